@@ -1,0 +1,46 @@
+# One-command set-up on a fresh Debian machine as root: system packages, .venv, the project.
+SHELL := /bin/bash
+PYTHON ?= python3
+VENV := .venv
+PY := $(VENV)/bin/python
+APT_PACKAGES := xvfb xauth libxcb-icccm4 libxcb-keysyms1 libxcb-cursor0 libxcb-image0 \
+	libxcb-render-util0 libxcb-xinerama0 libxcb-shape0 libxcb-randr0 libxcb-xkb1 libxkbcommon-x11-0 \
+	libegl1 libgl1 libdbus-1-3 libfontconfig1
+
+.PHONY: setup system venv run test screenshots bench samples clean
+
+system:
+	@missing=""; for p in $(APT_PACKAGES); do dpkg -s $$p >/dev/null 2>&1 || missing="$$missing $$p"; done; \
+	if [ -n "$$missing" ]; then \
+	  echo "installing system packages:$$missing"; \
+	  if [ "$$(id -u)" = 0 ]; then SUDO=""; else SUDO="sudo"; fi; \
+	  $$SUDO apt-get update -qq && DEBIAN_FRONTEND=noninteractive $$SUDO apt-get install -y -qq $$missing >/dev/null; \
+	fi
+
+$(VENV)/.installed: pyproject.toml
+	test -x $(PY) || $(PYTHON) -m venv $(VENV)
+	$(PY) -m pip install -q --upgrade pip
+	$(PY) -m pip install -q -e '.[test]'
+	touch $@
+
+venv: $(VENV)/.installed
+
+setup: system venv
+
+run: setup
+	bash scripts/run_main_job.sh
+
+test: setup
+	$(PY) -m pytest -q -p no:cacheprovider tests
+
+screenshots: setup
+	xvfb-run -a -s "-screen 0 1600x1000x24" $(PY) scripts/make_screenshots.py
+
+bench: setup
+	$(PY) benchmarks/bench_engine.py
+
+samples: setup
+	$(PY) scripts/make_samples.py
+
+clean:
+	rm -rf $(VENV) build *.egg-info

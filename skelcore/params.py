@@ -1,0 +1,132 @@
+"""Every constant of SPEC.md as one validated, frozen dataclass (the single source of truth)."""
+
+from __future__ import annotations
+
+import dataclasses
+from dataclasses import dataclass, fields
+from typing import Any, Literal
+
+
+@dataclass(frozen=True)
+class Params:
+    """Parameters of the evaluation; defaults reproduce the reference tool (SPEC.md).
+
+    Attributes
+    ----------
+    normalize_by : "longest_side" (reference tool) or "diagonal" (paper's text), SPEC 0.
+    normalized_size : the chosen bounding-box measure becomes this length (1.6), SPEC 0.
+    beta_star, c_star : thresholds; bounded means beta > beta_star, centred c > c_star (strict).
+    eps_quantile : quantile of the cloud's nearest-neighbour distances giving eps*, SPEC 1
+        (0.99 reference tool, 1.0 = the paper's max).
+    min_bar_fraction, fallback_fraction : K < min_bar_fraction * N_o triggers
+        K = N_o - round(fallback_fraction * N_o) + 1 (SPEC 1).
+    boundedness_method : "rays" (default, rotation invariant) or "paper" (reference tool), SPEC 2.
+    rays_radius_factor : h = factor x median nearest-neighbour spacing of the cloud, SPEC 2.
+    rays_rows : latitude rows of the equal-area raster used by the rays estimator.
+    paper_plane_threshold, paper_area_threshold : triangle-drop rule of the paper estimator.
+    k_center : neighbours for skeletal-point centeredness; None = round(0.01 N_s) with the
+        reference tool's clamps (<10 -> 10, >50 -> 30), SPEC 3.
+    curve_samples : total samples S along the curve skeleton, SPEC 3.
+    slab_factor : slab width alpha = factor x bounding-box diagonal of the normalized cloud.
+    ring_growth : ring isolation ratio (keep while next distance < ratio x last kept).
+    collinear_cos : |cos| at or above which a degree-2 vertex's neighbours count as collinear.
+    tangent_k, smooth_k : neighbours for PCA tangents and for the tangent comparison, SPEC 4.
+    """
+
+    normalize_by: Literal["longest_side", "diagonal"] = "longest_side"
+    normalized_size: float = 1.6
+    beta_star: float = 0.75
+    c_star: float = 0.75
+    eps_quantile: float = 0.99
+    min_bar_fraction: float = 0.05
+    fallback_fraction: float = 0.95
+    boundedness_method: Literal["rays", "paper"] = "rays"
+    rays_radius_factor: float = 2.0
+    rays_rows: int = 256
+    paper_plane_threshold: float = 0.8
+    paper_area_threshold: float = 1e-4
+    k_center: int | None = None
+    curve_samples: int = 200
+    slab_factor: float = 0.02
+    ring_growth: float = 1.5
+    collinear_cos: float = 0.99
+    tangent_k: int = 8
+    smooth_k: int = 4
+
+    def __post_init__(self) -> None:
+        def bad(name: str, why: str) -> None:
+            raise ValueError(f"parameter {name}={getattr(self, name)!r}: {why}")
+
+        if self.normalize_by not in ("longest_side", "diagonal"):
+            bad("normalize_by", "must be 'longest_side' or 'diagonal'")
+        if self.boundedness_method not in ("rays", "paper"):
+            bad("boundedness_method", "must be 'rays' or 'paper'")
+        for name in ("normalized_size", "rays_radius_factor", "slab_factor", "paper_area_threshold"):
+            if not float(getattr(self, name)) > 0:
+                bad(name, "must be > 0")
+        for name in ("beta_star", "c_star", "min_bar_fraction", "fallback_fraction", "collinear_cos"):
+            if not 0.0 <= float(getattr(self, name)) <= 1.0:
+                bad(name, "must be in [0, 1]")
+        if not 0.0 < float(self.eps_quantile) <= 1.0:
+            bad("eps_quantile", "must be in (0, 1]")
+        if not float(self.ring_growth) > 1.0:
+            bad("ring_growth", "must be > 1")
+        for name in ("curve_samples", "tangent_k", "smooth_k", "rays_rows"):
+            if int(getattr(self, name)) < 1:
+                bad(name, "must be a positive integer")
+        if self.k_center is not None and int(self.k_center) < 1:
+            bad("k_center", "must be a positive integer or None")
+
+    def replace(self, **changes: Any) -> "Params":
+        """A copy with some fields changed; an unknown name fails loudly."""
+        known = {f.name for f in fields(self)}
+        unknown = sorted(set(changes) - known)
+        if unknown:
+            raise ValueError(f"unknown parameter(s): {', '.join(unknown)}")
+        return dataclasses.replace(self, **changes)
+
+    def with_strings(self, assignments: list[str]) -> "Params":
+        """Apply ``NAME=VALUE`` strings (the CLI's ``--set``), converting to each field's type."""
+        changes: dict[str, Any] = {}
+        defaults = {f.name: f.default for f in fields(self)}
+        for item in assignments:
+            name, sep, raw = item.partition("=")
+            name = name.strip()
+            if not sep or not name:
+                raise ValueError(f"--set expects NAME=VALUE, got {item!r}")
+            if name not in defaults:
+                raise ValueError(f"unknown parameter {name!r}")
+            changes[name] = _convert(name, raw.strip(), defaults[name])
+        return self.replace(**changes)
+
+    def to_dict(self) -> dict[str, Any]:
+        return dataclasses.asdict(self)
+
+
+def _convert(name: str, raw: str, default: Any) -> Any:
+    if name == "k_center":
+        return None if raw.lower() in ("none", "auto", "") else int(raw)
+    try:
+        if isinstance(default, bool):
+            return raw.lower() in ("1", "true", "yes", "on")
+        if isinstance(default, int):
+            return int(raw)
+        if isinstance(default, float):
+            return float(raw)
+    except ValueError:
+        raise ValueError(f"parameter {name}: cannot read {raw!r} as {type(default).__name__}") from None
+    return raw
+
+
+def k_center_for(n_skeletal: int, params: Params) -> int:
+    """SPEC 3: k = round(0.01 N_s), <10 -> 10, >50 -> 30 (reference-tool quirk), unless set."""
+    if params.k_center is not None:
+        return int(params.k_center)
+    from .geometry import matlab_round
+
+    k = matlab_round(0.01 * n_skeletal)
+    if k < 10:
+        k = 10
+    if k > 50:
+        k = 30
+    return k
