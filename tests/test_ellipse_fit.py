@@ -1,0 +1,92 @@
+"""Fitzgibbon / Halir-Flusser ellipse fit (SPEC 3, curve centeredness)."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from skelcore.metrics.ellipse_fit import fit_ellipse
+
+
+def _ellipse(center, a, b, angle, t):
+    c, s = np.cos(angle), np.sin(angle)
+    x, y = a * np.cos(t), b * np.sin(t)
+    return np.column_stack([center[0] + c * x - s * y, center[1] + s * x + c * y])
+
+
+@pytest.mark.parametrize(
+    "center, a, b, angle",
+    [((0.0, 0.0), 2.0, 1.0, 0.0), ((5.0, -3.0), 3.0, 0.5, 0.7), ((-100.0, 40.0), 0.02, 0.015, -1.2)],
+)
+def test_recovers_rotated_off_centre_ellipse_exactly(center, a, b, angle):
+    t = np.random.default_rng(3).uniform(0, 2 * np.pi, 40)
+    fit = fit_ellipse(_ellipse(center, a, b, angle, t))
+    assert fit is not None
+    c, axes, ang = fit
+    np.testing.assert_allclose(c, center, rtol=0, atol=1e-8 * a)
+    np.testing.assert_allclose(axes, [a, b], rtol=1e-8)
+    assert abs(np.sin(ang - angle)) < 1e-8
+
+
+def test_recovers_ellipse_from_five_points():
+    t = np.array([0.1, 1.3, 2.0, 3.9, 5.0])
+    c, axes, _ = fit_ellipse(_ellipse((1.0, 2.0), 4.0, 1.5, 0.3, t))
+    np.testing.assert_allclose(c, [1, 2], atol=1e-8)
+    np.testing.assert_allclose(axes, [4, 1.5], rtol=1e-8)
+
+
+def test_recovers_ellipse_from_a_short_arc():
+    t = np.linspace(0.2, 1.4, 30)
+    c, axes, _ = fit_ellipse(_ellipse((0.5, 0.5), 2.0, 1.0, 0.4, t))
+    np.testing.assert_allclose(c, [0.5, 0.5], atol=1e-6)
+    np.testing.assert_allclose(axes, [2, 1], rtol=1e-6)
+
+
+def test_circle_has_equal_semi_axes():
+    t = np.linspace(0, 2 * np.pi, 17, endpoint=False)
+    c, axes, _ = fit_ellipse(np.column_stack([1 + 0.3 * np.cos(t), -2 + 0.3 * np.sin(t)]))
+    np.testing.assert_allclose(c, [1, -2], atol=1e-10)
+    np.testing.assert_allclose(axes, [0.3, 0.3], rtol=1e-9)
+
+
+def test_noisy_circle_centre_is_close():
+    rng = np.random.default_rng(11)
+    t = rng.uniform(0, 2 * np.pi, 300)
+    xy = np.column_stack([np.cos(t), np.sin(t)]) + rng.normal(scale=0.01, size=(300, 2))
+    c, axes, _ = fit_ellipse(xy)
+    assert np.linalg.norm(c) < 0.01
+    np.testing.assert_allclose(axes, [1, 1], atol=0.02)
+
+
+def test_collinear_points_give_none():
+    x = np.linspace(-1, 3, 12)
+    assert fit_ellipse(np.column_stack([x, 2 * x + 1])) is None
+
+
+def test_coincident_points_give_none():
+    assert fit_ellipse(np.ones((8, 2))) is None
+
+
+def test_fewer_than_five_points_give_none():
+    t = np.array([0.0, 1.0, 2.0, 3.0])
+    assert fit_ellipse(np.column_stack([np.cos(t), np.sin(t)])) is None
+
+
+def test_hyperbola_points_still_give_a_real_ellipse():
+    # the constraint 4ac - b^2 = 1 forces an ellipse whatever the data (Fitzgibbon's key property)
+    x = np.array([0.5, 1.0, 2.0, 3.0, -0.5, -1.0, -2.0, -3.0])
+    fit = fit_ellipse(np.column_stack([x, 1 / x]))
+    assert fit is not None
+    c, axes, _ = fit
+    np.testing.assert_allclose(c, [0, 0], atol=1e-9)  # symmetric data, symmetric fit
+    assert np.all(axes > 0)
+
+
+def test_two_parallel_lines_give_none():
+    x = np.linspace(0, 1, 10)
+    assert fit_ellipse(np.column_stack([np.r_[x, x], np.r_[np.zeros(10), np.ones(10)]])) is None
+
+
+def test_rejects_wrong_shape():
+    with pytest.raises(ValueError):
+        fit_ellipse(np.zeros((6, 3)))
