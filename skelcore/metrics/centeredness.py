@@ -1,0 +1,206 @@
+"""Centeredness of a skeletal point set and of curve-skeleton samples (SPEC 3, paper Defs. 10-12).
+
+Both functions return raw local values: c in [0, 1], NaN where invalid. The rule "not bounded ->
+c = 0" is applied later by :func:`skelcore.results.apply_unbounded_rule`, so the viewer can change
+beta* without recomputing.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from scipy.spatial import cKDTree
+
+from ..geometry import Checkpoint, bbox_diagonal, no_checkpoint, unit_rows
+from ..params import Params, k_center_for
+from .ellipse_fit import fit_ellipse
+
+__all__ = ["skeletal_centeredness", "curve_centeredness", "ring_length", "cross_section_centeredness"]
+
+# rows of skeletal points per kNN chunk: bounds memory (chunk x k x 3 floats) and checkpoint spacing
+_SKELETAL_CHUNK = 8192
+
+
+def skeletal_centeredness(
+    corresponding_cloud: np.ndarray,
+    skeletal: np.ndarray,
+    *,
+    params: Params = Params(),
+    checkpoint: Checkpoint = no_checkpoint,
+) -> np.ndarray:
+    """Centeredness of every skeletal point (SPEC 3, paper Eq. 13; the reference tool's k).
+
+    For skeletal point q_i take its k nearest skeletal neighbours (itself included; k from
+    :func:`skelcore.params.k_center_for`, at most N_s), their centroid m_s, the centroid m_o of
+    their corresponding cloud points (same rows of ``corresponding_cloud``) and M, the mean distance
+    from m_s to those cloud points: c_i = max(0, 1 - |m_o - m_s| / M). M = 0 gives NaN.
+
+    Parameters
+    ----------
+    corresponding_cloud : (N_s, 3) cloud point of each skeletal point (row i <-> row i).
+    skeletal : (N_s, 3) skeletal point set, normalized like the cloud.
+
+    Returns
+    -------
+    (N_s,) raw centeredness; the unbounded -> 0 rule is NOT applied here. Empty input -> empty.
+
+    Examples
+    --------
+    >>> ring = np.array([[np.cos(a), np.sin(a), 0] for a in np.linspace(0, 2 * np.pi, 12, endpoint=False)])
+    >>> skeletal_centeredness(ring, np.zeros((12, 3)), params=Params(k_center=12)).round(12).tolist()[:3]
+    [1.0, 1.0, 1.0]
+    """
+    cloud = np.asarray(corresponding_cloud, dtype=float)
+    skel = np.asarray(skeletal, dtype=float)
+    if skel.ndim != 2 or skel.shape[1] != 3 or cloud.shape != skel.shape:
+        raise ValueError(
+            f"skeletal points {skel.shape} and their corresponding cloud points {cloud.shape} "
+            "must both be (N, 3) with the same N"
+        )
+    n = len(skel)
+    out = np.full(n, np.nan)
+    if n == 0:
+        return out
+    k = min(k_center_for(n, params), n)
+    tree = cKDTree(skel)
+    checkpoint(0.0)
+    for lo in range(0, n, _SKELETAL_CHUNK):
+        hi = min(lo + _SKELETAL_CHUNK, n)
+        _, idx = tree.query(skel[lo:hi], k=k, workers=-1)
+        idx = idx.reshape(hi - lo, k)
+        m_s = skel[idx].mean(axis=1)
+        neighbours_o = cloud[idx]
+        m_o = neighbours_o.mean(axis=1)
+        spread = np.linalg.norm(neighbours_o - m_s[:, None, :], axis=2).mean(axis=1)
+        offset = np.linalg.norm(m_o - m_s, axis=1)
+        with np.errstate(invalid="ignore", divide="ignore"):
+            c = np.maximum(0.0, 1.0 - offset / spread)
+        c[~(spread > 0)] = np.nan
+        out[lo:hi] = c
+        checkpoint(hi / n)
+    return out
+
+
+def curve_centeredness(
+    cloud: np.ndarray,
+    sample_points: np.ndarray,
+    sample_directions: np.ndarray,
+    *,
+    params: Params = Params(),
+    checkpoint: Checkpoint = no_checkpoint,
+) -> np.ndarray:
+    """Centeredness of curve-skeleton samples from the cloud's cross-section (SPEC 3, paper Eq. 15).
+
+    For sample p with direction u: the slab of cloud points x with |u . (x - p)| < alpha / 2,
+    alpha = ``params.slab_factor`` x bounding-box diagonal of ``cloud``; the slab and p projected
+    onto two unit vectors orthogonal to u; the ring = slab points sorted by 2-D distance to p, kept
+    while each next distance is < ``params.ring_growth`` x the last kept one (isolates the nearest
+    cross-section from other branches); then :func:`cross_section_centeredness`.
+
+    Invalid (NaN): a NaN direction (joint vertex), fewer than 3 ring points. The unbounded -> 0
+    rule is NOT applied here.
+
+    The slab is a thin plate spanning the whole cloud, so candidates come from a uniform grid of
+    cells (side max(alpha, diagonal / 256)): only the points of cells that can meet the slab are
+    tested. The result equals that of testing every cloud point.
+    """
+    cloud = np.asarray(cloud, dtype=float)
+    points = np.asarray(sample_points, dtype=float)
+    dirs = np.asarray(sample_directions, dtype=float)
+    if cloud.ndim != 2 or cloud.shape[1] != 3:
+        raise ValueError(f"cloud must be (N, 3), got {cloud.shape}")
+    if points.ndim != 2 or points.shape[1] != 3 or dirs.shape != points.shape:
+        raise ValueError(f"sample points {points.shape} and directions {dirs.shape} must both be (S, 3)")
+    n_samples = len(points)
+    out = np.full(n_samples, np.nan)
+    if n_samples == 0 or len(cloud) == 0:
+        return out
+    u = unit_rows(dirs)
+    todo = np.flatnonzero(np.all(np.isfinite(u), axis=1) & np.all(np.isfinite(points), axis=1))
+    diagonal = bbox_diagonal(cloud)
+    half = 0.5 * float(params.slab_factor) * diagonal
+    if len(todo) == 0 or not half > 0:
+        return out  # no direction, or a cloud without extent: every slab is empty
+    growth = float(params.ring_growth)
+    grid = _SlabGrid(cloud, cell=max(2.0 * half, diagonal / 256.0))
+    g, h = _orthonormal_complement(u[todo])
+
+    checkpoint(0.0)
+    for done, (row, p, u_row, g_row, h_row) in enumerate(zip(todo, points[todo], u[todo], g, h), start=1):
+        rel = grid.slab_candidates(p, u_row, half) - p
+        rel = rel[np.abs(rel @ u_row) < half]
+        flat = np.column_stack([rel @ g_row, rel @ h_row])  # p_hat is the origin
+        dist = np.hypot(flat[:, 0], flat[:, 1])
+        order = np.argsort(dist, kind="stable")
+        ring = flat[order[: ring_length(dist[order], growth)]]
+        out[row] = cross_section_centeredness(ring)
+        checkpoint(done / len(todo))
+    return out
+
+
+class _SlabGrid:
+    """Cloud points bucketed in cubic cells (sorted by cell), for fast slab candidate lookup."""
+
+    def __init__(self, cloud: np.ndarray, cell: float) -> None:
+        lo = cloud.min(axis=0)
+        ijk = np.floor((cloud - lo) / cell).astype(np.int64)
+        dims = ijk.max(axis=0) + 1
+        key = ijk[:, 0] + dims[0] * (ijk[:, 1] + dims[1] * ijk[:, 2])
+        order = np.argsort(key, kind="stable")
+        self.points = cloud[order]
+        keys, self.starts, self.counts = np.unique(key[order], return_index=True, return_counts=True)
+        cell_ijk = np.column_stack([keys % dims[0], (keys // dims[0]) % dims[1], keys // (dims[0] * dims[1])])
+        self.centres = lo + (cell_ijk + 0.5) * cell
+        self.half_cell = 0.5 * cell
+
+    def slab_candidates(self, p: np.ndarray, u: np.ndarray, half: float) -> np.ndarray:
+        """Points of every cell that may meet the slab |u . (x - p)| < half (a superset of it)."""
+        # a cube's extent along unit u is half_cell x |u|_1; the small margin absorbs round-off
+        reach = half + self.half_cell * float(np.abs(u).sum()) * (1 + 1e-9) + 1e-12
+        hit = np.abs((self.centres - p) @ u) < reach
+        starts, counts = self.starts[hit], self.counts[hit]
+        total = int(counts.sum())
+        shift = np.repeat(starts - (np.cumsum(counts) - counts), counts)
+        return self.points[np.arange(total) + shift]
+
+
+def _orthonormal_complement(u: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Two unit vectors g, h per unit row of u with (u, g, h) orthonormal."""
+    helper = np.zeros_like(u)
+    helper[np.arange(len(u)), np.argmin(np.abs(u), axis=1)] = 1.0
+    g = np.cross(u, helper)
+    g /= np.linalg.norm(g, axis=1, keepdims=True)
+    h = np.cross(u, g)
+    return g, h
+
+
+def ring_length(sorted_distances: np.ndarray, growth: float) -> int:
+    """Length of the leading run of ``sorted_distances`` in which each next distance is
+    < growth x the previous one (SPEC 3 ring isolation). 0 for an empty array."""
+    d = np.asarray(sorted_distances, dtype=float)
+    if len(d) == 0:
+        return 0
+    breaks = np.flatnonzero(~(d[1:] < growth * d[:-1]))
+    return int(breaks[0] + 1) if len(breaks) else len(d)
+
+
+def cross_section_centeredness(ring: np.ndarray, p_hat: np.ndarray | None = None) -> float:
+    """c = max(0, 1 - |p_hat - centre| / r) for one cross-section ring (SPEC 3).
+
+    centre and r from :func:`fit_ellipse` (conic centre, mean semi-axis); with fewer than 5 points
+    or no valid ellipse, centre = ring mean and r = largest distance from p_hat to a ring point.
+    Fewer than 3 points, or r = 0: NaN. ``p_hat`` defaults to the origin.
+    """
+    ring = np.asarray(ring, dtype=float).reshape(-1, 2)
+    p_hat = np.zeros(2) if p_hat is None else np.asarray(p_hat, dtype=float)
+    if len(ring) < 3:
+        return float("nan")
+    fit = fit_ellipse(ring) if len(ring) >= 5 else None
+    if fit is not None:
+        centre, axes, _ = fit
+        r = float(axes.mean())
+    else:
+        centre = ring.mean(axis=0)
+        r = float(np.max(np.linalg.norm(ring - p_hat, axis=1)))
+    if not r > 0 or not np.isfinite(r):
+        return float("nan")
+    return max(0.0, 1.0 - float(np.linalg.norm(p_hat - centre)) / r)

@@ -1,0 +1,315 @@
+"""Centeredness of skeletal points and curve samples (SPEC 3) and its analytic checks (SPEC 6)."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from skelcore.curve import CurveSkeleton
+from skelcore.curve_sampling import sample_curve
+from skelcore.metrics.centeredness import (
+    cross_section_centeredness,
+    curve_centeredness,
+    ring_length,
+    skeletal_centeredness,
+)
+from skelcore.metrics.ellipse_fit import fit_ellipse
+from skelcore.params import Params, k_center_for
+from skelcore.shapes import cylinder, torus, y_shape
+
+RADIUS = 0.5
+LENGTH = 4.0
+
+
+@pytest.fixture(scope="module")
+def dense_cylinder():
+    return cylinder(20000, radius=RADIUS, length=LENGTH, capped=True, seed=1)
+
+
+def _axis_samples(shape, shift=(0.0, 0.0, 0.0)):
+    curve = CurveSkeleton.from_raw(shape.curve_vertices + np.asarray(shift), shape.curve_edges)
+    return sample_curve(curve, 200)
+
+
+def _away_from_caps(points):
+    return (points[:, 2] > 0.3) & (points[:, 2] < LENGTH - 0.3)
+
+
+# ---------------------------------------------------------------- skeletal point set
+
+
+def _skeletal_reference(cloud, skel, k):
+    """Plain loops over SPEC 3's definition, neighbours by brute-force sorting."""
+    out = []
+    for q in skel:
+        d = np.sqrt(((skel - q) ** 2).sum(axis=1))
+        nb = np.argsort(d, kind="stable")[:k]
+        m_s = sum(skel[j] for j in nb) / k
+        m_o = sum(cloud[j] for j in nb) / k
+        big_m = sum(np.linalg.norm(cloud[j] - m_s) for j in nb) / k
+        out.append(np.nan if big_m == 0 else max(0.0, 1 - np.linalg.norm(m_o - m_s) / big_m))
+    return np.array(out)
+
+
+@pytest.mark.parametrize("n, k_center", [(300, None), (257, 7), (40, 60)])
+def test_skeletal_matches_plain_loop_reference(rng, n, k_center):
+    cloud = rng.normal(size=(n, 3))
+    skel = 0.3 * cloud + rng.normal(scale=0.2, size=(n, 3))
+    params = Params(k_center=k_center)
+    got = skeletal_centeredness(cloud, skel, params=params)
+    want = _skeletal_reference(cloud, skel, min(k_center_for(n, params), n))
+    np.testing.assert_allclose(got, want, rtol=0, atol=1e-12)
+
+
+def test_skeletal_chunks_agree_with_one_pass(rng, monkeypatch):
+    import skelcore.metrics.centeredness as mod
+
+    cloud = rng.normal(size=(1000, 3))
+    skel = 0.5 * cloud
+    whole = skeletal_centeredness(cloud, skel)
+    monkeypatch.setattr(mod, "_SKELETAL_CHUNK", 97)
+    np.testing.assert_array_equal(skeletal_centeredness(cloud, skel), whole)
+
+
+def test_skeletal_symmetric_ring_is_perfectly_centred():
+    angles = np.linspace(0, 2 * np.pi, 16, endpoint=False)
+    ring = np.column_stack([np.cos(angles), np.sin(angles), np.zeros(16)])
+    c = skeletal_centeredness(ring, np.zeros((16, 3)), params=Params(k_center=16))
+    np.testing.assert_allclose(c, 1.0, atol=1e-12)
+
+
+def test_skeletal_one_sided_neighbourhood_scores_zero():
+    # cloud points all on one side of their skeletal centroid at the same distance: |m_o-m_s| = M
+    cloud = np.tile([1.0, 0.0, 0.0], (12, 1))
+    c = skeletal_centeredness(cloud, np.zeros((12, 3)), params=Params(k_center=12))
+    np.testing.assert_allclose(c, 0.0, atol=1e-12)
+
+
+def test_skeletal_zero_spread_is_nan():
+    pts = np.zeros((15, 3))
+    assert np.all(np.isnan(skeletal_centeredness(pts, pts)))
+
+
+def test_skeletal_zero_spread_only_where_it_occurs():
+    # a far-away cluster where cloud == skeleton (M = 0) next to a healthy one
+    ring = np.array([[np.cos(a), np.sin(a), 0.0] for a in np.linspace(0, 2 * np.pi, 10, endpoint=False)])
+    cloud = np.vstack([ring, np.full((10, 3), 100.0)])
+    skel = np.vstack([np.zeros((10, 3)), np.full((10, 3), 100.0)])
+    c = skeletal_centeredness(cloud, skel, params=Params(k_center=10))
+    np.testing.assert_allclose(c[:10], 1.0, atol=1e-12)
+    assert np.all(np.isnan(c[10:]))
+
+
+def test_skeletal_empty_input_gives_empty_output():
+    assert skeletal_centeredness(np.empty((0, 3)), np.empty((0, 3))).shape == (0,)
+
+
+def test_skeletal_rejects_mismatched_rows():
+    with pytest.raises(ValueError):
+        skeletal_centeredness(np.zeros((5, 3)), np.zeros((6, 3)))
+
+
+def test_skeletal_cylinder_about_85_percent_pass(dense_cylinder):
+    """SPEC 6: with k = 30 random ring points |m_o - m_s| / M is about 0.16; ~85% pass 0.75."""
+    shape = cylinder(20000, radius=RADIUS, length=LENGTH, capped=False, seed=2)
+    c = skeletal_centeredness(shape.cloud, shape.skeletal, params=Params(k_center=30))
+    assert np.all(np.isfinite(c))
+    passing = float(np.mean(c > 0.75))
+    assert 0.78 < passing < 0.92
+    assert 0.78 < float(np.median(c)) < 0.9
+
+
+def test_skeletal_points_pushed_to_one_side_score_low():
+    shape = cylinder(6000, radius=RADIUS, length=LENGTH, capped=False, seed=3)
+    skel = shape.skeletal + [0.8 * RADIUS, 0.0, 0.0]
+    c = skeletal_centeredness(shape.cloud, skel, params=Params(k_center=30))
+    assert float(np.mean(c > 0.75)) < 0.05
+
+
+# ---------------------------------------------------------------- curve skeleton
+
+
+def _curve_reference(cloud, points, directions, params):
+    """Straight from SPEC 3: every cloud point tested per sample, loops, fit_ellipse or fallback."""
+    alpha = params.slab_factor * np.linalg.norm(cloud.max(0) - cloud.min(0))
+    out = []
+    for p, u in zip(points, directions):
+        if not np.all(np.isfinite(u)):
+            out.append(np.nan)
+            continue
+        u = u / np.linalg.norm(u)
+        a = np.array([1.0, 0, 0]) if abs(u[0]) < 0.9 else np.array([0, 1.0, 0])
+        g = np.cross(u, a)
+        g /= np.linalg.norm(g)
+        h = np.cross(u, g)
+        slab = [x for x in cloud if abs(u @ (x - p)) < alpha / 2]
+        flat = sorted(([x @ g, x @ h] for x in slab), key=lambda q: np.hypot(q[0] - p @ g, q[1] - p @ h))
+        p_hat = np.array([p @ g, p @ h])
+        ring = flat[:1]
+        for q in flat[1:]:
+            if np.linalg.norm(np.subtract(q, p_hat)) < params.ring_growth * np.linalg.norm(np.subtract(ring[-1], p_hat)):
+                ring.append(q)
+            else:
+                break
+        ring = np.array(ring)
+        if len(ring) < 3:
+            out.append(np.nan)
+            continue
+        fit = fit_ellipse(ring) if len(ring) >= 5 else None
+        if fit is not None:
+            centre, r = fit[0], fit[1].mean()
+        else:
+            centre, r = ring.mean(0), np.linalg.norm(ring - p_hat, axis=1).max()
+        out.append(max(0.0, 1 - np.linalg.norm(p_hat - centre) / r))
+    return np.array(out)
+
+
+def test_curve_matches_whole_cloud_reference_on_branching_shape():
+    shape = y_shape(1500, seed=4)
+    rng = np.random.default_rng(5)
+    samples = sample_curve(CurveSkeleton.from_raw(shape.curve_vertices, shape.curve_edges), 40)
+    points = samples.points + rng.normal(scale=0.05, size=samples.points.shape)
+    dirs = samples.directions + rng.normal(scale=0.2, size=samples.directions.shape)
+    params = Params()
+    got = curve_centeredness(shape.cloud, points, dirs, params=params)
+    want = _curve_reference(shape.cloud, points, dirs, params)
+    np.testing.assert_array_equal(np.isnan(got), np.isnan(want))
+    np.testing.assert_allclose(got, want, atol=1e-9)
+
+
+def test_curve_centred_axis_scores_one(dense_cylinder):
+    """SPEC 6: the axis of a dense closed cylinder is perfectly centred away from the caps."""
+    s = _axis_samples(dense_cylinder)
+    c = curve_centeredness(dense_cylinder.cloud, s.points, s.directions)
+    mid = _away_from_caps(s.points)
+    assert mid.sum() > 150
+    np.testing.assert_allclose(c[mid], 1.0, atol=1e-6)
+
+
+@pytest.mark.parametrize("fraction", [0.1, 0.3, 0.5])
+def test_curve_shifted_sideways_scores_one_minus_d_over_r(dense_cylinder, fraction):
+    """SPEC 6: the axis shifted sideways by d scores about 1 - d / r."""
+    d = fraction * RADIUS
+    s = _axis_samples(dense_cylinder, shift=(d / np.sqrt(2), d / np.sqrt(2), 0.0))
+    c = curve_centeredness(dense_cylinder.cloud, s.points, s.directions)
+    mid = _away_from_caps(s.points)
+    np.testing.assert_allclose(c[mid], 1 - fraction, atol=1e-3)
+
+
+def test_curve_on_noisy_cylinder_is_close_to_one_minus_d_over_r():
+    shape = cylinder(20000, radius=RADIUS, length=LENGTH, capped=True, seed=6)
+    cloud = shape.cloud + np.random.default_rng(6).normal(scale=0.01 * RADIUS, size=shape.cloud.shape)
+    s = _axis_samples(shape, shift=(0.2 * RADIUS, 0.0, 0.0))
+    c = curve_centeredness(cloud, s.points, s.directions)
+    mid = _away_from_caps(s.points)
+    assert abs(np.median(c[mid]) - 0.8) < 0.02
+
+
+def test_curve_scale_invariant(dense_cylinder):
+    s = _axis_samples(dense_cylinder, shift=(0.1, 0.0, 0.0))
+    c1 = curve_centeredness(dense_cylinder.cloud, s.points, s.directions)
+    c2 = curve_centeredness(3.0 * dense_cylinder.cloud, 3.0 * s.points, s.directions)
+    np.testing.assert_allclose(c1, c2, atol=1e-9)
+
+
+def test_curve_direction_sign_does_not_matter(dense_cylinder):
+    s = _axis_samples(dense_cylinder, shift=(0.1, 0.0, 0.0))
+    c1 = curve_centeredness(dense_cylinder.cloud, s.points, s.directions)
+    c2 = curve_centeredness(dense_cylinder.cloud, s.points, -s.directions)
+    np.testing.assert_allclose(c1, c2, atol=1e-9)
+
+
+def test_curve_torus_core_circle_is_centred():
+    shape = torus(20000, R=1.0, r=0.3, n_curve=32, seed=7)
+    s = sample_curve(CurveSkeleton.from_raw(shape.curve_vertices, shape.curve_edges), 100)
+    c = curve_centeredness(shape.cloud, s.points, s.directions)
+    # the polygon's chords sit slightly inside the circle; slabs of a curved tube are not circles
+    assert np.all(np.isfinite(c))
+    assert np.median(c) > 0.9
+
+
+def test_curve_ring_isolation_ignores_a_parallel_branch():
+    # two parallel cylinders; the slab of one axis cuts both, the ring must keep only the nearer
+    a = cylinder(8000, radius=RADIUS, length=LENGTH, capped=False, seed=8)
+    b_cloud = a.cloud + [3.0, 0.0, 0.0]
+    cloud = np.vstack([a.cloud, b_cloud])
+    s = _axis_samples(a, shift=(0.1, 0.0, 0.0))
+    c = curve_centeredness(cloud, s.points, s.directions)
+    mid = _away_from_caps(s.points)
+    np.testing.assert_allclose(c[mid], 1 - 0.1 / RADIUS, atol=1e-3)
+
+
+def test_curve_nan_direction_gives_nan(dense_cylinder):
+    s = _axis_samples(dense_cylinder)
+    dirs = s.directions.copy()
+    dirs[5] = np.nan
+    c = curve_centeredness(dense_cylinder.cloud, s.points, dirs)
+    assert np.isnan(c[5])
+    assert np.isfinite(c[4]) and np.isfinite(c[6])
+
+
+def test_curve_fewer_than_three_ring_points_is_nan():
+    cloud = np.array([[1.0, 0, 0], [-1.0, 0, 0], [0, 0, 5.0], [0, 0, -5.0]])
+    c = curve_centeredness(cloud, np.zeros((1, 3)), np.array([[0, 0, 1.0]]))
+    assert np.isnan(c[0])
+
+
+def test_curve_three_ring_points_use_mean_and_max_distance():
+    # 3 ring points: no ellipse; centre = their mean, r = largest distance from p_hat
+    cloud = np.array([[1.0, 0, 0], [0, 1.0, 0], [-1.0, 0, 0], [0, 0, 10.0]])
+    p = np.array([[0.0, -0.5, 0.0]])
+    c = curve_centeredness(cloud, p, np.array([[0, 0, 1.0]]))
+    centre = np.array([0.0, 1 / 3])
+    r = 1.5  # distance from p_hat to (0, 1)
+    np.testing.assert_allclose(c[0], max(0.0, 1 - np.linalg.norm(centre - [0, -0.5]) / r))
+
+
+def test_curve_empty_slab_is_nan():
+    cloud = np.array([[0, 0, 0.0], [0, 0, 1.0], [1, 1, 2.0]])
+    c = curve_centeredness(cloud, np.array([[0, 0, 10.0]]), np.array([[0, 0, 1.0]]))
+    assert np.isnan(c[0])
+
+
+def test_curve_no_samples_gives_empty_output(dense_cylinder):
+    c = curve_centeredness(dense_cylinder.cloud, np.empty((0, 3)), np.empty((0, 3)))
+    assert c.shape == (0,)
+
+
+def test_checkpoint_reaches_one_and_can_cancel(dense_cylinder):
+    from skelcore.errors import Cancelled
+
+    s = _axis_samples(dense_cylinder)
+    seen: list[float] = []
+    curve_centeredness(dense_cylinder.cloud, s.points, s.directions, checkpoint=seen.append)
+    assert seen[-1] == 1.0 and seen == sorted(seen)
+
+    def cancel(fraction: float) -> None:
+        if fraction > 0.2:
+            raise Cancelled()
+
+    with pytest.raises(Cancelled):
+        curve_centeredness(dense_cylinder.cloud, s.points, s.directions, checkpoint=cancel)
+    with pytest.raises(Cancelled):
+        skeletal_centeredness(dense_cylinder.cloud, dense_cylinder.skeletal, checkpoint=cancel)
+
+
+# ---------------------------------------------------------------- helpers
+
+
+def test_ring_length_stops_at_first_big_jump():
+    assert ring_length(np.array([1.0, 1.2, 1.7, 2.5, 3.9, 4.0]), 1.5) == 4
+    assert ring_length(np.array([1.0, 1.1]), 1.5) == 2
+    assert ring_length(np.array([]), 1.5) == 0
+    assert ring_length(np.array([0.0, 0.0, 1.0]), 1.5) == 1  # 0 < 1.5 x 0 is false
+
+
+def test_cross_section_uses_ellipse_centre_and_mean_semi_axis():
+    t = np.linspace(0, 2 * np.pi, 24, endpoint=False)
+    ring = np.column_stack([0.3 + 2.0 * np.cos(t), 1.0 * np.sin(t)])
+    np.testing.assert_allclose(cross_section_centeredness(ring), 1 - 0.3 / 1.5)
+
+
+def test_cross_section_clamps_at_zero():
+    t = np.linspace(0, 2 * np.pi, 24, endpoint=False)
+    ring = np.column_stack([5 + np.cos(t), np.sin(t)])
+    assert cross_section_centeredness(ring) == 0.0
