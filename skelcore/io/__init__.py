@@ -190,6 +190,8 @@ def _point_set(raw: RawData, path: str | os.PathLike, what: str) -> np.ndarray:
         raise SkelInputError(
             f"{len(bad)} of {len(v)} points have NaN or infinite coordinates (first: row {bad[0]}, {kind})", path
         )
+    if len(v) == 1:
+        raise SkelInputError(f"{what} has a single point", path)
     if np.all(v == v[0]):
         raise SkelInputError(f"all {len(v)} points of the {what} are at the same position", path)
     return v

@@ -132,6 +132,7 @@ def read_obj(path: Path, data: bytes) -> RawData:
     verts: list[list[str]] = []
     v_lines: list[int] = []
     edges: list[tuple[int, int]] = []
+    l_lines: list[tuple[int, int, int]] = []
     has_l = False
     for lineno, line in enumerate(text.splitlines(), 1):
         if not line or line[0] not in "vl \t":
@@ -147,6 +148,7 @@ def read_obj(path: Path, data: bytes) -> RawData:
         elif parts[0] == "l":
             has_l = True
             idx = [_obj_index(t, len(verts), lineno, path) for t in parts[1:]]
+            l_lines.append((lineno, min(idx, default=0), max(idx, default=0)))
             edges.extend(zip(idx[:-1], idx[1:]))
     if verts:
         try:
@@ -163,6 +165,14 @@ def read_obj(path: Path, data: bytes) -> RawData:
             raise SkelInputError("vertex coordinates are not numbers", path)
     else:
         vertices = np.empty((0, 3))
+    for lineno, lo, hi in l_lines:
+        if lo < 0 or hi >= len(verts):
+            bad = lo if lo < 0 else hi
+            raise SkelInputError(
+                f"line {lineno}: vertex index {bad + 1 if bad >= 0 else bad - len(verts)} out of range "
+                f"(file has {len(verts)} vertices)",
+                path,
+            )
     e = np.array(edges, dtype=np.int64).reshape(-1, 2) if has_l else None
     return RawData(vertices=vertices, edges=e, format="OBJ")
 
@@ -261,8 +271,13 @@ def read_cg(path: Path, data: bytes) -> RawData:
         if np.any(e != np.round(e)):
             raise SkelInputError("edge indices must be whole numbers", path)
         e = e.astype(np.int64)
-        if e.min() != 0:
-            e = e - 1
+        base = 0 if e.min() == 0 else 1
+        if e.min() < 0 or e.max() - base >= nv:
+            bad = e.min() if e.min() < 0 else e.max()
+            raise SkelInputError(
+                f"edge index {bad} out of range for {nv} vertices ({'0' if base == 0 else '1'}-based)", path
+            )
+        e = e - base
     else:
         e = np.empty((0, 2), dtype=np.int64)
     return RawData(vertices=vertices, edges=e, format=".cg curve graph", curve_format=True)
