@@ -1,0 +1,14 @@
+"""SkelScope's desktop viewer (PySide6 + pyvistaqt) on top of the skelcore engine.
+
+Importing ``app`` is cheap: Qt, VTK and matplotlib are imported by the modules that need them.
+"""
+
+from __future__ import annotations
+
+__all__ = ["main"]
+
+
+def main(argv: list[str] | None = None) -> int:
+    from .__main__ import main as _main
+
+    return _main(argv)

@@ -1,0 +1,74 @@
+"""The two H0 barcodes (SPEC 1): the K compared bars of the cloud and of the skeletal point set,
+eps* marked, d_B and d_Wp in the title. Drawn on the panel's own matplotlib Figure (no pyplot, no
+global rc), so the viewer never changes anyone else's plots."""
+
+from __future__ import annotations
+
+import math
+from typing import Any
+
+import numpy as np
+from matplotlib.backends.backend_qtagg import FigureCanvasQTAgg
+from matplotlib.figure import Figure
+from PySide6 import QtWidgets
+
+
+def compared_bars(barcode: np.ndarray, k: int) -> np.ndarray:
+    """The K longest bars (the barcode is stored longest first, the infinite bar first)."""
+    bars = np.asarray(barcode, dtype=float).reshape(-1, 2)
+    order = np.argsort(-(bars[:, 1] - bars[:, 0]), kind="stable")
+    return bars[order[: max(int(k), 0)]]
+
+
+class BarcodePanel(QtWidgets.QWidget):
+    def __init__(self, parent: QtWidgets.QWidget | None = None) -> None:
+        super().__init__(parent)
+        self.figure = Figure(figsize=(4.0, 3.6), dpi=90, layout="constrained")
+        self.canvas = FigureCanvasQTAgg(self.figure)
+        self.canvas.setMinimumHeight(220)
+        layout = QtWidgets.QVBoxLayout(self)
+        layout.setContentsMargins(2, 2, 2, 2)
+        layout.addWidget(self.canvas)
+        self.show_topology(None)
+
+    def show_topology(self, topology: Any) -> None:
+        """Draw the compared bars of both diagrams, or a hint when there is no topology result."""
+        fig = self.figure
+        fig.clear()
+        if topology is None:
+            ax = fig.add_subplot(1, 1, 1)
+            ax.set_axis_off()
+            ax.text(0.5, 0.5, "H0 barcodes appear here after an evaluation\nwith a skeletal point set",
+                    ha="center", va="center", transform=ax.transAxes, color="0.4")
+            self.canvas.draw_idle()
+            return
+        k = int(topology.n_bars)
+        cloud = compared_bars(topology.cloud_barcode, k)
+        skel = compared_bars(topology.skeletal_barcode, k)
+        finite = np.concatenate([cloud[np.isfinite(cloud[:, 1]), 1], skel[np.isfinite(skel[:, 1]), 1], [topology.eps_star]])
+        x_end = float(finite.max()) * 1.08 if finite.size and finite.max() > 0 else 1.0
+        axes = fig.subplots(2, 1, sharex=True)
+        for ax, bars, name, colour in ((axes[0], cloud, "cloud", "#1f4e79"), (axes[1], skel, "skeletal points", "#b35900")):
+            deaths = np.where(np.isfinite(bars[:, 1]), bars[:, 1], x_end)
+            y = np.arange(len(bars))
+            ax.hlines(y, bars[:, 0], deaths, color=colour, linewidth=1.0 if len(bars) < 80 else 0.6)
+            inf_rows = ~np.isfinite(bars[:, 1])
+            if inf_rows.any():
+                ax.plot(np.full(inf_rows.sum(), x_end), y[inf_rows], marker=">", color=colour, linestyle="none",
+                        markersize=5)
+            ax.axvline(topology.eps_star, color="crimson", linestyle="--", linewidth=1.0, label="eps*")
+            ax.set_ylim(len(bars) - 0.5 if len(bars) else 1, -0.5 - max(len(bars) * 0.02, 0.5))
+            ax.set_ylabel(f"{name}\n({len(bars)} bars)", fontsize=8)
+            ax.tick_params(labelsize=7)
+            ax.set_yticks([])
+        axes[0].legend(loc="lower right", fontsize=7, frameon=False)
+        axes[1].set_xlabel("persistence (normalized units)", fontsize=8)
+        axes[1].set_xlim(0, x_end * 1.03)
+        fig.suptitle(
+            f"H0, K = {k}:  d_B = {_fmt(topology.bottleneck)},  d_Wp = {_fmt(topology.wasserstein)}", fontsize=9
+        )
+        self.canvas.draw_idle()
+
+
+def _fmt(v: float) -> str:
+    return "nan" if math.isnan(float(v)) else f"{float(v):.4f}"

@@ -1,0 +1,70 @@
+"""Histogram of the selected local metric (skeletal points and curve elements) with the threshold
+line an overall score counts against (beta* for boundedness, c* for centeredness; SPEC 2-3)."""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+from matplotlib.backends.backend_qtagg import FigureCanvasQTAgg
+from matplotlib.figure import Figure
+from PySide6 import QtWidgets
+
+from ..scene import Scene
+
+_LABELS = {"skeletal": "skeletal points", "curve": "curve"}
+_COLOURS = {"skeletal": "#b35900", "curve": "#1f4e79"}
+
+
+class HistogramPanel(QtWidgets.QWidget):
+    def __init__(self, parent: QtWidgets.QWidget | None = None) -> None:
+        super().__init__(parent)
+        self.figure = Figure(figsize=(4.0, 2.6), dpi=90, layout="constrained")
+        self.canvas = FigureCanvasQTAgg(self.figure)
+        self.canvas.setMinimumHeight(180)
+        layout = QtWidgets.QVBoxLayout(self)
+        layout.setContentsMargins(2, 2, 2, 2)
+        layout.addWidget(self.canvas)
+        self.threshold: float | None = None
+
+    def show_scene(self, scene: Scene) -> None:
+        fig = self.figure
+        fig.clear()
+        ax = fig.add_subplot(1, 1, 1)
+        metric = scene.metric
+        series: list[tuple[str, np.ndarray, int]] = []
+        for name in ("skeletal", "curve"):
+            layer = scene.layers.get(name)
+            q = None if layer is None else layer.quantity(metric)
+            if q is not None:
+                finite = q.values[np.isfinite(q.values)]
+                series.append((name, finite, q.n_invalid))
+        if not series:
+            ax.set_axis_off()
+            ax.text(0.5, 0.5, f"no {metric} values yet", ha="center", va="center", transform=ax.transAxes,
+                    color="0.4")
+            self.threshold = None
+            self.canvas.draw_idle()
+            return
+        lo, hi = 0.0, 1.0
+        for _, finite, _ in series:
+            if finite.size:
+                lo, hi = min(lo, float(finite.min())), max(hi, float(finite.max()))
+        bins = np.linspace(lo, hi, 26)
+        for name, finite, n_nan in series:
+            label = f"{_LABELS[name]} (n = {finite.size}" + (f", {n_nan} nan)" if n_nan else ")")
+            # Each series as fractions of its own size, so 4096 points and 200 samples compare.
+            weights = np.full(finite.size, 1.0 / max(finite.size, 1))
+            ax.hist(finite, bins=bins, weights=weights, alpha=0.55, color=_COLOURS[name], label=label)
+        self.threshold = scene.threshold_for(metric)
+        if self.threshold is not None:
+            star = "beta*" if metric == "boundedness" else "c*"
+            ax.axvline(self.threshold, color="crimson", linestyle="--", linewidth=1.2, label=f"{star} = {self.threshold:.2f}")
+        ax.set_xlabel(metric, fontsize=8)
+        ax.set_ylabel("fraction", fontsize=8)
+        ax.tick_params(labelsize=7)
+        ax.legend(fontsize=7, frameon=False, loc="upper left")
+        self.canvas.draw_idle()
+
+    def axes(self) -> Any:
+        return self.figure.axes[0] if self.figure.axes else None

@@ -1,0 +1,73 @@
+"""Evaluation parameters (a subset of skelcore's Params, SPEC 0-4) the user may change before a run."""
+
+from __future__ import annotations
+
+from PySide6 import QtCore, QtWidgets
+
+from skelcore.params import Params
+
+
+class SettingsPanel(QtWidgets.QWidget):
+    changed = QtCore.Signal()
+
+    def __init__(self, parent: QtWidgets.QWidget | None = None) -> None:
+        super().__init__(parent)
+        d = Params()
+        self.boundedness_method = QtWidgets.QComboBox(self)
+        self.boundedness_method.addItems(["rays", "paper"])
+        self.boundedness_method.setToolTip("SPEC 2: 'rays' (rotation invariant) or 'paper' (the reference tool)")
+        self.normalize_by = QtWidgets.QComboBox(self)
+        self.normalize_by.addItems(["longest_side", "diagonal"])
+        self.normalize_by.setToolTip("SPEC 0: the bounding-box measure scaled to 1.6")
+        self.k_center = self._int(0, 10000, 0, "neighbours for skeletal centeredness; 0 = auto (SPEC 3)")
+        self.k_center.setSpecialValueText("auto")
+        self.tangent_k = self._int(1, 1000, d.tangent_k, "neighbours for PCA tangents (SPEC 4)")
+        self.smooth_k = self._int(1, 1000, d.smooth_k, "neighbours compared for smoothness (SPEC 4)")
+        self.curve_samples = self._int(1, 1_000_000, d.curve_samples, "samples S along the curve (SPEC 3)")
+        self.eps_quantile = QtWidgets.QDoubleSpinBox(self)
+        self.eps_quantile.setRange(0.01, 1.0)
+        self.eps_quantile.setDecimals(3)
+        self.eps_quantile.setSingleStep(0.01)
+        self.eps_quantile.setValue(d.eps_quantile)
+        self.eps_quantile.setToolTip("SPEC 1: quantile of nearest-neighbour distances giving eps*")
+        form = QtWidgets.QFormLayout(self)
+        form.addRow("boundedness estimator", self.boundedness_method)
+        form.addRow("normalization", self.normalize_by)
+        form.addRow("k (centeredness)", self.k_center)
+        form.addRow("k (tangents)", self.tangent_k)
+        form.addRow("k (smoothness)", self.smooth_k)
+        form.addRow("curve samples", self.curve_samples)
+        form.addRow("eps* quantile", self.eps_quantile)
+        for w in (self.boundedness_method, self.normalize_by):
+            w.currentTextChanged.connect(lambda *_: self.changed.emit())
+        for w in (self.k_center, self.tangent_k, self.smooth_k, self.curve_samples, self.eps_quantile):
+            w.valueChanged.connect(lambda *_: self.changed.emit())
+
+    def _int(self, lo: int, hi: int, value: int, tip: str) -> QtWidgets.QSpinBox:
+        spin = QtWidgets.QSpinBox(self)
+        spin.setRange(lo, hi)
+        spin.setValue(value)
+        spin.setToolTip(tip)
+        return spin
+
+    def params(self, base: Params | None = None) -> Params:
+        """The chosen parameters on top of ``base`` (thresholds are set in the summary panel)."""
+        base = base or Params()
+        return base.replace(
+            boundedness_method=self.boundedness_method.currentText(),
+            normalize_by=self.normalize_by.currentText(),
+            k_center=None if self.k_center.value() == 0 else self.k_center.value(),
+            tangent_k=self.tangent_k.value(),
+            smooth_k=self.smooth_k.value(),
+            curve_samples=self.curve_samples.value(),
+            eps_quantile=self.eps_quantile.value(),
+        )
+
+    def set_params(self, params: Params) -> None:
+        self.boundedness_method.setCurrentText(params.boundedness_method)
+        self.normalize_by.setCurrentText(params.normalize_by)
+        self.k_center.setValue(0 if params.k_center is None else int(params.k_center))
+        self.tangent_k.setValue(params.tangent_k)
+        self.smooth_k.setValue(params.smooth_k)
+        self.curve_samples.setValue(params.curve_samples)
+        self.eps_quantile.setValue(params.eps_quantile)

@@ -1,0 +1,214 @@
+"""The viewer's controller: loads files into the scene, runs evaluate / skeletonize in the worker.
+
+No widgets here: dialogs are reached through the ``error`` signal and the ``ask`` callback, which the
+main window connects to message boxes (and tests or the scripted mode replace).
+"""
+
+from __future__ import annotations
+
+import os
+from typing import Any, Callable
+
+from PySide6 import QtCore
+
+from skelcore.errors import SkelInputError
+from skelcore.params import Params
+
+from .loading import ROLES, Ask, assign_roles
+from .scene import Scene, SceneEvent
+from .worker import TaskRunner
+
+__all__ = ["Session"]
+
+
+class Session(QtCore.QObject):
+    error = QtCore.Signal(str, str, str)  # title, one-line message, details ("" when none)
+    message = QtCore.Signal(str)  # status-bar text
+    loaded = QtCore.Signal(str, str)  # role, path
+    evaluated = QtCore.Signal(object)  # the Evaluation now shown
+
+    def __init__(self, scene: Scene | None = None, parent: QtCore.QObject | None = None) -> None:
+        super().__init__(parent)
+        self.scene = scene or Scene()
+        self.runner = TaskRunner(self)
+        self.ask: Ask = lambda question, options: options[0] if options else None
+        self.params_provider: Callable[[], Params] = Params
+        self.auto_evaluate = True
+        self.runner.succeeded.connect(self._task_succeeded)
+        self.runner.failed.connect(self._task_failed)
+        self.runner.cancelled.connect(lambda name: self.message.emit(f"{name} cancelled"))
+        self.scene.subscribe(self._on_scene)
+
+    # ---- loading --------------------------------------------------------------------------
+    def load_files(self, paths: list[str]) -> list[tuple[str, str]]:
+        """Load files dropped or named together, deciding each one's role (see :mod:`app.loading`).
+
+        A file that fails shows its loader's one-line message; the others and what was loaded survive.
+        Returns the (role, path) pairs loaded.
+        """
+        from skelcore.io import load_any
+
+        items, failures = [], []
+        for path in paths:
+            try:
+                items.append(load_any(path))
+            except SkelInputError as exc:
+                failures.append(str(exc))
+            except Exception as exc:  # noqa: BLE001 - a loader bug must not take the window down
+                failures.append(f"{path}: {type(exc).__name__}: {exc}")
+        if failures:
+            self.error.emit("Could not load", "\n".join(failures), "")
+        cloud = self.scene.cloud
+        done = []
+        with self.batch():
+            for a in assign_roles(items, None if cloud is None else cloud.n_points, self.ask):
+                self._apply(a.role, a.loaded.points if a.role != "curve" else a.loaded.curve, a.loaded.path)
+                done.append((a.role, a.loaded.path))
+        return done
+
+    def load_as(self, role: str, path: str) -> bool:
+        """File > Open for one role; False (and an error dialog) when the file does not load."""
+        from skelcore.io import load_cloud, load_curve, load_points
+
+        if role not in ROLES:
+            raise ValueError(f"unknown role {role!r}")
+        loader = {"cloud": load_cloud, "skeletal": load_points, "curve": load_curve}[role]
+        try:
+            data = loader(path)
+        except SkelInputError as exc:
+            self.error.emit("Could not load", str(exc), "")
+            return False
+        except Exception as exc:  # noqa: BLE001
+            self.error.emit("Could not load", f"{path}: {type(exc).__name__}: {exc}", "")
+            return False
+        with self.batch():
+            self._apply(role, data, path)
+        return True
+
+    def _apply(self, role: str, data: Any, path: str | None) -> None:
+        if role == "cloud":
+            self.scene.set_cloud(data, path)
+        elif role == "skeletal":
+            self.scene.set_skeletal(data, path)
+        else:
+            self.scene.set_curve(data, path)
+        if path:
+            self.loaded.emit(role, str(path))
+            self.message.emit(f"loaded {os.path.basename(str(path))} as the {_ROLE_TITLES[role]}")
+
+    class _Batch:
+        def __init__(self, session: "Session") -> None:
+            self.session = session
+
+        def __enter__(self) -> None:
+            self.session._batch_depth += 1
+
+        def __exit__(self, *exc: object) -> None:
+            self.session._batch_depth -= 1
+            if self.session._batch_depth == 0 and self.session._inputs_changed:
+                self.session._inputs_changed = False
+                if self.session.auto_evaluate and self.session.scene.can_evaluate():
+                    self.session.start_evaluation()
+
+    _batch_depth = 0
+    _inputs_changed = False
+
+    def batch(self) -> "Session._Batch":
+        """Several files loaded together start one evaluation, after the last one."""
+        return Session._Batch(self)
+
+    def _on_scene(self, event: SceneEvent) -> None:
+        if event.kind == "layer":
+            # The running evaluation describes old inputs: drop it (its result will never land).
+            if self.runner.current_name == "evaluation":
+                self.runner.discard()
+            self._inputs_changed = True
+
+    # ---- computing ------------------------------------------------------------------------
+    def params(self) -> Params:
+        return self.params_provider().replace(beta_star=self.scene.beta_star, c_star=self.scene.c_star)
+
+    def start_evaluation(self, params: Params | None = None) -> bool:
+        """Evaluate the loaded inputs in the worker thread (cancelling any run in progress)."""
+        import skelcore
+
+        scene = self.scene
+        if not scene.can_evaluate():
+            self.message.emit("load a cloud and a skeletal point set or a curve skeleton first")
+            return False
+        try:
+            params = params or self.params()
+        except ValueError as exc:
+            self.error.emit("Invalid parameters", str(exc), "")
+            return False
+        cloud = scene.cloud.points
+        skeletal = None if scene.skeletal is None else scene.skeletal.points
+        curve = None if scene.curve is None else scene.curve.curve
+        inputs = {k: v for k, v in scene.input_paths().items() if v}
+
+        def job(progress: Callable[[float, str], None], cancel: Callable[[], bool]) -> Any:
+            return skelcore.evaluate(cloud, skeletal, curve, params, progress, cancel, inputs=inputs)
+
+        self._evaluated_layers = (scene.cloud, scene.skeletal, scene.curve)
+        self.runner.start(job, "evaluation")
+        self.message.emit("evaluating…")
+        return True
+
+    def start_skeletonize(self, params: Params | None = None) -> bool:
+        """Skeletonize the loaded cloud (issue 4) in the worker; both results become layers."""
+        import skelcore
+
+        if self.scene.cloud is None:
+            self.message.emit("load a cloud first")
+            return False
+        params = params or self.params()
+        cloud = self.scene.cloud.points
+        skeletonize = skelcore.skeletonize  # resolved here, so a missing module fails before the thread
+
+        def job(progress: Callable[[float, str], None], cancel: Callable[[], bool]) -> Any:
+            return skeletonize(cloud, params, progress=progress, cancel=cancel)
+
+        self._skeletonized_cloud = self.scene.cloud
+        self.runner.start(job, "skeletonization")
+        self.message.emit("skeletonizing…")
+        return True
+
+    def cancel(self) -> None:
+        self.runner.cancel()
+
+    @QtCore.Slot(str, object)
+    def _task_succeeded(self, name: str, result: Any) -> None:
+        scene = self.scene
+        if name == "evaluation":
+            if self._evaluated_layers != (scene.cloud, scene.skeletal, scene.curve):
+                return  # inputs changed meanwhile: this result describes other data
+            scene.set_evaluation(result)
+            total = result.timings.get("total") if result.timings else None
+            self.message.emit("evaluation done" + (f" in {total:.2f} s" if total is not None else ""))
+            self.evaluated.emit(result)
+        elif name == "skeletonization":
+            if self._skeletonized_cloud is not scene.cloud:
+                return
+            from skelcore.curve import CurveSkeleton
+
+            skeletal, curve = result
+            if not isinstance(curve, CurveSkeleton):
+                curve = CurveSkeleton.from_raw(*curve)
+            with self.batch():
+                scene.set_skeletal(skeletal, None)
+                scene.set_curve(curve, None)
+            self.message.emit(f"skeletonized: {len(skeletal)} skeletal points, {curve.n_vertices} curve vertices")
+
+    @QtCore.Slot(str, object, str)
+    def _task_failed(self, name: str, exc: Any, tb: str) -> None:
+        if isinstance(exc, (SkelInputError, ValueError)):
+            self.error.emit(f"{name.capitalize()} failed", str(exc), "")
+        else:
+            self.error.emit(f"{name.capitalize()} failed", f"{type(exc).__name__}: {exc}", tb)
+        self.message.emit(f"{name} failed")
+
+    _evaluated_layers: tuple = ()
+    _skeletonized_cloud: Any = None
+
+
+_ROLE_TITLES = {"cloud": "cloud", "skeletal": "skeletal point set", "curve": "curve skeleton"}

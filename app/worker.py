@@ -1,0 +1,180 @@
+"""Engine work (evaluate, skeletonize) in a ``QThread``, with progress, cancel and no stale results.
+
+The job function gets ``progress(fraction, stage)`` and ``cancel()`` and passes them to skelcore,
+which checks ``cancel`` at its checkpoints and raises ``Cancelled`` (how Cancel stops a run within a
+second). Following Orange3's ``concurrent`` helpers, starting a new task first cancels and
+disconnects the old one, so a stale result can never land on top of a newer one; progress is
+throttled to visible steps. Only plain Python objects cross threads: VTK stays on the GUI thread.
+"""
+
+from __future__ import annotations
+
+import threading
+import traceback
+from typing import Any, Callable
+
+from PySide6 import QtCore
+
+from skelcore.errors import Cancelled
+
+__all__ = ["Task", "TaskRunner"]
+
+JobFunction = Callable[[Callable[[float, str], None], Callable[[], bool]], Any]
+
+
+class Task(QtCore.QThread):
+    """One run of a job function; its signals are emitted from the worker thread (queued to the GUI)."""
+
+    progressed = QtCore.Signal(float, str)
+    succeeded = QtCore.Signal(object)
+    failed = QtCore.Signal(object, str)  # exception, formatted traceback
+    aborted = QtCore.Signal()
+
+    def __init__(self, fn: JobFunction, name: str = "task", parent: QtCore.QObject | None = None) -> None:
+        super().__init__(parent)
+        self.fn = fn
+        self.name = name
+        self._cancel = threading.Event()
+        self._last = (-1.0, "")
+
+    def cancel(self) -> None:
+        self._cancel.set()
+
+    def is_cancelled(self) -> bool:
+        return self._cancel.is_set()
+
+    def _progress(self, fraction: float, stage: str) -> None:
+        last_fraction, last_stage = self._last
+        if stage != last_stage or fraction - last_fraction >= 0.005 or fraction >= 1.0:
+            self._last = (fraction, stage)
+            self.progressed.emit(float(fraction), str(stage))
+
+    def run(self) -> None:  # worker thread
+        try:
+            result = self.fn(self._progress, self._cancel.is_set)
+        except Cancelled:
+            self.aborted.emit()
+        except BaseException as exc:  # noqa: BLE001 - every failure becomes a dialog, never a crash
+            if self._cancel.is_set():
+                self.aborted.emit()
+            else:
+                self.failed.emit(exc, traceback.format_exc())
+        else:
+            if self._cancel.is_set():
+                self.aborted.emit()  # cancelled after the last checkpoint: still no result
+            else:
+                self.succeeded.emit(result)
+
+
+class TaskRunner(QtCore.QObject):
+    """Runs one task at a time; the GUI connects to these signals, which only the current task feeds."""
+
+    started = QtCore.Signal(str)
+    progressed = QtCore.Signal(float, str)
+    succeeded = QtCore.Signal(str, object)  # task name, result
+    failed = QtCore.Signal(str, object, str)  # task name, exception, traceback
+    cancelled = QtCore.Signal(str)
+    finished = QtCore.Signal(str)  # after any of succeeded / failed / cancelled
+
+    def __init__(self, parent: QtCore.QObject | None = None) -> None:
+        super().__init__(parent)
+        self._current: Task | None = None
+        self._retired: set[Task] = set()  # cancelled tasks still winding down (kept alive until done)
+
+    @property
+    def running(self) -> bool:
+        return self._current is not None
+
+    @property
+    def current_name(self) -> str | None:
+        return None if self._current is None else self._current.name
+
+    def start(self, fn: JobFunction, name: str = "task") -> Task:
+        """Cancel and disconnect any running task, then start ``fn`` in a new thread."""
+        self._retire_current()
+        task = Task(fn, name)
+        task.progressed.connect(self._on_progress)
+        task.succeeded.connect(self._on_success)
+        task.failed.connect(self._on_failure)
+        task.aborted.connect(self._on_abort)
+        self._current = task
+        self.started.emit(name)
+        task.start()
+        return task
+
+    def cancel(self) -> None:
+        """Ask the current task to stop at its next checkpoint; ``cancelled`` follows when it has."""
+        if self._current is not None:
+            self._current.cancel()
+
+    def discard(self) -> None:
+        """Cancel the current task and drop whatever it would still deliver (inputs changed)."""
+        self._retire_current()
+
+    def _retire_current(self) -> None:
+        task = self._current
+        if task is None:
+            return
+        self._current = None
+        task.cancel()
+        for signal in (task.progressed, task.succeeded, task.failed, task.aborted):
+            try:
+                signal.disconnect()
+            except (RuntimeError, TypeError):
+                pass
+        self._keep_until_finished(task)
+        self.cancelled.emit(task.name)
+
+    def wait_all(self, ms: int = 5000) -> bool:
+        """Block until every thread has ended (used at exit)."""
+        ok = True
+        for task in [*self._retired, *([self._current] if self._current else [])]:
+            ok = task.wait(ms) and ok
+        return ok
+
+    def shutdown(self) -> None:
+        self._retire_current()
+        self.wait_all()
+
+    def _is_current(self) -> bool:
+        return self.sender() is self._current and self._current is not None
+
+    @QtCore.Slot(float, str)
+    def _on_progress(self, fraction: float, stage: str) -> None:
+        if self._is_current():
+            self.progressed.emit(fraction, stage)
+
+    @QtCore.Slot(object)
+    def _on_success(self, result: object) -> None:
+        if self._is_current():
+            task = self._end()
+            self.succeeded.emit(task.name, result)
+            self.finished.emit(task.name)
+
+    @QtCore.Slot(object, str)
+    def _on_failure(self, exc: object, tb: str) -> None:
+        if self._is_current():
+            task = self._end()
+            self.failed.emit(task.name, exc, tb)
+            self.finished.emit(task.name)
+
+    @QtCore.Slot()
+    def _on_abort(self) -> None:
+        if self._is_current():
+            task = self._end()
+            self.cancelled.emit(task.name)
+            self.finished.emit(task.name)
+
+    def _end(self) -> Task:
+        task = self._current
+        assert task is not None
+        self._current = None
+        self._keep_until_finished(task)
+        return task
+
+    def _keep_until_finished(self, task: Task) -> None:
+        # A QThread object destroyed while its thread runs aborts the process: hold a reference.
+        self._retired.add(task)
+        task.finished.connect(lambda t=task: self._retired.discard(t))
+        if task.isFinished():
+            self._retired.discard(task)
