@@ -313,3 +313,21 @@ def test_cross_section_clamps_at_zero():
     t = np.linspace(0, 2 * np.pi, 24, endpoint=False)
     ring = np.column_stack([5 + np.cos(t), np.sin(t)])
     assert cross_section_centeredness(ring) == 0.0
+
+
+def test_curve_grid_lookup_matches_reference_on_real_scan(shared_data):
+    from plyfile import PlyData
+
+    from skelcore.geometry import Normalization
+
+    vertex = PlyData.read(str(shared_data / "hammer_4096.ply"))["vertex"]
+    raw = np.column_stack([vertex["x"], vertex["y"], vertex["z"]]).astype(float)
+    cloud = Normalization.from_cloud(raw).apply(raw)
+    rng = np.random.default_rng(9)
+    points = cloud[rng.choice(len(cloud), 15, replace=False)] * 0.8  # pulled inwards
+    dirs = rng.normal(size=(15, 3))
+    params = Params()
+    got = curve_centeredness(cloud, points, dirs, params=params)
+    want = _curve_reference(cloud, points, dirs, params)
+    np.testing.assert_array_equal(np.isnan(got), np.isnan(want))
+    np.testing.assert_allclose(got, want, atol=1e-9)
