@@ -143,11 +143,15 @@ def _curve_reference(cloud, points, directions, params):
         g /= np.linalg.norm(g)
         h = np.cross(u, g)
         slab = [x for x in cloud if abs(u @ (x - p)) < alpha / 2]
-        flat = sorted(([x @ g, x @ h] for x in slab), key=lambda q: np.hypot(q[0] - p @ g, q[1] - p @ h))
         p_hat = np.array([p @ g, p @ h])
+
+        def dist(q):
+            return np.linalg.norm(np.subtract(q, p_hat))
+
+        flat = sorted(([x @ g, x @ h] for x in slab), key=dist)
         ring = flat[:1]
         for q in flat[1:]:
-            if np.linalg.norm(np.subtract(q, p_hat)) < params.ring_growth * np.linalg.norm(np.subtract(ring[-1], p_hat)):
+            if dist(q) < params.ring_growth * dist(ring[-1]):
                 ring.append(q)
             else:
                 break
