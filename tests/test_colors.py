@@ -1,0 +1,75 @@
+"""Colour maps without matplotlib: NaN is magenta, range from finite values, tables match matplotlib."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from skelcore import colors
+from skelcore.colors import MAGENTA, NAN_COLOR, finite_range, lookup_table, map_to_rgb
+
+
+def test_nan_is_magenta():
+    rgb = map_to_rgb(np.array([0.2, np.nan, 0.8]), 0.0, 1.0)
+    assert rgb.dtype == np.uint8 and rgb.shape == (3, 3)
+    assert tuple(rgb[1]) == MAGENTA == NAN_COLOR == (255, 0, 255)
+    assert tuple(rgb[0]) != MAGENTA and tuple(rgb[2]) != MAGENTA
+
+
+def test_default_range_comes_from_finite_values_only():
+    values = np.array([np.nan, 10.0, np.inf, 20.0, -np.inf, 15.0])
+    assert finite_range(values) == (10.0, 20.0)
+    rgb = map_to_rgb(values)
+    lut = lookup_table("viridis")
+    assert tuple(rgb[1]) == tuple(lut[0]) and tuple(rgb[3]) == tuple(lut[-1])
+    # +-inf are clamped to the ends, not magenta.
+    assert tuple(rgb[2]) == tuple(lut[-1]) and tuple(rgb[4]) == tuple(lut[0])
+    assert tuple(rgb[0]) == MAGENTA
+
+
+def test_explicit_range_clamps_outside_values():
+    rgb = map_to_rgb(np.array([-1.0, 0.0, 1.0, 2.0]), 0.0, 1.0)
+    np.testing.assert_array_equal(rgb[0], rgb[1])
+    np.testing.assert_array_equal(rgb[2], rgb[3])
+
+
+def test_constant_values_map_to_the_middle_colour():
+    rgb = map_to_rgb(np.full(4, 0.3))
+    np.testing.assert_array_equal(rgb, np.tile(lookup_table("viridis", 3)[1], (4, 1)))
+
+
+def test_all_nan_and_empty_inputs():
+    assert (map_to_rgb(np.full(3, np.nan)) == MAGENTA).all()
+    assert map_to_rgb(np.array([])).shape == (0, 3)
+
+
+def test_viridis_is_monotone_in_lightness_and_has_its_known_ends():
+    lut = lookup_table("viridis").astype(float)
+    assert tuple(lut[0]) == (68, 1, 84) and tuple(lut[-1]) == (253, 231, 37)
+    luma = lut @ np.array([0.2126, 0.7152, 0.0722])
+    assert np.all(np.diff(luma) > -1.0)  # perceptual map: lightness never drops (uint8 rounding aside)
+
+
+@pytest.mark.parametrize("cmap", colors.COLORMAPS)
+def test_tables_match_matplotlib_within_two_levels(cmap):
+    mpl = pytest.importorskip("matplotlib")
+    ref = np.round(mpl.colormaps[cmap](np.linspace(0, 1, 256))[:, :3] * 255)
+    assert np.abs(lookup_table(cmap).astype(float) - ref).max() <= 2
+
+
+def test_bad_arguments_fail_loudly():
+    with pytest.raises(ValueError, match="unknown colour map"):
+        map_to_rgb(np.zeros(2), cmap="jet")
+    with pytest.raises(ValueError, match="reversed"):
+        map_to_rgb(np.zeros(2), 1.0, 0.0)
+    with pytest.raises(ValueError, match="finite"):
+        map_to_rgb(np.zeros(2), 0.0, np.inf)
+
+
+def test_colors_module_does_not_import_matplotlib():
+    import subprocess
+    import sys
+
+    code = "import sys, skelcore.colors, skelcore.export, skelcore.io; print('matplotlib' in sys.modules)"
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+    assert out.stdout.strip() == "False"
