@@ -70,6 +70,19 @@ def write_ply_le_int(path, pts):
     _ply(path, pts, text=False, byte_order="<", dtype="i4")
 
 
+def write_open3d_pointcloud(path, pts):
+    """Byte layout of Open3D's ``write_point_cloud`` (rply, binary little endian; double normals and
+    uchar colours), as pc-skeletor writes ``01_point_cloud_contracted_*.ply`` and ``02_skeleton_*.ply``."""
+    head = (
+        "ply\nformat binary_little_endian 1.0\ncomment Created by Open3D\n"
+        f"element vertex {len(pts)}\nproperty double x\nproperty double y\nproperty double z\n"
+        "property double nx\nproperty double ny\nproperty double nz\n"
+        "property uchar red\nproperty uchar green\nproperty uchar blue\nend_header\n"
+    )
+    body = b"".join(struct.pack("<6d3B", *p, 0.0, 0.0, 1.0, 0, 0, 255) for p in pts.tolist())
+    Path(path).write_bytes(head.encode() + body)
+
+
 def write_pcd_ascii(path, pts):
     head = (
         "# .PCD v0.7 - Point Cloud Data file format\nVERSION 0.7\nFIELDS x y z rgb\nSIZE 4 4 4 4\n"
@@ -149,6 +162,7 @@ CLOUD_WRITERS = {
     "ply_be_double": (".ply", write_ply_be_double),
     "ply_le_int": (".ply", write_ply_le_int),
     "ply_named_txt": (".txt", write_ply_le_float),
+    "open3d_pointcloud": (".ply", write_open3d_pointcloud),
     "pcd_ascii": (".pcd", write_pcd_ascii),
     "pcd_binary": (".pcd", write_pcd_binary),
     "xyz": (".xyz", write_xyz_space),
@@ -264,7 +278,7 @@ def test_cloud_format_round_trips(tmp_path, name):
     writer(path, pts)
     got = load_cloud(path)
     assert got.dtype == np.float64 and got.shape == pts.shape
-    if "int" in name:
+    if name == "ply_le_int":
         np.testing.assert_array_equal(got, np.trunc(pts))
     else:
         # float32 storage (PLY float, PCD, NPY f32) loses digits beyond ~1e-7 relative.
