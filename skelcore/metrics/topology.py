@@ -1,0 +1,436 @@
+"""Topological similarity of a skeletal point set to its cloud: H0 barcodes compared (SPEC 1).
+
+The H0 barcode of a Vietoris-Rips filtration is exactly the set of Euclidean minimum spanning tree
+edge lengths (each bar born at 0, dying at a full edge length) plus one infinite bar. The EMST is
+computed exactly by Boruvka's algorithm on k-nearest-neighbour lists: every merge edge is proven to
+be the shortest edge leaving its component (points whose list stays inside their own component are
+resolved by exact searches), so no Delaunay triangulation is needed (slow on surface samples and
+undefined on the collinear or coplanar sets that contraction produces).
+
+All bars are born at 0, so comparing two diagrams is a one-dimensional matching problem with the
+diagonal (cost d/2 for the bar (0, d)): the 1-Wasserstein distance is solved exactly by a slope-trick
+dynamic programme in O(K log K) and the bottleneck distance by a Hall-condition feasibility test
+inside an exact bisection, O(K log K) per test.
+"""
+
+from __future__ import annotations
+
+import heapq
+
+import numpy as np
+from scipy.sparse import coo_matrix
+from scipy.sparse.csgraph import connected_components, minimum_spanning_tree
+from scipy.spatial import cKDTree
+
+from ..geometry import Checkpoint, matlab_round, nearest_neighbor_distances, no_checkpoint
+from ..params import Params
+from ..results import TopologyResult
+
+__all__ = [
+    "topological_similarity",
+    "h0_barcode",
+    "eps_star",
+    "compared_bar_count",
+    "bottleneck_h0",
+    "wasserstein_h0",
+]
+
+_LIST_K = 10  # neighbours kept per point for Boruvka; larger lists resolve more points, cost more memory
+_DEEP_K = 64  # neighbours of the second, exact-search pass for points whose list stayed inside
+_QUERY_CHUNK = 32768  # points per kNN query call, so the checkpoint is reached often
+
+
+# ---------------------------------------------------------------------------------------------
+# H0 barcode = EMST edge lengths
+# ---------------------------------------------------------------------------------------------
+def _unique_rows(points: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(unique points, inverse, counts), comparing values (so -0.0 equals 0.0)."""
+    order = np.lexsort(points.T[::-1])
+    srt = points[order]
+    new = np.ones(len(srt), bool)
+    if len(srt) > 1:
+        new[1:] = np.any(srt[1:] != srt[:-1], axis=1)
+    group = np.cumsum(new) - 1
+    inverse = np.empty(len(points), np.int64)
+    inverse[order] = group
+    counts = np.bincount(group)
+    return srt[new], inverse, counts
+
+
+def _as_points(points: np.ndarray) -> np.ndarray:
+    pts = np.asarray(points, dtype=float)
+    if pts.ndim != 2 or pts.shape[1] != 3:
+        raise ValueError(f"expected an (n, 3) array of points, got shape {pts.shape}")
+    if not np.all(np.isfinite(pts)):
+        raise ValueError("points contain NaN or inf")
+    return pts
+
+
+def _chunked_knn(tree: cKDTree, queries: np.ndarray, k: int, checkpoint, lo: float, hi: float):
+    """kNN of ``queries`` in ``tree`` (k >= 1, 2-D results), reporting progress between chunks."""
+    n = len(queries)
+    dist = np.empty((n, k))
+    idx = np.empty((n, k), np.int64)
+    for start in range(0, n, _QUERY_CHUNK):
+        stop = min(n, start + _QUERY_CHUNK)
+        d, i = tree.query(queries[start:stop], k=k, workers=-1)
+        dist[start:stop] = d.reshape(stop - start, k)
+        idx[start:stop] = i.reshape(stop - start, k)
+        checkpoint(lo + (hi - lo) * stop / max(n, 1))
+    return dist, idx
+
+
+def _first_other(labels: np.ndarray, rows: np.ndarray, dist: np.ndarray, idx: np.ndarray):
+    """For each row, the first list entry (sorted by distance) in another component."""
+    other = labels[idx] != labels[rows][:, None]
+    has = other.any(axis=1)
+    col = other.argmax(axis=1)
+    r = np.arange(len(rows))
+    return has, dist[r, col], idx[r, col]
+
+
+def _emst_lengths(points: np.ndarray, checkpoint: Checkpoint = no_checkpoint) -> np.ndarray:
+    """Edge lengths of the Euclidean minimum spanning tree of distinct points (Boruvka, exact).
+
+    Each round finds, for every component, its shortest outgoing edge. A point's candidate is the
+    first entry of its sorted neighbour list in another component (exact for that point: every
+    closer point is in the list). A point whose whole list lies in its own component can only have
+    an outgoing edge at least as long as its list radius; if that radius is below its component's
+    best candidate, an exact search settles it (a deeper kNN pass, then a KD-tree over the nearby
+    points of other components). Ties only ever form cycles of equal-length edges, which the MST
+    over the chosen edges drops, so the multiset of lengths is exact.
+    """
+    n = len(points)
+    if n < 2:
+        return np.empty(0)
+    tree = cKDTree(points)
+    k = min(_LIST_K, n - 1)
+    dist, idx = _chunked_knn(tree, points, k + 1, checkpoint, 0.0, 0.5)
+    dist, idx = dist[:, 1:], idx[:, 1:]  # column 0 is the point itself (points are distinct)
+    radius = dist[:, -1]
+    lists_complete = k == n - 1
+    labels = np.arange(n)
+    n_comp = n
+    active = np.ones(n, bool)  # a list wholly inside its component stays so: never scanned again
+    lengths: list[np.ndarray] = []
+    rounds = 0
+    while n_comp > 1:
+        rows = np.flatnonzero(active)
+        has, cd, cb = _first_other(labels, rows, dist[rows], idx[rows])
+        active[rows[~has]] = False
+        src = rows[has]
+        cand_a, cand_b, cand_d = src, cb[has], cd[has]
+        best = np.full(n_comp, np.inf)
+        np.minimum.at(best, labels[cand_a], cand_d)
+
+        if not lists_complete:
+            pend = np.flatnonzero(~active)
+            pend = pend[radius[pend] < best[labels[pend]]]
+            if len(pend):
+                ea, eb, ed = _resolve_pending(points, tree, labels, n_comp, pend, best)
+                cand_a = np.concatenate([cand_a, ea])
+                cand_b = np.concatenate([cand_b, eb])
+                cand_d = np.concatenate([cand_d, ed])
+
+        # shortest candidate per component, then one edge per component pair
+        la, lb = labels[cand_a], labels[cand_b]
+        order = np.lexsort((cand_d, la))
+        first = np.ones(len(order), bool)
+        first[1:] = la[order][1:] != la[order][:-1]
+        pick = order[first]
+        u, v, w = la[pick], lb[pick], cand_d[pick]
+        lo_, hi_ = np.minimum(u, v), np.maximum(u, v)
+        order = np.lexsort((w, hi_, lo_))
+        keep = np.ones(len(order), bool)
+        keep[1:] = (lo_[order][1:] != lo_[order][:-1]) | (hi_[order][1:] != hi_[order][:-1])
+        order = order[keep]
+        graph = coo_matrix((w[order], (lo_[order], hi_[order])), shape=(n_comp, n_comp)).tocsr()
+        forest = minimum_spanning_tree(graph)
+        lengths.append(forest.data.copy())
+        n_new, comp = connected_components(forest, directed=False)
+        if n_new >= n_comp:  # cannot happen: every component has an outgoing edge
+            raise RuntimeError("EMST: Boruvka round made no progress")
+        labels = comp[labels]
+        n_comp = n_new
+        rounds += 1
+        checkpoint(0.5 + 0.5 * (1.0 - n_comp / n) ** 0.5)
+    return np.concatenate(lengths) if lengths else np.empty(0)
+
+
+def _resolve_pending(points, tree, labels, n_comp, pend, best):
+    """Exact shortest outgoing edges for points whose neighbour list lies inside their component.
+
+    Returns candidate edges (a, b, length) that improve on ``best`` (updated in place).
+    """
+    n = len(points)
+    out_a, out_b, out_d = [], [], []
+    # 1) one deeper kNN pass over all pending points at once (vectorized)
+    kk = min(_DEEP_K, n - 1)
+    if kk > _LIST_K and len(pend) <= max(4096, n // 8):
+        d2, i2 = tree.query(points[pend], k=kk + 1, workers=-1)
+        d2, i2 = d2[:, 1:], i2[:, 1:]
+        has, cd, cb = _first_other(labels, pend, d2, i2)
+        ok = has & (cd < best[labels[pend]])
+        if ok.any():
+            out_a.append(pend[ok]), out_b.append(cb[ok]), out_d.append(cd[ok])
+            np.minimum.at(best, labels[pend[ok]], cd[ok])
+        if kk == n - 1:
+            pend = pend[:0]
+        else:
+            pend = pend[~has & (d2[:, -1] < best[labels[pend]])]
+    # 2) per component: a KD-tree over the other components' points near the pending ones
+    if len(pend):
+        comp_of = labels[pend]
+        order = np.argsort(comp_of, kind="stable")
+        pend, comp_of = pend[order], comp_of[order]
+        starts = np.flatnonzero(np.r_[True, comp_of[1:] != comp_of[:-1]])
+        ends = np.r_[starts[1:], len(pend)]
+        for s, e in zip(starts, ends):
+            c = comp_of[s]
+            q = pend[s:e]
+            bound = best[c]
+            outside = labels != c
+            if not np.isfinite(bound):
+                # any outside point gives a finite bound
+                d0 = np.linalg.norm(points[outside] - points[q[0]], axis=1)
+                bound = float(d0.min()) * (1 + 1e-12) + 1e-300
+            lo = points[q].min(axis=0) - bound
+            hi = points[q].max(axis=0) + bound
+            near = outside & np.all((points >= lo) & (points <= hi), axis=1)
+            cand = np.flatnonzero(near)
+            if not len(cand):
+                continue
+            d, j = cKDTree(points[cand]).query(points[q], k=1, distance_upper_bound=bound, workers=-1)
+            i = int(np.argmin(d))
+            if d[i] < best[c]:
+                best[c] = d[i]
+                out_a.append(q[i : i + 1]), out_b.append(cand[j[i : i + 1]]), out_d.append(d[i : i + 1])
+    if not out_a:
+        empty = np.empty(0, np.int64)
+        return empty, empty, np.empty(0)
+    return np.concatenate(out_a), np.concatenate(out_b), np.concatenate(out_d)
+
+
+def h0_barcode(points: np.ndarray, *, checkpoint: Checkpoint = no_checkpoint) -> np.ndarray:
+    """H0 barcode of the Vietoris-Rips filtration of ``points`` (SPEC 1).
+
+    Returns an (n, 2) array of (birth = 0, death) rows, longest first: the infinite bar, then one
+    bar per EMST edge of the distinct points (full edge lengths). Duplicate points would give
+    zero-length bars, which are dropped as gudhi does; one point (or all coincident) gives only
+    the infinite bar; no points gives an empty (0, 2) array.
+
+    Examples
+    --------
+    >>> h0_barcode(np.array([[0., 0, 0], [1, 0, 0], [3, 0, 0]]))[:, 1]
+    array([inf,  2.,  1.])
+    """
+    pts = _as_points(points)
+    if len(pts) == 0:
+        return np.empty((0, 2))
+    uniq, _, _ = _unique_rows(pts)
+    deaths = np.sort(_emst_lengths(uniq, checkpoint))[::-1]
+    deaths = deaths[deaths > 0]
+    bars = np.zeros((len(deaths) + 1, 2))
+    bars[0, 1] = np.inf
+    bars[1:, 1] = deaths
+    return bars
+
+
+# ---------------------------------------------------------------------------------------------
+# eps* and the number of compared bars
+# ---------------------------------------------------------------------------------------------
+def eps_star(cloud: np.ndarray, quantile: float = 0.99) -> float:
+    """SPEC 1: the ``quantile`` of the cloud's nearest-neighbour distances, as MATLAB's ``prctile``
+    (numpy ``method="hazen"``); quantile 1.0 is the paper's maximum."""
+    if not 0.0 < quantile <= 1.0:
+        raise ValueError(f"quantile must be in (0, 1], got {quantile}")
+    nn = nearest_neighbor_distances(_as_points(cloud))
+    if len(nn) == 0:
+        return 0.0
+    return float(np.quantile(nn, quantile, method="hazen"))
+
+
+def compared_bar_count(cloud_barcode: np.ndarray, eps: float, n_cloud: int, *, params: Params = Params()) -> int:
+    """SPEC 1: K = bars of the cloud with persistence > eps* (the infinite bar counts); if
+    K < min_bar_fraction * N_o, the reference tool's fallback K = N_o - round(0.95 N_o) + 1."""
+    bars = np.asarray(cloud_barcode, dtype=float).reshape(-1, 2)
+    k = int(np.count_nonzero(bars[:, 1] - bars[:, 0] > eps))
+    if k < params.min_bar_fraction * n_cloud:
+        k = int(n_cloud - matlab_round(params.fallback_fraction * n_cloud) + 1)
+    return k
+
+
+# ---------------------------------------------------------------------------------------------
+# distances between H0 diagrams (all births 0)
+# ---------------------------------------------------------------------------------------------
+def _split_deaths(diagram: np.ndarray) -> tuple[np.ndarray, int]:
+    """Finite deaths (sorted ascending) and the number of infinite bars of an H0 diagram.
+
+    Accepts an (n, 2) barcode with births 0 or a 1-D array of deaths.
+    """
+    arr = np.asarray(diagram, dtype=float)
+    if arr.ndim == 2:
+        if arr.shape[1] != 2:
+            raise ValueError(f"expected an (n, 2) barcode, got shape {arr.shape}")
+        if len(arr) and np.any(arr[:, 0] != 0):
+            raise ValueError("H0 diagram distances need every bar born at 0")
+        arr = arr[:, 1]
+    elif arr.ndim != 1:
+        raise ValueError(f"expected an (n, 2) barcode or 1-D deaths, got shape {arr.shape}")
+    if np.any(np.isnan(arr)) or np.any(arr < 0):
+        raise ValueError("deaths must be >= 0 and not NaN")
+    inf = np.isposinf(arr)
+    return np.sort(arr[~inf]), int(inf.sum())
+
+
+def wasserstein_h0(a: np.ndarray, b: np.ndarray) -> float:
+    """Exact 1-Wasserstein distance (L-infinity ground metric) between two H0 diagrams.
+
+    Matching (0, x) to (0, y) costs |x - y|, sending (0, x) to the diagonal costs x / 2; infinite
+    bars match each other at cost 0 (a different number of them gives inf, as gudhi). Matched pairs
+    can be taken in sorted order, so the optimum is a dynamic programme over the merged sorted deaths
+    whose state is the running imbalance F (matched x's minus matched y's so far). Its value is
+    convex in F and each step (add gap * |F|; keep or match the next point) preserves convexity, so
+    the slope sequence is kept in two heaps split at F = 0 (slope trick): O(K log K), exact.
+    Not divided by the number of bars (``topological_similarity`` does that: d_Wp = W1 / K).
+    """
+    xa, ia = _split_deaths(a)
+    xb, ib = _split_deaths(b)
+    if ia != ib:
+        return float("inf")
+    events = np.concatenate([xa, xb])
+    side = np.concatenate([np.zeros(len(xa), bool), np.ones(len(xb), bool)])
+    order = np.argsort(events, kind="stable")
+    left: list[float] = []  # max-heap (negated) of slopes s(F) for F < 0, stored minus add_left
+    right: list[float] = []  # min-heap of slopes for F >= 0, stored minus add_right
+    add_left = add_right = 0.0
+    sum_left = 0.0  # sum of stored values in ``left`` (actual sum = sum_left + add_left * len)
+    g_lo = 0.0  # value of the convex function at its leftmost point lo
+    lo = 0
+    z_prev = 0.0
+    for e in order.tolist():
+        z = float(events[e])
+        gap = z - z_prev
+        z_prev = z
+        if gap:
+            add_left -= gap
+            add_right += gap
+            g_lo += gap * (-lo)
+        c = z / 2.0
+        if not side[e]:  # a point of ``a``: g'(F) = min(g(F) + c, g(F - 1)) inserts slope -c
+            g_lo += c
+            s = -c
+            if left and s < -left[0] + add_left:
+                top = -heapq.heappushpop(left, -(s - add_left)) + add_left
+                sum_left += (s - add_left) - (top - add_left)
+                heapq.heappush(right, top - add_right)
+            else:
+                heapq.heappush(right, s - add_right)
+        else:  # a point of ``b``: g'(F) = min(g(F) + c, g(F + 1)) inserts slope +c, lo -= 1
+            lo -= 1
+            s = c
+            if right and s > right[0] + add_right:
+                low = heapq.heappushpop(right, s - add_right) + add_right
+            else:
+                low = s
+            heapq.heappush(left, -(low - add_left))
+            sum_left += low - add_left
+    return float(g_lo + sum_left + add_left * len(left))
+
+
+def _hall_ok(must: np.ndarray, other: np.ndarray, t: float) -> bool:
+    """Can every point of sorted ``must`` be matched to a distinct point of sorted ``other`` within t?
+
+    Neighbourhoods are intervals of equal width, so Hall's condition only needs contiguous runs
+    must[i..j]: #other in [must_i - t, must_j + t] >= j - i + 1.
+    """
+    if len(must) == 0:
+        return True
+    j = np.arange(len(must))
+    upper = j + 1 - np.searchsorted(other, must + t, side="right")
+    lower = j - np.searchsorted(other, must - t, side="left")
+    return bool(np.all(upper <= np.minimum.accumulate(lower)))
+
+
+def _bottleneck_feasible(xa: np.ndarray, xb: np.ndarray, t: float) -> bool:
+    # Points within 2t of 0 may go to the diagonal; the others need a partner within t. Matchings
+    # covering each side's required points exist separately iff one covers both (Mendelsohn-Dulmage).
+    return _hall_ok(xa[xa > 2 * t], xb, t) and _hall_ok(xb[xb > 2 * t], xa, t)
+
+
+def bottleneck_h0(a: np.ndarray, b: np.ndarray) -> float:
+    """Exact bottleneck distance (L-infinity ground metric) between two H0 diagrams.
+
+    Same costs as :func:`wasserstein_h0`. The answer is one of x/2, y/2 or |x - y|; feasibility of
+    a threshold is a Hall-condition test; bisection over floats brackets the optimum to one ulp and
+    the nearest candidate value is returned, so the result is exact.
+    """
+    xa, ia = _split_deaths(a)
+    xb, ib = _split_deaths(b)
+    if ia != ib:
+        return float("inf")
+    if len(xa) == 0 and len(xb) == 0:
+        return 0.0
+    hi = max(xa[-1] if len(xa) else 0.0, xb[-1] if len(xb) else 0.0) / 2.0  # all to the diagonal
+    lo = 0.0
+    if _bottleneck_feasible(xa, xb, lo):
+        return 0.0
+    for _ in range(200):
+        mid = (lo + hi) / 2.0
+        if mid <= lo or mid >= hi:
+            break
+        if _bottleneck_feasible(xa, xb, mid):
+            hi = mid
+        else:
+            lo = mid
+    # snap to the nearest candidate value (exactly computed) to remove bisection rounding
+    cands = [xa / 2.0, xb / 2.0]
+    for x, y in ((xa, xb), (xb, xa)):
+        if len(x) and len(y):
+            for target in (x - hi, x + hi):
+                pos = np.clip(np.searchsorted(y, target), 0, len(y) - 1)
+                for p in (pos, np.maximum(pos - 1, 0)):
+                    cands.append(np.abs(x - y[p]))
+    cands = np.concatenate(cands)
+    best = cands[np.argmin(np.abs(cands - hi))]
+    return float(best) if abs(best - hi) <= 1e-12 * max(hi, 1e-300) + 1e-300 else float(hi)
+
+
+# ---------------------------------------------------------------------------------------------
+# the metric
+# ---------------------------------------------------------------------------------------------
+def topological_similarity(
+    cloud: np.ndarray,
+    skeletal: np.ndarray,
+    *,
+    params: Params = Params(),
+    checkpoint: Checkpoint = no_checkpoint,
+) -> TopologyResult:
+    """Bottleneck and normalized 1-Wasserstein distances between the K longest H0 bars of the
+    cloud and of the skeletal point set (SPEC 1; both inputs already normalized, SPEC 0).
+
+    K comes from :func:`compared_bar_count`; a diagram with fewer than K bars is compared whole;
+    d_Wp = W1 / K. Barcodes and eps* are returned in normalized units, every bar included.
+    """
+    cloud = _as_points(cloud)
+    skeletal = _as_points(skeletal)
+    if len(cloud) == 0 or len(skeletal) == 0:
+        raise ValueError("topological similarity needs a non-empty cloud and skeletal point set")
+    cloud_bars = h0_barcode(cloud, checkpoint=lambda f: checkpoint(0.45 * f))
+    skel_bars = h0_barcode(skeletal, checkpoint=lambda f: checkpoint(0.45 + 0.45 * f))
+    eps = eps_star(cloud, params.eps_quantile)
+    k = compared_bar_count(cloud_bars, eps, len(cloud), params=params)
+    checkpoint(0.92)
+    a, b = cloud_bars[:k], skel_bars[:k]
+    d_b = bottleneck_h0(a, b)
+    checkpoint(0.96)
+    d_w = wasserstein_h0(a, b) / k
+    checkpoint(1.0)
+    return TopologyResult(
+        bottleneck=float(d_b),
+        wasserstein=float(d_w),
+        eps_star=eps,
+        n_bars=int(k),
+        cloud_barcode=cloud_bars,
+        skeletal_barcode=skel_bars,
+    )
