@@ -61,6 +61,41 @@ def test_skeletal_matches_plain_loop_reference(rng, n, k_center):
     np.testing.assert_allclose(got, want, rtol=0, atol=1e-12)
 
 
+@pytest.mark.parametrize("k_center", [10, 30])
+def test_skeletal_coincident_points_break_ties_by_index_like_reference(rng, k_center):
+    # contraction leaves clusters of exactly coincident points, some larger than k, some smaller:
+    # ties both at distance 0 and at the boundary inside a neighbouring cluster
+    centres = rng.normal(size=(25, 3))
+    skel = centres[rng.integers(0, 25, size=400)]
+    cloud = skel + rng.normal(scale=0.3, size=skel.shape)
+    params = Params(k_center=k_center)
+    got = skeletal_centeredness(cloud, skel, params=params)
+    want = _skeletal_reference(cloud, skel, k_center)
+    np.testing.assert_allclose(got, want, rtol=0, atol=1e-12)
+
+
+def test_skeletal_cluster_larger_than_k_uses_lowest_index_members():
+    # 12 coincident skeletal points, k = 10: every member's neighbours are rows 0..9
+    cloud = np.vstack([np.tile([1.0, 0, 0], (10, 1)), np.tile([-1.0, 0, 0], (2, 1))])
+    c = skeletal_centeredness(cloud, np.zeros((12, 3)), params=Params(k_center=10))
+    np.testing.assert_allclose(c, 0.0, atol=1e-12)  # all ten chosen cloud points lie on one side
+
+
+def test_skeletal_negative_zero_coincides_with_zero():
+    skel = np.zeros((12, 3))
+    skel[::2, 0] = -0.0
+    cloud = np.vstack([np.tile([1.0, 0, 0], (10, 1)), np.tile([-1.0, 0, 0], (2, 1))])
+    c = skeletal_centeredness(cloud, skel, params=Params(k_center=10))
+    np.testing.assert_allclose(c, 0.0, atol=1e-12)
+
+
+def test_skeletal_rejects_non_finite_points():
+    skel = np.zeros((12, 3))
+    skel[3, 1] = np.nan
+    with pytest.raises(ValueError):
+        skeletal_centeredness(np.zeros((12, 3)), skel)
+
+
 def test_skeletal_chunks_agree_with_one_pass(rng, monkeypatch):
     import skelcore.metrics.centeredness as mod
 

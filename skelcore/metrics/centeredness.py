@@ -35,10 +35,16 @@ def skeletal_centeredness(
     their corresponding cloud points (same rows of ``corresponding_cloud``) and M, the mean distance
     from m_s to those cloud points: c_i = max(0, 1 - |m_o - m_s| / M). M = 0 gives NaN.
 
+    Ties: contraction leaves many skeletal points at exactly the same position, so "the k nearest"
+    is often ambiguous and the choice changes m_o. Equal distances are ordered by row index, as
+    MATLAB's ``knnsearch`` (the reference tool) does: in a cluster of more than k coincident points
+    every member gets the k lowest-index members as its neighbours (itself not necessarily among
+    them). The result does not depend on the kd-tree's internals.
+
     Parameters
     ----------
     corresponding_cloud : (N_s, 3) cloud point of each skeletal point (row i <-> row i).
-    skeletal : (N_s, 3) skeletal point set, normalized like the cloud.
+    skeletal : (N_s, 3) skeletal point set, normalized like the cloud; finite.
 
     Returns
     -------
@@ -57,17 +63,22 @@ def skeletal_centeredness(
             f"skeletal points {skel.shape} and their corresponding cloud points {cloud.shape} "
             "must both be (N, 3) with the same N"
         )
+    if not np.all(np.isfinite(skel)):
+        raise ValueError("skeletal points contain NaN or inf")
     n = len(skel)
-    out = np.full(n, np.nan)
     if n == 0:
-        return out
+        return np.full(0, np.nan)
     k = min(k_center_for(n, params), n)
-    tree = cKDTree(skel)
     checkpoint(0.0)
-    for lo in range(0, n, _SKELETAL_CHUNK):
-        hi = min(lo + _SKELETAL_CHUNK, n)
-        _, idx = tree.query(skel[lo:hi], k=k, workers=-1)
-        idx = idx.reshape(hi - lo, k)
+    groups = _CoincidentGroups(skel)
+    checkpoint(0.0)
+    tree = cKDTree(groups.positions)
+    checkpoint(0.0)
+    n_groups = len(groups.positions)
+    per_group = np.full(n_groups, np.nan)
+    for lo in range(0, n_groups, _SKELETAL_CHUNK):
+        hi = min(lo + _SKELETAL_CHUNK, n_groups)
+        idx = groups.k_nearest_rows(tree, np.arange(lo, hi), k)
         m_s = skel[idx].mean(axis=1)
         neighbours_o = cloud[idx]
         m_o = neighbours_o.mean(axis=1)
@@ -77,9 +88,48 @@ def skeletal_centeredness(
         with np.errstate(invalid="ignore", divide="ignore"):
             c = np.maximum(0.0, 1.0 - offset / spread)
         c[~(spread > 0)] = np.nan
-        out[lo:hi] = c
-        checkpoint(hi / n)
-    return out
+        per_group[lo:hi] = c
+        checkpoint(hi / n_groups)
+    # coincident points have the same neighbours (ties go by index, not by self), so the same c
+    return per_group[groups.group_of]
+
+
+class _CoincidentGroups:
+    """Skeletal points grouped by exact position; members of each group in increasing row order."""
+
+    def __init__(self, points: np.ndarray) -> None:
+        # lexsort is stable, so each group's members come out in increasing row order; it is also
+        # much faster than np.unique(axis=0). -0.0 == 0.0, so both land in one group.
+        order = np.lexsort(points.T[::-1])
+        ordered = points[order]
+        new = np.ones(len(points), dtype=bool)
+        new[1:] = np.any(ordered[1:] != ordered[:-1], axis=1)
+        self.starts = np.flatnonzero(new)
+        self.counts = np.diff(np.append(self.starts, len(points)))
+        self.positions = ordered[self.starts] + 0.0
+        self.members = order
+        self.group_of = np.empty(len(points), dtype=np.int64)
+        self.group_of[order] = np.cumsum(new) - 1
+
+    def k_nearest_rows(self, tree: cKDTree, queries: np.ndarray, k: int) -> np.ndarray:
+        """(len(queries), k) rows: the k points nearest to each query group's position, equal
+        distances in row order. Whole groups are taken nearest first; the last one contributes its
+        lowest-index members. (Distinct positions at exactly equal distances keep the tree's order.)
+        """
+        n_q = len(queries)
+        k_groups = min(k, len(self.positions))  # every group has >= 1 member, so k groups suffice
+        _, near = tree.query(self.positions[queries], k=k_groups, workers=-1)
+        near = near.reshape(n_q, k_groups)
+        cum = np.cumsum(self.counts[near], axis=1)  # >= k in the last column
+        # slot[q, t] = first j with cum[q, j] > t: one flat searchsorted with per-row offsets
+        stride = int(cum[:, -1].max()) + 1
+        row_offset = np.arange(n_q, dtype=np.int64)[:, None] * stride
+        t = np.arange(k, dtype=np.int64)[None, :]
+        slot = np.searchsorted((cum + row_offset).ravel(), (t + row_offset).ravel(), side="right")
+        slot = slot.reshape(n_q, k) - np.arange(n_q, dtype=np.int64)[:, None] * k_groups
+        before = np.where(slot > 0, np.take_along_axis(cum, np.maximum(slot - 1, 0), axis=1), 0)
+        group = np.take_along_axis(near, slot, axis=1)
+        return self.members[self.starts[group] + (t - before)]
 
 
 def curve_centeredness(
