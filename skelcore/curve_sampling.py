@@ -1,4 +1,5 @@
-"""Samples along a curve skeleton and the curve direction at each (SPEC 3, paper Def. 5 and 9).
+"""Samples along a curve skeleton and the curve direction at each (SPEC 3; paper, definitions
+"curve skeleton point" and "associated points").
 
 The samples feed curve boundedness (SPEC 2) and curve centeredness (SPEC 3); the directions define
 the cutting slabs of curve centeredness, so only the line through a direction matters, not its sign.

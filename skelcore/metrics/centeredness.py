@@ -1,4 +1,5 @@
-"""Centeredness of a skeletal point set and of curve-skeleton samples (SPEC 3, paper Defs. 10-12).
+"""Centeredness of a skeletal point set and of curve-skeleton samples (SPEC 3; paper,
+eq. "skeletal_point_centeredness" and "curve_point_centeredness").
 
 Both functions return raw local values: c in [0, 1], NaN where invalid. The rule "not bounded ->
 c = 0" is applied later by :func:`skelcore.results.apply_unbounded_rule`, so the viewer can change
@@ -28,7 +29,7 @@ def skeletal_centeredness(
     params: Params = Params(),
     checkpoint: Checkpoint = no_checkpoint,
 ) -> np.ndarray:
-    """Centeredness of every skeletal point (SPEC 3, paper Eq. 13; the reference tool's k).
+    """Centeredness of every skeletal point (SPEC 3; paper eq. "skeletal_point_centeredness").
 
     For skeletal point q_i take its k nearest skeletal neighbours (itself included; k from
     :func:`skelcore.params.k_center_for`, at most N_s), their centroid m_s, the centroid m_o of
@@ -140,7 +141,8 @@ def curve_centeredness(
     params: Params = Params(),
     checkpoint: Checkpoint = no_checkpoint,
 ) -> np.ndarray:
-    """Centeredness of curve-skeleton samples from the cloud's cross-section (SPEC 3, paper Eq. 15).
+    """Centeredness of curve samples from the cloud's cross-section (SPEC 3; paper eq.
+    "curve_point_centeredness").
 
     For sample p with direction u: the slab of cloud points x with |u . (x - p)| < alpha / 2,
     alpha = ``params.slab_factor`` x bounding-box diagonal of ``cloud``; the slab and p projected
