@@ -48,13 +48,17 @@ CASES = [
     ("ply_truncated_binary", "c.ply", _ply_binary_cloud(cut=7), load_cloud, "truncated"),
     ("ply_count_too_big", "c.ply", _ply_binary_cloud(count=10**9), load_cloud, "truncated"),
     ("ply_no_end_header", "c.ply", b"ply\nformat ascii 1.0\nelement vertex 1\n", load_cloud, "end_header"),
+    ("ply_ascii_short_row", "c.ply", b"ply\nformat ascii 1.0\nelement vertex 2\nproperty float x\nproperty float y\n"
+     b"property float z\nend_header\n1 2 3\n1 3\n", load_cloud, "line 9 has 2 columns"),  # fmt: skip
+    ("ply_bad_property_type", "c.ply", b"ply\nformat ascii 1.0\nelement vertex 1\nproperty real x\nend_header\n1\n",
+     load_cloud, "bad property line"),  # fmt: skip
     ("ply_bad_format", "c.ply", b"ply\nformat weird 1.0\nelement vertex 0\nend_header\n", load_cloud, "format"),
     ("ply_no_x", "c.ply", b"ply\nformat ascii 1.0\nelement vertex 1\nproperty float a\nproperty float y\n"
      b"property float z\nend_header\n1 2 3\n", load_cloud, "no x"),  # fmt: skip
     ("ply_no_vertex_element", "c.ply", b"ply\nformat ascii 1.0\nelement foo 1\nproperty float x\nend_header\n1\n",
      load_cloud, "no vertex element"),  # fmt: skip
     ("ply_text_garbage_row", "c.ply", b"ply\nformat ascii 1.0\nelement vertex 2\nproperty float x\nproperty float y\n"
-     b"property float z\nend_header\n1 2 3\n1 two 3\n", load_cloud, "malformed PLY"),  # fmt: skip
+     b"property float z\nend_header\n1 2 3\n1 two 3\n", load_cloud, "line 9: 'two' is not a number"),  # fmt: skip
     ("ply_empty_cloud", "c.ply", _ply_binary_cloud(n=0), load_cloud, "0 points"),
     ("ply_inf", "c.ply", b"ply\nformat ascii 1.0\nelement vertex 2\nproperty float x\nproperty float y\n"
      b"property float z\nend_header\n1 2 3\n1 inf 3\n", load_cloud, "infinite"),  # fmt: skip

@@ -389,3 +389,21 @@ def test_real_hammer_cloud_loads_in_file_units(shared_data):
     pts = load_cloud(shared_data / "hammer_4096.ply")
     assert pts.shape == (4096, 3) and pts.dtype == np.float64
     np.testing.assert_allclose(pts[0], [-7.67962217330932617, -185.189102172851562, -13.0556678771972656], rtol=1e-7)
+
+
+@pytest.mark.parametrize("text", [False, True])
+def test_ply_layouts_outside_the_fast_path_load_through_plyfile(tmp_path, text):
+    """A list element before the vertices, and edges stored as polylines in a list property."""
+    v, e = make_curve()
+    face = np.array([([0, 1, 2],)], dtype=[("vertex_indices", "i4", (3,))])
+    vert = np.zeros(len(v), dtype=[("x", "f8"), ("y", "f8"), ("z", "f8")])
+    vert["x"], vert["y"], vert["z"] = v.T
+    lines = np.empty(len(CURVE_BRANCHES), dtype=[("vertex_indices", object)])
+    lines["vertex_indices"] = [np.array(b, dtype=np.int32) for b in CURVE_BRANCHES]
+    elements = [PlyElement.describe(face, "face"), PlyElement.describe(vert, "vertex"),
+                PlyElement.describe(lines, "edge", len_types={"vertex_indices": "u1"},
+                                    val_types={"vertex_indices": "i4"})]  # fmt: skip
+    path = tmp_path / "mixed.ply"
+    PlyData(elements, text=text).write(str(path))
+    curve = load_curve(path)
+    assert edge_set(curve.vertices, curve.edges) == edge_set(v, e)

@@ -1,9 +1,15 @@
-"""PLY: clouds, skeletal point sets and curve skeletons (``edge`` element), read with plyfile.
+"""PLY: clouds, skeletal point sets and curve skeletons (``edge`` element).
 
-VTK's PLY reader drops the ``edge`` element and extra properties, so we use plyfile. Curve files as
-written by Open3D's ``write_line_set`` (used by pc-skeletor's ``export_results``): binary little
-endian, ``double x y z`` vertices, ``element edge`` with ``int vertex1``, ``int vertex2`` (and
-``uchar red green blue`` when the line set is coloured), 0-based indices.
+VTK's PLY reader drops the ``edge`` element and extra properties, so we do not use it. The header is
+parsed here and the data read with numpy in one pass (``np.frombuffer`` for binary, the C text
+parser for ASCII), because plyfile reads non-memory-mapped binary and all ASCII data row by row in
+Python (seconds per million points); plyfile remains the reader for the rare layouts the fast path
+does not cover (a list property in the vertex or edge element, or a list element before them) and
+writes our PLY files.
+
+Curve files as written by Open3D's ``write_line_set`` (which pc-skeletor's ``export_results`` uses):
+binary little endian, ``double x y z`` vertices, ``element edge`` with ``int vertex1``, ``int
+vertex2`` (and ``uchar red green blue`` when the line set is coloured), 0-based indices.
 """
 
 from __future__ import annotations
@@ -11,6 +17,7 @@ from __future__ import annotations
 import io
 import os
 import re
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Iterable, Mapping
 
@@ -18,17 +25,18 @@ import numpy as np
 from plyfile import PlyData, PlyElement
 
 from ..errors import SkelInputError
-from ._common import RawData, as_edges
+from ._common import RawData, as_edges, numeric_table
 from .atomic import atomic_open
 
-_SIZES = {
-    "char": 1, "int8": 1, "uchar": 1, "uint8": 1,
-    "short": 2, "int16": 2, "ushort": 2, "uint16": 2,
-    "int": 4, "int32": 4, "uint": 4, "uint32": 4,
-    "float": 4, "float32": 4, "double": 8, "float64": 8,
+_TYPES = {
+    "char": "i1", "int8": "i1", "uchar": "u1", "uint8": "u1",
+    "short": "i2", "int16": "i2", "ushort": "u2", "uint16": "u2",
+    "int": "i4", "int32": "i4", "uint": "u4", "uint32": "u4",
+    "float": "f4", "float32": "f4", "double": "f8", "float64": "f8",
 }  # fmt: skip
 _VERTEX_NAMES = ("vertex", "vertices", "point", "points")
 _EDGE_NAMES = ("edge", "edges", "line", "lines")
+_EDGE_PAIRS = (("vertex1", "vertex2"), ("v1", "v2"), ("vertex_1", "vertex_2"), ("source", "target"))
 _NAME_RE = re.compile(r"^[A-Za-z_][A-Za-z0-9_]*$")
 
 
@@ -36,86 +44,160 @@ def is_ply(head: bytes) -> bool:
     return head[:4] in (b"ply\n", b"ply\r") or head[:5] == b"ply \n"
 
 
-def _check_header(data: bytes, path: Path) -> None:
-    """Check the header's element sizes against the file size before plyfile allocates anything.
+@dataclass
+class _Element:
+    name: str
+    count: int
+    props: list[tuple[str, str]] = field(default_factory=list)  # (name, numpy code or "list")
 
-    A flipped digit in ``element vertex 3`` would otherwise make plyfile try to read (or allocate)
-    billions of rows.
-    """
-    end = data.find(b"end_header")
-    if end < 0:
-        raise SkelInputError("PLY header has no end_header line (truncated or not a PLY file)", path)
-    nl = data.find(b"\n", end)
-    if nl < 0:
-        raise SkelInputError("PLY file ends right after its header (truncated)", path)
-    body_size = len(data) - nl - 1
-    header = data[:end].decode("ascii", errors="replace").splitlines()
+    @property
+    def has_list(self) -> bool:
+        return any(t == "list" for _, t in self.props)
+
+    def prop(self, *names: str) -> str | None:
+        lower = {n.lower(): n for n, _ in self.props}
+        return next((lower[n] for n in names if n in lower), None)
+
+
+def _parse_header(data: bytes, path: Path) -> tuple[str, list[_Element], int]:
+    """(format, elements, byte offset of the data). Checks every count and type before any data
+    is read, so a flipped digit in ``element vertex 3`` cannot make a reader allocate billions of rows."""
+    pos = 0
     fmt = None
-    counts: list[int] = []
-    row_sizes: list[int | None] = []
-    for line in header:
+    elements: list[_Element] = []
+    for lineno in range(1, 100000):
+        nl = data.find(b"\n", pos)
+        if nl < 0:
+            raise SkelInputError("PLY header has no end_header line (truncated or not a PLY file)", path)
+        line = data[pos:nl].decode("ascii", errors="replace").strip()
+        pos = nl + 1
         parts = line.split()
-        if not parts:
+        if not parts or parts[0] in ("comment", "obj_info") or lineno == 1:
             continue
-        if parts[0] == "format" and len(parts) >= 2:
+        key = parts[0]
+        if key == "end_header":
+            break
+        if key == "format":
+            if len(parts) < 2 or parts[1] not in ("ascii", "binary_little_endian", "binary_big_endian"):
+                raise SkelInputError(f"unknown PLY format {' '.join(parts[1:])[:30]!r}", path)
             fmt = parts[1]
-        elif parts[0] == "element" and len(parts) >= 3:
-            try:
-                counts.append(int(parts[2]))
-            except ValueError:
-                raise SkelInputError(f"PLY header: bad element count {parts[2][:20]!r}", path) from None
-            if counts[-1] < 0:
-                raise SkelInputError(f"PLY header: negative element count {counts[-1]}", path)
-            row_sizes.append(0)
-        elif parts[0] == "property" and row_sizes:
-            if len(parts) >= 2 and parts[1] == "list":
-                row_sizes[-1] = None  # variable-size rows: cannot pre-check
-            elif row_sizes[-1] is not None and len(parts) >= 2:
-                size = _SIZES.get(parts[1])
-                if size is None:
-                    raise SkelInputError(f"PLY header: unknown property type {parts[1][:20]!r}", path)
-                row_sizes[-1] += size
+        elif key == "element":
+            if len(parts) != 3 or not parts[2].isdigit():
+                raise SkelInputError(f"PLY header line {lineno}: bad element line {line[:40]!r}", path)
+            elements.append(_Element(parts[1], int(parts[2])))
+        elif key == "property":
+            if not elements:
+                raise SkelInputError(f"PLY header line {lineno}: property before any element", path)
+            if len(parts) == 5 and parts[1] == "list" and parts[2] in _TYPES and parts[3] in _TYPES:
+                elements[-1].props.append((parts[4], "list"))
+            elif len(parts) == 3 and parts[1] in _TYPES:
+                elements[-1].props.append((parts[2], _TYPES[parts[1]]))
+            else:
+                raise SkelInputError(f"PLY header line {lineno}: bad property line {line[:40]!r}", path)
+        else:
+            raise SkelInputError(f"PLY header line {lineno}: unexpected {line[:30]!r}", path)
+    else:
+        raise SkelInputError("PLY header has no end_header line in its first 100000 lines", path)
     if fmt is None:
         raise SkelInputError("PLY header has no format line", path)
+    body = len(data) - pos
     if fmt == "ascii":
-        n_lines = data.count(b"\n", nl + 1) + 1
-        if sum(counts) > n_lines:
-            raise SkelInputError(
-                f"truncated: PLY header promises {sum(counts)} rows, file has {n_lines} lines of data", path
-            )
-    elif fmt in ("binary_little_endian", "binary_big_endian"):
-        if all(s is not None for s in row_sizes):
-            need = sum(c * s for c, s in zip(counts, row_sizes))  # type: ignore[operator]
-            if need > body_size:
-                raise SkelInputError(
-                    f"truncated: PLY header promises {need} bytes of data, file has {body_size}", path
-                )
-        elif sum(counts) > body_size:
-            raise SkelInputError("truncated: PLY header promises more rows than the file has bytes", path)
+        if sum(e.count for e in elements) > data.count(b"\n", pos) + 1:
+            raise SkelInputError(f"truncated: PLY header promises more rows than the file has lines", path)
     else:
-        raise SkelInputError(f"unknown PLY format {fmt[:30]!r}", path)
+        need = 0
+        for e in elements:
+            if e.has_list:
+                need += e.count  # at least one byte (the list length) per row
+            else:
+                need += e.count * sum(np.dtype(t).itemsize for _, t in e.props)
+        if need > body:
+            raise SkelInputError(f"truncated: PLY header promises at least {need} bytes of data, file has {body}", path)
+    return fmt, elements, pos
 
 
-def _element(ply: PlyData, names: tuple[str, ...]):
-    for el in ply.elements:
-        if el.name.lower() in names:
-            return el
-    return None
+def _find(elements: list[_Element], names: tuple[str, ...]) -> _Element | None:
+    return next((e for e in elements if e.name.lower() in names), None)
 
 
 def read_ply(path: Path, data: bytes) -> RawData:
     if not is_ply(data[:8]):
         raise SkelInputError("not a PLY file (does not start with 'ply')", path)
-    _check_header(data, path)
-    ply = PlyData.read(io.BytesIO(data), mmap=False)
-    vert = _element(ply, _VERTEX_NAMES)
+    fmt, elements, start = _parse_header(data, path)
+    vert = _find(elements, _VERTEX_NAMES)
     if vert is None:
-        names = ", ".join(el.name for el in ply.elements) or "none"
+        names = ", ".join(e.name for e in elements) or "none"
         raise SkelInputError(f"PLY file has no vertex element (elements: {names})", path)
-    props = {p.name.lower(): p.name for p in vert.properties}
-    missing = [k for k in "xyz" if k not in props]
+    missing = [k for k in "xyz" if vert.prop(k) is None]
     if missing:
         raise SkelInputError(f"PLY vertex element has no {'/'.join(missing)} property", path)
+    edge_el = _find(elements, _EDGE_NAMES)
+    pair = None if edge_el is None else next(
+        ((edge_el.prop(a), edge_el.prop(b)) for a, b in _EDGE_PAIRS if edge_el.prop(a) and edge_el.prop(b)), None
+    )
+    fast_edges = edge_el is None or (not edge_el.has_list and pair is not None)
+    if not vert.has_list and fast_edges:
+        tables = _read_fast(fmt, elements, data, start, path, wanted={id(vert), id(edge_el)})
+        if tables is not None:
+            v = tables[id(vert)]
+            vertices = np.column_stack([np.asarray(v[vert.prop(k)], dtype=np.float64) for k in "xyz"])
+            edges = None
+            if edge_el is not None:
+                e = tables[id(edge_el)]
+                a, b = pair  # type: ignore[misc]
+                pairs = np.column_stack([np.asarray(e[a]), np.asarray(e[b])]) if len(e[a]) else np.empty((0, 2))
+                edges = as_edges(pairs, path, "PLY edge indices")
+            return RawData(vertices=vertices.reshape(-1, 3), edges=edges, format="PLY")
+    return _read_plyfile(path, data)
+
+
+def _read_fast(fmt, elements, data, start, path, wanted) -> dict[int, dict[str, np.ndarray]] | None:
+    """Column arrays of the wanted elements, or None when a list element precedes one of them."""
+    out: dict[int, dict[str, np.ndarray]] = {}
+    wanted = {w for w in wanted if w != id(None)}
+    if fmt == "ascii":
+        lines = data[start:].decode("utf-8", errors="replace").splitlines()
+        header_lines = data.count(b"\n", 0, start)
+        row = 0
+        for e in elements:
+            if not wanted - set(out):
+                break
+            if id(e) in wanted:
+                first_line = header_lines + row + 1
+                rows = [(first_line + k, text) for k, text in enumerate(lines[row : row + e.count])]
+                if len(rows) < e.count:
+                    raise SkelInputError(f"truncated: PLY element '{e.name}' has {len(rows)} of {e.count} rows", path)
+                if e.count:
+                    table = numeric_table(rows, path, min_cols=len(e.props), what=f"PLY {e.name} row")
+                else:
+                    table = np.empty((0, len(e.props)))
+                if table.shape[1] != len(e.props):
+                    raise SkelInputError(f"PLY {e.name} rows have {table.shape[1]} values, header says {len(e.props)}", path)
+                out[id(e)] = {name: table[:, j] for j, (name, _) in enumerate(e.props)}
+            row += e.count  # ASCII PLY: one row per line, lists included
+        return out
+    order = "<" if fmt == "binary_little_endian" else ">"
+    offset = start
+    for e in elements:
+        if not wanted - set(out):
+            break
+        if e.has_list:
+            return None  # row sizes unknown: let plyfile walk it
+        dtype = np.dtype([(f"p{j}", order + t) for j, (_, t) in enumerate(e.props)])
+        if id(e) in wanted:
+            if offset + e.count * dtype.itemsize > len(data):
+                raise SkelInputError(f"truncated: PLY element '{e.name}' runs past the end of the file", path)
+            rec = np.frombuffer(data, dtype=dtype, count=e.count, offset=offset)
+            out[id(e)] = {name: rec[f"p{j}"] for j, (name, _) in enumerate(e.props)}
+        offset += e.count * dtype.itemsize
+    return out
+
+
+def _read_plyfile(path: Path, data: bytes) -> RawData:
+    ply = PlyData.read(io.BytesIO(data), mmap=False)
+    vert = next((el for el in ply.elements if el.name.lower() in _VERTEX_NAMES), None)
+    assert vert is not None  # checked on our own header parse
+    props = {p.name.lower(): p.name for p in vert.properties}
     cols = []
     for k in "xyz":
         col = np.asarray(vert.data[props[k]])
@@ -124,7 +206,7 @@ def read_ply(path: Path, data: bytes) -> RawData:
         cols.append(col.astype(np.float64))
     vertices = np.column_stack(cols) if len(vert.data) else np.empty((0, 3))
     edges = None
-    edge_el = _element(ply, _EDGE_NAMES)
+    edge_el = next((el for el in ply.elements if el.name.lower() in _EDGE_NAMES), None)
     if edge_el is not None:
         edges = _ply_edges(edge_el, path)
     return RawData(vertices=vertices, edges=edges, format="PLY")
@@ -134,7 +216,7 @@ def _ply_edges(el, path: Path) -> np.ndarray:
     """``vertex1``/``vertex2`` scalar properties (Open3D, pc-skeletor), or one list property per row
     (a polyline: consecutive indices become edges)."""
     props = {p.name.lower(): p.name for p in el.properties}
-    for a, b in (("vertex1", "vertex2"), ("v1", "v2"), ("vertex_1", "vertex_2"), ("source", "target")):
+    for a, b in _EDGE_PAIRS:
         if a in props and b in props:
             if len(el.data) == 0:
                 return np.empty((0, 2), dtype=np.int64)
@@ -196,10 +278,31 @@ def _vertex_array(
     return out
 
 
+_PLY_TYPE = {"f8": "double", "f4": "float", "i4": "int", "u1": "uchar"}
+_TEXT_FMT = {"f8": "%.17g", "f4": "%.9g", "i4": "%d", "u1": "%d"}
+
+
 def _write(path, elements: list[PlyElement], inputs: Iterable, binary: bool) -> None:
-    ply = PlyData(elements, text=not binary, byte_order="<", comments=["written by skelcore"])
-    with atomic_open(path, "wb", inputs=inputs) as fh:
-        ply.write(fh)
+    if binary:
+        ply = PlyData(elements, text=False, byte_order="<", comments=["written by skelcore"])
+        with atomic_open(path, "wb", inputs=inputs) as fh:
+            ply.write(fh)
+        return
+    # ASCII by hand: plyfile formats text one row at a time (~20 s per million points).
+    head = ["ply", "format ascii 1.0", "comment written by skelcore"]
+    for el in elements:
+        head.append(f"element {el.name} {len(el.data)}")
+        head += [f"property {_PLY_TYPE[el.data.dtype[n].str[1:]]} {n}" for n in el.data.dtype.names]
+    head.append("end_header")
+    with atomic_open(path, "w", inputs=inputs) as fh:
+        fh.write("\n".join(head) + "\n")
+        for el in elements:
+            names = el.data.dtype.names
+            if len(el.data) == 0:
+                continue
+            table = np.column_stack([np.asarray(el.data[n], dtype=np.float64) for n in names])
+            fmt = " ".join(_TEXT_FMT[el.data.dtype[n].str[1:]] for n in names)
+            np.savetxt(fh, table, fmt=fmt)
 
 
 def write_points_ply(
