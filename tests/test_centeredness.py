@@ -203,15 +203,18 @@ def _curve_reference(cloud, points, directions, params):
     return np.array(out)
 
 
-def test_curve_matches_whole_cloud_reference_on_branching_shape():
-    shape = y_shape(1500, seed=4)
+@pytest.mark.parametrize("slab_factor", [0.02, 0.06, 0.003])
+def test_curve_matches_whole_cloud_reference_on_branching_shape(slab_factor):
+    # 0.003 makes the grid cell (diagonal / 256) wider than the slab
+    shape = y_shape(1500 if slab_factor > 0.01 else 6000, seed=4)
     rng = np.random.default_rng(5)
     samples = sample_curve(CurveSkeleton.from_raw(shape.curve_vertices, shape.curve_edges), 40)
     points = samples.points + rng.normal(scale=0.05, size=samples.points.shape)
     dirs = samples.directions + rng.normal(scale=0.2, size=samples.directions.shape)
-    params = Params()
+    params = Params(slab_factor=slab_factor)
     got = curve_centeredness(shape.cloud, points, dirs, params=params)
     want = _curve_reference(shape.cloud, points, dirs, params)
+    assert np.isfinite(want).sum() >= 10
     np.testing.assert_array_equal(np.isnan(got), np.isnan(want))
     np.testing.assert_allclose(got, want, atol=1e-9)
 
