@@ -1,0 +1,143 @@
+"""Union-of-caps area on an equal-area latitude raster: the kernel of the ``rays`` estimator (SPEC 2).
+
+The unit sphere of directions around a query is cut into ``rows`` rows of equal height in z (so of
+equal area, Archimedes) and every row into ``bins`` equal longitude bins; one direction sample sits at
+the centre of every cell, so the raster is an equal-weight grid of ``rows x bins`` directions.  A cap
+meets row j's centre circle in one exact longitude interval (law of cosines), so the samples a cap
+contains are found with a few float operations per (cap, row) and no per-sample test; they are marked
+in a per-row difference array, and the union of any number of caps costs one ``np.bincount`` and one
+``cumsum``.  Output = covered samples / all samples: the exact union area up to the sampling error of
+the grid.  The raster's frame is a fixed generic rotation of the world frame, so the row circles of
+the grid never line up with the axis-aligned silhouettes common in scanned and synthetic shapes (an
+aligned edge would make the per-row errors add up instead of averaging out).
+
+Everything runs in float32 on flat (query, point) pair arrays: the estimator's budget is a few tens of
+nanoseconds per pair (SPEC 2 accuracy is 0.01, far above float32's 1e-7).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+# A fixed, generic rotation (rotation vector (0.3, 0.7, 1.1) rad): raster frame = FRAME @ world.
+_ROTVEC = np.array([0.3, 0.7, 1.1])
+
+
+def _rotation_matrix(rotvec: np.ndarray) -> np.ndarray:
+    angle = float(np.linalg.norm(rotvec))
+    k = rotvec / angle
+    kx = np.array([[0, -k[2], k[1]], [k[2], 0, -k[0]], [-k[1], k[0], 0]])
+    return np.eye(3) + np.sin(angle) * kx + (1 - np.cos(angle)) * (kx @ kx)
+
+
+FRAME = _rotation_matrix(_ROTVEC)
+
+
+class CapRaster:
+    """The raster geometry (row heights, per-row constants) and the union-area kernel."""
+
+    def __init__(self, rows: int, bins: int):
+        if rows < 1 or bins < 1:
+            raise ValueError("the raster needs at least one row and one bin")
+        self.rows = int(rows)
+        self.bins = int(bins)
+        z = -1.0 + (np.arange(self.rows) + 0.5) * (2.0 / self.rows)
+        s = np.sqrt(1.0 - z * z)
+        self._inv_s = (1.0 / s).astype(np.float32)
+        self._z_over_s = (z / s).astype(np.float32)
+        self._bins_per_radian = np.float32(self.bins / (2.0 * np.pi))
+
+    def union_fraction(
+        self,
+        n_queries: int,
+        qidx: np.ndarray,
+        dx: np.ndarray,
+        dy: np.ndarray,
+        dz: np.ndarray,
+        h: np.ndarray | float,
+    ) -> np.ndarray:
+        """Fraction of the raster's samples covered by the caps of (query, point) pairs, per query.
+
+        ``qidx`` (any order) names the query of each pair in ``0..n_queries-1``; ``(dx, dy, dz)`` is
+        p - q in the raster's frame (float32); ``h`` is the ball radius, a scalar or one per pair.
+        A pair with |p - q| <= h contributes nothing (SPEC 2: the query is inside that ball).
+        """
+        rows, bins = self.rows, self.bins
+        f32 = np.float32
+        h = np.asarray(h, dtype=f32)
+        d2 = dx * dx
+        d2 += dy * dy
+        d2 += dz * dz
+        with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
+            inside = d2 <= h * h
+            inv = f32(1.0) / np.sqrt(d2)
+            uz = dz * inv
+            sina = h * inv
+            cosa = np.sqrt(np.maximum(f32(1.0) - sina * sina, f32(0.0)))
+            rho = np.sqrt(np.maximum(f32(1.0) - uz * uz, f32(0.0)))
+            mid = uz * cosa
+            spread = rho * sina
+            zhi = mid + spread
+            zlo = mid - spread
+            zhi[uz >= cosa] = 1.0  # the cap holds the north pole
+            zlo[-uz >= cosa] = -1.0  # ... the south pole
+            # rows j whose centre z_j = -1 + (j + 0.5) 2/rows lies in [zlo, zhi]:
+            # first = ceil(x - 0.5) = trunc(x + 0.5), end = floor(y - 0.5) + 1 = trunc(y + 0.5)
+            half_rows = f32(0.5 * rows)
+            first = ((zlo + f32(1.0)) * half_rows + f32(0.5)).astype(np.int32)
+            end = ((zhi + f32(1.0)) * half_rows + f32(0.5)).astype(np.int32)
+        np.minimum(end, rows, out=end)
+        n = end - first
+        n[inside] = 0
+        np.maximum(n, 0, out=n)
+        sel = np.flatnonzero(n)
+        out = np.zeros(n_queries)
+        if len(sel) == 0:
+            return out
+        n = n[sel]
+        total = int(n.sum())
+        rho = np.maximum(rho[sel], f32(1e-30))  # a cap centred on a pole: c = +-huge, full or empty
+        with np.errstate(over="ignore"):
+            # c_j = (cos a - z_j u_z) / (s_j rho): cosine of the half-width of the cap's interval in row j
+            a_coef = cosa[sel] / rho
+            b_coef = uz[sel] / rho
+        phi = np.arctan2(dy[sel], dx[sel])
+        phi *= self._bins_per_radian
+        phi += f32(bins)  # longitude in bin units, shifted positive
+        offsets = np.cumsum(n) - n
+        row = np.arange(total, dtype=np.int32)
+        row -= np.repeat((offsets - first[sel]).astype(np.int32), n)
+        c = np.repeat(a_coef, n)
+        c *= self._inv_s[row]
+        t = np.repeat(b_coef, n)
+        t *= self._z_over_s[row]
+        c -= t
+        np.clip(c, -1.0, 1.0, out=c)
+        half = np.arccos(c)
+        half *= self._bins_per_radian
+        centre = np.repeat(phi, n)
+        # bins k whose centre k + 0.5 lies in [centre - half, centre + half]
+        start = (centre - half + f32(0.5)).astype(np.int32)
+        stop = (centre + half + f32(0.5)).astype(np.int32)
+        length = stop - start
+        np.clip(length, 0, bins, out=length)
+        length[c <= -1.0] = bins
+        start %= bins
+        base = np.repeat(qidx[sel].astype(np.int32) * rows, n)
+        base += row
+        base *= bins + 1
+        stop = start + length
+        wrap = np.flatnonzero(stop > bins)
+        np.minimum(stop, bins, out=stop)
+        size = n_queries * rows * (bins + 1)
+        wrapped = base[wrap]
+        # +1 at each interval start, -1 at its end (second half of one bincount); a wrapped interval
+        # is split into [start, bins) and [0, stop - bins)
+        marks = np.concatenate(
+            [base + start, wrapped, base + stop + size, wrapped + (start[wrap] + length[wrap] - bins + size)]
+        )
+        counts = np.bincount(marks, minlength=2 * size)
+        diff = counts[:size] - counts[size:]
+        covered = np.cumsum(diff.reshape(n_queries, rows, bins + 1)[:, :, :bins], axis=2) > 0
+        out[:] = np.count_nonzero(covered.reshape(n_queries, -1), axis=1) / float(rows * bins)
+        return out
