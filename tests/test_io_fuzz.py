@@ -41,7 +41,10 @@ def _check(path, loader) -> str:
     return "ok"
 
 
-@pytest.mark.parametrize("kind,name", [("cloud", n) for n in sorted(CLOUD_WRITERS)] + [("curve", n) for n in sorted(CURVE_WRITERS)])
+FILES = [("cloud", n) for n in sorted(CLOUD_WRITERS)] + [("curve", n) for n in sorted(CURVE_WRITERS)]
+
+
+@pytest.mark.parametrize("kind,name", FILES)
 def test_corrupted_files_raise_only_skelinputerror(tmp_path, kind, name):
     seed = sum(map(ord, name))
     rng = np.random.default_rng(seed)

@@ -10,7 +10,6 @@ any problem into a one-line :class:`~skelcore.errors.SkelInputError` naming the 
 from __future__ import annotations
 
 import os
-import warnings
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Callable, Iterable
@@ -164,9 +163,7 @@ def _read_raw(path: str | os.PathLike) -> RawData:
         raise SkelInputError("file is empty", p)
     fmt = detect_format(p, data[:_HEAD_BYTES])
     try:
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore")
-            raw = _READERS[fmt](p, data)
+        raw = _READERS[fmt](p, data)
     except SkelInputError:
         raise
     except MemoryError:

@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import warnings
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Sequence
@@ -74,9 +73,9 @@ def numeric_table(
             f"line {rows[0][0]} has {ncols_first} columns, expected at least {min_cols} ({what})", path
         )
     try:
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore")
-            arr = np.loadtxt(lines, delimiter=delimiter, ndmin=2, dtype=np.float64, comments=None)
+        # rows is never empty, so loadtxt has nothing to warn about (no warnings filter needed:
+        # catch_warnings is not thread-safe and the viewer loads files in a worker thread).
+        arr = np.loadtxt(lines, delimiter=delimiter, ndmin=2, dtype=np.float64, comments=None)
         if arr.shape[0] == len(lines) and arr.shape[1] == ncols_first:
             return arr if use_cols is None else arr[:, :use_cols]
     except Exception:

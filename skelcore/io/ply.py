@@ -103,7 +103,7 @@ def _parse_header(data: bytes, path: Path) -> tuple[str, list[_Element], int]:
     body = len(data) - pos
     if fmt == "ascii":
         if sum(e.count for e in elements) > data.count(b"\n", pos) + 1:
-            raise SkelInputError(f"truncated: PLY header promises more rows than the file has lines", path)
+            raise SkelInputError("truncated: PLY header promises more rows than the file has lines", path)
     else:
         need = 0
         for e in elements:
@@ -172,7 +172,9 @@ def _read_fast(fmt, elements, data, start, path, wanted) -> dict[int, dict[str, 
                 else:
                     table = np.empty((0, len(e.props)))
                 if table.shape[1] != len(e.props):
-                    raise SkelInputError(f"PLY {e.name} rows have {table.shape[1]} values, header says {len(e.props)}", path)
+                    raise SkelInputError(
+                        f"PLY {e.name} rows have {table.shape[1]} values, header says {len(e.props)}", path
+                    )
                 out[id(e)] = {name: table[:, j] for j, (name, _) in enumerate(e.props)}
             row += e.count  # ASCII PLY: one row per line, lists included
         return out

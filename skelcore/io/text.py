@@ -67,7 +67,7 @@ def read_xyz(path: Path, data: bytes) -> RawData:
     delim = _delimiter(lines[first].strip())
     rows = _rows(text, first)
     # Multi-scan PTS files repeat the count line before every scan.
-    singles = [r for r in rows if len(r[1].split()) == 1 and r[1].isdigit()]
+    singles = [r for r in rows if r[1].isdigit()]
     if singles:
         single_set = {r[0] for r in singles}
         rows = [r for r in rows if r[0] not in single_set]
