@@ -17,29 +17,30 @@ __all__ = [
     "Params",
     "Evaluation",
     "evaluate",
+    "shapes",
+    "load_cloud",
+    "load_points",
+    "load_curve",
+    "load_any",
+    "skeletonize",
 ]
 
 
 def __getattr__(name: str):
-    # Lazy, so `import skelcore` stays cheap for the viewer's start-up and the CLI's --help.
-    if name == "evaluate":
-        from .evaluate import evaluate
-
-        return evaluate
-    if name == "Evaluation":
-        from .results import Evaluation
-
-        return Evaluation
-    if name in ("load_cloud", "load_points", "load_curve", "write_points_ply", "write_curve_ply"):
+    # Lazy where a submodule and a function share a name would clash otherwise (see below).
+    if name in ("load_cloud", "load_points", "load_curve", "load_any", "write_points_ply", "write_curve_ply"):
         from . import io
 
         return getattr(io, name)
-    if name in ("skeletonize",):
-        from .skeletonize import skeletonize
+    if name == "skeletonize":
+        from .skeletonize import skeletonize as fn
 
-        return skeletonize
-    if name in ("degrade",):
-        from . import degrade
-
-        return degrade
+        globals()["skeletonize"] = fn  # the submodule import bound the module here; the function wins
+        return fn
     raise AttributeError(f"module 'skelcore' has no attribute {name!r}")
+
+
+# Imported eagerly: the submodule ``skelcore.evaluate`` would otherwise shadow the function.
+from .evaluate import evaluate  # noqa: E402
+from .results import Evaluation  # noqa: E402
+from . import shapes  # noqa: E402
