@@ -104,6 +104,7 @@ def test_failed_write_leaves_no_file_behind(tmp_path, points):
     [
         {"scalars": {"bad name": np.zeros(30)}},
         {"scalars": {"x": np.zeros(30)}},
+        {"scalars": {"red": np.zeros(30)}},  # would read as a colour even without colors=
         {"colors": np.zeros((30, 3))},  # float colours: caller forgot map_to_rgb
         {"colors": np.zeros((29, 3), dtype=np.uint8)},
     ],

@@ -38,6 +38,8 @@ _VERTEX_NAMES = ("vertex", "vertices", "point", "points")
 _EDGE_NAMES = ("edge", "edges", "line", "lines")
 _EDGE_PAIRS = (("vertex1", "vertex2"), ("v1", "v2"), ("vertex_1", "vertex_2"), ("source", "target"))
 _NAME_RE = re.compile(r"^[A-Za-z_][A-Za-z0-9_]*$")
+# Scalar names that viewers would take for coordinates, colours or normals.
+_RESERVED = {"x", "y", "z", "red", "green", "blue", "alpha", "nx", "ny", "nz"}
 
 
 def is_ply(head: bytes) -> bool:
@@ -259,7 +261,7 @@ def _vertex_array(
         fields += [("red", "u1"), ("green", "u1"), ("blue", "u1")]
     values: dict[str, np.ndarray] = {}
     for name, val in scalars.items():
-        if not _NAME_RE.match(name) or name.lower() in {f[0] for f in fields}:
+        if not _NAME_RE.match(name) or name.lower() in _RESERVED:
             raise ValueError(f"bad PLY property name {name!r}")
         arr = np.asarray(val).ravel()
         if arr.shape != (n,):
