@@ -68,32 +68,104 @@ class CapRaster:
         d2 = dx * dx
         d2 += dy * dy
         d2 += dz * dz
-        with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
-            inside = d2 <= h * h
-            inv = f32(1.0) / np.sqrt(d2)
-            uz = dz * inv
-            sina = h * inv
-            cosa = np.sqrt(np.maximum(f32(1.0) - sina * sina, f32(0.0)))
-            rho = np.sqrt(np.maximum(f32(1.0) - uz * uz, f32(0.0)))
-            mid = uz * cosa
-            spread = rho * sina
-            zhi = mid + spread
-            zlo = mid - spread
-            zhi[uz >= cosa] = 1.0  # the cap holds the north pole
-            zlo[-uz >= cosa] = -1.0  # ... the south pole
-            # rows j whose centre z_j = -1 + (j + 0.5) 2/rows lies in [zlo, zhi]:
-            # first = ceil(x - 0.5) = trunc(x + 0.5), end = floor(y - 0.5) + 1 = trunc(y + 0.5)
-            half_rows = f32(0.5 * rows)
-            first = ((zlo + f32(1.0)) * half_rows + f32(0.5)).astype(np.int32)
-            end = ((zhi + f32(1.0)) * half_rows + f32(0.5)).astype(np.int32)
-        np.minimum(end, rows, out=end)
-        n = end - first
+        # no errstate (it costs more than a ufunc here): every step below stays finite
+        inside = d2 <= h * h
+        np.maximum(d2, f32(1e-30), out=d2)
+        inv = np.sqrt(d2)
+        np.divide(f32(1.0), inv, out=inv)
+        uz = dz * inv
+        sina = h * inv
+        np.minimum(sina, f32(1.0), out=sina)
+        cosa = f32(1.0) - sina * sina
+        np.sqrt(cosa, out=cosa)
+        rho = f32(1.0) - uz * uz
+        np.maximum(rho, f32(0.0), out=rho)
+        np.sqrt(rho, out=rho)
+        mid = uz * cosa
+        spread = rho * sina
+        zhi = mid + spread
+        zlo = mid - spread
+        zhi[uz >= cosa] = 1.0  # the cap holds the north pole
+        zlo[-uz >= cosa] = -1.0  # ... the south pole
+        # rows j whose centre z_j = -1 + (j + 0.5) 2/rows lies in [zlo, zhi]:
+        # first = ceil(x - 0.5) = trunc(x + 0.5), end = floor(y - 0.5) + 1 = trunc(y + 0.5)
+        half_rows = f32(0.5 * rows)
+        zlo += f32(1.0)
+        zlo *= half_rows
+        zlo += f32(0.5)
+        first = zlo.astype(np.int32)
+        zhi += f32(1.0)
+        zhi *= half_rows
+        zhi += f32(0.5)
+        n = zhi.astype(np.int32)
+        np.minimum(n, rows, out=n)
+        n -= first
         n[inside] = 0
-        np.maximum(n, 0, out=n)
-        sel = np.flatnonzero(n)
+        sel = np.flatnonzero(n > 0)
         out = np.zeros(n_queries)
         if len(sel) == 0:
             return out
+        n = n[sel]
+        total = int(n.sum())
+        rho = np.maximum(rho[sel], f32(1e-30))  # a cap centred on a pole: c = +-huge, full or empty
+        # per pair, packed to expand with one np.repeat: c_j = (cos a - z_j u_z) / (s_j rho) is the
+        # cosine of the half-width of the cap's interval on row j; longitude in bin units, shifted > 0
+        packed = np.empty((len(sel), 4), dtype=f32)
+        np.divide(cosa[sel], rho, out=packed[:, 0])
+        np.divide(uz[sel], rho, out=packed[:, 1])
+        phi = np.arctan2(dy[sel], dx[sel])
+        phi *= self._bins_per_radian
+        phi += f32(bins)
+        packed[:, 2] = phi
+        offsets = np.cumsum(n, dtype=np.int32)
+        offsets -= n
+        offsets -= first[sel]
+        packed[:, 3] = offsets.view(f32)  # carried bit-exactly through the repeat
+        per_row = np.repeat(packed, n, axis=0)
+        row = np.arange(total, dtype=np.int32)
+        row -= per_row[:, 3].view(np.int32)
+        c = per_row[:, 0] * self._inv_s[row]
+        c -= per_row[:, 1] * self._z_over_s[row]
+        full = c <= f32(-1.0)
+        np.maximum(c, f32(-1.0), out=c)
+        np.minimum(c, f32(1.0), out=c)
+        half = np.arccos(c)
+        half *= self._bins_per_radian
+        # bins k whose centre k + 0.5 lies in [centre - half, centre + half]
+        centre = per_row[:, 2] + f32(0.5)
+        start = (centre - half).astype(np.int32)
+        centre += half
+        length = centre.astype(np.int32)
+        length -= start
+        np.maximum(length, 0, out=length)
+        np.minimum(length, bins, out=length)
+        length[full] = bins
+        np.subtract(start, bins, out=start, where=start >= bins)
+        if n_queries == 1:
+            base = row
+        else:
+            base = np.repeat(qidx[sel].astype(np.int32) * rows, n)
+            base += row
+        base *= bins + 1
+        stop = start + length
+        wrap = np.flatnonzero(stop > bins)
+        np.minimum(stop, bins, out=stop)
+        size = n_queries * rows * (bins + 1)
+        wrapped = base[wrap]
+        # +1 at each interval start, -1 at its end (second half of one bincount); a wrapped interval
+        # is split into [start, bins) and [0, stop - bins)
+        base += size
+        marks = np.concatenate(
+            [base - size + start, wrapped, base + stop, wrapped + (start[wrap] + length[wrap] - bins + size)]
+        )
+        counts = np.bincount(marks, minlength=2 * size)
+        diff = counts[:size] - counts[size:]
+        covered = np.cumsum(diff.reshape(n_queries, rows, bins + 1)[:, :, :bins], axis=2) > 0
+        if n_queries == 1:
+            out[0] = np.count_nonzero(covered) / float(rows * bins)
+        else:
+            out[:] = np.count_nonzero(covered.reshape(n_queries, -1), axis=1) / float(rows * bins)
+        return out
         n = n[sel]
         total = int(n.sum())
         rho = np.maximum(rho[sel], f32(1e-30))  # a cap centred on a pole: c = +-huge, full or empty
