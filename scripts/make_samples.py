@@ -36,7 +36,7 @@ def main() -> None:
         "yshape": shapes.y_shape(4000, radius=0.25, arm=2.0, seed=3),
     }
     for name, shape in samples.items():
-        scale = 0.02 * float(np.ptp(shape.cloud, axis=0).max())
+        scale = 0.0005 * float(np.ptp(shape.cloud, axis=0).max())
         skeletal = jitter(shape.skeletal, scale, rng)
         verts = jitter(shape.curve_vertices, scale / 2, rng)
         write_points_ply(OUT / f"{name}_cloud.ply", shape.cloud)
