@@ -37,6 +37,7 @@ __all__ = [
 
 _LIST_K = 10  # neighbours kept per point for Boruvka; larger lists resolve more points, cost more memory
 _DEEP_K = 64  # neighbours of the second, exact-search pass for points whose list stayed inside
+_FEW_COMPONENTS = 8  # up to this many components with pending points skip the deep pass
 _QUERY_CHUNK = 32768  # points per kNN query call, so the checkpoint is reached often
 
 
@@ -109,6 +110,8 @@ def _emst_lengths(points: np.ndarray, checkpoint: Checkpoint = no_checkpoint) ->
     dist, idx = dist[:, 1:], idx[:, 1:]  # column 0 is the point itself (points are distinct)
     radius = dist[:, -1]
     lists_complete = k == n - 1
+    x_order = np.argsort(points[:, 0], kind="stable")  # slabs of points for the exact searches
+    x_sorted = points[x_order, 0]
     labels = np.arange(n)
     n_comp = n
     active = np.ones(n, bool)  # a list wholly inside its component stays so: never scanned again
@@ -127,7 +130,7 @@ def _emst_lengths(points: np.ndarray, checkpoint: Checkpoint = no_checkpoint) ->
             pend = np.flatnonzero(~active)
             pend = pend[radius[pend] < best[labels[pend]]]
             if len(pend):
-                ea, eb, ed = _resolve_pending(points, tree, labels, n_comp, pend, best)
+                ea, eb, ed = _resolve_pending(points, tree, labels, pend, best, x_order, x_sorted)
                 cand_a = np.concatenate([cand_a, ea])
                 cand_b = np.concatenate([cand_b, eb])
                 cand_d = np.concatenate([cand_d, ed])
@@ -157,7 +160,7 @@ def _emst_lengths(points: np.ndarray, checkpoint: Checkpoint = no_checkpoint) ->
     return np.concatenate(lengths) if lengths else np.empty(0)
 
 
-def _resolve_pending(points, tree, labels, n_comp, pend, best):
+def _resolve_pending(points, tree, labels, pend, best, x_order, x_sorted):
     """Exact shortest outgoing edges for points whose neighbour list lies inside their component.
 
     Returns candidate edges (a, b, length) that improve on ``best`` (updated in place).
@@ -166,7 +169,8 @@ def _resolve_pending(points, tree, labels, n_comp, pend, best):
     out_a, out_b, out_d = [], [], []
     # 1) one deeper kNN pass over all pending points at once (vectorized)
     kk = min(_DEEP_K, n - 1)
-    if kk > _LIST_K and len(pend) <= max(4096, n // 8):
+    n_pending_comps = len(np.unique(labels[pend]))
+    if kk > _LIST_K and n_pending_comps > _FEW_COMPONENTS:
         d2, i2 = tree.query(points[pend], k=kk + 1, workers=-1)
         d2, i2 = d2[:, 1:], i2[:, 1:]
         has, cd, cb = _first_other(labels, pend, d2, i2)
@@ -189,15 +193,17 @@ def _resolve_pending(points, tree, labels, n_comp, pend, best):
             c = comp_of[s]
             q = pend[s:e]
             bound = best[c]
-            outside = labels != c
             if not np.isfinite(bound):
-                # any outside point gives a finite bound
+                # any point of another component gives a finite bound
+                outside = np.flatnonzero(labels != c)
                 d0 = np.linalg.norm(points[outside] - points[q[0]], axis=1)
                 bound = float(d0.min()) * (1 + 1e-12) + 1e-300
             lo = points[q].min(axis=0) - bound
             hi = points[q].max(axis=0) + bound
-            near = outside & np.all((points >= lo) & (points <= hi), axis=1)
-            cand = np.flatnonzero(near)
+            slab = x_order[np.searchsorted(x_sorted, lo[0], "left") : np.searchsorted(x_sorted, hi[0], "right")]
+            ps = points[slab]
+            near = (labels[slab] != c) & np.all((ps[:, 1:] >= lo[1:]) & (ps[:, 1:] <= hi[1:]), axis=1)
+            cand = slab[near]
             if not len(cand):
                 continue
             d, j = cKDTree(points[cand]).query(points[q], k=1, distance_upper_bound=bound, workers=-1)

@@ -1,0 +1,264 @@
+"""Topological similarity (SPEC 1): H0 barcodes, eps*, K, exact bottleneck and Wasserstein."""
+
+from __future__ import annotations
+
+import math
+
+import gudhi
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+import skelcore.metrics.topology as topology
+from skelcore.geometry import Normalization
+from skelcore.metrics.topology import (
+    bottleneck_h0,
+    compared_bar_count,
+    eps_star,
+    h0_barcode,
+    topological_similarity,
+    wasserstein_h0,
+)
+from skelcore.params import Params
+from skelcore.shapes import torus
+
+
+def gudhi_h0_deaths(points: np.ndarray) -> np.ndarray:
+    st_ = gudhi.RipsComplex(points=points).create_simplex_tree(max_dimension=1)
+    deaths = np.array([d for dim, (_, d) in st_.persistence() if dim == 0])
+    return np.sort(deaths)[::-1]
+
+
+def point_sets(rng: np.random.Generator):
+    n = 250
+    yield "gaussian", rng.normal(size=(n, 3))
+    yield "duplicates", np.vstack([g := rng.normal(size=(n, 3)), g[rng.integers(0, n, 120)], g[:5]])
+    yield "collinear", np.outer(rng.normal(size=n), [0.3, -1.0, 2.0]) + [1.0, 2.0, 3.0]
+    yield "coplanar", rng.normal(size=(n, 2)) @ np.array([[1.0, 0.5, -0.2], [0.0, 1.0, 0.7]])
+    yield "near_collinear", np.outer(rng.normal(size=n), [1.0, 1.0, 0.0]) + rng.normal(size=(n, 3)) * 1e-7
+    yield "clusters", np.vstack([rng.normal(size=(150, 3)) * 0.05 + c for c in ([0, 0, 0], [3, 0, 0], [0, 9, 1])])
+    yield "grid_ties", np.stack(np.meshgrid(*[np.arange(6.0)] * 3), -1).reshape(-1, 3)
+    yield "contracted", np.round(rng.normal(size=(n, 3)) * [1, 0.05, 0.05], 1)
+
+
+@pytest.mark.parametrize("name", [name for name, _ in point_sets(np.random.default_rng(0))])
+def test_h0_barcode_equals_gudhi_rips(name):
+    points = dict(point_sets(np.random.default_rng(7)))[name]
+    bars = h0_barcode(points)
+    want = gudhi_h0_deaths(points)
+    assert bars.shape == (len(want), 2)
+    assert np.all(bars[:, 0] == 0)
+    assert bars[0, 1] == math.inf and want[0] == math.inf
+    np.testing.assert_allclose(bars[1:, 1], want[1:], rtol=0, atol=1e-9)
+    assert np.all(np.diff(bars[1:, 1]) <= 0)  # longest first
+
+
+@pytest.mark.parametrize("list_k, deep_k, few", [(1, 2, 0), (2, 3, 8), (3, 70, 0), (3, 70, 10**9)])
+def test_h0_barcode_is_exact_when_neighbour_lists_are_short(monkeypatch, list_k, deep_k, few):
+    # short lists force the exact fallback searches (deep pass and per-component trees) everywhere
+    monkeypatch.setattr(topology, "_LIST_K", list_k)
+    monkeypatch.setattr(topology, "_DEEP_K", deep_k)
+    monkeypatch.setattr(topology, "_FEW_COMPONENTS", few)
+    for name, points in point_sets(np.random.default_rng(11)):
+        np.testing.assert_allclose(h0_barcode(points)[1:, 1], gudhi_h0_deaths(points)[1:], atol=1e-9, err_msg=name)
+
+
+def test_h0_barcode_of_degenerate_sets():
+    assert h0_barcode(np.empty((0, 3))).shape == (0, 2)
+    np.testing.assert_array_equal(h0_barcode(np.ones((1, 3))), [[0, np.inf]])
+    np.testing.assert_array_equal(h0_barcode(np.ones((9, 3))), [[0, np.inf]])
+    np.testing.assert_allclose(h0_barcode(np.array([[0.0, 0, 0], [-0.0, 0, 0], [0, 3, 4]])), [[0, np.inf], [0, 5]])
+    np.testing.assert_allclose(h0_barcode(np.array([[0.0, 0, 0], [1, 0, 0], [3, 0, 0]]))[:, 1], [np.inf, 2, 1])
+    with pytest.raises(ValueError):
+        h0_barcode(np.array([[0.0, np.nan, 0]]))
+
+
+def matlab_prctile(x: np.ndarray, q: float) -> float:
+    """MATLAB prctile: sorted x_i sits at percentile 100 (i - 0.5) / n, linear in between, clamped."""
+    x = np.sort(x)
+    pos = (np.arange(1, len(x) + 1) - 0.5) / len(x)
+    return float(np.interp(q, pos, x))
+
+
+def test_eps_star_is_matlab_prctile_of_nearest_neighbour_distances(rng):
+    line = np.column_stack([[0.0, 1, 3, 6], np.zeros(4), np.zeros(4)])  # NN distances 1, 1, 2, 3
+    assert eps_star(line, 0.5) == pytest.approx(1.5)
+    assert eps_star(line, 0.6) == pytest.approx(1.9)
+    assert eps_star(line, 0.99) == pytest.approx(3.0)
+    assert eps_star(line, 1.0) == pytest.approx(3.0)  # the paper's max
+    cloud = rng.normal(size=(500, 3))
+    nn = np.sort(np.linalg.norm(cloud[:, None] - cloud[None], axis=2), axis=1)[:, 1]
+    assert eps_star(cloud, 0.99) == pytest.approx(matlab_prctile(nn, 0.99))
+    assert eps_star(cloud, 1.0) == pytest.approx(nn.max())
+    with pytest.raises(ValueError):
+        eps_star(cloud, 0.0)
+
+
+def bars_of(*deaths: float) -> np.ndarray:
+    return np.column_stack([np.zeros(len(deaths)), deaths])
+
+
+def test_compared_bar_count_counts_bars_longer_than_eps_star_strictly():
+    bars = bars_of(np.inf, 5, 4, 3, 1.0, 0.5, 0.2)
+    assert compared_bar_count(bars, 1.0, 60) == 4  # inf, 5, 4, 3; the bar equal to eps* is out
+    assert compared_bar_count(bars, 0.3, 100) == 6  # 6 >= 0.05 * 100: no fallback
+
+
+def test_compared_bar_count_falls_back_like_the_reference_tool():
+    bars = bars_of(np.inf, 5, 4, 3)
+    assert compared_bar_count(bars, 1.0, 100) == 100 - 95 + 1  # 4 < 5 bars
+    # 0.95 * 30 = 28.5 rounds half away from zero (MATLAB) to 29, not to even (Python) 28
+    assert compared_bar_count(bars_of(np.inf), 1.0, 30) == 30 - 29 + 1
+    assert compared_bar_count(bars, 1.0, 100, params=Params(min_bar_fraction=0.01)) == 4
+    assert compared_bar_count(bars, 1.0, 100, params=Params(fallback_fraction=0.9)) == 100 - 90 + 1
+
+
+def random_diagram(rng: np.random.Generator, n: int, n_inf: int = 1) -> np.ndarray:
+    deaths = np.round(rng.exponential(size=n), int(rng.integers(1, 4)))  # rounding makes ties
+    return bars_of(*([np.inf] * n_inf), *deaths)
+
+
+def test_bottleneck_equals_gudhi_exact_bottleneck(rng):
+    for _ in range(150):
+        a = random_diagram(rng, int(rng.integers(0, 25)))
+        b = random_diagram(rng, int(rng.integers(0, 25)))
+        if rng.random() < 0.3:
+            b = np.vstack([b, a[1:] + [0, 0.01]])
+        assert bottleneck_h0(a, b) == pytest.approx(gudhi.bottleneck_distance(a, b, e=0), rel=1e-12, abs=1e-15)
+
+
+def test_wasserstein_equals_gudhi_optimal_transport(rng):
+    gw = pytest.importorskip("gudhi.wasserstein", exc_type=ImportError)
+    pytest.importorskip("ot")
+    for _ in range(150):
+        a = random_diagram(rng, int(rng.integers(0, 25)))
+        b = random_diagram(rng, int(rng.integers(0, 25)))
+        if rng.random() < 0.3:
+            b = np.vstack([b, a[1:] + [0, 0.01]])
+        want = gw.wasserstein_distance(a, b, order=1, internal_p=np.inf)
+        assert wasserstein_h0(a, b) == pytest.approx(want, rel=1e-9, abs=1e-12)
+
+
+def dp_reference(a: np.ndarray, b: np.ndarray) -> tuple[float, float]:
+    """O(n m) dynamic programme over sorted deaths (matched pairs in sorted order): (W1, bottleneck)."""
+    a, b = np.sort(a), np.sort(b)
+    w = np.full((len(a) + 1, len(b) + 1), np.inf)
+    bn = np.full_like(w, np.inf)
+    w[0, 0] = bn[0, 0] = 0.0
+    for i in range(len(a) + 1):
+        for j in range(len(b) + 1):
+            if i:
+                w[i, j] = min(w[i, j], w[i - 1, j] + a[i - 1] / 2)
+                bn[i, j] = min(bn[i, j], max(bn[i - 1, j], a[i - 1] / 2))
+            if j:
+                w[i, j] = min(w[i, j], w[i, j - 1] + b[j - 1] / 2)
+                bn[i, j] = min(bn[i, j], max(bn[i, j - 1], b[j - 1] / 2))
+            if i and j:
+                c = abs(a[i - 1] - b[j - 1])
+                w[i, j] = min(w[i, j], w[i - 1, j - 1] + c)
+                bn[i, j] = min(bn[i, j], max(bn[i - 1, j - 1], c))
+    return float(w[-1, -1]), float(bn[-1, -1])
+
+
+def test_distances_match_a_quadratic_dynamic_programme_on_larger_diagrams(rng):
+    a = rng.exponential(size=150)
+    b = np.concatenate([a[:100] * rng.uniform(0.8, 1.2, 100), rng.exponential(size=70) * 0.3])
+    w, bn = dp_reference(a, b)
+    assert wasserstein_h0(a, b) == pytest.approx(w, rel=1e-10)
+    assert bottleneck_h0(a, b) == pytest.approx(bn, rel=1e-12)
+
+
+def test_distance_edge_cases():
+    empty = np.empty((0, 2))
+    inf_only = bars_of(np.inf)
+    assert bottleneck_h0(empty, empty) == 0.0 and wasserstein_h0(empty, empty) == 0.0
+    assert bottleneck_h0(inf_only, inf_only) == 0.0 and wasserstein_h0(inf_only, inf_only) == 0.0
+    assert bottleneck_h0(bars_of(np.inf, 4.0), inf_only) == 2.0  # to the diagonal: d / 2
+    assert wasserstein_h0(bars_of(np.inf, 4.0, 1.0), inf_only) == 2.5
+    assert bottleneck_h0(bars_of(np.inf, 4.0), bars_of(np.inf, 3.0)) == 1.0
+    assert wasserstein_h0(bars_of(4.0, 1.0), bars_of(3.0)) == 1.5
+    assert bottleneck_h0(inf_only, empty) == math.inf  # unmatched infinite bar, as gudhi
+    assert wasserstein_h0(inf_only, empty) == math.inf
+    assert wasserstein_h0(np.array([4.0, 1.0]), np.array([3.0])) == 1.5  # 1-D deaths accepted
+    with pytest.raises(ValueError):
+        bottleneck_h0(np.array([[1.0, 2.0]]), empty)  # H0 bars are born at 0
+
+
+def normalized_torus(n: int = 1500, seed: int = 2):
+    shape = torus(n, seed=seed)
+    norm = Normalization.from_cloud(shape.cloud)
+    return norm.apply(shape.cloud), norm.apply(shape.skeletal)
+
+
+def test_identical_inputs_have_zero_distance():
+    cloud, _ = normalized_torus()
+    result = topological_similarity(cloud, cloud)
+    assert result.bottleneck == 0.0 and result.wasserstein == 0.0
+    np.testing.assert_array_equal(result.cloud_barcode, result.skeletal_barcode)
+
+
+def test_topological_similarity_compares_the_k_longest_bars():
+    cloud, skel = normalized_torus()
+    skel = skel + np.random.default_rng(0).normal(size=skel.shape) * 0.01
+    r = topological_similarity(cloud, skel)
+    eps = eps_star(cloud, 0.99)
+    assert r.eps_star == eps
+    assert r.n_bars == compared_bar_count(r.cloud_barcode, eps, len(cloud))
+    k = r.n_bars
+    a, b = r.cloud_barcode[:k], r.skeletal_barcode[:k]
+    assert r.bottleneck == pytest.approx(gudhi.bottleneck_distance(a, b, e=0), rel=1e-12)
+    assert r.wasserstein == pytest.approx(wasserstein_h0(a, b) / k)
+    assert r.cloud_barcode.shape == (len(cloud), 2)  # every bar, not only the K compared
+    assert r.skeletal_barcode.shape == (len(skel), 2)
+    assert r.bottleneck > 0 and r.wasserstein > 0
+
+
+def test_skeletal_diagram_with_fewer_than_k_bars_is_compared_whole():
+    cloud, _ = normalized_torus(400)
+    skel = np.repeat(np.array([[0.0, 0, 0], [0.5, 0, 0], [0.5, 0.4, 0]]), [200, 100, 100], axis=0)
+    r = topological_similarity(cloud, skel)
+    assert len(r.skeletal_barcode) == 3 < r.n_bars
+    a = r.cloud_barcode[: r.n_bars]
+    assert r.bottleneck == pytest.approx(gudhi.bottleneck_distance(a, r.skeletal_barcode, e=0), rel=1e-12)
+    w, _ = dp_reference(a[1:, 1], r.skeletal_barcode[1:, 1])
+    assert r.wasserstein == pytest.approx(w / r.n_bars)
+
+
+@settings(max_examples=20, deadline=None)
+@given(
+    shift=st.tuples(*[st.floats(-1e3, 1e3)] * 3),
+    scale=st.floats(1e-3, 1e3),
+    seed=st.integers(0, 2**16),
+)
+def test_distances_are_invariant_to_translation_and_scaling_after_normalization(shift, scale, seed):
+    rng = np.random.default_rng(seed)
+    cloud = rng.normal(size=(120, 3)) * [1.0, 0.3, 0.2]
+    skel = cloud * [1.0, 0.1, 0.1] + rng.normal(size=cloud.shape) * 0.01
+
+    def run(c: np.ndarray, s: np.ndarray):
+        norm = Normalization.from_cloud(c)
+        return topological_similarity(norm.apply(c), norm.apply(s))
+
+    ref = run(cloud, skel)
+    moved = run(cloud * scale + shift, skel * scale + shift)
+    assert moved.n_bars == ref.n_bars
+    assert moved.bottleneck == pytest.approx(ref.bottleneck, rel=1e-6, abs=1e-9)
+    assert moved.wasserstein == pytest.approx(ref.wasserstein, rel=1e-6, abs=1e-9)
+
+
+def test_topological_similarity_reports_progress_and_honours_cancel():
+    cloud, skel = normalized_torus(600)
+    seen: list[float] = []
+    topological_similarity(cloud, skel, checkpoint=seen.append)
+    assert seen[-1] == 1.0 and all(0 <= f <= 1 for f in seen)
+    assert all(b >= a for a, b in zip(seen, seen[1:]))
+
+    class Stop(Exception):
+        pass
+
+    def cancel(_f: float) -> None:
+        raise Stop
+
+    with pytest.raises(Stop):
+        topological_similarity(cloud, skel, checkpoint=cancel)
