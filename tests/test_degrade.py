@@ -82,9 +82,10 @@ def test_voxel_grid_average_is_the_mean_of_each_cell():
 
 
 def test_voxel_grid_boundary_in_decimal_is_not_split_by_binary_rounding():
-    # (0.06 - 0) / 0.02 is 2.9999999999999996 in binary; the point belongs to cell 3 with 0.07
-    pts = np.array([[0.0, 0, 0], [0.06, 0, 0], [0.07, 0, 0], [0.059, 0, 0]])
-    centres, voxel = voxel_grid_average(pts, 0.02)
+    # (0.3 - 0) / 0.1 is 2.9999999999999996 in binary; the point belongs to cell 3 with 0.35
+    assert 0.3 / 0.1 < 3
+    pts = np.array([[0.0, 0, 0], [0.3, 0, 0], [0.35, 0, 0], [0.29, 0, 0]])
+    centres, voxel = voxel_grid_average(pts, 0.1)
     assert voxel[1] == voxel[2]
     assert voxel[1] != voxel[3]
 
