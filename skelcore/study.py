@@ -1,0 +1,522 @@
+"""The paper's degradation study: skeletonize a cloud, a noisy and a sparse copy, score each, and
+write the results table (paper, Table "Quantitative results": rows normal / 5% noise / sparse;
+columns d_B/d_Wp, boundedness, centeredness, smoothness, each "skeletal/curve").
+
+Each variant is scored against its own (degraded) cloud, as the paper's toolbox does. The built-in
+skeletonizer is :func:`skelcore.skeletonize.skeletonize`; ``skeleton_cmd`` plugs in any other
+program instead. Also home of the ``study`` and ``skeletonize`` subcommands of ``skelcore``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import csv
+import io as _io
+import math
+import os
+import shlex
+import subprocess
+import sys
+import tempfile
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any, Callable
+
+import numpy as np
+
+from .curve import CurveSkeleton
+from .errors import Cancelled, SkelInputError
+from .params import Params
+
+__all__ = ["StudyRow", "StudyResult", "run_study", "register_cli", "register_skeletonize_cli"]
+
+Progress = Callable[[float, str], None]
+
+_PLACEHOLDERS = ("{in}", "{out_skeletal}", "{out_curve}")
+
+
+@dataclass
+class StudyRow:
+    """One variant: its cloud, skeleton, evaluation and the files written for it."""
+
+    name: str  # "normal", "noise" or "sparse"
+    label: str  # as in the paper's table: "4096 pts", "5% noise", "1024 pts"
+    cloud: np.ndarray
+    skeletal: np.ndarray | None
+    curve: CurveSkeleton | None
+    evaluation: Any  # skelcore.results.Evaluation
+    files: dict[str, str] = field(default_factory=dict)
+    timings: dict[str, float] = field(default_factory=dict)
+
+    def scores(self) -> dict[str, float | None]:
+        """Flat overall scores (None where the skeleton lacks that representation)."""
+        s = self.evaluation.summary()
+        topo = s["topology"] or {}
+        out: dict[str, float | None] = {"d_B": topo.get("bottleneck"), "d_Wp": topo.get("wasserstein")}
+        for metric in ("boundedness", "centeredness", "smoothness"):
+            for kind in ("skeletal", "curve"):
+                out[f"{metric}_{kind}"] = s[metric][kind]
+        return out
+
+
+def _num(value: float | None, digits: int) -> str:
+    if value is None:
+        return "-"
+    v = float(value)
+    if math.isnan(v):
+        return "nan"
+    return f"{v:.{digits}f}"
+
+
+@dataclass
+class StudyResult:
+    """The study's rows plus what produced them; table writers in three formats."""
+
+    name: str
+    rows: list[StudyRow]
+    params: Params
+    settings: dict[str, Any]
+
+    HEADER = ("shape", "d_B/d_Wp", "boundedness", "centeredness", "smoothness")
+
+    def table(self) -> list[tuple[str, ...]]:
+        """Header and one row per variant, cells "skeletal/curve" as in the paper (d_B 4 digits)."""
+        out = [self.HEADER]
+        for row in self.rows:
+            s = row.scores()
+            out.append(
+                (
+                    f"{self.name} ({row.label})",
+                    f"{_num(s['d_B'], 4)}/{_num(s['d_Wp'], 4)}",
+                    f"{_num(s['boundedness_skeletal'], 3)}/{_num(s['boundedness_curve'], 3)}",
+                    f"{_num(s['centeredness_skeletal'], 3)}/{_num(s['centeredness_curve'], 3)}",
+                    f"{_num(s['smoothness_skeletal'], 3)}/{_num(s['smoothness_curve'], 3)}",
+                )
+            )
+        return out
+
+    def to_markdown(self) -> str:
+        rows = self.table()
+        widths = [max(len(r[i]) for r in rows) for i in range(len(rows[0]))]
+        lines = ["| " + " | ".join(c.ljust(w) for c, w in zip(rows[0], widths)) + " |",
+                 "|" + "|".join("-" * (w + 2) for w in widths) + "|"]
+        lines += ["| " + " | ".join(c.ljust(w) for c, w in zip(r, widths)) + " |" for r in rows[1:]]
+        return "\n".join(lines) + "\n"
+
+    def to_csv(self) -> str:
+        """Machine-readable: one column per score, full precision, empty where not computed."""
+        buf = _io.StringIO()
+        w = csv.writer(buf, lineterminator="\n")
+        keys = ["d_B", "d_Wp", "boundedness_skeletal", "boundedness_curve", "centeredness_skeletal",
+                "centeredness_curve", "smoothness_skeletal", "smoothness_curve"]
+        w.writerow(["variant", "label", "n_points", *keys])
+        for row in self.rows:
+            s = row.scores()
+            w.writerow([row.name, row.label, len(row.cloud), *("" if s[k] is None else repr(float(s[k])) for k in keys)])
+        return buf.getvalue()
+
+    def to_latex(self) -> str:
+        """A ``tabular`` in the paper's layout (booktabs-free, like the paper's table)."""
+
+        def esc(text: str) -> str:
+            for a, b in (("\\", r"\textbackslash{}"), ("&", r"\&"), ("%", r"\%"), ("_", r"\_"), ("#", r"\#")):
+                text = text.replace(a, b)
+            return text
+
+        head = (r"\textbf{Shapes} & $d_B/d_{W_p}\downarrow$ & $\mathcal{B}_{P_s}/\mathcal{B}_{G_s}\uparrow$ & "
+                r"$\mathcal{C}_s(P_s)/\mathcal{C}_s(G_s)\uparrow$ & $S(P_s)/\mathfrak{S}_{G_s}\uparrow$ \\ \hline\hline")
+        lines = [r"\begin{tabular}{lllll}", r"\hline", head]
+        lines += [" & ".join(esc(c) for c in r) + r" \\" for r in self.table()[1:]]
+        lines += [r"\hline", r"\end{tabular}"]
+        return "\n".join(lines) + "\n"
+
+    def write_tables(self, out_dir: str | os.PathLike, inputs: tuple[str, ...] = ()) -> dict[str, str]:
+        """``study.md``, ``study.csv``, ``study.tex`` in ``out_dir``; returns their paths."""
+        from .io.atomic import atomic_open
+
+        paths = {}
+        for ext, text in (("md", self.to_markdown()), ("csv", self.to_csv()), ("tex", self.to_latex())):
+            path = os.path.join(out_dir, f"study.{ext}")
+            with atomic_open(path, "w", inputs=inputs) as fh:
+                fh.write(text)
+            paths[ext] = path
+        return paths
+
+
+# ---------------------------------------------------------------------------------------------
+# skeletonizers
+
+
+def _run_command(
+    template: str, cloud_path: str, skeletal_path: str, curve_path: str, cancel: Callable[[], bool] | None
+) -> tuple[np.ndarray | None, CurveSkeleton | None]:
+    """Run the user's skeletonizer: ``shlex.split`` argv, placeholders substituted per token, no shell."""
+    from . import io
+
+    argv = shlex.split(template)
+    if not argv:
+        raise SkelInputError("--skeleton-cmd is empty")
+    joined = " ".join(argv)
+    if "{in}" not in joined:
+        raise SkelInputError("--skeleton-cmd needs an {in} placeholder for the cloud file")
+    wants_skeletal = "{out_skeletal}" in joined
+    wants_curve = "{out_curve}" in joined
+    if not (wants_skeletal or wants_curve):
+        raise SkelInputError("--skeleton-cmd needs {out_skeletal} and/or {out_curve} placeholders")
+    values = {"{in}": cloud_path, "{out_skeletal}": skeletal_path, "{out_curve}": curve_path}
+    args = []
+    for token in argv:
+        for key in _PLACEHOLDERS:
+            token = token.replace(key, values[key])
+        args.append(token)
+    for stale in (skeletal_path, curve_path):
+        if os.path.exists(stale):
+            os.unlink(stale)
+    try:
+        proc = subprocess.Popen(args, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    except OSError as exc:
+        raise SkelInputError(f"--skeleton-cmd could not start {args[0]!r}: {exc.strerror or exc}") from None
+    while True:
+        try:
+            out, err = proc.communicate(timeout=0.1)
+            break
+        except subprocess.TimeoutExpired:
+            if cancel is not None and cancel():
+                proc.kill()
+                proc.communicate()
+                raise Cancelled("cancelled while the skeleton command ran") from None
+    if proc.returncode != 0:
+        last = (err or out or "").strip().splitlines()
+        raise SkelInputError(
+            f"--skeleton-cmd exited with status {proc.returncode}" + (f": {last[-1]}" if last else "")
+        )
+    skeletal = curve = None
+    if wants_skeletal:
+        if not os.path.exists(skeletal_path):
+            raise SkelInputError("--skeleton-cmd did not write the skeletal point set", skeletal_path)
+        skeletal = io.load_points(skeletal_path)
+    if wants_curve:
+        if not os.path.exists(curve_path):
+            raise SkelInputError("--skeleton-cmd did not write the curve skeleton", curve_path)
+        curve = io.load_curve(curve_path)
+    return skeletal, curve
+
+
+# ---------------------------------------------------------------------------------------------
+# the study
+
+
+def _variants(
+    cloud: np.ndarray,
+    *,
+    noise: float | None,
+    noise_model: str,
+    sparse: int | None,
+    grid: float | None,
+    base_grid: float | None,
+    seed: int,
+) -> list[tuple[str, str, np.ndarray]]:
+    from .degrade import add_noise, random_downsample, voxel_grid_average
+
+    if sparse is not None and grid is not None:
+        raise SkelInputError("give either a sparse point count or a grid cell, not both")
+    # independent streams: the sparse row does not change when the noise row is left out
+    noise_rng, sparse_rng = (np.random.default_rng(s) for s in np.random.SeedSequence(seed).spawn(2))
+    normal = cloud if base_grid is None else voxel_grid_average(cloud, base_grid)[0]
+    out = [("normal", f"{len(normal)} pts", normal)]
+    if noise:
+        pct = f"{noise * 100:g}% noise"
+        out.append(("noise", pct, add_noise(normal, noise, model=noise_model, seed=noise_rng)))  # type: ignore[arg-type]
+    if grid is not None:
+        pts = voxel_grid_average(cloud, grid)[0]
+        out.append(("sparse", f"{len(pts)} pts", pts))
+    else:
+        n = sparse if sparse is not None else max(10, len(normal) // 4)
+        if n < len(normal):
+            pts = random_downsample(normal, n, seed=sparse_rng)[0]
+            out.append(("sparse", f"{len(pts)} pts", pts))
+    return out
+
+
+def run_study(
+    cloud: np.ndarray,
+    *,
+    noise: float | None = 0.05,
+    noise_model: str = "reference",
+    sparse: int | None = None,
+    grid: float | None = None,
+    base_grid: float | None = None,
+    seed: int = 0,
+    out_dir: str | os.PathLike | None = None,
+    skeleton_cmd: str | None = None,
+    params: Params = Params(),
+    skeletonize_params: Any = None,
+    name: str = "cloud",
+    inputs: tuple[str, ...] = (),
+    progress: Progress | None = None,
+    cancel: Callable[[], bool] | None = None,
+) -> StudyResult:
+    """Skeletonize and score the cloud, a noisy copy and a sparse copy (the paper's study).
+
+    Parameters
+    ----------
+    cloud : (N, 3) points in the user's units.
+    noise : noise ratio for the "noise" row (paper: 0.05); 0 or None leaves the row out.
+    noise_model : ``"reference"`` (sigma = ratio x each coordinate, the paper's toolbox) or
+        ``"isotropic"``; see :func:`skelcore.degrade.add_noise`.
+    sparse : points kept (random, seeded) for the "sparse" row; default N // 4 (4096 -> 1024 as in
+        the paper). Exclusive with ``grid``.
+    grid : voxel-grid cell for the "sparse" row instead (the paper's tree and cave), applied to the
+        input cloud.
+    base_grid : voxel-grid cell applied to the input to make the "normal" row (the paper's tree:
+        22367 points, cell 0.02 -> 8936; then ``grid=0.05`` -> 1730 for the sparse row).
+    seed : seeds the noise and the random downsampling.
+    out_dir : when given, every variant's cloud, skeletal points, curve (PLY) and evaluation (JSON)
+        and the tables ``study.md/.csv/.tex`` are written there.
+    skeleton_cmd : instead of the built-in skeletonizer, a command line with ``{in}`` (the variant's
+        cloud, written as PLY) and ``{out_skeletal}`` and/or ``{out_curve}`` placeholders; run
+        without a shell.
+    params : evaluation parameters (SPEC); ``skeletonize_params`` : :class:`SkeletonizeParams`.
+    name : the shape's name in the table's first column.
+    inputs : paths no output may overwrite (the user's files).
+    progress, cancel : as :func:`skelcore.evaluate`.
+
+    Examples
+    --------
+    >>> result = run_study(cloud, noise=0.05, sparse=1024, seed=0)    # doctest: +SKIP
+    >>> print(result.to_markdown())                                   # doctest: +SKIP
+    """
+    from . import io
+    from .evaluate import _as_points, evaluate
+    from .skeletonize import SkeletonizeParams, skeletonize
+
+    cloud = _as_points("cloud", cloud)
+    sk_params = skeletonize_params if skeletonize_params is not None else SkeletonizeParams()
+    variants = _variants(cloud, noise=noise, noise_model=noise_model, sparse=sparse, grid=grid,
+                         base_grid=base_grid, seed=seed)
+    if out_dir is not None:
+        out_dir = os.fspath(out_dir)
+        os.makedirs(out_dir, exist_ok=True)
+    work = tempfile.TemporaryDirectory(prefix="skelcore-study-") if skeleton_cmd and out_dir is None else None
+    folder = out_dir if out_dir is not None else (work.name if work is not None else None)
+
+    n_rows = len(variants)
+    rows: list[StudyRow] = []
+    try:
+        for k, (vname, label, pts) in enumerate(variants):
+
+            def sub_progress(lo: float, hi: float, prefix: str) -> Progress | None:
+                if progress is None:
+                    return None
+                return lambda f, stage: progress((k + lo + (hi - lo) * f) / n_rows, f"{prefix}: {stage}")
+
+            files: dict[str, str] = {}
+            timings: dict[str, float] = {}
+            t0 = time.perf_counter()
+            if folder is not None:
+                files["cloud"] = os.path.join(folder, f"{vname}_cloud.ply")
+                io.write_points_ply(files["cloud"], pts, inputs=inputs)
+            if skeleton_cmd:
+                if progress is not None:
+                    progress(k / n_rows, f"{vname}: skeleton command")
+                skeletal, curve = _run_command(
+                    skeleton_cmd,
+                    files["cloud"],
+                    os.path.join(folder, f"{vname}_skeletal.ply"),  # type: ignore[arg-type]
+                    os.path.join(folder, f"{vname}_curve.ply"),  # type: ignore[arg-type]
+                    cancel,
+                )
+            else:
+                skeletal, curve = skeletonize(pts, sk_params, progress=sub_progress(0.0, 0.5, vname), cancel=cancel)
+            timings["skeletonize"] = time.perf_counter() - t0
+            t0 = time.perf_counter()
+            ev = evaluate(pts, skeletal, curve, params, progress=sub_progress(0.5, 1.0, vname), cancel=cancel,
+                          inputs={"cloud": files.get("cloud")})
+            timings["evaluate"] = time.perf_counter() - t0
+            if out_dir is not None:
+                if skeletal is not None and not skeleton_cmd:
+                    files["skeletal"] = os.path.join(out_dir, f"{vname}_skeletal.ply")
+                    io.write_points_ply(files["skeletal"], skeletal, inputs=inputs)
+                if curve is not None and not skeleton_cmd:
+                    files["curve"] = os.path.join(out_dir, f"{vname}_curve.ply")
+                    io.write_curve_ply(files["curve"], curve.vertices, curve.edges, inputs=inputs)
+                if skeleton_cmd:
+                    for key, val in (("skeletal", skeletal), ("curve", curve)):
+                        if val is not None:
+                            files[key] = os.path.join(out_dir, f"{vname}_{key}.ply")
+                files["json"] = os.path.join(out_dir, f"{vname}_evaluation.json")
+                ev.inputs.update({k2: v for k2, v in files.items() if k2 in ("cloud", "skeletal", "curve")})
+                ev.write_json(files["json"], inputs=inputs)
+            rows.append(StudyRow(vname, label, pts, skeletal, curve, ev, files, timings))
+    finally:
+        if work is not None:
+            work.cleanup()
+
+    settings = {"noise": noise, "noise_model": noise_model, "sparse": sparse, "grid": grid,
+                "base_grid": base_grid, "seed": seed, "skeleton_cmd": skeleton_cmd}
+    result = StudyResult(name=name, rows=rows, params=params, settings=settings)
+    if out_dir is not None:
+        result.write_tables(out_dir, inputs=inputs)
+    if progress is not None:
+        progress(1.0, "done")
+    return result
+
+
+# ---------------------------------------------------------------------------------------------
+# command line
+
+
+def _params_from_args(args: argparse.Namespace) -> Params:
+    try:
+        params = Params().with_strings(getattr(args, "set", None) or [])
+        if getattr(args, "boundedness_method", None):
+            params = params.replace(boundedness_method=args.boundedness_method)
+    except ValueError as exc:
+        raise SkelInputError(str(exc)) from None
+    return params
+
+
+def _positive_int(text: str) -> int:
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a whole number, got {text!r}") from None
+    if value < 1:
+        raise argparse.ArgumentTypeError(f"expected a positive number, got {text!r}")
+    return value
+
+
+def _positive_float(text: str) -> float:
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a number, got {text!r}") from None
+    if not (math.isfinite(value) and value > 0):
+        raise argparse.ArgumentTypeError(f"expected a number > 0, got {text!r}")
+    return value
+
+
+def _ratio(text: str) -> float:
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a number, got {text!r}") from None
+    if not (math.isfinite(value) and value >= 0):
+        raise argparse.ArgumentTypeError(f"expected a number >= 0, got {text!r}")
+    return value
+
+
+def _stderr_progress(quiet: bool) -> Progress | None:
+    if quiet or not sys.stderr.isatty():
+        return None
+
+    def progress(fraction: float, stage: str) -> None:
+        print(f"\r{fraction * 100:5.1f}%  {stage[:40]:<40}", end="", file=sys.stderr, flush=True)
+
+    return progress
+
+
+def register_cli(subparsers: argparse._SubParsersAction) -> argparse.ArgumentParser:
+    """Add ``skelcore study CLOUD ...``."""
+    p = subparsers.add_parser(
+        "study",
+        help="the paper's study: skeletonize and score the cloud, a noisy and a sparse copy",
+        description="Skeletonize the cloud, a noisy copy and a sparse copy, score each and print the "
+        "paper's results table (skeletal/curve in every cell).",
+    )
+    p.add_argument("cloud", help="point cloud file")
+    p.add_argument("--noise", type=_ratio, default=0.05, help="noise ratio of the noise row (default 0.05; 0 = no row)")
+    p.add_argument("--noise-model", choices=("reference", "isotropic"), default="reference",
+                   help="reference: sigma = ratio x each coordinate (paper's toolbox); isotropic: ratio x RMS radius")
+    g = p.add_mutually_exclusive_group()
+    g.add_argument("--sparse", type=_positive_int, metavar="N", help="sparse row: N random points (default N/4)")
+    g.add_argument("--grid", type=_positive_float, metavar="CELL", help="sparse row: voxel-grid average of the input")
+    p.add_argument("--base-grid", type=_positive_float, metavar="CELL",
+                   help="normal row: voxel-grid average of the input (paper's tree: 0.02 with --grid 0.05)")
+    p.add_argument("--seed", type=int, default=0, help="seed of the noise and the downsampling (default 0)")
+    p.add_argument("--out", metavar="DIR", help="write every variant's PLY/JSON files and study.md/.csv/.tex here")
+    p.add_argument("--skeleton-cmd", metavar="CMD",
+                   help="use this skeletonizer: a command with {in}, {out_skeletal} and/or {out_curve}")
+    p.add_argument("--boundedness-method", choices=("rays", "paper"), help="boundedness estimator (default rays)")
+    p.add_argument("--set", metavar="NAME=VALUE", action="append", default=[], help="set any Params field")
+    p.add_argument("--quiet", action="store_true", help="do not print progress")
+    p.set_defaults(func=run_study_cli)
+    return p
+
+
+def run_study_cli(args: argparse.Namespace) -> int:
+    """Handler of ``skelcore study``: prints the table; 2 and one line on an input error."""
+    from . import io
+
+    try:
+        params = _params_from_args(args)
+        cloud = io.load_cloud(args.cloud)
+        progress = _stderr_progress(args.quiet)
+        result = run_study(
+            cloud,
+            noise=args.noise,
+            noise_model=args.noise_model,
+            sparse=args.sparse,
+            grid=args.grid,
+            base_grid=args.base_grid,
+            seed=args.seed,
+            out_dir=args.out,
+            skeleton_cmd=args.skeleton_cmd,
+            params=params,
+            name=Path(args.cloud).stem,
+            inputs=(args.cloud,),
+            progress=progress,
+        )
+        if progress is not None:
+            print("\r" + " " * 50 + "\r", end="", file=sys.stderr)
+    except SkelInputError as exc:
+        print(f"skelcore: error: {exc}", file=sys.stderr)
+        return 2
+    print(result.to_markdown(), end="")
+    total = sum(sum(r.timings.values()) for r in result.rows)
+    print(f"boundedness estimator: {params.boundedness_method}; noise model: {args.noise_model}; "
+          f"seed {args.seed}; total {total:.1f} s")
+    if args.out:
+        print(f"files written to {args.out}")
+    return 0
+
+
+def register_skeletonize_cli(subparsers: argparse._SubParsersAction) -> argparse.ArgumentParser:
+    """Add ``skelcore skeletonize CLOUD --out-skeletal F --out-curve F``."""
+    p = subparsers.add_parser(
+        "skeletonize",
+        help="skeletonize a cloud (Laplacian contraction): skeletal points and curve skeleton",
+        description="Laplacian-based contraction (Cao et al. 2010): writes the skeletal point set "
+        "(one point per cloud point, same order) and the curve skeleton as PLY.",
+    )
+    p.add_argument("cloud", help="point cloud file")
+    p.add_argument("--out-skeletal", metavar="F", help="write the skeletal point set (PLY)")
+    p.add_argument("--out-curve", metavar="F", help="write the curve skeleton (PLY with an edge element)")
+    p.add_argument("--quiet", action="store_true", help="do not print progress")
+    p.set_defaults(func=run_skeletonize_cli)
+    return p
+
+
+def run_skeletonize_cli(args: argparse.Namespace) -> int:
+    from . import io
+    from .skeletonize import skeletonize
+
+    try:
+        if not (args.out_skeletal or args.out_curve):
+            raise SkelInputError("nothing to write: give --out-skeletal and/or --out-curve")
+        cloud = io.load_cloud(args.cloud)
+        progress = _stderr_progress(args.quiet)
+        skeletal, curve, info = skeletonize(cloud, progress=progress, return_info=True)
+        if progress is not None:
+            print("\r" + " " * 50 + "\r", end="", file=sys.stderr)
+        if args.out_skeletal:
+            io.write_points_ply(args.out_skeletal, skeletal, inputs=(args.cloud,))
+        if args.out_curve:
+            io.write_curve_ply(args.out_curve, curve.vertices, curve.edges, inputs=(args.cloud,))
+    except SkelInputError as exc:
+        print(f"skelcore: error: {exc}", file=sys.stderr)
+        return 2
+    print(f"{len(cloud)} points contracted in {info.iterations} iterations ({info.stop_reason}); "
+          f"curve: {curve.n_vertices} vertices, {curve.n_edges} edges; {info.timings['total']:.2f} s")
+    return 0
