@@ -24,9 +24,10 @@ class Params:
     rays_radius_factor : h = factor x median nearest-neighbour spacing of the cloud, SPEC 2.
     rays_rows : latitude rows of the equal-area raster used by the rays estimator (2 x as many
         longitude bins); 48 keeps it within 0.004 of the exact union area (tests/test_boundedness.py).
-    rays_lod_points : clouds with more distinct points use the rays estimator's level-of-detail far
-        field (random subsets with proportionally larger balls, boundedness.py docstring).
-    rays_lod_angle : caps smaller than this angle (radians) come from the coarser levels.
+    rays_exact_pairs : up to this many (query, cloud point) pairs the rays estimator uses every pair;
+        beyond, queries share their far field in clusters (boundedness.py docstring).
+    rays_near_angle : a clustered query's own near field reaches h / rays_near_angle.
+    rays_cluster_cell : side of the cluster cells, in units of h.
     paper_plane_threshold, paper_area_threshold : triangle-drop rule of the paper estimator.
     k_center : neighbours for skeletal-point centeredness; None = round(0.01 N_s) with the
         reference tool's clamps (<10 -> 10, >50 -> 30), SPEC 3.
@@ -47,8 +48,9 @@ class Params:
     boundedness_method: Literal["rays", "paper"] = "rays"
     rays_radius_factor: float = 2.0
     rays_rows: int = 48
-    rays_lod_points: int = 16384
-    rays_lod_angle: float = 0.05
+    rays_exact_pairs: int = 40_000_000
+    rays_near_angle: float = 0.1
+    rays_cluster_cell: float = 2.0
     paper_plane_threshold: float = 0.8
     paper_area_threshold: float = 1e-4
     k_center: int | None = None
@@ -67,7 +69,7 @@ class Params:
             bad("normalize_by", "must be 'longest_side' or 'diagonal'")
         if self.boundedness_method not in ("rays", "paper"):
             bad("boundedness_method", "must be 'rays' or 'paper'")
-        for name in ("normalized_size", "rays_radius_factor", "slab_factor", "paper_area_threshold", "rays_lod_angle"):
+        for name in ("normalized_size", "rays_radius_factor", "slab_factor", "paper_area_threshold", "rays_cluster_cell"):
             if not float(getattr(self, name)) > 0:
                 bad(name, "must be > 0")
         for name in ("beta_star", "c_star", "min_bar_fraction", "fallback_fraction", "collinear_cos"):
@@ -77,9 +79,11 @@ class Params:
             bad("eps_quantile", "must be in (0, 1]")
         if not float(self.ring_growth) > 1.0:
             bad("ring_growth", "must be > 1")
-        for name in ("curve_samples", "tangent_k", "smooth_k", "rays_rows", "rays_lod_points"):
+        for name in ("curve_samples", "tangent_k", "smooth_k", "rays_rows", "rays_exact_pairs"):
             if int(getattr(self, name)) < 1:
                 bad(name, "must be a positive integer")
+        if not 0.0 < float(self.rays_near_angle) < 1.0:
+            bad("rays_near_angle", "must be in (0, 1)")
         if self.k_center is not None and int(self.k_center) < 1:
             bad("k_center", "must be a positive integer or None")
 

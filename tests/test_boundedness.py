@@ -210,16 +210,19 @@ def test_single_worker_and_pool_agree():
     assert np.array_equal(boundedness_rays(cloud, queries, workers=1), boundedness_rays(cloud, queries, workers=2))
 
 
-def test_level_of_detail_far_field_stays_close_to_every_pair():
+@pytest.mark.parametrize("cell", [2.0, 8.0])
+def test_shared_far_field_stays_within_0_01_of_every_pair(cell):
     shape = cylinder(12000, 0.5, 4.0, seed=5)
     norm = Normalization.from_cloud(shape.cloud)
     cloud = norm.apply(shape.cloud)
     rng = np.random.default_rng(4)
-    queries = np.vstack([norm.apply(shape.skeletal[:20]), cloud[:10] + rng.normal(scale=0.02, size=(10, 3))])
+    queries = np.vstack(
+        [norm.apply(shape.skeletal[:400]) + rng.normal(scale=0.01, size=(400, 3)), cloud[:40] - 0.01 * cloud[:40]]
+    )
     exact = boundedness_rays(cloud, queries)
-    lod = boundedness_rays(cloud, queries, lod_points=2000, lod_angle=0.05)
-    err = lod - exact
-    assert np.abs(err).max() <= 0.03 and abs(err.mean()) <= 0.01
+    assert len(cloud) * len(queries) <= 40_000_000  # so the default above used every pair
+    shared = boundedness_rays(cloud, queries, exact_pairs=0, cluster_cell=cell, near_angle=0.1 * 2.0 / cell)
+    assert np.abs(shared - exact).max() <= 0.01
 
 
 def test_dispatch_follows_params():

@@ -56,7 +56,20 @@ class CapRaster:
         dz: np.ndarray,
         h: np.ndarray | float,
     ) -> np.ndarray:
-        """Fraction of the raster's samples covered by the caps of (query, point) pairs, per query.
+        """Fraction of the raster's samples covered by the caps of (query, point) pairs, per query."""
+        covered = self.covered(n_queries, qidx, dx, dy, dz, h)
+        return np.count_nonzero(covered.reshape(n_queries, -1), axis=1) / float(self.rows * self.bins)
+
+    def covered(
+        self,
+        n_queries: int,
+        qidx: np.ndarray,
+        dx: np.ndarray,
+        dy: np.ndarray,
+        dz: np.ndarray,
+        h: np.ndarray | float,
+    ) -> np.ndarray:
+        """(n_queries, rows, bins) booleans: the samples covered by the caps of (query, point) pairs.
 
         ``qidx`` (any order) names the query of each pair in ``0..n_queries-1``; ``(dx, dy, dz)`` is
         p - q in the raster's frame (float32); ``h`` is the ball radius, a scalar or one per pair.
@@ -102,9 +115,8 @@ class CapRaster:
         n -= first
         n[inside] = 0
         sel = np.flatnonzero(n > 0)
-        out = np.zeros(n_queries)
         if len(sel) == 0:
-            return out
+            return np.zeros((n_queries, rows, bins), dtype=bool)
         n = n[sel]
         total = int(n.sum())
         rho = np.maximum(rho[sel], f32(1e-30))  # a cap centred on a pole: c = +-huge, full or empty
@@ -160,12 +172,7 @@ class CapRaster:
         )
         counts = np.bincount(marks, minlength=2 * size)
         diff = counts[:size] - counts[size:]
-        covered = np.cumsum(diff.reshape(n_queries, rows, bins + 1)[:, :, :bins], axis=2) > 0
-        if n_queries == 1:
-            out[0] = np.count_nonzero(covered) / float(rows * bins)
-        else:
-            out[:] = np.count_nonzero(covered.reshape(n_queries, -1), axis=1) / float(rows * bins)
-        return out
+        return np.cumsum(diff.reshape(n_queries, rows, bins + 1)[:, :, :bins], axis=2) > 0
         n = n[sel]
         total = int(n.sum())
         rho = np.maximum(rho[sel], f32(1e-30))  # a cap centred on a pole: c = +-huge, full or empty

@@ -18,14 +18,14 @@ How it is computed, and why (measured on this project's 2-core machine; see benc
   batch (measured optimum: the batch stays in the CPU cache), batches spread over a thread pool
   (numpy releases the GIL).  Exact duplicate queries (contracted skeletal points coincide by the
   hundreds) and duplicate cloud points (identical caps) are computed once.
-* Clouds up to ``rays_lod_points`` points use every (query, point) pair: the estimate is the exact
-  union up to the raster error.  Larger clouds use a level-of-detail far field: level L is a fixed
-  random subset of N / 4^L points with ball radius 2^L h (the same expected coverage of the surface,
-  since point density x ball area is unchanged), used for the points whose caps would be smaller
-  than ``rays_lod_angle``; every cap actually rasterised then has angular radius >= that angle, so
-  the work per query no longer grows with N.  Near points (distance < h / rays_lod_angle) are always
-  exact.  The far field is then right in expectation for randomly sampled surfaces, not pointwise;
-  its error against brute force is measured in benchmarks/bench_boundedness.py.
+* Up to ``rays_exact_pairs`` (query, point) pairs (4k x 4k is 17M) every pair is rasterised: the
+  estimate is the exact union up to the raster error.  Beyond, the far field is shared: queries are
+  grouped in cubic cells of side ``rays_cluster_cell`` x h; each query rasterises its own near field
+  (points within h / ``rays_near_angle``) and OR-s in its cluster's far field, rasterised once from
+  the cluster's centroid.  Seen from the query instead, far caps move together by a small angle
+  (a nearly rigid shift, which keeps the area); measured against every-pair evaluation the error stays
+  below 0.01 (tests; benchmarks/bench_boundedness.py).  When there are too many clusters for the
+  budget, the cells and the near radius grow together (same ratio, same bound on that shift).
 
 ``paper`` (the reference tool's algorithm, SPEC 2): sinusoidal projection of the unit directions,
 2-D Delaunay, the seam at lon = +-pi zipped from the free-boundary loop, flat 3-D triangle areas with
@@ -52,8 +52,6 @@ __all__ = ["boundedness", "boundedness_rays", "boundedness_paper", "rays_radius"
 _PAIRS_PER_CALL = 4096
 # pairs per pool task: one checkpoint per finished task, so this bounds their spacing (~10 ms)
 _PAIRS_PER_TASK = 65536
-# levels of detail stop when a level would have fewer points than this
-_LOD_MIN_POINTS = 1024
 
 
 def boundedness(
@@ -81,8 +79,9 @@ def boundedness(
         queries,
         radius_factor=params.rays_radius_factor,
         rows=params.rays_rows,
-        lod_points=params.rays_lod_points,
-        lod_angle=params.rays_lod_angle,
+        exact_pairs=params.rays_exact_pairs,
+        near_angle=params.rays_near_angle,
+        cluster_cell=params.rays_cluster_cell,
         checkpoint=checkpoint,
     )
 
@@ -113,8 +112,9 @@ def boundedness_rays(
     radius_factor: float = 2.0,
     rows: int = 48,
     bins: int | None = None,
-    lod_points: int = 16384,
-    lod_angle: float = 0.05,
+    exact_pairs: int = 40_000_000,
+    near_angle: float = 0.1,
+    cluster_cell: float = 2.0,
     workers: int | None = None,
     checkpoint: Checkpoint = no_checkpoint,
 ) -> np.ndarray:
@@ -126,8 +126,9 @@ def boundedness_rays(
     queries : (Q, 3) skeletal points or curve samples.
     radius_factor : h = radius_factor x median nearest-neighbour spacing of ``cloud``.
     rows, bins : raster size (``bins`` defaults to 2 x rows: cells about square at the equator).
-    lod_points : clouds with more (distinct) points use the level-of-detail far field.
-    lod_angle : caps smaller than this (radians) come from the coarser levels.
+    exact_pairs : up to this many (distinct query, distinct point) pairs, every pair is used.
+    near_angle, cluster_cell : beyond that, a query's own near field reaches h / near_angle and
+        queries share the far field within cubic cells of side cluster_cell x h (module docstring).
     workers : threads (default: up to 2).
     checkpoint : called with the fraction done, at least every ~0.1 s; may raise ``Cancelled``.
 
@@ -146,8 +147,8 @@ def boundedness_rays(
     queries = _as_points("queries", queries)
     if not radius_factor > 0:
         raise ValueError(f"radius_factor must be > 0, got {radius_factor!r}")
-    if not lod_angle > 0:
-        raise ValueError(f"lod_angle must be > 0, got {lod_angle!r}")
+    if not (0 < near_angle < 1 and cluster_cell > 0):
+        raise ValueError(f"need 0 < near_angle < 1 and cluster_cell > 0, got {near_angle!r}, {cluster_cell!r}")
     out = np.zeros(len(queries))
     if len(queries) == 0 or len(cloud) == 0:
         checkpoint(1.0)
@@ -163,11 +164,13 @@ def boundedness_rays(
     centre = (pts.min(axis=0) + pts.max(axis=0)) / 2.0
     pts_r = ((pts - centre) @ FRAME.T).astype(np.float32)
     q_r = ((uniq_q - centre) @ FRAME.T).astype(np.float32)
-    if len(pts_r) > lod_points:
-        job = _LodJob(raster, pts_r, q_r, h, lod_angle)
-    else:
+    if len(pts_r) * len(q_r) <= exact_pairs:
         job = _DenseJob(raster, pts_r, q_r, h)
-    beta = _run(job, len(q_r), workers or _workers(), checkpoint)
+    else:
+        job = _ClusteredJob.sized(raster, pts_r, q_r, h, h / near_angle, cluster_cell * h, exact_pairs)
+    beta = np.empty(len(q_r))
+    order = getattr(job, "order", slice(None))
+    beta[order] = _run(job, len(q_r), workers or _workers(), checkpoint)
     out[:] = beta[inverse.ravel()]
     return out
 
@@ -197,92 +200,126 @@ class _DenseJob:
         return out
 
 
-class _LodJob:
-    """Exact near field plus random-subset levels of detail for the far field (module docstring)."""
+class _ClusteredJob:
+    """Exact near field per query; the far field rasterised once per cluster of nearby queries.
 
-    def __init__(self, raster: CapRaster, pts: np.ndarray, queries: np.ndarray, h: float, lod_angle: float):
+    Queries are grouped by cubic cells of side ``cell``; a cluster's far field (points farther than
+    ``near_radius - spread`` from its centroid, spread = its farthest query) is rasterised from the
+    centroid, and OR-ed with each query's own near field (points within ``near_radius``).  Every
+    point is in one of the two sets.  Seen from a query instead of the centroid, a far cap moves by
+    at most spread / (near_radius - spread) radians, coherently with its neighbours (a nearly rigid
+    shift, which keeps the area); the error against every-pair evaluation is measured in the tests.
+    """
+
+    def __init__(self, raster: CapRaster, pts: np.ndarray, queries: np.ndarray, h: float, near_radius: float, cell: float):
         self.raster = raster
-        self.queries = queries
-        order = np.random.default_rng(20240607).permutation(len(pts))
-        self.levels: list[tuple[np.ndarray, cKDTree | None, float, float, float]] = []
-        inner = 0.0
-        level = 0
-        while True:
-            size = len(pts) // 4**level
-            last = size // 4 < _LOD_MIN_POINTS
-            sub = pts[order[:size]] if level else pts
-            radius = h * 2**level
-            outer = np.inf if last else radius / lod_angle
-            tree = None if last else cKDTree(sub)
-            self.levels.append((sub, tree, radius, inner, outer))
-            if last:
-                break
-            inner = outer
-            level += 1
-        # per task: roughly _PAIRS_PER_TASK pairs, estimated from the coarsest (dense) level
-        self.per_task = max(1, _PAIRS_PER_TASK // (4 * len(self.levels[-1][0]) + 1))
+        self.pts = pts
+        self.cols = [np.ascontiguousarray(pts[:, k]) for k in range(3)]
+        self.h = np.float32(h)
+        self.near_radius = float(near_radius)
+        keys = np.floor(queries.astype(float) / cell).astype(np.int64)
+        _, cid = np.unique(keys, axis=0, return_inverse=True)
+        cid = cid.ravel()
+        self.order = np.argsort(cid, kind="stable")
+        self.queries = queries[self.order]
+        cid = cid[self.order]
+        self.starts = np.flatnonzero(np.r_[True, cid[1:] != cid[:-1], True])
+        # tasks: runs of whole clusters of about _PAIRS_PER_TASK estimated pairs
+        cost = len(pts) + 64 * np.diff(self.starts)
+        bounds = [0]
+        acc = 0
+        for k, c in enumerate(cost):
+            acc += c
+            if acc >= _PAIRS_PER_TASK:
+                bounds.append(k + 1)
+                acc = 0
+        if bounds[-1] != len(cost):
+            bounds.append(len(cost))
+        self.tasks = [(int(self.starts[a]), int(self.starts[b])) for a, b in zip(bounds[:-1], bounds[1:])]
 
-    def _pairs(self, q: np.ndarray):
-        """Yield (qidx, dx, dy, dz, h) for one batch of queries, level by level."""
-        for sub, tree, radius, inner, outer in self.levels:
-            if tree is None:
-                qi = np.repeat(np.arange(len(q), dtype=np.int32), len(sub))
-                pi = np.tile(np.arange(len(sub)), len(q))
-            else:
-                found = tree.query_ball_point(q, np.float64(outer), return_sorted=False)
-                lens = np.fromiter((len(f) for f in found), dtype=np.int64, count=len(found))
-                if lens.sum() == 0:
-                    continue
-                qi = np.repeat(np.arange(len(q), dtype=np.int32), lens)
-                pi = np.concatenate([np.asarray(f, dtype=np.intp) for f in found if f])
-            d = sub[pi] - q[qi]
-            if inner > 0:
-                keep = np.einsum("ij,ij->i", d, d) > np.float32(inner * inner)
-                qi, d = qi[keep], d[keep]
-            yield qi, d, radius
+    @classmethod
+    def sized(
+        cls, raster: CapRaster, pts: np.ndarray, queries: np.ndarray, h: float, near_radius: float, cell: float,
+        budget: int,
+    ) -> "_ClusteredJob":
+        """Grow cell and near radius together (x2 per step) until the estimated pairs fit ``budget``."""
+        tree = cKDTree(pts)
+        sample = queries[np.random.default_rng(0).permutation(len(queries))[:256]].astype(float)
+        scale = 1.0
+        for _ in range(6):
+            keys = np.floor(queries.astype(float) / (cell * scale)).astype(np.int64)
+            clusters = len(np.unique(keys, axis=0))
+            near = float(np.mean(tree.query_ball_point(sample, near_radius * scale, return_length=True)))
+            if clusters * len(pts) + len(queries) * near <= budget:
+                break
+            scale *= 2.0
+        return cls(raster, pts, queries, h, near_radius * scale, cell * scale)
+
+    def _bitmaps(self, qidx: np.ndarray, d: np.ndarray, n_queries: int) -> np.ndarray:
+        out = np.zeros((n_queries, self.raster.rows, self.raster.bins), dtype=bool)
+        for a in range(0, len(qidx), _PAIRS_PER_CALL):
+            b = a + _PAIRS_PER_CALL
+            dd = d[a:b]
+            out |= self.raster.covered(
+                n_queries, qidx[a:b], np.ascontiguousarray(dd[:, 0]), np.ascontiguousarray(dd[:, 1]),
+                np.ascontiguousarray(dd[:, 2]), self.h,
+            )
+        return out
 
     def __call__(self, lo: int, hi: int) -> np.ndarray:
-        q = self.queries[lo:hi]
-        parts = list(self._pairs(q))
-        qi = np.concatenate([p[0] for p in parts])
-        d = np.concatenate([p[1] for p in parts])
-        hh = np.concatenate([np.full(len(p[0]), p[2], dtype=np.float32) for p in parts])
-        # kernel calls over runs of queries holding ~_PAIRS_PER_CALL pairs each
-        order = np.argsort(qi, kind="stable")
-        qi, d, hh = qi[order], d[order], hh[order]
-        starts = np.searchsorted(qi, np.arange(len(q) + 1))
-        out = np.empty(len(q))
-        a = 0
-        while a < len(q):
-            b = int(np.searchsorted(starts, starts[a] + _PAIRS_PER_CALL, side="right")) - 1
-            b = min(max(b, a + 1), len(q))
-            s, e = starts[a], starts[b]
-            dd = d[s:e]
-            out[a:b] = self.raster.union_fraction(
-                b - a, qi[s:e] - a, np.ascontiguousarray(dd[:, 0]), np.ascontiguousarray(dd[:, 1]),
-                np.ascontiguousarray(dd[:, 2]), hh[s:e],
-            )
-            a = b
+        out = np.empty(hi - lo)
+        first = int(np.searchsorted(self.starts, lo))
+        for k in range(first, len(self.starts) - 1):
+            a, b = int(self.starts[k]), int(self.starts[k + 1])
+            if a >= hi:
+                break
+            q = self.queries[a:b]
+            centre = q.astype(float).mean(axis=0).astype(np.float32)
+            spread = float(np.sqrt(((q - centre) ** 2).sum(axis=1)).max()) if b - a > 1 else 0.0
+            if b - a == 1:
+                centre = q[0]
+            d_c = self.pts - centre
+            dist_c = np.sqrt(np.einsum("ij,ij->i", d_c, d_c))
+            far = dist_c > self.near_radius - spread
+            far_map = self._bitmaps(np.zeros(int(far.sum()), np.int32), d_c[far], 1)[0]
+            cand = self.pts[dist_c <= self.near_radius + spread]
+            if len(cand) == 0:
+                out[a - lo : b - lo] = far_map.mean()
+                continue
+            step = max(1, _PAIRS_PER_TASK // len(cand))
+            for s0 in range(a, b, step):
+                s1 = min(s0 + step, b)
+                d = cand[None, :, :] - self.queries[s0:s1, None, :]
+                near = np.einsum("qpk,qpk->qp", d, d) <= np.float32(self.near_radius**2)
+                qi, pi = np.nonzero(near)
+                maps = self._bitmaps(qi.astype(np.int32), d[qi, pi], s1 - s0)
+                maps |= far_map
+                out[s0 - lo : s1 - lo] = maps.reshape(s1 - s0, -1).mean(axis=1)
         return out
 
 
 def _run(job, n_queries: int, workers: int, checkpoint: Checkpoint) -> np.ndarray:
-    """Run ``job(lo, hi)`` over task-sized query ranges on a pool; checkpoint after each task."""
-    step = job.per_task
-    ranges = [(lo, min(lo + step, n_queries)) for lo in range(0, n_queries, step)]
+    """Run ``job(lo, hi)`` over its tasks (ranges of its query order) on a pool; checkpoint after each.
+
+    Returns the values in the job's query order.
+    """
+    tasks = getattr(job, "tasks", None)
+    if tasks is None:
+        step = job.per_task
+        tasks = [(lo, min(lo + step, n_queries)) for lo in range(0, n_queries, step)]
     out = np.empty(n_queries)
     checkpoint(0.0)
-    if workers <= 1 or len(ranges) == 1:
-        for i, (lo, hi) in enumerate(ranges):
+    if workers <= 1 or len(tasks) == 1:
+        for i, (lo, hi) in enumerate(tasks):
             out[lo:hi] = job(lo, hi)
-            checkpoint((i + 1) / len(ranges))
+            checkpoint((i + 1) / len(tasks))
         return out
     pool = ThreadPoolExecutor(max_workers=workers)
     try:
-        # keep a short queue so a cancel stops within one task per worker
+        # a short queue, so that a cancel stops within about one task per worker
         pending: list = []
-        it = iter(enumerate(ranges))
-        for i, (lo, hi) in it:
+        it = iter(tasks)
+        for lo, hi in it:
             pending.append((lo, hi, pool.submit(job, lo, hi)))
             if len(pending) >= 2 * workers:
                 break
@@ -291,11 +328,10 @@ def _run(job, n_queries: int, workers: int, checkpoint: Checkpoint) -> np.ndarra
             lo, hi, fut = pending.pop(0)
             out[lo:hi] = fut.result()
             done += 1
-            checkpoint(done / len(ranges))
+            checkpoint(done / len(tasks))
             nxt = next(it, None)
             if nxt is not None:
-                _, (nlo, nhi) = nxt
-                pending.append((nlo, nhi, pool.submit(job, nlo, nhi)))
+                pending.append((nxt[0], nxt[1], pool.submit(job, nxt[0], nxt[1])))
     finally:
         pool.shutdown(wait=True, cancel_futures=True)
     return out
