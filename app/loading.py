@@ -11,6 +11,8 @@ import os
 from dataclasses import dataclass
 from typing import Any, Callable, Sequence
 
+import numpy as np
+
 ROLES = ("cloud", "skeletal", "curve")
 
 Ask = Callable[[str, list[str]], "str | None"]
@@ -27,11 +29,27 @@ def _count(loaded: Any) -> int:
     return int(len(loaded.points))
 
 
+def _spread(loaded: Any, max_points: int = 20000) -> float:
+    """Median nearest-neighbour spacing: contraction packs points onto a curve (many coincide), so
+    the cloud's spacing is the largest. Same-size sets are subsampled alike, keeping the ratio."""
+    from scipy.spatial import cKDTree
+
+    pts = np.asarray(loaded.points, dtype=float)
+    if len(pts) > max_points:
+        pts = pts[np.linspace(0, len(pts) - 1, max_points).astype(np.int64)]
+    if len(pts) < 2:
+        return 0.0
+    dist, _ = cKDTree(pts).query(pts, k=2)
+    return float(np.median(dist[:, 1]))
+
+
 def assign_roles(items: Sequence[Any], cloud_count: int | None, ask: Ask) -> list[Assignment]:
     """Roles for ``items`` (``skelcore.io.Loaded``), given the currently loaded cloud's size.
 
-    Ambiguous cases asked about: several same-size point sets and no cloud yet (which one is the
-    cloud?), and a point set whose size differs from an already loaded cloud (replace the cloud?).
+    Several same-size point sets and no cloud yet: the cloud is the one with the clearly largest
+    point spacing (a skeletal set is the cloud contracted), the first one by the issue's rule otherwise;
+    when no spread stands out, ``ask``. A point set whose size differs from an already loaded cloud
+    cannot be its skeletal set: ``ask`` whether it replaces the cloud.
     """
     out: list[Assignment] = [Assignment("curve", it) for it in items if it.kind == "curve"]
     points = [it for it in items if it.kind != "curve"]
@@ -39,9 +57,12 @@ def assign_roles(items: Sequence[Any], cloud_count: int | None, ask: Ask) -> lis
     if count is None and points:
         first = points[0]
         same = [p for p in points if _count(p) == _count(first)]
-        if len(same) > 1:
+        spreads = sorted(((_spread(p), i) for i, p in enumerate(same)), reverse=True)
+        if len(same) > 1 and spreads[0][0] > 1.5 * spreads[1][0]:
+            cloud = same[spreads[0][1]]
+        elif len(same) > 1:
             names = [os.path.basename(p.path) for p in same]
-            choice = ask("Several point sets have the same number of points. Which one is the cloud?", names)
+            choice = ask("Several point sets have the same number of points and similar spacing. Which one is the cloud?", names)
             cloud = same[names.index(choice)] if choice in names else first
         else:
             cloud = first

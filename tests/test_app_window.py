@@ -1,0 +1,207 @@
+"""The main window under Xvfb: loading through the API and by drag-and-drop, error dialogs, the
+render checked by content (cloud grey, colour-map colours, magenta exactly for NaN), picking."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+from PySide6 import QtCore, QtGui, QtWidgets
+
+from skelcore import shapes
+from skelcore.io import write_curve_ply, write_points_ply
+
+pytestmark = pytest.mark.gui
+
+
+@pytest.fixture
+def files(tmp_path):
+    sh = shapes.y_shape(1500, seed=3)
+    paths = {k: tmp_path / f"y_{k}.ply" for k in ("cloud", "skeletal", "curve")}
+    write_points_ply(paths["cloud"], sh.cloud)
+    write_points_ply(paths["skeletal"], sh.skeletal)
+    write_curve_ply(paths["curve"], sh.curve_vertices, sh.curve_edges)
+    return {k: str(v) for k, v in paths.items()}
+
+
+@pytest.fixture
+def window(qtbot, tmp_path, monkeypatch):
+    from app.main_window import MainWindow
+
+    dialogs: list[str] = []
+
+    def critical(parent, title, text, *args, **kwargs):
+        dialogs.append(text)
+        return QtWidgets.QMessageBox.StandardButton.Ok
+
+    monkeypatch.setattr(QtWidgets.QMessageBox, "critical", critical)
+    monkeypatch.setattr(QtWidgets.QMessageBox, "exec", lambda self: dialogs.append(self.text()) or 0)
+    monkeypatch.setattr(QtWidgets.QInputDialog, "getItem", lambda *a, **k: pytest.fail(f"unexpected question {a[2]!r}"))
+    settings = QtCore.QSettings(str(tmp_path / "settings.ini"), QtCore.QSettings.Format.IniFormat)
+    w = MainWindow(settings=settings)
+    w.session.auto_evaluate = False
+    w.dialogs = dialogs
+    qtbot.addWidget(w)
+    w.resize(1200, 800)
+    w.show()
+    qtbot.waitExposed(w)
+    yield w
+    w.session.runner.shutdown()
+
+
+def _drop(widget: QtWidgets.QWidget, paths: list[str]) -> QtGui.QDropEvent:
+    mime = QtCore.QMimeData()
+    mime.setUrls([QtCore.QUrl.fromLocalFile(p) for p in paths])
+    pos = QtCore.QPointF(widget.width() / 2, widget.height() / 2)
+    enter = QtGui.QDragEnterEvent(pos.toPoint(), QtCore.Qt.DropAction.CopyAction, mime,
+                                  QtCore.Qt.MouseButton.LeftButton, QtCore.Qt.KeyboardModifier.NoModifier)
+    QtWidgets.QApplication.sendEvent(widget, enter)
+    assert enter.isAccepted()
+    drop = QtGui.QDropEvent(pos, QtCore.Qt.DropAction.CopyAction, mime, QtCore.Qt.MouseButton.LeftButton,
+                            QtCore.Qt.KeyboardModifier.NoModifier)
+    QtWidgets.QApplication.sendEvent(widget, drop)
+    return drop
+
+
+def _rgb(img: np.ndarray) -> np.ndarray:
+    return np.asarray(img)[..., :3].reshape(-1, 3).astype(int)
+
+
+def _count(img: np.ndarray, colour) -> int:
+    return int(np.all(_rgb(img) == np.asarray(colour), axis=1).sum())
+
+
+def _is_grey(img: np.ndarray) -> int:
+    px = _rgb(img)
+    spread = px.max(axis=1) - px.min(axis=1)
+    return int(((spread <= 6) & (px[:, 0] > 90) & (px[:, 0] < 235)).sum())
+
+
+def test_files_load_through_the_api_with_roles(window, files):
+    assert window.session.load_as("cloud", files["cloud"])
+    done = window.session.load_files([files["curve"], files["skeletal"]])
+    assert sorted(role for role, _ in done) == ["curve", "skeletal"]
+    scene = window.scene
+    assert scene.cloud.n_points == scene.skeletal.n_points == 1500
+    assert scene.curve.edges.shape[1] == 2 and scene.curve.path == files["curve"]
+    assert window.recent_files()[0].endswith("y_skeletal.ply") or window.recent_files()[0].endswith("y_curve.ply")
+    assert window.dialogs == []
+
+
+def test_drop_of_several_files_on_the_3d_view_assigns_roles_not_pyvistas_reader(window, files, qtbot):
+    n_actors_before = len(window.view.plotter.renderer.actors)
+    drop = _drop(window.view.widget, [files["curve"], files["cloud"], files["skeletal"]])
+    assert drop.isAccepted()
+    scene = window.scene
+    assert scene.cloud.path == files["cloud"]
+    assert scene.skeletal.path == files["skeletal"]
+    assert scene.curve.path == files["curve"]
+    # cloud, skeletal points, curve edges, curve vertices: our actors, not a pyvista.read() mesh
+    assert set(window.view._actors) == {"cloud", "skeletal", "curve-edges", "curve-vertices"}
+    assert len(window.view.plotter.renderer.actors) >= n_actors_before + 4
+
+
+def test_drop_on_a_side_panel_loads_too(window, files):
+    _drop(window, [files["cloud"]])
+    assert window.scene.cloud is not None
+
+
+def test_corrupt_file_gives_a_dialog_and_the_window_and_loaded_data_survive(window, files, tmp_path):
+    assert window.session.load_as("cloud", files["cloud"])
+    bad = tmp_path / "broken.ply"
+    bad.write_bytes(open(files["cloud"], "rb").read()[:300])
+    assert not window.session.load_as("skeletal", str(bad))
+    assert len(window.dialogs) == 1 and "broken.ply" in window.dialogs[0] and "\n" not in window.dialogs[0]
+    assert window.scene.cloud.path == files["cloud"] and window.scene.skeletal is None
+    window.session.load_files([str(bad), files["skeletal"]])
+    assert len(window.dialogs) == 2
+    assert window.scene.skeletal.path == files["skeletal"]
+    assert window.isVisible()
+
+
+def test_render_shows_the_cloud_grey_and_colour_map_colours(window, files, qtbot):
+    window.session.load_files([files["cloud"], files["skeletal"]])
+    plain = window.view.image()
+    assert _is_grey(plain) > 200  # the cloud
+    assert _count(plain, (230, 120, 20)) > 50  # uncoloured skeletal points are orange
+    values = np.linspace(0.0, 1.0, window.scene.skeletal.n_points)
+    window.scene.skeletal.add_scalar_quantity("boundedness", values)
+    window.scene.set_metric("boundedness")
+    img = window.view.image()
+    assert _count(img, (230, 120, 20)) == 0
+    from matplotlib import colormaps
+
+    lut = (np.asarray(colormaps["viridis"](np.linspace(0, 1, 256)))[:, :3] * 255).round().astype(int)
+    px = _rgb(img)
+    on_map = np.zeros(len(px), bool)
+    for chunk in np.array_split(np.arange(len(px)), 8):
+        d = np.abs(px[chunk, None, :] - lut[None, :, :]).max(axis=2).min(axis=1)
+        on_map[chunk] = d <= 3
+    assert on_map.sum() > 300
+    assert _count(img, (255, 0, 255)) == 0  # no NaN, no magenta
+
+
+def test_magenta_appears_exactly_when_values_are_invalid(window, files):
+    window.session.load_files([files["cloud"], files["skeletal"], files["curve"]])
+    scene = window.scene
+    n = scene.skeletal.n_points
+    scene.skeletal.add_scalar_quantity("smoothness", np.full(n, 0.5))
+    degrees = scene.curve.curve.degrees()
+    scene.curve.add_scalar_quantity("smoothness", np.where(degrees == 2, 0.9, 1.0), location="vertices")
+    scene.set_metric("smoothness")
+    assert _count(window.view.image(), (255, 0, 255)) == 0
+    # SPEC 4: a curve vertex that is not of degree 2 (the junction of the Y, the three tips) is NaN.
+    assert (degrees == 3).sum() == 1
+    scene.curve.add_scalar_quantity("smoothness", np.where(degrees == 2, 0.9, math.nan), location="vertices")
+    scene.set_metric("smoothness")
+    assert _count(window.view.image(), (255, 0, 255)) > 20
+    assert "4 invalid" in window.display.invalid.text()
+    scene.set_visible("curve", False)
+    assert _count(window.view.image(), (255, 0, 255)) == 0
+
+
+def test_clicking_a_skeletal_point_shows_its_index_coordinates_and_values(window, files, qtbot):
+    window.session.load_files([files["cloud"], files["skeletal"]])
+    scene = window.scene
+    scene.set_visible("cloud", False)
+    scene.skeletal.add_scalar_quantity("boundedness", np.linspace(0, 1, scene.skeletal.n_points))
+    scene.set_metric("boundedness")
+    window.view.image()
+    target = int(np.argmax(scene.skeletal.points[:, 1]))  # the tip of the upper arm
+    x, y = window.view.world_to_display(scene.skeletal.points[target])
+    widget = window.view.widget
+    pos = QtCore.QPoint(int(round(x / widget.devicePixelRatioF())), int(round(widget.height() - y / widget.devicePixelRatioF())))
+    qtbot.mouseClick(widget, QtCore.Qt.MouseButton.LeftButton, pos=pos)
+    info = window.pick.info
+    assert info is not None and info["element"] == "skeletal point"
+    assert np.linalg.norm(np.asarray(info["xyz"]) - scene.skeletal.points[target]) < 0.05
+    assert info["values"]["boundedness"] == pytest.approx(scene.skeletal.quantities["boundedness"].values[info["index"]])
+    assert f"#{info['index']}" in window.pick.text.toPlainText()
+    assert "pick-marker" in window.view._actors
+
+
+def test_camera_views_and_parallel_projection(window, files):
+    window.session.load_as("cloud", files["cloud"])
+    window.view.standard_view("xy")
+    assert np.allclose(np.abs(window.view.plotter.camera.direction), [0, 0, 1], atol=1e-6)
+    window.actions_by_name["parallel"].trigger()
+    assert window.view.parallel_projection
+    window.actions_by_name["parallel"].trigger()
+    assert not window.view.parallel_projection
+    with pytest.raises(ValueError):
+        window.view.standard_view("sideways")
+
+
+def test_help_lists_the_keyboard_shortcuts(window):
+    rows = dict(window.shortcut_rows())
+    assert rows["Evaluate"] == "F5" and rows["Cancel"] == "Esc" and rows["Reset camera"] == "R"
+    assert "Keyboard shortcuts" in rows
+
+
+def test_vtk_single_key_bindings_do_not_close_the_view(window, files, qtbot):
+    window.session.load_as("cloud", files["cloud"])
+    qtbot.keyClick(window.view.widget, "q")
+    qtbot.keyClick(window.view.widget, "e")
+    assert window.isVisible() and not window.view.plotter._closed
+    assert window.view.image().std() > 0
