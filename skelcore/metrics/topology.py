@@ -37,7 +37,11 @@ __all__ = [
 
 _LIST_K = 10  # neighbours kept per point for Boruvka; larger lists resolve more points, cost more memory
 _DEEP_K = 64  # neighbours of the second, exact-search pass for points whose list stayed inside
-_FEW_COMPONENTS = 8  # up to this many components with pending points skip the deep pass
+_FEW_COMPONENTS = 32  # up to this many components with pending points skip the deep pass
+_DEEP_MAX_POINTS = 4096  # ... as do more fresh pending points than this or n/8 (far-apart clusters)
+_CELL_MAX = 2048  # points per cell of the exact per-component search
+_THREADED_QUERY = 16384  # smaller KD-tree queries run single-threaded (thread start-up dominates)
+_PROBE = 32  # pending points nearest to a component's box probed first for a tight bound
 _QUERY_CHUNK = 32768  # points per kNN query call, so the checkpoint is reached often
 
 
@@ -95,11 +99,12 @@ def _emst_lengths(points: np.ndarray, checkpoint: Checkpoint = no_checkpoint) ->
 
     Each round finds, for every component, its shortest outgoing edge. A point's candidate is the
     first entry of its sorted neighbour list in another component (exact for that point: every
-    closer point is in the list). A point whose whole list lies in its own component can only have
-    an outgoing edge at least as long as its list radius; if that radius is below its component's
-    best candidate, an exact search settles it (a deeper kNN pass, then a KD-tree over the nearby
-    points of other components). Ties only ever form cycles of equal-length edges, which the MST
-    over the chosen edges drops, so the multiset of lengths is exact.
+    closer point is in the list). A point whose whole list lies in its own component keeps a lower
+    bound (all points closer than it are in its component, which stays true as components merge);
+    only if that bound is below its component's best candidate does an exact search settle it (a
+    deeper kNN pass once per point, then KD-trees of the nearest other components, pruned by
+    bounding boxes). Ties only ever form cycles of equal-length edges, which the MST over the
+    chosen edges drops, so the multiset of lengths is exact.
     """
     n = len(points)
     if n < 2:
@@ -108,29 +113,34 @@ def _emst_lengths(points: np.ndarray, checkpoint: Checkpoint = no_checkpoint) ->
     k = min(_LIST_K, n - 1)
     dist, idx = _chunked_knn(tree, points, k + 1, checkpoint, 0.0, 0.5)
     dist, idx = dist[:, 1:], idx[:, 1:]  # column 0 is the point itself (points are distinct)
-    radius = dist[:, -1]
+    lower = dist[:, -1].copy()  # every point closer than this is in the point's own component
+    deep_done = np.zeros(n, bool)
     lists_complete = k == n - 1
-    x_order = np.argsort(points[:, 0], kind="stable")  # slabs of points for the exact searches
-    x_sorted = points[x_order, 0]
+    # cells: compact groups of points (a component, until it grows past _CELL_MAX points, then
+    # frozen) whose bounding boxes prune the exact searches; ids are never reused, so each cell's
+    # KD-tree can be cached across rounds
+    cells = np.arange(n)
+    next_cell = n
+    cell_trees: dict[int, tuple[np.ndarray, cKDTree]] = {}
     labels = np.arange(n)
     n_comp = n
     active = np.ones(n, bool)  # a list wholly inside its component stays so: never scanned again
     lengths: list[np.ndarray] = []
-    rounds = 0
     while n_comp > 1:
         rows = np.flatnonzero(active)
         has, cd, cb = _first_other(labels, rows, dist[rows], idx[rows])
         active[rows[~has]] = False
-        src = rows[has]
-        cand_a, cand_b, cand_d = src, cb[has], cd[has]
+        cand_a, cand_b, cand_d = rows[has], cb[has], cd[has]
         best = np.full(n_comp, np.inf)
         np.minimum.at(best, labels[cand_a], cand_d)
 
         if not lists_complete:
             pend = np.flatnonzero(~active)
-            pend = pend[radius[pend] < best[labels[pend]]]
+            pend = pend[lower[pend] < best[labels[pend]]]
             if len(pend):
-                ea, eb, ed = _resolve_pending(points, tree, labels, pend, best, x_order, x_sorted)
+                ea, eb, ed = _resolve_pending(
+                    points, tree, labels, pend, best, lower, deep_done, cells, cell_trees
+                )
                 cand_a = np.concatenate([cand_a, ea])
                 cand_b = np.concatenate([cand_b, eb])
                 cand_d = np.concatenate([cand_d, ed])
@@ -155,66 +165,111 @@ def _emst_lengths(points: np.ndarray, checkpoint: Checkpoint = no_checkpoint) ->
             raise RuntimeError("EMST: Boruvka round made no progress")
         labels = comp[labels]
         n_comp = n_new
-        rounds += 1
+        small = np.bincount(labels, minlength=n_comp)[labels] <= _CELL_MAX
+        cells[small] = next_cell + labels[small]
+        next_cell += n_comp
         checkpoint(0.5 + 0.5 * (1.0 - n_comp / n) ** 0.5)
     return np.concatenate(lengths) if lengths else np.empty(0)
 
 
-def _resolve_pending(points, tree, labels, pend, best, x_order, x_sorted):
+def _resolve_pending(points, tree, labels, pend, best, lower, deep_done, cells, cell_trees):
     """Exact shortest outgoing edges for points whose neighbour list lies inside their component.
 
-    Returns candidate edges (a, b, length) that improve on ``best`` (updated in place).
+    ``best`` (per component), ``lower``/``deep_done`` (per point) and the cell KD-tree cache are
+    updated in place.
+    Returns candidate edges (a, b, length) improving on the components' list candidates.
     """
     n = len(points)
     out_a, out_b, out_d = [], [], []
-    # 1) one deeper kNN pass over all pending points at once (vectorized)
+    # 1) many components involved: one deeper kNN pass (vectorized), at most once per point
     kk = min(_DEEP_K, n - 1)
-    n_pending_comps = len(np.unique(labels[pend]))
-    if kk > _LIST_K and n_pending_comps > _FEW_COMPONENTS:
-        d2, i2 = tree.query(points[pend], k=kk + 1, workers=-1)
+    fresh = pend[~deep_done[pend]]
+    many = len(np.unique(labels[pend])) > _FEW_COMPONENTS
+    if kk > _LIST_K and 0 < len(fresh) <= max(_DEEP_MAX_POINTS, n // 8) and many:
+        d2, i2 = tree.query(points[fresh], k=kk + 1, workers=-1 if len(fresh) > _THREADED_QUERY else 1)
         d2, i2 = d2[:, 1:], i2[:, 1:]
-        has, cd, cb = _first_other(labels, pend, d2, i2)
-        ok = has & (cd < best[labels[pend]])
+        has, cd, cb = _first_other(labels, fresh, d2, i2)
+        deep_done[fresh] = True
+        lower[fresh] = np.maximum(lower[fresh], np.where(has, cd, d2[:, -1]))
+        ok = has & (cd < best[labels[fresh]])
         if ok.any():
-            out_a.append(pend[ok]), out_b.append(cb[ok]), out_d.append(cd[ok])
-            np.minimum.at(best, labels[pend[ok]], cd[ok])
+            out_a.append(fresh[ok]), out_b.append(cb[ok]), out_d.append(cd[ok])
+            np.minimum.at(best, labels[fresh[ok]], cd[ok])
         if kk == n - 1:
             pend = pend[:0]
-        else:
-            pend = pend[~has & (d2[:, -1] < best[labels[pend]])]
-    # 2) per component: a KD-tree over the other components' points near the pending ones
+        pend = pend[lower[pend] < best[labels[pend]]]
+    # 2) per cell of pending points: KD-trees of other components' cells, nearest boxes first
     if len(pend):
-        comp_of = labels[pend]
-        order = np.argsort(comp_of, kind="stable")
-        pend, comp_of = pend[order], comp_of[order]
-        starts = np.flatnonzero(np.r_[True, comp_of[1:] != comp_of[:-1]])
-        ends = np.r_[starts[1:], len(pend)]
-        for s, e in zip(starts, ends):
-            c = comp_of[s]
+        ids, cell_of = np.unique(cells, return_inverse=True)
+        for stale in set(cell_trees) - set(ids.tolist()):
+            del cell_trees[stale]
+        by_cell = np.argsort(cell_of, kind="stable")
+        starts = np.searchsorted(cell_of[by_cell], np.arange(len(ids) + 1))
+        sorted_pts = points[by_cell]
+        box_lo = np.minimum.reduceat(sorted_pts, starts[:-1], axis=0)
+        box_hi = np.maximum.reduceat(sorted_pts, starts[:-1], axis=0)
+        cell_comp = labels[by_cell[starts[:-1]]]
+
+        def cell_tree(y: int) -> tuple[np.ndarray, cKDTree]:
+            key = int(ids[y])
+            if key not in cell_trees:
+                members = by_cell[starts[y] : starts[y + 1]]
+                cell_trees[key] = (members, cKDTree(points[members]))
+            return cell_trees[key]
+
+        pc = cell_of[pend]
+        order = np.lexsort((pc, labels[pend]))
+        pend, pc = pend[order], pc[order]
+        group = np.flatnonzero(np.r_[True, pc[1:] != pc[:-1]])
+        for s, e in zip(group, np.r_[group[1:], len(pend)]):
             q = pend[s:e]
-            bound = best[c]
-            if not np.isfinite(bound):
-                # any point of another component gives a finite bound
-                outside = np.flatnonzero(labels != c)
-                d0 = np.linalg.norm(points[outside] - points[q[0]], axis=1)
-                bound = float(d0.min()) * (1 + 1e-12) + 1e-300
-            lo = points[q].min(axis=0) - bound
-            hi = points[q].max(axis=0) + bound
-            slab = x_order[np.searchsorted(x_sorted, lo[0], "left") : np.searchsorted(x_sorted, hi[0], "right")]
-            ps = points[slab]
-            near = (labels[slab] != c) & np.all((ps[:, 1:] >= lo[1:]) & (ps[:, 1:] <= hi[1:]), axis=1)
-            cand = slab[near]
-            if not len(cand):
-                continue
-            d, j = cKDTree(points[cand]).query(points[q], k=1, distance_upper_bound=bound, workers=-1)
-            i = int(np.argmin(d))
-            if d[i] < best[c]:
-                best[c] = d[i]
-                out_a.append(q[i : i + 1]), out_b.append(cand[j[i : i + 1]]), out_d.append(d[i : i + 1])
+            c = int(labels[q[0]])
+            qp = points[q]
+            qlo, qhi = qp.min(axis=0), qp.max(axis=0)
+            gap = np.maximum(0.0, np.maximum(box_lo - qhi, qlo - box_hi))
+            box_d = np.sqrt(np.einsum("ij,ij->i", gap, gap))
+            box_d[cell_comp == c] = np.inf
+            near = [int(np.argmin(box_d))] if not np.isfinite(best[c]) else []  # a finite bound first
+            for stage in (0, 1):
+                if stage == 1:
+                    cand = np.flatnonzero(box_d < best[c])
+                    near = cand[np.argsort(box_d[cand], kind="stable")].tolist()
+                for y in near:
+                    if not box_d[y] < best[c]:
+                        break
+                    members, t = cell_tree(y)
+                    # only pending points closer to the other box than the bound can improve;
+                    # probing the nearest few first tightens the bound cheaply
+                    g = np.maximum(0.0, np.maximum(box_lo[y] - qp, qp - box_hi[y]))
+                    to_box = np.sqrt(np.einsum("ij,ij->i", g, g))
+                    sel = np.flatnonzero(to_box < best[c])
+                    if len(sel) > 4 * _PROBE:
+                        steps = (sel[np.argpartition(to_box[sel], _PROBE)[:_PROBE]], None)
+                    else:
+                        steps = (sel,)
+                    for part in steps:
+                        if part is None:
+                            part = sel[to_box[sel] < best[c]]
+                        if not len(part):
+                            continue
+                        workers = -1 if len(part) > _THREADED_QUERY else 1  # threads cost more on small
+                        dq, jq = t.query(qp[part], k=1, distance_upper_bound=best[c], workers=workers)
+                        i = int(np.argmin(dq))
+                        if dq[i] < best[c]:
+                            a, b = int(q[part[i]]), int(members[jq[i]])
+                            best[c] = dq[i]
+                            out_a.append([a]), out_b.append([b]), out_d.append([dq[i]])
+                            if dq[i] < best[labels[b]]:  # the same edge also leaves b's component
+                                best[labels[b]] = dq[i]
+                                out_a.append([b]), out_b.append([a]), out_d.append([dq[i]])
     if not out_a:
         empty = np.empty(0, np.int64)
         return empty, empty, np.empty(0)
-    return np.concatenate(out_a), np.concatenate(out_b), np.concatenate(out_d)
+    return (
+        np.concatenate(out_a).astype(np.int64),
+        np.concatenate(out_b).astype(np.int64),
+        np.concatenate(out_d).astype(float),
+    )
 
 
 def h0_barcode(points: np.ndarray, *, checkpoint: Checkpoint = no_checkpoint) -> np.ndarray:
