@@ -54,14 +54,31 @@ def test_h0_barcode_equals_gudhi_rips(name):
     assert np.all(np.diff(bars[1:, 1]) <= 0)  # longest first
 
 
-@pytest.mark.parametrize("list_k, deep_k, few", [(1, 2, 0), (2, 3, 8), (3, 70, 0), (3, 70, 10**9)])
-def test_h0_barcode_is_exact_when_neighbour_lists_are_short(monkeypatch, list_k, deep_k, few):
-    # short lists force the exact fallback searches (deep pass and per-component trees) everywhere
+@pytest.mark.parametrize(
+    "list_k, deep_k, few, cell_max", [(1, 2, 0, 4), (2, 3, 8, 2048), (3, 70, 0, 16), (3, 70, 10**9, 1), (1, 300, 0, 8)]
+)
+def test_h0_barcode_is_exact_when_neighbour_lists_are_short(monkeypatch, list_k, deep_k, few, cell_max):
+    # short lists force the exact fallback searches (deep pass, cell KD-trees) everywhere; small
+    # cells freeze early, so searches cross many cells of one component
     monkeypatch.setattr(topology, "_LIST_K", list_k)
     monkeypatch.setattr(topology, "_DEEP_K", deep_k)
     monkeypatch.setattr(topology, "_FEW_COMPONENTS", few)
+    monkeypatch.setattr(topology, "_CELL_MAX", cell_max)
     for name, points in point_sets(np.random.default_rng(11)):
         np.testing.assert_allclose(h0_barcode(points)[1:, 1], gudhi_h0_deaths(points)[1:], atol=1e-9, err_msg=name)
+
+
+def test_h0_barcode_equals_dense_minimum_spanning_tree_on_larger_sets(rng):
+    from scipy.sparse.csgraph import minimum_spanning_tree
+    from scipy.spatial.distance import pdist, squareform
+
+    cloud, skel = normalized_torus(1500)
+    blobs = rng.normal(size=(1500, 3)) * 0.002 + rng.uniform(-0.8, 0.8, size=(30, 3))[np.arange(1500) % 30]
+    contracted = np.round(skel + rng.normal(size=skel.shape) * 0.01, 2)  # many coincide
+    for points in (cloud, blobs, contracted):
+        distinct = np.unique(points, axis=0)
+        want = np.sort(minimum_spanning_tree(squareform(pdist(distinct))).data)[::-1]
+        np.testing.assert_allclose(h0_barcode(points)[1:, 1], want, rtol=0, atol=1e-12)
 
 
 def test_h0_barcode_of_degenerate_sets():

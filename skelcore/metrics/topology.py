@@ -195,8 +195,6 @@ def _resolve_pending(points, tree, labels, pend, best, lower, deep_done, cells, 
         if ok.any():
             out_a.append(fresh[ok]), out_b.append(cb[ok]), out_d.append(cd[ok])
             np.minimum.at(best, labels[fresh[ok]], cd[ok])
-        if kk == n - 1:
-            pend = pend[:0]
         pend = pend[lower[pend] < best[labels[pend]]]
     # 2) per cell of pending points: KD-trees of other components' cells, nearest boxes first
     if len(pend):
