@@ -137,8 +137,18 @@ class StudyDialog(QtWidgets.QDialog):
         name = os.path.splitext(os.path.basename(path))[0]
 
         def job(progress, cancel):
+            last = [-1.0]
+
+            def coarse(fraction: float, stage: str) -> None:
+                # one signal per visible percent: the stage text changes at every engine stage,
+                # which would otherwise emit a signal per stage (PySide6 6.12's emit leaks a
+                # reference to True per call, see the report; fewer emits also keep the GUI calm)
+                if fraction - last[0] >= 0.01 or fraction >= 1.0:
+                    last[0] = fraction
+                    progress(fraction, stage)
+
             cloud = load_cloud(path)
-            return run_study(cloud, params=params, name=name, inputs=(path,), progress=progress, cancel=cancel, **kwargs)
+            return run_study(cloud, params=params, name=name, inputs=(path,), progress=coarse, cancel=cancel, **kwargs)
 
         self.result = None
         self.error = None
