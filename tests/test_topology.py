@@ -215,6 +215,14 @@ def test_identical_inputs_have_zero_distance():
     np.testing.assert_array_equal(result.cloud_barcode, result.skeletal_barcode)
 
 
+def test_eps_star_of_the_metric_counts_duplicate_cloud_points_as_distance_zero(rng):
+    cloud = rng.normal(size=(300, 3))
+    cloud = np.vstack([cloud, cloud[:40]])  # 80 points with a twin: nearest-neighbour distance 0
+    r = topological_similarity(cloud, cloud * 0.5)
+    assert r.eps_star == pytest.approx(eps_star(cloud, 0.99), rel=1e-15)
+    assert topological_similarity(cloud, cloud, params=Params(eps_quantile=0.2)).eps_star == 0.0
+
+
 def test_topological_similarity_compares_the_k_longest_bars():
     cloud, skel = normalized_torus()
     skel = skel + np.random.default_rng(0).normal(size=skel.shape) * 0.01

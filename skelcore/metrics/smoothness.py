@@ -18,7 +18,7 @@ from ..params import Params
 
 __all__ = ["skeletal_smoothness", "curve_vertex_smoothness", "curve_smoothness_overall"]
 
-_CHUNK = 65536  # unique points per block between checkpoints
+_CHUNK = 8192  # distinct positions per block between checkpoints
 
 
 def _angle_score(cos: np.ndarray) -> np.ndarray:
@@ -79,6 +79,7 @@ def skeletal_smoothness(
     # each distinct neighbour position holds >= 1 point, so max(kt, ks) positions always suffice
     q = min(m - 1, max(kt, ks))
     tree = cKDTree(uniq)
+    checkpoint(0.05)
     tangents = np.full((m, 3), np.nan)
     nbr = np.empty((m, q), np.int64)
     for start in range(0, m, _CHUNK):
@@ -91,16 +92,18 @@ def skeletal_smoothness(
         cov = np.einsum("nj,nja,njb->nab", weight, diff, diff) / kt
         _, vecs = np.linalg.eigh(cov)
         t = vecs[:, :, -1]  # eigh sorts eigenvalues ascending
-        zero = ~np.any(cov.reshape(len(cov), -1) != 0, axis=1)
-        t[zero] = np.nan
+        t[~np.any(cov.reshape(len(cov), -1) != 0, axis=1)] = np.nan
         tangents[start:stop] = t
-        checkpoint(0.8 * stop / m)
-    use = _taken(counts[nbr], ks) > 0  # neighbour positions holding one of the ks nearest points
-    cos = np.einsum("na,nja->nj", tangents, tangents[nbr])
-    score = _angle_score(cos)
-    s_unique = np.where(use & np.isfinite(score), score, np.inf).min(axis=1)
+        checkpoint(0.05 + 0.75 * stop / m)
+    s_unique = np.empty(m)
+    for start in range(0, m, _CHUNK):
+        stop = min(m, start + _CHUNK)
+        idx = nbr[start:stop]
+        use = _taken(counts[idx], ks) > 0  # neighbour positions holding one of the ks nearest points
+        score = _angle_score(np.einsum("na,nja->nj", tangents[start:stop], tangents[idx]))
+        s_unique[start:stop] = np.where(use & np.isfinite(score), score, np.inf).min(axis=1)
+        checkpoint(0.8 + 0.2 * stop / m)
     s_unique[np.isinf(s_unique)] = np.nan  # no neighbour with a tangent, or no tangent here
-    checkpoint(1.0)
     return s_unique[inverse]
 
 

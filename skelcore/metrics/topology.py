@@ -42,7 +42,7 @@ _DEEP_MAX_POINTS = 4096  # ... as do more fresh pending points than this or n/8 
 _CELL_MAX = 2048  # points per cell of the exact per-component search
 _THREADED_QUERY = 16384  # smaller KD-tree queries run single-threaded (thread start-up dominates)
 _PROBE = 32  # pending points nearest to a component's box probed first for a tight bound
-_QUERY_CHUNK = 32768  # points per kNN query call, so the checkpoint is reached often
+_QUERY_CHUNK = 16384  # points per kNN query call, so the checkpoint is reached often
 
 
 # ---------------------------------------------------------------------------------------------
@@ -94,8 +94,9 @@ def _first_other(labels: np.ndarray, rows: np.ndarray, dist: np.ndarray, idx: np
     return has, dist[r, col], idx[r, col]
 
 
-def _emst_lengths(points: np.ndarray, checkpoint: Checkpoint = no_checkpoint) -> np.ndarray:
-    """Edge lengths of the Euclidean minimum spanning tree of distinct points (Boruvka, exact).
+def _emst_lengths(points: np.ndarray, checkpoint: Checkpoint = no_checkpoint) -> tuple[np.ndarray, np.ndarray]:
+    """Edge lengths of the Euclidean minimum spanning tree of distinct points (Boruvka, exact),
+    and each point's nearest-neighbour distance (a by-product, used for eps*).
 
     Each round finds, for every component, its shortest outgoing edge. A point's candidate is the
     first entry of its sorted neighbour list in another component (exact for that point: every
@@ -108,10 +109,11 @@ def _emst_lengths(points: np.ndarray, checkpoint: Checkpoint = no_checkpoint) ->
     """
     n = len(points)
     if n < 2:
-        return np.empty(0)
+        return np.empty(0), np.zeros(n)
     tree = cKDTree(points)
+    checkpoint(0.02)
     k = min(_LIST_K, n - 1)
-    dist, idx = _chunked_knn(tree, points, k + 1, checkpoint, 0.0, 0.5)
+    dist, idx = _chunked_knn(tree, points, k + 1, checkpoint, 0.02, 0.5)
     dist, idx = dist[:, 1:], idx[:, 1:]  # column 0 is the point itself (points are distinct)
     lower = dist[:, -1].copy()  # every point closer than this is in the point's own component
     deep_done = np.zeros(n, bool)
@@ -127,9 +129,11 @@ def _emst_lengths(points: np.ndarray, checkpoint: Checkpoint = no_checkpoint) ->
     active = np.ones(n, bool)  # a list wholly inside its component stays so: never scanned again
     lengths: list[np.ndarray] = []
     while n_comp > 1:
+        done = 0.5 + 0.5 * (1.0 - n_comp / n) ** 0.5
         rows = np.flatnonzero(active)
         has, cd, cb = _first_other(labels, rows, dist[rows], idx[rows])
         active[rows[~has]] = False
+        checkpoint(done)
         cand_a, cand_b, cand_d = rows[has], cb[has], cd[has]
         best = np.full(n_comp, np.inf)
         np.minimum.at(best, labels[cand_a], cand_d)
@@ -139,11 +143,13 @@ def _emst_lengths(points: np.ndarray, checkpoint: Checkpoint = no_checkpoint) ->
             pend = pend[lower[pend] < best[labels[pend]]]
             if len(pend):
                 ea, eb, ed = _resolve_pending(
-                    points, tree, labels, pend, best, lower, deep_done, cells, cell_trees
+                    points, tree, labels, pend, best, lower, deep_done, cells, cell_trees,
+                    lambda: checkpoint(done),
                 )
                 cand_a = np.concatenate([cand_a, ea])
                 cand_b = np.concatenate([cand_b, eb])
                 cand_d = np.concatenate([cand_d, ed])
+                checkpoint(done)
 
         # shortest candidate per component, then one edge per component pair
         la, lb = labels[cand_a], labels[cand_b]
@@ -169,14 +175,14 @@ def _emst_lengths(points: np.ndarray, checkpoint: Checkpoint = no_checkpoint) ->
         cells[small] = next_cell + labels[small]
         next_cell += n_comp
         checkpoint(0.5 + 0.5 * (1.0 - n_comp / n) ** 0.5)
-    return np.concatenate(lengths) if lengths else np.empty(0)
+    return (np.concatenate(lengths) if lengths else np.empty(0)), dist[:, 0]
 
 
-def _resolve_pending(points, tree, labels, pend, best, lower, deep_done, cells, cell_trees):
+def _resolve_pending(points, tree, labels, pend, best, lower, deep_done, cells, cell_trees, tick):
     """Exact shortest outgoing edges for points whose neighbour list lies inside their component.
 
     ``best`` (per component), ``lower``/``deep_done`` (per point) and the cell KD-tree cache are
-    updated in place.
+    updated in place; ``tick()`` reports progress (and may raise ``Cancelled``).
     Returns candidate edges (a, b, length) improving on the components' list candidates.
     """
     n = len(points)
@@ -219,7 +225,9 @@ def _resolve_pending(points, tree, labels, pend, best, lower, deep_done, cells, 
         order = np.lexsort((pc, labels[pend]))
         pend, pc = pend[order], pc[order]
         group = np.flatnonzero(np.r_[True, pc[1:] != pc[:-1]])
-        for s, e in zip(group, np.r_[group[1:], len(pend)]):
+        for n_done, (s, e) in enumerate(zip(group, np.r_[group[1:], len(pend)])):
+            if n_done % 64 == 63:
+                tick()  # progress and cancel between cells
             q = pend[s:e]
             c = int(labels[q[0]])
             qp = points[q]
@@ -270,6 +278,24 @@ def _resolve_pending(points, tree, labels, pend, best, lower, deep_done, cells, 
     )
 
 
+def _barcode_and_nn(points: np.ndarray, checkpoint: Checkpoint) -> tuple[np.ndarray, np.ndarray]:
+    """H0 barcode (see :func:`h0_barcode`) and every point's nearest-neighbour distance (0 for a
+    duplicate), from one kNN pass."""
+    if len(points) == 0:
+        return np.empty((0, 2)), np.empty(0)
+    uniq, inverse, counts = _unique_rows(points)
+    checkpoint(0.02)
+    lengths, nn_unique = _emst_lengths(uniq, lambda f: checkpoint(0.02 + 0.96 * f))
+    deaths = np.sort(lengths)[::-1]
+    deaths = deaths[deaths > 0]
+    bars = np.zeros((len(deaths) + 1, 2))
+    bars[0, 1] = np.inf
+    bars[1:, 1] = deaths
+    nn = np.where(counts[inverse] > 1, 0.0, nn_unique[inverse])
+    checkpoint(1.0)
+    return bars, nn
+
+
 def h0_barcode(points: np.ndarray, *, checkpoint: Checkpoint = no_checkpoint) -> np.ndarray:
     """H0 barcode of the Vietoris-Rips filtration of ``points`` (SPEC 1).
 
@@ -283,16 +309,7 @@ def h0_barcode(points: np.ndarray, *, checkpoint: Checkpoint = no_checkpoint) ->
     >>> h0_barcode(np.array([[0., 0, 0], [1, 0, 0], [3, 0, 0]]))[:, 1]
     array([inf,  2.,  1.])
     """
-    pts = _as_points(points)
-    if len(pts) == 0:
-        return np.empty((0, 2))
-    uniq, _, _ = _unique_rows(pts)
-    deaths = np.sort(_emst_lengths(uniq, checkpoint))[::-1]
-    deaths = deaths[deaths > 0]
-    bars = np.zeros((len(deaths) + 1, 2))
-    bars[0, 1] = np.inf
-    bars[1:, 1] = deaths
-    return bars
+    return _barcode_and_nn(_as_points(points), checkpoint)[0]
 
 
 # ---------------------------------------------------------------------------------------------
@@ -303,10 +320,11 @@ def eps_star(cloud: np.ndarray, quantile: float = 0.99) -> float:
     (numpy ``method="hazen"``); quantile 1.0 is the paper's maximum."""
     if not 0.0 < quantile <= 1.0:
         raise ValueError(f"quantile must be in (0, 1], got {quantile}")
-    nn = nearest_neighbor_distances(_as_points(cloud))
-    if len(nn) == 0:
-        return 0.0
-    return float(np.quantile(nn, quantile, method="hazen"))
+    return _quantile(nearest_neighbor_distances(_as_points(cloud)), quantile)
+
+
+def _quantile(nn: np.ndarray, quantile: float) -> float:
+    return float(np.quantile(nn, quantile, method="hazen")) if len(nn) else 0.0
 
 
 def compared_bar_count(cloud_barcode: np.ndarray, eps: float, n_cloud: int, *, params: Params = Params()) -> int:
@@ -475,9 +493,9 @@ def topological_similarity(
     skeletal = _as_points(skeletal)
     if len(cloud) == 0 or len(skeletal) == 0:
         raise ValueError("topological similarity needs a non-empty cloud and skeletal point set")
-    cloud_bars = h0_barcode(cloud, checkpoint=lambda f: checkpoint(0.45 * f))
-    skel_bars = h0_barcode(skeletal, checkpoint=lambda f: checkpoint(0.45 + 0.45 * f))
-    eps = eps_star(cloud, params.eps_quantile)
+    cloud_bars, cloud_nn = _barcode_and_nn(cloud, lambda f: checkpoint(0.45 * f))
+    skel_bars, _ = _barcode_and_nn(skeletal, lambda f: checkpoint(0.45 + 0.45 * f))
+    eps = _quantile(cloud_nn, params.eps_quantile)  # = eps_star(cloud, quantile), without a new kNN
     k = compared_bar_count(cloud_bars, eps, len(cloud), params=params)
     checkpoint(0.92)
     a, b = cloud_bars[:k], skel_bars[:k]
