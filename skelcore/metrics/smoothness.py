@@ -89,7 +89,7 @@ def skeletal_smoothness(
         nbr[start:stop] = idx
         weight = _taken(counts[idx], kt).astype(float)
         diff = uniq[idx] - uniq[start:stop, None, :]
-        cov = np.einsum("nj,nja,njb->nab", weight, diff, diff) / kt
+        cov = np.matmul((diff * weight[:, :, None]).transpose(0, 2, 1), diff) / kt
         _, vecs = np.linalg.eigh(cov)
         t = vecs[:, :, -1]  # eigh sorts eigenvalues ascending
         t[~np.any(cov.reshape(len(cov), -1) != 0, axis=1)] = np.nan
