@@ -151,19 +151,19 @@ def _emst_lengths(points: np.ndarray, checkpoint: Checkpoint = no_checkpoint) ->
                 cand_d = np.concatenate([cand_d, ed])
                 checkpoint(done)
 
-        # shortest candidate per component, then one edge per component pair
-        la, lb = labels[cand_a], labels[cand_b]
-        order = np.lexsort((cand_d, la))
-        first = np.ones(len(order), bool)
-        first[1:] = la[order][1:] != la[order][:-1]
-        pick = order[first]
-        u, v, w = la[pick], lb[pick], cand_d[pick]
-        lo_, hi_ = np.minimum(u, v), np.maximum(u, v)
-        order = np.lexsort((w, hi_, lo_))
-        keep = np.ones(len(order), bool)
-        keep[1:] = (lo_[order][1:] != lo_[order][:-1]) | (hi_[order][1:] != hi_[order][:-1])
-        order = order[keep]
-        graph = coo_matrix((w[order], (lo_[order], hi_[order])), shape=(n_comp, n_comp)).tocsr()
+        # one shortest candidate per component (``best`` holds each component's minimum), then
+        # one edge per component pair: two components choosing each other pick equal lengths
+        la = labels[cand_a]
+        hit = np.flatnonzero(cand_d == best[la])
+        pick = np.full(n_comp, -1)
+        pick[la[hit]] = hit
+        if np.any(pick < 0):  # cannot happen: every component has an outgoing edge
+            raise RuntimeError("EMST: a component found no outgoing edge")
+        u = np.arange(n_comp)
+        v = labels[cand_b[pick]]
+        w = cand_d[pick]
+        keep = ~((v[v] == u) & (u > v))
+        graph = coo_matrix((w[keep], (u[keep], v[keep])), shape=(n_comp, n_comp)).tocsr()
         forest = minimum_spanning_tree(graph)
         lengths.append(forest.data.copy())
         n_new, comp = connected_components(forest, directed=False)
