@@ -178,6 +178,16 @@ def dp_reference(a: np.ndarray, b: np.ndarray) -> tuple[float, float]:
     return float(w[-1, -1]), float(bn[-1, -1])
 
 
+def test_distances_match_a_quadratic_dynamic_programme_on_random_small_diagrams(rng):
+    # runs without POT too; ties from rounding exercise equal deaths on both sides
+    for _ in range(150):
+        a = np.round(rng.exponential(size=int(rng.integers(0, 15))), int(rng.integers(1, 3)))
+        b = np.round(rng.exponential(size=int(rng.integers(0, 15))), int(rng.integers(1, 3)))
+        w, bn = dp_reference(a, b)
+        assert wasserstein_h0(a, b) == pytest.approx(w, rel=1e-10, abs=1e-12)
+        assert bottleneck_h0(a, b) == pytest.approx(bn, rel=1e-12, abs=1e-15)
+
+
 def test_distances_match_a_quadratic_dynamic_programme_on_larger_diagrams(rng):
     a = rng.exponential(size=150)
     b = np.concatenate([a[:100] * rng.uniform(0.8, 1.2, 100), rng.exponential(size=70) * 0.3])
