@@ -10,7 +10,7 @@ import numpy as np
 from .curve import CurveSkeleton
 from .curve_sampling import sample_curve
 from .errors import Cancelled, SkelInputError
-from .geometry import Normalization
+from .geometry import Normalization, as_points
 from .metrics.boundedness import boundedness
 from .metrics.centeredness import curve_centeredness, skeletal_centeredness
 from .metrics.smoothness import curve_smoothness_overall, curve_vertex_smoothness, skeletal_smoothness
@@ -70,20 +70,6 @@ class _Stages:
         return out
 
 
-def _as_points(name: str, points: object) -> np.ndarray:
-    try:
-        arr = np.asarray(points, dtype=float)
-    except (TypeError, ValueError):
-        raise SkelInputError(f"{name}: coordinates are not numbers") from None
-    if arr.ndim != 2 or arr.shape[1] != 3:
-        raise SkelInputError(f"{name}: expected an N x 3 array of points, got shape {arr.shape}")
-    if len(arr) == 0:
-        raise SkelInputError(f"{name}: no points")
-    if not np.all(np.isfinite(arr)):
-        raise SkelInputError(f"{name}: coordinates contain NaN or inf")
-    return arr
-
-
 def evaluate(
     cloud: np.ndarray,
     skeletal: np.ndarray | None = None,
@@ -113,7 +99,7 @@ def evaluate(
     >>> ev.summary()["boundedness"]["skeletal"]            # doctest: +SKIP
     """
     t_start = time.perf_counter()
-    cloud = _as_points("cloud", cloud)
+    cloud = as_points("cloud", cloud)
     if len(cloud) < 2:
         raise SkelInputError("cloud: at least 2 points are needed")
     try:
@@ -125,7 +111,7 @@ def evaluate(
     skel = skel_n = None
     correspondence = None
     if skeletal is not None:
-        skel = _as_points("skeletal point set", skeletal)
+        skel = as_points("skeletal point set", skeletal)
         if skeletal_index is not None:
             correspondence = np.asarray(skeletal_index, dtype=np.int64).ravel()
             if correspondence.shape != (len(skel),):

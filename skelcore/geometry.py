@@ -72,6 +72,41 @@ def knn(points: np.ndarray, queries: np.ndarray, k: int, tree: cKDTree | None = 
     return dist, idx
 
 
+def unique_rows(points: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(unique points, inverse, counts), comparing values (so -0.0 equals 0.0).
+
+    Contraction stacks many skeletal points at one position; metrics work once per position.
+    Faster than ``np.unique(axis=0)``, which compares bytes.
+    """
+    points = np.asarray(points, dtype=float)
+    order = np.lexsort(points.T[::-1])
+    srt = points[order]
+    new = np.ones(len(srt), bool)
+    if len(srt) > 1:
+        new[1:] = np.any(srt[1:] != srt[:-1], axis=1)
+    group = np.cumsum(new) - 1
+    inverse = np.empty(len(points), np.int64)
+    inverse[order] = group
+    return srt[new], inverse, np.bincount(group, minlength=int(new.sum()))
+
+
+def as_points(name: str, points: object) -> np.ndarray:
+    """Validate user points as a finite, non-empty (N, 3) float array, else a one-line SkelInputError."""
+    from .errors import SkelInputError
+
+    try:
+        arr = np.asarray(points, dtype=float)
+    except (TypeError, ValueError):
+        raise SkelInputError(f"{name}: coordinates are not numbers") from None
+    if arr.ndim != 2 or arr.shape[1] != 3:
+        raise SkelInputError(f"{name}: expected an N x 3 array of points, got shape {arr.shape}")
+    if len(arr) == 0:
+        raise SkelInputError(f"{name}: no points")
+    if not np.all(np.isfinite(arr)):
+        raise SkelInputError(f"{name}: coordinates contain NaN or inf")
+    return arr
+
+
 def bbox_diagonal(points: np.ndarray) -> float:
     return float(np.linalg.norm(points.max(axis=0) - points.min(axis=0)))
 

@@ -13,7 +13,7 @@ import numpy as np
 from scipy.spatial import cKDTree
 
 from ..curve import CurveSkeleton
-from ..geometry import Checkpoint, no_checkpoint, unit_rows
+from ..geometry import Checkpoint, no_checkpoint, unique_rows, unit_rows
 from ..params import Params
 
 __all__ = ["skeletal_smoothness", "curve_vertex_smoothness", "curve_smoothness_overall"]
@@ -26,19 +26,6 @@ def _angle_score(cos: np.ndarray) -> np.ndarray:
     with np.errstate(invalid="ignore"):
         theta = np.arccos(np.clip(cos, -1.0, 1.0))
     return np.abs(1.0 - 2.0 * theta / np.pi)
-
-
-def _unique_rows(points: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """(unique points, inverse, counts), comparing values (so -0.0 equals 0.0)."""
-    order = np.lexsort(points.T[::-1])
-    srt = points[order]
-    new = np.ones(len(srt), bool)
-    if len(srt) > 1:
-        new[1:] = np.any(srt[1:] != srt[:-1], axis=1)
-    group = np.cumsum(new) - 1
-    inverse = np.empty(len(points), np.int64)
-    inverse[order] = group
-    return srt[new], inverse, np.bincount(group)
 
 
 def _taken(counts_in_order: np.ndarray, k: int) -> np.ndarray:
@@ -71,7 +58,7 @@ def skeletal_smoothness(
     out = np.full(n, np.nan)
     if n == 0:
         return out
-    uniq, inverse, counts = _unique_rows(pts)
+    uniq, inverse, counts = unique_rows(pts)
     m = len(uniq)
     if m < 2:
         return out  # every C_i is zero: no direction anywhere

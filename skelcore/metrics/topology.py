@@ -22,7 +22,7 @@ from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import connected_components, minimum_spanning_tree
 from scipy.spatial import cKDTree
 
-from ..geometry import Checkpoint, matlab_round, nearest_neighbor_distances, no_checkpoint
+from ..geometry import Checkpoint, matlab_round, nearest_neighbor_distances, no_checkpoint, unique_rows
 from ..params import Params
 from ..results import TopologyResult
 
@@ -48,20 +48,6 @@ _QUERY_CHUNK = 16384  # points per kNN query call, so the checkpoint is reached 
 # ---------------------------------------------------------------------------------------------
 # H0 barcode = EMST edge lengths
 # ---------------------------------------------------------------------------------------------
-def _unique_rows(points: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """(unique points, inverse, counts), comparing values (so -0.0 equals 0.0)."""
-    order = np.lexsort(points.T[::-1])
-    srt = points[order]
-    new = np.ones(len(srt), bool)
-    if len(srt) > 1:
-        new[1:] = np.any(srt[1:] != srt[:-1], axis=1)
-    group = np.cumsum(new) - 1
-    inverse = np.empty(len(points), np.int64)
-    inverse[order] = group
-    counts = np.bincount(group)
-    return srt[new], inverse, counts
-
-
 def _as_points(points: np.ndarray) -> np.ndarray:
     pts = np.asarray(points, dtype=float)
     if pts.ndim != 2 or pts.shape[1] != 3:
@@ -283,7 +269,7 @@ def _barcode_and_nn(points: np.ndarray, checkpoint: Checkpoint) -> tuple[np.ndar
     duplicate), from one kNN pass."""
     if len(points) == 0:
         return np.empty((0, 2)), np.empty(0)
-    uniq, inverse, counts = _unique_rows(points)
+    uniq, inverse, counts = unique_rows(points)
     checkpoint(0.02)
     lengths, nn_unique = _emst_lengths(uniq, lambda f: checkpoint(0.02 + 0.96 * f))
     deaths = np.sort(lengths)[::-1]
