@@ -50,7 +50,7 @@ class Params:
     rays_rows: int = 48
     rays_exact_pairs: int = 40_000_000
     rays_near_angle: float = 0.1
-    rays_cluster_cell: float = 2.0
+    rays_cluster_cell: float = 1.0
     paper_plane_threshold: float = 0.8
     paper_area_threshold: float = 1e-4
     k_center: int | None = None
