@@ -10,6 +10,7 @@ import pytest
 from PySide6 import QtCore, QtGui, QtWidgets
 
 from skelcore import shapes
+from skelcore.colors import SKELETAL_COLOR, lookup_table
 from skelcore.io import write_curve_ply, write_points_ply
 
 pytestmark = pytest.mark.gui
@@ -124,15 +125,13 @@ def test_render_shows_the_cloud_grey_and_colour_map_colours(window, files, qtbot
     window.session.load_files([files["cloud"], files["skeletal"]])
     plain = window.view.image()
     assert _is_grey(plain) > 200  # the cloud
-    assert _count(plain, (230, 120, 20)) > 50  # uncoloured skeletal points are orange
+    assert _count(plain, SKELETAL_COLOR) > 50  # uncoloured skeletal points have their plain colour
     values = np.linspace(0.0, 1.0, window.scene.skeletal.n_points)
     window.scene.skeletal.add_scalar_quantity("boundedness", values)
     window.scene.set_metric("boundedness")
     img = window.view.image()
-    assert _count(img, (230, 120, 20)) == 0
-    from matplotlib import colormaps
-
-    lut = (np.asarray(colormaps["viridis"](np.linspace(0, 1, 256)))[:, :3] * 255).round().astype(int)
+    assert _count(img, SKELETAL_COLOR) == 0
+    lut = lookup_table("viridis", 256).astype(int)
     px = _rgb(img)
     on_map = np.zeros(len(px), bool)
     for chunk in np.array_split(np.arange(len(px)), 8):

@@ -15,7 +15,7 @@ from pyvistaqt import QtInteractor
 from PySide6 import QtCore, QtGui
 
 from ..scene import CURVE_LOCATION, Scene, SceneEvent
-from .style import CLOUD_GREY, COLORMAP, CURVE_EDGE, CURVE_VERTEX, MAGENTA, PICK_MARKER, SKELETAL_PLAIN
+from .style import CLOUD_GREY, CURVE_EDGE, CURVE_VERTEX, PICK_MARKER, SKELETAL_PLAIN, make_lut
 
 __all__ = ["SceneView", "DropInteractor"]
 
@@ -135,8 +135,8 @@ class SceneView:
         )
         if values is not None:
             poly.point_data["values"] = np.asarray(values, dtype=float)
-            kwargs.update(scalars="values", cmap=COLORMAP, clim=self.scene.colour_range(), nan_color=MAGENTA,
-                          show_scalar_bar=False)
+            clim = self.scene.colour_range()
+            kwargs.update(scalars="values", cmap=make_lut(clim), clim=clim, show_scalar_bar=False)
         else:
             kwargs.update(color=plain)
         actor = self.plotter.add_mesh(poly, **kwargs)

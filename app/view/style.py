@@ -1,17 +1,27 @@
-"""The viewer's colours in one place. NaN's magenta comes from skelcore.colors (SPEC 5), so the
-screen and the exported PLY files agree."""
+"""The viewer's colours. Everything shared with the files skelcore writes (NaN magenta, SPEC 5; the
+colour maps; the cloud and skeleton colours) comes from :mod:`skelcore.colors`, so the screen and an
+exported PLY agree; only view-only colours live here."""
 
 from __future__ import annotations
 
-try:
-    from skelcore.colors import MAGENTA as _MAGENTA
-except ImportError:  # TEMPORARY until skelcore.colors lands
-    _MAGENTA = (255, 0, 255)
+import pyvista as pv
 
-MAGENTA: tuple[int, int, int] = tuple(int(v) for v in _MAGENTA)  # type: ignore[assignment]
-COLORMAP = "viridis"  # perceptually uniform and free of magenta, so NaN stands out
-CLOUD_GREY = (150, 150, 150)
-SKELETAL_PLAIN = (230, 120, 20)  # orange: not on viridis, so uncoloured skeletons read as such
-CURVE_EDGE = (40, 40, 40)
-CURVE_VERTEX = (40, 40, 40)
-PICK_MARKER = (230, 20, 20)
+from skelcore.colors import CLOUD_GREY, CURVE_COLOR, MAGENTA, SKELETAL_COLOR, lookup_table
+
+__all__ = ["MAGENTA", "CLOUD_GREY", "SKELETAL_PLAIN", "CURVE_EDGE", "CURVE_VERTEX", "PICK_MARKER", "make_lut"]
+
+SKELETAL_PLAIN = SKELETAL_COLOR
+CURVE_EDGE = CURVE_COLOR
+CURVE_VERTEX = CURVE_COLOR
+PICK_MARKER = (255, 140, 0)  # orange: on neither colour map, not magenta
+COLORMAP = "viridis"
+
+
+def make_lut(clim: tuple[float, float], cmap: str = COLORMAP) -> pv.LookupTable:
+    """A VTK lookup table of skelcore's colour map over ``clim``, NaN drawn magenta."""
+    table = lookup_table(cmap, 256)
+    lut = pv.LookupTable()
+    lut.values = [(int(r), int(g), int(b), 255) for r, g, b in table]
+    lut.scalar_range = (float(clim[0]), float(clim[1]))
+    lut.nan_color = MAGENTA
+    return lut

@@ -1,0 +1,206 @@
+"""A real evaluation in the window's worker thread: it completes and fills the panels, Cancel stops a
+long one with no result landing, thresholds re-score without recomputing, exports reload."""
+
+from __future__ import annotations
+
+import csv
+import json
+import os
+
+import numpy as np
+import pytest
+from PySide6 import QtCore, QtWidgets
+
+import skelcore
+from skelcore import shapes
+from skelcore.io import load_any, write_curve_ply, write_points_ply
+from skelcore.params import Params
+
+pytestmark = pytest.mark.gui
+
+
+@pytest.fixture(scope="module")
+def files(tmp_path_factory):
+    tmp_path = tmp_path_factory.mktemp("y")
+    sh = shapes.y_shape(1500, seed=3)
+    paths = {k: tmp_path / f"y_{k}.ply" for k in ("cloud", "skeletal", "curve")}
+    write_points_ply(paths["cloud"], sh.cloud)
+    write_points_ply(paths["skeletal"], sh.skeletal)
+    write_curve_ply(paths["curve"], sh.curve_vertices, sh.curve_edges)
+    return {k: str(v) for k, v in paths.items()}
+
+
+@pytest.fixture
+def window(qtbot, tmp_path, monkeypatch):
+    from app.main_window import MainWindow
+
+    dialogs: list[str] = []
+    monkeypatch.setattr(QtWidgets.QMessageBox, "critical", lambda parent, title, text, *a, **k: dialogs.append(text))
+    monkeypatch.setattr(QtWidgets.QMessageBox, "exec", lambda self: dialogs.append(self.text()) or 0)
+    settings = QtCore.QSettings(str(tmp_path / "settings.ini"), QtCore.QSettings.Format.IniFormat)
+    w = MainWindow(settings=settings)
+    w.dialogs = dialogs
+    qtbot.addWidget(w)
+    w.show()
+    qtbot.waitExposed(w)
+    yield w
+    w.session.runner.shutdown()
+
+
+@pytest.fixture(scope="module")
+def evaluation(files):
+    """One real evaluation of the files, shared by the tests that only need its result."""
+    from skelcore.io import load_cloud, load_curve, load_points
+
+    return skelcore.evaluate(load_cloud(files["cloud"]), load_points(files["skeletal"]), load_curve(files["curve"]),
+                             inputs=dict(files))
+
+
+@pytest.fixture
+def evaluated(window, files, evaluation, monkeypatch):
+    """The window with the three files loaded and their evaluation shown; evaluating again fails."""
+    window.session.auto_evaluate = False
+    window.session.load_files([files["cloud"], files["skeletal"], files["curve"]])
+    window.session._evaluated_layers = (window.scene.cloud, window.scene.skeletal, window.scene.curve)
+    window.session._task_succeeded("evaluation", evaluation)
+    monkeypatch.setattr(skelcore, "evaluate", lambda *a, **k: pytest.fail("recomputed"))
+    return window
+
+
+def test_loading_inputs_runs_one_evaluation_in_the_worker_and_fills_the_panels(window, files, qtbot, monkeypatch):
+    calls = []
+    real = skelcore.evaluate
+
+    def counting(*args, **kwargs):
+        calls.append(1)
+        return real(*args, **kwargs)
+
+    monkeypatch.setattr(skelcore, "evaluate", counting)
+    with qtbot.waitSignal(window.session.evaluated, timeout=60000):
+        window.session.load_files([files["cloud"], files["skeletal"], files["curve"]])
+    w = window
+    ev = w.scene.evaluation
+    assert ev is not None and len(calls) == 1
+    summary = ev.summary()
+    assert w.summary.cell_text("boundedness", "skeletal points") == (
+        f"{summary['boundedness']['skeletal']:.3f}  (n = {summary['counts']['boundedness']['skeletal']})"
+    )
+    assert w.summary.cell_text("d_B / d_Wp", "skeletal points").startswith(f"{summary['topology']['bottleneck']:.4f}")
+    assert w.summary.cell_text("smoothness", "curve skeleton").endswith(f"(n = {summary['counts']['smoothness']['curve']})")
+    title = w.barcodes.figure.texts[0].get_text() if w.barcodes.figure.texts else w.barcodes.figure._suptitle.get_text()
+    assert "d_B" in title and "d_Wp" in title and f"K = {ev.topology.n_bars}" in title
+    bar_axes = w.barcodes.figure.axes
+    assert len(bar_axes) == 2 and all(len(ax.collections) >= 1 for ax in bar_axes)
+    assert w.histogram.threshold == pytest.approx(w.scene.beta_star)
+    assert not w.progress.isVisible() and not w.session.runner.running
+    assert w.scene.skeletal.quantities["boundedness"].values.shape == (1500,)
+    assert w.scene.curve.samples is not None
+
+
+def test_thresholds_change_the_summary_at_once_without_recomputing(evaluated):
+    w = evaluated
+    before = w.summary.cell_text("boundedness", "skeletal points")
+    c_before = w.scene.skeletal.quantities["centeredness"].values.copy()
+    w.summary.beta_star.setValue(1.0)  # nothing is > 1: every element unbounded, centeredness 0
+    assert w.summary.cell_text("boundedness", "skeletal points") == "0.000  (n = 1500)"
+    assert w.summary.cell_text("boundedness", "skeletal points") != before
+    assert np.all(w.scene.skeletal.quantities["centeredness"].values == 0.0)
+    assert not np.array_equal(c_before, w.scene.skeletal.quantities["centeredness"].values)
+    w.summary.c_star.setValue(0.0)
+    assert w.scene.summary()["centeredness"]["skeletal"] == 0.0
+    assert not w.session.runner.running
+
+
+def test_cancel_stops_a_long_evaluation_and_no_result_lands(window, files, qtbot):
+    w = window
+    w.session.auto_evaluate = False
+    w.settings_panel.boundedness_method.setCurrentText("paper")  # the reference tool's slow estimator
+    w.session.load_files([files["cloud"], files["skeletal"]])
+    stages = []
+    w.session.runner.progressed.connect(lambda f, s: stages.append(s))
+    assert w.session.start_evaluation()
+    qtbot.waitUntil(lambda: "skeletal boundedness" in stages, timeout=30000)
+    assert w.progress.isVisible() and w.cancel_button.isVisible()
+    task = w.session.runner._current
+    with qtbot.waitSignal(w.session.runner.cancelled, timeout=10000):
+        w.cancel_button.click()
+    assert task.wait(10000)
+    qtbot.wait(100)
+    assert w.scene.evaluation is None and not w.session.runner.running
+    assert not w.progress.isVisible()
+    assert w.dialogs == []
+
+
+def test_loading_new_inputs_during_a_run_drops_its_result(window, files, qtbot, tmp_path):
+    w = window
+    w.session.auto_evaluate = False
+    w.session.load_files([files["cloud"], files["skeletal"]])
+    w.session.start_evaluation(Params(boundedness_method="paper"))
+    old = w.session.runner._current
+    w.session.load_as("curve", files["curve"])  # inputs changed: the old run is cancelled and ignored
+    assert old.wait(20000)
+    qtbot.wait(100)
+    assert w.scene.evaluation is None and not w.session.runner.running
+
+
+def test_an_invalid_evaluation_input_becomes_a_dialog(window, files, qtbot, tmp_path):
+    other = tmp_path / "other.ply"
+    write_points_ply(other, shapes.cylinder(800).cloud)
+    w = window
+    w.session.auto_evaluate = False
+    w.session.load_as("cloud", files["cloud"])
+    w.session.load_as("skeletal", str(other))  # 800 points against a 1500-point cloud
+    with qtbot.waitSignal(w.session.runner.finished, timeout=20000):
+        w.session.start_evaluation()
+    assert len(w.dialogs) == 1 and "pointwise correspondence" in w.dialogs[0]
+    assert w.isVisible() and w.scene.evaluation is None
+
+
+def test_every_export_reloads(evaluated, tmp_path):
+    w = evaluated
+    out = tmp_path / "out"
+    out.mkdir()
+    w.scene.set_metric("smoothness")
+    plys = w.export_ply(str(out / "ply"))
+    assert {os.path.basename(p) for p in plys} == {"skeletal.ply", "curve.ply", "curve_samples.ply"}
+    skel = load_any(out / "ply" / "skeletal.ply")
+    assert skel.kind == "points" and np.allclose(skel.points, w.scene.skeletal.points)
+    curve = load_any(out / "ply" / "curve.ply")
+    assert curve.kind == "curve" and np.array_equal(curve.curve.edges, w.scene.curve.curve.edges)
+    samples = load_any(out / "ply" / "curve_samples.ply")
+    assert np.allclose(samples.points, w.scene.curve.samples)
+
+    written = w.export_results(str(out / "run.json"))
+    doc = json.loads((out / "run.json").read_text())
+    assert doc["boundedness"]["skeletal"] == pytest.approx(w.scene.summary()["boundedness"]["skeletal"])
+    assert doc["counts"]["smoothness"]["curve"] == w.scene.summary()["counts"]["smoothness"]["curve"]
+    with open(out / "run_skeletal.csv") as fh:
+        rows = list(csv.DictReader(fh))
+    assert len(rows) == 1500 and float(rows[7]["x"]) == pytest.approx(w.scene.skeletal.points[7, 0])
+    with open(out / "run_curve_vertices.csv") as fh:
+        vertex_rows = list(csv.DictReader(fh))
+    assert sum(r["smoothness"] == "nan" for r in vertex_rows) == 4  # the Y's junction and three tips
+    with open(out / "run_barcodes.csv") as fh:
+        bars = list(csv.DictReader(fh))
+    assert {r["diagram"] for r in bars} == {"cloud", "skeletal"} and any(r["death"] == "inf" for r in bars)
+    assert len(written) == 5
+
+    png = w.save_screenshot(str(out / "view.png"), scale=2)
+    from matplotlib.image import imread
+
+    img = imread(png)
+    view = w.view.widget
+    assert img.shape[0] == 2 * view.height() and img.shape[1] == 2 * view.width()
+    assert img[..., :3].std() > 0.02
+    transparent = imread(w.save_screenshot(str(out / "clear.png"), transparent=True))
+    assert transparent.shape[2] == 4 and transparent[..., 3].min() == 0 and transparent[..., 3].max() == 1
+
+
+def test_exports_never_overwrite_a_loaded_input(evaluated, files):
+    w = evaluated
+    before = open(files["cloud"], "rb").read()
+    with pytest.raises(skelcore.SkelInputError, match="refusing to overwrite"):
+        w.save_screenshot(files["cloud"])
+    w._guarded("Screenshot", w.save_screenshot, files["cloud"])
+    assert w.dialogs and "refusing to overwrite" in w.dialogs[-1]
+    assert open(files["cloud"], "rb").read() == before
