@@ -8,7 +8,6 @@ from __future__ import annotations
 
 import dataclasses
 import os
-from pathlib import Path
 from typing import Any, Iterable
 
 import numpy as np
@@ -24,16 +23,13 @@ def with_thresholds(evaluation: Any, beta_star: float, c_star: float) -> Any:
     return dataclasses.replace(evaluation, params=params)
 
 
-def export_coloured_ply(evaluation: Any, out_dir: str | os.PathLike, inputs: Iterable[str] = ()) -> list[str]:
-    """Skeletal points, curve vertices with edges and curve samples as coloured PLY (skelcore.export)."""
+def export_coloured_ply(evaluation: Any, out_dir: str | os.PathLike, inputs: Iterable[str] = (),
+                        color_by: str = "centeredness") -> list[str]:
+    """Skeletal points, curve vertices with edges and curve samples as coloured PLY, RGB by the metric
+    on screen and one float property per local metric (``skelcore.export.export_ply``)."""
     from skelcore.export import export_ply
 
-    Path(out_dir).mkdir(parents=True, exist_ok=True)
-    before = set(os.listdir(out_dir))
-    written = export_ply(evaluation, str(out_dir), inputs=tuple(inputs))
-    if written:
-        return [str(p) for p in written]
-    return sorted(str(Path(out_dir) / n) for n in set(os.listdir(out_dir)) - before if n.endswith(".ply"))
+    return [str(p) for p in export_ply(evaluation, str(out_dir), inputs=tuple(inputs), color_by=color_by)]
 
 
 def export_results(evaluation: Any, prefix: str | os.PathLike, inputs: Iterable[str] = ()) -> list[str]:

@@ -331,6 +331,11 @@ class MainWindow(QtWidgets.QMainWindow):
         dialog.show()
         self._study_dialog = dialog
 
+    def open_variant(self, cloud: Any, skeletal: Any = None, curve: Any = None, evaluation: Any = None) -> None:
+        """Called by the Study dialog: show one variant (arrays, no files) in the 3D view."""
+        self.session.show_arrays(cloud, skeletal, curve, evaluation)
+        self.view.reset_camera()
+
     # ---- exports --------------------------------------------------------------------------
     def _shown_evaluation(self) -> Any:
         ev = self.scene.evaluation
@@ -343,7 +348,7 @@ class MainWindow(QtWidgets.QMainWindow):
         ev = self._shown_evaluation()
         if ev is None:
             raise ValueError("nothing to export: run an evaluation first")
-        return export_coloured_ply(ev, out_dir, self._inputs())
+        return export_coloured_ply(ev, out_dir, self._inputs(), color_by=self.scene.metric)
 
     def export_results(self, prefix: str) -> list[str]:
         ev = self._shown_evaluation()

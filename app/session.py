@@ -85,6 +85,21 @@ class Session(QtCore.QObject):
             self._apply(role, data, path)
         return True
 
+    def show_arrays(self, cloud: Any, skeletal: Any = None, curve: Any = None, evaluation: Any = None) -> None:
+        """Show in-memory inputs (a study variant, issue 4) in place of the loaded ones; evaluated
+        unless its ``evaluation`` is given."""
+        with self.batch():
+            self.scene.set_cloud(cloud, None)
+            for name, data in (("skeletal", skeletal), ("curve", curve)):
+                if data is None:
+                    self.scene.remove_layer(name)
+                else:
+                    self._apply(name, data, None)
+            if evaluation is not None:
+                self._inputs_changed = False
+                self.scene.set_evaluation(evaluation)
+                self.evaluated.emit(evaluation)
+
     def _apply(self, role: str, data: Any, path: str | None) -> None:
         if role == "cloud":
             self.scene.set_cloud(data, path)
@@ -154,16 +169,21 @@ class Session(QtCore.QObject):
         self.message.emit("evaluating…")
         return True
 
-    def start_skeletonize(self, params: Params | None = None) -> bool:
-        """Skeletonize the loaded cloud (issue 4) in the worker; both results become layers."""
-        import skelcore
+    def start_skeletonize(self, params: Any = None) -> bool:
+        """Skeletonize the loaded cloud (issue 4) in the worker; both results become layers.
 
+        ``params`` is a ``skelcore.skeletonize.SkeletonizeParams`` (its defaults when None).
+        """
         if self.scene.cloud is None:
             self.message.emit("load a cloud first")
             return False
-        params = params or self.params()
+        try:
+            from skelcore.skeletonize import SkeletonizeParams, skeletonize
+        except ImportError as exc:
+            self.error.emit("Skeletonize", f"the skeletonizer is not available ({exc})", "")
+            return False
+        params = params or SkeletonizeParams()
         cloud = self.scene.cloud.points
-        skeletonize = skelcore.skeletonize  # resolved here, so a missing module fails before the thread
 
         def job(progress: Callable[[float, str], None], cancel: Callable[[], bool]) -> Any:
             return skeletonize(cloud, params, progress=progress, cancel=cancel)

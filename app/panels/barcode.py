@@ -23,7 +23,7 @@ def compared_bars(barcode: np.ndarray, k: int) -> np.ndarray:
 class BarcodePanel(QtWidgets.QWidget):
     def __init__(self, parent: QtWidgets.QWidget | None = None) -> None:
         super().__init__(parent)
-        self.figure = Figure(figsize=(4.0, 3.6), dpi=90, layout="constrained")
+        self.figure = Figure(figsize=(4.0, 3.6), dpi=90)
         self.canvas = FigureCanvasQTAgg(self.figure)
         self.canvas.setMinimumHeight(220)
         layout = QtWidgets.QVBoxLayout(self)
@@ -47,7 +47,8 @@ class BarcodePanel(QtWidgets.QWidget):
         skel = compared_bars(topology.skeletal_barcode, k)
         finite = np.concatenate([cloud[np.isfinite(cloud[:, 1]), 1], skel[np.isfinite(skel[:, 1]), 1], [topology.eps_star]])
         x_end = float(finite.max()) * 1.08 if finite.size and finite.max() > 0 else 1.0
-        axes = fig.subplots(2, 1, sharex=True)
+        # Fixed margins, not a layout engine: a hidden (tabbed) panel has no size to lay out.
+        axes = fig.subplots(2, 1, sharex=True, gridspec_kw=dict(left=0.16, right=0.97, top=0.9, bottom=0.13, hspace=0.12))
         for ax, bars, name, colour in ((axes[0], cloud, "cloud", "#1f4e79"), (axes[1], skel, "skeletal points", "#b35900")):
             deaths = np.where(np.isfinite(bars[:, 1]), bars[:, 1], x_end)
             y = np.arange(len(bars))

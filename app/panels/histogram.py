@@ -19,7 +19,7 @@ _COLOURS = {"skeletal": "#b35900", "curve": "#1f4e79"}
 class HistogramPanel(QtWidgets.QWidget):
     def __init__(self, parent: QtWidgets.QWidget | None = None) -> None:
         super().__init__(parent)
-        self.figure = Figure(figsize=(4.0, 2.6), dpi=90, layout="constrained")
+        self.figure = Figure(figsize=(4.0, 2.6), dpi=90)
         self.canvas = FigureCanvasQTAgg(self.figure)
         self.canvas.setMinimumHeight(180)
         layout = QtWidgets.QVBoxLayout(self)
@@ -31,6 +31,7 @@ class HistogramPanel(QtWidgets.QWidget):
         fig = self.figure
         fig.clear()
         ax = fig.add_subplot(1, 1, 1)
+        fig.subplots_adjust(left=0.14, right=0.97, top=0.95, bottom=0.17)  # no layout engine (hidden tabs)
         metric = scene.metric
         series: list[tuple[str, np.ndarray, int]] = []
         for name in ("skeletal", "curve"):
