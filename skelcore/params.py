@@ -48,7 +48,7 @@ class Params:
     boundedness_method: Literal["rays", "paper"] = "rays"
     rays_radius_factor: float = 2.0
     rays_rows: int = 48
-    rays_exact_pairs: int = 40_000_000
+    rays_exact_pairs: int = 4_000_000
     rays_near_angle: float = 0.1
     rays_cluster_cell: float = 1.0
     paper_plane_threshold: float = 0.8

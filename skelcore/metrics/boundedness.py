@@ -18,8 +18,9 @@ How it is computed, and why (measured on this project's 2-core machine; see benc
   batch (measured optimum: the batch stays in the CPU cache), batches spread over a thread pool
   (numpy releases the GIL).  Exact duplicate queries (contracted skeletal points coincide by the
   hundreds) and duplicate cloud points (identical caps) are computed once.
-* Up to ``rays_exact_pairs`` (query, point) pairs (4k x 4k is 17M) every pair is rasterised: the
-  estimate is the exact union up to the raster error.  Beyond, the far field is shared: queries are
+* Up to ``rays_exact_pairs`` (query, point) pairs (default 4M, 2k x 2k) every pair is rasterised:
+  the estimate is the exact union up to the raster error.  Beyond, unless the queries are too spread
+  out for it to pay (then every pair again), the far field is shared: queries are
   grouped in cubic cells of side ``rays_cluster_cell`` x h; each query rasterises its own near field
   (points within h / ``rays_near_angle``) and OR-s in its cluster's far field, rasterised once from
   the cluster's centroid.  Seen from the query instead, far caps move together by a small angle
@@ -50,6 +51,7 @@ __all__ = ["boundedness", "boundedness_rays", "boundedness_paper", "rays_radius"
 # pairs per kernel call: small enough to stay in cache (measured optimum ~4k), big enough that
 # numpy's per-call overhead stays below ~10 %
 _PAIRS_PER_CALL = 4096
+_FAR_PAIRS_PER_CALL = 16384
 # pairs per pool task: one checkpoint per finished task, so this bounds their spacing (~10 ms)
 _PAIRS_PER_TASK = 65536
 
@@ -112,9 +114,10 @@ def boundedness_rays(
     radius_factor: float = 2.0,
     rows: int = 48,
     bins: int | None = None,
-    exact_pairs: int = 40_000_000,
+    exact_pairs: int = 4_000_000,
     near_angle: float = 0.1,
     cluster_cell: float = 1.0,
+    share_far_field: bool | None = None,
     workers: int | None = None,
     checkpoint: Checkpoint = no_checkpoint,
 ) -> np.ndarray:
@@ -129,6 +132,7 @@ def boundedness_rays(
     exact_pairs : up to this many (distinct query, distinct point) pairs, every pair is used.
     near_angle, cluster_cell : beyond that, a query's own near field reaches h / near_angle and
         queries share the far field within cubic cells of side cluster_cell x h (module docstring).
+    share_far_field : None = decide by cost as above; True = always share; False = every pair.
     workers : threads (default: up to 2).
     checkpoint : called with the fraction done, at least every ~0.1 s; may raise ``Cancelled``.
 
@@ -164,10 +168,14 @@ def boundedness_rays(
     centre = (pts.min(axis=0) + pts.max(axis=0)) / 2.0
     pts_r = ((pts - centre) @ FRAME.T).astype(np.float32)
     q_r = ((uniq_q - centre) @ FRAME.T).astype(np.float32)
-    if len(pts_r) * len(q_r) <= exact_pairs:
-        job = _DenseJob(raster, pts_r, q_r, h)
-    else:
+    job = None
+    every_pair = len(pts_r) * len(q_r)
+    if share_far_field or (share_far_field is None and every_pair > exact_pairs):
         job = _ClusteredJob.sized(raster, pts_r, q_r, h, h / near_angle, cluster_cell * h, exact_pairs)
+        if share_far_field is None and job.estimated_pairs > every_pair / 2:
+            job = None  # queries too spread out to share much: every pair costs about the same
+    if job is None:
+        job = _DenseJob(raster, pts_r, q_r, h)
     beta = np.empty(len(q_r))
     order = getattr(job, "order", slice(None))
     beta[order] = _run(job, len(q_r), workers or _workers(), checkpoint)
@@ -214,7 +222,6 @@ class _ClusteredJob:
 
     def __init__(self, raster: CapRaster, pts: np.ndarray, queries: np.ndarray, h: float, near_radius: float, cell: float):
         self.raster = raster
-        self.pts = pts
         self.cols = [np.ascontiguousarray(pts[:, k]) for k in range(3)]
         self.h = np.float32(h)
         self.near_radius = float(near_radius)
@@ -255,46 +262,57 @@ class _ClusteredJob:
             costs.append(clusters * len(pts) + len(queries) * near)
             if costs[-1] <= budget:
                 break
-        scale = 2.0 ** (len(costs) - 1 if costs[-1] <= budget else int(np.argmin(costs)))
-        return cls(raster, pts, queries, h, near_radius * scale, cell * scale)
+        pick = len(costs) - 1 if costs[-1] <= budget else int(np.argmin(costs))
+        job = cls(raster, pts, queries, h, near_radius * 2.0**pick, cell * 2.0**pick)
+        job.estimated_pairs = costs[pick]
+        return job
 
-    def _bitmaps(self, qidx: np.ndarray, d: np.ndarray, n_queries: int) -> np.ndarray:
+    def _bitmaps(
+        self, n_queries: int, qidx: np.ndarray, dx: np.ndarray, dy: np.ndarray, dz: np.ndarray, per_call: int
+    ) -> np.ndarray:
         out = np.zeros((n_queries, self.raster.rows, self.raster.bins), dtype=bool)
-        for a in range(0, len(qidx), _PAIRS_PER_CALL):
-            b = a + _PAIRS_PER_CALL
-            dd = d[a:b]
-            out |= self.raster.covered(
-                n_queries, qidx[a:b], np.ascontiguousarray(dd[:, 0]), np.ascontiguousarray(dd[:, 1]),
-                np.ascontiguousarray(dd[:, 2]), self.h,
-            )
+        for a in range(0, len(qidx), per_call):
+            b = a + per_call
+            out |= self.raster.covered(n_queries, qidx[a:b], dx[a:b], dy[a:b], dz[a:b], self.h)
         return out
 
     def __call__(self, lo: int, hi: int) -> np.ndarray:
         out = np.empty(hi - lo)
         first = int(np.searchsorted(self.starts, lo))
+        x, y, z = self.cols
         for k in range(first, len(self.starts) - 1):
             a, b = int(self.starts[k]), int(self.starts[k + 1])
             if a >= hi:
                 break
             q = self.queries[a:b]
-            centre = q.astype(float).mean(axis=0).astype(np.float32)
-            spread = float(np.sqrt(((q - centre) ** 2).sum(axis=1)).max()) if b - a > 1 else 0.0
             if b - a == 1:
-                centre = q[0]
-            d_c = self.pts - centre
-            dist_c = np.sqrt(np.einsum("ij,ij->i", d_c, d_c))
-            far = dist_c > self.near_radius + spread
-            far_map = self._bitmaps(np.zeros(int(far.sum()), np.int32), d_c[far], 1)[0]
-            cand = self.pts[~far]
-            if len(cand) == 0:
+                centre, spread = q[0], 0.0
+            else:
+                centre = q.astype(float).mean(axis=0).astype(np.float32)
+                spread = float(np.sqrt(((q - centre) ** 2).sum(axis=1)).max())
+            dx, dy, dz = x - centre[0], y - centre[1], z - centre[2]
+            d2 = dx * dx
+            d2 += dy * dy
+            d2 += dz * dz
+            far = d2 > np.float32((self.near_radius + spread) ** 2)
+            # far caps are small (few rows each): bigger calls amortise numpy's per-call overhead
+            n_far = int(np.count_nonzero(far))
+            far_map = self._bitmaps(
+                1, np.zeros(n_far, np.int32), dx[far], dy[far], dz[far], _FAR_PAIRS_PER_CALL
+            )[0]
+            near = ~far
+            cand = [x[near], y[near], z[near]]
+            m = len(cand[0])
+            if m == 0:
                 out[a - lo : b - lo] = far_map.mean()
                 continue
-            step = max(1, _PAIRS_PER_TASK // len(cand))
+            step = max(1, _PAIRS_PER_TASK // m)
             for s0 in range(a, b, step):
                 s1 = min(s0 + step, b)
-                d = (cand[None, :, :] - self.queries[s0:s1, None, :]).reshape(-1, 3)
-                qi = np.repeat(np.arange(s1 - s0, dtype=np.int32), len(cand))
-                maps = self._bitmaps(qi, d, s1 - s0)
+                qs = self.queries[s0:s1]
+                d = [(cand[j][None, :] - qs[:, j : j + 1]).ravel() for j in range(3)]
+                qi = np.repeat(np.arange(s1 - s0, dtype=np.int32), m)
+                maps = self._bitmaps(s1 - s0, qi, d[0], d[1], d[2], _PAIRS_PER_CALL)
                 maps |= far_map
                 out[s0 - lo : s1 - lo] = maps.reshape(s1 - s0, -1).mean(axis=1)
         return out
