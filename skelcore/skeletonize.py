@@ -23,6 +23,7 @@ toolbox's ``GS.normalize``) and is returned in the user's units. Deterministic: 
 
 from __future__ import annotations
 
+import math
 import time
 from dataclasses import dataclass, fields
 from typing import Callable
@@ -50,15 +51,22 @@ class SkeletonizeParams:
     laplacian_neighbors : candidate neighbours per point for robust_laplacian's local Delaunay
         one-rings (its default, 30).
     mollify_factor : robust_laplacian's intrinsic mollification (its default, 1e-5).
-    contraction_weight : initial contraction weight W_L; None = 1 / (5 x mean one-ring edge length)
-        in normalized units (toolbox's ``compute_init_laplacian_constraint_weight``).
+    contraction_weight : initial contraction weight W_L; None = sqrt(N / reference_points) /
+        (5 x mean one-ring edge length) in normalized units: the toolbox's
+        ``compute_init_laplacian_constraint_weight`` made density independent (the cotangent
+        Laplacian scales with the area per point).
+    reference_points : cloud size at which the default W_L and its cap equal the toolbox's (4096,
+        the paper's clouds).
     contraction_scale : W_L is multiplied by this each iteration (s_L = 3, toolbox; the paper says 2).
-    contraction_weight_max : cap on W_L (2048, from Au et al.'s implementation).
+    contraction_weight_max : cap on W_L (2048, from Au et al.'s implementation), scaled by
+        sqrt(N / reference_points) like the start.
     attraction_weight : initial attraction weight W_H (1).
     attraction_weight_max : cap on W_H (10000).
     max_iterations : contraction iterations at most (20, toolbox).
     termination_ratio : stop when the mean one-ring size ratio (current / original) decreased by less
-        than this in the last iteration (0.01, toolbox's ``CONTRACT_TERMINATION_CONDITION``).
+        than this in the last iteration (0.01, toolbox's ``CONTRACT_TERMINATION_CONDITION``) ...
+    started_ratio : ... and that ratio is already below this (0.9): unlike the toolbox, a first
+        iteration that hardly moved anything does not end the contraction.
     bbox_growth_limit : an iteration whose result's bounding box (0.1%-99.9% quantiles) grows on any axis by more than
         (factor - 1) x the original's longest side is rejected and contraction stops (1.2; the
         toolbox compares each axis with itself, which stops flat shapes early).
@@ -68,13 +76,16 @@ class SkeletonizeParams:
         the one-ring neighbours of the Laplacian (Cao's "inherited" connectivity).
     short_cycle_factor : after triangles are gone, cycles shorter (total edge length) than this x the
         sample radius are collapsed, shortest edge first: two strands of samples along a tube that
-        did not contract to a line. A real hole of the shape (a torus: ~80 radii) is far longer.
+        did not contract to a line, or quads left in a flat cap. A real hole (torus: ~80 radii) is longer.
         0 keeps every cycle.
     shortcut_ratio : before collapsing, an edge is dropped when another path joins its ends at most
         this x its length (a shortcut along a line of samples, e.g. the long side of a triangle
         with an angle above ~100 degrees); 1 = Cao's plain collapse.
     prune_branch_factor : leaf branches shorter than this x the sample radius that hang off a
         junction are removed (end-cap spurs); 0 keeps them.
+    prune_thickness_factor : ... as are leaf branches shorter than this x the shape's thickness at
+        their junction (mean distance of the junction's original points to it): a flat end cap
+        contracts to a cross as wide as the tube; 0 turns this off.
     min_sample_points : a sample ball holding fewer contracted points than this is dropped with its
         points (stray points thrown out of the shape would add long spokes to the curve).
     """
@@ -84,16 +95,19 @@ class SkeletonizeParams:
     contraction_weight: float | None = None
     contraction_scale: float = 3.0
     contraction_weight_max: float = 2048.0
+    reference_points: int = 4096
     attraction_weight: float = 1.0
     attraction_weight_max: float = 10000.0
     max_iterations: int = 20
     termination_ratio: float = 0.01
+    started_ratio: float = 0.9
     bbox_growth_limit: float = 1.2
     sample_radius_factor: float = 0.02
     connect_neighbors: int | None = None
-    short_cycle_factor: float = 12.0
+    short_cycle_factor: float = 20.0
     shortcut_ratio: float = 1.3
     prune_branch_factor: float = 3.0
+    prune_thickness_factor: float = 1.0
     min_sample_points: int = 3
 
     def __post_init__(self) -> None:
@@ -106,6 +120,10 @@ class SkeletonizeParams:
                 bad(name, "must be > 0")
         if self.contraction_weight is not None and not float(self.contraction_weight) > 0:
             bad("contraction_weight", "must be > 0 or None")
+        if not 0.0 < float(self.started_ratio) <= 1.0:
+            bad("started_ratio", "must be in (0, 1]")
+        if int(self.reference_points) < 1:
+            bad("reference_points", "must be >= 1")
         if not float(self.contraction_scale) >= 1.0:
             bad("contraction_scale", "must be >= 1")
         if not float(self.bbox_growth_limit) > 1.0:
@@ -118,6 +136,8 @@ class SkeletonizeParams:
             bad("connect_neighbors", "must be >= 2 or None")
         if not float(self.shortcut_ratio) >= 1.0:
             bad("shortcut_ratio", "must be >= 1")
+        if float(self.prune_thickness_factor) < 0:
+            bad("prune_thickness_factor", "must be >= 0")
         if float(self.prune_branch_factor) < 0:
             bad("prune_branch_factor", "must be >= 0")
         if int(self.min_sample_points) < 1:
@@ -269,7 +289,16 @@ def contract(
     sizes0 = _ring_sizes(points_n, adj)
     coo = adj.tocoo()
     mean_edge = float(np.mean(np.linalg.norm(points_n[coo.row] - points_n[coo.col], axis=1))) if coo.nnz else 1.0
-    wl = float(params.contraction_weight) if params.contraction_weight is not None else 1.0 / (5.0 * mean_edge)
+    # Cao's toolbox starts at 1 / (5 h). The Laplacian of a sampled surface scales with the area per
+    # point (h^2), so that start contracts a dense cloud far more weakly than a sparse one; scaling it
+    # by sqrt(N / reference_points) gives the same first step as the toolbox's on a cloud of the
+    # reference size (the paper's 4096) of the same surface, whatever the density. The cap scales alike.
+    density = float(np.sqrt(n / params.reference_points))
+    if params.contraction_weight is not None:
+        wl = float(params.contraction_weight)
+    else:
+        wl = density / (5.0 * mean_edge)
+    wl_max = params.contraction_weight_max * density
     wh = np.full(n, float(params.attraction_weight))
     extent0 = np.maximum(_robust_extent(points_n), 1e-12)
     total0 = float(sizes0.sum()) or 1.0
@@ -301,10 +330,11 @@ def contract(
         decrease = ratios[-1] - ratio
         current = new
         ratios.append(ratio)
-        if decrease < params.termination_ratio:
+        # the toolbox also stops when nothing has moved yet (a fat part under weak first weights)
+        if decrease < params.termination_ratio and ratio < params.started_ratio:
             stop = "one-ring size stopped shrinking"
             break
-        wl = min(wl * params.contraction_scale, params.contraction_weight_max)
+        wl = min(wl * params.contraction_scale, wl_max)
         with np.errstate(divide="ignore", invalid="ignore"):
             wh = params.attraction_weight * np.where(sizes > 0, sizes0 / sizes, params.attraction_weight_max)
         wh = np.clip(np.nan_to_num(wh, nan=params.attraction_weight), params.attraction_weight, params.attraction_weight_max)
@@ -328,40 +358,46 @@ def _farthest_sampling_by_sphere(
     n = len(pts)
     tree = cKDTree(pts)
     label = np.full(n, -1, np.int64)
-    mindst = np.full(n, np.nan)
+    mindst = np.full(n, -1.0)  # -1: not reached by any ball yet
     centres: list[int] = []
+    unlabelled = n
     for start in range(n):
+        if unlabelled == 0:
+            break
         if label[start] >= 0:
             continue
         mindst[start] = np.inf
-        while True:
-            cand = np.where(np.isnan(mindst), -1.0, mindst)
-            idx = int(np.argmax(cand))
-            if cand[idx] <= 0:
+        while unlabelled > 0:  # as the toolbox: stop as soon as every point has a sample
+            idx = int(np.argmax(mindst))
+            if mindst[idx] <= 0:
                 break
             nbrs = np.asarray(tree.query_ball_point(pts[idx], radius), dtype=np.int64)
-            if nbrs.size == 0 or np.all(label[nbrs] >= 0) and idx != start:
+            if idx != start and np.all(label[nbrs] >= 0):
                 mindst[idx] = 0.0
                 continue
             d = np.linalg.norm(pts[nbrs] - pts[idx], axis=1)
             centres.append(idx)
-            better = np.isnan(mindst[nbrs]) | (mindst[nbrs] > d) | (label[nbrs] < 0)
+            better = (label[nbrs] < 0) | (mindst[nbrs] > d)
+            unlabelled -= int(np.count_nonzero(label[nbrs] < 0))
             mindst[nbrs[better]] = d[better]
             label[nbrs[better]] = len(centres) - 1
             mindst[idx] = 0.0
             if len(centres) % 32 == 0:
-                report("curve", 0.5 * float(np.count_nonzero(label >= 0)) / n)
-        if np.all(label >= 0):
-            break
+                report("curve", 0.5 * (1.0 - unlabelled / n))
     return np.asarray(centres, np.int64), label
 
 
 class _Graph:
-    """Small mutable graph of curve vertices: adjacency sets, point sums for centroids."""
+    """Small mutable graph of curve vertices: adjacency sets, point sums for centroids.
+
+    Plain Python floats and sets: the graph has hundreds of vertices and is edited one collapse at a
+    time, where numpy's per-call overhead would dominate.
+    """
 
     def __init__(self, pos: np.ndarray, counts: np.ndarray, edges: np.ndarray) -> None:
-        self.sum = pos * counts[:, None]
-        self.count = counts.astype(float)
+        self.sum = [list(map(float, p * c)) for p, c in zip(pos, counts)]
+        self.count = [float(c) for c in counts]
+        self._pos = [tuple(map(float, p)) for p in pos]
         self.alive = np.ones(len(pos), bool)
         self.adj: list[set[int]] = [set() for _ in range(len(pos))]
         for a, b in edges:
@@ -370,16 +406,20 @@ class _Graph:
                 self.adj[b].add(int(a))
         self.merged_into = np.arange(len(pos))
 
-    def pos(self, v: int) -> np.ndarray:
-        return self.sum[v] / self.count[v]
+    def pos(self, v: int) -> tuple[float, float, float]:
+        return self._pos[v]
 
     def length(self, a: int, b: int) -> float:
-        return float(np.linalg.norm(self.pos(a) - self.pos(b)))
+        return math.dist(self._pos[a], self._pos[b])
 
     def collapse(self, keep: int, gone: int) -> None:
         """Merge ``gone`` into ``keep``: the merged vertex is the centroid of both balls' points."""
-        self.sum[keep] += self.sum[gone]
+        sk, sg = self.sum[keep], self.sum[gone]
+        for i in range(3):
+            sk[i] += sg[i]
         self.count[keep] += self.count[gone]
+        c = self.count[keep]
+        self._pos[keep] = (sk[0] / c, sk[1] / c, sk[2] / c)
         for w in self.adj[gone]:
             self.adj[w].discard(gone)
             if w != keep:
@@ -471,42 +511,48 @@ def _remove_shortcuts(g: _Graph, ratio: float) -> None:
             g.adj[b].discard(a)
 
 
-def _prune_short_branches(g: _Graph, min_length: float) -> None:
-    """Remove leaf branches shorter than ``min_length`` that hang off a junction (degree >= 3).
+def _prune_short_branches(g: _Graph, min_length: Callable[[int], float]) -> None:
+    """Remove leaf branches shorter than ``min_length(junction)`` that hang off a junction (degree >= 3).
 
-    The flat end caps of a tube contract to small stars whose arms would otherwise show up as spurs;
-    the branch's vertices are handed to the junction. A junction never loses its last two branches,
-    so a path is never shortened.
+    The flat end caps of a tube contract to small stars or crosses whose arms would otherwise show
+    up as spurs; the branch's vertices are handed to the junction. Shortest branch first, so a
+    junction never loses its last two branches and a path is never shortened.
     """
     while True:
-        branches = []
+        best = None
         for leaf in np.flatnonzero(g.alive):
             leaf = int(leaf)
             if len(g.adj[leaf]) != 1:
                 continue
             chain, prev, cur, length = [leaf], -1, leaf, 0.0
             while True:
-                nxt = [w for w in g.adj[cur] if w != prev]
-                if len(g.adj[cur]) > 2 or not nxt:
+                w = next(x for x in g.adj[cur] if x != prev)
+                length += g.length(cur, w)
+                prev, cur = cur, w
+                if len(g.adj[cur]) != 2:
                     break
-                if len(g.adj[cur]) == 2 or cur == leaf:
-                    w = nxt[0]
-                    length += g.length(cur, w)
-                    prev, cur = cur, w
-                    if len(g.adj[cur]) != 2:
-                        break
-                    chain.append(cur)
-            if len(g.adj[cur]) >= 3 and length < min_length:
-                branches.append((length, leaf, chain, cur))
-        if not branches:
+                chain.append(cur)
+            if len(g.adj[cur]) >= 3 and length < min_length(cur) and (best is None or length < best[0]):
+                best = (length, chain, cur)
+        if best is None:
             return
-        length, leaf, chain, junction = min(branches)
+        _length, chain, junction = best
         for v in chain:
             for w in list(g.adj[v]):
                 g.adj[w].discard(v)
             g.adj[v] = set()
             g.alive[v] = False
             g.merged_into[v] = junction
+
+
+def _roots(merged_into: np.ndarray) -> np.ndarray:
+    """Follow merges to the surviving vertex of each sample."""
+    root = merged_into.copy()
+    while True:
+        nxt = root[root]
+        if np.array_equal(nxt, root):
+            return root
+        root = nxt
 
 
 def _short_cycle(g: _Graph, max_length: float) -> list[int] | None:
@@ -529,6 +575,7 @@ def extract_curve(
     radius: float,
     params: SkeletonizeParams = SkeletonizeParams(),
     *,
+    original_n: np.ndarray | None = None,
     report: Callable[[str, float], None] | None = None,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Curve skeleton of contracted points: sampling, inherited connectivity, edge collapse.
@@ -537,6 +584,7 @@ def extract_curve(
     contracted points' coordinates.
     """
     report = report or (lambda _stage, _f: None)
+    original_n = contracted_n if original_n is None else original_n
     report("curve", 0.0)
     centres, label = _farthest_sampling_by_sphere(contracted_n, radius, report)
     counts = np.bincount(label, minlength=len(centres))
@@ -572,21 +620,23 @@ def extract_curve(
         a, b = min(ring, key=lambda e: (g.length(*e), e))
         g.collapse(a, b)
         _collapse_triangles(g, report)
-    if params.prune_branch_factor > 0:
-        _prune_short_branches(g, params.prune_branch_factor * radius)
+    if params.prune_branch_factor > 0 or params.prune_thickness_factor > 0:
+        # local thickness: mean distance of a vertex's original points to it (about the tube radius)
+        owner = _roots(g.merged_into)[np.maximum(label, 0)]
+        vpos = np.array(g._pos)
+        dist = np.linalg.norm(original_n - vpos[owner], axis=1)
+        w = valid.astype(float)
+        thickness = np.bincount(owner, weights=dist * w, minlength=m) / np.maximum(np.bincount(owner, weights=w, minlength=m), 1)
+        _prune_short_branches(
+            g, lambda j: max(params.prune_branch_factor * radius, params.prune_thickness_factor * thickness[j])
+        )
     alive = np.flatnonzero(g.alive)
     new_index = np.full(m, -1, np.int64)
     new_index[alive] = np.arange(len(alive))
     verts = np.array([g.pos(int(v)) for v in alive]).reshape(-1, 3)
     out_edges = sorted({(min(new_index[a], new_index[b]), max(new_index[a], new_index[b]))
                         for a in alive for b in g.adj[a]})
-    # follow merges to give each point its final vertex
-    root = g.merged_into.copy()
-    for _ in range(m):
-        nxt = root[root]
-        if np.array_equal(nxt, root):
-            break
-        root = nxt
+    root = _roots(g.merged_into)
     report("curve", 1.0)
     final = np.where(valid, new_index[root[np.maximum(label, 0)]], -1)
     return verts, np.asarray(out_edges, np.int64).reshape(-1, 2), final
@@ -647,7 +697,7 @@ def skeletonize(
     diag = float(np.linalg.norm(pts_n.max(axis=0) - pts_n.min(axis=0)))
     radius = params.sample_radius_factor * diag
     t = time.perf_counter()
-    verts, edges, _labels = extract_curve(contracted, adj, radius, params, report=report)
+    verts, edges, _labels = extract_curve(contracted, adj, radius, params, original_n=pts_n, report=report)
     t_curve = time.perf_counter() - t
 
     skeletal = norm.invert(contracted)
