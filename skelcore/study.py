@@ -288,10 +288,11 @@ def run_study(
     >>> print(result.to_markdown())                                   # doctest: +SKIP
     """
     from . import io
-    from .evaluate import _as_points, evaluate
+    from .degrade import _cloud
+    from .evaluate import evaluate
     from .skeletonize import SkeletonizeParams, skeletonize
 
-    cloud = _as_points("cloud", cloud)
+    cloud = _cloud(cloud)
     sk_params = skeletonize_params if skeletonize_params is not None else SkeletonizeParams()
     variants = _variants(cloud, noise=noise, noise_model=noise_model, sparse=sparse, grid=grid,
                          base_grid=base_grid, seed=seed)
