@@ -228,6 +228,21 @@ def test_shared_far_field_stays_within_0_01_of_every_pair(cell):
     assert 0 < err.max() <= 0.01  # not the every-pair path, and close to it
 
 
+def test_default_shares_the_far_field_of_a_compact_skeletal_set_within_0_01():
+    """4k torus, skeletal points near the core circle: 17M pairs, so the default shares far fields."""
+    shape = torus(4096, 1.0, 0.3, seed=6)
+    rng = np.random.default_rng(6)
+    norm = Normalization.from_cloud(shape.cloud)
+    cloud = norm.apply(shape.cloud)
+    queries = norm.apply(shape.skeletal + rng.normal(scale=0.01, size=shape.skeletal.shape))
+    seen: list[float] = []
+    beta = boundedness_rays(cloud, queries, checkpoint=seen.append)
+    pick = rng.choice(len(queries), 150, replace=False)
+    exact = boundedness_rays(cloud, queries[pick], share_far_field=False)
+    assert 0 < np.abs(beta[pick] - exact).max() <= 0.01
+    assert seen == sorted(seen) and seen[-1] == 1.0 and len(seen) > 20
+
+
 def test_dispatch_follows_params():
     cloud = _sphere(600)
     q = np.array([[0.0, 0, 0], [1.6, 0, 0]])

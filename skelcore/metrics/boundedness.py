@@ -7,26 +7,32 @@ directions of angular radius asin(h / |p - q|) around (p - q) / |p - q|; beta(q)
 of the caps / 4 pi, i.e. the fraction of rays from q that hit a ball of radius h around some cloud
 point.  h = ``rays_radius_factor`` x median nearest-neighbour spacing of the cloud.
 
-How it is computed, and why (measured on this project's 2-core machine; see benchmarks/):
+How it is computed, and why (measured on this project's loaded 2-core machine, see
+benchmarks/bench_boundedness.py; torus with 1 %-jittered skeletal points + 200 curve samples):
 
 * The union is rasterised on an equal-area latitude grid (``_rays.CapRaster``): exact longitude
-  intervals per row, a difference array and one ``bincount`` per batch.  ``rays_rows = 48`` rows and
-  96 longitude bins keep the error within 0.004 of the exact area on every test configuration (dense
-  brute-force direction grid, tests/test_boundedness.py); 64 rows halve it for ~40 % more time.  The
-  grid is turned by a fixed generic rotation so shape edges never run along its rows.
-* All work is vectorised over flat (query, point) pair arrays in float32, a few thousand pairs per
-  batch (measured optimum: the batch stays in the CPU cache), batches spread over a thread pool
-  (numpy releases the GIL).  Exact duplicate queries (contracted skeletal points coincide by the
-  hundreds) and duplicate cloud points (identical caps) are computed once.
+  intervals per row, a difference array and one ``bincount`` per batch (sorting intervals per row
+  was slower).  ``rays_rows = 48`` rows and 96 longitude bins stay within 0.0035 of a 200k-direction
+  brute force on every test configuration; 32 rows err up to 0.0065, 64 rows cost ~40 % more.  The
+  grid is turned by a fixed generic rotation: with rows along an axis-aligned torus's silhouette the
+  row errors added up to 0.03 at 24 rows (0.006 once turned).
+* Work is vectorised over flat (query, point) pair arrays in float32, ~4096 pairs per kernel call
+  (measured optimum: bigger batches fall out of the cache and run 2-3x slower per pair), tasks of
+  ~64k pairs on a 2-thread pool (numpy releases the GIL), one checkpoint per task (~10 ms).  Exact
+  duplicate queries (contracted skeletal points coincide) and duplicate cloud points (identical
+  caps) are computed once.  Cost: ~0.3 us of CPU per (query, point) pair.
 * Up to ``rays_exact_pairs`` (query, point) pairs (default 4M, 2k x 2k) every pair is rasterised:
-  the estimate is the exact union up to the raster error.  Beyond, unless the queries are too spread
-  out for it to pay (then every pair again), the far field is shared: queries are
-  grouped in cubic cells of side ``rays_cluster_cell`` x h; each query rasterises its own near field
-  (points within h / ``rays_near_angle``) and OR-s in its cluster's far field, rasterised once from
-  the cluster's centroid.  Seen from the query instead, far caps move together by a small angle
-  (a nearly rigid shift, which keeps the area); measured against every-pair evaluation the error stays
-  below 0.01 (tests; benchmarks/bench_boundedness.py).  When there are too many clusters for the
-  budget, the cells and the near radius grow together (same ratio, same bound on that shift).
+  the exact union up to the raster error.  Beyond, unless the queries are too spread out for it to
+  pay (then every pair again), the far field is shared: queries are grouped in cubic cells of side
+  ``rays_cluster_cell`` x h; each query rasterises its near field (points within h /
+  ``rays_near_angle`` of its cluster, plus the cluster's spread) exactly, and OR-s in its cluster's
+  far field, rasterised once from the cluster's centroid.  Seen from the query instead, far caps move
+  together by a small angle (a nearly rigid shift, which keeps the area): against every-pair
+  evaluation the error stayed <= 0.0035 at 4k, 0.008 at 16k, 0.0098 at 64k and 0.008 at 100k points.
+  When the clusters cost too much, cells and near radius grow together (same ratio, same shift).
+  Time (wall): 4k x 4.3k 0.7-1.9 s, 16k 4 s, 64k 8-11 s, 100k 21 s (every pair: 4k 2-4 s, 16k
+  ~25 s CPU, 64k ~400 s).  A random-subset level of detail for the far field was tried and dropped:
+  slower, and biased up to 0.05 (coarse balls widen the silhouettes).
 
 ``paper`` (the reference tool's algorithm, SPEC 2): sinusoidal projection of the unit directions,
 2-D Delaunay, the seam at lon = +-pi zipped from the free-boundary loop, flat 3-D triangle areas with
@@ -220,7 +226,10 @@ class _ClusteredJob:
     every-pair evaluation is measured in the tests.
     """
 
-    def __init__(self, raster: CapRaster, pts: np.ndarray, queries: np.ndarray, h: float, near_radius: float, cell: float):
+    def __init__(
+        self, raster: CapRaster, pts: np.ndarray, queries: np.ndarray, h: float, near_radius: float, cell: float,
+        tree: cKDTree | None = None,
+    ):
         self.raster = raster
         self.cols = [np.ascontiguousarray(pts[:, k]) for k in range(3)]
         self.h = np.float32(h)
@@ -232,18 +241,35 @@ class _ClusteredJob:
         self.queries = queries[self.order]
         cid = cid[self.order]
         self.starts = np.flatnonzero(np.r_[True, cid[1:] != cid[:-1], True])
-        # tasks: runs of whole clusters of about _PAIRS_PER_TASK estimated pairs
-        cost = len(pts) + 64 * np.diff(self.starts)
-        bounds = [0]
-        acc = 0
-        for k, c in enumerate(cost):
-            acc += c
-            if acc >= _PAIRS_PER_TASK:
-                bounds.append(k + 1)
-                acc = 0
-        if bounds[-1] != len(cost):
-            bounds.append(len(cost))
-        self.tasks = [(int(self.starts[a]), int(self.starts[b])) for a, b in zip(bounds[:-1], bounds[1:])]
+        # centroid and spread of every cluster: fixed here so results do not depend on the tasks
+        sizes = np.diff(self.starts)
+        q64 = self.queries.astype(float)
+        centres = np.add.reduceat(q64, self.starts[:-1], axis=0) / sizes[:, None]
+        cid_sorted = np.repeat(np.arange(len(sizes)), sizes)
+        dist = np.linalg.norm(q64 - centres[cid_sorted], axis=1)
+        spreads = np.maximum.reduceat(dist, self.starts[:-1])
+        single = sizes == 1
+        centres[single] = q64[self.starts[:-1][single]]
+        spreads[single] = 0.0
+        self.centres = centres.astype(np.float32)
+        self.spreads = spreads
+        # tasks: ranges of the sorted queries of about _PAIRS_PER_TASK pairs; a cluster whose near
+        # part is large is split, so checkpoints stay ~10 ms apart
+        tree = cKDTree(pts) if tree is None else tree
+        n_near = tree.query_ball_point(centres, near_radius + spreads, return_length=True)
+        self.tasks = []
+        lo, acc = 0, 0
+        for k in range(len(sizes)):
+            a, b = int(self.starts[k]), int(self.starts[k + 1])
+            step = max(1, _PAIRS_PER_TASK // max(1, int(n_near[k])))
+            for s0 in range(a, b, step):
+                s1 = min(s0 + step, b)
+                acc += len(pts) + (s1 - s0) * int(n_near[k])
+                if acc >= _PAIRS_PER_TASK:
+                    self.tasks.append((lo, s1))
+                    lo, acc = s1, 0
+        if lo < len(self.queries):
+            self.tasks.append((lo, len(self.queries)))
 
     @classmethod
     def sized(
@@ -263,7 +289,7 @@ class _ClusteredJob:
             if costs[-1] <= budget:
                 break
         pick = len(costs) - 1 if costs[-1] <= budget else int(np.argmin(costs))
-        job = cls(raster, pts, queries, h, near_radius * 2.0**pick, cell * 2.0**pick)
+        job = cls(raster, pts, queries, h, near_radius * 2.0**pick, cell * 2.0**pick, tree=tree)
         job.estimated_pairs = costs[pick]
         return job
 
@@ -278,18 +304,12 @@ class _ClusteredJob:
 
     def __call__(self, lo: int, hi: int) -> np.ndarray:
         out = np.empty(hi - lo)
-        first = int(np.searchsorted(self.starts, lo))
         x, y, z = self.cols
-        for k in range(first, len(self.starts) - 1):
-            a, b = int(self.starts[k]), int(self.starts[k + 1])
-            if a >= hi:
-                break
-            q = self.queries[a:b]
-            if b - a == 1:
-                centre, spread = q[0], 0.0
-            else:
-                centre = q.astype(float).mean(axis=0).astype(np.float32)
-                spread = float(np.sqrt(((q - centre) ** 2).sum(axis=1)).max())
+        k = int(np.searchsorted(self.starts, lo, side="right")) - 1
+        while k < len(self.starts) - 1 and self.starts[k] < hi:
+            a, b = max(int(self.starts[k]), lo), min(int(self.starts[k + 1]), hi)
+            centre, spread = self.centres[k], float(self.spreads[k])
+            k += 1
             dx, dy, dz = x - centre[0], y - centre[1], z - centre[2]
             d2 = dx * dx
             d2 += dy * dy
@@ -306,7 +326,7 @@ class _ClusteredJob:
             if m == 0:
                 out[a - lo : b - lo] = far_map.mean()
                 continue
-            step = max(1, _PAIRS_PER_TASK // m)
+            step = max(1, _PAIRS_PER_CALL // m)
             for s0 in range(a, b, step):
                 s1 = min(s0 + step, b)
                 qs = self.queries[s0:s1]
