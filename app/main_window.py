@@ -64,8 +64,7 @@ class MainWindow(QtWidgets.QMainWindow):
         self._dock("Settings", self.settings_panel, QtCore.Qt.DockWidgetArea.LeftDockWidgetArea)
         self.tabifyDockWidget(self.docks["Barcodes"], self.docks["Histogram"])
         self.docks["Barcodes"].raise_()
-        self.resizeDocks([self.docks["Summary"]], [430], QtCore.Qt.Orientation.Horizontal)
-        self.resizeDocks([self.docks["Display"]], [300], QtCore.Qt.Orientation.Horizontal)
+        QtCore.QTimer.singleShot(0, self._size_docks)  # after the first layout, or Qt ignores it
 
         self._build_status_bar()
         self._build_menus()
@@ -92,6 +91,9 @@ class MainWindow(QtWidgets.QMainWindow):
         dock.setWidget(widget)
         self.addDockWidget(area, dock)
         self.docks[title] = dock
+
+    def _size_docks(self) -> None:
+        self.resizeDocks([self.docks["Summary"], self.docks["Display"]], [420, 270], QtCore.Qt.Orientation.Horizontal)
 
     def _build_status_bar(self) -> None:
         bar = self.statusBar()

@@ -22,7 +22,8 @@ class DisplayPanel(QtWidgets.QWidget):
         self.auto_range.setChecked(True)
         self.vmin = self._range_spin(0.0)
         self.vmax = self._range_spin(1.0)
-        self.fit_range = QtWidgets.QPushButton("fit to data", self)
+        self.fit_range = QtWidgets.QPushButton("fit", self)
+        self.fit_range.setToolTip("fit the colour range to the shown values")
         self.fit_range.clicked.connect(self._fit_range)
         self.auto_range.toggled.connect(self._range_changed)
         range_row = QtWidgets.QHBoxLayout()
@@ -45,6 +46,7 @@ class DisplayPanel(QtWidgets.QWidget):
             size = QtWidgets.QDoubleSpinBox(self)
             size.setRange(1.0, 30.0)
             size.setDecimals(0)
+            size.setMaximumWidth(56)
             size.valueChanged.connect(lambda v, n=name: scene.set_point_size(n, v))
             opacity = QtWidgets.QSlider(QtCore.Qt.Orientation.Horizontal, self)
             opacity.setRange(0, 100)
@@ -75,6 +77,7 @@ class DisplayPanel(QtWidgets.QWidget):
         spin.setSingleStep(0.05)
         spin.setValue(value)
         spin.setKeyboardTracking(False)
+        spin.setMaximumWidth(72)
         spin.valueChanged.connect(self._range_changed)
         return spin
 

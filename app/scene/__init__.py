@@ -149,7 +149,10 @@ class Scene:
         return self.layers.get("curve")
 
     def set_cloud(self, points: np.ndarray, path: str | None = None) -> Layer:
-        layer = Layer("cloud", _points(points), path=path, point_size=2.0, opacity=0.35)
+        pts = _points(points)
+        # Dense clouds hide the skeleton: draw them lighter and smaller.
+        size, opacity = (2.0, 0.35) if len(pts) <= 200_000 else (1.0, 0.2)
+        layer = Layer("cloud", pts, path=path, point_size=size, opacity=opacity)
         return self._replace(layer)
 
     def set_skeletal(self, points: np.ndarray, path: str | None = None) -> Layer:
