@@ -11,8 +11,9 @@ the grid.  The raster's frame is a fixed generic rotation of the world frame, so
 the grid never line up with the axis-aligned silhouettes common in scanned and synthetic shapes (an
 aligned edge would make the per-row errors add up instead of averaging out).
 
-Everything runs in float32 on flat (query, point) pair arrays: the estimator's budget is a few tens of
-nanoseconds per pair (SPEC 2 accuracy is 0.01, far above float32's 1e-7).
+Everything runs in float32 on flat (query, point) pair arrays (half the memory traffic of float64;
+SPEC 2 asks for 0.01, far above float32's 1e-7).  Cost: ~0.3 us of CPU per pair, most of it in the
+(pair, row) stage, so it grows with the number of rows a cap spans.
 """
 
 from __future__ import annotations
@@ -173,50 +174,3 @@ class CapRaster:
         counts = np.bincount(marks, minlength=2 * size)
         diff = counts[:size] - counts[size:]
         return np.cumsum(diff.reshape(n_queries, rows, bins + 1)[:, :, :bins], axis=2) > 0
-        n = n[sel]
-        total = int(n.sum())
-        rho = np.maximum(rho[sel], f32(1e-30))  # a cap centred on a pole: c = +-huge, full or empty
-        with np.errstate(over="ignore"):
-            # c_j = (cos a - z_j u_z) / (s_j rho): cosine of the half-width of the cap's interval in row j
-            a_coef = cosa[sel] / rho
-            b_coef = uz[sel] / rho
-        phi = np.arctan2(dy[sel], dx[sel])
-        phi *= self._bins_per_radian
-        phi += f32(bins)  # longitude in bin units, shifted positive
-        offsets = np.cumsum(n) - n
-        row = np.arange(total, dtype=np.int32)
-        row -= np.repeat((offsets - first[sel]).astype(np.int32), n)
-        c = np.repeat(a_coef, n)
-        c *= self._inv_s[row]
-        t = np.repeat(b_coef, n)
-        t *= self._z_over_s[row]
-        c -= t
-        np.clip(c, -1.0, 1.0, out=c)
-        half = np.arccos(c)
-        half *= self._bins_per_radian
-        centre = np.repeat(phi, n)
-        # bins k whose centre k + 0.5 lies in [centre - half, centre + half]
-        start = (centre - half + f32(0.5)).astype(np.int32)
-        stop = (centre + half + f32(0.5)).astype(np.int32)
-        length = stop - start
-        np.clip(length, 0, bins, out=length)
-        length[c <= -1.0] = bins
-        start %= bins
-        base = np.repeat(qidx[sel].astype(np.int32) * rows, n)
-        base += row
-        base *= bins + 1
-        stop = start + length
-        wrap = np.flatnonzero(stop > bins)
-        np.minimum(stop, bins, out=stop)
-        size = n_queries * rows * (bins + 1)
-        wrapped = base[wrap]
-        # +1 at each interval start, -1 at its end (second half of one bincount); a wrapped interval
-        # is split into [start, bins) and [0, stop - bins)
-        marks = np.concatenate(
-            [base + start, wrapped, base + stop + size, wrapped + (start[wrap] + length[wrap] - bins + size)]
-        )
-        counts = np.bincount(marks, minlength=2 * size)
-        diff = counts[:size] - counts[size:]
-        covered = np.cumsum(diff.reshape(n_queries, rows, bins + 1)[:, :, :bins], axis=2) > 0
-        out[:] = np.count_nonzero(covered.reshape(n_queries, -1), axis=1) / float(rows * bins)
-        return out
