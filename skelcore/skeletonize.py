@@ -361,6 +361,7 @@ def _farthest_sampling_by_sphere(
     mindst = np.full(n, -1.0)  # -1: not reached by any ball yet
     centres: list[int] = []
     unlabelled = n
+    skips = 0
     for start in range(n):
         if unlabelled == 0:
             break
@@ -374,7 +375,20 @@ def _farthest_sampling_by_sphere(
             nbrs = np.asarray(tree.query_ball_point(pts[idx], radius), dtype=np.int64)
             if idx != start and np.all(label[nbrs] >= 0):
                 mindst[idx] = 0.0
+                skips += 1
+                if skips >= 32:
+                    # Many covered points in a row with nothing new in reach (the rest of the cloud is
+                    # another component): retire every candidate with no unlabelled point within the
+                    # radius at once. Labels are never taken back, so this only skips what the loop
+                    # would skip one by one.
+                    skips = 0
+                    cand = np.flatnonzero(mindst > 0)
+                    free = np.flatnonzero(label < 0)
+                    if len(cand) and len(free):
+                        d, _ = cKDTree(pts[free]).query(pts[cand], distance_upper_bound=radius * (1 + 1e-12))
+                        mindst[cand[~np.isfinite(d)]] = 0.0
                 continue
+            skips = 0
             d = np.linalg.norm(pts[nbrs] - pts[idx], axis=1)
             centres.append(idx)
             better = (label[nbrs] < 0) | (mindst[nbrs] > d)
