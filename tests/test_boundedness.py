@@ -243,6 +243,16 @@ def test_default_shares_the_far_field_of_a_compact_skeletal_set_within_0_01():
     assert seen == sorted(seen) and seen[-1] == 1.0 and len(seen) > 20
 
 
+def test_big_cloud_sliced_every_pair_equals_singleton_clusters():
+    """Far apart queries are clusters of one: centroid = query, so sharing is exact there; and the
+    every-pair path slices a big cloud without changing the union."""
+    cloud = sphere_surface(40000, 0.8, seed=1)
+    queries = np.array([[0.0, 0, 0], [1.6, 0, 0], [0.3, 0.2, 0.1]])
+    every = boundedness_rays(cloud, queries, share_far_field=False)
+    assert np.array_equal(every, boundedness_rays(cloud, queries, share_far_field=True))
+    assert every[0] > 0.9 and every[1] < 0.08
+
+
 def test_dispatch_follows_params():
     cloud = _sphere(600)
     q = np.array([[0.0, 0, 0], [1.6, 0, 0]])

@@ -200,11 +200,21 @@ class _DenseJob:
         n = len(pts)
         self.per_call = max(1, _PAIRS_PER_CALL // n)
         self.per_task = max(self.per_call, (_PAIRS_PER_TASK // n) // self.per_call * self.per_call)
-        self.qidx = np.repeat(np.arange(self.per_call, dtype=np.int32), n)
+        self.qidx = np.repeat(np.arange(self.per_call, dtype=np.int32), min(n, _FAR_PAIRS_PER_CALL))
 
     def __call__(self, lo: int, hi: int) -> np.ndarray:
         out = np.empty(hi - lo)
         n = len(self.cols[0])
+        if n > _FAR_PAIRS_PER_CALL:  # a big cloud: one query at a time, the cloud in slices
+            zeros = np.zeros(_FAR_PAIRS_PER_CALL, np.int32)
+            for i in range(lo, hi):
+                q = self.queries[i]
+                covered = np.zeros((self.raster.rows, self.raster.bins), dtype=bool)
+                for s in range(0, n, _FAR_PAIRS_PER_CALL):
+                    dx, dy, dz = (col[s : s + _FAR_PAIRS_PER_CALL] - q[k] for k, col in enumerate(self.cols))
+                    covered |= self.raster.covered(1, zeros[: len(dx)], dx, dy, dz, self.h)[0]
+                out[i - lo] = covered.mean()
+            return out
         for a in range(lo, hi, self.per_call):
             b = min(a + self.per_call, hi)
             q = self.queries[a:b]
