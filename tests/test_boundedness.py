@@ -162,11 +162,11 @@ def test_query_on_a_cloud_point_and_duplicates_are_well_defined():
     assert np.all(np.isfinite(beta))
     assert np.array_equal(beta[:3], beta[3:6])
     assert 0.4 < beta[0] < 0.75  # on the surface: about the half-space of the inside, plus a rim
-    # duplicate cloud points have identical caps: the union does not change
-    twice = boundedness_rays(np.vstack([cloud, cloud[:700]]), queries, radius_factor=2.0)
-    h_ratio = rays_radius(np.vstack([cloud, cloud[:700]])) / rays_radius(cloud)
-    if h_ratio == 1.0:
-        assert np.allclose(twice, beta)
+    # duplicate cloud points have identical caps: with the same h the union does not change
+    doubled = np.vstack([cloud, cloud[:300]])
+    factor = 2.0 * rays_radius(cloud, 1.0) / rays_radius(doubled, 1.0)
+    assert factor != 2.0  # the copies do lower the median spacing
+    assert np.abs(boundedness_rays(doubled, queries, radius_factor=factor) - beta).max() <= 1e-3
 
 
 def test_query_within_h_of_every_cloud_point_is_unbounded():
