@@ -87,7 +87,8 @@ class SkeletonizeParams:
         their junction (mean distance of the junction's original points to it): a flat end cap
         contracts to a cross as wide as the tube; 0 turns this off.
     min_sample_points : a sample ball holding fewer contracted points than this is dropped with its
-        points (stray points thrown out of the shape would add long spokes to the curve).
+        points when it is isolated or a leaf on an edge longer than two radii (stray points thrown
+        out of the shape would add long spokes to the curve).
     """
 
     laplacian_neighbors: int = 30
@@ -478,6 +479,28 @@ def _collapse_triangles(g: _Graph, report: Callable[[str, float], None]) -> None
             report("curve", 0.6)
 
 
+def _drop_strays(g: _Graph, counts: np.ndarray, min_points: int, long_edge: float) -> None:
+    """Remove samples of a few stray points: a ball holding fewer than ``min_points`` points that is
+    isolated, or a leaf hanging on an edge longer than ``long_edge``. Contraction throws single
+    points out of thin parts (the horse's ears, the paper notes); they would add long spokes. A small
+    ball inside a chain (a sparse branch) is kept: dropping it would cut the curve.
+    """
+    changed = True
+    while changed:
+        changed = False
+        for v in np.flatnonzero(g.alive):
+            v = int(v)
+            if counts[v] >= min_points or len(g.adj[v]) > 1:
+                continue
+            if g.adj[v] and g.length(v, next(iter(g.adj[v]))) <= long_edge:
+                continue
+            for w in g.adj[v]:
+                g.adj[w].discard(v)
+            g.adj[v] = set()
+            g.alive[v] = False
+            changed = True
+
+
 def _shortest_path(g: _Graph, a: int, b: int, budget: float) -> list[int] | None:
     """Shortest a -> b path (Dijkstra) no longer than ``budget``, not using the edge (a, b)."""
     import heapq
@@ -601,15 +624,6 @@ def extract_curve(
     original_n = contracted_n if original_n is None else original_n
     report("curve", 0.0)
     centres, label = _farthest_sampling_by_sphere(contracted_n, radius, report)
-    counts = np.bincount(label, minlength=len(centres))
-    # a ball holding almost no points is a stray point thrown out by the contraction: it would
-    # only add a long spoke to the curve
-    keep = counts >= params.min_sample_points
-    if keep.any() and not keep.all():
-        relabel = np.full(len(centres), -1, np.int64)
-        relabel[keep] = np.arange(int(keep.sum()))
-        label = relabel[label]
-        centres = centres[keep]
     m = len(centres)
     valid = label >= 0
     counts = np.bincount(label[valid], minlength=m).astype(float)
@@ -622,6 +636,7 @@ def extract_curve(
     edges = np.unique(np.sort(np.column_stack([la[diff], lb[diff]]), axis=1), axis=0) if diff.any() else np.empty((0, 2), np.int64)
     g = _Graph(pos, np.maximum(counts, 1), edges)
     report("curve", 0.55)
+    _drop_strays(g, counts, params.min_sample_points, 2.0 * radius)
     if params.shortcut_ratio > 1.0:
         _remove_shortcuts(g, params.shortcut_ratio)
     _collapse_triangles(g, report)
