@@ -12,10 +12,13 @@ From a bare cloud to both skeletal representations the metrics score:
    toolbox does. Iterations stop when the mean one-ring size stops shrinking.
 2. **Curve** (Cao's ROSA-style line extraction). Farthest-point sampling of the contracted points with
    balls of radius ``sample_radius_factor`` x the cloud's bounding-box diagonal; two samples are
-   connected when points of their balls are one-ring neighbours in the original cloud; edges of
-   triangles are collapsed (lowest mean degree first, then shortest) until no triangle is left, and
-   cycles shorter than ``short_cycle_factor`` sample radii (left by incomplete contraction) are collapsed
-   shortest edge first. A curve vertex sits at the centroid of the contracted points it stands for.
+   connected when points of their balls are one-ring neighbours in the original cloud. Then, in
+   order: stray single-point balls are dropped; shortcut edges (another path at most
+   ``shortcut_ratio`` x as long) are removed; edges of triangles are collapsed (lowest mean degree
+   first, then shortest; Cao's rule) until no triangle is left; cycles shorter than
+   ``short_cycle_factor`` sample radii (left by incomplete contraction) are collapsed shortest edge
+   first; short end-cap spurs are pruned. A curve vertex sits at the centroid of the contracted
+   points it stands for. Everything beyond Cao's collapse is an addition of ours (see the params).
 
 Everything runs in normalized coordinates (SPEC 0 transform, longest side 1.6, like the reference
 toolbox's ``GS.normalize``) and is returned in the user's units. Deterministic: no randomness.
