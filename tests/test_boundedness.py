@@ -210,7 +210,7 @@ def test_single_worker_and_pool_agree():
     assert np.array_equal(boundedness_rays(cloud, queries, workers=1), boundedness_rays(cloud, queries, workers=2))
 
 
-@pytest.mark.parametrize("cell", [1.0, 4.0])
+@pytest.mark.parametrize("cell", [2.0, 4.0])
 def test_shared_far_field_stays_within_0_01_of_every_pair(cell):
     shape = cylinder(12000, 0.5, 4.0, seed=5)
     norm = Normalization.from_cloud(shape.cloud)
@@ -220,27 +220,35 @@ def test_shared_far_field_stays_within_0_01_of_every_pair(cell):
         [norm.apply(shape.skeletal[:400]) + rng.normal(scale=0.01, size=(400, 3)), cloud[:40] - 0.01 * cloud[:40]]
     )
     exact = boundedness_rays(cloud, queries, exact_pairs=10**12)
-    # the default ratio (near radius = 10 cells), as kept when the cells grow to fit the budget
-    shared = boundedness_rays(
-        cloud, queries, exact_pairs=0, share_far_field=True, cluster_cell=cell, near_angle=0.1 / cell
-    )
+    # the default sizes (near radius 20 h, cells of 2 h) and twice them: near radius = 10 cells
+    shared = boundedness_rays(cloud, queries, share_far_field=True, cluster_cell=cell, near_angle=0.1 / cell)
     err = np.abs(shared - exact)
     assert 0 < err.max() <= 0.01  # not the every-pair path, and close to it
 
 
-def test_default_shares_the_far_field_of_a_compact_skeletal_set_within_0_01():
-    """4k torus, skeletal points near the core circle: 17M pairs, so the default shares far fields."""
-    shape = torus(4096, 1.0, 0.3, seed=6)
+def test_default_shares_the_far_field_only_where_it_pays():
+    """16k torus: its 16k skeletal points near the core share far fields; as many points spread
+    through the box, or few queries, use every pair (the accuracy of sharing is tested above)."""
+    from skelcore.metrics.boundedness import _choose_job, _ClusteredJob, _DenseJob
+
+    shape = torus(16384, 1.0, 0.3, seed=6)
     rng = np.random.default_rng(6)
     norm = Normalization.from_cloud(shape.cloud)
-    cloud = norm.apply(shape.cloud)
-    queries = norm.apply(shape.skeletal + rng.normal(scale=0.01, size=shape.skeletal.shape))
-    seen: list[float] = []
-    beta = boundedness_rays(cloud, queries, checkpoint=seen.append)
-    pick = rng.choice(len(queries), 150, replace=False)
-    exact = boundedness_rays(cloud, queries[pick], share_far_field=False)
-    assert 0 < np.abs(beta[pick] - exact).max() <= 0.01
-    assert seen == sorted(seen) and seen[-1] == 1.0 and len(seen) > 20
+    cloud = norm.apply(shape.cloud).astype(np.float32)
+    compact = norm.apply(shape.skeletal + rng.normal(scale=0.01, size=shape.skeletal.shape)).astype(np.float32)
+    spread = rng.uniform(-0.8, 0.8, (16384, 3)).astype(np.float32)
+    h = rays_radius(cloud)
+    p = Params()
+    raster = CapRaster(p.rays_rows, 2 * p.rays_rows)
+
+    def choose(queries):
+        return _choose_job(
+            raster, cloud, queries, h, p.rays_exact_pairs, p.rays_near_angle, p.rays_cluster_cell, None
+        )
+
+    assert isinstance(choose(compact), _ClusteredJob)
+    assert isinstance(choose(spread), _DenseJob)
+    assert isinstance(choose(compact[:200]), _DenseJob)
 
 
 def test_big_cloud_sliced_every_pair_equals_singleton_clusters():

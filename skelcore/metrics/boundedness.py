@@ -24,15 +24,18 @@ benchmarks/bench_boundedness.py; torus with 1 %-jittered skeletal points + 200 c
 * Up to ``rays_exact_pairs`` (query, point) pairs (default 4M, 2k x 2k) every pair is rasterised:
   the exact union up to the raster error.  Beyond, unless the queries are too spread out for it to
   pay (then every pair again), the far field is shared: queries are grouped in cubic cells of side
-  ``rays_cluster_cell`` x h; each query rasterises its near field (points within h /
-  ``rays_near_angle`` of its cluster, plus the cluster's spread) exactly, and OR-s in its cluster's
-  far field, rasterised once from the cluster's centroid.  Seen from the query instead, far caps move
-  together by a small angle (a nearly rigid shift, which keeps the area): against every-pair
-  evaluation the error stayed <= 0.0035 at 4k, 0.008 at 16k, 0.0098 at 64k and 0.008 at 100k points.
-  When the clusters cost too much, cells and near radius grow together (same ratio, same shift).
-  Time (wall): 4k x 4.3k 0.7-1.9 s, 16k 4 s, 64k 8-11 s, 100k 21 s (every pair: 4k 2-4 s, 16k
-  ~25 s CPU, 64k ~400 s).  A random-subset level of detail for the far field was tried and dropped:
-  slower, and biased up to 0.05 (coarse balls widen the silhouettes).
+  c = ``rays_cluster_cell`` x h; each query rasterises its near field (points within r = h /
+  ``rays_near_angle`` of its cluster's centroid, plus the cluster's spread) exactly, and OR-s in its
+  cluster's far field, rasterised once from the centroid.  Seen from the query instead, far caps move
+  together by at most spread / r (a nearly rigid shift, which keeps the area).  r = 10 c always; the
+  pair (c, r) is the cheapest of x1 ... x32 the defaults (0.25 h, 2.5 h) by a cost estimate.  Against
+  every-pair evaluation the error stayed <= 0.006 at 4k, 0.0074 at 16k, 0.0072 at 64k points
+  (torus; <= 0.0082 on jittered cylinders and Y shapes, 4k, also for surface and random queries);
+  near radius 5 cells instead of 10 erred up to 0.08.  Time (wall, loaded machine): 4k x 4.3k
+  ~1.2 s, 16k 3 s, 64k 9 s, 100k ~20 s (every pair: 4k 2-4 s, 16k ~25 s CPU, 64k ~400 s CPU).
+  Worst case: queries spread through the volume (no sharing) cost every pair, ~0.3 us each.
+  A random-subset level of detail for the far field was tried and dropped: slower, and biased up
+  to 0.05 (coarse balls widen the silhouettes).
 
 ``paper`` (the reference tool's algorithm, SPEC 2): sinusoidal projection of the unit directions,
 2-D Delaunay, the seam at lon = +-pi zipped from the free-boundary loop, flat 3-D triangle areas with
@@ -121,8 +124,8 @@ def boundedness_rays(
     rows: int = 48,
     bins: int | None = None,
     exact_pairs: int = 4_000_000,
-    near_angle: float = 0.1,
-    cluster_cell: float = 1.0,
+    near_angle: float = 0.05,
+    cluster_cell: float = 2.0,
     share_far_field: bool | None = None,
     workers: int | None = None,
     checkpoint: Checkpoint = no_checkpoint,
@@ -137,7 +140,8 @@ def boundedness_rays(
     rows, bins : raster size (``bins`` defaults to 2 x rows: cells about square at the equator).
     exact_pairs : up to this many (distinct query, distinct point) pairs, every pair is used.
     near_angle, cluster_cell : beyond that, a query's own near field reaches h / near_angle and
-        queries share the far field within cubic cells of side cluster_cell x h (module docstring).
+        queries share the far field within cubic cells of side cluster_cell x h, both scaled by the
+        same power of 2 (the cheapest estimate; module docstring).
     share_far_field : None = decide by cost as above; True = always share; False = every pair.
     workers : threads (default: up to 2).
     checkpoint : called with the fraction done, at least every ~0.1 s; may raise ``Cancelled``.
@@ -174,19 +178,26 @@ def boundedness_rays(
     centre = (pts.min(axis=0) + pts.max(axis=0)) / 2.0
     pts_r = ((pts - centre) @ FRAME.T).astype(np.float32)
     q_r = ((uniq_q - centre) @ FRAME.T).astype(np.float32)
-    job = None
-    every_pair = len(pts_r) * len(q_r)
-    if share_far_field or (share_far_field is None and every_pair > exact_pairs):
-        job = _ClusteredJob.sized(raster, pts_r, q_r, h, h / near_angle, cluster_cell * h, exact_pairs)
-        if share_far_field is None and job.estimated_pairs > every_pair / 2:
-            job = None  # queries too spread out to share much: every pair costs about the same
-    if job is None:
-        job = _DenseJob(raster, pts_r, q_r, h)
+    job = _choose_job(raster, pts_r, q_r, h, exact_pairs, near_angle, cluster_cell, share_far_field)
     beta = np.empty(len(q_r))
     order = getattr(job, "order", slice(None))
     beta[order] = _run(job, len(q_r), workers or _workers(), checkpoint)
     out[:] = beta[inverse.ravel()]
     return out
+
+
+def _choose_job(
+    raster: CapRaster, pts: np.ndarray, queries: np.ndarray, h: float, exact_pairs: int, near_angle: float,
+    cluster_cell: float, share_far_field: bool | None,
+) -> "_DenseJob | _ClusteredJob":
+    """Every pair when that is small or cheaper; else the shared far field (module docstring)."""
+    every_pair = len(pts) * len(queries)
+    if share_far_field is False or (share_far_field is None and every_pair <= exact_pairs):
+        return _DenseJob(raster, pts, queries, h)
+    job = _ClusteredJob.sized(raster, pts, queries, h, h / near_angle, cluster_cell * h)
+    if share_far_field is None and job.estimated_pairs > every_pair / 2:
+        return _DenseJob(raster, pts, queries, h)  # too spread out to share much
+    return job
 
 
 class _DenseJob:
@@ -283,22 +294,23 @@ class _ClusteredJob:
 
     @classmethod
     def sized(
-        cls, raster: CapRaster, pts: np.ndarray, queries: np.ndarray, h: float, near_radius: float, cell: float,
-        budget: int,
+        cls, raster: CapRaster, pts: np.ndarray, queries: np.ndarray, h: float, near_radius: float, cell: float
     ) -> "_ClusteredJob":
-        """Grow cell and near radius together (x2 per step) until the estimated pairs fit ``budget``;
-        if no size fits, the cheapest one."""
+        """The cheapest of six sizes: cell and near radius x 1, 2, ..., 32 (same ratio, same shift).
+
+        Estimated cost = clusters x N (far pairs) + 3 x queries x near points (near caps are big and
+        span several rows each: measured ~3x the cost of a far pair).
+        """
         tree = cKDTree(pts)
         sample = queries[np.random.default_rng(0).permutation(len(queries))[:256]].astype(float)
         costs = []
         for scale in 2.0 ** np.arange(6):
             keys = np.floor(queries.astype(float) / (cell * scale)).astype(np.int64)
             clusters = len(np.unique(keys, axis=0))
-            near = float(np.mean(tree.query_ball_point(sample, near_radius * scale, return_length=True)))
-            costs.append(clusters * len(pts) + len(queries) * near)
-            if costs[-1] <= budget:
-                break
-        pick = len(costs) - 1 if costs[-1] <= budget else int(np.argmin(costs))
+            reach = (near_radius + 0.87 * cell) * scale
+            near = float(np.mean(tree.query_ball_point(sample, reach, return_length=True)))
+            costs.append(clusters * len(pts) + 3.0 * len(queries) * near)
+        pick = int(np.argmin(costs))
         job = cls(raster, pts, queries, h, near_radius * 2.0**pick, cell * 2.0**pick, tree=tree)
         job.estimated_pairs = costs[pick]
         return job
