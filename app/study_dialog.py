@@ -60,6 +60,11 @@ class StudyDialog(QtWidgets.QDialog):
         self.grid = QtWidgets.QDoubleSpinBox(decimals=4, minimum=0.0001, maximum=1e6, singleStep=0.01, value=0.05)
         self.grid.setToolTip("voxel-grid cell in the cloud's units (grid anchored at the box's min corner)")
         form.addRow("Grid cell", self.grid)
+        self.base_grid = QtWidgets.QDoubleSpinBox(decimals=4, minimum=0.0, maximum=1e6, singleStep=0.01, value=0.0)
+        self.base_grid.setSpecialValueText("off")
+        self.base_grid.setToolTip("normal row = voxel-grid average of the cloud with this cell (paper's tree: "
+                                  "0.02, with a 0.05 grid for the sparse row)")
+        form.addRow("Base grid cell", self.base_grid)
         self.seed = QtWidgets.QSpinBox(minimum=0, maximum=2**31 - 1, value=0)
         form.addRow("Seed", self.seed)
         self.out_dir = QtWidgets.QLineEdit()
@@ -122,6 +127,7 @@ class StudyDialog(QtWidgets.QDialog):
             "noise_model": self.noise_model.currentText(),
             "sparse": None if grid or self.sparse_n.value() == 0 else int(self.sparse_n.value()),
             "grid": float(self.grid.value()) if grid else None,
+            "base_grid": float(self.base_grid.value()) or None,
             "seed": int(self.seed.value()),
             "out_dir": self.out_dir.text().strip() or None,
             "skeleton_cmd": self.skeleton_cmd.text().strip() or None,

@@ -72,7 +72,7 @@ def test_rows_cannot_be_opened_without_a_viewer_that_supports_it(qtbot, cloud_fi
     dialog.sparse_mode.setCurrentIndex(1)
     dialog.grid.setValue(0.5)
     assert dialog.settings()["grid"] == 0.5 and dialog.settings()["sparse"] is None
-    assert dialog.settings()["noise"] is None
+    assert dialog.settings()["noise"] is None and dialog.settings()["base_grid"] is None
     with qtbot.waitSignal(dialog.runner.finished, timeout=120000):
         dialog.start()
     assert dialog.table.rowCount() == 2
