@@ -27,20 +27,17 @@ __all__ = [
 
 
 def __getattr__(name: str):
-    # Lazy where a submodule and a function share a name would clash otherwise (see below).
+    # Loaders on first use, so the CLI's --help stays fast.
     if name in ("load_cloud", "load_points", "load_curve", "load_any", "write_points_ply", "write_curve_ply"):
         from . import io
 
         return getattr(io, name)
-    if name == "skeletonize":
-        from .skeletonize import skeletonize as fn
-
-        globals()["skeletonize"] = fn  # the submodule import bound the module here; the function wins
-        return fn
     raise AttributeError(f"module 'skelcore' has no attribute {name!r}")
 
 
-# Imported eagerly: the submodule ``skelcore.evaluate`` would otherwise shadow the function.
+# Imported eagerly: once imported, the submodules ``skelcore.evaluate`` and ``skelcore.skeletonize``
+# would otherwise shadow the functions of the same name.
 from .evaluate import evaluate  # noqa: E402
 from .results import Evaluation  # noqa: E402
 from . import shapes  # noqa: E402
+from .skeletonize import skeletonize  # noqa: E402
