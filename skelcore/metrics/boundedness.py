@@ -24,18 +24,19 @@ benchmarks/bench_boundedness.py; torus with 1 %-jittered skeletal points + 200 c
 * Up to ``rays_exact_pairs`` (query, point) pairs (default 4M, 2k x 2k) every pair is rasterised:
   the exact union up to the raster error.  Beyond, unless the queries are too spread out for it to
   pay (then every pair again), the far field is shared: queries are grouped in cubic cells of side
-  c = ``rays_cluster_cell`` x h; each query rasterises its near field (points within r = h /
-  ``rays_near_angle`` of its cluster's centroid, plus the cluster's spread) exactly, and OR-s in its
-  cluster's far field, rasterised once from the centroid.  Seen from the query instead, far caps move
-  together by at most spread / r (a nearly rigid shift, which keeps the area).  r = 10 c always; the
-  pair (c, r) is the cheapest of x1 ... x32 the defaults (0.25 h, 2.5 h) by a cost estimate.  Against
-  every-pair evaluation the error stayed <= 0.006 at 4k, 0.0074 at 16k, 0.0072 at 64k points
-  (torus; <= 0.0082 on jittered cylinders and Y shapes, 4k, also for surface and random queries);
-  near radius 5 cells instead of 10 erred up to 0.08.  Time (wall, loaded machine): 4k x 4.3k
-  ~1.2 s, 16k 3 s, 64k 9 s, 100k ~20 s (every pair: 4k 2-4 s, 16k ~25 s CPU, 64k ~400 s CPU).
-  Worst case: queries spread through the volume (no sharing) cost every pair, ~0.3 us each.
-  A random-subset level of detail for the far field was tried and dropped: slower, and biased up
-  to 0.05 (coarse balls widen the silhouettes).
+  c (``rays_cluster_cell`` x h = 2 h); each query rasterises its near field (points within
+  r = h / ``rays_near_angle`` = 20 h of its cluster's centroid, plus the cluster's spread) exactly,
+  and OR-s in its cluster's far field, rasterised once from the centroid.  The error is the change of
+  the far part of beta between two viewpoints a cluster apart; it shrinks as r grows (far caps get
+  small and many): on a cylinder's jittered axis (walls beyond r), r = 10 h and c = h erred up to
+  0.024, r = 20 h and c = 2 h up to 0.006, r = 40 h and c = 4 h up to 0.003.  (c, r) x 1, 2, ..., 32
+  are costed and the cheapest is used.  Against every-pair evaluation (torus with 1 %-jittered
+  skeletal points, 200 random queries): max error 0.0022 at 16k, 0.0098 at 64k, 0.0078 at 100k
+  points.  Time (wall, loaded machine): 4k (every pair) 1.6-3.8 s, 16k 9 s, 64k 10 s, 100k 18 s;
+  every pair would take ~25 s CPU at 16k and ~400 s at 64k.  Worst case: queries spread through
+  the volume share nothing and cost every pair (~0.3 us each).  A random-subset level of detail
+  for the far field was tried and dropped: slower, and biased up to 0.05 (coarse balls widen the
+  silhouettes).
 
 ``paper`` (the reference tool's algorithm, SPEC 2): sinusoidal projection of the unit directions,
 2-D Delaunay, the seam at lon = +-pi zipped from the free-boundary loop, flat 3-D triangle areas with
