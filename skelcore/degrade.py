@@ -15,6 +15,7 @@ from typing import Literal
 import numpy as np
 
 from .errors import SkelInputError
+from .geometry import as_points
 
 __all__ = ["add_noise", "random_downsample", "farthest_point_downsample", "voxel_grid_average"]
 
@@ -26,17 +27,7 @@ def _rng(seed: Seed) -> np.random.Generator:
 
 
 def _cloud(cloud: object) -> np.ndarray:
-    try:
-        pts = np.asarray(cloud, dtype=float)
-    except (TypeError, ValueError):
-        raise SkelInputError("cloud: coordinates are not numbers") from None
-    if pts.ndim != 2 or pts.shape[1] != 3:
-        raise SkelInputError(f"cloud: expected an N x 3 array of points, got shape {pts.shape}")
-    if len(pts) == 0:
-        raise SkelInputError("cloud: no points")
-    if not np.all(np.isfinite(pts)):
-        raise SkelInputError("cloud: coordinates contain NaN or inf")
-    return pts
+    return as_points("cloud", cloud)
 
 
 def add_noise(

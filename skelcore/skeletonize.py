@@ -38,7 +38,7 @@ from scipy.spatial import cKDTree
 
 from .curve import CurveSkeleton
 from .errors import Cancelled, SkelInputError
-from .geometry import Normalization
+from .geometry import Normalization, as_points, unique_rows
 
 __all__ = ["SkeletonizeParams", "SkeletonizeInfo", "skeletonize", "contract", "extract_curve"]
 
@@ -709,15 +709,8 @@ def skeletonize(
     2
     """
     t0 = time.perf_counter()
-    try:
-        pts = np.asarray(cloud, dtype=float)
-    except (TypeError, ValueError):
-        raise SkelInputError("cloud: coordinates are not numbers") from None
-    if pts.ndim != 2 or pts.shape[1] != 3:
-        raise SkelInputError(f"cloud: expected an N x 3 array of points, got shape {pts.shape}")
-    if not np.all(np.isfinite(pts)):
-        raise SkelInputError("cloud: coordinates contain NaN or inf")
-    if len(np.unique(pts, axis=0)) < 10:
+    pts = as_points("cloud", cloud)
+    if len(unique_rows(pts)[0]) < 10:
         raise SkelInputError("cloud: at least 10 distinct points are needed to skeletonize")
     norm = Normalization.from_cloud(pts, "longest_side", 1.6)
     pts_n = norm.apply(pts)
