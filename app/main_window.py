@@ -64,6 +64,9 @@ class MainWindow(QtWidgets.QMainWindow):
         self._dock("Settings", self.settings_panel, QtCore.Qt.DockWidgetArea.LeftDockWidgetArea)
         self.tabifyDockWidget(self.docks["Barcodes"], self.docks["Histogram"])
         self.docks["Barcodes"].raise_()
+        self._plots_stale: set[str] = set()
+        for dock in ("Barcodes", "Histogram"):
+            self.docks[dock].visibilityChanged.connect(lambda visible: visible and self._schedule_plots())
         QtCore.QTimer.singleShot(0, self._size_docks)  # after the first layout, or Qt ignores it
 
         self._build_status_bar()
@@ -97,15 +100,24 @@ class MainWindow(QtWidgets.QMainWindow):
 
     def _build_status_bar(self) -> None:
         bar = self.statusBar()
+        # Fixed sizes: a status bar that re-lays itself out on every progress step makes Qt repaint the
+        # window, and the 3D view re-renders (100+ ms for big clouds in software GL).
         self.stage = QtWidgets.QLabel("", self)
+        self.stage.setFixedWidth(180)
         self.progress = QtWidgets.QProgressBar(self)
         self.progress.setRange(0, 1000)
-        self.progress.setMaximumWidth(260)
+        self.progress.setFixedWidth(220)
+        self.progress.setTextVisible(False)
         self.cancel_button = QtWidgets.QPushButton("Cancel", self)
         self.cancel_button.clicked.connect(self.session.cancel)
         for w in (self.stage, self.progress, self.cancel_button):
             bar.addPermanentWidget(w)
             w.setVisible(False)
+        # Progress is shown at most 8 times a second: each repaint costs the GUI thread ~10 ms.
+        self._pending_progress: tuple[float, str] | None = None
+        self._progress_timer = QtCore.QTimer(self)
+        self._progress_timer.setInterval(125)
+        self._progress_timer.timeout.connect(self._show_progress)
 
     def _action(self, menu: QtWidgets.QMenu, text: str, slot: Any, shortcut: str | None = None,
                 checkable: bool = False) -> QtGui.QAction:
@@ -274,12 +286,26 @@ class MainWindow(QtWidgets.QMainWindow):
         self._update_actions()
 
     def _task_progress(self, fraction: float, stage: str) -> None:
+        self._pending_progress = (fraction, stage)
+        if not self._progress_timer.isActive():
+            self._show_progress()
+            self._progress_timer.start()
+
+    def _show_progress(self) -> None:
+        if self._pending_progress is None:
+            self._progress_timer.stop()
+            return
+        fraction, stage = self._pending_progress
+        self._pending_progress = None
         self.progress.setValue(int(round(fraction * 1000)))
-        self.stage.setText(stage)
+        if self.stage.text() != stage:
+            self.stage.setText(stage)
 
     def _task_finished(self, _name: str) -> None:
         if self.session.runner.running:
             return
+        self._progress_timer.stop()
+        self._pending_progress = None
         for w in (self.stage, self.progress, self.cancel_button):
             w.setVisible(False)
         self._update_actions()
@@ -292,16 +318,36 @@ class MainWindow(QtWidgets.QMainWindow):
                 self.summary.set_thresholds(self.scene.beta_star, self.scene.c_star)
             self.summary.show_summary(self.scene.summary(), ev)
             if event.kind == "quantities":
-                self.barcodes.show_topology(None if ev is None else ev.topology)
+                self._plots_stale.add("barcodes")
                 self.pick.show_info(None)
-            self.histogram.show_scene(self.scene)
+            self._plots_stale.add("histogram")
+            self._schedule_plots()
         elif event.kind in ("colouring", "display"):
-            self.histogram.show_scene(self.scene)
+            self._plots_stale.add("histogram")
+            self._schedule_plots()
         elif event.kind == "layer":
             self.pick.show_info(None)
             names = [os.path.basename(layer.path) for layer in self.scene.layers.values() if layer.path]
             self.setWindowTitle("SkelScope" + (f" — {', '.join(names)}" if names else ""))
         self._update_actions()
+
+    def _schedule_plots(self) -> None:
+        """Plots are redrawn one per event-loop turn, and only when their panel is on screen, so a
+        result landing never blocks the window for the sum of every redraw."""
+        QtCore.QTimer.singleShot(0, self._refresh_plots)
+
+    def _refresh_plots(self) -> None:
+        ev = self.scene.evaluation
+        for name, panel, dock in (("barcodes", self.barcodes, "Barcodes"), ("histogram", self.histogram, "Histogram")):
+            if name in self._plots_stale and not self.docks[dock].visibleRegion().isEmpty():
+                self._plots_stale.discard(name)
+                if name == "barcodes":
+                    panel.show_topology(None if ev is None else ev.topology)
+                else:
+                    panel.show_scene(self.scene)
+                if self._plots_stale:
+                    QtCore.QTimer.singleShot(0, self._refresh_plots)
+                return
 
     def _picked(self, info: dict[str, Any] | None) -> None:
         self.pick.show_info(info)

@@ -162,6 +162,7 @@ class Session(QtCore.QObject):
         inputs = {k: v for k, v in scene.input_paths().items() if v}
 
         def job(progress: Callable[[float, str], None], cancel: Callable[[], bool]) -> Any:
+            # skelcore.evaluate is resolved (and, the first time, imported) in the worker thread
             return skelcore.evaluate(cloud, skeletal, curve, params, progress, cancel, inputs=inputs)
 
         self._evaluated_layers = (scene.cloud, scene.skeletal, scene.curve)

@@ -2,7 +2,8 @@
 
 The job function gets ``progress(fraction, stage)`` and ``cancel()`` and passes them to skelcore,
 which checks ``cancel`` at its checkpoints and raises ``Cancelled`` (how Cancel stops a run within a
-second). Following Orange3's ``concurrent`` helpers, starting a new task first cancels and
+second). A thread is enough: measured, the engine's numpy/scipy calls let the GUI thread run (the
+window's stalls came from repainting, now throttled, not from the GIL). Following Orange3's ``concurrent`` helpers, starting a new task first cancels and
 disconnects the old one, so a stale result can never land on top of a newer one; progress is
 throttled to visible steps. Only plain Python objects cross threads: VTK stays on the GUI thread.
 """

@@ -87,10 +87,14 @@ def test_loading_inputs_runs_one_evaluation_in_the_worker_and_fills_the_panels(w
     )
     assert w.summary.cell_text("d_B / d_Wp", "skeletal points").startswith(f"{summary['topology']['bottleneck']:.4f}")
     assert w.summary.cell_text("smoothness", "curve skeleton").endswith(f"(n = {summary['counts']['smoothness']['curve']})")
-    title = w.barcodes.figure.texts[0].get_text() if w.barcodes.figure.texts else w.barcodes.figure._suptitle.get_text()
+    w.docks["Barcodes"].raise_()
+    qtbot.waitUntil(lambda: "d_B" in w.barcodes.title(), timeout=5000)
+    title = w.barcodes.title()
     assert "d_B" in title and "d_Wp" in title and f"K = {ev.topology.n_bars}" in title
     bar_axes = w.barcodes.figure.axes
     assert len(bar_axes) == 2 and all(len(ax.collections) >= 1 for ax in bar_axes)
+    w.docks["Histogram"].raise_()
+    qtbot.waitUntil(lambda: w.histogram.threshold is not None, timeout=5000)
     assert w.histogram.threshold == pytest.approx(w.scene.beta_star)
     assert not w.progress.isVisible() and not w.session.runner.running
     assert w.scene.skeletal.quantities["boundedness"].values.shape == (1500,)

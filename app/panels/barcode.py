@@ -31,15 +31,36 @@ class BarcodePanel(QtWidgets.QWidget):
         layout.addWidget(self.canvas)
         self.show_topology(None)
 
+    def _axes(self) -> Any:
+        """Two axes made once and reused: creating and clearing axes is most of a redraw's cost."""
+        if getattr(self, "_bar_axes", None) is None:
+            self._bar_axes = self.figure.subplots(
+                2, 1, sharex=True, gridspec_kw=dict(left=0.16, right=0.97, top=0.9, bottom=0.13, hspace=0.12)
+            )
+            for ax in self._bar_axes:
+                ax.tick_params(labelsize=7)
+                ax.set_yticks([])
+            self._bar_axes[1].set_xlabel("persistence (normalized units)", fontsize=8)
+            self._hint = self.figure.text(
+                0.5, 0.5, "H0 barcodes appear here after an evaluation\nwith a skeletal point set",
+                ha="center", va="center", color="0.4",
+            )
+            self._title = self.figure.suptitle("", fontsize=9)
+        return self._bar_axes
+
     def show_topology(self, topology: Any) -> None:
         """Draw the compared bars of both diagrams, or a hint when there is no topology result."""
-        fig = self.figure
-        fig.clear()
+        axes = self._axes()
+        for ax in axes:
+            for artist in [*ax.collections, *ax.lines]:
+                artist.remove()
+            legend = ax.get_legend()
+            if legend is not None:
+                legend.remove()
+            ax.set_visible(topology is not None)
+        self._hint.set_visible(topology is None)
         if topology is None:
-            ax = fig.add_subplot(1, 1, 1)
-            ax.set_axis_off()
-            ax.text(0.5, 0.5, "H0 barcodes appear here after an evaluation\nwith a skeletal point set",
-                    ha="center", va="center", transform=ax.transAxes, color="0.4")
+            self._title.set_text("")
             self.canvas.draw_idle()
             return
         k = int(topology.n_bars)
@@ -47,28 +68,24 @@ class BarcodePanel(QtWidgets.QWidget):
         skel = compared_bars(topology.skeletal_barcode, k)
         finite = np.concatenate([cloud[np.isfinite(cloud[:, 1]), 1], skel[np.isfinite(skel[:, 1]), 1], [topology.eps_star]])
         x_end = float(finite.max()) * 1.08 if finite.size and finite.max() > 0 else 1.0
-        # Fixed margins, not a layout engine: a hidden (tabbed) panel has no size to lay out.
-        axes = fig.subplots(2, 1, sharex=True, gridspec_kw=dict(left=0.16, right=0.97, top=0.9, bottom=0.13, hspace=0.12))
         for ax, bars, name, colour in ((axes[0], cloud, "cloud", "#1f4e79"), (axes[1], skel, "skeletal points", "#b35900")):
             deaths = np.where(np.isfinite(bars[:, 1]), bars[:, 1], x_end)
             y = np.arange(len(bars))
             ax.hlines(y, bars[:, 0], deaths, color=colour, linewidth=1.0 if len(bars) < 80 else 0.6)
             inf_rows = ~np.isfinite(bars[:, 1])
-            if inf_rows.any():
+            if inf_rows.any():  # the infinite bar runs off the plot
                 ax.plot(np.full(inf_rows.sum(), x_end), y[inf_rows], marker=">", color=colour, linestyle="none",
                         markersize=5)
             ax.axvline(topology.eps_star, color="crimson", linestyle="--", linewidth=1.0, label="eps*")
             ax.set_ylim(len(bars) - 0.5 if len(bars) else 1, -0.5 - max(len(bars) * 0.02, 0.5))
             ax.set_ylabel(f"{name}\n({len(bars)} bars)", fontsize=8)
-            ax.tick_params(labelsize=7)
-            ax.set_yticks([])
         axes[0].legend(loc="lower right", fontsize=7, frameon=False)
-        axes[1].set_xlabel("persistence (normalized units)", fontsize=8)
         axes[1].set_xlim(0, x_end * 1.03)
-        fig.suptitle(
-            f"H0, K = {k}:  d_B = {_fmt(topology.bottleneck)},  d_Wp = {_fmt(topology.wasserstein)}", fontsize=9
-        )
+        self._title.set_text(f"H0, K = {k}:  d_B = {_fmt(topology.bottleneck)},  d_Wp = {_fmt(topology.wasserstein)}")
         self.canvas.draw_idle()
+
+    def title(self) -> str:
+        return self._title.get_text()
 
 
 def _fmt(v: float) -> str:
