@@ -15,7 +15,7 @@ from pyvistaqt import QtInteractor
 from PySide6 import QtCore, QtGui
 
 from ..scene import CURVE_LOCATION, Scene, SceneEvent
-from .style import CLOUD_GREY, CURVE_EDGE, CURVE_VERTEX, PICK_MARKER, SKELETAL_PLAIN, make_lut
+from .style import CLOUD_GREY, CURVE_EDGE, CURVE_VERTEX, MAGENTA, PICK_MARKER, SKELETAL_PLAIN, make_lut
 
 __all__ = ["SceneView", "DropInteractor"]
 
@@ -113,7 +113,7 @@ class SceneView:
         self.plotter.render()
 
     def _remove(self, *names: str) -> None:
-        for name in names:
+        for name in [*names, *(f"{n}-nan" for n in names)]:
             if self._actors.pop(name, None) is not None:
                 self.plotter.remove_actor(name, render=False)
             self._pickable.pop(name, None)
@@ -146,6 +146,17 @@ class SceneView:
         self._actors[key] = actor
         if pickable is not None:
             self._pickable[key] = pickable
+        invalid = None if values is None else ~np.isfinite(np.asarray(values, dtype=float))
+        if invalid is not None and invalid.any():
+            # Invalid elements are few and matter: drawn larger, in front, so they are seen at a glance.
+            nan_actor = self.plotter.add_mesh(
+                pv.PolyData(_display_coordinates(np.asarray(points)[invalid])), color=MAGENTA, style="points",
+                point_size=size + 4, lighting=False, name=f"{key}-nan", reset_camera=False, render=False,
+                render_points_as_spheres=False, pickable=False,
+            )
+            nan_actor.SetVisibility(layer.visible)
+            _draw_in_front(nan_actor, -400.0)
+            self._actors[f"{key}-nan"] = nan_actor
 
     def _build_cloud(self) -> None:
         self._remove("cloud")
@@ -201,7 +212,8 @@ class SceneView:
             if key == name or key.startswith(f"{name}-"):
                 actor.SetVisibility(layer.visible)
                 if key != "curve-edges":
-                    actor.prop.point_size = layer.point_size if key != "curve-samples" else max(layer.point_size - 2, 3)
+                    size = layer.point_size if not key.startswith("curve-samples") else max(layer.point_size - 2, 3)
+                    actor.prop.point_size = size + (4 if key.endswith("-nan") else 0)
                     actor.prop.opacity = layer.opacity
 
     def _coloured_actor(self) -> Any:
@@ -328,16 +340,16 @@ def _display_coordinates(points: np.ndarray) -> np.ndarray:
     return np.ascontiguousarray(pts, dtype=np.float64)
 
 
-def _draw_in_front(actor: Any) -> None:
+def _draw_in_front(actor: Any, offset: float = -200.0) -> None:
     """The curve skeleton usually lies exactly on the skeletal points (both on the medial axis):
     a depth offset draws it in front of coincident points instead of a random z-fight."""
     import vtk
 
     vtk.vtkMapper.SetResolveCoincidentTopologyToPolygonOffset()
     mapper = actor.GetMapper()
-    mapper.SetRelativeCoincidentTopologyPointOffsetParameter(-200.0)
-    mapper.SetRelativeCoincidentTopologyLineOffsetParameters(0.0, -200.0)
-    mapper.SetRelativeCoincidentTopologyPolygonOffsetParameters(0.0, -200.0)
+    mapper.SetRelativeCoincidentTopologyPointOffsetParameter(offset)
+    mapper.SetRelativeCoincidentTopologyLineOffsetParameters(0.0, offset)
+    mapper.SetRelativeCoincidentTopologyPolygonOffsetParameters(0.0, offset)
 
 
 def _diagonal(scene: Scene) -> float:
