@@ -89,6 +89,9 @@ def main(argv: Sequence[str] | None = None) -> int:
     window.bug = None
     scripted = bool(args.quit)
     window.interactive = not scripted
+    if scripted:  # the picture is of the 3D view only: give it the whole window
+        for dock in window.docks.values():
+            dock.hide()
     _install_exception_hook(window)
     window.show()
     app.processEvents()
@@ -109,6 +112,8 @@ def main(argv: Sequence[str] | None = None) -> int:
         if scripted:
             return _fail(window.errors[0], 1 if window.bug else 2)
     if args.screenshot:
+        app.processEvents()
+        window.view.reset_camera()  # fit the final view size (docks may have moved since loading)
         try:
             path = window.save_screenshot(args.screenshot, scale=args.scale, transparent=args.transparent)
         except (ValueError, OSError) as exc:

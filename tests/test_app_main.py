@@ -124,3 +124,22 @@ def test_study_action_opens_the_study_dialog_for_the_loaded_cloud(qtbot, tmp_pat
     w.actions_by_name["study"].trigger()
     assert w._study_dialog.cloud_path == str(cloud) and w._study_dialog.isVisible()
     w._study_dialog.close()
+
+
+def test_an_uncaught_exception_becomes_a_dialog_with_the_traceback(qtbot, tmp_path, monkeypatch):
+    from app.__main__ import _install_exception_hook
+    from app.main_window import MainWindow
+
+    shown = []
+    monkeypatch.setattr(QtWidgets.QMessageBox, "exec", lambda self: shown.append((self.text(), self.detailedText())) or 0)
+    monkeypatch.setattr(sys, "excepthook", sys.excepthook)
+    w = MainWindow(settings=QtCore.QSettings(str(tmp_path / "s.ini"), QtCore.QSettings.Format.IniFormat))
+    qtbot.addWidget(w)
+    w.show()
+    _install_exception_hook(w)
+    try:
+        1 / 0
+    except ZeroDivisionError:
+        sys.excepthook(*sys.exc_info())
+    assert shown[0][0] == "ZeroDivisionError: division by zero" and "Traceback" in shown[0][1]
+    assert w.isVisible() and w.bug is not None

@@ -231,7 +231,7 @@ class SceneView:
             return
         self.plotter.add_scalar_bar(
             title=self.scene.metric, mapper=actor.mapper, n_labels=5, fmt="%.2f", color="black",
-            nan_annotation=self.scene.n_invalid_shown() > 0, vertical=True, position_x=0.9, position_y=0.25,
+            nan_annotation=self.scene.n_invalid_shown() > 0, vertical=True, position_x=0.87, position_y=0.25,
             width=0.06, height=0.5, title_font_size=14, label_font_size=12, render=False,
         )
 
