@@ -14,6 +14,7 @@ from PySide6 import QtCore, QtGui, QtWidgets
 
 from .exports import export_coloured_ply, export_results, with_thresholds, write_png
 from .panels import BarcodePanel, DisplayPanel, HistogramPanel, PickPanel, SettingsPanel, SummaryPanel
+from .panels._plot import preload_matplotlib
 from .scene import METRICS, Scene, SceneEvent
 from .session import Session
 from .view import SceneView
@@ -86,6 +87,7 @@ class MainWindow(QtWidgets.QMainWindow):
         self.view.on_pick = self._picked
         self.scene.subscribe(self._on_scene)
         self._update_actions()
+        QtCore.QTimer.singleShot(1500, preload_matplotlib)  # after the first frame, off the GUI thread
 
     # ---- construction ---------------------------------------------------------------------
     def _dock(self, title: str, widget: QtWidgets.QWidget, area: QtCore.Qt.DockWidgetArea) -> None:

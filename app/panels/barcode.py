@@ -8,9 +8,9 @@ import math
 from typing import Any
 
 import numpy as np
-from matplotlib.backends.backend_qtagg import FigureCanvasQTAgg
-from matplotlib.figure import Figure
 from PySide6 import QtWidgets
+
+from ._plot import PlotPanel
 
 
 def compared_bars(barcode: np.ndarray, k: int) -> np.ndarray:
@@ -20,16 +20,12 @@ def compared_bars(barcode: np.ndarray, k: int) -> np.ndarray:
     return bars[order[: max(int(k), 0)]]
 
 
-class BarcodePanel(QtWidgets.QWidget):
+_HINT = "H0 barcodes appear here after an evaluation\nwith a skeletal point set"
+
+
+class BarcodePanel(PlotPanel):
     def __init__(self, parent: QtWidgets.QWidget | None = None) -> None:
-        super().__init__(parent)
-        self.figure = Figure(figsize=(4.0, 3.6), dpi=90)
-        self.canvas = FigureCanvasQTAgg(self.figure)
-        self.canvas.setMinimumHeight(220)
-        layout = QtWidgets.QVBoxLayout(self)
-        layout.setContentsMargins(2, 2, 2, 2)
-        layout.addWidget(self.canvas)
-        self.show_topology(None)
+        super().__init__((4.0, 3.6), 220, _HINT, parent)
 
     def _axes(self) -> Any:
         """Two axes made once and reused: creating and clearing axes is most of a redraw's cost."""
@@ -41,15 +37,14 @@ class BarcodePanel(QtWidgets.QWidget):
                 ax.tick_params(labelsize=7)
                 ax.set_yticks([])
             self._bar_axes[1].set_xlabel("persistence (normalized units)", fontsize=8)
-            self._hint = self.figure.text(
-                0.5, 0.5, "H0 barcodes appear here after an evaluation\nwith a skeletal point set",
-                ha="center", va="center", color="0.4",
-            )
+            self._empty = self.figure.text(0.5, 0.5, _HINT, ha="center", va="center", color="0.4")
             self._title = self.figure.suptitle("", fontsize=9)
         return self._bar_axes
 
     def show_topology(self, topology: Any) -> None:
         """Draw the compared bars of both diagrams, or a hint when there is no topology result."""
+        if topology is None and not self.has_figure:
+            return  # the start-up hint label is showing
         axes = self._axes()
         for ax in axes:
             for artist in [*ax.collections, *ax.lines]:
@@ -58,7 +53,7 @@ class BarcodePanel(QtWidgets.QWidget):
             if legend is not None:
                 legend.remove()
             ax.set_visible(topology is not None)
-        self._hint.set_visible(topology is None)
+        self._empty.set_visible(topology is None)
         if topology is None:
             self._title.set_text("")
             self.canvas.draw_idle()
@@ -85,7 +80,7 @@ class BarcodePanel(QtWidgets.QWidget):
         self.canvas.draw_idle()
 
     def title(self) -> str:
-        return self._title.get_text()
+        return self._title.get_text() if self.has_figure else ""
 
 
 def _fmt(v: float) -> str:

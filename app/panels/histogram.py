@@ -6,28 +6,27 @@ from __future__ import annotations
 from typing import Any
 
 import numpy as np
-from matplotlib.backends.backend_qtagg import FigureCanvasQTAgg
-from matplotlib.figure import Figure
 from PySide6 import QtWidgets
 
 from ..scene import Scene
+from ._plot import PlotPanel
 
 _LABELS = {"skeletal": "skeletal points", "curve": "curve"}
 _COLOURS = {"skeletal": "#b35900", "curve": "#1f4e79"}
 
 
-class HistogramPanel(QtWidgets.QWidget):
+class HistogramPanel(PlotPanel):
     def __init__(self, parent: QtWidgets.QWidget | None = None) -> None:
-        super().__init__(parent)
-        self.figure = Figure(figsize=(4.0, 2.6), dpi=90)
-        self.canvas = FigureCanvasQTAgg(self.figure)
-        self.canvas.setMinimumHeight(180)
-        layout = QtWidgets.QVBoxLayout(self)
-        layout.setContentsMargins(2, 2, 2, 2)
-        layout.addWidget(self.canvas)
+        super().__init__((4.0, 2.6), 180, "a histogram of the selected local metric\nappears here after an evaluation", parent)
         self.threshold: float | None = None
 
     def show_scene(self, scene: Scene) -> None:
+        has_values = any(
+            layer.quantity(scene.metric) is not None for name, layer in scene.layers.items() if name != "cloud"
+        )
+        if not has_values and not self.has_figure:
+            self.threshold = None
+            return  # the start-up hint label is showing
         fig = self.figure
         fig.clear()
         ax = fig.add_subplot(1, 1, 1)
@@ -68,4 +67,4 @@ class HistogramPanel(QtWidgets.QWidget):
         self.canvas.draw_idle()
 
     def axes(self) -> Any:
-        return self.figure.axes[0] if self.figure.axes else None
+        return self.figure.axes[0] if self.has_figure and self.figure.axes else None
