@@ -81,6 +81,7 @@ class SceneView:
         self._actors: dict[str, Any] = {}
         self._pickable: dict[str, tuple[str, str]] = {}  # actor name -> (layer, location)
         self._camera_set = False
+        self._render_pending = False
         self.on_pick: Callable[[dict[str, Any] | None], None] | None = None
         self._click_filter = _ClickFilter(self._clicked)
         self.plotter.installEventFilter(self._click_filter)
@@ -104,7 +105,19 @@ class SceneView:
             self._build("skeletal")
             self._build("curve")
         self._update_scalar_bar()
-        self.plotter.render()
+        self.request_render()
+
+    def request_render(self) -> None:
+        """Render once, on the next event-loop turn, however many scene changes arrive meanwhile
+        (a frame of a large cloud costs tens to hundreds of ms in software GL)."""
+        if not self._render_pending:
+            self._render_pending = True
+            QtCore.QTimer.singleShot(0, self._render_now)
+
+    def _render_now(self) -> None:
+        if self._render_pending and not getattr(self.plotter, "_closed", False):
+            self._render_pending = False
+            self.plotter.render()
 
     def rebuild(self) -> None:
         for name in ("cloud", "skeletal", "curve"):
@@ -322,6 +335,7 @@ class SceneView:
     # ---- images ---------------------------------------------------------------------------
     def image(self, scale: int = 1, transparent: bool = False) -> np.ndarray:
         """The rendered 3D view as an (H, W, 3 or 4) uint8 array, ``scale`` times the widget size."""
+        self._render_pending = False
         self.plotter.render()
         img = self.plotter.screenshot(None, transparent_background=transparent, return_img=True, scale=int(scale))
         return np.asarray(img)
