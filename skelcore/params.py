@@ -28,7 +28,8 @@ class Params:
         beyond, queries share their far field in clusters (boundedness.py docstring).
     rays_near_angle : a clustered query's own near field reaches h / rays_near_angle (smallest size
         tried; cells and near field grow together by powers of 2 to the cheapest estimate).
-    rays_cluster_cell : side of the cluster cells, in units of h (smallest size tried).
+    rays_cluster_cell : side of the cluster cells, in units of h (smallest size tried); keep
+        1 / rays_near_angle >= 10 x rays_cluster_cell (5 x erred up to 0.08).
     paper_plane_threshold, paper_area_threshold : triangle-drop rule of the paper estimator.
     k_center : neighbours for skeletal-point centeredness; None = round(0.01 N_s) with the
         reference tool's clamps (<10 -> 10, >50 -> 30), SPEC 3.
@@ -50,8 +51,8 @@ class Params:
     rays_radius_factor: float = 2.0
     rays_rows: int = 48
     rays_exact_pairs: int = 4_000_000
-    rays_near_angle: float = 0.05
-    rays_cluster_cell: float = 2.0
+    rays_near_angle: float = 0.1
+    rays_cluster_cell: float = 1.0
     paper_plane_threshold: float = 0.8
     paper_area_threshold: float = 1e-4
     k_center: int | None = None

@@ -22,22 +22,23 @@ benchmarks/bench_boundedness.py; torus with 1 %-jittered skeletal points + 200 c
   duplicate queries (contracted skeletal points coincide) and duplicate cloud points (identical
   caps) are computed once.  Cost: ~0.3 us of CPU per (query, point) pair.
 * Up to ``rays_exact_pairs`` (query, point) pairs (default 4M, 2k x 2k) every pair is rasterised:
-  the exact union up to the raster error.  Beyond, unless the queries are too spread out for it to
-  pay (then every pair again), the far field is shared: queries are grouped in cubic cells of side
-  c (``rays_cluster_cell`` x h = 2 h); each query rasterises its near field (points within
-  r = h / ``rays_near_angle`` = 20 h of its cluster's centroid, plus the cluster's spread) exactly,
-  and OR-s in its cluster's far field, rasterised once from the centroid.  The error is the change of
-  the far part of beta between two viewpoints a cluster apart; it shrinks as r grows (far caps get
-  small and many): on a cylinder's jittered axis (walls beyond r), r = 10 h and c = h erred up to
-  0.024, r = 20 h and c = 2 h up to 0.006, r = 40 h and c = 4 h up to 0.003.  (c, r) x 1, 2, ..., 32
-  are costed and the cheapest is used.  Against every-pair evaluation (torus with 1 %-jittered
-  skeletal points, 200-400 random queries): max error 0.0022 at 16k, 0.011 at 64k, 0.0078 at 100k
-  points, so slightly past SPEC's 0.01 for rare queries of big clouds (r = 30 h: 0.0043 at 64k, but
-  10x slower there); ``share_far_field=False`` gives the exact union at every-pair cost.  Time (wall, loaded machine): 4k (every pair) 1.6-3.8 s, 16k 9 s, 64k 10 s, 100k 18 s;
-  every pair would take ~25 s CPU at 16k and ~400 s at 64k.  Worst case: queries spread through
-  the volume share nothing and cost every pair (~0.3 us each).  A random-subset level of detail
-  for the far field was tried and dropped: slower, and biased up to 0.05 (coarse balls widen the
-  silhouettes).
+  the exact union up to the raster error.  Beyond, unless it would not pay (queries spread through
+  the volume: then every pair again), the far field is shared: queries are grouped in cubic cells of
+  side c (``rays_cluster_cell`` x h); each query rasterises its near field (points within
+  r = h / ``rays_near_angle`` of its cluster's centroid, plus the cluster's spread) exactly, and OR-s
+  in its cluster's far field, rasterised once from the centroid.  (c, r) = (h, 10 h) x 1, 2, ...,
+  32 are costed and the cheapest is used.  The error is the change of the far part of beta between
+  two viewpoints a cluster apart.  It is worst for a viewpoint near a surface (nearly coplanar points
+  swap sides of its horizon: 0.024 for a point just outside a cylinder's end disc clustered with
+  inner ones), so queries within 4 h of the cloud are clusters of their own (exact); r = 5 c erred
+  up to 0.08, r = 10 c stays within 0.0082 at 4k-16k (torus, cylinder, Y shape; skeletal, surface
+  and random queries).  At 64k the cheapest size is (2 h, 20 h): max error 0.011 on 400 random
+  queries of the jittered torus, slightly past SPEC's 0.01; ``share_far_field=False`` gives the
+  exact union at every-pair cost.  Time (wall, loaded 2-core machine; torus, 1 %-jittered skeletal
+  points): 4k 1.4 s (every pair 3-4 s), 16k ~4 s, 64k ~8 s, 100k ~18 s; every pair would take ~25 s
+  CPU at 16k and ~400 s at 64k.  Worst case: queries spread through the volume share nothing and
+  cost every pair (~0.3 us each).  A random-subset level of detail for the far field was tried and
+  dropped: slower, and biased up to 0.05 (coarse balls widen the silhouettes).
 
 ``paper`` (the reference tool's algorithm, SPEC 2): sinusoidal projection of the unit directions,
 2-D Delaunay, the seam at lon = +-pi zipped from the free-boundary loop, flat 3-D triangle areas with
@@ -65,6 +66,8 @@ _PAIRS_PER_CALL = 4096
 _FAR_PAIRS_PER_CALL = 16384
 # pairs per pool task: one checkpoint per finished task, so this bounds their spacing (~10 ms)
 _PAIRS_PER_TASK = 65536
+# queries closer than this many h to the cloud are clusters of their own (exact)
+_ALONE_WITHIN = 4.0
 
 
 def boundedness(
@@ -126,8 +129,8 @@ def boundedness_rays(
     rows: int = 48,
     bins: int | None = None,
     exact_pairs: int = 4_000_000,
-    near_angle: float = 0.05,
-    cluster_cell: float = 2.0,
+    near_angle: float = 0.1,
+    cluster_cell: float = 1.0,
     share_far_field: bool | None = None,
     workers: int | None = None,
     checkpoint: Checkpoint = no_checkpoint,
@@ -197,7 +200,9 @@ def _choose_job(
     if share_far_field is False or (share_far_field is None and every_pair <= exact_pairs):
         return _DenseJob(raster, pts, queries, h)
     job = _ClusteredJob.sized(raster, pts, queries, h, h / near_angle, cluster_cell * h)
-    if share_far_field is None and job.estimated_pairs > every_pair / 2:
+    # every pair costs the same near caps (x 3, as in ``sized``) plus all the others once
+    every_pair_cost = every_pair + 2.0 * len(queries) * job.estimated_near
+    if share_far_field is None and job.estimated_cost > 0.75 * every_pair_cost:
         return _DenseJob(raster, pts, queries, h)  # too spread out to share much
     return job
 
@@ -240,13 +245,13 @@ class _DenseJob:
 class _ClusteredJob:
     """Exact near field per query; the far field rasterised once per cluster of nearby queries.
 
-    Queries are grouped by cubic cells of side ``cell``.  The cloud is split once per cluster: the
-    near part (within ``near_radius + spread`` of its centroid, spread = distance of its farthest
-    query) is rasterised from every query exactly; the far part, once from the centroid, and OR-ed
-    in.  Every point is in exactly one part (a point in both would fill holes twice: a bias).  Seen
-    from a query instead of the centroid, a far cap moves by at most spread / near_radius radians,
-    coherently with its neighbours (a nearly rigid shift, which keeps the area); the error against
-    every-pair evaluation is measured in the tests.
+    Queries are grouped by cubic cells of side ``cell``; a query within ``_ALONE_WITHIN`` h of the
+    cloud is a cluster of its own.  The cloud is split once per cluster: the near part (within
+    ``near_radius + spread`` of its centroid, spread = distance of its farthest query) is rasterised
+    from every query exactly; the far part, once from the centroid, and OR-ed in.  Every point is in
+    exactly one part (a point in both would fill holes twice: a bias).  Seen from a query instead of
+    the centroid, a far cap moves by at most spread / near_radius radians; the error against
+    every-pair evaluation is measured in the tests and the module docstring.
     """
 
     def __init__(
@@ -257,7 +262,13 @@ class _ClusteredJob:
         self.cols = [np.ascontiguousarray(pts[:, k]) for k in range(3)]
         self.h = np.float32(h)
         self.near_radius = float(near_radius)
+        tree = cKDTree(pts) if tree is None else tree
         keys = np.floor(queries.astype(float) / cell).astype(np.int64)
+        # a query near the surface sees nearly coplanar points at grazing angles, where a small move
+        # of the viewpoint swaps the side of the horizon their caps lie on: it stays on its own
+        lone = np.flatnonzero(tree.query(queries, k=1)[0] < _ALONE_WITHIN * h)
+        keys = np.column_stack([keys, np.zeros(len(keys), np.int64)])
+        keys[lone, 3] = lone + 1
         _, cid = np.unique(keys, axis=0, return_inverse=True)
         cid = cid.ravel()
         self.order = np.argsort(cid, kind="stable")
@@ -276,10 +287,10 @@ class _ClusteredJob:
         spreads[single] = 0.0
         self.centres = centres.astype(np.float32)
         self.spreads = spreads
+        self.reach = near_radius + spreads
         # tasks: ranges of the sorted queries of about _PAIRS_PER_TASK pairs; a cluster whose near
         # part is large is split, so checkpoints stay ~10 ms apart
-        tree = cKDTree(pts) if tree is None else tree
-        n_near = tree.query_ball_point(centres, near_radius + spreads, return_length=True)
+        n_near = tree.query_ball_point(centres, self.reach, return_length=True)
         self.tasks = []
         lo, acc = 0, 0
         for k in range(len(sizes)):
@@ -311,10 +322,10 @@ class _ClusteredJob:
             clusters = len(np.unique(keys, axis=0))
             reach = (near_radius + 0.87 * cell) * scale
             near = float(np.mean(tree.query_ball_point(sample, reach, return_length=True)))
-            costs.append(clusters * len(pts) + 3.0 * len(queries) * near)
-        pick = int(np.argmin(costs))
+            costs.append((clusters * len(pts) + 3.0 * len(queries) * near, near))
+        pick = int(np.argmin([c[0] for c in costs]))
         job = cls(raster, pts, queries, h, near_radius * 2.0**pick, cell * 2.0**pick, tree=tree)
-        job.estimated_pairs = costs[pick]
+        job.estimated_cost, job.estimated_near = costs[pick]
         return job
 
     def _bitmaps(
@@ -332,13 +343,13 @@ class _ClusteredJob:
         k = int(np.searchsorted(self.starts, lo, side="right")) - 1
         while k < len(self.starts) - 1 and self.starts[k] < hi:
             a, b = max(int(self.starts[k]), lo), min(int(self.starts[k + 1]), hi)
-            centre, spread = self.centres[k], float(self.spreads[k])
+            centre, reach = self.centres[k], float(self.reach[k])
             k += 1
             dx, dy, dz = x - centre[0], y - centre[1], z - centre[2]
             d2 = dx * dx
             d2 += dy * dy
             d2 += dz * dz
-            far = d2 > np.float32((self.near_radius + spread) ** 2)
+            far = d2 > np.float32(reach * reach)
             # far caps are small (few rows each): bigger calls amortise numpy's per-call overhead
             n_far = int(np.count_nonzero(far))
             far_map = self._bitmaps(
