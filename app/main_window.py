@@ -88,6 +88,7 @@ class MainWindow(QtWidgets.QMainWindow):
         self.scene.subscribe(self._on_scene)
         self._update_actions()
         QtCore.QTimer.singleShot(1500, preload_matplotlib)  # after the first frame, off the GUI thread
+        QtCore.QTimer.singleShot(4000, self._prepare_plots)
 
     # ---- construction ---------------------------------------------------------------------
     def _dock(self, title: str, widget: QtWidgets.QWidget, area: QtCore.Qt.DockWidgetArea) -> None:
@@ -115,6 +116,9 @@ class MainWindow(QtWidgets.QMainWindow):
         for w in (self.stage, self.progress, self.cancel_button):
             bar.addPermanentWidget(w)
             w.setVisible(False)
+        # A constant height: showing the progress bar must not resize (and so re-render) the 3D view
+        # and the plots.
+        bar.setFixedHeight(max(self.cancel_button.sizeHint().height(), self.progress.sizeHint().height()) + 6)
         # Progress is shown at most 8 times a second: each repaint costs the GUI thread ~10 ms.
         self._pending_progress: tuple[float, str] | None = None
         self._progress_timer = QtCore.QTimer(self)
@@ -333,10 +337,19 @@ class MainWindow(QtWidgets.QMainWindow):
             self.setWindowTitle("SkelScope" + (f" — {', '.join(names)}" if names else ""))
         self._update_actions()
 
+    def _prepare_plots(self) -> None:
+        """Make the barcode axes while idle (once matplotlib is loaded), not when a result lands."""
+        import sys
+
+        if "matplotlib.backends.backend_qtagg" in sys.modules and self.scene.evaluation is None:
+            self.barcodes.prepare()
+        elif "matplotlib.backends.backend_qtagg" not in sys.modules:
+            QtCore.QTimer.singleShot(1000, self._prepare_plots)
+
     def _schedule_plots(self) -> None:
         """Plots are redrawn one per event-loop turn, and only when their panel is on screen, so a
         result landing never blocks the window for the sum of every redraw."""
-        QtCore.QTimer.singleShot(0, self._refresh_plots)
+        QtCore.QTimer.singleShot(20, self._refresh_plots)  # after the 3D view's frame and any input
 
     def _refresh_plots(self) -> None:
         ev = self.scene.evaluation
@@ -348,7 +361,7 @@ class MainWindow(QtWidgets.QMainWindow):
                 else:
                     panel.show_scene(self.scene)
                 if self._plots_stale:
-                    QtCore.QTimer.singleShot(0, self._refresh_plots)
+                    QtCore.QTimer.singleShot(20, self._refresh_plots)  # after the 3D view's frame and any input
                 return
 
     def _picked(self, info: dict[str, Any] | None) -> None:
