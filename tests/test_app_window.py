@@ -204,3 +204,31 @@ def test_vtk_single_key_bindings_do_not_close_the_view(window, files, qtbot):
     qtbot.keyClick(window.view.widget, "e")
     assert window.isVisible() and not window.view.plotter._closed
     assert window.view.image().std() > 0
+
+
+def test_ambiguous_drop_asks_and_the_answer_decides_the_role(window, files, tmp_path, monkeypatch):
+    window.session.load_files([files["cloud"]])
+    other = tmp_path / "other_cloud.ply"
+    write_points_ply(other, shapes.cylinder(700, seed=4).cloud)
+    asked = []
+
+    def get_item(parent, title, question, options, current, editable):
+        asked.append(question)
+        return options[0], True  # "the cloud (replaces the current one)"
+
+    monkeypatch.setattr(QtWidgets.QInputDialog, "getItem", get_item)
+    _drop(window.view.widget, [str(other)])
+    assert asked and "700 points but the cloud has 1500" in asked[0]
+    assert window.scene.cloud.path == str(other) and window.scene.cloud.n_points == 700
+
+
+def test_a_study_variant_opens_in_the_3d_view_without_files(window):
+    sh = shapes.torus(600, seed=2)
+    from skelcore.curve import CurveSkeleton
+
+    window.open_variant(sh.cloud, sh.skeletal, CurveSkeleton.from_raw(sh.curve_vertices, sh.curve_edges))
+    scene = window.scene
+    assert scene.cloud.n_points == 600 and scene.skeletal.n_points == 600 and scene.curve.curve.n_edges == 32
+    assert scene.cloud.path is None and window.actions_by_name["evaluate"].isEnabled()
+    window.open_variant(sh.cloud, sh.skeletal, None)
+    assert scene.curve is None and "curve-edges" not in window.view._actors
