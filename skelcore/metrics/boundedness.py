@@ -41,9 +41,23 @@ benchmarks/bench_boundedness.py; torus with 1 %-jittered skeletal points + 200 c
   dropped: slower, and biased up to 0.05 (coarse balls widen the silhouettes).
 
 ``paper`` (the reference tool's algorithm, SPEC 2): sinusoidal projection of the unit directions,
-2-D Delaunay, the seam at lon = +-pi zipped from the free-boundary loop, flat 3-D triangle areas with
-the reference tool's drop rule, sum / 4 pi.  One Delaunay per query: slow, kept for comparison with
-published numbers.
+2-D Delaunay, the seam closed by a triangle strip over the free-boundary loop, flat 3-D triangle areas
+with the reference tool's drop rule, sum / 4 pi.  One Delaunay per query: slow, kept for comparison
+with published numbers.  Seam rule, as read in the reference MATLAB code (points_boundedness.m and
+boundedness.m of weiqimeng1/PointCloud_Skeletonization_Metrics): the strip is applied to the whole
+loop UNCONDITIONALLY (no test of lon = +-pi, of the loop spanning the seam, or of which vertices are
+near it); its vertices are visited from the lowest one and its successor, the side whose next vertex
+is lower advancing, and every new vertex forms a triangle with the two vertices visited just before it
+(not with the current vertex of the other side, as a true zipper would).  Directions are q - p (the
+reference's sign; SPEC writes p - q, the same areas up to where the seam falls).  Values this gives
+(dense random sphere of radius 0.8, 1k-100k points): centre 1.00 +- 0.005; twice the radius 0.103-0.118
+(mean ~0.11) when the cap of directions lies off the seam and off the poles (its whole boundary loop is
+stripped: the part where the sides alternate covers the cap again, sliver runs do not), 0.129 = twice
+the cap (0.067) when it straddles the seam or holds a pole (the Delaunay hull then spans the chart);
+SPEC's "about 0.08" is not reproduced by the published code.  The centre of a torus hole (r/R = 0.3)
+gets 0.5-0.85 instead of 0.3: the silhouette rows of directions are nearly straight chart edges whose
+Delaunay slivers and strip triangles are chords across the sphere, counted (plane distance ~0.3 < 0.8,
+but area far above the 1e-4 threshold).  A point on a closed cylinder's axis gets ~0.99-1.
 """
 
 from __future__ import annotations
@@ -426,13 +440,14 @@ def boundedness_paper(
 ) -> np.ndarray:
     """The reference tool's triangulated-sphere estimator (SPEC 2 ``paper``; paper Sec. 3.2).
 
-    Directions u = (p - q)/|p - q| (cloud points at q itself are skipped) are projected by the
-    sinusoidal projection (lon cos lat, lat) and triangulated in 2-D (Delaunay); the free-boundary
-    loop is zipped across the seam at lon = +-pi (from its lowest-latitude vertex, always advancing
-    the side whose next vertex is lower).  Each triangle counts with the area of the flat 3-D triangle
-    between its unit vectors, unless (signed distance from the centre to its plane) < plane_threshold
-    and (mean |p - q| of its corners)^2 x area < area_threshold.  beta = sum / (4 pi).  Fewer than 3
-    distinct directions give 0.  The sum is not clipped to 1 (as the reference tool).
+    Directions u = (q - p)/|q - p| (the reference tool's sign; cloud points at q itself are skipped)
+    are projected by the sinusoidal projection (lon cos lat, lat) and triangulated in 2-D (Delaunay);
+    the free-boundary loop is closed by the reference tool's strip (``_zip_seam``), applied whether or
+    not the loop reaches the seam at lon = +-pi, as the reference does.  Each triangle counts with the
+    area of the flat 3-D triangle between its unit vectors, unless (signed distance from the centre to
+    its plane) < plane_threshold and (mean |p - q| of its corners)^2 x area < area_threshold.
+    beta = sum / (4 pi).  Fewer than 3 distinct directions give 0.  The sum is not clipped to 1 (as the
+    reference tool).  Values on analytic shapes: module docstring.
     """
     cloud = _as_points("cloud", cloud)
     queries = _as_points("queries", queries)
@@ -449,7 +464,7 @@ def boundedness_paper(
 
 
 def _paper_one(cloud: np.ndarray, q: np.ndarray, plane_threshold: float, area_threshold: float) -> float:
-    d = cloud - q
+    d = q - cloud  # the reference tool's sign (q - p): it puts the seam behind the cloud, see _zip_seam
     dist = np.sqrt(np.einsum("ij,ij->i", d, d))
     keep = dist > 0
     d, dist = d[keep], dist[keep]
@@ -457,19 +472,20 @@ def _paper_one(cloud: np.ndarray, q: np.ndarray, plane_threshold: float, area_th
         return 0.0
     u = d / dist[:, None]
     lon = np.arctan2(u[:, 1], u[:, 0])
-    lat = np.arctan2(u[:, 2], np.hypot(u[:, 0], u[:, 1]))
-    flat = np.column_stack([lon * np.cos(lat), lat])
+    rxy = np.hypot(u[:, 0], u[:, 1])
+    lat = np.arctan2(u[:, 2], rxy)
+    flat = np.column_stack([lon * rxy, lat])  # rxy = cos(lat)
     try:
         tri = Delaunay(flat)
         hull = ConvexHull(flat).vertices  # the free-boundary loop, counter-clockwise
     except QhullError:
         return 0.0  # all directions on one great circle through the poles, or coincident
     simplices = tri.simplices
-    # orient counter-clockwise in the chart (= outward on the sphere: east right, north up)
+    # orient counter-clockwise in the chart (as MATLAB's delaunayTriangulation): outward on the sphere
     a, b, c = flat[simplices[:, 0]], flat[simplices[:, 1]], flat[simplices[:, 2]]
     cw = (b[:, 0] - a[:, 0]) * (c[:, 1] - a[:, 1]) - (b[:, 1] - a[:, 1]) * (c[:, 0] - a[:, 0]) < 0
     simplices[cw] = simplices[cw][:, [0, 2, 1]]
-    seam = _zip_seam(hull, lat, lon)
+    seam = _zip_seam(hull, lat)
     tris = np.vstack([simplices, seam]) if len(seam) else simplices
     v1, v2, v3 = u[tris[:, 0]], u[tris[:, 1]], u[tris[:, 2]]
     cross = np.cross(v2 - v1, v3 - v1)
@@ -483,35 +499,31 @@ def _paper_one(cloud: np.ndarray, q: np.ndarray, plane_threshold: float, area_th
     return float(area[~drop].sum() / (4.0 * np.pi))
 
 
-def _zip_seam(loop: np.ndarray, lat: np.ndarray, lon: np.ndarray) -> np.ndarray:
-    """Triangles closing the seam: zip the loop's two sides from its lowest to its highest vertex.
+def _zip_seam(loop: np.ndarray, lat: np.ndarray) -> np.ndarray:
+    """The reference tool's seam strip over the whole free-boundary loop (m vertices -> m - 2 triangles).
 
-    ``loop`` is counter-clockwise, so from the bottom it first climbs the east side (lon near +pi)
-    and comes back down the west side (lon near -pi).  Triangles are oriented counter-clockwise in the
-    chart unwrapped across the seam (west side shifted by 2 pi), i.e. outward on the sphere.
+    Visit order: the loop's lowest vertex, its successor, then the two sides (onward from the
+    successor, backward from the lowest) merged by latitude: the side whose next vertex is lower
+    advances (a tie advances the backward side).  Each new vertex makes a triangle with the TWO
+    PREVIOUSLY VISITED vertices, in that order, not re-oriented (so the drop rule sees alternating
+    signs).  Where the sides alternate this is the usual zipper between them; where one side
+    advances twice in a row, the triangle is three consecutive loop vertices (a sliver) and the
+    zipper triangle is skipped.  The reference applies it unconditionally, also to loops that do not
+    reach the seam (module docstring: the values this gives).
     """
-    k = len(loop)
-    if k < 3:
+    m = len(loop)
+    if m < 3:
         return np.empty((0, 3), dtype=np.intp)
-    bottom = int(np.argmin(lat[loop]))
-    top = int(np.argmax(lat[loop]))
-    east = loop[np.arange(bottom, bottom + ((top - bottom) % k) + 1) % k]
-    west = loop[np.arange(bottom, bottom - ((bottom - top) % k) - 1, -1) % k]
-    tris = []
-    i = j = 0
-    while i < len(east) - 1 or j < len(west) - 1:
-        go_east = j >= len(west) - 1 or (i < len(east) - 1 and lat[east[i + 1]] <= lat[west[j + 1]])
-        if go_east:
-            tris.append((east[i], east[i + 1], west[j]))
-            i += 1
+    loop_lat = lat[loop]
+    bottom = int(np.argmin(loop_lat))
+    order = [bottom, (bottom + 1) % m]
+    back, fwd = (bottom - 1) % m, (bottom + 2) % m
+    for _ in range(m - 2):
+        if loop_lat[back] > loop_lat[fwd]:
+            order.append(fwd)
+            fwd = (fwd + 1) % m
         else:
-            tris.append((west[j], east[i], west[j + 1]))
-            j += 1
-    tris_arr = np.array(tris, dtype=np.intp)
-    # orient counter-clockwise in the unwrapped chart (x = lon, west side + 2 pi)
-    x = np.where(lon < 0, lon + 2 * np.pi, lon)
-    p, r, s = tris_arr[:, 0], tris_arr[:, 1], tris_arr[:, 2]
-    orient = (x[r] - x[p]) * (lat[s] - lat[p]) - (lat[r] - lat[p]) * (x[s] - x[p])
-    flip = orient < 0
-    tris_arr[flip] = tris_arr[flip][:, [0, 2, 1]]
-    return tris_arr
+            order.append(back)
+            back = (back - 1) % m
+    visit = loop[np.array(order)]
+    return np.column_stack([visit[:-2], visit[1:-1], visit[2:]])
