@@ -69,12 +69,13 @@ def main() -> None:
     ap.add_argument("--check", type=int, default=200, help="queries compared with every-pair evaluation")
     ap.add_argument("--brute", action="store_true")
     ap.add_argument("--paper", action="store_true")
+    ap.add_argument("--workers", type=int, default=None, help="threads (default: the estimator's choice)")
     args = ap.parse_args()
     rng = np.random.default_rng(1)
     print("rays: N, queries, wall s, CPU s, max |error| / mean error vs every pair on a subset")
     for n in args.sizes:
         cloud, queries = torus_case(n)
-        beta, wall, cpu = timed(boundedness_rays, cloud, queries)
+        beta, wall, cpu = timed(boundedness_rays, cloud, queries, workers=args.workers)
         pick = rng.choice(len(queries), min(args.check, len(queries)), replace=False)
         exact = boundedness_rays(cloud, queries[pick], share_far_field=False)
         err = beta[pick] - exact
