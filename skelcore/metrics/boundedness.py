@@ -343,8 +343,7 @@ class _ClusteredJob:
         costs = []
         scales = 2.0 ** np.arange(-1, 6)
         for scale in scales:
-            keys = np.floor(queries.astype(float) / (cell * scale)).astype(np.int64)
-            clusters = len(np.unique(keys, axis=0))
+            clusters = _count_cells(queries, cell * scale)
             reach = (near_radius + 0.87 * cell) * scale
             near = float(np.mean(tree.query_ball_point(sample, reach, return_length=True)))
             costs.append((clusters * len(pts) + 3.0 * len(queries) * near, near))
@@ -384,7 +383,7 @@ class _ClusteredJob:
             cand = [x[near], y[near], z[near]]
             m = len(cand[0])
             if m == 0:
-                out[a - lo : b - lo] = far_map.mean()
+                out[a - lo : b - lo] = np.count_nonzero(far_map) / far_map.size
                 continue
             step = max(1, _PAIRS_PER_CALL // m)
             for s0 in range(a, b, step):
@@ -396,6 +395,17 @@ class _ClusteredJob:
                 maps |= far_map
                 out[s0 - lo : s1 - lo] = maps.reshape(s1 - s0, -1).mean(axis=1)
         return out
+
+
+def _count_cells(points: np.ndarray, cell: float) -> int:
+    """Number of distinct cubic cells of side ``cell`` holding points (one 1-D unique: ~10x faster
+    than ``np.unique(axis=0)``)."""
+    keys = np.floor(points.astype(float) / cell).astype(np.int64)
+    keys -= keys.min(axis=0)
+    span = keys.max(axis=0) + 1
+    if float(np.prod(span.astype(float))) >= 2.0**62:  # far-flung queries: no overflow-free 1-D key
+        return len(np.unique(keys, axis=0))
+    return len(np.unique((keys[:, 0] * span[1] + keys[:, 1]) * span[2] + keys[:, 2]))
 
 
 def _run(job, n_queries: int, workers: int, checkpoint: Checkpoint) -> np.ndarray:
