@@ -151,7 +151,7 @@ def boundedness_rays(
     near_angle: float = 0.1,
     cluster_cell: float = 1.0,
     share_far_field: bool | None = None,
-    workers: int = 1,
+    workers: int | None = 1,
     checkpoint: Checkpoint = no_checkpoint,
 ) -> np.ndarray:
     """Fraction of rays from each query that hit a ball of radius h around a cloud point (SPEC 2).
@@ -167,8 +167,8 @@ def boundedness_rays(
         queries share the far field within cubic cells of side cluster_cell x h, both scaled by the
         same power of 2 (the cheapest estimate; module docstring).
     share_far_field : None = decide by cost as above; True = always share; False = every pair.
-    workers : threads; 1 by default: two threads were slower at every size (GIL hand-offs between
-        thousands of mid-size numpy calls; module docstring).
+    workers : threads (None = 1).  Two threads were slower at every size measured (GIL hand-offs
+        between thousands of mid-size numpy calls; module docstring).
     checkpoint : called with the fraction done, at least every ~0.1 s; may raise ``Cancelled``.
 
     Returns
@@ -207,7 +207,7 @@ def boundedness_rays(
     job = _choose_job(raster, pts_r, q_r, h, exact_pairs, near_angle, cluster_cell, share_far_field)
     beta = np.empty(len(q_r))
     order = getattr(job, "order", slice(None))
-    beta[order] = _run(job, len(q_r), max(1, int(workers)), checkpoint)
+    beta[order] = _run(job, len(q_r), max(1, int(workers or 1)), checkpoint)
     out[:] = beta[inverse.ravel()]
     return out
 
