@@ -210,7 +210,7 @@ def test_single_worker_and_pool_agree():
     assert np.array_equal(boundedness_rays(cloud, queries, workers=1), boundedness_rays(cloud, queries, workers=2))
 
 
-@pytest.mark.parametrize("cell", [1.0, 2.0])
+@pytest.mark.parametrize("cell", [0.5, 1.0, 2.0])
 def test_shared_far_field_stays_within_0_01_of_every_pair(cell):
     shape = cylinder(12000, 0.5, 4.0, seed=5)
     norm = Normalization.from_cloud(shape.cloud)
@@ -220,11 +220,34 @@ def test_shared_far_field_stays_within_0_01_of_every_pair(cell):
         [norm.apply(shape.skeletal[:400]) + rng.normal(scale=0.01, size=(400, 3)), cloud[:40] - 0.01 * cloud[:40]]
     )
     exact = boundedness_rays(cloud, queries, exact_pairs=10**12)
-    # the default sizes (near radius 10 h, cells of h) and twice them; the queries include skeletal
+    # the smallest size tried from (h/2, 5 h), (h, 10 h) or (2 h, 20 h) up; the queries include skeletal
     # points jittered out through the end discs, which must not share a far field with inner ones
     shared = boundedness_rays(cloud, queries, share_far_field=True, cluster_cell=cell, near_angle=0.1 / cell)
     err = np.abs(shared - exact)
     assert 0 < err.max() <= 0.01  # not the every-pair path, and close to it
+
+
+def test_thin_torus_default_uses_half_cells_and_stays_within_0_01_of_every_pair():
+    """4k torus (r/R = 0.3), 1 %-jittered skeletal points 5.5 h inside the tube: the cost model picks
+    cells of h/2 with a near radius of 5 h (no near field at all: the fast case of the benchmark)."""
+    from skelcore.metrics.boundedness import _choose_job
+
+    shape = torus(4096, 1.0, 0.3, seed=0)
+    rng = np.random.default_rng(0)
+    norm = Normalization.from_cloud(shape.cloud)
+    cloud = norm.apply(shape.cloud)
+    queries = norm.apply(shape.skeletal + rng.normal(scale=0.01, size=shape.skeletal.shape))
+    h = rays_radius(cloud)
+    p = Params()
+    job = _choose_job(
+        CapRaster(p.rays_rows, 2 * p.rays_rows), cloud.astype(np.float32), queries.astype(np.float32), h,
+        p.rays_exact_pairs, p.rays_near_angle, p.rays_cluster_cell, None,
+    )
+    assert job.near_radius == pytest.approx(5 * h)
+    beta = boundedness_rays(cloud, queries)
+    pick = rng.choice(len(queries), 300, replace=False)
+    err = np.abs(beta[pick] - boundedness_rays(cloud, queries[pick], share_far_field=False))
+    assert 0 < err.max() <= 0.01
 
 
 def test_default_shares_the_far_field_only_where_it_pays():
