@@ -26,9 +26,9 @@ class Params:
         longitude bins); 48 keeps it within 0.004 of the exact union area (tests/test_boundedness.py).
     rays_exact_pairs : up to this many (query, cloud point) pairs the rays estimator uses every pair;
         beyond, queries share their far field in clusters (boundedness.py docstring).
-    rays_near_angle : a clustered query's own near field reaches h / rays_near_angle (smallest size
-        tried; cells and near field grow together by powers of 2 to the cheapest estimate).
-    rays_cluster_cell : side of the cluster cells, in units of h (smallest size tried); keep
+    rays_near_angle : a clustered query's own near field reaches h / rays_near_angle (x 1/2, 1, 2, ...,
+        32 are tried: cells and near field scale together to the cheapest estimate).
+    rays_cluster_cell : side of the cluster cells, in units of h (scaled as above); keep
         1 / rays_near_angle >= 10 x rays_cluster_cell (5 x erred up to 0.08).
     paper_plane_threshold, paper_area_threshold : triangle-drop rule of the paper estimator.
     k_center : neighbours for skeletal-point centeredness; None = round(0.01 N_s) with the

@@ -12,8 +12,9 @@ the grid never line up with the axis-aligned silhouettes common in scanned and s
 aligned edge would make the per-row errors add up instead of averaging out).
 
 Everything runs in float32 on flat (query, point) pair arrays (half the memory traffic of float64;
-SPEC 2 asks for 0.01, far above float32's 1e-7).  Cost: ~0.3 us of CPU per pair, most of it in the
-(pair, row) stage, so it grows with the number of rows a cap spans.
+SPEC 2 asks for 0.01, far above float32's 1e-7).  Cost: 0.1-0.3 us of CPU per pair, most of it in
+the (pair, row) stage (the ``bincount``, the ``repeat`` and the per-row interval arithmetic), so it
+grows with the number of rows a cap spans.
 """
 
 from __future__ import annotations

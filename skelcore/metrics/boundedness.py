@@ -18,27 +18,38 @@ benchmarks/bench_boundedness.py; torus with 1 %-jittered skeletal points + 200 c
   row errors added up to 0.03 at 24 rows (0.006 once turned).
 * Work is vectorised over flat (query, point) pair arrays in float32, ~4096 pairs per kernel call
   (measured optimum: bigger batches fall out of the cache and run 2-3x slower per pair), tasks of
-  ~64k pairs on a 2-thread pool (numpy releases the GIL), one checkpoint per task (~10 ms).  Exact
-  duplicate queries (contracted skeletal points coincide) and duplicate cloud points (identical
-  caps) are computed once.  Cost: ~0.3 us of CPU per (query, point) pair.
+  ~64k pairs, one checkpoint per task (~10 ms).  One thread by default: a 2-thread pool was slower
+  at every size (4k 0.44 -> 1.01 s wall, 16k 2.2 -> 2.7 s, 64k 7.1 -> 8.9 s, every-pair 2k x 2k
+  0.39 -> 0.59 s; the GIL is handed back and forth around thousands of mid-size numpy calls), so
+  ``workers`` stays an option only.  Exact duplicate queries (contracted skeletal points coincide)
+  and duplicate cloud points (identical caps) are computed once.  Cost: 0.1-0.3 us of CPU per
+  (query, point) pair, growing with the rows a cap spans.  A fresh process first frees one 16 MiB
+  block (``_keep_freed_memory``): without it glibc unmapped and re-faulted the kernel's temporaries
+  on every call, which doubled the first 4k evaluation (0.80 s -> 0.40 s).
 * Up to ``rays_exact_pairs`` (query, point) pairs (default 4M, 2k x 2k) every pair is rasterised:
   the exact union up to the raster error.  Beyond, unless it would not pay (queries spread through
   the volume: then every pair again), the far field is shared: queries are grouped in cubic cells of
   side c (``rays_cluster_cell`` x h); each query rasterises its near field (points within
   r = h / ``rays_near_angle`` of its cluster's centroid, plus the cluster's spread) exactly, and OR-s
-  in its cluster's far field, rasterised once from the centroid.  (c, r) = (h, 10 h) x 1, 2, ...,
-  32 are costed and the cheapest is used.  The error is the change of the far part of beta between
-  two viewpoints a cluster apart.  It is worst for a viewpoint near a surface (nearly coplanar points
-  swap sides of its horizon: 0.024 for a point just outside a cylinder's end disc clustered with
-  inner ones), so queries within 4 h of the cloud are clusters of their own (exact); r = 5 c erred
-  up to 0.08, r = 10 c stays within 0.0082 at 4k-16k (torus, cylinder, Y shape; skeletal, surface
-  and random queries).  At 64k the cheapest size is (2 h, 20 h): max error 0.011 on 400 random
-  queries of the jittered torus, slightly past SPEC's 0.01; ``share_far_field=False`` gives the
-  exact union at every-pair cost.  Time (wall, loaded 2-core machine; torus, 1 %-jittered skeletal
-  points): 4k 1.4 s (every pair 3-4 s), 16k ~4 s, 64k ~8 s, 100k ~18 s; every pair would take ~25 s
-  CPU at 16k and ~400 s at 64k.  Worst case: queries spread through the volume share nothing and
-  cost every pair (~0.3 us each).  A random-subset level of detail for the far field was tried and
-  dropped: slower, and biased up to 0.05 (coarse balls widen the silhouettes).
+  in its cluster's far field, rasterised once from the centroid.  (c, r) = (h, 10 h) x 1/2, 1, 2,
+  ..., 32 are costed and the cheapest is used (x 1/2 added: queries 5.5 h inside the 4k torus's tube
+  then have no near field at all; 2.6x faster than (h, 10 h)).  The error is the change of the far
+  part of beta between two viewpoints a cluster apart.  It is worst for a viewpoint near a surface
+  (nearly coplanar points swap sides of its horizon: 0.024 for a point just outside a cylinder's end
+  disc clustered with inner ones), so queries within 4 h of the cloud are clusters of their own
+  (exact); r = 5 c erred up to 0.08, r = 10 c stays within 0.0082 of every pair at 4k-16k (torus,
+  cylinder, Y shape; skeletal, surface and random queries; (h/2, 5 h) on the 4k torus: 0.0078 of
+  every pair, 0.006 of a 200k-direction brute force on its 40 worst and 40 random queries).  64k
+  torus: 0.0078 on 300 random queries; an earlier run saw 0.011 on 400, slightly past SPEC's 0.01;
+  ``share_far_field=False`` gives the exact union at every-pair cost.  Time (wall, one thread, 2-core
+  machine lightly loaded; torus, 1 %-jittered skeletal points + 200 curve samples): 4k 0.40 s (was
+  1.4 s; every pair 3.7 s), 16k 1.3 s (was ~4 s), 64k 6.6 s (was ~8 s).  Full 4k evaluation
+  (benchmarks/bench_engine.py --sizes 4096 --no-real, best of 3): 1.46 s -> 0.58 s, skeletal
+  boundedness 1.21 -> 0.38 s.  Worst case: queries spread through the volume share nothing and cost
+  every pair.  A random-subset level of detail for the far field was tried and dropped: slower, and
+  biased up to 0.05 (coarse balls widen the silhouettes).  Culling far caps whose raster box is
+  already covered by nearer caps was measured but not built: it would skip only ~28 % of the
+  (cap, row) work (most of the raster rows belong to the near, big caps that do add coverage).
 
 ``paper`` (the reference tool's algorithm, SPEC 2): sinusoidal projection of the unit directions,
 2-D Delaunay, the seam closed by a triangle strip over the free-boundary loop, flat 3-D triangle areas
