@@ -48,6 +48,16 @@ class CapRaster:
         self._inv_s = (1.0 / s).astype(np.float32)
         self._z_over_s = (z / s).astype(np.float32)
         self._bins_per_radian = np.float32(self.bins / (2.0 * np.pi))
+        self._tiled: dict[int, tuple[np.ndarray, np.ndarray]] = {}
+
+    def _row_tables(self, n_queries: int) -> tuple[np.ndarray, np.ndarray]:
+        """1 / s_j and z_j / s_j tiled over n_queries blocks: indexed by the global row q * rows + j."""
+        tables = self._tiled.get(n_queries)
+        if tables is None:
+            tables = (np.tile(self._inv_s, n_queries), np.tile(self._z_over_s, n_queries))
+            if len(self._tiled) < 64:
+                self._tiled[n_queries] = tables
+        return tables
 
     def union_fraction(
         self,
@@ -130,48 +140,52 @@ class CapRaster:
         phi = np.arctan2(dy[sel], dx[sel])
         phi *= self._bins_per_radian
         phi += f32(bins)
+        phi += f32(0.5)  # bins k whose centre k + 0.5 lies in [phi - half, phi + half]: k = trunc(...)
         packed[:, 2] = phi
+        # global row index q * rows + j = position in the expanded array - offset of the pair
         offsets = np.cumsum(n, dtype=np.int32)
         offsets -= n
         offsets -= first[sel]
+        if n_queries > 1:
+            offsets -= qidx[sel].astype(np.int32) * rows
         packed[:, 3] = offsets.view(f32)  # carried bit-exactly through the repeat
         per_row = np.repeat(packed, n, axis=0)
         row = np.arange(total, dtype=np.int32)
         row -= per_row[:, 3].view(np.int32)
-        c = per_row[:, 0] * self._inv_s[row]
-        c -= per_row[:, 1] * self._z_over_s[row]
+        inv_s, z_over_s = self._row_tables(n_queries)
+        c = per_row[:, 0] * inv_s[row]
+        c -= per_row[:, 1] * z_over_s[row]
         full = c <= f32(-1.0)
         np.maximum(c, f32(-1.0), out=c)
         np.minimum(c, f32(1.0), out=c)
         half = np.arccos(c)
         half *= self._bins_per_radian
-        # bins k whose centre k + 0.5 lies in [centre - half, centre + half]
-        centre = per_row[:, 2] + f32(0.5)
+        centre = per_row[:, 2]
         start = (centre - half).astype(np.int32)
-        centre += half
-        length = centre.astype(np.int32)
+        length = (centre + half).astype(np.int32)
         length -= start
         np.maximum(length, 0, out=length)
         np.minimum(length, bins, out=length)
         length[full] = bins
         np.subtract(start, bins, out=start, where=start >= bins)
-        if n_queries == 1:
-            base = row
-        else:
-            base = np.repeat(qidx[sel].astype(np.int32) * rows, n)
-            base += row
+        base = row
         base *= bins + 1
+        size = n_queries * rows * (bins + 1)
         stop = start + length
         wrap = np.flatnonzero(stop > bins)
         np.minimum(stop, bins, out=stop)
-        size = n_queries * rows * (bins + 1)
-        wrapped = base[wrap]
+        stop += size
         # +1 at each interval start, -1 at its end (second half of one bincount); a wrapped interval
-        # is split into [start, bins) and [0, stop - bins)
-        base += size
-        marks = np.concatenate(
-            [base - size + start, wrapped, base + stop, wrapped + (start[wrap] + length[wrap] - bins + size)]
-        )
+        # is split into [start, bins) and [0, stop - bins); written straight into one intp array
+        n_wrap = len(wrap)
+        marks = np.empty(2 * (total + n_wrap), dtype=np.intp)
+        np.add(base, start, out=marks[:total])
+        np.add(base, stop, out=marks[total : 2 * total])
+        wrapped = base[wrap]
+        marks[2 * total : 2 * total + n_wrap] = wrapped
+        wrapped += start[wrap]
+        wrapped += length[wrap] + (size - bins)
+        marks[2 * total + n_wrap :] = wrapped
         counts = np.bincount(marks, minlength=2 * size)
         diff = counts[:size] - counts[size:]
         return np.cumsum(diff.reshape(n_queries, rows, bins + 1)[:, :, :bins], axis=2) > 0
