@@ -4,6 +4,8 @@
   evaluated and coloured by each local metric; magenta marks invalid (NaN) values.
 - ``barcode_panel.png``: the H0 barcode panel; ``histogram_panel.png``: the histogram panel.
 - ``window_skeletonized.png``: the skeletonizer's output for the sample cloud (issue 4), evaluated.
+- ``window_hammer_skeletonized.png``: the real hammer scan (../shared/data, when present) skeletonized
+  and evaluated, coloured by centeredness.
 - ``error_dialog.png``: the dialog a corrupt file gives, over the window that survives it.
 
 Falls back to freshly generated shapes in a temporary folder when resources/samples/ is missing.
@@ -102,7 +104,7 @@ def main() -> int:
     except ImportError:
         pass
     else:
-        window.session.load_files([files["cloud"]])
+        window.session.load_as("cloud", files["cloud"])
         window.scene.remove_layer("skeletal")
         window.scene.remove_layer("curve")
         window.session.start_skeletonize()
@@ -112,6 +114,20 @@ def main() -> int:
         window.view.standard_view("xy")
         settle()
         save(window, "window_skeletonized.png")
+
+    # A real scan when the shared data folder is present (never copied into the repo).
+    hammer = ROOT.parent / "shared" / "data" / "hammer_4096.ply"
+    if hammer.is_file() and "skelcore.skeletonize" in sys.modules:
+        window.session.load_as("cloud", str(hammer))
+        window.scene.remove_layer("skeletal")
+        window.scene.remove_layer("curve")
+        window.session.start_skeletonize()
+        wait_for_runner()
+        wait_for_runner()
+        window.scene.set_metric("centeredness")
+        window.view.reset_camera()
+        settle()
+        save(window, "window_hammer_skeletonized.png")
 
     # A corrupt file: the dialog, grabbed while it is open, then closed.
     bad = tmp / "broken_cloud.ply"
