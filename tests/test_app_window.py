@@ -232,3 +232,30 @@ def test_a_study_variant_opens_in_the_3d_view_without_files(window):
     assert scene.cloud.path is None and window.actions_by_name["evaluate"].isEnabled()
     window.open_variant(sh.cloud, sh.skeletal, None)
     assert scene.curve is None and "curve-edges" not in window.view._actors
+
+
+def test_edges_as_tubes_and_display_controls_change_the_actors(window, files):
+    window.session.load_files([files["cloud"], files["curve"]])
+    view = window.view
+    assert view._actors["curve-edges"].mapper.dataset.n_lines > 0
+    window.actions_by_name["tubes"].trigger()
+    tubes = view._actors["curve-edges"].mapper.dataset
+    assert tubes.n_lines == 0 and tubes.n_strips > 0  # triangle strips around each edge
+    window.display.size["cloud"].setValue(5)
+    window.display.opacity["cloud"].setValue(80)
+    assert view._actors["cloud"].prop.point_size == 5 and view._actors["cloud"].prop.opacity == pytest.approx(0.8)
+    window.display.visible["cloud"].setChecked(False)
+    assert not view._actors["cloud"].GetVisibility()
+
+
+def test_settings_panel_builds_the_evaluation_parameters(window):
+    panel = window.settings_panel
+    panel.boundedness_method.setCurrentText("paper")
+    panel.k_center.setValue(12)
+    panel.curve_samples.setValue(50)
+    window.summary.beta_star.setValue(0.6)
+    params = window.session.params()
+    assert (params.boundedness_method, params.k_center, params.curve_samples) == ("paper", 12, 50)
+    assert params.beta_star == pytest.approx(0.6)
+    panel.k_center.setValue(0)
+    assert window.session.params().k_center is None  # 0 shows "auto": SPEC 3's rule
