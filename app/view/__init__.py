@@ -117,7 +117,9 @@ class SceneView:
     def _render_now(self) -> None:
         if self._render_pending and not getattr(self.plotter, "_closed", False):
             self._render_pending = False
-            self.plotter.render()
+            # A repaint request, not plotter.render(): pyvistaqt's paintGL always renders, so
+            # render() followed by the paint it causes would draw every frame twice.
+            self.plotter.update()
 
     def rebuild(self) -> None:
         for name in ("cloud", "skeletal", "curve"):
