@@ -250,6 +250,30 @@ def test_thin_torus_default_uses_half_cells_and_stays_within_0_01_of_every_pair(
     assert 0 < err.max() <= 0.01
 
 
+def test_near_surface_queries_share_in_finer_cells_within_0_01_of_every_pair():
+    """Queries 1.5-3.5 h inside a cylinder's wall (as a contracted skeleton of a thin part puts them)
+    used to be clusters of one; they now share in cells of h/4 with clearance >= 4 cells."""
+    from skelcore.metrics.boundedness import _ClusteredJob
+
+    shape = cylinder(4096, 0.5, 4.0, seed=8)
+    norm = Normalization.from_cloud(shape.cloud)
+    cloud = norm.apply(shape.cloud)
+    axis = norm.apply(shape.skeletal)
+    h = rays_radius(cloud)
+    rng = np.random.default_rng(8)
+    i = rng.choice(np.flatnonzero((shape.skeletal[:, 2] > 0.5) & (shape.skeletal[:, 2] < 3.5)), 150, replace=False)
+    inward = (axis[i] - cloud[i]) / np.linalg.norm(axis[i] - cloud[i], axis=1, keepdims=True)
+    seeds = cloud[i] + inward * rng.uniform(1.5, 3.5, (150, 1)) * h
+    queries = np.repeat(seeds, 4, axis=0) + rng.normal(scale=0.02 * h, size=(600, 3))
+    job = _ClusteredJob(
+        CapRaster(48, 96), cloud.astype(np.float32), queries.astype(np.float32), h, 5 * h, 0.5 * h
+    )
+    assert len(job.starts) - 1 < 300  # shared, not 600 clusters of one
+    shared = boundedness_rays(cloud, queries, share_far_field=True)
+    exact = boundedness_rays(cloud, queries, share_far_field=False)
+    assert 0 < np.abs(shared - exact).max() <= 0.01
+
+
 def test_default_shares_the_far_field_only_where_it_pays():
     """16k torus: its 16k skeletal points near the core share far fields; as many points spread
     through the box, or few queries, use every pair (the accuracy of sharing is tested above)."""

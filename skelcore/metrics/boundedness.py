@@ -92,6 +92,10 @@ _FAR_PAIRS_PER_CALL = 16384
 _PAIRS_PER_TASK = 65536
 # queries closer than this many h to the cloud are clusters of their own (exact)
 _ALONE_WITHIN = 4.0
+# near-surface queries share in finer cells (cell / 2^k, down to h / 4) with a near radius this many
+# times longer than the usual 10 cells (20 cells): measured on the hammer scan, 1.5 x held the error
+# to that of exact near-surface queries (0.0056 of every pair), 1 x let it grow to 0.0076
+_FINER_BOOST = 2.0
 
 
 def boundedness(
@@ -277,8 +281,9 @@ class _DenseJob:
 class _ClusteredJob:
     """Exact near field per query; the far field rasterised once per cluster of nearby queries.
 
-    Queries are grouped by cubic cells of side ``cell``; a query within ``_ALONE_WITHIN`` h of the
-    cloud is a cluster of its own.  The cloud is split once per cluster: the near part (within
+    Queries are grouped by cubic cells of side ``cell``; a query closer to the cloud than 4 h and 4
+    cells shares in finer cells (``__init__``), with twice the near radius, or below h is a cluster
+    of its own.  The cloud is split once per cluster: the near part (within
     ``near_radius + spread`` of its centroid, spread = distance of its farthest query) is rasterised
     from every query exactly; the far part, once from the centroid, and OR-ed in.  Every point is in
     exactly one part (a point in both would fill holes twice: a bias).  Seen from a query instead of
@@ -288,19 +293,31 @@ class _ClusteredJob:
 
     def __init__(
         self, raster: CapRaster, pts: np.ndarray, queries: np.ndarray, h: float, near_radius: float, cell: float,
-        tree: cKDTree | None = None,
+        tree: cKDTree | None = None, finer: bool = True,
     ):
         self.raster = raster
         self.cols = [np.ascontiguousarray(pts[:, k]) for k in range(3)]
         self.h = np.float32(h)
         self.near_radius = float(near_radius)
         tree = cKDTree(pts) if tree is None else tree
-        keys = np.floor(queries.astype(float) / cell).astype(np.int64)
         # a query near the surface sees nearly coplanar points at grazing angles, where a small move
-        # of the viewpoint swaps the side of the horizon their caps lie on: it stays on its own
-        lone = np.flatnonzero(tree.query(queries, k=1)[0] < _ALONE_WITHIN * h)
-        keys = np.column_stack([keys, np.zeros(len(keys), np.int64)])
-        keys[lone, 3] = lone + 1
+        # of the viewpoint swaps the side of the horizon their caps lie on.  Level 0 (cells of
+        # ``cell``) takes queries at least 4 h and 4 cells from the cloud; a query closer shares only
+        # in level k's cells of cell / 2^k >= h / 4 with clearance >= 4 of them (no cluster member
+        # can then be on the other side of a surface), and stays on its own below that (clearance
+        # < h).  ``finer=False``: everything closer than 4 h on its own (the scheme before levels).
+        clearance = tree.query(queries, k=1)[0]
+        level = np.zeros(len(queries), np.int64)
+        levels = max(0, int(np.floor(np.log2(cell / (h / 4.0))))) if finer else 0
+        for k in range(1, levels + 1):
+            need = _ALONE_WITHIN * h if k == 1 else 0.0
+            level[clearance < max(_ALONE_WITHIN * cell / 2.0 ** (k - 1), need)] = k
+        lone = clearance < (_ALONE_WITHIN * cell / 2.0**levels if levels else _ALONE_WITHIN * h)
+        level_cell = cell / 2.0**level
+        keys = np.floor(queries.astype(float) / level_cell[:, None]).astype(np.int64)
+        keys = np.column_stack([keys, level, np.zeros(len(keys), np.int64)])
+        lone = np.flatnonzero(lone)
+        keys[lone, 4] = lone + 1
         _, cid = np.unique(keys, axis=0, return_inverse=True)
         cid = cid.ravel()
         self.order = np.argsort(cid, kind="stable")
@@ -319,7 +336,8 @@ class _ClusteredJob:
         spreads[single] = 0.0
         self.centres = centres.astype(np.float32)
         self.spreads = spreads
-        self.reach = near_radius + spreads
+        cl_level = level[self.order][self.starts[:-1]]
+        self.reach = near_radius * np.where(cl_level > 0, _FINER_BOOST, 1.0) / 2.0**cl_level + spreads
         # tasks: ranges of the sorted queries of about _PAIRS_PER_TASK pairs; a cluster whose near
         # part is large is split, so checkpoints stay ~10 ms apart
         n_near = tree.query_ball_point(centres, self.reach, return_length=True)
