@@ -36,8 +36,14 @@ benchmarks/bench_boundedness.py; torus with 1 %-jittered skeletal points + 200 c
   then have no near field at all; 2.6x faster than (h, 10 h)).  The error is the change of the far
   part of beta between two viewpoints a cluster apart.  It is worst for a viewpoint near a surface
   (nearly coplanar points swap sides of its horizon: 0.024 for a point just outside a cylinder's end
-  disc clustered with inner ones), so queries within 4 h of the cloud are clusters of their own
-  (exact); r = 5 c erred up to 0.08, r = 10 c stays within 0.0082 of every pair at 4k-16k (torus,
+  disc clustered with inner ones), so a query closer than 4 h and 4 c to the cloud shares only in
+  finer cells, c / 2^k down to h / 4, at most a quarter of its clearance (no cluster can straddle a
+  surface), with a near radius of 20 such cells, and below a clearance of h is a cluster of its own
+  (exact).  The finer cells matter on scans, whose contracted skeletons sit a few h inside thin parts
+  (hammer 4k: 79 % of its queries within 4 h; one by one 1.4 s, shared 0.46 s, max error against
+  every pair 0.0056 both ways, 0.0076 with a near radius of 10 cells; apple tree 22k 21 -> 11 s,
+  cave 27k 9 -> ~5 s, max errors 0.0028 and 0.0069 on 450 queries incl. the 150 that changed
+  most).  r = 5 c erred up to 0.08, r = 10 c stays within 0.0082 of every pair at 4k-16k (torus,
   cylinder, Y shape; skeletal, surface and random queries; (h/2, 5 h) on the 4k torus: 0.0078 of
   every pair, 0.006 of a 200k-direction brute force on its 40 worst and 40 random queries).  64k
   torus: 0.0078 on 300 random queries; an earlier run saw 0.011 on 400, slightly past SPEC's 0.01;
