@@ -254,13 +254,20 @@ class SceneView:
     def _fit_camera(self) -> None:
         """Frame the scene left of the colour bar: the projection centre moves left and the view
         zooms out a little, so the bar on the right edge does not cover the skeleton."""
-        self.plotter.reset_camera(render=False)  # no frame here: one of a 1M cloud costs 0.3-1 s
-        self.plotter.camera.SetWindowCenter(0.12, 0.0)
-        self.plotter.camera.zoom(0.9)
+        # Through the renderer: Plotter.reset_camera and a first Plotter.camera access both render a
+        # frame synchronously, and a frame of a 1M-point cloud costs 0.3-1 s in software GL.
+        ren = self.plotter.renderer
+        camera = ren.camera
+        if not camera.is_set:
+            ren.camera_position = ren.get_default_cam_pos()
+            camera.is_set = True
+        ren.reset_camera(render=False)
+        camera.SetWindowCenter(0.12, 0.0)
+        camera.zoom(0.9)
 
     def reset_camera(self) -> None:
         self._fit_camera()
-        self.plotter.render()
+        self.request_render()
 
     def standard_view(self, name: str) -> None:
         """'xy', 'xz', 'yz' (and their negatives '-xy', ...) or 'iso'."""
