@@ -1,9 +1,10 @@
 """Generate resources/samples/ from analytic shapes (never hand-edited; rerun to regenerate).
 
 Each sample is a cloud, a skeletal point set in pointwise correspondence and a curve skeleton, all
-PLY (the curve keeps its ``edge`` element). The skeletal sets are the exact medial projections plus a
-small seeded jitter, so the local metrics vary along the skeleton as they do on real results; the
-Y shape's junction vertex has no smoothness value (drawn magenta). When the skeletonizer is
+PLY (the curve keeps its ``edge`` element). ``*_skeletal.ply`` is the exact medial projection (the
+ground truth: smoothness 1, centeredness as SPEC 6 says); ``*_curve.ply`` is the true axis with a
+small seeded jitter of its vertices, so curve smoothness varies a little; the Y shape's junction vertex
+has no smoothness value (drawn magenta). When the skeletonizer is
 available its output for each cloud is written too (``*_lbc_skeletal.ply``, ``*_lbc_curve.ply``).
 """
 
@@ -37,7 +38,7 @@ def main() -> None:
     }
     for name, shape in samples.items():
         scale = 0.0005 * float(np.ptp(shape.cloud, axis=0).max())
-        skeletal = jitter(shape.skeletal, scale, rng)
+        skeletal = shape.skeletal
         verts = jitter(shape.curve_vertices, scale / 2, rng)
         write_points_ply(OUT / f"{name}_cloud.ply", shape.cloud)
         write_points_ply(OUT / f"{name}_skeletal.ply", skeletal)
