@@ -65,6 +65,17 @@ def run_case(kind: str, arg: str, method: str) -> dict:
     return out
 
 
+def _cpu_model() -> str:
+    try:
+        with open("/proc/cpuinfo") as fh:
+            for line in fh:
+                if line.startswith("model name"):
+                    return line.split(":", 1)[1].strip()
+    except OSError:
+        pass
+    return platform.processor() or platform.machine()
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--sizes", type=int, nargs="*", default=[4096, 16384, 65536, 262144])
@@ -78,7 +89,7 @@ def main() -> None:
     cases = [("torus", str(n)) for n in args.sizes]
     if not args.no_real and SHARED.is_dir():
         cases += [("real", str(p)) for p in sorted(SHARED.glob("*.ply"))]
-    print(f"machine: {platform.processor() or platform.machine()}, {os.cpu_count()} cores, Python {platform.python_version()}")
+    print(f"machine: {_cpu_model()}, {os.cpu_count()} cores, Python {platform.python_version()}, load average {os.getloadavg()[0]:.1f}")
     head = ["case", "points"] + [s.replace("skeletal ", "skel ") for s in STAGES] + ["total s", "peak MB"]
     print("| " + " | ".join(head) + " |")
     print("|" + "---|" * len(head))
