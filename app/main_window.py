@@ -66,6 +66,12 @@ class MainWindow(QtWidgets.QMainWindow):
         self.tabifyDockWidget(self.docks["Barcodes"], self.docks["Histogram"])
         self.docks["Barcodes"].raise_()
         self._plots_stale: set[str] = set()
+        self._plots_timer = QtCore.QTimer(self)
+        self._plots_timer.setSingleShot(True)
+        self._plots_timer.setInterval(20)
+        self._plots_timer.timeout.connect(self._refresh_plots)
+        for panel in (self.barcodes, self.histogram):
+            panel.drawn.connect(self._plot_drawn)
         for dock in ("Barcodes", "Histogram"):
             self.docks[dock].visibilityChanged.connect(lambda visible: visible and self._schedule_plots())
         QtCore.QTimer.singleShot(0, self._size_docks)  # after the first layout, or Qt ignores it
@@ -347,11 +353,14 @@ class MainWindow(QtWidgets.QMainWindow):
             QtCore.QTimer.singleShot(1000, self._prepare_plots)
 
     def _schedule_plots(self) -> None:
-        """Plots are redrawn one per event-loop turn, and only when their panel is on screen, so a
-        result landing never blocks the window for the sum of every redraw."""
-        QtCore.QTimer.singleShot(20, self._refresh_plots)  # after the 3D view's frame and any input
+        """Plots are redrawn one per event-loop turn (making the artists in one turn, drawing them in
+        the next), only when their panel is on screen, and only after the 3D view's pending frame,
+        so a result landing never blocks the window for the sum of every redraw."""
+        self.view.after_render(self._plots_timer.start)
 
     def _refresh_plots(self) -> None:
+        if self.barcodes.draw_pending or self.histogram.draw_pending:
+            return  # the panel's draw comes first; its ``drawn`` restarts this
         ev = self.scene.evaluation
         for name, panel, dock in (("barcodes", self.barcodes, "Barcodes"), ("histogram", self.histogram, "Histogram")):
             if name in self._plots_stale and not self.docks[dock].visibleRegion().isEmpty():
@@ -360,9 +369,11 @@ class MainWindow(QtWidgets.QMainWindow):
                     panel.show_topology(None if ev is None else ev.topology)
                 else:
                     panel.show_scene(self.scene)
-                if self._plots_stale:
-                    QtCore.QTimer.singleShot(20, self._refresh_plots)  # after the 3D view's frame and any input
                 return
+
+    def _plot_drawn(self) -> None:
+        if self._plots_stale:
+            self._plots_timer.start()  # the next stale plot, after the event loop has turned
 
     def _picked(self, info: dict[str, Any] | None) -> None:
         self.pick.show_info(info)

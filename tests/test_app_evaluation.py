@@ -208,3 +208,43 @@ def test_exports_never_overwrite_a_loaded_input(evaluated, files):
     w._guarded("Screenshot", w.save_screenshot, files["cloud"])
     assert w.dialogs and "refusing to overwrite" in w.dialogs[-1]
     assert open(files["cloud"], "rb").read() == before
+
+
+def test_a_landing_result_is_shown_in_separate_event_loop_turns(window, files, evaluation, qtbot, monkeypatch):
+    """The panels' repaint, the 3D frame, the barcode artists and their drawing each get their own
+    turn of the event loop (a 1 ms timer fires between each two), so the window's stalls do not add up."""
+    w = window
+    w.session.auto_evaluate = False
+    w.session.load_files([files["cloud"], files["skeletal"], files["curve"]])
+    w.docks["Barcodes"].raise_()
+    w.barcodes.prepare()
+    qtbot.waitUntil(lambda: not w.view.render_pending and not w.barcodes.draw_pending, timeout=5000)
+    events: list[str] = []
+
+    class PaintSpy(QtCore.QObject):
+        def eventFilter(self, obj, event):  # noqa: N802
+            if event.type() == QtCore.QEvent.Type.Paint:
+                events.append("summary painted")
+            return False
+
+    spy = PaintSpy()
+    w.summary.table.viewport().installEventFilter(spy)
+    w.view.plotter.ren_win.AddObserver("EndEvent", lambda *a: events.append("frame"))
+    show = w.barcodes.show_topology
+    monkeypatch.setattr(w.barcodes, "show_topology", lambda topology: (events.append("artists"), show(topology)))
+    w.barcodes.drawn.connect(lambda: events.append("drawn"))
+    beat = QtCore.QTimer()
+    beat.setInterval(1)
+    beat.timeout.connect(lambda: events.append("beat"))
+    beat.start()
+    w.session._evaluated_layers = (w.scene.cloud, w.scene.skeletal, w.scene.curve)
+    w.session._task_succeeded("evaluation", evaluation)
+    events.append("delivered")
+    qtbot.waitUntil(lambda: "drawn" in events, timeout=10000)
+    beat.stop()
+    assert "d_B" in w.barcodes.title()
+    steps = ["delivered", "summary painted", "frame", "artists", "drawn"]
+    at = [events.index(step) for step in steps]
+    assert at == sorted(at), events
+    for i in range(1, len(steps) - 1):  # Qt repaints the changed panels right after the delivery
+        assert "beat" in events[at[i] + 1:at[i + 1]], f"no event-loop turn between {steps[i]} and {steps[i + 1]}: {events}"

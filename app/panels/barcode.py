@@ -8,7 +8,7 @@ import math
 from typing import Any
 
 import numpy as np
-from PySide6 import QtWidgets
+from PySide6 import QtCore, QtWidgets
 
 from ._plot import PlotPanel
 
@@ -42,15 +42,35 @@ class BarcodePanel(PlotPanel):
         return self._bar_axes
 
     def prepare(self) -> None:
-        """Create the figure and axes ahead of the first result (they cost ~50-80 ms)."""
+        """Create the figure and axes ahead of the first result (they cost ~50-80 ms), then, in a
+        later event-loop turn, warm matplotlib's caches for the first result's draw."""
         if not self.has_figure:
             self._axes()
             self.show_topology(None)
+            timer = QtCore.QTimer(self)  # a child: it dies with the panel
+            timer.setSingleShot(True)
+            timer.timeout.connect(self._warm_up)
+            timer.start(100)
+            self._warm_up_timer = timer
+
+    def _warm_up(self) -> None:
+        """Lay the axes out once with their ticks showing (~20 ms, nothing rasterized): that fills
+        matplotlib's font and text-layout caches, without which the first result's draw takes about
+        twice as long (measured 80 -> 35 ms)."""
+        axes = self._axes()
+        shown = [ax.get_visible() for ax in axes]
+        for ax in axes:
+            ax.set_visible(True)
+        self.figure.draw_without_rendering()
+        for ax, visible in zip(axes, shown):
+            ax.set_visible(visible)
 
     def show_topology(self, topology: Any) -> None:
         """Draw the compared bars of both diagrams, or a hint when there is no topology result."""
         if topology is None and not self.has_figure:
             return  # the start-up hint label is showing
+        from matplotlib.collections import LineCollection
+
         axes = self._axes()
         for ax in axes:
             for artist in [*ax.collections, *ax.lines]:
@@ -62,7 +82,7 @@ class BarcodePanel(PlotPanel):
         self._empty.set_visible(topology is None)
         if topology is None:
             self._title.set_text("")
-            self.canvas.draw_idle()
+            self.request_draw()
             return
         k = int(topology.n_bars)
         cloud = compared_bars(topology.cloud_barcode, k)
@@ -72,7 +92,10 @@ class BarcodePanel(PlotPanel):
         for ax, bars, name, colour in ((axes[0], cloud, "cloud", "#1f4e79"), (axes[1], skel, "skeletal points", "#b35900")):
             deaths = np.where(np.isfinite(bars[:, 1]), bars[:, 1], x_end)
             y = np.arange(len(bars))
-            ax.hlines(y, bars[:, 0], deaths, color=colour, linewidth=1.0 if len(bars) < 80 else 0.6)
+            # A LineCollection from one (n, 2, 2) array: ax.hlines goes through masked arrays per
+            # bar and costs ~10 ms for a few hundred bars.
+            segments = np.stack([np.column_stack([bars[:, 0], y]), np.column_stack([deaths, y])], axis=1)
+            ax.add_collection(LineCollection(segments, colors=colour, linewidths=1.0 if len(bars) < 80 else 0.6))
             inf_rows = ~np.isfinite(bars[:, 1])
             if inf_rows.any():  # the infinite bar runs off the plot
                 ax.plot(np.full(inf_rows.sum(), x_end), y[inf_rows], marker=">", color=colour, linestyle="none",
@@ -83,7 +106,7 @@ class BarcodePanel(PlotPanel):
         axes[0].legend(loc="lower right", fontsize=7, frameon=False)
         axes[1].set_xlim(0, x_end * 1.03)
         self._title.set_text(f"H0, K = {k}:  d_B = {_fmt(topology.bottleneck)},  d_Wp = {_fmt(topology.wasserstein)}")
-        self.canvas.draw_idle()
+        self.request_draw()
 
     def title(self) -> str:
         return self._title.get_text() if self.has_figure else ""

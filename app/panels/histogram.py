@@ -27,10 +27,7 @@ class HistogramPanel(PlotPanel):
         if not has_values and not self.has_figure:
             self.threshold = None
             return  # the start-up hint label is showing
-        fig = self.figure
-        fig.clear()
-        ax = fig.add_subplot(1, 1, 1)
-        fig.subplots_adjust(left=0.14, right=0.97, top=0.95, bottom=0.17)  # no layout engine (hidden tabs)
+        ax = self._axes()
         metric = scene.metric
         series: list[tuple[str, np.ndarray, int]] = []
         for name in ("skeletal", "curve"):
@@ -39,12 +36,13 @@ class HistogramPanel(PlotPanel):
             if q is not None:
                 finite = q.values[np.isfinite(q.values)]
                 series.append((name, finite, q.n_invalid))
+        ax.set_axis_on()
         if not series:
             ax.set_axis_off()
             ax.text(0.5, 0.5, f"no {metric} values yet", ha="center", va="center", transform=ax.transAxes,
                     color="0.4")
             self.threshold = None
-            self.canvas.draw_idle()
+            self.request_draw()
             return
         lo, hi = 0.0, 1.0
         for _, finite, _ in series:
@@ -54,8 +52,9 @@ class HistogramPanel(PlotPanel):
         for name, finite, n_nan in series:
             label = f"{_LABELS[name]} (n = {finite.size}" + (f", {n_nan} nan)" if n_nan else ")")
             # Each series as fractions of its own size, so 4096 points and 200 samples compare.
-            weights = np.full(finite.size, 1.0 / max(finite.size, 1))
-            ax.hist(finite, bins=bins, weights=weights, alpha=0.55, color=_COLOURS[name], label=label)
+            fractions = np.histogram(finite, bins=bins)[0] / max(finite.size, 1)
+            # One filled step patch per series (ax.hist makes a Rectangle per bin: ~10x slower to build).
+            ax.stairs(fractions, bins, fill=True, alpha=0.55, color=_COLOURS[name], label=label)
         self.threshold = scene.threshold_for(metric)
         if self.threshold is not None:
             star = "beta*" if metric == "boundedness" else "c*"
@@ -64,7 +63,24 @@ class HistogramPanel(PlotPanel):
         ax.set_ylabel("fraction", fontsize=8)
         ax.tick_params(labelsize=7)
         ax.legend(fontsize=7, frameon=False, loc="upper left")
-        self.canvas.draw_idle()
+        self.request_draw()
+
+    def _axes(self) -> Any:
+        """The axes, made once and emptied for each redraw: clearing the figure and making new
+        axes is most of a redraw's cost."""
+        fig = self.figure
+        if not fig.axes:
+            fig.add_subplot(1, 1, 1)
+            fig.subplots_adjust(left=0.14, right=0.97, top=0.95, bottom=0.17)  # no layout engine (hidden tabs)
+        ax = fig.axes[0]
+        for artist in [*ax.patches, *ax.lines, *ax.texts]:
+            artist.remove()
+        legend = ax.get_legend()
+        if legend is not None:
+            legend.remove()
+        ax.relim()
+        ax.autoscale()
+        return ax
 
     def axes(self) -> Any:
         return self.figure.axes[0] if self.has_figure and self.figure.axes else None

@@ -19,6 +19,10 @@ from .style import CLOUD_GREY, CURVE_EDGE, CURVE_VERTEX, MAGENTA, PICK_MARKER, S
 
 __all__ = ["SceneView", "DropInteractor"]
 
+RENDER_DELAY_MS = 10
+"""A requested frame is drawn this long after the request: after Qt's own repaint of the widgets the
+same change touched, which Qt schedules 5 ms after the change (QT_QPA_UPDATE_IDLE_TIME)."""
+
 
 class DropInteractor(QtInteractor):
     """A ``QtInteractor`` whose drag-and-drop goes to the viewer's loader, not pyvista's reader.
@@ -31,6 +35,23 @@ class DropInteractor(QtInteractor):
         super().__init__(*args, **kwargs)
         self.drop_handler: Callable[[QtGui.QDropEvent], None] | None = None
         self.drag_handler: Callable[[QtGui.QDragEnterEvent], None] | None = None
+        self.software_gl: bool | None = None  # known once the GL context exists
+        self.on_frame: Callable[[], None] | None = None  # called after each frame is painted
+
+    def initializeGL(self) -> None:  # noqa: N802
+        super().initializeGL()
+        if self.software_gl is None:
+            self.software_gl = _is_software_renderer(self.ren_win.ReportCapabilities())
+            if self.software_gl:
+                # pyvista's default 8x MSAA (capped at 4 here) multiplies the fill cost of every
+                # frame in a software rasterizer (measured 100 -> 55 ms per frame under llvmpipe);
+                # a GPU keeps it.
+                self.ren_win.SetMultiSamples(0)
+
+    def paintGL(self) -> None:  # noqa: N802
+        super().paintGL()
+        if self.on_frame is not None:
+            self.on_frame()
 
     def dragEnterEvent(self, event: QtGui.QDragEnterEvent) -> None:  # noqa: N802
         if self.drag_handler is not None:
@@ -79,9 +100,21 @@ class SceneView:
         self.widget = self.plotter
         self.plotter.set_background("white")
         self._actors: dict[str, Any] = {}
+        self._sources: dict[str, np.ndarray] = {}  # actor name -> the points array it was built from
         self._pickable: dict[str, tuple[str, str]] = {}  # actor name -> (layer, location)
+        self._lut: tuple[tuple[float, float], pv.LookupTable] | None = None
+        self._edges_as_tubes: bool | None = None  # how the curve's edge actor was built
+        self._bar_actor: Any = None  # the actor the colour bar describes
         self._camera_set = False
         self._render_pending = False
+        self._after_render: list[Callable[[], None]] = []
+        # A timer, not a posted call: Qt runs posted events back to back, before any timer or input,
+        # so a frame queued that way would stall the window together with whatever queued it.
+        self._render_timer = QtCore.QTimer()
+        self._render_timer.setSingleShot(True)
+        self._render_timer.setInterval(RENDER_DELAY_MS)
+        self._render_timer.timeout.connect(self._render_now)
+        self.plotter.on_frame = self._frame_done
         self.on_pick: Callable[[dict[str, Any] | None], None] | None = None
         self._click_filter = _ClickFilter(self._clicked)
         self.plotter.installEventFilter(self._click_filter)
@@ -96,30 +129,61 @@ class SceneView:
                 self._fit_camera()
                 self._camera_set = True
         elif event.kind == "display":
-            if event.layer == "curve":
-                self._build("curve")
-            else:
-                self._apply_display(event.layer)
+            if event.layer == "curve" and self._edges_as_tubes != self.scene.edges_as_tubes:
+                self._build_curve_edges()
+            self._apply_display(event.layer)
         elif event.kind in ("quantities", "colouring", "thresholds"):
+            # Only values changed: the skeleton actors are recoloured in place, not rebuilt.
             self._remove_marker()
-            self._build("skeletal")
-            self._build("curve")
+            self._colour_skeletal()
+            self._colour_curve()
         self._update_scalar_bar()
         self.request_render()
 
     def request_render(self) -> None:
-        """Render once, on the next event-loop turn, however many scene changes arrive meanwhile
-        (a frame of a large cloud costs tens to hundreds of ms in software GL)."""
+        """Render once, soon, however many scene changes arrive meanwhile (a frame costs tens to
+        hundreds of ms in software GL).
+
+        The frame is drawn by a timer started when the current event's handlers are done and firing
+        RENDER_DELAY_MS later: after Qt's own repaint of the panels the same change updated, with
+        the event loop turning (input, timers) in between, so the two are two short stalls, not one.
+        """
         if not self._render_pending:
             self._render_pending = True
-            QtCore.QTimer.singleShot(0, self._render_now)
+            QtCore.QTimer.singleShot(0, self._render_timer.start)
+
+    @property
+    def render_pending(self) -> bool:
+        return self._render_pending
+
+    def after_render(self, fn: Callable[[], None]) -> None:
+        """Call ``fn`` once the pending frame has been painted (at once if none is pending), so work
+        that follows a change (the plots) starts after the frame, never in the same event-loop turn."""
+        if self._render_pending:
+            if fn not in self._after_render:
+                self._after_render.append(fn)
+        else:
+            fn()
 
     def _render_now(self) -> None:
-        if self._render_pending and not getattr(self.plotter, "_closed", False):
-            self._render_pending = False
-            # A repaint request, not plotter.render(): pyvistaqt's paintGL always renders, so
-            # render() followed by the paint it causes would draw every frame twice.
-            self.plotter.update()
+        if not self._render_pending:
+            return
+        if getattr(self.plotter, "_closed", False) or not self.plotter.isVisible():
+            self._frame_done()  # nothing to paint: whatever waited for the frame goes ahead
+            return
+        # A repaint of the view now, not plotter.render() (pyvistaqt's paintGL always renders, so
+        # render() followed by the paint it causes would draw every frame twice) and not update()
+        # (whose paint Qt would merge with its next repaint of the other widgets). Its paintGL calls
+        # _frame_done, here or, when Qt defers the repaint, in Qt's next repaint.
+        self.plotter.repaint()
+
+    def _frame_done(self) -> None:
+        """A frame was painted: it shows every change so far, so no other frame is pending."""
+        self._render_timer.stop()
+        self._render_pending = False
+        callbacks, self._after_render = self._after_render, []
+        for fn in callbacks:
+            fn()
 
     def rebuild(self) -> None:
         for name in ("cloud", "skeletal", "curve"):
@@ -128,10 +192,15 @@ class SceneView:
         self.plotter.render()
 
     def _remove(self, *names: str) -> None:
-        for name in [*names, *(f"{n}-nan" for n in names)]:
-            if self._actors.pop(name, None) is not None:
-                self.plotter.remove_actor(name, render=False)
-            self._pickable.pop(name, None)
+        for name in names:
+            self._drop(name)
+            self._drop(f"{name}-nan")
+
+    def _drop(self, name: str) -> None:
+        if self._actors.pop(name, None) is not None:
+            self.plotter.remove_actor(name, render=False)
+        self._pickable.pop(name, None)
+        self._sources.pop(name, None)
 
     def _build(self, name: str | None) -> None:
         if name == "cloud":
@@ -141,27 +210,45 @@ class SceneView:
         elif name == "curve":
             self._build_curve()
 
+    def _lookup_table(self) -> pv.LookupTable:
+        """One lookup table shared by every coloured actor and the colour bar, remade only when the
+        colour range changes (building one from the colour map costs more than recolouring)."""
+        clim = self.scene.colour_range()
+        if self._lut is None or self._lut[0] != clim:
+            self._lut = (clim, make_lut(clim))
+        return self._lut[1]
+
     def _points_actor(self, key: str, points: np.ndarray, layer: Any, values: np.ndarray | None,
                       plain: tuple[int, int, int], size: float, pickable: tuple[str, str] | None) -> None:
-        poly = pv.PolyData(_display_coordinates(points))
-        kwargs: dict[str, Any] = dict(
-            style="points", point_size=size, opacity=layer.opacity, lighting=False, name=key,
-            reset_camera=False, render=False, render_points_as_spheres=False, pickable=pickable is not None,
-        )
-        if values is not None:
-            poly.point_data["values"] = np.asarray(values, dtype=float)
-            clim = self.scene.colour_range()
-            kwargs.update(scalars="values", cmap=make_lut(clim), clim=clim, show_scalar_bar=False)
+        """Draw ``points`` coloured by ``values`` (plain colour when None). An actor already built
+        from the same array is recoloured in place: a new result re-uploads scalars, not geometry."""
+        actor = self._actors.get(key)
+        if actor is None or self._sources.get(key) is not points:
+            self._remove(key)
+            actor = self.plotter.add_mesh(
+                pv.PolyData(_display_coordinates(points)), color=plain, style="points", point_size=size,
+                opacity=layer.opacity, lighting=False, name=key, reset_camera=False, render=False,
+                render_points_as_spheres=False, pickable=pickable is not None,
+            )
+            if key.startswith("curve"):
+                _draw_in_front(actor)
+            self._actors[key] = actor
+            self._sources[key] = points
+            if pickable is not None:
+                self._pickable[key] = pickable
+        mapper = actor.mapper
+        if values is None:
+            mapper.scalar_visibility = False
+            actor.prop.color = plain
         else:
-            kwargs.update(color=plain)
-        actor = self.plotter.add_mesh(poly, **kwargs)
+            values = np.asarray(values, dtype=float)
+            mapper.dataset.point_data.set_array(values, "values")  # replaces the previous values
+            clim = self.scene.colour_range()
+            mapper.set_scalars(values, "values", cmap=self._lookup_table(), clim=clim)
+            mapper.scalar_visibility = True
         actor.SetVisibility(layer.visible)
-        if key.startswith("curve"):
-            _draw_in_front(actor)
-        self._actors[key] = actor
-        if pickable is not None:
-            self._pickable[key] = pickable
-        invalid = None if values is None else ~np.isfinite(np.asarray(values, dtype=float))
+        self._drop(f"{key}-nan")
+        invalid = None if values is None else ~np.isfinite(values)
         if invalid is not None and invalid.any():
             # Invalid elements are few and matter: drawn larger, in front, so they are seen at a glance.
             nan_actor = self.plotter.add_mesh(
@@ -181,43 +268,63 @@ class SceneView:
 
     def _build_skeletal(self) -> None:
         self._remove("skeletal")
+        self._colour_skeletal()
+
+    def _colour_skeletal(self) -> None:
         layer = self.scene.skeletal
         if layer is None:
+            self._remove("skeletal")
             return
         q = layer.quantity(self.scene.metric)
         self._points_actor("skeletal", layer.points, layer, None if q is None else q.values, SKELETAL_PLAIN,
                            layer.point_size, ("skeletal", "points"))
 
     def _build_curve(self) -> None:
-        self._remove("curve-edges", "curve-vertices", "curve-samples")
+        self._remove("curve-vertices", "curve-samples")
+        self._build_curve_edges()
+        self._colour_curve()
+
+    def _build_curve_edges(self) -> None:
+        self._remove("curve-edges")
+        self._edges_as_tubes = None
         layer = self.scene.curve
         if layer is None:
             return
+        self._edges_as_tubes = self.scene.edges_as_tubes
         verts = np.ascontiguousarray(layer.points, dtype=float)
         edges = np.asarray(layer.edges, dtype=np.int64).reshape(-1, 2)
-        if len(edges):
-            cells = np.hstack([np.full((len(edges), 1), 2, dtype=np.int64), edges]).ravel()
-            lines = pv.PolyData(verts, lines=cells)
-            if self.scene.edges_as_tubes:
-                radius = 0.004 * _diagonal(self.scene)
-                mesh = lines.tube(radius=radius, n_sides=12)
-                actor = self.plotter.add_mesh(mesh, color=CURVE_EDGE, name="curve-edges", reset_camera=False,
-                                              render=False, pickable=False, smooth_shading=True)
-            else:
-                actor = self.plotter.add_mesh(lines, color=CURVE_EDGE, style="wireframe", line_width=2.5,
-                                              lighting=False, name="curve-edges", reset_camera=False,
-                                              render=False, pickable=False)
-            actor.SetVisibility(layer.visible)
-            _draw_in_front(actor)
-            self._actors["curve-edges"] = actor
+        if not len(edges):
+            return
+        cells = np.hstack([np.full((len(edges), 1), 2, dtype=np.int64), edges]).ravel()
+        lines = pv.PolyData(verts, lines=cells)
+        if self.scene.edges_as_tubes:
+            radius = 0.004 * _diagonal(self.scene)
+            mesh = lines.tube(radius=radius, n_sides=12)
+            actor = self.plotter.add_mesh(mesh, color=CURVE_EDGE, name="curve-edges", reset_camera=False,
+                                          render=False, pickable=False, smooth_shading=True)
+        else:
+            actor = self.plotter.add_mesh(lines, color=CURVE_EDGE, style="wireframe", line_width=2.5,
+                                          lighting=False, name="curve-edges", reset_camera=False,
+                                          render=False, pickable=False)
+        actor.SetVisibility(layer.visible)
+        _draw_in_front(actor)
+        self._actors["curve-edges"] = actor
+
+    def _colour_curve(self) -> None:
+        layer = self.scene.curve
+        if layer is None:
+            self._remove("curve-edges", "curve-vertices", "curve-samples")
+            return
         location = CURVE_LOCATION[self.scene.metric]
         q = layer.quantity(self.scene.metric)
         vert_values = q.values if (q is not None and location == "vertices") else None
-        self._points_actor("curve-vertices", verts, layer, vert_values, CURVE_VERTEX, layer.point_size,
+        self._points_actor("curve-vertices", layer.points, layer, vert_values, CURVE_VERTEX, layer.point_size,
                            ("curve", "vertices"))
         if layer.samples is not None and q is not None and location == "samples":
             self._points_actor("curve-samples", layer.samples, layer, q.values, CURVE_VERTEX,
                                max(layer.point_size - 2.0, 3.0), ("curve", "samples"))
+        else:
+            self._remove("curve-samples")
 
     def _apply_display(self, name: str | None) -> None:
         layer = self.scene.layers.get(name or "")
@@ -239,16 +346,24 @@ class SceneView:
         return None
 
     def _update_scalar_bar(self) -> None:
-        for title in list(self.plotter.scalar_bars.keys()):
-            self.plotter.remove_scalar_bar(title, render=False)
+        """One colour bar, made when the coloured actor or the metric changes and otherwise updated
+        in place (pyvista's add_scalar_bar costs several ms and a new bar re-renders its text)."""
         actor = self._coloured_actor()
-        if actor is None:
-            return
-        self.plotter.add_scalar_bar(
-            title=self.scene.metric, mapper=actor.mapper, n_labels=5, fmt="%.2f", color="black",
-            nan_annotation=self.scene.n_invalid_shown() > 0, vertical=True, position_x=0.87, position_y=0.25,
-            width=0.06, height=0.5, title_font_size=14, label_font_size=12, render=False,
-        )
+        bars = self.plotter.scalar_bars
+        if actor is None or actor is not self._bar_actor or self.scene.metric not in bars:
+            for title in list(bars.keys()):
+                self.plotter.remove_scalar_bar(title, render=False)
+            self._bar_actor = actor
+            if actor is None:
+                return
+            self.plotter.add_scalar_bar(
+                title=self.scene.metric, mapper=actor.mapper, n_labels=5, fmt="%.2f", color="black",
+                vertical=True, position_x=0.87, position_y=0.25, width=0.06, height=0.5, title_font_size=14,
+                label_font_size=12, render=False,
+            )
+        bar = bars[self.scene.metric]
+        bar.SetLookupTable(actor.mapper.lookup_table)
+        bar.SetDrawNanAnnotation(self.scene.n_invalid_shown() > 0)
 
     # ---- camera ---------------------------------------------------------------------------
     def _fit_camera(self) -> None:
@@ -352,14 +467,27 @@ class SceneView:
     # ---- images ---------------------------------------------------------------------------
     def image(self, scale: int = 1, transparent: bool = False) -> np.ndarray:
         """The rendered 3D view as an (H, W, 3 or 4) uint8 array, ``scale`` times the widget size."""
-        self._render_pending = False
         self.plotter.render()
         img = self.plotter.screenshot(None, transparent_background=transparent, return_img=True, scale=int(scale))
+        self._frame_done()  # the pending frame is the one rendered here
         return np.asarray(img)
 
     def close(self) -> None:
         self.scene.unsubscribe(self._on_scene)
+        self.plotter.on_frame = None
+        self._render_timer.stop()
+        self._after_render.clear()
         self.plotter.close()
+
+
+def _is_software_renderer(capabilities: str) -> bool:
+    """True when VTK's capability report names a software rasterizer (Mesa llvmpipe / softpipe /
+    swrast, SwiftShader, Windows' basic renderer)."""
+    for line in capabilities.splitlines():
+        if "renderer string" in line.lower():
+            name = line.lower()
+            return any(s in name for s in ("llvmpipe", "softpipe", "swrast", "software", "swiftshader", "basic render"))
+    return False
 
 
 def _display_coordinates(points: np.ndarray) -> np.ndarray:
