@@ -248,3 +248,21 @@ def test_a_landing_result_is_shown_in_separate_event_loop_turns(window, files, e
     assert at == sorted(at), events
     for i in range(1, len(steps) - 1):  # Qt repaints the changed panels right after the delivery
         assert "beat" in events[at[i] + 1:at[i + 1]], f"no event-loop turn between {steps[i]} and {steps[i + 1]}: {events}"
+
+
+def test_barcodes_drawn_in_stages_give_the_same_pixels_as_one_draw(evaluation, qtbot):
+    from app.panels.barcode import BarcodePanel
+
+    panel = BarcodePanel()
+    qtbot.addWidget(panel)
+    panel.resize(420, 440)
+    panel.show()
+    qtbot.waitExposed(panel)
+    panel.prepare()
+    panel.show_topology(evaluation.topology)
+    with qtbot.waitSignal(panel.drawn, timeout=5000):
+        panel.draw_now()  # the first of two stages now, the second in a later event-loop turn
+    staged = np.asarray(panel.canvas.renderer.buffer_rgba()).copy()
+    panel.canvas.draw()  # matplotlib's own whole-figure draw
+    assert np.array_equal(staged, np.asarray(panel.canvas.renderer.buffer_rgba()))
+    assert (staged[..., :3] < 100).any()  # the bars are there, not a blank figure

@@ -3,7 +3,8 @@ importing matplotlib's Qt backend costs ~0.4 s, which stays off the viewer's sta
 
 Redraws go through :meth:`PlotPanel.request_draw`, a timer, instead of matplotlib's ``draw_idle``,
 whose zero-delay call Qt runs straight after the code that changed the plot: making the artists and
-drawing them (~20 + ~50 ms) would be one stall of the window instead of two shorter ones."""
+drawing them (~20 + ~50 ms) would be one stall of the window instead of two shorter ones. A panel
+may also draw its figure in stages, one per event-loop turn (:meth:`PlotPanel._draw_stages`)."""
 
 from __future__ import annotations
 
@@ -46,20 +47,59 @@ class PlotPanel(QtWidgets.QWidget):
         self._draw_timer.setSingleShot(True)
         self._draw_timer.setInterval(self.DRAW_DELAY_MS)
         self._draw_timer.timeout.connect(self.draw_now)
+        self._stages: tuple[Any, tuple[float, float, float], list[list[Any]]] | None = None
+        self._stage_timer = QtCore.QTimer(self)
+        self._stage_timer.setSingleShot(True)
+        self._stage_timer.setInterval(self.DRAW_DELAY_MS)
+        self._stage_timer.timeout.connect(self._draw_stage)
 
     def request_draw(self) -> None:
         """Redraw the figure in a later event-loop turn (however many changes arrive meanwhile)."""
+        self._stages = None  # a redraw in progress is outdated
         if not self._draw_timer.isActive():
             self._draw_timer.start()
 
     @property
     def draw_pending(self) -> bool:
-        return self._draw_timer.isActive()
+        return self._draw_timer.isActive() or self._stages is not None
+
+    def _draw_stages(self) -> list[list[Any]] | None:
+        """Groups of artists to draw in successive event-loop turns (None: the whole figure in one).
+        Each group must be listed in drawing order and the groups must not overlap on screen."""
+        return None
 
     def draw_now(self) -> None:
         self._draw_timer.stop()
-        if self._canvas is not None:
+        stages = self._draw_stages() if self._canvas is not None else None
+        if self._canvas is not None and stages is None:
             self._canvas.draw()  # Agg rendering; the widget repaint follows in Qt's own turn
+        elif stages is not None:
+            from matplotlib.backends.backend_agg import RendererAgg
+
+            w, h = self._canvas.get_width_height(physical=True)
+            # Into a renderer of its own: a repaint between two stages shows the previous figure.
+            self._stages = (RendererAgg(w, h, self._figure.dpi), (w, h, self._figure.dpi), list(stages))
+            self._draw_stage()
+            return
+        self.drawn.emit()
+
+    def _draw_stage(self) -> None:
+        if self._stages is None:
+            return  # a newer request_draw replaced this redraw
+        renderer, key, stages = self._stages
+        for artist in stages.pop(0):
+            artist.draw(renderer)
+        if stages:
+            self._stage_timer.start()
+            return
+        self._stages = None
+        canvas = self._canvas
+        if (*canvas.get_width_height(physical=True), canvas.figure.dpi) != key:
+            self.request_draw()  # resized meanwhile
+            return
+        canvas.renderer, canvas._lastKey = renderer, key  # what FigureCanvasAgg.get_renderer caches
+        self._figure.stale = False
+        canvas.update()
         self.drawn.emit()
 
     @property

@@ -108,6 +108,15 @@ class BarcodePanel(PlotPanel):
         self._title.set_text(f"H0, K = {k}:  d_B = {_fmt(topology.bottleneck)},  d_Wp = {_fmt(topology.wasserstein)}")
         self.request_draw()
 
+    def _draw_stages(self) -> list[list[Any]] | None:
+        """The cloud's diagram, then the skeletal points' (~20-30 ms each in Agg): two event-loop
+        turns instead of one twice as long. Same pixels as a whole-figure draw (Figure.draw's order:
+        background, axes, then the figure texts)."""
+        if getattr(self, "_bar_axes", None) is None:
+            return None
+        fig = self.figure
+        return [[fig.patch, self._bar_axes[0]], [self._bar_axes[1], self._title, self._empty]]
+
     def title(self) -> str:
         return self._title.get_text() if self.has_figure else ""
 

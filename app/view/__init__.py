@@ -101,6 +101,8 @@ class SceneView:
         self.plotter.set_background("white")
         self._actors: dict[str, Any] = {}
         self._sources: dict[str, np.ndarray] = {}  # actor name -> the points array it was built from
+        self._coloured: dict[str, bool] = {}  # actor name -> coloured by a metric (not its plain colour)
+        self._meshes: dict[str, pv.PolyData] = {}  # actor name -> its points
         self._pickable: dict[str, tuple[str, str]] = {}  # actor name -> (layer, location)
         self._lut: tuple[tuple[float, float], pv.LookupTable] | None = None
         self._edges_as_tubes: bool | None = None  # how the curve's edge actor was built
@@ -201,6 +203,8 @@ class SceneView:
             self.plotter.remove_actor(name, render=False)
         self._pickable.pop(name, None)
         self._sources.pop(name, None)
+        self._coloured.pop(name, None)
+        self._meshes.pop(name, None)
 
     def _build(self, name: str | None) -> None:
         if name == "cloud":
@@ -225,8 +229,9 @@ class SceneView:
         actor = self._actors.get(key)
         if actor is None or self._sources.get(key) is not points:
             self._remove(key)
+            mesh = pv.PolyData(_display_coordinates(points))
             actor = self.plotter.add_mesh(
-                pv.PolyData(_display_coordinates(points)), color=plain, style="points", point_size=size,
+                mesh, color=plain, style="points", point_size=size,
                 opacity=layer.opacity, lighting=False, name=key, reset_camera=False, render=False,
                 render_points_as_spheres=False, pickable=pickable is not None,
             )
@@ -234,21 +239,29 @@ class SceneView:
                 _draw_in_front(actor)
             self._actors[key] = actor
             self._sources[key] = points
+            self._meshes[key] = mesh
             if pickable is not None:
                 self._pickable[key] = pickable
         mapper = actor.mapper
-        if values is None:
+        if values is None and key == "cloud":
             mapper.scalar_visibility = False
             actor.prop.color = plain
         else:
-            values = np.asarray(values, dtype=float)
-            mapper.dataset.point_data.set_array(values, "values")  # replaces the previous values
-            clim = self.scene.colour_range()
-            mapper.set_scalars(values, "values", cmap=self._lookup_table(), clim=clim)
+            # Skeleton elements are always drawn through scalars and a lookup table, their plain
+            # colour as a one-colour table: the first result then needs no new GL shader program,
+            # whose compilation made its frame ~20 ms slower in software GL.
+            shown = values is not None
+            values = np.asarray(values, dtype=float) if shown else np.zeros(len(points))
+            # Into the mesh itself (the mapper's dataset is the output of pyvista's active-scalars
+            # filter, empty until the next render): replaces the previous values.
+            self._meshes[key].point_data.set_array(values, "values")
+            lut, clim = (self._lookup_table(), self.scene.colour_range()) if shown else (_plain_lut(plain), (0.0, 1.0))
+            mapper.set_scalars(values, "values", cmap=lut, clim=clim)
             mapper.scalar_visibility = True
+            self._coloured[key] = shown
         actor.SetVisibility(layer.visible)
         self._drop(f"{key}-nan")
-        invalid = None if values is None else ~np.isfinite(values)
+        invalid = ~np.isfinite(values) if self._coloured.get(key) else None
         if invalid is not None and invalid.any():
             # Invalid elements are few and matter: drawn larger, in front, so they are seen at a glance.
             nan_actor = self.plotter.add_mesh(
@@ -341,7 +354,7 @@ class SceneView:
     def _coloured_actor(self) -> Any:
         for key in ("skeletal", "curve-samples", "curve-vertices"):
             actor = self._actors.get(key)
-            if actor is not None and actor.mapper.scalar_visibility and actor.GetVisibility():
+            if actor is not None and self._coloured.get(key) and actor.GetVisibility():
                 return actor
         return None
 
@@ -478,6 +491,14 @@ class SceneView:
         self._render_timer.stop()
         self._after_render.clear()
         self.plotter.close()
+
+
+def _plain_lut(colour: tuple[int, int, int]) -> pv.LookupTable:
+    """A lookup table that maps every value to one colour (exactly: no lighting on points)."""
+    lut = pv.LookupTable()
+    lut.values = [(int(colour[0]), int(colour[1]), int(colour[2]), 255)] * 256
+    lut.scalar_range = (0.0, 1.0)
+    return lut
 
 
 def _is_software_renderer(capabilities: str) -> bool:
