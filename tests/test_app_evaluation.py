@@ -13,7 +13,8 @@ from PySide6 import QtCore, QtWidgets
 
 import skelcore
 from skelcore import shapes
-from skelcore.io import load_any, write_curve_ply, write_points_ply
+from conftest import write_shape_files
+from skelcore.io import load_any, write_points_ply
 from skelcore.params import Params
 
 pytestmark = pytest.mark.gui
@@ -21,13 +22,7 @@ pytestmark = pytest.mark.gui
 
 @pytest.fixture(scope="module")
 def files(tmp_path_factory):
-    tmp_path = tmp_path_factory.mktemp("y")
-    sh = shapes.y_shape(1500, seed=3)
-    paths = {k: tmp_path / f"y_{k}.ply" for k in ("cloud", "skeletal", "curve")}
-    write_points_ply(paths["cloud"], sh.cloud)
-    write_points_ply(paths["skeletal"], sh.skeletal)
-    write_curve_ply(paths["curve"], sh.curve_vertices, sh.curve_edges)
-    return {k: str(v) for k, v in paths.items()}
+    return write_shape_files(tmp_path_factory.mktemp("y"), shapes.y_shape(1500, seed=3))
 
 
 @pytest.fixture

@@ -11,20 +11,15 @@ from PySide6 import QtCore, QtWidgets
 
 from app.__main__ import main
 from skelcore import shapes
-from skelcore.io import write_curve_ply, write_points_ply
+from conftest import write_shape_files
+from skelcore.io import write_points_ply
 
 pytestmark = pytest.mark.gui
 
 
 @pytest.fixture(scope="module")
 def files(tmp_path_factory):
-    tmp = tmp_path_factory.mktemp("scripted")
-    sh = shapes.y_shape(900, seed=5)
-    paths = {k: tmp / f"y_{k}.ply" for k in ("cloud", "skeletal", "curve")}
-    write_points_ply(paths["cloud"], sh.cloud)
-    write_points_ply(paths["skeletal"], sh.skeletal)
-    write_curve_ply(paths["curve"], sh.curve_vertices, sh.curve_edges)
-    return {k: str(v) for k, v in paths.items()}
+    return write_shape_files(tmp_path_factory.mktemp("scripted"), shapes.y_shape(900, seed=5))
 
 
 @pytest.fixture

@@ -10,20 +10,16 @@ import pytest
 from PySide6 import QtCore, QtGui, QtWidgets
 
 from skelcore import shapes
+from conftest import write_shape_files
 from skelcore.colors import SKELETAL_COLOR, lookup_table
-from skelcore.io import write_curve_ply, write_points_ply
+from skelcore.io import write_points_ply
 
 pytestmark = pytest.mark.gui
 
 
 @pytest.fixture
 def files(tmp_path):
-    sh = shapes.y_shape(1500, seed=3)
-    paths = {k: tmp_path / f"y_{k}.ply" for k in ("cloud", "skeletal", "curve")}
-    write_points_ply(paths["cloud"], sh.cloud)
-    write_points_ply(paths["skeletal"], sh.skeletal)
-    write_curve_ply(paths["curve"], sh.curve_vertices, sh.curve_edges)
-    return {k: str(v) for k, v in paths.items()}
+    return write_shape_files(tmp_path, shapes.y_shape(1500, seed=3))
 
 
 @pytest.fixture
