@@ -54,6 +54,17 @@ def format_table(summary: dict) -> str:
     return "\n".join(lines)
 
 
+def stderr_progress(quiet: bool):
+    """A ``progress(fraction, stage)`` that redraws one terminal line, or None when not a terminal."""
+    if quiet or not sys.stderr.isatty():
+        return None
+
+    def progress(fraction: float, stage: str) -> None:
+        print(f"\r{fraction * 100:5.1f}%  {stage[:40]:<40}", end="", file=sys.stderr, flush=True)
+
+    return progress
+
+
 def _add_evaluate(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser("evaluate", help="score a skeleton against its point cloud")
     p.add_argument("cloud", help="original point cloud (PLY, PCD, XYZ/TXT/CSV/PTS, NPY/NPZ, OBJ, OFF)")
@@ -92,14 +103,10 @@ def run_evaluate(args: argparse.Namespace) -> int:
             args.skeletal,
         )
     inputs = {"cloud": args.cloud, "skeletal": args.skeletal, "curve": args.curve}
-    progress = None
-    if not args.quiet and sys.stderr.isatty():
-        def progress(fraction: float, stage: str) -> None:
-            print(f"\r{fraction * 100:5.1f}%  {stage:<24}", end="", file=sys.stderr, flush=True)
-
+    progress = stderr_progress(args.quiet)
     ev = evaluate(cloud, skeletal, curve, params, progress=progress, inputs=inputs)
     if progress is not None:
-        print("\r" + " " * 40 + "\r", end="", file=sys.stderr)
+        print("\r" + " " * 48 + "\r", end="", file=sys.stderr)
     guard = tuple(p for p in inputs.values() if p)
     print(format_table(ev.summary()))
     print(f"boundedness estimator: {params.boundedness_method}; total {ev.timings['total']:.2f} s")

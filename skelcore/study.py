@@ -408,16 +408,6 @@ def _ratio(text: str) -> float:
     return value
 
 
-def _stderr_progress(quiet: bool) -> Progress | None:
-    if quiet or not sys.stderr.isatty():
-        return None
-
-    def progress(fraction: float, stage: str) -> None:
-        print(f"\r{fraction * 100:5.1f}%  {stage[:40]:<40}", end="", file=sys.stderr, flush=True)
-
-    return progress
-
-
 def register_cli(subparsers: argparse._SubParsersAction) -> argparse.ArgumentParser:
     """Add ``skelcore study CLOUD ...``."""
     p = subparsers.add_parser(
@@ -453,7 +443,9 @@ def run_study_cli(args: argparse.Namespace) -> int:
     try:
         params = _params_from_args(args)
         cloud = io.load_cloud(args.cloud)
-        progress = _stderr_progress(args.quiet)
+        from .cli import stderr_progress
+
+        progress = stderr_progress(args.quiet)
         result = run_study(
             cloud,
             noise=args.noise,
@@ -507,7 +499,9 @@ def run_skeletonize_cli(args: argparse.Namespace) -> int:
         if not (args.out_skeletal or args.out_curve):
             raise SkelInputError("nothing to write: give --out-skeletal and/or --out-curve")
         cloud = io.load_cloud(args.cloud)
-        progress = _stderr_progress(args.quiet)
+        from .cli import stderr_progress
+
+        progress = stderr_progress(args.quiet)
         skeletal, curve, info = skeletonize(cloud, progress=progress, return_info=True)
         if progress is not None:
             print("\r" + " " * 50 + "\r", end="", file=sys.stderr)
