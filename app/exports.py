@@ -26,8 +26,8 @@ def with_thresholds(evaluation: Any, beta_star: float, c_star: float) -> Any:
 def export_coloured_ply(evaluation: Any, out_dir: str | os.PathLike, inputs: Iterable[str] = (),
                         color_by: str = "centeredness") -> list[str]:
     """Skeletal points, curve vertices with edges and curve samples as coloured PLY, RGB by the metric
-    on screen and one float property per local metric (``skelcore.export.export_ply``)."""
-    from skelcore.export import export_ply
+    on screen and one float property per local metric (``skelcore.io.export.export_ply``)."""
+    from skelcore.io.export import export_ply
 
     return [str(p) for p in export_ply(evaluation, str(out_dir), inputs=tuple(inputs), color_by=color_by)]
 

@@ -173,13 +173,13 @@ class Session(QtCore.QObject):
     def start_skeletonize(self, params: Any = None) -> bool:
         """Skeletonize the loaded cloud (issue 4) in the worker; both results become layers.
 
-        ``params`` is a ``skelcore.skeletonize.SkeletonizeParams`` (its defaults when None).
+        ``params`` is a ``skelcore.skeleton.SkeletonizeParams`` (its defaults when None).
         """
         if self.scene.cloud is None:
             self.message.emit("load a cloud first")
             return False
         try:
-            from skelcore.skeletonize import SkeletonizeParams, skeletonize
+            from skelcore.skeleton import SkeletonizeParams, skeletonize
         except ImportError as exc:
             self.error.emit("Skeletonize", f"the skeletonizer is not available ({exc})", "")
             return False

@@ -1,6 +1,6 @@
 """The Study dialog: run the paper's degradation study on the loaded cloud and show its table.
 
-The study (skelcore.study.run_study) runs in the viewer's worker thread (app.worker.TaskRunner:
+The study (skelcore.experiments.study.run_study) runs in the viewer's worker thread (app.worker.TaskRunner:
 progress, Cancel honoured at the engine's checkpoints, no stale result). Each row of the table can
 be opened in the 3D view through the main window's ``open_variant(cloud, skeletal, curve)``.
 """
@@ -28,7 +28,7 @@ class StudyDialog(QtWidgets.QDialog):
         self.setModal(False)
         self.cloud_path = str(cloud_path)
         self.params = params if params is not None else Params()
-        self.result: Any = None  # skelcore.study.StudyResult after a run
+        self.result: Any = None  # skelcore.experiments.study.StudyResult after a run
         self.error: str | None = None
         self._out_dir: str | None = None
         self.runner = TaskRunner(self)
@@ -135,7 +135,7 @@ class StudyDialog(QtWidgets.QDialog):
 
     def start(self) -> None:
         from skelcore.io import load_cloud
-        from skelcore.study import run_study
+        from skelcore.experiments.study import run_study
 
         kwargs = self.settings()
         self._out_dir = kwargs["out_dir"]

@@ -51,7 +51,7 @@ def run_case(kind: str, arg: str, method: str) -> dict:
         out["case"] = f"torus {n}"
     else:
         from skelcore.io import load_cloud
-        from skelcore.skeletonize import skeletonize
+        from skelcore.skeleton import skeletonize
 
         cloud = load_cloud(arg)
         t0 = time.perf_counter()

@@ -12,7 +12,7 @@ from __future__ import annotations
 import argparse
 
 from skelcore.shapes import cylinder, y_shape
-from skelcore.skeletonize import skeletonize
+from skelcore.skeleton import skeletonize
 
 
 def main() -> None:

@@ -45,7 +45,7 @@ def main() -> None:
         write_curve_ply(OUT / f"{name}_curve.ply", verts, shape.curve_edges)
         print(f"{name}: {len(shape.cloud)} points, curve {len(verts)} vertices / {len(shape.curve_edges)} edges")
         try:
-            from skelcore.skeletonize import skeletonize
+            from skelcore.skeleton import skeletonize
         except ImportError:
             continue
         skel_pts, curve = skeletonize(shape.cloud)

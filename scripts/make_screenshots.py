@@ -100,7 +100,7 @@ def main() -> int:
 
     # Skeletonize the bare cloud (issue 4) and evaluate its output.
     try:
-        import skelcore.skeletonize  # noqa: F401
+        import skelcore.skeleton.pipeline  # noqa: F401
     except ImportError:
         pass
     else:
@@ -117,7 +117,7 @@ def main() -> int:
 
     # A real scan when the shared data folder is present (never copied into the repo).
     hammer = ROOT.parent / "shared" / "data" / "hammer_4096.ply"
-    if hammer.is_file() and "skelcore.skeletonize" in sys.modules:
+    if hammer.is_file() and "skelcore.skeleton.pipeline" in sys.modules:
         window.session.load_as("cloud", str(hammer))
         window.scene.remove_layer("skeletal")
         window.scene.remove_layer("curve")

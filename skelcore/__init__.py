@@ -3,7 +3,7 @@ smoothness of point-cloud skeletons; SPEC.md). Never imports Qt or VTK."""
 
 from __future__ import annotations
 
-__version__ = "0.1.0"
+from .version import __version__
 
 from .curve import CurveSkeleton
 from .errors import Cancelled, SkelInputError
@@ -35,9 +35,9 @@ def __getattr__(name: str):
     raise AttributeError(f"module 'skelcore' has no attribute {name!r}")
 
 
-# Imported eagerly: once imported, the submodules ``skelcore.evaluate`` and ``skelcore.skeletonize``
-# would otherwise shadow the functions of the same name.
+# Imported eagerly: once imported, the submodule ``skelcore.evaluate``
+# would otherwise shadow the function of the same name.
 from .evaluate import evaluate  # noqa: E402
 from .results import Evaluation  # noqa: E402
 from . import shapes  # noqa: E402
-from .skeletonize import skeletonize  # noqa: E402
+from .skeleton import skeletonize  # noqa: E402

@@ -3,28 +3,8 @@
 
 The samples feed curve boundedness (SPEC 2) and curve centeredness (SPEC 3); the directions define
 the cutting slabs of curve centeredness, so only the line through a direction matters, not its sign.
-
-Conventions (the reference tool's, kept on purpose)
----------------------------------------------------
-* Edge (i, j) with i < j gets n_e = max(1, round(len_e / total_len * S)) samples (MATLAB rounding,
-  half away from zero) at fractions t = 1/n_e, ..., 1 from v_i to v_j: the start vertex is excluded
-  and the end vertex included, so the lowest-index end of a path is never sampled and a closed loop
-  samples one vertex twice. The total is sum(n_e), which may differ from S by rounding.
-* Direction inside an edge (t < 1): the edge direction v_j - v_i. At the end vertex (t == 1), by
-  the degree of v_j: 1 -> the edge direction; 2 -> the tangent at v_j of the circle through v_i,
-  v_j and v_j's other neighbour b (the chord b - v_i when |cos| of the angle at v_j is at or above
-  ``collinear_cos``, i.e. nearly straight or a hairpin); >= 3 (a joint) -> NaN.
-* Sign: every direction points "forward" along the sampled edge, from v_i towards v_j (and on to b
-  at a degree-2 vertex). Directions are unit vectors or NaN rows.
-
-Degenerate cases
-----------------
-* No edges: zero samples (empty arrays).
-* Zero-length edge: one sample at v_j (n_e = max(1, 0) = 1); its edge direction is undefined, so
-  its direction is NaN unless v_j has degree 2 and the chord to the other neighbour is defined.
-* All edges of zero length (total length 0): one sample per edge, as above.
-* Degree-2 vertex coinciding with a neighbour: the circle is undefined; the chord b - v_i is used
-  (NaN if that is zero too).
+The reference tool's sampling quirk, direction rules and degenerate cases are listed in
+:func:`sample_curve`.
 """
 
 from __future__ import annotations
@@ -76,7 +56,27 @@ def sample_counts(edge_lengths: np.ndarray, n_samples: int) -> np.ndarray:
 def sample_curve(curve: CurveSkeleton, n_samples: int, *, collinear_cos: float = 0.99) -> CurveSamples:
     """Sample ``curve`` with about ``n_samples`` points and give the curve direction at each (SPEC 3).
 
-    See the module docstring for the sampling quirk, the direction rules and the degenerate cases.
+    Conventions (the reference tool's, kept on purpose):
+
+    * Edge (i, j) with i < j gets n_e = max(1, round(len_e / total_len * S)) samples (MATLAB rounding,
+      half away from zero) at fractions t = 1/n_e, ..., 1 from v_i to v_j: the start vertex is excluded
+      and the end vertex included, so the lowest-index end of a path is never sampled and a closed loop
+      samples one vertex twice. The total is sum(n_e), which may differ from S by rounding.
+    * Direction inside an edge (t < 1): the edge direction v_j - v_i. At the end vertex (t == 1), by
+      the degree of v_j: 1 -> the edge direction; 2 -> the tangent at v_j of the circle through v_i,
+      v_j and v_j's other neighbour b (the chord b - v_i when |cos| of the angle at v_j is at or above
+      ``collinear_cos``, i.e. nearly straight or a hairpin); >= 3 (a joint) -> NaN.
+    * Sign: every direction points "forward" along the sampled edge, from v_i towards v_j (and on to b
+      at a degree-2 vertex). Directions are unit vectors or NaN rows.
+
+    Degenerate cases:
+
+    * No edges: zero samples (empty arrays).
+    * Zero-length edge: one sample at v_j (n_e = max(1, 0) = 1); its edge direction is undefined, so
+      its direction is NaN unless v_j has degree 2 and the chord to the other neighbour is defined.
+    * All edges of zero length (total length 0): one sample per edge, as above.
+    * Degree-2 vertex coinciding with a neighbour: the circle is undefined; the chord b - v_i is used
+      (NaN if that is zero too).
 
     Examples
     --------

@@ -148,7 +148,7 @@ class Evaluation:
     # ---- serialisation --------------------------------------------------------------------
     def to_json_dict(self, version: str | None = None) -> dict[str, Any]:
         """The ``--json`` document of the CLI (issue 2); null where an input was not given."""
-        from . import __version__
+        from .version import __version__
 
         summ = self.summary()
         params = self.params.to_dict()

@@ -70,6 +70,6 @@ def test_colors_module_does_not_import_matplotlib():
     import subprocess
     import sys
 
-    code = "import sys, skelcore.colors, skelcore.export, skelcore.io; print('matplotlib' in sys.modules)"
+    code = "import sys, skelcore.colors, skelcore.io.export, skelcore.io; print('matplotlib' in sys.modules)"
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
     assert out.stdout.strip() == "False"

@@ -1,4 +1,4 @@
-"""skelcore.degrade: noise models, downsamplers and the paper's voxel-grid counts."""
+"""skelcore.skeleton.degrade: noise models, downsamplers and the paper's voxel-grid counts."""
 
 from __future__ import annotations
 
@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from skelcore import shapes
-from skelcore.degrade import add_noise, farthest_point_downsample, random_downsample, voxel_grid_average
+from skelcore.skeleton.degrade import add_noise, farthest_point_downsample, random_downsample, voxel_grid_average
 from skelcore.errors import SkelInputError
 
 

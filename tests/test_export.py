@@ -9,7 +9,7 @@ from plyfile import PlyData
 from skelcore.colors import MAGENTA, map_to_rgb
 from skelcore.curve import CurveSkeleton
 from skelcore.errors import SkelInputError
-from skelcore.export import export_ply
+from skelcore.io.export import export_ply
 from skelcore.geometry import Normalization
 from skelcore.io import load_curve
 from skelcore.params import Params

@@ -1,4 +1,4 @@
-"""skelcore.skeletonize: Laplacian contraction + curve extraction on shapes with known skeletons."""
+"""skelcore.skeleton: Laplacian contraction + curve extraction on shapes with known skeletons."""
 
 from __future__ import annotations
 
@@ -11,7 +11,7 @@ from skelcore import shapes
 from skelcore.curve import CurveSkeleton
 from skelcore.errors import Cancelled, SkelInputError
 from skelcore.geometry import Normalization
-from skelcore.skeletonize import SkeletonizeParams, skeletonize
+from skelcore.skeleton import SkeletonizeParams, skeletonize
 
 
 def _components(curve: CurveSkeleton) -> int:
@@ -180,7 +180,7 @@ def test_real_hammer_gives_a_connected_tree_inside_the_scan(shared_data):
 
 def test_sparse_tree_curve_stays_connected(shared_data):
     # thin branches of the 1730-point tree hold balls of one or two points: they must not be cut
-    from skelcore.degrade import voxel_grid_average
+    from skelcore.skeleton.degrade import voxel_grid_average
     from skelcore.io import load_cloud
 
     tree = voxel_grid_average(load_cloud(shared_data / "apple_tree_22367.ply"), 0.05)[0]

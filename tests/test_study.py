@@ -1,4 +1,4 @@
-"""skelcore.study: variants, tables, files, the user's skeleton command and the CLI."""
+"""skelcore.experiments.study: variants, tables, files, the user's skeleton command and the CLI."""
 
 from __future__ import annotations
 
@@ -13,10 +13,10 @@ import pytest
 
 from skelcore import shapes
 from skelcore.cli import main
-from skelcore.degrade import voxel_grid_average
+from skelcore.skeleton.degrade import voxel_grid_average
 from skelcore.errors import Cancelled, SkelInputError
 from skelcore.io import load_cloud, load_curve, load_points, write_points_ply
-from skelcore.study import run_study
+from skelcore.experiments.study import run_study
 
 
 @pytest.fixture(scope="module")

@@ -8,7 +8,9 @@ import pyvista as pv
 
 from skelcore.colors import CLOUD_GREY, CURVE_COLOR, MAGENTA, SKELETAL_COLOR, lookup_table
 
-__all__ = ["MAGENTA", "CLOUD_GREY", "SKELETAL_PLAIN", "CURVE_EDGE", "CURVE_VERTEX", "PICK_MARKER", "make_lut"]
+__all__ = [
+    "MAGENTA", "CLOUD_GREY", "SKELETAL_PLAIN", "CURVE_EDGE", "CURVE_VERTEX", "PICK_MARKER", "make_lut", "plain_lut",
+]
 
 SKELETAL_PLAIN = SKELETAL_COLOR
 CURVE_EDGE = CURVE_COLOR
@@ -24,4 +26,12 @@ def make_lut(clim: tuple[float, float], cmap: str = COLORMAP) -> pv.LookupTable:
     lut.values = [(int(r), int(g), int(b), 255) for r, g, b in table]
     lut.scalar_range = (float(clim[0]), float(clim[1]))
     lut.nan_color = MAGENTA
+    return lut
+
+
+def plain_lut(colour: tuple[int, int, int]) -> pv.LookupTable:
+    """A lookup table that maps every value to one colour (exactly: no lighting on points)."""
+    lut = pv.LookupTable()
+    lut.values = [(int(colour[0]), int(colour[1]), int(colour[2]), 255)] * 256
+    lut.scalar_range = (0.0, 1.0)
     return lut

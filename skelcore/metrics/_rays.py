@@ -1,20 +1,16 @@
 """Union-of-caps area on an equal-area latitude raster: the kernel of the ``rays`` estimator (SPEC 2).
 
-The unit sphere of directions around a query is cut into ``rows`` rows of equal height in z (so of
-equal area, Archimedes) and every row into ``bins`` equal longitude bins; one direction sample sits at
-the centre of every cell, so the raster is an equal-weight grid of ``rows x bins`` directions.  A cap
-meets row j's centre circle in one exact longitude interval (law of cosines), so the samples a cap
-contains are found with a few float operations per (cap, row) and no per-sample test; they are marked
-in a per-row difference array, and the union of any number of caps costs one ``np.bincount`` and one
-``cumsum``.  Output = covered samples / all samples: the exact union area up to the sampling error of
-the grid.  The raster's frame is a fixed generic rotation of the world frame, so the row circles of
-the grid never line up with the axis-aligned silhouettes common in scanned and synthetic shapes (an
-aligned edge would make the per-row errors add up instead of averaging out).
+Computes the covered area S of paper Eq. 6 (``eq.boundedness_pts``) as a union of spherical caps.
+The unit sphere of directions is cut into ``rows`` rows of equal height in z (so of equal area,
+Archimedes) and every row into ``bins`` longitude bins, one direction sample per cell centre.  A cap
+meets a row's centre circle in one exact longitude interval (law of cosines), marked in a per-row
+difference array, so the union of any number of caps costs one ``np.bincount`` and one ``cumsum``:
+the exact union area up to the grid's sampling error, with no per-sample test.  The raster's frame
+is a fixed generic rotation of the world frame, so its rows never line up with the axis-aligned
+silhouettes common in scanned and synthetic shapes (the row errors would add up).  Everything runs in
+float32 on flat (query, point) pair arrays (SPEC 2's 0.01 is far above float32's precision).
 
-Everything runs in float32 on flat (query, point) pair arrays (half the memory traffic of float64;
-SPEC 2 asks for 0.01, far above float32's 1e-7).  Cost: 0.1-0.3 us of CPU per pair, most of it in
-the (pair, row) stage (the ``bincount``, the ``repeat`` and the per-row interval arithmetic), so it
-grows with the number of rows a cap spans.
+Cost, error measurements and alternatives tried: docs/boundedness.md.
 """
 
 from __future__ import annotations

@@ -1,80 +1,17 @@
-"""Boundedness beta(q) of skeletal points and curve samples (SPEC 2, paper Def. 5 and Prop. 1).
+"""Boundedness beta(q) of skeletal points and curve samples (paper Sec. 2.2, Eqs. 5-6; SPEC 2).
 
-Two estimators, chosen by ``Params.boundedness_method``:
+A skeleton should lie inside its shape: beta(q) is the share of the unit sphere of directions
+(p - q)/|p - q| that the cloud covers (Eq. 6); the overall scores (Eqs. 7-8) are taken in
+``skelcore.results``.  Estimators, by ``Params.boundedness_method``:
 
-``rays`` (default, rotation invariant).  Every cloud point p farther than h from q hides the cap of
-directions of angular radius asin(h / |p - q|) around (p - q) / |p - q|; beta(q) = area of the union
-of the caps / 4 pi, i.e. the fraction of rays from q that hit a ball of radius h around some cloud
-point.  h = ``rays_radius_factor`` x median nearest-neighbour spacing of the cloud.
+``rays`` (default, rotation invariant): every cloud point p farther than h from q hides the cap of
+directions of angular radius asin(h / |p - q|); beta(q) = area of the union of the caps / 4 pi,
+h = ``rays_radius_factor`` x median nearest-neighbour spacing.  The union is rasterised by
+``_rays.CapRaster``; beyond ``rays_exact_pairs`` pairs, clustered queries share their far field.
 
-How it is computed, and why (measured on this project's loaded 2-core machine, see
-benchmarks/bench_boundedness.py; torus with 1 %-jittered skeletal points + 200 curve samples):
-
-* The union is rasterised on an equal-area latitude grid (``_rays.CapRaster``): exact longitude
-  intervals per row, a difference array and one ``bincount`` per batch (sorting intervals per row
-  was slower).  ``rays_rows = 48`` rows and 96 longitude bins stay within 0.0035 of a 200k-direction
-  brute force on every test configuration; 32 rows err up to 0.0065, 64 rows cost ~40 % more.  The
-  grid is turned by a fixed generic rotation: with rows along an axis-aligned torus's silhouette the
-  row errors added up to 0.03 at 24 rows (0.006 once turned).
-* Work is vectorised over flat (query, point) pair arrays in float32, ~4096 pairs per kernel call
-  (measured optimum: bigger batches fall out of the cache and run 2-3x slower per pair), tasks of
-  ~64k pairs, one checkpoint per task (~10 ms).  One thread by default: a 2-thread pool was slower
-  at every size (4k 0.44 -> 1.01 s wall, 16k 2.2 -> 2.7 s, 64k 7.1 -> 8.9 s, every-pair 2k x 2k
-  0.39 -> 0.59 s; the GIL is handed back and forth around thousands of mid-size numpy calls), so
-  ``workers`` stays an option only.  Exact duplicate queries (contracted skeletal points coincide)
-  and duplicate cloud points (identical caps) are computed once.  Cost: 0.1-0.3 us of CPU per
-  (query, point) pair, growing with the rows a cap spans.  A fresh process first frees one 16 MiB
-  block (``_keep_freed_memory``): without it glibc unmapped and re-faulted the kernel's temporaries
-  on every call, which doubled the first 4k evaluation (0.80 s -> 0.40 s).
-* Up to ``rays_exact_pairs`` (query, point) pairs (default 4M, 2k x 2k) every pair is rasterised:
-  the exact union up to the raster error.  Beyond, unless it would not pay (queries spread through
-  the volume: then every pair again), the far field is shared: queries are grouped in cubic cells of
-  side c (``rays_cluster_cell`` x h); each query rasterises its near field (points within
-  r = h / ``rays_near_angle`` of its cluster's centroid, plus the cluster's spread) exactly, and OR-s
-  in its cluster's far field, rasterised once from the centroid.  (c, r) = (h, 10 h) x 1/2, 1, 2,
-  ..., 32 are costed and the cheapest is used (x 1/2 added: queries 5.5 h inside the 4k torus's tube
-  then have no near field at all; 2.6x faster than (h, 10 h)).  The error is the change of the far
-  part of beta between two viewpoints a cluster apart.  It is worst for a viewpoint near a surface
-  (nearly coplanar points swap sides of its horizon: 0.024 for a point just outside a cylinder's end
-  disc clustered with inner ones), so a query closer than 4 h and 4 c to the cloud shares only in
-  finer cells, c / 2^k down to h / 4, at most a quarter of its clearance (no cluster can straddle a
-  surface), with a near radius of 20 such cells, and below a clearance of h is a cluster of its own
-  (exact).  The finer cells matter on scans, whose contracted skeletons sit a few h inside thin parts
-  (hammer 4k: 79 % of its queries within 4 h; one by one 1.4 s, shared 0.46 s, max error against
-  every pair 0.0056 both ways, 0.0076 with a near radius of 10 cells; apple tree 22k 21 -> 11 s,
-  cave 27k 9 -> ~5 s, max errors 0.0028 and 0.0069 on 450 queries incl. the 150 that changed
-  most).  r = 5 c erred up to 0.08, r = 10 c stays within 0.0082 of every pair at 4k-16k (torus,
-  cylinder, Y shape; skeletal, surface and random queries; (h/2, 5 h) on the 4k torus: 0.0078 of
-  every pair, 0.006 of a 200k-direction brute force on its 40 worst and 40 random queries).  64k
-  torus: 0.0078 on 300 random queries; an earlier run saw 0.011 on 400, slightly past SPEC's 0.01;
-  ``share_far_field=False`` gives the exact union at every-pair cost.  Time (wall, one thread, 2-core
-  machine lightly loaded; torus, 1 %-jittered skeletal points + 200 curve samples): 4k 0.40 s (was
-  1.4 s; every pair 3.7 s), 16k 1.3 s (was ~4 s), 64k 6.6 s (was ~8 s).  Full 4k evaluation
-  (benchmarks/bench_engine.py --sizes 4096 --no-real, best of 3): 1.46 s -> 0.58 s, skeletal
-  boundedness 1.21 -> 0.38 s.  Worst case: queries spread through the volume share nothing and cost
-  every pair.  A random-subset level of detail for the far field was tried and dropped: slower, and
-  biased up to 0.05 (coarse balls widen the silhouettes).  Culling far caps whose raster box is
-  already covered by nearer caps was measured but not built: it would skip only ~28 % of the
-  (cap, row) work (most of the raster rows belong to the near, big caps that do add coverage).
-
-``paper`` (the reference tool's algorithm, SPEC 2): sinusoidal projection of the unit directions,
-2-D Delaunay, the seam closed by a triangle strip over the free-boundary loop, flat 3-D triangle areas
-with the reference tool's drop rule, sum / 4 pi.  One Delaunay per query: slow, kept for comparison
-with published numbers.  Seam rule, as read in the reference MATLAB code (points_boundedness.m and
-boundedness.m of weiqimeng1/PointCloud_Skeletonization_Metrics): the strip is applied to the whole
-loop UNCONDITIONALLY (no test of lon = +-pi, of the loop spanning the seam, or of which vertices are
-near it); its vertices are visited from the lowest one and its successor, the side whose next vertex
-is lower advancing, and every new vertex forms a triangle with the two vertices visited just before it
-(not with the current vertex of the other side, as a true zipper would).  Directions are q - p (the
-reference's sign; SPEC writes p - q, the same areas up to where the seam falls).  Values this gives
-(dense random sphere of radius 0.8, 1k-100k points): centre 1.00 +- 0.005; twice the radius 0.103-0.118
-(mean ~0.11) when the cap of directions lies off the seam and off the poles (its whole boundary loop is
-stripped: the part where the sides alternate covers the cap again, sliver runs do not), 0.129 = twice
-the cap (0.067) when it straddles the seam or holds a pole (the Delaunay hull then spans the chart);
-SPEC's "about 0.08" is not reproduced by the published code.  The centre of a torus hole (r/R = 0.3)
-gets 0.5-0.85 instead of 0.3: the silhouette rows of directions are nearly straight chart edges whose
-Delaunay slivers and strip triangles are chords across the sphere, counted (plane distance ~0.3 < 0.8,
-but area far above the 1e-4 threshold).  A point on a closed cylinder's axis gets ~0.99-1.
+``paper``: the reference tool's algorithm (sinusoidal projection, 2-D Delaunay, seam strip, flat
+triangle areas with its drop rule), kept to compare with published numbers.
+Design, error measurements, timings and rejected alternatives: docs/boundedness.md.
 """
 
 from __future__ import annotations
@@ -90,8 +27,8 @@ from ._rays import FRAME, CapRaster
 
 __all__ = ["boundedness", "boundedness_rays", "boundedness_paper", "rays_radius"]
 
-# pairs per kernel call: small enough to stay in cache (measured optimum ~4k), big enough that
-# numpy's per-call overhead stays below ~10 %
+# pairs per kernel call: small enough to stay in cache, big enough to amortise numpy's per-call
+# overhead (measurements: docs/boundedness.md)
 _PAIRS_PER_CALL = 4096
 _FAR_PAIRS_PER_CALL = 16384
 # pairs per pool task: one checkpoint per finished task, so this bounds their spacing (~10 ms)
@@ -99,8 +36,7 @@ _PAIRS_PER_TASK = 65536
 # queries closer than this many h to the cloud are clusters of their own (exact)
 _ALONE_WITHIN = 4.0
 # near-surface queries share in finer cells (cell / 2^k, down to h / 4) with a near radius this many
-# times longer than the usual 10 cells (20 cells): measured on the hammer scan, 1.5 x held the error
-# to that of exact near-surface queries (0.0056 of every pair), 1 x let it grow to 0.0076
+# times longer than the usual 10 cells (20 cells); measurements: docs/boundedness.md
 _FINER_BOOST = 2.0
 
 
@@ -152,10 +88,8 @@ def _as_points(name: str, points: np.ndarray) -> np.ndarray:
 
 
 def _keep_freed_memory() -> None:
-    """Allocate and free one 16 MiB block: glibc then raises its mmap threshold to 16 MiB and its trim
-    threshold to 32 MiB (mallopt(3), dynamic mmap threshold), so the kernel's 0.1-2 MB temporaries are
-    reused from the heap instead of being mapped, page-faulted and unmapped on every call.  Measured:
-    the first 4k evaluation in a fresh process 0.80 s -> 0.40 s.  Elsewhere a harmless alloc/free.
+    """Allocate and free one 16 MiB block so glibc raises its mmap/trim thresholds and reuses the
+    kernel's temporaries from the heap (glibc only; elsewhere harmless).  See docs/boundedness.md.
     """
     block = np.empty(16 << 20, dtype=np.uint8)
     del block
@@ -186,10 +120,9 @@ def boundedness_rays(
     exact_pairs : up to this many (distinct query, distinct point) pairs, every pair is used.
     near_angle, cluster_cell : beyond that, a query's own near field reaches h / near_angle and
         queries share the far field within cubic cells of side cluster_cell x h, both scaled by the
-        same power of 2 (the cheapest estimate; module docstring).
+        same power of 2 (the cheapest estimate; docs/boundedness.md).
     share_far_field : None = decide by cost as above; True = always share; False = every pair.
-    workers : threads (None = 1).  Two threads were slower at every size measured (GIL hand-offs
-        between thousands of mid-size numpy calls; module docstring).
+    workers : threads (None = 1); one is the default because more were slower (docs/boundedness.md).
     checkpoint : called with the fraction done, at least every ~0.1 s; may raise ``Cancelled``.
 
     Returns
@@ -237,7 +170,7 @@ def _choose_job(
     raster: CapRaster, pts: np.ndarray, queries: np.ndarray, h: float, exact_pairs: int, near_angle: float,
     cluster_cell: float, share_far_field: bool | None,
 ) -> "_DenseJob | _ClusteredJob":
-    """Every pair when that is small or cheaper; else the shared far field (module docstring)."""
+    """Every pair when that is small or cheaper; else the shared far field (docs/boundedness.md)."""
     every_pair = len(pts) * len(queries)
     if share_far_field is False or (share_far_field is None and every_pair <= exact_pairs):
         return _DenseJob(raster, pts, queries, h)
@@ -294,7 +227,7 @@ class _ClusteredJob:
     from every query exactly; the far part, once from the centroid, and OR-ed in.  Every point is in
     exactly one part (a point in both would fill holes twice: a bias).  Seen from a query instead of
     the centroid, a far cap moves by at most spread / near_radius radians; the error against
-    every-pair evaluation is measured in the tests and the module docstring.
+    every-pair evaluation is measured in the tests and docs/boundedness.md.
     """
 
     def __init__(
@@ -367,11 +300,8 @@ class _ClusteredJob:
     ) -> "_ClusteredJob":
         """The cheapest of seven sizes: cell and near radius x 1/2, 1, 2, ..., 32 (same ratio, same shift).
 
-        x 1/2 pays for queries a few h inside a thin tube (4k torus: 5.5 h from its wall): at (h/2, 5 h)
-        their near field is empty and the far field is cheap, 2x faster than (h, 10 h).
-
-        Estimated cost = clusters x N (far pairs) + 3 x queries x near points (near caps are big and
-        span several rows each: measured ~3x the cost of a far pair).
+        Estimated cost = clusters x N (far pairs) + 3 x queries x near points (near caps span several
+        rows each).  Why x 1/2 and the factor 3: docs/boundedness.md.
         """
         tree = cKDTree(pts)
         sample = queries[np.random.default_rng(0).permutation(len(queries))[:256]].astype(float)
@@ -494,7 +424,7 @@ def boundedness_paper(
     area_threshold: float = 1e-4,
     checkpoint: Checkpoint = no_checkpoint,
 ) -> np.ndarray:
-    """The reference tool's triangulated-sphere estimator (SPEC 2 ``paper``; paper Sec. 3.2).
+    """The reference tool's triangulated-sphere estimator (SPEC 2 ``paper``; paper Sec. 2.2, Prop. 2).
 
     Directions u = (q - p)/|q - p| (the reference tool's sign; cloud points at q itself are skipped)
     are projected by the sinusoidal projection (lon cos lat, lat) and triangulated in 2-D (Delaunay);
@@ -503,7 +433,8 @@ def boundedness_paper(
     area of the flat 3-D triangle between its unit vectors, unless (signed distance from the centre to
     its plane) < plane_threshold and (mean |p - q| of its corners)^2 x area < area_threshold.
     beta = sum / (4 pi).  Fewer than 3 distinct directions give 0.  The sum is not clipped to 1 (as the
-    reference tool).  Values on analytic shapes: module docstring.
+    reference tool).  Seam rule as read in the reference code, values on analytic shapes:
+    docs/boundedness.md.
     """
     cloud = _as_points("cloud", cloud)
     queries = _as_points("queries", queries)
@@ -565,7 +496,7 @@ def _zip_seam(loop: np.ndarray, lat: np.ndarray) -> np.ndarray:
     signs).  Where the sides alternate this is the usual zipper between them; where one side
     advances twice in a row, the triangle is three consecutive loop vertices (a sliver) and the
     zipper triangle is skipped.  The reference applies it unconditionally, also to loops that do not
-    reach the seam (module docstring: the values this gives).
+    reach the seam (the values this gives: docs/boundedness.md).
     """
     m = len(loop)
     if m < 3:

@@ -1,9 +1,13 @@
-"""Centeredness of a skeletal point set and of curve-skeleton samples (SPEC 3; paper,
-eq. "skeletal_point_centeredness" and "curve_point_centeredness").
+"""Centeredness of a skeletal point set and of curve-skeleton samples (paper Sec. 2.3; SPEC 3).
 
-Both functions return raw local values: c in [0, 1], NaN where invalid. The rule "not bounded ->
-c = 0" is applied later by :func:`skelcore.results.apply_unbounded_rule`, so the viewer can change
-beta* without recomputing.
+A skeleton should approximate the medial axis; without a surface, the paper measures how far a
+skeleton element is from the centre of the cloud points it stands for.  ``skeletal_centeredness``:
+kNN centroids of skeletal points vs. their corresponding cloud points (paper Eq. 10,
+``eq.skeletal_point_centeredness``).  ``curve_centeredness``: a slab cut across the curve direction,
+ellipse fit of the nearest cross-section (Eq. 11, ``eq.curve_point_centeredness``).
+Both return raw local values: c in [0, 1], NaN where invalid.  The rule "not bounded -> c = 0" and
+the overall score (Eq. 12) are applied later in :mod:`skelcore.results`, so the viewer can change
+beta* and c* without recomputing.  Departures from the paper and the reference tool: docs/metrics.md.
 """
 
 from __future__ import annotations
@@ -29,7 +33,7 @@ def skeletal_centeredness(
     params: Params = Params(),
     checkpoint: Checkpoint = no_checkpoint,
 ) -> np.ndarray:
-    """Centeredness of every skeletal point (SPEC 3; paper eq. "skeletal_point_centeredness").
+    """Centeredness of every skeletal point (SPEC 3; paper Eq. 10, ``eq.skeletal_point_centeredness``).
 
     For skeletal point q_i take its k nearest skeletal neighbours (itself included; k from
     :func:`skelcore.params.k_center_for`, at most N_s), their centroid m_s, the centroid m_o of
@@ -141,8 +145,8 @@ def curve_centeredness(
     params: Params = Params(),
     checkpoint: Checkpoint = no_checkpoint,
 ) -> np.ndarray:
-    """Centeredness of curve samples from the cloud's cross-section (SPEC 3; paper eq.
-    "curve_point_centeredness").
+    """Centeredness of curve samples from the cloud's cross-section (SPEC 3; paper Eq. 11,
+    ``eq.curve_point_centeredness``).
 
     For sample p with direction u: the slab of cloud points x with |u . (x - p)| < alpha / 2,
     alpha = ``params.slab_factor`` x bounding-box diagonal of ``cloud``; the slab and p projected

@@ -21,10 +21,10 @@ from typing import Iterable
 
 import numpy as np
 
-from .colors import map_to_rgb
-from .errors import SkelInputError
-from .io.ply import write_curve_ply, write_points_ply
-from .results import Evaluation
+from ..colors import map_to_rgb
+from ..errors import SkelInputError
+from .ply import write_curve_ply, write_points_ply
+from ..results import Evaluation
 
 __all__ = ["export_ply", "COLOR_BY"]
 

@@ -3,33 +3,30 @@ write the results table (paper, Table "Quantitative results": rows normal / 5% n
 columns d_B/d_Wp, boundedness, centeredness, smoothness, each "skeletal/curve").
 
 Each variant is scored against its own (degraded) cloud, as the paper's toolbox does. The built-in
-skeletonizer is :func:`skelcore.skeletonize.skeletonize`; ``skeleton_cmd`` plugs in any other
-program instead. Also home of the ``study`` and ``skeletonize`` subcommands of ``skelcore``.
+skeletonizer is :func:`skelcore.skeleton.skeletonize`; ``skeleton_cmd`` plugs in any other
+program instead. The ``study`` subcommand lives in :mod:`skelcore.cli.study`.
 """
 
 from __future__ import annotations
 
-import argparse
 import csv
 import io as _io
 import math
 import os
 import shlex
 import subprocess
-import sys
 import tempfile
 import time
 from dataclasses import dataclass, field
-from pathlib import Path
 from typing import Any, Callable
 
 import numpy as np
 
-from .curve import CurveSkeleton
-from .errors import Cancelled, SkelInputError
-from .params import Params
+from ..curve import CurveSkeleton
+from ..errors import Cancelled, SkelInputError
+from ..params import Params
 
-__all__ = ["StudyRow", "StudyResult", "run_study", "register_cli", "register_skeletonize_cli"]
+__all__ = ["StudyRow", "StudyResult", "run_study"]
 
 Progress = Callable[[float, str], None]
 
@@ -133,7 +130,7 @@ class StudyResult:
 
     def write_tables(self, out_dir: str | os.PathLike, inputs: tuple[str, ...] = ()) -> dict[str, str]:
         """``study.md``, ``study.csv``, ``study.tex`` in ``out_dir``; returns their paths."""
-        from .io.atomic import atomic_open
+        from ..io.atomic import atomic_open
 
         paths = {}
         for ext, text in (("md", self.to_markdown()), ("csv", self.to_csv()), ("tex", self.to_latex())):
@@ -152,7 +149,7 @@ def _run_command(
     template: str, cloud_path: str, skeletal_path: str, curve_path: str, cancel: Callable[[], bool] | None
 ) -> tuple[np.ndarray | None, CurveSkeleton | None]:
     """Run the user's skeletonizer: ``shlex.split`` argv, placeholders substituted per token, no shell."""
-    from . import io
+    from .. import io
 
     argv = shlex.split(template)
     if not argv:
@@ -217,7 +214,7 @@ def _variants(
     base_grid: float | None,
     seed: int,
 ) -> list[tuple[str, str, np.ndarray]]:
-    from .degrade import add_noise, random_downsample, voxel_grid_average
+    from ..skeleton.degrade import add_noise, random_downsample, voxel_grid_average
 
     if sparse is not None and grid is not None:
         raise SkelInputError("give either a sparse point count or a grid cell, not both")
@@ -264,7 +261,7 @@ def run_study(
     cloud : (N, 3) points in the user's units.
     noise : noise ratio for the "noise" row (paper: 0.05); 0 or None leaves the row out.
     noise_model : ``"reference"`` (sigma = ratio x each coordinate, the paper's toolbox) or
-        ``"isotropic"``; see :func:`skelcore.degrade.add_noise`.
+        ``"isotropic"``; see :func:`skelcore.skeleton.degrade.add_noise`.
     sparse : points kept (random, seeded) for the "sparse" row; default N // 4 (4096 -> 1024 as in
         the paper). Exclusive with ``grid``.
     grid : voxel-grid cell for the "sparse" row instead (the paper's tree and cave), applied to the
@@ -287,10 +284,10 @@ def run_study(
     >>> result = run_study(cloud, noise=0.05, sparse=1024, seed=0)    # doctest: +SKIP
     >>> print(result.to_markdown())                                   # doctest: +SKIP
     """
-    from . import io
-    from .degrade import _cloud
-    from .evaluate import evaluate
-    from .skeletonize import SkeletonizeParams, skeletonize
+    from .. import io
+    from ..skeleton.degrade import _cloud
+    from ..evaluate import evaluate
+    from ..skeleton import SkeletonizeParams, skeletonize
 
     cloud = _cloud(cloud)
     sk_params = skeletonize_params if skeletonize_params is not None else SkeletonizeParams()
@@ -362,156 +359,3 @@ def run_study(
     if progress is not None:
         progress(1.0, "done")
     return result
-
-
-# ---------------------------------------------------------------------------------------------
-# command line
-
-
-def _params_from_args(args: argparse.Namespace) -> Params:
-    try:
-        params = Params().with_strings(getattr(args, "set", None) or [])
-        if getattr(args, "boundedness_method", None):
-            params = params.replace(boundedness_method=args.boundedness_method)
-    except ValueError as exc:
-        raise SkelInputError(str(exc)) from None
-    return params
-
-
-def _positive_int(text: str) -> int:
-    try:
-        value = int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected a whole number, got {text!r}") from None
-    if value < 1:
-        raise argparse.ArgumentTypeError(f"expected a positive number, got {text!r}")
-    return value
-
-
-def _positive_float(text: str) -> float:
-    try:
-        value = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected a number, got {text!r}") from None
-    if not (math.isfinite(value) and value > 0):
-        raise argparse.ArgumentTypeError(f"expected a number > 0, got {text!r}")
-    return value
-
-
-def _ratio(text: str) -> float:
-    try:
-        value = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected a number, got {text!r}") from None
-    if not (math.isfinite(value) and value >= 0):
-        raise argparse.ArgumentTypeError(f"expected a number >= 0, got {text!r}")
-    return value
-
-
-def register_cli(subparsers: argparse._SubParsersAction) -> argparse.ArgumentParser:
-    """Add ``skelcore study CLOUD ...``."""
-    p = subparsers.add_parser(
-        "study",
-        help="the paper's study: skeletonize and score the cloud, a noisy and a sparse copy",
-        description="Skeletonize the cloud, a noisy copy and a sparse copy, score each and print the "
-        "paper's results table (skeletal/curve in every cell).",
-    )
-    p.add_argument("cloud", help="point cloud file")
-    p.add_argument("--noise", type=_ratio, default=0.05, help="noise ratio of the noise row (default 0.05; 0 = no row)")
-    p.add_argument("--noise-model", choices=("reference", "isotropic"), default="reference",
-                   help="reference: sigma = ratio x each coordinate (paper's toolbox); isotropic: ratio x RMS radius")
-    g = p.add_mutually_exclusive_group()
-    g.add_argument("--sparse", type=_positive_int, metavar="N", help="sparse row: N random points (default N/4)")
-    g.add_argument("--grid", type=_positive_float, metavar="CELL", help="sparse row: voxel-grid average of the input")
-    p.add_argument("--base-grid", type=_positive_float, metavar="CELL",
-                   help="normal row: voxel-grid average of the input (paper's tree: 0.02 with --grid 0.05)")
-    p.add_argument("--seed", type=int, default=0, help="seed of the noise and the downsampling (default 0)")
-    p.add_argument("--out", metavar="DIR", help="write every variant's PLY/JSON files and study.md/.csv/.tex here")
-    p.add_argument("--skeleton-cmd", metavar="CMD",
-                   help="use this skeletonizer: a command with {in}, {out_skeletal} and/or {out_curve}")
-    p.add_argument("--boundedness-method", choices=("rays", "paper"), help="boundedness estimator (default rays)")
-    p.add_argument("--set", metavar="NAME=VALUE", action="append", default=[], help="set any Params field")
-    p.add_argument("--quiet", action="store_true", help="do not print progress")
-    p.set_defaults(func=run_study_cli)
-    return p
-
-
-def run_study_cli(args: argparse.Namespace) -> int:
-    """Handler of ``skelcore study``: prints the table; 2 and one line on an input error."""
-    from . import io
-
-    try:
-        params = _params_from_args(args)
-        cloud = io.load_cloud(args.cloud)
-        from .cli import stderr_progress
-
-        progress = stderr_progress(args.quiet)
-        result = run_study(
-            cloud,
-            noise=args.noise,
-            noise_model=args.noise_model,
-            sparse=args.sparse,
-            grid=args.grid,
-            base_grid=args.base_grid,
-            seed=args.seed,
-            out_dir=args.out,
-            skeleton_cmd=args.skeleton_cmd,
-            params=params,
-            name=Path(args.cloud).stem,
-            inputs=(args.cloud,),
-            progress=progress,
-        )
-        if progress is not None:
-            print("\r" + " " * 50 + "\r", end="", file=sys.stderr)
-    except SkelInputError as exc:
-        print(f"skelcore: error: {exc}", file=sys.stderr)
-        return 2
-    print(result.to_markdown(), end="")
-    total = sum(sum(r.timings.values()) for r in result.rows)
-    print(f"boundedness estimator: {params.boundedness_method}; noise model: {args.noise_model}; "
-          f"seed {args.seed}; total {total:.1f} s")
-    if args.out:
-        print(f"files written to {args.out}")
-    return 0
-
-
-def register_skeletonize_cli(subparsers: argparse._SubParsersAction) -> argparse.ArgumentParser:
-    """Add ``skelcore skeletonize CLOUD --out-skeletal F --out-curve F``."""
-    p = subparsers.add_parser(
-        "skeletonize",
-        help="skeletonize a cloud (Laplacian contraction): skeletal points and curve skeleton",
-        description="Laplacian-based contraction (Cao et al. 2010): writes the skeletal point set "
-        "(one point per cloud point, same order) and the curve skeleton as PLY.",
-    )
-    p.add_argument("cloud", help="point cloud file")
-    p.add_argument("--out-skeletal", metavar="F", help="write the skeletal point set (PLY)")
-    p.add_argument("--out-curve", metavar="F", help="write the curve skeleton (PLY with an edge element)")
-    p.add_argument("--quiet", action="store_true", help="do not print progress")
-    p.set_defaults(func=run_skeletonize_cli)
-    return p
-
-
-def run_skeletonize_cli(args: argparse.Namespace) -> int:
-    from . import io
-    from .skeletonize import skeletonize
-
-    try:
-        if not (args.out_skeletal or args.out_curve):
-            raise SkelInputError("nothing to write: give --out-skeletal and/or --out-curve")
-        cloud = io.load_cloud(args.cloud)
-        from .cli import stderr_progress
-
-        progress = stderr_progress(args.quiet)
-        skeletal, curve, info = skeletonize(cloud, progress=progress, return_info=True)
-        if progress is not None:
-            print("\r" + " " * 50 + "\r", end="", file=sys.stderr)
-        if args.out_skeletal:
-            io.write_points_ply(args.out_skeletal, skeletal, inputs=(args.cloud,))
-        if args.out_curve:
-            io.write_curve_ply(args.out_curve, curve.vertices, curve.edges, inputs=(args.cloud,))
-    except SkelInputError as exc:
-        print(f"skelcore: error: {exc}", file=sys.stderr)
-        return 2
-    print(f"{len(cloud)} points contracted in {info.iterations} iterations ({info.stop_reason}); "
-          f"curve: {curve.n_vertices} vertices, {curve.n_edges} edges; {info.timings['total']:.2f} s")
-    return 0

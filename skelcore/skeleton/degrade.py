@@ -14,8 +14,8 @@ from typing import Literal
 
 import numpy as np
 
-from .errors import SkelInputError
-from .geometry import as_points
+from ..errors import SkelInputError
+from ..geometry import as_points
 
 __all__ = ["add_noise", "random_downsample", "farthest_point_downsample", "voxel_grid_average"]
 

@@ -1,0 +1,253 @@
+"""The scene model: the loaded layers, the current evaluation and the display choices, without Qt.
+
+Every change goes through a ``Scene`` method, which emits a :class:`~app.scene.events.SceneEvent`
+to its subscribers (the 3D view and the panels redraw from it). Changing the thresholds updates
+the centeredness quantities and the scores from the kept ``Evaluation``, never re-evaluating.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Any
+
+import numpy as np
+
+from skelcore.curve import CurveSkeleton
+
+from .events import Listener, SceneEvent
+from .layers import METRICS, Layer, ScalarQuantity
+
+__all__ = ["Scene"]
+
+
+class Scene:
+    """Everything the viewer shows, and the current evaluation, without any Qt.
+
+    Changing inputs drops the evaluation (its values would describe other data). Changing the
+    thresholds recomputes only the centeredness quantities (SPEC 3's unbounded -> 0 rule depends on
+    beta*) and the overall scores, through ``Evaluation.summary``: nothing is re-evaluated.
+    """
+
+    def __init__(self) -> None:
+        self.layers: dict[str, Layer] = {}
+        self.evaluation: Any = None  # skelcore.results.Evaluation
+        self.metric: str = "boundedness"
+        self.clim: tuple[float, float] | None = None  # None: the metric's natural range [0, 1]
+        self.edges_as_tubes: bool = False
+        self.beta_star: float = 0.75
+        self.c_star: float = 0.75
+        self._listeners: list[Listener] = []
+
+    # ---- events ---------------------------------------------------------------------------
+    def subscribe(self, listener: Listener) -> None:
+        self._listeners.append(listener)
+
+    def unsubscribe(self, listener: Listener) -> None:
+        if listener in self._listeners:
+            self._listeners.remove(listener)
+
+    def _emit(self, kind: str, layer: str | None = None) -> None:
+        event = SceneEvent(kind, layer)
+        for listener in list(self._listeners):
+            listener(event)
+
+    # ---- inputs ---------------------------------------------------------------------------
+    @property
+    def cloud(self) -> Layer | None:
+        return self.layers.get("cloud")
+
+    @property
+    def skeletal(self) -> Layer | None:
+        return self.layers.get("skeletal")
+
+    @property
+    def curve(self) -> Layer | None:
+        return self.layers.get("curve")
+
+    def set_cloud(self, points: np.ndarray, path: str | None = None) -> Layer:
+        pts = _points(points)
+        # Dense clouds hide the skeleton: draw them lighter and smaller.
+        size, opacity = (2.0, 0.35) if len(pts) <= 200_000 else (1.0, 0.2)
+        layer = Layer("cloud", pts, path=path, point_size=size, opacity=opacity)
+        return self._replace(layer)
+
+    def set_skeletal(self, points: np.ndarray, path: str | None = None) -> Layer:
+        layer = Layer("skeletal", _points(points), path=path, point_size=6.0)
+        return self._replace(layer)
+
+    def set_curve(self, curve: CurveSkeleton, path: str | None = None) -> Layer:
+        layer = Layer(
+            "curve", np.asarray(curve.vertices, dtype=float), path=path, edges=np.asarray(curve.edges),
+            curve=curve, point_size=9.0,
+        )
+        return self._replace(layer)
+
+    def remove_layer(self, name: str) -> None:
+        if self.layers.pop(name, None) is not None:
+            self.clear_evaluation()
+            self._emit("layer", name)
+
+    def _replace(self, layer: Layer) -> Layer:
+        old = self.layers.get(layer.name)
+        if old is not None:  # keep the user's display choices across reloads
+            layer.visible, layer.point_size, layer.opacity = old.visible, old.point_size, old.opacity
+        self.layers[layer.name] = layer
+        self.clear_evaluation()
+        self._emit("layer", layer.name)
+        return layer
+
+    def input_paths(self) -> dict[str, str | None]:
+        return {name: layer.path for name, layer in self.layers.items()}
+
+    def can_evaluate(self) -> bool:
+        return self.cloud is not None and (self.skeletal is not None or self.curve is not None)
+
+    # ---- evaluation -----------------------------------------------------------------------
+    def clear_evaluation(self) -> None:
+        had = self.evaluation is not None or any(layer.quantities for layer in self.layers.values())
+        self.evaluation = None
+        for layer in self.layers.values():
+            layer.quantities.clear()
+            layer.samples = layer.sample_edge = layer.sample_t = None
+        if had:
+            self._emit("quantities")
+
+    def set_evaluation(self, evaluation: Any) -> None:
+        """Attach an ``Evaluation``'s local values as quantities of the skeleton layers."""
+        self.evaluation = evaluation
+        self.beta_star = float(evaluation.params.beta_star)
+        self.c_star = float(evaluation.params.c_star)
+        sk, cv = self.skeletal, self.curve
+        if evaluation.skeletal is not None and sk is not None:
+            s = evaluation.skeletal
+            sk.quantities.clear()
+            sk.add_scalar_quantity("boundedness", s.boundedness)
+            sk.add_scalar_quantity("centeredness", s.centeredness(self.beta_star))
+            sk.add_scalar_quantity("smoothness", s.smoothness)
+        if evaluation.curve is not None and cv is not None:
+            c = evaluation.curve
+            cv.quantities.clear()
+            cv.samples = np.asarray(c.samples, dtype=float)
+            cv.sample_edge = np.asarray(c.sample_edge)
+            cv.sample_t = np.asarray(c.sample_t, dtype=float)
+            cv.add_scalar_quantity("boundedness", c.sample_boundedness, location="samples")
+            cv.add_scalar_quantity("centeredness", c.sample_centeredness(self.beta_star), location="samples")
+            cv.add_scalar_quantity("smoothness", c.vertex_smoothness, location="vertices")
+        self._emit("quantities")
+
+    def set_thresholds(self, beta_star: float, c_star: float) -> None:
+        """New beta*, c*: centeredness (unbounded -> 0, SPEC 3) and scores follow, no recomputation."""
+        self.beta_star, self.c_star = float(beta_star), float(c_star)
+        ev = self.evaluation
+        if ev is not None:
+            if ev.skeletal is not None and self.skeletal is not None:
+                self.skeletal.add_scalar_quantity("centeredness", ev.skeletal.centeredness(self.beta_star))
+            if ev.curve is not None and self.curve is not None:
+                self.curve.add_scalar_quantity(
+                    "centeredness", ev.curve.sample_centeredness(self.beta_star), location="samples"
+                )
+        self._emit("thresholds")
+
+    def summary(self) -> dict[str, Any] | None:
+        if self.evaluation is None:
+            return None
+        return self.evaluation.summary(self.beta_star, self.c_star)
+
+    def threshold_for(self, metric: str) -> float | None:
+        """The threshold an overall score counts against (none for smoothness, SPEC 4)."""
+        return {"boundedness": self.beta_star, "centeredness": self.c_star}.get(metric)
+
+    # ---- display --------------------------------------------------------------------------
+    def set_metric(self, metric: str) -> None:
+        if metric not in METRICS:
+            raise ValueError(f"unknown metric {metric!r}: use one of {', '.join(METRICS)}")
+        self.metric = metric
+        self._emit("colouring")
+
+    def set_clim(self, clim: tuple[float, float] | None) -> None:
+        if clim is not None:
+            lo, hi = float(clim[0]), float(clim[1])
+            if not (math.isfinite(lo) and math.isfinite(hi) and lo < hi):
+                raise ValueError(f"colour range needs finite min < max, got {clim!r}")
+            clim = (lo, hi)
+        self.clim = clim
+        self._emit("colouring")
+
+    def colour_range(self) -> tuple[float, float]:
+        """The range of the colour map: the user's, else [0, 1], every metric's natural range."""
+        return self.clim if self.clim is not None else (0.0, 1.0)
+
+    def data_range(self) -> tuple[float, float] | None:
+        """Finite min/max of the shown metric over every layer (for an 'auto' range)."""
+        lo, hi = math.inf, -math.inf
+        for q in self.shown_quantities():
+            r = q.finite_range()
+            if r is not None:
+                lo, hi = min(lo, r[0]), max(hi, r[1])
+        return None if lo > hi else (lo, hi)
+
+    def shown_quantities(self) -> list[ScalarQuantity]:
+        """The quantities of the selected metric on visible layers."""
+        out = []
+        for layer in self.layers.values():
+            q = layer.quantities.get(self.metric)
+            if q is not None and layer.visible:
+                out.append(q)
+        return out
+
+    def n_invalid_shown(self) -> int:
+        return sum(q.n_invalid for q in self.shown_quantities())
+
+    def set_visible(self, name: str, visible: bool) -> None:
+        layer = self.layers.get(name)
+        if layer is not None and layer.visible != bool(visible):
+            layer.visible = bool(visible)
+            self._emit("display", name)
+
+    def set_point_size(self, name: str, size: float) -> None:
+        layer = self.layers.get(name)
+        if layer is not None:
+            layer.point_size = float(size)
+            self._emit("display", name)
+
+    def set_opacity(self, name: str, opacity: float) -> None:
+        layer = self.layers.get(name)
+        if layer is not None:
+            layer.opacity = float(min(max(opacity, 0.0), 1.0))
+            self._emit("display", name)
+
+    def set_edges_as_tubes(self, tubes: bool) -> None:
+        self.edges_as_tubes = bool(tubes)
+        self._emit("display", "curve")
+
+    # ---- picking --------------------------------------------------------------------------
+    def element_info(self, layer_name: str, location: str, index: int) -> dict[str, Any]:
+        """Index, coordinates and every local value of one skeleton element (for the pick panel)."""
+        layer = self.layers[layer_name]
+        info: dict[str, Any] = {"layer": layer_name, "location": location, "index": int(index)}
+        if location == "samples":
+            if layer.samples is None:
+                raise ValueError("the curve has no samples before an evaluation")
+            info["element"] = "curve sample"
+            info["xyz"] = tuple(float(v) for v in layer.samples[index])
+            if layer.sample_edge is not None:
+                info["edge"] = int(layer.sample_edge[index])
+                info["t"] = float(layer.sample_t[index])
+        else:
+            info["element"] = {"cloud": "cloud point", "skeletal": "skeletal point", "curve": "curve vertex"}[layer_name]
+            info["xyz"] = tuple(float(v) for v in layer.points[index])
+            if layer_name == "curve" and layer.curve is not None:
+                info["degree"] = int(layer.curve.degrees()[index])
+        values = {}
+        for name, q in layer.quantities.items():
+            if q.location == location or (location in ("points", "vertices") and q.location in ("points", "vertices")):
+                values[name] = float(q.values[index])
+        info["values"] = values
+        return info
+
+
+def _points(points: object) -> np.ndarray:
+    arr = np.asarray(points, dtype=float)
+    if arr.ndim != 2 or arr.shape[1] != 3:
+        raise ValueError(f"expected an N x 3 array of points, got shape {arr.shape}")
+    return arr

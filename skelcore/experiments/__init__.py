@@ -1,0 +1,1 @@
+"""Experiments built on the engine: the paper's degradation study (``study``)."""

@@ -1,0 +1,216 @@
+"""Format detection and the loaders: ``load_cloud``, ``load_points``, ``load_curve``, ``load_any``.
+
+The format is detected from the file's content first and from its extension otherwise; every loader
+returns float64 coordinates in the file's units (SPEC 0), protects the path from writers and turns
+any problem into a one-line :class:`~skelcore.errors.SkelInputError` naming the file.
+"""
+
+
+from __future__ import annotations
+
+import os
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Callable
+
+import numpy as np
+
+from ..curve import CurveSkeleton
+from ..errors import SkelInputError
+from . import atomic
+from ._common import RawData, decode_text, is_comment
+from .arrays import read_json, read_npy, read_npz
+from .pcd import is_pcd, read_pcd
+from .ply import is_ply, read_ply
+from .text import (
+    is_cg,
+    is_off,
+    looks_like_obj,
+    looks_like_polylines,
+    read_cg,
+    read_obj,
+    read_off,
+    read_polylines,
+    read_swc,
+    read_xyz,
+)
+
+__all__ = ["Loaded", "load_any", "load_cloud", "load_points", "load_curve", "detect_format", "SUPPORTED_EXTENSIONS"]
+
+_READERS: dict[str, Callable[[Path, bytes], RawData]] = {
+    "ply": read_ply,
+    "pcd": read_pcd,
+    "xyz": read_xyz,
+    "obj": read_obj,
+    "off": read_off,
+    "cg": read_cg,
+    "swc": read_swc,
+    "polylines": read_polylines,
+    "npy": read_npy,
+    "npz": read_npz,
+    "json": read_json,
+}
+
+_BY_SUFFIX = {
+    ".ply": "ply",
+    ".pcd": "pcd",
+    ".xyz": "xyz",
+    ".txt": "xyz",
+    ".csv": "xyz",
+    ".pts": "xyz",
+    ".asc": "xyz",
+    ".xyzn": "xyz",
+    ".xyzrgb": "xyz",
+    ".obj": "obj",
+    ".off": "off",
+    ".cg": "cg",
+    ".swc": "swc",
+    ".npy": "npy",
+    ".npz": "npz",
+    ".json": "json",
+}
+
+#: For file dialogs: every extension the loaders accept (``.polylines.txt`` is a ``.txt``).
+SUPPORTED_EXTENSIONS: tuple[str, ...] = tuple(_BY_SUFFIX)
+
+_HEAD_BYTES = 8192
+
+
+@dataclass(frozen=True)
+class Loaded:
+    """What :func:`load_any` found: ``kind`` is ``"curve"`` for a file with edges (then ``curve`` is
+    set) and ``"points"`` otherwise (then ``points`` is set)."""
+
+    kind: str
+    path: str
+    format: str
+    points: np.ndarray | None = None
+    curve: CurveSkeleton | None = None
+
+
+def detect_format(path: str | os.PathLike, head: bytes) -> str:
+    """Format key for a file from its first bytes and its name (content wins over the extension)."""
+    p = Path(path)
+    if is_ply(head):
+        return "ply"
+    if head.startswith(b"\x93NUMPY"):
+        return "npy"
+    if head.startswith((b"PK\x03\x04", b"PK\x05\x06")):
+        return "npz"
+    text = decode_text(head).lstrip()
+    if text.startswith(("{", "[")):
+        return "json"
+    if is_cg(text):
+        return "cg"
+    if is_pcd(text):
+        return "pcd"
+    first = next((ln.split() for ln in text.splitlines() if ln.strip() and not is_comment(ln.strip())), [])
+    if first and is_off(first[0]):
+        return "off"
+    name = p.name.lower()
+    if name.endswith(".polylines.txt"):
+        return "polylines"
+    fmt = _BY_SUFFIX.get(p.suffix.lower())
+    if fmt == "xyz" or fmt is None:
+        # Text tables and unknown extensions: recognise OBJ and CGAL polylines by content.
+        if looks_like_obj(text):
+            return "obj"
+        if looks_like_polylines(text):
+            return "polylines"
+    if fmt is None:
+        supported = ", ".join(sorted(set(SUPPORTED_EXTENSIONS)))
+        raise SkelInputError(f"unknown file format {p.suffix or '(no extension)'!r} (supported: {supported})", p)
+    return fmt
+
+
+def _short(exc: BaseException) -> str:
+    text = " ".join(str(exc).split()) or type(exc).__name__
+    return text if len(text) <= 160 else text[:157] + "..."
+
+
+def _read_raw(path: str | os.PathLike) -> RawData:
+    """Existence and permission checks, format detection, parsing; only SkelInputError escapes."""
+    try:
+        p = Path(path)
+    except TypeError:
+        raise SkelInputError(f"not a file path: {path!r}") from None
+    if not p.exists():
+        raise SkelInputError("file not found", p)
+    if p.is_dir():
+        raise SkelInputError("is a folder, not a file", p)
+    atomic.protect(p)
+    try:
+        data = p.read_bytes()
+    except PermissionError:
+        raise SkelInputError("permission denied", p) from None
+    except OSError as exc:
+        raise SkelInputError(f"cannot read file ({exc.strerror or _short(exc)})", p) from None
+    if len(data) == 0 or (len(data) <= 4096 and not data.strip()):
+        raise SkelInputError("file is empty", p)
+    fmt = detect_format(p, data[:_HEAD_BYTES])
+    try:
+        raw = _READERS[fmt](p, data)
+    except SkelInputError:
+        raise
+    except MemoryError:
+        raise SkelInputError(f"too large to load as {fmt.upper()} (out of memory)", p) from None
+    except Exception as exc:  # any parser failure is bad input, reported in one line
+        raise SkelInputError(f"malformed {fmt.upper()} file: {_short(exc)}", p) from None
+    if raw.vertices.ndim != 2 or raw.vertices.shape[1] != 3:
+        raise SkelInputError(f"expected x y z rows, got shape {raw.vertices.shape}", p)
+    return raw
+
+
+def _point_set(raw: RawData, path: str | os.PathLike, what: str) -> np.ndarray:
+    """SPEC 0 inputs must be usable: at least one point, all finite, not all at one position."""
+    v = np.ascontiguousarray(raw.vertices, dtype=np.float64)
+    if len(v) == 0:
+        raise SkelInputError(f"{what} is empty (0 points)", path)
+    finite = np.isfinite(v).all(axis=1)
+    if not finite.all():
+        bad = np.flatnonzero(~finite)
+        kind = "NaN" if np.isnan(v[bad[0]]).any() else "infinite"
+        raise SkelInputError(
+            f"{len(bad)} of {len(v)} points have NaN or infinite coordinates (first: row {bad[0]}, {kind})", path
+        )
+    if len(v) == 1:
+        raise SkelInputError(f"{what} has a single point", path)
+    if np.all(v == v[0]):
+        raise SkelInputError(f"all {len(v)} points of the {what} are at the same position", path)
+    return v
+
+
+def load_cloud(path: str | os.PathLike) -> np.ndarray:
+    """The original cloud P_o as an (N, 3) float64 array in the file's units (SPEC 0). A mesh's or a
+    curve file's vertices are accepted as points."""
+    return _point_set(_read_raw(path), path, "point cloud")
+
+
+def load_points(path: str | os.PathLike) -> np.ndarray:
+    """A skeletal point set P_s (same formats and checks as :func:`load_cloud`)."""
+    return _point_set(_read_raw(path), path, "skeletal point set")
+
+
+def _curve(raw: RawData, path: str | os.PathLike) -> CurveSkeleton:
+    if raw.edges is None or len(raw.edges) == 0:
+        raise SkelInputError(
+            f"{raw.format} file has no edges: it is a point set, not a curve skeleton", path
+        )
+    curve = CurveSkeleton.from_raw(raw.vertices, raw.edges, path)
+    if curve.n_vertices and np.all(curve.vertices == curve.vertices[0]):
+        raise SkelInputError(f"all {curve.n_vertices} curve vertices are at the same position", path)
+    return curve
+
+
+def load_curve(path: str | os.PathLike) -> CurveSkeleton:
+    """A curve skeleton G_s = (V, E), cleaned by :meth:`CurveSkeleton.from_raw` (SPEC 0: NaN vertices
+    dropped with a warning, duplicate edges and self-loops dropped, out-of-range index an error)."""
+    return _curve(_read_raw(path), path)
+
+
+def load_any(path: str | os.PathLike) -> Loaded:
+    """Load a dropped file: a file with edges (or in a curve-only format) is a curve, else points."""
+    raw = _read_raw(path)
+    if raw.curve_format or (raw.edges is not None and len(raw.edges) > 0):
+        return Loaded(kind="curve", path=str(path), format=raw.format, curve=_curve(raw, path))
+    return Loaded(kind="points", path=str(path), format=raw.format, points=_point_set(raw, path, "point set"))

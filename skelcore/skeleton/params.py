@@ -1,0 +1,170 @@
+"""The skeletonizer's constants (``SkeletonizeParams``), its run report and its progress plumbing.
+
+Defaults follow Cao et al.'s toolbox (``GS.m``) where it has one; every field is settable by name
+(``with_values``) so the CLI, the study and the viewer share one source of truth.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, fields
+from typing import Callable
+
+from ..errors import Cancelled
+
+__all__ = ["SkeletonizeParams", "SkeletonizeInfo", "Reporter", "Progress"]
+
+Progress = Callable[[float, str], None]
+
+@dataclass(frozen=True)
+class SkeletonizeParams:
+    """Constants of the skeletonizer; defaults follow Cao et al.'s toolbox (``GS.m``) where it has one.
+
+    Attributes
+    ----------
+    laplacian_neighbors : candidate neighbours per point for robust_laplacian's local Delaunay
+        one-rings (its default, 30).
+    mollify_factor : robust_laplacian's intrinsic mollification (its default, 1e-5).
+    contraction_weight : initial contraction weight W_L; None = sqrt(N / reference_points) /
+        (5 x mean one-ring edge length) in normalized units: the toolbox's
+        ``compute_init_laplacian_constraint_weight`` made density independent (the cotangent
+        Laplacian scales with the area per point).
+    reference_points : cloud size at which the default W_L and its cap equal the toolbox's (4096,
+        the paper's clouds).
+    contraction_scale : W_L is multiplied by this each iteration (s_L = 3, toolbox; the paper says 2).
+    contraction_weight_max : cap on W_L (2048, from Au et al.'s implementation), scaled by
+        sqrt(N / reference_points) like the start.
+    attraction_weight : initial attraction weight W_H (1).
+    attraction_weight_max : cap on W_H (10000).
+    max_iterations : contraction iterations at most (20, toolbox).
+    termination_ratio : stop when the mean one-ring size ratio (current / original) decreased by less
+        than this in the last iteration (0.01, toolbox's ``CONTRACT_TERMINATION_CONDITION``) ...
+    started_ratio : ... and that ratio is already below this (0.9): unlike the toolbox, a first
+        iteration that hardly moved anything does not end the contraction.
+    bbox_growth_limit : an iteration whose result's bounding box (0.1%-99.9% quantiles) grows on any axis by more than
+        (factor - 1) x the original's longest side is rejected and contraction stops (1.2; the
+        toolbox compares each axis with itself, which stops flat shapes early).
+    sample_radius_factor : ball radius of the farthest-point sampling = factor x bounding-box diagonal
+        of the normalized cloud (0.02, as the paper's demo).
+    connect_neighbors : original-cloud kNN neighbours whose ball labels connect two samples; None =
+        the one-ring neighbours of the Laplacian (Cao's "inherited" connectivity).
+    short_cycle_factor : after triangles are gone, cycles shorter (total edge length) than this x the
+        sample radius are collapsed, shortest edge first: two strands of samples along a tube that
+        did not contract to a line, or quads left in a flat cap. A real hole (torus: ~80 radii) is longer.
+        0 keeps every cycle.
+    shortcut_ratio : before collapsing, an edge is dropped when another path joins its ends at most
+        this x its length (a shortcut along a line of samples, e.g. the long side of a triangle
+        with an angle above ~100 degrees); 1 = Cao's plain collapse.
+    prune_branch_factor : leaf branches shorter than this x the sample radius that hang off a
+        junction are removed (end-cap spurs); 0 keeps them.
+    prune_thickness_factor : ... as are leaf branches shorter than this x the shape's thickness at
+        their junction (mean distance of the junction's original points to it): a flat end cap
+        contracts to a cross as wide as the tube; 0 turns this off.
+    min_sample_points : a sample ball holding fewer contracted points than this is dropped with its
+        points when it is isolated or a leaf on an edge longer than two radii (stray points thrown
+        out of the shape would add long spokes to the curve).
+    """
+
+    laplacian_neighbors: int = 30
+    mollify_factor: float = 1e-5
+    contraction_weight: float | None = None
+    contraction_scale: float = 3.0
+    contraction_weight_max: float = 2048.0
+    reference_points: int = 4096
+    attraction_weight: float = 1.0
+    attraction_weight_max: float = 10000.0
+    max_iterations: int = 20
+    termination_ratio: float = 0.01
+    started_ratio: float = 0.9
+    bbox_growth_limit: float = 1.2
+    sample_radius_factor: float = 0.02
+    connect_neighbors: int | None = None
+    short_cycle_factor: float = 20.0
+    shortcut_ratio: float = 1.3
+    prune_branch_factor: float = 3.0
+    prune_thickness_factor: float = 1.0
+    min_sample_points: int = 3
+
+    def __post_init__(self) -> None:
+        def bad(name: str, why: str) -> None:
+            raise ValueError(f"skeletonize parameter {name}={getattr(self, name)!r}: {why}")
+
+        for name in ("mollify_factor", "contraction_weight_max", "attraction_weight",
+                     "attraction_weight_max", "termination_ratio", "sample_radius_factor"):
+            if not float(getattr(self, name)) > 0:
+                bad(name, "must be > 0")
+        if self.contraction_weight is not None and not float(self.contraction_weight) > 0:
+            bad("contraction_weight", "must be > 0 or None")
+        if not 0.0 < float(self.started_ratio) <= 1.0:
+            bad("started_ratio", "must be in (0, 1]")
+        if int(self.reference_points) < 1:
+            bad("reference_points", "must be >= 1")
+        if not float(self.contraction_scale) >= 1.0:
+            bad("contraction_scale", "must be >= 1")
+        if not float(self.bbox_growth_limit) > 1.0:
+            bad("bbox_growth_limit", "must be > 1")
+        if int(self.laplacian_neighbors) < 3:
+            bad("laplacian_neighbors", "must be >= 3")
+        if int(self.max_iterations) < 1:
+            bad("max_iterations", "must be >= 1")
+        if self.connect_neighbors is not None and int(self.connect_neighbors) < 2:
+            bad("connect_neighbors", "must be >= 2 or None")
+        if not float(self.shortcut_ratio) >= 1.0:
+            bad("shortcut_ratio", "must be >= 1")
+        if float(self.prune_thickness_factor) < 0:
+            bad("prune_thickness_factor", "must be >= 0")
+        if float(self.prune_branch_factor) < 0:
+            bad("prune_branch_factor", "must be >= 0")
+        if int(self.min_sample_points) < 1:
+            bad("min_sample_points", "must be >= 1")
+        if float(self.short_cycle_factor) < 0:
+            bad("short_cycle_factor", "must be >= 0")
+
+    def replace(self, **changes) -> "SkeletonizeParams":
+        known = {f.name for f in fields(self)}
+        unknown = sorted(set(changes) - known)
+        if unknown:
+            raise ValueError(f"unknown skeletonize parameter(s): {', '.join(unknown)}")
+        import dataclasses
+
+        return dataclasses.replace(self, **changes)
+
+
+@dataclass
+class SkeletonizeInfo:
+    """What happened: iterations run, the one-ring size ratio after each, why it stopped, timings."""
+
+    iterations: int
+    ring_ratios: list[float]
+    stop_reason: str
+    sample_radius: float
+    n_samples: int
+    timings: dict[str, float]
+
+
+# ---------------------------------------------------------------------------------------------
+# progress plumbing
+
+
+class Reporter:
+    """Maps stage fractions onto one overall fraction and raises ``Cancelled`` when asked to."""
+
+    _SPAN = {"laplacian": (0.0, 0.1), "contraction": (0.1, 0.85), "curve": (0.85, 1.0)}
+
+    def __init__(self, progress: Progress | None, cancel: Callable[[], bool] | None) -> None:
+        self.progress = progress
+        self.cancel = cancel
+        self._last = -1.0
+
+    def __call__(self, stage: str, fraction: float) -> None:
+        if self.cancel is not None and self.cancel():
+            raise Cancelled(f"cancelled during skeletonization ({stage})")
+        if self.progress is not None:
+            lo, hi = self._SPAN[stage]
+            overall = lo + (hi - lo) * min(max(fraction, 0.0), 1.0)
+            if overall - self._last >= 0.005 or overall >= 1.0:
+                self._last = overall
+                self.progress(overall, stage)
+
+
+# ---------------------------------------------------------------------------------------------
+# one-rings and the Laplacian

@@ -1,0 +1,155 @@
+"""The house rules, read from the source with ``ast`` (nothing is imported): no import cycle between
+skelcore modules, no GUI or plotting library imported by skelcore at module level, no engine
+module importing the command line, and package ``__init__`` files that only re-export."""
+
+from __future__ import annotations
+
+import ast
+from pathlib import Path
+
+import pytest
+
+ROOT = Path(__file__).resolve().parents[1]
+FORBIDDEN = ("PySide6", "PyQt5", "PyQt6", "shiboken6", "qtpy", "pyvista", "pyvistaqt", "vtk", "vtkmodules", "matplotlib")
+# Reports and figures import their plotting lazily, inside the function that draws.
+LAZY_PLOTTING_OK = ("skelcore.experiments",)
+
+
+def _module_name(path: Path) -> str:
+    rel = path.relative_to(ROOT).with_suffix("")
+    parts = list(rel.parts)
+    if parts[-1] == "__init__":
+        parts.pop()
+    return ".".join(parts)
+
+
+def _modules(package: str) -> dict[str, Path]:
+    return {_module_name(p): p for p in sorted((ROOT / package).rglob("*.py"))}
+
+
+def _imports(name: str, path: Path, known: set[str]) -> list[tuple[str, int, bool]]:
+    """(imported module, line, at module level) for every import statement of the file."""
+    tree = ast.parse(path.read_text(encoding="utf-8"), filename=str(path))
+    is_pkg = path.name == "__init__.py"
+    base = name.split(".") if is_pkg else name.split(".")[:-1]
+    top_level = {id(n) for n in tree.body}
+    for n in tree.body:  # imports inside a module-level try/if still run at import time
+        if isinstance(n, (ast.Try, ast.If)):
+            top_level.update(id(m) for m in ast.walk(n))
+    out = []
+    for node in ast.walk(tree):
+        if isinstance(node, ast.Import):
+            for alias in node.names:
+                out.append((alias.name, node.lineno, id(node) in top_level))
+        elif isinstance(node, ast.ImportFrom):
+            if node.level:
+                stem = base[: len(base) - node.level + 1]
+                target = ".".join(stem + ([node.module] if node.module else []))
+            else:
+                target = node.module or ""
+            for alias in node.names:
+                sub = f"{target}.{alias.name}"
+                out.append((sub if sub in known else target, node.lineno, id(node) in top_level))
+    return out
+
+
+def _graph(package: str) -> tuple[dict[str, Path], dict[str, set[str]]]:
+    mods = _modules(package)
+    known = set(mods)
+    graph: dict[str, set[str]] = {m: set() for m in mods}
+    for name, path in mods.items():
+        for target, _line, _top in _imports(name, path, known):
+            if target in known and target != name:
+                graph[name].add(target)
+    return mods, graph
+
+
+def _cycles(graph: dict[str, set[str]]) -> list[list[str]]:
+    """Strongly connected components with more than one module (Tarjan)."""
+    index: dict[str, int] = {}
+    low: dict[str, int] = {}
+    stack: list[str] = []
+    on_stack: set[str] = set()
+    found: list[list[str]] = []
+    counter = [0]
+
+    def visit(v: str) -> None:
+        index[v] = low[v] = counter[0]
+        counter[0] += 1
+        stack.append(v)
+        on_stack.add(v)
+        for w in sorted(graph[v]):
+            if w not in index:
+                visit(w)
+                low[v] = min(low[v], low[w])
+            elif w in on_stack:
+                low[v] = min(low[v], index[w])
+        if low[v] == index[v]:
+            comp = []
+            while True:
+                w = stack.pop()
+                on_stack.discard(w)
+                comp.append(w)
+                if w == v:
+                    break
+            if len(comp) > 1:
+                found.append(sorted(comp))
+
+    for v in sorted(graph):
+        if v not in index:
+            visit(v)
+    return found
+
+
+@pytest.mark.parametrize("package", ["skelcore", "app"])
+def test_no_import_cycles(package):
+    _mods, graph = _graph(package)
+    assert _cycles(graph) == []
+
+
+def test_the_cycle_finder_finds_a_cycle():
+    assert _cycles({"a": {"b"}, "b": {"c"}, "c": {"a"}, "d": {"a"}}) == [["a", "b", "c"]]
+    assert _cycles({"a": {"b"}, "b": set()}) == []
+
+
+def test_skelcore_never_imports_gui_or_plotting_at_module_level():
+    mods = _modules("skelcore")
+    bad = []
+    for name, path in mods.items():
+        for target, line, top in _imports(name, path, set(mods)):
+            root = target.split(".")[0]
+            if root in FORBIDDEN and (top or not name.startswith(LAZY_PLOTTING_OK)):
+                bad.append(f"{path.relative_to(ROOT)}:{line} imports {target}")
+    assert bad == []
+
+
+def test_no_engine_module_imports_the_cli():
+    mods, graph = _graph("skelcore")
+    bad = [f"{m} -> {t}" for m, targets in graph.items() if not m.startswith(("skelcore.cli", "skelcore.__main__"))
+           for t in targets if t.startswith("skelcore.cli")]
+    assert bad == []
+
+
+@pytest.mark.parametrize("package", ["skelcore", "app"])
+def test_package_inits_only_re_export(package):
+    """An ``__init__.py`` holds a docstring, imports, ``__all__`` and at most a tiny helper."""
+    heavy = []
+    for path in sorted((ROOT / package).rglob("__init__.py")):
+        tree = ast.parse(path.read_text(encoding="utf-8"))
+        defs = [n for n in tree.body if isinstance(n, (ast.FunctionDef, ast.ClassDef, ast.AsyncFunctionDef))]
+        code_lines = sum((n.end_lineno or n.lineno) - n.lineno + 1 for n in defs)
+        if code_lines > 15:
+            heavy.append(f"{path.relative_to(ROOT)}: {code_lines} lines of definitions")
+    assert heavy == []
+
+
+def test_module_docstrings_are_short():
+    """What and why in about 15 lines; measurement history belongs in docs/."""
+    long = []
+    for name, path in _modules("skelcore").items():
+        doc = ast.get_docstring(ast.parse(path.read_text(encoding="utf-8")))
+        if doc is None and path.stat().st_size > 200:
+            long.append(f"{name}: no module docstring")
+        elif doc is not None and len(doc.splitlines()) > 18:
+            long.append(f"{name}: {len(doc.splitlines())} lines")
+    assert long == []
