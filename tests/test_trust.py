@@ -83,3 +83,17 @@ def test_wasserstein_is_never_negative():
         b = a.copy()
         b[:, 1] *= 1 + rng.normal(scale=1e-15, size=30)  # rounding-level differences
         assert wasserstein_h0(a, np.abs(b)) >= 0.0
+
+
+def test_frame_warning_for_voxel_coordinates_inside_the_clouds_box():
+    # a grid of pitch 3 laid over a torus at 0..78: voxel coordinates lie inside the cloud's box,
+    # a third of its size, mostly off the tube; centred and scaled back they are bounded again
+    sh = shapes.torus(2000, seed=9)
+    lo = (sh.cloud * 30).min(axis=0)
+    cloud, verts = sh.cloud * 30 - lo, sh.curve_vertices * 30 - lo
+    ev = evaluate(cloud, curve=(verts / 3.0, sh.curve_edges))
+    assert "frame" in codes(ev)
+    assert "--skeleton-scale" in ev.warnings[codes(ev).index("frame")].message
+    assert "frame" not in codes(evaluate(cloud, curve=(verts, sh.curve_edges)))
+    half = len(verts) // 2  # an incomplete skeleton in the right frame is not a frame problem
+    assert "frame" not in codes(evaluate(cloud, curve=(verts[: half + 1], sh.curve_edges[:half])))
