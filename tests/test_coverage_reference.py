@@ -119,3 +119,13 @@ def test_reference_block_in_json():
     assert set(ref) >= {"chamfer", "hausdorff", "precision", "recall", "f1", "junctions", "endpoints",
                         "components", "cycles"}
     assert ref["cycles"] == [1, 1] and ref["components"] == [1, 1] and ref["f1"] == 1.0
+
+
+@pytest.mark.parametrize(
+    "change", [{"coverage_slack": -0.1}, {"coverage_tau_factor": 0.0}, {"frame_extent_ratio": 1.0},
+               {"frame_inside_fraction": 1.5}, {"collapse_extent": 0.0}],
+)
+def test_new_params_are_validated(change):
+    with pytest.raises(ValueError, match=next(iter(change))):
+        Params(**change)
+    assert Params().coverage_slack == 0.5 and Params().coverage_tau_factor == 2.0
