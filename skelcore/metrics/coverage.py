@@ -22,6 +22,7 @@ from ..params import Params
 __all__ = ["Coverage", "coverage", "coverage_tau", "min_ball_excess"]
 
 _CHUNK = 8192
+_MAX_CLASSES = 64
 
 
 @dataclass
@@ -47,14 +48,16 @@ def coverage_tau(cloud: np.ndarray, params: Params = Params()) -> float:
 
 
 def min_ball_excess(
-    points: np.ndarray, centers: np.ndarray, radii: np.ndarray, k: int = 64, floor: float = -np.inf
+    points: np.ndarray, centers: np.ndarray, radii: np.ndarray, k: int = 16, floor: float = -np.inf,
+    class_ratio: float = 1.1,
 ) -> np.ndarray:
     """Min over balls of |p - c| - radius for every point p (negative inside a ball), exact where
     it exceeds ``floor`` (elsewhere some value <= floor: enough to clip or threshold at floor).
 
-    Balls are grouped in classes of radii within a factor 2; in each class the k nearest centres
-    give a value u (with the best so far); any other centre is at least
-    d_k - r_max away, so only points whose d_k - r_max < u (and u > floor) are redone with 4k.
+    A first bound u comes from the k nearest centres of any radius. Balls are then grouped in
+    classes of radii within ``class_ratio``; in a class, centres beyond the kk-th nearest are at
+    least d_kk - r_max(class) away, so a point is done with the class once d_kk - r_max >= u (or
+    u <= floor); kk = 1, 4, 16, ... (narrow classes keep r_max close to each radius: few queries).
     """
     points = np.asarray(points, dtype=float)
     best = np.full(len(points), np.inf)
@@ -64,7 +67,16 @@ def min_ball_excess(
     top = float(radii.max())
     level = np.zeros(len(radii), dtype=np.int64)
     if top > 0:
-        level = np.clip(np.floor(-np.log2(np.maximum(radii, 1e-300) / top)), 0, 10).astype(np.int64)
+        steps = np.floor(-np.log(np.maximum(radii, 1e-300) / top) / np.log(class_ratio))
+        level = np.clip(steps, 0, _MAX_CLASSES - 1).astype(np.int64)
+    # a good first bound from the nearest centres of any radius prunes most (row, class) pairs
+    kk0 = int(min(k, len(centers)))
+    all_tree = cKDTree(centers)
+    for lo in range(0, len(points), _CHUNK):
+        p = points[lo:lo + _CHUNK]
+        dist, idx = all_tree.query(p, k=kk0, workers=-1 if len(p) * kk0 > 1_000_000 else 1)
+        dist, idx = dist.reshape(len(p), kk0), idx.reshape(len(p), kk0)
+        best[lo:lo + _CHUNK] = np.min(dist - radii[idx], axis=1)
     for lv in np.unique(level):
         members = np.flatnonzero(level == lv)
         c, r = centers[members], radii[members]
@@ -73,11 +85,13 @@ def min_ball_excess(
         for lo in range(0, len(points), _CHUNK):
             p = points[lo:lo + _CHUNK]
             cur = best[lo:lo + _CHUNK].copy()
-            rows = np.arange(len(p))
-            kk = int(min(k, len(c)))
+            rows = np.flatnonzero(cur > floor)
+            kk = 1
             while len(rows):
                 # a row is done once its kk-th nearest centre is beyond reach (d - rmax >= cur)
-                dist, idx = tree.query(p[rows], k=kk, workers=-1)
+                # threads only pay off on large queries (many small ones are most of the calls)
+                workers = -1 if len(rows) * kk > 1_000_000 else 1
+                dist, idx = tree.query(p[rows], k=kk, workers=workers)
                 dist, idx = dist.reshape(len(rows), kk), idx.reshape(len(rows), kk)
                 cur[rows] = np.minimum(cur[rows], np.min(dist - r[idx], axis=1))
                 if kk >= len(c):
