@@ -83,6 +83,7 @@ def _job_key(job: Job) -> str:
     from ...skeleton import SkeletonizeParams
 
     method = job.method.to_dict()
+    method.pop("cwd")  # a moved dataset keeps its results (the inputs are hashed by content)
     if job.method.kind == "builtin":
         method["params"] = SkeletonizeParams().replace(**job.method.params).__dict__
     if job.method.kind == "files":
@@ -105,7 +106,7 @@ def make_jobs(manifest: Manifest) -> list[Job]:
             for cond in manifest.conditions:
                 if method.kind == "files" and not method.per_condition() and cond.degrades:
                     continue
-                for seed in manifest.seeds:
+                for seed in cond.seeds or manifest.seeds:
                     job = Job(shape, method, cond, seed, manifest.params)
                     jobs.append(Job(shape, method, cond, seed, manifest.params, _job_key(job)))
     return jobs
@@ -159,7 +160,7 @@ def execute(job: Job, workdir: str | None = None, *, prefix: str = "", write_clo
         out_c = os.path.join(workdir, f"{prefix}curve.ply")
         label = "--skeleton-cmd" if m.name == "--skeleton-cmd" else f"method {m.name!r}: command"
         skeletal, curve = run_command(m.command or "", files["cloud"], out_s, out_c, timeout=m.timeout,
-                                      cancel=cancel, label=label)
+                                      cancel=cancel, label=label, cwd=m.cwd)
         files.update({k: p for k, p, v in (("skeletal", out_s, skeletal), ("curve", out_c, curve)) if v is not None})
     else:
         skeletal, curve, index, paths = read_files(m, job.shape.name, job.condition.name, job.seed)

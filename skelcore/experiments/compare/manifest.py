@@ -35,7 +35,7 @@ _KEYS = {
     "builtin": {"name", "kind", "method", "params"},
     "command": {"name", "kind", "command", "timeout"},
     "files": {"name", "kind", "curve", "skeletal", "skeletal_index"},
-    "conditions": {"name", "noise", "model", "sparse", "grid", "fps", "base_grid"},
+    "conditions": {"name", "noise", "model", "sparse", "grid", "fps", "base_grid", "seeds"},
 }
 _PLACEHOLDERS = ("{in}", "{out_skeletal}", "{out_curve}")
 
@@ -60,6 +60,7 @@ class MethodSpec:
     params: dict[str, Any] = field(default_factory=dict)
     command: str | None = None
     timeout: float | None = None
+    cwd: str | None = None  # a command runs here: the manifest's folder
     curve: str | None = None
     skeletal: str | None = None
     skeletal_index: str | None = None
@@ -88,9 +89,11 @@ class ConditionSpec:
     grid: float | None = None
     fps: int | None = None
     base_grid: float | None = None
+    seeds: tuple[int, ...] | None = None  # this condition's own seeds (TOML: ``seeds`` after its table)
 
     def to_dict(self) -> dict[str, Any]:
-        return {f.name: getattr(self, f.name) for f in fields(self)}
+        """What the result depends on (the seeds are a job's, not the condition's)."""
+        return {f.name: getattr(self, f.name) for f in fields(self) if f.name != "seeds"}
 
     @property
     def degrades(self) -> bool:
@@ -146,16 +149,12 @@ def parse_manifest(doc: dict[str, Any], path: str) -> Manifest:
     shapes = _shapes(doc.get("shapes"), base, fail, unknown)
     methods = _methods(doc.get("methods"), base, shapes, fail, unknown)
     conditions = _conditions(doc.get("conditions", [{"name": "normal"}]), fail, unknown)
-    seeds = doc.get("seeds", [0])
-    if not isinstance(seeds, list) or not seeds or not all(isinstance(s, int) and not isinstance(s, bool) for s in seeds):
-        fail("seeds: expected a non-empty list of integers, e.g. seeds = [0, 1]")
-    if len(set(seeds)) != len(seeds):
-        fail("seeds: a seed is listed twice")
+    seeds = _seeds(doc.get("seeds", [0]), "seeds", fail)
     for m in methods:
         if m.kind == "files" and m.per_condition():
             for c in conditions:
                 for s in shapes:
-                    _files_exist(m, s, c.name, seeds, base, fail)
+                    _files_exist(m, s, c.name, c.seeds or seeds, base, fail)
     return Manifest(path, params, shapes, methods, conditions, tuple(seeds))
 
 
@@ -297,7 +296,7 @@ def _command(entry: dict, name: str, where: str, base: Path, fail) -> MethodSpec
     if timeout is not None and (isinstance(timeout, bool) or not isinstance(timeout, (int, float)) or timeout <= 0):
         fail(f"{where}: timeout must be a number of seconds > 0")
     return MethodSpec(name=name, kind="command", command=template,
-                      timeout=None if timeout is None else float(timeout))
+                      timeout=None if timeout is None else float(timeout), cwd=str(base))
 
 
 def _files(entry: dict, name: str, where: str, base: Path, shapes, fail) -> MethodSpec:
@@ -334,6 +333,14 @@ def expand_template(template: str, stem: str, condition: str | None, seed: int) 
     return template.replace("{stem}", stem).replace("{condition}", condition or "").replace("{seed}", str(seed))
 
 
+def _seeds(seeds: Any, where: str, fail) -> tuple[int, ...]:
+    if not isinstance(seeds, list) or not seeds or not all(isinstance(s, int) and not isinstance(s, bool) for s in seeds):
+        fail(f"{where}: expected a non-empty list of integers, e.g. seeds = [0, 1]")
+    if len(set(seeds)) != len(seeds):
+        fail(f"{where}: a seed is listed twice")
+    return tuple(seeds)
+
+
 def _conditions(value: Any, fail, unknown) -> tuple[ConditionSpec, ...]:
     out: list[ConditionSpec] = []
     for i, entry in enumerate(_list_of_tables(value, "conditions", fail)):
@@ -363,5 +370,7 @@ def _conditions(value: Any, fail, unknown) -> tuple[ConditionSpec, ...]:
             if "noise" not in entry:
                 fail(f"{where}: model without noise")
             kw["model"] = entry["model"]
+        if "seeds" in entry:
+            kw["seeds"] = _seeds(entry["seeds"], f"{where}: seeds", fail)
         out.append(ConditionSpec(**kw))
     return tuple(out)

@@ -55,6 +55,7 @@ def run_command(
     timeout: float | None = None,
     cancel: Callable[[], bool] | None = None,
     label: str = "command",
+    cwd: str | None = None,
 ) -> tuple[np.ndarray | None, CurveSkeleton | None]:
     """Run the user's skeletonizer: ``shlex.split`` argv, placeholders substituted per token.
 
@@ -79,7 +80,7 @@ def run_command(
             os.unlink(stale)
     try:
         proc = subprocess.Popen(args, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
-                                errors="replace", start_new_session=True)
+                                errors="replace", start_new_session=True, cwd=cwd)
     except OSError as exc:
         raise SkelInputError(f"{label} could not start {args[0]!r}: {exc.strerror or exc}") from None
     start = time.monotonic()
