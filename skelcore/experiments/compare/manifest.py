@@ -27,7 +27,7 @@ else:  # pragma: no cover
     import tomli as tomllib
 
 __all__ = ["ShapeSpec", "MethodSpec", "ConditionSpec", "Manifest", "load_manifest", "parse_manifest",
-           "check_command_template"]
+           "check_command_template", "expand_template", "skeletonize_accepts_method"]
 
 _KEYS = {
     "top": {"evaluation", "shapes", "methods", "conditions", "seeds"},
@@ -219,6 +219,15 @@ def _shapes(value: Any, base: Path, fail, unknown) -> tuple[ShapeSpec, ...]:
     return tuple(out.values())
 
 
+def skeletonize_accepts_method() -> bool:
+    """True when :func:`skelcore.skeleton.skeletonize` takes ``method=`` (several skeletonizers)."""
+    import inspect
+
+    from ...skeleton import skeletonize
+
+    return "method" in inspect.signature(skeletonize).parameters
+
+
 def check_command_template(template: str, label: str) -> list[str]:
     """The argv of a skeletonizer command line; SkelInputError (prefixed ``label``) when unusable."""
     try:
@@ -259,8 +268,6 @@ def _methods(value: Any, base: Path, shapes, fail, unknown) -> tuple[MethodSpec,
 
 def _builtin(entry: dict, where: str, fail) -> MethodSpec:
     from ...skeleton import SkeletonizeParams
-    from .methods import skeletonize_accepts_method
-
     params = entry.get("params", {})
     if not isinstance(params, dict):
         fail(f"{where}: params must be a table ([methods.params])")

@@ -4,7 +4,6 @@ process group, killed on timeout or cancel) or precomputed files. Returns what `
 
 from __future__ import annotations
 
-import inspect
 import os
 import signal
 import subprocess
@@ -15,18 +14,11 @@ import numpy as np
 
 from ...curve import CurveSkeleton
 from ...errors import Cancelled, SkelInputError
-from .manifest import MethodSpec, check_command_template, expand_template
+from .manifest import MethodSpec, check_command_template, expand_template, skeletonize_accepts_method
 
 __all__ = ["skeletonize_accepts_method", "run_builtin", "run_command", "read_files"]
 
 Progress = Callable[[float, str], None]
-
-
-def skeletonize_accepts_method() -> bool:
-    """True when :func:`skelcore.skeleton.skeletonize` takes ``method=`` (several skeletonizers)."""
-    from ...skeleton import skeletonize
-
-    return "method" in inspect.signature(skeletonize).parameters
 
 
 def run_builtin(points: np.ndarray, spec: MethodSpec, progress: Progress | None = None,

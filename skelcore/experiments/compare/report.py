@@ -76,6 +76,7 @@ def distributions_png(rows: list[dict[str, Any]], methods: list[str], conditions
         ax.set_xticks(range(len(methods)), methods, fontsize=7, rotation=20)
         ax.set_title(c + (" ↓" if c in ("d_B", "d_Wp") else " ↑"), fontsize=9)
         ax.tick_params(axis="y", labelsize=7)
+        ax.ticklabel_format(axis="y", useOffset=False, style="plain")
         ax.set_xlim(-0.6, len(methods) - 0.4)
         if i == 0:
             handles, labels = ax.get_legend_handles_labels()
