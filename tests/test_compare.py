@@ -308,3 +308,41 @@ def test_a_run_killed_by_sigterm_resumes_without_losing_or_duplicating_a_job(dat
     # what ran before the kill was kept as it was
     for k in done:
         assert json.loads((out / "jobs" / f"{k}.json").read_text()) == records[k]
+
+
+def test_coverage_warnings_and_correspondence_reach_results_csv(data, tmp_path):
+    """Issue 8's fields: coverage fractions and the number of trust warnings are columns; a point
+    set that does not match the cloud row for row is scored with ``correspondence = "reverse"``."""
+    root, _m = data
+    m = manifest(root, """
+    [[shapes]]
+    path = "clouds/*.ply"
+    [[methods]]
+    name = "truth"
+    kind = "files"
+    curve = "skeletons/{stem}_curve.ply"
+    skeletal = "skeletons/{stem}_skeletal.ply"
+    [[methods]]
+    name = "vertices_auto"
+    kind = "files"
+    skeletal = "skeletons/{stem}_curve.ply"
+    [[methods]]
+    name = "vertices_reverse"
+    kind = "files"
+    skeletal = "skeletons/{stem}_curve.ply"
+    correspondence = "reverse"
+    [[conditions]]
+    name = "normal"
+    """, name="corr.toml")
+    run_compare(m, tmp_path / "out", Backend("serial"), report=False)
+    rows = {(r["shape"], r["method"]): r for r in _csv(tmp_path / "out" / "results.csv")}
+    for shape in ("cyl", "yshape"):
+        truth, auto, rev = (rows[(shape, k)] for k in ("truth", "vertices_auto", "vertices_reverse"))
+        assert all(r["status"] == "ok" for r in (truth, auto, rev)), (auto["error"], rev["error"])
+        assert float(truth["coverage_curve"]) > 0.9 and float(truth["coverage_skeletal"]) > 0.9
+        assert truth["n_warnings"] == "0.0"
+        # 21 vertices for ~700 cloud points: no row-for-row correspondence, a warning, no topology
+        assert auto["d_B"] == "" and float(auto["n_warnings"]) >= 1
+        assert float(rev["d_B"]) >= 0 and rev["centeredness_skeletal"] != ""
+        doc = json.loads((tmp_path / "out" / "jobs" / f"{rev['key']}.json").read_text())
+        assert doc["evaluation"]["correspondence"] == "reverse"

@@ -112,14 +112,6 @@ def make_jobs(manifest: Manifest) -> list[Job]:
     return jobs
 
 
-def _evaluate_kwargs() -> set[str]:
-    import inspect
-
-    from ...evaluate import evaluate
-
-    return set(inspect.signature(evaluate).parameters)
-
-
 def execute(job: Job, workdir: str | None = None, *, prefix: str = "", write_cloud: bool = False,
             inputs: tuple[str, ...] = (), progress: Progress | None = None,
             cancel: Callable[[], bool] | None = None, cloud: np.ndarray | None = None) -> JobOutput:
@@ -170,6 +162,8 @@ def execute(job: Job, workdir: str | None = None, *, prefix: str = "", write_clo
     kwargs: dict[str, Any] = {}
     if index is not None:
         kwargs["skeletal_index"] = index
+    if m.correspondence is not None:
+        kwargs["correspondence"] = m.correspondence
     ev = evaluate(pts, skeletal, curve, job.params, progress=part(0.5, 1.0), cancel=cancel,
                   inputs={"cloud": files.get("cloud")}, **kwargs)
     timings["evaluate"] = time.perf_counter() - t0

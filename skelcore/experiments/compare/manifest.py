@@ -33,8 +33,8 @@ _KEYS = {
     "top": {"evaluation", "shapes", "methods", "conditions", "seeds"},
     "shapes": {"path", "name"},
     "builtin": {"name", "kind", "method", "params"},
-    "command": {"name", "kind", "command", "timeout"},
-    "files": {"name", "kind", "curve", "skeletal", "skeletal_index"},
+    "command": {"name", "kind", "command", "timeout", "correspondence"},
+    "files": {"name", "kind", "curve", "skeletal", "skeletal_index", "correspondence"},
     "conditions": {"name", "noise", "model", "sparse", "grid", "fps", "base_grid", "seeds"},
 }
 _PLACEHOLDERS = ("{in}", "{out_skeletal}", "{out_curve}")
@@ -64,6 +64,7 @@ class MethodSpec:
     curve: str | None = None
     skeletal: str | None = None
     skeletal_index: str | None = None
+    correspondence: str | None = None  # evaluate(correspondence=...): "reverse" for unmatched point sets
 
     def to_dict(self) -> dict[str, Any]:
         return {f.name: getattr(self, f.name) for f in fields(self)}
@@ -262,8 +263,24 @@ def _methods(value: Any, base: Path, shapes, fail, unknown) -> tuple[MethodSpec,
             spec = _command(entry, name, where, base, fail)
         else:
             spec = _files(entry, name, where, base, shapes, fail)
+        if "correspondence" in entry:
+            spec = _with_correspondence(spec, entry["correspondence"], where, fail)
         out.append(spec)
     return tuple(out)
+
+
+def _with_correspondence(spec: MethodSpec, value: Any, where: str, fail) -> MethodSpec:
+    import dataclasses
+    import inspect
+
+    from ...evaluate import evaluate
+
+    if "correspondence" not in inspect.signature(evaluate).parameters:
+        fail(f"{where}: this skelcore's evaluate() has no correspondence option")
+    allowed = ("auto", "pointwise", "index", "reverse", "none")
+    if value not in allowed:
+        fail(f"{where}: correspondence must be one of {', '.join(allowed)}, got {value!r}")
+    return dataclasses.replace(spec, correspondence=value)
 
 
 def _builtin(entry: dict, where: str, fail) -> MethodSpec:
