@@ -226,3 +226,13 @@ def test_the_users_copy_of_the_profiles_is_the_shipped_file():
     assert "our reading" in shipped.read_text().lower()
     assert [p.name for p in load_profiles(ROOT / "resources" / "profiles.toml")] == [
         "grasping", "navigation", "agriculture", "reconstruction"]
+
+
+def test_the_shipped_samples_manifest_is_valid():
+    """resources/compare/samples.toml: the bundled samples, named without their "_cloud" suffix."""
+    m = load_manifest(ROOT / "resources" / "compare" / "samples.toml")
+    assert [s.name for s in m.shapes] == ["cylinder", "torus", "yshape"]
+    assert [x.name for x in m.methods] == ["builtin", "axis", "lbc_files", "truth"]
+    jobs = make_jobs(m)
+    # builtin and axis under 3 conditions, the two precomputed methods on the clean clouds only
+    assert len(jobs) == 3 * (3 + 3 + 1 + 1)

@@ -31,7 +31,7 @@ __all__ = ["ShapeSpec", "MethodSpec", "ConditionSpec", "Manifest", "load_manifes
 
 _KEYS = {
     "top": {"evaluation", "shapes", "methods", "conditions", "seeds"},
-    "shapes": {"path", "name"},
+    "shapes": {"path", "name", "suffix"},
     "builtin": {"name", "kind", "method", "params"},
     "command": {"name", "kind", "command", "timeout", "correspondence"},
     "files": {"name", "kind", "curve", "skeletal", "skeletal_index", "correspondence"},
@@ -42,7 +42,8 @@ _PLACEHOLDERS = ("{in}", "{out_skeletal}", "{out_curve}")
 
 @dataclass(frozen=True)
 class ShapeSpec:
-    """One input cloud, named by its file stem (or the entry's ``name`` for a single file)."""
+    """One input cloud, named by its file stem less the entry's ``suffix`` ("_cloud"), or by the
+    entry's ``name`` for a single file."""
 
     name: str
     path: str
@@ -210,8 +211,14 @@ def _shapes(value: Any, base: Path, fail, unknown) -> tuple[ShapeSpec, ...]:
             if not os.path.isfile(full):
                 fail(f"{where}: shape file {pattern!r} not found")
             matches = [full]
+        suffix = entry.get("suffix", "")
+        if not isinstance(suffix, str):
+            fail(f"{where}: suffix must be a string (cut from the end of each file stem)")
         for m in matches:
-            name = entry.get("name") if "name" in entry else Path(m).stem
+            stem = Path(m).stem
+            if suffix and stem.endswith(suffix) and stem != suffix:
+                stem = stem[: -len(suffix)]
+            name = entry.get("name") if "name" in entry else stem
             if not isinstance(name, str) or not name:
                 fail(f"{where}: name must be a non-empty string")
             if name in out and out[name].path != m:
