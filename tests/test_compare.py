@@ -18,6 +18,7 @@ import pytest
 
 from compare_helpers import command, make_dataset, manifest
 from skelcore.experiments.compare import Backend, run_compare
+from skelcore.cli import main as main_cli
 from skelcore.experiments.compare.results import COLUMNS
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -346,3 +347,43 @@ def test_coverage_warnings_and_correspondence_reach_results_csv(data, tmp_path):
         assert float(rev["d_B"]) >= 0 and rev["centeredness_skeletal"] != ""
         doc = json.loads((tmp_path / "out" / "jobs" / f"{rev['key']}.json").read_text())
         assert doc["evaluation"]["correspondence"] == "reverse"
+
+
+def test_an_existing_dask_scheduler_by_address(data, tmp_path, capsys):
+    """``--dask tcp://HOST:PORT`` submits to a scheduler somebody else started."""
+    from distributed import LocalCluster
+
+    root, _m = data
+    m = manifest(root, """
+    [[shapes]]
+    path = "clouds/*.ply"
+    [[methods]]
+    name = "truth"
+    kind = "files"
+    curve = "skeletons/{stem}_curve.ply"
+    [[conditions]]
+    name = "normal"
+    """, name="tcp.toml")
+    with LocalCluster(n_workers=1, threads_per_worker=1, processes=False, protocol="tcp",
+                      dashboard_address=None) as cluster:
+        assert cluster.scheduler_address.startswith("tcp://")
+        rc = main_cli(["compare", str(m), "--out", str(tmp_path / "out"), "--dask", cluster.scheduler_address,
+                       "--quiet", "--no-report"])
+    out = capsys.readouterr().out
+    assert rc == 0 and "2 ran ok, 0 failed; dask tcp://" in out
+    assert len(_csv(tmp_path / "out" / "results.csv")) == 2
+
+
+def test_an_unreachable_scheduler_is_one_line(data, tmp_path, capsys):
+    root, _m = data
+    m = manifest(root, """
+    [[shapes]]
+    path = "clouds/cyl.ply"
+    [[methods]]
+    name = "truth"
+    kind = "files"
+    curve = "skeletons/{stem}_curve.ply"
+    """, name="tcp2.toml")
+    rc = main_cli(["compare", str(m), "--out", str(tmp_path / "out"), "--dask", "tcp://127.0.0.1:9", "--quiet"])
+    err = capsys.readouterr().err
+    assert rc == 2 and "cannot reach the Dask scheduler at tcp://127.0.0.1:9" in err and len(err.strip().splitlines()) == 1

@@ -206,7 +206,7 @@ def _run_dask(todo: list[Job], backend: Backend, file: Callable[[dict[str, Any]]
     try:
         if backend.address:
             try:
-                client = Client(backend.address, timeout="10s")
+                client = Client(backend.address, timeout="5s")
             except (OSError, TimeoutError) as exc:
                 raise SkelInputError(f"cannot reach the Dask scheduler at {backend.address}: {exc}") from None
         else:
