@@ -75,9 +75,12 @@ class _Bar:
     def __init__(self, total: int, quiet: bool) -> None:
         self.bar = None
         if not quiet and sys.stderr.isatty() and total:
+            import shutil
+
             from tqdm import tqdm
 
-            self.bar = tqdm(total=total, file=sys.stderr, unit="job", dynamic_ncols=True, desc="compare")
+            cols = shutil.get_terminal_size((100, 24)).columns or 100  # a pty may report 0 columns
+            self.bar = tqdm(total=total, file=sys.stderr, unit="job", ncols=min(cols, 120), desc="compare")
 
     def update(self, ok: int, failed: int) -> None:
         if self.bar is not None:
