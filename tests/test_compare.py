@@ -387,3 +387,42 @@ def test_an_unreachable_scheduler_is_one_line(data, tmp_path, capsys):
     rc = main_cli(["compare", str(m), "--out", str(tmp_path / "out"), "--dask", "tcp://127.0.0.1:9", "--quiet"])
     err = capsys.readouterr().err
     assert rc == 2 and "cannot reach the Dask scheduler at tcp://127.0.0.1:9" in err and len(err.strip().splitlines()) == 1
+
+
+def test_study_is_a_compare_run_with_one_shape_and_one_method(data, tmp_path):
+    """The same cloud, command, conditions and seed: the study's table equals compare's results."""
+    from skelcore.experiments.study import run_study
+    from skelcore.io import load_cloud
+
+    root, _m = data
+    cmd = command("line")
+    m = manifest(root, f"""
+    seeds = [5]
+    [[shapes]]
+    path = "clouds/yshape.ply"
+    [[methods]]
+    name = "line"
+    kind = "command"
+    command = "{cmd}"
+    [[conditions]]
+    name = "normal"
+    [[conditions]]
+    name = "noise"
+    noise = 0.05
+    [[conditions]]
+    name = "sparse"
+    sparse = 300
+    """, name="study.toml")
+    res = run_compare(m, tmp_path / "out", Backend("serial"), report=False)
+    cwd = os.getcwd()
+    os.chdir(root)  # the command names bin/line.py relative to the manifest's folder
+    try:
+        study = run_study(load_cloud(root / "clouds/yshape.ply"), noise=0.05, sparse=300, seed=5, skeleton_cmd=cmd)
+    finally:
+        os.chdir(cwd)
+    rows = {r["condition"]: r for r in res.rows}
+    assert [r.name for r in study.rows] == ["normal", "noise", "sparse"]
+    for row in study.rows:
+        for key, value in row.scores().items():
+            got = rows[row.name][key]
+            assert (value is None and np.isnan(got)) or got == pytest.approx(value, rel=1e-12, abs=1e-15), (row.name, key)
