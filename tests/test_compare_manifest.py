@@ -236,3 +236,10 @@ def test_the_shipped_samples_manifest_is_valid():
     jobs = make_jobs(m)
     # builtin and axis under 3 conditions, the two precomputed methods on the clean clouds only
     assert len(jobs) == 3 * (3 + 3 + 1 + 1)
+
+
+def test_means_that_print_the_same_share_a_rank():
+    from skelcore.experiments.compare.leaderboard import _ranks
+
+    assert _ranks([0.02331, 0.02334, 0.0237, math.nan], True, 4) == [1, 1, 3, None]
+    assert _ranks([0.9, 0.95, 0.95], False, 3) == [3, 1, 1]
