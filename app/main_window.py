@@ -80,6 +80,8 @@ class MainWindow(QtWidgets.QMainWindow):
         self._build_menus()
 
         self.session.params_provider = self.settings_panel.params
+        self.session.correspondence_provider = self.settings_panel.correspondence
+        self.summary.cloud_colouring.connect(self.view.set_cloud_values)
         self.session.ask = self._ask
         self.session.error.connect(self.show_error)
         self.session.message.connect(lambda text: self.statusBar().showMessage(text, 8000))

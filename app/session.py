@@ -33,6 +33,8 @@ class Session(QtCore.QObject):
         self.runner = TaskRunner(self)
         self.ask: Ask = lambda question, options: options[0] if options else None
         self.params_provider: Callable[[], Params] = Params
+        #: "auto" or "reverse" (SPEC 7), e.g. the settings panel's choice
+        self.correspondence_provider: Callable[[], str] = lambda: "auto"
         self.auto_evaluate = True
         self.runner.succeeded.connect(self._task_succeeded)
         self.runner.failed.connect(self._task_failed)
@@ -160,10 +162,12 @@ class Session(QtCore.QObject):
         skeletal = None if scene.skeletal is None else scene.skeletal.points
         curve = None if scene.curve is None else scene.curve.curve
         inputs = {k: v for k, v in scene.input_paths().items() if v}
+        correspondence = self.correspondence_provider()
 
         def job(progress: Callable[[float, str], None], cancel: Callable[[], bool]) -> Any:
             # skelcore.evaluate is resolved (and, the first time, imported) in the worker thread
-            return skelcore.evaluate(cloud, skeletal, curve, params, progress, cancel, inputs=inputs)
+            return skelcore.evaluate(cloud, skeletal, curve, params, progress, cancel, inputs=inputs,
+                                     correspondence=correspondence)
 
         self._evaluated_layers = (scene.cloud, scene.skeletal, scene.curve)
         self.runner.start(job, "evaluation")

@@ -21,7 +21,7 @@ from .metrics.smoothness import curve_smoothness_overall, curve_vertex_smoothnes
 from .metrics.topology import topological_similarity
 from .params import Params
 from .results import CurveLocal, Evaluation, SkeletalLocal
-from .trust import frame_warnings, no_correspondence_warning, smoothness_warning
+from .trust import frame_fit_warning, frame_warnings, no_correspondence_warning, smoothness_warning
 
 Progress = Callable[[float, str], None]
 
@@ -218,10 +218,22 @@ def evaluate(
             ev.skeletal.source = "curve"
 
     # ---- trust checks, coverage, reference (SkelScope's own; docs/metrics.md) ----------------
+    def bounded_fraction(points_user: np.ndarray) -> float:
+        beta = boundedness(cloud_n, norm.apply(points_user), params=p)
+        return float(np.mean(beta > p.beta_star))
+
     if skel is not None:
-        ev.warnings += frame_warnings(cloud, skel, "skeletal point set", p)
+        found = frame_warnings(cloud, skel, "skeletal point set", p)
+        if not found:
+            now = float(np.mean(ev.skeletal.boundedness > p.beta_star))
+            found = frame_fit_warning(cloud, skel, now, bounded_fraction, "skeletal point set", p)
+        ev.warnings += found
     if curve_obj is not None:
-        ev.warnings += frame_warnings(cloud, curve_obj.vertices, "curve skeleton", p)
+        found = frame_warnings(cloud, curve_obj.vertices, "curve skeleton", p)
+        if not found:
+            now = float(np.mean(ev.curve.sample_boundedness > p.beta_star))
+            found = frame_fit_warning(cloud, ev.curve.samples, now, bounded_fraction, "curve skeleton", p)
+        ev.warnings += found
         ev.warnings += smoothness_warning(ev.curve.vertex_degree)
     if mode == "none":
         ev.warnings.append(no_correspondence_warning(len(skel), len(cloud)))

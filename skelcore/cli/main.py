@@ -1,6 +1,7 @@
 """The ``skelcore`` entry point: one parser on which every subcommand module registers itself.
 
-Exit codes: 0 success, 2 input error (one line on stderr), 130 interrupted.
+Exit codes: 0 success, 2 input error or unwritable output (one line on stderr), 3 a trust warning
+under `evaluate --strict`, 130 interrupted.
 """
 
 from __future__ import annotations
