@@ -426,3 +426,22 @@ def test_study_is_a_compare_run_with_one_shape_and_one_method(data, tmp_path):
         for key, value in row.scores().items():
             got = rows[row.name][key]
             assert (value is None and np.isnan(got)) or got == pytest.approx(value, rel=1e-12, abs=1e-15), (row.name, key)
+
+
+def test_editing_the_profiles_changes_verdicts_without_recomputing(pool_run, data, tmp_path):
+    root, m = data
+    prof = tmp_path / "mine.toml"
+    prof.write_text('[[profiles]]\nname = "tube_follower"\ntitle = "t"\n'
+                    '[[profiles.require]]\nmetric = "boundedness_curve"\nmin = 0.9\n')
+    seen = []
+    res = run_compare(m, root / "out_pool", Backend("serial"), profiles_path=prof, report=False, on_record=seen.append)
+    assert seen == []
+    rows = _csv(root / "out_pool" / "results.csv")
+    assert "profile_grasping" not in rows[0] and "profile_tube_follower_reason" in rows[0]
+    for r in rows:
+        b = float(r["boundedness_curve"])
+        assert r["profile_tube_follower"] == ("pass" if b >= 0.9 else "fail")
+        assert r["profile_tube_follower_reason"].startswith("boundedness_curve ")
+    assert "tube_follower" in (root / "out_pool" / "leaderboard.md").read_text().splitlines()[0]
+    assert [p.name for p in res.leaderboard.profiles] == ["tube_follower"]
+    run_compare(m, root / "out_pool", Backend("serial"), report=False)  # back to the shipped ones

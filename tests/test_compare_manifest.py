@@ -236,3 +236,38 @@ def test_the_shipped_samples_manifest_is_valid():
     jobs = make_jobs(m)
     # builtin and axis under 3 conditions, the two precomputed methods on the clean clouds only
     assert len(jobs) == 3 * (3 + 3 + 1 + 1)
+
+
+def test_means_that_print_the_same_share_a_rank():
+    from skelcore.experiments.compare.leaderboard import _ranks
+
+    assert _ranks([0.02331, 0.02334, 0.0237, math.nan], True, 4) == [1, 1, 3, None]
+    assert _ranks([0.9, 0.95, 0.95], False, 3) == [3, 1, 1]
+
+
+def test_builtin_method_is_passed_only_when_skeletonize_takes_it(root, monkeypatch):
+    """``kind = "builtin"`` with ``method = "cao"``: forwarded to skeletonize(method=...) when the
+    installed skelcore has several skeletonizers, a one-line error otherwise."""
+    import skelcore.skeleton as skeleton
+    from skelcore.experiments.compare.methods import run_builtin
+
+    body = GOOD.replace('name = "builtin"\nkind = "builtin"', 'name = "builtin"\nkind = "builtin"\nmethod = "cao"')
+    real = skeleton.skeletonize
+    if "method" not in __import__("inspect").signature(real).parameters:
+        with pytest.raises(SkelInputError, match="has no method= option"):
+            load_manifest(manifest(root, body))
+    calls = []
+
+    def fake(points, params, progress=None, cancel=None, *, method="skelscope"):
+        calls.append((method, params.max_iterations))
+        return points, None
+
+    monkeypatch.setattr(skeleton, "skeletonize", fake)
+    m = load_manifest(manifest(root, body))
+    assert m.methods[0].method == "cao"
+    pts = np.random.default_rng(0).normal(size=(50, 3))
+    skeletal, curve = run_builtin(pts, m.methods[0])
+    assert calls == [("cao", 5)] and skeletal is pts and curve is None
+    plain = load_manifest(manifest(root, GOOD))
+    run_builtin(pts, plain.methods[0])
+    assert calls[-1] == ("skelscope", 5)  # no method given: the skeletonizer's own default

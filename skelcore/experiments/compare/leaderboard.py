@@ -1,6 +1,6 @@
 """The leaderboard: per method and condition, the mean and standard deviation over shapes (and
 seeds) of every score of the jobs that finished, with its rank among the methods under that
-condition (1 = best; arrows as in the paper's table: lower is better for d_B, d_Wp, warnings and
+condition (1 = best, ties as printed share a rank; arrows as in the paper's table: lower is better for d_B, d_Wp, warnings and
 time, higher for the rest), and each application profile's pass rate. Markdown, CSV and LaTeX.
 """
 
@@ -81,7 +81,7 @@ class Leaderboard:
             if math.isnan(m):
                 out.append("-")
                 continue
-            d = 4 if c in ("d_B", "d_Wp") else (1 if c in ("n_warnings", "seconds") else 3)
+            d = _digits(c)
             out.append(f"{m:.{d}f} ± {s:.{d}f}" + (f" ({r})" if r is not None else ""))
         return out
 
@@ -146,16 +146,22 @@ def _tex_escape(text: str) -> str:
     return text.replace("\x00", r"\textbackslash{}")
 
 
-def _ranks(values: list[float], lower_better: bool) -> list[int | None]:
-    """Competition ranks (1, 2, 2, 4) of the finite values; None for NaN."""
+def _digits(col: str) -> int:
+    """Decimals shown (and ranked on): 4 for the topological distances, 1 for counts and seconds."""
+    return 4 if col in ("d_B", "d_Wp") else (1 if col in ("n_warnings", "seconds") else 3)
+
+
+def _ranks(values: list[float], lower_better: bool, digits: int) -> list[int | None]:
+    """Competition ranks (1, 2, 2, 4) of the finite values as shown (rounded to ``digits``), so two
+    methods that print the same mean share a rank; None for NaN."""
     out: list[int | None] = []
-    finite = [v for v in values if not math.isnan(v)]
-    for v in values:
+    shown = [v if math.isnan(v) else round(v, digits) for v in values]
+    finite = [v for v in shown if not math.isnan(v)]
+    for v in shown:
         if math.isnan(v):
             out.append(None)
         else:
-            better = sum(1 for w in finite if (w < v if lower_better else w > v) and not math.isclose(w, v, rel_tol=1e-12))
-            out.append(1 + better)
+            out.append(1 + sum(1 for w in finite if (w < v if lower_better else w > v)))
     return out
 
 
@@ -181,7 +187,7 @@ def build_leaderboard(rows: list[dict[str, Any]], profiles: tuple[Profile, ...],
                 e.profiles[p.name] = (verdicts.count("pass"), sum(v != "n/a" for v in verdicts))
             group.append(e)
         for c in COLUMNS:
-            for e, r in zip(group, _ranks([e.mean[c] for e in group], c in LOWER_IS_BETTER)):
+            for e, r in zip(group, _ranks([e.mean[c] for e in group], c in LOWER_IS_BETTER, _digits(c))):
                 e.rank[c] = r if len(group) > 1 else None
         entries += group
     return Leaderboard(entries, profiles)

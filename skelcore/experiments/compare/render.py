@@ -45,8 +45,20 @@ def _lines(verts: np.ndarray, edges: np.ndarray):
     return pv.PolyData(np.asarray(verts, float), lines=cells)
 
 
+def _quiet_vtk() -> None:
+    """VTK logs "bad X server connection" on a machine without X before rendering off-screen fine."""
+    try:
+        from vtkmodules.vtkCommonCore import vtkLogger
+
+        vtkLogger.SetStderrVerbosity(vtkLogger.VERBOSITY_OFF)
+    except (ImportError, AttributeError):  # pragma: no cover
+        pass
+
+
 def _render_3d(arrays: dict[str, np.ndarray], view: str, size: tuple[int, int]) -> bytes:
     import pyvista as pv
+
+    _quiet_vtk()
 
     pl = pv.Plotter(off_screen=True, window_size=list(size))
     try:

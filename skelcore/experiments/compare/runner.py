@@ -217,10 +217,17 @@ def _run_dask(todo: list[Job], backend: Backend, file: Callable[[dict[str, Any]]
                                    dashboard_address=None, silence_logs=logging.ERROR)
             client = Client(cluster)
         try:
-            futures = [client.submit(run_job, job, key=f"skelcore-job-{job.key}", pure=False) for job in todo]
+            jobs = {client.submit(run_job, job, key=f"skelcore-job-{job.key}", pure=False): job for job in todo}
+            futures = list(jobs)
             try:
                 for fut in as_completed(futures):
-                    file(fut.result())
+                    try:
+                        rec = fut.result()
+                    except Exception as exc:  # KilledWorker (a job that kills its worker), lost data
+                        from .jobs import one_line
+
+                        rec = _failed(jobs[fut], f"the Dask worker failed: {one_line(exc)}")
+                    file(rec)
                     fut.release()
             finally:
                 client.cancel(futures)
