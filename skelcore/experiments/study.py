@@ -249,6 +249,7 @@ def run_study(
     skeleton_cmd: str | None = None,
     params: Params = Params(),
     skeletonize_params: Any = None,
+    method: str | None = None,
     name: str = "cloud",
     inputs: tuple[str, ...] = (),
     progress: Progress | None = None,
@@ -274,7 +275,9 @@ def run_study(
     skeleton_cmd : instead of the built-in skeletonizer, a command line with ``{in}`` (the variant's
         cloud, written as PLY) and ``{out_skeletal}`` and/or ``{out_curve}`` placeholders; run
         without a shell.
-    params : evaluation parameters (SPEC); ``skeletonize_params`` : :class:`SkeletonizeParams`.
+    params : evaluation parameters (SPEC); ``skeletonize_params`` : :class:`CaoParams` or
+        :class:`SkeletonizeParams`; ``method`` : the built-in skeletonizer, "cao" (default) or
+        "skelscope" (see :func:`skelcore.skeleton.skeletonize`).
     name : the shape's name in the table's first column.
     inputs : paths no output may overwrite (the user's files).
     progress, cancel : as :func:`skelcore.evaluate`.
@@ -287,10 +290,10 @@ def run_study(
     from .. import io
     from ..skeleton.degrade import _cloud
     from ..evaluate import evaluate
-    from ..skeleton import SkeletonizeParams, skeletonize
+    from ..skeleton import skeletonize
 
     cloud = _cloud(cloud)
-    sk_params = skeletonize_params if skeletonize_params is not None else SkeletonizeParams()
+    sk_params = skeletonize_params
     variants = _variants(cloud, noise=noise, noise_model=noise_model, sparse=sparse, grid=grid,
                          base_grid=base_grid, seed=seed)
     if out_dir is not None:
@@ -326,7 +329,8 @@ def run_study(
                     cancel,
                 )
             else:
-                skeletal, curve = skeletonize(pts, sk_params, progress=sub_progress(0.0, 0.5, vname), cancel=cancel)
+                skeletal, curve = skeletonize(pts, sk_params, progress=sub_progress(0.0, 0.5, vname), cancel=cancel,
+                                              method=method)
             timings["skeletonize"] = time.perf_counter() - t0
             t0 = time.perf_counter()
             ev = evaluate(pts, skeletal, curve, params, progress=sub_progress(0.5, 1.0, vname), cancel=cancel,
@@ -352,7 +356,8 @@ def run_study(
             work.cleanup()
 
     settings = {"noise": noise, "noise_model": noise_model, "sparse": sparse, "grid": grid,
-                "base_grid": base_grid, "seed": seed, "skeleton_cmd": skeleton_cmd}
+                "base_grid": base_grid, "seed": seed, "skeleton_cmd": skeleton_cmd,
+                "method": None if skeleton_cmd else (method or "cao")}
     result = StudyResult(name=name, rows=rows, params=params, settings=settings)
     if out_dir is not None:
         result.write_tables(out_dir, inputs=inputs)

@@ -87,7 +87,6 @@ def cao_contract(
     params: CaoParams = CaoParams(),
     *,
     report: Callable[[str, float], None] | None = None,
-    solve_options: dict | None = None,
 ) -> tuple[np.ndarray, dict]:
     """Contract normalized points; returns (contracted points, info) with info "iterations" (the
     toolbox's t), "initial_weight", "ring_ratios" (its ``a``), "stop_reason"."""
@@ -101,7 +100,6 @@ def cao_contract(
     wh = np.full(n, wc)
     sizes0 = rings.sizes(pts, "min")
     total0 = float(sizes0.sum())
-    opts = dict(solve_options or {})
 
     def check_for(it: int) -> Callable[[], None]:
         return lambda: report("contraction", it / params.max_iterations)
@@ -110,7 +108,7 @@ def cao_contract(
         L = cotangent_laplacian(current, rings, params.weight_row_cap)
         M = (wl * wl) * (L.T @ L) + sp.diags(wh * wh)
         rhs = (wh * wh)[:, None] * current
-        return solve_spd(M, rhs, current, check=check_for(it), **opts)
+        return solve_spd(M, rhs, check=check_for(it))
 
     report("contraction", 0.0)
     cpts = step(pts, wl, wh, 0)

@@ -12,6 +12,8 @@ See docs/skeletonize.md for where this departs from Qhull's triangle order.
 
 from __future__ import annotations
 
+from typing import Callable
+
 import numpy as np
 from scipy.spatial import cKDTree
 
@@ -24,16 +26,17 @@ def knn_count(n: int, min_k: int = 8, max_k: int = 30, fraction: float = 0.012) 
     return int(min(k, int(max_k), n))
 
 
-def _neighbours(points: np.ndarray, k: int) -> np.ndarray:
-    """(N, k) kNN indices, each row starting with the point itself (duplicates could push it back)."""
-    _d, idx = cKDTree(points).query(points, k=k, workers=-1)
-    idx = np.asarray(idx, np.int64).reshape(len(points), k)
-    rows = np.arange(len(points))
+def _neighbours(points: np.ndarray, tree: cKDTree, rows: np.ndarray, k: int) -> np.ndarray:
+    """(len(rows), k) kNN indices, each row starting with the point itself (a duplicate point at
+    distance 0 could come first; the toolbox's MEX kd-tree returns the query point first)."""
+    _d, idx = tree.query(points[rows], k=k, workers=-1)
+    idx = np.asarray(idx, np.int64).reshape(len(rows), k)
     not_first = idx[:, 0] != rows
     if np.any(not_first):
-        for i in np.flatnonzero(not_first):
-            r = [int(i)] + [int(j) for j in idx[i] if j != i]
-            idx[i] = r[:k]
+        for r in np.flatnonzero(not_first):
+            i = int(rows[r])
+            order = [i] + [int(j) for j in idx[r] if j != i]
+            idx[r] = order[:k]
     return idx
 
 
@@ -54,11 +57,11 @@ def _project(points: np.ndarray, idx: np.ndarray) -> np.ndarray:
     return np.einsum("nki,nij->nkj", rel, axes)
 
 
-def _hull_order(z: np.ndarray, valid: np.ndarray) -> list[np.ndarray]:
+def _hull_order(z: np.ndarray, valid: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Counter-clockwise convex-hull vertices of each row's valid points of ``z`` (N, m, 2).
 
     Jarvis march for all rows at once; on collinear candidates the farthest is taken (a point in the
-    middle of a hull side is not a vertex). Returns one index array per row.
+    middle of a hull side is not a vertex). Returns (N, m) vertex indices (-1 padded), counts.
     """
     n, m, _ = z.shape
     r2 = np.where(valid, np.einsum("nmk,nmk->nm", z, z), -1.0)
@@ -95,38 +98,42 @@ def _hull_order(z: np.ndarray, valid: np.ndarray) -> list[np.ndarray]:
         hull[go, count[go]] = nxt[~done]
         count[go] += 1
         active[a[done]] = False
-    return [hull[i, : count[i]] for i in range(n)]
+    return hull, count
 
 
-def _closed_start(rel: np.ndarray, h: np.ndarray) -> tuple[int, int]:
-    """Where a closed ring starts and which way it runs: (first vertex, second vertex).
-
-    The toolbox starts at the lower-ranked vertex of the first triangle of Qhull's output around the
-    point and walks towards that triangle's other vertex; Qhull's output order is an artefact of its
-    incremental construction. In its place: the fan triangle that the first principal axis (MATLAB's
-    sign) passes through, a choice of the same kind (one triangle, determined by the geometry).
-    """
-    ang = np.arctan2(rel[h, 1], rel[h, 0])  # hull order is counter-clockwise around the point
-    nxt = np.roll(np.arange(len(h)), -1)
-    span = np.mod(ang[nxt] - ang, 2 * np.pi)
-    off = np.mod(-ang, 2 * np.pi)  # direction of the +first axis (angle 0) from each vertex
-    t = int(np.argmax(off < span)) if np.any(off < span) else 0
-    a, b = int(h[t]), int(h[nxt[t]])
-    return (a, b) if a < b else (b, a)
-
-
-def point_rings(points: np.ndarray, k: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+def point_rings(
+    points: np.ndarray, k: int, check: Callable[[float], None] | None = None, chunk: int = 2048
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """One-rings of every point, CSR style: (indptr, indices, closed).
 
     ``indices[indptr[i]:indptr[i+1]]`` is point i's ring in fan order, global indices; a closed ring
     repeats its first vertex at the end, as the toolbox's rings do. A point whose neighbourhood is
     degenerate (all neighbours on one line in projection) gets its kNN list, nearest first.
+    Works ``chunk`` points at a time; ``check(fraction)`` is called between chunks (cancel).
     """
+    check = check or (lambda _f: None)
     pts = np.asarray(points, dtype=float)
     n = len(pts)
     k = int(min(k, n))
-    idx = _neighbours(pts, k)
-    rel = _project(pts, idx)[:, 1:, :]  # (N, m, 2), m = k - 1 candidates (local ranks 1..m)
+    tree = cKDTree(pts)
+    ptrs, parts, closed = [np.zeros(1, np.int64)], [], []
+    offset = 0
+    for lo in range(0, n, chunk):
+        check(lo / n)
+        hi = min(n, lo + chunk)
+        ip, ind, cl = _rings_of(pts, tree, np.arange(lo, hi), k)
+        ptrs.append(ip[1:] + offset)
+        offset += int(ip[-1])
+        parts.append(ind)
+        closed.append(cl)
+    check(1.0)
+    return np.concatenate(ptrs), np.concatenate(parts), np.concatenate(closed)
+
+
+def _rings_of(pts: np.ndarray, tree: cKDTree, rows: np.ndarray, k: int) -> tuple:
+    idx = _neighbours(pts, tree, rows, k)
+    n = len(rows)
+    rel = _project(pts, idx)[:, 1:, :]  # (n, m, 2), m = k - 1 candidates (local ranks 1..m)
     r2 = np.einsum("nmk,nmk->nm", rel, rel)
     scale = np.sqrt(np.max(r2, axis=1, keepdims=True))
     valid = r2 > (1e-12 * scale) ** 2
@@ -135,31 +142,54 @@ def point_rings(points: np.ndarray, k: int) -> tuple[np.ndarray, np.ndarray, np.
     m = rel.shape[1]
     z = np.concatenate([inv, np.zeros((n, 1, 2))], axis=1)  # candidate m = the origin (the point)
     zvalid = np.concatenate([valid, np.ones((n, 1), bool)], axis=1)
-    hulls = _hull_order(z, zvalid)
+    hull, cnt = _hull_order(z, zvalid)
+    return _assemble(idx, rel, hull, cnt, m)
 
-    out: list[np.ndarray] = []
-    closed = np.zeros(n, bool)
-    for i, h in enumerate(hulls):
-        if len(h) < 3 and not (len(h) >= 2 and m in h):
-            out.append(idx[i, 1:])
-            continue
-        if m in h:  # the point is on its neighbourhood's hull: an open fan from one hull neighbour
-            p = int(np.flatnonzero(h == m)[0])
-            seq = np.concatenate([h[p + 1:], h[:p]])
-            if len(seq) < 2:
-                out.append(idx[i, 1:])
-                continue
-            if seq[-1] < seq[0]:  # the toolbox starts at the lower-ranked end
-                seq = seq[::-1]
-        else:  # closed fan: see _closed_start
-            a, b = _closed_start(rel[i], h)
-            p = int(np.flatnonzero(h == a)[0])
-            seq = np.roll(h, -p)
-            if seq[1] != b:
-                seq = np.concatenate([seq[:1], seq[1:][::-1]])
-            seq = np.concatenate([seq, seq[:1]])
-            closed[i] = True
-        out.append(idx[i, seq + 1])
-    lengths = np.fromiter((len(r) for r in out), np.int64, n)
-    indptr = np.concatenate([[0], np.cumsum(lengths)])
-    return indptr, np.concatenate(out).astype(np.int64), closed
+
+def _assemble(idx: np.ndarray, rel: np.ndarray, hull: np.ndarray, cnt: np.ndarray, m: int) -> tuple:
+    """Hull orders to toolbox rings (start, direction, closing repeat), all rows at once.
+
+    Open fan (the origin, candidate m, on the hull): from the hull vertex after the origin to the one
+    before it, reversed if that ends lower-ranked (the toolbox starts at the lower-ranked end).
+    Closed fan: the toolbox starts at the lower-ranked vertex of the first triangle of Qhull's output
+    around the point, towards that triangle's other vertex; Qhull's output order is an artefact of
+    its incremental construction. In its place: the fan triangle that the first principal axis
+    (MATLAB's sign) passes through, a choice of the same kind (docs/skeletonize.md).
+    """
+    n, width = hull.shape
+    col = np.arange(width)[None, :]
+    inside = col < cnt[:, None]
+    h = np.where(inside, hull, 0)
+    is_open = np.any(inside & (hull == m), axis=1)
+    c = np.maximum(cnt, 1)[:, None]
+    nxt = (col + 1) % c
+    rows = np.arange(n)[:, None]
+    cand = np.minimum(h, m - 1)
+    ang = np.arctan2(rel[rows, cand, 1], rel[rows, cand, 0])
+    span = np.mod(np.take_along_axis(ang, nxt, axis=1) - ang, 2 * np.pi)
+    off = np.mod(-ang, 2 * np.pi)
+    hit = inside & (off < span)
+    t = np.where(hit.any(axis=1), np.argmax(hit, axis=1), 0)
+    va = h[np.arange(n), t]
+    vb = h[np.arange(n), (t + 1) % c[:, 0]]
+    first = np.where(va < vb, t, (t + 1) % c[:, 0])
+    forward = va < vb  # the lower-ranked vertex first, then the other one: forward iff a is lower
+    origin_pos = np.argmax(inside & (hull == m), axis=1)
+
+    good_closed = ~is_open & (cnt >= 3)
+    good_open = is_open & (cnt >= 3)
+    # open: positions origin+1 .. origin+cnt-1; reversed when the last is lower-ranked than the first
+    o_first = h[np.arange(n), (origin_pos + 1) % c[:, 0]]
+    o_last = h[np.arange(n), (origin_pos - 1) % c[:, 0]]
+    o_rev = o_last < o_first
+    length = np.where(good_closed, cnt + 1, np.where(good_open, cnt - 1, idx.shape[1] - 1))
+    indptr = np.concatenate([[0], np.cumsum(length)])
+    row = np.repeat(np.arange(n), length)
+    r = np.arange(indptr[-1]) - indptr[row]
+    cc = c[row, 0]
+    pos_closed = np.where(forward[row], first[row] + r, first[row] - r) % cc
+    pos_open = np.where(o_rev[row], origin_pos[row] - 1 - r, origin_pos[row] + 1 + r) % cc
+    local = np.where(good_closed[row], h[row, pos_closed],
+                     np.where(good_open[row], h[row, pos_open], r))  # fallback: kNN order
+    indices = idx[row, local + 1]
+    return indptr, indices.astype(np.int64), good_closed

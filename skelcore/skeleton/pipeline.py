@@ -47,7 +47,7 @@ def _skeletonize_cao(pts_n: np.ndarray, params: CaoParams, report: Reporter) -> 
 
     report("laplacian", 0.0)
     k = knn_count(len(pts_n), params.min_neighbors, params.max_neighbors, params.neighbor_fraction)
-    indptr, indices, _closed = point_rings(pts_n, k)
+    indptr, indices, _closed = point_rings(pts_n, k, check=lambda f: report("laplacian", f))
     rings = Rings(indptr, indices)
     report("laplacian", 1.0)
     t = time.perf_counter()
