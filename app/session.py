@@ -174,24 +174,24 @@ class Session(QtCore.QObject):
         self.message.emit("evaluating…")
         return True
 
-    def start_skeletonize(self, params: Any = None) -> bool:
+    def start_skeletonize(self, params: Any = None, method: str | None = None) -> bool:
         """Skeletonize the loaded cloud (issue 4) in the worker; both results become layers.
 
-        ``params`` is a ``skelcore.skeleton.SkeletonizeParams`` (its defaults when None).
+        ``method`` "cao" (default) or "skelscope"; ``params`` its ``CaoParams`` / ``SkeletonizeParams``.
         """
         if self.scene.cloud is None:
             self.message.emit("load a cloud first")
             return False
         try:
-            from skelcore.skeleton import SkeletonizeParams, skeletonize
+            from skelcore.skeleton import skeletonize
         except ImportError as exc:
             self.error.emit("Skeletonize", f"the skeletonizer is not available ({exc})", "")
             return False
-        params = params or SkeletonizeParams()
+        params = params or None  # a menu action passes its checked state
         cloud = self.scene.cloud.points
 
         def job(progress: Callable[[float, str], None], cancel: Callable[[], bool]) -> Any:
-            return skeletonize(cloud, params, progress=progress, cancel=cancel)
+            return skeletonize(cloud, params, progress=progress, cancel=cancel, method=method)
 
         self._skeletonized_cloud = self.scene.cloud
         self.runner.start(job, "skeletonization")

@@ -185,6 +185,7 @@ def run_study(
     skeleton_cmd: str | None = None,
     params: Params = Params(),
     skeletonize_params: Any = None,
+    method: str | None = None,
     name: str = "cloud",
     inputs: tuple[str, ...] = (),
     progress: Progress | None = None,
@@ -210,7 +211,9 @@ def run_study(
     skeleton_cmd : instead of the built-in skeletonizer, a command line with ``{in}`` (the variant's
         cloud, written as PLY) and ``{out_skeletal}`` and/or ``{out_curve}`` placeholders; run
         without a shell.
-    params : evaluation parameters (SPEC); ``skeletonize_params`` : :class:`SkeletonizeParams`.
+    params : evaluation parameters (SPEC); ``skeletonize_params`` : :class:`CaoParams` or
+        :class:`SkeletonizeParams`; ``method`` : the built-in skeletonizer, "cao" (default) or
+        "skelscope" (see :func:`skelcore.skeleton.skeletonize`).
     name : the shape's name in the table's first column.
     inputs : paths no output may overwrite (the user's files).
     progress, cancel : as :func:`skelcore.evaluate`.
@@ -275,7 +278,8 @@ def run_study(
             work.cleanup()
 
     settings = {"noise": noise, "noise_model": noise_model, "sparse": sparse, "grid": grid,
-                "base_grid": base_grid, "seed": seed, "skeleton_cmd": skeleton_cmd}
+                "base_grid": base_grid, "seed": seed, "skeleton_cmd": skeleton_cmd,
+                "method": None if skeleton_cmd else (method or "cao")}
     result = StudyResult(name=name, rows=rows, params=params, settings=settings)
     if out_dir is not None:
         result.write_tables(out_dir, inputs=inputs)
