@@ -7,7 +7,7 @@ from __future__ import annotations
 import math
 from typing import Any
 
-from PySide6 import QtCore, QtWidgets
+from PySide6 import QtCore, QtGui, QtWidgets
 
 ROWS = ("d_B / d_Wp", "boundedness", "centeredness", "smoothness")
 COLUMNS = ("skeletal points", "curve skeleton")
@@ -38,8 +38,12 @@ def summary_cells(summary: dict[str, Any] | None) -> list[list[str]]:
     return cells
 
 
+NO_RESULT = "No evaluation yet: load a cloud and a skeleton, then Evaluate (F5)."
+
+
 class SummaryPanel(QtWidgets.QWidget):
     thresholds_changed = QtCore.Signal(float, float)
+    rerun_requested = QtCore.Signal()
 
     def __init__(self, parent: QtWidgets.QWidget | None = None) -> None:
         super().__init__(parent)
@@ -53,13 +57,20 @@ class SummaryPanel(QtWidgets.QWidget):
         self.table.setSizeAdjustPolicy(QtWidgets.QAbstractScrollArea.SizeAdjustPolicy.AdjustToContents)
         self.beta_star = self._spin("bounded means beta > beta* (SPEC 2)")
         self.c_star = self._spin("centred means c > c* (SPEC 3)")
-        self.details = QtWidgets.QLabel("No evaluation yet: load a cloud and a skeleton, then Evaluate (F5).")
+        self.details = QtWidgets.QLabel(NO_RESULT)
         self.details.setWordWrap(True)
+        # Shown while the results are out of date (see set_stale).
+        self.rerun = QtWidgets.QPushButton("", self)
+        self.rerun.setStyleSheet("QPushButton { color: #8a4b00; font-weight: bold; }")
+        self.rerun.clicked.connect(self.rerun_requested.emit)
+        self.rerun.setVisible(False)
+        self.stale = ""
         form = QtWidgets.QFormLayout()
         form.addRow("beta* (boundedness)", self.beta_star)
         form.addRow("c* (centeredness)", self.c_star)
         layout = QtWidgets.QVBoxLayout(self)
         layout.addWidget(self.table)
+        layout.addWidget(self.rerun)
         layout.addLayout(form)
         layout.addWidget(self.details)
         layout.addStretch(1)
@@ -92,7 +103,10 @@ class SummaryPanel(QtWidgets.QWidget):
                 item = QtWidgets.QTableWidgetItem(text)
                 item.setTextAlignment(QtCore.Qt.AlignmentFlag.AlignCenter)
                 self.table.setItem(r, c, item)
+        self._grey(bool(self.stale))
         if summary is None or evaluation is None:
+            # Nothing shown: no line may describe a run whose values are gone.
+            self.details.setText(NO_RESULT)
             return
         lines = [f"boundedness estimator: {evaluation.params.boundedness_method}"]
         topo = summary.get("topology")
@@ -102,6 +116,28 @@ class SummaryPanel(QtWidgets.QWidget):
         if total is not None:
             lines.append(f"evaluated in {total:.2f} s")
         self.details.setText("\n".join(lines))
+
+    def set_stale(self, reason: str) -> None:
+        """Mark the results out of date ("settings changed", "inputs changed"): values greyed, a
+        re-run button naming the reason; "" clears the mark."""
+        self.stale = reason
+        self.rerun.setText(f"{reason}: re-run (F5)" if reason else "")
+        self.rerun.setVisible(bool(reason))
+        self._grey(bool(reason))
+
+    def _grey(self, grey: bool) -> None:
+        colour = self.palette().color(QtGui.QPalette.ColorGroup.Disabled, QtGui.QPalette.ColorRole.Text) if grey \
+            else self.palette().color(QtGui.QPalette.ColorRole.Text)
+        for r in range(self.table.rowCount()):
+            for c in range(self.table.columnCount()):
+                item = self.table.item(r, c)
+                if item is not None:
+                    item.setForeground(colour)
+        self.details.setEnabled(not grey)
+
+    def is_greyed(self) -> bool:
+        item = self.table.item(1, 0)
+        return item is not None and item.foreground().color() != self.palette().color(QtGui.QPalette.ColorRole.Text)
 
     def cell_text(self, row: str, column: str) -> str:
         item = self.table.item(ROWS.index(row), COLUMNS.index(column))
