@@ -67,10 +67,23 @@ def fit_camera(plotter: Any, point_sets: Iterable[np.ndarray] = ()) -> None:
         x, y = _view_coordinates(ren, pts)
         if not len(x):
             break
-        cx = -WINDOW_CENTER_X  # where the projection centre lands in the viewport
+        # Centre the data in the free area (its box centre need not be its picture's centre): pan
+        # the camera by the world offset between the two view points at the focal point's depth.
+        fp = np.asarray(camera.GetFocalPoint())
+        ren.SetWorldPoint(*fp, 1.0)
+        ren.WorldToView()
+        depth = ren.GetViewPoint()[2]
+        now = _view_to_world(ren, (x.max() + x.min()) / 2, (y.max() + y.min()) / 2, depth)
+        goal = _view_to_world(ren, (FIT_X[0] + FIT_X[1]) / 2, (FIT_Y[0] + FIT_Y[1]) / 2, depth)
+        shift = now - goal
+        camera.SetFocalPoint(*(fp + shift))
+        camera.SetPosition(*(np.asarray(camera.GetPosition()) + shift))
+        x, y = _view_coordinates(ren, pts)
+        # Zooming scales the view about the focal point's image (the window centre moved it left).
+        (cx,), (cy,) = _view_coordinates(ren, np.asarray([camera.GetFocalPoint()]))
         need = max(
             (x.max() - cx) / (FIT_X[1] - cx), (cx - x.min()) / (cx - FIT_X[0]),
-            y.max() / FIT_Y[1], -y.min() / -FIT_Y[0], 1e-6,
+            (y.max() - cy) / (FIT_Y[1] - cy), (cy - y.min()) / (cy - FIT_Y[0]), 1e-6,
         )
         if abs(need - 1.0) < 0.01:
             break
@@ -92,6 +105,13 @@ def _view_coordinates(ren: Any, pts: np.ndarray) -> tuple[np.ndarray, np.ndarray
     wv = hom[:, 3]
     ok = wv > 1e-12
     return hom[ok, 0] / wv[ok], hom[ok, 1] / wv[ok]
+
+
+def _view_to_world(ren: Any, x: float, y: float, z: float) -> np.ndarray:
+    ren.SetViewPoint(float(x), float(y), float(z))
+    ren.ViewToWorld()
+    wp = ren.GetWorldPoint()
+    return np.asarray(wp[:3]) / (wp[3] if wp[3] else 1.0)
 
 
 def orient_standard_view(plotter: Any, name: str) -> None:

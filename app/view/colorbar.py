@@ -17,7 +17,7 @@ __all__ = ["ColourBar", "BAR_X", "BAR_WIDTH", "NAN_LABEL"]
 
 BAR_X, BAR_Y, BAR_WIDTH, BAR_HEIGHT = 0.87, 0.25, 0.06, 0.5  # normalized viewport
 NAN_LABEL = "NaN (invalid)"
-_SWATCH = (0.875, 0.17, 0.895, 0.21)  # x0, y0, x1, y1 (normalized viewport)
+_SWATCH = (0.875, 0.18, 0.895, 0.20)  # x0, y0, x1, y1 (normalized viewport)
 _TITLE_SIZE, _LABEL_SIZE = 14, 12
 
 

@@ -166,7 +166,7 @@ class SceneView:
             if pickable is not None:
                 self._pickable[key] = pickable
             if lod and len(points) > LOD_POINTS:
-                idx = lod_indices(len(points))
+                idx = lod_indices(len(points), LOD_POINTS)
                 twin = pv.PolyData(display_coordinates(np.asarray(points)[idx]))
                 self._actors[f"{key}-lod"] = self._add_points(f"{key}-lod", twin, plain, size, layer.opacity, False)
                 self._meshes[f"{key}-lod"] = twin
