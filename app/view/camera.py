@@ -63,7 +63,7 @@ def fit_camera(plotter: Any, point_sets: Iterable[np.ndarray] = ()) -> None:
     if not len(pts):
         camera.zoom(0.9)
         return
-    for _ in range(3):  # perspective: zooming scales projected offsets exactly; depth clipping may shift a bit
+    for _ in range(4):  # perspective: zooming scales projected offsets exactly; depth clipping may shift a bit
         x, y = _view_coordinates(ren, pts)
         if not len(x):
             break
@@ -85,8 +85,9 @@ def fit_camera(plotter: Any, point_sets: Iterable[np.ndarray] = ()) -> None:
             (x.max() - cx) / (FIT_X[1] - cx), (cx - x.min()) / (cx - FIT_X[0]),
             (y.max() - cy) / (FIT_Y[1] - cy), (cy - y.min()) / (cy - FIT_Y[0]), 1e-6,
         )
-        if abs(need - 1.0) < 0.01:
+        if 0.98 <= need <= 1.0:
             break
+        need *= 1.003  # land just inside the free area
         if camera.GetParallelProjection():
             camera.SetParallelScale(camera.GetParallelScale() * need)
         else:
