@@ -122,10 +122,10 @@ def test_a_new_cloud_over_a_skeleton_asks_clears_by_default_and_refits_the_camer
 def _assert_fits(w, points):
     """Every point is drawn inside the view and left of the colour bar."""
     from app.view.camera import FIT_X
-    from app.view.picking import project_to_display
+    from app.view.picking import pick_layout, project_to_display
 
     ren = w.view.plotter.renderer
-    x, y, _ = project_to_display(ren, points)
+    x, y, _ = project_to_display(ren, pick_layout(points))
     width, height = ren.GetSize()
     assert x.min() >= 0 and y.min() >= 0 and y.max() <= height
     assert x.max() <= (FIT_X[1] + 1) / 2 * width + 1

@@ -14,7 +14,7 @@ from PySide6 import QtCore
 
 __all__ = ["LOD_POINTS", "lod_indices", "MotionFilter", "WHEEL_REST_MS"]
 
-LOD_POINTS = 150_000
+LOD_POINTS = 80_000
 """Layers larger than this get a twin of this many points (a spread, seeded random subsample)."""
 WHEEL_REST_MS = 250
 """The camera counts as resting this long after the last wheel step."""

@@ -22,7 +22,7 @@ from .colorbar import ColourBar
 from .frames import FrameScheduler
 from .interactor import ClickFilter, DropInteractor
 from .lod import LOD_POINTS, MotionFilter, lod_indices
-from .picking import nearest_on_screen
+from .picking import nearest_on_screen, pick_layout
 from .style import CLOUD_GREY, CURVE_EDGE, CURVE_VERTEX, MAGENTA, PICK_MARKER, SKELETAL_PLAIN, make_lut, plain_lut
 
 __all__ = ["SceneView", "EMPTY_HINT"]
@@ -44,6 +44,7 @@ class SceneView:
         self._meshes: dict[str, pv.PolyData] = {}  # actor name -> its points
         self._pickable: dict[str, tuple[str, str]] = {}  # actor name -> (layer, location)
         self._lod: dict[str, np.ndarray] = {}  # layer actor name -> indices of its level-of-detail twin
+        self._pick_coords: dict[str, np.ndarray] = {}  # actor name -> its points laid out for picking
         self._lut: tuple[tuple[float, float], pv.LookupTable] | None = None
         self._edges_as_tubes: bool | None = None  # how the curve's edge actor was built
         self._colour_bar = ColourBar(self.plotter)
@@ -130,6 +131,7 @@ class SceneView:
         self._coloured.pop(name, None)
         self._meshes.pop(name, None)
         self._lod.pop(name, None)
+        self._pick_coords.pop(name, None)
 
     def _build(self, name: str | None) -> None:
         if name == "cloud":
@@ -462,7 +464,9 @@ class SceneView:
             if actor is None or layer is None or not layer.visible:
                 continue
             tolerance = (max(float(actor.prop.point_size), 4.0) / 2 + 3) * ratio
-            hit = nearest_on_screen(self.plotter.renderer, self._sources[key], x, y, tolerance)
+            if key not in self._pick_coords:
+                self._pick_coords[key] = pick_layout(self._sources[key])
+            hit = nearest_on_screen(self.plotter.renderer, self._pick_coords[key], x, y, tolerance)
             if hit is not None:
                 candidates.append((hit[1], hit[2], where, hit[0]))
         if not candidates:
