@@ -5,8 +5,8 @@
   evaluated and coloured by each local metric; magenta marks invalid (NaN) values.
 - ``barcode_panel.png``: the H0 barcode panel; ``histogram_panel.png``: the histogram panel.
 - ``window_tubes.png``: edges as tubes, coloured by centeredness (the curve samples' values).
-- ``figure_spheres_edl.png``: File > Save picture at scale 2 with shaded spheres and eye-dome lighting,
-  no colour bar (points and lines grow with the scale).
+- ``figure_spheres.png``: File > Save picture at scale 2 with points as shaded spheres (points, lines
+  and text grow with the scale); ``figure_eye_dome.png``: eye-dome lighting, no colour bar, no axes.
 - ``window_skeletonized.png``: the skeletonizer's output for the sample cloud (issue 4), evaluated.
 - ``window_hammer_skeletonized.png``: the real hammer scan (../shared/data, when present) skeletonized
   and evaluated, coloured by centeredness.
@@ -115,13 +115,18 @@ def main() -> int:
     window.actions_by_name["tubes"].trigger()
     window.view.standard_view("iso")
     window.scene.set_style("spheres", True)
-    window.scene.set_style("eye_dome", True)
-    window.scene.set_metric("boundedness")
+    window.scene.set_metric("centeredness")
     settle()
-    window.save_screenshot(str(OUT / "figure_spheres_edl.png"), scale=2, colour_bar=False)
-    print("wrote screenshots/figure_spheres_edl.png")
+    window.save_screenshot(str(OUT / "figure_spheres.png"), scale=2)
+    print("wrote screenshots/figure_spheres.png")
     window.scene.set_style("spheres", False)
+    window.scene.set_style("eye_dome", True)
+    window.scene.set_style("axes", False)
+    settle()
+    window.save_screenshot(str(OUT / "figure_eye_dome.png"), scale=2, colour_bar=False)
+    print("wrote screenshots/figure_eye_dome.png")
     window.scene.set_style("eye_dome", False)
+    window.scene.set_style("axes", True)
 
     # Skeletonize the bare cloud (issue 4) and evaluate its output.
     try:

@@ -16,7 +16,7 @@ from .style import MAGENTA
 __all__ = ["ColourBar", "BAR_X", "BAR_WIDTH", "NAN_LABEL"]
 
 BAR_X, BAR_Y, BAR_WIDTH, BAR_HEIGHT = 0.87, 0.25, 0.06, 0.5  # normalized viewport
-NAN_LABEL = "NaN (invalid)"
+NAN_LABEL = "NaN"  # short: it must fit right of the swatch in a narrow view
 _SWATCH = (0.875, 0.18, 0.895, 0.20)  # x0, y0, x1, y1 (normalized viewport)
 _TITLE_SIZE, _LABEL_SIZE = 14, 12
 
@@ -96,18 +96,15 @@ class ColourBar:
         return self.label.GetPosition()[0] > _SWATCH[2]
 
     def scaled(self, scale: int, visible: bool = True) -> list[Callable[[], None]]:
-        """Scale the bar's and the legend's text by ``scale`` (a scaled screenshot) and hide them
+        """Scale the legend's text by ``scale`` (a scaled screenshot; a text actor keeps its pixel
+        size, the bar scales its own) and hide bar and legend
         when not ``visible``; the functions that undo it."""
         undo: list[Callable[[], None]] = []
         bars = list(self.plotter.scalar_bars.values())
-        for bar in bars:
+        for bar in bars:  # its text already follows the bar's size, which follows the picture's
             on = bar.GetVisibility()
-            title, labels = bar.GetTitleTextProperty(), bar.GetLabelTextProperty()
-            ts, ls = title.GetFontSize(), labels.GetFontSize()
-            title.SetFontSize(ts * scale)
-            labels.SetFontSize(ls * scale)
             bar.SetVisibility(on and visible)
-            undo.append(lambda b=bar, o=on, t=title, l=labels, a=ts, c=ls: (b.SetVisibility(o), t.SetFontSize(a), l.SetFontSize(c)))
+            undo.append(lambda b=bar, o=on: b.SetVisibility(o))
         prop = self.label.GetTextProperty()
         size, shown = prop.GetFontSize(), self.nan_shown
         prop.SetFontSize(size * scale)
