@@ -27,9 +27,9 @@ def display_coordinates(points: np.ndarray) -> np.ndarray:
 def draw_in_front(actor: Any, offset: float = -200.0) -> None:
     """The curve skeleton usually lies exactly on the skeletal points (both on the medial axis):
     a depth offset draws it in front of coincident points instead of a random z-fight."""
-    import vtk
+    from vtkmodules.vtkRenderingCore import vtkMapper  # one module: `import vtk` loads all of VTK (seconds)
 
-    vtk.vtkMapper.SetResolveCoincidentTopologyToPolygonOffset()
+    vtkMapper.SetResolveCoincidentTopologyToPolygonOffset()
     mapper = actor.GetMapper()
     mapper.SetRelativeCoincidentTopologyPointOffsetParameter(offset)
     mapper.SetRelativeCoincidentTopologyLineOffsetParameters(0.0, offset)

@@ -59,26 +59,28 @@ class ColourBar:
         self.label.SetVisibility(on)
 
     def _make_nan_legend(self) -> tuple[Any, Any]:
-        import vtk
+        from vtkmodules.vtkCommonCore import vtkPoints  # single modules: `import vtk` loads all of VTK (seconds)
+        from vtkmodules.vtkCommonDataModel import vtkCellArray, vtkPolyData
+        from vtkmodules.vtkRenderingCore import vtkActor2D, vtkCoordinate, vtkPolyDataMapper2D, vtkTextActor
 
         x0, y0, x1, y1 = _SWATCH
-        pts = vtk.vtkPoints()
+        pts = vtkPoints()
         for x, y in ((x0, y0), (x1, y0), (x1, y1), (x0, y1)):
             pts.InsertNextPoint(x, y, 0.0)
-        quad = vtk.vtkCellArray()
+        quad = vtkCellArray()
         quad.InsertNextCell(4, [0, 1, 2, 3])
-        poly = vtk.vtkPolyData()
+        poly = vtkPolyData()
         poly.SetPoints(pts)
         poly.SetPolys(quad)
-        coord = vtk.vtkCoordinate()
+        coord = vtkCoordinate()
         coord.SetCoordinateSystemToNormalizedViewport()
-        mapper = vtk.vtkPolyDataMapper2D()
+        mapper = vtkPolyDataMapper2D()
         mapper.SetInputData(poly)
         mapper.SetTransformCoordinate(coord)
-        swatch = vtk.vtkActor2D()
+        swatch = vtkActor2D()
         swatch.SetMapper(mapper)
         swatch.GetProperty().SetColor(*(c / 255.0 for c in MAGENTA))
-        label = vtk.vtkTextActor()
+        label = vtkTextActor()
         label.SetInput(NAN_LABEL)
         prop = label.GetTextProperty()
         prop.SetFontSize(_LABEL_SIZE)

@@ -365,9 +365,9 @@ class SceneView:
 
     def _make_hint(self) -> Any:
         """The empty window's hint, centred; hidden once anything is loaded."""
-        import vtk
+        from vtkmodules.vtkRenderingCore import vtkTextActor  # one module: `import vtk` loads all of VTK (seconds)
 
-        text = vtk.vtkTextActor()
+        text = vtkTextActor()
         text.SetInput(EMPTY_HINT)
         prop = text.GetTextProperty()
         prop.SetFontSize(20)
