@@ -369,9 +369,7 @@ class MainWindow(QtWidgets.QMainWindow):
         elif event.kind in ("colouring", "display"):
             self._plots_stale.add("histogram")
             self._schedule_plots()
-        elif event.kind in ("style", "display"):
-            pass
-        if event.kind == "layer":
+        elif event.kind == "layer":
             self.pick.show_info(None)
             names = [os.path.basename(layer.path) for layer in self.scene.layers.values() if layer.path]
             self.setWindowTitle("SkelScope" + (f" — {', '.join(names)}" if names else ""))
