@@ -100,6 +100,9 @@ class MainWindow(QtWidgets.QMainWindow):
         self.display.layer_action.connect(self._layer_action)
         self.view.on_pick = self._picked
         self.scene.subscribe(self._on_scene)
+        from .support_controller import install_supports
+
+        install_supports(self)  # issue 11: the picked element's support (dock, 3-D overlay, filter)
         self._update_actions()
         QtCore.QTimer.singleShot(1500, preload_matplotlib)  # after the first frame, off the GUI thread
         QtCore.QTimer.singleShot(4000, self._prepare_plots)

@@ -1,0 +1,161 @@
+"""The local support behind a picked element's value, from the shown ``Evaluation`` (issue 11).
+
+Which support depends on the element and the metric on screen: boundedness -> the direction map
+around the element (paper Eq. 5-6; for the ``paper`` estimator its triangles); centeredness of a
+curve sample -> its slab, ring and ellipse (Eq. 11, SPEC 3); centeredness of a skeletal point -> its
+k neighbours and the two centroids (Eq. 10). The engine's :mod:`skelcore.metrics.supports` computes
+them in normalized units; this module picks the rows and maps 3-D points back to the user's units.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+__all__ = ["ElementSupport", "element_support"]
+
+
+@dataclass
+class ElementSupport:
+    """What the support panel plots and the 3-D overlay highlights for one element.
+
+    kind: "slab" | "knn" | "directions" | "none" (``reason`` says why nothing is shown).
+    points3d: named (n, 3) arrays in the user's units for the overlay (slab, ring, neighbours, ...).
+    detail: the engine's support object (SlabSupport, KnnSupport, DirectionMap, PaperTriangles).
+    """
+
+    kind: str
+    element: str
+    index: int
+    metric: str
+    value: float = float("nan")
+    reason: str = ""
+    points3d: dict[str, np.ndarray] = field(default_factory=dict)
+    detail: Any = None
+    estimator: str = "rays"
+
+
+_CACHE: dict[int, Any] = {}
+
+
+def _curve_samples_n(ev: Any) -> Any:
+    """The curve's samples and directions in normalized units, as evaluate computed them."""
+    from skelcore.curve_sampling import sample_curve
+
+    key = id(ev)
+    hit = _CACHE.get(key)
+    if hit is not None and hit[0] is ev:
+        return hit[1]
+    p = ev.params
+    curve_n = ev.curve.curve.transformed(ev.normalization.apply)
+    samples = sample_curve(curve_n, p.curve_samples, collinear_cos=p.collinear_cos)
+    _CACHE.clear()
+    _CACHE[key] = (ev, samples)
+    return samples
+
+
+def _none(info: dict[str, Any], metric: str, reason: str) -> ElementSupport:
+    return ElementSupport("none", info.get("element", ""), int(info.get("index", -1)), metric, reason=reason)
+
+
+def element_support(ev: Any, info: dict[str, Any] | None, metric: str) -> ElementSupport | None:
+    """The support of the picked element ``info`` (``Scene.element_info``) for ``metric``."""
+    if ev is None or info is None:
+        return None
+    layer, location, i = info["layer"], info["location"], int(info["index"])
+    norm = ev.normalization
+    cloud_n = norm.apply(ev.cloud)
+    if metric == "smoothness":
+        return _none(info, metric, "smoothness has no local support to draw (pick boundedness or centeredness)")
+    if layer == "curve" and location == "vertices":
+        return _none(info, metric, f"{metric} lives on the curve samples: pick a sample, not a vertex")
+    if layer == "curve":
+        if ev.curve is None:
+            return _none(info, metric, "no curve result")
+        q_user = np.asarray(ev.curve.samples[i], dtype=float)
+    elif layer == "skeletal":
+        if ev.skeletal is None:
+            return _none(info, metric, "no skeletal result")
+        q_user = np.asarray(ev.skeletal.points[i], dtype=float)
+    else:
+        return _none(info, metric, "pick a skeletal point or a curve sample")
+    if metric == "boundedness":
+        return _boundedness(ev, info, cloud_n, q_user)
+    if layer == "curve":
+        return _slab(ev, info, cloud_n, i)
+    return _knn(ev, info, cloud_n, i)
+
+
+def _boundedness(ev: Any, info: dict[str, Any], cloud_n: np.ndarray, q_user: np.ndarray) -> ElementSupport:
+    from skelcore.metrics.boundedness import paper_triangles
+    from skelcore.metrics.supports import direction_map
+
+    p = ev.params
+    q_n = ev.normalization.apply(q_user[None])[0]
+    values = ev.curve.sample_boundedness if info["layer"] == "curve" else ev.skeletal.boundedness
+    out = ElementSupport("directions", info["element"], int(info["index"]), "boundedness",
+                         value=float(values[int(info["index"])]), estimator=p.boundedness_method)
+    out.points3d["query"] = q_user[None]
+    if p.boundedness_method == "paper":
+        out.detail = paper_triangles(cloud_n, q_n, plane_threshold=p.paper_plane_threshold,
+                                     area_threshold=p.paper_area_threshold)
+        if out.detail is None:
+            out.reason = "fewer than 3 distinct directions: no triangulation (beta = 0)"
+    else:
+        out.detail = direction_map(cloud_n, q_n, params=p)
+    return out
+
+
+def _slab(ev: Any, info: dict[str, Any], cloud_n: np.ndarray, i: int) -> ElementSupport:
+    from skelcore.metrics.supports import curve_sample_support
+
+    samples = _curve_samples_n(ev)
+    sup = curve_sample_support(cloud_n, samples.points[i], samples.directions[i], params=ev.params)
+    out = ElementSupport("slab", info["element"], i, "centeredness", value=sup.value, detail=sup)
+    if not len(sup.slab):
+        out.reason = "a joint (degree >= 3): no direction, so no slab (NaN)"
+    cloud = np.asarray(ev.cloud, dtype=float)
+    out.points3d["slab"] = cloud[sup.slab]
+    out.points3d["ring"] = cloud[sup.slab[sup.ring]]
+    out.points3d["query"] = np.asarray(ev.curve.samples[i], dtype=float)[None]
+    if sup.centre is not None:
+        centre_n = sup.point + sup.centre @ sup.basis
+        out.points3d["centre"] = ev.normalization.invert(centre_n[None])
+    return out
+
+
+def _knn(ev: Any, info: dict[str, Any], cloud_n: np.ndarray, i: int) -> ElementSupport:
+    from skelcore.metrics.supports import skeletal_point_support
+
+    s = ev.skeletal
+    mode = ev.correspondence
+    cloud = np.asarray(ev.cloud, dtype=float)
+    skel_user = np.asarray(s.points, dtype=float)
+    skel_n = ev.normalization.apply(skel_user)
+    if mode == "none" or not s.centeredness_available:
+        return _none(info, "centeredness", "no correspondence between the skeletal points and the cloud: "
+                     "skeletal centeredness is not computed")
+    if mode == "index":
+        return _none(info, "centeredness", "the skeletal index is not kept with the evaluation: "
+                     "its neighbourhood cannot be drawn")
+    row = i
+    if mode == "reverse":
+        # the pointwise set is (skel[rows], cloud): show the first cloud row projected onto point i
+        mapped = np.flatnonzero(np.asarray(s.rows) == i)
+        if not len(mapped):
+            return _none(info, "centeredness", "no cloud point projects onto this skeletal point (NaN)")
+        row = int(mapped[0])
+        pointwise_n, pointwise_user = skel_n[s.rows], skel_user[s.rows]
+    else:
+        pointwise_n, pointwise_user = skel_n, skel_user
+    sup = skeletal_point_support(cloud_n, pointwise_n, row, params=ev.params)
+    out = ElementSupport("knn", info["element"], i, "centeredness", value=sup.value, detail=sup)
+    inv = ev.normalization.invert
+    out.points3d["neighbours"] = pointwise_user[sup.neighbours]
+    out.points3d["cloud"] = cloud[sup.neighbours]
+    out.points3d["m_s"] = inv(sup.skeletal_centroid[None])
+    out.points3d["m_o"] = inv(sup.cloud_centroid[None])
+    out.points3d["query"] = skel_user[i][None]
+    return out

@@ -1,0 +1,173 @@
+"""Wires issue 11's support views into the main window: a pick shows the element's support in the
+"Support" dock (2-D plot) and in the 3-D view (overlay); the Display panel's "only elements below the
+threshold" box hides every element whose value passes (beta > beta*, c > c*; NaN stays shown).
+
+Installed by one call from :class:`app.main_window.MainWindow`; it chains the view's ``on_pick`` and
+subscribes to the scene after the view, so its overlay and filter are applied after the view's redraw.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+import pyvista as pv
+from PySide6 import QtCore, QtWidgets
+
+from .panels.support import SupportPanel
+from .scene import SceneEvent
+from .scene.supports import ElementSupport, element_support
+from .view.actors import display_coordinates
+from .view.style import MAGENTA
+from .view.support_overlay import SupportOverlay
+
+__all__ = ["SupportController", "install_supports", "below_threshold"]
+
+# scene-view actor -> (layer, quantity location) the filter replaces
+_FILTERED = {"skeletal": ("skeletal", "points"), "curve-samples": ("curve", "samples"),
+             "curve-vertices": ("curve", "vertices")}
+
+
+def below_threshold(values: np.ndarray, threshold: float) -> np.ndarray:
+    """The elements an overall score does not count: value <= threshold, or NaN (SPEC 2-3)."""
+    v = np.asarray(values, dtype=float)
+    return ~(v > threshold)
+
+
+class SupportController(QtCore.QObject):
+    def __init__(self, window: Any) -> None:
+        super().__init__(window)
+        self.window = window
+        self.scene = window.scene
+        self.view = window.view
+        self.panel = SupportPanel(window)
+        self.overlay = SupportOverlay(self.view)
+        self.info: dict[str, Any] | None = None
+        self.support: ElementSupport | None = None
+        self.filter_on = False
+        self._filter_names: list[str] = []
+        self.filter_meshes: dict[str, pv.PolyData] = {}  # filter actor name -> the points it draws
+        window._dock("Support", self.panel, QtCore.Qt.DockWidgetArea.LeftDockWidgetArea)
+        window.splitDockWidget(window.docks["Picked element"], window.docks["Support"], QtCore.Qt.Orientation.Vertical)
+        self.filter_box = QtWidgets.QCheckBox("only elements below the threshold", window.display)
+        self.filter_box.setToolTip("hide every element the overall score counts (beta > beta*, c > c*); NaN stays")
+        self.filter_box.toggled.connect(self.set_filter)
+        layout = window.display.layout()
+        layout.insertWidget(layout.count() - 1, self.filter_box)
+        self._pick = self.view.on_pick
+        self.view.on_pick = self.picked
+        self.scene.subscribe(self._on_scene)
+        self._sync_filter_box()
+
+    # ---- picking --------------------------------------------------------------------------
+    def picked(self, info: dict[str, Any] | None) -> None:
+        if self._pick is not None:
+            self._pick(info)
+        self.show_element(info)
+
+    def show_element(self, info: dict[str, Any] | None) -> ElementSupport | None:
+        """Compute and show the support of ``info`` for the metric on screen (None clears)."""
+        self.info = info
+        ev = self.scene.evaluation
+        try:
+            self.support = element_support(ev, info, self.scene.metric)
+        except (ValueError, IndexError) as exc:
+            self.support = None
+            self.window.statusBar().showMessage(f"support: {exc}", 8000)
+        scale = ev.normalization.scale if ev is not None else 1.0
+        self.panel.show_support(self.support, scale)
+        self.overlay.show(self.support)
+        return self.support
+
+    def _on_scene(self, event: SceneEvent) -> None:
+        if event.kind in ("layer", "quantities"):
+            self.info = None
+            self.overlay.clear()
+            if self.support is not None:
+                self.support = None
+                self.panel.show_support(None)
+        elif event.kind == "colouring" and self.info is not None:
+            self.show_element(self.info)  # the metric changed: that metric's support
+        if event.kind in ("layer", "quantities", "colouring", "thresholds", "display"):
+            self._sync_filter_box()
+            if self.filter_on:
+                self._apply_filter()
+
+    # ---- filter ---------------------------------------------------------------------------
+    def _sync_filter_box(self) -> None:
+        ok = self.scene.threshold_for(self.scene.metric) is not None and self.scene.evaluation is not None
+        self.filter_box.setEnabled(ok)
+        self.filter_box.setToolTip("hide every element the overall score counts (beta > beta*, c > c*); NaN stays"
+                                   if ok else "needs an evaluation and a metric with a threshold (not smoothness)")
+
+    def set_filter(self, on: bool) -> None:
+        self.filter_on = bool(on)
+        if self.filter_box.isChecked() != self.filter_on:
+            self.filter_box.blockSignals(True)
+            self.filter_box.setChecked(self.filter_on)
+            self.filter_box.blockSignals(False)
+        self._apply_filter()
+
+    def filtered_counts(self) -> dict[str, tuple[int, int]]:
+        """Per filtered actor: (elements shown, elements in all)."""
+        out = {}
+        for key, (layer_name, location) in _FILTERED.items():
+            mask = self._mask(layer_name, location)
+            if mask is not None:
+                out[key] = (int(mask.sum()), int(mask.size))
+        return out
+
+    def _mask(self, layer_name: str, location: str) -> np.ndarray | None:
+        threshold = self.scene.threshold_for(self.scene.metric)
+        layer = self.scene.layers.get(layer_name)
+        if threshold is None or layer is None:
+            return None
+        q = layer.quantity(self.scene.metric)
+        if q is None or q.location != location:
+            return None
+        return below_threshold(q.values, threshold)
+
+    def _apply_filter(self) -> None:
+        plotter = self.view.plotter
+        for name in self._filter_names:
+            plotter.remove_actor(name, render=False)
+        self._filter_names = []
+        self.filter_meshes = {}
+        actors = self.view._actors
+        active = self.filter_on and self.filter_box.isEnabled()
+        for key, (layer_name, location) in _FILTERED.items():
+            actor = actors.get(key)
+            layer = self.scene.layers.get(layer_name)
+            mask = self._mask(layer_name, location) if active else None
+            if actor is None or layer is None:
+                continue
+            if mask is None:
+                actor.SetVisibility(self.view._shown(key, layer))
+                if f"{key}-lod" in actors:
+                    actors[f"{key}-lod"].SetVisibility(self.view._shown(f"{key}-lod", layer))
+                continue
+            actor.SetVisibility(False)
+            lod = actors.get(f"{key}-lod")
+            if lod is not None:
+                lod.SetVisibility(False)
+            if not layer.visible or not mask.any():
+                continue
+            source = self.view._sources[key]
+            q = layer.quantity(self.scene.metric)
+            mesh = pv.PolyData(display_coordinates(np.asarray(source)[mask]))
+            mesh.point_data.set_array(np.asarray(q.values, dtype=float)[mask], "values")
+            name = f"filter-{key}"
+            plotter.add_mesh(mesh, scalars="values", cmap=self.view._lookup_table(), clim=self.scene.colour_range(),
+                             nan_color=MAGENTA, style="points", point_size=actor.prop.point_size + 1,
+                             lighting=False, name=name, reset_camera=False, render=False, pickable=False,
+                             show_scalar_bar=False)
+            self._filter_names.append(name)
+            self.filter_meshes[name] = mesh
+        self.view.request_render()
+
+
+def install_supports(window: Any) -> SupportController:
+    controller = SupportController(window)
+    window.supports = controller
+    return controller
+

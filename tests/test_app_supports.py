@@ -1,0 +1,167 @@
+"""Issue 11 in the window: a picked element's support plotted and highlighted, on shapes with known
+answers (a cylinder's cross-section, a point outside a sphere), and the below-threshold filter."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from PySide6 import QtCore, QtWidgets
+
+from skelcore import evaluate, shapes
+from skelcore.curve import CurveSkeleton
+
+pytestmark = pytest.mark.gui
+
+RADIUS = 0.5
+
+
+@pytest.fixture(scope="module")
+def cylinder_eval():
+    cyl = shapes.cylinder(2500, radius=RADIUS, length=4.0, capped=False, seed=4)
+    curve = CurveSkeleton.from_raw(cyl.curve_vertices, cyl.curve_edges)
+    return cyl, curve, evaluate(cyl.cloud, cyl.skeletal, curve)
+
+
+@pytest.fixture
+def window(qtbot, tmp_path, monkeypatch):
+    from app.main_window import MainWindow
+
+    monkeypatch.setattr(QtWidgets.QMessageBox, "critical", lambda *a, **k: pytest.fail(f"unexpected dialog {a[2]!r}"))
+    settings = QtCore.QSettings(str(tmp_path / "settings.ini"), QtCore.QSettings.Format.IniFormat)
+    w = MainWindow(settings=settings)
+    w.session.auto_evaluate = False
+    qtbot.addWidget(w)
+    w.resize(1300, 850)
+    w.show()
+    qtbot.waitExposed(w)
+    yield w
+    w.session.runner.shutdown()
+
+
+@pytest.fixture
+def cylinder_window(window, cylinder_eval):
+    cyl, curve, ev = cylinder_eval
+    window.session.show_arrays(cyl.cloud, cyl.skeletal, curve, ev)
+    return window
+
+
+def _rgb_count(img: np.ndarray, colour) -> int:
+    return int(np.all(np.asarray(img)[..., :3].reshape(-1, 3) == np.asarray(colour), axis=1).sum())
+
+
+def _middle_sample(ev) -> int:
+    z = ev.curve.samples[:, 2]
+    return int(np.argmin(np.abs(z - 2.0)))
+
+
+def test_a_curve_samples_plot_shows_a_circular_ring_centred_on_the_axis(cylinder_window, cylinder_eval, qtbot):
+    from matplotlib.patches import Ellipse
+
+    w = cylinder_window
+    _, _, ev = cylinder_eval
+    w.scene.set_metric("centeredness")
+    i = _middle_sample(ev)
+    w.supports.picked(w.scene.element_info("curve", "samples", i))
+    assert w.pick.info["index"] == i  # the pick panel still gets the pick
+    sup = w.supports.panel.support
+    assert sup.kind == "slab" and sup.value == pytest.approx(ev.curve.sample_centeredness_raw[i], abs=1e-12)
+    ax = w.supports.panel.figure.axes[0]
+    slab, ring = ax.collections[0].get_offsets(), ax.collections[1].get_offsets()
+    assert len(ring) > 10 and len(slab) >= len(ring)
+    # the plot is in the user's units: the ring kept is the circle of radius 0.5 around the axis
+    np.testing.assert_allclose(np.hypot(ring[:, 0], ring[:, 1]), RADIUS, atol=1e-6)
+    (ellipse,) = [p for p in ax.patches if isinstance(p, Ellipse)]
+    assert ellipse.width / 2 == pytest.approx(RADIUS, abs=0.02)
+    assert ellipse.height / 2 == pytest.approx(RADIUS, abs=0.02)
+    np.testing.assert_allclose(ellipse.center, 0.0, atol=0.02)
+    assert "c = " in w.supports.panel.title
+    # 3-D: the slab's cloud points and the ring are highlighted, the centre lies on the axis
+    pts = sup.points3d
+    half = sup.detail.half_width / ev.normalization.scale
+    assert np.all(np.abs(pts["slab"][:, 2] - ev.curve.samples[i, 2]) < half + 1e-9)
+    np.testing.assert_allclose(pts["centre"][0, :2], 0.0, atol=0.02)
+    assert {"support-slab", "support-ring", "support-centre"} <= set(w.supports.overlay.names)
+    w.scene.set_visible("cloud", False)
+    from app.view.support_overlay import OVERLAY_COLOURS
+
+    assert _rgb_count(w.view.image(), OVERLAY_COLOURS["ring"][0]) > 20
+    # a new result clears the highlight
+    w.scene.set_evaluation(ev)
+    assert w.supports.overlay.names == [] and w.supports.panel.support is None
+
+
+def test_a_skeletal_points_neighbours_and_centroids_are_shown(cylinder_window, cylinder_eval):
+    w = cylinder_window
+    cyl, _, ev = cylinder_eval
+    w.scene.set_metric("centeredness")
+    w.supports.picked(w.scene.element_info("skeletal", "points", 100))
+    sup = w.supports.support
+    assert sup.kind == "knn"
+    assert sup.value == pytest.approx(ev.skeletal.centeredness_raw[100], abs=1e-12)
+    nb = sup.points3d["neighbours"]
+    # pointwise correspondence: each neighbour's cloud point is the cloud row of the same index
+    np.testing.assert_array_equal(sup.points3d["cloud"], cyl.cloud[sup.detail.neighbours])
+    np.testing.assert_allclose(sup.points3d["m_s"][0], nb.mean(axis=0), atol=1e-12)
+    np.testing.assert_allclose(sup.points3d["m_o"][0], cyl.cloud[sup.detail.neighbours].mean(axis=0), atol=1e-12)
+    assert np.all(np.linalg.norm(sup.points3d["cloud"][:, :2], axis=1) == pytest.approx(RADIUS))
+    assert {"support-neighbours", "support-cloud", "support-m_s", "support-m_o", "support-links"} <= set(
+        w.supports.overlay.names)
+    # switching the metric shows that metric's support for the same element
+    w.scene.set_metric("boundedness")
+    assert w.supports.support.kind == "directions" and w.supports.overlay.names == []
+    w.scene.set_metric("smoothness")
+    assert w.supports.support.kind == "none"
+
+
+def test_a_point_outside_a_sphere_covers_the_cap_fraction_of_its_direction_map(window):
+    radius, dist = 1.0, 2.0
+    cloud = shapes.sphere_surface(3000, radius, seed=2)
+    skeletal = np.array([[0.0, 0.0, dist], [0.0, 0.0, 0.0], [0.3, 0.0, 0.0]])
+    ev = evaluate(cloud, skeletal)
+    window.session.show_arrays(cloud, skeletal, None, ev)
+    window.scene.set_metric("boundedness")
+    window.supports.picked(window.scene.element_info("skeletal", "points", 0))
+    sup = window.supports.support
+    assert sup.kind == "directions"
+    h = sup.detail.radius / ev.normalization.scale  # the balls' radius, in the user's units
+    cap = (1.0 - np.cos(np.arcsin((radius + h) / dist))) / 2.0
+    ax = window.supports.panel.figure.axes[0]
+    shown = np.asarray(ax.images[0].get_array())
+    assert shown.mean() == pytest.approx(cap, abs=0.02)
+    assert shown[0].all() and not shown[-1].any()  # the covered directions point down, at the sphere
+    assert shown.mean() == pytest.approx(ev.skeletal.boundedness[0], abs=0.01)
+    assert "beta = " in window.supports.panel.title
+    # the centre of the sphere sees (nearly) every direction, as the engine says
+    window.supports.picked(window.scene.element_info("skeletal", "points", 1))
+    inside = np.asarray(window.supports.panel.figure.axes[0].images[0].get_array()).mean()
+    assert inside > 0.9 and inside == pytest.approx(ev.skeletal.boundedness[1], abs=0.01)
+
+
+def test_the_filter_shows_only_the_elements_below_the_threshold(cylinder_window, cylinder_eval):
+    w = cylinder_window
+    _, _, ev = cylinder_eval
+    w.scene.set_metric("boundedness")
+    w.scene.set_thresholds(0.9, 0.75)
+    below = ~(ev.skeletal.boundedness > 0.9)
+    assert 0 < below.sum() < len(below)
+    box = w.supports.filter_box
+    assert box.isEnabled()
+    box.setChecked(True)
+    view = w.view
+    assert not view._actors["skeletal"].GetVisibility()
+    assert "filter-skeletal" in view.plotter.renderer.actors
+    mesh = w.supports.filter_meshes["filter-skeletal"]
+    assert mesh.n_points == int(below.sum())
+    np.testing.assert_allclose(mesh["values"], ev.skeletal.boundedness[below])
+    assert w.supports.filtered_counts()["skeletal"] == (int(below.sum()), len(below))
+    # a new threshold re-filters at once
+    w.scene.set_thresholds(0.95, 0.75)
+    assert w.supports.filter_meshes["filter-skeletal"].n_points == int((~(ev.skeletal.boundedness > 0.95)).sum())
+    # the curve samples are filtered too (boundedness lives on them)
+    assert w.supports.filter_meshes["filter-curve-samples"].n_points == int((~(ev.curve.sample_boundedness > 0.95)).sum())
+    # smoothness has no threshold: the box is disabled and everything shows again
+    w.scene.set_metric("smoothness")
+    assert not box.isEnabled() and view._actors["skeletal"].GetVisibility()
+    box.setChecked(False)
+    w.scene.set_metric("boundedness")
+    assert view._actors["skeletal"].GetVisibility() and "filter-skeletal" not in view.plotter.renderer.actors
