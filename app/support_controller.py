@@ -158,7 +158,7 @@ class SupportController(QtCore.QObject):
             mesh.point_data.set_array(np.asarray(q.values, dtype=float)[mask], "values")
             name = f"filter-{key}"
             plotter.add_mesh(mesh, scalars="values", cmap=self.view._lookup_table(), clim=self.scene.colour_range(),
-                             nan_color=MAGENTA, style="points", point_size=actor.prop.point_size + 1,
+                             nan_color=MAGENTA, style="points", point_size=actor.prop.point_size + 3,
                              lighting=False, name=name, reset_camera=False, render=False, pickable=False,
                              show_scalar_bar=False)
             self._filter_names.append(name)

@@ -11,6 +11,10 @@
 - ``window_hammer_skeletonized.png``: the real hammer scan (../shared/data, when present) skeletonized
   and evaluated, coloured by centeredness.
 - ``error_dialog.png``: the dialog a corrupt file gives, over the window that survives it.
+- Issue 11 (``--supports`` makes only these): ``window_support_slab.png`` / ``support_slab_panel.png``
+  (a curve sample's slab, ring and ellipse), ``window_support_knn.png`` (a skeletal point's neighbours
+  and centroids), ``support_directions_panel.png`` / ``support_paper_panel.png`` (direction map, paper
+  triangles), ``window_filter.png`` (only the elements below beta*).
 
 Falls back to freshly generated shapes in a temporary folder when resources/samples/ is missing.
 """
@@ -86,6 +90,11 @@ def main() -> int:
         print(f"error: {window.errors[0]}", file=sys.stderr)
         return 1
     window.view.standard_view("xy")
+    support_screenshots(window, settle, save)
+    if "--supports" in sys.argv:
+        window.session.runner.shutdown()
+        window.close()
+        return 0
     for metric in ("boundedness", "centeredness", "smoothness"):
         window.scene.set_metric(metric)
         window.docks["Histogram" if metric == "centeredness" else "Barcodes"].raise_()
@@ -176,6 +185,64 @@ def main() -> int:
     window.session.runner.shutdown()
     window.close()
     return 0
+
+
+def support_screenshots(window, settle, save) -> None:
+    """Issue 11: each metric's local support on screen, for elements on the Y's upper arm."""
+    import numpy as np
+
+    import skelcore
+
+    scene, sup = window.scene, window.supports
+    ev = scene.evaluation
+    samples = ev.curve.samples
+    mid = int(np.argsort(np.abs(samples[:, 1] - 0.5 * (samples[:, 1].max() + np.median(samples[:, 1]))))[0])
+    scene.set_metric("centeredness")
+    info = scene.element_info("curve", "samples", mid)
+    window._picked(info)
+    window.view._show_marker(info["xyz"])
+    sup.picked(info)
+    settle(500)
+    save(window, "window_support_slab.png")
+    save(window.docks["Support"], "support_slab_panel.png")
+    skel = scene.skeletal.points
+    k = int(np.argmin(np.linalg.norm(skel - samples[mid], axis=1)))
+    info = scene.element_info("skeletal", "points", k)
+    window.view._show_marker(info["xyz"])
+    window._picked(info)
+    sup.picked(info)
+    settle(500)
+    save(window, "window_support_knn.png")
+    scene.set_metric("boundedness")  # the same element's direction map
+    settle(500)
+    save(window.docks["Support"], "support_directions_panel.png")
+    # the paper estimator on a few skeletal points (its triangulation per query is slow)
+    params = ev.params.replace(boundedness_method="paper")
+    few = skel[::64]
+    ev_paper = skelcore.evaluate(ev.cloud, few, params=params)
+    window.session.show_arrays(ev.cloud, few, scene.curve.curve, None)
+    window.session.runner.discard()
+    scene.set_evaluation(ev_paper)
+    scene.set_metric("boundedness")
+    info = scene.element_info("skeletal", "points", int(np.argmin(np.linalg.norm(few - skel[k], axis=1))))
+    sup.picked(info)
+    settle(500)
+    save(window.docks["Support"], "support_paper_panel.png")
+    window.session.show_arrays(ev.cloud, skel, scene.curve.curve, ev)
+    scene.set_metric("boundedness")
+    window._picked(None)
+    sup.picked(None)
+    window.view._remove_marker()
+    beta_star = scene.beta_star
+    scene.set_thresholds(0.9, scene.c_star)  # a stricter beta*: the arms' ends fall below it
+    window.summary.set_thresholds(scene.beta_star, scene.c_star)
+    sup.set_filter(True)
+    settle(500)
+    save(window, "window_filter.png")
+    sup.set_filter(False)
+    scene.set_thresholds(beta_star, scene.c_star)
+    window.summary.set_thresholds(scene.beta_star, scene.c_star)
+    settle()
 
 
 if __name__ == "__main__":

@@ -122,14 +122,14 @@ class SupportPanel(PlotPanel):
     def _knn(self, ax: Any, support: ElementSupport) -> None:
         sup = support.detail
         pts = support.points3d
-        # project on the plane through m_s orthogonal to the skeleton's local direction (the neighbours' main axis)
+        # the plane of the corresponding cloud points' two main axes (their cross-section), through m_s
         nb = pts["neighbours"]
-        centred = nb - nb.mean(axis=0)
-        axis = np.linalg.svd(centred, full_matrices=False)[2][0] if len(nb) > 1 else np.array([0.0, 0.0, 1.0])
-        helper = np.eye(3)[int(np.argmin(np.abs(axis)))]
-        g = np.cross(axis, helper)
-        g /= np.linalg.norm(g)
-        h = np.cross(axis, g)
+        cl = pts["cloud"]
+        centred = cl - cl.mean(axis=0)
+        if len(cl) > 2 and np.linalg.matrix_rank(centred) >= 2:
+            g, h = np.linalg.svd(centred, full_matrices=False)[2][:2]
+        else:
+            g, h = np.eye(3)[0], np.eye(3)[1]
         origin = pts["m_s"][0]
 
         def flat(p: np.ndarray) -> np.ndarray:
@@ -143,7 +143,7 @@ class SupportPanel(PlotPanel):
         ax.scatter([mo[0]], [mo[1]], marker="x", s=60, color=ELLIPSE, label="m_o (cloud centroid)", zorder=6)
         ax.set_aspect("equal", adjustable="datalim")
         self._head(ax, support, f"c = {_fmt(sup.value)} = 1 - |m_o - m_s| / M")
-        ax.set_xlabel("across the skeleton", fontsize=7)
+        ax.set_xlabel("main axes of the cloud points", fontsize=7)
         ax.legend(fontsize=6, frameon=False, loc="upper right")
 
 
