@@ -103,6 +103,9 @@ class MainWindow(QtWidgets.QMainWindow):
         from .support_controller import install_supports
 
         install_supports(self)  # issue 11: the picked element's support (dock, 3-D overlay, filter)
+        from .compare_view import install_compare
+
+        install_compare(self)  # issue 11: File > Compare with a second skeleton (B)
         self._update_actions()
         QtCore.QTimer.singleShot(1500, preload_matplotlib)  # after the first frame, off the GUI thread
         QtCore.QTimer.singleShot(4000, self._prepare_plots)

@@ -165,3 +165,59 @@ def test_the_filter_shows_only_the_elements_below_the_threshold(cylinder_window,
     box.setChecked(False)
     w.scene.set_metric("boundedness")
     assert view._actors["skeletal"].GetVisibility() and "filter-skeletal" not in view.plotter.renderer.actors
+
+
+@pytest.fixture(scope="module")
+def b_eval(cylinder_eval):
+    cyl, curve, _ = cylinder_eval
+    shifted = cyl.skeletal + np.array([0.15, 0.0, 0.0])  # an off-centre skeleton B of the same cloud
+    return shifted, evaluate(cyl.cloud, shifted, curve)
+
+
+def test_the_ab_table_shows_both_evaluations_and_their_differences(cylinder_window, cylinder_eval, b_eval):
+    from app.compare_view import ab_rows
+
+    w = cylinder_window
+    _, _, ev_a = cylinder_eval
+    _, ev_b = b_eval
+    view = w.compare.open(ev_a, ev_b, ("A", "shifted"))
+    try:
+        sa, sb = ev_a.summary(), ev_b.summary()
+        expected = {
+            "d_B": (sa["topology"]["bottleneck"], sb["topology"]["bottleneck"]),
+            "centeredness (skeletal)": (sa["centeredness"]["skeletal"], sb["centeredness"]["skeletal"]),
+            "boundedness (curve)": (sa["boundedness"]["curve"], sb["boundedness"]["curve"]),
+        }
+        rows = {label: (a, b, d) for label, a, b, d in view.rows}
+        for label, (a, b) in expected.items():
+            assert rows[label] == (a, b, b - a)
+        assert rows["centeredness (skeletal)"][2] < 0  # the shifted skeleton is less centred
+        assert [r[0] for r in view.rows] == [r[0] for r in ab_rows(sa, sb)]
+        for r, (label, a, b, d) in enumerate(view.rows):
+            assert view.cell(r, 0) == label
+            assert float(view.cell(r, 3)) == pytest.approx(d, abs=5e-5)
+            assert float(view.cell(r, 3)) == pytest.approx(float(view.cell(r, 2)) - float(view.cell(r, 1)), abs=2e-4)
+        # linked cameras: both halves look through one camera
+        cams = [ren.GetActiveCamera() for ren in view.plotter.renderers]
+        assert len(cams) == 2 and cams[0] is cams[1]
+        img = view.image()
+        assert img.shape[1] > 2 * 100
+    finally:
+        view.close()
+
+
+def test_skeleton_b_is_evaluated_in_the_worker_and_opens_the_ab_view(cylinder_window, cylinder_eval, b_eval, qtbot):
+    w = cylinder_window
+    _, _, ev_a = cylinder_eval
+    shifted, ev_b = b_eval
+    assert w.compare.compare_arrays(shifted, None, "shifted")
+    qtbot.waitUntil(lambda: bool(w.compare.views), timeout=120000)
+    view = w.compare.views[-1]
+    try:
+        rows = {label: (a, b, d) for label, a, b, d in view.rows}
+        assert rows["centeredness (skeletal)"][1] == pytest.approx(ev_b.summary()["centeredness"]["skeletal"])
+        assert rows["centeredness (skeletal)"][0] == ev_a.summary()["centeredness"]["skeletal"]
+        assert np.isnan(rows["boundedness (curve)"][1])  # B has no curve: no score, no difference
+        assert view.cell(list(rows).index("boundedness (curve)"), 3) == "—"
+    finally:
+        view.close()

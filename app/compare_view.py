@@ -1,0 +1,239 @@
+"""Two skeletons of one cloud side by side (issue 11): A (the main window's) and B (another method's).
+
+One pyvista interactor split in two renderers that share one camera (linked cameras: rotating either
+moves both), each drawing the cloud and its skeleton coloured by the chosen metric, and the summary
+table with A, B and B - A columns (the scores of :meth:`Evaluation.summary` at A's thresholds).
+File > "Compare with a second skeleton (B)…" loads B's files and evaluates them in the worker.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+from typing import Any
+
+import numpy as np
+from PySide6 import QtCore, QtWidgets
+
+__all__ = ["ab_rows", "CompareWindow", "install_compare"]
+
+_SCORES = [("d_B", "topology", "bottleneck"), ("d_Wp", "topology", "wasserstein")] + [
+    (f"{metric} ({kind})", metric, kind)
+    for metric in ("boundedness", "centeredness", "smoothness") for kind in ("skeletal", "curve")
+]
+
+
+def _score(summary: dict[str, Any], group: str, key: str) -> float:
+    block = summary.get(group)
+    value = None if block is None else block.get(key)
+    return math.nan if value is None else float(value)
+
+
+def ab_rows(a: dict[str, Any], b: dict[str, Any]) -> list[tuple[str, float, float, float]]:
+    """(label, A, B, B - A) per overall score of two ``Evaluation.summary()`` dicts; NaN where
+    either side has no such score (a missing topology, no curve)."""
+    rows = []
+    for label, group, key in _SCORES:
+        va, vb = _score(a, group, key), _score(b, group, key)
+        if math.isnan(va) and math.isnan(vb):
+            continue
+        rows.append((label, va, vb, vb - va))
+    return rows
+
+
+def _fmt(v: float, signed: bool = False) -> str:
+    if math.isnan(v):
+        return "—"
+    return f"{v:+.4f}" if signed else f"{v:.4f}"
+
+
+class CompareWindow(QtWidgets.QWidget):
+    """A/B view of two evaluations of one cloud."""
+
+    def __init__(self, ev_a: Any, ev_b: Any, names: tuple[str, str] = ("A", "B"), metric: str = "centeredness",
+                 thresholds: tuple[float, float] | None = None, parent: QtWidgets.QWidget | None = None) -> None:
+        super().__init__(parent, QtCore.Qt.WindowType.Window)
+        from pyvistaqt import QtInteractor
+
+        self.setWindowTitle(f"SkelScope — A: {names[0]}  |  B: {names[1]}")
+        self.resize(1400, 850)
+        self.ev_a, self.ev_b, self.names = ev_a, ev_b, names
+        self.thresholds = thresholds or (ev_a.params.beta_star, ev_a.params.c_star)
+        self.plotter = QtInteractor(self, shape=(1, 2), auto_update=False)
+        self.metric_box = QtWidgets.QComboBox(self)
+        self.metric_box.addItems(["boundedness", "centeredness", "smoothness"])
+        self.metric_box.setCurrentText(metric)
+        self.metric_box.currentTextChanged.connect(self.draw)
+        self.table = QtWidgets.QTableWidget(self)
+        self.table.setColumnCount(4)
+        self.table.setHorizontalHeaderLabels(["score", f"A: {names[0]}", f"B: {names[1]}", "B - A"])
+        self.table.verticalHeader().setVisible(False)
+        self.table.setEditTriggers(QtWidgets.QAbstractItemView.EditTrigger.NoEditTriggers)
+        top = QtWidgets.QHBoxLayout()
+        top.addWidget(QtWidgets.QLabel("colour by", self))
+        top.addWidget(self.metric_box)
+        top.addStretch(1)
+        split = QtWidgets.QSplitter(QtCore.Qt.Orientation.Vertical, self)
+        split.addWidget(self.plotter)
+        split.addWidget(self.table)
+        split.setSizes([600, 250])
+        layout = QtWidgets.QVBoxLayout(self)
+        layout.addLayout(top)
+        layout.addWidget(split)
+        self.rows = ab_rows(ev_a.summary(*self.thresholds), ev_b.summary(*self.thresholds))
+        self._fill_table()
+        self.draw()
+        self.plotter.link_views()  # one camera for both renderers
+        self.plotter.reset_camera()
+
+    def _fill_table(self) -> None:
+        self.table.setRowCount(len(self.rows))
+        for r, (label, a, b, d) in enumerate(self.rows):
+            for c, text in enumerate((label, _fmt(a), _fmt(b), _fmt(d, signed=True))):
+                item = QtWidgets.QTableWidgetItem(text)
+                if c:
+                    item.setTextAlignment(QtCore.Qt.AlignmentFlag.AlignRight | QtCore.Qt.AlignmentFlag.AlignVCenter)
+                if c == 3 and not math.isnan(d) and d != 0:
+                    item.setForeground(QtCore.Qt.GlobalColor.darkGreen if d > 0 else QtCore.Qt.GlobalColor.darkRed)
+                self.table.setItem(r, c, item)
+        self.table.resizeColumnsToContents()
+
+    def cell(self, row: int, col: int) -> str:
+        return self.table.item(row, col).text()
+
+    def draw(self, *_: Any) -> None:
+        import pyvista as pv
+
+        from skelcore.colors import CLOUD_GREY, CURVE_COLOR, MAGENTA
+
+        from .view.actors import display_coordinates
+        from .view.style import make_lut
+
+        metric = self.metric_box.currentText()
+        b_star, _c_star = self.thresholds
+        lut = make_lut((0.0, 1.0))
+        for col, (ev, name) in enumerate(((self.ev_a, self.names[0]), (self.ev_b, self.names[1]))):
+            self.plotter.subplot(0, col)
+            self.plotter.clear_actors()
+            self.plotter.set_background("white")
+            self.plotter.add_text(f"{'AB'[col]}: {name}", font_size=10, color="black", name=f"title-{col}")
+            self.plotter.add_mesh(pv.PolyData(display_coordinates(ev.cloud)), color=CLOUD_GREY, style="points",
+                                  point_size=2, opacity=0.3, lighting=False, reset_camera=False, render=False)
+            if ev.skeletal is not None:
+                values = {"boundedness": ev.skeletal.boundedness, "centeredness": ev.skeletal.centeredness(b_star),
+                          "smoothness": ev.skeletal.smoothness}[metric]
+                mesh = pv.PolyData(display_coordinates(ev.skeletal.points))
+                mesh["values"] = np.asarray(values, dtype=float)
+                self.plotter.add_mesh(mesh, scalars="values", cmap=lut, clim=(0.0, 1.0), nan_color=MAGENTA,
+                                      style="points", point_size=6, lighting=False, reset_camera=False,
+                                      render=False, show_scalar_bar=False)
+            if ev.curve is not None:
+                curve = ev.curve.curve
+                edges = np.asarray(curve.edges, dtype=np.int64).reshape(-1, 2)
+                if len(edges):
+                    cells = np.hstack([np.full((len(edges), 1), 2, dtype=np.int64), edges]).ravel()
+                    self.plotter.add_mesh(pv.PolyData(display_coordinates(curve.vertices), lines=cells),
+                                          color=CURVE_COLOR, line_width=2.5, lighting=False, reset_camera=False,
+                                          render=False)
+                if metric != "smoothness":
+                    vals = ev.curve.sample_boundedness if metric == "boundedness" else ev.curve.sample_centeredness(b_star)
+                    mesh = pv.PolyData(display_coordinates(ev.curve.samples))
+                    mesh["values"] = np.asarray(vals, dtype=float)
+                    self.plotter.add_mesh(mesh, scalars="values", cmap=lut, clim=(0.0, 1.0), nan_color=MAGENTA,
+                                          style="points", point_size=5, lighting=False, reset_camera=False,
+                                          render=False, show_scalar_bar=False)
+        self.plotter.render()
+
+    def image(self) -> np.ndarray:
+        self.plotter.render()
+        return np.asarray(self.plotter.screenshot(None, return_img=True))
+
+    def closeEvent(self, event: Any) -> None:  # noqa: N802
+        self.plotter.close()
+        super().closeEvent(event)
+
+
+class _CompareAction(QtCore.QObject):
+    """File > Compare with a second skeleton (B): load, evaluate B in the worker, open the A/B window."""
+
+    NAME = "evaluation B"
+
+    def __init__(self, window: Any) -> None:
+        super().__init__(window)
+        self.window = window
+        self.views: list[CompareWindow] = []
+        self._pending: tuple[Any, str] | None = None
+        window.session.runner.succeeded.connect(self._succeeded)
+        file_menu = window.menuBar().actions()[0].menu()
+        action = window._action(file_menu, "Compare with a second skeleton (B)…", self.dialog)
+        file_menu.insertAction(file_menu.actions()[5], action)  # after the Open entries
+        window.actions_by_name["compare"] = action
+
+    def dialog(self) -> None:
+        from .main_window import FILE_FILTER
+
+        paths, _ = QtWidgets.QFileDialog.getOpenFileNames(self.window, "Open skeleton B (skeletal points and/or curve)",
+                                                          self.window._last_dir(), FILE_FILTER)
+        if paths:
+            self.compare_files(paths)
+
+    def compare_files(self, paths: list[str]) -> bool:
+        """Load B's skeletal set and/or curve skeleton and evaluate them against A's cloud."""
+        from skelcore.errors import SkelInputError
+        from skelcore.io import load_any
+
+        skeletal = curve = None
+        try:
+            for path in paths:
+                item = load_any(path)
+                if item.kind == "curve":
+                    curve = item.curve
+                else:
+                    skeletal = item.points
+        except SkelInputError as exc:
+            self.window.show_error("Compare", str(exc))
+            return False
+        name = ", ".join(os.path.basename(p) for p in paths)
+        return self.compare_arrays(skeletal, curve, name)
+
+    def compare_arrays(self, skeletal: Any, curve: Any, name: str = "B") -> bool:
+        import skelcore
+
+        ev_a = self.window.scene.evaluation
+        if ev_a is None:
+            self.window.show_error("Compare", "evaluate A (the loaded skeleton) first")
+            return False
+        if skeletal is None and curve is None:
+            self.window.show_error("Compare", "skeleton B has neither skeletal points nor a curve")
+            return False
+        params = ev_a.params
+        cloud = ev_a.cloud
+        correspondence = "reverse" if ev_a.correspondence == "reverse" else "auto"
+
+        def job(progress: Any, cancel: Any) -> Any:
+            return skelcore.evaluate(cloud, skeletal, curve, params, progress, cancel, correspondence=correspondence)
+
+        self._pending = (ev_a, name)
+        self.window.session.runner.start(job, self.NAME)
+        return True
+
+    def _succeeded(self, name: str, result: Any) -> None:
+        if name != self.NAME or self._pending is None:
+            return
+        ev_a, b_name = self._pending
+        self._pending = None
+        a_name = ", ".join(os.path.basename(p) for role, p in self.window.scene.input_paths().items()
+                           if p and role != "cloud") or "A"
+        self.open(ev_a, result, (a_name, b_name))
+
+    def open(self, ev_a: Any, ev_b: Any, names: tuple[str, str]) -> CompareWindow:
+        scene = self.window.scene
+        view = CompareWindow(ev_a, ev_b, names, metric=scene.metric, thresholds=(scene.beta_star, scene.c_star))
+        view.show()
+        self.views.append(view)
+        return view
+
+
+def install_compare(window: Any) -> _CompareAction:
+    window.compare = _CompareAction(window)
+    return window.compare
