@@ -68,6 +68,7 @@ class CompareWindow(QtWidgets.QWidget):
         self.table.setColumnCount(4)
         self.table.setHorizontalHeaderLabels(["score", f"A: {names[0]}", f"B: {names[1]}", "B - A"])
         self.table.verticalHeader().setVisible(False)
+        self.table.horizontalHeader().setStretchLastSection(True)
         self.table.setEditTriggers(QtWidgets.QAbstractItemView.EditTrigger.NoEditTriggers)
         top = QtWidgets.QHBoxLayout()
         top.addWidget(QtWidgets.QLabel("colour by", self))
@@ -112,9 +113,9 @@ class CompareWindow(QtWidgets.QWidget):
         metric = self.metric_box.currentText()
         b_star, _c_star = self.thresholds
         lut = make_lut((0.0, 1.0))
+        self.plotter.clear_actors()  # every renderer's
         for col, (ev, name) in enumerate(((self.ev_a, self.names[0]), (self.ev_b, self.names[1]))):
             self.plotter.subplot(0, col)
-            self.plotter.clear_actors()
             self.plotter.set_background("white")
             self.plotter.add_text(f"{'AB'[col]}: {name}", font_size=10, color="black", name=f"title-{col}")
             self.plotter.add_mesh(pv.PolyData(display_coordinates(ev.cloud)), color=CLOUD_GREY, style="points",
@@ -223,7 +224,7 @@ class _CompareAction(QtCore.QObject):
         ev_a, b_name = self._pending
         self._pending = None
         a_name = ", ".join(os.path.basename(p) for role, p in self.window.scene.input_paths().items()
-                           if p and role != "cloud") or "A"
+                           if p and role != "cloud") or "loaded skeleton"
         self.open(ev_a, result, (a_name, b_name))
 
     def open(self, ev_a: Any, ev_b: Any, names: tuple[str, str]) -> CompareWindow:

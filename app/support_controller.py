@@ -2,12 +2,14 @@
 "Support" dock (2-D plot) and in the 3-D view (overlay); the Display panel's "only elements below the
 threshold" box hides every element whose value passes (beta > beta*, c > c*; NaN stays shown).
 
-Installed by one call from :class:`app.main_window.MainWindow`; it chains the view's ``on_pick`` and
+Supports of clouds of BACKGROUND_POINTS or more are computed in a thread of their own (a direction map
+of a 100k-point cloud takes seconds), the newest pick winning. Installed by one call from :class:`app.main_window.MainWindow`; it chains the view's ``on_pick`` and
 subscribes to the scene after the view, so its overlay and filter are applied after the view's redraw.
 """
 
 from __future__ import annotations
 
+import threading
 from typing import Any
 
 import numpy as np
@@ -34,7 +36,12 @@ def below_threshold(values: np.ndarray, threshold: float) -> np.ndarray:
     return ~(v > threshold)
 
 
+BACKGROUND_POINTS = 20_000
+
+
 class SupportController(QtCore.QObject):
+    ready = QtCore.Signal(int, object, object)  # request token, info, ElementSupport or the exception
+
     def __init__(self, window: Any) -> None:
         super().__init__(window)
         self.window = window
@@ -54,6 +61,10 @@ class SupportController(QtCore.QObject):
         self.filter_box.toggled.connect(self.set_filter)
         layout = window.display.layout()
         layout.insertWidget(layout.count() - 1, self.filter_box)
+        self.background_points = BACKGROUND_POINTS
+        self._token = 0
+        self.busy = False
+        self.ready.connect(self._ready)
         self._pick = self.view.on_pick
         self.view.on_pick = self.picked
         self.scene.subscribe(self._on_scene)
@@ -66,22 +77,51 @@ class SupportController(QtCore.QObject):
         self.show_element(info)
 
     def show_element(self, info: dict[str, Any] | None) -> ElementSupport | None:
-        """Compute and show the support of ``info`` for the metric on screen (None clears)."""
+        """Compute and show the support of ``info`` for the metric on screen (None clears); for a
+        big cloud in a thread, shown when done (returns None meanwhile)."""
         self.info = info
+        self._token += 1
+        ev, metric = self.scene.evaluation, self.scene.metric
+        if ev is None or info is None or len(ev.cloud) < self.background_points:
+            try:
+                support = element_support(ev, info, metric)
+            except (ValueError, IndexError) as exc:
+                support = exc
+            self._ready(self._token, info, support)
+            return self.support
+        self.busy = True
+        self.overlay.clear()
+        self.panel.show_support(ElementSupport("none", info.get("element", ""), int(info["index"]), metric,
+                                               reason=f"computing the {metric} support…"))
+        token = self._token
+
+        def run() -> None:
+            try:
+                out: Any = element_support(ev, info, metric)
+            except Exception as exc:  # noqa: BLE001 - reported in the status bar, never a crash
+                out = exc
+            self.ready.emit(token, info, out)
+
+        threading.Thread(target=run, name="skelscope-support", daemon=True).start()
+        return None
+
+    def _ready(self, token: int, info: Any, support: Any) -> None:
+        if token != self._token:
+            return  # a newer pick (or a new result) replaced this one
+        self.busy = False
+        if isinstance(support, Exception):
+            self.window.statusBar().showMessage(f"support: {support}", 8000)
+            support = None
+        self.support = support
         ev = self.scene.evaluation
-        try:
-            self.support = element_support(ev, info, self.scene.metric)
-        except (ValueError, IndexError) as exc:
-            self.support = None
-            self.window.statusBar().showMessage(f"support: {exc}", 8000)
-        scale = ev.normalization.scale if ev is not None else 1.0
-        self.panel.show_support(self.support, scale)
-        self.overlay.show(self.support)
-        return self.support
+        self.panel.show_support(support, ev.normalization.scale if ev is not None else 1.0)
+        self.overlay.show(support)
 
     def _on_scene(self, event: SceneEvent) -> None:
         if event.kind in ("layer", "quantities"):
             self.info = None
+            self._token += 1  # a support still computing describes the old result
+            self.busy = False
             self.overlay.clear()
             if self.support is not None:
                 self.support = None

@@ -14,7 +14,8 @@
 - Issue 11 (``--supports`` makes only these): ``window_support_slab.png`` / ``support_slab_panel.png``
   (a curve sample's slab, ring and ellipse), ``window_support_knn.png`` (a skeletal point's neighbours
   and centroids), ``support_directions_panel.png`` / ``support_paper_panel.png`` (direction map, paper
-  triangles), ``window_filter.png`` (only the elements below beta*).
+  triangles), ``window_filter.png`` (only the elements below beta*), ``window_ab.png`` (skeleton A
+  against the skeletonizer's B: linked split view, A / B / B - A table).
 
 Falls back to freshly generated shapes in a temporary folder when resources/samples/ is missing.
 """
@@ -243,6 +244,32 @@ def support_screenshots(window, settle, save) -> None:
     scene.set_thresholds(beta_star, scene.c_star)
     window.summary.set_thresholds(scene.beta_star, scene.c_star)
     settle()
+    ab_screenshot(window, settle)
+
+
+def ab_screenshot(window, settle) -> None:
+    """Issue 11: the bundled skeleton (A) against the skeletonizer's (B) of the same cloud, ``window_ab.png``."""
+    from PySide6 import QtCore
+
+    try:
+        from skelcore.skeleton import skeletonize
+    except ImportError:
+        return
+    ev = window.scene.evaluation
+    skeletal, curve = skeletonize(ev.cloud)
+    window.compare.compare_arrays(skeletal, curve, "skeletonized (Cao et al.)")
+    while window.session.runner.running:
+        loop = QtCore.QEventLoop()
+        QtCore.QTimer.singleShot(200, loop.quit)
+        loop.exec()
+    settle()
+    view = window.compare.views[-1]
+    view.resize(1400, 850)
+    view.plotter.view_xy()
+    settle(800)
+    view.grab().save(str(OUT / "window_ab.png"))
+    print("wrote screenshots/window_ab.png")
+    view.close()
 
 
 if __name__ == "__main__":

@@ -200,8 +200,11 @@ def test_the_ab_table_shows_both_evaluations_and_their_differences(cylinder_wind
         # linked cameras: both halves look through one camera
         cams = [ren.GetActiveCamera() for ren in view.plotter.renderers]
         assert len(cams) == 2 and cams[0] is cams[1]
+        # both halves drawn: each renderer has the cloud, the skeletal points and the curve
+        assert all(len(ren.actors) >= 3 for ren in view.plotter.renderers)
         img = view.image()
-        assert img.shape[1] > 2 * 100
+        half = img.shape[1] // 2
+        assert (img[:, :half, :3] < 200).any() and (img[:, half:, :3] < 200).any()
     finally:
         view.close()
 
@@ -221,3 +224,17 @@ def test_skeleton_b_is_evaluated_in_the_worker_and_opens_the_ab_view(cylinder_wi
         assert view.cell(list(rows).index("boundedness (curve)"), 3) == "—"
     finally:
         view.close()
+
+
+def test_a_big_clouds_support_is_computed_in_a_thread_and_the_newest_pick_wins(cylinder_window, cylinder_eval, qtbot):
+    w = cylinder_window
+    _, _, ev = cylinder_eval
+    w.supports.background_points = 0  # every cloud counts as big
+    w.scene.set_metric("boundedness")
+    w.supports.picked(w.scene.element_info("skeletal", "points", 5))
+    assert w.supports.show_element(w.scene.element_info("skeletal", "points", 7)) is None  # not computed here
+    assert "computing" in w.supports.panel.support.reason
+    qtbot.waitUntil(lambda: not w.supports.busy, timeout=60000)
+    sup = w.supports.support
+    assert sup.kind == "directions" and sup.index == 7
+    assert sup.detail.fraction == pytest.approx(ev.skeletal.boundedness[7], abs=0.01)
