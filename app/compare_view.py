@@ -171,10 +171,12 @@ class _CompareAction(QtCore.QObject):
         window.actions_by_name["compare"] = action
 
     def dialog(self) -> None:
-        from .main_window import FILE_FILTER
+        from skelcore.io import SUPPORTED_EXTENSIONS
 
+        patterns = " ".join(f"*{ext}" for ext in sorted(set(SUPPORTED_EXTENSIONS)))
         paths, _ = QtWidgets.QFileDialog.getOpenFileNames(self.window, "Open skeleton B (skeletal points and/or curve)",
-                                                          self.window._last_dir(), FILE_FILTER)
+                                                          self.window._last_dir(),
+                                                          f"Skeletons ({patterns});;All files (*)")
         if paths:
             self.compare_files(paths)
 
