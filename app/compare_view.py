@@ -2,7 +2,7 @@
 
 One pyvista interactor split in two renderers that share one camera (linked cameras: rotating either
 moves both), each drawing the cloud and its skeleton coloured by the chosen metric, and the summary
-table with A, B and B - A columns (the scores of :meth:`Evaluation.summary` at A's thresholds).
+table with A, B and B - A columns (the scores of :meth:`Evaluation.summary` at A's thresholds; green where B is better).
 File > "Compare with a second skeleton (B)…" loads B's files and evaluates them in the worker.
 """
 
@@ -68,7 +68,6 @@ class CompareWindow(QtWidgets.QWidget):
         self.table.setColumnCount(4)
         self.table.setHorizontalHeaderLabels(["score", f"A: {names[0]}", f"B: {names[1]}", "B - A"])
         self.table.verticalHeader().setVisible(False)
-        self.table.horizontalHeader().setStretchLastSection(True)
         self.table.setEditTriggers(QtWidgets.QAbstractItemView.EditTrigger.NoEditTriggers)
         top = QtWidgets.QHBoxLayout()
         top.addWidget(QtWidgets.QLabel("colour by", self))
@@ -77,7 +76,7 @@ class CompareWindow(QtWidgets.QWidget):
         split = QtWidgets.QSplitter(QtCore.Qt.Orientation.Vertical, self)
         split.addWidget(self.plotter)
         split.addWidget(self.table)
-        split.setSizes([600, 250])
+        split.setSizes([520, 330])
         layout = QtWidgets.QVBoxLayout(self)
         layout.addLayout(top)
         layout.addWidget(split)
@@ -95,7 +94,9 @@ class CompareWindow(QtWidgets.QWidget):
                 if c:
                     item.setTextAlignment(QtCore.Qt.AlignmentFlag.AlignRight | QtCore.Qt.AlignmentFlag.AlignVCenter)
                 if c == 3 and not math.isnan(d) and d != 0:
-                    item.setForeground(QtCore.Qt.GlobalColor.darkGreen if d > 0 else QtCore.Qt.GlobalColor.darkRed)
+                    better = d < 0 if label in ("d_B", "d_Wp") else d > 0  # distances: lower is better
+                    item.setForeground(QtCore.Qt.GlobalColor.darkGreen if better else QtCore.Qt.GlobalColor.darkRed)
+                    item.setToolTip("B is better" if better else "A is better")
                 self.table.setItem(r, c, item)
         self.table.resizeColumnsToContents()
 

@@ -265,6 +265,7 @@ def ab_screenshot(window, settle) -> None:
     settle()
     view = window.compare.views[-1]
     view.resize(1400, 850)
+    view.metric_box.setCurrentText("centeredness")
     view.plotter.view_xy()
     settle(800)
     view.grab().save(str(OUT / "window_ab.png"))
