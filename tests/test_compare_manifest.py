@@ -11,7 +11,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from compare_helpers import command, make_dataset, manifest
+from compare_helpers import make_dataset, manifest
 from skelcore.cli import main
 from skelcore.errors import SkelInputError
 from skelcore.experiments.compare.conditions import degrade
