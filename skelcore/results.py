@@ -214,6 +214,8 @@ class Evaluation:
                     "n_vertices": self.curve.curve.n_vertices,
                     "n_edges": self.curve.curve.n_edges,
                 },
+                "skeletal_index": self.inputs.get("skeletal_index"),
+                "reference_curve": self.inputs.get("reference_curve"),
             },
             "topology": summ["topology"],
             "boundedness": summ["boundedness"],

@@ -164,12 +164,14 @@ def test_every_export_reloads(evaluated, tmp_path):
     out.mkdir()
     w.scene.set_metric("smoothness")
     plys = w.export_ply(str(out / "ply"))
-    assert {os.path.basename(p) for p in plys} == {"skeletal.ply", "curve.ply", "curve_samples.ply"}
-    skel = load_any(out / "ply" / "skeletal.ply")
+    # named after the data: a second dataset exported into the same folder cannot overwrite these
+    assert {os.path.basename(p) for p in plys} == {"y_cloud_skeletal.ply", "y_cloud_curve.ply", "y_cloud_curve_samples.ply"}
+    assert sorted(os.listdir(out / "ply")) == sorted(os.path.basename(p) for p in plys)  # no staging left
+    skel = load_any(out / "ply" / "y_cloud_skeletal.ply")
     assert skel.kind == "points" and np.allclose(skel.points, w.scene.skeletal.points)
-    curve = load_any(out / "ply" / "curve.ply")
+    curve = load_any(out / "ply" / "y_cloud_curve.ply")
     assert curve.kind == "curve" and np.array_equal(curve.curve.edges, w.scene.curve.curve.edges)
-    samples = load_any(out / "ply" / "curve_samples.ply")
+    samples = load_any(out / "ply" / "y_cloud_curve_samples.ply")
     assert np.allclose(samples.points, w.scene.curve.samples)
 
     written = w.export_results(str(out / "run.json"))

@@ -11,7 +11,7 @@ import math
 from typing import Any
 
 import numpy as np
-from PySide6 import QtCore, QtWidgets
+from PySide6 import QtCore, QtGui, QtWidgets
 
 ROWS = ("d_B / d_Wp", "boundedness", "centeredness", "smoothness", "coverage*")
 COLUMNS = ("skeletal points", "curve skeleton")
@@ -97,12 +97,14 @@ def cloud_gap_values(evaluation: Any) -> tuple[np.ndarray, str] | None:
             top = float(np.nanmax(gap)) if np.isfinite(gap).any() else 0.0
             return (gap / top if top > 0 else np.where(np.isfinite(gap), 0.0, np.nan)), kind
     return None
+NO_RESULT = "No evaluation yet: load a cloud and a skeleton, then Evaluate (F5)."
 
 
 class SummaryPanel(QtWidgets.QWidget):
     thresholds_changed = QtCore.Signal(float, float)
     #: per cloud point values in [0, 1] to colour the cloud by (gap / max gap), or None for plain
     cloud_colouring = QtCore.Signal(object)
+    rerun_requested = QtCore.Signal()
 
     def __init__(self, parent: QtWidgets.QWidget | None = None) -> None:
         super().__init__(parent)
@@ -116,7 +118,7 @@ class SummaryPanel(QtWidgets.QWidget):
         self.table.setSizeAdjustPolicy(QtWidgets.QAbstractScrollArea.SizeAdjustPolicy.AdjustToContents)
         self.beta_star = self._spin("bounded means beta > beta* (SPEC 2)")
         self.c_star = self._spin("centred means c > c* (SPEC 3)")
-        self.details = QtWidgets.QLabel("No evaluation yet: load a cloud and a skeleton, then Evaluate (F5).")
+        self.details = QtWidgets.QLabel(NO_RESULT)
         self.details.setWordWrap(True)
         self.details.setTextInteractionFlags(QtCore.Qt.TextInteractionFlag.TextSelectableByMouse)
         self.cloud_by_gap = QtWidgets.QCheckBox("colour the cloud by its coverage gap", self)
@@ -127,11 +129,18 @@ class SummaryPanel(QtWidgets.QWidget):
         self.cloud_by_gap.setEnabled(False)
         self.cloud_by_gap.toggled.connect(self._emit_cloud_colouring)
         self._evaluation: Any = None
+        # Shown while the results are out of date (see set_stale).
+        self.rerun = QtWidgets.QPushButton("", self)
+        self.rerun.setStyleSheet("QPushButton { color: #8a4b00; font-weight: bold; }")
+        self.rerun.clicked.connect(self.rerun_requested.emit)
+        self.rerun.setVisible(False)
+        self.stale = ""
         form = QtWidgets.QFormLayout()
         form.addRow("beta* (boundedness)", self.beta_star)
         form.addRow("c* (centeredness)", self.c_star)
         layout = QtWidgets.QVBoxLayout(self)
         layout.addWidget(self.table)
+        layout.addWidget(self.rerun)
         layout.addLayout(form)
         layout.addWidget(self.cloud_by_gap)
         layout.addWidget(self.details)
@@ -171,7 +180,10 @@ class SummaryPanel(QtWidgets.QWidget):
         if gap is not None:
             self.cloud_by_gap.setText(f"colour the cloud by its coverage gap ({gap[1]})")
         self._emit_cloud_colouring()
+        self._grey(bool(self.stale))
         if summary is None or evaluation is None:
+            # Nothing shown: no line may describe a run whose values are gone.
+            self.details.setText(NO_RESULT)
             return
         lines = detail_lines(summary, evaluation)
         warned = [i for i, t in enumerate(lines) if t.startswith("⚠")]
@@ -191,6 +203,28 @@ class SummaryPanel(QtWidgets.QWidget):
     def _emit_cloud_colouring(self, *_: Any) -> None:
         gap = cloud_gap_values(self._evaluation) if self.cloud_by_gap.isChecked() else None
         self.cloud_colouring.emit(None if gap is None else gap[0])
+
+    def set_stale(self, reason: str) -> None:
+        """Mark the results out of date ("settings changed", "inputs changed"): values greyed, a
+        re-run button naming the reason; "" clears the mark."""
+        self.stale = reason
+        self.rerun.setText(f"{reason}: re-run (F5)" if reason else "")
+        self.rerun.setVisible(bool(reason))
+        self._grey(bool(reason))
+
+    def _grey(self, grey: bool) -> None:
+        colour = self.palette().color(QtGui.QPalette.ColorGroup.Disabled, QtGui.QPalette.ColorRole.Text) if grey \
+            else self.palette().color(QtGui.QPalette.ColorRole.Text)
+        for r in range(self.table.rowCount()):
+            for c in range(self.table.columnCount()):
+                item = self.table.item(r, c)
+                if item is not None:
+                    item.setForeground(colour)
+        self.details.setEnabled(not grey)
+
+    def is_greyed(self) -> bool:
+        item = self.table.item(1, 0)
+        return item is not None and item.foreground().color() != self.palette().color(QtGui.QPalette.ColorRole.Text)
 
     def cell_text(self, row: str, column: str) -> str:
         item = self.table.item(ROWS.index(row), COLUMNS.index(column))

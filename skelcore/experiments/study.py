@@ -185,6 +185,7 @@ def run_study(
     skeleton_cmd: str | None = None,
     params: Params = Params(),
     skeletonize_params: Any = None,
+    method: str | None = None,
     name: str = "cloud",
     inputs: tuple[str, ...] = (),
     progress: Progress | None = None,
@@ -210,7 +211,9 @@ def run_study(
     skeleton_cmd : instead of the built-in skeletonizer, a command line with ``{in}`` (the variant's
         cloud, written as PLY) and ``{out_skeletal}`` and/or ``{out_curve}`` placeholders; run
         without a shell.
-    params : evaluation parameters (SPEC); ``skeletonize_params`` : :class:`SkeletonizeParams`.
+    params : evaluation parameters (SPEC); ``skeletonize_params`` : :class:`CaoParams` or
+        :class:`SkeletonizeParams`; ``method`` : the built-in skeletonizer, "cao" (default) or
+        "skelscope" (see :func:`skelcore.skeleton.skeletonize`).
     name : the shape's name in the table's first column.
     inputs : paths no output may overwrite (the user's files).
     progress, cancel : as :func:`skelcore.evaluate`.
@@ -229,13 +232,15 @@ def run_study(
     from .compare.manifest import MethodSpec, ShapeSpec
 
     cloud = _cloud(cloud)
-    sk_params = skeletonize_params if skeletonize_params is not None else SkeletonizeParams()
+    if method is None:
+        method = "skelscope" if isinstance(skeletonize_params, SkeletonizeParams) else "cao"
+    sk_values = dataclasses.asdict(skeletonize_params) if skeletonize_params is not None else {}
     conditions = _conditions(cloud, noise=noise, noise_model=noise_model, sparse=sparse, grid=grid,
                              base_grid=base_grid)
     if skeleton_cmd is not None:
-        method = MethodSpec(name="--skeleton-cmd", kind="command", command=skeleton_cmd)
+        method_spec = MethodSpec(name="--skeleton-cmd", kind="command", command=skeleton_cmd)
     else:
-        method = MethodSpec(name="builtin", kind="builtin", params=dataclasses.asdict(sk_params))
+        method_spec = MethodSpec(name="builtin", kind="builtin", method=method, params=sk_values)
     shape = ShapeSpec(name, inputs[0] if inputs else "")
     if out_dir is not None:
         out_dir = os.fspath(out_dir)
@@ -252,7 +257,7 @@ def run_study(
             def row_progress(f: float, stage: str, k: int = k, vname: str = vname) -> None:
                 progress((k + f) / n_rows, f"{vname}: {stage}")  # type: ignore[misc]
 
-            job = Job(shape, method, cond, seed, params)
+            job = Job(shape, method_spec, cond, seed, params)
             out = execute(job, folder, prefix=f"{vname}_", write_cloud=out_dir is not None, inputs=inputs,
                           progress=None if progress is None else row_progress, cancel=cancel, cloud=cloud)
             pts, skeletal, curve, ev = out.points, out.skeletal, out.curve, out.evaluation
@@ -275,7 +280,8 @@ def run_study(
             work.cleanup()
 
     settings = {"noise": noise, "noise_model": noise_model, "sparse": sparse, "grid": grid,
-                "base_grid": base_grid, "seed": seed, "skeleton_cmd": skeleton_cmd}
+                "base_grid": base_grid, "seed": seed, "skeleton_cmd": skeleton_cmd,
+                "method": None if skeleton_cmd else (method or "cao")}
     result = StudyResult(name=name, rows=rows, params=params, settings=settings)
     if out_dir is not None:
         result.write_tables(out_dir, inputs=inputs)

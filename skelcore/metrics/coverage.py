@@ -19,9 +19,9 @@ from scipy.spatial import cKDTree
 from ..geometry import nearest_neighbor_distances
 from ..params import Params
 
-__all__ = ["Coverage", "coverage", "coverage_tau", "min_ball_excess"]
+__all__ = ["Coverage", "coverage", "coverage_tau", "min_ball_excess", "covered_by_balls"]
 
-_CHUNK = 8192
+_PAIRS = 2_000_000
 
 
 @dataclass
@@ -46,46 +46,74 @@ def coverage_tau(cloud: np.ndarray, params: Params = Params()) -> float:
     return float(params.coverage_tau_factor * np.median(nearest_neighbor_distances(cloud)))
 
 
+def _lifted(centers: np.ndarray, radii: np.ndarray) -> tuple[cKDTree, float]:
+    """A 4-D tree of (x, sqrt(R^2 - r^2)): |(p, 0) - lifted x|^2 - R^2 = |p - x|^2 - r(x)^2, the
+    power distance, so nearest neighbours in 4-D are the balls of least power distance."""
+    top = float(radii.max()) if len(radii) else 0.0
+    w = np.sqrt(np.maximum(top * top - radii * radii, 0.0))
+    return cKDTree(np.column_stack([centers, w])), top
+
+
 def min_ball_excess(
-    points: np.ndarray, centers: np.ndarray, radii: np.ndarray, k: int = 64, floor: float = -np.inf
+    points: np.ndarray, centers: np.ndarray, radii: np.ndarray, k: int = 16, floor: float = -np.inf,
+    class_ratio: float = 1.25,
 ) -> np.ndarray:
     """Min over balls of |p - c| - radius for every point p (negative inside a ball), exact where
     it exceeds ``floor`` (elsewhere some value <= floor: enough to clip or threshold at floor).
 
-    Balls are grouped in classes of radii within a factor 2; in each class the k nearest centres
-    give a value u (with the best so far); any other centre is at least
-    d_k - r_max away, so only points whose d_k - r_max < u (and u > floor) are redone with 4k.
+    A first value u per point comes from its k nearest centres. Then, per class of radii within
+    ``class_ratio`` (top radius R), candidates come by least power distance (4-D lifting,
+    :func:`_lifted`), kk = 1, 4, 16, ...: a ball doing better than u has d < u + r, so its power
+    distance is below u^2 + 2 u R (u > 0; u^2 when u <= 0), and a point is done with the class once
+    its kk-th candidate's power distance reaches that bound.
     """
     points = np.asarray(points, dtype=float)
+    centers = np.asarray(centers, dtype=float)
+    radii = np.asarray(radii, dtype=float)
     best = np.full(len(points), np.inf)
     if len(centers) == 0:
         return best
-    radii = np.asarray(radii, dtype=float)
+    kk0 = int(min(k, len(centers)))
+    d, idx = cKDTree(centers).query(points, k=kk0, workers=1)
+    best = np.min(d.reshape(len(points), kk0) - radii[idx.reshape(len(points), kk0)], axis=1)
     top = float(radii.max())
     level = np.zeros(len(radii), dtype=np.int64)
     if top > 0:
-        level = np.clip(np.floor(-np.log2(np.maximum(radii, 1e-300) / top)), 0, 10).astype(np.int64)
+        steps = np.floor(-np.log(np.maximum(radii, 1e-300) / top) / np.log(class_ratio))
+        level = np.clip(steps, 0, 30).astype(np.int64)
+    lifted_p = np.column_stack([points, np.zeros(len(points))])
     for lv in np.unique(level):
         members = np.flatnonzero(level == lv)
         c, r = centers[members], radii[members]
-        rmax = float(r.max())
-        tree = cKDTree(c)
-        for lo in range(0, len(points), _CHUNK):
-            p = points[lo:lo + _CHUNK]
-            cur = best[lo:lo + _CHUNK].copy()
-            rows = np.arange(len(p))
-            kk = int(min(k, len(c)))
-            while len(rows):
-                # a row is done once its kk-th nearest centre is beyond reach (d - rmax >= cur)
-                dist, idx = tree.query(p[rows], k=kk, workers=-1)
-                dist, idx = dist.reshape(len(rows), kk), idx.reshape(len(rows), kk)
-                cur[rows] = np.minimum(cur[rows], np.min(dist - r[idx], axis=1))
-                if kk >= len(c):
-                    break
-                rows = rows[(dist[:, -1] - rmax < cur[rows]) & (cur[rows] > floor)]
-                kk = int(min(4 * kk, len(c)))
-            best[lo:lo + _CHUNK] = cur
+        tree, rtop = _lifted(c, r)
+        rows = np.flatnonzero(best > floor)
+        kk = 1
+        while len(rows):
+            keep = []
+            step = max(1, _PAIRS // kk)  # bounds the (rows x kk x 3) candidate array
+            for lo in range(0, len(rows), step):
+                r_ = rows[lo:lo + step]
+                d4, ix = tree.query(lifted_p[r_], k=kk, workers=1)
+                d4, ix = d4.reshape(len(r_), kk), ix.reshape(len(r_), kk)
+                d3 = np.linalg.norm(points[r_][:, None, :] - c[ix], axis=2)
+                u = np.minimum(best[r_], np.min(d3 - r[ix], axis=1))
+                best[r_] = u
+                bound = np.where(u > 0, u * u + 2 * u * rtop, u * u)
+                keep.append(r_[(u > floor) & (d4[:, -1] ** 2 - rtop * rtop < bound)])
+            if kk >= len(c):
+                break
+            rows = np.concatenate(keep)
+            kk = int(min(4 * kk, len(c)))
     return best
+
+
+def covered_by_balls(points: np.ndarray, centers: np.ndarray, radii: np.ndarray) -> np.ndarray:
+    """Is each point inside some ball: min power distance |p - c|^2 - radius^2 <= 0 (one 4-D query)."""
+    if len(centers) == 0:
+        return np.zeros(len(points), dtype=bool)
+    tree, top = _lifted(np.asarray(centers, dtype=float), np.asarray(radii, dtype=float))
+    d4, _ = tree.query(np.column_stack([points, np.zeros(len(points))]), k=1, workers=-1)
+    return d4 * d4 - top * top <= 1e-12 * max(top * top, 1e-300)
 
 
 def coverage(cloud: np.ndarray, elements: np.ndarray, params: Params = Params(), tau: float | None = None) -> Coverage:
@@ -96,7 +124,8 @@ def coverage(cloud: np.ndarray, elements: np.ndarray, params: Params = Params(),
     r, _ = cKDTree(cloud).query(elements, k=1, workers=-1)
     gap = np.maximum(min_ball_excess(cloud, elements, r, floor=0.0), 0.0)
     s = float(params.coverage_slack)
-    covered = min_ball_excess(cloud, elements, (1.0 + s) * r, floor=tau) <= tau
+    # |p - x| - (1 + s) r <= tau  <=>  p lies in the ball of radius (1 + s) r + tau
+    covered = covered_by_balls(cloud, elements, (1.0 + s) * r + tau)
     return Coverage(
         gap=gap,
         covered=covered,

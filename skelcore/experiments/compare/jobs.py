@@ -80,12 +80,13 @@ def file_digest(path: str) -> str:
 
 
 def _job_key(job: Job) -> str:
-    from ...skeleton import SkeletonizeParams
+    from ...skeleton.params import method_params
 
     method = job.method.to_dict()
     method.pop("cwd")  # a moved dataset keeps its results (the inputs are hashed by content)
     if job.method.kind == "builtin":
-        method["params"] = SkeletonizeParams().replace(**job.method.params).__dict__
+        method["method"], resolved = method_params(job.method.method, job.method.params)
+        method["params"] = resolved.__dict__
     if job.method.kind == "files":
         method = {"kind": "files", "name": job.method.name, "inputs": {
             k: file_digest(expand_template(t, job.shape.name, job.condition.name, job.seed))

@@ -291,7 +291,8 @@ def _with_correspondence(spec: MethodSpec, value: Any, where: str, fail) -> Meth
 
 
 def _builtin(entry: dict, where: str, fail) -> MethodSpec:
-    from ...skeleton import SkeletonizeParams
+    from ...skeleton.params import method_params
+
     params = entry.get("params", {})
     if not isinstance(params, dict):
         fail(f"{where}: params must be a table ([methods.params])")
@@ -302,7 +303,7 @@ def _builtin(entry: dict, where: str, fail) -> MethodSpec:
         if not skeletonize_accepts_method():
             fail(f"{where}: this skelcore's skeletonize() has no method= option (method = {method!r})")
     try:
-        SkeletonizeParams().replace(**params)
+        method_params(method, params)
     except (TypeError, ValueError) as exc:
         fail(f"{where}: {exc}")
     return MethodSpec(name=entry["name"], kind="builtin", method=method, params=dict(params))

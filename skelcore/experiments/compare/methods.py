@@ -23,11 +23,11 @@ Progress = Callable[[float, str], None]
 
 def run_builtin(points: np.ndarray, spec: MethodSpec, progress: Progress | None = None,
                 cancel: Callable[[], bool] | None = None) -> tuple[np.ndarray | None, CurveSkeleton | None]:
-    from ...skeleton import SkeletonizeParams, skeletonize
+    from ...skeleton import skeletonize
+    from ...skeleton.params import method_params
 
-    params = SkeletonizeParams().replace(**spec.params)
-    kwargs = {"method": spec.method} if spec.method is not None and skeletonize_accepts_method() else {}
-    return skeletonize(points, params, progress=progress, cancel=cancel, **kwargs)
+    method, params = method_params(spec.method, spec.params)
+    return skeletonize(points, params, progress=progress, cancel=cancel, method=method)
 
 
 def _kill_group(proc: subprocess.Popen) -> None:
