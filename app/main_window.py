@@ -82,6 +82,8 @@ class MainWindow(QtWidgets.QMainWindow):
         self._build_menus()
 
         self.session.params_provider = self.settings_panel.params
+        self.session.correspondence_provider = self.settings_panel.correspondence
+        self.summary.cloud_colouring.connect(self.view.set_cloud_values)
         self.session.ask = self._ask
         self.session.error.connect(self.show_error)
         self.session.message.connect(lambda text: self.statusBar().showMessage(text, 8000))
@@ -199,7 +201,10 @@ class MainWindow(QtWidgets.QMainWindow):
             m.addAction(dock.toggleViewAction())
 
         m = mb.addMenu("&Tools")
-        a["skeletonize"] = self._action(m, "Skeletonize the cloud", self.session.start_skeletonize, "Ctrl+K")
+        a["skeletonize"] = self._action(m, "Skeletonize the cloud (Cao et al., the paper's)",
+                                        self.session.start_skeletonize, "Ctrl+K")
+        a["skeletonize_skelscope"] = self._action(m, "Skeletonize the cloud (SkelScope, with clean-up)",
+                                                  lambda: self.session.start_skeletonize(method="skelscope"))
         a["study"] = self._action(m, "Study…", self.open_study, "Ctrl+Shift+S")
 
         m = mb.addMenu("&Help")
@@ -441,6 +446,7 @@ class MainWindow(QtWidgets.QMainWindow):
         a["export_ply"].setEnabled(has_eval)
         a["export_results"].setEnabled(has_eval)
         a["skeletonize"].setEnabled(self.scene.cloud is not None)
+        a["skeletonize_skelscope"].setEnabled(self.scene.cloud is not None)
         a["study"].setEnabled(self.scene.cloud is not None and bool(self.scene.cloud.path) and _study_available())
 
     def open_study(self) -> None:

@@ -34,6 +34,8 @@ class Session(QtCore.QObject):
         self.runner = TaskRunner(self)
         self.ask: Ask = lambda question, options: options[0] if options else None
         self.params_provider: Callable[[], Params] = Params
+        #: "auto" or "reverse" (SPEC 7), e.g. the settings panel's choice
+        self.correspondence_provider: Callable[[], str] = lambda: "auto"
         self.auto_evaluate = True
         self.runner.succeeded.connect(self._task_succeeded)
         self.runner.failed.connect(self._task_failed)
@@ -238,10 +240,12 @@ class Session(QtCore.QObject):
         skeletal = None if scene.skeletal is None else scene.skeletal.points
         curve = None if scene.curve is None else scene.curve.curve
         inputs = {k: v for k, v in scene.input_paths().items() if v}
+        correspondence = self.correspondence_provider()
 
         def job(progress: Callable[[float, str], None], cancel: Callable[[], bool]) -> Any:
             # skelcore.evaluate is resolved (and, the first time, imported) in the worker thread
-            return skelcore.evaluate(cloud, skeletal, curve, params, progress, cancel, inputs=inputs)
+            return skelcore.evaluate(cloud, skeletal, curve, params, progress, cancel, inputs=inputs,
+                                     correspondence=correspondence)
 
         self._evaluated_layers = (scene.cloud, scene.skeletal, scene.curve)
         self.runner.start(job, "evaluation")
@@ -249,24 +253,24 @@ class Session(QtCore.QObject):
         self.message.emit("evaluating…")
         return True
 
-    def start_skeletonize(self, params: Any = None) -> bool:
+    def start_skeletonize(self, params: Any = None, method: str | None = None) -> bool:
         """Skeletonize the loaded cloud (issue 4) in the worker; both results become layers.
 
-        ``params`` is a ``skelcore.skeleton.SkeletonizeParams`` (its defaults when None).
+        ``method`` "cao" (default) or "skelscope"; ``params`` its ``CaoParams`` / ``SkeletonizeParams``.
         """
         if self.scene.cloud is None:
             self.message.emit("load a cloud first")
             return False
         try:
-            from skelcore.skeleton import SkeletonizeParams, skeletonize
+            from skelcore.skeleton import skeletonize
         except ImportError as exc:
             self.error.emit("Skeletonize", f"the skeletonizer is not available ({exc})", "")
             return False
-        params = params or SkeletonizeParams()
+        params = params or None  # a menu action passes its checked state
         cloud = self.scene.cloud.points
 
         def job(progress: Callable[[float, str], None], cancel: Callable[[], bool]) -> Any:
-            return skeletonize(cloud, params, progress=progress, cancel=cancel)
+            return skeletonize(cloud, params, progress=progress, cancel=cancel, method=method)
 
         self._skeletonized_cloud = self.scene.cloud
         self.runner.start(job, "skeletonization")

@@ -142,16 +142,19 @@ def test_loading_new_inputs_during_a_run_drops_its_result(window, files, qtbot, 
     assert w.scene.evaluation is None and not w.session.runner.running
 
 
-def test_an_invalid_evaluation_input_becomes_a_dialog(window, files, qtbot, tmp_path):
-    other = tmp_path / "other.ply"
-    write_points_ply(other, shapes.cylinder(800).cloud)
+def test_an_invalid_evaluation_input_becomes_a_dialog(window, files, qtbot, tmp_path, monkeypatch):
+    # (a skeletal set of another size is no longer one: issue 8, tests/test_app_trust.py)
+    def refuse(*args, **kwargs):
+        raise skelcore.SkelInputError("skeletal point set: not what the engine accepts")
+
+    monkeypatch.setattr(skelcore, "evaluate", refuse)
     w = window
     w.session.auto_evaluate = False
     w.session.load_as("cloud", files["cloud"])
-    w.session.load_as("skeletal", str(other))  # 800 points against a 1500-point cloud
+    w.session.load_as("skeletal", files["skeletal"])
     with qtbot.waitSignal(w.session.runner.finished, timeout=20000):
         w.session.start_evaluation()
-    assert len(w.dialogs) == 1 and "pointwise correspondence" in w.dialogs[0]
+    assert len(w.dialogs) == 1 and "not what the engine accepts" in w.dialogs[0]
     assert w.isVisible() and w.scene.evaluation is None
 
 
@@ -184,7 +187,7 @@ def test_every_export_reloads(evaluated, tmp_path):
     with open(out / "run_barcodes.csv") as fh:
         bars = list(csv.DictReader(fh))
     assert {r["diagram"] for r in bars} == {"cloud", "skeletal"} and any(r["death"] == "inf" for r in bars)
-    assert len(written) == 5
+    assert len(written) == 6  # + run_cloud.csv, the coverage gap per cloud point (issue 8)
 
     png = w.save_screenshot(str(out / "view.png"), scale=2)
     from matplotlib.image import imread

@@ -116,3 +116,14 @@ def test_bad_arguments_raise_input_errors(cloud, call):
 def test_unknown_noise_model_fails_loudly(cloud):
     with pytest.raises(ValueError, match="noise model"):
         add_noise(cloud, 0.05, model="salt")
+
+
+def test_voxel_grid_cells_come_in_matlabs_linear_index_order_x_fastest():
+    # cells (i, j, k) = (1,0,0), (0,1,0), (0,0,1), (0,0,0): MATLAB's order is by i + nx (j + ny k)
+    pts = np.array([[1.5, 0.5, 0.5], [0.5, 1.5, 0.5], [0.5, 0.5, 1.5], [0.5, 0.5, 0.5], [1.5, 1.5, 1.5]])
+    pts = np.vstack([pts, [[0.0, 0.0, 0.0], [2.0, 2.0, 2.0]]])  # fix the grid's corner and extent
+    centres, voxel = voxel_grid_average(pts, 1.0)
+    ijk = np.floor(centres).astype(int)
+    linear = ijk[:, 0] + 3 * (ijk[:, 1] + 3 * ijk[:, 2])
+    assert np.all(np.diff(linear) > 0)
+    np.testing.assert_array_equal(np.floor(centres[voxel]), np.floor(pts))  # each row's own cell

@@ -1,4 +1,5 @@
-"""skelcore.skeleton: Laplacian contraction + curve extraction on shapes with known skeletons."""
+"""skelcore.skeleton, method "skelscope": Laplacian contraction + our curve extraction on shapes with
+known skeletons (the toolbox's method "cao": tests/test_skeletonize_cao.py)."""
 
 from __future__ import annotations
 
@@ -11,7 +12,12 @@ from skelcore import shapes
 from skelcore.curve import CurveSkeleton
 from skelcore.errors import Cancelled, SkelInputError
 from skelcore.geometry import Normalization
-from skelcore.skeleton import SkeletonizeParams, skeletonize
+from skelcore.skeleton import SkeletonizeParams
+from skelcore.skeleton import skeletonize as _skeletonize
+
+
+def skeletonize(cloud, *args, **kwargs):
+    return _skeletonize(cloud, *args, method="skelscope", **kwargs)
 
 
 def _components(curve: CurveSkeleton) -> int:

@@ -178,8 +178,12 @@ def test_cli_skeletonize_writes_loadable_skeletons(cloud, tmp_path, capsys):
     src = tmp_path / "cyl.ply"
     write_points_ply(src, cloud)
     rc = main(["skeletonize", str(src), "--out-skeletal", str(tmp_path / "s.ply"),
-               "--out-curve", str(tmp_path / "c.ply"), "--quiet"])
+               "--out-curve", str(tmp_path / "c.ply"), "--quiet", "--method", "skelscope"])
     assert rc == 0
     assert load_points(tmp_path / "s.ply").shape == cloud.shape
     assert load_curve(tmp_path / "c.ply").degrees().max() <= 2
+    # the default, the toolbox's algorithm, writes the same kinds of files
+    assert main(["skeletonize", str(src), "--out-curve", str(tmp_path / "c2.ply"), "--quiet"]) == 0
+    assert "(cao)" in capsys.readouterr().out
+    assert load_curve(tmp_path / "c2.ply").n_vertices >= 2
     assert main(["skeletonize", str(src)]) == 2

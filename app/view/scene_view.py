@@ -246,7 +246,18 @@ class SceneView:
         self._remove("cloud")
         layer = self.scene.cloud
         if layer is not None:
-            self._points_actor("cloud", layer.points, layer, None, CLOUD_GREY, layer.point_size, None)
+            values = self._cloud_values
+            if values is not None and len(values) != layer.n_points:
+                values = self._cloud_values = None
+            self._points_actor("cloud", layer.points, layer, values, CLOUD_GREY, layer.point_size, None)
+
+    _cloud_values: np.ndarray | None = None
+
+    def set_cloud_values(self, values: np.ndarray | None) -> None:
+        """Colour the cloud by per-point values in [0, 1] (the coverage gap), NaN magenta; None: grey."""
+        self._cloud_values = None if values is None else np.asarray(values, dtype=float)
+        self._build_cloud()
+        self.request_render()
 
     def _build_skeletal(self) -> None:
         self._remove("skeletal")

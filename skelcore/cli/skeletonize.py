@@ -22,6 +22,9 @@ def register(subparsers: argparse._SubParsersAction) -> argparse.ArgumentParser:
     p.add_argument("cloud", help="point cloud file")
     p.add_argument("--out-skeletal", metavar="F", help="write the skeletal point set (PLY)")
     p.add_argument("--out-curve", metavar="F", help="write the curve skeleton (PLY with an edge element)")
+    p.add_argument("--method", choices=("cao", "skelscope"), default="cao",
+                   help="cao: the paper's toolbox algorithm, step by step (default); skelscope: ours, "
+                   "with clean-up of shortcuts, cycles and spurs (sturdier on noisy scans)")
     p.add_argument("--quiet", action="store_true", help="do not print progress")
     p.set_defaults(func=run_skeletonize_cli)
     return p
@@ -34,9 +37,12 @@ def run_skeletonize_cli(args: argparse.Namespace) -> int:
     try:
         if not (args.out_skeletal or args.out_curve):
             raise SkelInputError("nothing to write: give --out-skeletal and/or --out-curve")
+        for out in (args.out_skeletal, args.out_curve):
+            if out:
+                io.atomic.check_output_file(out, (args.cloud,))
         cloud = io.load_cloud(args.cloud)
         progress = stderr_progress(args.quiet)
-        skeletal, curve, info = skeletonize(cloud, progress=progress, return_info=True)
+        skeletal, curve, info = skeletonize(cloud, progress=progress, return_info=True, method=args.method)
         clear_progress_line(progress)
         if args.out_skeletal:
             io.write_points_ply(args.out_skeletal, skeletal, inputs=(args.cloud,))
@@ -45,6 +51,6 @@ def run_skeletonize_cli(args: argparse.Namespace) -> int:
     except SkelInputError as exc:
         print(f"skelcore: error: {exc}", file=sys.stderr)
         return 2
-    print(f"{len(cloud)} points contracted in {info.iterations} iterations ({info.stop_reason}); "
+    print(f"{len(cloud)} points contracted ({info.method}) in {info.iterations} iterations ({info.stop_reason}); "
           f"curve: {curve.n_vertices} vertices, {curve.n_edges} edges; {info.timings['total']:.2f} s")
     return 0

@@ -34,6 +34,8 @@ def register(subparsers: argparse._SubParsersAction) -> argparse.ArgumentParser:
     p.add_argument("--out", metavar="DIR", help="write every variant's PLY/JSON files and study.md/.csv/.tex here")
     p.add_argument("--skeleton-cmd", metavar="CMD",
                    help="use this skeletonizer: a command with {in}, {out_skeletal} and/or {out_curve}")
+    p.add_argument("--method", choices=("cao", "skelscope"), default="cao",
+                   help="built-in skeletonizer: cao (the paper's toolbox algorithm, default) or skelscope")
     p.add_argument("--boundedness-method", choices=("rays", "paper"), help="boundedness estimator (default rays)")
     p.add_argument("--set", metavar="NAME=VALUE", action="append", default=[], help="set any Params field")
     p.add_argument("--quiet", action="store_true", help="do not print progress")
@@ -48,6 +50,8 @@ def run_study_cli(args: argparse.Namespace) -> int:
 
     try:
         params = params_from_args(args)
+        if args.out:
+            io.atomic.check_output_dir(args.out)
         cloud = io.load_cloud(args.cloud)
         progress = stderr_progress(args.quiet)
         result = run_study(
@@ -60,6 +64,7 @@ def run_study_cli(args: argparse.Namespace) -> int:
             seed=args.seed,
             out_dir=args.out,
             skeleton_cmd=args.skeleton_cmd,
+            method=args.method,
             params=params,
             name=Path(args.cloud).stem,
             inputs=(args.cloud,),

@@ -17,6 +17,7 @@ Design, error measurements, timings and rejected alternatives: docs/boundedness.
 from __future__ import annotations
 
 from concurrent.futures import ThreadPoolExecutor
+from dataclasses import dataclass
 
 import numpy as np
 from scipy.spatial import ConvexHull, Delaunay, QhullError, cKDTree
@@ -25,7 +26,7 @@ from ..geometry import Checkpoint, nearest_neighbor_distances, no_checkpoint
 from ..params import Params
 from ._rays import FRAME, CapRaster
 
-__all__ = ["boundedness", "boundedness_rays", "boundedness_paper", "rays_radius"]
+__all__ = ["boundedness", "boundedness_rays", "boundedness_paper", "rays_radius", "paper_triangles", "PaperTriangles"]
 
 # pairs per kernel call: small enough to stay in cache, big enough to amortise numpy's per-call
 # overhead (measurements: docs/boundedness.md)
@@ -451,12 +452,34 @@ def boundedness_paper(
 
 
 def _paper_one(cloud: np.ndarray, q: np.ndarray, plane_threshold: float, area_threshold: float) -> float:
+    tri = paper_triangles(cloud, q, plane_threshold=plane_threshold, area_threshold=area_threshold)
+    return float(tri.area[tri.counted].sum() / (4.0 * np.pi)) if tri is not None else 0.0
+
+
+@dataclass(frozen=True)
+class PaperTriangles:
+    """The reference tool's triangulated sphere around one query (``paper`` estimator)."""
+
+    directions: np.ndarray  # (m, 3) unit q - p of the cloud points kept
+    triangles: np.ndarray  # (t, 3) rows of ``directions``: the 2-D Delaunay ones, then the seam strip
+    area: np.ndarray  # (t,) flat 3-D area of each
+    counted: np.ndarray  # (t,) bool: not dropped by the plane/area rule
+
+    @property
+    def beta(self) -> float:
+        return float(self.area[self.counted].sum() / (4.0 * np.pi))
+
+
+def paper_triangles(cloud: np.ndarray, q: np.ndarray, *, plane_threshold: float = 0.8,
+                    area_threshold: float = 1e-4) -> "PaperTriangles | None":
+    """The triangles :func:`boundedness_paper` sums for query ``q``; None when fewer than 3 distinct
+    directions or a degenerate set leave no triangulation (beta = 0)."""
     d = q - cloud  # the reference tool's sign (q - p): it puts the seam behind the cloud, see _zip_seam
     dist = np.sqrt(np.einsum("ij,ij->i", d, d))
     keep = dist > 0
     d, dist = d[keep], dist[keep]
     if len(d) < 3:
-        return 0.0
+        return None
     u = d / dist[:, None]
     lon = np.arctan2(u[:, 1], u[:, 0])
     rxy = np.hypot(u[:, 0], u[:, 1])
@@ -466,7 +489,7 @@ def _paper_one(cloud: np.ndarray, q: np.ndarray, plane_threshold: float, area_th
         tri = Delaunay(flat)
         hull = ConvexHull(flat).vertices  # the free-boundary loop, counter-clockwise
     except QhullError:
-        return 0.0  # all directions on one great circle through the poles, or coincident
+        return None  # all directions on one great circle through the poles, or coincident
     simplices = tri.simplices
     # orient counter-clockwise in the chart (as MATLAB's delaunayTriangulation): outward on the sphere
     a, b, c = flat[simplices[:, 0]], flat[simplices[:, 1]], flat[simplices[:, 2]]
@@ -483,7 +506,7 @@ def _paper_one(cloud: np.ndarray, q: np.ndarray, plane_threshold: float, area_th
     plane = np.where(norm > 0, plane, 1.0)
     mean_dist = dist[tris].mean(axis=1)
     drop = (plane < plane_threshold) & (mean_dist**2 * area < area_threshold)
-    return float(area[~drop].sum() / (4.0 * np.pi))
+    return PaperTriangles(directions=u, triangles=tris, area=area, counted=~drop)
 
 
 def _zip_seam(loop: np.ndarray, lat: np.ndarray) -> np.ndarray:

@@ -361,6 +361,8 @@ def wasserstein_h0(a: np.ndarray, b: np.ndarray) -> float:
     xb, ib = _split_deaths(b)
     if ia != ib:
         return float("inf")
+    if np.array_equal(xa, xb):  # identical diagrams: exactly 0 (the heaps' sums would round)
+        return 0.0
     events = np.concatenate([xa, xb])
     side = np.concatenate([np.zeros(len(xa), bool), np.ones(len(xb), bool)])
     order = np.argsort(events, kind="stable")
@@ -398,7 +400,7 @@ def wasserstein_h0(a: np.ndarray, b: np.ndarray) -> float:
                 low = s
             heapq.heappush(left, -(low - add_left))
             sum_left += low - add_left
-    return float(g_lo + sum_left + add_left * len(left))
+    return max(0.0, float(g_lo + sum_left + add_left * len(left)))  # a distance: rounding never < 0
 
 
 def _hall_ok(must: np.ndarray, other: np.ndarray, t: float) -> bool:

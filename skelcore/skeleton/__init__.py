@@ -4,9 +4,9 @@
 stages; ``degrade`` holds the noise models and downsamplers of the paper's study.
 """
 
-from .params import SkeletonizeInfo, SkeletonizeParams
+from .params import CaoParams, SkeletonizeInfo, SkeletonizeParams
 from .pipeline import skeletonize
 from .contraction import contract
 from .curve_extraction import extract_curve
 
-__all__ = ["SkeletonizeParams", "SkeletonizeInfo", "skeletonize", "contract", "extract_curve"]
+__all__ = ["CaoParams", "SkeletonizeParams", "SkeletonizeInfo", "skeletonize", "contract", "extract_curve"]

@@ -16,9 +16,9 @@ from typing import Callable
 
 import numpy as np
 import scipy.sparse as sp
-import scipy.sparse.linalg as spla
 
 from .params import SkeletonizeParams
+from .solve import solve_spd
 
 __all__ = ["contract"]
 
@@ -140,7 +140,7 @@ def contract(
         L = _cotan_laplacian(current, faces, params.mollify_factor)
         A = (wl * wl) * (L.T @ L) + sp.diags(wh * wh)
         rhs = (wh * wh)[:, None] * current
-        new = spla.spsolve(A.tocsc(), rhs)
+        new = solve_spd(A, rhs, check=lambda it=it: report("contraction", it / params.max_iterations))
         new = np.asarray(new).reshape(n, 3)
         if not np.all(np.isfinite(new)):
             stop = "non-finite solve"

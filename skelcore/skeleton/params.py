@@ -11,9 +11,76 @@ from typing import Callable
 
 from ..errors import Cancelled
 
-__all__ = ["SkeletonizeParams", "SkeletonizeInfo", "Reporter", "Progress"]
+__all__ = ["CaoParams", "SkeletonizeParams", "SkeletonizeInfo", "Reporter", "Progress"]
 
 Progress = Callable[[float, str], None]
+
+@dataclass(frozen=True)
+class CaoParams:
+    """Constants of ``method="cao"``: the toolbox's defaults (``GS.m``, ``contraction_by_mesh_laplacian.m``,
+    ``compute_point_weight.m``, ``eg_skeleton_laplacian_rosa.m``), one field each.
+
+    Attributes
+    ----------
+    min_neighbors, max_neighbors, neighbor_fraction : k of the kNN behind the one-rings =
+        round(neighbor_fraction x N) clamped to [min_neighbors, max_neighbors] (8, 30, 0.012).
+    contraction_weight : initial W_L; None = 1 / (5 x mean one-ring edge length) (the toolbox's
+        ``compute_init_laplacian_constraint_weight``, conformal type).
+    attraction_weight : initial W_H (WC = 1).
+    contraction_scale : W_L is multiplied by this each iteration (s_L = 3).
+    contraction_weight_max : cap on W_L (2048).
+    attraction_weight_max : cap on W_H (10000); W_H = WC x (original / current min one-ring size).
+    weight_row_cap : a Laplacian row whose |sum of cotangent weights| exceeds this is scaled down to
+        it (10000, ``compute_point_weight_dcp``).
+    max_iterations : the iteration count t stops at this (20).
+    termination_ratio : stop when the min-one-ring-size ratio decreased by less than this (0.01);
+        the iterate that failed the test is discarded, as is one whose bounding box grew on an axis
+        beyond ``bbox_growth_limit`` x the original's (1.2).
+    sample_radius_factor : ball radius of the farthest sampling = factor x bounding-box diagonal (0.02).
+    """
+
+    min_neighbors: int = 8
+    max_neighbors: int = 30
+    neighbor_fraction: float = 0.012
+    contraction_weight: float | None = None
+    attraction_weight: float = 1.0
+    contraction_scale: float = 3.0
+    contraction_weight_max: float = 2048.0
+    attraction_weight_max: float = 10000.0
+    weight_row_cap: float = 10000.0
+    max_iterations: int = 20
+    termination_ratio: float = 0.01
+    bbox_growth_limit: float = 1.2
+    sample_radius_factor: float = 0.02
+
+    def __post_init__(self) -> None:
+        def bad(name: str, why: str) -> None:
+            raise ValueError(f"skeletonize parameter {name}={getattr(self, name)!r}: {why}")
+
+        for name in ("attraction_weight", "contraction_weight_max", "attraction_weight_max", "weight_row_cap",
+                     "termination_ratio", "sample_radius_factor", "neighbor_fraction"):
+            if not float(getattr(self, name)) > 0:
+                bad(name, "must be > 0")
+        if self.contraction_weight is not None and not float(self.contraction_weight) > 0:
+            bad("contraction_weight", "must be > 0 or None")
+        if not float(self.contraction_scale) >= 1.0:
+            bad("contraction_scale", "must be >= 1")
+        if not float(self.bbox_growth_limit) > 1.0:
+            bad("bbox_growth_limit", "must be > 1")
+        if int(self.min_neighbors) < 3 or int(self.max_neighbors) < int(self.min_neighbors):
+            bad("min_neighbors", "must be >= 3 and <= max_neighbors")
+        if int(self.max_iterations) < 1:
+            bad("max_iterations", "must be >= 1")
+
+    def replace(self, **changes) -> "CaoParams":
+        known = {f.name for f in fields(self)}
+        unknown = sorted(set(changes) - known)
+        if unknown:
+            raise ValueError(f"unknown skeletonize parameter(s): {', '.join(unknown)}")
+        import dataclasses
+
+        return dataclasses.replace(self, **changes)
+
 
 @dataclass(frozen=True)
 class SkeletonizeParams:
@@ -131,7 +198,8 @@ class SkeletonizeParams:
 
 @dataclass
 class SkeletonizeInfo:
-    """What happened: iterations run, the one-ring size ratio after each, why it stopped, timings."""
+    """What happened: iterations run, the one-ring size ratio after each, why it stopped, timings,
+    the method and (cao) its initial contraction weight W_L."""
 
     iterations: int
     ring_ratios: list[float]
@@ -139,6 +207,8 @@ class SkeletonizeInfo:
     sample_radius: float
     n_samples: int
     timings: dict[str, float]
+    method: str = "skelscope"
+    initial_weight: float | None = None
 
 
 # ---------------------------------------------------------------------------------------------
@@ -168,3 +238,14 @@ class Reporter:
 
 # ---------------------------------------------------------------------------------------------
 # one-rings and the Laplacian
+
+
+def method_params(method: str | None, values: dict | None = None) -> "tuple[str, CaoParams | SkeletonizeParams]":
+    """The built-in method's name and its parameters from plain values (manifests, the study, the
+    CLI): ``"cao"`` (the default) takes :class:`CaoParams`, ``"skelscope"`` :class:`SkeletonizeParams`.
+    Unknown methods or fields raise ``ValueError``."""
+    name = "cao" if method is None else str(method)
+    if name not in ("cao", "skelscope"):
+        raise ValueError(f"unknown skeletonize method {name!r}: use cao or skelscope")
+    cls = CaoParams if name == "cao" else SkeletonizeParams
+    return name, cls().replace(**(values or {}))

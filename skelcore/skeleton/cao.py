@@ -1,0 +1,140 @@
+"""``method="cao"``: the contraction of Cao et al. 2010 as its authors' toolbox runs it.
+
+Step by step ``contraction_by_mesh_laplacian.m`` with ``USING_POINT_RING``: the one-rings of the
+normalized cloud (:mod:`.cao_ring`) stay fixed; each iteration recomputes the cotangent weights of
+each point's own fan on the current positions (``compute_point_weight_dcp``: row-capped, not
+symmetrized, ``L = W - diag(W 1)``), solves ``(A'A) X = A'b`` with ``A = [W_L L; diag(W_H)]``,
+``b = [0; W_H X]`` (:mod:`.solve`), then ``W_L <- min(s_L W_L, 2048)`` and ``W_H = WC x size0 /
+size`` (min one-ring edge, capped at 10000). It stops, keeping the previous iterate, when the
+ratio sum(size) / sum(size0) fell by less than 0.01 (or is NaN) or the bounding box grew beyond 1.2x
+on an axis; ``t`` counts the accepted solves, at most 20.
+"""
+
+from __future__ import annotations
+
+from typing import Callable
+
+import numpy as np
+import scipy.sparse as sp
+
+from .params import CaoParams
+from .solve import solve_spd
+
+__all__ = ["Rings", "cao_contract", "cotangent_laplacian"]
+
+
+class Rings:
+    """The one-rings in flat arrays: ``owner[p]`` is the point whose ring holds ``member[p]``."""
+
+    def __init__(self, indptr: np.ndarray, indices: np.ndarray) -> None:
+        self.n = len(indptr) - 1
+        self.indptr = np.asarray(indptr, np.int64)
+        self.member = np.asarray(indices, np.int64)
+        self.owner = np.repeat(np.arange(self.n), np.diff(self.indptr))
+        # fan triangles (i, ring[t], ring[t+1]) of every ring
+        last = np.zeros(len(self.member), bool)
+        ends = self.indptr[1:] - 1
+        last[ends[ends >= self.indptr[:-1]]] = True
+        p = np.flatnonzero(~last)
+        self.tri = (self.owner[p], self.member[p], self.member[p + 1])
+
+    def sizes(self, pts: np.ndarray, kind: str) -> np.ndarray:
+        """``GS.one_ring_size``: per point the min ("min") or mean ("mean") distance to its ring
+        entries (a closed ring's repeated first vertex counts twice in the mean, as there)."""
+        d = np.linalg.norm(pts[self.member] - pts[self.owner], axis=1)
+        out = np.zeros(self.n)
+        counts = np.diff(self.indptr)
+        has = counts > 0
+        if kind == "min":
+            out[has] = np.minimum.reduceat(d, self.indptr[:-1][has])
+        else:
+            out[has] = np.add.reduceat(d, self.indptr[:-1][has]) / counts[has]
+        return out
+
+
+def cotangent_laplacian(pts: np.ndarray, rings: Rings, row_cap: float) -> sp.csr_matrix:
+    """``-compute_point_laplacian(pts, 'conformal', rings)`` = W - diag(W 1), W from each point's fan:
+    W(i, j) += cot of the angle at k, W(i, k) += cot of the angle at j, per fan triangle (i, j, k);
+    rows with |sum| > row_cap scaled to row_cap."""
+    i, j, k = rings.tri
+    vi, vj, vk = pts[i], pts[j], pts[k]
+
+    def cot(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+        cr = np.linalg.norm(np.cross(a, b), axis=1)
+        # a zero-area triangle: the toolbox divides by zero; a tiny floor keeps it finite and the
+        # row cap then bounds the row as the toolbox intends
+        return np.einsum("ij,ij->i", a, b) / np.maximum(cr, 1e-300)
+
+    c1 = cot(vk - vi, vk - vj)
+    c2 = cot(vj - vi, vj - vk)
+    n = rings.n
+    W = sp.coo_matrix((np.concatenate([c1, c2]), (np.concatenate([i, i]), np.concatenate([j, k]))),
+                      shape=(n, n)).tocsr()
+    W.sum_duplicates()
+    s = np.asarray(W.sum(axis=1)).ravel()
+    big = np.abs(s) > row_cap
+    if np.any(big):
+        f = np.ones(n)
+        f[big] = row_cap / np.abs(s[big])
+        W = sp.diags(f) @ W
+        s = s * f
+    return (W - sp.diags(s)).tocsr()
+
+
+def cao_contract(
+    pts: np.ndarray,
+    rings: Rings,
+    params: CaoParams = CaoParams(),
+    *,
+    report: Callable[[str, float], None] | None = None,
+) -> tuple[np.ndarray, dict]:
+    """Contract normalized points; returns (contracted points, info) with info "iterations" (the
+    toolbox's t), "initial_weight", "ring_ratios" (its ``a``), "stop_reason"."""
+    report = report or (lambda _stage, _f: None)
+    n = len(pts)
+    bbox0 = pts.max(axis=0) - pts.min(axis=0)
+    wl = (float(params.contraction_weight) if params.contraction_weight is not None
+          else 1.0 / (5.0 * float(np.mean(rings.sizes(pts, "mean")))))
+    init_wl = wl
+    wc = float(params.attraction_weight)
+    wh = np.full(n, wc)
+    sizes0 = rings.sizes(pts, "min")
+    total0 = float(sizes0.sum())
+
+    def check_for(it: int) -> Callable[[], None]:
+        return lambda: report("contraction", it / params.max_iterations)
+
+    def step(current: np.ndarray, wl: float, wh: np.ndarray, it: int) -> np.ndarray:
+        L = cotangent_laplacian(current, rings, params.weight_row_cap)
+        M = (wl * wl) * (L.T @ L) + sp.diags(wh * wh)
+        rhs = (wh * wh)[:, None] * current
+        return solve_spd(M, rhs, check=check_for(it))
+
+    report("contraction", 0.0)
+    cpts = step(pts, wl, wh, 0)
+    t = 1
+    size_new = rings.sizes(cpts, "min")
+    a = [float(size_new.sum()) / total0]
+    stop = "max_iterations"
+    while t < params.max_iterations:
+        wl = min(params.contraction_scale * wl, params.contraction_weight_max)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            wh = wc * (sizes0 / size_new)
+        # 0/0 (a point duplicated in the cloud): the toolbox's NaN would poison the whole solve; the cap
+        # holds such a point instead (docs/skeletonize.md)
+        wh = np.where(np.isnan(wh), np.inf, wh)
+        wh = np.minimum(wh, params.attraction_weight_max)
+        tmp = step(cpts, wl, wh, t)
+        size_new = rings.sizes(tmp, "min")
+        a.append(float(size_new.sum()) / total0)
+        box = tmp.max(axis=0) - tmp.min(axis=0)
+        if np.any(box > bbox0 * params.bbox_growth_limit):
+            stop = "bounding box grew"
+            break
+        if a[t - 1] - a[-1] < params.termination_ratio or np.isnan(a[-1]):
+            stop = "one-ring size stopped shrinking"
+            break
+        cpts = tmp
+        t += 1
+    report("contraction", 1.0)
+    return cpts, {"iterations": t, "initial_weight": init_wl, "ring_ratios": a, "stop_reason": stop}
