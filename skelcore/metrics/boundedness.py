@@ -95,9 +95,11 @@ def _threads(workers: int | None):
 
     before = numba.get_num_threads()
     numba.set_num_threads(max(1, min(int(workers or numba.config.NUMBA_NUM_THREADS), numba.config.NUMBA_NUM_THREADS)))
+    chunk = numba.set_parallel_chunksize(1)  # iterations handed out one by one: costs vary a lot
     try:
         yield
     finally:
+        numba.set_parallel_chunksize(chunk)
         numba.set_num_threads(before)
 
 
@@ -201,7 +203,7 @@ def _batches(total: int, run, checkpoint: Checkpoint, first: int = 16) -> None:
         dt = time.perf_counter() - t0
         checkpoint(b / total)
         # grow or shrink towards the target, at most x4 per step
-        size = int(min(4 * size, max(1, size * _BATCH_SECONDS / max(dt, 1e-4))))
+        size = int(min(8 * size, max(1, size * _BATCH_SECONDS / max(dt, 1e-4))))
         a = b
 
 
@@ -309,11 +311,13 @@ class _Clusters:
         beta_sorted = np.empty(len(self.queries))
         starts = self.starts
 
+        queries = np.ascontiguousarray(self.queries)
+        centres = np.ascontiguousarray(self.centres)
+        reach = np.ascontiguousarray(self.reach, dtype=np.float64)
+        starts = starts.astype(np.int64)
+
         def run(a: int, b: int) -> None:
-            bits, count, _ = caps.far_field(self.centres[a:b], self.reach[a:b])
-            offsets, idx = caps.near_lists(self.centres[a:b], self.reach[a:b])
-            lo, hi = starts[a], starts[b]
-            beta_sorted[lo:hi] = caps.near_field(self.queries[lo:hi], self.cluster[lo:hi] - a, offsets, idx, bits, count)
+            beta_sorted[starts[a] : starts[b]] = caps.clusters(queries, starts, centres, reach, a, b - a)
 
         _batches(len(starts) - 1, run, checkpoint, first=4)
         beta = np.empty(len(self.queries))

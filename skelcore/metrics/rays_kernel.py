@@ -524,34 +524,6 @@ def cover_counts(queries, pts, centre, radius, lo, hi, first_leaf, h, zrow, srow
     return counts, visits
 
 
-@njit(parallel=True, cache=True)
-def far_maps(
-    fcentre, freach, pts, centre, radius, lo, hi, first_leaf, h, zrow, srow, cxs, cys, bins,
-):  # pragma: no cover - compiled
-    """The far field of every cluster seen from its centre: points farther than freach[c]."""
-    n = fcentre.shape[0]
-    rows = zrow.shape[0]
-    words = (bins + 63) // 64
-    bits_out = np.zeros((n, rows, words), np.uint64)
-    count_out = np.zeros((n, rows), np.int32)
-    visits = np.zeros(n, np.int64)
-    n_nodes = centre.shape[0]
-    n_blocks = (n + _BLOCK - 1) // _BLOCK
-    for blk in prange(n_blocks):
-        heap_key = np.empty(n_nodes + 2)
-        heap_id = np.empty(n_nodes + 2, np.int64)
-        cand_j = np.empty(_MAX_CAND, np.int64)
-        cand_k = np.empty(_MAX_CAND, np.int64)
-        for i in range(blk * _BLOCK, min(n, (blk + 1) * _BLOCK)):
-            fx, fy, fz = fcentre[i, 0], fcentre[i, 1], fcentre[i, 2]
-            _, v = _walk(
-                fx, fy, fz, pts, centre, radius, lo, hi, first_leaf, h, zrow, srow, cxs, cys, bins,
-                bits_out[i], count_out[i], 0, fx, fy, fz, freach[i], 1, heap_key, heap_id, cand_j, cand_k,
-            )
-            visits[i] = v
-    return bits_out, count_out, visits
-
-
 @njit(cache=True)
 def _ball(fx, fy, fz, reach, pts, centre, radius, lo, hi, first_leaf, out, stack):  # pragma: no cover
     """Indices of the points within reach of f, into out (if big enough); their number."""
@@ -603,50 +575,72 @@ def near_lists(fcentre, freach, pts, centre, radius, lo, hi, first_leaf):  # pra
 
 
 @njit(parallel=True, cache=True)
-def near_counts(
-    queries, cluster, offsets, idx, pts, h, zrow, srow, cxs, cys, bins, far_bits, far_count,
+def cluster_counts(
+    queries, starts, fcentre, freach, first_cluster, n_clusters, pts, centre, radius, lo, hi, first_leaf, h,
+    zrow, srow, cxs, cys, bins,
 ):  # pragma: no cover - compiled
-    """Covered samples per query: its cluster's far map plus the caps of its cluster's near list."""
-    n = queries.shape[0]
+    """Covered samples of the queries of clusters first..first+n-1 (queries sorted by cluster,
+    cluster c = queries[starts[c]:starts[c + 1]]): the far field (points beyond freach[c] of
+    fcentre[c]) walked once from fcentre[c], then each member's near field (the points within)
+    added cap by cap.  One parallel region for the whole batch."""
     rows = zrow.shape[0]
     words = (bins + 63) // 64
-    counts = np.zeros(n, np.int64)
+    q0 = starts[first_cluster]
+    counts = np.zeros(starts[first_cluster + n_clusters] - q0, np.int64)
+    n_nodes = centre.shape[0]
     h2 = h * h
-    n_blocks = (n + _BLOCK - 1) // _BLOCK
-    for blk in prange(n_blocks):
-        bits = np.zeros((rows, words), np.uint64)
-        count = np.zeros(rows, np.int32)
-        for i in range(blk * _BLOCK, min(n, (blk + 1) * _BLOCK)):
-            c = cluster[i]
+    for t in prange(n_clusters):
+        c = first_cluster + t
+        heap_key = np.empty(n_nodes + 2)
+        heap_id = np.empty(n_nodes + 2, np.int64)
+        cand_j = np.empty(_MAX_CAND, np.int64)
+        cand_k = np.empty(_MAX_CAND, np.int64)
+        far_bits = np.zeros((rows, words), np.uint64)
+        far_count = np.zeros(rows, np.int32)
+        fx, fy, fz, fr = fcentre[c, 0], fcentre[c, 1], fcentre[c, 2], freach[c]
+        far_full, _ = _walk(
+            fx, fy, fz, pts, centre, radius, lo, hi, first_leaf, h, zrow, srow, cxs, cys, bins,
+            far_bits, far_count, 0, fx, fy, fz, fr, 1, heap_key, heap_id, cand_j, cand_k,
+        )
+        far_total = 0
+        for j in range(rows):
+            far_total += far_count[j]
+        a, b = starts[c], starts[c + 1]
+        if far_full >= rows:
+            for i in range(a, b):
+                counts[i - q0] = far_total
+            continue
+        stack = np.empty(128, np.int64)
+        m = _ball(fx, fy, fz, fr, pts, centre, radius, lo, hi, first_leaf, np.empty(0, np.int64), stack)
+        if m == 0:
+            for i in range(a, b):
+                counts[i - q0] = far_total
+            continue
+        near = np.empty(m, np.int64)
+        _ball(fx, fy, fz, fr, pts, centre, radius, lo, hi, first_leaf, near, stack)
+        bits = np.empty((rows, words), np.uint64)
+        count = np.empty(rows, np.int32)
+        for i in range(a, b):
+            bits[:, :] = far_bits
+            count[:] = far_count
+            nfull = far_full
+            qx, qy, qz = queries[i, 0], queries[i, 1], queries[i, 2]
+            for p in near:
+                ux, uy, uz = pts[p, 0] - qx, pts[p, 1] - qy, pts[p, 2] - qz
+                d2 = ux * ux + uy * uy + uz * uz
+                if d2 <= h2:
+                    continue
+                dist = math.sqrt(d2)
+                sina = h / dist
+                cosa = math.sqrt(1.0 - sina * sina)
+                nfull += _cap(bits, count, ux / dist, uy / dist, uz / dist, cosa, sina, zrow, srow, cxs, cys,
+                              bins, True)
+                if nfull >= rows:
+                    break
             total = 0
             for j in range(rows):
-                total += far_count[c, j]
-            a, b = offsets[c], offsets[c + 1]
-            if a < b and total < rows * bins:
-                bits[:, :] = far_bits[c]
-                count[:] = far_count[c]
-                nfull = 0
-                for j in range(rows):
-                    if count[j] >= bins:
-                        nfull += 1
-                qx, qy, qz = queries[i, 0], queries[i, 1], queries[i, 2]
-                for t in range(a, b):
-                    p = idx[t]
-                    ux, uy, uz = pts[p, 0] - qx, pts[p, 1] - qy, pts[p, 2] - qz
-                    d2 = ux * ux + uy * uy + uz * uz
-                    if d2 <= h2:
-                        continue
-                    dist = math.sqrt(d2)
-                    sina = h / dist
-                    cosa = math.sqrt(1.0 - sina * sina)
-                    nfull += _cap(bits, count, ux / dist, uy / dist, uz / dist, cosa, sina, zrow, srow, cxs, cys,
-                                  bins, True)
-                    if nfull >= rows:
-                        break
-                total = 0
-                for j in range(rows):
-                    total += count[j]
-            counts[i] = total
+                total += count[j]
+            counts[i - q0] = total
     return counts
 
 
@@ -698,17 +692,9 @@ class CapTree:
         counts, visits = cover_counts(np.ascontiguousarray(queries, dtype=np.float64), *self._args())
         return counts / float(self.rows * self.bins), visits
 
-    def far_field(self, centres: np.ndarray, reach: np.ndarray):
-        """Raster maps of the points farther than reach[k] from centres[k], seen from centres[k]."""
-        return far_maps(np.ascontiguousarray(centres, np.float64), np.ascontiguousarray(reach, np.float64),
-                        *self._args())
-
-    def near_field(self, queries, cluster, offsets, idx, far_bits, far_count) -> np.ndarray:
-        """Covered fraction of each query: its cluster's far map plus its cluster's near list."""
-        counts = near_counts(
-            np.ascontiguousarray(queries, np.float64), np.ascontiguousarray(cluster, np.int64), offsets, idx,
-            self.pts, self.h, self.zrow, self.srow, self.cxs, self.cys, self.bins, far_bits, far_count,
-        )
+    def clusters(self, queries, starts, centres, reach, first: int, n: int) -> np.ndarray:
+        """Covered fraction of the queries of clusters first..first+n-1 (see ``cluster_counts``)."""
+        counts = cluster_counts(queries, starts, centres, reach, first, n, *self._args())
         return counts / float(self.rows * self.bins)
 
     def near_lists(self, centres: np.ndarray, reach: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
