@@ -375,6 +375,8 @@ class MainWindow(QtWidgets.QMainWindow):
             if event.kind == "quantities":
                 self._plots_stale.add("barcodes")
                 self.pick.show_info(None)
+                if ev is None:
+                    self.statusBar().clearMessage()  # "evaluation done in …" must not outlive the result
             self._plots_stale.add("histogram")
             self._schedule_plots()
         elif event.kind in ("colouring", "display"):

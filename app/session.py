@@ -130,7 +130,12 @@ class Session(QtCore.QObject):
         except ValueError:
             return "settings changed"
         shown = ev.params
+        if self._shown_correspondence is not None and self.correspondence_provider() != self._shown_correspondence:
+            return "settings changed"
         return "" if now.replace(beta_star=shown.beta_star, c_star=shown.c_star) == shown else "settings changed"
+
+    _shown_correspondence: str | None = None  # what the shown evaluation was asked for (None: unknown)
+    _requested_correspondence: str | None = None
 
     def check_stale(self) -> None:
         reason = self.stale_reason()
@@ -173,6 +178,7 @@ class Session(QtCore.QObject):
                     self._apply(name, data, None)
             if evaluation is not None:
                 self._inputs_changed = False
+                self._shown_correspondence = None
                 self.scene.set_evaluation(evaluation)
                 self._had_result = True
                 self.evaluated.emit(evaluation)
@@ -241,6 +247,7 @@ class Session(QtCore.QObject):
         curve = None if scene.curve is None else scene.curve.curve
         inputs = {k: v for k, v in scene.input_paths().items() if v}
         correspondence = self.correspondence_provider()
+        self._requested_correspondence = correspondence
 
         def job(progress: Callable[[float, str], None], cancel: Callable[[], bool]) -> Any:
             # skelcore.evaluate is resolved (and, the first time, imported) in the worker thread
@@ -292,6 +299,7 @@ class Session(QtCore.QObject):
             if self._evaluated_layers != (scene.cloud, scene.skeletal, scene.curve):
                 return  # inputs changed meanwhile: this result describes other data
             scene.set_evaluation(result)
+            self._shown_correspondence = self._requested_correspondence
             self._had_result = True
             self.check_stale()
             total = result.timings.get("total") if result.timings else None

@@ -58,6 +58,7 @@ class _Stages:
         self._progress = progress
         self._cancel = cancel
         self._last = -1.0
+        self._last_stage = ""
         self.timings: dict[str, float] = {}
 
     def checkpoint(self, stage: str) -> Callable[[float], None]:
@@ -66,8 +67,12 @@ class _Stages:
                 raise Cancelled(f"cancelled during {stage}")
             if self._progress is not None:
                 overall = self._start[stage] + self._size[stage] * min(max(fraction, 0.0), 1.0)
-                if overall - self._last >= 0.005 or fraction >= 1.0:  # throttle (Orange3's habit)
+                # throttled (Orange3's habit), but a new stage is shown at once: the label names
+                # the stage that runs
+                if stage != self._last_stage or overall - self._last >= 0.005 or fraction >= 1.0:
+                    overall = max(overall, self._last)  # never back by a rounding error
                     self._last = overall
+                    self._last_stage = stage
                     self._progress(overall, stage)
 
         return check

@@ -208,27 +208,17 @@ def test_ambiguous_drop_asks_and_the_answer_decides_the_role(window, files, tmp_
     other = tmp_path / "other_cloud.ply"
     write_points_ply(other, shapes.cylinder(700, seed=4).cloud)
     asked = []
-
-    answers = []
+    answer = {"choice": None}  # None: Enter on the dialog's default
 
     def get_item(parent, title, question, options, current, editable):
-        asked.append((question, options[current]))
-        return answers.pop(0), True
+        asked.append(question)
+        return (options[current] if answer["choice"] is None else answer["choice"]), True
 
     monkeypatch.setattr(QtWidgets.QInputDialog, "getItem", get_item)
-    answers.append(None)  # Enter on the default
-    get_default = get_item
-
-    def enter(parent, title, question, options, current, editable):
-        asked.append((question, options[current]))
-        return options[current], True
-
-    monkeypatch.setattr(QtWidgets.QInputDialog, "getItem", enter)
     _drop(window.view.widget, [str(other)])
-    assert asked and "700 points but the cloud has 1500" in asked[0][0]
+    assert asked and "700 points but the cloud has 1500" in asked[0]
     assert window.scene.cloud.path == files["cloud"]  # the default never replaces the loaded cloud
-    monkeypatch.setattr(QtWidgets.QInputDialog, "getItem", get_default)
-    answers[:] = [REPLACE_CLOUD]
+    answer["choice"] = REPLACE_CLOUD
     _drop(window.view.widget, [str(other)])
     assert window.scene.cloud.path == str(other) and window.scene.cloud.n_points == 700
 

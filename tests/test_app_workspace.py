@@ -170,6 +170,12 @@ def test_changed_settings_mark_the_results_stale_until_re_run(window, files, eva
     w.summary.beta_star.setValue(0.5)  # thresholds re-score at once: they never make results stale
     w.settings_panel.smooth_k.setValue(w.settings_panel.smooth_k.value() - 2)
     assert w.summary.stale == "" and not w.summary.rerun.isVisible() and not w.summary.is_greyed()
+    w.session._shown_correspondence = w.settings_panel.correspondence()  # as after a run from the window
+    other = [w.settings_panel.correspondence_choice.itemData(i) for i in range(w.settings_panel.correspondence_choice.count())]
+    other = [k for k in other if k != w.settings_panel.correspondence()]
+    if other:
+        w.settings_panel.set_correspondence(other[0])
+        assert w.summary.stale == "settings changed"
     w.settings_panel.curve_samples.setValue(50)
     started = []
     monkeypatch.setattr(w.session, "start_evaluation", lambda *a: started.append(1))
@@ -184,7 +190,9 @@ def test_changed_inputs_clear_the_results_and_no_text_describes_them(window, fil
     w.session.load_files([files["cloud"], files["skeletal"], files["curve"]])
     _show(w, evaluation)
     assert "evaluated in" in w.summary.details.text()
+    w.statusBar().showMessage("evaluation done in 2.80 s", 8000)
     w.session.close_layer("curve")
+    assert "evaluation done" not in w.statusBar().currentMessage()
     assert w.scene.evaluation is None
     assert "evaluated in" not in w.summary.details.text() and "eps*" not in w.summary.details.text()
     assert w.summary.cell_text("boundedness", "skeletal points") == "—"

@@ -11,7 +11,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from compare_helpers import command, make_dataset, manifest
+from compare_helpers import make_dataset, manifest
 from skelcore.cli import main
 from skelcore.errors import SkelInputError
 from skelcore.experiments.compare.conditions import degrade
@@ -268,6 +268,11 @@ def test_builtin_method_is_passed_only_when_skeletonize_takes_it(root, monkeypat
     pts = np.random.default_rng(0).normal(size=(50, 3))
     skeletal, curve = run_builtin(pts, m.methods[0])
     assert calls == [("cao", 5)] and skeletal is pts and curve is None
+    from skelcore.skeleton.params import method_params
+
     plain = load_manifest(manifest(root, GOOD))
     run_builtin(pts, plain.methods[0])
-    assert calls[-1] == ("skelscope", 5)  # no method given: the skeletonizer's own default
+    assert calls[-1] == (method_params(None)[0], 5)  # no method given: the skeletonizer's default
+    monkeypatch.setattr(skeleton, "skeletonize", real)
+    with pytest.raises(SkelInputError, match="unknown skeletonize method 'magic'"):
+        load_manifest(manifest(root, body.replace('method = "cao"', 'method = "magic"')))
