@@ -1,6 +1,7 @@
 """Wires issue 11's support views into the main window: a pick shows the element's support in the
 "Support" dock (2-D plot) and in the 3-D view (overlay); the Display panel's "only elements below the
-threshold" box hides every element whose value passes (beta > beta*, c > c*; NaN stays shown).
+threshold" box hides (and makes unpickable) every element whose value passes (beta > beta*, c > c*;
+NaN stays shown).
 
 Supports of clouds of BACKGROUND_POINTS or more are computed in a thread of their own (a direction map
 of a 100k-point cloud takes seconds), the newest pick winning. Installed by one call from :class:`app.main_window.MainWindow`; it chains the view's ``on_pick`` and
@@ -20,6 +21,7 @@ from .panels.support import SupportPanel
 from .scene import SceneEvent
 from .scene.supports import ElementSupport, element_support
 from .view.actors import display_coordinates
+from .view.picking import pick_layout
 from .view.style import MAGENTA
 from .view.support_overlay import SupportOverlay
 
@@ -182,11 +184,16 @@ class SupportController(QtCore.QObject):
             if actor is None or layer is None:
                 continue
             if mask is None:
+                self.view._pick_coords.pop(key, None)  # rebuilt from every element at the next pick
                 actor.SetVisibility(self.view._shown(key, layer))
                 if f"{key}-lod" in actors:
                     actors[f"{key}-lod"].SetVisibility(self.view._shown(f"{key}-lod", layer))
                 continue
             actor.SetVisibility(False)
+            # hidden elements cannot be picked: NaN coordinates are never near a click
+            coords = np.array(self.view._sources[key], dtype=float)
+            coords[~mask] = np.nan
+            self.view._pick_coords[key] = pick_layout(coords)
             lod = actors.get(f"{key}-lod")
             if lod is not None:
                 lod.SetVisibility(False)

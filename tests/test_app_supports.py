@@ -154,6 +154,13 @@ def test_the_filter_shows_only_the_elements_below_the_threshold(cylinder_window,
     assert mesh.n_points == int(below.sum())
     np.testing.assert_allclose(mesh["values"], ev.skeletal.boundedness[below])
     assert w.supports.filtered_counts()["skeletal"] == (int(below.sum()), len(below))
+    # a hidden element cannot be picked: a click on it finds a shown one or nothing
+    w.scene.set_visible("curve", False)
+    view.image()
+    for j in np.flatnonzero(~below)[:5]:
+        info = view.pick_display(*view.world_to_display(w.scene.skeletal.points[j]))
+        assert info is None or not info["values"]["boundedness"] > 0.9
+    w.scene.set_visible("curve", True)
     # a new threshold re-filters at once
     w.scene.set_thresholds(0.95, 0.75)
     assert w.supports.filter_meshes["filter-skeletal"].n_points == int((~(ev.skeletal.boundedness > 0.95)).sum())
