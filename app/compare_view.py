@@ -115,6 +115,8 @@ class CompareWindow(QtWidgets.QWidget):
         b_star, _c_star = self.thresholds
         lut = make_lut((0.0, 1.0))
         self.plotter.clear_actors()  # every renderer's
+        for title in list(self.plotter.scalar_bars.keys()):
+            self.plotter.remove_scalar_bar(title, render=False)
         for col, (ev, name) in enumerate(((self.ev_a, self.names[0]), (self.ev_b, self.names[1]))):
             self.plotter.subplot(0, col)
             self.plotter.set_background("white")
@@ -128,7 +130,10 @@ class CompareWindow(QtWidgets.QWidget):
                 mesh["values"] = np.asarray(values, dtype=float)
                 self.plotter.add_mesh(mesh, scalars="values", cmap=lut, clim=(0.0, 1.0), nan_color=MAGENTA,
                                       style="points", point_size=6, lighting=False, reset_camera=False,
-                                      render=False, show_scalar_bar=False)
+                                      render=False, show_scalar_bar=col == 1,
+                                      scalar_bar_args={"title": metric, "color": "black", "vertical": True,
+                                                       "position_x": 0.86, "position_y": 0.2, "height": 0.6,
+                                                       "width": 0.06, "n_labels": 5, "fmt": "%.2f"})
             if ev.curve is not None:
                 curve = ev.curve.curve
                 edges = np.asarray(curve.edges, dtype=np.int64).reshape(-1, 2)

@@ -209,6 +209,9 @@ def test_the_ab_table_shows_both_evaluations_and_their_differences(cylinder_wind
         assert len(cams) == 2 and cams[0] is cams[1]
         # both halves drawn: each renderer has the cloud, the skeletal points and the curve
         assert all(len(ren.actors) >= 3 for ren in view.plotter.renderers)
+        view.metric_box.setCurrentText("boundedness")  # redrawn by the other metric, in both halves
+        assert all(len(ren.actors) >= 3 for ren in view.plotter.renderers)
+        assert list(view.plotter.scalar_bars.keys()) == ["boundedness"]
         img = view.image()
         half = img.shape[1] // 2
         assert (img[:, :half, :3] < 200).any() and (img[:, half:, :3] < 200).any()
