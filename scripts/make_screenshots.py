@@ -12,7 +12,7 @@
   and evaluated, coloured by centeredness.
 - ``error_dialog.png``: the dialog a corrupt file gives, over the window that survives it.
 - Issue 11 (``--supports`` makes only these): ``window_support_slab.png`` / ``support_slab_panel.png``
-  (a curve sample's slab, ring and ellipse), ``window_support_knn.png`` (a skeletal point's neighbours
+  (a curve sample's slab, ring and ellipse; ``support_slab_junction_panel.png`` near the junction), ``window_support_knn.png`` (a skeletal point's neighbours
   and centroids), ``support_directions_panel.png`` / ``support_paper_panel.png`` (direction map, paper
   triangles), ``window_filter.png`` (only the elements below beta*), ``window_ab.png`` (skeleton A
   against the skeletonizer's B: linked split view, A / B / B - A table).
@@ -206,6 +206,12 @@ def support_screenshots(window, settle, save) -> None:
     settle(500)
     save(window, "window_support_slab.png")
     save(window.docks["Support"], "support_slab_panel.png")
+    # near the junction the slab also cuts the other arms: the ring keeps the nearest cross-section only
+    upper = np.flatnonzero((np.abs(samples[:, 0] - samples[mid, 0]) < 0.02) & (samples[:, 1] > 0))
+    near = int(upper[np.argmin(np.abs(samples[upper, 1] - 0.12))])
+    sup.picked(scene.element_info("curve", "samples", near))
+    settle(500)
+    save(window.docks["Support"], "support_slab_junction_panel.png")
     skel = scene.skeletal.points
     k = int(np.argmin(np.linalg.norm(skel - samples[mid], axis=1)))
     info = scene.element_info("skeletal", "points", k)
