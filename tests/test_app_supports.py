@@ -248,3 +248,23 @@ def test_a_big_clouds_support_is_computed_in_a_thread_and_the_newest_pick_wins(c
     sup = w.supports.support
     assert sup.kind == "directions" and sup.index == 7
     assert sup.detail.fraction == pytest.approx(ev.skeletal.boundedness[7], abs=0.01)
+
+
+def test_a_real_click_on_a_curve_sample_fills_the_support_dock(cylinder_window, cylinder_eval, qtbot):
+    w = cylinder_window
+    _, _, ev = cylinder_eval
+    w.scene.set_metric("centeredness")
+    for name in ("cloud", "skeletal"):
+        w.scene.set_visible(name, False)
+    w.view.standard_view("xz")
+    w.view.image()
+    i = int(np.argmin(np.abs(ev.curve.samples[:, 2] - 2.1)))  # halfway between two curve vertices
+    x, y = w.view.world_to_display(ev.curve.samples[i])
+    widget = w.view.widget
+    ratio = widget.devicePixelRatioF()
+    pos = QtCore.QPoint(int(round(x / ratio)), int(round(widget.height() - y / ratio)))
+    qtbot.mouseClick(widget, QtCore.Qt.MouseButton.LeftButton, pos=pos)
+    sup = w.supports.support
+    assert w.pick.info is not None and w.pick.info["element"] == "curve sample"
+    assert sup.kind == "slab" and abs(sup.points3d["query"][0, 2] - ev.curve.samples[i, 2]) < 0.05
+    assert w.supports.panel.title.startswith(f"curve sample #{sup.index}")
