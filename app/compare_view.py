@@ -175,6 +175,17 @@ class _CompareAction(QtCore.QObject):
         action = window._action(file_menu, "Compare with a second skeleton (B)…", self.dialog)
         file_menu.insertAction(file_menu.actions()[5], action)  # after the Open entries
         window.actions_by_name["compare"] = action
+        window.installEventFilter(self)  # the A/B windows close with the main window
+
+    def eventFilter(self, obj: QtCore.QObject, event: QtCore.QEvent) -> bool:  # noqa: N802
+        if obj is self.window and event.type() == QtCore.QEvent.Type.Close:
+            self.close_views()
+        return False
+
+    def close_views(self) -> None:
+        for view in self.views:
+            view.close()
+        self.views = []
 
     def dialog(self) -> None:
         from skelcore.io import SUPPORTED_EXTENSIONS
@@ -239,6 +250,7 @@ class _CompareAction(QtCore.QObject):
         scene = self.window.scene
         view = CompareWindow(ev_a, ev_b, names, metric=scene.metric, thresholds=(scene.beta_star, scene.c_star))
         view.show()
+        self.views = [v for v in self.views if v.isVisible()]
         self.views.append(view)
         return view
 

@@ -232,6 +232,8 @@ def test_skeleton_b_is_evaluated_in_the_worker_and_opens_the_ab_view(cylinder_wi
         assert rows["centeredness (skeletal)"][0] == ev_a.summary()["centeredness"]["skeletal"]
         assert np.isnan(rows["boundedness (curve)"][1])  # B has no curve: no score, no difference
         assert view.cell(list(rows).index("boundedness (curve)"), 3) == "—"
+        w.close()  # the A/B window closes with the main window
+        assert not view.isVisible() and w.compare.views == []
     finally:
         view.close()
 
