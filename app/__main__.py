@@ -1,4 +1,4 @@
-"""``skelscope [CLOUD] [--skeletal F] [--curve F] [--metric NAME] [--screenshot OUT.png] [--quit]``
+"""``skelscope [CLOUD] [--skeletal F] [--curve F] [--metric NAME] [--screenshot OUT.png] [--camera F] [--quit]``
 
 A thin main (silx's model): parse arguments, import Qt lazily, install an exception hook that shows
 errors in a dialog, open the window. With ``--screenshot`` and ``--quit`` it loads, evaluates,
@@ -30,6 +30,8 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--screenshot", metavar="OUT.png", help="save the 3D view as PNG once evaluated")
     p.add_argument("--scale", type=int, default=1, help="screenshot scale factor (default 1)")
     p.add_argument("--transparent", action="store_true", help="screenshot with a transparent background")
+    p.add_argument("--no-colour-bar", action="store_true", help="screenshot without the colour bar")
+    p.add_argument("--camera", metavar="F", help="camera file written by View > Save camera (default: fit the data)")
     p.add_argument("--quit", action="store_true", help="exit after the screenshot (scripted use)")
     return p
 
@@ -74,6 +76,16 @@ def main(argv: Sequence[str] | None = None) -> int:
         return _fail("--quit without inputs has nothing to do")
     if args.screenshot and not os.path.isdir(os.path.dirname(os.path.abspath(args.screenshot))):
         return _fail(f"{args.screenshot}: output folder does not exist")
+    camera = None
+    if args.camera:
+        from skelcore.errors import SkelInputError
+
+        from .view.camera import load_camera
+
+        try:
+            camera = load_camera(args.camera)
+        except SkelInputError as exc:
+            return _fail(str(exc))
     if sys.platform.startswith("linux") and not (os.environ.get("DISPLAY") or os.environ.get("WAYLAND_DISPLAY")) \
             and os.environ.get("QT_QPA_PLATFORM", "") in ("", "xcb"):
         return _fail("no display: run under a desktop session or `xvfb-run -a skelscope ...`")
@@ -102,10 +114,12 @@ def main(argv: Sequence[str] | None = None) -> int:
             if path and not session.load_as(role, path) and scripted:
                 session.auto_evaluate = False
     window.scene.set_metric(args.metric)
+    if camera is not None:
+        window.view.set_camera_state(camera)
     if scripted and window.errors:
         return _fail(window.errors[0])
     if not args.screenshot and not scripted:
-        return app.exec()
+        return _exited(app.exec())
 
     _wait_for_runner(app, session)
     if window.errors:
@@ -113,9 +127,13 @@ def main(argv: Sequence[str] | None = None) -> int:
             return _fail(window.errors[0], 1 if window.bug else 2)
     if args.screenshot:
         app.processEvents()
-        window.view.reset_camera()  # fit the final view size (docks may have moved since loading)
+        if camera is None:
+            window.view.reset_camera()  # fit the final view size (docks may have moved since loading)
+        else:
+            window.view.set_camera_state(camera)
         try:
-            path = window.save_screenshot(args.screenshot, scale=args.scale, transparent=args.transparent)
+            path = window.save_screenshot(args.screenshot, scale=args.scale, transparent=args.transparent,
+                                          colour_bar=not args.no_colour_bar)
         except (ValueError, OSError) as exc:
             if scripted:
                 return _fail(str(exc))
@@ -128,7 +146,20 @@ def main(argv: Sequence[str] | None = None) -> int:
             print("\n".join(_summary_lines(summary)))
         window.close()
         return 1 if window.bug else 0
-    return app.exec()
+    return _exited(app.exec())
+
+
+def _exited(code: int) -> int:
+    """The event loop has ended (the window closed, its task cancelled and waited for at most
+    ``app.worker.SHUTDOWN_WAIT_S``). A task thread still inside an engine call without a checkpoint
+    would only delay the exit: leave now, with the event loop's status."""
+    from .worker import threads_alive
+
+    if threads_alive():
+        sys.stdout.flush()
+        sys.stderr.flush()
+        os._exit(code)
+    return code
 
 
 def _wait_for_runner(app: Any, session: Any) -> None:

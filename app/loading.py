@@ -2,7 +2,9 @@
 
 Issue 3's rules for files dropped or named together: a file with edges is a curve skeleton; a point
 set with the cloud's point count is a skeletal point set (SPEC 0's pointwise correspondence); the first
-point set is the cloud. When that is ambiguous the ``ask`` callback decides (the window shows a dialog).
+point set is the cloud; a complete set dropped at once is assigned within itself. When that is
+ambiguous the ``ask`` callback decides (the window shows a dialog) and its default never replaces
+the loaded cloud.
 """
 
 from __future__ import annotations
@@ -43,29 +45,52 @@ def _spread(loaded: Any, max_points: int = 20000) -> float:
     return float(np.median(dist[:, 1]))
 
 
+SKIP = "skip this file"
+REPLACE_CLOUD = "the cloud (replaces the loaded cloud and clears its skeleton)"
+SKELETAL = "the skeletal point set"
+
+
+def _fresh_cloud(points: list[Any], ask: Ask) -> Any:
+    """The cloud among point sets dropped together on a window without a cloud (or as a complete
+    set): of a group of same-size sets, the one with the clearly largest point spacing (a skeletal
+    set is the cloud contracted); ``ask`` when no spread stands out; otherwise the first."""
+    counts = [_count(p) for p in points]
+    group_count = next((c for c in counts if counts.count(c) > 1), None)
+    if group_count is None:
+        return points[0]
+    same = [p for p in points if _count(p) == group_count]
+    spreads = sorted(((_spread(p), i) for i, p in enumerate(same)), reverse=True)
+    if spreads[0][0] > 1.5 * spreads[1][0]:
+        return same[spreads[0][1]]
+    names = [os.path.basename(p.path) for p in same]
+    choice = ask("Several point sets have the same number of points and similar spacing. Which one is the cloud?", names)
+    return same[names.index(choice)] if choice in names else same[0]
+
+
+def is_complete_set(items: Sequence[Any], cloud_count: int | None) -> bool:
+    """A drop that brings its own cloud: two same-size point sets (a cloud and its skeletal set), or
+    one point set that cannot be the loaded cloud's skeletal set, dropped with a curve skeleton."""
+    points = [it for it in items if it.kind != "curve"]
+    counts = [_count(p) for p in points]
+    if any(counts.count(c) > 1 for c in counts):
+        return True
+    has_curve = len(points) < len(items)
+    return has_curve and len(points) == 1 and cloud_count is not None and counts[0] != cloud_count
+
+
 def assign_roles(items: Sequence[Any], cloud_count: int | None, ask: Ask) -> list[Assignment]:
     """Roles for ``items`` (``skelcore.io.Loaded``), given the currently loaded cloud's size.
 
-    Several same-size point sets and no cloud yet: the cloud is the one with the clearly largest
-    point spacing (a skeletal set is the cloud contracted), the first one by the issue's rule otherwise;
-    when no spread stands out, ``ask``. A point set whose size differs from an already loaded cloud
-    cannot be its skeletal set: ``ask`` whether it replaces the cloud.
+    No cloud yet, or a complete set (:func:`is_complete_set`): the set is assigned within itself
+    (:func:`_fresh_cloud`), never against the loaded cloud. Otherwise a point set with the loaded
+    cloud's size is its skeletal set; any other point set is asked about, and the question's first
+    (default) answer skips the file: an ambiguous drop never replaces the loaded cloud by default.
     """
     out: list[Assignment] = [Assignment("curve", it) for it in items if it.kind == "curve"]
     points = [it for it in items if it.kind != "curve"]
     count = cloud_count
-    if count is None and points:
-        first = points[0]
-        same = [p for p in points if _count(p) == _count(first)]
-        spreads = sorted(((_spread(p), i) for i, p in enumerate(same)), reverse=True)
-        if len(same) > 1 and spreads[0][0] > 1.5 * spreads[1][0]:
-            cloud = same[spreads[0][1]]
-        elif len(same) > 1:
-            names = [os.path.basename(p.path) for p in same]
-            choice = ask("Several point sets have the same number of points and similar spacing. Which one is the cloud?", names)
-            cloud = same[names.index(choice)] if choice in names else first
-        else:
-            cloud = first
+    if points and (count is None or is_complete_set(items, cloud_count)):
+        cloud = _fresh_cloud(points, ask)
         out.append(Assignment("cloud", cloud))
         points = [p for p in points if p is not cloud]
         count = _count(cloud)
@@ -78,17 +103,20 @@ def assign_roles(items: Sequence[Any], cloud_count: int | None, ask: Ask) -> lis
             continue
         if _count(p) == count:
             question = f"{name} has the cloud's {count} points, like another file dropped with it. Load it as:"
+            options = [SKIP, SKELETAL, REPLACE_CLOUD]
         else:
             question = (
-                f"{name} has {_count(p)} points but the cloud has {count}, so it cannot be a skeletal point "
+                f"{name} has {_count(p)} points but the cloud has {count}, so it cannot be its skeletal point "
                 "set (pointwise correspondence). Load it as:"
             )
-        options = ["the cloud (replaces the current one)", "the skeletal point set"]
+            options = [SKIP, REPLACE_CLOUD]
         choice = ask(question, options)
-        if choice == options[0]:
+        if choice == REPLACE_CLOUD:
+            out = [a for a in out if a.role != "cloud"]
             out.append(Assignment("cloud", p))
             count = _count(p)
-        elif choice == options[1]:
+        elif choice == SKELETAL:
+            out = [a for a in out if a.role != "skeletal"]
             out.append(Assignment("skeletal", p))
             skeletal_taken = True
     order = {"cloud": 0, "skeletal": 1, "curve": 2}

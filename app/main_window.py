@@ -12,10 +12,12 @@ from typing import Any
 
 from PySide6 import QtCore, QtGui, QtWidgets
 
-from .exports import export_coloured_ply, export_results, with_thresholds, write_png
+from .exports import (
+    data_stem, export_coloured_ply, export_results, ply_export_names, result_export_names, with_thresholds, write_png,
+)
 from .panels import BarcodePanel, DisplayPanel, HistogramPanel, PickPanel, SettingsPanel, SummaryPanel
 from .panels._plot import preload_matplotlib
-from .scene import METRICS, Scene, SceneEvent
+from .scene import LAYER_ORDER, METRICS, Scene, SceneEvent
 from .session import Session
 from .view import SceneView
 
@@ -80,6 +82,8 @@ class MainWindow(QtWidgets.QMainWindow):
         self._build_menus()
 
         self.session.params_provider = self.settings_panel.params
+        self.session.correspondence_provider = self.settings_panel.correspondence
+        self.summary.cloud_colouring.connect(self.view.set_cloud_values)
         self.session.ask = self._ask
         self.session.error.connect(self.show_error)
         self.session.message.connect(lambda text: self.statusBar().showMessage(text, 8000))
@@ -90,6 +94,10 @@ class MainWindow(QtWidgets.QMainWindow):
         runner.finished.connect(self._task_finished)
         runner.cancelled.connect(lambda name: self._task_finished(name) if not runner.running else None)
         self.summary.thresholds_changed.connect(self.scene.set_thresholds)
+        self.summary.rerun_requested.connect(self.session.start_evaluation)
+        self.settings_panel.changed.connect(self.session.check_stale)
+        self.session.stale_changed.connect(self._stale_changed)
+        self.display.layer_action.connect(self._layer_action)
         self.view.on_pick = self._picked
         self.scene.subscribe(self._on_scene)
         self._update_actions()
@@ -154,10 +162,15 @@ class MainWindow(QtWidgets.QMainWindow):
         a["open_curve"] = self._action(m, "Open curve skeleton…", lambda: self.open_as("curve"), "Ctrl+3")
         self.recent_menu = m.addMenu("Recent files")
         self._fill_recent()
+        close = m.addMenu("Close")
+        for role in LAYER_ORDER:
+            a[f"close_{role}"] = self._action(close, f"Close the {_ROLE_TITLES[role]}",
+                                              lambda _=False, r=role: self.session.close_layer(r))
+        a["close_all"] = self._action(m, "Close all", self.session.close_all, "Ctrl+W")
         m.addSeparator()
         a["export_ply"] = self._action(m, "Export coloured PLY…", self.export_ply_dialog, "Ctrl+E")
         a["export_results"] = self._action(m, "Export results (JSON + CSV)…", self.export_results_dialog, "Ctrl+Shift+E")
-        a["screenshot"] = self._action(m, "Save screenshot of the 3D view…", self.screenshot_dialog, "Ctrl+S")
+        a["screenshot"] = self._action(m, "Save picture of the 3D view…", self.screenshot_dialog, "Ctrl+S")
         m.addSeparator()
         a["quit"] = self._action(m, "Quit", self.close, "Ctrl+Q")
 
@@ -177,6 +190,12 @@ class MainWindow(QtWidgets.QMainWindow):
             a[f"view_{name}"] = self._action(m, title, lambda _=False, n=name: self.view.standard_view(n), key)
         a["parallel"] = self._action(m, "Parallel projection", self.view.set_parallel_projection, "P", checkable=True)
         a["tubes"] = self._action(m, "Edges as tubes", self.scene.set_edges_as_tubes, "T", checkable=True)
+        for name, title, key in (("spheres", "Points as shaded spheres", "Shift+S"),
+                                 ("eye_dome", "Eye-dome lighting", "Shift+E"), ("axes", "Orientation axes", "Shift+A")):
+            a[f"style_{name}"] = self._action(m, title, lambda on, n=name: self.scene.set_style(n, on), key, checkable=True)
+        m.addSeparator()
+        a["save_camera"] = self._action(m, "Save camera…", self.save_camera_dialog)
+        a["load_camera"] = self._action(m, "Load camera…", self.load_camera_dialog)
         m.addSeparator()
         for dock in self.docks.values():
             m.addAction(dock.toggleViewAction())
@@ -208,10 +227,25 @@ class MainWindow(QtWidgets.QMainWindow):
             QtWidgets.QMessageBox.critical(self, title, message)
 
     def _ask(self, question: str, options: list[str]) -> str | None:
+        """The session's questions; the first option is the default (Enter), never a destructive one."""
         if not self.interactive:
             return options[0] if options else None
-        item, ok = QtWidgets.QInputDialog.getItem(self, "Which file is which?", question, options, 0, False)
+        item, ok = QtWidgets.QInputDialog.getItem(self, "SkelScope", question, options, 0, False)
         return item if ok else None
+
+    def _confirm_overwrite(self, paths: list[str]) -> bool:
+        """True when none of ``paths`` exists or the user agrees to replace those that do (default: no)."""
+        existing = [p for p in paths if os.path.exists(p)]
+        if not existing:
+            return True
+        if not self.interactive:
+            return False
+        names = "\n".join(os.path.basename(p) for p in existing)
+        answer = QtWidgets.QMessageBox.question(
+            self, "Replace files?", f"These files exist already in {os.path.dirname(existing[0]) or '.'}:\n{names}\n\nReplace them?",
+            QtWidgets.QMessageBox.StandardButton.Yes | QtWidgets.QMessageBox.StandardButton.No,
+            QtWidgets.QMessageBox.StandardButton.No)
+        return answer == QtWidgets.QMessageBox.StandardButton.Yes
 
     def shortcut_rows(self) -> list[tuple[str, str]]:
         rows = [(act.text().replace("&", "").rstrip("…"), act.shortcut().toString())
@@ -294,7 +328,7 @@ class MainWindow(QtWidgets.QMainWindow):
 
     # ---- computing ------------------------------------------------------------------------
     def _task_started(self, name: str) -> None:
-        self.stage.setText(f"{name}…")
+        self.stage.setText(f"{name}: starting…")
         self.progress.setValue(0)
         for w in (self.stage, self.progress, self.cancel_button):
             w.setVisible(True)
@@ -335,6 +369,8 @@ class MainWindow(QtWidgets.QMainWindow):
             if event.kind == "quantities":
                 self._plots_stale.add("barcodes")
                 self.pick.show_info(None)
+                if ev is None:
+                    self.statusBar().clearMessage()  # "evaluation done in …" must not outlive the result
             self._plots_stale.add("histogram")
             self._schedule_plots()
         elif event.kind in ("colouring", "display"):
@@ -383,8 +419,26 @@ class MainWindow(QtWidgets.QMainWindow):
         if info is not None:
             self.statusBar().showMessage(f"{info['element']} #{info['index']}", 5000)
 
+    def _stale_changed(self, reason: str) -> None:
+        self.summary.set_stale(reason)
+
+    def _layer_action(self, action: str, role: str) -> None:
+        if action == "close":
+            self.session.close_layer(role)
+        elif action == "swap":
+            self.session.swap_roles()
+
     def _update_actions(self) -> None:
         a = self.actions_by_name
+        for role in LAYER_ORDER:
+            a[f"close_{role}"].setEnabled(role in self.scene.layers)
+        a["close_all"].setEnabled(bool(self.scene.layers))
+        for action, on in [(a["tubes"], self.scene.edges_as_tubes),
+                           *((a[f"style_{n}"], v) for n, v in self.scene.style.items())]:
+            if action.isChecked() != on:
+                action.blockSignals(True)
+                action.setChecked(on)
+                action.blockSignals(False)
         has_eval = self.scene.evaluation is not None
         running = self.session.runner.running
         a["evaluate"].setEnabled(self.scene.can_evaluate())
@@ -405,12 +459,18 @@ class MainWindow(QtWidgets.QMainWindow):
         if cloud is None or not cloud.path:
             self.show_error("Study", "load a cloud from a file first")
             return
-        dialog = StudyDialog(self, cloud.path)
+        try:
+            params = self.session.params()  # the window's settings and thresholds (beta*, c*)
+        except ValueError as exc:
+            self.show_error("Study", str(exc))
+            return
+        dialog = StudyDialog(self, cloud.path, params=params)
         dialog.show()
         self._study_dialog = dialog
 
     def open_variant(self, cloud: Any, skeletal: Any = None, curve: Any = None, evaluation: Any = None) -> None:
-        """Called by the Study dialog: show one variant (arrays, no files) in the 3D view."""
+        """Called by the Study dialog: show one variant (arrays, no files) in the 3D view, with its
+        stored evaluation when given (shown at once, nothing recomputed)."""
         self.session.show_arrays(cloud, skeletal, curve, evaluation)
         self.view.reset_camera()
 
@@ -422,24 +482,36 @@ class MainWindow(QtWidgets.QMainWindow):
     def _inputs(self) -> tuple[str, ...]:
         return tuple(p for p in self.scene.input_paths().values() if p)
 
-    def export_ply(self, out_dir: str) -> list[str]:
-        ev = self._shown_evaluation()
-        if ev is None:
-            raise ValueError("nothing to export: run an evaluation first")
-        return export_coloured_ply(ev, out_dir, self._inputs(), color_by=self.scene.metric)
+    def export_stem(self) -> str:
+        """What exports are named after: the loaded cloud's file stem ("skelscope" for in-memory data)."""
+        return data_stem(self.scene.input_paths())
 
-    def export_results(self, prefix: str) -> list[str]:
+    def export_ply(self, out_dir: str, overwrite: bool = False) -> list[str]:
+        """``<stem>_skeletal.ply``, ``<stem>_curve.ply``, ``<stem>_curve_samples.ply`` into ``out_dir``;
+        an existing file is replaced only with ``overwrite`` (the dialog asks first)."""
         ev = self._shown_evaluation()
         if ev is None:
             raise ValueError("nothing to export: run an evaluation first")
+        names = ply_export_names(ev, out_dir, self.export_stem())
+        _refuse_existing(names, overwrite)
+        return export_coloured_ply(ev, out_dir, self._inputs(), color_by=self.scene.metric, stem=self.export_stem())
+
+    def export_results(self, prefix: str, overwrite: bool = False) -> list[str]:
+        ev = self._shown_evaluation()
+        if ev is None:
+            raise ValueError("nothing to export: run an evaluation first")
+        _refuse_existing(result_export_names(ev, prefix), overwrite)
         return export_results(ev, prefix, self._inputs())
 
-    def save_screenshot(self, path: str, scale: int = 1, transparent: bool = False) -> str:
-        return write_png(path, self.view.image(scale=scale, transparent=transparent), self._inputs())
+    def save_screenshot(self, path: str, scale: int = 1, transparent: bool = False, colour_bar: bool = True,
+                        overwrite: bool = True) -> str:
+        _refuse_existing([path], overwrite)
+        return write_png(path, self.view.image(scale=scale, transparent=transparent, colour_bar=colour_bar),
+                         self._inputs())
 
-    def _guarded(self, what: str, fn: Any, *args: Any) -> Any:
+    def _guarded(self, what: str, fn: Any, *args: Any, **kwargs: Any) -> Any:
         try:
-            out = fn(*args)
+            out = fn(*args, **kwargs)
         except (ValueError, OSError) as exc:
             self.show_error(f"{what} failed", str(exc))
             return None
@@ -448,33 +520,87 @@ class MainWindow(QtWidgets.QMainWindow):
 
     def export_ply_dialog(self) -> None:
         folder = QtWidgets.QFileDialog.getExistingDirectory(self, "Export coloured PLY into", self._last_dir())
-        if folder:
-            self._guarded("PLY export", self.export_ply, folder)
+        ev = self._shown_evaluation()
+        if folder and ev is not None and self._confirm_overwrite(ply_export_names(ev, folder, self.export_stem())):
+            self._guarded("PLY export", self.export_ply, folder, overwrite=True)
 
     def export_results_dialog(self) -> None:
-        path, _ = QtWidgets.QFileDialog.getSaveFileName(self, "Export results (PREFIX.json and PREFIX_*.csv)",
-                                                        os.path.join(self._last_dir(), "results.json"), "JSON (*.json)")
-        if path:
-            self._guarded("Results export", self.export_results, path)
+        path, _ = QtWidgets.QFileDialog.getSaveFileName(
+            self, "Export results (PREFIX.json and PREFIX_*.csv)",
+            os.path.join(self._last_dir(), f"{self.export_stem()}_results.json"), "JSON (*.json)",
+            options=QtWidgets.QFileDialog.Option.DontConfirmOverwrite)
+        ev = self._shown_evaluation()
+        if path and ev is not None and self._confirm_overwrite(result_export_names(ev, path)):
+            self._guarded("Results export", self.export_results, path, overwrite=True)
 
     def screenshot_dialog(self) -> None:
-        path, _ = QtWidgets.QFileDialog.getSaveFileName(self, "Save screenshot", os.path.join(self._last_dir(), "view.png"), "PNG (*.png)")
-        if not path:
+        """One dialog: file, scale, transparent background, colour bar on or off."""
+        from .picture_dialog import PictureDialog
+
+        default = os.path.join(self._last_dir(), f"{self.export_stem()}_{self.scene.metric}.png")
+        dialog = PictureDialog(self, default, (self.view.widget.width(), self.view.widget.height()))
+        if dialog.exec() != QtWidgets.QDialog.DialogCode.Accepted:
             return
-        scale, ok = QtWidgets.QInputDialog.getInt(self, "Screenshot", "Scale factor", 2, 1, 8)
-        if not ok:
-            return
-        transparent = QtWidgets.QMessageBox.question(self, "Screenshot", "Transparent background?") == \
-            QtWidgets.QMessageBox.StandardButton.Yes
-        if not path.lower().endswith(".png"):
-            path += ".png"
-        self._guarded("Screenshot", self.save_screenshot, path, scale, transparent)
+        opts = dialog.options()
+        if opts.path and self._confirm_overwrite([opts.path]):
+            self._guarded("Picture", self.save_screenshot, opts.path, opts.scale, opts.transparent, opts.colour_bar)
+
+    def save_camera(self, path: str) -> str:
+        from .view.camera import save_camera
+
+        return save_camera(path, self.view.camera_state(), self._inputs())
+
+    def load_camera(self, path: str) -> None:
+        from .view.camera import load_camera
+
+        self.view.set_camera_state(load_camera(path))
+
+    def save_camera_dialog(self) -> None:
+        path, _ = QtWidgets.QFileDialog.getSaveFileName(
+            self, "Save camera", os.path.join(self._last_dir(), f"{self.export_stem()}_camera.json"), "Camera (*.json)")
+        if path:
+            self._guarded("Camera", self.save_camera, path)
+
+    def load_camera_dialog(self) -> None:
+        path, _ = QtWidgets.QFileDialog.getOpenFileName(self, "Load camera", self._last_dir(), "Camera (*.json)")
+        if path:
+            try:
+                self.load_camera(path)
+            except ValueError as exc:
+                self.show_error("Camera", str(exc))
 
     # ---- closing --------------------------------------------------------------------------
     def closeEvent(self, event: QtGui.QCloseEvent) -> None:  # noqa: N802
-        self.session.runner.shutdown()
+        """Quitting cancels any running task and waits for it at most SHUTDOWN_WAIT_S in all (a task
+        inside an engine call without a checkpoint is left to the process exit, see app.__main__)."""
+        import time
+
+        from .worker import SHUTDOWN_WAIT_S
+
+        deadline = time.monotonic() + SHUTDOWN_WAIT_S
+        runners = [self.session.runner]
+        study = getattr(self, "_study_dialog", None)
+        if study is not None:
+            runners.append(study.runner)
+        for runner in runners:
+            runner.discard()
+        for runner in runners:
+            runner.wait_all(int(max(0.0, deadline - time.monotonic()) * 1000))
+        if study is not None:
+            study.close()
         self.view.close()
         super().closeEvent(event)
+
+
+_ROLE_TITLES = {"cloud": "cloud", "skeletal": "skeletal point set", "curve": "curve skeleton"}
+
+
+def _refuse_existing(paths: list[str], overwrite: bool) -> None:
+    """Exports never replace a file without being told to (the dialogs ask first)."""
+    if not overwrite:
+        existing = [p for p in paths if os.path.exists(p)]
+        if existing:
+            raise FileExistsError(f"{existing[0]}: exists already (not replaced)")
 
 
 def _study_available() -> bool:

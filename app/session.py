@@ -26,6 +26,7 @@ class Session(QtCore.QObject):
     message = QtCore.Signal(str)  # status-bar text
     loaded = QtCore.Signal(str, str)  # role, path
     evaluated = QtCore.Signal(object)  # the Evaluation now shown
+    stale_changed = QtCore.Signal(str)  # why the shown results are out of date ("" when they are not)
 
     def __init__(self, scene: Scene | None = None, parent: QtCore.QObject | None = None) -> None:
         super().__init__(parent)
@@ -33,10 +34,12 @@ class Session(QtCore.QObject):
         self.runner = TaskRunner(self)
         self.ask: Ask = lambda question, options: options[0] if options else None
         self.params_provider: Callable[[], Params] = Params
+        #: "auto" or "reverse" (SPEC 7), e.g. the settings panel's choice
+        self.correspondence_provider: Callable[[], str] = lambda: "auto"
         self.auto_evaluate = True
         self.runner.succeeded.connect(self._task_succeeded)
         self.runner.failed.connect(self._task_failed)
-        self.runner.cancelled.connect(lambda name: self.message.emit(f"{name} cancelled"))
+        self.runner.finished.connect(lambda name: self.check_stale())
         self.scene.subscribe(self._on_scene)
 
     # ---- loading --------------------------------------------------------------------------
@@ -60,11 +63,87 @@ class Session(QtCore.QObject):
             self.error.emit("Could not load", "\n".join(failures), "")
         cloud = self.scene.cloud
         done = []
+        assignments = assign_roles(items, None if cloud is None else cloud.n_points, self.ask)
         with self.batch():
-            for a in assign_roles(items, None if cloud is None else cloud.n_points, self.ask):
+            roles = {a.role for a in assignments}
+            if "cloud" in roles:
+                self._new_cloud_over_skeleton(keep=roles - {"cloud"})
+            for a in assignments:
                 self._apply(a.role, a.loaded.points if a.role != "curve" else a.loaded.curve, a.loaded.path)
                 done.append((a.role, a.loaded.path))
         return done
+
+    KEEP_SKELETON = ("clear it", "keep it")
+
+    def _new_cloud_over_skeleton(self, keep: set[str] = frozenset()) -> None:
+        """A new cloud replaces the loaded one: the loaded skeleton layers (other than those in
+        ``keep``, which arrive with the cloud) describe the old cloud, so ask whether to keep them;
+        the default (the question's first answer) clears them."""
+        old = [name for name in ("skeletal", "curve") if name in self.scene.layers and name not in keep]
+        if not old or self.scene.cloud is None:
+            return
+        what = " and ".join(_ROLE_TITLES[name] for name in old)
+        choice = self.ask(f"A new cloud replaces the loaded one. The loaded {what} was made from the old cloud: "
+                          "clear it or keep it?", list(self.KEEP_SKELETON))
+        if choice != self.KEEP_SKELETON[1]:
+            for name in old:
+                self.scene.remove_layer(name)
+
+    # ---- layers ---------------------------------------------------------------------------
+    def close_layer(self, role: str) -> None:
+        """File > Close / the panel's remove button: drop one layer (and the results with it)."""
+        if role not in ROLES:
+            raise ValueError(f"unknown role {role!r}")
+        self.scene.remove_layer(role)
+        self._after_layers_changed()
+
+    def close_all(self) -> None:
+        self.runner.discard()
+        self.scene.clear()
+        self._after_layers_changed()
+
+    def swap_roles(self) -> None:
+        """The cloud becomes the skeletal set and the skeletal set the cloud (Display panel)."""
+        with self.batch():
+            self.scene.swap_cloud_and_skeletal()
+
+    def _after_layers_changed(self) -> None:
+        self._inputs_changed = False  # closing is not an input to evaluate: no automatic run
+        if not self.scene.layers:
+            self._had_result = False
+        self.check_stale()
+
+    # ---- stale results --------------------------------------------------------------------
+    _had_result = False
+
+    def stale_reason(self) -> str:
+        """Why the results on screen are not those of the current inputs and settings: "settings
+        changed" (an evaluation is shown, the Settings panel now differs from its parameters; the
+        thresholds re-score at once and never make it stale), "inputs changed" (the shown results
+        were dropped with the inputs they described and nothing runs), "" otherwise."""
+        ev = self.scene.evaluation
+        if ev is None:
+            running = self.runner.current_name == "evaluation"
+            return "inputs changed" if self._had_result and self.scene.can_evaluate() and not running else ""
+        try:
+            now = self.params()
+        except ValueError:
+            return "settings changed"
+        shown = ev.params
+        if self._shown_correspondence is not None and self.correspondence_provider() != self._shown_correspondence:
+            return "settings changed"
+        return "" if now.replace(beta_star=shown.beta_star, c_star=shown.c_star) == shown else "settings changed"
+
+    _shown_correspondence: str | None = None  # what the shown evaluation was asked for (None: unknown)
+    _requested_correspondence: str | None = None
+
+    def check_stale(self) -> None:
+        reason = self.stale_reason()
+        if reason != self._stale:
+            self._stale = reason
+            self.stale_changed.emit(reason)
+
+    _stale = ""
 
     def load_as(self, role: str, path: str) -> bool:
         """File > Open for one role; False (and an error dialog) when the file does not load."""
@@ -82,6 +161,8 @@ class Session(QtCore.QObject):
             self.error.emit("Could not load", f"{path}: {type(exc).__name__}: {exc}", "")
             return False
         with self.batch():
+            if role == "cloud":
+                self._new_cloud_over_skeleton()
             self._apply(role, data, path)
         return True
 
@@ -97,8 +178,11 @@ class Session(QtCore.QObject):
                     self._apply(name, data, None)
             if evaluation is not None:
                 self._inputs_changed = False
+                self._shown_correspondence = None
                 self.scene.set_evaluation(evaluation)
+                self._had_result = True
                 self.evaluated.emit(evaluation)
+        self.check_stale()
 
     def _apply(self, role: str, data: Any, path: str | None) -> None:
         if role == "cloud":
@@ -138,6 +222,8 @@ class Session(QtCore.QObject):
             if self.runner.current_name == "evaluation":
                 self.runner.discard()
             self._inputs_changed = True
+        if event.kind in ("layer", "quantities"):
+            self.check_stale()
 
     # ---- computing ------------------------------------------------------------------------
     def params(self) -> Params:
@@ -160,13 +246,17 @@ class Session(QtCore.QObject):
         skeletal = None if scene.skeletal is None else scene.skeletal.points
         curve = None if scene.curve is None else scene.curve.curve
         inputs = {k: v for k, v in scene.input_paths().items() if v}
+        correspondence = self.correspondence_provider()
+        self._requested_correspondence = correspondence
 
         def job(progress: Callable[[float, str], None], cancel: Callable[[], bool]) -> Any:
             # skelcore.evaluate is resolved (and, the first time, imported) in the worker thread
-            return skelcore.evaluate(cloud, skeletal, curve, params, progress, cancel, inputs=inputs)
+            return skelcore.evaluate(cloud, skeletal, curve, params, progress, cancel, inputs=inputs,
+                                     correspondence=correspondence)
 
         self._evaluated_layers = (scene.cloud, scene.skeletal, scene.curve)
         self.runner.start(job, "evaluation")
+        self.check_stale()
         self.message.emit("evaluating…")
         return True
 
@@ -195,7 +285,12 @@ class Session(QtCore.QObject):
         return True
 
     def cancel(self) -> None:
-        self.runner.cancel()
+        """Cancel (Esc, the status bar's button): the window is free at once and no result of the
+        task can land; its thread stops at the engine's next checkpoint."""
+        name = self.runner.current_name
+        self.runner.discard()
+        if name:
+            self.message.emit(f"{name} cancelled")
 
     @QtCore.Slot(str, object)
     def _task_succeeded(self, name: str, result: Any) -> None:
@@ -204,6 +299,9 @@ class Session(QtCore.QObject):
             if self._evaluated_layers != (scene.cloud, scene.skeletal, scene.curve):
                 return  # inputs changed meanwhile: this result describes other data
             scene.set_evaluation(result)
+            self._shown_correspondence = self._requested_correspondence
+            self._had_result = True
+            self.check_stale()
             total = result.timings.get("total") if result.timings else None
             self.message.emit("evaluation done" + (f" in {total:.2f} s" if total is not None else ""))
             self.evaluated.emit(result)

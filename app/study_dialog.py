@@ -2,7 +2,9 @@
 
 The study (skelcore.experiments.study.run_study) runs in the viewer's worker thread (app.worker.TaskRunner:
 progress, Cancel honoured at the engine's checkpoints, no stale result). Each row of the table can
-be opened in the 3D view through the main window's ``open_variant(cloud, skeletal, curve)``.
+be opened in the 3D view through the main window's ``open_variant(cloud, skeletal, curve, evaluation)``:
+its stored evaluation is shown at once, nothing is recomputed. The window passes its own parameters
+and thresholds (beta*, c*), which the dialog names above its table.
 """
 
 from __future__ import annotations
@@ -40,8 +42,16 @@ class StudyDialog(QtWidgets.QDialog):
         self._build()
 
     # ---- layout -------------------------------------------------------------------------------
+    def thresholds_text(self) -> str:
+        p = self.params
+        return (f"thresholds from the window: beta* = {p.beta_star:g}, c* = {p.c_star:g}; "
+                f"boundedness estimator: {p.boundedness_method}")
+
     def _build(self) -> None:
         form = QtWidgets.QFormLayout()
+        self.thresholds = QtWidgets.QLabel(self.thresholds_text())
+        self.thresholds.setWordWrap(True)
+        form.addRow(self.thresholds)
         self.noise = QtWidgets.QDoubleSpinBox(decimals=3, minimum=0.0, maximum=1.0, singleStep=0.01, value=0.05)
         self.noise.setToolTip("noise ratio of the noise row (paper: 0.05); 0 leaves the row out")
         form.addRow("Noise ratio", self.noise)
@@ -175,7 +185,9 @@ class StudyDialog(QtWidgets.QDialog):
         self._fill(result)
         total = sum(sum(r.timings.values()) for r in result.rows)
         where = f"; files in {self._out_dir}" if self._out_dir else ""
-        self.status.setText(f"done in {total:.1f} s (boundedness: {result.params.boundedness_method}){where}")
+        p = result.params
+        self.status.setText(f"done in {total:.1f} s (beta* = {p.beta_star:g}, c* = {p.c_star:g}, boundedness: "
+                            f"{p.boundedness_method}){where}")
         self.progress_bar.setValue(1000)
 
     def _failed(self, _name: str, exc: object, _tb: str) -> None:
@@ -217,7 +229,7 @@ class StudyDialog(QtWidgets.QDialog):
     def open_row(self, row: Any) -> None:
         opener = getattr(self.parent(), "open_variant", None)
         if callable(opener):
-            opener(row.cloud, row.skeletal, row.curve)
+            opener(row.cloud, row.skeletal, row.curve, row.evaluation)
 
     def closeEvent(self, event: Any) -> None:  # noqa: N802
         self.runner.shutdown()

@@ -1,16 +1,19 @@
-"""Engine work (evaluate, skeletonize) in a ``QThread``, with progress, cancel and no stale results.
+"""Engine work (evaluate, skeletonize) in a worker thread, with progress, cancel and no stale results.
 
 The job function gets ``progress(fraction, stage)`` and ``cancel()`` and passes them to skelcore,
-which checks ``cancel`` at its checkpoints and raises ``Cancelled`` (how Cancel stops a run within a
-second). A thread is enough: measured, the engine's numpy/scipy calls let the GUI thread run (the
-window's stalls came from repainting, now throttled, not from the GIL). Following Orange3's ``concurrent`` helpers, starting a new task first cancels and
-disconnects the old one, so a stale result can never land on top of a newer one; progress is
+which checks ``cancel`` at its checkpoints and raises ``Cancelled``. Cancel takes effect in the window
+at once: the task is disconnected and whatever it still delivers is dropped, while its thread winds
+down at the engine's next checkpoint. The thread is a plain daemon ``threading.Thread`` (not a
+``QThread``, whose object destroyed while running aborts the process): quitting waits a bounded time
+(:meth:`TaskRunner.shutdown`) and the process can then exit with a thread still inside numpy.
+Following Orange3's ``concurrent`` helpers, a new task first retires the old one; progress is
 throttled to visible steps. Only plain Python objects cross threads: VTK stays on the GUI thread.
 """
 
 from __future__ import annotations
 
 import threading
+import time
 import traceback
 from typing import Any, Callable
 
@@ -18,25 +21,44 @@ from PySide6 import QtCore
 
 from skelcore.errors import Cancelled
 
-__all__ = ["Task", "TaskRunner"]
+__all__ = ["Task", "TaskRunner", "SHUTDOWN_WAIT_S", "THREAD_PREFIX", "threads_alive"]
 
 JobFunction = Callable[[Callable[[float, str], None], Callable[[], bool]], Any]
 
+SHUTDOWN_WAIT_S = 2.0
+"""How long quitting waits for a cancelled task to reach a checkpoint before the process exits anyway."""
 
-class Task(QtCore.QThread):
-    """One run of a job function; its signals are emitted from the worker thread (queued to the GUI)."""
+
+THREAD_PREFIX = "skelscope-task-"
+
+
+def threads_alive() -> bool:
+    """Whether any task thread (of any runner) is still running, e.g. after a bounded shutdown."""
+    return any(t.name.startswith(THREAD_PREFIX) and t.is_alive() for t in threading.enumerate())
+
+
+class Task(QtCore.QObject):
+    """One run of a job function in a daemon thread; its signals are emitted from that thread and
+    queued to the GUI thread (the object lives there)."""
 
     progressed = QtCore.Signal(float, str)
     succeeded = QtCore.Signal(object)
     failed = QtCore.Signal(object, str)  # exception, formatted traceback
     aborted = QtCore.Signal()
+    finished = QtCore.Signal()
 
     def __init__(self, fn: JobFunction, name: str = "task", parent: QtCore.QObject | None = None) -> None:
         super().__init__(parent)
         self.fn = fn
         self.name = name
         self._cancel = threading.Event()
+        self._done = threading.Event()
         self._last = (-1.0, "")
+        self.stage = ""  # the stage the job reported last (read by the GUI thread)
+        self._thread = threading.Thread(target=self.run, name=f"{THREAD_PREFIX}{name}", daemon=True)
+
+    def start(self) -> None:
+        self._thread.start()
 
     def cancel(self) -> None:
         self._cancel.set()
@@ -44,27 +66,45 @@ class Task(QtCore.QThread):
     def is_cancelled(self) -> bool:
         return self._cancel.is_set()
 
+    def isRunning(self) -> bool:  # noqa: N802 - QThread's name, kept for callers
+        return self._thread.is_alive() and not self._done.is_set()
+
+    def isFinished(self) -> bool:  # noqa: N802
+        return self._done.is_set()
+
+    def wait(self, ms: int | None = None) -> bool:
+        """Block until the job has returned (at most ``ms`` milliseconds); True when it has."""
+        return self._done.wait(None if ms is None else ms / 1000.0)
+
     def _progress(self, fraction: float, stage: str) -> None:
         last_fraction, last_stage = self._last
+        self.stage = str(stage)
         if stage != last_stage or fraction - last_fraction >= 0.005 or fraction >= 1.0:
             self._last = (fraction, stage)
             self.progressed.emit(float(fraction), str(stage))
 
     def run(self) -> None:  # worker thread
         try:
-            result = self.fn(self._progress, self._cancel.is_set)
-        except Cancelled:
-            self.aborted.emit()
-        except BaseException as exc:  # noqa: BLE001 - every failure becomes a dialog, never a crash
-            if self._cancel.is_set():
+            try:
+                result = self.fn(self._progress, self._cancel.is_set)
+            except Cancelled:
                 self.aborted.emit()
+            except BaseException as exc:  # noqa: BLE001 - every failure becomes a dialog, never a crash
+                if self._cancel.is_set():
+                    self.aborted.emit()
+                else:
+                    self.failed.emit(exc, traceback.format_exc())
             else:
-                self.failed.emit(exc, traceback.format_exc())
-        else:
-            if self._cancel.is_set():
-                self.aborted.emit()  # cancelled after the last checkpoint: still no result
-            else:
-                self.succeeded.emit(result)
+                if self._cancel.is_set():
+                    self.aborted.emit()  # cancelled after the last checkpoint: still no result
+                else:
+                    self.succeeded.emit(result)
+        finally:
+            self._done.set()
+            try:
+                self.finished.emit()
+            except RuntimeError:  # the GUI side is gone (process exiting)
+                pass
 
 
 class TaskRunner(QtCore.QObject):
@@ -127,15 +167,29 @@ class TaskRunner(QtCore.QObject):
         self.cancelled.emit(task.name)
 
     def wait_all(self, ms: int = 5000) -> bool:
-        """Block until every thread has ended (used at exit)."""
+        """Block until every thread has ended, at most ``ms`` milliseconds in all; True when they have."""
+        deadline = time.monotonic() + ms / 1000.0
         ok = True
         for task in [*self._retired, *([self._current] if self._current else [])]:
-            ok = task.wait(ms) and ok
+            ok = task.wait(max(0.0, deadline - time.monotonic()) * 1000.0) and ok
         return ok
 
-    def shutdown(self) -> None:
+    def shutdown(self, wait_s: float = SHUTDOWN_WAIT_S) -> bool:
+        """Cancel the current task and wait at most ``wait_s`` for every thread to end (quitting).
+        False when one is still inside an engine call without a checkpoint: it is a daemon thread,
+        so the process still exits."""
         self._retire_current()
-        self.wait_all()
+        return self.wait_all(int(wait_s * 1000))
+
+    @property
+    def alive(self) -> bool:
+        """Any thread (current or retired) still running."""
+        return any(t.isRunning() for t in [*self._retired, *([self._current] if self._current else [])])
+
+    @property
+    def stage(self) -> str:
+        """The stage the current task reported last ('' when none)."""
+        return "" if self._current is None else self._current.stage
 
     def _is_current(self) -> bool:
         return self.sender() is self._current and self._current is not None
@@ -174,7 +228,7 @@ class TaskRunner(QtCore.QObject):
         return task
 
     def _keep_until_finished(self, task: Task) -> None:
-        # A QThread object destroyed while its thread runs aborts the process: hold a reference.
+        # Held until its thread ends, so its signals' object outlives the thread.
         self._retired.add(task)
         task.finished.connect(lambda t=task: self._retired.discard(t))
         if task.isFinished():

@@ -1,5 +1,6 @@
-"""Viewer benchmarks (issue 3): launch to first render for 100k / 1M-point clouds, the longest GUI
-event-loop stall during a 4096-point evaluation (QTimer heartbeat), and how fast Cancel stops a run.
+"""Viewer benchmarks (issues 3, 10): launch to first render for 100k / 1M-point clouds, frames while
+the camera moves (level of detail) and a pick at 1M points, Cancel and quit during a 1M-point
+evaluation, the longest GUI event-loop stall during a 4096-point evaluation (QTimer heartbeat).
 
 Run under a display, e.g. ``xvfb-run -a -s "-screen 0 1600x1000x24" .venv/bin/python benchmarks/bench_app.py``.
 Each launch measurement is a fresh process (interpreter start, imports, window, PLY load, first frame).
@@ -13,6 +14,8 @@ import sys
 import tempfile
 import time
 from pathlib import Path
+
+import numpy as np
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -135,16 +138,145 @@ def cancel_latency() -> float:
     return latency
 
 
+def _million_window(n: int = 1_000_000, skeletal: bool = True):
+    from PySide6 import QtCore, QtWidgets
+
+    from app.main_window import MainWindow
+    from skelcore import shapes
+
+    app = QtWidgets.QApplication.instance() or QtWidgets.QApplication(["bench"])
+    tmp = tempfile.mkdtemp()
+    w = MainWindow(settings=QtCore.QSettings(os.path.join(tmp, "s.ini"), QtCore.QSettings.Format.IniFormat))
+    w.session.auto_evaluate = False
+    w.resize(1500, 950)
+    w.show()
+    app.processEvents()
+    cloud = shapes.sphere_surface(n, seed=0)
+    with w.session.batch():
+        w.scene.set_cloud(cloud)
+        if skeletal:
+            w.scene.set_skeletal(cloud * 0.5)
+    w.view.image()
+    return app, w, cloud
+
+
+def frames_while_moving(n: int = 1_000_000, frames: int = 8) -> dict[str, float]:
+    """Median frame time (render + GL finish) of a 1M-point cloud and its 1M-point skeletal set, at
+    rest (full detail) and while the camera moves (level-of-detail twins), rotating 5 degrees a frame."""
+    app, w, _ = _million_window(n)
+    ren_win = w.view.plotter.ren_win
+    camera = w.view.plotter.renderer.GetActiveCamera()
+
+    def timed(moving: bool) -> float:
+        w.view._set_moving(moving)
+        times = []
+        for _ in range(frames):
+            camera.Azimuth(5.0)
+            t0 = time.perf_counter()
+            ren_win.Render()
+            w.view.plotter.GetRenderWindow().WaitForCompletion()
+            times.append(time.perf_counter() - t0)
+        return sorted(times)[len(times) // 2]
+
+    out = {"rest": timed(False), "moving": timed(True)}
+    w.view._set_moving(False)
+    w.close()
+    app.processEvents()
+    return out
+
+
+def pick_time(n: int = 1_000_000, picks: int = 5) -> float:
+    """Median seconds of a pick among a 1M-point skeletal set (numpy projection, marker queued)."""
+    app, w, cloud = _million_window(n)
+    w.scene.set_visible("cloud", False)
+    w.view.image()
+    sk = w.scene.skeletal.points
+    times = []
+    for i in range(picks):
+        x, y = w.view.world_to_display(sk[int(np.argmax(sk[:, 2])) - i])
+        t0 = time.perf_counter()
+        info = w.view.pick_display(x, y)
+        times.append(time.perf_counter() - t0)
+        assert info is not None
+    w.close()
+    app.processEvents()
+    return sorted(times)[len(times) // 2]
+
+
+def cancel_at_a_million(delays: tuple[float, ...] = (1.0, 4.0, 10.0)) -> list[tuple[float, str, float, float]]:
+    """(delay, stage at Cancel, s until the window was idle, s until the worker thread stopped)."""
+    app, w, _ = _million_window(1_000_000)
+    out = []
+    for delay in delays:
+        assert w.session.start_evaluation()
+        task = w.session.runner._current
+        end = time.perf_counter() + delay
+        while time.perf_counter() < end:
+            app.processEvents()
+            time.sleep(0.01)
+        stage = task.stage
+        t0 = time.perf_counter()
+        w.cancel_button.click()
+        idle = time.perf_counter() - t0
+        assert not w.session.runner.running
+        task.wait()
+        out.append((delay, stage, idle, time.perf_counter() - t0))
+    w.close()
+    return out
+
+
+_QUIT = r"""
+import sys, time
+from PySide6 import QtCore, QtWidgets
+app = QtWidgets.QApplication(["bench-quit"])
+from app.__main__ import _exited
+from app.main_window import MainWindow
+from skelcore import shapes
+w = MainWindow(settings=QtCore.QSettings(sys.argv[1], QtCore.QSettings.Format.IniFormat))
+w.session.auto_evaluate = False
+cloud = shapes.sphere_surface(1_000_000, seed=0)
+with w.session.batch():
+    w.scene.set_cloud(cloud)
+    w.scene.set_skeletal(cloud * 0.05)
+w.show()
+def quit_now():
+    print(f"{time.time():.4f} {w.session.runner.stage}", flush=True)
+    w.actions_by_name["quit"].trigger()
+w.session.runner.progressed.connect(lambda f, s: QtCore.QTimer.singleShot(float(sys.argv[2]) * 1000, quit_now)
+                                    if not hasattr(quit_now, "armed") and not setattr(quit_now, "armed", 1) else None)
+QtCore.QTimer.singleShot(100, w.session.start_evaluation)
+sys.exit(_exited(app.exec()))
+"""
+
+
+def quit_while_running(delay: float, tmp: Path) -> tuple[float, int, bool, str]:
+    """(s from Ctrl+Q to the process's end, exit status, Qt's thread abort seen, stage) for a quit
+    ``delay`` s after a 1M-point evaluation started reporting."""
+    proc = subprocess.run([sys.executable, "-c", _QUIT, str(tmp / "q.ini"), str(delay)], capture_output=True,
+                          text=True, cwd=ROOT)
+    ended = time.time()
+    quit_at, _, stage = proc.stdout.strip().partition(" ")
+    return ended - float(quit_at), proc.returncode, "Destroyed while thread" in proc.stderr, stage
+
+
 def main(argv: list[str] | None = None) -> int:
     import argparse
 
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--skip-launch", action="store_true", help="skip the launch-to-first-render runs")
     parser.add_argument("--skip-cancel", action="store_true", help="skip the Cancel latency run")
+    parser.add_argument("--skip-million", action="store_true", help="skip the 1M-point frames, pick, cancel and quit")
+    parser.add_argument("--only-million", action="store_true", help="only the 1M-point frames, pick, cancel and quit")
+    parser.add_argument("--million-part", choices=("frames", "pick", "cancel"), help=argparse.SUPPRESS)
     parser.add_argument("--stall-runs", type=int, default=1,
                         help="evaluations timed for the GUI stall, each in a fresh process (best reported)")
     parser.add_argument("--stall-once", action="store_true", help=argparse.SUPPRESS)  # one run, in this process
     args = parser.parse_args(argv)
+    if args.million_part:  # one part, in this process (a fresh one per part: no warm caches)
+        sys.path.insert(0, str(ROOT))
+        part = {"frames": frames_while_moving, "pick": pick_time, "cancel": cancel_at_a_million}[args.million_part]
+        print(repr(part()))
+        return 0
     if args.stall_once:
         sys.path.insert(0, str(ROOT))
         print(*stall_during_evaluation(4096))
@@ -152,6 +284,24 @@ def main(argv: list[str] | None = None) -> int:
     sys.path.insert(0, str(ROOT))
     tmp = Path(tempfile.mkdtemp(prefix="bench-app-"))
     print(f"machine: {os.cpu_count()} cores, load average {os.getloadavg()[0]:.1f} at start")
+    if not args.skip_million:
+        run = lambda part: eval(subprocess.run([sys.executable, __file__, "--million-part", part],  # noqa: E731,S307
+                                               capture_output=True, text=True, cwd=ROOT, check=True).stdout.strip()
+                                .splitlines()[-1])
+        frames = run("frames")
+        print(f"\n1M-point cloud + 1M-point skeletal set, median frame while rotating: {frames['rest'] * 1000:.0f} ms "
+              f"at full detail, {frames['moving'] * 1000:.0f} ms with the level-of-detail twins (camera moving)"
+              f"  [load {os.getloadavg()[0]:.1f}]")
+        print(f"pick among 1M skeletal points: {run('pick') * 1000:.0f} ms (median of 5)  [load {os.getloadavg()[0]:.1f}]")
+        for delay, stage, idle, stopped in run("cancel"):
+            print(f"Cancel {delay:.0f} s into a 1M-point evaluation (stage '{stage}'): window idle after "
+                  f"{idle * 1000:.0f} ms, worker stopped after {stopped:.2f} s  [load {os.getloadavg()[0]:.1f}]")
+        for delay in (0.5, 3.0):
+            took, code, aborted, stage = quit_while_running(delay, tmp)
+            print(f"Ctrl+Q {delay:g} s into a 1M-point evaluation (stage '{stage}'): process ended {took:.2f} s later, "
+                  f"exit status {code}, QThread abort: {'yes' if aborted else 'no'}  [load {os.getloadavg()[0]:.1f}]")
+    if args.only_million:
+        return 0
     if not args.skip_launch:
         print("\n| cloud | imports done | window shown | file loaded | first frame rendered (launch to first render) | + a second frame read back | cloud-grey pixels in the frame |")
         print("|---|---|---|---|---|---|---|")

@@ -1,8 +1,12 @@
 """Real screenshots of the SkelScope window into screenshots/ (``make screenshots`` runs this under Xvfb).
 
+- ``window_empty.png``: the empty window and its hint.
 - ``window_<metric>.png``: the bundled Y-shaped sample (cloud, skeletal points, curve skeleton)
   evaluated and coloured by each local metric; magenta marks invalid (NaN) values.
 - ``barcode_panel.png``: the H0 barcode panel; ``histogram_panel.png``: the histogram panel.
+- ``window_tubes.png``: edges as tubes, coloured by centeredness (the curve samples' values).
+- ``figure_spheres.png``: File > Save picture at scale 2 with points as shaded spheres (points, lines
+  and text grow with the scale); ``figure_eye_dome.png``: eye-dome lighting, no colour bar, no axes.
 - ``window_skeletonized.png``: the skeletonizer's output for the sample cloud (issue 4), evaluated.
 - ``window_hammer_skeletonized.png``: the real hammer scan (../shared/data, when present) skeletonized
   and evaluated, coloured by centeredness.
@@ -48,6 +52,7 @@ def main() -> int:
     tmp = Path(tempfile.mkdtemp(prefix="skelscope-shots-"))
     settings = QtCore.QSettings(str(tmp / "settings.ini"), QtCore.QSettings.Format.IniFormat)
     window = MainWindow(settings=settings)
+    window.session.ask = lambda question, options: options[0]  # every question's default (no dialogs)
     window.resize(1600, 960)
     window.show()
     app.processEvents()
@@ -70,6 +75,9 @@ def main() -> int:
         path = OUT / name
         widget.grab().save(str(path))
         print(f"wrote {path.relative_to(ROOT)}")
+
+    settle(600)
+    save(window, "window_empty.png")
 
     files = sample_files(tmp)
     window.session.load_files([files["cloud"], files["skeletal"], files["curve"]])
@@ -98,15 +106,35 @@ def main() -> int:
     save(window.docks["Histogram"], "histogram_panel.png")
     window.docks["Barcodes"].raise_()
 
+    window._picked(None)
+    window.view._remove_marker()
+    window.scene.set_metric("centeredness")
+    window.actions_by_name["tubes"].trigger()  # the T key's action: the checkbox follows
+    settle()
+    save(window, "window_tubes.png")
+    window.actions_by_name["tubes"].trigger()
+    window.view.standard_view("iso")
+    window.scene.set_style("spheres", True)
+    window.scene.set_metric("centeredness")
+    settle()
+    window.save_screenshot(str(OUT / "figure_spheres.png"), scale=2)
+    print("wrote screenshots/figure_spheres.png")
+    window.scene.set_style("spheres", False)
+    window.scene.set_style("eye_dome", True)
+    window.scene.set_style("axes", False)
+    settle()
+    window.save_screenshot(str(OUT / "figure_eye_dome.png"), scale=2, colour_bar=False)
+    print("wrote screenshots/figure_eye_dome.png")
+    window.scene.set_style("eye_dome", False)
+    window.scene.set_style("axes", True)
+
     # Skeletonize the bare cloud (issue 4) and evaluate its output.
     try:
         import skelcore.skeleton.pipeline  # noqa: F401
     except ImportError:
         pass
     else:
-        window.session.load_as("cloud", files["cloud"])
-        window.scene.remove_layer("skeletal")
-        window.scene.remove_layer("curve")
+        window.session.load_as("cloud", files["cloud"])  # a new cloud clears the old skeleton (the default)
         window.session.start_skeletonize()
         wait_for_runner()
         wait_for_runner()  # the evaluation that follows
@@ -119,8 +147,6 @@ def main() -> int:
     hammer = ROOT.parent / "shared" / "data" / "hammer_4096.ply"
     if hammer.is_file() and "skelcore.skeleton.pipeline" in sys.modules:
         window.session.load_as("cloud", str(hammer))
-        window.scene.remove_layer("skeletal")
-        window.scene.remove_layer("curve")
         window.session.start_skeletonize()
         wait_for_runner()
         wait_for_runner()

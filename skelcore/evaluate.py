@@ -1,4 +1,5 @@
-"""Orchestration: normalize, run each metric, map progress, honour cancel, time each stage."""
+"""Orchestration: normalize, find the correspondence, run each metric, the trust checks, coverage
+and the reference comparison; map progress, honour cancel, time each stage."""
 
 from __future__ import annotations
 
@@ -7,16 +8,20 @@ from typing import Callable
 
 import numpy as np
 
+from .correspondence import aggregate_rows, densify_curve, project_onto_curve, reverse_projection
 from .curve import CurveSkeleton
 from .curve_sampling import sample_curve
 from .errors import Cancelled, SkelInputError
 from .geometry import Normalization, as_points
 from .metrics.boundedness import boundedness
 from .metrics.centeredness import curve_centeredness, skeletal_centeredness
+from .metrics.coverage import coverage, coverage_tau
+from .metrics.reference import compare_with_reference
 from .metrics.smoothness import curve_smoothness_overall, curve_vertex_smoothness, skeletal_smoothness
 from .metrics.topology import topological_similarity
 from .params import Params
 from .results import CurveLocal, Evaluation, SkeletalLocal
+from .trust import frame_fit_warning, frame_warnings, no_correspondence_warning, smoothness_warning
 
 Progress = Callable[[float, str], None]
 
@@ -29,7 +34,14 @@ _WEIGHTS = {
     "curve boundedness": 1.0,
     "curve centeredness": 1.0,
     "curve smoothness": 0.1,
+    "correspondence": 0.3,
+    "skeletal coverage": 0.3,
+    "curve coverage": 0.3,
+    "reference": 0.1,
 }
+
+#: ``correspondence=`` choices of :func:`evaluate`
+CORRESPONDENCE_CHOICES = ("auto", "reverse")
 
 
 class _Stages:
@@ -46,6 +58,7 @@ class _Stages:
         self._progress = progress
         self._cancel = cancel
         self._last = -1.0
+        self._last_stage = ""
         self.timings: dict[str, float] = {}
 
     def checkpoint(self, stage: str) -> Callable[[float], None]:
@@ -54,8 +67,12 @@ class _Stages:
                 raise Cancelled(f"cancelled during {stage}")
             if self._progress is not None:
                 overall = self._start[stage] + self._size[stage] * min(max(fraction, 0.0), 1.0)
-                if overall - self._last >= 0.005 or fraction >= 1.0:  # throttle (Orange3's habit)
+                # throttled (Orange3's habit), but a new stage is shown at once: the label names
+                # the stage that runs
+                if stage != self._last_stage or overall - self._last >= 0.005 or fraction >= 1.0:
+                    overall = max(overall, self._last)  # never back by a rounding error
                     self._last = overall
+                    self._last_stage = stage
                     self._progress(overall, stage)
 
         return check
@@ -79,17 +96,24 @@ def evaluate(
     cancel: Callable[[], bool] | None = None,
     *,
     skeletal_index: np.ndarray | None = None,
+    correspondence: str = "auto",
+    reference_curve: CurveSkeleton | tuple | None = None,
     inputs: dict | None = None,
 ) -> Evaluation:
-    """Score a skeleton against its point cloud with the paper's four metrics (SPEC.md).
+    """Score a skeleton against its point cloud with the paper's four metrics (SPEC.md), the trust
+    checks, SkelScope's coverage and, given a ``reference_curve``, the comparison with it.
 
     Parameters
     ----------
     cloud : (N_o, 3) original cloud, user units.
-    skeletal : (N_s, 3) skeletal point set with pointwise correspondence (row i of the skeletal set
-        is where cloud row i went); N_s must equal N_o unless ``skeletal_index`` maps skeletal rows
-        to cloud rows.
-    curve : a :class:`CurveSkeleton` or a ``(vertices, edges)`` pair.
+    skeletal : (N_s, 3) skeletal point set. Row i is where cloud row i went when N_s = N_o
+        ("pointwise"), or ``skeletal_index`` maps skeletal rows to cloud rows ("index"); otherwise
+        ``correspondence="reverse"`` maps every cloud point to its nearest skeletal point, and
+        without either topology and skeletal centeredness are not computed ("none", a warning).
+    curve : a :class:`CurveSkeleton` or a ``(vertices, edges)`` pair. With ``correspondence=
+        "reverse"`` and no skeletal set, the cloud's projections onto its edges are scored as the
+        skeletal set (topology, skeletal-style centeredness).
+    reference_curve : a ground-truth curve in the cloud's frame (needs ``curve``).
     progress : ``progress(fraction, stage)``, called at checkpoints (throttled).
     cancel : returning True makes the next checkpoint raise :class:`Cancelled`.
 
@@ -99,6 +123,8 @@ def evaluate(
     >>> ev.summary()["boundedness"]["skeletal"]            # doctest: +SKIP
     """
     t_start = time.perf_counter()
+    if correspondence not in CORRESPONDENCE_CHOICES:
+        raise SkelInputError(f"correspondence must be one of {', '.join(CORRESPONDENCE_CHOICES)}, got {correspondence!r}")
     cloud = as_points("cloud", cloud)
     if len(cloud) < 2:
         raise SkelInputError("cloud: at least 2 points are needed")
@@ -109,43 +135,63 @@ def evaluate(
     cloud_n = norm.apply(cloud)
 
     skel = skel_n = None
-    correspondence = None
+    index = None
+    mode: str | None = None
     if skeletal is not None:
         skel = as_points("skeletal point set", skeletal)
-        if skeletal_index is not None:
-            correspondence = np.asarray(skeletal_index, dtype=np.int64).ravel()
-            if correspondence.shape != (len(skel),):
-                raise SkelInputError("skeletal index: needs one cloud row per skeletal point")
-            if correspondence.min() < 0 or correspondence.max() >= len(cloud):
-                raise SkelInputError("skeletal index: cloud row out of range")
-        elif len(skel) != len(cloud):
-            raise SkelInputError(
-                f"skeletal point set has {len(skel)} points but the cloud has {len(cloud)}: "
-                "pointwise correspondence needs equal counts"
-            )
         skel_n = norm.apply(skel)
+        if correspondence == "reverse":
+            if skeletal_index is not None:
+                raise SkelInputError("give either a skeletal index or reverse correspondence, not both")
+            mode = "reverse"
+        elif skeletal_index is not None:
+            index = _check_index(skeletal_index, len(skel), len(cloud))
+            mode = "index"
+        else:
+            mode = "pointwise" if len(skel) == len(cloud) else "none"
+    elif skeletal_index is not None:
+        raise SkelInputError("a skeletal index needs a skeletal point set")
 
     curve_obj: CurveSkeleton | None = None
     if curve is not None:
         curve_obj = curve if isinstance(curve, CurveSkeleton) else CurveSkeleton.from_raw(*curve)
+    if correspondence == "reverse" and skel is None:
+        if curve_obj is None:
+            raise SkelInputError("reverse correspondence needs a skeletal point set or a curve skeleton")
+        mode = "reverse"
+    ref_obj: CurveSkeleton | None = None
+    if reference_curve is not None:
+        if curve_obj is None:
+            raise SkelInputError("a reference curve is compared with a curve skeleton: give one")
+        ref_obj = reference_curve if isinstance(reference_curve, CurveSkeleton) else CurveSkeleton.from_raw(*reference_curve)
 
     names: list[str] = []
+    skeletal_from_curve = skel is None and mode == "reverse"
+    skeletal_stages = ["skeletal boundedness", "skeletal smoothness"]
+    if mode != "none":
+        skeletal_stages = ["topology", "skeletal boundedness", "skeletal centeredness", "skeletal smoothness"]
+    if mode == "reverse":
+        skeletal_stages.insert(0, "correspondence")
     if skel is not None:
-        names += ["topology", "skeletal boundedness", "skeletal centeredness", "skeletal smoothness"]
+        names += skeletal_stages
     if curve_obj is not None:
         names += ["curve boundedness", "curve centeredness", "curve smoothness"]
+    if skeletal_from_curve:
+        names += skeletal_stages
+    if skel is not None:
+        names.append("skeletal coverage")
+    if curve_obj is not None:
+        names.append("curve coverage")
+    if ref_obj is not None:
+        names.append("reference")
     stages = _Stages(names, progress, cancel)
     p = params
 
-    ev = Evaluation(params=p, normalization=norm, cloud=cloud, inputs=dict(inputs or {}))
+    ev = Evaluation(params=p, normalization=norm, cloud=cloud, inputs=dict(inputs or {}), correspondence=mode)
     if skel is not None:
-        ev.topology = stages.run("topology", topological_similarity, cloud_n, skel_n, params=p)
-        beta = stages.run("skeletal boundedness", boundedness, cloud_n, skel_n, params=p)
-        corr_cloud = cloud_n if correspondence is None else cloud_n[correspondence]
-        c_raw = stages.run("skeletal centeredness", skeletal_centeredness, corr_cloud, skel_n, params=p)
-        smooth = stages.run("skeletal smoothness", skeletal_smoothness, skel_n, params=p)
-        ev.skeletal = SkeletalLocal(points=skel, boundedness=beta, centeredness_raw=c_raw, smoothness=smooth)
+        ev.skeletal = _score_skeletal(ev, stages, cloud_n, skel, skel_n, mode, index)
 
+    curve_n = None
     if curve_obj is not None:
         curve_n = curve_obj.transformed(norm.apply)
         samples = sample_curve(curve_n, p.curve_samples, collinear_cos=p.collinear_cos)
@@ -171,6 +217,88 @@ def evaluate(
             smoothness_overall=float(s_overall),
             smoothness_count=int(s_count),
         )
+        if skeletal_from_curve:
+            q_n, _ = stages.run("correspondence", lambda c, checkpoint: project_onto_curve(cloud_n, c), curve_n)
+            ev.skeletal = _score_skeletal(ev, stages, cloud_n, norm.invert(q_n), q_n, "pointwise", None)
+            ev.skeletal.source = "curve"
+
+    # ---- trust checks, coverage, reference (SkelScope's own; docs/metrics.md) ----------------
+    def bounded_fraction(points_user: np.ndarray) -> float:
+        beta = boundedness(cloud_n, norm.apply(points_user), params=p)
+        return float(np.mean(beta > p.beta_star))
+
+    if skel is not None:
+        found = frame_warnings(cloud, skel, "skeletal point set", p)
+        if not found:
+            now = float(np.mean(ev.skeletal.boundedness > p.beta_star))
+            found = frame_fit_warning(cloud, skel, now, bounded_fraction, "skeletal point set", p)
+        ev.warnings += found
+    if curve_obj is not None:
+        found = frame_warnings(cloud, curve_obj.vertices, "curve skeleton", p)
+        if not found:
+            now = float(np.mean(ev.curve.sample_boundedness > p.beta_star))
+            found = frame_fit_warning(cloud, ev.curve.samples, now, bounded_fraction, "curve skeleton", p)
+        ev.warnings += found
+        ev.warnings += smoothness_warning(ev.curve.vertex_degree)
+    if mode == "none":
+        ev.warnings.append(no_correspondence_warning(len(skel), len(cloud)))
+    tau = coverage_tau(cloud_n, p)
+    if skel is not None:
+        ev.coverage_skeletal = stages.run("skeletal coverage", lambda checkpoint: coverage(cloud_n, skel_n, p, tau))
+    if curve_n is not None:
+        step = max(tau / p.coverage_tau_factor, float(curve_n.edge_lengths().sum()) / 200_000)
+
+        def _curve_cov(checkpoint):
+            pts, _ = densify_curve(curve_n, step)
+            return coverage(cloud_n, np.vstack([pts, curve_n.vertices]), p, tau)
+
+        ev.coverage_curve = stages.run("curve coverage", _curve_cov)
+    if ref_obj is not None:
+        ref_n = ref_obj.transformed(norm.apply)
+        ev.reference = stages.run("reference", lambda checkpoint: compare_with_reference(curve_n, ref_n, tau))
     ev.timings = dict(stages.timings)
     ev.timings["total"] = time.perf_counter() - t_start
     return ev
+
+
+def _check_index(skeletal_index: np.ndarray, n_skel: int, n_cloud: int) -> np.ndarray:
+    index = np.asarray(skeletal_index)
+    if index.dtype.kind not in "iu":
+        if index.dtype.kind != "f" or not np.all(np.isfinite(index)) or np.any(index != np.round(index)):
+            raise SkelInputError("skeletal index: cloud rows must be whole numbers")
+    index = index.astype(np.int64).ravel()
+    if index.shape != (n_skel,):
+        raise SkelInputError(f"skeletal index: has {len(index)} rows, needs one cloud row per skeletal point ({n_skel})")
+    if len(index) and (index.min() < 0 or index.max() >= n_cloud):
+        bad = int(index.min()) if index.min() < 0 else int(index.max())
+        raise SkelInputError(f"skeletal index: cloud row {bad} out of range (the cloud has {n_cloud} rows, 0-based)")
+    return index
+
+
+def _score_skeletal(ev, stages, cloud_n, skel, skel_n, mode, index) -> SkeletalLocal:
+    """The skeletal column under each correspondence (pointwise, index, reverse, none)."""
+    p = ev.params
+    rows = c_rows = None
+    if mode == "reverse":
+        rows = stages.run("correspondence", lambda checkpoint: reverse_projection(cloud_n, skel_n))
+    if mode == "none":
+        reason = (f"the skeletal set has {len(skel)} points and the cloud {len(cloud_n)}; "
+                  "give a skeletal index or use reverse correspondence")
+        ev.not_computed = {"topology": reason, "skeletal centeredness": reason}
+    else:
+        pointwise = skel_n if rows is None else skel_n[rows]
+        ev.topology = stages.run("topology", topological_similarity, cloud_n, pointwise, params=p)
+    beta = stages.run("skeletal boundedness", boundedness, cloud_n, skel_n, params=p)
+    if mode == "none":
+        c_raw = np.full(len(skel), np.nan)
+    elif mode == "reverse":
+        c_rows = stages.run("skeletal centeredness", skeletal_centeredness, cloud_n, skel_n[rows], params=p)
+        c_raw = aggregate_rows(c_rows, rows, len(skel))
+    else:
+        corr_cloud = cloud_n if index is None else cloud_n[index]
+        c_raw = stages.run("skeletal centeredness", skeletal_centeredness, corr_cloud, skel_n, params=p)
+    smooth = stages.run("skeletal smoothness", skeletal_smoothness, skel_n, params=p)
+    return SkeletalLocal(
+        points=skel, boundedness=beta, centeredness_raw=c_raw, smoothness=smooth,
+        rows=rows, centeredness_rows_raw=c_rows, centeredness_available=mode != "none",
+    )  # fmt: skip

@@ -48,14 +48,45 @@ class Normalization:
         return np.asarray(points, dtype=float) / self.scale + self.center
 
 
-def nearest_neighbor_distances(points: np.ndarray, tree: cKDTree | None = None) -> np.ndarray:
+QUERY_CHUNK = 65536
+"""Points per KD-tree query call between checkpoints (about 0.1 s for k <= 16 on one 2-core machine)."""
+
+
+def kd_tree(points: np.ndarray) -> cKDTree:
+    """A cKDTree built the fast way (sliding-midpoint splits, no node shrinking): about 2.5 x faster
+    to build than the default on a million points, queries about as fast (docs/performance.md)."""
+    return cKDTree(np.asarray(points, dtype=float), balanced_tree=False, compact_nodes=False)
+
+
+def chunked_query(
+    tree: cKDTree, queries: np.ndarray, k: int, checkpoint: Checkpoint = no_checkpoint,
+    lo: float = 0.0, hi: float = 1.0, **kwargs,
+) -> tuple[np.ndarray, np.ndarray]:
+    """``tree.query(queries, k)`` in chunks of QUERY_CHUNK with a checkpoint after each (progress
+    from ``lo`` to ``hi``).  Returns 2-D (n, k) distances and indices, all threads used."""
+    queries = np.asarray(queries, dtype=float)
+    n = len(queries)
+    dist = np.empty((n, k))
+    idx = np.empty((n, k), np.int64)
+    for start in range(0, n, QUERY_CHUNK):
+        stop = min(n, start + QUERY_CHUNK)
+        d, i = tree.query(queries[start:stop], k=k, workers=-1, **kwargs)
+        dist[start:stop] = d.reshape(stop - start, k)
+        idx[start:stop] = i.reshape(stop - start, k)
+        checkpoint(lo + (hi - lo) * stop / max(n, 1))
+    return dist, idx
+
+
+def nearest_neighbor_distances(
+    points: np.ndarray, tree: cKDTree | None = None, checkpoint: Checkpoint = no_checkpoint
+) -> np.ndarray:
     """Distance from each point to its nearest *other* point (0 for duplicates)."""
     points = np.asarray(points, dtype=float)
     if len(points) < 2:
         return np.zeros(len(points))
-    tree = cKDTree(points) if tree is None else tree
-    dist, _ = tree.query(points, k=2, workers=-1)
-    return dist[:, 1]
+    tree = kd_tree(points) if tree is None else tree
+    checkpoint(0.0)
+    return chunked_query(tree, points, 2, checkpoint)[0][:, 1]
 
 
 def knn(points: np.ndarray, queries: np.ndarray, k: int, tree: cKDTree | None = None) -> tuple[np.ndarray, np.ndarray]:

@@ -38,6 +38,16 @@ class Params:
     ring_growth : ring isolation ratio (keep while next distance < ratio x last kept).
     collinear_cos : |cos| at or above which a degree-2 vertex's neighbours count as collinear.
     tangent_k, smooth_k : neighbours for PCA tangents and for the tangent comparison, SPEC 4.
+    coverage_slack : s of SkelScope's coverage (docs/metrics.md "Coverage"): a cloud point is covered
+        when it lies within (1 + s) r(x) + tau of some skeleton element x of inscribed radius r(x).
+    coverage_tau_factor : tau = factor x the cloud's median nearest-neighbour spacing (coverage and
+        the reference comparison's precision / recall).
+    frame_inside_fraction : the ``frame`` warning fires when fewer skeleton points than this fraction
+        lie inside the cloud's bounding box (grown by 10 % of its diagonal).
+    frame_extent_ratio : ... or when the skeleton's bounding-box diagonal is more than this many
+        times larger (or smaller, when it also lies outside) than the cloud's.
+    collapse_extent : the ``collapse`` warning fires when the skeleton's bounding-box diagonal is
+        below this fraction of the cloud's.
     """
 
     normalize_by: Literal["longest_side", "diagonal"] = "longest_side"
@@ -62,6 +72,11 @@ class Params:
     collinear_cos: float = 0.99
     tangent_k: int = 8
     smooth_k: int = 4
+    coverage_slack: float = 0.5
+    coverage_tau_factor: float = 2.0
+    frame_inside_fraction: float = 0.5
+    frame_extent_ratio: float = 10.0
+    collapse_extent: float = 0.1
 
     def __post_init__(self) -> None:
         def bad(name: str, why: str) -> None:
@@ -74,7 +89,15 @@ class Params:
         for name in ("normalized_size", "rays_radius_factor", "slab_factor", "paper_area_threshold", "rays_cluster_cell"):
             if not float(getattr(self, name)) > 0:
                 bad(name, "must be > 0")
-        for name in ("beta_star", "c_star", "min_bar_fraction", "fallback_fraction", "collinear_cos"):
+        for name in ("coverage_tau_factor", "collapse_extent"):
+            if not float(getattr(self, name)) > 0:
+                bad(name, "must be > 0")
+        if not float(self.coverage_slack) >= 0:
+            bad("coverage_slack", "must be >= 0")
+        if not float(self.frame_extent_ratio) > 1:
+            bad("frame_extent_ratio", "must be > 1")
+        for name in ("beta_star", "c_star", "min_bar_fraction", "fallback_fraction", "collinear_cos",
+                     "frame_inside_fraction"):
             if not 0.0 <= float(getattr(self, name)) <= 1.0:
                 bad(name, "must be in [0, 1]")
         if not 0.0 < float(self.eps_quantile) <= 1.0:

@@ -18,7 +18,10 @@ import numpy as np
 from .curve import CurveSkeleton
 from .geometry import Normalization
 from .io.atomic import atomic_open
+from .metrics.coverage import Coverage
+from .metrics.reference import ReferenceComparison
 from .params import Params
+from .trust import TrustWarning
 
 __all__ = ["TopologyResult", "SkeletalLocal", "CurveLocal", "Evaluation", "apply_unbounded_rule"]
 
@@ -45,15 +48,32 @@ def apply_unbounded_rule(c_raw: np.ndarray, beta: np.ndarray, beta_star: float) 
 
 @dataclass
 class SkeletalLocal:
-    """Local values per skeletal point; ``points`` in the user's units."""
+    """Local values per skeletal point; ``points`` in the user's units.
+
+    Under reverse correspondence ``rows[i]`` is the skeletal row cloud row i was projected to and
+    ``centeredness_rows_raw`` the raw centeredness of that pointwise set (one per cloud row, what
+    the overall score counts); ``centeredness_raw`` is its mean over each point's cloud rows.
+    ``centeredness_available`` is False when no correspondence exists (then it is all NaN).
+    ``source`` is "curve" when the points are the cloud's projections onto the curve skeleton.
+    """
 
     points: np.ndarray
     boundedness: np.ndarray
     centeredness_raw: np.ndarray
     smoothness: np.ndarray
+    rows: np.ndarray | None = None
+    centeredness_rows_raw: np.ndarray | None = None
+    centeredness_available: bool = True
+    source: str = "skeletal"
 
     def centeredness(self, beta_star: float) -> np.ndarray:
         return apply_unbounded_rule(self.centeredness_raw, self.boundedness, beta_star)
+
+    def centeredness_counted(self, beta_star: float) -> np.ndarray:
+        """The values the overall score counts: per cloud row under reverse correspondence."""
+        if self.rows is None or self.centeredness_rows_raw is None:
+            return self.centeredness(beta_star)
+        return apply_unbounded_rule(self.centeredness_rows_raw, self.boundedness[self.rows], beta_star)
 
 
 @dataclass
@@ -101,6 +121,14 @@ class Evaluation:
     curve: CurveLocal | None = None
     timings: dict[str, float] = field(default_factory=dict)
     inputs: dict[str, Any] = field(default_factory=dict)
+    #: "pointwise" | "index" | "reverse" | "none" (skelcore.correspondence.MODES); None: no skeletal set
+    correspondence: str | None = None
+    warnings: list[TrustWarning] = field(default_factory=list)
+    coverage_skeletal: Coverage | None = None
+    coverage_curve: Coverage | None = None
+    reference: ReferenceComparison | None = None
+    #: what could not be computed and why, e.g. {"topology": "..."}
+    not_computed: dict[str, str] = field(default_factory=dict)
 
     # ---- overall scores -------------------------------------------------------------------
     def summary(self, beta_star: float | None = None, c_star: float | None = None) -> dict[str, Any]:
@@ -129,10 +157,11 @@ class Evaluation:
         if self.skeletal is not None:
             s = self.skeletal
             b, nb = _fraction_above(s.boundedness, b_star, denominator="all")
-            c, nc = _fraction_above(s.centeredness(b_star), c_star_, denominator="all")
             finite = s.smoothness[np.isfinite(s.smoothness)]
             out["boundedness"]["skeletal"], out["counts"]["boundedness"]["skeletal"] = b, nb
-            out["centeredness"]["skeletal"], out["counts"]["centeredness"]["skeletal"] = c, nc
+            if s.centeredness_available:
+                c, nc = _fraction_above(s.centeredness_counted(b_star), c_star_, denominator="all")
+                out["centeredness"]["skeletal"], out["counts"]["centeredness"]["skeletal"] = c, nc
             out["smoothness"]["skeletal"] = float(finite.mean()) if finite.size else math.nan
             out["counts"]["smoothness"]["skeletal"] = int(finite.size)
         if self.curve is not None:
@@ -143,7 +172,23 @@ class Evaluation:
             out["centeredness"]["curve"], out["counts"]["centeredness"]["curve"] = c, nc
             out["smoothness"]["curve"] = cv.smoothness_overall
             out["counts"]["smoothness"]["curve"] = cv.smoothness_count
+        out["coverage"] = self.coverage_dict()
         return out
+
+    def coverage_dict(self) -> dict[str, Any] | None:
+        """JSON ``coverage`` block: {skeletal, curve: {fraction, mean_gap, max_gap} | None, slack, tau}."""
+        covs = [c for c in (self.coverage_skeletal, self.coverage_curve) if c is not None]
+        if not covs:
+            return None
+        return {
+            "skeletal": None if self.coverage_skeletal is None else self.coverage_skeletal.to_dict(),
+            "curve": None if self.coverage_curve is None else self.coverage_curve.to_dict(),
+            "slack": covs[0].slack,
+            "tau": covs[0].tau,
+        }
+
+    def warning_dicts(self) -> list[dict[str, str]]:
+        return [w.to_dict() for w in self.warnings]
 
     # ---- serialisation --------------------------------------------------------------------
     def to_json_dict(self, version: str | None = None) -> dict[str, Any]:
@@ -160,7 +205,8 @@ class Evaluation:
                 "cloud": {"path": self.inputs.get("cloud"), "n_points": int(len(self.cloud))},
                 "skeletal": None
                 if self.skeletal is None
-                else {"path": self.inputs.get("skeletal"), "n_points": int(len(self.skeletal.points))},
+                else {"path": self.inputs.get("skeletal"), "n_points": int(len(self.skeletal.points)),
+                      "source": self.skeletal.source},
                 "curve": None
                 if self.curve is None
                 else {
@@ -168,12 +214,19 @@ class Evaluation:
                     "n_vertices": self.curve.curve.n_vertices,
                     "n_edges": self.curve.curve.n_edges,
                 },
+                "skeletal_index": self.inputs.get("skeletal_index"),
+                "reference_curve": self.inputs.get("reference_curve"),
             },
             "topology": summ["topology"],
             "boundedness": summ["boundedness"],
             "centeredness": summ["centeredness"],
             "smoothness": summ["smoothness"],
             "counts": summ["counts"],
+            "correspondence": self.correspondence,
+            "not_computed": dict(self.not_computed),
+            "warnings": self.warning_dicts(),
+            "coverage": summ["coverage"],
+            "reference": None if self.reference is None else self.reference.to_dict(),
             "timings_s": {k: round(float(v), 6) for k, v in self.timings.items()},
         }
         return _json_safe(doc)
@@ -184,7 +237,8 @@ class Evaluation:
             fh.write("\n")
 
     def write_per_point(self, prefix: str, inputs: tuple[str, ...] = ()) -> list[str]:
-        """``PREFIX_skeletal.csv``, ``PREFIX_curve_samples.csv``, ``PREFIX_curve_vertices.csv``."""
+        """``PREFIX_skeletal.csv``, ``PREFIX_curve_samples.csv``, ``PREFIX_curve_vertices.csv`` and,
+        with coverage or reverse correspondence, ``PREFIX_cloud.csv`` (one row per cloud point)."""
         written: list[str] = []
         guard = inputs or self._input_paths()
         b_star = self.params.beta_star
@@ -207,7 +261,24 @@ class Evaluation:
             rows = zip(range(c.curve.n_vertices), *c.curve.vertices.T, c.vertex_degree, c.vertex_smoothness)
             _write_csv(path, ["vertex", "x", "y", "z", "degree", "smoothness"], rows, guard)
             written.append(path)
+        cloud_cols = self.cloud_columns()
+        if len(cloud_cols) > 3:
+            path = f"{prefix}_cloud.csv"
+            rows = zip(range(len(self.cloud)), *cloud_cols.values())
+            _write_csv(path, ["index", *cloud_cols], rows, guard)
+            written.append(path)
         return written
+
+    def cloud_columns(self) -> dict[str, np.ndarray]:
+        """Per-cloud-point columns: x, y, z, and gap/covered per coverage, skeletal_row (reverse)."""
+        cols: dict[str, np.ndarray] = {"x": self.cloud[:, 0], "y": self.cloud[:, 1], "z": self.cloud[:, 2]}
+        for name, cov in (("skeletal", self.coverage_skeletal), ("curve", self.coverage_curve)):
+            if cov is not None:
+                cols[f"gap_{name}"] = cov.gap
+                cols[f"covered_{name}"] = cov.covered.astype(np.int64)
+        if self.skeletal is not None and self.skeletal.rows is not None:
+            cols["skeletal_row"] = self.skeletal.rows
+        return cols
 
     def write_barcodes(self, path: str, inputs: tuple[str, ...] = ()) -> None:
         """``diagram,birth,death`` rows for every bar of both diagrams (``inf`` for the infinite bar)."""

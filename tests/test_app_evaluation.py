@@ -142,16 +142,19 @@ def test_loading_new_inputs_during_a_run_drops_its_result(window, files, qtbot, 
     assert w.scene.evaluation is None and not w.session.runner.running
 
 
-def test_an_invalid_evaluation_input_becomes_a_dialog(window, files, qtbot, tmp_path):
-    other = tmp_path / "other.ply"
-    write_points_ply(other, shapes.cylinder(800).cloud)
+def test_an_invalid_evaluation_input_becomes_a_dialog(window, files, qtbot, tmp_path, monkeypatch):
+    # (a skeletal set of another size is no longer one: issue 8, tests/test_app_trust.py)
+    def refuse(*args, **kwargs):
+        raise skelcore.SkelInputError("skeletal point set: not what the engine accepts")
+
+    monkeypatch.setattr(skelcore, "evaluate", refuse)
     w = window
     w.session.auto_evaluate = False
     w.session.load_as("cloud", files["cloud"])
-    w.session.load_as("skeletal", str(other))  # 800 points against a 1500-point cloud
+    w.session.load_as("skeletal", files["skeletal"])
     with qtbot.waitSignal(w.session.runner.finished, timeout=20000):
         w.session.start_evaluation()
-    assert len(w.dialogs) == 1 and "pointwise correspondence" in w.dialogs[0]
+    assert len(w.dialogs) == 1 and "not what the engine accepts" in w.dialogs[0]
     assert w.isVisible() and w.scene.evaluation is None
 
 
@@ -161,12 +164,14 @@ def test_every_export_reloads(evaluated, tmp_path):
     out.mkdir()
     w.scene.set_metric("smoothness")
     plys = w.export_ply(str(out / "ply"))
-    assert {os.path.basename(p) for p in plys} == {"skeletal.ply", "curve.ply", "curve_samples.ply"}
-    skel = load_any(out / "ply" / "skeletal.ply")
+    # named after the data: a second dataset exported into the same folder cannot overwrite these
+    assert {os.path.basename(p) for p in plys} == {"y_cloud_skeletal.ply", "y_cloud_curve.ply", "y_cloud_curve_samples.ply"}
+    assert sorted(os.listdir(out / "ply")) == sorted(os.path.basename(p) for p in plys)  # no staging left
+    skel = load_any(out / "ply" / "y_cloud_skeletal.ply")
     assert skel.kind == "points" and np.allclose(skel.points, w.scene.skeletal.points)
-    curve = load_any(out / "ply" / "curve.ply")
+    curve = load_any(out / "ply" / "y_cloud_curve.ply")
     assert curve.kind == "curve" and np.array_equal(curve.curve.edges, w.scene.curve.curve.edges)
-    samples = load_any(out / "ply" / "curve_samples.ply")
+    samples = load_any(out / "ply" / "y_cloud_curve_samples.ply")
     assert np.allclose(samples.points, w.scene.curve.samples)
 
     written = w.export_results(str(out / "run.json"))
@@ -182,7 +187,7 @@ def test_every_export_reloads(evaluated, tmp_path):
     with open(out / "run_barcodes.csv") as fh:
         bars = list(csv.DictReader(fh))
     assert {r["diagram"] for r in bars} == {"cloud", "skeletal"} and any(r["death"] == "inf" for r in bars)
-    assert len(written) == 5
+    assert len(written) == 6  # + run_cloud.csv, the coverage gap per cloud point (issue 8)
 
     png = w.save_screenshot(str(out / "view.png"), scale=2)
     from matplotlib.image import imread

@@ -8,7 +8,7 @@ from types import SimpleNamespace
 import numpy as np
 import pytest
 
-from app.loading import assign_roles
+from app.loading import REPLACE_CLOUD, assign_roles, is_complete_set
 from app.panels.summary import summary_cells
 from app.scene import Scene, format_element_info
 from skelcore.curve import CurveSkeleton
@@ -48,8 +48,75 @@ def test_point_set_of_another_size_than_the_loaded_cloud_asks_and_can_be_skipped
 
     assert assign_roles(items, 100, ask) == []
     assert "70 points but the cloud has 100" in questions[0][0]
-    roles = assign_roles(items, 100, lambda q, options: options[0])
+    # The default answer (Enter) skips the file: an ambiguous drop never replaces the loaded cloud.
+    assert assign_roles(items, 100, lambda q, options: options[0]) == []
+    roles = assign_roles(items, 100, lambda q, options: REPLACE_CLOUD)
     assert [a.role for a in roles] == ["cloud"]
+
+
+def test_a_complete_set_dropped_on_a_loaded_window_is_assigned_within_itself():
+    # cloud 100 loaded; a new set of another size (cloud, skeletal, curve): no question, right roles
+    items = [_loaded("points", 60, "new_skeletal.ply", spread=0.01), _loaded("points", 60, "new_cloud.ply"),
+             _loaded("curve", 0, "new_curve.ply")]
+    roles = assign_roles(items, 100, lambda q, o: pytest.fail(f"asked {q}"))
+    assert [(a.role, a.loaded.path) for a in roles] == [
+        ("cloud", "/d/new_cloud.ply"), ("skeletal", "/d/new_skeletal.ply"), ("curve", "/d/new_curve.ply")]
+    # the same set with the loaded cloud's size: still within itself (not "skeletal + ask")
+    items = [_loaded("points", 100, "s.ply", spread=0.01), _loaded("points", 100, "c.ply")]
+    roles = assign_roles(items, 100, lambda q, o: pytest.fail(f"asked {q}"))
+    assert {a.role: a.loaded.path for a in roles} == {"cloud": "/d/c.ply", "skeletal": "/d/s.ply"}
+    # a cloud dropped with its curve skeleton
+    items = [_loaded("curve", 0, "k.ply"), _loaded("points", 70, "other.ply")]
+    assert is_complete_set(items, 100)
+    roles = assign_roles(items, 100, lambda q, o: pytest.fail(f"asked {q}"))
+    assert [(a.role, a.loaded.path) for a in roles] == [("cloud", "/d/other.ply"), ("curve", "/d/k.ply")]
+
+
+def test_scene_closes_layers_and_swaps_cloud_and_skeletal():
+    scene = Scene()
+    rng = np.random.default_rng(1)
+    a, b = rng.normal(size=(30, 3)), rng.normal(size=(30, 3)) * 0.1
+    scene.set_cloud(a, "/d/a.ply")
+    scene.set_skeletal(b, "/d/b.ply")
+    scene.set_point_size("cloud", 3.0)
+    scene.swap_cloud_and_skeletal()
+    assert scene.cloud.path == "/d/b.ply" and np.array_equal(scene.cloud.points, b)
+    assert scene.skeletal.path == "/d/a.ply" and np.array_equal(scene.skeletal.points, a)
+    assert scene.cloud.point_size == 2.0  # a new cloud's display, not the old skeletal set's
+    scene.remove_layer("skeletal")
+    assert set(scene.layers) == {"cloud"}
+    scene.swap_cloud_and_skeletal()  # only a cloud: it becomes the skeletal set
+    assert set(scene.layers) == {"skeletal"}
+    scene.set_curve(_y_curve())
+    scene.clear()
+    assert scene.layers == {}
+
+
+def test_style_options_are_checked_and_emit_one_event():
+    scene = Scene()
+    events = []
+    scene.subscribe(lambda e: events.append((e.kind, e.layer)))
+    scene.set_style("spheres", True)
+    scene.set_style("spheres", True)
+    assert events == [("style", "spheres")] and scene.style["spheres"]
+    with pytest.raises(ValueError):
+        scene.set_style("glow", True)
+
+
+def test_tube_polylines_run_through_the_samples_in_order():
+    from app.view.actors import curve_polylines
+
+    v = np.array([[0, 0, 0], [1, 0, 0], [1, 1, 0]], float)
+    edges = np.array([[0, 1], [1, 2]])
+    samples = np.array([[0.75, 0, 0], [0.25, 0, 0], [1, 0.5, 0]])
+    pts, cells, vals = curve_polylines(v, edges, np.array([0.3, 0.1, 0.9]), "samples", samples,
+                                       np.array([0, 0, 1]), np.array([0.75, 0.25, 0.5]))
+    # edge 0: v0, sample t=0.25, sample t=0.75, v1; edge 1: v1, sample, v2
+    assert cells.tolist() == [4, 0, 1, 2, 3, 3, 4, 5, 6]
+    assert np.allclose(pts[:4, 0], [0, 0.25, 0.75, 1]) and np.allclose(vals[1:3], [0.1, 0.3])
+    assert vals[0] == 0.1 and vals[3] == 0.3  # a vertex takes its nearest sample's value
+    pts, cells, vals = curve_polylines(v, edges, np.array([0.5, np.nan, 1.0]), "vertices")
+    assert cells.tolist() == [2, 0, 1, 2, 1, 2] and np.isnan(vals[1])
 
 
 def test_point_set_with_the_loaded_clouds_count_becomes_skeletal_without_asking():

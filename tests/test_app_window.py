@@ -13,6 +13,7 @@ from skelcore import shapes
 from conftest import write_shape_files
 from skelcore.colors import SKELETAL_COLOR, lookup_table
 from skelcore.io import write_points_ply
+from app.loading import REPLACE_CLOUD
 
 pytestmark = pytest.mark.gui
 
@@ -207,14 +208,18 @@ def test_ambiguous_drop_asks_and_the_answer_decides_the_role(window, files, tmp_
     other = tmp_path / "other_cloud.ply"
     write_points_ply(other, shapes.cylinder(700, seed=4).cloud)
     asked = []
+    answer = {"choice": None}  # None: Enter on the dialog's default
 
     def get_item(parent, title, question, options, current, editable):
         asked.append(question)
-        return options[0], True  # "the cloud (replaces the current one)"
+        return (options[current] if answer["choice"] is None else answer["choice"]), True
 
     monkeypatch.setattr(QtWidgets.QInputDialog, "getItem", get_item)
     _drop(window.view.widget, [str(other)])
     assert asked and "700 points but the cloud has 1500" in asked[0]
+    assert window.scene.cloud.path == files["cloud"]  # the default never replaces the loaded cloud
+    answer["choice"] = REPLACE_CLOUD
+    _drop(window.view.widget, [str(other)])
     assert window.scene.cloud.path == str(other) and window.scene.cloud.n_points == 700
 
 

@@ -106,7 +106,8 @@ def test_export_ply_writes_coloured_files(sample, tmp_path):
         (["evaluate", "{d}/missing.ply", "--curve", "{d}/curve.ply"], "missing.ply"),
         (["evaluate", "{d}/cloud.ply"], "nothing to evaluate"),
         (["evaluate", "{d}/cloud.ply", "--curve", "{d}/curve.ply", "--set", "nope=1"], "unknown parameter"),
-        (["evaluate", "{d}/cloud.ply", "--skeletal", "{d}/short.ply"], "short.ply"),
+        (["evaluate", "{d}/cloud.ply", "--skeletal", "{d}/short.ply", "--skeletal-index", "{d}/missing.txt"],
+         "missing.txt"),
         (["evaluate", "{d}/cloud.ply", "--curve", "{d}/curve.ply", "--json", "{d}/cloud.ply"], "overwrite"),
     ],
 )

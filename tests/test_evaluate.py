@@ -117,7 +117,10 @@ def test_cancel_raises_cancelled_at_the_next_checkpoint():
         (dict(cloud=np.ones((10, 3))), "coincide"),
         (dict(cloud=np.array([[0, 0, np.nan], [1, 1, 1]])), "NaN"),
         (dict(cloud=np.random.default_rng(0).random((10, 2))), "N x 3"),
-        (dict(cloud=np.random.default_rng(0).random((10, 3)), skeletal=np.zeros((9, 3))), "9 points but the cloud has 10"),
+        (dict(cloud=np.random.default_rng(0).random((10, 3)), skeletal=np.zeros((9, 3)), skeletal_index=np.arange(8)),
+             "has 8 rows, needs one cloud row per skeletal point"),
+            (dict(cloud=np.random.default_rng(0).random((10, 3)), skeletal=np.zeros((9, 3)), skeletal_index=np.arange(9) + 2),
+             "cloud row 10 out of range"),
         (dict(cloud=np.random.default_rng(0).random((10, 3)), curve=(np.eye(3), [[0, 3]])), "out of range"),
     ],
 )

@@ -20,8 +20,8 @@ class _Viewer(QtWidgets.QWidget):
         super().__init__()
         self.opened: list[tuple] = []
 
-    def open_variant(self, cloud, skeletal, curve) -> None:
-        self.opened.append((cloud, skeletal, curve))
+    def open_variant(self, cloud, skeletal, curve, evaluation=None) -> None:
+        self.opened.append((cloud, skeletal, curve, evaluation))
 
 
 @pytest.fixture
@@ -49,8 +49,9 @@ def test_run_fills_the_table_and_a_row_opens_in_the_3d_view(qtbot, cloud_file, t
     assert dialog.progress_bar.value() == 1000
     assert (tmp_path / "study.md").is_file()
     qtbot.mouseClick(dialog.open_buttons[2], QtCore.Qt.MouseButton.LeftButton)
-    cloud, skeletal, curve = viewer.opened[-1]
+    cloud, skeletal, curve, evaluation = viewer.opened[-1]
     assert len(cloud) == 300 and skeletal.shape == (300, 3) and curve.n_vertices > 1
+    assert evaluation is dialog.result.rows[2].evaluation  # the stored result, not a recomputation
     assert dialog.run_button.isEnabled() and not dialog.cancel_button.isEnabled()
 
 

@@ -1,5 +1,7 @@
 """Display controls: which metric colours the skeleton, the colour range, and each layer's
-visibility, point size and opacity; edges as lines or tubes. Everything goes through the scene."""
+visibility, point size and opacity, a remove button per layer and a cloud <-> skeletal swap; edges as
+lines or tubes; figure options (shaded spheres, eye-dome lighting, orientation axes). Everything goes
+through the scene, except closing and swapping, which the session does (``layer_action``)."""
 
 from __future__ import annotations
 
@@ -10,7 +12,12 @@ from ..scene import LAYER_ORDER, METRICS, Scene, SceneEvent
 _LAYER_TITLES = {"cloud": "cloud", "skeletal": "skeletal points", "curve": "curve skeleton"}
 
 
+_STYLE_TITLES = {"spheres": "points as shaded spheres", "eye_dome": "eye-dome lighting", "axes": "orientation axes"}
+
+
 class DisplayPanel(QtWidgets.QWidget):
+    layer_action = QtCore.Signal(str, str)  # ("close", role) or ("swap", "")
+
     def __init__(self, scene: Scene, parent: QtWidgets.QWidget | None = None) -> None:
         super().__init__(parent)
         self.scene = scene
@@ -29,8 +36,14 @@ class DisplayPanel(QtWidgets.QWidget):
         range_row = QtWidgets.QHBoxLayout()
         for w in (self.auto_range, self.vmin, self.vmax, self.fit_range):
             range_row.addWidget(w)
-        self.tubes = QtWidgets.QCheckBox("edges as tubes", self)
+        self.tubes = QtWidgets.QCheckBox("edges as tubes (T)", self)
         self.tubes.toggled.connect(scene.set_edges_as_tubes)
+        self.style: dict[str, QtWidgets.QCheckBox] = {}
+        for name, title in _STYLE_TITLES.items():
+            box = QtWidgets.QCheckBox(title, self)
+            box.setChecked(scene.style[name])
+            box.toggled.connect(lambda on, n=name: scene.set_style(n, on))
+            self.style[name] = box
 
         grid = QtWidgets.QGridLayout()
         grid.addWidget(QtWidgets.QLabel("layer"), 0, 0)
@@ -39,6 +52,7 @@ class DisplayPanel(QtWidgets.QWidget):
         self.visible: dict[str, QtWidgets.QCheckBox] = {}
         self.size: dict[str, QtWidgets.QDoubleSpinBox] = {}
         self.opacity: dict[str, QtWidgets.QSlider] = {}
+        self.remove: dict[str, QtWidgets.QToolButton] = {}
         for row, name in enumerate(LAYER_ORDER, start=1):
             box = QtWidgets.QCheckBox(_LAYER_TITLES[name], self)
             box.setChecked(True)
@@ -51,10 +65,19 @@ class DisplayPanel(QtWidgets.QWidget):
             opacity = QtWidgets.QSlider(QtCore.Qt.Orientation.Horizontal, self)
             opacity.setRange(0, 100)
             opacity.valueChanged.connect(lambda v, n=name: scene.set_opacity(n, v / 100.0))
+            remove = QtWidgets.QToolButton(self)
+            remove.setText("✕")
+            remove.setToolTip(f"close the {_LAYER_TITLES[name]} (File > Close)")
+            remove.clicked.connect(lambda _=False, n=name: self.layer_action.emit("close", n))
             grid.addWidget(box, row, 0)
             grid.addWidget(size, row, 1)
             grid.addWidget(opacity, row, 2)
+            grid.addWidget(remove, row, 3)
             self.visible[name], self.size[name], self.opacity[name] = box, size, opacity
+            self.remove[name] = remove
+        self.swap = QtWidgets.QPushButton("swap roles: cloud ↔ skeletal points", self)
+        self.swap.setToolTip("the cloud becomes the skeletal point set and the skeletal point set the cloud")
+        self.swap.clicked.connect(lambda: self.layer_action.emit("swap", ""))
 
         form = QtWidgets.QFormLayout()
         form.addRow("colour by", self.metric)
@@ -62,7 +85,10 @@ class DisplayPanel(QtWidgets.QWidget):
         layout = QtWidgets.QVBoxLayout(self)
         layout.addLayout(form)
         layout.addLayout(grid)
+        layout.addWidget(self.swap)
         layout.addWidget(self.tubes)
+        for box in self.style.values():
+            layout.addWidget(box)
         self.invalid = QtWidgets.QLabel(self)
         self.invalid.setWordWrap(True)
         layout.addWidget(self.invalid)
@@ -108,7 +134,7 @@ class DisplayPanel(QtWidgets.QWidget):
         self._range_changed()
 
     def _on_scene(self, event: SceneEvent) -> None:
-        if event.kind in ("layer", "quantities", "colouring", "thresholds", "display"):
+        if event.kind in ("layer", "quantities", "colouring", "thresholds", "display", "style"):
             self._sync()
 
     def _sync(self) -> None:
@@ -119,7 +145,7 @@ class DisplayPanel(QtWidgets.QWidget):
         self.metric.blockSignals(False)
         for name in LAYER_ORDER:
             layer = s.layers.get(name)
-            widgets = (self.visible[name], self.size[name], self.opacity[name])
+            widgets = (self.visible[name], self.size[name], self.opacity[name], self.remove[name])
             for w in widgets:
                 w.setEnabled(layer is not None)
                 w.blockSignals(True)
@@ -130,6 +156,11 @@ class DisplayPanel(QtWidgets.QWidget):
             for w in widgets:
                 w.blockSignals(False)
         self.tubes.setEnabled(s.curve is not None)
+        self.swap.setEnabled(s.cloud is not None or s.skeletal is not None)
+        for box, on in [(self.tubes, s.edges_as_tubes), *((self.style[n], s.style[n]) for n in self.style)]:
+            box.blockSignals(True)
+            box.setChecked(on)
+            box.blockSignals(False)
         n = s.n_invalid_shown()
         self.invalid.setText(
             f"{n} invalid (NaN) {s.metric} values, drawn magenta" if n else ""

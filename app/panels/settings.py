@@ -1,10 +1,17 @@
-"""Evaluation parameters (a subset of skelcore's Params, SPEC 0-4) the user may change before a run."""
+"""Evaluation parameters (a subset of skelcore's Params, SPEC 0-4) the user may change before a run,
+and the correspondence of a skeletal set with another point count than the cloud (SPEC 7)."""
 
 from __future__ import annotations
 
 from PySide6 import QtCore, QtWidgets
 
 from skelcore.params import Params
+
+#: (label, skelcore.evaluate's ``correspondence=``)
+CORRESPONDENCE_CHOICES = (
+    ("as loaded (pointwise / none)", "auto"),
+    ("reverse projection", "reverse"),
+)
 
 
 class SettingsPanel(QtWidgets.QWidget):
@@ -30,7 +37,17 @@ class SettingsPanel(QtWidgets.QWidget):
         self.eps_quantile.setSingleStep(0.01)
         self.eps_quantile.setValue(d.eps_quantile)
         self.eps_quantile.setToolTip("SPEC 1: quantile of nearest-neighbour distances giving eps*")
+        self.correspondence_choice = QtWidgets.QComboBox(self)
+        for text, key in CORRESPONDENCE_CHOICES:
+            self.correspondence_choice.addItem(text, key)
+        self.correspondence_choice.setToolTip(
+            "SPEC 7: a skeletal set with another point count than the cloud has no row-by-row "
+            "correspondence. 'reverse' maps every cloud point to its nearest skeletal point (with only "
+            "a curve: its nearest point on the curve) and scores topology and centeredness on that set; "
+            "'as loaded' leaves them out, with a warning"
+        )
         form = QtWidgets.QFormLayout(self)
+        form.addRow("correspondence", self.correspondence_choice)
         form.addRow("boundedness estimator", self.boundedness_method)
         form.addRow("normalization", self.normalize_by)
         form.addRow("k (centeredness)", self.k_center)
@@ -38,7 +55,7 @@ class SettingsPanel(QtWidgets.QWidget):
         form.addRow("k (smoothness)", self.smooth_k)
         form.addRow("curve samples", self.curve_samples)
         form.addRow("eps* quantile", self.eps_quantile)
-        for w in (self.boundedness_method, self.normalize_by):
+        for w in (self.boundedness_method, self.normalize_by, self.correspondence_choice):
             w.currentTextChanged.connect(lambda *_: self.changed.emit())
         for w in (self.k_center, self.tangent_k, self.smooth_k, self.curve_samples, self.eps_quantile):
             w.valueChanged.connect(lambda *_: self.changed.emit())
@@ -49,6 +66,16 @@ class SettingsPanel(QtWidgets.QWidget):
         spin.setValue(value)
         spin.setToolTip(tip)
         return spin
+
+    def correspondence(self) -> str:
+        """``correspondence=`` for :func:`skelcore.evaluate`: "auto" or "reverse"."""
+        return str(self.correspondence_choice.currentData())
+
+    def set_correspondence(self, key: str) -> None:
+        index = self.correspondence_choice.findData(key)
+        if index < 0:
+            raise ValueError(f"unknown correspondence {key!r}")
+        self.correspondence_choice.setCurrentIndex(index)
 
     def params(self, base: Params | None = None) -> Params:
         """The chosen parameters on top of ``base`` (thresholds are set in the summary panel)."""

@@ -1,15 +1,19 @@
 """The summary table in the paper's layout (rows d_B/d_Wp, boundedness, centeredness, smoothness;
 columns skeletal points / curve skeleton), each score with the number of elements it counted (SPEC 5),
-and the editable thresholds beta*, c* (SPEC 2-3) that re-score without recomputing."""
+SkelScope's coverage row (SPEC 8, marked as not the paper's), the editable thresholds beta*, c*
+(SPEC 2-3) that re-score without recomputing, and below: the correspondence used (SPEC 7), the trust
+warnings, the reference comparison (SPEC 9), and a switch colouring the cloud by its coverage gap."""
 
 from __future__ import annotations
 
+import html
 import math
 from typing import Any
 
-from PySide6 import QtCore, QtWidgets
+import numpy as np
+from PySide6 import QtCore, QtGui, QtWidgets
 
-ROWS = ("d_B / d_Wp", "boundedness", "centeredness", "smoothness")
+ROWS = ("d_B / d_Wp", "boundedness", "centeredness", "smoothness", "coverage*")
 COLUMNS = ("skeletal points", "curve skeleton")
 
 
@@ -35,11 +39,72 @@ def summary_cells(summary: dict[str, Any] | None) -> list[list[str]]:
                 continue
             n = summary["counts"][metric][kind]
             cells[r][c] = f"{_num(value)}  (n = {n})"
+    cov = summary.get("coverage")
+    if cov is not None:
+        for c, kind in enumerate(("skeletal", "curve")):
+            block = cov.get(kind)
+            if block is not None:
+                cells[4][c] = f"{_num(block['fraction'])}  (gap {_num(block['mean_gap'], 4)} / {_num(block['max_gap'], 4)})"
     return cells
+
+
+def detail_lines(summary: dict[str, Any] | None, evaluation: Any) -> list[str]:
+    """The text under the table (Qt-free): correspondence, warnings, reference, run facts."""
+    if summary is None or evaluation is None:
+        return []
+    lines = []
+    corr = getattr(evaluation, "correspondence", None)
+    if corr is not None:
+        source = getattr(evaluation.skeletal, "source", "skeletal") if evaluation.skeletal is not None else ""
+        extra = " (the cloud projected onto the curve)" if source == "curve" else ""
+        lines.append(f"correspondence: {corr}{extra}")
+    for what, why in (getattr(evaluation, "not_computed", None) or {}).items():
+        lines.append(f"not computed: {what}: {why}")
+    for w in getattr(evaluation, "warnings", None) or []:
+        lines.append(f"⚠ warning [{w.code}]: {w.message}")
+    ref = getattr(evaluation, "reference", None)
+    if ref is not None:
+        lines.append(
+            f"reference curve: chamfer {_num(ref.chamfer, 4)}, Hausdorff {_num(ref.hausdorff, 4)}, "
+            f"precision {_num(ref.precision)}, recall {_num(ref.recall)}, F1 {_num(ref.f1)}"
+        )
+        lines.append("  ours / reference: " + ", ".join(
+            f"{k} {getattr(ref, k)[0]}/{getattr(ref, k)[1]}" for k in ("junctions", "endpoints", "components", "cycles")
+        ))
+    cov = summary.get("coverage")
+    if cov is not None:
+        lines.append(f"* coverage is SkelScope's own, not the paper's: covered fraction (s = {cov['slack']:g}, "
+                     f"tau = {_num(cov['tau'], 4)}), mean / max gap in normalized units")
+    lines.append(f"boundedness estimator: {evaluation.params.boundedness_method}")
+    topo = summary.get("topology")
+    if topo is not None:
+        lines.append(f"eps* = {_num(topo['eps_star'], 4)} (normalized units), K = {topo['n_bars']} bars compared")
+    total = evaluation.timings.get("total") if evaluation.timings else None
+    if total is not None:
+        lines.append(f"evaluated in {total:.2f} s")
+    return lines
+
+
+def cloud_gap_values(evaluation: Any) -> tuple[np.ndarray, str] | None:
+    """Per cloud point gap / max gap in [0, 1] (the skeletal set's balls when it has coverage, else
+    the curve's; NaN where undefined, drawn magenta) and which one; None without coverage."""
+    if evaluation is None:
+        return None
+    for kind in ("skeletal", "curve"):
+        cov = getattr(evaluation, f"coverage_{kind}", None)
+        if cov is not None:
+            gap = np.asarray(cov.gap, dtype=float)
+            top = float(np.nanmax(gap)) if np.isfinite(gap).any() else 0.0
+            return (gap / top if top > 0 else np.where(np.isfinite(gap), 0.0, np.nan)), kind
+    return None
+NO_RESULT = "No evaluation yet: load a cloud and a skeleton, then Evaluate (F5)."
 
 
 class SummaryPanel(QtWidgets.QWidget):
     thresholds_changed = QtCore.Signal(float, float)
+    #: per cloud point values in [0, 1] to colour the cloud by (gap / max gap), or None for plain
+    cloud_colouring = QtCore.Signal(object)
+    rerun_requested = QtCore.Signal()
 
     def __init__(self, parent: QtWidgets.QWidget | None = None) -> None:
         super().__init__(parent)
@@ -53,14 +118,31 @@ class SummaryPanel(QtWidgets.QWidget):
         self.table.setSizeAdjustPolicy(QtWidgets.QAbstractScrollArea.SizeAdjustPolicy.AdjustToContents)
         self.beta_star = self._spin("bounded means beta > beta* (SPEC 2)")
         self.c_star = self._spin("centred means c > c* (SPEC 3)")
-        self.details = QtWidgets.QLabel("No evaluation yet: load a cloud and a skeleton, then Evaluate (F5).")
+        self.details = QtWidgets.QLabel(NO_RESULT)
         self.details.setWordWrap(True)
+        self.details.setTextInteractionFlags(QtCore.Qt.TextInteractionFlag.TextSelectableByMouse)
+        self.cloud_by_gap = QtWidgets.QCheckBox("colour the cloud by its coverage gap", self)
+        self.cloud_by_gap.setToolTip(
+            "each cloud point's distance to the union of the skeleton's medial balls, / the largest gap "
+            "(0 = covered); magenta where undefined"
+        )
+        self.cloud_by_gap.setEnabled(False)
+        self.cloud_by_gap.toggled.connect(self._emit_cloud_colouring)
+        self._evaluation: Any = None
+        # Shown while the results are out of date (see set_stale).
+        self.rerun = QtWidgets.QPushButton("", self)
+        self.rerun.setStyleSheet("QPushButton { color: #8a4b00; font-weight: bold; }")
+        self.rerun.clicked.connect(self.rerun_requested.emit)
+        self.rerun.setVisible(False)
+        self.stale = ""
         form = QtWidgets.QFormLayout()
         form.addRow("beta* (boundedness)", self.beta_star)
         form.addRow("c* (centeredness)", self.c_star)
         layout = QtWidgets.QVBoxLayout(self)
         layout.addWidget(self.table)
+        layout.addWidget(self.rerun)
         layout.addLayout(form)
+        layout.addWidget(self.cloud_by_gap)
         layout.addWidget(self.details)
         layout.addStretch(1)
         self.show_summary(None)
@@ -92,16 +174,57 @@ class SummaryPanel(QtWidgets.QWidget):
                 item = QtWidgets.QTableWidgetItem(text)
                 item.setTextAlignment(QtCore.Qt.AlignmentFlag.AlignCenter)
                 self.table.setItem(r, c, item)
+        self._evaluation = evaluation
+        gap = cloud_gap_values(evaluation)
+        self.cloud_by_gap.setEnabled(gap is not None)
+        if gap is not None:
+            self.cloud_by_gap.setText(f"colour the cloud by its coverage gap ({gap[1]})")
+        self._emit_cloud_colouring()
+        self._grey(bool(self.stale))
         if summary is None or evaluation is None:
+            # Nothing shown: no line may describe a run whose values are gone.
+            self.details.setText(NO_RESULT)
             return
-        lines = [f"boundedness estimator: {evaluation.params.boundedness_method}"]
-        topo = summary.get("topology")
-        if topo is not None:
-            lines.append(f"eps* = {_num(topo['eps_star'], 4)} (normalized units), K = {topo['n_bars']} bars compared")
-        total = evaluation.timings.get("total") if evaluation.timings else None
-        if total is not None:
-            lines.append(f"evaluated in {total:.2f} s")
-        self.details.setText("\n".join(lines))
+        lines = detail_lines(summary, evaluation)
+        warned = [i for i, t in enumerate(lines) if t.startswith("⚠")]
+        self.details.setTextFormat(QtCore.Qt.TextFormat.RichText)
+        self.details.setText("<br>".join(
+            f"<span style='color:#b35900'>{html.escape(t)}</span>" if i in warned else html.escape(t)
+            for i, t in enumerate(lines)
+        ))
+
+    def details_text(self) -> str:
+        """The text under the table, as plain lines."""
+        return "\n".join(detail_lines(self._summary_for_text(), self._evaluation)) if self._evaluation else self.details.text()
+
+    def _summary_for_text(self) -> dict[str, Any] | None:
+        return None if self._evaluation is None else self._evaluation.summary()
+
+    def _emit_cloud_colouring(self, *_: Any) -> None:
+        gap = cloud_gap_values(self._evaluation) if self.cloud_by_gap.isChecked() else None
+        self.cloud_colouring.emit(None if gap is None else gap[0])
+
+    def set_stale(self, reason: str) -> None:
+        """Mark the results out of date ("settings changed", "inputs changed"): values greyed, a
+        re-run button naming the reason; "" clears the mark."""
+        self.stale = reason
+        self.rerun.setText(f"{reason}: re-run (F5)" if reason else "")
+        self.rerun.setVisible(bool(reason))
+        self._grey(bool(reason))
+
+    def _grey(self, grey: bool) -> None:
+        colour = self.palette().color(QtGui.QPalette.ColorGroup.Disabled, QtGui.QPalette.ColorRole.Text) if grey \
+            else self.palette().color(QtGui.QPalette.ColorRole.Text)
+        for r in range(self.table.rowCount()):
+            for c in range(self.table.columnCount()):
+                item = self.table.item(r, c)
+                if item is not None:
+                    item.setForeground(colour)
+        self.details.setEnabled(not grey)
+
+    def is_greyed(self) -> bool:
+        item = self.table.item(1, 0)
+        return item is not None and item.foreground().color() != self.palette().color(QtGui.QPalette.ColorRole.Text)
 
     def cell_text(self, row: str, column: str) -> str:
         item = self.table.item(ROWS.index(row), COLUMNS.index(column))

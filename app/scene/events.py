@@ -13,7 +13,8 @@ __all__ = ["SceneEvent", "Listener"]
 
 @dataclass(frozen=True)
 class SceneEvent:
-    """What changed: ``kind`` is 'layer', 'display', 'quantities', 'colouring' or 'thresholds'."""
+    """What changed: ``kind`` is 'layer', 'display', 'quantities', 'colouring', 'thresholds'
+    or 'style' (a figure option; ``layer`` names the option)."""
 
     kind: str
     layer: str | None = None

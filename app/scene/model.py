@@ -17,7 +17,9 @@ from skelcore.curve import CurveSkeleton
 from .events import Listener, SceneEvent
 from .layers import METRICS, Layer, ScalarQuantity
 
-__all__ = ["Scene"]
+__all__ = ["Scene", "STYLE_DEFAULTS"]
+
+STYLE_DEFAULTS = {"spheres": False, "eye_dome": False, "axes": True}
 
 
 class Scene:
@@ -34,6 +36,7 @@ class Scene:
         self.metric: str = "boundedness"
         self.clim: tuple[float, float] | None = None  # None: the metric's natural range [0, 1]
         self.edges_as_tubes: bool = False
+        self.style: dict[str, bool] = dict(STYLE_DEFAULTS)  # figure options, see set_style
         self.beta_star: float = 0.75
         self.c_star: float = 0.75
         self._listeners: list[Listener] = []
@@ -76,16 +79,43 @@ class Scene:
         return self._replace(layer)
 
     def set_curve(self, curve: CurveSkeleton, path: str | None = None) -> Layer:
+        # Curve vertices smaller than the skeletal points (6): the skeletal set lies on the curve and
+        # its colours must stay visible around each vertex.
         layer = Layer(
             "curve", np.asarray(curve.vertices, dtype=float), path=path, edges=np.asarray(curve.edges),
-            curve=curve, point_size=9.0,
+            curve=curve, point_size=4.0,
         )
         return self._replace(layer)
 
     def remove_layer(self, name: str) -> None:
+        """Close one layer (File > Close, the panel's remove button); the evaluation goes with it."""
         if self.layers.pop(name, None) is not None:
             self.clear_evaluation()
             self._emit("layer", name)
+
+    def clear(self) -> None:
+        """Close every layer (File > Close all)."""
+        for name in [n for n in ("curve", "skeletal", "cloud") if n in self.layers]:
+            self.remove_layer(name)
+
+    def swap_cloud_and_skeletal(self) -> None:
+        """Exchange the cloud's and the skeletal set's data (a drop that guessed the roles wrong).
+        Each role keeps its display choices; the evaluation, describing the old roles, is dropped."""
+        cloud, skeletal = self.cloud, self.skeletal
+        if cloud is None and skeletal is None:
+            return
+        self.clear_evaluation()
+        for layer in (cloud, skeletal):
+            if layer is not None:
+                self.layers.pop(layer.name)
+        if skeletal is not None:
+            self.set_cloud(skeletal.points, skeletal.path)
+        else:
+            self._emit("layer", "cloud")
+        if cloud is not None:
+            self.set_skeletal(cloud.points, cloud.path)
+        else:
+            self._emit("layer", "skeletal")
 
     def _replace(self, layer: Layer) -> Layer:
         old = self.layers.get(layer.name)
@@ -217,8 +247,18 @@ class Scene:
             self._emit("display", name)
 
     def set_edges_as_tubes(self, tubes: bool) -> None:
-        self.edges_as_tubes = bool(tubes)
-        self._emit("display", "curve")
+        if bool(tubes) != self.edges_as_tubes:
+            self.edges_as_tubes = bool(tubes)
+            self._emit("display", "curve")
+
+    def set_style(self, name: str, on: bool) -> None:
+        """A figure option: 'spheres' (points as shaded spheres), 'eye_dome' (eye-dome lighting),
+        'axes' (the orientation axes widget)."""
+        if name not in STYLE_DEFAULTS:
+            raise ValueError(f"unknown display option {name!r}: use one of {', '.join(STYLE_DEFAULTS)}")
+        if self.style[name] != bool(on):
+            self.style[name] = bool(on)
+            self._emit("style", name)
 
     # ---- picking --------------------------------------------------------------------------
     def element_info(self, layer_name: str, location: str, index: int) -> dict[str, Any]:

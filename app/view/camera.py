@@ -1,4 +1,5 @@
-"""Camera placement for the 3D view: framing the scene beside the colour bar, standard views.
+"""Camera placement for the 3D view: framing all the data beside the colour bar, standard views, and
+camera files (View > Save camera, ``skelscope --camera FILE``).
 
 Works on the renderer directly where pyvista's Plotter helpers would render a frame synchronously
 (a frame of a 1M-point cloud costs 0.3-1 s in software GL).
@@ -6,14 +7,45 @@ Works on the renderer directly where pyvista's Plotter helpers would render a fr
 
 from __future__ import annotations
 
-from typing import Any
+import json
+import os
+from typing import Any, Iterable
 
-__all__ = ["fit_camera", "orient_standard_view"]
+import numpy as np
+
+from skelcore.errors import SkelInputError
+from skelcore.io.atomic import atomic_open
+
+__all__ = ["fit_camera", "orient_standard_view", "camera_state", "apply_camera_state", "save_camera", "load_camera",
+           "FIT_X", "FIT_Y"]
+
+WINDOW_CENTER_X = 0.12
+"""The projection centre moves this far right (viewport units, [-1, 1]): the data sits left of the bar."""
+FIT_X = (-0.95, 0.72)
+"""Where the data may lie across the view (viewport units): the colour bar starts at 0.74 (x = 0.87)."""
+FIT_Y = (-0.92, 0.92)
+_FIT_POINTS = 20000  # points per layer projected to fit the view (plus each layer's extreme points)
 
 
-def fit_camera(plotter: Any) -> None:
-    """Frame the scene left of the colour bar: the projection centre moves left and the view
-    zooms out a little, so the bar on the right edge does not cover the skeleton."""
+def _fit_samples(point_sets: Iterable[np.ndarray]) -> np.ndarray:
+    """The points the view must show: every point of small sets; a spread subsample of big ones,
+    with each set's extreme points along x, y, z (the subsample could miss a thin arm's tip)."""
+    out = []
+    for pts in point_sets:
+        pts = np.asarray(pts, dtype=float)
+        if not len(pts):
+            continue
+        if len(pts) > _FIT_POINTS:
+            extremes = np.concatenate([pts.argmin(axis=0), pts.argmax(axis=0)])
+            idx = np.concatenate([np.linspace(0, len(pts) - 1, _FIT_POINTS).astype(np.int64), extremes])
+            pts = pts[idx]
+        out.append(pts)
+    return np.concatenate(out) if out else np.zeros((0, 3))
+
+
+def fit_camera(plotter: Any, point_sets: Iterable[np.ndarray] = ()) -> None:
+    """Frame the data left of the colour bar: the projection centre moves left, then the view zooms
+    so that every point in ``point_sets`` (all visible data when empty) lies inside FIT_X x FIT_Y."""
     # Through the renderer: Plotter.reset_camera and a first Plotter.camera access both render a
     # frame synchronously, and a frame of a 1M-point cloud costs 0.3-1 s in software GL.
     ren = plotter.renderer
@@ -21,20 +53,136 @@ def fit_camera(plotter: Any) -> None:
     if not camera.is_set:
         ren.camera_position = ren.get_default_cam_pos()
         camera.is_set = True
-    ren.reset_camera(render=False)
-    camera.SetWindowCenter(0.12, 0.0)
-    camera.zoom(0.9)
+    pts = _fit_samples(point_sets)
+    if len(pts):
+        lo, hi = pts.min(axis=0), pts.max(axis=0)
+        ren.ResetCamera(lo[0], hi[0], lo[1], hi[1], lo[2], hi[2])
+    else:
+        ren.reset_camera(render=False)
+    camera.SetWindowCenter(WINDOW_CENTER_X, 0.0)
+    if not len(pts):
+        camera.zoom(0.9)
+        return
+    for _ in range(4):  # perspective: zooming scales projected offsets exactly; depth clipping may shift a bit
+        x, y = _view_coordinates(ren, pts)
+        if not len(x):
+            break
+        # Centre the data in the free area (its box centre need not be its picture's centre): pan
+        # the camera by the world offset between the two view points at the focal point's depth.
+        fp = np.asarray(camera.GetFocalPoint())
+        ren.SetWorldPoint(*fp, 1.0)
+        ren.WorldToView()
+        depth = ren.GetViewPoint()[2]
+        now = _view_to_world(ren, (x.max() + x.min()) / 2, (y.max() + y.min()) / 2, depth)
+        goal = _view_to_world(ren, (FIT_X[0] + FIT_X[1]) / 2, (FIT_Y[0] + FIT_Y[1]) / 2, depth)
+        shift = now - goal
+        camera.SetFocalPoint(*(fp + shift))
+        camera.SetPosition(*(np.asarray(camera.GetPosition()) + shift))
+        x, y = _view_coordinates(ren, pts)
+        # Zooming scales the view about the focal point's image (the window centre moved it left).
+        (cx,), (cy,) = _view_coordinates(ren, np.asarray([camera.GetFocalPoint()]))
+        need = max(
+            (x.max() - cx) / (FIT_X[1] - cx), (cx - x.min()) / (cx - FIT_X[0]),
+            (y.max() - cy) / (FIT_Y[1] - cy), (cy - y.min()) / (cy - FIT_Y[0]), 1e-6,
+        )
+        if 0.98 <= need <= 1.0:
+            break
+        need *= 1.003  # land just inside the free area
+        if camera.GetParallelProjection():
+            camera.SetParallelScale(camera.GetParallelScale() * need)
+        else:
+            camera.Zoom(1.0 / need)
+    ren.ResetCameraClippingRange()
+
+
+def _view_coordinates(ren: Any, pts: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Normalized viewport coordinates ([-1, 1]) of world points, by the camera's composite matrix."""
+    w, h = ren.GetSize()
+    aspect = w / h if h else 1.0
+    near, far = ren.GetActiveCamera().GetClippingRange()
+    m = ren.GetActiveCamera().GetCompositeProjectionTransformMatrix(aspect, -1, 1)
+    mat = np.array([[m.GetElement(i, j) for j in range(4)] for i in range(4)])
+    hom = np.c_[pts, np.ones(len(pts))] @ mat.T
+    wv = hom[:, 3]
+    ok = wv > 1e-12
+    return hom[ok, 0] / wv[ok], hom[ok, 1] / wv[ok]
+
+
+def _view_to_world(ren: Any, x: float, y: float, z: float) -> np.ndarray:
+    ren.SetViewPoint(float(x), float(y), float(z))
+    ren.ViewToWorld()
+    wp = ren.GetWorldPoint()
+    return np.asarray(wp[:3]) / (wp[3] if wp[3] else 1.0)
 
 
 def orient_standard_view(plotter: Any, name: str) -> None:
     """Turn the camera to 'xy', 'xz', 'yz' (and their negatives '-xy', ...) or 'iso'."""
     p = plotter
     views = {
-        "xy": lambda: p.view_xy(), "-xy": lambda: p.view_xy(negative=True),
-        "xz": lambda: p.view_xz(), "-xz": lambda: p.view_xz(negative=True),
-        "yz": lambda: p.view_yz(), "-yz": lambda: p.view_yz(negative=True),
-        "iso": lambda: p.view_isometric(),
+        "xy": lambda: p.view_xy(render=False), "-xy": lambda: p.view_xy(negative=True, render=False),
+        "xz": lambda: p.view_xz(render=False), "-xz": lambda: p.view_xz(negative=True, render=False),
+        "yz": lambda: p.view_yz(render=False), "-yz": lambda: p.view_yz(negative=True, render=False),
+        "iso": lambda: p.view_isometric(render=False),
     }
     if name not in views:
         raise ValueError(f"unknown view {name!r}")
     views[name]()
+
+
+_KEYS = ("position", "focal_point", "view_up", "view_angle", "parallel_projection", "parallel_scale")
+
+
+def camera_state(plotter: Any) -> dict[str, Any]:
+    """The camera as plain values (what a camera file holds)."""
+    cam = plotter.renderer.GetActiveCamera()
+    return {
+        "position": list(cam.GetPosition()), "focal_point": list(cam.GetFocalPoint()), "view_up": list(cam.GetViewUp()),
+        "view_angle": cam.GetViewAngle(), "parallel_projection": bool(cam.GetParallelProjection()),
+        "parallel_scale": cam.GetParallelScale(), "window_center": list(cam.GetWindowCenter()),
+    }
+
+
+def apply_camera_state(plotter: Any, state: dict[str, Any]) -> None:
+    ren = plotter.renderer
+    cam = ren.GetActiveCamera()
+    cam.SetPosition(*state["position"])
+    cam.SetFocalPoint(*state["focal_point"])
+    cam.SetViewUp(*state["view_up"])
+    cam.SetViewAngle(float(state["view_angle"]))
+    cam.SetParallelProjection(bool(state["parallel_projection"]))
+    cam.SetParallelScale(float(state["parallel_scale"]))
+    cam.SetWindowCenter(*state.get("window_center", (WINDOW_CENTER_X, 0.0)))
+    ren.camera.is_set = True
+    ren.ResetCameraClippingRange()
+
+
+def save_camera(path: str | os.PathLike, state: dict[str, Any], inputs: Iterable[str] = ()) -> str:
+    """Write a camera file (JSON), atomically and never over a loaded input."""
+    with atomic_open(path, "w", inputs=tuple(inputs)) as fh:
+        json.dump({"skelscope_camera": 1, **state}, fh, indent=2)
+        fh.write("\n")
+    return str(path)
+
+
+def load_camera(path: str | os.PathLike) -> dict[str, Any]:
+    """Read a camera file; SkelInputError naming the file and the problem otherwise."""
+    try:
+        with open(path, encoding="utf-8") as fh:
+            doc = json.load(fh)
+    except FileNotFoundError:
+        raise SkelInputError("camera file not found", path) from None
+    except (OSError, UnicodeDecodeError, json.JSONDecodeError) as exc:
+        raise SkelInputError(f"not a camera file ({exc})", path) from None
+    missing = [k for k in _KEYS if not isinstance(doc, dict) or k not in doc]
+    if missing:
+        raise SkelInputError(f"not a camera file (missing {', '.join(missing)})", path)
+    try:
+        for key in ("position", "focal_point", "view_up"):
+            vec = [float(v) for v in doc[key]]
+            if len(vec) != 3 or not np.all(np.isfinite(vec)):
+                raise ValueError(key)
+            doc[key] = vec
+        doc["view_angle"], doc["parallel_scale"] = float(doc["view_angle"]), float(doc["parallel_scale"])
+    except (TypeError, ValueError):
+        raise SkelInputError("not a camera file (bad vector or number)", path) from None
+    return doc

@@ -27,6 +27,7 @@ class DropInteractor(QtInteractor):
         self.drag_handler: Callable[[QtGui.QDragEnterEvent], None] | None = None
         self.software_gl: bool | None = None  # known once the GL context exists
         self.on_frame: Callable[[], None] | None = None  # called after each frame is painted
+        self.before_frame: Callable[[], None] | None = None  # called right before each frame
 
     def initializeGL(self) -> None:  # noqa: N802
         super().initializeGL()
@@ -39,6 +40,8 @@ class DropInteractor(QtInteractor):
                 self.ren_win.SetMultiSamples(0)
 
     def paintGL(self) -> None:  # noqa: N802
+        if self.before_frame is not None:
+            self.before_frame()
         super().paintGL()
         if self.on_frame is not None:
             self.on_frame()

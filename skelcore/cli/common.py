@@ -10,8 +10,8 @@ import sys
 from ..errors import SkelInputError
 from ..params import Params
 
-__all__ = ["format_table", "stderr_progress", "params_from_args", "positive_int", "positive_float",
-           "nonnegative_float", "clear_progress_line"]
+__all__ = ["format_table", "format_reference", "print_warnings", "stderr_progress", "params_from_args",
+           "positive_int", "positive_float", "nonnegative_float", "clear_progress_line"]
 
 
 def _fmt_score(value: object, digits: int = 3) -> str:
@@ -41,6 +41,9 @@ def format_table(summary: dict) -> str:
         ("centeredness", cell("centeredness", "skeletal"), cell("centeredness", "curve")),
         ("smoothness", cell("smoothness", "skeletal"), cell("smoothness", "curve")),
     ]
+    cov = summary.get("coverage")
+    if cov is not None:
+        rows.append(("coverage*", _coverage_cell(cov["skeletal"]), _coverage_cell(cov["curve"])))
     widths = [max(len(r[i]) for r in rows) for i in range(3)]
     lines = []
     for k, r in enumerate(rows):
@@ -49,7 +52,31 @@ def format_table(summary: dict) -> str:
             lines.append("  ".join("-" * w for w in widths))
     if topo is not None:
         lines.append(f"(eps* = {_fmt_score(topo['eps_star'], 5)}, K = {topo['n_bars']} bars compared)")
+    if cov is not None:
+        lines.append(f"(* SkelScope's own, not the paper's: covered fraction of the cloud (slack s = "
+                     f"{cov['slack']:g}, tau = {_fmt_score(cov['tau'], 4)}), mean / max gap, normalized units)")
     return "\n".join(lines)
+
+
+def _coverage_cell(block: dict | None) -> str:
+    if block is None:
+        return "-"
+    return f"{_fmt_score(block['fraction'])} (gap {_fmt_score(block['mean_gap'], 4)} / {_fmt_score(block['max_gap'], 4)})"
+
+
+def format_reference(ref: dict) -> str:
+    """The comparison with a reference curve, two lines."""
+    counts = ", ".join(f"{k} {ref[k][0]}/{ref[k][1]}" for k in ("junctions", "endpoints", "components", "cycles"))
+    return (f"reference curve: chamfer {_fmt_score(ref['chamfer'], 4)}, hausdorff {_fmt_score(ref['hausdorff'], 4)}, "
+            f"precision {_fmt_score(ref['precision'])}, recall {_fmt_score(ref['recall'])}, F1 {_fmt_score(ref['f1'])} "
+            f"(within tau = {_fmt_score(ref['tau'], 4)})\n"
+            f"  graph (ours/reference): {counts}")
+
+
+def print_warnings(warnings: list[dict]) -> None:
+    """One stderr line per trust warning: ``skelcore: warning [code]: message``."""
+    for w in warnings:
+        print(f"skelcore: warning [{w['code']}]: {w['message']}", file=sys.stderr)
 
 
 def stderr_progress(quiet: bool):

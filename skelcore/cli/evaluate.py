@@ -1,65 +1,135 @@
-"""``skelcore evaluate``: score a skeleton against its cloud and print the paper's table."""
+"""``skelcore evaluate``: score a skeleton against its cloud and print the paper's table, SkelScope's
+coverage row, the reference comparison and the trust warnings (exit 3 on a warning with --strict)."""
 
 from __future__ import annotations
 
 import argparse
-import os
+import sys
+
+import numpy as np
 
 from ..errors import SkelInputError
-from .common import clear_progress_line, format_table, params_from_args, stderr_progress
+from .common import (clear_progress_line, format_reference, format_table, params_from_args, positive_float,
+                     print_warnings, stderr_progress)
 
-__all__ = ["register", "run_evaluate"]
+__all__ = ["register", "run_evaluate", "EXIT_WARNINGS"]
+
+#: exit status of ``--strict`` when the evaluation carries a trust warning (2 stays "bad input")
+EXIT_WARNINGS = 3
 
 
 def register(sub: argparse._SubParsersAction) -> None:
     """Add ``skelcore evaluate CLOUD ...``."""
-    p = sub.add_parser("evaluate", help="score a skeleton against its point cloud")
-    p.add_argument("cloud", help="original point cloud (PLY, PCD, XYZ/TXT/CSV/PTS, NPY/NPZ, OBJ, OFF)")
-    p.add_argument("--skeletal", metavar="F", help="skeletal point set in pointwise correspondence with the cloud")
-    p.add_argument("--curve", metavar="F", help="curve skeleton (PLY with edges, OBJ, CG, SWC, polylines, JSON/NPZ)")
+    p = sub.add_parser(
+        "evaluate",
+        help="score a skeleton against its point cloud",
+        description="Score a skeleton against its cloud. Exit 0 on success, 2 on bad input or an "
+        "output that cannot be written (one line on stderr), 3 with --strict when a warning was given.",
+    )
+    p.add_argument("cloud", help="original point cloud (PLY, PCD, LAS/LAZ, XYZ/TXT/CSV/PTS, NPY/NPZ, OBJ, OFF)")
+    p.add_argument("--skeletal", metavar="F",
+                   help="skeletal point set (one row per cloud row, or see --skeletal-index / --correspondence); "
+                   "a CGAL correspondence polylines file brings its own index")
+    p.add_argument("--skeletal-index", metavar="F",
+                   help="one 0-based cloud row per skeletal row (NPY, or one integer per line)")
+    p.add_argument("--correspondence", choices=("auto", "reverse"), default="auto",
+                   help="reverse: map every cloud point to its nearest skeletal point (or, with only --curve, "
+                   "its nearest point on the curve) and score that pointwise set (default auto)")
+    p.add_argument("--curve", metavar="F", help="curve skeleton (PLY with edges, OBJ, CG, SWC, polylines, PyGEL .graph, JSON/NPZ)")
+    p.add_argument("--reference-curve", metavar="F", help="ground-truth curve skeleton to compare --curve with")
+    p.add_argument("--skeleton-scale", type=positive_float, metavar="S", default=1.0,
+                   help="multiply skeletal and curve coordinates by S (e.g. voxel size) ...")
+    p.add_argument("--skeleton-offset", type=float, nargs=3, metavar=("X", "Y", "Z"), default=(0.0, 0.0, 0.0),
+                   help="... then add this offset, to bring them into the cloud's frame")
     p.add_argument("--json", metavar="F", help="write the results as JSON")
-    p.add_argument("--per-point", metavar="PREFIX", help="write PREFIX_skeletal.csv, PREFIX_curve_samples.csv, PREFIX_curve_vertices.csv")
+    p.add_argument("--per-point", metavar="PREFIX",
+                   help="write PREFIX_skeletal.csv, PREFIX_curve_samples.csv, PREFIX_curve_vertices.csv, PREFIX_cloud.csv")
     p.add_argument("--barcodes", metavar="F", help="write every H0 bar of both diagrams as CSV")
     p.add_argument("--export-ply", metavar="DIR", help="write coloured PLY files of the skeleton into DIR")
     p.add_argument("--boundedness-method", choices=("rays", "paper"), help="boundedness estimator (default rays)")
     p.add_argument("--set", metavar="NAME=VALUE", action="append", default=[], help="set any Params field (repeatable)")
+    p.add_argument("--strict", action="store_true", help="exit 3 when the evaluation carries a warning")
     p.add_argument("--quiet", action="store_true", help="do not print progress")
     p.set_defaults(func=run_evaluate)
+
+
+def _check_outputs(args: argparse.Namespace, guard: tuple[str, ...]) -> None:
+    """Every output can be written, checked before the (possibly long) evaluation."""
+    from ..io.atomic import check_output_dir, check_output_file
+
+    if args.json:
+        check_output_file(args.json, guard)
+    if args.barcodes:
+        check_output_file(args.barcodes, guard)
+    if args.per_point:
+        check_output_file(f"{args.per_point}_skeletal.csv", guard)
+    if args.export_ply:
+        check_output_dir(args.export_ply)
 
 
 def run_evaluate(args: argparse.Namespace) -> int:
     from .. import io
     from ..evaluate import evaluate
+    from ..io.correspondence import load_skeletal, load_skeletal_index
     from ..io.export import export_ply
 
     params = params_from_args(args)
     if not (args.skeletal or args.curve):
         raise SkelInputError("nothing to evaluate: give --skeletal and/or --curve")
-    cloud = io.load_cloud(args.cloud)
-    skeletal = io.load_points(args.skeletal) if args.skeletal else None
-    curve = io.load_curve(args.curve) if args.curve else None
-    if skeletal is not None and len(skeletal) != len(cloud):
-        raise SkelInputError(
-            f"has {len(skeletal)} points but the cloud {args.cloud} has {len(cloud)}: "
-            "a skeletal point set needs one point per cloud point",
-            args.skeletal,
-        )
-    inputs = {"cloud": args.cloud, "skeletal": args.skeletal, "curve": args.curve}
-    progress = stderr_progress(args.quiet)
-    ev = evaluate(cloud, skeletal, curve, params, progress=progress, inputs=inputs)
-    clear_progress_line(progress)
+    if args.skeletal_index and not args.skeletal:
+        raise SkelInputError("--skeletal-index needs --skeletal")
+    if args.reference_curve and not args.curve:
+        raise SkelInputError("--reference-curve is compared with a curve skeleton: give --curve")
+    if args.skeletal_index and args.correspondence == "reverse":
+        raise SkelInputError("give either --skeletal-index or --correspondence reverse, not both")
+    inputs = {"cloud": args.cloud, "skeletal": args.skeletal, "curve": args.curve,
+              "skeletal_index": args.skeletal_index, "reference_curve": args.reference_curve}
     guard = tuple(p for p in inputs.values() if p)
+    _check_outputs(args, guard)
+    if args.barcodes and args.skeletal is None and args.correspondence != "reverse":
+        raise SkelInputError("--barcodes needs --skeletal (barcodes compare the cloud with the skeletal set)")
+
+    cloud = io.load_cloud(args.cloud)
+    skeletal = index = None
+    if args.skeletal:
+        skeletal, index, fmt = load_skeletal(args.skeletal, cloud)
+        if index is not None and args.skeletal_index:
+            raise SkelInputError("is a CGAL correspondence file, which carries its own index: drop --skeletal-index", args.skeletal)
+        if index is not None and args.correspondence == "reverse":
+            index = None  # the user asked for reverse projection instead
+        if args.skeletal_index:
+            index = load_skeletal_index(args.skeletal_index, len(skeletal), len(cloud))
+    curve = io.load_curve(args.curve) if args.curve else None
+    reference = io.load_curve(args.reference_curve) if args.reference_curve else None
+
+    scale, offset = float(args.skeleton_scale), np.asarray(args.skeleton_offset, dtype=float)
+    if scale != 1.0 or np.any(offset != 0):
+        if skeletal is not None:
+            skeletal = skeletal * scale + offset
+        if curve is not None:
+            curve = curve.transformed(lambda v: v * scale + offset)
+
+    progress = stderr_progress(args.quiet)
+    ev = evaluate(cloud, skeletal, curve, params, progress=progress, skeletal_index=index,
+                  correspondence=args.correspondence, reference_curve=reference, inputs=inputs)
+    clear_progress_line(progress)
     print(format_table(ev.summary()))
-    print(f"boundedness estimator: {params.boundedness_method}; total {ev.timings['total']:.2f} s")
+    if ev.reference is not None:
+        print(format_reference(ev.reference.to_dict()))
+    corr = f"correspondence: {ev.correspondence}; " if ev.correspondence else ""
+    print(f"{corr}boundedness estimator: {params.boundedness_method}; total {ev.timings['total']:.2f} s")
+    print_warnings(ev.warning_dicts())
     if args.json:
         ev.write_json(args.json, inputs=guard)
     if args.per_point:
         ev.write_per_point(args.per_point, inputs=guard)
     if args.barcodes:
         if ev.topology is None:
-            raise SkelInputError("--barcodes needs --skeletal (barcodes compare the cloud with the skeletal set)")
+            raise SkelInputError("--barcodes: no barcodes without a correspondence (see the warning)")
         ev.write_barcodes(args.barcodes, inputs=guard)
     if args.export_ply:
-        os.makedirs(args.export_ply, exist_ok=True)
         export_ply(ev, args.export_ply, inputs=guard)
+    if args.strict and ev.warnings:
+        print(f"skelcore: --strict: {len(ev.warnings)} warning(s), exit {EXIT_WARNINGS}", file=sys.stderr)
+        return EXIT_WARNINGS
     return 0

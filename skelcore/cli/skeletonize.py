@@ -37,6 +37,9 @@ def run_skeletonize_cli(args: argparse.Namespace) -> int:
     try:
         if not (args.out_skeletal or args.out_curve):
             raise SkelInputError("nothing to write: give --out-skeletal and/or --out-curve")
+        for out in (args.out_skeletal, args.out_curve):
+            if out:
+                io.atomic.check_output_file(out, (args.cloud,))
         cloud = io.load_cloud(args.cloud)
         progress = stderr_progress(args.quiet)
         skeletal, curve, info = skeletonize(cloud, progress=progress, return_info=True, method=args.method)

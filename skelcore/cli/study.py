@@ -50,6 +50,8 @@ def run_study_cli(args: argparse.Namespace) -> int:
 
     try:
         params = params_from_args(args)
+        if args.out:
+            io.atomic.check_output_dir(args.out)
         cloud = io.load_cloud(args.cloud)
         progress = stderr_progress(args.quiet)
         result = run_study(

@@ -4,7 +4,9 @@ columns d_B/d_Wp, boundedness, centeredness, smoothness, each "skeletal/curve").
 
 Each variant is scored against its own (degraded) cloud, as the paper's toolbox does. The built-in
 skeletonizer is :func:`skelcore.skeleton.skeletonize`; ``skeleton_cmd`` plugs in any other
-program instead. The ``study`` subcommand lives in :mod:`skelcore.cli.study`.
+program instead. A study is ``skelcore compare`` with one shape and one method: each row is a
+compare job (:func:`skelcore.experiments.compare.jobs.execute`), run here in this process. The
+``study`` subcommand lives in :mod:`skelcore.cli.study`.
 """
 
 from __future__ import annotations
@@ -13,24 +15,19 @@ import csv
 import io as _io
 import math
 import os
-import shlex
-import subprocess
 import tempfile
-import time
 from dataclasses import dataclass, field
 from typing import Any, Callable
 
 import numpy as np
 
 from ..curve import CurveSkeleton
-from ..errors import Cancelled, SkelInputError
+from ..errors import SkelInputError
 from ..params import Params
 
 __all__ = ["StudyRow", "StudyResult", "run_study"]
 
 Progress = Callable[[float, str], None]
-
-_PLACEHOLDERS = ("{in}", "{out_skeletal}", "{out_curve}")
 
 
 @dataclass
@@ -142,69 +139,10 @@ class StudyResult:
 
 
 # ---------------------------------------------------------------------------------------------
-# skeletonizers
+# the study = compare jobs of one shape and one method
 
 
-def _run_command(
-    template: str, cloud_path: str, skeletal_path: str, curve_path: str, cancel: Callable[[], bool] | None
-) -> tuple[np.ndarray | None, CurveSkeleton | None]:
-    """Run the user's skeletonizer: ``shlex.split`` argv, placeholders substituted per token, no shell."""
-    from .. import io
-
-    argv = shlex.split(template)
-    if not argv:
-        raise SkelInputError("--skeleton-cmd is empty")
-    joined = " ".join(argv)
-    if "{in}" not in joined:
-        raise SkelInputError("--skeleton-cmd needs an {in} placeholder for the cloud file")
-    wants_skeletal = "{out_skeletal}" in joined
-    wants_curve = "{out_curve}" in joined
-    if not (wants_skeletal or wants_curve):
-        raise SkelInputError("--skeleton-cmd needs {out_skeletal} and/or {out_curve} placeholders")
-    values = {"{in}": cloud_path, "{out_skeletal}": skeletal_path, "{out_curve}": curve_path}
-    args = []
-    for token in argv:
-        for key in _PLACEHOLDERS:
-            token = token.replace(key, values[key])
-        args.append(token)
-    for stale in (skeletal_path, curve_path):
-        if os.path.exists(stale):
-            os.unlink(stale)
-    try:
-        proc = subprocess.Popen(args, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
-    except OSError as exc:
-        raise SkelInputError(f"--skeleton-cmd could not start {args[0]!r}: {exc.strerror or exc}") from None
-    while True:
-        try:
-            out, err = proc.communicate(timeout=0.1)
-            break
-        except subprocess.TimeoutExpired:
-            if cancel is not None and cancel():
-                proc.kill()
-                proc.communicate()
-                raise Cancelled("cancelled while the skeleton command ran") from None
-    if proc.returncode != 0:
-        last = (err or out or "").strip().splitlines()
-        raise SkelInputError(
-            f"--skeleton-cmd exited with status {proc.returncode}" + (f": {last[-1]}" if last else "")
-        )
-    skeletal = curve = None
-    if wants_skeletal:
-        if not os.path.exists(skeletal_path):
-            raise SkelInputError("--skeleton-cmd did not write the skeletal point set", skeletal_path)
-        skeletal = io.load_points(skeletal_path)
-    if wants_curve:
-        if not os.path.exists(curve_path):
-            raise SkelInputError("--skeleton-cmd did not write the curve skeleton", curve_path)
-        curve = io.load_curve(curve_path)
-    return skeletal, curve
-
-
-# ---------------------------------------------------------------------------------------------
-# the study
-
-
-def _variants(
+def _conditions(
     cloud: np.ndarray,
     *,
     noise: float | None,
@@ -212,27 +150,25 @@ def _variants(
     sparse: int | None,
     grid: float | None,
     base_grid: float | None,
-    seed: int,
-) -> list[tuple[str, str, np.ndarray]]:
-    from ..skeleton.degrade import add_noise, random_downsample, voxel_grid_average
+) -> list[Any]:
+    """The study's rows as compare conditions (normal, noise, sparse)."""
+    from ..skeleton.degrade import voxel_grid_average
+    from .compare.manifest import ConditionSpec
 
     if sparse is not None and grid is not None:
         raise SkelInputError("give either a sparse point count or a grid cell, not both")
-    # independent streams: the sparse row does not change when the noise row is left out
-    noise_rng, sparse_rng = (np.random.default_rng(s) for s in np.random.SeedSequence(seed).spawn(2))
-    normal = cloud if base_grid is None else voxel_grid_average(cloud, base_grid)[0]
-    out = [("normal", f"{len(normal)} pts", normal)]
+    n_normal = len(cloud) if base_grid is None else len(voxel_grid_average(cloud, base_grid)[0])
+    out = [ConditionSpec("normal", base_grid=base_grid)]
     if noise:
-        pct = f"{noise * 100:g}% noise"
-        out.append(("noise", pct, add_noise(normal, noise, model=noise_model, seed=noise_rng)))  # type: ignore[arg-type]
+        if noise_model not in ("reference", "isotropic"):
+            raise ValueError(f"noise model must be 'reference' or 'isotropic', got {noise_model!r}")
+        out.append(ConditionSpec("noise", noise=float(noise), model=noise_model, base_grid=base_grid))
     if grid is not None:
-        pts = voxel_grid_average(cloud, grid)[0]
-        out.append(("sparse", f"{len(pts)} pts", pts))
+        out.append(ConditionSpec("sparse", grid=float(grid)))
     else:
-        n = sparse if sparse is not None else max(10, len(normal) // 4)
-        if n < len(normal):
-            pts = random_downsample(normal, n, seed=sparse_rng)[0]
-            out.append(("sparse", f"{len(pts)} pts", pts))
+        n = sparse if sparse is not None else max(10, n_normal // 4)
+        if n < n_normal:
+            out.append(ConditionSpec("sparse", sparse=int(n), base_grid=base_grid))
     return out
 
 
@@ -287,55 +223,47 @@ def run_study(
     >>> result = run_study(cloud, noise=0.05, sparse=1024, seed=0)    # doctest: +SKIP
     >>> print(result.to_markdown())                                   # doctest: +SKIP
     """
+    import dataclasses
+
     from .. import io
     from ..skeleton.degrade import _cloud
-    from ..evaluate import evaluate
-    from ..skeleton import skeletonize
+    from ..skeleton import SkeletonizeParams
+    from .compare.jobs import Job, execute
+    from .compare.manifest import MethodSpec, ShapeSpec
 
     cloud = _cloud(cloud)
-    sk_params = skeletonize_params
-    variants = _variants(cloud, noise=noise, noise_model=noise_model, sparse=sparse, grid=grid,
-                         base_grid=base_grid, seed=seed)
+    if method is None:
+        method = "skelscope" if isinstance(skeletonize_params, SkeletonizeParams) else "cao"
+    sk_values = dataclasses.asdict(skeletonize_params) if skeletonize_params is not None else {}
+    conditions = _conditions(cloud, noise=noise, noise_model=noise_model, sparse=sparse, grid=grid,
+                             base_grid=base_grid)
+    if skeleton_cmd is not None:
+        method_spec = MethodSpec(name="--skeleton-cmd", kind="command", command=skeleton_cmd)
+    else:
+        method_spec = MethodSpec(name="builtin", kind="builtin", method=method, params=sk_values)
+    shape = ShapeSpec(name, inputs[0] if inputs else "")
     if out_dir is not None:
         out_dir = os.fspath(out_dir)
         os.makedirs(out_dir, exist_ok=True)
     work = tempfile.TemporaryDirectory(prefix="skelcore-study-") if skeleton_cmd and out_dir is None else None
     folder = out_dir if out_dir is not None else (work.name if work is not None else None)
 
-    n_rows = len(variants)
+    n_rows = len(conditions)
     rows: list[StudyRow] = []
     try:
-        for k, (vname, label, pts) in enumerate(variants):
+        for k, cond in enumerate(conditions):
+            vname = cond.name
 
-            def sub_progress(lo: float, hi: float, prefix: str) -> Progress | None:
-                if progress is None:
-                    return None
-                return lambda f, stage: progress((k + lo + (hi - lo) * f) / n_rows, f"{prefix}: {stage}")
+            def row_progress(f: float, stage: str, k: int = k, vname: str = vname) -> None:
+                progress((k + f) / n_rows, f"{vname}: {stage}")  # type: ignore[misc]
 
-            files: dict[str, str] = {}
-            timings: dict[str, float] = {}
-            t0 = time.perf_counter()
-            if folder is not None:
-                files["cloud"] = os.path.join(folder, f"{vname}_cloud.ply")
-                io.write_points_ply(files["cloud"], pts, inputs=inputs)
-            if skeleton_cmd:
-                if progress is not None:
-                    progress(k / n_rows, f"{vname}: skeleton command")
-                skeletal, curve = _run_command(
-                    skeleton_cmd,
-                    files["cloud"],
-                    os.path.join(folder, f"{vname}_skeletal.ply"),  # type: ignore[arg-type]
-                    os.path.join(folder, f"{vname}_curve.ply"),  # type: ignore[arg-type]
-                    cancel,
-                )
-            else:
-                skeletal, curve = skeletonize(pts, sk_params, progress=sub_progress(0.0, 0.5, vname), cancel=cancel,
-                                              method=method)
-            timings["skeletonize"] = time.perf_counter() - t0
-            t0 = time.perf_counter()
-            ev = evaluate(pts, skeletal, curve, params, progress=sub_progress(0.5, 1.0, vname), cancel=cancel,
-                          inputs={"cloud": files.get("cloud")})
-            timings["evaluate"] = time.perf_counter() - t0
+            job = Job(shape, method_spec, cond, seed, params)
+            out = execute(job, folder, prefix=f"{vname}_", write_cloud=out_dir is not None, inputs=inputs,
+                          progress=None if progress is None else row_progress, cancel=cancel, cloud=cloud)
+            pts, skeletal, curve, ev = out.points, out.skeletal, out.curve, out.evaluation
+            files = dict(out.files)
+            timings = {"skeletonize": out.timings["degrade"] + out.timings["skeletonize"],
+                       "evaluate": out.timings["evaluate"]}
             if out_dir is not None:
                 if skeletal is not None and not skeleton_cmd:
                     files["skeletal"] = os.path.join(out_dir, f"{vname}_skeletal.ply")
@@ -343,14 +271,10 @@ def run_study(
                 if curve is not None and not skeleton_cmd:
                     files["curve"] = os.path.join(out_dir, f"{vname}_curve.ply")
                     io.write_curve_ply(files["curve"], curve.vertices, curve.edges, inputs=inputs)
-                if skeleton_cmd:
-                    for key, val in (("skeletal", skeletal), ("curve", curve)):
-                        if val is not None:
-                            files[key] = os.path.join(out_dir, f"{vname}_{key}.ply")
                 files["json"] = os.path.join(out_dir, f"{vname}_evaluation.json")
                 ev.inputs.update({k2: v for k2, v in files.items() if k2 in ("cloud", "skeletal", "curve")})
                 ev.write_json(files["json"], inputs=inputs)
-            rows.append(StudyRow(vname, label, pts, skeletal, curve, ev, files, timings))
+            rows.append(StudyRow(vname, cond.label(len(pts)), pts, skeletal, curve, ev, files, timings))
     finally:
         if work is not None:
             work.cleanup()

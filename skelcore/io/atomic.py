@@ -26,6 +26,41 @@ def check_not_input(path: str | os.PathLike, inputs: Iterable[str | os.PathLike]
         raise SkelInputError("refusing to overwrite an input file", path)
 
 
+def check_output_file(path: str | os.PathLike, inputs: Iterable[str | os.PathLike] = ()) -> None:
+    """Fail early, in one line, when ``path`` cannot be written (before any long computation)."""
+    p = Path(path)
+    check_not_input(p, inputs)
+    folder = p.parent if str(p.parent) else Path(".")
+    if p.is_dir():
+        raise SkelInputError("is a folder, not a file", p)
+    _check_folder(folder, p)
+
+
+def check_output_dir(path: str | os.PathLike) -> None:
+    """Fail early when folder ``path`` is a file, or cannot be created or written in."""
+    p = Path(path)
+    if p.exists() and not p.is_dir():
+        raise SkelInputError("output folder is a file", p)
+    ancestor = p
+    while not ancestor.exists() and ancestor != ancestor.parent:
+        ancestor = ancestor.parent
+    _check_folder(ancestor, p)
+
+
+def _check_folder(folder: Path, target: Path) -> None:
+    for up in (folder, *folder.parents):
+        if up.exists():
+            if not up.is_dir():
+                raise SkelInputError(f"cannot write: {up} is a file, not a folder", target)
+            break
+    if not folder.exists():
+        raise SkelInputError("output folder does not exist", folder)
+    if not folder.is_dir():
+        raise SkelInputError(f"cannot write: {folder} is a file, not a folder", target)
+    if not os.access(folder, os.W_OK | os.X_OK):
+        raise SkelInputError(f"cannot write: permission denied in {folder}", target)
+
+
 @contextlib.contextmanager
 def atomic_open(path: str | os.PathLike, mode: str = "w", inputs: Iterable[str | os.PathLike] = ()) -> Iterator[IO]:
     """Write to a temporary file in the target's folder, then rename over the target.
@@ -36,8 +71,13 @@ def atomic_open(path: str | os.PathLike, mode: str = "w", inputs: Iterable[str |
     check_not_input(path, inputs)
     folder = path.parent if str(path.parent) else Path(".")
     if not folder.is_dir():
-        raise SkelInputError("output folder does not exist", folder)
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=folder)
+        _check_folder(folder, path)
+    if path.is_dir():
+        raise SkelInputError("is a folder, not a file", path)
+    try:
+        fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=folder)
+    except OSError as exc:
+        raise SkelInputError(f"cannot write here ({exc.strerror or exc})", path) from None
     try:
         kwargs = {} if "b" in mode else {"encoding": "utf-8", "newline": ""}
         with os.fdopen(fd, mode, **kwargs) as fh:
@@ -46,6 +86,10 @@ def atomic_open(path: str | os.PathLike, mode: str = "w", inputs: Iterable[str |
             os.fsync(fh.fileno())
         os.chmod(tmp, 0o644)
         os.replace(tmp, path)
+    except OSError as exc:
+        with contextlib.suppress(OSError):
+            os.unlink(tmp)
+        raise SkelInputError(f"cannot write ({exc.strerror or exc})", path) from None
     except BaseException:
         with contextlib.suppress(OSError):
             os.unlink(tmp)

@@ -20,14 +20,17 @@ from ..errors import SkelInputError
 from . import atomic
 from ._common import RawData, decode_text, is_comment
 from .arrays import read_json, read_npy, read_npz
+from .las import is_las, read_las
 from .pcd import is_pcd, read_pcd
 from .ply import is_ply, read_ply
 from .text import (
     is_cg,
     is_off,
+    looks_like_graph,
     looks_like_obj,
     looks_like_polylines,
     read_cg,
+    read_graph,
     read_obj,
     read_off,
     read_polylines,
@@ -49,6 +52,8 @@ _READERS: dict[str, Callable[[Path, bytes], RawData]] = {
     "npy": read_npy,
     "npz": read_npz,
     "json": read_json,
+    "graph": read_graph,
+    "las": read_las,
 }
 
 _BY_SUFFIX = {
@@ -68,6 +73,9 @@ _BY_SUFFIX = {
     ".npy": "npy",
     ".npz": "npz",
     ".json": "json",
+    ".graph": "graph",
+    ".las": "las",
+    ".laz": "las",
 }
 
 #: For file dialogs: every extension the loaders accept (``.polylines.txt`` is a ``.txt``).
@@ -97,6 +105,8 @@ def detect_format(path: str | os.PathLike, head: bytes) -> str:
         return "npy"
     if head.startswith((b"PK\x03\x04", b"PK\x05\x06")):
         return "npz"
+    if is_las(head):
+        return "las"
     text = decode_text(head).lstrip()
     if text.startswith(("{", "[")):
         return "json"
@@ -117,6 +127,8 @@ def detect_format(path: str | os.PathLike, head: bytes) -> str:
             return "obj"
         if looks_like_polylines(text):
             return "polylines"
+        if looks_like_graph(text):
+            return "graph"
     if fmt is None:
         supported = ", ".join(sorted(set(SUPPORTED_EXTENSIONS)))
         raise SkelInputError(f"unknown file format {p.suffix or '(no extension)'!r} (supported: {supported})", p)

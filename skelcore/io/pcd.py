@@ -1,4 +1,5 @@
-"""PCD (Point Cloud Library): ASCII and binary; binary_compressed is reported as unsupported."""
+"""PCD (Point Cloud Library): ascii, binary and binary_compressed (LZF, PCL's default in many
+robotics pipelines: sizes as two uint32, then the fields stored one after another, uncompressed)."""
 
 from __future__ import annotations
 
@@ -8,6 +9,7 @@ import numpy as np
 
 from ..errors import SkelInputError
 from ._common import RawData, decode_text, numeric_table
+from .lzf import lzf_decompress
 
 _HEADER_KEYS = ("VERSION", "FIELDS", "SIZE", "TYPE", "COUNT", "WIDTH", "HEIGHT", "VIEWPOINT", "POINTS", "DATA")
 
@@ -87,9 +89,7 @@ def read_pcd(path: Path, data: bytes) -> RawData:
         pts = np.column_stack([rec[names[lower.index(k)]].reshape(n_points, -1)[:, 0] for k in "xyz"])
         return RawData(vertices=pts.astype(np.float64), edges=None, format="PCD")
     if mode == "binary_compressed":
-        raise SkelInputError(
-            "PCD 'binary_compressed' is not supported; re-save it as ascii or binary PCD, or as PLY", path
-        )
+        return RawData(vertices=_compressed_xyz(data, start, header, fields, counts, n_points, path), edges=None, format="PCD")
     raise SkelInputError(f"unknown PCD DATA type {mode[:30]!r}", path)
 
 
@@ -119,3 +119,45 @@ def _record_dtype(header, fields, counts, path: Path) -> np.dtype:
         # Padding fields are all called "_"; numpy needs unique names.
         parts.append((f"{i}_{name}", f"<{code}{size}", (count,)))
     return np.dtype(parts)
+
+
+def _compressed_xyz(data: bytes, start: int, header, fields, counts, n_points: int, path: Path) -> np.ndarray:
+    """x, y, z of a binary_compressed PCD: uint32 compressed and uncompressed sizes, LZF data that
+    decompresses to each field's column for all points in turn (structure of arrays; PCL leaves
+    out padding fields named ``_`` there, so either layout is accepted by its size)."""
+    dtype = _record_dtype(header, fields, counts, path)
+    if len(data) - start < 8:
+        raise SkelInputError("truncated: binary_compressed PCD has no size words", path)
+    comp, raw = (int(v) for v in np.frombuffer(data, dtype="<u4", count=2, offset=start))
+    subs = [dtype.fields[name][0] for name in dtype.names or ()]  # type: ignore[index]
+    keep = list(range(len(fields)))
+    if raw != n_points * dtype.itemsize:
+        keep = [i for i, f in enumerate(fields) if f != "_"]
+        if raw != n_points * sum(subs[i].itemsize for i in keep):
+            raise SkelInputError(
+                f"binary_compressed PCD: uncompressed size {raw} does not match {n_points} points "
+                f"of {dtype.itemsize} bytes", path,
+            )  # fmt: skip
+    if len(data) - start - 8 < comp:
+        raise SkelInputError(
+            f"truncated: binary_compressed PCD promises {comp} compressed bytes, file has {len(data) - start - 8}", path
+        )
+    if raw == 0:
+        return np.empty((0, 3))
+    try:
+        flat = lzf_decompress(data[start + 8:start + 8 + comp], raw)
+    except ValueError as exc:
+        raise SkelInputError(f"binary_compressed PCD: corrupt LZF data ({exc})", path) from None
+    offsets: dict[int, int] = {}
+    offset = 0
+    for i in keep:
+        offsets[i] = offset
+        offset += subs[i].itemsize * n_points
+    lower = [f.lower() for f in fields]
+    cols = []
+    for k in "xyz":
+        i = lower.index(k)
+        sub = subs[i]
+        col = np.frombuffer(flat, dtype=sub.base, count=n_points * int(np.prod(sub.shape)), offset=offsets[i])
+        cols.append(col.reshape(n_points, -1)[:, 0])
+    return np.column_stack(cols).astype(np.float64)

@@ -355,3 +355,41 @@ def read_polylines(path: Path, data: bytes) -> RawData:
     a = idx[~is_last]
     edges = np.column_stack([label[a], label[a + 1]]).astype(np.int64)
     return RawData(vertices=vertices, edges=edges, format="CGAL polylines", curve_format=True)
+
+
+# ---- PyGEL .graph -------------------------------------------------------------------------------
+
+
+def looks_like_graph(text_head: str) -> bool:
+    """PyGEL3D's ``graph.save``: ``n x y z`` node lines, then ``c i j`` connection lines."""
+    rows = [ln.split() for ln in text_head.splitlines()[:50] if ln.strip() and not is_comment(ln.strip())]
+    if len(rows) > 1:
+        rows = rows[:-1]  # the head may end mid-line
+    return bool(rows) and rows[0][0] == "n" and all(
+        (t[0] == "n" and len(t) == 4) or (t[0] == "c" and len(t) == 3) for t in rows
+    )
+
+
+def read_graph(path: Path, data: bytes) -> RawData:
+    """PyGEL ``.graph``: ``n x y z`` adds node k (0-based, in order), ``c i j`` connects nodes i, j."""
+    nodes: list[tuple[int, str]] = []
+    conns: list[tuple[int, str]] = []
+    for lineno, s in _rows(decode_text(data)):
+        tag, _, rest = s.partition(" ")
+        if tag == "n":
+            nodes.append((lineno, rest))
+        elif tag == "c":
+            conns.append((lineno, rest))
+        else:
+            raise SkelInputError(f"line {lineno}: expected 'n x y z' or 'c i j', got {s[:30]!r}", path)
+    if not nodes:
+        raise SkelInputError("PyGEL graph has no 'n x y z' node lines", path)
+    v = numeric_table(nodes, path, min_cols=3, what="n x y z")
+    if v.shape[1] != 3:
+        raise SkelInputError(f"node lines have {v.shape[1]} numbers, expected 3 (n x y z)", path)
+    e = np.empty((0, 2))
+    if conns:
+        e = numeric_table(conns, path, min_cols=2, what="c i j")
+        if e.shape[1] != 2:
+            raise SkelInputError(f"connection lines have {e.shape[1]} numbers, expected 2 (c i j)", path)
+    return RawData(vertices=v, edges=e, format="PyGEL graph", curve_format=True)

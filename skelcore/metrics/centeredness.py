@@ -15,7 +15,7 @@ from __future__ import annotations
 import numpy as np
 from scipy.spatial import cKDTree
 
-from ..geometry import Checkpoint, bbox_diagonal, no_checkpoint, unit_rows
+from ..geometry import Checkpoint, bbox_diagonal, kd_tree, no_checkpoint, unit_rows
 from ..params import Params, k_center_for
 from .ellipse_fit import fit_ellipse
 
@@ -77,7 +77,7 @@ def skeletal_centeredness(
     checkpoint(0.0)
     groups = _CoincidentGroups(skel)
     checkpoint(0.0)
-    tree = cKDTree(groups.positions)
+    tree = kd_tree(groups.positions)
     checkpoint(0.0)
     n_groups = len(groups.positions)
     per_group = np.full(n_groups, np.nan)

@@ -13,10 +13,9 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from scipy.spatial import cKDTree
 
 from ..curve import CurveSkeleton
-from ..geometry import Checkpoint, no_checkpoint, unique_rows, unit_rows
+from ..geometry import Checkpoint, kd_tree, no_checkpoint, unique_rows, unit_rows
 from ..params import Params
 
 __all__ = ["skeletal_smoothness", "curve_vertex_smoothness", "curve_smoothness_overall"]
@@ -68,7 +67,7 @@ def skeletal_smoothness(
     kt, ks = int(params.tangent_k), int(params.smooth_k)
     # each distinct neighbour position holds >= 1 point, so max(kt, ks) positions always suffice
     q = min(m - 1, max(kt, ks))
-    tree = cKDTree(uniq)
+    tree = kd_tree(uniq)
     checkpoint(0.05)
     tangents = np.full((m, 3), np.nan)
     nbr = np.empty((m, q), np.int64)

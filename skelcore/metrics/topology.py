@@ -22,7 +22,7 @@ from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import connected_components, minimum_spanning_tree
 from scipy.spatial import cKDTree
 
-from ..geometry import Checkpoint, matlab_round, nearest_neighbor_distances, no_checkpoint, unique_rows
+from ..geometry import Checkpoint, chunked_query, kd_tree, matlab_round, nearest_neighbor_distances, no_checkpoint, unique_rows
 from ..params import Params
 from ..results import TopologyResult
 
@@ -96,7 +96,7 @@ def _emst_lengths(points: np.ndarray, checkpoint: Checkpoint = no_checkpoint) ->
     n = len(points)
     if n < 2:
         return np.empty(0), np.zeros(n)
-    tree = cKDTree(points)
+    tree = kd_tree(points)
     checkpoint(0.02)
     k = min(_LIST_K, n - 1)
     dist, idx = _chunked_knn(tree, points, k + 1, checkpoint, 0.02, 0.5)
@@ -178,7 +178,10 @@ def _resolve_pending(points, tree, labels, pend, best, lower, deep_done, cells, 
     fresh = pend[~deep_done[pend]]
     many = len(np.unique(labels[pend])) > _FEW_COMPONENTS
     if kk > _LIST_K and 0 < len(fresh) <= max(_DEEP_MAX_POINTS, n // 8) and many:
-        d2, i2 = tree.query(points[fresh], k=kk + 1, workers=-1 if len(fresh) > _THREADED_QUERY else 1)
+        if len(fresh) > _THREADED_QUERY:  # chunked, so a cancel is seen within ~0.1 s
+            d2, i2 = chunked_query(tree, points[fresh], kk + 1, lambda _f: tick())
+        else:
+            d2, i2 = tree.query(points[fresh], k=kk + 1, workers=1)
         d2, i2 = d2[:, 1:], i2[:, 1:]
         has, cd, cb = _first_other(labels, fresh, d2, i2)
         deep_done[fresh] = True
@@ -361,6 +364,8 @@ def wasserstein_h0(a: np.ndarray, b: np.ndarray) -> float:
     xb, ib = _split_deaths(b)
     if ia != ib:
         return float("inf")
+    if np.array_equal(xa, xb):  # identical diagrams: exactly 0 (the heaps' sums would round)
+        return 0.0
     events = np.concatenate([xa, xb])
     side = np.concatenate([np.zeros(len(xa), bool), np.ones(len(xb), bool)])
     order = np.argsort(events, kind="stable")
@@ -398,7 +403,7 @@ def wasserstein_h0(a: np.ndarray, b: np.ndarray) -> float:
                 low = s
             heapq.heappush(left, -(low - add_left))
             sum_left += low - add_left
-    return float(g_lo + sum_left + add_left * len(left))
+    return max(0.0, float(g_lo + sum_left + add_left * len(left)))  # a distance: rounding never < 0
 
 
 def _hall_ok(must: np.ndarray, other: np.ndarray, t: float) -> bool:

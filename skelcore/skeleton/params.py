@@ -239,3 +239,14 @@ class Reporter:
 
 # ---------------------------------------------------------------------------------------------
 # one-rings and the Laplacian
+
+
+def method_params(method: str | None, values: dict | None = None) -> "tuple[str, CaoParams | SkeletonizeParams]":
+    """The built-in method's name and its parameters from plain values (manifests, the study, the
+    CLI): ``"cao"`` (the default) takes :class:`CaoParams`, ``"skelscope"`` :class:`SkeletonizeParams`.
+    Unknown methods or fields raise ``ValueError``."""
+    name = "cao" if method is None else str(method)
+    if name not in ("cao", "skelscope"):
+        raise ValueError(f"unknown skeletonize method {name!r}: use cao or skelscope")
+    cls = CaoParams if name == "cao" else SkeletonizeParams
+    return name, cls().replace(**(values or {}))

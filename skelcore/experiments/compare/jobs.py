@@ -1,0 +1,253 @@
+"""One job = (shape, method, condition, seed): degrade, skeletonize, evaluate with every metric.
+
+A job's key hashes what its result depends on: the bytes of its input files (cloud, precomputed
+skeletons), the method's definition, the condition, the seed and the evaluation parameters, so a
+rerun finds finished jobs and an edited input recomputes exactly the jobs it feeds.
+``execute`` is the one code path (``skelcore study`` calls it too); ``run_job`` wraps it for a
+worker: it never raises, a failure is a record with a one-line error.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import math
+import os
+import tempfile
+import time
+import traceback
+from dataclasses import dataclass, field
+from typing import Any, Callable
+
+import numpy as np
+
+from ...curve import CurveSkeleton
+from ...errors import Cancelled, SkelInputError
+from ...params import Params
+from .conditions import degrade
+from .manifest import ConditionSpec, Manifest, MethodSpec, ShapeSpec, expand_template
+
+__all__ = ["Job", "JobOutput", "make_jobs", "execute", "run_job", "scores_from_doc", "SCORE_COLUMNS",
+           "file_digest"]
+
+Progress = Callable[[float, str], None]
+
+SCORE_COLUMNS = ("d_B", "d_Wp", "boundedness_skeletal", "boundedness_curve", "centeredness_skeletal",
+                 "centeredness_curve", "smoothness_skeletal", "smoothness_curve", "coverage_skeletal",
+                 "coverage_curve", "n_warnings")
+
+
+@dataclass(frozen=True)
+class Job:
+    shape: ShapeSpec
+    method: MethodSpec
+    condition: ConditionSpec
+    seed: int
+    params: Params
+    key: str = ""
+
+    @property
+    def label(self) -> str:
+        return f"{self.shape.name} / {self.method.name} / {self.condition.name} / seed {self.seed}"
+
+
+@dataclass
+class JobOutput:
+    """What ``execute`` produced, in memory."""
+
+    points: np.ndarray
+    skeletal: np.ndarray | None
+    curve: CurveSkeleton | None
+    evaluation: Any  # skelcore.results.Evaluation
+    timings: dict[str, float] = field(default_factory=dict)
+    files: dict[str, str] = field(default_factory=dict)
+
+
+_digests: dict[tuple[str, float, int], str] = {}
+
+
+def file_digest(path: str) -> str:
+    """SHA-256 of a file's bytes (cached per path, mtime and size within one process)."""
+    st = os.stat(path)
+    k = (os.path.abspath(path), st.st_mtime, st.st_size)
+    if k not in _digests:
+        h = hashlib.sha256()
+        with open(path, "rb") as fh:
+            for chunk in iter(lambda: fh.read(1 << 20), b""):
+                h.update(chunk)
+        _digests[k] = h.hexdigest()
+    return _digests[k]
+
+
+def _job_key(job: Job) -> str:
+    from ...skeleton.params import method_params
+
+    method = job.method.to_dict()
+    method.pop("cwd")  # a moved dataset keeps its results (the inputs are hashed by content)
+    if job.method.kind == "builtin":
+        method["method"], resolved = method_params(job.method.method, job.method.params)
+        method["params"] = resolved.__dict__
+    if job.method.kind == "files":
+        method = {"kind": "files", "name": job.method.name, "inputs": {
+            k: file_digest(expand_template(t, job.shape.name, job.condition.name, job.seed))
+            for k, t in sorted(job.method.file_templates().items())}}
+    doc = {"cloud": file_digest(job.shape.path), "shape": job.shape.name, "method": method,
+           "condition": job.condition.to_dict(), "seed": job.seed, "params": job.params.to_dict()}
+    text = json.dumps(doc, sort_keys=True, default=str)
+    return hashlib.sha256(text.encode()).hexdigest()[:24]
+
+
+def make_jobs(manifest: Manifest) -> list[Job]:
+    """Every (shape, method, condition, seed) of the manifest, keyed. A ``files`` method whose
+    templates do not name ``{condition}`` holds skeletons of the clean clouds: it only gets the
+    conditions that do not degrade."""
+    jobs = []
+    for shape in manifest.shapes:
+        for method in manifest.methods:
+            for cond in manifest.conditions:
+                if method.kind == "files" and not method.per_condition() and cond.degrades:
+                    continue
+                for seed in cond.seeds or manifest.seeds:
+                    job = Job(shape, method, cond, seed, manifest.params)
+                    jobs.append(Job(shape, method, cond, seed, manifest.params, _job_key(job)))
+    return jobs
+
+
+def execute(job: Job, workdir: str | None = None, *, prefix: str = "", write_cloud: bool = False,
+            inputs: tuple[str, ...] = (), progress: Progress | None = None,
+            cancel: Callable[[], bool] | None = None, cloud: np.ndarray | None = None) -> JobOutput:
+    """Degrade, skeletonize (or run the command, or read the files) and evaluate one job.
+
+    ``workdir`` receives ``{prefix}cloud.ply`` (always for a command, else if ``write_cloud``) and a
+    command's ``{prefix}skeletal.ply`` / ``{prefix}curve.ply``. ``cloud`` skips reading the shape.
+    """
+    from ... import io
+    from ...evaluate import evaluate
+    from .methods import read_files, run_builtin, run_command
+
+    def part(lo: float, hi: float) -> Progress | None:
+        if progress is None:
+            return None
+        return lambda f, stage: progress(lo + (hi - lo) * f, stage)
+
+    timings: dict[str, float] = {}
+    t0 = time.perf_counter()
+    base = io.load_cloud(job.shape.path) if cloud is None else cloud
+    pts = degrade(base, job.condition, job.seed)
+    timings["degrade"] = time.perf_counter() - t0
+    files: dict[str, str] = {}
+    m = job.method
+    if workdir is not None and (write_cloud or m.kind == "command"):
+        files["cloud"] = os.path.join(workdir, f"{prefix}cloud.ply")
+        io.write_points_ply(files["cloud"], pts, inputs=inputs)
+    t0 = time.perf_counter()
+    index = None
+    if m.kind == "builtin":
+        skeletal, curve = run_builtin(pts, m, progress=part(0.0, 0.5), cancel=cancel)
+    elif m.kind == "command":
+        if workdir is None:
+            raise ValueError("a command method needs a workdir")
+        if progress is not None:
+            progress(0.0, "skeleton command")
+        out_s = os.path.join(workdir, f"{prefix}skeletal.ply")
+        out_c = os.path.join(workdir, f"{prefix}curve.ply")
+        label = "--skeleton-cmd" if m.name == "--skeleton-cmd" else f"method {m.name!r}: command"
+        skeletal, curve = run_command(m.command or "", files["cloud"], out_s, out_c, timeout=m.timeout,
+                                      cancel=cancel, label=label, cwd=m.cwd)
+        files.update({k: p for k, p, v in (("skeletal", out_s, skeletal), ("curve", out_c, curve)) if v is not None})
+    else:
+        skeletal, curve, index, paths = read_files(m, job.shape.name, job.condition.name, job.seed)
+        files.update(paths)
+    timings["skeletonize"] = time.perf_counter() - t0
+    t0 = time.perf_counter()
+    kwargs: dict[str, Any] = {}
+    if index is not None:
+        kwargs["skeletal_index"] = index
+    if m.correspondence is not None:
+        kwargs["correspondence"] = m.correspondence
+    ev = evaluate(pts, skeletal, curve, job.params, progress=part(0.5, 1.0), cancel=cancel,
+                  inputs={"cloud": files.get("cloud")}, **kwargs)
+    timings["evaluate"] = time.perf_counter() - t0
+    return JobOutput(pts, skeletal, curve, ev, timings, files)
+
+
+# ---- the worker's entry point -------------------------------------------------------------------
+
+def _nan(v: Any) -> float:
+    return math.nan if v is None or isinstance(v, str) else float(v)
+
+
+def scores_from_doc(doc: dict[str, Any] | None) -> dict[str, float]:
+    """Flat scores of an ``evaluate --json`` document; NaN where not computed. Coverage and warnings
+    are read when the evaluation carries them (issue 8), NaN / 0 otherwise."""
+    out = {k: math.nan for k in SCORE_COLUMNS}
+    if not doc:
+        return out
+    topo = doc.get("topology") or {}
+    out["d_B"], out["d_Wp"] = _nan(topo.get("bottleneck")), _nan(topo.get("wasserstein"))
+    for metric in ("boundedness", "centeredness", "smoothness"):
+        for kind in ("skeletal", "curve"):
+            out[f"{metric}_{kind}"] = _nan((doc.get(metric) or {}).get(kind))
+    cov = doc.get("coverage") or {}
+    for kind in ("skeletal", "curve"):
+        block = cov.get(kind)
+        out[f"coverage_{kind}"] = _nan(block.get("fraction") if isinstance(block, dict) else block)
+    out["n_warnings"] = float(len(doc.get("warnings") or []))
+    return out
+
+
+def _arrays(ev: Any) -> dict[str, np.ndarray]:
+    """The local values the report draws (float32 coordinates, NaN kept)."""
+    f32 = lambda a: np.asarray(a, dtype=np.float32)  # noqa: E731
+    out = {"cloud": f32(ev.cloud)}
+    b_star = ev.params.beta_star
+    if ev.skeletal is not None:
+        s = ev.skeletal
+        out.update(skeletal=f32(s.points), skeletal_boundedness=f32(s.boundedness),
+                   skeletal_centeredness=f32(s.centeredness(b_star)), skeletal_smoothness=f32(s.smoothness))
+    if ev.curve is not None:
+        c = ev.curve
+        out.update(curve_vertices=f32(c.curve.vertices), curve_edges=np.asarray(c.curve.edges, np.int32),
+                   curve_samples=f32(c.samples), curve_sample_boundedness=f32(c.sample_boundedness),
+                   curve_sample_centeredness=f32(c.sample_centeredness(b_star)),
+                   curve_vertex_smoothness=f32(c.vertex_smoothness))
+    if ev.topology is not None:
+        out.update(cloud_barcode=np.asarray(ev.topology.cloud_barcode, np.float64),
+                   skeletal_barcode=np.asarray(ev.topology.skeletal_barcode, np.float64),
+                   eps_star=np.array([ev.topology.eps_star]), n_bars=np.array([ev.topology.n_bars]))
+    return out
+
+
+def one_line(exc: BaseException) -> str:
+    text = " ".join(str(exc).split())
+    if isinstance(exc, SkelInputError):
+        return text
+    return f"{type(exc).__name__}: {text}"[:300] if text else type(exc).__name__
+
+
+def run_job(job: Job) -> dict[str, Any]:
+    """Execute a job in a scratch folder and return its record (never raises on a job's failure):
+    ``status`` "ok" or "failed", ``error``, scores, the evaluation document and the arrays."""
+    rec: dict[str, Any] = {"key": job.key, "shape": job.shape.name, "method": job.method.name,
+                           "condition": job.condition.name, "seed": job.seed, "status": "failed",
+                           "error": "", "pid": os.getpid(), "started": time.time()}
+    t0 = time.perf_counter()
+    try:
+        with tempfile.TemporaryDirectory(prefix="skelcore-job-") as work:
+            out = execute(job, work if job.method.kind == "command" else None)
+        doc = out.evaluation.to_json_dict()
+        doc["inputs"]["cloud"]["path"] = job.shape.path
+        rec.update(status="ok", evaluation=doc, timings=out.timings, n_points=int(len(out.points)),
+                   label=job.condition.label(len(out.points)), arrays=_arrays(out.evaluation))
+    except (SkelInputError, Cancelled) as exc:
+        rec["error"] = one_line(exc)
+    except MemoryError:
+        rec["error"] = "MemoryError: out of memory"
+    except Exception as exc:  # a bug or a library failure on odd input: recorded, never fatal
+        tb = traceback.extract_tb(exc.__traceback__)
+        where = f" (at {os.path.basename(tb[-1].filename)}:{tb[-1].lineno})" if tb else ""
+        rec["error"] = one_line(exc) + where
+    rec["seconds"] = time.perf_counter() - t0
+    rec["finished"] = time.time()
+    rec["scores"] = scores_from_doc(rec.get("evaluation"))
+    return rec

@@ -1,0 +1,193 @@
+"""The leaderboard: per method and condition, the mean and standard deviation over shapes (and
+seeds) of every score of the jobs that finished, with its rank among the methods under that
+condition (1 = best, ties as printed share a rank; arrows as in the paper's table: lower is better for d_B, d_Wp, warnings and
+time, higher for the rest), and each application profile's pass rate. Markdown, CSV and LaTeX.
+"""
+
+from __future__ import annotations
+
+import csv
+import io as _io
+import math
+import os
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+from ...io.atomic import atomic_open
+from .jobs import SCORE_COLUMNS
+from .profiles import Profile
+
+__all__ = ["Entry", "Leaderboard", "build_leaderboard", "LOWER_IS_BETTER"]
+
+LOWER_IS_BETTER = frozenset({"d_B", "d_Wp", "n_warnings", "seconds"})
+COLUMNS = (*SCORE_COLUMNS, "seconds")
+_TEX_NAMES = {
+    "d_B": r"$d_B$", "d_Wp": r"$d_{W_p}$",
+    "boundedness_skeletal": r"$\mathcal{B}_{P_s}$", "boundedness_curve": r"$\mathcal{B}_{G_s}$",
+    "centeredness_skeletal": r"$\mathcal{C}_s(P_s)$", "centeredness_curve": r"$\mathcal{C}_s(G_s)$",
+    "smoothness_skeletal": r"$S(P_s)$", "smoothness_curve": r"$\mathfrak{S}_{G_s}$",
+    "coverage_skeletal": r"cov.\ $P_s$", "coverage_curve": r"cov.\ $G_s$",
+    "n_warnings": "warnings", "seconds": "time (s)",
+}
+
+
+@dataclass
+class Entry:
+    method: str
+    condition: str
+    n_jobs: int
+    n_ok: int
+    mean: dict[str, float] = field(default_factory=dict)
+    std: dict[str, float] = field(default_factory=dict)
+    rank: dict[str, int | None] = field(default_factory=dict)
+    profiles: dict[str, tuple[int, int]] = field(default_factory=dict)  # name -> (passed, applicable)
+
+
+@dataclass
+class Leaderboard:
+    entries: list[Entry]
+    profiles: tuple[Profile, ...]
+
+    def arrow(self, col: str) -> str:
+        return "↓" if col in LOWER_IS_BETTER else "↑"
+
+    def columns(self) -> list[str]:
+        """Score columns that at least one entry has (a run without curves shows no curve column)."""
+        return [c for c in COLUMNS if any(not math.isnan(e.mean.get(c, math.nan)) for e in self.entries)]
+
+    # ---- formats ------------------------------------------------------------------------------
+    def to_csv(self) -> str:
+        buf = _io.StringIO()
+        w = csv.writer(buf, lineterminator="\n")
+        head = ["method", "condition", "n_jobs", "n_ok"]
+        for c in COLUMNS:
+            head += [f"{c}_mean", f"{c}_std", f"{c}_rank"]
+        head += [f"profile_{p.name}" for p in self.profiles]
+        w.writerow(head)
+        for e in self.entries:
+            row: list[Any] = [e.method, e.condition, e.n_jobs, e.n_ok]
+            for c in COLUMNS:
+                row += [_num(e.mean[c]), _num(e.std[c]), "" if e.rank[c] is None else e.rank[c]]
+            row += [_rate(e.profiles[p.name], digits=None) for p in self.profiles]
+            w.writerow(row)
+        return buf.getvalue()
+
+    def _cells(self, e: Entry, cols: list[str]) -> list[str]:
+        out = []
+        for c in cols:
+            m, s, r = e.mean[c], e.std[c], e.rank[c]
+            if math.isnan(m):
+                out.append("-")
+                continue
+            d = _digits(c)
+            out.append(f"{m:.{d}f} ± {s:.{d}f}" + (f" ({r})" if r is not None else ""))
+        return out
+
+    def to_markdown(self) -> str:
+        cols = self.columns()
+        head = ["method", "condition", "ok"] + [f"{c} {self.arrow(c)}" for c in cols] + [p.name for p in self.profiles]
+        rows = [head]
+        for e in self.entries:
+            rows.append([e.method, e.condition, f"{e.n_ok}/{e.n_jobs}", *self._cells(e, cols),
+                         *(_rate(e.profiles[p.name]) for p in self.profiles)])
+        widths = [max(len(r[i]) for r in rows) for i in range(len(head))]
+        lines = ["| " + " | ".join(c.ljust(w) for c, w in zip(rows[0], widths)) + " |",
+                 "|" + "|".join("-" * (w + 2) for w in widths) + "|"]
+        lines += ["| " + " | ".join(c.ljust(w) for c, w in zip(r, widths)) + " |" for r in rows[1:]]
+        notes = ["", "Mean ± standard deviation over shapes and seeds of the jobs that finished; (rank) among the "
+                 "methods under the same condition, 1 = best; ↓ lower is better, ↑ higher is better. Profile "
+                 "columns: jobs passing / jobs it applies to (thresholds: our reading of the paper, section V-B)."]
+        return "\n".join(lines + notes) + "\n"
+
+    def to_latex(self) -> str:
+        cols = self.columns()
+        esc = _tex_escape
+        arrow = lambda c: r"$\downarrow$" if c in LOWER_IS_BETTER else r"$\uparrow$"  # noqa: E731
+        head = ["Method", "Condition"] + [f"{_TEX_NAMES[c]}{arrow(c)}" for c in cols] + [esc(p.name) for p in self.profiles]
+        lines = [r"\begin{tabular}{ll" + "l" * (len(cols) + len(self.profiles)) + "}", r"\hline",
+                 " & ".join(head) + r" \\ \hline\hline"]
+        for e in self.entries:
+            cells = [c.replace("±", r"$\pm$") for c in self._cells(e, cols)]
+            cells = [r"\textbf{" + c + "}" if c.endswith("(1)") else c for c in cells]
+            lines.append(" & ".join([esc(e.method), esc(e.condition), *cells,
+                                     *(esc(_rate(e.profiles[p.name])) for p in self.profiles)]) + r" \\")
+        lines += [r"\hline", r"\end{tabular}"]
+        return "\n".join(lines) + "\n"
+
+    def write(self, out_dir: str | os.PathLike, inputs: tuple[str, ...] = ()) -> dict[str, str]:
+        paths = {}
+        for ext, text in (("md", self.to_markdown()), ("csv", self.to_csv()), ("tex", self.to_latex())):
+            path = os.path.join(out_dir, f"leaderboard.{ext}")
+            with atomic_open(path, "w", inputs=inputs) as fh:
+                fh.write(text)
+            paths[ext] = path
+        return paths
+
+
+def _num(v: float) -> str:
+    return "" if math.isnan(v) else repr(float(v))
+
+
+def _rate(pr: tuple[int, int], digits: int | None = 2) -> str:
+    passed, n = pr
+    if n == 0:
+        return "n/a"
+    if digits is None:
+        return repr(passed / n)
+    return f"{passed}/{n}"
+
+
+def _tex_escape(text: str) -> str:
+    for a, b in (("\\", r"\textbackslash{}"), ("&", r"\&"), ("%", r"\%"), ("_", r"\_"), ("#", r"\#"),
+                 ("$", r"\$"), ("{", r"\{"), ("}", r"\}")):
+        text = text.replace(a, b) if a != "\\" else text.replace(a, "\x00")
+    return text.replace("\x00", r"\textbackslash{}")
+
+
+def _digits(col: str) -> int:
+    """Decimals shown (and ranked on): 4 for the topological distances, 1 for counts and seconds."""
+    return 4 if col in ("d_B", "d_Wp") else (1 if col in ("n_warnings", "seconds") else 3)
+
+
+def _ranks(values: list[float], lower_better: bool, digits: int) -> list[int | None]:
+    """Competition ranks (1, 2, 2, 4) of the finite values as shown (rounded to ``digits``), so two
+    methods that print the same mean share a rank; None for NaN."""
+    out: list[int | None] = []
+    shown = [v if math.isnan(v) else round(v, digits) for v in values]
+    finite = [v for v in shown if not math.isnan(v)]
+    for v in shown:
+        if math.isnan(v):
+            out.append(None)
+        else:
+            out.append(1 + sum(1 for w in finite if (w < v if lower_better else w > v)))
+    return out
+
+
+def build_leaderboard(rows: list[dict[str, Any]], profiles: tuple[Profile, ...],
+                      methods: list[str], conditions: list[str]) -> Leaderboard:
+    """Aggregate ``results.csv`` rows (see :mod:`.results`) in manifest order of methods and conditions."""
+    entries = []
+    for cond in conditions:
+        group = []
+        for meth in methods:
+            mine = [r for r in rows if r["method"] == meth and r["condition"] == cond]
+            if not mine:
+                continue
+            ok = [r for r in mine if r["status"] == "ok"]
+            e = Entry(meth, cond, len(mine), len(ok))
+            for c in COLUMNS:
+                vals = np.array([r[c] for r in ok], dtype=float)
+                vals = vals[np.isfinite(vals)]
+                e.mean[c] = float(vals.mean()) if vals.size else math.nan
+                e.std[c] = float(vals.std(ddof=1)) if vals.size > 1 else (0.0 if vals.size else math.nan)
+            for p in profiles:
+                verdicts = [r[f"profile_{p.name}"] for r in mine]
+                e.profiles[p.name] = (verdicts.count("pass"), sum(v != "n/a" for v in verdicts))
+            group.append(e)
+        for c in COLUMNS:
+            for e, r in zip(group, _ranks([e.mean[c] for e in group], c in LOWER_IS_BETTER, _digits(c))):
+                e.rank[c] = r if len(group) > 1 else None
+        entries += group
+    return Leaderboard(entries, profiles)

@@ -1,0 +1,134 @@
+"""Running one skeletonizer on one cloud: the built-in one, an external command (no shell, its own
+process group, killed on timeout or cancel) or precomputed files. Returns what ``evaluate`` takes.
+"""
+
+from __future__ import annotations
+
+import os
+import signal
+import subprocess
+import time
+from typing import Callable
+
+import numpy as np
+
+from ...curve import CurveSkeleton
+from ...errors import Cancelled, SkelInputError
+from .manifest import MethodSpec, check_command_template, expand_template, skeletonize_accepts_method
+
+__all__ = ["skeletonize_accepts_method", "run_builtin", "run_command", "read_files"]
+
+Progress = Callable[[float, str], None]
+
+
+def run_builtin(points: np.ndarray, spec: MethodSpec, progress: Progress | None = None,
+                cancel: Callable[[], bool] | None = None) -> tuple[np.ndarray | None, CurveSkeleton | None]:
+    from ...skeleton import skeletonize
+    from ...skeleton.params import method_params
+
+    method, params = method_params(spec.method, spec.params)
+    return skeletonize(points, params, progress=progress, cancel=cancel, method=method)
+
+
+def _kill_group(proc: subprocess.Popen) -> None:
+    try:
+        os.killpg(proc.pid, signal.SIGKILL)
+    except (ProcessLookupError, PermissionError):
+        proc.kill()
+    proc.communicate()
+
+
+def run_command(
+    template: str,
+    cloud_path: str,
+    skeletal_path: str,
+    curve_path: str,
+    *,
+    timeout: float | None = None,
+    cancel: Callable[[], bool] | None = None,
+    label: str = "command",
+    cwd: str | None = None,
+) -> tuple[np.ndarray | None, CurveSkeleton | None]:
+    """Run the user's skeletonizer: ``shlex.split`` argv, placeholders substituted per token.
+
+    The program runs in its own session so that a timeout, a cancel or our own termination kills it
+    and all its children. Its outputs are read back with the project's loaders, so a file that is
+    not a skeleton becomes a one-line error naming it.
+    """
+    from ... import io
+
+    argv = check_command_template(template, label)
+    joined = " ".join(argv)
+    wants_skeletal = "{out_skeletal}" in joined
+    wants_curve = "{out_curve}" in joined
+    values = {"{in}": cloud_path, "{out_skeletal}": skeletal_path, "{out_curve}": curve_path}
+    args = []
+    for token in argv:
+        for key, val in values.items():
+            token = token.replace(key, val)
+        args.append(token)
+    for stale in (skeletal_path, curve_path):
+        if os.path.exists(stale):
+            os.unlink(stale)
+    try:
+        proc = subprocess.Popen(args, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                                errors="replace", start_new_session=True, cwd=cwd)
+    except OSError as exc:
+        raise SkelInputError(f"{label} could not start {args[0]!r}: {exc.strerror or exc}") from None
+    start = time.monotonic()
+    try:
+        while True:
+            try:
+                out, err = proc.communicate(timeout=0.1)
+                break
+            except subprocess.TimeoutExpired:
+                if cancel is not None and cancel():
+                    _kill_group(proc)
+                    raise Cancelled("cancelled while the skeleton command ran") from None
+                if timeout is not None and time.monotonic() - start > timeout:
+                    _kill_group(proc)
+                    raise SkelInputError(f"{label} timed out after {timeout:g} s and was killed") from None
+    except BaseException:
+        if proc.poll() is None:  # SystemExit from SIGTERM, KeyboardInterrupt: take the program down too
+            _kill_group(proc)
+        raise
+    if proc.returncode != 0:
+        last = (err or out or "").strip().splitlines()
+        how = f"was killed by signal {-proc.returncode}" if proc.returncode < 0 else f"exited with status {proc.returncode}"
+        raise SkelInputError(f"{label} {how}" + (f": {last[-1][:200]}" if last else ""))
+    skeletal = curve = None
+    if wants_skeletal:
+        if not os.path.exists(skeletal_path):
+            raise SkelInputError(f"{label} did not write the skeletal point set", skeletal_path)
+        skeletal = io.load_points(skeletal_path)
+    if wants_curve:
+        if not os.path.exists(curve_path):
+            raise SkelInputError(f"{label} did not write the curve skeleton", curve_path)
+        curve = io.load_curve(curve_path)
+    return skeletal, curve
+
+
+def read_files(spec: MethodSpec, stem: str, condition: str, seed: int
+               ) -> tuple[np.ndarray | None, CurveSkeleton | None, np.ndarray | None, dict[str, str]]:
+    """Precomputed skeletons of a ``files`` method: (skeletal, curve, skeletal_index, paths)."""
+    from ... import io
+
+    paths = {k: expand_template(t, stem, condition, seed) for k, t in spec.file_templates().items()}
+    skeletal = io.load_points(paths["skeletal"]) if "skeletal" in paths else None
+    curve = io.load_curve(paths["curve"]) if "curve" in paths else None
+    index = None
+    if "skeletal_index" in paths:
+        index = _load_index(paths["skeletal_index"])
+    return skeletal, curve, index, paths
+
+
+def _load_index(path: str) -> np.ndarray:
+    """One cloud row per skeletal point: a ``.npy`` or a text file of integers."""
+    try:
+        arr = np.load(path) if path.endswith(".npy") else np.loadtxt(path, dtype=np.int64, ndmin=1)
+    except (OSError, ValueError) as exc:
+        raise SkelInputError(f"cannot read the skeletal index: {exc}", path) from None
+    arr = np.asarray(arr)
+    if arr.ndim != 1 or not np.issubdtype(arr.dtype, np.integer):
+        raise SkelInputError("skeletal index must be one integer per line", path)
+    return arr.astype(np.int64)

@@ -1,0 +1,196 @@
+"""``DIR/report.html``: one self-contained page (every image inline as a data URI, no script or
+style from the network) with the leaderboard, the profiles, the per-metric distributions across
+methods (strip plots), the failed jobs, and per shape and condition the paper's graphic-table row
+for each method (:mod:`.render`). A small inline script records in ``body[data-images]`` how many
+images decoded, which the test reads back from headless Chromium.
+"""
+
+from __future__ import annotations
+
+import base64
+import html
+import io as _io
+import math
+import os
+import time
+from typing import Any
+
+import numpy as np
+
+from ...io.atomic import atomic_open
+from .jobs import SCORE_COLUMNS
+from .leaderboard import Leaderboard
+from .profiles import Profile
+from .render import VIEWS, render_job
+from .store import Store
+
+__all__ = ["write_report", "distributions_png"]
+
+_CSS = """
+body{font-family:DejaVu Sans,Arial,sans-serif;margin:24px;color:#222;background:#fff}
+h1{font-size:22px}h2{font-size:18px;margin-top:28px;border-bottom:1px solid #ccc}h3{font-size:15px}
+table{border-collapse:collapse;font-size:12px;margin:8px 0}
+td,th{border:1px solid #ccc;padding:3px 6px;text-align:left;vertical-align:middle}
+th{background:#f0f0f0}td.best{font-weight:bold;background:#eef7ee}
+.gt td{text-align:center}.gt img{width:180px;height:180px;display:block}
+.note{color:#555;font-size:12px}.fail{color:#a00}
+"""
+_SCRIPT = """
+window.addEventListener('load',function(){var im=document.images,ok=0;
+for(var i=0;i<im.length;i++){if(im[i].complete&&im[i].naturalWidth>0)ok++;}
+document.body.setAttribute('data-images',ok+'/'+im.length);});
+"""
+
+
+def _img(data: bytes, alt: str) -> str:
+    return f'<img alt="{html.escape(alt)}" src="data:image/png;base64,{base64.b64encode(data).decode()}">'
+
+
+def distributions_png(rows: list[dict[str, Any]], methods: list[str], conditions: list[str]) -> bytes | None:
+    """Strip plots: one panel per score, methods along x, one dot per job coloured by condition."""
+    import matplotlib
+
+    matplotlib.use("Agg", force=False)
+    from matplotlib.figure import Figure
+
+    ok = [r for r in rows if r["status"] == "ok"]
+    cols = [c for c in SCORE_COLUMNS if c != "n_warnings" and any(np.isfinite(r[c]) for r in ok)]
+    if not cols:
+        return None
+    ncol = 4
+    nrow = math.ceil(len(cols) / ncol)
+    fig = Figure(figsize=(3.2 * ncol, 2.6 * nrow), dpi=90)
+    palette = ["#1f77b4", "#ff7f0e", "#2ca02c", "#d62728", "#9467bd", "#8c564b", "#e377c2", "#7f7f7f"]
+    rng = np.random.default_rng(0)
+    for i, c in enumerate(cols):
+        ax = fig.add_subplot(nrow, ncol, i + 1)
+        for ci, cond in enumerate(conditions):
+            for mi, meth in enumerate(methods):
+                v = np.array([r[c] for r in ok if r["method"] == meth and r["condition"] == cond], float)
+                v = v[np.isfinite(v)]
+                if not v.size:
+                    continue
+                x = mi + (ci - (len(conditions) - 1) / 2) * 0.22 + rng.uniform(-0.05, 0.05, v.size)
+                ax.plot(x, v, "o", ms=3.5, alpha=0.8, color=palette[ci % len(palette)],
+                        label=cond if mi == 0 or not ax.get_legend_handles_labels()[1].count(cond) else None)
+        ax.set_xticks(range(len(methods)), methods, fontsize=7, rotation=20)
+        ax.set_title(c + (" ↓" if c in ("d_B", "d_Wp") else " ↑"), fontsize=9)
+        ax.tick_params(axis="y", labelsize=7)
+        ax.ticklabel_format(axis="y", useOffset=False, style="plain")
+        ax.set_xlim(-0.6, len(methods) - 0.4)
+        if i == 0:
+            handles, labels = ax.get_legend_handles_labels()
+            seen = {}
+            for h, lab in zip(handles, labels):
+                seen.setdefault(lab, h)
+            ax.legend(seen.values(), seen.keys(), fontsize=7, loc="best")
+    fig.tight_layout()
+    buf = _io.BytesIO()
+    fig.savefig(buf, format="png")
+    return buf.getvalue()
+
+
+def _leaderboard_html(board: Leaderboard) -> str:
+    cols = board.columns()
+    out = ["<table><tr><th>method</th><th>condition</th><th>ok</th>"]
+    out += [f"<th>{html.escape(c)} {board.arrow(c)}</th>" for c in cols]
+    out += [f"<th>{html.escape(p.name)}</th>" for p in board.profiles] + ["</tr>"]
+    for e in board.entries:
+        cells = board._cells(e, cols)
+        out.append(f"<tr><td>{html.escape(e.method)}</td><td>{html.escape(e.condition)}</td><td>{e.n_ok}/{e.n_jobs}</td>")
+        for c, text in zip(cols, cells):
+            cls = ' class="best"' if e.rank.get(c) == 1 else ""
+            out.append(f"<td{cls}>{html.escape(text)}</td>")
+        for p in board.profiles:
+            passed, n = e.profiles[p.name]
+            out.append(f"<td>{'n/a' if n == 0 else f'{passed}/{n}'}</td>")
+        out.append("</tr>")
+    out.append("</table>")
+    return "".join(out)
+
+
+def _profiles_html(profiles: tuple[Profile, ...]) -> str:
+    items = []
+    for p in profiles:
+        crit = ", ".join(f"{'/'.join(c.metrics)} {'≤' if c.upper else '≥'} {c.bound:g} (weight {c.weight:g})"
+                         for c in p.criteria)
+        when = f" — only {p.when} conditions" if p.when else ""
+        items.append(f"<li><b>{html.escape(p.name)}</b> ({html.escape(p.title)}{when}): {html.escape(crit)}. "
+                     f"<span class=note>{html.escape(p.why)}</span></li>")
+    return ("<p class=note>These thresholds and weights are our reading of the paper's discussion (section V-B), "
+            "not its numbers; edit a copy of resources/profiles.toml and pass --profiles.</p><ul>" + "".join(items) + "</ul>")
+
+
+def _scores_line(r: dict[str, Any]) -> str:
+    def f(k: str, d: int = 3) -> str:
+        v = r.get(k, math.nan)
+        return "-" if v is None or not np.isfinite(v) else f"{v:.{d}f}"
+
+    return (f"d_B/d_Wp {f('d_B', 4)}/{f('d_Wp', 4)}<br>B {f('boundedness_skeletal')}/{f('boundedness_curve')} "
+            f"C {f('centeredness_skeletal')}/{f('centeredness_curve')}<br>S {f('smoothness_skeletal')}/{f('smoothness_curve')}")
+
+
+def _graphic_table(out_dir: str, rows: list[dict[str, Any]], store: Store, shapes: list[str], methods: list[str],
+                   conditions: list[str]) -> str:
+    out = []
+    for shape in shapes:
+        out.append(f"<h3>{html.escape(shape)}</h3><table class=gt><tr><th>condition / method</th>"
+                   + "".join(f"<th>{v}</th>" for v in VIEWS) + "<th>scores (skeletal/curve)</th></tr>")
+        for cond in conditions:
+            for meth in methods:
+                mine = [r for r in rows if r["shape"] == shape and r["condition"] == cond and r["method"] == meth]
+                if not mine:
+                    continue
+                r = mine[0]  # the first seed
+                head = f"<td>{html.escape(cond)} ({html.escape(str(r.get('label', '')))})<br><b>{html.escape(meth)}</b></td>"
+                if r["status"] != "ok":
+                    out.append(f"<tr>{head}<td colspan={len(VIEWS) + 1} class=fail>{html.escape(r['status'])}: "
+                               f"{html.escape(str(r.get('error', '')))}</td></tr>")
+                    continue
+                pngs = render_job(out_dir, r["key"], store.arrays(r["key"]))
+                imgs = "".join(f"<td>{_img(pngs[v].read_bytes(), f'{shape} {cond} {meth} {v}')}</td>" for v in VIEWS)
+                out.append(f"<tr>{head}{imgs}<td>{_scores_line(r)}</td></tr>")
+        out.append("</table>")
+    return "".join(out)
+
+
+def write_report(out_dir: str | os.PathLike, rows: list[dict[str, Any]], board: Leaderboard, store: Store, *,
+                 shapes: list[str], methods: list[str], conditions: list[str], title: str = "skelcore compare",
+                 meta: dict[str, Any] | None = None, inputs: tuple[str, ...] = ()) -> str:
+    """Write ``out_dir/report.html`` and return its path."""
+    from ...version import __version__
+
+    out_dir = os.fspath(out_dir)
+    n_ok = sum(r["status"] == "ok" for r in rows)
+    failed = [r for r in rows if r["status"] != "ok"]
+    parts = [f"<!DOCTYPE html><html><head><meta charset='utf-8'><title>{html.escape(title)}</title>"
+             f"<style>{_CSS}</style></head><body data-images=''>",
+             f"<h1>{html.escape(title)}</h1><p class=note>skelcore {__version__}, "
+             f"{time.strftime('%Y-%m-%d %H:%M UTC', time.gmtime())}; {len(rows)} jobs, {n_ok} ok, {len(failed)} failed"]
+    for k, v in (meta or {}).items():
+        parts.append(f"; {html.escape(str(k))}: {html.escape(str(v))}")
+    parts.append("</p><h2>Leaderboard</h2>" + _leaderboard_html(board))
+    parts.append("<p class=note>Mean ± standard deviation over shapes and seeds of the finished jobs; (rank) among the "
+                 "methods under the same condition, best in bold; ↓ lower is better, ↑ higher is better. "
+                 "Profile columns: jobs passing / jobs the profile applies to.</p>")
+    parts.append("<h2>Application profiles</h2>" + _profiles_html(board.profiles))
+    dist = distributions_png(rows, methods, conditions)
+    if dist is not None:
+        parts.append("<h2>Distributions</h2>" + _img(dist, "per-metric distributions across methods"))
+    if failed:
+        parts.append("<h2>Failed jobs</h2><table><tr><th>shape</th><th>method</th><th>condition</th><th>seed</th>"
+                     "<th>error</th></tr>")
+        for r in failed:
+            parts.append("<tr>" + "".join(f"<td>{html.escape(str(r[k]))}</td>" for k in ("shape", "method", "condition", "seed"))
+                         + f"<td class=fail>{html.escape(str(r.get('error', '')))}</td></tr>")
+        parts.append("</table>")
+    parts.append("<h2>Graphic table</h2><p class=note>Per shape and condition, for each method (first seed): the "
+                 "skeleton (blue points, red curve) over the cloud, the H0 barcodes of the cloud and the skeleton "
+                 "(eps* dashed), and the skeleton coloured by boundedness, centeredness and smoothness (viridis 0..1, "
+                 "magenta = invalid).</p>")
+    parts.append(_graphic_table(out_dir, rows, store, shapes, methods, conditions))
+    parts.append(f"<script>{_SCRIPT}</script></body></html>\n")
+    path = os.path.join(out_dir, "report.html")
+    with atomic_open(path, "w", inputs=inputs) as fh:
+        fh.write("".join(parts))
+    return path

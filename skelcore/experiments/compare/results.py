@@ -1,0 +1,76 @@
+"""``results.csv``: one row per job of the manifest (in manifest order) from the store, with each
+application profile's verdict and reason. Empty cells are missing scores, so pandas reads the
+file as it is (``pd.read_csv``: NaN there, floats at full precision elsewhere).
+"""
+
+from __future__ import annotations
+
+import csv
+import io as _io
+import math
+import os
+from typing import Any
+
+from ...io.atomic import atomic_open
+from .jobs import SCORE_COLUMNS, Job
+from .profiles import Profile
+from .store import Store
+
+__all__ = ["collect_rows", "write_results_csv", "COLUMNS"]
+
+COLUMNS = ("shape", "method", "condition", "seed", "status", "error", *SCORE_COLUMNS, "seconds", "label",
+           "n_points", "key")
+
+
+def _float(v: Any) -> float:
+    if v is None:
+        return math.nan
+    if isinstance(v, str):
+        return {"inf": math.inf, "-inf": -math.inf}.get(v, math.nan)
+    return float(v)
+
+
+def collect_rows(jobs: list[Job], store: Store, profiles: tuple[Profile, ...]) -> list[dict[str, Any]]:
+    """A flat row per job; jobs not in the store (a run stopped early) get status "missing"."""
+    rows = []
+    for job in jobs:
+        rec = store.get(job.key) or {}
+        scores = {k: _float((rec.get("scores") or {}).get(k)) for k in SCORE_COLUMNS}
+        ok = rec.get("status") == "ok"
+        if not ok:
+            scores["n_warnings"] = math.nan
+        row: dict[str, Any] = {"shape": job.shape.name, "method": job.method.name, "condition": job.condition.name,
+                               "seed": job.seed, "status": rec.get("status", "missing"), "error": rec.get("error", ""),
+                               **scores, "seconds": _float(rec.get("seconds")), "label": rec.get("label", ""),
+                               "n_points": rec.get("n_points", ""), "key": job.key}
+        for p in profiles:
+            v = p.verdict(scores, job.condition.to_dict(), ok=ok)
+            row[f"profile_{p.name}"] = v.status
+            row[f"profile_{p.name}_score"] = v.score
+            row[f"profile_{p.name}_reason"] = v.reason
+        rows.append(row)
+    return rows
+
+
+def _cell(v: Any) -> str:
+    if isinstance(v, float):
+        if math.isnan(v):
+            return ""
+        return repr(v) if math.isfinite(v) else ("inf" if v > 0 else "-inf")
+    return str(v)
+
+
+def results_csv_text(rows: list[dict[str, Any]], profiles: tuple[Profile, ...]) -> str:
+    header = list(COLUMNS) + [f"profile_{p.name}{s}" for p in profiles for s in ("", "_score", "_reason")]
+    buf = _io.StringIO()
+    w = csv.writer(buf, lineterminator="\n")
+    w.writerow(header)
+    for r in rows:
+        w.writerow([_cell(r.get(k, "")) for k in header])
+    return buf.getvalue()
+
+
+def write_results_csv(path: str | os.PathLike, rows: list[dict[str, Any]], profiles: tuple[Profile, ...],
+                      inputs: tuple[str, ...] = ()) -> None:
+    with atomic_open(path, "w", inputs=inputs) as fh:
+        fh.write(results_csv_text(rows, profiles))

@@ -1,0 +1,236 @@
+"""Pictures for a paper, checked by content under Xvfb: sizes follow the scale, the colour bar and
+its NaN legend, tubes coloured by the metric, skeletal points visible under a curve, the empty
+window's hint, figure options, camera files, the level of detail while the camera moves."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+from PySide6 import QtCore, QtWidgets
+
+import skelcore
+from conftest import write_shape_files
+from skelcore import shapes
+from skelcore.colors import SKELETAL_COLOR, lookup_table
+
+pytestmark = pytest.mark.gui
+
+MAGENTA = (255, 0, 255)
+
+
+@pytest.fixture(scope="module")
+def files(tmp_path_factory):
+    return write_shape_files(tmp_path_factory.mktemp("y"), shapes.y_shape(1500, seed=3))
+
+
+@pytest.fixture(scope="module")
+def evaluation(files):
+    from skelcore.io import load_cloud, load_curve, load_points
+
+    return skelcore.evaluate(load_cloud(files["cloud"]), load_points(files["skeletal"]), load_curve(files["curve"]),
+                             inputs=dict(files))
+
+
+@pytest.fixture
+def window(qtbot, tmp_path, monkeypatch):
+    from app.main_window import MainWindow
+
+    monkeypatch.setattr(QtWidgets.QMessageBox, "critical", lambda *a, **k: pytest.fail(f"error dialog {a[2]!r}"))
+    w = MainWindow(settings=QtCore.QSettings(str(tmp_path / "s.ini"), QtCore.QSettings.Format.IniFormat))
+    w.session.auto_evaluate = False
+    w.session.ask = lambda q, o: o[0]
+    qtbot.addWidget(w)
+    w.resize(1200, 800)
+    w.show()
+    qtbot.waitExposed(w)
+    yield w
+    w.session.runner.shutdown()
+
+
+@pytest.fixture
+def evaluated(window, files, evaluation):
+    window.session.load_files([files["cloud"], files["skeletal"], files["curve"]])
+    window.session._evaluated_layers = (window.scene.cloud, window.scene.skeletal, window.scene.curve)
+    window.session._task_succeeded("evaluation", evaluation)
+    return window
+
+
+def _rgb(img):
+    return np.asarray(img)[..., :3].astype(int)
+
+
+def _count(img, colour) -> int:
+    return int(np.all(_rgb(img) == np.asarray(colour), axis=-1).sum())
+
+
+def _grey(img) -> int:
+    px = _rgb(img)
+    spread = px.max(axis=-1) - px.min(axis=-1)
+    return int(((spread <= 6) & (px[..., 0] > 90) & (px[..., 0] < 235)).sum())
+
+
+def _on_map(img) -> int:
+    lut = lookup_table("viridis", 256).astype(int)
+    px = _rgb(img).reshape(-1, 3)
+    px = px[(px.max(axis=1) - px.min(axis=1)) > 30]  # coloured pixels only
+    hits = 0
+    for chunk in np.array_split(px, max(1, len(px) // 20000 + 1)):
+        hits += int((np.abs(chunk[:, None, :] - lut[None]).max(axis=2).min(axis=1) <= 12).sum())
+    return hits
+
+
+def test_point_sizes_and_line_widths_follow_the_screenshot_scale(window, files):
+    window.session.load_files([files["cloud"], files["skeletal"]])
+    window.scene.set_style("axes", False)
+    one = window.view.image(scale=1)
+    two = window.view.image(scale=2)
+    assert two.shape[0] == 2 * one.shape[0]
+    # 4x the pixels, each point 2x as wide: the cloud covers about 4x as many pixels, not the same
+    ratio = _grey(two) / max(_grey(one), 1)
+    assert ratio > 2.5, ratio
+    # and the view itself is back to its own sizes afterwards
+    assert window.view._actors["cloud"].prop.point_size == window.scene.cloud.point_size
+
+
+def test_the_colour_bar_can_be_left_out_and_its_nan_label_sits_right_of_the_swatch(evaluated):
+    w = evaluated
+    w.scene.set_metric("smoothness")  # NaN at the Y's junction and tips
+    with_bar = w.view.image()
+    without = w.view.image(colour_bar=False)
+    bar = w.view._colour_bar
+    assert bar.nan_shown and bar.label_starts_right_of_swatch()
+    right = slice(int(with_bar.shape[1] * 0.86), None)
+    dark = lambda img: int((_rgb(img)[:, right].max(axis=-1) < 60).sum())  # noqa: E731 - bar text and labels
+    assert dark(with_bar) > 100 and dark(without) < dark(with_bar) / 10
+    # the swatch's pixels: magenta, with no label text inside its box
+    px = np.all(_rgb(with_bar)[:, right] == MAGENTA, axis=-1)
+    rows, cols = np.nonzero(px)
+    assert len(rows) > 50
+    box = _rgb(with_bar)[:, right][rows.min():rows.max() + 1, cols.min():cols.max() + 1]
+    assert (box.max(axis=-1) < 60).sum() == 0
+
+
+def test_tubes_follow_the_checkbox_and_the_t_key_and_carry_the_metric_colours(evaluated):
+    w = evaluated
+    w.scene.set_visible("cloud", False)
+    w.scene.set_visible("skeletal", False)
+    w.scene.set_metric("centeredness")
+    w.actions_by_name["tubes"].trigger()  # T
+    assert w.scene.edges_as_tubes and w.display.tubes.isChecked() and w.actions_by_name["tubes"].isChecked()
+    tubes = w.view._actors["curve-edges"]
+    assert tubes.mapper.dataset.n_strips > 0 and tubes.mapper.scalar_visibility
+    values = tubes.mapper.dataset.point_data["values"]
+    assert np.nanmin(values) >= 0 and np.nanmax(values) <= 1
+    assert _on_map(w.view.image()) > 500  # shaded, but on the colour map, not dark red
+    w.display.tubes.setChecked(False)
+    assert not w.scene.edges_as_tubes and not w.actions_by_name["tubes"].isChecked()
+    assert w.view._actors["curve-edges"].mapper.dataset.n_lines > 0
+
+
+def test_skeletal_points_stay_visible_under_a_curve(window, files):
+    window.session.load_files([files["cloud"], files["skeletal"]])
+    window.scene.set_visible("cloud", False)
+    alone = _count(window.view.image(), SKELETAL_COLOR)
+    window.session.load_as("curve", files["curve"])
+    under = _count(window.view.image(), SKELETAL_COLOR)
+    assert under > 0.5 * alone, (under, alone)
+
+
+def test_the_empty_window_shows_a_hint_until_something_is_loaded(window, files):
+    assert window.view.hint_visible
+    img = window.view.image()
+    assert (_rgb(img).max(axis=-1) < 160).sum() > 200  # the hint's grey text
+    window.session.load_as("cloud", files["cloud"])
+    assert not window.view.hint_visible
+    window.session.close_all()
+    assert window.view.hint_visible
+
+
+def test_figure_options_spheres_eye_dome_lighting_and_axes(evaluated):
+    w = evaluated
+    plain = w.view.image()
+    w.actions_by_name["style_spheres"].trigger()
+    assert w.display.style["spheres"].isChecked()
+    assert w.view._actors["skeletal"].prop.render_points_as_spheres and w.view._actors["skeletal"].prop.lighting
+    spheres = w.view.image()
+    assert not np.array_equal(plain, spheres)
+    w.display.style["eye_dome"].setChecked(True)
+    assert w.actions_by_name["style_eye_dome"].isChecked()
+    edl = w.view.image()
+    assert not np.array_equal(spheres, edl)
+    assert w.view.plotter.renderer.axes_widget.GetEnabled()
+    w.display.style["axes"].setChecked(False)
+    assert not w.view.plotter.renderer.axes_widget.GetEnabled()
+    # a new actor (a reload) is built in the chosen style
+    w.session.load_as("skeletal", w.scene.skeletal.path)
+    assert w.view._actors["skeletal"].prop.render_points_as_spheres
+
+
+def test_a_saved_camera_restores_the_view_and_the_scripted_mode_reads_it(evaluated, files, tmp_path, capsys,
+                                                                         monkeypatch):
+    w = evaluated
+    w.view.standard_view("xz")
+    path = w.save_camera(str(tmp_path / "cam.json"))
+    saved = json.loads(open(path).read())
+    w.view.standard_view("xy")
+    w.load_camera(path)
+    assert np.allclose(w.view.camera_state()["position"], saved["position"])
+    with pytest.raises(skelcore.SkelInputError, match="not a camera file"):
+        (tmp_path / "bad.json").write_text("{}")
+        w.load_camera(str(tmp_path / "bad.json"))
+
+    from app.__main__ import main
+
+    QtCore.QSettings.setPath(QtCore.QSettings.Format.NativeFormat, QtCore.QSettings.Scope.UserScope, str(tmp_path))
+    import sys
+
+    monkeypatch.setattr(sys, "excepthook", sys.excepthook)
+    out_a, out_b = tmp_path / "a.png", tmp_path / "b.png"
+    for out in (out_a, out_b):
+        code = main([files["cloud"], "--skeletal", files["skeletal"], "--camera", path, "--screenshot", str(out),
+                     "--no-colour-bar", "--quit"])
+        assert code == 0, capsys.readouterr().err
+    fitted = tmp_path / "fitted.png"
+    assert main([files["cloud"], "--skeletal", files["skeletal"], "--screenshot", str(fitted), "--quit"]) == 0
+    from matplotlib.image import imread
+
+    a, b, c = imread(out_a), imread(out_b), imread(fitted)
+    assert np.array_equal(a, b) and not np.array_equal(a, c)  # the saved view, every time
+    assert main([files["cloud"], "--camera", str(tmp_path / "bad.json"), "--quit"]) == 2
+    assert "bad.json: not a camera file" in capsys.readouterr().err
+
+
+def test_a_level_of_detail_twin_replaces_a_big_layer_while_the_camera_moves(window, qtbot, monkeypatch):
+    import app.view.scene_view as scene_view
+
+    monkeypatch.setattr(scene_view, "LOD_POINTS", 2000)
+    cloud = shapes.sphere_surface(10000, seed=1)
+    window.scene.set_cloud(cloud)
+    view = window.view
+    full, twin = view._actors["cloud"], view._actors["cloud-lod"]
+    assert twin.mapper.dataset.n_points == 2000 and full.GetVisibility() and not twin.GetVisibility()
+    centre = view.widget.rect().center()
+    qtbot.mousePress(view.widget, QtCore.Qt.MouseButton.LeftButton, pos=centre)
+    assert view.moving and twin.GetVisibility() and not full.GetVisibility()
+    qtbot.mouseRelease(view.widget, QtCore.Qt.MouseButton.LeftButton, pos=centre + QtCore.QPoint(40, 0))
+    assert not view.moving and full.GetVisibility() and not twin.GetVisibility()
+    window.scene.set_visible("cloud", False)
+    qtbot.mousePress(view.widget, QtCore.Qt.MouseButton.LeftButton, pos=centre)
+    assert not twin.GetVisibility() and not full.GetVisibility()  # a hidden layer stays hidden
+    qtbot.mouseRelease(view.widget, QtCore.Qt.MouseButton.LeftButton, pos=centre)
+
+
+def test_a_pick_among_a_million_skeletal_points_finds_the_clicked_one(window, qtbot):
+    cloud = shapes.sphere_surface(1_000_000, seed=0)
+    skeletal = cloud * 0.5
+    window.scene.set_cloud(cloud)
+    window.scene.set_skeletal(skeletal)
+    window.scene.set_visible("cloud", False)
+    window.view.image()
+    target = int(np.argmax(skeletal[:, 2]))  # the top, facing the camera in the default view? any visible one:
+    x, y = window.view.world_to_display(skeletal[target])
+    info = window.view.pick_display(x, y)
+    assert info is not None and info["element"] == "skeletal point"
+    assert np.linalg.norm(np.asarray(info["xyz"]) - skeletal[target]) < 0.02
