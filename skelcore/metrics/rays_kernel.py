@@ -526,7 +526,8 @@ def cover_counts(queries, pts, centre, radius, lo, hi, first_leaf, h, zrow, srow
 
 @njit(cache=True)
 def _ball(fx, fy, fz, reach, pts, centre, radius, lo, hi, first_leaf, out, stack):  # pragma: no cover
-    """Indices of the points within reach of f, into out (if big enough); their number."""
+    """Indices of the points within reach of f, into out (if big enough); their number.  With an
+    empty ``out`` it only counts, taking nodes wholly inside the ball whole."""
     n = 0
     top = 1
     stack[0] = 0
@@ -538,7 +539,11 @@ def _ball(fx, fy, fz, reach, pts, centre, radius, lo, hi, first_leaf, out, stack
         if r < 0.0:
             continue
         gx, gy, gz = centre[node, 0] - fx, centre[node, 1] - fy, centre[node, 2] - fz
-        if math.sqrt(gx * gx + gy * gy + gz * gz) - r > reach:
+        g = math.sqrt(gx * gx + gy * gy + gz * gz)
+        if g - r > reach:
+            continue
+        if out.shape[0] == 0 and g + r < reach:
+            n += hi[node] - lo[node]  # counting only: a node wholly inside counts whole
             continue
         if node >= first_leaf:
             for p in range(lo[node], hi[node]):
@@ -555,23 +560,16 @@ def _ball(fx, fy, fz, reach, pts, centre, radius, lo, hi, first_leaf, out, stack
 
 
 @njit(parallel=True, cache=True)
-def near_lists(fcentre, freach, pts, centre, radius, lo, hi, first_leaf):  # pragma: no cover - compiled
-    """CSR lists of the points within freach[c] of fcentre[c] (tree order), one per cluster."""
+def near_counts(fcentre, freach, pts, centre, radius, lo, hi, first_leaf):  # pragma: no cover - compiled
+    """Number of points within freach[c] of fcentre[c], for every c (the cost model's sample)."""
     n = fcentre.shape[0]
-    sizes = np.zeros(n + 1, np.int64)
-    depth = 2 * 64
+    out = np.zeros(n, np.int64)
     empty = np.empty(0, np.int64)
     for i in prange(n):
-        stack = np.empty(depth, np.int64)
-        sizes[i + 1] = _ball(fcentre[i, 0], fcentre[i, 1], fcentre[i, 2], freach[i], pts, centre, radius,
-                             lo, hi, first_leaf, empty, stack)
-    offsets = np.cumsum(sizes)
-    idx = np.empty(offsets[-1], np.int64)
-    for i in prange(n):
-        stack = np.empty(depth, np.int64)
-        _ball(fcentre[i, 0], fcentre[i, 1], fcentre[i, 2], freach[i], pts, centre, radius, lo, hi, first_leaf,
-              idx[offsets[i]:offsets[i + 1]], stack)
-    return offsets, idx
+        stack = np.empty(128, np.int64)
+        out[i] = _ball(fcentre[i, 0], fcentre[i, 1], fcentre[i, 2], freach[i], pts, centre, radius, lo, hi,
+                       first_leaf, empty, stack)
+    return out
 
 
 @njit(parallel=True, cache=True)
@@ -697,7 +695,7 @@ class CapTree:
         counts = cluster_counts(queries, starts, centres, reach, first, n, *self._args())
         return counts / float(self.rows * self.bins)
 
-    def near_lists(self, centres: np.ndarray, reach: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """CSR lists (offsets, tree-order indices) of the points within reach[k] of centres[k]."""
-        return near_lists(np.ascontiguousarray(centres, np.float64), np.ascontiguousarray(reach, np.float64),
-                          self.pts, self.centre, self.radius, self.lo, self.hi, self.first_leaf)
+    def near_counts(self, centres: np.ndarray, reach: np.ndarray) -> np.ndarray:
+        """Number of points within reach[k] of centres[k]."""
+        return near_counts(np.ascontiguousarray(centres, np.float64), np.ascontiguousarray(reach, np.float64),
+                           self.pts, self.centre, self.radius, self.lo, self.hi, self.first_leaf)

@@ -101,6 +101,8 @@ def cao_contract(
     sizes0 = rings.sizes(pts, "min")
     total0 = float(sizes0.sum())
 
+    order: dict = {}  # one sparsity pattern for every iteration: its ordering is computed once
+
     def check_for(it: int) -> Callable[[], None]:
         return lambda: report("contraction", it / params.max_iterations)
 
@@ -108,7 +110,7 @@ def cao_contract(
         L = cotangent_laplacian(current, rings, params.weight_row_cap)
         M = (wl * wl) * (L.T @ L) + sp.diags(wh * wh)
         rhs = (wh * wh)[:, None] * current
-        return solve_spd(M, rhs, check=check_for(it))
+        return solve_spd(M, rhs, check=check_for(it), order=order)
 
     report("contraction", 0.0)
     cpts = step(pts, wl, wh, 0)

@@ -135,12 +135,13 @@ def contract(
     iterations = 0
     if len(faces) == 0:
         return current, adj, {"iterations": 0, "ring_ratios": ratios, "stop_reason": "no one-ring triangles"}
+    order: dict = {}  # the faces are fixed: every iteration's matrix has one pattern
     for it in range(int(params.max_iterations)):
         report("contraction", it / params.max_iterations)
         L = _cotan_laplacian(current, faces, params.mollify_factor)
         A = (wl * wl) * (L.T @ L) + sp.diags(wh * wh)
         rhs = (wh * wh)[:, None] * current
-        new = solve_spd(A, rhs, check=lambda it=it: report("contraction", it / params.max_iterations))
+        new = solve_spd(A, rhs, check=lambda it=it: report("contraction", it / params.max_iterations), order=order)
         new = np.asarray(new).reshape(n, 3)
         if not np.all(np.isfinite(new)):
             stop = "non-finite solve"

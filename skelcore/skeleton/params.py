@@ -1,7 +1,8 @@
-"""The skeletonizer's constants (``SkeletonizeParams``), its run report and its progress plumbing.
+"""The skeletonizers' constants (``CaoParams`` for method "cao", ``SkeletonizeParams`` for
+"skelscope"), the run report and the progress plumbing.
 
 Defaults follow Cao et al.'s toolbox (``GS.m``) where it has one; every field is settable by name
-(``with_values``) so the CLI, the study and the viewer share one source of truth.
+(``replace``) so the CLI, the study and the viewer share one source of truth.
 """
 
 from __future__ import annotations
