@@ -24,6 +24,8 @@ STAGES = [
     "curve boundedness",
     "curve centeredness",
     "curve smoothness",
+    "skeletal coverage",
+    "curve coverage",
 ]
 
 
