@@ -1,8 +1,7 @@
 """Engine speed against the targets of issue 12: full evaluations by size, real scans, cancel latency.
 
-Every case runs in a fresh subprocess, so its time includes the fresh process's first call into the
-compiled boundedness kernel (numba's on-disk cache loads then; "start-up" = interpreter + imports,
-reported separately) and its peak resident memory (ru_maxrss) is its own; CPU s = process time of
+Every case runs in a fresh subprocess, so its time includes the fresh process's first call
+("start-up" = interpreter + imports, reported separately) and its peak resident memory (ru_maxrss) is its own; CPU s = process time of
 all threads (the fairer figure when other jobs share the cores).  Generated shapes: a torus
 (R = 1, r = 0.3) sampled with N points, skeletal set = each point's projection onto the core circle
 + 1 % jitter, curve = a 64-gon of the core circle.  Real clouds from ../shared/data/ are scored

@@ -80,7 +80,6 @@ def test_rays_matches_brute_force_direction_grid(case, directions):
 
 
 def test_rays_matches_brute_force_on_a_4096_point_cloud(directions):
-    """Every query exact here (few pairs); the shared far field is checked against this below."""
     shape = cylinder(4096, 0.5, 4.0, seed=0)
     norm = Normalization.from_cloud(shape.cloud)
     cloud = norm.apply(shape.cloud)
@@ -228,49 +227,33 @@ def test_shared_far_field_stays_within_0_01_of_every_pair(cell):
     assert 0 < err.max() <= 0.01  # not the every-pair path, and close to it
 
 
-def _rotated(cloud, queries):
-    """Cloud and queries in the raster frame, centred as ``boundedness_rays`` does."""
-    from skelcore.metrics._rays import FRAME
+def test_thin_torus_default_uses_half_cells_and_stays_within_0_01_of_every_pair():
+    """4k torus (r/R = 0.3), 1 %-jittered skeletal points 5.5 h inside the tube: the cost model picks
+    cells of h/2 with a near radius of 5 h (no near field at all: the fast case of the benchmark)."""
+    from skelcore.metrics.boundedness import _choose_job
 
-    centre = (cloud.min(axis=0) + cloud.max(axis=0)) / 2.0
-    return (cloud - centre) @ FRAME.T, (queries - centre) @ FRAME.T
-
-
-def _plan_for(cloud, queries):
-    from skelcore.geometry import kd_tree
-    from skelcore.metrics.boundedness import _plan
-    from skelcore.metrics.rays_kernel import CapTree
-
-    p = Params()
-    h = rays_radius(cloud)
-    pts, q = _rotated(cloud, queries)
-    caps = CapTree(pts, h, p.rays_rows, 2 * p.rays_rows)
-    tree = kd_tree(cloud)
-    return _plan(
-        caps, lambda: tree.query(queries, k=1)[0], pts, q, h, p.rays_exact_pairs, p.rays_near_angle,
-        p.rays_cluster_cell, None, lambda f: None,
-    )
-
-
-def test_thin_torus_default_shares_the_far_field_and_stays_within_0_01_of_every_point():
-    """4k torus (r/R = 0.3), 1 %-jittered skeletal points 5.5 h inside the tube: the measured cost
-    picks a shared far field (the fast case of the benchmark), within 0.01 of exact queries."""
     shape = torus(4096, 1.0, 0.3, seed=0)
     rng = np.random.default_rng(0)
     norm = Normalization.from_cloud(shape.cloud)
     cloud = norm.apply(shape.cloud)
     queries = norm.apply(shape.skeletal + rng.normal(scale=0.01, size=shape.skeletal.shape))
-    assert _plan_for(cloud, queries) is not None
+    h = rays_radius(cloud)
+    p = Params()
+    job = _choose_job(
+        CapRaster(p.rays_rows, 2 * p.rays_rows), cloud.astype(np.float32), queries.astype(np.float32), h,
+        p.rays_exact_pairs, p.rays_near_angle, p.rays_cluster_cell, None,
+    )
+    assert job.near_radius == pytest.approx(5 * h)
     beta = boundedness_rays(cloud, queries)
     pick = rng.choice(len(queries), 300, replace=False)
     err = np.abs(beta[pick] - boundedness_rays(cloud, queries[pick], share_far_field=False))
     assert 0 < err.max() <= 0.01
 
 
-def test_near_surface_queries_share_in_finer_cells_within_0_01_of_every_point():
+def test_near_surface_queries_share_in_finer_cells_within_0_01_of_every_pair():
     """Queries 1.5-3.5 h inside a cylinder's wall (as a contracted skeleton of a thin part puts them)
-    used to be clusters of one; they share in cells of h/4 with clearance >= 4 cells."""
-    from skelcore.metrics.boundedness import _Clusters
+    used to be clusters of one; they now share in cells of h/4 with clearance >= 4 cells."""
+    from skelcore.metrics.boundedness import _ClusteredJob
 
     shape = cylinder(4096, 0.5, 4.0, seed=8)
     norm = Normalization.from_cloud(shape.cloud)
@@ -282,8 +265,9 @@ def test_near_surface_queries_share_in_finer_cells_within_0_01_of_every_point():
     inward = (axis[i] - cloud[i]) / np.linalg.norm(axis[i] - cloud[i], axis=1, keepdims=True)
     seeds = cloud[i] + inward * rng.uniform(1.5, 3.5, (150, 1)) * h
     queries = np.repeat(seeds, 4, axis=0) + rng.normal(scale=0.02 * h, size=(600, 3))
-    clearance = cKDTree(cloud).query(queries, k=1)[0]
-    job = _Clusters(_rotated(cloud, queries)[1], clearance, h, 5 * h, 0.5 * h)
+    job = _ClusteredJob(
+        CapRaster(48, 96), cloud.astype(np.float32), queries.astype(np.float32), h, 5 * h, 0.5 * h
+    )
     assert len(job.starts) - 1 < 300  # shared, not 600 clusters of one
     shared = boundedness_rays(cloud, queries, share_far_field=True)
     exact = boundedness_rays(cloud, queries, share_far_field=False)
@@ -292,39 +276,27 @@ def test_near_surface_queries_share_in_finer_cells_within_0_01_of_every_point():
 
 def test_default_shares_the_far_field_only_where_it_pays():
     """16k torus: its 16k skeletal points near the core share far fields; as many points spread
-    through the box, or few queries, are exact (the accuracy of sharing is tested above)."""
-    from skelcore.metrics.boundedness import _Clusters
+    through the box, or few queries, use every pair (the accuracy of sharing is tested above)."""
+    from skelcore.metrics.boundedness import _choose_job, _ClusteredJob, _DenseJob
 
     shape = torus(16384, 1.0, 0.3, seed=6)
     rng = np.random.default_rng(6)
     norm = Normalization.from_cloud(shape.cloud)
-    cloud = norm.apply(shape.cloud)
-    compact = norm.apply(shape.skeletal + rng.normal(scale=0.01, size=shape.skeletal.shape))
-    spread = rng.uniform(-0.8, 0.8, (16384, 3))
-    assert isinstance(_plan_for(cloud, compact), _Clusters)
-    assert _plan_for(cloud, spread) is None
-    assert _plan_for(cloud, compact[:200]) is None
-
-
-def test_kernel_equals_the_numpy_raster_of_every_pair():
-    """The culled, compiled walk gives the same raster as rasterising every (query, point) pair with
-    the independent numpy ``CapRaster``: culling skips only caps that cannot change a sample."""
-    from skelcore.metrics.rays_kernel import CapTree
-
-    cloud = _torus(1500, seed=4)
-    queries = np.vstack([np.random.default_rng(5).uniform(-1, 1, (40, 3)), [[0, 0, 0], [0.8, 0, 0]]])
+    cloud = norm.apply(shape.cloud).astype(np.float32)
+    compact = norm.apply(shape.skeletal + rng.normal(scale=0.01, size=shape.skeletal.shape)).astype(np.float32)
+    spread = rng.uniform(-0.8, 0.8, (16384, 3)).astype(np.float32)
     h = rays_radius(cloud)
-    pts, q = _rotated(cloud, queries)
-    raster = CapRaster(48, 96)
-    f32 = pts.astype(np.float32)
-    ref = []
-    for one in q.astype(np.float32):
-        d = f32 - one
-        ref.append(raster.union_fraction(1, np.zeros(len(d), np.int32), d[:, 0], d[:, 1], d[:, 2], h)[0])
-    got, visits = CapTree(pts, h, 48, 96).every_point(q)
-    # float32 (numpy) against float64 (kernel): a sample exactly on a cap's edge may differ
-    assert np.abs(got - np.array(ref)).max() <= 2 / 4608
-    assert visits.max() < 2 * len(cloud)  # culled: nowhere near one visit per point and node
+    p = Params()
+    raster = CapRaster(p.rays_rows, 2 * p.rays_rows)
+
+    def choose(queries):
+        return _choose_job(
+            raster, cloud, queries, h, p.rays_exact_pairs, p.rays_near_angle, p.rays_cluster_cell, None
+        )
+
+    assert isinstance(choose(compact), _ClusteredJob)
+    assert isinstance(choose(spread), _DenseJob)
+    assert isinstance(choose(compact[:200]), _DenseJob)
 
 
 def test_big_cloud_sliced_every_pair_equals_singleton_clusters():
