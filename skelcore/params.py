@@ -86,10 +86,8 @@ class Params:
             bad("normalize_by", "must be 'longest_side' or 'diagonal'")
         if self.boundedness_method not in ("rays", "paper"):
             bad("boundedness_method", "must be 'rays' or 'paper'")
-        for name in ("normalized_size", "rays_radius_factor", "slab_factor", "paper_area_threshold", "rays_cluster_cell"):
-            if not float(getattr(self, name)) > 0:
-                bad(name, "must be > 0")
-        for name in ("coverage_tau_factor", "collapse_extent"):
+        for name in ("normalized_size", "rays_radius_factor", "slab_factor", "paper_area_threshold", "rays_cluster_cell",
+                     "coverage_tau_factor", "collapse_extent"):
             if not float(getattr(self, name)) > 0:
                 bad(name, "must be > 0")
         if not float(self.coverage_slack) >= 0:

@@ -7,6 +7,7 @@ Defaults follow Cao et al.'s toolbox (``GS.m``) where it has one; every field is
 
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import dataclass, fields
 from typing import Callable
 
@@ -16,8 +17,18 @@ __all__ = ["CaoParams", "SkeletonizeParams", "SkeletonizeInfo", "Reporter", "Pro
 
 Progress = Callable[[float, str], None]
 
+class _Replaceable:
+    """``replace(**changes)`` for the frozen parameter dataclasses: unknown names raise ValueError."""
+
+    def replace(self, **changes):
+        unknown = sorted(set(changes) - {f.name for f in fields(self)})
+        if unknown:
+            raise ValueError(f"unknown skeletonize parameter(s): {', '.join(unknown)}")
+        return dataclasses.replace(self, **changes)
+
+
 @dataclass(frozen=True)
-class CaoParams:
+class CaoParams(_Replaceable):
     """Constants of ``method="cao"``: the toolbox's defaults (``GS.m``, ``contraction_by_mesh_laplacian.m``,
     ``compute_point_weight.m``, ``eg_skeleton_laplacian_rosa.m``), one field each.
 
@@ -73,18 +84,10 @@ class CaoParams:
         if int(self.max_iterations) < 1:
             bad("max_iterations", "must be >= 1")
 
-    def replace(self, **changes) -> "CaoParams":
-        known = {f.name for f in fields(self)}
-        unknown = sorted(set(changes) - known)
-        if unknown:
-            raise ValueError(f"unknown skeletonize parameter(s): {', '.join(unknown)}")
-        import dataclasses
-
-        return dataclasses.replace(self, **changes)
 
 
 @dataclass(frozen=True)
-class SkeletonizeParams:
+class SkeletonizeParams(_Replaceable):
     """Constants of the skeletonizer; defaults follow Cao et al.'s toolbox (``GS.m``) where it has one.
 
     Attributes
@@ -187,14 +190,6 @@ class SkeletonizeParams:
         if float(self.short_cycle_factor) < 0:
             bad("short_cycle_factor", "must be >= 0")
 
-    def replace(self, **changes) -> "SkeletonizeParams":
-        known = {f.name for f in fields(self)}
-        unknown = sorted(set(changes) - known)
-        if unknown:
-            raise ValueError(f"unknown skeletonize parameter(s): {', '.join(unknown)}")
-        import dataclasses
-
-        return dataclasses.replace(self, **changes)
 
 
 @dataclass
