@@ -1,0 +1,500 @@
+/* Compiled kernel of the `rays` boundedness estimator (SPEC 2; design: docs/boundedness.md, section 3).
+ *
+ * beta(q) = share of the raster's direction samples s from q whose ray meets a ball of radius h around
+ * a cloud point p with |p - q| > h.  A ray meets that ball iff s lies in p's cap of angular radius
+ * asin(h / |p - q|), so this is the union-of-caps raster of _rays.py, sample for sample.
+ *
+ * Queries come in clusters (centre c, reach r).  Far points (|p - c| > r) are handled once per cluster:
+ * one any-hit ray cast per sample from c through a KD-tree of bounding spheres (cost ~ samples x depth,
+ * not ~ points).  Near points (|p - c| <= r) are rasterised as exact caps from every member query into a
+ * copy of the cluster's far bitmap (per-row longitude intervals, law of cosines), nearest first, stopping
+ * when the bitmap is full.  A cluster of one query at its own position is exact for any r.
+ *
+ * Plain C with the buffer protocol (no numpy headers at build time); every entry point releases the GIL.
+ */
+#define PY_SSIZE_T_CLEAN
+#include <Python.h>
+#include <math.h>
+#include <stdint.h>
+#include <stdlib.h>
+#include <string.h>
+
+#define LEAF_SIZE 8
+#define TWO_PI 6.283185307179586476925286766559
+
+/* ------------------------------------------------------------------------------------------------ */
+/* KD-tree of bounding spheres over a permutation of the points                                       */
+
+typedef struct {
+    float c[3], r;          /* bounding sphere */
+    int32_t kid, lo, hi;    /* first child (second = kid + 1) or -1 for a leaf; point range [lo, hi) */
+    int32_t par;            /* parent, -1 for the root */
+} Node;                     /* 32 bytes: two siblings share a cache line */
+
+typedef struct {
+    const float *pts;       /* (n, 3) points in tree order */
+    const Node *nodes;
+    int32_t n_nodes;
+} Tree;
+
+static void select_nth(double *key, int32_t *idx, int32_t lo, int32_t hi, int32_t nth) {
+    /* quickselect on key[lo:hi] carrying idx: afterwards key[nth] is the nth smallest */
+    while (hi - lo > 1) {
+        int32_t mid = lo + (hi - lo) / 2;
+        double a = key[lo], b = key[mid], c = key[hi - 1];
+        double pivot = (a < b) ? ((b < c) ? b : ((a < c) ? c : a)) : ((a < c) ? a : ((b < c) ? c : b));
+        int32_t i = lo, j = hi - 1;
+        while (i <= j) {
+            while (key[i] < pivot) i++;
+            while (key[j] > pivot) j--;
+            if (i <= j) {
+                double tk = key[i]; key[i] = key[j]; key[j] = tk;
+                int32_t ti = idx[i]; idx[i] = idx[j]; idx[j] = ti;
+                i++; j--;
+            }
+        }
+        if (nth <= j) hi = j + 1;
+        else if (nth >= i) lo = i;
+        else return;
+    }
+}
+
+typedef struct {
+    const double *pts;
+    int32_t *perm;
+    double *key;
+    double *sph;
+    int32_t *rng;
+    int32_t *kid;
+    int32_t n_nodes, cap;
+} Builder;
+
+static void build_node(Builder *b, int32_t node, int32_t lo, int32_t hi) {
+    double mn[3] = {INFINITY, INFINITY, INFINITY}, mx[3] = {-INFINITY, -INFINITY, -INFINITY};
+    for (int32_t i = lo; i < hi; i++) {
+        const double *p = b->pts + 3 * (size_t)b->perm[i];
+        for (int k = 0; k < 3; k++) {
+            if (p[k] < mn[k]) mn[k] = p[k];
+            if (p[k] > mx[k]) mx[k] = p[k];
+        }
+    }
+    double c[3], r2 = 0.0;
+    for (int k = 0; k < 3; k++) c[k] = 0.5 * (mn[k] + mx[k]);
+    for (int32_t i = lo; i < hi; i++) {
+        const double *p = b->pts + 3 * (size_t)b->perm[i];
+        double dx = p[0] - c[0], dy = p[1] - c[1], dz = p[2] - c[2];
+        double d2 = dx * dx + dy * dy + dz * dz;
+        if (d2 > r2) r2 = d2;
+    }
+    b->sph[4 * node + 0] = c[0];
+    b->sph[4 * node + 1] = c[1];
+    b->sph[4 * node + 2] = c[2];
+    b->sph[4 * node + 3] = sqrt(r2) * (1.0 + 1e-12) + 1e-300;
+    b->rng[2 * node] = lo;
+    b->rng[2 * node + 1] = hi;
+    if (hi - lo <= LEAF_SIZE || b->n_nodes + 2 > b->cap) {
+        b->kid[node] = -1;
+        return;
+    }
+    int axis = 0;
+    double ext = mx[0] - mn[0];
+    for (int k = 1; k < 3; k++)
+        if (mx[k] - mn[k] > ext) { ext = mx[k] - mn[k]; axis = k; }
+    for (int32_t i = lo; i < hi; i++) b->key[i] = b->pts[3 * (size_t)b->perm[i] + axis];
+    int32_t mid = lo + (hi - lo) / 2;
+    select_nth(b->key, b->perm, lo, hi, mid);
+    int32_t first = b->n_nodes;
+    b->n_nodes += 2;
+    b->kid[node] = first;
+    build_node(b, first, lo, mid);
+    build_node(b, first + 1, mid, hi);
+}
+
+/* build_tree(points (n,3) f64, perm (n) i32 out, spheres (cap,4) f64 out, ranges (cap,2) i32 out,
+ *            kids (cap) i32 out) -> number of nodes.  perm lists the input rows in tree order. */
+static PyObject *py_build_tree(PyObject *self, PyObject *args) {
+    Py_buffer pts, perm, sph, rng, kid;
+    if (!PyArg_ParseTuple(args, "y*w*w*w*w*", &pts, &perm, &sph, &rng, &kid)) return NULL;
+    int32_t n = (int32_t)(pts.len / (3 * sizeof(double)));
+    int32_t cap = (int32_t)(kid.len / sizeof(int32_t));
+    PyObject *result = NULL;
+    double *key = NULL;
+    if (perm.len / (Py_ssize_t)sizeof(int32_t) < n || sph.len / (Py_ssize_t)(4 * sizeof(double)) < cap ||
+        rng.len / (Py_ssize_t)(2 * sizeof(int32_t)) < cap || cap < 1) {
+        PyErr_SetString(PyExc_ValueError, "build_tree: output buffers too small");
+        goto done;
+    }
+    key = (double *)malloc(sizeof(double) * (size_t)(n > 0 ? n : 1));
+    if (!key) { PyErr_NoMemory(); goto done; }
+    Builder b = {(const double *)pts.buf, (int32_t *)perm.buf, key, (double *)sph.buf, (int32_t *)rng.buf,
+                 (int32_t *)kid.buf, 1, cap};
+    Py_BEGIN_ALLOW_THREADS
+    for (int32_t i = 0; i < n; i++) b.perm[i] = i;
+    build_node(&b, 0, 0, n);
+    Py_END_ALLOW_THREADS
+    result = PyLong_FromLong(b.n_nodes);
+done:
+    free(key);
+    PyBuffer_Release(&pts); PyBuffer_Release(&perm); PyBuffer_Release(&sph);
+    PyBuffer_Release(&rng); PyBuffer_Release(&kid);
+    return result;
+}
+
+/* ------------------------------------------------------------------------------------------------ */
+/* The raster: rows of equal height in z, bins of equal longitude; one sample per cell centre         */
+
+typedef struct {
+    int rows, bins, words;     /* words per row */
+    double *z, *s, *inv_s, *z_over_s, *cos_lon, *sin_lon;
+    uint64_t last_mask;        /* valid bits of a row's last word */
+} Raster;
+
+static int raster_init(Raster *r, int rows, int bins) {
+    r->rows = rows;
+    r->bins = bins;
+    r->words = (bins + 63) / 64;
+    r->last_mask = (bins % 64) ? ((UINT64_C(1) << (bins % 64)) - 1) : ~UINT64_C(0);
+    r->z = (double *)malloc(sizeof(double) * (size_t)(4 * rows + 2 * bins));
+    if (!r->z) return -1;
+    r->s = r->z + rows;
+    r->inv_s = r->s + rows;
+    r->z_over_s = r->inv_s + rows;
+    r->cos_lon = r->z_over_s + rows;
+    r->sin_lon = r->cos_lon + bins;
+    for (int j = 0; j < rows; j++) {
+        double z = -1.0 + (j + 0.5) * (2.0 / rows);
+        r->z[j] = z;
+        r->s[j] = sqrt(1.0 - z * z);
+        r->inv_s[j] = 1.0 / r->s[j];
+        r->z_over_s[j] = z / r->s[j];
+    }
+    for (int k = 0; k < bins; k++) {
+        double lon = (k + 0.5) * (TWO_PI / bins);
+        r->cos_lon[k] = cos(lon);
+        r->sin_lon[k] = sin(lon);
+    }
+    return 0;
+}
+
+static void raster_free(Raster *r) { free(r->z); }
+
+/* one raster's bits: rows x words, plus the count of full rows */
+static inline int row_is_full(const Raster *r, const uint64_t *row) {
+    for (int w = 0; w < r->words - 1; w++)
+        if (row[w] != ~UINT64_C(0)) return 0;
+    return row[r->words - 1] == r->last_mask;
+}
+
+static inline void set_bits(uint64_t *row, int a, int b) {
+    /* bits [a, b) of a row, 0 <= a <= b */
+    while (a < b) {
+        int w = a >> 6, off = a & 63;
+        int take = 64 - off;
+        if (take > b - a) take = b - a;
+        uint64_t m = (take == 64) ? ~UINT64_C(0) : (((UINT64_C(1) << take) - 1) << off);
+        row[w] |= m;
+        a += take;
+    }
+}
+
+static int64_t popcount_all(const Raster *r, const uint64_t *bits) {
+    int64_t c = 0;
+    for (int i = 0; i < r->rows * r->words; i++) c += __builtin_popcountll(bits[i]);
+    return c;
+}
+
+/* The cap of (dx, dy, dz) = p - q (|p - q| > h) into the bitmap, rows already full skipped.
+ * The same arithmetic as _rays.CapRaster.covered, in double precision.  Returns rows newly full. */
+static int add_cap(const Raster *r, uint64_t *bits, uint8_t *full, double dx, double dy, double dz, double d2,
+                   double h) {
+    const int rows = r->rows, bins = r->bins;
+    double inv = 1.0 / sqrt(d2);
+    double uz = dz * inv;
+    double sina = h * inv;
+    if (sina > 1.0) sina = 1.0;
+    double cosa = sqrt(1.0 - sina * sina);
+    double rho2 = 1.0 - uz * uz;
+    double rho = rho2 > 0.0 ? sqrt(rho2) : 0.0;
+    double mid = uz * cosa, spread = rho * sina;
+    double zhi = mid + spread, zlo = mid - spread;
+    if (uz >= cosa) zhi = 1.0;
+    if (-uz >= cosa) zlo = -1.0;
+    int first = (int)((zlo + 1.0) * (0.5 * rows) + 0.5);
+    int end = (int)((zhi + 1.0) * (0.5 * rows) + 0.5);
+    if (end > rows) end = rows;
+    if (first < 0) first = 0;
+    if (end <= first) return 0;
+    if (rho < 1e-30) rho = 1e-30;
+    double a0 = cosa / rho, a1 = uz / rho;
+    double centre = atan2(dy, dx) * (bins / TWO_PI) + bins + 0.5;
+    int newly = 0;
+    for (int j = first; j < end; j++) {
+        if (full[j]) continue;
+        uint64_t *row = bits + (size_t)j * r->words;
+        double c = a0 * r->inv_s[j] - a1 * r->z_over_s[j];
+        int start, length;
+        if (c <= -1.0) {
+            start = 0;
+            length = bins;
+        } else {
+            if (c > 1.0) c = 1.0;
+            double half = acos(c) * (bins / TWO_PI);
+            start = (int)(centre - half);
+            length = (int)(centre + half) - start;
+            if (length <= 0) continue;
+            if (length > bins) length = bins;
+            if (start >= bins) start -= bins;
+        }
+        int stop = start + length;
+        if (stop > bins) {
+            set_bits(row, start, bins);
+            set_bits(row, 0, stop - bins);
+        } else {
+            set_bits(row, start, stop);
+        }
+        if (row_is_full(r, row)) { full[j] = 1; newly++; }
+    }
+    return newly;
+}
+
+/* ------------------------------------------------------------------------------------------------ */
+/* Any-hit ray cast from o along s against the balls of the points with |p - o|^2 > cut2              */
+
+typedef struct {
+    int32_t *stack;
+    int32_t last_leaf;
+    int64_t visits, hint_tries, hint_hits;
+} Walker;
+
+static inline int leaf_hit(const Tree *t, int32_t node, const float *o, const float *s, float cut2, float h2) {
+    const Node *nd = t->nodes + node;
+    for (int32_t i = nd->lo; i < nd->hi; i++) {
+        const float *p = t->pts + 3 * (size_t)i;
+        float wx = p[0] - o[0], wy = p[1] - o[1], wz = p[2] - o[2];
+        float d2 = wx * wx + wy * wy + wz * wz;
+        if (d2 <= cut2) continue;
+        float tt = wx * s[0] + wy * s[1] + wz * s[2];
+        if (tt > 0.0f && d2 - tt * tt <= h2) return 1;
+    }
+    return 0;
+}
+
+/* Any-hit walk of the subtree at `root` (skipping subtree `skip` and leaves `skip_a`, `skip_b`, already
+ * tested): the leaf of a hit, or -1.  Nearer child along the ray first. */
+static int32_t walk(const Tree *t, Walker *w, int32_t root, int32_t skip, int32_t skip_a, int32_t skip_b,
+                    const float *o, const float *s, float cut, float h) {
+    const float h2 = h * h, cut2 = cut * cut;
+    int sp = 0;
+    w->stack[sp++] = root;
+    while (sp > 0) {
+        int32_t node = w->stack[--sp];
+        if (node == skip) continue;
+        const Node *nd = t->nodes + node;
+        float wx = nd->c[0] - o[0], wy = nd->c[1] - o[1], wz = nd->c[2] - o[2];
+        float rad = nd->r;
+        float d2 = wx * wx + wy * wy + wz * wz;
+        w->visits++;
+        /* every point of the node within the cut: nothing of it counts */
+        if (cut > 0.0f) {
+            float lim = cut - rad;
+            if (lim > 0.0f && d2 <= lim * lim) continue;
+        }
+        float tt = wx * s[0] + wy * s[1] + wz * s[2];
+        float reach = rad + h;
+        float off2 = (tt > 0.0f) ? d2 - tt * tt : d2;
+        if (off2 > reach * reach) continue;
+        int32_t k = nd->kid;
+        if (k < 0) {
+            if (node != skip_a && node != skip_b && leaf_hit(t, node, o, s, cut2, h2)) return node;
+            continue;
+        }
+        const Node *a = t->nodes + k, *b = a + 1;
+        float ta = (a->c[0] - o[0]) * s[0] + (a->c[1] - o[1]) * s[1] + (a->c[2] - o[2]) * s[2];
+        float tb = (b->c[0] - o[0]) * s[0] + (b->c[1] - o[1]) * s[1] + (b->c[2] - o[2]) * s[2];
+        if (ta <= tb) { w->stack[sp++] = k + 1; w->stack[sp++] = k; }
+        else { w->stack[sp++] = k; w->stack[sp++] = k + 1; }
+    }
+    return -1;
+}
+
+/* Does the ray from o along s meet a ball around a point with |p - o| > cut?  Exact; the hints only
+ * order the search: *hint = a leaf a nearby ray hit (the same sample from the previous cluster), then
+ * the previous ray's leaf, then the rest of the tree bottom-up from *hint (the hit is usually near). */
+static int ray_hits(const Tree *t, Walker *w, const float *o, const float *s, float cut, float h,
+                    int32_t *hint) {
+    const float h2 = h * h, cut2 = cut * cut;
+    int32_t a = *hint, b = w->last_leaf;
+    if (a >= 0) {
+        w->hint_tries++;
+        if (leaf_hit(t, a, o, s, cut2, h2)) { w->hint_hits++; w->last_leaf = a; return 1; }
+    }
+    if (b >= 0 && b != a) {
+        w->hint_tries++;
+        if (leaf_hit(t, b, o, s, cut2, h2)) { w->hint_hits++; *hint = b; return 1; }
+    }
+    int32_t leaf = -1;
+    if (a >= 0) {
+        /* bottom-up from the hinted leaf: each ancestor's other subtree in turn, up to the root */
+        int32_t prev = a, node = t->nodes[a].par;
+        while (node >= 0 && leaf < 0) {
+            leaf = walk(t, w, node, prev, a, b, o, s, cut, h);
+            prev = node;
+            node = t->nodes[node].par;
+        }
+    } else {
+        leaf = walk(t, w, 0, -1, a, b, o, s, cut, h);
+    }
+    if (leaf < 0) return 0;
+    *hint = leaf;
+    w->last_leaf = leaf;
+    return 1;
+}
+
+/* Points with |p - c| <= reach, nearest first, into idx; returns their number */
+typedef struct { double d2; int32_t i; } Near;
+
+static int cmp_near(const void *a, const void *b) {
+    double x = ((const Near *)a)->d2, y = ((const Near *)b)->d2;
+    if (x < y) return -1;
+    if (x > y) return 1;
+    int32_t i = ((const Near *)a)->i, j = ((const Near *)b)->i;
+    return (i > j) - (i < j);
+}
+
+static int32_t collect_near(const Tree *t, int32_t *stack, const double *c, double reach, Near *out) {
+    int32_t m = 0;
+    int sp = 0;
+    double r2 = reach * reach;
+    stack[sp++] = 0;
+    while (sp > 0) {
+        const Node *nd = t->nodes + stack[--sp];
+        double wx = nd->c[0] - c[0], wy = nd->c[1] - c[1], wz = nd->c[2] - c[2];
+        double d = sqrt(wx * wx + wy * wy + wz * wz);
+        if (d - nd->r > reach) continue;
+        if (nd->kid >= 0) {
+            stack[sp++] = nd->kid;
+            stack[sp++] = nd->kid + 1;
+            continue;
+        }
+        for (int32_t i = nd->lo; i < nd->hi; i++) {
+            const float *p = t->pts + 3 * (size_t)i;
+            double dx = p[0] - c[0], dy = p[1] - c[1], dz = p[2] - c[2];
+            double d2 = dx * dx + dy * dy + dz * dz;
+            if (d2 <= r2) { out[m].d2 = d2; out[m].i = i; m++; }
+        }
+    }
+    qsort(out, (size_t)m, sizeof(Near), cmp_near);
+    return m;
+}
+
+/* clusters(points (n,3) f32 tree order, nodes (m) Node, queries (q,3) f64 grouped by cluster,
+ *          starts (k1 - k0 + 1) i64 into queries, centres (k,3) f64, reach (k) f64 (all clusters),
+ *          cluster range [k0, k1), h, rows, bins, beta out (q) f64,
+ *          stats out (6) i64: node visits, near caps, far rays, near points, hint tries, hint hits)
+ * beta of the queries of clusters k0..k1-1 (queries holds just theirs, grouped by cluster). */
+static PyObject *py_clusters(PyObject *self, PyObject *args) {
+    Py_buffer pts, nds, qs, starts, cen, rch, beta, stats;
+    int k0, k1, rows, bins;
+    double h;
+    if (!PyArg_ParseTuple(args, "y*y*y*y*y*y*iidiiw*w*", &pts, &nds, &qs, &starts, &cen, &rch,
+                          &k0, &k1, &h, &rows, &bins, &beta, &stats))
+        return NULL;
+    PyObject *result = NULL;
+    Raster r = {0};
+    int32_t n = (int32_t)(pts.len / (3 * sizeof(float)));
+    Tree t = {(const float *)pts.buf, (const Node *)nds.buf, (int32_t)(nds.len / (Py_ssize_t)sizeof(Node))};
+    const int64_t *st = (const int64_t *)starts.buf;
+    const double *q = (const double *)qs.buf, *cc = (const double *)cen.buf, *rr = (const double *)rch.buf;
+    double *out = (double *)beta.buf;
+    int64_t *stat = (int64_t *)stats.buf;
+    uint64_t *far = NULL, *bits = NULL;
+    uint8_t *far_full = NULL, *full = NULL;
+    int32_t *stack = NULL, *hints = NULL;
+    Near *near = NULL;
+    if (rows < 1 || bins < 1 || raster_init(&r, rows, bins) != 0) {
+        PyErr_SetString(PyExc_ValueError, "clusters: bad raster");
+        goto done;
+    }
+    size_t nw = (size_t)rows * r.words;
+    far = (uint64_t *)calloc(2 * nw, sizeof(uint64_t));
+    far_full = (uint8_t *)calloc(2 * (size_t)rows, 1);
+    hints = (int32_t *)malloc(sizeof(int32_t) * (size_t)rows * bins);
+    stack = (int32_t *)malloc(sizeof(int32_t) * 256);
+    near = (Near *)malloc(sizeof(Near) * (size_t)(n > 0 ? n : 1));
+    if (!far || !far_full || !stack || !near || !hints) { PyErr_NoMemory(); goto done; }
+    for (int i = 0; i < rows * bins; i++) hints[i] = -1;
+    bits = far + nw;
+    full = far_full + rows;
+    Py_BEGIN_ALLOW_THREADS
+    Walker w = {stack, -1, 0, 0, 0};
+    int64_t caps = 0, rays = 0, nears = 0;
+    const double h2 = h * h;
+    for (int k = k0; k < k1; k++) {
+        const double *c = cc + 3 * (size_t)k;
+        const float cf[3] = {(float)c[0], (float)c[1], (float)c[2]};
+        double reach = rr[k];
+        /* far field from the centre: one ray per sample */
+        memset(far, 0, nw * sizeof(uint64_t));
+        memset(far_full, 0, (size_t)rows);
+        int n_full = 0;
+        w.last_leaf = -1;
+        double cut = reach > h ? reach : h;
+        if (n > 0) {
+            for (int j = 0; j < rows; j++) {
+                uint64_t *row = far + (size_t)j * r.words;
+                for (int b = 0; b < bins; b++) {
+                    float s[3] = {(float)(r.s[j] * r.cos_lon[b]), (float)(r.s[j] * r.sin_lon[b]), (float)r.z[j]};
+                    rays++;
+                    if (ray_hits(&t, &w, cf, s, (float)cut, (float)h, hints + (size_t)j * bins + b))
+                        row[b >> 6] |= UINT64_C(1) << (b & 63);
+                }
+                if (row_is_full(&r, row)) { far_full[j] = 1; n_full++; }
+            }
+        }
+        int32_t m = (n_full < rows && n > 0) ? collect_near(&t, stack, c, reach, near) : 0;
+        nears += m;
+        for (int64_t i = st[k - k0]; i < st[k - k0 + 1]; i++) {
+            const double *qi = q + 3 * (size_t)i;
+            if (n_full == rows) { out[i] = 1.0; continue; }
+            memcpy(bits, far, nw * sizeof(uint64_t));
+            memcpy(full, far_full, (size_t)rows);
+            int nf = n_full;
+            for (int32_t a = 0; a < m && nf < rows; a++) {
+                const float *p = t.pts + 3 * (size_t)near[a].i;
+                double dx = p[0] - qi[0], dy = p[1] - qi[1], dz = p[2] - qi[2];
+                double d2 = dx * dx + dy * dy + dz * dz;
+                if (d2 <= h2) continue;
+                caps++;
+                nf += add_cap(&r, bits, full, dx, dy, dz, d2, h);
+            }
+            out[i] = (nf == rows) ? 1.0 : (double)popcount_all(&r, bits) / ((double)rows * bins);
+        }
+    }
+    stat[0] += w.visits;
+    stat[1] += caps;
+    stat[2] += rays;
+    stat[3] += nears;
+    stat[4] += w.hint_tries;
+    stat[5] += w.hint_hits;
+    Py_END_ALLOW_THREADS
+    result = Py_None;
+    Py_INCREF(result);
+done:
+    raster_free(&r);
+    free(far); free(far_full); free(stack); free(near); free(hints);
+    PyBuffer_Release(&pts); PyBuffer_Release(&nds); PyBuffer_Release(&qs); PyBuffer_Release(&starts); PyBuffer_Release(&cen); PyBuffer_Release(&rch);
+    PyBuffer_Release(&beta); PyBuffer_Release(&stats);
+    return result;
+}
+
+static PyMethodDef methods[] = {
+    {"build_tree", py_build_tree, METH_VARARGS, "KD-tree of bounding spheres (boundedness rays kernel)."},
+    {"clusters", py_clusters, METH_VARARGS, "beta of the queries of a range of clusters (rays kernel)."},
+    {NULL, NULL, 0, NULL},
+};
+
+static struct PyModuleDef module = {PyModuleDef_HEAD_INIT, "_raycast",
+                                    "Compiled kernel of the rays boundedness estimator (docs/boundedness.md).",
+                                    -1, methods};
+
+PyMODINIT_FUNC PyInit__raycast(void) { return PyModule_Create(&module); }

@@ -1,0 +1,256 @@
+"""Driver of the compiled ``rays`` kernel (``_raycast.c``): the cloud's tree, the cluster plan, the tasks.
+
+beta(q) is the share of raster samples whose ray from q meets a ball of radius h around a cloud point
+(SPEC 2; the same samples as ``_rays.CapRaster``).  Queries are grouped in clusters (docs/boundedness.md
+1.6-1.7: cubic cells, finer cells near the surface, near-surface queries alone); each cluster's far field
+(points beyond its reach) is ray cast once from its centroid, its near field rasterised as exact caps
+from every member.  A cluster of one query at its own position is exact.  Clusters run on a thread pool
+(the kernel releases the GIL) in tasks of bounded cost, with a checkpoint after each task.
+Design, costs and errors: docs/boundedness.md section 3.
+"""
+
+from __future__ import annotations
+
+import os
+from concurrent.futures import ThreadPoolExecutor
+from dataclasses import dataclass
+
+import numpy as np
+from scipy.spatial import cKDTree
+
+from ..geometry import Checkpoint, chunked_query, no_checkpoint
+from . import _raycast
+
+# queries closer than this many h to the cloud share only in finer cells, or are alone (1.7)
+ALONE_WITHIN = 4.0
+# near-surface queries share in finer cells with a near radius this many times the usual 10 cells
+FINER_BOOST = 2.0
+# cost units (about one tree-node visit each): one near cap, and a far ray per level of the tree
+CAP_COST = 25.0
+# cost units per task: about 50 ms of one core, so checkpoints stay well under 0.5 s apart
+TASK_COST = 1.5e6
+
+
+# one tree node as the kernel reads it (struct Node in _raycast.c): 32 bytes
+NODE = np.dtype([("c", "<f4", (3,)), ("r", "<f4"), ("kid", "<i4"), ("lo", "<i4"), ("hi", "<i4"), ("par", "<i4")])
+
+
+class BallTree:
+    """The distinct cloud points (raster frame) in a balanced KD-tree with a bounding sphere per node."""
+
+    def __init__(self, pts: np.ndarray):
+        pts = np.ascontiguousarray(pts, dtype=np.float64)
+        n = len(pts)
+        cap = max(1, 2 * ((n + 3) // 4) + 2)
+        perm = np.empty(n, np.int32)
+        spheres = np.empty((cap, 4))
+        ranges = np.empty((cap, 2), np.int32)
+        kids = np.empty(cap, np.int32)
+        m = _raycast.build_tree(pts, perm, spheres, ranges, kids)
+        self.points = np.ascontiguousarray(pts[perm], dtype=np.float32)
+        nodes = np.zeros(m, NODE)
+        nodes["c"] = spheres[:m, :3]
+        # float32 rounding of centres and points must not let a point fall outside its sphere
+        scale = float(np.abs(pts).max(initial=1.0))
+        nodes["r"] = spheres[:m, 3] * (1.0 + 1e-6) + 1e-6 * scale
+        nodes["kid"] = kids[:m]
+        nodes["lo"] = ranges[:m, 0]
+        nodes["hi"] = ranges[:m, 1]
+        nodes["par"] = -1
+        inner = np.flatnonzero(kids[:m] >= 0)
+        nodes["par"][kids[inner]] = inner
+        nodes["par"][kids[inner] + 1] = inner
+        self.nodes = nodes
+        self.n = n
+        self.depth = max(1.0, float(np.log2(max(2.0, n / 8.0))))
+
+    @property
+    def ray_cost(self) -> float:
+        """Cost units of one far ray (node visits grow with the depth)."""
+        return 2.0 + self.depth
+
+
+@dataclass
+class Plan:
+    """Queries grouped by cluster: ``order`` (plan position -> query row), cluster ``starts`` (K + 1),
+    ``centres`` (K, 3), ``reach`` (K,): points within reach of the centre are near."""
+
+    order: np.ndarray
+    starts: np.ndarray
+    centres: np.ndarray
+    reach: np.ndarray
+    estimated_cost: float = 0.0
+    estimated_near: float = 0.0
+
+
+def exact_plan(queries: np.ndarray, reach: float) -> Plan:
+    """Every query its own cluster at its own position: exact for any reach."""
+    n = len(queries)
+    return Plan(np.arange(n), np.arange(n + 1, dtype=np.int64), np.ascontiguousarray(queries, np.float64),
+                np.full(n, float(reach)))
+
+
+def shared_plan(
+    cloud_tree: cKDTree, queries: np.ndarray, h: float, near_radius: float, cell: float, clearance: np.ndarray,
+    finer: bool = True,
+) -> Plan:
+    """Clusters of cubic cells of side ``cell`` with reach ``near_radius`` + spread (docs/boundedness.md 1.6).
+
+    A query closer than 4 h and 4 cells to the cloud shares only in finer cells (cell / 2^k down to
+    h / 4, clearance >= 4 of them, twice the near radius), or is alone below that (1.7).
+    """
+    level = np.zeros(len(queries), np.int64)
+    levels = max(0, int(np.floor(np.log2(cell / (h / 4.0))))) if finer else 0
+    for k in range(1, levels + 1):
+        need = ALONE_WITHIN * h if k == 1 else 0.0
+        level[clearance < max(ALONE_WITHIN * cell / 2.0 ** (k - 1), need)] = k
+    lone = clearance < (ALONE_WITHIN * cell / 2.0**levels if levels else ALONE_WITHIN * h)
+    level_cell = cell / 2.0**level
+    keys = np.floor(queries / level_cell[:, None]).astype(np.int64)
+    keys = np.column_stack([keys, level, np.where(lone, np.arange(1, len(keys) + 1), 0)])
+    cid = _group_ids(keys)
+    order = np.argsort(cid, kind="stable")
+    cid = cid[order]
+    q = queries[order]
+    starts = np.flatnonzero(np.r_[True, cid[1:] != cid[:-1], True]).astype(np.int64)
+    sizes = np.diff(starts)
+    centres = np.add.reduceat(q, starts[:-1], axis=0) / sizes[:, None]
+    dist = np.linalg.norm(q - np.repeat(centres, sizes, axis=0), axis=1)
+    spreads = np.maximum.reduceat(dist, starts[:-1])
+    single = sizes == 1
+    centres[single] = q[starts[:-1][single]]
+    spreads[single] = 0.0
+    cl_level = level[order][starts[:-1]]
+    reach = near_radius * np.where(cl_level > 0, FINER_BOOST, 1.0) / 2.0**cl_level + spreads
+    return Plan(order, starts, np.ascontiguousarray(centres), reach)
+
+
+def _group_ids(keys: np.ndarray) -> np.ndarray:
+    """Dense ids of equal rows of an int64 key matrix (one 1-D unique when the key space allows)."""
+    k = keys - keys.min(axis=0)
+    span = k.max(axis=0) + 1
+    if float(np.prod(span.astype(float))) < 2.0**62:
+        flat = np.zeros(len(k), np.int64)
+        for j in range(k.shape[1]):
+            flat = flat * span[j] + k[:, j]
+        return np.unique(flat, return_inverse=True)[1].ravel()
+    return np.unique(k, axis=0, return_inverse=True)[1].ravel()
+
+
+def choose_plan(
+    tree: BallTree, cloud_tree: cKDTree, queries: np.ndarray, h: float, near_radius: float, cell: float,
+    samples: int, exact_pairs: int, share: bool | None, checkpoint: Checkpoint = no_checkpoint,
+) -> Plan:
+    """Exact when small, forced, or cheaper; else the cheapest of seven cluster sizes (x 1/2 ... x 32).
+
+    Estimated cost = clusters x samples x ray cost + queries x near points x cap cost, the near points
+    counted on 256 sampled queries.
+    """
+    n_q = len(queries)
+    sample = queries[np.random.default_rng(0).permutation(n_q)[:256]]
+    near_exact = float(np.mean(cloud_tree.query_ball_point(sample, near_radius, return_length=True)))
+    exact_cost = n_q * (samples * tree.ray_cost + near_exact * CAP_COST)
+    if share is False or (share is None and tree.n * n_q <= exact_pairs):
+        plan = exact_plan(queries, near_radius)
+        plan.estimated_cost, plan.estimated_near = exact_cost, near_exact
+        return plan
+    best = None
+    for scale in 2.0 ** np.arange(-1, 6):
+        clusters = _count_cells(queries, cell * scale)
+        reach = (near_radius + 0.87 * cell) * scale
+        near = float(np.mean(cloud_tree.query_ball_point(sample, reach, return_length=True)))
+        cost = clusters * samples * tree.ray_cost + n_q * near * CAP_COST
+        if best is None or cost < best[0]:
+            best = (cost, near, scale)
+        checkpoint(0.0)
+    cost, near, scale = best
+    if share is None and cost > 0.75 * exact_cost:
+        plan = exact_plan(queries, near_radius)
+        plan.estimated_cost, plan.estimated_near = exact_cost, near_exact
+        return plan
+    # only "closer than 4 cells (or 4 h)" matters, and a bounded search is fast even from a tube's
+    # axis, where the whole wall is nearly equidistant
+    bound = ALONE_WITHIN * max(cell * scale, h) * (1.0 + 1e-9)
+    clearance = chunked_query(
+        cloud_tree, queries, 1, checkpoint=lambda f: checkpoint(0.0), distance_upper_bound=bound
+    )[0][:, 0]
+    plan = shared_plan(cloud_tree, queries, h, near_radius * scale, cell * scale, clearance)
+    plan.estimated_cost, plan.estimated_near = cost, near
+    return plan
+
+
+def _count_cells(points: np.ndarray, cell: float) -> int:
+    """Number of distinct cubic cells of side ``cell`` holding points."""
+    return int(_group_ids(np.floor(points / cell).astype(np.int64)).max(initial=-1)) + 1
+
+
+def run_plan(
+    tree: BallTree, plan: Plan, queries: np.ndarray, h: float, rows: int, bins: int, workers: int | None = None,
+    checkpoint: Checkpoint = no_checkpoint, stats: np.ndarray | None = None,
+) -> np.ndarray:
+    """beta of every query row (in the input order), the plan's clusters on ``workers`` threads."""
+    q_sorted = np.ascontiguousarray(queries[plan.order], np.float64)
+    sizes = np.diff(plan.starts)
+    cost = rows * bins * tree.ray_cost + sizes * max(plan.estimated_near, 1.0) * CAP_COST
+    bounds = [0]
+    acc = 0.0
+    for k, c in enumerate(cost):  # cluster ranges of about TASK_COST units each
+        acc += c
+        if acc >= TASK_COST:
+            bounds.append(k + 1)
+            acc = 0.0
+    if bounds[-1] != len(cost):
+        bounds.append(len(cost))
+    tasks = list(zip(bounds[:-1], bounds[1:]))
+    out_sorted = np.zeros(len(q_sorted))
+    stats = np.zeros(6, np.int64) if stats is None else stats
+    reach = np.ascontiguousarray(plan.reach, np.float64)
+    centres = np.ascontiguousarray(plan.centres, np.float64)
+    starts = np.ascontiguousarray(plan.starts, np.int64)
+
+    def task(k0: int, k1: int) -> np.ndarray:
+        beta = np.zeros(int(starts[k1] - starts[k0]))
+        st = np.zeros(6, np.int64)
+        sub_starts = starts[k0 : k1 + 1] - starts[k0]
+        _raycast.clusters(
+            tree.points, tree.nodes, q_sorted[starts[k0] : starts[k1]],
+            np.ascontiguousarray(sub_starts), centres, reach, k0, k1, float(h), rows, bins, beta, st,
+        )
+        return beta, st
+
+    workers = max(1, int(workers or os.cpu_count() or 1))
+    checkpoint(0.0)
+    done = 0
+
+    def store(k0: int, k1: int, result) -> None:
+        nonlocal done
+        beta, st = result
+        out_sorted[starts[k0] : starts[k1]] = beta
+        stats[:] += st
+        done += 1
+        checkpoint(done / len(tasks))
+
+    if workers == 1 or len(tasks) <= 1:
+        for k0, k1 in tasks:
+            store(k0, k1, task(k0, k1))
+    else:
+        with ThreadPoolExecutor(max_workers=workers) as pool:
+            pending: list = []
+            it = iter(tasks)
+            try:
+                for k0, k1 in it:  # a short queue: a cancel stops within about one task per worker
+                    pending.append((k0, k1, pool.submit(task, k0, k1)))
+                    if len(pending) >= 2 * workers:
+                        break
+                while pending:
+                    k0, k1, fut = pending.pop(0)
+                    store(k0, k1, fut.result())
+                    nxt = next(it, None)
+                    if nxt is not None:
+                        pending.append((nxt[0], nxt[1], pool.submit(task, nxt[0], nxt[1])))
+            finally:
+                for *_, fut in pending:
+                    fut.cancel()
+    out = np.empty(len(q_sorted))
+    out[plan.order] = out_sorted
+    return out
