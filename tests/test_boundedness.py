@@ -414,3 +414,25 @@ def test_paper_skips_cloud_points_at_the_query_and_degenerate_sets():
     at_point = boundedness_paper(cloud, cloud[:1])[0]
     assert np.isfinite(at_point)
     assert boundedness_paper(cloud[:2], np.zeros((1, 3)))[0] == 0.0
+
+
+def test_a_cancel_during_the_tree_build_stops_it_and_leaves_no_thread_behind():
+    """The kernel's tree of a big cloud is built in a thread (GIL released) while the caller polls its
+    checkpoint; a cancel sets the kernel's stop flag and is re-raised once the build has returned."""
+    import threading
+
+    from skelcore.metrics.rays_kernel import BallTree
+
+    pts = np.random.default_rng(3).uniform(-1, 1, (300_000, 3))
+
+    def cancel(_fraction: float) -> None:
+        raise Cancelled("stop")
+
+    with pytest.raises(Cancelled):
+        BallTree(pts, cancel)
+    assert not [t for t in threading.enumerate() if t.name == "skelscope-balltree"]
+    tree = BallTree(pts)  # and a build that is not cancelled holds every point once
+    assert tree.nodes["lo"][0] == 0 and tree.nodes["hi"][0] == len(pts)
+    assert np.array_equal(np.unique(tree.points, axis=0), np.unique(pts.astype(np.float32), axis=0))
+    leaves = tree.nodes[tree.nodes["kid"] < 0]
+    assert (leaves["hi"] - leaves["lo"]).sum() == len(pts) and (leaves["hi"] - leaves["lo"]).max() <= 8

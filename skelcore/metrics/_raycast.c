@@ -67,9 +67,14 @@ typedef struct {
     int32_t *rng;
     int32_t *kid;
     int32_t n_nodes, cap;
+    volatile int32_t *stop;  /* set by another thread to abandon the build (a cancel) */
 } Builder;
 
 static void build_node(Builder *b, int32_t node, int32_t lo, int32_t hi) {
+    if (hi - lo > 4096 && *b->stop) {
+        b->kid[node] = -1;
+        return;
+    }
     double mn[3] = {INFINITY, INFINITY, INFINITY}, mx[3] = {-INFINITY, -INFINITY, -INFINITY};
     for (int32_t i = lo; i < hi; i++) {
         const double *p = b->pts + 3 * (size_t)b->perm[i];
@@ -111,10 +116,11 @@ static void build_node(Builder *b, int32_t node, int32_t lo, int32_t hi) {
 }
 
 /* build_tree(points (n,3) f64, perm (n) i32 out, spheres (cap,4) f64 out, ranges (cap,2) i32 out,
- *            kids (cap) i32 out) -> number of nodes.  perm lists the input rows in tree order. */
+ *            kids (cap) i32 out, stop (1) i32) -> number of nodes, or -1 if stop was set meanwhile.
+ * perm lists the input rows in tree order. */
 static PyObject *py_build_tree(PyObject *self, PyObject *args) {
-    Py_buffer pts, perm, sph, rng, kid;
-    if (!PyArg_ParseTuple(args, "y*w*w*w*w*", &pts, &perm, &sph, &rng, &kid)) return NULL;
+    Py_buffer pts, perm, sph, rng, kid, stop;
+    if (!PyArg_ParseTuple(args, "y*w*w*w*w*w*", &pts, &perm, &sph, &rng, &kid, &stop)) return NULL;
     int32_t n = (int32_t)(pts.len / (3 * sizeof(double)));
     int32_t cap = (int32_t)(kid.len / sizeof(int32_t));
     PyObject *result = NULL;
@@ -127,16 +133,16 @@ static PyObject *py_build_tree(PyObject *self, PyObject *args) {
     key = (double *)malloc(sizeof(double) * (size_t)(n > 0 ? n : 1));
     if (!key) { PyErr_NoMemory(); goto done; }
     Builder b = {(const double *)pts.buf, (int32_t *)perm.buf, key, (double *)sph.buf, (int32_t *)rng.buf,
-                 (int32_t *)kid.buf, 1, cap};
+                 (int32_t *)kid.buf, 1, cap, (volatile int32_t *)stop.buf};
     Py_BEGIN_ALLOW_THREADS
     for (int32_t i = 0; i < n; i++) b.perm[i] = i;
     build_node(&b, 0, 0, n);
     Py_END_ALLOW_THREADS
-    result = PyLong_FromLong(b.n_nodes);
+    result = PyLong_FromLong(*b.stop ? -1 : b.n_nodes);
 done:
     free(key);
     PyBuffer_Release(&pts); PyBuffer_Release(&perm); PyBuffer_Release(&sph);
-    PyBuffer_Release(&rng); PyBuffer_Release(&kid);
+    PyBuffer_Release(&rng); PyBuffer_Release(&kid); PyBuffer_Release(&stop);
     return result;
 }
 
@@ -195,12 +201,6 @@ static inline void set_bits(uint64_t *row, int a, int b) {
         row[w] |= m;
         a += take;
     }
-}
-
-static int64_t popcount_all(const Raster *r, const uint64_t *bits) {
-    int64_t c = 0;
-    for (int i = 0; i < r->rows * r->words; i++) c += __builtin_popcountll(bits[i]);
-    return c;
 }
 
 /* The cap of (dx, dy, dz) = p - q (|p - q| > h) into the bitmap, rows already full skipped.
@@ -387,6 +387,25 @@ static int32_t collect_near(const Tree *t, int32_t *stack, const double *c, doub
     return m;
 }
 
+/* One query's near caps (points nearest first, |p - q| > h) into a cleared bitmap; returns caps drawn */
+#define MEMBER_CHUNK 1024
+static int64_t near_raster(const Raster *r, const Tree *t, const Near *near, int32_t m, const double *qi,
+                           double h, double h2, uint64_t *bits, uint8_t *full) {
+    memset(bits, 0, (size_t)r->rows * r->words * sizeof(uint64_t));
+    memset(full, 0, (size_t)r->rows);
+    int nf = 0;
+    int64_t caps = 0;
+    for (int32_t a = 0; a < m && nf < r->rows; a++) {
+        const float *p = t->pts + 3 * (size_t)near[a].i;
+        double dx = p[0] - qi[0], dy = p[1] - qi[1], dz = p[2] - qi[2];
+        double d2 = dx * dx + dy * dy + dz * dz;
+        if (d2 <= h2) continue;
+        caps++;
+        nf += add_cap(r, bits, full, dx, dy, dz, d2, h);
+    }
+    return caps;
+}
+
 /* clusters(points (n,3) f32 tree order, nodes (m) Node, queries (q,3) f64 grouped by cluster,
  *          starts (k1 - k0 + 1) i64 into queries, centres (k,3) f64, reach (k) f64 (all clusters),
  *          cluster range [k0, k1), h, rows, bins, beta out (q) f64,
@@ -407,8 +426,8 @@ static PyObject *py_clusters(PyObject *self, PyObject *args) {
     const double *q = (const double *)qs.buf, *cc = (const double *)cen.buf, *rr = (const double *)rch.buf;
     double *out = (double *)beta.buf;
     int64_t *stat = (int64_t *)stats.buf;
-    uint64_t *far = NULL, *bits = NULL;
-    uint8_t *far_full = NULL, *full = NULL;
+    uint64_t *far = NULL, *need = NULL, *bits = NULL;
+    uint8_t *full = NULL;
     int32_t *stack = NULL, *hints = NULL;
     Near *near = NULL;
     if (rows < 1 || bins < 1 || raster_init(&r, rows, bins) != 0) {
@@ -416,58 +435,78 @@ static PyObject *py_clusters(PyObject *self, PyObject *args) {
         goto done;
     }
     size_t nw = (size_t)rows * r.words;
-    far = (uint64_t *)calloc(2 * nw, sizeof(uint64_t));
-    far_full = (uint8_t *)calloc(2 * (size_t)rows, 1);
+    far = (uint64_t *)calloc((2 + (size_t)MEMBER_CHUNK) * nw, sizeof(uint64_t));
+    full = (uint8_t *)calloc((size_t)rows * MEMBER_CHUNK, 1);
     hints = (int32_t *)malloc(sizeof(int32_t) * (size_t)rows * bins);
     stack = (int32_t *)malloc(sizeof(int32_t) * 256);
     near = (Near *)malloc(sizeof(Near) * (size_t)(n > 0 ? n : 1));
-    if (!far || !far_full || !stack || !near || !hints) { PyErr_NoMemory(); goto done; }
+    if (!far || !full || !stack || !near || !hints) { PyErr_NoMemory(); goto done; }
     for (int i = 0; i < rows * bins; i++) hints[i] = -1;
-    bits = far + nw;
-    full = far_full + rows;
+    need = far + nw;
+    bits = need + nw;
     Py_BEGIN_ALLOW_THREADS
     Walker w = {stack, -1, 0, 0, 0};
     int64_t caps = 0, rays = 0, nears = 0;
     const double h2 = h * h;
+    const double total = (double)rows * bins;
+    double prev[3] = {0.0, 0.0, 0.0};
     for (int k = k0; k < k1; k++) {
         const double *c = cc + 3 * (size_t)k;
         const float cf[3] = {(float)c[0], (float)c[1], (float)c[2]};
-        double reach = rr[k];
-        /* far field from the centre: one ray per sample */
-        memset(far, 0, nw * sizeof(uint64_t));
-        memset(far_full, 0, (size_t)rows);
-        int n_full = 0;
-        w.last_leaf = -1;
-        double cut = reach > h ? reach : h;
-        if (n > 0) {
+        const double reach = rr[k];
+        const double cut = reach > h ? reach : h;
+        const int64_t q0 = st[k - k0], q1 = st[k - k0 + 1];
+        const int64_t n_mem = q1 - q0;
+        /* hints from a cluster far away would only lengthen the walks */
+        double jx = c[0] - prev[0], jy = c[1] - prev[1], jz = c[2] - prev[2];
+        if (k == k0 || jx * jx + jy * jy + jz * jz > 4.0 * reach * reach)
+            for (int i = 0; i < rows * bins; i++) hints[i] = -1;
+        memcpy(prev, c, sizeof prev);
+        int32_t m = n > 0 ? collect_near(&t, stack, c, reach, near) : 0;
+        nears += m;
+        /* pass 1: every member's near caps; `need` = samples left uncovered by some member */
+        memset(need, 0, nw * sizeof(uint64_t));
+        for (int64_t i = q0; i < q1; i++) {
+            int64_t slot = (i - q0) % MEMBER_CHUNK;
+            uint64_t *mb = bits + (size_t)slot * nw;
+            uint8_t *mf = full + (size_t)slot * rows;
+            caps += near_raster(&r, &t, near, m, q + 3 * (size_t)i, h, h2, mb, mf);
             for (int j = 0; j < rows; j++) {
-                uint64_t *row = far + (size_t)j * r.words;
-                for (int b = 0; b < bins; b++) {
-                    float s[3] = {(float)(r.s[j] * r.cos_lon[b]), (float)(r.s[j] * r.sin_lon[b]), (float)r.z[j]};
-                    rays++;
-                    if (ray_hits(&t, &w, cf, s, (float)cut, (float)h, hints + (size_t)j * bins + b))
-                        row[b >> 6] |= UINT64_C(1) << (b & 63);
+                if (mf[j]) continue;
+                for (int x = 0; x < r.words; x++) {
+                    uint64_t valid = (x == r.words - 1) ? r.last_mask : ~UINT64_C(0);
+                    need[(size_t)j * r.words + x] |= ~mb[(size_t)j * r.words + x] & valid;
                 }
-                if (row_is_full(&r, row)) { far_full[j] = 1; n_full++; }
             }
         }
-        int32_t m = (n_full < rows && n > 0) ? collect_near(&t, stack, c, reach, near) : 0;
-        nears += m;
-        for (int64_t i = st[k - k0]; i < st[k - k0 + 1]; i++) {
-            const double *qi = q + 3 * (size_t)i;
-            if (n_full == rows) { out[i] = 1.0; continue; }
-            memcpy(bits, far, nw * sizeof(uint64_t));
-            memcpy(full, far_full, (size_t)rows);
-            int nf = n_full;
-            for (int32_t a = 0; a < m && nf < rows; a++) {
-                const float *p = t.pts + 3 * (size_t)near[a].i;
-                double dx = p[0] - qi[0], dy = p[1] - qi[1], dz = p[2] - qi[2];
-                double d2 = dx * dx + dy * dy + dz * dz;
-                if (d2 <= h2) continue;
-                caps++;
-                nf += add_cap(&r, bits, full, dx, dy, dz, d2, h);
+        /* the far field from the centre: one ray per needed sample */
+        memset(far, 0, nw * sizeof(uint64_t));
+        w.last_leaf = -1;
+        if (n > 0) {
+            for (int j = 0; j < rows; j++) {
+                for (int x = 0; x < r.words; x++) {
+                    uint64_t todo = need[(size_t)j * r.words + x];
+                    while (todo) {
+                        int b = 64 * x + __builtin_ctzll(todo);
+                        todo &= todo - 1;
+                        float s[3] = {(float)(r.s[j] * r.cos_lon[b]), (float)(r.s[j] * r.sin_lon[b]),
+                                      (float)r.z[j]};
+                        rays++;
+                        if (ray_hits(&t, &w, cf, s, (float)cut, (float)h, hints + (size_t)j * bins + b))
+                            far[(size_t)j * r.words + x] |= UINT64_C(1) << (b & 63);
+                    }
+                }
             }
-            out[i] = (nf == rows) ? 1.0 : (double)popcount_all(&r, bits) / ((double)rows * bins);
+        }
+        /* pass 2: member raster | far field (members beyond the first chunk are rasterised again) */
+        for (int64_t i = q0; i < q1; i++) {
+            int64_t slot = (i - q0) % MEMBER_CHUNK;
+            uint64_t *mb = bits + (size_t)slot * nw;
+            uint8_t *mf = full + (size_t)slot * rows;
+            if (n_mem > MEMBER_CHUNK) caps += near_raster(&r, &t, near, m, q + 3 * (size_t)i, h, h2, mb, mf);
+            int64_t count = 0;
+            for (size_t x = 0; x < nw; x++) count += __builtin_popcountll(mb[x] | far[x]);
+            out[i] = (double)count / total;
         }
     }
     stat[0] += w.visits;
@@ -481,7 +520,7 @@ static PyObject *py_clusters(PyObject *self, PyObject *args) {
     Py_INCREF(result);
 done:
     raster_free(&r);
-    free(far); free(far_full); free(stack); free(near); free(hints);
+    free(far); free(full); free(stack); free(near); free(hints);
     PyBuffer_Release(&pts); PyBuffer_Release(&nds); PyBuffer_Release(&qs); PyBuffer_Release(&starts); PyBuffer_Release(&cen); PyBuffer_Release(&rch);
     PyBuffer_Release(&beta); PyBuffer_Release(&stats);
     return result;

@@ -22,7 +22,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.spatial import ConvexHull, Delaunay, QhullError
 
-from ..geometry import Checkpoint, kd_tree, nearest_neighbor_distances, no_checkpoint
+from ..geometry import Checkpoint, kd_tree, nearest_neighbor_distances, no_checkpoint, unique_rows
 from ..params import Params
 from ._rays import FRAME
 from .rays_kernel import BallTree, choose_plan, run_plan
@@ -131,23 +131,23 @@ def boundedness_rays(
     if not h > 0:
         checkpoint(1.0)
         return out
-    uniq_q, inverse = np.unique(queries, axis=0, return_inverse=True)
+    uniq_q, inverse, _ = unique_rows(queries)
     # identical cloud points have identical caps; the union is unchanged without the copies
-    pts = np.unique(cloud, axis=0)
+    pts = unique_rows(cloud)[0]
+    checkpoint(0.0)
     centre = (pts.min(axis=0) + pts.max(axis=0)) / 2.0
     pts_r = (pts - centre) @ FRAME.T
     q_r = (uniq_q - centre) @ FRAME.T
     bins = 2 * rows if bins is None else int(bins)
     if rows < 1 or bins < 1:
         raise ValueError("the raster needs at least one row and one bin")
-    tree = BallTree(pts_r)
-    checkpoint(0.0)
+    tree = BallTree(pts_r, checkpoint)
     plan = choose_plan(
         tree, kd_tree(pts_r), q_r, h, h / near_angle, cluster_cell * h, rows * bins, exact_pairs, share_far_field,
         checkpoint,
     )
     beta = run_plan(tree, plan, q_r, h, rows, bins, workers, checkpoint)
-    out[:] = beta[inverse.ravel()]
+    out[:] = beta[inverse]
     return out
 
 

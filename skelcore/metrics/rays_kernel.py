@@ -12,6 +12,7 @@ Design, costs and errors: docs/boundedness.md section 3.
 from __future__ import annotations
 
 import os
+import threading
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
 
@@ -38,7 +39,7 @@ NODE = np.dtype([("c", "<f4", (3,)), ("r", "<f4"), ("kid", "<i4"), ("lo", "<i4")
 class BallTree:
     """The distinct cloud points (raster frame) in a balanced KD-tree with a bounding sphere per node."""
 
-    def __init__(self, pts: np.ndarray):
+    def __init__(self, pts: np.ndarray, checkpoint: Checkpoint = no_checkpoint):
         pts = np.ascontiguousarray(pts, dtype=np.float64)
         n = len(pts)
         cap = max(1, 2 * ((n + 3) // 4) + 2)
@@ -46,7 +47,7 @@ class BallTree:
         spheres = np.empty((cap, 4))
         ranges = np.empty((cap, 2), np.int32)
         kids = np.empty(cap, np.int32)
-        m = _raycast.build_tree(pts, perm, spheres, ranges, kids)
+        m = _build_polling(lambda stop: _raycast.build_tree(pts, perm, spheres, ranges, kids, stop), n, checkpoint)
         self.points = np.ascontiguousarray(pts[perm], dtype=np.float32)
         nodes = np.zeros(m, NODE)
         nodes["c"] = spheres[:m, :3]
@@ -68,6 +69,26 @@ class BallTree:
     def ray_cost(self) -> float:
         """Cost units of one far ray (node visits grow with the depth)."""
         return 2.0 + self.depth
+
+
+def _build_polling(build, n: int, checkpoint: Checkpoint) -> int:
+    """Run ``build(stop)`` (the kernel releases the GIL) in a thread while this one calls the checkpoint
+    every 50 ms; a cancel sets ``stop``, which the kernel reads, then re-raises once it has returned."""
+    stop = np.zeros(1, np.int32)
+    if n <= 65536:  # a few ms: no thread needed
+        return build(stop)
+    result: list = []
+    worker = threading.Thread(target=lambda: result.append(build(stop)), name="skelscope-balltree", daemon=True)
+    worker.start()
+    try:
+        while worker.is_alive():
+            worker.join(0.05)
+            checkpoint(0.0)
+    except BaseException:
+        stop[0] = 1
+        worker.join()
+        raise
+    return result[0]
 
 
 @dataclass
@@ -109,6 +130,14 @@ def shared_plan(
     keys = np.floor(queries / level_cell[:, None]).astype(np.int64)
     keys = np.column_stack([keys, level, np.where(lone, np.arange(1, len(keys) + 1), 0)])
     cid = _group_ids(keys)
+    # clusters in Morton order of their first query's cell: neighbours follow each other, so the
+    # kernel's per-sample hints (the leaf the same sample hit from the previous cluster) stay good
+    first = np.zeros(int(cid.max(initial=-1)) + 1, np.int64)
+    first[cid[::-1]] = np.arange(len(cid))[::-1]
+    rank = np.argsort(_morton(np.floor(queries[first] / (cell / 2.0**levels)).astype(np.int64)), kind="stable")
+    inv = np.empty_like(rank)
+    inv[rank] = np.arange(len(rank))
+    cid = inv[cid]
     order = np.argsort(cid, kind="stable")
     cid = cid[order]
     q = queries[order]
@@ -123,6 +152,16 @@ def shared_plan(
     cl_level = level[order][starts[:-1]]
     reach = near_radius * np.where(cl_level > 0, FINER_BOOST, 1.0) / 2.0**cl_level + spreads
     return Plan(order, starts, np.ascontiguousarray(centres), reach)
+
+
+def _morton(cells: np.ndarray) -> np.ndarray:
+    """Morton (Z-order) codes of integer cells (N, 3): 21 bits per axis, interleaved."""
+    c = (cells - cells.min(axis=0, initial=0)).astype(np.uint64) & np.uint64((1 << 21) - 1)
+    code = np.zeros(len(c), np.uint64)
+    for bit in range(21):
+        for axis in range(3):
+            code |= ((c[:, axis] >> np.uint64(bit)) & np.uint64(1)) << np.uint64(3 * bit + axis)
+    return code
 
 
 def _group_ids(keys: np.ndarray) -> np.ndarray:
@@ -156,9 +195,11 @@ def choose_plan(
         return plan
     best = None
     for scale in 2.0 ** np.arange(-1, 6):
-        clusters = _count_cells(queries, cell * scale)
         reach = (near_radius + 0.87 * cell) * scale
         near = float(np.mean(cloud_tree.query_ball_point(sample, reach, return_length=True)))
+        if best is not None and n_q * near * CAP_COST >= best[0]:
+            break  # the near part only grows with the size: no larger size can be cheaper
+        clusters = _count_cells(queries, cell * scale)
         cost = clusters * samples * tree.ray_cost + n_q * near * CAP_COST
         if best is None or cost < best[0]:
             best = (cost, near, scale)
