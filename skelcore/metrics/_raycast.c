@@ -526,8 +526,66 @@ done:
     return result;
 }
 
+/* Distance from each point of [i0, i1) (tree order) to its nearest other point: its own leaf first, then
+ * up the tree, each ancestor's other subtree pruned by the best distance so far.  Exact (as a KD-tree
+ * kNN query), in double precision from the float32 points. */
+static double nn_subtree(const Tree *t, int32_t *stack, int32_t root, int32_t self, const float *p, double best2) {
+    int sp = 0;
+    stack[sp++] = root;
+    double best = sqrt(best2);
+    while (sp > 0) {
+        const Node *nd = t->nodes + stack[--sp];
+        double wx = nd->c[0] - p[0], wy = nd->c[1] - p[1], wz = nd->c[2] - p[2];
+        double d = sqrt(wx * wx + wy * wy + wz * wz) - nd->r;
+        if (d > best) continue;
+        if (nd->kid >= 0) {
+            stack[sp++] = nd->kid;
+            stack[sp++] = nd->kid + 1;
+            continue;
+        }
+        for (int32_t i = nd->lo; i < nd->hi; i++) {
+            if (i == self) continue;
+            const float *o = t->pts + 3 * (size_t)i;
+            double dx = (double)o[0] - p[0], dy = (double)o[1] - p[1], dz = (double)o[2] - p[2];
+            double d2 = dx * dx + dy * dy + dz * dz;
+            if (d2 < best2) { best2 = d2; best = sqrt(d2); }
+        }
+    }
+    return best2;
+}
+
+/* nn_dist(points (n,3) f32 tree order, nodes, leaf_of (n) i32, i0, i1, out (i1 - i0) f64) */
+static PyObject *py_nn_dist(PyObject *self, PyObject *args) {
+    Py_buffer pts, nds, leaf_of, out;
+    Py_ssize_t i0, i1;
+    if (!PyArg_ParseTuple(args, "y*y*y*nnw*", &pts, &nds, &leaf_of, &i0, &i1, &out)) return NULL;
+    Tree t = {(const float *)pts.buf, (const Node *)nds.buf, (int32_t)(nds.len / (Py_ssize_t)sizeof(Node))};
+    const int32_t *lf = (const int32_t *)leaf_of.buf;
+    double *o = (double *)out.buf;
+    Py_BEGIN_ALLOW_THREADS
+    int32_t stack[256];
+    for (Py_ssize_t i = i0; i < i1; i++) {
+        const float *p = t.pts + 3 * (size_t)i;
+        int32_t leaf = lf[i];
+        double best2 = nn_subtree(&t, stack, leaf, (int32_t)i, p, INFINITY);
+        int32_t prev = leaf, node = t.nodes[leaf].par;
+        while (node >= 0) {  /* each ancestor's other subtree; far ones cost one sphere test */
+            const Node *nd = t.nodes + node;
+            int32_t other = (nd->kid == prev) ? prev + 1 : prev - 1;
+            best2 = nn_subtree(&t, stack, other, (int32_t)i, p, best2);
+            prev = node;
+            node = nd->par;
+        }
+        o[i - i0] = sqrt(best2);
+    }
+    Py_END_ALLOW_THREADS
+    PyBuffer_Release(&pts); PyBuffer_Release(&nds); PyBuffer_Release(&leaf_of); PyBuffer_Release(&out);
+    Py_RETURN_NONE;
+}
+
 static PyMethodDef methods[] = {
     {"build_tree", py_build_tree, METH_VARARGS, "KD-tree of bounding spheres (boundedness rays kernel)."},
+    {"nn_dist", py_nn_dist, METH_VARARGS, "Distance of each point to its nearest other point (tree order)."},
     {"clusters", py_clusters, METH_VARARGS, "beta of the queries of a range of clusters (rays kernel)."},
     {NULL, NULL, 0, NULL},
 };

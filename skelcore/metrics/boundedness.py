@@ -22,7 +22,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.spatial import ConvexHull, Delaunay, QhullError
 
-from ..geometry import Checkpoint, kd_tree, nearest_neighbor_distances, no_checkpoint, unique_rows
+from ..geometry import Checkpoint, kd_tree, no_checkpoint, unique_rows
 from ..params import Params
 from ._rays import FRAME
 from .rays_kernel import BallTree, choose_plan, run_plan
@@ -62,11 +62,13 @@ def boundedness(
 
 
 def rays_radius(cloud: np.ndarray, radius_factor: float = 2.0, checkpoint: Checkpoint = no_checkpoint) -> float:
-    """h = radius_factor x the median nearest-neighbour spacing of the cloud (SPEC 2)."""
+    """h = radius_factor x the median nearest-neighbour spacing of the cloud (SPEC 2; copies of a point
+    are at distance 0), from the kernel's tree of the distinct points."""
     cloud = np.asarray(cloud, dtype=float)
     if len(cloud) < 2:
         return 0.0
-    return float(radius_factor * np.median(nearest_neighbor_distances(cloud, checkpoint=checkpoint)))
+    pts, _, counts = unique_rows(cloud)
+    return float(radius_factor * BallTree(pts, checkpoint).median_spacing(counts, checkpoint))
 
 
 def _as_points(name: str, points: np.ndarray) -> np.ndarray:
@@ -127,21 +129,21 @@ def boundedness_rays(
     if len(queries) == 0 or len(cloud) == 0:
         checkpoint(1.0)
         return out
-    h = rays_radius(cloud, radius_factor, lambda f: checkpoint(0.0))
-    if not h > 0:
-        checkpoint(1.0)
-        return out
     uniq_q, inverse, _ = unique_rows(queries)
     # identical cloud points have identical caps; the union is unchanged without the copies
-    pts = unique_rows(cloud)[0]
+    pts, _, counts = unique_rows(cloud)
     checkpoint(0.0)
-    centre = (pts.min(axis=0) + pts.max(axis=0)) / 2.0
-    pts_r = (pts - centre) @ FRAME.T
-    q_r = (uniq_q - centre) @ FRAME.T
     bins = 2 * rows if bins is None else int(bins)
     if rows < 1 or bins < 1:
         raise ValueError("the raster needs at least one row and one bin")
+    centre = (pts.min(axis=0) + pts.max(axis=0)) / 2.0
+    pts_r = (pts - centre) @ FRAME.T
+    q_r = (uniq_q - centre) @ FRAME.T
     tree = BallTree(pts_r, checkpoint)
+    h = radius_factor * tree.median_spacing(counts, lambda f: checkpoint(0.0)) if len(cloud) > 1 else 0.0
+    if not h > 0:
+        checkpoint(1.0)
+        return out
     plan = choose_plan(
         tree, kd_tree(pts_r), q_r, h, h / near_angle, cluster_cell * h, rows * bins, exact_pairs, share_far_field,
         checkpoint,

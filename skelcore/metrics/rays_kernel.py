@@ -30,6 +30,8 @@ FINER_BOOST = 2.0
 CAP_COST = 25.0
 # cost units per task: about 50 ms of one core, so checkpoints stay well under 0.5 s apart
 TASK_COST = 1.5e6
+# points per nearest-neighbour call (about 30 ms of one core)
+NN_CHUNK = 65536
 
 
 # one tree node as the kernel reads it (struct Node in _raycast.c): 32 bytes
@@ -62,13 +64,71 @@ class BallTree:
         nodes["par"][kids[inner]] = inner
         nodes["par"][kids[inner] + 1] = inner
         self.nodes = nodes
+        self.perm = perm
         self.n = n
         self.depth = max(1.0, float(np.log2(max(2.0, n / 8.0))))
+
+    def nearest_other(self, checkpoint: Checkpoint = no_checkpoint, workers: int | None = None) -> np.ndarray:
+        """Distance from each point (tree order) to its nearest other point, exact; inf for a lone point."""
+        leaves = np.flatnonzero(self.nodes["kid"] < 0)
+        leaves = leaves[np.argsort(self.nodes["lo"][leaves])]
+        leaf_of = np.repeat(leaves.astype(np.int32), self.nodes["hi"][leaves] - self.nodes["lo"][leaves])
+        out = np.empty(self.n)
+
+        def chunk(i0: int, i1: int) -> None:
+            _raycast.nn_dist(self.points, self.nodes, leaf_of, i0, i1, out[i0:i1])
+
+        spans = [(i, min(i + NN_CHUNK, self.n)) for i in range(0, self.n, NN_CHUNK)]
+        _on_pool(chunk, spans, workers, checkpoint)
+        return out
+
+    def median_spacing(self, counts: np.ndarray, checkpoint: Checkpoint = no_checkpoint) -> float:
+        """Median nearest-neighbour distance over the original points, ``counts`` copies of each
+        distinct point (input order): a point with copies is at distance 0 from one (SPEC 2's h)."""
+        if int(np.sum(counts)) < 2:
+            return 0.0
+        c = np.asarray(counts)[self.perm]
+        d = np.where(c > 1, 0.0, self.nearest_other(checkpoint))
+        return float(np.median(np.repeat(d, c)))
 
     @property
     def ray_cost(self) -> float:
         """Cost units of one far ray (node visits grow with the depth)."""
         return 2.0 + self.depth
+
+
+def _on_pool(fn, spans: list, workers: int | None, checkpoint: Checkpoint, done=None) -> None:
+    """``fn(*span)`` for every span on ``workers`` threads (None = all cores), a checkpoint after each
+    in order; ``done(span, result)`` stores a result.  A short queue: a cancel stops within about one
+    span per worker."""
+    workers = max(1, int(workers or os.cpu_count() or 1))
+    store = done or (lambda span, result: None)
+    checkpoint(0.0)
+    if workers == 1 or len(spans) <= 1:
+        for i, span in enumerate(spans):
+            store(span, fn(*span))
+            checkpoint((i + 1) / len(spans))
+        return
+    with ThreadPoolExecutor(max_workers=workers) as pool:
+        pending: list = []
+        it = iter(spans)
+        try:
+            for span in it:
+                pending.append((span, pool.submit(fn, *span)))
+                if len(pending) >= 2 * workers:
+                    break
+            finished = 0
+            while pending:
+                span, fut = pending.pop(0)
+                store(span, fut.result())
+                finished += 1
+                checkpoint(finished / len(spans))
+                nxt = next(it, None)
+                if nxt is not None:
+                    pending.append((nxt, pool.submit(fn, *nxt)))
+        finally:
+            for _, fut in pending:
+                fut.cancel()
 
 
 def _build_polling(build, n: int, checkpoint: Checkpoint) -> int:
@@ -259,39 +319,12 @@ def run_plan(
         )
         return beta, st
 
-    workers = max(1, int(workers or os.cpu_count() or 1))
-    checkpoint(0.0)
-    done = 0
-
-    def store(k0: int, k1: int, result) -> None:
-        nonlocal done
+    def store(span: tuple[int, int], result) -> None:
         beta, st = result
-        out_sorted[starts[k0] : starts[k1]] = beta
+        out_sorted[starts[span[0]] : starts[span[1]]] = beta
         stats[:] += st
-        done += 1
-        checkpoint(done / len(tasks))
 
-    if workers == 1 or len(tasks) <= 1:
-        for k0, k1 in tasks:
-            store(k0, k1, task(k0, k1))
-    else:
-        with ThreadPoolExecutor(max_workers=workers) as pool:
-            pending: list = []
-            it = iter(tasks)
-            try:
-                for k0, k1 in it:  # a short queue: a cancel stops within about one task per worker
-                    pending.append((k0, k1, pool.submit(task, k0, k1)))
-                    if len(pending) >= 2 * workers:
-                        break
-                while pending:
-                    k0, k1, fut = pending.pop(0)
-                    store(k0, k1, fut.result())
-                    nxt = next(it, None)
-                    if nxt is not None:
-                        pending.append((nxt[0], nxt[1], pool.submit(task, nxt[0], nxt[1])))
-            finally:
-                for *_, fut in pending:
-                    fut.cancel()
+    _on_pool(task, tasks, workers, checkpoint, store)
     out = np.empty(len(q_sorted))
     out[plan.order] = out_sorted
     return out
