@@ -229,7 +229,6 @@ def test_shared_far_field_stays_within_0_01_of_every_pair(cell):
 
 def _plan(cloud, queries, share=None):
     """The plan ``boundedness_rays`` would choose with the default Params (raster frame)."""
-    from skelcore.geometry import kd_tree
     from skelcore.metrics._rays import FRAME
     from skelcore.metrics.rays_kernel import BallTree, choose_plan
 
@@ -239,7 +238,7 @@ def _plan(cloud, queries, share=None):
     centre = (pts.min(axis=0) + pts.max(axis=0)) / 2.0
     pts_r, q_r = (pts - centre) @ FRAME.T, (np.unique(queries, axis=0) - centre) @ FRAME.T
     plan = choose_plan(
-        BallTree(pts_r), kd_tree(pts_r), q_r, h, h / p.rays_near_angle, p.rays_cluster_cell * h,
+        BallTree(pts_r), q_r, h, h / p.rays_near_angle, p.rays_cluster_cell * h,
         2 * p.rays_rows**2, p.rays_exact_pairs, share,
     )
     return plan, h
@@ -265,8 +264,7 @@ def test_thin_torus_default_shares_and_stays_within_0_01_of_every_pair():
 def test_near_surface_queries_share_in_finer_cells_within_0_01_of_every_pair():
     """Queries 1.5-3.5 h inside a cylinder's wall (as a contracted skeleton of a thin part puts them)
     share in cells of h/4 with clearance >= 4 cells (docs/boundedness.md 1.7)."""
-    from skelcore.geometry import kd_tree
-    from skelcore.metrics.rays_kernel import shared_plan
+    from skelcore.metrics.rays_kernel import BallTree, shared_plan
 
     shape = cylinder(4096, 0.5, 4.0, seed=8)
     norm = Normalization.from_cloud(shape.cloud)
@@ -278,9 +276,9 @@ def test_near_surface_queries_share_in_finer_cells_within_0_01_of_every_pair():
     inward = (axis[i] - cloud[i]) / np.linalg.norm(axis[i] - cloud[i], axis=1, keepdims=True)
     seeds = cloud[i] + inward * rng.uniform(1.5, 3.5, (150, 1)) * h
     queries = np.repeat(seeds, 4, axis=0) + rng.normal(scale=0.02 * h, size=(600, 3))
-    tree = kd_tree(cloud)
-    clearance = tree.query(queries, k=1)[0]
-    plan = shared_plan(tree, queries, h, 5 * h, 0.5 * h, clearance)
+    clearance = BallTree(cloud).clearance(queries, np.inf)
+    assert np.allclose(clearance, cKDTree(cloud).query(queries, k=1)[0], rtol=1e-5)
+    plan = shared_plan(queries, h, 5 * h, 0.5 * h, clearance)
     assert len(plan.starts) - 1 < 300  # shared, not 600 clusters of one
     shared = boundedness_rays(cloud, queries, share_far_field=True)
     exact = boundedness_rays(cloud, queries, share_far_field=False)
@@ -300,6 +298,11 @@ def test_default_shares_the_far_field_only_where_it_pays():
     def clusters(queries):
         plan, _ = _plan(cloud, queries)
         return len(plan.starts) - 1
+
+    from skelcore.metrics.rays_kernel import BallTree
+
+    counts = BallTree(cloud).count_within(spread[:300], 0.1)  # the cost model's near counts
+    assert np.array_equal(counts, cKDTree(cloud).query_ball_point(spread[:300], 0.1, return_length=True))
 
     assert clusters(compact) < len(compact) / 4
     assert clusters(spread) == len(spread)

@@ -63,18 +63,19 @@ typedef struct {
     const double *pts;
     int32_t *perm;
     double *key;
-    double *sph;
-    int32_t *rng;
-    int32_t *kid;
+    Node *nodes;
     int32_t n_nodes, cap;
+    double pad;              /* absolute radius padding: float32 rounding of centres and points */
     volatile int32_t *stop;  /* set by another thread to abandon the build (a cancel) */
 } Builder;
 
-static void build_node(Builder *b, int32_t node, int32_t lo, int32_t hi) {
-    if (hi - lo > 4096 && *b->stop) {
-        b->kid[node] = -1;
-        return;
-    }
+static void build_node(Builder *b, int32_t node, int32_t parent, int32_t lo, int32_t hi) {
+    Node *nd = b->nodes + node;
+    nd->par = parent;
+    nd->lo = lo;
+    nd->hi = hi;
+    nd->kid = -1;
+    if (hi - lo > 4096 && *b->stop) return;
     double mn[3] = {INFINITY, INFINITY, INFINITY}, mx[3] = {-INFINITY, -INFINITY, -INFINITY};
     for (int32_t i = lo; i < hi; i++) {
         const double *p = b->pts + 3 * (size_t)b->perm[i];
@@ -91,16 +92,9 @@ static void build_node(Builder *b, int32_t node, int32_t lo, int32_t hi) {
         double d2 = dx * dx + dy * dy + dz * dz;
         if (d2 > r2) r2 = d2;
     }
-    b->sph[4 * node + 0] = c[0];
-    b->sph[4 * node + 1] = c[1];
-    b->sph[4 * node + 2] = c[2];
-    b->sph[4 * node + 3] = sqrt(r2) * (1.0 + 1e-12) + 1e-300;
-    b->rng[2 * node] = lo;
-    b->rng[2 * node + 1] = hi;
-    if (hi - lo <= LEAF_SIZE || b->n_nodes + 2 > b->cap) {
-        b->kid[node] = -1;
-        return;
-    }
+    for (int k = 0; k < 3; k++) nd->c[k] = (float)c[k];
+    nd->r = (float)(sqrt(r2) * (1.0 + 1e-6) + b->pad);
+    if (hi - lo <= LEAF_SIZE || b->n_nodes + 2 > b->cap) return;
     int axis = 0;
     double ext = mx[0] - mn[0];
     for (int k = 1; k < 3; k++)
@@ -110,39 +104,41 @@ static void build_node(Builder *b, int32_t node, int32_t lo, int32_t hi) {
     select_nth(b->key, b->perm, lo, hi, mid);
     int32_t first = b->n_nodes;
     b->n_nodes += 2;
-    b->kid[node] = first;
-    build_node(b, first, lo, mid);
-    build_node(b, first + 1, mid, hi);
+    nd->kid = first;
+    build_node(b, first, node, lo, mid);
+    build_node(b, first + 1, node, mid, hi);
 }
 
-/* build_tree(points (n,3) f64, perm (n) i32 out, spheres (cap,4) f64 out, ranges (cap,2) i32 out,
- *            kids (cap) i32 out, stop (1) i32) -> number of nodes, or -1 if stop was set meanwhile.
- * perm lists the input rows in tree order. */
+/* build_tree(points (n,3) f64, perm (n) i32 out, nodes (cap) Node out, stop (1) i32) -> number of
+ * nodes, or -1 if stop was set meanwhile.  perm lists the input rows in tree order. */
 static PyObject *py_build_tree(PyObject *self, PyObject *args) {
-    Py_buffer pts, perm, sph, rng, kid, stop;
-    if (!PyArg_ParseTuple(args, "y*w*w*w*w*w*", &pts, &perm, &sph, &rng, &kid, &stop)) return NULL;
+    Py_buffer pts, perm, nds, stop;
+    if (!PyArg_ParseTuple(args, "y*w*w*w*", &pts, &perm, &nds, &stop)) return NULL;
     int32_t n = (int32_t)(pts.len / (3 * sizeof(double)));
-    int32_t cap = (int32_t)(kid.len / sizeof(int32_t));
+    int32_t cap = (int32_t)(nds.len / (Py_ssize_t)sizeof(Node));
     PyObject *result = NULL;
     double *key = NULL;
-    if (perm.len / (Py_ssize_t)sizeof(int32_t) < n || sph.len / (Py_ssize_t)(4 * sizeof(double)) < cap ||
-        rng.len / (Py_ssize_t)(2 * sizeof(int32_t)) < cap || cap < 1) {
+    if (perm.len / (Py_ssize_t)sizeof(int32_t) < n || cap < 1) {
         PyErr_SetString(PyExc_ValueError, "build_tree: output buffers too small");
         goto done;
     }
     key = (double *)malloc(sizeof(double) * (size_t)(n > 0 ? n : 1));
     if (!key) { PyErr_NoMemory(); goto done; }
-    Builder b = {(const double *)pts.buf, (int32_t *)perm.buf, key, (double *)sph.buf, (int32_t *)rng.buf,
-                 (int32_t *)kid.buf, 1, cap, (volatile int32_t *)stop.buf};
+    double scale = 1.0;
+    for (Py_ssize_t i = 0; i < 3 * (Py_ssize_t)n; i++) {
+        double v = fabs(((const double *)pts.buf)[i]);
+        if (v > scale) scale = v;
+    }
+    Builder b = {(const double *)pts.buf, (int32_t *)perm.buf, key, (Node *)nds.buf, 1, cap, 1e-6 * scale,
+                 (volatile int32_t *)stop.buf};
     Py_BEGIN_ALLOW_THREADS
     for (int32_t i = 0; i < n; i++) b.perm[i] = i;
-    build_node(&b, 0, 0, n);
+    build_node(&b, 0, -1, 0, n);
     Py_END_ALLOW_THREADS
     result = PyLong_FromLong(*b.stop ? -1 : b.n_nodes);
 done:
     free(key);
-    PyBuffer_Release(&pts); PyBuffer_Release(&perm); PyBuffer_Release(&sph);
-    PyBuffer_Release(&rng); PyBuffer_Release(&kid); PyBuffer_Release(&stop);
+    PyBuffer_Release(&pts); PyBuffer_Release(&perm); PyBuffer_Release(&nds); PyBuffer_Release(&stop);
     return result;
 }
 
@@ -583,8 +579,81 @@ static PyObject *py_nn_dist(PyObject *self, PyObject *args) {
     Py_RETURN_NONE;
 }
 
+/* near_stats(points (n,3) f32 tree order, nodes, queries (q,3) f64, radius, bound, counts out (q) i64,
+ *            clearance out (q) f64): per query, the number of points within `radius`, and the distance
+ * to the nearest point if it is below `bound` (else inf).  For the cluster plan's cost estimate and its
+ * near-surface test. */
+static PyObject *py_near_stats(PyObject *self, PyObject *args) {
+    Py_buffer pts, nds, qs, counts, clear;
+    double radius, bound;
+    if (!PyArg_ParseTuple(args, "y*y*y*ddw*w*", &pts, &nds, &qs, &radius, &bound, &counts, &clear)) return NULL;
+    Tree t = {(const float *)pts.buf, (const Node *)nds.buf, (int32_t)(nds.len / (Py_ssize_t)sizeof(Node))};
+    Py_ssize_t nq = qs.len / (Py_ssize_t)(3 * sizeof(double));
+    const double *q = (const double *)qs.buf;
+    int64_t *cnt = (int64_t *)counts.buf;
+    double *cl = (double *)clear.buf;
+    const int want_count = counts.len > 0, want_clear = clear.len > 0;
+    Py_BEGIN_ALLOW_THREADS
+    int32_t stack[256];
+    const double r2 = radius * radius;
+    for (Py_ssize_t i = 0; i < nq; i++) {
+        const double *p = q + 3 * (size_t)i;
+        if (want_count) {  /* points within radius: whole nodes inside the ball counted at once */
+            int64_t c = 0;
+            int sp = 0;
+            stack[sp++] = 0;
+            while (sp > 0) {
+                const Node *nd = t.nodes + stack[--sp];
+                double wx = nd->c[0] - p[0], wy = nd->c[1] - p[1], wz = nd->c[2] - p[2];
+                double d = sqrt(wx * wx + wy * wy + wz * wz);
+                if (d - nd->r > radius) continue;
+                if (d + nd->r <= radius) { c += nd->hi - nd->lo; continue; }
+                if (nd->kid >= 0) { stack[sp++] = nd->kid; stack[sp++] = nd->kid + 1; continue; }
+                for (int32_t k = nd->lo; k < nd->hi; k++) {
+                    const float *o = t.pts + 3 * (size_t)k;
+                    double dx = o[0] - p[0], dy = o[1] - p[1], dz = o[2] - p[2];
+                    if (dx * dx + dy * dy + dz * dz <= r2) c++;
+                }
+            }
+            cnt[i] = c;
+        }
+        if (want_clear) {  /* nearest point below the bound, nearer child first */
+            double best = bound, best2 = bound * bound;
+            int sp = 0;
+            stack[sp++] = 0;
+            while (sp > 0) {
+                const Node *nd = t.nodes + stack[--sp];
+                double wx = nd->c[0] - p[0], wy = nd->c[1] - p[1], wz = nd->c[2] - p[2];
+                if (sqrt(wx * wx + wy * wy + wz * wz) - nd->r > best) continue;
+                if (nd->kid >= 0) {
+                    const Node *a = t.nodes + nd->kid, *b = a + 1;
+                    double da = (a->c[0] - p[0]) * (a->c[0] - p[0]) + (a->c[1] - p[1]) * (a->c[1] - p[1]) +
+                                (a->c[2] - p[2]) * (a->c[2] - p[2]);
+                    double db = (b->c[0] - p[0]) * (b->c[0] - p[0]) + (b->c[1] - p[1]) * (b->c[1] - p[1]) +
+                                (b->c[2] - p[2]) * (b->c[2] - p[2]);
+                    if (da <= db) { stack[sp++] = nd->kid + 1; stack[sp++] = nd->kid; }
+                    else { stack[sp++] = nd->kid; stack[sp++] = nd->kid + 1; }
+                    continue;
+                }
+                for (int32_t k = nd->lo; k < nd->hi; k++) {
+                    const float *o = t.pts + 3 * (size_t)k;
+                    double dx = o[0] - p[0], dy = o[1] - p[1], dz = o[2] - p[2];
+                    double d2 = dx * dx + dy * dy + dz * dz;
+                    if (d2 < best2) { best2 = d2; best = sqrt(d2); }
+                }
+            }
+            cl[i] = best2 < bound * bound ? best : INFINITY;
+        }
+    }
+    Py_END_ALLOW_THREADS
+    PyBuffer_Release(&pts); PyBuffer_Release(&nds); PyBuffer_Release(&qs);
+    PyBuffer_Release(&counts); PyBuffer_Release(&clear);
+    Py_RETURN_NONE;
+}
+
 static PyMethodDef methods[] = {
     {"build_tree", py_build_tree, METH_VARARGS, "KD-tree of bounding spheres (boundedness rays kernel)."},
+    {"near_stats", py_near_stats, METH_VARARGS, "Points within a radius and bounded clearance per query."},
     {"nn_dist", py_nn_dist, METH_VARARGS, "Distance of each point to its nearest other point (tree order)."},
     {"clusters", py_clusters, METH_VARARGS, "beta of the queries of a range of clusters (rays kernel)."},
     {NULL, NULL, 0, NULL},

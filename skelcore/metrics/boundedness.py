@@ -22,7 +22,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.spatial import ConvexHull, Delaunay, QhullError
 
-from ..geometry import Checkpoint, kd_tree, no_checkpoint, unique_rows
+from ..geometry import Checkpoint, no_checkpoint, unique_rows
 from ..params import Params
 from ._rays import FRAME
 from .rays_kernel import BallTree, choose_plan, run_plan
@@ -145,7 +145,7 @@ def boundedness_rays(
         checkpoint(1.0)
         return out
     plan = choose_plan(
-        tree, kd_tree(pts_r), q_r, h, h / near_angle, cluster_cell * h, rows * bins, exact_pairs, share_far_field,
+        tree, q_r, h, h / near_angle, cluster_cell * h, rows * bins, exact_pairs, share_far_field,
         checkpoint,
     )
     beta = run_plan(tree, plan, q_r, h, rows, bins, workers, checkpoint)

@@ -17,9 +17,7 @@ from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.spatial import cKDTree
-
-from ..geometry import Checkpoint, chunked_query, no_checkpoint
+from ..geometry import Checkpoint, no_checkpoint
 from . import _raycast
 
 # queries closer than this many h to the cloud share only in finer cells, or are alone (1.7)
@@ -46,23 +44,10 @@ class BallTree:
         n = len(pts)
         cap = max(1, 2 * ((n + 3) // 4) + 2)
         perm = np.empty(n, np.int32)
-        spheres = np.empty((cap, 4))
-        ranges = np.empty((cap, 2), np.int32)
-        kids = np.empty(cap, np.int32)
-        m = _build_polling(lambda stop: _raycast.build_tree(pts, perm, spheres, ranges, kids, stop), n, checkpoint)
+        nodes = np.empty(cap, NODE)
+        m = _build_polling(lambda stop: _raycast.build_tree(pts, perm, nodes, stop), n, checkpoint)
         self.points = np.ascontiguousarray(pts[perm], dtype=np.float32)
-        nodes = np.zeros(m, NODE)
-        nodes["c"] = spheres[:m, :3]
-        # float32 rounding of centres and points must not let a point fall outside its sphere
-        scale = float(np.abs(pts).max(initial=1.0))
-        nodes["r"] = spheres[:m, 3] * (1.0 + 1e-6) + 1e-6 * scale
-        nodes["kid"] = kids[:m]
-        nodes["lo"] = ranges[:m, 0]
-        nodes["hi"] = ranges[:m, 1]
-        nodes["par"] = -1
-        inner = np.flatnonzero(kids[:m] >= 0)
-        nodes["par"][kids[inner]] = inner
-        nodes["par"][kids[inner] + 1] = inner
+        nodes = nodes[:m].copy()
         self.nodes = nodes
         self.perm = perm
         self.n = n
@@ -90,6 +75,26 @@ class BallTree:
         c = np.asarray(counts)[self.perm]
         d = np.where(c > 1, 0.0, self.nearest_other(checkpoint))
         return float(np.median(np.repeat(d, c)))
+
+    def count_within(self, queries: np.ndarray, radius: float) -> np.ndarray:
+        """Number of points within ``radius`` of each query."""
+        q = np.ascontiguousarray(queries, np.float64)
+        counts = np.empty(len(q), np.int64)
+        _raycast.near_stats(self.points, self.nodes, q, float(radius), 0.0, counts, np.empty(0))
+        return counts
+
+    def clearance(self, queries: np.ndarray, bound: float, checkpoint: Checkpoint = no_checkpoint,
+                  workers: int | None = None) -> np.ndarray:
+        """Distance from each query to the nearest point, inf where it is not below ``bound``."""
+        q = np.ascontiguousarray(queries, np.float64)
+        out = np.empty(len(q))
+
+        def chunk(i0: int, i1: int) -> None:
+            _raycast.near_stats(self.points, self.nodes, q[i0:i1], 0.0, float(bound), np.empty(0, np.int64),
+                                out[i0:i1])
+
+        _on_pool(chunk, [(i, min(i + NN_CHUNK, len(q))) for i in range(0, len(q), NN_CHUNK)], workers, checkpoint)
+        return out
 
     @property
     def ray_cost(self) -> float:
@@ -172,7 +177,7 @@ def exact_plan(queries: np.ndarray, reach: float) -> Plan:
 
 
 def shared_plan(
-    cloud_tree: cKDTree, queries: np.ndarray, h: float, near_radius: float, cell: float, clearance: np.ndarray,
+    queries: np.ndarray, h: float, near_radius: float, cell: float, clearance: np.ndarray,
     finer: bool = True,
 ) -> Plan:
     """Clusters of cubic cells of side ``cell`` with reach ``near_radius`` + spread (docs/boundedness.md 1.6).
@@ -237,7 +242,7 @@ def _group_ids(keys: np.ndarray) -> np.ndarray:
 
 
 def choose_plan(
-    tree: BallTree, cloud_tree: cKDTree, queries: np.ndarray, h: float, near_radius: float, cell: float,
+    tree: BallTree, queries: np.ndarray, h: float, near_radius: float, cell: float,
     samples: int, exact_pairs: int, share: bool | None, checkpoint: Checkpoint = no_checkpoint,
 ) -> Plan:
     """Exact when small, forced, or cheaper; else the cheapest of seven cluster sizes (x 1/2 ... x 32).
@@ -247,7 +252,7 @@ def choose_plan(
     """
     n_q = len(queries)
     sample = queries[np.random.default_rng(0).permutation(n_q)[:256]]
-    near_exact = float(np.mean(cloud_tree.query_ball_point(sample, near_radius, return_length=True)))
+    near_exact = float(np.mean(tree.count_within(sample, near_radius)))
     exact_cost = n_q * (samples * tree.ray_cost + near_exact * CAP_COST)
     if share is False or (share is None and tree.n * n_q <= exact_pairs):
         plan = exact_plan(queries, near_radius)
@@ -256,7 +261,7 @@ def choose_plan(
     best = None
     for scale in 2.0 ** np.arange(-1, 6):
         reach = (near_radius + 0.87 * cell) * scale
-        near = float(np.mean(cloud_tree.query_ball_point(sample, reach, return_length=True)))
+        near = float(np.mean(tree.count_within(sample, reach)))
         if best is not None and n_q * near * CAP_COST >= best[0]:
             break  # the near part only grows with the size: no larger size can be cheaper
         clusters = _count_cells(queries, cell * scale)
@@ -272,10 +277,8 @@ def choose_plan(
     # only "closer than 4 cells (or 4 h)" matters, and a bounded search is fast even from a tube's
     # axis, where the whole wall is nearly equidistant
     bound = ALONE_WITHIN * max(cell * scale, h) * (1.0 + 1e-9)
-    clearance = chunked_query(
-        cloud_tree, queries, 1, checkpoint=lambda f: checkpoint(0.0), distance_upper_bound=bound
-    )[0][:, 0]
-    plan = shared_plan(cloud_tree, queries, h, near_radius * scale, cell * scale, clearance)
+    clearance = tree.clearance(queries, bound, lambda f: checkpoint(0.0))
+    plan = shared_plan(queries, h, near_radius * scale, cell * scale, clearance)
     plan.estimated_cost, plan.estimated_near = cost, near
     return plan
 
