@@ -3,7 +3,8 @@
 One pyvista interactor split in two renderers that share one camera (linked cameras: rotating either
 moves both), each drawing the cloud and its skeleton coloured by the chosen metric, and the summary
 table with A, B and B - A columns (the scores of :meth:`Evaluation.summary` at A's thresholds; green where B is better).
-File > "Compare with a second skeleton (B)…" loads B's files and evaluates them in the worker.
+File > "Compare with a second skeleton (B)…" loads B's files and evaluates them in the worker;
+File > "Open comparison run…" (:mod:`app.compare_run`) opens two report rows' stored results.
 """
 
 from __future__ import annotations
