@@ -200,13 +200,15 @@ def _ab_inputs(args: argparse.Namespace) -> tuple[str, Any] | None:
         raise ValueError("--skeleton-b needs CLOUD and skeleton A (--skeletal and/or --curve)")
     from skelcore.io import load_any
 
-    skeletal = curve = None
+    got: dict[str, Any] = {}
     for path in args.skeleton_b:
         item = load_any(path)
-        if item.kind == "curve":
-            curve = item.curve
-        else:
-            skeletal = item.points
+        kind = "curve" if item.kind == "curve" else "skeletal"
+        if kind in got:
+            raise ValueError(f"--skeleton-b: two {kind} files ({got[kind][0]}, {path}); give one skeletal set "
+                             "and/or one curve")
+        got[kind] = (path, item.curve if kind == "curve" else item.points)
+    skeletal, curve = (got[k][1] if k in got else None for k in ("skeletal", "curve"))
     return "b", (skeletal, curve, ", ".join(os.path.basename(p) for p in args.skeleton_b))
 
 

@@ -133,11 +133,10 @@ class CompareRunDialog(QtWidgets.QDialog):
 
     def _refill(self) -> None:
         shape, cond = self.dataset.currentText(), self.condition.currentText()
-        for box, items in ((self.seed, [str(s) for s in self.run.seeds(shape, cond)]),):
-            box.blockSignals(True)
-            box.clear()
-            box.addItems(items)
-            box.blockSignals(False)
+        self.seed.blockSignals(True)
+        self.seed.clear()
+        self.seed.addItems([str(s) for s in self.run.seeds(shape, cond)])
+        self.seed.blockSignals(False)
         methods = self.run.methods_for(shape, cond)
         for i, box in enumerate((self.method_a, self.method_b)):
             keep = box.currentText()

@@ -268,6 +268,8 @@ def test_compare_run_on_the_command_line_saves_the_ab_view(run_dir, tmp_path, ca
     (["--compare-run", "{out}", "--a", "truth", "--b", "sub", "{cloud}"], "give no CLOUD"),
     (["{cloud}", "--skeleton-b", "{cloud}"], "--skeleton-b needs CLOUD and skeleton A"),
     (["{cloud}", "--skeletal", "{skeletal}", "--skeleton-b", "{missing}"], "missing"),
+    (["{cloud}", "--skeletal", "{skeletal}", "--skeleton-b", "{skeletal}", "--skeleton-b", "{skeletal}"],
+     "--skeleton-b: two skeletal files"),
 ])
 def test_bad_ab_arguments_exit_2_with_one_line(argv, message, run_dir, tmp_path, capsys):
     _root, _m, out = run_dir
