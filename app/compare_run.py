@@ -3,8 +3,8 @@
 File > "Open comparison run…" (or dropping the run's folder or its ``index.json`` on the window) opens
 a dialog listing the run's datasets, conditions, seeds and, for the chosen ones, each method's row of
 the report (status and scores); pick method A and method B and "Open A/B view" shows both stored
-Evaluations side by side (:class:`app.compare_view.CompareWindow`); "Show A in the main window" puts
-A's stored result in the 3-D view, where picking shows each element's support. Nothing is recomputed:
+Evaluations side by side (:class:`app.compare_view.CompareWindow`); "Show A (B) in the main window"
+puts that stored result in the 3-D view, where picking shows each element's support. Nothing is recomputed:
 :mod:`skelcore.experiments.compare.run_folder` reads the jobs' records. Bad input is one dialog line.
 """
 
@@ -81,25 +81,28 @@ class CompareRunDialog(QtWidgets.QDialog):
         form.addRow("Seed", self.seed)
         form.addRow("Method A", self.method_a)
         form.addRow("Method B", self.method_b)
-        self.table = QtWidgets.QTableWidget(0, 2 + len(_SCORE_COLUMNS), self)
-        self.table.setHorizontalHeaderLabels(["method", "status", *(c for c, _ in _SCORE_COLUMNS)])
+        self.table = QtWidgets.QTableWidget(0, 3 + len(_SCORE_COLUMNS), self)
+        self.table.setHorizontalHeaderLabels(["", "method", "status", *(c for c, _ in _SCORE_COLUMNS)])
         self.table.verticalHeader().setVisible(False)
         self.table.setEditTriggers(QtWidgets.QAbstractItemView.EditTrigger.NoEditTriggers)
         self.table.setSelectionBehavior(QtWidgets.QAbstractItemView.SelectionBehavior.SelectRows)
         self.table.setToolTip("the report's rows for this dataset and condition (s/c: skeletal points / curve); "
                               "double-click a row to make it B")
-        self.table.cellDoubleClicked.connect(lambda row, _col: self.method_b.setCurrentText(self.table.item(row, 0).text()))
+        self.table.cellDoubleClicked.connect(lambda row, _col: self.method_b.setCurrentText(self.table.item(row, 1).text()))
         self.open_button = QtWidgets.QPushButton("Open A/B view")
         self.open_button.setDefault(True)
         self.open_button.clicked.connect(self.open_ab)
         self.show_a_button = QtWidgets.QPushButton("Show A in the main window")
         self.show_a_button.setToolTip("A's stored result in the 3-D view: pick an element to see its support")
         self.show_a_button.clicked.connect(self.show_a)
+        self.show_b_button = QtWidgets.QPushButton("Show B in the main window")
+        self.show_b_button.clicked.connect(self.show_b)
         self.status = QtWidgets.QLabel("")
         self.status.setWordWrap(True)
         buttons = QtWidgets.QHBoxLayout()
         buttons.addWidget(self.open_button)
         buttons.addWidget(self.show_a_button)
+        buttons.addWidget(self.show_b_button)
         buttons.addStretch(1)
         layout = QtWidgets.QVBoxLayout(self)
         layout.addLayout(form)
@@ -158,7 +161,7 @@ class CompareRunDialog(QtWidgets.QDialog):
             job = self.run.find(shape, method, cond, seed)
             status, error = self.run.status(job)
             scores = self.run.scores(job) if status == "ok" else {}
-            cells = [method, status if status == "ok" else f"{status}: {error}"]
+            cells = ["", method, status if status == "ok" else f"{status}: {error}"]
             cells += [_cell(scores, key) for _, key in _SCORE_COLUMNS]
             for c, text in enumerate(cells):
                 item = QtWidgets.QTableWidgetItem(text)
@@ -170,9 +173,19 @@ class CompareRunDialog(QtWidgets.QDialog):
 
     def _check(self) -> None:
         _shape, _cond, _seed, a, b = self.choice()
+        for r in range(self.table.rowCount()):  # which rows are A and B
+            method = self.table.item(r, 1)
+            role = "/".join(x for x, m in (("A", a), ("B", b)) if method is not None and method.text() == m)
+            item = self.table.item(r, 0)
+            if item is not None:
+                item.setText(role)
+                font = item.font()
+                font.setBold(True)
+                item.setFont(font)
         ok = bool(a and b)
         self.open_button.setEnabled(ok)
         self.show_a_button.setEnabled(bool(a))
+        self.show_b_button.setEnabled(bool(b))
         self.status.setText("" if ok else "this dataset and condition have no method to compare")
         if ok and a == b:
             self.status.setText("A and B are the same method")
@@ -191,18 +204,26 @@ class CompareRunDialog(QtWidgets.QDialog):
         return view
 
     def show_a(self) -> bool:
+        return self.show_in_window("A")
+
+    def show_b(self) -> bool:
+        return self.show_in_window("B")
+
+    def show_in_window(self, which: str) -> bool:
+        """Method A's (or B's) stored result in the main window's 3-D view, as if just evaluated."""
         from skelcore.errors import SkelInputError
 
-        shape, cond, seed, a, _b = self.choice()
+        shape, cond, seed, a, b = self.choice()
+        method = a if which == "A" else b
         try:
-            ev = self.run.evaluation(self.run.find(shape, a, cond, seed))
+            ev = self.run.evaluation(self.run.find(shape, method, cond, seed))
         except SkelInputError as exc:
             self.window.show_error("Comparison run", str(exc))
             return False
         skeletal = None if ev.skeletal is None else ev.skeletal.points
         curve = None if ev.curve is None else ev.curve.curve
         self.window.open_variant(ev.cloud, skeletal, curve, ev)
-        self.status.setText(f"the main window shows A: {a} ({shape}, {cond})")
+        self.status.setText(f"the main window shows {which}: {method} ({shape}, {cond})")
         return True
 
 

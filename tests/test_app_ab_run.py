@@ -114,7 +114,8 @@ def test_the_dialog_lists_the_reports_rows_and_opens_the_ab_view_from_stored_res
     assert [dialog.dataset.itemText(i) for i in range(dialog.dataset.count())] == ["cyl", "yshape"]
     dialog.select(dataset="yshape", a="truth", b="builtin")
     assert dialog.table.rowCount() == 3
-    assert [dialog.table.item(r, 1).text() for r in range(3)] == ["ok"] * 3
+    assert [dialog.table.item(r, 2).text() for r in range(3)] == ["ok"] * 3
+    assert [dialog.table.item(r, 0).text() for r in range(3)] == ["A", "", "B"]  # truth, sub, builtin
     assert dialog.choice() == ("yshape", "normal", 0, "truth", "builtin")
     # the A/B table's differences are those of the two evaluations, computed afresh here
     expected = ab_rows(_fresh(m, "yshape", "truth").summary(), _fresh(m, "yshape", "builtin").summary())
@@ -151,6 +152,8 @@ def test_show_a_puts_the_stored_index_result_in_the_main_window_and_its_support_
     assert sup.kind == "knn", sup.reason
     assert sup.value == pytest.approx(ev.skeletal.centeredness_raw[i], abs=1e-12)
     np.testing.assert_array_equal(sup.points3d["cloud"], ev.cloud[idx[sup.detail.neighbours]])
+    assert dialog.show_b()  # B's stored result replaces it
+    assert window.scene.evaluation.correspondence == "pointwise" and window.scene.curve is not None
 
 
 def test_skeletal_support_under_a_skeletal_index_matches_eq10_by_hand(window):
@@ -232,7 +235,7 @@ def test_bad_runs_and_failed_jobs_are_one_line_dialogs(window, run_dir, tmp_path
         np.savez_compressed(fh, **old)
     dialog.select(dataset="yshape")
     dialog.select(dataset="cyl", a="truth", b="builtin")
-    statuses = {dialog.table.item(r, 0).text(): dialog.table.item(r, 1).text() for r in range(dialog.table.rowCount())}
+    statuses = {dialog.table.item(r, 1).text(): dialog.table.item(r, 2).text() for r in range(dialog.table.rowCount())}
     assert statuses["builtin"] == "failed: MemoryError: out of memory"
     assert dialog.open_ab() is None
     assert "stored no skeletons" in errors[-1] and "\n" not in errors[-1]
