@@ -12,11 +12,12 @@ from __future__ import annotations
 
 import math
 import os
+import threading
 from typing import Any
 
 from PySide6 import QtCore, QtGui, QtWidgets
 
-__all__ = ["CompareRunDialog", "install_compare_run", "open_ab_from_run", "load_ab", "ab_context"]
+__all__ = ["CompareRunDialog", "install_compare_run", "load_ab", "ab_context"]
 
 _SCORE_COLUMNS = [("d_B", "d_B"), ("d_Wp", "d_Wp"), ("bounded. s/c", ("boundedness_skeletal", "boundedness_curve")),
                   ("centred. s/c", ("centeredness_skeletal", "centeredness_curve")),
@@ -52,20 +53,23 @@ def ab_context(run: Any, job: Any) -> str:
     return f"{job.shape}, {job.condition}, seed {job.seed} — run {run.name}"
 
 
-def open_ab_from_run(window: Any, run: Any, shape: str | None, method_a: str, method_b: str,
-                     condition: str | None = None, seed: int | None = None) -> Any:
-    """The A/B view of two methods' stored results (thresholds: the run's own)."""
-    job_a, job_b, ev_a, ev_b = load_ab(run, shape, method_a, method_b, condition, seed)
-    return window.compare.open(ev_a, ev_b, (job_a.method, job_b.method), thresholds=None,
-                               context=ab_context(run, job_a))
+BACKGROUND_BYTES = 8_000_000
+"""Stored arrays to read above which the dialog reads them in a thread (a 30k-point job's are ~3 MB)."""
 
 
 class CompareRunDialog(QtWidgets.QDialog):
-    """Dataset / condition / seed, the report's rows for them, methods A and B, and the two buttons."""
+    """Dataset / condition / seed, the report's rows for them, methods A and B, and the buttons."""
+
+    loaded = QtCore.Signal(int, object, object)  # request token, (jobs, what next), Evaluations or the exception
 
     def __init__(self, window: Any, run: Any) -> None:
         super().__init__(window)
         self.window, self.run = window, run
+        self.view: Any = None  # the last A/B window opened
+        self.background_bytes = BACKGROUND_BYTES
+        self.busy = False
+        self._token = 0
+        self.loaded.connect(self._loaded)
         self.setWindowTitle(f"Comparison run: {run.name}")
         self.setModal(False)
         form = QtWidgets.QFormLayout()
@@ -192,39 +196,83 @@ class CompareRunDialog(QtWidgets.QDialog):
 
     # ---- actions ------------------------------------------------------------------------------
     def open_ab(self) -> Any:
+        """The A/B view of the chosen rows (returned when read at once; a big run's arrive later)."""
+        shape, cond, _seed, a, b = self.choice()
+
+        def show(jobs: list[Any], evs: list[Any]) -> Any:
+            self.view = self.window.compare.open(evs[0], evs[1], (a, b), thresholds=None,
+                                                 context=ab_context(self.run, jobs[0]))
+            self.status.setText(f"opened A: {a} | B: {b} ({shape}, {cond})")
+            return self.view
+
+        return self._load([a, b], show)
+
+    def show_a(self) -> Any:
+        return self.show_in_window("A")
+
+    def show_b(self) -> Any:
+        return self.show_in_window("B")
+
+    def show_in_window(self, which: str) -> Any:
+        """Method A's (or B's) stored result in the main window's 3-D view, as if just evaluated."""
+        shape, cond, _seed, a, b = self.choice()
+        method = a if which == "A" else b
+
+        def show(_jobs: list[Any], evs: list[Any]) -> bool:
+            ev = evs[0]
+            skeletal = None if ev.skeletal is None else ev.skeletal.points
+            curve = None if ev.curve is None else ev.curve.curve
+            self.window.open_variant(ev.cloud, skeletal, curve, ev)
+            self.status.setText(f"the main window shows {which}: {method} ({shape}, {cond})")
+            return True
+
+        return self._load([method], show)
+
+    def _load(self, methods: list[str], then: Any) -> Any:
+        """Read the chosen rows' stored Evaluations and call ``then(jobs, evaluations)``: at once when
+        their arrays are small (its result is returned), else in a thread (None is returned, the newest
+        request wins, the window stays free). A failure is one dialog line."""
         from skelcore.errors import SkelInputError
 
-        shape, cond, seed, a, b = self.choice()
+        shape, cond, seed, _a, _b = self.choice()
+        self._token += 1
         try:
-            view = open_ab_from_run(self.window, self.run, shape, a, b, cond, seed)
+            jobs = [self.run.find(shape, m, cond, seed) for m in methods]
+            size = sum(self.run.arrays_size(j) for j in jobs)
+            if size < self.background_bytes:
+                return then(jobs, [self.run.evaluation(j) for j in jobs])
         except SkelInputError as exc:
             self.window.show_error("Comparison run", str(exc))
             return None
-        self.status.setText(f"opened A: {a} | B: {b} ({shape}, {cond})")
-        return view
+        token = self._token
+        self.busy = True
+        for button in (self.open_button, self.show_a_button, self.show_b_button):
+            button.setEnabled(False)
+        self.status.setText(f"reading {size / 1e6:.0f} MB of stored results…")
 
-    def show_a(self) -> bool:
-        return self.show_in_window("A")
+        def work() -> None:
+            try:
+                out: Any = [self.run.evaluation(j) for j in jobs]
+            except Exception as exc:  # noqa: BLE001 - shown as a dialog line, never a crash
+                out = exc
+            self.loaded.emit(token, (jobs, then), out)
 
-    def show_b(self) -> bool:
-        return self.show_in_window("B")
+        threading.Thread(target=work, name="skelscope-run-read", daemon=True).start()
+        return None
 
-    def show_in_window(self, which: str) -> bool:
-        """Method A's (or B's) stored result in the main window's 3-D view, as if just evaluated."""
-        from skelcore.errors import SkelInputError
+    def _loaded(self, token: int, what: Any, out: Any) -> None:
+        if token != self._token:
+            return  # a newer request replaced this one
+        self.busy = False
+        self._check()
+        jobs, then = what
+        if isinstance(out, Exception):
+            from skelcore.errors import SkelInputError
 
-        shape, cond, seed, a, b = self.choice()
-        method = a if which == "A" else b
-        try:
-            ev = self.run.evaluation(self.run.find(shape, method, cond, seed))
-        except SkelInputError as exc:
-            self.window.show_error("Comparison run", str(exc))
-            return False
-        skeletal = None if ev.skeletal is None else ev.skeletal.points
-        curve = None if ev.curve is None else ev.curve.curve
-        self.window.open_variant(ev.cloud, skeletal, curve, ev)
-        self.status.setText(f"the main window shows {which}: {method} ({shape}, {cond})")
-        return True
+            self.window.show_error("Comparison run", str(out) if isinstance(out, SkelInputError)
+                                   else f"{type(out).__name__}: {out}")
+            return
+        then(jobs, out)
 
 
 class _RunAction(QtCore.QObject):

@@ -136,6 +136,29 @@ def test_the_dialog_lists_the_reports_rows_and_opens_the_ab_view_from_stored_res
         assert (np.ptp(rgb, axis=1) > 60).sum() > 200
 
 
+def test_a_big_runs_rows_are_read_in_a_thread_and_the_newest_request_wins(window, run_dir, qtbot, errors):
+    _root, _m, out = run_dir
+    dialog = window.compare_run.open(out)
+    dialog.background_bytes = 0  # every run is "big"
+    dialog.select(dataset="cyl", a="truth", b="sub")
+    assert dialog.show_a() is None and dialog.busy and not dialog.open_button.isEnabled()
+    dialog.select(dataset="yshape", a="truth", b="builtin")
+    assert dialog.open_ab() is None  # replaces the first request, whose result must not land
+    qtbot.waitUntil(lambda: not dialog.busy, timeout=20000)
+    assert len(window.compare.views) == 1 and dialog.view is window.compare.views[0]
+    assert "yshape" in dialog.view.windowTitle() and window.scene.evaluation is None
+    assert dialog.open_button.isEnabled() and errors == []
+    dialog.select(dataset="cyl", a="truth", b="builtin", condition="normal")
+    bad = dialog.run.find("cyl", "builtin")
+    (out / "jobs" / f"{bad.key}.npz").rename(out / "jobs" / "moved.npz")
+    try:
+        dialog.open_ab()
+        qtbot.waitUntil(lambda: not dialog.busy, timeout=20000)
+    finally:
+        (out / "jobs" / "moved.npz").rename(out / "jobs" / f"{bad.key}.npz")
+    assert len(errors) == 1 and "its arrays are missing" in errors[0]
+
+
 def test_show_a_puts_the_stored_index_result_in_the_main_window_and_its_support_draws(window, run_dir, monkeypatch):
     root, _m, out = run_dir
     dialog = window.compare_run.open(out / "index.json")

@@ -114,6 +114,13 @@ class CompareRun:
     def scores(self, job: JobEntry) -> dict[str, Any]:
         return dict((self.record(job) or {}).get("scores") or {})
 
+    def arrays_size(self, job: JobEntry) -> int:
+        """Bytes of the job's stored arrays (0 when there are none)."""
+        try:
+            return (self.root / "jobs" / f"{job.key}.npz").stat().st_size
+        except OSError:
+            return 0
+
     def evaluation(self, job: JobEntry) -> Evaluation:
         """The job's stored Evaluation (nothing recomputed)."""
         rec = self.record(job)
