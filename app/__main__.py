@@ -168,8 +168,8 @@ def main(argv: Sequence[str] | None = None) -> int:
         if summary is not None:
             print("\n".join(_summary_lines(summary)))
         for view in window.compare.views[-1:] if ab is not None else []:
-            print("\n".join(f"{view.cell(r, 0):24} A {view.cell(r, 1):>10}  B {view.cell(r, 2):>10}  B-A {view.cell(r, 3)}"
-                            for r in range(len(view.rows))))
+            cells = [[view.cell(r, c) for c in range(4)] for r in range(len(view.rows))]
+            print("\n".join(f"{label:24} A {a:>10}  B {b:>10}  B-A {d}" for label, a, b, d in cells))
         window.close()
         return 1 if window.bug else 0
     return _exited(app.exec())

@@ -4,8 +4,9 @@ File > "Open comparison run…" (or dropping the run's folder or its ``index.jso
 a dialog listing the run's datasets, conditions, seeds and, for the chosen ones, each method's row of
 the report (status and scores); pick method A and method B and "Open A/B view" shows both stored
 Evaluations side by side (:class:`app.compare_view.CompareWindow`); "Show A (B) in the main window"
-puts that stored result in the 3-D view, where picking shows each element's support. Nothing is recomputed:
-:mod:`skelcore.experiments.compare.run_folder` reads the jobs' records. Bad input is one dialog line.
+puts that stored result in the 3-D view, where picking shows each element's support. Nothing is
+recomputed: :mod:`skelcore.experiments.compare.run_folder` reads the jobs' records. Bad input is one
+dialog line; big rows are read in a thread.
 """
 
 from __future__ import annotations
@@ -92,7 +93,8 @@ class CompareRunDialog(QtWidgets.QDialog):
         self.table.setSelectionBehavior(QtWidgets.QAbstractItemView.SelectionBehavior.SelectRows)
         self.table.setToolTip("the report's rows for this dataset and condition (s/c: skeletal points / curve); "
                               "double-click a row to make it B")
-        self.table.cellDoubleClicked.connect(lambda row, _col: self.method_b.setCurrentText(self.table.item(row, 1).text()))
+        self.table.cellDoubleClicked.connect(
+            lambda row, _col: self.method_b.setCurrentText(self.table.item(row, 1).text()))
         self.open_button = QtWidgets.QPushButton("Open A/B view")
         self.open_button.setDefault(True)
         self.open_button.clicked.connect(self.open_ab)
