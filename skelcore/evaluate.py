@@ -300,5 +300,5 @@ def _score_skeletal(ev, stages, cloud_n, skel, skel_n, mode, index) -> SkeletalL
     smooth = stages.run("skeletal smoothness", skeletal_smoothness, skel_n, params=p)
     return SkeletalLocal(
         points=skel, boundedness=beta, centeredness_raw=c_raw, smoothness=smooth,
-        rows=rows, centeredness_rows_raw=c_rows, centeredness_available=mode != "none",
+        rows=rows, centeredness_rows_raw=c_rows, centeredness_available=mode != "none", index=index,
     )  # fmt: skip
