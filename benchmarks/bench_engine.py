@@ -34,6 +34,8 @@ STAGES = [
     "curve boundedness",
     "curve centeredness",
     "curve smoothness",
+    "skeletal coverage",
+    "curve coverage",
 ]
 
 
