@@ -15,7 +15,7 @@ from __future__ import annotations
 import numpy as np
 from scipy.spatial import cKDTree
 
-from ..geometry import Checkpoint, bbox_diagonal, kd_tree, no_checkpoint, unit_rows
+from ..geometry import Checkpoint, bbox_diagonal, kd_tree, leaf_order, lex_order, no_checkpoint, unit_rows
 from ..params import Params, k_center_for
 from .ellipse_fit import fit_ellipse
 
@@ -77,15 +77,20 @@ def skeletal_centeredness(
     checkpoint(0.0)
     groups = _CoincidentGroups(skel)
     checkpoint(0.0)
-    tree = kd_tree(groups.positions)
+    tree = kd_tree(groups.positions, checkpoint)
     checkpoint(0.0)
+    # groups are visited in the tree's leaf order and the rows gathered in member (x-sorted) order:
+    # both keep a chunk's memory traffic local (3 x faster at 1M points, same arithmetic)
+    visit = leaf_order(tree)
+    skel_m, cloud_m = skel[groups.members], cloud[groups.members]
     n_groups = len(groups.positions)
     per_group = np.full(n_groups, np.nan)
     for lo in range(0, n_groups, _SKELETAL_CHUNK):
         hi = min(lo + _SKELETAL_CHUNK, n_groups)
-        idx = groups.k_nearest_rows(tree, np.arange(lo, hi), k)
-        m_s = skel[idx].mean(axis=1)
-        neighbours_o = cloud[idx]
+        which = visit[lo:hi]
+        slot = groups.k_nearest_slots(tree, which, k)
+        m_s = skel_m[slot].mean(axis=1)
+        neighbours_o = cloud_m[slot]
         m_o = neighbours_o.mean(axis=1)
         diff = neighbours_o - m_s[:, None, :]
         spread = np.sqrt(np.einsum("ijk,ijk->ij", diff, diff)).mean(axis=1)
@@ -93,7 +98,7 @@ def skeletal_centeredness(
         with np.errstate(invalid="ignore", divide="ignore"):
             c = np.maximum(0.0, 1.0 - offset / spread)
         c[~(spread > 0)] = np.nan
-        per_group[lo:hi] = c
+        per_group[which] = c
         checkpoint(hi / n_groups)
     # coincident points have the same neighbours (ties go by index, not by self), so the same c
     return per_group[groups.group_of]
@@ -105,7 +110,7 @@ class _CoincidentGroups:
     def __init__(self, points: np.ndarray) -> None:
         # lexsort is stable, so each group's members come out in increasing row order; it is also
         # much faster than np.unique(axis=0). -0.0 == 0.0, so both land in one group.
-        order = np.lexsort(points.T[::-1])
+        order = lex_order(points)
         ordered = points[order]
         new = np.ones(len(points), dtype=bool)
         new[1:] = np.any(ordered[1:] != ordered[:-1], axis=1)
@@ -116,10 +121,11 @@ class _CoincidentGroups:
         self.group_of = np.empty(len(points), dtype=np.int64)
         self.group_of[order] = np.cumsum(new) - 1
 
-    def k_nearest_rows(self, tree: cKDTree, queries: np.ndarray, k: int) -> np.ndarray:
-        """(len(queries), k) rows: the k points nearest to each query group's position, equal
-        distances in row order. Whole groups are taken nearest first; the last one contributes its
-        lowest-index members. (Distinct positions at exactly equal distances keep the tree's order.)
+    def k_nearest_slots(self, tree: cKDTree, queries: np.ndarray, k: int) -> np.ndarray:
+        """(len(queries), k) indices into ``members`` (so rows ``members[...]``): the k points nearest
+        to each query group's position, equal distances in row order. Whole groups are taken nearest
+        first; the last one contributes its lowest-index members. (Distinct positions at exactly
+        equal distances keep the tree's order.)
         """
         n_q = len(queries)
         k_groups = min(k, len(self.positions))  # every group has >= 1 member, so k groups suffice
@@ -134,7 +140,7 @@ class _CoincidentGroups:
         slot = slot.reshape(n_q, k) - np.arange(n_q, dtype=np.int64)[:, None] * k_groups
         before = np.where(slot > 0, np.take_along_axis(cum, np.maximum(slot - 1, 0), axis=1), 0)
         group = np.take_along_axis(near, slot, axis=1)
-        return self.members[self.starts[group] + (t - before)]
+        return self.starts[group] + (t - before)
 
 
 def curve_centeredness(

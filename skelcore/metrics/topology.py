@@ -22,7 +22,9 @@ from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import connected_components, minimum_spanning_tree
 from scipy.spatial import cKDTree
 
-from ..geometry import Checkpoint, chunked_query, kd_tree, matlab_round, nearest_neighbor_distances, no_checkpoint, unique_rows
+from ..geometry import (
+    Checkpoint, chunked_query, kd_tree, leaf_order, matlab_round, nearest_neighbor_distances, no_checkpoint, unique_rows,
+)
 from ..params import Params
 from ..results import TopologyResult
 
@@ -57,20 +59,6 @@ def _as_points(points: np.ndarray) -> np.ndarray:
     return pts
 
 
-def _chunked_knn(tree: cKDTree, queries: np.ndarray, k: int, checkpoint, lo: float, hi: float):
-    """kNN of ``queries`` in ``tree`` (k >= 1, 2-D results), reporting progress between chunks."""
-    n = len(queries)
-    dist = np.empty((n, k))
-    idx = np.empty((n, k), np.int64)
-    for start in range(0, n, _QUERY_CHUNK):
-        stop = min(n, start + _QUERY_CHUNK)
-        d, i = tree.query(queries[start:stop], k=k, workers=-1)
-        dist[start:stop] = d.reshape(stop - start, k)
-        idx[start:stop] = i.reshape(stop - start, k)
-        checkpoint(lo + (hi - lo) * stop / max(n, 1))
-    return dist, idx
-
-
 def _first_other(labels: np.ndarray, rows: np.ndarray, dist: np.ndarray, idx: np.ndarray):
     """For each row, the first list entry (sorted by distance) in another component."""
     other = labels[idx] != labels[rows][:, None]
@@ -96,10 +84,11 @@ def _emst_lengths(points: np.ndarray, checkpoint: Checkpoint = no_checkpoint) ->
     n = len(points)
     if n < 2:
         return np.empty(0), np.zeros(n)
-    tree = kd_tree(points)
+    tree = kd_tree(points, checkpoint)
     checkpoint(0.02)
     k = min(_LIST_K, n - 1)
-    dist, idx = _chunked_knn(tree, points, k + 1, checkpoint, 0.02, 0.5)
+    # asked in the tree's leaf order (cache-warm), answered in row order
+    dist, idx = chunked_query(tree, points, k + 1, checkpoint, 0.02, 0.5, order=leaf_order(tree), chunk=_QUERY_CHUNK)
     dist, idx = dist[:, 1:], idx[:, 1:]  # column 0 is the point itself (points are distinct)
     lower = dist[:, -1].copy()  # every point closer than this is in the point's own component
     deep_done = np.zeros(n, bool)
