@@ -150,13 +150,25 @@ def min_ball_excess(
 def covered_by_balls(
     points: np.ndarray, centers: np.ndarray, radii: np.ndarray, checkpoint: Checkpoint = no_checkpoint
 ) -> np.ndarray:
-    """Is each point inside some ball: min power distance |p - c|^2 - radius^2 <= 0 (one 4-D query,
-    in chunks of about 0.1 s with a ``checkpoint`` after each)."""
+    """Is each point inside some ball: min power distance |p - c|^2 - radius^2 <= 0 (4-D queries,
+    in chunks of about 0.1 s with a ``checkpoint`` after each).
+
+    A first, approximate query (cKDTree ``eps=1``: it returns some ball, cheaply, even where many
+    balls are nearly tangent) settles every point it finds inside a ball: the exact nearest ball is
+    no farther.  Only the others get the exact query, so the answer is the same as asking every
+    point exactly."""
     if len(centers) == 0:
         return np.zeros(len(points), dtype=bool)
     tree, top = _lifted(np.asarray(centers, dtype=float), np.asarray(radii, dtype=float), checkpoint)
-    d4, _ = timed_query(tree, np.column_stack([points, np.zeros(len(points))]), 1, checkpoint)
-    return d4[:, 0] * d4[:, 0] - top * top <= 1e-12 * max(top * top, 1e-300)
+    lifted = np.column_stack([points, np.zeros(len(points))])
+    limit = 1e-12 * max(top * top, 1e-300)
+    d4, _ = timed_query(tree, lifted, 1, _scaled(checkpoint, 0.0, 0.5), eps=1.0)
+    inside = d4[:, 0] * d4[:, 0] - top * top <= limit
+    rest = np.flatnonzero(~inside)
+    if len(rest):
+        d4, _ = timed_query(tree, lifted[rest], 1, _scaled(checkpoint, 0.5, 1.0))
+        inside[rest] = d4[:, 0] * d4[:, 0] - top * top <= limit
+    return inside
 
 
 def coverage(
