@@ -16,7 +16,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.spatial import cKDTree
 
-from ..geometry import Checkpoint, TimedChunks, kd_tree, nearest_neighbor_distances, no_checkpoint, timed_query
+from ..geometry import Checkpoint, TimedChunks, kd_tree, nearest_neighbor_distances, no_checkpoint, timed_query, unique_rows
 from ..params import Params
 
 __all__ = ["Coverage", "coverage", "coverage_tau", "min_ball_excess", "covered_by_balls"]
@@ -48,35 +48,6 @@ def coverage_tau(cloud: np.ndarray, params: Params = Params(), checkpoint: Check
 
 def _scaled(checkpoint: Checkpoint, lo: float, hi: float) -> Checkpoint:
     return lambda f: checkpoint(lo + (hi - lo) * min(max(f, 0.0), 1.0))
-
-
-def _distinct(points: np.ndarray) -> np.ndarray:
-    """The distinct rows of ``points``, compared bit for bit like ``np.unique(axis=0)`` (so -0.0 and
-    0.0 stay two elements), in no particular order; sorts 8-byte keys instead of 24-byte records."""
-    points = np.ascontiguousarray(points, dtype=float)
-    if len(points) < 2:
-        return points.copy()
-    bits = points.view(np.uint64)
-    order = np.lexsort(bits.T[::-1]) if len(points) < 4096 else _lex_bits(bits)
-    srt = bits[order]
-    new = np.ones(len(srt), bool)
-    new[1:] = np.any(srt[1:] != srt[:-1], axis=1)
-    return points[order[new]]
-
-
-def _lex_bits(bits: np.ndarray) -> np.ndarray:
-    # one argsort by the first key, then a full lexsort of only the rows whose first key repeats
-    order = np.argsort(bits[:, 0])
-    first = bits[order, 0]
-    eq = first[1:] == first[:-1]
-    if eq.any():
-        run = np.zeros(len(bits), bool)
-        run[1:] |= eq
-        run[:-1] |= eq
-        at = np.flatnonzero(run)
-        rows = order[at]
-        order[at] = rows[np.lexsort(bits[rows].T[::-1])]
-    return order
 
 
 def _lifted(centers: np.ndarray, radii: np.ndarray, checkpoint: Checkpoint | None = None) -> tuple[cKDTree, float]:
@@ -179,7 +150,7 @@ def coverage(
 
     Every KD-tree build and query checks ``checkpoint`` (cancel) at least every ~0.1 s of work."""
     cloud = np.asarray(cloud, dtype=float)
-    elements = _distinct(np.asarray(elements, dtype=float))
+    elements = unique_rows(np.asarray(elements, dtype=float))[0]  # as np.unique(axis=0), 10 x faster
     checkpoint(0.0)
     tau = coverage_tau(cloud, params, _scaled(checkpoint, 0.0, 0.05)) if tau is None else float(tau)
     tree = kd_tree(cloud, checkpoint, 0.05)
