@@ -77,6 +77,15 @@ class _Stages:
 
         return check
 
+    def between(self, what: str) -> Callable[[float], None]:
+        """A checkpoint for work between stages (the trust checks): cancel only, no progress."""
+
+        def check(_fraction: float) -> None:
+            if self._cancel is not None and self._cancel():
+                raise Cancelled(f"cancelled during {what}")
+
+        return check
+
     def run(self, stage: str, fn, *args, **kwargs):
         check = self.checkpoint(stage)
         check(0.0)
@@ -224,7 +233,7 @@ def evaluate(
 
     # ---- trust checks, coverage, reference (SkelScope's own; docs/metrics.md) ----------------
     def bounded_fraction(points_user: np.ndarray) -> float:
-        beta = boundedness(cloud_n, norm.apply(points_user), params=p)
+        beta = boundedness(cloud_n, norm.apply(points_user), params=p, checkpoint=stages.between("trust checks"))
         return float(np.mean(beta > p.beta_star))
 
     if skel is not None:

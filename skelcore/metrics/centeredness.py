@@ -185,6 +185,7 @@ def curve_centeredness(
     if len(todo) == 0 or not half > 0:
         return out  # no direction, or a cloud without extent: every slab is empty
     growth = float(params.ring_growth)
+    checkpoint(0.0)
     grid = _SlabGrid(cloud, cell=max(2.0 * half, diagonal / 256.0))
     g, h = _orthonormal_complement(u[todo])
 
@@ -211,7 +212,10 @@ class _SlabGrid:
         key = ijk[:, 0] + dims[0] * (ijk[:, 1] + dims[1] * ijk[:, 2])
         order = np.argsort(key, kind="stable")
         self.points = cloud[order]
-        keys, self.starts, self.counts = np.unique(key[order], return_index=True, return_counts=True)
+        srt = key[order]  # already sorted: cell boundaries by one diff, not a second sort (np.unique)
+        self.starts = np.flatnonzero(np.r_[True, srt[1:] != srt[:-1]])
+        self.counts = np.diff(np.r_[self.starts, len(srt)])
+        keys = srt[self.starts]
         cell_ijk = np.column_stack([keys % dims[0], (keys // dims[0]) % dims[1], keys // (dims[0] * dims[1])])
         self.centres = lo + (cell_ijk + 0.5) * cell
         self.half_cell = 0.5 * cell
