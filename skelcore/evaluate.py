@@ -232,8 +232,10 @@ def evaluate(
             ev.skeletal.source = "curve"
 
     # ---- trust checks, coverage, reference (SkelScope's own; docs/metrics.md) ----------------
+    between = stages.between("trust checks")  # only the rare frame-fit re-runs of boundedness
+
     def bounded_fraction(points_user: np.ndarray) -> float:
-        beta = boundedness(cloud_n, norm.apply(points_user), params=p, checkpoint=stages.between("trust checks"))
+        beta = boundedness(cloud_n, norm.apply(points_user), params=p, checkpoint=between)
         return float(np.mean(beta > p.beta_star))
 
     if skel is not None:

@@ -82,7 +82,10 @@ def skeletal_centeredness(
     # groups are visited in the tree's leaf order and the rows gathered in member (x-sorted) order:
     # both keep a chunk's memory traffic local (3 x faster at 1M points, same arithmetic)
     visit = leaf_order(tree)
-    skel_m, cloud_m = skel[groups.members], cloud[groups.members]
+    skel_m = skel[groups.members]
+    checkpoint(0.0)
+    cloud_m = cloud[groups.members]
+    checkpoint(0.0)
     n_groups = len(groups.positions)
     per_group = np.full(n_groups, np.nan)
     for lo in range(0, n_groups, _SKELETAL_CHUNK):
@@ -186,7 +189,7 @@ def curve_centeredness(
         return out  # no direction, or a cloud without extent: every slab is empty
     growth = float(params.ring_growth)
     checkpoint(0.0)
-    grid = _SlabGrid(cloud, cell=max(2.0 * half, diagonal / 256.0))
+    grid = _SlabGrid(cloud, cell=max(2.0 * half, diagonal / 256.0), checkpoint=checkpoint)
     g, h = _orthonormal_complement(u[todo])
 
     checkpoint(0.0)
@@ -205,12 +208,14 @@ def curve_centeredness(
 class _SlabGrid:
     """Cloud points bucketed in cubic cells (sorted by cell), for fast slab candidate lookup."""
 
-    def __init__(self, cloud: np.ndarray, cell: float) -> None:
+    def __init__(self, cloud: np.ndarray, cell: float, checkpoint: Checkpoint = no_checkpoint) -> None:
         lo = cloud.min(axis=0)
         ijk = np.floor((cloud - lo) / cell).astype(np.int64)
         dims = ijk.max(axis=0) + 1
         key = ijk[:, 0] + dims[0] * (ijk[:, 1] + dims[1] * ijk[:, 2])
+        checkpoint(0.0)
         order = np.argsort(key, kind="stable")
+        checkpoint(0.0)
         self.points = cloud[order]
         srt = key[order]  # already sorted: cell boundaries by one diff, not a second sort (np.unique)
         self.starts = np.flatnonzero(np.r_[True, srt[1:] != srt[:-1]])

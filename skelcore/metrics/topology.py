@@ -45,6 +45,7 @@ _CELL_MAX = 2048  # points per cell of the exact per-component search
 _THREADED_QUERY = 16384  # smaller KD-tree queries run single-threaded (thread start-up dominates)
 _PROBE = 32  # pending points nearest to a component's box probed first for a tight bound
 _QUERY_CHUNK = 16384  # points per kNN query call, so the checkpoint is reached often
+_ROUND_CHUNK = 262144  # neighbour lists scanned per block of a Boruvka round, between checkpoints
 
 
 # ---------------------------------------------------------------------------------------------
@@ -87,8 +88,14 @@ def _emst_lengths(points: np.ndarray, checkpoint: Checkpoint = no_checkpoint) ->
     tree = kd_tree(points, checkpoint)
     checkpoint(0.02)
     k = min(_LIST_K, n - 1)
-    # asked in the tree's leaf order (cache-warm), answered in row order
-    dist, idx = chunked_query(tree, points, k + 1, checkpoint, 0.02, 0.5, order=leaf_order(tree), chunk=_QUERY_CHUNK)
+    # the points are renumbered in the tree's leaf order, so that queries and every later gather
+    # (labels[idx], cells) touch memory that spatial neighbours share; ``rank`` maps tree answers
+    perm = leaf_order(tree)
+    rank = np.empty(n, np.int64)
+    rank[perm] = np.arange(n)
+    points = points[perm]
+    dist, idx = chunked_query(tree, points, k + 1, checkpoint, 0.02, 0.5, chunk=_QUERY_CHUNK)
+    idx = rank[idx]
     dist, idx = dist[:, 1:], idx[:, 1:]  # column 0 is the point itself (points are distinct)
     lower = dist[:, -1].copy()  # every point closer than this is in the point's own component
     deep_done = np.zeros(n, bool)
@@ -106,19 +113,27 @@ def _emst_lengths(points: np.ndarray, checkpoint: Checkpoint = no_checkpoint) ->
     while n_comp > 1:
         done = 0.5 + 0.5 * (1.0 - n_comp / n) ** 0.5
         rows = np.flatnonzero(active)
-        has, cd, cb = _first_other(labels, rows, dist[rows], idx[rows])
+        parts = []
+        for lo in range(0, len(rows), _ROUND_CHUNK):  # the first rounds scan every list: in blocks
+            r = rows[lo : lo + _ROUND_CHUNK]
+            parts.append(_first_other(labels, r, dist[r], idx[r]))
+            checkpoint(done)
+        if parts:
+            has, cd, cb = (np.concatenate(x) for x in zip(*parts))
+        else:
+            has, cd, cb = np.zeros(0, bool), np.empty(0), np.empty(0, np.int64)
         active[rows[~has]] = False
-        checkpoint(done)
         cand_a, cand_b, cand_d = rows[has], cb[has], cd[has]
         best = np.full(n_comp, np.inf)
         np.minimum.at(best, labels[cand_a], cand_d)
+        checkpoint(done)
 
         if not lists_complete:
             pend = np.flatnonzero(~active)
             pend = pend[lower[pend] < best[labels[pend]]]
             if len(pend):
                 ea, eb, ed = _resolve_pending(
-                    points, tree, labels, pend, best, lower, deep_done, cells, cell_trees,
+                    points, tree, rank, labels, pend, best, lower, deep_done, cells, cell_trees,
                     lambda: checkpoint(done),
                 )
                 cand_a = np.concatenate([cand_a, ea])
@@ -139,9 +154,12 @@ def _emst_lengths(points: np.ndarray, checkpoint: Checkpoint = no_checkpoint) ->
         w = cand_d[pick]
         keep = ~((v[v] == u) & (u > v))
         graph = coo_matrix((w[keep], (u[keep], v[keep])), shape=(n_comp, n_comp)).tocsr()
+        checkpoint(done)
         forest = minimum_spanning_tree(graph)
         lengths.append(forest.data.copy())
+        checkpoint(done)
         n_new, comp = connected_components(forest, directed=False)
+        checkpoint(done)
         if n_new >= n_comp:  # cannot happen: every component has an outgoing edge
             raise RuntimeError("EMST: Boruvka round made no progress")
         labels = comp[labels]
@@ -150,14 +168,17 @@ def _emst_lengths(points: np.ndarray, checkpoint: Checkpoint = no_checkpoint) ->
         cells[small] = next_cell + labels[small]
         next_cell += n_comp
         checkpoint(0.5 + 0.5 * (1.0 - n_comp / n) ** 0.5)
-    return (np.concatenate(lengths) if lengths else np.empty(0)), dist[:, 0]
+    nn = np.empty(n)
+    nn[perm] = dist[:, 0]  # back to the caller's numbering
+    return (np.concatenate(lengths) if lengths else np.empty(0)), nn
 
 
-def _resolve_pending(points, tree, labels, pend, best, lower, deep_done, cells, cell_trees, tick):
+def _resolve_pending(points, tree, rank, labels, pend, best, lower, deep_done, cells, cell_trees, tick):
     """Exact shortest outgoing edges for points whose neighbour list lies inside their component.
 
-    ``best`` (per component), ``lower``/``deep_done`` (per point) and the cell KD-tree cache are
-    updated in place; ``tick()`` reports progress (and may raise ``Cancelled``).
+    ``points`` are numbered in leaf order, ``tree`` (built on the caller's order) answers in its
+    own numbering, mapped by ``rank``.  ``best`` (per component), ``lower``/``deep_done`` (per
+    point) and the cell KD-tree cache are updated in place; ``tick()`` reports progress (and may raise ``Cancelled``).
     Returns candidate edges (a, b, length) improving on the components' list candidates.
     """
     n = len(points)
@@ -171,6 +192,7 @@ def _resolve_pending(points, tree, labels, pend, best, lower, deep_done, cells, 
             d2, i2 = chunked_query(tree, points[fresh], kk + 1, lambda _f: tick())
         else:
             d2, i2 = tree.query(points[fresh], k=kk + 1, workers=1)
+        i2 = rank[i2]  # the tree numbers points as given, ``points`` is in leaf order
         d2, i2 = d2[:, 1:], i2[:, 1:]
         has, cd, cb = _first_other(labels, fresh, d2, i2)
         deep_done[fresh] = True
