@@ -7,7 +7,8 @@ process only, by a function that returns 1 for every query (so the trust checks 
 "bounded" path) and still calls its checkpoint.  Each size runs in a fresh subprocess (its own peak
 memory).  A cancel gap is the time between two consecutive cancel checks; it is charged to the stage
 that is running when the gap ends ("a -> b" when it spans the end of a and the start of b: the work
-between stages).  With ``--trees`` the script also times cKDTree builds on the cloud.
+between stages).  CPU s per stage = process time (both threads) from the stage's first progress
+report to the next stage's (the work between them included).  ``--trees`` times cKDTree builds.
 
     .venv/bin/python benchmarks/bench_stages.py [--sizes 65536 262144 1048576] [--trees]
 """
@@ -54,9 +55,13 @@ def run_case(n: int, skip_coverage: bool = False) -> dict:
     last = [time.perf_counter()]
     stage = [""]
 
+    starts: list[tuple[str, float]] = []  # (stage, process time when its label first showed)
+
     def progress(_fraction: float, name: str) -> None:
-        if name != stage[0] and events:  # the check just made began this stage: its gap spans both
-            events[-1][1] = f"{stage[0] or 'set-up'} -> {name}"
+        if name != stage[0]:
+            if events:  # the check just made began this stage: its gap spans both
+                events[-1][1] = f"{stage[0] or 'set-up'} -> {name}"
+            starts.append((name, time.process_time()))
         stage[0] = name
 
     def cancel() -> bool:
@@ -71,6 +76,8 @@ def run_case(n: int, skip_coverage: bool = False) -> dict:
     out = {"n": n, "total": time.perf_counter() - t0, "cpu": time.process_time() - cpu0,
            "tail": time.perf_counter() - last[0]}  # after the last check (timings, return)
     out.update({k: v for k, v in ev.timings.items() if k != "total"})
+    ends = [t for _, t in starts[1:]] + [time.process_time()]
+    out["cpu_stage"] = {name: end - t for (name, t), end in zip(starts, ends)}  # incl. the work after it
     gaps: dict[str, float] = {}
     checks: dict[str, int] = {}
     for gap, key in events:
@@ -149,10 +156,11 @@ def main() -> None:
                 continue
             print(f"\nN = {n}: total {r['total']:.2f} s (boundedness stubbed), CPU {r['cpu']:.2f} s, "
                   f"peak {r['peak_mb']:.0f} MB, load at end {r['load']:.2f}")
-            print("| stage | s | checks | longest cancel gap s |\n|---|---|---|---|")
+            print("| stage | wall s | CPU s | checks | longest cancel gap s |\n|---|---|---|---|---|")
             for s in STAGES:
                 if s in r:
-                    print(f"| {s} | {r[s]:.3f} | {r['checks'].get(s, 0)} | {r['gaps'].get(s, 0.0):.3f} |")
+                    print(f"| {s} | {r[s]:.3f} | {r.get('cpu_stage', {}).get(s, float('nan')):.2f} | "
+                          f"{r['checks'].get(s, 0)} | {r['gaps'].get(s, 0.0):.3f} |")
             for k, v in sorted(r["gaps"].items(), key=lambda kv: -kv[1]):
                 if k not in STAGES and v > 0.05:
                     print(f"| (gap) {k or 'before the first stage'} | | | {v:.3f} |")
