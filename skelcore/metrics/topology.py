@@ -45,6 +45,7 @@ _CELL_MAX = 2048  # points per cell of the exact per-component search
 _THREADED_QUERY = 16384  # smaller KD-tree queries run single-threaded (thread start-up dominates)
 _PROBE = 32  # pending points nearest to a component's box probed first for a tight bound
 _QUERY_CHUNK = 16384  # points per kNN query call, so the checkpoint is reached often
+_DEEP_CHUNK = 4096  # points per deep (k = 65) query between checkpoints: ~0.1 s at 1M points
 _ROUND_CHUNK = 262144  # neighbour lists scanned per block of a Boruvka round, between checkpoints
 
 
@@ -188,8 +189,8 @@ def _resolve_pending(points, tree, rank, labels, pend, best, lower, deep_done, c
     fresh = pend[~deep_done[pend]]
     many = len(np.unique(labels[pend])) > _FEW_COMPONENTS
     if kk > _LIST_K and 0 < len(fresh) <= max(_DEEP_MAX_POINTS, n // 8) and many:
-        if len(fresh) > _THREADED_QUERY:  # chunked, so a cancel is seen within ~0.1 s
-            d2, i2 = chunked_query(tree, points[fresh], kk + 1, lambda _f: tick())
+        if len(fresh) > _DEEP_CHUNK:  # chunked, so a cancel is seen within ~0.1 s
+            d2, i2 = chunked_query(tree, points[fresh], kk + 1, lambda _f: tick(), chunk=_DEEP_CHUNK)
         else:
             d2, i2 = tree.query(points[fresh], k=kk + 1, workers=1)
         i2 = rank[i2]  # the tree numbers points as given, ``points`` is in leaf order
