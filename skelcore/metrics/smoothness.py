@@ -60,7 +60,8 @@ def skeletal_smoothness(
     out = np.full(n, np.nan)
     if n == 0:
         return out
-    uniq, inverse, counts = unique_rows(pts)
+    checkpoint(0.0)
+    uniq, inverse, counts = unique_rows(pts, checkpoint)
     m = len(uniq)
     if m < 2:
         return out  # every C_i is zero: no direction anywhere

@@ -97,6 +97,7 @@ def _emst_lengths(points: np.ndarray, checkpoint: Checkpoint = no_checkpoint) ->
     points = points[perm]
     dist, idx = chunked_query(tree, points, k + 1, checkpoint, 0.02, 0.5, chunk=_QUERY_CHUNK)
     idx = rank[idx]
+    checkpoint(0.5)
     dist, idx = dist[:, 1:], idx[:, 1:]  # column 0 is the point itself (points are distinct)
     lower = dist[:, -1].copy()  # every point closer than this is in the point's own component
     deep_done = np.zeros(n, bool)
@@ -206,13 +207,16 @@ def _resolve_pending(points, tree, rank, labels, pend, best, lower, deep_done, c
     # 2) per cell of pending points: KD-trees of other components' cells, nearest boxes first
     if len(pend):
         ids, cell_of = np.unique(cells, return_inverse=True)
+        tick()
         for stale in set(cell_trees) - set(ids.tolist()):
             del cell_trees[stale]
         by_cell = np.argsort(cell_of, kind="stable")
+        tick()
         starts = np.searchsorted(cell_of[by_cell], np.arange(len(ids) + 1))
         sorted_pts = points[by_cell]
         box_lo = np.minimum.reduceat(sorted_pts, starts[:-1], axis=0)
         box_hi = np.maximum.reduceat(sorted_pts, starts[:-1], axis=0)
+        tick()
         cell_comp = labels[by_cell[starts[:-1]]]
 
         def cell_tree(y: int) -> tuple[np.ndarray, cKDTree]:
@@ -284,9 +288,11 @@ def _barcode_and_nn(points: np.ndarray, checkpoint: Checkpoint) -> tuple[np.ndar
     duplicate), from one kNN pass."""
     if len(points) == 0:
         return np.empty((0, 2)), np.empty(0)
-    uniq, inverse, counts = unique_rows(points)
+    checkpoint(0.0)
+    uniq, inverse, counts = unique_rows(points, checkpoint)
     checkpoint(0.02)
     lengths, nn_unique = _emst_lengths(uniq, lambda f: checkpoint(0.02 + 0.96 * f))
+    checkpoint(0.98)
     deaths = np.sort(lengths)[::-1]
     deaths = deaths[deaths > 0]
     bars = np.zeros((len(deaths) + 1, 2))
