@@ -172,3 +172,11 @@ def test_min_ball_excess_chunked_equals_brute_force(monkeypatch):
     calls = []
     assert np.allclose(min_ball_excess(pts, centers, radii, k=4, checkpoint=calls.append), brute, atol=1e-12)
     assert len(calls) > 20
+
+
+@pytest.mark.parametrize("n", [1, 255, 256, 257, 5000])
+def test_bounding_box_equals_min_max(n):
+    pts = np.random.default_rng(n).normal(size=(n, 3))
+    for arr in (pts, pts[::2] if n > 1 else pts):  # also a non-contiguous view
+        lo, hi = geometry.bounding_box(arr)
+        assert np.array_equal(lo, arr.min(axis=0)) and np.array_equal(hi, arr.max(axis=0))
