@@ -180,3 +180,20 @@ def test_bounding_box_equals_min_max(n):
     for arr in (pts, pts[::2] if n > 1 else pts):  # also a non-contiguous view
         lo, hi = geometry.bounding_box(arr)
         assert np.array_equal(lo, arr.min(axis=0)) and np.array_equal(hi, arr.max(axis=0))
+
+
+def test_centeredness_fast_path_without_coincident_points(monkeypatch):
+    """Without coincident points the k nearest groups are taken as they come; the general path
+    (counts and searchsorted) gives the same rows."""
+    cloud, skel = _torus_case(5000, seed=8)
+    skel = skel + np.random.default_rng(8).normal(scale=1e-6, size=skel.shape)  # no two equal
+    fast = centeredness.skeletal_centeredness(cloud, skel)
+    original = centeredness._CoincidentGroups.__init__
+
+    def general(self, points):
+        original(self, points)
+        assert self.single
+        self.single = False
+
+    monkeypatch.setattr(centeredness._CoincidentGroups, "__init__", general)
+    assert np.array_equal(centeredness.skeletal_centeredness(cloud, skel), fast, equal_nan=True)

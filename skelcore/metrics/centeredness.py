@@ -119,6 +119,7 @@ class _CoincidentGroups:
         new[1:] = np.any(ordered[1:] != ordered[:-1], axis=1)
         self.starts = np.flatnonzero(new)
         self.counts = np.diff(np.append(self.starts, len(points)))
+        self.single = bool(len(points)) and int(self.counts.max()) == 1
         self.positions = ordered[self.starts] + 0.0
         self.members = order
         self.group_of = np.empty(len(points), dtype=np.int64)
@@ -134,6 +135,8 @@ class _CoincidentGroups:
         k_groups = min(k, len(self.positions))  # every group has >= 1 member, so k groups suffice
         _, near = tree.query(self.positions[queries], k=k_groups, workers=-1)
         near = near.reshape(n_q, k_groups)
+        if self.single:  # no coincident points: the k nearest groups are the k nearest points
+            return self.starts[near]
         cum = np.cumsum(self.counts[near], axis=1)  # >= k in the last column
         # slot[q, t] = first j with cum[q, j] > t: one flat searchsorted with per-row offsets
         stride = int(cum[:, -1].max()) + 1
