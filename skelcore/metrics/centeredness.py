@@ -75,7 +75,7 @@ def skeletal_centeredness(
         return np.full(0, np.nan)
     k = min(k_center_for(n, params), n)
     checkpoint(0.0)
-    groups = _CoincidentGroups(skel)
+    groups = _CoincidentGroups(skel, checkpoint)
     checkpoint(0.0)
     tree = kd_tree(groups.positions, checkpoint)
     checkpoint(0.0)
@@ -110,13 +110,15 @@ def skeletal_centeredness(
 class _CoincidentGroups:
     """Skeletal points grouped by exact position; members of each group in increasing row order."""
 
-    def __init__(self, points: np.ndarray) -> None:
+    def __init__(self, points: np.ndarray, checkpoint: Checkpoint = no_checkpoint) -> None:
         # lexsort is stable, so each group's members come out in increasing row order; it is also
         # much faster than np.unique(axis=0). -0.0 == 0.0, so both land in one group.
         order = lex_order(points)
+        checkpoint(0.0)
         ordered = points[order]
         new = np.ones(len(points), dtype=bool)
         new[1:] = np.any(ordered[1:] != ordered[:-1], axis=1)
+        checkpoint(0.0)
         self.starts = np.flatnonzero(new)
         self.counts = np.diff(np.append(self.starts, len(points)))
         self.single = bool(len(points)) and int(self.counts.max()) == 1
