@@ -95,10 +95,12 @@ def _prepared_cloud(cloud: np.ndarray, checkpoint: Checkpoint) -> _PreparedCloud
     if ref is not None and ref() is cloud and hit is not None and hit.digest == digest:
         return hit
     # identical cloud points have identical caps; the union is unchanged without the copies
-    pts, _, counts = unique_rows(cloud)
+    pts, _, counts = unique_rows(cloud, lambda f: checkpoint(0.0))
     checkpoint(0.0)
     centre = (pts.min(axis=0) + pts.max(axis=0)) / 2.0
-    tree = BallTree((pts - centre) @ FRAME.T, checkpoint)
+    pts_r = (pts - centre) @ FRAME.T
+    checkpoint(0.0)
+    tree = BallTree(pts_r, checkpoint)
     spacing = tree.median_spacing(counts, lambda f: checkpoint(0.0)) if len(cloud) > 1 else 0.0
     prepared = _PreparedCloud(digest, centre, tree, spacing)
     try:
@@ -167,7 +169,7 @@ def boundedness_rays(
     if len(queries) == 0 or len(cloud) == 0:
         checkpoint(1.0)
         return out
-    uniq_q, inverse, _ = unique_rows(queries)
+    uniq_q, inverse, _ = unique_rows(queries, lambda f: checkpoint(0.0))
     checkpoint(0.0)
     bins = 2 * rows if bins is None else int(bins)
     if rows < 1 or bins < 1:
