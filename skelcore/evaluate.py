@@ -187,9 +187,11 @@ def evaluate(
         names += ["curve boundedness", "curve centeredness", "curve smoothness"]
     if skeletal_from_curve:
         names += skeletal_stages
-    if skel is not None:
+    # SkelScope's coverage (not a paper metric) is exact and grows about as N^1.6 on tubes
+    with_coverage = len(cloud) <= int(params.coverage_max_points)
+    if skel is not None and with_coverage:
         names.append("skeletal coverage")
-    if curve_obj is not None:
+    if curve_obj is not None and with_coverage:
         names.append("curve coverage")
     if ref_obj is not None:
         names.append("reference")
@@ -262,13 +264,19 @@ def evaluate(
             tau_box.append(coverage_tau(cloud_n, p, checkpoint))
         return tau_box[0]
 
-    if skel is not None:
+    if not with_coverage and (skel is not None or curve_n is not None):
+        ev.not_computed["coverage"] = (
+            f"the cloud has {len(cloud):,} points, above coverage_max_points = {int(p.coverage_max_points):,} "
+            "(exact coverage takes hours at 1M points on tube-like shapes; raise it with "
+            "--set coverage_max_points=N)"
+        )
+    if skel is not None and with_coverage:
         def _skel_cov(checkpoint):
             tau = _tau(lambda f: checkpoint(0.1 * f))
             return coverage(cloud_n, skel_n, p, tau, checkpoint=lambda f: checkpoint(0.1 + 0.9 * f))
 
         ev.coverage_skeletal = stages.run("skeletal coverage", _skel_cov)
-    if curve_n is not None:
+    if curve_n is not None and with_coverage:
         def _curve_cov(checkpoint):
             tau = _tau(lambda f: checkpoint(0.1 * f))
             step = max(tau / p.coverage_tau_factor, float(curve_n.edge_lengths().sum()) / 200_000)

@@ -42,6 +42,8 @@ class Params:
         when it lies within (1 + s) r(x) + tau of some skeleton element x of inscribed radius r(x).
     coverage_tau_factor : tau = factor x the cloud's median nearest-neighbour spacing (coverage and
         the reference comparison's precision / recall).
+    coverage_max_points : coverage is computed for clouds of at most this many points (0: never);
+        exact coverage grows about as N^1.6 on tube-like shapes (hours at 1M, docs/performance.md 5).
     frame_inside_fraction : the ``frame`` warning fires when fewer skeleton points than this fraction
         lie inside the cloud's bounding box (grown by 10 % of its diagonal).
     frame_extent_ratio : ... or when the skeleton's bounding-box diagonal is more than this many
@@ -74,6 +76,7 @@ class Params:
     smooth_k: int = 4
     coverage_slack: float = 0.5
     coverage_tau_factor: float = 2.0
+    coverage_max_points: int = 65536
     frame_inside_fraction: float = 0.5
     frame_extent_ratio: float = 10.0
     collapse_extent: float = 0.1
@@ -105,6 +108,8 @@ class Params:
         for name in ("curve_samples", "tangent_k", "smooth_k", "rays_rows", "rays_exact_pairs"):
             if int(getattr(self, name)) < 1:
                 bad(name, "must be a positive integer")
+        if int(self.coverage_max_points) < 0:
+            bad("coverage_max_points", "must be >= 0")
         if not 0.0 < float(self.rays_near_angle) < 1.0:
             bad("rays_near_angle", "must be in (0, 1)")
         if self.k_center is not None and int(self.k_center) < 1:
