@@ -90,6 +90,7 @@ def main(argv: Sequence[str] | None = None) -> int:
             and os.environ.get("QT_QPA_PLATFORM", "") in ("", "xcb"):
         return _fail("no display: run under a desktop session or `xvfb-run -a skelscope ...`")
 
+    import_view_libraries()
     from PySide6 import QtWidgets
 
     app = QtWidgets.QApplication.instance() or QtWidgets.QApplication(["skelscope"])
@@ -147,6 +148,16 @@ def main(argv: Sequence[str] | None = None) -> int:
         window.close()
         return 1 if window.bug else 0
     return _exited(app.exec())
+
+
+def import_view_libraries() -> None:
+    """numpy, VTK / pyvista (which loads matplotlib) and skelcore's readers, imported before Qt: once
+    PySide6 is imported its import hook reads the source of every module imported after it (PySide's
+    ``__feature__`` check), which cost the start-up ~0.4 s (benchmarks/bench_app.py)."""
+    import numpy  # noqa: F401
+    import pyvista.plotting  # noqa: F401
+
+    import skelcore.io  # noqa: F401
 
 
 def _exited(code: int) -> int:
