@@ -14,6 +14,7 @@ import sys
 import tempfile
 import time
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -206,30 +207,77 @@ def pick_time(n: int = 1_000_000, picks: int = 5) -> float:
     return sorted(times)[len(times) // 2]
 
 
-def cancel_at_a_million(delays: tuple[float, ...] = (1.0, 4.0, 10.0)) -> list[tuple[float, str, float, float]]:
-    """(delay, stage at Cancel, s until the window was idle, s until the worker thread stopped)."""
+CANCEL_STAGES = ("topology", "skeletal boundedness", "skeletal centeredness", "skeletal smoothness",
+                 "skeletal coverage")
+"""The stages of the 1M-point evaluation (cloud + skeletal set in pointwise correspondence), in order."""
+
+
+def _stand_in_boundedness(cloud: np.ndarray, queries: np.ndarray, *, params: object = None,
+                          checkpoint: Any = lambda f: None) -> np.ndarray:
+    """1 for every query, after its checkpoints (as benchmarks/bench_stages.py does): the stages after
+    boundedness are reached in minutes; 1M boundedness queries take hours (docs/performance.md)."""
+    checkpoint(0.0)
+    checkpoint(1.0)
+    return np.ones(len(queries))
+
+
+def _pump(app: Any, seconds: float, until: Any = lambda: False) -> float:
+    """Run the event loop for ``seconds`` (or until ``until()``); returns the longest event-loop turn
+    seen beyond the 10 ms sleeps (a worker holding the GIL, or the GUI's own work, shows up here)."""
+    end = time.perf_counter() + seconds
+    last = time.perf_counter()
+    longest = 0.0
+    while time.perf_counter() < end and not until():
+        app.processEvents()
+        time.sleep(0.01)
+        now = time.perf_counter()
+        longest = max(longest, now - last - 0.01)
+        last = now
+    return longest
+
+
+def cancel_in_every_stage(stages: tuple[str, ...] = CANCEL_STAGES, into: float = 2.0,
+                          wait: float = 1800.0) -> list[tuple]:
+    """Cancel a 1M-point evaluation inside each stage: start it, wait (at most ``wait`` s) until the
+    worker reports the stage, let it run ``into`` s more (less if the stage ends first), press Cancel.
+
+    Runs aimed at a stage after boundedness use :func:`_stand_in_boundedness` (this process only).
+    Returns, per stage: (stage aimed at, stage at Cancel, label shown at Cancel, s until the stage
+    began, s into it, s until the window was idle, s until the worker stopped (None: not within
+    600 s), longest event-loop turn while the stage ran, stand-in used)."""
+    import importlib
+
+    ev_mod = importlib.import_module("skelcore.evaluate")
+    real_boundedness = ev_mod.boundedness
     app, w, _ = _million_window(1_000_000)
     out = []
-    for delay in delays:
+    for target in stages:
+        stand_in = target in CANCEL_STAGES[CANCEL_STAGES.index("skeletal boundedness") + 1:]
+        ev_mod.boundedness = _stand_in_boundedness if stand_in else real_boundedness
         assert w.session.start_evaluation()
         task = w.session.runner._current
-        end = time.perf_counter() + delay
-        while time.perf_counter() < end:
-            app.processEvents()
-            time.sleep(0.01)
-        stage = task.stage
+        t_start = time.perf_counter()
+        _pump(app, wait, lambda: task.stage == target or task.isFinished())
+        reached = time.perf_counter() - t_start
+        t_in = time.perf_counter()
+        gap = _pump(app, into, lambda: task.stage != target)
+        stage, label = task.stage, w.stage.text()
         t0 = time.perf_counter()
         w.cancel_button.click()
         idle = time.perf_counter() - t0
         assert not w.session.runner.running
-        task.wait()
-        out.append((delay, stage, idle, time.perf_counter() - t0))
+        stopped = time.perf_counter() - t0 if task.wait(600_000) else None
+        out.append((target, stage, label, reached, t0 - t_in, idle, stopped, gap, stand_in))
+        _pump(app, 0.5)
+    ev_mod.boundedness = real_boundedness
     w.close()
     return out
 
 
 _QUIT = r"""
 import sys, time
+from app.__main__ import import_view_libraries
+import_view_libraries()
 from PySide6 import QtCore, QtWidgets
 app = QtWidgets.QApplication(["bench-quit"])
 from app.__main__ import _exited
@@ -245,17 +293,21 @@ w.show()
 def quit_now():
     print(f"{time.time():.4f} {w.session.runner.stage}", flush=True)
     w.actions_by_name["quit"].trigger()
-w.session.runner.progressed.connect(lambda f, s: QtCore.QTimer.singleShot(float(sys.argv[2]) * 1000, quit_now)
-                                    if not hasattr(quit_now, "armed") and not setattr(quit_now, "armed", 1) else None)
+armed = []
+def arm(_fraction, stage):  # the delay counts from the first report of the stage aimed at (any: sys.argv[3] "")
+    if not armed and stage.startswith(sys.argv[3]):
+        armed.append(stage)
+        QtCore.QTimer.singleShot(int(float(sys.argv[2]) * 1000), quit_now)
+w.session.runner.progressed.connect(arm)
 QtCore.QTimer.singleShot(100, w.session.start_evaluation)
 sys.exit(_exited(app.exec()))
 """
 
 
-def quit_while_running(delay: float, tmp: Path) -> tuple[float, int, bool, str]:
+def quit_while_running(delay: float, tmp: Path, stage: str = "") -> tuple[float, int, bool, str]:
     """(s from Ctrl+Q to the process's end, exit status, Qt's thread abort seen, stage) for a quit
-    ``delay`` s after a 1M-point evaluation started reporting."""
-    proc = subprocess.run([sys.executable, "-c", _QUIT, str(tmp / "q.ini"), str(delay)], capture_output=True,
+    ``delay`` s after a 1M-point evaluation first reported ``stage`` (any stage when "")."""
+    proc = subprocess.run([sys.executable, "-c", _QUIT, str(tmp / "q.ini"), str(delay), stage], capture_output=True,
                           text=True, cwd=ROOT)
     ended = time.time()
     quit_at, _, stage = proc.stdout.strip().partition(" ")
@@ -279,7 +331,7 @@ def main(argv: list[str] | None = None) -> int:
     args = parser.parse_args(argv)
     if args.million_part:  # one part, in this process (a fresh one per part: no warm caches)
         sys.path.insert(0, str(ROOT))
-        part = {"frames": frames_while_moving, "pick": pick_time, "cancel": cancel_at_a_million}[args.million_part]
+        part = {"frames": frames_while_moving, "pick": pick_time, "cancel": cancel_in_every_stage}[args.million_part]
         print(repr(part()))
         return 0
     if args.stall_once:
@@ -298,13 +350,19 @@ def main(argv: list[str] | None = None) -> int:
               f"at full detail, {frames['moving'] * 1000:.0f} ms with the level-of-detail twins (camera moving)"
               f"  [load {os.getloadavg()[0]:.1f}]")
         print(f"pick among 1M skeletal points: {run('pick') * 1000:.0f} ms (median of 5)  [load {os.getloadavg()[0]:.1f}]")
-        for delay, stage, idle, stopped in run("cancel"):
-            print(f"Cancel {delay:.0f} s into a 1M-point evaluation (stage '{stage}'): window idle after "
-                  f"{idle * 1000:.0f} ms, worker stopped after {stopped:.2f} s  [load {os.getloadavg()[0]:.1f}]")
-        for delay in (0.5, 3.0):
-            took, code, aborted, stage = quit_while_running(delay, tmp)
-            print(f"Ctrl+Q {delay:g} s into a 1M-point evaluation (stage '{stage}'): process ended {took:.2f} s later, "
-                  f"exit status {code}, QThread abort: {'yes' if aborted else 'no'}  [load {os.getloadavg()[0]:.1f}]")
+        print("\nCancel inside each stage of a 1M-point evaluation (1M cloud + 1M skeletal set):\n")
+        print("| stage aimed at | stage at Cancel | label shown | stage began after | Cancel after | window idle after "
+              "| worker stopped after | longest GUI event-loop turn | load |")
+        print("|---|---|---|---|---|---|---|---|---|")
+        for target, stage, label, reached, into, idle, stopped, gap, stand_in in run("cancel"):
+            print(f"| {target}{' (boundedness stand-in)' if stand_in else ''} | {stage} | {label} | {reached:.1f} s "
+                  f"| {into:.2f} s into it | {idle * 1000:.0f} ms | "
+                  f"{'> 600 s' if stopped is None else f'{stopped:.2f} s'} | {gap * 1000:.0f} ms | {os.getloadavg()[0]:.1f} |")
+        for delay, stage in ((0.5, ""), (3.0, ""), (2.0, "skeletal boundedness")):
+            took, code, aborted, at = quit_while_running(delay, tmp, stage)
+            print(f"Ctrl+Q {delay:g} s into {'a 1M-point evaluation' if not stage else repr(stage)} (stage '{at}'): "
+                  f"process ended {took:.2f} s later, exit status {code}, QThread abort: {'yes' if aborted else 'no'}"
+                  f"  [load {os.getloadavg()[0]:.1f}]")
     if args.only_million:
         return 0
     if not args.skip_launch:
