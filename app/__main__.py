@@ -151,13 +151,29 @@ def main(argv: Sequence[str] | None = None) -> int:
 
 
 def import_view_libraries() -> None:
-    """numpy, VTK / pyvista (which loads matplotlib) and skelcore's readers, imported before Qt: once
-    PySide6 is imported its import hook reads the source of every module imported after it (PySide's
-    ``__feature__`` check), which cost the start-up ~0.4 s (benchmarks/bench_app.py)."""
-    import numpy  # noqa: F401
-    import pyvista.plotting  # noqa: F401
+    """The viewer's imports, in the order that starts it fastest (benchmarks/bench_app.py): numpy,
+    VTK / pyvista (which loads matplotlib) and skelcore's readers before Qt, since once PySide6 is
+    imported its import hook reads the source of every later module (PySide's ``__feature__`` check);
+    and with the cyclic garbage collector paused, which would otherwise scan the ~300k objects the
+    imports make again and again. Those objects are then frozen (left out of every later collection,
+    which keeps collections short) and the collector runs again. Each saved ~0.4 s CPU at start-up."""
+    import gc
 
-    import skelcore.io  # noqa: F401
+    collecting = gc.isenabled()
+    gc.disable()
+    try:
+        import numpy  # noqa: F401
+        import pyvista.plotting  # noqa: F401
+
+        import skelcore.io  # noqa: F401
+
+        from PySide6 import QtWidgets  # noqa: F401
+
+        from . import main_window  # noqa: F401
+    finally:
+        gc.freeze()
+        if collecting:
+            gc.enable()
 
 
 def _exited(code: int) -> int:

@@ -108,7 +108,7 @@ class MainWindow(QtWidgets.QMainWindow):
         install_compare(self)  # issue 11: File > Compare with a second skeleton (B)
         self._update_actions()
         QtCore.QTimer.singleShot(1500, preload_matplotlib)  # after the first frame, off the GUI thread
-        QtCore.QTimer.singleShot(2500, preload_engine)
+        QtCore.QTimer.singleShot(2500, lambda: self.view.after_render(preload_engine))  # not during a frame
         QtCore.QTimer.singleShot(4000, self._prepare_plots)
 
     # ---- construction ---------------------------------------------------------------------
