@@ -227,23 +227,34 @@ def test_shared_far_field_stays_within_0_01_of_every_pair(cell):
     assert 0 < err.max() <= 0.01  # not the every-pair path, and close to it
 
 
-def test_thin_torus_default_uses_half_cells_and_stays_within_0_01_of_every_pair():
-    """4k torus (r/R = 0.3), 1 %-jittered skeletal points 5.5 h inside the tube: the cost model picks
-    cells of h/2 with a near radius of 5 h (no near field at all: the fast case of the benchmark)."""
-    from skelcore.metrics.boundedness import _choose_job
+def _plan(cloud, queries, share=None):
+    """The plan ``boundedness_rays`` would choose with the default Params (raster frame)."""
+    from skelcore.metrics._rays import FRAME
+    from skelcore.metrics.rays_kernel import BallTree, choose_plan
 
+    p = Params()
+    h = rays_radius(cloud)
+    pts = np.unique(cloud, axis=0)
+    centre = (pts.min(axis=0) + pts.max(axis=0)) / 2.0
+    pts_r, q_r = (pts - centre) @ FRAME.T, (np.unique(queries, axis=0) - centre) @ FRAME.T
+    plan = choose_plan(
+        BallTree(pts_r), q_r, h, h / p.rays_near_angle, p.rays_cluster_cell * h,
+        2 * p.rays_rows**2, p.rays_exact_pairs, share,
+    )
+    return plan, h
+
+
+def test_thin_torus_default_shares_and_stays_within_0_01_of_every_pair():
+    """4k torus (r/R = 0.3), 1 %-jittered skeletal points 5.5 h inside the tube: shared far fields,
+    no near field at all (the fast case of the benchmark), within 0.01 of every query on its own."""
     shape = torus(4096, 1.0, 0.3, seed=0)
     rng = np.random.default_rng(0)
     norm = Normalization.from_cloud(shape.cloud)
     cloud = norm.apply(shape.cloud)
     queries = norm.apply(shape.skeletal + rng.normal(scale=0.01, size=shape.skeletal.shape))
-    h = rays_radius(cloud)
-    p = Params()
-    job = _choose_job(
-        CapRaster(p.rays_rows, 2 * p.rays_rows), cloud.astype(np.float32), queries.astype(np.float32), h,
-        p.rays_exact_pairs, p.rays_near_angle, p.rays_cluster_cell, None,
-    )
-    assert job.near_radius == pytest.approx(5 * h)
+    plan, h = _plan(cloud, queries)
+    assert len(plan.starts) - 1 < len(queries) / 2  # shared
+    assert plan.estimated_near < 2.0  # almost no near caps
     beta = boundedness_rays(cloud, queries)
     pick = rng.choice(len(queries), 300, replace=False)
     err = np.abs(beta[pick] - boundedness_rays(cloud, queries[pick], share_far_field=False))
@@ -252,8 +263,8 @@ def test_thin_torus_default_uses_half_cells_and_stays_within_0_01_of_every_pair(
 
 def test_near_surface_queries_share_in_finer_cells_within_0_01_of_every_pair():
     """Queries 1.5-3.5 h inside a cylinder's wall (as a contracted skeleton of a thin part puts them)
-    used to be clusters of one; they now share in cells of h/4 with clearance >= 4 cells."""
-    from skelcore.metrics.boundedness import _ClusteredJob
+    share in cells of h/4 with clearance >= 4 cells (docs/boundedness.md 1.7)."""
+    from skelcore.metrics.rays_kernel import BallTree, shared_plan
 
     shape = cylinder(4096, 0.5, 4.0, seed=8)
     norm = Normalization.from_cloud(shape.cloud)
@@ -265,10 +276,10 @@ def test_near_surface_queries_share_in_finer_cells_within_0_01_of_every_pair():
     inward = (axis[i] - cloud[i]) / np.linalg.norm(axis[i] - cloud[i], axis=1, keepdims=True)
     seeds = cloud[i] + inward * rng.uniform(1.5, 3.5, (150, 1)) * h
     queries = np.repeat(seeds, 4, axis=0) + rng.normal(scale=0.02 * h, size=(600, 3))
-    job = _ClusteredJob(
-        CapRaster(48, 96), cloud.astype(np.float32), queries.astype(np.float32), h, 5 * h, 0.5 * h
-    )
-    assert len(job.starts) - 1 < 300  # shared, not 600 clusters of one
+    clearance = BallTree(cloud).clearance(queries, np.inf)
+    assert np.allclose(clearance, cKDTree(cloud).query(queries, k=1)[0], rtol=1e-5)
+    plan = shared_plan(queries, h, 5 * h, 0.5 * h, clearance)
+    assert len(plan.starts) - 1 < 300  # shared, not 600 clusters of one
     shared = boundedness_rays(cloud, queries, share_far_field=True)
     exact = boundedness_rays(cloud, queries, share_far_field=False)
     assert 0 < np.abs(shared - exact).max() <= 0.01
@@ -276,27 +287,49 @@ def test_near_surface_queries_share_in_finer_cells_within_0_01_of_every_pair():
 
 def test_default_shares_the_far_field_only_where_it_pays():
     """16k torus: its 16k skeletal points near the core share far fields; as many points spread
-    through the box, or few queries, use every pair (the accuracy of sharing is tested above)."""
-    from skelcore.metrics.boundedness import _choose_job, _ClusteredJob, _DenseJob
-
+    through the box, or few queries, are each on their own (the accuracy of sharing is tested above)."""
     shape = torus(16384, 1.0, 0.3, seed=6)
     rng = np.random.default_rng(6)
     norm = Normalization.from_cloud(shape.cloud)
-    cloud = norm.apply(shape.cloud).astype(np.float32)
-    compact = norm.apply(shape.skeletal + rng.normal(scale=0.01, size=shape.skeletal.shape)).astype(np.float32)
-    spread = rng.uniform(-0.8, 0.8, (16384, 3)).astype(np.float32)
+    cloud = norm.apply(shape.cloud)
+    compact = norm.apply(shape.skeletal + rng.normal(scale=0.01, size=shape.skeletal.shape))
+    spread = rng.uniform(-0.8, 0.8, (16384, 3))
+
+    def clusters(queries):
+        plan, _ = _plan(cloud, queries)
+        return len(plan.starts) - 1
+
+    from skelcore.metrics.rays_kernel import BallTree
+
+    counts = BallTree(cloud).count_within(spread[:300], 0.1)  # the cost model's near counts
+    assert np.array_equal(counts, cKDTree(cloud).query_ball_point(spread[:300], 0.1, return_length=True))
+
+    assert clusters(compact) < len(compact) / 4
+    assert clusters(spread) == len(spread)
+    assert clusters(compact[:200]) == 200
+
+
+def test_kernel_equals_the_numpy_cap_raster_of_every_pair():
+    """The compiled kernel (rays from far caps, exact near caps) against the independent numpy raster of
+    every (query, point) pair: the same samples, so equal up to float32 rounding at a few cap edges."""
+    from skelcore.metrics._rays import FRAME
+
+    cloud = _torus(3000, seed=11)
+    rng = np.random.default_rng(11)
+    queries = np.vstack([rng.uniform(-1.3, 1.3, (150, 3)), cloud[:50] * 0.97])
     h = rays_radius(cloud)
-    p = Params()
-    raster = CapRaster(p.rays_rows, 2 * p.rays_rows)
-
-    def choose(queries):
-        return _choose_job(
-            raster, cloud, queries, h, p.rays_exact_pairs, p.rays_near_angle, p.rays_cluster_cell, None
-        )
-
-    assert isinstance(choose(compact), _ClusteredJob)
-    assert isinstance(choose(spread), _DenseJob)
-    assert isinstance(choose(compact[:200]), _DenseJob)
+    centre = (cloud.min(axis=0) + cloud.max(axis=0)) / 2.0
+    pts_r = ((cloud - centre) @ FRAME.T).astype(np.float32)
+    q_r = ((queries - centre) @ FRAME.T).astype(np.float32)
+    raster = CapRaster(48, 96)
+    ref = np.empty(len(q_r))
+    for i, q in enumerate(q_r):
+        d = pts_r - q
+        ref[i] = raster.union_fraction(1, np.zeros(len(d), np.int32), d[:, 0], d[:, 1], d[:, 2], h)[0]
+    for near_angle in (0.1, 0.5, 0.999):  # near caps out to 10 h, 2 h, ~h: more and more far rays
+        got = boundedness_rays(cloud, queries, share_far_field=False, near_angle=near_angle)
+        diff = np.abs(got - ref)
+        assert diff.max() <= 3 / 4608 and np.mean(diff > 0) < 0.05
 
 
 def test_big_cloud_sliced_every_pair_equals_singleton_clusters():
@@ -384,3 +417,25 @@ def test_paper_skips_cloud_points_at_the_query_and_degenerate_sets():
     at_point = boundedness_paper(cloud, cloud[:1])[0]
     assert np.isfinite(at_point)
     assert boundedness_paper(cloud[:2], np.zeros((1, 3)))[0] == 0.0
+
+
+def test_a_cancel_during_the_tree_build_stops_it_and_leaves_no_thread_behind():
+    """The kernel's tree of a big cloud is built in a thread (GIL released) while the caller polls its
+    checkpoint; a cancel sets the kernel's stop flag and is re-raised once the build has returned."""
+    import threading
+
+    from skelcore.metrics.rays_kernel import BallTree
+
+    pts = np.random.default_rng(3).uniform(-1, 1, (300_000, 3))
+
+    def cancel(_fraction: float) -> None:
+        raise Cancelled("stop")
+
+    with pytest.raises(Cancelled):
+        BallTree(pts, cancel)
+    assert not [t for t in threading.enumerate() if t.name == "skelscope-balltree"]
+    tree = BallTree(pts)  # and a build that is not cancelled holds every point once
+    assert tree.nodes["lo"][0] == 0 and tree.nodes["hi"][0] == len(pts)
+    assert np.array_equal(np.unique(tree.points, axis=0), np.unique(pts.astype(np.float32), axis=0))
+    leaves = tree.nodes[tree.nodes["kid"] < 0]
+    assert (leaves["hi"] - leaves["lo"]).sum() == len(pts) and (leaves["hi"] - leaves["lo"]).max() <= 8

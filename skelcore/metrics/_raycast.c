@@ -1,0 +1,666 @@
+/* Compiled kernel of the `rays` boundedness estimator (SPEC 2; design: docs/boundedness.md, section 3).
+ *
+ * beta(q) = share of the raster's direction samples s from q whose ray meets a ball of radius h around
+ * a cloud point p with |p - q| > h.  A ray meets that ball iff s lies in p's cap of angular radius
+ * asin(h / |p - q|), so this is the union-of-caps raster of _rays.py, sample for sample.
+ *
+ * Queries come in clusters (centre c, reach r).  Far points (|p - c| > r) are handled once per cluster:
+ * one any-hit ray cast per sample from c through a KD-tree of bounding spheres (cost ~ samples x depth,
+ * not ~ points).  Near points (|p - c| <= r) are rasterised as exact caps from every member query into a
+ * copy of the cluster's far bitmap (per-row longitude intervals, law of cosines), nearest first, stopping
+ * when the bitmap is full.  A cluster of one query at its own position is exact for any r.
+ *
+ * Plain C with the buffer protocol (no numpy headers at build time); every entry point releases the GIL.
+ */
+#define PY_SSIZE_T_CLEAN
+#include <Python.h>
+#include <math.h>
+#include <stdint.h>
+#include <stdlib.h>
+#include <string.h>
+
+#define LEAF_SIZE 8
+#define TWO_PI 6.283185307179586476925286766559
+
+/* ------------------------------------------------------------------------------------------------ */
+/* KD-tree of bounding spheres over a permutation of the points                                       */
+
+typedef struct {
+    float c[3], r;          /* bounding sphere */
+    int32_t kid, lo, hi;    /* first child (second = kid + 1) or -1 for a leaf; point range [lo, hi) */
+    int32_t par;            /* parent, -1 for the root */
+} Node;                     /* 32 bytes: two siblings share a cache line */
+
+typedef struct {
+    const float *pts;       /* (n, 3) points in tree order */
+    const Node *nodes;
+    int32_t n_nodes;
+} Tree;
+
+static void select_nth(double *key, int32_t *idx, int32_t lo, int32_t hi, int32_t nth) {
+    /* quickselect on key[lo:hi] carrying idx: afterwards key[nth] is the nth smallest */
+    while (hi - lo > 1) {
+        int32_t mid = lo + (hi - lo) / 2;
+        double a = key[lo], b = key[mid], c = key[hi - 1];
+        double pivot = (a < b) ? ((b < c) ? b : ((a < c) ? c : a)) : ((a < c) ? a : ((b < c) ? c : b));
+        int32_t i = lo, j = hi - 1;
+        while (i <= j) {
+            while (key[i] < pivot) i++;
+            while (key[j] > pivot) j--;
+            if (i <= j) {
+                double tk = key[i]; key[i] = key[j]; key[j] = tk;
+                int32_t ti = idx[i]; idx[i] = idx[j]; idx[j] = ti;
+                i++; j--;
+            }
+        }
+        if (nth <= j) hi = j + 1;
+        else if (nth >= i) lo = i;
+        else return;
+    }
+}
+
+typedef struct {
+    const double *pts;
+    int32_t *perm;
+    double *key;
+    Node *nodes;
+    int32_t n_nodes, cap;
+    double pad;              /* absolute radius padding: float32 rounding of centres and points */
+    volatile int32_t *stop;  /* set by another thread to abandon the build (a cancel) */
+} Builder;
+
+static void build_node(Builder *b, int32_t node, int32_t parent, int32_t lo, int32_t hi) {
+    Node *nd = b->nodes + node;
+    nd->par = parent;
+    nd->lo = lo;
+    nd->hi = hi;
+    nd->kid = -1;
+    if (hi - lo > 4096 && *b->stop) return;
+    double mn[3] = {INFINITY, INFINITY, INFINITY}, mx[3] = {-INFINITY, -INFINITY, -INFINITY};
+    for (int32_t i = lo; i < hi; i++) {
+        const double *p = b->pts + 3 * (size_t)b->perm[i];
+        for (int k = 0; k < 3; k++) {
+            if (p[k] < mn[k]) mn[k] = p[k];
+            if (p[k] > mx[k]) mx[k] = p[k];
+        }
+    }
+    double c[3], r2 = 0.0;
+    for (int k = 0; k < 3; k++) c[k] = 0.5 * (mn[k] + mx[k]);
+    for (int32_t i = lo; i < hi; i++) {
+        const double *p = b->pts + 3 * (size_t)b->perm[i];
+        double dx = p[0] - c[0], dy = p[1] - c[1], dz = p[2] - c[2];
+        double d2 = dx * dx + dy * dy + dz * dz;
+        if (d2 > r2) r2 = d2;
+    }
+    for (int k = 0; k < 3; k++) nd->c[k] = (float)c[k];
+    nd->r = (float)(sqrt(r2) * (1.0 + 1e-6) + b->pad);
+    if (hi - lo <= LEAF_SIZE || b->n_nodes + 2 > b->cap) return;
+    int axis = 0;
+    double ext = mx[0] - mn[0];
+    for (int k = 1; k < 3; k++)
+        if (mx[k] - mn[k] > ext) { ext = mx[k] - mn[k]; axis = k; }
+    for (int32_t i = lo; i < hi; i++) b->key[i] = b->pts[3 * (size_t)b->perm[i] + axis];
+    int32_t mid = lo + (hi - lo) / 2;
+    select_nth(b->key, b->perm, lo, hi, mid);
+    int32_t first = b->n_nodes;
+    b->n_nodes += 2;
+    nd->kid = first;
+    build_node(b, first, node, lo, mid);
+    build_node(b, first + 1, node, mid, hi);
+}
+
+/* build_tree(points (n,3) f64, perm (n) i32 out, nodes (cap) Node out, stop (1) i32) -> number of
+ * nodes, or -1 if stop was set meanwhile.  perm lists the input rows in tree order. */
+static PyObject *py_build_tree(PyObject *self, PyObject *args) {
+    Py_buffer pts, perm, nds, stop;
+    if (!PyArg_ParseTuple(args, "y*w*w*w*", &pts, &perm, &nds, &stop)) return NULL;
+    int32_t n = (int32_t)(pts.len / (3 * sizeof(double)));
+    int32_t cap = (int32_t)(nds.len / (Py_ssize_t)sizeof(Node));
+    PyObject *result = NULL;
+    double *key = NULL;
+    if (perm.len / (Py_ssize_t)sizeof(int32_t) < n || cap < 1) {
+        PyErr_SetString(PyExc_ValueError, "build_tree: output buffers too small");
+        goto done;
+    }
+    key = (double *)malloc(sizeof(double) * (size_t)(n > 0 ? n : 1));
+    if (!key) { PyErr_NoMemory(); goto done; }
+    double scale = 1.0;
+    for (Py_ssize_t i = 0; i < 3 * (Py_ssize_t)n; i++) {
+        double v = fabs(((const double *)pts.buf)[i]);
+        if (v > scale) scale = v;
+    }
+    Builder b = {(const double *)pts.buf, (int32_t *)perm.buf, key, (Node *)nds.buf, 1, cap, 1e-6 * scale,
+                 (volatile int32_t *)stop.buf};
+    Py_BEGIN_ALLOW_THREADS
+    for (int32_t i = 0; i < n; i++) b.perm[i] = i;
+    build_node(&b, 0, -1, 0, n);
+    Py_END_ALLOW_THREADS
+    result = PyLong_FromLong(*b.stop ? -1 : b.n_nodes);
+done:
+    free(key);
+    PyBuffer_Release(&pts); PyBuffer_Release(&perm); PyBuffer_Release(&nds); PyBuffer_Release(&stop);
+    return result;
+}
+
+/* ------------------------------------------------------------------------------------------------ */
+/* The raster: rows of equal height in z, bins of equal longitude; one sample per cell centre         */
+
+typedef struct {
+    int rows, bins, words;     /* words per row */
+    double *z, *s, *inv_s, *z_over_s, *cos_lon, *sin_lon;
+    uint64_t last_mask;        /* valid bits of a row's last word */
+} Raster;
+
+static int raster_init(Raster *r, int rows, int bins) {
+    r->rows = rows;
+    r->bins = bins;
+    r->words = (bins + 63) / 64;
+    r->last_mask = (bins % 64) ? ((UINT64_C(1) << (bins % 64)) - 1) : ~UINT64_C(0);
+    r->z = (double *)malloc(sizeof(double) * (size_t)(4 * rows + 2 * bins));
+    if (!r->z) return -1;
+    r->s = r->z + rows;
+    r->inv_s = r->s + rows;
+    r->z_over_s = r->inv_s + rows;
+    r->cos_lon = r->z_over_s + rows;
+    r->sin_lon = r->cos_lon + bins;
+    for (int j = 0; j < rows; j++) {
+        double z = -1.0 + (j + 0.5) * (2.0 / rows);
+        r->z[j] = z;
+        r->s[j] = sqrt(1.0 - z * z);
+        r->inv_s[j] = 1.0 / r->s[j];
+        r->z_over_s[j] = z / r->s[j];
+    }
+    for (int k = 0; k < bins; k++) {
+        double lon = (k + 0.5) * (TWO_PI / bins);
+        r->cos_lon[k] = cos(lon);
+        r->sin_lon[k] = sin(lon);
+    }
+    return 0;
+}
+
+static void raster_free(Raster *r) { free(r->z); }
+
+/* one raster's bits: rows x words, plus the count of full rows */
+static inline int row_is_full(const Raster *r, const uint64_t *row) {
+    for (int w = 0; w < r->words - 1; w++)
+        if (row[w] != ~UINT64_C(0)) return 0;
+    return row[r->words - 1] == r->last_mask;
+}
+
+static inline void set_bits(uint64_t *row, int a, int b) {
+    /* bits [a, b) of a row, 0 <= a <= b */
+    while (a < b) {
+        int w = a >> 6, off = a & 63;
+        int take = 64 - off;
+        if (take > b - a) take = b - a;
+        uint64_t m = (take == 64) ? ~UINT64_C(0) : (((UINT64_C(1) << take) - 1) << off);
+        row[w] |= m;
+        a += take;
+    }
+}
+
+/* The cap of (dx, dy, dz) = p - q (|p - q| > h) into the bitmap, rows already full skipped.
+ * The same arithmetic as _rays.CapRaster.covered, in double precision.  Returns rows newly full. */
+static int add_cap(const Raster *r, uint64_t *bits, uint8_t *full, double dx, double dy, double dz, double d2,
+                   double h) {
+    const int rows = r->rows, bins = r->bins;
+    double inv = 1.0 / sqrt(d2);
+    double uz = dz * inv;
+    double sina = h * inv;
+    if (sina > 1.0) sina = 1.0;
+    double cosa = sqrt(1.0 - sina * sina);
+    double rho2 = 1.0 - uz * uz;
+    double rho = rho2 > 0.0 ? sqrt(rho2) : 0.0;
+    double mid = uz * cosa, spread = rho * sina;
+    double zhi = mid + spread, zlo = mid - spread;
+    if (uz >= cosa) zhi = 1.0;
+    if (-uz >= cosa) zlo = -1.0;
+    int first = (int)((zlo + 1.0) * (0.5 * rows) + 0.5);
+    int end = (int)((zhi + 1.0) * (0.5 * rows) + 0.5);
+    if (end > rows) end = rows;
+    if (first < 0) first = 0;
+    if (end <= first) return 0;
+    if (rho < 1e-30) rho = 1e-30;
+    double a0 = cosa / rho, a1 = uz / rho;
+    double centre = atan2(dy, dx) * (bins / TWO_PI) + bins + 0.5;
+    int newly = 0;
+    for (int j = first; j < end; j++) {
+        if (full[j]) continue;
+        uint64_t *row = bits + (size_t)j * r->words;
+        double c = a0 * r->inv_s[j] - a1 * r->z_over_s[j];
+        int start, length;
+        if (c <= -1.0) {
+            start = 0;
+            length = bins;
+        } else {
+            if (c > 1.0) c = 1.0;
+            double half = acos(c) * (bins / TWO_PI);
+            start = (int)(centre - half);
+            length = (int)(centre + half) - start;
+            if (length <= 0) continue;
+            if (length > bins) length = bins;
+            if (start >= bins) start -= bins;
+        }
+        int stop = start + length;
+        if (stop > bins) {
+            set_bits(row, start, bins);
+            set_bits(row, 0, stop - bins);
+        } else {
+            set_bits(row, start, stop);
+        }
+        if (row_is_full(r, row)) { full[j] = 1; newly++; }
+    }
+    return newly;
+}
+
+/* ------------------------------------------------------------------------------------------------ */
+/* Any-hit ray cast from o along s against the balls of the points with |p - o|^2 > cut2              */
+
+typedef struct {
+    int32_t *stack;
+    int32_t last_leaf;
+    int64_t visits, hint_tries, hint_hits;
+} Walker;
+
+static inline int leaf_hit(const Tree *t, int32_t node, const float *o, const float *s, float cut2, float h2) {
+    const Node *nd = t->nodes + node;
+    for (int32_t i = nd->lo; i < nd->hi; i++) {
+        const float *p = t->pts + 3 * (size_t)i;
+        float wx = p[0] - o[0], wy = p[1] - o[1], wz = p[2] - o[2];
+        float d2 = wx * wx + wy * wy + wz * wz;
+        if (d2 <= cut2) continue;
+        float tt = wx * s[0] + wy * s[1] + wz * s[2];
+        if (tt > 0.0f && d2 - tt * tt <= h2) return 1;
+    }
+    return 0;
+}
+
+/* Any-hit walk of the subtree at `root` (skipping subtree `skip` and leaves `skip_a`, `skip_b`, already
+ * tested): the leaf of a hit, or -1.  Nearer child along the ray first. */
+static int32_t walk(const Tree *t, Walker *w, int32_t root, int32_t skip, int32_t skip_a, int32_t skip_b,
+                    const float *o, const float *s, float cut, float h) {
+    const float h2 = h * h, cut2 = cut * cut;
+    int sp = 0;
+    w->stack[sp++] = root;
+    while (sp > 0) {
+        int32_t node = w->stack[--sp];
+        if (node == skip) continue;
+        const Node *nd = t->nodes + node;
+        float wx = nd->c[0] - o[0], wy = nd->c[1] - o[1], wz = nd->c[2] - o[2];
+        float rad = nd->r;
+        float d2 = wx * wx + wy * wy + wz * wz;
+        w->visits++;
+        /* every point of the node within the cut: nothing of it counts */
+        if (cut > 0.0f) {
+            float lim = cut - rad;
+            if (lim > 0.0f && d2 <= lim * lim) continue;
+        }
+        float tt = wx * s[0] + wy * s[1] + wz * s[2];
+        float reach = rad + h;
+        float off2 = (tt > 0.0f) ? d2 - tt * tt : d2;
+        if (off2 > reach * reach) continue;
+        int32_t k = nd->kid;
+        if (k < 0) {
+            if (node != skip_a && node != skip_b && leaf_hit(t, node, o, s, cut2, h2)) return node;
+            continue;
+        }
+        const Node *a = t->nodes + k, *b = a + 1;
+        float ta = (a->c[0] - o[0]) * s[0] + (a->c[1] - o[1]) * s[1] + (a->c[2] - o[2]) * s[2];
+        float tb = (b->c[0] - o[0]) * s[0] + (b->c[1] - o[1]) * s[1] + (b->c[2] - o[2]) * s[2];
+        if (ta <= tb) { w->stack[sp++] = k + 1; w->stack[sp++] = k; }
+        else { w->stack[sp++] = k; w->stack[sp++] = k + 1; }
+    }
+    return -1;
+}
+
+/* Does the ray from o along s meet a ball around a point with |p - o| > cut?  Exact; the hints only
+ * order the search: *hint = a leaf a nearby ray hit (the same sample from the previous cluster), then
+ * the previous ray's leaf, then the rest of the tree bottom-up from *hint (the hit is usually near). */
+static int ray_hits(const Tree *t, Walker *w, const float *o, const float *s, float cut, float h,
+                    int32_t *hint) {
+    const float h2 = h * h, cut2 = cut * cut;
+    int32_t a = *hint, b = w->last_leaf;
+    if (a >= 0) {
+        w->hint_tries++;
+        if (leaf_hit(t, a, o, s, cut2, h2)) { w->hint_hits++; w->last_leaf = a; return 1; }
+    }
+    if (b >= 0 && b != a) {
+        w->hint_tries++;
+        if (leaf_hit(t, b, o, s, cut2, h2)) { w->hint_hits++; *hint = b; return 1; }
+    }
+    int32_t leaf = -1;
+    if (a >= 0) {
+        /* bottom-up from the hinted leaf: each ancestor's other subtree in turn, up to the root */
+        int32_t prev = a, node = t->nodes[a].par;
+        while (node >= 0 && leaf < 0) {
+            leaf = walk(t, w, node, prev, a, b, o, s, cut, h);
+            prev = node;
+            node = t->nodes[node].par;
+        }
+    } else {
+        leaf = walk(t, w, 0, -1, a, b, o, s, cut, h);
+    }
+    if (leaf < 0) return 0;
+    *hint = leaf;
+    w->last_leaf = leaf;
+    return 1;
+}
+
+/* Points with |p - c| <= reach, nearest first, into idx; returns their number */
+typedef struct { double d2; int32_t i; } Near;
+
+static int cmp_near(const void *a, const void *b) {
+    double x = ((const Near *)a)->d2, y = ((const Near *)b)->d2;
+    if (x < y) return -1;
+    if (x > y) return 1;
+    int32_t i = ((const Near *)a)->i, j = ((const Near *)b)->i;
+    return (i > j) - (i < j);
+}
+
+static int32_t collect_near(const Tree *t, int32_t *stack, const double *c, double reach, Near *out) {
+    int32_t m = 0;
+    int sp = 0;
+    double r2 = reach * reach;
+    stack[sp++] = 0;
+    while (sp > 0) {
+        const Node *nd = t->nodes + stack[--sp];
+        double wx = nd->c[0] - c[0], wy = nd->c[1] - c[1], wz = nd->c[2] - c[2];
+        double d = sqrt(wx * wx + wy * wy + wz * wz);
+        if (d - nd->r > reach) continue;
+        if (nd->kid >= 0) {
+            stack[sp++] = nd->kid;
+            stack[sp++] = nd->kid + 1;
+            continue;
+        }
+        for (int32_t i = nd->lo; i < nd->hi; i++) {
+            const float *p = t->pts + 3 * (size_t)i;
+            double dx = p[0] - c[0], dy = p[1] - c[1], dz = p[2] - c[2];
+            double d2 = dx * dx + dy * dy + dz * dz;
+            if (d2 <= r2) { out[m].d2 = d2; out[m].i = i; m++; }
+        }
+    }
+    qsort(out, (size_t)m, sizeof(Near), cmp_near);
+    return m;
+}
+
+/* One query's near caps (points nearest first, |p - q| > h) into a cleared bitmap; returns caps drawn */
+#define MEMBER_CHUNK 1024
+static int64_t near_raster(const Raster *r, const Tree *t, const Near *near, int32_t m, const double *qi,
+                           double h, double h2, uint64_t *bits, uint8_t *full) {
+    memset(bits, 0, (size_t)r->rows * r->words * sizeof(uint64_t));
+    memset(full, 0, (size_t)r->rows);
+    int nf = 0;
+    int64_t caps = 0;
+    for (int32_t a = 0; a < m && nf < r->rows; a++) {
+        const float *p = t->pts + 3 * (size_t)near[a].i;
+        double dx = p[0] - qi[0], dy = p[1] - qi[1], dz = p[2] - qi[2];
+        double d2 = dx * dx + dy * dy + dz * dz;
+        if (d2 <= h2) continue;
+        caps++;
+        nf += add_cap(r, bits, full, dx, dy, dz, d2, h);
+    }
+    return caps;
+}
+
+/* clusters(points (n,3) f32 tree order, nodes (m) Node, queries (q,3) f64 grouped by cluster,
+ *          starts (k1 - k0 + 1) i64 into queries, centres (k,3) f64, reach (k) f64 (all clusters),
+ *          cluster range [k0, k1), h, rows, bins, beta out (q) f64,
+ *          stats out (6) i64: node visits, near caps, far rays, near points, hint tries, hint hits)
+ * beta of the queries of clusters k0..k1-1 (queries holds just theirs, grouped by cluster). */
+static PyObject *py_clusters(PyObject *self, PyObject *args) {
+    Py_buffer pts, nds, qs, starts, cen, rch, beta, stats;
+    int k0, k1, rows, bins;
+    double h;
+    if (!PyArg_ParseTuple(args, "y*y*y*y*y*y*iidiiw*w*", &pts, &nds, &qs, &starts, &cen, &rch,
+                          &k0, &k1, &h, &rows, &bins, &beta, &stats))
+        return NULL;
+    PyObject *result = NULL;
+    Raster r = {0};
+    int32_t n = (int32_t)(pts.len / (3 * sizeof(float)));
+    Tree t = {(const float *)pts.buf, (const Node *)nds.buf, (int32_t)(nds.len / (Py_ssize_t)sizeof(Node))};
+    const int64_t *st = (const int64_t *)starts.buf;
+    const double *q = (const double *)qs.buf, *cc = (const double *)cen.buf, *rr = (const double *)rch.buf;
+    double *out = (double *)beta.buf;
+    int64_t *stat = (int64_t *)stats.buf;
+    uint64_t *far = NULL, *need = NULL, *bits = NULL;
+    uint8_t *full = NULL;
+    int32_t *stack = NULL, *hints = NULL;
+    Near *near = NULL;
+    if (rows < 1 || bins < 1 || raster_init(&r, rows, bins) != 0) {
+        PyErr_SetString(PyExc_ValueError, "clusters: bad raster");
+        goto done;
+    }
+    size_t nw = (size_t)rows * r.words;
+    far = (uint64_t *)calloc((2 + (size_t)MEMBER_CHUNK) * nw, sizeof(uint64_t));
+    full = (uint8_t *)calloc((size_t)rows * MEMBER_CHUNK, 1);
+    hints = (int32_t *)malloc(sizeof(int32_t) * (size_t)rows * bins);
+    stack = (int32_t *)malloc(sizeof(int32_t) * 256);
+    near = (Near *)malloc(sizeof(Near) * (size_t)(n > 0 ? n : 1));
+    if (!far || !full || !stack || !near || !hints) { PyErr_NoMemory(); goto done; }
+    for (int i = 0; i < rows * bins; i++) hints[i] = -1;
+    need = far + nw;
+    bits = need + nw;
+    Py_BEGIN_ALLOW_THREADS
+    Walker w = {stack, -1, 0, 0, 0};
+    int64_t caps = 0, rays = 0, nears = 0;
+    const double h2 = h * h;
+    const double total = (double)rows * bins;
+    double prev[3] = {0.0, 0.0, 0.0};
+    for (int k = k0; k < k1; k++) {
+        const double *c = cc + 3 * (size_t)k;
+        const float cf[3] = {(float)c[0], (float)c[1], (float)c[2]};
+        const double reach = rr[k];
+        const double cut = reach > h ? reach : h;
+        const int64_t q0 = st[k - k0], q1 = st[k - k0 + 1];
+        const int64_t n_mem = q1 - q0;
+        /* hints from a cluster far away would only lengthen the walks */
+        double jx = c[0] - prev[0], jy = c[1] - prev[1], jz = c[2] - prev[2];
+        if (k == k0 || jx * jx + jy * jy + jz * jz > 4.0 * reach * reach)
+            for (int i = 0; i < rows * bins; i++) hints[i] = -1;
+        memcpy(prev, c, sizeof prev);
+        int32_t m = n > 0 ? collect_near(&t, stack, c, reach, near) : 0;
+        nears += m;
+        /* pass 1: every member's near caps; `need` = samples left uncovered by some member */
+        memset(need, 0, nw * sizeof(uint64_t));
+        for (int64_t i = q0; i < q1; i++) {
+            int64_t slot = (i - q0) % MEMBER_CHUNK;
+            uint64_t *mb = bits + (size_t)slot * nw;
+            uint8_t *mf = full + (size_t)slot * rows;
+            caps += near_raster(&r, &t, near, m, q + 3 * (size_t)i, h, h2, mb, mf);
+            for (int j = 0; j < rows; j++) {
+                if (mf[j]) continue;
+                for (int x = 0; x < r.words; x++) {
+                    uint64_t valid = (x == r.words - 1) ? r.last_mask : ~UINT64_C(0);
+                    need[(size_t)j * r.words + x] |= ~mb[(size_t)j * r.words + x] & valid;
+                }
+            }
+        }
+        /* the far field from the centre: one ray per needed sample */
+        memset(far, 0, nw * sizeof(uint64_t));
+        w.last_leaf = -1;
+        if (n > 0) {
+            for (int j = 0; j < rows; j++) {
+                for (int x = 0; x < r.words; x++) {
+                    uint64_t todo = need[(size_t)j * r.words + x];
+                    while (todo) {
+                        int b = 64 * x + __builtin_ctzll(todo);
+                        todo &= todo - 1;
+                        float s[3] = {(float)(r.s[j] * r.cos_lon[b]), (float)(r.s[j] * r.sin_lon[b]),
+                                      (float)r.z[j]};
+                        rays++;
+                        if (ray_hits(&t, &w, cf, s, (float)cut, (float)h, hints + (size_t)j * bins + b))
+                            far[(size_t)j * r.words + x] |= UINT64_C(1) << (b & 63);
+                    }
+                }
+            }
+        }
+        /* pass 2: member raster | far field (members beyond the first chunk are rasterised again) */
+        for (int64_t i = q0; i < q1; i++) {
+            int64_t slot = (i - q0) % MEMBER_CHUNK;
+            uint64_t *mb = bits + (size_t)slot * nw;
+            uint8_t *mf = full + (size_t)slot * rows;
+            if (n_mem > MEMBER_CHUNK) caps += near_raster(&r, &t, near, m, q + 3 * (size_t)i, h, h2, mb, mf);
+            int64_t count = 0;
+            for (size_t x = 0; x < nw; x++) count += __builtin_popcountll(mb[x] | far[x]);
+            out[i] = (double)count / total;
+        }
+    }
+    stat[0] += w.visits;
+    stat[1] += caps;
+    stat[2] += rays;
+    stat[3] += nears;
+    stat[4] += w.hint_tries;
+    stat[5] += w.hint_hits;
+    Py_END_ALLOW_THREADS
+    result = Py_None;
+    Py_INCREF(result);
+done:
+    raster_free(&r);
+    free(far); free(full); free(stack); free(near); free(hints);
+    PyBuffer_Release(&pts); PyBuffer_Release(&nds); PyBuffer_Release(&qs); PyBuffer_Release(&starts); PyBuffer_Release(&cen); PyBuffer_Release(&rch);
+    PyBuffer_Release(&beta); PyBuffer_Release(&stats);
+    return result;
+}
+
+/* Distance from each point of [i0, i1) (tree order) to its nearest other point: its own leaf first, then
+ * up the tree, each ancestor's other subtree pruned by the best distance so far.  Exact (as a KD-tree
+ * kNN query), in double precision from the float32 points. */
+static double nn_subtree(const Tree *t, int32_t *stack, int32_t root, int32_t self, const float *p, double best2) {
+    int sp = 0;
+    stack[sp++] = root;
+    double best = sqrt(best2);
+    while (sp > 0) {
+        const Node *nd = t->nodes + stack[--sp];
+        double wx = nd->c[0] - p[0], wy = nd->c[1] - p[1], wz = nd->c[2] - p[2];
+        double d = sqrt(wx * wx + wy * wy + wz * wz) - nd->r;
+        if (d > best) continue;
+        if (nd->kid >= 0) {
+            stack[sp++] = nd->kid;
+            stack[sp++] = nd->kid + 1;
+            continue;
+        }
+        for (int32_t i = nd->lo; i < nd->hi; i++) {
+            if (i == self) continue;
+            const float *o = t->pts + 3 * (size_t)i;
+            double dx = (double)o[0] - p[0], dy = (double)o[1] - p[1], dz = (double)o[2] - p[2];
+            double d2 = dx * dx + dy * dy + dz * dz;
+            if (d2 < best2) { best2 = d2; best = sqrt(d2); }
+        }
+    }
+    return best2;
+}
+
+/* nn_dist(points (n,3) f32 tree order, nodes, leaf_of (n) i32, i0, i1, out (i1 - i0) f64) */
+static PyObject *py_nn_dist(PyObject *self, PyObject *args) {
+    Py_buffer pts, nds, leaf_of, out;
+    Py_ssize_t i0, i1;
+    if (!PyArg_ParseTuple(args, "y*y*y*nnw*", &pts, &nds, &leaf_of, &i0, &i1, &out)) return NULL;
+    Tree t = {(const float *)pts.buf, (const Node *)nds.buf, (int32_t)(nds.len / (Py_ssize_t)sizeof(Node))};
+    const int32_t *lf = (const int32_t *)leaf_of.buf;
+    double *o = (double *)out.buf;
+    Py_BEGIN_ALLOW_THREADS
+    int32_t stack[256];
+    for (Py_ssize_t i = i0; i < i1; i++) {
+        const float *p = t.pts + 3 * (size_t)i;
+        int32_t leaf = lf[i];
+        double best2 = nn_subtree(&t, stack, leaf, (int32_t)i, p, INFINITY);
+        int32_t prev = leaf, node = t.nodes[leaf].par;
+        while (node >= 0) {  /* each ancestor's other subtree; far ones cost one sphere test */
+            const Node *nd = t.nodes + node;
+            int32_t other = (nd->kid == prev) ? prev + 1 : prev - 1;
+            best2 = nn_subtree(&t, stack, other, (int32_t)i, p, best2);
+            prev = node;
+            node = nd->par;
+        }
+        o[i - i0] = sqrt(best2);
+    }
+    Py_END_ALLOW_THREADS
+    PyBuffer_Release(&pts); PyBuffer_Release(&nds); PyBuffer_Release(&leaf_of); PyBuffer_Release(&out);
+    Py_RETURN_NONE;
+}
+
+/* near_stats(points (n,3) f32 tree order, nodes, queries (q,3) f64, radius, bound, counts out (q) i64,
+ *            clearance out (q) f64): per query, the number of points within `radius`, and the distance
+ * to the nearest point if it is below `bound` (else inf).  For the cluster plan's cost estimate and its
+ * near-surface test. */
+static PyObject *py_near_stats(PyObject *self, PyObject *args) {
+    Py_buffer pts, nds, qs, counts, clear;
+    double radius, bound;
+    if (!PyArg_ParseTuple(args, "y*y*y*ddw*w*", &pts, &nds, &qs, &radius, &bound, &counts, &clear)) return NULL;
+    Tree t = {(const float *)pts.buf, (const Node *)nds.buf, (int32_t)(nds.len / (Py_ssize_t)sizeof(Node))};
+    Py_ssize_t nq = qs.len / (Py_ssize_t)(3 * sizeof(double));
+    const double *q = (const double *)qs.buf;
+    int64_t *cnt = (int64_t *)counts.buf;
+    double *cl = (double *)clear.buf;
+    const int want_count = counts.len > 0, want_clear = clear.len > 0;
+    Py_BEGIN_ALLOW_THREADS
+    int32_t stack[256];
+    const double r2 = radius * radius;
+    for (Py_ssize_t i = 0; i < nq; i++) {
+        const double *p = q + 3 * (size_t)i;
+        if (want_count) {  /* points within radius: whole nodes inside the ball counted at once */
+            int64_t c = 0;
+            int sp = 0;
+            stack[sp++] = 0;
+            while (sp > 0) {
+                const Node *nd = t.nodes + stack[--sp];
+                double wx = nd->c[0] - p[0], wy = nd->c[1] - p[1], wz = nd->c[2] - p[2];
+                double d = sqrt(wx * wx + wy * wy + wz * wz);
+                if (d - nd->r > radius) continue;
+                if (d + nd->r <= radius) { c += nd->hi - nd->lo; continue; }
+                if (nd->kid >= 0) { stack[sp++] = nd->kid; stack[sp++] = nd->kid + 1; continue; }
+                for (int32_t k = nd->lo; k < nd->hi; k++) {
+                    const float *o = t.pts + 3 * (size_t)k;
+                    double dx = o[0] - p[0], dy = o[1] - p[1], dz = o[2] - p[2];
+                    if (dx * dx + dy * dy + dz * dz <= r2) c++;
+                }
+            }
+            cnt[i] = c;
+        }
+        if (want_clear) {  /* nearest point below the bound, nearer child first */
+            double best = bound, best2 = bound * bound;
+            int sp = 0;
+            stack[sp++] = 0;
+            while (sp > 0) {
+                const Node *nd = t.nodes + stack[--sp];
+                double wx = nd->c[0] - p[0], wy = nd->c[1] - p[1], wz = nd->c[2] - p[2];
+                if (sqrt(wx * wx + wy * wy + wz * wz) - nd->r > best) continue;
+                if (nd->kid >= 0) {
+                    const Node *a = t.nodes + nd->kid, *b = a + 1;
+                    double da = (a->c[0] - p[0]) * (a->c[0] - p[0]) + (a->c[1] - p[1]) * (a->c[1] - p[1]) +
+                                (a->c[2] - p[2]) * (a->c[2] - p[2]);
+                    double db = (b->c[0] - p[0]) * (b->c[0] - p[0]) + (b->c[1] - p[1]) * (b->c[1] - p[1]) +
+                                (b->c[2] - p[2]) * (b->c[2] - p[2]);
+                    if (da <= db) { stack[sp++] = nd->kid + 1; stack[sp++] = nd->kid; }
+                    else { stack[sp++] = nd->kid; stack[sp++] = nd->kid + 1; }
+                    continue;
+                }
+                for (int32_t k = nd->lo; k < nd->hi; k++) {
+                    const float *o = t.pts + 3 * (size_t)k;
+                    double dx = o[0] - p[0], dy = o[1] - p[1], dz = o[2] - p[2];
+                    double d2 = dx * dx + dy * dy + dz * dz;
+                    if (d2 < best2) { best2 = d2; best = sqrt(d2); }
+                }
+            }
+            cl[i] = best2 < bound * bound ? best : INFINITY;
+        }
+    }
+    Py_END_ALLOW_THREADS
+    PyBuffer_Release(&pts); PyBuffer_Release(&nds); PyBuffer_Release(&qs);
+    PyBuffer_Release(&counts); PyBuffer_Release(&clear);
+    Py_RETURN_NONE;
+}
+
+static PyMethodDef methods[] = {
+    {"build_tree", py_build_tree, METH_VARARGS, "KD-tree of bounding spheres (boundedness rays kernel)."},
+    {"near_stats", py_near_stats, METH_VARARGS, "Points within a radius and bounded clearance per query."},
+    {"nn_dist", py_nn_dist, METH_VARARGS, "Distance of each point to its nearest other point (tree order)."},
+    {"clusters", py_clusters, METH_VARARGS, "beta of the queries of a range of clusters (rays kernel)."},
+    {NULL, NULL, 0, NULL},
+};
+
+static struct PyModuleDef module = {PyModuleDef_HEAD_INIT, "_raycast",
+                                    "Compiled kernel of the rays boundedness estimator (docs/boundedness.md).",
+                                    -1, methods};
+
+PyMODINIT_FUNC PyInit__raycast(void) { return PyModule_Create(&module); }

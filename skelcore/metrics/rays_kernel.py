@@ -1,0 +1,333 @@
+"""Driver of the compiled ``rays`` kernel (``_raycast.c``): the cloud's tree, the cluster plan, the tasks.
+
+beta(q) is the share of raster samples whose ray from q meets a ball of radius h around a cloud point
+(SPEC 2; the same samples as ``_rays.CapRaster``).  Queries are grouped in clusters (docs/boundedness.md
+1.6-1.7: cubic cells, finer cells near the surface, near-surface queries alone); each cluster's far field
+(points beyond its reach) is ray cast once from its centroid, its near field rasterised as exact caps
+from every member.  A cluster of one query at its own position is exact.  Clusters run on a thread pool
+(the kernel releases the GIL) in tasks of bounded cost, with a checkpoint after each task.
+Design, costs and errors: docs/boundedness.md section 3.
+"""
+
+from __future__ import annotations
+
+import os
+import threading
+from concurrent.futures import ThreadPoolExecutor
+from dataclasses import dataclass
+
+import numpy as np
+from ..geometry import Checkpoint, no_checkpoint
+from . import _raycast
+
+# queries closer than this many h to the cloud share only in finer cells, or are alone (1.7)
+ALONE_WITHIN = 4.0
+# near-surface queries share in finer cells with a near radius this many times the usual 10 cells
+FINER_BOOST = 2.0
+# cost units (about one tree-node visit each): one near cap, and a far ray per level of the tree
+CAP_COST = 25.0
+# cost units per task: about 50 ms of one core, so checkpoints stay well under 0.5 s apart
+TASK_COST = 1.5e6
+# points per nearest-neighbour call (about 30 ms of one core)
+NN_CHUNK = 65536
+
+
+# one tree node as the kernel reads it (struct Node in _raycast.c): 32 bytes
+NODE = np.dtype([("c", "<f4", (3,)), ("r", "<f4"), ("kid", "<i4"), ("lo", "<i4"), ("hi", "<i4"), ("par", "<i4")])
+
+
+class BallTree:
+    """The distinct cloud points (raster frame) in a balanced KD-tree with a bounding sphere per node."""
+
+    def __init__(self, pts: np.ndarray, checkpoint: Checkpoint = no_checkpoint):
+        pts = np.ascontiguousarray(pts, dtype=np.float64)
+        n = len(pts)
+        cap = max(1, 2 * ((n + 3) // 4) + 2)
+        perm = np.empty(n, np.int32)
+        nodes = np.empty(cap, NODE)
+        m = _build_polling(lambda stop: _raycast.build_tree(pts, perm, nodes, stop), n, checkpoint)
+        self.points = np.ascontiguousarray(pts[perm], dtype=np.float32)
+        nodes = nodes[:m].copy()
+        self.nodes = nodes
+        self.perm = perm
+        self.n = n
+        self.depth = max(1.0, float(np.log2(max(2.0, n / 8.0))))
+
+    def nearest_other(self, checkpoint: Checkpoint = no_checkpoint, workers: int | None = None) -> np.ndarray:
+        """Distance from each point (tree order) to its nearest other point, exact; inf for a lone point."""
+        leaves = np.flatnonzero(self.nodes["kid"] < 0)
+        leaves = leaves[np.argsort(self.nodes["lo"][leaves])]
+        leaf_of = np.repeat(leaves.astype(np.int32), self.nodes["hi"][leaves] - self.nodes["lo"][leaves])
+        out = np.empty(self.n)
+
+        def chunk(i0: int, i1: int) -> None:
+            _raycast.nn_dist(self.points, self.nodes, leaf_of, i0, i1, out[i0:i1])
+
+        spans = [(i, min(i + NN_CHUNK, self.n)) for i in range(0, self.n, NN_CHUNK)]
+        _on_pool(chunk, spans, workers, checkpoint)
+        return out
+
+    def median_spacing(self, counts: np.ndarray, checkpoint: Checkpoint = no_checkpoint) -> float:
+        """Median nearest-neighbour distance over the original points, ``counts`` copies of each
+        distinct point (input order): a point with copies is at distance 0 from one (SPEC 2's h)."""
+        if int(np.sum(counts)) < 2:
+            return 0.0
+        c = np.asarray(counts)[self.perm]
+        d = np.where(c > 1, 0.0, self.nearest_other(checkpoint))
+        return float(np.median(np.repeat(d, c)))
+
+    def count_within(self, queries: np.ndarray, radius: float) -> np.ndarray:
+        """Number of points within ``radius`` of each query."""
+        q = np.ascontiguousarray(queries, np.float64)
+        counts = np.empty(len(q), np.int64)
+        _raycast.near_stats(self.points, self.nodes, q, float(radius), 0.0, counts, np.empty(0))
+        return counts
+
+    def clearance(self, queries: np.ndarray, bound: float, checkpoint: Checkpoint = no_checkpoint,
+                  workers: int | None = None) -> np.ndarray:
+        """Distance from each query to the nearest point, inf where it is not below ``bound``."""
+        q = np.ascontiguousarray(queries, np.float64)
+        out = np.empty(len(q))
+
+        def chunk(i0: int, i1: int) -> None:
+            _raycast.near_stats(self.points, self.nodes, q[i0:i1], 0.0, float(bound), np.empty(0, np.int64),
+                                out[i0:i1])
+
+        _on_pool(chunk, [(i, min(i + NN_CHUNK, len(q))) for i in range(0, len(q), NN_CHUNK)], workers, checkpoint)
+        return out
+
+    @property
+    def ray_cost(self) -> float:
+        """Cost units of one far ray (node visits grow with the depth)."""
+        return 2.0 + self.depth
+
+
+def _on_pool(fn, spans: list, workers: int | None, checkpoint: Checkpoint, done=None) -> None:
+    """``fn(*span)`` for every span on ``workers`` threads (None = all cores), a checkpoint after each
+    in order; ``done(span, result)`` stores a result.  A short queue: a cancel stops within about one
+    span per worker."""
+    workers = max(1, int(workers or os.cpu_count() or 1))
+    store = done or (lambda span, result: None)
+    checkpoint(0.0)
+    if workers == 1 or len(spans) <= 1:
+        for i, span in enumerate(spans):
+            store(span, fn(*span))
+            checkpoint((i + 1) / len(spans))
+        return
+    with ThreadPoolExecutor(max_workers=workers) as pool:
+        pending: list = []
+        it = iter(spans)
+        try:
+            for span in it:
+                pending.append((span, pool.submit(fn, *span)))
+                if len(pending) >= 2 * workers:
+                    break
+            finished = 0
+            while pending:
+                span, fut = pending.pop(0)
+                store(span, fut.result())
+                finished += 1
+                checkpoint(finished / len(spans))
+                nxt = next(it, None)
+                if nxt is not None:
+                    pending.append((nxt, pool.submit(fn, *nxt)))
+        finally:
+            for _, fut in pending:
+                fut.cancel()
+
+
+def _build_polling(build, n: int, checkpoint: Checkpoint) -> int:
+    """Run ``build(stop)`` (the kernel releases the GIL) in a thread while this one calls the checkpoint
+    every 50 ms; a cancel sets ``stop``, which the kernel reads, then re-raises once it has returned."""
+    stop = np.zeros(1, np.int32)
+    if n <= 65536:  # a few ms: no thread needed
+        return build(stop)
+    result: list = []
+    worker = threading.Thread(target=lambda: result.append(build(stop)), name="skelscope-balltree", daemon=True)
+    worker.start()
+    try:
+        while worker.is_alive():
+            worker.join(0.05)
+            checkpoint(0.0)
+    except BaseException:
+        stop[0] = 1
+        worker.join()
+        raise
+    return result[0]
+
+
+@dataclass
+class Plan:
+    """Queries grouped by cluster: ``order`` (plan position -> query row), cluster ``starts`` (K + 1),
+    ``centres`` (K, 3), ``reach`` (K,): points within reach of the centre are near."""
+
+    order: np.ndarray
+    starts: np.ndarray
+    centres: np.ndarray
+    reach: np.ndarray
+    estimated_cost: float = 0.0
+    estimated_near: float = 0.0
+
+
+def exact_plan(queries: np.ndarray, reach: float) -> Plan:
+    """Every query its own cluster at its own position: exact for any reach."""
+    n = len(queries)
+    return Plan(np.arange(n), np.arange(n + 1, dtype=np.int64), np.ascontiguousarray(queries, np.float64),
+                np.full(n, float(reach)))
+
+
+def shared_plan(
+    queries: np.ndarray, h: float, near_radius: float, cell: float, clearance: np.ndarray,
+    finer: bool = True,
+) -> Plan:
+    """Clusters of cubic cells of side ``cell`` with reach ``near_radius`` + spread (docs/boundedness.md 1.6).
+
+    A query closer than 4 h and 4 cells to the cloud shares only in finer cells (cell / 2^k down to
+    h / 4, clearance >= 4 of them, twice the near radius), or is alone below that (1.7).
+    """
+    level = np.zeros(len(queries), np.int64)
+    levels = max(0, int(np.floor(np.log2(cell / (h / 4.0))))) if finer else 0
+    for k in range(1, levels + 1):
+        need = ALONE_WITHIN * h if k == 1 else 0.0
+        level[clearance < max(ALONE_WITHIN * cell / 2.0 ** (k - 1), need)] = k
+    lone = clearance < (ALONE_WITHIN * cell / 2.0**levels if levels else ALONE_WITHIN * h)
+    level_cell = cell / 2.0**level
+    keys = np.floor(queries / level_cell[:, None]).astype(np.int64)
+    keys = np.column_stack([keys, level, np.where(lone, np.arange(1, len(keys) + 1), 0)])
+    cid = _group_ids(keys)
+    # clusters in Morton order of their first query's cell: neighbours follow each other, so the
+    # kernel's per-sample hints (the leaf the same sample hit from the previous cluster) stay good
+    first = np.zeros(int(cid.max(initial=-1)) + 1, np.int64)
+    first[cid[::-1]] = np.arange(len(cid))[::-1]
+    rank = np.argsort(_morton(np.floor(queries[first] / (cell / 2.0**levels)).astype(np.int64)), kind="stable")
+    inv = np.empty_like(rank)
+    inv[rank] = np.arange(len(rank))
+    cid = inv[cid]
+    order = np.argsort(cid, kind="stable")
+    cid = cid[order]
+    q = queries[order]
+    starts = np.flatnonzero(np.r_[True, cid[1:] != cid[:-1], True]).astype(np.int64)
+    sizes = np.diff(starts)
+    centres = np.add.reduceat(q, starts[:-1], axis=0) / sizes[:, None]
+    dist = np.linalg.norm(q - np.repeat(centres, sizes, axis=0), axis=1)
+    spreads = np.maximum.reduceat(dist, starts[:-1])
+    single = sizes == 1
+    centres[single] = q[starts[:-1][single]]
+    spreads[single] = 0.0
+    cl_level = level[order][starts[:-1]]
+    reach = near_radius * np.where(cl_level > 0, FINER_BOOST, 1.0) / 2.0**cl_level + spreads
+    return Plan(order, starts, np.ascontiguousarray(centres), reach)
+
+
+def _morton(cells: np.ndarray) -> np.ndarray:
+    """Morton (Z-order) codes of integer cells (N, 3): 21 bits per axis, interleaved."""
+    c = (cells - cells.min(axis=0, initial=0)).astype(np.uint64) & np.uint64((1 << 21) - 1)
+    code = np.zeros(len(c), np.uint64)
+    for bit in range(21):
+        for axis in range(3):
+            code |= ((c[:, axis] >> np.uint64(bit)) & np.uint64(1)) << np.uint64(3 * bit + axis)
+    return code
+
+
+def _group_ids(keys: np.ndarray) -> np.ndarray:
+    """Dense ids of equal rows of an int64 key matrix (one 1-D unique when the key space allows)."""
+    k = keys - keys.min(axis=0)
+    span = k.max(axis=0) + 1
+    if float(np.prod(span.astype(float))) < 2.0**62:
+        flat = np.zeros(len(k), np.int64)
+        for j in range(k.shape[1]):
+            flat = flat * span[j] + k[:, j]
+        return np.unique(flat, return_inverse=True)[1].ravel()
+    return np.unique(k, axis=0, return_inverse=True)[1].ravel()
+
+
+def choose_plan(
+    tree: BallTree, queries: np.ndarray, h: float, near_radius: float, cell: float,
+    samples: int, exact_pairs: int, share: bool | None, checkpoint: Checkpoint = no_checkpoint,
+) -> Plan:
+    """Exact when small, forced, or cheaper; else the cheapest of seven cluster sizes (x 1/2 ... x 32).
+
+    Estimated cost = clusters x samples x ray cost + queries x near points x cap cost, the near points
+    counted on 256 sampled queries.
+    """
+    n_q = len(queries)
+    sample = queries[np.random.default_rng(0).permutation(n_q)[:256]]
+    near_exact = float(np.mean(tree.count_within(sample, near_radius)))
+    exact_cost = n_q * (samples * tree.ray_cost + near_exact * CAP_COST)
+    if share is False or (share is None and tree.n * n_q <= exact_pairs):
+        plan = exact_plan(queries, near_radius)
+        plan.estimated_cost, plan.estimated_near = exact_cost, near_exact
+        return plan
+    best = None
+    for scale in 2.0 ** np.arange(-1, 6):
+        reach = (near_radius + 0.87 * cell) * scale
+        near = float(np.mean(tree.count_within(sample, reach)))
+        if best is not None and n_q * near * CAP_COST >= best[0]:
+            break  # the near part only grows with the size: no larger size can be cheaper
+        clusters = _count_cells(queries, cell * scale)
+        cost = clusters * samples * tree.ray_cost + n_q * near * CAP_COST
+        if best is None or cost < best[0]:
+            best = (cost, near, scale)
+        checkpoint(0.0)
+    cost, near, scale = best
+    if share is None and cost > 0.75 * exact_cost:
+        plan = exact_plan(queries, near_radius)
+        plan.estimated_cost, plan.estimated_near = exact_cost, near_exact
+        return plan
+    # only "closer than 4 cells (or 4 h)" matters, and a bounded search is fast even from a tube's
+    # axis, where the whole wall is nearly equidistant
+    bound = ALONE_WITHIN * max(cell * scale, h) * (1.0 + 1e-9)
+    clearance = tree.clearance(queries, bound, lambda f: checkpoint(0.0))
+    plan = shared_plan(queries, h, near_radius * scale, cell * scale, clearance)
+    plan.estimated_cost, plan.estimated_near = cost, near
+    return plan
+
+
+def _count_cells(points: np.ndarray, cell: float) -> int:
+    """Number of distinct cubic cells of side ``cell`` holding points."""
+    return int(_group_ids(np.floor(points / cell).astype(np.int64)).max(initial=-1)) + 1
+
+
+def run_plan(
+    tree: BallTree, plan: Plan, queries: np.ndarray, h: float, rows: int, bins: int, workers: int | None = None,
+    checkpoint: Checkpoint = no_checkpoint, stats: np.ndarray | None = None,
+) -> np.ndarray:
+    """beta of every query row (in the input order), the plan's clusters on ``workers`` threads."""
+    q_sorted = np.ascontiguousarray(queries[plan.order], np.float64)
+    sizes = np.diff(plan.starts)
+    cost = rows * bins * tree.ray_cost + sizes * max(plan.estimated_near, 1.0) * CAP_COST
+    bounds = [0]
+    acc = 0.0
+    for k, c in enumerate(cost):  # cluster ranges of about TASK_COST units each
+        acc += c
+        if acc >= TASK_COST:
+            bounds.append(k + 1)
+            acc = 0.0
+    if bounds[-1] != len(cost):
+        bounds.append(len(cost))
+    tasks = list(zip(bounds[:-1], bounds[1:]))
+    out_sorted = np.zeros(len(q_sorted))
+    stats = np.zeros(6, np.int64) if stats is None else stats
+    reach = np.ascontiguousarray(plan.reach, np.float64)
+    centres = np.ascontiguousarray(plan.centres, np.float64)
+    starts = np.ascontiguousarray(plan.starts, np.int64)
+
+    def task(k0: int, k1: int) -> np.ndarray:
+        beta = np.zeros(int(starts[k1] - starts[k0]))
+        st = np.zeros(6, np.int64)
+        sub_starts = starts[k0 : k1 + 1] - starts[k0]
+        _raycast.clusters(
+            tree.points, tree.nodes, q_sorted[starts[k0] : starts[k1]],
+            np.ascontiguousarray(sub_starts), centres, reach, k0, k1, float(h), rows, bins, beta, st,
+        )
+        return beta, st
+
+    def store(span: tuple[int, int], result) -> None:
+        beta, st = result
+        out_sorted[starts[span[0]] : starts[span[1]]] = beta
+        stats[:] += st
+
+    _on_pool(task, tasks, workers, checkpoint, store)
+    out = np.empty(len(q_sorted))
+    out[plan.order] = out_sorted
+    return out
