@@ -237,15 +237,15 @@ def _pump(app: Any, seconds: float, until: Any = lambda: False) -> float:
     return longest
 
 
-def cancel_in_every_stage(stages: tuple[str, ...] = CANCEL_STAGES, into: float = 2.0,
-                          wait: float = 1800.0) -> list[tuple]:
+def cancel_in_every_stage(stages: tuple[str, ...] = CANCEL_STAGES, into: float = 2.0, wait: float = 1800.0,
+                          stop_wait: float = 600.0) -> list[tuple]:
     """Cancel a 1M-point evaluation inside each stage: start it, wait (at most ``wait`` s) until the
     worker reports the stage, let it run ``into`` s more (less if the stage ends first), press Cancel.
 
     Runs aimed at a stage after boundedness use :func:`_stand_in_boundedness` (this process only).
     Returns, per stage: (stage aimed at, stage at Cancel, label shown at Cancel, s until the stage
     began, s into it, s until the window was idle, s until the worker stopped (None: not within
-    600 s), longest event-loop turn while the stage ran, stand-in used)."""
+    ``stop_wait`` s), longest event-loop turn while the stage ran, stand-in used)."""
     import importlib
 
     ev_mod = importlib.import_module("skelcore.evaluate")
@@ -267,7 +267,7 @@ def cancel_in_every_stage(stages: tuple[str, ...] = CANCEL_STAGES, into: float =
         w.cancel_button.click()
         idle = time.perf_counter() - t0
         assert not w.session.runner.running
-        stopped = time.perf_counter() - t0 if task.wait(600_000) else None
+        stopped = time.perf_counter() - t0 if task.wait(stop_wait * 1000) else None
         out.append((target, stage, label, reached, t0 - t_in, idle, stopped, gap, stand_in))
         _pump(app, 0.5)
     ev_mod.boundedness = real_boundedness
@@ -329,6 +329,7 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--cancel-stages", default=",".join(CANCEL_STAGES),
                         help="comma-separated stages to cancel in at 1M (default: all; coverage has no checkpoint "
                              "yet, so its run waits 600 s for the worker)")
+    parser.add_argument("--stop-wait", type=float, default=600.0, help="s to wait for the worker after a Cancel")
     parser.add_argument("--skip-frames", action="store_true", help="skip the 1M-point frames and pick")
     parser.add_argument("--stall-runs", type=int, default=1,
                         help="evaluations timed for the GUI stall, each in a fresh process (best reported)")
@@ -338,7 +339,7 @@ def main(argv: list[str] | None = None) -> int:
         sys.path.insert(0, str(ROOT))
         stages = tuple(x.strip() for x in args.cancel_stages.split(",") if x.strip())
         part = {"frames": frames_while_moving, "pick": pick_time,
-                "cancel": lambda: cancel_in_every_stage(stages)}[args.million_part]
+                "cancel": lambda: cancel_in_every_stage(stages, stop_wait=args.stop_wait)}[args.million_part]
         print(repr(part()))
         return 0
     if args.stall_once:
@@ -350,7 +351,7 @@ def main(argv: list[str] | None = None) -> int:
     print(f"machine: {os.cpu_count()} cores, load average {os.getloadavg()[0]:.1f} at start")
     if not args.skip_million and not args.only_launch:
         run = lambda part: eval(subprocess.run([sys.executable, __file__, "--million-part", part,  # noqa: E731,S307
-                                                "--cancel-stages", args.cancel_stages],
+                                                "--cancel-stages", args.cancel_stages, "--stop-wait", str(args.stop_wait)],
                                                capture_output=True, text=True, cwd=ROOT, check=True).stdout.strip()
                                 .splitlines()[-1])
         if not args.skip_frames:
@@ -367,7 +368,7 @@ def main(argv: list[str] | None = None) -> int:
         for target, stage, label, reached, into, idle, stopped, gap, stand_in in run("cancel"):
             print(f"| {target}{' (boundedness stand-in)' if stand_in else ''} | {stage} | {label} | {reached:.1f} s "
                   f"| {into:.2f} s into it | {idle * 1000:.0f} ms | "
-                  f"{'> 600 s' if stopped is None else f'{stopped:.2f} s'} | {gap * 1000:.0f} ms | {os.getloadavg()[0]:.1f} |")
+                  f"{f'> {args.stop_wait:g} s' if stopped is None else f'{stopped:.2f} s'} | {gap * 1000:.0f} ms | {os.getloadavg()[0]:.1f} |")
         for delay, stage in ((0.5, ""), (3.0, ""), (2.0, "skeletal boundedness")):
             took, code, aborted, at = quit_while_running(delay, tmp, stage)
             print(f"Ctrl+Q {delay:g} s into {'a 1M-point evaluation' if not stage else repr(stage)} (stage '{at}'): "
