@@ -3,7 +3,8 @@
 One pyvista interactor split in two renderers that share one camera (linked cameras: rotating either
 moves both), each drawing the cloud and its skeleton coloured by the chosen metric, and the summary
 table with A, B and B - A columns (the scores of :meth:`Evaluation.summary` at A's thresholds; green where B is better).
-File > "Compare with a second skeleton (B)…" loads B's files and evaluates them in the worker.
+File > "Compare with a second skeleton (B)…" loads B's files and evaluates them in the worker;
+File > "Open comparison run…" (:mod:`app.compare_run`) opens two report rows' stored results.
 """
 
 from __future__ import annotations
@@ -51,11 +52,13 @@ class CompareWindow(QtWidgets.QWidget):
     """A/B view of two evaluations of one cloud."""
 
     def __init__(self, ev_a: Any, ev_b: Any, names: tuple[str, str] = ("A", "B"), metric: str = "centeredness",
-                 thresholds: tuple[float, float] | None = None, parent: QtWidgets.QWidget | None = None) -> None:
+                 thresholds: tuple[float, float] | None = None, parent: QtWidgets.QWidget | None = None,
+                 context: str = "") -> None:
         super().__init__(parent, QtCore.Qt.WindowType.Window)
         from pyvistaqt import QtInteractor
 
-        self.setWindowTitle(f"SkelScope — A: {names[0]}  |  B: {names[1]}")
+        self.context = context  # e.g. a compare run's dataset, condition and seed
+        self.setWindowTitle(f"SkelScope — A: {names[0]}  |  B: {names[1]}" + (f"  ({context})" if context else ""))
         self.resize(1400, 850)
         self.ev_a, self.ev_b, self.names = ev_a, ev_b, names
         self.thresholds = thresholds or (ev_a.params.beta_star, ev_a.params.c_star)
@@ -73,6 +76,8 @@ class CompareWindow(QtWidgets.QWidget):
         top.addWidget(QtWidgets.QLabel("colour by", self))
         top.addWidget(self.metric_box)
         top.addStretch(1)
+        if context:
+            top.addWidget(QtWidgets.QLabel(context, self))
         split = QtWidgets.QSplitter(QtCore.Qt.Orientation.Vertical, self)
         split.addWidget(self.plotter)
         split.addWidget(self.table)
@@ -154,6 +159,15 @@ class CompareWindow(QtWidgets.QWidget):
     def image(self) -> np.ndarray:
         self.plotter.render()
         return np.asarray(self.plotter.screenshot(None, return_img=True))
+
+    def picture(self) -> np.ndarray:
+        """The whole window (both views, the table) as an (H, W, 3) uint8 image."""
+        from PySide6 import QtGui
+
+        self.plotter.render()
+        img = self.grab().toImage().convertToFormat(QtGui.QImage.Format.Format_RGB888)
+        h, w, bpl = img.height(), img.width(), img.bytesPerLine()
+        return np.frombuffer(img.constBits(), np.uint8).reshape(h, bpl)[:, : w * 3].reshape(h, w, 3).copy()
 
     def closeEvent(self, event: Any) -> None:  # noqa: N802
         self.plotter.close()
@@ -246,9 +260,14 @@ class _CompareAction(QtCore.QObject):
                            if p and role != "cloud") or "loaded skeleton"
         self.open(ev_a, result, (a_name, b_name))
 
-    def open(self, ev_a: Any, ev_b: Any, names: tuple[str, str]) -> CompareWindow:
+    def open(self, ev_a: Any, ev_b: Any, names: tuple[str, str], thresholds: Any = "window",
+             context: str = "") -> CompareWindow:
+        """The A/B window; ``thresholds`` "window" (the main window's beta*, c*), None (A's own
+        parameters, e.g. a compare run's) or a (beta*, c*) pair."""
         scene = self.window.scene
-        view = CompareWindow(ev_a, ev_b, names, metric=scene.metric, thresholds=(scene.beta_star, scene.c_star))
+        if thresholds == "window":
+            thresholds = (scene.beta_star, scene.c_star)
+        view = CompareWindow(ev_a, ev_b, names, metric=scene.metric, thresholds=thresholds, context=context)
         view.show()
         self.views = [v for v in self.views if v.isVisible()]
         self.views.append(view)
@@ -256,5 +275,9 @@ class _CompareAction(QtCore.QObject):
 
 
 def install_compare(window: Any) -> _CompareAction:
+    """File > Compare with a second skeleton (B), and File > Open comparison run (:mod:`app.compare_run`)."""
+    from .compare_run import install_compare_run
+
     window.compare = _CompareAction(window)
+    install_compare_run(window)
     return window.compare

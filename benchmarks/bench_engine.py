@@ -34,6 +34,8 @@ STAGES = [
     "curve boundedness",
     "curve centeredness",
     "curve smoothness",
+    "skeletal coverage",
+    "curve coverage",
 ]
 
 
@@ -84,6 +86,8 @@ def run_case(kind: str, arg: str, method: str) -> dict:
     stage = [""]
 
     def progress(_fraction: float, name: str) -> None:
+        if name != stage[0]:  # for the parent: the stage a case was in when its time ran out
+            print(f"stage {name} {time.perf_counter() - t_start:.1f}", file=sys.stderr, flush=True)
         stage[0] = name
 
     def cancel() -> bool:
@@ -115,10 +119,19 @@ def _cpu_model() -> str:
     return platform.processor() or platform.machine()
 
 
-def _child(kind: str, arg: str, method: str) -> dict | None:
-    proc = subprocess.run(
-        [sys.executable, __file__, "--method", method, "--child", kind, arg], capture_output=True, text=True
-    )
+def _child(kind: str, arg: str, method: str, timeout: float) -> dict | None:
+    try:
+        proc = subprocess.run(
+            [sys.executable, __file__, "--method", method, "--child", kind, arg], capture_output=True, text=True,
+            timeout=timeout,
+        )
+    except subprocess.TimeoutExpired as exc:
+        err = exc.stderr.decode() if isinstance(exc.stderr, bytes) else (exc.stderr or "")
+        stages = [ln.split()[1:] for ln in err.splitlines() if ln.startswith("stage ")]
+        where = " ".join(stages[-1][:-1]) if stages else "start-up"
+        since = float(stages[-1][-1]) if stages else 0.0
+        print(f"| {kind} {arg} | did not finish in {timeout:.0f} s: in '{where}' since {since:.0f} s |", flush=True)
+        return None
     if proc.returncode != 0:
         tail = proc.stderr.strip().splitlines()[-1] if proc.stderr.strip() else str(proc.returncode)
         print(f"| {kind} {arg} | failed: {tail} |", flush=True)
@@ -141,6 +154,7 @@ def main() -> None:
     ap.add_argument("--method", default="rays", choices=("rays", "paper"))
     ap.add_argument("--no-real", action="store_true", help="skip ../shared/data clouds")
     ap.add_argument("--no-targets", action="store_true", help="only the size series (no Rips, no 100k, no curve-only)")
+    ap.add_argument("--timeout", type=float, default=900.0, help="seconds per case before it is stopped")
     ap.add_argument("--child", nargs=2, help=argparse.SUPPRESS)
     args = ap.parse_args()
     if args.child:
@@ -163,7 +177,7 @@ def main() -> None:
         cases += [("torus", "100000"), ("torus-curve", "1048576")]
     cases += [("torus", str(n)) for n in args.sizes]
     for kind, arg in cases:
-        r = _child(kind, arg, args.method)
+        r = _child(kind, arg, args.method, args.timeout)
         if r is None:
             continue
         res[r["case"]] = r

@@ -15,7 +15,9 @@
   (a curve sample's slab, ring and ellipse; ``support_slab_junction_panel.png`` near the junction), ``window_support_knn.png`` (a skeletal point's neighbours
   and centroids), ``support_directions_panel.png`` / ``support_paper_panel.png`` (direction map, paper
   triangles), ``window_filter.png`` (only the elements below beta*), ``window_ab.png`` (skeleton A
-  against the skeletonizer's B: linked split view, A / B / B - A table).
+  against the skeletonizer's B: linked split view, A / B / B - A table), ``compare_run_dialog.png`` and
+  ``window_ab_run.png`` (a ``skelcore compare`` run over the bundled samples, two of its report rows
+  opened in the A/B view from the stored results; ``--ab-run`` makes only these two).
 
 Falls back to freshly generated shapes in a temporary folder when resources/samples/ is missing.
 """
@@ -91,8 +93,10 @@ def main() -> int:
         print(f"error: {window.errors[0]}", file=sys.stderr)
         return 1
     window.view.standard_view("xy")
-    support_screenshots(window, settle, save)
-    if "--supports" in sys.argv:
+    if "--ab-run" not in sys.argv:
+        support_screenshots(window, settle, save)
+    ab_run_screenshots(window, settle, save, tmp)
+    if "--supports" in sys.argv or "--ab-run" in sys.argv:
         window.session.runner.shutdown()
         window.close()
         return 0
@@ -277,6 +281,57 @@ def ab_screenshot(window, settle) -> None:
     view.grab().save(str(OUT / "window_ab.png"))
     print("wrote screenshots/window_ab.png")
     view.close()
+
+
+AB_RUN_MANIFEST = """
+[[shapes]]
+path = "{samples}/*_cloud.ply"
+suffix = "_cloud"
+[[methods]]
+name = "truth"
+kind = "files"
+skeletal = "{samples}/{{stem}}_skeletal.ply"
+curve = "{samples}/{{stem}}_curve.ply"
+[[methods]]
+name = "lbc_files"
+kind = "files"
+skeletal = "{samples}/{{stem}}_lbc_skeletal.ply"
+curve = "{samples}/{{stem}}_lbc_curve.ply"
+[[methods]]
+name = "cao"
+kind = "builtin"
+[[conditions]]
+name = "normal"
+[[conditions]]
+name = "noise"
+noise = 0.05
+"""
+
+
+def ab_run_screenshots(window, settle, save, tmp: Path) -> None:
+    """Issue 11: a ``skelcore compare`` run over the bundled samples (true skeletons, the stored LBC
+    output, the built-in skeletonizer), its dialog and two report rows in the A/B view, stored results."""
+    samples = ROOT / "resources" / "samples"
+    if not (samples / "yshape_lbc_skeletal.ply").is_file():
+        return
+    from skelcore.experiments.compare import Backend, run_compare
+
+    (tmp / "run.toml").write_text(AB_RUN_MANIFEST.format(samples=samples.as_posix()))
+    out = tmp / "compare_run"
+    run_compare(tmp / "run.toml", out, Backend("serial"), report=False)
+    dialog = window.compare_run.open(out)
+    dialog.select(dataset="yshape", condition="normal", a="truth", b="cao")
+    dialog.table.selectRow(2)
+    settle()
+    save(dialog, "compare_run_dialog.png")
+    view = dialog.open_ab()
+    view.resize(1400, 850)
+    view.metric_box.setCurrentText("centeredness")
+    view.plotter.view_xy()
+    settle(800)
+    save(view, "window_ab_run.png")
+    view.close()
+    dialog.close()
 
 
 if __name__ == "__main__":

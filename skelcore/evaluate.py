@@ -77,6 +77,15 @@ class _Stages:
 
         return check
 
+    def between(self, what: str) -> Callable[[float], None]:
+        """A checkpoint for work between stages (the trust checks): cancel only, no progress."""
+
+        def check(_fraction: float) -> None:
+            if self._cancel is not None and self._cancel():
+                raise Cancelled(f"cancelled during {what}")
+
+        return check
+
     def run(self, stage: str, fn, *args, **kwargs):
         check = self.checkpoint(stage)
         check(0.0)
@@ -223,8 +232,10 @@ def evaluate(
             ev.skeletal.source = "curve"
 
     # ---- trust checks, coverage, reference (SkelScope's own; docs/metrics.md) ----------------
+    between = stages.between("trust checks")  # only the rare frame-fit re-runs of boundedness
+
     def bounded_fraction(points_user: np.ndarray) -> float:
-        beta = boundedness(cloud_n, norm.apply(points_user), params=p)
+        beta = boundedness(cloud_n, norm.apply(points_user), params=p, checkpoint=between)
         return float(np.mean(beta > p.beta_star))
 
     if skel is not None:
@@ -242,20 +253,33 @@ def evaluate(
         ev.warnings += smoothness_warning(ev.curve.vertex_degree)
     if mode == "none":
         ev.warnings.append(no_correspondence_warning(len(skel), len(cloud)))
-    tau = coverage_tau(cloud_n, p)
-    if skel is not None:
-        ev.coverage_skeletal = stages.run("skeletal coverage", lambda checkpoint: coverage(cloud_n, skel_n, p, tau))
-    if curve_n is not None:
-        step = max(tau / p.coverage_tau_factor, float(curve_n.edge_lengths().sum()) / 200_000)
+    # tau (the cloud's spacing, one kNN pass) is computed inside the first coverage stage, so a
+    # cancel is seen during it too
+    tau_box: list[float] = []
 
+    def _tau(checkpoint) -> float:
+        if not tau_box:
+            tau_box.append(coverage_tau(cloud_n, p, checkpoint))
+        return tau_box[0]
+
+    if skel is not None:
+        def _skel_cov(checkpoint):
+            tau = _tau(lambda f: checkpoint(0.1 * f))
+            return coverage(cloud_n, skel_n, p, tau, checkpoint=lambda f: checkpoint(0.1 + 0.9 * f))
+
+        ev.coverage_skeletal = stages.run("skeletal coverage", _skel_cov)
+    if curve_n is not None:
         def _curve_cov(checkpoint):
+            tau = _tau(lambda f: checkpoint(0.1 * f))
+            step = max(tau / p.coverage_tau_factor, float(curve_n.edge_lengths().sum()) / 200_000)
             pts, _ = densify_curve(curve_n, step)
-            return coverage(cloud_n, np.vstack([pts, curve_n.vertices]), p, tau)
+            return coverage(cloud_n, np.vstack([pts, curve_n.vertices]), p, tau,
+                            checkpoint=lambda f: checkpoint(0.1 + 0.9 * f))
 
         ev.coverage_curve = stages.run("curve coverage", _curve_cov)
     if ref_obj is not None:
         ref_n = ref_obj.transformed(norm.apply)
-        ev.reference = stages.run("reference", lambda checkpoint: compare_with_reference(curve_n, ref_n, tau))
+        ev.reference = stages.run("reference", lambda checkpoint: compare_with_reference(curve_n, ref_n, _tau(checkpoint)))
     ev.timings = dict(stages.timings)
     ev.timings["total"] = time.perf_counter() - t_start
     return ev
@@ -300,5 +324,5 @@ def _score_skeletal(ev, stages, cloud_n, skel, skel_n, mode, index) -> SkeletalL
     smooth = stages.run("skeletal smoothness", skeletal_smoothness, skel_n, params=p)
     return SkeletalLocal(
         points=skel, boundedness=beta, centeredness_raw=c_raw, smoothness=smooth,
-        rows=rows, centeredness_rows_raw=c_rows, centeredness_available=mode != "none",
+        rows=rows, centeredness_rows_raw=c_rows, centeredness_available=mode != "none", index=index,
     )  # fmt: skip

@@ -55,6 +55,8 @@ class SkeletalLocal:
     the overall score counts); ``centeredness_raw`` is its mean over each point's cloud rows.
     ``centeredness_available`` is False when no correspondence exists (then it is all NaN).
     ``source`` is "curve" when the points are the cloud's projections onto the curve skeleton.
+    Under index correspondence ``index[i]`` is the cloud row skeletal point i corresponds to (kept so
+    a viewer can draw the neighbourhood behind the value).
     """
 
     points: np.ndarray
@@ -65,6 +67,7 @@ class SkeletalLocal:
     centeredness_rows_raw: np.ndarray | None = None
     centeredness_available: bool = True
     source: str = "skeletal"
+    index: np.ndarray | None = None
 
     def centeredness(self, beta_star: float) -> np.ndarray:
         return apply_unbounded_rule(self.centeredness_raw, self.boundedness, beta_star)

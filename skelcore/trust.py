@@ -17,6 +17,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from .geometry import bounding_box
 from .params import Params
 
 __all__ = ["TrustWarning", "frame_warnings", "frame_fit_warning", "bbox_transform", "smoothness_warning",
@@ -35,13 +36,16 @@ class TrustWarning:
 
 
 def _diag(points: np.ndarray) -> float:
-    return float(np.linalg.norm(np.ptp(points, axis=0))) if len(points) else 0.0
+    if not len(points):
+        return 0.0
+    lo, hi = bounding_box(points)
+    return float(np.linalg.norm(hi - lo))
 
 
 def frame_warnings(cloud: np.ndarray, skeleton: np.ndarray, what: str, params: Params = Params()) -> list[TrustWarning]:
     """``frame`` / ``collapse`` for one skeleton's points (both arrays in the user's units)."""
-    lo, hi = cloud.min(axis=0), cloud.max(axis=0)
-    d_cloud = _diag(cloud)
+    lo, hi = bounding_box(cloud)
+    d_cloud = float(np.linalg.norm(hi - lo))  # = _diag(cloud)
     margin = 0.1 * d_cloud
     inside = np.all((skeleton >= lo - margin) & (skeleton <= hi + margin), axis=1)
     frac_inside = float(inside.mean())

@@ -439,3 +439,23 @@ def test_a_cancel_during_the_tree_build_stops_it_and_leaves_no_thread_behind():
     assert np.array_equal(np.unique(tree.points, axis=0), np.unique(pts.astype(np.float32), axis=0))
     leaves = tree.nodes[tree.nodes["kid"] < 0]
     assert (leaves["hi"] - leaves["lo"]).sum() == len(pts) and (leaves["hi"] - leaves["lo"]).max() <= 8
+
+
+def test_the_prepared_cloud_is_reused_only_for_the_same_unchanged_array():
+    """The skeletal and curve stages share the cloud's tree; a changed or another array is prepared anew."""
+    from skelcore.metrics import boundedness as b
+
+    cloud = _sphere(2000, seed=5)
+    queries = np.zeros((1, 3))
+    first = boundedness_rays(cloud, queries)
+    prepared = b._last_prepared["prepared"]
+    assert np.array_equal(boundedness_rays(cloud, queries), first) and b._last_prepared["prepared"] is prepared
+    cloud[:1000] *= 3.0  # in place: the digest changes, so the tree is rebuilt
+    changed = boundedness_rays(cloud, queries)
+    assert b._last_prepared["prepared"] is not prepared
+    assert np.array_equal(changed, boundedness_rays(cloud.copy(), queries))
+    del cloud
+    import gc
+
+    gc.collect()
+    assert "prepared" not in b._last_prepared  # nothing kept once the array is gone

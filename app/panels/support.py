@@ -3,7 +3,8 @@
 A curve sample's centeredness: its slab's cloud points on the cross-section plane, the ring kept, the
 fitted ellipse, its centre and the sample (the paper's figure of the two cutting planes; Eq. 11,
 SPEC 3). Boundedness: the covered directions on an equal-area (longitude, z) map with beta (Eq. 5-6;
-for the ``paper`` estimator its triangles in the same chart, counted ones filled). A skeletal point's
+for the ``paper`` estimator its triangles in the same chart, counted ones filled) and, beside it, on a
+small 3-D sphere. A skeletal point's
 centeredness: its neighbours and the two centroids of Eq. 10, seen along the line m_s -> m_o.
 Lengths are in the user's units.
 """
@@ -28,10 +29,12 @@ class SupportPanel(PlotPanel):
                          "to see why its value is what it is", parent)
         self.support: ElementSupport | None = None
         self.title = ""
+        self.sphere_faces: tuple[np.ndarray, np.ndarray] | None = None  # boundedness: (centres, covered)
 
     def show_support(self, support: ElementSupport | None, scale: float = 1.0) -> None:
         """Draw ``support``; ``scale`` is the evaluation's normalization scale (normalized = user x scale)."""
         self.support = support
+        self.sphere_faces = None
         if support is None and not self.has_figure:
             return
         fig = self.figure
@@ -46,7 +49,13 @@ class SupportPanel(PlotPanel):
         elif support.kind == "slab":
             self._slab(ax, support, scale)
         elif support.kind == "directions":
-            self._directions(ax, support)
+            fig.clear()  # the map and, beside it, the same directions on a small 3-D sphere
+            grid = fig.add_gridspec(1, 2, width_ratios=[1.45, 1.0], wspace=0.08)
+            chart = fig.add_subplot(grid[0])
+            self._directions(chart, support)
+            chart.set_title("")
+            fig.suptitle(self.title, fontsize=8, y=0.98)  # over both: the map alone is too narrow for it
+            self._sphere(fig.add_subplot(grid[1], projection="3d"), support)
         elif support.kind == "knn":
             self._knn(ax, support)
         fig.subplots_adjust(left=0.15, right=0.97, top=0.88, bottom=0.14)
@@ -100,6 +109,56 @@ class SupportPanel(PlotPanel):
         ax.set_xlabel("longitude (deg)", fontsize=7)
         ax.set_ylabel("z = sin(latitude)", fontsize=7)
 
+    def _sphere(self, ax: Any, support: ElementSupport) -> None:
+        """The map's directions on the unit sphere (world axes, z up): the raster's cells (equal area)
+        or the paper estimator's triangles, covered / counted ones in blue. ``sphere_faces`` keeps
+        each face's centre and whether it is covered, as drawn."""
+        from mpl_toolkits.mplot3d.art3d import Poly3DCollection
+
+        detail = support.detail
+        if support.estimator == "paper":
+            polys = detail.directions[detail.triangles]  # (t, 3, 3)
+            covered = np.asarray(detail.counted, dtype=bool)
+            colours = np.where(covered[:, None], _rgba(COVERED), _rgba("#f2b8b8"))
+        else:
+            rows, bins = detail.covered.shape
+            z = np.linspace(-1.0, 1.0, rows + 1)
+            lon = np.linspace(-np.pi, np.pi, bins + 1)
+            r = np.sqrt(np.clip(1.0 - z * z, 0.0, None))
+            corner = np.stack([r[:, None] * np.cos(lon)[None], r[:, None] * np.sin(lon)[None],
+                               np.repeat(z[:, None], bins + 1, axis=1)], axis=-1)  # (rows+1, bins+1, 3)
+            polys = np.stack([corner[:-1, :-1], corner[:-1, 1:], corner[1:, 1:], corner[1:, :-1]], axis=2)
+            polys = polys.reshape(-1, 4, 3)
+            covered = detail.covered.reshape(-1)
+            colours = np.where(covered[:, None], _rgba(COVERED), _rgba("#f4f4f4"))
+        centres = polys.mean(axis=1)
+        centres /= np.linalg.norm(centres, axis=1, keepdims=True)
+        self.sphere_faces = (centres, covered)
+        # look at the covered side (its mean direction), the z axis kept vertical
+        mean = centres[covered].mean(axis=0) if covered.any() else np.zeros(3)
+        if np.linalg.norm(mean) > 0.2:
+            elev = float(np.clip(np.arcsin(np.clip(mean[2] / np.linalg.norm(mean), -1, 1)), -1.1, 1.1))
+            azim = float(np.arctan2(mean[1], mean[0])) if np.hypot(mean[0], mean[1]) > 1e-6 else np.radians(-60.0)
+        else:
+            elev, azim = np.radians(20.0), np.radians(-60.0)
+        eye = np.array([np.cos(elev) * np.cos(azim), np.cos(elev) * np.sin(azim), np.sin(elev)])
+        light = eye + np.array([0.0, 0.0, 0.6])
+        shade = 0.5 + 0.5 * np.clip(centres @ (light / np.linalg.norm(light)), 0.0, 1.0)  # Lambert, so it reads round
+        colours = colours.copy()
+        colours[:, :3] *= shade[:, None]
+        # edges in the face's colour close the hairline gaps antialiasing leaves between faces
+        ax.add_collection3d(Poly3DCollection(list(polys), facecolors=colours, edgecolors=colours, linewidths=0.3))
+        t = np.linspace(0, 2 * np.pi, 97)
+        for z0 in ((-0.5, 0.0, 0.5) if support.estimator == "paper" else (0.0,)):  # parallels: the sphere's shape
+            r0 = np.sqrt(1 - z0 * z0)
+            ax.plot(r0 * np.cos(t), r0 * np.sin(t), np.full_like(t, z0), color="0.6", linewidth=0.5)
+        for lim in (ax.set_xlim, ax.set_ylim, ax.set_zlim):
+            lim(-1.0, 1.0)
+        ax.set_box_aspect((1, 1, 1), zoom=1.35)
+        ax.view_init(elev=np.degrees(elev), azim=np.degrees(azim))
+        ax.set_axis_off()
+        ax.set_title("on the sphere (z up)", fontsize=7)
+
     def _triangles(self, ax: Any, support: ElementSupport) -> None:
         from matplotlib.collections import PolyCollection
 
@@ -145,6 +204,12 @@ class SupportPanel(PlotPanel):
         self._head(ax, support, f"c = {_fmt(sup.value)} = 1 - |m_o - m_s| / M")
         ax.set_xlabel("main axes of the cloud points", fontsize=7)
         ax.legend(fontsize=6, frameon=False, loc="upper right")
+
+
+def _rgba(colour: str) -> np.ndarray:
+    from matplotlib.colors import to_rgba
+
+    return np.asarray(to_rgba(colour))
 
 
 def _fmt(v: float) -> str:

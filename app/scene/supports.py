@@ -137,24 +137,28 @@ def _knn(ev: Any, info: dict[str, Any], cloud_n: np.ndarray, i: int) -> ElementS
     if mode == "none" or not s.centeredness_available:
         return _none(info, "centeredness", "no correspondence between the skeletal points and the cloud: "
                      "skeletal centeredness is not computed")
-    if mode == "index":
+    index = getattr(s, "index", None)
+    if mode == "index" and index is None:
         return _none(info, "centeredness", "the skeletal index is not kept with the evaluation: "
                      "its neighbourhood cannot be drawn")
     row = i
-    if mode == "reverse":
+    corr_n, corr_user = cloud_n, cloud  # the cloud point of each pointwise skeletal row
+    pointwise_n, pointwise_user = skel_n, skel_user
+    if mode == "index":  # skeletal row j corresponds to cloud row index[j]
+        index = np.asarray(index, dtype=np.int64)
+        corr_n, corr_user = cloud_n[index], cloud[index]
+    elif mode == "reverse":
         # the pointwise set is (skel[rows], cloud): show the first cloud row projected onto point i
         mapped = np.flatnonzero(np.asarray(s.rows) == i)
         if not len(mapped):
             return _none(info, "centeredness", "no cloud point projects onto this skeletal point (NaN)")
         row = int(mapped[0])
         pointwise_n, pointwise_user = skel_n[s.rows], skel_user[s.rows]
-    else:
-        pointwise_n, pointwise_user = skel_n, skel_user
-    sup = skeletal_point_support(cloud_n, pointwise_n, row, params=ev.params)
+    sup = skeletal_point_support(corr_n, pointwise_n, row, params=ev.params)
     out = ElementSupport("knn", info["element"], i, "centeredness", value=sup.value, detail=sup)
     inv = ev.normalization.invert
     out.points3d["neighbours"] = pointwise_user[sup.neighbours]
-    out.points3d["cloud"] = cloud[sup.neighbours]
+    out.points3d["cloud"] = corr_user[sup.neighbours]
     out.points3d["m_s"] = inv(sup.skeletal_centroid[None])
     out.points3d["m_o"] = inv(sup.cloud_centroid[None])
     out.points3d["query"] = skel_user[i][None]

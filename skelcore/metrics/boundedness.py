@@ -17,6 +17,8 @@ Design, error measurements, timings and rejected alternatives: docs/boundedness.
 
 from __future__ import annotations
 
+import hashlib
+import weakref
 from dataclasses import dataclass
 
 import numpy as np
@@ -69,6 +71,44 @@ def rays_radius(cloud: np.ndarray, radius_factor: float = 2.0, checkpoint: Check
         return 0.0
     pts, _, counts = unique_rows(cloud)
     return float(radius_factor * BallTree(pts, checkpoint).median_spacing(counts, checkpoint))
+
+
+@dataclass
+class _PreparedCloud:
+    """A cloud's distinct points in the kernel's tree (raster frame) and its median spacing."""
+
+    digest: bytes
+    centre: np.ndarray
+    tree: BallTree
+    spacing: float
+
+
+# the last cloud prepared, reused while the same unchanged array comes back (the skeletal and the
+# curve stage of one evaluation share it: at 1M points it saves about 3 s)
+_last_prepared: dict = {}
+
+
+def _prepared_cloud(cloud: np.ndarray, checkpoint: Checkpoint) -> _PreparedCloud:
+    digest = hashlib.blake2b(np.ascontiguousarray(cloud).view(np.uint8), digest_size=16).digest()
+    ref = _last_prepared.get("cloud")
+    hit = _last_prepared.get("prepared")
+    if ref is not None and ref() is cloud and hit is not None and hit.digest == digest:
+        return hit
+    # identical cloud points have identical caps; the union is unchanged without the copies
+    pts, _, counts = unique_rows(cloud, lambda f: checkpoint(0.0))
+    checkpoint(0.0)
+    centre = (pts.min(axis=0) + pts.max(axis=0)) / 2.0
+    pts_r = (pts - centre) @ FRAME.T
+    checkpoint(0.0)
+    tree = BallTree(pts_r, checkpoint)
+    spacing = tree.median_spacing(counts, lambda f: checkpoint(0.0)) if len(cloud) > 1 else 0.0
+    prepared = _PreparedCloud(digest, centre, tree, spacing)
+    try:
+        ref = weakref.ref(cloud, lambda r: _last_prepared.clear() if _last_prepared.get("cloud") is r else None)
+        _last_prepared.update(cloud=ref, prepared=prepared)
+    except TypeError:  # not weak-referenceable (a view of a foreign buffer): no reuse
+        _last_prepared.clear()
+    return prepared
 
 
 def _as_points(name: str, points: np.ndarray) -> np.ndarray:
@@ -129,18 +169,15 @@ def boundedness_rays(
     if len(queries) == 0 or len(cloud) == 0:
         checkpoint(1.0)
         return out
-    uniq_q, inverse, _ = unique_rows(queries)
-    # identical cloud points have identical caps; the union is unchanged without the copies
-    pts, _, counts = unique_rows(cloud)
+    uniq_q, inverse, _ = unique_rows(queries, lambda f: checkpoint(0.0))
     checkpoint(0.0)
     bins = 2 * rows if bins is None else int(bins)
     if rows < 1 or bins < 1:
         raise ValueError("the raster needs at least one row and one bin")
-    centre = (pts.min(axis=0) + pts.max(axis=0)) / 2.0
-    pts_r = (pts - centre) @ FRAME.T
+    prepared = _prepared_cloud(cloud, checkpoint)
+    tree, centre = prepared.tree, prepared.centre
     q_r = (uniq_q - centre) @ FRAME.T
-    tree = BallTree(pts_r, checkpoint)
-    h = radius_factor * tree.median_spacing(counts, lambda f: checkpoint(0.0)) if len(cloud) > 1 else 0.0
+    h = radius_factor * prepared.spacing
     if not h > 0:
         checkpoint(1.0)
         return out

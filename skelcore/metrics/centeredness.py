@@ -15,7 +15,7 @@ from __future__ import annotations
 import numpy as np
 from scipy.spatial import cKDTree
 
-from ..geometry import Checkpoint, bbox_diagonal, kd_tree, no_checkpoint, unit_rows
+from ..geometry import Checkpoint, bbox_diagonal, kd_tree, leaf_order, lex_order, no_checkpoint, unit_rows
 from ..params import Params, k_center_for
 from .ellipse_fit import fit_ellipse
 
@@ -75,17 +75,25 @@ def skeletal_centeredness(
         return np.full(0, np.nan)
     k = min(k_center_for(n, params), n)
     checkpoint(0.0)
-    groups = _CoincidentGroups(skel)
+    groups = _CoincidentGroups(skel, checkpoint)
     checkpoint(0.0)
-    tree = kd_tree(groups.positions)
+    tree = kd_tree(groups.positions, checkpoint)
+    checkpoint(0.0)
+    # groups are visited in the tree's leaf order and the rows gathered in member (x-sorted) order:
+    # both keep a chunk's memory traffic local (3 x faster at 1M points, same arithmetic)
+    visit = leaf_order(tree)
+    skel_m = skel[groups.members]
+    checkpoint(0.0)
+    cloud_m = cloud[groups.members]
     checkpoint(0.0)
     n_groups = len(groups.positions)
     per_group = np.full(n_groups, np.nan)
     for lo in range(0, n_groups, _SKELETAL_CHUNK):
         hi = min(lo + _SKELETAL_CHUNK, n_groups)
-        idx = groups.k_nearest_rows(tree, np.arange(lo, hi), k)
-        m_s = skel[idx].mean(axis=1)
-        neighbours_o = cloud[idx]
+        which = visit[lo:hi]
+        slot = groups.k_nearest_slots(tree, which, k)
+        m_s = skel_m[slot].mean(axis=1)
+        neighbours_o = cloud_m[slot]
         m_o = neighbours_o.mean(axis=1)
         diff = neighbours_o - m_s[:, None, :]
         spread = np.sqrt(np.einsum("ijk,ijk->ij", diff, diff)).mean(axis=1)
@@ -93,7 +101,7 @@ def skeletal_centeredness(
         with np.errstate(invalid="ignore", divide="ignore"):
             c = np.maximum(0.0, 1.0 - offset / spread)
         c[~(spread > 0)] = np.nan
-        per_group[lo:hi] = c
+        per_group[which] = c
         checkpoint(hi / n_groups)
     # coincident points have the same neighbours (ties go by index, not by self), so the same c
     return per_group[groups.group_of]
@@ -102,29 +110,35 @@ def skeletal_centeredness(
 class _CoincidentGroups:
     """Skeletal points grouped by exact position; members of each group in increasing row order."""
 
-    def __init__(self, points: np.ndarray) -> None:
+    def __init__(self, points: np.ndarray, checkpoint: Checkpoint = no_checkpoint) -> None:
         # lexsort is stable, so each group's members come out in increasing row order; it is also
         # much faster than np.unique(axis=0). -0.0 == 0.0, so both land in one group.
-        order = np.lexsort(points.T[::-1])
+        order = lex_order(points)
+        checkpoint(0.0)
         ordered = points[order]
         new = np.ones(len(points), dtype=bool)
         new[1:] = np.any(ordered[1:] != ordered[:-1], axis=1)
+        checkpoint(0.0)
         self.starts = np.flatnonzero(new)
         self.counts = np.diff(np.append(self.starts, len(points)))
+        self.single = bool(len(points)) and int(self.counts.max()) == 1
         self.positions = ordered[self.starts] + 0.0
         self.members = order
         self.group_of = np.empty(len(points), dtype=np.int64)
         self.group_of[order] = np.cumsum(new) - 1
 
-    def k_nearest_rows(self, tree: cKDTree, queries: np.ndarray, k: int) -> np.ndarray:
-        """(len(queries), k) rows: the k points nearest to each query group's position, equal
-        distances in row order. Whole groups are taken nearest first; the last one contributes its
-        lowest-index members. (Distinct positions at exactly equal distances keep the tree's order.)
+    def k_nearest_slots(self, tree: cKDTree, queries: np.ndarray, k: int) -> np.ndarray:
+        """(len(queries), k) indices into ``members`` (so rows ``members[...]``): the k points nearest
+        to each query group's position, equal distances in row order. Whole groups are taken nearest
+        first; the last one contributes its lowest-index members. (Distinct positions at exactly
+        equal distances keep the tree's order.)
         """
         n_q = len(queries)
         k_groups = min(k, len(self.positions))  # every group has >= 1 member, so k groups suffice
         _, near = tree.query(self.positions[queries], k=k_groups, workers=-1)
         near = near.reshape(n_q, k_groups)
+        if self.single:  # no coincident points: the k nearest groups are the k nearest points
+            return self.starts[near]
         cum = np.cumsum(self.counts[near], axis=1)  # >= k in the last column
         # slot[q, t] = first j with cum[q, j] > t: one flat searchsorted with per-row offsets
         stride = int(cum[:, -1].max()) + 1
@@ -134,7 +148,7 @@ class _CoincidentGroups:
         slot = slot.reshape(n_q, k) - np.arange(n_q, dtype=np.int64)[:, None] * k_groups
         before = np.where(slot > 0, np.take_along_axis(cum, np.maximum(slot - 1, 0), axis=1), 0)
         group = np.take_along_axis(near, slot, axis=1)
-        return self.members[self.starts[group] + (t - before)]
+        return self.starts[group] + (t - before)
 
 
 def curve_centeredness(
@@ -179,7 +193,8 @@ def curve_centeredness(
     if len(todo) == 0 or not half > 0:
         return out  # no direction, or a cloud without extent: every slab is empty
     growth = float(params.ring_growth)
-    grid = _SlabGrid(cloud, cell=max(2.0 * half, diagonal / 256.0))
+    checkpoint(0.0)
+    grid = _SlabGrid(cloud, cell=max(2.0 * half, diagonal / 256.0), checkpoint=checkpoint)
     g, h = _orthonormal_complement(u[todo])
 
     checkpoint(0.0)
@@ -198,14 +213,19 @@ def curve_centeredness(
 class _SlabGrid:
     """Cloud points bucketed in cubic cells (sorted by cell), for fast slab candidate lookup."""
 
-    def __init__(self, cloud: np.ndarray, cell: float) -> None:
+    def __init__(self, cloud: np.ndarray, cell: float, checkpoint: Checkpoint = no_checkpoint) -> None:
         lo = cloud.min(axis=0)
         ijk = np.floor((cloud - lo) / cell).astype(np.int64)
         dims = ijk.max(axis=0) + 1
         key = ijk[:, 0] + dims[0] * (ijk[:, 1] + dims[1] * ijk[:, 2])
+        checkpoint(0.0)
         order = np.argsort(key, kind="stable")
+        checkpoint(0.0)
         self.points = cloud[order]
-        keys, self.starts, self.counts = np.unique(key[order], return_index=True, return_counts=True)
+        srt = key[order]  # already sorted: cell boundaries by one diff, not a second sort (np.unique)
+        self.starts = np.flatnonzero(np.r_[True, srt[1:] != srt[:-1]])
+        self.counts = np.diff(np.r_[self.starts, len(srt)])
+        keys = srt[self.starts]
         cell_ijk = np.column_stack([keys % dims[0], (keys // dims[0]) % dims[1], keys // (dims[0] * dims[1])])
         self.centres = lo + (cell_ijk + 0.5) * cell
         self.half_cell = 0.5 * cell

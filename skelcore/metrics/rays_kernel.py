@@ -26,8 +26,8 @@ ALONE_WITHIN = 4.0
 FINER_BOOST = 2.0
 # cost units (about one tree-node visit each): one near cap, and a far ray per level of the tree
 CAP_COST = 25.0
-# cost units per task: about 50 ms of one core, so checkpoints stay well under 0.5 s apart
-TASK_COST = 1.5e6
+# cost units per task: about 40 ms of one core (a unit costs about 80 ns at 1M points), so checkpoints stay well under 0.5 s apart
+TASK_COST = 0.5e6
 # points per nearest-neighbour call (about 30 ms of one core)
 NN_CHUNK = 65536
 
@@ -46,6 +46,7 @@ class BallTree:
         perm = np.empty(n, np.int32)
         nodes = np.empty(cap, NODE)
         m = _build_polling(lambda stop: _raycast.build_tree(pts, perm, nodes, stop), n, checkpoint)
+        checkpoint(0.0)
         self.points = np.ascontiguousarray(pts[perm], dtype=np.float32)
         nodes = nodes[:m].copy()
         self.nodes = nodes
@@ -74,6 +75,7 @@ class BallTree:
             return 0.0
         c = np.asarray(counts)[self.perm]
         d = np.where(c > 1, 0.0, self.nearest_other(checkpoint))
+        checkpoint(1.0)
         return float(np.median(np.repeat(d, c)))
 
     def count_within(self, queries: np.ndarray, radius: float) -> np.ndarray:
@@ -178,7 +180,7 @@ def exact_plan(queries: np.ndarray, reach: float) -> Plan:
 
 def shared_plan(
     queries: np.ndarray, h: float, near_radius: float, cell: float, clearance: np.ndarray,
-    finer: bool = True,
+    finer: bool = True, checkpoint: Checkpoint = no_checkpoint,
 ) -> Plan:
     """Clusters of cubic cells of side ``cell`` with reach ``near_radius`` + spread (docs/boundedness.md 1.6).
 
@@ -194,7 +196,9 @@ def shared_plan(
     level_cell = cell / 2.0**level
     keys = np.floor(queries / level_cell[:, None]).astype(np.int64)
     keys = np.column_stack([keys, level, np.where(lone, np.arange(1, len(keys) + 1), 0)])
+    checkpoint(0.0)
     cid = _group_ids(keys)
+    checkpoint(0.0)
     # clusters in Morton order of their first query's cell: neighbours follow each other, so the
     # kernel's per-sample hints (the leaf the same sample hit from the previous cluster) stay good
     first = np.zeros(int(cid.max(initial=-1)) + 1, np.int64)
@@ -203,11 +207,14 @@ def shared_plan(
     inv = np.empty_like(rank)
     inv[rank] = np.arange(len(rank))
     cid = inv[cid]
+    checkpoint(0.0)
     order = np.argsort(cid, kind="stable")
+    checkpoint(0.0)
     cid = cid[order]
     q = queries[order]
     starts = np.flatnonzero(np.r_[True, cid[1:] != cid[:-1], True]).astype(np.int64)
     sizes = np.diff(starts)
+    checkpoint(0.0)
     centres = np.add.reduceat(q, starts[:-1], axis=0) / sizes[:, None]
     dist = np.linalg.norm(q - np.repeat(centres, sizes, axis=0), axis=1)
     spreads = np.maximum.reduceat(dist, starts[:-1])
@@ -252,6 +259,7 @@ def choose_plan(
     """
     n_q = len(queries)
     sample = queries[np.random.default_rng(0).permutation(n_q)[:256]]
+    checkpoint(0.0)
     near_exact = float(np.mean(tree.count_within(sample, near_radius)))
     exact_cost = n_q * (samples * tree.ray_cost + near_exact * CAP_COST)
     if share is False or (share is None and tree.n * n_q <= exact_pairs):
@@ -264,6 +272,7 @@ def choose_plan(
         near = float(np.mean(tree.count_within(sample, reach)))
         if best is not None and n_q * near * CAP_COST >= best[0]:
             break  # the near part only grows with the size: no larger size can be cheaper
+        checkpoint(0.0)
         clusters = _count_cells(queries, cell * scale)
         cost = clusters * samples * tree.ray_cost + n_q * near * CAP_COST
         if best is None or cost < best[0]:
@@ -278,7 +287,8 @@ def choose_plan(
     # axis, where the whole wall is nearly equidistant
     bound = ALONE_WITHIN * max(cell * scale, h) * (1.0 + 1e-9)
     clearance = tree.clearance(queries, bound, lambda f: checkpoint(0.0))
-    plan = shared_plan(queries, h, near_radius * scale, cell * scale, clearance)
+    plan = shared_plan(queries, h, near_radius * scale, cell * scale, clearance,
+                       checkpoint=lambda f: checkpoint(0.0))
     plan.estimated_cost, plan.estimated_near = cost, near
     return plan
 
@@ -296,13 +306,9 @@ def run_plan(
     q_sorted = np.ascontiguousarray(queries[plan.order], np.float64)
     sizes = np.diff(plan.starts)
     cost = rows * bins * tree.ray_cost + sizes * max(plan.estimated_near, 1.0) * CAP_COST
-    bounds = [0]
-    acc = 0.0
-    for k, c in enumerate(cost):  # cluster ranges of about TASK_COST units each
-        acc += c
-        if acc >= TASK_COST:
-            bounds.append(k + 1)
-            acc = 0.0
+    # cluster ranges of about TASK_COST units each
+    block = np.floor(np.cumsum(cost) / TASK_COST)
+    bounds = [0] + (np.flatnonzero(np.diff(block)) + 1).tolist()
     if bounds[-1] != len(cost):
         bounds.append(len(cost))
     tasks = list(zip(bounds[:-1], bounds[1:]))

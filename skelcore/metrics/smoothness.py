@@ -15,7 +15,7 @@ import math
 import numpy as np
 
 from ..curve import CurveSkeleton
-from ..geometry import Checkpoint, kd_tree, no_checkpoint, unique_rows, unit_rows
+from ..geometry import Checkpoint, kd_tree, leaf_order, no_checkpoint, unique_rows, unit_rows
 from ..params import Params
 
 __all__ = ["skeletal_smoothness", "curve_vertex_smoothness", "curve_smoothness_overall"]
@@ -60,37 +60,42 @@ def skeletal_smoothness(
     out = np.full(n, np.nan)
     if n == 0:
         return out
-    uniq, inverse, counts = unique_rows(pts)
+    checkpoint(0.0)
+    uniq, inverse, counts = unique_rows(pts, checkpoint)
     m = len(uniq)
     if m < 2:
         return out  # every C_i is zero: no direction anywhere
     kt, ks = int(params.tangent_k), int(params.smooth_k)
     # each distinct neighbour position holds >= 1 point, so max(kt, ks) positions always suffice
     q = min(m - 1, max(kt, ks))
-    tree = kd_tree(uniq)
+    checkpoint(0.02)
+    tree = kd_tree(uniq, checkpoint, 0.02)
     checkpoint(0.05)
+    visit = leaf_order(tree)  # blocks of spatial neighbours: cache-warm queries and gathers
     tangents = np.full((m, 3), np.nan)
     nbr = np.empty((m, q), np.int64)
     for start in range(0, m, _CHUNK):
         stop = min(m, start + _CHUNK)
-        _, idx = tree.query(uniq[start:stop], k=q + 1, workers=-1)
+        rows = visit[start:stop]
+        _, idx = tree.query(uniq[rows], k=q + 1, workers=-1)
         idx = idx.reshape(stop - start, q + 1)[:, 1:]  # column 0 is the position itself
-        nbr[start:stop] = idx
+        nbr[rows] = idx
         weight = _taken(counts[idx], kt).astype(float)
-        diff = uniq[idx] - uniq[start:stop, None, :]
+        diff = uniq[idx] - uniq[rows, None, :]
         cov = np.matmul((diff * weight[:, :, None]).transpose(0, 2, 1), diff) / kt
         _, vecs = np.linalg.eigh(cov)
         t = vecs[:, :, -1]  # eigh sorts eigenvalues ascending
         t[~np.any(cov.reshape(len(cov), -1) != 0, axis=1)] = np.nan
-        tangents[start:stop] = t
+        tangents[rows] = t
         checkpoint(0.05 + 0.75 * stop / m)
     s_unique = np.empty(m)
     for start in range(0, m, _CHUNK):
         stop = min(m, start + _CHUNK)
-        idx = nbr[start:stop]
+        rows = visit[start:stop]
+        idx = nbr[rows]
         use = _taken(counts[idx], ks) > 0  # neighbour positions holding one of the ks nearest points
-        score = _angle_score(np.einsum("na,nja->nj", tangents[start:stop], tangents[idx]))
-        s_unique[start:stop] = np.where(use & np.isfinite(score), score, np.inf).min(axis=1)
+        score = _angle_score(np.einsum("na,nja->nj", tangents[rows], tangents[idx]))
+        s_unique[rows] = np.where(use & np.isfinite(score), score, np.inf).min(axis=1)
         checkpoint(0.8 + 0.2 * stop / m)
     s_unique[np.isinf(s_unique)] = np.nan  # no neighbour with a tangent, or no tangent here
     return s_unique[inverse]

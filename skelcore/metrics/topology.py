@@ -22,7 +22,9 @@ from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import connected_components, minimum_spanning_tree
 from scipy.spatial import cKDTree
 
-from ..geometry import Checkpoint, chunked_query, kd_tree, matlab_round, nearest_neighbor_distances, no_checkpoint, unique_rows
+from ..geometry import (
+    Checkpoint, chunked_query, kd_tree, leaf_order, matlab_round, nearest_neighbor_distances, no_checkpoint, unique_rows,
+)
 from ..params import Params
 from ..results import TopologyResult
 
@@ -43,6 +45,8 @@ _CELL_MAX = 2048  # points per cell of the exact per-component search
 _THREADED_QUERY = 16384  # smaller KD-tree queries run single-threaded (thread start-up dominates)
 _PROBE = 32  # pending points nearest to a component's box probed first for a tight bound
 _QUERY_CHUNK = 16384  # points per kNN query call, so the checkpoint is reached often
+_DEEP_CHUNK = 4096  # points per deep (k = 65) query between checkpoints: ~0.1 s at 1M points
+_ROUND_CHUNK = 262144  # neighbour lists scanned per block of a Boruvka round, between checkpoints
 
 
 # ---------------------------------------------------------------------------------------------
@@ -55,20 +59,6 @@ def _as_points(points: np.ndarray) -> np.ndarray:
     if not np.all(np.isfinite(pts)):
         raise ValueError("points contain NaN or inf")
     return pts
-
-
-def _chunked_knn(tree: cKDTree, queries: np.ndarray, k: int, checkpoint, lo: float, hi: float):
-    """kNN of ``queries`` in ``tree`` (k >= 1, 2-D results), reporting progress between chunks."""
-    n = len(queries)
-    dist = np.empty((n, k))
-    idx = np.empty((n, k), np.int64)
-    for start in range(0, n, _QUERY_CHUNK):
-        stop = min(n, start + _QUERY_CHUNK)
-        d, i = tree.query(queries[start:stop], k=k, workers=-1)
-        dist[start:stop] = d.reshape(stop - start, k)
-        idx[start:stop] = i.reshape(stop - start, k)
-        checkpoint(lo + (hi - lo) * stop / max(n, 1))
-    return dist, idx
 
 
 def _first_other(labels: np.ndarray, rows: np.ndarray, dist: np.ndarray, idx: np.ndarray):
@@ -96,10 +86,18 @@ def _emst_lengths(points: np.ndarray, checkpoint: Checkpoint = no_checkpoint) ->
     n = len(points)
     if n < 2:
         return np.empty(0), np.zeros(n)
-    tree = kd_tree(points)
+    tree = kd_tree(points, checkpoint)
     checkpoint(0.02)
     k = min(_LIST_K, n - 1)
-    dist, idx = _chunked_knn(tree, points, k + 1, checkpoint, 0.02, 0.5)
+    # the points are renumbered in the tree's leaf order, so that queries and every later gather
+    # (labels[idx], cells) touch memory that spatial neighbours share; ``rank`` maps tree answers
+    perm = leaf_order(tree)
+    rank = np.empty(n, np.int64)
+    rank[perm] = np.arange(n)
+    points = points[perm]
+    dist, idx = chunked_query(tree, points, k + 1, checkpoint, 0.02, 0.5, chunk=_QUERY_CHUNK)
+    idx = rank[idx]
+    checkpoint(0.5)
     dist, idx = dist[:, 1:], idx[:, 1:]  # column 0 is the point itself (points are distinct)
     lower = dist[:, -1].copy()  # every point closer than this is in the point's own component
     deep_done = np.zeros(n, bool)
@@ -117,19 +115,27 @@ def _emst_lengths(points: np.ndarray, checkpoint: Checkpoint = no_checkpoint) ->
     while n_comp > 1:
         done = 0.5 + 0.5 * (1.0 - n_comp / n) ** 0.5
         rows = np.flatnonzero(active)
-        has, cd, cb = _first_other(labels, rows, dist[rows], idx[rows])
+        parts = []
+        for lo in range(0, len(rows), _ROUND_CHUNK):  # the first rounds scan every list: in blocks
+            r = rows[lo : lo + _ROUND_CHUNK]
+            parts.append(_first_other(labels, r, dist[r], idx[r]))
+            checkpoint(done)
+        if parts:
+            has, cd, cb = (np.concatenate(x) for x in zip(*parts))
+        else:
+            has, cd, cb = np.zeros(0, bool), np.empty(0), np.empty(0, np.int64)
         active[rows[~has]] = False
-        checkpoint(done)
         cand_a, cand_b, cand_d = rows[has], cb[has], cd[has]
         best = np.full(n_comp, np.inf)
         np.minimum.at(best, labels[cand_a], cand_d)
+        checkpoint(done)
 
         if not lists_complete:
             pend = np.flatnonzero(~active)
             pend = pend[lower[pend] < best[labels[pend]]]
             if len(pend):
                 ea, eb, ed = _resolve_pending(
-                    points, tree, labels, pend, best, lower, deep_done, cells, cell_trees,
+                    points, tree, rank, labels, pend, best, lower, deep_done, cells, cell_trees,
                     lambda: checkpoint(done),
                 )
                 cand_a = np.concatenate([cand_a, ea])
@@ -150,9 +156,12 @@ def _emst_lengths(points: np.ndarray, checkpoint: Checkpoint = no_checkpoint) ->
         w = cand_d[pick]
         keep = ~((v[v] == u) & (u > v))
         graph = coo_matrix((w[keep], (u[keep], v[keep])), shape=(n_comp, n_comp)).tocsr()
+        checkpoint(done)
         forest = minimum_spanning_tree(graph)
         lengths.append(forest.data.copy())
+        checkpoint(done)
         n_new, comp = connected_components(forest, directed=False)
+        checkpoint(done)
         if n_new >= n_comp:  # cannot happen: every component has an outgoing edge
             raise RuntimeError("EMST: Boruvka round made no progress")
         labels = comp[labels]
@@ -161,14 +170,17 @@ def _emst_lengths(points: np.ndarray, checkpoint: Checkpoint = no_checkpoint) ->
         cells[small] = next_cell + labels[small]
         next_cell += n_comp
         checkpoint(0.5 + 0.5 * (1.0 - n_comp / n) ** 0.5)
-    return (np.concatenate(lengths) if lengths else np.empty(0)), dist[:, 0]
+    nn = np.empty(n)
+    nn[perm] = dist[:, 0]  # back to the caller's numbering
+    return (np.concatenate(lengths) if lengths else np.empty(0)), nn
 
 
-def _resolve_pending(points, tree, labels, pend, best, lower, deep_done, cells, cell_trees, tick):
+def _resolve_pending(points, tree, rank, labels, pend, best, lower, deep_done, cells, cell_trees, tick):
     """Exact shortest outgoing edges for points whose neighbour list lies inside their component.
 
-    ``best`` (per component), ``lower``/``deep_done`` (per point) and the cell KD-tree cache are
-    updated in place; ``tick()`` reports progress (and may raise ``Cancelled``).
+    ``points`` are numbered in leaf order, ``tree`` (built on the caller's order) answers in its
+    own numbering, mapped by ``rank``.  ``best`` (per component), ``lower``/``deep_done`` (per
+    point) and the cell KD-tree cache are updated in place; ``tick()`` reports progress (and may raise ``Cancelled``).
     Returns candidate edges (a, b, length) improving on the components' list candidates.
     """
     n = len(points)
@@ -178,10 +190,11 @@ def _resolve_pending(points, tree, labels, pend, best, lower, deep_done, cells, 
     fresh = pend[~deep_done[pend]]
     many = len(np.unique(labels[pend])) > _FEW_COMPONENTS
     if kk > _LIST_K and 0 < len(fresh) <= max(_DEEP_MAX_POINTS, n // 8) and many:
-        if len(fresh) > _THREADED_QUERY:  # chunked, so a cancel is seen within ~0.1 s
-            d2, i2 = chunked_query(tree, points[fresh], kk + 1, lambda _f: tick())
+        if len(fresh) > _DEEP_CHUNK:  # chunked, so a cancel is seen within ~0.1 s
+            d2, i2 = chunked_query(tree, points[fresh], kk + 1, lambda _f: tick(), chunk=_DEEP_CHUNK)
         else:
             d2, i2 = tree.query(points[fresh], k=kk + 1, workers=1)
+        i2 = rank[i2]  # the tree numbers points as given, ``points`` is in leaf order
         d2, i2 = d2[:, 1:], i2[:, 1:]
         has, cd, cb = _first_other(labels, fresh, d2, i2)
         deep_done[fresh] = True
@@ -194,13 +207,16 @@ def _resolve_pending(points, tree, labels, pend, best, lower, deep_done, cells, 
     # 2) per cell of pending points: KD-trees of other components' cells, nearest boxes first
     if len(pend):
         ids, cell_of = np.unique(cells, return_inverse=True)
+        tick()
         for stale in set(cell_trees) - set(ids.tolist()):
             del cell_trees[stale]
         by_cell = np.argsort(cell_of, kind="stable")
+        tick()
         starts = np.searchsorted(cell_of[by_cell], np.arange(len(ids) + 1))
         sorted_pts = points[by_cell]
         box_lo = np.minimum.reduceat(sorted_pts, starts[:-1], axis=0)
         box_hi = np.maximum.reduceat(sorted_pts, starts[:-1], axis=0)
+        tick()
         cell_comp = labels[by_cell[starts[:-1]]]
 
         def cell_tree(y: int) -> tuple[np.ndarray, cKDTree]:
@@ -272,9 +288,11 @@ def _barcode_and_nn(points: np.ndarray, checkpoint: Checkpoint) -> tuple[np.ndar
     duplicate), from one kNN pass."""
     if len(points) == 0:
         return np.empty((0, 2)), np.empty(0)
-    uniq, inverse, counts = unique_rows(points)
+    checkpoint(0.0)
+    uniq, inverse, counts = unique_rows(points, checkpoint)
     checkpoint(0.02)
     lengths, nn_unique = _emst_lengths(uniq, lambda f: checkpoint(0.02 + 0.96 * f))
+    checkpoint(0.98)
     deaths = np.sort(lengths)[::-1]
     deaths = deaths[deaths > 0]
     bars = np.zeros((len(deaths) + 1, 2))

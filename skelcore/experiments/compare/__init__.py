@@ -3,7 +3,8 @@
 ``manifest`` (parse and check the TOML), ``jobs`` (one keyed job: degrade, skeletonize, evaluate),
 ``conditions``, ``methods``, ``runner`` (serial, process pool, Dask), ``store`` (resumable per-job
 records), ``results`` (results.csv), ``leaderboard``, ``profiles``, ``render``, ``report``
-(report.html), ``figure`` (the graphic table) and ``run`` (all of it, end to end).
+(report.html), ``figure`` (the graphic table), ``run`` (all of it, end to end), ``stored`` (a job's
+whole Evaluation in its npz) and ``run_folder`` (a finished run read back, for the viewer).
 """
 
 from .manifest import Manifest, load_manifest

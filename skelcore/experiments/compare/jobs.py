@@ -197,7 +197,10 @@ def scores_from_doc(doc: dict[str, Any] | None) -> dict[str, float]:
 
 
 def _arrays(ev: Any) -> dict[str, np.ndarray]:
-    """The local values the report draws (float32 coordinates, NaN kept)."""
+    """The local values the report draws (float32 coordinates, NaN kept), and the whole evaluation
+    at full precision for the viewer (:mod:`.stored`)."""
+    from .stored import evaluation_arrays
+
     f32 = lambda a: np.asarray(a, dtype=np.float32)  # noqa: E731
     out = {"cloud": f32(ev.cloud)}
     b_star = ev.params.beta_star
@@ -215,6 +218,7 @@ def _arrays(ev: Any) -> dict[str, np.ndarray]:
         out.update(cloud_barcode=np.asarray(ev.topology.cloud_barcode, np.float64),
                    skeletal_barcode=np.asarray(ev.topology.skeletal_barcode, np.float64),
                    eps_star=np.array([ev.topology.eps_star]), n_bars=np.array([ev.topology.n_bars]))
+    out.update(evaluation_arrays(ev))
     return out
 
 

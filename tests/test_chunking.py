@@ -1,0 +1,199 @@
+"""Chunked and reordered work gives the same answers as the plain calls, and its checkpoints stop it.
+
+The stages of an evaluation split KD-tree builds and queries so that a cancel is seen within
+~0.5 s at 1M points (docs/performance.md "Stages at 1M"); these tests check that the splitting changes
+no result (chunked == unchunked, leaf order == row order, eps-first == exact) and that a checkpoint
+raising in the middle of the work stops it.  No timings are asserted.
+"""
+
+from __future__ import annotations
+
+import threading
+
+import numpy as np
+import pytest
+from scipy.spatial import cKDTree
+
+from skelcore import geometry
+from skelcore.errors import Cancelled
+from skelcore.geometry import TimedChunks, chunked_query, kd_tree, leaf_order, lex_order, timed_query, unique_rows
+from skelcore.metrics import centeredness, coverage, smoothness
+from skelcore.metrics.coverage import coverage as coverage_of, covered_by_balls, min_ball_excess
+from skelcore.shapes import torus
+
+
+def _raise_at(n: int):
+    """A checkpoint that raises Cancelled at its n-th call, and counts calls."""
+    calls = [0]
+
+    def check(_fraction: float) -> None:
+        calls[0] += 1
+        if calls[0] >= n:
+            raise Cancelled("stop")
+
+    return check, calls
+
+
+@pytest.mark.parametrize("seed", range(4))
+def test_lex_order_is_numpys_lexsort(seed):
+    rng = np.random.default_rng(seed)
+    pts = rng.integers(-2, 3, size=(3000, 3)).astype(float)  # many equal x, many equal rows
+    pts[rng.random(3000) < 0.2] *= -1.0  # and -0.0 next to 0.0
+    pts[:500] = rng.normal(size=(500, 3))
+    assert np.array_equal(lex_order(pts), np.lexsort(pts.T[::-1]))
+    u, inv, counts = unique_rows(pts)
+    assert np.array_equal(u[inv], pts + 0.0) and counts.sum() == len(pts)
+    assert np.all(np.diff(np.lexsort(u.T[::-1])) == 1)  # unique rows come sorted
+
+
+def test_unique_rows_match_numpy_unique():
+    """coverage() used np.unique(axis=0); unique_rows gives the same rows (-0.0 equal to 0.0)."""
+    rng = np.random.default_rng(1)
+    pts = rng.integers(-1, 2, size=(6000, 3)).astype(float)
+    pts[::7] = -0.0
+    assert np.array_equal(unique_rows(pts)[0], np.unique(pts, axis=0))
+
+
+def test_chunked_and_timed_queries_equal_one_query():
+    rng = np.random.default_rng(2)
+    pts = rng.normal(size=(20000, 3))
+    queries = rng.normal(size=(9000, 3))
+    tree = kd_tree(pts)
+    d0, i0 = tree.query(queries, k=5)
+    calls = []
+    d1, i1 = chunked_query(tree, queries, 5, calls.append, chunk=1000, order=rng.permutation(len(queries)))
+    assert np.array_equal(d0, d1) and np.array_equal(i0, i1)
+    assert len(calls) == 9 and calls[-1] == 1.0
+    d2, i2 = timed_query(tree, queries, 5)
+    assert np.array_equal(d0, d2) and np.array_equal(i0, i2)
+    order = leaf_order(tree)
+    assert np.array_equal(np.sort(order), np.arange(len(pts)))
+
+
+def test_timed_chunks_cover_every_row_once():
+    spans = list(TimedChunks(100_000, first=7))
+    assert spans[0] == (0, 7)
+    assert all(a[1] == b[0] for a, b in zip(spans, spans[1:])) and spans[-1][1] == 100_000
+
+
+def test_threaded_build_polls_the_checkpoint_and_stops_on_cancel(monkeypatch):
+    """The build runs in a helper thread (held here until the checkpoint has been called 3 times):
+    the calling thread keeps calling the checkpoint, and a raising checkpoint ends the call."""
+    pts = np.random.default_rng(3).normal(size=(5000, 3))
+    release = threading.Event()
+
+    def slow_tree(points, **kwargs):
+        release.wait(10.0)
+        return cKDTree(points, **kwargs)
+
+    monkeypatch.setattr(geometry, "THREADED_BUILD", 1000)
+    monkeypatch.setattr(geometry, "_POLL", 0.005)
+    monkeypatch.setattr(geometry, "cKDTree", slow_tree)
+    calls = [0]
+
+    def check(_fraction: float) -> None:
+        calls[0] += 1
+        if calls[0] == 3:
+            release.set()
+
+    tree = kd_tree(pts, check)
+    assert calls[0] >= 3
+    assert np.array_equal(tree.query(pts[:50], k=3)[1], cKDTree(pts).query(pts[:50], k=3)[1])
+
+    release.clear()
+    check, calls = _raise_at(2)
+    with pytest.raises(Cancelled):
+        kd_tree(pts, check)
+    release.set()  # let the abandoned build finish
+    assert calls[0] == 2
+
+
+def _torus_case(n=6000, seed=5):
+    sh = torus(n, 1.0, 0.3, n_curve=32, seed=seed)
+    skel = sh.skeletal + np.random.default_rng(seed).normal(scale=0.01, size=sh.skeletal.shape)
+    skel[::5] = skel[::5].round(2)  # coincident points, as contraction makes
+    return sh.cloud, skel
+
+
+def test_skeletal_stages_do_not_depend_on_the_chunk(monkeypatch):
+    cloud, skel = _torus_case()
+    c_ref = centeredness.skeletal_centeredness(cloud, skel)
+    s_ref = smoothness.skeletal_smoothness(skel)
+    monkeypatch.setattr(centeredness, "_SKELETAL_CHUNK", 97)
+    monkeypatch.setattr(smoothness, "_CHUNK", 101)
+    calls = []
+    assert np.array_equal(centeredness.skeletal_centeredness(cloud, skel, checkpoint=calls.append), c_ref, equal_nan=True)
+    assert len(calls) > 50
+    calls.clear()
+    assert np.array_equal(smoothness.skeletal_smoothness(skel, checkpoint=calls.append), s_ref, equal_nan=True)
+    assert len(calls) > 50
+    for fn in (lambda ck: centeredness.skeletal_centeredness(cloud, skel, checkpoint=ck),
+               lambda ck: smoothness.skeletal_smoothness(skel, checkpoint=ck)):
+        check, calls = _raise_at(20)
+        with pytest.raises(Cancelled):
+            fn(check)
+        assert calls[0] == 20
+
+
+def test_covered_by_balls_matches_brute_force():
+    rng = np.random.default_rng(6)
+    pts = rng.uniform(-1, 1, (3000, 3))
+    centers = rng.uniform(-1, 1, (400, 3))
+    radii = rng.uniform(0.01, 0.2, 400)
+    brute = (np.linalg.norm(pts[:, None] - centers[None], axis=2) ** 2 - radii[None] ** 2).min(axis=1) <= 1e-12
+    got = covered_by_balls(pts, centers, radii)
+    assert 0.1 < got.mean() < 0.9  # both answers occur
+    assert np.array_equal(got, brute)
+
+
+def test_coverage_checks_often_and_stops_in_the_middle(monkeypatch):
+    cloud, skel = _torus_case(4000)
+    ref = coverage_of(cloud, skel)
+    monkeypatch.setattr(coverage, "TimedChunks", lambda n, first=256, target=0.1, most=65536: TimedChunks(n, 64, 0.0, 64))
+    monkeypatch.setattr(geometry, "TimedChunks", lambda n, first=256, target=0.1, most=65536: TimedChunks(n, 64, 0.0, 64))
+    calls = []
+    got = coverage_of(cloud, skel, checkpoint=calls.append)
+    assert len(calls) > 100 and all(0.0 <= f <= 1.0 for f in calls)
+    assert np.array_equal(got.gap, ref.gap) and np.array_equal(got.covered, ref.covered)
+    assert (got.fraction, got.mean_gap, got.max_gap, got.tau) == (ref.fraction, ref.mean_gap, ref.max_gap, ref.tau)
+    check, n_calls = _raise_at(len(calls) // 2)
+    with pytest.raises(Cancelled):
+        coverage_of(cloud, skel, checkpoint=check)
+    assert n_calls[0] == len(calls) // 2
+
+
+def test_min_ball_excess_chunked_equals_brute_force(monkeypatch):
+    monkeypatch.setattr(coverage, "TimedChunks", lambda n, first=256, target=0.1, most=65536: TimedChunks(n, 50, 0.0, 50))
+    rng = np.random.default_rng(7)
+    pts = rng.uniform(-1, 1, (900, 3))
+    centers = rng.uniform(-1, 1, (700, 3))
+    radii = rng.uniform(0.001, 0.3, 700) ** 2 * 3
+    brute = (np.linalg.norm(pts[:, None] - centers[None], axis=2) - radii[None]).min(axis=1)
+    calls = []
+    assert np.allclose(min_ball_excess(pts, centers, radii, k=4, checkpoint=calls.append), brute, atol=1e-12)
+    assert len(calls) > 20
+
+
+@pytest.mark.parametrize("n", [1, 255, 256, 257, 5000])
+def test_bounding_box_equals_min_max(n):
+    pts = np.random.default_rng(n).normal(size=(n, 3))
+    for arr in (pts, pts[::2] if n > 1 else pts):  # also a non-contiguous view
+        lo, hi = geometry.bounding_box(arr)
+        assert np.array_equal(lo, arr.min(axis=0)) and np.array_equal(hi, arr.max(axis=0))
+
+
+def test_centeredness_fast_path_without_coincident_points(monkeypatch):
+    """Without coincident points the k nearest groups are taken as they come; the general path
+    (counts and searchsorted) gives the same rows."""
+    cloud, skel = _torus_case(5000, seed=8)
+    skel = skel + np.random.default_rng(8).normal(scale=1e-6, size=skel.shape)  # no two equal
+    fast = centeredness.skeletal_centeredness(cloud, skel)
+    original = centeredness._CoincidentGroups.__init__
+
+    def general(self, points, *args):
+        original(self, points, *args)
+        assert self.single
+        self.single = False
+
+    monkeypatch.setattr(centeredness._CoincidentGroups, "__init__", general)
+    assert np.array_equal(centeredness.skeletal_centeredness(cloud, skel), fast, equal_nan=True)
