@@ -216,7 +216,7 @@ CANCEL_STAGES = ("topology", "skeletal boundedness", "skeletal centeredness", "s
 def _stand_in_boundedness(cloud: np.ndarray, queries: np.ndarray, *, params: object = None,
                           checkpoint: Any = lambda f: None) -> np.ndarray:
     """1 for every query, after its checkpoints (as benchmarks/bench_stages.py does): the stages after
-    boundedness are reached in minutes; 1M boundedness queries take hours (docs/performance.md)."""
+    boundedness come without waiting for 1M boundedness queries."""
     checkpoint(0.0)
     checkpoint(1.0)
     return np.ones(len(queries))
