@@ -18,7 +18,7 @@ from .exports import (
 from .panels import BarcodePanel, DisplayPanel, HistogramPanel, PickPanel, SettingsPanel, SummaryPanel
 from .panels._plot import preload_matplotlib
 from .scene import LAYER_ORDER, METRICS, Scene, SceneEvent
-from .session import Session
+from .session import Session, preload_engine
 from .view import SceneView
 
 MAX_RECENT = 10
@@ -108,6 +108,7 @@ class MainWindow(QtWidgets.QMainWindow):
         install_compare(self)  # issue 11: File > Compare with a second skeleton (B)
         self._update_actions()
         QtCore.QTimer.singleShot(1500, preload_matplotlib)  # after the first frame, off the GUI thread
+        QtCore.QTimer.singleShot(2500, lambda: self.view.after_render(preload_engine))  # not during a frame
         QtCore.QTimer.singleShot(4000, self._prepare_plots)
 
     # ---- construction ---------------------------------------------------------------------
@@ -593,7 +594,8 @@ class MainWindow(QtWidgets.QMainWindow):
         for runner in runners:
             runner.wait_all(int(max(0.0, deadline - time.monotonic()) * 1000))
         if study is not None:
-            study.close()
+            study.hide()  # not close(): its closeEvent would wait for its runner again, past the deadline
+        self.settings.sync()  # the process may end with os._exit (a task still inside the engine)
         self.view.close()
         super().closeEvent(event)
 

@@ -7,6 +7,7 @@ main window connects to message boxes (and tests or the scripted mode replace).
 from __future__ import annotations
 
 import os
+import threading
 from typing import Any, Callable
 
 from PySide6 import QtCore
@@ -18,7 +19,17 @@ from .loading import ROLES, Ask, assign_roles
 from .scene import Scene, SceneEvent
 from .worker import TaskRunner
 
-__all__ = ["Session"]
+__all__ = ["Session", "preload_engine"]
+
+
+def preload_engine() -> None:
+    """Import skelcore's metrics (scipy's KD-trees and the metric modules, ~0.5 s) in the background
+    once the window is up: the start-up does without them, and the first evaluation need not wait."""
+
+    def load() -> None:
+        import skelcore.evaluate  # noqa: F401
+
+    threading.Thread(target=load, name="skelscope-preload-engine", daemon=True).start()
 
 
 class Session(QtCore.QObject):

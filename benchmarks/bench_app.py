@@ -1,9 +1,10 @@
 """Viewer benchmarks (issues 3, 10): launch to first render for 100k / 1M-point clouds, frames while
-the camera moves (level of detail) and a pick at 1M points, Cancel and quit during a 1M-point
-evaluation, the longest GUI event-loop stall during a 4096-point evaluation (QTimer heartbeat).
+the camera moves (level of detail) and a pick at 1M points, Cancel inside every stage and Ctrl+Q
+during a 1M-point evaluation, the longest GUI event-loop stall during a 4096-point evaluation.
 
-Run under a display, e.g. ``xvfb-run -a -s "-screen 0 1600x1000x24" .venv/bin/python benchmarks/bench_app.py``.
-Each launch measurement is a fresh process (interpreter start, imports, window, PLY load, first frame).
+Run under a display, e.g. ``xvfb-run -a -s "-screen 0 1600x1000x24" .venv/bin/python benchmarks/bench_app.py``
+(``--only-launch``, ``--only-million --skip-frames --cancel-stages topology,...`` for parts). Each launch
+is a fresh process (interpreter, imports in skelscope's order, window, PLY load, first frame).
 """
 
 from __future__ import annotations
@@ -14,6 +15,7 @@ import sys
 import tempfile
 import time
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -22,6 +24,8 @@ ROOT = Path(__file__).resolve().parents[1]
 _LAUNCH = r"""
 import sys, time
 t_start = float(sys.argv[1])
+from app.__main__ import import_view_libraries
+import_view_libraries()  # as skelscope's main does: the view's libraries first, then Qt
 from PySide6 import QtCore, QtWidgets
 app = QtWidgets.QApplication(["bench"])
 from app.main_window import MainWindow
@@ -37,11 +41,12 @@ t_loaded = time.time()
 while not [t for t in rendered if t >= t_loaded]:  # the view repaints on the next event-loop turn
     app.processEvents()
 t_render = min(t for t in rendered if t >= t_loaded)
+cpu_render = time.process_time()  # CPU of the whole process (all threads) up to here: robust under load
 img = w.view.image()     # a second frame, read back: the GL work is surely finished (upper bound)
 t_image = time.time()
 spread = img.max(axis=2).astype(int) - img.min(axis=2)
 grey = int(((spread <= 6) & (img[..., 0] > 90) & (img[..., 0] < 235)).sum())
-print(f"{t_imported - t_start:.3f} {t_window - t_start:.3f} {t_loaded - t_start:.3f} {t_render - t_start:.3f} {w.scene.cloud.n_points} {grey} {t_image - t_start:.3f}")
+print(f"{t_imported - t_start:.3f} {t_window - t_start:.3f} {t_loaded - t_start:.3f} {t_render - t_start:.3f} {w.scene.cloud.n_points} {grey} {t_image - t_start:.3f} {cpu_render:.3f}")
 w.close()
 """
 
@@ -59,7 +64,7 @@ def launch_to_first_render(n: int, tmp: Path) -> list[float]:
         capture_output=True, text=True, cwd=ROOT, check=True,
     )
     fields = out.stdout.split()
-    return [float(x) for x in fields[:4]] + [int(fields[5]), float(fields[6])]
+    return [float(x) for x in fields[:4]] + [int(fields[5]), float(fields[6]), float(fields[7])]
 
 
 def stall_during_evaluation(n: int = 4096) -> tuple[float, float, float]:
@@ -203,30 +208,77 @@ def pick_time(n: int = 1_000_000, picks: int = 5) -> float:
     return sorted(times)[len(times) // 2]
 
 
-def cancel_at_a_million(delays: tuple[float, ...] = (1.0, 4.0, 10.0)) -> list[tuple[float, str, float, float]]:
-    """(delay, stage at Cancel, s until the window was idle, s until the worker thread stopped)."""
+CANCEL_STAGES = ("topology", "skeletal boundedness", "skeletal centeredness", "skeletal smoothness",
+                 "skeletal coverage")
+"""The stages of the 1M-point evaluation (cloud + skeletal set in pointwise correspondence), in order."""
+
+
+def _stand_in_boundedness(cloud: np.ndarray, queries: np.ndarray, *, params: object = None,
+                          checkpoint: Any = lambda f: None) -> np.ndarray:
+    """1 for every query, after its checkpoints (as benchmarks/bench_stages.py does): the stages after
+    boundedness come without waiting for 1M boundedness queries."""
+    checkpoint(0.0)
+    checkpoint(1.0)
+    return np.ones(len(queries))
+
+
+def _pump(app: Any, seconds: float, until: Any = lambda: False) -> float:
+    """Run the event loop for ``seconds`` (or until ``until()``); returns the longest event-loop turn
+    seen beyond the 10 ms sleeps (a worker holding the GIL, or the GUI's own work, shows up here)."""
+    end = time.perf_counter() + seconds
+    last = time.perf_counter()
+    longest = 0.0
+    while time.perf_counter() < end and not until():
+        app.processEvents()
+        time.sleep(0.01)
+        now = time.perf_counter()
+        longest = max(longest, now - last - 0.01)
+        last = now
+    return longest
+
+
+def cancel_in_every_stage(stages: tuple[str, ...] = CANCEL_STAGES, into: float = 2.0, wait: float = 1800.0,
+                          stop_wait: float = 600.0) -> list[tuple]:
+    """Cancel a 1M-point evaluation inside each stage: start it, wait (at most ``wait`` s) until the
+    worker reports the stage, let it run ``into`` s more (less if the stage ends first), press Cancel.
+
+    Runs aimed at a stage after boundedness use :func:`_stand_in_boundedness` (this process only).
+    Returns, per stage: (stage aimed at, stage at Cancel, label shown at Cancel, s until the stage
+    began, s into it, s until the window was idle, s until the worker stopped (None: not within
+    ``stop_wait`` s), longest event-loop turn while the stage ran, stand-in used)."""
+    import importlib
+
+    ev_mod = importlib.import_module("skelcore.evaluate")
+    real_boundedness = ev_mod.boundedness
     app, w, _ = _million_window(1_000_000)
     out = []
-    for delay in delays:
+    for target in stages:
+        stand_in = target in CANCEL_STAGES[CANCEL_STAGES.index("skeletal boundedness") + 1:]
+        ev_mod.boundedness = _stand_in_boundedness if stand_in else real_boundedness
         assert w.session.start_evaluation()
         task = w.session.runner._current
-        end = time.perf_counter() + delay
-        while time.perf_counter() < end:
-            app.processEvents()
-            time.sleep(0.01)
-        stage = task.stage
+        t_start = time.perf_counter()
+        _pump(app, wait, lambda: task.stage == target or task.isFinished())
+        reached = time.perf_counter() - t_start
+        t_in = time.perf_counter()
+        gap = _pump(app, into, lambda: task.stage != target)
+        stage, label = task.stage, w.stage.text()
         t0 = time.perf_counter()
         w.cancel_button.click()
         idle = time.perf_counter() - t0
         assert not w.session.runner.running
-        task.wait()
-        out.append((delay, stage, idle, time.perf_counter() - t0))
+        stopped = time.perf_counter() - t0 if task.wait(stop_wait * 1000) else None
+        out.append((target, stage, label, reached, t0 - t_in, idle, stopped, gap, stand_in))
+        _pump(app, 0.5)
+    ev_mod.boundedness = real_boundedness
     w.close()
     return out
 
 
 _QUIT = r"""
 import sys, time
+from app.__main__ import import_view_libraries
+import_view_libraries()
 from PySide6 import QtCore, QtWidgets
 app = QtWidgets.QApplication(["bench-quit"])
 from app.__main__ import _exited
@@ -242,17 +294,21 @@ w.show()
 def quit_now():
     print(f"{time.time():.4f} {w.session.runner.stage}", flush=True)
     w.actions_by_name["quit"].trigger()
-w.session.runner.progressed.connect(lambda f, s: QtCore.QTimer.singleShot(float(sys.argv[2]) * 1000, quit_now)
-                                    if not hasattr(quit_now, "armed") and not setattr(quit_now, "armed", 1) else None)
+armed = []
+def arm(_fraction, stage):  # the delay counts from the first report of the stage aimed at (any: sys.argv[3] "")
+    if not armed and stage.startswith(sys.argv[3]):
+        armed.append(stage)
+        QtCore.QTimer.singleShot(int(float(sys.argv[2]) * 1000), quit_now)
+w.session.runner.progressed.connect(arm)
 QtCore.QTimer.singleShot(100, w.session.start_evaluation)
 sys.exit(_exited(app.exec()))
 """
 
 
-def quit_while_running(delay: float, tmp: Path) -> tuple[float, int, bool, str]:
+def quit_while_running(delay: float, tmp: Path, stage: str = "") -> tuple[float, int, bool, str]:
     """(s from Ctrl+Q to the process's end, exit status, Qt's thread abort seen, stage) for a quit
-    ``delay`` s after a 1M-point evaluation started reporting."""
-    proc = subprocess.run([sys.executable, "-c", _QUIT, str(tmp / "q.ini"), str(delay)], capture_output=True,
+    ``delay`` s after a 1M-point evaluation first reported ``stage`` (any stage when "")."""
+    proc = subprocess.run([sys.executable, "-c", _QUIT, str(tmp / "q.ini"), str(delay), stage], capture_output=True,
                           text=True, cwd=ROOT)
     ended = time.time()
     quit_at, _, stage = proc.stdout.strip().partition(" ")
@@ -264,17 +320,26 @@ def main(argv: list[str] | None = None) -> int:
 
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--skip-launch", action="store_true", help="skip the launch-to-first-render runs")
+    parser.add_argument("--only-launch", action="store_true", help="only the launch-to-first-render runs")
+    parser.add_argument("--launch-runs", type=int, default=2, help="fresh launches per cloud size (best reported)")
     parser.add_argument("--skip-cancel", action="store_true", help="skip the Cancel latency run")
     parser.add_argument("--skip-million", action="store_true", help="skip the 1M-point frames, pick, cancel and quit")
     parser.add_argument("--only-million", action="store_true", help="only the 1M-point frames, pick, cancel and quit")
     parser.add_argument("--million-part", choices=("frames", "pick", "cancel"), help=argparse.SUPPRESS)
+    parser.add_argument("--cancel-stages", default=",".join(CANCEL_STAGES),
+                        help="comma-separated stages to cancel in at 1M (default: all; coverage has no checkpoint "
+                             "yet, so its run waits 600 s for the worker)")
+    parser.add_argument("--stop-wait", type=float, default=600.0, help="s to wait for the worker after a Cancel")
+    parser.add_argument("--skip-frames", action="store_true", help="skip the 1M-point frames and pick")
     parser.add_argument("--stall-runs", type=int, default=1,
                         help="evaluations timed for the GUI stall, each in a fresh process (best reported)")
     parser.add_argument("--stall-once", action="store_true", help=argparse.SUPPRESS)  # one run, in this process
     args = parser.parse_args(argv)
     if args.million_part:  # one part, in this process (a fresh one per part: no warm caches)
         sys.path.insert(0, str(ROOT))
-        part = {"frames": frames_while_moving, "pick": pick_time, "cancel": cancel_at_a_million}[args.million_part]
+        stages = tuple(x.strip() for x in args.cancel_stages.split(",") if x.strip())
+        part = {"frames": frames_while_moving, "pick": pick_time,
+                "cancel": lambda: cancel_in_every_stage(stages, stop_wait=args.stop_wait)}[args.million_part]
         print(repr(part()))
         return 0
     if args.stall_once:
@@ -284,31 +349,45 @@ def main(argv: list[str] | None = None) -> int:
     sys.path.insert(0, str(ROOT))
     tmp = Path(tempfile.mkdtemp(prefix="bench-app-"))
     print(f"machine: {os.cpu_count()} cores, load average {os.getloadavg()[0]:.1f} at start")
-    if not args.skip_million:
-        run = lambda part: eval(subprocess.run([sys.executable, __file__, "--million-part", part],  # noqa: E731,S307
+    if not args.skip_million and not args.only_launch:
+        run = lambda part: eval(subprocess.run([sys.executable, __file__, "--million-part", part,  # noqa: E731,S307
+                                                "--cancel-stages", args.cancel_stages, "--stop-wait", str(args.stop_wait)],
                                                capture_output=True, text=True, cwd=ROOT, check=True).stdout.strip()
                                 .splitlines()[-1])
-        frames = run("frames")
-        print(f"\n1M-point cloud + 1M-point skeletal set, median frame while rotating: {frames['rest'] * 1000:.0f} ms "
-              f"at full detail, {frames['moving'] * 1000:.0f} ms with the level-of-detail twins (camera moving)"
-              f"  [load {os.getloadavg()[0]:.1f}]")
-        print(f"pick among 1M skeletal points: {run('pick') * 1000:.0f} ms (median of 5)  [load {os.getloadavg()[0]:.1f}]")
-        for delay, stage, idle, stopped in run("cancel"):
-            print(f"Cancel {delay:.0f} s into a 1M-point evaluation (stage '{stage}'): window idle after "
-                  f"{idle * 1000:.0f} ms, worker stopped after {stopped:.2f} s  [load {os.getloadavg()[0]:.1f}]")
-        for delay in (0.5, 3.0):
-            took, code, aborted, stage = quit_while_running(delay, tmp)
-            print(f"Ctrl+Q {delay:g} s into a 1M-point evaluation (stage '{stage}'): process ended {took:.2f} s later, "
-                  f"exit status {code}, QThread abort: {'yes' if aborted else 'no'}  [load {os.getloadavg()[0]:.1f}]")
+        if not args.skip_frames:
+            frames = run("frames")
+            print(f"\n1M-point cloud + 1M-point skeletal set, median frame while rotating: {frames['rest'] * 1000:.0f} "
+                  f"ms at full detail, {frames['moving'] * 1000:.0f} ms with the level-of-detail twins (camera moving)"
+                  f"  [load {os.getloadavg()[0]:.1f}]")
+            print(f"pick among 1M skeletal points: {run('pick') * 1000:.0f} ms (median of 5)  "
+                  f"[load {os.getloadavg()[0]:.1f}]")
+        print("\nCancel inside each stage of a 1M-point evaluation (1M cloud + 1M skeletal set):\n")
+        print("| stage aimed at | stage at Cancel | label shown | stage began after | Cancel after | window idle after "
+              "| worker stopped after | longest GUI event-loop turn | load |")
+        print("|---|---|---|---|---|---|---|---|---|")
+        for target, stage, label, reached, into, idle, stopped, gap, stand_in in run("cancel"):
+            print(f"| {target}{' (boundedness stand-in)' if stand_in else ''} | {stage} | {label} | {reached:.1f} s "
+                  f"| {into:.2f} s into it | {idle * 1000:.0f} ms | "
+                  f"{f'> {args.stop_wait:g} s' if stopped is None else f'{stopped:.2f} s'} | {gap * 1000:.0f} ms | {os.getloadavg()[0]:.1f} |")
+        for delay, stage in ((0.5, ""), (3.0, ""), (2.0, "skeletal boundedness")):
+            took, code, aborted, at = quit_while_running(delay, tmp, stage)
+            print(f"Ctrl+Q {delay:g} s into {'a 1M-point evaluation' if not stage else repr(stage)} (stage '{at}'): "
+                  f"process ended {took:.2f} s later, exit status {code}, QThread abort: {'yes' if aborted else 'no'}"
+                  f"  [load {os.getloadavg()[0]:.1f}]")
     if args.only_million:
         return 0
     if not args.skip_launch:
-        print("\n| cloud | imports done | window shown | file loaded | first frame rendered (launch to first render) | + a second frame read back | cloud-grey pixels in the frame |")
-        print("|---|---|---|---|---|---|---|")
+        print("\n| cloud | imports done | window shown | file loaded | first frame rendered (launch to first render) "
+              "| + a second frame read back | CPU s to the first frame | cloud-grey pixels in the frame | load |")
+        print("|---|---|---|---|---|---|---|---|---|")
         for n in (100_000, 1_000_000):
-            runs = [launch_to_first_render(n, tmp) for _ in range(2)]
+            runs = [launch_to_first_render(n, tmp) for _ in range(max(args.launch_runs, 1))]
             best = min(runs, key=lambda r: r[3])
-            print(f"| {n:,} points | {best[0]:.2f} s | {best[1]:.2f} s | {best[2]:.2f} s | **{best[3]:.2f} s** | {best[5]:.2f} s | {best[4]} |")
+            cpu = min(r[6] for r in runs)
+            print(f"| {n:,} points | {best[0]:.2f} s | {best[1]:.2f} s | {best[2]:.2f} s | **{best[3]:.2f} s** | {best[5]:.2f} s "
+                  f"| {cpu:.2f} | {best[4]} | {os.getloadavg()[0]:.1f} |")
+        if args.only_launch:
+            return 0
     stalls = []
     for _ in range(max(args.stall_runs, 1)):  # a fresh process each: no warm caches from a previous run
         out = subprocess.run([sys.executable, __file__, "--stall-once"], capture_output=True, text=True, cwd=ROOT,

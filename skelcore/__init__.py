@@ -1,7 +1,14 @@
 """skelcore: the SkelScope metric engine (topological similarity, boundedness, centeredness,
-smoothness of point-cloud skeletons; SPEC.md). Never imports Qt or VTK."""
+smoothness of point-cloud skeletons; SPEC.md). Never imports Qt or VTK.
+
+``evaluate``, ``Evaluation``, ``shapes``, ``skeletonize`` and the loaders are imported on first use:
+the viewer reads a cloud and draws its first frame without scipy's KD-trees and the metric modules.
+"""
 
 from __future__ import annotations
+
+import sys
+import types
 
 from .version import __version__
 
@@ -25,19 +32,24 @@ __all__ = [
     "skeletonize",
 ]
 
+_LAZY = {"evaluate": ".evaluate", "Evaluation": ".results", "shapes": ".shapes", "skeletonize": ".skeleton",
+         **dict.fromkeys(("load_cloud", "load_points", "load_curve", "load_any", "write_points_ply",
+                          "write_curve_ply"), ".io")}
+
 
 def __getattr__(name: str):
-    # Loaders on first use, so the CLI's --help stays fast.
-    if name in ("load_cloud", "load_points", "load_curve", "load_any", "write_points_ply", "write_curve_ply"):
-        from . import io
+    if name not in _LAZY:
+        raise AttributeError(f"module 'skelcore' has no attribute {name!r}")
+    import importlib
 
-        return getattr(io, name)
-    raise AttributeError(f"module 'skelcore' has no attribute {name!r}")
+    module = importlib.import_module(_LAZY[name], __name__)
+    return module if name == "shapes" else getattr(module, name)
 
 
-# Imported eagerly: once imported, the submodule ``skelcore.evaluate``
-# would otherwise shadow the function of the same name.
-from .evaluate import evaluate  # noqa: E402
-from .results import Evaluation  # noqa: E402
-from . import shapes  # noqa: E402
-from .skeleton import skeletonize  # noqa: E402
+class _Package(types.ModuleType):
+    def __setattr__(self, name: str, value: object) -> None:
+        # Importing the submodule ``skelcore.evaluate`` sets this attribute: the function stays.
+        super().__setattr__(name, value.evaluate if name == "evaluate" and isinstance(value, types.ModuleType) else value)
+
+
+sys.modules[__name__].__class__ = _Package

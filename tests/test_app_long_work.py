@@ -7,6 +7,8 @@ import os
 import subprocess
 import sys
 import textwrap
+import threading
+import time
 from pathlib import Path
 
 import pytest
@@ -97,3 +99,115 @@ def test_quitting_while_a_million_point_evaluation_runs_exits_0_without_a_qthrea
     assert out.returncode == 0, out.stderr
     assert "Destroyed while thread" not in out.stderr and "QThread" not in out.stderr
     assert "Traceback" not in out.stderr
+
+
+# ---- every stage, the stage label, a bounded quit (issue 10's "Long work") -----------------------
+
+_STAGES = ("topology", "skeletal boundedness", "skeletal centeredness", "skeletal smoothness", "curve boundedness",
+           "curve centeredness", "curve smoothness", "skeletal coverage", "curve coverage")
+
+
+def _window(qtbot, tmp_path, monkeypatch):
+    from app.main_window import MainWindow
+
+    monkeypatch.setattr(QtWidgets.QMessageBox, "critical", lambda *a, **k: pytest.fail(f"error dialog {a[2]!r}"))
+    w = MainWindow(settings=QtCore.QSettings(str(tmp_path / "s.ini"), QtCore.QSettings.Format.IniFormat))
+    qtbot.addWidget(w)
+    w.session.auto_evaluate = False
+    w.show()
+    return w
+
+
+@pytest.mark.parametrize("target", _STAGES)
+def test_cancel_inside_each_stage_stops_the_engine_there_and_the_window_survives(qtbot, tmp_path, monkeypatch, target):
+    """The real engine on a Y with a skeletal set and a curve; its progress report holds the worker
+    inside ``target`` until the window's Cancel is pressed, so the cancel lands in that very stage."""
+    import skelcore
+    from skelcore.curve import CurveSkeleton
+    from skelcore.errors import Cancelled
+
+    real = skelcore.evaluate
+    seen: list[str] = []
+    raised: list[BaseException] = []
+
+    def paused_in_target(cloud, skeletal, curve, params, progress, cancel, **kwargs):
+        def report(fraction, stage):
+            seen.append(stage)
+            progress(fraction, stage)
+            while stage == target and not cancel():  # the stage's work resumes once Cancel is pressed
+                time.sleep(0.005)
+
+        try:
+            return real(cloud, skeletal, curve, params, report, cancel, **kwargs)
+        except Cancelled as exc:
+            raised.append(exc)
+            raise
+
+    monkeypatch.setattr(skelcore, "evaluate", paused_in_target)
+    w = _window(qtbot, tmp_path, monkeypatch)
+    sh = shapes.y_shape(600, seed=0)
+    with w.session.batch():
+        w.scene.set_cloud(sh.cloud)
+        w.scene.set_skeletal(sh.skeletal)
+        w.scene.set_curve(CurveSkeleton.from_raw(sh.curve_vertices, sh.curve_edges))
+    assert w.session.start_evaluation()
+    task = w.session.runner._current
+    qtbot.waitUntil(lambda: w.stage.text() == target, timeout=60000)  # the label names the stage that runs
+    assert task.stage == target and task.isRunning()
+    w.cancel_button.click()
+    assert not w.session.runner.running and not w.cancel_button.isVisible()
+    assert task.wait(60000)
+    assert [str(e) for e in raised] == [f"cancelled during {target}"]  # stopped in that stage, not later
+    assert seen[-1] == target
+    qtbot.wait(50)
+    assert w.scene.evaluation is None and w.isVisible() and w.actions_by_name["evaluate"].isEnabled()
+
+
+def test_the_stage_label_follows_the_stage_that_runs(qtbot, tmp_path, monkeypatch):
+    w = _window(qtbot, tmp_path, monkeypatch)
+    go = [threading.Event() for _ in range(3)]
+
+    def job(progress, cancel):
+        for i, stage in enumerate(("topology", "skeletal boundedness", "skeletal coverage")):
+            progress(i / 3, stage)
+            go[i].wait(30)
+        return None
+
+    w.session.runner.start(job, "evaluation")
+    for i, stage in enumerate(("topology", "skeletal boundedness", "skeletal coverage")):
+        qtbot.waitUntil(lambda s=stage: w.stage.text() == s, timeout=10000)
+        go[i].set()
+    qtbot.waitUntil(lambda: not w.session.runner.running, timeout=10000)
+    assert not w.stage.isVisible()
+
+
+def test_quitting_waits_for_stuck_tasks_within_one_budget_and_keeps_the_settings(qtbot, tmp_path, monkeypatch):
+    """A task inside an engine call without a checkpoint (main window and Study dialog both): closing
+    asks for at most SHUTDOWN_WAIT_S of waiting in all, never a second full wait for the Study."""
+    from app.study_dialog import StudyDialog
+    from app.worker import SHUTDOWN_WAIT_S, Task
+
+    w = _window(qtbot, tmp_path, monkeypatch)
+    release = threading.Event()
+
+    def stuck(progress, cancel):
+        progress(0.0, "topology")
+        release.wait(60)
+
+    try:
+        w.session.runner.start(stuck, "evaluation")
+        study = StudyDialog(w, str(tmp_path / "cloud.ply"))
+        w._study_dialog = study
+        study.show()
+        study.runner.start(stuck, "study")
+        asked: list[float | None] = []
+        real_wait = Task.wait
+        monkeypatch.setattr(Task, "wait", lambda self, ms=None: (asked.append(ms), real_wait(self, ms))[1])
+        w._add_recent(str(tmp_path / "cloud.ply"))  # not yet written to disk (QSettings syncs later)
+        w.close()
+        assert asked and None not in asked
+        assert sum(asked) <= SHUTDOWN_WAIT_S * 1000 + 1, asked
+        assert not study.isVisible() and not w.isVisible()
+        assert "cloud.ply" in (tmp_path / "s.ini").read_text()  # synced: the process may end with os._exit
+    finally:
+        release.set()
