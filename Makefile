@@ -1,12 +1,13 @@
 # One-command set-up on a fresh Debian machine as root: system packages, .venv, the project.
 # chromium: the test suite renders skelcore compare's report.html in headless Chromium.
+# gcc, python3-dev: the install compiles the boundedness kernel (skelcore/metrics/_raycast.c).
 SHELL := /bin/bash
 PYTHON ?= python3
 VENV := .venv
 PY := $(VENV)/bin/python
 APT_PACKAGES := xvfb xauth libxcb-icccm4 libxcb-keysyms1 libxcb-cursor0 libxcb-image0 \
 	libxcb-render-util0 libxcb-xinerama0 libxcb-shape0 libxcb-randr0 libxcb-xkb1 libxkbcommon-x11-0 \
-	libegl1 libgl1 libdbus-1-3 libfontconfig1 chromium
+	libegl1 libgl1 libdbus-1-3 libfontconfig1 chromium gcc python3-dev
 
 .PHONY: setup system venv run test screenshots bench samples clean
 
