@@ -119,8 +119,8 @@ def run_evaluate(args: argparse.Namespace) -> int:
     corr = f"correspondence: {ev.correspondence}; " if ev.correspondence else ""
     print(f"{corr}boundedness estimator: {params.boundedness_method}; total {ev.timings['total']:.2f} s")
     print_warnings(ev.warning_dicts())
-    for what, why in ev.not_computed.items():
-        print(f"skelcore: not computed: {what}: {why}", file=sys.stderr)
+    if "coverage" in ev.not_computed:  # the others come with their warning (no_correspondence)
+        print(f"skelcore: not computed: coverage: {ev.not_computed['coverage']}", file=sys.stderr)
     if args.json:
         ev.write_json(args.json, inputs=guard)
     if args.per_point:
