@@ -459,3 +459,15 @@ def test_the_prepared_cloud_is_reused_only_for_the_same_unchanged_array():
 
     gc.collect()
     assert "prepared" not in b._last_prepared  # nothing kept once the array is gone
+
+
+@pytest.mark.parametrize("copies", [30, 900])  # a few copies (kept in the tree), many (rebuilt without)
+def test_copies_of_cloud_points_change_nothing_but_the_spacing_rule(copies):
+    """Exact copies cover the same caps; h counts each copy at distance 0, as rays_radius does."""
+    cloud = _sphere(3000, seed=12)
+    rng = np.random.default_rng(12)
+    doubled = np.vstack([cloud, cloud[rng.choice(len(cloud), copies, replace=False)]])
+    queries = np.vstack([rng.uniform(-0.5, 0.5, (40, 3)), [[0.0, 0, 0], [1.5, 0, 0]]])
+    factor = 2.0 * rays_radius(cloud, 1.0) / rays_radius(doubled, 1.0)  # the same h for both
+    got = boundedness_rays(doubled, queries, radius_factor=factor)
+    assert np.allclose(got, boundedness_rays(cloud, queries), atol=1 / 4608)
