@@ -4,11 +4,11 @@
  * a cloud point p with |p - q| > h.  A ray meets that ball iff s lies in p's cap of angular radius
  * asin(h / |p - q|), so this is the union-of-caps raster of _rays.py, sample for sample.
  *
- * Queries come in clusters (centre c, reach r).  Far points (|p - c| > r) are handled once per cluster:
- * one any-hit ray cast per sample from c through a KD-tree of bounding spheres (cost ~ samples x depth,
- * not ~ points).  Near points (|p - c| <= r) are rasterised as exact caps from every member query into a
- * copy of the cluster's far bitmap (per-row longitude intervals, law of cosines), nearest first, stopping
- * when the bitmap is full.  A cluster of one query at its own position is exact for any r.
+ * Queries come in clusters (centre c, reach r).  Near points (|p - c| <= r) are rasterised as exact caps
+ * from every member query (per-row longitude intervals, law of cosines), nearest first, stopping when a
+ * raster is full.  Far points (|p - c| > r) are handled once per cluster: one any-hit ray cast from c,
+ * through a KD-tree of bounding spheres, per sample that some member left open (cost ~ samples x depth,
+ * not ~ points).  A cluster of one query at its own position is exact for any r.
  *
  * Plain C with the buffer protocol (no numpy headers at build time); every entry point releases the GIL.
  */
