@@ -65,12 +65,11 @@ def boundedness(
 
 def rays_radius(cloud: np.ndarray, radius_factor: float = 2.0, checkpoint: Checkpoint = no_checkpoint) -> float:
     """h = radius_factor x the median nearest-neighbour spacing of the cloud (SPEC 2; copies of a point
-    are at distance 0), from the kernel's tree of the distinct points."""
+    are at distance 0), from the kernel's tree of the distinct points: the h ``boundedness_rays`` uses."""
     cloud = np.asarray(cloud, dtype=float)
     if len(cloud) < 2:
         return 0.0
-    pts, _, counts = unique_rows(cloud)
-    return float(radius_factor * BallTree(pts, checkpoint).median_spacing(counts, checkpoint))
+    return float(radius_factor * _prepared_cloud(cloud, checkpoint).spacing)
 
 
 @dataclass
