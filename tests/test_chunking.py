@@ -46,6 +46,31 @@ def test_lex_order_is_numpys_lexsort(seed):
     assert np.all(np.diff(np.lexsort(u.T[::-1])) == 1)  # unique rows come sorted
 
 
+@pytest.mark.parametrize("seed", range(4))
+def test_stable_argsort_is_numpys_stable_argsort(seed):
+    """Ties (many, few, none), NaN and -0.0 == 0.0: the same permutation as kind="stable"."""
+    from skelcore.geometry import stable_argsort
+
+    rng = np.random.default_rng(seed)
+    for n in (0, 1, 2, 7, 1000):
+        for values in (rng.integers(0, 4, n).astype(float), rng.random(n), rng.integers(0, 50, n)):
+            if n > 3 and values.dtype.kind == "f":
+                values[rng.integers(0, n, 3)] = np.nan
+                values[rng.integers(0, n, 2)] = -0.0
+                values[rng.integers(0, n, 2)] = 0.0
+            assert np.array_equal(stable_argsort(values), np.argsort(values, kind="stable"))
+
+
+def test_take_rows_is_fancy_indexing():
+    from skelcore.geometry import take_rows
+
+    a = np.random.default_rng(1).random((500, 3))
+    for index in (np.arange(500)[::-1], np.random.default_rng(2).integers(0, 500, (40, 7)), np.zeros(0, int)):
+        assert np.array_equal(take_rows(a, index), a[index])
+    with pytest.raises(IndexError):
+        take_rows(a, np.array([500]))
+
+
 def test_unique_rows_match_numpy_unique():
     """coverage() used np.unique(axis=0); unique_rows gives the same rows (-0.0 equal to 0.0)."""
     rng = np.random.default_rng(1)

@@ -15,7 +15,7 @@ from __future__ import annotations
 import numpy as np
 from scipy.spatial import cKDTree
 
-from ..geometry import Checkpoint, bbox_diagonal, kd_tree, leaf_order, lex_order, no_checkpoint, unit_rows
+from ..geometry import Checkpoint, bbox_diagonal, kd_tree, leaf_order, lex_order, no_checkpoint, stable_argsort, take_rows, unit_rows
 from ..params import Params, k_center_for
 from .ellipse_fit import fit_ellipse
 
@@ -82,9 +82,9 @@ def skeletal_centeredness(
     # groups are visited in the tree's leaf order and the rows gathered in member (x-sorted) order:
     # both keep a chunk's memory traffic local (3 x faster at 1M points, same arithmetic)
     visit = leaf_order(tree)
-    skel_m = skel[groups.members]
+    skel_m = take_rows(skel, groups.members)
     checkpoint(0.0)
-    cloud_m = cloud[groups.members]
+    cloud_m = take_rows(cloud, groups.members)
     checkpoint(0.0)
     n_groups = len(groups.positions)
     per_group = np.full(n_groups, np.nan)
@@ -92,8 +92,8 @@ def skeletal_centeredness(
         hi = min(lo + _SKELETAL_CHUNK, n_groups)
         which = visit[lo:hi]
         slot = groups.k_nearest_slots(tree, which, k)
-        m_s = skel_m[slot].mean(axis=1)
-        neighbours_o = cloud_m[slot]
+        m_s = take_rows(skel_m, slot).mean(axis=1)
+        neighbours_o = take_rows(cloud_m, slot)
         m_o = neighbours_o.mean(axis=1)
         diff = neighbours_o - m_s[:, None, :]
         spread = np.sqrt(np.einsum("ijk,ijk->ij", diff, diff)).mean(axis=1)
@@ -115,7 +115,7 @@ class _CoincidentGroups:
         # much faster than np.unique(axis=0). -0.0 == 0.0, so both land in one group.
         order = lex_order(points)
         checkpoint(0.0)
-        ordered = points[order]
+        ordered = take_rows(points, order)
         new = np.ones(len(points), dtype=bool)
         new[1:] = np.any(ordered[1:] != ordered[:-1], axis=1)
         checkpoint(0.0)
@@ -200,10 +200,10 @@ def curve_centeredness(
     checkpoint(0.0)
     for done, (row, p, u_row, g_row, h_row) in enumerate(zip(todo, points[todo], u[todo], g, h), start=1):
         rel = grid.slab_candidates(p, u_row, half) - p
-        rel = rel[np.abs(rel @ u_row) < half]
+        rel = np.compress(np.abs(rel @ u_row) < half, rel, axis=0)  # = rel[mask], 2 x faster
         flat = np.column_stack([rel @ g_row, rel @ h_row])  # p_hat is the origin
         dist = np.hypot(flat[:, 0], flat[:, 1])
-        order = np.argsort(dist, kind="stable")
+        order = stable_argsort(dist)
         ring = flat[order[: ring_length(dist[order], growth)]]
         out[row] = cross_section_centeredness(ring)
         checkpoint(done / len(todo))
@@ -221,7 +221,7 @@ class _SlabGrid:
         checkpoint(0.0)
         order = np.argsort(key, kind="stable")
         checkpoint(0.0)
-        self.points = cloud[order]
+        self.points = take_rows(cloud, order)
         srt = key[order]  # already sorted: cell boundaries by one diff, not a second sort (np.unique)
         self.starts = np.flatnonzero(np.r_[True, srt[1:] != srt[:-1]])
         self.counts = np.diff(np.r_[self.starts, len(srt)])
@@ -238,7 +238,7 @@ class _SlabGrid:
         starts, counts = self.starts[hit], self.counts[hit]
         total = int(counts.sum())
         shift = np.repeat(starts - (np.cumsum(counts) - counts), counts)
-        return self.points[np.arange(total) + shift]
+        return take_rows(self.points, np.arange(total) + shift)
 
 
 def _orthonormal_complement(u: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

@@ -17,7 +17,7 @@ from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
 
 import numpy as np
-from ..geometry import Checkpoint, no_checkpoint
+from ..geometry import Checkpoint, no_checkpoint, take_rows
 from . import _raycast
 
 # queries closer than this many h to the cloud share only in finer cells, or are alone (1.7)
@@ -45,9 +45,11 @@ class BallTree:
         cap = max(1, 2 * ((n + 3) // 4) + 2)
         perm = np.empty(n, np.int32)
         nodes = np.empty(cap, NODE)
-        m = _build_polling(lambda stop: _raycast.build_tree(pts, perm, nodes, stop), n, checkpoint)
+        tree_points = np.empty((n, 3), np.float32)
+        threads = os.cpu_count() or 1
+        m = _build_polling(lambda stop: _raycast.build_tree(pts, perm, nodes, stop, threads, tree_points), n, checkpoint)
         checkpoint(0.0)
-        self.points = np.ascontiguousarray(pts[perm], dtype=np.float32)
+        self.points = tree_points
         nodes = nodes[:m].copy()
         self.nodes = nodes
         self.perm = perm
@@ -211,7 +213,7 @@ def shared_plan(
     order = np.argsort(cid, kind="stable")
     checkpoint(0.0)
     cid = cid[order]
-    q = queries[order]
+    q = take_rows(queries, order)
     starts = np.flatnonzero(np.r_[True, cid[1:] != cid[:-1], True]).astype(np.int64)
     sizes = np.diff(starts)
     checkpoint(0.0)
@@ -304,7 +306,7 @@ def run_plan(
     checkpoint: Checkpoint = no_checkpoint, stats: np.ndarray | None = None,
 ) -> np.ndarray:
     """beta of every query row (in the input order), the plan's clusters on ``workers`` threads."""
-    q_sorted = np.ascontiguousarray(queries[plan.order], np.float64)
+    q_sorted = np.ascontiguousarray(take_rows(queries, plan.order), np.float64)
     sizes = np.diff(plan.starts)
     cost = rows * bins * tree.ray_cost + sizes * max(plan.estimated_near, 1.0) * CAP_COST
     # cluster ranges of about TASK_COST units each

@@ -15,7 +15,7 @@ import math
 import numpy as np
 
 from ..curve import CurveSkeleton
-from ..geometry import Checkpoint, kd_tree, leaf_order, no_checkpoint, unique_rows, unit_rows
+from ..geometry import Checkpoint, kd_tree, leaf_order, no_checkpoint, take_rows, unique_rows, unit_rows
 from ..params import Params
 
 __all__ = ["skeletal_smoothness", "curve_vertex_smoothness", "curve_smoothness_overall"]
@@ -77,11 +77,11 @@ def skeletal_smoothness(
     for start in range(0, m, _CHUNK):
         stop = min(m, start + _CHUNK)
         rows = visit[start:stop]
-        _, idx = tree.query(uniq[rows], k=q + 1, workers=-1)
+        _, idx = tree.query(take_rows(uniq, rows), k=q + 1, workers=-1)
         idx = idx.reshape(stop - start, q + 1)[:, 1:]  # column 0 is the position itself
         nbr[rows] = idx
         weight = _taken(counts[idx], kt).astype(float)
-        diff = uniq[idx] - uniq[rows, None, :]
+        diff = take_rows(uniq, idx) - take_rows(uniq, rows)[:, None, :]
         cov = np.matmul((diff * weight[:, :, None]).transpose(0, 2, 1), diff) / kt
         _, vecs = np.linalg.eigh(cov)
         t = vecs[:, :, -1]  # eigh sorts eigenvalues ascending
@@ -94,7 +94,7 @@ def skeletal_smoothness(
         rows = visit[start:stop]
         idx = nbr[rows]
         use = _taken(counts[idx], ks) > 0  # neighbour positions holding one of the ks nearest points
-        score = _angle_score(np.einsum("na,nja->nj", tangents[rows], tangents[idx]))
+        score = _angle_score(np.einsum("na,nja->nj", take_rows(tangents, rows), take_rows(tangents, idx)))
         s_unique[rows] = np.where(use & np.isfinite(score), score, np.inf).min(axis=1)
         checkpoint(0.8 + 0.2 * stop / m)
     s_unique[np.isinf(s_unique)] = np.nan  # no neighbour with a tangent, or no tangent here

@@ -23,7 +23,8 @@ from scipy.sparse.csgraph import connected_components, minimum_spanning_tree
 from scipy.spatial import cKDTree
 
 from ..geometry import (
-    Checkpoint, chunked_query, kd_tree, leaf_order, matlab_round, nearest_neighbor_distances, no_checkpoint, unique_rows,
+    Checkpoint, chunked_query, kd_tree, leaf_order, matlab_round, nearest_neighbor_distances, no_checkpoint, take_rows,
+    unique_rows,
 )
 from ..params import Params
 from ..results import TopologyResult
@@ -94,7 +95,7 @@ def _emst_lengths(points: np.ndarray, checkpoint: Checkpoint = no_checkpoint) ->
     perm = leaf_order(tree)
     rank = np.empty(n, np.int64)
     rank[perm] = np.arange(n)
-    points = points[perm]
+    points = take_rows(points, perm)
     dist, idx = chunked_query(tree, points, k + 1, checkpoint, 0.02, 0.5, chunk=_QUERY_CHUNK)
     idx = rank[idx]
     checkpoint(0.5)
