@@ -160,6 +160,26 @@ def test_skeletal_stages_do_not_depend_on_the_chunk(monkeypatch):
         assert calls[0] == 20
 
 
+def test_curve_centeredness_on_threads_equals_one_thread(monkeypatch):
+    """Curve samples are scored in spans on a thread pool: the same values as one thread, and a cancel
+    raised in the middle stops it."""
+    cloud, _ = _torus_case()
+    t = np.linspace(0, 2 * np.pi, 41, endpoint=False)
+    pts = np.column_stack([np.cos(t), np.sin(t), 0.02 * np.cos(3 * t)])
+    dirs = np.column_stack([-np.sin(t), np.cos(t), 0 * t])
+    dirs[7] = np.nan  # a joint vertex: NaN, wherever its span runs
+    monkeypatch.setattr(centeredness, "_CURVE_THREADED", 10**12)
+    one = centeredness.curve_centeredness(cloud, pts, dirs)
+    monkeypatch.setattr(centeredness, "_CURVE_THREADED", 0)
+    calls = []
+    assert np.array_equal(centeredness.curve_centeredness(cloud, pts, dirs, checkpoint=calls.append), one, equal_nan=True)
+    assert np.isnan(one[7]) and np.isfinite(one).sum() == 40 and len(calls) >= 10
+    check, calls = _raise_at(5)
+    with pytest.raises(Cancelled):
+        centeredness.curve_centeredness(cloud, pts, dirs, checkpoint=check)
+    assert calls[0] == 5
+
+
 def test_covered_by_balls_matches_brute_force():
     rng = np.random.default_rng(6)
     pts = rng.uniform(-1, 1, (3000, 3))
