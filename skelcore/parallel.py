@@ -8,12 +8,17 @@ as alone, so the results do not depend on the number of threads.
 from __future__ import annotations
 
 import os
+import threading
 from concurrent.futures import ThreadPoolExecutor
-from typing import Callable
+from typing import Callable, TypeVar
 
+from .errors import Cancelled
 from .geometry import Checkpoint, no_checkpoint
 
-__all__ = ["on_threads"]
+A = TypeVar("A")
+B = TypeVar("B")
+
+__all__ = ["on_threads", "side_by_side"]
 
 
 def on_threads(
@@ -51,3 +56,46 @@ def on_threads(
         finally:
             for _, fut in pending:
                 fut.cancel()
+
+
+def side_by_side(
+    main: Callable[[Checkpoint], A], side: Callable[[Checkpoint], B], checkpoint: Checkpoint = no_checkpoint,
+    split: float = 0.5, poll: float = 0.05,
+) -> tuple[A, B]:
+    """``(main(ck), side(ck2))`` with ``side`` on a second thread while ``main`` runs on this one.
+
+    Only this thread calls ``checkpoint`` (callers' callbacks need not be thread-safe): ``main``'s
+    progress maps to [0, split], then, while this thread waits for ``side`` (polling every ``poll`` s),
+    ``side``'s own progress to [split, 1].  A cancel raised here stops ``side`` at its next checkpoint
+    and is re-raised once it has; an error in ``side`` is re-raised here.  Both are computed exactly as
+    one after the other, so the results do not depend on it.
+    """
+    stop = threading.Event()
+    side_done = [0.0]
+    box: dict = {}
+
+    def side_checkpoint(fraction: float) -> None:
+        side_done[0] = fraction
+        if stop.is_set():
+            raise Cancelled("cancelled")
+
+    def run_side() -> None:
+        try:
+            box["value"] = side(side_checkpoint)
+        except BaseException as exc:  # handed to the caller's thread
+            box["error"] = exc
+
+    worker = threading.Thread(target=run_side, name="skelscope-side", daemon=True)
+    worker.start()
+    try:
+        first = main(lambda f: checkpoint(split * f))
+        while worker.is_alive():
+            worker.join(poll)
+            checkpoint(split + (1.0 - split) * min(max(side_done[0], 0.0), 1.0))
+    except BaseException:
+        stop.set()
+        worker.join()
+        raise
+    if "error" in box:
+        raise box["error"]
+    return first, box["value"]
