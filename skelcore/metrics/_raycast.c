@@ -581,8 +581,8 @@ static double nn_subtree(const Tree *t, int32_t *stack, int32_t root, int32_t se
     while (sp > 0) {
         const Node *nd = t->nodes + stack[--sp];
         double wx = nd->c[0] - p[0], wy = nd->c[1] - p[1], wz = nd->c[2] - p[2];
-        double d = sqrt(wx * wx + wy * wy + wz * wz) - nd->r;
-        if (d > best) continue;
+        double lim = best + nd->r;  /* |p - c| - r > best, without a square root */
+        if (wx * wx + wy * wy + wz * wz > lim * lim) continue;
         if (nd->kid >= 0) {
             stack[sp++] = nd->kid;
             stack[sp++] = nd->kid + 1;

@@ -24,7 +24,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.spatial import ConvexHull, Delaunay, QhullError
 
-from ..geometry import Checkpoint, no_checkpoint, unique_rows
+from ..geometry import Checkpoint, bounding_box, no_checkpoint, unique_rows
 from ..params import Params
 from ._rays import FRAME
 from .rays_kernel import BallTree, choose_plan, run_plan
@@ -87,6 +87,13 @@ class _PreparedCloud:
 _last_prepared: dict = {}
 
 
+def _in_frame(points: np.ndarray, centre: np.ndarray) -> np.ndarray:
+    """(points - centre) in the raster frame (FRAME @ (p - centre)), by einsum: 5 x faster than ``@``
+    on a million rows (OpenBLAS starts its threads for a 3 x 3 product: 0.29 -> 0.06 s), within an ulp
+    of it."""
+    return np.einsum("ij,kj->ik", points - centre, FRAME)
+
+
 def _prepared_cloud(cloud: np.ndarray, checkpoint: Checkpoint) -> _PreparedCloud:
     digest = hashlib.blake2b(np.ascontiguousarray(cloud).view(np.uint8), digest_size=16).digest()
     ref = _last_prepared.get("cloud")
@@ -94,10 +101,12 @@ def _prepared_cloud(cloud: np.ndarray, checkpoint: Checkpoint) -> _PreparedCloud
     if ref is not None and ref() is cloud and hit is not None and hit.digest == digest:
         return hit
     # identical cloud points have identical caps; the union is unchanged without the copies
+    checkpoint(0.0)  # after the digest: a cancel is seen before the sort of a million rows
     pts, _, counts = unique_rows(cloud, lambda f: checkpoint(0.0))
     checkpoint(0.0)
-    centre = (pts.min(axis=0) + pts.max(axis=0)) / 2.0
-    pts_r = (pts - centre) @ FRAME.T
+    lo, hi = bounding_box(pts)
+    centre = (lo + hi) / 2.0
+    pts_r = _in_frame(pts, centre)
     checkpoint(0.0)
     tree = BallTree(pts_r, checkpoint)
     spacing = tree.median_spacing(counts, lambda f: checkpoint(0.0)) if len(cloud) > 1 else 0.0
@@ -175,7 +184,7 @@ def boundedness_rays(
         raise ValueError("the raster needs at least one row and one bin")
     prepared = _prepared_cloud(cloud, checkpoint)
     tree, centre = prepared.tree, prepared.centre
-    q_r = (uniq_q - centre) @ FRAME.T
+    q_r = _in_frame(uniq_q, centre)
     h = radius_factor * prepared.spacing
     if not h > 0:
         checkpoint(1.0)

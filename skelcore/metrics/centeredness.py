@@ -18,7 +18,7 @@ import numpy as np
 from scipy.spatial import cKDTree
 
 from ..geometry import (
-    Checkpoint, bbox_diagonal, kd_tree, leaf_order, lex_order, no_checkpoint, stable_argsort, take_rows, unit_rows,
+    Checkpoint, bbox_diagonal, bounding_box, kd_tree, leaf_order, lex_order, no_checkpoint, stable_argsort, take_rows, unit_rows,
 )
 from ..parallel import on_threads
 from ..params import Params, k_center_for
@@ -236,8 +236,9 @@ class _SlabGrid:
     """Cloud points bucketed in cubic cells (sorted by cell), for fast slab candidate lookup."""
 
     def __init__(self, cloud: np.ndarray, cell: float, checkpoint: Checkpoint = no_checkpoint) -> None:
-        lo = cloud.min(axis=0)
+        lo = bounding_box(cloud)[0]
         ijk = np.floor((cloud - lo) / cell).astype(np.int64)
+        checkpoint(0.0)
         dims = ijk.max(axis=0) + 1
         key = ijk[:, 0] + dims[0] * (ijk[:, 1] + dims[1] * ijk[:, 2])
         checkpoint(0.0)
