@@ -29,10 +29,12 @@ typedef struct {
     double c[3];            /* bounding-sphere centre */
     double rho;             /* max |x - c| over the members (padded) */
     double rg, rc;          /* max |x - c| + r(x), max |x - c| + R(x) (padded; set by refit) */
-    double n[3], t;         /* slab: |n| <= 1, every member has |(x - c).n| <= t; n = 0: none */
+    double n[3], t, w;      /* disc: |n| <= 1, every member has |(x - c).n| <= t and its distance from the
+                               normal line through c <= w; n = 0: none */
+    double k[3], rk;        /* a second sphere: max |x - k| + r(x) (set by refit; k = c, rk = rg if none) */
     int32_t kid, lo, hi;    /* first child (second = kid + 1) or -1 for a leaf; member range [lo, hi) */
     int32_t pad_;
-} Node;                     /* 96 bytes */
+} Node;                     /* 136 bytes */
 
 /* ------------------------------------------------------------------------------------------------ */
 /* Build                                                                                              */
@@ -142,14 +144,18 @@ static void build_node(Builder *b, int32_t node, int32_t lo, int32_t hi) {
         }
         double n[3];
         if (least_axis(a, n)) {
-            double t = 0.0;
+            double t = 0.0, w2 = 0.0;
             for (int32_t i = lo; i < hi; i++) {
                 const double *p = b->pts + 3 * (size_t)b->perm[i];
-                double s = fabs((p[0] - c[0]) * n[0] + (p[1] - c[1]) * n[1] + (p[2] - c[2]) * n[2]);
-                if (s > t) t = s;
+                double d[3] = {p[0] - c[0], p[1] - c[1], p[2] - c[2]};
+                double s = d[0] * n[0] + d[1] * n[1] + d[2] * n[2];
+                double l2 = d[0] * d[0] + d[1] * d[1] + d[2] * d[2] - s * s;
+                if (fabs(s) > t) t = fabs(s);
+                if (l2 > w2) w2 = l2;
             }
             memcpy(nd->n, n, sizeof n);
             nd->t = t * (1.0 + 1e-12) + b->pad;
+            nd->w = sqrt(w2) * (1.0 + 1e-12) + b->pad;
         }
     }
     if (hi - lo <= b->leaf || b->n_nodes + 2 > b->cap) return;
@@ -180,8 +186,8 @@ static double abs_scale(const double *v, Py_ssize_t n) {
  * number of nodes, or -1 if stop was set meanwhile.  perm lists the input rows in tree order. */
 static PyObject *py_build_tree(PyObject *self, PyObject *args) {
     Py_buffer pts, perm, nds, stop;
-    int slab;
-    if (!PyArg_ParseTuple(args, "y*w*w*pw*", &pts, &perm, &nds, &slab, &stop)) return NULL;
+    int slab, leaf = LEAF_SIZE;
+    if (!PyArg_ParseTuple(args, "y*w*w*pw*|i", &pts, &perm, &nds, &slab, &stop, &leaf)) return NULL;
     int32_t n = (int32_t)(pts.len / (3 * sizeof(double)));
     int32_t cap = (int32_t)(nds.len / (Py_ssize_t)sizeof(Node));
     PyObject *result = NULL;
@@ -192,7 +198,7 @@ static PyObject *py_build_tree(PyObject *self, PyObject *args) {
     }
     key = (double *)malloc(sizeof(double) * (size_t)(n > 0 ? n : 1));
     if (!key) { PyErr_NoMemory(); goto done; }
-    Builder b = {(const double *)pts.buf, (int32_t *)perm.buf, key, (Node *)nds.buf, 1, cap, LEAF_SIZE, slab,
+    Builder b = {(const double *)pts.buf, (int32_t *)perm.buf, key, (Node *)nds.buf, 1, cap, leaf < 2 ? 2 : leaf, slab,
                  1e-13 * abs_scale((const double *)pts.buf, 3 * (Py_ssize_t)n), (volatile int32_t *)stop.buf};
     Py_BEGIN_ALLOW_THREADS
     for (int32_t i = 0; i < n; i++) b.perm[i] = i;
@@ -205,31 +211,68 @@ done:
     return result;
 }
 
-/* refit(nodes, points (n,3) f64 tree order, r (n) f64, R (n) f64, i0, i1): rg and rc of nodes [i0, i1) */
+static inline double dist3(const double *a, const double *b) {
+    double dx = a[0] - b[0], dy = a[1] - b[1], dz = a[2] - b[2];
+    return sqrt(dx * dx + dy * dy + dz * dz);
+}
+
+/* refit(nodes, points (n,3) f64 tree order, r (n) f64, R (n) f64, contact (n,3) f64 or empty, i0, i1):
+ * rg and rc of nodes [i0, i1), and their second sphere.  Balls that touch the surface (r(x) = distance
+ * to the nearest cloud point, contact = that point) shrink as their centres move toward it, so a sphere
+ * about c bounds them loosely (by about the node's size) where it matters, near the contacts; a sphere
+ * about k = c - beta m (m the mean contact direction) hugs them when k is near the surface's centre of
+ * curvature.  beta is chosen among a few by the bound it gives at the members' contacts (where the
+ * least excess is 0); every choice is a valid bound, the choice only sets how tight. */
 static PyObject *py_refit(PyObject *self, PyObject *args) {
-    Py_buffer nds, pts, rg, rc;
+    Py_buffer nds, pts, rg, rc, con;
     Py_ssize_t i0, i1;
-    if (!PyArg_ParseTuple(args, "w*y*y*y*nn", &nds, &pts, &rg, &rc, &i0, &i1)) return NULL;
+    if (!PyArg_ParseTuple(args, "w*y*y*y*y*nn", &nds, &pts, &rg, &rc, &con, &i0, &i1)) return NULL;
     Node *nodes = (Node *)nds.buf;
     const double *p = (const double *)pts.buf, *r = (const double *)rg.buf, *R = (const double *)rc.buf;
+    const double *q = con.len > 0 ? (const double *)con.buf : NULL;
     Py_ssize_t n = pts.len / (Py_ssize_t)(3 * sizeof(double));
     double pad = 1e-13 * (abs_scale(p, 3 * n) + abs_scale(R, n));
     Py_BEGIN_ALLOW_THREADS
     for (Py_ssize_t k = i0; k < i1; k++) {
         Node *nd = nodes + k;
-        double g = 0.0, c = 0.0;
+        double g = 0.0, c = 0.0, m[3] = {0.0, 0.0, 0.0}, rmean = 0.0;
         for (int32_t i = nd->lo; i < nd->hi; i++) {
             const double *x = p + 3 * (size_t)i;
             double dx = x[0] - nd->c[0], dy = x[1] - nd->c[1], dz = x[2] - nd->c[2];
             double d = sqrt(dx * dx + dy * dy + dz * dz);
             if (d + r[i] > g) g = d + r[i];
             if (d + R[i] > c) c = d + R[i];
+            rmean += r[i];
+            if (q && r[i] > 0.0)
+                for (int j = 0; j < 3; j++) m[j] += (q[3 * (size_t)i + j] - x[j]) / r[i];
         }
         nd->rg = g * (1.0 + 1e-12) + pad;
         nd->rc = c * (1.0 + 1e-12) + pad;
+        memcpy(nd->k, nd->c, sizeof nd->k);
+        nd->rk = nd->rg;
+        int32_t cnt = nd->hi - nd->lo;
+        double ml = sqrt(m[0] * m[0] + m[1] * m[1] + m[2] * m[2]);
+        if (!q || cnt < 1 || !(ml > 0.25 * cnt)) continue;  /* contacts all around: no direction */
+        rmean /= cnt;
+        double best_val = -INFINITY, best_beta = 0.0, best_rk = nd->rg;
+        for (int step = 0; step <= 10; step++) {
+            double beta = step == 0 ? 0.0 : rmean * ldexp(1.0, step - 8);  /* r/128 ... 4 r */
+            double kc[3] = {nd->c[0] - beta * m[0] / ml, nd->c[1] - beta * m[1] / ml, nd->c[2] - beta * m[2] / ml};
+            double rk = 0.0, val = 0.0;
+            for (int32_t i = nd->lo; i < nd->hi; i++) {
+                const double *x = p + 3 * (size_t)i;
+                double d = dist3(x, kc);
+                if (d + r[i] > rk) rk = d + r[i];
+            }
+            for (int32_t i = nd->lo; i < nd->hi; i++) val += dist3(q + 3 * (size_t)i, kc);
+            val = val / cnt - rk;
+            if (val > best_val) { best_val = val; best_beta = beta; best_rk = rk; }
+        }
+        for (int j = 0; j < 3; j++) nd->k[j] = nd->c[j] - best_beta * m[j] / ml;
+        nd->rk = best_rk * (1.0 + 1e-12) + pad + 1e-13 * best_beta;
     }
     Py_END_ALLOW_THREADS
-    PyBuffer_Release(&nds); PyBuffer_Release(&pts); PyBuffer_Release(&rg); PyBuffer_Release(&rc);
+    PyBuffer_Release(&nds); PyBuffer_Release(&pts); PyBuffer_Release(&rg); PyBuffer_Release(&rc); PyBuffer_Release(&con);
     Py_RETURN_NONE;
 }
 
@@ -238,16 +281,27 @@ static PyObject *py_refit(PyObject *self, PyObject *args) {
 
 typedef struct { int32_t node; double d; } Entry;
 
-static inline double dist3(const double *a, const double *b) {
-    double dx = a[0] - b[0], dy = a[1] - b[1], dz = a[2] - b[2];
-    return sqrt(dx * dx + dy * dy + dz * dz);
-}
 
-/* lower bound of |q - x| over the node's members: sphere and slab */
-static inline double near_bound(const Node *nd, const double *q, double d) {
-    double b = d - nd->rho;
-    double s = fabs((q[0] - nd->c[0]) * nd->n[0] + (q[1] - nd->c[1]) * nd->n[1] + (q[2] - nd->c[2]) * nd->n[2]) - nd->t;
-    return s > b ? s : b;
+/* Squared lower bound of |q - x| over the node's members, or inf if it is >= best: their sphere (tested
+ * without a root), then their disc (a cylinder of radius w and half-height t around the normal n
+ * through c): one square root at most, for the distance from the cylinder's axis. */
+static inline double near_bound2(const Node *nd, const double *q, double best) {
+    double dx = q[0] - nd->c[0], dy = q[1] - nd->c[1], dz = q[2] - nd->c[2];
+    double d2 = dx * dx + dy * dy + dz * dz;
+    double s = best + nd->rho;
+    if (d2 >= s * s) return INFINITY;
+    if (nd->t == 0.0) {
+        double d = sqrt(d2) - nd->rho;
+        return d > 0.0 ? d * d : 0.0;
+    }
+    double h = dx * nd->n[0] + dy * nd->n[1] + dz * nd->n[2];
+    double l2 = d2 - h * h, dn = fabs(h) - nd->t, b2 = 0.0;
+    if (dn > 0.0) b2 = dn * dn;
+    if (l2 > nd->w * nd->w) {
+        double dl = sqrt(l2) - nd->w;
+        b2 += dl * dl;
+    }
+    return b2 * (1.0 - 1e-12);
 }
 
 /* nearest(nodes, points (n,3) f64 tree order, queries (m,3) f64, i0, i1, dist out (m) f64,
@@ -270,34 +324,45 @@ static PyObject *py_nearest(PyObject *self, PyObject *args) {
     int32_t seed = -1;
     for (Py_ssize_t k = i0; k < i1; k++) {
         const double *x = q + 3 * (size_t)k;
-        double best = INFINITY;
+        double best = INFINITY, best2 = INFINITY;
         int32_t bi = -1;
         if (n == 0) { out[k] = INFINITY; oi[k] = -1; continue; }
-        if (seed >= 0) { best = dist3(x, p + 3 * (size_t)seed); bi = seed; }
+        if (seed >= 0) {
+            const double *y = p + 3 * (size_t)seed;
+            double dx = x[0] - y[0], dy = x[1] - y[1], dz = x[2] - y[2];
+            best2 = dx * dx + dy * dy + dz * dz;
+            best = sqrt(best2);
+            bi = seed;
+        }
         int sp = 0;
         stack[sp].node = 0;
-        stack[sp++].d = near_bound(nodes, x, dist3(x, nodes[0].c));
+        stack[sp++].d = near_bound2(nodes, x, best);
         while (sp > 0) {
             Entry e = stack[--sp];
-            if (e.d >= best) continue;
+            if (e.d >= best2) continue;
             const Node *nd = nodes + e.node;
             visits++;
-            if (nd->kid < 0) {
+            if (nd->kid < 0) {  /* squared distances: sqrt is monotone, the least one is the same */
+                double b2 = best2;
+                int32_t bj = -1;
                 for (int32_t i = nd->lo; i < nd->hi; i++) {
-                    double d = dist3(x, p + 3 * (size_t)i);
-                    if (d < best || (d == best && i < bi)) { best = d; bi = i; }
+                    const double *y = p + 3 * (size_t)i;
+                    double dx = x[0] - y[0], dy = x[1] - y[1], dz = x[2] - y[2];
+                    double d2 = dx * dx + dy * dy + dz * dz;
+                    if (d2 < b2) { b2 = d2; bj = i; }
                 }
+                if (bj >= 0) { best2 = b2; best = sqrt(b2); bi = bj; }
                 tests += nd->hi - nd->lo;
                 continue;
             }
             const Node *a = nodes + nd->kid, *b = a + 1;
-            double da = near_bound(a, x, dist3(x, a->c)), db = near_bound(b, x, dist3(x, b->c));
+            double da = near_bound2(a, x, best), db = near_bound2(b, x, best);
             if (da <= db) {
-                if (db < best) { stack[sp].node = nd->kid + 1; stack[sp++].d = db; }
-                if (da < best) { stack[sp].node = nd->kid; stack[sp++].d = da; }
+                if (db < best2) { stack[sp].node = nd->kid + 1; stack[sp++].d = db; }
+                if (da < best2) { stack[sp].node = nd->kid; stack[sp++].d = da; }
             } else {
-                if (da < best) { stack[sp].node = nd->kid; stack[sp++].d = da; }
-                if (db < best) { stack[sp].node = nd->kid + 1; stack[sp++].d = db; }
+                if (da < best2) { stack[sp].node = nd->kid; stack[sp++].d = da; }
+                if (db < best2) { stack[sp].node = nd->kid + 1; stack[sp++].d = db; }
             }
         }
         out[k] = best;
@@ -314,6 +379,13 @@ static PyObject *py_nearest(PyObject *self, PyObject *args) {
 
 /* ------------------------------------------------------------------------------------------------ */
 /* Gap and cover                                                                                      */
+
+/* may the node's second sphere hold a ball with excess below best: |q - k| - rk < best */
+static inline int second_ok(const Node *nd, const double *q, double best) {
+    double dx = q[0] - nd->k[0], dy = q[1] - nd->k[1], dz = q[2] - nd->k[2];
+    double s = best + nd->rk;
+    return s > 0.0 && dx * dx + dy * dy + dz * dz < s * s;
+}
 
 /* balls(nodes (refit), centres (n,3) f64 tree order, r (n) f64, R (n) f64, queries (m,3) f64, i0, i1,
  *       floor, eps, gap out (m) f64 or empty, covered out (m) u8 or empty, stats out (2) i64)
@@ -360,12 +432,16 @@ static PyObject *py_balls(PyObject *self, PyObject *args) {
         }
         if (gap_open && best <= floor_) gap_open = 0;
         int sp = 0;
-        if (gap_open || cov_open) { stack[sp].node = 0; stack[sp++].d = dist3(x, nodes[0].c); }
+        if (gap_open || cov_open) { stack[sp].node = 0; stack[sp++].d = 0.0; }
         while (sp > 0 && (gap_open || cov_open)) {
             Entry e = stack[--sp];
             const Node *nd = nodes + e.node;
-            const int g = gap_open && e.d - nd->rg < best, c = cov_open && e.d - nd->rc <= tol;
-            if (!g && !c) continue;
+            if (e.node != 0) {  /* the walk may have moved on since the push: test again */
+                double sg = best + nd->rg, sc = nd->rc + tol;
+                const int g = gap_open && sg > 0.0 && e.d < sg * sg && second_ok(nd, x, best),
+                          c = cov_open && e.d <= sc * sc;
+                if (!g && !c) continue;
+            }
             visits++;
             if (nd->kid < 0) {
                 for (int32_t i = nd->lo; i < nd->hi; i++) {
@@ -373,24 +449,38 @@ static PyObject *py_balls(PyObject *self, PyObject *args) {
                     double dx = x[0] - b[0], dy = x[1] - b[1], dz = x[2] - b[2];
                     double d2 = dx * dx + dy * dy + dz * dz;
                     if (gap_open) {
-                        double ex = sqrt(d2) - r[i];
-                        if (ex < best) { best = ex; bi = i; if (best <= floor_) gap_open = 0; }
+                        /* sqrt(d2) - r < best needs d2 < (best + r)^2; the margin m keeps every
+                         * skipped ball's computed excess >= best */
+                        double t = best + r[i], m = 1e-12 * (fabs(best) + r[i]) + 1e-300;
+                        if (t + m > 0.0 && d2 < (t + m) * (t + m)) {
+                            double ex = sqrt(d2) - r[i];
+                            if (ex < best) { best = ex; bi = i; if (best <= floor_) gap_open = 0; }
+                        }
                     }
                     if (cov_open && d2 - R[i] * R[i] <= eps) { cov_open = 0; ci = i; }
                 }
                 tests += nd->hi - nd->lo;
                 continue;
             }
-            const Node *a = nodes + nd->kid, *b = a + 1;
-            double da = dist3(x, a->c), db = dist3(x, b->c);
-            /* nearer first by the bound that still matters */
-            double ka = gap_open ? da - a->rg : da - a->rc, kb = gap_open ? db - b->rg : db - b->rc;
-            if (ka <= kb) {
-                stack[sp].node = nd->kid + 1; stack[sp++].d = db;
-                stack[sp].node = nd->kid; stack[sp++].d = da;
-            } else {
-                stack[sp].node = nd->kid; stack[sp++].d = da;
-                stack[sp].node = nd->kid + 1; stack[sp++].d = db;
+            /* a child is needed while |q - c| - rg < best (gap) or |q - c| - rc <= tol (cover), in squares */
+            const Node *kid[2] = {nodes + nd->kid, nodes + nd->kid + 1};
+            double d2k[2], key[2];
+            int need[2];
+            for (int j = 0; j < 2; j++) {
+                const Node *ch = kid[j];
+                double dx = x[0] - ch->c[0], dy = x[1] - ch->c[1], dz = x[2] - ch->c[2];
+                double d2 = dx * dx + dy * dy + dz * dz;
+                double sg = best + ch->rg, sc = ch->rc + tol;
+                int g = gap_open && sg > 0.0 && d2 < sg * sg && second_ok(ch, x, best), c = cov_open && d2 <= sc * sc;
+                need[j] = g || c;
+                d2k[j] = d2;
+                /* nearer first by the power distance of the bound that still matters */
+                key[j] = gap_open ? d2 - ch->rg * ch->rg : d2 - ch->rc * ch->rc;
+            }
+            int first = key[0] <= key[1] ? 0 : 1;
+            for (int j = 1; j >= 0; j--) {
+                int w = j == 0 ? first : 1 - first;  /* the second one pushed first */
+                if (need[w]) { stack[sp].node = nd->kid + w; stack[sp++].d = d2k[w]; }
             }
         }
         if (want_gap) og[k] = best;

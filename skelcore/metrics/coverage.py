@@ -25,9 +25,11 @@ from . import _balls
 
 __all__ = ["Coverage", "coverage", "coverage_tau", "min_ball_excess", "covered_by_balls", "BallTree"]
 
-# one tree node as the kernel reads it (struct Node in _balls.c): 96 bytes
+# one tree node as the kernel reads it (struct Node in _balls.c): 136 bytes
 NODE = np.dtype([("c", "<f8", (3,)), ("rho", "<f8"), ("rg", "<f8"), ("rc", "<f8"), ("n", "<f8", (3,)),
-                 ("t", "<f8"), ("kid", "<i4"), ("lo", "<i4"), ("hi", "<i4"), ("pad", "<i4")])
+                 ("t", "<f8"), ("w", "<f8"), ("k", "<f8", (3,)), ("rk", "<f8"), ("kid", "<i4"), ("lo", "<i4"), ("hi", "<i4"), ("pad", "<i4")])
+# points per tree leaf at most
+LEAF = 8
 # rows per timed chunk at most (a chunk is split over the threads)
 MOST_ROWS = 262144
 # below this many rows a chunk runs on the calling thread alone
@@ -72,7 +74,7 @@ class BallTree:
         n = len(pts)
         perm = np.empty(n, np.int32)
         nodes = np.empty(max(1, 2 * ((n + 3) // 4) + 2), NODE)
-        m = _build_polling(lambda stop: _balls.build_tree(pts, perm, nodes, slab, stop), n, checkpoint)
+        m = _build_polling(lambda stop: _balls.build_tree(pts, perm, nodes, slab, stop, LEAF), n, checkpoint)
         self.nodes = nodes[:m].copy()
         self.perm = perm
         self.points = np.ascontiguousarray(pts[perm])
@@ -90,13 +92,16 @@ class BallTree:
             self.stats += st
 
         _chunked(run, len(q), checkpoint, workers)
+        self.last_index = idx  # the nearest point of each query (tree order)
         return out
 
-    def set_radii(self, r: np.ndarray, big_r: np.ndarray) -> None:
-        """Ball radii r (gap) and R (cover) of the points, tree order: every node's bounds."""
+    def set_radii(self, r: np.ndarray, big_r: np.ndarray, contact: np.ndarray | None = None) -> None:
+        """Ball radii r (gap) and R (cover) of the points, tree order: every node's bounds.  ``contact``
+        (each ball's nearest cloud point, where r came from) lets a node bound its balls tighter."""
         self.r = np.ascontiguousarray(r, dtype=np.float64)
         self.big_r = np.ascontiguousarray(big_r, dtype=np.float64)
-        _balls.refit(self.nodes, self.points, self.r, self.big_r, 0, len(self.nodes))
+        con = np.empty(0) if contact is None else np.ascontiguousarray(contact, dtype=np.float64)
+        _balls.refit(self.nodes, self.points, self.r, self.big_r, con, 0, len(self.nodes))
 
     def balls(self, queries: np.ndarray, gap: bool = True, cover: bool = True, floor: float = -np.inf,
               checkpoint: Checkpoint = no_checkpoint, workers: int | None = None) -> tuple:
@@ -221,12 +226,17 @@ def coverage(
         surface = BallTree(cloud, slab=True, checkpoint=build)
         balls = BallTree(elements, checkpoint=build)
         r = surface.nearest(balls.points, _scaled(checkpoint, 0.1, 0.4), workers)
+        contact = surface.last_index
         # |p - x| - (1 + s) r <= tau  <=>  p lies in the ball of radius (1 + s) r + tau
-        balls.set_radii(r, (1.0 + s) * r + tau)
-        g, c = balls.balls(surface.points, floor=0.0, checkpoint=_scaled(checkpoint, 0.4, 1.0), workers=workers)
-        gap, covered = np.empty(len(cloud)), np.empty(len(cloud), bool)
-        gap[surface.perm] = np.maximum(g, 0.0)
-        covered[surface.perm] = c
+        balls.set_radii(r, (1.0 + s) * r + tau, surface.points[contact])
+        # a cloud point that is some element's nearest has excess exactly 0 for that ball (the same
+        # arithmetic both ways) and lies in its larger ball: gap 0, covered, no search
+        rest = np.ones(len(cloud), bool)
+        rest[contact] = False
+        g, c = balls.balls(surface.points[rest], floor=0.0, checkpoint=_scaled(checkpoint, 0.4, 1.0), workers=workers)
+        gap, covered = np.zeros(len(cloud)), np.ones(len(cloud), bool)
+        gap[surface.perm[rest]] = np.maximum(g, 0.0)
+        covered[surface.perm[rest]] = c
     return Coverage(
         gap=gap,
         covered=covered,
