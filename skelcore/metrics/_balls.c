@@ -39,19 +39,20 @@ typedef struct {
 /* ------------------------------------------------------------------------------------------------ */
 /* Build                                                                                              */
 
-static void select_nth(double *key, int32_t *idx, int32_t lo, int32_t hi, int32_t nth) {
-    /* quickselect on key[lo:hi] carrying idx: afterwards key[nth] is the nth smallest */
+typedef struct { double x[3]; int32_t i; int32_t pad_; } Item;  /* a point and its input row */
+
+static void select_nth(Item *v, int32_t lo, int32_t hi, int32_t nth, int axis) {
+    /* quickselect on v[lo:hi] by coordinate `axis`: afterwards v[nth] is the nth smallest */
     while (hi - lo > 1) {
         int32_t mid = lo + (hi - lo) / 2;
-        double a = key[lo], b = key[mid], c = key[hi - 1];
+        double a = v[lo].x[axis], b = v[mid].x[axis], c = v[hi - 1].x[axis];
         double pivot = (a < b) ? ((b < c) ? b : ((a < c) ? c : a)) : ((a < c) ? a : ((b < c) ? c : b));
         int32_t i = lo, j = hi - 1;
         while (i <= j) {
-            while (key[i] < pivot) i++;
-            while (key[j] > pivot) j--;
+            while (v[i].x[axis] < pivot) i++;
+            while (v[j].x[axis] > pivot) j--;
             if (i <= j) {
-                double tk = key[i]; key[i] = key[j]; key[j] = tk;
-                int32_t ti = idx[i]; idx[i] = idx[j]; idx[j] = ti;
+                Item t = v[i]; v[i] = v[j]; v[j] = t;
                 i++; j--;
             }
         }
@@ -94,9 +95,7 @@ static int least_axis(const double *a, double *n) {
 }
 
 typedef struct {
-    const double *pts;
-    int32_t *perm;
-    double *key;
+    Item *v;                 /* the points, reordered in place into tree order (sequential access) */
     Node *nodes;
     int32_t n_nodes, cap, leaf;
     int slab;
@@ -113,7 +112,7 @@ static void build_node(Builder *b, int32_t node, int32_t lo, int32_t hi) {
     if (hi - lo > 4096 && *b->stop) return;
     double mn[3] = {INFINITY, INFINITY, INFINITY}, mx[3] = {-INFINITY, -INFINITY, -INFINITY};
     for (int32_t i = lo; i < hi; i++) {
-        const double *p = b->pts + 3 * (size_t)b->perm[i];
+        const double *p = b->v[i].x;
         for (int k = 0; k < 3; k++) {
             if (p[k] < mn[k]) mn[k] = p[k];
             if (p[k] > mx[k]) mx[k] = p[k];
@@ -122,7 +121,7 @@ static void build_node(Builder *b, int32_t node, int32_t lo, int32_t hi) {
     double c[3], r2 = 0.0;
     for (int k = 0; k < 3; k++) c[k] = 0.5 * (mn[k] + mx[k]);
     for (int32_t i = lo; i < hi; i++) {
-        const double *p = b->pts + 3 * (size_t)b->perm[i];
+        const double *p = b->v[i].x;
         double dx = p[0] - c[0], dy = p[1] - c[1], dz = p[2] - c[2];
         double d2 = dx * dx + dy * dy + dz * dz;
         if (d2 > r2) r2 = d2;
@@ -132,12 +131,12 @@ static void build_node(Builder *b, int32_t node, int32_t lo, int32_t hi) {
     if (b->slab && hi - lo >= 3) {
         double m[3] = {0.0, 0.0, 0.0}, a[9] = {0.0};
         for (int32_t i = lo; i < hi; i++) {
-            const double *p = b->pts + 3 * (size_t)b->perm[i];
+            const double *p = b->v[i].x;
             for (int k = 0; k < 3; k++) m[k] += p[k] - c[k];
         }
         for (int k = 0; k < 3; k++) m[k] /= (double)(hi - lo);
         for (int32_t i = lo; i < hi; i++) {
-            const double *p = b->pts + 3 * (size_t)b->perm[i];
+            const double *p = b->v[i].x;
             double d[3] = {p[0] - c[0] - m[0], p[1] - c[1] - m[1], p[2] - c[2] - m[2]};
             for (int u = 0; u < 3; u++)
                 for (int v = 0; v < 3; v++) a[3 * u + v] += d[u] * d[v];
@@ -146,7 +145,7 @@ static void build_node(Builder *b, int32_t node, int32_t lo, int32_t hi) {
         if (least_axis(a, n)) {
             double t = 0.0, w2 = 0.0;
             for (int32_t i = lo; i < hi; i++) {
-                const double *p = b->pts + 3 * (size_t)b->perm[i];
+                const double *p = b->v[i].x;
                 double d[3] = {p[0] - c[0], p[1] - c[1], p[2] - c[2]};
                 double s = d[0] * n[0] + d[1] * n[1] + d[2] * n[2];
                 double l2 = d[0] * d[0] + d[1] * d[1] + d[2] * d[2] - s * s;
@@ -163,9 +162,8 @@ static void build_node(Builder *b, int32_t node, int32_t lo, int32_t hi) {
     double ext = mx[0] - mn[0];
     for (int k = 1; k < 3; k++)
         if (mx[k] - mn[k] > ext) { ext = mx[k] - mn[k]; axis = k; }
-    for (int32_t i = lo; i < hi; i++) b->key[i] = b->pts[3 * (size_t)b->perm[i] + axis];
     int32_t mid = lo + (hi - lo) / 2;
-    select_nth(b->key, b->perm, lo, hi, mid);
+    select_nth(b->v, lo, hi, mid, axis);
     int32_t first = b->n_nodes;
     b->n_nodes += 2;
     nd->kid = first;
@@ -182,32 +180,45 @@ static double abs_scale(const double *v, Py_ssize_t n) {
     return s;
 }
 
-/* build_tree(points (n,3) f64, perm (n) i32 out, nodes (cap) Node out, slab (0/1), stop (1) i32) ->
- * number of nodes, or -1 if stop was set meanwhile.  perm lists the input rows in tree order. */
+/* build_tree(points (n,3) f64, perm (n) i32 out, sorted (n,3) f64 out, nodes (cap) Node out, slab (0/1),
+ * stop (1) i32[, leaf size]) -> number of nodes, or -1 if stop was set meanwhile.  perm lists the input
+ * rows in tree order, sorted holds the points in that order. */
 static PyObject *py_build_tree(PyObject *self, PyObject *args) {
-    Py_buffer pts, perm, nds, stop;
+    Py_buffer pts, perm, srt, nds, stop;
     int slab, leaf = LEAF_SIZE;
-    if (!PyArg_ParseTuple(args, "y*w*w*pw*|i", &pts, &perm, &nds, &slab, &stop, &leaf)) return NULL;
+    if (!PyArg_ParseTuple(args, "y*w*w*w*pw*|i", &pts, &perm, &srt, &nds, &slab, &stop, &leaf)) return NULL;
     int32_t n = (int32_t)(pts.len / (3 * sizeof(double)));
     int32_t cap = (int32_t)(nds.len / (Py_ssize_t)sizeof(Node));
     PyObject *result = NULL;
-    double *key = NULL;
-    if (perm.len / (Py_ssize_t)sizeof(int32_t) < n || cap < 1 || stop.len < (Py_ssize_t)sizeof(int32_t)) {
+    Item *v = NULL;
+    if (perm.len / (Py_ssize_t)sizeof(int32_t) < n || srt.len < pts.len || cap < 1 ||
+        stop.len < (Py_ssize_t)sizeof(int32_t)) {
         PyErr_SetString(PyExc_ValueError, "build_tree: output buffers too small");
         goto done;
     }
-    key = (double *)malloc(sizeof(double) * (size_t)(n > 0 ? n : 1));
-    if (!key) { PyErr_NoMemory(); goto done; }
-    Builder b = {(const double *)pts.buf, (int32_t *)perm.buf, key, (Node *)nds.buf, 1, cap, leaf < 2 ? 2 : leaf, slab,
+    v = (Item *)malloc(sizeof(Item) * (size_t)(n > 0 ? n : 1));
+    if (!v) { PyErr_NoMemory(); goto done; }
+    Builder b = {v, (Node *)nds.buf, 1, cap, leaf < 2 ? 2 : leaf, slab,
                  1e-13 * abs_scale((const double *)pts.buf, 3 * (Py_ssize_t)n), (volatile int32_t *)stop.buf};
     Py_BEGIN_ALLOW_THREADS
-    for (int32_t i = 0; i < n; i++) b.perm[i] = i;
+    const double *src = (const double *)pts.buf;
+    for (int32_t i = 0; i < n; i++) {
+        memcpy(v[i].x, src + 3 * (size_t)i, 3 * sizeof(double));
+        v[i].i = i;
+    }
     build_node(&b, 0, 0, n);
+    int32_t *out = (int32_t *)perm.buf;
+    double *sorted = (double *)srt.buf;
+    for (int32_t i = 0; i < n; i++) {
+        out[i] = v[i].i;
+        memcpy(sorted + 3 * (size_t)i, v[i].x, 3 * sizeof(double));
+    }
     Py_END_ALLOW_THREADS
     result = PyLong_FromLong(*b.stop ? -1 : b.n_nodes);
 done:
-    free(key);
-    PyBuffer_Release(&pts); PyBuffer_Release(&perm); PyBuffer_Release(&nds); PyBuffer_Release(&stop);
+    free(v);
+    PyBuffer_Release(&pts); PyBuffer_Release(&perm); PyBuffer_Release(&srt); PyBuffer_Release(&nds);
+    PyBuffer_Release(&stop);
     return result;
 }
 

@@ -72,12 +72,12 @@ class BallTree:
     def __init__(self, points: np.ndarray, slab: bool = False, checkpoint: Checkpoint = no_checkpoint):
         pts = np.ascontiguousarray(points, dtype=np.float64).reshape(-1, 3)
         n = len(pts)
-        perm = np.empty(n, np.int32)
+        perm, srt = np.empty(n, np.int32), np.empty((n, 3))
         nodes = np.empty(max(1, 2 * ((n + 3) // 4) + 2), NODE)
-        m = _build_polling(lambda stop: _balls.build_tree(pts, perm, nodes, slab, stop, LEAF), n, checkpoint)
-        self.nodes = nodes[:m].copy()
+        m = _build_polling(lambda stop: _balls.build_tree(pts, perm, srt, nodes, slab, stop, LEAF), n, checkpoint)
+        self.nodes = nodes[:m]
         self.perm = perm
-        self.points = np.ascontiguousarray(pts[perm])
+        self.points = srt
         self.stats = np.zeros(2, np.int64)  # node visits, point tests of the queries so far
 
     def nearest(self, queries: np.ndarray, checkpoint: Checkpoint = no_checkpoint,
