@@ -247,6 +247,23 @@ static PyObject *py_refit(PyObject *self, PyObject *args) {
     for (Py_ssize_t k = i0; k < i1; k++) {
         Node *nd = nodes + k;
         double g = 0.0, c = 0.0, m[3] = {0.0, 0.0, 0.0}, rmean = 0.0;
+        {   /* the sphere about the members' centres (the tree may have been built on other points) */
+            double mn[3] = {INFINITY, INFINITY, INFINITY}, mx[3] = {-INFINITY, -INFINITY, -INFINITY}, r2 = 0.0;
+            for (int32_t i = nd->lo; i < nd->hi; i++)
+                for (int j = 0; j < 3; j++) {
+                    double v = p[3 * (size_t)i + j];
+                    if (v < mn[j]) mn[j] = v;
+                    if (v > mx[j]) mx[j] = v;
+                }
+            if (nd->hi > nd->lo)
+                for (int j = 0; j < 3; j++) nd->c[j] = 0.5 * (mn[j] + mx[j]);
+            for (int32_t i = nd->lo; i < nd->hi; i++) {
+                double d2 = 0.0;
+                for (int j = 0; j < 3; j++) d2 += (p[3 * (size_t)i + j] - nd->c[j]) * (p[3 * (size_t)i + j] - nd->c[j]);
+                if (d2 > r2) r2 = d2;
+            }
+            nd->rho = sqrt(r2) * (1.0 + 1e-12) + pad;
+        }
         for (int32_t i = nd->lo; i < nd->hi; i++) {
             const double *x = p + 3 * (size_t)i;
             double dx = x[0] - nd->c[0], dy = x[1] - nd->c[1], dz = x[2] - nd->c[2];
@@ -316,13 +333,17 @@ static inline double near_bound2(const Node *nd, const double *q, double best) {
 }
 
 /* nearest(nodes, points (n,3) f64 tree order, queries (m,3) f64, i0, i1, dist out (m) f64,
- *         index out (m) i32 (tree order), stats out (2) i64: nodes visited, points tested)
+ *         index out (m) i32 (tree order), stats out (2) i64: nodes visited, points tested[, others])
  * Distance from each query of [i0, i1) to its nearest point, exact (sqrt(dx^2 + dy^2 + dz^2), the
- * value a brute-force loop gives); queries in spatial order make the previous answer a good seed. */
+ * value a brute-force loop gives); queries in spatial order make the previous answer a good seed.
+ * With `others`, the queries are the tree's own points and query k skips point k (its nearest
+ * other point: 0 for a copy). */
 static PyObject *py_nearest(PyObject *self, PyObject *args) {
     Py_buffer nds, pts, qs, dist, index, stats;
     Py_ssize_t i0, i1;
-    if (!PyArg_ParseTuple(args, "y*y*y*nnw*w*w*", &nds, &pts, &qs, &i0, &i1, &dist, &index, &stats)) return NULL;
+    int others = 0;
+    if (!PyArg_ParseTuple(args, "y*y*y*nnw*w*w*|p", &nds, &pts, &qs, &i0, &i1, &dist, &index, &stats, &others))
+        return NULL;
     const Node *nodes = (const Node *)nds.buf;
     const double *p = (const double *)pts.buf, *q = (const double *)qs.buf;
     const int32_t n = (int32_t)(pts.len / (Py_ssize_t)(3 * sizeof(double)));
@@ -337,7 +358,9 @@ static PyObject *py_nearest(PyObject *self, PyObject *args) {
         const double *x = q + 3 * (size_t)k;
         double best = INFINITY, best2 = INFINITY;
         int32_t bi = -1;
+        const int32_t skip = others ? (int32_t)k : -1;
         if (n == 0) { out[k] = INFINITY; oi[k] = -1; continue; }
+        if (seed == skip) seed = -1;
         if (seed >= 0) {
             const double *y = p + 3 * (size_t)seed;
             double dx = x[0] - y[0], dy = x[1] - y[1], dz = x[2] - y[2];
@@ -360,7 +383,7 @@ static PyObject *py_nearest(PyObject *self, PyObject *args) {
                     const double *y = p + 3 * (size_t)i;
                     double dx = x[0] - y[0], dy = x[1] - y[1], dz = x[2] - y[2];
                     double d2 = dx * dx + dy * dy + dz * dz;
-                    if (d2 < b2) { b2 = d2; bj = i; }
+                    if (d2 < b2 && i != skip) { b2 = d2; bj = i; }
                 }
                 if (bj >= 0) { best2 = b2; best = sqrt(b2); bi = bj; }
                 tests += nd->hi - nd->lo;

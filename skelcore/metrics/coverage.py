@@ -19,7 +19,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..geometry import Checkpoint, TimedChunks, nearest_neighbor_distances, no_checkpoint, unique_rows
+from ..geometry import Checkpoint, TimedChunks, no_checkpoint, unique_rows
 from ..params import Params
 from . import _balls
 
@@ -56,8 +56,14 @@ class Coverage:
 
 
 def coverage_tau(cloud: np.ndarray, params: Params = Params(), checkpoint: Checkpoint = no_checkpoint) -> float:
-    """tau = coverage_tau_factor x the cloud's median nearest-neighbour spacing."""
-    return float(params.coverage_tau_factor * np.median(nearest_neighbor_distances(cloud, checkpoint=checkpoint)))
+    """tau = coverage_tau_factor x the cloud's median nearest-neighbour spacing (0 for a copy; the
+    values of ``geometry.nearest_neighbor_distances``, from the kernel's tree)."""
+    cloud = np.asarray(cloud, dtype=float).reshape(-1, 3)
+    if len(cloud) < 2:
+        return 0.0
+    tree = BallTree(cloud, checkpoint=_scaled(checkpoint, 0.0, 0.3))
+    d = tree.nearest(tree.points, _scaled(checkpoint, 0.3, 1.0), others=True)
+    return float(params.coverage_tau_factor * np.median(d))
 
 
 def _scaled(checkpoint: Checkpoint, lo: float, hi: float) -> Checkpoint:
@@ -81,14 +87,15 @@ class BallTree:
         self.stats = np.zeros(2, np.int64)  # node visits, point tests of the queries so far
 
     def nearest(self, queries: np.ndarray, checkpoint: Checkpoint = no_checkpoint,
-                workers: int | None = None) -> np.ndarray:
-        """Distance from each query row to its nearest point, exact; ask in spatial order."""
+                workers: int | None = None, others: bool = False) -> np.ndarray:
+        """Distance from each query row to its nearest point, exact; ask in spatial order.  With
+        ``others`` the queries are ``self.points`` and each skips itself (nearest other point)."""
         q = np.ascontiguousarray(queries, dtype=np.float64)
         out, idx = np.empty(len(q)), np.empty(len(q), np.int32)
 
         def run(i0: int, i1: int) -> None:
             st = np.zeros(2, np.int64)
-            _balls.nearest(self.nodes, self.points, q, i0, i1, out, idx, st)
+            _balls.nearest(self.nodes, self.points, q, i0, i1, out, idx, st, others)
             self.stats += st
 
         _chunked(run, len(q), checkpoint, workers)
