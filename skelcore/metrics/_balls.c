@@ -307,7 +307,7 @@ static PyObject *py_refit(PyObject *self, PyObject *args) {
 /* ------------------------------------------------------------------------------------------------ */
 /* Nearest point (the radii r(x))                                                                     */
 
-typedef struct { int32_t node; double d; } Entry;
+typedef struct { int32_t node, ver; double d; } Entry;  /* ver: improvements of best when pushed */
 
 
 /* Squared lower bound of |q - x| over the node's members, or inf if it is >= best: their sphere (tested
@@ -370,6 +370,7 @@ static PyObject *py_nearest(PyObject *self, PyObject *args) {
         }
         int sp = 0;
         stack[sp].node = 0;
+        stack[sp].ver = 0;
         stack[sp++].d = near_bound2(nodes, x, best);
         while (sp > 0) {
             Entry e = stack[--sp];
@@ -465,12 +466,12 @@ static PyObject *py_balls(PyObject *self, PyObject *args) {
             if (cov_open && d2 - R[i] * R[i] <= eps) { cov_open = 0; ci = i; }
         }
         if (gap_open && best <= floor_) gap_open = 0;
-        int sp = 0;
-        if (gap_open || cov_open) { stack[sp].node = 0; stack[sp++].d = 0.0; }
+        int sp = 0, ver = 0;
+        if (gap_open || cov_open) { stack[sp].node = 0; stack[sp].ver = 0; stack[sp++].d = 0.0; }
         while (sp > 0 && (gap_open || cov_open)) {
             Entry e = stack[--sp];
             const Node *nd = nodes + e.node;
-            if (e.node != 0) {  /* the walk may have moved on since the push: test again */
+            if (e.ver != ver) {  /* best has improved (or cover closed) since the push: test again */
                 double sg = best + nd->rg, sc = nd->rc + tol;
                 const int g = gap_open && sg > 0.0 && e.d < sg * sg && second_ok(nd, x, best),
                           c = cov_open && e.d <= sc * sc;
@@ -488,10 +489,10 @@ static PyObject *py_balls(PyObject *self, PyObject *args) {
                         double t = best + r[i], m = 1e-12 * (fabs(best) + r[i]) + 1e-300;
                         if (t + m > 0.0 && d2 < (t + m) * (t + m)) {
                             double ex = sqrt(d2) - r[i];
-                            if (ex < best) { best = ex; bi = i; if (best <= floor_) gap_open = 0; }
+                            if (ex < best) { best = ex; bi = i; ver++; if (best <= floor_) gap_open = 0; }
                         }
                     }
-                    if (cov_open && d2 - R[i] * R[i] <= eps) { cov_open = 0; ci = i; }
+                    if (cov_open && d2 - R[i] * R[i] <= eps) { cov_open = 0; ci = i; ver++; }
                 }
                 tests += nd->hi - nd->lo;
                 continue;
@@ -514,7 +515,7 @@ static PyObject *py_balls(PyObject *self, PyObject *args) {
             int first = key[0] <= key[1] ? 0 : 1;
             for (int j = 1; j >= 0; j--) {
                 int w = j == 0 ? first : 1 - first;  /* the second one pushed first */
-                if (need[w]) { stack[sp].node = nd->kid + w; stack[sp++].d = d2k[w]; }
+                if (need[w]) { stack[sp].node = nd->kid + w; stack[sp].ver = ver; stack[sp++].d = d2k[w]; }
             }
         }
         if (want_gap) og[k] = best;
