@@ -23,6 +23,7 @@
 
 #define LEAF_SIZE 8
 #define MAX_STACK 256
+#define BACK_MAX 2048  /* nodes of at most this many balls get a second sphere */
 #define PI 3.14159265358979323846264338327950288
 
 typedef struct {
@@ -280,7 +281,8 @@ static PyObject *py_refit(PyObject *self, PyObject *args) {
         nd->rk = nd->rg;
         int32_t cnt = nd->hi - nd->lo;
         double ml = sqrt(m[0] * m[0] + m[1] * m[1] + m[2] * m[2]);
-        if (!q || cnt < 1 || !(ml > 0.25 * cnt)) continue;  /* contacts all around: no direction */
+        /* a large node's contacts point all around (and its scan would be long): no second sphere */
+        if (!q || cnt < 1 || cnt > BACK_MAX || !(ml > 0.25 * cnt)) continue;
         rmean /= cnt;
         double best_val = -INFINITY, best_beta = 0.0, best_rk = nd->rg;
         for (int step = 0; step <= 10; step++) {

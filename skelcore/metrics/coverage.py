@@ -102,13 +102,15 @@ class BallTree:
         self.last_index = idx  # the nearest point of each query (tree order)
         return out
 
-    def set_radii(self, r: np.ndarray, big_r: np.ndarray, contact: np.ndarray | None = None) -> None:
+    def set_radii(self, r: np.ndarray, big_r: np.ndarray, contact: np.ndarray | None = None,
+                  checkpoint: Checkpoint = no_checkpoint, workers: int | None = None) -> None:
         """Ball radii r (gap) and R (cover) of the points, tree order: every node's bounds.  ``contact``
         (each ball's nearest cloud point, where r came from) lets a node bound its balls tighter."""
         self.r = np.ascontiguousarray(r, dtype=np.float64)
         self.big_r = np.ascontiguousarray(big_r, dtype=np.float64)
         con = np.empty(0) if contact is None else np.ascontiguousarray(contact, dtype=np.float64)
-        _balls.refit(self.nodes, self.points, self.r, self.big_r, con, 0, len(self.nodes))
+        _chunked(lambda i0, i1: _balls.refit(self.nodes, self.points, self.r, self.big_r, con, i0, i1),
+                 len(self.nodes), checkpoint, workers)
 
     def balls(self, queries: np.ndarray, gap: bool = True, cover: bool = True, floor: float = -np.inf,
               checkpoint: Checkpoint = no_checkpoint, workers: int | None = None) -> tuple:
@@ -222,7 +224,7 @@ def coverage(
     cloud points ask the elements' tree for gap and cover together.  Every tree build and every
     ~0.1 s of queries checks ``checkpoint`` (cancel)."""
     cloud = np.asarray(cloud, dtype=float)
-    elements = unique_rows(np.asarray(elements, dtype=float))[0]  # as np.unique(axis=0), 10 x faster
+    elements = unique_rows(np.asarray(elements, dtype=float), checkpoint)[0]  # as np.unique(axis=0), 10 x faster
     checkpoint(0.0)
     tau = coverage_tau(cloud, params, _scaled(checkpoint, 0.0, 0.05)) if tau is None else float(tau)
     s = float(params.coverage_slack)
@@ -232,10 +234,10 @@ def coverage(
         build = _scaled(checkpoint, 0.05, 0.1)
         surface = BallTree(cloud, slab=True, checkpoint=build)
         balls = BallTree(elements, checkpoint=build)
-        r = surface.nearest(balls.points, _scaled(checkpoint, 0.1, 0.4), workers)
+        r = surface.nearest(balls.points, _scaled(checkpoint, 0.1, 0.35), workers)
         contact = surface.last_index
         # |p - x| - (1 + s) r <= tau  <=>  p lies in the ball of radius (1 + s) r + tau
-        balls.set_radii(r, (1.0 + s) * r + tau, surface.points[contact])
+        balls.set_radii(r, (1.0 + s) * r + tau, surface.points[contact], _scaled(checkpoint, 0.35, 0.4), workers)
         # a cloud point that is some element's nearest has excess exactly 0 for that ball (the same
         # arithmetic both ways) and lies in its larger ball: gap 0, covered, no search
         rest = np.ones(len(cloud), bool)
