@@ -441,6 +441,35 @@ def test_a_cancel_during_the_tree_build_stops_it_and_leaves_no_thread_behind():
     assert (leaves["hi"] - leaves["lo"]).sum() == len(pts) and (leaves["hi"] - leaves["lo"]).max() <= 8
 
 
+def test_the_tree_does_not_depend_on_the_build_threads():
+    """Subtrees of big nodes are built on threads of their own, numbered as one thread numbers them:
+    the nodes, the permutation and the float32 points are the same bytes for 1, 2 and 5 threads, and the
+    tree is a valid bounding-sphere tree (every point inside each of its nodes' spheres)."""
+    from skelcore.metrics import _raycast
+    from skelcore.metrics.rays_kernel import NODE
+
+    pts = np.random.default_rng(8).normal(size=(200_003, 3))
+    pts[:50] = pts[50:100]  # copies, which a median split may part
+    built = []
+    for threads in (1, 2, 5):
+        n = len(pts)
+        perm, nodes = np.empty(n, np.int32), np.empty(2 * ((n + 3) // 4) + 2, NODE)
+        tree_points = np.empty((n, 3), np.float32)
+        m = _raycast.build_tree(pts, perm, nodes, np.zeros(1, np.int32), threads, tree_points)
+        built.append((m, perm, nodes[:m].tobytes(), tree_points))
+    for other in built[1:]:
+        assert other[0] == built[0][0] and np.array_equal(other[1], built[0][1])
+        assert other[2] == built[0][2] and np.array_equal(other[3], built[0][3])
+    m, perm, _, tree_points = built[0]
+    nodes = np.frombuffer(built[0][2], NODE)
+    assert np.array_equal(np.sort(perm), np.arange(len(pts)))
+    assert np.array_equal(tree_points, pts[perm].astype(np.float32))
+    owner = np.repeat(np.arange(m), nodes["hi"] - nodes["lo"])  # every node's points
+    rows = np.concatenate([np.arange(lo, hi) for lo, hi in zip(nodes["lo"], nodes["hi"])])
+    gap = np.linalg.norm(tree_points[rows].astype(float) - nodes["c"][owner].astype(float), axis=1)
+    assert np.all(gap <= nodes["r"][owner])
+
+
 def test_the_prepared_cloud_is_reused_only_for_the_same_unchanged_array():
     """The skeletal and curve stages share the cloud's tree; a changed or another array is prepared anew."""
     from skelcore.metrics import boundedness as b

@@ -46,6 +46,31 @@ def test_lex_order_is_numpys_lexsort(seed):
     assert np.all(np.diff(np.lexsort(u.T[::-1])) == 1)  # unique rows come sorted
 
 
+@pytest.mark.parametrize("seed", range(4))
+def test_stable_argsort_is_numpys_stable_argsort(seed):
+    """Ties (many, few, none), NaN and -0.0 == 0.0: the same permutation as kind="stable"."""
+    from skelcore.geometry import stable_argsort
+
+    rng = np.random.default_rng(seed)
+    for n in (0, 1, 2, 7, 1000):
+        for values in (rng.integers(0, 4, n).astype(float), rng.random(n), rng.integers(0, 50, n)):
+            if n > 3 and values.dtype.kind == "f":
+                values[rng.integers(0, n, 3)] = np.nan
+                values[rng.integers(0, n, 2)] = -0.0
+                values[rng.integers(0, n, 2)] = 0.0
+            assert np.array_equal(stable_argsort(values), np.argsort(values, kind="stable"))
+
+
+def test_take_rows_is_fancy_indexing():
+    from skelcore.geometry import take_rows
+
+    a = np.random.default_rng(1).random((500, 3))
+    for index in (np.arange(500)[::-1], np.random.default_rng(2).integers(0, 500, (40, 7)), np.zeros(0, int)):
+        assert np.array_equal(take_rows(a, index), a[index])
+    with pytest.raises(IndexError):
+        take_rows(a, np.array([500]))
+
+
 def test_unique_rows_match_numpy_unique():
     """coverage() used np.unique(axis=0); unique_rows gives the same rows (-0.0 equal to 0.0)."""
     rng = np.random.default_rng(1)
@@ -133,6 +158,26 @@ def test_skeletal_stages_do_not_depend_on_the_chunk(monkeypatch):
         with pytest.raises(Cancelled):
             fn(check)
         assert calls[0] == 20
+
+
+def test_curve_centeredness_on_threads_equals_one_thread(monkeypatch):
+    """Curve samples are scored in spans on a thread pool: the same values as one thread, and a cancel
+    raised in the middle stops it."""
+    cloud, _ = _torus_case()
+    t = np.linspace(0, 2 * np.pi, 41, endpoint=False)
+    pts = np.column_stack([np.cos(t), np.sin(t), 0.02 * np.cos(3 * t)])
+    dirs = np.column_stack([-np.sin(t), np.cos(t), 0 * t])
+    dirs[7] = np.nan  # a joint vertex: NaN, wherever its span runs
+    monkeypatch.setattr(centeredness, "_CURVE_THREADED", 10**12)
+    one = centeredness.curve_centeredness(cloud, pts, dirs)
+    monkeypatch.setattr(centeredness, "_CURVE_THREADED", 0)
+    calls = []
+    assert np.array_equal(centeredness.curve_centeredness(cloud, pts, dirs, checkpoint=calls.append), one, equal_nan=True)
+    assert np.isnan(one[7]) and np.isfinite(one).sum() == 40 and len(calls) >= 10
+    check, calls = _raise_at(5)
+    with pytest.raises(Cancelled):
+        centeredness.curve_centeredness(cloud, pts, dirs, checkpoint=check)
+    assert calls[0] == 5
 
 
 def test_covered_by_balls_matches_brute_force():

@@ -15,6 +15,7 @@
 #define PY_SSIZE_T_CLEAN
 #include <Python.h>
 #include <math.h>
+#include <pthread.h>
 #include <stdint.h>
 #include <stdlib.h>
 #include <string.h>
@@ -37,8 +38,15 @@ typedef struct {
     int32_t n_nodes;
 } Tree;
 
-static void select_nth(double *key, int32_t *idx, int32_t lo, int32_t hi, int32_t nth) {
-    /* quickselect on key[lo:hi] carrying idx: afterwards key[nth] is the nth smallest */
+static inline void swap_rows(double *key, int32_t *idx, double *wp, int32_t i, int32_t j) {
+    double tk = key[i]; key[i] = key[j]; key[j] = tk;
+    int32_t ti = idx[i]; idx[i] = idx[j]; idx[j] = ti;
+    double *a = wp + 3 * (size_t)i, *b = wp + 3 * (size_t)j;
+    for (int k = 0; k < 3; k++) { double t = a[k]; a[k] = b[k]; b[k] = t; }
+}
+
+static void select_nth(double *key, int32_t *idx, double *wp, int32_t lo, int32_t hi, int32_t nth) {
+    /* quickselect on key[lo:hi] carrying idx and the point rows wp: afterwards key[nth] is the nth smallest */
     while (hi - lo > 1) {
         int32_t mid = lo + (hi - lo) / 2;
         double a = key[lo], b = key[mid], c = key[hi - 1];
@@ -48,8 +56,7 @@ static void select_nth(double *key, int32_t *idx, int32_t lo, int32_t hi, int32_
             while (key[i] < pivot) i++;
             while (key[j] > pivot) j--;
             if (i <= j) {
-                double tk = key[i]; key[i] = key[j]; key[j] = tk;
-                int32_t ti = idx[i]; idx[i] = idx[j]; idx[j] = ti;
+                swap_rows(key, idx, wp, i, j);
                 i++; j--;
             }
         }
@@ -60,16 +67,33 @@ static void select_nth(double *key, int32_t *idx, int32_t lo, int32_t hi, int32_
 }
 
 typedef struct {
-    const double *pts;
+    double *wp;              /* (n, 3) the points, permuted along with perm: every pass reads them in order */
     int32_t *perm;
     double *key;
     Node *nodes;
     int32_t n_nodes, cap;
     double pad;              /* absolute radius padding: float32 rounding of centres and points */
     volatile int32_t *stop;  /* set by another thread to abandon the build (a cancel) */
+    int split_depth;         /* subtrees this many levels from the root or fewer get a thread of their own */
 } Builder;
 
-static void build_node(Builder *b, int32_t node, int32_t parent, int32_t lo, int32_t hi) {
+/* nodes of the subtree over n points (median splits, leaves of at most LEAF_SIZE) */
+static int32_t subtree_nodes(int32_t n) {
+    if (n <= LEAF_SIZE) return 1;
+    return 1 + subtree_nodes(n / 2) + subtree_nodes(n - n / 2);
+}
+
+static void build_node(Builder *b, int32_t node, int32_t parent, int32_t lo, int32_t hi, int depth);
+
+typedef struct { Builder b; int32_t node, parent, lo, hi; int depth; } BuildJob;
+
+static void *build_job(void *arg) {
+    BuildJob *j = (BuildJob *)arg;
+    build_node(&j->b, j->node, j->parent, j->lo, j->hi, j->depth);
+    return NULL;
+}
+
+static void build_node(Builder *b, int32_t node, int32_t parent, int32_t lo, int32_t hi, int depth) {
     Node *nd = b->nodes + node;
     nd->par = parent;
     nd->lo = lo;
@@ -78,7 +102,7 @@ static void build_node(Builder *b, int32_t node, int32_t parent, int32_t lo, int
     if (hi - lo > 4096 && *b->stop) return;
     double mn[3] = {INFINITY, INFINITY, INFINITY}, mx[3] = {-INFINITY, -INFINITY, -INFINITY};
     for (int32_t i = lo; i < hi; i++) {
-        const double *p = b->pts + 3 * (size_t)b->perm[i];
+        const double *p = b->wp + 3 * (size_t)i;
         for (int k = 0; k < 3; k++) {
             if (p[k] < mn[k]) mn[k] = p[k];
             if (p[k] > mx[k]) mx[k] = p[k];
@@ -87,7 +111,7 @@ static void build_node(Builder *b, int32_t node, int32_t parent, int32_t lo, int
     double c[3], r2 = 0.0;
     for (int k = 0; k < 3; k++) c[k] = 0.5 * (mn[k] + mx[k]);
     for (int32_t i = lo; i < hi; i++) {
-        const double *p = b->pts + 3 * (size_t)b->perm[i];
+        const double *p = b->wp + 3 * (size_t)i;
         double dx = p[0] - c[0], dy = p[1] - c[1], dz = p[2] - c[2];
         double d2 = dx * dx + dy * dy + dz * dz;
         if (d2 > r2) r2 = d2;
@@ -99,46 +123,71 @@ static void build_node(Builder *b, int32_t node, int32_t parent, int32_t lo, int
     double ext = mx[0] - mn[0];
     for (int k = 1; k < 3; k++)
         if (mx[k] - mn[k] > ext) { ext = mx[k] - mn[k]; axis = k; }
-    for (int32_t i = lo; i < hi; i++) b->key[i] = b->pts[3 * (size_t)b->perm[i] + axis];
+    for (int32_t i = lo; i < hi; i++) b->key[i] = b->wp[3 * (size_t)i + axis];
     int32_t mid = lo + (hi - lo) / 2;
-    select_nth(b->key, b->perm, lo, hi, mid);
+    select_nth(b->key, b->perm, b->wp, lo, hi, mid);
     int32_t first = b->n_nodes;
     b->n_nodes += 2;
     nd->kid = first;
-    build_node(b, first, node, lo, mid);
-    build_node(b, first + 1, node, mid, hi);
+    if (depth < b->split_depth && hi - lo > 65536) {
+        /* the second subtree on its own thread, numbered as the sequential build numbers it: its nodes
+         * follow all of the first subtree's */
+        BuildJob job = {*b, first + 1, node, mid, hi, depth + 1};
+        job.b.n_nodes = first + 2 + (subtree_nodes(mid - lo) - 1);
+        pthread_t th;
+        if (pthread_create(&th, NULL, build_job, &job) == 0) {
+            build_node(b, first, node, lo, mid, depth + 1);
+            pthread_join(th, NULL);
+            b->n_nodes = job.b.n_nodes;
+            return;
+        }
+    }
+    build_node(b, first, node, lo, mid, depth + 1);
+    build_node(b, first + 1, node, mid, hi, depth + 1);
 }
 
-/* build_tree(points (n,3) f64, perm (n) i32 out, nodes (cap) Node out, stop (1) i32) -> number of
- * nodes, or -1 if stop was set meanwhile.  perm lists the input rows in tree order. */
+/* build_tree(points (n,3) f64, perm (n) i32 out, nodes (cap) Node out, stop (1) i32, threads,
+ *            tree_points (n,3) f32 out) -> number of nodes, or -1 if stop was set meanwhile.  perm lists the
+ * input rows in tree order, tree_points the points in that order.  The tree does not depend on threads. */
 static PyObject *py_build_tree(PyObject *self, PyObject *args) {
-    Py_buffer pts, perm, nds, stop;
-    if (!PyArg_ParseTuple(args, "y*w*w*w*", &pts, &perm, &nds, &stop)) return NULL;
+    Py_buffer pts, perm, nds, stop, out;
+    int threads = 1;
+    if (!PyArg_ParseTuple(args, "y*w*w*w*iw*", &pts, &perm, &nds, &stop, &threads, &out)) return NULL;
     int32_t n = (int32_t)(pts.len / (3 * sizeof(double)));
     int32_t cap = (int32_t)(nds.len / (Py_ssize_t)sizeof(Node));
     PyObject *result = NULL;
-    double *key = NULL;
-    if (perm.len / (Py_ssize_t)sizeof(int32_t) < n || cap < 1) {
+    double *key = NULL, *wp = NULL;
+    if (perm.len / (Py_ssize_t)sizeof(int32_t) < n || cap < 1 || out.len < 3 * (Py_ssize_t)sizeof(float) * n) {
         PyErr_SetString(PyExc_ValueError, "build_tree: output buffers too small");
         goto done;
     }
     key = (double *)malloc(sizeof(double) * (size_t)(n > 0 ? n : 1));
-    if (!key) { PyErr_NoMemory(); goto done; }
+    wp = (double *)malloc(3 * sizeof(double) * (size_t)(n > 0 ? n : 1));
+    if (!key || !wp) { PyErr_NoMemory(); goto done; }
     double scale = 1.0;
     for (Py_ssize_t i = 0; i < 3 * (Py_ssize_t)n; i++) {
         double v = fabs(((const double *)pts.buf)[i]);
         if (v > scale) scale = v;
     }
-    Builder b = {(const double *)pts.buf, (int32_t *)perm.buf, key, (Node *)nds.buf, 1, cap, 1e-6 * scale,
-                 (volatile int32_t *)stop.buf};
+    int split = 0;
+    while ((1 << split) < threads && split < 6) split++;
+    Builder b = {wp, (int32_t *)perm.buf, key, (Node *)nds.buf, 1, cap, 1e-6 * scale,
+                 (volatile int32_t *)stop.buf, split};
+    int32_t total = 0;
     Py_BEGIN_ALLOW_THREADS
+    memcpy(wp, pts.buf, 3 * sizeof(double) * (size_t)n);
     for (int32_t i = 0; i < n; i++) b.perm[i] = i;
-    build_node(&b, 0, -1, 0, n);
+    build_node(&b, 0, -1, 0, n, 0);
+    total = b.n_nodes;
+    float *tp = (float *)out.buf;
+    for (size_t i = 0; i < 3 * (size_t)n; i++) tp[i] = (float)wp[i];
     Py_END_ALLOW_THREADS
-    result = PyLong_FromLong(*b.stop ? -1 : b.n_nodes);
+    result = PyLong_FromLong(*b.stop ? -1 : total);
 done:
     free(key);
+    free(wp);
     PyBuffer_Release(&pts); PyBuffer_Release(&perm); PyBuffer_Release(&nds); PyBuffer_Release(&stop);
+    PyBuffer_Release(&out);
     return result;
 }
 

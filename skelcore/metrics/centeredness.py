@@ -12,10 +12,15 @@ beta* and c* without recomputing.  Departures from the paper and the reference t
 
 from __future__ import annotations
 
+import os
+
 import numpy as np
 from scipy.spatial import cKDTree
 
-from ..geometry import Checkpoint, bbox_diagonal, kd_tree, leaf_order, lex_order, no_checkpoint, unit_rows
+from ..geometry import (
+    Checkpoint, bbox_diagonal, kd_tree, leaf_order, lex_order, no_checkpoint, stable_argsort, take_rows, unit_rows,
+)
+from ..parallel import on_threads
 from ..params import Params, k_center_for
 from .ellipse_fit import fit_ellipse
 
@@ -24,6 +29,8 @@ __all__ = ["skeletal_centeredness", "curve_centeredness", "ring_length", "cross_
 # rows of skeletal points per kNN chunk: bounds memory (chunk x k x 3 floats) and keeps checkpoints
 # under ~0.1 s apart on a loaded machine
 _SKELETAL_CHUNK = 4096
+_CURVE_SPAN = 4  # curve samples per thread task (about 5-25 ms at 1M points)
+_CURVE_THREADED = 50_000  # smaller clouds: one thread (a task would cost less than its hand-off)
 
 
 def skeletal_centeredness(
@@ -82,18 +89,19 @@ def skeletal_centeredness(
     # groups are visited in the tree's leaf order and the rows gathered in member (x-sorted) order:
     # both keep a chunk's memory traffic local (3 x faster at 1M points, same arithmetic)
     visit = leaf_order(tree)
-    skel_m = skel[groups.members]
+    skel_m = take_rows(skel, groups.members)
     checkpoint(0.0)
-    cloud_m = cloud[groups.members]
+    cloud_m = take_rows(cloud, groups.members)
     checkpoint(0.0)
     n_groups = len(groups.positions)
     per_group = np.full(n_groups, np.nan)
-    for lo in range(0, n_groups, _SKELETAL_CHUNK):
-        hi = min(lo + _SKELETAL_CHUNK, n_groups)
+    threads = (os.cpu_count() or 1) if n_groups >= 2 * _SKELETAL_CHUNK else 1
+
+    def span(lo: int, hi: int) -> None:
         which = visit[lo:hi]
-        slot = groups.k_nearest_slots(tree, which, k)
-        m_s = skel_m[slot].mean(axis=1)
-        neighbours_o = cloud_m[slot]
+        slot = groups.k_nearest_slots(tree, which, k, workers=1 if threads > 1 else -1)
+        m_s = take_rows(skel_m, slot).mean(axis=1)
+        neighbours_o = take_rows(cloud_m, slot)
         m_o = neighbours_o.mean(axis=1)
         diff = neighbours_o - m_s[:, None, :]
         spread = np.sqrt(np.einsum("ijk,ijk->ij", diff, diff)).mean(axis=1)
@@ -102,7 +110,10 @@ def skeletal_centeredness(
             c = np.maximum(0.0, 1.0 - offset / spread)
         c[~(spread > 0)] = np.nan
         per_group[which] = c
-        checkpoint(hi / n_groups)
+
+    # chunks on every core, each query single-threaded (docs/performance.md 6)
+    on_threads(span, [(lo, min(lo + _SKELETAL_CHUNK, n_groups)) for lo in range(0, n_groups, _SKELETAL_CHUNK)],
+               threads, checkpoint)
     # coincident points have the same neighbours (ties go by index, not by self), so the same c
     return per_group[groups.group_of]
 
@@ -115,7 +126,7 @@ class _CoincidentGroups:
         # much faster than np.unique(axis=0). -0.0 == 0.0, so both land in one group.
         order = lex_order(points)
         checkpoint(0.0)
-        ordered = points[order]
+        ordered = take_rows(points, order)
         new = np.ones(len(points), dtype=bool)
         new[1:] = np.any(ordered[1:] != ordered[:-1], axis=1)
         checkpoint(0.0)
@@ -127,7 +138,7 @@ class _CoincidentGroups:
         self.group_of = np.empty(len(points), dtype=np.int64)
         self.group_of[order] = np.cumsum(new) - 1
 
-    def k_nearest_slots(self, tree: cKDTree, queries: np.ndarray, k: int) -> np.ndarray:
+    def k_nearest_slots(self, tree: cKDTree, queries: np.ndarray, k: int, workers: int = -1) -> np.ndarray:
         """(len(queries), k) indices into ``members`` (so rows ``members[...]``): the k points nearest
         to each query group's position, equal distances in row order. Whole groups are taken nearest
         first; the last one contributes its lowest-index members. (Distinct positions at exactly
@@ -135,7 +146,7 @@ class _CoincidentGroups:
         """
         n_q = len(queries)
         k_groups = min(k, len(self.positions))  # every group has >= 1 member, so k groups suffice
-        _, near = tree.query(self.positions[queries], k=k_groups, workers=-1)
+        _, near = tree.query(take_rows(self.positions, queries), k=k_groups, workers=workers)
         near = near.reshape(n_q, k_groups)
         if self.single:  # no coincident points: the k nearest groups are the k nearest points
             return self.starts[near]
@@ -197,16 +208,27 @@ def curve_centeredness(
     grid = _SlabGrid(cloud, cell=max(2.0 * half, diagonal / 256.0), checkpoint=checkpoint)
     g, h = _orthonormal_complement(u[todo])
 
-    checkpoint(0.0)
-    for done, (row, p, u_row, g_row, h_row) in enumerate(zip(todo, points[todo], u[todo], g, h), start=1):
+    def one(i: int) -> float:
+        p, u_row = points[todo[i]], u[todo[i]]
         rel = grid.slab_candidates(p, u_row, half) - p
-        rel = rel[np.abs(rel @ u_row) < half]
-        flat = np.column_stack([rel @ g_row, rel @ h_row])  # p_hat is the origin
+        rel = np.compress(np.abs(rel @ u_row) < half, rel, axis=0)  # = rel[mask], 2 x faster
+        flat = np.column_stack([rel @ g[i], rel @ h[i]])  # p_hat is the origin
         dist = np.hypot(flat[:, 0], flat[:, 1])
-        order = np.argsort(dist, kind="stable")
+        order = stable_argsort(dist)
         ring = flat[order[: ring_length(dist[order], growth)]]
-        out[row] = cross_section_centeredness(ring)
-        checkpoint(done / len(todo))
+        return cross_section_centeredness(ring)
+
+    def span(i0: int, i1: int) -> list[float]:
+        return [one(i) for i in range(i0, i1)]
+
+    def store(span_: tuple[int, int], values: list[float]) -> None:
+        out[todo[span_[0] : span_[1]]] = values
+
+    # the samples are independent and numpy releases the GIL in their big gathers, sorts and
+    # products: spans of samples on every core (docs/performance.md 6)
+    step = _CURVE_SPAN
+    on_threads(span, [(i, min(i + step, len(todo))) for i in range(0, len(todo), step)],
+               None if len(cloud) >= _CURVE_THREADED else 1, checkpoint, store)
     return out
 
 
@@ -221,7 +243,7 @@ class _SlabGrid:
         checkpoint(0.0)
         order = np.argsort(key, kind="stable")
         checkpoint(0.0)
-        self.points = cloud[order]
+        self.points = take_rows(cloud, order)
         srt = key[order]  # already sorted: cell boundaries by one diff, not a second sort (np.unique)
         self.starts = np.flatnonzero(np.r_[True, srt[1:] != srt[:-1]])
         self.counts = np.diff(np.r_[self.starts, len(srt)])
@@ -238,7 +260,7 @@ class _SlabGrid:
         starts, counts = self.starts[hit], self.counts[hit]
         total = int(counts.sum())
         shift = np.repeat(starts - (np.cumsum(counts) - counts), counts)
-        return self.points[np.arange(total) + shift]
+        return take_rows(self.points, np.arange(total) + shift)
 
 
 def _orthonormal_complement(u: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

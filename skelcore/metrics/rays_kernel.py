@@ -13,11 +13,11 @@ from __future__ import annotations
 
 import os
 import threading
-from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
 
 import numpy as np
-from ..geometry import Checkpoint, no_checkpoint
+from ..geometry import Checkpoint, no_checkpoint, take_rows
+from ..parallel import on_threads
 from . import _raycast
 
 # queries closer than this many h to the cloud share only in finer cells, or are alone (1.7)
@@ -45,9 +45,11 @@ class BallTree:
         cap = max(1, 2 * ((n + 3) // 4) + 2)
         perm = np.empty(n, np.int32)
         nodes = np.empty(cap, NODE)
-        m = _build_polling(lambda stop: _raycast.build_tree(pts, perm, nodes, stop), n, checkpoint)
+        tree_points = np.empty((n, 3), np.float32)
+        threads = os.cpu_count() or 1
+        m = _build_polling(lambda stop: _raycast.build_tree(pts, perm, nodes, stop, threads, tree_points), n, checkpoint)
         checkpoint(0.0)
-        self.points = np.ascontiguousarray(pts[perm], dtype=np.float32)
+        self.points = tree_points
         nodes = nodes[:m].copy()
         self.nodes = nodes
         self.perm = perm
@@ -65,7 +67,7 @@ class BallTree:
             _raycast.nn_dist(self.points, self.nodes, leaf_of, i0, i1, out[i0:i1])
 
         spans = [(i, min(i + NN_CHUNK, self.n)) for i in range(0, self.n, NN_CHUNK)]
-        _on_pool(chunk, spans, workers, checkpoint)
+        on_threads(chunk, spans, workers, checkpoint)
         return out
 
     def median_spacing(self, counts: np.ndarray, checkpoint: Checkpoint = no_checkpoint) -> float:
@@ -95,47 +97,13 @@ class BallTree:
             _raycast.near_stats(self.points, self.nodes, q[i0:i1], 0.0, float(bound), np.empty(0, np.int64),
                                 out[i0:i1])
 
-        _on_pool(chunk, [(i, min(i + NN_CHUNK, len(q))) for i in range(0, len(q), NN_CHUNK)], workers, checkpoint)
+        on_threads(chunk, [(i, min(i + NN_CHUNK, len(q))) for i in range(0, len(q), NN_CHUNK)], workers, checkpoint)
         return out
 
     @property
     def ray_cost(self) -> float:
         """Cost units of one far ray (node visits grow with the depth)."""
         return 2.0 + self.depth
-
-
-def _on_pool(fn, spans: list, workers: int | None, checkpoint: Checkpoint, done=None) -> None:
-    """``fn(*span)`` for every span on ``workers`` threads (None = all cores), a checkpoint after each
-    in order; ``done(span, result)`` stores a result.  A short queue: a cancel stops within about one
-    span per worker."""
-    workers = max(1, int(workers or os.cpu_count() or 1))
-    store = done or (lambda span, result: None)
-    checkpoint(0.0)
-    if workers == 1 or len(spans) <= 1:
-        for i, span in enumerate(spans):
-            store(span, fn(*span))
-            checkpoint((i + 1) / len(spans))
-        return
-    with ThreadPoolExecutor(max_workers=workers) as pool:
-        pending: list = []
-        it = iter(spans)
-        try:
-            for span in it:
-                pending.append((span, pool.submit(fn, *span)))
-                if len(pending) >= 2 * workers:
-                    break
-            finished = 0
-            while pending:
-                span, fut = pending.pop(0)
-                store(span, fut.result())
-                finished += 1
-                checkpoint(finished / len(spans))
-                nxt = next(it, None)
-                if nxt is not None:
-                    pending.append((nxt, pool.submit(fn, *nxt)))
-        finally:
-            for _, fut in pending:
-                fut.cancel()
 
 
 def _build_polling(build, n: int, checkpoint: Checkpoint) -> int:
@@ -211,7 +179,7 @@ def shared_plan(
     order = np.argsort(cid, kind="stable")
     checkpoint(0.0)
     cid = cid[order]
-    q = queries[order]
+    q = take_rows(queries, order)
     starts = np.flatnonzero(np.r_[True, cid[1:] != cid[:-1], True]).astype(np.int64)
     sizes = np.diff(starts)
     checkpoint(0.0)
@@ -304,7 +272,7 @@ def run_plan(
     checkpoint: Checkpoint = no_checkpoint, stats: np.ndarray | None = None,
 ) -> np.ndarray:
     """beta of every query row (in the input order), the plan's clusters on ``workers`` threads."""
-    q_sorted = np.ascontiguousarray(queries[plan.order], np.float64)
+    q_sorted = np.ascontiguousarray(take_rows(queries, plan.order), np.float64)
     sizes = np.diff(plan.starts)
     cost = rows * bins * tree.ray_cost + sizes * max(plan.estimated_near, 1.0) * CAP_COST
     # cluster ranges of about TASK_COST units each
@@ -334,7 +302,7 @@ def run_plan(
         out_sorted[starts[span[0]] : starts[span[1]]] = beta
         stats[:] += st
 
-    _on_pool(task, tasks, workers, checkpoint, store)
+    on_threads(task, tasks, workers, checkpoint, store)
     out = np.empty(len(q_sorted))
     out[plan.order] = out_sorted
     return out

@@ -11,11 +11,13 @@ with theta the angle between two directions, so they do not depend on the sign o
 from __future__ import annotations
 
 import math
+import os
 
 import numpy as np
 
 from ..curve import CurveSkeleton
-from ..geometry import Checkpoint, kd_tree, leaf_order, no_checkpoint, unique_rows, unit_rows
+from ..geometry import Checkpoint, kd_tree, leaf_order, no_checkpoint, take_rows, unique_rows, unit_rows
+from ..parallel import on_threads
 from ..params import Params
 
 __all__ = ["skeletal_smoothness", "curve_vertex_smoothness", "curve_smoothness_overall"]
@@ -74,29 +76,34 @@ def skeletal_smoothness(
     visit = leaf_order(tree)  # blocks of spatial neighbours: cache-warm queries and gathers
     tangents = np.full((m, 3), np.nan)
     nbr = np.empty((m, q), np.int64)
-    for start in range(0, m, _CHUNK):
-        stop = min(m, start + _CHUNK)
+    spans = [(start, min(m, start + _CHUNK)) for start in range(0, m, _CHUNK)]
+    threads = (os.cpu_count() or 1) if len(spans) > 1 else 1
+    workers = 1 if threads > 1 else -1  # chunks on every core, each query on one (docs/performance.md 6)
+
+    def tangent_span(start: int, stop: int) -> None:
         rows = visit[start:stop]
-        _, idx = tree.query(uniq[rows], k=q + 1, workers=-1)
+        _, idx = tree.query(take_rows(uniq, rows), k=q + 1, workers=workers)
         idx = idx.reshape(stop - start, q + 1)[:, 1:]  # column 0 is the position itself
         nbr[rows] = idx
         weight = _taken(counts[idx], kt).astype(float)
-        diff = uniq[idx] - uniq[rows, None, :]
+        diff = take_rows(uniq, idx) - take_rows(uniq, rows)[:, None, :]
         cov = np.matmul((diff * weight[:, :, None]).transpose(0, 2, 1), diff) / kt
         _, vecs = np.linalg.eigh(cov)
         t = vecs[:, :, -1]  # eigh sorts eigenvalues ascending
         t[~np.any(cov.reshape(len(cov), -1) != 0, axis=1)] = np.nan
         tangents[rows] = t
-        checkpoint(0.05 + 0.75 * stop / m)
+
+    on_threads(tangent_span, spans, threads, lambda f: checkpoint(0.05 + 0.75 * f))
     s_unique = np.empty(m)
-    for start in range(0, m, _CHUNK):
-        stop = min(m, start + _CHUNK)
+
+    def score_span(start: int, stop: int) -> None:
         rows = visit[start:stop]
         idx = nbr[rows]
         use = _taken(counts[idx], ks) > 0  # neighbour positions holding one of the ks nearest points
-        score = _angle_score(np.einsum("na,nja->nj", tangents[rows], tangents[idx]))
+        score = _angle_score(np.einsum("na,nja->nj", take_rows(tangents, rows), take_rows(tangents, idx)))
         s_unique[rows] = np.where(use & np.isfinite(score), score, np.inf).min(axis=1)
-        checkpoint(0.8 + 0.2 * stop / m)
+
+    on_threads(score_span, spans, threads, lambda f: checkpoint(0.8 + 0.2 * f))
     s_unique[np.isinf(s_unique)] = np.nan  # no neighbour with a tangent, or no tangent here
     return s_unique[inverse]
 

@@ -16,6 +16,7 @@ Equations, departures from the paper and the reference tool: docs/metrics.md.
 from __future__ import annotations
 
 import heapq
+import os
 
 import numpy as np
 from scipy.sparse import coo_matrix
@@ -23,8 +24,10 @@ from scipy.sparse.csgraph import connected_components, minimum_spanning_tree
 from scipy.spatial import cKDTree
 
 from ..geometry import (
-    Checkpoint, chunked_query, kd_tree, leaf_order, matlab_round, nearest_neighbor_distances, no_checkpoint, unique_rows,
+    Checkpoint, chunked_query, kd_tree, leaf_order, matlab_round, nearest_neighbor_distances, no_checkpoint, take_rows,
+    unique_rows,
 )
+from ..parallel import side_by_side
 from ..params import Params
 from ..results import TopologyResult
 
@@ -47,6 +50,7 @@ _PROBE = 32  # pending points nearest to a component's box probed first for a ti
 _QUERY_CHUNK = 16384  # points per kNN query call, so the checkpoint is reached often
 _DEEP_CHUNK = 4096  # points per deep (k = 65) query between checkpoints: ~0.1 s at 1M points
 _ROUND_CHUNK = 262144  # neighbour lists scanned per block of a Boruvka round, between checkpoints
+_SIDE_BY_SIDE = 16384  # both point sets at least this big: the two barcodes on two threads
 
 
 # ---------------------------------------------------------------------------------------------
@@ -94,7 +98,7 @@ def _emst_lengths(points: np.ndarray, checkpoint: Checkpoint = no_checkpoint) ->
     perm = leaf_order(tree)
     rank = np.empty(n, np.int64)
     rank[perm] = np.arange(n)
-    points = points[perm]
+    points = take_rows(points, perm)
     dist, idx = chunked_query(tree, points, k + 1, checkpoint, 0.02, 0.5, chunk=_QUERY_CHUNK)
     idx = rank[idx]
     checkpoint(0.5)
@@ -502,8 +506,16 @@ def topological_similarity(
     skeletal = _as_points(skeletal)
     if len(cloud) == 0 or len(skeletal) == 0:
         raise ValueError("topological similarity needs a non-empty cloud and skeletal point set")
-    cloud_bars, cloud_nn = _barcode_and_nn(cloud, lambda f: checkpoint(0.45 * f))
-    skel_bars, _ = _barcode_and_nn(skeletal, lambda f: checkpoint(0.45 + 0.45 * f))
+    # the two barcodes are independent: the skeletal set's on a second thread (numpy and the KD-tree
+    # release the GIL), when both are big enough to be worth it (docs/performance.md 6)
+    if min(len(cloud), len(skeletal)) >= _SIDE_BY_SIDE and (os.cpu_count() or 1) > 1:
+        (cloud_bars, cloud_nn), (skel_bars, _) = side_by_side(
+            lambda ck: _barcode_and_nn(cloud, ck), lambda ck: _barcode_and_nn(skeletal, ck),
+            lambda f: checkpoint(0.9 * f),
+        )
+    else:
+        cloud_bars, cloud_nn = _barcode_and_nn(cloud, lambda f: checkpoint(0.45 * f))
+        skel_bars, _ = _barcode_and_nn(skeletal, lambda f: checkpoint(0.45 + 0.45 * f))
     eps = _quantile(cloud_nn, params.eps_quantile)  # = eps_star(cloud, quantile), without a new kNN
     k = compared_bar_count(cloud_bars, eps, len(cloud), params=params)
     checkpoint(0.92)

@@ -1,0 +1,84 @@
+"""skelcore.parallel: spans on threads and two computations side by side give what one thread gives;
+a cancel or an error on either side reaches the caller, and no thread is left behind."""
+
+from __future__ import annotations
+
+import threading
+import time
+
+import numpy as np
+import pytest
+
+from skelcore.errors import Cancelled
+from skelcore.metrics import topology
+from skelcore.parallel import on_threads, side_by_side
+from skelcore.shapes import torus
+
+
+def _no_side_thread() -> bool:
+    return not [t for t in threading.enumerate() if t.name == "skelscope-side"]
+
+
+def test_on_threads_runs_every_span_once_and_checks_in_order():
+    seen, fractions = [], []
+    on_threads(lambda a, b: seen.append((a, b)) or (a, b), [(i, i + 1) for i in range(37)], 3, fractions.append)
+    assert sorted(seen) == [(i, i + 1) for i in range(37)]
+    assert fractions[0] == 0.0 and fractions[-1] == 1.0 and fractions == sorted(fractions)
+
+
+def test_side_by_side_returns_both_and_reports_the_side_progress_from_this_thread():
+    me = threading.get_ident()
+    calls = []
+
+    def checkpoint(f):
+        assert threading.get_ident() == me  # callbacks only ever from the caller's thread
+        calls.append(f)
+
+    def side(ck):
+        for i in range(5):
+            time.sleep(0.03)
+            ck(i / 4)
+        return "side"
+
+    assert side_by_side(lambda ck: (ck(1.0), "main")[1], side, checkpoint) == ("main", "side")
+    assert max(calls) <= 1.0 and any(0.5 < f for f in calls) and _no_side_thread()
+
+
+def test_a_cancel_on_this_thread_stops_the_side_and_an_error_there_comes_here():
+    started = threading.Event()
+    side_checks = []
+
+    def side(ck):
+        started.set()
+        while True:
+            side_checks.append(1)
+            ck(0.5)
+            time.sleep(0.005)
+
+    def main(ck):
+        started.wait(5)
+        raise Cancelled("stop")
+
+    with pytest.raises(Cancelled):
+        side_by_side(main, side)
+    assert side_checks and _no_side_thread()
+
+    def broken(ck):
+        raise ValueError("side failed")
+
+    with pytest.raises(ValueError, match="side failed"):
+        side_by_side(lambda ck: 1, broken)
+    assert _no_side_thread()
+
+
+def test_topology_side_by_side_equals_one_after_the_other(monkeypatch):
+    sh = torus(20000, 1.0, 0.3, n_curve=32, seed=2)
+    skel = sh.skeletal + np.random.default_rng(0).normal(scale=0.01, size=sh.skeletal.shape)
+    skel[::7] = skel[::7].round(2)
+    monkeypatch.setattr(topology, "_SIDE_BY_SIDE", 10**12)
+    one = topology.topological_similarity(sh.cloud, skel)
+    monkeypatch.setattr(topology, "_SIDE_BY_SIDE", 1000)
+    monkeypatch.setattr("os.cpu_count", lambda: 2)
+    two = topology.topological_similarity(sh.cloud, skel)
+    assert (one.bottleneck, one.wasserstein, one.eps_star, one.n_bars) == (two.bottleneck, two.wasserstein, two.eps_star, two.n_bars)
+    assert np.array_equal(one.cloud_barcode, two.cloud_barcode) and np.array_equal(one.skeletal_barcode, two.skeletal_barcode)
