@@ -173,3 +173,16 @@ def test_a_large_tree_build_polls_and_stops():
     nodes = np.empty(2 * len(pts) // 4 + 2, cov.NODE)
     out = _balls.build_tree(pts, np.empty(len(pts), np.int32), np.empty_like(pts), nodes, True, np.ones(1, np.int32))
     assert out == -1
+
+
+def test_the_tree_does_not_depend_on_build_threads():
+    """Big subtrees are built on threads of their own, numbered as the sequential build numbers them."""
+    pts = np.random.default_rng(8).normal(size=(200_000, 3))
+    built = []
+    for threads in (1, 2, 4):
+        perm, srt = np.empty(len(pts), np.int32), np.empty_like(pts)
+        nodes = np.empty(2 * ((len(pts) + 3) // 4) + 2, cov.NODE)
+        m = _balls.build_tree(pts, perm, srt, nodes, True, np.zeros(1, np.int32), cov.LEAF, threads)
+        built.append((perm, srt, nodes[:m].tobytes()))
+    for perm, srt, raw in built[1:]:
+        assert np.array_equal(perm, built[0][0]) and np.array_equal(srt, built[0][1]) and raw == built[0][2]

@@ -17,6 +17,7 @@
 #define PY_SSIZE_T_CLEAN
 #include <Python.h>
 #include <math.h>
+#include <pthread.h>
 #include <stdint.h>
 #include <stdlib.h>
 #include <string.h>
@@ -102,9 +103,26 @@ typedef struct {
     int slab;
     double pad;              /* absolute padding of every bound: rounding of the distances */
     volatile int32_t *stop;  /* set by another thread to abandon the build (a cancel) */
+    int split_depth;         /* subtrees this many levels from the root or fewer get a thread of their own */
 } Builder;
 
-static void build_node(Builder *b, int32_t node, int32_t lo, int32_t hi) {
+/* nodes of the subtree over n points (median splits, leaves of at most `leaf`) */
+static int32_t subtree_nodes(int32_t n, int32_t leaf) {
+    if (n <= leaf) return 1;
+    return 1 + subtree_nodes(n / 2, leaf) + subtree_nodes(n - n / 2, leaf);
+}
+
+static void build_node(Builder *b, int32_t node, int32_t lo, int32_t hi, int depth);
+
+typedef struct { Builder b; int32_t node, lo, hi; int depth; } BuildJob;
+
+static void *build_job(void *arg) {
+    BuildJob *j = (BuildJob *)arg;
+    build_node(&j->b, j->node, j->lo, j->hi, j->depth);
+    return NULL;
+}
+
+static void build_node(Builder *b, int32_t node, int32_t lo, int32_t hi, int depth) {
     Node *nd = b->nodes + node;
     memset(nd, 0, sizeof(Node));
     nd->lo = lo;
@@ -168,8 +186,21 @@ static void build_node(Builder *b, int32_t node, int32_t lo, int32_t hi) {
     int32_t first = b->n_nodes;
     b->n_nodes += 2;
     nd->kid = first;
-    build_node(b, first, lo, mid);
-    build_node(b, first + 1, mid, hi);
+    if (depth < b->split_depth && hi - lo > 65536) {
+        /* the second subtree on its own thread, numbered as the sequential build numbers it: its nodes
+         * follow all of the first subtree's (the same tree bytes with any number of threads) */
+        BuildJob job = {*b, first + 1, mid, hi, depth + 1};
+        job.b.n_nodes = first + 2 + (subtree_nodes(mid - lo, b->leaf) - 1);
+        pthread_t th;
+        if (pthread_create(&th, NULL, build_job, &job) == 0) {
+            build_node(b, first, lo, mid, depth + 1);
+            pthread_join(th, NULL);
+            b->n_nodes = job.b.n_nodes;
+            return;
+        }
+    }
+    build_node(b, first, lo, mid, depth + 1);
+    build_node(b, first + 1, mid, hi, depth + 1);
 }
 
 static double abs_scale(const double *v, Py_ssize_t n) {
@@ -182,12 +213,14 @@ static double abs_scale(const double *v, Py_ssize_t n) {
 }
 
 /* build_tree(points (n,3) f64, perm (n) i32 out, sorted (n,3) f64 out, nodes (cap) Node out, slab (0/1),
- * stop (1) i32[, leaf size]) -> number of nodes, or -1 if stop was set meanwhile.  perm lists the input
- * rows in tree order, sorted holds the points in that order. */
+ * stop (1) i32[, leaf size, threads]) -> number of nodes, or -1 if stop was set meanwhile.  perm lists
+ * the input rows in tree order, sorted holds the points in that order.  The tree does not depend on
+ * threads. */
 static PyObject *py_build_tree(PyObject *self, PyObject *args) {
     Py_buffer pts, perm, srt, nds, stop;
-    int slab, leaf = LEAF_SIZE;
-    if (!PyArg_ParseTuple(args, "y*w*w*w*pw*|i", &pts, &perm, &srt, &nds, &slab, &stop, &leaf)) return NULL;
+    int slab, leaf = LEAF_SIZE, threads = 1;
+    if (!PyArg_ParseTuple(args, "y*w*w*w*pw*|ii", &pts, &perm, &srt, &nds, &slab, &stop, &leaf, &threads))
+        return NULL;
     int32_t n = (int32_t)(pts.len / (3 * sizeof(double)));
     int32_t cap = (int32_t)(nds.len / (Py_ssize_t)sizeof(Node));
     PyObject *result = NULL;
@@ -199,15 +232,19 @@ static PyObject *py_build_tree(PyObject *self, PyObject *args) {
     }
     v = (Item *)malloc(sizeof(Item) * (size_t)(n > 0 ? n : 1));
     if (!v) { PyErr_NoMemory(); goto done; }
+    int split = 0;
+    while ((1 << split) < threads && split < 6) split++;
     Builder b = {v, (Node *)nds.buf, 1, cap, leaf < 2 ? 2 : leaf, slab,
-                 1e-13 * abs_scale((const double *)pts.buf, 3 * (Py_ssize_t)n), (volatile int32_t *)stop.buf};
+                 1e-13 * abs_scale((const double *)pts.buf, 3 * (Py_ssize_t)n), (volatile int32_t *)stop.buf, split};
+    int32_t total = 0;
     Py_BEGIN_ALLOW_THREADS
     const double *src = (const double *)pts.buf;
     for (int32_t i = 0; i < n; i++) {
         memcpy(v[i].x, src + 3 * (size_t)i, 3 * sizeof(double));
         v[i].i = i;
     }
-    build_node(&b, 0, 0, n);
+    build_node(&b, 0, 0, n, 0);
+    total = b.n_nodes;
     int32_t *out = (int32_t *)perm.buf;
     double *sorted = (double *)srt.buf;
     for (int32_t i = 0; i < n; i++) {
@@ -215,7 +252,7 @@ static PyObject *py_build_tree(PyObject *self, PyObject *args) {
         memcpy(sorted + 3 * (size_t)i, v[i].x, 3 * sizeof(double));
     }
     Py_END_ALLOW_THREADS
-    result = PyLong_FromLong(*b.stop ? -1 : b.n_nodes);
+    result = PyLong_FromLong(*b.stop ? -1 : total);
 done:
     free(v);
     PyBuffer_Release(&pts); PyBuffer_Release(&perm); PyBuffer_Release(&srt); PyBuffer_Release(&nds);

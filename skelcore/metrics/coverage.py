@@ -80,7 +80,8 @@ class BallTree:
         n = len(pts)
         perm, srt = np.empty(n, np.int32), np.empty((n, 3))
         nodes = np.empty(max(1, 2 * ((n + 3) // 4) + 2), NODE)
-        m = _build_polling(lambda stop: _balls.build_tree(pts, perm, srt, nodes, slab, stop, LEAF), n, checkpoint)
+        threads = max(1, os.cpu_count() or 1)
+        m = _build_polling(lambda stop: _balls.build_tree(pts, perm, srt, nodes, slab, stop, LEAF, threads), n, checkpoint)
         self.nodes = nodes[:m]
         self.perm = perm
         self.points = srt
