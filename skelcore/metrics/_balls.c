@@ -270,8 +270,8 @@ static inline double dist3(const double *a, const double *b) {
  * to the nearest cloud point, contact = that point) shrink as their centres move toward it, so a sphere
  * about c bounds them loosely (by about the node's size) where it matters, near the contacts; a sphere
  * about k = c - beta m (m the mean contact direction) hugs them when k is near the surface's centre of
- * curvature.  beta is chosen among a few by the bound it gives at the members' contacts (where the
- * least excess is 0); every choice is a valid bound, the choice only sets how tight. */
+ * curvature.  beta is chosen among a few by the worst bound it gives at the members' contacts (where
+ * the least excess is 0); every choice is a valid bound, the choice only sets how tight. */
 static PyObject *py_refit(PyObject *self, PyObject *args) {
     Py_buffer nds, pts, rg, rc, con;
     Py_ssize_t i0, i1;
@@ -331,8 +331,9 @@ static PyObject *py_refit(PyObject *self, PyObject *args) {
                 double d = dist3(x, kc);
                 if (d + r[i] > rk) rk = d + r[i];
             }
-            for (int32_t i = nd->lo; i < nd->hi; i++) val += dist3(q + 3 * (size_t)i, kc);
-            val = val / cnt - rk;
+            val = INFINITY;
+            for (int32_t i = nd->lo; i < nd->hi; i++) { double dq = dist3(q + 3 * (size_t)i, kc); if (dq < val) val = dq; }
+            val = val - rk;
             if (val > best_val) { best_val = val; best_beta = beta; best_rk = rk; }
         }
         for (int j = 0; j < 3; j++) nd->k[j] = nd->c[j] - best_beta * m[j] / ml;
