@@ -267,7 +267,7 @@ def evaluate(
     if not with_coverage and (skel is not None or curve_n is not None):
         ev.not_computed["coverage"] = (
             f"the cloud has {len(cloud):,} points, above coverage_max_points = {int(p.coverage_max_points):,} "
-            "(exact coverage of a skeletal set takes about 30 s at 1M points on tube-like shapes; raise it with "
+            "(exact coverage of a skeletal set takes 15-45 s at 1M points on tube-like shapes; raise it with "
             "--set coverage_max_points=N)"
         )
     if skel is not None and with_coverage:

@@ -43,8 +43,8 @@ class Params:
     coverage_tau_factor : tau = factor x the cloud's median nearest-neighbour spacing (coverage and
         the reference comparison's precision / recall).
     coverage_max_points : coverage is computed for clouds of at most this many points (0: never);
-        a skeletal set as large as the cloud costs about N^1.4 on tube-like shapes (torus: 5-7 s at
-        256k, 30 s at 1M; docs/metrics.md 5.2).
+        a skeletal set as large as the cloud costs about N^1.4 on tube-like shapes (torus, both cores:
+        2.4 s at 256k, 16 s at 1M; docs/metrics.md 5.2).
     frame_inside_fraction : the ``frame`` warning fires when fewer skeleton points than this fraction
         lie inside the cloud's bounding box (grown by 10 % of its diagonal).
     frame_extent_ratio : ... or when the skeleton's bounding-box diagonal is more than this many
