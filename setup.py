@@ -1,6 +1,7 @@
-"""Build step for the one compiled module, the rays boundedness kernel (docs/boundedness.md, section 3).
+"""Build step for the two compiled modules: the rays boundedness kernel (docs/boundedness.md, section 3)
+and the coverage kernel (docs/metrics.md, section 5.2).
 
-Everything else is declared in pyproject.toml.  The kernel is plain C against the CPython API (no numpy
+Everything else is declared in pyproject.toml.  The kernels are plain C against the CPython API (no numpy
 headers), so building needs only a C compiler and the Python headers.
 """
 
@@ -12,6 +13,11 @@ setup(
             "skelcore.metrics._raycast",
             sources=["skelcore/metrics/_raycast.c"],
             extra_compile_args=["-O3", "-std=c99"],
-        )
+        ),
+        Extension(
+            "skelcore.metrics._balls",
+            sources=["skelcore/metrics/_balls.c"],
+            extra_compile_args=["-O3", "-std=c99"],
+        ),
     ]
 )

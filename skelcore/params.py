@@ -43,7 +43,8 @@ class Params:
     coverage_tau_factor : tau = factor x the cloud's median nearest-neighbour spacing (coverage and
         the reference comparison's precision / recall).
     coverage_max_points : coverage is computed for clouds of at most this many points (0: never);
-        exact coverage grows about as N^1.6 on tube-like shapes (hours at 1M, docs/performance.md 5).
+        a skeletal set as large as the cloud costs about N^1.4 on tube-like shapes (torus, both cores:
+        2.4 s at 256k, 16 s at 1M; docs/metrics.md 5.2).
     frame_inside_fraction : the ``frame`` warning fires when fewer skeleton points than this fraction
         lie inside the cloud's bounding box (grown by 10 % of its diagonal).
     frame_extent_ratio : ... or when the skeleton's bounding-box diagonal is more than this many
@@ -76,7 +77,7 @@ class Params:
     smooth_k: int = 4
     coverage_slack: float = 0.5
     coverage_tau_factor: float = 2.0
-    coverage_max_points: int = 65536
+    coverage_max_points: int = 262144
     frame_inside_fraction: float = 0.5
     frame_extent_ratio: float = 10.0
     collapse_extent: float = 0.1

@@ -215,7 +215,7 @@ def test_min_ball_excess_chunked_equals_brute_force(monkeypatch):
     radii = rng.uniform(0.001, 0.3, 700) ** 2 * 3
     brute = (np.linalg.norm(pts[:, None] - centers[None], axis=2) - radii[None]).min(axis=1)
     calls = []
-    assert np.allclose(min_ball_excess(pts, centers, radii, k=4, checkpoint=calls.append), brute, atol=1e-12)
+    assert np.allclose(min_ball_excess(pts, centers, radii, checkpoint=calls.append), brute, atol=1e-12)
     assert len(calls) > 20
 
 

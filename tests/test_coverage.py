@@ -1,8 +1,9 @@
 
 
 def test_coverage_is_skipped_above_coverage_max_points_and_says_so(tmp_path):
-    """Exact coverage takes hours at 1M points on tubes (docs/performance.md 5): above the limit the
-    evaluation says why it is missing, in the JSON and on the command line, and still scores the rest."""
+    """Exact skeletal coverage takes 15-45 s at 1M points on tubes (docs/metrics.md 5.2): above the
+    limit the evaluation says why it is missing, in the JSON and on the command line, and still scores
+    the rest."""
     import json
     import subprocess
     import sys

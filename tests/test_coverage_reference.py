@@ -16,8 +16,8 @@ def test_min_ball_excess_matches_brute_force():
     centers = rng.uniform(-1, 1, (900, 3))
     radii = rng.uniform(0.001, 0.3, 900) ** 2 * 3  # radii spanning several factor-2 classes
     brute = (np.linalg.norm(pts[:, None] - centers[None], axis=2) - radii[None]).min(axis=1)
-    assert np.allclose(min_ball_excess(pts, centers, radii, k=4), brute, atol=1e-12)
-    floored = min_ball_excess(pts, centers, radii, k=4, floor=0.05)
+    assert np.allclose(min_ball_excess(pts, centers, radii), brute, atol=1e-12)
+    floored = min_ball_excess(pts, centers, radii, floor=0.05)
     above = brute > 0.05
     assert np.allclose(floored[above], brute[above]) and np.all(floored[~above] <= 0.05)
 

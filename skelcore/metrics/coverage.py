@@ -1,27 +1,41 @@
 """Coverage: how much of the cloud a skeleton's medial balls reconstruct (SkelScope's own, not the
-paper's; docs/metrics.md "Coverage").
+paper's; SPEC 8, docs/metrics.md 5.2).
 
 Each skeleton element x (skeletal point, curve sample) gets the radius r(x) = distance to its
 nearest cloud point, its inscribed ball. A cloud point p has the gap g(p) = min_x |p - x| - r(x)
 (>= 0: its distance to the union of the balls); ``mean_gap`` and ``max_gap`` (one-sided Hausdorff
 distance from the cloud to the balls) summarise it. p is covered when min_x |p - x| - (1 + s) r(x)
 <= tau (``Params.coverage_slack`` s, tau = ``coverage_tau_factor`` x median NN spacing): a curve's
-balls never fill a shape's ends, so a complete skeleton must not need them to.
+balls never fill a shape's ends, so a complete skeleton must not need them to.  All three searches
+are exact, in the compiled kernel ``_balls.c`` on every core, a checkpoint every ~0.1 s.
 """
 
 from __future__ import annotations
 
+import os
+import threading
+from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.spatial import cKDTree
 
-from ..geometry import Checkpoint, TimedChunks, kd_tree, nearest_neighbor_distances, no_checkpoint, timed_query, unique_rows
+from ..geometry import Checkpoint, TimedChunks, no_checkpoint, unique_rows
 from ..params import Params
+from . import _balls
 
-__all__ = ["Coverage", "coverage", "coverage_tau", "min_ball_excess", "covered_by_balls"]
+__all__ = ["Coverage", "coverage", "coverage_tau", "min_ball_excess", "covered_by_balls", "BallTree"]
 
-_PAIRS = 2_000_000
+# one tree node as the kernel reads it (struct Node in _balls.c): 136 bytes
+NODE = np.dtype([("c", "<f8", (3,)), ("rho", "<f8"), ("rg", "<f8"), ("rc", "<f8"), ("n", "<f8", (3,)),
+                 ("t", "<f8"), ("w", "<f8"), ("k", "<f8", (3,)), ("rk", "<f8"), ("kid", "<i4"), ("lo", "<i4"), ("hi", "<i4"), ("pad", "<i4")])
+# points per tree leaf at most
+LEAF = 8
+# rows per timed chunk at most (a chunk is split over the threads)
+MOST_ROWS = 262144
+# below this many rows a chunk runs on the calling thread alone
+THREAD_ROWS = 512
+# covered: |p - x|^2 - R(x)^2 <= COVER_EPS x R_max^2 (the rounding allowance of the 4-D lifted query before)
+COVER_EPS = 1e-12
 
 
 @dataclass
@@ -42,126 +56,198 @@ class Coverage:
 
 
 def coverage_tau(cloud: np.ndarray, params: Params = Params(), checkpoint: Checkpoint = no_checkpoint) -> float:
-    """tau = coverage_tau_factor x the cloud's median nearest-neighbour spacing."""
-    return float(params.coverage_tau_factor * np.median(nearest_neighbor_distances(cloud, checkpoint=checkpoint)))
+    """tau = coverage_tau_factor x the cloud's median nearest-neighbour spacing (0 for a copy; the
+    values of ``geometry.nearest_neighbor_distances``, from the kernel's tree)."""
+    cloud = np.asarray(cloud, dtype=float).reshape(-1, 3)
+    if len(cloud) < 2:
+        return 0.0
+    tree = BallTree(cloud, checkpoint=_scaled(checkpoint, 0.0, 0.3))
+    d = tree.nearest(tree.points, _scaled(checkpoint, 0.3, 1.0), others=True)
+    return float(params.coverage_tau_factor * np.median(d))
 
 
 def _scaled(checkpoint: Checkpoint, lo: float, hi: float) -> Checkpoint:
     return lambda f: checkpoint(lo + (hi - lo) * min(max(f, 0.0), 1.0))
 
 
-def _lifted(centers: np.ndarray, radii: np.ndarray, checkpoint: Checkpoint | None = None) -> tuple[cKDTree, float]:
-    """A 4-D tree of (x, sqrt(R^2 - r^2)): |(p, 0) - lifted x|^2 - R^2 = |p - x|^2 - r(x)^2, the
-    power distance, so nearest neighbours in 4-D are the balls of least power distance."""
-    top = float(radii.max()) if len(radii) else 0.0
-    w = np.sqrt(np.maximum(top * top - radii * radii, 0.0))
-    return kd_tree(np.column_stack([centers, w]), checkpoint), top
+class BallTree:
+    """Points in a balanced KD-tree of bounding spheres (``_balls.build_tree``), in tree order:
+    ``points`` = input rows ``perm``.  With ``slab`` every node also bounds its points by a plane
+    (for nearest-point queries from inside a surface)."""
+
+    def __init__(self, points: np.ndarray, slab: bool = False, checkpoint: Checkpoint = no_checkpoint):
+        pts = np.ascontiguousarray(points, dtype=np.float64).reshape(-1, 3)
+        n = len(pts)
+        perm, srt = np.empty(n, np.int32), np.empty((n, 3))
+        nodes = np.empty(max(1, 2 * ((n + 3) // 4) + 2), NODE)
+        threads = max(1, os.cpu_count() or 1)
+        m = _build_polling(lambda stop: _balls.build_tree(pts, perm, srt, nodes, slab, stop, LEAF, threads), n, checkpoint)
+        self.nodes = nodes[:m]
+        self.perm = perm
+        self.points = srt
+        self.stats = np.zeros(2, np.int64)  # node visits, point tests of the queries so far
+
+    def nearest(self, queries: np.ndarray, checkpoint: Checkpoint = no_checkpoint,
+                workers: int | None = None, others: bool = False) -> np.ndarray:
+        """Distance from each query row to its nearest point, exact; ask in spatial order.  With
+        ``others`` the queries are ``self.points`` and each skips itself (nearest other point)."""
+        q = np.ascontiguousarray(queries, dtype=np.float64)
+        out, idx = np.empty(len(q)), np.empty(len(q), np.int32)
+
+        def run(i0: int, i1: int) -> None:
+            st = np.zeros(2, np.int64)
+            _balls.nearest(self.nodes, self.points, q, i0, i1, out, idx, st, others)
+            self.stats += st
+
+        _chunked(run, len(q), checkpoint, workers)
+        self.last_index = idx  # the nearest point of each query (tree order)
+        return out
+
+    def set_radii(self, r: np.ndarray, big_r: np.ndarray, contact: np.ndarray | None = None,
+                  checkpoint: Checkpoint = no_checkpoint, workers: int | None = None) -> None:
+        """Ball radii r (gap) and R (cover) of the points, tree order: every node's bounds.  ``contact``
+        (each ball's nearest cloud point, where r came from) lets a node bound its balls tighter."""
+        self.r = np.ascontiguousarray(r, dtype=np.float64)
+        self.big_r = np.ascontiguousarray(big_r, dtype=np.float64)
+        con = np.empty(0) if contact is None else np.ascontiguousarray(contact, dtype=np.float64)
+        _chunked(lambda i0, i1: _balls.refit(self.nodes, self.points, self.r, self.big_r, con, i0, i1),
+                 len(self.nodes), checkpoint, workers)
+
+    def balls(self, queries: np.ndarray, gap: bool = True, cover: bool = True, floor: float = -np.inf,
+              checkpoint: Checkpoint = no_checkpoint, workers: int | None = None) -> tuple:
+        """(min_x |q - x| - r(x), exact where above ``floor``, else some value <= floor; is some
+        |q - x|^2 - R(x)^2 <= COVER_EPS R_max^2) per query row, each None unless asked for."""
+        q = np.ascontiguousarray(queries, dtype=np.float64)
+        out_g = np.empty(len(q) if gap else 0)
+        out_c = np.zeros(len(q) if cover else 0, np.uint8)
+        top = float(self.big_r.max()) if len(self.big_r) else 0.0
+        eps = COVER_EPS * max(top * top, 1e-300)
+
+        def run(i0: int, i1: int) -> None:
+            st = np.zeros(2, np.int64)
+            _balls.balls(self.nodes, self.points, self.r, self.big_r, q, i0, i1, float(floor), eps, out_g, out_c, st)
+            self.stats += st
+
+        _chunked(run, len(q), checkpoint, workers)
+        return (out_g if gap else None), (out_c.view(bool) if cover else None)
+
+
+def _chunked(fn, n: int, checkpoint: Checkpoint, workers: int | None = None) -> None:
+    """``fn(i0, i1)`` over [0, n) in chunks of about 0.1 s (``TimedChunks``), a checkpoint after each;
+    a chunk is cut in 4 x ``workers`` contiguous pieces that ``workers`` threads (None: every core;
+    the kernel releases the GIL) take as they finish, so an unlucky piece delays little."""
+    workers = max(1, int(workers or os.cpu_count() or 1))
+    pool = ThreadPoolExecutor(max_workers=workers) if workers > 1 and n >= THREAD_ROWS else None
+    try:
+        for lo, hi in TimedChunks(n, first=256, most=MOST_ROWS):
+            if pool is None or hi - lo < THREAD_ROWS:
+                fn(lo, hi)
+            else:
+                cuts = np.linspace(lo, hi, 4 * workers + 1).astype(int)
+                for fut in [pool.submit(fn, a, b) for a, b in zip(cuts[:-1], cuts[1:])]:
+                    fut.result()
+            checkpoint(hi / n)
+    finally:
+        if pool is not None:
+            pool.shutdown(wait=True)
+
+
+def _build_polling(build, n: int, checkpoint: Checkpoint) -> int:
+    """Run ``build(stop)`` (the kernel releases the GIL) in a thread while this one calls the checkpoint
+    every 50 ms; a cancel sets ``stop``, which the kernel reads, then re-raises once it has returned."""
+    stop = np.zeros(1, np.int32)
+    if n <= 65536:  # a few ms: no thread needed
+        m = build(stop)
+        checkpoint(0.0)
+        return m
+    result: list = []
+    worker = threading.Thread(target=lambda: result.append(build(stop)), name="skelscope-coverage-tree", daemon=True)
+    worker.start()
+    try:
+        while worker.is_alive():
+            worker.join(0.05)
+            checkpoint(0.0)
+    except BaseException:
+        stop[0] = 1
+        worker.join()
+        raise
+    return result[0]
 
 
 def min_ball_excess(
-    points: np.ndarray, centers: np.ndarray, radii: np.ndarray, k: int = 16, floor: float = -np.inf,
-    class_ratio: float = 1.25, checkpoint: Checkpoint = no_checkpoint,
+    points: np.ndarray, centers: np.ndarray, radii: np.ndarray, floor: float = -np.inf,
+    checkpoint: Checkpoint = no_checkpoint, workers: int | None = None,
 ) -> np.ndarray:
     """Min over balls of |p - c| - radius for every point p (negative inside a ball), exact where
-    it exceeds ``floor`` (elsewhere some value <= floor: enough to clip or threshold at floor).
-
-    A first value u per point comes from its k nearest centres. Then, per class of radii within
-    ``class_ratio`` (top radius R), candidates come by least power distance (4-D lifting,
-    :func:`_lifted`), kk = 1, 4, 16, ...: a ball doing better than u has d < u + r, so its power
-    distance is below u^2 + 2 u R (u > 0; u^2 when u <= 0), and a point is done with the class once
-    its kk-th candidate's power distance reaches that bound.  Every query is made in chunks of
-    about 0.1 s with a ``checkpoint`` after each (progress 0 -> 1 over the radius classes).
-    """
-    points = np.asarray(points, dtype=float)
-    centers = np.asarray(centers, dtype=float)
-    radii = np.asarray(radii, dtype=float)
-    best = np.full(len(points), np.inf)
+    it exceeds ``floor`` (elsewhere some value <= floor: enough to clip or threshold at floor);
+    inf without balls.  Points are asked in the order of their own tree (neighbours' answers seed)."""
+    points = np.asarray(points, dtype=float).reshape(-1, 3)
+    radii = np.ascontiguousarray(radii, dtype=float)
+    checkpoint(0.0)
     if len(centers) == 0:
-        return best
-    kk0 = int(min(k, len(centers)))
-    tree0 = kd_tree(centers, checkpoint)
-    d, idx = timed_query(tree0, points, kk0, _scaled(checkpoint, 0.0, 0.3))
-    best = np.min(d - radii[idx], axis=1)
-    del tree0, d, idx
-    top = float(radii.max())
-    level = np.zeros(len(radii), dtype=np.int64)
-    if top > 0:
-        steps = np.floor(-np.log(np.maximum(radii, 1e-300) / top) / np.log(class_ratio))
-        level = np.clip(steps, 0, 30).astype(np.int64)
-    lifted_p = np.column_stack([points, np.zeros(len(points))])
-    levels = np.unique(level)
-    for n_lv, lv in enumerate(levels):
-        members = np.flatnonzero(level == lv)
-        c, r = centers[members], radii[members]
-        tree, rtop = _lifted(c, r, checkpoint)
-        rows = np.flatnonzero(best > floor)
-        kk = 1
-        tick = _scaled(checkpoint, 0.3 + 0.7 * n_lv / len(levels), 0.3 + 0.7 * (n_lv + 1) / len(levels))
-        while len(rows):
-            keep = []
-            step = max(1, _PAIRS // kk)  # bounds the (rows x kk x 3) candidate array
-            for lo, hi in TimedChunks(len(rows), most=step):
-                r_ = rows[lo:hi]
-                d4, ix = tree.query(lifted_p[r_], k=kk, workers=-1)
-                d4, ix = d4.reshape(len(r_), kk), ix.reshape(len(r_), kk)
-                d3 = np.linalg.norm(points[r_][:, None, :] - c[ix], axis=2)
-                u = np.minimum(best[r_], np.min(d3 - r[ix], axis=1))
-                best[r_] = u
-                bound = np.where(u > 0, u * u + 2 * u * rtop, u * u)
-                keep.append(r_[(u > floor) & (d4[:, -1] ** 2 - rtop * rtop < bound)])
-                tick(0.0)
-            if kk >= len(c):
-                break
-            rows = np.concatenate(keep)
-            kk = int(min(4 * kk, len(c)))
-        tick(1.0)
-    return best
+        return np.full(len(points), np.inf)
+    tree = BallTree(centers, checkpoint=checkpoint)
+    r = radii[tree.perm]
+    tree.set_radii(r, r)
+    order = BallTree(points, checkpoint=checkpoint).perm
+    gap, _ = tree.balls(points[order], cover=False, floor=floor, checkpoint=checkpoint, workers=workers)
+    out = np.empty(len(points))
+    out[order] = gap
+    return out
 
 
 def covered_by_balls(
-    points: np.ndarray, centers: np.ndarray, radii: np.ndarray, checkpoint: Checkpoint = no_checkpoint
+    points: np.ndarray, centers: np.ndarray, radii: np.ndarray, checkpoint: Checkpoint = no_checkpoint,
+    workers: int | None = None,
 ) -> np.ndarray:
-    """Is each point inside some ball: min power distance |p - c|^2 - radius^2 <= 0 (4-D queries,
-    in chunks of about 0.1 s with a ``checkpoint`` after each).
-
-    A first, approximate query (cKDTree ``eps=1``: it returns some ball, cheaply, even where many
-    balls are nearly tangent) settles every point it finds inside a ball: the exact nearest ball is
-    no farther.  Only the others get the exact query, so the answer is the same as asking every
-    point exactly."""
+    """Is each point inside some ball: |p - c|^2 - radius^2 <= 1e-12 x the largest radius^2 (the
+    rounding allowance), exact; the first ball found inside ends a point's search."""
+    points = np.asarray(points, dtype=float).reshape(-1, 3)
+    checkpoint(0.0)
     if len(centers) == 0:
         return np.zeros(len(points), dtype=bool)
-    tree, top = _lifted(np.asarray(centers, dtype=float), np.asarray(radii, dtype=float), checkpoint)
-    lifted = np.column_stack([points, np.zeros(len(points))])
-    limit = 1e-12 * max(top * top, 1e-300)
-    d4, _ = timed_query(tree, lifted, 1, _scaled(checkpoint, 0.0, 0.5), eps=1.0)
-    inside = d4[:, 0] * d4[:, 0] - top * top <= limit
-    rest = np.flatnonzero(~inside)
-    if len(rest):
-        d4, _ = timed_query(tree, lifted[rest], 1, _scaled(checkpoint, 0.5, 1.0))
-        inside[rest] = d4[:, 0] * d4[:, 0] - top * top <= limit
-    return inside
+    tree = BallTree(centers, checkpoint=checkpoint)
+    r = np.ascontiguousarray(radii, dtype=float)[tree.perm]
+    tree.set_radii(r, r)
+    order = BallTree(points, checkpoint=checkpoint).perm
+    _, inside = tree.balls(points[order], gap=False, checkpoint=checkpoint, workers=workers)
+    out = np.empty(len(points), bool)
+    out[order] = inside
+    return out
 
 
 def coverage(
     cloud: np.ndarray, elements: np.ndarray, params: Params = Params(), tau: float | None = None,
-    checkpoint: Checkpoint = no_checkpoint,
+    checkpoint: Checkpoint = no_checkpoint, workers: int | None = None,
 ) -> Coverage:
     """Coverage of the (normalized) cloud by the medial balls of the (normalized) skeleton elements.
 
-    Every KD-tree build and query checks ``checkpoint`` (cancel) at least every ~0.1 s of work."""
+    The cloud's tree gives r(x) (elements asked in their tree's order) and the order in which the
+    cloud points ask the elements' tree for gap and cover together.  Every tree build and every
+    ~0.1 s of queries checks ``checkpoint`` (cancel)."""
     cloud = np.asarray(cloud, dtype=float)
-    elements = unique_rows(np.asarray(elements, dtype=float))[0]  # as np.unique(axis=0), 10 x faster
+    elements = unique_rows(np.asarray(elements, dtype=float), checkpoint)[0]  # as np.unique(axis=0), 10 x faster
     checkpoint(0.0)
     tau = coverage_tau(cloud, params, _scaled(checkpoint, 0.0, 0.05)) if tau is None else float(tau)
-    tree = kd_tree(cloud, checkpoint, 0.05)
-    # r(x): a medial point's nearest surface point costs many node visits (docs/performance.md), so
-    # the chunks are timed
-    r = timed_query(tree, elements, 1, _scaled(checkpoint, 0.05, 0.25))[0][:, 0]
-    del tree
-    gap = np.maximum(min_ball_excess(cloud, elements, r, floor=0.0, checkpoint=_scaled(checkpoint, 0.25, 0.8)), 0.0)
     s = float(params.coverage_slack)
-    # |p - x| - (1 + s) r <= tau  <=>  p lies in the ball of radius (1 + s) r + tau
-    covered = covered_by_balls(cloud, elements, (1.0 + s) * r + tau, _scaled(checkpoint, 0.8, 1.0))
+    if len(elements) == 0:
+        gap, covered = np.full(len(cloud), np.inf), np.zeros(len(cloud), bool)
+    else:
+        build = _scaled(checkpoint, 0.05, 0.1)
+        surface = BallTree(cloud, slab=True, checkpoint=build)
+        balls = BallTree(elements, checkpoint=build)
+        r = surface.nearest(balls.points, _scaled(checkpoint, 0.1, 0.35), workers)
+        contact = surface.last_index
+        # |p - x| - (1 + s) r <= tau  <=>  p lies in the ball of radius (1 + s) r + tau
+        balls.set_radii(r, (1.0 + s) * r + tau, surface.points[contact], _scaled(checkpoint, 0.35, 0.4), workers)
+        # a cloud point that is some element's nearest has excess exactly 0 for that ball (the same
+        # arithmetic both ways) and lies in its larger ball: gap 0, covered, no search
+        rest = np.ones(len(cloud), bool)
+        rest[contact] = False
+        g, c = balls.balls(surface.points[rest], floor=0.0, checkpoint=_scaled(checkpoint, 0.4, 1.0), workers=workers)
+        gap, covered = np.zeros(len(cloud)), np.ones(len(cloud), bool)
+        gap[surface.perm[rest]] = np.maximum(g, 0.0)
+        covered[surface.perm[rest]] = c
     return Coverage(
         gap=gap,
         covered=covered,
