@@ -216,6 +216,8 @@ def stable_argsort(values: np.ndarray) -> np.ndarray:
     unstable (vectorised) sort and a re-sort of the indices inside each run of equal values: 2-3 x faster
     when ties are few (docs/performance.md 6)."""
     values = np.asarray(values)
+    if len(values) < 4096:  # below this the fix-up's few calls cost more than the sort saves
+        return np.argsort(values, kind="stable")
     order = np.argsort(values)
     v = values[order]
     eq = v[1:] == v[:-1]
