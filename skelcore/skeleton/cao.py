@@ -110,7 +110,7 @@ def cao_contract(
         L = cotangent_laplacian(current, rings, params.weight_row_cap)
         M = (wl * wl) * (L.T @ L) + sp.diags(wh * wh)
         rhs = (wh * wh)[:, None] * current
-        return solve_spd(M, rhs, check=check_for(it), order=order)
+        return solve_spd(M, rhs, check=check_for(it), order=order, solver=params.linear_solver)
 
     report("contraction", 0.0)
     cpts = step(pts, wl, wh, 0)
