@@ -52,33 +52,54 @@ class Rings:
         return out
 
 
+def _laplacian_pattern(rings: Rings) -> tuple:
+    """The CSR pattern shared by every iteration's Laplacian (the fan entries (i, j), (i, k) of
+    each triangle plus the diagonal) and where each triangle's two weights land in it."""
+    i, j, k = rings.tri
+    n = rings.n
+    rows = np.concatenate([i, i, np.arange(n)])
+    cols = np.concatenate([j, k, np.arange(n)])
+    key = rows * n + cols
+    uniq, where = np.unique(key, return_inverse=True)
+    indptr = np.searchsorted(uniq, np.arange(n + 1) * n).astype(np.int64)
+    indices = (uniq % n).astype(np.int64)
+    ntri = len(i)
+    return indptr, indices, where[: 2 * ntri], where[2 * ntri:], np.repeat(np.arange(n), np.diff(indptr))
+
+
 def cotangent_laplacian(pts: np.ndarray, rings: Rings, row_cap: float) -> sp.csr_matrix:
     """``-compute_point_laplacian(pts, 'conformal', rings)`` = W - diag(W 1), W from each point's fan:
     W(i, j) += cot of the angle at k, W(i, k) += cot of the angle at j, per fan triangle (i, j, k);
-    rows with |sum| > row_cap scaled to row_cap."""
+    rows with |sum| > row_cap scaled to row_cap. One sparsity pattern for all positions (cached on
+    ``rings``: the iterations only fill in values)."""
+    pattern = getattr(rings, "_lap_pattern", None)
+    if pattern is None:
+        pattern = rings._lap_pattern = _laplacian_pattern(rings)
+    indptr, indices, where, diag, row_of = pattern
     i, j, k = rings.tri
-    vi, vj, vk = pts[i], pts[j], pts[k]
+    x, y, z = (np.ascontiguousarray(pts[:, c], dtype=float) for c in range(3))
 
-    def cot(a: np.ndarray, b: np.ndarray) -> np.ndarray:
-        cr = np.linalg.norm(np.cross(a, b), axis=1)
+    def cot(a: int | np.ndarray, b: np.ndarray, c: np.ndarray) -> np.ndarray:
+        # cot of the angle at a in triangle (a, b, c): (b - a).(c - a) / |(b - a) x (c - a)|
+        ux, uy, uz = x[b] - x[a], y[b] - y[a], z[b] - z[a]
+        vx, vy, vz = x[c] - x[a], y[c] - y[a], z[c] - z[a]
+        cx, cy, cz = uy * vz - uz * vy, uz * vx - ux * vz, ux * vy - uy * vx
+        cr = np.sqrt(cx * cx + cy * cy + cz * cz)
         # a zero-area triangle: the toolbox divides by zero; a tiny floor keeps it finite and the
         # row cap then bounds the row as the toolbox intends
-        return np.einsum("ij,ij->i", a, b) / np.maximum(cr, 1e-300)
+        return (ux * vx + uy * vy + uz * vz) / np.maximum(cr, 1e-300)
 
-    c1 = cot(vk - vi, vk - vj)
-    c2 = cot(vj - vi, vj - vk)
     n = rings.n
-    W = sp.coo_matrix((np.concatenate([c1, c2]), (np.concatenate([i, i]), np.concatenate([j, k]))),
-                      shape=(n, n)).tocsr()
-    W.sum_duplicates()
-    s = np.asarray(W.sum(axis=1)).ravel()
+    w = np.bincount(where, weights=np.concatenate([cot(k, i, j), cot(j, i, k)]), minlength=len(indices))
+    s = np.bincount(row_of, weights=w, minlength=n)
     big = np.abs(s) > row_cap
     if np.any(big):
         f = np.ones(n)
         f[big] = row_cap / np.abs(s[big])
-        W = sp.diags(f) @ W
+        w *= f[row_of]
         s = s * f
-    return (W - sp.diags(s)).tocsr()
+    w[diag] -= s
+    return sp.csr_matrix((w, indices, indptr), shape=(n, n))
 
 
 def cao_contract(
