@@ -116,3 +116,17 @@ def test_solver_names_are_checked(monkeypatch):
     assert solve.resolve_solver("auto") == "superlu"
     with pytest.raises(ValueError, match="needs the cvxopt package"):
         solve.resolve_solver("cholmod")
+
+
+def test_skelscope_gives_the_same_skeleton_with_either_solver():
+    from skelcore.skeleton import SkeletonizeParams
+
+    cloud = shapes.y_shape(3000, seed=8).cloud
+    diag = float(np.linalg.norm(np.ptp(cloud, axis=0)))
+    sk_c, cu_c, info_c = skeletonize(cloud, SkeletonizeParams(linear_solver="cholmod"), return_info=True)
+    sk_s, cu_s, info_s = skeletonize(cloud, SkeletonizeParams(linear_solver="superlu"), return_info=True)
+    assert info_c.iterations == info_s.iterations
+    assert np.linalg.norm(sk_c - sk_s, axis=1).max() < 1e-7 * diag
+    np.testing.assert_array_equal(cu_c.edges, cu_s.edges)
+    with pytest.raises(ValueError, match="linear_solver"):
+        SkeletonizeParams(linear_solver="spsolve")
