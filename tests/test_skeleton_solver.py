@@ -1,6 +1,7 @@
-"""skelcore.skeleton.solve: the contraction's SPD solve. CHOLMOD (cvxopt) against SuperLU and a dense
-solve, its cached symbolic analysis, its fallback, its cancel points, and the whole skeletonizer
-giving the same skeleton with either backend."""
+"""skelcore.skeleton.solve: the contraction's SPD solve. CHOLMOD (ctypes, and cvxopt's module as the
+fallback) against SuperLU and a dense solve, its cached symbolic analysis, its fallback on a matrix
+that is not positive definite, a cancel mid-factorization, and the whole skeletonizer giving the same
+skeleton with either backend."""
 
 from __future__ import annotations
 
@@ -43,14 +44,14 @@ def test_the_cached_analysis_serves_new_values_and_a_new_pattern_is_analysed_afr
     M, rhs, _pts = _contraction_matrix()
     cache: dict = {}
     solve.solve_spd(M, rhs, solver="cholmod", order=cache)
-    F = cache["cholmod"]["F"]
+    F = cache["factor"]
     M2 = (M * 3.0 + sp.identity(M.shape[0])).tocsc()  # same pattern, new values
     x2 = solve.solve_spd(M2, rhs, solver="cholmod", order=cache)
-    assert cache["cholmod"]["F"] is F
+    assert cache["factor"] is F
     np.testing.assert_allclose(M2 @ x2, rhs, atol=1e-8 * np.abs(rhs).max())
     M3 = sp.diags(np.arange(1.0, M.shape[0] + 1.0)).tocsc()  # another pattern
     x3 = solve.solve_spd(M3, rhs, solver="cholmod", order=cache)
-    assert cache["cholmod"]["F"] is not F
+    assert cache["factor"] is not F
     np.testing.assert_allclose(x3, rhs / np.arange(1.0, M.shape[0] + 1.0)[:, None], rtol=1e-12)
 
 
@@ -65,18 +66,45 @@ def test_a_matrix_cholmod_rejects_is_solved_by_superlu():
     np.testing.assert_allclose(M @ x, b, atol=1e-10)
 
 
-def test_a_cancel_raised_during_the_cholmod_factorization_stops_the_solve():
-    M, rhs, _pts = _contraction_matrix()
-    calls = {"n": 0}
+def test_a_cancel_raised_during_the_cholmod_factorization_returns_before_it_ends():
+    import threading
 
-    def check() -> None:  # the first call is before the factorization, the second right after
-        calls["n"] += 1
-        if calls["n"] >= 2:
+    from scipy.spatial import cKDTree
+
+    n = 16000
+    pts = np.random.default_rng(0).random((n, 3))
+    _d, nn = cKDTree(pts).query(pts, k=10)
+    A = sp.coo_matrix((np.ones(nn.size), (np.repeat(np.arange(n), 10), nn.ravel())), shape=(n, n)).tocsr()
+    M = (A.T @ A) + sp.identity(n)  # a random 3-D graph: heavy fill-in, CHOLMOD takes ~1 s
+    polls = {"n": 0}
+
+    def check() -> None:  # the first call comes before the helper starts, then every 20 ms
+        polls["n"] += 1
+        if polls["n"] >= 3:
             raise Cancelled("stop")
 
     with pytest.raises(Cancelled):
-        solve.solve_spd(M, rhs, check=check, solver="cholmod")
-    assert calls["n"] == 2
+        solve.solve_spd(M, pts, check=check, solver="cholmod")
+    # the cancel came back while CHOLMOD was still working (no GIL held: the polls ran meanwhile)
+    running = [t for t in solve._abandoned if t.is_alive()]
+    assert running
+    for t in running:
+        t.join()
+    x = solve.solve_spd(M, pts, solver="cholmod")  # and the solver still works afterwards
+    np.testing.assert_allclose(M @ x, pts, atol=1e-8)
+
+
+def test_without_the_ctypes_library_cvxopts_module_solves(monkeypatch):
+    from skelcore.skeleton import cholmod
+
+    M, rhs, _pts = _contraction_matrix()
+    want = solve.solve_spd(M, rhs, solver="superlu")
+    monkeypatch.setattr(cholmod, "library", lambda: None)
+    cache: dict = {}
+    for scale in (1.0, 2.0):  # the second solve reuses cvxopt's symbolic analysis
+        x = solve.solve_spd(M * scale, rhs, solver="cholmod", order=cache)
+        np.testing.assert_allclose(x * scale, want, atol=1e-9 * np.abs(want).max())
+    assert "cholmod" in cache
 
 
 def test_a_cancel_mid_contraction_stops_skeletonize_with_either_solver():
@@ -112,7 +140,10 @@ def test_solver_names_are_checked(monkeypatch):
         CaoParams(linear_solver="umfpack")
     with pytest.raises(ValueError, match="unknown linear_solver"):
         solve.resolve_solver("umfpack")
+    from skelcore.skeleton import cholmod
+
     monkeypatch.setattr(solve, "_cvxopt", lambda: None)  # as without cvxopt installed
+    monkeypatch.setattr(cholmod, "library", lambda: None)
     assert solve.resolve_solver("auto") == "superlu"
     with pytest.raises(ValueError, match="needs the cvxopt package"):
         solve.resolve_solver("cholmod")

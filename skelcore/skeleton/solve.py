@@ -1,13 +1,13 @@
 """The contraction's linear solve: ``(W_L^2 L^T L + W_H^2) X = W_H^2 X0``, the normal equations of
 ``[W_L L; W_H] X = [0; W_H X0]`` (Cao et al. 2010 eq. 2, solved as the toolbox does, ``(A'A) \\ (A'b)``).
 
-The matrix is symmetric positive definite. Two exact (direct) backends, same solution to rounding:
-``cholmod``, CHOLMOD's supernodal Cholesky as MATLAB's backslash uses it (from the cvxopt wheel, which
-bundles SuiteSparse and OpenBLAS; ~8x faster than SuperLU at 64k points), its symbolic analysis done
-once per sparsity pattern; ``superlu``, SciPy's SuperLU with a symmetric ordering and no pivoting,
-run in a helper thread (it releases the GIL) while the caller polls ``check`` every 20 ms. CHOLMOD
-holds the GIL: ``check`` runs before and after each factorization, so a cancel waits for one
-(0.3-0.5 s at 64k points). Measurements: docs/skeletonize.md, "sparse solver".
+The matrix is symmetric positive definite. Two exact (direct) backends, the same solution to
+rounding: ``cholmod``, CHOLMOD's supernodal Cholesky as MATLAB's backslash uses it (the library the
+cvxopt wheel bundles, called through ctypes: :mod:`.cholmod`; ~9x faster than SuperLU at 64k
+points), its symbolic analysis done once per sparsity pattern; ``superlu``, SciPy's SuperLU with a
+symmetric ordering and no pivoting. Both release the GIL: the factorization runs in a helper thread
+while the caller polls ``check`` every 20 ms, so a cancel is answered mid-factorization (the
+abandoned one finishes alone). Measurements: docs/skeletonize.md, "sparse solver".
 """
 
 from __future__ import annotations
@@ -46,25 +46,52 @@ def _cvxopt():
     return cvxopt, cholmod
 
 
+def _have_cholmod() -> bool:
+    from .cholmod import library
+
+    return library() is not None or _cvxopt() is not None
+
+
 def resolve_solver(name: str) -> str:
     """The backend ``name`` ("auto", "cholmod", "superlu") stands for here; ValueError when it
     names one that is not installed or does not exist."""
     if name not in SOLVERS:
         raise ValueError(f"unknown linear_solver {name!r}: use one of {', '.join(SOLVERS)}")
     if name == "auto":
-        return "cholmod" if _cvxopt() is not None else "superlu"
-    if name == "cholmod" and _cvxopt() is None:
+        return "cholmod" if _have_cholmod() else "superlu"
+    if name == "cholmod" and not _have_cholmod():
         raise ValueError("linear_solver 'cholmod' needs the cvxopt package (pip install cvxopt)")
     return name
 
 
-# ---- CHOLMOD (cvxopt) ------------------------------------------------------------------------
+# ---- CHOLMOD ---------------------------------------------------------------------------------
 
-def _cholmod_solve(M: sp.spmatrix, rhs: np.ndarray, cache: dict | None) -> np.ndarray:
-    cvxopt, cholmod = _cvxopt()
+def _lower(M: sp.spmatrix) -> sp.csc_matrix:
     low = sp.csc_matrix(sp.tril(M, format="csc"))
     low.sum_duplicates()
     low.sort_indices()
+    return low
+
+
+def _cholmod_solve(M: sp.spmatrix, rhs: np.ndarray, cache: dict | None) -> np.ndarray | None:
+    """Through ctypes (no GIL); None when the matrix is not positive definite to rounding."""
+    from .cholmod import Factor
+
+    low = _lower(M)
+    F = cache.get("factor") if cache is not None else None
+    if F is None or not F.same_pattern(low):
+        F = Factor(low)
+        if cache is not None:
+            cache["factor"] = F
+    if not F.factorize(low.data):
+        return None
+    return F.solve(rhs)
+
+
+def _cvxopt_solve(M: sp.spmatrix, rhs: np.ndarray, cache: dict | None) -> np.ndarray:
+    """cvxopt's own cholmod module (holds the GIL): when the library cannot be loaded by ctypes."""
+    cvxopt, cholmod = _cvxopt()
+    low = _lower(M)
     key = (low.shape, low.indptr, low.indices)
     c = cache.get("cholmod") if cache is not None else None
     same = (c is not None and c["key"][0] == key[0] and np.array_equal(c["key"][1], key[1])
@@ -110,12 +137,16 @@ def _superlu_solve(M: sp.csc_matrix, rhs: np.ndarray, order: dict | None) -> np.
     return out
 
 
-def _superlu_polled(M: sp.csc_matrix, rhs: np.ndarray, order: dict | None, check: Callable[[], None]) -> np.ndarray:
+def _polled(fn: Callable[[], np.ndarray | None], check: Callable[[], None] | None) -> np.ndarray | None:
+    """``fn()`` in a helper thread while this one calls ``check`` every 20 ms; a raising ``check``
+    abandons the helper (it finishes alone; joined at exit)."""
+    if check is None:
+        return fn()
     out: dict = {}
 
     def run() -> None:
         try:
-            out["x"] = _superlu_solve(M, rhs, order)
+            out["x"] = fn()
         except BaseException as exc:  # handed to the caller's thread
             out["error"] = exc
 
@@ -143,8 +174,8 @@ def solve_spd(
     solver: str = "auto",
 ) -> np.ndarray:
     """Solve ``M X = rhs`` (M SPD, rhs (n, 3)) with the backend ``solver`` (see :data:`SOLVERS`).
-    ``check()`` may raise (e.g. ``Cancelled``) to abandon the solve: superlu calls it every 20 ms
-    mid-factorization, cholmod before and after it. ``order``: a dict kept across solves of one
+    ``check()`` may raise (e.g. ``Cancelled``) to abandon the solve; it is called every 20 ms
+    mid-factorization. ``order``: a dict kept across solves of one
     sparsity pattern; it caches the symbolic analysis (cholmod) or fill-reducing ordering (superlu)
     of the first (~40% of a superlu factorization)."""
     backend = resolve_solver(solver)
@@ -153,14 +184,18 @@ def solve_spd(
     if check is not None:
         check()
     if backend == "cholmod":
-        try:
-            x = _cholmod_solve(M, rhs, order)
-        except ArithmeticError:  # CHOLMOD: not positive definite to rounding; SuperLU does not stop
-            x = None
-        if x is not None:
+        from .cholmod import library
+
+        if library() is not None:
+            x = _polled(lambda: _cholmod_solve(M, rhs, order), check)
+        else:
+            try:
+                x = _cvxopt_solve(M, rhs, order)
+            except ArithmeticError:
+                x = None
             if check is not None:
                 check()
+        if x is not None:
             return x
-    if check is None:
-        return _superlu_solve(M, rhs, order)
-    return _superlu_polled(M, rhs, order, check)
+        # not positive definite to rounding (CHOLMOD stops at the first bad pivot): SuperLU goes on
+    return _polled(lambda: _superlu_solve(M, rhs, order), check)
