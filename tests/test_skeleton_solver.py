@@ -161,3 +161,15 @@ def test_skelscope_gives_the_same_skeleton_with_either_solver():
     np.testing.assert_array_equal(cu_c.edges, cu_s.edges)
     with pytest.raises(ValueError, match="linear_solver"):
         SkeletonizeParams(linear_solver="spsolve")
+
+
+def test_cholmod_is_told_not_to_print():
+    import struct
+
+    from skelcore.skeleton import cholmod
+
+    M = sp.csc_matrix(sp.tril(sp.diags(np.arange(1.0, 11.0))))
+    F = cholmod.Factor(M)
+    assert struct.unpack_from("i", F._common.raw, cholmod._PRINT_OFFSET)[0] == 0
+    assert F.factorize(M.data)
+    np.testing.assert_allclose(F.solve(np.ones((10, 3)))[:, 0], 1.0 / np.arange(1.0, 11.0))

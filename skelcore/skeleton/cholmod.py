@@ -45,6 +45,22 @@ class _FactorHead(ctypes.Structure):  # the first fields of cholmod_factor
     _fields_ = [("n", ctypes.c_size_t), ("minor", ctypes.c_size_t)]
 
 
+# cholmod_common's leading fields (CHOLMOD 3-5): their defaults after cholmod_l_start, and the offset
+# of ``print``; the layout is checked against these before ``print`` is set to 0 (CHOLMOD must not
+# write to the process's stdout: the CLI's JSON goes there)
+_SIGNATURE = (("d", 1.2, 8), ("d", 40.0, 40), ("i", 1, 48), ("d", 0.8, 80), ("i", 3, 144))  # grow0,
+# supernodal_switch, supernodal, zrelax[0], print
+_PRINT_OFFSET = 144
+
+
+def _quiet(common: ctypes.Array) -> None:
+    import struct
+
+    raw = common.raw[:256]
+    if all(struct.unpack_from(fmt, raw, off)[0] == want for fmt, want, off in _SIGNATURE):
+        ctypes.c_int.from_buffer(common, _PRINT_OFFSET).value = 0
+
+
 def _candidates() -> list[str]:
     out = []
     try:
@@ -103,6 +119,7 @@ class Factor:
                           self._x.ctypes.data, None, -1, _LONG, _REAL, _DOUBLE, 1, 1)
         self._common = ctypes.create_string_buffer(_COMMON_BYTES)
         lib.cholmod_l_start(self._common)
+        _quiet(self._common)
         self._L = ctypes.c_void_p(lib.cholmod_l_analyze(ctypes.byref(self._A), self._common))
         if not self._L.value:
             lib.cholmod_l_finish(self._common)
