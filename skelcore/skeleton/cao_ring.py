@@ -118,18 +118,28 @@ def point_rings(
     n = len(pts)
     k = int(min(k, n))
     tree = cKDTree(pts)
-    ptrs, parts, closed = [np.zeros(1, np.int64)], [], []
-    offset = 0
+    # rows in the tree's leaf order: consecutive rows are spatial neighbours, so the kNN queries and
+    # the neighbourhood gathers stay cache-warm (2.5x faster kNN at 64k); each row's ring is the same
+    order = np.asarray(tree.indices, np.int64)
+    lens, parts, closed = [], [], []
     for lo in range(0, n, chunk):
         check(lo / n)
-        hi = min(n, lo + chunk)
-        ip, ind, cl = _rings_of(pts, tree, np.arange(lo, hi), k)
-        ptrs.append(ip[1:] + offset)
-        offset += int(ip[-1])
+        ip, ind, cl = _rings_of(pts, tree, order[lo:lo + chunk], k)
+        lens.append(np.diff(ip))
         parts.append(ind)
         closed.append(cl)
     check(1.0)
-    return np.concatenate(ptrs), np.concatenate(parts), np.concatenate(closed)
+    done_len = np.concatenate(lens)  # ring lengths in processing order
+    length = np.empty(n, np.int64)
+    length[order] = done_len
+    indptr = np.concatenate([[0], np.cumsum(length)])
+    done_start = np.concatenate([[0], np.cumsum(done_len)[:-1]])
+    shift = np.repeat(indptr[order] - done_start, done_len)
+    indices = np.empty(int(indptr[-1]), np.int64)
+    indices[np.arange(len(indices)) + shift] = np.concatenate(parts)
+    is_closed = np.empty(n, bool)
+    is_closed[order] = np.concatenate(closed)
+    return indptr, indices, is_closed
 
 
 def _rings_of(pts: np.ndarray, tree: cKDTree, rows: np.ndarray, k: int) -> tuple:
