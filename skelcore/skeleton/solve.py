@@ -174,10 +174,10 @@ def solve_spd(
     solver: str = "auto",
 ) -> np.ndarray:
     """Solve ``M X = rhs`` (M SPD, rhs (n, 3)) with the backend ``solver`` (see :data:`SOLVERS`).
-    ``check()`` may raise (e.g. ``Cancelled``) to abandon the solve; it is called every 20 ms
-    mid-factorization. ``order``: a dict kept across solves of one
-    sparsity pattern; it caches the symbolic analysis (cholmod) or fill-reducing ordering (superlu)
-    of the first (~40% of a superlu factorization)."""
+    ``check()`` may raise (e.g. ``Cancelled``) to abandon the solve; it is called before and every
+    20 ms during the factorization. ``order``: a dict kept across solves of one sparsity pattern;
+    it caches the symbolic analysis (cholmod) or the fill-reducing ordering (superlu, ~40% of a
+    factorization) of the first."""
     backend = resolve_solver(solver)
     M = sp.csc_matrix(M)
     rhs = np.ascontiguousarray(rhs, dtype=float)
