@@ -208,7 +208,7 @@ def test_cao_progress_and_cancel():
             skeletonize(shapes.cylinder(1200, seed=10).cloud, cancel=cancel)
 
 
-def test_a_cancel_mid_solve_returns_while_the_factorization_runs():
+def test_a_cancel_mid_solve_returns_while_the_superlu_factorization_runs():
     import threading
 
     from scipy.spatial import cKDTree
@@ -234,14 +234,14 @@ def test_a_cancel_mid_solve_returns_while_the_factorization_runs():
 
     threading.Thread(target=later, daemon=True).start()
     with pytest.raises(Cancelled):
-        solve.solve_spd(M, pts, check=check)
+        solve.solve_spd(M, pts, check=check, solver="superlu")
     # the cancel came back while the factorization was still running (it is left to finish alone)
     running = [t for t in solve._abandoned if t.is_alive()]
     assert running
     for t in running:
         t.join()
     small = M[:500, :500]
-    x = solve.solve_spd(small, pts[:500])  # and the solver still works afterwards
+    x = solve.solve_spd(small, pts[:500], solver="superlu")  # and the solver still works afterwards
     np.testing.assert_allclose(small @ x, pts[:500], atol=1e-8)
 
 

@@ -38,6 +38,15 @@ class Rings:
         p = np.flatnonzero(~last)
         self.tri = (self.owner[p], self.member[p], self.member[p + 1])
 
+    def relabel(self, perm: np.ndarray) -> "Rings":
+        """The same rings with point ``perm[q]`` renamed ``q`` (rows and members alike)."""
+        inv = np.empty_like(perm)
+        inv[perm] = np.arange(len(perm))
+        lens = np.diff(self.indptr)[perm]
+        indptr = np.concatenate([[0], np.cumsum(lens)])
+        src = np.repeat(self.indptr[perm] - indptr[:-1], lens) + np.arange(int(indptr[-1]))
+        return Rings(indptr, inv[self.member[src]])
+
     def sizes(self, pts: np.ndarray, kind: str) -> np.ndarray:
         """``GS.one_ring_size``: per point the min ("min") or mean ("mean") distance to its ring
         entries (a closed ring's repeated first vertex counts twice in the mean, as there)."""
@@ -52,33 +61,54 @@ class Rings:
         return out
 
 
+def _laplacian_pattern(rings: Rings) -> tuple:
+    """The CSR pattern shared by every iteration's Laplacian (the fan entries (i, j), (i, k) of
+    each triangle plus the diagonal) and where each triangle's two weights land in it."""
+    i, j, k = rings.tri
+    n = rings.n
+    rows = np.concatenate([i, i, np.arange(n)])
+    cols = np.concatenate([j, k, np.arange(n)])
+    key = rows * n + cols
+    uniq, where = np.unique(key, return_inverse=True)
+    indptr = np.searchsorted(uniq, np.arange(n + 1) * n).astype(np.int64)
+    indices = (uniq % n).astype(np.int64)
+    ntri = len(i)
+    return indptr, indices, where[: 2 * ntri], where[2 * ntri:], np.repeat(np.arange(n), np.diff(indptr))
+
+
 def cotangent_laplacian(pts: np.ndarray, rings: Rings, row_cap: float) -> sp.csr_matrix:
     """``-compute_point_laplacian(pts, 'conformal', rings)`` = W - diag(W 1), W from each point's fan:
     W(i, j) += cot of the angle at k, W(i, k) += cot of the angle at j, per fan triangle (i, j, k);
-    rows with |sum| > row_cap scaled to row_cap."""
+    rows with |sum| > row_cap scaled to row_cap. One sparsity pattern for all positions (cached on
+    ``rings``: the iterations only fill in values)."""
+    pattern = getattr(rings, "_lap_pattern", None)
+    if pattern is None:
+        pattern = rings._lap_pattern = _laplacian_pattern(rings)
+    indptr, indices, where, diag, row_of = pattern
     i, j, k = rings.tri
-    vi, vj, vk = pts[i], pts[j], pts[k]
+    x, y, z = (np.ascontiguousarray(pts[:, c], dtype=float) for c in range(3))
 
-    def cot(a: np.ndarray, b: np.ndarray) -> np.ndarray:
-        cr = np.linalg.norm(np.cross(a, b), axis=1)
+    def cot(a: int | np.ndarray, b: np.ndarray, c: np.ndarray) -> np.ndarray:
+        # cot of the angle at a in triangle (a, b, c): (b - a).(c - a) / |(b - a) x (c - a)|
+        ux, uy, uz = x[b] - x[a], y[b] - y[a], z[b] - z[a]
+        vx, vy, vz = x[c] - x[a], y[c] - y[a], z[c] - z[a]
+        cx, cy, cz = uy * vz - uz * vy, uz * vx - ux * vz, ux * vy - uy * vx
+        cr = np.sqrt(cx * cx + cy * cy + cz * cz)
         # a zero-area triangle: the toolbox divides by zero; a tiny floor keeps it finite and the
         # row cap then bounds the row as the toolbox intends
-        return np.einsum("ij,ij->i", a, b) / np.maximum(cr, 1e-300)
+        return (ux * vx + uy * vy + uz * vz) / np.maximum(cr, 1e-300)
 
-    c1 = cot(vk - vi, vk - vj)
-    c2 = cot(vj - vi, vj - vk)
     n = rings.n
-    W = sp.coo_matrix((np.concatenate([c1, c2]), (np.concatenate([i, i]), np.concatenate([j, k]))),
-                      shape=(n, n)).tocsr()
-    W.sum_duplicates()
-    s = np.asarray(W.sum(axis=1)).ravel()
+    w = np.bincount(where, weights=np.concatenate([cot(k, i, j), cot(j, i, k)]), minlength=len(indices))
+    s = np.bincount(row_of, weights=w, minlength=n)
     big = np.abs(s) > row_cap
     if np.any(big):
         f = np.ones(n)
         f[big] = row_cap / np.abs(s[big])
-        W = sp.diags(f) @ W
+        w *= f[row_of]
         s = s * f
-    return (W - sp.diags(s)).tocsr()
+    w[diag] -= s
+    return sp.csr_matrix((w, indices, indptr), shape=(n, n))
 
 
 def cao_contract(
@@ -89,7 +119,22 @@ def cao_contract(
     report: Callable[[str, float], None] | None = None,
 ) -> tuple[np.ndarray, dict]:
     """Contract normalized points; returns (contracted points, info) with info "iterations" (the
-    toolbox's t), "initial_weight", "ring_ratios" (its ``a``), "stop_reason"."""
+    toolbox's t), "initial_weight", "ring_ratios" (its ``a``), "stop_reason".
+
+    Works on the points in the kd-tree's leaf order (spatial neighbours next to each other: the
+    sparse products and gathers of every iteration stay cache-local, 2-4x faster on a shuffled
+    cloud) and returns them in the caller's order; the same result to rounding."""
+    from scipy.spatial import cKDTree
+
+    perm = np.asarray(cKDTree(pts).indices, np.int64)
+    cpts, info = _contract(np.ascontiguousarray(pts[perm]), rings.relabel(perm), params, report)
+    out = np.empty_like(cpts)
+    out[perm] = cpts
+    return out, info
+
+
+def _contract(pts: np.ndarray, rings: Rings, params: CaoParams, report: Callable[[str, float], None] | None
+              ) -> tuple[np.ndarray, dict]:
     report = report or (lambda _stage, _f: None)
     n = len(pts)
     bbox0 = pts.max(axis=0) - pts.min(axis=0)
@@ -107,10 +152,14 @@ def cao_contract(
         return lambda: report("contraction", it / params.max_iterations)
 
     def step(current: np.ndarray, wl: float, wh: np.ndarray, it: int) -> np.ndarray:
+        check = check_for(it)
         L = cotangent_laplacian(current, rings, params.weight_row_cap)
-        M = (wl * wl) * (L.T @ L) + sp.diags(wh * wh)
+        check()  # between the steps too: each is ~0.1 s per 64k points
+        LtL = L.T @ L
+        check()
+        M = ((wl * wl) * LtL + sp.diags(wh * wh)).tocsc()
         rhs = (wh * wh)[:, None] * current
-        return solve_spd(M, rhs, check=check_for(it), order=order)
+        return solve_spd(M, rhs, check=check, order=order, solver=params.linear_solver)
 
     report("contraction", 0.0)
     cpts = step(pts, wl, wh, 0)

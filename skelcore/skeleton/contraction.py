@@ -19,6 +19,7 @@ import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
 from .params import SkeletonizeParams
+from .solve import resolve_solver, solve_spd
 
 __all__ = ["contract"]
 
@@ -129,6 +130,8 @@ def contract(
     extent0 = np.maximum(_robust_extent(points_n), 1e-12)
     total0 = float(sizes0.sum()) or 1.0
 
+    backend = resolve_solver(params.linear_solver)
+    order: dict = {}  # CHOLMOD's symbolic analysis, one sparsity pattern for every iteration
     current = points_n.copy()
     ratios: list[float] = [1.0]
     stop = "max_iterations"
@@ -140,9 +143,13 @@ def contract(
         L = _cotan_laplacian(current, faces, params.mollify_factor)
         A = (wl * wl) * (L.T @ L) + sp.diags(wh * wh)
         rhs = (wh * wh)[:, None] * current
-        # spsolve (COLAMD, partial pivoting): measured far faster on this matrix than solve_spd's
-        # symmetric-mode path, whose ordering suits the cao matrix (docs/skeletonize.md)
-        new = spla.spsolve(A.tocsc(), rhs)
+        if backend == "cholmod":
+            new = solve_spd(A, rhs, order=order, solver="cholmod",
+                            check=lambda: report("contraction", it / params.max_iterations))
+        else:
+            # spsolve (COLAMD, partial pivoting): measured far faster on this matrix than solve_spd's
+            # symmetric-mode SuperLU path, whose ordering suits the cao matrix (docs/skeletonize.md)
+            new = spla.spsolve(A.tocsc(), rhs)
         new = np.asarray(new).reshape(n, 3)
         if not np.all(np.isfinite(new)):
             stop = "non-finite solve"

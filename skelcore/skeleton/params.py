@@ -49,6 +49,9 @@ class CaoParams(_Replaceable):
         the iterate that failed the test is discarded, as is one whose bounding box grew on an axis
         beyond ``bbox_growth_limit`` x the original's (1.2).
     sample_radius_factor : ball radius of the farthest sampling = factor x bounding-box diagonal (0.02).
+    linear_solver : the contraction's sparse SPD solve: "cholmod" (CHOLMOD from cvxopt, MATLAB's
+        backslash path), "superlu" (SciPy) or "auto" (cholmod when cvxopt is installed); all exact,
+        the same skeleton to rounding (:mod:`.solve`, docs/skeletonize.md).
     """
 
     min_neighbors: int = 8
@@ -64,11 +67,14 @@ class CaoParams(_Replaceable):
     termination_ratio: float = 0.01
     bbox_growth_limit: float = 1.2
     sample_radius_factor: float = 0.02
+    linear_solver: str = "auto"
 
     def __post_init__(self) -> None:
         def bad(name: str, why: str) -> None:
             raise ValueError(f"skeletonize parameter {name}={getattr(self, name)!r}: {why}")
 
+        if self.linear_solver not in ("auto", "cholmod", "superlu"):
+            bad("linear_solver", "must be auto, cholmod or superlu")
         for name in ("attraction_weight", "contraction_weight_max", "attraction_weight_max", "weight_row_cap",
                      "termination_ratio", "sample_radius_factor", "neighbor_fraction"):
             if not float(getattr(self, name)) > 0:
@@ -133,6 +139,8 @@ class SkeletonizeParams(_Replaceable):
     min_sample_points : a sample ball holding fewer contracted points than this is dropped with its
         points when it is isolated or a leaf on an edge longer than two radii (stray points thrown
         out of the shape would add long spokes to the curve).
+    linear_solver : the contraction's solve: "cholmod" (CHOLMOD from cvxopt), "superlu" (SciPy's
+        ``spsolve``) or "auto" (cholmod when cvxopt is installed); the same skeleton to rounding.
     """
 
     laplacian_neighbors: int = 30
@@ -154,10 +162,14 @@ class SkeletonizeParams(_Replaceable):
     prune_branch_factor: float = 3.0
     prune_thickness_factor: float = 1.0
     min_sample_points: int = 3
+    linear_solver: str = "auto"
 
     def __post_init__(self) -> None:
         def bad(name: str, why: str) -> None:
             raise ValueError(f"skeletonize parameter {name}={getattr(self, name)!r}: {why}")
+
+        if self.linear_solver not in ("auto", "cholmod", "superlu"):
+            bad("linear_solver", "must be auto, cholmod or superlu")
 
         for name in ("mollify_factor", "contraction_weight_max", "attraction_weight",
                      "attraction_weight_max", "termination_ratio", "sample_radius_factor"):
