@@ -18,7 +18,7 @@ from .geometry import Checkpoint, no_checkpoint
 A = TypeVar("A")
 B = TypeVar("B")
 
-__all__ = ["on_threads", "side_by_side"]
+__all__ = ["on_threads", "side_by_side", "polled_build"]
 
 
 def on_threads(
@@ -99,3 +99,27 @@ def side_by_side(
     if "error" in box:
         raise box["error"]
     return first, box["value"]
+
+
+def polled_build(build: Callable, n: int, checkpoint: Checkpoint, name: str, threaded_from: int = 65536):
+    """``build(stop)`` of a compiled kernel (which releases the GIL) in a thread while this one calls the
+    checkpoint every 50 ms; a cancel sets ``stop`` (an int32 array the kernel reads), waits for the build
+    to return and re-raises.  Below ``threaded_from`` points the build takes a few ms: no thread."""
+    import numpy as np
+
+    stop = np.zeros(1, np.int32)
+    if n <= threaded_from:
+        return build(stop)
+    result: list = []
+    worker = threading.Thread(target=lambda: result.append(build(stop)), name=name, daemon=True)
+    worker.start()
+    try:
+        while worker.is_alive():
+            worker.join(0.05)
+            checkpoint(0.0)
+    except BaseException:
+        stop[0] = 1
+        worker.join()
+        raise
+    return result[0]
+

@@ -13,13 +13,13 @@ are exact, in the compiled kernel ``_balls.c`` on every core, a checkpoint every
 from __future__ import annotations
 
 import os
-import threading
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
 
 import numpy as np
 
 from ..geometry import Checkpoint, TimedChunks, no_checkpoint, unique_rows
+from ..parallel import polled_build
 from ..params import Params
 from . import _balls
 
@@ -153,25 +153,10 @@ def _chunked(fn, n: int, checkpoint: Checkpoint, workers: int | None = None) -> 
 
 
 def _build_polling(build, n: int, checkpoint: Checkpoint) -> int:
-    """Run ``build(stop)`` (the kernel releases the GIL) in a thread while this one calls the checkpoint
-    every 50 ms; a cancel sets ``stop``, which the kernel reads, then re-raises once it has returned."""
-    stop = np.zeros(1, np.int32)
-    if n <= 65536:  # a few ms: no thread needed
-        m = build(stop)
-        checkpoint(0.0)
-        return m
-    result: list = []
-    worker = threading.Thread(target=lambda: result.append(build(stop)), name="skelscope-coverage-tree", daemon=True)
-    worker.start()
-    try:
-        while worker.is_alive():
-            worker.join(0.05)
-            checkpoint(0.0)
-    except BaseException:
-        stop[0] = 1
-        worker.join()
-        raise
-    return result[0]
+    """The kernel's tree build, polled (:func:`skelcore.parallel.polled_build`), then one checkpoint."""
+    m = polled_build(build, n, checkpoint, "skelscope-coverage-tree")
+    checkpoint(0.0)
+    return m
 
 
 def min_ball_excess(

@@ -12,12 +12,11 @@ Design, costs and errors: docs/boundedness.md section 3.
 from __future__ import annotations
 
 import os
-import threading
 from dataclasses import dataclass
 
 import numpy as np
 from ..geometry import Checkpoint, no_checkpoint, take_rows
-from ..parallel import on_threads
+from ..parallel import on_threads, polled_build
 from . import _raycast
 
 # queries closer than this many h to the cloud share only in finer cells, or are alone (1.7)
@@ -107,23 +106,8 @@ class BallTree:
 
 
 def _build_polling(build, n: int, checkpoint: Checkpoint) -> int:
-    """Run ``build(stop)`` (the kernel releases the GIL) in a thread while this one calls the checkpoint
-    every 50 ms; a cancel sets ``stop``, which the kernel reads, then re-raises once it has returned."""
-    stop = np.zeros(1, np.int32)
-    if n <= 65536:  # a few ms: no thread needed
-        return build(stop)
-    result: list = []
-    worker = threading.Thread(target=lambda: result.append(build(stop)), name="skelscope-balltree", daemon=True)
-    worker.start()
-    try:
-        while worker.is_alive():
-            worker.join(0.05)
-            checkpoint(0.0)
-    except BaseException:
-        stop[0] = 1
-        worker.join()
-        raise
-    return result[0]
+    """The kernel's tree build, polled (:func:`skelcore.parallel.polled_build`)."""
+    return polled_build(build, n, checkpoint, "skelscope-balltree")
 
 
 @dataclass
