@@ -23,7 +23,8 @@ class _Parser(argparse.ArgumentParser):
 
 
 def build_parser() -> argparse.ArgumentParser:
-    p = _Parser(prog="skelscope", description="See where a point-cloud skeleton is good or bad.")
+    # no prefix matching: "--skeleton" must not silently mean "--skeleton-b" (the A/B view)
+    p = _Parser(prog="skelscope", description="See where a point-cloud skeleton is good or bad.", allow_abbrev=False)
     p.add_argument("cloud", nargs="?", help="the original point cloud")
     p.add_argument("--skeletal", metavar="F", help="skeletal point set in pointwise correspondence with the cloud")
     p.add_argument("--curve", metavar="F", help="curve skeleton (a file with edges)")

@@ -308,6 +308,16 @@ def test_bad_ab_arguments_exit_2_with_one_line(argv, message, run_dir, tmp_path,
     assert err.count("\n") == 1 and err.startswith("skelscope: error:") and message in err, err
 
 
+def test_an_option_prefix_is_not_taken_for_skeleton_b(capsys):
+    """argparse would read "--skeleton F" as "--skeleton-b F" and open the A/B view: it is an error."""
+    from app.__main__ import build_parser
+
+    with pytest.raises(SystemExit) as exc:
+        build_parser().parse_args(["cloud.ply", "--skeleton", "skel.ply"])
+    err = capsys.readouterr().err
+    assert exc.value.code == 2 and err.count("\n") == 1 and "unrecognized arguments: --skeleton skel.ply" in err
+
+
 def test_skeleton_b_on_the_command_line_is_evaluated_against_the_cloud(tmp_path, capsys, no_user_settings):
     from app.compare_view import ab_rows
 
