@@ -124,12 +124,19 @@ def chunked_query(
 
     ``order`` (a permutation of the query rows, e.g. :func:`leaf_order`) sets the order in which the
     rows are asked; the results come back in row order and are the same as without it."""
+    n = len(queries)
+    return _query_spans(tree, queries, k, ((a, min(n, a + chunk)) for a in range(0, n, chunk)), checkpoint,
+                        lo, hi, order, kwargs)
+
+
+def _query_spans(tree, queries, k, spans, checkpoint, lo, hi, order, kwargs) -> tuple[np.ndarray, np.ndarray]:
+    """The k-NN answers of ``queries`` asked span by span (rows ``order[start:stop]`` or start:stop),
+    a checkpoint after each: the loop of :func:`chunked_query` and :func:`timed_query`."""
     queries = np.asarray(queries, dtype=float)
     n = len(queries)
     dist = np.empty((n, k))
     idx = np.empty((n, k), np.int64)
-    for start in range(0, n, chunk):
-        stop = min(n, start + chunk)
+    for start, stop in spans:
         rows = slice(start, stop) if order is None else order[start:stop]
         d, i = tree.query(queries[rows], k=k, workers=-1, **kwargs)
         dist[rows] = d.reshape(stop - start, k)
@@ -166,17 +173,7 @@ def timed_query(
     lo: float = 0.0, hi: float = 1.0, order: np.ndarray | None = None, **kwargs,
 ) -> tuple[np.ndarray, np.ndarray]:
     """:func:`chunked_query` with chunks sized by :class:`TimedChunks` (about 0.1 s each)."""
-    queries = np.asarray(queries, dtype=float)
-    n = len(queries)
-    dist = np.empty((n, k))
-    idx = np.empty((n, k), np.int64)
-    for start, stop in TimedChunks(n):
-        rows = slice(start, stop) if order is None else order[start:stop]
-        d, i = tree.query(queries[rows], k=k, workers=-1, **kwargs)
-        dist[rows] = d.reshape(stop - start, k)
-        idx[rows] = i.reshape(stop - start, k)
-        checkpoint(lo + (hi - lo) * stop / max(n, 1))
-    return dist, idx
+    return _query_spans(tree, queries, k, TimedChunks(len(queries)), checkpoint, lo, hi, order, kwargs)
 
 
 def nearest_neighbor_distances(

@@ -14,7 +14,7 @@ from typing import Any
 from ...io.atomic import atomic_open
 from .jobs import SCORE_COLUMNS, Job
 from .profiles import Profile
-from .store import Store
+from .store import Store, json_float
 
 __all__ = ["collect_rows", "write_results_csv", "COLUMNS"]
 
@@ -22,26 +22,18 @@ COLUMNS = ("shape", "method", "condition", "seed", "status", "error", *SCORE_COL
            "n_points", "key")
 
 
-def _float(v: Any) -> float:
-    if v is None:
-        return math.nan
-    if isinstance(v, str):
-        return {"inf": math.inf, "-inf": -math.inf}.get(v, math.nan)
-    return float(v)
-
-
 def collect_rows(jobs: list[Job], store: Store, profiles: tuple[Profile, ...]) -> list[dict[str, Any]]:
     """A flat row per job; jobs not in the store (a run stopped early) get status "missing"."""
     rows = []
     for job in jobs:
         rec = store.get(job.key) or {}
-        scores = {k: _float((rec.get("scores") or {}).get(k)) for k in SCORE_COLUMNS}
+        scores = {k: json_float((rec.get("scores") or {}).get(k)) for k in SCORE_COLUMNS}
         ok = rec.get("status") == "ok"
         if not ok:
             scores["n_warnings"] = math.nan
         row: dict[str, Any] = {"shape": job.shape.name, "method": job.method.name, "condition": job.condition.name,
                                "seed": job.seed, "status": rec.get("status", "missing"), "error": rec.get("error", ""),
-                               **scores, "seconds": _float(rec.get("seconds")), "label": rec.get("label", ""),
+                               **scores, "seconds": json_float(rec.get("seconds")), "label": rec.get("label", ""),
                                "n_points": rec.get("n_points", ""), "key": job.key}
         for p in profiles:
             v = p.verdict(scores, job.condition.to_dict(), ok=ok)

@@ -9,6 +9,7 @@ exists and parses; leftovers of an interrupted write (``.*.tmp``) are ignored an
 from __future__ import annotations
 
 import json
+import math
 import os
 from pathlib import Path
 from typing import Any, Iterator
@@ -18,7 +19,7 @@ import numpy as np
 from ...errors import SkelInputError
 from ...io.atomic import atomic_open
 
-__all__ = ["Store"]
+__all__ = ["Store", "json_float"]
 
 
 class Store:
@@ -92,3 +93,12 @@ def _json_safe(obj: Any) -> Any:
     if isinstance(obj, np.integer):
         return int(obj)
     return obj
+
+
+def json_float(v: Any) -> float:
+    """A score as the JSON records hold it: a number, None (NaN) or "inf" / "-inf"."""
+    if v is None:
+        return math.nan
+    if isinstance(v, str):
+        return {"inf": math.inf, "-inf": -math.inf}.get(v, math.nan)
+    return float(v)

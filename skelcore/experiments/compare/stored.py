@@ -12,7 +12,6 @@ recomputed, and its ``summary()`` gives the stored scores.
 from __future__ import annotations
 
 import dataclasses
-import math
 from typing import Any
 
 import numpy as np
@@ -24,6 +23,7 @@ from ...metrics.coverage import Coverage
 from ...params import Params
 from ...results import CurveLocal, Evaluation, SkeletalLocal, TopologyResult
 from ...trust import TrustWarning
+from .store import json_float
 
 __all__ = ["evaluation_arrays", "evaluation_from_store", "has_evaluation", "STORED_KEY"]
 
@@ -69,14 +69,6 @@ def evaluation_arrays(ev: Evaluation) -> dict[str, np.ndarray]:
     return out
 
 
-def _num(v: Any) -> float:
-    if v is None:
-        return math.nan
-    if isinstance(v, str):
-        return {"inf": math.inf, "-inf": -math.inf}.get(v, math.nan)
-    return float(v)
-
-
 def _params(doc: dict[str, Any]) -> Params:
     raw = dict(doc.get("params") or {})
     known = {f.name for f in dataclasses.fields(Params)}
@@ -102,8 +94,8 @@ def evaluation_from_store(doc: dict[str, Any], arrays: dict[str, np.ndarray], wh
     ev.warnings = [TrustWarning(w["code"], w["message"]) for w in doc.get("warnings") or []]
     topo = doc.get("topology")
     if topo is not None and "cloud_barcode" in a:
-        ev.topology = TopologyResult(_num(topo.get("bottleneck")), _num(topo.get("wasserstein")),
-                                     _num(topo.get("eps_star")), int(topo.get("n_bars") or 0),
+        ev.topology = TopologyResult(json_float(topo.get("bottleneck")), json_float(topo.get("wasserstein")),
+                                     json_float(topo.get("eps_star")), int(topo.get("n_bars") or 0),
                                      np.asarray(a["cloud_barcode"], float), np.asarray(a["skeletal_barcode"], float))
     if "ev_skeletal" in a:
         flags = a["ev_skeletal_flags"]
@@ -119,14 +111,14 @@ def evaluation_from_store(doc: dict[str, Any], arrays: dict[str, np.ndarray], wh
         vertices = np.asarray(a["ev_curve_vertices"], float)
         curve = CurveSkeleton(vertices, np.asarray(a["ev_curve_edges"], np.int64), np.arange(len(vertices)))
         ev.curve = CurveLocal(curve=curve, **{n: a[f"ev_curve_{n}"] for n in _CURVE},
-                              smoothness_overall=_num(smooth), smoothness_count=int(count))
+                              smoothness_overall=json_float(smooth), smoothness_count=int(count))
     cov_doc = doc.get("coverage") or {}
     for kind in ("skeletal", "curve"):
         block = cov_doc.get(kind)
         if isinstance(block, dict) and f"ev_coverage_{kind}_gap" in a:
             setattr(ev, f"coverage_{kind}", Coverage(
                 gap=a[f"ev_coverage_{kind}_gap"], covered=a[f"ev_coverage_{kind}_covered"],
-                fraction=_num(block.get("fraction")), mean_gap=_num(block.get("mean_gap")),
-                max_gap=_num(block.get("max_gap")), tau=_num(cov_doc.get("tau")), slack=_num(cov_doc.get("slack")),
+                fraction=json_float(block.get("fraction")), mean_gap=json_float(block.get("mean_gap")),
+                max_gap=json_float(block.get("max_gap")), tau=json_float(cov_doc.get("tau")), slack=json_float(cov_doc.get("slack")),
                 n_elements=int(a[f"ev_coverage_{kind}_n"][0])))
     return ev
