@@ -14,7 +14,7 @@ import numpy as np
 import pytest
 from scipy.spatial import cKDTree
 
-from skelcore import geometry
+from skelcore import geometry, shapes
 from skelcore.errors import Cancelled
 from skelcore.geometry import TimedChunks, chunked_query, kd_tree, leaf_order, lex_order, timed_query, unique_rows
 from skelcore.metrics import centeredness, coverage, smoothness
@@ -160,24 +160,56 @@ def test_skeletal_stages_do_not_depend_on_the_chunk(monkeypatch):
         assert calls[0] == 20
 
 
-def test_curve_centeredness_on_threads_equals_one_thread(monkeypatch):
-    """Curve samples are scored in spans on a thread pool: the same values as one thread, and a cancel
-    raised in the middle stops it."""
+def test_curve_centeredness_at_once_equals_per_sample_on_threads(monkeypatch):
+    """Curve samples are scored all at once in flat arrays (small clouds, in batches) or one by one in
+    spans on a thread pool (large clouds): the same values bit for bit, NaNs included;
+    a cancel raised in the middle stops either."""
     cloud, _ = _torus_case()
     t = np.linspace(0, 2 * np.pi, 41, endpoint=False)
     pts = np.column_stack([np.cos(t), np.sin(t), 0.02 * np.cos(3 * t)])
     dirs = np.column_stack([-np.sin(t), np.cos(t), 0 * t])
     dirs[7] = np.nan  # a joint vertex: NaN, wherever its span runs
-    monkeypatch.setattr(centeredness, "_CURVE_THREADED", 10**12)
-    one = centeredness.curve_centeredness(cloud, pts, dirs)
-    monkeypatch.setattr(centeredness, "_CURVE_THREADED", 0)
+    pts[11] = [5.0, 5.0, 5.0]  # far outside the cloud: an empty slab, NaN
+    monkeypatch.setattr(centeredness, "_CURVE_AT_ONCE", 0)
     calls = []
-    assert np.array_equal(centeredness.curve_centeredness(cloud, pts, dirs, checkpoint=calls.append), one, equal_nan=True)
-    assert np.isnan(one[7]) and np.isfinite(one).sum() == 40 and len(calls) >= 10
+    one = centeredness.curve_centeredness(cloud, pts, dirs, checkpoint=calls.append)
+    assert np.isnan(one[7]) and np.isnan(one[11]) and np.isfinite(one).sum() == 39 and len(calls) >= 10
     check, calls = _raise_at(5)
     with pytest.raises(Cancelled):
         centeredness.curve_centeredness(cloud, pts, dirs, checkpoint=check)
     assert calls[0] == 5
+    monkeypatch.setattr(centeredness, "_CURVE_AT_ONCE", 10**12)
+    for batch in (10**9, 500):  # one batch, and a batch of about one sample
+        monkeypatch.setattr(centeredness, "_CURVE_BATCH_PAIRS", batch)
+        calls = []
+        at_once = centeredness.curve_centeredness(cloud, pts, dirs, checkpoint=calls.append)
+        assert np.array_equal(at_once, one, equal_nan=True)
+    assert len(calls) >= 10
+    check, calls = _raise_at(5)
+    with pytest.raises(Cancelled):
+        centeredness.curve_centeredness(cloud, pts, dirs, checkpoint=check)
+    assert calls[0] == 5
+
+
+def test_curve_centeredness_at_once_equals_per_sample_on_ties_and_branches(monkeypatch):
+    """Rings by a stable sort: a lattice cloud (exact distance ties, rings cut inside a tie run) and a
+    branching shape with random directions give the same NaNs and values either way."""
+    rng = np.random.default_rng(4)
+    # a square tube on an integer lattice: distances from lattice samples tie exactly
+    side = [(x, y) for x in range(-4, 5) for y in range(-4, 5) if max(abs(x), abs(y)) == 4]
+    lattice = np.array([(x, y, z) for z in range(20) for x, y in side], dtype=float)
+    branch = shapes.y_shape(6000, seed=2).cloud
+    for cloud, pts, dirs in (
+        (lattice, np.column_stack([rng.integers(-2, 3, (60, 2)), rng.integers(1, 19, 60)]), np.tile([0.0, 0.0, 1.0], (60, 1))),
+        (lattice, np.column_stack([rng.integers(-2, 3, (60, 2)), rng.integers(1, 19, 60)]), rng.normal(size=(60, 3)) * [0.1, 0.1, 1]),
+        (branch, branch[rng.choice(len(branch), 80)] * 0.5, rng.normal(size=(80, 3))),
+    ):
+        monkeypatch.setattr(centeredness, "_CURVE_AT_ONCE", 0)
+        one = centeredness.curve_centeredness(cloud, pts, dirs)
+        monkeypatch.setattr(centeredness, "_CURVE_AT_ONCE", 10**12)
+        at_once = centeredness.curve_centeredness(cloud, pts, dirs)
+        assert np.array_equal(at_once, one, equal_nan=True)  # bit for bit
+        assert np.isfinite(one).sum() > 10
 
 
 def test_covered_by_balls_matches_brute_force():

@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from skelcore.metrics.ellipse_fit import fit_ellipse
+from skelcore.metrics.ellipse_fit import fit_ellipse, fit_ellipses
 
 
 def _ellipse(center, a, b, angle, t):
@@ -90,3 +90,28 @@ def test_two_parallel_lines_give_none():
 def test_rejects_wrong_shape():
     with pytest.raises(ValueError):
         fit_ellipse(np.zeros((6, 3)))
+
+
+def test_batched_fits_equal_one_by_one():
+    """fit_ellipses (the batch curve centeredness uses) = fit_ellipse of each set alone, bit for bit,
+    including the sets it must reject: too few points, collinear, a NaN point, coincident points,
+    hyperbola-like scatter; and the noisy ellipses are recovered."""
+    rng = np.random.default_rng(11)
+    sets = [_ellipse((rng.normal(), rng.normal()), rng.uniform(0.5, 3), rng.uniform(0.1, 0.5), rng.uniform(-3, 3),
+                     rng.uniform(0, 2 * np.pi, rng.integers(5, 60))) + rng.normal(scale=0.01, size=(1, 2))
+            for _ in range(40)]
+    sets += [rng.normal(size=(3, 2)), np.zeros((0, 2)), rng.normal(size=(4, 2)),
+             np.column_stack([np.arange(8.0), 2 * np.arange(8.0)]),  # collinear
+             np.vstack([_ellipse((0, 0), 2, 1, 0, np.linspace(0, 6, 9)), [[np.nan, 0.0]]]),
+             np.ones((7, 2)),  # all coincident
+             np.column_stack([np.r_[-3:3:12j], np.r_[-3:3:12j] ** 3]),  # no ellipse fits well
+             rng.normal(size=(30, 2)) * [5.0, 0.01]]
+    starts = np.r_[0, np.cumsum([len(s) for s in sets])]
+    centers, axes, angles = fit_ellipses(np.vstack(sets), starts)
+    for i, pts in enumerate(sets):
+        one = fit_ellipse(pts)
+        if one is None:
+            assert np.all(np.isnan(centers[i])) and np.all(np.isnan(axes[i])) and np.isnan(angles[i]), i
+        else:
+            assert np.array_equal(centers[i], one[0]) and np.array_equal(axes[i], one[1]) and angles[i] == one[2]
+    assert np.isfinite(centers[:40]).all() and np.isnan(centers[40:46]).all()

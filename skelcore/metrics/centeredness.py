@@ -22,7 +22,7 @@ from ..geometry import (
 )
 from ..parallel import on_threads
 from ..params import Params, k_center_for
-from .ellipse_fit import fit_ellipse
+from .ellipse_fit import fit_ellipses
 
 __all__ = ["skeletal_centeredness", "curve_centeredness", "ring_length", "cross_section_centeredness"]
 
@@ -30,7 +30,8 @@ __all__ = ["skeletal_centeredness", "curve_centeredness", "ring_length", "cross_
 # under ~0.1 s apart on a loaded machine
 _SKELETAL_CHUNK = 4096
 _CURVE_SPAN = 4  # curve samples per thread task (about 5-25 ms at 1M points)
-_CURVE_THREADED = 50_000  # smaller clouds: one thread (a task would cost less than its hand-off)
+_CURVE_AT_ONCE = 50_000  # smaller clouds: all samples at once in flat arrays; larger: per sample on threads
+_CURVE_BATCH_PAIRS = 2_000_000  # slab candidates per batch of samples taken at once (memory: 24 bytes each)
 
 
 def skeletal_centeredness(
@@ -210,14 +211,13 @@ def curve_centeredness(
     g, h = _orthonormal_complement(u[todo])
 
     def one(i: int) -> float:
-        p, u_row = points[todo[i]], u[todo[i]]
-        rel = grid.slab_candidates(p, u_row, half) - p
-        rel = np.compress(np.abs(rel @ u_row) < half, rel, axis=0)  # = rel[mask], 2 x faster
-        flat = np.column_stack([rel @ g[i], rel @ h[i]])  # p_hat is the origin
+        rel = grid.slab_candidates(points[todo[i]], u[todo[i]], half) - points[todo[i]]
+        rel = np.compress(np.abs(_dot3(rel, u[todo[i]])) < half, rel, axis=0)  # = rel[mask], 2 x faster
+        flat = np.column_stack([_dot3(rel, g[i]), _dot3(rel, h[i])])  # p_hat is the origin
         dist = np.hypot(flat[:, 0], flat[:, 1])
         order = stable_argsort(dist)
         ring = flat[order[: ring_length(dist[order], growth)]]
-        return cross_section_centeredness(ring)
+        return float(_rings_centeredness(ring, np.array([0, len(ring)]))[0])
 
     def span(i0: int, i1: int) -> list[float]:
         return [one(i) for i in range(i0, i1)]
@@ -225,12 +225,91 @@ def curve_centeredness(
     def store(span_: tuple[int, int], values: list[float]) -> None:
         out[todo[span_[0] : span_[1]]] = values
 
+    if len(cloud) < _CURVE_AT_ONCE:
+        # small clouds: every sample at once (a few dozen numpy calls in all instead of per sample;
+        # hammer scan 0.05 -> 0.01 s, docs/performance.md 7)
+        out[todo] = _all_samples_at_once(grid, points[todo], u[todo], g, h, half, growth, checkpoint)
+        return out
     # the samples are independent and numpy releases the GIL in their big gathers, sorts and
     # products: spans of samples on every core (docs/performance.md 6)
     step = _CURVE_SPAN
-    on_threads(span, [(i, min(i + step, len(todo))) for i in range(0, len(todo), step)],
-               None if len(cloud) >= _CURVE_THREADED else 1, checkpoint, store)
+    on_threads(span, [(i, min(i + step, len(todo))) for i in range(0, len(todo), step)], None, checkpoint, store)
     return out
+
+
+def _all_samples_at_once(
+    grid: "_SlabGrid", points: np.ndarray, u: np.ndarray, g: np.ndarray, h: np.ndarray, half: float,
+    growth: float, checkpoint: Checkpoint,
+) -> np.ndarray:
+    """:func:`curve_centeredness`'s per-sample steps (slab, ring, fit) for all samples in flat arrays.
+
+    The candidates of each sample come in the order ``_SlabGrid.slab_candidates`` gives them, the
+    products are the same element-wise operations (:func:`_dot3`), the rings are sorted stably by
+    distance and fitted by the same batched fit: the same values as the per-sample path, bit for bit.
+    """
+    n = len(points)
+    out = np.full(n, np.nan)
+    reach = half + grid.half_cell * np.abs(u).sum(axis=1) * (1 + 1e-9) + 1e-12
+    # (sample, cell) pairs that may meet the slab, sample-major: each sample's cells in grid order
+    hit_s, hit_c = np.nonzero(np.abs(np.einsum("ck,sk->sc", grid.centres, u) - np.einsum("sk,sk->s", points, u)[:, None])
+                              < reach[:, None])
+    per_sample = np.bincount(hit_s, weights=grid.counts[hit_c], minlength=n).astype(np.int64)
+    bounds = np.r_[0, np.cumsum(per_sample)]
+    lo = 0
+    while lo < n:  # batches of samples of about _CURVE_BATCH_PAIRS candidates
+        hi = max(lo + 1, int(np.searchsorted(bounds, bounds[lo] + _CURVE_BATCH_PAIRS, side="right")) - 1)
+        hi = min(hi, n)
+        sel = (hit_s >= lo) & (hit_s < hi)
+        cs, cc = hit_s[sel], hit_c[sel]
+        counts = grid.counts[cc]
+        total = int(counts.sum())
+        shift = np.repeat(grid.starts[cc] - (np.cumsum(counts) - counts), counts)
+        rows = np.arange(total) + shift
+        sid = np.repeat(cs, counts)
+        rel = take_rows(grid.points, rows) - take_rows(points, sid)
+        inside = np.abs(_dot3(rel, take_rows(u, sid))) < half
+        rel, sid = np.compress(inside, rel, axis=0), sid[inside]
+        flat = np.column_stack([_dot3(rel, take_rows(g, sid)), _dot3(rel, take_rows(h, sid))])
+        dist = np.hypot(flat[:, 0], flat[:, 1])
+        order = np.lexsort((dist, sid))  # stable: equal distances keep the candidates' order
+        sid, dist, flat = sid[order], dist[order], flat[order]
+        # ring = the leading run of each sample's sorted distances growing by < growth (ring_length)
+        starts = np.searchsorted(sid, np.arange(lo, hi + 1))
+        stop = np.ones(len(dist), dtype=bool)  # stop[i]: the ring ends after position i
+        if len(dist) > 1:
+            stop[:-1] = ~(dist[1:] < growth * dist[:-1]) | (sid[1:] != sid[:-1])
+        ends = np.flatnonzero(stop)
+        first_stop = ends[np.minimum(np.searchsorted(ends, starts[:-1]), len(ends) - 1)] if len(ends) else starts[:-1]
+        ring_len = np.where(starts[1:] > starts[:-1], first_stop - starts[:-1] + 1, 0)
+        in_ring = np.arange(len(dist)) - np.repeat(starts[:-1], starts[1:] - starts[:-1]) < np.repeat(ring_len, starts[1:] - starts[:-1])
+        ring = flat[in_ring]
+        ring_starts = np.r_[0, np.cumsum(ring_len)]
+        out[lo:hi] = _rings_centeredness(ring, ring_starts)
+        lo = hi
+        checkpoint(lo / n)
+    return out
+
+
+def _rings_centeredness(ring: np.ndarray, starts: np.ndarray) -> np.ndarray:
+    """:func:`cross_section_centeredness` (p_hat at the origin) of ``ring[starts[i]:starts[i + 1]]``
+    for every i: one batched fit; the sets it rejects (fewer than 5 points, or no ellipse) take the
+    ring mean and the farthest ring point instead.  Set i's value does not depend on the other sets."""
+    centers, axes, _ = fit_ellipses(ring, starts)
+    r = (axes[:, 0] + axes[:, 1]) / 2.0
+    for i in np.flatnonzero(np.isnan(centers[:, 0]) & (np.diff(starts) >= 3)):
+        pts = ring[starts[i] : starts[i + 1]]
+        centers[i] = pts.mean(axis=0)
+        r[i] = np.sqrt(pts[:, 0] ** 2 + pts[:, 1] ** 2).max()
+    with np.errstate(invalid="ignore", divide="ignore"):
+        c = np.maximum(0.0, 1.0 - np.sqrt(centers[:, 0] ** 2 + centers[:, 1] ** 2) / r)
+    c[~(r > 0) | ~np.isfinite(r) | (np.diff(starts) < 3)] = np.nan
+    return c
+
+
+def _dot3(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """Row-wise dot products of (M, 3) ``a`` with (3,) or (M, 3) ``b`` by element-wise operations, so
+    one sample alone and many samples at once round alike."""
+    return a[:, 0] * b[..., 0] + a[:, 1] * b[..., 1] + a[:, 2] * b[..., 2]
 
 
 class _SlabGrid:
@@ -293,16 +372,6 @@ def cross_section_centeredness(ring: np.ndarray, p_hat: np.ndarray | None = None
     Fewer than 3 points, or r = 0: NaN. ``p_hat`` defaults to the origin.
     """
     ring = np.asarray(ring, dtype=float).reshape(-1, 2)
-    p_hat = np.zeros(2) if p_hat is None else np.asarray(p_hat, dtype=float)
-    if len(ring) < 3:
-        return float("nan")
-    fit = fit_ellipse(ring) if len(ring) >= 5 else None
-    if fit is not None:
-        centre, axes, _ = fit
-        r = float(axes.mean())
-    else:
-        centre = ring.mean(axis=0)
-        r = float(np.max(np.linalg.norm(ring - p_hat, axis=1)))
-    if not r > 0 or not np.isfinite(r):
-        return float("nan")
-    return max(0.0, 1.0 - float(np.linalg.norm(p_hat - centre)) / r)
+    if p_hat is not None:
+        ring = ring - np.asarray(p_hat, dtype=float).reshape(2)
+    return float(_rings_centeredness(ring, np.array([0, len(ring)]))[0])

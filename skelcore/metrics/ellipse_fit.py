@@ -8,7 +8,7 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["fit_ellipse"]
+__all__ = ["fit_ellipse", "fit_ellipses"]
 
 # C1^-1 for the constraint 4ac - b^2 = 1 on (a, b, c): C1 = [[0, 0, 2], [0, -1, 0], [2, 0, 0]]
 _C1_INV = np.array([[0.0, 0.0, 0.5], [0.0, -1.0, 0.0], [0.5, 0.0, 0.0]])
@@ -45,65 +45,89 @@ def fit_ellipse(xy: np.ndarray) -> tuple[np.ndarray, np.ndarray, float] | None:
     xy = np.asarray(xy, dtype=float)
     if xy.ndim != 2 or xy.shape[1] != 2:
         raise ValueError(f"expected (n, 2) points, got shape {xy.shape}")
-    if len(xy) < 5 or not np.all(np.isfinite(xy)):
+    centers, axes, angles = fit_ellipses(xy, np.array([0, len(xy)]))
+    if np.isnan(centers[0, 0]):
         return None
-    origin = xy.mean(axis=0)
-    centred = xy - origin
-    scale = float(np.sqrt(np.mean(np.einsum("ij,ij->i", centred, centred))))
-    if not scale > 0:
-        return None
-    x, y = (centred / scale).T
+    return centers[0], axes[0], float(angles[0])
 
-    d1 = np.column_stack([x * x, x * y, y * y])
-    d2 = np.column_stack([x, y, np.ones_like(x)])
-    s1 = d1.T @ d1
-    s2 = d1.T @ d2
-    s3 = d2.T @ d2
+
+def fit_ellipses(xy: np.ndarray, starts: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """:func:`fit_ellipse` of many point sets at once: set i is ``xy[starts[i]:starts[i + 1]]``.
+
+    Every step runs on stacked matrices (one LAPACK call per step for all sets: curve centeredness fits
+    about 200 cross-sections, docs/performance.md 7), and set i's numbers never depend on the other
+    sets, so one set alone gives the same bits as the same set in a batch.
+
+    Returns ``centers`` (S, 2), ``semi_axes`` (S, 2, major first) and ``angles`` (S,), NaN for a set
+    that has fewer than 5 points, a non-finite point, degenerate points (e.g. collinear) or no real
+    ellipse.
+    """
+    xy = np.asarray(xy, dtype=float).reshape(-1, 2)
+    starts = np.asarray(starts, dtype=np.int64)
+    n_sets = len(starts) - 1
+    centers, axes, angles = np.full((n_sets, 2), np.nan), np.full((n_sets, 2), np.nan), np.full(n_sets, np.nan)
+    counts = np.diff(starts)
+    seg = np.repeat(np.arange(n_sets), counts)
+    usable = counts >= 5
+    usable[seg[~np.all(np.isfinite(xy), axis=1)]] = False
+    use = np.flatnonzero(usable)
+    if len(use) == 0:
+        return centers, axes, angles
+    keep = np.repeat(usable, counts)
+    pts, slot = xy[keep], np.repeat(np.arange(len(use)), counts[use])
+    first = np.r_[0, np.cumsum(counts[use])[:-1]]
+    m = counts[use].astype(float)
+    # centred and scaled to unit RMS radius: the constrained problem is invariant under both
+    origin = np.add.reduceat(pts, first, axis=0) / m[:, None]
+    centred = pts - origin[slot]
+    scale = np.sqrt(np.add.reduceat(np.einsum("ij,ij->i", centred, centred), first) / m)
+    ok = scale > 0
+    local = centred / np.where(ok, scale, 1.0)[slot][:, None]
+    x, y = local[:, 0], local[:, 1]
+    design = np.column_stack([x * x, x * y, y * y, x, y, np.ones_like(x)])  # [D1 | D2]
+    scatter = np.add.reduceat(design[:, :, None] * design[:, None, :], first, axis=0)
+    s1, s2, s3 = scatter[:, :3, :3], scatter[:, :3, 3:], scatter[:, 3:, 3:]
     # s3 is singular exactly when the points are collinear; the cutoff is relative (unit RMS data)
-    if np.linalg.cond(s3) > 1e12:
-        return None
-    t = -np.linalg.solve(s3, s2.T)
+    with np.errstate(invalid="ignore", divide="ignore", over="ignore"):
+        ok &= np.linalg.cond(s3) <= 1e12
+    use, s1, s2, s3, origin, scale = use[ok], s1[ok], s2[ok], s3[ok], origin[ok], scale[ok]
+    if len(use) == 0:
+        return centers, axes, angles
+    t = -np.linalg.solve(s3, np.swapaxes(s2, 1, 2))
     reduced = _C1_INV @ (s1 + s2 @ t)
+    finite = np.all(np.isfinite(reduced), axis=(1, 2))
+    reduced[~finite] = np.eye(3)
     with np.errstate(invalid="ignore"):
         eigval, eigvec = np.linalg.eig(reduced)
-    if not np.all(np.isfinite(eigvec)):
-        return None
+    found = finite & np.all(np.isfinite(eigvec), axis=(1, 2))
     eigvec = np.real(eigvec)
-    constraint = 4 * eigvec[0] * eigvec[2] - eigvec[1] ** 2
-    ok = np.flatnonzero((constraint > 0) & (np.abs(np.imag(eigval)) < 1e-12 * (1 + np.abs(eigval))))
-    if len(ok) == 0:
-        return None
+    constraint = 4 * eigvec[:, 0, :] * eigvec[:, 2, :] - eigvec[:, 1, :] ** 2
+    admissible = (constraint > 0) & (np.abs(np.imag(eigval)) < 1e-12 * (1 + np.abs(eigval)))
+    found &= np.any(admissible, axis=1)
     # exactly one eigenvector satisfies the constraint in theory; with round-off take the one of
     # smallest non-negative eigenvalue (the algebraic residual)
-    best = ok[np.argmin(np.abs(np.real(eigval[ok])))]
-    a1 = eigvec[:, best]
-    a, b, c = a1
-    d, e, f = t @ a1
-    return _conic_geometry(a, b, c, d, e, f, origin, scale)
-
-
-def _conic_geometry(a: float, b: float, c: float, d: float, e: float, f: float, origin: np.ndarray, scale: float):
-    """Centre, semi-axes (major first) and major-axis angle of an ellipse conic in scaled coordinates."""
-    quad = np.array([[a, b / 2], [b / 2, c]])
-    det = a * c - b * b / 4
-    if not det > 0:
-        return None
-    center = np.linalg.solve(quad, [-d / 2, -e / 2])
-    value_at_center = f + (d * center[0] + e * center[1]) / 2
+    best = np.argmin(np.where(admissible, np.abs(np.real(eigval)), np.inf), axis=1)
+    a1 = np.take_along_axis(eigvec, best[:, None, None], axis=2)[:, :, 0]
+    a, b, c = a1.T
+    d, e, f = np.einsum("sij,sj->si", t, a1).T
+    # conic geometry: centre, semi-axes (major first), major-axis angle, in scaled coordinates
+    found &= a * c - b * b / 4 > 0
+    quad = np.stack([np.stack([a, b / 2], axis=1), np.stack([b / 2, c], axis=1)], axis=1)
+    quad[~found] = np.eye(2)
+    centre = np.linalg.solve(quad, np.column_stack([-d / 2, -e / 2])[:, :, None])[:, :, 0]
+    value_at_center = f + (d * centre[:, 0] + e * centre[:, 1]) / 2
     lam, vec = np.linalg.eigh(quad)
     with np.errstate(invalid="ignore", divide="ignore"):
-        squared = -value_at_center / lam
-    if not np.all(np.isfinite(squared)) or not np.all(squared > 0):
-        return None
-    axes = np.sqrt(squared) * scale
-    major = int(np.argmax(axes))
-    direction = vec[:, major]
-    angle = float(np.arctan2(direction[1], direction[0]))
-    if angle <= -np.pi / 2:
-        angle += np.pi
-    elif angle > np.pi / 2:
-        angle -= np.pi
-    center_out = origin + center * scale
-    if not np.all(np.isfinite(center_out)):
-        return None
-    return center_out, np.sort(axes)[::-1], angle
+        squared = -value_at_center[:, None] / lam
+        found &= np.all(np.isfinite(squared), axis=1) & np.all(squared > 0, axis=1)
+        semi = np.sqrt(squared) * scale[:, None]
+    major = np.argmax(semi, axis=1)
+    direction = np.take_along_axis(vec, major[:, None, None], axis=2)[:, :, 0]
+    angle = np.arctan2(direction[:, 1], direction[:, 0])
+    angle = np.where(angle <= -np.pi / 2, angle + np.pi, np.where(angle > np.pi / 2, angle - np.pi, angle))
+    centre_out = origin + centre * scale[:, None]
+    found &= np.all(np.isfinite(centre_out), axis=1)
+    centers[use[found]] = centre_out[found]
+    axes[use[found]] = np.sort(semi[found], axis=1)[:, ::-1]
+    angles[use[found]] = angle[found]
+    return centers, axes, angles
