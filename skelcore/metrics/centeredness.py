@@ -250,17 +250,17 @@ def _all_samples_at_once(
     n = len(points)
     out = np.full(n, np.nan)
     reach = half + grid.half_cell * np.abs(u).sum(axis=1) * (1 + 1e-9) + 1e-12
-    # (sample, cell) pairs that may meet the slab, sample-major: each sample's cells in grid order
-    hit_s, hit_c = np.nonzero(np.abs(np.einsum("ck,sk->sc", grid.centres, u) - np.einsum("sk,sk->s", points, u)[:, None])
-                              < reach[:, None])
-    per_sample = np.bincount(hit_s, weights=grid.counts[hit_c], minlength=n).astype(np.int64)
-    bounds = np.r_[0, np.cumsum(per_sample)]
+    offset = np.einsum("sk,sk->s", points, u)
     lo = 0
-    while lo < n:  # batches of samples of about _CURVE_BATCH_PAIRS candidates
-        hi = max(lo + 1, int(np.searchsorted(bounds, bounds[lo] + _CURVE_BATCH_PAIRS, side="right")) - 1)
-        hi = min(hi, n)
-        sel = (hit_s >= lo) & (hit_s < hi)
-        cs, cc = hit_s[sel], hit_c[sel]
+    while lo < n:
+        # a batch of samples: its (sample, cell) test matrix and its slab candidates bounded in memory
+        hi = min(n, lo + max(1, _CURVE_BATCH_PAIRS // max(1, len(grid.centres))))
+        hit_s, hit_c = np.nonzero(np.abs(np.einsum("ck,sk->sc", grid.centres, u[lo:hi]) - offset[lo:hi, None])
+                                  < reach[lo:hi, None])  # sample-major: each sample's cells in grid order
+        bounds = np.r_[0, np.cumsum(np.bincount(hit_s, weights=grid.counts[hit_c], minlength=hi - lo))]
+        hi = lo + max(1, int(np.searchsorted(bounds, _CURVE_BATCH_PAIRS, side="right")) - 1)
+        sel = hit_s < hi - lo
+        cs, cc = hit_s[sel] + lo, hit_c[sel]
         counts = grid.counts[cc]
         total = int(counts.sum())
         shift = np.repeat(grid.starts[cc] - (np.cumsum(counts) - counts), counts)
