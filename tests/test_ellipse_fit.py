@@ -115,3 +115,17 @@ def test_batched_fits_equal_one_by_one():
         else:
             assert np.array_equal(centers[i], one[0]) and np.array_equal(axes[i], one[1]) and angles[i] == one[2]
     assert np.isfinite(centers[:40]).all() and np.isnan(centers[40:46]).all()
+
+
+def test_batched_fit_of_a_large_set_equals_the_single_fit():
+    """A cross-section of a million-point cloud holds thousands of points: the same bits alone or
+    beside small sets."""
+    rng = np.random.default_rng(2)
+    big = _ellipse((1.0, -2.0), 0.3, 0.2, 0.4, rng.uniform(0, 2 * np.pi, 30000)) + rng.normal(scale=1e-3, size=(30000, 2))
+    small = _ellipse((0.0, 0.0), 2.0, 1.0, 0.0, np.linspace(0, 6, 7))
+    centers, axes, angles = fit_ellipses(np.vstack([small, big, small]), np.array([0, 7, 30007, 30014]))
+    one = fit_ellipse(big)
+    assert np.array_equal(centers[1], one[0]) and np.array_equal(axes[1], one[1]) and angles[1] == one[2]
+    np.testing.assert_allclose(one[0], [1.0, -2.0], atol=1e-4)
+    np.testing.assert_allclose(one[1], [0.3, 0.2], rtol=1e-3)
+    assert np.array_equal(centers[0], centers[2])

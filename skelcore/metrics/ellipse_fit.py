@@ -54,9 +54,11 @@ def fit_ellipse(xy: np.ndarray) -> tuple[np.ndarray, np.ndarray, float] | None:
 def fit_ellipses(xy: np.ndarray, starts: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """:func:`fit_ellipse` of many point sets at once: set i is ``xy[starts[i]:starts[i + 1]]``.
 
-    Every step runs on stacked matrices (one LAPACK call per step for all sets: curve centeredness fits
-    about 200 cross-sections, docs/performance.md 7), and set i's numbers never depend on the other
-    sets, so one set alone gives the same bits as the same set in a batch.
+    Each set's scatter matrices are one BLAS product; every later step (condition, solve, the 3 x 3
+    eigenproblem, the conic's geometry) is one LAPACK call on the stacked matrices of all sets, instead
+    of a dozen numpy calls per set (curve centeredness fits about 200 cross-sections,
+    docs/performance.md 7).  Set i's numbers never depend on the other sets, so one set alone gives the
+    same bits as in a batch.
 
     Returns ``centers`` (S, 2), ``semi_axes`` (S, 2, major first) and ``angles`` (S,), NaN for a set
     that has fewer than 5 points, a non-finite point, degenerate points (e.g. collinear) or no real
@@ -66,27 +68,29 @@ def fit_ellipses(xy: np.ndarray, starts: np.ndarray) -> tuple[np.ndarray, np.nda
     starts = np.asarray(starts, dtype=np.int64)
     n_sets = len(starts) - 1
     centers, axes, angles = np.full((n_sets, 2), np.nan), np.full((n_sets, 2), np.nan), np.full(n_sets, np.nan)
-    counts = np.diff(starts)
-    seg = np.repeat(np.arange(n_sets), counts)
-    usable = counts >= 5
-    usable[seg[~np.all(np.isfinite(xy), axis=1)]] = False
-    use = np.flatnonzero(usable)
-    if len(use) == 0:
+    # per set: centred and scaled to unit RMS radius (the constrained problem is invariant under
+    # both), then the scatter matrices of D1 = [x^2, xy, y^2] and D2 = [x, y, 1] (a loop: a set may
+    # hold tens of thousands of points, and its products go through BLAS)
+    use, origins, scales, s1s, s2s, s3s = [], [], [], [], [], []
+    for i in range(n_sets):
+        pts = xy[starts[i] : starts[i + 1]]
+        if len(pts) < 5 or not np.all(np.isfinite(pts)):
+            continue
+        origin = pts.mean(axis=0)
+        centred = pts - origin
+        scale = float(np.sqrt(np.mean(np.einsum("ij,ij->i", centred, centred))))
+        if not scale > 0:
+            continue
+        x, y = (centred / scale).T
+        d = np.column_stack([x * x, x * y, y * y, x, y, np.ones_like(x)])
+        sc = d.T @ d
+        use.append(i), origins.append(origin), scales.append(scale)
+        s1s.append(sc[:3, :3]), s2s.append(sc[:3, 3:]), s3s.append(sc[3:, 3:])
+    if not use:
         return centers, axes, angles
-    keep = np.repeat(usable, counts)
-    pts, slot = xy[keep], np.repeat(np.arange(len(use)), counts[use])
-    first = np.r_[0, np.cumsum(counts[use])[:-1]]
-    m = counts[use].astype(float)
-    # centred and scaled to unit RMS radius: the constrained problem is invariant under both
-    origin = np.add.reduceat(pts, first, axis=0) / m[:, None]
-    centred = pts - origin[slot]
-    scale = np.sqrt(np.add.reduceat(np.einsum("ij,ij->i", centred, centred), first) / m)
-    ok = scale > 0
-    local = centred / np.where(ok, scale, 1.0)[slot][:, None]
-    x, y = local[:, 0], local[:, 1]
-    design = np.column_stack([x * x, x * y, y * y, x, y, np.ones_like(x)])  # [D1 | D2]
-    scatter = np.add.reduceat(design[:, :, None] * design[:, None, :], first, axis=0)
-    s1, s2, s3 = scatter[:, :3, :3], scatter[:, :3, 3:], scatter[:, 3:, 3:]
+    use, origin, scale = np.array(use), np.array(origins), np.array(scales)
+    s1, s2, s3 = np.array(s1s), np.array(s2s), np.array(s3s)
+    ok = np.ones(len(use), dtype=bool)
     # s3 is singular exactly when the points are collinear; the cutoff is relative (unit RMS data)
     with np.errstate(invalid="ignore", divide="ignore", over="ignore"):
         ok &= np.linalg.cond(s3) <= 1e12
@@ -109,7 +113,7 @@ def fit_ellipses(xy: np.ndarray, starts: np.ndarray) -> tuple[np.ndarray, np.nda
     best = np.argmin(np.where(admissible, np.abs(np.real(eigval)), np.inf), axis=1)
     a1 = np.take_along_axis(eigvec, best[:, None, None], axis=2)[:, :, 0]
     a, b, c = a1.T
-    d, e, f = np.einsum("sij,sj->si", t, a1).T
+    d, e, f = (t @ a1[:, :, None])[:, :, 0].T
     # conic geometry: centre, semi-axes (major first), major-axis angle, in scaled coordinates
     found &= a * c - b * b / 4 > 0
     quad = np.stack([np.stack([a, b / 2], axis=1), np.stack([b / 2, c], axis=1)], axis=1)
