@@ -100,8 +100,9 @@ def _emst_lengths(points: np.ndarray, checkpoint: Checkpoint = no_checkpoint) ->
     rank[perm] = np.arange(n)
     points = take_rows(points, perm)
     dist, idx = chunked_query(tree, points, k + 1, checkpoint, 0.02, 0.5, chunk=_QUERY_CHUNK)
-    idx = rank[idx]
-    checkpoint(0.5)
+    for lo in range(0, n, _ROUND_CHUNK):  # back to leaf-order numbers, in blocks between checkpoints
+        idx[lo : lo + _ROUND_CHUNK] = np.take(rank, idx[lo : lo + _ROUND_CHUNK])
+        checkpoint(0.5)
     dist, idx = dist[:, 1:], idx[:, 1:]  # column 0 is the point itself (points are distinct)
     lower = dist[:, -1].copy()  # every point closer than this is in the point's own component
     deep_done = np.zeros(n, bool)
