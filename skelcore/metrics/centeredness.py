@@ -186,7 +186,9 @@ def curve_centeredness(
     The slab is a thin plate spanning the whole cloud, so candidates come from a uniform grid of
     cells (side max(alpha / 2, diagonal / 512): half the slab's width, so the cells that meet it hold
     about 1.5 x its points; at 1M points 15 % faster than cells of alpha): only the points of cells
-    that can meet the slab are tested. The result equals that of testing every cloud point.
+    that can meet the slab are tested. The result equals that of testing every cloud point.  Clouds
+    under 50k points take every sample at once in flat arrays, larger ones cut the rings per sample on
+    threads; both fit all rings in one batched call and give the same bits (docs/performance.md 7).
     """
     cloud = np.asarray(cloud, dtype=float)
     points = np.asarray(sample_points, dtype=float)
@@ -274,21 +276,26 @@ def _all_samples_at_once(
         dist = np.hypot(flat[:, 0], flat[:, 1])
         order = np.lexsort((dist, sid))  # stable: equal distances keep the candidates' order
         sid, dist, flat = sid[order], dist[order], flat[order]
-        # ring = the leading run of each sample's sorted distances growing by < growth (ring_length)
-        starts = np.searchsorted(sid, np.arange(lo, hi + 1))
-        stop = np.ones(len(dist), dtype=bool)  # stop[i]: the ring ends after position i
-        if len(dist) > 1:
-            stop[:-1] = ~(dist[1:] < growth * dist[:-1]) | (sid[1:] != sid[:-1])
-        ends = np.flatnonzero(stop)
-        first_stop = ends[np.minimum(np.searchsorted(ends, starts[:-1]), len(ends) - 1)] if len(ends) else starts[:-1]
-        ring_len = np.where(starts[1:] > starts[:-1], first_stop - starts[:-1] + 1, 0)
-        in_ring = np.arange(len(dist)) - np.repeat(starts[:-1], starts[1:] - starts[:-1]) < np.repeat(ring_len, starts[1:] - starts[:-1])
-        ring = flat[in_ring]
-        ring_starts = np.r_[0, np.cumsum(ring_len)]
-        out[lo:hi] = _rings_centeredness(ring, ring_starts)
+        in_ring, ring_len = _leading_rings(sid, dist, np.searchsorted(sid, np.arange(lo, hi + 1)), growth)
+        out[lo:hi] = _rings_centeredness(flat[in_ring], np.r_[0, np.cumsum(ring_len)])
         lo = hi
         checkpoint(lo / n)
     return out
+
+
+def _leading_rings(sid: np.ndarray, dist: np.ndarray, starts: np.ndarray, growth: float) -> tuple[np.ndarray, np.ndarray]:
+    """:func:`ring_length` of every sample at once: ``dist[starts[i]:starts[i + 1]]`` are sample i's
+    sorted distances (``sid`` its sample ids).  Returns the mask of the positions kept and each ring's
+    length."""
+    stop = np.ones(len(dist), dtype=bool)  # stop[j]: the ring ends after position j
+    if len(dist) > 1:
+        stop[:-1] = ~(dist[1:] < growth * dist[:-1]) | (sid[1:] != sid[:-1])
+    ends = np.flatnonzero(stop)
+    first, counts = starts[:-1], np.diff(starts)
+    first_stop = ends[np.minimum(np.searchsorted(ends, first), len(ends) - 1)] if len(ends) else first
+    ring_len = np.where(counts > 0, first_stop - first + 1, 0)
+    position = np.arange(len(dist)) - np.repeat(first, counts)
+    return position < np.repeat(ring_len, counts), ring_len
 
 
 def _rings_centeredness(ring: np.ndarray, starts: np.ndarray) -> np.ndarray:
