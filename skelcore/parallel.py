@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import os
 import threading
-from concurrent.futures import ThreadPoolExecutor
+from concurrent.futures import FIRST_EXCEPTION, ThreadPoolExecutor, wait
 from typing import Callable, TypeVar
 
 from .errors import Cancelled
@@ -18,7 +18,7 @@ from .geometry import Checkpoint, no_checkpoint
 A = TypeVar("A")
 B = TypeVar("B")
 
-__all__ = ["on_threads", "side_by_side", "polled_build"]
+__all__ = ["on_threads", "side_by_side", "polled_build", "polled_streams"]
 
 
 def on_threads(
@@ -123,3 +123,36 @@ def polled_build(build: Callable, n: int, checkpoint: Checkpoint, name: str, thr
         raise
     return result[0]
 
+
+
+def polled_streams(
+    fn: Callable, spans: list, workers: int | None, checkpoint: Checkpoint, progress: Callable[[], float],
+    stop, poll: float = 0.05,
+) -> None:
+    """``fn(*span)`` for every span on ``workers`` threads (None = all cores), while this thread calls
+    ``checkpoint(progress())`` every ``poll`` s.
+
+    For compiled code that releases the GIL, keeps state from one item to the next inside a span (so
+    spans should be long) and returns early once ``stop[0]`` is set: a cancel (or any error) raised by
+    the checkpoint sets it, waits for the threads and is re-raised; an error in a span is re-raised here
+    after the others have stopped.  Only this thread calls ``checkpoint``.
+    """
+    if not spans:
+        return
+    workers = max(1, min(len(spans), int(workers or os.cpu_count() or 1)))
+    checkpoint(progress())
+    with ThreadPoolExecutor(max_workers=workers, thread_name_prefix="skelscope-stream") as pool:
+        futures = [pool.submit(fn, *span) for span in spans]
+        try:
+            pending = set(futures)
+            while pending:
+                finished, pending = wait(pending, timeout=poll, return_when=FIRST_EXCEPTION)
+                for fut in finished:
+                    fut.result()  # an error in a span: raised here
+                checkpoint(progress())
+        except BaseException:
+            stop[0] = 1
+            for fut in futures:
+                fut.cancel()
+            wait(futures)
+            raise

@@ -210,6 +210,44 @@ def test_single_worker_and_pool_agree():
     assert np.array_equal(boundedness_rays(cloud, queries, workers=1), boundedness_rays(cloud, queries, workers=2))
 
 
+def test_values_do_not_depend_on_how_the_clusters_are_cut_into_streams(monkeypatch):
+    """A stream keeps each sample's hint (the leaf its ray hit from the previous cluster); hints only
+    order the search, so one stream, a few and one stream per cluster give the same bits."""
+    from skelcore.metrics import rays_kernel
+
+    shape = torus(6000, 1.0, 0.3, n_curve=32, seed=5)
+    queries = shape.skeletal[::3] + np.random.default_rng(5).normal(scale=0.01, size=shape.skeletal[::3].shape)
+    runs = []
+    for per_worker in (1, 8, 10**9):
+        monkeypatch.setattr(rays_kernel, "STREAMS_PER_WORKER", per_worker)
+        runs.append(boundedness_rays(shape.cloud, queries, workers=2))
+    assert np.array_equal(runs[0], runs[1]) and np.array_equal(runs[0], runs[2])
+
+
+def test_a_cancel_while_the_kernel_streams_run_stops_them(monkeypatch):
+    """The checkpoint is polled while the streams run; a cancel sets the kernel's stop flag, each stream
+    returns after the cluster it is in, and no thread is left behind."""
+    import threading
+
+    from skelcore.metrics import rays_kernel
+
+    monkeypatch.setattr(rays_kernel, "POLL", 0.002)
+    shape = torus(20000, 1.0, 0.3, n_curve=32, seed=6)
+    queries = shape.skeletal + np.random.default_rng(6).normal(scale=0.01, size=shape.skeletal.shape)
+    seen = []
+
+    def cancel_mid_kernel(fraction: float) -> None:
+        seen.append(fraction)
+        if 0.0 < fraction < 1.0:  # progress only moves inside the kernel's streams
+            raise Cancelled("stop")
+
+    with pytest.raises(Cancelled):
+        boundedness_rays(shape.cloud, queries, checkpoint=cancel_mid_kernel)
+    assert 0.0 < seen[-1] < 1.0
+    assert not [t for t in threading.enumerate() if t.name.startswith("skelscope-stream")]
+    assert boundedness_rays(shape.cloud, queries[:50]).shape == (50,)  # and the next call runs normally
+
+
 @pytest.mark.parametrize("cell", [0.5, 1.0, 2.0])
 def test_shared_far_field_stays_within_0_01_of_every_pair(cell):
     shape = cylinder(12000, 0.5, 4.0, seed=5)
@@ -500,3 +538,20 @@ def test_copies_of_cloud_points_change_nothing_but_the_spacing_rule(copies):
     factor = 2.0 * rays_radius(cloud, 1.0) / rays_radius(doubled, 1.0)  # the same h for both
     got = boundedness_rays(doubled, queries, radius_factor=factor)
     assert np.allclose(got, boundedness_rays(cloud, queries), atol=1 / 4608)
+
+
+def test_the_kernel_counts_finished_clusters_and_returns_at_once_when_stopped():
+    from skelcore.metrics import _raycast
+    from skelcore.metrics.rays_kernel import BallTree, exact_plan
+
+    cloud = _torus(2000, seed=8)
+    queries = np.random.default_rng(8).uniform(-0.5, 0.5, (30, 3))
+    tree = BallTree(cloud)
+    plan = exact_plan(queries, 0.1)
+    args = (tree.points, tree.nodes, np.ascontiguousarray(queries[plan.order]), plan.starts, plan.centres, plan.reach,
+            0, 30, 0.02, 48, 96)
+    beta, stats, done = np.zeros(30), np.zeros(6, np.int64), np.zeros(1, np.int64)
+    assert _raycast.clusters(*args, beta, stats, np.ones(1, np.int32), done) == 0 and done[0] == 0
+    assert not beta.any() and stats[2] == 0  # stopped before the first cluster: no ray cast
+    assert _raycast.clusters(*args, beta, stats, np.zeros(1, np.int32), done) == 30 and done[0] == 30
+    assert beta.any() and stats[2] > 0

@@ -11,7 +11,7 @@ import pytest
 
 from skelcore.errors import Cancelled
 from skelcore.metrics import topology
-from skelcore.parallel import on_threads, side_by_side
+from skelcore.parallel import on_threads, polled_streams, side_by_side
 from skelcore.shapes import torus
 
 
@@ -82,3 +82,61 @@ def test_topology_side_by_side_equals_one_after_the_other(monkeypatch):
     two = topology.topological_similarity(sh.cloud, skel)
     assert (one.bottleneck, one.wasserstein, one.eps_star, one.n_bars) == (two.bottleneck, two.wasserstein, two.eps_star, two.n_bars)
     assert np.array_equal(one.cloud_barcode, two.cloud_barcode) and np.array_equal(one.skeletal_barcode, two.skeletal_barcode)
+
+
+def _no_stream_thread() -> bool:
+    return not [t for t in threading.enumerate() if t.name.startswith("skelscope-stream")]
+
+
+def test_polled_streams_run_every_span_and_report_progress_from_this_thread():
+    me = threading.get_ident()
+    done = np.zeros(6, np.int64)
+    stop = np.zeros(1, np.int32)
+    fractions = []
+
+    def span(i):
+        for _ in range(4):
+            time.sleep(0.01)
+            done[i] += 1
+
+    def checkpoint(f):
+        assert threading.get_ident() == me
+        fractions.append(f)
+
+    polled_streams(span, [(i,) for i in range(6)], 2, checkpoint, lambda: done.sum() / 24, stop, poll=0.005)
+    assert done.tolist() == [4] * 6 and stop[0] == 0
+    assert fractions[0] == 0.0 and fractions[-1] == 1.0 and fractions == sorted(fractions) and len(fractions) > 3
+    assert _no_stream_thread()
+
+
+def test_a_cancel_sets_the_stop_flag_and_waits_for_the_streams_and_an_error_in_one_stops_the_others():
+    stop = np.zeros(1, np.int32)
+    returned = []
+
+    def span(i):  # like the kernel: works until the stop flag is set
+        while not stop[0]:
+            time.sleep(0.002)
+        returned.append(i)
+
+    calls = [0]
+
+    def cancel_at_second(f):
+        calls[0] += 1
+        if calls[0] == 2:
+            raise Cancelled("stop")
+
+    with pytest.raises(Cancelled):
+        polled_streams(span, [(0,), (1,)], 2, cancel_at_second, lambda: 0.0, stop, poll=0.01)
+    assert stop[0] == 1 and sorted(returned) == [0, 1] and _no_stream_thread()
+
+    stop[0] = 0
+
+    def failing(i):
+        if i == 1:
+            raise ValueError("bad span")
+        while not stop[0]:
+            time.sleep(0.002)
+
+    with pytest.raises(ValueError, match="bad span"):
+        polled_streams(failing, [(0,), (1,)], 2, lambda f: None, lambda: 0.0, stop, poll=0.01)
+    assert stop[0] == 1 and _no_stream_thread()

@@ -477,15 +477,22 @@ static int64_t near_raster(const Raster *r, const Tree *t, const Near *near, int
 /* clusters(points (n,3) f32 tree order, nodes (m) Node, queries (q,3) f64 grouped by cluster,
  *          starts (k1 - k0 + 1) i64 into queries, centres (k,3) f64, reach (k) f64 (all clusters),
  *          cluster range [k0, k1), h, rows, bins, beta out (q) f64,
- *          stats out (6) i64: node visits, near caps, far rays, near points, hint tries, hint hits)
- * beta of the queries of clusters k0..k1-1 (queries holds just theirs, grouped by cluster). */
+ *          stats out (6) i64: node visits, near caps, far rays, near points, hint tries, hint hits,
+ *          stop (1) i32, done out (1) i64)
+ * beta of the queries of clusters k0..k1-1 (queries holds just theirs, grouped by cluster), one cluster
+ * after the other, so that each far ray can start from the leaf its sample hit from the previous cluster.
+ * `done` counts the clusters finished (read by another thread for progress); once another thread sets
+ * `stop`, the call returns after the cluster it is in.  Returns the number of clusters finished. */
 static PyObject *py_clusters(PyObject *self, PyObject *args) {
-    Py_buffer pts, nds, qs, starts, cen, rch, beta, stats;
+    Py_buffer pts, nds, qs, starts, cen, rch, beta, stats, stop_buf, done_buf;
     int k0, k1, rows, bins;
     double h;
-    if (!PyArg_ParseTuple(args, "y*y*y*y*y*y*iidiiw*w*", &pts, &nds, &qs, &starts, &cen, &rch,
-                          &k0, &k1, &h, &rows, &bins, &beta, &stats))
+    if (!PyArg_ParseTuple(args, "y*y*y*y*y*y*iidiiw*w*w*w*", &pts, &nds, &qs, &starts, &cen, &rch,
+                          &k0, &k1, &h, &rows, &bins, &beta, &stats, &stop_buf, &done_buf))
         return NULL;
+    volatile const int32_t *stop = (volatile const int32_t *)stop_buf.buf;
+    volatile int64_t *done_count = (volatile int64_t *)done_buf.buf;
+    int64_t finished = 0;
     PyObject *result = NULL;
     Raster r = {0};
     int32_t n = (int32_t)(pts.len / (3 * sizeof(float)));
@@ -498,6 +505,10 @@ static PyObject *py_clusters(PyObject *self, PyObject *args) {
     uint8_t *full = NULL;
     int32_t *stack = NULL, *hints = NULL;
     Near *near = NULL;
+    if (stop_buf.len < (Py_ssize_t)sizeof(int32_t) || done_buf.len < (Py_ssize_t)sizeof(int64_t)) {
+        PyErr_SetString(PyExc_ValueError, "clusters: stop needs one int32, done one int64");
+        goto done;
+    }
     if (rows < 1 || bins < 1 || raster_init(&r, rows, bins) != 0) {
         PyErr_SetString(PyExc_ValueError, "clusters: bad raster");
         goto done;
@@ -518,7 +529,7 @@ static PyObject *py_clusters(PyObject *self, PyObject *args) {
     const double h2 = h * h;
     const double total = (double)rows * bins;
     double prev[3] = {0.0, 0.0, 0.0};
-    for (int k = k0; k < k1; k++) {
+    for (int k = k0; k < k1 && !*stop; k++) {
         const double *c = cc + 3 * (size_t)k;
         const float cf[3] = {(float)c[0], (float)c[1], (float)c[2]};
         const double reach = rr[k];
@@ -576,6 +587,7 @@ static PyObject *py_clusters(PyObject *self, PyObject *args) {
             for (size_t x = 0; x < nw; x++) count += __builtin_popcountll(mb[x] | far[x]);
             out[i] = (double)count / total;
         }
+        *done_count = ++finished;
     }
     stat[0] += w.visits;
     stat[1] += caps;
@@ -584,13 +596,12 @@ static PyObject *py_clusters(PyObject *self, PyObject *args) {
     stat[4] += w.hint_tries;
     stat[5] += w.hint_hits;
     Py_END_ALLOW_THREADS
-    result = Py_None;
-    Py_INCREF(result);
+    result = PyLong_FromLongLong((long long)finished);
 done:
     raster_free(&r);
     free(far); free(full); free(stack); free(near); free(hints);
     PyBuffer_Release(&pts); PyBuffer_Release(&nds); PyBuffer_Release(&qs); PyBuffer_Release(&starts); PyBuffer_Release(&cen); PyBuffer_Release(&rch);
-    PyBuffer_Release(&beta); PyBuffer_Release(&stats);
+    PyBuffer_Release(&beta); PyBuffer_Release(&stats); PyBuffer_Release(&stop_buf); PyBuffer_Release(&done_buf);
     return result;
 }
 

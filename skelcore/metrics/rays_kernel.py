@@ -1,11 +1,12 @@
-"""Driver of the compiled ``rays`` kernel (``_raycast.c``): the cloud's tree, the cluster plan, the tasks.
+"""Driver of the compiled ``rays`` kernel (``_raycast.c``): the cloud's tree, the cluster plan, the streams.
 
 beta(q) is the share of raster samples whose ray from q meets a ball of radius h around a cloud point
 (SPEC 2; the same samples as ``_rays.CapRaster``).  Queries are grouped in clusters (docs/boundedness.md
 1.6-1.7: cubic cells, finer cells near the surface, near-surface queries alone); each cluster's far field
 (points beyond its reach) is ray cast once from its centroid, its near field rasterised as exact caps
-from every member.  A cluster of one query at its own position is exact.  Clusters run on a thread pool
-(the kernel releases the GIL) in tasks of bounded cost, with a checkpoint after each task.
+from every member.  A cluster of one query at its own position is exact.  Clusters run in long contiguous
+streams on a thread pool (the kernel releases the GIL and keeps each sample's hint from one cluster to the
+next), while the caller's thread polls its checkpoint; a cancel stops the kernel within one cluster.
 Design, costs and errors: docs/boundedness.md section 3.
 """
 
@@ -16,7 +17,7 @@ from dataclasses import dataclass
 
 import numpy as np
 from ..geometry import Checkpoint, no_checkpoint, take_rows
-from ..parallel import on_threads, polled_build
+from ..parallel import on_threads, polled_build, polled_streams
 from . import _raycast
 
 # queries closer than this many h to the cloud share only in finer cells, or are alone (1.7)
@@ -25,8 +26,12 @@ ALONE_WITHIN = 4.0
 FINER_BOOST = 2.0
 # cost units (about one tree-node visit each): one near cap, and a far ray per level of the tree
 CAP_COST = 25.0
-# cost units per task: about 40 ms of one core (a unit costs about 80 ns at 1M points), so checkpoints stay well under 0.5 s apart
-TASK_COST = 0.5e6
+# clusters run in this many contiguous streams per core (a stream keeps its far rays' hints from one
+# cluster to the next: 15-38 % fewer node visits than tasks of ~40 ms, docs/boundedness.md 3.9; several
+# per core so that the cores finish together)
+STREAMS_PER_WORKER = 8
+# seconds between two checkpoints while the streams run (the kernel stops within one cluster of a cancel)
+POLL = 0.05
 # points per nearest-neighbour call (about 30 ms of one core)
 NN_CHUNK = 65536
 
@@ -255,38 +260,39 @@ def run_plan(
     tree: BallTree, plan: Plan, queries: np.ndarray, h: float, rows: int, bins: int, workers: int | None = None,
     checkpoint: Checkpoint = no_checkpoint, stats: np.ndarray | None = None,
 ) -> np.ndarray:
-    """beta of every query row (in the input order), the plan's clusters on ``workers`` threads."""
+    """beta of every query row (in the input order), the plan's clusters in contiguous streams of about
+    equal estimated cost on ``workers`` threads; the checkpoint is called every ``POLL`` s meanwhile."""
     q_sorted = np.ascontiguousarray(take_rows(queries, plan.order), np.float64)
+    n_clusters = len(plan.starts) - 1
+    if n_clusters == 0:
+        return np.zeros(len(q_sorted))
     sizes = np.diff(plan.starts)
-    cost = rows * bins * tree.ray_cost + sizes * max(plan.estimated_near, 1.0) * CAP_COST
-    # cluster ranges of about TASK_COST units each
-    block = np.floor(np.cumsum(cost) / TASK_COST)
-    bounds = [0] + (np.flatnonzero(np.diff(block)) + 1).tolist()
-    if bounds[-1] != len(cost):
-        bounds.append(len(cost))
-    tasks = list(zip(bounds[:-1], bounds[1:]))
+    cost = np.cumsum(rows * bins * tree.ray_cost + sizes * max(plan.estimated_near, 1.0) * CAP_COST)
+    workers = max(1, int(workers or os.cpu_count() or 1))
+    n_streams = max(1, min(n_clusters, workers * STREAMS_PER_WORKER))
+    cuts = np.searchsorted(cost, cost[-1] * np.arange(1, n_streams) / n_streams, side="right")
+    bounds = np.unique(np.r_[0, cuts, n_clusters]).astype(int).tolist()
+    streams = list(zip(bounds[:-1], bounds[1:]))
     out_sorted = np.zeros(len(q_sorted))
     stats = np.zeros(6, np.int64) if stats is None else stats
+    stream_stats = np.zeros((len(streams), 6), np.int64)
+    done = np.zeros(len(streams), np.int64)
+    stop = np.zeros(1, np.int32)
     reach = np.ascontiguousarray(plan.reach, np.float64)
     centres = np.ascontiguousarray(plan.centres, np.float64)
     starts = np.ascontiguousarray(plan.starts, np.int64)
 
-    def task(k0: int, k1: int) -> np.ndarray:
-        beta = np.zeros(int(starts[k1] - starts[k0]))
-        st = np.zeros(6, np.int64)
-        sub_starts = starts[k0 : k1 + 1] - starts[k0]
+    def stream(i: int) -> None:
+        k0, k1 = streams[i]
         _raycast.clusters(
-            tree.points, tree.nodes, q_sorted[starts[k0] : starts[k1]],
-            np.ascontiguousarray(sub_starts), centres, reach, k0, k1, float(h), rows, bins, beta, st,
+            tree.points, tree.nodes, q_sorted[starts[k0] : starts[k1]], np.ascontiguousarray(starts[k0 : k1 + 1] - starts[k0]),
+            centres, reach, k0, k1, float(h), rows, bins, out_sorted[starts[k0] : starts[k1]], stream_stats[i], stop,
+            done[i : i + 1],
         )
-        return beta, st
 
-    def store(span: tuple[int, int], result) -> None:
-        beta, st = result
-        out_sorted[starts[span[0]] : starts[span[1]]] = beta
-        stats[:] += st
-
-    on_threads(task, tasks, workers, checkpoint, store)
+    polled_streams(stream, [(i,) for i in range(len(streams))], workers, checkpoint,
+                   lambda: float(done.sum()) / max(1, n_clusters), stop, POLL)
+    stats[:] += stream_stats.sum(axis=0)
     out = np.empty(len(q_sorted))
     out[plan.order] = out_sorted
     return out
