@@ -194,27 +194,17 @@ def _morton(cells: np.ndarray) -> np.ndarray:
 
 
 def _group_ids(keys: np.ndarray, checkpoint: Checkpoint = no_checkpoint) -> np.ndarray:
-    """Dense ids of equal rows of an int64 key matrix, numbered in increasing key order (as
-    ``np.unique``'s inverse): one 1-D sort when the key space allows, with checkpoints around it (at 1M
-    queries ``np.unique`` was 0.2-0.3 s without one)."""
-    if len(keys) == 0:
-        return np.zeros(0, np.int64)
-    k = keys - keys.min(axis=0)
-    span = k.max(axis=0) + 1
+    """Dense ids of equal rows of an int64 key matrix, in increasing key order: one 1-D unique when the
+    key space allows, with checkpoints around it (about 0.2 s at 1M rows)."""
+    k = keys - keys.min(axis=0, initial=0)
+    span = k.max(axis=0, initial=0) + 1
     if float(np.prod(span.astype(float))) >= 2.0**62:
         return np.unique(k, axis=0, return_inverse=True)[1].ravel()
     flat = np.zeros(len(k), np.int64)
     for j in range(k.shape[1]):
         flat = flat * span[j] + k[:, j]
     checkpoint(0.0)
-    order = np.argsort(flat)
-    checkpoint(0.0)
-    ordered = flat[order]
-    new = np.empty(len(flat), bool)
-    new[0] = True
-    np.not_equal(ordered[1:], ordered[:-1], out=new[1:])
-    ids = np.empty(len(flat), np.int64)
-    ids[order] = np.cumsum(new) - 1
+    ids = np.unique(flat, return_inverse=True)[1].ravel()
     checkpoint(0.0)
     return ids
 
@@ -239,13 +229,14 @@ def choose_plan(
         plan.estimated_cost, plan.estimated_near = exact_cost, near_exact
         return plan
     best = None
-    for scale in 2.0 ** np.arange(-1, 6):
+    cells = _CellCounts(queries, cell / 2.0, checkpoint)
+    for halvings, scale in enumerate(2.0 ** np.arange(-1, 6)):
         reach = (near_radius + 0.87 * cell) * scale
         near = float(np.mean(tree.count_within(sample, reach)))
         if best is not None and n_q * near * CAP_COST >= best[0]:
             break  # the near part only grows with the size: no larger size can be cheaper
         checkpoint(0.0)
-        clusters = _count_cells(queries, cell * scale, checkpoint)
+        clusters = cells.count(halvings)
         cost = clusters * samples * tree.ray_cost + n_q * near * CAP_COST
         if best is None or cost < best[0]:
             best = (cost, near, scale)
@@ -265,9 +256,45 @@ def choose_plan(
     return plan
 
 
-def _count_cells(points: np.ndarray, cell: float, checkpoint: Checkpoint = no_checkpoint) -> int:
-    """Number of distinct cubic cells of side ``cell`` holding points."""
-    return int(_group_ids(np.floor(points / cell).astype(np.int64), checkpoint).max(initial=-1)) + 1
+class _CellCounts:
+    """Number of distinct cubic cells of side ``finest`` x 2^j holding points, for j = 0, 1, ... in
+    turn: the distinct cells of each size from those of the size before (floor(floor(y / 2) / 2^(j-1))
+    = floor(y / 2^j), and dividing by a power of 2 is exact in floating point), so the same counts as
+    flooring every point at each size, from ever fewer rows (1M queries: 0.9 s -> 0.35 s)."""
+
+    def __init__(self, points: np.ndarray, finest: float, checkpoint: Checkpoint = no_checkpoint):
+        self._rows = _distinct_rows(np.floor(points / finest).astype(np.int64), checkpoint)
+        self._size = 0
+        self._checkpoint = checkpoint
+
+    def count(self, halvings: int) -> int:
+        while self._size < halvings:
+            self._rows = _distinct_rows(np.floor_divide(self._rows, 2), self._checkpoint)
+            self._size += 1
+        return len(self._rows)
+
+
+def _distinct_rows(keys: np.ndarray, checkpoint: Checkpoint = no_checkpoint) -> np.ndarray:
+    """The distinct rows of an int64 key matrix (one 1-D unique of their mixed-radix codes when the key
+    space allows), in increasing code order."""
+    if len(keys) == 0:
+        return keys
+    low = keys.min(axis=0)
+    k = keys - low
+    span = k.max(axis=0) + 1
+    if float(np.prod(span.astype(float))) >= 2.0**62:
+        return np.unique(keys, axis=0)
+    flat = np.zeros(len(k), np.int64)
+    for j in range(k.shape[1]):
+        flat = flat * span[j] + k[:, j]
+    checkpoint(0.0)
+    code = np.unique(flat)
+    checkpoint(0.0)
+    columns = []
+    for j in range(k.shape[1] - 1, -1, -1):
+        code, digit = np.divmod(code, span[j])
+        columns.append(digit)
+    return np.column_stack(columns[::-1]) + low
 
 
 def run_plan(
