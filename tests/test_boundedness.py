@@ -555,3 +555,18 @@ def test_the_kernel_counts_finished_clusters_and_returns_at_once_when_stopped():
     assert not beta.any() and stats[2] == 0  # stopped before the first cluster: no ray cast
     assert _raycast.clusters(*args, beta, stats, np.zeros(1, np.int32), done) == 30 and done[0] == 30
     assert beta.any() and stats[2] > 0
+
+
+def test_cell_counts_of_every_size_equal_flooring_the_points_at_that_size():
+    """The plan's cost model counts the distinct cells of seven sizes from one another's distinct cells:
+    the same counts as flooring every point at each size, also with points on cell boundaries."""
+    from skelcore.metrics.rays_kernel import _CellCounts
+
+    rng = np.random.default_rng(1)
+    for pts in (rng.normal(size=(20000, 3)) * 0.3, np.round(rng.normal(size=(3000, 3)), 2), np.zeros((4, 3)),
+                rng.normal(size=(0, 3))):
+        for cell in (0.013, 0.05, 1 / 64):
+            counts = _CellCounts(pts, cell / 2)
+            for j, scale in enumerate(2.0 ** np.arange(-1, 6)):
+                direct = len(np.unique(np.floor(pts / (cell * scale)).astype(np.int64), axis=0))
+                assert counts.count(j) == direct, (cell, scale)
