@@ -252,7 +252,7 @@ def _all_samples_at_once(
     """
     n = len(points)
     out = np.full(n, np.nan)
-    reach = half + grid.half_cell * np.abs(u).sum(axis=1) * (1 + 1e-9) + 1e-12
+    reach = grid.reach(u, half)
     offset = np.einsum("sk,sk->s", points, u)
     lo = 0
     while lo < n:
@@ -264,12 +264,8 @@ def _all_samples_at_once(
         hi = lo + max(1, int(np.searchsorted(bounds, _CURVE_BATCH_PAIRS, side="right")) - 1)
         sel = hit_s < hi - lo
         cs, cc = hit_s[sel] + lo, hit_c[sel]
-        counts = grid.counts[cc]
-        total = int(counts.sum())
-        shift = np.repeat(grid.starts[cc] - (np.cumsum(counts) - counts), counts)
-        rows = np.arange(total) + shift
-        sid = np.repeat(cs, counts)
-        rel = take_rows(grid.points, rows) - take_rows(points, sid)
+        sid = np.repeat(cs, grid.counts[cc])
+        rel = take_rows(grid.points, grid.cell_rows(cc)) - take_rows(points, sid)
         inside = np.abs(_dot3(rel, take_rows(u, sid))) < half
         rel, sid = np.compress(inside, rel, axis=0), sid[inside]
         flat = np.column_stack([_dot3(rel, take_rows(g, sid)), _dot3(rel, take_rows(h, sid))])
@@ -341,15 +337,21 @@ class _SlabGrid:
         self.centres = lo + (cell_ijk + 0.5) * cell
         self.half_cell = 0.5 * cell
 
+    def reach(self, u: np.ndarray, half: float) -> np.ndarray:
+        """How far from the slab's mid-plane a cell centre may lie for the cell to meet the slab, for
+        unit rows ``u``: a cube's extent along u is half_cell x |u|_1; the small margin absorbs round-off."""
+        return half + self.half_cell * np.abs(u).sum(axis=-1) * (1 + 1e-9) + 1e-12
+
+    def cell_rows(self, cells: np.ndarray) -> np.ndarray:
+        """Rows of ``self.points`` of the given cells, cell after cell, each cell's in grid order."""
+        starts, counts = self.starts[cells], self.counts[cells]
+        shift = np.repeat(starts - (np.cumsum(counts) - counts), counts)
+        return np.arange(int(counts.sum())) + shift
+
     def slab_candidates(self, p: np.ndarray, u: np.ndarray, half: float) -> np.ndarray:
         """Points of every cell that may meet the slab |u . (x - p)| < half (a superset of it)."""
-        # a cube's extent along unit u is half_cell x |u|_1; the small margin absorbs round-off
-        reach = half + self.half_cell * float(np.abs(u).sum()) * (1 + 1e-9) + 1e-12
-        hit = np.abs((self.centres - p) @ u) < reach
-        starts, counts = self.starts[hit], self.counts[hit]
-        total = int(counts.sum())
-        shift = np.repeat(starts - (np.cumsum(counts) - counts), counts)
-        return take_rows(self.points, np.arange(total) + shift)
+        hit = np.flatnonzero(np.abs((self.centres - p) @ u) < self.reach(u, half))
+        return take_rows(self.points, self.cell_rows(hit))
 
 
 def _orthonormal_complement(u: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
