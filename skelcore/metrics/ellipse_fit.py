@@ -90,10 +90,9 @@ def fit_ellipses(xy: np.ndarray, starts: np.ndarray) -> tuple[np.ndarray, np.nda
         return centers, axes, angles
     use, origin, scale = np.array(use), np.array(origins), np.array(scales)
     s1, s2, s3 = np.array(s1s), np.array(s2s), np.array(s3s)
-    ok = np.ones(len(use), dtype=bool)
     # s3 is singular exactly when the points are collinear; the cutoff is relative (unit RMS data)
     with np.errstate(invalid="ignore", divide="ignore", over="ignore"):
-        ok &= np.linalg.cond(s3) <= 1e12
+        ok = np.linalg.cond(s3) <= 1e12
     use, s1, s2, s3, origin, scale = use[ok], s1[ok], s2[ok], s3[ok], origin[ok], scale[ok]
     if len(use) == 0:
         return centers, axes, angles
