@@ -1,5 +1,6 @@
-"""Build step for the two compiled modules: the rays boundedness kernel (docs/boundedness.md, section 3)
-and the coverage kernel (docs/metrics.md, section 5.2).
+"""Build step for the three compiled modules: the rays boundedness kernel (docs/boundedness.md, section 3),
+the coverage kernel (docs/metrics.md, section 5.2) and the topology stage's EMST (docs/performance.md,
+section 8).
 
 Everything else is declared in pyproject.toml.  The kernels are plain C against the CPython API (no numpy
 headers), so building needs only a C compiler and the Python headers.
@@ -18,6 +19,11 @@ setup(
             "skelcore.metrics._balls",
             sources=["skelcore/metrics/_balls.c"],
             extra_compile_args=["-O3", "-std=c99"],
+        ),
+        Extension(
+            "skelcore.metrics._emst",
+            sources=["skelcore/metrics/_emst.c"],
+            extra_compile_args=["-O3", "-std=gnu99"],
         ),
     ]
 )

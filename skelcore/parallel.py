@@ -101,10 +101,12 @@ def side_by_side(
     return first, box["value"]
 
 
-def polled_build(build: Callable, n: int, checkpoint: Checkpoint, name: str, threaded_from: int = 65536):
+def polled_build(build: Callable, n: int, checkpoint: Checkpoint, name: str, threaded_from: int = 65536,
+                 progress: Callable[[], float] | None = None):
     """``build(stop)`` of a compiled kernel (which releases the GIL) in a thread while this one calls the
-    checkpoint every 50 ms; a cancel sets ``stop`` (an int32 array the kernel reads), waits for the build
-    to return and re-raises.  Below ``threaded_from`` points the build takes a few ms: no thread."""
+    checkpoint every 50 ms (with ``progress()``, else 0); a cancel sets ``stop`` (an int32 array the kernel
+    reads), waits for the build to return and re-raises.  Below ``threaded_from`` points the build takes a
+    few ms: no thread."""
     import numpy as np
 
     stop = np.zeros(1, np.int32)
@@ -116,7 +118,7 @@ def polled_build(build: Callable, n: int, checkpoint: Checkpoint, name: str, thr
     try:
         while worker.is_alive():
             worker.join(0.05)
-            checkpoint(0.0)
+            checkpoint(progress() if progress is not None else 0.0)
     except BaseException:
         stop[0] = 1
         worker.join()

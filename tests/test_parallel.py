@@ -12,7 +12,6 @@ import pytest
 from skelcore.errors import Cancelled
 from skelcore.metrics import topology
 from skelcore.parallel import on_threads, polled_streams, side_by_side
-from skelcore.shapes import torus
 
 
 def _no_side_thread() -> bool:
@@ -69,19 +68,6 @@ def test_a_cancel_on_this_thread_stops_the_side_and_an_error_there_comes_here():
     with pytest.raises(ValueError, match="side failed"):
         side_by_side(lambda ck: 1, broken)
     assert _no_side_thread()
-
-
-def test_topology_side_by_side_equals_one_after_the_other(monkeypatch):
-    sh = torus(20000, 1.0, 0.3, n_curve=32, seed=2)
-    skel = sh.skeletal + np.random.default_rng(0).normal(scale=0.01, size=sh.skeletal.shape)
-    skel[::7] = skel[::7].round(2)
-    monkeypatch.setattr(topology, "_SIDE_BY_SIDE", 10**12)
-    one = topology.topological_similarity(sh.cloud, skel)
-    monkeypatch.setattr(topology, "_SIDE_BY_SIDE", 1000)
-    monkeypatch.setattr("os.cpu_count", lambda: 2)
-    two = topology.topological_similarity(sh.cloud, skel)
-    assert (one.bottleneck, one.wasserstein, one.eps_star, one.n_bars) == (two.bottleneck, two.wasserstein, two.eps_star, two.n_bars)
-    assert np.array_equal(one.cloud_barcode, two.cloud_barcode) and np.array_equal(one.skeletal_barcode, two.skeletal_barcode)
 
 
 def _no_stream_thread() -> bool:

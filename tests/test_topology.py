@@ -54,18 +54,58 @@ def test_h0_barcode_equals_gudhi_rips(name):
     assert np.all(np.diff(bars[1:, 1]) <= 0)  # longest first
 
 
-@pytest.mark.parametrize(
-    "list_k, deep_k, few, cell_max", [(1, 2, 0, 4), (2, 3, 8, 2048), (3, 70, 0, 16), (3, 70, 10**9, 1), (1, 300, 0, 8)]
-)
-def test_h0_barcode_is_exact_when_neighbour_lists_are_short(monkeypatch, list_k, deep_k, few, cell_max):
-    # short lists force the exact fallback searches (deep pass, cell KD-trees) everywhere; small
-    # cells freeze early, so searches cross many cells of one component
-    monkeypatch.setattr(topology, "_LIST_K", list_k)
-    monkeypatch.setattr(topology, "_DEEP_K", deep_k)
-    monkeypatch.setattr(topology, "_FEW_COMPONENTS", few)
-    monkeypatch.setattr(topology, "_CELL_MAX", cell_max)
-    for name, points in point_sets(np.random.default_rng(11)):
-        np.testing.assert_allclose(h0_barcode(points)[1:, 1], gudhi_h0_deaths(points)[1:], atol=1e-9, err_msg=name)
+def _kernel_emst(points: np.ndarray, threads: int, stop: int = 0) -> tuple[int, np.ndarray, np.ndarray]:
+    from skelcore.metrics import _emst
+
+    pts = np.ascontiguousarray(points, dtype=float)
+    lengths, nn = np.full(len(pts) - 1, np.nan), np.full(len(pts), np.nan)
+    m = _emst.emst(pts, lengths, nn, np.array([stop], np.int32), np.zeros(1, np.int64), threads)
+    return m, lengths, nn
+
+
+def test_emst_kernel_does_not_depend_on_its_threads(rng):
+    # above 16k points the searches of a round run on several threads; lattice ties give many equal
+    # candidates, so threads could pick different edges: the lengths (and nearest distances) may not differ
+    grid = np.stack(np.meshgrid(*[np.arange(28.0)] * 3), -1).reshape(-1, 3)  # 21952 points, all ties
+    blobs = rng.normal(size=(40000, 3)) * 0.01 + rng.uniform(-1, 1, size=(16, 3))[np.arange(40000) % 16]
+    for points in (grid, np.unique(blobs, axis=0)):
+        m1, len1, nn1 = _kernel_emst(points, 1)
+        m4, len4, nn4 = _kernel_emst(points, 4)
+        assert m1 == m4 == len(points) - 1
+        assert np.array_equal(np.sort(len1), np.sort(len4)) and np.array_equal(nn1, nn4)
+    assert np.all(np.sort(_kernel_emst(grid, 2)[1]) == 1.0)  # a unit lattice: every EMST edge is 1
+
+
+def test_emst_kernel_nearest_distances_equal_a_kd_tree_query(rng):
+    from scipy.spatial import cKDTree
+
+    points = np.unique(np.round(rng.normal(size=(30000, 3)), 2), axis=0)
+    _, _, nn = _kernel_emst(points, 2)
+    assert np.array_equal(nn, cKDTree(points).query(points, 2)[0][:, 1])
+
+
+def test_emst_kernel_stops_on_its_flag_and_topology_leaves_no_thread_on_cancel():
+    import threading
+
+    points = np.random.default_rng(3).normal(size=(5000, 3))
+    assert _kernel_emst(points, 2, stop=1)[0] == -1  # the flag is read before every block of searches
+    cloud, skel = normalized_torus(40000)  # above _THREADED_EMST: the kernel runs in a polled thread
+    seen = []
+
+    def emst_threads() -> list:
+        return [t for t in threading.enumerate() if t.name.startswith("skelscope-emst")]
+
+    class Stop(Exception):
+        pass
+
+    def cancel(f: float) -> None:
+        if emst_threads():  # a poll while the kernel runs
+            seen.append(f)
+            raise Stop
+
+    with pytest.raises(Stop):
+        topological_similarity(cloud, skel, checkpoint=cancel)
+    assert seen and not emst_threads()
 
 
 def test_h0_barcode_equals_dense_minimum_spanning_tree_on_larger_sets(rng):

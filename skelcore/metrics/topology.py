@@ -4,9 +4,9 @@ A good skeleton keeps the shape's connectivity, so the H0 barcodes of cloud and 
 eps* (paper Eq. 2, 0.99 quantile per SPEC 1) picks the K compared bars, then the bottleneck distance
 (Eq. 3) and the 1-Wasserstein distance divided by K (Eq. 4).  The H0 barcode of a Vietoris-Rips
 filtration is exactly the Euclidean minimum spanning tree's edge lengths plus one infinite bar; the
-EMST is computed exactly by Boruvka's algorithm on k-nearest-neighbour lists (points whose list stays
-inside their own component are resolved by exact searches), so no Delaunay triangulation is needed
-(slow on surface samples, undefined on the collinear or coplanar sets that contraction produces).
+EMST is computed exactly by Boruvka's algorithm over a KD-tree in compiled code (``_emst.c``), so no
+Delaunay triangulation is needed (slow on surface samples, undefined on the collinear or coplanar sets
+that contraction produces).
 All bars are born at 0, so both distances are one-dimensional matchings with the diagonal (cost d/2
 for the bar (0, d)), solved exactly: W1 by a slope-trick dynamic programme, the bottleneck by a
 Hall-condition test inside an exact bisection, both O(K log K).
@@ -19,17 +19,12 @@ import heapq
 import os
 
 import numpy as np
-from scipy.sparse import coo_matrix
-from scipy.sparse.csgraph import connected_components, minimum_spanning_tree
-from scipy.spatial import cKDTree
 
-from ..geometry import (
-    Checkpoint, chunked_query, kd_tree, leaf_order, matlab_round, nearest_neighbor_distances, no_checkpoint, take_rows,
-    unique_rows,
-)
-from ..parallel import side_by_side
+from ..geometry import Checkpoint, matlab_round, nearest_neighbor_distances, no_checkpoint, unique_rows
+from ..parallel import polled_build
 from ..params import Params
 from ..results import TopologyResult
+from . import _emst
 
 __all__ = [
     "topological_similarity",
@@ -40,17 +35,7 @@ __all__ = [
     "wasserstein_h0",
 ]
 
-_LIST_K = 10  # neighbours kept per point for Boruvka; larger lists resolve more points, cost more memory
-_DEEP_K = 64  # neighbours of the second, exact-search pass for points whose list stayed inside
-_FEW_COMPONENTS = 32  # up to this many components with pending points skip the deep pass
-_DEEP_MAX_POINTS = 4096  # ... as do more fresh pending points than this or n/8 (far-apart clusters)
-_CELL_MAX = 2048  # points per cell of the exact per-component search
-_THREADED_QUERY = 16384  # smaller KD-tree queries run single-threaded (thread start-up dominates)
-_PROBE = 32  # pending points nearest to a component's box probed first for a tight bound
-_QUERY_CHUNK = 16384  # points per kNN query call, so the checkpoint is reached often
-_DEEP_CHUNK = 4096  # points per deep (k = 65) query between checkpoints: ~0.1 s at 1M points
-_ROUND_CHUNK = 262144  # neighbour lists scanned per block of a Boruvka round, between checkpoints
-_SIDE_BY_SIDE = 16384  # both point sets at least this big: the two barcodes on two threads
+_THREADED_EMST = 16384  # smaller sets: the kernel runs on this thread (a few ms, no polling needed)
 
 
 # ---------------------------------------------------------------------------------------------
@@ -65,227 +50,32 @@ def _as_points(points: np.ndarray) -> np.ndarray:
     return pts
 
 
-def _first_other(labels: np.ndarray, rows: np.ndarray, dist: np.ndarray, idx: np.ndarray):
-    """For each row, the first list entry (sorted by distance) in another component."""
-    other = labels[idx] != labels[rows][:, None]
-    has = other.any(axis=1)
-    col = other.argmax(axis=1)
-    r = np.arange(len(rows))
-    return has, dist[r, col], idx[r, col]
-
-
 def _emst_lengths(points: np.ndarray, checkpoint: Checkpoint = no_checkpoint) -> tuple[np.ndarray, np.ndarray]:
-    """Edge lengths of the Euclidean minimum spanning tree of distinct points (Boruvka, exact),
-    and each point's nearest-neighbour distance (a by-product, used for eps*).
+    """Edge lengths of the Euclidean minimum spanning tree of distinct points (Boruvka over a KD-tree,
+    exact; compiled in ``_emst.c``), and each point's nearest-neighbour distance (its first round, used
+    for eps*).
 
-    Each round finds, for every component, its shortest outgoing edge. A point's candidate is the
-    first entry of its sorted neighbour list in another component (exact for that point: every
-    closer point is in the list). A point whose whole list lies in its own component keeps a lower
-    bound (all points closer than it are in its component, which stays true as components merge);
-    only if that bound is below its component's best candidate does an exact search settle it (a
-    deeper kNN pass once per point, then KD-trees of the nearest other components, pruned by
-    bounding boxes). Ties only ever form cycles of equal-length edges, which the MST over the
-    chosen edges drops, so the multiset of lengths is exact.
+    The kernel runs in a helper thread (all cores for its searches) while this thread calls the
+    checkpoint every 50 ms with the share of components merged; a cancel stops it within one block of
+    1024 searches.  The lengths do not depend on the number of threads (docs/performance.md 8).
     """
     n = len(points)
     if n < 2:
         return np.empty(0), np.zeros(n)
-    tree = kd_tree(points, checkpoint)
-    checkpoint(0.02)
-    k = min(_LIST_K, n - 1)
-    # the points are renumbered in the tree's leaf order, so that queries and every later gather
-    # (labels[idx], cells) touch memory that spatial neighbours share; ``rank`` maps tree answers
-    perm = leaf_order(tree)
-    rank = np.empty(n, np.int64)
-    rank[perm] = np.arange(n)
-    points = take_rows(points, perm)
-    dist, idx = chunked_query(tree, points, k + 1, checkpoint, 0.02, 0.5, chunk=_QUERY_CHUNK)
-    for lo in range(0, n, _ROUND_CHUNK):  # back to leaf-order numbers, in blocks between checkpoints
-        idx[lo : lo + _ROUND_CHUNK] = np.take(rank, idx[lo : lo + _ROUND_CHUNK])
-        checkpoint(0.5)
-    dist, idx = dist[:, 1:], idx[:, 1:]  # column 0 is the point itself (points are distinct)
-    lower = dist[:, -1].copy()  # every point closer than this is in the point's own component
-    deep_done = np.zeros(n, bool)
-    lists_complete = k == n - 1
-    # cells: compact groups of points (a component, until it grows past _CELL_MAX points, then
-    # frozen) whose bounding boxes prune the exact searches; ids are never reused, so each cell's
-    # KD-tree can be cached across rounds
-    cells = np.arange(n)
-    next_cell = n
-    cell_trees: dict[int, tuple[np.ndarray, cKDTree]] = {}
-    labels = np.arange(n)
-    n_comp = n
-    active = np.ones(n, bool)  # a list wholly inside its component stays so: never scanned again
-    lengths: list[np.ndarray] = []
-    while n_comp > 1:
-        done = 0.5 + 0.5 * (1.0 - n_comp / n) ** 0.5
-        rows = np.flatnonzero(active)
-        parts = []
-        for lo in range(0, len(rows), _ROUND_CHUNK):  # the first rounds scan every list: in blocks
-            r = rows[lo : lo + _ROUND_CHUNK]
-            parts.append(_first_other(labels, r, dist[r], idx[r]))
-            checkpoint(done)
-        if parts:
-            has, cd, cb = (np.concatenate(x) for x in zip(*parts))
-        else:
-            has, cd, cb = np.zeros(0, bool), np.empty(0), np.empty(0, np.int64)
-        active[rows[~has]] = False
-        cand_a, cand_b, cand_d = rows[has], cb[has], cd[has]
-        best = np.full(n_comp, np.inf)
-        np.minimum.at(best, labels[cand_a], cand_d)
-        checkpoint(done)
-
-        if not lists_complete:
-            pend = np.flatnonzero(~active)
-            pend = pend[lower[pend] < best[labels[pend]]]
-            if len(pend):
-                ea, eb, ed = _resolve_pending(
-                    points, tree, rank, labels, pend, best, lower, deep_done, cells, cell_trees,
-                    lambda: checkpoint(done),
-                )
-                cand_a = np.concatenate([cand_a, ea])
-                cand_b = np.concatenate([cand_b, eb])
-                cand_d = np.concatenate([cand_d, ed])
-                checkpoint(done)
-
-        # one shortest candidate per component (``best`` holds each component's minimum), then
-        # one edge per component pair: two components choosing each other pick equal lengths
-        la = labels[cand_a]
-        hit = np.flatnonzero(cand_d == best[la])
-        pick = np.full(n_comp, -1)
-        pick[la[hit]] = hit
-        if np.any(pick < 0):  # cannot happen: every component has an outgoing edge
-            raise RuntimeError("EMST: a component found no outgoing edge")
-        u = np.arange(n_comp)
-        v = labels[cand_b[pick]]
-        w = cand_d[pick]
-        keep = ~((v[v] == u) & (u > v))
-        graph = coo_matrix((w[keep], (u[keep], v[keep])), shape=(n_comp, n_comp)).tocsr()
-        checkpoint(done)
-        forest = minimum_spanning_tree(graph)
-        lengths.append(forest.data.copy())
-        checkpoint(done)
-        n_new, comp = connected_components(forest, directed=False)
-        checkpoint(done)
-        if n_new >= n_comp:  # cannot happen: every component has an outgoing edge
-            raise RuntimeError("EMST: Boruvka round made no progress")
-        labels = comp[labels]
-        n_comp = n_new
-        small = np.bincount(labels, minlength=n_comp)[labels] <= _CELL_MAX
-        cells[small] = next_cell + labels[small]
-        next_cell += n_comp
-        checkpoint(0.5 + 0.5 * (1.0 - n_comp / n) ** 0.5)
+    pts = np.ascontiguousarray(points, dtype=np.float64)
+    lengths = np.empty(n - 1)
     nn = np.empty(n)
-    nn[perm] = dist[:, 0]  # back to the caller's numbering
-    return (np.concatenate(lengths) if lengths else np.empty(0)), nn
+    components = np.array([n], np.int64)
+    threads = os.cpu_count() or 1
 
+    def merged() -> float:
+        return (1.0 - float(components[0]) / n) ** 0.5
 
-def _resolve_pending(points, tree, rank, labels, pend, best, lower, deep_done, cells, cell_trees, tick):
-    """Exact shortest outgoing edges for points whose neighbour list lies inside their component.
-
-    ``points`` are numbered in leaf order, ``tree`` (built on the caller's order) answers in its
-    own numbering, mapped by ``rank``.  ``best`` (per component), ``lower``/``deep_done`` (per
-    point) and the cell KD-tree cache are updated in place; ``tick()`` reports progress (and may raise ``Cancelled``).
-    Returns candidate edges (a, b, length) improving on the components' list candidates.
-    """
-    n = len(points)
-    out_a, out_b, out_d = [], [], []
-    # 1) many components involved: one deeper kNN pass (vectorized), at most once per point
-    kk = min(_DEEP_K, n - 1)
-    fresh = pend[~deep_done[pend]]
-    many = len(np.unique(labels[pend])) > _FEW_COMPONENTS
-    if kk > _LIST_K and 0 < len(fresh) <= max(_DEEP_MAX_POINTS, n // 8) and many:
-        if len(fresh) > _DEEP_CHUNK:  # chunked, so a cancel is seen within ~0.1 s
-            d2, i2 = chunked_query(tree, points[fresh], kk + 1, lambda _f: tick(), chunk=_DEEP_CHUNK)
-        else:
-            d2, i2 = tree.query(points[fresh], k=kk + 1, workers=1)
-        i2 = rank[i2]  # the tree numbers points as given, ``points`` is in leaf order
-        d2, i2 = d2[:, 1:], i2[:, 1:]
-        has, cd, cb = _first_other(labels, fresh, d2, i2)
-        deep_done[fresh] = True
-        lower[fresh] = np.maximum(lower[fresh], np.where(has, cd, d2[:, -1]))
-        ok = has & (cd < best[labels[fresh]])
-        if ok.any():
-            out_a.append(fresh[ok]), out_b.append(cb[ok]), out_d.append(cd[ok])
-            np.minimum.at(best, labels[fresh[ok]], cd[ok])
-        pend = pend[lower[pend] < best[labels[pend]]]
-    # 2) per cell of pending points: KD-trees of other components' cells, nearest boxes first
-    if len(pend):
-        ids, cell_of = np.unique(cells, return_inverse=True)
-        tick()
-        for stale in set(cell_trees) - set(ids.tolist()):
-            del cell_trees[stale]
-        by_cell = np.argsort(cell_of, kind="stable")
-        tick()
-        starts = np.searchsorted(cell_of[by_cell], np.arange(len(ids) + 1))
-        sorted_pts = points[by_cell]
-        box_lo = np.minimum.reduceat(sorted_pts, starts[:-1], axis=0)
-        box_hi = np.maximum.reduceat(sorted_pts, starts[:-1], axis=0)
-        tick()
-        cell_comp = labels[by_cell[starts[:-1]]]
-
-        def cell_tree(y: int) -> tuple[np.ndarray, cKDTree]:
-            key = int(ids[y])
-            if key not in cell_trees:
-                members = by_cell[starts[y] : starts[y + 1]]
-                cell_trees[key] = (members, cKDTree(points[members]))
-            return cell_trees[key]
-
-        pc = cell_of[pend]
-        order = np.lexsort((pc, labels[pend]))
-        pend, pc = pend[order], pc[order]
-        group = np.flatnonzero(np.r_[True, pc[1:] != pc[:-1]])
-        for n_done, (s, e) in enumerate(zip(group, np.r_[group[1:], len(pend)])):
-            if n_done % 64 == 63:
-                tick()  # progress and cancel between cells
-            q = pend[s:e]
-            c = int(labels[q[0]])
-            qp = points[q]
-            qlo, qhi = qp.min(axis=0), qp.max(axis=0)
-            gap = np.maximum(0.0, np.maximum(box_lo - qhi, qlo - box_hi))
-            box_d = np.sqrt(np.einsum("ij,ij->i", gap, gap))
-            box_d[cell_comp == c] = np.inf
-            near = [int(np.argmin(box_d))] if not np.isfinite(best[c]) else []  # a finite bound first
-            for stage in (0, 1):
-                if stage == 1:
-                    cand = np.flatnonzero(box_d < best[c])
-                    near = cand[np.argsort(box_d[cand], kind="stable")].tolist()
-                for y in near:
-                    if not box_d[y] < best[c]:
-                        break
-                    members, t = cell_tree(y)
-                    # only pending points closer to the other box than the bound can improve;
-                    # probing the nearest few first tightens the bound cheaply
-                    g = np.maximum(0.0, np.maximum(box_lo[y] - qp, qp - box_hi[y]))
-                    to_box = np.sqrt(np.einsum("ij,ij->i", g, g))
-                    sel = np.flatnonzero(to_box < best[c])
-                    if len(sel) > 4 * _PROBE:
-                        steps = (sel[np.argpartition(to_box[sel], _PROBE)[:_PROBE]], None)
-                    else:
-                        steps = (sel,)
-                    for part in steps:
-                        if part is None:
-                            part = sel[to_box[sel] < best[c]]
-                        if not len(part):
-                            continue
-                        workers = -1 if len(part) > _THREADED_QUERY else 1  # threads cost more on small
-                        dq, jq = t.query(qp[part], k=1, distance_upper_bound=best[c], workers=workers)
-                        i = int(np.argmin(dq))
-                        if dq[i] < best[c]:
-                            a, b = int(q[part[i]]), int(members[jq[i]])
-                            best[c] = dq[i]
-                            out_a.append([a]), out_b.append([b]), out_d.append([dq[i]])
-                            if dq[i] < best[labels[b]]:  # the same edge also leaves b's component
-                                best[labels[b]] = dq[i]
-                                out_a.append([b]), out_b.append([a]), out_d.append([dq[i]])
-    if not out_a:
-        empty = np.empty(0, np.int64)
-        return empty, empty, np.empty(0)
-    return (
-        np.concatenate(out_a).astype(np.int64),
-        np.concatenate(out_b).astype(np.int64),
-        np.concatenate(out_d).astype(float),
-    )
+    m = polled_build(lambda stop: _emst.emst(pts, lengths, nn, stop, components, threads), n, checkpoint,
+                     "skelscope-emst", _THREADED_EMST, progress=merged)
+    if m != n - 1:  # cannot happen: every round merges, the kernel reports a stop by raising here
+        raise RuntimeError(f"EMST: {m} edges for {n} points")
+    return lengths, nn
 
 
 def _barcode_and_nn(points: np.ndarray, checkpoint: Checkpoint) -> tuple[np.ndarray, np.ndarray]:
@@ -507,16 +297,9 @@ def topological_similarity(
     skeletal = _as_points(skeletal)
     if len(cloud) == 0 or len(skeletal) == 0:
         raise ValueError("topological similarity needs a non-empty cloud and skeletal point set")
-    # the two barcodes are independent: the skeletal set's on a second thread (numpy and the KD-tree
-    # release the GIL), when both are big enough to be worth it (docs/performance.md 6)
-    if min(len(cloud), len(skeletal)) >= _SIDE_BY_SIDE and (os.cpu_count() or 1) > 1:
-        (cloud_bars, cloud_nn), (skel_bars, _) = side_by_side(
-            lambda ck: _barcode_and_nn(cloud, ck), lambda ck: _barcode_and_nn(skeletal, ck),
-            lambda f: checkpoint(0.9 * f),
-        )
-    else:
-        cloud_bars, cloud_nn = _barcode_and_nn(cloud, lambda f: checkpoint(0.45 * f))
-        skel_bars, _ = _barcode_and_nn(skeletal, lambda f: checkpoint(0.45 + 0.45 * f))
+    # one after the other: each EMST's searches use every core (docs/performance.md 8)
+    cloud_bars, cloud_nn = _barcode_and_nn(cloud, lambda f: checkpoint(0.45 * f))
+    skel_bars, _ = _barcode_and_nn(skeletal, lambda f: checkpoint(0.45 + 0.45 * f))
     eps = _quantile(cloud_nn, params.eps_quantile)  # = eps_star(cloud, quantile), without a new kNN
     k = compared_bar_count(cloud_bars, eps, len(cloud), params=params)
     checkpoint(0.92)
