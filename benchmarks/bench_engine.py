@@ -21,6 +21,7 @@ import os
 import platform
 import subprocess
 import sys
+import threading
 import time
 from pathlib import Path
 
@@ -81,20 +82,26 @@ def run_case(kind: str, arg: str, method: str) -> dict:
         out["skeletonize"] = time.perf_counter() - t0
         out["case"] = Path(arg).stem
     out["n_points"] = int(len(cloud))
+    # the stages run side by side (evaluate's workers): a cancel stops the evaluation once every running
+    # stage has reached its next check, so the gaps are measured per thread (the stage that thread runs)
     gaps = {"worst": 0.0, "stage": ""}
-    last = [time.perf_counter()]
+    last = {threading.get_ident(): time.perf_counter()}
+    stage_of: dict = {}
     stage = [""]
 
     def progress(_fraction: float, name: str) -> None:
         if name != stage[0]:  # for the parent: the stage a case was in when its time ran out
             print(f"stage {name} {time.perf_counter() - t_start:.1f}", file=sys.stderr, flush=True)
         stage[0] = name
+        stage_of[threading.get_ident()] = name
 
     def cancel() -> bool:
         now = time.perf_counter()
-        if now - last[0] > gaps["worst"]:
-            gaps["worst"], gaps["stage"] = now - last[0], stage[0]
-        last[0] = now
+        me = threading.get_ident()
+        gap = now - last.get(me, now)
+        if gap > gaps["worst"]:
+            gaps["worst"], gaps["stage"] = gap, stage_of.get(me, stage[0])
+        last[me] = now
         return False
 
     cpu0 = time.process_time()

@@ -3,6 +3,7 @@ and the reference comparison; map progress, honour cancel, time each stage."""
 
 from __future__ import annotations
 
+import threading
 import time
 from typing import Callable
 
@@ -19,6 +20,7 @@ from .metrics.coverage import coverage, coverage_tau
 from .metrics.reference import compare_with_reference
 from .metrics.smoothness import curve_smoothness_overall, curve_vertex_smoothness, skeletal_smoothness
 from .metrics.topology import topological_similarity
+from .parallel import GraphTask, run_graph
 from .params import Params
 from .results import CurveLocal, Evaluation, SkeletalLocal
 from .trust import frame_fit_warning, frame_warnings, no_correspondence_warning, smoothness_warning
@@ -45,35 +47,47 @@ CORRESPONDENCE_CHOICES = ("auto", "reverse")
 
 
 class _Stages:
-    """Turns per-stage fractions into one overall fraction; checks ``cancel`` at every call."""
+    """Turns per-stage fractions into one overall fraction; checks ``cancel`` at every call.
+
+    Stages may run side by side on several threads (:func:`skelcore.parallel.run_graph`): the caller's
+    ``progress`` is called under a lock (never from two threads at once) with the weighted sum of every
+    stage's fraction, and once :meth:`abort` has been called (a stage failed or was cancelled) every
+    checkpoint raises, so the stages beside it stop too."""
 
     def __init__(self, names: list[str], progress: Progress | None, cancel: Callable[[], bool] | None):
         total = sum(_WEIGHTS[n] for n in names) or 1.0
-        self._start: dict[str, float] = {}
-        acc = 0.0
-        for n in names:
-            self._start[n] = acc / total
-            acc += _WEIGHTS[n]
         self._size = {n: _WEIGHTS[n] / total for n in names}
+        self._done = {n: 0.0 for n in names}
         self._progress = progress
         self._cancel = cancel
+        self._aborted = threading.Event()
+        self._lock = threading.Lock()
         self._last = -1.0
         self._last_stage = ""
         self.timings: dict[str, float] = {}
 
+    def abort(self) -> None:
+        self._aborted.set()
+
+    def _stop_if_asked(self, stage: str) -> None:
+        if self._aborted.is_set() or (self._cancel is not None and self._cancel()):
+            raise Cancelled(f"cancelled during {stage}")
+
     def checkpoint(self, stage: str) -> Callable[[float], None]:
         def check(fraction: float) -> None:
-            if self._cancel is not None and self._cancel():
-                raise Cancelled(f"cancelled during {stage}")
+            self._stop_if_asked(stage)
             if self._progress is not None:
-                overall = self._start[stage] + self._size[stage] * min(max(fraction, 0.0), 1.0)
-                # throttled (Orange3's habit), but a new stage is shown at once: the label names
-                # the stage that runs
-                if stage != self._last_stage or overall - self._last >= 0.005 or fraction >= 1.0:
-                    overall = max(overall, self._last)  # never back by a rounding error
-                    self._last = overall
-                    self._last_stage = stage
-                    self._progress(overall, stage)
+                with self._lock:
+                    self._stop_if_asked(stage)  # a stage beside may have been cancelled while this one waited
+                    self._done[stage] = max(self._done[stage], min(max(fraction, 0.0), 1.0))
+                    overall = sum(self._size[n] * f for n, f in self._done.items())
+                    # throttled (Orange3's habit), but a new stage is shown at once: the label names
+                    # the stage that reported last
+                    if stage != self._last_stage or overall - self._last >= 0.005 or fraction >= 1.0:
+                        overall = max(overall, self._last)  # never back by a rounding error
+                        self._last = overall
+                        self._last_stage = stage
+                        self._progress(overall, stage)
 
         return check
 
@@ -108,6 +122,7 @@ def evaluate(
     correspondence: str = "auto",
     reference_curve: CurveSkeleton | tuple | None = None,
     inputs: dict | None = None,
+    workers: int | None = None,
 ) -> Evaluation:
     """Score a skeleton against its point cloud with the paper's four metrics (SPEC.md), the trust
     checks, SkelScope's coverage and, given a ``reference_curve``, the comparison with it.
@@ -124,7 +139,10 @@ def evaluate(
         skeletal set (topology, skeletal-style centeredness).
     reference_curve : a ground-truth curve in the cloud's frame (needs ``curve``).
     progress : ``progress(fraction, stage)``, called at checkpoints (throttled).
-    cancel : returning True makes the next checkpoint raise :class:`Cancelled`.
+    cancel : returning True makes the next checkpoint raise :class:`Cancelled` (in whichever stage checks
+        first when several run side by side).
+    workers : threads running the independent stages side by side (None = all cores; 1 = one after the
+        other, boundedness first); the values do not depend on it.
 
     Examples
     --------
@@ -199,39 +217,104 @@ def evaluate(
     p = params
 
     ev = Evaluation(params=p, normalization=norm, cloud=cloud, inputs=dict(inputs or {}), correspondence=mode)
-    if skel is not None:
-        ev.skeletal = _score_skeletal(ev, stages, cloud_n, skel, skel_n, mode, index)
-
-    curve_n = None
+    curve_n = samples = None
     if curve_obj is not None:
         curve_n = curve_obj.transformed(norm.apply)
         samples = sample_curve(curve_n, p.curve_samples, collinear_cos=p.collinear_cos)
-        beta_c = stages.run("curve boundedness", boundedness, cloud_n, samples.points, params=p)
-        c_raw_c = stages.run(
-            "curve centeredness", curve_centeredness, cloud_n, samples.points, samples.directions, params=p
-        )
+
+    # The stages are independent (but for the correspondence): they run side by side on the cores, the
+    # long compiled ones first in the list so that the other thread takes the rest beside them
+    # (docs/performance.md 8).  ``got`` holds each result as soon as its stage is done.
+    got: dict = {}
+
+    def task(stage: str, fn, *args, after: tuple[str, ...] = (), **kwargs) -> GraphTask:
+        def run() -> object:
+            got[stage] = stages.run(stage, fn, *args, **kwargs)
+            return got[stage]
+
+        return GraphTask(stage, run, after)
+
+    first: list[GraphTask] = []  # the boundedness stages
+    rest: list[GraphTask] = []
+    if skel is not None:
+        _skeletal_tasks(task, first, rest, cloud_n, lambda: skel_n, lambda: got["correspondence"], mode, index, p,
+                        after=())
+        if mode == "reverse":
+            rest.insert(0, task("correspondence", lambda checkpoint: reverse_projection(cloud_n, skel_n)))
+    if curve_obj is not None:
+        first.append(task("curve boundedness", boundedness, cloud_n, samples.points, params=p))
+        rest.append(task("curve centeredness", curve_centeredness, cloud_n, samples.points, samples.directions,
+                         params=p))
 
         def _smooth(curve_n: CurveSkeleton, checkpoint) -> tuple:
             s = curve_vertex_smoothness(curve_n)
             return s, curve_smoothness_overall(curve_n, s)
 
-        s_v, (s_overall, s_count) = stages.run("curve smoothness", _smooth, curve_n)
+        rest.append(task("curve smoothness", _smooth, curve_n))
+        if skeletal_from_curve:
+            rest.insert(0, task("correspondence", lambda checkpoint: project_onto_curve(cloud_n, curve_n)[0]))
+            _skeletal_tasks(task, first, rest, cloud_n, lambda: got["correspondence"], lambda: None, "pointwise",
+                            None, p, after=("correspondence",))
+    # SkelScope's coverage (docs/metrics.md): tau (the cloud's spacing, one kNN pass) is computed inside
+    # the first coverage stage that runs, so a cancel is seen during it too
+    tau_box: list[float] = []
+    tau_lock = threading.Lock()
+
+    def _tau(checkpoint) -> float:
+        with tau_lock:
+            if not tau_box:
+                tau_box.append(coverage_tau(cloud_n, p, checkpoint))
+            return tau_box[0]
+
+    if not with_coverage and (skel is not None or curve_n is not None):
+        ev.not_computed["coverage"] = (
+            f"the cloud has {len(cloud):,} points, above coverage_max_points = {int(p.coverage_max_points):,} "
+            "(exact coverage of a skeletal set takes 15-45 s at 1M points on tube-like shapes; raise it with "
+            "--set coverage_max_points=N)"
+        )
+    if skel is not None and with_coverage:
+        def _skel_cov(checkpoint):
+            tau = _tau(lambda f: checkpoint(0.1 * f))
+            return coverage(cloud_n, skel_n, p, tau, checkpoint=lambda f: checkpoint(0.1 + 0.9 * f))
+
+        rest.append(task("skeletal coverage", _skel_cov))
+    if curve_n is not None and with_coverage:
+        def _curve_cov(checkpoint):
+            tau = _tau(lambda f: checkpoint(0.1 * f))
+            step = max(tau / p.coverage_tau_factor, float(curve_n.edge_lengths().sum()) / 200_000)
+            pts, _ = densify_curve(curve_n, step)
+            return coverage(cloud_n, np.vstack([pts, curve_n.vertices]), p, tau,
+                            checkpoint=lambda f: checkpoint(0.1 + 0.9 * f))
+
+        rest.append(task("curve coverage", _curve_cov))
+    if ref_obj is not None:
+        ref_n = ref_obj.transformed(norm.apply)
+        rest.append(task("reference", lambda checkpoint: compare_with_reference(curve_n, ref_n, _tau(checkpoint))))
+    run_graph(first + rest, workers, on_error=stages.abort)
+
+    if skel is not None:
+        ev.skeletal = _skeletal_result(ev, got, skel, mode, index)
+    if curve_obj is not None:
+        s_v, (s_overall, s_count) = got["curve smoothness"]
         ev.curve = CurveLocal(
             curve=curve_obj,
             samples=norm.invert(samples.points),
             sample_edge=samples.edge,
             sample_t=samples.t,
-            sample_boundedness=beta_c,
-            sample_centeredness_raw=c_raw_c,
+            sample_boundedness=got["curve boundedness"],
+            sample_centeredness_raw=got["curve centeredness"],
             vertex_degree=curve_obj.degrees(),
             vertex_smoothness=s_v,
             smoothness_overall=float(s_overall),
             smoothness_count=int(s_count),
         )
         if skeletal_from_curve:
-            q_n, _ = stages.run("correspondence", lambda c, checkpoint: project_onto_curve(cloud_n, c), curve_n)
-            ev.skeletal = _score_skeletal(ev, stages, cloud_n, norm.invert(q_n), q_n, "pointwise", None)
+            q_n = got["correspondence"]
+            ev.skeletal = _skeletal_result(ev, got, norm.invert(q_n), "pointwise", None)
             ev.skeletal.source = "curve"
+    ev.coverage_skeletal = got.get("skeletal coverage")
+    ev.coverage_curve = got.get("curve coverage")
+    ev.reference = got.get("reference")
 
     # ---- trust checks, coverage, reference (SkelScope's own; docs/metrics.md) ----------------
     between = stages.between("trust checks")  # only the rare frame-fit re-runs of boundedness
@@ -255,39 +338,6 @@ def evaluate(
         ev.warnings += smoothness_warning(ev.curve.vertex_degree)
     if mode == "none":
         ev.warnings.append(no_correspondence_warning(len(skel), len(cloud)))
-    # tau (the cloud's spacing, one kNN pass) is computed inside the first coverage stage, so a
-    # cancel is seen during it too
-    tau_box: list[float] = []
-
-    def _tau(checkpoint) -> float:
-        if not tau_box:
-            tau_box.append(coverage_tau(cloud_n, p, checkpoint))
-        return tau_box[0]
-
-    if not with_coverage and (skel is not None or curve_n is not None):
-        ev.not_computed["coverage"] = (
-            f"the cloud has {len(cloud):,} points, above coverage_max_points = {int(p.coverage_max_points):,} "
-            "(exact coverage of a skeletal set takes 15-45 s at 1M points on tube-like shapes; raise it with "
-            "--set coverage_max_points=N)"
-        )
-    if skel is not None and with_coverage:
-        def _skel_cov(checkpoint):
-            tau = _tau(lambda f: checkpoint(0.1 * f))
-            return coverage(cloud_n, skel_n, p, tau, checkpoint=lambda f: checkpoint(0.1 + 0.9 * f))
-
-        ev.coverage_skeletal = stages.run("skeletal coverage", _skel_cov)
-    if curve_n is not None and with_coverage:
-        def _curve_cov(checkpoint):
-            tau = _tau(lambda f: checkpoint(0.1 * f))
-            step = max(tau / p.coverage_tau_factor, float(curve_n.edge_lengths().sum()) / 200_000)
-            pts, _ = densify_curve(curve_n, step)
-            return coverage(cloud_n, np.vstack([pts, curve_n.vertices]), p, tau,
-                            checkpoint=lambda f: checkpoint(0.1 + 0.9 * f))
-
-        ev.coverage_curve = stages.run("curve coverage", _curve_cov)
-    if ref_obj is not None:
-        ref_n = ref_obj.transformed(norm.apply)
-        ev.reference = stages.run("reference", lambda checkpoint: compare_with_reference(curve_n, ref_n, _tau(checkpoint)))
     ev.timings = dict(stages.timings)
     ev.timings["total"] = time.perf_counter() - t_start
     return ev
@@ -307,30 +357,51 @@ def _check_index(skeletal_index: np.ndarray, n_skel: int, n_cloud: int) -> np.nd
     return index
 
 
-def _score_skeletal(ev, stages, cloud_n, skel, skel_n, mode, index) -> SkeletalLocal:
-    """The skeletal column under each correspondence (pointwise, index, reverse, none)."""
-    p = ev.params
-    rows = c_rows = None
-    if mode == "reverse":
-        rows = stages.run("correspondence", lambda checkpoint: reverse_projection(cloud_n, skel_n))
+def _skeletal_tasks(task, first: list, rest: list, cloud_n, skel_of: Callable[[], np.ndarray],
+                    rows_of: Callable[[], np.ndarray], mode, index, p, after: tuple[str, ...]) -> None:
+    """The skeletal column's stages under each correspondence (pointwise, index, reverse, none), as tasks:
+    boundedness into ``first``, the others into ``rest``.  ``skel_of()`` gives the normalized skeletal set
+    once the tasks named in ``after`` are done (the curve's projections are computed by one of them),
+    ``rows_of()`` the reverse correspondence's rows once its stage is done."""
+    with_rows = after + (("correspondence",) if mode == "reverse" else ())
+    first.append(task("skeletal boundedness", lambda checkpoint: boundedness(cloud_n, skel_of(), params=p,
+                                                                               checkpoint=checkpoint), after=after))
+    if mode != "none":
+        def _topology(checkpoint):
+            pointwise = skel_of()[rows_of()] if mode == "reverse" else skel_of()
+            return topological_similarity(cloud_n, pointwise, params=p, checkpoint=checkpoint)
+
+        rest.append(task("topology", _topology, after=with_rows))
+
+        def _centeredness(checkpoint):
+            if mode == "reverse":
+                return skeletal_centeredness(cloud_n, skel_of()[rows_of()], params=p, checkpoint=checkpoint)
+            corr_cloud = cloud_n if index is None else cloud_n[index]
+            return skeletal_centeredness(corr_cloud, skel_of(), params=p, checkpoint=checkpoint)
+
+        rest.append(task("skeletal centeredness", _centeredness, after=with_rows))
+    rest.append(task("skeletal smoothness", lambda checkpoint: skeletal_smoothness(skel_of(), params=p,
+                                                                                     checkpoint=checkpoint), after=after))
+
+
+def _skeletal_result(ev, got: dict, skel, mode, index) -> SkeletalLocal:
+    """The skeletal column from its stages' results (``got``, by stage name)."""
+    rows = got.get("correspondence") if mode == "reverse" else None
+    c_rows = None
     if mode == "none":
-        reason = (f"the skeletal set has {len(skel)} points and the cloud {len(cloud_n)}; "
+        reason = (f"the skeletal set has {len(skel)} points and the cloud {len(ev.cloud)}; "
                   "give a skeletal index or use reverse correspondence")
         ev.not_computed = {"topology": reason, "skeletal centeredness": reason}
-    else:
-        pointwise = skel_n if rows is None else skel_n[rows]
-        ev.topology = stages.run("topology", topological_similarity, cloud_n, pointwise, params=p)
-    beta = stages.run("skeletal boundedness", boundedness, cloud_n, skel_n, params=p)
-    if mode == "none":
         c_raw = np.full(len(skel), np.nan)
-    elif mode == "reverse":
-        c_rows = stages.run("skeletal centeredness", skeletal_centeredness, cloud_n, skel_n[rows], params=p)
-        c_raw = aggregate_rows(c_rows, rows, len(skel))
     else:
-        corr_cloud = cloud_n if index is None else cloud_n[index]
-        c_raw = stages.run("skeletal centeredness", skeletal_centeredness, corr_cloud, skel_n, params=p)
-    smooth = stages.run("skeletal smoothness", skeletal_smoothness, skel_n, params=p)
+        ev.topology = got["topology"]
+        if mode == "reverse":
+            c_rows = got["skeletal centeredness"]
+            c_raw = aggregate_rows(c_rows, rows, len(skel))
+        else:
+            c_raw = got["skeletal centeredness"]
     return SkeletalLocal(
-        points=skel, boundedness=beta, centeredness_raw=c_raw, smoothness=smooth,
-        rows=rows, centeredness_rows_raw=c_rows, centeredness_available=mode != "none", index=index,
+        points=skel, boundedness=got["skeletal boundedness"], centeredness_raw=c_raw,
+        smoothness=got["skeletal smoothness"], rows=rows, centeredness_rows_raw=c_rows,
+        centeredness_available=mode != "none", index=index,
     )  # fmt: skip

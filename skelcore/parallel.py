@@ -1,4 +1,5 @@
-"""Independent pieces of a stage on both cores: spans of work on a thread pool, checkpoints in order.
+"""Independent pieces of work on both cores: spans of a stage on a thread pool (checkpoints in order),
+the independent stages of an evaluation side by side (``run_graph``), polled compiled kernels.
 
 The compiled kernels release the GIL, and so do numpy's sorts, gathers and BLAS products on large arrays,
 so threads share the cores without processes (no pickling, no copies).  Every span is computed exactly
@@ -10,15 +11,12 @@ from __future__ import annotations
 import os
 import threading
 from concurrent.futures import FIRST_EXCEPTION, ThreadPoolExecutor, wait
-from typing import Callable, TypeVar
+from dataclasses import dataclass
+from typing import Callable
 
-from .errors import Cancelled
 from .geometry import Checkpoint, no_checkpoint
 
-A = TypeVar("A")
-B = TypeVar("B")
-
-__all__ = ["on_threads", "side_by_side", "polled_build", "polled_streams"]
+__all__ = ["on_threads", "GraphTask", "run_graph", "polled_build", "polled_streams"]
 
 
 def on_threads(
@@ -58,47 +56,71 @@ def on_threads(
                 fut.cancel()
 
 
-def side_by_side(
-    main: Callable[[Checkpoint], A], side: Callable[[Checkpoint], B], checkpoint: Checkpoint = no_checkpoint,
-    split: float = 0.5, poll: float = 0.05,
-) -> tuple[A, B]:
-    """``(main(ck), side(ck2))`` with ``side`` on a second thread while ``main`` runs on this one.
+@dataclass(frozen=True)
+class GraphTask:
+    """One piece of work for :func:`run_graph`: ``fn()`` once every task named in ``after`` is done."""
 
-    Only this thread calls ``checkpoint`` (callers' callbacks need not be thread-safe): ``main``'s
-    progress maps to [0, split], then, while this thread waits for ``side`` (polling every ``poll`` s),
-    ``side``'s own progress to [split, 1].  A cancel raised here stops ``side`` at its next checkpoint
-    and is re-raised once it has; an error in ``side`` is re-raised here.  Both are computed exactly as
-    one after the other, so the results do not depend on it.
+    name: str
+    fn: Callable[[], object]
+    after: tuple[str, ...] = ()
+
+
+def run_graph(tasks: list[GraphTask], workers: int | None = None, on_error: Callable[[], None] | None = None) -> dict:
+    """Every task's result by name, the tasks run on ``workers`` threads (None = all cores; this thread
+    is one of them), each thread taking the first task in list order whose ``after`` tasks are done.
+
+    For the independent stages of an evaluation (docs/performance.md 8): the long compiled ones first,
+    the others beside them.  At the first error ``on_error()`` is called (it should make the running
+    tasks' checkpoints raise), no new task starts, every thread is joined and that first error is
+    re-raised here.  A task's result does not depend on which thread ran it.
     """
-    stop = threading.Event()
-    side_done = [0.0]
-    box: dict = {}
+    names = [t.name for t in tasks]
+    if len(set(names)) != len(names) or any(a not in names for t in tasks for a in t.after):
+        raise ValueError("run_graph: task names must be unique and every 'after' must name a task")
+    workers = max(1, min(len(tasks), int(workers or os.cpu_count() or 1)))
+    results: dict = {}
+    started: set = set()
+    done: set = set()
+    errors: list = []
+    cond = threading.Condition()
 
-    def side_checkpoint(fraction: float) -> None:
-        side_done[0] = fraction
-        if stop.is_set():
-            raise Cancelled("cancelled")
+    def next_task() -> GraphTask | None:
+        with cond:
+            while not errors and len(started) < len(tasks):
+                for t in tasks:
+                    if t.name not in started and all(a in done for a in t.after):
+                        started.add(t.name)
+                        return t
+                cond.wait()
+            return None
 
-    def run_side() -> None:
-        try:
-            box["value"] = side(side_checkpoint)
-        except BaseException as exc:  # handed to the caller's thread
-            box["error"] = exc
+    def work() -> None:
+        while (task := next_task()) is not None:
+            try:
+                value = task.fn()
+            except BaseException as exc:  # the first error wins; the others stop at a checkpoint
+                with cond:
+                    errors.append(exc)
+                    cond.notify_all()
+                if on_error is not None:
+                    on_error()
+                return
+            with cond:
+                results[task.name] = value
+                done.add(task.name)
+                cond.notify_all()
 
-    worker = threading.Thread(target=run_side, name="skelscope-side", daemon=True)
-    worker.start()
+    helpers = [threading.Thread(target=work, name=f"skelscope-lane-{i}", daemon=True) for i in range(1, workers)]
+    for th in helpers:
+        th.start()
     try:
-        first = main(lambda f: checkpoint(split * f))
-        while worker.is_alive():
-            worker.join(poll)
-            checkpoint(split + (1.0 - split) * min(max(side_done[0], 0.0), 1.0))
-    except BaseException:
-        stop.set()
-        worker.join()
-        raise
-    if "error" in box:
-        raise box["error"]
-    return first, box["value"]
+        work()
+    finally:
+        for th in helpers:
+            th.join()
+    if errors:
+        raise errors[0]
+    return results
 
 
 def polled_build(build: Callable, n: int, checkpoint: Checkpoint, name: str, threaded_from: int = 65536,

@@ -16,12 +16,14 @@ from skelcore import evaluate
 from skelcore.errors import Cancelled
 from skelcore.shapes import torus
 
+# the order of the stages run one after the other (workers=1); with more workers they run side by side,
+# the boundedness stages first, the others beside them
 STAGES = [
-    "topology",
     "skeletal boundedness",
+    "curve boundedness",
+    "topology",
     "skeletal centeredness",
     "skeletal smoothness",
-    "curve boundedness",
     "curve centeredness",
     "curve smoothness",
     "skeletal coverage",
@@ -50,13 +52,14 @@ def _calls_per_stage(case) -> dict[str, int]:
     def progress(_fraction: float, stage: str) -> None:
         current[0] = stage
 
-    evaluate(*case, progress=progress, cancel=cancel)
+    evaluate(*case, progress=progress, cancel=cancel, workers=1)
     return per_stage
 
 
 def test_progress_names_every_stage_as_it_starts(case):
     seen: list[str] = []
-    evaluate(*case, progress=lambda _f, stage: seen.append(stage) if not seen or seen[-1] != stage else None)
+    evaluate(*case, progress=lambda _f, stage: seen.append(stage) if not seen or seen[-1] != stage else None,
+             workers=1)
     assert seen == STAGES  # each stage reported, in the order they run
 
 
@@ -84,7 +87,26 @@ def test_cancel_stops_in_every_stage(case, where):
             return calls[0] >= flip
 
         with pytest.raises(Cancelled, match=f"during {stage}$"):
-            evaluate(*case, progress=progress, cancel=cancel)
+            evaluate(*case, progress=progress, cancel=cancel, workers=1)
+
+
+def test_stages_side_by_side_report_every_stage_and_a_cancel_stops_them_all(case):
+    import threading
+
+    seen: list[str] = []
+    evaluate(*case, progress=lambda _f, stage: seen.append(stage), workers=2)
+    assert set(seen) == set(STAGES)
+    lanes_at_cancel = []
+
+    def cancel() -> bool:
+        lanes = [t for t in threading.enumerate() if t.name.startswith("skelscope-lane")]
+        if lanes:  # a second stage runs beside the first
+            lanes_at_cancel.append(len(lanes))
+        return bool(lanes)
+
+    with pytest.raises(Cancelled, match="^cancelled during "):
+        evaluate(*case, cancel=cancel, workers=2)
+    assert lanes_at_cancel and not [t for t in threading.enumerate() if t.name.startswith("skelscope-lane")]
 
 
 @pytest.mark.parametrize("n", [20000])
@@ -103,7 +125,8 @@ def test_every_stage_checks_often_on_a_bigger_cloud(n):
         per_stage[current[0]] = per_stage.get(current[0], 0) + 1
         return False
 
-    evaluate(shape.cloud, skeletal, (shape.curve_vertices, shape.curve_edges), progress=progress, cancel=cancel)
+    evaluate(shape.cloud, skeletal, (shape.curve_vertices, shape.curve_edges), progress=progress, cancel=cancel,
+             workers=1)
     for stage in ["topology", "skeletal boundedness", "skeletal centeredness", "skeletal smoothness",
                   "curve boundedness", "curve centeredness"]:
         assert per_stage.get(stage, 0) >= 3, (stage, per_stage)

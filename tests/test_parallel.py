@@ -10,12 +10,11 @@ import numpy as np
 import pytest
 
 from skelcore.errors import Cancelled
-from skelcore.metrics import topology
-from skelcore.parallel import on_threads, polled_streams, side_by_side
+from skelcore.parallel import GraphTask, on_threads, polled_streams, run_graph
 
 
-def _no_side_thread() -> bool:
-    return not [t for t in threading.enumerate() if t.name == "skelscope-side"]
+def _no_lane_thread() -> bool:
+    return not [t for t in threading.enumerate() if t.name.startswith("skelscope-lane")]
 
 
 def test_on_threads_runs_every_span_once_and_checks_in_order():
@@ -25,49 +24,53 @@ def test_on_threads_runs_every_span_once_and_checks_in_order():
     assert fractions[0] == 0.0 and fractions[-1] == 1.0 and fractions == sorted(fractions)
 
 
-def test_side_by_side_returns_both_and_reports_the_side_progress_from_this_thread():
+def test_run_graph_runs_tasks_side_by_side_after_what_they_need():
+    both = threading.Barrier(2, timeout=5)  # two tasks must run at the same time to pass it
+    order = []
+
+    def step(name, value, meet=False):
+        def fn():
+            if meet:
+                both.wait()
+            order.append(name)
+            return value
+
+        return GraphTask(name, fn, () if name != "c" else ("a", "b"))
+
+    tasks = [step("a", 1, meet=True), step("b", 2, meet=True), step("c", 3)]
+    assert run_graph(tasks, workers=2) == {"a": 1, "b": 2, "c": 3}
+    assert order[-1] == "c" and _no_lane_thread()
+    # one worker: the list order, on this thread
     me = threading.get_ident()
-    calls = []
-
-    def checkpoint(f):
-        assert threading.get_ident() == me  # callbacks only ever from the caller's thread
-        calls.append(f)
-
-    def side(ck):
-        for i in range(5):
-            time.sleep(0.03)
-            ck(i / 4)
-        return "side"
-
-    assert side_by_side(lambda ck: (ck(1.0), "main")[1], side, checkpoint) == ("main", "side")
-    assert max(calls) <= 1.0 and any(0.5 < f for f in calls) and _no_side_thread()
+    seen = []
+    run_graph([GraphTask(n, lambda n=n: seen.append((n, threading.get_ident()))) for n in "xyz"], workers=1)
+    assert seen == [("x", me), ("y", me), ("z", me)]
+    with pytest.raises(ValueError, match="every 'after'"):
+        run_graph([GraphTask("a", lambda: 1, ("nope",))])
 
 
-def test_a_cancel_on_this_thread_stops_the_side_and_an_error_there_comes_here():
-    started = threading.Event()
-    side_checks = []
+def test_run_graph_stops_every_task_at_the_first_error_and_raises_it():
+    stop = threading.Event()
+    checks = []
 
-    def side(ck):
-        started.set()
-        while True:
-            side_checks.append(1)
-            ck(0.5)
+    def long_task():
+        while True:  # a stage polling its checkpoint
+            checks.append(1)
+            if stop.is_set():
+                raise Cancelled("stopped beside a failure")
             time.sleep(0.005)
 
-    def main(ck):
-        started.wait(5)
-        raise Cancelled("stop")
+    def broken():
+        while not checks:
+            time.sleep(0.005)
+        raise ValueError("stage failed")
 
-    with pytest.raises(Cancelled):
-        side_by_side(main, side)
-    assert side_checks and _no_side_thread()
-
-    def broken(ck):
-        raise ValueError("side failed")
-
-    with pytest.raises(ValueError, match="side failed"):
-        side_by_side(lambda ck: 1, broken)
-    assert _no_side_thread()
+    ran = []
+    tasks = [GraphTask("long", long_task), GraphTask("broken", broken),
+             GraphTask("later", lambda: ran.append(1), ("broken",))]
+    with pytest.raises(ValueError, match="stage failed"):
+        run_graph(tasks, workers=2, on_error=stop.set)
+    assert stop.is_set() and not ran and _no_lane_thread()
 
 
 def _no_stream_thread() -> bool:

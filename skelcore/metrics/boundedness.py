@@ -18,6 +18,7 @@ Design, error measurements, timings and rejected alternatives: docs/boundedness.
 from __future__ import annotations
 
 import hashlib
+import threading
 import weakref
 from dataclasses import dataclass
 
@@ -85,6 +86,7 @@ class _PreparedCloud:
 # the last cloud prepared, reused while the same unchanged array comes back (the skeletal and the
 # curve stage of one evaluation share it: at 1M points it saves about 3 s)
 _last_prepared: dict = {}
+_prepare_lock = threading.Lock()
 
 
 def _in_frame(points: np.ndarray, centre: np.ndarray) -> np.ndarray:
@@ -95,6 +97,13 @@ def _in_frame(points: np.ndarray, centre: np.ndarray) -> np.ndarray:
 
 
 def _prepared_cloud(cloud: np.ndarray, checkpoint: Checkpoint) -> _PreparedCloud:
+    # one preparation at a time: the skeletal and curve stages may start side by side (the second
+    # waits, then finds the first's in the cache)
+    with _prepare_lock:
+        return _prepare(cloud, checkpoint)
+
+
+def _prepare(cloud: np.ndarray, checkpoint: Checkpoint) -> _PreparedCloud:
     digest = hashlib.blake2b(np.ascontiguousarray(cloud).view(np.uint8), digest_size=16).digest()
     ref = _last_prepared.get("cloud")
     hit = _last_prepared.get("prepared")
