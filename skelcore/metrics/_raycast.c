@@ -292,11 +292,14 @@ static int add_cap(const Raster *r, uint64_t *bits, uint8_t *full, double dx, do
     if (end > rows) end = rows;
     if (first < 0) first = 0;
     if (end <= first) return 0;
+    int open = first;  /* a cap whose rows are all full adds nothing: no atan2 for it */
+    while (open < end && full[open]) open++;
+    if (open == end) return 0;
     if (rho < 1e-30) rho = 1e-30;
     double a0 = cosa / rho, a1 = uz / rho;
     double centre = atan2(dy, dx) * (bins / TWO_PI) + bins + 0.5;
     int newly = 0;
-    for (int j = first; j < end; j++) {
+    for (int j = open; j < end; j++) {
         if (full[j]) continue;
         uint64_t *row = bits + (size_t)j * r->words;
         double c = a0 * r->inv_s[j] - a1 * r->z_over_s[j];
@@ -331,20 +334,25 @@ static int add_cap(const Raster *r, uint64_t *bits, uint8_t *full, double dx, do
 typedef struct {
     int32_t *stack;
     int32_t last_leaf;
+    int32_t hit_point;         /* the point of the last hit a walk found */
     int64_t visits, hint_tries, hint_hits;
 } Walker;
 
-static inline int leaf_hit(const Tree *t, int32_t node, const float *o, const float *s, float cut2, float h2) {
+static inline int point_hit(const Tree *t, int32_t i, const float *o, const float *s, float cut2, float h2) {
+    const float *p = t->pts + 3 * (size_t)i;
+    float wx = p[0] - o[0], wy = p[1] - o[1], wz = p[2] - o[2];
+    float d2 = wx * wx + wy * wy + wz * wz;
+    if (d2 <= cut2) return 0;
+    float tt = wx * s[0] + wy * s[1] + wz * s[2];
+    return tt > 0.0f && d2 - tt * tt <= h2;
+}
+
+/* the first point of the leaf whose ball the ray meets, or -1 */
+static inline int32_t leaf_hit(const Tree *t, int32_t node, const float *o, const float *s, float cut2, float h2) {
     const Node *nd = t->nodes + node;
-    for (int32_t i = nd->lo; i < nd->hi; i++) {
-        const float *p = t->pts + 3 * (size_t)i;
-        float wx = p[0] - o[0], wy = p[1] - o[1], wz = p[2] - o[2];
-        float d2 = wx * wx + wy * wy + wz * wz;
-        if (d2 <= cut2) continue;
-        float tt = wx * s[0] + wy * s[1] + wz * s[2];
-        if (tt > 0.0f && d2 - tt * tt <= h2) return 1;
-    }
-    return 0;
+    for (int32_t i = nd->lo; i < nd->hi; i++)
+        if (point_hit(t, i, o, s, cut2, h2)) return i;
+    return -1;
 }
 
 /* Any-hit walk of the subtree at `root` (skipping subtree `skip` and leaves `skip_a`, `skip_b`, already
@@ -373,32 +381,39 @@ static int32_t walk(const Tree *t, Walker *w, int32_t root, int32_t skip, int32_
         if (off2 > reach * reach) continue;
         int32_t k = nd->kid;
         if (k < 0) {
-            if (node != skip_a && node != skip_b && leaf_hit(t, node, o, s, cut2, h2)) return node;
+            if (node != skip_a && node != skip_b && (w->hit_point = leaf_hit(t, node, o, s, cut2, h2)) >= 0)
+                return node;
             continue;
         }
         const Node *a = t->nodes + k, *b = a + 1;
-        float ta = (a->c[0] - o[0]) * s[0] + (a->c[1] - o[1]) * s[1] + (a->c[2] - o[2]) * s[2];
-        float tb = (b->c[0] - o[0]) * s[0] + (b->c[1] - o[1]) * s[1] + (b->c[2] - o[2]) * s[2];
-        if (ta <= tb) { w->stack[sp++] = k + 1; w->stack[sp++] = k; }
+        /* the child whose centre lies nearer along the ray first: (a - b) . s <= 0 (only the order) */
+        float ab = (a->c[0] - b->c[0]) * s[0] + (a->c[1] - b->c[1]) * s[1] + (a->c[2] - b->c[2]) * s[2];
+        if (ab <= 0.0f) { w->stack[sp++] = k + 1; w->stack[sp++] = k; }
         else { w->stack[sp++] = k; w->stack[sp++] = k + 1; }
     }
     return -1;
 }
 
 /* Does the ray from o along s meet a ball around a point with |p - o| > cut?  Exact; the hints only
- * order the search: *hint = a leaf a nearby ray hit (the same sample from the previous cluster), then
- * the previous ray's leaf, then the rest of the tree bottom-up from *hint (the hit is usually near). */
+ * order the search.  hint[0], hint[1] = the leaf and the point a nearby ray hit (the same sample from the
+ * previous cluster): that point first (a centre one cell away usually still sees it), then its leaf,
+ * then the previous ray's leaf, then the rest of the tree bottom-up from the hinted leaf (the hit is
+ * usually near). */
 static int ray_hits(const Tree *t, Walker *w, const float *o, const float *s, float cut, float h,
                     int32_t *hint) {
     const float h2 = h * h, cut2 = cut * cut;
-    int32_t a = *hint, b = w->last_leaf;
+    int32_t a = hint[0], b = w->last_leaf, p;
+    if (hint[1] >= 0) {
+        w->hint_tries++;
+        if (point_hit(t, hint[1], o, s, cut2, h2)) { w->hint_hits++; w->last_leaf = a; return 1; }
+    }
     if (a >= 0) {
         w->hint_tries++;
-        if (leaf_hit(t, a, o, s, cut2, h2)) { w->hint_hits++; w->last_leaf = a; return 1; }
+        if ((p = leaf_hit(t, a, o, s, cut2, h2)) >= 0) { w->hint_hits++; w->last_leaf = a; hint[1] = p; return 1; }
     }
     if (b >= 0 && b != a) {
         w->hint_tries++;
-        if (leaf_hit(t, b, o, s, cut2, h2)) { w->hint_hits++; *hint = b; return 1; }
+        if ((p = leaf_hit(t, b, o, s, cut2, h2)) >= 0) { w->hint_hits++; hint[0] = b; hint[1] = p; return 1; }
     }
     int32_t leaf = -1;
     if (a >= 0) {
@@ -413,7 +428,8 @@ static int ray_hits(const Tree *t, Walker *w, const float *o, const float *s, fl
         leaf = walk(t, w, 0, -1, a, b, o, s, cut, h);
     }
     if (leaf < 0) return 0;
-    *hint = leaf;
+    hint[0] = leaf;
+    hint[1] = w->hit_point;
     w->last_leaf = leaf;
     return 1;
 }
@@ -421,12 +437,37 @@ static int ray_hits(const Tree *t, Walker *w, const float *o, const float *s, fl
 /* Points with |p - c| <= reach, nearest first, into idx; returns their number */
 typedef struct { double d2; int32_t i; } Near;
 
-static int cmp_near(const void *a, const void *b) {
-    double x = ((const Near *)a)->d2, y = ((const Near *)b)->d2;
-    if (x < y) return -1;
-    if (x > y) return 1;
-    int32_t i = ((const Near *)a)->i, j = ((const Near *)b)->i;
-    return (i > j) - (i < j);
+static inline int near_less(const Near *x, const Near *y) {
+    return x->d2 < y->d2 || (x->d2 == y->d2 && x->i < y->i);
+}
+
+/* nearest first, ties by index (a total order: any sort gives the same result; qsort's calls through a
+ * comparator cost twice as much) */
+static void sort_near(Near *v, int32_t n) {
+    while (n > 24) {
+        /* median of three to v[0], then Hoare partition */
+        int32_t mid = n / 2;
+        if (near_less(&v[mid], &v[0])) { Near t = v[mid]; v[mid] = v[0]; v[0] = t; }
+        if (near_less(&v[n - 1], &v[0])) { Near t = v[n - 1]; v[n - 1] = v[0]; v[0] = t; }
+        if (near_less(&v[n - 1], &v[mid])) { Near t = v[n - 1]; v[n - 1] = v[mid]; v[mid] = t; }
+        Near pivot = v[mid];
+        int32_t i = -1, j = n;
+        for (;;) {
+            do i++; while (near_less(&v[i], &pivot));
+            do j--; while (near_less(&pivot, &v[j]));
+            if (i >= j) break;
+            Near t = v[i]; v[i] = v[j]; v[j] = t;
+        }
+        /* recurse into the smaller side, loop on the larger (stack depth <= log2 n) */
+        if (j + 1 < n - j - 1) { sort_near(v, j + 1); v += j + 1; n -= j + 1; }
+        else { sort_near(v + j + 1, n - j - 1); n = j + 1; }
+    }
+    for (int32_t a = 1; a < n; a++) {
+        Near x = v[a];
+        int32_t b = a - 1;
+        while (b >= 0 && near_less(&x, &v[b])) { v[b + 1] = v[b]; b--; }
+        v[b + 1] = x;
+    }
 }
 
 static int32_t collect_near(const Tree *t, int32_t *stack, const double *c, double reach, Near *out) {
@@ -451,7 +492,7 @@ static int32_t collect_near(const Tree *t, int32_t *stack, const double *c, doub
             if (d2 <= r2) { out[m].d2 = d2; out[m].i = i; m++; }
         }
     }
-    qsort(out, (size_t)m, sizeof(Near), cmp_near);
+    sort_near(out, m);
     return m;
 }
 
@@ -516,15 +557,15 @@ static PyObject *py_clusters(PyObject *self, PyObject *args) {
     size_t nw = (size_t)rows * r.words;
     far = (uint64_t *)calloc((2 + (size_t)MEMBER_CHUNK) * nw, sizeof(uint64_t));
     full = (uint8_t *)calloc((size_t)rows * MEMBER_CHUNK, 1);
-    hints = (int32_t *)malloc(sizeof(int32_t) * (size_t)rows * bins);
+    hints = (int32_t *)malloc(sizeof(int32_t) * 2 * (size_t)rows * bins);  /* leaf, point per sample */
     stack = (int32_t *)malloc(sizeof(int32_t) * 256);
     near = (Near *)malloc(sizeof(Near) * (size_t)(n > 0 ? n : 1));
     if (!far || !full || !stack || !near || !hints) { PyErr_NoMemory(); goto done; }
-    for (int i = 0; i < rows * bins; i++) hints[i] = -1;
+    for (int i = 0; i < 2 * rows * bins; i++) hints[i] = -1;
     need = far + nw;
     bits = need + nw;
     Py_BEGIN_ALLOW_THREADS
-    Walker w = {stack, -1, 0, 0, 0};
+    Walker w = {stack, -1, -1, 0, 0, 0};
     int64_t caps = 0, rays = 0, nears = 0;
     const double h2 = h * h;
     const double total = (double)rows * bins;
@@ -539,7 +580,7 @@ static PyObject *py_clusters(PyObject *self, PyObject *args) {
         /* hints from a cluster far away would only lengthen the walks */
         double jx = c[0] - prev[0], jy = c[1] - prev[1], jz = c[2] - prev[2];
         if (k == k0 || jx * jx + jy * jy + jz * jz > 4.0 * reach * reach)
-            for (int i = 0; i < rows * bins; i++) hints[i] = -1;
+            for (int i = 0; i < 2 * rows * bins; i++) hints[i] = -1;
         memcpy(prev, c, sizeof prev);
         int32_t m = n > 0 ? collect_near(&t, stack, c, reach, near) : 0;
         nears += m;
@@ -571,7 +612,7 @@ static PyObject *py_clusters(PyObject *self, PyObject *args) {
                         float s[3] = {(float)(r.s[j] * r.cos_lon[b]), (float)(r.s[j] * r.sin_lon[b]),
                                       (float)r.z[j]};
                         rays++;
-                        if (ray_hits(&t, &w, cf, s, (float)cut, (float)h, hints + (size_t)j * bins + b))
+                        if (ray_hits(&t, &w, cf, s, (float)cut, (float)h, hints + 2 * ((size_t)j * bins + b)))
                             far[(size_t)j * r.words + x] |= UINT64_C(1) << (b & 63);
                     }
                 }
