@@ -237,15 +237,17 @@ static inline int row_is_full(const Raster *r, const uint64_t *row) {
 }
 
 static inline void set_bits(uint64_t *row, int a, int b) {
-    /* bits [a, b) of a row, 0 <= a <= b */
-    while (a < b) {
-        int w = a >> 6, off = a & 63;
-        int take = 64 - off;
-        if (take > b - a) take = b - a;
-        uint64_t m = (take == 64) ? ~UINT64_C(0) : (((UINT64_C(1) << take) - 1) << off);
-        row[w] |= m;
-        a += take;
+    /* bits [a, b) of a row, 0 <= a <= b: a mask for the first and the last word, whole words between */
+    if (a >= b) return;
+    int wa = a >> 6, wb = (b - 1) >> 6;
+    uint64_t first = ~UINT64_C(0) << (a & 63), last = ~UINT64_C(0) >> (63 - ((b - 1) & 63));
+    if (wa == wb) {
+        row[wa] |= first & last;
+        return;
     }
+    row[wa] |= first;
+    for (int w = wa + 1; w < wb; w++) row[w] = ~UINT64_C(0);
+    row[wb] |= last;
 }
 
 /* acos on [-1, 1] to within 6e-12 rad: acos(x) = sqrt(1 - x) P11(x) on [0, 1] (the form of Abramowitz &
@@ -355,30 +357,34 @@ static inline int32_t leaf_hit(const Tree *t, int32_t node, const float *o, cons
     return -1;
 }
 
+/* Can the node hold a counted point whose ball the ray meets?  Not if every point of it lies within the
+ * cut, nor if the ray passes farther than its radius + h from its centre. */
+static inline int node_passes(const Node *nd, const float *o, const float *s, float cut, float h) {
+    float wx = nd->c[0] - o[0], wy = nd->c[1] - o[1], wz = nd->c[2] - o[2];
+    float rad = nd->r;
+    float d2 = wx * wx + wy * wy + wz * wz;
+    float lim = cut - rad;
+    if (lim > 0.0f && d2 <= lim * lim) return 0;
+    float tt = wx * s[0] + wy * s[1] + wz * s[2];
+    float reach = rad + h;
+    float off2 = (tt > 0.0f) ? d2 - tt * tt : d2;
+    return off2 <= reach * reach;
+}
+
 /* Any-hit walk of the subtree at `root` (skipping subtree `skip` and leaves `skip_a`, `skip_b`, already
- * tested): the leaf of a hit, or -1.  Nearer child along the ray first. */
+ * tested): the leaf of a hit, or -1.  Both children are tested before they are pushed (the two tests are
+ * independent, so they overlap), the nearer along the ray first. */
 static int32_t walk(const Tree *t, Walker *w, int32_t root, int32_t skip, int32_t skip_a, int32_t skip_b,
                     const float *o, const float *s, float cut, float h) {
     const float h2 = h * h, cut2 = cut * cut;
+    if (root == skip) return -1;
+    w->visits++;
+    if (!node_passes(t->nodes + root, o, s, cut, h)) return -1;
     int sp = 0;
     w->stack[sp++] = root;
     while (sp > 0) {
         int32_t node = w->stack[--sp];
-        if (node == skip) continue;
         const Node *nd = t->nodes + node;
-        float wx = nd->c[0] - o[0], wy = nd->c[1] - o[1], wz = nd->c[2] - o[2];
-        float rad = nd->r;
-        float d2 = wx * wx + wy * wy + wz * wz;
-        w->visits++;
-        /* every point of the node within the cut: nothing of it counts */
-        if (cut > 0.0f) {
-            float lim = cut - rad;
-            if (lim > 0.0f && d2 <= lim * lim) continue;
-        }
-        float tt = wx * s[0] + wy * s[1] + wz * s[2];
-        float reach = rad + h;
-        float off2 = (tt > 0.0f) ? d2 - tt * tt : d2;
-        if (off2 > reach * reach) continue;
         int32_t k = nd->kid;
         if (k < 0) {
             if (node != skip_a && node != skip_b && (w->hit_point = leaf_hit(t, node, o, s, cut2, h2)) >= 0)
@@ -386,16 +392,25 @@ static int32_t walk(const Tree *t, Walker *w, int32_t root, int32_t skip, int32_
             continue;
         }
         const Node *a = t->nodes + k, *b = a + 1;
+        int pa = k != skip && node_passes(a, o, s, cut, h);
+        int pb = k + 1 != skip && node_passes(b, o, s, cut, h);
+        w->visits += 2;
         /* the child whose centre lies nearer along the ray first: (a - b) . s <= 0 (only the order) */
         float ab = (a->c[0] - b->c[0]) * s[0] + (a->c[1] - b->c[1]) * s[1] + (a->c[2] - b->c[2]) * s[2];
-        if (ab <= 0.0f) { w->stack[sp++] = k + 1; w->stack[sp++] = k; }
-        else { w->stack[sp++] = k; w->stack[sp++] = k + 1; }
+        if (ab <= 0.0f) {
+            if (pb) w->stack[sp++] = k + 1;
+            if (pa) w->stack[sp++] = k;
+        } else {
+            if (pa) w->stack[sp++] = k;
+            if (pb) w->stack[sp++] = k + 1;
+        }
     }
     return -1;
 }
 
-/* Does the ray from o along s meet a ball around a point with |p - o| > cut?  Exact; the hints only
- * order the search.  hint[0], hint[1] = the leaf and the point a nearby ray hit (the same sample from the
+/* Does the ray from o along s meet a ball around a point with |p - o| > cut (1 / 0)?  Exact; the hints only
+ * order the search; a ray without a hint that misses the previous ray's leaf returns -1 (the caller walks
+ * it from the root in a packet).  hint[0], hint[1] = the leaf and the point a nearby ray hit (the same sample from the
  * previous cluster): that point first (a centre one cell away usually still sees it), then its leaf,
  * then the previous ray's leaf, then the rest of the tree bottom-up from the hinted leaf (the hit is
  * usually near). */
@@ -415,23 +430,85 @@ static int ray_hits(const Tree *t, Walker *w, const float *o, const float *s, fl
         w->hint_tries++;
         if ((p = leaf_hit(t, b, o, s, cut2, h2)) >= 0) { w->hint_hits++; hint[0] = b; hint[1] = p; return 1; }
     }
+    if (a < 0) return -1;  /* no hint: left to a packet walk from the root (walk_packet) */
     int32_t leaf = -1;
-    if (a >= 0) {
-        /* bottom-up from the hinted leaf: each ancestor's other subtree in turn, up to the root */
-        int32_t prev = a, node = t->nodes[a].par;
-        while (node >= 0 && leaf < 0) {
-            leaf = walk(t, w, node, prev, a, b, o, s, cut, h);
-            prev = node;
-            node = t->nodes[node].par;
-        }
-    } else {
-        leaf = walk(t, w, 0, -1, a, b, o, s, cut, h);
+    /* bottom-up from the hinted leaf: each ancestor's other subtree in turn, up to the root */
+    int32_t prev = a, node = t->nodes[a].par;
+    while (node >= 0 && leaf < 0) {
+        leaf = walk(t, w, node, prev, a, b, o, s, cut, h);
+        prev = node;
+        node = t->nodes[node].par;
     }
     if (leaf < 0) return 0;
     hint[0] = leaf;
     hint[1] = w->hit_point;
     w->last_leaf = leaf;
     return 1;
+}
+
+/* Up to PACKET rays from one origin without a hint (mostly rays that escape: they cost most of the walks),
+ * walked from the root together: one traversal, each node tested against every ray still open (the
+ * shared part of the test once), each leaf tested ray by ray.  Per ray it is the same exact test as
+ * walk(), so the same hits. */
+#define PACKET 4
+typedef struct {
+    float s[PACKET][3];
+    int32_t *hint[PACKET];
+    uint64_t *word[PACKET];
+    uint64_t bit[PACKET];
+    int n;
+} Packet;
+
+static void walk_packet(const Tree *t, Walker *w, Packet *pk, const float *o, float cut, float h) {
+    const float h2 = h * h, cut2 = cut * cut;
+    unsigned active = (1u << pk->n) - 1u;
+    uint8_t masks[256];
+    float mx = 0.0f, my = 0.0f, mz = 0.0f;  /* the rays' summed direction: children in its order */
+    for (int l = 0; l < pk->n; l++) { mx += pk->s[l][0]; my += pk->s[l][1]; mz += pk->s[l][2]; }
+    int sp = 0;
+    w->stack[sp] = 0; masks[sp] = (uint8_t)active; sp++;
+    while (sp > 0 && active) {
+        sp--;
+        int32_t node = w->stack[sp];
+        unsigned m = masks[sp] & active;
+        if (!m) continue;
+        const Node *nd = t->nodes + node;
+        float wx = nd->c[0] - o[0], wy = nd->c[1] - o[1], wz = nd->c[2] - o[2];
+        float rad = nd->r;
+        float d2 = wx * wx + wy * wy + wz * wz;
+        w->visits++;
+        float lim = cut - rad;
+        if (lim > 0.0f && d2 <= lim * lim) continue;
+        float reach2 = (rad + h) * (rad + h);
+        unsigned pass = 0;
+        for (int l = 0; l < PACKET; l++) {
+            float tt = wx * pk->s[l][0] + wy * pk->s[l][1] + wz * pk->s[l][2];
+            float off2 = (tt > 0.0f) ? d2 - tt * tt : d2;
+            pass |= (unsigned)(off2 <= reach2) << l;
+        }
+        m &= pass;
+        if (!m) continue;
+        int32_t k = nd->kid;
+        if (k < 0) {
+            for (int l = 0; l < pk->n; l++) {
+                if (!(m >> l & 1u)) continue;
+                int32_t p = leaf_hit(t, node, o, pk->s[l], cut2, h2);
+                if (p < 0) continue;
+                active &= ~(1u << l);
+                pk->hint[l][0] = node;
+                pk->hint[l][1] = p;
+                *pk->word[l] |= pk->bit[l];
+                w->last_leaf = node;
+            }
+            continue;
+        }
+        const Node *a = t->nodes + k, *b = a + 1;
+        float ab = (a->c[0] - b->c[0]) * mx + (a->c[1] - b->c[1]) * my + (a->c[2] - b->c[2]) * mz;
+        int32_t first = ab <= 0.0f ? k : k + 1;  /* nearer along the rays: popped first */
+        w->stack[sp] = 2 * k + 1 - first; masks[sp] = (uint8_t)m; sp++;
+        w->stack[sp] = first; masks[sp] = (uint8_t)m; sp++;
+    }
+    pk->n = 0;
 }
 
 /* Points with |p - c| <= reach, nearest first, into idx; returns their number */
@@ -566,6 +643,8 @@ static PyObject *py_clusters(PyObject *self, PyObject *args) {
     bits = need + nw;
     Py_BEGIN_ALLOW_THREADS
     Walker w = {stack, -1, -1, 0, 0, 0};
+    Packet pk;
+    pk.n = 0;
     int64_t caps = 0, rays = 0, nears = 0;
     const double h2 = h * h;
     const double total = (double)rows * bins;
@@ -612,11 +691,19 @@ static PyObject *py_clusters(PyObject *self, PyObject *args) {
                         float s[3] = {(float)(r.s[j] * r.cos_lon[b]), (float)(r.s[j] * r.sin_lon[b]),
                                       (float)r.z[j]};
                         rays++;
-                        if (ray_hits(&t, &w, cf, s, (float)cut, (float)h, hints + 2 * ((size_t)j * bins + b)))
-                            far[(size_t)j * r.words + x] |= UINT64_C(1) << (b & 63);
+                        int32_t *hint = hints + 2 * ((size_t)j * bins + b);
+                        uint64_t *word = far + (size_t)j * r.words + x, bit = UINT64_C(1) << (b & 63);
+                        int hit = ray_hits(&t, &w, cf, s, (float)cut, (float)h, hint);
+                        if (hit > 0) *word |= bit;
+                        if (hit < 0) {
+                            memcpy(pk.s[pk.n], s, sizeof s);
+                            pk.hint[pk.n] = hint; pk.word[pk.n] = word; pk.bit[pk.n] = bit;
+                            if (++pk.n == PACKET) walk_packet(&t, &w, &pk, cf, (float)cut, (float)h);
+                        }
                     }
                 }
             }
+            if (pk.n) walk_packet(&t, &w, &pk, cf, (float)cut, (float)h);
         }
         /* pass 2: member raster | far field (members beyond the first chunk are rasterised again) */
         for (int64_t i = q0; i < q1; i++) {
