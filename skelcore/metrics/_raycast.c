@@ -450,7 +450,7 @@ static int ray_hits(const Tree *t, Walker *w, const float *o, const float *s, fl
  * walked from the root together: one traversal, each node tested against every ray still open (the
  * shared part of the test once), each leaf tested ray by ray.  Per ray it is the same exact test as
  * walk(), so the same hits. */
-#define PACKET 4
+#define PACKET 8
 typedef struct {
     float s[PACKET][3];
     int32_t *hint[PACKET];
@@ -632,8 +632,14 @@ static PyObject *py_clusters(PyObject *self, PyObject *args) {
         goto done;
     }
     size_t nw = (size_t)rows * r.words;
-    far = (uint64_t *)calloc((2 + (size_t)MEMBER_CHUNK) * nw, sizeof(uint64_t));
-    full = (uint8_t *)calloc((size_t)rows * MEMBER_CHUNK, 1);
+    /* member rasters for the largest cluster of the stream, at most MEMBER_CHUNK (fresh pages cost) */
+    int64_t slots = 1;
+    for (int k = k0; k < k1; k++) {
+        int64_t n_mem = st[k - k0 + 1] - st[k - k0];
+        if (n_mem > slots) slots = n_mem < MEMBER_CHUNK ? n_mem : MEMBER_CHUNK;
+    }
+    far = (uint64_t *)calloc((2 + (size_t)slots) * nw, sizeof(uint64_t));
+    full = (uint8_t *)calloc((size_t)rows * slots, 1);
     hints = (int32_t *)malloc(sizeof(int32_t) * 2 * (size_t)rows * bins);  /* leaf, point per sample */
     stack = (int32_t *)malloc(sizeof(int32_t) * 256);
     near = (Near *)malloc(sizeof(Near) * (size_t)(n > 0 ? n : 1));
@@ -666,7 +672,7 @@ static PyObject *py_clusters(PyObject *self, PyObject *args) {
         /* pass 1: every member's near caps; `need` = samples left uncovered by some member */
         memset(need, 0, nw * sizeof(uint64_t));
         for (int64_t i = q0; i < q1; i++) {
-            int64_t slot = (i - q0) % MEMBER_CHUNK;
+            int64_t slot = (i - q0) % slots;
             uint64_t *mb = bits + (size_t)slot * nw;
             uint8_t *mf = full + (size_t)slot * rows;
             caps += near_raster(&r, &t, near, m, q + 3 * (size_t)i, h, h2, mb, mf);
@@ -707,10 +713,10 @@ static PyObject *py_clusters(PyObject *self, PyObject *args) {
         }
         /* pass 2: member raster | far field (members beyond the first chunk are rasterised again) */
         for (int64_t i = q0; i < q1; i++) {
-            int64_t slot = (i - q0) % MEMBER_CHUNK;
+            int64_t slot = (i - q0) % slots;
             uint64_t *mb = bits + (size_t)slot * nw;
             uint8_t *mf = full + (size_t)slot * rows;
-            if (n_mem > MEMBER_CHUNK) caps += near_raster(&r, &t, near, m, q + 3 * (size_t)i, h, h2, mb, mf);
+            if (n_mem > slots) caps += near_raster(&r, &t, near, m, q + 3 * (size_t)i, h, h2, mb, mf);
             int64_t count = 0;
             for (size_t x = 0; x < nw; x++) count += __builtin_popcountll(mb[x] | far[x]);
             out[i] = (double)count / total;
