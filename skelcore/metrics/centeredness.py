@@ -100,7 +100,7 @@ def skeletal_centeredness(
 
     def span(lo: int, hi: int) -> None:
         which = visit[lo:hi]
-        slot = groups.k_nearest_slots(tree, which, k, workers=1 if threads > 1 else -1)
+        slot = groups.k_nearest_slots(tree, which, k, workers=1)
         m_s = take_rows(skel_m, slot).mean(axis=1)
         neighbours_o = take_rows(cloud_m, slot)
         m_o = neighbours_o.mean(axis=1)
@@ -112,7 +112,8 @@ def skeletal_centeredness(
         c[~(spread > 0)] = np.nan
         per_group[which] = c
 
-    # chunks on every core, each query single-threaded (docs/performance.md 6)
+    # chunks on every core, each query single-threaded (docs/performance.md 6); one chunk (a small set)
+    # runs on this thread alone: the evaluation's other stages run beside it (docs/performance.md 8)
     on_threads(span, [(lo, min(lo + _SKELETAL_CHUNK, n_groups)) for lo in range(0, n_groups, _SKELETAL_CHUNK)],
                threads, checkpoint)
     # coincident points have the same neighbours (ties go by index, not by self), so the same c

@@ -32,8 +32,9 @@ NODE = np.dtype([("c", "<f8", (3,)), ("rho", "<f8"), ("rg", "<f8"), ("rc", "<f8"
 LEAF = 8
 # rows per timed chunk at most (a chunk is split over the threads)
 MOST_ROWS = 262144
-# below this many rows a chunk runs on the calling thread alone
-THREAD_ROWS = 512
+# below this many rows a chunk runs on the calling thread alone: the evaluation's stages already run side
+# by side, and on a small cloud the pieces' hand-over cost more than their work (docs/performance.md 8)
+THREAD_ROWS = 8192
 # covered: |p - x|^2 - R(x)^2 <= COVER_EPS x R_max^2 (the rounding allowance of the 4-D lifted query before)
 COVER_EPS = 1e-12
 
