@@ -570,3 +570,36 @@ def test_cell_counts_of_every_size_equal_flooring_the_points_at_that_size():
             for j, scale in enumerate(2.0 ** np.arange(-1, 6)):
                 direct = len(np.unique(np.floor(pts / (cell * scale)).astype(np.int64), axis=0))
                 assert counts.count(j) == direct, (cell, scale)
+
+
+def test_a_stage_waiting_for_the_cloud_preparation_still_checks_for_cancel():
+    # the skeletal and curve stages start side by side; the second waits for the first's preparation
+    # (seconds at 1M points) and must keep calling its checkpoint meanwhile
+    import threading
+    import time
+
+    import skelcore.metrics.boundedness as bnd
+
+    cloud = sphere_surface(500, 1.0, seed=1)
+    start = time.perf_counter()
+    raised = []
+
+    def checkpoint(_f: float) -> None:
+        if time.perf_counter() - start > 0.2:  # several polls of the wait
+            raise Cancelled("cancelled while waiting")
+
+    def run() -> None:
+        try:
+            boundedness_rays(cloud, np.zeros((1, 3)), checkpoint=checkpoint)
+        except Cancelled as exc:
+            raised.append(exc)
+
+    bnd._last_prepared.clear()
+    with bnd._prepare_lock:  # another stage is preparing, for longer than this test waits
+        worker = threading.Thread(target=run, daemon=True)
+        worker.start()
+        worker.join(5.0)
+        stopped_while_held = not worker.is_alive()
+    worker.join()
+    assert stopped_while_held and raised
+    assert boundedness_rays(cloud, np.zeros((1, 3)))[0] > 0.9  # the lock is free again

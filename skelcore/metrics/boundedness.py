@@ -98,9 +98,14 @@ def _in_frame(points: np.ndarray, centre: np.ndarray) -> np.ndarray:
 
 def _prepared_cloud(cloud: np.ndarray, checkpoint: Checkpoint) -> _PreparedCloud:
     # one preparation at a time: the skeletal and curve stages may start side by side (the second
-    # waits, then finds the first's in the cache)
-    with _prepare_lock:
+    # waits, then finds the first's in the cache); the wait calls the checkpoint every 50 ms (at 1M points
+    # the preparation takes seconds, and a cancel must reach this stage too)
+    while not _prepare_lock.acquire(timeout=0.05):
+        checkpoint(0.0)
+    try:
         return _prepare(cloud, checkpoint)
+    finally:
+        _prepare_lock.release()
 
 
 def _prepare(cloud: np.ndarray, checkpoint: Checkpoint) -> _PreparedCloud:
