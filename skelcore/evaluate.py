@@ -142,7 +142,8 @@ def evaluate(
     cancel : returning True makes the next checkpoint raise :class:`Cancelled` (in whichever stage checks
         first when several run side by side).
     workers : threads running the independent stages side by side (None = all cores; 1 = one after the
-        other, boundedness first); the values do not depend on it.
+        other, in the order they are started: the skeletal boundedness first, the curve's last); the
+        values do not depend on it.
 
     Examples
     --------
@@ -223,8 +224,8 @@ def evaluate(
         samples = sample_curve(curve_n, p.curve_samples, collinear_cos=p.collinear_cos)
 
     # The stages are independent (but for the correspondence): they run side by side on the cores, the
-    # long compiled ones first in the list so that the other thread takes the rest beside them
-    # (docs/performance.md 8).  ``got`` holds each result as soon as its stage is done.
+    # longest first so that the other thread takes the rest beside it (docs/performance.md 8).  ``got``
+    # holds each result as soon as its stage is done.
     got: dict = {}
 
     def task(stage: str, fn, *args, after: tuple[str, ...] = (), **kwargs) -> GraphTask:
@@ -290,7 +291,14 @@ def evaluate(
     if ref_obj is not None:
         ref_n = ref_obj.transformed(norm.apply)
         rest.append(task("reference", lambda checkpoint: compare_with_reference(curve_n, ref_n, _tau(checkpoint))))
-    run_graph(first + rest, workers, on_error=stages.abort)
+    # longest first (list scheduling): the skeletal set's boundedness, then the rest, the curve's
+    # boundedness last when the skeletal one runs (on the hammer it is a quarter of it; put second, it
+    # held the other thread while the rest waited); without a skeletal set the curve's leads
+    if len(first) == 2 and first[1].name == "curve boundedness":
+        order = [first[0]] + rest + [first[1]]
+    else:
+        order = first + rest
+    run_graph(order, workers, on_error=stages.abort)
 
     if skel is not None:
         ev.skeletal = _skeletal_result(ev, got, skel, mode, index)

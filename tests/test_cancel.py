@@ -17,10 +17,9 @@ from skelcore.errors import Cancelled
 from skelcore.shapes import torus
 
 # the order of the stages run one after the other (workers=1); with more workers they run side by side,
-# the boundedness stages first, the others beside them
+# the longest first (the skeletal boundedness), the curve's boundedness last
 STAGES = [
     "skeletal boundedness",
-    "curve boundedness",
     "topology",
     "skeletal centeredness",
     "skeletal smoothness",
@@ -28,6 +27,7 @@ STAGES = [
     "curve smoothness",
     "skeletal coverage",
     "curve coverage",
+    "curve boundedness",
 ]
 
 
