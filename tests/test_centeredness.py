@@ -373,3 +373,12 @@ def test_curve_grid_lookup_matches_reference_on_real_scan(shared_data):
     want = _curve_reference(cloud, points, dirs, params)
     np.testing.assert_array_equal(np.isnan(got), np.isnan(want))
     np.testing.assert_allclose(got, want, atol=1e-9)
+
+
+def test_the_neighbour_mean_is_numpys_mean_bit_for_bit(rng):
+    from skelcore.metrics.centeredness import _neighbour_mean
+
+    values = rng.normal(size=(500, 3)) * 1e3 + 7.0
+    for k in (1, 2, 10, 41):
+        slot = rng.integers(0, 500, size=(300, k))
+        assert np.array_equal(_neighbour_mean(values, slot), values[slot].mean(axis=1))

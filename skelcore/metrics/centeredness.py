@@ -101,9 +101,9 @@ def skeletal_centeredness(
     def span(lo: int, hi: int) -> None:
         which = visit[lo:hi]
         slot = groups.k_nearest_slots(tree, which, k, workers=1)
-        m_s = take_rows(skel_m, slot).mean(axis=1)
+        m_s = _neighbour_mean(skel_m, slot)
         neighbours_o = take_rows(cloud_m, slot)
-        m_o = neighbours_o.mean(axis=1)
+        m_o = _neighbour_mean(cloud_m, slot)
         diff = neighbours_o - m_s[:, None, :]
         spread = np.sqrt(np.einsum("ijk,ijk->ij", diff, diff)).mean(axis=1)
         offset = np.linalg.norm(m_o - m_s, axis=1)
@@ -118,6 +118,15 @@ def skeletal_centeredness(
                threads, checkpoint)
     # coincident points have the same neighbours (ties go by index, not by self), so the same c
     return per_group[groups.group_of]
+
+
+def _neighbour_mean(values: np.ndarray, slot: np.ndarray) -> np.ndarray:
+    """``values[slot].mean(axis=1)`` bit for bit (numpy sums a middle axis in order, then divides),
+    column by column: 2-3 x faster at k = 41, and the (n, k, 3) gather is not made."""
+    total = values[slot[:, 0]].copy()
+    for j in range(1, slot.shape[1]):
+        total += values[slot[:, j]]
+    return total / slot.shape[1]
 
 
 class _CoincidentGroups:
