@@ -2,7 +2,8 @@
 
 Issue 12's torus (benchmarks/bench_engine.py: R = 1, r = 0.3, N cloud points, skeletal set = each
 point's projection onto the core circle + 1 % jitter, curve = a 64-gon, 200 samples) is evaluated
-with ``skelcore.evaluate``; boundedness (timed apart) is replaced, in this benchmark's process only
+with ``skelcore.evaluate(..., workers=1)`` (the stages one after the other, so that each stage's time,
+CPU and gaps are its own; an evaluation runs them side by side); boundedness (timed apart) is replaced, in this benchmark's process only
 (unless ``--real-boundedness``), by a function returning 1 for every query (so the trust checks take
 their usual "bounded" path) that still calls its checkpoint.  Each size runs in a fresh subprocess
 (its own peak memory).  A cancel gap is the time between two consecutive cancel checks; it is charged to the stage
@@ -73,7 +74,7 @@ def run_case(n: int, skip_coverage: bool = False, real_boundedness: bool = False
 
     cpu0 = time.process_time()
     t0 = time.perf_counter()
-    ev = ev_mod.evaluate(shape.cloud, skeletal, curve, Params(), progress=progress, cancel=cancel)
+    ev = ev_mod.evaluate(shape.cloud, skeletal, curve, Params(), progress=progress, cancel=cancel, workers=1)
     out = {"n": n, "total": time.perf_counter() - t0, "cpu": time.process_time() - cpu0,
            "tail": time.perf_counter() - last[0]}  # after the last check (timings, return)
     out.update({k: v for k, v in ev.timings.items() if k != "total"})
