@@ -162,6 +162,9 @@ def main() -> None:
     ap.add_argument("--no-real", action="store_true", help="skip ../shared/data clouds")
     ap.add_argument("--no-targets", action="store_true", help="only the size series (no Rips, no 100k, no curve-only)")
     ap.add_argument("--timeout", type=float, default=900.0, help="seconds per case before it is stopped")
+    ap.add_argument("--ratio-runs", type=int, default=0, metavar="N",
+                    help="then N more pairs of (gudhi Rips H0, hammer) fresh processes, alternating, and the "
+                         "median of their ratios (this VM's speed drifts between minutes)")
     ap.add_argument("--child", nargs=2, help=argparse.SUPPRESS)
     args = ap.parse_args()
     if args.child:
@@ -207,6 +210,17 @@ def main() -> None:
     for a, b in zip(sizes, sizes[1:]):
         print(f"| growth torus {a} -> {b} | x{res[f'torus {b}']['total'] / res[f'torus {a}']['total']:.2f} "
               f"for x{b / a:.0f} points | <= 4.5 per 4x |")
+    if args.ratio_runs > 0 and hammer.is_file():
+        ratios = []
+        for _ in range(args.ratio_runs):
+            pair = [_child("rips", str(hammer), args.method, args.timeout), _child("real", str(hammer), args.method, args.timeout)]
+            if None in pair:
+                continue
+            ratios.append((pair[1]["total"] / pair[0]["total"], pair[1]["total"], pair[0]["total"]))
+        if ratios:
+            listed = ", ".join(f"{h:.2f}/{r:.2f} s = {q:.3f}" for q, h, r in ratios)
+            print(f"| hammer / Rips in {len(ratios)} alternating pairs | {listed}; median "
+                  f"{sorted(q for q, _, _ in ratios)[len(ratios) // 2]:.3f} | <= 0.02 |")
     gaps = [(r["cancel_gap"], k, r["cancel_stage"]) for k, r in res.items() if "cancel_gap" in r]
     if gaps:
         g, k, s = max(gaps)
