@@ -235,15 +235,20 @@ def evaluate(
 
         return GraphTask(stage, run, after)
 
-    first: list[GraphTask] = []  # the boundedness stages
+    # the order they are started in: longest first (list scheduling); the curve's boundedness last when
+    # the skeletal set's runs (on the hammer it is a quarter of it; put second, it held the other thread
+    # while the rest waited), first without it
+    first: list[GraphTask] = []
     rest: list[GraphTask] = []
+    last: list[GraphTask] = []
     if skel is not None:
         _skeletal_tasks(task, first, rest, cloud_n, lambda: skel_n, lambda: got["correspondence"], mode, index, p,
                         after=())
         if mode == "reverse":
             rest.insert(0, task("correspondence", lambda checkpoint: reverse_projection(cloud_n, skel_n)))
     if curve_obj is not None:
-        first.append(task("curve boundedness", boundedness, cloud_n, samples.points, params=p))
+        (last if skel is not None else first).append(
+            task("curve boundedness", boundedness, cloud_n, samples.points, params=p))
         rest.append(task("curve centeredness", curve_centeredness, cloud_n, samples.points, samples.directions,
                          params=p))
 
@@ -291,14 +296,7 @@ def evaluate(
     if ref_obj is not None:
         ref_n = ref_obj.transformed(norm.apply)
         rest.append(task("reference", lambda checkpoint: compare_with_reference(curve_n, ref_n, _tau(checkpoint))))
-    # longest first (list scheduling): the skeletal set's boundedness, then the rest, the curve's
-    # boundedness last when the skeletal one runs (on the hammer it is a quarter of it; put second, it
-    # held the other thread while the rest waited); without a skeletal set the curve's leads
-    if len(first) == 2 and first[1].name == "curve boundedness":
-        order = [first[0]] + rest + [first[1]]
-    else:
-        order = first + rest
-    run_graph(order, workers, on_error=stages.abort)
+    run_graph(first + rest + last, workers, on_error=stages.abort)
 
     if skel is not None:
         ev.skeletal = _skeletal_result(ev, got, skel, mode, index)

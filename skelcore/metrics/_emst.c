@@ -119,8 +119,8 @@ static int build(Tree *t) {
 typedef struct {
     Tree *t;
     int32_t *comp;         /* component (root point) of every point, tree order */
-    double *cand_d;        /* each point's candidate: length and far end (-1: none) */
-    int32_t *cand_j;
+    double *cand_d;        /* each point's candidate: its length ... */
+    int32_t *cand_j;       /* ... and its far end (-1: none) */
     double *lower;         /* nothing of another component is closer than this */
     int64_t *bound_bits;   /* per component (root point): best candidate length so far, as bits */
     int64_t next_block;    /* shared block counter of the current round */
@@ -337,7 +337,6 @@ static int64_t emst(const double *pts, int32_t n, double *lengths, double *nn, v
         for (int32_t i = 0; i < n; i++) s.comp[i] = find(parent, i);
     }
     *components = 1;
-    if (n == 1) nn[0] = INFINITY;
     status = m;
 done:
     free(t.P); free(t.perm); free(t.nodes); free(s.comp); free(s.cand_d); free(s.cand_j); free(s.lower);

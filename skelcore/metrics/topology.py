@@ -73,7 +73,7 @@ def _emst_lengths(points: np.ndarray, checkpoint: Checkpoint = no_checkpoint) ->
 
     m = polled_build(lambda stop: _emst.emst(pts, lengths, nn, stop, components, threads), n, checkpoint,
                      "skelscope-emst", _THREADED_EMST, progress=merged)
-    if m != n - 1:  # cannot happen: every round merges, the kernel reports a stop by raising here
+    if m != n - 1:  # cannot happen: every round merges, and a cancel is raised by polled_build's checkpoint
         raise RuntimeError(f"EMST: {m} edges for {n} points")
     return lengths, nn
 
