@@ -89,7 +89,9 @@ def test_emst_kernel_stops_on_its_flag_and_topology_leaves_no_thread_on_cancel()
 
     points = np.random.default_rng(3).normal(size=(5000, 3))
     assert _kernel_emst(points, 2, stop=1)[0] == -1  # the flag is read before every block of searches
-    cloud, skel = normalized_torus(40000)  # above _THREADED_EMST: the kernel runs in a polled thread
+    # above _THREADED_EMST the kernel runs in a polled thread; 200k points keep it busy for far longer
+    # than one 50 ms poll on any machine (40k finished within one poll on a fast minute: no poll saw it)
+    many = np.random.default_rng(4).normal(size=(200_000, 3))
     seen = []
 
     def emst_threads() -> list:
@@ -104,7 +106,7 @@ def test_emst_kernel_stops_on_its_flag_and_topology_leaves_no_thread_on_cancel()
             raise Stop
 
     with pytest.raises(Stop):
-        topological_similarity(cloud, skel, checkpoint=cancel)
+        topology._emst_lengths(many, cancel)
     assert seen and not emst_threads()
 
 
