@@ -479,6 +479,27 @@ def test_a_cancel_during_the_tree_build_stops_it_and_leaves_no_thread_behind():
     assert (leaves["hi"] - leaves["lo"]).sum() == len(pts) and (leaves["hi"] - leaves["lo"]).max() <= 8
 
 
+@pytest.mark.parametrize("n", [1, 5, 3001])
+def test_each_leaf_block_holds_its_leafs_points_lane_by_lane(n):
+    """The kernel tests a leaf's points 4 at a time from x[8], y[8], z[8] blocks: leaf b (kid = -1 - b)
+    holds its points in order, NaN beyond them (a NaN lane never hits); a block too small is refused."""
+    from skelcore.metrics import _raycast
+    from skelcore.metrics.rays_kernel import BallTree, exact_plan
+
+    tree = BallTree(np.random.default_rng(n).normal(size=(n, 3)))
+    leaves = np.flatnonzero(tree.nodes["kid"] < 0)
+    assert sorted(-1 - tree.nodes["kid"][leaves]) == list(range(len(leaves))) == list(range((len(tree.nodes) + 1) // 2))
+    for node in leaves:
+        lo, hi = tree.nodes["lo"][node], tree.nodes["hi"][node]
+        block = tree.leaves[-1 - tree.nodes["kid"][node]]
+        assert np.array_equal(block[:, : hi - lo].T, tree.points[lo:hi]) and np.isnan(block[:, hi - lo :]).all()
+    plan = exact_plan(np.zeros((1, 3)), 0.1)
+    args = (tree.points, tree.nodes, tree.leaves[:-1], np.zeros((1, 3)), plan.starts, plan.centres, plan.reach,
+            0, 1, 0.02, 48, 96, np.zeros(1), np.zeros(6, np.int64), np.zeros(1, np.int32), np.zeros(1, np.int64))
+    with pytest.raises(ValueError, match="leaves"):
+        _raycast.clusters(*args)
+
+
 def test_the_tree_does_not_depend_on_the_build_threads():
     """Subtrees of big nodes are built on threads of their own, numbered as one thread numbers them:
     the nodes, the permutation and the float32 points are the same bytes for 1, 2 and 5 threads, and the
@@ -548,7 +569,7 @@ def test_the_kernel_counts_finished_clusters_and_returns_at_once_when_stopped():
     queries = np.random.default_rng(8).uniform(-0.5, 0.5, (30, 3))
     tree = BallTree(cloud)
     plan = exact_plan(queries, 0.1)
-    args = (tree.points, tree.nodes, np.ascontiguousarray(queries[plan.order]), plan.starts, plan.centres, plan.reach,
+    args = (tree.points, tree.nodes, tree.leaves, np.ascontiguousarray(queries[plan.order]), plan.starts, plan.centres, plan.reach,
             0, 30, 0.02, 48, 96)
     beta, stats, done = np.zeros(30), np.zeros(6, np.int64), np.zeros(1, np.int64)
     assert _raycast.clusters(*args, beta, stats, np.ones(1, np.int32), done) == 0 and done[0] == 0

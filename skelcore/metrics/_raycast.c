@@ -19,8 +19,24 @@
 #include <stdint.h>
 #include <stdlib.h>
 #include <string.h>
+#ifdef __SSE2__
+#include <emmintrin.h>
+#endif
 
 #define LEAF_SIZE 8
+
+/* four floats (GCC/Clang vector extensions: SSE on x86-64, NEON on arm64); element-wise IEEE operations,
+ * so a lane rounds exactly as the scalar expression written in the same order */
+typedef float v4f __attribute__((vector_size(16)));
+typedef int32_t v4i __attribute__((vector_size(16)));
+
+static inline unsigned lane_mask(v4i m) {  /* bit l set iff lane l of the comparison holds */
+#ifdef __SSE2__
+    return (unsigned)_mm_movemask_ps((__m128)m);
+#else
+    return (unsigned)((m[0] & 1) | (m[1] & 2) | (m[2] & 4) | (m[3] & 8));
+#endif
+}
 #define TWO_PI 6.283185307179586476925286766559
 
 /* ------------------------------------------------------------------------------------------------ */
@@ -28,7 +44,7 @@
 
 typedef struct {
     float c[3], r;          /* bounding sphere */
-    int32_t kid, lo, hi;    /* first child (second = kid + 1) or -1 for a leaf; point range [lo, hi) */
+    int32_t kid, lo, hi;    /* first child (second = kid + 1), or -1 - b for leaf b; point range [lo, hi) */
     int32_t par;            /* parent, -1 for the root */
 } Node;                     /* 32 bytes: two siblings share a cache line */
 
@@ -36,6 +52,7 @@ typedef struct {
     const float *pts;       /* (n, 3) points in tree order */
     const Node *nodes;
     int32_t n_nodes;
+    const float *leaf;      /* (leaves, 3, LEAF_SIZE): leaf b's points as x[8], y[8], z[8] (unused lanes NaN) */
 } Tree;
 
 static inline void swap_rows(double *key, int32_t *idx, double *wp, int32_t i, int32_t j) {
@@ -197,6 +214,7 @@ done:
 typedef struct {
     int rows, bins, words;     /* words per row */
     double *z, *s, *inv_s, *z_over_s, *cos_lon, *sin_lon;
+    double *row_c, *row_half;  /* add_cap's scratch: per row, the interval's cosine and half-width in bins */
     uint64_t last_mask;        /* valid bits of a row's last word */
 } Raster;
 
@@ -205,12 +223,15 @@ static int raster_init(Raster *r, int rows, int bins) {
     r->bins = bins;
     r->words = (bins + 63) / 64;
     r->last_mask = (bins % 64) ? ((UINT64_C(1) << (bins % 64)) - 1) : ~UINT64_C(0);
-    r->z = (double *)malloc(sizeof(double) * (size_t)(4 * rows + 2 * bins));
+    /* every per-row array has one padding entry (add_cap reads rows two at a time) */
+    r->z = (double *)calloc((size_t)(6 * (rows + 1) + 2 * bins), sizeof(double));
     if (!r->z) return -1;
-    r->s = r->z + rows;
-    r->inv_s = r->s + rows;
-    r->z_over_s = r->inv_s + rows;
-    r->cos_lon = r->z_over_s + rows;
+    r->s = r->z + rows + 1;
+    r->inv_s = r->s + rows + 1;
+    r->z_over_s = r->inv_s + rows + 1;
+    r->row_c = r->z_over_s + rows + 1;
+    r->row_half = r->row_c + rows + 1;
+    r->cos_lon = r->row_half + rows + 1;
     r->sin_lon = r->cos_lon + bins;
     for (int j = 0; j < rows; j++) {
         double z = -1.0 + (j + 0.5) * (2.0 / rows);
@@ -250,14 +271,18 @@ static inline void set_bits(uint64_t *row, int a, int b) {
     row[wb] |= last;
 }
 
-/* acos on [-1, 1] to within 6e-12 rad: acos(x) = sqrt(1 - x) P11(x) on [0, 1] (the form of Abramowitz &
- * Stegun 4.4.46, coefficients refitted for degree 11 near-minimax absolute error), acos(-x) = pi - acos(x).
- * Inlined, it replaces glibc's acos call (12 % of the kernel's CPU on a scanned tree; docs/boundedness.md
- * 3.8).  A cap's interval ends are truncated to bins (96 / 2 pi bins per rad), so a sample can change side
- * only within 1e-10 bins of a cap edge. */
-static inline double acos_poly(double x) {
-    double a = fabs(x);
-    double p = -1.672209418596159e-04;
+typedef double v2d __attribute__((vector_size(16)));
+typedef int64_t v2l __attribute__((vector_size(16)));
+
+/* acos on [-1, 1] to within 6e-12 rad, two lanes at once: acos(x) = sqrt(1 - x) P11(x) on [0, 1] (the form
+ * of Abramowitz & Stegun 4.4.46, coefficients refitted for degree 11 near-minimax absolute error),
+ * acos(-x) = pi - acos(x).  It replaces glibc's acos call (12 % of the kernel's CPU on a scanned tree;
+ * docs/boundedness.md 3.8); two lanes since session 7 (3.11: the same bits as the scalar form).  A cap's
+ * interval ends are truncated to bins (96 / 2 pi bins per rad), so a sample can change side only within
+ * 1e-10 bins of a cap edge. */
+static inline v2d acos_poly2(v2d x) {
+    v2d a = (v2d)((v2l)x & INT64_C(0x7fffffffffffffff));
+    v2d p = (v2d){-1.672209418596159e-04, -1.672209418596159e-04};
     p = p * a + 1.1512229129094958e-03;
     p = p * a - 3.7477159300164384e-03;
     p = p * a + 7.91670454880172e-03;
@@ -269,8 +294,16 @@ static inline double acos_poly(double x) {
     p = p * a + 8.904851410439575e-02;
     p = p * a - 2.1460183461102783e-01;
     p = p * a + 1.5707963267888694;
-    double r = sqrt(1.0 - a) * p;
-    return x < 0.0 ? 3.141592653589793238462643383280 - r : r;
+    v2d q = 1.0 - a;
+#ifdef __SSE2__
+    q = (v2d)_mm_sqrt_pd((__m128d)q);
+#else
+    q[0] = sqrt(q[0]);
+    q[1] = sqrt(q[1]);
+#endif
+    v2d r = q * p;
+    v2l neg = x < 0.0;
+    return (v2d)((neg & (v2l)(3.141592653589793238462643383280 - r)) | (~neg & (v2l)r));
 }
 
 /* The cap of (dx, dy, dz) = p - q (|p - q| > h) into the bitmap, rows already full skipped.
@@ -300,18 +333,29 @@ static int add_cap(const Raster *r, uint64_t *bits, uint8_t *full, double dx, do
     if (rho < 1e-30) rho = 1e-30;
     double a0 = cosa / rho, a1 = uz / rho;
     double centre = atan2(dy, dx) * (bins / TWO_PI) + bins + 0.5;
+    /* the rows' cosines and half-widths two rows at a time (the acos chains overlap), then the rows */
+    for (int j = open; j < end; j += 2) {
+        v2d is, zs;
+        memcpy(&is, r->inv_s + j, sizeof is);
+        memcpy(&zs, r->z_over_s + j, sizeof zs);
+        v2d c = a0 * is - a1 * zs;
+        v2l hi = c > 1.0, lo = c < -1.0;  /* clamped for the acos; c <= -1 (a whole row) uses no half-width */
+        v2d cl = (v2d)((hi & (v2l)(c - c + 1.0)) | (lo & (v2l)(c - c - 1.0)) | (~(hi | lo) & (v2l)c));
+        v2d half = acos_poly2(cl) * (bins / TWO_PI);
+        memcpy(r->row_c + j, &c, sizeof c);
+        memcpy(r->row_half + j, &half, sizeof half);
+    }
     int newly = 0;
     for (int j = open; j < end; j++) {
         if (full[j]) continue;
         uint64_t *row = bits + (size_t)j * r->words;
-        double c = a0 * r->inv_s[j] - a1 * r->z_over_s[j];
+        double c = r->row_c[j];
         int start, length;
         if (c <= -1.0) {
             start = 0;
             length = bins;
         } else {
-            if (c > 1.0) c = 1.0;
-            double half = acos_poly(c) * (bins / TWO_PI);
+            double half = r->row_half[j];
             start = (int)(centre - half);
             length = (int)(centre + half) - start;
             if (length <= 0) continue;
@@ -349,12 +393,24 @@ static inline int point_hit(const Tree *t, int32_t i, const float *o, const floa
     return tt > 0.0f && d2 - tt * tt <= h2;
 }
 
-/* the first point of the leaf whose ball the ray meets, or -1 */
+/* the first point of the leaf whose ball the ray meets, or -1: point_hit on its 8 lanes at once (the
+ * same operations in the same order, so the same bits; a NaN lane never hits) */
 static inline int32_t leaf_hit(const Tree *t, int32_t node, const float *o, const float *s, float cut2, float h2) {
     const Node *nd = t->nodes + node;
-    for (int32_t i = nd->lo; i < nd->hi; i++)
-        if (point_hit(t, i, o, s, cut2, h2)) return i;
-    return -1;
+    const float *L = t->leaf + 3 * LEAF_SIZE * (size_t)(-1 - nd->kid);
+    unsigned mask = 0;
+    for (int half = 0; half < LEAF_SIZE; half += 4) {
+        v4f x, y, z;
+        memcpy(&x, L + half, sizeof x);
+        memcpy(&y, L + LEAF_SIZE + half, sizeof y);
+        memcpy(&z, L + 2 * LEAF_SIZE + half, sizeof z);
+        v4f wx = x - o[0], wy = y - o[1], wz = z - o[2];
+        v4f d2 = wx * wx + wy * wy + wz * wz;
+        v4f tt = wx * s[0] + wy * s[1] + wz * s[2];
+        v4i hit = (d2 > cut2) & (tt > 0.0f) & (d2 - tt * tt <= h2);
+        mask |= lane_mask(hit) << half;
+    }
+    return mask ? nd->lo + __builtin_ctz(mask) : -1;
 }
 
 /* Can the node hold a counted point whose ball the ray meets?  Not if every point of it lies within the
@@ -452,7 +508,7 @@ static int ray_hits(const Tree *t, Walker *w, const float *o, const float *s, fl
  * walk(), so the same hits. */
 #define PACKET 8
 typedef struct {
-    float s[PACKET][3];
+    float sx[PACKET], sy[PACKET], sz[PACKET];  /* the rays' directions, lane by lane (NaN when unused) */
     int32_t *hint[PACKET];
     uint64_t *word[PACKET];
     uint64_t bit[PACKET];
@@ -464,7 +520,13 @@ static void walk_packet(const Tree *t, Walker *w, Packet *pk, const float *o, fl
     unsigned active = (1u << pk->n) - 1u;
     uint8_t masks[256];
     float mx = 0.0f, my = 0.0f, mz = 0.0f;  /* the rays' summed direction: children in its order */
-    for (int l = 0; l < pk->n; l++) { mx += pk->s[l][0]; my += pk->s[l][1]; mz += pk->s[l][2]; }
+    for (int l = 0; l < pk->n; l++) { mx += pk->sx[l]; my += pk->sy[l]; mz += pk->sz[l]; }
+    v4f sx[2], sy[2], sz[2];
+    for (int half = 0; half < 2; half++) {
+        memcpy(&sx[half], pk->sx + 4 * half, sizeof(v4f));
+        memcpy(&sy[half], pk->sy + 4 * half, sizeof(v4f));
+        memcpy(&sz[half], pk->sz + 4 * half, sizeof(v4f));
+    }
     int sp = 0;
     w->stack[sp] = 0; masks[sp] = (uint8_t)active; sp++;
     while (sp > 0 && active) {
@@ -480,11 +542,12 @@ static void walk_packet(const Tree *t, Walker *w, Packet *pk, const float *o, fl
         float lim = cut - rad;
         if (lim > 0.0f && d2 <= lim * lim) continue;
         float reach2 = (rad + h) * (rad + h);
+        /* node_passes' ray part for 8 rays: off2 = d2 - tt^2 where tt > 0, else d2 (d2 - 0 = d2 exactly) */
         unsigned pass = 0;
-        for (int l = 0; l < PACKET; l++) {
-            float tt = wx * pk->s[l][0] + wy * pk->s[l][1] + wz * pk->s[l][2];
-            float off2 = (tt > 0.0f) ? d2 - tt * tt : d2;
-            pass |= (unsigned)(off2 <= reach2) << l;
+        for (int half = 0; half < 2; half++) {
+            v4f tt = wx * sx[half] + wy * sy[half] + wz * sz[half];
+            v4f sq = (v4f)((v4i)(tt * tt) & (tt > 0.0f));
+            pass |= lane_mask(d2 - sq <= reach2) << (4 * half);
         }
         m &= pass;
         if (!m) continue;
@@ -492,7 +555,8 @@ static void walk_packet(const Tree *t, Walker *w, Packet *pk, const float *o, fl
         if (k < 0) {
             for (int l = 0; l < pk->n; l++) {
                 if (!(m >> l & 1u)) continue;
-                int32_t p = leaf_hit(t, node, o, pk->s[l], cut2, h2);
+                const float s[3] = {pk->sx[l], pk->sy[l], pk->sz[l]};
+                int32_t p = leaf_hit(t, node, o, s, cut2, h2);
                 if (p < 0) continue;
                 active &= ~(1u << l);
                 pk->hint[l][0] = node;
@@ -592,7 +656,8 @@ static int64_t near_raster(const Raster *r, const Tree *t, const Near *near, int
     return caps;
 }
 
-/* clusters(points (n,3) f32 tree order, nodes (m) Node, queries (q,3) f64 grouped by cluster,
+/* clusters(points (n,3) f32 tree order, nodes (m) Node, leaves ((m + 1) / 2, 3, 8) f32 (Tree.leaf),
+ *          queries (q,3) f64 grouped by cluster,
  *          starts (k1 - k0 + 1) i64 into queries, centres (k,3) f64, reach (k) f64 (all clusters),
  *          cluster range [k0, k1), h, rows, bins, beta out (q) f64,
  *          stats out (6) i64: node visits, near caps, far rays, near points, hint tries, hint hits,
@@ -602,10 +667,10 @@ static int64_t near_raster(const Raster *r, const Tree *t, const Near *near, int
  * `done` counts the clusters finished (read by another thread for progress); once another thread sets
  * `stop`, the call returns after the cluster it is in.  Returns the number of clusters finished. */
 static PyObject *py_clusters(PyObject *self, PyObject *args) {
-    Py_buffer pts, nds, qs, starts, cen, rch, beta, stats, stop_buf, done_buf;
+    Py_buffer pts, nds, lvs, qs, starts, cen, rch, beta, stats, stop_buf, done_buf;
     int k0, k1, rows, bins;
     double h;
-    if (!PyArg_ParseTuple(args, "y*y*y*y*y*y*iidiiw*w*w*w*", &pts, &nds, &qs, &starts, &cen, &rch,
+    if (!PyArg_ParseTuple(args, "y*y*y*y*y*y*y*iidiiw*w*w*w*", &pts, &nds, &lvs, &qs, &starts, &cen, &rch,
                           &k0, &k1, &h, &rows, &bins, &beta, &stats, &stop_buf, &done_buf))
         return NULL;
     volatile const int32_t *stop = (volatile const int32_t *)stop_buf.buf;
@@ -614,7 +679,8 @@ static PyObject *py_clusters(PyObject *self, PyObject *args) {
     PyObject *result = NULL;
     Raster r = {0};
     int32_t n = (int32_t)(pts.len / (3 * sizeof(float)));
-    Tree t = {(const float *)pts.buf, (const Node *)nds.buf, (int32_t)(nds.len / (Py_ssize_t)sizeof(Node))};
+    Tree t = {(const float *)pts.buf, (const Node *)nds.buf, (int32_t)(nds.len / (Py_ssize_t)sizeof(Node)),
+              (const float *)lvs.buf};
     const int64_t *st = (const int64_t *)starts.buf;
     const double *q = (const double *)qs.buf, *cc = (const double *)cen.buf, *rr = (const double *)rch.buf;
     double *out = (double *)beta.buf;
@@ -625,6 +691,10 @@ static PyObject *py_clusters(PyObject *self, PyObject *args) {
     Near *near = NULL;
     if (stop_buf.len < (Py_ssize_t)sizeof(int32_t) || done_buf.len < (Py_ssize_t)sizeof(int64_t)) {
         PyErr_SetString(PyExc_ValueError, "clusters: stop needs one int32, done one int64");
+        goto done;
+    }
+    if (lvs.len < (Py_ssize_t)sizeof(float) * 3 * LEAF_SIZE * ((t.n_nodes + 1) / 2)) {  /* a full binary tree */
+        PyErr_SetString(PyExc_ValueError, "clusters: the leaves' block is too small for the nodes");
         goto done;
     }
     if (rows < 1 || bins < 1 || raster_init(&r, rows, bins) != 0) {
@@ -651,6 +721,7 @@ static PyObject *py_clusters(PyObject *self, PyObject *args) {
     Walker w = {stack, -1, -1, 0, 0, 0};
     Packet pk;
     pk.n = 0;
+    for (int l = 0; l < PACKET; l++) pk.sx[l] = pk.sy[l] = pk.sz[l] = NAN;
     int64_t caps = 0, rays = 0, nears = 0;
     const double h2 = h * h;
     const double total = (double)rows * bins;
@@ -702,7 +773,7 @@ static PyObject *py_clusters(PyObject *self, PyObject *args) {
                         int hit = ray_hits(&t, &w, cf, s, (float)cut, (float)h, hint);
                         if (hit > 0) *word |= bit;
                         if (hit < 0) {
-                            memcpy(pk.s[pk.n], s, sizeof s);
+                            pk.sx[pk.n] = s[0]; pk.sy[pk.n] = s[1]; pk.sz[pk.n] = s[2];
                             pk.hint[pk.n] = hint; pk.word[pk.n] = word; pk.bit[pk.n] = bit;
                             if (++pk.n == PACKET) walk_packet(&t, &w, &pk, cf, (float)cut, (float)h);
                         }
@@ -734,7 +805,8 @@ static PyObject *py_clusters(PyObject *self, PyObject *args) {
 done:
     raster_free(&r);
     free(far); free(full); free(stack); free(near); free(hints);
-    PyBuffer_Release(&pts); PyBuffer_Release(&nds); PyBuffer_Release(&qs); PyBuffer_Release(&starts); PyBuffer_Release(&cen); PyBuffer_Release(&rch);
+    PyBuffer_Release(&pts); PyBuffer_Release(&nds); PyBuffer_Release(&lvs); PyBuffer_Release(&qs); PyBuffer_Release(&starts);
+    PyBuffer_Release(&cen); PyBuffer_Release(&rch);
     PyBuffer_Release(&beta); PyBuffer_Release(&stats); PyBuffer_Release(&stop_buf); PyBuffer_Release(&done_buf);
     return result;
 }

@@ -39,6 +39,8 @@ POLL = 0.05
 NN_CHUNK = 65536
 
 
+# points per leaf at most (LEAF_SIZE in _raycast.c)
+LEAF_SIZE = 8
 # one tree node as the kernel reads it (struct Node in _raycast.c): 32 bytes
 NODE = np.dtype([("c", "<f4", (3,)), ("r", "<f4"), ("kid", "<i4"), ("lo", "<i4"), ("hi", "<i4"), ("par", "<i4")])
 
@@ -58,6 +60,7 @@ class BallTree:
         checkpoint(0.0)
         self.points = tree_points
         nodes = nodes[:m].copy()
+        self.leaves = _leaf_blocks(nodes, tree_points)
         self.nodes = nodes
         self.perm = perm
         self.n = n
@@ -111,6 +114,21 @@ class BallTree:
     def ray_cost(self) -> float:
         """Cost units of one far ray (node visits grow with the depth)."""
         return 2.0 + self.depth
+
+
+def _leaf_blocks(nodes: np.ndarray, points: np.ndarray) -> np.ndarray:
+    """Each leaf's points as x[8], y[8], z[8] (unused lanes NaN), for the kernel's 4-wide ball tests; leaf
+    b (in node order) gets kid = -1 - b (``nodes`` is changed in place)."""
+    leaves = np.flatnonzero(nodes["kid"] < 0)
+    lo, count = nodes["lo"][leaves].astype(np.int64), (nodes["hi"][leaves] - nodes["lo"][leaves]).astype(np.int64)
+    if len(leaves) and int(count.max()) > LEAF_SIZE:
+        raise RuntimeError(f"a leaf of the boundedness tree holds {int(count.max())} points, above {LEAF_SIZE}")
+    nodes["kid"][leaves] = -1 - np.arange(len(leaves), dtype=np.int32)
+    blocks = np.full((len(leaves), 3, LEAF_SIZE), np.nan, np.float32)
+    leaf = np.repeat(np.arange(len(leaves)), count)
+    lane = np.arange(int(count.sum())) - np.repeat(np.cumsum(count) - count, count)
+    blocks[leaf, :, lane] = points[np.repeat(lo, count) + lane]
+    return blocks
 
 
 def _build_polling(build, n: int, checkpoint: Checkpoint) -> int:
@@ -333,7 +351,7 @@ def run_plan(
     def stream(i: int) -> None:
         k0, k1 = streams[i]
         _raycast.clusters(
-            tree.points, tree.nodes, q_sorted[starts[k0] : starts[k1]], np.ascontiguousarray(starts[k0 : k1 + 1] - starts[k0]),
+            tree.points, tree.nodes, tree.leaves, q_sorted[starts[k0] : starts[k1]], np.ascontiguousarray(starts[k0 : k1 + 1] - starts[k0]),
             centres, reach, k0, k1, float(h), rows, bins, out_sorted[starts[k0] : starts[k1]], stream_stats[i], stop,
             done[i : i + 1],
         )
