@@ -379,7 +379,7 @@ static int add_cap(const Raster *r, uint64_t *bits, uint8_t *full, double dx, do
 
 typedef struct {
     int32_t *stack;
-    int32_t last_leaf;
+    int32_t last_leaf;         /* the leaf of the previous ray's hit */
     int32_t hit_point;         /* the point of the last hit a walk found */
     int64_t visits, hint_tries, hint_hits;
 } Walker;
@@ -464,12 +464,16 @@ static int32_t walk(const Tree *t, Walker *w, int32_t root, int32_t skip, int32_
     return -1;
 }
 
-/* Does the ray from o along s meet a ball around a point with |p - o| > cut (1 / 0)?  Exact; the hints only
- * order the search; a ray without a hint that misses the previous ray's leaf returns -1 (the caller walks
- * it from the root in a packet).  hint[0], hint[1] = the leaf and the point a nearby ray hit (the same sample from the
- * previous cluster): that point first (a centre one cell away usually still sees it), then its leaf,
- * then the previous ray's leaf, then the rest of the tree bottom-up from the hinted leaf (the hit is
- * usually near). */
+/* levels a ray that its hints did not settle walks up from its hinted leaf (each ancestor's other subtree)
+ * before it is left to a packet from the root: hits nearby are found there, misses (escaping rays) are
+ * cheaper in packets (docs/boundedness.md 3.11) */
+#define WALK_UP 2
+
+/* Does the ray from o along s meet a ball around a point with |p - o| > cut?  1 yes, 0 no, -1 not settled:
+ * the caller walks it from the root in a packet (walk_packet).  Exact either way; the hints only order the
+ * search.  hint[0], hint[1] = the leaf and the point a nearby ray hit (the same sample from the previous
+ * cluster): that point first (a centre one cell away usually still sees it), then its leaf, then the
+ * previous ray's leaf, then the subtrees of the hinted leaf's WALK_UP nearest ancestors. */
 static int ray_hits(const Tree *t, Walker *w, const float *o, const float *s, float cut, float h,
                     int32_t *hint) {
     const float h2 = h * h, cut2 = cut * cut;
@@ -486,27 +490,28 @@ static int ray_hits(const Tree *t, Walker *w, const float *o, const float *s, fl
         w->hint_tries++;
         if ((p = leaf_hit(t, b, o, s, cut2, h2)) >= 0) { w->hint_hits++; hint[0] = b; hint[1] = p; return 1; }
     }
-    if (a < 0) return -1;  /* no hint: left to a packet walk from the root (walk_packet) */
+    if (a < 0) return -1;
     int32_t leaf = -1;
-    /* bottom-up from the hinted leaf: each ancestor's other subtree in turn, up to the root */
     int32_t prev = a, node = t->nodes[a].par;
-    while (node >= 0 && leaf < 0) {
+    for (int up = 0; up < WALK_UP && node >= 0 && leaf < 0; up++) {
         leaf = walk(t, w, node, prev, a, b, o, s, cut, h);
         prev = node;
         node = t->nodes[node].par;
     }
-    if (leaf < 0) return 0;
+    if (leaf < 0) return node >= 0 ? -1 : 0;  /* the whole tree walked (a small one): a miss */
     hint[0] = leaf;
     hint[1] = w->hit_point;
     w->last_leaf = leaf;
     return 1;
 }
 
-/* Up to PACKET rays from one origin without a hint (mostly rays that escape: they cost most of the walks),
- * walked from the root together: one traversal, each node tested against every ray still open (the
- * shared part of the test once), each leaf tested ray by ray.  Per ray it is the same exact test as
- * walk(), so the same hits. */
-#define PACKET 8
+/* Up to PACKET rays from one origin that the hints did not settle (mostly rays that escape: they cost most
+ * of the walks), walked from the root together: one traversal, each node tested against every ray still open
+ * (the shared part of the test once, the rays' part 4 lanes at a time), each leaf tested ray by ray.  A
+ * node can hold a hit for a ray only if some of its points lie beyond the cut and the ray passes within
+ * its radius + h of its centre; a ray meets a point's ball iff point_hit.  Exact per ray, so the hits do
+ * not depend on which rays share a packet (docs/boundedness.md 3.10-3.11). */
+#define PACKET 16
 typedef struct {
     float sx[PACKET], sy[PACKET], sz[PACKET];  /* the rays' directions, lane by lane (NaN when unused) */
     int32_t *hint[PACKET];
@@ -518,17 +523,17 @@ typedef struct {
 static void walk_packet(const Tree *t, Walker *w, Packet *pk, const float *o, float cut, float h) {
     const float h2 = h * h, cut2 = cut * cut;
     unsigned active = (1u << pk->n) - 1u;
-    uint8_t masks[256];
+    uint16_t masks[256];
     float mx = 0.0f, my = 0.0f, mz = 0.0f;  /* the rays' summed direction: children in its order */
     for (int l = 0; l < pk->n; l++) { mx += pk->sx[l]; my += pk->sy[l]; mz += pk->sz[l]; }
-    v4f sx[2], sy[2], sz[2];
-    for (int half = 0; half < 2; half++) {
-        memcpy(&sx[half], pk->sx + 4 * half, sizeof(v4f));
-        memcpy(&sy[half], pk->sy + 4 * half, sizeof(v4f));
-        memcpy(&sz[half], pk->sz + 4 * half, sizeof(v4f));
+    v4f sx[PACKET / 4], sy[PACKET / 4], sz[PACKET / 4];
+    for (int g = 0; g < PACKET / 4; g++) {
+        memcpy(&sx[g], pk->sx + 4 * g, sizeof(v4f));
+        memcpy(&sy[g], pk->sy + 4 * g, sizeof(v4f));
+        memcpy(&sz[g], pk->sz + 4 * g, sizeof(v4f));
     }
     int sp = 0;
-    w->stack[sp] = 0; masks[sp] = (uint8_t)active; sp++;
+    w->stack[sp] = 0; masks[sp] = (uint16_t)active; sp++;
     while (sp > 0 && active) {
         sp--;
         int32_t node = w->stack[sp];
@@ -542,12 +547,12 @@ static void walk_packet(const Tree *t, Walker *w, Packet *pk, const float *o, fl
         float lim = cut - rad;
         if (lim > 0.0f && d2 <= lim * lim) continue;
         float reach2 = (rad + h) * (rad + h);
-        /* node_passes' ray part for 8 rays: off2 = d2 - tt^2 where tt > 0, else d2 (d2 - 0 = d2 exactly) */
+        /* the rays' part: off2 = d2 - tt^2 where tt > 0, else d2 (d2 - 0 = d2 exactly) */
         unsigned pass = 0;
-        for (int half = 0; half < 2; half++) {
-            v4f tt = wx * sx[half] + wy * sy[half] + wz * sz[half];
+        for (int g = 0; g < PACKET / 4; g++) {
+            v4f tt = wx * sx[g] + wy * sy[g] + wz * sz[g];
             v4f sq = (v4f)((v4i)(tt * tt) & (tt > 0.0f));
-            pass |= lane_mask(d2 - sq <= reach2) << (4 * half);
+            pass |= lane_mask(d2 - sq <= reach2) << (4 * g);
         }
         m &= pass;
         if (!m) continue;
@@ -569,8 +574,8 @@ static void walk_packet(const Tree *t, Walker *w, Packet *pk, const float *o, fl
         const Node *a = t->nodes + k, *b = a + 1;
         float ab = (a->c[0] - b->c[0]) * mx + (a->c[1] - b->c[1]) * my + (a->c[2] - b->c[2]) * mz;
         int32_t first = ab <= 0.0f ? k : k + 1;  /* nearer along the rays: popped first */
-        w->stack[sp] = 2 * k + 1 - first; masks[sp] = (uint8_t)m; sp++;
-        w->stack[sp] = first; masks[sp] = (uint8_t)m; sp++;
+        w->stack[sp] = 2 * k + 1 - first; masks[sp] = (uint16_t)m; sp++;
+        w->stack[sp] = first; masks[sp] = (uint16_t)m; sp++;
     }
     pk->n = 0;
 }
