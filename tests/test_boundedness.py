@@ -210,6 +210,33 @@ def test_single_worker_and_pool_agree():
     assert np.array_equal(boundedness_rays(cloud, queries, workers=1), boundedness_rays(cloud, queries, workers=2))
 
 
+def test_the_avx2_build_gives_the_generic_builds_bits(monkeypatch):
+    """On x86-64 setup.py also builds the kernel with AVX2 (8 float and 4 double lanes instead of 4 and 2);
+    rays_kernel uses it where the CPU runs it.  The same operations per lane: the same bits, shared far
+    fields (packets, hints, near caps) and exact queries alike."""
+    import platform
+
+    from skelcore.metrics import _raycast, rays_kernel
+
+    if not _raycast.cpu_has_avx2():
+        pytest.skip("this CPU has no AVX2")
+    if platform.machine().lower() not in ("x86_64", "amd64"):
+        pytest.skip("the AVX2 build is made on x86-64 only")
+    from skelcore.metrics import _raycast_avx2
+
+    assert rays_kernel._raycast is _raycast_avx2  # the faster build is the one used
+    shape = torus(6000, 1.0, 0.3, n_curve=32, seed=7)
+    rng = np.random.default_rng(7)
+    queries = np.vstack([shape.skeletal[::2] + rng.normal(scale=0.02, size=shape.skeletal[::2].shape),
+                         rng.uniform(-1.4, 1.4, (300, 3))])
+    runs = []
+    for module in (_raycast, _raycast_avx2):
+        monkeypatch.setattr(rays_kernel, "_raycast", module)
+        runs.append([boundedness_rays(shape.cloud, queries, share_far_field=share) for share in (None, False)])
+    assert np.array_equal(runs[0][0], runs[1][0]) and np.array_equal(runs[0][1], runs[1][1])
+    assert 0.2 < float(np.mean(runs[0][0] > 0.75)) < 1.0  # bounded and unbounded queries both present
+
+
 def test_values_do_not_depend_on_how_the_clusters_are_cut_into_streams(monkeypatch):
     """A stream keeps each sample's hint (the leaf its ray hit from the previous cluster); hints only
     order the search, so one stream, a few and one stream per cluster give the same bits."""

@@ -19,22 +19,59 @@
 #include <stdint.h>
 #include <stdlib.h>
 #include <string.h>
-#ifdef __SSE2__
+#if defined(__AVX__)
+#include <immintrin.h>
+#elif defined(__SSE2__)
 #include <emmintrin.h>
 #endif
 
 #define LEAF_SIZE 8
 
-/* four floats (GCC/Clang vector extensions: SSE on x86-64, NEON on arm64); element-wise IEEE operations,
- * so a lane rounds exactly as the scalar expression written in the same order */
-typedef float v4f __attribute__((vector_size(16)));
-typedef int32_t v4i __attribute__((vector_size(16)));
+/* The module's name: setup.py also builds this file with -mavx2 as _raycast_avx2 (rays_kernel.py imports
+ * it where the CPU has AVX2; docs/boundedness.md 3.11). */
+#ifndef MODULE_NAME
+#define MODULE_NAME _raycast
+#endif
+#define STR_(x) #x
+#define STR(x) STR_(x)
+#define CAT_(a, b) a##b
+#define CAT(a, b) CAT_(a, b)
 
-static inline unsigned lane_mask(v4i m) {  /* bit l set iff lane l of the comparison holds */
-#ifdef __SSE2__
+/* Lanes of floats (VF) and doubles (VD): GCC/Clang vector extensions, SSE2 on x86-64 (AVX with -mavx2),
+ * NEON on arm64.  Element-wise IEEE operations without contraction (-std=c99 keeps -ffp-contract=off), so a
+ * lane rounds exactly as the scalar expression written in the same order: the same bits on every build. */
+#ifdef __AVX__
+#define VF 8
+#define VD 4
+#else
+#define VF 4
+#define VD 2
+#endif
+typedef float vf __attribute__((vector_size(4 * VF)));
+typedef int32_t vfi __attribute__((vector_size(4 * VF)));
+typedef double vd __attribute__((vector_size(8 * VD)));
+typedef int64_t vdi __attribute__((vector_size(8 * VD)));
+
+static inline unsigned lane_mask(vfi m) {  /* bit l set iff lane l of the comparison holds */
+#if defined(__AVX__)
+    return (unsigned)_mm256_movemask_ps((__m256)m);
+#elif defined(__SSE2__)
     return (unsigned)_mm_movemask_ps((__m128)m);
 #else
-    return (unsigned)((m[0] & 1) | (m[1] & 2) | (m[2] & 4) | (m[3] & 8));
+    unsigned bits = 0;
+    for (int l = 0; l < VF; l++) bits |= (unsigned)(m[l] & 1) << l;
+    return bits;
+#endif
+}
+
+static inline vd sqrt_lanes(vd q) {
+#if defined(__AVX__)
+    return (vd)_mm256_sqrt_pd((__m256d)q);
+#elif defined(__SSE2__)
+    return (vd)_mm_sqrt_pd((__m128d)q);
+#else
+    for (int l = 0; l < VD; l++) q[l] = sqrt(q[l]);
+    return q;
 #endif
 }
 #define TWO_PI 6.283185307179586476925286766559
@@ -223,15 +260,16 @@ static int raster_init(Raster *r, int rows, int bins) {
     r->bins = bins;
     r->words = (bins + 63) / 64;
     r->last_mask = (bins % 64) ? ((UINT64_C(1) << (bins % 64)) - 1) : ~UINT64_C(0);
-    /* every per-row array has one padding entry (add_cap reads rows two at a time) */
-    r->z = (double *)calloc((size_t)(6 * (rows + 1) + 2 * bins), sizeof(double));
+    /* every per-row array has VD - 1 padding entries (add_cap reads rows VD at a time) */
+    const int pad = rows + VD - 1;
+    r->z = (double *)calloc((size_t)(6 * pad + 2 * bins), sizeof(double));
     if (!r->z) return -1;
-    r->s = r->z + rows + 1;
-    r->inv_s = r->s + rows + 1;
-    r->z_over_s = r->inv_s + rows + 1;
-    r->row_c = r->z_over_s + rows + 1;
-    r->row_half = r->row_c + rows + 1;
-    r->cos_lon = r->row_half + rows + 1;
+    r->s = r->z + pad;
+    r->inv_s = r->s + pad;
+    r->z_over_s = r->inv_s + pad;
+    r->row_c = r->z_over_s + pad;
+    r->row_half = r->row_c + pad;
+    r->cos_lon = r->row_half + pad;
     r->sin_lon = r->cos_lon + bins;
     for (int j = 0; j < rows; j++) {
         double z = -1.0 + (j + 0.5) * (2.0 / rows);
@@ -271,18 +309,15 @@ static inline void set_bits(uint64_t *row, int a, int b) {
     row[wb] |= last;
 }
 
-typedef double v2d __attribute__((vector_size(16)));
-typedef int64_t v2l __attribute__((vector_size(16)));
-
-/* acos on [-1, 1] to within 6e-12 rad, two lanes at once: acos(x) = sqrt(1 - x) P11(x) on [0, 1] (the form
+/* acos on [-1, 1] to within 6e-12 rad, VD lanes at once: acos(x) = sqrt(1 - x) P11(x) on [0, 1] (the form
  * of Abramowitz & Stegun 4.4.46, coefficients refitted for degree 11 near-minimax absolute error),
  * acos(-x) = pi - acos(x).  It replaces glibc's acos call (12 % of the kernel's CPU on a scanned tree;
- * docs/boundedness.md 3.8); two lanes since session 7 (3.11: the same bits as the scalar form).  A cap's
+ * docs/boundedness.md 3.8); in lanes since session 7 (3.11: the same bits as the scalar form).  A cap's
  * interval ends are truncated to bins (96 / 2 pi bins per rad), so a sample can change side only within
  * 1e-10 bins of a cap edge. */
-static inline v2d acos_poly2(v2d x) {
-    v2d a = (v2d)((v2l)x & INT64_C(0x7fffffffffffffff));
-    v2d p = (v2d){-1.672209418596159e-04, -1.672209418596159e-04};
+static inline vd acos_lanes(vd x) {
+    vd a = (vd)((vdi)x & INT64_C(0x7fffffffffffffff));
+    vd p = (vd){0} - 1.672209418596159e-04;
     p = p * a + 1.1512229129094958e-03;
     p = p * a - 3.7477159300164384e-03;
     p = p * a + 7.91670454880172e-03;
@@ -294,16 +329,9 @@ static inline v2d acos_poly2(v2d x) {
     p = p * a + 8.904851410439575e-02;
     p = p * a - 2.1460183461102783e-01;
     p = p * a + 1.5707963267888694;
-    v2d q = 1.0 - a;
-#ifdef __SSE2__
-    q = (v2d)_mm_sqrt_pd((__m128d)q);
-#else
-    q[0] = sqrt(q[0]);
-    q[1] = sqrt(q[1]);
-#endif
-    v2d r = q * p;
-    v2l neg = x < 0.0;
-    return (v2d)((neg & (v2l)(3.141592653589793238462643383280 - r)) | (~neg & (v2l)r));
+    vd r = sqrt_lanes(1.0 - a) * p;
+    vdi neg = x < 0.0;
+    return (vd)((neg & (vdi)(3.141592653589793238462643383280 - r)) | (~neg & (vdi)r));
 }
 
 /* The cap of (dx, dy, dz) = p - q (|p - q| > h) into the bitmap, rows already full skipped.
@@ -333,15 +361,15 @@ static int add_cap(const Raster *r, uint64_t *bits, uint8_t *full, double dx, do
     if (rho < 1e-30) rho = 1e-30;
     double a0 = cosa / rho, a1 = uz / rho;
     double centre = atan2(dy, dx) * (bins / TWO_PI) + bins + 0.5;
-    /* the rows' cosines and half-widths two rows at a time (the acos chains overlap), then the rows */
-    for (int j = open; j < end; j += 2) {
-        v2d is, zs;
+    /* the rows' cosines and half-widths VD rows at a time (the acos chains overlap), then the rows */
+    for (int j = open; j < end; j += VD) {
+        vd is, zs;
         memcpy(&is, r->inv_s + j, sizeof is);
         memcpy(&zs, r->z_over_s + j, sizeof zs);
-        v2d c = a0 * is - a1 * zs;
-        v2l hi = c > 1.0, lo = c < -1.0;  /* clamped for the acos; c <= -1 (a whole row) uses no half-width */
-        v2d cl = (v2d)((hi & (v2l)(c - c + 1.0)) | (lo & (v2l)(c - c - 1.0)) | (~(hi | lo) & (v2l)c));
-        v2d half = acos_poly2(cl) * (bins / TWO_PI);
+        vd c = a0 * is - a1 * zs;
+        vdi hi = c > 1.0, lo = c < -1.0;  /* clamped for the acos; c <= -1 (a whole row) uses no half-width */
+        vd cl = (vd)((hi & (vdi)((vd){0} + 1.0)) | (lo & (vdi)((vd){0} - 1.0)) | (~(hi | lo) & (vdi)c));
+        vd half = acos_lanes(cl) * (bins / TWO_PI);
         memcpy(r->row_c + j, &c, sizeof c);
         memcpy(r->row_half + j, &half, sizeof half);
     }
@@ -393,22 +421,22 @@ static inline int point_hit(const Tree *t, int32_t i, const float *o, const floa
     return tt > 0.0f && d2 - tt * tt <= h2;
 }
 
-/* the first point of the leaf whose ball the ray meets, or -1: point_hit on its 8 lanes at once (the
+/* the first point of the leaf whose ball the ray meets, or -1: point_hit on its 8 lanes, VF at once (the
  * same operations in the same order, so the same bits; a NaN lane never hits) */
 static inline int32_t leaf_hit(const Tree *t, int32_t node, const float *o, const float *s, float cut2, float h2) {
     const Node *nd = t->nodes + node;
     const float *L = t->leaf + 3 * LEAF_SIZE * (size_t)(-1 - nd->kid);
     unsigned mask = 0;
-    for (int half = 0; half < LEAF_SIZE; half += 4) {
-        v4f x, y, z;
-        memcpy(&x, L + half, sizeof x);
-        memcpy(&y, L + LEAF_SIZE + half, sizeof y);
-        memcpy(&z, L + 2 * LEAF_SIZE + half, sizeof z);
-        v4f wx = x - o[0], wy = y - o[1], wz = z - o[2];
-        v4f d2 = wx * wx + wy * wy + wz * wz;
-        v4f tt = wx * s[0] + wy * s[1] + wz * s[2];
-        v4i hit = (d2 > cut2) & (tt > 0.0f) & (d2 - tt * tt <= h2);
-        mask |= lane_mask(hit) << half;
+    for (int g = 0; g < LEAF_SIZE; g += VF) {
+        vf x, y, z;
+        memcpy(&x, L + g, sizeof x);
+        memcpy(&y, L + LEAF_SIZE + g, sizeof y);
+        memcpy(&z, L + 2 * LEAF_SIZE + g, sizeof z);
+        vf wx = x - o[0], wy = y - o[1], wz = z - o[2];
+        vf d2 = wx * wx + wy * wy + wz * wz;
+        vf tt = wx * s[0] + wy * s[1] + wz * s[2];
+        vfi hit = (d2 > cut2) & (tt > 0.0f) & (d2 - tt * tt <= h2);
+        mask |= lane_mask(hit) << g;
     }
     return mask ? nd->lo + __builtin_ctz(mask) : -1;
 }
@@ -526,11 +554,11 @@ static void walk_packet(const Tree *t, Walker *w, Packet *pk, const float *o, fl
     uint16_t masks[256];
     float mx = 0.0f, my = 0.0f, mz = 0.0f;  /* the rays' summed direction: children in its order */
     for (int l = 0; l < pk->n; l++) { mx += pk->sx[l]; my += pk->sy[l]; mz += pk->sz[l]; }
-    v4f sx[PACKET / 4], sy[PACKET / 4], sz[PACKET / 4];
-    for (int g = 0; g < PACKET / 4; g++) {
-        memcpy(&sx[g], pk->sx + 4 * g, sizeof(v4f));
-        memcpy(&sy[g], pk->sy + 4 * g, sizeof(v4f));
-        memcpy(&sz[g], pk->sz + 4 * g, sizeof(v4f));
+    vf sx[PACKET / VF], sy[PACKET / VF], sz[PACKET / VF];
+    for (int g = 0; g < PACKET / VF; g++) {
+        memcpy(&sx[g], pk->sx + VF * g, sizeof(vf));
+        memcpy(&sy[g], pk->sy + VF * g, sizeof(vf));
+        memcpy(&sz[g], pk->sz + VF * g, sizeof(vf));
     }
     int sp = 0;
     w->stack[sp] = 0; masks[sp] = (uint16_t)active; sp++;
@@ -549,10 +577,10 @@ static void walk_packet(const Tree *t, Walker *w, Packet *pk, const float *o, fl
         float reach2 = (rad + h) * (rad + h);
         /* the rays' part: off2 = d2 - tt^2 where tt > 0, else d2 (d2 - 0 = d2 exactly) */
         unsigned pass = 0;
-        for (int g = 0; g < PACKET / 4; g++) {
-            v4f tt = wx * sx[g] + wy * sy[g] + wz * sz[g];
-            v4f sq = (v4f)((v4i)(tt * tt) & (tt > 0.0f));
-            pass |= lane_mask(d2 - sq <= reach2) << (4 * g);
+        for (int g = 0; g < PACKET / VF; g++) {
+            vf tt = wx * sx[g] + wy * sy[g] + wz * sz[g];
+            vf sq = (vf)((vfi)(tt * tt) & (tt > 0.0f));
+            pass |= lane_mask(d2 - sq <= reach2) << (VF * g);
         }
         m &= pass;
         if (!m) continue;
@@ -945,7 +973,18 @@ static PyObject *py_near_stats(PyObject *self, PyObject *args) {
     Py_RETURN_NONE;
 }
 
+/* cpu_has_avx2() -> bool: can this CPU (and OS) run the _raycast_avx2 build? */
+static PyObject *py_cpu_has_avx2(PyObject *self, PyObject *noargs) {
+#if defined(__x86_64__) && defined(__GNUC__)
+    __builtin_cpu_init();
+    return PyBool_FromLong(__builtin_cpu_supports("avx2") && __builtin_cpu_supports("popcnt"));
+#else
+    Py_RETURN_FALSE;
+#endif
+}
+
 static PyMethodDef methods[] = {
+    {"cpu_has_avx2", py_cpu_has_avx2, METH_NOARGS, "Can this CPU run the AVX2 build of the kernel?"},
     {"build_tree", py_build_tree, METH_VARARGS, "KD-tree of bounding spheres (boundedness rays kernel)."},
     {"near_stats", py_near_stats, METH_VARARGS, "Points within a radius and bounded clearance per query."},
     {"nn_dist", py_nn_dist, METH_VARARGS, "Distance of each point to its nearest other point (tree order)."},
@@ -953,8 +992,8 @@ static PyMethodDef methods[] = {
     {NULL, NULL, 0, NULL},
 };
 
-static struct PyModuleDef module = {PyModuleDef_HEAD_INIT, "_raycast",
+static struct PyModuleDef module = {PyModuleDef_HEAD_INIT, STR(MODULE_NAME),
                                     "Compiled kernel of the rays boundedness estimator (docs/boundedness.md).",
                                     -1, methods};
 
-PyMODINIT_FUNC PyInit__raycast(void) { return PyModule_Create(&module); }
+PyMODINIT_FUNC CAT(PyInit_, MODULE_NAME)(void) { return PyModule_Create(&module); }
