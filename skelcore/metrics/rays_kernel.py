@@ -6,7 +6,8 @@ beta(q) is the share of raster samples whose ray from q meets a ball of radius h
 (points beyond its reach) is ray cast once from its centroid, its near field rasterised as exact caps
 from every member.  A cluster of one query at its own position is exact.  Clusters run in long contiguous
 streams on a thread pool (the kernel releases the GIL and keeps each sample's hint from one cluster to the
-next), while the caller's thread polls its checkpoint; a cancel stops the kernel within one cluster.
+next), while the caller's thread polls its checkpoint; a cancel stops the kernel within one cluster.  The
+kernel tests in SIMD lanes; on x86-64 it is also built for AVX2, used where the CPU has it (the same bits).
 Design, costs and errors: docs/boundedness.md section 3.
 """
 
@@ -133,8 +134,8 @@ class BallTree:
 
 
 def _leaf_blocks(nodes: np.ndarray, points: np.ndarray) -> np.ndarray:
-    """Each leaf's points as x[8], y[8], z[8] (unused lanes NaN), for the kernel's 4-wide ball tests; leaf
-    b (in node order) gets kid = -1 - b (``nodes`` is changed in place)."""
+    """Each leaf's points as x[8], y[8], z[8] (unused lanes NaN, which never hit), for the kernel's ball tests
+    4 or 8 lanes at a time; leaf b (in node order) gets kid = -1 - b (``nodes`` is changed in place)."""
     leaves = np.flatnonzero(nodes["kid"] < 0)
     lo, count = nodes["lo"][leaves].astype(np.int64), (nodes["hi"][leaves] - nodes["lo"][leaves]).astype(np.int64)
     if len(leaves) and int(count.max()) > LEAF_SIZE:
