@@ -535,13 +535,13 @@ static int ray_hits(const Tree *t, Walker *w, const float *o, const float *s, fl
 
 /* Up to PACKET rays from one origin that the hints did not settle (mostly rays that escape: they cost most
  * of the walks), walked from the root together: one traversal, each node tested against every ray still open
- * (the shared part of the test once, the rays' part 4 lanes at a time), each leaf tested ray by ray.  A
+ * (the shared part of the test once, the rays' part VF lanes at a time), each leaf tested ray by ray.  A
  * node can hold a hit for a ray only if some of its points lie beyond the cut and the ray passes within
  * its radius + h of its centre; a ray meets a point's ball iff point_hit.  Exact per ray, so the hits do
  * not depend on which rays share a packet (docs/boundedness.md 3.10-3.11). */
 #define PACKET 16
 typedef struct {
-    float sx[PACKET], sy[PACKET], sz[PACKET];  /* the rays' directions, lane by lane (NaN when unused) */
+    float sx[PACKET], sy[PACKET], sz[PACKET];  /* the rays' directions; lanes from n on are masked out */
     int32_t *hint[PACKET];
     uint64_t *word[PACKET];
     uint64_t bit[PACKET];
@@ -754,7 +754,7 @@ static PyObject *py_clusters(PyObject *self, PyObject *args) {
     Walker w = {stack, -1, -1, 0, 0, 0};
     Packet pk;
     pk.n = 0;
-    for (int l = 0; l < PACKET; l++) pk.sx[l] = pk.sy[l] = pk.sz[l] = NAN;
+    for (int l = 0; l < PACKET; l++) pk.sx[l] = pk.sy[l] = pk.sz[l] = NAN;  /* never uninitialised lanes */
     int64_t caps = 0, rays = 0, nears = 0;
     const double h2 = h * h;
     const double total = (double)rows * bins;
@@ -996,4 +996,8 @@ static struct PyModuleDef module = {PyModuleDef_HEAD_INIT, STR(MODULE_NAME),
                                     "Compiled kernel of the rays boundedness estimator (docs/boundedness.md).",
                                     -1, methods};
 
-PyMODINIT_FUNC CAT(PyInit_, MODULE_NAME)(void) { return PyModule_Create(&module); }
+PyMODINIT_FUNC CAT(PyInit_, MODULE_NAME)(void) {
+    PyObject *m = PyModule_Create(&module);
+    if (m && PyModule_AddIntConstant(m, "LEAF_SIZE", LEAF_SIZE) < 0) Py_CLEAR(m);  /* rays_kernel's leaf blocks */
+    return m;
+}

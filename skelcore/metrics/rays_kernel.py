@@ -56,8 +56,8 @@ POLL = 0.05
 NN_CHUNK = 65536
 
 
-# points per leaf at most (LEAF_SIZE in _raycast.c)
-LEAF_SIZE = 8
+# points per leaf at most (the kernel's own constant)
+LEAF_SIZE = _raycast.LEAF_SIZE
 # one tree node as the kernel reads it (struct Node in _raycast.c): 32 bytes
 NODE = np.dtype([("c", "<f4", (3,)), ("r", "<f4"), ("kid", "<i4"), ("lo", "<i4"), ("hi", "<i4"), ("par", "<i4")])
 
