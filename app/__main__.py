@@ -215,7 +215,7 @@ def _ab_inputs(args: argparse.Namespace) -> tuple[str, Any] | None:
                              "or --skeleton-b with it")
         if args.a is None or args.b is None:
             raise ValueError("--compare-run needs --a METHOD and --b METHOD")
-        from skelcore.experiments.compare.run_folder import open_run
+        from skelcore.compare.finished_run import open_run
 
         from .compare_run import load_ab
 

@@ -5,7 +5,7 @@ a dialog listing the run's datasets, conditions, seeds and, for the chosen ones,
 the report (status and scores); pick method A and method B and "Open A/B view" shows both stored
 Evaluations side by side (:class:`app.compare_view.CompareWindow`); "Show A (B) in the main window"
 puts that stored result in the 3-D view, where picking shows each element's support. Nothing is
-recomputed: :mod:`skelcore.experiments.compare.run_folder` reads the jobs' records. Bad input is one
+recomputed: :mod:`skelcore.compare.finished_run` reads the jobs' records. Bad input is one
 dialog line; big rows are read in a thread.
 """
 
@@ -298,7 +298,7 @@ class _RunAction(QtCore.QObject):
 
     @staticmethod
     def run_path(event: Any) -> str | None:
-        from skelcore.experiments.compare.run_folder import is_run_path
+        from skelcore.compare.finished_run import is_run_path
 
         data = event.mimeData()
         if data is None or not data.hasUrls():
@@ -339,7 +339,7 @@ class _RunAction(QtCore.QObject):
     def open(self, path: str | os.PathLike) -> CompareRunDialog | None:
         """The dialog for the run at ``path`` (a folder or its index.json); a one-line dialog if it is not one."""
         from skelcore.errors import SkelInputError
-        from skelcore.experiments.compare.run_folder import open_run
+        from skelcore.compare.finished_run import open_run
 
         try:
             run = open_run(path)

@@ -21,8 +21,8 @@ from pathlib import Path
 import numpy as np
 
 from skelcore import shapes
-from skelcore.experiments.compare import Backend, run_compare
-from skelcore.experiments.compare.run_folder import open_run
+from skelcore.compare import Backend, run_compare
+from skelcore.compare.finished_run import open_run
 from skelcore.io import write_curve_ply, write_points_ply
 
 MANIFEST = """

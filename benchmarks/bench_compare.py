@@ -25,7 +25,7 @@ from pathlib import Path
 import numpy as np
 
 from skelcore import shapes
-from skelcore.experiments.compare import Backend, run_compare
+from skelcore.compare import Backend, run_compare
 from skelcore.io import write_points_ply
 
 LINE = """

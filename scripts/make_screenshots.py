@@ -314,7 +314,7 @@ def ab_run_screenshots(window, settle, save, tmp: Path) -> None:
     samples = ROOT / "resources" / "samples"
     if not (samples / "yshape_lbc_skeletal.ply").is_file():
         return
-    from skelcore.experiments.compare import Backend, run_compare
+    from skelcore.compare import Backend, run_compare
 
     (tmp / "run.toml").write_text(AB_RUN_MANIFEST.format(samples=samples.as_posix()))
     out = tmp / "compare_run"

@@ -22,7 +22,7 @@ from .metrics.smoothness import curve_smoothness_overall, curve_vertex_smoothnes
 from .metrics.topology import topological_similarity
 from .parallel import GraphTask, run_graph
 from .params import Params
-from .results import CurveLocal, Evaluation, SkeletalLocal
+from .evaluation import CurveLocal, Evaluation, SkeletalLocal
 from .trust import frame_fit_warning, frame_warnings, no_correspondence_warning, smoothness_warning
 
 Progress = Callable[[float, str], None]

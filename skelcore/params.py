@@ -23,7 +23,7 @@ class Params:
     boundedness_method : "rays" (default, rotation invariant) or "paper" (reference tool), SPEC 2.
     rays_radius_factor : h = factor x median nearest-neighbour spacing of the cloud, SPEC 2.
     rays_rows : latitude rows of the equal-area raster used by the rays estimator (2 x as many
-        longitude bins); 48 keeps it within 0.004 of the exact union area (tests/test_boundedness.py).
+        longitude bins); 48 keeps it within 0.004 of the exact union area (tests/engine/test_boundedness.py).
     rays_exact_pairs : up to this many (query, cloud point) pairs the rays estimator uses every pair;
         beyond, queries share their far field in clusters (boundedness.py docstring).
     rays_near_angle : a clustered query's own near field reaches h / rays_near_angle (x 1/2, 1, 2, ...,

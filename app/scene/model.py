@@ -32,7 +32,7 @@ class Scene:
 
     def __init__(self) -> None:
         self.layers: dict[str, Layer] = {}
-        self.evaluation: Any = None  # skelcore.results.Evaluation
+        self.evaluation: Any = None  # skelcore.evaluation.Evaluation
         self.metric: str = "boundedness"
         self.clim: tuple[float, float] | None = None  # None: the metric's natural range [0, 1]
         self.edges_as_tubes: bool = False

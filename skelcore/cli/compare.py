@@ -1,5 +1,5 @@
 """``skelcore compare MANIFEST.toml --out DIR``: rank skeletonizers over a dataset
-(:mod:`skelcore.experiments.compare`)."""
+(:mod:`skelcore.compare`)."""
 
 from __future__ import annotations
 
@@ -38,7 +38,7 @@ def _terminate(signum, frame):  # noqa: ARG001
 
 
 def run_compare_cli(args: argparse.Namespace) -> int:
-    from ..experiments.compare import parse_backend, run_compare
+    from ..compare import parse_backend, run_compare
 
     previous = signal.signal(signal.SIGTERM, _terminate)  # unwind: stop the workers, keep what is stored
     try:

@@ -70,7 +70,7 @@ def _check_outputs(args: argparse.Namespace, guard: tuple[str, ...]) -> None:
 def run_evaluate(args: argparse.Namespace) -> int:
     from .. import io
     from ..evaluate import evaluate
-    from ..io.correspondence import load_skeletal, load_skeletal_index
+    from ..io.correspondence_files import load_skeletal, load_skeletal_index
     from ..io.export import export_ply
 
     params = params_from_args(args)

@@ -27,7 +27,7 @@ def register(subparsers: argparse._SubParsersAction) -> argparse.ArgumentParser:
 
 
 def run_figure_cli(args: argparse.Namespace) -> int:
-    from ..experiments.compare.figure import make_figure
+    from ..compare.figure import make_figure
 
     try:
         n = make_figure(args.dir, args.output, shapes=args.shapes, methods=args.methods,

@@ -5,7 +5,7 @@ columns d_B/d_Wp, boundedness, centeredness, smoothness, each "skeletal/curve").
 Each variant is scored against its own (degraded) cloud, as the paper's toolbox does. The built-in
 skeletonizer is :func:`skelcore.skeleton.skeletonize`; ``skeleton_cmd`` plugs in any other
 program instead. A study is ``skelcore compare`` with one shape and one method: each row is a
-compare job (:func:`skelcore.experiments.compare.jobs.execute`), run here in this process. The
+compare job (:func:`skelcore.compare.jobs.execute`), run here in this process. The
 ``study`` subcommand lives in :mod:`skelcore.cli.study`.
 """
 
@@ -39,7 +39,7 @@ class StudyRow:
     cloud: np.ndarray
     skeletal: np.ndarray | None
     curve: CurveSkeleton | None
-    evaluation: Any  # skelcore.results.Evaluation
+    evaluation: Any  # skelcore.evaluation.Evaluation
     files: dict[str, str] = field(default_factory=dict)
     timings: dict[str, float] = field(default_factory=dict)
 
@@ -153,7 +153,7 @@ def _conditions(
 ) -> list[Any]:
     """The study's rows as compare conditions (normal, noise, sparse)."""
     from ..skeleton.degrade import voxel_grid_average
-    from .compare.manifest import ConditionSpec
+    from ..compare.manifest import ConditionSpec
 
     if sparse is not None and grid is not None:
         raise SkelInputError("give either a sparse point count or a grid cell, not both")
@@ -228,8 +228,8 @@ def run_study(
     from .. import io
     from ..skeleton.degrade import _cloud
     from ..skeleton import SkeletonizeParams
-    from .compare.jobs import Job, execute
-    from .compare.manifest import MethodSpec, ShapeSpec
+    from ..compare.jobs import Job, execute
+    from ..compare.manifest import MethodSpec, ShapeSpec
 
     cloud = _cloud(cloud)
     if method is None:

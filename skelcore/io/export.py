@@ -24,7 +24,7 @@ import numpy as np
 from ..colors import map_to_rgb
 from ..errors import SkelInputError
 from .ply import write_curve_ply, write_points_ply
-from ..results import Evaluation
+from ..evaluation import Evaluation
 
 __all__ = ["export_ply", "COLOR_BY"]
 

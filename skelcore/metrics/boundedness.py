@@ -2,7 +2,7 @@
 
 A skeleton should lie inside its shape: beta(q) is the share of the unit sphere of directions
 (p - q)/|p - q| that the cloud covers (Eq. 6); the overall scores (Eqs. 7-8) are taken in
-``skelcore.results``.  Estimators, by ``Params.boundedness_method``:
+``skelcore.evaluation``.  Estimators, by ``Params.boundedness_method``:
 
 ``rays`` (default, rotation invariant): every cloud point p farther than h from q hides the cap of
 directions of angular radius asin(h / |p - q|); beta(q) = area of the union of the caps / 4 pi,

@@ -6,7 +6,7 @@ kNN centroids of skeletal points vs. their corresponding cloud points (paper Eq.
 ``eq.skeletal_point_centeredness``).  ``curve_centeredness``: a slab cut across the curve direction,
 ellipse fit of the nearest cross-section (Eq. 11, ``eq.curve_point_centeredness``).
 Both return raw local values: c in [0, 1], NaN where invalid.  The rule "not bounded -> c = 0" and
-the overall score (Eq. 12) are applied later in :mod:`skelcore.results`, so the viewer can change
+the overall score (Eq. 12) are applied later in :mod:`skelcore.evaluation`, so the viewer can change
 beta* and c* without recomputing.  Departures from the paper and the reference tool: docs/metrics.md.
 """
 

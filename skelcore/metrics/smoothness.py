@@ -2,7 +2,7 @@
 
 Paper Sec. 2.4: tangents by Prop. 3 (unnumbered covariance), the angle measure D_n of Eq. 13, local
 scores Eq. 14 (skeletal points) and Eq. 15 (curve vertices), overall scores Eq. 16 (mean, taken in
-:mod:`skelcore.results`) and Eq. 17 (length-weighted, ``curve_smoothness_overall``).  Direction
+:mod:`skelcore.evaluation`) and Eq. 17 (length-weighted, ``curve_smoothness_overall``).  Direction
 changes matter for paths and grasps planned along a skeleton.  Both local scores are |1 - 2 theta / pi|
 with theta the angle between two directions, so they do not depend on the sign of a tangent:
 1 = same line, 0 = perpendicular.  Departures from the paper: docs/metrics.md.

@@ -23,7 +23,7 @@ import numpy as np
 from ..geometry import Checkpoint, matlab_round, nearest_neighbor_distances, no_checkpoint, unique_rows
 from ..parallel import polled_build
 from ..params import Params
-from ..results import TopologyResult
+from ..evaluation import TopologyResult
 from . import _emst
 
 __all__ = [

@@ -6,7 +6,7 @@ step by step (``cao_ring``, ``cao``, ``cao_curve``), ``method="skelscope"`` our 
 the noise models and downsamplers of the paper's study. docs/skeletonize.md has the details.
 """
 
-from .params import CaoParams, SkeletonizeInfo, SkeletonizeParams
+from .skeleton_params import CaoParams, SkeletonizeInfo, SkeletonizeParams
 from .pipeline import METHODS, skeletonize
 from .contraction import contract
 from .curve_extraction import extract_curve

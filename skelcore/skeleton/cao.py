@@ -17,7 +17,7 @@ from typing import Callable
 import numpy as np
 import scipy.sparse as sp
 
-from .params import CaoParams
+from .skeleton_params import CaoParams
 from .solve import solve_spd
 
 __all__ = ["Rings", "cao_contract", "cotangent_laplacian"]

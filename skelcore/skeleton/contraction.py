@@ -18,7 +18,7 @@ import numpy as np
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
-from .params import SkeletonizeParams
+from .skeleton_params import SkeletonizeParams
 from .solve import resolve_solver, solve_spd
 
 __all__ = ["contract"]

@@ -19,7 +19,7 @@ import numpy as np
 import scipy.sparse as sp
 from scipy.spatial import cKDTree
 
-from .params import SkeletonizeParams
+from .skeleton_params import SkeletonizeParams
 
 __all__ = ["extract_curve"]
 

@@ -19,7 +19,7 @@ from ..errors import SkelInputError
 from ..geometry import Normalization, as_points, unique_rows
 from .contraction import contract
 from .curve_extraction import extract_curve
-from .params import CaoParams, Progress, Reporter, SkeletonizeInfo, SkeletonizeParams
+from .skeleton_params import CaoParams, Progress, Reporter, SkeletonizeInfo, SkeletonizeParams
 
 __all__ = ["skeletonize", "METHODS"]
 

@@ -1,14 +1,19 @@
-"""``skelcore compare``: rank skeletonizers over a dataset (issue 9).
+"""Deprecated alias of :mod:`skelcore.compare` (the compare subsystem moved there, its modules renamed);
+removed in the next release. ``skelcore.experiments.compare.X`` still imports the module X now names."""
 
-``manifest`` (parse and check the TOML), ``jobs`` (one keyed job: degrade, skeletonize, evaluate),
-``conditions``, ``methods``, ``runner`` (serial, process pool, Dask), ``store`` (resumable per-job
-records), ``results`` (results.csv), ``leaderboard``, ``profiles``, ``render``, ``report``
-(report.html), ``figure`` (the graphic table), ``run`` (all of it, end to end), ``stored`` (a job's
-whole Evaluation in its npz) and ``run_folder`` (a finished run read back, for the viewer).
-"""
+import importlib
+import sys
+import warnings
 
-from .manifest import Manifest, load_manifest
-from .run import CompareResult, run_compare
-from .runner import Backend, parse_backend
+from ...compare import *  # noqa: F401,F403
+from ...compare import __all__  # noqa: F401
 
-__all__ = ["Manifest", "load_manifest", "CompareResult", "run_compare", "Backend", "parse_backend"]
+warnings.warn("skelcore.experiments.compare is deprecated: import from skelcore.compare", DeprecationWarning,
+              stacklevel=2)
+
+_RENAMED = {"runner": "backends", "store": "job_store", "stored": "job_evaluation", "results": "results_csv",
+            "run": "run_compare", "run_folder": "finished_run", **{m: m for m in (
+                "conditions", "figure", "jobs", "leaderboard", "manifest", "methods", "profiles", "render",
+                "report")}}
+for _old, _new in _RENAMED.items():
+    sys.modules[f"{__name__}.{_old}"] = importlib.import_module(f"skelcore.compare.{_new}")

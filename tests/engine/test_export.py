@@ -13,7 +13,7 @@ from skelcore.io.export import export_ply
 from skelcore.geometry import Normalization
 from skelcore.io import load_curve
 from skelcore.params import Params
-from skelcore.results import CurveLocal, Evaluation, SkeletalLocal
+from skelcore.evaluation import CurveLocal, Evaluation, SkeletalLocal
 
 
 def _evaluation(inputs: dict | None = None) -> Evaluation:

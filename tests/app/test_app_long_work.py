@@ -18,7 +18,7 @@ from skelcore import shapes
 
 pytestmark = pytest.mark.gui
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 MILLION = 1_000_000
 
 

@@ -16,14 +16,14 @@ from typing import Any
 
 import numpy as np
 
-from ...curve import CurveSkeleton
-from ...errors import SkelInputError
-from ...geometry import Normalization
-from ...metrics.coverage import Coverage
-from ...params import Params
-from ...results import CurveLocal, Evaluation, SkeletalLocal, TopologyResult
-from ...trust import TrustWarning
-from .store import json_float
+from ..curve import CurveSkeleton
+from ..errors import SkelInputError
+from ..geometry import Normalization
+from ..metrics.coverage import Coverage
+from ..params import Params
+from ..evaluation import CurveLocal, Evaluation, SkeletalLocal, TopologyResult
+from ..trust import TrustWarning
+from .job_store import json_float
 
 __all__ = ["evaluation_arrays", "evaluation_from_store", "has_evaluation", "STORED_KEY"]
 

@@ -17,9 +17,9 @@ import time
 from dataclasses import dataclass, field
 from typing import Any, Callable
 
-from ...errors import SkelInputError
+from ..errors import SkelInputError
 from .jobs import Job, run_job
-from .store import Store
+from .job_store import Store
 
 __all__ = ["Backend", "parse_backend", "RunSummary", "run_jobs"]
 
@@ -149,7 +149,7 @@ def _run_pool(todo: list[Job], workers: int, file: Callable[[dict[str, Any]], No
     from concurrent.futures.process import BrokenProcessPool
 
     ctx = mp.get_context("forkserver")
-    ctx.set_forkserver_preload(["skelcore.experiments.compare.jobs"])
+    ctx.set_forkserver_preload(["skelcore.compare.jobs"])
     ex = ProcessPoolExecutor(max_workers=min(workers, len(todo)), mp_context=ctx, initializer=_worker_init)
     futures = {ex.submit(run_job, job): job for job in todo}
     done: set[str] = set()

@@ -14,13 +14,13 @@ import pytest
 from compare_helpers import make_dataset, manifest
 from skelcore.cli import main
 from skelcore.errors import SkelInputError
-from skelcore.experiments.compare.conditions import degrade
-from skelcore.experiments.compare.jobs import make_jobs
-from skelcore.experiments.compare.leaderboard import build_leaderboard
-from skelcore.experiments.compare.manifest import ConditionSpec, load_manifest
-from skelcore.experiments.compare.profiles import load_profiles
+from skelcore.compare.conditions import degrade
+from skelcore.compare.jobs import make_jobs
+from skelcore.compare.leaderboard import build_leaderboard
+from skelcore.compare.manifest import ConditionSpec, load_manifest
+from skelcore.compare.profiles import load_profiles
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 
 GOOD = """
 [evaluation]
@@ -221,7 +221,7 @@ def test_profile_verdicts_give_the_reason(tmp_path):
 
 
 def test_the_users_copy_of_the_profiles_is_the_shipped_file():
-    shipped = ROOT / "skelcore" / "experiments" / "data" / "profiles.toml"
+    shipped = ROOT / "skelcore" / "compare" / "data" / "profiles.toml"
     assert (ROOT / "resources" / "profiles.toml").read_bytes() == shipped.read_bytes()
     assert "our reading" in shipped.read_text().lower()
     assert [p.name for p in load_profiles(ROOT / "resources" / "profiles.toml")] == [
@@ -239,7 +239,7 @@ def test_the_shipped_samples_manifest_is_valid():
 
 
 def test_means_that_print_the_same_share_a_rank():
-    from skelcore.experiments.compare.leaderboard import _ranks
+    from skelcore.compare.leaderboard import _ranks
 
     assert _ranks([0.02331, 0.02334, 0.0237, math.nan], True, 4) == [1, 1, 3, None]
     assert _ranks([0.9, 0.95, 0.95], False, 3) == [3, 1, 1]
@@ -249,7 +249,7 @@ def test_builtin_method_is_passed_only_when_skeletonize_takes_it(root, monkeypat
     """``kind = "builtin"`` with ``method = "cao"``: forwarded to skeletonize(method=...) when the
     installed skelcore has several skeletonizers, a one-line error otherwise."""
     import skelcore.skeleton as skeleton
-    from skelcore.experiments.compare.methods import run_builtin
+    from skelcore.compare.methods import run_builtin
 
     body = GOOD.replace('name = "builtin"\nkind = "builtin"', 'name = "builtin"\nkind = "builtin"\nmethod = "cao"')
     real = skeleton.skeletonize
@@ -268,7 +268,7 @@ def test_builtin_method_is_passed_only_when_skeletonize_takes_it(root, monkeypat
     pts = np.random.default_rng(0).normal(size=(50, 3))
     skeletal, curve = run_builtin(pts, m.methods[0])
     assert calls == [("cao", 5)] and skeletal is pts and curve is None
-    from skelcore.skeleton.params import method_params
+    from skelcore.skeleton.skeleton_params import method_params
 
     plain = load_manifest(manifest(root, GOOD))
     run_builtin(pts, plain.methods[0])

@@ -13,7 +13,7 @@ import pytest
 
 from compare_helpers import command, make_dataset, manifest
 from skelcore.cli import main
-from skelcore.experiments.compare import Backend, run_compare
+from skelcore.compare import Backend, run_compare
 
 CHROMIUM_FLAGS = ["--headless", "--no-sandbox", "--disable-gpu", "--disable-background-networking",
                   "--disable-component-update", "--disable-sync", "--no-first-run"]

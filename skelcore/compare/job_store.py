@@ -16,8 +16,8 @@ from typing import Any, Iterator
 
 import numpy as np
 
-from ...errors import SkelInputError
-from ...io.atomic import atomic_open
+from ..errors import SkelInputError
+from ..io.atomic import atomic_open
 
 __all__ = ["Store", "json_float"]
 

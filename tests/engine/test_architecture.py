@@ -9,10 +9,10 @@ from pathlib import Path
 
 import pytest
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 FORBIDDEN = ("PySide6", "PyQt5", "PyQt6", "shiboken6", "qtpy", "pyvista", "pyvistaqt", "vtk", "vtkmodules", "matplotlib")
 # Reports and figures import their plotting lazily, inside the function that draws.
-LAZY_PLOTTING_OK = ("skelcore.experiments",)
+LAZY_PLOTTING_OK = ("skelcore.experiments", "skelcore.compare")
 
 
 def _module_name(path: Path) -> str:
@@ -153,3 +153,41 @@ def test_module_docstrings_are_short():
         elif doc is not None and len(doc.splitlines()) > 18:
             long.append(f"{name}: {len(doc.splitlines())} lines")
     assert long == []
+
+
+def test_no_two_engine_modules_share_a_name():
+    """A module's file name says what it holds, once: the CLI's subcommand modules aside (``cli/evaluate``
+    is the ``evaluate`` subcommand), no two engine modules are called alike."""
+    seen: dict[str, list[str]] = {}
+    for name, path in _modules("skelcore").items():
+        if path.name == "__init__.py" or name.startswith("skelcore.cli."):
+            continue
+        seen.setdefault(path.stem, []).append(name)
+    assert {stem: names for stem, names in seen.items() if len(names) > 1} == {}
+
+
+@pytest.mark.parametrize("old, new, attr", [
+    ("skelcore.results", "skelcore.evaluation", "Evaluation"),
+    ("skelcore.experiments.compare", "skelcore.compare", "run_compare"),
+])
+def test_moved_modules_still_import_with_a_deprecation_warning(old, new, attr):
+    import importlib
+    import subprocess
+    import sys
+
+    code = (f"import warnings; warnings.simplefilter('error', DeprecationWarning)\n"
+            f"try:\n    import {old}\nexcept DeprecationWarning as e:\n    print('warned', e)\n"
+            f"warnings.simplefilter('ignore')\nimport {old} as m, {new} as n\nprint(m.{attr} is n.{attr})")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout
+    assert "warned" in out and out.strip().endswith("True")
+    assert importlib.import_module(new)
+
+
+def test_old_compare_submodule_paths_name_the_renamed_modules():
+    import subprocess
+    import sys
+
+    code = ("import warnings; warnings.simplefilter('ignore')\n"
+            "from skelcore.experiments.compare.run_folder import open_run\n"
+            "from skelcore.compare.finished_run import open_run as new\nprint(open_run is new)")
+    assert subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout.strip() == "True"

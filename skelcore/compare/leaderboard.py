@@ -15,7 +15,7 @@ from typing import Any
 
 import numpy as np
 
-from ...io.atomic import atomic_open
+from ..io.atomic import atomic_open
 from .jobs import SCORE_COLUMNS
 from .profiles import Profile
 
@@ -167,7 +167,7 @@ def _ranks(values: list[float], lower_better: bool, digits: int) -> list[int | N
 
 def build_leaderboard(rows: list[dict[str, Any]], profiles: tuple[Profile, ...],
                       methods: list[str], conditions: list[str]) -> Leaderboard:
-    """Aggregate ``results.csv`` rows (see :mod:`.results`) in manifest order of methods and conditions."""
+    """Aggregate ``results.csv`` rows (see :mod:`.results_csv`) in manifest order of methods and conditions."""
     entries = []
     for cond in conditions:
         group = []

@@ -18,7 +18,7 @@ __all__ = ["degrade"]
 
 def degrade(cloud: np.ndarray, condition: ConditionSpec, seed: int) -> np.ndarray:
     """The degraded copy of ``cloud`` under ``condition`` (the cloud itself for "normal")."""
-    from ...skeleton.degrade import add_noise, farthest_point_downsample, random_downsample, voxel_grid_average
+    from ..skeleton.degrade import add_noise, farthest_point_downsample, random_downsample, voxel_grid_average
 
     noise_rng, sparse_rng = (np.random.default_rng(s) for s in np.random.SeedSequence(seed).spawn(2))
     pts = cloud

@@ -12,8 +12,8 @@ from typing import Callable
 
 import numpy as np
 
-from ...curve import CurveSkeleton
-from ...errors import Cancelled, SkelInputError
+from ..curve import CurveSkeleton
+from ..errors import Cancelled, SkelInputError
 from .manifest import MethodSpec, check_command_template, expand_template, skeletonize_accepts_method
 
 __all__ = ["skeletonize_accepts_method", "run_builtin", "run_command", "read_files"]
@@ -23,8 +23,8 @@ Progress = Callable[[float, str], None]
 
 def run_builtin(points: np.ndarray, spec: MethodSpec, progress: Progress | None = None,
                 cancel: Callable[[], bool] | None = None) -> tuple[np.ndarray | None, CurveSkeleton | None]:
-    from ...skeleton import skeletonize
-    from ...skeleton.params import method_params
+    from ..skeleton import skeletonize
+    from ..skeleton.skeleton_params import method_params
 
     method, params = method_params(spec.method, spec.params)
     return skeletonize(points, params, progress=progress, cancel=cancel, method=method)
@@ -55,7 +55,7 @@ def run_command(
     and all its children. Its outputs are read back with the project's loaders, so a file that is
     not a skeleton becomes a one-line error naming it.
     """
-    from ... import io
+    from .. import io
 
     argv = check_command_template(template, label)
     joined = " ".join(argv)
@@ -111,7 +111,7 @@ def run_command(
 def read_files(spec: MethodSpec, stem: str, condition: str, seed: int
                ) -> tuple[np.ndarray | None, CurveSkeleton | None, np.ndarray | None, dict[str, str]]:
     """Precomputed skeletons of a ``files`` method: (skeletal, curve, skeletal_index, paths)."""
-    from ... import io
+    from .. import io
 
     paths = {k: expand_template(t, stem, condition, seed) for k, t in spec.file_templates().items()}
     skeletal = io.load_points(paths["skeletal"]) if "skeletal" in paths else None

@@ -17,11 +17,11 @@ import numpy as np
 import pytest
 
 from compare_helpers import command, make_dataset, manifest
-from skelcore.experiments.compare import Backend, run_compare
+from skelcore.compare import Backend, run_compare
 from skelcore.cli import main as main_cli
-from skelcore.experiments.compare.results import COLUMNS
+from skelcore.compare.results_csv import COLUMNS
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 SCORES = ["d_B", "d_Wp", "boundedness_skeletal", "boundedness_curve", "centeredness_skeletal",
           "centeredness_curve", "smoothness_skeletal", "smoothness_curve"]
 

@@ -16,9 +16,9 @@ from app.__main__ import main
 from compare_helpers import make_dataset, manifest
 from conftest import write_shape_files
 from skelcore import evaluate, shapes
-from skelcore.experiments.compare import Backend, run_compare
-from skelcore.experiments.compare.jobs import execute, make_jobs
-from skelcore.experiments.compare.manifest import load_manifest
+from skelcore.compare import Backend, run_compare
+from skelcore.compare.jobs import execute, make_jobs
+from skelcore.compare.manifest import load_manifest
 from skelcore.io import load_points, write_points_ply
 from skelcore.params import k_center_for
 

@@ -12,8 +12,8 @@ from pathlib import Path
 
 import pytest
 
-ROOT = Path(__file__).resolve().parents[1]
-ENGINE_ONLY = ("skelcore.evaluate", "skelcore.results", "skelcore.metrics", "skelcore.experiments", "scipy.spatial",
+ROOT = Path(__file__).resolve().parents[2]
+ENGINE_ONLY = ("skelcore.evaluate", "skelcore.evaluation", "skelcore.metrics", "skelcore.experiments", "scipy.spatial",
                "scipy.sparse", "sklearn", "gudhi", "pandas", "numba")
 
 

@@ -18,8 +18,8 @@ from dataclasses import dataclass, field, fields
 from pathlib import Path
 from typing import Any
 
-from ...errors import SkelInputError
-from ...params import Params
+from ..errors import SkelInputError
+from ..params import Params
 
 if sys.version_info >= (3, 11):
     import tomllib
@@ -231,7 +231,7 @@ def skeletonize_accepts_method() -> bool:
     """True when :func:`skelcore.skeleton.skeletonize` takes ``method=`` (several skeletonizers)."""
     import inspect
 
-    from ...skeleton import skeletonize
+    from ..skeleton import skeletonize
 
     return "method" in inspect.signature(skeletonize).parameters
 
@@ -280,7 +280,7 @@ def _with_correspondence(spec: MethodSpec, value: Any, where: str, fail) -> Meth
     import dataclasses
     import inspect
 
-    from ...evaluate import evaluate
+    from ..evaluate import evaluate
 
     if "correspondence" not in inspect.signature(evaluate).parameters:
         fail(f"{where}: this skelcore's evaluate() has no correspondence option")
@@ -291,7 +291,7 @@ def _with_correspondence(spec: MethodSpec, value: Any, where: str, fail) -> Meth
 
 
 def _builtin(entry: dict, where: str, fail) -> MethodSpec:
-    from ...skeleton.params import method_params
+    from ..skeleton.skeleton_params import method_params
 
     params = entry.get("params", {})
     if not isinstance(params, dict):

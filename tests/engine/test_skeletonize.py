@@ -1,5 +1,5 @@
 """skelcore.skeleton, method "skelscope": Laplacian contraction + our curve extraction on shapes with
-known skeletons (the toolbox's method "cao": tests/test_skeletonize_cao.py)."""
+known skeletons (the toolbox's method "cao": tests/engine/test_skeletonize_cao.py)."""
 
 from __future__ import annotations
 

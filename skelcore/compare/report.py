@@ -17,12 +17,12 @@ from typing import Any
 
 import numpy as np
 
-from ...io.atomic import atomic_open
+from ..io.atomic import atomic_open
 from .jobs import SCORE_COLUMNS
 from .leaderboard import Leaderboard
 from .profiles import Profile
 from .render import VIEWS, render_job
-from .store import Store
+from .job_store import Store
 
 __all__ = ["write_report", "distributions_png"]
 
@@ -158,7 +158,7 @@ def write_report(out_dir: str | os.PathLike, rows: list[dict[str, Any]], board: 
                  shapes: list[str], methods: list[str], conditions: list[str], title: str = "skelcore compare",
                  meta: dict[str, Any] | None = None, inputs: tuple[str, ...] = ()) -> str:
     """Write ``out_dir/report.html`` and return its path."""
-    from ...version import __version__
+    from ..version import __version__
 
     out_dir = os.fspath(out_dir)
     n_ok = sum(r["status"] == "ok" for r in rows)

@@ -12,14 +12,14 @@ import os
 from dataclasses import dataclass
 from typing import Any, Callable
 
-from ...io.atomic import atomic_open
+from ..io.atomic import atomic_open
 from .jobs import Job, make_jobs
 from .leaderboard import Leaderboard, build_leaderboard
 from .manifest import Manifest, load_manifest
 from .profiles import Profile, load_profiles
-from .results import collect_rows, write_results_csv
-from .runner import Backend, RunSummary, run_jobs
-from .store import Store
+from .results_csv import collect_rows, write_results_csv
+from .backends import Backend, RunSummary, run_jobs
+from .job_store import Store
 
 __all__ = ["CompareResult", "run_compare", "write_outputs", "load_index"]
 
@@ -82,7 +82,7 @@ def _write_index(out_dir, manifest: Manifest, jobs: list[Job], backend: Backend,
 
 
 def load_index(out_dir: str | os.PathLike) -> dict[str, Any]:
-    from ...errors import SkelInputError
+    from ..errors import SkelInputError
 
     path = os.path.join(os.fspath(out_dir), "index.json")
     try:

@@ -21,9 +21,9 @@ from typing import Any, Callable
 
 import numpy as np
 
-from ...curve import CurveSkeleton
-from ...errors import Cancelled, SkelInputError
-from ...params import Params
+from ..curve import CurveSkeleton
+from ..errors import Cancelled, SkelInputError
+from ..params import Params
 from .conditions import degrade
 from .manifest import ConditionSpec, Manifest, MethodSpec, ShapeSpec, expand_template
 
@@ -58,7 +58,7 @@ class JobOutput:
     points: np.ndarray
     skeletal: np.ndarray | None
     curve: CurveSkeleton | None
-    evaluation: Any  # skelcore.results.Evaluation
+    evaluation: Any  # skelcore.evaluation.Evaluation
     timings: dict[str, float] = field(default_factory=dict)
     files: dict[str, str] = field(default_factory=dict)
 
@@ -80,7 +80,7 @@ def file_digest(path: str) -> str:
 
 
 def _job_key(job: Job) -> str:
-    from ...skeleton.params import method_params
+    from ..skeleton.skeleton_params import method_params
 
     method = job.method.to_dict()
     method.pop("cwd")  # a moved dataset keeps its results (the inputs are hashed by content)
@@ -121,8 +121,8 @@ def execute(job: Job, workdir: str | None = None, *, prefix: str = "", write_clo
     ``workdir`` receives ``{prefix}cloud.ply`` (always for a command, else if ``write_cloud``) and a
     command's ``{prefix}skeletal.ply`` / ``{prefix}curve.ply``. ``cloud`` skips reading the shape.
     """
-    from ... import io
-    from ...evaluate import evaluate
+    from .. import io
+    from ..evaluate import evaluate
     from .methods import read_files, run_builtin, run_command
 
     def part(lo: float, hi: float) -> Progress | None:
@@ -198,8 +198,8 @@ def scores_from_doc(doc: dict[str, Any] | None) -> dict[str, float]:
 
 def _arrays(ev: Any) -> dict[str, np.ndarray]:
     """The local values the report draws (float32 coordinates, NaN kept), and the whole evaluation
-    at full precision for the viewer (:mod:`.stored`)."""
-    from .stored import evaluation_arrays
+    at full precision for the viewer (:mod:`.job_evaluation`)."""
+    from .job_evaluation import evaluation_arrays
 
     f32 = lambda a: np.asarray(a, dtype=np.float32)  # noqa: E731
     out = {"cloud": f32(ev.cloud)}

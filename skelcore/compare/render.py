@@ -14,8 +14,8 @@ from typing import Any
 
 import numpy as np
 
-from ... import colors
-from ...io.atomic import atomic_open
+from .. import colors
+from ..io.atomic import atomic_open
 
 __all__ = ["VIEWS", "render_job", "draw_barcodes", "barcode_png"]
 

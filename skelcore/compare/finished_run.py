@@ -16,9 +16,9 @@ from typing import Any
 
 import numpy as np
 
-from ...errors import SkelInputError
-from ...results import Evaluation
-from .stored import evaluation_from_store
+from ..errors import SkelInputError
+from ..evaluation import Evaluation
+from .job_evaluation import evaluation_from_store
 
 __all__ = ["CompareRun", "JobEntry", "open_run", "is_run_path"]
 

@@ -11,10 +11,10 @@ from __future__ import annotations
 import os
 from typing import Sequence
 
-from ...errors import SkelInputError
-from ...io.atomic import atomic_open
+from ..errors import SkelInputError
+from ..io.atomic import atomic_open
 from .render import VIEWS, draw_barcodes, render_job
-from .store import Store
+from .job_store import Store
 
 __all__ = ["make_figure"]
 
@@ -30,8 +30,8 @@ def make_figure(out_dir: str | os.PathLike, output: str | os.PathLike, *, shapes
     from matplotlib.colors import ListedColormap, Normalize
     from matplotlib.figure import Figure
 
-    from ... import colors
-    from .run import load_index
+    from .. import colors
+    from .run_compare import load_index
 
     output = os.fspath(output)
     ext = os.path.splitext(output)[1].lower()

@@ -13,10 +13,10 @@ import pytest
 
 from compare_helpers import make_dataset, manifest
 from skelcore.errors import SkelInputError
-from skelcore.experiments.compare import Backend, run_compare
-from skelcore.experiments.compare.jobs import execute, make_jobs
-from skelcore.experiments.compare.manifest import load_manifest
-from skelcore.experiments.compare.run_folder import is_run_path, open_run
+from skelcore.compare import Backend, run_compare
+from skelcore.compare.jobs import execute, make_jobs
+from skelcore.compare.manifest import load_manifest
+from skelcore.compare.finished_run import is_run_path, open_run
 from skelcore.io import load_points, write_points_ply
 
 BODY = """

@@ -11,10 +11,10 @@ import math
 import os
 from typing import Any
 
-from ...io.atomic import atomic_open
+from ..io.atomic import atomic_open
 from .jobs import SCORE_COLUMNS, Job
 from .profiles import Profile
-from .store import Store, json_float
+from .job_store import Store, json_float
 
 __all__ = ["collect_rows", "write_results_csv", "COLUMNS"]
 

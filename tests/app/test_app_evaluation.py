@@ -143,7 +143,7 @@ def test_loading_new_inputs_during_a_run_drops_its_result(window, files, qtbot, 
 
 
 def test_an_invalid_evaluation_input_becomes_a_dialog(window, files, qtbot, tmp_path, monkeypatch):
-    # (a skeletal set of another size is no longer one: issue 8, tests/test_app_trust.py)
+    # (a skeletal set of another size is no longer one: issue 8, tests/app/test_app_trust.py)
     def refuse(*args, **kwargs):
         raise skelcore.SkelInputError("skeletal point set: not what the engine accepts")
 

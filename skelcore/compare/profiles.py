@@ -2,7 +2,7 @@
 agricultural manipulation and surface reconstruction, as thresholds with weights.
 
 The thresholds are our reading of the paper's discussion, not its numbers (only d* = 0.02 is the
-paper's). They live in ``skelcore/experiments/data/profiles.toml`` (copied to
+paper's). They live in ``skelcore/compare/data/profiles.toml`` (copied to
 ``resources/profiles.toml`` for users to edit; ``--profiles F`` loads another file). A verdict is
 computed from a job's stored scores, so editing a profile never recomputes a job.
 """
@@ -16,7 +16,7 @@ from dataclasses import dataclass
 from importlib import resources
 from typing import Any
 
-from ...errors import SkelInputError
+from ..errors import SkelInputError
 from .jobs import SCORE_COLUMNS
 
 if sys.version_info >= (3, 11):
@@ -84,12 +84,12 @@ class Profile:
 
 
 def default_profiles_text() -> str:
-    return resources.files("skelcore.experiments").joinpath("data/profiles.toml").read_text(encoding="utf-8")
+    return resources.files("skelcore.compare").joinpath("data/profiles.toml").read_text(encoding="utf-8")
 
 
 def load_profiles(path: str | os.PathLike | None = None) -> tuple[Profile, ...]:
     """The shipped profiles, or those of ``path``; one-line SkelInputError on a bad file."""
-    label = "skelcore/experiments/data/profiles.toml" if path is None else os.fspath(path)
+    label = "skelcore/compare/data/profiles.toml" if path is None else os.fspath(path)
     try:
         text = default_profiles_text() if path is None else open(path, encoding="utf-8").read()
         doc = tomllib.loads(text)
