@@ -7,8 +7,6 @@ unbounded element's centeredness is 0).
 
 from __future__ import annotations
 
-import csv
-import json
 import math
 from dataclasses import dataclass, field
 from typing import Any
@@ -17,26 +15,14 @@ import numpy as np
 
 from .curve import CurveSkeleton
 from .geometry import Normalization
-from .io.atomic import atomic_open
 from .metrics.coverage import Coverage
 from .metrics.reference import ReferenceComparison
+from .metrics.topology import TopologyResult
 from .params import Params
 from .trust import TrustWarning
 
+# TopologyResult lives beside its metric (metrics.topology); imported from here for compatibility
 __all__ = ["TopologyResult", "SkeletalLocal", "CurveLocal", "Evaluation", "apply_unbounded_rule"]
-
-
-@dataclass
-class TopologyResult:
-    """SPEC 1. Barcodes are (n, 2) arrays of (birth, death) in normalized units, longest first,
-    the infinite bar first with death = inf; every bar, not only the K compared ones."""
-
-    bottleneck: float
-    wasserstein: float
-    eps_star: float
-    n_bars: int
-    cloud_barcode: np.ndarray
-    skeletal_barcode: np.ndarray
 
 
 def apply_unbounded_rule(c_raw: np.ndarray, beta: np.ndarray, beta_star: float) -> np.ndarray:
@@ -193,143 +179,38 @@ class Evaluation:
     def warning_dicts(self) -> list[dict[str, str]]:
         return [w.to_dict() for w in self.warnings]
 
-    # ---- serialisation --------------------------------------------------------------------
+    # ---- serialisation: skelcore.io.evaluation_files, imported when called (the record imports no io) ----
     def to_json_dict(self, version: str | None = None) -> dict[str, Any]:
         """The ``--json`` document of the CLI (issue 2); null where an input was not given."""
-        from .version import __version__
+        from .io import evaluation_files
 
-        summ = self.summary()
-        params = self.params.to_dict()
-        params["boundedness_estimator"] = self.params.boundedness_method
-        doc = {
-            "skelcore_version": version or __version__,
-            "params": params,
-            "inputs": {
-                "cloud": {"path": self.inputs.get("cloud"), "n_points": int(len(self.cloud))},
-                "skeletal": None
-                if self.skeletal is None
-                else {"path": self.inputs.get("skeletal"), "n_points": int(len(self.skeletal.points)),
-                      "source": self.skeletal.source},
-                "curve": None
-                if self.curve is None
-                else {
-                    "path": self.inputs.get("curve"),
-                    "n_vertices": self.curve.curve.n_vertices,
-                    "n_edges": self.curve.curve.n_edges,
-                },
-                "skeletal_index": self.inputs.get("skeletal_index"),
-                "reference_curve": self.inputs.get("reference_curve"),
-            },
-            "topology": summ["topology"],
-            "boundedness": summ["boundedness"],
-            "centeredness": summ["centeredness"],
-            "smoothness": summ["smoothness"],
-            "counts": summ["counts"],
-            "correspondence": self.correspondence,
-            "not_computed": dict(self.not_computed),
-            "warnings": self.warning_dicts(),
-            "coverage": summ["coverage"],
-            "reference": None if self.reference is None else self.reference.to_dict(),
-            "timings_s": {k: round(float(v), 6) for k, v in self.timings.items()},
-        }
-        return _json_safe(doc)
+        return evaluation_files.to_json_dict(self, version)
 
     def write_json(self, path: str, inputs: tuple[str, ...] = ()) -> None:
-        with atomic_open(path, "w", inputs=inputs or self._input_paths()) as fh:
-            json.dump(self.to_json_dict(), fh, indent=2)
-            fh.write("\n")
+        """The ``--json`` document, written atomically (never over ``inputs`` or the evaluated files)."""
+        from .io import evaluation_files
+
+        evaluation_files.write_json(self, path, inputs)
 
     def write_per_point(self, prefix: str, inputs: tuple[str, ...] = ()) -> list[str]:
         """``PREFIX_skeletal.csv``, ``PREFIX_curve_samples.csv``, ``PREFIX_curve_vertices.csv`` and,
         with coverage or reverse correspondence, ``PREFIX_cloud.csv`` (one row per cloud point)."""
-        written: list[str] = []
-        guard = inputs or self._input_paths()
-        b_star = self.params.beta_star
-        if self.skeletal is not None:
-            s = self.skeletal
-            path = f"{prefix}_skeletal.csv"
-            rows = zip(range(len(s.points)), *s.points.T, s.boundedness, s.centeredness(b_star), s.smoothness)
-            _write_csv(path, ["index", "x", "y", "z", "boundedness", "centeredness", "smoothness"], rows, guard)
-            written.append(path)
-        if self.curve is not None:
-            c = self.curve
-            path = f"{prefix}_curve_samples.csv"
-            rows = zip(
-                range(len(c.samples)), c.sample_edge, c.sample_t, *c.samples.T,
-                c.sample_boundedness, c.sample_centeredness(b_star),
-            )
-            _write_csv(path, ["sample", "edge", "t", "x", "y", "z", "boundedness", "centeredness"], rows, guard)
-            written.append(path)
-            path = f"{prefix}_curve_vertices.csv"
-            rows = zip(range(c.curve.n_vertices), *c.curve.vertices.T, c.vertex_degree, c.vertex_smoothness)
-            _write_csv(path, ["vertex", "x", "y", "z", "degree", "smoothness"], rows, guard)
-            written.append(path)
-        cloud_cols = self.cloud_columns()
-        if len(cloud_cols) > 3:
-            path = f"{prefix}_cloud.csv"
-            rows = zip(range(len(self.cloud)), *cloud_cols.values())
-            _write_csv(path, ["index", *cloud_cols], rows, guard)
-            written.append(path)
-        return written
+        from .io import evaluation_files
+
+        return evaluation_files.write_per_point(self, prefix, inputs)
 
     def cloud_columns(self) -> dict[str, np.ndarray]:
         """Per-cloud-point columns: x, y, z, and gap/covered per coverage, skeletal_row (reverse)."""
-        cols: dict[str, np.ndarray] = {"x": self.cloud[:, 0], "y": self.cloud[:, 1], "z": self.cloud[:, 2]}
-        for name, cov in (("skeletal", self.coverage_skeletal), ("curve", self.coverage_curve)):
-            if cov is not None:
-                cols[f"gap_{name}"] = cov.gap
-                cols[f"covered_{name}"] = cov.covered.astype(np.int64)
-        if self.skeletal is not None and self.skeletal.rows is not None:
-            cols["skeletal_row"] = self.skeletal.rows
-        return cols
+        from .io import evaluation_files
+
+        return evaluation_files.cloud_columns(self)
 
     def write_barcodes(self, path: str, inputs: tuple[str, ...] = ()) -> None:
         """``diagram,birth,death`` rows for every bar of both diagrams (``inf`` for the infinite bar)."""
-        if self.topology is None:
-            raise ValueError("no barcodes: a skeletal point set is needed for topological similarity")
-        rows = []
-        for name, bars in (("cloud", self.topology.cloud_barcode), ("skeletal", self.topology.skeletal_barcode)):
-            rows.extend((name, float(b), float(d)) for b, d in bars)
-        _write_csv(path, ["diagram", "birth", "death"], rows, inputs or self._input_paths())
+        from .io import evaluation_files
+
+        evaluation_files.write_barcodes(self, path, inputs)
 
     def _input_paths(self) -> tuple[str, ...]:
         return tuple(str(p) for p in self.inputs.values() if p)
 
-
-def _fmt(value: Any) -> str:
-    if isinstance(value, (float, np.floating)):
-        v = float(value)
-        if math.isnan(v):
-            return "nan"
-        if math.isinf(v):
-            return "inf" if v > 0 else "-inf"
-        return repr(v)
-    if isinstance(value, np.integer):
-        return str(int(value))
-    return str(value)
-
-
-def _write_csv(path: str, header: list[str], rows, inputs) -> None:
-    with atomic_open(path, "w", inputs=inputs) as fh:
-        writer = csv.writer(fh, lineterminator="\n")
-        writer.writerow(header)
-        for row in rows:
-            writer.writerow([_fmt(v) for v in row])
-
-
-def _json_safe(obj: Any) -> Any:
-    """NaN/inf are not JSON: NaN -> null, inf -> "inf"."""
-    if isinstance(obj, dict):
-        return {k: _json_safe(v) for k, v in obj.items()}
-    if isinstance(obj, (list, tuple)):
-        return [_json_safe(v) for v in obj]
-    if isinstance(obj, (float, np.floating)):
-        v = float(obj)
-        if math.isnan(v):
-            return None
-        if math.isinf(v):
-            return "inf" if v > 0 else "-inf"
-        return v
-    if isinstance(obj, np.integer):
-        return int(obj)
-    return obj

@@ -4,8 +4,8 @@
 ``conditions``, ``methods``, ``backends`` (serial, process pool, Dask), ``job_store`` (resumable
 per-job records), ``results_csv`` (results.csv), ``leaderboard``, ``profiles``, ``render``, ``report``
 (report.html), ``figure`` (the graphic table), ``run_compare`` (all of it, end to end),
-``job_evaluation`` (a job's whole Evaluation in its npz) and ``finished_run`` (a finished run read
-back, for the viewer).
+and ``finished_run`` (a finished run read back, for the viewer; a job's whole Evaluation is saved and
+read by :mod:`skelcore.io.evaluation_files`).
 """
 
 from .manifest import Manifest, load_manifest

@@ -18,7 +18,7 @@ import numpy as np
 
 from ..errors import SkelInputError
 from ..evaluation import Evaluation
-from .job_evaluation import evaluation_from_store
+from ..io.evaluation_files import evaluation_from_store
 
 __all__ = ["CompareRun", "JobEntry", "open_run", "is_run_path"]
 

@@ -9,7 +9,6 @@ exists and parses; leftovers of an interrupted write (``.*.tmp``) are ignored an
 from __future__ import annotations
 
 import json
-import math
 import os
 from pathlib import Path
 from typing import Any, Iterator
@@ -18,8 +17,9 @@ import numpy as np
 
 from ..errors import SkelInputError
 from ..io.atomic import atomic_open
+from ..io.json_numbers import json_float, json_safe
 
-__all__ = ["Store", "json_float"]
+__all__ = ["Store", "json_float"]  # json_float: from skelcore.io.json_numbers, re-exported
 
 
 class Store:
@@ -62,7 +62,7 @@ class Store:
                 np.savez_compressed(fh, **arrays)
             rec["arrays"] = self.npz_path(key).name
         with atomic_open(self.json_path(key), "w", inputs=self.inputs) as fh:
-            json.dump(_json_safe(rec), fh, indent=1)
+            json.dump(json_safe(rec), fh, indent=1)
             fh.write("\n")
 
     def arrays(self, key: str) -> dict[str, np.ndarray]:
@@ -81,24 +81,3 @@ class Store:
             if rec is not None:
                 yield rec
 
-
-def _json_safe(obj: Any) -> Any:
-    if isinstance(obj, dict):
-        return {k: _json_safe(v) for k, v in obj.items()}
-    if isinstance(obj, (list, tuple)):
-        return [_json_safe(v) for v in obj]
-    if isinstance(obj, (float, np.floating)):
-        v = float(obj)
-        return None if v != v else ("inf" if v == float("inf") else "-inf" if v == float("-inf") else v)
-    if isinstance(obj, np.integer):
-        return int(obj)
-    return obj
-
-
-def json_float(v: Any) -> float:
-    """A score as the JSON records hold it: a number, None (NaN) or "inf" / "-inf"."""
-    if v is None:
-        return math.nan
-    if isinstance(v, str):
-        return {"inf": math.inf, "-inf": -math.inf}.get(v, math.nan)
-    return float(v)

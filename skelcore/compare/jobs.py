@@ -199,7 +199,7 @@ def scores_from_doc(doc: dict[str, Any] | None) -> dict[str, float]:
 def _arrays(ev: Any) -> dict[str, np.ndarray]:
     """The local values the report draws (float32 coordinates, NaN kept), and the whole evaluation
     at full precision for the viewer (:mod:`.job_evaluation`)."""
-    from .job_evaluation import evaluation_arrays
+    from ..io.evaluation_files import evaluation_arrays
 
     f32 = lambda a: np.asarray(a, dtype=np.float32)  # noqa: E731
     out = {"cloud": f32(ev.cloud)}

@@ -17,16 +17,17 @@ from __future__ import annotations
 
 import heapq
 import os
+from dataclasses import dataclass
 
 import numpy as np
 
 from ..geometry import Checkpoint, matlab_round, nearest_neighbor_distances, no_checkpoint, unique_rows
 from ..parallel import polled_build
 from ..params import Params
-from ..evaluation import TopologyResult
 from . import _emst
 
 __all__ = [
+    "TopologyResult",
     "topological_similarity",
     "h0_barcode",
     "eps_star",
@@ -36,6 +37,19 @@ __all__ = [
 ]
 
 _THREADED_EMST = 16384  # smaller sets: the kernel runs on this thread (a few ms, no polling needed)
+
+
+@dataclass
+class TopologyResult:
+    """SPEC 1. Barcodes are (n, 2) arrays of (birth, death) in normalized units, longest first,
+    the infinite bar first with death = inf; every bar, not only the K compared ones."""
+
+    bottleneck: float
+    wasserstein: float
+    eps_star: float
+    n_bars: int
+    cloud_barcode: np.ndarray
+    skeletal_barcode: np.ndarray
 
 
 # ---------------------------------------------------------------------------------------------

@@ -53,14 +53,31 @@ def _imports(name: str, path: Path, known: set[str]) -> list[tuple[str, int, boo
     return out
 
 
-def _graph(package: str) -> tuple[dict[str, Path], dict[str, set[str]]]:
+# A public method kept on a lower module that hands its work to the module above it, imported inside the
+# method (never at module level): the only arrows allowed to point up, and they are no cycle at import time.
+LAZY_DELEGATIONS = {
+    ("skelcore.evaluation", "skelcore.io.evaluation_files"),  # Evaluation.write_json & co. (issue 21)
+}
+
+
+def _edges(package: str) -> tuple[dict[str, Path], list[tuple[str, str, int, bool]]]:
+    """(importer, imported, line, at module level) for every import between two modules of ``package``,
+    the lazy delegations imported inside a function left out."""
     mods = _modules(package)
     known = set(mods)
-    graph: dict[str, set[str]] = {m: set() for m in mods}
+    edges = []
     for name, path in mods.items():
-        for target, _line, _top in _imports(name, path, known):
-            if target in known and target != name:
-                graph[name].add(target)
+        for target, line, top in _imports(name, path, known):
+            if target in known and target != name and (top or (name, target) not in LAZY_DELEGATIONS):
+                edges.append((name, target, line, top))
+    return mods, edges
+
+
+def _graph(package: str) -> tuple[dict[str, Path], dict[str, set[str]]]:
+    mods, edges = _edges(package)
+    graph: dict[str, set[str]] = {m: set() for m in mods}
+    for name, target, _line, _top in edges:
+        graph[name].add(target)
     return mods, graph
 
 
@@ -110,6 +127,97 @@ def test_no_import_cycles(package):
 def test_the_cycle_finder_finds_a_cycle():
     assert _cycles({"a": {"b"}, "b": {"c"}, "c": {"a"}, "d": {"a"}}) == [["a", "b", "c"]]
     assert _cycles({"a": {"b"}, "b": set()}) == []
+
+
+# The engine's layers, bottom to top, and the lower layers each may import (its own always; an import
+# inside a function counts too, the LAZY_DELEGATIONS aside):
+#   foundation        errors, version, params, geometry, parallel, curve, curve_sampling, correspondence,
+#                     trust, colors, shapes                                       -> nothing else
+#   formats           skelcore.io: readers and writers of file formats, atomic writes, JSON numbers
+#                                                                                 -> foundation
+#   skeletonizer      skelcore.skeleton                                           -> foundation
+#   metrics           skelcore.metrics (each result type beside its metric)       -> foundation
+#   record            the Evaluation (skelcore.evaluation, its old name results)  -> foundation, metrics
+#   stages            skelcore.evaluate (the pipeline)                            -> foundation, metrics, record
+#   evaluation files  io.evaluation_files (JSON, CSVs, npz of an Evaluation), io.export (coloured PLY)
+#                                                             -> foundation, formats, metrics, record
+#   applications      skelcore.compare, skelcore.experiments  -> every layer above this line
+#   entry points      skelcore.cli, skelcore.__main__, the package facade skelcore/__init__ -> every layer
+# So: metrics never import the record, the stages or the evaluation files; the record imports no io; the
+# format readers and writers import no metric; compare and the CLI sit on top. A pattern "x.*" is the
+# package x and everything in it, any other an exact module; a module's layer is its longest pattern.
+_BELOW_APPS = ["foundation", "formats", "skeletonizer", "metrics", "record", "stages", "evaluation files"]
+LAYERS: dict[str, tuple[list[str], list[str]]] = {
+    "foundation": ([f"skelcore.{m}" for m in ("errors", "version", "params", "geometry", "parallel", "curve",
+                                              "curve_sampling", "correspondence", "trust", "colors", "shapes")], []),
+    "formats": (["skelcore.io.*"], ["foundation"]),
+    "skeletonizer": (["skelcore.skeleton.*"], ["foundation"]),
+    "metrics": (["skelcore.metrics.*"], ["foundation"]),
+    "record": (["skelcore.evaluation", "skelcore.results"], ["foundation", "metrics"]),
+    "stages": (["skelcore.evaluate.*"], ["foundation", "metrics", "record"]),
+    "evaluation files": (["skelcore.io.evaluation_files", "skelcore.io.export"],
+                         ["foundation", "formats", "metrics", "record"]),
+    "applications": (["skelcore.compare.*", "skelcore.experiments.*"], _BELOW_APPS),
+    "entry points": (["skelcore", "skelcore.__main__", "skelcore.cli.*"], [*_BELOW_APPS, "applications"]),
+}
+
+
+def _layer_of(module: str) -> str | None:
+    best, best_len = None, -1
+    for layer, (patterns, _may) in LAYERS.items():
+        for pattern in patterns:
+            stem = pattern[:-2] if pattern.endswith(".*") else pattern
+            hit = module == stem or (pattern.endswith(".*") and module.startswith(stem + "."))
+            if hit and len(stem) > best_len:
+                best, best_len = layer, len(stem)
+    return best
+
+
+def _upward_arrows(edges: list[tuple[str, str, int, bool]]) -> list[str]:
+    bad = []
+    for name, target, line, _top in edges:
+        src, dst = _layer_of(name), _layer_of(target)
+        if src != dst and dst not in LAYERS[src][1]:
+            bad.append(f"{name}:{line} ({src}) imports {target} ({dst})")
+    return bad
+
+
+def test_every_engine_module_has_a_layer():
+    mods, _edges_ = _edges("skelcore")
+    assert [m for m in mods if _layer_of(m) is None] == []
+
+
+def test_no_arrow_runs_up_the_layers():
+    _mods, edges = _edges("skelcore")
+    assert _upward_arrows(edges) == []
+
+
+def test_the_layer_check_finds_an_upward_arrow():
+    """What issue 21 removed would be caught: a metric importing the record, the record importing io,
+    a format reader importing a metric, an engine module importing compare."""
+    edges = [("skelcore.metrics.topology", "skelcore.evaluation", 26, True),
+             ("skelcore.evaluation", "skelcore.io.atomic", 19, True),
+             ("skelcore.io.loaders", "skelcore.metrics.coverage", 1, False),
+             ("skelcore.evaluate", "skelcore.compare.jobs", 1, False),
+             ("skelcore.metrics.coverage", "skelcore.geometry", 1, True),
+             ("skelcore.compare.jobs", "skelcore.io.evaluation_files", 1, False)]
+    assert [b.split(":")[0] for b in _upward_arrows(edges)] == [
+        "skelcore.metrics.topology", "skelcore.evaluation", "skelcore.io.loaders", "skelcore.evaluate"]
+    assert _layer_of("skelcore.evaluation") == "record" and _layer_of("skelcore.evaluate.stages") == "stages"
+    assert _layer_of("skelcore.io.evaluation_files") == "evaluation files" and _layer_of("skelcore.io.ply") == "formats"
+
+
+def test_lazy_delegations_are_imported_inside_functions_only():
+    """An arrow of LAZY_DELEGATIONS at module level is kept in the graph (and fails the cycle and layer
+    tests); each listed delegation exists."""
+    mods = _modules("skelcore")
+    found = set()
+    for name, target in LAZY_DELEGATIONS:
+        for imported, line, top in _imports(name, mods[name], set(mods)):
+            if imported == target:
+                assert not top, f"{name}:{line} imports {target} at module level"
+                found.add((name, target))
+    assert found == LAZY_DELEGATIONS
 
 
 def test_skelcore_never_imports_gui_or_plotting_at_module_level():
