@@ -198,7 +198,7 @@ def scores_from_doc(doc: dict[str, Any] | None) -> dict[str, float]:
 
 def _arrays(ev: Any) -> dict[str, np.ndarray]:
     """The local values the report draws (float32 coordinates, NaN kept), and the whole evaluation
-    at full precision for the viewer (:mod:`.job_evaluation`)."""
+    at full precision for the viewer (:mod:`skelcore.io.evaluation_files`)."""
     from ..io.evaluation_files import evaluation_arrays
 
     f32 = lambda a: np.asarray(a, dtype=np.float32)  # noqa: E731
