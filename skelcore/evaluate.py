@@ -397,7 +397,7 @@ def _skeletal_result(ev, got: dict, skel, mode, index) -> SkeletalLocal:
     if mode == "none":
         reason = (f"the skeletal set has {len(skel)} points and the cloud {len(ev.cloud)}; "
                   "give a skeletal index or use reverse correspondence")
-        ev.not_computed = {"topology": reason, "skeletal centeredness": reason}
+        ev.not_computed = {"topology": reason, "skeletal centeredness": reason, **ev.not_computed}
         c_raw = np.full(len(skel), np.nan)
     else:
         ev.topology = got["topology"]
