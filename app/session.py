@@ -27,7 +27,7 @@ def preload_engine() -> None:
     once the window is up: the start-up does without them, and the first evaluation need not wait."""
 
     def load() -> None:
-        import skelcore.evaluate  # noqa: F401
+        import skelcore.stages  # noqa: F401
 
     threading.Thread(target=load, name="skelscope-preload-engine", daemon=True).start()
 

@@ -248,13 +248,15 @@ def cancel_in_every_stage(stages: tuple[str, ...] = CANCEL_STAGES, into: float =
     ``stop_wait`` s), longest event-loop turn while the stage ran, stand-in used)."""
     import importlib
 
-    ev_mod = importlib.import_module("skelcore.evaluate")
-    real_boundedness = ev_mod.boundedness
+    # the stages' and the trust checks' boundedness (skelcore/stages/)
+    ev_mods = [importlib.import_module(f"skelcore.stages.{m}") for m in ("catalogue", "assemble")]
+    real_boundedness = ev_mods[0].boundedness
     app, w, _ = _million_window(1_000_000)
     out = []
     for target in stages:
         stand_in = target in CANCEL_STAGES[CANCEL_STAGES.index("skeletal boundedness") + 1:]
-        ev_mod.boundedness = _stand_in_boundedness if stand_in else real_boundedness
+        for ev_mod in ev_mods:
+            ev_mod.boundedness = _stand_in_boundedness if stand_in else real_boundedness
         assert w.session.start_evaluation()
         task = w.session.runner._current
         t_start = time.perf_counter()
@@ -270,7 +272,8 @@ def cancel_in_every_stage(stages: tuple[str, ...] = CANCEL_STAGES, into: float =
         stopped = time.perf_counter() - t0 if task.wait(stop_wait * 1000) else None
         out.append((target, stage, label, reached, t0 - t_in, idle, stopped, gap, stand_in))
         _pump(app, 0.5)
-    ev_mod.boundedness = real_boundedness
+    for ev_mod in ev_mods:
+        ev_mod.boundedness = real_boundedness
     w.close()
     return out
 

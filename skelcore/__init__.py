@@ -7,9 +7,6 @@ the viewer reads a cloud and draws its first frame without scipy's KD-trees and 
 
 from __future__ import annotations
 
-import sys
-import types
-
 from .version import __version__
 
 from .curve import CurveSkeleton
@@ -32,7 +29,7 @@ __all__ = [
     "skeletonize",
 ]
 
-_LAZY = {"evaluate": ".evaluate", "Evaluation": ".results", "shapes": ".shapes", "skeletonize": ".skeleton",
+_LAZY = {"evaluate": ".stages", "Evaluation": ".evaluation", "shapes": ".shapes", "skeletonize": ".skeleton",
          **dict.fromkeys(("load_cloud", "load_points", "load_curve", "load_any", "write_points_ply",
                           "write_curve_ply"), ".io")}
 
@@ -45,11 +42,3 @@ def __getattr__(name: str):
     module = importlib.import_module(_LAZY[name], __name__)
     return module if name == "shapes" else getattr(module, name)
 
-
-class _Package(types.ModuleType):
-    def __setattr__(self, name: str, value: object) -> None:
-        # Importing the submodule ``skelcore.evaluate`` sets this attribute: the function stays.
-        super().__setattr__(name, value.evaluate if name == "evaluate" and isinstance(value, types.ModuleType) else value)
-
-
-sys.modules[__name__].__class__ = _Package

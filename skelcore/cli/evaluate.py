@@ -69,7 +69,7 @@ def _check_outputs(args: argparse.Namespace, guard: tuple[str, ...]) -> None:
 
 def run_evaluate(args: argparse.Namespace) -> int:
     from .. import io
-    from ..evaluate import evaluate
+    from ..stages import evaluate
     from ..io.correspondence_files import load_skeletal, load_skeletal_index
     from ..io.export import export_ply
 

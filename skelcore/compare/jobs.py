@@ -122,7 +122,7 @@ def execute(job: Job, workdir: str | None = None, *, prefix: str = "", write_clo
     command's ``{prefix}skeletal.ply`` / ``{prefix}curve.ply``. ``cloud`` skips reading the shape.
     """
     from .. import io
-    from ..evaluate import evaluate
+    from ..stages import evaluate
     from .methods import read_files, run_builtin, run_command
 
     def part(lo: float, hi: float) -> Progress | None:

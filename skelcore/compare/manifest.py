@@ -280,7 +280,7 @@ def _with_correspondence(spec: MethodSpec, value: Any, where: str, fail) -> Meth
     import dataclasses
     import inspect
 
-    from ..evaluate import evaluate
+    from ..stages import evaluate
 
     if "correspondence" not in inspect.signature(evaluate).parameters:
         fail(f"{where}: this skelcore's evaluate() has no correspondence option")

@@ -13,7 +13,7 @@ from pathlib import Path
 import pytest
 
 ROOT = Path(__file__).resolve().parents[2]
-ENGINE_ONLY = ("skelcore.evaluate", "skelcore.evaluation", "skelcore.metrics", "skelcore.experiments", "scipy.spatial",
+ENGINE_ONLY = ("skelcore.stages", "skelcore.evaluation", "skelcore.metrics", "skelcore.experiments", "scipy.spatial",
                "scipy.sparse", "sklearn", "gudhi", "pandas", "numba")
 
 
@@ -23,12 +23,12 @@ def _python(code: str, *args: str, timeout: float = 300) -> subprocess.Completed
                           cwd=ROOT, env=env, timeout=timeout)
 
 
-def test_skelcore_imports_its_metrics_on_first_use_and_evaluate_stays_the_function():
+def test_skelcore_imports_its_metrics_on_first_use_and_evaluate_is_the_function():
     out = _python(f"""
         import sys
         import skelcore, skelcore.io
         print(sorted(m for m in {ENGINE_ONLY!r} if m in sys.modules))
-        from skelcore.evaluate import CORRESPONDENCE_CHOICES  # the submodule first: it must not hide the function
+        from skelcore.stages import CORRESPONDENCE_CHOICES  # the stages first: skelcore.evaluate stays the function
         from skelcore import evaluate, shapes, Evaluation, skeletonize, load_cloud
         print(callable(skelcore.evaluate), skelcore.evaluate is evaluate, evaluate.__module__, shapes.__name__,
               Evaluation.__name__, callable(skeletonize), callable(load_cloud))
@@ -38,7 +38,7 @@ def test_skelcore_imports_its_metrics_on_first_use_and_evaluate_stays_the_functi
     assert out.returncode == 0, out.stderr
     lines = out.stdout.splitlines()
     assert lines[0] == "[]"
-    assert lines[1] == "True True skelcore.evaluate skelcore.shapes Evaluation True True"
+    assert lines[1] == "True True skelcore.stages.orchestrate skelcore.shapes Evaluation True True"
     assert lines[2] == "Evaluation"
 
 

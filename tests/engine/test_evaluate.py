@@ -67,6 +67,18 @@ def test_unbounded_points_get_zero_centeredness():
     assert np.all(ev.skeletal.centeredness(0.75)[:50] == 0.0)
 
 
+def test_without_correspondence_a_cloud_above_coverage_max_points_keeps_every_reason():
+    """Issue 21: the skeletal column's reasons (no correspondence) and coverage's (too many points) are
+    both reported; the first used to replace the second."""
+    sh = shapes.cylinder(400, seed=2)
+    ev = evaluate(sh.cloud, sh.skeletal[::8], params=Params(coverage_max_points=100))
+    assert ev.correspondence == "none" and len(ev.skeletal.points) == 50
+    assert set(ev.not_computed) == {"topology", "skeletal centeredness", "coverage"}
+    assert "coverage_max_points = 100" in ev.not_computed["coverage"]
+    assert ev.topology is None and ev.coverage_skeletal is None
+    assert set(ev.to_json_dict()["not_computed"]) == {"topology", "skeletal centeredness", "coverage"}
+
+
 def test_junction_vertex_smoothness_is_nan_not_zero():
     sh = shapes.y_shape(3000, seed=1)
     ev = evaluate(sh.cloud, curve=(sh.curve_vertices, sh.curve_edges))

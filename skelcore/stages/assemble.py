@@ -1,0 +1,96 @@
+"""The Evaluation from the stages' results: the skeletal and curve columns (local values in the user's
+units, SPEC 2-4), coverage, the reference comparison, what was not computed, and the trust checks
+(frame, frame fit, smoothness, no correspondence; docs/metrics.md) run after the stages."""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+
+from ..correspondence import aggregate_rows
+from ..evaluation import CurveLocal, Evaluation, SkeletalLocal
+from ..geometry import Checkpoint
+from ..metrics.boundedness import boundedness
+from ..trust import TrustWarning, frame_fit_warning, frame_warnings, no_correspondence_warning, smoothness_warning
+from .context import EvalContext
+
+__all__ = ["assemble", "trust_warnings"]
+
+
+def assemble(ctx: EvalContext, inputs: dict[str, Any] | None = None) -> Evaluation:
+    """The Evaluation of ``ctx`` once every selected stage has stored its result (no trust checks)."""
+    got = ctx.results
+    ev = Evaluation(params=ctx.params, normalization=ctx.norm, cloud=ctx.cloud, inputs=dict(inputs or {}),
+                    correspondence=ctx.mode, not_computed=dict(ctx.not_computed))
+    ev.topology = got.get("topology")
+    if ctx.skeletal is not None:
+        ev.skeletal = _skeletal_local(ctx, ctx.skeletal, ctx.mode, ctx.index)
+    if ctx.curve is not None:
+        samples = ctx.samples
+        s_v, (s_overall, s_count) = got["curve smoothness"]
+        ev.curve = CurveLocal(
+            curve=ctx.curve,
+            samples=ctx.norm.invert(samples.points),
+            sample_edge=samples.edge,
+            sample_t=samples.t,
+            sample_boundedness=got["curve boundedness"],
+            sample_centeredness_raw=got["curve centeredness"],
+            vertex_degree=ctx.curve.degrees(),
+            vertex_smoothness=s_v,
+            smoothness_overall=float(s_overall),
+            smoothness_count=int(s_count),
+        )
+    if ctx.from_curve:
+        ev.skeletal = _skeletal_local(ctx, ctx.norm.invert(got["correspondence"]), "pointwise", None)
+        ev.skeletal.source = "curve"
+    ev.coverage_skeletal = got.get("skeletal coverage")
+    ev.coverage_curve = got.get("curve coverage")
+    ev.reference = got.get("reference")
+    return ev
+
+
+def _skeletal_local(ctx: EvalContext, points: np.ndarray, mode: str | None, index: np.ndarray | None) -> SkeletalLocal:
+    """The skeletal column; under reverse correspondence the per-row centeredness is averaged per point."""
+    got = ctx.results
+    rows = c_rows = None
+    if mode == "none":
+        c_raw = np.full(len(points), np.nan)
+    elif mode == "reverse":
+        rows, c_rows = got["correspondence"], got["skeletal centeredness"]
+        c_raw = aggregate_rows(c_rows, rows, len(points))
+    else:
+        c_raw = got["skeletal centeredness"]
+    return SkeletalLocal(
+        points=points, boundedness=got["skeletal boundedness"], centeredness_raw=c_raw,
+        smoothness=got["skeletal smoothness"], rows=rows, centeredness_rows_raw=c_rows,
+        centeredness_available=mode != "none", index=index,
+    )  # fmt: skip
+
+
+def trust_warnings(ctx: EvalContext, ev: Evaluation, checkpoint: Checkpoint) -> list[TrustWarning]:
+    """SkelScope's trust checks on the given skeletons (docs/metrics.md); ``checkpoint`` is only
+    reached by the rare frame-fit re-runs of boundedness."""
+    p, cloud = ctx.params, ctx.cloud
+
+    def bounded_fraction(points_user: np.ndarray) -> float:
+        beta = boundedness(ctx.cloud_n, ctx.norm.apply(points_user), params=p, checkpoint=checkpoint)
+        return float(np.mean(beta > p.beta_star))
+
+    out: list[TrustWarning] = []
+    if ctx.skeletal is not None:
+        found = frame_warnings(cloud, ctx.skeletal, "skeletal point set", p)
+        if not found:
+            now = float(np.mean(ev.skeletal.boundedness > p.beta_star))
+            found = frame_fit_warning(cloud, ctx.skeletal, now, bounded_fraction, "skeletal point set", p)
+        out += found
+    if ctx.curve is not None:
+        found = frame_warnings(cloud, ctx.curve.vertices, "curve skeleton", p)
+        if not found:
+            now = float(np.mean(ev.curve.sample_boundedness > p.beta_star))
+            found = frame_fit_warning(cloud, ev.curve.samples, now, bounded_fraction, "curve skeleton", p)
+        out += found
+        out += smoothness_warning(ev.curve.vertex_degree)
+    if ctx.mode == "none":
+        out.append(no_correspondence_warning(len(ctx.skeletal), len(cloud)))
+    return out

@@ -1,0 +1,191 @@
+"""The stages of an evaluation, declared once (issue 21): each names its weight (relative cost, for a
+progress bar that moves evenly; measured on 4k-point shapes), the column it fills, what it reads from
+the context (the stage that makes an input runs before it), when it applies and its function.
+
+The paper's four metrics on the skeletal set and the curve (SPEC 1-4), the reverse correspondence,
+SkelScope's coverage and the reference comparison (docs/metrics.md).  Start order (docs/performance.md
+8): the boundedness stages first (the longest), then what others wait for, then the rest in catalogue
+order, the curve's boundedness last when the skeletal set's runs.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Callable
+
+import numpy as np
+
+from ..correspondence import densify_curve, project_onto_curve, reverse_projection
+from ..geometry import Checkpoint
+from ..metrics.boundedness import boundedness
+from ..metrics.centeredness import curve_centeredness, skeletal_centeredness
+from ..metrics.coverage import coverage
+from ..metrics.reference import compare_with_reference
+from ..metrics.smoothness import curve_smoothness_overall, curve_vertex_smoothness, skeletal_smoothness
+from ..metrics.topology import topological_similarity
+from .context import EvalContext
+
+__all__ = ["Stage", "CATALOGUE", "select", "start_order", "FIRST", "EARLY", "IN_TURN", "LAST"]
+
+#: start groups (list scheduling: the longest first so that the other thread takes the rest beside it)
+FIRST, EARLY, IN_TURN, LAST = range(4)
+
+
+@dataclass(frozen=True)
+class Stage:
+    """One stage: ``fn(ctx, checkpoint)`` returns its result, stored as ``ctx.results[name]``."""
+
+    name: str
+    weight: float
+    column: str  # "skeletal" | "curve" | "" (coverage, reference: after both columns)
+    inputs: tuple[str, ...]  # context items it reads (context.CONTEXT_ITEMS)
+    applies: Callable[[EvalContext], bool]
+    fn: Callable[[EvalContext, Checkpoint], object]
+    start: int | Callable[[EvalContext], int] = IN_TURN  # start group, or a function of the context
+
+    def start_group(self, ctx: EvalContext) -> int:
+        return self.start(ctx) if callable(self.start) else self.start
+
+    def after(self, ctx: EvalContext) -> tuple[str, ...]:
+        """The stages that make its inputs in this evaluation."""
+        return tuple(dict.fromkeys(s for s in map(ctx.made_by, self.inputs) if s is not None))
+
+
+# ---- the stages' functions --------------------------------------------------------------------
+
+def _correspondence(ctx: EvalContext, checkpoint: Checkpoint) -> np.ndarray:
+    """Reverse correspondence: each cloud row's nearest skeletal row, or its projection onto the curve."""
+    if ctx.from_curve:
+        return project_onto_curve(ctx.cloud_n, ctx.curve_n)[0]
+    return reverse_projection(ctx.cloud_n, ctx.skeletal_n)
+
+
+def _topology(ctx: EvalContext, checkpoint: Checkpoint):
+    pointwise = ctx.skeletal_points()[ctx.rows()] if ctx.skeletal_mode == "reverse" else ctx.skeletal_points()
+    return topological_similarity(ctx.cloud_n, pointwise, params=ctx.params, checkpoint=checkpoint)
+
+
+def _skeletal_boundedness(ctx: EvalContext, checkpoint: Checkpoint) -> np.ndarray:
+    return boundedness(ctx.cloud_n, ctx.skeletal_points(), params=ctx.params, checkpoint=checkpoint)
+
+
+def _skeletal_centeredness(ctx: EvalContext, checkpoint: Checkpoint) -> np.ndarray:
+    """Per skeletal point, or per cloud row under reverse correspondence (aggregated by the assembly)."""
+    if ctx.skeletal_mode == "reverse":
+        return skeletal_centeredness(ctx.cloud_n, ctx.skeletal_points()[ctx.rows()], params=ctx.params,
+                                     checkpoint=checkpoint)
+    corr_cloud = ctx.cloud_n if ctx.index is None else ctx.cloud_n[ctx.index]
+    return skeletal_centeredness(corr_cloud, ctx.skeletal_points(), params=ctx.params, checkpoint=checkpoint)
+
+
+def _skeletal_smoothness(ctx: EvalContext, checkpoint: Checkpoint) -> np.ndarray:
+    return skeletal_smoothness(ctx.skeletal_points(), params=ctx.params, checkpoint=checkpoint)
+
+
+def _curve_boundedness(ctx: EvalContext, checkpoint: Checkpoint) -> np.ndarray:
+    return boundedness(ctx.cloud_n, ctx.samples.points, params=ctx.params, checkpoint=checkpoint)
+
+
+def _curve_centeredness(ctx: EvalContext, checkpoint: Checkpoint) -> np.ndarray:
+    return curve_centeredness(ctx.cloud_n, ctx.samples.points, ctx.samples.directions, params=ctx.params,
+                              checkpoint=checkpoint)
+
+
+def _curve_smoothness(ctx: EvalContext, checkpoint: Checkpoint) -> tuple:
+    """(per-vertex smoothness, (overall, count))."""
+    s = curve_vertex_smoothness(ctx.curve_n)
+    return s, curve_smoothness_overall(ctx.curve_n, s)
+
+
+def _skeletal_coverage(ctx: EvalContext, checkpoint: Checkpoint):
+    tau = ctx.tau(lambda f: checkpoint(0.1 * f))
+    return coverage(ctx.cloud_n, ctx.skeletal_n, ctx.params, tau, checkpoint=lambda f: checkpoint(0.1 + 0.9 * f))
+
+
+def _curve_coverage(ctx: EvalContext, checkpoint: Checkpoint):
+    """The curve densified to tau / coverage_tau_factor (at most 200k pieces) plus its vertices."""
+    p, curve_n = ctx.params, ctx.curve_n
+    tau = ctx.tau(lambda f: checkpoint(0.1 * f))
+    step = max(tau / p.coverage_tau_factor, float(curve_n.edge_lengths().sum()) / 200_000)
+    pts, _ = densify_curve(curve_n, step)
+    return coverage(ctx.cloud_n, np.vstack([pts, curve_n.vertices]), p, tau,
+                    checkpoint=lambda f: checkpoint(0.1 + 0.9 * f))
+
+
+def _reference(ctx: EvalContext, checkpoint: Checkpoint):
+    return compare_with_reference(ctx.curve_n, ctx.reference_n, ctx.tau(checkpoint))
+
+
+# ---- when they apply ----------------------------------------------------------------------------
+
+def _reverse(ctx: EvalContext) -> bool:
+    return ctx.mode == "reverse"
+
+
+def _skeletal(ctx: EvalContext) -> bool:
+    return ctx.has_skeletal_column
+
+
+def _skeletal_corresponded(ctx: EvalContext) -> bool:
+    return ctx.has_skeletal_column and ctx.skeletal_mode != "none"
+
+
+def _curve(ctx: EvalContext) -> bool:
+    return ctx.curve is not None
+
+
+def _skeletal_set_coverage(ctx: EvalContext) -> bool:
+    """Coverage of the given skeletal set only (not of the curve's projections)."""
+    return ctx.skeletal is not None and ctx.with_coverage
+
+
+def _curve_coverage_applies(ctx: EvalContext) -> bool:
+    return ctx.curve is not None and ctx.with_coverage
+
+
+def _reference_given(ctx: EvalContext) -> bool:
+    return ctx.reference_n is not None
+
+
+def _last_beside_skeletal(ctx: EvalContext) -> int:
+    # the curve's boundedness is a quarter of the skeletal one on the hammer; started second, it held
+    # the other thread while the rest waited
+    return LAST if ctx.skeletal is not None else FIRST
+
+
+CATALOGUE: tuple[Stage, ...] = (
+    Stage("correspondence", weight=0.3, column="skeletal", inputs=("cloud", "skeletal set", "curve"), applies=_reverse,
+          fn=_correspondence, start=EARLY),
+    Stage("topology", weight=1.0, column="skeletal", inputs=("cloud", "skeletal points", "rows"),
+          applies=_skeletal_corresponded, fn=_topology),
+    Stage("skeletal boundedness", weight=4.0, column="skeletal", inputs=("cloud", "skeletal points"), applies=_skeletal,
+          fn=_skeletal_boundedness, start=FIRST),
+    Stage("skeletal centeredness", weight=0.5, column="skeletal", inputs=("cloud", "skeletal points", "rows", "index"),
+          applies=_skeletal_corresponded, fn=_skeletal_centeredness),
+    Stage("skeletal smoothness", weight=0.5, column="skeletal", inputs=("skeletal points",), applies=_skeletal,
+          fn=_skeletal_smoothness),
+    Stage("curve boundedness", weight=1.0, column="curve", inputs=("cloud", "samples"), applies=_curve,
+          fn=_curve_boundedness, start=_last_beside_skeletal),
+    Stage("curve centeredness", weight=1.0, column="curve", inputs=("cloud", "samples"), applies=_curve,
+          fn=_curve_centeredness),
+    Stage("curve smoothness", weight=0.1, column="curve", inputs=("curve",), applies=_curve, fn=_curve_smoothness),
+    Stage("skeletal coverage", weight=0.3, column="", inputs=("cloud", "skeletal set", "tau"),
+          applies=_skeletal_set_coverage, fn=_skeletal_coverage),
+    Stage("curve coverage", weight=0.3, column="", inputs=("cloud", "curve", "tau"), applies=_curve_coverage_applies,
+          fn=_curve_coverage),
+    Stage("reference", weight=0.1, column="", inputs=("curve", "reference", "tau"), applies=_reference_given,
+          fn=_reference),
+)
+
+
+def select(ctx: EvalContext) -> list[Stage]:
+    """The stages that apply, in catalogue order; the curve's column first when the skeletal column is
+    made from it (this order sums the progress)."""
+    columns = ("curve", "skeletal", "") if ctx.from_curve else ("skeletal", "curve", "")
+    return sorted((s for s in CATALOGUE if s.applies(ctx)), key=lambda s: columns.index(s.column))
+
+
+def start_order(stages: list[Stage], ctx: EvalContext) -> list[Stage]:
+    """The order they are started in (:func:`skelcore.parallel.run_graph` takes the first ready one;
+    with one worker, the order they run in)."""
+    return sorted(stages, key=lambda s: s.start_group(ctx))

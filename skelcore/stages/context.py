@@ -1,0 +1,178 @@
+"""What the stages of an evaluation share (issue 21): the checked and normalized inputs, the curve's
+samples, which correspondence the skeletal column has, what cannot be computed and why, tau, and each
+stage's result as soon as it is done.  :func:`build_context` checks the inputs (one-line
+:class:`SkelInputError`) and makes the decisions once, so the stages only read them.
+"""
+
+from __future__ import annotations
+
+import threading
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+from ..curve import CurveSkeleton
+from ..curve_sampling import CurveSamples, sample_curve
+from ..errors import SkelInputError
+from ..geometry import Checkpoint, Normalization, as_points
+from ..metrics.coverage import coverage_tau
+from ..params import Params
+
+__all__ = ["EvalContext", "build_context", "CORRESPONDENCE_CHOICES", "CONTEXT_ITEMS"]
+
+#: ``correspondence=`` choices of :func:`skelcore.evaluate`
+CORRESPONDENCE_CHOICES = ("auto", "reverse")
+
+#: What a stage may read from the context (its ``inputs``): "skeletal set" is the one given, "skeletal
+#: points" the one the skeletal column scores (the curve's projections, made by the correspondence stage,
+#: when no set is given), "rows" the reverse correspondence (made by that stage too).
+CONTEXT_ITEMS = ("cloud", "skeletal set", "skeletal points", "rows", "index", "curve", "samples", "reference", "tau")
+
+
+@dataclass
+class EvalContext:
+    """Inputs in the user's units and normalized (``_n``, SPEC 0), the decisions made from them, and
+    ``results``: each stage's result by stage name (written by the orchestrator as a stage ends)."""
+
+    params: Params
+    cloud: np.ndarray
+    norm: Normalization
+    cloud_n: np.ndarray
+    #: the skeletal column's correspondence (``Evaluation.correspondence``): "pointwise" | "index" |
+    #: "reverse" | "none", None without a skeletal column
+    mode: str | None
+    skeletal: np.ndarray | None = None
+    skeletal_n: np.ndarray | None = None
+    index: np.ndarray | None = None
+    curve: CurveSkeleton | None = None
+    curve_n: CurveSkeleton | None = None
+    samples: CurveSamples | None = None
+    reference_n: CurveSkeleton | None = None
+    #: SkelScope's coverage is exact and grows about as N^1.4 on tubes: only up to coverage_max_points
+    with_coverage: bool = True
+    not_computed: dict[str, str] = field(default_factory=dict)
+    results: dict[str, Any] = field(default_factory=dict)
+    _tau: list[float] = field(default_factory=list, repr=False)
+    _tau_lock: threading.Lock = field(default_factory=threading.Lock, repr=False)
+
+    @property
+    def from_curve(self) -> bool:
+        """The skeletal column is scored on the cloud's projections onto the curve (reverse, no set)."""
+        return self.skeletal is None and self.mode == "reverse"
+
+    @property
+    def has_skeletal_column(self) -> bool:
+        return self.skeletal is not None or self.from_curve
+
+    @property
+    def skeletal_mode(self) -> str | None:
+        """The correspondence the skeletal stages see: the curve's projections are pointwise."""
+        return "pointwise" if self.from_curve else self.mode
+
+    def made_by(self, item: str) -> str | None:
+        """The stage that makes a context item, None when it is there from the start."""
+        if item not in CONTEXT_ITEMS:
+            raise KeyError(f"unknown context item {item!r}")
+        if item == "skeletal points" and self.from_curve:
+            return "correspondence"
+        if item == "rows" and self.skeletal_mode == "reverse":
+            return "correspondence"
+        return None
+
+    def skeletal_points(self) -> np.ndarray:
+        """The normalized skeletal set the skeletal stages score."""
+        return self.results["correspondence"] if self.from_curve else self.skeletal_n
+
+    def rows(self) -> np.ndarray:
+        """Reverse correspondence: the skeletal row of every cloud row."""
+        return self.results["correspondence"]
+
+    def tau(self, checkpoint: Checkpoint) -> float:
+        """Coverage's tau (the cloud's spacing, one kNN pass), computed by the first stage that asks, so
+        that a cancel is seen during it too (docs/metrics.md)."""
+        with self._tau_lock:
+            if not self._tau:
+                self._tau.append(coverage_tau(self.cloud_n, self.params, checkpoint))
+            return self._tau[0]
+
+
+def build_context(
+    cloud: np.ndarray,
+    skeletal: np.ndarray | None,
+    curve: CurveSkeleton | tuple | None,
+    params: Params,
+    *,
+    skeletal_index: np.ndarray | None,
+    correspondence: str,
+    reference_curve: CurveSkeleton | tuple | None,
+) -> EvalContext:
+    """Check the inputs of :func:`skelcore.evaluate`, normalize them (SPEC 0) and decide the
+    correspondence, coverage and what cannot be computed."""
+    if correspondence not in CORRESPONDENCE_CHOICES:
+        raise SkelInputError(f"correspondence must be one of {', '.join(CORRESPONDENCE_CHOICES)}, got {correspondence!r}")
+    cloud = as_points("cloud", cloud)
+    if len(cloud) < 2:
+        raise SkelInputError("cloud: at least 2 points are needed")
+    try:
+        norm = Normalization.from_cloud(cloud, params.normalize_by, params.normalized_size)
+    except ValueError:
+        raise SkelInputError("cloud: all points coincide") from None
+    ctx = EvalContext(params=params, cloud=cloud, norm=norm, cloud_n=norm.apply(cloud), mode=None)
+
+    if skeletal is not None:
+        ctx.skeletal = as_points("skeletal point set", skeletal)
+        ctx.skeletal_n = norm.apply(ctx.skeletal)
+        if correspondence == "reverse":
+            if skeletal_index is not None:
+                raise SkelInputError("give either a skeletal index or reverse correspondence, not both")
+            ctx.mode = "reverse"
+        elif skeletal_index is not None:
+            ctx.index = _check_index(skeletal_index, len(ctx.skeletal), len(cloud))
+            ctx.mode = "index"
+        else:
+            ctx.mode = "pointwise" if len(ctx.skeletal) == len(cloud) else "none"
+    elif skeletal_index is not None:
+        raise SkelInputError("a skeletal index needs a skeletal point set")
+
+    if curve is not None:
+        ctx.curve = curve if isinstance(curve, CurveSkeleton) else CurveSkeleton.from_raw(*curve)
+    if correspondence == "reverse" and skeletal is None:
+        if ctx.curve is None:
+            raise SkelInputError("reverse correspondence needs a skeletal point set or a curve skeleton")
+        ctx.mode = "reverse"
+    if reference_curve is not None:
+        if ctx.curve is None:
+            raise SkelInputError("a reference curve is compared with a curve skeleton: give one")
+        ref = reference_curve if isinstance(reference_curve, CurveSkeleton) else CurveSkeleton.from_raw(*reference_curve)
+        ctx.reference_n = ref.transformed(norm.apply)
+    if ctx.curve is not None:
+        ctx.curve_n = ctx.curve.transformed(norm.apply)
+        ctx.samples = sample_curve(ctx.curve_n, params.curve_samples, collinear_cos=params.collinear_cos)
+
+    if ctx.mode == "none":
+        reason = (f"the skeletal set has {len(ctx.skeletal)} points and the cloud {len(cloud)}; "
+                  "give a skeletal index or use reverse correspondence")
+        ctx.not_computed.update({"topology": reason, "skeletal centeredness": reason})
+    ctx.with_coverage = len(cloud) <= int(params.coverage_max_points)
+    if not ctx.with_coverage and (ctx.skeletal is not None or ctx.curve is not None):
+        ctx.not_computed["coverage"] = (
+            f"the cloud has {len(cloud):,} points, above coverage_max_points = {int(params.coverage_max_points):,} "
+            "(exact coverage of a skeletal set takes 15-45 s at 1M points on tube-like shapes; raise it with "
+            "--set coverage_max_points=N)"
+        )
+    return ctx
+
+
+def _check_index(skeletal_index: np.ndarray, n_skel: int, n_cloud: int) -> np.ndarray:
+    index = np.asarray(skeletal_index)
+    if index.dtype.kind not in "iu":
+        if index.dtype.kind != "f" or not np.all(np.isfinite(index)) or np.any(index != np.round(index)):
+            raise SkelInputError("skeletal index: cloud rows must be whole numbers")
+    index = index.astype(np.int64).ravel()
+    if index.shape != (n_skel,):
+        raise SkelInputError(f"skeletal index: has {len(index)} rows, needs one cloud row per skeletal point ({n_skel})")
+    if len(index) and (index.min() < 0 or index.max() >= n_cloud):
+        bad = int(index.min()) if index.min() < 0 else int(index.max())
+        raise SkelInputError(f"skeletal index: cloud row {bad} out of range (the cloud has {n_cloud} rows, 0-based)")
+    return index

@@ -1,0 +1,252 @@
+"""Golden outputs of ``skelcore.evaluate`` (issue 21, item 3): the cases, how one is recorded, and the
+writer of ``evaluate_golden.json``.
+
+Recorded from the code before the stages refactor so that ``tests/engine/test_evaluate_golden.py`` can
+show the refactor changes no value, bit for bit: per case the ``--json`` document (minus the timings and
+the version), a sha256 of every array of the Evaluation (local values, barcodes, coverage gaps, rows),
+the stages that ran (the timing keys), the stage labels in the order shown when the stages run one after
+the other (``workers=1``) and the last progress fraction.  The shared scans (hammer, apple tree at the
+paper's 0.02 grid, skeletons by ``skeletonize`` method "cao") are skipped when ../shared/data is absent.
+
+Run ``PYTHONPATH=. python tests/engine/golden/make_golden.py`` to rewrite the file (only when a change of
+values is intended, and say why in the commit).
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import sys
+from pathlib import Path
+from typing import Any, Callable
+
+import numpy as np
+
+HERE = Path(__file__).resolve().parent
+ROOT = HERE.parents[2]
+SAMPLES = ROOT / "resources" / "samples"
+SHARED = ROOT.parent / "shared" / "data"
+GOLDEN = HERE / "evaluate_golden.json"
+
+
+# ---- inputs ---------------------------------------------------------------------------------------
+
+def _sample(shape: str, kind: str = "") -> dict:
+    from skelcore.io import load_curve, load_points
+
+    pre = f"{shape}_{kind}_" if kind else f"{shape}_"
+    return {
+        "cloud": load_points(SAMPLES / f"{shape}_cloud.ply"),
+        "skeletal": load_points(SAMPLES / f"{pre}skeletal.ply"),
+        "curve": load_curve(SAMPLES / f"{pre}curve.ply"),
+    }
+
+
+_SHARED_CACHE: dict[str, tuple] = {}
+
+
+def _shared(name: str) -> dict:
+    """A shared scan and its "cao" skeletons (made once per process)."""
+    from skelcore import skeletonize
+    from skelcore.io import load_cloud
+    from skelcore.skeleton.degrade import voxel_grid_average
+
+    if name not in _SHARED_CACHE:
+        if name == "hammer":
+            cloud = load_cloud(SHARED / "hammer_4096.ply")
+        else:  # the paper's "synthetic tree": the apple tree averaged on a 0.02 grid (8936 points)
+            cloud = voxel_grid_average(load_cloud(SHARED / "apple_tree_22367.ply"), 0.02)[0]
+        skeletal, curve = skeletonize(cloud, method="cao")
+        _SHARED_CACHE[name] = (cloud, skeletal, curve)
+    cloud, skeletal, curve = _SHARED_CACHE[name]
+    return {"cloud": cloud, "skeletal": skeletal, "curve": curve}
+
+
+def _rows(n: int, step: int) -> np.ndarray:
+    return np.arange(0, n, step, dtype=np.int64)
+
+
+def _case(make: Callable[[], dict], shared: bool = False) -> dict:
+    return {"make": make, "shared": shared}
+
+
+def _cases() -> dict[str, dict]:
+    from skelcore import Params
+
+    def pointwise(shape, kind="", workers=None, **extra):
+        def make():
+            s = _sample(shape, kind)
+            return dict(cloud=s["cloud"], skeletal=s["skeletal"], curve=s["curve"], workers=workers, **extra)
+
+        return make
+
+    def index_mode():
+        s = _sample("yshape")
+        rows = _rows(len(s["cloud"]), 7)
+        return dict(cloud=s["cloud"], skeletal=s["skeletal"][rows], curve=s["curve"], skeletal_index=rows)
+
+    def reverse_with_set(workers=None):
+        def make():
+            s = _sample("yshape", "lbc")
+            return dict(cloud=s["cloud"], skeletal=s["skeletal"][::10], curve=s["curve"], correspondence="reverse",
+                        workers=workers)
+
+        return make
+
+    def reverse_curve_only(workers=None):
+        def make():
+            s = _sample("torus")
+            return dict(cloud=s["cloud"], curve=s["curve"], correspondence="reverse", workers=workers)
+
+        return make
+
+    def none_mode(params=Params()):
+        def make():
+            s = _sample("cylinder")
+            return dict(cloud=s["cloud"], skeletal=s["skeletal"][::10], curve=s["curve"], params=params)
+
+        return make
+
+    def with_reference():
+        s, ref = _sample("torus"), _sample("torus", "lbc")
+        return dict(cloud=s["cloud"], skeletal=s["skeletal"], curve=s["curve"], reference_curve=ref["curve"])
+
+    def curve_only():
+        s = _sample("cylinder", "lbc")
+        return dict(cloud=s["cloud"], curve=s["curve"], workers=1)
+
+    def skeletal_only():
+        s = _sample("torus", "lbc")
+        return dict(cloud=s["cloud"], skeletal=s["skeletal"], workers=1)
+
+    def shared(name, workers=None):
+        def make():
+            return dict(**_shared(name), workers=workers)
+
+        return make
+
+    no_cov = Params(coverage_max_points=1000)
+    return {
+        "cylinder": _case(pointwise("cylinder")),
+        "cylinder_w1": _case(pointwise("cylinder", workers=1)),
+        "cylinder_lbc_w1": _case(pointwise("cylinder", "lbc", workers=1)),
+        "cylinder_no_coverage": _case(pointwise("cylinder", params=no_cov)),
+        "torus": _case(pointwise("torus")),
+        "torus_lbc": _case(pointwise("torus", "lbc")),
+        "yshape": _case(pointwise("yshape")),
+        "yshape_lbc_w1": _case(pointwise("yshape", "lbc", workers=1)),
+        "yshape_index": _case(index_mode),
+        "yshape_lbc_reverse": _case(reverse_with_set()),
+        "yshape_lbc_reverse_w1": _case(reverse_with_set(workers=1)),
+        "torus_reverse_curve_only": _case(reverse_curve_only()),
+        "torus_reverse_curve_only_w1": _case(reverse_curve_only(workers=1)),
+        "cylinder_none": _case(none_mode()),
+        "cylinder_none_no_coverage": _case(none_mode(no_cov)),
+        "torus_reference": _case(with_reference),
+        "cylinder_lbc_curve_only_w1": _case(curve_only),
+        "torus_lbc_skeletal_only_w1": _case(skeletal_only),
+        "hammer_cao": _case(shared("hammer"), shared=True),
+        "hammer_cao_w1": _case(shared("hammer", workers=1), shared=True),
+        "apple_tree_8936_cao": _case(shared("tree"), shared=True),
+    }
+
+
+CASES = _cases()
+
+
+# ---- one case's record ----------------------------------------------------------------------------
+
+def array_sha(a: Any) -> str | None:
+    """sha256 of an array's dtype, shape and bytes (None for None)."""
+    if a is None:
+        return None
+    a = np.ascontiguousarray(a)
+    h = hashlib.sha256(f"{a.dtype.str}{a.shape}".encode())
+    h.update(a.tobytes())
+    return h.hexdigest()[:32]
+
+
+def record(kwargs: dict) -> dict:
+    """Evaluate one case and return what is compared: document, array hashes, stages, progress."""
+    from skelcore import evaluate
+
+    labels: list[str] = []
+    last = [None]
+
+    def progress(fraction: float, stage: str) -> None:
+        if not labels or labels[-1] != stage:
+            labels.append(stage)
+        last[0] = fraction
+
+    ev = evaluate(**kwargs, progress=progress)
+    doc = ev.to_json_dict()
+    doc.pop("timings_s")
+    doc.pop("skelcore_version")
+    arrays: dict[str, str | None] = {
+        "cloud": array_sha(ev.cloud),
+        "normalization": array_sha(np.append(ev.normalization.center, ev.normalization.scale)),
+    }
+    s = ev.skeletal
+    for name in ("points", "boundedness", "centeredness_raw", "smoothness", "rows", "centeredness_rows_raw", "index"):
+        arrays[f"skeletal.{name}"] = None if s is None else array_sha(getattr(s, name))
+    c = ev.curve
+    for name in ("samples", "sample_edge", "sample_t", "sample_boundedness", "sample_centeredness_raw",
+                 "vertex_degree", "vertex_smoothness"):
+        arrays[f"curve.{name}"] = None if c is None else array_sha(getattr(c, name))
+    arrays["curve.vertices"] = None if c is None else array_sha(c.curve.vertices)
+    arrays["curve.edges"] = None if c is None else array_sha(c.curve.edges)
+    t = ev.topology
+    arrays["topology.cloud_barcode"] = None if t is None else array_sha(t.cloud_barcode)
+    arrays["topology.skeletal_barcode"] = None if t is None else array_sha(t.skeletal_barcode)
+    for name, cov in (("skeletal", ev.coverage_skeletal), ("curve", ev.coverage_curve)):
+        arrays[f"coverage_{name}.gap"] = None if cov is None else array_sha(cov.gap)
+        arrays[f"coverage_{name}.covered"] = None if cov is None else array_sha(cov.covered)
+    scalars = {
+        "skeletal": None if s is None else {"source": s.source, "centeredness_available": s.centeredness_available},
+        "curve": None if c is None else {"smoothness_overall": repr(c.smoothness_overall),
+                                         "smoothness_count": c.smoothness_count},
+        "topology": None if t is None else [repr(t.bottleneck), repr(t.wasserstein), repr(t.eps_star), t.n_bars],
+        "coverage": {name: None if cov is None else [repr(cov.fraction), repr(cov.mean_gap), repr(cov.max_gap),
+                                                    repr(cov.tau), repr(cov.slack), cov.n_elements]
+                     for name, cov in (("skeletal", ev.coverage_skeletal), ("curve", ev.coverage_curve))},
+        "reference": None if ev.reference is None else {k: repr(v) for k, v in ev.reference.to_dict().items()},
+    }
+    one_lane = kwargs.get("workers") == 1
+    return {
+        "doc": doc,
+        "arrays": arrays,
+        "scalars": scalars,
+        "stages": sorted(k for k in ev.timings if k != "total"),
+        # one after the other the order is fixed; side by side only the set of labels is
+        "progress_labels": labels if one_lane else sorted(set(labels)),
+        "progress_last": last[0],
+    }
+
+
+def input_hashes(kwargs: dict) -> dict[str, str | None]:
+    """The inputs' hashes: a changed skeletonizer shows here, not as a changed evaluation."""
+    out = {}
+    for key in ("cloud", "skeletal", "skeletal_index"):
+        out[key] = array_sha(kwargs.get(key))
+    for key in ("curve", "reference_curve"):
+        c = kwargs.get(key)
+        out[key] = None if c is None else array_sha(np.append(c.vertices.ravel(), c.edges.ravel()))
+    return out
+
+
+def main() -> None:
+    sys.path.insert(0, str(ROOT))
+    out: dict[str, Any] = {}
+    for name, case in CASES.items():
+        if case["shared"] and not SHARED.is_dir():
+            print(f"skip {name}: {SHARED} absent")
+            continue
+        kwargs = case["make"]()
+        out[name] = {"inputs": input_hashes(kwargs), **record(kwargs)}
+        print(name, out[name]["stages"])
+    GOLDEN.write_text(json.dumps(out, indent=1, sort_keys=True) + "\n")
+    print(f"wrote {GOLDEN} ({GOLDEN.stat().st_size:,} bytes)")
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,50 @@
+"""The declared stages of an evaluation (skelcore/stages/catalogue.py): each declared once, reading only
+context items, waiting for the stage that makes its inputs, selected and started by the rules of
+docs/performance.md 8 (longest first; the curve's boundedness last when the skeletal set's runs)."""
+
+from __future__ import annotations
+
+import pytest
+
+from skelcore import Params, shapes
+from skelcore.stages import CATALOGUE
+from skelcore.stages.catalogue import select, start_order
+from skelcore.stages.context import CONTEXT_ITEMS, build_context
+
+
+def _ctx(skeletal=True, curve=True, correspondence="auto", every=1, params=Params()):
+    sh = shapes.y_shape(600, seed=1)
+    return build_context(sh.cloud, sh.skeletal[::every] if skeletal else None,
+                         (sh.curve_vertices, sh.curve_edges) if curve else None, params,
+                         skeletal_index=None, correspondence=correspondence, reference_curve=None)
+
+
+def test_every_stage_is_declared_once_with_a_weight_and_known_inputs():
+    names = [s.name for s in CATALOGUE]
+    assert len(set(names)) == len(names)
+    assert all(s.weight > 0 and s.inputs and set(s.inputs) <= set(CONTEXT_ITEMS) for s in CATALOGUE)
+    with pytest.raises(KeyError, match="unknown context item"):
+        _ctx().made_by("skeleton")
+
+
+@pytest.mark.parametrize("case, started, waits", [
+    (dict(), ["skeletal boundedness", "topology", "skeletal centeredness", "skeletal smoothness", "curve centeredness",
+              "curve smoothness", "skeletal coverage", "curve coverage", "curve boundedness"], {}),
+    (dict(correspondence="reverse", every=5),
+     ["skeletal boundedness", "correspondence", "topology", "skeletal centeredness", "skeletal smoothness",
+      "curve centeredness", "curve smoothness", "skeletal coverage", "curve coverage", "curve boundedness"],
+     {"topology": ("correspondence",), "skeletal centeredness": ("correspondence",)}),
+    (dict(skeletal=False, correspondence="reverse"),
+     ["curve boundedness", "skeletal boundedness", "correspondence", "curve centeredness", "curve smoothness",
+      "topology", "skeletal centeredness", "skeletal smoothness", "curve coverage"],
+     {s: ("correspondence",) for s in ("topology", "skeletal boundedness", "skeletal centeredness",
+                                        "skeletal smoothness")}),
+    (dict(every=5, params=Params(coverage_max_points=100)),
+     ["skeletal boundedness", "skeletal smoothness", "curve centeredness", "curve smoothness", "curve boundedness"], {}),
+    (dict(skeletal=False), ["curve boundedness", "curve centeredness", "curve smoothness", "curve coverage"], {}),
+])
+def test_stages_are_selected_started_and_wait_by_the_declared_rules(case, started, waits):
+    ctx = _ctx(**case)
+    order = start_order(select(ctx), ctx)
+    assert [s.name for s in order] == started
+    assert {s.name: s.after(ctx) for s in order if s.after(ctx)} == waits
