@@ -138,7 +138,7 @@ def test_the_cycle_finder_finds_a_cycle():
 #   skeletonizer      skelcore.skeleton                                           -> foundation
 #   metrics           skelcore.metrics (each result type beside its metric)       -> foundation
 #   record            the Evaluation (skelcore.evaluation, its old name results)  -> foundation, metrics
-#   stages            skelcore.evaluate (the pipeline)                            -> foundation, metrics, record
+#   stages            skelcore.stages (the evaluate pipeline)                     -> foundation, metrics, record
 #   evaluation files  io.evaluation_files (JSON, CSVs, npz of an Evaluation), io.export (coloured PLY)
 #                                                             -> foundation, formats, metrics, record
 #   applications      skelcore.compare, skelcore.experiments  -> every layer above this line
@@ -154,7 +154,7 @@ LAYERS: dict[str, tuple[list[str], list[str]]] = {
     "skeletonizer": (["skelcore.skeleton.*"], ["foundation"]),
     "metrics": (["skelcore.metrics.*"], ["foundation"]),
     "record": (["skelcore.evaluation", "skelcore.results"], ["foundation", "metrics"]),
-    "stages": (["skelcore.evaluate.*"], ["foundation", "metrics", "record"]),
+    "stages": (["skelcore.stages.*"], ["foundation", "metrics", "record"]),
     "evaluation files": (["skelcore.io.evaluation_files", "skelcore.io.export"],
                          ["foundation", "formats", "metrics", "record"]),
     "applications": (["skelcore.compare.*", "skelcore.experiments.*"], _BELOW_APPS),
@@ -198,12 +198,12 @@ def test_the_layer_check_finds_an_upward_arrow():
     edges = [("skelcore.metrics.topology", "skelcore.evaluation", 26, True),
              ("skelcore.evaluation", "skelcore.io.atomic", 19, True),
              ("skelcore.io.loaders", "skelcore.metrics.coverage", 1, False),
-             ("skelcore.evaluate", "skelcore.compare.jobs", 1, False),
+             ("skelcore.stages.orchestrate", "skelcore.compare.jobs", 1, False),
              ("skelcore.metrics.coverage", "skelcore.geometry", 1, True),
              ("skelcore.compare.jobs", "skelcore.io.evaluation_files", 1, False)]
     assert [b.split(":")[0] for b in _upward_arrows(edges)] == [
-        "skelcore.metrics.topology", "skelcore.evaluation", "skelcore.io.loaders", "skelcore.evaluate"]
-    assert _layer_of("skelcore.evaluation") == "record" and _layer_of("skelcore.evaluate.stages") == "stages"
+        "skelcore.metrics.topology", "skelcore.evaluation", "skelcore.io.loaders", "skelcore.stages.orchestrate"]
+    assert _layer_of("skelcore.evaluation") == "record" and _layer_of("skelcore.stages.catalogue") == "stages"
     assert _layer_of("skelcore.io.evaluation_files") == "evaluation files" and _layer_of("skelcore.io.ply") == "formats"
 
 

@@ -13,7 +13,7 @@ import pytest
 
 from skelcore import shapes
 from skelcore.errors import SkelInputError
-from skelcore.evaluate import evaluate
+from skelcore import evaluate
 from skelcore.evaluation import Evaluation
 from skelcore.io.evaluation_files import (evaluation_arrays, evaluation_from_store, load_evaluation,
                                           save_evaluation, to_json_dict)
