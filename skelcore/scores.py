@@ -114,7 +114,8 @@ SCORE_COLUMNS: tuple[ScoreColumn, ...] = (
     ScoreColumn("reference_recall", "recall", "R", "recall", "fraction", "higher", 3, "reference"),
     ScoreColumn("reference_f1", "F1", "F1", "$F_1$", "fraction", "higher", 3, "reference"),
     ScoreColumn("reference_tau", "reference tau", "tau", r"$\tau$", "normalized units", None, 4, "reference"),
-    # facts of the run: lower is better in the leaderboard (1 decimal: means over jobs)
+    # facts of the run, lower is better in the leaderboard (1 decimal: means over jobs); "seconds" is the
+    # evaluation's wall time in a Scores, the whole job's (skeletonize + evaluate) in compare's tables
     ScoreColumn("n_warnings", "warnings", "warn.", "warnings", "count", "lower", 1, "run", compared=True),
     ScoreColumn("seconds", "time (s)", "s", "time (s)", "s", "lower", 1, "run", compared=True),
 )
@@ -131,9 +132,8 @@ def column_keys(*, group: str | Iterable[str] | None = None, compared: bool | No
 
 
 def paired_columns(group: str = "paper") -> list[tuple[str, ScoreColumn, ScoreColumn]]:
-    """(metric, skeletal column, curve column) of ``group``'s per-representation scores that carry a
-    count or a detail: the rows of the paper's table (boundedness, centeredness, smoothness) or of
-    SkelScope's (coverage)."""
+    """(metric, skeletal column, curve column) of ``group``'s scores named ``{metric}_{kind}``: the rows
+    of the paper's table (boundedness, centeredness, smoothness) or of SkelScope's (coverage)."""
     rows = []
     for c in SCORE_COLUMNS:
         if c.group == group and c.kind == KINDS[0] and c.key == f"{c.metric}_{c.kind}":
