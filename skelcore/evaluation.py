@@ -164,6 +164,13 @@ class Evaluation:
         out["coverage"] = self.coverage_dict()
         return out
 
+    def scores(self, beta_star: float | None = None, c_star: float | None = None) -> "Scores":
+        """The overall scores as one flat record (:class:`skelcore.scores.Scores`), counted with
+        beta*, c* (default: the params' thresholds, SPEC 2-3); the values of :meth:`summary`."""
+        from .scores import Scores
+
+        return Scores.from_evaluation(self, beta_star, c_star)
+
     def coverage_dict(self) -> dict[str, Any] | None:
         """JSON ``coverage`` block: {skeletal, curve: {fraction, mean_gap, max_gap} | None, slack, tau}."""
         covs = [c for c in (self.coverage_skeletal, self.coverage_curve) if c is not None]

@@ -7,51 +7,33 @@ warnings, the reference comparison (SPEC 9), and a switch colouring the cloud by
 from __future__ import annotations
 
 import html
-import math
 from typing import Any
 
 import numpy as np
 from PySide6 import QtCore, QtGui, QtWidgets
 
-ROWS = ("d_B / d_Wp", "boundedness", "centeredness", "smoothness", "coverage*")
+from skelcore.params import Params
+from skelcore.scores import Scores, paper_table
+
 COLUMNS = ("skeletal points", "curve skeleton")
+#: the panel's cells (em dash where not computed, counts spaced)
+_STYLE = {"missing": "—", "sep": "  ", "count": "n = {}"}
+ROWS = tuple(row for row, _s, _c in paper_table(None, **_STYLE))
 
 
-def _num(value: Any, digits: int = 3) -> str:
-    if value is None:
-        return "—"
-    v = float(value)
-    return "nan" if math.isnan(v) else f"{v:.{digits}f}"
+def summary_cells(summary: Scores | dict[str, Any] | None) -> list[list[str]]:
+    """The table's text, row by row (Qt-free so it can be tested and reused), from a :class:`Scores`
+    or a ``summary()`` dict."""
+    if summary is not None and not isinstance(summary, Scores):
+        summary = Scores.from_json_dict(summary)
+    return [[a, b] for _row, a, b in paper_table(summary, **_STYLE)]
 
 
-def summary_cells(summary: dict[str, Any] | None) -> list[list[str]]:
-    """The table's text, row by row (Qt-free so it can be tested and reused)."""
-    cells = [["—", "—"] for _ in ROWS]
-    if summary is None:
-        return cells
-    topo = summary.get("topology")
-    if topo is not None:
-        cells[0][0] = f"{_num(topo['bottleneck'], 4)} / {_num(topo['wasserstein'], 4)}"
-    for r, metric in enumerate(("boundedness", "centeredness", "smoothness"), start=1):
-        for c, kind in enumerate(("skeletal", "curve")):
-            value = summary[metric][kind]
-            if value is None:
-                continue
-            n = summary["counts"][metric][kind]
-            cells[r][c] = f"{_num(value)}  (n = {n})"
-    cov = summary.get("coverage")
-    if cov is not None:
-        for c, kind in enumerate(("skeletal", "curve")):
-            block = cov.get(kind)
-            if block is not None:
-                cells[4][c] = f"{_num(block['fraction'])}  (gap {_num(block['mean_gap'], 4)} / {_num(block['max_gap'], 4)})"
-    return cells
-
-
-def detail_lines(summary: dict[str, Any] | None, evaluation: Any) -> list[str]:
+def detail_lines(summary: Scores | dict[str, Any] | None, evaluation: Any) -> list[str]:
     """The text under the table (Qt-free): correspondence, warnings, reference, run facts."""
     if summary is None or evaluation is None:
         return []
+    s = evaluation.scores()  # what these lines show does not depend on the thresholds
     lines = []
     corr = getattr(evaluation, "correspondence", None)
     if corr is not None:
@@ -62,26 +44,23 @@ def detail_lines(summary: dict[str, Any] | None, evaluation: Any) -> list[str]:
         lines.append(f"not computed: {what}: {why}")
     for w in getattr(evaluation, "warnings", None) or []:
         lines.append(f"⚠ warning [{w.code}]: {w.message}")
-    ref = getattr(evaluation, "reference", None)
-    if ref is not None:
+    if s.reference_chamfer is not None:
         lines.append(
-            f"reference curve: chamfer {_num(ref.chamfer, 4)}, Hausdorff {_num(ref.hausdorff, 4)}, "
-            f"precision {_num(ref.precision)}, recall {_num(ref.recall)}, F1 {_num(ref.f1)}"
+            f"reference curve: chamfer {s.text('reference_chamfer')}, Hausdorff {s.text('reference_hausdorff')}, "
+            f"precision {s.text('reference_precision')}, recall {s.text('reference_recall')}, F1 {s.text('reference_f1')}"
         )
         lines.append("  ours / reference: " + ", ".join(
-            f"{k} {getattr(ref, k)[0]}/{getattr(ref, k)[1]}" for k in ("junctions", "endpoints", "components", "cycles")
+            f"{k} {getattr(s, f'reference_{k}')[0]}/{getattr(s, f'reference_{k}')[1]}"
+            for k in ("junctions", "endpoints", "components", "cycles")
         ))
-    cov = summary.get("coverage")
-    if cov is not None:
-        lines.append(f"* coverage is SkelScope's own, not the paper's: covered fraction (s = {cov['slack']:g}, "
-                     f"tau = {_num(cov['tau'], 4)}), mean / max gap in normalized units")
+    if s.coverage_skeletal is not None or s.coverage_curve is not None:
+        lines.append(f"* coverage is SkelScope's own, not the paper's: covered fraction (s = {s.coverage_slack:g}, "
+                     f"tau = {s.text('coverage_tau')}), mean / max gap in normalized units")
     lines.append(f"boundedness estimator: {evaluation.params.boundedness_method}")
-    topo = summary.get("topology")
-    if topo is not None:
-        lines.append(f"eps* = {_num(topo['eps_star'], 4)} (normalized units), K = {topo['n_bars']} bars compared")
-    total = evaluation.timings.get("total") if evaluation.timings else None
-    if total is not None:
-        lines.append(f"evaluated in {total:.2f} s")
+    if s.d_B is not None:
+        lines.append(f"eps* = {s.text('eps_star')} (normalized units), K = {s.n_bars} bars compared")
+    if s.seconds is not None:
+        lines.append(f"evaluated in {s.seconds:.2f} s")
     return lines
 
 
@@ -116,8 +95,9 @@ class SummaryPanel(QtWidgets.QWidget):
         self.table.verticalHeader().setSectionResizeMode(QtWidgets.QHeaderView.ResizeMode.ResizeToContents)
         self.table.setVerticalScrollBarPolicy(QtCore.Qt.ScrollBarPolicy.ScrollBarAlwaysOff)
         self.table.setSizeAdjustPolicy(QtWidgets.QAbstractScrollArea.SizeAdjustPolicy.AdjustToContents)
-        self.beta_star = self._spin("bounded means beta > beta* (SPEC 2)")
-        self.c_star = self._spin("centred means c > c* (SPEC 3)")
+        defaults = Params()
+        self.beta_star = self._spin("bounded means beta > beta* (SPEC 2)", defaults.beta_star)
+        self.c_star = self._spin("centred means c > c* (SPEC 3)", defaults.c_star)
         self.details = QtWidgets.QLabel(NO_RESULT)
         self.details.setWordWrap(True)
         self.details.setTextInteractionFlags(QtCore.Qt.TextInteractionFlag.TextSelectableByMouse)
@@ -147,12 +127,12 @@ class SummaryPanel(QtWidgets.QWidget):
         layout.addStretch(1)
         self.show_summary(None)
 
-    def _spin(self, tip: str) -> QtWidgets.QDoubleSpinBox:
+    def _spin(self, tip: str, value: float) -> QtWidgets.QDoubleSpinBox:
         spin = QtWidgets.QDoubleSpinBox(self)
         spin.setRange(0.0, 1.0)
         spin.setDecimals(3)
         spin.setSingleStep(0.05)
-        spin.setValue(0.75)
+        spin.setValue(value)
         spin.setToolTip(tip)
         spin.setKeyboardTracking(False)
         spin.valueChanged.connect(self._emit_thresholds)

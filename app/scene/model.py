@@ -13,6 +13,7 @@ from typing import Any
 import numpy as np
 
 from skelcore.curve import CurveSkeleton
+from skelcore.params import Params
 
 from .events import Listener, SceneEvent
 from .layers import METRICS, Layer, ScalarQuantity
@@ -37,8 +38,9 @@ class Scene:
         self.clim: tuple[float, float] | None = None  # None: the metric's natural range [0, 1]
         self.edges_as_tubes: bool = False
         self.style: dict[str, bool] = dict(STYLE_DEFAULTS)  # figure options, see set_style
-        self.beta_star: float = 0.75
-        self.c_star: float = 0.75
+        defaults = Params()  # the thresholds until an evaluation brings its own
+        self.beta_star: float = defaults.beta_star
+        self.c_star: float = defaults.c_star
         self._listeners: list[Listener] = []
 
     # ---- events ---------------------------------------------------------------------------
@@ -182,6 +184,13 @@ class Scene:
         if self.evaluation is None:
             return None
         return self.evaluation.summary(self.beta_star, self.c_star)
+
+    def scores(self) -> Any:
+        """The overall scores at the scene's thresholds as one record (:class:`skelcore.scores.Scores`),
+        None before an evaluation."""
+        if self.evaluation is None:
+            return None
+        return self.evaluation.scores(self.beta_star, self.c_star)
 
     def threshold_for(self, metric: str) -> float | None:
         """The threshold an overall score counts against (none for smoothness, SPEC 4)."""

@@ -9,67 +9,40 @@ import sys
 
 from ..errors import SkelInputError
 from ..params import Params
+from ..scores import Scores, paper_table
 
 __all__ = ["format_table", "format_reference", "print_warnings", "stderr_progress", "params_from_args",
            "positive_int", "positive_float", "nonnegative_float", "clear_progress_line"]
 
 
-def _fmt_score(value: object, digits: int = 3) -> str:
-    if value is None:
-        return "-"
-    v = float(value)  # type: ignore[arg-type]
-    return "nan" if math.isnan(v) else f"{v:.{digits}f}"
-
-
-def format_table(summary: dict) -> str:
+def format_table(scores: Scores | dict) -> str:
     """The paper's results layout: rows d_B/d_Wp, boundedness, centeredness, smoothness;
-    columns skeletal points / curve skeleton, each score with the number of elements it counted."""
-    counts = summary["counts"]
-
-    def cell(metric: str, kind: str) -> str:
-        value = summary[metric][kind]
-        if value is None:
-            return "-"
-        return f"{_fmt_score(value)} (n={counts[metric][kind]})"
-
-    topo = summary["topology"]
-    topo_cell = "-" if topo is None else f"{_fmt_score(topo['bottleneck'], 4)} / {_fmt_score(topo['wasserstein'], 4)}"
-    rows = [
-        ("metric", "skeletal points", "curve skeleton"),
-        ("d_B / d_Wp", topo_cell, "-"),
-        ("boundedness", cell("boundedness", "skeletal"), cell("boundedness", "curve")),
-        ("centeredness", cell("centeredness", "skeletal"), cell("centeredness", "curve")),
-        ("smoothness", cell("smoothness", "skeletal"), cell("smoothness", "curve")),
-    ]
-    cov = summary.get("coverage")
-    if cov is not None:
-        rows.append(("coverage*", _coverage_cell(cov["skeletal"]), _coverage_cell(cov["curve"])))
+    columns skeletal points / curve skeleton, each score with the number of elements it counted
+    (a :class:`Scores`, or a ``summary()`` / ``--json`` dict)."""
+    s = scores if isinstance(scores, Scores) else Scores.from_json_dict(scores)
+    rows = [("metric", "skeletal points", "curve skeleton"), *paper_table(s, every_row=False)]
     widths = [max(len(r[i]) for r in rows) for i in range(3)]
     lines = []
     for k, r in enumerate(rows):
         lines.append("  ".join(c.ljust(w) for c, w in zip(r, widths)).rstrip())
         if k == 0:
             lines.append("  ".join("-" * w for w in widths))
-    if topo is not None:
-        lines.append(f"(eps* = {_fmt_score(topo['eps_star'], 5)}, K = {topo['n_bars']} bars compared)")
-    if cov is not None:
+    if s.d_B is not None:
+        lines.append(f"(eps* = {s.text('eps_star')}, K = {s.n_bars} bars compared)")
+    if s.coverage_skeletal is not None or s.coverage_curve is not None:
         lines.append(f"(* SkelScope's own, not the paper's: covered fraction of the cloud (slack s = "
-                     f"{cov['slack']:g}, tau = {_fmt_score(cov['tau'], 4)}), mean / max gap, normalized units)")
+                     f"{s.coverage_slack:g}, tau = {s.text('coverage_tau')}), mean / max gap, normalized units)")
     return "\n".join(lines)
 
 
-def _coverage_cell(block: dict | None) -> str:
-    if block is None:
-        return "-"
-    return f"{_fmt_score(block['fraction'])} (gap {_fmt_score(block['mean_gap'], 4)} / {_fmt_score(block['max_gap'], 4)})"
-
-
-def format_reference(ref: dict) -> str:
-    """The comparison with a reference curve, two lines."""
-    counts = ", ".join(f"{k} {ref[k][0]}/{ref[k][1]}" for k in ("junctions", "endpoints", "components", "cycles"))
-    return (f"reference curve: chamfer {_fmt_score(ref['chamfer'], 4)}, hausdorff {_fmt_score(ref['hausdorff'], 4)}, "
-            f"precision {_fmt_score(ref['precision'])}, recall {_fmt_score(ref['recall'])}, F1 {_fmt_score(ref['f1'])} "
-            f"(within tau = {_fmt_score(ref['tau'], 4)})\n"
+def format_reference(scores: Scores | dict) -> str:
+    """The comparison with a reference curve, two lines (a :class:`Scores`, or the JSON ``reference`` block)."""
+    s = scores if isinstance(scores, Scores) else Scores.from_json_dict({"reference": scores})
+    counts = ", ".join(f"{k} {getattr(s, f'reference_{k}')[0]}/{getattr(s, f'reference_{k}')[1]}"
+                       for k in ("junctions", "endpoints", "components", "cycles"))
+    return (f"reference curve: chamfer {s.text('reference_chamfer')}, hausdorff {s.text('reference_hausdorff')}, "
+            f"precision {s.text('reference_precision')}, recall {s.text('reference_recall')}, "
+            f"F1 {s.text('reference_f1')} (within tau = {s.text('reference_tau')})\n"
             f"  graph (ours/reference): {counts}")
 
 

@@ -113,9 +113,10 @@ def run_evaluate(args: argparse.Namespace) -> int:
     ev = evaluate(cloud, skeletal, curve, params, progress=progress, skeletal_index=index,
                   correspondence=args.correspondence, reference_curve=reference, inputs=inputs)
     clear_progress_line(progress)
-    print(format_table(ev.summary()))
+    scores = ev.scores()
+    print(format_table(scores))
     if ev.reference is not None:
-        print(format_reference(ev.reference.to_dict()))
+        print(format_reference(scores))
     corr = f"correspondence: {ev.correspondence}; " if ev.correspondence else ""
     print(f"{corr}boundedness estimator: {params.boundedness_method}; total {ev.timings['total']:.2f} s")
     print_warnings(ev.warning_dicts())

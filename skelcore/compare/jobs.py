@@ -24,6 +24,7 @@ import numpy as np
 from ..curve import CurveSkeleton
 from ..errors import Cancelled, SkelInputError
 from ..params import Params
+from ..scores import Scores, column_keys
 from .conditions import degrade
 from .manifest import ConditionSpec, Manifest, MethodSpec, ShapeSpec, expand_template
 
@@ -32,9 +33,8 @@ __all__ = ["Job", "JobOutput", "make_jobs", "execute", "run_job", "scores_from_d
 
 Progress = Callable[[float, str], None]
 
-SCORE_COLUMNS = ("d_B", "d_Wp", "boundedness_skeletal", "boundedness_curve", "centeredness_skeletal",
-                 "centeredness_curve", "smoothness_skeletal", "smoothness_curve", "coverage_skeletal",
-                 "coverage_curve", "n_warnings")
+#: the scores a job's record holds (:mod:`skelcore.scores`' compared columns; "seconds" is the job's own)
+SCORE_COLUMNS = tuple(k for k in column_keys(compared=True) if k != "seconds")
 
 
 @dataclass(frozen=True)
@@ -173,27 +173,11 @@ def execute(job: Job, workdir: str | None = None, *, prefix: str = "", write_clo
 
 # ---- the worker's entry point -------------------------------------------------------------------
 
-def _nan(v: Any) -> float:
-    return math.nan if v is None or isinstance(v, str) else float(v)
-
-
 def scores_from_doc(doc: dict[str, Any] | None) -> dict[str, float]:
-    """Flat scores of an ``evaluate --json`` document; NaN where not computed. Coverage and warnings
-    are read when the evaluation carries them (issue 8), NaN / 0 otherwise."""
-    out = {k: math.nan for k in SCORE_COLUMNS}
+    """Flat scores of an ``evaluate --json`` document; NaN where not computed (all NaN without one)."""
     if not doc:
-        return out
-    topo = doc.get("topology") or {}
-    out["d_B"], out["d_Wp"] = _nan(topo.get("bottleneck")), _nan(topo.get("wasserstein"))
-    for metric in ("boundedness", "centeredness", "smoothness"):
-        for kind in ("skeletal", "curve"):
-            out[f"{metric}_{kind}"] = _nan((doc.get(metric) or {}).get(kind))
-    cov = doc.get("coverage") or {}
-    for kind in ("skeletal", "curve"):
-        block = cov.get(kind)
-        out[f"coverage_{kind}"] = _nan(block.get("fraction") if isinstance(block, dict) else block)
-    out["n_warnings"] = float(len(doc.get("warnings") or []))
-    return out
+        return {k: math.nan for k in SCORE_COLUMNS}
+    return Scores.from_json_dict(doc).flat(SCORE_COLUMNS)
 
 
 def _arrays(ev: Any) -> dict[str, np.ndarray]:

@@ -16,21 +16,13 @@ from typing import Any
 import numpy as np
 
 from ..io.atomic import atomic_open
-from .jobs import SCORE_COLUMNS
+from ..scores import COLUMN, column_keys, format_score
 from .profiles import Profile
 
 __all__ = ["Entry", "Leaderboard", "build_leaderboard", "LOWER_IS_BETTER"]
 
-LOWER_IS_BETTER = frozenset({"d_B", "d_Wp", "n_warnings", "seconds"})
-COLUMNS = (*SCORE_COLUMNS, "seconds")
-_TEX_NAMES = {
-    "d_B": r"$d_B$", "d_Wp": r"$d_{W_p}$",
-    "boundedness_skeletal": r"$\mathcal{B}_{P_s}$", "boundedness_curve": r"$\mathcal{B}_{G_s}$",
-    "centeredness_skeletal": r"$\mathcal{C}_s(P_s)$", "centeredness_curve": r"$\mathcal{C}_s(G_s)$",
-    "smoothness_skeletal": r"$S(P_s)$", "smoothness_curve": r"$\mathfrak{S}_{G_s}$",
-    "coverage_skeletal": r"cov.\ $P_s$", "coverage_curve": r"cov.\ $G_s$",
-    "n_warnings": "warnings", "seconds": "time (s)",
-}
+COLUMNS = column_keys(compared=True)
+LOWER_IS_BETTER = frozenset(c for c in COLUMNS if COLUMN[c].better == "lower")
 
 
 @dataclass
@@ -51,7 +43,7 @@ class Leaderboard:
     profiles: tuple[Profile, ...]
 
     def arrow(self, col: str) -> str:
-        return "↓" if col in LOWER_IS_BETTER else "↑"
+        return COLUMN[col].arrow
 
     def columns(self) -> list[str]:
         """Score columns that at least one entry has (a run without curves shows no curve column)."""
@@ -81,8 +73,8 @@ class Leaderboard:
             if math.isnan(m):
                 out.append("-")
                 continue
-            d = _digits(c)
-            out.append(f"{m:.{d}f} ± {s:.{d}f}" + (f" ({r})" if r is not None else ""))
+            d = COLUMN[c].digits
+            out.append(f"{format_score(m, d)} ± {format_score(s, d)}" + (f" ({r})" if r is not None else ""))
         return out
 
     def to_markdown(self) -> str:
@@ -104,8 +96,7 @@ class Leaderboard:
     def to_latex(self) -> str:
         cols = self.columns()
         esc = _tex_escape
-        arrow = lambda c: r"$\downarrow$" if c in LOWER_IS_BETTER else r"$\uparrow$"  # noqa: E731
-        head = ["Method", "Condition"] + [f"{_TEX_NAMES[c]}{arrow(c)}" for c in cols] + [esc(p.name) for p in self.profiles]
+        head = ["Method", "Condition"] + [f"{COLUMN[c].tex}${COLUMN[c].tex_arrow}$" for c in cols] + [esc(p.name) for p in self.profiles]
         lines = [r"\begin{tabular}{ll" + "l" * (len(cols) + len(self.profiles)) + "}", r"\hline",
                  " & ".join(head) + r" \\ \hline\hline"]
         for e in self.entries:
@@ -146,11 +137,6 @@ def _tex_escape(text: str) -> str:
     return text.replace("\x00", r"\textbackslash{}")
 
 
-def _digits(col: str) -> int:
-    """Decimals shown (and ranked on): 4 for the topological distances, 1 for counts and seconds."""
-    return 4 if col in ("d_B", "d_Wp") else (1 if col in ("n_warnings", "seconds") else 3)
-
-
 def _ranks(values: list[float], lower_better: bool, digits: int) -> list[int | None]:
     """Competition ranks (1, 2, 2, 4) of the finite values as shown (rounded to ``digits``), so two
     methods that print the same mean share a rank; None for NaN."""
@@ -187,7 +173,7 @@ def build_leaderboard(rows: list[dict[str, Any]], profiles: tuple[Profile, ...],
                 e.profiles[p.name] = (verdicts.count("pass"), sum(v != "n/a" for v in verdicts))
             group.append(e)
         for c in COLUMNS:
-            for e, r in zip(group, _ranks([e.mean[c] for e in group], c in LOWER_IS_BETTER, _digits(c))):
+            for e, r in zip(group, _ranks([e.mean[c] for e in group], c in LOWER_IS_BETTER, COLUMN[c].digits)):
                 e.rank[c] = r if len(group) > 1 else None
         entries += group
     return Leaderboard(entries, profiles)

@@ -17,7 +17,7 @@ from importlib import resources
 from typing import Any
 
 from ..errors import SkelInputError
-from .jobs import SCORE_COLUMNS
+from ..scores import column_keys
 
 if sys.version_info >= (3, 11):
     import tomllib
@@ -26,7 +26,7 @@ else:  # pragma: no cover
 
 __all__ = ["Criterion", "Profile", "Verdict", "load_profiles", "default_profiles_text"]
 
-_METRICS = set(SCORE_COLUMNS) | {"seconds"}
+_METRICS = set(column_keys(compared=True))
 
 
 @dataclass(frozen=True)

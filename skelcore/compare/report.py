@@ -18,7 +18,7 @@ from typing import Any
 import numpy as np
 
 from ..io.atomic import atomic_open
-from .jobs import SCORE_COLUMNS
+from ..scores import COLUMN, column_keys, format_score, paired_columns
 from .leaderboard import Leaderboard
 from .profiles import Profile
 from .render import VIEWS, render_job
@@ -54,7 +54,8 @@ def distributions_png(rows: list[dict[str, Any]], methods: list[str], conditions
     from matplotlib.figure import Figure
 
     ok = [r for r in rows if r["status"] == "ok"]
-    cols = [c for c in SCORE_COLUMNS if c != "n_warnings" and any(np.isfinite(r[c]) for r in ok)]
+    scores = column_keys(group=("paper", "skelscope"), compared=True)  # not the run's facts (warnings, time)
+    cols = [c for c in scores if any(np.isfinite(r[c]) for r in ok)]
     if not cols:
         return None
     ncol = 4
@@ -74,7 +75,7 @@ def distributions_png(rows: list[dict[str, Any]], methods: list[str], conditions
                 ax.plot(x, v, "o", ms=3.5, alpha=0.8, color=palette[ci % len(palette)],
                         label=cond if mi == 0 or not ax.get_legend_handles_labels()[1].count(cond) else None)
         ax.set_xticks(range(len(methods)), methods, fontsize=7, rotation=20)
-        ax.set_title(c + (" ↓" if c in ("d_B", "d_Wp") else " ↑"), fontsize=9)
+        ax.set_title(f"{c} {COLUMN[c].arrow}", fontsize=9)
         ax.tick_params(axis="y", labelsize=7)
         ax.ticklabel_format(axis="y", useOffset=False, style="plain")
         ax.set_xlim(-0.6, len(methods) - 0.4)
@@ -122,12 +123,13 @@ def _profiles_html(profiles: tuple[Profile, ...]) -> str:
 
 
 def _scores_line(r: dict[str, Any]) -> str:
-    def f(k: str, d: int = 3) -> str:
-        v = r.get(k, math.nan)
-        return "-" if v is None or not np.isfinite(v) else f"{v:.{d}f}"
+    """d_B/d_Wp, then "B s/c C s/c", "S s/c": the paper's scores, skeletal/curve, two to a line."""
+    def f(k: str) -> str:
+        return format_score(r.get(k, math.nan), COLUMN[k].digits, nan="-")
 
-    return (f"d_B/d_Wp {f('d_B', 4)}/{f('d_Wp', 4)}<br>B {f('boundedness_skeletal')}/{f('boundedness_curve')} "
-            f"C {f('centeredness_skeletal')}/{f('centeredness_curve')}<br>S {f('smoothness_skeletal')}/{f('smoothness_curve')}")
+    items = [f"d_B/d_Wp {f('d_B')}/{f('d_Wp')}"]
+    items += [f"{metric[0].upper()} {f(sk.key)}/{f(cv.key)}" for metric, sk, cv in paired_columns("paper")]
+    return "<br>".join([items[0]] + [" ".join(items[i:i + 2]) for i in range(1, len(items), 2)])
 
 
 def _graphic_table(out_dir: str, rows: list[dict[str, Any]], store: Store, shapes: list[str], methods: list[str],

@@ -12,13 +12,14 @@ import os
 from typing import Any
 
 from ..io.atomic import atomic_open
+from ..scores import column_keys
 from .jobs import SCORE_COLUMNS, Job
 from .profiles import Profile
 from .job_store import Store, json_float
 
 __all__ = ["collect_rows", "write_results_csv", "COLUMNS"]
 
-COLUMNS = ("shape", "method", "condition", "seed", "status", "error", *SCORE_COLUMNS, "seconds", "label",
+COLUMNS = ("shape", "method", "condition", "seed", "status", "error", *column_keys(compared=True), "label",
            "n_points", "key")
 
 

@@ -13,7 +13,6 @@ from __future__ import annotations
 
 import csv
 import io as _io
-import math
 import os
 import tempfile
 from dataclasses import dataclass, field
@@ -24,10 +23,14 @@ import numpy as np
 from ..curve import CurveSkeleton
 from ..errors import SkelInputError
 from ..params import Params
+from ..scores import COLUMN, ScoreColumn, column_keys, format_score, paired_columns
 
 __all__ = ["StudyRow", "StudyResult", "run_study"]
 
 Progress = Callable[[float, str], None]
+
+#: the paper's table's scores (d_B, d_Wp, then each metric skeletal, curve)
+_PAPER = column_keys(group="paper", compared=True)
 
 
 @dataclass
@@ -44,23 +47,15 @@ class StudyRow:
     timings: dict[str, float] = field(default_factory=dict)
 
     def scores(self) -> dict[str, float | None]:
-        """Flat overall scores (None where the skeleton lacks that representation)."""
-        s = self.evaluation.summary()
-        topo = s["topology"] or {}
-        out: dict[str, float | None] = {"d_B": topo.get("bottleneck"), "d_Wp": topo.get("wasserstein")}
-        for metric in ("boundedness", "centeredness", "smoothness"):
-            for kind in ("skeletal", "curve"):
-                out[f"{metric}_{kind}"] = s[metric][kind]
-        return out
+        """The paper's overall scores (None where the skeleton lacks that representation)."""
+        s = self.evaluation.scores()
+        return {k: s.get(k) for k in _PAPER}
 
 
-def _num(value: float | None, digits: int) -> str:
-    if value is None:
-        return "-"
-    v = float(value)
-    if math.isnan(v):
-        return "nan"
-    return f"{v:.{digits}f}"
+
+def _pair(s: dict[str, float | None], a: str, b: str) -> str:
+    """A "skeletal/curve" (or "d_B/d_Wp") cell of the paper's table."""
+    return f"{format_score(s[a], COLUMN[a].digits)}/{format_score(s[b], COLUMN[b].digits)}"
 
 
 @dataclass
@@ -72,22 +67,15 @@ class StudyResult:
     params: Params
     settings: dict[str, Any]
 
-    HEADER = ("shape", "d_B/d_Wp", "boundedness", "centeredness", "smoothness")
+    HEADER = ("shape", "d_B/d_Wp", *(metric for metric, _s, _c in paired_columns("paper")))
 
     def table(self) -> list[tuple[str, ...]]:
         """Header and one row per variant, cells "skeletal/curve" as in the paper (d_B 4 digits)."""
         out = [self.HEADER]
         for row in self.rows:
             s = row.scores()
-            out.append(
-                (
-                    f"{self.name} ({row.label})",
-                    f"{_num(s['d_B'], 4)}/{_num(s['d_Wp'], 4)}",
-                    f"{_num(s['boundedness_skeletal'], 3)}/{_num(s['boundedness_curve'], 3)}",
-                    f"{_num(s['centeredness_skeletal'], 3)}/{_num(s['centeredness_curve'], 3)}",
-                    f"{_num(s['smoothness_skeletal'], 3)}/{_num(s['smoothness_curve'], 3)}",
-                )
-            )
+            out.append((f"{self.name} ({row.label})", _pair(s, "d_B", "d_Wp"),
+                        *(_pair(s, sk.key, cv.key) for _m, sk, cv in paired_columns("paper"))))
         return out
 
     def to_markdown(self) -> str:
@@ -102,8 +90,7 @@ class StudyResult:
         """Machine-readable: one column per score, full precision, empty where not computed."""
         buf = _io.StringIO()
         w = csv.writer(buf, lineterminator="\n")
-        keys = ["d_B", "d_Wp", "boundedness_skeletal", "boundedness_curve", "centeredness_skeletal",
-                "centeredness_curve", "smoothness_skeletal", "smoothness_curve"]
+        keys = _PAPER
         w.writerow(["variant", "label", "n_points", *keys])
         for row in self.rows:
             s = row.scores()
@@ -118,9 +105,12 @@ class StudyResult:
                 text = text.replace(a, b)
             return text
 
-        head = (r"\textbf{Shapes} & $d_B/d_{W_p}\downarrow$ & $\mathcal{B}_{P_s}/\mathcal{B}_{G_s}\uparrow$ & "
-                r"$\mathcal{C}_s(P_s)/\mathcal{C}_s(G_s)\uparrow$ & $S(P_s)/\mathfrak{S}_{G_s}\uparrow$ \\ \hline\hline")
-        lines = [r"\begin{tabular}{lllll}", r"\hline", head]
+        def pair(a: ScoreColumn, b: ScoreColumn) -> str:  # "$A/B\uparrow$" from "$A$" and "$B$"
+            return f"${a.tex.strip('$')}/{b.tex.strip('$')}{a.tex_arrow}$"
+
+        cells = [pair(COLUMN["d_B"], COLUMN["d_Wp"]), *(pair(sk, cv) for _m, sk, cv in paired_columns("paper"))]
+        head = r"\textbf{Shapes} & " + " & ".join(cells) + r" \\ \hline\hline"
+        lines = [r"\begin{tabular}{l" + "l" * len(cells) + "}", r"\hline", head]
         lines += [" & ".join(esc(c) for c in r) + r" \\" for r in self.table()[1:]]
         lines += [r"\hline", r"\end{tabular}"]
         return "\n".join(lines) + "\n"
