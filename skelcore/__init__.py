@@ -20,6 +20,7 @@ __all__ = [
     "SkelInputError",
     "Params",
     "Evaluation",
+    "Scores",
     "evaluate",
     "shapes",
     "load_cloud",
@@ -29,7 +30,7 @@ __all__ = [
     "skeletonize",
 ]
 
-_LAZY = {"evaluate": ".stages", "Evaluation": ".evaluation", "shapes": ".shapes", "skeletonize": ".skeleton",
+_LAZY = {"evaluate": ".stages", "Evaluation": ".evaluation", "Scores": ".scores", "shapes": ".shapes", "skeletonize": ".skeleton",
          **dict.fromkeys(("load_cloud", "load_points", "load_curve", "load_any", "write_points_ply",
                           "write_curve_ply"), ".io")}
 

@@ -137,7 +137,7 @@ def test_the_cycle_finder_finds_a_cycle():
 #                                                                                 -> foundation
 #   skeletonizer      skelcore.skeleton                                           -> foundation
 #   metrics           skelcore.metrics (each result type beside its metric)       -> foundation
-#   record            the Evaluation (skelcore.evaluation, its old name results)  -> foundation, metrics
+#   record            the Evaluation (skelcore.evaluation, old name results), Scores -> foundation, metrics
 #   stages            skelcore.stages (the evaluate pipeline)                     -> foundation, metrics, record
 #   evaluation files  io.evaluation_files (JSON, CSVs, npz of an Evaluation), io.export (coloured PLY)
 #                                                             -> foundation, formats, metrics, record
@@ -153,7 +153,7 @@ LAYERS: dict[str, tuple[list[str], list[str]]] = {
     "formats": (["skelcore.io.*"], ["foundation"]),
     "skeletonizer": (["skelcore.skeleton.*"], ["foundation"]),
     "metrics": (["skelcore.metrics.*"], ["foundation"]),
-    "record": (["skelcore.evaluation", "skelcore.results"], ["foundation", "metrics"]),
+    "record": (["skelcore.evaluation", "skelcore.results", "skelcore.scores"], ["foundation", "metrics"]),
     "stages": (["skelcore.stages.*"], ["foundation", "metrics", "record"]),
     "evaluation files": (["skelcore.io.evaluation_files", "skelcore.io.export"],
                          ["foundation", "formats", "metrics", "record"]),
