@@ -18,7 +18,9 @@ from typing import Any
 
 from PySide6 import QtCore, QtGui, QtWidgets
 
-__all__ = ["CompareRunDialog", "install_compare_run", "load_ab", "ab_context"]
+from .window_api import ActionSpec, WindowApi
+
+__all__ = ["CompareRunDialog", "RunBrowser", "load_ab", "ab_context"]
 
 _SCORE_COLUMNS = [("d_B", "d_B"), ("d_Wp", "d_Wp"), ("bounded. s/c", ("boundedness_skeletal", "boundedness_curve")),
                   ("centred. s/c", ("centeredness_skeletal", "centeredness_curve")),
@@ -63,8 +65,8 @@ class CompareRunDialog(QtWidgets.QDialog):
 
     loaded = QtCore.Signal(int, object, object)  # request token, (jobs, what next), Evaluations or the exception
 
-    def __init__(self, window: Any, run: Any) -> None:
-        super().__init__(window)
+    def __init__(self, window: WindowApi, run: Any) -> None:
+        super().__init__(window.widget)
         self.window, self.run = window, run
         self.view: Any = None  # the last A/B window opened
         self.background_bytes = BACKGROUND_BYTES
@@ -277,62 +279,35 @@ class CompareRunDialog(QtWidgets.QDialog):
         then(jobs, out)
 
 
-class _RunAction(QtCore.QObject):
+class RunBrowser(QtCore.QObject):
     """File > Open comparison run…, and drops of a run's folder or ``index.json`` on the window."""
 
-    def __init__(self, window: Any) -> None:
-        super().__init__(window)
+    def __init__(self, window: WindowApi) -> None:
+        super().__init__(window.widget)
         self.window = window
         self.dialog: CompareRunDialog | None = None
-        file_menu = window.menuBar().actions()[0].menu()
-        action = window._action(file_menu, "Open comparison run (skelcore compare folder)…", self.choose)
-        after = window.actions_by_name.get("compare")
-        actions = file_menu.actions()
-        if after is not None and after in actions and actions.index(after) + 1 < len(actions):
-            file_menu.insertAction(actions[actions.index(after) + 1], action)
-        window.actions_by_name["open_compare_run"] = action
-        plotter = window.view.plotter  # drops on the 3-D view come through its handlers
-        self._drag, self._drop = plotter.drag_handler, plotter.drop_handler
-        plotter.drag_handler, plotter.drop_handler = self._drag_event, self._drop_event
-        window.installEventFilter(self)  # drops elsewhere on the window
+        window.add_action(ActionSpec("open_compare_run", "Open comparison run (skelcore compare folder)…",
+                                     "file.compare", self.choose))
+        window.add_drop_handler(self.accepts, self.dropped)  # on the 3-D view and anywhere on the window
 
     @staticmethod
-    def run_path(event: Any) -> str | None:
+    def run_path(paths: list[str]) -> str | None:
+        """The first of ``paths`` that is a compare run (its folder or its index.json)."""
         from skelcore.compare.finished_run import is_run_path
 
-        data = event.mimeData()
-        if data is None or not data.hasUrls():
-            return None
-        for url in data.urls():
-            if url.isLocalFile() and is_run_path(url.toLocalFile()):
-                return url.toLocalFile()
-        return None
+        return next((p for p in paths if is_run_path(p)), None)
 
-    def _drag_event(self, event: Any) -> None:
-        if self.run_path(event):
-            event.acceptProposedAction()
-        elif self._drag is not None:
-            self._drag(event)
+    def accepts(self, paths: list[str]) -> bool:
+        return self.run_path(paths) is not None
 
-    def _drop_event(self, event: Any) -> None:
-        path = self.run_path(event)
+    def dropped(self, paths: list[str]) -> None:
+        path = self.run_path(paths)
         if path:
-            event.acceptProposedAction()
             QtCore.QTimer.singleShot(0, lambda: self.open(path))  # not inside the drop: the dialog may be modal
-        elif self._drop is not None:
-            self._drop(event)
-
-    def eventFilter(self, obj: QtCore.QObject, event: QtCore.QEvent) -> bool:  # noqa: N802
-        t = event.type()
-        if obj is self.window and t in (QtCore.QEvent.Type.DragEnter, QtCore.QEvent.Type.DragMove,
-                                        QtCore.QEvent.Type.Drop) and self.run_path(event):
-            (self._drop_event if t == QtCore.QEvent.Type.Drop else self._drag_event)(event)
-            return True
-        return False
 
     def choose(self) -> None:
-        folder = QtWidgets.QFileDialog.getExistingDirectory(self.window, "Open a skelcore compare output folder",
-                                                            self.window._last_dir())
+        folder = QtWidgets.QFileDialog.getExistingDirectory(self.window.widget, "Open a skelcore compare output folder",
+                                                            self.window.last_dir())
         if folder:
             self.open(folder)
 
@@ -351,8 +326,3 @@ class _RunAction(QtCore.QObject):
         self.dialog = CompareRunDialog(self.window, run)
         self.dialog.show()
         return self.dialog
-
-
-def install_compare_run(window: Any) -> _RunAction:
-    window.compare_run = _RunAction(window)
-    return window.compare_run

@@ -16,7 +16,9 @@ from typing import Any
 import numpy as np
 from PySide6 import QtCore, QtWidgets
 
-__all__ = ["ab_rows", "CompareWindow", "install_compare"]
+from .window_api import ActionSpec, WindowApi
+
+__all__ = ["ab_rows", "CompareWindow", "CompareController"]
 
 _SCORES = [("d_B", "topology", "bottleneck"), ("d_Wp", "topology", "wasserstein")] + [
     (f"{metric} ({kind})", metric, kind)
@@ -174,27 +176,19 @@ class CompareWindow(QtWidgets.QWidget):
         super().closeEvent(event)
 
 
-class _CompareAction(QtCore.QObject):
+class CompareController(QtCore.QObject):
     """File > Compare with a second skeleton (B): load, evaluate B in the worker, open the A/B window."""
 
     NAME = "evaluation B"
 
-    def __init__(self, window: Any) -> None:
-        super().__init__(window)
+    def __init__(self, window: WindowApi) -> None:
+        super().__init__(window.widget)
         self.window = window
         self.views: list[CompareWindow] = []
         self._pending: tuple[Any, str] | None = None
         window.session.runner.succeeded.connect(self._succeeded)
-        file_menu = window.menuBar().actions()[0].menu()
-        action = window._action(file_menu, "Compare with a second skeleton (B)…", self.dialog)
-        file_menu.insertAction(file_menu.actions()[5], action)  # after the Open entries
-        window.actions_by_name["compare"] = action
-        window.installEventFilter(self)  # the A/B windows close with the main window
-
-    def eventFilter(self, obj: QtCore.QObject, event: QtCore.QEvent) -> bool:  # noqa: N802
-        if obj is self.window and event.type() == QtCore.QEvent.Type.Close:
-            self.close_views()
-        return False
+        window.add_action(ActionSpec("compare", "Compare with a second skeleton (B)…", "file.compare", self.dialog))
+        window.closing.connect(self.close_views)  # the A/B windows close with the main window
 
     def close_views(self) -> None:
         for view in self.views:
@@ -205,8 +199,9 @@ class _CompareAction(QtCore.QObject):
         from skelcore.io import SUPPORTED_EXTENSIONS
 
         patterns = " ".join(f"*{ext}" for ext in sorted(set(SUPPORTED_EXTENSIONS)))
-        paths, _ = QtWidgets.QFileDialog.getOpenFileNames(self.window, "Open skeleton B (skeletal points and/or curve)",
-                                                          self.window._last_dir(),
+        paths, _ = QtWidgets.QFileDialog.getOpenFileNames(self.window.widget,
+                                                          "Open skeleton B (skeletal points and/or curve)",
+                                                          self.window.last_dir(),
                                                           f"Skeletons ({patterns});;All files (*)")
         if paths:
             self.compare_files(paths)
@@ -272,12 +267,3 @@ class _CompareAction(QtCore.QObject):
         self.views = [v for v in self.views if v.isVisible()]
         self.views.append(view)
         return view
-
-
-def install_compare(window: Any) -> _CompareAction:
-    """File > Compare with a second skeleton (B), and File > Open comparison run (:mod:`app.compare_run`)."""
-    from .compare_run import install_compare_run
-
-    window.compare = _CompareAction(window)
-    install_compare_run(window)
-    return window.compare

@@ -8,10 +8,11 @@ from __future__ import annotations
 
 import html
 import os
-from typing import Any
+from typing import Any, Callable
 
 from PySide6 import QtCore, QtGui, QtWidgets
 
+from .actions import Menus
 from .exports import (
     data_stem, export_coloured_ply, export_results, ply_export_names, result_export_names, with_thresholds, write_png,
 )
@@ -20,6 +21,7 @@ from .panels._plot import preload_matplotlib
 from .scene import LAYER_ORDER, METRICS, Scene, SceneEvent
 from .session import Session, preload_engine
 from .view import SceneView
+from .window_api import LEFT, RIGHT, ActionSpec
 
 MAX_RECENT = 10
 FILE_FILTER = "Clouds and skeletons (*.ply *.pcd *.xyz *.txt *.csv *.pts *.obj *.off *.cg *.swc *.npy *.npz *.json);;All files (*)"
@@ -34,6 +36,11 @@ class _KeyEater(QtCore.QObject):
 
 
 class MainWindow(QtWidgets.QMainWindow):
+    """The viewer's window; feature controllers see it as :class:`app.window_api.WindowApi`."""
+
+    element_picked = QtCore.Signal(object)  # info dict of the picked element, or None (after the pick panel)
+    closing = QtCore.Signal()  # emitted first thing in closeEvent
+
     def __init__(self, settings: QtCore.QSettings | None = None, parent: QtWidgets.QWidget | None = None) -> None:
         super().__init__(parent)
         self.setWindowTitle("SkelScope")
@@ -41,15 +48,20 @@ class MainWindow(QtWidgets.QMainWindow):
         self.settings = settings if settings is not None else QtCore.QSettings("SkelScope", "skelscope")
         self.interactive = True  # False in the scripted mode: errors go to ``errors``, not dialogs
         self.errors: list[str] = []
+        self.bug: str | None = None  # an uncaught exception's traceback (the scripted mode exits 1)
         self.scene = Scene()
         self.session = Session(self.scene, self)
         self.view = SceneView(self.scene, self)
         self.setCentralWidget(self.view.widget)
         self._key_eater = _KeyEater(self)
         self.view.widget.installEventFilter(self._key_eater)
+        self._drop_handlers: list[tuple[Callable[[list[str]], bool], Callable[[list[str]], None]]] = []
         self.view.plotter.drag_handler = self._drag
         self.view.plotter.drop_handler = self._drop
         self.setAcceptDrops(True)
+        self.menus = Menus(self.menuBar(), self)
+        self.actions_by_name: dict[str, QtGui.QAction] = self.menus.actions
+        self.recent_menu = self.menus.submenus["file.recent"]
 
         self.summary = SummaryPanel(self)
         self.barcodes = BarcodePanel(self)
@@ -58,13 +70,12 @@ class MainWindow(QtWidgets.QMainWindow):
         self.settings_panel = SettingsPanel(self)
         self.pick = PickPanel(self)
         self.docks: dict[str, QtWidgets.QDockWidget] = {}
-        right = QtCore.Qt.DockWidgetArea.RightDockWidgetArea
-        self._dock("Summary", self.summary, right)
-        self._dock("Barcodes", self.barcodes, right)
-        self._dock("Histogram", self.histogram, right)
-        self._dock("Display", self.display, QtCore.Qt.DockWidgetArea.LeftDockWidgetArea)
-        self._dock("Picked element", self.pick, QtCore.Qt.DockWidgetArea.LeftDockWidgetArea)
-        self._dock("Settings", self.settings_panel, QtCore.Qt.DockWidgetArea.LeftDockWidgetArea)
+        self.add_dock("Summary", self.summary, RIGHT)
+        self.add_dock("Barcodes", self.barcodes, RIGHT)
+        self.add_dock("Histogram", self.histogram, RIGHT)
+        self.add_dock("Display", self.display, LEFT)
+        self.add_dock("Picked element", self.pick, LEFT)
+        self.add_dock("Settings", self.settings_panel, LEFT)
         self.tabifyDockWidget(self.docks["Barcodes"], self.docks["Histogram"])
         self.docks["Barcodes"].raise_()
         self._plots_stale: set[str] = set()
@@ -79,14 +90,16 @@ class MainWindow(QtWidgets.QMainWindow):
         QtCore.QTimer.singleShot(0, self._size_docks)  # after the first layout, or Qt ignores it
 
         self._build_status_bar()
-        self._build_menus()
+        for spec in self.action_table():
+            self.add_action(spec)
+        self._fill_recent()
 
         self.session.params_provider = self.settings_panel.params
         self.session.correspondence_provider = self.settings_panel.correspondence
         self.summary.cloud_colouring.connect(self.view.set_cloud_values)
         self.session.ask = self._ask
         self.session.error.connect(self.show_error)
-        self.session.message.connect(lambda text: self.statusBar().showMessage(text, 8000))
+        self.session.message.connect(self.show_message)
         self.session.loaded.connect(lambda role, path: self._add_recent(path))
         runner = self.session.runner
         runner.started.connect(self._task_started)
@@ -98,27 +111,78 @@ class MainWindow(QtWidgets.QMainWindow):
         self.settings_panel.changed.connect(self.session.check_stale)
         self.session.stale_changed.connect(self._stale_changed)
         self.display.layer_action.connect(self._layer_action)
-        self.view.on_pick = self._picked
+        self.view.on_pick = self.pick_element
         self.scene.subscribe(self._on_scene)
-        from .support_controller import install_supports
+        # issue 11's features, each through the public interface (app.window_api)
+        from .compare_run import RunBrowser
+        from .compare_view import CompareController
+        from .support_controller import SupportController
 
-        install_supports(self)  # issue 11: the picked element's support (dock, 3-D overlay, filter)
-        from .compare_view import install_compare
-
-        install_compare(self)  # issue 11: File > Compare with a second skeleton (B)
+        self.supports = SupportController(self)  # the picked element's support (dock, 3-D overlay, filter)
+        self.compare = CompareController(self)  # File > Compare with a second skeleton (B)
+        self.compare_run = RunBrowser(self)  # File > Open comparison run, and drops of a run
         self._update_actions()
         QtCore.QTimer.singleShot(1500, preload_matplotlib)  # after the first frame, off the GUI thread
         QtCore.QTimer.singleShot(2500, lambda: self.view.after_render(preload_engine))  # not during a frame
         QtCore.QTimer.singleShot(4000, self._prepare_plots)
 
-    # ---- construction ---------------------------------------------------------------------
-    def _dock(self, title: str, widget: QtWidgets.QWidget, area: QtCore.Qt.DockWidgetArea) -> None:
+    # ---- the interface for feature controllers (app.window_api.WindowApi) -----------------
+    @property
+    def widget(self) -> QtWidgets.QMainWindow:
+        return self
+
+    def add_dock(self, title: str, widget: QtWidgets.QWidget, area: QtCore.Qt.DockWidgetArea = LEFT,
+                 below: str | None = None) -> QtWidgets.QDockWidget:
+        """A dock named ``title`` in ``area`` (or split under the dock ``below``), listed in the View menu."""
         dock = QtWidgets.QDockWidget(title, self)
         dock.setObjectName(f"dock-{title}")
         dock.setWidget(widget)
         self.addDockWidget(area, dock)
+        if below is not None:
+            self.splitDockWidget(self.docks[below], dock, QtCore.Qt.Orientation.Vertical)
         self.docks[title] = dock
+        self.menus.place("view.docks", dock.toggleViewAction())
+        return dock
 
+    def add_action(self, spec: ActionSpec) -> QtGui.QAction:
+        """A menu action at the end of its group (:data:`app.actions.MENUS`); its conditions are kept up."""
+        action = self.menus.add(spec)
+        self.menus.update()
+        return action
+
+    def add_drop_handler(self, accepts: Callable[[list[str]], bool], drop: Callable[[list[str]], None]) -> None:
+        """Dropped paths (files or folders) that ``accepts`` takes go to ``drop`` instead of the loader."""
+        self._drop_handlers.append((accepts, drop))
+
+    def add_display_option(self, widget: QtWidgets.QWidget) -> None:
+        """A control at the end of the Display panel."""
+        self.display.add_option(widget)
+
+    def last_dir(self) -> str:
+        """Where file dialogs open: the folder of the last file loaded, else the working folder."""
+        recent = self.recent_files()
+        return os.path.dirname(recent[0]) if recent else os.getcwd()
+
+    def input_files(self) -> tuple[str, ...]:
+        """The loaded inputs' files (writers refuse to replace them)."""
+        return tuple(p for p in self.scene.input_paths().values() if p)
+
+    def pick_element(self, info: dict[str, Any] | None) -> None:
+        """A pick (a click in the 3-D view; None clears): the pick panel, the status bar, ``element_picked``."""
+        self.pick.show_info(info)
+        if info is not None:
+            self.show_message(f"{info['element']} #{info['index']}", 5000)
+        self.element_picked.emit(info)
+
+    def show_message(self, text: str, timeout_ms: int = 8000) -> None:
+        self.statusBar().showMessage(text, timeout_ms)
+
+    def report_bug(self, message: str, details: str) -> None:
+        """An uncaught exception (the exception hook): kept in ``bug`` and shown like any error."""
+        self.bug = details
+        self.show_error("Unexpected error", message, details)
+
+    # ---- construction ---------------------------------------------------------------------
     def _size_docks(self) -> None:
         self.resizeDocks([self.docks["Summary"], self.docks["Display"]], [420, 270], QtCore.Qt.Orientation.Horizontal)
 
@@ -146,77 +210,57 @@ class MainWindow(QtWidgets.QMainWindow):
         self._progress_timer.setInterval(125)
         self._progress_timer.timeout.connect(self._show_progress)
 
-    def _action(self, menu: QtWidgets.QMenu, text: str, slot: Any, shortcut: str | None = None,
-                checkable: bool = False) -> QtGui.QAction:
-        action = QtGui.QAction(text, self)
-        if shortcut:
-            action.setShortcut(QtGui.QKeySequence(shortcut))
-            action.setShortcutContext(QtCore.Qt.ShortcutContext.WindowShortcut)
-        action.setCheckable(checkable)
-        action.triggered.connect(slot)
-        menu.addAction(action)
-        self.addAction(action)
-        return action
+    def action_table(self) -> list[ActionSpec]:
+        """The window's own actions, one row each: name, text, menu group, what it does, shortcut, and
+        when it is enabled or checked. Feature controllers add theirs with :meth:`add_action`."""
+        scene, session, view = self.scene, self.session, self.view
 
-    def _build_menus(self) -> None:
-        mb = self.menuBar()
-        self.actions_by_name: dict[str, QtGui.QAction] = {}
-        a = self.actions_by_name
-        m = mb.addMenu("&File")
-        a["open"] = self._action(m, "Open files (roles decided automatically)…", self.open_files, "Ctrl+O")
-        a["open_cloud"] = self._action(m, "Open cloud…", lambda: self.open_as("cloud"), "Ctrl+1")
-        a["open_skeletal"] = self._action(m, "Open skeletal point set…", lambda: self.open_as("skeletal"), "Ctrl+2")
-        a["open_curve"] = self._action(m, "Open curve skeleton…", lambda: self.open_as("curve"), "Ctrl+3")
-        self.recent_menu = m.addMenu("Recent files")
-        self._fill_recent()
-        close = m.addMenu("Close")
-        for role in LAYER_ORDER:
-            a[f"close_{role}"] = self._action(close, f"Close the {_ROLE_TITLES[role]}",
-                                              lambda _=False, r=role: self.session.close_layer(r))
-        a["close_all"] = self._action(m, "Close all", self.session.close_all, "Ctrl+W")
-        m.addSeparator()
-        a["export_ply"] = self._action(m, "Export coloured PLY…", self.export_ply_dialog, "Ctrl+E")
-        a["export_results"] = self._action(m, "Export results (JSON + CSV)…", self.export_results_dialog, "Ctrl+Shift+E")
-        a["screenshot"] = self._action(m, "Save picture of the 3D view…", self.screenshot_dialog, "Ctrl+S")
-        m.addSeparator()
-        a["quit"] = self._action(m, "Quit", self.close, "Ctrl+Q")
+        def has_eval() -> bool:
+            return scene.evaluation is not None
 
-        m = mb.addMenu("&Evaluate")
-        a["evaluate"] = self._action(m, "Evaluate", self.session.start_evaluation, "F5")
-        a["cancel"] = self._action(m, "Cancel", self.session.cancel, "Esc")
-        m.addSeparator()
-        for key, metric in zip(("B", "C", "S"), METRICS):
-            a[f"metric_{metric}"] = self._action(m, f"Colour by {metric}", lambda _=False, mm=metric: self.scene.set_metric(mm), key)
+        def has_cloud() -> bool:
+            return scene.cloud is not None
 
-        m = mb.addMenu("&View")
-        a["reset"] = self._action(m, "Reset camera", self.view.reset_camera, "R")
-        for key, (name, title) in zip(("1", "2", "3", "4", "5", "6", "0"), (
-            ("xy", "Top (XY)"), ("-xy", "Bottom (-XY)"), ("xz", "Front (XZ)"), ("-xz", "Back (-XZ)"),
-            ("yz", "Side (YZ)"), ("-yz", "Other side (-YZ)"), ("iso", "Isometric"),
-        )):
-            a[f"view_{name}"] = self._action(m, title, lambda _=False, n=name: self.view.standard_view(n), key)
-        a["parallel"] = self._action(m, "Parallel projection", self.view.set_parallel_projection, "P", checkable=True)
-        a["tubes"] = self._action(m, "Edges as tubes", self.scene.set_edges_as_tubes, "T", checkable=True)
-        for name, title, key in (("spheres", "Points as shaded spheres", "Shift+S"),
-                                 ("eye_dome", "Eye-dome lighting", "Shift+E"), ("axes", "Orientation axes", "Shift+A")):
-            a[f"style_{name}"] = self._action(m, title, lambda on, n=name: self.scene.set_style(n, on), key, checkable=True)
-        m.addSeparator()
-        a["save_camera"] = self._action(m, "Save camera…", self.save_camera_dialog)
-        a["load_camera"] = self._action(m, "Load camera…", self.load_camera_dialog)
-        m.addSeparator()
-        for dock in self.docks.values():
-            m.addAction(dock.toggleViewAction())
+        def can_study() -> bool:
+            return scene.cloud is not None and bool(scene.cloud.path) and _study_available()
 
-        m = mb.addMenu("&Tools")
-        a["skeletonize"] = self._action(m, "Skeletonize the cloud (Cao et al., the paper's)",
-                                        self.session.start_skeletonize, "Ctrl+K")
-        a["skeletonize_skelscope"] = self._action(m, "Skeletonize the cloud (SkelScope, with clean-up)",
-                                                  lambda: self.session.start_skeletonize(method="skelscope"))
-        a["study"] = self._action(m, "Study…", self.open_study, "Ctrl+Shift+S")
-
-        m = mb.addMenu("&Help")
-        a["help"] = self._action(m, "Keyboard shortcuts", self.show_shortcuts, "F1")
-        a["about"] = self._action(m, "About SkelScope", self.show_about)
+        A = ActionSpec  # noqa: N806
+        return [
+            A("open", "Open files (roles decided automatically)…", "file.open", self.open_files, "Ctrl+O"),
+            A("open_cloud", "Open cloud…", "file.open", lambda: self.open_as("cloud"), "Ctrl+1"),
+            A("open_skeletal", "Open skeletal point set…", "file.open", lambda: self.open_as("skeletal"), "Ctrl+2"),
+            A("open_curve", "Open curve skeleton…", "file.open", lambda: self.open_as("curve"), "Ctrl+3"),
+            *(A(f"close_{role}", f"Close the {_ROLE_TITLES[role]}", "file.close",
+                lambda r=role: session.close_layer(r), enabled=lambda r=role: r in scene.layers)
+              for role in LAYER_ORDER),
+            A("close_all", "Close all", "file.close_all", session.close_all, "Ctrl+W", enabled=lambda: bool(scene.layers)),
+            A("export_ply", "Export coloured PLY…", "file.export", self.export_ply_dialog, "Ctrl+E", enabled=has_eval),
+            A("export_results", "Export results (JSON + CSV)…", "file.export", self.export_results_dialog,
+              "Ctrl+Shift+E", enabled=has_eval),
+            A("screenshot", "Save picture of the 3D view…", "file.export", self.screenshot_dialog, "Ctrl+S"),
+            A("quit", "Quit", "file.quit", self.close, "Ctrl+Q"),
+            A("evaluate", "Evaluate", "evaluate.run", session.start_evaluation, "F5", enabled=scene.can_evaluate),
+            A("cancel", "Cancel", "evaluate.run", session.cancel, "Esc", enabled=lambda: session.runner.running),
+            *(A(f"metric_{metric}", f"Colour by {metric}", "evaluate.colour", lambda m=metric: scene.set_metric(m), key)
+              for key, metric in zip(("B", "C", "S"), METRICS)),
+            A("reset", "Reset camera", "view.camera", view.reset_camera, "R"),
+            *(A(f"view_{name}", title, "view.camera", lambda n=name: view.standard_view(n), key)
+              for key, (name, title) in zip(("1", "2", "3", "4", "5", "6", "0"), _STANDARD_VIEWS)),
+            A("parallel", "Parallel projection", "view.camera", view.set_parallel_projection, "P",
+              checked=lambda: view.parallel_projection),
+            A("tubes", "Edges as tubes", "view.style", scene.set_edges_as_tubes, "T", checked=lambda: scene.edges_as_tubes),
+            *(A(f"style_{name}", title, "view.style", lambda on, n=name: scene.set_style(n, on), key,
+                checked=lambda n=name: scene.style[n]) for name, title, key in _STYLES),
+            A("save_camera", "Save camera…", "view.camera_files", self.save_camera_dialog),
+            A("load_camera", "Load camera…", "view.camera_files", self.load_camera_dialog),
+            A("skeletonize", "Skeletonize the cloud (Cao et al., the paper's)", "tools.skeletonize",
+              session.start_skeletonize, "Ctrl+K", enabled=has_cloud),
+            A("skeletonize_skelscope", "Skeletonize the cloud (SkelScope, with clean-up)", "tools.skeletonize",
+              lambda: session.start_skeletonize(method="skelscope"), enabled=has_cloud),
+            A("study", "Study…", "tools.study", self.open_study, "Ctrl+Shift+S", enabled=can_study),
+            A("help", "Keyboard shortcuts", "help", self.show_shortcuts, "F1"),
+            A("about", "About SkelScope", "help", self.show_about),
+        ]
 
     # ---- dialogs --------------------------------------------------------------------------
     @QtCore.Slot(str, str, str)
@@ -273,19 +317,15 @@ class MainWindow(QtWidgets.QMainWindow):
 
     # ---- loading --------------------------------------------------------------------------
     def open_files(self) -> None:
-        paths, _ = QtWidgets.QFileDialog.getOpenFileNames(self, "Open clouds and skeletons", self._last_dir(), FILE_FILTER)
+        paths, _ = QtWidgets.QFileDialog.getOpenFileNames(self, "Open clouds and skeletons", self.last_dir(), FILE_FILTER)
         if paths:
             self.session.load_files(paths)
 
     def open_as(self, role: str) -> None:
         title = {"cloud": "Open cloud", "skeletal": "Open skeletal point set", "curve": "Open curve skeleton"}[role]
-        path, _ = QtWidgets.QFileDialog.getOpenFileName(self, title, self._last_dir(), FILE_FILTER)
+        path, _ = QtWidgets.QFileDialog.getOpenFileName(self, title, self.last_dir(), FILE_FILTER)
         if path:
             self.session.load_as(role, path)
-
-    def _last_dir(self) -> str:
-        recent = self.recent_files()
-        return os.path.dirname(recent[0]) if recent else os.getcwd()
 
     def recent_files(self) -> list[str]:
         value = self.settings.value("recent_files", [])
@@ -309,25 +349,34 @@ class MainWindow(QtWidgets.QMainWindow):
         self.recent_menu.setEnabled(bool(files))
 
     @staticmethod
-    def _local_files(event: QtGui.QDropEvent) -> list[str]:
+    def _local_paths(event: QtGui.QDropEvent) -> list[str]:
         data = event.mimeData()
         if data is None or not data.hasUrls():
             return []
-        return [u.toLocalFile() for u in data.urls() if u.isLocalFile() and os.path.isfile(u.toLocalFile())]
+        return [u.toLocalFile() for u in data.urls() if u.isLocalFile()]
+
+    def _drop_handler(self, paths: list[str]) -> Callable[[list[str]], None] | None:
+        """The drop handler that takes ``paths`` (a controller's first), else the loader for their files."""
+        for accepts, drop in self._drop_handlers:
+            if paths and accepts(paths):
+                return drop
+        files = [p for p in paths if os.path.isfile(p)]
+        return (lambda _paths: self.session.load_files(files)) if files else None
 
     def _drag(self, event: QtGui.QDragEnterEvent) -> None:
-        if self._local_files(event):
+        if self._drop_handler(self._local_paths(event)) is not None:
             event.acceptProposedAction()
         else:
             event.ignore()
 
     def _drop(self, event: QtGui.QDropEvent) -> None:
-        paths = self._local_files(event)
-        if not paths:
+        paths = self._local_paths(event)
+        handler = self._drop_handler(paths)
+        if handler is None:
             event.ignore()
             return
         event.acceptProposedAction()
-        self.session.load_files(paths)
+        handler(paths)
 
     dragEnterEvent = _drag  # drops on the panels work too  # noqa: N815
     dragMoveEvent = _drag  # noqa: N815
@@ -421,11 +470,6 @@ class MainWindow(QtWidgets.QMainWindow):
         if self._plots_stale:
             self._plots_timer.start()  # the next stale plot, after the event loop has turned
 
-    def _picked(self, info: dict[str, Any] | None) -> None:
-        self.pick.show_info(info)
-        if info is not None:
-            self.statusBar().showMessage(f"{info['element']} #{info['index']}", 5000)
-
     def _stale_changed(self, reason: str) -> None:
         self.summary.set_stale(reason)
 
@@ -436,25 +480,7 @@ class MainWindow(QtWidgets.QMainWindow):
             self.session.swap_roles()
 
     def _update_actions(self) -> None:
-        a = self.actions_by_name
-        for role in LAYER_ORDER:
-            a[f"close_{role}"].setEnabled(role in self.scene.layers)
-        a["close_all"].setEnabled(bool(self.scene.layers))
-        for action, on in [(a["tubes"], self.scene.edges_as_tubes),
-                           *((a[f"style_{n}"], v) for n, v in self.scene.style.items())]:
-            if action.isChecked() != on:
-                action.blockSignals(True)
-                action.setChecked(on)
-                action.blockSignals(False)
-        has_eval = self.scene.evaluation is not None
-        running = self.session.runner.running
-        a["evaluate"].setEnabled(self.scene.can_evaluate())
-        a["cancel"].setEnabled(running)
-        a["export_ply"].setEnabled(has_eval)
-        a["export_results"].setEnabled(has_eval)
-        a["skeletonize"].setEnabled(self.scene.cloud is not None)
-        a["skeletonize_skelscope"].setEnabled(self.scene.cloud is not None)
-        a["study"].setEnabled(self.scene.cloud is not None and bool(self.scene.cloud.path) and _study_available())
+        self.menus.update()
 
     def open_study(self) -> None:
         try:
@@ -486,9 +512,6 @@ class MainWindow(QtWidgets.QMainWindow):
         ev = self.scene.evaluation
         return None if ev is None else with_thresholds(ev, self.scene.beta_star, self.scene.c_star)
 
-    def _inputs(self) -> tuple[str, ...]:
-        return tuple(p for p in self.scene.input_paths().values() if p)
-
     def export_stem(self) -> str:
         """What exports are named after: the loaded cloud's file stem ("skelscope" for in-memory data)."""
         return data_stem(self.scene.input_paths())
@@ -501,20 +524,20 @@ class MainWindow(QtWidgets.QMainWindow):
             raise ValueError("nothing to export: run an evaluation first")
         names = ply_export_names(ev, out_dir, self.export_stem())
         _refuse_existing(names, overwrite)
-        return export_coloured_ply(ev, out_dir, self._inputs(), color_by=self.scene.metric, stem=self.export_stem())
+        return export_coloured_ply(ev, out_dir, self.input_files(), color_by=self.scene.metric, stem=self.export_stem())
 
     def export_results(self, prefix: str, overwrite: bool = False) -> list[str]:
         ev = self._shown_evaluation()
         if ev is None:
             raise ValueError("nothing to export: run an evaluation first")
         _refuse_existing(result_export_names(ev, prefix), overwrite)
-        return export_results(ev, prefix, self._inputs())
+        return export_results(ev, prefix, self.input_files())
 
     def save_screenshot(self, path: str, scale: int = 1, transparent: bool = False, colour_bar: bool = True,
                         overwrite: bool = True) -> str:
         _refuse_existing([path], overwrite)
         return write_png(path, self.view.image(scale=scale, transparent=transparent, colour_bar=colour_bar),
-                         self._inputs())
+                         self.input_files())
 
     def _guarded(self, what: str, fn: Any, *args: Any, **kwargs: Any) -> Any:
         try:
@@ -522,11 +545,11 @@ class MainWindow(QtWidgets.QMainWindow):
         except (ValueError, OSError) as exc:
             self.show_error(f"{what} failed", str(exc))
             return None
-        self.statusBar().showMessage(f"{what}: wrote {', '.join(os.path.basename(p) for p in ([out] if isinstance(out, str) else out))}", 8000)
+        self.show_message(f"{what}: wrote {', '.join(os.path.basename(p) for p in ([out] if isinstance(out, str) else out))}", 8000)
         return out
 
     def export_ply_dialog(self) -> None:
-        folder = QtWidgets.QFileDialog.getExistingDirectory(self, "Export coloured PLY into", self._last_dir())
+        folder = QtWidgets.QFileDialog.getExistingDirectory(self, "Export coloured PLY into", self.last_dir())
         ev = self._shown_evaluation()
         if folder and ev is not None and self._confirm_overwrite(ply_export_names(ev, folder, self.export_stem())):
             self._guarded("PLY export", self.export_ply, folder, overwrite=True)
@@ -534,7 +557,7 @@ class MainWindow(QtWidgets.QMainWindow):
     def export_results_dialog(self) -> None:
         path, _ = QtWidgets.QFileDialog.getSaveFileName(
             self, "Export results (PREFIX.json and PREFIX_*.csv)",
-            os.path.join(self._last_dir(), f"{self.export_stem()}_results.json"), "JSON (*.json)",
+            os.path.join(self.last_dir(), f"{self.export_stem()}_results.json"), "JSON (*.json)",
             options=QtWidgets.QFileDialog.Option.DontConfirmOverwrite)
         ev = self._shown_evaluation()
         if path and ev is not None and self._confirm_overwrite(result_export_names(ev, path)):
@@ -544,7 +567,7 @@ class MainWindow(QtWidgets.QMainWindow):
         """One dialog: file, scale, transparent background, colour bar on or off."""
         from .picture_dialog import PictureDialog
 
-        default = os.path.join(self._last_dir(), f"{self.export_stem()}_{self.scene.metric}.png")
+        default = os.path.join(self.last_dir(), f"{self.export_stem()}_{self.scene.metric}.png")
         dialog = PictureDialog(self, default, (self.view.widget.width(), self.view.widget.height()))
         if dialog.exec() != QtWidgets.QDialog.DialogCode.Accepted:
             return
@@ -555,7 +578,7 @@ class MainWindow(QtWidgets.QMainWindow):
     def save_camera(self, path: str) -> str:
         from .view.camera import save_camera
 
-        return save_camera(path, self.view.camera_state(), self._inputs())
+        return save_camera(path, self.view.camera_state(), self.input_files())
 
     def load_camera(self, path: str) -> None:
         from .view.camera import load_camera
@@ -564,12 +587,12 @@ class MainWindow(QtWidgets.QMainWindow):
 
     def save_camera_dialog(self) -> None:
         path, _ = QtWidgets.QFileDialog.getSaveFileName(
-            self, "Save camera", os.path.join(self._last_dir(), f"{self.export_stem()}_camera.json"), "Camera (*.json)")
+            self, "Save camera", os.path.join(self.last_dir(), f"{self.export_stem()}_camera.json"), "Camera (*.json)")
         if path:
             self._guarded("Camera", self.save_camera, path)
 
     def load_camera_dialog(self) -> None:
-        path, _ = QtWidgets.QFileDialog.getOpenFileName(self, "Load camera", self._last_dir(), "Camera (*.json)")
+        path, _ = QtWidgets.QFileDialog.getOpenFileName(self, "Load camera", self.last_dir(), "Camera (*.json)")
         if path:
             try:
                 self.load_camera(path)
@@ -584,6 +607,7 @@ class MainWindow(QtWidgets.QMainWindow):
 
         from .worker import SHUTDOWN_WAIT_S
 
+        self.closing.emit()
         deadline = time.monotonic() + SHUTDOWN_WAIT_S
         runners = [self.session.runner]
         study = getattr(self, "_study_dialog", None)
@@ -601,6 +625,10 @@ class MainWindow(QtWidgets.QMainWindow):
 
 
 _ROLE_TITLES = {"cloud": "cloud", "skeletal": "skeletal point set", "curve": "curve skeleton"}
+_STANDARD_VIEWS = (("xy", "Top (XY)"), ("-xy", "Bottom (-XY)"), ("xz", "Front (XZ)"), ("-xz", "Back (-XZ)"),
+                   ("yz", "Side (YZ)"), ("-yz", "Other side (-YZ)"), ("iso", "Isometric"))
+_STYLES = (("spheres", "Points as shaded spheres", "Shift+S"), ("eye_dome", "Eye-dome lighting", "Shift+E"),
+           ("axes", "Orientation axes", "Shift+A"))
 
 
 def _refuse_existing(paths: list[str], overwrite: bool) -> None:

@@ -4,7 +4,8 @@ threshold" box hides (and makes unpickable) every element whose value passes (be
 NaN stays shown).
 
 Supports of clouds of BACKGROUND_POINTS or more are computed in a thread of their own (a direction map
-of a 100k-point cloud takes seconds), the newest pick winning. Installed by one call from :class:`app.main_window.MainWindow`; it chains the view's ``on_pick`` and
+of a 100k-point cloud takes seconds), the newest pick winning. Made by :class:`app.main_window.MainWindow`
+through its public interface (:class:`app.window_api.WindowApi`): it listens to ``element_picked`` and
 subscribes to the scene after the view, so its overlay and filter are applied after the view's redraw.
 """
 
@@ -24,8 +25,9 @@ from .view.actors import display_coordinates
 from .view.picking import pick_layout
 from .view.style import MAGENTA
 from .view.support_overlay import SupportOverlay
+from .window_api import LEFT, WindowApi
 
-__all__ = ["SupportController", "install_supports", "below_threshold"]
+__all__ = ["SupportController", "below_threshold"]
 
 # scene-view actor -> (layer, quantity location) the filter replaces
 _FILTERED = {"skeletal": ("skeletal", "points"), "curve-samples": ("curve", "samples"),
@@ -44,40 +46,32 @@ BACKGROUND_POINTS = 20_000
 class SupportController(QtCore.QObject):
     ready = QtCore.Signal(int, object, object)  # request token, info, ElementSupport or the exception
 
-    def __init__(self, window: Any) -> None:
-        super().__init__(window)
+    def __init__(self, window: WindowApi) -> None:
+        super().__init__(window.widget)
         self.window = window
         self.scene = window.scene
         self.view = window.view
-        self.panel = SupportPanel(window)
+        self.panel = SupportPanel(window.widget)
         self.overlay = SupportOverlay(self.view)
         self.info: dict[str, Any] | None = None
         self.support: ElementSupport | None = None
         self.filter_on = False
         self._filter_names: list[str] = []
         self.filter_meshes: dict[str, pv.PolyData] = {}  # filter actor name -> the points it draws
-        window._dock("Support", self.panel, QtCore.Qt.DockWidgetArea.LeftDockWidgetArea)
-        window.splitDockWidget(window.docks["Picked element"], window.docks["Support"], QtCore.Qt.Orientation.Vertical)
-        self.filter_box = QtWidgets.QCheckBox("only elements below the threshold", window.display)
+        window.add_dock("Support", self.panel, LEFT, below="Picked element")
+        self.filter_box = QtWidgets.QCheckBox("only elements below the threshold")
         self.filter_box.setToolTip("hide every element the overall score counts (beta > beta*, c > c*); NaN stays")
         self.filter_box.toggled.connect(self.set_filter)
-        layout = window.display.layout()
-        layout.insertWidget(layout.count() - 1, self.filter_box)
+        window.add_display_option(self.filter_box)
         self.background_points = BACKGROUND_POINTS
         self._token = 0
         self.busy = False
         self.ready.connect(self._ready)
-        self._pick = self.view.on_pick
-        self.view.on_pick = self.picked
+        window.element_picked.connect(self.show_element)
         self.scene.subscribe(self._on_scene)
         self._sync_filter_box()
 
     # ---- picking --------------------------------------------------------------------------
-    def picked(self, info: dict[str, Any] | None) -> None:
-        if self._pick is not None:
-            self._pick(info)
-        self.show_element(info)
-
     def show_element(self, info: dict[str, Any] | None) -> ElementSupport | None:
         """Compute and show the support of ``info`` for the metric on screen (None clears); for a
         big cloud in a thread, shown when done (returns None meanwhile)."""
@@ -112,7 +106,7 @@ class SupportController(QtCore.QObject):
             return  # a newer pick (or a new result) replaced this one
         self.busy = False
         if isinstance(support, Exception):
-            self.window.statusBar().showMessage(f"support: {support}", 8000)
+            self.window.show_message(f"support: {support}")
             support = None
         self.support = support
         ev = self.scene.evaluation
@@ -211,10 +205,3 @@ class SupportController(QtCore.QObject):
             self._filter_names.append(name)
             self.filter_meshes[name] = mesh
         self.view.request_render()
-
-
-def install_supports(window: Any) -> SupportController:
-    controller = SupportController(window)
-    window.supports = controller
-    return controller
-

@@ -108,7 +108,9 @@ def main() -> int:
             curve = window.scene.curve
             junction = int(curve.curve.degrees().argmax())
             x, y = window.view.world_to_display(curve.points[junction])
-            window._picked(window.view.pick_display(x, y))
+            info = window.view.pick_display(x, y)  # the pick panel only: no support overlay in this picture
+            window.pick.show_info(info)
+            window.show_message(f"{info['element']} #{info['index']}", 5000)
         settle()
         save(window, f"window_{metric}.png")
     window.docks["Barcodes"].raise_()
@@ -120,7 +122,7 @@ def main() -> int:
     save(window.docks["Histogram"], "histogram_panel.png")
     window.docks["Barcodes"].raise_()
 
-    window._picked(None)
+    window.pick_element(None)
     window.view._remove_marker()
     window.scene.set_metric("centeredness")
     window.actions_by_name["tubes"].trigger()  # the T key's action: the checkbox follows
@@ -204,24 +206,22 @@ def support_screenshots(window, settle, save) -> None:
     mid = int(np.argsort(np.abs(samples[:, 1] - 0.5 * (samples[:, 1].max() + np.median(samples[:, 1]))))[0])
     scene.set_metric("centeredness")
     info = scene.element_info("curve", "samples", mid)
-    window._picked(info)
     window.view._show_marker(info["xyz"])
-    sup.picked(info)
+    window.pick_element(info)
     settle(500)
     save(window, "window_support_slab.png")
     save(window.docks["Support"], "support_slab_panel.png")
     # near the junction the slab also cuts the other arms: the ring keeps the nearest cross-section only
     upper = np.flatnonzero((np.abs(samples[:, 0] - samples[mid, 0]) < 0.02) & (samples[:, 1] > 0))
     near = int(upper[np.argmin(np.abs(samples[upper, 1] - 0.12))])
-    sup.picked(scene.element_info("curve", "samples", near))
+    window.pick_element(scene.element_info("curve", "samples", near))
     settle(500)
     save(window.docks["Support"], "support_slab_junction_panel.png")
     skel = scene.skeletal.points
     k = int(np.argmin(np.linalg.norm(skel - samples[mid], axis=1)))
     info = scene.element_info("skeletal", "points", k)
     window.view._show_marker(info["xyz"])
-    window._picked(info)
-    sup.picked(info)
+    window.pick_element(info)
     settle(500)
     save(window, "window_support_knn.png")
     scene.set_metric("boundedness")  # the same element's direction map
@@ -236,13 +236,12 @@ def support_screenshots(window, settle, save) -> None:
     scene.set_evaluation(ev_paper)
     scene.set_metric("boundedness")
     info = scene.element_info("skeletal", "points", int(np.argmin(np.linalg.norm(few - skel[k], axis=1))))
-    sup.picked(info)
+    window.pick_element(info)
     settle(500)
     save(window.docks["Support"], "support_paper_panel.png")
     window.session.show_arrays(ev.cloud, skel, scene.curve.curve, ev)
     scene.set_metric("boundedness")
-    window._picked(None)
-    sup.picked(None)
+    window.pick_element(None)
     window.view._remove_marker()
     beta_star = scene.beta_star
     scene.set_thresholds(0.9, scene.c_star)  # a stricter beta*: the arms' ends fall below it

@@ -96,6 +96,11 @@ class DisplayPanel(QtWidgets.QWidget):
         scene.subscribe(self._on_scene)
         self._sync()
 
+    def add_option(self, widget: QtWidgets.QWidget) -> None:
+        """A control added by a feature (e.g. the support filter), below the others, above the stretch."""
+        layout = self.layout()
+        layout.insertWidget(layout.count() - 1, widget)
+
     def _range_spin(self, value: float) -> QtWidgets.QDoubleSpinBox:
         spin = QtWidgets.QDoubleSpinBox(self)
         spin.setRange(-1e6, 1e6)

@@ -14,7 +14,7 @@ from PySide6 import QtCore, QtGui, QtWidgets
 
 from app.__main__ import main
 from compare_helpers import make_dataset, manifest
-from conftest import write_shape_files
+from shape_files import write_shape_files
 from skelcore import evaluate, shapes
 from skelcore.compare import Backend, run_compare
 from skelcore.compare.jobs import execute, make_jobs
@@ -22,7 +22,7 @@ from skelcore.compare.manifest import load_manifest
 from skelcore.io import load_points, write_points_ply
 from skelcore.params import k_center_for
 
-pytestmark = pytest.mark.gui
+pytestmark = [pytest.mark.gui, pytest.mark.window(size=(1200, 800), dialogs="record")]
 
 BODY = """
 [[shapes]]
@@ -59,26 +59,8 @@ def run_dir(tmp_path_factory):
 
 
 @pytest.fixture
-def errors(monkeypatch):
-    seen: list[str] = []
-    monkeypatch.setattr(QtWidgets.QMessageBox, "critical", lambda parent, title, text, *a, **k: seen.append(text))
-    return seen
-
-
-@pytest.fixture
-def window(qtbot, tmp_path, errors):
-    from app.main_window import MainWindow
-
-    settings = QtCore.QSettings(str(tmp_path / "settings.ini"), QtCore.QSettings.Format.IniFormat)
-    w = MainWindow(settings=settings)
-    w.session.auto_evaluate = False
-    qtbot.addWidget(w)
-    w.resize(1200, 800)
-    w.show()
-    qtbot.waitExposed(w)
-    yield w
-    w.compare.close_views()
-    w.session.runner.shutdown()
+def errors(window):
+    return window.dialogs  # the error dialogs' lines
 
 
 @pytest.fixture
@@ -170,7 +152,7 @@ def test_show_a_puts_the_stored_index_result_in_the_main_window_and_its_support_
     idx = np.loadtxt(root / "skeletons" / "cyl_sub.idx", dtype=np.int64)
     window.scene.set_metric("centeredness")
     i = int(np.argmin(np.abs(ev.skeletal.points[:, 2] - 2.0)))
-    window.supports.picked(window.scene.element_info("skeletal", "points", i))
+    window.pick_element(window.scene.element_info("skeletal", "points", i))
     sup = window.supports.support
     assert sup.kind == "knn", sup.reason
     assert sup.value == pytest.approx(ev.skeletal.centeredness_raw[i], abs=1e-12)
@@ -193,7 +175,7 @@ def test_skeletal_support_under_a_skeletal_index_matches_eq10_by_hand(window):
     window.session.show_arrays(cyl.cloud, skeletal, None, ev)
     window.scene.set_metric("centeredness")
     for i in (0, 123, 499):
-        window.supports.picked(window.scene.element_info("skeletal", "points", i))
+        window.pick_element(window.scene.element_info("skeletal", "points", i))
         sup = window.supports.support
         assert sup.kind == "knn", sup.reason
         nb = sup.detail.neighbours

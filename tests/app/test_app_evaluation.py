@@ -9,37 +9,20 @@ import os
 
 import numpy as np
 import pytest
-from PySide6 import QtCore, QtWidgets
+from PySide6 import QtCore
 
 import skelcore
 from skelcore import shapes
-from conftest import write_shape_files
+from shape_files import write_shape_files
 from skelcore.io import load_any, write_points_ply
 from skelcore.params import Params
 
-pytestmark = pytest.mark.gui
+pytestmark = [pytest.mark.gui, pytest.mark.window(auto_evaluate=True, dialogs="record")]
 
 
 @pytest.fixture(scope="module")
 def files(tmp_path_factory):
     return write_shape_files(tmp_path_factory.mktemp("y"), shapes.y_shape(1500, seed=3))
-
-
-@pytest.fixture
-def window(qtbot, tmp_path, monkeypatch):
-    from app.main_window import MainWindow
-
-    dialogs: list[str] = []
-    monkeypatch.setattr(QtWidgets.QMessageBox, "critical", lambda parent, title, text, *a, **k: dialogs.append(text))
-    monkeypatch.setattr(QtWidgets.QMessageBox, "exec", lambda self: dialogs.append(self.text()) or 0)
-    settings = QtCore.QSettings(str(tmp_path / "settings.ini"), QtCore.QSettings.Format.IniFormat)
-    w = MainWindow(settings=settings)
-    w.dialogs = dialogs
-    qtbot.addWidget(w)
-    w.show()
-    qtbot.waitExposed(w)
-    yield w
-    w.session.runner.shutdown()
 
 
 @pytest.fixture(scope="module")

@@ -12,7 +12,6 @@ import time
 from pathlib import Path
 
 import pytest
-from PySide6 import QtCore, QtWidgets
 
 from skelcore import shapes
 
@@ -28,15 +27,8 @@ def million():
     return cloud, cloud * 0.05  # a skeletal set in pointwise correspondence (the cloud contracted)
 
 
-def test_cancel_during_a_million_point_evaluation_stops_the_worker_and_the_window_survives(qtbot, tmp_path, million,
-                                                                                          monkeypatch):
-    from app.main_window import MainWindow
-
-    monkeypatch.setattr(QtWidgets.QMessageBox, "critical", lambda *a, **k: pytest.fail(f"error dialog {a[2]!r}"))
-    w = MainWindow(settings=QtCore.QSettings(str(tmp_path / "s.ini"), QtCore.QSettings.Format.IniFormat))
-    qtbot.addWidget(w)
-    w.session.auto_evaluate = False
-    w.show()
+def test_cancel_during_a_million_point_evaluation_stops_the_worker_and_the_window_survives(window, qtbot, million):
+    w = window
     cloud, skeletal = million
     with w.session.batch():
         w.scene.set_cloud(cloud)
@@ -107,19 +99,8 @@ _STAGES = ("topology", "skeletal boundedness", "skeletal centeredness", "skeleta
            "curve centeredness", "curve smoothness", "skeletal coverage", "curve coverage")
 
 
-def _window(qtbot, tmp_path, monkeypatch):
-    from app.main_window import MainWindow
-
-    monkeypatch.setattr(QtWidgets.QMessageBox, "critical", lambda *a, **k: pytest.fail(f"error dialog {a[2]!r}"))
-    w = MainWindow(settings=QtCore.QSettings(str(tmp_path / "s.ini"), QtCore.QSettings.Format.IniFormat))
-    qtbot.addWidget(w)
-    w.session.auto_evaluate = False
-    w.show()
-    return w
-
-
 @pytest.mark.parametrize("target", _STAGES)
-def test_cancel_inside_each_stage_stops_the_engine_there_and_the_window_survives(qtbot, tmp_path, monkeypatch, target):
+def test_cancel_inside_each_stage_stops_the_engine_there_and_the_window_survives(window, qtbot, monkeypatch, target):
     """The real engine on a Y with a skeletal set and a curve; its progress report holds the worker
     inside ``target`` until the window's Cancel is pressed, so the cancel lands in that very stage."""
     import skelcore
@@ -143,8 +124,8 @@ def test_cancel_inside_each_stage_stops_the_engine_there_and_the_window_survives
             raised.append(exc)
             raise
 
-    monkeypatch.setattr(skelcore, "evaluate", paused_in_target)
-    w = _window(qtbot, tmp_path, monkeypatch)
+    monkeypatch.setattr(skelcore, "evaluate", paused_in_target)  # read when the task starts
+    w = window
     sh = shapes.y_shape(600, seed=0)
     with w.session.batch():
         w.scene.set_cloud(sh.cloud)
@@ -165,8 +146,8 @@ def test_cancel_inside_each_stage_stops_the_engine_there_and_the_window_survives
     assert w.scene.evaluation is None and w.isVisible() and w.actions_by_name["evaluate"].isEnabled()
 
 
-def test_the_stage_label_follows_the_stage_that_runs(qtbot, tmp_path, monkeypatch):
-    w = _window(qtbot, tmp_path, monkeypatch)
+def test_the_stage_label_follows_the_stage_that_runs(window, qtbot):
+    w = window
     go = [threading.Event() for _ in range(3)]
 
     def job(progress, cancel):
@@ -183,13 +164,13 @@ def test_the_stage_label_follows_the_stage_that_runs(qtbot, tmp_path, monkeypatc
     assert not w.stage.isVisible()
 
 
-def test_quitting_waits_for_stuck_tasks_within_one_budget_and_keeps_the_settings(qtbot, tmp_path, monkeypatch):
+def test_quitting_waits_for_stuck_tasks_within_one_budget_and_keeps_the_settings(window, tmp_path, monkeypatch):
     """A task inside an engine call without a checkpoint (main window and Study dialog both): closing
     asks for at most SHUTDOWN_WAIT_S of waiting in all, never a second full wait for the Study."""
     from app.study_dialog import StudyDialog
     from app.worker import SHUTDOWN_WAIT_S, Task
 
-    w = _window(qtbot, tmp_path, monkeypatch)
+    w = window
     release = threading.Event()
 
     def stuck(progress, cancel):
@@ -210,6 +191,6 @@ def test_quitting_waits_for_stuck_tasks_within_one_budget_and_keeps_the_settings
         assert asked and None not in asked
         assert sum(asked) <= SHUTDOWN_WAIT_S * 1000 + 1, asked
         assert not study.isVisible() and not w.isVisible()
-        assert "cloud.ply" in (tmp_path / "s.ini").read_text()  # synced: the process may end with os._exit
+        assert "cloud.ply" in (tmp_path / "settings.ini").read_text()  # synced: the process may end with os._exit
     finally:
         release.set()

@@ -11,7 +11,7 @@ from PySide6 import QtCore, QtWidgets
 
 from app.__main__ import main
 from skelcore import shapes
-from conftest import write_shape_files
+from shape_files import write_shape_files
 from skelcore.io import write_points_ply
 
 pytestmark = pytest.mark.gui
@@ -81,13 +81,9 @@ def test_unknown_metric_is_a_usage_error_exit_2(capsys):
     assert exc.value.code == 2 and capsys.readouterr().err.count("\n") == 1
 
 
-def test_skeletonize_action_runs_in_the_worker_and_loads_both_skeletons(qtbot, tmp_path, monkeypatch):
-    from app.main_window import MainWindow
-
-    monkeypatch.setattr(QtWidgets.QMessageBox, "critical", lambda *a, **k: pytest.fail(f"error dialog {a[2]!r}"))
-    w = MainWindow(settings=QtCore.QSettings(str(tmp_path / "s.ini"), QtCore.QSettings.Format.IniFormat))
-    qtbot.addWidget(w)
-    w.show()
+@pytest.mark.window(auto_evaluate=True)
+def test_skeletonize_action_runs_in_the_worker_and_loads_both_skeletons(window, qtbot, tmp_path):
+    w = window
     assert not w.actions_by_name["skeletonize"].isEnabled()
     cloud = tmp_path / "cyl.ply"
     write_points_ply(cloud, shapes.cylinder(800, seed=1).cloud)
@@ -101,16 +97,11 @@ def test_skeletonize_action_runs_in_the_worker_and_loads_both_skeletons(qtbot, t
     assert w.scene.skeletal.n_points == 800 and w.scene.curve.curve.n_edges >= 1
     assert "contraction" in stages
     assert w.scene.skeletal.path is None and w.actions_by_name["evaluate"].isEnabled()
-    w.session.runner.shutdown()
 
 
-def test_study_action_opens_the_study_dialog_for_the_loaded_cloud(qtbot, tmp_path):
+def test_study_action_opens_the_study_dialog_for_the_loaded_cloud(window, tmp_path):
     pytest.importorskip("app.study_dialog")
-    from app.main_window import MainWindow
-
-    w = MainWindow(settings=QtCore.QSettings(str(tmp_path / "s.ini"), QtCore.QSettings.Format.IniFormat))
-    qtbot.addWidget(w)
-    w.session.auto_evaluate = False
+    w = window
     cloud = tmp_path / "cyl.ply"
     write_points_ply(cloud, shapes.cylinder(500, seed=1).cloud)
     assert not w.actions_by_name["study"].isEnabled()
@@ -121,16 +112,14 @@ def test_study_action_opens_the_study_dialog_for_the_loaded_cloud(qtbot, tmp_pat
     w._study_dialog.close()
 
 
-def test_an_uncaught_exception_becomes_a_dialog_with_the_traceback(qtbot, tmp_path, monkeypatch):
+def test_an_uncaught_exception_becomes_a_dialog_with_the_traceback(window, monkeypatch):
     from app.__main__ import _install_exception_hook
-    from app.main_window import MainWindow
 
     shown = []
     monkeypatch.setattr(QtWidgets.QMessageBox, "exec", lambda self: shown.append((self.text(), self.detailedText())) or 0)
     monkeypatch.setattr(sys, "excepthook", sys.excepthook)
-    w = MainWindow(settings=QtCore.QSettings(str(tmp_path / "s.ini"), QtCore.QSettings.Format.IniFormat))
-    qtbot.addWidget(w)
-    w.show()
+    w = window
+    assert w.bug is None
     _install_exception_hook(w)
     try:
         1 / 0

@@ -8,14 +8,14 @@ import json
 
 import numpy as np
 import pytest
-from PySide6 import QtCore, QtWidgets
+from PySide6 import QtCore
 
 import skelcore
-from conftest import write_shape_files
+from shape_files import write_shape_files
 from skelcore import shapes
 from skelcore.colors import SKELETAL_COLOR, lookup_table
 
-pytestmark = pytest.mark.gui
+pytestmark = [pytest.mark.gui, pytest.mark.window(size=(1200, 800), questions="default")]
 
 MAGENTA = (255, 0, 255)
 
@@ -31,22 +31,6 @@ def evaluation(files):
 
     return skelcore.evaluate(load_cloud(files["cloud"]), load_points(files["skeletal"]), load_curve(files["curve"]),
                              inputs=dict(files))
-
-
-@pytest.fixture
-def window(qtbot, tmp_path, monkeypatch):
-    from app.main_window import MainWindow
-
-    monkeypatch.setattr(QtWidgets.QMessageBox, "critical", lambda *a, **k: pytest.fail(f"error dialog {a[2]!r}"))
-    w = MainWindow(settings=QtCore.QSettings(str(tmp_path / "s.ini"), QtCore.QSettings.Format.IniFormat))
-    w.session.auto_evaluate = False
-    w.session.ask = lambda q, o: o[0]
-    qtbot.addWidget(w)
-    w.resize(1200, 800)
-    w.show()
-    qtbot.waitExposed(w)
-    yield w
-    w.session.runner.shutdown()
 
 
 @pytest.fixture

@@ -5,27 +5,11 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from PySide6 import QtCore, QtWidgets
 
 from skelcore import evaluate, shapes
 from skelcore.params import Params
 
 pytestmark = pytest.mark.gui
-
-
-@pytest.fixture
-def window(qtbot, tmp_path, monkeypatch):
-    from app.main_window import MainWindow
-
-    monkeypatch.setattr(QtWidgets.QMessageBox, "critical", lambda *a, **k: pytest.fail(f"unexpected dialog {a[2]!r}"))
-    settings = QtCore.QSettings(str(tmp_path / "settings.ini"), QtCore.QSettings.Format.IniFormat)
-    w = MainWindow(settings=settings)
-    w.session.auto_evaluate = False
-    qtbot.addWidget(w)
-    w.show()
-    qtbot.waitExposed(w)
-    yield w
-    w.session.runner.shutdown()
 
 
 @pytest.mark.parametrize("method", ["rays", "paper"])
@@ -38,7 +22,7 @@ def test_the_direction_sphere_shows_the_cap_below_a_point_above_a_sphere(window,
     ev = evaluate(cloud, skeletal, params=Params(boundedness_method=method))
     window.session.show_arrays(cloud, skeletal, None, ev)
     window.scene.set_metric("boundedness")
-    window.supports.picked(window.scene.element_info("skeletal", "points", 0))
+    window.pick_element(window.scene.element_info("skeletal", "points", 0))
     panel = window.supports.panel
     fig = panel.figure
     assert len(fig.axes) == 2 and fig.axes[1].name == "3d"
@@ -63,7 +47,7 @@ def test_the_direction_sphere_shows_the_cap_below_a_point_above_a_sphere(window,
     panel.draw_now()
     qtbot.wait(50)
     # the centre of the sphere sees (nearly) every direction
-    window.supports.picked(window.scene.element_info("skeletal", "points", 1))
+    window.pick_element(window.scene.element_info("skeletal", "points", 1))
     _c, inside = panel.sphere_faces
     assert inside.mean() > 0.85
     # other supports have no sphere

@@ -5,12 +5,12 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from PySide6 import QtCore, QtWidgets
+from PySide6 import QtCore
 
 from skelcore import evaluate, shapes
 from skelcore.curve import CurveSkeleton
 
-pytestmark = pytest.mark.gui
+pytestmark = [pytest.mark.gui, pytest.mark.window(size=(1300, 850))]
 
 RADIUS = 0.5
 
@@ -20,22 +20,6 @@ def cylinder_eval():
     cyl = shapes.cylinder(2500, radius=RADIUS, length=4.0, capped=False, seed=4)
     curve = CurveSkeleton.from_raw(cyl.curve_vertices, cyl.curve_edges)
     return cyl, curve, evaluate(cyl.cloud, cyl.skeletal, curve)
-
-
-@pytest.fixture
-def window(qtbot, tmp_path, monkeypatch):
-    from app.main_window import MainWindow
-
-    monkeypatch.setattr(QtWidgets.QMessageBox, "critical", lambda *a, **k: pytest.fail(f"unexpected dialog {a[2]!r}"))
-    settings = QtCore.QSettings(str(tmp_path / "settings.ini"), QtCore.QSettings.Format.IniFormat)
-    w = MainWindow(settings=settings)
-    w.session.auto_evaluate = False
-    qtbot.addWidget(w)
-    w.resize(1300, 850)
-    w.show()
-    qtbot.waitExposed(w)
-    yield w
-    w.session.runner.shutdown()
 
 
 @pytest.fixture
@@ -61,7 +45,7 @@ def test_a_curve_samples_plot_shows_a_circular_ring_centred_on_the_axis(cylinder
     _, _, ev = cylinder_eval
     w.scene.set_metric("centeredness")
     i = _middle_sample(ev)
-    w.supports.picked(w.scene.element_info("curve", "samples", i))
+    w.pick_element(w.scene.element_info("curve", "samples", i))
     assert w.pick.info["index"] == i  # the pick panel still gets the pick
     sup = w.supports.panel.support
     assert sup.kind == "slab" and sup.value == pytest.approx(ev.curve.sample_centeredness_raw[i], abs=1e-12)
@@ -94,7 +78,7 @@ def test_a_skeletal_points_neighbours_and_centroids_are_shown(cylinder_window, c
     w = cylinder_window
     cyl, _, ev = cylinder_eval
     w.scene.set_metric("centeredness")
-    w.supports.picked(w.scene.element_info("skeletal", "points", 100))
+    w.pick_element(w.scene.element_info("skeletal", "points", 100))
     sup = w.supports.support
     assert sup.kind == "knn"
     assert sup.value == pytest.approx(ev.skeletal.centeredness_raw[100], abs=1e-12)
@@ -120,7 +104,7 @@ def test_a_point_outside_a_sphere_covers_the_cap_fraction_of_its_direction_map(w
     ev = evaluate(cloud, skeletal)
     window.session.show_arrays(cloud, skeletal, None, ev)
     window.scene.set_metric("boundedness")
-    window.supports.picked(window.scene.element_info("skeletal", "points", 0))
+    window.pick_element(window.scene.element_info("skeletal", "points", 0))
     sup = window.supports.support
     assert sup.kind == "directions"
     h = sup.detail.radius / ev.normalization.scale  # the balls' radius, in the user's units
@@ -132,7 +116,7 @@ def test_a_point_outside_a_sphere_covers_the_cap_fraction_of_its_direction_map(w
     assert shown.mean() == pytest.approx(ev.skeletal.boundedness[0], abs=0.01)
     assert "beta = " in window.supports.panel.title
     # the centre of the sphere sees (nearly) every direction, as the engine says
-    window.supports.picked(window.scene.element_info("skeletal", "points", 1))
+    window.pick_element(window.scene.element_info("skeletal", "points", 1))
     inside = np.asarray(window.supports.panel.figure.axes[0].images[0].get_array()).mean()
     assert inside > 0.9 and inside == pytest.approx(ev.skeletal.boundedness[1], abs=0.01)
 
@@ -243,7 +227,7 @@ def test_a_big_clouds_support_is_computed_in_a_thread_and_the_newest_pick_wins(c
     _, _, ev = cylinder_eval
     w.supports.background_points = 0  # every cloud counts as big
     w.scene.set_metric("boundedness")
-    w.supports.picked(w.scene.element_info("skeletal", "points", 5))
+    w.pick_element(w.scene.element_info("skeletal", "points", 5))
     assert w.supports.show_element(w.scene.element_info("skeletal", "points", 7)) is None  # not computed here
     assert "computing" in w.supports.panel.support.reason
     qtbot.waitUntil(lambda: not w.supports.busy, timeout=60000)

@@ -6,13 +6,12 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from PySide6 import QtCore, QtWidgets
 
 import skelcore
 from skelcore import shapes
 from skelcore.io import write_curve_ply, write_points_ply
 
-pytestmark = pytest.mark.gui
+pytestmark = [pytest.mark.gui, pytest.mark.window(auto_evaluate=True, dialogs="record")]
 
 
 @pytest.fixture(scope="module")
@@ -24,23 +23,6 @@ def files(tmp_path_factory):
     write_points_ply(d / "sub.ply", sh.skeletal[sub])
     write_curve_ply(d / "far.ply", sh.curve_vertices * 30.0, sh.curve_edges)
     return {"cloud": str(d / "cloud.ply"), "sub": str(d / "sub.ply"), "far": str(d / "far.ply")}
-
-
-@pytest.fixture
-def window(qtbot, tmp_path, monkeypatch):
-    from app.main_window import MainWindow
-
-    dialogs: list[str] = []
-    monkeypatch.setattr(QtWidgets.QMessageBox, "critical", lambda parent, title, text, *a, **k: dialogs.append(text))
-    monkeypatch.setattr(QtWidgets.QMessageBox, "exec", lambda self: dialogs.append(self.text()) or 0)
-    settings = QtCore.QSettings(str(tmp_path / "settings.ini"), QtCore.QSettings.Format.IniFormat)
-    w = MainWindow(settings=settings)
-    w.dialogs = dialogs
-    qtbot.addWidget(w)
-    w.show()
-    qtbot.waitExposed(w)
-    yield w
-    w.session.runner.shutdown()
 
 
 def _evaluate(qtbot, w):

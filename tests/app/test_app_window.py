@@ -10,42 +10,17 @@ import pytest
 from PySide6 import QtCore, QtGui, QtWidgets
 
 from skelcore import shapes
-from conftest import write_shape_files
+from shape_files import write_shape_files
 from skelcore.colors import SKELETAL_COLOR, lookup_table
 from skelcore.io import write_points_ply
 from app.loading import REPLACE_CLOUD
 
-pytestmark = pytest.mark.gui
+pytestmark = [pytest.mark.gui, pytest.mark.window(size=(1200, 800), dialogs="record")]
 
 
 @pytest.fixture
 def files(tmp_path):
     return write_shape_files(tmp_path, shapes.y_shape(1500, seed=3))
-
-
-@pytest.fixture
-def window(qtbot, tmp_path, monkeypatch):
-    from app.main_window import MainWindow
-
-    dialogs: list[str] = []
-
-    def critical(parent, title, text, *args, **kwargs):
-        dialogs.append(text)
-        return QtWidgets.QMessageBox.StandardButton.Ok
-
-    monkeypatch.setattr(QtWidgets.QMessageBox, "critical", critical)
-    monkeypatch.setattr(QtWidgets.QMessageBox, "exec", lambda self: dialogs.append(self.text()) or 0)
-    monkeypatch.setattr(QtWidgets.QInputDialog, "getItem", lambda *a, **k: pytest.fail(f"unexpected question {a[2]!r}"))
-    settings = QtCore.QSettings(str(tmp_path / "settings.ini"), QtCore.QSettings.Format.IniFormat)
-    w = MainWindow(settings=settings)
-    w.session.auto_evaluate = False
-    w.dialogs = dialogs
-    qtbot.addWidget(w)
-    w.resize(1200, 800)
-    w.show()
-    qtbot.waitExposed(w)
-    yield w
-    w.session.runner.shutdown()
 
 
 def _drop(widget: QtWidgets.QWidget, paths: list[str]) -> QtGui.QDropEvent:

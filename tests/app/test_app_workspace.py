@@ -10,10 +10,10 @@ import pytest
 from PySide6 import QtCore, QtGui, QtWidgets
 
 import skelcore
-from conftest import write_shape_files
+from shape_files import write_shape_files
 from skelcore import shapes
 
-pytestmark = pytest.mark.gui
+pytestmark = [pytest.mark.gui, pytest.mark.window(size=(1200, 800), dialogs="record", questions="default")]
 
 
 @pytest.fixture(scope="module")
@@ -32,31 +32,6 @@ def evaluation(files):
 
     return skelcore.evaluate(load_cloud(files["cloud"]), load_points(files["skeletal"]), load_curve(files["curve"]),
                              inputs=dict(files))
-
-
-@pytest.fixture
-def window(qtbot, tmp_path, monkeypatch):
-    from app.main_window import MainWindow
-
-    dialogs: list[str] = []
-    monkeypatch.setattr(QtWidgets.QMessageBox, "critical", lambda parent, title, text, *a, **k: dialogs.append(text))
-    monkeypatch.setattr(QtWidgets.QMessageBox, "exec", lambda self: dialogs.append(self.text()) or 0)
-    w = MainWindow(settings=QtCore.QSettings(str(tmp_path / "s.ini"), QtCore.QSettings.Format.IniFormat))
-    w.session.auto_evaluate = False
-    w.dialogs = dialogs
-    w.questions = []
-
-    def ask(question, options):  # Enter on every question: its default
-        w.questions.append((question, options))
-        return options[0]
-
-    w.session.ask = ask
-    qtbot.addWidget(w)
-    w.resize(1200, 800)
-    w.show()
-    qtbot.waitExposed(w)
-    yield w
-    w.session.runner.shutdown()
 
 
 def _show(window, evaluation):

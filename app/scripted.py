@@ -1,0 +1,231 @@
+"""The viewer started with inputs from the command line, and its scripted mode (``--screenshot``, ``--quit``).
+
+:func:`check_arguments` reads every input the options name (camera file, a compare run's stored
+results, skeleton B) before any window opens, so bad input is one line and exit 2. :func:`run` loads
+the inputs into the window, starts the A/B view (``--skeleton-b``, ``--compare-run``), waits for the
+evaluation, saves the picture and prints the scores; scripted (``--quit``) it closes the window and
+returns the exit status: 0 on success, 2 on bad input, 1 on a bug (an uncaught exception). It uses the
+window through :class:`app.window_api.WindowApi` only.
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import sys
+from dataclasses import dataclass
+from typing import TYPE_CHECKING, Any
+
+if TYPE_CHECKING:  # Qt is imported after the view libraries (app.__main__.import_view_libraries)
+    from PySide6 import QtWidgets
+
+    from .session import Session
+    from .window_api import WindowApi
+
+__all__ = ["Startup", "check_arguments", "fail", "run"]
+
+
+def fail(message: str, code: int = 2) -> int:
+    """One line on stderr (like skelcore's CLI); returns ``code``, the exit status."""
+    print(f"skelscope: error: {' '.join(str(message).split())}", file=sys.stderr)
+    return code
+
+
+@dataclass(frozen=True)
+class Startup:
+    """The command line with its inputs read: the options, the camera, the A/B view's inputs."""
+
+    args: argparse.Namespace
+    camera: dict[str, Any] | None
+    ab: tuple[str, Any] | None
+
+    @property
+    def scripted(self) -> bool:
+        return bool(self.args.quit)
+
+
+def check_arguments(args: argparse.Namespace) -> Startup:
+    """The options checked and their files read before any window opens; ValueError (SkelInputError
+    included) with one line on bad input."""
+    if args.scale < 1:
+        raise ValueError("--scale must be a positive integer")
+    if (args.skeletal or args.curve) and not args.cloud:
+        raise ValueError("a skeletal point set or curve skeleton needs the cloud it was made from (CLOUD)")
+    if args.quit and not args.screenshot and not args.cloud and not args.compare_run:
+        raise ValueError("--quit without inputs has nothing to do")
+    if args.screenshot and not os.path.isdir(os.path.dirname(os.path.abspath(args.screenshot))):
+        raise ValueError(f"{args.screenshot}: output folder does not exist")
+    camera = None
+    if args.camera:
+        from .view.camera import load_camera
+
+        camera = load_camera(args.camera)
+    return Startup(args, camera, _ab_inputs(args))
+
+
+def run(app: QtWidgets.QApplication, window: WindowApi, startup: Startup) -> int | None:
+    """Load, colour, start the A/B view; with ``--screenshot`` wait and save the picture. Returns the
+    exit status when scripted (or on a failure), None when the event loop should run."""
+    args, camera, ab, scripted = startup.args, startup.camera, startup.ab, startup.scripted
+    window.interactive = not scripted
+    if scripted:  # the picture is of the 3D view only: give it the whole window
+        for dock in window.docks.values():
+            dock.hide()
+    window.widget.show()
+    app.processEvents()
+
+    session = window.session
+    with session.batch():
+        for role, path in (("cloud", args.cloud), ("skeletal", args.skeletal), ("curve", args.curve)):
+            if path and not session.load_as(role, path) and scripted:
+                session.auto_evaluate = False
+    window.scene.set_metric(args.metric)
+    if camera is not None:
+        window.view.set_camera_state(camera)
+    if scripted and window.errors:
+        return fail(window.errors[0])
+    _start_ab(window, ab)
+    if not args.screenshot and not scripted:
+        return None
+
+    _wait_for_runner(app, session)
+    if ab is not None and ab[0] == "b":
+        app.processEvents()  # B starts once A's evaluation has landed
+        _wait_for_runner(app, session)
+    if window.errors:
+        if scripted:
+            return fail(window.errors[0], 1 if window.bug else 2)
+    if args.screenshot and ab is not None:
+        code = _save_ab_picture(app, window, args.screenshot, scripted)
+        if code:
+            return code
+    elif args.screenshot:
+        app.processEvents()
+        if camera is None:
+            window.view.reset_camera()  # fit the final view size (docks may have moved since loading)
+        else:
+            window.view.set_camera_state(camera)
+        try:
+            path = window.save_screenshot(args.screenshot, scale=args.scale, transparent=args.transparent,
+                                          colour_bar=not args.no_colour_bar)
+        except (ValueError, OSError) as exc:
+            if scripted:
+                return fail(str(exc))
+            window.show_error("Screenshot failed", str(exc))
+        else:
+            print(f"skelscope: wrote {path}")
+    if scripted:
+        summary = window.scene.summary()
+        if summary is not None:
+            print("\n".join(_summary_lines(summary)))
+        for view in window.compare.views[-1:] if ab is not None else []:
+            cells = [[view.cell(r, c) for c in range(4)] for r in range(len(view.rows))]
+            print("\n".join(f"{label:24} A {a:>10}  B {b:>10}  B-A {d}" for label, a, b, d in cells))
+        window.close()
+        return 1 if window.bug else 0
+    return None
+
+
+def _summary_lines(summary: dict[str, Any]) -> list[str]:
+    from .panels.summary import COLUMNS, ROWS, summary_cells
+
+    cells = summary_cells(summary)
+    width = max(len(r) for r in ROWS)
+    lines = [f"{'':{width}}  {COLUMNS[0]:>28}  {COLUMNS[1]:>28}"]
+    lines += [f"{row:{width}}  {a:>28}  {b:>28}" for row, (a, b) in zip(ROWS, cells)]
+    return lines
+
+
+def _ab_inputs(args: argparse.Namespace) -> tuple[str, Any] | None:
+    """The A/B view's inputs, checked before any window opens: ("run", (jobs, evaluations, run)) for
+    --compare-run (stored results read now, nothing recomputed), ("b", (skeletal, curve, name)) for
+    --skeleton-b. Raises ValueError / SkelInputError with one line."""
+    run_opts = [o for o, v in (("--dataset", args.dataset), ("--condition", args.condition), ("--seed", args.seed),
+                               ("--a", args.a), ("--b", args.b)) if v is not None]
+    if args.compare_run:
+        if args.cloud or args.skeletal or args.curve or args.skeleton_b:
+            raise ValueError("--compare-run opens a run's stored results: give no CLOUD, --skeletal, --curve "
+                             "or --skeleton-b with it")
+        if args.a is None or args.b is None:
+            raise ValueError("--compare-run needs --a METHOD and --b METHOD")
+        from skelcore.compare.finished_run import open_run
+
+        from .compare_run import load_ab
+
+        run = open_run(args.compare_run)
+        return "run", (*load_ab(run, args.dataset, args.a, args.b, args.condition, args.seed), run)
+    if run_opts:
+        raise ValueError(f"{run_opts[0]} goes with --compare-run DIR")
+    if not args.skeleton_b:
+        return None
+    if not args.cloud or not (args.skeletal or args.curve):
+        raise ValueError("--skeleton-b needs CLOUD and skeleton A (--skeletal and/or --curve)")
+    from skelcore.io import load_any
+
+    got: dict[str, Any] = {}
+    for path in args.skeleton_b:
+        item = load_any(path)
+        kind = "curve" if item.kind == "curve" else "skeletal"
+        if kind in got:
+            raise ValueError(f"--skeleton-b: two {kind} files ({got[kind][0]}, {path}); give one skeletal set "
+                             "and/or one curve")
+        got[kind] = (path, item.curve if kind == "curve" else item.points)
+    skeletal, curve = (got[k][1] if k in got else None for k in ("skeletal", "curve"))
+    return "b", (skeletal, curve, ", ".join(os.path.basename(p) for p in args.skeleton_b))
+
+
+def _start_ab(window: WindowApi, ab: tuple[str, Any] | None) -> None:
+    """--compare-run: A's stored result in the main window and the A/B view at once; --skeleton-b:
+    B is evaluated in the worker once A's evaluation has landed, then the A/B view opens."""
+    if ab is None:
+        return
+    from PySide6 import QtCore
+
+    kind, data = ab
+    if kind == "run":
+        from .compare_run import ab_context
+
+        job_a, job_b, ev_a, ev_b, run = data
+        window.open_variant(ev_a.cloud, None if ev_a.skeletal is None else ev_a.skeletal.points,
+                            None if ev_a.curve is None else ev_a.curve.curve, ev_a)
+        window.compare.open(ev_a, ev_b, (job_a.method, job_b.method), thresholds=None,
+                            context=ab_context(run, job_a))
+        return
+    skeletal, curve, name = data
+
+    def start_b(_ev: Any = None) -> None:
+        window.session.evaluated.disconnect(start_b)
+        QtCore.QTimer.singleShot(0, lambda: window.compare.compare_arrays(skeletal, curve, name))
+
+    window.session.evaluated.connect(start_b)
+
+
+def _save_ab_picture(app: QtWidgets.QApplication, window: WindowApi, path: str, scripted: bool) -> int:
+    """The A/B window (split view and table) as PNG; 0, or the exit status of a failure."""
+    from .exports import write_png
+
+    views = [v for v in window.compare.views if v.isVisible()]
+    if not views:
+        return fail("the A/B view did not open", 1 if window.bug else 2) if scripted else 0
+    app.processEvents()
+    try:
+        out = write_png(path, views[-1].picture(), window.input_files())
+    except (ValueError, OSError) as exc:
+        if scripted:
+            return fail(str(exc))
+        window.show_error("Screenshot failed", str(exc))
+        return 0
+    print(f"skelscope: wrote {out}")
+    return 0
+
+
+def _wait_for_runner(app: QtWidgets.QApplication, session: Session) -> None:
+    from PySide6 import QtCore
+
+    if not session.runner.running:
+        return
+    loop = QtCore.QEventLoop()
+    session.runner.finished.connect(loop.quit)
+    if session.runner.running:
+        loop.exec()
+    app.processEvents()
