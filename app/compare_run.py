@@ -11,33 +11,28 @@ dialog line; big rows are read in a thread.
 
 from __future__ import annotations
 
-import math
 import os
 import threading
 from typing import Any
 
 from PySide6 import QtCore, QtGui, QtWidgets
 
+from skelcore.io.json_numbers import json_float
+from skelcore.scores import COLUMN, column_keys, format_score, paired_columns
+
 from .window_api import ActionSpec, WindowApi
 
 __all__ = ["CompareRunDialog", "RunBrowser", "load_ab", "ab_context"]
 
-_SCORE_COLUMNS = [("d_B", "d_B"), ("d_Wp", "d_Wp"), ("bounded. s/c", ("boundedness_skeletal", "boundedness_curve")),
-                  ("centred. s/c", ("centeredness_skeletal", "centeredness_curve")),
-                  ("smooth. s/c", ("smoothness_skeletal", "smoothness_curve"))]
-
-
-def _num(v: Any) -> float:
-    try:
-        return math.nan if v is None else float(v)
-    except (TypeError, ValueError):
-        return math.nan
+#: (header, column key or the (skeletal, curve) pair shown as "s/c") of the run browser's table
+_SCORE_COLUMNS = [(COLUMN[k].label, k) for k in column_keys(group="paper", compared=True) if COLUMN[k].kind is None] + [
+    (f"{sk.short[:-2]} s/c", (sk.key, cv.key)) for _m, sk, cv in paired_columns("paper")]
 
 
 def _cell(scores: dict[str, Any], key: Any) -> str:
+    """A stored job's score(s) with the column's digits, "—" where missing."""
     def one(k: str) -> str:
-        v = _num(scores.get(k))
-        return "—" if math.isnan(v) else f"{v:.4f}" if k.startswith("d_") else f"{v:.3f}"
+        return format_score(json_float(scores.get(k)), COLUMN[k].digits, nan="—", missing="—")
 
     return one(key) if isinstance(key, str) else "/".join(one(k) for k in key)
 

@@ -16,38 +16,25 @@ from typing import Any
 import numpy as np
 from PySide6 import QtCore, QtWidgets
 
+from skelcore.scores import COLUMN, Scores, column_keys, format_score
+
 from .window_api import ActionSpec, WindowApi
 
 __all__ = ["ab_rows", "CompareWindow", "CompareController"]
 
-_SCORES = [("d_B", "topology", "bottleneck"), ("d_Wp", "topology", "wasserstein")] + [
-    (f"{metric} ({kind})", metric, kind)
-    for metric in ("boundedness", "centeredness", "smoothness") for kind in ("skeletal", "curve")
-]
+def ab_rows(a: Any, b: Any) -> list[tuple[str, float, float, float]]:
+    """(label, A, B, B - A) per compared paper score (:data:`skelcore.scores.SCORE_COLUMNS`) of two
+    :class:`~skelcore.scores.Scores` (or ``Evaluation.summary()`` dicts); NaN where either side has
+    no such score (a missing topology, no curve), and a row left out when neither has it."""
+    a, b = (s if isinstance(s, Scores) else Scores.from_json_dict(s) for s in (a, b))
+    keys = column_keys(group="paper", compared=True)
+    fa, fb = a.flat(keys), b.flat(keys)
+    return [(COLUMN[k].label, fa[k], fb[k], fb[k] - fa[k]) for k in keys
+            if not (math.isnan(fa[k]) and math.isnan(fb[k]))]
 
 
-def _score(summary: dict[str, Any], group: str, key: str) -> float:
-    block = summary.get(group)
-    value = None if block is None else block.get(key)
-    return math.nan if value is None else float(value)
-
-
-def ab_rows(a: dict[str, Any], b: dict[str, Any]) -> list[tuple[str, float, float, float]]:
-    """(label, A, B, B - A) per overall score of two ``Evaluation.summary()`` dicts; NaN where
-    either side has no such score (a missing topology, no curve)."""
-    rows = []
-    for label, group, key in _SCORES:
-        va, vb = _score(a, group, key), _score(b, group, key)
-        if math.isnan(va) and math.isnan(vb):
-            continue
-        rows.append((label, va, vb, vb - va))
-    return rows
-
-
-def _fmt(v: float, signed: bool = False) -> str:
-    if math.isnan(v):
-        return "—"
-    return f"{v:+.4f}" if signed else f"{v:.4f}"
+def _lower_is_better(label: str) -> bool:
+    return any(c.label == label and c.better == "lower" for c in COLUMN.values())
 
 
 class CompareWindow(QtWidgets.QWidget):
@@ -87,7 +74,7 @@ class CompareWindow(QtWidgets.QWidget):
         layout = QtWidgets.QVBoxLayout(self)
         layout.addLayout(top)
         layout.addWidget(split)
-        self.rows = ab_rows(ev_a.summary(*self.thresholds), ev_b.summary(*self.thresholds))
+        self.rows = ab_rows(ev_a.scores(*self.thresholds), ev_b.scores(*self.thresholds))
         self._fill_table()
         self.draw()
         self.plotter.link_views()  # one camera for both renderers
@@ -96,12 +83,13 @@ class CompareWindow(QtWidgets.QWidget):
     def _fill_table(self) -> None:
         self.table.setRowCount(len(self.rows))
         for r, (label, a, b, d) in enumerate(self.rows):
-            for c, text in enumerate((label, _fmt(a), _fmt(b), _fmt(d, signed=True))):
+            for c, text in enumerate((label, *(format_score(v, 4, nan="—") for v in (a, b)),
+                                       format_score(d, 4, nan="—", signed=True))):
                 item = QtWidgets.QTableWidgetItem(text)
                 if c:
                     item.setTextAlignment(QtCore.Qt.AlignmentFlag.AlignRight | QtCore.Qt.AlignmentFlag.AlignVCenter)
                 if c == 3 and not math.isnan(d) and d != 0:
-                    better = d < 0 if label in ("d_B", "d_Wp") else d > 0  # distances: lower is better
+                    better = d < 0 if _lower_is_better(label) else d > 0  # distances: lower is better
                     item.setForeground(QtCore.Qt.GlobalColor.darkGreen if better else QtCore.Qt.GlobalColor.darkRed)
                     item.setToolTip("B is better" if better else "A is better")
                 self.table.setItem(r, c, item)

@@ -421,7 +421,7 @@ class MainWindow(QtWidgets.QMainWindow):
             ev = self.scene.evaluation
             if event.kind == "quantities" and ev is not None:
                 self.summary.set_thresholds(self.scene.beta_star, self.scene.c_star)
-            self.summary.show_summary(self.scene.summary(), ev)
+            self.summary.show_summary(self.scene.scores(), ev)
             if event.kind == "quantities":
                 self._plots_stale.add("barcodes")
                 self.pick.show_info(None)

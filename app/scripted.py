@@ -115,7 +115,7 @@ def run(app: QtWidgets.QApplication, window: WindowApi, startup: Startup) -> int
         else:
             print(f"skelscope: wrote {path}")
     if scripted:
-        summary = window.scene.summary()
+        summary = window.scene.scores()
         if summary is not None:
             print("\n".join(_summary_lines(summary)))
         for view in window.compare.views[-1:] if ab is not None else []:

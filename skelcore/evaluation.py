@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -20,6 +20,9 @@ from .metrics.reference import ReferenceComparison
 from .metrics.topology import TopologyResult
 from .params import Params
 from .trust import TrustWarning
+
+if TYPE_CHECKING:
+    from .scores import Scores
 
 # TopologyResult lives beside its metric (metrics.topology); imported from here for compatibility
 __all__ = ["TopologyResult", "SkeletalLocal", "CurveLocal", "Evaluation", "apply_unbounded_rule"]
