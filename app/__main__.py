@@ -17,11 +17,12 @@ from types import TracebackType
 from typing import TYPE_CHECKING, Sequence
 
 from .scripted import check_arguments, fail, run
+from skelcore.scores import LOCAL_METRICS
 
 if TYPE_CHECKING:
     from .window_api import WindowApi
 
-METRIC_CHOICES = ("boundedness", "centeredness", "smoothness")
+METRIC_CHOICES = LOCAL_METRICS
 
 
 class _Parser(argparse.ArgumentParser):

@@ -16,7 +16,7 @@ from typing import Any
 import numpy as np
 from PySide6 import QtCore, QtWidgets
 
-from skelcore.scores import COLUMN, Scores, column_keys, format_score
+from skelcore.scores import COLUMN, LOCAL_METRICS, Scores, column_keys, format_score
 
 from .window_api import ActionSpec, WindowApi
 
@@ -53,7 +53,7 @@ class CompareWindow(QtWidgets.QWidget):
         self.thresholds = thresholds or (ev_a.params.beta_star, ev_a.params.c_star)
         self.plotter = QtInteractor(self, shape=(1, 2), auto_update=False)
         self.metric_box = QtWidgets.QComboBox(self)
-        self.metric_box.addItems(["boundedness", "centeredness", "smoothness"])
+        self.metric_box.addItems(list(LOCAL_METRICS))
         self.metric_box.setCurrentText(metric)
         self.metric_box.currentTextChanged.connect(self.draw)
         self.table = QtWidgets.QTableWidget(self)

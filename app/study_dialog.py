@@ -17,6 +17,7 @@ from PySide6 import QtCore, QtWidgets
 from skelcore.params import Params
 
 from .worker import TaskRunner
+from skelcore.scores import LOCAL_METRICS
 
 __all__ = ["StudyDialog"]
 
@@ -104,7 +105,7 @@ class StudyDialog(QtWidgets.QDialog):
         buttons.addWidget(self.progress_bar, 1)
 
         self.table = QtWidgets.QTableWidget(0, 6)
-        self.table.setHorizontalHeaderLabels(["shape", "d_B/d_Wp", "boundedness", "centeredness", "smoothness", ""])
+        self.table.setHorizontalHeaderLabels(["shape", "d_B/d_Wp", *LOCAL_METRICS, ""])
         self.table.setEditTriggers(QtWidgets.QAbstractItemView.EditTrigger.NoEditTriggers)
         self.table.horizontalHeader().setSectionResizeMode(QtWidgets.QHeaderView.ResizeMode.ResizeToContents)
         self.table.verticalHeader().setVisible(False)

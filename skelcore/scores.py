@@ -21,6 +21,8 @@ __all__ = ["Scores", "ScoreColumn", "SCORE_COLUMNS", "COLUMN", "KINDS", "format_
 
 #: the two skeleton representations, in the paper's column order (SPEC 0)
 KINDS = ("skeletal", "curve")
+#: the paper's local metrics (SPEC 2-4), in the order every table, menu and colour choice lists them
+LOCAL_METRICS = ("boundedness", "centeredness", "smoothness")
 
 
 def format_score(value: Any, digits: int = 3, *, missing: str = "-", nan: str = "nan", signed: bool = False) -> str:

@@ -4,13 +4,13 @@ global rc), so the viewer never changes anyone else's plots."""
 
 from __future__ import annotations
 
-import math
 from typing import Any
 
 import numpy as np
 from PySide6 import QtCore, QtWidgets
 
 from ._plot import PlotPanel
+from skelcore.scores import format_score
 
 
 def compared_bars(barcode: np.ndarray, k: int) -> np.ndarray:
@@ -122,4 +122,4 @@ class BarcodePanel(PlotPanel):
 
 
 def _fmt(v: float) -> str:
-    return "nan" if math.isnan(float(v)) else f"{float(v):.4f}"
+    return format_score(v, 4)

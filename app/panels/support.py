@@ -18,6 +18,7 @@ from PySide6 import QtWidgets
 
 from ..scene.supports import ElementSupport
 from ._plot import PlotPanel
+from skelcore.scores import format_score
 
 SLAB, RING, ELLIPSE, SAMPLE, CENTRE = "#9a9a9a", "#1f4e79", "#d62728", "#ff8c00", "#2ca02c"
 COVERED = "#1f4e79"
@@ -213,4 +214,4 @@ def _rgba(colour: str) -> np.ndarray:
 
 
 def _fmt(v: float) -> str:
-    return "nan" if not np.isfinite(v) else f"{v:.3f}"
+    return format_score(v, 3)

@@ -13,10 +13,11 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from skelcore.curve import CurveSkeleton
+from skelcore.scores import LOCAL_METRICS
 
 __all__ = ["METRICS", "LAYER_ORDER", "CURVE_LOCATION", "ScalarQuantity", "Layer"]
 
-METRICS = ("boundedness", "centeredness", "smoothness")
+METRICS = LOCAL_METRICS
 """Local metrics the viewer can colour by (SPEC 2-4)."""
 
 LAYER_ORDER = ("cloud", "skeletal", "curve")

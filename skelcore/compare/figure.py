@@ -15,6 +15,7 @@ from ..errors import SkelInputError
 from ..io.atomic import atomic_open
 from .render import VIEWS, draw_barcodes, render_job
 from .job_store import Store
+from ..scores import format_score
 
 __all__ = ["make_figure"]
 
@@ -72,7 +73,7 @@ def make_figure(out_dir: str | os.PathLike, output: str | os.PathLike, *, shapes
         ax = fig.add_subplot(gs[i, 0])
         ax.set_axis_off()
         sc = rec.get("scores", {})
-        topo = "" if sc.get("d_B") is None else f"\nd_B {sc['d_B']:.4f}\nd_Wp {sc['d_Wp']:.4f}"
+        topo = "" if sc.get("d_B") is None else f"\nd_B {format_score(sc['d_B'], 4)}\nd_Wp {format_score(sc['d_Wp'], 4)}"
         ax.text(0.0, 0.5, f"{j['shape']}\n{rec.get('label', j['condition'])}\n{j['method']}{topo}", fontsize=7,
                 va="center", ha="left", transform=ax.transAxes)
         for k, view in enumerate(VIEWS):

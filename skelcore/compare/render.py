@@ -16,10 +16,11 @@ import numpy as np
 
 from .. import colors
 from ..io.atomic import atomic_open
+from ..scores import LOCAL_METRICS
 
 __all__ = ["VIEWS", "render_job", "draw_barcodes", "barcode_png"]
 
-VIEWS = ("skeleton", "barcodes", "boundedness", "centeredness", "smoothness")
+VIEWS = ("skeleton", "barcodes", *LOCAL_METRICS)
 _SIZE = (320, 320)
 
 
