@@ -21,7 +21,10 @@ def register(subparsers: argparse._SubParsersAction) -> argparse.ArgumentParser:
         "results.csv, leaderboard.md/.csv/.tex and report.html in DIR.",
     )
     p.add_argument("manifest", help="the manifest (TOML; paths relative to its folder)")
-    p.add_argument("--out", required=True, metavar="DIR", help="output folder (reused: finished jobs are skipped)")
+    p.add_argument("--out", required=True, metavar="DIR",
+                   help="output folder: new, empty, or an earlier run (resumed: finished jobs are skipped)")
+    p.add_argument("--force", action="store_true",
+                   help="write into an existing --out that is not a compare run (files of the same names are replaced)")
     g = p.add_mutually_exclusive_group()
     g.add_argument("--jobs", type=positive_int, metavar="N", help="local worker processes (default: one per core)")
     g.add_argument("--dask", metavar="ADDR", help="tcp://HOST:PORT of a Dask scheduler, or local:N for a LocalCluster")
@@ -44,7 +47,8 @@ def run_compare_cli(args: argparse.Namespace) -> int:
     try:
         backend = parse_backend(args.jobs, args.dask)
         result = run_compare(args.manifest, args.out, backend, profiles_path=args.profiles,
-                             report=not args.no_report, quiet=args.quiet, retry_failed=args.retry_failed)
+                             report=not args.no_report, quiet=args.quiet, retry_failed=args.retry_failed,
+                             force=args.force)
     except SkelInputError as exc:
         print(f"skelcore: error: {exc}", file=sys.stderr)
         return 2

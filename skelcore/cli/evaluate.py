@@ -6,9 +6,8 @@ from __future__ import annotations
 import argparse
 import sys
 
-import numpy as np
-
 from ..errors import SkelInputError
+from ..skeleton_mapping import map_skeleton
 from .common import (clear_progress_line, format_reference, format_table, params_from_args, positive_float,
                      print_warnings, stderr_progress)
 
@@ -102,12 +101,7 @@ def run_evaluate(args: argparse.Namespace) -> int:
     curve = io.load_curve(args.curve) if args.curve else None
     reference = io.load_curve(args.reference_curve) if args.reference_curve else None
 
-    scale, offset = float(args.skeleton_scale), np.asarray(args.skeleton_offset, dtype=float)
-    if scale != 1.0 or np.any(offset != 0):
-        if skeletal is not None:
-            skeletal = skeletal * scale + offset
-        if curve is not None:
-            curve = curve.transformed(lambda v: v * scale + offset)
+    skeletal, curve = map_skeleton(skeletal, curve, float(args.skeleton_scale), tuple(args.skeleton_offset))
 
     progress = stderr_progress(args.quiet)
     ev = evaluate(cloud, skeletal, curve, params, progress=progress, skeletal_index=index,

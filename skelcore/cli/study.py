@@ -33,7 +33,8 @@ def register(subparsers: argparse._SubParsersAction) -> argparse.ArgumentParser:
     p.add_argument("--seed", type=int, default=0, help="seed of the noise and the downsampling (default 0)")
     p.add_argument("--out", metavar="DIR", help="write every variant's PLY/JSON files and study.md/.csv/.tex here")
     p.add_argument("--skeleton-cmd", metavar="CMD",
-                   help="use this skeletonizer: a command with {in}, {out_skeletal} and/or {out_curve}")
+                   help="use this skeletonizer: a command with {in}, {out_skeletal} and/or {out_curve} "
+                   "({python}: the interpreter running skelcore)")
     p.add_argument("--method", choices=("cao", "skelscope"), default="cao",
                    help="built-in skeletonizer: cao (the paper's toolbox algorithm, default) or skelscope")
     p.add_argument("--boundedness-method", choices=("rays", "paper"), help="boundedness estimator (default rays)")

@@ -91,6 +91,8 @@ def _job_key(job: Job) -> str:
         method = {"kind": "files", "name": job.method.name, "inputs": {
             k: file_digest(expand_template(t, job.shape.name, job.condition.name, job.seed))
             for k, t in sorted(job.method.file_templates().items())}}
+        if job.method.mapping() is not None:  # absent when unmapped: older runs keep their keys
+            method["mapping"] = job.method.mapping()
     doc = {"cloud": file_digest(job.shape.path), "shape": job.shape.name, "method": method,
            "condition": job.condition.to_dict(), "seed": job.seed, "params": job.params.to_dict()}
     text = json.dumps(doc, sort_keys=True, default=str)

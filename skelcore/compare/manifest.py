@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import glob
 import os
+import re
 import shlex
 import shutil
 import sys
@@ -27,17 +28,19 @@ else:  # pragma: no cover
     import tomli as tomllib
 
 __all__ = ["ShapeSpec", "MethodSpec", "ConditionSpec", "Manifest", "load_manifest", "parse_manifest",
-           "check_command_template", "expand_template", "skeletonize_accepts_method"]
+           "check_command_template", "command_argv", "python_executable", "expand_template",
+           "skeletonize_accepts_method"]
 
 _KEYS = {
     "top": {"evaluation", "shapes", "methods", "conditions", "seeds"},
     "shapes": {"path", "name", "suffix"},
     "builtin": {"name", "kind", "method", "params"},
     "command": {"name", "kind", "command", "timeout", "correspondence"},
-    "files": {"name", "kind", "curve", "skeletal", "skeletal_index", "correspondence"},
+    "files": {"name", "kind", "curve", "skeletal", "skeletal_index", "correspondence", "scale", "offset"},
     "conditions": {"name", "noise", "model", "sparse", "grid", "fps", "base_grid", "seeds"},
 }
-_PLACEHOLDERS = ("{in}", "{out_skeletal}", "{out_curve}")
+_PLACEHOLDERS = ("{python}", "{in}", "{out_skeletal}", "{out_curve}")
+_PLACEHOLDER_RE = re.compile("|".join(re.escape(p) for p in _PLACEHOLDERS))
 
 
 @dataclass(frozen=True)
@@ -52,8 +55,10 @@ class ShapeSpec:
 @dataclass(frozen=True)
 class MethodSpec:
     """A skeletonizer: ``builtin`` (SkelScope's, optional ``method`` and ``params``), ``command``
-    (an external program, placeholders ``{in} {out_skeletal} {out_curve}``, ``timeout`` seconds) or
-    ``files`` (precomputed skeletons; templates with ``{stem}``, optionally ``{condition}``, ``{seed}``)."""
+    (an external program, placeholders ``{python} {in} {out_skeletal} {out_curve}``, ``timeout``
+    seconds) or ``files`` (precomputed skeletons; templates with ``{stem}``, optionally
+    ``{condition}``, ``{seed}``; ``scale`` and ``offset`` map them into the cloud's frame as
+    ``evaluate --skeleton-scale S --skeleton-offset X Y Z`` does)."""
 
     name: str
     kind: str
@@ -66,13 +71,25 @@ class MethodSpec:
     skeletal: str | None = None
     skeletal_index: str | None = None
     correspondence: str | None = None  # evaluate(correspondence=...): "reverse" for unmatched point sets
+    scale: float | None = None  # files: skeleton coordinates * scale + offset (None: not mapped)
+    offset: tuple[float, float, float] | None = None
 
     def to_dict(self) -> dict[str, Any]:
-        return {f.name: getattr(self, f.name) for f in fields(self)}
+        """The definition a job key hashes; ``scale`` / ``offset`` only when set, so the keys of
+        runs made before they existed still hold."""
+        return {f.name: getattr(self, f.name) for f in fields(self)
+                if not (f.name in ("scale", "offset") and getattr(self, f.name) is None)}
 
     def file_templates(self) -> dict[str, str]:
         return {k: v for k, v in (("curve", self.curve), ("skeletal", self.skeletal),
                                   ("skeletal_index", self.skeletal_index)) if v}
+
+    def mapping(self) -> dict[str, Any] | None:
+        """A ``files`` method's ``{"scale", "offset"}`` when it maps its skeletons, else None."""
+        from ..skeleton_mapping import is_identity
+
+        scale, offset = self.scale or 1.0, self.offset or (0.0, 0.0, 0.0)
+        return None if is_identity(scale, offset) else {"scale": scale, "offset": list(offset)}
 
     def per_condition(self) -> bool:
         """A ``files`` method whose templates name ``{condition}`` has skeletons of degraded clouds."""
@@ -236,6 +253,25 @@ def skeletonize_accepts_method() -> bool:
     return "method" in inspect.signature(skeletonize).parameters
 
 
+def python_executable() -> str:
+    """What ``{python}`` stands for: the interpreter running skelcore (``sys.executable``), so a
+    script importing skelcore runs whether or not a venv is activated (issue 24)."""
+    if not sys.executable:
+        raise SkelInputError("{python}: cannot tell which Python interpreter runs skelcore (sys.executable is empty)")
+    return sys.executable
+
+
+def command_argv(template: str, label: str, values: dict[str, str] | None = None) -> list[str]:
+    """The argv to run: the template split into words (``shlex``, no shell), then ``{python}`` and
+    the given ``values`` (``{in}``, ``{out_skeletal}``, ``{out_curve}``) substituted in each word
+    in one pass, so a substituted path is never expanded again."""
+    argv = check_command_template(template, label)
+    table = dict(values or {})
+    if any("{python}" in word for word in argv):
+        table["{python}"] = python_executable()
+    return [_PLACEHOLDER_RE.sub(lambda m: table.get(m.group(0), m.group(0)), word) for word in argv]
+
+
 def check_command_template(template: str, label: str) -> list[str]:
     """The argv of a skeletonizer command line; SkelInputError (prefixed ``label``) when unusable."""
     try:
@@ -314,10 +350,10 @@ def _command(entry: dict, name: str, where: str, base: Path, fail) -> MethodSpec
     if not isinstance(template, str):
         fail(f"{where}: needs command = \"prog {{in}} {{out_skeletal}} {{out_curve}}\"")
     try:
-        argv = check_command_template(template, f"{where}: command")
+        argv = command_argv(template, f"{where}: command")
     except SkelInputError as exc:
         fail(str(exc))
-    prog = argv[0]
+    prog = argv[0]  # with {python} already the interpreter's absolute path
     if os.sep in prog:
         full = prog if os.path.isabs(prog) else str(base / prog)
         if not (os.path.isfile(full) and os.access(full, os.X_OK)):
@@ -344,7 +380,16 @@ def _files(entry: dict, name: str, where: str, base: Path, shapes, fail) -> Meth
         fail(f"{where}: needs curve and/or skeletal path templates")
     if "skeletal_index" in templates and "skeletal" not in templates:
         fail(f"{where}: skeletal_index needs skeletal")
-    spec = MethodSpec(name=name, kind="files", **templates)
+    mapping: dict[str, Any] = {}
+    if "scale" in entry or "offset" in entry:
+        from ..skeleton_mapping import check_mapping
+
+        try:
+            scale, offset = check_mapping(entry.get("scale", 1.0), entry.get("offset", [0.0, 0.0, 0.0]))
+        except ValueError as exc:
+            fail(f"{where}: {exc}")
+        mapping = {"scale": scale, "offset": offset}
+    spec = MethodSpec(name=name, kind="files", **templates, **mapping)
     if not spec.per_condition():
         for s in shapes:
             _files_exist(spec, s, None, [0], base, fail)

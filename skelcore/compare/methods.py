@@ -14,7 +14,7 @@ import numpy as np
 
 from ..curve import CurveSkeleton
 from ..errors import Cancelled, SkelInputError
-from .manifest import MethodSpec, check_command_template, expand_template, skeletonize_accepts_method
+from .manifest import MethodSpec, check_command_template, command_argv, expand_template, skeletonize_accepts_method
 
 __all__ = ["skeletonize_accepts_method", "run_builtin", "run_command", "read_files"]
 
@@ -49,7 +49,8 @@ def run_command(
     label: str = "command",
     cwd: str | None = None,
 ) -> tuple[np.ndarray | None, CurveSkeleton | None]:
-    """Run the user's skeletonizer: ``shlex.split`` argv, placeholders substituted per token.
+    """Run the user's skeletonizer: ``shlex.split`` argv, placeholders substituted per token
+    (``{python}``: the interpreter running skelcore, :func:`.manifest.command_argv`).
 
     The program runs in its own session so that a timeout, a cancel or our own termination kills it
     and all its children. Its outputs are read back with the project's loaders, so a file that is
@@ -57,16 +58,11 @@ def run_command(
     """
     from .. import io
 
-    argv = check_command_template(template, label)
-    joined = " ".join(argv)
+    joined = " ".join(check_command_template(template, label))
     wants_skeletal = "{out_skeletal}" in joined
     wants_curve = "{out_curve}" in joined
-    values = {"{in}": cloud_path, "{out_skeletal}": skeletal_path, "{out_curve}": curve_path}
-    args = []
-    for token in argv:
-        for key, val in values.items():
-            token = token.replace(key, val)
-        args.append(token)
+    args = command_argv(template, label, {"{in}": cloud_path, "{out_skeletal}": skeletal_path,
+                                          "{out_curve}": curve_path})
     for stale in (skeletal_path, curve_path):
         if os.path.exists(stale):
             os.unlink(stale)
@@ -110,12 +106,17 @@ def run_command(
 
 def read_files(spec: MethodSpec, stem: str, condition: str, seed: int
                ) -> tuple[np.ndarray | None, CurveSkeleton | None, np.ndarray | None, dict[str, str]]:
-    """Precomputed skeletons of a ``files`` method: (skeletal, curve, skeletal_index, paths)."""
+    """Precomputed skeletons of a ``files`` method: (skeletal, curve, skeletal_index, paths), mapped
+    into the cloud's frame by the method's ``scale`` / ``offset`` (:mod:`skelcore.skeleton_mapping`)."""
     from .. import io
+    from ..skeleton_mapping import map_skeleton
 
     paths = {k: expand_template(t, stem, condition, seed) for k, t in spec.file_templates().items()}
     skeletal = io.load_points(paths["skeletal"]) if "skeletal" in paths else None
     curve = io.load_curve(paths["curve"]) if "curve" in paths else None
+    mapping = spec.mapping()
+    if mapping is not None:
+        skeletal, curve = map_skeleton(skeletal, curve, mapping["scale"], mapping["offset"])
     index = None
     if "skeletal_index" in paths:
         index = _load_index(paths["skeletal_index"])

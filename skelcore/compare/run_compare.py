@@ -1,7 +1,8 @@
 """``run_compare``: manifest -> jobs -> store -> ``results.csv``, ``leaderboard.*``, ``report.html``.
 
-Also writes ``DIR/index.json`` (the jobs in manifest order and the run's settings) so that
-``skelcore figure DIR`` and a later report need no manifest. Everything is rebuilt from the store,
+Claims DIR first (:mod:`.run_marker`: a new or empty folder, or one of our runs; never a user's
+folder unless forced). Also writes ``DIR/index.json`` (the jobs in manifest order and the run's
+settings) so that ``skelcore figure DIR`` and a later report need no manifest. Everything is rebuilt from the store,
 so the tables of a rerun (or of a run killed and resumed) are those of one uninterrupted run.
 """
 
@@ -20,6 +21,7 @@ from .profiles import Profile, load_profiles
 from .results_csv import collect_rows, write_results_csv
 from .backends import Backend, RunSummary, run_jobs
 from .job_store import Store
+from .run_marker import claim_run_folder
 
 __all__ = ["CompareResult", "run_compare", "write_outputs", "load_index"]
 
@@ -36,12 +38,19 @@ class CompareResult:
 
 def run_compare(manifest_path: str | os.PathLike, out_dir: str | os.PathLike, backend: Backend = Backend("serial"),
                 *, profiles_path: str | os.PathLike | None = None, report: bool = True, quiet: bool = True,
-                retry_failed: bool = False, on_record: Callable[[dict[str, Any]], None] | None = None) -> CompareResult:
-    """Validate everything first (manifest, profiles, output folder), then run the missing jobs."""
+                retry_failed: bool = False, on_record: Callable[[dict[str, Any]], None] | None = None,
+                force: bool = False) -> CompareResult:
+    """Validate everything first (manifest, profiles, output folder), then run the missing jobs.
+
+    ``out_dir`` must be new, empty or one of our compare runs (its ``.skelscope-run`` marker,
+    :mod:`.run_marker`); any other folder is refused with a one-line SkelInputError unless
+    ``force`` (the CLI's ``--force``), so a user's own ``results.csv`` is never replaced unasked.
+    """
     manifest = load_manifest(manifest_path)
     profiles = load_profiles(profiles_path)
     inputs = tuple(s.path for s in manifest.shapes) + (manifest.path,)
     jobs = make_jobs(manifest)
+    claim_run_folder(out_dir, "compare", force=force, manifest=manifest.path, inputs=inputs)
     store = Store(out_dir, inputs=inputs)
     _write_index(out_dir, manifest, jobs, backend, inputs)
     summary = run_jobs(jobs, store, backend, quiet=quiet, retry_failed=retry_failed, on_record=on_record)

@@ -199,8 +199,8 @@ def run_study(
     out_dir : when given, every variant's cloud, skeletal points, curve (PLY) and evaluation (JSON)
         and the tables ``study.md/.csv/.tex`` are written there.
     skeleton_cmd : instead of the built-in skeletonizer, a command line with ``{in}`` (the variant's
-        cloud, written as PLY) and ``{out_skeletal}`` and/or ``{out_curve}`` placeholders; run
-        without a shell.
+        cloud, written as PLY) and ``{out_skeletal}`` and/or ``{out_curve}`` placeholders (and
+        ``{python}``, the interpreter running skelcore); run without a shell.
     params : evaluation parameters (SPEC); ``skeletonize_params`` : :class:`CaoParams` or
         :class:`SkeletonizeParams`; ``method`` : the built-in skeletonizer, "cao" (default) or
         "skelscope" (see :func:`skelcore.skeleton.skeletonize`).
