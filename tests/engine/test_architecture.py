@@ -132,7 +132,7 @@ def test_the_cycle_finder_finds_a_cycle():
 # The engine's layers, bottom to top, and the lower layers each may import (its own always; an import
 # inside a function counts too, the LAZY_DELEGATIONS aside):
 #   foundation        errors, version, params, geometry, parallel, curve, curve_sampling, correspondence,
-#                     trust, colors, shapes                                       -> nothing else
+#                     trust, colors, shapes, skeleton_mapping                     -> nothing else
 #   formats           skelcore.io: readers and writers of file formats, atomic writes, JSON numbers
 #                                                                                 -> foundation
 #   skeletonizer      skelcore.skeleton                                           -> foundation
@@ -149,7 +149,8 @@ def test_the_cycle_finder_finds_a_cycle():
 _BELOW_APPS = ["foundation", "formats", "skeletonizer", "metrics", "record", "stages", "evaluation files"]
 LAYERS: dict[str, tuple[list[str], list[str]]] = {
     "foundation": ([f"skelcore.{m}" for m in ("errors", "version", "params", "geometry", "parallel", "curve",
-                                              "curve_sampling", "correspondence", "trust", "colors", "shapes")], []),
+                                              "curve_sampling", "correspondence", "trust", "colors", "shapes",
+                                              "skeleton_mapping")], []),
     "formats": (["skelcore.io.*"], ["foundation"]),
     "skeletonizer": (["skelcore.skeleton.*"], ["foundation"]),
     "metrics": (["skelcore.metrics.*"], ["foundation"]),
