@@ -20,7 +20,7 @@ import numpy as np
 from .geometry import bounding_box
 from .params import Params
 
-__all__ = ["TrustWarning", "frame_warnings", "frame_fit_warning", "bbox_transform", "smoothness_warning",
+__all__ = ["TrustWarning", "DEFECT_CODES", "defect_codes", "frame_warnings", "frame_fit_warning", "bbox_transform", "smoothness_warning",
            "no_correspondence_warning"]
 
 _FRAME_HINT = "map it with --skeleton-scale S --skeleton-offset X Y Z"
@@ -124,6 +124,19 @@ def frame_fit_warning(
             f"{off[0]:.6g} {off[1]:.6g} {off[2]:.6g})",
         )]  # fmt: skip
     return []
+
+
+#: Warning codes that say the skeleton itself is wrong (issue 22), as opposed to caveats about what a
+#: score can mean (``trivial_smoothness``, ``no_correspondence``) or about the scan: ``--strict``,
+#: compare's "sound" column, the profiles' ``fail_on`` and the CLI's defects block read this set.
+DEFECT_CODES = frozenset({"frame", "collapse", "incomplete", "spurious_branches", "spurious_cycles",
+                          "missing_cycles", "outside"})
+
+
+def defect_codes(warnings: list[dict[str, str]] | list[TrustWarning]) -> list[str]:
+    """The defect codes among ``warnings`` (dicts or TrustWarnings), sorted, each once."""
+    codes = {w["code"] if isinstance(w, dict) else w.code for w in warnings}
+    return sorted(codes & DEFECT_CODES)
 
 
 def smoothness_warning(degrees: np.ndarray) -> list[TrustWarning]:

@@ -9,9 +9,10 @@ import sys
 
 from ..errors import SkelInputError
 from ..params import Params
+from ..trust import DEFECT_CODES
 from ..scores import Scores, paper_table
 
-__all__ = ["format_table", "format_reference", "print_warnings", "stderr_progress", "params_from_args",
+__all__ = ["format_table", "format_defects", "format_reference", "print_warnings", "stderr_progress", "params_from_args",
            "positive_int", "positive_float", "nonnegative_float", "clear_progress_line"]
 
 
@@ -44,6 +45,15 @@ def format_reference(scores: Scores | dict) -> str:
             f"precision {s.text('reference_precision')}, recall {s.text('reference_recall')}, "
             f"F1 {s.text('reference_f1')} (within tau = {s.text('reference_tau')})\n"
             f"  graph (ours/reference): {counts}")
+
+
+def format_defects(warnings: list[dict]) -> str:
+    """The "defects" block under the paper's table (issue 22): one line per defect warning
+    (:data:`skelcore.trust.DEFECT_CODES`), "none found" otherwise."""
+    found = [w for w in warnings if w["code"] in DEFECT_CODES]
+    if not found:
+        return "defects: none found"
+    return "\n".join(["defects:"] + [f"  [{w['code']}] {w['message']}" for w in found])
 
 
 def print_warnings(warnings: list[dict]) -> None:

@@ -8,7 +8,7 @@ import sys
 
 from ..errors import SkelInputError
 from ..skeleton_mapping import map_skeleton
-from .common import (clear_progress_line, format_reference, format_table, params_from_args, positive_float,
+from .common import (clear_progress_line, format_defects, format_reference, format_table, params_from_args, positive_float,
                      print_warnings, stderr_progress)
 
 __all__ = ["register", "run_evaluate", "EXIT_WARNINGS"]
@@ -113,6 +113,7 @@ def run_evaluate(args: argparse.Namespace) -> int:
         print(format_reference(scores))
     corr = f"correspondence: {ev.correspondence}; " if ev.correspondence else ""
     print(f"{corr}boundedness estimator: {params.boundedness_method}; total {ev.timings['total']:.2f} s")
+    print(format_defects(ev.warning_dicts()))
     print_warnings(ev.warning_dicts())
     if "coverage" in ev.not_computed:  # the others come with their warning (no_correspondence)
         print(f"skelcore: not computed: coverage: {ev.not_computed['coverage']}", file=sys.stderr)

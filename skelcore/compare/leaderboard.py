@@ -22,6 +22,7 @@ from .profiles import Profile
 __all__ = ["Entry", "Leaderboard", "build_leaderboard", "LOWER_IS_BETTER"]
 
 COLUMNS = column_keys(compared=True)
+TAINT = "†"  # marks a mean that includes a defective job
 LOWER_IS_BETTER = frozenset(c for c in COLUMNS if COLUMN[c].better == "lower")
 
 
@@ -35,6 +36,9 @@ class Entry:
     std: dict[str, float] = field(default_factory=dict)
     rank: dict[str, int | None] = field(default_factory=dict)
     profiles: dict[str, tuple[int, int]] = field(default_factory=dict)  # name -> (passed, applicable)
+    n_sound: int = 0  # finished jobs with no defect warning (skelcore.trust.DEFECT_CODES)
+    #: column -> True when its mean includes a job with a defect: marked "†", never ranked (so never best)
+    tainted: dict[str, bool] = field(default_factory=dict)
 
 
 @dataclass
@@ -53,13 +57,13 @@ class Leaderboard:
     def to_csv(self) -> str:
         buf = _io.StringIO()
         w = csv.writer(buf, lineterminator="\n")
-        head = ["method", "condition", "n_jobs", "n_ok"]
+        head = ["method", "condition", "n_jobs", "n_ok", "n_sound"]
         for c in COLUMNS:
             head += [f"{c}_mean", f"{c}_std", f"{c}_rank"]
         head += [f"profile_{p.name}" for p in self.profiles]
         w.writerow(head)
         for e in self.entries:
-            row: list[Any] = [e.method, e.condition, e.n_jobs, e.n_ok]
+            row: list[Any] = [e.method, e.condition, e.n_jobs, e.n_ok, e.n_sound]
             for c in COLUMNS:
                 row += [_num(e.mean[c]), _num(e.std[c]), "" if e.rank[c] is None else e.rank[c]]
             row += [_rate(e.profiles[p.name], digits=None) for p in self.profiles]
@@ -74,15 +78,16 @@ class Leaderboard:
                 out.append("-")
                 continue
             d = COLUMN[c].digits
-            out.append(f"{format_score(m, d)} ± {format_score(s, d)}" + (f" ({r})" if r is not None else ""))
+            mark = TAINT if e.tainted.get(c) else ""
+            out.append(f"{format_score(m, d)}{mark} ± {format_score(s, d)}" + (f" ({r})" if r is not None else ""))
         return out
 
     def to_markdown(self) -> str:
         cols = self.columns()
-        head = ["method", "condition", "ok"] + [f"{c} {self.arrow(c)}" for c in cols] + [p.name for p in self.profiles]
+        head = ["method", "condition", "ok", "sound"] + [f"{c} {self.arrow(c)}" for c in cols] + [p.name for p in self.profiles]
         rows = [head]
         for e in self.entries:
-            rows.append([e.method, e.condition, f"{e.n_ok}/{e.n_jobs}", *self._cells(e, cols),
+            rows.append([e.method, e.condition, f"{e.n_ok}/{e.n_jobs}", f"{e.n_sound}/{e.n_jobs}", *self._cells(e, cols),
                          *(_rate(e.profiles[p.name]) for p in self.profiles)])
         widths = [max(len(r[i]) for r in rows) for i in range(len(head))]
         lines = ["| " + " | ".join(c.ljust(w) for c, w in zip(rows[0], widths)) + " |",
@@ -90,19 +95,22 @@ class Leaderboard:
         lines += ["| " + " | ".join(c.ljust(w) for c, w in zip(r, widths)) + " |" for r in rows[1:]]
         notes = ["", "Mean ± standard deviation over shapes and seeds of the jobs that finished; (rank) among the "
                  "methods under the same condition, 1 = best; ↓ lower is better, ↑ higher is better. Profile "
-                 "columns: jobs passing / jobs it applies to (thresholds: our reading of the paper, section V-B)."]
+                 "columns: jobs passing / jobs it applies to (thresholds: our reading of the paper, section V-B). "
+                 f"sound: finished jobs with no defect warning / jobs; {TAINT} a mean that includes a job with a "
+                 "defect (not ranked: a defective skeleton is never shown best)."]
         return "\n".join(lines + notes) + "\n"
 
     def to_latex(self) -> str:
         cols = self.columns()
         esc = _tex_escape
-        head = ["Method", "Condition"] + [f"{COLUMN[c].tex}${COLUMN[c].tex_arrow}$" for c in cols] + [esc(p.name) for p in self.profiles]
+        head = ["Method", "Condition", "Sound"] + [f"{COLUMN[c].tex}${COLUMN[c].tex_arrow}$" for c in cols] + [esc(p.name) for p in self.profiles]
         lines = [r"\begin{tabular}{ll" + "l" * (len(cols) + len(self.profiles)) + "}", r"\hline",
                  " & ".join(head) + r" \\ \hline\hline"]
         for e in self.entries:
             cells = [c.replace("±", r"$\pm$") for c in self._cells(e, cols)]
             cells = [r"\textbf{" + c + "}" if c.endswith("(1)") else c for c in cells]
-            lines.append(" & ".join([esc(e.method), esc(e.condition), *cells,
+            cells = [c.replace(TAINT, r"$^\dagger$") for c in cells]
+            lines.append(" & ".join([esc(e.method), esc(e.condition), f"{e.n_sound}/{e.n_jobs}", *cells,
                                      *(esc(_rate(e.profiles[p.name])) for p in self.profiles)]) + r" \\")
         lines += [r"\hline", r"\end{tabular}"]
         return "\n".join(lines) + "\n"
@@ -163,8 +171,10 @@ def build_leaderboard(rows: list[dict[str, Any]], profiles: tuple[Profile, ...],
                 continue
             ok = [r for r in mine if r["status"] == "ok"]
             e = Entry(meth, cond, len(mine), len(ok))
+            e.n_sound = sum(1 for r in ok if not r.get("defects"))
             for c in COLUMNS:
                 vals = np.array([r[c] for r in ok], dtype=float)
+                e.tainted[c] = any(r.get("defects") and np.isfinite(float(r[c])) for r in ok)
                 vals = vals[np.isfinite(vals)]
                 e.mean[c] = float(vals.mean()) if vals.size else math.nan
                 e.std[c] = float(vals.std(ddof=1)) if vals.size > 1 else (0.0 if vals.size else math.nan)
@@ -173,7 +183,8 @@ def build_leaderboard(rows: list[dict[str, Any]], profiles: tuple[Profile, ...],
                 e.profiles[p.name] = (verdicts.count("pass"), sum(v != "n/a" for v in verdicts))
             group.append(e)
         for c in COLUMNS:
-            for e, r in zip(group, _ranks([e.mean[c] for e in group], c in LOWER_IS_BETTER, COLUMN[c].digits)):
+            clean = [math.nan if e.tainted[c] else e.mean[c] for e in group]
+            for e, r in zip(group, _ranks(clean, c in LOWER_IS_BETTER, COLUMN[c].digits)):
                 e.rank[c] = r if len(group) > 1 else None
         entries += group
     return Leaderboard(entries, profiles)

@@ -18,6 +18,7 @@ from typing import Any
 
 from ..errors import SkelInputError
 from ..scores import column_keys
+from ..trust import DEFECT_CODES
 
 if sys.version_info >= (3, 11):
     import tomllib
@@ -61,6 +62,7 @@ class Profile:
     why: str
     criteria: tuple[Criterion, ...]
     when: str | None = None  # "noise", "sparse" or None (every condition)
+    fail_on: tuple[str, ...] = ()  # defect codes that fail the profile whatever the scores (issue 22)
 
     def applies(self, condition: dict[str, Any]) -> bool:
         if self.when == "noise":
@@ -69,11 +71,16 @@ class Profile:
             return any(condition.get(k) is not None for k in ("sparse", "grid", "fps"))
         return True
 
-    def verdict(self, scores: dict[str, float], condition: dict[str, Any], ok: bool = True) -> Verdict:
+    def verdict(self, scores: dict[str, float], condition: dict[str, Any], ok: bool = True,
+                defects: tuple[str, ...] | list[str] = ()) -> Verdict:
+        """Pass when every criterion is met and the job has none of the defects in ``fail_on``."""
         if not self.applies(condition):
             return Verdict("n/a", math.nan, f"only for {self.when} conditions")
         if not ok:
             return Verdict("fail", 0.0, "job failed")
+        fatal = [d for d in defects if d in self.fail_on]
+        if fatal:
+            return Verdict("fail", 0.0, "defect: " + ", ".join(fatal))
         results = [c.check(scores) for c in self.criteria]
         total = sum(c.weight for c in self.criteria) or 1.0
         score = sum(c.weight for c, (met, _) in zip(self.criteria, results) if met) / total
@@ -117,9 +124,12 @@ def _parse(doc: dict[str, Any], label: str) -> tuple[Profile, ...]:
         if not isinstance(name, str) or not name.isidentifier():
             fail(f"profiles[{i}]: name must be a word (letters, digits, _), got {name!r}")
         where = f"profile {name!r}"
-        extra = set(e) - {"name", "title", "why", "when", "require"}
+        extra = set(e) - {"name", "title", "why", "when", "require", "fail_on"}
         if extra:
             fail(f"{where}: unknown keys {sorted(extra)}")
+        fail_on = e.get("fail_on", [])
+        if not isinstance(fail_on, list) or any(c not in DEFECT_CODES for c in fail_on):
+            fail(f"{where}: fail_on must list defect codes among {', '.join(sorted(DEFECT_CODES))}; got {fail_on!r}")
         if e.get("when") not in (None, "noise", "sparse"):
             fail(f"{where}: when must be 'noise' or 'sparse'")
         reqs = e.get("require")
@@ -144,5 +154,6 @@ def _parse(doc: dict[str, Any], label: str) -> tuple[Profile, ...]:
             crits.append(Criterion(metrics, float(bound), "max" in r, float(weight)))
         if any(p.name == name for p in out):
             fail(f"{where}: defined twice")
-        out.append(Profile(name, str(e.get("title", name)), str(e.get("why", "")), tuple(crits), e.get("when")))
+        out.append(Profile(name, str(e.get("title", name)), str(e.get("why", "")), tuple(crits), e.get("when"),
+                           tuple(fail_on)))
     return tuple(out)

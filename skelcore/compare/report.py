@@ -19,6 +19,7 @@ import numpy as np
 
 from ..io.atomic import atomic_open
 from ..scores import COLUMN, column_keys, format_score, paired_columns
+from ..trust import DEFECT_CODES
 from .leaderboard import Leaderboard
 from .profiles import Profile
 from .render import VIEWS, render_job
@@ -33,7 +34,7 @@ table{border-collapse:collapse;font-size:12px;margin:8px 0}
 td,th{border:1px solid #ccc;padding:3px 6px;text-align:left;vertical-align:middle}
 th{background:#f0f0f0}td.best{font-weight:bold;background:#eef7ee}
 .gt td{text-align:center}.gt img{width:180px;height:180px;display:block}
-.note{color:#555;font-size:12px}.fail{color:#a00}
+.note{color:#555;font-size:12px}.fail{color:#a00}ul.warnings{margin:4px 0;padding-left:16px;font-size:12px;max-width:360px}
 """
 _SCRIPT = """
 window.addEventListener('load',function(){var im=document.images,ok=0;
@@ -93,12 +94,13 @@ def distributions_png(rows: list[dict[str, Any]], methods: list[str], conditions
 
 def _leaderboard_html(board: Leaderboard) -> str:
     cols = board.columns()
-    out = ["<table><tr><th>method</th><th>condition</th><th>ok</th>"]
+    out = ["<table><tr><th>method</th><th>condition</th><th>ok</th><th>sound</th>"]
     out += [f"<th>{html.escape(c)} {board.arrow(c)}</th>" for c in cols]
     out += [f"<th>{html.escape(p.name)}</th>" for p in board.profiles] + ["</tr>"]
     for e in board.entries:
         cells = board._cells(e, cols)
-        out.append(f"<tr><td>{html.escape(e.method)}</td><td>{html.escape(e.condition)}</td><td>{e.n_ok}/{e.n_jobs}</td>")
+        out.append(f"<tr><td>{html.escape(e.method)}</td><td>{html.escape(e.condition)}</td><td>{e.n_ok}/{e.n_jobs}</td>"
+                   f"<td{' class=fail' if e.n_sound < e.n_jobs else ''}>{e.n_sound}/{e.n_jobs}</td>")
         for c, text in zip(cols, cells):
             cls = ' class="best"' if e.rank.get(c) == 1 else ""
             out.append(f"<td{cls}>{html.escape(text)}</td>")
@@ -116,6 +118,8 @@ def _profiles_html(profiles: tuple[Profile, ...]) -> str:
         crit = ", ".join(f"{'/'.join(c.metrics)} {'≤' if c.upper else '≥'} {c.bound:g} (weight {c.weight:g})"
                          for c in p.criteria)
         when = f" — only {p.when} conditions" if p.when else ""
+        if p.fail_on:
+            crit += f"; fails on the defects {', '.join(p.fail_on)}"
         items.append(f"<li><b>{html.escape(p.name)}</b> ({html.escape(p.title)}{when}): {html.escape(crit)}. "
                      f"<span class=note>{html.escape(p.why)}</span></li>")
     return ("<p class=note>These thresholds and weights are our reading of the paper's discussion (section V-B), "
@@ -130,6 +134,17 @@ def _scores_line(r: dict[str, Any]) -> str:
     items = [f"d_B/d_Wp {f('d_B')}/{f('d_Wp')}"]
     items += [f"{metric[0].upper()} {f(sk.key)}/{f(cv.key)}" for metric, sk, cv in paired_columns("paper")]
     return "<br>".join([items[0]] + [" ".join(items[i:i + 2]) for i in range(1, len(items), 2)])
+
+
+def _warnings_html(store: Store, r: dict[str, Any]) -> str:
+    """The job's warnings beside its pictures, defects first and in red (issue 22)."""
+    doc = (store.get(r["key"]) or {}).get("evaluation") or {}
+    warnings = sorted(doc.get("warnings") or [], key=lambda w: w["code"] not in DEFECT_CODES)
+    if not warnings:
+        return "<br><span class=note>no warning</span>"
+    items = "".join(f"<li{' class=fail' if w['code'] in DEFECT_CODES else ''}><b>{html.escape(w['code'])}</b>: "
+                    f"{html.escape(w['message'])}</li>" for w in warnings)
+    return f"<ul class=warnings>{items}</ul>"
 
 
 def _graphic_table(out_dir: str, rows: list[dict[str, Any]], store: Store, shapes: list[str], methods: list[str],
@@ -151,7 +166,7 @@ def _graphic_table(out_dir: str, rows: list[dict[str, Any]], store: Store, shape
                     continue
                 pngs = render_job(out_dir, r["key"], store.arrays(r["key"]))
                 imgs = "".join(f"<td>{_img(pngs[v].read_bytes(), f'{shape} {cond} {meth} {v}')}</td>" for v in VIEWS)
-                out.append(f"<tr>{head}{imgs}<td>{_scores_line(r)}</td></tr>")
+                out.append(f"<tr>{head}{imgs}<td>{_scores_line(r)}{_warnings_html(store, r)}</td></tr>")
         out.append("</table>")
     return "".join(out)
 
@@ -174,7 +189,8 @@ def write_report(out_dir: str | os.PathLike, rows: list[dict[str, Any]], board: 
     parts.append("</p><h2>Leaderboard</h2>" + _leaderboard_html(board))
     parts.append("<p class=note>Mean ± standard deviation over shapes and seeds of the finished jobs; (rank) among the "
                  "methods under the same condition, best in bold; ↓ lower is better, ↑ higher is better. "
-                 "Profile columns: jobs passing / jobs the profile applies to.</p>")
+                 "Profile columns: jobs passing / jobs the profile applies to. sound: finished jobs with no defect "
+                 "warning / jobs; † a mean that includes a job with a defect (never ranked, so never shown best).</p>")
     parts.append("<h2>Application profiles</h2>" + _profiles_html(board.profiles))
     dist = distributions_png(rows, methods, conditions)
     if dist is not None:

@@ -1,5 +1,6 @@
 """``results.csv``: one row per job of the manifest (in manifest order) from the store, with each
-application profile's verdict and reason. Empty cells are missing scores, so pandas reads the
+application profile's verdict and reason, and the job's warning codes by name (``warnings``), those
+that are defects (``defects``, :data:`skelcore.trust.DEFECT_CODES`) and ``sound`` (1: no defect). Empty cells are missing scores, so pandas reads the
 file as it is (``pd.read_csv``: NaN there, floats at full precision elsewhere).
 """
 
@@ -13,14 +14,15 @@ from typing import Any
 
 from ..io.atomic import atomic_open
 from ..scores import column_keys
+from ..trust import defect_codes
 from .jobs import SCORE_COLUMNS, Job
 from .profiles import Profile
 from .job_store import Store, json_float
 
 __all__ = ["collect_rows", "write_results_csv", "COLUMNS"]
 
-COLUMNS = ("shape", "method", "condition", "seed", "status", "error", *column_keys(compared=True), "label",
-           "n_points", "key")
+COLUMNS = ("shape", "method", "condition", "seed", "status", "error", *column_keys(compared=True), "sound",
+           "defects", "warnings", "label", "n_points", "key")
 
 
 def collect_rows(jobs: list[Job], store: Store, profiles: tuple[Profile, ...]) -> list[dict[str, Any]]:
@@ -32,12 +34,16 @@ def collect_rows(jobs: list[Job], store: Store, profiles: tuple[Profile, ...]) -
         ok = rec.get("status") == "ok"
         if not ok:
             scores["n_warnings"] = math.nan
+        codes = sorted({w["code"] for w in ((rec.get("evaluation") or {}).get("warnings") or [])})
+        defects = defect_codes([{"code": c} for c in codes])
         row: dict[str, Any] = {"shape": job.shape.name, "method": job.method.name, "condition": job.condition.name,
                                "seed": job.seed, "status": rec.get("status", "missing"), "error": rec.get("error", ""),
-                               **scores, "seconds": json_float(rec.get("seconds")), "label": rec.get("label", ""),
+                               **scores, "seconds": json_float(rec.get("seconds")),
+                               "sound": (0 if defects else 1) if ok else "", "defects": ";".join(defects),
+                               "warnings": ";".join(codes), "label": rec.get("label", ""),
                                "n_points": rec.get("n_points", ""), "key": job.key}
         for p in profiles:
-            v = p.verdict(scores, job.condition.to_dict(), ok=ok)
+            v = p.verdict(scores, job.condition.to_dict(), ok=ok, defects=defects)
             row[f"profile_{p.name}"] = v.status
             row[f"profile_{p.name}_score"] = v.score
             row[f"profile_{p.name}_reason"] = v.reason
