@@ -182,7 +182,7 @@ def evaluate(
 
     curve_obj: CurveSkeleton | None = None
     if curve is not None:
-        curve_obj = curve if isinstance(curve, CurveSkeleton) else CurveSkeleton.from_raw(*curve)
+        curve_obj = CurveSkeleton.coerce(curve, "curve")
     if correspondence == "reverse" and skel is None:
         if curve_obj is None:
             raise SkelInputError("reverse correspondence needs a skeletal point set or a curve skeleton")
@@ -191,7 +191,7 @@ def evaluate(
     if reference_curve is not None:
         if curve_obj is None:
             raise SkelInputError("a reference curve is compared with a curve skeleton: give one")
-        ref_obj = reference_curve if isinstance(reference_curve, CurveSkeleton) else CurveSkeleton.from_raw(*reference_curve)
+        ref_obj = CurveSkeleton.coerce(reference_curve, "reference curve")
 
     names: list[str] = []
     skeletal_from_curve = skel is None and mode == "reverse"

@@ -1,4 +1,5 @@
-"""Text formats: XYZ/TXT/CSV/PTS tables, OBJ, OFF, the .cg curve graph, SWC, CGAL polylines."""
+"""Text formats: XYZ/TXT/CSV/PTS tables, OBJ, OFF, the .cg curve graph, CGAL polylines, PyGEL graphs
+(SWC: :mod:`.swc`); the OBJ and .cg curve writers."""
 
 from __future__ import annotations
 
@@ -281,36 +282,6 @@ def read_cg(path: Path, data: bytes) -> RawData:
     else:
         e = np.empty((0, 2), dtype=np.int64)
     return RawData(vertices=vertices, edges=e, format=".cg curve graph", curve_format=True)
-
-
-# ---- SWC ----------------------------------------------------------------------------------------
-
-
-def read_swc(path: Path, data: bytes) -> RawData:
-    """SWC rows ``id type x y z radius parent``; parent -1 (any negative) marks a root; ids may be
-    non-contiguous and appear in any order. Each non-root row gives the edge (row, parent's row)."""
-    text = decode_text(data)
-    rows = _rows(text)
-    table = numeric_table(rows, path, min_cols=7, use_cols=7, what="id type x y z radius parent")
-    ids, parents = table[:, 0], table[:, 6]
-    if np.any(ids != np.round(ids)) or np.any(parents != np.round(parents)):
-        raise SkelInputError("SWC ids and parent ids must be whole numbers", path)
-    ids = ids.astype(np.int64)
-    parents = parents.astype(np.int64)
-    order = np.argsort(ids, kind="stable")
-    sorted_ids = ids[order]
-    dup = np.flatnonzero(sorted_ids[1:] == sorted_ids[:-1])
-    if dup.size:
-        raise SkelInputError(f"SWC id {int(sorted_ids[dup[0]])} appears more than once", path)
-    child = np.flatnonzero(parents >= 0)
-    pos = np.searchsorted(sorted_ids, parents[child])
-    pos_c = np.minimum(pos, len(sorted_ids) - 1)
-    found = sorted_ids[pos_c] == parents[child]
-    if not found.all():
-        k = child[~found][0]
-        raise SkelInputError(f"SWC node {int(ids[k])} has parent {int(parents[k])}, which is not in the file", path)
-    edges = np.column_stack([child, order[pos_c]]).astype(np.int64)
-    return RawData(vertices=table[:, 2:5].copy(), edges=edges, format="SWC", curve_format=True)
 
 
 # ---- CGAL polylines -----------------------------------------------------------------------------
