@@ -21,9 +21,11 @@ from ..errors import SkelInputError
 from . import atomic
 from ._common import RawData, decode_text, is_comment
 from .arrays import read_json, read_npy, read_npz
+from .graph_xml import is_gexf, is_graphml, read_gexf, read_graphml
 from .las import is_las, read_las
 from .pcd import is_pcd, read_pcd
 from .swc import read_swc
+from .treeqsm import is_mat, read_treeqsm
 from .ply import is_ply, read_ply
 from .text import (
     is_cg,
@@ -55,6 +57,9 @@ _READERS: dict[str, Callable[[Path, bytes], RawData]] = {
     "json": read_json,
     "graph": read_graph,
     "las": read_las,
+    "graphml": read_graphml,
+    "gexf": read_gexf,
+    "mat": read_treeqsm,
 }
 
 _BY_SUFFIX = {
@@ -77,6 +82,9 @@ _BY_SUFFIX = {
     ".graph": "graph",
     ".las": "las",
     ".laz": "las",
+    ".graphml": "graphml",
+    ".gexf": "gexf",
+    ".mat": "mat",
 }
 
 #: For file dialogs: every extension the loaders accept (``.polylines.txt`` is a ``.txt``).
@@ -108,7 +116,14 @@ def detect_format(path: str | os.PathLike, head: bytes) -> str:
         return "npz"
     if is_las(head):
         return "las"
+    if is_mat(head):
+        return "mat"
     text = decode_text(head).lstrip()
+    if text.startswith("<"):
+        if is_graphml(text):
+            return "graphml"
+        if is_gexf(text):
+            return "gexf"
     if text.startswith(("{", "[")):
         return "json"
     if is_cg(text):

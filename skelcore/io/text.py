@@ -364,3 +364,38 @@ def read_graph(path: Path, data: bytes) -> RawData:
         if e.shape[1] != 2:
             raise SkelInputError(f"connection lines have {e.shape[1]} numbers, expected 2 (c i j)", path)
     return RawData(vertices=v, edges=e, format="PyGEL graph", curve_format=True)
+
+
+# ---- curve writers ------------------------------------------------------------------------------
+
+
+def _curve_arrays(vertices: np.ndarray, edges: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    v = np.asarray(vertices, dtype=np.float64)
+    e = np.asarray(edges, dtype=np.int64).reshape(-1, 2)
+    if v.ndim != 2 or v.shape[1] != 3:
+        raise ValueError(f"vertices must be N x 3, got shape {v.shape}")
+    if e.size and (e.min() < 0 or e.max() >= len(v)):
+        raise ValueError("edge index out of range")
+    return v, e
+
+
+def write_curve_obj(path, vertices: np.ndarray, edges: np.ndarray, *, inputs=()) -> None:
+    """``v x y z`` lines then one ``l i j`` line per edge (1-based), full double precision."""
+    from .atomic import atomic_open
+
+    v, e = _curve_arrays(vertices, edges)
+    with atomic_open(path, "w", inputs=inputs) as fh:
+        fh.write("# written by skelcore: curve skeleton\n")
+        np.savetxt(fh, v, fmt="v %.17g %.17g %.17g")
+        np.savetxt(fh, e + 1, fmt="l %d %d")
+
+
+def write_curve_cg(path, vertices: np.ndarray, edges: np.ndarray, *, inputs=()) -> None:
+    """Starlab's ``.cg``: ``# D:3 NV:n NE:m``, ``v`` lines, ``e i j`` lines (1-based)."""
+    from .atomic import atomic_open
+
+    v, e = _curve_arrays(vertices, edges)
+    with atomic_open(path, "w", inputs=inputs) as fh:
+        fh.write(f"# D:3 NV:{len(v)} NE:{len(e)}\n")
+        np.savetxt(fh, v, fmt="v %.17g %.17g %.17g")
+        np.savetxt(fh, e + 1, fmt="e %d %d")
