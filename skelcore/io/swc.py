@@ -57,16 +57,17 @@ def read_swc(path: Path, data: bytes) -> RawData:
     return RawData(vertices=table[:, 2:5].copy(), edges=edges, format="SWC", curve_format=True, radius=radius)
 
 
-def forest_parents(n: int, edges: np.ndarray) -> np.ndarray:
+def forest_parents(n: int, edges: np.ndarray, *, spanning: bool = False) -> np.ndarray:
     """Parent row of every vertex (-1 for the root of each component) of an undirected forest, by a
-    breadth-first search from each component's lowest-numbered vertex; ValueError on a cycle."""
+    breadth-first search from each component's lowest-numbered vertex; ValueError on a cycle, unless
+    ``spanning`` (then the breadth-first spanning forest: each cycle loses one edge)."""
     from scipy.sparse import coo_matrix
     from scipy.sparse.csgraph import breadth_first_order, connected_components
 
     e = np.asarray(edges, dtype=np.int64).reshape(-1, 2)
     adj = coo_matrix((np.ones(len(e)), (e[:, 0], e[:, 1])), shape=(n, n)).tocsr()
     n_comp, labels = connected_components(adj, directed=False)
-    if len(e) != n - n_comp:
+    if len(e) != n - n_comp and not spanning:
         raise ValueError(f"the curve has {len(e) - n + n_comp} independent cycle(s); SWC holds only trees")
     parents = np.full(n, -1, np.int64)
     roots = np.unique(labels, return_index=True)[1]
@@ -84,12 +85,13 @@ def forest_parents(n: int, edges: np.ndarray) -> np.ndarray:
 
 def write_swc(
     path: str | os.PathLike, vertices: np.ndarray, edges: np.ndarray, radius: np.ndarray | None = None, *,
-    inputs: Iterable[str | os.PathLike] = (),
+    inputs: Iterable[str | os.PathLike] = (), spanning: bool = False,
 ) -> None:
     """A forest curve as SWC: vertex i is node i + 1 (vertex order kept), type 0, its radius (0 when
-    unknown), its parent from a breadth-first search of its component. ValueError on a cycle."""
+    unknown), its parent from a breadth-first search of its component. ValueError on a cycle unless
+    ``spanning`` (then one edge of each cycle is dropped)."""
     v = np.asarray(vertices, dtype=np.float64)
-    parents = forest_parents(len(v), edges)
+    parents = forest_parents(len(v), edges, spanning=spanning)
     r = np.zeros(len(v)) if radius is None else np.nan_to_num(np.asarray(radius, float), nan=0.0)
     ids = np.arange(1, len(v) + 1)
     table = np.column_stack([ids, np.zeros(len(v)), v, r, np.where(parents >= 0, parents + 1, -1)])

@@ -80,10 +80,12 @@ def points_loss(path: str | os.PathLike) -> str | None:
 
 def write_curve(
     path: str | os.PathLike, curve: CurveSkeleton, *, inputs: Iterable[str | os.PathLike] = (), binary: bool = True,
+    lossy: bool = False,
 ) -> None:
     """Write ``curve`` in the format of ``path``'s extension (:data:`CURVE_SUFFIXES`; a point format
     gets the vertices only). Radii go to PLY (a double ``radius`` property), SWC, GraphML and JSON.
-    ValueError for an extension no writer handles, or a cycle in SWC."""
+    ValueError for an extension no writer handles, or a cycle in SWC (unless ``lossy``: then SWC
+    gets the breadth-first spanning forest)."""
     from .arrays import write_curve_json
     from .graph_xml import write_graphml
     from .ply import write_curve_ply
@@ -99,7 +101,7 @@ def write_curve(
     elif suffix == ".cg":
         write_curve_cg(path, v, e, inputs=inputs)
     elif suffix == ".swc":
-        write_swc(path, v, e, r, inputs=inputs)
+        write_swc(path, v, e, r, inputs=inputs, spanning=lossy)
     elif suffix == ".graphml":
         write_graphml(path, v, e, r, inputs=inputs)
     elif suffix == ".json":
