@@ -49,7 +49,7 @@ def curve_parts(obj: object, name: str = "curve") -> tuple[np.ndarray, np.ndarra
     kind = kind_of(obj)
     if kind is None or kind in ("array", "array_like"):
         raise TypeError(f"{name}: cannot use a {type_name(obj)} as a curve skeleton; expected {EXPECTED_CURVE}")
-    if kind in ("open3d_pointcloud", "open3d_mesh", "trimesh_points", "frame"):
+    if kind in ("open3d_pointcloud", "open3d_mesh", "trimesh_points"):
         raise SkelInputError(
             f"{name}: a {type_name(obj)} has no edges: it is a point set, not a curve skeleton"
         )
@@ -69,7 +69,7 @@ def curve_parts(obj: object, name: str = "curve") -> tuple[np.ndarray, np.ndarra
         return _graph_parts(obj, name)
     from .swc_frames import frame_curve_parts
 
-    return frame_curve_parts(obj.nodes if kind == "navis_neuron" else obj, name)
+    return frame_curve_parts(obj.nodes if kind == "navis_neuron" else obj, name)  # "swc_frame", "frame"
 
 
 def _path_parts(path, name: str) -> tuple[np.ndarray, np.ndarray, None]:
