@@ -72,6 +72,7 @@ _BY_SUFFIX = {
     ".asc": "xyz",
     ".xyzn": "xyz",
     ".xyzrgb": "xyz",
+    ".xyzr": "xyz",  # Point2Skeleton's x y z radius list
     ".obj": "obj",
     ".off": "off",
     ".cg": "cg",
