@@ -34,7 +34,11 @@ def type_name(obj: object) -> str:
 
 
 def _has(obj: object, *names: str) -> bool:
-    return all(hasattr(type(obj), n) or hasattr(obj, n) for n in names)
+    """Every name is an attribute of the object's class or the object (a failing property is "no")."""
+    try:
+        return all(hasattr(type(obj), n) or hasattr(obj, n) for n in names)
+    except Exception:  # an object's __getattr__ may raise anything; then it is not what we look for
+        return False
 
 
 def _module(obj: object) -> str:

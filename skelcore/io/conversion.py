@@ -16,6 +16,7 @@ import numpy as np
 
 from ..curve import CurveSkeleton
 from ..errors import SkelInputError
+from . import atomic
 from .loaders import Loaded, load_any, load_curve, load_points
 from .writers import CURVE_SUFFIXES, POINT_SUFFIXES, curve_loss, points_loss, write_curve, write_point_set
 
@@ -122,6 +123,7 @@ def convert_file(source: str | os.PathLike, target: str | os.PathLike, *, lossy:
             raise
         raise SkelInputError(str(exc), dst) from None
     back = load_any(dst)
+    atomic.release(dst)  # reading it back protected it: it is our output, not an input
     if loaded.kind == "curve" and back.kind == "points" and before.n_edges == 0:
         back = Loaded(kind="curve", path=str(dst), format=back.format,
                       curve=CurveSkeleton.from_raw(back.points, np.empty((0, 2))))

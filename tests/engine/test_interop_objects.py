@@ -20,7 +20,7 @@ from skelcore.io import load_cloud, load_curve, load_points, write_curve, write_
 @pytest.fixture(scope="module")
 def y_files(tmp_path_factory):
     """The Y shape (a tree with a junction): cloud PLY, skeletal PLY, curve SWC with radii, and the
-    evaluation from those files."""
+    summaries of the evaluations from those files (with the skeletal set, and of the curve alone)."""
     d = tmp_path_factory.mktemp("y")
     sh = shapes.y_shape(1500, seed=3)
     radius = np.linspace(0.3, 0.1, len(sh.curve_vertices))
@@ -29,8 +29,8 @@ def y_files(tmp_path_factory):
     write_points_ply(d / "skeletal.ply", sh.skeletal)
     write_curve(d / "curve.swc", curve)
     cloud, skeletal, curve = load_cloud(d / "cloud.ply"), load_points(d / "skeletal.ply"), load_curve(d / "curve.swc")
-    ev = skelcore.evaluate(cloud, skeletal=skeletal, curve=curve)
-    return sh, curve, ev.summary()
+    full = skelcore.evaluate(cloud, skeletal=skeletal, curve=curve).summary()
+    return sh, curve, {"full": full, "curve": skelcore.evaluate(cloud, curve=curve).summary()}
 
 
 def _same_summary(a: dict, b: dict) -> None:
@@ -61,7 +61,7 @@ def test_open3d_pointcloud_lineset_and_mesh_score_as_the_files(y_files):
     cloud = o3d.geometry.PointCloud(o3d.utility.Vector3dVector(sh.cloud))
     skeletal = o3d.geometry.PointCloud(o3d.utility.Vector3dVector(sh.skeletal))
     lines = o3d.geometry.LineSet(o3d.utility.Vector3dVector(curve.vertices), o3d.utility.Vector2iVector(curve.edges))
-    _same_summary(_score(cloud, skeletal, lines), {**ref})
+    _same_summary(_score(cloud, skeletal, lines), ref["full"])
     mesh = o3d.geometry.TriangleMesh()
     mesh.vertices = o3d.utility.Vector3dVector(sh.cloud)
     np.testing.assert_array_equal(load_cloud(mesh), sh.cloud)
@@ -76,7 +76,7 @@ def test_trimesh_pointcloud_mesh_and_path3d_score_as_the_files(y_files):
     from trimesh.path.entities import Line
 
     path = trimesh.path.Path3D(entities=[Line(e) for e in curve.edges], vertices=curve.vertices, process=False)
-    _same_summary(_score(cloud, skeletal, path), ref)
+    _same_summary(_score(cloud, skeletal, path), ref["full"])
 
 
 @pytest.mark.parametrize("style", ["pos", "xyz"])
@@ -88,7 +88,7 @@ def test_networkx_graph_with_positions_scores_as_the_file(y_files, style):
         attrs = {"pos": p} if style == "pos" else dict(zip("xyz", p.tolist()))
         g.add_node(f"node-{i}", radius=curve.radius[i], **attrs)
     g.add_edges_from((f"node-{a}", f"node-{b}") for a, b in curve.edges)
-    _same_summary(_score(sh.cloud, sh.skeletal, g), ref)
+    _same_summary(_score(sh.cloud, None, g), ref["curve"])
     got = load_curve(g)
     np.testing.assert_array_equal(got.vertices, curve.vertices)
     np.testing.assert_array_equal(got.radius, curve.radius)
@@ -108,7 +108,7 @@ def test_pandas_swc_rows_and_xyz_frame_score_as_the_files(y_files):
     pd = pytest.importorskip("pandas")
     sh, curve, ref = y_files
     cloud = pd.DataFrame(sh.cloud, columns=["X", "Y", "Z"])
-    _same_summary(_score(cloud, sh.skeletal, _swc_frame(curve)), ref)
+    _same_summary(_score(cloud, None, _swc_frame(curve)), ref["curve"])
     np.testing.assert_array_equal(load_curve(_swc_frame(curve)).radius, curve.radius)
 
 
@@ -116,7 +116,7 @@ def test_navis_tree_neuron_scores_as_the_file(y_files):
     navis = pytest.importorskip("navis")
     sh, curve, ref = y_files
     neuron = navis.TreeNeuron(_swc_frame(curve))
-    _same_summary(_score(sh.cloud, sh.skeletal, neuron), ref)
+    _same_summary(_score(sh.cloud, None, neuron), ref["curve"])
     assert load_curve(neuron).radius is not None
 
 
@@ -127,7 +127,7 @@ def test_cloud_volume_skeleton_scores_as_the_file(y_files):
         Skeleton = pytest.importorskip("osteoid").Skeleton  # kimimaro's Skeleton class
     sh, curve, ref = y_files
     skel = Skeleton(curve.vertices, curve.edges, radii=curve.radius)
-    _same_summary(_score(sh.cloud, sh.skeletal, skel), ref)
+    _same_summary(_score(sh.cloud, None, skel), ref["curve"])
     np.testing.assert_array_equal(load_curve(skel).radius, curve.radius)
     # cloud-volume marks unknown radii -1: they are unknown here too
     assert load_curve(Skeleton(curve.vertices, curve.edges)).radius is None
@@ -135,8 +135,8 @@ def test_cloud_volume_skeleton_scores_as_the_file(y_files):
 
 def test_pairs_dicts_and_array_likes_score_as_the_files(y_files):
     sh, curve, ref = y_files
-    _same_summary(_score(sh.cloud.tolist(), sh.skeletal, (curve.vertices, curve.edges)), ref)
-    _same_summary(_score(sh.cloud, sh.skeletal, {"vertices": curve.vertices, "edges": curve.edges}), ref)
+    _same_summary(_score(sh.cloud.tolist(), sh.skeletal.tolist(), (curve.vertices, curve.edges)), ref["full"])
+    _same_summary(_score(sh.cloud, None, {"vertices": curve.vertices, "edges": curve.edges}), ref["curve"])
 
 
 def test_reference_curve_accepts_an_object(y_files):

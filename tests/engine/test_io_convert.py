@@ -158,3 +158,10 @@ def test_convert_file_as_points_reads_a_curve_file_as_its_vertices(tmp_path):
     write_curve(tmp_path / "in.ply", _tree())
     result = convert_file(tmp_path / "in.ply", tmp_path / "v.npy", as_kind="points")
     assert result.source.kind == "points" and result.same
+
+
+def test_convert_file_can_replace_its_own_earlier_output(tmp_path):
+    write_curve(tmp_path / "in.ply", _tree())
+    first = convert_file(tmp_path / "in.ply", tmp_path / "out.json")
+    again = convert_file(tmp_path / "in.ply", tmp_path / "out.json", force=True)
+    assert first.same and again.same
