@@ -31,7 +31,8 @@ def points_of(obj: object, name: str = "points") -> object:
     if kind in ("array", "array_like"):
         return obj
     if kind is None:
-        raise TypeError(f"{name}: cannot use a {type_name(obj)}; expected {EXPECTED_POINTS}")
+        hint = " (a file name: load it with skelcore.load_cloud first)" if isinstance(obj, (str, bytes)) else ""
+        raise TypeError(f"{name}: cannot use a {type_name(obj)}{hint}; expected {EXPECTED_POINTS}")
     if kind == "open3d_pointcloud" or kind == "open3d_lineset":
         return np.asarray(obj.points, dtype=np.float64)
     if kind == "open3d_mesh" or kind == "trimesh_points":

@@ -157,6 +157,8 @@ def test_unknown_object_is_one_type_error_naming_what_is_expected():
         skelcore.evaluate(np.random.default_rng(0).random((50, 3)), curve=3.5)
     with pytest.raises(TypeError, match="point cloud: cannot use a"):
         load_cloud(object())
+    with pytest.raises(TypeError, match=r"cloud: cannot use a str \(a file name: load it with skelcore.load_cloud"):
+        skelcore.evaluate("cloud.ply")
 
 
 def test_objects_without_what_is_needed_are_one_line_input_errors():
