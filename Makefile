@@ -9,7 +9,7 @@ APT_PACKAGES := xvfb xauth libxcb-icccm4 libxcb-keysyms1 libxcb-cursor0 libxcb-i
 	libxcb-render-util0 libxcb-xinerama0 libxcb-shape0 libxcb-randr0 libxcb-xkb1 libxkbcommon-x11-0 \
 	libegl1 libgl1 libdbus-1-3 libfontconfig1 chromium gcc python3-dev
 
-.PHONY: setup system venv run test screenshots bench samples clean
+.PHONY: setup system venv run test test-interop screenshots bench samples clean
 
 system:
 	@missing=""; for p in $(APT_PACKAGES); do dpkg -s $$p >/dev/null 2>&1 || missing="$$missing $$p"; done; \
@@ -34,6 +34,13 @@ run: setup
 
 test: setup
 	$(PY) -m pytest -q -p no:cacheprovider tests
+
+# Open3D (a ~400 MB wheel) and cloud-volume are kept out of `make test`: this installs the interop
+# extra and runs the tests of other libraries' objects, which skip Open3D's cases without it.
+test-interop: setup
+	$(PY) -m pip install -q -e '.[interop]'
+	$(PY) -m pytest -q -p no:cacheprovider tests/engine/test_interop_objects.py tests/engine/test_interop_outputs.py \
+		tests/engine/test_io_tool_formats.py tests/engine/test_io_convert.py
 
 screenshots: setup
 	xvfb-run -a -s "-screen 0 1600x1000x24" $(PY) scripts/make_screenshots.py

@@ -224,3 +224,23 @@ class Evaluation:
     def _input_paths(self) -> tuple[str, ...]:
         return tuple(str(p) for p in self.inputs.values() if p)
 
+    # ---- other libraries' objects (skelcore.interop; each imports its library only when called) ----
+    def to_frame(self, kind: str = "skeletal", **thresholds):
+        """A pandas DataFrame, one row per element of ``kind`` ("skeletal", "curve_samples",
+        "curve_vertices", "cloud") with every local value and flag (:func:`skelcore.interop.tables.to_frame`)."""
+        from .interop.tables import to_frame
+
+        return to_frame(self, kind, **thresholds)
+
+    def to_networkx(self, **thresholds):
+        """The curve skeleton as a networkx Graph with the local values as node and edge attributes."""
+        from .interop.graph_out import to_networkx
+
+        return to_networkx(self, **thresholds)
+
+    def to_open3d(self, metric: str = "centeredness", **options):
+        """The curve skeleton as an Open3D LineSet coloured like the viewer (NaN magenta)."""
+        from .interop.open3d_out import to_open3d
+
+        return to_open3d(self, metric, **options)
+

@@ -272,9 +272,15 @@ def unique_rows(points: np.ndarray, checkpoint: Checkpoint = no_checkpoint) -> t
 
 
 def as_points(name: str, points: object) -> np.ndarray:
-    """Validate user points as a finite, non-empty (N, 3) float array, else a one-line SkelInputError."""
+    """Validate user points as a finite, non-empty (N, 3) float array, else a one-line SkelInputError.
+    Other libraries' objects (an Open3D PointCloud, a trimesh mesh, ...) give their points
+    (:func:`skelcore.interop.points_of`); an unknown object is a TypeError naming what is accepted."""
     from .errors import SkelInputError
 
+    if not isinstance(points, np.ndarray):
+        from .interop.objects_in import points_of
+
+        points = points_of(points, name)
     try:
         arr = np.asarray(points, dtype=float)
     except (TypeError, ValueError):

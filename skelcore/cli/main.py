@@ -1,7 +1,7 @@
 """The ``skelcore`` entry point: one parser on which every subcommand module registers itself.
 
 Exit codes: 0 success, 2 input error or unwritable output (one line on stderr), 3 a trust warning
-under `evaluate --strict`, 130 interrupted.
+under `evaluate --strict`, 1 when `convert` reads back something else than it wrote, 130 interrupted.
 """
 
 from __future__ import annotations
@@ -12,12 +12,12 @@ import warnings
 from typing import Sequence
 
 from ..errors import SkelInputError
-from . import compare, evaluate, figure, skeletonize, study
+from . import compare, convert, evaluate, figure, skeletonize, study
 
 __all__ = ["build_parser", "main"]
 
 DESCRIPTION = "skelcore command line: evaluate a skeleton against its cloud; print the paper's table."
-SUBCOMMANDS = (evaluate, study, skeletonize, compare, figure)
+SUBCOMMANDS = (evaluate, study, skeletonize, compare, figure, convert)
 
 
 def build_parser() -> argparse.ArgumentParser:

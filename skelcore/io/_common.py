@@ -16,13 +16,15 @@ class RawData:
     """A file's contents before validation: vertices in the file's units, edges when the format has them.
 
     ``edges`` is None for formats that cannot carry connectivity (XYZ, PCD, NPY); ``curve_format`` is
-    True for formats that only ever hold curve skeletons (.cg, SWC, CGAL polylines).
+    True for formats that only ever hold curve skeletons (.cg, SWC, CGAL polylines); ``radius`` is one
+    radius per vertex when the file has them (SWC, TreeQSM, a PLY ``radius`` property).
     """
 
     vertices: np.ndarray
     edges: np.ndarray | None
     format: str
     curve_format: bool = False
+    radius: np.ndarray | None = None
 
 
 def decode_text(data: bytes) -> str:

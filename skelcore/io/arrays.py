@@ -1,4 +1,5 @@
-"""NumPy (.npy, .npz) and JSON point sets and ``{vertices, edges}`` curve skeletons."""
+"""NumPy (.npy, .npz) and JSON point sets and ``{vertices, edges[, radius]}`` curve skeletons; the JSON
+curve writer."""
 
 from __future__ import annotations
 
@@ -95,7 +96,15 @@ def read_json(path: Path, data: bytes) -> RawData:
         if any(len(r) != 2 or not all(isinstance(x, (int, float)) and not isinstance(x, bool) for x in r) for r in e):
             raise SkelInputError(f"JSON '{ekey}' must be a list of [i, j] number pairs", path)
         edges = as_edges(np.array(e, dtype=np.float64).reshape(-1, 2), path)
-    return RawData(vertices=vertices, edges=edges, format="JSON")
+    radius = None
+    rkey = _pick(doc.keys(), ("radius", "radii"))
+    if rkey is not None and edges is not None:
+        r = doc[rkey]
+        if not isinstance(r, list) or len(r) != len(vertices) or \
+                not all(x is None or (isinstance(x, (int, float)) and not isinstance(x, bool)) for x in r):
+            raise SkelInputError(f"JSON '{rkey}' must be a list of one number (or null) per vertex", path)
+        radius = np.array([np.nan if x is None else x for x in r], dtype=np.float64)
+    return RawData(vertices=vertices, edges=edges, format="JSON", radius=radius)
 
 
 def _json_vertices(rows: object, path: Path) -> np.ndarray:
@@ -112,3 +121,18 @@ def _json_vertices(rows: object, path: Path) -> np.ndarray:
         raise SkelInputError("JSON vertices must be a list of [x, y, z] number rows", path)
     # null (how NaN is usually written to JSON) becomes NaN.
     return np.array([[np.nan if x is None else x for x in r[:3]] for r in rows], dtype=np.float64)
+
+
+def write_curve_json(path, vertices: np.ndarray, edges: np.ndarray, radius: np.ndarray | None = None, *,
+                     inputs=()) -> None:
+    """``{"vertices": [[x, y, z], ...], "edges": [[i, j], ...]}`` (0-based), plus ``"radius"`` when
+    known (NaN, an unknown radius, written as null); floats round-trip exactly."""
+    from .atomic import atomic_open
+
+    doc = {"vertices": np.asarray(vertices, dtype=np.float64).tolist(),
+           "edges": np.asarray(edges, dtype=np.int64).reshape(-1, 2).tolist()}
+    if radius is not None:
+        doc["radius"] = [None if not np.isfinite(r) else r for r in np.asarray(radius, dtype=np.float64).tolist()]
+    with atomic_open(path, "w", inputs=inputs) as fh:
+        json.dump(doc, fh)
+        fh.write("\n")

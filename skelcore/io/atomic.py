@@ -19,6 +19,12 @@ def protect(path: str | os.PathLike) -> None:
         _protected.add(Path(path).resolve())
 
 
+def release(path: str | os.PathLike) -> None:
+    """Forget a file :func:`protect` remembered (a file ``convert`` wrote and read back to check it)."""
+    with contextlib.suppress(OSError):
+        _protected.discard(Path(path).resolve())
+
+
 def check_not_input(path: str | os.PathLike, inputs: Iterable[str | os.PathLike] = ()) -> None:
     target = Path(path).resolve()
     others = {Path(p).resolve() for p in inputs if p is not None}

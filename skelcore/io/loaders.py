@@ -2,7 +2,8 @@
 
 The format is detected from the file's content first and from its extension otherwise; every loader
 returns float64 coordinates in the file's units (SPEC 0), protects the path from writers and turns
-any problem into a one-line :class:`~skelcore.errors.SkelInputError` naming the file.
+any problem into a one-line :class:`~skelcore.errors.SkelInputError` naming the file. Each loader also
+takes another library's object instead of a path (:mod:`skelcore.interop`) and checks it the same way.
 """
 
 
@@ -20,8 +21,11 @@ from ..errors import SkelInputError
 from . import atomic
 from ._common import RawData, decode_text, is_comment
 from .arrays import read_json, read_npy, read_npz
+from .graph_xml import is_gexf, is_graphml, read_gexf, read_graphml
 from .las import is_las, read_las
 from .pcd import is_pcd, read_pcd
+from .swc import read_swc
+from .treeqsm import is_mat, read_treeqsm
 from .ply import is_ply, read_ply
 from .text import (
     is_cg,
@@ -34,7 +38,6 @@ from .text import (
     read_obj,
     read_off,
     read_polylines,
-    read_swc,
     read_xyz,
 )
 
@@ -54,6 +57,9 @@ _READERS: dict[str, Callable[[Path, bytes], RawData]] = {
     "json": read_json,
     "graph": read_graph,
     "las": read_las,
+    "graphml": read_graphml,
+    "gexf": read_gexf,
+    "mat": read_treeqsm,
 }
 
 _BY_SUFFIX = {
@@ -66,6 +72,7 @@ _BY_SUFFIX = {
     ".asc": "xyz",
     ".xyzn": "xyz",
     ".xyzrgb": "xyz",
+    ".xyzr": "xyz",  # Point2Skeleton's x y z radius list
     ".obj": "obj",
     ".off": "off",
     ".cg": "cg",
@@ -76,6 +83,9 @@ _BY_SUFFIX = {
     ".graph": "graph",
     ".las": "las",
     ".laz": "las",
+    ".graphml": "graphml",
+    ".gexf": "gexf",
+    ".mat": "mat",
 }
 
 #: For file dialogs: every extension the loaders accept (``.polylines.txt`` is a ``.txt``).
@@ -107,7 +117,14 @@ def detect_format(path: str | os.PathLike, head: bytes) -> str:
         return "npz"
     if is_las(head):
         return "las"
+    if is_mat(head):
+        return "mat"
     text = decode_text(head).lstrip()
+    if text.startswith("<"):
+        if is_graphml(text):
+            return "graphml"
+        if is_gexf(text):
+            return "gexf"
     if text.startswith(("{", "[")):
         return "json"
     if is_cg(text):
@@ -192,14 +209,36 @@ def _point_set(raw: RawData, path: str | os.PathLike, what: str) -> np.ndarray:
     return v
 
 
-def load_cloud(path: str | os.PathLike) -> np.ndarray:
+def _is_path(path: object) -> bool:
+    return isinstance(path, (str, bytes, os.PathLike))
+
+
+def _object_raw(obj: object, what: str) -> RawData:
+    """A library object's points as RawData (:func:`skelcore.interop.points_of`)."""
+    from ..interop.objects_in import points_of
+
+    points = points_of(obj, what)  # an unknown object: a TypeError naming what is accepted
+    try:
+        v = np.asarray(points, dtype=np.float64)
+    except (TypeError, ValueError):
+        raise SkelInputError(f"{what}: coordinates are not numbers") from None
+    if v.ndim != 2 or v.shape[1] != 3:
+        raise SkelInputError(f"{what}: expected an N x 3 array of points, got shape {v.shape}")
+    return RawData(vertices=v, edges=None, format=type(obj).__name__)
+
+
+def load_cloud(path: str | os.PathLike | object) -> np.ndarray:
     """The original cloud P_o as an (N, 3) float64 array in the file's units (SPEC 0). A mesh's or a
-    curve file's vertices are accepted as points."""
+    curve file's vertices are accepted as points; so is an object (an Open3D PointCloud, ...)."""
+    if not _is_path(path):
+        return _point_set(_object_raw(path, "point cloud"), None, "point cloud")
     return _point_set(_read_raw(path), path, "point cloud")
 
 
-def load_points(path: str | os.PathLike) -> np.ndarray:
-    """A skeletal point set P_s (same formats and checks as :func:`load_cloud`)."""
+def load_points(path: str | os.PathLike | object) -> np.ndarray:
+    """A skeletal point set P_s (same formats, objects and checks as :func:`load_cloud`)."""
+    if not _is_path(path):
+        return _point_set(_object_raw(path, "skeletal point set"), None, "skeletal point set")
     return _point_set(_read_raw(path), path, "skeletal point set")
 
 
@@ -208,20 +247,35 @@ def _curve(raw: RawData, path: str | os.PathLike) -> CurveSkeleton:
         raise SkelInputError(
             f"{raw.format} file has no edges: it is a point set, not a curve skeleton", path
         )
-    curve = CurveSkeleton.from_raw(raw.vertices, raw.edges, path)
+    curve = CurveSkeleton.from_raw(raw.vertices, raw.edges, path, radius=raw.radius)
     if curve.n_vertices and np.all(curve.vertices == curve.vertices[0]):
         raise SkelInputError(f"all {curve.n_vertices} curve vertices are at the same position", path)
     return curve
 
 
-def load_curve(path: str | os.PathLike) -> CurveSkeleton:
+def load_curve(path: str | os.PathLike | object) -> CurveSkeleton:
     """A curve skeleton G_s = (V, E), cleaned by :meth:`CurveSkeleton.from_raw` (SPEC 0: NaN vertices
-    dropped with a warning, duplicate edges and self-loops dropped, out-of-range index an error)."""
+    dropped with a warning, duplicate edges and self-loops dropped, out-of-range index an error), with
+    its per-vertex radius when the file has one. A curve object (a LineSet, a networkx graph, ...) too."""
+    if not _is_path(path):
+        curve = CurveSkeleton.coerce(path, "curve skeleton")
+        if curve.n_edges == 0:
+            raise SkelInputError(f"curve skeleton: the {type(path).__name__} has no edges: it is a point set")
+        if np.all(curve.vertices == curve.vertices[0]):
+            raise SkelInputError(f"curve skeleton: all {curve.n_vertices} vertices are at the same position")
+        return curve
     return _curve(_read_raw(path), path)
 
 
 def load_any(path: str | os.PathLike) -> Loaded:
     """Load a dropped file: a file with edges (or in a curve-only format) is a curve, else points."""
+    if not _is_path(path):
+        from ..interop.objects_in import is_curve_object
+
+        label = f"<{type(path).__name__}>"
+        if is_curve_object(path):
+            return Loaded(kind="curve", path=label, format=label, curve=load_curve(path))
+        return Loaded(kind="points", path=label, format=label, points=load_cloud(path))
     raw = _read_raw(path)
     if raw.curve_format or (raw.edges is not None and len(raw.edges) > 0):
         return Loaded(kind="curve", path=str(path), format=raw.format, curve=_curve(raw, path))

@@ -36,6 +36,7 @@ _TYPES = {
 }  # fmt: skip
 _VERTEX_NAMES = ("vertex", "vertices", "point", "points")
 _EDGE_NAMES = ("edge", "edges", "line", "lines")
+_RADIUS_NAMES = ("radius", "radii")
 _EDGE_PAIRS = (("vertex1", "vertex2"), ("v1", "v2"), ("vertex_1", "vertex_2"), ("source", "target"))
 _NAME_RE = re.compile(r"^[A-Za-z_][A-Za-z0-9_]*$")
 # Scalar names that viewers would take for coordinates, colours or normals.
@@ -143,13 +144,15 @@ def read_ply(path: Path, data: bytes) -> RawData:
         if tables is not None:
             v = tables[id(vert)]
             vertices = np.column_stack([np.asarray(v[vert.prop(k)], dtype=np.float64) for k in "xyz"])
+            rname = vert.prop(*_RADIUS_NAMES)
+            radius = None if rname is None else np.asarray(v[rname], dtype=np.float64)
             edges = None
             if edge_el is not None:
                 e = tables[id(edge_el)]
                 a, b = pair  # type: ignore[misc]
                 pairs = np.column_stack([np.asarray(e[a]), np.asarray(e[b])]) if len(e[a]) else np.empty((0, 2))
                 edges = as_edges(pairs, path, "PLY edge indices")
-            return RawData(vertices=vertices.reshape(-1, 3), edges=edges, format="PLY")
+            return RawData(vertices=vertices.reshape(-1, 3), edges=edges, format="PLY", radius=radius)
     return _read_plyfile(path, data)
 
 
@@ -209,11 +212,15 @@ def _read_plyfile(path: Path, data: bytes) -> RawData:
             raise SkelInputError(f"PLY vertex property {k} is a list, expected a number", path)
         cols.append(col.astype(np.float64))
     vertices = np.column_stack(cols) if len(vert.data) else np.empty((0, 3))
+    rname = next((props[k] for k in _RADIUS_NAMES if k in props), None)
+    radius = None
+    if rname is not None and np.asarray(vert.data[rname]).dtype != object:
+        radius = np.asarray(vert.data[rname], dtype=np.float64)
     edges = None
     edge_el = next((el for el in ply.elements if el.name.lower() in _EDGE_NAMES), None)
     if edge_el is not None:
         edges = _ply_edges(edge_el, path)
-    return RawData(vertices=vertices, edges=edges, format="PLY")
+    return RawData(vertices=vertices, edges=edges, format="PLY", radius=radius)
 
 
 def _ply_edges(el, path: Path) -> np.ndarray:
@@ -266,8 +273,9 @@ def _vertex_array(
         arr = np.asarray(val).ravel()
         if arr.shape != (n,):
             raise ValueError(f"scalar {name!r} has {arr.size} values for {n} points")
-        # Integer quantities (degree, edge index) stay integers; everything else is a float property.
-        kind = "<i4" if arr.dtype.kind in "iub" else "<f4"
+        # Integer quantities (degree, edge index) stay integers; a radius is a double (round trips
+        # exactly); everything else is a float property.
+        kind = "<i4" if arr.dtype.kind in "iub" else "<f8" if name in _RADIUS_NAMES else "<f4"
         fields.append((name, kind))
         values[name] = arr
     out = np.empty(n, dtype=fields)

@@ -1,4 +1,5 @@
-"""Text formats: XYZ/TXT/CSV/PTS tables, OBJ, OFF, the .cg curve graph, SWC, CGAL polylines."""
+"""Text formats: XYZ/TXT/CSV/PTS tables, OBJ, OFF, the .cg curve graph, CGAL polylines, PyGEL graphs
+(SWC: :mod:`.swc`); the OBJ and .cg curve writers."""
 
 from __future__ import annotations
 
@@ -283,36 +284,6 @@ def read_cg(path: Path, data: bytes) -> RawData:
     return RawData(vertices=vertices, edges=e, format=".cg curve graph", curve_format=True)
 
 
-# ---- SWC ----------------------------------------------------------------------------------------
-
-
-def read_swc(path: Path, data: bytes) -> RawData:
-    """SWC rows ``id type x y z radius parent``; parent -1 (any negative) marks a root; ids may be
-    non-contiguous and appear in any order. Each non-root row gives the edge (row, parent's row)."""
-    text = decode_text(data)
-    rows = _rows(text)
-    table = numeric_table(rows, path, min_cols=7, use_cols=7, what="id type x y z radius parent")
-    ids, parents = table[:, 0], table[:, 6]
-    if np.any(ids != np.round(ids)) or np.any(parents != np.round(parents)):
-        raise SkelInputError("SWC ids and parent ids must be whole numbers", path)
-    ids = ids.astype(np.int64)
-    parents = parents.astype(np.int64)
-    order = np.argsort(ids, kind="stable")
-    sorted_ids = ids[order]
-    dup = np.flatnonzero(sorted_ids[1:] == sorted_ids[:-1])
-    if dup.size:
-        raise SkelInputError(f"SWC id {int(sorted_ids[dup[0]])} appears more than once", path)
-    child = np.flatnonzero(parents >= 0)
-    pos = np.searchsorted(sorted_ids, parents[child])
-    pos_c = np.minimum(pos, len(sorted_ids) - 1)
-    found = sorted_ids[pos_c] == parents[child]
-    if not found.all():
-        k = child[~found][0]
-        raise SkelInputError(f"SWC node {int(ids[k])} has parent {int(parents[k])}, which is not in the file", path)
-    edges = np.column_stack([child, order[pos_c]]).astype(np.int64)
-    return RawData(vertices=table[:, 2:5].copy(), edges=edges, format="SWC", curve_format=True)
-
-
 # ---- CGAL polylines -----------------------------------------------------------------------------
 
 
@@ -393,3 +364,38 @@ def read_graph(path: Path, data: bytes) -> RawData:
         if e.shape[1] != 2:
             raise SkelInputError(f"connection lines have {e.shape[1]} numbers, expected 2 (c i j)", path)
     return RawData(vertices=v, edges=e, format="PyGEL graph", curve_format=True)
+
+
+# ---- curve writers ------------------------------------------------------------------------------
+
+
+def _curve_arrays(vertices: np.ndarray, edges: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    v = np.asarray(vertices, dtype=np.float64)
+    e = np.asarray(edges, dtype=np.int64).reshape(-1, 2)
+    if v.ndim != 2 or v.shape[1] != 3:
+        raise ValueError(f"vertices must be N x 3, got shape {v.shape}")
+    if e.size and (e.min() < 0 or e.max() >= len(v)):
+        raise ValueError("edge index out of range")
+    return v, e
+
+
+def write_curve_obj(path, vertices: np.ndarray, edges: np.ndarray, *, inputs=()) -> None:
+    """``v x y z`` lines then one ``l i j`` line per edge (1-based), full double precision."""
+    from .atomic import atomic_open
+
+    v, e = _curve_arrays(vertices, edges)
+    with atomic_open(path, "w", inputs=inputs) as fh:
+        fh.write("# written by skelcore: curve skeleton\n")
+        np.savetxt(fh, v, fmt="v %.17g %.17g %.17g")
+        np.savetxt(fh, e + 1, fmt="l %d %d")
+
+
+def write_curve_cg(path, vertices: np.ndarray, edges: np.ndarray, *, inputs=()) -> None:
+    """Starlab's ``.cg``: ``# D:3 NV:n NE:m``, ``v`` lines, ``e i j`` lines (1-based)."""
+    from .atomic import atomic_open
+
+    v, e = _curve_arrays(vertices, edges)
+    with atomic_open(path, "w", inputs=inputs) as fh:
+        fh.write(f"# D:3 NV:{len(v)} NE:{len(e)}\n")
+        np.savetxt(fh, v, fmt="v %.17g %.17g %.17g")
+        np.savetxt(fh, e + 1, fmt="e %d %d")

@@ -136,7 +136,7 @@ def build_context(
         raise SkelInputError("a skeletal index needs a skeletal point set")
 
     if curve is not None:
-        ctx.curve = curve if isinstance(curve, CurveSkeleton) else CurveSkeleton.from_raw(*curve)
+        ctx.curve = CurveSkeleton.coerce(curve, "curve")
     if correspondence == "reverse" and skeletal is None:
         if ctx.curve is None:
             raise SkelInputError("reverse correspondence needs a skeletal point set or a curve skeleton")
@@ -144,7 +144,7 @@ def build_context(
     if reference_curve is not None:
         if ctx.curve is None:
             raise SkelInputError("a reference curve is compared with a curve skeleton: give one")
-        ref = reference_curve if isinstance(reference_curve, CurveSkeleton) else CurveSkeleton.from_raw(*reference_curve)
+        ref = CurveSkeleton.coerce(reference_curve, "reference curve")
         ctx.reference_n = ref.transformed(norm.apply)
     if ctx.curve is not None:
         ctx.curve_n = ctx.curve.transformed(norm.apply)
