@@ -57,6 +57,13 @@ def _imports(name: str, path: Path, known: set[str]) -> list[tuple[str, int, boo
 # method (never at module level): the only arrows allowed to point up, and they are no cycle at import time.
 LAZY_DELEGATIONS = {
     ("skelcore.evaluation", "skelcore.io.evaluation_files"),  # Evaluation.write_json & co. (issue 21)
+    # other libraries' objects (issue 24): recognised only when one is given instead of an array / path
+    ("skelcore.geometry", "skelcore.interop.objects_in"),
+    ("skelcore.curve", "skelcore.interop.objects_in"),
+    ("skelcore.io.loaders", "skelcore.interop.objects_in"),
+    ("skelcore.evaluation", "skelcore.interop.tables"),
+    ("skelcore.evaluation", "skelcore.interop.graph_out"),
+    ("skelcore.evaluation", "skelcore.interop.open3d_out"),
 }
 
 
@@ -139,14 +146,17 @@ def test_the_cycle_finder_finds_a_cycle():
 #   metrics           skelcore.metrics (each result type beside its metric)       -> foundation
 #   record            the Evaluation (skelcore.evaluation, old name results), Scores -> foundation, metrics
 #   stages            skelcore.stages (the evaluate pipeline)                     -> foundation, metrics, record
-#   evaluation files  io.evaluation_files (JSON, CSVs, npz of an Evaluation), io.export (coloured PLY)
+#   objects in        skelcore.interop's recognisers of other libraries' objects -> foundation, formats
+#   evaluation files  io.evaluation_files (JSON, CSVs, npz of an Evaluation), io.export (coloured PLY),
+#                     io.conversion (skelcore convert), interop's outputs (to_frame, to_networkx, to_open3d)
 #                                                             -> foundation, formats, metrics, record
 #   applications      skelcore.compare, skelcore.experiments  -> every layer above this line
 #   entry points      skelcore.cli, skelcore.__main__, the package facade skelcore/__init__ -> every layer
 # So: metrics never import the record, the stages or the evaluation files; the record imports no io; the
 # format readers and writers import no metric; compare and the CLI sit on top. A pattern "x.*" is the
 # package x and everything in it, any other an exact module; a module's layer is its longest pattern.
-_BELOW_APPS = ["foundation", "formats", "skeletonizer", "metrics", "record", "stages", "evaluation files"]
+_BELOW_APPS = ["foundation", "formats", "objects in", "skeletonizer", "metrics", "record", "stages",
+               "evaluation files"]
 LAYERS: dict[str, tuple[list[str], list[str]]] = {
     "foundation": ([f"skelcore.{m}" for m in ("errors", "version", "params", "geometry", "parallel", "curve",
                                               "curve_sampling", "correspondence", "trust", "colors", "shapes",
@@ -156,7 +166,11 @@ LAYERS: dict[str, tuple[list[str], list[str]]] = {
     "metrics": (["skelcore.metrics.*"], ["foundation"]),
     "record": (["skelcore.evaluation", "skelcore.results", "skelcore.scores"], ["foundation", "metrics"]),
     "stages": (["skelcore.stages.*"], ["foundation", "metrics", "record"]),
-    "evaluation files": (["skelcore.io.evaluation_files", "skelcore.io.export"],
+    "objects in": (["skelcore.interop", "skelcore.interop.recognise", "skelcore.interop.objects_in",
+                    "skelcore.interop.swc_frames"], ["foundation", "formats"]),
+    "evaluation files": (["skelcore.io.evaluation_files", "skelcore.io.export", "skelcore.io.conversion",
+                          "skelcore.interop.tables",
+                          "skelcore.interop.graph_out", "skelcore.interop.open3d_out"],
                          ["foundation", "formats", "metrics", "record"]),
     "applications": (["skelcore.compare.*", "skelcore.experiments.*"], _BELOW_APPS),
     "entry points": (["skelcore", "skelcore.__main__", "skelcore.cli.*"], [*_BELOW_APPS, "applications"]),
