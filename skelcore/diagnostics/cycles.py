@@ -1,0 +1,357 @@
+"""The skeleton's cycles against the shape's tunnels -> ``spurious_cycles``, ``missing_cycles``
+(issue 22, item 4; docs/diagnostics.md "Cycles").
+
+The shape X is voxelized (:mod:`.interior`); its tunnels are its first Betti number beta1(X). A
+skeleton cycle goes around a tunnel when it links a loop of the space outside the shape (Alexander
+duality: H1 of a solid is dual to H1 of its complement by the linking number), so a cycle is
+spurious (can be shrunk to a point inside the shape) when it links no loop outside.
+
+The linking numbers are read from the solid angle Omega_g(p) that cycle g subtends at p (Gauss:
+going once around a loop c, Omega_g changes by 4 pi lk(g, c)). Omega_g is evaluated at the centres of
+a collar of outside voxels around X' = X plus the voxels near the skeleton (so every cycle lies in
+X', and the collar's loops generate H1 of the outside: "half lives, half dies"). Along each collar
+edge the change of Omega_g is small, so its jump by a multiple of 4 pi is an integer 1-cochain J_g;
+summed around the fundamental loops of a spanning tree of the collar it gives a matrix K (cycles x
+loops) of linking numbers. Then
+
+- rank K = the number of independent tunnels the skeleton's cycles go around;
+- spurious = cycles - rank K: taking the basis cycles shortest first, each whose row of K lies in the
+  span of the rows before is flagged (a trivial cycle, or one that repeats shorter ones);
+- missing = beta1(X) - rank K (at least 0).
+
+A cycle passing outside the shape is measured in X' (the shape with the skeleton's neighbourhood):
+a cycle through the air around a tunnel still goes around it; its edges are ``outside``'s to flag.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+from scipy import ndimage
+from scipy.sparse import coo_matrix
+from scipy.sparse.csgraph import breadth_first_order, connected_components, minimum_spanning_tree
+from scipy.spatial import cKDTree
+
+from ..curve import CurveSkeleton
+from ..geometry import Checkpoint, no_checkpoint
+from ..params import Params
+from ..trust import TrustWarning
+from .branches import Branches, decompose_branches, densify
+from .interior import VoxelShape, betti_numbers, voxelize_interior
+
+__all__ = ["CycleDefects", "find_cycle_defects", "solid_angle_polygon", "simplify_polygon"]
+
+# collar voxels are at least this many voxel sizes from the skeleton's cycles: along a collar edge of
+# one voxel, Omega changes by about 2 / distance < pi, so its 4 pi jumps are read without doubt
+_CLEARANCE = 2.0
+# collar thickness, in voxels
+_COLLAR = 2
+
+
+@dataclass
+class CycleDefects:
+    """Cycles of the skeleton against tunnels of the shape.
+
+    n_cycles : the skeleton's cycle rank. shape_tunnels : beta1 of the voxelized shape.
+    linked : how many independent tunnels the skeleton's cycles go around (rank K).
+    spurious : ids (into ``branches.cycles``) of the basis cycles flagged spurious; missing : the
+    count of tunnels no cycle goes around. cycle_linking : per basis cycle, whether it goes around
+    some tunnel (links a loop outside the shape).
+    branch_spurious : (B,) bool, the branches of the spurious cycles; vertex_flag (V,), sample_flag
+    (S,) or None: on a spurious cycle's branch. voxel_size, grid : the voxelization (normalized
+    units); subsampled : always False (every cloud point is binned).
+    """
+
+    branches: Branches
+    n_cycles: int
+    shape_tunnels: int
+    linked: int
+    spurious: list[int]
+    missing: int
+    cycle_linking: np.ndarray
+    cycle_length: np.ndarray
+    branch_spurious: np.ndarray
+    vertex_flag: np.ndarray
+    sample_flag: np.ndarray | None
+    voxel_size: float
+    grid: tuple[int, int, int]
+    total_length: float
+    params: Params = field(default_factory=Params)
+    subsampled: bool = False
+
+    @property
+    def n_spurious(self) -> int:
+        return len(self.spurious)
+
+    def warnings(self) -> list[TrustWarning]:
+        out: list[TrustWarning] = []
+        if self.n_spurious >= self.params.cycles_warn_spurious:
+            share = float(self.branches.length[self.branch_spurious].sum()) / self.total_length if self.total_length > 0 else 0.0
+            out.append(TrustWarning(
+                "spurious_cycles",
+                f"{self.n_spurious} of the curve's {self.n_cycles} cycles go around no tunnel of the shape "
+                f"({self.shape_tunnels} tunnels found) and could be shrunk inside it; their branches are "
+                f"{share:.1%} of the curve's length",
+            ))  # fmt: skip
+        if self.missing >= self.params.cycles_warn_missing:
+            out.append(TrustWarning(
+                "missing_cycles",
+                f"the shape has {self.shape_tunnels} tunnels and the curve's {self.n_cycles} cycles go around "
+                f"{self.linked}: {self.missing} missing",
+            ))  # fmt: skip
+        return out
+
+    def to_dict(self) -> dict:
+        return {
+            "skeleton": self.n_cycles,
+            "shape": self.shape_tunnels,
+            "linked": self.linked,
+            "spurious": self.n_spurious,
+            "missing": self.missing,
+            "spurious_cycles": [int(i) for i in self.spurious],
+            "voxel_size": float(self.voxel_size),
+            "grid": [int(g) for g in self.grid],
+            "subsampled": bool(self.subsampled),
+        }
+
+
+def solid_angle_triangles(p: np.ndarray, a: np.ndarray, b: np.ndarray, c: np.ndarray) -> np.ndarray:
+    """Signed solid angle of triangles (a, b, c) seen from points p (broadcast), in (-2 pi, 2 pi]
+    (Van Oosterom and Strackee 1983)."""
+    ra, rb, rc = a - p, b - p, c - p
+    la, lb, lc = (np.sqrt(np.einsum("...i,...i->...", r, r)) for r in (ra, rb, rc))
+    num = np.einsum("...i,...i->...", ra, np.cross(rb, rc))
+    den = (la * lb * lc + np.einsum("...i,...i->...", ra, rb) * lc + np.einsum("...i,...i->...", ra, rc) * lb
+           + np.einsum("...i,...i->...", rb, rc) * la)
+    return 2.0 * np.arctan2(num, den)
+
+
+def solid_angle_polygon(p: np.ndarray, polygon: np.ndarray, chunk: int = 4096) -> np.ndarray:
+    """Solid angle (mod 4 pi) that the closed polygon subtends at each row of p: the sum over the
+    fan of triangles from the polygon's mean (any apex gives the same value mod 4 pi)."""
+    p = np.asarray(p, dtype=float)
+    poly = np.asarray(polygon, dtype=float)
+    apex = poly.mean(axis=0)
+    out = np.empty(len(p))
+    for s0 in range(0, len(p), chunk):
+        q = p[s0:s0 + chunk]
+        ra = apex - q  # (n, 3)
+        la = np.sqrt(np.einsum("ij,ij->i", ra, ra))
+        r = poly[None, :, :] - q[:, None, :]  # (n, m, 3)
+        lr = np.sqrt(np.einsum("ijk,ijk->ij", r, r))
+        r2 = np.roll(r, -1, axis=1)
+        l2 = np.roll(lr, -1, axis=1)
+        num = np.einsum("ik,ijk->ij", ra, np.cross(r, r2))
+        den = (la[:, None] * lr * l2 + np.einsum("ik,ijk->ij", ra, r) * l2 + np.einsum("ik,ijk->ij", ra, r2) * lr
+               + np.einsum("ijk,ijk->ij", r, r2) * la[:, None])
+        out[s0:s0 + chunk] = 2.0 * np.arctan2(num, den).sum(axis=1)
+    return out
+
+
+def simplify_polygon(polygon: np.ndarray, tol: float) -> np.ndarray:
+    """A closed polygon with vertices dropped while every dropped vertex stays within ``tol`` of the
+    chord that replaces it (greedy): the cycle moves by at most ``tol``."""
+    poly = np.asarray(polygon, dtype=float)
+    m = len(poly)
+    if m <= 4 or tol <= 0:
+        return poly
+    keep = [0]
+    i = 0
+    while i < m - 1:
+        j = i + 2
+        while j <= m:
+            a, b = poly[i], poly[j % m]
+            mid = poly[i + 1:j]
+            ab = b - a
+            L2 = float(ab @ ab)
+            t = np.clip(((mid - a) @ ab) / L2, 0, 1) if L2 > 0 else np.zeros(len(mid))
+            dev = np.linalg.norm(mid - (a + t[:, None] * ab), axis=1).max()
+            if dev > tol:
+                break
+            j += 1
+        i = j - 1
+        if i < m:
+            keep.append(i)
+    keep = sorted(set(k for k in keep if k < m))
+    return poly[keep] if len(keep) >= 3 else poly
+
+
+def _collar_graph(solid: np.ndarray, near: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Collar voxels (outside ``solid``, within ``_COLLAR`` voxels of it, not ``near`` the skeleton)
+    as flat indices, and the 6-adjacent pairs among them (rows of positions into that list)."""
+    grown = ndimage.binary_dilation(solid, structure=np.ones((3, 3, 3), bool), iterations=_COLLAR)
+    collar = grown & ~solid & ~near
+    flat = np.flatnonzero(collar.ravel())
+    pos = np.full(collar.size, -1, dtype=np.int64)
+    pos[flat] = np.arange(len(flat))
+    strides = np.array(collar.strides) // collar.itemsize
+    pairs = []
+    for ax in range(3):
+        sl_a = [slice(None)] * 3
+        sl_b = [slice(None)] * 3
+        sl_a[ax] = slice(None, -1)
+        sl_b[ax] = slice(1, None)
+        both = collar[tuple(sl_a)] & collar[tuple(sl_b)]
+        idx = np.flatnonzero(both.ravel())
+        # flat index in the full grid of the lower voxel
+        sub = np.unravel_index(idx, both.shape)
+        lower = sub[0] * strides[0] + sub[1] * strides[1] + sub[2] * strides[2]
+        pairs.append(np.column_stack([pos[lower], pos[lower + strides[ax]]]))
+    return flat, np.vstack(pairs) if pairs else np.zeros((0, 2), np.int64)
+
+
+def _tree_potentials(n: int, edges: np.ndarray, jumps: np.ndarray) -> np.ndarray:
+    """Integer linking numbers of the fundamental loops of a spanning forest of the graph (n nodes,
+    ``edges`` (m, 2)) with each cycle's jump cochain ``jumps`` (m, c): one column per non-tree edge
+    whose loop some cycle links (columns repeated or all zero are dropped)."""
+    if len(edges) == 0:
+        return np.zeros((jumps.shape[1], 0), np.int64)
+    g = coo_matrix((np.ones(len(edges)), (edges[:, 0], edges[:, 1])), shape=(n, n))
+    tree = minimum_spanning_tree(g).tocoo()
+    t_edges = np.column_stack([tree.row, tree.col])
+    # orient the tree from a virtual root tied to one node of every component
+    ncomp, lab = connected_components(g, directed=False)
+    roots = np.unique(lab, return_index=True)[1]
+    rr = np.concatenate([t_edges[:, 0], t_edges[:, 1], np.full(len(roots), n)])
+    cc = np.concatenate([t_edges[:, 1], t_edges[:, 0], roots])
+    full = coo_matrix((np.ones(len(rr)), (rr, cc)), shape=(n + 1, n + 1)).tocsr()
+    _, pred = breadth_first_order(full, n, directed=True, return_predecessors=True)
+    pred = pred[:n]
+    # jump from the parent to each node (0 at the roots), looked up from the edge list
+    key = np.minimum(edges[:, 0], edges[:, 1]) * n + np.maximum(edges[:, 0], edges[:, 1])
+    srt = np.argsort(key)
+    sign_of = np.where(edges[:, 0] < edges[:, 1], 1, -1)  # +1: jumps stored low -> high
+    node_jump = np.zeros((n, jumps.shape[1]), np.int64)
+    has_parent = pred < n
+    child = np.flatnonzero(has_parent)
+    par = pred[child]
+    kk = np.minimum(par, child) * n + np.maximum(par, child)
+    row = srt[np.searchsorted(key[srt], kk)]
+    # jumps[row] are stored for edges[row, 0] -> edges[row, 1]; parent -> child is that or its reverse
+    forward = edges[row, 0] == par
+    node_jump[child] = np.where(forward[:, None], jumps[row], -jumps[row])
+    # potentials m(v) = sum of jumps from the root to v: pointer jumping
+    m = node_jump.copy()
+    anc = np.where(has_parent, pred, -1)
+    while np.any(anc >= 0):
+        ok = anc >= 0
+        m[ok] += m[anc[ok]]
+        nxt = np.full(n, -1)
+        nxt[ok] = anc[anc[ok]]
+        anc = nxt
+    in_tree = np.zeros(len(edges), bool)
+    tk = np.minimum(t_edges[:, 0], t_edges[:, 1]) * n + np.maximum(t_edges[:, 0], t_edges[:, 1])
+    in_tree[srt[np.searchsorted(key[srt], tk)]] = True
+    non = np.flatnonzero(~in_tree)
+    u, v = edges[non, 0], edges[non, 1]
+    loops = m[u] + jumps[non] - m[v]  # (n_loops, c)
+    loops = loops[np.any(loops != 0, axis=1)]
+    if len(loops):
+        loops = np.unique(loops, axis=0)
+    return loops.T.astype(np.int64)
+
+
+def _greedy_dependent(rows: np.ndarray, order: np.ndarray) -> tuple[list[int], int]:
+    """Rows taken in ``order``; those in the span of the rows taken before (zero rows included):
+    their ids and the rank."""
+    basis: list[np.ndarray] = []
+    dependent: list[int] = []
+    for i in order:
+        r = rows[i].astype(float)
+        for q in basis:
+            r = r - (r @ q) * q
+        norm = float(np.linalg.norm(r))
+        if norm > 1e-6 * max(1.0, float(np.linalg.norm(rows[i]))):
+            basis.append(r / norm)
+        else:
+            dependent.append(int(i))
+    return dependent, len(basis)
+
+
+def find_cycle_defects(
+    cloud: np.ndarray,
+    curve: CurveSkeleton,
+    *,
+    params: Params = Params(),
+    branches: Branches | None = None,
+    sample_edge: np.ndarray | None = None,
+    voxel_shape: VoxelShape | None = None,
+    checkpoint: Checkpoint = no_checkpoint,
+) -> CycleDefects:
+    """Spurious and missing cycles of ``curve`` in the shape sampled by ``cloud`` (both normalized,
+    SPEC 0). ``branches`` / ``voxel_shape`` may be passed when already computed; ``sample_edge``
+    (the curve samples' edges) gives the per-sample flags."""
+    cloud = np.asarray(cloud, dtype=float)
+    if branches is None:
+        branches = decompose_branches(curve, cloud=cloud, sample_edge=sample_edge)
+    if voxel_shape is None:
+        voxel_shape = voxelize_interior(cloud, voxels=params.cycles_voxels,
+                                        min_spacing_factor=params.cycles_voxel_spacing,
+                                        inside_share=params.beta_star,
+                                        checkpoint=lambda f: checkpoint(0.5 * f))
+    solid = ndimage.binary_fill_holes(voxel_shape.inside)
+    _, tunnels, _ = betti_numbers(solid)
+    checkpoint(0.6)
+    nc = branches.cycle_rank
+    lengths = np.array([float(sum(branches.length[b] for b, _ in branches.cycles[i])) for i in range(nc)])
+    linking = np.zeros(nc, bool)
+    spurious: list[int] = []
+    rank = 0
+    if nc:
+        h = voxel_shape.size
+        # the skeleton's cycle edges, densely, and the voxels within the clearance of them
+        on_cycle = np.zeros(len(curve.edges), bool)
+        for i in range(nc):
+            on_cycle[branches.cycle_edges(i)] = True
+        sub = CurveSkeleton(vertices=curve.vertices, edges=curve.edges[on_cycle], vertex_map=curve.vertex_map)
+        pts, _ = densify(sub, h / 4)
+        pts = pts[np.isfinite(pts).all(axis=1)]
+        ijk = voxel_shape.index_of(pts)
+        mark = np.zeros(solid.shape, bool)
+        mark[ijk[:, 0], ijk[:, 1], ijk[:, 2]] = True
+        reach = int(np.ceil(_CLEARANCE)) + 1
+        cand = ndimage.binary_dilation(mark, structure=np.ones((3, 3, 3), bool), iterations=reach)
+        cidx = np.argwhere(cand)
+        d, _ = cKDTree(pts).query(voxel_shape.centres(cidx), distance_upper_bound=_CLEARANCE * h)
+        near = np.zeros(solid.shape, bool)
+        close = np.isfinite(d)
+        near[cidx[close, 0], cidx[close, 1], cidx[close, 2]] = True
+        solid_x = solid | near
+        flat, pairs = _collar_graph(solid_x, near)
+        checkpoint(0.7)
+        centres = voxel_shape.centres(np.column_stack(np.unravel_index(flat, solid.shape)))
+        # a fixed irrational nudge keeps the fan's apex off the voxel centres
+        omega = np.empty((len(centres), nc))
+        for i in range(nc):
+            poly = simplify_polygon(curve.vertices[branches.cycle_polygon(i)], 0.5 * h)
+            omega[:, i] = solid_angle_polygon(centres, poly + 1e-7 * np.array([np.sqrt(2), np.sqrt(3), np.sqrt(5)]))
+            checkpoint(0.7 + 0.25 * (i + 1) / nc)
+        diff = omega[pairs[:, 1]] - omega[pairs[:, 0]]
+        jumps = np.rint((np.mod(diff + np.pi * 2, 4 * np.pi) - np.pi * 2 - diff) / (4 * np.pi)).astype(np.int64)
+        k = _tree_potentials(len(flat), pairs, jumps)
+        linking = np.any(k != 0, axis=1)
+        order = np.argsort(lengths, kind="stable")
+        spurious, rank = _greedy_dependent(k, order)
+        spurious.sort()
+    missing = max(0, tunnels - rank)
+    branch_spurious = np.zeros(len(branches), bool)
+    for i in spurious:
+        for b, _ in branches.cycles[i]:
+            branch_spurious[b] = True
+    vb = branches.vertex_branch
+    vertex_flag = np.zeros(curve.n_vertices, bool)
+    ok = vb >= 0
+    vertex_flag[ok] = branch_spurious[vb[ok]]
+    for b in np.flatnonzero(branch_spurious):
+        vertex_flag[branches.paths[b]] = True
+    sample_flag = None
+    if branches.sample_branch is not None:
+        sample_flag = branch_spurious[branches.sample_branch]
+    checkpoint(1.0)
+    return CycleDefects(
+        branches=branches, n_cycles=nc, shape_tunnels=int(tunnels), linked=int(rank), spurious=spurious,
+        missing=int(missing), cycle_linking=linking, cycle_length=lengths, branch_spurious=branch_spurious,
+        vertex_flag=vertex_flag, sample_flag=sample_flag, voxel_size=float(voxel_shape.size),
+        grid=tuple(int(s) for s in solid.shape), total_length=float(branches.length.sum()), params=params,
+    )  # fmt: skip
