@@ -4,9 +4,9 @@
 A branch is a maximal path whose inner vertices have degree 2, between two "nodes" (vertices of
 degree 1, 0 or >= 3); a component with no node is a pure cycle and one branch of its own. The
 defects (spurious branches, cycles, leaving the shape) are found and reported per branch, so every
-curve vertex, edge and sample gets a branch id. The cycle basis is the fundamental cycles of a
-spanning forest of the branch graph (nodes joined by branches): its size is the curve's cycle rank
-E - V + C.
+curve vertex, edge and sample gets a branch id. The cycle basis lives on the branch graph (nodes
+joined by branches): a minimum-length basis (Horton), so that a short spurious loop is one basis
+cycle; its size is the curve's cycle rank E - V + C.
 """
 
 from __future__ import annotations
@@ -16,6 +16,7 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import connected_components, depth_first_order
+from scipy.spatial import cKDTree
 
 from ..curve import CurveSkeleton
 from ..geometry import Checkpoint, kd_tree, no_checkpoint
@@ -43,7 +44,8 @@ class Branches:
     radius_min, radius_median, radius_max : (B,) the local radius along the branch, i.e. the
         distance from its points (every ``step``) to the nearest cloud point (NaN without a cloud).
     cycles : the cycle basis, each a list of (branch, direction +1 / -1) pairs, branches followed
-        along (+1) or against (-1) their path.
+        along (+1) or against (-1) their path: a minimum-length basis up to 64 cycles (beyond, the
+        fundamental cycles of a spanning forest).
     flags : per branch, the defect codes found on it (empty until a diagnostic adds its own).
     """
 
@@ -237,18 +239,120 @@ def _kind(path: np.ndarray, deg: np.ndarray) -> str:
     return "internal"
 
 
-def _cycle_basis(paths: list[np.ndarray], kinds: list[str]) -> list[list[tuple[int, int]]]:
-    """Fundamental cycles of a breadth-first spanning forest of the branch graph (nodes = branch
-    ends, one edge per branch); a pure cycle or a loop is a cycle by itself."""
-    adj: dict[int, list[tuple[int, int, int]]] = {}
+def _cycle_basis(paths: list[np.ndarray], kinds: list[str], lengths: np.ndarray,
+                 max_horton: int = 64) -> list[list[tuple[int, int]]]:
+    """A cycle basis of the branch graph (nodes = branch ends, one edge per branch): every pure cycle
+    and loop by itself, then a minimum-length basis of the rest (Horton's candidates: for every node
+    v and branch x-y, the shortest paths v-x and y-v closed by the branch, taken shortest first while
+    independent over GF(2)). Beyond ``max_horton`` cycles, the fundamental cycles of a breadth-first
+    spanning forest (same count, not the shortest)."""
     cycles: list[list[tuple[int, int]]] = []
-    for i, (p, k) in enumerate(zip(paths, kinds)):
+    graph_ids: list[int] = []
+    for i, k in enumerate(kinds):
         if k in ("cycle", "loop"):
             cycles.append([(i, 1)])
         elif k != "point":
-            a, b = int(p[0]), int(p[-1])
-            adj.setdefault(a, []).append((b, i, 1))
-            adj.setdefault(b, []).append((a, i, -1))
+            graph_ids.append(i)
+    if not graph_ids:
+        return cycles
+    nodes = sorted({int(paths[i][0]) for i in graph_ids} | {int(paths[i][-1]) for i in graph_ids})
+    at = {v: j for j, v in enumerate(nodes)}
+    a = np.array([at[int(paths[i][0])] for i in graph_ids])
+    b = np.array([at[int(paths[i][-1])] for i in graph_ids])
+    nn = len(nodes)
+    ncomp = connected_components(coo_matrix((np.ones(len(a)), (a, b)), shape=(nn, nn)), directed=False)[0]
+    rank = len(graph_ids) - nn + ncomp
+    if rank == 0:
+        return cycles
+    if rank > max_horton:
+        return cycles + _fundamental_cycles(paths, graph_ids)
+    from scipy.sparse.csgraph import dijkstra
+
+    w = np.maximum(lengths[graph_ids], 1e-12)
+    # the shortest branch between each pair of nodes carries the shortest paths
+    best: dict[tuple[int, int], int] = {}
+    for j in range(len(graph_ids)):
+        key = (min(a[j], b[j]), max(a[j], b[j]))
+        if key not in best or w[j] < w[best[key]]:
+            best[key] = j
+    sel = np.array(sorted(best.values()))
+    g = coo_matrix((np.concatenate([w[sel], w[sel]]), (np.concatenate([a[sel], b[sel]]), np.concatenate([b[sel], a[sel]]))),
+                   shape=(nn, nn)).tocsr()
+    dist, pred = dijkstra(g, directed=False, return_predecessors=True)
+    pair_edge = {(int(a[j]), int(b[j])): j for j in sel} | {(int(b[j]), int(a[j])): j for j in sel}
+    cands: dict[int, float] = {}
+    for v in range(nn):
+        # bitset of the branches on the shortest path from v to every node, along the tree
+        order = np.argsort(dist[v])
+        bits = [0] * nn
+        for x in order:
+            px = pred[v, x]
+            if px >= 0:
+                bits[x] = bits[px] | (1 << int(pair_edge[(int(px), int(x))]))
+        for j in range(len(graph_ids)):
+            x, y = int(a[j]), int(b[j])
+            if not (np.isfinite(dist[v, x]) and np.isfinite(dist[v, y])):
+                continue
+            if bits[x] & bits[y] or (bits[x] | bits[y]) >> j & 1:
+                continue  # not a simple cycle through v
+            c = bits[x] | bits[y] | (1 << j)
+            if c not in cands:
+                cands[c] = float(dist[v, x] + dist[v, y] + w[j])
+    pivots: dict[int, int] = {}
+    chosen: list[int] = []
+    for c, _ in sorted(cands.items(), key=lambda kv: kv[1]):
+        r = c
+        while r:
+            top = r.bit_length() - 1
+            if top in pivots:
+                r ^= pivots[top]
+            else:
+                pivots[top] = r
+                chosen.append(c)
+                break
+        if len(chosen) == rank:
+            break
+    if len(chosen) < rank:  # cannot happen (Horton); kept safe
+        return cycles + _fundamental_cycles(paths, graph_ids)
+    for c in chosen:
+        members = [j for j in range(len(graph_ids)) if c >> j & 1]
+        cycles.append(_ordered_cycle(members, a, b, graph_ids))
+    return cycles
+
+
+def _ordered_cycle(members: list[int], a: np.ndarray, b: np.ndarray, graph_ids: list[int]) -> list[tuple[int, int]]:
+    """The branches of a simple cycle (indices into ``graph_ids``) in order, each with its direction."""
+    left = set(members[1:])
+    first = members[0]
+    out = [(graph_ids[first], 1)]
+    node, start = int(b[first]), int(a[first])
+    while left:
+        for j in list(left):
+            if int(a[j]) == node:
+                out.append((graph_ids[j], 1))
+                node = int(b[j])
+            elif int(b[j]) == node:
+                out.append((graph_ids[j], -1))
+                node = int(a[j])
+            else:
+                continue
+            left.discard(j)
+            break
+        else:  # not one simple cycle: keep the order found
+            out.extend((graph_ids[j], 1) for j in left)
+            break
+    return out
+
+
+def _fundamental_cycles(paths: list[np.ndarray], graph_ids: list[int]) -> list[list[tuple[int, int]]]:
+    """Fundamental cycles of a breadth-first spanning forest of the branch graph."""
+    adj: dict[int, list[tuple[int, int, int]]] = {}
+    cycles: list[list[tuple[int, int]]] = []
+    for i in graph_ids:
+        p = paths[i]
+        a, b = int(p[0]), int(p[-1])
+        adj.setdefault(a, []).append((b, i, 1))
+        adj.setdefault(b, []).append((a, i, -1))
     parent: dict[int, tuple[int, int, int]] = {}  # node -> (parent node, branch, direction parent->node)
     depth: dict[int, int] = {}
     used: set[int] = set()
@@ -258,18 +362,19 @@ def _cycle_basis(paths: list[np.ndarray], kinds: list[str]) -> list[list[tuple[i
         depth[root] = 0
         queue = [root]
         for u in queue:
-            for w, b, s in adj[u]:
+            for w, br, s in adj[u]:
                 if w not in depth:
                     depth[w] = depth[u] + 1
-                    parent[w] = (u, b, s)
-                    used.add(b)
+                    parent[w] = (u, br, s)
+                    used.add(br)
                     queue.append(w)
-    for i, (p, k) in enumerate(zip(paths, kinds)):
-        if k in ("cycle", "loop", "point") or i in used:
+    for i in graph_ids:
+        if i in used:
             continue
+        p = paths[i]
         a, b = int(p[0]), int(p[-1])
         # the branch a -> b, then the tree path b -> a through their lowest common ancestor
-        up_b: list[tuple[int, int]] = []  # from b up towards the ancestor: branches against parent->node
+        up_b: list[tuple[int, int]] = []
         up_a: list[tuple[int, int]] = []
         x, y = b, a
         while depth[x] > depth[y]:
@@ -297,12 +402,14 @@ def decompose_branches(
     cloud: np.ndarray | None = None,
     sample_edge: np.ndarray | None = None,
     step: float | None = None,
+    cloud_tree: cKDTree | None = None,
     checkpoint: Checkpoint = no_checkpoint,
 ) -> Branches:
     """Cut ``curve`` into branches and give its cycle basis (issue 22, item 1).
 
     ``cloud`` (same frame as the curve) gives each branch its local radius, the distance from its
-    points every ``step`` (default: 1/200 of the curve's length) to the nearest cloud point.
+    points every ``step`` (default: 1/200 of the curve's length) to the nearest cloud point
+    (``cloud_tree``: a KD-tree of it, when built).
     ``sample_edge`` (the edge of each curve sample, ``CurveSamples.edge``) gives each sample the
     branch of its edge. Junction vertices (degree >= 3) get the branch id :data:`JUNCTION`.
     """
@@ -335,7 +442,8 @@ def decompose_branches(
         iso = pe < 0
         if iso.any():
             pb[iso] = vertex_branch[np.flatnonzero(deg == 0)]
-        r, _ = kd_tree(np.asarray(cloud, float)).query(pts)
+        tree = cloud_tree if cloud_tree is not None else kd_tree(np.asarray(cloud, float))
+        r, _ = tree.query(pts)
         checkpoint(0.8)
         order = np.argsort(pb, kind="stable")
         bounds = np.searchsorted(pb[order], np.arange(nb + 1))
@@ -354,5 +462,5 @@ def decompose_branches(
     return Branches(
         paths=paths, kind=kinds, ends=ends, end_degrees=end_degrees, length=lengths, edge_branch=edge_branch,
         vertex_branch=vertex_branch, sample_branch=sample_branch, radius_min=rmin, radius_median=rmed,
-        radius_max=rmax, cycles=_cycle_basis(paths, kinds), n_components=int(n_comp),
+        radius_max=rmax, cycles=_cycle_basis(paths, kinds, lengths), n_components=int(n_comp),
     )  # fmt: skip

@@ -34,6 +34,7 @@ from scipy.sparse.csgraph import breadth_first_order, connected_components, mini
 from scipy.spatial import cKDTree
 
 from ..curve import CurveSkeleton
+from ..curve_sampling import CurveSamples
 from ..geometry import Checkpoint, no_checkpoint
 from ..params import Params
 from ..trust import TrustWarning
@@ -275,16 +276,18 @@ def find_cycle_defects(
     *,
     params: Params = Params(),
     branches: Branches | None = None,
-    sample_edge: np.ndarray | None = None,
+    samples: CurveSamples | None = None,
     voxel_shape: VoxelShape | None = None,
+    cloud_tree: cKDTree | None = None,
     checkpoint: Checkpoint = no_checkpoint,
 ) -> CycleDefects:
     """Spurious and missing cycles of ``curve`` in the shape sampled by ``cloud`` (both normalized,
-    SPEC 0). ``branches`` / ``voxel_shape`` may be passed when already computed; ``sample_edge``
-    (the curve samples' edges) gives the per-sample flags."""
+    SPEC 0). ``branches``, ``voxel_shape`` and ``cloud_tree`` may be passed when computed; ``samples``
+    (the curve samples) give the per-sample flags."""
     cloud = np.asarray(cloud, dtype=float)
     if branches is None:
-        branches = decompose_branches(curve, cloud=cloud, sample_edge=sample_edge)
+        branches = decompose_branches(curve, cloud=cloud, sample_edge=None if samples is None else samples.edge,
+                                      cloud_tree=cloud_tree)
     if voxel_shape is None:
         voxel_shape = voxelize_interior(cloud, voxels=params.cycles_voxels,
                                         min_spacing_factor=params.cycles_voxel_spacing,

@@ -21,7 +21,7 @@ from scipy import ndimage
 
 from ..geometry import Checkpoint, bounding_box, no_checkpoint
 
-__all__ = ["VoxelShape", "voxelize_interior", "betti_numbers", "LATTICE_DIRECTIONS"]
+__all__ = ["VoxelShape", "voxelize_interior", "betti_numbers", "median_spacing", "LATTICE_DIRECTIONS"]
 
 #: the 26 lattice directions (each component -1, 0 or 1, not all 0)
 LATTICE_DIRECTIONS = np.array([(a, b, c) for a in (-1, 0, 1) for b in (-1, 0, 1) for c in (-1, 0, 1)
@@ -81,6 +81,22 @@ def _ray_hits(target: np.ndarray, d: np.ndarray) -> np.ndarray:
     return np.moveaxis(hit, 0, axis)
 
 
+def median_spacing(cloud: np.ndarray, max_points: int = 20000) -> float:
+    """The cloud's median nearest-neighbour spacing, from a random subsample of at most
+    ``max_points`` (seed 0) scaled by sqrt(m / n): a surface sample's spacing shrinks as
+    1 / sqrt(density). Exact for clouds of at most ``max_points``."""
+    from scipy.spatial import cKDTree
+
+    cloud = np.asarray(cloud, dtype=float)
+    n = len(cloud)
+    if n < 2:
+        return 0.0
+    m = min(n, int(max_points))
+    sub = cloud if m == n else cloud[np.random.default_rng(0).choice(n, m, replace=False)]
+    d, _ = cKDTree(sub).query(sub, k=2)
+    return float(np.median(d[:, 1])) * float(np.sqrt(m / n))
+
+
 def voxelize_interior(
     cloud: np.ndarray,
     *,
@@ -96,17 +112,10 @@ def voxelize_interior(
     cloud-holding voxels, grown by one, close the surface. A voxel is inside when it holds points or
     more than ``inside_share`` of its 26 lattice rays hit the grown surface.
     """
-    from scipy.spatial import cKDTree
-
     cloud = np.asarray(cloud, dtype=float)
     lo, hi = bounding_box(cloud)
     longest = float(np.max(hi - lo)) or 1.0
-    n = len(cloud)
-    m = min(n, 20000)
-    sub = cloud if m == n else cloud[np.random.default_rng(0).choice(n, m, replace=False)]
-    d, _ = cKDTree(sub).query(sub, k=2)
-    # a surface sample's spacing shrinks as 1/sqrt(density): correct the subsample's
-    spacing = float(np.median(d[:, 1])) * np.sqrt(m / n)
+    spacing = median_spacing(cloud)
     size = max(longest / max(int(voxels), 4), min_spacing_factor * spacing)
     origin = lo - PAD * size
     shape = tuple(int(s) for s in np.floor((hi - lo) / size + 0.5).astype(np.int64) + 2 * PAD + 1)
