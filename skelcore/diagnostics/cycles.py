@@ -1,26 +1,16 @@
 """The skeleton's cycles against the shape's tunnels -> ``spurious_cycles``, ``missing_cycles``
-(issue 22, item 4; docs/diagnostics.md "Cycles").
+(issue 22, item 4; docs/diagnostics.md "Cycles" has the derivation).
 
 The shape X is voxelized (:mod:`.interior`); its tunnels are its first Betti number beta1(X). A
-skeleton cycle goes around a tunnel when it links a loop of the space outside the shape (Alexander
-duality: H1 of a solid is dual to H1 of its complement by the linking number), so a cycle is
-spurious (can be shrunk to a point inside the shape) when it links no loop outside.
-
-The linking numbers are read from the solid angle Omega_g(p) that cycle g subtends at p (Gauss:
-going once around a loop c, Omega_g changes by 4 pi lk(g, c)). Omega_g is evaluated at the centres of
-a collar of outside voxels around X' = X plus the voxels near the skeleton (so every cycle lies in
-X', and the collar's loops generate H1 of the outside: "half lives, half dies"). Along each collar
-edge the change of Omega_g is small, so its jump by a multiple of 4 pi is an integer 1-cochain J_g;
-summed around the fundamental loops of a spanning tree of the collar it gives a matrix K (cycles x
-loops) of linking numbers. Then
-
-- rank K = the number of independent tunnels the skeleton's cycles go around;
-- spurious = cycles - rank K: taking the basis cycles shortest first, each whose row of K lies in the
-  span of the rows before is flagged (a trivial cycle, or one that repeats shorter ones);
-- missing = beta1(X) - rank K (at least 0).
-
-A cycle passing outside the shape is measured in X' (the shape with the skeleton's neighbourhood):
-a cycle through the air around a tunnel still goes around it; its edges are ``outside``'s to flag.
+cycle goes around a tunnel when it links a loop outside the shape (Alexander duality), so it is
+spurious (shrinkable inside the shape) when it links none. Linking numbers come from the solid angle
+Omega_g(p) that cycle g subtends (it changes by 4 pi lk(g, c) once around a loop c): evaluated on a
+collar of outside voxels around X' = X plus the voxels near the skeleton, its 4 pi jumps along the
+collar's edges, summed around the fundamental loops of a spanning tree, give the matrix K (cycles x
+loops) of linking numbers. rank K = the tunnels the cycles go around; taking the basis cycles
+shortest first, each whose row of K is in the span of those before is spurious; missing =
+beta1(X) - rank K. A cycle partly outside is measured in X' (a cycle through the air around a
+tunnel still goes around it; ``outside`` flags its edges).
 """
 
 from __future__ import annotations
