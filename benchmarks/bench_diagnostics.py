@@ -295,24 +295,48 @@ def defects(size: int, seeds: int, noises: list[float]) -> None:
         print(f"| {defect} | {name} | {h}/{n} |")
 
 
+def tangle(skeletal: np.ndarray, n: int = 400, k: int = 4, seed: int = 0) -> tuple[np.ndarray, np.ndarray]:
+    """A PyGEL-like tangle: ``n`` of the contracted points, each joined to its ``k`` nearest others
+    (a graph with hundreds of short cycles inside the shape)."""
+    pts = np.unique(skeletal, axis=0)
+    pts = pts[np.random.default_rng(seed).choice(len(pts), min(n, len(pts)), replace=False)]
+    _, nb = cKDTree(pts).query(pts, k=k + 1)
+    e = np.sort(np.column_stack([np.repeat(np.arange(len(pts)), k), nb[:, 1:].ravel()]), axis=1)
+    return pts, np.unique(e, axis=0)
+
+
 def hammer() -> None:
+    """Our skeletonizers' hammer skeletons as they are, then cao's with issue 22's defects."""
     import skelcore
 
     path = Path("/work/shared/data/hammer_4096.ply")
     cloud = skelcore.load_cloud(str(path))
+    rng = np.random.default_rng(22)
     for method in ("cao", "skelscope"):
         skel, curve = skelcore.skeletonize(cloud, method=method)
         t = time.perf_counter()
-        ev = skelcore.evaluate(cloud, skeletal=skel, curve=curve)
+        skelcore.evaluate(cloud, skeletal=skel, curve=curve)
         t_ev = time.perf_counter() - t
-        d, t_d = diagnose(cloud, curve.vertices, curve.edges)
-        print(f"{method}: {curve.n_vertices} vertices, {len(d.branches)} branches "
-              f"({', '.join(f'{k} {d.branches.kind.count(k)}' for k in sorted(set(d.branches.kind)))}), "
-              f"{d.branches.cycle_rank} cycles; evaluation {t_ev:.2f} s, diagnostics {t_d:.2f} s")
-        for w in d.warnings():
-            print(f"  {w.code}: {w.message}")
-        if not d.warnings():
-            print("  no defect warning")
+        cases = {"as made": (curve.vertices, curve.edges)}
+        if method == "cao":
+            sh = shapes.Shape(cloud, skel, curve.vertices, curve.edges)
+            v, e, _ = add_spurs(sh, 10, 1.0, rng)
+            cases["ten spurs of 1 r"] = (v, e)
+            cases["shortcut handle end - head end"] = shortcut(sh, "hammer")
+            cases["chord closing a loop in the handle"] = add_loop(sh, 3.0, rng)
+            diag = float(np.linalg.norm(np.ptp(cloud, axis=0)))
+            r0 = float(np.median(_radius_at(sh, curve.vertices)))
+            cases["branch 30 % of the diagonal out"] = out_branch(sh, 0.3 * diag / r0, rng)
+            cases["tangle (kNN graph of 400 contracted points)"] = tangle(skel)
+        for label, (v, e) in cases.items():
+            d, t_d = diagnose(cloud, v, e)
+            b = d.branches
+            print(f"{method}, {label}: {len(v)} vertices, {len(b)} branches, {b.cycle_rank} cycles; "
+                  f"evaluation {t_ev:.2f} s, diagnostics {t_d:.2f} s")
+            for w in d.warnings():
+                print(f"  {w.code}: {w.message}")
+            if not d.warnings():
+                print("  no defect warning")
 
 
 def speed(sizes: list[int]) -> None:

@@ -45,7 +45,7 @@ class Branches:
         distance from its points (every ``step``) to the nearest cloud point (NaN without a cloud).
     cycles : the cycle basis, each a list of (branch, direction +1 / -1) pairs, branches followed
         along (+1) or against (-1) their path: a minimum-length basis up to 64 cycles (beyond, the
-        fundamental cycles of a spanning forest).
+        fundamental cycles of a minimum spanning forest).
     flags : per branch, the defect codes found on it (empty until a diagnostic adds its own).
     """
 
@@ -183,7 +183,7 @@ def _chains(curve: CurveSkeleton, deg: np.ndarray) -> tuple[list[np.ndarray], np
     # the walk lists chain after chain: cut it where the component changes
     lab = label[order]
     cuts = np.flatnonzero(np.diff(lab)) + 1
-    pieces = np.split(order, cuts)
+    pieces = np.split(order, cuts) if len(order) else []
 
     # node neighbours of each chain end: the edges from a node (degree != 2) to a degree-2 vertex
     node_edge = two[e[:, 0]] ^ two[e[:, 1]]
@@ -244,7 +244,7 @@ def _cycle_basis(paths: list[np.ndarray], kinds: list[str], lengths: np.ndarray,
     """A cycle basis of the branch graph (nodes = branch ends, one edge per branch): every pure cycle
     and loop by itself, then a minimum-length basis of the rest (Horton's candidates: for every node
     v and branch x-y, the shortest paths v-x and y-v closed by the branch, taken shortest first while
-    independent over GF(2)). Beyond ``max_horton`` cycles, the fundamental cycles of a breadth-first
+    independent over GF(2)). Beyond ``max_horton`` cycles, the fundamental cycles of a minimum
     spanning forest (same count, not the shortest)."""
     cycles: list[list[tuple[int, int]]] = []
     graph_ids: list[int] = []
@@ -265,7 +265,7 @@ def _cycle_basis(paths: list[np.ndarray], kinds: list[str], lengths: np.ndarray,
     if rank == 0:
         return cycles
     if rank > max_horton:
-        return cycles + _fundamental_cycles(paths, graph_ids)
+        return cycles + _fundamental_cycles(paths, graph_ids, lengths)
     from scipy.sparse.csgraph import dijkstra
 
     w = np.maximum(lengths[graph_ids], 1e-12)
@@ -313,7 +313,7 @@ def _cycle_basis(paths: list[np.ndarray], kinds: list[str], lengths: np.ndarray,
         if len(chosen) == rank:
             break
     if len(chosen) < rank:  # cannot happen (Horton); kept safe
-        return cycles + _fundamental_cycles(paths, graph_ids)
+        return cycles + _fundamental_cycles(paths, graph_ids, lengths)
     for c in chosen:
         members = [j for j in range(len(graph_ids)) if c >> j & 1]
         cycles.append(_ordered_cycle(members, a, b, graph_ids))
@@ -344,55 +344,63 @@ def _ordered_cycle(members: list[int], a: np.ndarray, b: np.ndarray, graph_ids: 
     return out
 
 
-def _fundamental_cycles(paths: list[np.ndarray], graph_ids: list[int]) -> list[list[tuple[int, int]]]:
-    """Fundamental cycles of a breadth-first spanning forest of the branch graph."""
-    adj: dict[int, list[tuple[int, int, int]]] = {}
+def _fundamental_cycles(paths: list[np.ndarray], graph_ids: list[int], lengths: np.ndarray) -> list[list[tuple[int, int]]]:
+    """Fundamental cycles of a minimum spanning forest of the branch graph (by branch length): in a
+    geometric graph its tree paths stay local, so most of these cycles are short."""
+    from scipy.sparse.csgraph import breadth_first_order, minimum_spanning_tree
+
+    ends = np.array([[int(paths[i][0]), int(paths[i][-1])] for i in graph_ids])
+    nodes, inv = np.unique(ends, return_inverse=True)
+    inv = inv.reshape(-1, 2)
+    nn = len(nodes)
+    w = np.maximum(lengths[graph_ids], 1e-12)
+    # the shortest branch between two nodes may join the tree; the others close cycles
+    order = np.lexsort((w, inv.max(axis=1), inv.min(axis=1)))
+    lo, hi = inv.min(axis=1)[order], inv.max(axis=1)[order]
+    first = np.ones(len(order), bool)
+    first[1:] = (lo[1:] != lo[:-1]) | (hi[1:] != hi[:-1])
+    simple = order[first]
+    g = coo_matrix((w[simple], (inv[simple, 0], inv[simple, 1])), shape=(nn, nn))
+    t = minimum_spanning_tree(g).tocoo()
+    tree_pairs = {(min(a, b), max(a, b)) for a, b in zip(t.row.tolist(), t.col.tolist())}
+    in_tree = {int(j) for j in simple if (int(inv[j].min()), int(inv[j].max())) in tree_pairs}
+    # parents from a breadth-first walk of the forest (a virtual root tied to every component)
+    _, lab = connected_components(g, directed=False)
+    roots = np.unique(lab, return_index=True)[1]
+    tj = np.array(sorted(in_tree), dtype=np.int64)
+    rr = np.concatenate([inv[tj, 0], inv[tj, 1], np.full(len(roots), nn)])
+    cc = np.concatenate([inv[tj, 1], inv[tj, 0], roots])
+    full = coo_matrix((np.ones(len(rr)), (rr, cc)), shape=(nn + 1, nn + 1)).tocsr()
+    walk, pred = breadth_first_order(full, nn, directed=True, return_predecessors=True)
+    depth = np.zeros(nn + 1, np.int64)
+    for x in walk[1:]:
+        depth[x] = depth[pred[x]] + 1
+    via = {}
+    for j in tj.tolist():
+        a, b = int(inv[j, 0]), int(inv[j, 1])
+        via[(a, b)] = (graph_ids[j], 1)  # walking a -> b follows the path
+        via[(b, a)] = (graph_ids[j], -1)
     cycles: list[list[tuple[int, int]]] = []
-    for i in graph_ids:
-        p = paths[i]
-        a, b = int(p[0]), int(p[-1])
-        adj.setdefault(a, []).append((b, i, 1))
-        adj.setdefault(b, []).append((a, i, -1))
-    parent: dict[int, tuple[int, int, int]] = {}  # node -> (parent node, branch, direction parent->node)
-    depth: dict[int, int] = {}
-    used: set[int] = set()
-    for root in sorted(adj):
-        if root in depth:
+    for j in range(len(graph_ids)):
+        if j in in_tree:
             continue
-        depth[root] = 0
-        queue = [root]
-        for u in queue:
-            for w, br, s in adj[u]:
-                if w not in depth:
-                    depth[w] = depth[u] + 1
-                    parent[w] = (u, br, s)
-                    used.add(br)
-                    queue.append(w)
-    for i in graph_ids:
-        if i in used:
-            continue
-        p = paths[i]
-        a, b = int(p[0]), int(p[-1])
+        a, b = int(inv[j, 0]), int(inv[j, 1])
         # the branch a -> b, then the tree path b -> a through their lowest common ancestor
         up_b: list[tuple[int, int]] = []
-        up_a: list[tuple[int, int]] = []
+        down_a: list[tuple[int, int]] = []
         x, y = b, a
         while depth[x] > depth[y]:
-            u, br, s = parent[x]
-            up_b.append((br, -s))
-            x = u
+            up_b.append(via[(x, int(pred[x]))])
+            x = int(pred[x])
         while depth[y] > depth[x]:
-            u, br, s = parent[y]
-            up_a.append((br, s))
-            y = u
+            down_a.append(via[(int(pred[y]), y)])
+            y = int(pred[y])
         while x != y:
-            u, br, s = parent[x]
-            up_b.append((br, -s))
-            x = u
-            u, br, s = parent[y]
-            up_a.append((br, s))
-            y = u
-        cycles.append([(i, 1)] + up_b + up_a[::-1])
+            up_b.append(via[(x, int(pred[x]))])
+            x = int(pred[x])
+            down_a.append(via[(int(pred[y]), y)])
+            y = int(pred[y])
+        cycles.append([(graph_ids[j], 1)] + up_b + down_a[::-1])
     return cycles
 
 

@@ -47,8 +47,9 @@ class CycleDefects:
     n_cycles : the skeleton's cycle rank. shape_tunnels : beta1 of the voxelized shape.
     linked : how many independent tunnels the skeleton's cycles go around (rank K).
     spurious : ids (into ``branches.cycles``) of the basis cycles flagged spurious; missing : the
-    count of tunnels no cycle goes around. cycle_linking : per basis cycle, whether it goes around
-    some tunnel (links a loop outside the shape).
+    count of tunnels no cycle goes around. cycle_linking : per basis cycle, 1 when it goes around
+    some tunnel (links a loop outside the shape), 0 when not, -1 when not looked at (the cycles
+    after the rank reached the tunnels of the shape with the skeleton are dependent).
     branch_spurious : (B,) bool, the branches of the spurious cycles; vertex_flag (V,), sample_flag
     (S,) or None: on a spurious cycle's branch. voxel_size, grid : the voxelization (normalized
     units); subsampled : always False (every cloud point is binned).
@@ -118,24 +119,26 @@ def solid_angle_triangles(p: np.ndarray, a: np.ndarray, b: np.ndarray, c: np.nda
     return 2.0 * np.arctan2(num, den)
 
 
-def solid_angle_polygon(p: np.ndarray, polygon: np.ndarray, chunk: int = 4096) -> np.ndarray:
+def solid_angle_polygon(p: np.ndarray, polygon: np.ndarray, chunk: int = 8192) -> np.ndarray:
     """Solid angle (mod 4 pi) that the closed polygon subtends at each row of p: the sum over the
-    fan of triangles from the polygon's mean (any apex gives the same value mod 4 pi)."""
+    fan of triangles from the polygon's mean (any apex gives the same value mod 4 pi), each by Van
+    Oosterom and Strackee's formula, component by component (no (n, m, 3) temporaries)."""
     p = np.asarray(p, dtype=float)
     poly = np.asarray(polygon, dtype=float)
     apex = poly.mean(axis=0)
+    nxt = np.roll(poly, -1, axis=0)
     out = np.empty(len(p))
     for s0 in range(0, len(p), chunk):
         q = p[s0:s0 + chunk]
-        ra = apex - q  # (n, 3)
-        la = np.sqrt(np.einsum("ij,ij->i", ra, ra))
-        r = poly[None, :, :] - q[:, None, :]  # (n, m, 3)
-        lr = np.sqrt(np.einsum("ijk,ijk->ij", r, r))
-        r2 = np.roll(r, -1, axis=1)
-        l2 = np.roll(lr, -1, axis=1)
-        num = np.einsum("ik,ijk->ij", ra, np.cross(r, r2))
-        den = (la[:, None] * lr * l2 + np.einsum("ik,ijk->ij", ra, r) * l2 + np.einsum("ik,ijk->ij", ra, r2) * lr
-               + np.einsum("ijk,ijk->ij", r, r2) * la[:, None])
+        ax, ay, az = (apex[k] - q[:, k:k + 1] for k in range(3))  # (n, 1)
+        la = np.sqrt(ax * ax + ay * ay + az * az)
+        bx, by, bz = (poly[None, :, k] - q[:, k:k + 1] for k in range(3))  # (n, m)
+        cx, cy, cz = (nxt[None, :, k] - q[:, k:k + 1] for k in range(3))
+        lb = np.sqrt(bx * bx + by * by + bz * bz)
+        lc = np.sqrt(cx * cx + cy * cy + cz * cz)
+        num = ax * (by * cz - bz * cy) + ay * (bz * cx - bx * cz) + az * (bx * cy - by * cx)
+        den = (la * lb * lc + (ax * bx + ay * by + az * bz) * lc + (ax * cx + ay * cy + az * cz) * lb
+               + (bx * cx + by * cy + bz * cz) * la)
         out[s0:s0 + chunk] = 2.0 * np.arctan2(num, den).sum(axis=1)
     return out
 
@@ -192,72 +195,69 @@ def _collar_graph(solid: np.ndarray, near: np.ndarray) -> tuple[np.ndarray, np.n
     return flat, np.vstack(pairs) if pairs else np.zeros((0, 2), np.int64)
 
 
-def _tree_potentials(n: int, edges: np.ndarray, jumps: np.ndarray) -> np.ndarray:
-    """Integer linking numbers of the fundamental loops of a spanning forest of the graph (n nodes,
-    ``edges`` (m, 2)) with each cycle's jump cochain ``jumps`` (m, c): one column per non-tree edge
-    whose loop some cycle links (columns repeated or all zero are dropped)."""
-    if len(edges) == 0:
-        return np.zeros((jumps.shape[1], 0), np.int64)
-    g = coo_matrix((np.ones(len(edges)), (edges[:, 0], edges[:, 1])), shape=(n, n))
-    tree = minimum_spanning_tree(g).tocoo()
-    t_edges = np.column_stack([tree.row, tree.col])
-    # orient the tree from a virtual root tied to one node of every component
-    ncomp, lab = connected_components(g, directed=False)
-    roots = np.unique(lab, return_index=True)[1]
-    rr = np.concatenate([t_edges[:, 0], t_edges[:, 1], np.full(len(roots), n)])
-    cc = np.concatenate([t_edges[:, 1], t_edges[:, 0], roots])
-    full = coo_matrix((np.ones(len(rr)), (rr, cc)), shape=(n + 1, n + 1)).tocsr()
-    _, pred = breadth_first_order(full, n, directed=True, return_predecessors=True)
-    pred = pred[:n]
-    # jump from the parent to each node (0 at the roots), looked up from the edge list
-    key = np.minimum(edges[:, 0], edges[:, 1]) * n + np.maximum(edges[:, 0], edges[:, 1])
-    srt = np.argsort(key)
-    sign_of = np.where(edges[:, 0] < edges[:, 1], 1, -1)  # +1: jumps stored low -> high
-    node_jump = np.zeros((n, jumps.shape[1]), np.int64)
-    has_parent = pred < n
-    child = np.flatnonzero(has_parent)
-    par = pred[child]
-    kk = np.minimum(par, child) * n + np.maximum(par, child)
-    row = srt[np.searchsorted(key[srt], kk)]
-    # jumps[row] are stored for edges[row, 0] -> edges[row, 1]; parent -> child is that or its reverse
-    forward = edges[row, 0] == par
-    node_jump[child] = np.where(forward[:, None], jumps[row], -jumps[row])
-    # potentials m(v) = sum of jumps from the root to v: pointer jumping
-    m = node_jump.copy()
-    anc = np.where(has_parent, pred, -1)
-    while np.any(anc >= 0):
-        ok = anc >= 0
-        m[ok] += m[anc[ok]]
-        nxt = np.full(n, -1)
-        nxt[ok] = anc[anc[ok]]
-        anc = nxt
-    in_tree = np.zeros(len(edges), bool)
-    tk = np.minimum(t_edges[:, 0], t_edges[:, 1]) * n + np.maximum(t_edges[:, 0], t_edges[:, 1])
-    in_tree[srt[np.searchsorted(key[srt], tk)]] = True
-    non = np.flatnonzero(~in_tree)
-    u, v = edges[non, 0], edges[non, 1]
-    loops = m[u] + jumps[non] - m[v]  # (n_loops, c)
-    loops = loops[np.any(loops != 0, axis=1)]
-    if len(loops):
-        loops = np.unique(loops, axis=0)
-    return loops.T.astype(np.int64)
+class _CollarLoops:
+    """The fundamental loops of a spanning forest of the collar graph (n nodes, ``edges`` (m, 2)):
+    ``linking(jumps)`` sums each cycle's jump cochain (m, c) around every loop (one row per non-tree
+    edge), the cycles' linking numbers with the loops."""
+
+    def __init__(self, n: int, edges: np.ndarray):
+        self.n = n
+        self.edges = edges
+        if len(edges) == 0:
+            self.non = np.zeros(0, np.int64)
+            return
+        g = coo_matrix((np.ones(len(edges)), (edges[:, 0], edges[:, 1])), shape=(n, n))
+        tree = minimum_spanning_tree(g).tocoo()
+        t_edges = np.column_stack([tree.row, tree.col])
+        # orient the forest from a virtual root tied to one node of every component
+        _, lab = connected_components(g, directed=False)
+        roots = np.unique(lab, return_index=True)[1]
+        rr = np.concatenate([t_edges[:, 0], t_edges[:, 1], np.full(len(roots), n)])
+        cc = np.concatenate([t_edges[:, 1], t_edges[:, 0], roots])
+        full = coo_matrix((np.ones(len(rr)), (rr, cc)), shape=(n + 1, n + 1)).tocsr()
+        _, pred = breadth_first_order(full, n, directed=True, return_predecessors=True)
+        pred = pred[:n]
+        key = np.minimum(edges[:, 0], edges[:, 1]) * n + np.maximum(edges[:, 0], edges[:, 1])
+        srt = np.argsort(key)
+        has_parent = (pred >= 0) & (pred < n)
+        self.child = np.flatnonzero(has_parent)
+        par = pred[self.child]
+        kk = np.minimum(par, self.child) * n + np.maximum(par, self.child)
+        self.row = srt[np.searchsorted(key[srt], kk)]  # the edge from each child's parent
+        self.forward = edges[self.row, 0] == par  # jumps are stored edges[:, 0] -> edges[:, 1]
+        self.anc = np.where(has_parent, pred, -1)
+        in_tree = np.zeros(len(edges), bool)
+        in_tree[self.row] = True
+        self.non = np.flatnonzero(~in_tree)
+
+    def linking(self, jumps: np.ndarray) -> np.ndarray:
+        c = jumps.shape[1]
+        if len(self.non) == 0:
+            return np.zeros((0, c), np.int64)
+        # potentials m(v) = sum of the jumps from the root down to v, by pointer jumping
+        m = np.zeros((self.n, c), np.int64)
+        m[self.child] = np.where(self.forward[:, None], jumps[self.row], -jumps[self.row])
+        anc = self.anc.copy()
+        while np.any(anc >= 0):
+            ok = anc >= 0
+            m[ok] += m[anc[ok]]
+            nxt = np.full(self.n, -1)
+            nxt[ok] = anc[anc[ok]]
+            anc = nxt
+        u, v = self.edges[self.non, 0], self.edges[self.non, 1]
+        return m[u] + jumps[self.non] - m[v]
 
 
-def _greedy_dependent(rows: np.ndarray, order: np.ndarray) -> tuple[list[int], int]:
-    """Rows taken in ``order``; those in the span of the rows taken before (zero rows included):
-    their ids and the rank."""
-    basis: list[np.ndarray] = []
-    dependent: list[int] = []
-    for i in order:
-        r = rows[i].astype(float)
-        for q in basis:
-            r = r - (r @ q) * q
-        norm = float(np.linalg.norm(r))
-        if norm > 1e-6 * max(1.0, float(np.linalg.norm(rows[i]))):
-            basis.append(r / norm)
-        else:
-            dependent.append(int(i))
-    return dependent, len(basis)
+def _add_to_span(basis: list[np.ndarray], row: np.ndarray) -> bool:
+    """Add ``row`` to the orthonormal ``basis`` unless it lies in its span; True when added."""
+    r = row.astype(float)
+    for q in basis:
+        r = r - (r @ q) * q
+    norm = float(np.linalg.norm(r))
+    if norm > 1e-6 * max(1.0, float(np.linalg.norm(row))):
+        basis.append(r / norm)
+        return True
+    return False
 
 
 def find_cycle_defects(
@@ -288,7 +288,7 @@ def find_cycle_defects(
     checkpoint(0.6)
     nc = branches.cycle_rank
     lengths = np.array([float(sum(branches.length[b] for b, _ in branches.cycles[i])) for i in range(nc)])
-    linking = np.zeros(nc, bool)
+    linking = np.full(nc, -1, dtype=np.int8)
     spurious: list[int] = []
     rank = 0
     if nc:
@@ -311,22 +311,50 @@ def find_cycle_defects(
         close = np.isfinite(d)
         near[cidx[close, 0], cidx[close, 1], cidx[close, 2]] = True
         solid_x = solid | near
-        flat, pairs = _collar_graph(solid_x, near)
-        checkpoint(0.7)
-        centres = voxel_shape.centres(np.column_stack(np.unravel_index(flat, solid.shape)))
-        # a fixed irrational nudge keeps the fan's apex off the voxel centres
-        omega = np.empty((len(centres), nc))
-        for i in range(nc):
-            poly = simplify_polygon(curve.vertices[branches.cycle_polygon(i)], 0.5 * h)
-            omega[:, i] = solid_angle_polygon(centres, poly + 1e-7 * np.array([np.sqrt(2), np.sqrt(3), np.sqrt(5)]))
-            checkpoint(0.7 + 0.25 * (i + 1) / nc)
-        diff = omega[pairs[:, 1]] - omega[pairs[:, 0]]
-        jumps = np.rint((np.mod(diff + np.pi * 2, 4 * np.pi) - np.pi * 2 - diff) / (4 * np.pi)).astype(np.int64)
-        k = _tree_potentials(len(flat), pairs, jumps)
-        linking = np.any(k != 0, axis=1)
+        # the cycles cannot go around more tunnels than the shape with the skeleton has
+        _, tunnels_x, _ = betti_numbers(solid_x)
         order = np.argsort(lengths, kind="stable")
-        spurious, rank = _greedy_dependent(k, order)
+        basis: list[np.ndarray] = []
+        done = 0
+        if tunnels_x:
+            flat, pairs = _collar_graph(solid_x, near)
+            loops = _CollarLoops(len(flat), pairs)
+            centres = voxel_shape.centres(np.column_stack(np.unravel_index(flat, solid.shape)))
+            # a fixed irrational nudge keeps the fan's apex off the voxel centres
+            nudge = 1e-7 * np.array([np.sqrt(2), np.sqrt(3), np.sqrt(5)])
+            # shortest first, a few at a time, until the rank reaches the tunnels of X': the rest are
+            # dependent (spurious) without a look
+            # a cycle inside a ball that lies in X' is trivial without a look (tangles of short loops)
+            depth = ndimage.distance_transform_edt(solid_x)
+            while done < nc and len(basis) < tunnels_x:
+                ids = order[done:done + 16]
+                polys = []
+                for i in ids:
+                    poly = curve.vertices[branches.cycle_polygon(i)]
+                    centre = (poly.min(axis=0) + poly.max(axis=0)) / 2
+                    rho = float(np.linalg.norm(poly - centre, axis=1).max())
+                    c_ijk = voxel_shape.index_of(centre[None])[0]
+                    polys.append(None if depth[tuple(c_ijk)] * h > rho + np.sqrt(3) * h
+                                 else simplify_polygon(poly, 0.5 * h) + nudge)
+                look = [j for j, q in enumerate(polys) if q is not None]
+                k = np.zeros((len(loops.non), len(ids)), np.int64)
+                if look:
+                    omega = np.empty((len(centres), len(look)))
+                    for col, j in enumerate(look):
+                        omega[:, col] = solid_angle_polygon(centres, polys[j])
+                    diff = omega[pairs[:, 1]] - omega[pairs[:, 0]]
+                    jumps = np.rint((np.mod(diff + 2 * np.pi, 4 * np.pi) - 2 * np.pi - diff) / (4 * np.pi)).astype(np.int64)
+                    k[:, look] = loops.linking(jumps)
+                for j, i in enumerate(ids):
+                    linking[i] = 1 if np.any(k[:, j] != 0) else 0
+                    if len(basis) < tunnels_x and _add_to_span(basis, k[:, j]):
+                        continue
+                    spurious.append(int(i))
+                done += len(ids)
+                checkpoint(0.7 + 0.25 * done / nc)
+        spurious.extend(int(i) for i in order[done:])
         spurious.sort()
+        rank = len(basis)
     missing = max(0, tunnels - rank)
     branch_spurious = np.zeros(len(branches), bool)
     for i in spurious:

@@ -150,3 +150,29 @@ def test_to_dict_lists_every_branch():
     assert [x["flags"] for x in d["branches"]][2] == ["spurious_branches"]
     assert all(x["radius"]["median"] > 0 for x in d["branches"])
     assert sorted(x["kind"] for x in d["branches"]).count("terminal") == 5
+
+
+def test_large_cycle_space_gets_fundamental_cycles_of_a_minimum_spanning_forest():
+    """Beyond 64 cycles: the right count, closed walks, independent over GF(2)."""
+    rng = np.random.default_rng(11)
+    curve = _random_graph(rng, 120, 90)
+    b = decompose_branches(curve)
+    assert b.cycle_rank == curve.n_edges - curve.n_vertices + b.n_components > 64
+    m = np.zeros((b.cycle_rank, curve.n_edges), np.uint8)
+    adj = {tuple(e) for e in curve.edges.tolist()}
+    for i in range(b.cycle_rank):
+        poly = b.cycle_polygon(i)
+        for x, y in zip(poly, np.roll(poly, -1)):
+            assert (min(x, y), max(x, y)) in adj
+        m[i, b.cycle_edges(i)] = 1
+    r, rank = m.copy(), 0
+    for col in range(r.shape[1]):
+        piv = [i for i in range(rank, len(r)) if r[i, col]]
+        if not piv:
+            continue
+        r[[rank, piv[0]]] = r[[piv[0], rank]]
+        rows = np.flatnonzero(r[:, col])
+        rows = rows[rows != rank]
+        r[rows] ^= r[rank]
+        rank += 1
+    assert rank == b.cycle_rank

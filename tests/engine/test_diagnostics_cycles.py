@@ -85,7 +85,7 @@ def test_rotated_torus_core_is_legitimate():
     c, curve, _, _ = normalized(s.cloud @ q.T, s.curve_vertices @ q.T, s.curve_edges)
     r = find_cycle_defects(c, curve)
     assert (r.n_cycles, r.shape_tunnels, r.linked, r.n_spurious, r.missing) == (1, 1, 1, 0, 0)
-    assert r.cycle_linking.tolist() == [True]
+    assert r.cycle_linking.tolist() == [1]
 
 
 @pytest.mark.parametrize("gap", [1, 4])
