@@ -446,7 +446,7 @@ def decompose_branches(
             total = float(lengths.sum())
             step = total / 200 if total > 0 else 1.0
         pts, pe = densify(curve, step)
-        pb = np.where(pe >= 0, edge_branch[np.maximum(pe, 0)], -1)
+        pb = np.where(pe >= 0, edge_branch[np.maximum(pe, 0)] if len(edge_branch) else -1, -1)
         iso = pe < 0
         if iso.any():
             pb[iso] = vertex_branch[np.flatnonzero(deg == 0)]

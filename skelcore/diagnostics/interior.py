@@ -21,7 +21,8 @@ from scipy import ndimage
 
 from ..geometry import Checkpoint, bounding_box, no_checkpoint
 
-__all__ = ["VoxelShape", "voxelize_interior", "betti_numbers", "median_spacing", "LATTICE_DIRECTIONS"]
+__all__ = ["VoxelShape", "voxelize_interior", "betti_numbers", "median_spacing", "cloud_subsample",
+           "LATTICE_DIRECTIONS"]
 
 #: the 26 lattice directions (each component -1, 0 or 1, not all 0)
 LATTICE_DIRECTIONS = np.array([(a, b, c) for a in (-1, 0, 1) for b in (-1, 0, 1) for c in (-1, 0, 1)
@@ -79,6 +80,16 @@ def _ray_hits(target: np.ndarray, d: np.ndarray) -> np.ndarray:
         j = i + step
         hit[i] = _shifted(tg[j] | hit[j], d1, d2)
     return np.moveaxis(hit, 0, axis)
+
+
+def cloud_subsample(cloud: np.ndarray, max_points: int, seed: int = 0) -> np.ndarray:
+    """The cloud itself, or a random subset of ``max_points`` of its rows (in their order) when larger:
+    the same subset for the same cloud, size and seed."""
+    cloud = np.asarray(cloud, dtype=float)
+    if len(cloud) <= max_points:
+        return cloud
+    pick = np.random.default_rng(seed).choice(len(cloud), int(max_points), replace=False)
+    return cloud[np.sort(pick)]
 
 
 def median_spacing(cloud: np.ndarray, max_points: int = 20000) -> float:

@@ -25,7 +25,7 @@ from ..geometry import Checkpoint, kd_tree, no_checkpoint
 from ..params import Params
 from ..trust import TrustWarning
 from .branches import Branches, decompose_branches
-from .interior import median_spacing
+from .interior import cloud_subsample, median_spacing
 
 __all__ = ["OutsideDefects", "find_outside"]
 
@@ -148,7 +148,7 @@ def find_outside(
     cloud = np.asarray(cloud, dtype=float)
     beta_star = params.beta_star
     if cloud_tree is None and len(cloud):
-        cloud_tree = kd_tree(cloud)
+        cloud_tree = kd_tree(cloud_subsample(cloud, params.diag_max_points, seed))
     sample_edge = None if samples is None else samples.edge
     sample_points = None if samples is None else samples.points
     if curve is not None and branches is None:

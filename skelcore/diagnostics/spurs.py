@@ -28,7 +28,7 @@ from ..geometry import Checkpoint, kd_tree, no_checkpoint
 from ..params import Params
 from ..trust import TrustWarning
 from .branches import Branches, decompose_branches, densify
-from .interior import median_spacing
+from .interior import cloud_subsample, median_spacing
 
 __all__ = ["SpurDefects", "find_spurious_branches", "curve_points"]
 
@@ -151,11 +151,12 @@ def find_spurious_branches(
     seed: int = 0,
 ) -> SpurDefects:
     """Spurious terminal branches of ``curve`` in the shape sampled by ``cloud`` (both normalized,
-    SPEC 0). ``branches`` and ``cloud_tree`` (a KD-tree of the cloud) may be passed when computed;
+    SPEC 0). ``branches`` and ``cloud_tree`` (a KD-tree of the cloud, or of its subsample of
+    ``diag_max_points``: the local radii come from it) may be passed when computed;
     ``samples`` (the curve samples) give the per-sample flags."""
     cloud = np.asarray(cloud, dtype=float)
     if cloud_tree is None and len(cloud):
-        cloud_tree = kd_tree(cloud, checkpoint)
+        cloud_tree = kd_tree(cloud_subsample(cloud, params.diag_max_points, seed), checkpoint)
     if branches is None:
         branches = decompose_branches(curve, cloud=cloud, sample_edge=None if samples is None else samples.edge,
                                       cloud_tree=cloud_tree)
@@ -165,7 +166,7 @@ def find_spurious_branches(
     r_j = np.full(nb, np.nan)
     territory = np.zeros(nb, np.int64)
     unique = np.zeros(nb, np.int64)
-    subsampled = None
+    subsampled = int(params.diag_max_points) if len(cloud) > params.diag_max_points else None
     if len(terminal) and len(cloud):
         r_typ = float(np.nanmedian(branches.radius_median)) if np.any(np.isfinite(branches.radius_median)) else 0.0
         total = float(branches.length.sum())
@@ -174,11 +175,7 @@ def find_spurious_branches(
         pts, pb = curve_points(curve, branches, step)
         r_x, _ = cloud_tree.query(pts)
         checkpoint(0.2)
-        use = cloud
-        if len(cloud) > params.diag_max_points:
-            pick = np.random.default_rng(seed).choice(len(cloud), int(params.diag_max_points), replace=False)
-            use = cloud[np.sort(pick)]
-            subsampled = int(params.diag_max_points)
+        use = cloud_subsample(cloud, params.diag_max_points, seed)
         tau = params.coverage_tau_factor * median_spacing(cloud)
         explain = (1.0 + params.coverage_slack) * r_x + tau
         ptree = cKDTree(pts)

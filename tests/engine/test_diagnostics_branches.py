@@ -176,3 +176,15 @@ def test_large_cycle_space_gets_fundamental_cycles_of_a_minimum_spanning_forest(
         r[rows] ^= r[rank]
         rank += 1
     assert rank == b.cycle_rank
+
+
+@pytest.mark.parametrize("edges", [np.zeros((0, 2), int), [[0, 1]], [[0, 1], [1, 2]]])
+def test_degenerate_curves_run_through_every_diagnostic(edges):
+    from skelcore.diagnostics import find_curve_defects
+
+    s = shapes.cylinder(n=1500, seed=1)
+    v = np.array([[0, 0, 1.0], [0, 0, 2.0], [0, 0, 3.0]])
+    curve = CurveSkeleton.from_raw(v, edges)
+    d = find_curve_defects(s.cloud, curve)
+    assert len(d.branches) >= 1 and d.cycles.n_cycles == 0 and d.warnings() == []
+    assert d.to_dict()["branches"]["n_branches"] == len(d.branches)
