@@ -260,6 +260,75 @@ def _add_to_span(basis: list[np.ndarray], row: np.ndarray) -> bool:
     return False
 
 
+def _near_cycles(curve: CurveSkeleton, branches: Branches, vs: VoxelShape, shape: tuple) -> np.ndarray:
+    """The voxels whose centres lie within the clearance of the skeleton's cycle edges."""
+    h = vs.size
+    on_cycle = np.zeros(len(curve.edges), bool)
+    for i in range(branches.cycle_rank):
+        on_cycle[branches.cycle_edges(i)] = True
+    sub = CurveSkeleton(vertices=curve.vertices, edges=curve.edges[on_cycle], vertex_map=curve.vertex_map)
+    pts, _ = densify(sub, h / 4)
+    ijk = vs.index_of(pts)
+    mark = np.zeros(shape, bool)
+    mark[ijk[:, 0], ijk[:, 1], ijk[:, 2]] = True
+    cand = ndimage.binary_dilation(mark, structure=np.ones((3, 3, 3), bool), iterations=int(np.ceil(_CLEARANCE)) + 1)
+    cidx = np.argwhere(cand)
+    d, _ = cKDTree(pts).query(vs.centres(cidx), distance_upper_bound=_CLEARANCE * h)
+    near = np.zeros(shape, bool)
+    close = np.isfinite(d)
+    near[cidx[close, 0], cidx[close, 1], cidx[close, 2]] = True
+    return near
+
+
+def _classify(curve: CurveSkeleton, branches: Branches, vs: VoxelShape, solid_x: np.ndarray, near: np.ndarray,
+              lengths: np.ndarray, progress: Checkpoint) -> tuple[list[int], np.ndarray, int]:
+    """(spurious cycle ids, linking per cycle (1 / 0 / -1 not looked at), rank K): the basis cycles
+    shortest first, 16 at a time, until the rank reaches the tunnels of X' (``solid_x``); the rest
+    are dependent without a look. A cycle inside a ball that lies in X' is trivial at once (tangles
+    of short loops)."""
+    nc = branches.cycle_rank
+    h = vs.size
+    order = np.argsort(lengths, kind="stable")
+    linking = np.full(nc, -1, dtype=np.int8)
+    spurious: list[int] = []
+    basis: list[np.ndarray] = []
+    _, tunnels_x, _ = betti_numbers(solid_x)
+    done = 0
+    if tunnels_x:
+        flat, pairs = _collar_graph(solid_x, near)
+        loops = _CollarLoops(len(flat), pairs)
+        centres = vs.centres(np.column_stack(np.unravel_index(flat, solid_x.shape)))
+        nudge = 1e-7 * np.array([np.sqrt(2), np.sqrt(3), np.sqrt(5)])  # keeps the fan's apex off the centres
+        depth = ndimage.distance_transform_edt(solid_x)
+        while done < nc and len(basis) < tunnels_x:
+            ids = order[done:done + 16]
+            polys = []
+            for i in ids:
+                poly = curve.vertices[branches.cycle_polygon(i)]
+                centre = (poly.min(axis=0) + poly.max(axis=0)) / 2
+                rho = float(np.linalg.norm(poly - centre, axis=1).max())
+                inside_ball = depth[tuple(vs.index_of(centre[None])[0])] * h > rho + np.sqrt(3) * h
+                polys.append(None if inside_ball else simplify_polygon(poly, 0.5 * h) + nudge)
+            look = [j for j, q in enumerate(polys) if q is not None]
+            k = np.zeros((len(loops.non), len(ids)), np.int64)
+            if look:
+                omega = np.empty((len(centres), len(look)))
+                for col, j in enumerate(look):
+                    omega[:, col] = solid_angle_polygon(centres, polys[j])
+                diff = omega[pairs[:, 1]] - omega[pairs[:, 0]]
+                jumps = np.rint((np.mod(diff + 2 * np.pi, 4 * np.pi) - 2 * np.pi - diff) / (4 * np.pi)).astype(np.int64)
+                k[:, look] = loops.linking(jumps)
+            for j, i in enumerate(ids):
+                linking[i] = 1 if np.any(k[:, j] != 0) else 0
+                if len(basis) < tunnels_x and _add_to_span(basis, k[:, j]):
+                    continue
+                spurious.append(int(i))
+            done += len(ids)
+            progress(done / nc)
+    spurious.extend(int(i) for i in order[done:])
+    return sorted(spurious), linking, len(basis)
+
+
 def find_cycle_defects(
     cloud: np.ndarray,
     curve: CurveSkeleton,
@@ -292,69 +361,9 @@ def find_cycle_defects(
     spurious: list[int] = []
     rank = 0
     if nc:
-        h = voxel_shape.size
-        # the skeleton's cycle edges, densely, and the voxels within the clearance of them
-        on_cycle = np.zeros(len(curve.edges), bool)
-        for i in range(nc):
-            on_cycle[branches.cycle_edges(i)] = True
-        sub = CurveSkeleton(vertices=curve.vertices, edges=curve.edges[on_cycle], vertex_map=curve.vertex_map)
-        pts, _ = densify(sub, h / 4)
-        pts = pts[np.isfinite(pts).all(axis=1)]
-        ijk = voxel_shape.index_of(pts)
-        mark = np.zeros(solid.shape, bool)
-        mark[ijk[:, 0], ijk[:, 1], ijk[:, 2]] = True
-        reach = int(np.ceil(_CLEARANCE)) + 1
-        cand = ndimage.binary_dilation(mark, structure=np.ones((3, 3, 3), bool), iterations=reach)
-        cidx = np.argwhere(cand)
-        d, _ = cKDTree(pts).query(voxel_shape.centres(cidx), distance_upper_bound=_CLEARANCE * h)
-        near = np.zeros(solid.shape, bool)
-        close = np.isfinite(d)
-        near[cidx[close, 0], cidx[close, 1], cidx[close, 2]] = True
-        solid_x = solid | near
-        # the cycles cannot go around more tunnels than the shape with the skeleton has
-        _, tunnels_x, _ = betti_numbers(solid_x)
-        order = np.argsort(lengths, kind="stable")
-        basis: list[np.ndarray] = []
-        done = 0
-        if tunnels_x:
-            flat, pairs = _collar_graph(solid_x, near)
-            loops = _CollarLoops(len(flat), pairs)
-            centres = voxel_shape.centres(np.column_stack(np.unravel_index(flat, solid.shape)))
-            # a fixed irrational nudge keeps the fan's apex off the voxel centres
-            nudge = 1e-7 * np.array([np.sqrt(2), np.sqrt(3), np.sqrt(5)])
-            # shortest first, a few at a time, until the rank reaches the tunnels of X': the rest are
-            # dependent (spurious) without a look
-            # a cycle inside a ball that lies in X' is trivial without a look (tangles of short loops)
-            depth = ndimage.distance_transform_edt(solid_x)
-            while done < nc and len(basis) < tunnels_x:
-                ids = order[done:done + 16]
-                polys = []
-                for i in ids:
-                    poly = curve.vertices[branches.cycle_polygon(i)]
-                    centre = (poly.min(axis=0) + poly.max(axis=0)) / 2
-                    rho = float(np.linalg.norm(poly - centre, axis=1).max())
-                    c_ijk = voxel_shape.index_of(centre[None])[0]
-                    polys.append(None if depth[tuple(c_ijk)] * h > rho + np.sqrt(3) * h
-                                 else simplify_polygon(poly, 0.5 * h) + nudge)
-                look = [j for j, q in enumerate(polys) if q is not None]
-                k = np.zeros((len(loops.non), len(ids)), np.int64)
-                if look:
-                    omega = np.empty((len(centres), len(look)))
-                    for col, j in enumerate(look):
-                        omega[:, col] = solid_angle_polygon(centres, polys[j])
-                    diff = omega[pairs[:, 1]] - omega[pairs[:, 0]]
-                    jumps = np.rint((np.mod(diff + 2 * np.pi, 4 * np.pi) - 2 * np.pi - diff) / (4 * np.pi)).astype(np.int64)
-                    k[:, look] = loops.linking(jumps)
-                for j, i in enumerate(ids):
-                    linking[i] = 1 if np.any(k[:, j] != 0) else 0
-                    if len(basis) < tunnels_x and _add_to_span(basis, k[:, j]):
-                        continue
-                    spurious.append(int(i))
-                done += len(ids)
-                checkpoint(0.7 + 0.25 * done / nc)
-        spurious.extend(int(i) for i in order[done:])
-        spurious.sort()
-        rank = len(basis)
+        near = _near_cycles(curve, branches, voxel_shape, solid.shape)
+        spurious, linking, rank = _classify(curve, branches, voxel_shape, solid | near, near, lengths,
+                                            lambda f: checkpoint(0.7 + 0.25 * f))
     missing = max(0, tunnels - rank)
     branch_spurious = np.zeros(len(branches), bool)
     for i in spurious:

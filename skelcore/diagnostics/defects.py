@@ -15,7 +15,7 @@ from ..params import Params
 from ..trust import TrustWarning
 from .branches import Branches, decompose_branches
 from .cycles import CycleDefects, find_cycle_defects
-from .interior import cloud_subsample
+from .interior import cloud_subsample, voxelize_interior
 from .outside import OutsideDefects, find_outside
 from .spurs import SpurDefects, find_spurious_branches
 
@@ -80,17 +80,21 @@ def find_curve_defects(
                                   cloud_tree=tree, checkpoint=lambda f: checkpoint(0.05 + 0.05 * f))
     t["branches"] = time.perf_counter() - t0
     t0 = time.perf_counter()
+    shape = voxelize_interior(cloud, voxels=params.cycles_voxels, min_spacing_factor=params.cycles_voxel_spacing,
+                              inside_share=params.beta_star, checkpoint=lambda f: checkpoint(0.1 + 0.1 * f))
+    t["interior"] = time.perf_counter() - t0
+    t0 = time.perf_counter()
     spurs = find_spurious_branches(cloud, curve, params=params, branches=branches, cloud_tree=tree,
-                                   checkpoint=lambda f: checkpoint(0.1 + 0.3 * f))
+                                   checkpoint=lambda f: checkpoint(0.2 + 0.3 * f))
     t["spurs"] = time.perf_counter() - t0
     t0 = time.perf_counter()
-    cycles = find_cycle_defects(cloud, curve, params=params, branches=branches, cloud_tree=tree,
-                                checkpoint=lambda f: checkpoint(0.4 + 0.5 * f))
+    cycles = find_cycle_defects(cloud, curve, params=params, branches=branches, cloud_tree=tree, voxel_shape=shape,
+                                checkpoint=lambda f: checkpoint(0.5 + 0.4 * f))
     t["cycles"] = time.perf_counter() - t0
     t0 = time.perf_counter()
     outside = find_outside(cloud, curve, samples=samples, sample_boundedness=sample_boundedness, skeletal=skeletal,
                            skeletal_boundedness=skeletal_boundedness, params=params, branches=branches,
-                           cloud_tree=tree, checkpoint=lambda f: checkpoint(0.9 + 0.1 * f))
+                           cloud_tree=tree, voxel_shape=shape, checkpoint=lambda f: checkpoint(0.9 + 0.1 * f))
     t["outside"] = time.perf_counter() - t0
     flagged = branches.flagged("spurious_branches", spurs.spurious)
     flagged = flagged.flagged("spurious_cycles", np.flatnonzero(cycles.branch_spurious))

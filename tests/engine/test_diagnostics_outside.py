@@ -20,25 +20,37 @@ def test_true_skeleton_is_inside(make):
     assert r.length_share < 0.01 and np.all(r.branch_radii < 0.5)
 
 
-def test_per_edge_length_follows_the_samples():
-    """Each sample stands for len_e / n_e of its edge: an edge all of whose samples are outside has
-    all its length outside, whatever the others."""
-    s = shapes.cylinder(n=2000, seed=2)
-    c, curve, samples, beta = normalized(s.cloud, s.curve_vertices, s.curve_edges)
-    beta = np.ones_like(beta)
-    beta[samples.edge == 7] = 0.2
+def test_length_outside_is_measured_along_the_edge():
+    """A straight edge from the cylinder's axis out to 2 units sideways (radius 0.5): 1.5 of its 2
+    units lie outside. The edge holds several unbounded samples; walked every half voxel, its length
+    outside is 1.5 within a voxel or two, and nothing else is outside."""
+    s = shapes.cylinder(n=4000, seed=2)
+    v, e, ids = attach_path(s.curve_vertices, s.curve_edges, 10, [2.0, 0.0, 2.0], 1)
+    c, curve, samples, beta = normalized(s.cloud, v, e)
     r = find_outside(c, curve, samples=samples, sample_boundedness=beta)
-    lengths = curve.edge_lengths()
-    assert r.edge_outside_length[7] == pytest.approx(lengths[7])
+    scale = 1.6 / 4.0  # the normalization: the longest side (4) becomes 1.6
+    spur = int(np.flatnonzero((curve.edges == [10, ids[0]]).all(axis=1))[0])
+    assert r.edge_outside_length[spur] == pytest.approx(1.5 * scale, abs=2 * r.voxel_size)
     assert np.count_nonzero(r.edge_outside_length) == 1
-    assert r.branch_outside_length.tolist() == [pytest.approx(lengths[7])]
-    assert r.length_share == pytest.approx(lengths[7] / lengths.sum())
+    assert r.length_share == pytest.approx(r.edge_outside_length[spur] / curve.edge_lengths().sum())
     assert r.vertex_flag.sum() == 2
-    # 0.2 of 4 in a 0.5 radius cylinder: 0.4 radii, below the 1-radius threshold and the 5 % share
-    assert r.warnings() == []
-    r = find_outside(c, curve, samples=samples, sample_boundedness=beta,
-                     params=Params(outside_min_radii=0.3))
-    assert [w.code for w in r.warnings()] == ["outside"]
+    assert r.depth.max() == pytest.approx(1.5 * scale / r.radius, rel=0.1)
+    (w,) = r.warnings()
+    assert w.code == "outside"
+    # the same edge in the air but its samples given as bounded: nothing is outside
+    r = find_outside(c, curve, samples=samples, sample_boundedness=np.ones_like(beta))
+    assert r.warnings() == [] and not r.edge_outside_length.any()
+
+
+def test_unbounded_samples_inside_the_voxels_are_not_outside():
+    """Boundedness can be low inside thin or partly scanned parts; a sample whose stretch lies in
+    inside voxels is not outside (the apple tree's twigs)."""
+    s = shapes.cylinder(n=4000, seed=3)
+    c, curve, samples, beta = normalized(s.cloud, s.curve_vertices, s.curve_edges)
+    low = np.where(samples.edge == 7, 0.2, beta)
+    r = find_outside(c, curve, samples=samples, sample_boundedness=low)
+    assert not r.sample_outside.any()
+    assert not r.edge_outside_length.any() and r.warnings() == []
 
 
 def test_one_edge_through_the_air_is_flagged_while_the_boundedness_stays_high():
@@ -82,7 +94,8 @@ def test_skeletal_points_outside_in_one_cluster():
     rng = np.random.default_rng(5)
     scattered = rng.choice(len(skel), 200, replace=False)
     skel_a = skel.copy()
-    skel_a[scattered] += rng.normal(scale=1.0, size=(200, 3))
+    away = rng.normal(size=(200, 3))
+    skel_a[scattered] += 3.0 * away / np.linalg.norm(away, axis=1, keepdims=True)
     beta_a = beta.copy()
     beta_a[scattered] = 0.1
     r = find_outside(c, None, skeletal=skel_a, skeletal_boundedness=beta_a)
@@ -114,7 +127,7 @@ def test_curve_defects_share_one_decomposition_and_flag_branches():
     assert d.vertex_flags()["spurious_branches"][ids].all()
     out = d.to_dict()
     assert out["spurious_branches"]["spurious"] == 1 and out["cycles"]["missing"] == 0
-    assert set(d.timings) == {"branches", "spurs", "cycles", "outside"}
+    assert set(d.timings) == {"branches", "interior", "spurs", "cycles", "outside"}
 
 
 def test_cancel_reaches_every_diagnostic():
