@@ -60,8 +60,9 @@ class Params:
     spur_reach : a terminal branch is spurious when its far end stays within spur_reach x r_J of its
         junction (r_J: the local radius at the junction) ...
     spur_unique : ... or when fewer than this share of the cloud points nearest to it lie beyond the
-        rest of the skeleton's grown balls ((1 + coverage_slack) r + tau, as coverage) ...
+        rest of the skeleton's grown balls ((1 + spur_slack) r + tau, coverage's rule) ...
     spur_min_points : ... or fewer than this many points do (both: it explains almost nothing).
+    spur_slack : see spur_unique.
     spurs_warn_count : ``spurious_branches`` fires from this many spurious branches.
     cycles_voxels : voxels along the longest side of the cloud's box for the shape's interior ...
     cycles_voxel_spacing : ... but a voxel is at least this many median nearest-neighbour spacings
@@ -110,6 +111,7 @@ class Params:
     spur_reach: float = 1.0
     spur_unique: float = 0.1
     spur_min_points: int = 5
+    spur_slack: float = 0.25
     spurs_warn_count: int = 1
     cycles_voxels: int = 96
     cycles_voxel_spacing: float = 1.5
@@ -163,6 +165,8 @@ class Params:
                      "cycles_warn_missing"):
             if int(getattr(self, name)) < 1:
                 bad(name, "must be a positive integer")
+        if not float(self.spur_slack) >= 0:
+            bad("spur_slack", "must be >= 0")
         if int(self.spur_min_points) < 0:
             bad("spur_min_points", "must be >= 0")
 

@@ -8,7 +8,7 @@ classical significance measures fails:
   the medial ball at J (distance from J to the cloud): it does not leave the junction's ball;
 - **explanation**: the cloud points nearest to it (its territory) are explained by the rest of the
   skeleton as well: a point is explained by an element x (curve point, every ``diag_step`` local
-  radii) when it lies within (1 + ``coverage_slack``) r(x) + tau of it, coverage's rule (SPEC 8). The
+  radii) when it lies within (1 + ``spur_slack``) r(x) + tau of it (coverage's rule, SPEC 8). The
   branch is spurious when fewer than ``spur_min_points`` of its territory, or less than
   ``spur_unique`` of it, are explained by nothing else.
 
@@ -177,7 +177,7 @@ def find_spurious_branches(
         checkpoint(0.2)
         use = cloud_subsample(cloud, params.diag_max_points, seed)
         tau = params.coverage_tau_factor * median_spacing(cloud)
-        explain = (1.0 + params.coverage_slack) * r_x + tau
+        explain = (1.0 + params.spur_slack) * r_x + tau
         ptree = cKDTree(pts)
         _, near = ptree.query(use)
         own = pb[near]
