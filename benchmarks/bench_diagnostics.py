@@ -267,7 +267,7 @@ def defects(size: int, seeds: int, noises: list[float]) -> None:
                     d, _ = diagnose(s.cloud, v, e)
                     record("shortcut", "-", name, "outside", codes_of(d))
                 # a branch out of the shape
-                for out in (1.0, 3.0, 10.0):
+                for out in (0.5, 1.0, 3.0, 10.0):
                     v, e = out_branch(s, out, rng)
                     d, _ = diagnose(s.cloud, v, e)
                     record("branch outside", f"{out:g} r out", name, "outside", codes_of(d))

@@ -70,10 +70,12 @@ class Params:
     cycles_warn_spurious, cycles_warn_missing : ``spurious_cycles`` / ``missing_cycles`` fire from
         this many spurious / missing cycles.
     outside_min_radii : ``outside`` fires when a branch has at least this many local radii of
-        length outside the shape (its curve samples with boundedness <= beta_star) ...
+        length outside the shape (where its curve samples have boundedness <= beta_star and the
+        cycle test's voxels are not inside) ...
     outside_min_share : ... or at least this share of the curve's length is outside.
     outside_skeletal_share : ``outside`` fires when more than this share of a skeletal point set
-        is outside in one connected cluster (points within outside_link x its median spacing).
+        is outside (unbounded, in no inside voxel) in one cluster (points within outside_link x the
+        cloud's median spacing).
     outside_link : see outside_skeletal_share.
     """
 
@@ -117,7 +119,7 @@ class Params:
     cycles_voxel_spacing: float = 1.5
     cycles_warn_spurious: int = 1
     cycles_warn_missing: int = 1
-    outside_min_radii: float = 1.0
+    outside_min_radii: float = 0.5
     outside_min_share: float = 0.05
     outside_skeletal_share: float = 0.05
     outside_link: float = 3.0
