@@ -51,6 +51,32 @@ class Params:
         times larger (or smaller, when it also lies outside) than the cloud's.
     collapse_extent : the ``collapse`` warning fires when the skeleton's bounding-box diagonal is
         below this fraction of the cloud's.
+
+    Diagnostics (docs/diagnostics.md; local radius r = distance from a curve point to the cloud):
+
+    diag_max_points : the spur test explains at most this many cloud points (a random subsample
+        beyond; the result says so).
+    diag_step : the curve is walked every diag_step x its median local radius.
+    spur_reach : a terminal branch is spurious when its far end stays within spur_reach x r_J of its
+        junction (r_J: the local radius at the junction) ...
+    spur_unique : ... or when fewer than this share of the cloud points nearest to it lie beyond the
+        rest of the skeleton's grown balls ((1 + spur_slack) r + tau, coverage's rule) ...
+    spur_min_points : ... or fewer than this many points do (both: it explains almost nothing).
+    spur_slack : see spur_unique.
+    spurs_warn_count : ``spurious_branches`` fires from this many spurious branches.
+    cycles_voxels : voxels along the longest side of the cloud's box for the shape's interior ...
+    cycles_voxel_spacing : ... but a voxel is at least this many median nearest-neighbour spacings
+        of the cloud wide, so that the surface's voxels close.
+    cycles_warn_spurious, cycles_warn_missing : ``spurious_cycles`` / ``missing_cycles`` fire from
+        this many spurious / missing cycles.
+    outside_min_radii : ``outside`` fires when a branch has at least this many local radii of
+        length outside the shape (where its curve samples have boundedness <= beta_star and the
+        cycle test's voxels are not inside) ...
+    outside_min_share : ... or at least this share of the curve's length is outside.
+    outside_skeletal_share : ``outside`` fires when more than this share of a skeletal point set
+        is outside (unbounded, in no inside voxel) in one cluster (points within outside_link x the
+        cloud's median spacing).
+    outside_link : see outside_skeletal_share.
     """
 
     normalize_by: Literal["longest_side", "diagonal"] = "longest_side"
@@ -81,6 +107,22 @@ class Params:
     frame_inside_fraction: float = 0.5
     frame_extent_ratio: float = 10.0
     collapse_extent: float = 0.1
+    # diagnostics: branches, spurs, cycles, outside (docs/diagnostics.md)
+    diag_max_points: int = 200_000
+    diag_step: float = 0.25
+    spur_reach: float = 1.0
+    spur_unique: float = 0.1
+    spur_min_points: int = 5
+    spur_slack: float = 0.25
+    spurs_warn_count: int = 1
+    cycles_voxels: int = 96
+    cycles_voxel_spacing: float = 1.5
+    cycles_warn_spurious: int = 1
+    cycles_warn_missing: int = 1
+    outside_min_radii: float = 0.5
+    outside_min_share: float = 0.05
+    outside_skeletal_share: float = 0.05
+    outside_link: float = 3.0
 
     def __post_init__(self) -> None:
         def bad(name: str, why: str) -> None:
@@ -115,6 +157,20 @@ class Params:
             bad("rays_near_angle", "must be in (0, 1)")
         if self.k_center is not None and int(self.k_center) < 1:
             bad("k_center", "must be a positive integer or None")
+        for name in ("diag_step", "spur_reach", "cycles_voxel_spacing", "outside_min_radii", "outside_link"):
+            if not float(getattr(self, name)) > 0:
+                bad(name, "must be > 0")
+        for name in ("spur_unique", "outside_min_share", "outside_skeletal_share"):
+            if not 0.0 <= float(getattr(self, name)) <= 1.0:
+                bad(name, "must be in [0, 1]")
+        for name in ("diag_max_points", "cycles_voxels", "spurs_warn_count", "cycles_warn_spurious",
+                     "cycles_warn_missing"):
+            if int(getattr(self, name)) < 1:
+                bad(name, "must be a positive integer")
+        if not float(self.spur_slack) >= 0:
+            bad("spur_slack", "must be >= 0")
+        if int(self.spur_min_points) < 0:
+            bad("spur_min_points", "must be >= 0")
 
     def replace(self, **changes: Any) -> "Params":
         """A copy with some fields changed; an unknown name fails loudly."""

@@ -1,0 +1,102 @@
+"""All of a curve skeleton's defects at once (issue 22, items 1 and 3-5): one KD-tree of the cloud
+and one branch decomposition shared by the spurious-branch, cycle and outside diagnostics, and the
+branches flagged with what each found (docs/diagnostics.md)."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..curve import CurveSkeleton
+from ..curve_sampling import CurveSamples
+from ..geometry import Checkpoint, kd_tree, no_checkpoint
+from ..params import Params
+from ..trust import TrustWarning
+from .branches import Branches, decompose_branches
+from .cycles import CycleDefects, find_cycle_defects
+from .interior import cloud_subsample, voxelize_interior
+from .outside import OutsideDefects, find_outside
+from .spurs import SpurDefects, find_spurious_branches
+
+__all__ = ["CurveDefects", "find_curve_defects"]
+
+
+@dataclass
+class CurveDefects:
+    """The branches (flagged ``spurious_branches``, ``spurious_cycles``, ``outside``) and each
+    diagnostic's result; per-element defect flags by code."""
+
+    branches: Branches
+    spurs: SpurDefects
+    cycles: CycleDefects
+    outside: OutsideDefects
+    timings: dict
+
+    def warnings(self) -> list[TrustWarning]:
+        return self.spurs.warnings() + self.cycles.warnings() + self.outside.warnings()
+
+    def vertex_flags(self) -> dict[str, np.ndarray]:
+        return {"spurious_branches": self.spurs.vertex_flag, "spurious_cycles": self.cycles.vertex_flag,
+                "outside": self.outside.vertex_flag}
+
+    def sample_flags(self) -> dict[str, np.ndarray | None]:
+        return {"spurious_branches": self.spurs.sample_flag, "spurious_cycles": self.cycles.sample_flag,
+                "outside": self.outside.sample_outside}
+
+    def to_dict(self) -> dict:
+        return {
+            "branches": self.branches.to_dict(),
+            "spurious_branches": self.spurs.to_dict(),
+            "cycles": self.cycles.to_dict(),
+            "outside": self.outside.to_dict(),
+            "warnings": [w.to_dict() for w in self.warnings()],
+        }
+
+
+def find_curve_defects(
+    cloud: np.ndarray,
+    curve: CurveSkeleton,
+    *,
+    samples: CurveSamples | None = None,
+    sample_boundedness: np.ndarray | None = None,
+    skeletal: np.ndarray | None = None,
+    skeletal_boundedness: np.ndarray | None = None,
+    params: Params = Params(),
+    checkpoint: Checkpoint = no_checkpoint,
+) -> CurveDefects:
+    """Branches, spurious branches, cycles and the parts outside of ``curve`` (and of ``skeletal``),
+    all normalized (SPEC 0); ``sample_boundedness`` are the boundedness values of ``samples``. The
+    local radii come from at most ``diag_max_points`` of the cloud (``spurs.subsampled`` says when)."""
+    import time
+
+    t: dict[str, float] = {}
+    t0 = time.perf_counter()
+    cloud = np.asarray(cloud, dtype=float)
+    # the local radii from at most diag_max_points of the cloud (a 1M-point tree costs 1-2 s; the
+    # radii grow by about the subsample's spacing, a few % of a radius)
+    tree = kd_tree(cloud_subsample(cloud, params.diag_max_points), lambda f: checkpoint(0.05 * f))
+    branches = decompose_branches(curve, cloud=cloud, sample_edge=None if samples is None else samples.edge,
+                                  cloud_tree=tree, checkpoint=lambda f: checkpoint(0.05 + 0.05 * f))
+    t["branches"] = time.perf_counter() - t0
+    t0 = time.perf_counter()
+    shape = voxelize_interior(cloud, voxels=params.cycles_voxels, min_spacing_factor=params.cycles_voxel_spacing,
+                              inside_share=params.beta_star, checkpoint=lambda f: checkpoint(0.1 + 0.1 * f))
+    t["interior"] = time.perf_counter() - t0
+    t0 = time.perf_counter()
+    spurs = find_spurious_branches(cloud, curve, params=params, branches=branches, cloud_tree=tree,
+                                   checkpoint=lambda f: checkpoint(0.2 + 0.3 * f))
+    t["spurs"] = time.perf_counter() - t0
+    t0 = time.perf_counter()
+    cycles = find_cycle_defects(cloud, curve, params=params, branches=branches, cloud_tree=tree, voxel_shape=shape,
+                                checkpoint=lambda f: checkpoint(0.5 + 0.4 * f))
+    t["cycles"] = time.perf_counter() - t0
+    t0 = time.perf_counter()
+    outside = find_outside(cloud, curve, samples=samples, sample_boundedness=sample_boundedness, skeletal=skeletal,
+                           skeletal_boundedness=skeletal_boundedness, params=params, branches=branches,
+                           cloud_tree=tree, voxel_shape=shape, checkpoint=lambda f: checkpoint(0.9 + 0.1 * f))
+    t["outside"] = time.perf_counter() - t0
+    flagged = branches.flagged("spurious_branches", spurs.spurious)
+    flagged = flagged.flagged("spurious_cycles", np.flatnonzero(cycles.branch_spurious))
+    flagged = flagged.flagged("outside", outside.defective_branches())
+    return CurveDefects(branches=flagged, spurs=spurs, cycles=cycles, outside=outside, timings=t)

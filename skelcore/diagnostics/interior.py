@@ -1,0 +1,182 @@
+"""The shape's interior as voxels, and its Betti numbers (issue 22, item 4; docs/diagnostics.md
+"Cycles").
+
+A voxel is inside when it holds cloud points or when the rays from its centre along the 26 lattice
+directions hit the (one voxel thicker) cloud-holding voxels in more than beta* of them: SPEC 2's
+boundedness (the share of rays from a point that hit the sampled surface), on the voxel lattice.
+Scoring every voxel with the ``rays`` estimator itself would cost 13 s for a 48-voxel torus of 4096
+points; the lattice rays cost a few sweeps over the grid at any cloud size.
+
+The interior is the union of its closed voxel cubes; its Betti numbers come from the Euler
+characteristic (beta1 = beta0 + beta2 - chi), beta0 from its 26-connected components and beta2 from
+the 6-connected components of the rest that do not reach the grid's border (cavities).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from scipy import ndimage
+
+from ..geometry import Checkpoint, bounding_box, no_checkpoint
+
+__all__ = ["VoxelShape", "voxelize_interior", "betti_numbers", "median_spacing", "cloud_subsample",
+           "LATTICE_DIRECTIONS"]
+
+#: the 26 lattice directions (each component -1, 0 or 1, not all 0)
+LATTICE_DIRECTIONS = np.array([(a, b, c) for a in (-1, 0, 1) for b in (-1, 0, 1) for c in (-1, 0, 1)
+                               if (a, b, c) != (0, 0, 0)], dtype=np.int64)
+#: empty voxels around the cloud's box, so the outside is one component touching the border
+PAD = 3
+
+
+@dataclass
+class VoxelShape:
+    """The interior on a grid: voxel (i, j, k) has centre ``origin + (i, j, k) * size``.
+
+    inside : bool (nx, ny, nz). occupied : voxels holding cloud points. hits : the share of the
+    26 lattice rays from each voxel that meet the surface voxels.
+    """
+
+    inside: np.ndarray
+    occupied: np.ndarray
+    hits: np.ndarray
+    origin: np.ndarray
+    size: float
+
+    def index_of(self, points: np.ndarray) -> np.ndarray:
+        """(n, 3) voxel indices of points (clipped to the grid)."""
+        ijk = np.floor((np.asarray(points, float) - self.origin) / self.size + 0.5).astype(np.int64)
+        return np.clip(ijk, 0, np.array(self.inside.shape) - 1)
+
+    def centres(self, ijk: np.ndarray) -> np.ndarray:
+        return self.origin + np.asarray(ijk, float) * self.size
+
+
+def _shifted(a: np.ndarray, d1: int, d2: int) -> np.ndarray:
+    """out[i, j] = a[i + d1, j + d2], False outside."""
+    out = np.zeros_like(a)
+    n1, n2 = a.shape
+    s1 = slice(max(0, -d1), n1 - max(0, d1))
+    s2 = slice(max(0, -d2), n2 - max(0, d2))
+    t1 = slice(max(0, d1), n1 - max(0, -d1))
+    t2 = slice(max(0, d2), n2 - max(0, -d2))
+    out[s1, s2] = a[t1, t2]
+    return out
+
+
+def _ray_hits(target: np.ndarray, d: np.ndarray) -> np.ndarray:
+    """hit[v] = some target voxel at v + t d, t >= 1: one sweep of 2-D slices against ``d``."""
+    axis = int(np.flatnonzero(d)[0])
+    step = int(d[axis])
+    others = [a for a in range(3) if a != axis]
+    tg = np.moveaxis(target, axis, 0)
+    hit = np.zeros_like(tg)
+    n = tg.shape[0]
+    rng = range(n - 2, -1, -1) if step > 0 else range(1, n)
+    d1, d2 = int(d[others[0]]), int(d[others[1]])
+    for i in rng:
+        j = i + step
+        hit[i] = _shifted(tg[j] | hit[j], d1, d2)
+    return np.moveaxis(hit, 0, axis)
+
+
+def cloud_subsample(cloud: np.ndarray, max_points: int, seed: int = 0) -> np.ndarray:
+    """The cloud itself, or a random subset of ``max_points`` of its rows (in their order) when larger:
+    the same subset for the same cloud, size and seed."""
+    cloud = np.asarray(cloud, dtype=float)
+    if len(cloud) <= max_points:
+        return cloud
+    pick = np.random.default_rng(seed).choice(len(cloud), int(max_points), replace=False)
+    return cloud[np.sort(pick)]
+
+
+def median_spacing(cloud: np.ndarray, max_points: int = 20000) -> float:
+    """The cloud's median nearest-neighbour spacing, from a random subsample of at most
+    ``max_points`` (seed 0) scaled by sqrt(m / n): a surface sample's spacing shrinks as
+    1 / sqrt(density). Exact for clouds of at most ``max_points``."""
+    from scipy.spatial import cKDTree
+
+    cloud = np.asarray(cloud, dtype=float)
+    n = len(cloud)
+    if n < 2:
+        return 0.0
+    m = min(n, int(max_points))
+    sub = cloud if m == n else cloud[np.random.default_rng(0).choice(n, m, replace=False)]
+    d, _ = cKDTree(sub).query(sub, k=2)
+    return float(np.median(d[:, 1])) * float(np.sqrt(m / n))
+
+
+def voxelize_interior(
+    cloud: np.ndarray,
+    *,
+    voxels: int = 96,
+    min_spacing_factor: float = 1.0,
+    inside_share: float = 0.75,
+    checkpoint: Checkpoint = no_checkpoint,
+) -> VoxelShape:
+    """Voxelize the solid bounded by ``cloud``.
+
+    The voxel size is the larger of (longest box side / ``voxels``) and ``min_spacing_factor`` x the
+    cloud's median nearest-neighbour spacing (estimated on at most 20 000 points), so that the
+    cloud-holding voxels, grown by one, close the surface. A voxel is inside when it holds points or
+    more than ``inside_share`` of its 26 lattice rays hit the grown surface.
+    """
+    cloud = np.asarray(cloud, dtype=float)
+    lo, hi = bounding_box(cloud)
+    longest = float(np.max(hi - lo)) or 1.0
+    spacing = median_spacing(cloud)
+    size = max(longest / max(int(voxels), 4), min_spacing_factor * spacing)
+    origin = lo - PAD * size
+    shape = tuple(int(s) for s in np.floor((hi - lo) / size + 0.5).astype(np.int64) + 2 * PAD + 1)
+    ijk = np.floor((cloud - origin) / size + 0.5).astype(np.int64)
+    occ = np.zeros(shape, bool)
+    occ[ijk[:, 0], ijk[:, 1], ijk[:, 2]] = True
+    checkpoint(0.2)
+    grown = ndimage.binary_dilation(occ, structure=np.ones((3, 3, 3), bool))
+    count = np.zeros(shape, np.uint8)
+    for k, dvec in enumerate(LATTICE_DIRECTIONS):
+        count += _ray_hits(grown, dvec)
+        checkpoint(0.2 + 0.8 * (k + 1) / len(LATTICE_DIRECTIONS))
+    hits = count / float(len(LATTICE_DIRECTIONS))
+    inside = occ | (hits > inside_share)
+    return VoxelShape(inside=inside, occupied=occ, hits=hits, origin=origin, size=size)
+
+
+def betti_numbers(solid: np.ndarray) -> tuple[int, int, int]:
+    """(beta0, beta1, beta2) of the union of the closed unit cubes of ``solid`` (a bool grid with
+    an empty border): chi = V - E + F - C counted on the cubical complex."""
+    s = np.pad(np.asarray(solid, bool), 1)
+    c = int(s.sum())
+    # a face normal to axis a lies between the two cubes beside it along a
+    faces = sum(int((s[tuple(slice(None, -1) if ax == a else slice(None) for ax in range(3))]
+                     | s[tuple(slice(1, None) if ax == a else slice(None) for ax in range(3))]).sum())
+                for a in range(3))
+    # an edge along axis a lies between the 4 cubes around it (the other two axes shifted by 0 / 1)
+    edges = 0
+    for a in range(3):
+        o = [ax for ax in range(3) if ax != a]
+        acc = None
+        for s1 in (0, 1):
+            for s2 in (0, 1):
+                sl = [slice(None)] * 3
+                sl[o[0]] = slice(s1, s.shape[o[0]] - 1 + s1)
+                sl[o[1]] = slice(s2, s.shape[o[1]] - 1 + s2)
+                part = s[tuple(sl)]
+                acc = part if acc is None else acc | part
+        edges += int(acc.sum())
+    acc = None
+    for s1 in (0, 1):
+        for s2 in (0, 1):
+            for s3 in (0, 1):
+                part = s[s1:s.shape[0] - 1 + s1, s2:s.shape[1] - 1 + s2, s3:s.shape[2] - 1 + s3]
+                acc = part if acc is None else acc | part
+    verts = int(acc.sum())
+    chi = verts - edges + faces - c
+    _, b0 = ndimage.label(s, structure=np.ones((3, 3, 3), bool))
+    lab, nc = ndimage.label(~s)
+    border = np.unique(np.concatenate([lab[0].ravel(), lab[-1].ravel(), lab[:, 0].ravel(), lab[:, -1].ravel(),
+                                       lab[:, :, 0].ravel(), lab[:, :, -1].ravel()]))
+    b2 = int(nc - np.count_nonzero(border))
+    return int(b0), int(b0 + b2 - chi), b2

@@ -1,0 +1,34 @@
+"""Shared helpers of the diagnostics tests: a shape's normalized cloud and curve, its curve samples
+and their boundedness (the values the evaluation passes to the diagnostics)."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from skelcore import Params
+from skelcore.curve import CurveSkeleton
+from skelcore.curve_sampling import sample_curve
+from skelcore.geometry import Normalization
+from skelcore.metrics.boundedness import boundedness
+
+
+def normalized(cloud: np.ndarray, verts: np.ndarray, edges: np.ndarray, params: Params = Params()):
+    """(normalized cloud, normalized curve, curve samples, their boundedness)."""
+    norm = Normalization.from_cloud(cloud, params.normalize_by, params.normalized_size)
+    c = norm.apply(cloud)
+    curve = CurveSkeleton.from_raw(norm.apply(verts), edges)
+    samples = sample_curve(curve, params.curve_samples, collinear_cos=params.collinear_cos)
+    return c, curve, samples, boundedness(c, samples.points, params=params)
+
+
+def attach_path(verts: np.ndarray, edges: np.ndarray, start: int, end_point: np.ndarray, pieces: int,
+                to: int | None = None) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """A path of ``pieces`` edges from vertex ``start`` to ``end_point`` (or on to vertex ``to``):
+    (vertices, edges, ids of the new vertices)."""
+    a = verts[start]
+    pts = a + np.linspace(0, 1, pieces + 1)[1:, None] * (np.asarray(end_point) - a)
+    if to is not None:
+        pts = pts[:-1]
+    ids = np.arange(len(verts), len(verts) + len(pts))
+    chain = np.concatenate([[start], ids] + ([[to]] if to is not None else []))
+    return np.vstack([verts, pts]), np.vstack([edges, np.column_stack([chain[:-1], chain[1:]])]), ids

@@ -1,0 +1,171 @@
+"""Curve length and skeletal points outside the shape (skelcore/diagnostics/outside.py; issue 22, 5)."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from diagnostics_helpers import attach_path, normalized
+
+from skelcore import Params, shapes
+from skelcore.diagnostics import find_curve_defects, find_outside
+from skelcore.geometry import Normalization
+
+
+@pytest.mark.parametrize("make", [shapes.y_shape, shapes.t_shape, shapes.torus, shapes.genus2, shapes.tree3])
+def test_true_skeleton_is_inside(make):
+    s = shapes.with_noise(make(n=3000, seed=1), 0.03, seed=1)
+    c, curve, samples, beta = normalized(s.cloud, s.curve_vertices, s.curve_edges)
+    r = find_outside(c, curve, samples=samples, sample_boundedness=beta)
+    assert r.warnings() == []
+    assert r.length_share < 0.01 and np.all(r.branch_radii < 0.5)
+
+
+def test_length_outside_is_measured_along_the_edge():
+    """A straight edge from the cylinder's axis out to 2 units sideways (radius 0.5): 1.5 of its 2
+    units lie outside. The edge holds several unbounded samples; walked every half voxel, its length
+    outside is 1.5 within a voxel or two, and nothing else is outside."""
+    s = shapes.cylinder(n=4000, seed=2)
+    v, e, ids = attach_path(s.curve_vertices, s.curve_edges, 10, [2.0, 0.0, 2.0], 1)
+    c, curve, samples, beta = normalized(s.cloud, v, e)
+    r = find_outside(c, curve, samples=samples, sample_boundedness=beta)
+    scale = 1.6 / 4.0  # the normalization: the longest side (4) becomes 1.6
+    spur = int(np.flatnonzero((curve.edges == [10, ids[0]]).all(axis=1))[0])
+    assert r.edge_outside_length[spur] == pytest.approx(1.5 * scale, abs=2 * r.voxel_size)
+    assert np.count_nonzero(r.edge_outside_length) == 1
+    assert r.length_share == pytest.approx(r.edge_outside_length[spur] / curve.edge_lengths().sum())
+    assert r.vertex_flag.sum() == 2
+    assert r.depth.max() == pytest.approx(1.5 * scale / r.radius, rel=0.1)
+    (w,) = r.warnings()
+    assert w.code == "outside"
+    # the same edge in the air but its samples given as bounded: nothing is outside
+    r = find_outside(c, curve, samples=samples, sample_boundedness=np.ones_like(beta))
+    assert r.warnings() == [] and not r.edge_outside_length.any()
+
+
+def test_unbounded_samples_inside_the_voxels_are_not_outside():
+    """Boundedness can be low inside thin or partly scanned parts; a sample whose stretch lies in
+    inside voxels is not outside (the apple tree's twigs)."""
+    s = shapes.cylinder(n=4000, seed=3)
+    c, curve, samples, beta = normalized(s.cloud, s.curve_vertices, s.curve_edges)
+    low = np.where(samples.edge == 7, 0.2, beta)
+    r = find_outside(c, curve, samples=samples, sample_boundedness=low)
+    assert not r.sample_outside.any()
+    assert not r.edge_outside_length.any() and r.warnings() == []
+
+
+def test_one_edge_through_the_air_is_flagged_while_the_boundedness_stays_high():
+    """The T's stem tip joined to a bar end by a straight edge through the air."""
+    s = shapes.t_shape(n=4000, seed=3)
+    v = s.curve_vertices
+    a, b = int(np.argmin(v[:, 2])), int(np.argmin(v[:, 0]))
+    v2, e2, ids = attach_path(v, s.curve_edges, a, v[b], 1, to=b)
+    c, curve, samples, beta = normalized(s.cloud, v2, e2)
+    r = find_outside(c, curve, samples=samples, sample_boundedness=beta)
+    (w,) = r.warnings()
+    assert w.code == "outside"
+    e_new = np.flatnonzero((curve.edges == sorted([a, b])).all(axis=1))
+    assert r.edge_outside_length[e_new[0]] > 0.5 * curve.edge_lengths()[e_new[0]]
+    assert r.depth.max() > 1
+    # the overall curve boundedness stays high: one edge is not much of the length
+    assert np.mean(beta > 0.75) > 0.6
+
+
+@pytest.mark.parametrize("out", [1.0, 3.0])
+def test_branch_poking_out_is_flagged(out):
+    s = shapes.tree3(n=4000, seed=4)
+    v = s.curve_vertices
+    trunk = np.flatnonzero((np.abs(v[:, 0]) < 1e-12) & (np.abs(v[:, 1]) < 1e-12) & (v[:, 2] > 0.6) & (v[:, 2] < 1.4))
+    a = int(trunk[0])
+    v2, e2, ids = attach_path(v, s.curve_edges, a, v[a] + [0, (1 + out) * 0.22, 0], 4)
+    c, curve, samples, beta = normalized(s.cloud, v2, e2)
+    r = find_outside(c, curve, samples=samples, sample_boundedness=beta)
+    assert [w.code for w in r.warnings()] == ["outside"]
+    bad = r.defective_branches()
+    assert r.branches.vertex_branch[ids[-1]] in bad
+
+
+def test_skeletal_points_outside_in_one_cluster():
+    s = shapes.t_shape(n=4000, seed=5)
+    norm = Normalization.from_cloud(s.cloud)
+    c = norm.apply(s.cloud)
+    skel = norm.apply(s.skeletal)
+    beta = np.ones(len(skel))
+    # scattered: 5 % of the points, far apart from each other -> no warning
+    rng = np.random.default_rng(5)
+    scattered = rng.choice(len(skel), 200, replace=False)
+    skel_a = skel.copy()
+    away = rng.normal(size=(200, 3))
+    skel_a[scattered] += 3.0 * away / np.linalg.norm(away, axis=1, keepdims=True)
+    beta_a = beta.copy()
+    beta_a[scattered] = 0.1
+    r = find_outside(c, None, skeletal=skel_a, skeletal_boundedness=beta_a)
+    assert r.skeletal_outside.sum() == 200 and r.skeletal_cluster_share < 0.01 and r.warnings() == []
+    # one cluster of 8 % of the points, 1 unit outside the bar
+    skel_b = skel.copy()
+    group = rng.choice(len(skel), 320, replace=False)
+    skel_b[group] = norm.apply(np.array([[0.0, 1.5, 0.0]])) + rng.normal(scale=0.01, size=(320, 3))
+    beta_b = beta.copy()
+    beta_b[group] = 0.05
+    r = find_outside(c, None, skeletal=skel_b, skeletal_boundedness=beta_b)
+    assert r.skeletal_cluster_share == pytest.approx(0.08)
+    (w,) = r.warnings()
+    assert w.code == "outside" and "8.0%" in w.message
+    assert r.to_dict()["skeletal"]["largest_cluster_share"] == pytest.approx(0.08)
+
+
+def test_curve_defects_share_one_decomposition_and_flag_branches():
+    s = shapes.t_shape(n=3000, seed=6)
+    v = s.curve_vertices
+    a = int(np.argmin(np.abs(v[:, 0] - 1.0) + np.abs(v[:, 2])))
+    v2, e2, ids = attach_path(v, s.curve_edges, a, v[a] + [0, 0.1, 0], 1)
+    c, curve, samples, beta = normalized(s.cloud, v2, e2)
+    d = find_curve_defects(c, curve, samples=samples, sample_boundedness=beta)
+    assert d.spurs.branches is d.cycles.branches is d.outside.branches
+    assert [w.code for w in d.warnings()] == ["spurious_branches"]
+    spur = d.branches.vertex_branch[ids[-1]]
+    assert d.branches.flags[spur] == ("spurious_branches",)
+    assert d.vertex_flags()["spurious_branches"][ids].all()
+    out = d.to_dict()
+    assert out["spurious_branches"]["spurious"] == 1 and out["cycles"]["missing"] == 0
+    assert set(d.timings) == {"branches", "interior", "spurs", "cycles", "outside"}
+
+
+def test_cancel_reaches_every_diagnostic():
+    from skelcore import Cancelled
+
+    s = shapes.torus(n=3000, seed=7)
+    c, curve, samples, beta = normalized(s.cloud, s.curve_vertices, s.curve_edges)
+    calls = []
+
+    def stop_after(n):
+        def check(f):
+            calls.append(f)
+            if len(calls) > n:
+                raise Cancelled("stop")
+        return check
+
+    with pytest.raises(Cancelled):
+        find_curve_defects(c, curve, samples=samples, sample_boundedness=beta, checkpoint=stop_after(3))
+    calls.clear()
+    find_curve_defects(c, curve, samples=samples, sample_boundedness=beta, checkpoint=stop_after(10**6))
+    assert calls[-1] == pytest.approx(1.0) and len(calls) > 10
+    assert all(b >= a - 1e-12 for a, b in zip(calls, calls[1:]))  # progress never goes back
+
+
+@pytest.mark.parametrize("change", [{"spur_reach": 0}, {"spur_unique": 1.5}, {"cycles_voxels": 0},
+                                    {"outside_min_radii": -1}, {"spur_min_points": -1}])
+def test_diagnostic_params_are_validated(change):
+    with pytest.raises(ValueError, match=next(iter(change))):
+        Params(**change)
+
+
+def test_hammer_with_our_skeletonizers_has_no_defect(shared_data):
+    import skelcore
+
+    cloud = skelcore.load_cloud(str(shared_data / "hammer_4096.ply"))
+    for method in ("cao", "skelscope"):
+        _, raw = skelcore.skeletonize(cloud, method=method)
+        c, curve, samples, beta = normalized(cloud, raw.vertices, raw.edges)
+        d = find_curve_defects(c, curve, samples=samples, sample_boundedness=beta)
+        assert d.warnings() == [], (method, [w.message for w in d.warnings()])
+        assert d.branches.kind.count("terminal") == 3 and d.cycles.shape_tunnels == 0
