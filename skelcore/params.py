@@ -51,6 +51,19 @@ class Params:
         times larger (or smaller, when it also lies outside) than the cloud's.
     collapse_extent : the ``collapse`` warning fires when the skeleton's bounding-box diagonal is
         below this fraction of the cloud's.
+    missing_depth : a region of unexplained cloud points (not covered, see coverage_slack) counts as a
+        missing part (warning ``incomplete``) when it reaches this many local radii beyond the balls at
+        its border (depth: its points' missing_depth_quantile gap over the median radius of the balls
+        nearest its border); a contraction stopping a radius short of a rounded end reaches < 1
+        (docs/diagnostics.md "Missing parts").
+    missing_min_share : ... and when it holds at least this share of the cloud (noise, a few points).
+    missing_depth_quantile : quantile of a region's gaps taken as its reach (robust to stray points).
+    missing_link_factor : unexplained points closer than this many median NN spacings are one region.
+    missing_max_points : above this many cloud points the missing parts are found on a random
+        subsample of this many and every cloud point takes its nearest sample's verdict (the result
+        says so; docs/diagnostics.md gives the verdicts unchanged).
+    missing_max_elements : a skeletal set with more distinct points is thinned to one point per cell
+        of half the cloud's median spacing before its balls are built.
     """
 
     normalize_by: Literal["longest_side", "diagonal"] = "longest_side"
@@ -81,6 +94,14 @@ class Params:
     frame_inside_fraction: float = 0.5
     frame_extent_ratio: float = 10.0
     collapse_extent: float = 0.1
+
+    # diagnostics: missing parts (docs/diagnostics.md)
+    missing_depth: float = 1.5
+    missing_min_share: float = 0.01
+    missing_depth_quantile: float = 0.95
+    missing_link_factor: float = 4.0
+    missing_max_points: int = 200_000
+    missing_max_elements: int = 50_000
 
     def __post_init__(self) -> None:
         def bad(name: str, why: str) -> None:
@@ -113,6 +134,15 @@ class Params:
             bad("coverage_max_points", "must be >= 0")
         if not 0.0 < float(self.rays_near_angle) < 1.0:
             bad("rays_near_angle", "must be in (0, 1)")
+        for name in ("missing_depth", "missing_link_factor"):
+            if not float(getattr(self, name)) > 0:
+                bad(name, "must be > 0")
+        for name in ("missing_min_share", "missing_depth_quantile"):
+            if not 0.0 <= float(getattr(self, name)) <= 1.0:
+                bad(name, "must be in [0, 1]")
+        for name in ("missing_max_points", "missing_max_elements"):
+            if int(getattr(self, name)) < 1000:
+                bad(name, "must be an integer >= 1000")
         if self.k_center is not None and int(self.k_center) < 1:
             bad("k_center", "must be a positive integer or None")
 

@@ -1,0 +1,289 @@
+"""Missing parts: the parts of the shape a skeleton does not reach, and its completeness (issue 22,
+item 2; docs/diagnostics.md "Missing parts", "Completeness").
+
+A cloud point is explained when a skeleton element's medial ball, grown by the coverage slack,
+reaches it (SPEC 8, :mod:`skelcore.metrics.coverage`); completeness is the share explained. The
+unexplained points are linked into regions of the cloud (neighbours closer than
+``missing_link_factor`` median spacings). A region's depth is how far it reaches beyond the balls
+at its border, in their radius: its points' ``missing_depth_quantile`` gap over the median radius of
+the balls nearest its least-gap points. A contraction stopping a radius short of a rounded end
+leaves regions under one radius deep; a missing arm or half handle reaches several. A region
+counts (warning ``incomplete``) when depth >= ``missing_depth`` and share >= ``missing_min_share``.
+Above ``missing_max_points`` cloud points the work runs on a random subsample and every cloud point
+takes its nearest sample's verdict (``subsample`` says so).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Callable
+
+import numpy as np
+from scipy.sparse import coo_matrix
+from scipy.sparse.csgraph import connected_components
+from scipy.spatial import cKDTree
+
+from ..correspondence import densify_curve
+from ..curve import CurveSkeleton
+from ..geometry import Checkpoint, no_checkpoint, unique_rows
+from ..metrics.coverage import Coverage, coverage, coverage_tau
+from ..params import Params
+from ..trust import TrustWarning
+
+__all__ = ["MissingRegion", "MissingParts", "missing_parts", "skeleton_elements"]
+
+# neighbours per unexplained point in the region graph (edges also need to be shorter than the link)
+LINK_K = 8
+# share of a region's points (lowest gaps) whose nearest balls give the radius at its border
+BORDER_QUANTILE = 0.1
+# seed of the subsample taken above missing_max_points (the verdicts must not depend on a run)
+SUBSAMPLE_SEED = 0
+
+
+@dataclass
+class MissingRegion:
+    """One connected region of unexplained cloud points.
+
+    ``share``: its share of the cloud; ``depth``: how far it reaches beyond the balls at its border, in
+    their radius ``border_radius`` (``reach`` = the gap it reaches, normalized units); ``centroid`` in
+    the units of ``to_user`` (user units in an evaluation); ``deepest``: the cloud row reaching
+    farthest; ``counted``: a missing part (``incomplete``)."""
+
+    id: int
+    n_points: int
+    share: float
+    depth: float
+    reach: float
+    border_radius: float
+    centroid: np.ndarray
+    deepest: int
+    counted: bool
+
+    def to_dict(self) -> dict:
+        return {"id": self.id, "n_points": self.n_points, "share": self.share, "depth": self.depth,
+                "reach": self.reach, "border_radius": self.border_radius,
+                "centroid": [float(c) for c in self.centroid], "deepest_point": self.deepest,
+                "counted": self.counted}
+
+
+@dataclass
+class MissingParts:
+    """What of the cloud a skeleton explains (docs/diagnostics.md "Missing parts").
+
+    Per cloud point: ``explained`` (bool) and ``region`` (int32: the id of its region in ``regions``,
+    -1 when explained); ``missing`` flags the points of counted regions. ``regions`` are sorted by
+    share, largest first. ``subsample``: the number of cloud points the regions were found on, None
+    when all were used."""
+
+    completeness: float
+    explained: np.ndarray
+    region: np.ndarray
+    regions: list[MissingRegion]
+    n_elements: int
+    subsample: int | None
+    what: str = "skeleton"
+    thresholds: dict = field(default_factory=dict)
+
+    @property
+    def counted(self) -> list[MissingRegion]:
+        return [r for r in self.regions if r.counted]
+
+    @property
+    def missing(self) -> np.ndarray:
+        ids = np.array([r.id for r in self.counted], dtype=np.int64)
+        return np.isin(self.region, ids) if len(ids) else np.zeros(len(self.region), bool)
+
+    @property
+    def missing_share(self) -> float:
+        return float(sum(r.share for r in self.counted))
+
+    def to_dict(self, max_regions: int = 10) -> dict:
+        """Completeness, the counted regions and the largest others (at most ``max_regions`` in all)."""
+        shown = self.counted + [r for r in self.regions if not r.counted][: max(0, max_regions - len(self.counted))]
+        return {"completeness": self.completeness, "missing_share": self.missing_share,
+                "n_missing_parts": len(self.counted), "n_regions": len(self.regions),
+                "regions": [r.to_dict() for r in shown], "n_elements": self.n_elements,
+                "subsample": self.subsample, "thresholds": dict(self.thresholds)}
+
+    def warnings(self) -> list[TrustWarning]:
+        """``incomplete`` when some region counts, with its share, depth and place."""
+        parts = self.counted
+        if not parts:
+            return []
+        said = "; ".join(f"{r.share:.1%} of the cloud around ({r.centroid[0]:.4g}, {r.centroid[1]:.4g}, "
+                         f"{r.centroid[2]:.4g}) reaching {r.depth:.2g} local radii beyond it" for r in parts[:3])
+        more = f" and {len(parts) - 3} more" if len(parts) > 3 else ""
+        sub = f" (found on {self.subsample:,} sampled cloud points)" if self.subsample else ""
+        n = len(parts)
+        return [TrustWarning(
+            "incomplete",
+            f"the {self.what} does not reach {n} part{'s' if n > 1 else ''} of the shape: {said}{more}; "
+            f"completeness {self.completeness:.3f}{sub}",
+        )]  # fmt: skip
+
+
+def skeleton_elements(skeleton: np.ndarray | CurveSkeleton, spacing: float, max_elements: int,
+                      checkpoint: Checkpoint = no_checkpoint) -> np.ndarray:
+    """The points whose balls explain the cloud: a curve's vertices and points every ``spacing``
+    along its edges (at most 200,000, as the evaluation's curve coverage), or a point set's distinct
+    points, thinned to one per cell of ``spacing / 2`` when more than ``max_elements``."""
+    if isinstance(skeleton, CurveSkeleton):
+        total = float(skeleton.edge_lengths().sum())
+        step = max(spacing, total / 200_000, 1e-12)
+        pts, _ = densify_curve(skeleton, step)
+        return np.vstack([pts, skeleton.vertices])
+    pts = unique_rows(np.asarray(skeleton, dtype=float).reshape(-1, 3), checkpoint)[0]
+    if len(pts) > max_elements and spacing > 0:
+        cells = np.floor((pts - pts.min(axis=0)) / (spacing / 2)).astype(np.int64)
+        _, first = np.unique(cells, axis=0, return_index=True)
+        pts = pts[np.sort(first)]
+    return pts
+
+
+def _identity(points: np.ndarray) -> np.ndarray:
+    return points
+
+
+def missing_parts(
+    cloud: np.ndarray,
+    skeleton: np.ndarray | CurveSkeleton,
+    params: Params = Params(),
+    *,
+    cov: Coverage | None = None,
+    tau: float | None = None,
+    what: str = "skeleton",
+    to_user: Callable[[np.ndarray], np.ndarray] = _identity,
+    checkpoint: Checkpoint = no_checkpoint,
+) -> MissingParts:
+    """The parts of the (normalized) cloud the (normalized) skeleton does not reach, and its completeness.
+
+    Parameters
+    ----------
+    cloud : (N, 3) normalized cloud.
+    skeleton : a skeletal point set (M, 3), curve samples, or a :class:`CurveSkeleton` (its edges
+        densified as the evaluation's curve coverage does), normalized.
+    cov : the evaluation's :class:`Coverage` of these elements, if computed (then used as is: no
+        subsample); else computed here.
+    tau : the coverage tolerance of the full cloud (``coverage_tau``), if known.
+    what : how the warning names the skeleton ("curve skeleton", "skeletal point set").
+    to_user : maps normalized points to user units for the regions' centroids.
+    checkpoint : ``checkpoint(fraction)``, raises to cancel.
+
+    An empty skeleton explains nothing: one region per connected part of the cloud, depth inf.
+    """
+    p = params
+    cloud = np.asarray(cloud, dtype=float).reshape(-1, 3)
+    n = len(cloud)
+    checkpoint(0.0)
+    sub: np.ndarray | None = None
+    if cov is not None:
+        if len(cov.covered) != n:
+            raise ValueError(f"coverage has {len(cov.covered)} cloud points, the cloud {n}")
+        pts = cloud
+        tau = float(cov.tau)
+    else:
+        if n > int(p.missing_max_points):
+            rng = np.random.default_rng(SUBSAMPLE_SEED)
+            sub = np.sort(rng.choice(n, int(p.missing_max_points), replace=False))
+            pts = cloud[sub]
+            # the spacing of a surface sample grows as 1 / sqrt(density)
+            tau = None if tau is None else float(tau) * float(np.sqrt(n / len(pts)))
+        else:
+            pts = cloud
+        if tau is None:
+            tau = coverage_tau(pts, p, lambda f: checkpoint(0.1 * f))
+    spacing = float(tau) / float(p.coverage_tau_factor)
+    elements = skeleton_elements(skeleton, spacing, int(p.missing_max_elements), lambda f: checkpoint(0.1))
+    if cov is None:
+        cov = coverage(pts, elements, p, tau, checkpoint=lambda f: checkpoint(0.1 + 0.6 * f))
+    checkpoint(0.7)
+    region_s, regions = _regions(pts, cov, elements, spacing, p, checkpoint)
+    checkpoint(0.9)
+    explained_s = cov.covered
+    if sub is not None:  # every cloud point takes its nearest sample's verdict
+        nearest = cKDTree(pts).query(cloud, workers=-1)[1]
+        region, explained = region_s[nearest], explained_s[nearest]
+    else:
+        region, explained = region_s, explained_s
+    counts = np.bincount(region[region >= 0], minlength=len(regions))
+    out: list[MissingRegion] = []
+    for k, r in enumerate(regions):
+        share = float(counts[k]) / n
+        out.append(MissingRegion(
+            id=k, n_points=int(counts[k]), share=share, depth=r["depth"], reach=r["reach"],
+            border_radius=r["border_radius"], centroid=np.asarray(to_user(r["centroid"][None]))[0],
+            deepest=int(r["deepest"] if sub is None else sub[r["deepest"]]),
+            counted=bool(r["depth"] >= p.missing_depth and share >= p.missing_min_share),
+        ))  # fmt: skip
+    checkpoint(1.0)
+    return MissingParts(
+        completeness=float(explained.mean()) if n else 1.0,
+        explained=explained,
+        region=region.astype(np.int32),
+        regions=out,
+        n_elements=int(len(elements)),
+        subsample=None if sub is None else int(len(sub)),
+        what=what,
+        thresholds={"missing_depth": float(p.missing_depth), "missing_min_share": float(p.missing_min_share)},
+    )
+
+
+def _regions(pts: np.ndarray, cov: Coverage, elements: np.ndarray, spacing: float, p: Params,
+             checkpoint: Checkpoint) -> tuple[np.ndarray, list[dict]]:
+    """Region id per point (-1 explained; ids by share, largest first) and each region's numbers."""
+    region = np.full(len(pts), -1, np.int64)
+    miss = np.flatnonzero(~cov.covered)
+    if len(miss) == 0:
+        return region, []
+    up = pts[miss]
+    link = float(p.missing_link_factor) * spacing
+    k = min(LINK_K + 1, len(miss))
+    if k > 1:
+        d, j = cKDTree(up).query(up, k=k, distance_upper_bound=link, workers=-1)
+        ok = np.isfinite(d[:, 1:])
+        rows = np.repeat(np.arange(len(miss)), k - 1)[ok.ravel()]
+        cols = j[:, 1:][ok]
+        graph = coo_matrix((np.ones(len(rows), np.int8), (rows, cols)), shape=(len(miss), len(miss)))
+        n_comp, label = connected_components(graph, directed=False)
+    else:
+        n_comp, label = 1, np.zeros(len(miss), np.int64)
+    checkpoint(0.8)
+    # ids by size, largest first (ties by first point)
+    size = np.bincount(label, minlength=n_comp)
+    rank = np.empty(n_comp, np.int64)
+    rank[np.lexsort((np.arange(n_comp), -size))] = np.arange(n_comp)
+    label = rank[label]
+    size = np.bincount(label, minlength=n_comp)
+    region[miss] = label
+    gap = cov.gap[miss]
+    # per region, gaps in increasing order: quantiles by position
+    order = np.lexsort((gap, label))
+    start = np.concatenate([[0], np.cumsum(size)[:-1]])
+    q_hi = order[start + np.floor(float(p.missing_depth_quantile) * (size - 1)).astype(np.int64)]
+    deepest = order[start + size - 1]
+    n_low = np.maximum(1, np.ceil(BORDER_QUANTILE * size).astype(np.int64))
+    low = np.zeros(len(miss), bool)
+    pos = np.arange(len(miss)) - np.repeat(start, size)  # position within its region (sorted order)
+    low[order[pos < np.repeat(n_low, size)]] = True
+    # radius of the balls at the border: the nearest element of each least-gap point, its distance to the cloud
+    if len(elements):
+        near = cKDTree(elements).query(up[low], workers=-1)[1]
+        used, inv = np.unique(near, return_inverse=True)
+        r_used = cKDTree(pts).query(elements[used], workers=-1)[0]
+        r_low = r_used[inv.ravel()]
+        lab_low = label[low]
+        o = np.lexsort((r_low, lab_low))
+        cnt = np.bincount(lab_low, minlength=n_comp)
+        st = np.concatenate([[0], np.cumsum(cnt)[:-1]])
+        border_r = r_low[o][st + (cnt - 1) // 2]
+    else:
+        border_r = np.zeros(n_comp)
+    border_r = np.maximum(border_r, spacing)  # a ball on the surface still spans about one spacing
+    sums = np.zeros((n_comp, 3))
+    np.add.at(sums, label, up)
+    centroid = sums / size[:, None]
+    reach = np.where(np.isfinite(gap[q_hi]), gap[q_hi], np.inf)
+    out = [{"depth": float(reach[c] / border_r[c]) if np.isfinite(reach[c]) else float("inf"),
+            "reach": float(reach[c]), "border_radius": float(border_r[c]) if len(elements) else float("nan"),
+            "centroid": centroid[c], "deepest": int(miss[deepest[c]])} for c in range(n_comp)]
+    return region, out
