@@ -4,13 +4,14 @@ item 2; docs/diagnostics.md "Missing parts", "Completeness").
 A cloud point is explained when a skeleton element's medial ball, grown by the coverage slack,
 reaches it (SPEC 8, :mod:`skelcore.metrics.coverage`); completeness is the share explained. The
 unexplained points are linked into regions of the cloud (neighbours closer than
-``missing_link_factor`` median spacings). A region's depth is how far it reaches beyond the balls
-at its border, in their radius: its points' ``missing_depth_quantile`` gap over the median radius of
-the balls nearest its least-gap points. A contraction stopping a radius short of a rounded end
-leaves regions under one radius deep; a missing arm or half handle reaches several. A region
-counts (warning ``incomplete``) when depth >= ``missing_depth`` and share >= ``missing_min_share``.
-Above ``missing_max_points`` cloud points the work runs on a random subsample and every cloud point
-takes its nearest sample's verdict (``subsample`` says so).
+``missing_link_factor`` median spacings). A region's depth is how far it reaches beyond its border
+(the unexplained points next to explained ones), in the radius of that border: a contraction that
+stops a radius short of a rounded end leaves a cap about one radius deep, a missing arm or half
+handle reaches several, the wide sides of a flat part a curve crosses reach less than their width.
+A region counts (warning ``incomplete``) when depth >= ``missing_depth`` and share >=
+``missing_min_share``, or share >= ``missing_large_share``. Above ``missing_max_points`` cloud points
+the work runs on a random subsample and every cloud point takes its nearest sample's verdict
+(``subsample`` says so).
 """
 
 from __future__ import annotations
@@ -28,14 +29,14 @@ from ..curve import CurveSkeleton
 from ..geometry import Checkpoint, no_checkpoint, unique_rows
 from ..metrics.coverage import Coverage, coverage, coverage_tau
 from ..params import Params
-from ..trust import TrustWarning
+from .warning import TrustWarning
 
 __all__ = ["MissingRegion", "MissingParts", "missing_parts", "skeleton_elements"]
 
 # neighbours per unexplained point in the region graph (edges also need to be shorter than the link)
 LINK_K = 8
-# share of a region's points (lowest gaps) whose nearest balls give the radius at its border
-BORDER_QUANTILE = 0.1
+# border points closer than this many links are one piece of a region's border
+BORDER_LINK = 3.0
 # seed of the subsample taken above missing_max_points (the verdicts must not depend on a run)
 SUBSAMPLE_SEED = 0
 
@@ -44,10 +45,11 @@ SUBSAMPLE_SEED = 0
 class MissingRegion:
     """One connected region of unexplained cloud points.
 
-    ``share``: its share of the cloud; ``depth``: how far it reaches beyond the balls at its border, in
-    their radius ``border_radius`` (``reach`` = the gap it reaches, normalized units); ``centroid`` in
-    the units of ``to_user`` (user units in an evaluation); ``deepest``: the cloud row reaching
-    farthest; ``counted``: a missing part (``incomplete``)."""
+    ``share``: its share of the cloud; ``depth``: how far it reaches beyond its border (``reach``, the
+    quantile distance to the border, normalized units) in the border's radius ``border_radius``; NaN
+    for regions under ``missing_min_share``, inf for a region no explained point touches;
+    ``centroid`` in the units of ``to_user`` (user units in an evaluation); ``deepest``: the cloud row
+    farthest from the skeleton's balls; ``counted``: a missing part (``incomplete``)."""
 
     id: int
     n_points: int
@@ -197,7 +199,7 @@ def missing_parts(
     if cov is None:
         cov = coverage(pts, elements, p, tau, checkpoint=lambda f: checkpoint(0.1 + 0.6 * f))
     checkpoint(0.7)
-    region_s, regions = _regions(pts, cov, elements, spacing, p, checkpoint)
+    region_s, regions = _regions(pts, cov, spacing, p, checkpoint)
     checkpoint(0.9)
     explained_s = cov.covered
     if sub is not None:  # every cloud point takes its nearest sample's verdict
@@ -213,7 +215,8 @@ def missing_parts(
             id=k, n_points=int(counts[k]), share=share, depth=r["depth"], reach=r["reach"],
             border_radius=r["border_radius"], centroid=np.asarray(to_user(r["centroid"][None]))[0],
             deepest=int(r["deepest"] if sub is None else sub[r["deepest"]]),
-            counted=bool(r["depth"] >= p.missing_depth and share >= p.missing_min_share),
+            counted=bool((share >= p.missing_min_share and r["depth"] >= p.missing_depth)
+                         or share >= p.missing_large_share),
         ))  # fmt: skip
     checkpoint(1.0)
     return MissingParts(
@@ -224,14 +227,23 @@ def missing_parts(
         n_elements=int(len(elements)),
         subsample=None if sub is None else int(len(sub)),
         what=what,
-        thresholds={"missing_depth": float(p.missing_depth), "missing_min_share": float(p.missing_min_share)},
+        thresholds={"missing_depth": float(p.missing_depth), "missing_min_share": float(p.missing_min_share),
+                    "missing_large_share": float(p.missing_large_share)},
     )
 
 
-def _regions(pts: np.ndarray, cov: Coverage, elements: np.ndarray, spacing: float, p: Params,
-             checkpoint: Checkpoint) -> tuple[np.ndarray, list[dict]]:
-    """Region id per point (-1 explained; ids by share, largest first) and each region's numbers."""
-    region = np.full(len(pts), -1, np.int64)
+def _regions(pts: np.ndarray, cov: Coverage, spacing: float, p: Params, checkpoint: Checkpoint,
+             tree: cKDTree | None = None) -> tuple[np.ndarray, list[dict]]:
+    """Region id per point (-1 explained; ids by size, largest first) and each region's numbers.
+
+    Border: the region's points with an explained point among their neighbours (within the link).
+    Radius at the border: the RMS distance of the largest connected piece of the border from its
+    centroid (a ring around a tube: the tube's radius; it is the cross-section's extent, not an
+    inscribed ball's, so a flat part a curve crosses is not a missing part). Depth: the region's
+    ``missing_depth_quantile`` distance to its border over that radius. Regions under
+    ``missing_min_share`` of the points get no depth (NaN): they cannot count."""
+    n = len(pts)
+    region = np.full(n, -1, np.int64)
     miss = np.flatnonzero(~cov.covered)
     if len(miss) == 0:
         return region, []
@@ -243,47 +255,61 @@ def _regions(pts: np.ndarray, cov: Coverage, elements: np.ndarray, spacing: floa
         ok = np.isfinite(d[:, 1:])
         rows = np.repeat(np.arange(len(miss)), k - 1)[ok.ravel()]
         cols = j[:, 1:][ok]
-        graph = coo_matrix((np.ones(len(rows), np.int8), (rows, cols)), shape=(len(miss), len(miss)))
-        n_comp, label = connected_components(graph, directed=False)
     else:
-        n_comp, label = 1, np.zeros(len(miss), np.int64)
-    checkpoint(0.8)
-    # ids by size, largest first (ties by first point)
+        rows = cols = np.empty(0, np.int64)
+    graph = coo_matrix((np.ones(len(rows), np.int8), (rows, cols)), shape=(len(miss), len(miss)))
+    n_comp, label = connected_components(graph, directed=False)
+    checkpoint(0.75)
     size = np.bincount(label, minlength=n_comp)
     rank = np.empty(n_comp, np.int64)
     rank[np.lexsort((np.arange(n_comp), -size))] = np.arange(n_comp)
     label = rank[label]
     size = np.bincount(label, minlength=n_comp)
     region[miss] = label
-    gap = cov.gap[miss]
-    # per region, gaps in increasing order: quantiles by position
-    order = np.lexsort((gap, label))
-    start = np.concatenate([[0], np.cumsum(size)[:-1]])
-    q_hi = order[start + np.floor(float(p.missing_depth_quantile) * (size - 1)).astype(np.int64)]
-    deepest = order[start + size - 1]
-    n_low = np.maximum(1, np.ceil(BORDER_QUANTILE * size).astype(np.int64))
-    low = np.zeros(len(miss), bool)
-    pos = np.arange(len(miss)) - np.repeat(start, size)  # position within its region (sorted order)
-    low[order[pos < np.repeat(n_low, size)]] = True
-    # radius of the balls at the border: the nearest element of each least-gap point, its distance to the cloud
-    if len(elements):
-        near = cKDTree(elements).query(up[low], workers=-1)[1]
-        used, inv = np.unique(near, return_inverse=True)
-        r_used = cKDTree(pts).query(elements[used], workers=-1)[0]
-        r_low = r_used[inv.ravel()]
-        lab_low = label[low]
-        o = np.lexsort((r_low, lab_low))
-        cnt = np.bincount(lab_low, minlength=n_comp)
-        st = np.concatenate([[0], np.cumsum(cnt)[:-1]])
-        border_r = r_low[o][st + (cnt - 1) // 2]
-    else:
-        border_r = np.zeros(n_comp)
-    border_r = np.maximum(border_r, spacing)  # a ball on the surface still spans about one spacing
     sums = np.zeros((n_comp, 3))
     np.add.at(sums, label, up)
     centroid = sums / size[:, None]
-    reach = np.where(np.isfinite(gap[q_hi]), gap[q_hi], np.inf)
-    out = [{"depth": float(reach[c] / border_r[c]) if np.isfinite(reach[c]) else float("inf"),
-            "reach": float(reach[c]), "border_radius": float(border_r[c]) if len(elements) else float("nan"),
-            "centroid": centroid[c], "deepest": int(miss[deepest[c]])} for c in range(n_comp)]
+    big = np.flatnonzero(size >= max(1.0, float(p.missing_min_share) * n))
+    depth = np.full(n_comp, np.nan)
+    reach = np.full(n_comp, np.nan)
+    radius = np.full(n_comp, np.nan)
+    if len(big):
+        # border points of the big regions: an explained cloud point among their neighbours
+        in_big = np.isin(label, big)
+        q = np.flatnonzero(in_big)
+        tree = cKDTree(pts) if tree is None else tree
+        kk = min(LINK_K + 1, n)
+        dd, jj = tree.query(up[q], k=kk, distance_upper_bound=link, workers=-1)
+        jj = np.where(np.isfinite(dd), jj, n)
+        explained = np.concatenate([cov.covered, [False]])
+        border = np.zeros(len(miss), bool)
+        border[q] = explained[jj].any(axis=1)
+        # pieces of the border (the two rings of an arc cut out of a loop): border points closer than
+        # BORDER_LINK links are one piece (the border of a scan's region is sparse and ragged)
+        bi = np.flatnonzero(border)
+        piece = np.zeros(len(miss), np.int64)
+        if len(bi) > 1:
+            pairs = cKDTree(up[bi]).query_pairs(BORDER_LINK * link, output_type="ndarray")
+            bg = coo_matrix((np.ones(len(pairs), np.int8), (pairs[:, 0], pairs[:, 1])), shape=(len(bi), len(bi)))
+            piece[bi] = connected_components(bg, directed=False)[1]
+        for c in big:
+            checkpoint(0.75 + 0.15 * float(c) / max(1, n_comp))
+            members = np.flatnonzero(label == c)
+            b = members[border[members]]
+            if len(b) == 0:  # nothing of the skeleton's reach touches it: all of it is missing
+                depth[c], reach[c], radius[c] = np.inf, np.inf, np.nan
+                continue
+            pid, cnt = np.unique(piece[b], return_counts=True)
+            main = b[piece[b] == pid[np.argmax(cnt)]]
+            ring = up[main]
+            rho = float(np.sqrt(np.mean(np.sum((ring - ring.mean(axis=0)) ** 2, axis=1))))
+            rho = max(rho, spacing)
+            dist = cKDTree(up[b]).query(up[members], workers=-1)[0]
+            r_q = float(np.quantile(dist, float(p.missing_depth_quantile)))
+            depth[c], reach[c], radius[c] = r_q / rho, r_q, rho
+    deepest = np.zeros(n_comp, np.int64)
+    order = np.lexsort((cov.gap[miss], label))
+    deepest[label[order]] = miss[order]  # the last of each region in gap order: its farthest point
+    out = [{"depth": float(depth[c]), "reach": float(reach[c]), "border_radius": float(radius[c]),
+            "centroid": centroid[c], "deepest": int(deepest[c])} for c in range(n_comp)]
     return region, out
