@@ -59,6 +59,9 @@ class Params:
     missing_min_share : ... and when it holds at least this share of the cloud (noise, a few points).
     missing_large_share : a region holding this share of the cloud counts whatever its depth (a
         skeleton shrunk to the centre of a ring: its ball is wide, the ring unexplained).
+    missing_min_completeness : ``incomplete`` also fires when the skeleton explains less than this
+        share of the cloud, however it is split (a mapping that halves a skeleton leaves several
+        regions, none large).
     missing_depth_quantile : quantile of a region's gaps taken as its reach (robust to stray points).
     missing_link_factor : unexplained points closer than this many median NN spacings are one region.
     missing_max_points : above this many cloud points the missing parts are found on a random
@@ -101,6 +104,7 @@ class Params:
     missing_depth: float = 1.5
     missing_min_share: float = 0.01
     missing_large_share: float = 0.25
+    missing_min_completeness: float = 0.75
     missing_depth_quantile: float = 0.95
     missing_link_factor: float = 4.0
     missing_max_points: int = 200_000
@@ -140,7 +144,7 @@ class Params:
         for name in ("missing_depth", "missing_link_factor"):
             if not float(getattr(self, name)) > 0:
                 bad(name, "must be > 0")
-        for name in ("missing_min_share", "missing_large_share", "missing_depth_quantile"):
+        for name in ("missing_min_share", "missing_large_share", "missing_min_completeness", "missing_depth_quantile"):
             if not 0.0 <= float(getattr(self, name)) <= 1.0:
                 bad(name, "must be in [0, 1]")
         for name in ("missing_max_points", "missing_max_elements"):

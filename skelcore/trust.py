@@ -14,10 +14,9 @@
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Callable
 
 import numpy as np
-from scipy.optimize import minimize
-from scipy.spatial import cKDTree
 
 from .diagnostics.warning import TrustWarning
 from .geometry import bounding_box
@@ -27,10 +26,12 @@ __all__ = ["TrustWarning", "FrameFit", "fit_frame", "frame_warnings", "frame_fit
            "smoothness_warning", "no_correspondence_warning"]
 
 _FRAME_HINT = "map it with --skeleton-scale S --skeleton-offset X Y Z"
-# the frame fit: skeleton points for its objective and completeness, cloud points, boundedness runs at most
-FIT_POINTS = 2000
+# the frame fit: skeleton points it maps, cloud points (completeness), cloud points probing the gap,
+# objective evaluations per start (about 2 s in all on a loaded 2-core machine; docs/diagnostics.md "Frame")
+FIT_POINTS = 300
 FIT_CLOUD = 16384
-FIT_TRIES = 4
+FIT_PROBES = 1024
+FIT_EVALUATIONS = 250
 
 
 def _diag(points: np.ndarray) -> float:
@@ -40,8 +41,12 @@ def _diag(points: np.ndarray) -> float:
     return float(np.linalg.norm(hi - lo))
 
 
-def frame_warnings(cloud: np.ndarray, skeleton: np.ndarray, what: str, params: Params = Params()) -> list[TrustWarning]:
-    """``frame`` / ``collapse`` for one skeleton's points (both arrays in the user's units)."""
+def frame_warnings(cloud: np.ndarray, skeleton: np.ndarray, what: str, params: Params = Params(),
+                   bounded_fraction: Callable[[np.ndarray], float] | None = None) -> list[TrustWarning]:
+    """``frame`` / ``collapse`` for one skeleton's points (both arrays in the user's units). A ``frame``
+    message proposes a scale and offset only when :func:`fit_frame` finds one under which the skeleton
+    is bounded and complete (``bounded_fraction(points)``: the share of points bounded, by default
+    the rays boundedness against this cloud)."""
     lo, hi = bounding_box(cloud)
     d_cloud = float(np.linalg.norm(hi - lo))  # = _diag(cloud)
     margin = 0.1 * d_cloud
@@ -59,8 +64,9 @@ def frame_warnings(cloud: np.ndarray, skeleton: np.ndarray, what: str, params: P
             why.append(f"only {frac_inside:.0%} of its points lie inside the cloud's bounding box")
         if big or small:
             why.append(f"its extent is {ratio:.3g} x the cloud's")
+        bf = bounded_fraction or _bounded_fraction(cloud, params)
         out.append(TrustWarning("frame", f"the {what} seems to be in another frame: {'; '.join(why)}; "
-                                         + _hint(cloud, skeleton)))
+                                         + _hint(fit_frame(cloud, skeleton, 0.0, bf, params))))
     elif ratio < params.collapse_extent:
         out.append(TrustWarning(
             "collapse",
@@ -81,13 +87,22 @@ def bbox_transform(cloud: np.ndarray, skeleton: np.ndarray) -> tuple[float, np.n
     return s, off
 
 
-def _hint(cloud: np.ndarray, skeleton: np.ndarray) -> str:
-    t = bbox_transform(cloud, skeleton)
-    if t is None:
-        return _FRAME_HINT
-    s, off = t
-    return (f"{_FRAME_HINT} (bounding boxes match with --skeleton-scale {s:.6g} "
-            f"--skeleton-offset {off[0]:.6g} {off[1]:.6g} {off[2]:.6g})")
+def _hint(fit: "FrameFit | None") -> str:
+    if fit is None:
+        return f"{_FRAME_HINT} (no scale and offset found under which it is bounded and complete)"
+    off = fit.offset
+    return (f"{_FRAME_HINT} (bounded {fit.bounded:.0%}, completeness {fit.completeness:.2f} with "
+            f"--skeleton-scale {fit.scale:.6g} --skeleton-offset {off[0]:.6g} {off[1]:.6g} {off[2]:.6g})")
+
+
+def _bounded_fraction(cloud: np.ndarray, params: Params) -> Callable[[np.ndarray], float]:
+    """The share of points (user units) bounded in ``cloud`` (SPEC 2, as the evaluation scores them)."""
+    from .geometry import Normalization
+    from .metrics.boundedness import boundedness
+
+    norm = Normalization.from_cloud(cloud, params.normalize_by, params.normalized_size)
+    cloud_n = norm.apply(cloud)
+    return lambda points: float(np.mean(boundedness(cloud_n, norm.apply(points), params=params) > params.beta_star))
 
 
 @dataclass(frozen=True)
@@ -102,64 +117,62 @@ class FrameFit:
 
 
 def fit_frame(
-    cloud: np.ndarray, skeleton: np.ndarray, bounded_now: float, bounded_fraction, params: Params = Params()
+    cloud: np.ndarray, skeleton: np.ndarray, bounded_now: float, bounded_fraction: Callable[[np.ndarray], float],
+    params: Params = Params(),
 ) -> FrameFit | None:
     """The mapping of a skeleton in another frame onto the cloud (both arrays in the user's units), or None.
 
     Only tried when the skeleton is under half bounded (``bounded_now`` < 0.5). Starts: its bounding
     box centred on the cloud's and scaled to its diagonal (x 1, 0.85, 0.7: a skeleton's box is smaller
-    by the shape's thickness); each is refined by maximizing the skeleton points' mean distance to the
-    cloud (a medial curve is as far from the surface as it can be; points leaving the cloud's box
-    count negative), Nelder-Mead on log scale and offset. Candidates are tried best first (at most
-    ``FIT_TRIES`` boundedness runs on <= 200 points): the first with ``bounded_fraction(points)`` >=
-    beta* and 0.25 above ``bounded_now`` AND no missing part (``incomplete``; a shrunk mapping is
-    bounded but leaves the shape's ends unexplained) is returned."""
-    # the diagnostics import this module (TrustWarning); imported here, when a fit is tried, no cycle at import
+    by the shape's thickness), best first by the objective; each is refined (Nelder-Mead on log scale
+    and offset) to the least mean gap of the cloud to the mapped skeleton's medial balls (SPEC 8's gap:
+    0 for a medial skeleton that reaches every part; moving it off the axis, shrinking or shifting it
+    raise it). A refined mapping is proposed only when ``bounded_fraction(points)`` >= beta* and 0.25
+    above ``bounded_now`` and the mapped skeleton is complete (no ``incomplete``: a shrunk mapping is
+    bounded but leaves the shape's ends unexplained); the next start is refined otherwise."""
+    from scipy.optimize import minimize
+    from scipy.spatial import cKDTree
+
+    # the diagnostics import this module's TrustWarning: imported when a fit is tried, no cycle at import
     from .diagnostics.missing_parts import missing_parts
 
     d_cloud, d_skel = _diag(cloud), _diag(skeleton)
     if not (d_cloud > 0 and d_skel > 0) or bounded_now >= 0.5:
         return None
     s0, _ = bbox_transform(cloud, skeleton)  # type: ignore[misc]
-    rows = np.linspace(0, len(skeleton) - 1, min(len(skeleton), FIT_POINTS)).astype(int)
-    pts = np.asarray(skeleton, dtype=float)[rows]
+    skeleton = np.asarray(skeleton, dtype=float)
+    pts = skeleton[np.linspace(0, len(skeleton) - 1, min(len(skeleton), FIT_POINTS)).astype(int)]
     pick = pts[np.linspace(0, len(pts) - 1, min(len(pts), 200)).astype(int)]
-    sub = cloud if len(cloud) <= FIT_CLOUD else cloud[np.random.default_rng(0).choice(len(cloud), FIT_CLOUD, replace=False)]
+    rng = np.random.default_rng(0)
+    sub = cloud if len(cloud) <= FIT_CLOUD else cloud[rng.choice(len(cloud), FIT_CLOUD, replace=False)]
+    probe = sub if len(sub) <= FIT_PROBES else sub[rng.choice(len(sub), FIT_PROBES, replace=False)]
     tree = cKDTree(sub)
     lo, hi = bounding_box(cloud)
     centre_c = (lo + hi) / 2
     centre_s = (skeleton.min(axis=0) + skeleton.max(axis=0)) / 2
-    step = 0.01 * d_cloud
+    step = 0.01 * d_cloud  # offsets in units of 1 % of the cloud's diagonal: the simplex's scales match
+    k = min(8, len(pts))
 
-    def fit_value(x: np.ndarray) -> float:
-        s, off = np.exp(x[0]), x[1:] * step
-        q = pts * s + off
-        d = tree.query(q)[0]
-        out = np.linalg.norm(np.maximum(lo - q, 0) + np.maximum(q - hi, 0), axis=1)
-        return float(np.mean(np.where(out > 0, -out, d)))
+    def mean_gap(x: np.ndarray) -> float:
+        q = pts * np.exp(x[0]) + x[1:] * step
+        r = tree.query(q)[0]  # each mapped point's inscribed ball
+        d, j = cKDTree(q).query(probe, k=k)  # a probe's gap over its k nearest balls (the minimum is near)
+        gap = np.min(d.reshape(len(probe), k) - r[j.reshape(len(probe), k)], axis=1)
+        out = np.linalg.norm(np.maximum(lo - q, 0) + np.maximum(q - hi, 0), axis=1)  # outside the cloud's box
+        return float(np.mean(np.maximum(gap, 0.0)) + np.mean(out))
 
-    cands = []
-    for f in (1.0, 0.85, 0.7):
-        sc = s0 * f
-        x0 = np.concatenate([[np.log(sc)], (centre_c - sc * centre_s) / step])
-        simplex = np.vstack([x0] + [x0 + np.eye(4)[k] * (0.05 if k == 0 else 1.0) for k in range(4)])
-        res = minimize(lambda x: -fit_value(x), x0, method="Nelder-Mead",
-                       options={"initial_simplex": simplex, "xatol": 1e-3, "fatol": 1e-9 * d_cloud, "maxfev": 600})
-        cands += [(fit_value(res.x), res.x), (fit_value(x0), x0)]
-    cands.sort(key=lambda c: -c[0])
-    tried: list[np.ndarray] = []
-    for _, x in cands:
-        if len(tried) >= FIT_TRIES:
-            break
-        if any(np.allclose(x, t, atol=1e-3) for t in tried):
-            continue
-        tried.append(x)
+    starts = [np.concatenate([[np.log(s0 * f)], (centre_c - s0 * f * centre_s) / step]) for f in (1.0, 0.85, 0.7)]
+    for x0 in sorted(starts, key=mean_gap):
+        simplex = np.vstack([x0] + [x0 + np.eye(4)[i] * (0.05 if i == 0 else 1.0) for i in range(4)])
+        x = minimize(mean_gap, x0, method="Nelder-Mead",
+                     options={"initial_simplex": simplex, "xatol": 1e-3, "fatol": 1e-9 * d_cloud,
+                              "maxfev": FIT_EVALUATIONS}).x
         s, off = float(np.exp(x[0])), x[1:] * step
         after = float(bounded_fraction(pick * s + off))
         if not (after >= params.beta_star and after >= bounded_now + 0.25):
             continue
         mp = missing_parts(sub, pts * s + off, params)
-        if mp.counted:
+        if mp.incomplete:
             continue
         return FrameFit(s, off, after, mp.completeness)
     return None

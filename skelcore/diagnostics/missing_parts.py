@@ -9,7 +9,8 @@ unexplained points are linked into regions of the cloud (neighbours closer than
 stops a radius short of a rounded end leaves a cap about one radius deep, a missing arm or half
 handle reaches several, the wide sides of a flat part a curve crosses reach less than their width.
 A region counts (warning ``incomplete``) when depth >= ``missing_depth`` and share >=
-``missing_min_share``, or share >= ``missing_large_share``. Above ``missing_max_points`` cloud points
+``missing_min_share``, or share >= ``missing_large_share``; it also fires when the completeness is
+under ``missing_min_completeness``. Above ``missing_max_points`` cloud points
 the work runs on a random subsample and every cloud point takes its nearest sample's verdict
 (``subsample`` says so).
 """
@@ -91,6 +92,11 @@ class MissingParts:
         return [r for r in self.regions if r.counted]
 
     @property
+    def incomplete(self) -> bool:
+        """Some region counts, or the skeleton explains under ``missing_min_completeness`` of the cloud."""
+        return bool(self.counted) or self.completeness < self.thresholds.get("missing_min_completeness", 0.0)
+
+    @property
     def missing(self) -> np.ndarray:
         ids = np.array([r.id for r in self.counted], dtype=np.int64)
         return np.isin(self.region, ids) if len(ids) else np.zeros(len(self.region), bool)
@@ -102,7 +108,7 @@ class MissingParts:
     def to_dict(self, max_regions: int = 10) -> dict:
         """Completeness, the counted regions and the largest others (at most ``max_regions`` in all)."""
         shown = self.counted + [r for r in self.regions if not r.counted][: max(0, max_regions - len(self.counted))]
-        return {"completeness": self.completeness, "missing_share": self.missing_share,
+        return {"completeness": self.completeness, "incomplete": self.incomplete, "missing_share": self.missing_share,
                 "n_missing_parts": len(self.counted), "n_regions": len(self.regions),
                 "regions": [r.to_dict() for r in shown], "n_elements": self.n_elements,
                 "subsample": self.subsample, "thresholds": dict(self.thresholds)}
@@ -110,12 +116,19 @@ class MissingParts:
     def warnings(self) -> list[TrustWarning]:
         """``incomplete`` when some region counts, with its share, depth and place."""
         parts = self.counted
-        if not parts:
+        if not self.incomplete:
             return []
+        sub = f" (found on {self.subsample:,} sampled cloud points)" if self.subsample else ""
+        if not parts:
+            big = f", the largest {self.regions[0].share:.1%} of it" if self.regions else ""
+            return [TrustWarning(
+                "incomplete",
+                f"the {self.what} explains only {self.completeness:.1%} of the cloud (completeness "
+                f"{self.completeness:.3f}; {len(self.regions)} unexplained regions{big}){sub}",
+            )]  # fmt: skip
         said = "; ".join(f"{r.share:.1%} of the cloud around ({r.centroid[0]:.4g}, {r.centroid[1]:.4g}, "
                          f"{r.centroid[2]:.4g}) reaching {r.depth:.2g} local radii beyond it" for r in parts[:3])
         more = f" and {len(parts) - 3} more" if len(parts) > 3 else ""
-        sub = f" (found on {self.subsample:,} sampled cloud points)" if self.subsample else ""
         n = len(parts)
         return [TrustWarning(
             "incomplete",
@@ -228,7 +241,8 @@ def missing_parts(
         subsample=None if sub is None else int(len(sub)),
         what=what,
         thresholds={"missing_depth": float(p.missing_depth), "missing_min_share": float(p.missing_min_share),
-                    "missing_large_share": float(p.missing_large_share)},
+                    "missing_large_share": float(p.missing_large_share),
+                    "missing_min_completeness": float(p.missing_min_completeness)},
     )
 
 
