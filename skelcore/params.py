@@ -67,8 +67,9 @@ class Params:
     missing_max_points : above this many cloud points the missing parts are found on a random
         subsample of this many and every cloud point takes its nearest sample's verdict (the result
         says so; docs/diagnostics.md gives the verdicts unchanged).
-    missing_max_elements : a skeletal set with more distinct points is thinned to one point per cell
-        of half the cloud's median spacing before its balls are built.
+    missing_max_elements : a skeletal set with more points is thinned to one point per grid cell
+        (half the cloud's median spacing, grown until at most this many remain) before its balls are
+        built: the balls' slack dwarfs the cells.
     """
 
     normalize_by: Literal["longest_side", "diagonal"] = "longest_side"
@@ -108,7 +109,7 @@ class Params:
     missing_depth_quantile: float = 0.95
     missing_link_factor: float = 4.0
     missing_max_points: int = 200_000
-    missing_max_elements: int = 50_000
+    missing_max_elements: int = 20_000
 
     def __post_init__(self) -> None:
         def bad(name: str, why: str) -> None:

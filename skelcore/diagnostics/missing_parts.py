@@ -38,6 +38,9 @@ __all__ = ["MissingRegion", "MissingParts", "missing_parts", "skeleton_elements"
 LINK_K = 8
 # border points closer than this many links are one piece of a region's border
 BORDER_LINK = 3.0
+# above missing_max_points, cloud points within this many (subsample) spacings of an unexplained sample
+# look up their nearest sample's verdict
+SPREAD = 4.0
 # seed of the subsample taken above missing_max_points (the verdicts must not depend on a run)
 SUBSAMPLE_SEED = 0
 
@@ -141,18 +144,30 @@ def skeleton_elements(skeleton: np.ndarray | CurveSkeleton, spacing: float, max_
                       checkpoint: Checkpoint = no_checkpoint) -> np.ndarray:
     """The points whose balls explain the cloud: a curve's vertices and points every ``spacing``
     along its edges (at most 200,000, as the evaluation's curve coverage), or a point set's distinct
-    points, thinned to one per cell of ``spacing / 2`` when more than ``max_elements``."""
+    points; more than ``max_elements`` are thinned to one per grid cell, of ``spacing / 2`` grown
+    until at most ``max_elements`` remain (contracted sets are tubes of points, not curves), after
+    a random pick of 10 x ``max_elements`` from a larger set."""
     if isinstance(skeleton, CurveSkeleton):
         total = float(skeleton.edge_lengths().sum())
         step = max(spacing, total / 200_000, 1e-12)
         pts, _ = densify_curve(skeleton, step)
         return np.vstack([pts, skeleton.vertices])
-    pts = unique_rows(np.asarray(skeleton, dtype=float).reshape(-1, 3), checkpoint)[0]
-    if len(pts) > max_elements and spacing > 0:
-        cells = np.floor((pts - pts.min(axis=0)) / (spacing / 2)).astype(np.int64)
-        _, first = np.unique(cells, axis=0, return_index=True)
-        pts = pts[np.sort(first)]
-    return pts
+    pts = np.asarray(skeleton, dtype=float).reshape(-1, 3)
+    if len(pts) <= max_elements or not spacing > 0:
+        return unique_rows(pts, checkpoint)[0]
+    if len(pts) > 10 * max_elements:  # a random tenth-or-less first: the cells see no difference
+        pts = pts[np.random.default_rng(SUBSAMPLE_SEED).choice(len(pts), 10 * max_elements, replace=False)]
+    cell = spacing / 2
+    lo = pts.min(axis=0)
+    while True:
+        cells = np.floor((pts - lo) / cell).astype(np.int64)
+        dims = cells.max(axis=0) + 1
+        key = (cells[:, 0] * dims[1] + cells[:, 1]) * dims[2] + cells[:, 2]  # one number per cell
+        _, first = np.unique(key, return_index=True)
+        checkpoint(0.0)
+        if len(first) <= max_elements:
+            return pts[np.sort(first)]
+        cell *= 1.5
 
 
 def _identity(points: np.ndarray) -> np.ndarray:
@@ -208,16 +223,15 @@ def missing_parts(
         if tau is None:
             tau = coverage_tau(pts, p, lambda f: checkpoint(0.1 * f))
     spacing = float(tau) / float(p.coverage_tau_factor)
-    elements = skeleton_elements(skeleton, spacing, int(p.missing_max_elements), lambda f: checkpoint(0.1))
     if cov is None:
+        elements = skeleton_elements(skeleton, spacing, int(p.missing_max_elements), lambda f: checkpoint(0.1))
         cov = coverage(pts, elements, p, tau, checkpoint=lambda f: checkpoint(0.1 + 0.6 * f))
     checkpoint(0.7)
     region_s, regions = _regions(pts, cov, spacing, p, checkpoint)
     checkpoint(0.9)
     explained_s = cov.covered
-    if sub is not None:  # every cloud point takes its nearest sample's verdict
-        nearest = cKDTree(pts).query(cloud, workers=-1)[1]
-        region, explained = region_s[nearest], explained_s[nearest]
+    if sub is not None:
+        region, explained = _spread(cloud, pts, region_s, explained_s, spacing)
     else:
         region, explained = region_s, explained_s
     counts = np.bincount(region[region >= 0], minlength=len(regions))
@@ -237,13 +251,30 @@ def missing_parts(
         explained=explained,
         region=region.astype(np.int32),
         regions=out,
-        n_elements=int(len(elements)),
+        n_elements=int(cov.n_elements),
         subsample=None if sub is None else int(len(sub)),
         what=what,
         thresholds={"missing_depth": float(p.missing_depth), "missing_min_share": float(p.missing_min_share),
                     "missing_large_share": float(p.missing_large_share),
                     "missing_min_completeness": float(p.missing_min_completeness)},
     )
+
+
+def _spread(cloud: np.ndarray, pts: np.ndarray, region_s: np.ndarray, explained_s: np.ndarray,
+            spacing: float) -> tuple[np.ndarray, np.ndarray]:
+    """Every cloud point takes the verdict of its nearest sample ``pts``; only points within
+    ``SPREAD`` spacings of an unexplained sample are looked up (the rest are explained: a point
+    farther than that from every sample, its nearest one included, is no sample's neighbour)."""
+    region = np.full(len(cloud), -1, np.int64)
+    explained = np.ones(len(cloud), bool)
+    un = np.flatnonzero(~explained_s)
+    if len(un) == 0:
+        return region, explained
+    d, _ = cKDTree(pts[un]).query(cloud, distance_upper_bound=SPREAD * spacing, workers=-1)
+    near = np.flatnonzero(np.isfinite(d))
+    j = cKDTree(pts).query(cloud[near], workers=-1)[1]
+    region[near], explained[near] = region_s[j], explained_s[j]
+    return region, explained
 
 
 def _regions(pts: np.ndarray, cov: Coverage, spacing: float, p: Params, checkpoint: Checkpoint,
