@@ -18,7 +18,7 @@ from typing import Callable
 
 import numpy as np
 
-from .diagnostics.warning import TrustWarning
+from .trust_warning import TrustWarning
 from .geometry import bounding_box
 from .params import Params
 
