@@ -33,7 +33,7 @@ sys.path.insert(0, str(ROOT / "benchmarks"))
 
 import skelcore  # noqa: E402
 from diag_cases import (SHAPES, collapse, cut_mask, defect_branch, drop_curve_vertices, missed_radii,  # noqa: E402
-                        true_branches, true_curve_radius)
+                        off_centre, true_branches, true_curve_radius)
 from skelcore import shapes  # noqa: E402
 from skelcore.correspondence import densify_curve  # noqa: E402
 from skelcore.curve import CurveSkeleton  # noqa: E402
@@ -90,6 +90,8 @@ def summary(mp) -> dict:
 
 
 def flagged(rec: dict, p: Params) -> bool:
+    if rec["completeness"] < p.missing_min_completeness:
+        return True
     for share, depth in rec["regions"]:
         d = np.nan if depth is None else depth
         if (share >= p.missing_min_share and d >= p.missing_depth) or share >= p.missing_large_share:
@@ -121,7 +123,7 @@ def run(args) -> list[dict]:
                         elems = densify_curve(sk, 0.01)[0] if isinstance(sk, CurveSkeleton) else sk
                         gt = missed_radii(elems, branches, radii)
                         records.append({**base, "skeleton": kind, "defect": None, "gt_missed": gt, "time": dt,
-                                        **summary(mp)})
+                                        "gt_offset": off_centre(elems, branches, radii), **summary(mp)})
                         if n not in args.defect_sizes:
                             continue
                         for dname, dsk in defects(name, sk, branches).items():
@@ -137,7 +139,7 @@ def run(args) -> list[dict]:
 
 def tables(records: list[dict], p: Params) -> None:
     print(f"Params: missing_depth {p.missing_depth}, missing_min_share {p.missing_min_share}, "
-          f"missing_large_share {p.missing_large_share}")
+          f"missing_large_share {p.missing_large_share}, missing_min_completeness {p.missing_min_completeness}")
     intact = [r for r in records if r["defect"] is None]
     shapes_ = list(dict.fromkeys(r["shape"] for r in records))
     # ---- false alarms ----
@@ -174,8 +176,10 @@ def tables(records: list[dict], p: Params) -> None:
               f"{r['gt_missed']:.1f} radii, flagged {flagged(r, p)}, completeness {r['completeness']:.3f}")
     fa = [r for r in intact if flagged(r, p) and (r["skeleton"].startswith("true") or r["gt_missed"] < 1.0)]
     for r in fa[:20]:
+        off = f", median offset from the true curve {r['gt_offset']:.2f} radii" if "gt_offset" in r else ""
         print(f"  FALSE ALARM {r['shape']} N={r['n']} noise={r['noise']} seed={r['seed']} {r['skeleton']}: "
-              + "; ".join(f"share {a:.3f} depth {b:.2f}" for a, b in r["regions"] if b is not None))
+              + "; ".join(f"share {a:.3f} depth {b:.2f}" for a, b in r["regions"] if b is not None)
+              + f"; completeness {r['completeness']:.3f}{off}")
     deep = sorted(((max([b for a, b in r["regions"] if b is not None and a >= p.missing_min_share] or [0]), r)
                    for r in intact if r["skeleton"].startswith("true") or r["gt_missed"] < 1.0), key=lambda t: -t[0])
     print("deepest regions (share >= missing_min_share) on intact skeletons: "

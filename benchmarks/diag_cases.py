@@ -142,3 +142,12 @@ def missed_radii(elements: np.ndarray, branches: list[Branch], radii: list[np.nd
         ds = np.diff(b.s, prepend=b.s[0])
         total += float(np.sum((ds / r)[d > 2 * r]))
     return total
+
+
+def off_centre(elements: np.ndarray, branches: list[Branch], radii: list[np.ndarray]) -> float:
+    """How far a skeleton sits from the true curve: the median over its elements of the distance to
+    the true curve in the local radius there."""
+    pts = np.vstack([b.points for b in branches])
+    r = np.concatenate(radii)
+    d, j = cKDTree(pts).query(elements)
+    return float(np.median(d / r[j]))

@@ -51,10 +51,11 @@ class Params:
         times larger (or smaller, when it also lies outside) than the cloud's.
     collapse_extent : the ``collapse`` warning fires when the skeleton's bounding-box diagonal is
         below this fraction of the cloud's.
-    missing_depth : a region of unexplained cloud points (not covered, see coverage_slack) counts as a
-        missing part (warning ``incomplete``) when it reaches this many local radii beyond the balls at
-        its border (depth: its points' missing_depth_quantile gap over the median radius of the balls
-        nearest its border); a contraction stopping a radius short of a rounded end reaches < 1
+    missing_depth : a region of unexplained cloud points (beyond every skeleton element's ball grown
+        by coverage_slack and tau) counts as a missing part (warning ``incomplete``) when it reaches
+        this many radii of its border beyond that border (the border: its points next to explained
+        ones; its radius: the RMS distance of the border's largest piece from its centroid); a
+        contraction stopping a radius short of a rounded end reaches about one or less
         (docs/diagnostics.md "Missing parts").
     missing_min_share : ... and when it holds at least this share of the cloud (noise, a few points).
     missing_large_share : a region holding this share of the cloud counts whatever its depth (a
@@ -62,7 +63,8 @@ class Params:
     missing_min_completeness : ``incomplete`` also fires when the skeleton explains less than this
         share of the cloud, however it is split (a mapping that halves a skeleton leaves several
         regions, none large).
-    missing_depth_quantile : quantile of a region's gaps taken as its reach (robust to stray points).
+    missing_depth_quantile : quantile of a region's distances to its border taken as its reach
+        (robust to stray points).
     missing_link_factor : unexplained points closer than this many median NN spacings are one region.
     missing_max_points : above this many cloud points the missing parts are found on a random
         subsample of this many and every cloud point takes its nearest sample's verdict (the result
@@ -102,10 +104,10 @@ class Params:
     collapse_extent: float = 0.1
 
     # diagnostics: missing parts (docs/diagnostics.md)
-    missing_depth: float = 1.5
+    missing_depth: float = 1.25
     missing_min_share: float = 0.01
-    missing_large_share: float = 0.25
-    missing_min_completeness: float = 0.75
+    missing_large_share: float = 0.5
+    missing_min_completeness: float = 0.6
     missing_depth_quantile: float = 0.95
     missing_link_factor: float = 4.0
     missing_max_points: int = 200_000

@@ -18,9 +18,9 @@ from typing import Callable
 
 import numpy as np
 
-from .trust_warning import TrustWarning
 from .geometry import bounding_box
 from .params import Params
+from .trust_warning import TrustWarning
 
 __all__ = ["TrustWarning", "FrameFit", "fit_frame", "frame_warnings", "frame_fit_warning", "bbox_transform",
            "smoothness_warning", "no_correspondence_warning"]
@@ -133,7 +133,8 @@ def fit_frame(
     from scipy.optimize import minimize
     from scipy.spatial import cKDTree
 
-    # the diagnostics import this module's TrustWarning: imported when a fit is tried, no cycle at import
+    # imported when a fit is tried: at import time, the diagnostics package (which imports this module)
+    # would be half-built
     from .diagnostics.missing_parts import missing_parts
 
     d_cloud, d_skel = _diag(cloud), _diag(skeleton)
