@@ -77,6 +77,27 @@ class Params:
         is outside (unbounded, in no inside voxel) in one cluster (points within outside_link x the
         cloud's median spacing).
     outside_link : see outside_skeletal_share.
+    missing_depth : a region of unexplained cloud points (beyond every skeleton element's ball grown
+        by coverage_slack and tau) counts as a missing part (warning ``incomplete``) when it reaches
+        this many radii of its border beyond that border (the border: its points next to explained
+        ones; its radius: the RMS distance of the border's largest piece from its centroid); a
+        contraction stopping a radius short of a rounded end reaches about one or less
+        (docs/diagnostics.md "Missing parts").
+    missing_min_share : ... and when it holds at least this share of the cloud (noise, a few points).
+    missing_large_share : a region holding this share of the cloud counts whatever its depth (a
+        skeleton shrunk to the centre of a ring: its ball is wide, the ring unexplained).
+    missing_min_completeness : ``incomplete`` also fires when the skeleton explains less than this
+        share of the cloud, however it is split (a mapping that halves a skeleton leaves several
+        regions, none large).
+    missing_depth_quantile : quantile of a region's distances to its border taken as its reach
+        (robust to stray points).
+    missing_link_factor : unexplained points closer than this many median NN spacings are one region.
+    missing_max_points : above this many cloud points the missing parts are found on a random
+        subsample of this many and every cloud point takes its nearest sample's verdict (the result
+        says so; docs/diagnostics.md gives the verdicts unchanged).
+    missing_max_elements : a skeletal set with more points is thinned to one point per grid cell
+        (half the cloud's median spacing, grown until at most this many remain) before its balls are
+        built: the balls' slack dwarfs the cells.
     """
 
     normalize_by: Literal["longest_side", "diagonal"] = "longest_side"
@@ -124,6 +145,16 @@ class Params:
     outside_skeletal_share: float = 0.05
     outside_link: float = 3.0
 
+    # diagnostics: missing parts (docs/diagnostics.md)
+    missing_depth: float = 1.25
+    missing_min_share: float = 0.01
+    missing_large_share: float = 0.5
+    missing_min_completeness: float = 0.6
+    missing_depth_quantile: float = 0.95
+    missing_link_factor: float = 4.0
+    missing_max_points: int = 200_000
+    missing_max_elements: int = 20_000
+
     def __post_init__(self) -> None:
         def bad(name: str, why: str) -> None:
             raise ValueError(f"parameter {name}={getattr(self, name)!r}: {why}")
@@ -155,6 +186,15 @@ class Params:
             bad("coverage_max_points", "must be >= 0")
         if not 0.0 < float(self.rays_near_angle) < 1.0:
             bad("rays_near_angle", "must be in (0, 1)")
+        for name in ("missing_depth", "missing_link_factor"):
+            if not float(getattr(self, name)) > 0:
+                bad(name, "must be > 0")
+        for name in ("missing_min_share", "missing_large_share", "missing_min_completeness", "missing_depth_quantile"):
+            if not 0.0 <= float(getattr(self, name)) <= 1.0:
+                bad(name, "must be in [0, 1]")
+        for name in ("missing_max_points", "missing_max_elements"):
+            if int(getattr(self, name)) < 1000:
+                bad(name, "must be an integer >= 1000")
         if self.k_center is not None and int(self.k_center) < 1:
             bad("k_center", "must be a positive integer or None")
         for name in ("diag_step", "spur_reach", "cycles_voxel_spacing", "outside_min_radii", "outside_link"):

@@ -1,0 +1,360 @@
+"""Missing parts: the parts of the shape a skeleton does not reach, and its completeness (issue 22,
+item 2; docs/diagnostics.md "Missing parts", "Completeness").
+
+A cloud point is explained when a skeleton element's medial ball, grown by the coverage slack,
+reaches it (SPEC 8, :mod:`skelcore.metrics.coverage`); completeness is the share explained. The
+unexplained points are linked into regions of the cloud (neighbours closer than
+``missing_link_factor`` median spacings). A region's depth is how far it reaches beyond its border
+(the unexplained points next to explained ones), in the radius of that border: a contraction that
+stops a radius short of a rounded end leaves a cap about one radius deep, a missing arm or half
+handle reaches several, the wide sides of a flat part a curve crosses reach less than their width.
+A region counts (warning ``incomplete``) when depth >= ``missing_depth`` and share >=
+``missing_min_share``, or share >= ``missing_large_share``; it also fires when the completeness is
+under ``missing_min_completeness``. Above ``missing_max_points`` cloud points
+the work runs on a random subsample and every cloud point takes its nearest sample's verdict
+(``subsample`` says so).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Callable
+
+import numpy as np
+from scipy.sparse import coo_matrix
+from scipy.sparse.csgraph import connected_components
+from scipy.spatial import cKDTree
+
+from ..correspondence import densify_curve
+from ..curve import CurveSkeleton
+from ..geometry import Checkpoint, no_checkpoint, unique_rows
+from ..metrics.coverage import Coverage, coverage, coverage_tau
+from ..params import Params
+from ..trust_warning import TrustWarning
+
+__all__ = ["MissingRegion", "MissingParts", "missing_parts", "skeleton_elements"]
+
+# neighbours per unexplained point in the region graph (edges also need to be shorter than the link)
+LINK_K = 8
+# border points closer than this many links are one piece of a region's border
+BORDER_LINK = 3.0
+# above missing_max_points, cloud points within this many (subsample) spacings of an unexplained sample
+# look up their nearest sample's verdict
+SPREAD = 4.0
+# seed of the subsample taken above missing_max_points (the verdicts must not depend on a run)
+SUBSAMPLE_SEED = 0
+
+
+@dataclass
+class MissingRegion:
+    """One connected region of unexplained cloud points.
+
+    ``share``: its share of the cloud; ``depth``: how far it reaches beyond its border (``reach``, the
+    quantile distance to the border, normalized units) in the border's radius ``border_radius``; NaN
+    for regions under ``missing_min_share``, inf for a region no explained point touches;
+    ``centroid`` in the units of ``to_user`` (user units in an evaluation); ``deepest``: the cloud row
+    farthest from the skeleton's balls; ``counted``: a missing part (``incomplete``)."""
+
+    id: int
+    n_points: int
+    share: float
+    depth: float
+    reach: float
+    border_radius: float
+    centroid: np.ndarray
+    deepest: int
+    counted: bool
+
+    def to_dict(self) -> dict:
+        return {"id": self.id, "n_points": self.n_points, "share": self.share, "depth": self.depth,
+                "reach": self.reach, "border_radius": self.border_radius,
+                "centroid": [float(c) for c in self.centroid], "deepest_point": self.deepest,
+                "counted": self.counted}
+
+
+@dataclass
+class MissingParts:
+    """What of the cloud a skeleton explains (docs/diagnostics.md "Missing parts").
+
+    Per cloud point: ``explained`` (bool) and ``region`` (int32: the id of its region in ``regions``,
+    -1 when explained); ``missing`` flags the points of counted regions. ``regions`` are sorted by
+    share, largest first. ``subsample``: the number of cloud points the regions were found on, None
+    when all were used."""
+
+    completeness: float
+    explained: np.ndarray
+    region: np.ndarray
+    regions: list[MissingRegion]
+    n_elements: int
+    subsample: int | None
+    what: str = "skeleton"
+    thresholds: dict = field(default_factory=dict)
+
+    @property
+    def counted(self) -> list[MissingRegion]:
+        return [r for r in self.regions if r.counted]
+
+    @property
+    def incomplete(self) -> bool:
+        """Some region counts, or the skeleton explains under ``missing_min_completeness`` of the cloud."""
+        return bool(self.counted) or self.completeness < self.thresholds.get("missing_min_completeness", 0.0)
+
+    @property
+    def missing(self) -> np.ndarray:
+        ids = np.array([r.id for r in self.counted], dtype=np.int64)
+        return np.isin(self.region, ids) if len(ids) else np.zeros(len(self.region), bool)
+
+    @property
+    def missing_share(self) -> float:
+        return float(sum(r.share for r in self.counted))
+
+    def to_dict(self, max_regions: int = 10) -> dict:
+        """Completeness, the counted regions and the largest others (at most ``max_regions`` in all)."""
+        shown = self.counted + [r for r in self.regions if not r.counted][: max(0, max_regions - len(self.counted))]
+        return {"completeness": self.completeness, "incomplete": self.incomplete, "missing_share": self.missing_share,
+                "n_missing_parts": len(self.counted), "n_regions": len(self.regions),
+                "regions": [r.to_dict() for r in shown], "n_elements": self.n_elements,
+                "subsample": self.subsample, "thresholds": dict(self.thresholds)}
+
+    def warnings(self) -> list[TrustWarning]:
+        """``incomplete`` when some region counts, with its share, depth and place."""
+        parts = self.counted
+        if not self.incomplete:
+            return []
+        sub = f" (found on {self.subsample:,} sampled cloud points)" if self.subsample else ""
+        if not parts:
+            big = f", the largest {self.regions[0].share:.1%} of it" if self.regions else ""
+            return [TrustWarning(
+                "incomplete",
+                f"the {self.what} explains only {self.completeness:.1%} of the cloud (completeness "
+                f"{self.completeness:.3f}; {len(self.regions)} unexplained regions{big}){sub}",
+            )]  # fmt: skip
+        said = "; ".join(f"{r.share:.1%} of the cloud around ({r.centroid[0]:.4g}, {r.centroid[1]:.4g}, "
+                         f"{r.centroid[2]:.4g}) reaching {r.depth:.2g} local radii beyond it" for r in parts[:3])
+        more = f" and {len(parts) - 3} more" if len(parts) > 3 else ""
+        n = len(parts)
+        return [TrustWarning(
+            "incomplete",
+            f"the {self.what} does not reach {n} part{'s' if n > 1 else ''} of the shape: {said}{more}; "
+            f"completeness {self.completeness:.3f}{sub}",
+        )]  # fmt: skip
+
+
+def skeleton_elements(skeleton: np.ndarray | CurveSkeleton, spacing: float, max_elements: int,
+                      checkpoint: Checkpoint = no_checkpoint) -> np.ndarray:
+    """The points whose balls explain the cloud: a curve's vertices and points every ``spacing``
+    along its edges (at most 200,000, as the evaluation's curve coverage), or a point set's distinct
+    points; more than ``max_elements`` are thinned to one per grid cell, of ``spacing / 2`` grown
+    until at most ``max_elements`` remain (contracted sets are tubes of points, not curves), after
+    a random pick of 10 x ``max_elements`` from a larger set."""
+    if isinstance(skeleton, CurveSkeleton):
+        total = float(skeleton.edge_lengths().sum())
+        step = max(spacing, total / 200_000, 1e-12)
+        pts, _ = densify_curve(skeleton, step)
+        return np.vstack([pts, skeleton.vertices])
+    pts = np.asarray(skeleton, dtype=float).reshape(-1, 3)
+    if len(pts) <= max_elements or not spacing > 0:
+        return unique_rows(pts, checkpoint)[0]
+    if len(pts) > 10 * max_elements:  # a random tenth-or-less first: the cells see no difference
+        pts = pts[np.random.default_rng(SUBSAMPLE_SEED).choice(len(pts), 10 * max_elements, replace=False)]
+    cell = spacing / 2
+    lo = pts.min(axis=0)
+    while True:
+        cells = np.floor((pts - lo) / cell).astype(np.int64)
+        dims = cells.max(axis=0) + 1
+        key = (cells[:, 0] * dims[1] + cells[:, 1]) * dims[2] + cells[:, 2]  # one number per cell
+        _, first = np.unique(key, return_index=True)
+        checkpoint(0.0)
+        if len(first) <= max_elements:
+            return pts[np.sort(first)]
+        cell *= 1.5
+
+
+def _identity(points: np.ndarray) -> np.ndarray:
+    return points
+
+
+def missing_parts(
+    cloud: np.ndarray,
+    skeleton: np.ndarray | CurveSkeleton,
+    params: Params = Params(),
+    *,
+    cov: Coverage | None = None,
+    tau: float | None = None,
+    what: str = "skeleton",
+    to_user: Callable[[np.ndarray], np.ndarray] = _identity,
+    checkpoint: Checkpoint = no_checkpoint,
+) -> MissingParts:
+    """The parts of the (normalized) cloud the (normalized) skeleton does not reach, and its completeness.
+
+    Parameters
+    ----------
+    cloud : (N, 3) normalized cloud.
+    skeleton : a skeletal point set (M, 3), curve samples, or a :class:`CurveSkeleton` (its edges
+        densified as the evaluation's curve coverage does), normalized.
+    cov : the evaluation's :class:`Coverage` of these elements, if computed (then used as is: no
+        subsample); else computed here.
+    tau : the coverage tolerance of the full cloud (``coverage_tau``), if known.
+    what : how the warning names the skeleton ("curve skeleton", "skeletal point set").
+    to_user : maps normalized points to user units for the regions' centroids.
+    checkpoint : ``checkpoint(fraction)``, raises to cancel.
+
+    An empty skeleton explains nothing: one region per connected part of the cloud, depth inf.
+    """
+    p = params
+    cloud = np.asarray(cloud, dtype=float).reshape(-1, 3)
+    n = len(cloud)
+    checkpoint(0.0)
+    sub: np.ndarray | None = None
+    if cov is not None:
+        if len(cov.covered) != n:
+            raise ValueError(f"coverage has {len(cov.covered)} cloud points, the cloud {n}")
+        pts = cloud
+        tau = float(cov.tau)
+    else:
+        if n > int(p.missing_max_points):
+            rng = np.random.default_rng(SUBSAMPLE_SEED)
+            sub = np.sort(rng.choice(n, int(p.missing_max_points), replace=False))
+            pts = cloud[sub]
+            # the spacing of a surface sample grows as 1 / sqrt(density)
+            tau = None if tau is None else float(tau) * float(np.sqrt(n / len(pts)))
+        else:
+            pts = cloud
+        if tau is None:
+            tau = coverage_tau(pts, p, lambda f: checkpoint(0.1 * f))
+    spacing = float(tau) / float(p.coverage_tau_factor)
+    if cov is None:
+        elements = skeleton_elements(skeleton, spacing, int(p.missing_max_elements), lambda f: checkpoint(0.1))
+        cov = coverage(pts, elements, p, tau, checkpoint=lambda f: checkpoint(0.1 + 0.6 * f))
+    checkpoint(0.7)
+    region_s, regions = _regions(pts, cov, spacing, p, checkpoint)
+    checkpoint(0.9)
+    explained_s = cov.covered
+    if sub is not None:
+        region, explained = _spread(cloud, pts, region_s, explained_s, spacing)
+    else:
+        region, explained = region_s, explained_s
+    counts = np.bincount(region[region >= 0], minlength=len(regions))
+    out: list[MissingRegion] = []
+    for k, r in enumerate(regions):
+        share = float(counts[k]) / n
+        out.append(MissingRegion(
+            id=k, n_points=int(counts[k]), share=share, depth=r["depth"], reach=r["reach"],
+            border_radius=r["border_radius"], centroid=np.asarray(to_user(r["centroid"][None]))[0],
+            deepest=int(r["deepest"] if sub is None else sub[r["deepest"]]),
+            counted=bool((share >= p.missing_min_share and r["depth"] >= p.missing_depth)
+                         or share >= p.missing_large_share),
+        ))  # fmt: skip
+    checkpoint(1.0)
+    return MissingParts(
+        completeness=float(explained.mean()) if n else 1.0,
+        explained=explained,
+        region=region.astype(np.int32),
+        regions=out,
+        n_elements=int(cov.n_elements),
+        subsample=None if sub is None else int(len(sub)),
+        what=what,
+        thresholds={"missing_depth": float(p.missing_depth), "missing_min_share": float(p.missing_min_share),
+                    "missing_large_share": float(p.missing_large_share),
+                    "missing_min_completeness": float(p.missing_min_completeness)},
+    )
+
+
+def _spread(cloud: np.ndarray, pts: np.ndarray, region_s: np.ndarray, explained_s: np.ndarray,
+            spacing: float) -> tuple[np.ndarray, np.ndarray]:
+    """Every cloud point takes the verdict of its nearest sample ``pts``; only points within
+    ``SPREAD`` spacings of an unexplained sample are looked up (the rest are explained: a point
+    farther than that from every sample, its nearest one included, is no sample's neighbour)."""
+    region = np.full(len(cloud), -1, np.int64)
+    explained = np.ones(len(cloud), bool)
+    un = np.flatnonzero(~explained_s)
+    if len(un) == 0:
+        return region, explained
+    d, _ = cKDTree(pts[un]).query(cloud, distance_upper_bound=SPREAD * spacing, workers=-1)
+    near = np.flatnonzero(np.isfinite(d))
+    j = cKDTree(pts).query(cloud[near], workers=-1)[1]
+    region[near], explained[near] = region_s[j], explained_s[j]
+    return region, explained
+
+
+def _regions(pts: np.ndarray, cov: Coverage, spacing: float, p: Params, checkpoint: Checkpoint,
+             tree: cKDTree | None = None) -> tuple[np.ndarray, list[dict]]:
+    """Region id per point (-1 explained; ids by size, largest first) and each region's numbers.
+
+    Border: the region's points with an explained point among their neighbours (within the link).
+    Radius at the border: the RMS distance of the largest connected piece of the border from its
+    centroid (a ring around a tube: the tube's radius; it is the cross-section's extent, not an
+    inscribed ball's, so a flat part a curve crosses is not a missing part). Depth: the region's
+    ``missing_depth_quantile`` distance to its border over that radius. Regions under
+    ``missing_min_share`` of the points get no depth (NaN): they cannot count."""
+    n = len(pts)
+    region = np.full(n, -1, np.int64)
+    miss = np.flatnonzero(~cov.covered)
+    if len(miss) == 0:
+        return region, []
+    up = pts[miss]
+    link = float(p.missing_link_factor) * spacing
+    k = min(LINK_K + 1, len(miss))
+    if k > 1:
+        d, j = cKDTree(up).query(up, k=k, distance_upper_bound=link, workers=-1)
+        ok = np.isfinite(d[:, 1:])
+        rows = np.repeat(np.arange(len(miss)), k - 1)[ok.ravel()]
+        cols = j[:, 1:][ok]
+    else:
+        rows = cols = np.empty(0, np.int64)
+    graph = coo_matrix((np.ones(len(rows), np.int8), (rows, cols)), shape=(len(miss), len(miss)))
+    n_comp, label = connected_components(graph, directed=False)
+    checkpoint(0.75)
+    size = np.bincount(label, minlength=n_comp)
+    rank = np.empty(n_comp, np.int64)
+    rank[np.lexsort((np.arange(n_comp), -size))] = np.arange(n_comp)
+    label = rank[label]
+    size = np.bincount(label, minlength=n_comp)
+    region[miss] = label
+    sums = np.zeros((n_comp, 3))
+    np.add.at(sums, label, up)
+    centroid = sums / size[:, None]
+    big = np.flatnonzero(size >= max(1.0, float(p.missing_min_share) * n))
+    depth = np.full(n_comp, np.nan)
+    reach = np.full(n_comp, np.nan)
+    radius = np.full(n_comp, np.nan)
+    if len(big):
+        # border points of the big regions: an explained cloud point among their neighbours
+        in_big = np.isin(label, big)
+        q = np.flatnonzero(in_big)
+        tree = cKDTree(pts) if tree is None else tree
+        kk = min(LINK_K + 1, n)
+        dd, jj = tree.query(up[q], k=kk, distance_upper_bound=link, workers=-1)
+        jj = np.where(np.isfinite(dd), jj, n)
+        explained = np.concatenate([cov.covered, [False]])
+        border = np.zeros(len(miss), bool)
+        border[q] = explained[jj].any(axis=1)
+        # pieces of the border (the two rings of an arc cut out of a loop): border points closer than
+        # BORDER_LINK links are one piece (the border of a scan's region is sparse and ragged)
+        bi = np.flatnonzero(border)
+        piece = np.zeros(len(miss), np.int64)
+        if len(bi) > 1:
+            pairs = cKDTree(up[bi]).query_pairs(BORDER_LINK * link, output_type="ndarray")
+            bg = coo_matrix((np.ones(len(pairs), np.int8), (pairs[:, 0], pairs[:, 1])), shape=(len(bi), len(bi)))
+            piece[bi] = connected_components(bg, directed=False)[1]
+        for c in big:
+            checkpoint(0.75 + 0.15 * float(c) / max(1, n_comp))
+            members = np.flatnonzero(label == c)
+            b = members[border[members]]
+            if len(b) == 0:  # nothing of the skeleton's reach touches it: all of it is missing
+                depth[c], reach[c], radius[c] = np.inf, np.inf, np.nan
+                continue
+            pid, cnt = np.unique(piece[b], return_counts=True)
+            main = b[piece[b] == pid[np.argmax(cnt)]]
+            ring = up[main]
+            rho = float(np.sqrt(np.mean(np.sum((ring - ring.mean(axis=0)) ** 2, axis=1))))
+            rho = max(rho, spacing)
+            dist = cKDTree(up[b]).query(up[members], workers=-1)[0]
+            r_q = float(np.quantile(dist, float(p.missing_depth_quantile)))
+            depth[c], reach[c], radius[c] = r_q / rho, r_q, rho
+    deepest = np.zeros(n_comp, np.int64)
+    order = np.lexsort((cov.gap[miss], label))
+    deepest[label[order]] = miss[order]  # the last of each region in gap order: its farthest point
+    out = [{"depth": float(depth[c]), "reach": float(reach[c]), "border_radius": float(radius[c]),
+            "centroid": centroid[c], "deepest": int(deepest[c])} for c in range(n_comp)]
+    return region, out
