@@ -144,6 +144,8 @@ def test_the_cycle_finder_finds_a_cycle():
 #                                                                                 -> foundation
 #   skeletonizer      skelcore.skeleton                                           -> foundation
 #   metrics           skelcore.metrics (each result type beside its metric)       -> foundation
+#   diagnostics       skelcore.diagnostics, trust (the warnings; TrustWarning itself is in the foundation)
+#                                                                                 -> foundation, metrics
 #   record            the Evaluation (skelcore.evaluation, old name results), Scores -> foundation, metrics
 #   stages            skelcore.stages (the evaluate pipeline)                     -> foundation, metrics, record
 #   objects in        skelcore.interop's recognisers of other libraries' objects -> foundation, formats
@@ -155,23 +157,24 @@ def test_the_cycle_finder_finds_a_cycle():
 # So: metrics never import the record, the stages or the evaluation files; the record imports no io; the
 # format readers and writers import no metric; compare and the CLI sit on top. A pattern "x.*" is the
 # package x and everything in it, any other an exact module; a module's layer is its longest pattern.
-_BELOW_APPS = ["foundation", "formats", "objects in", "skeletonizer", "metrics", "record", "stages",
+_BELOW_APPS = ["foundation", "formats", "objects in", "skeletonizer", "metrics", "diagnostics", "record", "stages",
                "evaluation files"]
 LAYERS: dict[str, tuple[list[str], list[str]]] = {
     "foundation": ([f"skelcore.{m}" for m in ("errors", "version", "params", "geometry", "parallel", "curve",
-                                              "curve_sampling", "correspondence", "trust", "colors", "shapes",
-                                              "skeleton_mapping")], []),
+                                              "curve_sampling", "correspondence", "colors", "shapes",
+                                              "skeleton_mapping", "trust_warning")], []),
     "formats": (["skelcore.io.*"], ["foundation"]),
     "skeletonizer": (["skelcore.skeleton.*"], ["foundation"]),
     "metrics": (["skelcore.metrics.*"], ["foundation"]),
-    "record": (["skelcore.evaluation", "skelcore.results", "skelcore.scores"], ["foundation", "metrics"]),
-    "stages": (["skelcore.stages.*"], ["foundation", "metrics", "record"]),
+    "diagnostics": (["skelcore.diagnostics.*", "skelcore.trust"], ["foundation", "metrics"]),
+    "record": (["skelcore.evaluation", "skelcore.results", "skelcore.scores"], ["foundation", "metrics", "diagnostics"]),
+    "stages": (["skelcore.stages.*"], ["foundation", "metrics", "diagnostics", "record"]),
     "objects in": (["skelcore.interop", "skelcore.interop.recognise", "skelcore.interop.objects_in",
                     "skelcore.interop.swc_frames"], ["foundation", "formats"]),
     "evaluation files": (["skelcore.io.evaluation_files", "skelcore.io.export", "skelcore.io.conversion",
                           "skelcore.interop.tables",
                           "skelcore.interop.graph_out", "skelcore.interop.open3d_out"],
-                         ["foundation", "formats", "metrics", "record"]),
+                         ["foundation", "formats", "metrics", "diagnostics", "record"]),
     "applications": (["skelcore.compare.*", "skelcore.experiments.*"], _BELOW_APPS),
     "entry points": (["skelcore", "skelcore.__main__", "skelcore.cli.*"], [*_BELOW_APPS, "applications"]),
 }
