@@ -121,6 +121,8 @@ class Evaluation:
     reference: ReferenceComparison | None = None
     #: what could not be computed and why, e.g. {"topology": "..."}
     not_computed: dict[str, str] = field(default_factory=dict)
+    #: the defects found without a reference (issue 22; skelcore.diagnostics.record.Diagnostics)
+    diagnostics: Any = None
 
     # ---- overall scores -------------------------------------------------------------------
     def summary(self, beta_star: float | None = None, c_star: float | None = None) -> dict[str, Any]:

@@ -116,6 +116,20 @@ SCORE_COLUMNS: tuple[ScoreColumn, ...] = (
     ScoreColumn("reference_recall", "recall", "R", "recall", "fraction", "higher", 3, "reference"),
     ScoreColumn("reference_f1", "F1", "F1", "$F_1$", "fraction", "higher", 3, "reference"),
     ScoreColumn("reference_tau", "reference tau", "tau", r"$\tau$", "normalized units", None, 4, "reference"),
+    # the diagnostics (issue 22, docs/diagnostics.md)
+    *(ScoreColumn(f"completeness_{kind}", f"completeness ({kind})", f"compl. {kind[0]}", rf"compl.\ ${'P_s' if kind == 'skeletal' else 'G_s'}$",
+                  "fraction of the cloud", "higher", 3, "diagnostics", "completeness", kind, compared=True)
+      for kind in KINDS),
+    ScoreColumn("spurious_branches", "spurious branches", "spurs", "spurs", "count", "lower", 1, "diagnostics",
+                compared=True),
+    ScoreColumn("spurious_length_share", "spurious length share", "spur len.", "spur len.", "fraction of the length",
+                "lower", 3, "diagnostics"),
+    ScoreColumn("spurious_cycles", "spurious cycles", "sp. cyc.", "sp. cycles", "count", "lower", 1, "diagnostics",
+                compared=True),
+    ScoreColumn("missing_cycles", "missing cycles", "miss. cyc.", "miss. cycles", "count", "lower", 1, "diagnostics",
+                compared=True),
+    ScoreColumn("outside_length_share", "length outside", "outside", "outside", "fraction of the length", "lower", 3,
+                "diagnostics", compared=True),
     # facts of the run, lower is better in the leaderboard (1 decimal: means over jobs); "seconds" is the
     # evaluation's wall time in a Scores, the whole job's (skeletonize + evaluate) in compare's tables
     ScoreColumn("n_warnings", "warnings", "warn.", "warnings", "count", "lower", 1, "run", compared=True),
@@ -204,6 +218,14 @@ class Scores:
     reference_endpoints: tuple[int, int] | None = _at("reference", "endpoints", read="pair")
     reference_components: tuple[int, int] | None = _at("reference", "components", read="pair")
     reference_cycles: tuple[int, int] | None = _at("reference", "cycles", read="pair")
+    # issue 22: the diagnostics (docs/diagnostics.md): share of the cloud explained, defects found
+    completeness_skeletal: float | None = _at("diagnostics", "completeness", "skeletal", needs="skeletal")
+    completeness_curve: float | None = _at("diagnostics", "completeness", "curve", needs="curve")
+    spurious_branches: int | None = _at("diagnostics", "spurious_branches", "spurious", read="int")
+    spurious_length_share: float | None = _at("diagnostics", "spurious_branches", "length_share", needs="curve")
+    spurious_cycles: int | None = _at("diagnostics", "cycles", "spurious", read="int")
+    missing_cycles: int | None = _at("diagnostics", "cycles", "missing", read="int")
+    outside_length_share: float | None = _at("diagnostics", "outside", "length_share", needs="curve")
     # the run: trust warnings, evaluation wall time (s, to the microsecond), thresholds counted with
     n_warnings: int | None = _at("warnings", read="len")
     seconds: float | None = _at("timings_s", "total")
@@ -220,6 +242,7 @@ class Scores:
         doc = dict(ev.summary(b_star, c_star_))
         total = (ev.timings or {}).get("total")
         doc.update(reference=None if ev.reference is None else ev.reference.to_dict(),
+                   diagnostics=None if ev.diagnostics is None else ev.diagnostics.to_dict(),
                    warnings=list(ev.warnings), params={"beta_star": b_star, "c_star": c_star_},
                    timings_s={} if total is None else {"total": round(float(total), 6)})
         return cls._read(doc, lambda _field: None)

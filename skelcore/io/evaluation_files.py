@@ -89,6 +89,7 @@ def to_json_dict(ev: Evaluation, version: str | None = None) -> dict[str, Any]:
         "warnings": ev.warning_dicts(),
         "coverage": summ["coverage"],
         "reference": None if ev.reference is None else ev.reference.to_dict(),
+        "diagnostics": None if ev.diagnostics is None else ev.diagnostics.to_dict(),
         "timings_s": {k: round(float(v), 6) for k, v in ev.timings.items()},
     }
     return json_safe(doc)
@@ -120,11 +121,15 @@ def write_per_point(ev: Evaluation, prefix: str, inputs: tuple[str, ...] = ()) -
             range(len(c.samples)), c.sample_edge, c.sample_t, *c.samples.T,
             c.sample_boundedness, c.sample_centeredness(b_star),
         )
-        _write_csv(path, ["sample", "edge", "t", "x", "y", "z", "boundedness", "centeredness"], rows, guard)
+        extra, cols = _defect_columns(ev, "sample", len(c.samples))
+        _write_csv(path, ["sample", "edge", "t", "x", "y", "z", "boundedness", "centeredness", *cols],
+                   (r + e for r, e in zip(rows, extra)), guard)
         written.append(path)
         path = f"{prefix}_curve_vertices.csv"
         rows = zip(range(c.curve.n_vertices), *c.curve.vertices.T, c.vertex_degree, c.vertex_smoothness)
-        _write_csv(path, ["vertex", "x", "y", "z", "degree", "smoothness"], rows, guard)
+        extra, cols = _defect_columns(ev, "vertex", c.curve.n_vertices)
+        _write_csv(path, ["vertex", "x", "y", "z", "degree", "smoothness", *cols], (r + e for r, e in zip(rows, extra)),
+                   guard)
         written.append(path)
     cloud_cols = cloud_columns(ev)
     if len(cloud_cols) > 3:
@@ -144,7 +149,22 @@ def cloud_columns(ev: Evaluation) -> dict[str, np.ndarray]:
             cols[f"covered_{name}"] = cov.covered.astype(np.int64)
     if ev.skeletal is not None and ev.skeletal.rows is not None:
         cols["skeletal_row"] = ev.skeletal.rows
+    arrays = {} if ev.diagnostics is None else ev.diagnostics.arrays
+    for kind in ("skeletal", "curve"):
+        if f"cloud_missing_{kind}" in arrays:
+            cols[f"missing_{kind}"] = arrays[f"cloud_missing_{kind}"]
     return cols
+
+
+def _defect_columns(ev: Evaluation, element: str, n: int) -> tuple[list[tuple], list[str]]:
+    """The diagnostics' ``branch`` and ``defects`` (";"-joined codes) per curve sample or vertex (issue 22)."""
+    arrays = {} if ev.diagnostics is None else ev.diagnostics.arrays
+    if f"curve_{element}_branch" not in arrays:
+        return [()] * n, []
+    from ..diagnostics.record import defect_names
+
+    return (list(zip(arrays[f"curve_{element}_branch"], defect_names(arrays[f"curve_{element}_defects"]))),
+            ["branch", "defects"])
 
 
 def write_barcodes(ev: Evaluation, path: str | os.PathLike, inputs: tuple[str, ...] = ()) -> None:
@@ -218,6 +238,8 @@ def evaluation_arrays(ev: Evaluation) -> dict[str, np.ndarray]:
             out[f"ev_coverage_{kind}_gap"] = np.asarray(cov.gap, dtype=float)
             out[f"ev_coverage_{kind}_covered"] = np.asarray(cov.covered, dtype=bool)
             out[f"ev_coverage_{kind}_n"] = np.array([int(cov.n_elements)])
+    if ev.diagnostics is not None:
+        out.update({f"ev_diag_{k}": np.asarray(v) for k, v in ev.diagnostics.arrays.items()})
     return out
 
 
@@ -294,6 +316,11 @@ def evaluation_from_store(doc: dict[str, Any], arrays: dict[str, np.ndarray], wh
                 max_gap=json_float(block.get("max_gap")), tau=json_float(cov_doc.get("tau")),
                 slack=json_float(cov_doc.get("slack")), n_elements=int(a[f"ev_coverage_{kind}_n"][0])))
     ev.reference = _reference(doc.get("reference"))
+    if doc.get("diagnostics") is not None:
+        from ..diagnostics.record import Diagnostics
+
+        ev.diagnostics = Diagnostics(summary=doc["diagnostics"],
+                                     arrays={k[len("ev_diag_"):]: a[k] for k in a if k.startswith("ev_diag_")})
     return ev
 
 

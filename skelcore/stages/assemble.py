@@ -13,9 +13,10 @@ from ..evaluation import CurveLocal, Evaluation, SkeletalLocal
 from ..geometry import Checkpoint
 from ..metrics.boundedness import boundedness
 from ..trust import TrustWarning, frame_fit_warning, frame_warnings, no_correspondence_warning, smoothness_warning
+from ..diagnostics.record import diagnostics_record
 from .context import EvalContext
 
-__all__ = ["assemble", "trust_warnings"]
+__all__ = ["assemble", "trust_warnings", "diagnostics_warnings"]
 
 
 def assemble(ctx: EvalContext, inputs: dict[str, Any] | None = None) -> Evaluation:
@@ -47,7 +48,20 @@ def assemble(ctx: EvalContext, inputs: dict[str, Any] | None = None) -> Evaluati
     ev.coverage_skeletal = got.get("skeletal coverage")
     ev.coverage_curve = got.get("curve coverage")
     ev.reference = got.get("reference")
+    if any(k in got for k in ("curve defects", "skeletal missing parts", "curve missing parts")):
+        ev.diagnostics = diagnostics_record(got.get("curve defects"), got.get("skeletal missing parts"),
+                                            got.get("curve missing parts"))
     return ev
+
+
+def diagnostics_warnings(ctx: EvalContext) -> list[TrustWarning]:
+    """The diagnostics' defect warnings (issue 22), after the trust checks."""
+    out: list[TrustWarning] = []
+    for name in ("skeletal missing parts", "curve missing parts", "curve defects"):
+        found = ctx.results.get(name)
+        if found is not None:
+            out += found.warnings()
+    return out
 
 
 def _skeletal_local(ctx: EvalContext, points: np.ndarray, mode: str | None, index: np.ndarray | None) -> SkeletalLocal:

@@ -3,7 +3,7 @@ progress bar that moves evenly; measured on 4k-point shapes), the column it fill
 the context (the stage that makes an input runs before it), when it applies and its function.
 
 The paper's four metrics on the skeletal set and the curve (SPEC 1-4), the reverse correspondence,
-SkelScope's coverage and the reference comparison (docs/metrics.md).  Start order (docs/performance.md
+SkelScope's coverage and the reference comparison (docs/metrics.md), the diagnostics (issue 22).  Start order (docs/performance.md
 8): the boundedness stages first (the longest), then what others wait for, then the rest in catalogue
 order, the curve's boundedness last when the skeletal set's runs.
 """
@@ -23,6 +23,8 @@ from ..metrics.coverage import coverage
 from ..metrics.reference import compare_with_reference
 from ..metrics.smoothness import curve_smoothness_overall, curve_vertex_smoothness, skeletal_smoothness
 from ..metrics.topology import topological_similarity
+from ..diagnostics.defects import find_curve_defects
+from ..diagnostics.missing_parts import missing_parts
 from .context import EvalContext
 
 __all__ = ["Stage", "CATALOGUE", "select", "start_order", "FIRST", "EARLY", "IN_TURN", "LAST"]
@@ -116,6 +118,25 @@ def _reference(ctx: EvalContext, checkpoint: Checkpoint):
     return compare_with_reference(ctx.curve_n, ctx.reference_n, ctx.tau(checkpoint))
 
 
+def _curve_defects(ctx: EvalContext, checkpoint: Checkpoint):
+    """Branches, spurious branches, cycles, the parts outside (issue 22, docs/diagnostics.md)."""
+    return find_curve_defects(ctx.cloud_n, ctx.curve_n, samples=ctx.samples,
+                              sample_boundedness=ctx.results["curve boundedness"], params=ctx.params,
+                              checkpoint=checkpoint)
+
+
+def _missing(kind: str) -> Callable[[EvalContext, Checkpoint], object]:
+    """Missing parts and completeness of one column (docs/diagnostics.md), from its coverage when computed."""
+    def run(ctx: EvalContext, checkpoint: Checkpoint):
+        skeleton = ctx.skeletal_n if kind == "skeletal" else ctx.curve_n
+        cov = ctx.results.get(f"{kind} coverage")
+        what = "skeletal point set" if kind == "skeletal" else "curve skeleton"
+        return missing_parts(ctx.cloud_n, skeleton, ctx.params, cov=cov, tau=None if cov is None else cov.tau,
+                             what=what, to_user=ctx.norm.invert, checkpoint=checkpoint)
+
+    return run
+
+
 # ---- when they apply ----------------------------------------------------------------------------
 
 def _reverse(ctx: EvalContext) -> bool:
@@ -141,6 +162,10 @@ def _skeletal_set_coverage(ctx: EvalContext) -> bool:
 
 def _curve_coverage_applies(ctx: EvalContext) -> bool:
     return ctx.curve is not None and ctx.with_coverage
+
+
+def _skeletal_set(ctx: EvalContext) -> bool:
+    return ctx.skeletal is not None
 
 
 def _reference_given(ctx: EvalContext) -> bool:
@@ -175,6 +200,12 @@ CATALOGUE: tuple[Stage, ...] = (
           fn=_curve_coverage),
     Stage("reference", weight=0.1, column="", inputs=("curve", "reference", "tau"), applies=_reference_given,
           fn=_reference),
+    Stage("curve defects", weight=0.5, column="", inputs=("cloud", "curve", "samples", "curve boundedness"),
+          applies=_curve, fn=_curve_defects, start=LAST),
+    Stage("skeletal missing parts", weight=0.2, column="", inputs=("cloud", "skeletal set", "skeletal coverage"),
+          applies=_skeletal_set, fn=_missing("skeletal"), start=LAST),
+    Stage("curve missing parts", weight=0.2, column="", inputs=("cloud", "curve", "curve coverage"), applies=_curve,
+          fn=_missing("curve"), start=LAST),
 )
 
 

@@ -27,7 +27,11 @@ CORRESPONDENCE_CHOICES = ("auto", "reverse")
 #: What a stage may read from the context (its ``inputs``): "skeletal set" is the one given, "skeletal
 #: points" the one the skeletal column scores (the curve's projections, made by the correspondence stage,
 #: when no set is given), "rows" the reverse correspondence (made by that stage too).
-CONTEXT_ITEMS = ("cloud", "skeletal set", "skeletal points", "rows", "index", "curve", "samples", "reference", "tau")
+CONTEXT_ITEMS = ("cloud", "skeletal set", "skeletal points", "rows", "index", "curve", "samples", "reference", "tau",
+                 "curve boundedness", "skeletal coverage", "curve coverage")
+#: items that are other stages' results (the diagnostics read them), made by the stage of that name
+#: when it runs in this evaluation (the coverage stages only below coverage_max_points)
+STAGE_RESULTS = ("curve boundedness", "skeletal coverage", "curve coverage")
 
 
 @dataclass
@@ -78,6 +82,12 @@ class EvalContext:
             return "correspondence"
         if item == "rows" and self.skeletal_mode == "reverse":
             return "correspondence"
+        if item == "curve boundedness":
+            return item if self.curve is not None else None
+        if item == "skeletal coverage":
+            return item if self.skeletal is not None and self.with_coverage else None
+        if item == "curve coverage":
+            return item if self.curve is not None and self.with_coverage else None
         return None
 
     def skeletal_points(self) -> np.ndarray:

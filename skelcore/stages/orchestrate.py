@@ -13,7 +13,7 @@ from ..curve import CurveSkeleton
 from ..evaluation import Evaluation
 from ..parallel import GraphTask, run_graph
 from ..params import Params
-from .assemble import assemble, trust_warnings
+from .assemble import assemble, diagnostics_warnings, trust_warnings
 from .catalogue import Stage, select, start_order
 from .context import EvalContext, build_context
 from .progress import Progress, StageProgress
@@ -70,6 +70,7 @@ def evaluate(
     run_graph(tasks, workers, on_error=tracker.abort)
     ev = assemble(ctx, inputs)
     ev.warnings += trust_warnings(ctx, ev, tracker.between("trust checks"))
+    ev.warnings += diagnostics_warnings(ctx)
     ev.timings = dict(tracker.timings)
     ev.timings["total"] = time.perf_counter() - t_start
     return ev

@@ -166,7 +166,7 @@ LAYERS: dict[str, tuple[list[str], list[str]]] = {
     "formats": (["skelcore.io.*"], ["foundation"]),
     "skeletonizer": (["skelcore.skeleton.*"], ["foundation"]),
     "metrics": (["skelcore.metrics.*"], ["foundation"]),
-    "diagnostics": (["skelcore.diagnostics.*", "skelcore.trust"], ["foundation", "metrics"]),
+    "diagnostics": (["skelcore.diagnostics.*", "skelcore.trust"], ["foundation", "formats", "metrics"]),
     "record": (["skelcore.evaluation", "skelcore.results", "skelcore.scores"], ["foundation", "metrics", "diagnostics"]),
     "stages": (["skelcore.stages.*"], ["foundation", "metrics", "diagnostics", "record"]),
     "objects in": (["skelcore.interop", "skelcore.interop.recognise", "skelcore.interop.objects_in",

@@ -52,23 +52,46 @@ def test_evaluate_gives_the_stored_outputs_bit_for_bit(name, request):
     stored = STORED[name]
     kwargs = case["make"]()
     assert make_golden.input_hashes(kwargs) == stored["inputs"], "the inputs changed (the skeletonizer?)"
-    now = json.loads(json.dumps(make_golden.record(kwargs)))  # the stored file's types (tuples as lists)
+    now = _without_diagnostics(json.loads(json.dumps(make_golden.record(kwargs))))  # the stored file's types
     assert _added_after(_differences({k: v for k, v in stored.items() if k != "inputs"}, now)) == []
 
 
 #: what later work adds without changing a stored value: new Params fields and new document blocks
 ADDITIONS = ("/doc/params/", "/doc/diagnostics: new")
+#: the diagnostics' stages and warnings (issue 22: tests/engine/test_diagnostics*.py check them)
+DIAGNOSTIC_STAGES = ("curve defects", "skeletal missing parts", "curve missing parts")
+DIAGNOSTIC_CODES = ("incomplete", "spurious_branches", "spurious_cycles", "missing_cycles", "outside")
 
 
 def _added_after(differences: list[str]) -> list[str]:
-    return [d for d in differences if not (d.endswith(": new") and d.startswith(ADDITIONS))]
+    """Differences less the additions, and less the last progress fraction's rounding (the stages'
+    weights sum differently once the diagnostics are among them: 0.9999999999999999 or 1.0)."""
+    def rounding(d: str) -> bool:
+        if not d.startswith("/progress_last: stored "):
+            return False
+        a, b = d[len("/progress_last: stored "):].split(", now ")
+        return abs(float(a) - float(b)) < 1e-9
+    return [d for d in differences if not (d.endswith(": new") and d.startswith(ADDITIONS)) and not rounding(d)]
+
+
+def _without_diagnostics(rec: dict) -> dict:
+    """The record as the paper's stages and the trust checks made it: the diagnostics' stages and
+    warnings taken out (they come after, and change no stored value)."""
+    rec = dict(rec)
+    for key in ("stages", "progress_labels"):
+        if isinstance(rec.get(key), list):
+            rec[key] = [s for s in rec[key] if s not in DIAGNOSTIC_STAGES]
+    if isinstance(rec.get("doc"), dict):
+        rec["doc"] = dict(rec["doc"])
+        rec["doc"]["warnings"] = [w for w in rec["doc"].get("warnings", []) if w["code"] not in DIAGNOSTIC_CODES]
+    return rec
 
 
 def test_a_changed_value_is_seen():
     """The comparison is not vacuous: one bit of one local value, or one key, makes it fail."""
     kwargs = make_golden.CASES["torus_lbc_skeletal_only_w1"]["make"]()
     stored = STORED["torus_lbc_skeletal_only_w1"]
-    rec = json.loads(json.dumps(make_golden.record(kwargs)))
+    rec = _without_diagnostics(json.loads(json.dumps(make_golden.record(kwargs))))
     assert _added_after(_differences({k: v for k, v in stored.items() if k != "inputs"}, rec)) == []
     beta = np.fromiter((1.0, 0.5), float)
     beta[1] = np.nextafter(beta[1], 1.0)  # one ulp

@@ -27,21 +27,33 @@ def test_every_stage_is_declared_once_with_a_weight_and_known_inputs():
         _ctx().made_by("skeleton")
 
 
+#: the diagnostics (issue 22) start last and wait for the results they read
+DIAG = ["curve defects", "skeletal missing parts", "curve missing parts"]
+DIAG_WAITS = {"curve defects": ("curve boundedness",), "skeletal missing parts": ("skeletal coverage",),
+              "curve missing parts": ("curve coverage",)}
+
+
 @pytest.mark.parametrize("case, started, waits", [
     (dict(), ["skeletal boundedness", "topology", "skeletal centeredness", "skeletal smoothness", "curve centeredness",
-              "curve smoothness", "skeletal coverage", "curve coverage", "curve boundedness"], {}),
+              "curve smoothness", "skeletal coverage", "curve coverage", "curve boundedness", *DIAG], DIAG_WAITS),
     (dict(correspondence="reverse", every=5),
      ["skeletal boundedness", "correspondence", "topology", "skeletal centeredness", "skeletal smoothness",
-      "curve centeredness", "curve smoothness", "skeletal coverage", "curve coverage", "curve boundedness"],
-     {"topology": ("correspondence",), "skeletal centeredness": ("correspondence",)}),
+      "curve centeredness", "curve smoothness", "skeletal coverage", "curve coverage", "curve boundedness", *DIAG],
+     {"topology": ("correspondence",), "skeletal centeredness": ("correspondence",), **DIAG_WAITS}),
     (dict(skeletal=False, correspondence="reverse"),
      ["curve boundedness", "skeletal boundedness", "correspondence", "curve centeredness", "curve smoothness",
-      "topology", "skeletal centeredness", "skeletal smoothness", "curve coverage"],
-     {s: ("correspondence",) for s in ("topology", "skeletal boundedness", "skeletal centeredness",
-                                        "skeletal smoothness")}),
+      "topology", "skeletal centeredness", "skeletal smoothness", "curve coverage", "curve defects",
+      "curve missing parts"],
+     {**{s: ("correspondence",) for s in ("topology", "skeletal boundedness", "skeletal centeredness",
+                                          "skeletal smoothness")},
+      "curve defects": ("curve boundedness",), "curve missing parts": ("curve coverage",)}),
+    # without coverage the missing parts compute their own (on a subsample above missing_max_points)
     (dict(every=5, params=Params(coverage_max_points=100)),
-     ["skeletal boundedness", "skeletal smoothness", "curve centeredness", "curve smoothness", "curve boundedness"], {}),
-    (dict(skeletal=False), ["curve boundedness", "curve centeredness", "curve smoothness", "curve coverage"], {}),
+     ["skeletal boundedness", "skeletal smoothness", "curve centeredness", "curve smoothness", "curve boundedness",
+      *DIAG], {"curve defects": ("curve boundedness",)}),
+    (dict(skeletal=False), ["curve boundedness", "curve centeredness", "curve smoothness", "curve coverage",
+                            "curve defects", "curve missing parts"],
+     {"curve defects": ("curve boundedness",), "curve missing parts": ("curve coverage",)}),
 ])
 def test_stages_are_selected_started_and_wait_by_the_declared_rules(case, started, waits):
     ctx = _ctx(**case)
