@@ -173,8 +173,8 @@ def build_leaderboard(rows: list[dict[str, Any]], profiles: tuple[Profile, ...],
             e = Entry(meth, cond, len(mine), len(ok))
             e.n_sound = sum(1 for r in ok if not r.get("defects"))
             for c in COLUMNS:
-                vals = np.array([r[c] for r in ok], dtype=float)
-                e.tainted[c] = any(r.get("defects") and np.isfinite(float(r[c])) for r in ok)
+                vals = np.array([r.get(c, math.nan) for r in ok], dtype=float)  # older rows lack newer columns
+                e.tainted[c] = any(r.get("defects") and np.isfinite(float(r.get(c, math.nan))) for r in ok)
                 vals = vals[np.isfinite(vals)]
                 e.mean[c] = float(vals.mean()) if vals.size else math.nan
                 e.std[c] = float(vals.std(ddof=1)) if vals.size > 1 else (0.0 if vals.size else math.nan)

@@ -70,7 +70,8 @@ def evaluate(
     run_graph(tasks, workers, on_error=tracker.abort)
     ev = assemble(ctx, inputs)
     ev.warnings += trust_warnings(ctx, ev, tracker.between("trust checks"))
-    ev.warnings += diagnostics_warnings(ctx)
+    if not any(w.code == "frame" for w in ev.warnings):  # in another frame, every diagnostic would say so too
+        ev.warnings += diagnostics_warnings(ctx)
     ev.timings = dict(tracker.timings)
     ev.timings["total"] = time.perf_counter() - t_start
     return ev

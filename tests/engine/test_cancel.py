@@ -28,6 +28,9 @@ STAGES = [
     "skeletal coverage",
     "curve coverage",
     "curve boundedness",
+    "curve defects",  # the diagnostics (issue 22)
+    "skeletal missing parts",
+    "curve missing parts",
 ]
 
 

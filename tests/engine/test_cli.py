@@ -72,11 +72,12 @@ def test_per_point_and_barcode_files(sample, tmp_path):
     np.testing.assert_allclose([float(v) for v in rows[1][1:4]], sh.skeletal[0], rtol=1e-12)
     with open(f"{prefix}_curve_vertices.csv") as fh:
         rows = list(csv.reader(fh))
-    assert rows[0] == ["vertex", "x", "y", "z", "degree", "smoothness"]
+    assert rows[0] == ["vertex", "x", "y", "z", "degree", "smoothness", "branch", "defects"]  # + issue 22
     junction = [r for r in rows[1:] if r[4] == "3"]
     assert junction and junction[0][5] == "nan"
     with open(f"{prefix}_curve_samples.csv") as fh:
-        assert next(csv.reader(fh)) == ["sample", "edge", "t", "x", "y", "z", "boundedness", "centeredness"]
+        assert next(csv.reader(fh)) == ["sample", "edge", "t", "x", "y", "z", "boundedness", "centeredness", "branch",
+                                        "defects"]
     with open(bars) as fh:
         rows = list(csv.reader(fh))
     assert rows[0] == ["diagram", "birth", "death"]

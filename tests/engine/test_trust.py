@@ -34,7 +34,7 @@ def test_collapse_warning_for_a_skeleton_shrunk_to_the_centroid():
     c = np.repeat(sh.cloud.mean(axis=0)[None], len(sh.cloud), 0)
     c += np.random.default_rng(0).normal(scale=1e-6, size=c.shape)
     ev = evaluate(sh.cloud, c)
-    assert codes(ev) == ["collapse"]
+    assert codes(ev) == ["collapse", "incomplete"]  # a collapsed skeleton explains little of the cloud (issue 22)
     # the paper's scores reward it, which is why the warning exists
     assert ev.summary()["boundedness"]["skeletal"] > 0.9
 
