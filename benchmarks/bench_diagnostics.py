@@ -352,15 +352,19 @@ def scans() -> None:
         for method in ("cao", "skelscope"):
             t = time.perf_counter()
             try:
-                _, curve = skelcore.skeletonize(cloud, method=method)
+                skel, curve = skelcore.skeletonize(cloud, method=method)
             except Exception as exc:  # a failed skeletonization is reported, not fatal
                 print(f"{name} {method}: skeletonize failed: {exc}")
                 continue
             t_s = time.perf_counter() - t
+            t = time.perf_counter()
+            skelcore.evaluate(cloud, skeletal=skel, curve=curve)
+            t_e = time.perf_counter() - t
             d, t_d = diagnose(cloud, curve.vertices, curve.edges)
             b = d.branches
             print(f"{name} {method}: {curve.n_vertices} vertices, {len(b)} branches, {b.cycle_rank} cycles, "
-                  f"{d.cycles.shape_tunnels} tunnels; skeletonize {t_s:.1f} s, diagnostics {t_d:.2f} s", flush=True)
+                  f"{d.cycles.shape_tunnels} tunnels; skeletonize {t_s:.1f} s, evaluation {t_e:.2f} s, "
+                  f"diagnostics {t_d:.2f} s", flush=True)
             for w in d.warnings():
                 print(f"  {w.code}: {w.message}")
             for i, f in enumerate(b.flags):
