@@ -352,15 +352,19 @@ def scans() -> None:
         for method in ("cao", "skelscope"):
             t = time.perf_counter()
             try:
-                _, curve = skelcore.skeletonize(cloud, method=method)
+                skel, curve = skelcore.skeletonize(cloud, method=method)
             except Exception as exc:  # a failed skeletonization is reported, not fatal
                 print(f"{name} {method}: skeletonize failed: {exc}")
                 continue
             t_s = time.perf_counter() - t
+            t = time.perf_counter()
+            skelcore.evaluate(cloud, skeletal=skel, curve=curve)
+            t_e = time.perf_counter() - t
             d, t_d = diagnose(cloud, curve.vertices, curve.edges)
             b = d.branches
             print(f"{name} {method}: {curve.n_vertices} vertices, {len(b)} branches, {b.cycle_rank} cycles, "
-                  f"{d.cycles.shape_tunnels} tunnels; skeletonize {t_s:.1f} s, diagnostics {t_d:.2f} s", flush=True)
+                  f"{d.cycles.shape_tunnels} tunnels; skeletonize {t_s:.1f} s, evaluation {t_e:.2f} s, "
+                  f"diagnostics {t_d:.2f} s", flush=True)
             for w in d.warnings():
                 print(f"  {w.code}: {w.message}")
             for i, f in enumerate(b.flags):
@@ -374,7 +378,8 @@ def speed(sizes: list[int]) -> None:
     import skelcore
 
     print(f"{platform.processor() or platform.machine()}, {os.cpu_count()} cores, load {os.getloadavg()[0]:.1f}")
-    print("| N | evaluation s | diagnostics s | share | branches | spurs | cycles | outside |\n|---|---|---|---|---|---|---|---|")
+    print("| N | evaluation s | diagnostics s | share | branches | interior | spurs | cycles | outside |\n"
+          "|---|---|---|---|---|---|---|---|---|")
     for n in sizes:
         s = shapes.torus(n=n, n_curve=64)
         skel = s.skeletal + np.random.default_rng(0).normal(scale=0.003, size=s.skeletal.shape)
@@ -390,8 +395,9 @@ def speed(sizes: list[int]) -> None:
                                skeletal=norm.apply(ev.skeletal.points), skeletal_boundedness=ev.skeletal.boundedness)
         t_d = time.perf_counter() - t
         tm = d.timings
-        print(f"| {n} | {t_ev:.2f} | {t_d:.2f} | {t_d / t_ev:.0%} | {tm['branches']:.2f} | {tm['spurs']:.2f} | "
-              f"{tm['cycles']:.2f} | {tm['outside']:.2f} | codes {sorted(codes_of(d)) or '-'}", flush=True)
+        print(f"| {n} | {t_ev:.2f} | {t_d:.2f} | {t_d / t_ev:.0%} | {tm['branches']:.2f} | {tm['interior']:.2f} | "
+              f"{tm['spurs']:.2f} | {tm['cycles']:.2f} | {tm['outside']:.2f} | codes {sorted(codes_of(d)) or '-'}",
+              flush=True)
 
 
 def main() -> None:

@@ -14,6 +14,7 @@ the 6-connected components of the rest that do not reach the grid's border (cavi
 
 from __future__ import annotations
 
+import weakref
 from dataclasses import dataclass
 
 import numpy as np
@@ -92,6 +93,10 @@ def cloud_subsample(cloud: np.ndarray, max_points: int, seed: int = 0) -> np.nda
     return cloud[np.sort(pick)]
 
 
+# the last cloud's spacing, reused while the same array comes back (the diagnostics ask three times)
+_last_spacing: dict = {}
+
+
 def median_spacing(cloud: np.ndarray, max_points: int = 20000) -> float:
     """The cloud's median nearest-neighbour spacing, from a random subsample of at most
     ``max_points`` (seed 0) scaled by sqrt(m / n): a surface sample's spacing shrinks as
@@ -102,10 +107,18 @@ def median_spacing(cloud: np.ndarray, max_points: int = 20000) -> float:
     n = len(cloud)
     if n < 2:
         return 0.0
+    ref = _last_spacing.get("cloud")
+    if ref is not None and ref() is cloud and _last_spacing.get("key") == (n, max_points):
+        return _last_spacing["value"]
     m = min(n, int(max_points))
     sub = cloud if m == n else cloud[np.random.default_rng(0).choice(n, m, replace=False)]
     d, _ = cKDTree(sub).query(sub, k=2)
-    return float(np.median(d[:, 1])) * float(np.sqrt(m / n))
+    value = float(np.median(d[:, 1])) * float(np.sqrt(m / n))
+    try:
+        _last_spacing.update(cloud=weakref.ref(cloud), key=(n, max_points), value=value)
+    except TypeError:  # not weak-referenceable: no cache
+        pass
+    return value
 
 
 def voxelize_interior(

@@ -114,12 +114,12 @@ def _explained_elsewhere(
     tree: cKDTree, pts_branch: np.ndarray, reach: np.ndarray, queries: np.ndarray, own: np.ndarray, bound: float
 ) -> np.ndarray:
     """For each query point, whether some curve point on another branch than ``own`` explains it
-    (|q - x| <= reach(x)). Nearest points first, k doubled for the rows that only met their own
+    (|q - x| <= reach(x)). The k = 16 nearest first, k doubled for the rows that only met their own
     branch within ``bound``."""
     n = len(queries)
     done = np.zeros(n, bool)
     out = np.zeros(n, bool)
-    k = 32
+    k = 16
     todo = np.arange(n)
     while len(todo):
         kk = min(k, tree.n)
