@@ -75,8 +75,9 @@ def case(name, cloud, curve, p):
     for label, (s, off) in rows.items():
         err = float(np.abs(vox * s + off - (vox * h + origin)).max()) / diag
         b, c, comp, inc = scores(cloud, vox, curve.edges, s, off)
-        print(f"| {name} | {label} | {s / h:.3f} | {err:.4f} | {b:.3f} | {c:.3f} | {comp:.3f}{' (incomplete)' if inc else ''} | "
-              f"{dt if label == 'new' else float('nan'):.1f} |")
+        flag = " (incomplete)" if inc else ""
+        took = f"{dt:.1f}" if label == "new" else ""
+        print(f"| {name} | {label} | {s / h:.3f} | {err:.4f} | {b:.3f} | {c:.3f} | {comp:.3f}{flag} | {took} |")
     if not m:
         print(f"| {name} | new | none proposed | | | | | {dt:.1f} |")
 

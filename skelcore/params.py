@@ -189,7 +189,8 @@ class Params:
         for name in ("missing_depth", "missing_link_factor"):
             if not float(getattr(self, name)) > 0:
                 bad(name, "must be > 0")
-        for name in ("missing_min_share", "missing_large_share", "missing_min_completeness", "missing_depth_quantile"):
+        for name in ("missing_min_share", "missing_large_share", "missing_min_completeness",
+                     "missing_depth_quantile"):
             if not 0.0 <= float(getattr(self, name)) <= 1.0:
                 bad(name, "must be in [0, 1]")
         for name in ("missing_max_points", "missing_max_elements"):

@@ -183,6 +183,7 @@ def missing_parts(
     tau: float | None = None,
     what: str = "skeleton",
     to_user: Callable[[np.ndarray], np.ndarray] = _identity,
+    keep: np.ndarray | None = None,
     checkpoint: Checkpoint = no_checkpoint,
 ) -> MissingParts:
     """The parts of the (normalized) cloud the (normalized) skeleton does not reach, and its completeness.
@@ -197,6 +198,9 @@ def missing_parts(
     tau : the coverage tolerance of the full cloud (``coverage_tau``), if known.
     what : how the warning names the skeleton ("curve skeleton", "skeletal point set").
     to_user : maps normalized points to user units for the regions' centroids.
+    keep : for a point set, the rows whose balls may explain the cloud (e.g. the bounded ones: the
+        ball of a point far outside the shape touches it from outside and "explains" it); ignored
+        when ``cov`` is given.
     checkpoint : ``checkpoint(fraction)``, raises to cancel.
 
     An empty skeleton explains nothing: one region per connected part of the cloud, depth inf.
@@ -223,6 +227,8 @@ def missing_parts(
         if tau is None:
             tau = coverage_tau(pts, p, lambda f: checkpoint(0.1 * f))
     spacing = float(tau) / float(p.coverage_tau_factor)
+    if keep is not None and not isinstance(skeleton, CurveSkeleton):
+        skeleton = np.asarray(skeleton, dtype=float).reshape(-1, 3)[np.asarray(keep, dtype=bool)]
     if cov is None:
         elements = skeleton_elements(skeleton, spacing, int(p.missing_max_elements), lambda f: checkpoint(0.1))
         cov = coverage(pts, elements, p, tau, checkpoint=lambda f: checkpoint(0.1 + 0.6 * f))

@@ -135,6 +135,18 @@ def test_a_subsample_above_missing_max_points_keeps_the_verdict():
     assert len(sub.region) == len(cloud)
 
 
+def test_balls_of_points_outside_the_shape_explain_it_unless_left_out():
+    # points far beside the T's stem: their balls reach it from outside; ``keep`` leaves them out
+    sh = shapes.t_shape(3000, seed=11)
+    norm, cloud = normalized(sh)
+    bar = sh.skeletal[sh.skeletal[:, 2] > -0.2]
+    beside = np.column_stack([np.zeros(20), np.full(20, 1.2), np.linspace(-2.0, -0.3, 20)])
+    skel = norm.apply(np.vstack([bar, beside]))
+    assert not missing_parts(cloud, skel, P).incomplete
+    inside = np.arange(len(skel)) < len(bar)
+    assert missing_parts(cloud, skel, P, keep=inside).incomplete
+
+
 def test_no_skeleton_explains_nothing():
     sh = shapes.cylinder(1000, seed=9)
     norm, cloud = normalized(sh)
