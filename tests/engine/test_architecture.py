@@ -141,7 +141,7 @@ def test_the_cycle_finder_finds_a_cycle():
 #   stages            skelcore.stages (the evaluate pipeline)                     -> foundation, metrics, record
 #   evaluation files  io.evaluation_files (JSON, CSVs, npz of an Evaluation), io.export (coloured PLY)
 #                                                             -> foundation, formats, metrics, record
-#   applications      skelcore.compare, skelcore.experiments  -> every layer above this line
+#   applications      skelcore.compare, skelcore.experiments, skelcore.benchmark  -> every layer above this line
 #   entry points      skelcore.cli, skelcore.__main__, the package facade skelcore/__init__ -> every layer
 # So: metrics never import the record, the stages or the evaluation files; the record imports no io; the
 # format readers and writers import no metric; compare and the CLI sit on top. A pattern "x.*" is the
@@ -157,7 +157,7 @@ LAYERS: dict[str, tuple[list[str], list[str]]] = {
     "stages": (["skelcore.stages.*"], ["foundation", "metrics", "record"]),
     "evaluation files": (["skelcore.io.evaluation_files", "skelcore.io.export"],
                          ["foundation", "formats", "metrics", "record"]),
-    "applications": (["skelcore.compare.*", "skelcore.experiments.*"], _BELOW_APPS),
+    "applications": (["skelcore.compare.*", "skelcore.experiments.*", "skelcore.benchmark.*"], _BELOW_APPS),
     "entry points": (["skelcore", "skelcore.__main__", "skelcore.cli.*"], [*_BELOW_APPS, "applications"]),
 }
 
