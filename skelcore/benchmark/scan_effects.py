@@ -53,9 +53,11 @@ class ScanEffects:
 
 @dataclass
 class Scan:
-    """The cloud, the surface points it came from (before noise; outliers excluded) and what was done."""
+    """The cloud, each cloud point's local radius (NaN for an outlier), the surface points the cloud
+    came from (before noise, outliers excluded, in their own order) and what was done."""
 
     cloud: np.ndarray
+    local_radius: np.ndarray
     surface: SurfacePoints
     crop_plane: tuple[np.ndarray, float] | None = None  # (unit normal g, offset): kept where x . g <= offset
     info: dict[str, Any] = field(default_factory=dict)
@@ -154,6 +156,7 @@ def scan(sampler: SurfaceSampler, effects: ScanEffects, rng: np.random.Generator
     info["surface_points"] = len(surf)
     info["kept_fraction"] = len(surf) / n0
     pts = surf.points.copy()
+    radius = surf.radius.copy()
     if effects.noise > 0:
         pts += rng.normal(size=pts.shape) * (effects.noise * surf.radius)[:, None]
     if effects.outliers > 0:
@@ -161,6 +164,7 @@ def scan(sampler: SurfaceSampler, effects: ScanEffects, rng: np.random.Generator
         lo, hi = surf.points.min(axis=0), surf.points.max(axis=0)
         grow = 0.1 * float(np.linalg.norm(hi - lo))
         pts = np.vstack([pts, rng.uniform(lo - grow, hi + grow, size=(k, 3))])
+        radius = np.concatenate([radius, np.full(k, np.nan)])
         info["outlier_points"] = k
     order = rng.permutation(len(pts))
-    return Scan(cloud=pts[order], surface=surf, crop_plane=crop_plane, info=info)
+    return Scan(cloud=pts[order], local_radius=radius[order], surface=surf, crop_plane=crop_plane, info=info)
