@@ -2,8 +2,8 @@
 docs/metrics.md 5.5 gives every formula and its source).
 
 Both curves are cut into pieces of at most ``gt_sample_step`` x the reference's smallest radius;
-each piece's midpoint is a sample weighted by its length. Distances are exact (nearest point on the
-other curve's edges); a sample's local radius r is the reference radius at its nearest reference
+each piece's midpoint is a sample weighted by its length (isolated vertices are left out, unless a
+curve has no edge). Distances are exact (nearest point on the other curve's edges); a sample's local radius r is the reference radius at its nearest reference
 point (linear along edges; without one, the median distance from each reference vertex to its
 ``gt_radius_k`` nearest cloud points). Chamfer both ways (PRBonn/DiffTS); precision / recall / F1 at
 thresholds t_k = k / K x ``gt_threshold_max`` local radii, averaged over k = 1..K (DiffTS's curve
@@ -133,6 +133,18 @@ def _ratio(num: int, den: int) -> float:
     return float(num) / den if den else float("nan")
 
 
+def _edges_only(curve: CurveSkeleton) -> CurveSkeleton:
+    """The curve without its isolated vertices (a curve with edges is the union of its edges)."""
+    if curve.n_edges == 0:
+        return curve
+    used = np.unique(curve.edges)
+    if len(used) == curve.n_vertices:
+        return curve
+    remap = np.full(curve.n_vertices, -1)
+    remap[used] = np.arange(len(used))
+    return CurveSkeleton(vertices=curve.vertices[used], edges=remap[curve.edges], vertex_map=curve.vertex_map[used])
+
+
 def _at_projection(curve: CurveSkeleton, radius: np.ndarray, q: np.ndarray, edge: np.ndarray) -> np.ndarray:
     """The radius, linear along each edge, at points q lying on the given edges (-1: a vertex)."""
     out = np.empty(len(q))
@@ -169,6 +181,8 @@ def compare_with_ground_truth(curve: CurveSkeleton, reference: CurveSkeleton, re
         raise SkelInputError("ground-truth metrics need the reference's radius or the cloud to estimate it")
     if not (np.all(np.isfinite(radius)) and np.all(radius > 0)):
         raise SkelInputError("reference radius must be finite and > 0 at every vertex")
+    radius = radius[np.unique(reference.edges)]
+    reference = _edges_only(reference)
 
     lengths = (float(curve.edge_lengths().sum()) if curve.n_edges else 0.0, float(reference.edge_lengths().sum()))
     step = max(p.gt_sample_step * float(radius.min()), sum(lengths) / _MAX_SAMPLES)
@@ -177,7 +191,7 @@ def compare_with_ground_truth(curve: CurveSkeleton, reference: CurveSkeleton, re
     q, qe = project_onto_curve(our_pts, reference)
     d_ours = np.linalg.norm(q - our_pts, axis=1)
     r_ours = _at_projection(reference, radius, q, qe)
-    q2, _ = project_onto_curve(ref_pts, curve)
+    q2, _ = project_onto_curve(ref_pts, _edges_only(curve))
     d_ref = np.linalg.norm(q2 - ref_pts, axis=1)
 
     def wmean(x, w):
