@@ -45,7 +45,7 @@ class Params:
     coverage_max_points : coverage is computed for clouds of at most this many points (0: never);
         a skeletal set as large as the cloud costs about N^1.4 on tube-like shapes (torus, both cores:
         2.4 s at 256k, 16 s at 1M; docs/metrics.md 5.2).
-    gt_thresholds, gt_threshold_max : ground-truth precision / recall / F1 (docs/metrics.md 5.5) are
+    gt_thresholds, gt_threshold_max : ground-truth precision / recall / F1 (docs/metrics.md 5.3.1) are
         averaged over thresholds k / gt_thresholds x gt_threshold_max local radii, k = 1..gt_thresholds.
     gt_match_radii : junctions and endpoints match a reference node within this many of its radii.
     gt_branch_radii : branch split / merge: a reference branch and one of ours are associated when at

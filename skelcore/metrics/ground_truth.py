@@ -1,11 +1,11 @@
 """A curve skeleton against a ground-truth curve with a radius: the community's metrics (issue 23;
-docs/metrics.md 5.5 gives every formula and its source).
+docs/metrics.md 5.3.1 gives every formula and its source).
 
 Both curves are cut into pieces of at most ``gt_sample_step`` x the reference's smallest radius;
 each piece's midpoint is a sample weighted by its length (isolated vertices are left out, unless a
-curve has no edge). Distances are exact (nearest point on the other curve's edges); a sample's local radius r is the reference radius at its nearest reference
-point (linear along edges; without one, the median distance from each reference vertex to its
-``gt_radius_k`` nearest cloud points). Chamfer both ways (PRBonn/DiffTS); precision / recall / F1 at
+curve has no edge). Distances are exact (nearest point on the other curve's edges); a sample's
+local radius r is the reference radius at its nearest reference point (linear along edges; without
+one, the median distance from each reference vertex to its ``gt_radius_k`` nearest cloud points). Chamfer both ways (PRBonn/DiffTS); precision / recall / F1 at
 thresholds t_k = k / K x ``gt_threshold_max`` local radii, averaged over k = 1..K (DiffTS's curve
 area, its thresholds in local radii); junctions (degree >= 3) and endpoints (degree 1) matched one
 to one within ``gt_match_radii`` x r of the reference node (PyNeval's branch/leaf metric: Hungarian,
@@ -165,7 +165,7 @@ def compare_with_ground_truth(curve: CurveSkeleton, reference: CurveSkeleton, re
                               cloud: np.ndarray | None = None, *, params: Params | None = None) -> GroundTruthComparison:
     """Score ``curve`` against ``reference`` (same frame and units); ``reference_radius`` per reference
     vertex, else estimated from ``cloud`` (one of them is needed). Module docstring and
-    docs/metrics.md 5.5 for the definitions."""
+    docs/metrics.md 5.3.1 for the definitions."""
     p = params or Params()
     if reference.n_edges == 0:
         raise SkelInputError("the reference curve has no edges")

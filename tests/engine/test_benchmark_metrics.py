@@ -1,4 +1,4 @@
-"""Ground-truth metrics (skelcore.metrics.ground_truth; docs/metrics.md 5.5): hand-computed answers
+"""Ground-truth metrics (skelcore.metrics.ground_truth; docs/metrics.md 5.3.1): hand-computed answers
 (two parallel segments, a Y against a Y with a missing arm, a circle against a cut circle, a shifted
 copy) and an independent brute-force implementation on random small graphs."""
 
