@@ -83,9 +83,9 @@ def test_torus_samples_are_area_uniform():
     """On a ring of tube radius r around a circle of radius R the outer half (away from the axis) has
     area share 1/2 + r / (pi R): the sampler weights by the exact area element."""
     shape = make_shape("ring", "torus", 0, R=1.0, r=0.3, wobble=0.0)
-    s = SurfaceSampler(shape).sample(200_000, np.random.default_rng(4))
+    s = SurfaceSampler(shape).sample(120_000, np.random.default_rng(4))
     outer = np.mean(np.hypot(s.points[:, 0], s.points[:, 1]) > 1.0)
-    assert outer == pytest.approx(0.5 + 0.3 / np.pi, abs=0.004)
+    assert outer == pytest.approx(0.5 + 0.3 / np.pi, abs=0.005)  # binomial spread 0.0014
 
 
 def test_a_cone_like_tube_is_sampled_in_proportion_to_its_radius():
@@ -95,10 +95,10 @@ def test_a_cone_like_tube_is_sampled_in_proportion_to_its_radius():
     tube = Tube(np.array([[0, 0, 0], [1, 0, 0], [2, 0, 0], [3, 0, 0.0]]), np.array([0.1, 0.2, 0.3, 0.4]), start=0, end=1)
     shape = BenchShape("cone", "test", np.array([[0, 0, 0], [3, 0, 0.0]]), (tube,))
     sampler = SurfaceSampler(shape)
-    s = sampler.sample(100_000, np.random.default_rng(5))
+    s = sampler.sample(60_000, np.random.default_rng(5))
     body = (s.points[:, 0] > 0.5) & (s.points[:, 0] < 2.5)
     first, second = np.sum(body & (s.points[:, 0] < 1.5)), np.sum(body & (s.points[:, 0] >= 1.5))
-    assert second / first == pytest.approx(0.3 / 0.2, rel=0.02)  # binomial spread: 0.7 %
+    assert second / first == pytest.approx(0.3 / 0.2, rel=0.03)  # binomial spread: 0.9 %
 
 
 def test_elliptic_tube_radius_is_its_minor_semi_axis():
