@@ -45,13 +45,6 @@ class Params:
     coverage_max_points : coverage is computed for clouds of at most this many points (0: never);
         a skeletal set as large as the cloud costs about N^1.4 on tube-like shapes (torus, both cores:
         2.4 s at 256k, 16 s at 1M; docs/metrics.md 5.2).
-    gt_thresholds, gt_threshold_max : ground-truth precision / recall / F1 (docs/metrics.md 5.3.1) are
-        averaged over thresholds k / gt_thresholds x gt_threshold_max local radii, k = 1..gt_thresholds.
-    gt_match_radii : junctions and endpoints match a reference node within this many of its radii.
-    gt_branch_radii : branch split / merge: a reference branch and one of ours are associated when at
-        least this many local radii of its length lie within this many local radii of ours.
-    gt_sample_step : both curves are sampled every this many x the reference's smallest radius.
-    gt_radius_k : without a reference radius, it is the median distance to this many cloud points.
     frame_inside_fraction : the ``frame`` warning fires when fewer skeleton points than this fraction
         lie inside the cloud's bounding box (grown by 10 % of its diagonal).
     frame_extent_ratio : ... or when the skeleton's bounding-box diagonal is more than this many
@@ -85,12 +78,6 @@ class Params:
     coverage_slack: float = 0.5
     coverage_tau_factor: float = 2.0
     coverage_max_points: int = 262144
-    gt_thresholds: int = 20
-    gt_threshold_max: float = 1.0
-    gt_match_radii: float = 2.0
-    gt_branch_radii: float = 1.0
-    gt_sample_step: float = 0.1
-    gt_radius_k: int = 8
     frame_inside_fraction: float = 0.5
     frame_extent_ratio: float = 10.0
     collapse_extent: float = 0.1
@@ -109,12 +96,6 @@ class Params:
                 bad(name, "must be > 0")
         if not float(self.coverage_slack) >= 0:
             bad("coverage_slack", "must be >= 0")
-        for name in ("gt_threshold_max", "gt_match_radii", "gt_branch_radii", "gt_sample_step"):
-            if not float(getattr(self, name)) > 0:
-                bad(name, "must be > 0")
-        for name in ("gt_thresholds", "gt_radius_k"):
-            if int(getattr(self, name)) < 1:
-                bad(name, "must be a positive integer")
         if not float(self.frame_extent_ratio) > 1:
             bad("frame_extent_ratio", "must be > 1")
         for name in ("beta_star", "c_star", "min_bar_fraction", "fallback_fraction", "collinear_cos",

@@ -1,14 +1,14 @@
 """A curve skeleton against a ground-truth curve with a radius: the community's metrics (issue 23;
 docs/metrics.md 5.3.1 gives every formula and its source).
 
-Both curves are cut into pieces of at most ``gt_sample_step`` x the reference's smallest radius;
+Both curves are cut into pieces of at most ``sample_step`` x the reference's smallest radius;
 each piece's midpoint is a sample weighted by its length (isolated vertices are left out, unless a
 curve has no edge). Distances are exact (nearest point on the other curve's edges); a sample's
 local radius r is the reference radius at its nearest reference point (linear along edges; without
-one, the median distance from each reference vertex to its ``gt_radius_k`` nearest cloud points). Chamfer both ways (PRBonn/DiffTS); precision / recall / F1 at
-thresholds t_k = k / K x ``gt_threshold_max`` local radii, averaged over k = 1..K (DiffTS's curve
+one, the median distance from each reference vertex to its ``radius_k`` nearest cloud points). Chamfer both ways (PRBonn/DiffTS); precision / recall / F1 at
+thresholds t_k = k / K x ``threshold_max`` local radii, averaged over k = 1..K (DiffTS's curve
 area, its thresholds in local radii); junctions (degree >= 3) and endpoints (degree 1) matched one
-to one within ``gt_match_radii`` x r of the reference node (PyNeval's branch/leaf metric: Hungarian,
+to one within ``match_radii`` x r of the reference node (PyNeval's branch/leaf metric: Hungarian,
 scipy's linear_sum_assignment); cycle count error E - V + C; length ratio; branch split / merge
 counts (branches: maximal chains through degree-2 vertices).
 """
@@ -26,13 +26,42 @@ from scipy.spatial import cKDTree
 from ..correspondence import project_onto_curve
 from ..curve import CurveSkeleton
 from ..errors import SkelInputError
-from ..params import Params
 from .reference import graph_counts
 
-__all__ = ["GroundTruthComparison", "compare_with_ground_truth", "curve_samples", "branch_labels",
-           "match_nodes", "radius_from_cloud"]
+__all__ = ["GroundTruthParams", "GroundTruthComparison", "compare_with_ground_truth", "curve_samples",
+           "branch_labels", "match_nodes", "radius_from_cloud"]
 
 _MAX_SAMPLES = 200_000
+
+
+@dataclass(frozen=True)
+class GroundTruthParams:
+    """The metrics' constants (docs/metrics.md 5.3.1); they join :class:`skelcore.Params` when the
+    metrics join ``evaluate``.
+
+    thresholds, threshold_max : precision / recall / F1 are averaged over the thresholds
+        k / thresholds x threshold_max local radii, k = 1..thresholds.
+    match_radii : junctions and endpoints match a reference node within this many of its radii.
+    branch_radii : branch split / merge: a reference branch and one of ours are associated when at
+        least this many local radii of its length lie within this many local radii of ours.
+    sample_step : both curves are sampled every this many x the reference's smallest radius.
+    radius_k : without a reference radius, it is the median distance to this many cloud points.
+    """
+
+    thresholds: int = 20
+    threshold_max: float = 1.0
+    match_radii: float = 2.0
+    branch_radii: float = 1.0
+    sample_step: float = 0.1
+    radius_k: int = 8
+
+    def __post_init__(self) -> None:
+        for name in ("threshold_max", "match_radii", "branch_radii", "sample_step"):
+            if not float(getattr(self, name)) > 0:
+                raise ValueError(f"ground-truth parameter {name}={getattr(self, name)!r}: must be > 0")
+        for name in ("thresholds", "radius_k"):
+            if int(getattr(self, name)) < 1:
+                raise ValueError(f"ground-truth parameter {name}={getattr(self, name)!r}: must be a positive integer")
 
 
 @dataclass(frozen=True)
@@ -162,11 +191,12 @@ def _at_projection(curve: CurveSkeleton, radius: np.ndarray, q: np.ndarray, edge
 
 
 def compare_with_ground_truth(curve: CurveSkeleton, reference: CurveSkeleton, reference_radius: np.ndarray | None = None,
-                              cloud: np.ndarray | None = None, *, params: Params | None = None) -> GroundTruthComparison:
+                              cloud: np.ndarray | None = None, *,
+                              params: GroundTruthParams | None = None) -> GroundTruthComparison:
     """Score ``curve`` against ``reference`` (same frame and units); ``reference_radius`` per reference
     vertex, else estimated from ``cloud`` (one of them is needed). Module docstring and
     docs/metrics.md 5.3.1 for the definitions."""
-    p = params or Params()
+    p = params or GroundTruthParams()
     if reference.n_edges == 0:
         raise SkelInputError("the reference curve has no edges")
     if reference_radius is not None:
@@ -175,7 +205,7 @@ def compare_with_ground_truth(curve: CurveSkeleton, reference: CurveSkeleton, re
             raise SkelInputError(f"reference radius has {radius.size} values for {reference.n_vertices} vertices")
         source = "reference"
     elif cloud is not None and len(cloud):
-        radius = radius_from_cloud(reference.vertices, np.asarray(cloud, float), p.gt_radius_k)
+        radius = radius_from_cloud(reference.vertices, np.asarray(cloud, float), p.radius_k)
         source = "cloud"
     else:
         raise SkelInputError("ground-truth metrics need the reference's radius or the cloud to estimate it")
@@ -185,7 +215,7 @@ def compare_with_ground_truth(curve: CurveSkeleton, reference: CurveSkeleton, re
     reference = _edges_only(reference)
 
     lengths = (float(curve.edge_lengths().sum()) if curve.n_edges else 0.0, float(reference.edge_lengths().sum()))
-    step = max(p.gt_sample_step * float(radius.min()), sum(lengths) / _MAX_SAMPLES)
+    step = max(p.sample_step * float(radius.min()), sum(lengths) / _MAX_SAMPLES)
     ref_pts, ref_w, ref_edge, ref_r = curve_samples(reference, step, radius)
     our_pts, our_w, our_edge, _ = curve_samples(curve, step)
     q, qe = project_onto_curve(our_pts, reference)
@@ -197,7 +227,7 @@ def compare_with_ground_truth(curve: CurveSkeleton, reference: CurveSkeleton, re
     def wmean(x, w):
         return float(np.sum(x * w) / np.sum(w))
 
-    thresholds = p.gt_threshold_max * np.arange(1, p.gt_thresholds + 1) / p.gt_thresholds
+    thresholds = p.threshold_max * np.arange(1, p.thresholds + 1) / p.thresholds
     slack = 1.0 + 1e-9  # "within" holds up to rounding: a sample exactly at a threshold counts
     prec = np.array([wmean(d_ours <= t * slack * r_ours, our_w) for t in thresholds])
     rec = np.array([wmean(d_ref <= t * slack * ref_r, ref_w) for t in thresholds])
@@ -206,10 +236,10 @@ def compare_with_ground_truth(curve: CurveSkeleton, reference: CurveSkeleton, re
     deg_o, deg_r = curve.degrees(), reference.degrees()
     counts = {}
     for kind, sel_o, sel_r in (("junctions", deg_o >= 3, deg_r >= 3), ("endpoints", deg_o == 1, deg_r == 1)):
-        m = match_nodes(curve.vertices[sel_o], reference.vertices[sel_r], p.gt_match_radii * radius[sel_r])
+        m = match_nodes(curve.vertices[sel_o], reference.vertices[sel_r], p.match_radii * radius[sel_r])
         counts[kind] = (int(sel_o.sum()), int(sel_r.sum()), m)
 
-    splits, merges, n_branches = _splits_merges(curve, reference, radius, p.gt_branch_radii,
+    splits, merges, n_branches = _splits_merges(curve, reference, radius, p.branch_radii,
                                                 (ref_pts, ref_w, ref_edge, ref_r, d_ref), our_pts, our_edge)
     cyc_o, cyc_r = graph_counts(curve)["cycles"], graph_counts(reference)["cycles"]
     c_to, c_from = wmean(d_ours, our_w), wmean(d_ref, ref_w)
@@ -225,8 +255,8 @@ def compare_with_ground_truth(curve: CurveSkeleton, reference: CurveSkeleton, re
         cycles=(cyc_o, cyc_r), cycle_error=cyc_o - cyc_r,
         length=lengths, length_ratio=lengths[0] / lengths[1] if lengths[1] > 0 else float("nan"),
         branches=n_branches, splits=splits, merges=merges,
-        thresholds=tuple(float(t) for t in thresholds), match_radii=float(p.gt_match_radii),
-        branch_radii=float(p.gt_branch_radii), radius_source=source,
+        thresholds=tuple(float(t) for t in thresholds), match_radii=float(p.match_radii),
+        branch_radii=float(p.branch_radii), radius_source=source,
     )
 
 

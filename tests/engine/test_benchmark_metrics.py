@@ -12,8 +12,8 @@ import pytest
 
 from skelcore.curve import CurveSkeleton
 from skelcore.errors import SkelInputError
+from skelcore.metrics.ground_truth import GroundTruthParams as Params
 from skelcore.metrics.ground_truth import compare_with_ground_truth, radius_from_cloud
-from skelcore.params import Params
 
 THRESHOLDS = np.arange(1, 21) / 20  # the default: 0.05 .. 1 local radii
 
@@ -79,7 +79,7 @@ def test_a_y_against_a_y_with_a_missing_arm():
     the centre covering two reference branches: one merge."""
     ref = _star([90, 210, 330])
     ours = _star([90, 210])
-    fine = Params(gt_sample_step=0.01)
+    fine = Params(sample_step=0.01)
     g = compare_with_ground_truth(ours, ref, _const(ref, 0.1), params=fine)
     assert g.chamfer_to_reference == pytest.approx(0.0, abs=1e-12)
     assert g.chamfer_from_reference == pytest.approx(1 / 6)
@@ -103,7 +103,7 @@ def test_a_circle_against_a_cut_circle():
     n = 24
     ref = _polyline(_ngon(n), closed=True)
     ours = _polyline(_ngon(n))
-    g = compare_with_ground_truth(ours, ref, _const(ref, 0.1), params=Params(gt_sample_step=0.01))
+    g = compare_with_ground_truth(ours, ref, _const(ref, 0.1), params=Params(sample_step=0.01))
     chord = 2 * math.sin(math.pi / n)
     assert (g.cycles, g.cycle_error) == ((0, 1), -1)
     assert g.endpoints == (2, 0, 0) and g.endpoint_precision == 0.0 and math.isnan(g.endpoint_recall)
@@ -166,7 +166,7 @@ def test_bad_inputs_are_one_line_errors():
     with pytest.raises(SkelInputError, match="no edges"):
         compare_with_ground_truth(ref, lone, np.ones(1))
     with pytest.raises(ValueError):
-        Params(gt_thresholds=0)
+        Params(thresholds=0)
 
 
 def test_a_curve_without_edges_is_scored_by_its_vertices():
@@ -271,26 +271,26 @@ def _brute_force(ours: CurveSkeleton, ref: CurveSkeleton, radius: np.ndarray, p:
     v_o, e_o, v_r, e_r = ours.vertices, ours.edges.tolist(), ref.vertices, ref.edges.tolist()
     len_o = sum(float(np.linalg.norm(v_o[j] - v_o[i])) for i, j in e_o)
     len_r = sum(float(np.linalg.norm(v_r[j] - v_r[i])) for i, j in e_r)
-    step = max(p.gt_sample_step * float(min(radius)), (len_o + len_r) / 200_000)
+    step = max(p.sample_step * float(min(radius)), (len_o + len_r) / 200_000)
     s_r = _bf_samples(v_r, e_r, step, radius)
     s_o = _bf_samples(v_o, e_o, step)
     ours_d = [(_bf_nearest(v_r, e_r, x, radius), w) for x, w, _, _ in s_o]
     ref_d = [(_bf_nearest(v_o, e_o, x)[0], w, r) for x, w, _, r in s_r]
     w_o, w_r = sum(w for _, w in ours_d), sum(w for _, w, _ in ref_d)
     slack = 1 + 1e-9
-    ts = p.gt_threshold_max * np.arange(1, p.gt_thresholds + 1) / p.gt_thresholds
+    ts = p.threshold_max * np.arange(1, p.thresholds + 1) / p.thresholds
     prec = [sum(w for (d, r), w in ours_d if d <= t * slack * r) / w_o for t in ts]
     rec = [sum(w for d, w, r in ref_d if d <= t * slack * r) / w_r for t in ts]
     f1 = [2 * a * b / (a + b) if a + b > 0 else 0.0 for a, b in zip(prec, rec)]
     deg_o, deg_r = np.bincount(ours.edges.ravel(), minlength=len(v_o)), np.bincount(ref.edges.ravel(), minlength=len(v_r))
     nodes = {}
     for kind, so, sr in (("junctions", deg_o >= 3, deg_r >= 3), ("endpoints", deg_o == 1, deg_r == 1)):
-        nodes[kind] = (int(so.sum()), int(sr.sum()), _bf_match(v_o[so], v_r[sr], p.gt_match_radii * radius[sr]))
+        nodes[kind] = (int(so.sum()), int(sr.sum()), _bf_match(v_o[so], v_r[sr], p.match_radii * radius[sr]))
     lab_r, n_r = _bf_branches(len(v_r), e_r)
     lab_o, n_o = _bf_branches(len(v_o), e_o)
     junction = [j for j in range(len(v_r)) if deg_r[j] >= 3]
     overlap: dict = {}
-    reach = p.gt_branch_radii
+    reach = p.branch_radii
     for (x, w, k, r), (d, _, _) in zip(s_r, ref_d):
         if d > reach * r * slack:
             continue
@@ -340,7 +340,7 @@ def _random_pair(rng):
 def test_agrees_with_a_brute_force_implementation(seed):
     rng = np.random.default_rng(seed)
     ours, ref, radius = _random_pair(rng)
-    p = Params(gt_sample_step=0.5, gt_thresholds=10, gt_threshold_max=1.5)
+    p = Params(sample_step=0.5, thresholds=10, threshold_max=1.5)
     got = compare_with_ground_truth(ours, ref, radius, params=p).to_dict()
     want = _brute_force(ours, ref, radius, p)
     for key, value in want.items():
