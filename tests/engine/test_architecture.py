@@ -152,7 +152,7 @@ def test_the_cycle_finder_finds_a_cycle():
 #   evaluation files  io.evaluation_files (JSON, CSVs, npz of an Evaluation), io.export (coloured PLY),
 #                     io.conversion (skelcore convert), interop's outputs (to_frame, to_networkx, to_open3d)
 #                                                             -> foundation, formats, metrics, record
-#   applications      skelcore.compare, skelcore.experiments  -> every layer above this line
+#   applications      skelcore.compare, skelcore.experiments, skelcore.benchmark  -> every layer above this line
 #   entry points      skelcore.cli, skelcore.__main__, the package facade skelcore/__init__ -> every layer
 # So: metrics never import the record, the stages or the evaluation files; the record imports no io; the
 # format readers and writers import no metric; compare and the CLI sit on top. A pattern "x.*" is the
@@ -175,7 +175,7 @@ LAYERS: dict[str, tuple[list[str], list[str]]] = {
                           "skelcore.interop.tables",
                           "skelcore.interop.graph_out", "skelcore.interop.open3d_out"],
                          ["foundation", "formats", "metrics", "diagnostics", "record"]),
-    "applications": (["skelcore.compare.*", "skelcore.experiments.*"], _BELOW_APPS),
+    "applications": (["skelcore.compare.*", "skelcore.experiments.*", "skelcore.benchmark.*"], _BELOW_APPS),
     "entry points": (["skelcore", "skelcore.__main__", "skelcore.cli.*"], [*_BELOW_APPS, "applications"]),
 }
 

@@ -1,0 +1,54 @@
+"""Read a benchmark reference: a curve skeleton in PLY with an ``edge`` element and an optional
+per-vertex ``radius`` property (what :mod:`.writer` writes).
+
+The curve goes through :func:`skelcore.io.load_curve` (every format check and SPEC 0's cleaning);
+the radius is read beside it and follows the cleaned vertices. A stop-gap while
+``skelcore.curve.CurveSkeleton`` gains an optional radius and the PLY/SWC readers read it (issue 24):
+then this module reduces to ``load_curve``.
+"""
+
+from __future__ import annotations
+
+import os
+from dataclasses import dataclass
+
+import numpy as np
+from plyfile import PlyData, PlyParseError
+
+from ..curve import CurveSkeleton
+from ..errors import SkelInputError
+from ..io import load_curve
+
+__all__ = ["ReferenceCurve", "read_reference"]
+
+
+@dataclass(frozen=True)
+class ReferenceCurve:
+    """A reference curve skeleton and its radius per (cleaned) vertex, None when the file has none."""
+
+    curve: CurveSkeleton
+    radius: np.ndarray | None
+
+
+def read_reference(path: str | os.PathLike) -> ReferenceCurve:
+    """The curve and, for a PLY with a vertex ``radius`` property, its radius (finite and > 0, else a
+    one-line :class:`SkelInputError` naming the file)."""
+    curve = load_curve(path)
+    radius = None
+    with open(path, "rb") as fh:
+        is_ply = fh.read(3) == b"ply"
+    if is_ply:
+        try:
+            ply = PlyData.read(os.fspath(path))
+        except (OSError, ValueError, PlyParseError) as exc:
+            raise SkelInputError(f"cannot read the PLY's properties: {exc}", path) from None
+        vertex = next((el for el in ply.elements if el.name.lower() in ("vertex", "vertices")), None)
+        names = {p.name.lower(): p.name for p in vertex.properties} if vertex is not None else {}
+        if "radius" in names:
+            raw = np.asarray(vertex.data[names["radius"]])
+            if raw.dtype == object:
+                raise SkelInputError("PLY vertex property radius is a list, expected a number", path)
+            radius = raw.astype(np.float64)[curve.vertex_map]
+            if not (np.all(np.isfinite(radius)) and np.all(radius > 0)):
+                raise SkelInputError("reference radius must be finite and > 0 at every vertex", path)
+    return ReferenceCurve(curve, radius)

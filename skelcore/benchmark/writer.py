@@ -1,0 +1,88 @@
+"""A benchmark folder's files, all written atomically (:mod:`skelcore.io.atomic`):
+
+- ``clouds/{case}.ply``: the cloud (binary PLY, double x y z);
+- ``truth/{case}_reference.ply``: its exact curve skeleton (PLY with an ``edge`` element and a
+  per-vertex ``radius``), the file :mod:`.reference_ply` reads;
+- ``cases/{case}.json``: the case's record (its spec, seeds, counts), written last: a case whose
+  record is there and matches its spec is finished (resume);
+- ``suite.json``: every case's record; ``compare.toml``: a manifest for ``skelcore compare`` running
+  the built-in skeletonizers on every case, with ``reference = "truth/{stem}_reference.ply"``;
+- ``.skelscope-bench``: the marker saying the folder is a benchmark (suite, seed, generator).
+Same inputs, same bytes: no dates, no absolute paths, keys in a fixed order.
+"""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from ..io import write_curve_ply, write_points_ply
+from ..io.atomic import atomic_open
+
+__all__ = ["MARKER", "cloud_path", "reference_path", "record_path", "write_case_files", "write_json",
+           "write_manifest", "read_json"]
+
+MARKER = ".skelscope-bench"
+
+
+def cloud_path(folder: Path, case: str) -> Path:
+    return folder / "clouds" / f"{case}.ply"
+
+
+def reference_path(folder: Path, case: str) -> Path:
+    return folder / "truth" / f"{case}_reference.ply"
+
+
+def record_path(folder: Path, case: str) -> Path:
+    return folder / "cases" / f"{case}.json"
+
+
+def write_case_files(folder: Path, case: str, cloud: np.ndarray, vertices: np.ndarray, edges: np.ndarray,
+                     radius: np.ndarray) -> None:
+    """The cloud and its reference curve (with radius), each atomically."""
+    for sub in ("clouds", "truth", "cases"):
+        (folder / sub).mkdir(exist_ok=True)
+    write_points_ply(cloud_path(folder, case), cloud)
+    write_curve_ply(reference_path(folder, case), vertices, edges, scalars={"radius": np.asarray(radius, float)})
+
+
+def write_json(path: Path, doc: Any) -> None:
+    with atomic_open(path, "w") as fh:
+        json.dump(doc, fh, indent=1, allow_nan=False)
+        fh.write("\n")
+
+
+def read_json(path: Path) -> Any | None:
+    """The document, or None when the file is missing or not JSON (then the case is remade)."""
+    try:
+        with open(path, encoding="utf-8") as fh:
+            return json.load(fh)
+    except (OSError, ValueError):
+        return None
+
+
+def _toml_string(text: str) -> str:
+    return json.dumps(text)  # a JSON string of printable ASCII is a TOML basic string
+
+
+def write_manifest(folder: Path, records: list[dict[str, Any]], suite: str, seed: int) -> None:
+    """``compare.toml``: the built-in skeletonizers (cao, skelscope) on every case, each case with its
+    reference curve."""
+    lines = [
+        f"# skelcore compare manifest of the benchmark in this folder (suite {suite!r}, seed {seed}),",
+        "# written by `skelcore bench make`:  skelcore compare compare.toml --out runs/compare",
+        "# Each shape is one case of suite.json: its cloud and its exact curve skeleton (reference, a PLY",
+        "# with a per-vertex radius). Cases of the plate are marked ill-posed there: a thin plate has no",
+        "# well-defined curve skeleton (its reference is only the rim's centre circle).",
+        "",
+    ]
+    for name, method in (("cao", "cao"), ("skelscope", "skelscope")):
+        lines += ["[[methods]]", f"name = {_toml_string(name)}", 'kind = "builtin"', f"method = {_toml_string(method)}", ""]
+    for rec in records:
+        lines += ["[[shapes]]", f"name = {_toml_string(rec['name'])}", f"path = {_toml_string(rec['files']['cloud'])}",
+                  'reference = "truth/{stem}_reference.ply"', ""]
+    with atomic_open(folder / "compare.toml", "w") as fh:
+        fh.write("\n".join(lines))

@@ -1,0 +1,286 @@
+"""A curve skeleton against a ground-truth curve with a radius: the community's metrics (issue 23;
+docs/metrics.md 5.3.1 gives every formula and its source).
+
+Both curves are cut into pieces of at most ``sample_step`` x the reference's smallest radius;
+each piece's midpoint is a sample weighted by its length (isolated vertices are left out, unless a
+curve has no edge). Distances are exact (nearest point on the other curve's edges); a sample's
+local radius r is the reference radius at its nearest reference point (linear along edges; without
+one, the median distance from each reference vertex to its ``radius_k`` nearest cloud points). Chamfer both ways (PRBonn/DiffTS); precision / recall / F1 at
+thresholds t_k = k / K x ``threshold_max`` local radii, averaged over k = 1..K (DiffTS's curve
+area, its thresholds in local radii); junctions (degree >= 3) and endpoints (degree 1) matched one
+to one within ``match_radii`` x r of the reference node (PyNeval's branch/leaf metric: Hungarian,
+scipy's linear_sum_assignment); cycle count error E - V + C; length ratio; branch split / merge
+counts (branches: maximal chains through degree-2 vertices).
+"""
+
+from __future__ import annotations
+
+from dataclasses import asdict, dataclass
+
+import numpy as np
+from scipy.optimize import linear_sum_assignment
+from scipy.sparse import coo_matrix
+from scipy.sparse.csgraph import connected_components
+from scipy.spatial import cKDTree
+
+from ..correspondence import project_onto_curve
+from ..curve import CurveSkeleton
+from ..errors import SkelInputError
+from .reference import graph_counts
+
+__all__ = ["GroundTruthParams", "GroundTruthComparison", "compare_with_ground_truth", "curve_samples",
+           "branch_labels", "match_nodes", "radius_from_cloud"]
+
+_MAX_SAMPLES = 200_000
+
+
+@dataclass(frozen=True)
+class GroundTruthParams:
+    """The metrics' constants (docs/metrics.md 5.3.1); they join :class:`skelcore.Params` when the
+    metrics join ``evaluate``.
+
+    thresholds, threshold_max : precision / recall / F1 are averaged over the thresholds
+        k / thresholds x threshold_max local radii, k = 1..thresholds.
+    match_radii : junctions and endpoints match a reference node within this many of its radii.
+    branch_radii : branch split / merge: a reference branch and one of ours are associated when at
+        least this many local radii of its length lie within this many local radii of ours.
+    sample_step : both curves are sampled every this many x the reference's smallest radius.
+    radius_k : without a reference radius, it is the median distance to this many cloud points.
+    """
+
+    thresholds: int = 20
+    threshold_max: float = 1.0
+    match_radii: float = 2.0
+    branch_radii: float = 1.0
+    sample_step: float = 0.1
+    radius_k: int = 8
+
+    def __post_init__(self) -> None:
+        for name in ("threshold_max", "match_radii", "branch_radii", "sample_step"):
+            if not float(getattr(self, name)) > 0:
+                raise ValueError(f"ground-truth parameter {name}={getattr(self, name)!r}: must be > 0")
+        for name in ("thresholds", "radius_k"):
+            if int(getattr(self, name)) < 1:
+                raise ValueError(f"ground-truth parameter {name}={getattr(self, name)!r}: must be a positive integer")
+
+
+@dataclass(frozen=True)
+class GroundTruthComparison:
+    """Scores of a curve against a reference; distances in the inputs' units, counts as
+    (ours, reference[, matched]); NaN where a ratio has nothing to count (no junctions, say)."""
+
+    chamfer: float
+    chamfer_to_reference: float
+    chamfer_from_reference: float
+    chamfer_radii: float
+    precision: float
+    recall: float
+    f1: float
+    junction_precision: float
+    junction_recall: float
+    endpoint_precision: float
+    endpoint_recall: float
+    junctions: tuple[int, int, int]
+    endpoints: tuple[int, int, int]
+    cycles: tuple[int, int]
+    cycle_error: int
+    length: tuple[float, float]
+    length_ratio: float
+    branches: tuple[int, int]
+    splits: int
+    merges: int
+    thresholds: tuple[float, ...]
+    match_radii: float
+    branch_radii: float
+    radius_source: str
+
+    def to_dict(self) -> dict:
+        d = asdict(self)
+        return {k: list(v) if isinstance(v, tuple) else v for k, v in d.items()}
+
+
+def curve_samples(curve: CurveSkeleton, step: float, radius: np.ndarray | None = None):
+    """Piece midpoints (every edge cut into ceil(L / step) equal pieces), their weights (piece
+    lengths), their edge, and the radius interpolated at them (when ``radius`` per vertex is given).
+    A curve without edges gives its vertices, weight 1 each, edge -1."""
+    v, e = curve.vertices, curve.edges
+    if len(e) == 0:
+        r = None if radius is None else np.asarray(radius, float).copy()
+        return v.copy(), np.ones(len(v)), np.full(len(v), -1, dtype=np.int64), r
+    a, b = v[e[:, 0]], v[e[:, 1]]
+    length = np.linalg.norm(b - a, axis=1)
+    n = np.maximum(np.ceil(length / step).astype(np.int64), 1)
+    edge = np.repeat(np.arange(len(e)), n)
+    start = np.concatenate([[0], np.cumsum(n)[:-1]])
+    t = (np.arange(len(edge)) - start[edge] + 0.5) / n[edge]
+    pts = a[edge] + t[:, None] * (b - a)[edge]
+    r = None
+    if radius is not None:
+        radius = np.asarray(radius, float)
+        r = radius[e[edge, 0]] + t * (radius[e[edge, 1]] - radius[e[edge, 0]])
+    return pts, (length / n)[edge], edge, r
+
+
+def branch_labels(curve: CurveSkeleton) -> tuple[np.ndarray, int]:
+    """Branch index of every edge: edges sharing a vertex of degree 2 are in one branch, so a branch
+    is a maximal chain between vertices of other degrees (a loop of degree-2 vertices is one)."""
+    e = curve.edges
+    if len(e) == 0:
+        return np.empty(0, dtype=np.int64), 0
+    deg = curve.degrees()
+    inc_v = e.ravel()
+    inc_e = np.repeat(np.arange(len(e)), 2)
+    two = deg[inc_v] == 2
+    order = np.argsort(inc_v[two], kind="stable")
+    pairs = inc_e[two][order].reshape(-1, 2)
+    adj = coo_matrix((np.ones(len(pairs)), (pairs[:, 0], pairs[:, 1])), shape=(len(e), len(e)))
+    n, labels = connected_components(adj, directed=False)
+    return labels.astype(np.int64), int(n)
+
+
+def match_nodes(ours: np.ndarray, ref: np.ndarray, reach: np.ndarray) -> int:
+    """Largest one-to-one matching of points ``ours`` to ``ref`` with |p - q| <= reach[q] (ties
+    broken by the smallest total distance): the number of matched pairs."""
+    if len(ours) == 0 or len(ref) == 0:
+        return 0
+    d = np.linalg.norm(ours[:, None, :] - ref[None, :, :], axis=2)
+    allowed = d <= reach[None, :] * (1.0 + 1e-9)
+    big = 1.0 + float(d[allowed].sum()) if allowed.any() else 1.0
+    rows, cols = linear_sum_assignment(np.where(allowed, d, big))
+    return int(np.count_nonzero(allowed[rows, cols]))
+
+
+def radius_from_cloud(vertices: np.ndarray, cloud: np.ndarray, k: int) -> np.ndarray:
+    """Median distance from each vertex to its ``k`` nearest cloud points (the inscribed radius of
+    an exact skeleton point; the median resists noise and stray points)."""
+    k = max(1, min(int(k), len(cloud)))
+    d, _ = cKDTree(cloud).query(vertices, k=k, workers=-1)
+    return np.median(np.asarray(d).reshape(len(vertices), k), axis=1)
+
+
+def _ratio(num: int, den: int) -> float:
+    return float(num) / den if den else float("nan")
+
+
+def _edges_only(curve: CurveSkeleton) -> CurveSkeleton:
+    """The curve without its isolated vertices (a curve with edges is the union of its edges)."""
+    if curve.n_edges == 0:
+        return curve
+    used = np.unique(curve.edges)
+    if len(used) == curve.n_vertices:
+        return curve
+    remap = np.full(curve.n_vertices, -1)
+    remap[used] = np.arange(len(used))
+    return CurveSkeleton(vertices=curve.vertices[used], edges=remap[curve.edges], vertex_map=curve.vertex_map[used])
+
+
+def _at_projection(curve: CurveSkeleton, radius: np.ndarray, q: np.ndarray, edge: np.ndarray) -> np.ndarray:
+    """The radius, linear along each edge, at points q lying on the given edges (-1: a vertex)."""
+    out = np.empty(len(q))
+    iso = edge < 0
+    if iso.any():
+        _, nearest = cKDTree(curve.vertices).query(q[iso], k=1)
+        out[iso] = radius[nearest]
+    e = curve.edges[edge[~iso]]
+    a, b = curve.vertices[e[:, 0]], curve.vertices[e[:, 1]]
+    ab = b - a
+    t = np.einsum("ij,ij->i", q[~iso] - a, ab) / np.maximum(np.einsum("ij,ij->i", ab, ab), 1e-300)
+    t = np.clip(t, 0.0, 1.0)
+    out[~iso] = radius[e[:, 0]] + t * (radius[e[:, 1]] - radius[e[:, 0]])
+    return out
+
+
+def compare_with_ground_truth(curve: CurveSkeleton, reference: CurveSkeleton, reference_radius: np.ndarray | None = None,
+                              cloud: np.ndarray | None = None, *,
+                              params: GroundTruthParams | None = None) -> GroundTruthComparison:
+    """Score ``curve`` against ``reference`` (same frame and units); ``reference_radius`` per reference
+    vertex, else estimated from ``cloud`` (one of them is needed). Module docstring and
+    docs/metrics.md 5.3.1 for the definitions."""
+    p = params or GroundTruthParams()
+    if reference.n_edges == 0:
+        raise SkelInputError("the reference curve has no edges")
+    if reference_radius is not None:
+        radius = np.asarray(reference_radius, float).ravel()
+        if radius.shape != (reference.n_vertices,):
+            raise SkelInputError(f"reference radius has {radius.size} values for {reference.n_vertices} vertices")
+        source = "reference"
+    elif cloud is not None and len(cloud):
+        radius = radius_from_cloud(reference.vertices, np.asarray(cloud, float), p.radius_k)
+        source = "cloud"
+    else:
+        raise SkelInputError("ground-truth metrics need the reference's radius or the cloud to estimate it")
+    if not (np.all(np.isfinite(radius)) and np.all(radius > 0)):
+        raise SkelInputError("reference radius must be finite and > 0 at every vertex")
+    radius = radius[np.unique(reference.edges)]
+    reference = _edges_only(reference)
+
+    lengths = (float(curve.edge_lengths().sum()) if curve.n_edges else 0.0, float(reference.edge_lengths().sum()))
+    step = max(p.sample_step * float(radius.min()), sum(lengths) / _MAX_SAMPLES)
+    ref_pts, ref_w, ref_edge, ref_r = curve_samples(reference, step, radius)
+    our_pts, our_w, our_edge, _ = curve_samples(curve, step)
+    q, qe = project_onto_curve(our_pts, reference)
+    d_ours = np.linalg.norm(q - our_pts, axis=1)
+    r_ours = _at_projection(reference, radius, q, qe)
+    q2, _ = project_onto_curve(ref_pts, _edges_only(curve))
+    d_ref = np.linalg.norm(q2 - ref_pts, axis=1)
+
+    def wmean(x, w):
+        return float(np.sum(x * w) / np.sum(w))
+
+    thresholds = p.threshold_max * np.arange(1, p.thresholds + 1) / p.thresholds
+    slack = 1.0 + 1e-9  # "within" holds up to rounding: a sample exactly at a threshold counts
+    prec = np.array([wmean(d_ours <= t * slack * r_ours, our_w) for t in thresholds])
+    rec = np.array([wmean(d_ref <= t * slack * ref_r, ref_w) for t in thresholds])
+    f1 = np.where(prec + rec > 0, 2 * prec * rec / np.where(prec + rec > 0, prec + rec, 1.0), 0.0)
+
+    deg_o, deg_r = curve.degrees(), reference.degrees()
+    counts = {}
+    for kind, sel_o, sel_r in (("junctions", deg_o >= 3, deg_r >= 3), ("endpoints", deg_o == 1, deg_r == 1)):
+        m = match_nodes(curve.vertices[sel_o], reference.vertices[sel_r], p.match_radii * radius[sel_r])
+        counts[kind] = (int(sel_o.sum()), int(sel_r.sum()), m)
+
+    splits, merges, n_branches = _splits_merges(curve, reference, radius, p.branch_radii,
+                                                (ref_pts, ref_w, ref_edge, ref_r, d_ref), our_pts, our_edge)
+    cyc_o, cyc_r = graph_counts(curve)["cycles"], graph_counts(reference)["cycles"]
+    c_to, c_from = wmean(d_ours, our_w), wmean(d_ref, ref_w)
+    return GroundTruthComparison(
+        chamfer=(c_to + c_from) / 2, chamfer_to_reference=c_to, chamfer_from_reference=c_from,
+        chamfer_radii=(wmean(d_ours / r_ours, our_w) + wmean(d_ref / ref_r, ref_w)) / 2,
+        precision=float(prec.mean()), recall=float(rec.mean()), f1=float(f1.mean()),
+        junction_precision=_ratio(counts["junctions"][2], counts["junctions"][0]),
+        junction_recall=_ratio(counts["junctions"][2], counts["junctions"][1]),
+        endpoint_precision=_ratio(counts["endpoints"][2], counts["endpoints"][0]),
+        endpoint_recall=_ratio(counts["endpoints"][2], counts["endpoints"][1]),
+        junctions=counts["junctions"], endpoints=counts["endpoints"],
+        cycles=(cyc_o, cyc_r), cycle_error=cyc_o - cyc_r,
+        length=lengths, length_ratio=lengths[0] / lengths[1] if lengths[1] > 0 else float("nan"),
+        branches=n_branches, splits=splits, merges=merges,
+        thresholds=tuple(float(t) for t in thresholds), match_radii=float(p.match_radii),
+        branch_radii=float(p.branch_radii), radius_source=source,
+    )
+
+
+def _splits_merges(curve, reference, radius, reach, ref_samples, our_pts, our_edge):
+    """Reference branch b and our branch c are associated when at least ``reach`` x (b's mean
+    radius) of b's length lies within ``reach`` local radii of c (c: the branch of the nearest of our
+    samples), reference samples within ``reach`` x r_J of a reference junction J left out (there every
+    branch meets every other). splits = sum over b of (#c - 1)+, merges = sum over c of (#b - 1)+."""
+    ref_pts, ref_w, ref_edge, ref_r, d_ref = ref_samples
+    lab_r, n_r = branch_labels(reference)
+    lab_o, n_o = branch_labels(curve)
+    if n_o == 0:
+        return 0, 0, (0, n_r)
+    junction = np.flatnonzero(reference.degrees() >= 3)
+    keep = d_ref <= reach * ref_r * (1.0 + 1e-9)
+    if len(junction):
+        dj, j = cKDTree(reference.vertices[junction]).query(ref_pts, k=1)
+        keep &= dj > reach * radius[junction[j]]
+    _, nearest = cKDTree(our_pts).query(ref_pts[keep], k=1)
+    b = lab_r[ref_edge[keep]]
+    c = lab_o[our_edge[nearest]]
+    overlap = coo_matrix((ref_w[keep], (b, c)), shape=(n_r, n_o)).toarray()
+    mean_r = np.bincount(lab_r[ref_edge], weights=ref_w * ref_r, minlength=n_r) / np.bincount(
+        lab_r[ref_edge], weights=ref_w, minlength=n_r)
+    assoc = overlap >= reach * mean_r[:, None]
+    per_b, per_c = assoc.sum(axis=1), assoc.sum(axis=0)
+    return int(np.maximum(per_b - 1, 0).sum()), int(np.maximum(per_c - 1, 0).sum()), (n_o, n_r)
