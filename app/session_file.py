@@ -165,7 +165,8 @@ def session_from_json(doc: Any, path: str | os.PathLike = "session") -> SessionS
         raise bad(f"correspondence must be one of {', '.join(CORRESPONDENCES)}")
     index = doc.get("skeletal_index")
     state.skeletal_index = None if index is None else str(index)
-    from .scene import METRICS, STYLE_DEFAULTS
+    from .scene import METRICS
+    from .scene.model import STYLE_DEFAULTS
 
     state.metric = str(doc.get("metric", "boundedness"))
     if state.metric not in METRICS:
