@@ -221,10 +221,11 @@ class MainWindow(QtWidgets.QMainWindow):
         left = min(self.display.sizeHint().width() + bar + 8, int(0.3 * width))
         self.resizeDocks([self.docks["Summary"], self.docks["Display"]], [right, left], QtCore.Qt.Orientation.Horizontal)
         # the left column: the Display panel whole if the height allows, the picked element's few lines
-        picked = self.pick.sizeHint().height() + 24
+        title = self.docks["Display"].minimumSizeHint().height() - self.docks["Display"].widget().minimumSizeHint().height()
+        picked = self.pick.sizeHint().height() + title
         self.resizeDocks([self.docks["Display"], self.docks["Picked element"]],
-                         [min(self.display.sizeHint().height() + 40, int(0.5 * height)), min(picked, int(0.2 * height))],
-                         QtCore.Qt.Orientation.Vertical)
+                         [min(self.display.sizeHint().height() + title + 4, int(0.5 * height)),
+                          min(picked, int(0.2 * height))], QtCore.Qt.Orientation.Vertical)
 
     def _build_status_bar(self) -> None:
         bar = self.statusBar()

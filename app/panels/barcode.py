@@ -26,7 +26,8 @@ def compared_bars(barcode: np.ndarray, k: int) -> np.ndarray:
 
 _HINT = "H0 barcodes appear here after an evaluation\nwith a skeletal point set"
 MARGINS_PX = {"left": 46, "right": 16, "top": 30, "bottom": 36}
-"""Room around the two axes, in pixels: y labels, the last x tick label's right half, title, x labels."""
+"""Room around the two axes, in device-independent pixels: y labels, the last x tick label's right half,
+title, x labels."""
 TICK_SPACING_PX = 52  # at least this much width per persistence tick label
 
 
@@ -65,13 +66,16 @@ class BarcodePanel(PlotPanel):
         """Margins of a fixed size in pixels (a fraction of a narrow panel is too little for the
         labels, of a wide one too much), and as many x ticks as the width holds."""
         fig = self.figure
-        w, h = fig.bbox.width, fig.bbox.height
-        if w < 4 * (MARGINS_PX["left"] + MARGINS_PX["right"]) / 3 or h < 2 * (MARGINS_PX["top"] + MARGINS_PX["bottom"]):
+        ratio = float(getattr(self.canvas, "device_pixel_ratio", 1.0) or 1.0)  # Qt's scale factor: text grows too
+        w, h = fig.bbox.width / ratio, fig.bbox.height / ratio  # device-independent pixels
+        m = MARGINS_PX
+        if w < 4 * (m["left"] + m["right"]) / 3 or h < 2 * (m["top"] + m["bottom"]):
             return  # not laid out yet (or absurdly small): keep the previous margins
-        self._bar_axes[0].get_gridspec().update(
-            left=MARGINS_PX["left"] / w, right=1 - MARGINS_PX["right"] / w,
-            top=1 - MARGINS_PX["top"] / h, bottom=MARGINS_PX["bottom"] / h)
-        self._locator.set_params(nbins=max(2, int((w - MARGINS_PX["left"] - MARGINS_PX["right"]) / TICK_SPACING_PX)))
+        self._bar_axes[0].get_gridspec().update(left=m["left"] / w, right=1 - m["right"] / w,
+                                                top=1 - m["top"] / h, bottom=m["bottom"] / h)
+        for ax in self._bar_axes:  # GridSpec.update moves the axes of pyplot's figures only
+            ax.set_position(ax.get_subplotspec().get_position(fig))
+        self._locator.set_params(nbins=max(2, int((w - m["left"] - m["right"]) / TICK_SPACING_PX)))
 
     def prepare(self) -> None:
         """Create the figure and axes ahead of the first result (they cost ~50-80 ms), then, in a
