@@ -44,6 +44,8 @@ test-interop: setup
 
 screenshots: setup
 	xvfb-run -a -s "-screen 0 1600x1000x24" $(PY) scripts/make_screenshots.py
+	xvfb-run -a -s "-screen 0 1366x768x24" $(PY) scripts/make_screenshots.py --laptop
+	QT_SCALE_FACTOR=1.5 xvfb-run -a -s "-screen 0 1366x768x24" $(PY) scripts/make_screenshots.py --laptop
 
 bench: setup
 	$(PY) benchmarks/bench_engine.py

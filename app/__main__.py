@@ -1,5 +1,6 @@
-"""``skelscope [CLOUD] [--skeletal F] [--curve F] [--metric NAME] [--screenshot OUT.png] [--camera F] [--quit]``
-(and the A/B view: ``--skeleton-b F``, or ``--compare-run DIR --a METHOD --b METHOD [--dataset NAME]``)
+"""``skelscope [CLOUD] [--skeletal F] [--curve F] [--session F] [--metric NAME] [--screenshot OUT.png] [--camera F]
+[--size W H] [--background white|black|transparent] [--quit]`` (and the A/B view: ``--skeleton-b F``, or
+``--compare-run DIR --a METHOD --b METHOD [--dataset NAME]``)
 
 A thin main (silx's model): parse arguments, import Qt lazily, install an exception hook that shows
 errors in a dialog, open the window. Loading the inputs and the scripted mode (``--screenshot`` and
@@ -36,12 +37,21 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("cloud", nargs="?", help="the original point cloud")
     p.add_argument("--skeletal", metavar="F", help="skeletal point set in pointwise correspondence with the cloud")
     p.add_argument("--curve", metavar="F", help="curve skeleton (a file with edges)")
-    p.add_argument("--metric", choices=METRIC_CHOICES, default="boundedness", help="local metric to colour by")
+    p.add_argument("--session", metavar="F", help="a session saved by File > Save session (files, settings, "
+                   "display, camera, picked element); instead of CLOUD, --skeletal, --curve")
+    p.add_argument("--metric", choices=METRIC_CHOICES, default=None,
+                   help="local metric to colour by (default: the session's, else boundedness)")
     p.add_argument("--screenshot", metavar="OUT.png", help="save the 3D view as PNG once evaluated")
     p.add_argument("--scale", type=int, default=1, help="screenshot scale factor (default 1)")
-    p.add_argument("--transparent", action="store_true", help="screenshot with a transparent background")
+    p.add_argument("--background", choices=("white", "black", "transparent"), default=None,
+                   help="screenshot background (default white; black turns the text white)")
+    p.add_argument("--transparent", action="store_true", help="same as --background transparent")
     p.add_argument("--no-colour-bar", action="store_true", help="screenshot without the colour bar")
-    p.add_argument("--camera", metavar="F", help="camera file written by View > Save camera (default: fit the data)")
+    p.add_argument("--camera", metavar="F", help="camera file written by View > Save camera (default: fit the data, "
+                   "or the session's camera)")
+    p.add_argument("--size", metavar=("W", "H"), type=int, nargs=2,
+                   help="the 3D view's size in pixels at scale 1 (default: the camera file's or session's view "
+                   "size, which reproduces its framing; else the window's)")
     p.add_argument("--quit", action="store_true", help="exit after the screenshot (scripted use)")
     ab = p.add_argument_group("two skeletons side by side (A/B view; --screenshot then saves that window)")
     ab.add_argument("--skeleton-b", metavar="F", action="append", default=[],

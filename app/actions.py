@@ -15,14 +15,14 @@ from .window_api import ActionSpec
 __all__ = ["MENUS", "SUBMENUS", "Menus"]
 
 MENUS: tuple[tuple[str, tuple[str, ...]], ...] = (
-    ("&File", ("file.open", "file.recent", "file.compare", "file.close", "file.close_all", "-", "file.export", "-",
+    ("&File", ("file.open", "file.session", "file.recent", "file.compare", "file.close", "file.close_all", "-", "file.export", "-",
                "file.quit")),
     ("&Evaluate", ("evaluate.run", "-", "evaluate.colour")),
     ("&View", ("view.camera", "view.style", "-", "view.camera_files", "-", "view.docks")),
     ("&Tools", ("tools.skeletonize", "tools.study")),
     ("&Help", ("help",)),
 )
-SUBMENUS = {"file.recent": "Recent files", "file.close": "Close"}
+SUBMENUS = {"file.recent": "Recent", "file.close": "Close"}
 """Groups shown as a submenu of their menu, with this title."""
 
 

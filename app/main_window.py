@@ -44,7 +44,7 @@ class MainWindow(QtWidgets.QMainWindow):
     def __init__(self, settings: QtCore.QSettings | None = None, parent: QtWidgets.QWidget | None = None) -> None:
         super().__init__(parent)
         self.setWindowTitle("SkelScope")
-        self.resize(1500, 950)
+        self.resize(*initial_size(self.screen().availableGeometry().size()))
         self.settings = settings if settings is not None else QtCore.QSettings("SkelScope", "skelscope")
         self.interactive = True  # False in the scripted mode: errors go to ``errors``, not dialogs
         self.errors: list[str] = []
@@ -61,7 +61,6 @@ class MainWindow(QtWidgets.QMainWindow):
         self.setAcceptDrops(True)
         self.menus = Menus(self.menuBar(), self)
         self.actions_by_name: dict[str, QtGui.QAction] = self.menus.actions
-        self.recent_menu = self.menus.submenus["file.recent"]
 
         self.summary = SummaryPanel(self)
         self.barcodes = BarcodePanel(self)
@@ -76,8 +75,11 @@ class MainWindow(QtWidgets.QMainWindow):
         self.add_dock("Display", self.display, LEFT)
         self.add_dock("Picked element", self.pick, LEFT)
         self.add_dock("Settings", self.settings_panel, LEFT)
+        # Tabs where a column would need more height than a laptop has (issue 25: fit 1366 x 768)
         self.tabifyDockWidget(self.docks["Barcodes"], self.docks["Histogram"])
+        self.tabifyDockWidget(self.docks["Display"], self.docks["Settings"])
         self.docks["Barcodes"].raise_()
+        self.docks["Display"].raise_()
         self._plots_stale: set[str] = set()
         self._plots_timer = QtCore.QTimer(self)
         self._plots_timer.setSingleShot(True)
@@ -92,7 +94,6 @@ class MainWindow(QtWidgets.QMainWindow):
         self._build_status_bar()
         for spec in self.action_table():
             self.add_action(spec)
-        self._fill_recent()
 
         self.session.params_provider = self.settings_panel.params
         self.session.correspondence_provider = self.settings_panel.correspondence
@@ -116,11 +117,13 @@ class MainWindow(QtWidgets.QMainWindow):
         # issue 11's features, each through the public interface (app.window_api)
         from .compare_run import RunBrowser
         from .compare_view import CompareController
+        from .saved_sessions import SavedSessions
         from .support_controller import SupportController
 
         self.supports = SupportController(self)  # the picked element's support (dock, 3-D overlay, filter)
         self.compare = CompareController(self)  # File > Compare with a second skeleton (B)
         self.compare_run = RunBrowser(self)  # File > Open comparison run, and drops of a run
+        self.saved_sessions = SavedSessions(self)  # File > Save / Open session, File > Recent (issue 25)
         self._update_actions()
         QtCore.QTimer.singleShot(1500, preload_matplotlib)  # after the first frame, off the GUI thread
         QtCore.QTimer.singleShot(2500, lambda: self.view.after_render(preload_engine))  # not during a frame
@@ -133,10 +136,13 @@ class MainWindow(QtWidgets.QMainWindow):
 
     def add_dock(self, title: str, widget: QtWidgets.QWidget, area: QtCore.Qt.DockWidgetArea = LEFT,
                  below: str | None = None) -> QtWidgets.QDockWidget:
-        """A dock named ``title`` in ``area`` (or split under the dock ``below``), listed in the View menu."""
+        """A dock named ``title`` in ``area`` (or split under the dock ``below``), listed in the View menu.
+
+        The panel sits in a scroll area: a dock never asks for more room than the screen has (the
+        window's minimum size stays small, issue 25), a panel taller than its dock scrolls."""
         dock = QtWidgets.QDockWidget(title, self)
         dock.setObjectName(f"dock-{title}")
-        dock.setWidget(widget)
+        dock.setWidget(scrolling(widget, dock))
         self.addDockWidget(area, dock)
         if below is not None:
             self.splitDockWidget(self.docks[below], dock, QtCore.Qt.Orientation.Vertical)
@@ -153,6 +159,29 @@ class MainWindow(QtWidgets.QMainWindow):
     def add_drop_handler(self, accepts: Callable[[list[str]], bool], drop: Callable[[list[str]], None]) -> None:
         """Dropped paths (files or folders) that ``accepts`` takes go to ``drop`` instead of the loader."""
         self._drop_handlers.append((accepts, drop))
+
+    def submenu(self, group: str) -> QtWidgets.QMenu:
+        """The submenu a group is shown as (:data:`app.actions.SUBMENUS`), for a controller to fill."""
+        return self.menus.submenus[group]
+
+    def set_settings(self, params: Any, correspondence: str) -> None:
+        """The Settings panel's parameters, the thresholds beta*, c* (summary panel and scene) and the
+        correspondence mode, from a ``skelcore.Params`` (a saved session)."""
+        self.settings_panel.set_params(params)
+        self.settings_panel.set_correspondence(correspondence)
+        self.scene.set_thresholds(params.beta_star, params.c_star)
+        self.summary.set_thresholds(params.beta_star, params.c_star)
+
+    def picked_element(self) -> dict[str, Any] | None:
+        """The element shown in the pick panel (None when none is)."""
+        return self.pick.info
+
+    def select_element(self, layer: str, location: str, index: int) -> dict[str, Any]:
+        """Pick an element by its index, as a click on it would: marked in 3D, then :meth:`pick_element`."""
+        info = self.scene.element_info(layer, location, index)
+        self.view.mark(info["xyz"])
+        self.pick_element(info)
+        return info
 
     def add_display_option(self, widget: QtWidgets.QWidget) -> None:
         """A control at the end of the Display panel."""
@@ -184,7 +213,19 @@ class MainWindow(QtWidgets.QMainWindow):
 
     # ---- construction ---------------------------------------------------------------------
     def _size_docks(self) -> None:
-        self.resizeDocks([self.docks["Summary"], self.docks["Display"]], [420, 270], QtCore.Qt.Orientation.Horizontal)
+        """The side columns' first widths: their panels' natural widths, at most a third of the window
+        together (a small screen, or a large scale factor, keeps most of the width for the 3D view)."""
+        width, height = self.width(), self.height()
+        bar = self.style().pixelMetric(QtWidgets.QStyle.PixelMetric.PM_ScrollBarExtent)
+        right = min(420, int(0.3 * width))
+        left = min(self.display.sizeHint().width() + bar + 8, int(0.3 * width))
+        self.resizeDocks([self.docks["Summary"], self.docks["Display"]], [right, left], QtCore.Qt.Orientation.Horizontal)
+        # the left column: the Display panel whole if the height allows, the picked element's few lines
+        title = self.docks["Display"].minimumSizeHint().height() - self.docks["Display"].widget().minimumSizeHint().height()
+        picked = self.pick.sizeHint().height() + title
+        self.resizeDocks([self.docks["Display"], self.docks["Picked element"]],
+                         [min(self.display.sizeHint().height() + title + 4, int(0.5 * height)),
+                          min(picked, int(0.2 * height))], QtCore.Qt.Orientation.Vertical)
 
     def _build_status_bar(self) -> None:
         bar = self.statusBar()
@@ -334,19 +375,11 @@ class MainWindow(QtWidgets.QMainWindow):
         return [str(v) for v in (value or [])]
 
     def _add_recent(self, path: str) -> None:
+        """The files loaded, newest first: where file dialogs open (File > Recent lists sets and
+        sessions, :mod:`app.saved_sessions`)."""
         path = os.path.abspath(path)
         files = [path] + [p for p in self.recent_files() if p != path]
         self.settings.setValue("recent_files", files[:MAX_RECENT])
-        self._fill_recent()
-
-    def _fill_recent(self) -> None:
-        self.recent_menu.clear()
-        files = self.recent_files()
-        for path in files:
-            act = self.recent_menu.addAction(os.path.basename(path))
-            act.setToolTip(path)
-            act.triggered.connect(lambda _=False, p=path: self.session.load_files([p]))
-        self.recent_menu.setEnabled(bool(files))
 
     @staticmethod
     def _local_paths(event: QtGui.QDropEvent) -> list[str]:
@@ -534,10 +567,12 @@ class MainWindow(QtWidgets.QMainWindow):
         return export_results(ev, prefix, self.input_files())
 
     def save_screenshot(self, path: str, scale: int = 1, transparent: bool = False, colour_bar: bool = True,
-                        overwrite: bool = True) -> str:
+                        overwrite: bool = True, background: str | None = None) -> str:
+        """The 3D view as PNG, ``scale`` times its size, on a ``background`` of "white", "black" or
+        "transparent" (``transparent=True``: the latter)."""
         _refuse_existing([path], overwrite)
-        return write_png(path, self.view.image(scale=scale, transparent=transparent, colour_bar=colour_bar),
-                         self.input_files())
+        image = self.view.image(scale=scale, transparent=transparent, colour_bar=colour_bar, background=background)
+        return write_png(path, image, self.input_files())
 
     def _guarded(self, what: str, fn: Any, *args: Any, **kwargs: Any) -> Any:
         try:
@@ -564,7 +599,7 @@ class MainWindow(QtWidgets.QMainWindow):
             self._guarded("Results export", self.export_results, path, overwrite=True)
 
     def screenshot_dialog(self) -> None:
-        """One dialog: file, scale, transparent background, colour bar on or off."""
+        """One dialog: file, scale, background (white, black, transparent), colour bar on or off."""
         from .picture_dialog import PictureDialog
 
         default = os.path.join(self.last_dir(), f"{self.export_stem()}_{self.scene.metric}.png")
@@ -573,7 +608,8 @@ class MainWindow(QtWidgets.QMainWindow):
             return
         opts = dialog.options()
         if opts.path and self._confirm_overwrite([opts.path]):
-            self._guarded("Picture", self.save_screenshot, opts.path, opts.scale, opts.transparent, opts.colour_bar)
+            self._guarded("Picture", self.save_screenshot, opts.path, opts.scale, colour_bar=opts.colour_bar,
+                          background=opts.background)
 
     def save_camera(self, path: str) -> str:
         from .view.camera import save_camera
@@ -622,6 +658,27 @@ class MainWindow(QtWidgets.QMainWindow):
         self.settings.sync()  # the process may end with os._exit (a task still inside the engine)
         self.view.close()
         super().closeEvent(event)
+
+
+DEFAULT_SIZE = (1500, 950)
+FRAME_ALLOWANCE = (16, 48)
+"""Room left on the screen for a window manager's frame and title bar (device-independent pixels)."""
+
+
+def initial_size(available: QtCore.QSize) -> tuple[int, int]:
+    """The window's first size: DEFAULT_SIZE, shrunk to the screen's free area (minus a frame)."""
+    return (max(200, min(DEFAULT_SIZE[0], available.width() - FRAME_ALLOWANCE[0])),
+            max(200, min(DEFAULT_SIZE[1], available.height() - FRAME_ALLOWANCE[1])))
+
+
+def scrolling(widget: QtWidgets.QWidget, parent: QtWidgets.QWidget) -> QtWidgets.QScrollArea:
+    """``widget`` in a frameless scroll area that resizes it: it fills the dock, and scrolls once the
+    dock is smaller than the widget's minimum size."""
+    area = QtWidgets.QScrollArea(parent)
+    area.setWidgetResizable(True)
+    area.setFrameShape(QtWidgets.QFrame.Shape.NoFrame)
+    area.setWidget(widget)
+    return area
 
 
 _ROLE_TITLES = {"cloud": "cloud", "skeletal": "skeletal point set", "curve": "curve skeleton"}

@@ -1,5 +1,6 @@
-"""File > Save picture: one dialog for the file, the scale factor, a transparent background and
-whether the colour bar is drawn (the screenshot's options, as ``skelscope --screenshot`` takes them)."""
+"""File > Save picture: one dialog for the file, the scale factor, the background (white, black or
+transparent) and whether the colour bar is drawn (the screenshot's options, as ``skelscope
+--screenshot`` takes them: ``--scale``, ``--background``, ``--no-colour-bar``)."""
 
 from __future__ import annotations
 
@@ -8,15 +9,22 @@ from dataclasses import dataclass
 
 from PySide6 import QtWidgets
 
-__all__ = ["PictureOptions", "PictureDialog"]
+__all__ = ["PictureOptions", "PictureDialog", "BACKGROUND_CHOICES"]
+
+BACKGROUND_CHOICES = (("white", "white"), ("black (white text)", "black"), ("transparent (PNG alpha)", "transparent"))
+"""(label, ``SceneView.image``'s ``background``)"""
 
 
 @dataclass(frozen=True)
 class PictureOptions:
     path: str
     scale: int = 2
-    transparent: bool = False
+    background: str = "white"
     colour_bar: bool = True
+
+    @property
+    def transparent(self) -> bool:
+        return self.background == "transparent"
 
 
 class PictureDialog(QtWidgets.QDialog):
@@ -39,13 +47,16 @@ class PictureDialog(QtWidgets.QDialog):
         scale_row = QtWidgets.QHBoxLayout()
         scale_row.addWidget(self.scale)
         scale_row.addWidget(self.pixels, 1)
-        self.transparent = QtWidgets.QCheckBox("transparent background", self)
+        self.background = QtWidgets.QComboBox(self)
+        for text, key in BACKGROUND_CHOICES:
+            self.background.addItem(text, key)
+        self.background.setToolTip("on black, the colour bar's and the axes' text turns white")
         self.colour_bar = QtWidgets.QCheckBox("with the colour bar", self)
         self.colour_bar.setChecked(True)
         form = QtWidgets.QFormLayout()
         form.addRow("file", row)
         form.addRow("scale", scale_row)
-        form.addRow("", self.transparent)
+        form.addRow("background", self.background)
         form.addRow("", self.colour_bar)
         buttons = QtWidgets.QDialogButtonBox(
             QtWidgets.QDialogButtonBox.StandardButton.Save | QtWidgets.QDialogButtonBox.StandardButton.Cancel, self)
@@ -68,8 +79,15 @@ class PictureDialog(QtWidgets.QDialog):
         if path:
             self.path.setText(path)
 
+    def set_background(self, key: str) -> None:
+        index = self.background.findData(key)
+        if index < 0:
+            raise ValueError(f"unknown background {key!r}")
+        self.background.setCurrentIndex(index)
+
     def options(self) -> PictureOptions:
         path = os.path.expanduser(self.path.text().strip())
         if path and not path.lower().endswith(".png"):
             path += ".png"
-        return PictureOptions(path, int(self.scale.value()), self.transparent.isChecked(), self.colour_bar.isChecked())
+        return PictureOptions(path, int(self.scale.value()), str(self.background.currentData()),
+                              self.colour_bar.isChecked())

@@ -1,9 +1,11 @@
 """The viewer started with inputs from the command line, and its scripted mode (``--screenshot``, ``--quit``).
 
-:func:`check_arguments` reads every input the options name (camera file, a compare run's stored
-results, skeleton B) before any window opens, so bad input is one line and exit 2. :func:`run` loads
-the inputs into the window, starts the A/B view (``--skeleton-b``, ``--compare-run``), waits for the
-evaluation, saves the picture and prints the scores; scripted (``--quit``) it closes the window and
+:func:`check_arguments` reads every input the options name (camera file, saved session, a compare
+run's stored results, skeleton B) before any window opens, so bad input is one line and exit 2.
+:func:`run` sizes the 3D view (``--size W H``, else the camera's or session's saved view size, so a
+saved camera frames the data as it did), loads the inputs or restores the session into the window,
+starts the A/B view (``--skeleton-b``, ``--compare-run``), waits for the evaluation, saves the picture
+(``--scale``, ``--background``) and prints the scores; scripted (``--quit``) it closes the window and
 returns the exit status: 0 on success, 2 on bad input, 1 on a bug (an uncaught exception). It uses the
 window through :class:`app.window_api.WindowApi` only.
 """
@@ -22,7 +24,7 @@ if TYPE_CHECKING:  # Qt is imported after the view libraries (app.__main__.impor
     from .session import Session
     from .window_api import WindowApi
 
-__all__ = ["Startup", "check_arguments", "fail", "run"]
+__all__ = ["Startup", "check_arguments", "fail", "run", "fit_view_size"]
 
 
 def fail(message: str, code: int = 2) -> int:
@@ -38,20 +40,35 @@ class Startup:
     args: argparse.Namespace
     camera: dict[str, Any] | None
     ab: tuple[str, Any] | None
+    session: Any = None  # app.session_file.SessionState of --session
+    view_size: tuple[int, int] | None = None  # --size, else the camera's or the session's saved view size
 
     @property
     def scripted(self) -> bool:
         return bool(self.args.quit)
 
+    @property
+    def background(self) -> str:
+        return "transparent" if self.args.transparent else (self.args.background or "white")
+
 
 def check_arguments(args: argparse.Namespace) -> Startup:
     """The options checked and their files read before any window opens; ValueError (SkelInputError
     included) with one line on bad input."""
+    from .view.camera import MAX_VIEW_SIZE
+
     if args.scale < 1:
         raise ValueError("--scale must be a positive integer")
+    if args.transparent and args.background not in (None, "transparent"):
+        raise ValueError(f"--transparent contradicts --background {args.background}")
+    if args.size is not None and not all(1 <= v <= MAX_VIEW_SIZE for v in args.size):
+        raise ValueError(f"--size W H must be two integers in 1..{MAX_VIEW_SIZE}")
+    if args.session and (args.cloud or args.skeletal or args.curve or args.compare_run or args.skeleton_b):
+        raise ValueError("--session names its own files: give no CLOUD, --skeletal, --curve, --skeleton-b or "
+                         "--compare-run with it")
     if (args.skeletal or args.curve) and not args.cloud:
         raise ValueError("a skeletal point set or curve skeleton needs the cloud it was made from (CLOUD)")
-    if args.quit and not args.screenshot and not args.cloud and not args.compare_run:
+    if args.quit and not args.screenshot and not args.cloud and not args.compare_run and not args.session:
         raise ValueError("--quit without inputs has nothing to do")
     if args.screenshot and not os.path.isdir(os.path.dirname(os.path.abspath(args.screenshot))):
         raise ValueError(f"{args.screenshot}: output folder does not exist")
@@ -60,7 +77,15 @@ def check_arguments(args: argparse.Namespace) -> Startup:
         from .view.camera import load_camera
 
         camera = load_camera(args.camera)
-    return Startup(args, camera, _ab_inputs(args))
+    session = None
+    if args.session:
+        from .session_file import read_session
+
+        session = read_session(args.session)
+    saved = camera if camera is not None else (session.camera if session is not None else None)
+    view_size = tuple(args.size) if args.size else (tuple(saved["view_size"]) if saved and saved.get("view_size")
+                                                     else None)
+    return Startup(args, camera, _ab_inputs(args), session, view_size)
 
 
 def run(app: QtWidgets.QApplication, window: WindowApi, startup: Startup) -> int | None:
@@ -73,13 +98,29 @@ def run(app: QtWidgets.QApplication, window: WindowApi, startup: Startup) -> int
             dock.hide()
     window.widget.show()
     app.processEvents()
+    if startup.view_size is not None:
+        try:
+            fit_view_size(app, window, startup.view_size)
+        except ValueError as exc:
+            if scripted:
+                return fail(str(exc))
+            window.show_error("View size", str(exc))
 
     session = window.session
-    with session.batch():
-        for role, path in (("cloud", args.cloud), ("skeletal", args.skeletal), ("curve", args.curve)):
-            if path and not session.load_as(role, path) and scripted:
-                session.auto_evaluate = False
-    window.scene.set_metric(args.metric)
+    if startup.session is not None:
+        problems = window.saved_sessions.restore(startup.session, args.session)
+        window.saved_sessions.report(problems, os.path.basename(args.session))
+        if scripted and not window.scene.layers:
+            return fail(problems[0] if problems else f"{args.session}: the session names no file")
+        if camera is None:
+            camera = startup.session.camera
+    else:
+        with session.batch():
+            for role, path in (("cloud", args.cloud), ("skeletal", args.skeletal), ("curve", args.curve)):
+                if path and not session.load_as(role, path) and scripted:
+                    session.auto_evaluate = False
+    if args.metric:
+        window.scene.set_metric(args.metric)
     if camera is not None:
         window.view.set_camera_state(camera)
     if scripted and window.errors:
@@ -106,8 +147,8 @@ def run(app: QtWidgets.QApplication, window: WindowApi, startup: Startup) -> int
         else:
             window.view.set_camera_state(camera)
         try:
-            path = window.save_screenshot(args.screenshot, scale=args.scale, transparent=args.transparent,
-                                          colour_bar=not args.no_colour_bar)
+            path = window.save_screenshot(args.screenshot, scale=args.scale, colour_bar=not args.no_colour_bar,
+                                          background=startup.background)
         except (ValueError, OSError) as exc:
             if scripted:
                 return fail(str(exc))
@@ -124,6 +165,24 @@ def run(app: QtWidgets.QApplication, window: WindowApi, startup: Startup) -> int
         window.close()
         return 1 if window.bug else 0
     return None
+
+
+def fit_view_size(app: QtWidgets.QApplication, window: WindowApi, size: tuple[int, int]) -> None:
+    """Resize the window so that the 3D view is ``size`` pixels (a picture at scale 1 is that big):
+    a saved camera then frames the data as it did. ValueError when the window cannot get there."""
+    want_w, want_h = int(size[0]), int(size[1])
+    view, win = window.view.widget, window.widget
+    ratio = view.devicePixelRatioF()
+    for _ in range(4):
+        dw, dh = round(want_w / ratio) - view.width(), round(want_h / ratio) - view.height()
+        if not dw and not dh:
+            break
+        win.resize(win.width() + dw, win.height() + dh)
+        app.processEvents()
+    got = (round(view.width() * ratio), round(view.height() * ratio))
+    if got != (want_w, want_h):
+        raise ValueError(f"--size {want_w} {want_h}: the 3D view could only be made {got[0]} x {got[1]} pixels "
+                         "(a window manager or the window's minimum size)")
 
 
 def _summary_lines(summary: dict[str, Any]) -> list[str]:

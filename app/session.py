@@ -158,24 +158,37 @@ class Session(QtCore.QObject):
 
     def load_as(self, role: str, path: str) -> bool:
         """File > Open for one role; False (and an error dialog) when the file does not load."""
-        from skelcore.io import load_cloud, load_curve, load_points
-
-        if role not in ROLES:
-            raise ValueError(f"unknown role {role!r}")
-        loader = {"cloud": load_cloud, "skeletal": load_points, "curve": load_curve}[role]
         try:
-            data = loader(path)
+            data = _read(role, path)
         except SkelInputError as exc:
             self.error.emit("Could not load", str(exc), "")
-            return False
-        except Exception as exc:  # noqa: BLE001
-            self.error.emit("Could not load", f"{path}: {type(exc).__name__}: {exc}", "")
             return False
         with self.batch():
             if role == "cloud":
                 self._new_cloud_over_skeleton()
             self._apply(role, data, path)
         return True
+
+    def load_roles(self, paths: dict[str, str]) -> list[str]:
+        """Replace everything by these files, each in its role (a saved session, a recent set): one
+        evaluation after the last. Returns the one-line messages of the files that did not load,
+        for the caller to show together (nothing is shown here); the others are loaded."""
+        for role in paths:
+            if role not in ROLES:
+                raise ValueError(f"unknown role {role!r}")
+        failures, loaded = [], {}
+        for role in ROLES:
+            if role in paths:
+                try:
+                    loaded[role] = _read(role, paths[role])
+                except SkelInputError as exc:
+                    failures.append(str(exc))
+        self.runner.discard()
+        with self.batch():
+            self.scene.clear()
+            for role, data in loaded.items():
+                self._apply(role, data, paths[role])
+        return failures
 
     def show_arrays(self, cloud: Any, skeletal: Any = None, curve: Any = None, evaluation: Any = None) -> None:
         """Show in-memory inputs (a study variant, issue 4) in place of the loaded ones; evaluated
@@ -342,3 +355,19 @@ class Session(QtCore.QObject):
 
 
 _ROLE_TITLES = {"cloud": "cloud", "skeletal": "skeletal point set", "curve": "curve skeleton"}
+
+
+def _read(role: str, path: str) -> Any:
+    """The file's data for ``role`` (points, or a CurveSkeleton); SkelInputError with one line, also
+    for a loader's own bug (the window must survive it)."""
+    from skelcore.io import load_cloud, load_curve, load_points
+
+    if role not in ROLES:
+        raise ValueError(f"unknown role {role!r}")
+    loader = {"cloud": load_cloud, "skeletal": load_points, "curve": load_curve}[role]
+    try:
+        return loader(path)
+    except SkelInputError:
+        raise
+    except Exception as exc:  # noqa: BLE001 - a loader bug must not take the window down
+        raise SkelInputError(f"{type(exc).__name__}: {exc}", path) from None

@@ -1,7 +1,8 @@
 """What feature controllers and the scripted mode may use of the main window (issue 21, item 4).
 
 The A/B view (:mod:`app.compare_view`), the comparison-run browser (:mod:`app.compare_run`), the
-support views (:mod:`app.support_controller`) and the scripted mode (:mod:`app.scripted`) type their
+support views (:mod:`app.support_controller`), saved sessions (:mod:`app.saved_sessions`) and the
+scripted mode (:mod:`app.scripted`) type their
 window as :class:`WindowApi`, which :class:`app.main_window.MainWindow` implements: they add docks,
 menu actions (by named group, :class:`ActionSpec`), drop handlers and display options through it,
 and never touch the window's private attributes (``tests/app/test_window_api.py`` walks their code).
@@ -22,7 +23,7 @@ if TYPE_CHECKING:
     from .session import Session
     from .view import SceneView
 
-__all__ = ["ActionSpec", "ABComparison", "WindowApi", "LEFT", "RIGHT"]
+__all__ = ["ActionSpec", "ABComparison", "SessionFiles", "WindowApi", "LEFT", "RIGHT"]
 
 LEFT = QtCore.Qt.DockWidgetArea.LeftDockWidgetArea
 RIGHT = QtCore.Qt.DockWidgetArea.RightDockWidgetArea
@@ -57,6 +58,16 @@ class ABComparison(Protocol):
     def compare_arrays(self, skeletal: Any, curve: Any, name: str = "B") -> bool: ...
 
 
+class SessionFiles(Protocol):
+    """Saved sessions' controller as the scripted mode uses it (:mod:`app.saved_sessions`)."""
+
+    def open(self, path: str) -> list[str]: ...
+
+    def restore(self, state: Any, path: str) -> list[str]: ...
+
+    def report(self, problems: list[str], name: str) -> None: ...
+
+
 @runtime_checkable
 class WindowApi(Protocol):
     """The main window's public face. Its attributes are read, not replaced (``interactive`` aside)."""
@@ -65,6 +76,8 @@ class WindowApi(Protocol):
     session: Session
     view: SceneView
     compare: ABComparison
+    saved_sessions: SessionFiles
+    settings: QtCore.QSettings  # the viewer's own settings file (recent entries, ...)
     docks: dict[str, QtWidgets.QDockWidget]
     errors: list[str]  # every error message shown (scripted: recorded instead of shown)
     bug: str | None  # the traceback of an uncaught exception, once one happened
@@ -84,6 +97,14 @@ class WindowApi(Protocol):
 
     def add_drop_handler(self, accepts: Callable[[list[str]], bool], drop: Callable[[list[str]], None]) -> None: ...
 
+    def submenu(self, group: str) -> QtWidgets.QMenu: ...
+
+    def set_settings(self, params: Any, correspondence: str) -> None: ...
+
+    def picked_element(self) -> dict[str, Any] | None: ...
+
+    def select_element(self, layer: str, location: str, index: int) -> dict[str, Any]: ...
+
     def add_display_option(self, widget: QtWidgets.QWidget) -> None: ...
 
     def last_dir(self) -> str: ...
@@ -102,6 +123,6 @@ class WindowApi(Protocol):
                      evaluation: Any = None) -> None: ...
 
     def save_screenshot(self, path: str, scale: int = 1, transparent: bool = False, colour_bar: bool = True,
-                        overwrite: bool = True) -> str: ...
+                        overwrite: bool = True, background: str | None = None) -> str: ...
 
     def close(self) -> bool: ...

@@ -6,7 +6,12 @@
 - ``barcode_panel.png``: the H0 barcode panel; ``histogram_panel.png``: the histogram panel.
 - ``window_tubes.png``: edges as tubes, coloured by centeredness (the curve samples' values).
 - ``figure_spheres.png``: File > Save picture at scale 2 with points as shaded spheres (points, lines
-  and text grow with the scale); ``figure_eye_dome.png``: eye-dome lighting, no colour bar, no axes.
+  and text grow with the scale); ``figure_eye_dome.png``: eye-dome lighting, no colour bar, no axes;
+  ``figure_black.png``: scale 2 on a black background (the colour bar's and the axes' text white).
+- ``window_1366x768.png`` (``--laptop``, run under a 1366 x 768 screen; ``make screenshots`` does):
+  the whole screen of a laptop with the window filling it, the sample evaluated, an element picked
+  and an evaluation running (status bar: stage, progress bar, Cancel). With ``QT_SCALE_FACTOR=1.5``
+  (``--laptop`` again) it writes ``window_1366x768_scale1.5.png``.
 - ``window_skeletonized.png``: the skeletonizer's output for the sample cloud (issue 4), evaluated.
 - ``window_hammer_skeletonized.png``: the real hammer scan (../shared/data, when present) skeletonized
   and evaluated, coloured by centeredness.
@@ -47,6 +52,48 @@ def sample_files(tmp: Path) -> dict[str, str]:
     write_points_ply(names["skeletal"], sh.skeletal)
     write_curve_ply(names["curve"], sh.curve_vertices, sh.curve_edges)
     return {k: str(v) for k, v in names.items()}
+
+
+def laptop_screenshot() -> int:
+    """Issue 25: the window on a 1366 x 768 screen, filling it as a maximized window would."""
+    from PySide6 import QtCore, QtWidgets
+
+    app = QtWidgets.QApplication.instance() or QtWidgets.QApplication(["skelscope-screenshots"])
+    from app.main_window import MainWindow
+
+    OUT.mkdir(exist_ok=True)
+    tmp = Path(tempfile.mkdtemp(prefix="skelscope-shots-"))
+    window = MainWindow(settings=QtCore.QSettings(str(tmp / "settings.ini"), QtCore.QSettings.Format.IniFormat))
+    window.session.ask = lambda question, options: options[0]
+    screen = window.screen()
+    window.setGeometry(screen.availableGeometry())
+    window.show()
+
+    def settle(ms: int = 400) -> None:
+        loop = QtCore.QEventLoop()
+        QtCore.QTimer.singleShot(ms, loop.quit)
+        loop.exec()
+
+    settle(800)
+    files = sample_files(tmp)
+    window.session.load_files([files["cloud"], files["skeletal"], files["curve"]])
+    while window.session.runner.running:
+        settle(200)
+    window.scene.set_metric("centeredness")
+    window.view.standard_view("xy")
+    curve = window.scene.curve
+    junction = int(curve.curve.degrees().argmax())
+    window.select_element("curve", "vertices", junction)
+    settle(1500)
+    window.session.start_evaluation()  # a run in progress: the status bar's stage, progress and Cancel
+    settle(250)
+    scale = os.environ.get("QT_SCALE_FACTOR", "1")
+    name = "window_1366x768.png" if scale in ("", "1") else f"window_1366x768_scale{scale}.png"
+    QtWidgets.QApplication.primaryScreen().grabWindow(0).save(str(OUT / name))
+    print(f"wrote screenshots/{name} (screen {screen.size().width()} x {screen.size().height()} at scale {scale})")
+    window.session.runner.shutdown()
+    window.close()
+    return 0
 
 
 def main() -> int:
@@ -143,6 +190,10 @@ def main() -> int:
     print("wrote screenshots/figure_eye_dome.png")
     window.scene.set_style("eye_dome", False)
     window.scene.set_style("axes", True)
+    window.scene.set_metric("smoothness")  # NaN at the junction and tips: the NaN legend too
+    settle()
+    window.save_screenshot(str(OUT / "figure_black.png"), scale=2, background="black")
+    print("wrote screenshots/figure_black.png")
 
     # Skeletonize the bare cloud (issue 4) and evaluate its output.
     try:
@@ -336,4 +387,4 @@ def ab_run_screenshots(window, settle, save, tmp: Path) -> None:
 if __name__ == "__main__":
     sys.path.insert(0, str(ROOT))
     os.environ.setdefault("QT_QPA_PLATFORM", "xcb")
-    sys.exit(main())
+    sys.exit(laptop_screenshot() if "--laptop" in sys.argv else main())

@@ -11,6 +11,7 @@ from __future__ import annotations
 import numpy as np
 
 __all__ = [
+    "METRIC_COLORMAP",
     "MAGENTA",
     "NAN_COLOR",
     "CLOUD_GREY",
@@ -30,6 +31,8 @@ CLOUD_GREY: tuple[int, int, int] = (170, 170, 170)
 #: Uncoloured skeletal points and curve (no metric selected).
 SKELETAL_COLOR: tuple[int, int, int] = (31, 119, 180)
 CURVE_COLOR: tuple[int, int, int] = (214, 39, 40)
+#: The colour map of the local metrics, over [0, 1], on screen and in exported files.
+METRIC_COLORMAP = "viridis"
 
 _ANCHORS_HEX = {
     "viridis": (

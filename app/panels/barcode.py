@@ -1,6 +1,10 @@
 """The two H0 barcodes (SPEC 1): the K compared bars of the cloud and of the skeletal point set,
 eps* marked, d_B and d_Wp in the title. Drawn on the panel's own matplotlib Figure (no pyplot, no
-global rc), so the viewer never changes anyone else's plots."""
+global rc), so the viewer never changes anyone else's plots.
+
+The persistence axis keeps its labels inside the panel at any width (issue 25: "0.0200" was cut at
+the right edge): the margins are set in pixels on every resize, the labels are the shortest form of
+each value ("0.02", not "0.0200") and there are only as many as the width holds."""
 
 from __future__ import annotations
 
@@ -21,6 +25,16 @@ def compared_bars(barcode: np.ndarray, k: int) -> np.ndarray:
 
 
 _HINT = "H0 barcodes appear here after an evaluation\nwith a skeletal point set"
+MARGINS_PX = {"left": 46, "right": 16, "top": 30, "bottom": 36}
+"""Room around the two axes, in device-independent pixels: y labels, the last x tick label's right half,
+title, x labels."""
+TICK_SPACING_PX = 52  # at least this much width per persistence tick label
+
+
+def tick_text(value: float, _pos: object = None) -> str:
+    """A persistence tick's label: the value's shortest form (``0.02``, ``0.0025``, ``0``)."""
+    text = f"{value:.6g}"
+    return "0" if text in ("-0", "0") else text
 
 
 class BarcodePanel(PlotPanel):
@@ -33,13 +47,35 @@ class BarcodePanel(PlotPanel):
             self._bar_axes = self.figure.subplots(
                 2, 1, sharex=True, gridspec_kw=dict(left=0.16, right=0.97, top=0.9, bottom=0.13, hspace=0.12)
             )
+            from matplotlib.ticker import FuncFormatter, MaxNLocator
+
             for ax in self._bar_axes:
                 ax.tick_params(labelsize=7)
                 ax.set_yticks([])
             self._bar_axes[1].set_xlabel("persistence (normalized units)", fontsize=8)
+            self._bar_axes[1].xaxis.set_major_formatter(FuncFormatter(tick_text))
+            self._locator = MaxNLocator(nbins=5, steps=[1, 2, 2.5, 5, 10], min_n_ticks=2)
+            self._bar_axes[1].xaxis.set_major_locator(self._locator)
             self._empty = self.figure.text(0.5, 0.5, _HINT, ha="center", va="center", color="0.4")
             self._title = self.figure.suptitle("", fontsize=9)
+            self.canvas.mpl_connect("resize_event", lambda _event: self.fit_margins())
+            self.fit_margins()
         return self._bar_axes
+
+    def fit_margins(self) -> None:
+        """Margins of a fixed size in pixels (a fraction of a narrow panel is too little for the
+        labels, of a wide one too much), and as many x ticks as the width holds."""
+        fig = self.figure
+        ratio = float(getattr(self.canvas, "device_pixel_ratio", 1.0) or 1.0)  # Qt's scale factor: text grows too
+        w, h = fig.bbox.width / ratio, fig.bbox.height / ratio  # device-independent pixels
+        m = MARGINS_PX
+        if w < 4 * (m["left"] + m["right"]) / 3 or h < 2 * (m["top"] + m["bottom"]):
+            return  # not laid out yet (or absurdly small): keep the previous margins
+        self._bar_axes[0].get_gridspec().update(left=m["left"] / w, right=1 - m["right"] / w,
+                                                top=1 - m["top"] / h, bottom=m["bottom"] / h)
+        for ax in self._bar_axes:  # GridSpec.update moves the axes of pyplot's figures only
+            ax.set_position(ax.get_subplotspec().get_position(fig))
+        self._locator.set_params(nbins=max(2, int((w - m["left"] - m["right"]) / TICK_SPACING_PX)))
 
     def prepare(self) -> None:
         """Create the figure and axes ahead of the first result (they cost ~50-80 ms), then, in a

@@ -21,9 +21,9 @@ class DisplayPanel(QtWidgets.QWidget):
     def __init__(self, scene: Scene, parent: QtWidgets.QWidget | None = None) -> None:
         super().__init__(parent)
         self.scene = scene
-        self.metric = QtWidgets.QComboBox(self)
-        self.metric.addItems(list(METRICS))
-        self.metric.currentTextChanged.connect(self._metric_changed)
+        self.metric_box = QtWidgets.QComboBox(self)
+        self.metric_box.addItems(list(METRICS))
+        self.metric_box.currentTextChanged.connect(self._metric_changed)
         self.auto_range = QtWidgets.QCheckBox("[0, 1]", self)
         self.auto_range.setToolTip("Every metric lies in [0, 1]; untick to choose the colour range")
         self.auto_range.setChecked(True)
@@ -80,7 +80,7 @@ class DisplayPanel(QtWidgets.QWidget):
         self.swap.clicked.connect(lambda: self.layer_action.emit("swap", ""))
 
         form = QtWidgets.QFormLayout()
-        form.addRow("colour by", self.metric)
+        form.addRow("colour by", self.metric_box)
         form.addRow("range", range_row)
         layout = QtWidgets.QVBoxLayout(self)
         layout.addLayout(form)
@@ -145,9 +145,9 @@ class DisplayPanel(QtWidgets.QWidget):
     def _sync(self) -> None:
         """Reflect the scene in the widgets without feeding changes back."""
         s = self.scene
-        self.metric.blockSignals(True)
-        self.metric.setCurrentText(s.metric)
-        self.metric.blockSignals(False)
+        self.metric_box.blockSignals(True)
+        self.metric_box.setCurrentText(s.metric)
+        self.metric_box.blockSignals(False)
         for name in LAYER_ORDER:
             layer = s.layers.get(name)
             widgets = (self.visible[name], self.size[name], self.opacity[name], self.remove[name])

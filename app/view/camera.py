@@ -17,7 +17,7 @@ from skelcore.errors import SkelInputError
 from skelcore.io.atomic import atomic_open
 
 __all__ = ["fit_camera", "orient_standard_view", "camera_state", "apply_camera_state", "save_camera", "load_camera",
-           "FIT_X", "FIT_Y"]
+           "check_camera", "FIT_X", "FIT_Y", "MAX_VIEW_SIZE"]
 
 WINDOW_CENTER_X = 0.12
 """The projection centre moves this far right (viewport units, [-1, 1]): the data sits left of the bar."""
@@ -133,12 +133,14 @@ _KEYS = ("position", "focal_point", "view_up", "view_angle", "parallel_projectio
 
 
 def camera_state(plotter: Any) -> dict[str, Any]:
-    """The camera as plain values (what a camera file holds)."""
+    """The camera as plain values (what a camera file holds), with the view's size in pixels: the
+    same camera frames the data alike only in a view of the same shape (``skelscope --size``)."""
     cam = plotter.renderer.GetActiveCamera()
     return {
         "position": list(cam.GetPosition()), "focal_point": list(cam.GetFocalPoint()), "view_up": list(cam.GetViewUp()),
         "view_angle": cam.GetViewAngle(), "parallel_projection": bool(cam.GetParallelProjection()),
         "parallel_scale": cam.GetParallelScale(), "window_center": list(cam.GetWindowCenter()),
+        "view_size": [int(v) for v in plotter.render_window.GetSize()],
     }
 
 
@@ -185,4 +187,23 @@ def load_camera(path: str | os.PathLike) -> dict[str, Any]:
         doc["view_angle"], doc["parallel_scale"] = float(doc["view_angle"]), float(doc["parallel_scale"])
     except (TypeError, ValueError):
         raise SkelInputError("not a camera file (bad vector or number)", path) from None
+    return check_camera(doc, path)
+
+
+def check_camera(doc: dict[str, Any], path: str | os.PathLike = "camera") -> dict[str, Any]:
+    """The optional ``view_size`` of a camera record (two positive integers, or absent: files from
+    before it was saved), checked; SkelInputError naming ``path`` otherwise."""
+    size = doc.get("view_size")
+    if size is not None:
+        try:
+            size = [int(v) for v in size]
+        except (TypeError, ValueError):
+            size = []
+        if len(size) != 2 or min(size) < 1 or max(size) > MAX_VIEW_SIZE:
+            raise SkelInputError(f"not a camera file (view_size must be two integers in 1..{MAX_VIEW_SIZE})", path)
+        doc["view_size"] = size
     return doc
+
+
+MAX_VIEW_SIZE = 16384
+"""The largest view side a camera file or ``--size`` may ask for, in pixels."""

@@ -4,6 +4,13 @@ pyvista's ``add_scalar_bar`` costs several ms and a new bar re-renders its text,
 only when the coloured actor or the metric changes and is otherwise updated in place. The NaN legend
 is a magenta swatch with its label to the right of it (never over it, at any size or scale), below
 the bar, shown while any shown value is invalid (SPEC 5).
+
+The bar's title is a text actor of its own, laid out before every frame from the view's size in
+pixels: centred over the bar but never past the view's right edge, its bottom half a label plus a
+gap above the bar's top, so it clears the top label ("1.00") in a view of any size. A scaled picture
+(VTK's tiles) grows normalized positions and the bar's own text with the scale, but not a plain text
+actor's font: the title's and the NaN label's are multiplied by the scale for the picture, so the
+layout holds at any scale (issue 25).
 """
 
 from __future__ import annotations
@@ -13,12 +20,16 @@ from typing import Any, Callable
 from ..scene import Scene
 from .style import MAGENTA
 
-__all__ = ["ColourBar", "BAR_X", "BAR_WIDTH", "NAN_LABEL"]
+__all__ = ["ColourBar", "BAR_X", "BAR_WIDTH", "NAN_LABEL", "TEXT_COLOURS"]
 
 BAR_X, BAR_Y, BAR_WIDTH, BAR_HEIGHT = 0.87, 0.25, 0.06, 0.5  # normalized viewport
 NAN_LABEL = "NaN"  # short: it must fit right of the swatch in a narrow view
 _SWATCH = (0.875, 0.18, 0.895, 0.20)  # x0, y0, x1, y1 (normalized viewport)
 _TITLE_SIZE, _LABEL_SIZE = 14, 12
+_TITLE_GAP = 4  # pixels between the top label's top and the title's baseline
+_RIGHT_MARGIN = 4  # pixels between the title's end and the view's right edge
+TEXT_COLOURS = {"white": (0.0, 0.0, 0.0), "transparent": (0.0, 0.0, 0.0), "black": (1.0, 1.0, 1.0)}
+"""The annotations' text colour on each picture background."""
 
 
 class ColourBar:
@@ -28,6 +39,9 @@ class ColourBar:
         self.plotter = plotter
         self.actor: Any = None  # the actor the colour bar describes
         self.swatch, self.label = self._make_nan_legend()
+        self.title = self._make_title()
+        # laid out right before each render (the view's size is then final)
+        plotter.renderer.AddObserver("StartEvent", lambda *_: self.layout())
 
     def update(self, actor: Any, scene: Scene) -> None:
         """Describe ``actor`` (None: no bar) coloured by ``scene.metric``; the NaN legend is shown
@@ -39,12 +53,17 @@ class ColourBar:
             self.actor = actor
             if actor is None:
                 self._show_nan(False)
+                self.title.SetVisibility(False)
                 return
             self.plotter.add_scalar_bar(
                 title=scene.metric, mapper=actor.mapper, n_labels=5, fmt="%.2f", color="black",
                 vertical=True, position_x=BAR_X, position_y=BAR_Y, width=BAR_WIDTH, height=BAR_HEIGHT,
                 title_font_size=_TITLE_SIZE, label_font_size=_LABEL_SIZE, render=False,
             )
+            bars[scene.metric].SetTitle("")  # drawn by ``self.title`` (keyed by the metric in pyvista's dict)
+            self.title.SetInput(scene.metric)
+            self.title.SetVisibility(True)
+            self.layout()
         bar = bars[scene.metric]
         bar.SetLookupTable(actor.mapper.lookup_table)
         bar.SetDrawNanAnnotation(False)
@@ -94,22 +113,82 @@ class ColourBar:
             self.plotter.renderer.AddViewProp(a)
         return swatch, label
 
+    def _make_title(self) -> Any:
+        from vtkmodules.vtkRenderingCore import vtkTextActor
+
+        title = vtkTextActor()
+        prop = title.GetTextProperty()
+        prop.SetFontSize(_TITLE_SIZE)
+        prop.SetColor(0.0, 0.0, 0.0)
+        prop.SetVerticalJustificationToBottom()
+        title.GetPositionCoordinate().SetCoordinateSystemToNormalizedViewport()
+        title.SetVisibility(False)
+        self.plotter.renderer.AddViewProp(title)
+        return title
+
+    def layout(self) -> None:
+        """Place the title from the view's size in pixels: centred over the bar unless that runs past
+        the right edge (then it ends just inside it), its bottom above the top label. Skipped while a
+        scaled picture renders its tiles: the layout of the view at scale 1 holds (see the module)."""
+        ren = self.plotter.renderer
+        win = ren.GetRenderWindow()
+        if win is None or tuple(win.GetTileScale()) != (1, 1) or not self.title.GetVisibility():
+            return
+        w, h = ren.GetSize()
+        if w <= 0 or h <= 0:
+            return
+        size = [0.0, 0.0]
+        self.title.GetSize(ren, size)
+        centre = BAR_X + BAR_WIDTH / 2
+        prop = self.title.GetTextProperty()
+        if centre * w + size[0] / 2 > w - _RIGHT_MARGIN:
+            prop.SetJustificationToRight()
+            x = 1.0 - _RIGHT_MARGIN / w
+        else:
+            prop.SetJustificationToCentered()
+            x = centre
+        label_px = self._label_height()
+        self.title.SetPosition(x, BAR_Y + BAR_HEIGHT + (label_px / 2 + _TITLE_GAP) / h)
+
+    def _label_height(self) -> float:
+        """The bar's label height in pixels (the top label is centred on the bar's top)."""
+        bars = list(self.plotter.scalar_bars.values())
+        size = bars[0].GetLabelTextProperty().GetFontSize() if bars else _LABEL_SIZE
+        return 1.2 * size
+
+    def title_bottom_above_bar(self) -> float:
+        """The title's bottom minus the bar's top, in normalized viewport units (for tests)."""
+        return float(self.title.GetPosition()[1]) - (BAR_Y + BAR_HEIGHT)
+
     def label_starts_right_of_swatch(self) -> bool:
         return self.label.GetPosition()[0] > _SWATCH[2]
 
-    def scaled(self, scale: int, visible: bool = True) -> list[Callable[[], None]]:
-        """Scale the legend's text by ``scale`` (a scaled screenshot; a text actor keeps its pixel
-        size, the bar scales its own) and hide bar and legend
-        when not ``visible``; the functions that undo it."""
+    def for_picture(self, scale: int = 1, visible: bool = True, background: str = "white") -> list[Callable[[], None]]:
+        """Bar, title and NaN legend for a picture ``scale`` times the view's size: hidden when not
+        ``visible``, their text in the background's :data:`TEXT_COLOURS`, the title's and the NaN
+        label's fonts ``scale`` times larger (VTK's tiles grow the bar's own text, not theirs); the
+        functions that undo it."""
         undo: list[Callable[[], None]] = []
+        self.layout()
+        for actor in (self.title, self.label):
+            prop = actor.GetTextProperty()
+            size = prop.GetFontSize()
+            prop.SetFontSize(size * int(scale))
+            undo.append(lambda p=prop, s=size: p.SetFontSize(s))
+        colour = TEXT_COLOURS[background]
         bars = list(self.plotter.scalar_bars.values())
-        for bar in bars:  # its text already follows the bar's size, which follows the picture's
+        props = [self.title.GetTextProperty(), self.label.GetTextProperty()]
+        for bar in bars:
             on = bar.GetVisibility()
             bar.SetVisibility(on and visible)
             undo.append(lambda b=bar, o=on: b.SetVisibility(o))
-        prop = self.label.GetTextProperty()
-        size, shown = prop.GetFontSize(), self.nan_shown
-        prop.SetFontSize(size * scale)
+            props += [bar.GetLabelTextProperty(), bar.GetTitleTextProperty()]
+        for prop in props:
+            old = prop.GetColor()
+            prop.SetColor(*colour)
+            undo.append(lambda p=prop, c=old: p.SetColor(*c))
+        title_on, shown = bool(self.title.GetVisibility()), self.nan_shown
+        self.title.SetVisibility(title_on and visible)
         self._show_nan(shown and visible)
-        undo.append(lambda: (prop.SetFontSize(size), self._show_nan(shown)))
+        undo.append(lambda: (self.title.SetVisibility(title_on), self._show_nan(shown)))
         return undo

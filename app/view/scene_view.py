@@ -368,7 +368,7 @@ class SceneView:
             self._axes_shown = style["axes"]
             if self._axes_shown:
                 if self.plotter.renderer.axes_widget is None:
-                    self.plotter.add_axes(interactive=False, color="black", line_width=2)
+                    fixed_size_labels(self.plotter.add_axes(interactive=False, color="black", line_width=2))
                 else:
                     self.plotter.show_axes()
             else:
@@ -490,6 +490,10 @@ class SceneView:
         self._show_marker(info["xyz"])
         return info
 
+    def mark(self, xyz: tuple[float, float, float]) -> None:
+        """Mark a point as the picked element (a pick made by index, e.g. from a saved session)."""
+        self._show_marker(xyz)
+
     def _show_marker(self, xyz: tuple[float, float, float]) -> None:
         self._remove_marker()
         actor = self.plotter.add_mesh(
@@ -503,25 +507,36 @@ class SceneView:
         self._remove("pick-marker")
 
     # ---- images ---------------------------------------------------------------------------
-    def image(self, scale: int = 1, transparent: bool = False, colour_bar: bool = True) -> np.ndarray:
+    def image(self, scale: int = 1, transparent: bool = False, colour_bar: bool = True,
+              background: str | None = None) -> np.ndarray:
         """The rendered 3D view as an (H, W, 3 or 4) uint8 array, ``scale`` times the widget size.
 
-        Point sizes, line widths and the colour bar's text grow with ``scale``, so the picture is
-        the view as seen, at a higher resolution; ``colour_bar=False`` leaves the bar out."""
+        Point sizes, line widths and every text grow with ``scale``, so the picture is the view as
+        seen, at a higher resolution; ``colour_bar=False`` leaves the bar out. ``background`` is
+        "white" (the view's), "black" (text turns white) or "transparent" (an alpha channel);
+        ``transparent=True`` means "transparent"."""
+        background = "transparent" if transparent else (background or "white")
+        if background not in BACKGROUNDS:
+            raise ValueError(f"background must be one of {', '.join(BACKGROUNDS)}, got {background!r}")
         self._before_frame()
         self._set_moving(False)
         scale = int(scale)
         restore = _scaled_props(self._actors.values(), scale)
-        restore += self._colour_bar.scaled(scale, visible=colour_bar)
+        restore += self._colour_bar.for_picture(scale, visible=colour_bar, background=background)
+        restore += _axes_for_picture(self.plotter.renderer.axes_actor if self._axes_shown else None, scale, background)
+        if background == "black":
+            self.plotter.set_background("black")
+            restore.append(lambda: self.plotter.set_background("white"))
         try:
             self.plotter.render()
-            img = self.plotter.screenshot(None, transparent_background=transparent, return_img=True, scale=scale)
+            img = self.plotter.screenshot(None, transparent_background=background == "transparent", return_img=True,
+                                          scale=scale)
         finally:
             for undo in restore:
                 undo()
         self._frames.frame_done()  # the pending frame is the one rendered here
-        if scale != 1 or not colour_bar:
-            self.request_render()  # the view itself back to its own sizes
+        if scale != 1 or not colour_bar or background != "white":
+            self.request_render()  # the view itself back to its own sizes and colours
         return np.asarray(img)
 
     def close(self) -> None:
@@ -529,6 +544,40 @@ class SceneView:
         self.plotter.removeEventFilter(self._motion_filter)
         self._frames.close()
         self.plotter.close()
+
+
+BACKGROUNDS = ("white", "black", "transparent")
+"""A picture's backgrounds (File > Save picture, ``skelscope --background``)."""
+AXES_LABEL_SIZE = 13
+
+
+def fixed_size_labels(axes: Any) -> Any:
+    """The orientation axes' letters at a fixed font size: pyvista scales them to fit a box, which
+    VTK's tiles then grow once more, so a picture at scale 2 had letters three times too big."""
+    for caption in (axes.GetXAxisCaptionActor2D(), axes.GetYAxisCaptionActor2D(), axes.GetZAxisCaptionActor2D()):
+        caption.GetTextActor().SetTextScaleModeToNone()
+        caption.GetCaptionTextProperty().SetFontSize(AXES_LABEL_SIZE)
+    return axes
+
+
+def _axes_for_picture(axes: Any, scale: int, background: str) -> list[Callable[[], None]]:
+    """The orientation axes' lines ``scale`` times wider and their letters in the background's text
+    colour, for one picture; the functions that undo it."""
+    from .colorbar import TEXT_COLOURS
+
+    undo: list[Callable[[], None]] = []
+    if axes is None:
+        return undo
+    for prop in (axes.GetXAxisShaftProperty(), axes.GetYAxisShaftProperty(), axes.GetZAxisShaftProperty()):
+        width = prop.GetLineWidth()
+        prop.SetLineWidth(width * scale)
+        undo.append(lambda p=prop, w=width: p.SetLineWidth(w))
+    for caption in (axes.GetXAxisCaptionActor2D(), axes.GetYAxisCaptionActor2D(), axes.GetZAxisCaptionActor2D()):
+        prop = caption.GetCaptionTextProperty()
+        colour = prop.GetColor()
+        prop.SetColor(*TEXT_COLOURS[background])
+        undo.append(lambda p=prop, c=colour: p.SetColor(*c))
+    return undo
 
 
 def _scaled_props(actors: Any, scale: int) -> list[Callable[[], None]]:

@@ -6,7 +6,7 @@ from __future__ import annotations
 
 import pyvista as pv
 
-from skelcore.colors import CLOUD_GREY, CURVE_COLOR, MAGENTA, SKELETAL_COLOR, lookup_table
+from skelcore.colors import CLOUD_GREY, CURVE_COLOR, MAGENTA, METRIC_COLORMAP, SKELETAL_COLOR, lookup_table
 
 __all__ = [
     "MAGENTA", "CLOUD_GREY", "SKELETAL_PLAIN", "CURVE_EDGE", "CURVE_VERTEX", "PICK_MARKER", "make_lut", "plain_lut",
@@ -16,7 +16,7 @@ SKELETAL_PLAIN = SKELETAL_COLOR
 CURVE_EDGE = CURVE_COLOR
 CURVE_VERTEX = CURVE_COLOR
 PICK_MARKER = (255, 140, 0)  # orange: on neither colour map, not magenta
-COLORMAP = "viridis"
+COLORMAP = METRIC_COLORMAP
 
 
 def make_lut(clim: tuple[float, float], cmap: str = COLORMAP) -> pv.LookupTable:

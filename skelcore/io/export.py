@@ -11,6 +11,9 @@ the same picture as the viewer:
 - ``curve_samples.ply``: the curve samples (SPEC 3 sampling); boundedness, centeredness, their edge
   and fraction t; coloured by ``color_by`` (centeredness when ``color_by`` is smoothness, which
   samples do not have).
+
+Each file's header says which metric its colours encode, in one comment line (issue 25):
+``comment colors: centeredness (viridis over [0, 1], NaN magenta)`` (:func:`colour_comment`).
 """
 
 from __future__ import annotations
@@ -21,15 +24,20 @@ from typing import Iterable
 
 import numpy as np
 
-from ..colors import map_to_rgb
+from ..colors import METRIC_COLORMAP as COLOUR_MAP, map_to_rgb
 from ..errors import SkelInputError
 from .ply import write_curve_ply, write_points_ply
 from ..evaluation import Evaluation
 
-__all__ = ["export_ply", "COLOR_BY"]
+__all__ = ["export_ply", "COLOR_BY", "colour_comment"]
 
 #: Metrics a file can be coloured by. Every metric lives in [0, 1], so the colour range is fixed.
 COLOR_BY = ("centeredness", "boundedness", "smoothness")
+
+
+def colour_comment(metric: str) -> str:
+    """The PLY header comment naming the metric the RGB colours encode (and how)."""
+    return f"colors: {metric} ({COLOUR_MAP} over [0, 1], NaN magenta)"
 
 
 def export_ply(
@@ -65,8 +73,8 @@ def export_ply(
         }
         path = out / "skeletal.ply"
         write_points_ply(
-            path, s.points, scalars=values, colors=map_to_rgb(values[color_by], 0.0, 1.0),
-            inputs=guard, binary=binary,
+            path, s.points, scalars=values, colors=map_to_rgb(values[color_by], 0.0, 1.0, COLOUR_MAP),
+            inputs=guard, binary=binary, comments=[colour_comment(color_by)],
         )  # fmt: skip
         written.append(str(path))
 
@@ -77,7 +85,8 @@ def export_ply(
         write_curve_ply(
             path, c.curve.vertices, c.curve.edges,
             scalars={"smoothness": smooth, "degree": np.asarray(c.vertex_degree, dtype=np.int32)},
-            colors=map_to_rgb(smooth, 0.0, 1.0), inputs=guard, binary=binary,
+            colors=map_to_rgb(smooth, 0.0, 1.0, COLOUR_MAP), inputs=guard, binary=binary,
+            comments=[colour_comment("smoothness")],
         )  # fmt: skip
         written.append(str(path))
 
@@ -91,7 +100,8 @@ def export_ply(
             path, c.samples,
             scalars={**samples, "edge": np.asarray(c.sample_edge, dtype=np.int32),
                      "t": np.asarray(c.sample_t, dtype=np.float64)},
-            colors=map_to_rgb(samples[by], 0.0, 1.0), inputs=guard, binary=binary,
+            colors=map_to_rgb(samples[by], 0.0, 1.0, COLOUR_MAP), inputs=guard, binary=binary,
+            comments=[colour_comment(by)],
         )  # fmt: skip
         written.append(str(path))
     return written

@@ -294,14 +294,15 @@ _PLY_TYPE = {"f8": "double", "f4": "float", "i4": "int", "u1": "uchar"}
 _TEXT_FMT = {"f8": "%.17g", "f4": "%.9g", "i4": "%d", "u1": "%d"}
 
 
-def _write(path, elements: list[PlyElement], inputs: Iterable, binary: bool) -> None:
+def _write(path, elements: list[PlyElement], inputs: Iterable, binary: bool, comments: Iterable[str] = ()) -> None:
+    lines = ["written by skelcore", *(" ".join(str(c).split()) for c in comments)]  # one line each
     if binary:
-        ply = PlyData(elements, text=False, byte_order="<", comments=["written by skelcore"])
+        ply = PlyData(elements, text=False, byte_order="<", comments=lines)
         with atomic_open(path, "wb", inputs=inputs) as fh:
             ply.write(fh)
         return
     # ASCII by hand: plyfile formats text one row at a time (~20 s per million points).
-    head = ["ply", "format ascii 1.0", "comment written by skelcore"]
+    head = ["ply", "format ascii 1.0", *(f"comment {c}" for c in lines)]
     for el in elements:
         head.append(f"element {el.name} {len(el.data)}")
         head += [f"property {_PLY_TYPE[el.data.dtype[n].str[1:]]} {n}" for n in el.data.dtype.names]
@@ -325,12 +326,14 @@ def write_points_ply(
     colors: np.ndarray | None = None,
     inputs: Iterable[str | os.PathLike] = (),
     binary: bool = True,
+    comments: Iterable[str] = (),
 ) -> None:
     """Point set as PLY: ``double x y z``, ``uchar red green blue`` when ``colors`` (N x 3, 0..255) is
-    given, one ``float`` property per scalar (NaN kept as NaN, SPEC 5). Atomic; never overwrites an input.
+    given, one ``float`` property per scalar (NaN kept as NaN, SPEC 5), each of ``comments`` as a
+    header comment line. Atomic; never overwrites an input.
     """
     vertex = _vertex_array(points, scalars or {}, colors)
-    _write(path, [PlyElement.describe(vertex, "vertex")], inputs, binary)
+    _write(path, [PlyElement.describe(vertex, "vertex")], inputs, binary, comments)
 
 
 def write_curve_ply(
@@ -342,6 +345,7 @@ def write_curve_ply(
     colors: np.ndarray | None = None,
     inputs: Iterable[str | os.PathLike] = (),
     binary: bool = True,
+    comments: Iterable[str] = (),
 ) -> None:
     """Curve skeleton as PLY: the vertices as in :func:`write_points_ply` plus an ``edge`` element with
     ``int vertex1 vertex2`` (0-based), the layout Open3D's LineSet writer uses, so Open3D, MeshLab
@@ -356,4 +360,4 @@ def write_curve_ply(
         raise ValueError("edge index out of range")
     edge = np.empty(len(e), dtype=[("vertex1", "<i4"), ("vertex2", "<i4")])
     edge["vertex1"], edge["vertex2"] = e[:, 0], e[:, 1]
-    _write(path, [PlyElement.describe(vertex, "vertex"), PlyElement.describe(edge, "edge")], inputs, binary)
+    _write(path, [PlyElement.describe(vertex, "vertex"), PlyElement.describe(edge, "edge")], inputs, binary, comments)

@@ -218,3 +218,187 @@ def test_a_pick_among_a_million_skeletal_points_finds_the_clicked_one(window, qt
     info = window.view.pick_display(x, y)
     assert info is not None and info["element"] == "skeletal point"
     assert np.linalg.norm(np.asarray(info["xyz"]) - skeletal[target]) < 0.02
+
+
+# ---- issue 25: pictures at any scale, camera framing, backgrounds, barcode labels --------------
+
+def _dark_row_runs(img, x0: int) -> list[tuple[int, int, int]]:
+    """Runs of rows holding dark (text) pixels in columns x0.., as (first row, last row, rightmost
+    dark column): the colour bar's title and tick labels, top to bottom."""
+    dark = _rgb(img)[:, x0:].max(axis=-1) < 190  # anti-aliased glyphs: their thin strokes are grey
+    rows = np.flatnonzero(dark.any(axis=1))
+    runs, start = [], None
+    for i, r in enumerate(rows):
+        if start is None:
+            start = r
+        if i + 1 == len(rows) or rows[i + 1] != r + 1:
+            cols = np.flatnonzero(dark[start:r + 1].any(axis=0))
+            runs.append((int(start), int(r), x0 + int(cols.max())))
+            start = None
+    return runs
+
+
+@pytest.mark.parametrize("docks", ["shown", "hidden"])  # a narrow view (title right-aligned) and a wide one
+def test_the_colour_bar_title_clears_the_top_label_and_the_view_edge_at_every_scale(evaluated, docks):
+    from app.view.colorbar import BAR_WIDTH, BAR_X
+
+    w = evaluated
+    if docks == "hidden":
+        for dock in w.docks.values():
+            dock.hide()
+    w.scene.set_metric("centeredness")
+    for layer in ("cloud", "skeletal", "curve"):
+        w.scene.set_visible(layer, False)
+    w.scene.set_visible("skeletal", True)  # the bar describes the skeletal points
+    w.scene.set_style("axes", False)
+    w.view.image()  # one frame at the view's final size
+    for scale in (1, 2, 3):
+        img = w.view.image(scale=scale)
+        width = img.shape[1]
+        runs = _dark_row_runs(img, int((BAR_X + BAR_WIDTH) * width) + 2 * scale)
+        assert len(runs) >= 6, (scale, width, runs)  # title, 1.00 ... 0.00 (tick marks may stand apart)
+        title, top_label = runs[0], runs[1]
+        assert title[1] < top_label[0] - scale, (scale, runs)  # at least a row's gap per scale unit
+        # a title sitting on "1.00" would merge their rows into one run twice a label's height
+        assert title[1] - title[0] <= 1.6 * (top_label[1] - top_label[0] + 1), (scale, runs)
+        assert title[2] < width - 1, (scale, title, width)  # not cut at the right edge
+        # the title's text height grows with the picture (not shrinks, not blows up)
+        if scale == 1:
+            height1 = title[1] - title[0] + 1
+        else:
+            assert 0.7 * scale * height1 <= title[1] - title[0] + 1 <= 1.4 * scale * height1, (scale, title, height1)
+
+
+def test_the_orientation_axes_letters_grow_with_the_picture_not_three_times(evaluated):
+    w = evaluated
+    for layer in ("cloud", "skeletal", "curve"):
+        w.scene.set_visible(layer, False)
+    w.scene.set_style("axes", True)
+    w.view.image()
+
+    def letters_height(img) -> int:
+        h, wd = img.shape[:2]
+        corner = _rgb(img)[h // 2:, : wd // 2]
+        rows = np.flatnonzero((corner.max(axis=-1) < 80).any(axis=1))  # black letters (the arrows are coloured)
+        assert len(rows), "no axes letters"
+        return int(rows.max() - rows.min() + 1)
+
+    one = letters_height(w.view.image(scale=1, colour_bar=False))
+    for scale in (2, 3):
+        ratio = letters_height(w.view.image(scale=scale, colour_bar=False)) / one
+        assert 0.75 * scale <= ratio <= 1.25 * scale, (scale, ratio)
+
+
+def test_black_and_transparent_backgrounds_turn_the_text_white_and_leave_the_view_white(evaluated, tmp_path):
+    from app.view.colorbar import BAR_WIDTH, BAR_X
+
+    w = evaluated
+    black = w.view.image(scale=2, background="black")
+    assert black.shape[2] == 3 and tuple(_rgb(black)[0, 0]) == (0, 0, 0)
+    labels = _rgb(black)[:, int((BAR_X + BAR_WIDTH) * black.shape[1]) + 4:]
+    assert (labels.min(axis=-1) > 200).sum() > 100  # white label text
+    assert (labels.max(axis=-1) < 60).sum() > 0.95 * labels[..., 0].size  # on black
+    clear = w.view.image(background="transparent")
+    assert clear.shape[2] == 4 and clear[0, 0, 3] == 0 and clear[..., 3].max() == 255
+    after = w.view.image()
+    assert tuple(_rgb(after)[0, 0]) == (255, 255, 255)  # the view itself is back to white
+    path = w.save_screenshot(str(tmp_path / "b.png"), background="black")
+    from matplotlib.image import imread
+
+    assert imread(path)[0, 0, :3].tolist() == [0, 0, 0]
+    with pytest.raises(ValueError, match="background must be one of"):
+        w.view.image(background="grey")
+
+
+def _grey_box(img) -> tuple[int, int, int, int]:
+    px = _rgb(img)
+    spread = px.max(axis=-1) - px.min(axis=-1)
+    ys, xs = np.nonzero((spread <= 6) & (px[..., 0] > 90) & (px[..., 0] < 235))
+    return int(xs.min()), int(xs.max()), int(ys.min()), int(ys.max())
+
+
+def test_a_saved_camera_reproduces_the_framing_through_its_view_size_and_size_sets_it(window, files, tmp_path,
+                                                                                     capsys, monkeypatch):
+    """The scripted window has another shape than the one the camera was saved in: the camera file
+    carries the view's size and the scripted mode takes it (or ``--size W H``)."""
+    import sys
+
+    from matplotlib.image import imread
+
+    from app.__main__ import main
+
+    w = window
+    w.session.load_files([files["cloud"], files["skeletal"]])
+    w.view.standard_view("xz")
+    w.view.reset_camera()
+    seen = w.view.image(colour_bar=False)
+    cam = w.save_camera(str(tmp_path / "cam.json"))
+    saved = json.loads(open(cam).read())
+    assert saved["view_size"] == [seen.shape[1], seen.shape[0]]
+    QtCore.QSettings.setPath(QtCore.QSettings.Format.NativeFormat, QtCore.QSettings.Scope.UserScope, str(tmp_path))
+    monkeypatch.setattr(sys, "excepthook", sys.excepthook)
+    out = tmp_path / "framed.png"
+    assert main([files["cloud"], "--skeletal", files["skeletal"], "--camera", cam, "--screenshot", str(out),
+                 "--no-colour-bar", "--quit"]) == 0, capsys.readouterr().err
+    got = (imread(str(out))[..., :3] * 255).round().astype(np.uint8)
+    assert got.shape == seen.shape[:2] + (3,)
+    # the cloud lies where it lay in the window, to a pixel or two
+    assert np.abs(np.subtract(_grey_box(got), _grey_box(seen))).max() <= 2, (_grey_box(got), _grey_box(seen))
+    # --size wins over the camera's; a size the screen cannot hold is still a view of that size (no WM)
+    assert main([files["cloud"], "--camera", cam, "--size", "420", "300", "--screenshot", str(out), "--quit"]) == 0
+    assert imread(str(out)).shape[:2] == (300, 420)
+    assert main([files["cloud"], "--size", "0", "300", "--quit"]) == 2
+    assert "--size W H must be two integers" in capsys.readouterr().err
+    assert main([files["cloud"], "--transparent", "--background", "black", "--quit"]) == 2
+    assert "--transparent contradicts --background black" in capsys.readouterr().err
+    (tmp_path / "badsize.json").write_text(json.dumps({**saved, "view_size": [10, -3]}))
+    assert main([files["cloud"], "--camera", str(tmp_path / "badsize.json"), "--quit"]) == 2
+    assert "badsize.json: not a camera file (view_size" in capsys.readouterr().err
+
+
+def test_the_scripted_background_option(files, tmp_path, capsys, monkeypatch):
+    import sys
+
+    from matplotlib.image import imread
+
+    from app.__main__ import main
+
+    QtCore.QSettings.setPath(QtCore.QSettings.Format.NativeFormat, QtCore.QSettings.Scope.UserScope, str(tmp_path))
+    monkeypatch.setattr(sys, "excepthook", sys.excepthook)
+    for background, corner in (("black", [0, 0, 0]), ("white", [1, 1, 1])):
+        out = tmp_path / f"{background}.png"
+        assert main([files["cloud"], "--skeletal", files["skeletal"], "--background", background,
+                     "--screenshot", str(out), "--quit"]) == 0, capsys.readouterr().err
+        assert imread(str(out))[0, 0, :3].tolist() == corner
+    out = tmp_path / "clear.png"
+    assert main([files["cloud"], "--background", "transparent", "--screenshot", str(out), "--quit"]) == 0
+    assert imread(str(out))[0, 0, 3] == 0
+
+
+@pytest.mark.parametrize("width", [230, 300, 380, 520])
+def test_the_barcode_axis_labels_stay_inside_the_panel_in_their_shortest_form(qtbot, evaluation, width):
+    from app.panels.barcode import BarcodePanel, tick_text
+
+    panel = BarcodePanel()
+    qtbot.addWidget(panel)
+    panel.resize(width, 380)
+    panel.show()
+    qtbot.waitExposed(panel)
+    panel.show_topology(evaluation.topology)
+    panel.draw_now()
+    qtbot.waitUntil(lambda: not panel.draw_pending)
+    fig = panel.figure
+    renderer = panel.canvas.get_renderer()
+    ax = panel._axes()[1]
+    lo, hi = ax.get_xlim()
+    shown = [t for t, v in zip(ax.get_xticklabels(), ax.get_xticks()) if lo - 1e-12 <= v <= hi + 1e-12]
+    assert len(shown) >= 2
+    for label in shown:
+        box = label.get_window_extent(renderer)
+        assert box.x0 >= 0 and box.x1 <= fig.bbox.width and box.y0 >= 0, (width, label.get_text(), box)
+        text = label.get_text()
+        assert not (("." in text) and text.endswith("0")), text  # "0.02", never "0.0200"
+    for ax_ in panel._axes():  # the y labels too
+        box = ax_.yaxis.label.get_window_extent(renderer)
+        assert box.x0 >= 0, (width, box)
+    assert tick_text(0.02) == "0.02" and tick_text(0.0025) == "0.0025" and tick_text(-0.0) == "0"

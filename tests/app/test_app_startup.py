@@ -87,9 +87,10 @@ def test_skelscope_main_imports_the_view_libraries_before_qt(tmp_path):
     cloud = tmp_path / "cloud.ply"
     write_points_ply(cloud, shapes.sphere_surface(2000, seed=0))
     env = dict(os.environ, PYTHONPATH=str(ROOT) + os.pathsep + os.environ.get("PYTHONPATH", ""))
+    # --size is checked before any window opens (app.view.camera): that must not import Qt either
     out = subprocess.run([sys.executable, "-X", "importtime", "-m", "app", str(cloud), "--screenshot",
-                          str(tmp_path / "out.png"), "--quit"], capture_output=True, text=True, cwd=tmp_path, env=env,
-                         timeout=300)
+                          str(tmp_path / "out.png"), "--size", "320", "240", "--quit"], capture_output=True, text=True,
+                         cwd=tmp_path, env=env, timeout=300)
     assert out.returncode == 0, out.stderr[-2000:]
     names = [line.rsplit("|", 1)[-1].strip() for line in out.stderr.splitlines() if line.startswith("import time:")]
     assert names.index("pyvista.plotting") < min(i for i, n in enumerate(names) if n.startswith(("shiboken6", "PySide6")))

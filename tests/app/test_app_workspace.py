@@ -233,7 +233,7 @@ def test_the_picture_dialog_has_file_scale_background_and_colour_bar(window, fil
         assert dialog.path.text().endswith("y_cloud_boundedness.png")
         dialog.path.setText(str(target))
         dialog.scale.setValue(2)
-        dialog.transparent.setChecked(True)
+        dialog.set_background("transparent")
         dialog.colour_bar.setChecked(False)
         return QtWidgets.QDialog.DialogCode.Accepted
 

@@ -78,7 +78,7 @@ def test_the_window_implements_the_interface_and_controllers_add_actions_by_grou
     file_menu = window.menuBar().actions()[0].menu()
     texts = [a.text() for a in file_menu.actions() if not a.isSeparator()]
     # the controllers' entries sit in their group, between Recent files and Close, in the order added
-    assert texts[texts.index("Recent files") + 1: texts.index("Close")] == [
+    assert texts[texts.index("Recent") + 1: texts.index("Close")] == [
         "Compare with a second skeleton (B)…", "Open comparison run (skelcore compare folder)…"]
     # a new group member lands at the end of its group, whatever was added before
     added = []

@@ -123,3 +123,32 @@ def test_export_folder_that_is_a_file_is_an_input_error(tmp_path):
     f.write_text("x")
     with pytest.raises(SkelInputError, match="file"):
         export_ply(_evaluation(), f)
+
+
+@pytest.mark.parametrize("binary", [True, False])
+@pytest.mark.parametrize("color_by", ["boundedness", "centeredness", "smoothness"])
+def test_each_file_s_header_names_the_metric_its_colours_encode(tmp_path, color_by, binary):
+    """Issue 25: a coloured PLY says which metric its RGB encodes (one header comment), and that
+    metric's values are the ones its colours come from; the files still read back as before."""
+    from skelcore.io.export import colour_comment
+
+    ev = _evaluation()
+    export_ply(ev, tmp_path, color_by=color_by, binary=binary)
+    samples_by = color_by if color_by != "smoothness" else "centeredness"  # samples have no smoothness
+    for name, metric in (("skeletal", color_by), ("curve", "smoothness"), ("curve_samples", samples_by)):
+        ply = PlyData.read(str(tmp_path / f"{name}.ply"))
+        said = [c for c in ply.comments if c.startswith("colors:")]
+        assert said == [colour_comment(metric)] and said[0].startswith(f"colors: {metric} "), (name, ply.comments)
+        vert = ply["vertex"]
+        values = {"skeletal": {"boundedness": ev.skeletal.boundedness, "centeredness": ev.skeletal.centeredness(0.75),
+                               "smoothness": ev.skeletal.smoothness},
+                  "curve": {"smoothness": ev.curve.vertex_smoothness},
+                  "curve_samples": {"boundedness": ev.curve.sample_boundedness,
+                                    "centeredness": ev.curve.sample_centeredness(0.75)}}[name][metric]
+        np.testing.assert_array_equal(_rgb(vert), map_to_rgb(np.asarray(values, dtype=float), 0, 1))
+    # a reader of the header alone (no plyfile) sees it too, before end_header
+    head = (tmp_path / "skeletal.ply").read_bytes().split(b"end_header")[0].decode("ascii")
+    assert f"comment {colour_comment(color_by)}\n" in head
+    from skelcore.io import load_points
+
+    assert load_points(tmp_path / "skeletal.ply").shape == ev.skeletal.points.shape

@@ -1,0 +1,265 @@
+"""A saved viewer session as one small JSON file (File > Save session, ``skelscope --session F``).
+
+Not :mod:`app.session`, the viewer's controller: this is the file format, without widgets. A session holds
+the inputs' paths (relative to the session file when possible, absolute as well) with each file's
+size, modification time and SHA-256, so that opening it can tell a file that moved (missing) or
+changed from one that did not; the settings and thresholds (every ``skelcore.Params`` field) and the
+correspondence mode (SPEC 7); the metric, colour range and display options; the camera with the
+view's size; and the picked element. Written atomically (``skelcore.io.atomic``); read back with
+every field checked, so a bad file is one line (``SkelInputError``) before anything changes.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import math
+import os
+from dataclasses import dataclass, field
+from typing import Any, Iterable
+
+from skelcore.errors import SkelInputError
+from skelcore.io.atomic import atomic_open
+from skelcore.params import Params
+
+__all__ = ["FORMAT", "VERSION", "ROLES", "FileRecord", "SessionState", "fingerprint", "write_session",
+           "read_session", "session_to_json", "session_from_json", "locate", "Located", "file_sha256"]
+
+FORMAT = "skelscope_session"
+VERSION = 1
+ROLES = ("cloud", "skeletal", "curve")
+CORRESPONDENCES = ("auto", "reverse")
+_HASH_CHUNK = 1 << 20
+
+
+@dataclass(frozen=True)
+class FileRecord:
+    """One input file as saved: where it was (absolute, and relative to the session file's folder when
+    on the same drive) and what it was (size in bytes, modification time, SHA-256)."""
+
+    path: str
+    relative: str | None
+    size: int
+    mtime: float
+    sha256: str
+
+
+@dataclass
+class SessionState:
+    """Everything a session restores; see the module docstring. ``params`` is ``Params.to_dict()``."""
+
+    files: dict[str, FileRecord] = field(default_factory=dict)
+    params: dict[str, Any] = field(default_factory=dict)
+    correspondence: str = "auto"
+    skeletal_index: str | None = None  # reserved: an index file for a skeletal set (SPEC 7)
+    metric: str = "boundedness"
+    clim: tuple[float, float] | None = None
+    edges_as_tubes: bool = False
+    style: dict[str, bool] = field(default_factory=dict)
+    layers: dict[str, dict[str, Any]] = field(default_factory=dict)  # role -> visible, point_size, opacity
+    camera: dict[str, Any] | None = None
+    picked: dict[str, Any] | None = None  # layer, location, index
+
+    def paths(self) -> dict[str, str]:
+        return {role: rec.path for role, rec in self.files.items()}
+
+
+def file_sha256(path: str | os.PathLike) -> str:
+    digest = hashlib.sha256()
+    with open(path, "rb") as fh:
+        for chunk in iter(lambda: fh.read(_HASH_CHUNK), b""):
+            digest.update(chunk)
+    return digest.hexdigest()
+
+
+def fingerprint(path: str | os.PathLike, base_dir: str | os.PathLike) -> FileRecord:
+    """The record of an input file as it is now; ``relative`` to ``base_dir`` (the session file's
+    folder) when a relative path exists (same drive)."""
+    path = os.path.abspath(str(path))
+    st = os.stat(path)
+    try:
+        relative: str | None = os.path.relpath(path, os.path.abspath(str(base_dir)))
+    except ValueError:  # another drive (Windows)
+        relative = None
+    return FileRecord(path, relative, int(st.st_size), float(st.st_mtime), file_sha256(path))
+
+
+def session_to_json(state: SessionState) -> dict[str, Any]:
+    return {
+        FORMAT: VERSION,
+        "files": {role: {"path": rec.path, "relative": rec.relative, "size": rec.size, "mtime": rec.mtime,
+                         "sha256": rec.sha256} for role, rec in state.files.items()},
+        "params": {k: _json_value(v) for k, v in state.params.items()},
+        "correspondence": state.correspondence,
+        "skeletal_index": state.skeletal_index,
+        "metric": state.metric,
+        "clim": None if state.clim is None else [float(state.clim[0]), float(state.clim[1])],
+        "edges_as_tubes": bool(state.edges_as_tubes),
+        "style": {k: bool(v) for k, v in state.style.items()},
+        "layers": {role: dict(opts) for role, opts in state.layers.items()},
+        "camera": state.camera,
+        "picked": state.picked,
+    }
+
+
+def write_session(path: str | os.PathLike, state: SessionState, inputs: Iterable[str] = ()) -> str:
+    """Write ``state`` as a session file, atomically and never over a loaded input."""
+    with atomic_open(path, "w", inputs=tuple(inputs)) as fh:
+        json.dump(session_to_json(state), fh, indent=1, allow_nan=False)
+        fh.write("\n")
+    return str(path)
+
+
+def read_session(path: str | os.PathLike) -> SessionState:
+    """Read and check a session file; SkelInputError naming the file and the problem otherwise."""
+    try:
+        with open(path, encoding="utf-8") as fh:
+            doc = json.load(fh)
+    except FileNotFoundError:
+        raise SkelInputError("session file not found", path) from None
+    except IsADirectoryError:
+        raise SkelInputError("is a folder, not a session file", path) from None
+    except (OSError, UnicodeDecodeError, json.JSONDecodeError) as exc:
+        raise SkelInputError(f"not a SkelScope session file ({exc})", path) from None
+    return session_from_json(doc, path)
+
+
+def session_from_json(doc: Any, path: str | os.PathLike = "session") -> SessionState:
+    """A parsed session document, checked field by field (SkelInputError naming ``path``)."""
+
+    def bad(why: str) -> SkelInputError:
+        return SkelInputError(f"not a SkelScope session file ({why})", path)
+
+    if not isinstance(doc, dict) or FORMAT not in doc:
+        raise bad(f"no {FORMAT!r} key")
+    version = doc[FORMAT]
+    if not isinstance(version, int) or version < 1:
+        raise bad(f"bad version {version!r}")
+    if version > VERSION:
+        raise SkelInputError(f"session format version {version} is newer than this SkelScope reads ({VERSION})", path)
+    state = SessionState()
+    files = doc.get("files", {})
+    if not isinstance(files, dict) or set(files) - set(ROLES):
+        raise bad(f"'files' must map {', '.join(ROLES)} to file records")
+    for role, rec in files.items():
+        try:
+            relative = rec.get("relative")
+            state.files[role] = FileRecord(str(rec["path"]), None if relative is None else str(relative),
+                                           int(rec["size"]), float(rec["mtime"]), str(rec["sha256"]))
+        except (AttributeError, KeyError, TypeError, ValueError):
+            raise bad(f"the {role} file record needs path, size, mtime and sha256") from None
+    params = doc.get("params", {})
+    if not isinstance(params, dict):
+        raise bad("'params' must be an object")
+    known = set(Params().to_dict())
+    unknown = sorted(set(params) - known)
+    if unknown:
+        raise bad(f"unknown parameter(s) {', '.join(unknown)}")
+    try:
+        Params(**{k: _from_json_value(v) for k, v in params.items()})
+    except (TypeError, ValueError) as exc:
+        raise bad(f"bad parameters: {exc}") from None
+    state.params = {k: _from_json_value(v) for k, v in params.items()}
+    state.correspondence = str(doc.get("correspondence", "auto"))
+    if state.correspondence not in CORRESPONDENCES:
+        raise bad(f"correspondence must be one of {', '.join(CORRESPONDENCES)}")
+    index = doc.get("skeletal_index")
+    state.skeletal_index = None if index is None else str(index)
+    from .scene import METRICS
+    from .scene.model import STYLE_DEFAULTS
+
+    state.metric = str(doc.get("metric", "boundedness"))
+    if state.metric not in METRICS:
+        raise bad(f"metric must be one of {', '.join(METRICS)}")
+    clim = doc.get("clim")
+    if clim is not None:
+        try:
+            lo, hi = (float(v) for v in clim)
+        except (TypeError, ValueError):
+            raise bad("clim must be null or [min, max]") from None
+        if not (math.isfinite(lo) and math.isfinite(hi) and lo < hi):
+            raise bad("clim needs finite min < max")
+        state.clim = (lo, hi)
+    state.edges_as_tubes = bool(doc.get("edges_as_tubes", False))
+    style = doc.get("style", {})
+    if not isinstance(style, dict) or set(style) - set(STYLE_DEFAULTS):
+        raise bad(f"style keys must be among {', '.join(STYLE_DEFAULTS)}")
+    state.style = {k: bool(v) for k, v in style.items()}
+    layers = doc.get("layers", {})
+    if not isinstance(layers, dict) or set(layers) - set(ROLES):
+        raise bad(f"'layers' must map {', '.join(ROLES)} to display options")
+    for role, opts in layers.items():
+        try:
+            state.layers[role] = {"visible": bool(opts.get("visible", True)),
+                                  "point_size": float(opts["point_size"]), "opacity": float(opts["opacity"])}
+        except (AttributeError, KeyError, TypeError, ValueError):
+            raise bad(f"the {role} layer needs visible, point_size and opacity") from None
+    camera = doc.get("camera")
+    if camera is not None:
+        from .view.camera import check_camera
+
+        keys = ("position", "focal_point", "view_up", "view_angle", "parallel_projection", "parallel_scale")
+        if not isinstance(camera, dict) or any(k not in camera for k in keys):
+            raise bad(f"the camera needs {', '.join(keys)}")
+        try:
+            for key in ("position", "focal_point", "view_up"):
+                vec = [float(v) for v in camera[key]]
+                if len(vec) != 3 or not all(math.isfinite(v) for v in vec):
+                    raise ValueError(key)
+                camera[key] = vec
+            camera["view_angle"], camera["parallel_scale"] = float(camera["view_angle"]), float(camera["parallel_scale"])
+        except (TypeError, ValueError):
+            raise bad("bad camera vector or number") from None
+        state.camera = check_camera(camera, path)
+    picked = doc.get("picked")
+    if picked is not None:
+        try:
+            state.picked = {"layer": str(picked["layer"]), "location": str(picked["location"]),
+                            "index": int(picked["index"])}
+        except (TypeError, KeyError, ValueError):
+            raise bad("the picked element needs layer, location and index") from None
+        if state.picked["layer"] not in ROLES or state.picked["index"] < 0:
+            raise bad("bad picked element")
+    return state
+
+
+@dataclass(frozen=True)
+class Located:
+    """Where a session's file is now (None: missing) and what changed about it ("" when nothing)."""
+
+    role: str
+    path: str | None
+    problem: str = ""
+
+
+def locate(role: str, record: FileRecord, session_path: str | os.PathLike) -> Located:
+    """Find a saved file: beside the session first (its relative path: a folder moved whole), then at
+    its absolute path. A found file whose size differs, or whose content hash differs when only the
+    modification time does, is reported as changed (and still loaded); a missing one as missing."""
+    base = os.path.dirname(os.path.abspath(str(session_path)))
+    candidates = ([os.path.normpath(os.path.join(base, record.relative))] if record.relative else []) + [record.path]
+    name = os.path.basename(record.path)
+    found = next((p for p in candidates if os.path.isfile(p)), None)
+    if found is None:
+        where = " or ".join(dict.fromkeys(candidates))
+        return Located(role, None, f"{name}: missing (the {role}; looked for {where})")
+    st = os.stat(found)
+    if st.st_size != record.size:
+        return Located(role, found, f"{name}: changed since the session was saved (the {role}; "
+                                    f"{record.size} bytes then, {st.st_size} now)")
+    if st.st_mtime != record.mtime and file_sha256(found) != record.sha256:
+        return Located(role, found, f"{name}: changed since the session was saved (the {role}; same size, "
+                                    "other content)")
+    return Located(role, found)
+
+
+def _json_value(v: Any) -> Any:
+    if isinstance(v, float) and not math.isfinite(v):
+        return str(v)  # "inf", "nan": JSON has no such numbers
+    return v
+
+
+def _from_json_value(v: Any) -> Any:
+    if isinstance(v, str) and v in ("inf", "-inf", "nan"):
+        return float(v)
+    return v
