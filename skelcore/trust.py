@@ -9,6 +9,10 @@
   centeredness reward a skeleton shrunk to a point).
 - ``trivial_smoothness``: no degree-2 vertex, so the curve's smoothness is 1 by definition.
 - ``no_correspondence``: topology and skeletal centeredness could not be computed.
+
+Extents are measured on the box from the ``trust_extent_quantile`` to the 1 - ``trust_extent_quantile``
+quantile of each coordinate, so that a few stray points (docs/metrics.md 6.4) fire neither ``frame`` nor
+``collapse``; the real-scan warnings ``outliers`` and ``open_surface`` are in :mod:`skelcore.scan.report`.
 """
 
 from __future__ import annotations
@@ -20,7 +24,7 @@ import numpy as np
 from .geometry import bounding_box
 from .params import Params
 
-__all__ = ["TrustWarning", "frame_warnings", "frame_fit_warning", "bbox_transform", "smoothness_warning",
+__all__ = ["TrustWarning", "robust_box", "frame_warnings", "frame_fit_warning", "bbox_transform", "smoothness_warning",
            "no_correspondence_warning"]
 
 _FRAME_HINT = "map it with --skeleton-scale S --skeleton-offset X Y Z"
@@ -35,21 +39,32 @@ class TrustWarning:
         return {"code": self.code, "message": self.message}
 
 
-def _diag(points: np.ndarray) -> float:
+def robust_box(points: np.ndarray, quantile: float = 0.0) -> tuple[np.ndarray, np.ndarray]:
+    """(lo, hi) corners of the box from the ``quantile`` to the 1 - ``quantile`` quantile of each
+    coordinate (0: the bounding box): a few stray points do not stretch it."""
+    points = np.asarray(points, dtype=float)
+    if quantile <= 0 or len(points) < 2:
+        return bounding_box(points)
+    lo, hi = np.quantile(points, [quantile, 1.0 - quantile], axis=0)
+    return lo, hi
+
+
+def _diag(points: np.ndarray, quantile: float = 0.0) -> float:
     if not len(points):
         return 0.0
-    lo, hi = bounding_box(points)
+    lo, hi = robust_box(points, quantile)
     return float(np.linalg.norm(hi - lo))
 
 
 def frame_warnings(cloud: np.ndarray, skeleton: np.ndarray, what: str, params: Params = Params()) -> list[TrustWarning]:
     """``frame`` / ``collapse`` for one skeleton's points (both arrays in the user's units)."""
-    lo, hi = bounding_box(cloud)
-    d_cloud = float(np.linalg.norm(hi - lo))  # = _diag(cloud)
+    q = float(params.trust_extent_quantile)
+    lo, hi = robust_box(cloud, q)
+    d_cloud = float(np.linalg.norm(hi - lo))  # = _diag(cloud, q)
     margin = 0.1 * d_cloud
     inside = np.all((skeleton >= lo - margin) & (skeleton <= hi + margin), axis=1)
     frac_inside = float(inside.mean())
-    d_skel = _diag(skeleton)
+    d_skel = _diag(skeleton, q)
     ratio = d_skel / d_cloud if d_cloud > 0 else np.inf
     out: list[TrustWarning] = []
     outside = frac_inside < params.frame_inside_fraction
@@ -62,7 +77,7 @@ def frame_warnings(cloud: np.ndarray, skeleton: np.ndarray, what: str, params: P
         if big or small:
             why.append(f"its extent is {ratio:.3g} x the cloud's")
         out.append(TrustWarning("frame", f"the {what} seems to be in another frame: {'; '.join(why)}; "
-                                         + _hint(cloud, skeleton)))
+                                         + _hint(cloud, skeleton, q)))
     elif ratio < params.collapse_extent:
         out.append(TrustWarning(
             "collapse",
@@ -73,18 +88,19 @@ def frame_warnings(cloud: np.ndarray, skeleton: np.ndarray, what: str, params: P
     return out
 
 
-def bbox_transform(cloud: np.ndarray, skeleton: np.ndarray) -> tuple[float, np.ndarray] | None:
-    """(scale, offset) mapping the skeleton's bounding box (diagonal and centre) onto the cloud's."""
-    d_skel = _diag(skeleton)
+def bbox_transform(cloud: np.ndarray, skeleton: np.ndarray, quantile: float = 0.0) -> tuple[float, np.ndarray] | None:
+    """(scale, offset) mapping the skeleton's bounding box (diagonal and centre) onto the cloud's (the
+    boxes of :func:`robust_box` with ``quantile``)."""
+    d_skel = _diag(skeleton, quantile)
     if not d_skel > 0:
         return None
-    s = _diag(cloud) / d_skel
-    off = (cloud.min(axis=0) + cloud.max(axis=0)) / 2 - s * (skeleton.min(axis=0) + skeleton.max(axis=0)) / 2
+    s = _diag(cloud, quantile) / d_skel
+    off = sum(robust_box(cloud, quantile)) / 2 - s * sum(robust_box(skeleton, quantile)) / 2
     return s, off
 
 
-def _hint(cloud: np.ndarray, skeleton: np.ndarray) -> str:
-    t = bbox_transform(cloud, skeleton)
+def _hint(cloud: np.ndarray, skeleton: np.ndarray, quantile: float = 0.0) -> str:
+    t = bbox_transform(cloud, skeleton, quantile)
     if t is None:
         return _FRAME_HINT
     s, off = t
@@ -99,14 +115,15 @@ def frame_fit_warning(
     of its elements < 0.5) when centring its bounding box on the cloud's and scaling it to the
     cloud's diagonal (x 1, 0.85, 0.7) makes it bounded: ``bounded_fraction(points)`` (user units)
     >= beta* and 0.25 higher. Only tried in that suspicious case (<= 3 runs on <= 200 points)."""
-    d_cloud, d_skel = _diag(cloud), _diag(skeleton)
+    q = float(params.trust_extent_quantile)
+    d_cloud, d_skel = _diag(cloud, q), _diag(skeleton, q)
     if not (d_cloud > 0 and d_skel > 0) or bounded_now >= 0.5:
         return []
     ratio = d_skel / d_cloud
-    s0, _ = bbox_transform(cloud, skeleton)  # type: ignore[misc]
+    s0, _ = bbox_transform(cloud, skeleton, q)  # type: ignore[misc]
     pick = skeleton if len(skeleton) <= 200 else skeleton[np.linspace(0, len(skeleton) - 1, 200).astype(int)]
-    centre_c = (cloud.min(axis=0) + cloud.max(axis=0)) / 2
-    centre_s = (skeleton.min(axis=0) + skeleton.max(axis=0)) / 2
+    centre_c = sum(robust_box(cloud, q)) / 2
+    centre_s = sum(robust_box(skeleton, q)) / 2
     # a skeleton's box is smaller than its cloud's by the shape's thickness: try a few shrinks
     best, best_s = -1.0, s0
     for f in (1.0, 0.85, 0.7):

@@ -137,26 +137,28 @@ def test_the_cycle_finder_finds_a_cycle():
 #                                                                                 -> foundation
 #   skeletonizer      skelcore.skeleton                                           -> foundation
 #   metrics           skelcore.metrics (each result type beside its metric)       -> foundation
-#   record            the Evaluation (skelcore.evaluation, old name results), Scores -> foundation, metrics
-#   stages            skelcore.stages (the evaluate pipeline)                     -> foundation, metrics, record
+#   scan              skelcore.scan (openings, viewpoints, stray points, caps)    -> foundation, metrics
+#   record            the Evaluation (skelcore.evaluation, old name results), Scores -> foundation, metrics, scan
+#   stages            skelcore.stages (the evaluate pipeline)               -> foundation, metrics, scan, record
 #   evaluation files  io.evaluation_files (JSON, CSVs, npz of an Evaluation), io.export (coloured PLY)
-#                                                             -> foundation, formats, metrics, record
+#                                                             -> foundation, formats, metrics, scan, record
 #   applications      skelcore.compare, skelcore.experiments  -> every layer above this line
 #   entry points      skelcore.cli, skelcore.__main__, the package facade skelcore/__init__ -> every layer
 # So: metrics never import the record, the stages or the evaluation files; the record imports no io; the
 # format readers and writers import no metric; compare and the CLI sit on top. A pattern "x.*" is the
 # package x and everything in it, any other an exact module; a module's layer is its longest pattern.
-_BELOW_APPS = ["foundation", "formats", "skeletonizer", "metrics", "record", "stages", "evaluation files"]
+_BELOW_APPS = ["foundation", "formats", "skeletonizer", "metrics", "scan", "record", "stages", "evaluation files"]
 LAYERS: dict[str, tuple[list[str], list[str]]] = {
     "foundation": ([f"skelcore.{m}" for m in ("errors", "version", "params", "geometry", "parallel", "curve",
                                               "curve_sampling", "correspondence", "trust", "colors", "shapes")], []),
     "formats": (["skelcore.io.*"], ["foundation"]),
     "skeletonizer": (["skelcore.skeleton.*"], ["foundation"]),
     "metrics": (["skelcore.metrics.*"], ["foundation"]),
-    "record": (["skelcore.evaluation", "skelcore.results", "skelcore.scores"], ["foundation", "metrics"]),
-    "stages": (["skelcore.stages.*"], ["foundation", "metrics", "record"]),
+    "scan": (["skelcore.scan.*"], ["foundation", "metrics"]),
+    "record": (["skelcore.evaluation", "skelcore.results", "skelcore.scores"], ["foundation", "metrics", "scan"]),
+    "stages": (["skelcore.stages.*"], ["foundation", "metrics", "scan", "record"]),
     "evaluation files": (["skelcore.io.evaluation_files", "skelcore.io.export"],
-                         ["foundation", "formats", "metrics", "record"]),
+                         ["foundation", "formats", "metrics", "scan", "record"]),
     "applications": (["skelcore.compare.*", "skelcore.experiments.*"], _BELOW_APPS),
     "entry points": (["skelcore", "skelcore.__main__", "skelcore.cli.*"], [*_BELOW_APPS, "applications"]),
 }
