@@ -80,6 +80,9 @@ class Params:
         outlier_std_ratio robust standard deviations (1.4826 x MAD) ...
     outlier_radius, outlier_min_neighbours : ... and the radius test: fewer than outlier_min_neighbours
         other points within outlier_radius x the median spacing.  A stray point fails both.
+    outlier_skeletal_radius : a skeletal point with fewer than outlier_min_neighbours other skeletal
+        points within this many cloud spacings is a stray's image (contracted sets are dense: on the
+        hammer and the apple tree every skeletal point has two within 1.7).
     """
 
     normalize_by: Literal["longest_side", "diagonal"] = "longest_side"
@@ -121,13 +124,14 @@ class Params:
     open_end_flatness: float = 0.15
     open_end_roundness: float = 0.3
     open_surface_share: float = 0.02
-    cap_max_share: float = 0.05
-    cap_flatness: float = 0.1
+    cap_max_share: float = 0.1
+    cap_flatness: float = 0.2
     viewpoint_rows: int = 16
     outlier_k: int = 8
     outlier_std_ratio: float = 6.0
     outlier_radius: float = 10.0
     outlier_min_neighbours: int = 2
+    outlier_skeletal_radius: float = 5.0
 
     def __post_init__(self) -> None:
         def bad(name: str, why: str) -> None:
@@ -165,7 +169,7 @@ class Params:
         if not 0.0 <= float(self.trust_extent_quantile) < 0.5:
             bad("trust_extent_quantile", "must be in [0, 0.5)")
         for name in ("open_link", "open_empty", "open_end_flatness", "open_end_roundness", "cap_flatness",
-                     "outlier_std_ratio", "outlier_radius"):
+                     "outlier_std_ratio", "outlier_radius", "outlier_skeletal_radius"):
             if not float(getattr(self, name)) > 0:
                 bad(name, "must be > 0")
         if not 0.0 < float(self.open_angle) < 360.0:

@@ -62,8 +62,8 @@ class Opening:
 
     @property
     def size(self) -> float:
-        """The opening's radius (half its extent) in local radii; NaN without a local radius."""
-        return 0.5 * self.extent / self.local_radius if self.local_radius > 0 else float("nan")
+        """The opening's extent in local radii (an open tube end: about 2); NaN without a local radius."""
+        return self.extent / self.local_radius if self.local_radius > 0 else float("nan")
 
     def to_dict(self, transform=None) -> dict:
         """JSON-ready summary; ``transform`` maps points to other units (positions and lengths)."""
@@ -79,6 +79,7 @@ class Opening:
             "radius": float(self.radius * scale),
             "extent": float(self.extent * scale),
             "area": float(self.area * scale**2),
+            "n_fill": int(len(self.fill)),
             "flatness": float(self.flatness),
             "roundness": float(self.roundness),
             "local_radius": float(self.local_radius * scale),
@@ -148,8 +149,23 @@ def find_openings(
             opening.rows = rows[members]
             out.append(opening)
         checkpoint(0.65 + 0.35 * (i + 1) / len(candidates))
+    out = _without_nested(out)
     out.sort(key=lambda o: -len(o.fill))
     return out
+
+
+def _without_nested(openings: list[Opening]) -> list[Opening]:
+    """Drop an opening whose missing surface is mostly another's: the outer rim of a flat annulus fills
+    the hole its inner rim already bounds (rims by size, the smaller kept)."""
+    kept: list[Opening] = []
+    for o in sorted(openings, key=lambda o: len(o.rows)):
+        if kept and len(o.fill):
+            others = cKDTree(np.vstack([k.fill for k in kept]))
+            d, _ = others.query(o.fill, k=1, workers=-1)
+            if np.mean(d <= o.spacing) > 0.5:
+                continue
+        kept.append(o)
+    return kept
 
 
 def _opening(pts: np.ndarray, members: np.ndarray, tree: cKDTree, spacing: float, params: Params) -> Opening | None:

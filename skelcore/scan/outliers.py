@@ -12,10 +12,10 @@ of a scan, which fails at most one, is kept):
   the cloud's typical value, both taken robustly (median, 1.4826 x MAD: the strays must not widen the
   yardstick that finds them).
 
-A skeletal point set is held to the radius test alone, with the cloud's spacing as the yardstick
-(:func:`isolated_rows`): contraction stacks skeletal points, so their own spacing says nothing, and a
-contracted set is dense (on the hammer and the apple tree no skeletal point has its second neighbour
-beyond 1.7 cloud spacings), so a skeletal point ten spacings from all others is a stray's image.
+A skeletal point set in pointwise correspondence is held to the radius test alone, with the cloud's
+spacing as the yardstick (:func:`isolated_rows`): contraction stacks skeletal points, so their own spacing
+says nothing, and a contracted set is dense (on the hammer and the apple tree no skeletal point has its second neighbour
+beyond 1.7 cloud spacings), so a skeletal point five spacings from all others is a stray's image.
 """
 
 from __future__ import annotations
@@ -104,11 +104,11 @@ def find_outliers(cloud: np.ndarray, params: Params = Params(), *, checkpoint: C
 
 
 def isolated_rows(points: np.ndarray, spacing: float, params: Params = Params()) -> np.ndarray:
-    """Rows of ``points`` with fewer than ``outlier_min_neighbours`` other points within
-    ``outlier_radius`` x ``spacing`` (the radius test with another set's yardstick)."""
+    """Rows of ``points`` (a skeletal set) with fewer than ``outlier_min_neighbours`` other points within
+    ``outlier_skeletal_radius`` x ``spacing`` (the radius test with the cloud's spacing as yardstick)."""
     points = np.asarray(points, dtype=float)
     m = int(params.outlier_min_neighbours)
     if len(points) <= m or not spacing > 0:
         return np.zeros(0, np.int64)
     d, _ = cKDTree(points).query(points, k=m + 1, workers=-1)
-    return np.flatnonzero(d[:, m] > float(params.outlier_radius) * spacing).astype(np.int64)
+    return np.flatnonzero(d[:, m] > float(params.outlier_skeletal_radius) * spacing).astype(np.int64)

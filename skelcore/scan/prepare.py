@@ -1,12 +1,11 @@
 """``--remove-outliers``: the cloud without its stray points, and the skeletal rows that go with them
 (docs/metrics.md 6.4).
 
-The cloud's outliers (:func:`.outliers.find_outliers`) and the skeletal points far from every other
-skeletal point (:func:`.outliers.isolated_rows`, the cloud's spacing as yardstick) are left out.
-Pointwise correspondence (row i of the skeletal set is where cloud row i went) drops a row from both
-when either point is a stray; an index correspondence drops the skeletal rows whose cloud row went and
-renumbers the rest; a skeletal set without correspondence (reverse projection, none) loses only its own
-strays.
+The cloud's outliers (:func:`.outliers.find_outliers`) are left out.  Pointwise correspondence (row i
+of the skeletal set is where cloud row i went, so the set is as dense as the cloud) also drops the rows
+whose skeletal point is far from every other (:func:`.outliers.isolated_rows`), from both; an index
+correspondence drops the skeletal rows whose cloud row went and renumbers the rest; a skeletal set
+without correspondence (reverse projection, none; often sparse by design) is kept whole.
 """
 
 from __future__ import annotations
@@ -34,10 +33,10 @@ class Strays:
 
 
 def find_strays(cloud: np.ndarray, skeletal: np.ndarray | None, params: Params = Params(), *,
-                checkpoint: Checkpoint = no_checkpoint) -> Strays:
-    """The cloud's outliers and the skeletal set's isolated points."""
+                pointwise: bool = False, checkpoint: Checkpoint = no_checkpoint) -> Strays:
+    """The cloud's outliers and, for a skeletal set in pointwise correspondence, its isolated points."""
     found = find_outliers(cloud, params, checkpoint=checkpoint)
-    iso = isolated_rows(skeletal, found.spacing, params) if skeletal is not None else np.zeros(0, np.int64)
+    iso = isolated_rows(skeletal, found.spacing, params) if skeletal is not None and pointwise else np.zeros(0, np.int64)
     return Strays(found, iso)
 
 
@@ -52,7 +51,7 @@ def without_strays(
 ) -> tuple[np.ndarray, np.ndarray | None, np.ndarray | None, Strays, np.ndarray, int]:
     """(cloud, skeletal, index) without the strays (module docstring), the strays found, the cloud rows
     dropped and the number of skeletal rows dropped."""
-    strays = find_strays(cloud, skeletal, params, checkpoint=checkpoint)
+    strays = find_strays(cloud, skeletal, params, pointwise=pointwise, checkpoint=checkpoint)
     drop = np.zeros(len(cloud), bool)
     drop[strays.cloud.rows] = True
     if skeletal is None:

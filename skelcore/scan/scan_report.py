@@ -91,7 +91,7 @@ def open_surface_warning(kinds: list[str], largest: float, shares: dict[str, flo
     parts = [f"{ends} open tube end{'s' if ends != 1 else ''}"] if ends else []
     if sides:
         parts.append(f"{sides} missing side{'s' if sides != 1 else ''}")
-    size = f", the largest {largest:.3g} local radii across" if np.isfinite(largest) else ""
+    size = f", the largest {largest:.3g} local radii wide" if np.isfinite(largest) else ""
     names = {"skeletal": "skeletal points", "curve": "curve samples"}
     through = " and ".join(f"{share:.0%} of the {names[col]}" for col, share in shares.items())
     return TrustWarning(

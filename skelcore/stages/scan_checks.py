@@ -31,7 +31,8 @@ def scan_warnings(ctx: EvalContext, ev: Evaluation, checkpoint: Checkpoint) -> l
     report = ev.scan if ev.scan is not None else ScanReport()
     if not report.outliers_removed:
         t0 = time.perf_counter()
-        strays = find_strays(ctx.cloud, ctx.skeletal, ctx.params, checkpoint=checkpoint)
+        strays = find_strays(ctx.cloud, ctx.skeletal, ctx.params, pointwise=ctx.mode == "pointwise",
+                             checkpoint=checkpoint)
         report.timings["outliers"] = time.perf_counter() - t0
         if strays.cloud.count or len(strays.skeletal_rows):
             report.outliers = strays.to_dict()
