@@ -61,7 +61,8 @@ def skeletal_centeredness(
     skeletal : (N_s, 3) skeletal point set, normalized like the cloud; finite.
     depth : SkelScope's viewpoint extension (docs/metrics.md 6.3), None for the paper's Eq. 10:
         (N_s, 3), per skeletal point a viewing direction d of length w <= 1; the component of
-        m_o - m_s along d / |d| is left out times w (w = 1: nothing was observed behind).
+        m_o - m_s along d / |d|, turned square to the neighbours' line, is left out times w (w = 1:
+        nothing was observed behind).
 
     Returns
     -------
@@ -116,10 +117,7 @@ def skeletal_centeredness(
         spread = np.sqrt(np.einsum("ijk,ijk->ij", diff, diff)).mean(axis=1)
         shift = m_o - m_s
         if depth is not None:  # coincident points share a position, hence a depth: the group's first row's
-            d = depth[first_row[which]]
-            w = np.linalg.norm(d, axis=1, keepdims=True)
-            u = np.divide(d, w, out=np.zeros_like(d), where=w > 0)
-            shift = shift - (np.einsum("ij,ij->i", shift, u)[:, None] * w) * u
+            shift = shift - _unobserved(shift, depth[first_row[which]], take_rows(skel_m, slot) - m_s[:, None, :])
         offset = np.linalg.norm(shift, axis=1)
         with np.errstate(invalid="ignore", divide="ignore"):
             c = np.maximum(0.0, 1.0 - offset / spread)
@@ -132,6 +130,22 @@ def skeletal_centeredness(
                threads, checkpoint)
     # coincident points have the same neighbours (ties go by index, not by self), so the same c
     return per_group[groups.group_of]
+
+
+def _unobserved(shift: np.ndarray, depth: np.ndarray, around: np.ndarray) -> np.ndarray:
+    """The part of m_o - m_s that a one-sided view makes up (docs/metrics.md 6.3): its component along
+    the viewing direction d / |d| turned square to the skeleton's local direction (the neighbours'
+    ``around`` principal axis, as far as they lie on a line: a tube seen obliquely shows the side facing
+    the sensor), times the weight |d|."""
+    w = np.linalg.norm(depth, axis=1)
+    u = np.divide(depth, w[:, None], out=np.zeros_like(depth), where=w[:, None] > 0)
+    vals, vecs = np.linalg.eigh(np.matmul(around.transpose(0, 2, 1), around))
+    line = np.where(vals[:, 2] > 0, 1.0 - vals[:, 1] / np.where(vals[:, 2] > 0, vals[:, 2], 1.0), 0.0)
+    t = vecs[:, :, 2]
+    u = u - (line * np.einsum("ij,ij->i", u, t))[:, None] * t
+    n = np.linalg.norm(u, axis=1, keepdims=True)
+    u = np.divide(u, n, out=np.zeros_like(u), where=n > 1e-6)
+    return (np.einsum("ij,ij->i", shift, u) * w)[:, None] * u
 
 
 def _neighbour_mean(values: np.ndarray, slot: np.ndarray) -> np.ndarray:

@@ -10,9 +10,9 @@ faces a sensor (d . (v - e) > 0) and no scanned point lies in front of e on the 
 tree turned so that the direction is the one sample of a 1 x 1 raster.
 
 Skeletal centeredness (Eq. 10) with viewpoints leaves out the component of m_o - m_s along the mean
-viewing direction a(q), times |a| (one sensor: 1, opposite sensors: 0) and m(q), the uncovered share of
-the directions facing away from the sensors (0 where the back was scanned: a complete cloud keeps the
-paper's value).  Curve centeredness is unchanged: its ellipse is fitted to the observed arc (Eq. 11).
+viewing direction a(q) turned square to the skeleton, times m(q), the uncovered share of the directions
+facing away from the sensors (0 where the back was scanned: a complete cloud keeps the paper's value).
+Curve centeredness is unchanged: its ellipse is fitted to the observed arc of a section (Eq. 11).
 """
 
 from __future__ import annotations
@@ -284,9 +284,9 @@ def viewing_axes(points: np.ndarray, viewpoints: np.ndarray) -> np.ndarray:
 
 
 def depth_axes(points: np.ndarray, viewpoints: np.ndarray, missing: np.ndarray) -> np.ndarray:
-    """Per point, the unit mean viewing direction scaled by |a(q)| m(q) (:func:`viewing_axes`; m from
-    :func:`seen_boundedness`): how much of skeletal centeredness' offset along it to leave out."""
+    """Per point, the unit mean viewing direction a(q) / |a(q)| (:func:`viewing_axes`) scaled by m(q)
+    (from :func:`seen_boundedness`): how much of skeletal centeredness' offset along it to leave out."""
     a = viewing_axes(points, viewpoints)
     n = np.linalg.norm(a, axis=1, keepdims=True)
-    u = np.divide(a, n, out=np.zeros_like(a), where=n > 0)
-    return u * (n[:, 0] * np.asarray(missing, dtype=float))[:, None]
+    u = np.divide(a, n, out=np.zeros_like(a), where=n > 1e-9)
+    return u * np.asarray(missing, dtype=float)[:, None]

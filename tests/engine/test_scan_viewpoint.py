@@ -69,10 +69,10 @@ def test_front_half_cylinder_with_its_axis_and_the_sensor_on_its_side():
     seen = evaluate(c.cloud[k], c.skeletal[k], curve, viewpoints=[0.0, 40.0, 2.0])
     s = seen.summary()
     assert s["boundedness"]["curve"] >= 0.95 and s["centeredness"]["curve"] >= 0.9
-    # the skeletal column: as the complete cylinder's (SPEC 6: about 85 % centred with k = 30)
-    full = evaluate(c.cloud, c.skeletal, curve).summary()
+    # the skeletal column: 0 without the viewpoint; with it about 89 % of a random half ring's k = 20
+    # neighbourhoods pass, less the two caps' coincident groups (11 % of the rows) that fail together
     assert s["boundedness"]["skeletal"] >= 0.95
-    assert s["centeredness"]["skeletal"] >= full["centeredness"]["skeletal"] - 0.05
+    assert s["centeredness"]["skeletal"] >= 0.75
     assert seen.scan.viewpoints == [[0.0, 40.0, 2.0]]
     assert "open_surface" not in {w.code for w in seen.warnings}  # the scores now count what was seen
 
