@@ -62,7 +62,7 @@ def write_outputs(out_dir: str | os.PathLike, manifest: Manifest, jobs: list[Job
     board = build_leaderboard(rows, profiles, methods, conditions)
     files.update({f"leaderboard.{k}": v for k, v in board.write(out_dir, inputs=inputs).items()})
     if report:
-        from .scan_report import write_report
+        from .report import write_report
 
         files["report"] = write_report(out_dir, rows, board, store, shapes=[s.name for s in manifest.shapes],
                                        methods=methods, conditions=conditions, meta=meta, inputs=inputs,
