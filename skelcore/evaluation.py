@@ -19,6 +19,7 @@ from .metrics.coverage import Coverage
 from .metrics.reference import ReferenceComparison
 from .metrics.topology import TopologyResult
 from .params import Params
+from .scan.scan_report import ScanReport
 from .trust import TrustWarning
 
 if TYPE_CHECKING:
@@ -123,6 +124,9 @@ class Evaluation:
     not_computed: dict[str, str] = field(default_factory=dict)
     #: the defects found without a reference (issue 22; skelcore.diagnostics.record.Diagnostics)
     diagnostics: Any = None
+    #: real scans (docs/metrics.md 6): viewpoints, stray points, openings; None when no scan option was
+    #: given and no scan warning fired
+    scan: ScanReport | None = None
 
     # ---- overall scores -------------------------------------------------------------------
     def summary(self, beta_star: float | None = None, c_star: float | None = None) -> dict[str, Any]:

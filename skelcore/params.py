@@ -98,6 +98,38 @@ class Params:
     missing_max_elements : a skeletal set with more points is thinned to one point per grid cell
         (half the cloud's median spacing, grown until at most this many remain) before its balls are
         built: the balls' slack dwarfs the cells.
+    trust_extent_quantile : ``frame`` and ``collapse`` measure extents on the box from this quantile to
+        1 - it of each coordinate, so that a few stray points do not move them.
+
+    Real scans (docs/metrics.md section 6; SkelScope's own, the paper's values unchanged by default):
+
+    open_k, open_angle : a cloud point is on the boundary when the largest angle between its open_k
+        nearest neighbours' directions in its tangent plane exceeds open_angle degrees (PCL's
+        BoundaryEstimation, default 90).
+    open_link : boundary points closer than open_link x the cloud's median spacing belong to one opening.
+    open_empty : the fill of an opening keeps the points farther than open_empty x the median spacing
+        from every cloud point (where the surface is missing) ...
+    open_min_fill : ... and an opening with fewer such points is not one (a sampling gap).
+    open_max_points : the boundary test runs on a random subsample of this many points above it.
+    open_end_flatness, open_end_roundness : an opening is an open tube end when its rim lies within
+        open_end_flatness x its radius of its plane (RMS), the rim's distances from its centre vary by
+        less than open_end_roundness (coefficient of variation) and the rim surrounds the centre;
+        else a missing side.
+    open_surface_share : ``open_surface`` fires when at least this share of a skeleton's elements is
+        unbounded only because its rays leave through openings.
+    cap_max_share : ``--cap-openings`` refuses an opening whose cap would add more than this share of
+        the cloud's points ...
+    cap_flatness : ... or whose rim lies farther than this x its radius from its plane (RMS).
+    viewpoint_rows : with viewpoints, boundedness counts directions on an equal-area raster of
+        viewpoint_rows x 2 viewpoint_rows.
+    outlier_k, outlier_std_ratio : statistical test (PCL / Open3D): a point is flagged when its mean
+        distance to its outlier_k nearest neighbours exceeds the cloud's median of that by more than
+        outlier_std_ratio robust standard deviations (1.4826 x MAD) ...
+    outlier_radius, outlier_min_neighbours : ... and the radius test: fewer than outlier_min_neighbours
+        other points within outlier_radius x the median spacing.  A stray point fails both.
+    outlier_skeletal_radius : a skeletal point with fewer than outlier_min_neighbours other skeletal
+        points within this many cloud spacings is a stray's image (contracted sets are dense: on the
+        hammer and the apple tree every skeletal point has two within 1.7).
     """
 
     normalize_by: Literal["longest_side", "diagonal"] = "longest_side"
@@ -154,6 +186,25 @@ class Params:
     missing_link_factor: float = 4.0
     missing_max_points: int = 200_000
     missing_max_elements: int = 20_000
+    trust_extent_quantile: float = 0.005
+    # real scans: openings, viewpoints, stray points (docs/metrics.md section 6)
+    open_k: int = 30
+    open_angle: float = 90.0
+    open_link: float = 6.0
+    open_empty: float = 3.0
+    open_min_fill: int = 10
+    open_max_points: int = 50_000
+    open_end_flatness: float = 0.15
+    open_end_roundness: float = 0.3
+    open_surface_share: float = 0.02
+    cap_max_share: float = 0.1
+    cap_flatness: float = 0.2
+    viewpoint_rows: int = 16
+    outlier_k: int = 8
+    outlier_std_ratio: float = 6.0
+    outlier_radius: float = 10.0
+    outlier_min_neighbours: int = 2
+    outlier_skeletal_radius: float = 5.0
 
     def __post_init__(self) -> None:
         def bad(name: str, why: str) -> None:
@@ -212,6 +263,23 @@ class Params:
             bad("spur_slack", "must be >= 0")
         if int(self.spur_min_points) < 0:
             bad("spur_min_points", "must be >= 0")
+        if not 0.0 <= float(self.trust_extent_quantile) < 0.5:
+            bad("trust_extent_quantile", "must be in [0, 0.5)")
+        for name in ("open_link", "open_empty", "open_end_flatness", "open_end_roundness", "cap_flatness",
+                     "outlier_std_ratio", "outlier_radius", "outlier_skeletal_radius"):
+            if not float(getattr(self, name)) > 0:
+                bad(name, "must be > 0")
+        if not 0.0 < float(self.open_angle) < 360.0:
+            bad("open_angle", "must be in (0, 360) degrees")
+        for name in ("open_surface_share", "cap_max_share"):
+            if not 0.0 <= float(getattr(self, name)) <= 1.0:
+                bad(name, "must be in [0, 1]")
+        for name in ("open_k", "open_min_fill", "open_max_points", "viewpoint_rows", "outlier_k",
+                     "outlier_min_neighbours"):
+            if int(getattr(self, name)) < 1:
+                bad(name, "must be a positive integer")
+        if int(self.open_k) < 3:
+            bad("open_k", "must be at least 3")
 
     def replace(self, **changes: Any) -> "Params":
         """A copy with some fields changed; an unknown name fails loudly."""

@@ -22,7 +22,7 @@ from .geometry import bounding_box
 from .params import Params
 from .trust_warning import TrustWarning
 
-__all__ = ["TrustWarning", "DEFECT_CODES", "defect_codes", "FrameFit", "fit_frame", "frame_warnings", "frame_fit_warning", "bbox_transform",
+__all__ = ["TrustWarning", "DEFECT_CODES", "defect_codes", "robust_box", "FrameFit", "fit_frame", "frame_warnings", "frame_fit_warning", "bbox_transform",
            "smoothness_warning", "no_correspondence_warning"]
 
 _FRAME_HINT = "map it with --skeleton-scale S --skeleton-offset X Y Z"
@@ -34,10 +34,20 @@ FIT_PROBES = 1024
 FIT_EVALUATIONS = 250
 
 
-def _diag(points: np.ndarray) -> float:
+def robust_box(points: np.ndarray, quantile: float = 0.0) -> tuple[np.ndarray, np.ndarray]:
+    """(lo, hi) corners of the box from the ``quantile`` to the 1 - ``quantile`` quantile of each
+    coordinate (0: the bounding box): a few stray points do not stretch it (docs/metrics.md 6)."""
+    points = np.asarray(points, dtype=float)
+    if quantile <= 0 or len(points) < 2:
+        return bounding_box(points)
+    lo, hi = np.quantile(points, [quantile, 1.0 - quantile], axis=0)
+    return lo, hi
+
+
+def _diag(points: np.ndarray, quantile: float = 0.0) -> float:
     if not len(points):
         return 0.0
-    lo, hi = bounding_box(points)
+    lo, hi = robust_box(points, quantile)
     return float(np.linalg.norm(hi - lo))
 
 
@@ -47,12 +57,13 @@ def frame_warnings(cloud: np.ndarray, skeleton: np.ndarray, what: str, params: P
     message proposes a scale and offset only when :func:`fit_frame` finds one under which the skeleton
     is bounded and complete (``bounded_fraction(points)``: the share of points bounded, by default
     the rays boundedness against this cloud)."""
-    lo, hi = bounding_box(cloud)
-    d_cloud = float(np.linalg.norm(hi - lo))  # = _diag(cloud)
+    q = float(params.trust_extent_quantile)  # stray points stretch neither box (docs/metrics.md 6)
+    lo, hi = robust_box(cloud, q)
+    d_cloud = float(np.linalg.norm(hi - lo))  # = _diag(cloud, q)
     margin = 0.1 * d_cloud
     inside = np.all((skeleton >= lo - margin) & (skeleton <= hi + margin), axis=1)
     frac_inside = float(inside.mean())
-    d_skel = _diag(skeleton)
+    d_skel = _diag(skeleton, q)
     ratio = d_skel / d_cloud if d_cloud > 0 else np.inf
     out: list[TrustWarning] = []
     outside = frac_inside < params.frame_inside_fraction

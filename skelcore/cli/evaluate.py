@@ -6,6 +6,8 @@ from __future__ import annotations
 import argparse
 import sys
 
+import numpy as np
+
 from ..errors import SkelInputError
 from ..skeleton_mapping import map_skeleton
 from .common import (clear_progress_line, format_defects, format_reference, format_table, params_from_args, positive_float,
@@ -46,6 +48,14 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--barcodes", metavar="F", help="write every H0 bar of both diagrams as CSV")
     p.add_argument("--export-ply", metavar="DIR", help="write coloured PLY files of the skeleton into DIR")
     p.add_argument("--boundedness-method", choices=("rays", "paper"), help="boundedness estimator (default rays)")
+    p.add_argument("--viewpoint", type=float, nargs=3, action="append", metavar=("X", "Y", "Z"),
+                   help="a sensor position in the cloud's units (repeatable): boundedness counts only what the "
+                   "sensors could have seen (a scan from some sides only; default: a PCD's VIEWPOINT when set)")
+    p.add_argument("--remove-outliers", action="store_true",
+                   help="evaluate without the cloud's stray points (and their skeletal rows); found and reported anyway")
+    p.add_argument("--cap-openings", action="store_true",
+                   help="close small flat openings of the cloud with points on their planes for boundedness "
+                   "(as the paper did for its cave)")
     p.add_argument("--set", metavar="NAME=VALUE", action="append", default=[], help="set any Params field (repeatable)")
     p.add_argument("--strict", action="store_true", help="exit 3 when the evaluation carries a warning")
     p.add_argument("--quiet", action="store_true", help="do not print progress")
@@ -64,6 +74,45 @@ def _check_outputs(args: argparse.Namespace, guard: tuple[str, ...]) -> None:
         check_output_file(f"{args.per_point}_skeletal.csv", guard)
     if args.export_ply:
         check_output_dir(args.export_ply)
+
+
+def _viewpoints(args: argparse.Namespace) -> np.ndarray | None:
+    """``--viewpoint`` (repeatable), else a PCD cloud's VIEWPOINT when it is not PCL's default."""
+    from ..io import pcd_viewpoint
+
+    if args.viewpoint:
+        v = np.asarray(args.viewpoint, dtype=float)
+        if not np.all(np.isfinite(v)):
+            raise SkelInputError("--viewpoint: X Y Z must be finite numbers")
+        return v
+    v = pcd_viewpoint(args.cloud)
+    if v is not None:
+        print(f"skelcore: viewpoint {v[0]:g} {v[1]:g} {v[2]:g} from the PCD header of {args.cloud} "
+              "(boundedness counts what it could see)", file=sys.stderr)
+        return v[None, :]
+    return None
+
+
+def print_scan_notes(scan, args: argparse.Namespace) -> None:
+    """One stderr line per thing the scan options did: the outliers removed, each opening capped or not."""
+    if scan is None:
+        return
+    if args.remove_outliers and scan.outliers is not None:
+        n_cloud = len(scan.outliers.get("removed_rows") or [])
+        print(f"skelcore: --remove-outliers: {n_cloud} cloud point(s) and {scan.skeletal_rows_removed} skeletal "
+              "row(s) left out", file=sys.stderr)
+    if args.cap_openings:
+        openings = scan.openings or []
+        if not openings:
+            print("skelcore: --cap-openings: the cloud has no openings", file=sys.stderr)
+        for i, o in enumerate(openings):
+            where = " ".join(f"{x:.4g}" for x in o["centre"])
+            if o.get("capped"):
+                print(f"skelcore: --cap-openings: capped opening {i + 1} ({o['kind']} at {where}) with "
+                      f"{o['n_fill']} points", file=sys.stderr)
+            else:
+                print(f"skelcore: --cap-openings: not capped: opening {i + 1} ({o['kind']} at {where}): "
+                      f"{o.get('refused')}", file=sys.stderr)
 
 
 def run_evaluate(args: argparse.Namespace) -> int:
@@ -103,9 +152,11 @@ def run_evaluate(args: argparse.Namespace) -> int:
 
     skeletal, curve = map_skeleton(skeletal, curve, float(args.skeleton_scale), tuple(args.skeleton_offset))
 
+    viewpoints = _viewpoints(args)
     progress = stderr_progress(args.quiet)
     ev = evaluate(cloud, skeletal, curve, params, progress=progress, skeletal_index=index,
-                  correspondence=args.correspondence, reference_curve=reference, inputs=inputs)
+                  correspondence=args.correspondence, reference_curve=reference, inputs=inputs,
+                  viewpoints=viewpoints, remove_outliers=args.remove_outliers, cap_openings=args.cap_openings)
     clear_progress_line(progress)
     scores = ev.scores()
     print(format_table(scores))
@@ -115,6 +166,7 @@ def run_evaluate(args: argparse.Namespace) -> int:
     print(f"{corr}boundedness estimator: {params.boundedness_method}; total {ev.timings['total']:.2f} s")
     print(format_defects(ev.warning_dicts()))
     print_warnings(ev.warning_dicts())
+    print_scan_notes(ev.scan, args)
     if "coverage" in ev.not_computed:  # the others come with their warning (no_correspondence)
         print(f"skelcore: not computed: coverage: {ev.not_computed['coverage']}", file=sys.stderr)
     if args.json:

@@ -95,6 +95,8 @@ def _job_key(job: Job) -> str:
             method["mapping"] = job.method.mapping()
     doc = {"cloud": file_digest(job.shape.path), "shape": job.shape.name, "method": method,
            "condition": job.condition.to_dict(), "seed": job.seed, "params": job.params.to_dict()}
+    if job.shape.viewpoints:  # only then: the keys of runs without viewpoints stay as they were
+        doc["viewpoints"] = [list(v) for v in job.shape.viewpoints]
     text = json.dumps(doc, sort_keys=True, default=str)
     return hashlib.sha256(text.encode()).hexdigest()[:24]
 
@@ -167,6 +169,9 @@ def execute(job: Job, workdir: str | None = None, *, prefix: str = "", write_clo
         kwargs["skeletal_index"] = index
     if m.correspondence is not None:
         kwargs["correspondence"] = m.correspondence
+    viewpoints = job.shape.viewpoints or _pcd_viewpoints(job.shape.path)
+    if viewpoints:
+        kwargs["viewpoints"] = np.asarray(viewpoints, dtype=float)
     ev = evaluate(pts, skeletal, curve, job.params, progress=part(0.5, 1.0), cancel=cancel,
                   inputs={"cloud": files.get("cloud")}, **kwargs)
     timings["evaluate"] = time.perf_counter() - t0
@@ -174,6 +179,14 @@ def execute(job: Job, workdir: str | None = None, *, prefix: str = "", write_clo
 
 
 # ---- the worker's entry point -------------------------------------------------------------------
+
+def _pcd_viewpoints(path: str) -> tuple:
+    """A PCD shape's VIEWPOINT when it is not PCL's default (docs/metrics.md 6.3), else ()."""
+    from ..io import pcd_viewpoint
+
+    v = pcd_viewpoint(path)
+    return () if v is None else (tuple(float(x) for x in v),)
+
 
 def scores_from_doc(doc: dict[str, Any] | None) -> dict[str, float]:
     """Flat scores of an ``evaluate --json`` document; NaN where not computed (all NaN without one)."""

@@ -10,6 +10,7 @@ manifest and the offending entry.
 from __future__ import annotations
 
 import glob
+import math
 import os
 import re
 import shlex
@@ -33,7 +34,7 @@ __all__ = ["ShapeSpec", "MethodSpec", "ConditionSpec", "Manifest", "load_manifes
 
 _KEYS = {
     "top": {"evaluation", "shapes", "methods", "conditions", "seeds"},
-    "shapes": {"path", "name", "suffix"},
+    "shapes": {"path", "name", "suffix", "viewpoint"},
     "builtin": {"name", "kind", "method", "params"},
     "command": {"name", "kind", "command", "timeout", "correspondence"},
     "files": {"name", "kind", "curve", "skeletal", "skeletal_index", "correspondence", "scale", "offset"},
@@ -46,10 +47,12 @@ _PLACEHOLDER_RE = re.compile("|".join(re.escape(p) for p in _PLACEHOLDERS))
 @dataclass(frozen=True)
 class ShapeSpec:
     """One input cloud, named by its file stem less the entry's ``suffix`` ("_cloud"), or by the
-    entry's ``name`` for a single file."""
+    entry's ``name`` for a single file; ``viewpoints``: the sensor positions of a one-sided scan
+    (``viewpoint = [x, y, z]`` or a list of them; docs/metrics.md 6.3)."""
 
     name: str
     path: str
+    viewpoints: tuple[tuple[float, float, float], ...] = ()
 
 
 @dataclass(frozen=True)
@@ -231,6 +234,7 @@ def _shapes(value: Any, base: Path, fail, unknown) -> tuple[ShapeSpec, ...]:
         suffix = entry.get("suffix", "")
         if not isinstance(suffix, str):
             fail(f"{where}: suffix must be a string (cut from the end of each file stem)")
+        viewpoints = _viewpoints(entry.get("viewpoint"), where, fail)
         for m in matches:
             stem = Path(m).stem
             if suffix and stem.endswith(suffix) and stem != suffix:
@@ -240,8 +244,21 @@ def _shapes(value: Any, base: Path, fail, unknown) -> tuple[ShapeSpec, ...]:
                 fail(f"{where}: name must be a non-empty string")
             if name in out and out[name].path != m:
                 fail(f"{where}: two shapes are named {name!r} ({out[name].path} and {m})")
-            out[name] = ShapeSpec(name, m)
+            out[name] = ShapeSpec(name, m, viewpoints)
     return tuple(out.values())
+
+
+def _viewpoints(value: Any, where: str, fail) -> tuple[tuple[float, float, float], ...]:
+    """``viewpoint = [x, y, z]`` or ``[[x, y, z], ...]`` (the cloud's units); absent: ()."""
+    if value is None:
+        return ()
+    rows = [value] if isinstance(value, list) and value and not isinstance(value[0], list) else value
+    ok = isinstance(rows, list) and rows and all(
+        isinstance(r, list) and len(r) == 3 and all(isinstance(x, (int, float)) and not isinstance(x, bool)
+                                                    and math.isfinite(x) for x in r) for r in rows)
+    if not ok:
+        fail(f"{where}: viewpoint must be [x, y, z] or a list of them, finite numbers")
+    return tuple(tuple(float(x) for x in r) for r in rows)
 
 
 def skeletonize_accepts_method() -> bool:

@@ -9,6 +9,7 @@ any problem into a one-line :class:`~skelcore.errors.SkelInputError` naming the 
 
 from . import atomic  # noqa: F401  (skelcore.io.atomic is public)
 from .loaders import SUPPORTED_EXTENSIONS, Loaded, detect_format, load_any, load_cloud, load_curve, load_points
+from .pcd import pcd_viewpoint
 from .ply import write_curve_ply, write_points_ply
 from .writers import write_curve, write_point_set, write_points_npy, write_points_xyz
 
@@ -25,5 +26,6 @@ __all__ = [
     "write_points_npy",
     "write_curve",
     "write_point_set",
+    "pcd_viewpoint",
     "SUPPORTED_EXTENSIONS",
 ]

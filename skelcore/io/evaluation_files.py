@@ -2,7 +2,8 @@
 here into an equal Evaluation.
 
 - ``to_json_dict`` / ``write_json``: the ``evaluate --json`` document (scores, counts, params, inputs,
-  warnings, coverage, reference, timings; SPEC 5), also each compare job's ``evaluation`` record.
+  warnings, coverage, reference, timings, the real-scan report; SPEC 5), also each compare job's
+  ``evaluation`` record.
 - ``write_per_point``, ``cloud_columns``, ``write_barcodes``: the CSVs (NaN written ``nan``).
 - ``evaluation_arrays``: what the document lacks, for an npz (compare's ``jobs/KEY.npz``): the cloud,
   the skeletons, the raw local values (before SPEC 3's unbounded -> 0 rule, so thresholds can change),
@@ -34,6 +35,7 @@ from ..metrics.coverage import Coverage
 from ..metrics.reference import ReferenceComparison
 from ..metrics.topology import TopologyResult
 from ..params import Params
+from ..scan.scan_report import ScanReport
 from ..trust import TrustWarning
 from .atomic import atomic_open
 from .json_numbers import json_float, json_safe
@@ -92,6 +94,8 @@ def to_json_dict(ev: Evaluation, version: str | None = None) -> dict[str, Any]:
         "diagnostics": None if ev.diagnostics is None else ev.diagnostics.to_dict(),
         "timings_s": {k: round(float(v), 6) for k, v in ev.timings.items()},
     }
+    if ev.scan is not None:  # only with a scan option or a scan warning (docs/metrics.md 6)
+        doc["scan"] = ev.scan.to_dict()
     return json_safe(doc)
 
 
@@ -321,6 +325,8 @@ def evaluation_from_store(doc: dict[str, Any], arrays: dict[str, np.ndarray], wh
 
         ev.diagnostics = Diagnostics(summary=doc["diagnostics"],
                                      arrays={k[len("ev_diag_"):]: a[k] for k in a if k.startswith("ev_diag_")})
+    if isinstance(doc.get("scan"), dict):
+        ev.scan = ScanReport.from_dict(doc["scan"])
     return ev
 
 

@@ -50,6 +50,37 @@ def _parse_header(data: bytes, path: Path) -> tuple[dict[str, list[str]], int]:
             raise SkelInputError("PCD header too long (not a PCD file?)", path)
 
 
+_DEFAULT_VIEWPOINT = (0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0)
+
+
+def pcd_viewpoint(path: str | Path) -> np.ndarray | None:
+    """The sensor position of a PCD file: the translation of its ``VIEWPOINT tx ty tz qw qx qy qz`` line
+    (PCL's ``sensor_origin_``, in the cloud's coordinates), or None when the line is absent, is PCL's
+    default ``0 0 0 1 0 0 0`` (which says nothing), or the file is not a PCD (docs/metrics.md 6.3)."""
+    path = Path(path)
+    try:
+        with open(path, "rb") as fh:
+            head = fh.read(65536)
+    except OSError:
+        return None
+    if not is_pcd(head.decode("ascii", errors="replace")):
+        return None
+    header, _ = _parse_header(head if b"DATA" in head else head + b"\nDATA ascii\n", path)
+    tokens = header.get("VIEWPOINT")
+    if not tokens:
+        return None
+    try:
+        values = tuple(float(t) for t in tokens)
+    except ValueError:
+        raise SkelInputError(f"PCD header: VIEWPOINT must be 7 numbers, got {' '.join(tokens)[:40]!r}", path) from None
+    if len(values) != 7 or not np.all(np.isfinite(values)):
+        raise SkelInputError(f"PCD header: VIEWPOINT must be 7 finite numbers (tx ty tz qw qx qy qz), got {len(values)}",
+                             path)
+    if values == _DEFAULT_VIEWPOINT:
+        return None
+    return np.array(values[:3])
+
+
 def read_pcd(path: Path, data: bytes) -> RawData:
     header, start = _parse_header(data, path)
     fields = header.get("FIELDS")

@@ -39,6 +39,7 @@ def skeletal_centeredness(
     skeletal: np.ndarray,
     *,
     params: Params = Params(),
+    depth: np.ndarray | None = None,
     checkpoint: Checkpoint = no_checkpoint,
 ) -> np.ndarray:
     """Centeredness of every skeletal point (SPEC 3; paper Eq. 10, ``eq.skeletal_point_centeredness``).
@@ -58,6 +59,10 @@ def skeletal_centeredness(
     ----------
     corresponding_cloud : (N_s, 3) cloud point of each skeletal point (row i <-> row i).
     skeletal : (N_s, 3) skeletal point set, normalized like the cloud; finite.
+    depth : SkelScope's viewpoint extension (docs/metrics.md 6.3), None for the paper's Eq. 10:
+        (N_s, 3), per skeletal point a viewing direction d of length w <= 1; the component of
+        m_o - m_s along d / |d|, turned square to the neighbours' line, is left out times w (w = 1:
+        nothing was observed behind).
 
     Returns
     -------
@@ -96,6 +101,10 @@ def skeletal_centeredness(
     checkpoint(0.0)
     n_groups = len(groups.positions)
     per_group = np.full(n_groups, np.nan)
+    if depth is not None:
+        depth = np.asarray(depth, dtype=float)
+        first_row = np.zeros(n_groups, np.int64)
+        first_row[groups.group_of[::-1]] = np.arange(n)[::-1]
     threads = (os.cpu_count() or 1) if n_groups >= 2 * _SKELETAL_CHUNK else 1
 
     def span(lo: int, hi: int) -> None:
@@ -106,7 +115,10 @@ def skeletal_centeredness(
         m_o = _neighbour_mean(cloud_m, slot)
         diff = neighbours_o - m_s[:, None, :]
         spread = np.sqrt(np.einsum("ijk,ijk->ij", diff, diff)).mean(axis=1)
-        offset = np.linalg.norm(m_o - m_s, axis=1)
+        shift = m_o - m_s
+        if depth is not None:  # coincident points share a position, hence a depth: the group's first row's
+            shift = shift - _unobserved(shift, depth[first_row[which]], take_rows(skel_m, slot) - m_s[:, None, :])
+        offset = np.linalg.norm(shift, axis=1)
         with np.errstate(invalid="ignore", divide="ignore"):
             c = np.maximum(0.0, 1.0 - offset / spread)
         c[~(spread > 0)] = np.nan
@@ -118,6 +130,22 @@ def skeletal_centeredness(
                threads, checkpoint)
     # coincident points have the same neighbours (ties go by index, not by self), so the same c
     return per_group[groups.group_of]
+
+
+def _unobserved(shift: np.ndarray, depth: np.ndarray, around: np.ndarray) -> np.ndarray:
+    """The part of m_o - m_s that a one-sided view makes up (docs/metrics.md 6.3): its component along
+    the viewing direction d / |d| turned square to the skeleton's local direction (the neighbours'
+    ``around`` principal axis, as far as they lie on a line: a tube seen obliquely shows the side facing
+    the sensor), times the weight |d|."""
+    w = np.linalg.norm(depth, axis=1)
+    u = np.divide(depth, w[:, None], out=np.zeros_like(depth), where=w[:, None] > 0)
+    vals, vecs = np.linalg.eigh(np.matmul(around.transpose(0, 2, 1), around))
+    line = np.where(vals[:, 2] > 0, 1.0 - vals[:, 1] / np.where(vals[:, 2] > 0, vals[:, 2], 1.0), 0.0)
+    t = vecs[:, :, 2]
+    u = u - (line * np.einsum("ij,ij->i", u, t))[:, None] * t
+    n = np.linalg.norm(u, axis=1, keepdims=True)
+    u = np.divide(u, n, out=np.zeros_like(u), where=n > 1e-6)
+    return (np.einsum("ij,ij->i", shift, u) * w)[:, None] * u
 
 
 def _neighbour_mean(values: np.ndarray, slot: np.ndarray) -> np.ndarray:

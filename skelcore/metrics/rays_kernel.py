@@ -379,3 +379,23 @@ def run_plan(
     out = np.empty(len(q_sorted))
     out[plan.order] = out_sorted
     return out
+
+
+def run_plan_here(tree, plan: Plan, queries: np.ndarray, h: float, rows: int, bins: int,
+                  stop: np.ndarray | None = None) -> np.ndarray:
+    """:func:`run_plan` in the calling thread as one stream, without its pool and polling: for callers
+    that run many small plans on their own threads (skelcore.scan.viewpoint: one ray per query and
+    direction).  ``tree`` needs ``points``, ``nodes`` and ``leaves`` as :class:`BallTree`'s; a set
+    ``stop[0]`` makes the kernel return after the cluster it is in (the rest stays 0)."""
+    q_sorted = np.ascontiguousarray(take_rows(queries, plan.order), np.float64)
+    n_clusters = len(plan.starts) - 1
+    out_sorted = np.zeros(len(q_sorted))
+    if n_clusters > 0:
+        stop = np.zeros(1, np.int32) if stop is None else stop
+        _raycast.clusters(tree.points, tree.nodes, tree.leaves, q_sorted, np.ascontiguousarray(plan.starts, np.int64),
+                          np.ascontiguousarray(plan.centres, np.float64), np.ascontiguousarray(plan.reach, np.float64),
+                          0, n_clusters, float(h), int(rows), int(bins), out_sorted, np.zeros(6, np.int64), stop,
+                          np.zeros(1, np.int64))
+    out = np.empty(len(q_sorted))
+    out[plan.order] = out_sorted
+    return out

@@ -1,6 +1,7 @@
 """The Evaluation from the stages' results: the skeletal and curve columns (local values in the user's
 units, SPEC 2-4), coverage, the reference comparison, what was not computed, and the trust checks
-(frame, frame fit, smoothness, no correspondence; docs/metrics.md) run after the stages."""
+(frame, frame fit, smoothness, no correspondence; the real-scan checks of .scan_checks;
+docs/metrics.md) run after the stages."""
 
 from __future__ import annotations
 
@@ -11,10 +12,10 @@ import numpy as np
 from ..correspondence import aggregate_rows
 from ..evaluation import CurveLocal, Evaluation, SkeletalLocal
 from ..geometry import Checkpoint
-from ..metrics.boundedness import boundedness
 from ..trust import TrustWarning, frame_fit_warning, frame_warnings, no_correspondence_warning, smoothness_warning
 from ..diagnostics.record import diagnostics_record
 from .context import EvalContext
+from .scan_checks import scan_warnings
 
 __all__ = ["assemble", "trust_warnings", "diagnostics_warnings"]
 
@@ -51,6 +52,7 @@ def assemble(ctx: EvalContext, inputs: dict[str, Any] | None = None) -> Evaluati
     if any(k in got for k in ("curve defects", "skeletal missing parts", "curve missing parts")):
         ev.diagnostics = diagnostics_record(got.get("curve defects"), got.get("skeletal missing parts"),
                                             got.get("curve missing parts"))
+    ev.scan = ctx.scan
     return ev
 
 
@@ -88,7 +90,7 @@ def trust_warnings(ctx: EvalContext, ev: Evaluation, checkpoint: Checkpoint) -> 
     p, cloud = ctx.params, ctx.cloud
 
     def bounded_fraction(points_user: np.ndarray) -> float:
-        beta = boundedness(ctx.cloud_n, ctx.norm.apply(points_user), params=p, checkpoint=checkpoint)
+        beta = ctx.boundedness(ctx.norm.apply(points_user), checkpoint)
         return float(np.mean(beta > p.beta_star))
 
     out: list[TrustWarning] = []
@@ -107,4 +109,5 @@ def trust_warnings(ctx: EvalContext, ev: Evaluation, checkpoint: Checkpoint) -> 
         out += smoothness_warning(ev.curve.vertex_degree)
     if ctx.mode == "none":
         out.append(no_correspondence_warning(len(ctx.skeletal), len(cloud)))
+    out += scan_warnings(ctx, ev, checkpoint)
     return out

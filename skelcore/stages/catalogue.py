@@ -17,7 +17,6 @@ import numpy as np
 
 from ..correspondence import densify_curve, project_onto_curve, reverse_projection
 from ..geometry import Checkpoint
-from ..metrics.boundedness import boundedness
 from ..metrics.centeredness import curve_centeredness, skeletal_centeredness
 from ..metrics.coverage import coverage
 from ..metrics.reference import compare_with_reference
@@ -68,16 +67,17 @@ def _topology(ctx: EvalContext, checkpoint: Checkpoint):
 
 
 def _skeletal_boundedness(ctx: EvalContext, checkpoint: Checkpoint) -> np.ndarray:
-    return boundedness(ctx.cloud_n, ctx.skeletal_points(), params=ctx.params, checkpoint=checkpoint)
+    return ctx.boundedness(ctx.skeletal_points(), checkpoint, unseen="skeletal")
 
 
 def _skeletal_centeredness(ctx: EvalContext, checkpoint: Checkpoint) -> np.ndarray:
     """Per skeletal point, or per cloud row under reverse correspondence (aggregated by the assembly)."""
     if ctx.skeletal_mode == "reverse":
         return skeletal_centeredness(ctx.cloud_n, ctx.skeletal_points()[ctx.rows()], params=ctx.params,
-                                     checkpoint=checkpoint)
+                                     depth=ctx.depth(ctx.skeletal_points(), ctx.rows()), checkpoint=checkpoint)
     corr_cloud = ctx.cloud_n if ctx.index is None else ctx.cloud_n[ctx.index]
-    return skeletal_centeredness(corr_cloud, ctx.skeletal_points(), params=ctx.params, checkpoint=checkpoint)
+    return skeletal_centeredness(corr_cloud, ctx.skeletal_points(), params=ctx.params,
+                                 depth=ctx.depth(ctx.skeletal_points()), checkpoint=checkpoint)
 
 
 def _skeletal_smoothness(ctx: EvalContext, checkpoint: Checkpoint) -> np.ndarray:
@@ -85,7 +85,7 @@ def _skeletal_smoothness(ctx: EvalContext, checkpoint: Checkpoint) -> np.ndarray
 
 
 def _curve_boundedness(ctx: EvalContext, checkpoint: Checkpoint) -> np.ndarray:
-    return boundedness(ctx.cloud_n, ctx.samples.points, params=ctx.params, checkpoint=checkpoint)
+    return ctx.boundedness(ctx.samples.points, checkpoint)
 
 
 def _curve_centeredness(ctx: EvalContext, checkpoint: Checkpoint) -> np.ndarray:
@@ -185,7 +185,8 @@ CATALOGUE: tuple[Stage, ...] = (
           applies=_skeletal_corresponded, fn=_topology),
     Stage("skeletal boundedness", weight=4.0, column="skeletal", inputs=("cloud", "skeletal points"), applies=_skeletal,
           fn=_skeletal_boundedness, start=FIRST),
-    Stage("skeletal centeredness", weight=0.5, column="skeletal", inputs=("cloud", "skeletal points", "rows", "index"),
+    Stage("skeletal centeredness", weight=0.5, column="skeletal",
+          inputs=("cloud", "skeletal points", "rows", "index", "unseen"),
           applies=_skeletal_corresponded, fn=_skeletal_centeredness),
     Stage("skeletal smoothness", weight=0.5, column="skeletal", inputs=("skeletal points",), applies=_skeletal,
           fn=_skeletal_smoothness),

@@ -7,6 +7,7 @@ stage's result as soon as it is done.  :func:`build_context` checks the inputs (
 from __future__ import annotations
 
 import threading
+import time
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -15,9 +16,15 @@ import numpy as np
 from ..curve import CurveSkeleton
 from ..curve_sampling import CurveSamples, sample_curve
 from ..errors import SkelInputError
-from ..geometry import Checkpoint, Normalization, as_points
+from ..geometry import Checkpoint, Normalization, as_points, no_checkpoint
+from ..metrics.boundedness import boundedness
 from ..metrics.coverage import coverage_tau
 from ..params import Params
+from ..scan.capping import cap_openings
+from ..scan.openings import Opening, find_openings
+from ..scan.prepare import without_strays
+from ..scan.scan_report import ScanReport
+from ..scan.viewpoint import check_viewpoints, depth_axes, seen_boundedness
 
 __all__ = ["EvalContext", "build_context", "CORRESPONDENCE_CHOICES", "CONTEXT_ITEMS"]
 
@@ -26,9 +33,10 @@ CORRESPONDENCE_CHOICES = ("auto", "reverse")
 
 #: What a stage may read from the context (its ``inputs``): "skeletal set" is the one given, "skeletal
 #: points" the one the skeletal column scores (the curve's projections, made by the correspondence stage,
-#: when no set is given), "rows" the reverse correspondence (made by that stage too).
+#: when no set is given), "rows" the reverse correspondence (made by that stage too), "unseen" what the
+#: skeletal boundedness stage found behind the skeletal points with viewpoints (docs/metrics.md 6.3).
 CONTEXT_ITEMS = ("cloud", "skeletal set", "skeletal points", "rows", "index", "curve", "samples", "reference", "tau",
-                 "curve boundedness", "skeletal coverage", "curve coverage")
+                 "unseen", "curve boundedness", "skeletal coverage", "curve coverage")
 #: items that are other stages' results (the diagnostics read them), made by the stage of that name
 #: when it runs in this evaluation (the coverage stages only below coverage_max_points)
 STAGE_RESULTS = ("curve boundedness", "skeletal coverage", "curve coverage")
@@ -57,6 +65,14 @@ class EvalContext:
     with_coverage: bool = True
     not_computed: dict[str, str] = field(default_factory=dict)
     results: dict[str, Any] = field(default_factory=dict)
+    #: real scans (docs/metrics.md 6): the sensors' positions, normalized; the cloud boundedness casts
+    #: against (the normalized cloud, plus the caps of --cap-openings); the openings when looked for
+    #: (user units, rows of ``cloud``); what the scan report will say (None: no scan option given)
+    viewpoints_n: np.ndarray | None = None
+    capped_cloud_n: np.ndarray | None = None
+    openings: list[Opening] | None = None
+    scan: ScanReport | None = None
+    unseen: dict[str, np.ndarray] = field(default_factory=dict)
     _tau: list[float] = field(default_factory=list, repr=False)
     _tau_lock: threading.Lock = field(default_factory=threading.Lock, repr=False)
 
@@ -88,6 +104,8 @@ class EvalContext:
             return item if self.skeletal is not None and self.with_coverage else None
         if item == "curve coverage":
             return item if self.curve is not None and self.with_coverage else None
+        if item == "unseen" and self.viewpoints_n is not None:
+            return "skeletal boundedness"
         return None
 
     def skeletal_points(self) -> np.ndarray:
@@ -97,6 +115,35 @@ class EvalContext:
     def rows(self) -> np.ndarray:
         """Reverse correspondence: the skeletal row of every cloud row."""
         return self.results["correspondence"]
+
+    @property
+    def bounded_cloud_n(self) -> np.ndarray:
+        """The cloud boundedness runs on: the normalized cloud, with the caps of ``--cap-openings``."""
+        return self.cloud_n if self.capped_cloud_n is None else self.capped_cloud_n
+
+    def boundedness(self, points_n: np.ndarray, checkpoint: Checkpoint = no_checkpoint,
+                    unseen: str | None = None) -> np.ndarray:
+        """Boundedness of normalized points as the stages score it: the paper's (SPEC 2), or with
+        viewpoints the share of the seen directions that are covered (docs/metrics.md 6.3); then, given a
+        name in ``unseen``, also keeps there (``self.unseen``) how much of each point's unseen directions
+        the cloud leaves uncovered."""
+        if self.viewpoints_n is None:
+            return boundedness(self.bounded_cloud_n, points_n, params=self.params, checkpoint=checkpoint)
+        if unseen is None:
+            return seen_boundedness(self.bounded_cloud_n, points_n, self.viewpoints_n, params=self.params,
+                                    checkpoint=checkpoint)
+        beta, self.unseen[unseen] = seen_boundedness(self.bounded_cloud_n, points_n, self.viewpoints_n,
+                                                     params=self.params, return_missing=True,
+                                                     checkpoint=checkpoint)
+        return beta
+
+    def depth(self, points_n: np.ndarray, rows: np.ndarray | None = None) -> np.ndarray | None:
+        """Skeletal centeredness' depth per skeletal point with viewpoints (docs/metrics.md 6.3), else
+        None; ``rows`` picks the skeletal rows of a reverse correspondence."""
+        if self.viewpoints_n is None:
+            return None
+        d = depth_axes(points_n, self.viewpoints_n, self.unseen["skeletal"])
+        return d if rows is None else d[rows]
 
     def tau(self, checkpoint: Checkpoint) -> float:
         """Coverage's tau (the cloud's spacing, one kNN pass), computed by the first stage that asks, so
@@ -116,34 +163,65 @@ def build_context(
     skeletal_index: np.ndarray | None,
     correspondence: str,
     reference_curve: CurveSkeleton | tuple | None,
+    viewpoints=None,
+    remove_outliers: bool = False,
+    cap_openings: bool = False,
+    checkpoint: Checkpoint = no_checkpoint,
 ) -> EvalContext:
-    """Check the inputs of :func:`skelcore.evaluate`, normalize them (SPEC 0) and decide the
-    correspondence, coverage and what cannot be computed."""
+    """Check the inputs of :func:`skelcore.evaluate`, take out stray points (``remove_outliers``),
+    normalize (SPEC 0), cap small flat openings (``cap_openings``) and decide the correspondence,
+    coverage and what cannot be computed.  ``checkpoint`` is reached by the scan options' work only."""
     if correspondence not in CORRESPONDENCE_CHOICES:
         raise SkelInputError(f"correspondence must be one of {', '.join(CORRESPONDENCE_CHOICES)}, got {correspondence!r}")
     cloud = as_points("cloud", cloud)
     if len(cloud) < 2:
         raise SkelInputError("cloud: at least 2 points are needed")
+    scan = None
+    if viewpoints is not None or remove_outliers or cap_openings:
+        scan = ScanReport()
+    if viewpoints is not None:
+        try:
+            viewpoints = check_viewpoints(viewpoints)
+        except ValueError as exc:
+            raise SkelInputError(str(exc)) from None
+        if params.boundedness_method != "rays":
+            raise SkelInputError("viewpoint-aware boundedness counts the rays estimator's directions: "
+                                 "use boundedness_method rays with viewpoints")
+    skel = index = mode = None
+    if skeletal is not None:
+        skel = as_points("skeletal point set", skeletal)
+        if correspondence == "reverse":
+            if skeletal_index is not None:
+                raise SkelInputError("give either a skeletal index or reverse correspondence, not both")
+            mode = "reverse"
+        elif skeletal_index is not None:
+            index = _check_index(skeletal_index, len(skel), len(cloud))
+            mode = "index"
+        else:
+            mode = "pointwise" if len(skel) == len(cloud) else "none"
+    elif skeletal_index is not None:
+        raise SkelInputError("a skeletal index needs a skeletal point set")
+    if remove_outliers:
+        t0 = time.perf_counter()
+        cloud, skel, index, strays, cloud_rows, dropped = without_strays(cloud, skel, index, mode == "pointwise",
+                                                                         params, checkpoint=checkpoint)
+        scan.outliers = dict(strays.to_dict(), removed_rows=cloud_rows.tolist())
+        scan.outliers_removed, scan.skeletal_rows_removed = True, dropped
+        scan.timings["outliers"] = time.perf_counter() - t0
+        if skel is not None and len(skel) == 0:
+            raise SkelInputError("skeletal point set: every row went with the stray points")
+        if len(cloud) < 2:
+            raise SkelInputError("cloud: fewer than 2 points are left without the stray points")
     try:
         norm = Normalization.from_cloud(cloud, params.normalize_by, params.normalized_size)
     except ValueError:
         raise SkelInputError("cloud: all points coincide") from None
-    ctx = EvalContext(params=params, cloud=cloud, norm=norm, cloud_n=norm.apply(cloud), mode=None)
-
-    if skeletal is not None:
-        ctx.skeletal = as_points("skeletal point set", skeletal)
-        ctx.skeletal_n = norm.apply(ctx.skeletal)
-        if correspondence == "reverse":
-            if skeletal_index is not None:
-                raise SkelInputError("give either a skeletal index or reverse correspondence, not both")
-            ctx.mode = "reverse"
-        elif skeletal_index is not None:
-            ctx.index = _check_index(skeletal_index, len(ctx.skeletal), len(cloud))
-            ctx.mode = "index"
-        else:
-            ctx.mode = "pointwise" if len(ctx.skeletal) == len(cloud) else "none"
-    elif skeletal_index is not None:
-        raise SkelInputError("a skeletal index needs a skeletal point set")
+    ctx = EvalContext(params=params, cloud=cloud, norm=norm, cloud_n=norm.apply(cloud), mode=mode, scan=scan)
+    if viewpoints is not None:
+        ctx.viewpoints_n = norm.apply(viewpoints)
+        scan.viewpoints = viewpoints.tolist()
+    if skel is not None:
+        ctx.skeletal, ctx.skeletal_n, ctx.index = skel, norm.apply(skel), index
 
     if curve is not None:
         ctx.curve = CurveSkeleton.coerce(curve, "curve")
@@ -160,6 +238,9 @@ def build_context(
         ctx.curve_n = ctx.curve.transformed(norm.apply)
         ctx.samples = sample_curve(ctx.curve_n, params.curve_samples, collinear_cos=params.collinear_cos)
 
+    if cap_openings:
+        _cap(ctx, checkpoint)
+
     if ctx.mode == "none":
         reason = (f"the skeletal set has {len(ctx.skeletal)} points and the cloud {len(cloud)}; "
                   "give a skeletal index or use reverse correspondence")
@@ -172,6 +253,19 @@ def build_context(
             "--set coverage_max_points=N)"
         )
     return ctx
+
+
+def _cap(ctx: EvalContext, checkpoint: Checkpoint) -> None:
+    """``--cap-openings``: find the openings, cap the small flat ones into ``capped_cloud_n``."""
+    t0 = time.perf_counter()
+    ctx.openings = find_openings(ctx.cloud, ctx.params, checkpoint=checkpoint)
+    caps = cap_openings(ctx.openings, len(ctx.cloud), ctx.params)
+    if len(caps.points):
+        ctx.capped_cloud_n = np.vstack([ctx.cloud_n, ctx.norm.apply(caps.points)])
+    ctx.scan.openings = [dict(o.to_dict(), rows=o.rows.tolist(), capped=i in caps.capped, refused=caps.refused.get(i))
+                         for i, o in enumerate(ctx.openings)]
+    ctx.scan.cap_points = int(len(caps.points))
+    ctx.scan.timings["openings"] = time.perf_counter() - t0
 
 
 def _check_index(skeletal_index: np.ndarray, n_skel: int, n_cloud: int) -> np.ndarray:

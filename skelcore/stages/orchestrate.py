@@ -34,6 +34,9 @@ def evaluate(
     reference_curve: CurveSkeleton | tuple | None = None,
     inputs: dict | None = None,
     workers: int | None = None,
+    viewpoints=None,
+    remove_outliers: bool = False,
+    cap_openings: bool = False,
 ) -> Evaluation:
     """Score a skeleton against its point cloud with the paper's four metrics (SPEC.md), the trust
     checks, SkelScope's coverage and, given a ``reference_curve``, the comparison with it.
@@ -55,6 +58,13 @@ def evaluate(
     workers : threads running the independent stages side by side (None = all cores; 1 = one after the
         other, in the order they are started: the skeletal boundedness first, the curve's last); the
         values do not depend on it.
+    viewpoints : the sensors' positions (one x y z or several, the cloud's units) of a scan seen from
+        some sides only: boundedness counts the directions seen from them, skeletal centeredness
+        leaves out the viewing depth (docs/metrics.md 6.3; SkelScope's extension, None = the paper's).
+    remove_outliers : evaluate without the cloud's stray points (and their skeletal rows); they are
+        found and reported in any case (the ``outliers`` warning, docs/metrics.md 6.4).
+    cap_openings : close the cloud's small flat openings with points on their planes for boundedness,
+        as the paper did for its cave (docs/metrics.md 6.2).
 
     Examples
     --------
@@ -63,15 +73,22 @@ def evaluate(
     """
     t_start = time.perf_counter()
     ctx = build_context(cloud, skeletal, curve, params, skeletal_index=skeletal_index,
-                        correspondence=correspondence, reference_curve=reference_curve)
+                        correspondence=correspondence, reference_curve=reference_curve, viewpoints=viewpoints,
+                        remove_outliers=remove_outliers, cap_openings=cap_openings,
+                        checkpoint=StageProgress({}, None, cancel).between("scan preparation"))
     stages = select(ctx)
     tracker = StageProgress({s.name: s.weight for s in stages}, progress, cancel)
     tasks = [_task(stage, ctx, tracker) for stage in start_order(stages, ctx)]
     run_graph(tasks, workers, on_error=tracker.abort)
     ev = assemble(ctx, inputs)
     ev.warnings += trust_warnings(ctx, ev, tracker.between("trust checks"))
-    if not any(w.code == "frame" for w in ev.warnings):  # in another frame, every diagnostic would say so too
-        ev.warnings += diagnostics_warnings(ctx)
+    codes = {w.code for w in ev.warnings}
+    if "frame" not in codes:  # in another frame, every diagnostic would say so too
+        found = diagnostics_warnings(ctx)
+        if "open_surface" in codes or ctx.viewpoints_n is not None:
+            # the cycle test voxelizes the shape's interior, which an open scan does not enclose
+            found = [w for w in found if w.code not in ("spurious_cycles", "missing_cycles")]
+        ev.warnings += found
     ev.timings = dict(tracker.timings)
     ev.timings["total"] = time.perf_counter() - t_start
     return ev

@@ -144,21 +144,23 @@ def test_the_cycle_finder_finds_a_cycle():
 #                                                                                 -> foundation
 #   skeletonizer      skelcore.skeleton                                           -> foundation
 #   metrics           skelcore.metrics (each result type beside its metric)       -> foundation
+#   scan              skelcore.scan (openings, viewpoints, stray points, caps)    -> foundation, metrics
 #   diagnostics       skelcore.diagnostics, trust (the warnings; TrustWarning itself is in the foundation)
-#                                                                                 -> foundation, metrics
-#   record            the Evaluation (skelcore.evaluation, old name results), Scores -> foundation, metrics
-#   stages            skelcore.stages (the evaluate pipeline)                     -> foundation, metrics, record
+#                                                                                 -> foundation, formats, metrics
+#   record            the Evaluation (skelcore.evaluation, old name results), Scores
+#                                                             -> foundation, metrics, scan, diagnostics
+#   stages            skelcore.stages (the evaluate pipeline) -> foundation, metrics, scan, diagnostics, record
 #   objects in        skelcore.interop's recognisers of other libraries' objects -> foundation, formats
 #   evaluation files  io.evaluation_files (JSON, CSVs, npz of an Evaluation), io.export (coloured PLY),
 #                     io.conversion (skelcore convert), interop's outputs (to_frame, to_networkx, to_open3d)
-#                                                             -> foundation, formats, metrics, record
+#                                                             -> foundation, formats, metrics, scan, diagnostics, record
 #   applications      skelcore.compare, skelcore.experiments, skelcore.benchmark  -> every layer above this line
 #   entry points      skelcore.cli, skelcore.__main__, the package facade skelcore/__init__ -> every layer
 # So: metrics never import the record, the stages or the evaluation files; the record imports no io; the
 # format readers and writers import no metric; compare and the CLI sit on top. A pattern "x.*" is the
 # package x and everything in it, any other an exact module; a module's layer is its longest pattern.
-_BELOW_APPS = ["foundation", "formats", "objects in", "skeletonizer", "metrics", "diagnostics", "record", "stages",
-               "evaluation files"]
+_BELOW_APPS = ["foundation", "formats", "objects in", "skeletonizer", "metrics", "scan", "diagnostics", "record",
+               "stages", "evaluation files"]
 LAYERS: dict[str, tuple[list[str], list[str]]] = {
     "foundation": ([f"skelcore.{m}" for m in ("errors", "version", "params", "geometry", "parallel", "curve",
                                               "curve_sampling", "correspondence", "colors", "shapes",
@@ -166,15 +168,17 @@ LAYERS: dict[str, tuple[list[str], list[str]]] = {
     "formats": (["skelcore.io.*"], ["foundation"]),
     "skeletonizer": (["skelcore.skeleton.*"], ["foundation"]),
     "metrics": (["skelcore.metrics.*"], ["foundation"]),
+    "scan": (["skelcore.scan.*"], ["foundation", "metrics"]),
     "diagnostics": (["skelcore.diagnostics.*", "skelcore.trust"], ["foundation", "formats", "metrics"]),
-    "record": (["skelcore.evaluation", "skelcore.results", "skelcore.scores"], ["foundation", "metrics", "diagnostics"]),
-    "stages": (["skelcore.stages.*"], ["foundation", "metrics", "diagnostics", "record"]),
+    "record": (["skelcore.evaluation", "skelcore.results", "skelcore.scores"],
+               ["foundation", "metrics", "scan", "diagnostics"]),
+    "stages": (["skelcore.stages.*"], ["foundation", "metrics", "scan", "diagnostics", "record"]),
     "objects in": (["skelcore.interop", "skelcore.interop.recognise", "skelcore.interop.objects_in",
                     "skelcore.interop.swc_frames"], ["foundation", "formats"]),
     "evaluation files": (["skelcore.io.evaluation_files", "skelcore.io.export", "skelcore.io.conversion",
                           "skelcore.interop.tables",
                           "skelcore.interop.graph_out", "skelcore.interop.open3d_out"],
-                         ["foundation", "formats", "metrics", "diagnostics", "record"]),
+                         ["foundation", "formats", "metrics", "scan", "diagnostics", "record"]),
     "applications": (["skelcore.compare.*", "skelcore.experiments.*", "skelcore.benchmark.*"], _BELOW_APPS),
     "entry points": (["skelcore", "skelcore.__main__", "skelcore.cli.*"], [*_BELOW_APPS, "applications"]),
 }

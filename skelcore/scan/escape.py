@@ -1,0 +1,51 @@
+"""Which skeleton elements lose their boundedness through the cloud's openings (docs/metrics.md 6.1).
+
+An element is unbounded "only because of the openings" when beta(q) <= beta* on the cloud and
+beta(q) > beta* once every opening is closed by its dome (:mod:`.openings`): its rays left through
+them.  Only unbounded elements are scored again, on the cloud with the domes, by the same estimator.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from scipy.spatial import cKDTree
+
+from ..geometry import Checkpoint, no_checkpoint
+from ..metrics.boundedness import boundedness
+from ..params import Params
+from .openings import Opening
+
+__all__ = ["set_local_radii", "escaping_share"]
+
+
+def set_local_radii(openings: list[Opening], cloud: np.ndarray, skeleton: np.ndarray) -> None:
+    """Each opening's local radius: the median distance from its rim to the nearest skeleton element
+    (points in the cloud's units); left NaN without skeleton elements."""
+    if len(skeleton) == 0:
+        return
+    tree = cKDTree(skeleton)
+    for o in openings:
+        d, _ = tree.query(cloud[o.rows], k=1, workers=-1)
+        o.local_radius = float(np.median(d))
+
+
+def escaping_share(
+    cloud_n: np.ndarray,
+    domes_n: np.ndarray,
+    elements_n: np.ndarray,
+    beta: np.ndarray,
+    params: Params = Params(),
+    *,
+    checkpoint: Checkpoint = no_checkpoint,
+) -> float:
+    """Share of the elements with beta <= beta* that are bounded once the domes close the openings
+    (normalized coordinates; ``beta`` their boundedness on ``cloud_n``)."""
+    beta = np.asarray(beta, dtype=float)
+    if len(beta) == 0 or len(domes_n) == 0:
+        return 0.0
+    low = np.flatnonzero(~(beta > params.beta_star))
+    if len(low) == 0:
+        return 0.0
+    closed = np.vstack([cloud_n, domes_n])
+    again = boundedness(closed, elements_n[low], params=params, checkpoint=checkpoint)
+    return float(np.count_nonzero(again > params.beta_star)) / len(beta)

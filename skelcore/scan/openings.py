@@ -1,0 +1,243 @@
+"""Openings of a scanned surface: where the cloud's boundary points enclose a region with no points
+(docs/metrics.md 6.1).
+
+The paper's boundedness assumes a closed surface (it capped its cave "to ensure a closed shape"); a
+scan seen from one side, or a tube cut open, lets the rays of a perfect skeleton escape.  An opening is
+a connected group of boundary points (:mod:`.boundary`, linked within ``open_link`` median spacings)
+whose rim encloses missing surface: its plane, centre and radius from the rim's PCA; its *fill*, grid
+points on the rim's surface (the plane lifted by the rim's own offsets) that the rim surrounds and that
+lie ``open_empty`` spacings from every cloud point (fewer than ``open_min_fill``: a sampling gap, not an
+opening); its *dome*, the fill bulged away from the cloud as a half-cylinder over a long cut or a
+hemisphere over a round one (the surface the scan would plausibly have had: ``open_surface`` counts the
+rays it stops); its kind, an open tube ``end`` when the rim is flat, round and goes round its centre,
+else a missing ``side``.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+from scipy.sparse import coo_matrix
+from scipy.sparse.csgraph import connected_components
+from scipy.spatial import cKDTree
+
+from ..geometry import Checkpoint, no_checkpoint
+from ..params import Params
+from .boundary import boundary_mask, largest_angle_gap
+
+__all__ = ["Opening", "find_openings", "median_spacing", "fill_rim"]
+
+#: rim points used by the surround test of the fill (evenly spread); enough for gaps well under 90 degrees
+RIM_SAMPLE = 512
+#: grid points of one opening's fill at most (the grid step grows beyond)
+MAX_FILL = 200_000
+#: grid points per batch of the surround test
+FILL_CHUNK = 2048
+
+
+@dataclass
+class Opening:
+    """One opening; coordinates in the units of the cloud it was found in."""
+
+    rows: np.ndarray  # cloud rows of its rim (boundary points)
+    centre: np.ndarray  # (3,) the rim's centroid
+    normal: np.ndarray  # (3,) unit normal of the rim's plane, pointing away from the cloud
+    radius: float  # mean distance of the rim from its centre, in the plane
+    extent: float  # twice the largest such distance
+    flatness: float  # RMS distance of the rim from its plane / radius
+    roundness: float  # coefficient of variation of the rim's distances from the centre
+    surrounds: bool  # the rim goes all round its centre
+    kind: str  # "end" (open tube end) | "side" (missing side)
+    fill: np.ndarray  # (m, 3) the empty part of the flat fill (what --cap-openings adds)
+    dome: np.ndarray  # (m', 3) the fill bulged away from the cloud, where it is empty
+    spacing: float  # the grid step of the fill and the dome (2 x the median spacing near the rim)
+    local_radius: float = float("nan")  # the shape's radius at the rim (from a skeleton, set later)
+    notes: dict = field(default_factory=dict)
+
+    @property
+    def area(self) -> float:
+        """Area of the missing surface: the flat fill's cells."""
+        return float(len(self.fill)) * self.spacing**2
+
+    @property
+    def size(self) -> float:
+        """The opening's extent in local radii (an open tube end: about 2); NaN without a local radius."""
+        return self.extent / self.local_radius if self.local_radius > 0 else float("nan")
+
+    def to_dict(self, transform=None) -> dict:
+        """JSON-ready summary; ``transform`` maps points to other units (positions and lengths)."""
+        scale = 1.0
+        centre = self.centre
+        if transform is not None:
+            centre, scale = transform(self.centre[None, :])[0], transform.scale
+        return {
+            "kind": self.kind,
+            "n_rim": int(len(self.rows)),
+            "centre": [float(x) for x in centre],
+            "normal": [float(x) for x in self.normal],
+            "radius": float(self.radius * scale),
+            "extent": float(self.extent * scale),
+            "area": float(self.area * scale**2),
+            "n_fill": int(len(self.fill)),
+            "flatness": float(self.flatness),
+            "roundness": float(self.roundness),
+            "local_radius": float(self.local_radius * scale),
+            "size": float(self.size),
+        }
+
+
+def median_spacing(cloud: np.ndarray, tree: cKDTree | None = None) -> float:
+    """Median distance from a point to its nearest other point (copies count as 0)."""
+    if len(cloud) < 2:
+        return 0.0
+    tree = cKDTree(cloud) if tree is None else tree
+    d, _ = tree.query(cloud, k=2, workers=-1)
+    return float(np.median(d[:, 1]))
+
+
+def find_openings(
+    cloud: np.ndarray,
+    params: Params = Params(),
+    *,
+    checkpoint: Checkpoint = no_checkpoint,
+) -> list[Opening]:
+    """The openings of ``cloud`` (module docstring), largest fill first.
+
+    Above ``open_max_points`` points the boundary test runs on a random subsample of that many (fixed
+    seed); ``rows`` then index the full cloud all the same.  A closed, evenly sampled surface has none.
+
+    Examples
+    --------
+    >>> from skelcore.shapes import cylinder
+    >>> [o.kind for o in find_openings(cylinder(4000, capped=False).cloud)]
+    ['end', 'end']
+    >>> find_openings(cylinder(4000).cloud)
+    []
+    """
+    cloud = np.asarray(cloud, dtype=float)
+    n = len(cloud)
+    if n < max(int(params.open_k) + 1, 8):
+        return []
+    rows = np.arange(n)
+    if n > int(params.open_max_points):
+        rows = np.sort(np.random.default_rng(0).choice(n, int(params.open_max_points), replace=False))
+    pts = cloud[rows]
+    tree = cKDTree(pts)
+    nn = np.empty(len(pts))
+    checkpoint(0.05)
+    on_rim = boundary_mask(pts, k=int(params.open_k), angle=np.radians(params.open_angle), tree=tree,
+                           spacing_out=nn, checkpoint=lambda f: checkpoint(0.05 + 0.6 * f))
+    spacing = float(np.median(nn))
+    rim = np.flatnonzero(on_rim)
+    if len(rim) < 3 or not spacing > 0:
+        return []
+    if len(rows) < n:  # the spacing near a rim is the full cloud's, not the subsample's
+        nn = np.zeros(len(pts))
+        nn[rim] = cKDTree(cloud).query(pts[rim], k=2, workers=-1)[0][:, 1]
+    pairs = cKDTree(pts[rim]).query_pairs(float(params.open_link) * spacing, output_type="ndarray")
+    graph = coo_matrix((np.ones(len(pairs)), (pairs[:, 0], pairs[:, 1])), shape=(len(rim), len(rim)))
+    n_groups, label = connected_components(graph, directed=False)
+    sizes = np.bincount(label, minlength=n_groups)
+    out = []
+    candidates = [g for g in np.argsort(-sizes) if sizes[g] >= 5]
+    for i, g in enumerate(candidates):
+        members = rim[label == g]
+        local = float(np.median(nn[members]))
+        opening = _opening(pts, members, tree, local if local > 0 else spacing, params)
+        if opening is not None:
+            opening.rows = rows[members]
+            out.append(opening)
+        checkpoint(0.65 + 0.35 * (i + 1) / len(candidates))
+    out = _without_nested(out)
+    out.sort(key=lambda o: -len(o.fill))
+    return out
+
+
+def _without_nested(openings: list[Opening]) -> list[Opening]:
+    """Drop an opening whose missing surface is mostly another's: the outer rim of a flat annulus fills
+    the hole its inner rim already bounds (rims by size, the smaller kept)."""
+    kept: list[Opening] = []
+    for o in sorted(openings, key=lambda o: len(o.rows)):
+        if kept and len(o.fill):
+            others = cKDTree(np.vstack([k.fill for k in kept]))
+            d, _ = others.query(o.fill, k=1, workers=-1)
+            if np.mean(d <= o.spacing) > 0.5:
+                continue
+        kept.append(o)
+    return kept
+
+
+def _opening(pts: np.ndarray, members: np.ndarray, tree: cKDTree, spacing: float, params: Params) -> Opening | None:
+    rim = pts[members]
+    centre = rim.mean(axis=0)
+    _, sv, vt = np.linalg.svd(rim - centre, full_matrices=False)
+    e1, e2, normal = vt[0], vt[1], vt[2]
+    uv = (rim - centre) @ np.column_stack([e1, e2])
+    off = (rim - centre) @ normal
+    dist = np.linalg.norm(uv, axis=1)
+    radius = float(dist.mean())
+    if not radius > 0:
+        return None
+    flatness = float(np.sqrt(np.mean(off**2)) / radius)
+    roundness = float(dist.std() / radius)
+    surrounds = bool(largest_angle_gap((rim - centre)[None], np.stack([e1, e2, normal])[None])[0]
+                     < np.radians(params.open_angle))
+    flat, d_rim, step = fill_rim(uv, off, 2.0 * spacing, np.radians(params.open_angle))
+    if len(flat) == 0:
+        return None
+    basis = np.stack([e1, e2, normal])
+    fill3 = centre + flat @ basis
+    empty = float(params.open_empty) * spacing
+    fill_d, _ = tree.query(fill3, k=1, workers=-1)
+    fill = fill3[fill_d > empty]
+    if len(fill) < int(params.open_min_fill):
+        return None
+    # the cloud near the opening lies on one side of its plane: the dome bulges to the other
+    near = tree.query_ball_point(centre, r=max(dist.max(), spacing) * 1.5)
+    side = float(np.mean((pts[near] - centre) @ normal)) if near else 0.0
+    if side > 0:
+        normal = -normal
+    d_max = float(d_rim.max())
+    height = np.sqrt(np.maximum(d_max**2 - (d_max - d_rim) ** 2, 0.0))
+    dome3 = fill3 + height[:, None] * normal
+    dome_d, _ = tree.query(dome3, k=1, workers=-1)
+    dome = dome3[dome_d > empty]
+    end = flatness < params.open_end_flatness and roundness < params.open_end_roundness and surrounds
+    return Opening(rows=members, centre=centre, normal=normal, radius=radius, extent=2.0 * float(dist.max()),
+                   flatness=flatness, roundness=roundness, surrounds=surrounds, kind="end" if end else "side",
+                   fill=fill, dome=dome, spacing=step)
+
+
+def fill_rim(uv: np.ndarray, off: np.ndarray, spacing: float, angle: float) -> tuple[np.ndarray, np.ndarray, float]:
+    """The grid points (in-plane u, v, offset) that the rim ``uv`` (with offsets ``off`` from the plane)
+    surrounds, their distance to the rim, and the grid step (``spacing``, larger for a huge rim)."""
+    lo, hi = uv.min(axis=0), uv.max(axis=0)
+    step = spacing
+    cells = np.prod(np.floor((hi - lo) / step) + 1)
+    if cells > MAX_FILL:
+        step *= float(np.sqrt(cells / MAX_FILL))
+    gu = np.arange(lo[0] + step / 2, hi[0], step)
+    gv = np.arange(lo[1] + step / 2, hi[1], step)
+    if len(gu) == 0 or len(gv) == 0:
+        return np.empty((0, 3)), np.empty(0), step
+    grid = np.column_stack([np.repeat(gu, len(gv)), np.tile(gv, len(gu))])
+    pick = np.linspace(0, len(uv) - 1, min(len(uv), RIM_SAMPLE)).astype(int)
+    ring = np.column_stack([uv[pick], np.zeros(len(pick))])
+    plane = np.eye(3)[None]
+    inside = np.zeros(len(grid), bool)
+    for i0 in range(0, len(grid), FILL_CHUNK):
+        g = np.column_stack([grid[i0:i0 + FILL_CHUNK], np.zeros(min(FILL_CHUNK, len(grid) - i0))])
+        vec = ring[None, :, :] - g[:, None, :]
+        inside[i0:i0 + FILL_CHUNK] = largest_angle_gap(vec, np.repeat(plane, len(g), axis=0)) < angle
+    grid = grid[inside]
+    if len(grid) == 0:
+        return np.empty((0, 3)), np.empty(0), step
+    rim_tree = cKDTree(uv)
+    k = min(8, len(uv))
+    d, idx = rim_tree.query(grid, k=k, workers=-1)
+    d = d.reshape(len(grid), k)
+    idx = idx.reshape(len(grid), k)
+    w = 1.0 / np.maximum(d, 1e-12 * spacing) ** 2
+    lift = (w * off[idx]).sum(axis=1) / w.sum(axis=1)
+    return np.column_stack([grid, lift]), d[:, 0], step

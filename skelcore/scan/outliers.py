@@ -1,0 +1,114 @@
+"""Stray points: background returns far from the scanned surface (docs/metrics.md 6.4).
+
+One stray point sets the cloud's bounding box, hence the normalization every metric runs in (SPEC 0):
+a point at 10 x the hammer's extent shrinks the hammer to a tenth and changes d_B and centeredness.
+A point is an outlier when it fails both tests of PCL and Open3D (so a point in a sparse but real part
+of a scan, which fails at most one, is kept):
+
+- radius test (``RadiusOutlierRemoval`` / ``remove_radius_outlier``): fewer than
+  ``outlier_min_neighbours`` other points within ``outlier_radius`` x the cloud's median spacing;
+- statistical test (``StatisticalOutlierRemoval`` / ``remove_statistical_outlier``): its mean distance
+  to its ``outlier_k`` nearest neighbours is more than ``outlier_std_ratio`` standard deviations above
+  the cloud's typical value, both taken robustly (median, 1.4826 x MAD: the strays must not widen the
+  yardstick that finds them).
+
+A skeletal point set in pointwise correspondence is held to the radius test alone, with the cloud's
+spacing as the yardstick (:func:`isolated_rows`): contraction stacks skeletal points, so their own spacing
+says nothing, and a contracted set is dense (on the hammer and the apple tree no skeletal point has its second neighbour
+beyond 1.7 cloud spacings), so a skeletal point five spacings from all others is a stray's image.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from scipy.spatial import cKDTree
+
+from ..geometry import Checkpoint, Normalization, no_checkpoint
+from ..params import Params
+
+__all__ = ["Outliers", "find_outliers", "isolated_rows"]
+
+#: points whose mean kNN distance makes the statistical test's yardstick (a random sample beyond)
+REFERENCE_SAMPLE = 20_000
+
+
+@dataclass(frozen=True)
+class Outliers:
+    """The stray points of a cloud and what they do to its normalization."""
+
+    rows: np.ndarray  # cloud rows of the outliers, increasing
+    n_points: int  # points in the cloud
+    scale_ratio: float  # the normalization's measure (longest side or diagonal) with them / without them
+    centre_shift: float  # how far they move the bounding box's centre, in units of that measure without them
+    spacing: float = 0.0  # the cloud's median nearest-neighbour distance (the radius test's yardstick)
+
+    @property
+    def count(self) -> int:
+        return int(len(self.rows))
+
+    def to_dict(self) -> dict:
+        return {"count": self.count, "rows": [int(r) for r in self.rows], "scale_ratio": float(self.scale_ratio),
+                "centre_shift": float(self.centre_shift), "spacing": float(self.spacing)}
+
+
+def find_outliers(cloud: np.ndarray, params: Params = Params(), *, checkpoint: Checkpoint = no_checkpoint) -> Outliers:
+    """The outliers of ``cloud`` (module docstring) and how far they move SPEC 0's normalization.
+
+    Examples
+    --------
+    >>> from skelcore.shapes import sphere_surface
+    >>> cloud = np.vstack([sphere_surface(2000), [[30.0, 0, 0]]])
+    >>> o = find_outliers(cloud)
+    >>> o.rows.tolist(), round(o.scale_ratio, 1)
+    ([2000], 15.5)
+    """
+    cloud = np.asarray(cloud, dtype=float)
+    n = len(cloud)
+    m = int(params.outlier_min_neighbours)
+    k = int(params.outlier_k)
+    if n <= max(m, k) + 1:
+        return Outliers(np.zeros(0, np.int64), n, 1.0, 0.0)
+    tree = cKDTree(cloud)
+    checkpoint(0.1)
+    d, _ = tree.query(cloud, k=m + 1, workers=-1)
+    checkpoint(0.6)
+    spacing = float(np.median(d[:, 1]))
+    none = Outliers(np.zeros(0, np.int64), n, 1.0, 0.0, spacing)
+    if not spacing > 0:
+        return none
+    candidates = np.flatnonzero(d[:, m] > float(params.outlier_radius) * spacing)
+    if len(candidates) == 0:
+        return none
+    sample = np.arange(n) if n <= REFERENCE_SAMPLE else np.random.default_rng(0).choice(n, REFERENCE_SAMPLE, replace=False)
+    ref = tree.query(cloud[sample], k=k + 1, workers=-1)[0][:, 1:].mean(axis=1)
+    centre = float(np.median(ref))
+    sigma = 1.4826 * float(np.median(np.abs(ref - centre)))
+    mean_d = tree.query(cloud[candidates], k=k + 1, workers=-1)[0][:, 1:].mean(axis=1)
+    rows = candidates[mean_d > centre + float(params.outlier_std_ratio) * sigma]
+    checkpoint(0.9)
+    if len(rows) == 0 or len(rows) >= n - 1:
+        return none
+    keep = np.ones(n, bool)
+    keep[rows] = False
+    with_them = Normalization.from_cloud(cloud, params.normalize_by, params.normalized_size)
+    try:
+        without = Normalization.from_cloud(cloud[keep], params.normalize_by, params.normalized_size)
+    except ValueError:  # all the others coincide: nothing to normalize by
+        return none
+    # scale = normalized_size / measure, so measure ratio = inverse scale ratio
+    ratio = without.scale / with_them.scale
+    shift = float(np.linalg.norm(with_them.center - without.center) * without.scale / params.normalized_size)
+    return Outliers(rows.astype(np.int64), n, float(ratio), shift, spacing)
+
+
+def isolated_rows(points: np.ndarray, spacing: float, params: Params = Params()) -> np.ndarray:
+    """Rows of ``points`` (a skeletal set) with fewer than ``outlier_min_neighbours`` other points within
+    ``outlier_skeletal_radius`` x ``spacing`` (the radius test with the cloud's spacing as yardstick)."""
+    points = np.asarray(points, dtype=float)
+    m = int(params.outlier_min_neighbours)
+    if len(points) <= m or not spacing > 0:
+        return np.zeros(0, np.int64)
+    d, _ = cKDTree(points).query(points, k=m + 1, workers=-1)
+    return np.flatnonzero(d[:, m] > float(params.outlier_skeletal_radius) * spacing).astype(np.int64)

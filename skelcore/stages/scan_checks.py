@@ -1,0 +1,84 @@
+"""The real-scan trust checks, run after the stages (docs/metrics.md 6): ``outliers`` (stray points in
+the cloud) and ``open_surface`` (openings through which the rays of otherwise bounded elements escape).
+
+The opening search only runs when some skeleton has at least ``open_surface_share`` of its elements
+unbounded (else no opening can change that share), and not with viewpoints (the scores then count
+only what the sensors saw).  Without a scan option the Evaluation gets a scan report only when one of
+the two warnings fires, so a clean evaluation's document is the paper's.
+"""
+
+from __future__ import annotations
+
+import time
+
+import numpy as np
+
+from ..evaluation import Evaluation
+from ..geometry import Checkpoint
+from ..scan.escape import escaping_share, set_local_radii
+from ..scan.openings import find_openings
+from ..scan.prepare import find_strays
+from ..scan.scan_report import ScanReport, open_surface_warning, outliers_warning
+from ..trust import TrustWarning
+from .context import EvalContext
+
+__all__ = ["scan_warnings"]
+
+
+def scan_warnings(ctx: EvalContext, ev: Evaluation, checkpoint: Checkpoint) -> list[TrustWarning]:
+    """``outliers`` and ``open_surface`` for ``ev`` (whose ``scan`` report they fill in)."""
+    out: list[TrustWarning] = []
+    report = ev.scan if ev.scan is not None else ScanReport()
+    if not report.outliers_removed:
+        t0 = time.perf_counter()
+        strays = find_strays(ctx.cloud, ctx.skeletal, ctx.params, pointwise=ctx.mode == "pointwise",
+                             checkpoint=checkpoint)
+        report.timings["outliers"] = time.perf_counter() - t0
+        if strays.cloud.count or len(strays.skeletal_rows):
+            report.outliers = strays.to_dict()
+            out.append(outliers_warning(strays))
+    if ctx.viewpoints_n is None:
+        out += _open_surface(ctx, ev, report, checkpoint)
+    if out and ev.scan is None:
+        ev.scan = report
+    return out
+
+
+def _columns(ctx: EvalContext, ev: Evaluation) -> list[tuple[str, np.ndarray, np.ndarray]]:
+    """(column, its elements normalized, their boundedness) of each skeleton scored."""
+    cols = []
+    if ev.skeletal is not None:
+        cols.append(("skeletal", ctx.norm.apply(ev.skeletal.points), ev.skeletal.boundedness))
+    if ev.curve is not None:
+        cols.append(("curve", ctx.samples.points, ev.curve.sample_boundedness))
+    return cols
+
+
+def _open_surface(ctx: EvalContext, ev: Evaluation, report: ScanReport, checkpoint: Checkpoint) -> list[TrustWarning]:
+    p = ctx.params
+    cols = [c for c in _columns(ctx, ev) if np.mean(~(np.asarray(c[2]) > p.beta_star)) >= p.open_surface_share]
+    if not cols:
+        return []
+    t0 = time.perf_counter()
+    openings = ctx.openings if ctx.openings is not None else find_openings(ctx.cloud, p, checkpoint=checkpoint)
+    capped = {i for i, o in enumerate(report.openings or []) if o.get("capped")}
+    open_now = [o for i, o in enumerate(openings) if i not in capped and len(o.dome)]
+    if not open_now:
+        report.timings["open_surface"] = time.perf_counter() - t0
+        return []
+    elements = [ctx.norm.invert(c[1]) for c in _columns(ctx, ev)]
+    set_local_radii(openings, ctx.cloud, np.vstack(elements))
+    domes_n = ctx.norm.apply(np.vstack([o.dome for o in open_now]))
+    shares = {name: escaping_share(ctx.bounded_cloud_n, domes_n, pts, beta, p, checkpoint=checkpoint)
+              for name, pts, beta in cols}
+    report.timings["open_surface"] = time.perf_counter() - t0
+    if max(shares.values()) < p.open_surface_share:
+        return []
+    if report.openings is None:
+        report.openings = [dict(o.to_dict(), rows=o.rows.tolist(), capped=False, refused=None) for o in openings]
+    else:  # --cap-openings found them: now with their local radii
+        for entry, o in zip(report.openings, openings):
+            entry.update(local_radius=float(o.local_radius), size=float(o.size))
+    report.escaping = dict(shares)
+    sizes = [o.size for o in open_now if np.isfinite(o.size)]
+    return [open_surface_warning([o.kind for o in open_now], max(sizes) if sizes else float("nan"), shares)]

@@ -1,0 +1,115 @@
+"""Stray points (issue 26, "Stray points"; docs/metrics.md 6.4): found by the statistical and the radius
+test, reported with what they do to the normalization, left out with ``remove_outliers``; ``frame`` and
+``collapse`` measure robust extents."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from skelcore import Params, evaluate, shapes
+from skelcore.scan.outliers import find_outliers
+from skelcore.scan.prepare import without_strays
+from skelcore.trust import frame_warnings
+
+RADIUS = {"cylinder": 0.5, "torus": 0.3, "y": 0.25, "tree": 0.25}
+
+
+def _shape(name: str, n: int):
+    return {"cylinder": lambda: shapes.cylinder(n), "torus": lambda: shapes.torus(n),
+            "y": lambda: shapes.y_shape(n), "tree": lambda: shapes.branching_tree(n)}[name]()
+
+
+@pytest.mark.parametrize("name", list(RADIUS))
+@pytest.mark.parametrize("n", [1000, 20000])
+@pytest.mark.parametrize("noise", [0.0, 0.01, 0.03, 0.05])
+def test_clean_noisy_shapes_have_no_outliers(name, n, noise):
+    s = _shape(name, n)
+    cloud = s.cloud + np.random.default_rng(4).normal(scale=noise * RADIUS[name], size=s.cloud.shape)
+    assert find_outliers(cloud).count == 0
+
+
+def test_one_far_point_is_found_with_its_effect_on_the_normalization():
+    t = shapes.torus(3000)
+    extent = np.ptp(t.cloud, axis=0)
+    far = np.array([[10 * extent[0], 0.0, 0.0]])
+    found = find_outliers(np.vstack([t.cloud, far]))
+    assert found.rows.tolist() == [3000]
+    # the longest side with it / without it, computed here from the boxes
+    with_it = np.ptp(np.vstack([t.cloud, far]), axis=0).max()
+    assert found.scale_ratio == pytest.approx(with_it / extent.max())
+
+
+def _with_strays(shape, extra):
+    return np.vstack([shape.cloud, extra]), np.vstack([shape.skeletal, extra])
+
+
+@pytest.mark.parametrize("case", ["far", "box"])
+def test_stray_points_warn_and_are_left_out_on_request(case):
+    """The issue's two cases on a torus: the strays added to the cloud and the skeletal set."""
+    t = shapes.torus(3000)
+    lo, hi = t.cloud.min(axis=0), t.cloud.max(axis=0)
+    centre, extent = (lo + hi) / 2, hi - lo
+    rng = np.random.default_rng(0)
+    extra = (centre + 10 * extent * np.array([1.0, 0.3, 0.2]))[None] if case == "far" else \
+        centre + rng.uniform(-1, 1, (40, 3)) * extent
+    cloud, skeletal = _with_strays(t, extra)
+    curve = (t.curve_vertices, t.curve_edges)
+    clean = evaluate(t.cloud, t.skeletal, curve)
+    dirty = evaluate(cloud, skeletal, curve)
+    codes = {w.code for w in dirty.warnings}
+    assert "outliers" in codes and not codes & {"collapse", "frame"}
+    (w,) = [w for w in dirty.warnings if w.code == "outliers"]
+    assert "--remove-outliers" in w.message
+    removed = evaluate(cloud, skeletal, curve, remove_outliers=True)
+    assert {w.code for w in removed.warnings} == set()
+    assert removed.scan.outliers_removed
+    a, b = clean.summary(), removed.summary()
+    assert b["topology"]["bottleneck"] == pytest.approx(a["topology"]["bottleneck"], rel=0.05)
+    for metric in ("boundedness", "centeredness"):
+        for col in ("skeletal", "curve"):
+            assert b[metric][col] == pytest.approx(a[metric][col], rel=0.05, abs=1e-12)
+
+
+def test_hammer_cases_of_the_issue(shared_data):
+    from skelcore import skeletonize
+    from skelcore.io import load_cloud
+
+    h = load_cloud(shared_data / "hammer_4096.ply")
+    sk, curve = skeletonize(h, method="cao")
+    centre, extent = (h.min(axis=0) + h.max(axis=0)) / 2, np.ptp(h, axis=0)
+    clean = evaluate(h, sk, curve).summary()
+    for extra in ((centre + 10 * extent * np.array([1.0, 0.3, 0.2]))[None],
+                  centre + np.random.default_rng(0).uniform(-1, 1, (40, 3)) * extent):
+        ev = evaluate(np.vstack([h, extra]), np.vstack([sk, extra]), curve, remove_outliers=True).summary()
+        assert ev["topology"]["bottleneck"] == pytest.approx(clean["topology"]["bottleneck"], rel=0.05)
+        assert ev["topology"]["wasserstein"] == pytest.approx(clean["topology"]["wasserstein"], rel=0.05)
+        for metric in ("boundedness", "centeredness"):
+            for col in ("skeletal", "curve"):
+                assert ev[metric][col] == pytest.approx(clean[metric][col], rel=0.05)
+
+
+def test_a_few_stray_points_fire_no_collapse_but_the_bounding_box_would():
+    t = shapes.torus(3000)
+    far = (10 * np.ptp(t.cloud, axis=0).max()) * np.ones((1, 3))
+    cloud = np.vstack([t.cloud, far])
+    assert frame_warnings(cloud, t.curve_vertices, "curve skeleton", Params()) == []
+    # the same check on plain bounding boxes: the stray point makes the skeleton look collapsed
+    old = frame_warnings(cloud, t.curve_vertices, "curve skeleton", Params(trust_extent_quantile=0.0))
+    assert [w.code for w in old] == ["collapse"]
+    # and a really collapsed skeleton still is one
+    shrunk = t.curve_vertices * 0.01
+    assert [w.code for w in frame_warnings(t.cloud, shrunk, "curve skeleton", Params())] == ["collapse"]
+
+
+def test_remove_outliers_keeps_the_correspondence():
+    t = shapes.torus(2000)
+    extra = np.array([[50.0, 0, 0], [0, 60.0, 0]])
+    cloud, skeletal = np.vstack([t.cloud, extra]), np.vstack([t.skeletal, extra])
+    c, s, idx, strays, rows, dropped = without_strays(cloud, skeletal, None, True)
+    assert rows.tolist() == [2000, 2001] and dropped == 2
+    assert np.array_equal(c, t.cloud) and np.array_equal(s, t.skeletal) and idx is None
+    # index correspondence: skeletal rows pointing at a stray go, the rest are renumbered
+    index = np.array([0, 2001, 5, 1999, 2000])
+    c, s, idx, _, _, dropped = without_strays(cloud, cloud[index], index, False)
+    assert dropped == 2 and idx.tolist() == [0, 5, 1999] and np.array_equal(c[idx], s)
