@@ -186,6 +186,7 @@ class Params:
     missing_link_factor: float = 4.0
     missing_max_points: int = 200_000
     missing_max_elements: int = 20_000
+
     trust_extent_quantile: float = 0.005
     # real scans: openings, viewpoints, stray points (docs/metrics.md section 6)
     open_k: int = 30
