@@ -34,6 +34,7 @@ def evaluate(
     reference_curve: CurveSkeleton | tuple | None = None,
     inputs: dict | None = None,
     workers: int | None = None,
+    on_stages: Callable[[tuple[str, ...]], None] | None = None,
 ) -> Evaluation:
     """Score a skeleton against its point cloud with the paper's four metrics (SPEC.md), the trust
     checks, SkelScope's coverage and, given a ``reference_curve``, the comparison with it.
@@ -52,6 +53,8 @@ def evaluate(
     progress : ``progress(fraction, stage)``, called at checkpoints (throttled).
     cancel : returning True makes the next checkpoint raise :class:`Cancelled` (in whichever stage checks
         first when several run side by side).
+    on_stages : ``on_stages(names)`` whenever the set of stages running side by side changes (their
+        names in the order they started; empty between stages), e.g. for a label naming them all.
     workers : threads running the independent stages side by side (None = all cores; 1 = one after the
         other, in the order they are started: the skeletal boundedness first, the curve's last); the
         values do not depend on it.
@@ -65,7 +68,7 @@ def evaluate(
     ctx = build_context(cloud, skeletal, curve, params, skeletal_index=skeletal_index,
                         correspondence=correspondence, reference_curve=reference_curve)
     stages = select(ctx)
-    tracker = StageProgress({s.name: s.weight for s in stages}, progress, cancel)
+    tracker = StageProgress({s.name: s.weight for s in stages}, progress, cancel, on_stages)
     tasks = [_task(stage, ctx, tracker) for stage in start_order(stages, ctx)]
     run_graph(tasks, workers, on_error=tracker.abort)
     ev = assemble(ctx, inputs)
