@@ -38,7 +38,9 @@ def _evaluate(progress: Callable[[float, str], None], on_stages: Callable[[tuple
 
     cloud = kwargs.pop("cloud")
     ev = evaluate(cloud, progress=progress, cancel=cancel, on_stages=on_stages, **kwargs)
-    if ev.cloud is cloud:
+    import numpy as np
+
+    if ev.cloud is cloud or (ev.cloud.shape == cloud.shape and np.array_equal(ev.cloud, cloud)):
         ev.cloud = None  # the window has it already: not sent back (24 MB per million points)
     return ev
 

@@ -101,7 +101,8 @@ class MainWindow(QtWidgets.QMainWindow):
         self.session.correspondence_provider = self.settings_panel.correspondence
         self.session.set_correspondence = self.settings_panel.set_correspondence
         self.session.ask_file = self._ask_index_file
-        self.session.after_render = self.view.after_render
+        # the scripted mode waits for the evaluation it starts: no deferral there
+        self.session.after_render = lambda fn: self.view.after_render(fn) if self.interactive else fn()
         self.summary.cloud_colouring.connect(self.view.set_cloud_values)
         self.session.ask = self._ask
         self.session.error.connect(self.show_error)
@@ -466,7 +467,7 @@ class MainWindow(QtWidgets.QMainWindow):
                     self.statusBar().clearMessage()  # "evaluation done in …" must not outlive the result
             self._plots_stale.add("histogram")
             self._schedule_plots()
-        elif event.kind in ("colouring", "display"):
+        elif event.kind in ("colouring", "display", "stale"):
             self._plots_stale.add("histogram")
             self._schedule_plots()
         elif event.kind == "layer":
@@ -508,7 +509,9 @@ class MainWindow(QtWidgets.QMainWindow):
             self._plots_timer.start()  # the next stale plot, after the event loop has turned
 
     def _stale_changed(self, reason: str) -> None:
+        """Out-of-date results: greyed in the summary, the 3D view and the histogram (issue 25)."""
         self.summary.set_stale(reason)
+        self.scene.set_stale(reason)
 
     def _layer_action(self, action: str, role: str) -> None:
         if action == "close":

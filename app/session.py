@@ -319,7 +319,9 @@ class Session(QtCore.QObject):
             if token == self._auto_token and self.scene.can_evaluate() and self.scene.evaluation is None:
                 self.start_evaluation()
 
-        self.after_render(start)
+        sk = self.scene.skeletal
+        big = self.scene.cloud.n_points + (0 if sk is None else sk.n_points) >= self.process_from
+        (self.after_render if big else (lambda fn: fn()))(start)
 
     #: ``after_render(fn)``: ``fn()`` once the window has painted the current scene (the main window
     #: passes its view's); at once by default

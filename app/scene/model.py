@@ -41,6 +41,7 @@ class Scene:
         defaults = Params()  # the thresholds until an evaluation brings its own
         self.beta_star: float = defaults.beta_star
         self.c_star: float = defaults.c_star
+        self.stale: str = ""  # why the shown results are out of date ("settings changed"), "" when they are not
         self._listeners: list[Listener] = []
 
     # ---- events ---------------------------------------------------------------------------
@@ -241,6 +242,13 @@ class Scene:
     def threshold_for(self, metric: str) -> float | None:
         """The threshold an overall score counts against (none for smoothness, SPEC 4)."""
         return {"boundedness": self.beta_star, "centeredness": self.c_star}.get(metric)
+
+    def set_stale(self, reason: str) -> None:
+        """Mark the shown results out of date (the session's stale reason): the view and the plots
+        draw them greyed until a re-run (issue 25)."""
+        if reason != self.stale:
+            self.stale = reason
+            self._emit("stale")
 
     # ---- display --------------------------------------------------------------------------
     def set_metric(self, metric: str) -> None:
