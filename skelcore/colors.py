@@ -40,12 +40,12 @@ PICK_COLOR: tuple[int, int, int] = (255, 140, 0)
 #: from the pick marker and from the viridis map (dark purple -> teal -> yellow): browns, black and a
 #: light sky blue (issue 25: the slab's red was the curve's red).
 SUPPORT_COLORS: dict[str, tuple[int, int, int]] = {
-    "slab": (205, 170, 125),  # the slab's cloud points; a skeletal point's corresponding cloud points
+    "slab": (214, 160, 90),  # the slab's cloud points; a skeletal point's corresponding cloud points
     "ring": (120, 66, 18),  # the ring kept; a skeletal point's or vertex's neighbours
     "ellipse": (0, 0, 0),  # the fitted ellipse; the picked point's tangent; the vertex's edges
     "centre": (0, 176, 240),  # the ellipse's centre; m_s; the neighbour that sets the smoothness
     "m_o": (120, 66, 18),  # the cloud centroid m_o (shape tells it from the neighbours)
-    "links": (150, 150, 150),  # skeletal point -> its cloud point
+    "links": (90, 90, 90),  # skeletal point -> its cloud point
 }
 
 
