@@ -205,10 +205,12 @@ def direction_map(cloud: np.ndarray, query: np.ndarray, *, params: Params = Para
         stop = start + length
         wrap = stop > bins
         base = row * (bins + 1)
-        np.add.at(marks, base + start, 1)
-        np.add.at(marks, base + np.minimum(stop, bins), -1)
-        np.add.at(marks, base[wrap], 1)
-        np.add.at(marks, base[wrap] + stop[wrap] - bins, -1)
+        # bincount, not np.add.at: ~10x faster, so a viewer thread computing this holds the GIL less
+        size = len(marks)
+        marks += np.bincount(base + start, minlength=size)
+        marks -= np.bincount(base + np.minimum(stop, bins), minlength=size)
+        marks += np.bincount(base[wrap], minlength=size)
+        marks -= np.bincount(base[wrap] + stop[wrap] - bins, minlength=size)
     covered = np.cumsum(marks[:-1].reshape(rows, bins + 1), axis=1)[:, :bins] > 0
     return DirectionMap(covered=covered, z=z, longitude=lon, radius=h)
 
