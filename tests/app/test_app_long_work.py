@@ -314,3 +314,19 @@ def test_cancel_kills_the_child_process_inside_the_stage(window, qtbot):
     qtbot.wait(200)
     assert len(labels) == n and w.scene.evaluation is None
     assert "cancelled" in w.statusBar().currentMessage()
+
+
+@pytest.mark.window(dialogs="record")
+def test_an_input_error_in_the_child_process_is_one_dialog_line(window, qtbot):
+    w = window
+    w.session.process_from = 0
+    sh = shapes.y_shape(300, seed=1)
+    cloud = sh.cloud.copy()
+    cloud[5, 1] = np.nan
+    with w.session.batch():
+        w.scene.set_cloud(cloud)
+        w.scene.set_skeletal(sh.skeletal)
+    with qtbot.waitSignal(w.session.runner.finished, timeout=120000):
+        assert w.session.start_evaluation()
+    assert w.dialogs == ["cloud: coordinates contain NaN or inf"]
+    assert w.scene.evaluation is None and not w.session.runner.running
