@@ -39,14 +39,15 @@ app.processEvents()
 t_window = time.time()
 rendered = []
 w.view.plotter.ren_win.AddObserver("EndEvent", lambda *a: rendered.append(time.time()))
+t_load = time.time()
 if len(sys.argv) > 4:  # the cloud and its skeletal set dropped together (auto-evaluated, as a user's drop)
     assert len(w.session.load_files([sys.argv[2], sys.argv[4]])) == 2, w.errors
 else:
     assert w.session.load_as("cloud", sys.argv[2]), w.errors
 t_loaded = time.time()
-while not [t for t in rendered if t >= t_loaded]:  # the view repaints on the next event-loop turn
+while not [t for t in rendered if t >= t_load] and time.time() < t_loaded + 300:  # the next event-loop turn
     app.processEvents()
-t_render = min(t for t in rendered if t >= t_loaded)
+t_render = min([t for t in rendered if t >= t_load] or [float("inf")])
 cpu_render = time.process_time()  # CPU of the whole process (all threads) up to here: robust under load
 img = w.view.image()     # a second frame, read back: the GL work is surely finished (upper bound)
 t_image = time.time()

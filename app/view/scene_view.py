@@ -73,6 +73,8 @@ class SceneView:
         if event.kind == "layer":
             self._remove_marker()
             self._build(event.layer)
+            if f"{event.layer}-lod" in self._actors:
+                self._coarse_first = True  # new big data: seen at once through its twins, then in full
             # A new cloud is new data: the camera frames it (and whatever came with it) afresh.
             if self.scene.layers and (not self._camera_set or (event.layer == "cloud" and self.scene.cloud is not None)):
                 self._fit_pending = True
@@ -111,11 +113,21 @@ class SceneView:
         that follows a change (the plots) starts after the frame, never in the same event-loop turn."""
         self._frames.after_frame(fn)
 
+    _coarse_first = False
+
     def _before_frame(self) -> None:
-        """Right before a frame is drawn, at the widget's real size: a pending camera fit."""
+        """Right before a frame is drawn, at the widget's real size: a pending camera fit. The first
+        frame of newly loaded big layers shows their level-of-detail twins (80k points each: a tenth
+        of a second in software GL where full detail took seconds, issue 25) and asks for the
+        full-detail frame right after it."""
         if self._fit_pending:
             self._fit_pending = False
             fit_camera(self.plotter, self._visible_points())
+        if self._coarse_first:
+            self._coarse_first = False
+            if not self.moving:
+                self._set_moving(True)
+                self._frames.after_frame(lambda: self._set_moving(False))  # requests the full frame
 
     def rebuild(self) -> None:
         for name in ("cloud", "skeletal", "curve"):

@@ -330,3 +330,30 @@ def test_an_input_error_in_the_child_process_is_one_dialog_line(window, qtbot):
         assert w.session.start_evaluation()
     assert w.dialogs == ["cloud: coordinates contain NaN or inf"]
     assert w.scene.evaluation is None and not w.session.runner.running
+
+
+def test_the_first_frame_of_big_new_data_shows_its_twins_then_full_detail(window, qtbot, monkeypatch):
+    """Newly loaded big layers are first drawn through their level-of-detail twins (quick in software
+    GL), and the full-detail frame follows by itself; a big drop's evaluation starts after the first."""
+    import app.view.scene_view as scene_view
+
+    monkeypatch.setattr(scene_view, "LOD_POINTS", 2000)
+    w = window
+    view = w.view
+    frames: list[tuple[bool, bool]] = []
+    view.plotter.ren_win.AddObserver(
+        "EndEvent", lambda *a: frames.append((bool(view._actors["cloud"].GetVisibility()),
+                                              bool(view._actors["cloud-lod"].GetVisibility()))))
+    w.session.process_from = 15_000  # a "big" drop at this size
+    w.session.auto_evaluate = True
+    started: list[int] = []
+    w.session.runner.started.connect(lambda name: started.append(len(frames)))
+    sh = shapes.y_shape(10_000, seed=1)
+    with w.session.batch():
+        w.scene.set_cloud(sh.cloud)
+        w.scene.set_skeletal(sh.skeletal)
+    assert not started  # not yet: after the first frame
+    qtbot.waitUntil(lambda: len(frames) >= 2 and frames[-1] == (True, False), timeout=60000)
+    assert frames[0] == (False, True)  # the twins first
+    assert started and started[0] >= 1
+    w.session.runner.shutdown()
