@@ -179,6 +179,9 @@ class MainWindow(QtWidgets.QMainWindow):
         self.pick.show_info(info)
         if info is not None:
             self.show_message(f"{info['element']} #{info['index']}", 5000)
+        # The text on screen now, before the marker's frame (seconds at full detail for millions of
+        # points in software GL) and the support's computation (issue 25: 2.3 s from click to text).
+        self.pick.text.viewport().repaint()
         self.element_picked.emit(info)
 
     def show_message(self, text: str, timeout_ms: int = 8000) -> None:

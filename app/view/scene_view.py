@@ -186,6 +186,9 @@ class SceneView:
             self._meshes[key] = mesh
             if pickable is not None:
                 self._pickable[key] = pickable
+                if len(points) > LOD_POINTS:  # laid out for picking once drawn, not at the first click
+                    QtCore.QTimer.singleShot(0, lambda k=key, p=points: self.after_render(
+                        lambda: self._sources.get(k) is p and self._pick_layout(k)))
             if lod and len(points) > LOD_POINTS:
                 idx = lod_indices(len(points), LOD_POINTS)
                 twin = pv.PolyData(display_coordinates(np.asarray(points)[idx]))
@@ -500,9 +503,7 @@ class SceneView:
                 continue
             size = float(actor.prop.point_size)
             tolerance = ((max(size, 4.0) + 4.0) / 2 + 3) * ratio
-            if key not in self._pick_coords:
-                self._pick_coords[key] = pick_layout(self._sources[key])
-            idx, dist, depth = near_on_screen(self.plotter.renderer, self._pick_coords[key], x, y, tolerance)
+            idx, dist, depth = near_on_screen(self.plotter.renderer, self._pick_layout(key), x, y, tolerance)
             if not len(idx):
                 continue
             invalid = self._invalid.get(key)
@@ -527,6 +528,12 @@ class SceneView:
         self._show_marker(info["xyz"])
         self.picked = info
         return info
+
+    def _pick_layout(self, key: str) -> np.ndarray:
+        """An actor's points laid out for picking (:func:`.picking.pick_layout`), made once."""
+        if key not in self._pick_coords:
+            self._pick_coords[key] = pick_layout(self._sources[key])
+        return self._pick_coords[key]
 
     def _show_marker(self, xyz: tuple[float, float, float]) -> None:
         self._remove_marker()
