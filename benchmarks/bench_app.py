@@ -475,7 +475,7 @@ def main(argv: list[str] | None = None) -> int:
                                                 "--cancel-stages", args.cancel_stages, "--stop-wait", str(args.stop_wait),
                                                 *(["--thread"] if args.thread else [])],
                                                capture_output=True, text=True, cwd=ROOT, check=True).stdout.strip()
-                                .splitlines()[-1])
+                                .splitlines()[-1], {"nan": float("nan"), "inf": float("inf")})
         if not args.skip_frames:
             frames = run("frames")
             print(f"\n1M-point cloud + 1M-point skeletal set, median frame while rotating: {frames['rest'] * 1000:.0f} "

@@ -9,7 +9,7 @@ from skelcore.params import Params
 
 #: (label, skelcore.evaluate's ``correspondence=``)
 CORRESPONDENCE_CHOICES = (
-    ("as loaded (pointwise / index file / none)", "auto"),
+    ("as loaded (pointwise / none)", "auto"),  # with an index file: through it (see the tooltip)
     ("reverse projection", "reverse"),
 )
 
