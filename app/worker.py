@@ -207,11 +207,11 @@ class ProcessTask(Task):
             else:
                 self.failed.emit(exc, traceback.format_exc())
         finally:
-            self._done.set()
-            try:
+            try:  # emitted before ``wait()`` returns: once the window has waited, this thread touches no Qt object
                 self.finished.emit()
             except RuntimeError:
                 pass
+            self._done.set()
 
 
 class TaskRunner(QtCore.QObject):
