@@ -13,7 +13,8 @@
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+import re
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -26,20 +27,37 @@ __all__ = ["TrustWarning", "frame_warnings", "frame_fit_warning", "bbox_transfor
 _FRAME_HINT = "map it with --skeleton-scale S --skeleton-offset X Y Z"
 
 
+_NUMBER = r"([-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?)"
+_MAPPING = re.compile(rf"--skeleton-scale {_NUMBER} --skeleton-offset {_NUMBER} {_NUMBER} {_NUMBER}")
+#: where a message's command-line remedy starts (what precedes it is the finding)
+_REMEDIES = ("; give --skeletal-index", "; " + "map it with --skeleton-scale", " (or, if it is in other units, ")
+
+
 @dataclass(frozen=True)
 class TrustWarning:
-    """``message`` is the full text the CLI prints and the JSON stores (with the command-line remedy);
-    ``finding`` is what was found, without a remedy, and ``mapping`` the suggested ``(scale, offset)``
-    into the cloud's frame, for a front end that words its own remedy (the viewer names its menus
-    and settings, issue 25). Both are empty for warnings read back from a file."""
+    """``message`` is the text the CLI prints and the JSON stores, with the command line's remedy.
+    ``finding`` (what was found) and ``mapping`` (the suggested ``(scale, offset)`` into the cloud's
+    frame, or None) are read from it, for a front end that words its own remedy (the viewer names its
+    menus and settings, issue 25); a warning read back from a file gives the same."""
 
     code: str
     message: str
-    finding: str = field(default="", compare=False)
-    mapping: tuple[float, tuple[float, float, float]] | None = field(default=None, compare=False)
 
     def to_dict(self) -> dict[str, str]:
         return {"code": self.code, "message": self.message}
+
+    @property
+    def finding(self) -> str:
+        cut = [i for i in (self.message.find(r) for r in _REMEDIES) if i >= 0]
+        return self.message[: min(cut)] if cut else self.message
+
+    @property
+    def mapping(self) -> tuple[float, tuple[float, float, float]] | None:
+        m = _MAPPING.search(self.message)
+        if m is None:
+            return None
+        s, x, y, z = (float(v) for v in m.groups())
+        return s, (x, y, z)
 
 
 def _diag(points: np.ndarray) -> float:
@@ -68,24 +86,16 @@ def frame_warnings(cloud: np.ndarray, skeleton: np.ndarray, what: str, params: P
             why.append(f"only {frac_inside:.0%} of its points lie inside the cloud's bounding box")
         if big or small:
             why.append(f"its extent is {ratio:.3g} x the cloud's")
-        finding = f"the {what} seems to be in another frame: {'; '.join(why)}"
-        out.append(TrustWarning("frame", f"{finding}; " + _hint(cloud, skeleton), finding,
-                                _mapping(bbox_transform(cloud, skeleton))))
+        out.append(TrustWarning("frame", f"the {what} seems to be in another frame: {'; '.join(why)}; "
+                                         + _hint(cloud, skeleton)))
     elif ratio < params.collapse_extent:
-        finding = (f"the {what} spans {ratio:.3g} of the cloud's extent (bounding-box diagonals): a collapsed "
-                   "skeleton scores well on topology, boundedness and centeredness; see the coverage row")
         out.append(TrustWarning(
-            "collapse", finding + (f" (or, if it is in other units, {_FRAME_HINT})" if small else ""), finding,
-            _mapping(bbox_transform(cloud, skeleton)) if small else None,
+            "collapse",
+            f"the {what} spans {ratio:.3g} of the cloud's extent (bounding-box diagonals): a collapsed "
+            "skeleton scores well on topology, boundedness and centeredness; see the coverage row"
+            + (f" (or, if it is in other units, {_FRAME_HINT})" if small else ""),
         ))  # fmt: skip
     return out
-
-
-def _mapping(t: tuple[float, np.ndarray] | None) -> tuple[float, tuple[float, float, float]] | None:
-    if t is None:
-        return None
-    s, off = t
-    return float(s), (float(off[0]), float(off[1]), float(off[2]))
 
 
 def bbox_transform(cloud: np.ndarray, skeleton: np.ndarray) -> tuple[float, np.ndarray] | None:
@@ -131,13 +141,12 @@ def frame_fit_warning(
             best, best_s = after, sc
     if best >= params.beta_star and best >= bounded_now + 0.25:
         off = centre_c - best_s * centre_s
-        finding = (f"the {what} seems to be in another frame: {bounded_now:.0%} of it is bounded, {best:.0%} once "
-                   f"its bounding box (extent {ratio:.3g} x the cloud's) is centred on the cloud's and scaled by "
-                   f"{best_s:.6g}")
         return [TrustWarning(
             "frame",
-            f"{finding}; {_FRAME_HINT} (e.g. --skeleton-scale {best_s:.6g} --skeleton-offset "
-            f"{off[0]:.6g} {off[1]:.6g} {off[2]:.6g})", finding, _mapping((best_s, off)),
+            f"the {what} seems to be in another frame: {bounded_now:.0%} of it is bounded, {best:.0%} once "
+            f"its bounding box (extent {ratio:.3g} x the cloud's) is centred on the cloud's and scaled by "
+            f"{best_s:.6g}; {_FRAME_HINT} (e.g. --skeleton-scale {best_s:.6g} --skeleton-offset "
+            f"{off[0]:.6g} {off[1]:.6g} {off[2]:.6g})",
         )]  # fmt: skip
     return []
 
@@ -153,7 +162,8 @@ def smoothness_warning(degrees: np.ndarray) -> list[TrustWarning]:
 
 
 def no_correspondence_warning(n_skeletal: int, n_cloud: int) -> TrustWarning:
-    finding = (f"the skeletal set has {n_skeletal} points and the cloud {n_cloud}: topology and skeletal "
-               "centeredness need a correspondence")
-    return TrustWarning("no_correspondence", f"{finding}; give --skeletal-index F or --correspondence reverse",
-                        finding)
+    return TrustWarning(
+        "no_correspondence",
+        f"the skeletal set has {n_skeletal} points and the cloud {n_cloud}: topology and skeletal "
+        "centeredness need a correspondence; give --skeletal-index F or --correspondence reverse",
+    )

@@ -41,19 +41,19 @@ def summary_cells(summary: Scores | dict[str, Any] | None, evaluation: Any = Non
 def window_warning(w: Any) -> str:
     """A trust warning in the window's terms: its finding and the menu or setting that remedies it
     (the engine's message names the command line's flags, issue 25)."""
-    finding = getattr(w, "finding", "")
-    if not finding:
-        return _window_terms(w.message)
+    finding = getattr(w, "finding", "") or w.message
     if w.code == "no_correspondence":
         return (f"{finding}: choose Settings > correspondence > reverse projection, or give its index with "
                 "File > Open skeletal index… (one cloud row per skeletal point), then re-run (F5)")
-    mapping = getattr(w, "mapping", None)
-    if w.code in ("frame", "collapse") and mapping is not None:
-        s, off = mapping
-        remedy = (f"Evaluate > Map skeleton into the cloud's frame… (suggested: scale {s:.6g}, offset "
-                  f"{off[0]:.6g} {off[1]:.6g} {off[2]:.6g})")
-        return f"{finding}; map it with {remedy}" if w.code == "frame" else f"{finding} (or, if it is in other units, map it with {remedy})"
-    return finding
+    if w.code in ("frame", "collapse") and "--skeleton-scale" in w.message:
+        mapping = getattr(w, "mapping", None)
+        remedy = "Evaluate > Map skeleton into the cloud's frame…"
+        if mapping is not None:
+            s, off = mapping
+            remedy += f" (suggested: scale {s:.6g}, offset {off[0]:.6g} {off[1]:.6g} {off[2]:.6g})"
+        return f"{finding}; map it with {remedy}" if w.code == "frame" else \
+            f"{finding} (or, if it is in other units, map it with {remedy})"
+    return _window_terms(w.message)
 
 
 def _window_terms(text: str) -> str:
