@@ -5,7 +5,7 @@ point's centeredness: its k neighbours, their corresponding cloud points and the
 m_o of paper Eq. 10, with lines from each neighbour to its cloud point. Smoothness: the tangent at
 the point, its neighbours and their tangents, the one setting the value marked (Eq. 13-14); a curve
 vertex's two edges (Eq. 15). Colours come from :data:`skelcore.colors.SUPPORT_COLORS`, apart from
-the skeleton's; every set drawn has an entry in a legend in the view's corner. Actors are named
+the skeleton's; every set drawn has an entry in a legend in the view's top left corner. Actors are named
 ``support-*``, kept apart from the scene view's own, and removed whenever the scene's layers or
 results change.
 """
@@ -100,8 +100,10 @@ class SupportOverlay:
             self._add(f"support-{key}", pv.PolyData(display_coordinates(arr)), colour, size)
         self.legend = legend_entries(support)
         if len(self.legend) > 1:
-            self.plotter.add_legend(labels=[[label, colour] for label, colour in self.legend], bcolor="white",
-                                    size=(0.24, 0.035 * len(self.legend)), loc="lower right", face="circle")
+            # top left: the colour bar and its NaN key hold the right side, the axes the bottom left
+            self.plotter.add_legend(labels=[[label, colour] for label, colour in self.legend], bcolor="#ececec",
+                                    border=True, size=(0.2, 0.028 * len(self.legend)), loc="upper left",
+                                    face="circle")
         self.view.request_render()
 
     def _add(self, name: str, mesh: pv.PolyData, colour: Any, size: float, style: str = "points") -> None:
