@@ -4,7 +4,9 @@ Issue 3's rules for files dropped or named together: a file with edges is a curv
 set with the cloud's point count is a skeletal point set (SPEC 0's pointwise correspondence); the first
 point set is the cloud; a complete set dropped at once is assigned within itself. When that is
 ambiguous the ``ask`` callback decides (the window shows a dialog) and its default never replaces
-the loaded cloud.
+the loaded cloud. A point set with another count than the loaded cloud may also be a skeletal set
+scored by reverse projection or through an index file (SPEC 7, issue 25); replacing the cloud under a
+loaded skeleton says in the same answer whether the skeleton stays, so nothing is asked twice.
 """
 
 from __future__ import annotations
@@ -23,8 +25,14 @@ Ask = Callable[[str, list[str]], "str | None"]
 
 @dataclass(frozen=True)
 class Assignment:
+    """``correspondence`` of a skeletal set: None (pointwise or none), "reverse" or "index" (an index
+    file is still to be chosen); ``keep_skeleton`` of a cloud replacing the loaded one: the answer
+    already given (None: not asked yet)."""
+
     role: str  # "cloud", "skeletal" or "curve"
     loaded: Any  # skelcore.io.Loaded
+    correspondence: str | None = None
+    keep_skeleton: bool | None = None
 
 
 def _count(loaded: Any) -> int:
@@ -47,7 +55,11 @@ def _spread(loaded: Any, max_points: int = 20000) -> float:
 
 SKIP = "skip this file"
 REPLACE_CLOUD = "the cloud (replaces the loaded cloud and clears its skeleton)"
+REPLACE_CLOUD_ONLY = "the cloud (replaces the loaded cloud)"
+REPLACE_CLOUD_KEEP = "the cloud (replaces the loaded cloud, keeps its skeleton)"
 SKELETAL = "the skeletal point set"
+SKELETAL_REVERSE = "skeletal set (no correspondence: reverse projection)"
+SKELETAL_INDEX = "skeletal set with an index file…"
 
 
 def _fresh_cloud(points: list[Any], ask: Ask) -> Any:
@@ -78,13 +90,17 @@ def is_complete_set(items: Sequence[Any], cloud_count: int | None) -> bool:
     return has_curve and len(points) == 1 and cloud_count is not None and counts[0] != cloud_count
 
 
-def assign_roles(items: Sequence[Any], cloud_count: int | None, ask: Ask) -> list[Assignment]:
-    """Roles for ``items`` (``skelcore.io.Loaded``), given the currently loaded cloud's size.
+def assign_roles(items: Sequence[Any], cloud_count: int | None, ask: Ask,
+                 skeleton_loaded: bool = False) -> list[Assignment]:
+    """Roles for ``items`` (``skelcore.io.Loaded``), given the currently loaded cloud's size and
+    whether a skeleton is loaded over it.
 
     No cloud yet, or a complete set (:func:`is_complete_set`): the set is assigned within itself
     (:func:`_fresh_cloud`), never against the loaded cloud. Otherwise a point set with the loaded
-    cloud's size is its skeletal set; any other point set is asked about, and the question's first
-    (default) answer skips the file: an ambiguous drop never replaces the loaded cloud by default.
+    cloud's size is its skeletal set; any other point set is asked about: a skeletal set by reverse
+    projection or with an index file, or the cloud (keeping or clearing a loaded skeleton). The
+    question's first (default) answer skips the file: an ambiguous drop never replaces the loaded
+    cloud by default.
     """
     out: list[Assignment] = [Assignment("curve", it) for it in items if it.kind == "curve"]
     points = [it for it in items if it.kind != "curve"]
@@ -101,23 +117,26 @@ def assign_roles(items: Sequence[Any], cloud_count: int | None, ask: Ask) -> lis
             out.append(Assignment("skeletal", p))
             skeletal_taken = True
             continue
+        over_skeleton = skeleton_loaded and not any(a.role == "cloud" for a in out)
+        clouds = [REPLACE_CLOUD, REPLACE_CLOUD_KEEP] if over_skeleton else [REPLACE_CLOUD_ONLY]
         if _count(p) == count:
             question = f"{name} has the cloud's {count} points, like another file dropped with it. Load it as:"
-            options = [SKIP, SKELETAL, REPLACE_CLOUD]
+            options = [SKIP, SKELETAL, *clouds]
         else:
             question = (
-                f"{name} has {_count(p)} points but the cloud has {count}, so it cannot be its skeletal point "
-                "set (pointwise correspondence). Load it as:"
+                f"{name} has {_count(p)} points but the cloud has {count}: it is not a skeletal point set in "
+                "row-by-row (pointwise) correspondence with the cloud. Load it as:"
             )
-            options = [SKIP, REPLACE_CLOUD]
+            options = [SKIP, SKELETAL_REVERSE, SKELETAL_INDEX, *clouds]
         choice = ask(question, options)
-        if choice == REPLACE_CLOUD:
+        if choice in (REPLACE_CLOUD, REPLACE_CLOUD_ONLY, REPLACE_CLOUD_KEEP):
             out = [a for a in out if a.role != "cloud"]
-            out.append(Assignment("cloud", p))
+            out.append(Assignment("cloud", p, keep_skeleton=choice == REPLACE_CLOUD_KEEP))
             count = _count(p)
-        elif choice == SKELETAL:
+        elif choice in (SKELETAL, SKELETAL_REVERSE, SKELETAL_INDEX):
             out = [a for a in out if a.role != "skeletal"]
-            out.append(Assignment("skeletal", p))
+            mode = {SKELETAL_REVERSE: "reverse", SKELETAL_INDEX: "index"}.get(choice)
+            out.append(Assignment("skeletal", p, correspondence=mode))
             skeletal_taken = True
     order = {"cloud": 0, "skeletal": 1, "curve": 2}
     return sorted(out, key=lambda a: order[a.role])

@@ -24,6 +24,9 @@ from .view import SceneView
 from .window_api import LEFT, RIGHT, ActionSpec
 
 MAX_RECENT = 10
+OPEN_INDEX = "Open skeletal index…"
+MAP_SKELETON = "Map skeleton into the cloud's frame…"
+INDEX_FILTER = "Skeletal index (*.txt *.csv *.npy);;All files (*)"
 FILE_FILTER = "Clouds and skeletons (*.ply *.pcd *.xyz *.txt *.csv *.pts *.obj *.off *.cg *.swc *.npy *.npz *.json);;All files (*)"
 
 
@@ -97,6 +100,10 @@ class MainWindow(QtWidgets.QMainWindow):
 
         self.session.params_provider = self.settings_panel.params
         self.session.correspondence_provider = self.settings_panel.correspondence
+        self.session.set_correspondence = self.settings_panel.set_correspondence
+        self.session.ask_file = self._ask_index_file
+        # the scripted mode waits for the evaluation it starts: no deferral there
+        self.session.after_render = lambda fn: self.view.after_render(fn) if self.interactive else fn()
         self.summary.cloud_colouring.connect(self.view.set_cloud_values)
         self.session.ask = self._ask
         self.session.error.connect(self.show_error)
@@ -201,6 +208,9 @@ class MainWindow(QtWidgets.QMainWindow):
         self.pick.show_info(info)
         if info is not None:
             self.show_message(f"{info['element']} #{info['index']}", 5000)
+        # The text on screen now, before the marker's frame (seconds at full detail for millions of
+        # points in software GL) and the support's computation (issue 25: 2.3 s from click to text).
+        self.pick.text.viewport().repaint()
         self.element_picked.emit(info)
 
     def show_message(self, text: str, timeout_ms: int = 8000) -> None:
@@ -232,7 +242,7 @@ class MainWindow(QtWidgets.QMainWindow):
         # Fixed sizes: a status bar that re-lays itself out on every progress step makes Qt repaint the
         # window, and the 3D view re-renders (100+ ms for big clouds in software GL).
         self.stage = QtWidgets.QLabel("", self)
-        self.stage.setFixedWidth(180)
+        self.stage.setFixedWidth(320)  # two stages side by side: "skeletal boundedness + topology"
         self.progress = QtWidgets.QProgressBar(self)
         self.progress.setRange(0, 1000)
         self.progress.setFixedWidth(220)
@@ -271,6 +281,8 @@ class MainWindow(QtWidgets.QMainWindow):
             A("open_cloud", "Open cloud…", "file.open", lambda: self.open_as("cloud"), "Ctrl+1"),
             A("open_skeletal", "Open skeletal point set…", "file.open", lambda: self.open_as("skeletal"), "Ctrl+2"),
             A("open_curve", "Open curve skeleton…", "file.open", lambda: self.open_as("curve"), "Ctrl+3"),
+            A("open_index", OPEN_INDEX, "file.open", self.open_index_dialog,
+              enabled=lambda: scene.skeletal is not None and scene.cloud is not None),
             *(A(f"close_{role}", f"Close the {_ROLE_TITLES[role]}", "file.close",
                 lambda r=role: session.close_layer(r), enabled=lambda r=role: r in scene.layers)
               for role in LAYER_ORDER),
@@ -282,6 +294,8 @@ class MainWindow(QtWidgets.QMainWindow):
             A("quit", "Quit", "file.quit", self.close, "Ctrl+Q"),
             A("evaluate", "Evaluate", "evaluate.run", session.start_evaluation, "F5", enabled=scene.can_evaluate),
             A("cancel", "Cancel", "evaluate.run", session.cancel, "Esc", enabled=lambda: session.runner.running),
+            A("map_skeleton", MAP_SKELETON, "evaluate.run", self.map_skeleton_dialog,
+              enabled=lambda: scene.cloud is not None and (scene.skeletal is not None or scene.curve is not None)),
             *(A(f"metric_{metric}", f"Colour by {metric}", "evaluate.colour", lambda m=metric: scene.set_metric(m), key)
               for key, metric in zip(("B", "C", "S"), METRICS)),
             A("reset", "Reset camera", "view.camera", view.reset_camera, "R"),
@@ -324,6 +338,26 @@ class MainWindow(QtWidgets.QMainWindow):
             return options[0] if options else None
         item, ok = QtWidgets.QInputDialog.getItem(self, "SkelScope", question, options, 0, False)
         return item if ok else None
+
+    def _ask_index_file(self, title: str) -> str | None:
+        if not self.interactive:
+            return None
+        path, _ = QtWidgets.QFileDialog.getOpenFileName(self, title, self.last_dir(), INDEX_FILTER)
+        return path or None
+
+    def open_index_dialog(self) -> None:
+        path = self._ask_index_file("Open the skeletal set's index (one cloud row per skeletal point)")
+        if path:
+            self.session.load_index(path)
+
+    def map_skeleton_dialog(self) -> None:
+        """Scale and offset mapping the skeleton into the cloud's frame, filled in with a ``frame``
+        warning's suggestion when the shown evaluation has one."""
+        from .map_dialog import MapSkeletonDialog, suggested_mapping
+
+        dialog = MapSkeletonDialog(self, suggested_mapping(self.scene.evaluation))
+        if dialog.exec() == QtWidgets.QDialog.DialogCode.Accepted:
+            self.session.map_skeleton(*dialog.mapping())
 
     def _confirm_overwrite(self, paths: list[str]) -> bool:
         """True when none of ``paths`` exists or the user agrees to replace those that do (default: no)."""
@@ -436,8 +470,15 @@ class MainWindow(QtWidgets.QMainWindow):
         fraction, stage = self._pending_progress
         self._pending_progress = None
         self.progress.setValue(int(round(fraction * 1000)))
-        if self.stage.text() != stage:
-            self.stage.setText(stage)
+        self._set_stage_text(stage)
+
+    def _set_stage_text(self, stage: str) -> None:
+        """Every stage running side by side (``app.worker.stage_label``), elided to the label's fixed
+        width (a status bar that re-lays itself out re-renders the 3D view); the whole in its tooltip."""
+        shown = self.stage.fontMetrics().elidedText(stage, QtCore.Qt.TextElideMode.ElideRight, self.stage.width())
+        if self.stage.text() != shown or self.stage.toolTip() != stage:
+            self.stage.setToolTip(stage)
+            self.stage.setText(shown)
 
     def _task_finished(self, _name: str) -> None:
         if self.session.runner.running:
@@ -462,7 +503,7 @@ class MainWindow(QtWidgets.QMainWindow):
                     self.statusBar().clearMessage()  # "evaluation done in …" must not outlive the result
             self._plots_stale.add("histogram")
             self._schedule_plots()
-        elif event.kind in ("colouring", "display"):
+        elif event.kind in ("colouring", "display", "stale"):
             self._plots_stale.add("histogram")
             self._schedule_plots()
         elif event.kind == "layer":
@@ -504,7 +545,9 @@ class MainWindow(QtWidgets.QMainWindow):
             self._plots_timer.start()  # the next stale plot, after the event loop has turned
 
     def _stale_changed(self, reason: str) -> None:
+        """Out-of-date results: greyed in the summary, the 3D view and the histogram (issue 25)."""
         self.summary.set_stale(reason)
+        self.scene.set_stale(reason)
 
     def _layer_action(self, action: str, role: str) -> None:
         if action == "close":

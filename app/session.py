@@ -19,7 +19,12 @@ from .loading import ROLES, Ask, assign_roles
 from .scene import Scene, SceneEvent
 from .worker import TaskRunner
 
-__all__ = ["Session", "preload_engine"]
+__all__ = ["Session", "preload_engine", "PROCESS_FROM"]
+
+PROCESS_FROM = 200_000
+"""Evaluations of at least this many points (cloud + skeletal set) run in a child process
+(:mod:`app.engine_process`): Cancel and quit are then a kill, and the window never waits for the
+engine's GIL. Smaller ones run in a thread (no process start, ~1 s of imports)."""
 
 
 def preload_engine() -> None:
@@ -47,6 +52,12 @@ class Session(QtCore.QObject):
         self.params_provider: Callable[[], Params] = Params
         #: "auto" or "reverse" (SPEC 7), e.g. the settings panel's choice
         self.correspondence_provider: Callable[[], str] = lambda: "auto"
+        #: sets that choice (a drop answered "skeletal set (no correspondence: reverse projection)")
+        self.set_correspondence: Callable[[str], None] = lambda key: None
+        #: ``ask_file(title) -> path or None``: an index file for a skeletal set (the window: a file dialog)
+        self.ask_file: Callable[[str], str | None] = lambda title: None
+        #: evaluations of at least this many points (cloud + skeletal set) run in a child process
+        self.process_from = PROCESS_FROM
         self.auto_evaluate = True
         self.runner.succeeded.connect(self._task_succeeded)
         self.runner.failed.connect(self._task_failed)
@@ -74,28 +85,97 @@ class Session(QtCore.QObject):
             self.error.emit("Could not load", "\n".join(failures), "")
         cloud = self.scene.cloud
         done = []
-        assignments = assign_roles(items, None if cloud is None else cloud.n_points, self.ask)
+        skeleton_loaded = any(name in self.scene.layers for name in ("skeletal", "curve"))
+        assignments = assign_roles(items, None if cloud is None else cloud.n_points, self.ask, skeleton_loaded)
+        indices = {}
+        for a in assignments:  # the index file is chosen before anything changes: cancelling it skips the set
+            if a.role == "skeletal" and a.correspondence == "index":
+                n_cloud = next((len(b.loaded.points) for b in assignments if b.role == "cloud"), None)
+                n_cloud = n_cloud if n_cloud is not None else (cloud.n_points if cloud is not None else 0)
+                indices[id(a)] = self._choose_index(a.loaded.path, len(a.loaded.points), n_cloud)
+        assignments = [a for a in assignments if indices.get(id(a), True) is not None]
         with self.batch():
             roles = {a.role for a in assignments}
             if "cloud" in roles:
-                self._new_cloud_over_skeleton(keep=roles - {"cloud"})
+                decided = next(a.keep_skeleton for a in assignments if a.role == "cloud")
+                self._new_cloud_over_skeleton(keep=roles - {"cloud"}, decided=decided)
             for a in assignments:
-                self._apply(a.role, a.loaded.points if a.role != "curve" else a.loaded.curve, a.loaded.path)
+                if a.role == "skeletal" and a.correspondence is not None:
+                    index, index_path = indices.get(id(a)) or (None, None)
+                    self.scene.set_skeletal(a.loaded.points, a.loaded.path, index, index_path)
+                    self._loaded(a.role, a.loaded.path)
+                    self.set_correspondence("reverse" if a.correspondence == "reverse" else "auto")
+                    how = ("Settings > correspondence set to reverse projection" if a.correspondence == "reverse"
+                           else f"with the index {os.path.basename(str(index_path))}")
+                    self.message.emit(f"loaded {os.path.basename(a.loaded.path)} as the skeletal point set ({how})")
+                else:
+                    self._apply(a.role, a.loaded.points if a.role != "curve" else a.loaded.curve, a.loaded.path)
                 done.append((a.role, a.loaded.path))
         return done
 
+    def _choose_index(self, skeletal_path: str, n_skeletal: int, n_cloud: int) -> tuple[Any, str] | None:
+        """Ask for the index file of the skeletal set at ``skeletal_path`` and read it (one line error
+        and None when it does not fit, or None when no file was chosen)."""
+        from skelcore.io.correspondence_files import load_skeletal_index
+
+        path = self.ask_file(f"Index file of {os.path.basename(skeletal_path)} (one cloud row per skeletal point)")
+        if not path:
+            self.message.emit(f"{os.path.basename(skeletal_path)} skipped: no index file chosen")
+            return None
+        try:
+            return load_skeletal_index(path, n_skeletal, n_cloud), str(path)
+        except SkelInputError as exc:
+            self.error.emit("Could not load the skeletal index", str(exc), "")
+            return None
+
+    def load_index(self, path: str) -> bool:
+        """File > Open skeletal index…: one cloud row per point of the loaded skeletal set (SPEC 7);
+        the correspondence setting goes back to "as loaded", which uses it."""
+        from skelcore.io.correspondence_files import load_skeletal_index
+
+        sk, cloud = self.scene.skeletal, self.scene.cloud
+        if sk is None or cloud is None:
+            self.error.emit("Skeletal index", "load a cloud and a skeletal point set first", "")
+            return False
+        try:
+            index = load_skeletal_index(path, sk.n_points, cloud.n_points)
+        except SkelInputError as exc:
+            self.error.emit("Could not load the skeletal index", str(exc), "")
+            return False
+        with self.batch():
+            self.set_correspondence("auto")
+            self.scene.set_skeletal_index(index, str(path))
+        self.message.emit(f"loaded {os.path.basename(str(path))} as the skeletal set's index")
+        return True
+
+    def map_skeleton(self, scale: float, offset: tuple[float, float, float]) -> bool:
+        """Evaluate > Map skeleton into the cloud's frame: the skeleton layers times ``scale`` plus
+        ``offset`` (a ``frame`` warning's suggestion), then evaluated again."""
+        try:
+            with self.batch():
+                self.scene.map_skeleton(scale, offset)
+        except ValueError as exc:
+            self.error.emit("Map skeleton", str(exc), "")
+            return False
+        self.message.emit(f"skeleton mapped by scale {scale:.6g} and offset {' '.join(f'{v:.6g}' for v in offset)}")
+        return True
+
     KEEP_SKELETON = ("clear it", "keep it")
 
-    def _new_cloud_over_skeleton(self, keep: set[str] = frozenset()) -> None:
+    def _new_cloud_over_skeleton(self, keep: set[str] = frozenset(), decided: bool | None = None) -> None:
         """A new cloud replaces the loaded one: the loaded skeleton layers (other than those in
-        ``keep``, which arrive with the cloud) describe the old cloud, so ask whether to keep them;
-        the default (the question's first answer) clears them."""
+        ``keep``, which arrive with the cloud) describe the old cloud, so ask whether to keep them,
+        unless the drop's question answered it already (``decided``, issue 25: one question, not
+        two contradicting ones); the default (the question's first answer) clears them."""
         old = [name for name in ("skeletal", "curve") if name in self.scene.layers and name not in keep]
         if not old or self.scene.cloud is None:
             return
-        what = " and ".join(_ROLE_TITLES[name] for name in old)
-        choice = self.ask(f"A new cloud replaces the loaded one. The loaded {what} was made from the old cloud: "
-                          "clear it or keep it?", list(self.KEEP_SKELETON))
+        if decided is not None:
+            choice = self.KEEP_SKELETON[1] if decided else self.KEEP_SKELETON[0]
+        else:
+            what = " and ".join(_ROLE_TITLES[name] for name in old)
+            choice = self.ask(f"A new cloud replaces the loaded one. The loaded {what} was made from the old cloud: "
+                              "clear it or keep it?", list(self.KEEP_SKELETON))
         if choice != self.KEEP_SKELETON[1]:
             for name in old:
                 self.scene.remove_layer(name)
@@ -215,6 +295,9 @@ class Session(QtCore.QObject):
             self.scene.set_skeletal(data, path)
         else:
             self.scene.set_curve(data, path)
+        self._loaded(role, path)
+
+    def _loaded(self, role: str, path: str | None) -> None:
         if path:
             self.loaded.emit(role, str(path))
             self.message.emit(f"loaded {os.path.basename(str(path))} as the {_ROLE_TITLES[role]}")
@@ -231,10 +314,31 @@ class Session(QtCore.QObject):
             if self.session._batch_depth == 0 and self.session._inputs_changed:
                 self.session._inputs_changed = False
                 if self.session.auto_evaluate and self.session.scene.can_evaluate():
-                    self.session.start_evaluation()
+                    self.session._auto_start()
 
     _batch_depth = 0
     _inputs_changed = False
+
+    _auto_token = 0
+
+    def _auto_start(self) -> None:
+        """The evaluation of newly loaded inputs starts once the window has drawn them
+        (``after_render``): a worker started at once competed with the first frame for the cores
+        (issue 25: 6.8-10.4 s to the first frame of a 1M cloud with its 1M skeletal set)."""
+        self._auto_token += 1
+        token = self._auto_token
+
+        def start() -> None:
+            if token == self._auto_token and self.scene.can_evaluate() and self.scene.evaluation is None:
+                self.start_evaluation()
+
+        sk = self.scene.skeletal
+        big = self.scene.cloud.n_points + (0 if sk is None else sk.n_points) >= self.process_from
+        (self.after_render if big else (lambda fn: fn()))(start)
+
+    #: ``after_render(fn)``: ``fn()`` once the window has painted the current scene (the main window
+    #: passes its view's); at once by default
+    after_render: Callable[[Callable[[], None]], None] = staticmethod(lambda fn: fn())
 
     def batch(self) -> "Session._Batch":
         """Several files loaded together start one evaluation, after the last one."""
@@ -271,15 +375,29 @@ class Session(QtCore.QObject):
         curve = None if scene.curve is None else scene.curve.curve
         inputs = {k: v for k, v in scene.input_paths().items() if v}
         correspondence = self.correspondence_provider()
+        index = None
+        if correspondence != "reverse" and scene.skeletal is not None and scene.skeletal.index is not None:
+            index = scene.skeletal.index  # reverse projection, when chosen, replaces the index (as the CLI's CGAL rule)
+            if scene.skeletal.index_path:
+                inputs["skeletal_index"] = scene.skeletal.index_path
         self._requested_correspondence = correspondence
-
-        def job(progress: Callable[[float, str], None], cancel: Callable[[], bool]) -> Any:
-            # skelcore.evaluate is resolved (and, the first time, imported) in the worker thread
-            return skelcore.evaluate(cloud, skeletal, curve, params, progress, cancel, inputs=inputs,
-                                     correspondence=correspondence)
-
+        kwargs = dict(skeletal=skeletal, curve=curve, params=params, inputs=inputs, correspondence=correspondence,
+                      skeletal_index=index)
         self._evaluated_layers = (scene.cloud, scene.skeletal, scene.curve)
-        self.runner.start(job, "evaluation")
+        if len(cloud) + (0 if skeletal is None else len(skeletal)) >= self.process_from:
+            def restore(ev: Any) -> Any:  # the child does not send the cloud back
+                if ev.cloud is None:
+                    ev.cloud = cloud
+                return ev
+
+            self.runner.start_process("evaluate", dict(cloud=cloud, **kwargs), "evaluation", restore)
+        else:
+            def job(progress: Any, cancel: Callable[[], bool]) -> Any:
+                # skelcore.evaluate is resolved (and, the first time, imported) in the worker thread
+                return skelcore.evaluate(cloud, progress=progress, cancel=cancel,
+                                         on_stages=getattr(progress, "stages", None), **kwargs)
+
+            self.runner.start(job, "evaluation")
         self.check_stale()
         self.message.emit("evaluating…")
         return True

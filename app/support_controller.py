@@ -96,7 +96,10 @@ class SupportController(QtCore.QObject):
                 out: Any = element_support(ev, info, metric)
             except Exception as exc:  # noqa: BLE001 - reported in the status bar, never a crash
                 out = exc
-            self.ready.emit(token, info, out)
+            try:
+                self.ready.emit(token, info, out)
+            except RuntimeError:  # the window closed meanwhile
+                pass
 
         threading.Thread(target=run, name="skelscope-support", daemon=True).start()
         return None

@@ -8,6 +8,8 @@ down at the engine's next checkpoint. The thread is a plain daemon ``threading.T
 (:meth:`TaskRunner.shutdown`) and the process can then exit with a thread still inside numpy.
 Following Orange3's ``concurrent`` helpers, a new task first retires the old one; progress is
 throttled to visible steps. Only plain Python objects cross threads: VTK stays on the GUI thread.
+Big evaluations run in a child process instead (:class:`ProcessTask`, :mod:`app.engine_process`),
+where Cancel is a kill. The stage shown names every stage running side by side (:func:`stage_label`).
 """
 
 from __future__ import annotations
@@ -21,7 +23,7 @@ from PySide6 import QtCore
 
 from skelcore.errors import Cancelled
 
-__all__ = ["Task", "TaskRunner", "SHUTDOWN_WAIT_S", "THREAD_PREFIX", "threads_alive"]
+__all__ = ["Task", "ProcessTask", "TaskRunner", "SHUTDOWN_WAIT_S", "THREAD_PREFIX", "threads_alive", "stage_label"]
 
 JobFunction = Callable[[Callable[[float, str], None], Callable[[], bool]], Any]
 
@@ -36,6 +38,26 @@ THREAD_PREFIX = "skelscope-task-"
 def threads_alive() -> bool:
     """Whether any task thread (of any runner) is still running, e.g. after a bounded shutdown."""
     return any(t.name.startswith(THREAD_PREFIX) and t.is_alive() for t in threading.enumerate())
+
+
+def stage_label(running: tuple[str, ...] | list[str], reporting: str = "") -> str:
+    """The status bar's stage text: every stage running side by side, in the order they started
+    (issue 25: naming only the one that reported last made the label flip between them)."""
+    return " + ".join(running) if running else reporting
+
+
+class _Reporter:
+    """The ``progress(fraction, stage)`` a job gets; ``progress.stages(names)`` reports the stages
+    running side by side (pass it as ``skelcore.evaluate(on_stages=...)``)."""
+
+    def __init__(self, task: "Task") -> None:
+        self._task = task
+
+    def __call__(self, fraction: float, stage: str) -> None:
+        self._task._progress(fraction, stage)
+
+    def stages(self, names: tuple[str, ...]) -> None:
+        self._task.stages_running(names)
 
 
 class Task(QtCore.QObject):
@@ -55,7 +77,8 @@ class Task(QtCore.QObject):
         self._cancel = threading.Event()
         self._done = threading.Event()
         self._last = (-1.0, "")
-        self.stage = ""  # the stage the job reported last (read by the GUI thread)
+        self._running: tuple[str, ...] = ()
+        self.stage = ""  # the stages running now (``stage_label``), as the job reported them last
         self._thread = threading.Thread(target=self.run, name=f"{THREAD_PREFIX}{name}", daemon=True)
 
     def start(self) -> None:
@@ -78,16 +101,23 @@ class Task(QtCore.QObject):
         return self._done.wait(None if ms is None else ms / 1000.0)
 
     def _progress(self, fraction: float, stage: str) -> None:
-        last_fraction, last_stage = self._last
-        self.stage = str(stage)
-        if stage != last_stage or fraction - last_fraction >= 0.005 or fraction >= 1.0:
-            self._last = (fraction, stage)
-            self.progressed.emit(float(fraction), str(stage))
+        last_fraction, last_label = self._last
+        label = stage_label(self._running, str(stage))
+        self.stage = label
+        if label != last_label or fraction - last_fraction >= 0.005 or fraction >= 1.0:
+            self._last = (fraction, label)
+            self.progressed.emit(float(fraction), label)
+
+    def stages_running(self, names: tuple[str, ...]) -> None:
+        """The job's engine reports the stages running side by side (``evaluate(on_stages=...)``)."""
+        self._running = tuple(names)
+        if names:
+            self._progress(max(self._last[0], 0.0), names[-1])
 
     def run(self) -> None:  # worker thread
         try:
             try:
-                result = self.fn(self._progress, self._cancel.is_set)
+                result = self.fn(_Reporter(self), self._cancel.is_set)
             except Cancelled:
                 self.aborted.emit()
             except BaseException as exc:  # noqa: BLE001 - every failure becomes a dialog, never a crash
@@ -106,6 +136,82 @@ class Task(QtCore.QObject):
                 self.finished.emit()
             except RuntimeError:  # the GUI side is gone (process exiting)
                 pass
+
+
+class ProcessTask(Task):
+    """A job of :data:`app.engine_process.JOBS` in a child process, with :class:`Task`'s signals.
+
+    A thread of this process sends the job and reads the child's messages (so neither a 50 MB job nor
+    a 150 MB result blocks the window); Cancel kills the child, which stops the work at once, in any
+    stage (issue 25). The thread then sees the pipe close and reports the abort."""
+
+    def __init__(self, kind: str, kwargs: dict[str, Any], name: str = "task",
+                 restore: Callable[[Any], Any] | None = None, parent: QtCore.QObject | None = None) -> None:
+        super().__init__(lambda progress, cancel: None, name, parent)
+        self.kind, self.kwargs = kind, kwargs
+        self._restore = restore or (lambda result: result)
+        self._proc: Any = None
+        self._proc_lock = threading.Lock()
+        self.pid: int | None = None
+
+    def cancel(self) -> None:
+        self._cancel.set()
+        with self._proc_lock:
+            if self._proc is not None and self._proc.poll() is None:
+                self._proc.kill()
+
+    def run(self) -> None:  # reader thread
+        from .engine_process import start_child
+
+        try:
+            with self._proc_lock:
+                if self._cancel.is_set():
+                    raise Cancelled("cancelled before the engine started")
+                self._proc, send, receive = start_child()
+                self.pid = self._proc.pid
+            try:
+                send.send((self.kind, self.kwargs))
+                self.kwargs = {}
+                while True:
+                    message = receive.recv()
+                    if message[0] == "progress":
+                        self._progress(message[1], message[2])
+                    elif message[0] == "stages":
+                        self.stages_running(message[1])
+                    elif message[0] == "result":
+                        if self._cancel.is_set():
+                            raise Cancelled("cancelled")
+                        self.succeeded.emit(self._restore(message[1]))
+                        break
+                    else:  # ("error", exception, traceback)
+                        if self._cancel.is_set():
+                            raise Cancelled("cancelled")
+                        self.failed.emit(message[1], message[2])
+                        break
+            except (EOFError, OSError, BrokenPipeError):
+                if self._cancel.is_set():
+                    raise Cancelled("cancelled") from None
+                code = self._proc.wait()
+                self.failed.emit(RuntimeError(f"the engine process ended unexpectedly (exit status {code})"), "")
+            finally:
+                send.close()
+                receive.close()
+                if self._proc.poll() is None:
+                    self._proc.kill()
+                self._proc.wait()
+        except Cancelled:
+            self.aborted.emit()
+        except BaseException as exc:  # noqa: BLE001 - every failure becomes a dialog, never a crash
+            if self._cancel.is_set():
+                self.aborted.emit()
+            else:
+                self.failed.emit(exc, traceback.format_exc())
+        finally:
+            try:  # emitted before ``wait()`` returns: once the window has waited, this thread touches no Qt object
+                self.finished.emit()
+            except RuntimeError:
+                pass
+            self._done.set()
 
 
 class TaskRunner(QtCore.QObject):
@@ -133,8 +239,17 @@ class TaskRunner(QtCore.QObject):
 
     def start(self, fn: JobFunction, name: str = "task") -> Task:
         """Cancel and disconnect any running task, then start ``fn`` in a new thread."""
+        return self._launch(Task(fn, name))
+
+    def start_process(self, kind: str, kwargs: dict[str, Any], name: str = "task",
+                      restore: Callable[[Any], Any] | None = None) -> Task:
+        """Like :meth:`start`, for a job of :data:`app.engine_process.JOBS` run in a child process
+        (``restore(result)`` runs in this process before ``succeeded``)."""
+        return self._launch(ProcessTask(kind, kwargs, name, restore))
+
+    def _launch(self, task: Task) -> Task:
         self._retire_current()
-        task = Task(fn, name)
+        name = task.name
         task.progressed.connect(self._on_progress)
         task.succeeded.connect(self._on_success)
         task.failed.connect(self._on_failure)

@@ -1,6 +1,9 @@
-"""Viewer benchmarks (issues 3, 10): launch to first render for 100k / 1M-point clouds, frames while
-the camera moves (level of detail) and a pick at 1M points, Cancel inside every stage and Ctrl+Q
-during a 1M-point evaluation, the longest GUI event-loop stall during a 4096-point evaluation.
+"""Viewer benchmarks (issues 3, 10, 25): launch to first render for 100k / 1M-point clouds (and a 1M
+cloud dropped with its 1M skeletal set), frames while the camera moves (level of detail), a pick at 1M
+points (the projection alone, and a queued click to the pick panel's text painted), Cancel inside every
+stage of a 1M-point evaluation (in a child process, or ``--thread`` as before issue 25) with the longest
+GUI event-loop turn and the File menu's latency meanwhile, Ctrl+Q during it, the longest GUI
+event-loop stall during a 4096-point evaluation.
 
 Run under a display, e.g. ``xvfb-run -a -s "-screen 0 1600x1000x24" .venv/bin/python benchmarks/bench_app.py``
 (``--only-launch``, ``--only-million --skip-frames --cancel-stages topology,...`` for parts). Each launch
@@ -36,11 +39,15 @@ app.processEvents()
 t_window = time.time()
 rendered = []
 w.view.plotter.ren_win.AddObserver("EndEvent", lambda *a: rendered.append(time.time()))
-assert w.session.load_as("cloud", sys.argv[2]), w.errors
+t_load = time.time()
+if len(sys.argv) > 4:  # the cloud and its skeletal set dropped together (auto-evaluated, as a user's drop)
+    assert len(w.session.load_files([sys.argv[2], sys.argv[4]])) == 2, w.errors
+else:
+    assert w.session.load_as("cloud", sys.argv[2]), w.errors
 t_loaded = time.time()
-while not [t for t in rendered if t >= t_loaded]:  # the view repaints on the next event-loop turn
+while not [t for t in rendered if t >= t_load] and time.time() < t_loaded + 300:  # the next event-loop turn
     app.processEvents()
-t_render = min(t for t in rendered if t >= t_loaded)
+t_render = min([t for t in rendered if t >= t_load] or [float("inf")])
 cpu_render = time.process_time()  # CPU of the whole process (all threads) up to here: robust under load
 img = w.view.image()     # a second frame, read back: the GL work is surely finished (upper bound)
 t_image = time.time()
@@ -51,16 +58,21 @@ w.close()
 """
 
 
-def launch_to_first_render(n: int, tmp: Path) -> list[float]:
+def launch_to_first_render(n: int, tmp: Path, skeletal: bool = False) -> list[float]:
+    """A fresh process to the first frame of an n-point cloud (with ``skeletal``: and its n-point
+    skeletal set, dropped together, which starts their evaluation as a drop does)."""
     from skelcore import shapes
     from skelcore.io import write_points_ply
 
     path = tmp / f"cloud_{n}.ply"
+    skel_path = tmp / f"skeletal_{n}.ply"
     if not path.exists():
         write_points_ply(path, shapes.sphere_surface(n, seed=0))
+    if skeletal and not skel_path.exists():
+        write_points_ply(skel_path, shapes.sphere_surface(n, seed=0) * 0.5)
     t0 = time.time()
     out = subprocess.run(
-        [sys.executable, "-c", _LAUNCH, repr(t0), str(path), str(tmp / "s.ini")],
+        [sys.executable, "-c", _LAUNCH, repr(t0), str(path), str(tmp / "s.ini"), *([str(skel_path)] if skeletal else [])],
         capture_output=True, text=True, cwd=ROOT, check=True,
     )
     fields = out.stdout.split()
@@ -208,73 +220,174 @@ def pick_time(n: int = 1_000_000, picks: int = 5) -> float:
     return sorted(times)[len(times) // 2]
 
 
-CANCEL_STAGES = ("topology", "skeletal boundedness", "skeletal centeredness", "skeletal smoothness",
-                 "skeletal coverage")
-"""The stages of the 1M-point evaluation (cloud + skeletal set in pointwise correspondence), in order."""
+CANCEL_STAGES = ("skeletal boundedness", "topology", "skeletal centeredness", "skeletal smoothness")
+"""The stages of the 1M-point evaluation (cloud + skeletal set in pointwise correspondence). Coverage is
+not computed above ``coverage_max_points`` (200k), so it has no stage at 1M."""
 
 
 def _stand_in_boundedness(cloud: np.ndarray, queries: np.ndarray, *, params: object = None,
                           checkpoint: Any = lambda f: None) -> np.ndarray:
     """1 for every query, after its checkpoints (as benchmarks/bench_stages.py does): the stages after
-    boundedness come without waiting for 1M boundedness queries."""
+    boundedness come without waiting for 1M boundedness queries (thread mode only: a child process
+    imports the real engine)."""
     checkpoint(0.0)
     checkpoint(1.0)
     return np.ones(len(queries))
 
 
+PUMP_CPU: list[float] = []  # the GUI thread's CPU time in the longest turn of the last _pump
+
+
 def _pump(app: Any, seconds: float, until: Any = lambda: False) -> float:
     """Run the event loop for ``seconds`` (or until ``until()``); returns the longest event-loop turn
-    seen beyond the 10 ms sleeps (a worker holding the GIL, or the GUI's own work, shows up here)."""
+    seen beyond the 10 ms sleeps (a worker holding the GIL, or the GUI's own work, shows up here).
+    ``PUMP_CPU[0]`` is the GUI thread's CPU time during that turn: far below the turn's wall time,
+    the thread was waiting (for the GIL, or for a core on a loaded machine), not working."""
     end = time.perf_counter() + seconds
     last = time.perf_counter()
-    longest = 0.0
+    last_cpu = time.thread_time()
+    longest, cpu_of_longest = 0.0, 0.0
     while time.perf_counter() < end and not until():
         app.processEvents()
         time.sleep(0.01)
-        now = time.perf_counter()
-        longest = max(longest, now - last - 0.01)
-        last = now
+        now, cpu = time.perf_counter(), time.thread_time()
+        if now - last - 0.01 > longest:
+            longest, cpu_of_longest = now - last - 0.01, cpu - last_cpu
+        last, last_cpu = now, cpu
+    PUMP_CPU[:] = [cpu_of_longest]
     return longest
 
 
-def cancel_in_every_stage(stages: tuple[str, ...] = CANCEL_STAGES, into: float = 2.0, wait: float = 1800.0,
-                          stop_wait: float = 600.0) -> list[tuple]:
-    """Cancel a 1M-point evaluation inside each stage: start it, wait (at most ``wait`` s) until the
-    worker reports the stage, let it run ``into`` s more (less if the stage ends first), press Cancel.
+def menu_latency(app: Any, w: Any, timeout: float = 30.0) -> float:
+    """Seconds from a (queued) click on the File menu to the menu painted on screen, then closed."""
+    from PySide6 import QtCore, QtGui
 
-    Runs aimed at a stage after boundedness use :func:`_stand_in_boundedness` (this process only).
-    Returns, per stage: (stage aimed at, stage at Cancel, label shown at Cancel, s until the stage
-    began, s into it, s until the window was idle, s until the worker stopped (None: not within
-    ``stop_wait`` s), longest event-loop turn while the stage ran, stand-in used)."""
+    bar = w.menuBar()
+    menu = bar.actions()[0].menu()
+    painted: list[float] = []
+
+    class Watch(QtCore.QObject):
+        def eventFilter(self, obj: Any, event: Any) -> bool:  # noqa: N802
+            if event.type() == QtCore.QEvent.Type.Paint and not painted:
+                painted.append(time.perf_counter())
+            return False
+
+    watch = Watch()
+    menu.installEventFilter(watch)
+    pos = QtCore.QPointF(bar.actionGeometry(bar.actions()[0]).center())
+    glob = QtCore.QPointF(bar.mapToGlobal(pos.toPoint()))
+    t0 = time.perf_counter()
+    for kind in (QtCore.QEvent.Type.MouseButtonPress, QtCore.QEvent.Type.MouseButtonRelease):
+        app.postEvent(bar, QtGui.QMouseEvent(kind, pos, glob, QtCore.Qt.MouseButton.LeftButton,
+                                             QtCore.Qt.MouseButton.LeftButton, QtCore.Qt.KeyboardModifier.NoModifier))
+    end = t0 + timeout
+    while not painted and time.perf_counter() < end:
+        app.processEvents(QtCore.QEventLoop.ProcessEventsFlag.AllEvents, 5)
+    menu.removeEventFilter(watch)
+    menu.hide()
+    app.processEvents()
+    return (painted[0] - t0) if painted else float("inf")
+
+
+def cancel_in_every_stage(stages: tuple[str, ...] = CANCEL_STAGES, into: float = 2.0, wait: float = 1800.0,
+                          stop_wait: float = 600.0, thread: bool = False) -> list[tuple]:
+    """Cancel a 1M-point evaluation inside each stage: start it, wait (at most ``wait`` s) until the
+    label names the stage (it names every stage running side by side), let it run ``into`` s more
+    (less if the stage ends first) while the File menu is opened by a queued click, press Cancel.
+
+    ``thread``: the evaluation in a thread, as before issue 25 (stages after boundedness then reached
+    with :func:`_stand_in_boundedness`); else in a child process, as the window runs 1M points.
+    Returns, per stage: (stage aimed at, label shown at Cancel, s until the stage began, s into it,
+    s until the window was idle, s until the worker stopped (None: not within ``stop_wait`` s),
+    longest event-loop turn while the stage ran, the GUI thread's CPU s in it, s from a click on File
+    to its menu painted, stand-in used)."""
     import importlib
 
-    # the stages' and the trust checks' boundedness (skelcore/stages/)
     ev_mods = [importlib.import_module(f"skelcore.stages.{m}") for m in ("catalogue", "assemble")]
     real_boundedness = ev_mods[0].boundedness
     app, w, _ = _million_window(1_000_000)
+    w.session.process_from = 10**12 if thread else 0
     out = []
     for target in stages:
-        stand_in = target in CANCEL_STAGES[CANCEL_STAGES.index("skeletal boundedness") + 1:]
+        stand_in = thread and target in CANCEL_STAGES[CANCEL_STAGES.index("skeletal boundedness") + 1:]
         for ev_mod in ev_mods:
             ev_mod.boundedness = _stand_in_boundedness if stand_in else real_boundedness
         assert w.session.start_evaluation()
         task = w.session.runner._current
         t_start = time.perf_counter()
-        _pump(app, wait, lambda: task.stage == target or task.isFinished())
+        running = lambda: target in task.stage.split(" + ")  # noqa: E731
+        _pump(app, wait, lambda: running() or task.isFinished())
         reached = time.perf_counter() - t_start
         t_in = time.perf_counter()
-        gap = _pump(app, into, lambda: task.stage != target)
-        stage, label = task.stage, w.stage.text()
+        gap = _pump(app, into / 2, lambda: not running())
+        gap_cpu = PUMP_CPU[0]
+        menu = menu_latency(app, w) if running() else float("nan")
+        gap2 = _pump(app, into / 2, lambda: not running())
+        if gap2 > gap:
+            gap, gap_cpu = gap2, PUMP_CPU[0]
+        label = w.stage.toolTip()
         t0 = time.perf_counter()
         w.cancel_button.click()
         idle = time.perf_counter() - t0
         assert not w.session.runner.running
         stopped = time.perf_counter() - t0 if task.wait(stop_wait * 1000) else None
-        out.append((target, stage, label, reached, t0 - t_in, idle, stopped, gap, stand_in))
+        out.append((target, label, reached, t0 - t_in, idle, stopped, gap, gap_cpu, menu, stand_in))
         _pump(app, 0.5)
     for ev_mod in ev_mods:
         ev_mod.boundedness = real_boundedness
     w.close()
+    return out
+
+
+def pick_click_to_text(n: int = 1_000_000, picks: int = 3) -> list[float]:
+    """Seconds from a (queued) left click on a skeletal point to the pick panel's text painted, among
+    1M skeletal points with their evaluation shown (the support is then computed in the background)."""
+    from PySide6 import QtCore, QtGui
+
+    app, w, cloud = _million_window(n)
+    with __import__("contextlib").suppress(Exception):
+        w.session.process_from = 0
+    done: list[Any] = []
+    w.session.evaluated.connect(done.append)
+    w.session.start_evaluation()
+    _pump(app, 3600, lambda: bool(done))
+    _pump(app, 3.0)
+    w.scene.set_visible("cloud", False)
+    w.view.image()
+    sk = w.scene.skeletal.points
+    widget = w.view.plotter
+    ratio = widget.devicePixelRatioF()
+    viewport = w.pick.text.viewport()
+    out = []
+    for i in range(picks):
+        x, y = w.view.world_to_display(sk[int(np.argmax(sk[:, 2])) - 7 * i])
+        pos = QtCore.QPointF(x / ratio, widget.height() - y / ratio)
+        painted: list[float] = []
+
+        class Watch(QtCore.QObject):
+            def eventFilter(self, obj: Any, event: Any) -> bool:  # noqa: N802
+                if event.type() == QtCore.QEvent.Type.Paint and w.pick.info is not None and not painted:
+                    painted.append(time.perf_counter())
+                return False
+
+        w.pick.show_info(None)
+        app.processEvents()
+        watch = Watch()
+        viewport.installEventFilter(watch)
+        glob = QtCore.QPointF(widget.mapToGlobal(pos.toPoint()))
+        t0 = time.perf_counter()
+        for kind in (QtCore.QEvent.Type.MouseButtonPress, QtCore.QEvent.Type.MouseButtonRelease):
+            app.postEvent(widget, QtGui.QMouseEvent(kind, pos, glob, QtCore.Qt.MouseButton.LeftButton,
+                                                    QtCore.Qt.MouseButton.LeftButton,
+                                                    QtCore.Qt.KeyboardModifier.NoModifier))
+        end = t0 + 60
+        while not painted and time.perf_counter() < end:
+            app.processEvents(QtCore.QEventLoop.ProcessEventsFlag.AllEvents, 5)
+        viewport.removeEventFilter(watch)
+        out.append((painted[0] - t0) if painted else float("inf"))
+        _pump(app, 2.0, lambda: not w.supports.busy)
+    w.close()
+    app.processEvents()
     return out
 
 
@@ -289,6 +402,8 @@ from app.main_window import MainWindow
 from skelcore import shapes
 w = MainWindow(settings=QtCore.QSettings(sys.argv[1], QtCore.QSettings.Format.IniFormat))
 w.session.auto_evaluate = False
+if sys.argv[4] == "thread":
+    w.session.process_from = 10**12
 cloud = shapes.sphere_surface(1_000_000, seed=0)
 with w.session.batch():
     w.scene.set_cloud(cloud)
@@ -299,7 +414,7 @@ def quit_now():
     w.actions_by_name["quit"].trigger()
 armed = []
 def arm(_fraction, stage):  # the delay counts from the first report of the stage aimed at (any: sys.argv[3] "")
-    if not armed and stage.startswith(sys.argv[3]):
+    if not armed and sys.argv[3] in stage.split(" + ") + [""]:
         armed.append(stage)
         QtCore.QTimer.singleShot(int(float(sys.argv[2]) * 1000), quit_now)
 w.session.runner.progressed.connect(arm)
@@ -308,11 +423,11 @@ sys.exit(_exited(app.exec()))
 """
 
 
-def quit_while_running(delay: float, tmp: Path, stage: str = "") -> tuple[float, int, bool, str]:
+def quit_while_running(delay: float, tmp: Path, stage: str = "", thread: bool = False) -> tuple[float, int, bool, str]:
     """(s from Ctrl+Q to the process's end, exit status, Qt's thread abort seen, stage) for a quit
     ``delay`` s after a 1M-point evaluation first reported ``stage`` (any stage when "")."""
-    proc = subprocess.run([sys.executable, "-c", _QUIT, str(tmp / "q.ini"), str(delay), stage], capture_output=True,
-                          text=True, cwd=ROOT)
+    proc = subprocess.run([sys.executable, "-c", _QUIT, str(tmp / "q.ini"), str(delay), stage,
+                           "thread" if thread else "process"], capture_output=True, text=True, cwd=ROOT)
     ended = time.time()
     quit_at, _, stage = proc.stdout.strip().partition(" ")
     return ended - float(quit_at), proc.returncode, "Destroyed while thread" in proc.stderr, stage
@@ -328,10 +443,12 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--skip-cancel", action="store_true", help="skip the Cancel latency run")
     parser.add_argument("--skip-million", action="store_true", help="skip the 1M-point frames, pick, cancel and quit")
     parser.add_argument("--only-million", action="store_true", help="only the 1M-point frames, pick, cancel and quit")
-    parser.add_argument("--million-part", choices=("frames", "pick", "cancel"), help=argparse.SUPPRESS)
+    parser.add_argument("--million-part", choices=("frames", "pick", "click", "cancel"), help=argparse.SUPPRESS)
     parser.add_argument("--cancel-stages", default=",".join(CANCEL_STAGES),
-                        help="comma-separated stages to cancel in at 1M (default: all; coverage has no checkpoint "
-                             "yet, so its run waits 600 s for the worker)")
+                        help="comma-separated stages to cancel in at 1M (default: all)")
+    parser.add_argument("--thread", action="store_true",
+                        help="evaluate 1M points in a thread, as before issue 25 (default: a child process)")
+    parser.add_argument("--skip-click", action="store_true", help="skip the click-to-text pick (evaluates 1M points)")
     parser.add_argument("--stop-wait", type=float, default=600.0, help="s to wait for the worker after a Cancel")
     parser.add_argument("--skip-frames", action="store_true", help="skip the 1M-point frames and pick")
     parser.add_argument("--stall-runs", type=int, default=1,
@@ -341,8 +458,9 @@ def main(argv: list[str] | None = None) -> int:
     if args.million_part:  # one part, in this process (a fresh one per part: no warm caches)
         sys.path.insert(0, str(ROOT))
         stages = tuple(x.strip() for x in args.cancel_stages.split(",") if x.strip())
-        part = {"frames": frames_while_moving, "pick": pick_time,
-                "cancel": lambda: cancel_in_every_stage(stages, stop_wait=args.stop_wait)}[args.million_part]
+        part = {"frames": frames_while_moving, "pick": pick_time, "click": pick_click_to_text,
+                "cancel": lambda: cancel_in_every_stage(stages, stop_wait=args.stop_wait, thread=args.thread)
+                }[args.million_part]
         print(repr(part()))
         return 0
     if args.stall_once:
@@ -354,9 +472,10 @@ def main(argv: list[str] | None = None) -> int:
     print(f"machine: {os.cpu_count()} cores, load average {os.getloadavg()[0]:.1f} at start")
     if not args.skip_million and not args.only_launch:
         run = lambda part: eval(subprocess.run([sys.executable, __file__, "--million-part", part,  # noqa: E731,S307
-                                                "--cancel-stages", args.cancel_stages, "--stop-wait", str(args.stop_wait)],
+                                                "--cancel-stages", args.cancel_stages, "--stop-wait", str(args.stop_wait),
+                                                *(["--thread"] if args.thread else [])],
                                                capture_output=True, text=True, cwd=ROOT, check=True).stdout.strip()
-                                .splitlines()[-1])
+                                .splitlines()[-1], {"nan": float("nan"), "inf": float("inf")})
         if not args.skip_frames:
             frames = run("frames")
             print(f"\n1M-point cloud + 1M-point skeletal set, median frame while rotating: {frames['rest'] * 1000:.0f} "
@@ -364,16 +483,24 @@ def main(argv: list[str] | None = None) -> int:
                   f"  [load {os.getloadavg()[0]:.1f}]")
             print(f"pick among 1M skeletal points: {run('pick') * 1000:.0f} ms (median of 5)  "
                   f"[load {os.getloadavg()[0]:.1f}]")
-        print("\nCancel inside each stage of a 1M-point evaluation (1M cloud + 1M skeletal set):\n")
-        print("| stage aimed at | stage at Cancel | label shown | stage began after | Cancel after | window idle after "
-              "| worker stopped after | longest GUI event-loop turn | load |")
+        if not args.skip_click:
+            clicks = run("click")
+            print(f"click on one of 1M evaluated skeletal points to its text painted: "
+                  f"{', '.join(f'{c * 1000:.0f}' for c in clicks)} ms  [load {os.getloadavg()[0]:.1f}]")
+        mode = "a thread" if args.thread else "a child process"
+        print(f"\nCancel inside each stage of a 1M-point evaluation (1M cloud + 1M skeletal set) in {mode}:\n")
+        print("| stage aimed at | label shown (stages running) | stage began after | Cancel after | window idle after "
+              "| worker stopped after | longest GUI event-loop turn (GUI thread's CPU in it) "
+              "| File menu painted after the click | load |")
         print("|---|---|---|---|---|---|---|---|---|")
-        for target, stage, label, reached, into, idle, stopped, gap, stand_in in run("cancel"):
-            print(f"| {target}{' (boundedness stand-in)' if stand_in else ''} | {stage} | {label} | {reached:.1f} s "
+        for target, label, reached, into, idle, stopped, gap, gap_cpu, menu, stand_in in run("cancel"):
+            print(f"| {target}{' (boundedness stand-in)' if stand_in else ''} | {label} | {reached:.1f} s "
                   f"| {into:.2f} s into it | {idle * 1000:.0f} ms | "
-                  f"{f'> {args.stop_wait:g} s' if stopped is None else f'{stopped:.2f} s'} | {gap * 1000:.0f} ms | {os.getloadavg()[0]:.1f} |")
-        for delay, stage in ((0.5, ""), (3.0, ""), (2.0, "skeletal boundedness")):
-            took, code, aborted, at = quit_while_running(delay, tmp, stage)
+                  f"{f'> {args.stop_wait:g} s' if stopped is None else f'{stopped:.2f} s'} | {gap * 1000:.0f} ms "
+                  f"({gap_cpu * 1000:.0f} ms) | {menu * 1000:.0f} ms | {os.getloadavg()[0]:.1f} |")
+        for delay, stage in ((0.5, ""), (3.0, ""), (2.0, "skeletal boundedness"), (2.0, "topology"),
+                             (2.0, "skeletal centeredness")):
+            took, code, aborted, at = quit_while_running(delay, tmp, stage, args.thread)
             print(f"Ctrl+Q {delay:g} s into {'a 1M-point evaluation' if not stage else repr(stage)} (stage '{at}'): "
                   f"process ended {took:.2f} s later, exit status {code}, QThread abort: {'yes' if aborted else 'no'}"
                   f"  [load {os.getloadavg()[0]:.1f}]")
@@ -383,11 +510,13 @@ def main(argv: list[str] | None = None) -> int:
         print("\n| cloud | imports done | window shown | file loaded | first frame rendered (launch to first render) "
               "| + a second frame read back | CPU s to the first frame | cloud-grey pixels in the frame | load |")
         print("|---|---|---|---|---|---|---|---|---|")
-        for n in (100_000, 1_000_000):
-            runs = [launch_to_first_render(n, tmp) for _ in range(max(args.launch_runs, 1))]
+        for n, skeletal in ((100_000, False), (1_000_000, False), (1_000_000, True)):
+            runs = [launch_to_first_render(n, tmp, skeletal) for _ in range(max(args.launch_runs, 1))]
             best = min(runs, key=lambda r: r[3])
             cpu = min(r[6] for r in runs)
-            print(f"| {n:,} points | {best[0]:.2f} s | {best[1]:.2f} s | {best[2]:.2f} s | **{best[3]:.2f} s** | {best[5]:.2f} s "
+            every = ", ".join(f"{r[3]:.2f}" for r in runs)
+            print(f"| {n:,} points{' + skeletal set' if skeletal else ''} | {best[0]:.2f} s | {best[1]:.2f} s | "
+                  f"{best[2]:.2f} s | **{best[3]:.2f} s** (runs: {every}) | {best[5]:.2f} s "
                   f"| {cpu:.2f} | {best[4]} | {os.getloadavg()[0]:.1f} |")
         if args.only_launch:
             return 0

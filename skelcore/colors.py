@@ -17,6 +17,9 @@ __all__ = [
     "CLOUD_GREY",
     "SKELETAL_COLOR",
     "CURVE_COLOR",
+    "PICK_COLOR",
+    "SUPPORT_COLORS",
+    "hex_color",
     "COLORMAPS",
     "lookup_table",
     "map_to_rgb",
@@ -33,6 +36,29 @@ SKELETAL_COLOR: tuple[int, int, int] = (31, 119, 180)
 CURVE_COLOR: tuple[int, int, int] = (214, 39, 40)
 #: The colour map of the local metrics, over [0, 1], on screen and in exported files.
 METRIC_COLORMAP = "viridis"
+#: The picked element's marker: on neither colour map, not magenta, not a skeleton colour.
+PICK_COLOR: tuple[int, int, int] = (255, 140, 0)
+#: The picked element's support (the viewer's Support dock and 3-D overlay, the same colour for the
+#: same thing in both), chosen apart from the skeleton's and the cloud's colours above, from magenta,
+#: from the pick marker and from the viridis map (dark purple -> teal -> yellow): browns, black and a
+#: light sky blue (issue 25: the slab's red was the curve's red).
+SUPPORT_COLORS: dict[str, tuple[int, int, int]] = {
+    "slab": (214, 160, 90),  # the slab's cloud points; a skeletal point's corresponding cloud points
+    "ring": (120, 66, 18),  # the ring kept; a skeletal point's or vertex's neighbours
+    "ellipse": (0, 0, 0),  # the fitted ellipse; the picked point's tangent; the vertex's edges
+    "centre": (0, 176, 240),  # the ellipse's centre; m_s; the neighbour that sets the smoothness
+    "m_o": (120, 66, 18),  # the cloud centroid m_o (shape tells it from the neighbours)
+    "links": (90, 90, 90),  # skeletal point -> its cloud point
+}
+
+
+def hex_color(rgb: tuple[int, int, int]) -> str:
+    """``#rrggbb`` for plotting libraries.
+
+    >>> hex_color((255, 0, 255))
+    '#ff00ff'
+    """
+    return "#{:02x}{:02x}{:02x}".format(*(int(v) for v in rgb))
 
 _ANCHORS_HEX = {
     "viridis": (

@@ -1,5 +1,6 @@
 """Histogram of the selected local metric (skeletal points and curve elements) with the threshold
-line an overall score counts against (beta* for boundedness, c* for centeredness; SPEC 2-3)."""
+line an overall score counts against (beta* for boundedness, c* for centeredness; SPEC 2-3). Results
+out of date (a setting changed) are drawn grey, with the reason."""
 
 from __future__ import annotations
 
@@ -13,12 +14,14 @@ from ._plot import PlotPanel
 
 _LABELS = {"skeletal": "skeletal points", "curve": "curve"}
 _COLOURS = {"skeletal": "#b35900", "curve": "#1f4e79"}
+_STALE_COLOURS = {"skeletal": "#9a9a9a", "curve": "#c8c8c8"}
 
 
 class HistogramPanel(PlotPanel):
     def __init__(self, parent: QtWidgets.QWidget | None = None) -> None:
         super().__init__((4.0, 2.6), 180, "a histogram of the selected local metric\nappears here after an evaluation", parent)
         self.threshold: float | None = None
+        self.stale = ""  # the reason the drawn values are out of date, "" when they are not
 
     def show_scene(self, scene: Scene) -> None:
         has_values = any(
@@ -49,16 +52,22 @@ class HistogramPanel(PlotPanel):
             if finite.size:
                 lo, hi = min(lo, float(finite.min())), max(hi, float(finite.max()))
         bins = np.linspace(lo, hi, 26)
+        self.stale = scene.stale
+        colours = _STALE_COLOURS if self.stale else _COLOURS
         for name, finite, n_nan in series:
             label = f"{_LABELS[name]} (n = {finite.size}" + (f", {n_nan} nan)" if n_nan else ")")
             # Each series as fractions of its own size, so 4096 points and 200 samples compare.
             fractions = np.histogram(finite, bins=bins)[0] / max(finite.size, 1)
             # One filled step patch per series (ax.hist makes a Rectangle per bin: ~10x slower to build).
-            ax.stairs(fractions, bins, fill=True, alpha=0.55, color=_COLOURS[name], label=label)
+            ax.stairs(fractions, bins, fill=True, alpha=0.55, color=colours[name], label=label)
         self.threshold = scene.threshold_for(metric)
         if self.threshold is not None:
             star = "beta*" if metric == "boundedness" else "c*"
-            ax.axvline(self.threshold, color="crimson", linestyle="--", linewidth=1.2, label=f"{star} = {self.threshold:.2f}")
+            ax.axvline(self.threshold, color="0.6" if self.stale else "crimson", linestyle="--", linewidth=1.2,
+                       label=f"{star} = {self.threshold:.2f}")
+        if self.stale:
+            ax.text(0.98, 0.97, f"{self.stale}: re-run (F5)", ha="right", va="top", transform=ax.transAxes,
+                    fontsize=7, color="#8a4b00")
         ax.set_xlabel(metric, fontsize=8)
         ax.set_ylabel("fraction", fontsize=8)
         ax.tick_params(labelsize=7)

@@ -9,7 +9,7 @@ from skelcore.params import Params
 
 #: (label, skelcore.evaluate's ``correspondence=``)
 CORRESPONDENCE_CHOICES = (
-    ("as loaded (pointwise / none)", "auto"),
+    ("as loaded (pointwise / none)", "auto"),  # with an index file: through it (see the tooltip)
     ("reverse projection", "reverse"),
 )
 
@@ -44,7 +44,8 @@ class SettingsPanel(QtWidgets.QWidget):
             "SPEC 7: a skeletal set with another point count than the cloud has no row-by-row "
             "correspondence. 'reverse' maps every cloud point to its nearest skeletal point (with only "
             "a curve: its nearest point on the curve) and scores topology and centeredness on that set; "
-            "'as loaded' leaves them out, with a warning"
+            "'as loaded' uses the set's index file (File > Open skeletal index…) or, without one, leaves "
+            "them out, with a warning"
         )
         form = QtWidgets.QFormLayout(self)
         form.addRow("correspondence", self.correspondence_choice)

@@ -21,12 +21,52 @@ _STYLE = {"missing": "—", "sep": "  ", "count": "n = {}"}
 ROWS = tuple(row for row, _s, _c in paper_table(None, **_STYLE))
 
 
-def summary_cells(summary: Scores | dict[str, Any] | None) -> list[list[str]]:
+def summary_cells(summary: Scores | dict[str, Any] | None, evaluation: Any = None) -> list[list[str]]:
     """The table's text, row by row (Qt-free so it can be tested and reused), from a :class:`Scores`
-    or a ``summary()`` dict."""
+    or a ``summary()`` dict. Under reverse projection the skeletal centeredness counts cloud rows (the
+    pointwise set skel[rows] x cloud, SPEC 7), the other scores skeletal points: its cell says both."""
     if summary is not None and not isinstance(summary, Scores):
         summary = Scores.from_json_dict(summary)
-    return [[a, b] for _row, a, b in paper_table(summary, **_STYLE)]
+    cells = [[a, b] for _row, a, b in paper_table(summary, **_STYLE)]
+    sk = getattr(evaluation, "skeletal", None)
+    if summary is not None and getattr(evaluation, "correspondence", None) == "reverse" and sk is not None \
+            and sk.rows is not None and summary.n_centeredness_skeletal:
+        r = ROWS.index("centeredness")
+        n_points = len(np.unique(sk.rows))
+        cells[r][0] = (f"{summary.text('centeredness_skeletal')}  (n = {summary.n_centeredness_skeletal} cloud rows "
+                       f"on {n_points} of {len(sk.points)} skeletal points)")
+    return cells
+
+
+def window_warning(w: Any) -> str:
+    """A trust warning in the window's terms: its finding and the menu or setting that remedies it
+    (the engine's message names the command line's flags, issue 25)."""
+    finding = getattr(w, "finding", "") or w.message
+    if w.code == "no_correspondence":
+        return (f"{finding}: choose Settings > correspondence > reverse projection, or give its index with "
+                "File > Open skeletal index… (one cloud row per skeletal point), then re-run (F5)")
+    if w.code in ("frame", "collapse") and "--skeleton-scale" in w.message:
+        mapping = getattr(w, "mapping", None)
+        remedy = "Evaluate > Map skeleton into the cloud's frame…"
+        if mapping is not None:
+            s, off = mapping
+            remedy += f" (suggested: scale {s:.6g}, offset {off[0]:.6g} {off[1]:.6g} {off[2]:.6g})"
+        return f"{finding}; map it with {remedy}" if w.code == "frame" else \
+            f"{finding} (or, if it is in other units, map it with {remedy})"
+    return _window_terms(w.message)
+
+
+def _window_terms(text: str) -> str:
+    """Command-line flags in a stored message (an evaluation read back from a file) in window terms."""
+    import re
+
+    text = re.sub(r"give --skeletal-index F or --correspondence reverse",
+                  "choose Settings > correspondence > reverse projection, or File > Open skeletal index…", text)
+    text = re.sub(r"map it with --skeleton-scale S --skeleton-offset X Y Z",
+                  "map it with Evaluate > Map skeleton into the cloud's frame…", text)
+    text = re.sub(r"--skeleton-scale ([-+0-9.eE]+)", r"scale \1", text)
+    text = re.sub(r"--skeleton-offset ([-+0-9.eE]+) ([-+0-9.eE]+) ([-+0-9.eE]+)", r"offset \1 \2 \3", text)
+    return text.replace("; raise it with --set coverage_max_points=N)", ")")
 
 
 def detail_lines(summary: Scores | dict[str, Any] | None, evaluation: Any) -> list[str]:
@@ -41,9 +81,9 @@ def detail_lines(summary: Scores | dict[str, Any] | None, evaluation: Any) -> li
         extra = " (the cloud projected onto the curve)" if source == "curve" else ""
         lines.append(f"correspondence: {corr}{extra}")
     for what, why in (getattr(evaluation, "not_computed", None) or {}).items():
-        lines.append(f"not computed: {what}: {why}")
+        lines.append(f"not computed: {what}: {_window_terms(why)}")
     for w in getattr(evaluation, "warnings", None) or []:
-        lines.append(f"⚠ warning [{w.code}]: {w.message}")
+        lines.append(f"⚠ warning [{w.code}]: {window_warning(w)}")
     if s.reference_chamfer is not None:
         lines.append(
             f"reference curve: chamfer {s.text('reference_chamfer')}, Hausdorff {s.text('reference_hausdorff')}, "
@@ -149,7 +189,7 @@ class SummaryPanel(QtWidgets.QWidget):
             spin.blockSignals(False)
 
     def show_summary(self, summary: dict[str, Any] | None, evaluation: Any = None) -> None:
-        for r, row in enumerate(summary_cells(summary)):
+        for r, row in enumerate(summary_cells(summary, evaluation)):
             for c, text in enumerate(row):
                 item = QtWidgets.QTableWidgetItem(text)
                 item.setTextAlignment(QtCore.Qt.AlignmentFlag.AlignCenter)

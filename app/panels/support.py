@@ -6,7 +6,10 @@ SPEC 3). Boundedness: the covered directions on an equal-area (longitude, z) map
 for the ``paper`` estimator its triangles in the same chart, counted ones filled) and, beside it, on a
 small 3-D sphere. A skeletal point's
 centeredness: its neighbours and the two centroids of Eq. 10, seen along the line m_s -> m_o.
-Lengths are in the user's units.
+Smoothness (issue 25): a skeletal point's tangent and its neighbours' tangents with each one's score
+|1 - 2 theta / pi| (Eq. 13-14), the one setting the value marked; a curve vertex's two edges and
+their angle (Eq. 15). Lengths are in the user's units. Colours are the 3-D overlay's
+(:data:`skelcore.colors.SUPPORT_COLORS`); legends sit beside the plot, never on its data.
 """
 
 from __future__ import annotations
@@ -16,12 +19,17 @@ from typing import Any
 import numpy as np
 from PySide6 import QtWidgets
 
-from ..scene.supports import ElementSupport
-from ._plot import PlotPanel
+from skelcore.colors import PICK_COLOR, SUPPORT_COLORS, hex_color
 from skelcore.scores import format_score
 
-SLAB, RING, ELLIPSE, SAMPLE, CENTRE = "#9a9a9a", "#1f4e79", "#d62728", "#ff8c00", "#2ca02c"
+from ..scene.supports import ElementSupport
+from ._plot import PlotPanel
+
+SLAB, RING, ELLIPSE, CENTRE, M_O = (hex_color(SUPPORT_COLORS[k]) for k in ("slab", "ring", "ellipse", "centre", "m_o"))
+SAMPLE = hex_color(PICK_COLOR)  # the picked element, as its 3-D marker
 COVERED = "#1f4e79"
+#: right edge of the axes when a legend sits beside them
+_LEGEND_RIGHT = 0.60
 
 
 class SupportPanel(PlotPanel):
@@ -59,8 +67,17 @@ class SupportPanel(PlotPanel):
             self._sphere(fig.add_subplot(grid[1], projection="3d"), support)
         elif support.kind == "knn":
             self._knn(ax, support)
-        fig.subplots_adjust(left=0.15, right=0.97, top=0.88, bottom=0.14)
+        elif support.kind == "smoothness":
+            self._smoothness(ax, support)
+        beside = ax.get_legend() is not None and support is not None and support.kind in ("slab", "knn", "smoothness")
+        fig.subplots_adjust(left=0.15, right=_LEGEND_RIGHT if beside else 0.97, top=0.88, bottom=0.14)
         self.request_draw()
+
+    @staticmethod
+    def _legend(ax: Any) -> None:
+        """The legend beside the axes (issue 25: over the slab it hid the ring's points)."""
+        ax.legend(fontsize=6, frameon=False, loc="upper left", bbox_to_anchor=(1.03, 1.0), borderaxespad=0.0,
+                  markerscale=0.8)
 
     def _head(self, ax: Any, support: ElementSupport, what: str) -> None:
         self.title = f"{support.element} #{support.index}: {what}"
@@ -92,7 +109,7 @@ class SupportPanel(PlotPanel):
         ax.set_aspect("equal", adjustable="datalim")
         ax.set_xlabel("g (cross-section plane)", fontsize=7)
         ax.set_ylabel("h", fontsize=7)
-        ax.legend(fontsize=6, frameon=False, loc="upper right", markerscale=0.8)
+        self._legend(ax)
 
     def _directions(self, ax: Any, support: ElementSupport) -> None:
         detail = support.detail
@@ -200,11 +217,38 @@ class SupportPanel(PlotPanel):
         ax.scatter(skel[:, 0], skel[:, 1], s=10, color=RING, label=f"k = {len(nb)} neighbours", linewidths=0)
         mo = flat(pts["m_o"])[0]
         ax.scatter([0.0], [0.0], marker="+", s=80, color=CENTRE, label="m_s (skeletal centroid)", zorder=5)
-        ax.scatter([mo[0]], [mo[1]], marker="x", s=60, color=ELLIPSE, label="m_o (cloud centroid)", zorder=6)
+        ax.scatter([mo[0]], [mo[1]], marker="x", s=60, color=M_O, label="m_o (cloud centroid)", zorder=6)
         ax.set_aspect("equal", adjustable="datalim")
         self._head(ax, support, f"c = {_fmt(sup.value)} = 1 - |m_o - m_s| / M")
         ax.set_xlabel("main axes of the cloud points", fontsize=7)
-        ax.legend(fontsize=6, frameon=False, loc="upper right")
+        self._legend(ax)
+
+    def _smoothness(self, ax: Any, support: ElementSupport) -> None:
+        """Each compared direction's score |1 - 2 theta / pi| against its angle theta to the point's
+        tangent (a skeletal point) or to the other edge (a curve vertex), on the score's curve; the
+        one setting the value marked."""
+        sup = support.detail
+        theta = np.linspace(0.0, 180.0, 181)
+        ax.plot(theta, np.abs(1.0 - 2.0 * np.radians(theta) / np.pi), color="0.75", linewidth=1.0,
+                label="|1 - 2θ/π|")
+        if sup.tangent is not None:  # a skeletal point: one angle per neighbour
+            cos = np.clip(sup.neighbour_tangents @ sup.tangent, -1.0, 1.0)
+            angles = np.degrees(np.arccos(cos))
+            others = [j for j in range(len(angles)) if j != sup.worst and np.isfinite(angles[j])]
+            ax.scatter(angles[others], sup.scores[others], s=22, color=RING, label="neighbours' tangents", zorder=4)
+            what = f"s = {_fmt(sup.value)}: min over {len(angles)} neighbours"
+            worst_label = f"setting s (θ = {np.degrees(sup.theta):.1f}°)"
+        else:  # a curve vertex: the angle between its two edges
+            what = f"s = {_fmt(sup.value)}: angle between its two edges"
+            worst_label = f"its two edges (θ = {np.degrees(sup.theta):.1f}°)"
+        ax.scatter([np.degrees(sup.theta)], [sup.value], s=60, marker="D", color=CENTRE, label=worst_label, zorder=5)
+        ax.set_xlim(0, 180)
+        ax.set_ylim(-0.03, 1.05)
+        ax.set_xticks([0, 45, 90, 135, 180])
+        self._head(ax, support, what)
+        ax.set_xlabel("θ (degrees)", fontsize=7)
+        ax.set_ylabel("score", fontsize=7)
+        self._legend(ax)
 
 
 def _rgba(colour: str) -> np.ndarray:

@@ -13,8 +13,9 @@ __all__ = ["SceneEvent", "Listener"]
 
 @dataclass(frozen=True)
 class SceneEvent:
-    """What changed: ``kind`` is 'layer', 'display', 'quantities', 'colouring', 'thresholds'
-    or 'style' (a figure option; ``layer`` names the option)."""
+    """What changed: ``kind`` is 'layer', 'display', 'quantities', 'colouring', 'thresholds',
+    'stale' (the results went out of date or back) or 'style' (a figure option; ``layer`` names the
+    option)."""
 
     kind: str
     layer: str | None = None

@@ -51,7 +51,10 @@ class Layer:
     """One structure of the scene.
 
     ``points`` are the layer's elements in user units: cloud points, skeletal points, or curve
-    vertices; a curve also has ``edges`` and, once evaluated, the curve ``samples``.
+    vertices; a curve also has ``edges`` and, once evaluated, the curve ``samples``. A skeletal set
+    with another point count than the cloud may carry its ``index`` (one cloud row per skeletal
+    point, SPEC 7) and the file it came from. ``mapping`` is the ``(scale, offset)`` a skeleton layer
+    was mapped by into the cloud's frame (its file holds the unmapped coordinates).
     """
 
     name: str
@@ -66,6 +69,9 @@ class Layer:
     point_size: float = 4.0
     opacity: float = 1.0
     quantities: dict[str, ScalarQuantity] = field(default_factory=dict)
+    index: np.ndarray | None = None
+    index_path: str | None = None
+    mapping: tuple[float, tuple[float, float, float]] | None = None
 
     @property
     def n_points(self) -> int:

@@ -41,6 +41,7 @@ class Scene:
         defaults = Params()  # the thresholds until an evaluation brings its own
         self.beta_star: float = defaults.beta_star
         self.c_star: float = defaults.c_star
+        self.stale: str = ""  # why the shown results are out of date ("settings changed"), "" when they are not
         self._listeners: list[Listener] = []
 
     # ---- events ---------------------------------------------------------------------------
@@ -70,16 +71,54 @@ class Scene:
         return self.layers.get("curve")
 
     def set_cloud(self, points: np.ndarray, path: str | None = None) -> Layer:
+        """The cloud; a kept skeletal set's index described the old cloud's rows, so it is dropped."""
         pts = _points(points)
+        sk = self.skeletal
+        if sk is not None and sk.index is not None:
+            sk.index = sk.index_path = None
         # Dense clouds hide the skeleton: draw them lighter and smaller.
         size, opacity = (2.0, 0.35) if len(pts) <= 200_000 else (1.0, 0.2)
         layer = Layer("cloud", pts, path=path, point_size=size, opacity=opacity)
         return self._replace(layer)
 
-    def set_skeletal(self, points: np.ndarray, path: str | None = None) -> Layer:
-        layer = Layer("skeletal", _points(points), path=path, point_size=6.0)
+    def set_skeletal(self, points: np.ndarray, path: str | None = None, index: np.ndarray | None = None,
+                     index_path: str | None = None) -> Layer:
+        """The skeletal point set; ``index`` maps its rows to cloud rows (SPEC 7), from ``index_path``."""
+        layer = Layer("skeletal", _points(points), path=path, point_size=6.0,
+                      index=None if index is None else np.asarray(index, dtype=np.int64), index_path=index_path)
         return self._replace(layer)
 
+    def set_skeletal_index(self, index: np.ndarray | None, path: str | None = None) -> None:
+        """Give the loaded skeletal set its index (File > Open skeletal index…), or take it away:
+        an input change, so the evaluation goes."""
+        layer = self.skeletal
+        if layer is None:
+            raise ValueError("no skeletal point set loaded")
+        layer.index = None if index is None else np.asarray(index, dtype=np.int64)
+        layer.index_path = path if index is not None else None
+        self.clear_evaluation()
+        self._emit("layer", "skeletal")
+
+    def map_skeleton(self, scale: float, offset: tuple[float, float, float]) -> None:
+        """Map the loaded skeleton layers by ``v * scale + offset`` into the cloud's frame (a ``frame``
+        warning's remedy); mappings compose, ``Layer.mapping`` keeps the total."""
+        from skelcore.skeleton_mapping import check_mapping, map_skeleton
+
+        scale, offset = check_mapping(scale, offset)
+        sk, cv = self.skeletal, self.curve
+        if sk is None and cv is None:
+            raise ValueError("no skeleton loaded")
+        points, curve = map_skeleton(None if sk is None else sk.points, None if cv is None else cv.curve, scale, offset)
+        for layer in (sk, cv):
+            if layer is None:
+                continue
+            s0, o0 = layer.mapping or (1.0, (0.0, 0.0, 0.0))
+            total = (s0 * scale, tuple(float(o * scale + d) for o, d in zip(o0, offset)))
+            if layer is sk:
+                new = self.set_skeletal(points, sk.path, sk.index, sk.index_path)
+            else:
+                new = self.set_curve(curve, cv.path)
+            new.mapping = total
     def set_curve(self, curve: CurveSkeleton, path: str | None = None) -> Layer:
         # Curve vertices smaller than the skeletal points (6): the skeletal set lies on the curve and
         # its colours must stay visible around each vertex.
@@ -90,10 +129,18 @@ class Scene:
         return self._replace(layer)
 
     def remove_layer(self, name: str) -> None:
-        """Close one layer (File > Close, the panel's remove button); the evaluation goes with it."""
+        """Close one layer (File > Close, the panel's remove button). The evaluation goes with it,
+        except when one skeleton of two is closed: the other's column still describes the inputs
+        left, so it stays (issue 25: closing the curve kept nothing of the skeletal set's results)."""
         if self.layers.pop(name, None) is not None:
-            self.clear_evaluation()
+            kept = _without_column(self.evaluation, name)
+            if kept is None:
+                self.clear_evaluation()
+            else:
+                self.evaluation = kept
             self._emit("layer", name)
+            if kept is not None:
+                self._emit("quantities")
 
     def clear(self) -> None:
         """Close every layer (File > Close all)."""
@@ -196,6 +243,13 @@ class Scene:
         """The threshold an overall score counts against (none for smoothness, SPEC 4)."""
         return {"boundedness": self.beta_star, "centeredness": self.c_star}.get(metric)
 
+    def set_stale(self, reason: str) -> None:
+        """Mark the shown results out of date (the session's stale reason): the view and the plots
+        draw them greyed until a re-run (issue 25)."""
+        if reason != self.stale:
+            self.stale = reason
+            self._emit("stale")
+
     # ---- display --------------------------------------------------------------------------
     def set_metric(self, metric: str) -> None:
         if metric not in METRICS:
@@ -293,6 +347,26 @@ class Scene:
                 values[name] = float(q.values[index])
         info["values"] = values
         return info
+
+
+def _without_column(ev: Any, name: str) -> Any:
+    """``ev`` without the column of the closed skeleton layer ``name`` (and what was computed from
+    it: coverage, the reference comparison, its warnings), or None when nothing of it stays valid."""
+    from dataclasses import replace
+
+    if ev is None or name not in ("skeletal", "curve"):
+        return None
+    other = "curve" if name == "skeletal" else "skeletal"
+    if getattr(ev, other) is None or (ev.skeletal is not None and getattr(ev.skeletal, "source", "") == "curve"):
+        return None
+    what = "skeletal point set" if name == "skeletal" else "curve skeleton"
+    warnings = [w for w in ev.warnings if what not in w.message and not (name == "curve" and w.code == "trivial_smoothness")
+                and not (name == "skeletal" and w.code == "no_correspondence")]
+    inputs = {k: v for k, v in ev.inputs.items() if k != name and not (name == "skeletal" and k == "skeletal_index")}
+    if name == "curve":
+        return replace(ev, curve=None, coverage_curve=None, reference=None, warnings=warnings, inputs=inputs)
+    return replace(ev, skeletal=None, topology=None, coverage_skeletal=None, correspondence=None, warnings=warnings,
+                   inputs=inputs, not_computed={k: v for k, v in ev.not_computed.items() if k == "coverage"})
 
 
 def _points(points: object) -> np.ndarray:

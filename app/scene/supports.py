@@ -3,7 +3,9 @@
 Which support depends on the element and the metric on screen: boundedness -> the direction map
 around the element (paper Eq. 5-6; for the ``paper`` estimator its triangles); centeredness of a
 curve sample -> its slab, ring and ellipse (Eq. 11, SPEC 3); centeredness of a skeletal point -> its
-k neighbours and the two centroids (Eq. 10). The engine's :mod:`skelcore.metrics.supports` computes
+k neighbours and the two centroids (Eq. 10); smoothness of a skeletal point -> its tangent, its
+neighbours' tangents and the angle setting the value (Eq. 13-14); of a curve vertex -> its two edges
+and their angle (Eq. 15). The engine's :mod:`skelcore.metrics.supports` computes
 them in normalized units; this module picks the rows and maps 3-D points back to the user's units.
 """
 
@@ -21,8 +23,9 @@ __all__ = ["ElementSupport", "element_support"]
 class ElementSupport:
     """What the support panel plots and the 3-D overlay highlights for one element.
 
-    kind: "slab" | "knn" | "directions" | "none" (``reason`` says why nothing is shown).
+    kind: "slab" | "knn" | "directions" | "smoothness" | "none" (``reason`` says why nothing is shown).
     points3d: named (n, 3) arrays in the user's units for the overlay (slab, ring, neighbours, ...).
+    lines3d: named (n, 2, 3) segments (or, for "ellipse", an (n, 3) closed polyline) for the overlay.
     detail: the engine's support object (SlabSupport, KnnSupport, DirectionMap, PaperTriangles).
     """
 
@@ -33,6 +36,7 @@ class ElementSupport:
     value: float = float("nan")
     reason: str = ""
     points3d: dict[str, np.ndarray] = field(default_factory=dict)
+    lines3d: dict[str, np.ndarray] = field(default_factory=dict)
     detail: Any = None
     estimator: str = "rays"
 
@@ -68,7 +72,7 @@ def element_support(ev: Any, info: dict[str, Any] | None, metric: str) -> Elemen
     norm = ev.normalization
     cloud_n = norm.apply(ev.cloud)
     if metric == "smoothness":
-        return _none(info, metric, "smoothness has no local support to draw (pick boundedness or centeredness)")
+        return _smoothness(ev, info)
     if layer == "curve" and location == "vertices":
         return _none(info, metric, f"{metric} lives on the curve samples: pick a sample, not a vertex")
     if layer == "curve":
@@ -123,6 +127,62 @@ def _slab(ev: Any, info: dict[str, Any], cloud_n: np.ndarray, i: int) -> Element
     if sup.centre is not None:
         centre_n = sup.point + sup.centre @ sup.basis
         out.points3d["centre"] = ev.normalization.invert(centre_n[None])
+    if sup.ellipse is not None:  # the fitted ellipse in 3-D too, in the cross-section plane
+        centre, axes, angle = sup.ellipse
+        t = np.linspace(0.0, 2.0 * np.pi, 97)
+        c, s_ = np.cos(angle), np.sin(angle)
+        flat = np.column_stack([axes[0] * np.cos(t), axes[1] * np.sin(t)]) @ np.array([[c, s_], [-s_, c]])
+        out.lines3d["ellipse"] = ev.normalization.invert(sup.point + (flat + np.asarray(centre)) @ sup.basis)
+    return out
+
+
+def _segments(origin: np.ndarray, directions: np.ndarray, length: float) -> np.ndarray:
+    """(n, 2, 3) segments of ``length`` centred on each origin along each direction."""
+    origin = np.atleast_2d(origin)
+    half = 0.5 * length * np.asarray(directions, dtype=float).reshape(-1, 3)
+    return np.stack([origin - half, origin + half], axis=1)
+
+
+def _smoothness(ev: Any, info: dict[str, Any]) -> ElementSupport:
+    """Smoothness: a skeletal point's tangent and its neighbours' (Eq. 13-14), or a curve vertex's two
+    edges (Eq. 15); tangents drawn as segments one tenth of the skeleton's extent long."""
+    from skelcore.metrics.supports import curve_vertex_support, skeletal_smoothness_support
+
+    layer, location, i = info["layer"], info["location"], int(info["index"])
+    if layer == "curve" and location == "samples":
+        return _none(info, "smoothness", "smoothness lives on the curve vertices: pick a vertex")
+    if layer == "curve":
+        if ev.curve is None:
+            return _none(info, "smoothness", "no curve result")
+        curve = ev.curve.curve
+        sup = curve_vertex_support(curve.vertices, curve.edges, i)
+        out = ElementSupport("smoothness", info["element"], i, "smoothness", value=sup.value, detail=sup)
+        out.points3d["query"] = sup.point[None]
+        if not np.isfinite(sup.value):
+            out.reason = f"degree {len(sup.neighbours)}: smoothness needs exactly two edges (NaN, magenta)"
+            out.detail = None
+            return out
+        out.points3d["neighbours"] = np.asarray(curve.vertices, dtype=float)[sup.neighbours]
+        out.lines3d["edges"] = np.stack([np.repeat(sup.point[None], 2, axis=0), out.points3d["neighbours"]], axis=1)
+        return out
+    if ev.skeletal is None:
+        return _none(info, "smoothness", "no skeletal result")
+    pts = np.asarray(ev.skeletal.points, dtype=float)
+    sup = skeletal_smoothness_support(pts, i, params=ev.params)
+    out = ElementSupport("smoothness", info["element"], i, "smoothness", value=sup.value, detail=sup)
+    out.points3d["query"] = pts[i][None]
+    out.points3d["neighbours"] = pts[sup.neighbours]
+    if sup.worst < 0:
+        out.reason = "no tangent here or at its neighbours (all at one position): NaN"
+        out.detail = None
+        return out
+    extent = float(np.linalg.norm(pts.max(axis=0) - pts.min(axis=0))) or 1.0
+    length = 0.1 * extent
+    out.lines3d["tangent"] = _segments(pts[i], sup.tangent, length)
+    others = [j for j in range(len(sup.neighbours)) if j != sup.worst]
+    out.lines3d["neighbour_tangents"] = _segments(pts[sup.neighbours[others]], sup.neighbour_tangents[others], length)
+    out.lines3d["worst_tangent"] = _segments(pts[sup.neighbours[sup.worst]], sup.neighbour_tangents[sup.worst], length)
+    out.points3d["worst"] = pts[sup.neighbours[sup.worst]][None]
     return out
 
 
@@ -162,4 +222,5 @@ def _knn(ev: Any, info: dict[str, Any], cloud_n: np.ndarray, i: int) -> ElementS
     out.points3d["m_s"] = inv(sup.skeletal_centroid[None])
     out.points3d["m_o"] = inv(sup.cloud_centroid[None])
     out.points3d["query"] = skel_user[i][None]
+    out.lines3d["links"] = np.stack([out.points3d["neighbours"], out.points3d["cloud"]], axis=1)
     return out

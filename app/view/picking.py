@@ -10,7 +10,7 @@ from typing import Any
 
 import numpy as np
 
-__all__ = ["pick_layout", "project_to_display", "nearest_on_screen"]
+__all__ = ["pick_layout", "project_to_display", "nearest_on_screen", "near_on_screen", "front_pick"]
 
 
 def pick_layout(points: np.ndarray) -> np.ndarray:
@@ -55,3 +55,35 @@ def nearest_on_screen(renderer: Any, points_t: np.ndarray, x: float, y: float,
     order = np.lexsort((zd[near], np.round(dist)))
     i = int(near[order[0]])
     return i, float(np.sqrt(d2[i])), float(zd[i])
+
+
+def near_on_screen(renderer: Any, points_t: np.ndarray, x: float, y: float,
+                   tolerance: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(indices, pixel distances, depths) of every point drawn within ``tolerance`` pixels of display
+    point (x, y) (none behind the camera)."""
+    if not points_t.shape[1]:
+        return np.empty(0, np.int64), np.empty(0), np.empty(0)
+    xd, yd, zd = project_to_display(renderer, points_t)
+    d2 = (xd - x) ** 2 + (yd - y) ** 2
+    near = np.flatnonzero((d2 <= tolerance * tolerance) & np.isfinite(zd))
+    return near, np.sqrt(d2[near]).astype(float), zd[near].astype(float)
+
+
+def front_pick(candidates: list[tuple[Any, int, float, float, float, int]]) -> Any:
+    """The element a click means, among ``(key, index, pixel distance, depth, drawn radius, layer
+    rank)`` candidates: what is drawn on top at the click point wins (issue 25).
+
+    Of the elements whose drawn disc covers the click (distance <= radius), the one of the layer
+    drawn in front wins (rank 0: an invalid element's larger magenta marker, drawn in front of
+    everything; 1: the curve, drawn in front of the coincident skeletal points; 2: skeletal points),
+    then the nearest to the eye; a skeletal point hidden under a curve vertex is never picked for it.
+    When no disc covers the click, the nearest on screen (then to the eye) wins. Returns the winning
+    candidate's ``key, index``, or None."""
+    if not candidates:
+        return None
+    covering = [c for c in candidates if c[2] <= c[4]]
+    if covering:
+        best = min(covering, key=lambda c: (c[5], c[3], c[2]))
+    else:
+        best = min(candidates, key=lambda c: (round(c[2]), c[3]))
+    return best[0], best[1]

@@ -22,8 +22,10 @@ from .colorbar import ColourBar
 from .frames import FrameScheduler
 from .interactor import ClickFilter, DropInteractor
 from .lod import LOD_POINTS, MotionFilter, lod_indices
-from .picking import nearest_on_screen, pick_layout
-from .style import CLOUD_GREY, CURVE_EDGE, CURVE_VERTEX, MAGENTA, PICK_MARKER, SKELETAL_PLAIN, make_lut, plain_lut
+from .picking import front_pick, near_on_screen, pick_layout
+from .style import (
+    CLOUD_GREY, CURVE_EDGE, CURVE_VERTEX, MAGENTA, PICK_MARKER, SKELETAL_PLAIN, greyed, make_lut, plain_lut,
+)
 
 __all__ = ["SceneView", "EMPTY_HINT"]
 
@@ -45,7 +47,9 @@ class SceneView:
         self._pickable: dict[str, tuple[str, str]] = {}  # actor name -> (layer, location)
         self._lod: dict[str, np.ndarray] = {}  # layer actor name -> indices of its level-of-detail twin
         self._pick_coords: dict[str, np.ndarray] = {}  # actor name -> its points laid out for picking
-        self._lut: tuple[tuple[float, float], pv.LookupTable] | None = None
+        self._invalid: dict[str, np.ndarray] = {}  # actor name -> its elements drawn as magenta markers
+        self.picked: dict[str, Any] | None = None  # the picked element (marked in 3-D until the data changes)
+        self._lut: tuple[tuple[tuple[float, float], bool], pv.LookupTable] | None = None
         self._edges_as_tubes: bool | None = None  # how the curve's edge actor was built
         self._colour_bar = ColourBar(self.plotter)
         self._camera_set = False
@@ -69,6 +73,8 @@ class SceneView:
         if event.kind == "layer":
             self._remove_marker()
             self._build(event.layer)
+            if f"{event.layer}-lod" in self._actors:
+                self._coarse_first = True  # new big data: seen at once through its twins, then in full
             # A new cloud is new data: the camera frames it (and whatever came with it) afresh.
             if self.scene.layers and (not self._camera_set or (event.layer == "cloud" and self.scene.cloud is not None)):
                 self._fit_pending = True
@@ -80,9 +86,11 @@ class SceneView:
             if event.layer == "curve" and self._edges_as_tubes != self.scene.edges_as_tubes:
                 self._build_curve_edges()
             self._apply_display(event.layer)
-        elif event.kind in ("quantities", "colouring", "thresholds"):
-            # Only values changed: the skeleton actors are recoloured in place, not rebuilt.
-            self._remove_marker()
+        elif event.kind in ("quantities", "colouring", "thresholds", "stale"):
+            # Only values changed: the skeleton actors are recoloured in place, not rebuilt. The picked
+            # element stays marked while only the colouring changes (another metric, thresholds).
+            if event.kind == "quantities":
+                self._remove_marker()
             self._colour_skeletal()
             self._colour_curve()
             if self.scene.edges_as_tubes:
@@ -105,11 +113,21 @@ class SceneView:
         that follows a change (the plots) starts after the frame, never in the same event-loop turn."""
         self._frames.after_frame(fn)
 
+    _coarse_first = False
+
     def _before_frame(self) -> None:
-        """Right before a frame is drawn, at the widget's real size: a pending camera fit."""
+        """Right before a frame is drawn, at the widget's real size: a pending camera fit. The first
+        frame of newly loaded big layers shows their level-of-detail twins (80k points each: a tenth
+        of a second in software GL where full detail took seconds, issue 25) and asks for the
+        full-detail frame right after it."""
         if self._fit_pending:
             self._fit_pending = False
             fit_camera(self.plotter, self._visible_points())
+        if self._coarse_first:
+            self._coarse_first = False
+            if not self.moving:
+                self._set_moving(True)
+                self._frames.after_frame(lambda: self._set_moving(False))  # requests the full frame
 
     def rebuild(self) -> None:
         for name in ("cloud", "skeletal", "curve"):
@@ -132,6 +150,7 @@ class SceneView:
         self._meshes.pop(name, None)
         self._lod.pop(name, None)
         self._pick_coords.pop(name, None)
+        self._invalid.pop(name, None)
 
     def _build(self, name: str | None) -> None:
         if name == "cloud":
@@ -144,9 +163,9 @@ class SceneView:
     def _lookup_table(self) -> pv.LookupTable:
         """One lookup table shared by every coloured actor and the colour bar, remade only when the
         colour range changes (building one from the colour map costs more than recolouring)."""
-        clim = self.scene.colour_range()
-        if self._lut is None or self._lut[0] != clim:
-            self._lut = (clim, make_lut(clim))
+        key = (self.scene.colour_range(), bool(self.scene.stale))
+        if self._lut is None or self._lut[0] != key:
+            self._lut = (key, make_lut(key[0], stale=key[1]))
         return self._lut[1]
 
     def _points_actor(self, key: str, points: np.ndarray, layer: Any, values: np.ndarray | None,
@@ -167,6 +186,9 @@ class SceneView:
             self._meshes[key] = mesh
             if pickable is not None:
                 self._pickable[key] = pickable
+                if len(points) > LOD_POINTS:  # laid out for picking once drawn, not at the first click
+                    QtCore.QTimer.singleShot(0, lambda k=key, p=points: self.after_render(
+                        lambda: self._sources.get(k) is p and self._pick_layout(k)))
             if lod and len(points) > LOD_POINTS:
                 idx = lod_indices(len(points), LOD_POINTS)
                 twin = pv.PolyData(display_coordinates(np.asarray(points)[idx]))
@@ -184,10 +206,12 @@ class SceneView:
             self._actors[f"{key}-lod"].SetVisibility(self._shown(f"{key}-lod", layer))
         self._drop(f"{key}-nan")
         invalid = ~np.isfinite(values) if values is not None else None
+        self._invalid.pop(key, None)
         if invalid is not None and invalid.any():
+            self._invalid[key] = invalid
             # Invalid elements are few and matter: drawn larger, in front, so they are seen at a glance.
             nan_actor = self._add_points(f"{key}-nan", pv.PolyData(display_coordinates(np.asarray(points)[invalid])),
-                                         MAGENTA, size + 4, 1.0, False)
+                                         greyed(MAGENTA) if self.scene.stale else MAGENTA, size + 4, 1.0, False)
             nan_actor.SetVisibility(layer.visible)
             draw_in_front(nan_actor, -400.0)
             self._actors[f"{key}-nan"] = nan_actor
@@ -313,7 +337,9 @@ class SceneView:
                 lines.point_data.set_array(values, "values")
                 mesh = lines.tube(radius=radius, n_sides=12)
                 actor = self.plotter.add_mesh(mesh, scalars="values", cmap=self._lookup_table(),
-                                              clim=self.scene.colour_range(), nan_color=MAGENTA, name="curve-edges",
+                                              clim=self.scene.colour_range(),
+                                              nan_color=greyed(MAGENTA) if self.scene.stale else MAGENTA,
+                                              name="curve-edges",
                                               reset_camera=False, render=False, pickable=False, smooth_shading=True,
                                               show_scalar_bar=False)
         else:
@@ -466,7 +492,8 @@ class SceneView:
         """The skeleton element drawn nearest to display point (x, y), with every local value.
 
         A numpy projection of the visible skeleton elements (tens of ms for a million points, where
-        VTK's point picker took seconds); within a few pixels of the click, the front-most wins."""
+        VTK's point picker took seconds); of those near the click, what is drawn on top there wins
+        (:func:`.picking.front_pick`: a curve vertex over the skeletal point under it)."""
         ratio = self.plotter.devicePixelRatioF()
         candidates = []
         for key, where in self._pickable.items():
@@ -474,25 +501,42 @@ class SceneView:
             layer = self.scene.layers.get(where[0])
             if actor is None or layer is None or not layer.visible:
                 continue
-            tolerance = (max(float(actor.prop.point_size), 4.0) / 2 + 3) * ratio
-            if key not in self._pick_coords:
-                self._pick_coords[key] = pick_layout(self._sources[key])
-            hit = nearest_on_screen(self.plotter.renderer, self._pick_coords[key], x, y, tolerance)
-            if hit is not None:
-                candidates.append((hit[1], hit[2], where, hit[0]))
-        if not candidates:
+            size = float(actor.prop.point_size)
+            tolerance = ((max(size, 4.0) + 4.0) / 2 + 3) * ratio
+            idx, dist, depth = near_on_screen(self.plotter.renderer, self._pick_layout(key), x, y, tolerance)
+            if not len(idx):
+                continue
+            invalid = self._invalid.get(key)
+            nan = np.zeros(len(idx), bool) if invalid is None else invalid[idx]
+            radius = ((np.where(nan, size + 4.0, size)) / 2.0 + 1.0) * ratio  # the disc drawn, one pixel spare
+            rank = np.where(nan, 0, 1 if key.startswith("curve") else 2)
+            # per actor, the two that can win: the front-most covering one and the nearest on screen
+            cover = np.flatnonzero(dist <= radius)
+            picks = set()
+            if len(cover):
+                picks.add(int(cover[np.lexsort((dist[cover], depth[cover], rank[cover]))[0]]))
+            picks.add(int(np.lexsort((depth, np.round(dist)))[0]))
+            candidates += [(key, int(idx[j]), float(dist[j]), float(depth[j]), float(radius[j]), int(rank[j]))
+                           for j in picks]
+        best = front_pick(candidates)
+        if best is None:
             self._remove_marker()
             self.request_render()
             return None
-        best = min(candidates, key=lambda c: (round(c[0]), c[1]))
-        _, _, where, index = best
-        info = self.scene.element_info(where[0], where[1], index)
+        where = self._pickable[best[0]]
+        info = self.scene.element_info(where[0], where[1], best[1])
         self._show_marker(info["xyz"])
+        self.picked = info
         return info
 
     def mark(self, xyz: tuple[float, float, float]) -> None:
         """Mark a point as the picked element (a pick made by index, e.g. from a saved session)."""
         self._show_marker(xyz)
+    def _pick_layout(self, key: str) -> np.ndarray:
+        """An actor's points laid out for picking (:func:`.picking.pick_layout`), made once."""
+        if key not in self._pick_coords:
+            self._pick_coords[key] = pick_layout(self._sources[key])
+        return self._pick_coords[key]
 
     def _show_marker(self, xyz: tuple[float, float, float]) -> None:
         self._remove_marker()
@@ -505,6 +549,13 @@ class SceneView:
 
     def _remove_marker(self) -> None:
         self._remove("pick-marker")
+        self.picked = None
+
+    @property
+    def marker_shown(self) -> bool:
+        """Whether the picked element's marker is in the scene (and visible)."""
+        actor = self._actors.get("pick-marker")
+        return actor is not None and bool(actor.GetVisibility())
 
     # ---- images ---------------------------------------------------------------------------
     def image(self, scale: int = 1, transparent: bool = False, colour_bar: bool = True,

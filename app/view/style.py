@@ -6,26 +6,39 @@ from __future__ import annotations
 
 import pyvista as pv
 
-from skelcore.colors import CLOUD_GREY, CURVE_COLOR, MAGENTA, METRIC_COLORMAP, SKELETAL_COLOR, lookup_table
+from skelcore.colors import CLOUD_GREY, CURVE_COLOR, MAGENTA, METRIC_COLORMAP, PICK_COLOR, SKELETAL_COLOR, lookup_table
 
 __all__ = [
     "MAGENTA", "CLOUD_GREY", "SKELETAL_PLAIN", "CURVE_EDGE", "CURVE_VERTEX", "PICK_MARKER", "make_lut", "plain_lut",
+    "greyed", "STALE_MIX",
 ]
 
 SKELETAL_PLAIN = SKELETAL_COLOR
 CURVE_EDGE = CURVE_COLOR
 CURVE_VERTEX = CURVE_COLOR
-PICK_MARKER = (255, 140, 0)  # orange: on neither colour map, not magenta
+PICK_MARKER = PICK_COLOR
 COLORMAP = METRIC_COLORMAP
 
 
-def make_lut(clim: tuple[float, float], cmap: str = COLORMAP) -> pv.LookupTable:
-    """A VTK lookup table of skelcore's colour map over ``clim``, NaN drawn magenta."""
+STALE_MIX = 0.7
+"""How far stale results' colours are washed toward light grey (issue 25: a setting changed, so the
+colours on screen are not those a re-run would give)."""
+
+
+def greyed(rgb: tuple[int, int, int]) -> tuple[int, int, int]:
+    """A colour washed toward light grey (215) by STALE_MIX: still readable, plainly out of date."""
+    return tuple(int(round(v + STALE_MIX * (215 - v))) for v in rgb)  # type: ignore[return-value]
+
+
+def make_lut(clim: tuple[float, float], cmap: str = COLORMAP, stale: bool = False) -> pv.LookupTable:
+    """A VTK lookup table of skelcore's colour map over ``clim``, NaN drawn magenta; ``stale``: both
+    washed toward grey (:func:`greyed`)."""
     table = lookup_table(cmap, 256)
     lut = pv.LookupTable()
-    lut.values = [(int(r), int(g), int(b), 255) for r, g, b in table]
+    shade = greyed if stale else (lambda c: c)
+    lut.values = [(*shade((int(r), int(g), int(b))), 255) for r, g, b in table]
     lut.scalar_range = (float(clim[0]), float(clim[1]))
-    lut.nan_color = MAGENTA
+    lut.nan_color = shade(MAGENTA)
     return lut
 
 

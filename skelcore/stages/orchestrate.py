@@ -37,6 +37,7 @@ def evaluate(
     viewpoints=None,
     remove_outliers: bool = False,
     cap_openings: bool = False,
+    on_stages: Callable[[tuple[str, ...]], None] | None = None,
 ) -> Evaluation:
     """Score a skeleton against its point cloud with the paper's four metrics (SPEC.md), the trust
     checks, SkelScope's coverage and, given a ``reference_curve``, the comparison with it.
@@ -55,6 +56,8 @@ def evaluate(
     progress : ``progress(fraction, stage)``, called at checkpoints (throttled).
     cancel : returning True makes the next checkpoint raise :class:`Cancelled` (in whichever stage checks
         first when several run side by side).
+    on_stages : ``on_stages(names)`` whenever the set of stages running side by side changes (their
+        names in the order they started; empty between stages), e.g. for a label naming them all.
     workers : threads running the independent stages side by side (None = all cores; 1 = one after the
         other, in the order they are started: the skeletal boundedness first, the curve's last); the
         values do not depend on it.
@@ -77,7 +80,7 @@ def evaluate(
                         remove_outliers=remove_outliers, cap_openings=cap_openings,
                         checkpoint=StageProgress({}, None, cancel).between("scan preparation"))
     stages = select(ctx)
-    tracker = StageProgress({s.name: s.weight for s in stages}, progress, cancel)
+    tracker = StageProgress({s.name: s.weight for s in stages}, progress, cancel, on_stages)
     tasks = [_task(stage, ctx, tracker) for stage in start_order(stages, ctx)]
     run_graph(tasks, workers, on_error=tracker.abort)
     ev = assemble(ctx, inputs)

@@ -21,9 +21,13 @@ class StageProgress:
     Stages may run side by side on several threads (:func:`skelcore.parallel.run_graph`): the caller's
     ``progress`` is called under a lock (never from two threads at once) with the weighted sum of every
     stage's fraction, and once :meth:`abort` has been called (a stage failed or was cancelled) every
-    checkpoint raises, so the stages beside it stop too.  ``weights``: relative cost by stage name."""
+    checkpoint raises, so the stages beside it stop too.  ``weights``: relative cost by stage name.
+    ``on_stages(names)`` is called (under the same lock) whenever the set of running stages changes,
+    with every stage running side by side in the order they started: a label naming only the stage
+    that reported last would flip between them (issue 25)."""
 
-    def __init__(self, weights: dict[str, float], progress: Progress | None, cancel: Callable[[], bool] | None):
+    def __init__(self, weights: dict[str, float], progress: Progress | None, cancel: Callable[[], bool] | None,
+                 on_stages: Callable[[tuple[str, ...]], None] | None = None):
         total = sum(weights[n] for n in weights) or 1.0
         self._size = {n: weights[n] / total for n in weights}
         self._done = {n: 0.0 for n in weights}
@@ -33,6 +37,8 @@ class StageProgress:
         self._lock = threading.Lock()
         self._last = -1.0
         self._last_stage = ""
+        self._on_stages = on_stages
+        self.running: tuple[str, ...] = ()  # the stages running now, in the order they started
         self.timings: dict[str, float] = {}
 
     def abort(self) -> None:
@@ -69,12 +75,24 @@ class StageProgress:
 
         return check
 
+    def _set_running(self, stage: str, on: bool) -> None:
+        with self._lock:
+            running = tuple(s for s in self.running if s != stage) + ((stage,) if on else ())
+            if running != self.running:
+                self.running = running
+                if self._on_stages is not None and not self._aborted.is_set():
+                    self._on_stages(running)
+
     def run(self, stage: str, fn, *args, **kwargs):
         """``fn(*args, checkpoint=..., **kwargs)`` as stage ``stage``: checked at its start and end, timed."""
         check = self.checkpoint(stage)
-        check(0.0)
-        t0 = time.perf_counter()
-        out = fn(*args, checkpoint=check, **kwargs)
-        self.timings[stage] = time.perf_counter() - t0
-        check(1.0)
+        self._set_running(stage, True)
+        try:
+            check(0.0)
+            t0 = time.perf_counter()
+            out = fn(*args, checkpoint=check, **kwargs)
+            self.timings[stage] = time.perf_counter() - t0
+            check(1.0)
+        finally:
+            self._set_running(stage, False)
         return out

@@ -93,8 +93,8 @@ def test_a_skeletal_points_neighbours_and_centroids_are_shown(cylinder_window, c
     # switching the metric shows that metric's support for the same element
     w.scene.set_metric("boundedness")
     assert w.supports.support.kind == "directions" and w.supports.overlay.names == []
-    w.scene.set_metric("smoothness")
-    assert w.supports.support.kind == "none"
+    w.scene.set_metric("smoothness")  # (issue 25: smoothness has a support too, tests/app/test_app_picking.py)
+    assert w.supports.support.kind == "smoothness"
 
 
 def test_a_point_outside_a_sphere_covers_the_cap_fraction_of_its_direction_map(window):

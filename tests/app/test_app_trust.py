@@ -40,13 +40,19 @@ def test_skeletal_set_of_another_size_scores_by_the_chosen_correspondence(qtbot,
     assert w.summary.cell_text("d_B / d_Wp", "skeletal points") == "—"
     text = w.summary.details_text()
     assert "correspondence: none" in text and "warning [no_correspondence]" in text
-    assert "--correspondence reverse" in text
+    # in the window's terms (issue 25): which setting or menu, never a command-line flag
+    assert "Settings > correspondence > reverse projection" in text and "File > Open skeletal index" in text
+    assert "--" not in text
 
     w.settings_panel.set_correspondence("reverse")
     ev = _evaluate(qtbot, w)
     assert w.dialogs == [] and ev.correspondence == "reverse" and ev.topology is not None
     assert "correspondence: reverse" in w.summary.details_text()
-    assert "(n = 1200)" in w.summary.cell_text("centeredness", "skeletal points")  # counted per cloud row
+    # counted per cloud row; the cell says how many cloud rows and how many skeletal points
+    n_points = len(np.unique(ev.skeletal.rows))
+    assert f"(n = 1200 cloud rows on {n_points} of 150 skeletal points)" in w.summary.cell_text("centeredness",
+                                                                                                "skeletal points")
+    assert "(n = 150)" in w.summary.cell_text("boundedness", "skeletal points")
     cov = w.summary.cell_text("coverage*", "skeletal points")
     assert cov.startswith(f"{ev.coverage_skeletal.fraction:.3f}")
 
@@ -84,7 +90,10 @@ def test_warnings_and_reference_in_the_summary(qtbot, window, files):
     ev = skelcore.evaluate(cloud, curve=far, reference_curve=(sh.curve_vertices, sh.curve_edges))
     w.summary.show_summary(ev.summary(), ev)
     text = w.summary.details_text()
-    assert "warning [frame]" in text and "--skeleton-scale" in text
+    assert "warning [frame]" in text and "--skeleton-scale" not in text
+    (frame,) = [x for x in ev.warnings if x.code == "frame"]
+    s, off = frame.mapping
+    assert f"Evaluate > Map skeleton into the cloud's frame… (suggested: scale {s:.6g}" in text
     assert "reference curve: chamfer" in text and "junctions 1/1" in text
     assert any(line.startswith("* coverage is SkelScope's own") for line in detail_lines(ev.summary(), ev))
     assert w.summary.cell_text("coverage*", "curve skeleton") != "—"

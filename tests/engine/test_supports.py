@@ -101,3 +101,27 @@ def test_paper_triangles_sum_to_the_paper_estimator():
         assert tri.triangles.shape[1] == 3 and tri.triangles.max() < len(tri.directions)
         assert tri.beta == pytest.approx(boundedness_paper(cloud, np.array([q]))[0], abs=1e-14)
     assert paper_triangles(cloud[:2], np.zeros(3)) is None
+
+
+def test_smoothness_supports_reproduce_the_engines_values():
+    """Issue 25: the plain recomputation of one skeletal point's smoothness (its tangent and its
+    neighbours') and of one curve vertex's angle agrees with the engine's vectorized values, coincident
+    points included (contraction stacks them)."""
+    from skelcore.curve import CurveSkeleton
+    from skelcore.metrics.smoothness import curve_vertex_smoothness, skeletal_smoothness
+    from skelcore.metrics.supports import curve_vertex_support, skeletal_smoothness_support
+
+    rng = np.random.default_rng(5)
+    t = np.sort(rng.uniform(0, 4 * np.pi, 600))
+    pts = np.column_stack([np.cos(t), np.sin(t), 0.2 * t]) + rng.normal(scale=0.01, size=(600, 3))
+    pts[100:104] = pts[100]  # a stack of coincident points
+    engine = skeletal_smoothness(pts)
+    for i in (0, 50, 101, 300, 599):
+        sup = skeletal_smoothness_support(pts, i)
+        assert sup.value == pytest.approx(engine[i], abs=1e-9)
+        assert sup.scores[sup.worst] == sup.value and np.all(sup.scores[np.isfinite(sup.scores)] >= sup.value)
+    curve = CurveSkeleton.from_raw(pts[::20], np.column_stack([np.arange(29), np.arange(1, 30)]))
+    s = curve_vertex_smoothness(curve)
+    for v in range(curve.n_vertices):
+        sup = curve_vertex_support(curve.vertices, curve.edges, v)
+        assert (np.isnan(sup.value) and np.isnan(s[v])) or sup.value == pytest.approx(s[v], abs=1e-12)

@@ -97,3 +97,23 @@ def test_frame_warning_for_voxel_coordinates_inside_the_clouds_box():
     assert "frame" not in codes(evaluate(cloud, curve=(verts, sh.curve_edges)))
     half = len(verts) // 2  # an incomplete skeleton in the right frame is not a frame problem
     assert "frame" not in codes(evaluate(cloud, curve=(verts[: half + 1], sh.curve_edges[:half])))
+
+
+def test_a_warning_gives_its_finding_and_suggested_mapping_apart_from_the_command_line():
+    """Issue 25: a front end words its own remedy from ``finding`` and ``mapping``, read from the
+    message (so a warning read back from a file gives the same); the suggested map undoes the one
+    the skeleton was put in."""
+    from skelcore.trust import TrustWarning, frame_warnings, no_correspondence_warning
+
+    sh = shapes.y_shape(800, seed=1)
+    (w,) = frame_warnings(sh.cloud, sh.curve_vertices * 40.0 + 7.0, "curve skeleton")
+    assert "--skeleton" not in w.finding and w.message.startswith(w.finding)
+    s, off = w.mapping
+    mapped = (sh.curve_vertices * 40.0 + 7.0) * s + np.asarray(off)
+    # the frame fit (issue 22) proposes a bounded and complete map near the inverse (here a scale
+    # 12 % short of 1/40: the arms' ends stay inside their caps), not the bounding boxes' match
+    assert np.abs(mapped - sh.curve_vertices).max() < 0.1 * np.ptp(sh.cloud)
+    back = TrustWarning(w.code, w.message)  # as read from a JSON document
+    assert back.finding == w.finding and back.mapping == w.mapping
+    n = no_correspondence_warning(150, 1200)
+    assert n.finding.endswith("need a correspondence") and "--" not in n.finding and n.mapping is None
