@@ -388,59 +388,7 @@ def branching_tree(
     curve_step: float = 0.2,
     seed: int | np.random.Generator | None = 0,
 ) -> Shape:
-    """A tree of capped cylinders: a trunk up z, two branches at +-``angle`` in the xz-plane from its top,
-    two twigs from each branch's end spread across the branch's plane (radii and lengths per level).
-
-    As :func:`y_shape`, the cloud samples the union's boundary (points inside another tube removed),
-    each point's skeletal point is its projection onto its own tube's axis, and the curve skeleton is
-    the axes (junctions of degree 3 at the branch points), vertices about ``curve_step`` apart.
-    """
-    rng = _rng(seed)
-    up, side, across = np.array([0.0, 0, 1]), np.array([1.0, 0, 0]), np.array([0.0, 1, 0])
-    top = lengths[0] * up
-    segments = [(np.zeros(3), top, radii[0])]
-    for s1 in (-1, 1):
-        d1 = np.cos(angle) * up + s1 * np.sin(angle) * side
-        tip = top + lengths[1] * d1
-        segments.append((top, tip, radii[1]))
-        for s2 in (-1, 1):
-            d2 = np.cos(angle) * d1 + s2 * np.sin(angle) * across
-            segments.append((tip, tip + lengths[2] * d2, radii[2]))
-    areas = np.array([2 * np.pi * r * np.linalg.norm(b - a) + 2 * np.pi * r**2 for a, b, r in segments])
-    per = np.ceil(1.3 * n * areas / areas.sum()).astype(int)
-    clouds, skels, owner = [], [], []
-    for k, ((a, b, r), m) in enumerate(zip(segments, per)):
-        d = (b - a) / np.linalg.norm(b - a)
-        c = cylinder(int(m), r, float(np.linalg.norm(b - a)), capped=True, n_curve=2, seed=rng)
-        u = np.cross(d, [0.0, 0.0, 1.0]) if abs(d[2]) < 0.99 else np.cross(d, [1.0, 0.0, 0.0])
-        u /= np.linalg.norm(u)
-        frame = np.stack([u, np.cross(d, u), d])  # rows: images of x, y, z
-        clouds.append(c.cloud @ frame + a)
-        skels.append(c.skeletal @ frame + a)
-        owner.append(np.full(len(c.cloud), k))
-    cloud, skel, owner = np.vstack(clouds), np.vstack(skels), np.concatenate(owner)
-    inside = np.zeros(len(cloud), bool)
-    for k, (a, b, r) in enumerate(segments):
-        length = float(np.linalg.norm(b - a))
-        d = (b - a) / length
-        t = (cloud - a) @ d
-        dist = np.linalg.norm(cloud - a - np.clip(t, 0, length)[:, None] * d, axis=1)
-        inside |= (owner != k) & (dist < r * 0.999) & (t > -1e-9) & (t < length + 1e-9)
-    cloud, skel = cloud[~inside], skel[~inside]
-    pick = rng.permutation(len(cloud))[: min(n, len(cloud))]
-    verts: list[np.ndarray] = []
-    index: dict[tuple, int] = {}
-    edges = []
-
-    def vertex(p: np.ndarray) -> int:
-        key = tuple(np.round(p, 9))
-        if key not in index:
-            index[key] = len(verts)
-            verts.append(p)
-        return index[key]
-
-    for a, b, _r in segments:
-        steps = max(1, int(np.ceil(np.linalg.norm(b - a) / curve_step)))
-        ids = [vertex(a + (b - a) * i / steps) for i in range(steps + 1)]
-        edges.extend(zip(ids[:-1], ids[1:]))
-    return Shape(cloud[pick], skel[pick], np.array(verts), np.array(edges, dtype=np.int64))
+    """The tree of :func:`tree3` (a trunk up z, two branches at +-``angle`` in the xz-plane from its
+    top, two twigs from each branch's end), with these radii and lengths and curve vertices about
+    ``curve_step`` apart: one tube-union builder for both (kept for its callers' parameter names)."""
+    return tree3(n, radii, lengths, angle=angle, curve_spacing=curve_step, seed=seed)
