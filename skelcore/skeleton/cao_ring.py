@@ -7,7 +7,12 @@ boundary an open ring from the lower-ranked of its two hull neighbours. The star
 triangulating: after inversion about the point, its Delaunay neighbours are the vertices of the
 convex hull of the inverted neighbours plus the origin (the origin itself on the hull = open ring),
 hull order = fan order. All points at once, vectorized (Jarvis march over the (N, k) block).
-See docs/skeletonize.md for where this departs from Qhull's triangle order.
+
+Where a closed fan starts is an artefact of Qhull's output order (the toolbox starts at the first
+triangle ``delaunayn`` lists around the point). ``fan_start="qhull"`` asks Qhull for it, on the
+neighbourhood projected in absolute coordinates as the toolbox projects it (about 0.2 ms a point);
+``"axis"`` takes the fan triangle the first principal axis passes through (no Qhull call).
+docs/skeletonize.md, departure 2, measures what the choice changes.
 """
 
 from __future__ import annotations
@@ -17,7 +22,9 @@ from typing import Callable
 import numpy as np
 from scipy.spatial import cKDTree
 
-__all__ = ["knn_count", "point_rings"]
+__all__ = ["knn_count", "point_rings", "FAN_STARTS"]
+
+FAN_STARTS = ("qhull", "axis")
 
 
 def knn_count(n: int, min_k: int = 8, max_k: int = 30, fraction: float = 0.012) -> int:
@@ -45,6 +52,11 @@ def _project(points: np.ndarray, idx: np.ndarray) -> np.ndarray:
 
     Axes signed as MATLAB's ``pca`` signs its coefficients (largest-magnitude component positive).
     """
+    return _project_with_axes(points, idx)[0]
+
+
+def _project_with_axes(points: np.ndarray, idx: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """:func:`_project` and the (N, 3, 2) signed axes."""
     nb = points[idx]  # (N, k, 3)
     centred = nb - nb.mean(axis=1, keepdims=True)
     cov = np.matmul(centred.transpose(0, 2, 1), centred)
@@ -54,7 +66,28 @@ def _project(points: np.ndarray, idx: np.ndarray) -> np.ndarray:
     sign = np.sign(np.take_along_axis(axes, big[:, None, :], axis=1))
     axes = axes * np.where(sign == 0, 1.0, sign)
     rel = nb - nb[:, :1, :]
-    return np.matmul(rel, axes)
+    return np.matmul(rel, axes), axes
+
+
+def _qhull_fan_starts(points: np.ndarray, idx: np.ndarray, axes: np.ndarray, rows: np.ndarray) -> np.ndarray:
+    """(len(rows), 2) candidate ranks (local rank - 1) of the toolbox's closed-fan start and the
+    vertex it walks to: the first triangle around the point in Qhull's output (``delaunayn`` with
+    Octave's and MATLAB's options ``Qt Qbb Qc``, on ``neighbour * coefs`` as the toolbox projects),
+    its lower-ranked other vertex first. -1 where Qhull fails (degenerate neighbourhood)."""
+    from scipy.spatial import Delaunay, QhullError
+
+    out = np.full((len(rows), 2), -1, np.int64)
+    for j, r in enumerate(rows.tolist()):
+        x = points[idx[r]] @ axes[r]
+        try:
+            tri = Delaunay(x, qhull_options="Qt Qbb Qc").simplices
+        except (QhullError, ValueError):
+            continue
+        around = np.flatnonzero((tri == 0).any(axis=1))
+        if len(around):
+            other = np.sort(tri[around[0]])[1:]
+            out[j] = other - 1
+    return out
 
 
 def _hull_order(z: np.ndarray, valid: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -104,7 +137,8 @@ def _hull_order(z: np.ndarray, valid: np.ndarray) -> tuple[np.ndarray, np.ndarra
 
 
 def point_rings(
-    points: np.ndarray, k: int, check: Callable[[float], None] | None = None, chunk: int = 2048
+    points: np.ndarray, k: int, check: Callable[[float], None] | None = None, chunk: int = 2048,
+    fan_start: str = "axis",
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """One-rings of every point, CSR style: (indptr, indices, closed).
 
@@ -112,7 +146,10 @@ def point_rings(
     repeats its first vertex at the end, as the toolbox's rings do. A point whose neighbourhood is
     degenerate (all neighbours on one line in projection) gets its kNN list, nearest first.
     Works ``chunk`` points at a time; ``check(fraction)`` is called between chunks (cancel).
+    ``fan_start``: where a closed ring starts, "qhull" (the toolbox's) or "axis" (module docstring).
     """
+    if fan_start not in FAN_STARTS:
+        raise ValueError(f"fan_start {fan_start!r}: use one of {', '.join(FAN_STARTS)}")
     check = check or (lambda _f: None)
     pts = np.asarray(points, dtype=float)
     n = len(pts)
@@ -124,7 +161,7 @@ def point_rings(
     lens, parts, closed = [], [], []
     for lo in range(0, n, chunk):
         check(lo / n)
-        ip, ind, cl = _rings_of(pts, tree, order[lo:lo + chunk], k)
+        ip, ind, cl = _rings_of(pts, tree, order[lo:lo + chunk], k, fan_start == "qhull")
         lens.append(np.diff(ip))
         parts.append(ind)
         closed.append(cl)
@@ -142,10 +179,11 @@ def point_rings(
     return indptr, indices, is_closed
 
 
-def _rings_of(pts: np.ndarray, tree: cKDTree, rows: np.ndarray, k: int) -> tuple:
+def _rings_of(pts: np.ndarray, tree: cKDTree, rows: np.ndarray, k: int, qhull_start: bool = False) -> tuple:
     idx = _neighbours(pts, tree, rows, k)
     n = len(rows)
-    rel = _project(pts, idx)[:, 1:, :]  # (n, m, 2), m = k - 1 candidates (local ranks 1..m)
+    rel, axes = _project_with_axes(pts, idx)
+    rel = rel[:, 1:, :]  # (n, m, 2), m = k - 1 candidates (local ranks 1..m)
     r2 = np.einsum("nmk,nmk->nm", rel, rel)
     scale = np.sqrt(np.max(r2, axis=1, keepdims=True))
     valid = r2 > (1e-12 * scale) ** 2
@@ -155,10 +193,17 @@ def _rings_of(pts: np.ndarray, tree: cKDTree, rows: np.ndarray, k: int) -> tuple
     z = np.concatenate([inv, np.zeros((n, 1, 2))], axis=1)  # candidate m = the origin (the point)
     zvalid = np.concatenate([valid, np.ones((n, 1), bool)], axis=1)
     hull, cnt = _hull_order(z, zvalid)
-    return _assemble(idx, rel, hull, cnt, m)
+    starts = None
+    if qhull_start:
+        closed = np.flatnonzero(~np.any((np.arange(hull.shape[1])[None, :] < cnt[:, None]) & (hull == m), axis=1)
+                                & (cnt >= 3))
+        starts = np.full((n, 2), -1, np.int64)
+        starts[closed] = _qhull_fan_starts(pts, idx, axes, closed)
+    return _assemble(idx, rel, hull, cnt, m, starts)
 
 
-def _assemble(idx: np.ndarray, rel: np.ndarray, hull: np.ndarray, cnt: np.ndarray, m: int) -> tuple:
+def _assemble(idx: np.ndarray, rel: np.ndarray, hull: np.ndarray, cnt: np.ndarray, m: int,
+              starts: np.ndarray | None = None) -> tuple:
     """Hull orders to toolbox rings (start, direction, closing repeat), all rows at once.
 
     Open fan (the origin, candidate m, on the hull): from the hull vertex after the origin to the one
@@ -186,6 +231,14 @@ def _assemble(idx: np.ndarray, rel: np.ndarray, hull: np.ndarray, cnt: np.ndarra
     vb = h[np.arange(n), (t + 1) % c[:, 0]]
     first = np.where(va < vb, t, (t + 1) % c[:, 0])
     forward = va < vb  # the lower-ranked vertex first, then the other one: forward iff a is lower
+    if starts is not None:  # Qhull's first triangle, where its two vertices are adjacent in the fan
+        pos = np.argmax(inside & (h == starts[:, :1]), axis=1)
+        found = (starts[:, 0] >= 0) & np.any(inside & (h == starts[:, :1]), axis=1)
+        after = h[np.arange(n), (pos + 1) % c[:, 0]] == starts[:, 1]
+        before = h[np.arange(n), (pos - 1) % c[:, 0]] == starts[:, 1]
+        use = found & (after | before)
+        first = np.where(use, pos, first)
+        forward = np.where(use, after, forward)
     origin_pos = np.argmax(inside & (hull == m), axis=1)
 
     good_closed = ~is_open & (cnt >= 3)

@@ -47,7 +47,8 @@ def _skeletonize_cao(pts_n: np.ndarray, params: CaoParams, report: Reporter) -> 
 
     report("laplacian", 0.0)
     k = knn_count(len(pts_n), params.min_neighbors, params.max_neighbors, params.neighbor_fraction)
-    indptr, indices, _closed = point_rings(pts_n, k, check=lambda f: report("laplacian", f))
+    fan_start = params.fan_start_for(len(pts_n))
+    indptr, indices, _closed = point_rings(pts_n, k, check=lambda f: report("laplacian", f), fan_start=fan_start)
     rings = Rings(indptr, indices)
     report("laplacian", 1.0)
     t = time.perf_counter()
@@ -59,6 +60,7 @@ def _skeletonize_cao(pts_n: np.ndarray, params: CaoParams, report: Reporter) -> 
     verts, edges, _labels, n_samples = cao_curve(cpts, rings, radius, check=lambda: report("curve", 0.5))
     report("curve", 1.0)
     info["n_samples_before_collapse"] = n_samples
+    info["fan_start"] = fan_start
     return cpts, verts, edges, radius, info, t_contract, time.perf_counter() - t
 
 def skeletonize(
@@ -129,5 +131,6 @@ def skeletonize(
         timings={"contraction": t_contract, "curve": t_curve, "total": time.perf_counter() - t0},
         method=method,
         initial_weight=info.get("initial_weight"),
+        fan_start=info.get("fan_start"),
     )
     return skeletal, curve, sk_info

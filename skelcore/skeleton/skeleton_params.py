@@ -49,6 +49,12 @@ class CaoParams(_Replaceable):
         the iterate that failed the test is discarded, as is one whose bounding box grew on an axis
         beyond ``bbox_growth_limit`` x the original's (1.2).
     sample_radius_factor : ball radius of the farthest sampling = factor x bounding-box diagonal (0.02).
+    fan_start : where a closed one-ring starts (it decides the initial W_L and which neighbour
+        ``connect_by_inherit_neigh`` meets first): "qhull" (the toolbox's: the first triangle Qhull
+        lists around the point, about 0.14 ms of CPU a point), "axis" (the fan triangle the first
+        principal axis crosses, no Qhull call) or "auto" (qhull up to ``qhull_fan_max_points``).
+    qhull_fan_max_points : the largest cloud "auto" starts fans the toolbox's way (25000: the
+        paper's clouds; 3.4 s of CPU at 22k, docs/skeletonize.md departure 2).
     linear_solver : the contraction's sparse SPD solve: "cholmod" (CHOLMOD from cvxopt, MATLAB's
         backslash path), "superlu" (SciPy) or "auto" (cholmod when cvxopt is installed); all exact,
         the same skeleton to rounding (:mod:`.solve`, docs/skeletonize.md).
@@ -67,7 +73,15 @@ class CaoParams(_Replaceable):
     termination_ratio: float = 0.01
     bbox_growth_limit: float = 1.2
     sample_radius_factor: float = 0.02
+    fan_start: str = "auto"
+    qhull_fan_max_points: int = 25000
     linear_solver: str = "auto"
+
+    def fan_start_for(self, n_points: int) -> str:
+        """The fan start used for a cloud of ``n_points`` ("auto" resolved)."""
+        if self.fan_start != "auto":
+            return self.fan_start
+        return "qhull" if n_points <= int(self.qhull_fan_max_points) else "axis"
 
     def __post_init__(self) -> None:
         def bad(name: str, why: str) -> None:
@@ -75,6 +89,10 @@ class CaoParams(_Replaceable):
 
         if self.linear_solver not in ("auto", "cholmod", "superlu"):
             bad("linear_solver", "must be auto, cholmod or superlu")
+        if self.fan_start not in ("auto", "qhull", "axis"):
+            bad("fan_start", "must be auto, qhull or axis")
+        if int(self.qhull_fan_max_points) < 0:
+            bad("qhull_fan_max_points", "must be >= 0")
         for name in ("attraction_weight", "contraction_weight_max", "attraction_weight_max", "weight_row_cap",
                      "termination_ratio", "sample_radius_factor", "neighbor_fraction"):
             if not float(getattr(self, name)) > 0:
@@ -207,7 +225,7 @@ class SkeletonizeParams(_Replaceable):
 @dataclass
 class SkeletonizeInfo:
     """What happened: iterations run, the one-ring size ratio after each, why it stopped, timings,
-    the method and (cao) its initial contraction weight W_L."""
+    the method and (cao) its initial contraction weight W_L and where its closed one-rings started."""
 
     iterations: int
     ring_ratios: list[float]
@@ -217,6 +235,7 @@ class SkeletonizeInfo:
     timings: dict[str, float]
     method: str = "skelscope"
     initial_weight: float | None = None
+    fan_start: str | None = None
 
 
 # ---------------------------------------------------------------------------------------------

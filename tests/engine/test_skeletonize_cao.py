@@ -280,3 +280,72 @@ def test_tree_reproduces_the_papers_row(shared_data):
     assert s["smoothness"]["skeletal"] == pytest.approx(0.903, abs=0.02)
     assert abs(curve.n_vertices - 148) <= 3
     assert info.iterations == 2
+
+
+# ---- where a closed one-ring starts (docs/skeletonize.md, departure 2) -------------------------
+
+def test_qhull_fan_start_is_the_first_triangle_qhull_lists_around_the_point(rng):
+    """fan_start="qhull": a closed ring starts at the lower-ranked other vertex of the first
+    triangle around the point in Qhull's output (neighbourhood projected in absolute coordinates,
+    as the toolbox's ``neighbor * coefs``) and walks to that triangle's third vertex."""
+    from scipy.spatial import cKDTree
+    from skelcore.skeleton.cao_ring import _project_with_axes
+
+    pts = shapes.y_shape(1500, seed=4).cloud
+    k = knn_count(len(pts))
+    indptr, indices, closed = point_rings(pts, k, chunk=500, fan_start="qhull")
+    idx = _neighbours(pts, cKDTree(pts), np.arange(len(pts)), k)
+    _rel, axes = _project_with_axes(pts, idx)
+    checked = 0
+    for i in rng.choice(np.flatnonzero(closed), 120, replace=False):
+        tri = Delaunay(pts[idx[i]] @ axes[i], qhull_options="Qt Qbb Qc").simplices
+        first = np.sort(tri[np.flatnonzero((tri == 0).any(axis=1))[0]])[1:]
+        ring = indices[indptr[i]:indptr[i + 1]]
+        assert ring[0] == ring[-1]
+        assert (ring[0], ring[1]) == (idx[i, first[0]], idx[i, first[1]])
+        checked += 1
+    assert checked == 120
+    # the same neighbour sets as the axis start: only the start and direction differ
+    ip2, ind2, closed2 = point_rings(pts, k, chunk=500, fan_start="axis")
+    assert np.array_equal(closed, closed2) and np.array_equal(indptr, ip2)
+    for i in range(0, len(pts), 7):
+        assert set(indices[indptr[i]:indptr[i + 1]]) == set(ind2[ip2[i]:ip2[i + 1]])
+
+
+def test_fan_start_auto_uses_qhull_up_to_the_threshold():
+    p = CaoParams()
+    assert p.fan_start_for(4096) == "qhull" and p.fan_start_for(25001) == "axis"
+    assert CaoParams(fan_start="axis").fan_start_for(10) == "axis"
+    assert CaoParams(qhull_fan_max_points=100).fan_start_for(4096) == "axis"
+    with pytest.raises(ValueError, match="fan_start"):
+        CaoParams(fan_start="delaunay")
+    with pytest.raises(ValueError, match="fan_start"):
+        point_rings(np.random.default_rng(0).normal(size=(50, 3)), 8, fan_start="x")
+
+
+def test_hammer_starts_its_fans_as_the_toolbox_and_gets_its_weight(shared_data):
+    """With Qhull's fan starts the initial W_L is the toolbox's (17.197 in Octave, docs/skeletonize.md);
+    the axis start gave 17.55."""
+    from skelcore.io import load_cloud
+
+    cloud = load_cloud(shared_data / "hammer_4096.ply")
+    _s, curve, info = skeletonize(cloud, method="cao", return_info=True)
+    assert info.fan_start == "qhull"
+    assert info.initial_weight == pytest.approx(17.197, abs=0.001)
+    assert curve.n_vertices == 51
+
+
+def test_bundled_cylinder_gets_a_curve_along_most_of_its_length():
+    """Issue 22: the axis start gave 5 vertices over z 2.83-3.74 of the 0-4 cylinder; the toolbox's
+    own code gives 7 vertices over about 80 % of it, and so does the Qhull start."""
+    import skelcore
+    from skelcore.io import load_cloud
+
+    from pathlib import Path
+
+    cloud = load_cloud(Path(__file__).resolve().parents[2] / "resources" / "samples" / "cylinder_cloud.ply")
+    skeletal, curve = skeletonize(cloud, method="cao")
+    z = curve.vertices[:, 2]
+    assert z.max() - z.min() > 0.75 * 4.0
+    ev = skelcore.evaluate(cloud, skeletal, curve)
+    assert not [w for w in ev.warnings if w.code in ("incomplete", "spurious_branches", "outside")]
