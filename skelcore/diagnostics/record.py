@@ -12,6 +12,7 @@ import numpy as np
 from ..io.json_numbers import json_safe
 from .defects import CurveDefects
 from .missing_parts import MissingParts
+from .outside import OutsideDefects
 
 __all__ = ["Diagnostics", "DEFECT_BITS", "diagnostics_record", "defect_names"]
 
@@ -24,7 +25,8 @@ class Diagnostics:
     """``summary``: the JSON block (completeness, missing parts, branches, cycles: skeleton / shape /
     spurious / missing, outside length share); ``arrays``: ``curve_vertex_branch``,
     ``curve_sample_branch`` (-1: a junction), ``curve_vertex_defects``, ``curve_sample_defects``
-    (:data:`DEFECT_BITS`), ``cloud_missing_skeletal`` / ``cloud_missing_curve`` (the point's missing
+    (:data:`DEFECT_BITS`), ``skeletal_point_defects`` (the given skeletal set's ``outside`` bits),
+    ``cloud_missing_skeletal`` / ``cloud_missing_curve`` (the point's missing
     region, -1: explained or in no counted region)."""
 
     summary: dict[str, Any]
@@ -56,7 +58,8 @@ def _missing_region(mp: MissingParts) -> np.ndarray:
 
 
 def diagnostics_record(curve: CurveDefects | None, missing_skeletal: MissingParts | None,
-                       missing_curve: MissingParts | None, n_samples: int = 0) -> Diagnostics:
+                       missing_curve: MissingParts | None, n_samples: int = 0, *,
+                       skeletal_outside: OutsideDefects | None = None) -> Diagnostics:
     """The record from the diagnostics stages' results (any of them may be None: not run)."""
     summary: dict[str, Any] = {
         "completeness": {"skeletal": None if missing_skeletal is None else missing_skeletal.completeness,
@@ -64,6 +67,7 @@ def diagnostics_record(curve: CurveDefects | None, missing_skeletal: MissingPart
         "missing_parts": {"skeletal": None if missing_skeletal is None else missing_skeletal.to_dict(),
                           "curve": None if missing_curve is None else missing_curve.to_dict()},
         "branches": None, "spurious_branches": None, "cycles": None, "outside": None,
+        "skeletal_outside": None,
     }
     arrays: dict[str, np.ndarray] = {}
     if curve is not None:
@@ -76,6 +80,10 @@ def diagnostics_record(curve: CurveDefects | None, missing_skeletal: MissingPart
         if b.sample_branch is not None:
             arrays["curve_sample_branch"] = np.asarray(b.sample_branch, np.int64)
             arrays["curve_sample_defects"] = _flags(curve.sample_flags(), len(b.sample_branch))
+    if skeletal_outside is not None and skeletal_outside.skeletal_outside is not None:
+        summary["skeletal_outside"] = skeletal_outside.to_dict().get("skeletal")
+        arrays["skeletal_point_defects"] = _flags({"outside": skeletal_outside.skeletal_outside},
+                                                  len(skeletal_outside.skeletal_outside))
     if missing_skeletal is not None:
         arrays["cloud_missing_skeletal"] = _missing_region(missing_skeletal)
     if missing_curve is not None:

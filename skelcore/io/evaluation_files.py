@@ -116,7 +116,9 @@ def write_per_point(ev: Evaluation, prefix: str, inputs: tuple[str, ...] = ()) -
         s = ev.skeletal
         path = f"{prefix}_skeletal.csv"
         rows = zip(range(len(s.points)), *s.points.T, s.boundedness, s.centeredness(b_star), s.smoothness)
-        _write_csv(path, ["index", "x", "y", "z", "boundedness", "centeredness", "smoothness"], rows, guard)
+        extra, cols = _skeletal_defect_column(ev, len(s.points))
+        _write_csv(path, ["index", "x", "y", "z", "boundedness", "centeredness", "smoothness", *cols],
+                   (r + e for r, e in zip(rows, extra)), guard)
         written.append(path)
     if ev.curve is not None:
         c = ev.curve
@@ -169,6 +171,17 @@ def _defect_columns(ev: Evaluation, element: str, n: int) -> tuple[list[tuple], 
 
     return (list(zip(arrays[f"curve_{element}_branch"], defect_names(arrays[f"curve_{element}_defects"]))),
             ["branch", "defects"])
+
+
+def _skeletal_defect_column(ev: Evaluation, n: int) -> tuple[list[tuple], list[str]]:
+    """The diagnostics' ``defects`` per given skeletal point (``outside``; issue 22)."""
+    arrays = {} if ev.diagnostics is None else ev.diagnostics.arrays
+    bits = arrays.get("skeletal_point_defects")
+    if bits is None or len(bits) != n:
+        return [()] * n, []
+    from ..diagnostics.record import defect_names
+
+    return [(d,) for d in defect_names(bits)], ["defects"]
 
 
 def write_barcodes(ev: Evaluation, path: str | os.PathLike, inputs: tuple[str, ...] = ()) -> None:

@@ -49,9 +49,9 @@ def assemble(ctx: EvalContext, inputs: dict[str, Any] | None = None) -> Evaluati
     ev.coverage_skeletal = got.get("skeletal coverage")
     ev.coverage_curve = got.get("curve coverage")
     ev.reference = got.get("reference")
-    if any(k in got for k in ("curve defects", "skeletal missing parts", "curve missing parts")):
+    if any(k in got for k in ("curve defects", "skeletal outside", "skeletal missing parts", "curve missing parts")):
         ev.diagnostics = diagnostics_record(got.get("curve defects"), got.get("skeletal missing parts"),
-                                            got.get("curve missing parts"))
+                                            got.get("curve missing parts"), skeletal_outside=got.get("skeletal outside"))
     ev.scan = ctx.scan
     return ev
 
@@ -59,7 +59,7 @@ def assemble(ctx: EvalContext, inputs: dict[str, Any] | None = None) -> Evaluati
 def diagnostics_warnings(ctx: EvalContext) -> list[TrustWarning]:
     """The diagnostics' defect warnings (issue 22), after the trust checks."""
     out: list[TrustWarning] = []
-    for name in ("skeletal missing parts", "curve missing parts", "curve defects"):
+    for name in ("skeletal missing parts", "curve missing parts", "curve defects", "skeletal outside"):
         found = ctx.results.get(name)
         if found is not None:
             out += found.warnings()

@@ -24,6 +24,7 @@ from ..metrics.smoothness import curve_smoothness_overall, curve_vertex_smoothne
 from ..metrics.topology import topological_similarity
 from ..diagnostics.defects import find_curve_defects
 from ..diagnostics.missing_parts import missing_parts
+from ..diagnostics.outside import find_outside
 from .context import EvalContext
 
 __all__ = ["Stage", "CATALOGUE", "select", "start_order", "FIRST", "EARLY", "IN_TURN", "LAST"]
@@ -125,6 +126,13 @@ def _curve_defects(ctx: EvalContext, checkpoint: Checkpoint):
                               checkpoint=checkpoint)
 
 
+def _skeletal_outside(ctx: EvalContext, checkpoint: Checkpoint):
+    """The given skeletal set's points outside the shape, clustered (docs/diagnostics.md "Outside")."""
+    return find_outside(ctx.cloud_n, None, skeletal=ctx.skeletal_n,
+                        skeletal_boundedness=ctx.results["skeletal boundedness"], params=ctx.params,
+                        checkpoint=checkpoint)
+
+
 def _missing(kind: str) -> Callable[[EvalContext, Checkpoint], object]:
     """Missing parts and completeness of one column (docs/diagnostics.md), from its coverage when computed."""
     def run(ctx: EvalContext, checkpoint: Checkpoint):
@@ -203,6 +211,8 @@ CATALOGUE: tuple[Stage, ...] = (
           fn=_reference),
     Stage("curve defects", weight=0.5, column="", inputs=("cloud", "curve", "samples", "curve boundedness"),
           applies=_curve, fn=_curve_defects, start=LAST),
+    Stage("skeletal outside", weight=0.1, column="", inputs=("cloud", "skeletal set", "skeletal boundedness"),
+          applies=_skeletal_set, fn=_skeletal_outside, start=LAST),
     Stage("skeletal missing parts", weight=0.2, column="", inputs=("cloud", "skeletal set", "skeletal coverage"),
           applies=_skeletal_set, fn=_missing("skeletal"), start=LAST),
     Stage("curve missing parts", weight=0.2, column="", inputs=("cloud", "curve", "curve coverage"), applies=_curve,

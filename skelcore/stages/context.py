@@ -36,10 +36,10 @@ CORRESPONDENCE_CHOICES = ("auto", "reverse")
 #: when no set is given), "rows" the reverse correspondence (made by that stage too), "unseen" what the
 #: skeletal boundedness stage found behind the skeletal points with viewpoints (docs/metrics.md 6.3).
 CONTEXT_ITEMS = ("cloud", "skeletal set", "skeletal points", "rows", "index", "curve", "samples", "reference", "tau",
-                 "unseen", "curve boundedness", "skeletal coverage", "curve coverage")
+                 "unseen", "curve boundedness", "skeletal boundedness", "skeletal coverage", "curve coverage")
 #: items that are other stages' results (the diagnostics read them), made by the stage of that name
 #: when it runs in this evaluation (the coverage stages only below coverage_max_points)
-STAGE_RESULTS = ("curve boundedness", "skeletal coverage", "curve coverage")
+STAGE_RESULTS = ("curve boundedness", "skeletal boundedness", "skeletal coverage", "curve coverage")
 
 
 @dataclass
@@ -100,6 +100,8 @@ class EvalContext:
             return "correspondence"
         if item == "curve boundedness":
             return item if self.curve is not None else None
+        if item == "skeletal boundedness":
+            return item if self.has_skeletal_column else None
         if item == "skeletal coverage":
             return item if self.skeletal is not None and self.with_coverage else None
         if item == "curve coverage":

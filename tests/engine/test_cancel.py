@@ -29,6 +29,7 @@ STAGES = [
     "curve coverage",
     "curve boundedness",
     "curve defects",  # the diagnostics (issue 22)
+    "skeletal outside",
     "skeletal missing parts",
     "curve missing parts",
 ]

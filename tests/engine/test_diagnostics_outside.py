@@ -169,3 +169,37 @@ def test_hammer_with_our_skeletonizers_has_no_defect(shared_data):
         d = find_curve_defects(c, curve, samples=samples, sample_boundedness=beta)
         assert d.warnings() == [], (method, [w.message for w in d.warnings()])
         assert d.branches.kind.count("terminal") == 3 and d.cycles.shape_tunnels == 0
+
+
+def test_evaluate_tests_a_given_skeletal_set_for_points_outside(tmp_path):
+    """The "skeletal outside" stage (no curve needed): the T's true skeletal set is inside; the same
+    set with 10 % of its points moved together above the bar gets ``outside``, each moved point is
+    flagged in the per-element array and the per-point CSV, and the flags survive a save and load."""
+    import csv
+
+    import skelcore
+    from skelcore.io.evaluation_files import load_evaluation, save_evaluation
+
+    s = shapes.t_shape(n=4000, seed=5)
+    ev = skelcore.evaluate(s.cloud, s.skeletal)
+    assert "skeletal outside" in ev.timings
+    assert [w for w in ev.warnings if w.code == "outside"] == []
+    assert ev.diagnostics.summary["skeletal_outside"]["largest_cluster_share"] < 0.01
+
+    moved = s.skeletal.copy()
+    group = np.argsort(moved[:, 0])[-len(moved) // 10:]  # one end of the bar
+    moved[group] += np.array([0.0, 0.0, 0.5 * np.ptp(s.cloud, axis=0).max()])
+    ev = skelcore.evaluate(s.cloud, moved)
+    (w,) = [w for w in ev.warnings if w.code == "outside"]
+    assert "skeletal points lie outside the shape in one cluster" in w.message
+    flags = ev.diagnostics.arrays["skeletal_point_defects"]
+    assert set(np.flatnonzero(flags)) <= set(group.tolist()) and np.count_nonzero(flags) > 0.9 * len(group)
+
+    path = [p for p in ev.write_per_point(str(tmp_path / "t")) if p.endswith("_skeletal.csv")][0]
+    with open(path) as fh:
+        rows = list(csv.DictReader(fh))
+    assert {int(r["index"]) for r in rows if r["defects"] == "outside"} == set(np.flatnonzero(flags).tolist())
+    save_evaluation(ev, tmp_path / "t.npz", tmp_path / "t.json")
+    back = load_evaluation(tmp_path / "t.npz", tmp_path / "t.json")
+    np.testing.assert_array_equal(back.diagnostics.arrays["skeletal_point_defects"], flags)
+    assert back.diagnostics.summary["skeletal_outside"] == ev.diagnostics.summary["skeletal_outside"]

@@ -28,9 +28,9 @@ def test_every_stage_is_declared_once_with_a_weight_and_known_inputs():
 
 
 #: the diagnostics (issue 22) start last and wait for the results they read
-DIAG = ["curve defects", "skeletal missing parts", "curve missing parts"]
-DIAG_WAITS = {"curve defects": ("curve boundedness",), "skeletal missing parts": ("skeletal coverage",),
-              "curve missing parts": ("curve coverage",)}
+DIAG = ["curve defects", "skeletal outside", "skeletal missing parts", "curve missing parts"]
+DIAG_WAITS = {"curve defects": ("curve boundedness",), "skeletal outside": ("skeletal boundedness",),
+              "skeletal missing parts": ("skeletal coverage",), "curve missing parts": ("curve coverage",)}
 
 
 @pytest.mark.parametrize("case, started, waits", [
@@ -50,7 +50,7 @@ DIAG_WAITS = {"curve defects": ("curve boundedness",), "skeletal missing parts":
     # without coverage the missing parts compute their own (on a subsample above missing_max_points)
     (dict(every=5, params=Params(coverage_max_points=100)),
      ["skeletal boundedness", "skeletal smoothness", "curve centeredness", "curve smoothness", "curve boundedness",
-      *DIAG], {"curve defects": ("curve boundedness",)}),
+      *DIAG], {"curve defects": ("curve boundedness",), "skeletal outside": ("skeletal boundedness",)}),
     (dict(skeletal=False), ["curve boundedness", "curve centeredness", "curve smoothness", "curve coverage",
                             "curve defects", "curve missing parts"],
      {"curve defects": ("curve boundedness",), "curve missing parts": ("curve coverage",)}),
