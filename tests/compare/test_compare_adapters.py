@@ -214,3 +214,31 @@ def test_a_failing_or_hanging_tool_fails_its_job_and_the_others_go_on(tmp_path):
     assert rows["tiny_grid"]["status"] == "failed" and rows["tiny_grid"]["error"].startswith(
         "method 'tiny_grid': skimage: voxel_size ") and "> max_voxels 100" in rows["tiny_grid"]["error"]
     assert rows["thin"]["status"] == "ok"
+
+
+def test_a_cancelled_tool_run_stops_its_process(tmp_path):
+    """Cancel (the viewer's, a study's) kills the child's process group and raises Cancelled."""
+    from skelcore.compare.methods import run_adapter
+    from skelcore.errors import Cancelled
+
+    root = _dataset(tmp_path)
+    spec = load_manifest(manifest(root, TOOLS)).methods[1]  # kimimaro: 2-3 s to import alone
+    import psutil
+
+    before = {p.pid for p in psutil.Process().children(recursive=True)}
+    pids: set[int] = set()
+
+    def cancel() -> bool:
+        pids.update(p.pid for p in psutil.Process().children(recursive=True) if p.pid not in before)
+        return True
+
+    with pytest.raises(Cancelled):
+        run_adapter(SHAPES["cyl"]().cloud, spec, cancel=cancel)
+    alive = [p for p in pids if psutil.pid_exists(p) and psutil.Process(p).status() != psutil.STATUS_ZOMBIE]
+    assert pids and alive == []
+
+
+def test_run_in_this_process_refuses_a_bad_parameter_in_one_line():
+    with pytest.raises(SkelInputError, match=r"^skimage: unknown parameter 'voxel' \(allowed: closing, max_voxels, "
+                                             r"voxel_size\)$"):
+        run("skimage", SHAPES["cyl"]().cloud, {"voxel": 0.1})
