@@ -242,3 +242,28 @@ def test_run_in_this_process_refuses_a_bad_parameter_in_one_line():
     with pytest.raises(SkelInputError, match=r"^skimage: unknown parameter 'voxel' \(allowed: closing, max_voxels, "
                                              r"voxel_size\)$"):
         run("skimage", SHAPES["cyl"]().cloud, {"voxel": 0.1})
+
+
+def test_a_tool_that_crashes_fails_with_one_line(tmp_path):
+    """The child dies of a signal mid-run (SIGSEGV, as a segfault in the tool's C++ would): one line."""
+    import os
+    import signal
+
+    import psutil
+
+    from skelcore.compare.methods import run_adapter
+
+    root = _dataset(tmp_path)
+    spec = load_manifest(manifest(root, TOOLS)).methods[1]
+    before = {p.pid for p in psutil.Process().children(recursive=True)}
+
+    def crash() -> bool:
+        for p in psutil.Process().children(recursive=True):
+            if p.pid not in before:
+                os.kill(p.pid, signal.SIGSEGV)
+        return False
+
+    with pytest.raises(SkelInputError) as err:
+        run_adapter(SHAPES["cyl"]().cloud, spec, cancel=crash)
+    assert str(err.value).startswith(f"method 'kimi': kimimaro was killed by signal {int(signal.SIGSEGV)}")
+    assert "\n" not in str(err.value)
