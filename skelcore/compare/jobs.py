@@ -127,7 +127,8 @@ def execute(job: Job, workdir: str | None = None, *, prefix: str = "", write_clo
     """
     from .. import io
     from ..stages import evaluate
-    from .methods import read_files, run_builtin, run_command
+    from ..adapters import KINDS as ADAPTER_KINDS
+    from .methods import read_files, run_adapter, run_builtin, run_command
 
     def part(lo: float, hi: float) -> Progress | None:
         if progress is None:
@@ -146,6 +147,7 @@ def execute(job: Job, workdir: str | None = None, *, prefix: str = "", write_clo
         io.write_points_ply(files["cloud"], pts, inputs=inputs)
     t0 = time.perf_counter()
     index = None
+    correspondence = m.correspondence  # an adapter says what its skeletal set is unless the manifest does
     if m.kind == "builtin":
         skeletal, curve = run_builtin(pts, m, progress=part(0.0, 0.5), cancel=cancel)
     elif m.kind == "command":
@@ -159,6 +161,11 @@ def execute(job: Job, workdir: str | None = None, *, prefix: str = "", write_clo
         skeletal, curve = run_command(m.command or "", files["cloud"], out_s, out_c, timeout=m.timeout,
                                       cancel=cancel, label=label, cwd=m.cwd)
         files.update({k: p for k, p, v in (("skeletal", out_s, skeletal), ("curve", out_c, curve)) if v is not None})
+    elif m.kind in ADAPTER_KINDS:
+        if progress is not None:
+            progress(0.0, m.kind)
+        skeletal, curve, own = run_adapter(pts, m, cancel=cancel)
+        correspondence = correspondence or own
     else:
         skeletal, curve, index, paths = read_files(m, job.shape.name, job.condition.name, job.seed)
         files.update(paths)
@@ -167,8 +174,8 @@ def execute(job: Job, workdir: str | None = None, *, prefix: str = "", write_clo
     kwargs: dict[str, Any] = {}
     if index is not None:
         kwargs["skeletal_index"] = index
-    if m.correspondence is not None:
-        kwargs["correspondence"] = m.correspondence
+    if correspondence is not None:
+        kwargs["correspondence"] = correspondence
     viewpoints = job.shape.viewpoints or _pcd_viewpoints(job.shape.path)
     if viewpoints:
         kwargs["viewpoints"] = np.asarray(viewpoints, dtype=float)

@@ -38,6 +38,7 @@ _KEYS = {
     "builtin": {"name", "kind", "method", "params"},
     "command": {"name", "kind", "command", "timeout", "correspondence"},
     "files": {"name", "kind", "curve", "skeletal", "skeletal_index", "correspondence", "scale", "offset"},
+    "adapter": {"name", "kind", "params", "timeout", "correspondence"},  # kind = a skelcore.adapters KIND
     "conditions": {"name", "noise", "model", "sparse", "grid", "fps", "base_grid", "seeds"},
 }
 _PLACEHOLDERS = ("{python}", "{in}", "{out_skeletal}", "{out_curve}")
@@ -61,7 +62,9 @@ class MethodSpec:
     (an external program, placeholders ``{python} {in} {out_skeletal} {out_curve}``, ``timeout``
     seconds) or ``files`` (precomputed skeletons; templates with ``{stem}``, optionally
     ``{condition}``, ``{seed}``; ``scale`` and ``offset`` map them into the cloud's frame as
-    ``evaluate --skeleton-scale S --skeleton-offset X Y Z`` does)."""
+    ``evaluate --skeleton-scale S --skeleton-offset X Y Z`` does), or another tool by name
+    (``pygel``, ``kimimaro``, ``skimage``: :mod:`skelcore.adapters`, ``params`` resolved with their
+    defaults, ``tool`` its version string, both in the job key)."""
 
     name: str
     kind: str
@@ -76,12 +79,13 @@ class MethodSpec:
     correspondence: str | None = None  # evaluate(correspondence=...): "reverse" for unmatched point sets
     scale: float | None = None  # files: skeleton coordinates * scale + offset (None: not mapped)
     offset: tuple[float, float, float] | None = None
+    tool: str | None = None  # an adapter's tool and version, "kimimaro 5.8.5; adapter 1"
 
     def to_dict(self) -> dict[str, Any]:
-        """The definition a job key hashes; ``scale`` / ``offset`` only when set, so the keys of
-        runs made before they existed still hold."""
+        """The definition a job key hashes; ``scale`` / ``offset`` / ``tool`` only when set, so the
+        keys of runs made before they existed still hold."""
         return {f.name: getattr(self, f.name) for f in fields(self)
-                if not (f.name in ("scale", "offset") and getattr(self, f.name) is None)}
+                if not (f.name in ("scale", "offset", "tool") and getattr(self, f.name) is None)}
 
     def file_templates(self) -> dict[str, str]:
         return {k: v for k, v in (("curve", self.curve), ("skeletal", self.skeletal),
@@ -312,15 +316,18 @@ def _methods(value: Any, base: Path, shapes, fail, unknown) -> tuple[MethodSpec,
         name = _name(entry, where, fail)
         where = f"method {name!r}"
         kind = entry.get("kind")
-        if kind not in ("builtin", "command", "files"):
-            fail(f"{where}: kind must be 'builtin', 'command' or 'files', got {kind!r}")
-        unknown(where, entry, _KEYS[kind])
+        if kind not in ("builtin", "command", "files") + _adapter_kinds():
+            fail(f"{where}: kind must be 'builtin', 'command', 'files' or a tool ({', '.join(_adapter_kinds())}), "
+                 f"got {kind!r}")
+        unknown(where, entry, _KEYS[kind if kind in _KEYS else "adapter"])
         if any(m.name == name for m in out):
             fail(f"{where}: two methods have this name")
         if kind == "builtin":
             spec = _builtin(entry, where, fail)
         elif kind == "command":
             spec = _command(entry, name, where, base, fail)
+        elif kind in _adapter_kinds():
+            spec = _adapter(entry, name, where, fail)
         else:
             spec = _files(entry, name, where, base, shapes, fail)
         if "correspondence" in entry:
@@ -362,6 +369,37 @@ def _builtin(entry: dict, where: str, fail) -> MethodSpec:
     return MethodSpec(name=entry["name"], kind="builtin", method=method, params=dict(params))
 
 
+def _adapter_kinds() -> tuple[str, ...]:
+    from ..adapters import KINDS
+
+    return KINDS
+
+
+def _timeout(entry: dict, where: str, fail) -> float | None:
+    timeout = entry.get("timeout")
+    if timeout is not None and (isinstance(timeout, bool) or not isinstance(timeout, (int, float)) or timeout <= 0):
+        fail(f"{where}: timeout must be a number of seconds > 0")
+    return None if timeout is None else float(timeout)
+
+
+def _adapter(entry: dict, name: str, where: str, fail) -> MethodSpec:
+    """Another tool by name: its parameters checked and completed, then the tool imported (a missing
+    one is one line naming the ``[skeletonizers]`` extra, before any job runs)."""
+    from ..adapters import require, resolve_params
+
+    kind = entry["kind"]
+    try:
+        params = resolve_params(kind, entry.get("params", {}))
+    except ValueError as exc:
+        fail(f"{where}: {exc}")
+    timeout = _timeout(entry, where, fail)
+    try:
+        tool = require(kind)
+    except SkelInputError as exc:
+        fail(f"{where}: {exc}")
+    return MethodSpec(name=name, kind=kind, params=params, timeout=timeout, tool=tool)
+
+
 def _command(entry: dict, name: str, where: str, base: Path, fail) -> MethodSpec:
     template = entry.get("command")
     if not isinstance(template, str):
@@ -377,11 +415,8 @@ def _command(entry: dict, name: str, where: str, base: Path, fail) -> MethodSpec
             fail(f"{where}: program {prog!r} not found or not executable")
     elif shutil.which(prog) is None:
         fail(f"{where}: program {prog!r} is not on PATH")
-    timeout = entry.get("timeout")
-    if timeout is not None and (isinstance(timeout, bool) or not isinstance(timeout, (int, float)) or timeout <= 0):
-        fail(f"{where}: timeout must be a number of seconds > 0")
-    return MethodSpec(name=name, kind="command", command=template,
-                      timeout=None if timeout is None else float(timeout), cwd=str(base))
+    return MethodSpec(name=name, kind="command", command=template, timeout=_timeout(entry, where, fail),
+                      cwd=str(base))
 
 
 def _files(entry: dict, name: str, where: str, base: Path, shapes, fail) -> MethodSpec:

@@ -1,12 +1,15 @@
 """Running one skeletonizer on one cloud: the built-in one, an external command (no shell, its own
-process group, killed on timeout or cancel) or precomputed files. Returns what ``evaluate`` takes.
+process group, killed on timeout or cancel), another tool by name (:mod:`skelcore.adapters`, in a
+child process run the same way) or precomputed files. Returns what ``evaluate`` takes.
 """
 
 from __future__ import annotations
 
+import json
 import os
 import signal
 import subprocess
+import tempfile
 import time
 from typing import Callable
 
@@ -14,9 +17,10 @@ import numpy as np
 
 from ..curve import CurveSkeleton
 from ..errors import Cancelled, SkelInputError
-from .manifest import MethodSpec, check_command_template, command_argv, expand_template, skeletonize_accepts_method
+from .manifest import (MethodSpec, check_command_template, command_argv, expand_template, python_executable,
+                       skeletonize_accepts_method)
 
-__all__ = ["skeletonize_accepts_method", "run_builtin", "run_command", "read_files"]
+__all__ = ["skeletonize_accepts_method", "run_builtin", "run_command", "run_adapter", "read_files"]
 
 Progress = Callable[[float, str], None]
 
@@ -66,9 +70,28 @@ def run_command(
     for stale in (skeletal_path, curve_path):
         if os.path.exists(stale):
             os.unlink(stale)
+    _run_process(args, label, timeout=timeout, cancel=cancel, cwd=cwd)
+    skeletal = curve = None
+    if wants_skeletal:
+        if not os.path.exists(skeletal_path):
+            raise SkelInputError(f"{label} did not write the skeletal point set", skeletal_path)
+        skeletal = io.load_points(skeletal_path)
+    if wants_curve:
+        if not os.path.exists(curve_path):
+            raise SkelInputError(f"{label} did not write the curve skeleton", curve_path)
+        curve = io.load_curve(curve_path)
+    return skeletal, curve
+
+
+def _run_process(args: list[str], label: str, *, timeout: float | None = None,
+                 cancel: Callable[[], bool] | None = None, cwd: str | None = None,
+                 env: dict[str, str] | None = None, exit_2_is_input_error: bool = False) -> None:
+    """Run ``args`` in its own session until it exits; SkelInputError (one line, prefixed ``label``)
+    when it cannot start, times out or is cancelled (its whole process group killed), or fails.
+    ``exit_2_is_input_error``: status 2 means the program already said what was wrong in one line."""
     try:
         proc = subprocess.Popen(args, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
-                                errors="replace", start_new_session=True, cwd=cwd)
+                                errors="replace", start_new_session=True, cwd=cwd, env=env)
     except OSError as exc:
         raise SkelInputError(f"{label} could not start {args[0]!r}: {exc.strerror or exc}") from None
     start = time.monotonic()
@@ -90,18 +113,34 @@ def run_command(
         raise
     if proc.returncode != 0:
         last = (err or out or "").strip().splitlines()
+        if exit_2_is_input_error and proc.returncode == 2 and last:
+            raise SkelInputError(f"{label}: {last[-1][:300]}")
         how = f"was killed by signal {-proc.returncode}" if proc.returncode < 0 else f"exited with status {proc.returncode}"
         raise SkelInputError(f"{label} {how}" + (f": {last[-1][:200]}" if last else ""))
-    skeletal = curve = None
-    if wants_skeletal:
-        if not os.path.exists(skeletal_path):
-            raise SkelInputError(f"{label} did not write the skeletal point set", skeletal_path)
-        skeletal = io.load_points(skeletal_path)
-    if wants_curve:
-        if not os.path.exists(curve_path):
-            raise SkelInputError(f"{label} did not write the curve skeleton", curve_path)
-        curve = io.load_curve(curve_path)
-    return skeletal, curve
+
+
+def run_adapter(points: np.ndarray, spec: MethodSpec, *, cancel: Callable[[], bool] | None = None,
+                label: str | None = None) -> tuple[np.ndarray | None, CurveSkeleton, str]:
+    """Run a tool adapter (``spec.kind`` in :data:`skelcore.adapters.KINDS`) on ``points`` in a child
+    process (``python -m skelcore.adapters.child``): a crash or a hang past ``spec.timeout`` fails
+    this job with one line, and the run goes on. Returns (skeletal, curve, correspondence)."""
+    label = label or f"method {spec.name!r}: {spec.kind}"
+    root = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))  # holds skelcore/
+    env = dict(os.environ)  # the child imports this very skelcore, installed or not
+    env["PYTHONPATH"] = root + (os.pathsep + env["PYTHONPATH"] if env.get("PYTHONPATH") else "")
+    with tempfile.TemporaryDirectory(prefix="skelcore-adapter-") as work:
+        cloud, out, request = (os.path.join(work, n) for n in ("cloud.npy", "out.npz", "request.json"))
+        np.save(cloud, np.asarray(points, dtype=np.float64))
+        with open(request, "w", encoding="utf-8") as fh:
+            json.dump({"kind": spec.kind, "params": spec.params, "cloud": cloud, "out": out, "tool": spec.tool}, fh)
+        _run_process([python_executable(), "-m", "skelcore.adapters.child", request], label,
+                     timeout=spec.timeout, cancel=cancel, env=env, exit_2_is_input_error=True)
+        with np.load(out) as z:
+            radius = z["curve_radius"] if "curve_radius" in z.files else None
+            curve = CurveSkeleton.from_raw(z["curve_vertices"], z["curve_edges"], radius=radius)
+            skeletal = z["skeletal"] if "skeletal" in z.files else None
+            correspondence = str(z["correspondence"])
+    return skeletal, curve, correspondence
 
 
 def read_files(spec: MethodSpec, stem: str, condition: str, seed: int

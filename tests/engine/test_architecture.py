@@ -154,19 +154,22 @@ def test_the_cycle_finder_finds_a_cycle():
 #   evaluation files  io.evaluation_files (JSON, CSVs, npz of an Evaluation), io.export (coloured PLY),
 #                     io.conversion (skelcore convert), interop's outputs (to_frame, to_networkx, to_open3d)
 #                                                             -> foundation, formats, metrics, scan, diagnostics, record
+#   adapters          skelcore.adapters: other skeletonizers by name (PyGEL, kimimaro, scikit-image)
+#                                                                                 -> foundation, formats
 #   applications      skelcore.compare, skelcore.experiments, skelcore.benchmark  -> every layer above this line
 #   entry points      skelcore.cli, skelcore.__main__, the package facade skelcore/__init__ -> every layer
 # So: metrics never import the record, the stages or the evaluation files; the record imports no io; the
 # format readers and writers import no metric; compare and the CLI sit on top. A pattern "x.*" is the
 # package x and everything in it, any other an exact module; a module's layer is its longest pattern.
-_BELOW_APPS = ["foundation", "formats", "objects in", "skeletonizer", "metrics", "scan", "diagnostics", "record",
-               "stages", "evaluation files"]
+_BELOW_APPS = ["foundation", "formats", "objects in", "skeletonizer", "adapters", "metrics", "scan", "diagnostics",
+               "record", "stages", "evaluation files"]
 LAYERS: dict[str, tuple[list[str], list[str]]] = {
     "foundation": ([f"skelcore.{m}" for m in ("errors", "version", "params", "geometry", "parallel", "curve",
                                               "curve_sampling", "correspondence", "colors", "shapes",
                                               "skeleton_mapping", "trust_warning")], []),
     "formats": (["skelcore.io.*"], ["foundation"]),
     "skeletonizer": (["skelcore.skeleton.*"], ["foundation"]),
+    "adapters": (["skelcore.adapters.*"], ["foundation", "formats"]),
     "metrics": (["skelcore.metrics.*"], ["foundation"]),
     "scan": (["skelcore.scan.*"], ["foundation", "metrics"]),
     "diagnostics": (["skelcore.diagnostics.*", "skelcore.trust"], ["foundation", "formats", "metrics"]),
