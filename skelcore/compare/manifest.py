@@ -344,7 +344,9 @@ def _with_correspondence(spec: MethodSpec, value: Any, where: str, fail) -> Meth
 
     if "correspondence" not in inspect.signature(evaluate).parameters:
         fail(f"{where}: this skelcore's evaluate() has no correspondence option")
-    allowed = ("auto", "pointwise", "index", "reverse", "none")
+    from ..stages import CORRESPONDENCE_CHOICES
+
+    allowed = CORRESPONDENCE_CHOICES  # what evaluate() takes: a wrong value fails here, not in a job
     if value not in allowed:
         fail(f"{where}: correspondence must be one of {', '.join(allowed)}, got {value!r}")
     return dataclasses.replace(spec, correspondence=value)
