@@ -121,7 +121,10 @@ def spearman(x: np.ndarray, y: np.ndarray) -> float:
 def validity_table(rows: list[dict[str, Any]], metrics: tuple[MetricSpec, ...] = METRICS) -> list[dict[str, Any]]:
     """One record per (metric, defect): auc, spearman, n_clean, n_defective (and the levels' AUCs,
     ``auc_levels``, mild to strong), for every defect present in ``rows``."""
-    defects = [d for d in dict.fromkeys(r["defect"] for r in rows) if d != "clean"]
+    from .skeleton_defects import DEFECTS
+
+    present = {r["defect"] for r in rows}
+    defects = [d for d in DEFECTS if d in present] + sorted(present - set(DEFECTS) - {"clean"})
     clean = [r for r in rows if r["defect"] == "clean"]
     out = []
     for d in defects:
