@@ -32,8 +32,8 @@ from ..errors import SkelInputError
 from ..version import __version__
 from .skeleton_defects import DEFECTS, apply_defect
 
-__all__ = ["VALIDITY_SUITES", "ValiditySuite", "Task", "validity_tasks", "run_task", "run_validity",
-           "ValidityResult", "WARNING_CODES", "GT_KEYS", "read_rows", "TASK_VERSION"]
+__all__ = ["VALIDITY_SUITES", "ValiditySuite", "Task", "validity_tasks", "score_curve", "run_task", "run_validity",
+           "task_path", "ValidityResult", "WARNING_CODES", "GT_KEYS", "read_rows", "TASK_VERSION"]
 
 #: Bumped whenever a change alters a task's rows for the same spec (stored tasks are then redone).
 TASK_VERSION = 1

@@ -116,7 +116,8 @@ def draw_heatmap(table: list[dict[str, Any]], path: Path, title: str = "") -> No
         fig.savefig(fh, format="png", dpi=130, bbox_inches="tight")
 
 
-def write_report(folder: Path, rows: list[dict[str, Any]], *, figure: bool = True, note: str = "") -> list[dict[str, Any]]:
+def write_report(folder: Path, rows: list[dict[str, Any]], *, figure: bool = True,
+                 note: str = "") -> list[dict[str, Any]]:
     """Write the four outputs (module docstring) for ``rows``; returns the statistics table."""
     folder = Path(folder)
     metric_keys = sorted({k for r in rows for k in r} - set(ROW_KEYS))

@@ -25,14 +25,17 @@ def register_validity(actions: argparse._SubParsersAction) -> argparse.ArgumentP
         "validity.png into DIR: per metric and defect the detection AUC and the Spearman correlation with "
         "the ground-truth error. DIR must be new, empty or an earlier validity run (resumed).",
     )
-    p.add_argument("--out", required=True, metavar="DIR", help="output folder (new, empty, or a validity run: resumed)")
+    p.add_argument("--out", required=True, metavar="DIR",
+                   help="output folder (new, empty, or a validity run: resumed)")
     p.add_argument("--suite", choices=("default", "small"), default="default",
                    help="default: 12 shapes at 5000 points, 3 seeds; small: 3 shapes at 1200 points, 2 seeds")
-    p.add_argument("--seed", type=int, default=0, metavar="N", help="the suite seed shapes and defects are drawn from (0)")
+    p.add_argument("--seed", type=int, default=0, metavar="N",
+                   help="the suite seed shapes and defects are drawn from (0)")
     p.add_argument("--seeds", type=positive_int, metavar="K", help="clouds (and defect draws) per shape (the suite's)")
     p.add_argument("--points", type=positive_int, metavar="N", help="points per cloud (the suite's)")
     p.add_argument("--shapes", nargs="+", metavar="NAME", help="only these benchmark shapes")
-    p.add_argument("--defects", nargs="+", metavar="NAME", help="only these defects (docs/validity.md lists the ten; an unknown name lists them too)")
+    p.add_argument("--defects", nargs="+", metavar="NAME",
+                   help="only these defects (docs/validity.md lists the ten; an unknown name lists them too)")
     p.add_argument("--backend", choices=("pool", "dask", "serial"), default="pool",
                    help="a local process pool (default), Dask, or this process")
     p.add_argument("--workers", type=positive_int, metavar="N", help="workers of the pool or the Dask LocalCluster "
