@@ -32,6 +32,7 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
 from skelcore import Params, shapes  # noqa: E402
+from skelcore.benchmark import skeleton_defects as gen  # noqa: E402
 from skelcore.curve import CurveSkeleton  # noqa: E402
 from skelcore.curve_sampling import sample_curve  # noqa: E402
 from skelcore.diagnostics import find_curve_defects  # noqa: E402
@@ -68,82 +69,26 @@ def _radius_at(shape: shapes.Shape, pts: np.ndarray) -> np.ndarray:
     return d
 
 
-def _tangent(verts: np.ndarray, edges: np.ndarray, v: int) -> np.ndarray:
-    nb = np.concatenate([edges[edges[:, 0] == v, 1], edges[edges[:, 1] == v, 0]])
-    t = verts[nb[1]] - verts[nb[0]] if len(nb) >= 2 else verts[nb[0]] - verts[v]
-    return t / np.linalg.norm(t)
-
-
-def _perp(t: np.ndarray, rng: np.random.Generator) -> np.ndarray:
-    g = rng.normal(size=3)
-    g -= (g @ t) * t
-    return g / np.linalg.norm(g)
-
-
 def _inner_vertices(shape: shapes.Shape, away: float = 1.5) -> np.ndarray:
     """Degree-2 vertices at least ``away`` local radii from every node (end or junction)."""
-    v, e = shape.curve_vertices, shape.curve_edges
-    deg = np.bincount(e.ravel(), minlength=len(v))
-    r = _radius_at(shape, v)
-    nodes = v[deg != 2]
-    ok = deg == 2
-    if len(nodes):
-        d, _ = cKDTree(nodes).query(v)
-        ok &= d >= away * r
-    return np.flatnonzero(ok)
+    v = shape.curve_vertices
+    return gen.inner_vertices(v, shape.curve_edges, _radius_at(shape, v), away)
 
 
-def _polyline(a: np.ndarray, b: np.ndarray, step: float) -> np.ndarray:
-    n = max(1, int(np.ceil(np.linalg.norm(b - a) / step)))
-    return a + np.linspace(0, 1, n + 1)[1:, None] * (b - a)
-
+# the generators live in skelcore/benchmark/defects.py (shared with `skelcore bench validity`);
+# here the local radius is the distance to the cloud
 
 def add_spurs(shape: shapes.Shape, k: int, length: float, rng: np.random.Generator):
     """``k`` spurs of ``length`` local radii from distinct inner vertices, sideways; returns
     (vertices, edges, ids of the new tip vertices)."""
-    v, e = shape.curve_vertices.copy(), shape.curve_edges.copy()
-    cand = _inner_vertices(shape)
-    pick = rng.choice(cand, size=min(k, len(cand)), replace=False)
-    r = _radius_at(shape, v)
-    tips = []
-    for a in pick:
-        u = _perp(_tangent(v, e, a), rng)
-        pts = _polyline(v[a], v[a] + length * r[a] * u, 0.5 * r[a])
-        ids = np.arange(len(v), len(v) + len(pts))
-        v = np.vstack([v, pts])
-        e = np.vstack([e, np.column_stack([np.concatenate([[a], ids[:-1]]), ids])])
-        tips.append(int(ids[-1]))
-    return v, e, tips
+    v = shape.curve_vertices
+    return gen.add_spurs(v, shape.curve_edges, _radius_at(shape, v), k, length, rng)
 
 
 def add_loop(shape: shapes.Shape, span: float, rng: np.random.Generator):
-    """A chord closing a loop inside the shape: from an inner vertex a to the vertex b about ``span``
-    local radii further along the curve, through a new vertex 0.5 r sideways of their midpoint."""
-    v, e = shape.curve_vertices.copy(), shape.curve_edges.copy()
-    cand = _inner_vertices(shape, away=span + 1.0)
-    if not len(cand):
-        cand = _inner_vertices(shape, away=0.0)
-    a = int(rng.choice(cand))
-    r = _radius_at(shape, v[a:a + 1])[0]
-    # walk along the curve from a
-    adj = defaultdict(list)
-    for x, y in e:
-        adj[x].append(y)
-        adj[y].append(x)
-    prev, cur, walked = -1, a, 0.0
-    while walked < span * r:
-        nxt = [w for w in adj[cur] if w != prev]
-        if not nxt:
-            break
-        walked += np.linalg.norm(v[nxt[0]] - v[cur])
-        prev, cur = cur, nxt[0]
-    b = cur
-    mid = (v[a] + v[b]) / 2
-    u = _perp(_tangent(v, e, a), rng)
-    m = mid + 0.5 * r * u
-    v = np.vstack([v, m])
-    k = len(v) - 1
-    return v, np.vstack([e, [[a, k], [k, b]]])
+    """A chord closing a loop inside the shape, ``span`` local radii along the curve."""
+    v = shape.curve_vertices
+    return gen.add_chord(v, shape.curve_edges, _radius_at(shape, v), span, rng)
 
 
 def cut_open(shape: shapes.Shape, n_edges: int, which: int = 0):
@@ -172,25 +117,14 @@ def shortcut(shape: shapes.Shape, name: str):
         if name == "T":  # the stem's tip to a bar end
             a = int(np.argmin(v[:, 2]))
             b = int(np.argmin(v[:, 0]))
-    r = _radius_at(shape, v[a:a + 1])[0]
-    pts = _polyline(v[a], v[b], r)[:-1]
-    ids = np.arange(len(v), len(v) + len(pts))
-    chain = np.concatenate([[a], ids, [b]])
-    return np.vstack([v, pts]), np.vstack([e, np.column_stack([chain[:-1], chain[1:]])])
+    return gen.join(v, e, a, b, float(_radius_at(shape, v[a:a + 1])[0]))
 
 
 def out_branch(shape: shapes.Shape, out_radii: float, rng: np.random.Generator):
     """A terminal branch from an inner vertex straight out of the shape, ``out_radii`` local radii
     beyond its surface."""
-    v, e = shape.curve_vertices.copy(), shape.curve_edges.copy()
-    cand = _inner_vertices(shape)
-    a = int(rng.choice(cand))
-    r = _radius_at(shape, v[a:a + 1])[0]
-    u = _perp(_tangent(v, e, a), rng)
-    # go out sideways until the tip is out_radii local radii beyond the surface (straight line)
-    pts = _polyline(v[a], v[a] + (1.0 + out_radii) * r * u, 0.5 * r)
-    ids = np.arange(len(v), len(v) + len(pts))
-    return np.vstack([v, pts]), np.vstack([e, np.column_stack([np.concatenate([[a], ids[:-1]]), ids])])
+    v = shape.curve_vertices
+    return gen.out_branch(v, shape.curve_edges, _radius_at(shape, v), out_radii, rng)
 
 
 # ---- runs ---------------------------------------------------------------------------------------

@@ -12,6 +12,8 @@ import numpy as np
 from scipy.spatial import cKDTree
 
 from skelcore import shapes
+from skelcore.benchmark.skeleton_defects import collapse_points as collapse  # noqa: F401 (the calibration's collapse)
+from skelcore.benchmark.skeleton_defects import drop_vertices
 from skelcore.curve import CurveSkeleton
 
 SHAPES = {
@@ -102,20 +104,10 @@ def cut_mask(points: np.ndarray, branches: list[Branch], k: int, frac: float) ->
     return (owner[j] == k) & (arc[j] >= lo) & (arc[j] <= hi)
 
 
-def collapse(points: np.ndarray, f: float) -> np.ndarray:
-    """The points moved a share ``f`` of the way to their centroid (1: all at the centroid)."""
-    c = points.mean(axis=0)
-    return c + (points - c) * (1.0 - f)
-
-
 def drop_curve_vertices(curve: CurveSkeleton, drop: np.ndarray) -> CurveSkeleton | None:
-    keep = ~drop
-    if not keep.any():
+    if drop.all():
         return None
-    new = -np.ones(len(keep), np.int64)
-    new[keep] = np.arange(int(keep.sum()))
-    e = curve.edges[keep[curve.edges].all(axis=1)]
-    return CurveSkeleton.from_raw(curve.vertices[keep], new[e])
+    return CurveSkeleton.from_raw(*drop_vertices(curve.vertices, curve.edges, drop))
 
 
 def true_curve_radius(shape: shapes.Shape, branches: list[Branch]) -> list[np.ndarray]:

@@ -21,7 +21,7 @@ from ..errors import SkelInputError
 from .jobs import Job, run_job
 from .job_store import Store
 
-__all__ = ["Backend", "parse_backend", "RunSummary", "run_jobs"]
+__all__ = ["Backend", "parse_backend", "RunSummary", "run_jobs", "run_tasks"]
 
 
 @dataclass(frozen=True)
@@ -128,22 +128,33 @@ def run_jobs(jobs: list[Job], store: Store, backend: Backend, *, quiet: bool = T
             on_record(rec)
 
     try:
-        if not todo:
-            pass
-        elif backend.kind == "serial":
-            for job in todo:
-                file(run_job(job))
-        elif backend.kind == "pool":
-            _run_pool(todo, backend.workers, file)
-        else:
-            _run_dask(todo, backend, file)
+        run_tasks(run_job, todo, backend, file, failed=_failed, key=lambda job: job.key)
     finally:
         bar.close()
         summary.wall = time.perf_counter() - t0
     return summary
 
 
-def _run_pool(todo: list[Job], workers: int, file: Callable[[dict[str, Any]], None]) -> None:
+def run_tasks(fn: Callable[[Any], dict[str, Any]], tasks: list[Any], backend: Backend,
+              on_result: Callable[[dict[str, Any]], None], *, failed: Callable[[Any, str], dict[str, Any]],
+              key: Callable[[Any], str]) -> None:
+    """Run ``fn(task)`` (a picklable module-level function returning a record) for every task on
+    ``backend``; ``on_result(record)`` is called in this process as each arrives. A task whose worker
+    dies gets ``failed(task, message)`` instead; ``key(task)`` names it (unique). Used by
+    :func:`run_jobs` and ``skelcore bench validity``."""
+    if not tasks:
+        return
+    if backend.kind == "serial":
+        for task in tasks:
+            on_result(fn(task))
+    elif backend.kind == "pool":
+        _run_pool(tasks, backend.workers, on_result, fn, failed, key)
+    else:
+        _run_dask(tasks, backend, on_result, fn, failed, key)
+
+
+def _run_pool(todo: list[Any], workers: int, file: Callable[[dict[str, Any]], None], fn: Callable[[Any], dict[str, Any]],
+              failed: Callable[[Any, str], dict[str, Any]], key: Callable[[Any], str]) -> None:
     import multiprocessing as mp
     from concurrent.futures import ProcessPoolExecutor, as_completed
     from concurrent.futures.process import BrokenProcessPool
@@ -151,7 +162,7 @@ def _run_pool(todo: list[Job], workers: int, file: Callable[[dict[str, Any]], No
     ctx = mp.get_context("forkserver")
     ctx.set_forkserver_preload(["skelcore.compare.jobs"])
     ex = ProcessPoolExecutor(max_workers=min(workers, len(todo)), mp_context=ctx, initializer=_worker_init)
-    futures = {ex.submit(run_job, job): job for job in todo}
+    futures = {ex.submit(fn, job): job for job in todo}
     done: set[str] = set()
     broken = False
     try:
@@ -161,7 +172,7 @@ def _run_pool(todo: list[Job], workers: int, file: Callable[[dict[str, Any]], No
             except BrokenProcessPool:
                 broken = True
                 break
-            done.add(futures[fut].key)
+            done.add(key(futures[fut]))
             file(rec)
     finally:
         if broken:
@@ -171,12 +182,12 @@ def _run_pool(todo: list[Job], workers: int, file: Callable[[dict[str, Any]], No
     if broken:
         # a worker died (segfault, OOM kill): which job killed it is unknown, so every job not
         # finished runs again alone in a fresh one-worker pool; one that kills that too is failed
-        for job in [j for j in todo if j.key not in done]:
+        for job in [j for j in todo if key(j) not in done]:
             single = ProcessPoolExecutor(max_workers=1, mp_context=ctx, initializer=_worker_init)
             try:
-                rec = single.submit(run_job, job).result()
+                rec = single.submit(fn, job).result()
             except BrokenProcessPool:
-                rec = _failed(job, "the worker process died while running this job")
+                rec = failed(job, "the worker process died while running this job")
             finally:
                 _stop_pool(single)
             file(rec)
@@ -200,7 +211,8 @@ def _stop_pool(ex) -> None:
         proc.join(timeout=5)
 
 
-def _run_dask(todo: list[Job], backend: Backend, file: Callable[[dict[str, Any]], None]) -> None:
+def _run_dask(todo: list[Any], backend: Backend, file: Callable[[dict[str, Any]], None], fn: Callable[[Any], dict[str, Any]],
+              failed: Callable[[Any, str], dict[str, Any]], key: Callable[[Any], str]) -> None:
     import logging
 
     from distributed import Client, LocalCluster, as_completed
@@ -217,7 +229,7 @@ def _run_dask(todo: list[Job], backend: Backend, file: Callable[[dict[str, Any]]
                                    dashboard_address=None, silence_logs=logging.ERROR)
             client = Client(cluster)
         try:
-            jobs = {client.submit(run_job, job, key=f"skelcore-job-{job.key}", pure=False): job for job in todo}
+            jobs = {client.submit(fn, job, key=f"skelcore-job-{key(job)}", pure=False): job for job in todo}
             futures = list(jobs)
             try:
                 for fut in as_completed(futures):
@@ -226,7 +238,7 @@ def _run_dask(todo: list[Job], backend: Backend, file: Callable[[dict[str, Any]]
                     except Exception as exc:  # KilledWorker (a job that kills its worker), lost data
                         from .jobs import one_line
 
-                        rec = _failed(jobs[fut], f"the Dask worker failed: {one_line(exc)}")
+                        rec = failed(jobs[fut], f"the Dask worker failed: {one_line(exc)}")
                     file(rec)
                     fut.release()
             finally:

@@ -12,7 +12,7 @@ import pytest
 ROOT = Path(__file__).resolve().parents[2]
 FORBIDDEN = ("PySide6", "PyQt5", "PyQt6", "shiboken6", "qtpy", "pyvista", "pyvistaqt", "vtk", "vtkmodules", "matplotlib")
 # Reports and figures import their plotting lazily, inside the function that draws.
-LAZY_PLOTTING_OK = ("skelcore.experiments", "skelcore.compare")
+LAZY_PLOTTING_OK = ("skelcore.experiments", "skelcore.compare", "skelcore.benchmark.validity_report")
 
 
 def _module_name(path: Path) -> str:

@@ -1,0 +1,286 @@
+"""Which metric sees which defect (issue 23 item 4): ``skelcore bench validity --out DIR``.
+
+On the benchmark's well-posed shapes (the suite's clean cases; the plate, whose curve skeleton is
+ill-posed, is left out) the EXACT curve skeleton gets each controlled defect of :mod:`.skeleton_defects` at
+each of its levels. The clean skeleton and every defective one are scored by every metric against a
+fresh cloud of the shape per seed: the paper's four through ``skelcore.evaluate`` (curve skeleton,
+and a skeletal set made of each cloud point's projection onto that curve, so index correspondence
+holds), SkelScope's coverage, the diagnostics (their sizes and warnings), and the ground-truth
+metrics against the exact skeleton (:func:`skelcore.metrics.ground_truth.compare_with_ground_truth`).
+
+A task is one (shape, seed, defect): its levels share the shape's cloud. Tasks run on the pool or
+Dask (:func:`skelcore.compare.backends.run_tasks`); each finished task is written atomically as
+``tasks/{key}.json`` and a rerun skips the tasks whose file holds the same spec (resume).
+:mod:`.validity_stats` turns the rows into detection AUCs and Spearman correlations,
+:mod:`.validity_report` into the table and the heat-map.
+"""
+
+from __future__ import annotations
+
+import functools
+import json
+import os
+import time
+import zlib
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any, Callable
+
+import numpy as np
+
+from ..errors import SkelInputError
+from ..version import __version__
+from .skeleton_defects import DEFECTS, apply_defect
+
+__all__ = ["VALIDITY_SUITES", "ValiditySuite", "Task", "validity_tasks", "score_curve", "run_task", "run_validity",
+           "task_path", "ValidityResult", "WARNING_CODES", "GT_KEYS", "read_rows", "TASK_VERSION"]
+
+#: Bumped whenever a change alters a task's rows for the same spec (stored tasks are then redone).
+TASK_VERSION = 1
+
+#: the warning codes recorded per row as 0/1 columns ``warn_{code}``
+WARNING_CODES = ("incomplete", "spurious_branches", "spurious_cycles", "missing_cycles", "outside", "collapse")
+
+#: the ground-truth fields recorded per row as ``gt_{name}`` (docs/metrics.md 5.3.1)
+GT_KEYS = ("f1", "precision", "recall", "chamfer_radii", "junction_precision", "junction_recall",
+           "endpoint_precision", "endpoint_recall", "cycle_error", "length_ratio", "splits", "merges")
+
+
+@dataclass(frozen=True)
+class ValiditySuite:
+    """Which shapes (benchmark suite names), how many points per cloud, how many seeds."""
+
+    name: str
+    shapes: tuple[str, ...]
+    points: int
+    seeds: int
+
+
+VALIDITY_SUITES = {
+    "small": ValiditySuite("small", ("junction_y", "torus", "tube_a"), 1200, 2),
+    "default": ValiditySuite("default", ("tube_a", "tube_b", "elliptic", "junction_y", "junction_t", "junction_x",
+                                         "tree_2", "tree_3", "tree_4", "torus", "genus2", "hand"), 5000, 3),
+}
+
+
+@dataclass(frozen=True)
+class Task:
+    """One (shape, seed, defect) of the study; defect "clean" is the exact skeleton itself."""
+
+    shape: str
+    seed: int
+    defect: str
+    points: int
+    suite_seed: int
+
+    @property
+    def key(self) -> str:
+        return f"{self.shape}__{self.defect}__s{self.seed}"
+
+    def spec(self) -> dict[str, Any]:
+        levels = [] if self.defect == "clean" else [list(x) if isinstance(x, tuple) else x
+                                                    for x in DEFECTS[self.defect].levels]
+        return {"task_version": TASK_VERSION, "shape": self.shape, "seed": self.seed, "defect": self.defect,
+                "levels": levels, "points": self.points, "suite_seed": self.suite_seed}
+
+
+def validity_tasks(suite: str = "default", *, seed: int = 0, seeds: int | None = None,
+                   shapes: list[str] | None = None, defects: list[str] | None = None,
+                   points: int | None = None) -> list[Task]:
+    """The tasks of ``suite`` ("small" or "default"), optionally restricted to some shapes / defects,
+    with another number of seeds or points; a one-line SkelInputError for an unknown name."""
+    if suite not in VALIDITY_SUITES:
+        raise SkelInputError(f"unknown suite {suite!r} (known: {', '.join(VALIDITY_SUITES)})")
+    s = VALIDITY_SUITES[suite]
+    from .suite import SHAPES
+
+    for name in shapes or ():
+        if name not in SHAPES or name == "plate":
+            raise SkelInputError(f"unknown shape {name!r} (known: {', '.join(n for n in SHAPES if n != 'plate')})")
+    for name in defects or ():
+        if name not in DEFECTS:
+            raise SkelInputError(f"unknown defect {name!r} (known: {', '.join(DEFECTS)})")
+    n_seeds = s.seeds if seeds is None else int(seeds)
+    if n_seeds < 1:
+        raise SkelInputError(f"--seeds must be at least 1, got {n_seeds}")
+    n_points = s.points if points is None else int(points)
+    if n_points < 200:
+        raise SkelInputError(f"--points must be at least 200, got {n_points}")
+    names = ["clean", *(defects or DEFECTS)]
+    return [Task(sh, k, d, n_points, int(seed)) for sh in (shapes or s.shapes) for k in range(n_seeds) for d in names]
+
+
+# ---- one task ---------------------------------------------------------------------------------
+
+@functools.lru_cache(maxsize=4)
+def _shape(name: str, suite_seed: int):
+    from .families import make_shape
+    from .suite import SHAPES
+    from .surface_sampling import SurfaceSampler
+    from .tubes import reference_skeleton
+
+    entry = SHAPES[name]
+    shape = make_shape(name, entry.family, np.random.SeedSequence(entry.seed(suite_seed)), **entry.params)
+    return shape, SurfaceSampler(shape), reference_skeleton(shape)
+
+
+@functools.lru_cache(maxsize=4)
+def _cloud(name: str, suite_seed: int, seed: int, points: int) -> np.ndarray:
+    from .scan_effects import ScanEffects, scan
+
+    _, sampler, _ = _shape(name, suite_seed)
+    rng = np.random.default_rng(np.random.SeedSequence([suite_seed, zlib.crc32(f"validity/{name}".encode()), seed]))
+    return scan(sampler, ScanEffects(n_points=points), rng).cloud
+
+
+def _nan(x: Any) -> float:
+    return float("nan") if x is None else float(x)
+
+
+def score_curve(cloud: np.ndarray, vertices: np.ndarray, edges: np.ndarray, ref_v: np.ndarray, ref_e: np.ndarray,
+                ref_r: np.ndarray) -> dict[str, float]:
+    """Every metric of one curve: the evaluation's scores (Scores columns), the warnings as 0/1,
+    the ground-truth metrics (``gt_*``) and the ground-truth error ``gt_error`` = 1 - F1."""
+    from ..correspondence import project_onto_curve
+    from ..curve import CurveSkeleton
+    from ..metrics.ground_truth import compare_with_ground_truth
+    from ..scores import Scores
+    from ..stages.orchestrate import evaluate
+
+    curve = CurveSkeleton.from_raw(vertices, edges)
+    skeletal, _ = project_onto_curve(cloud, curve)
+    ev = evaluate(cloud, skeletal=skeletal, curve=curve)
+    row: dict[str, float] = {k: _nan(v) for k, v in Scores.from_evaluation(ev).flat().items()}
+    codes = {w.code for w in ev.warnings}
+    row.update({f"warn_{c}": float(c in codes) for c in WARNING_CODES})
+    gt = compare_with_ground_truth(curve, CurveSkeleton.from_raw(ref_v, ref_e), ref_r)
+    row.update({f"gt_{k}": float(getattr(gt, k)) for k in GT_KEYS})
+    row["gt_error"] = 1.0 - float(gt.f1)
+    row["n_vertices"], row["n_edges"] = float(curve.n_vertices), float(curve.n_edges)
+    return row
+
+
+def _task_rows(task: Task) -> list[dict[str, Any]]:
+    from .tubes import signed_distance
+
+    shape, _, (ref_v, ref_e, ref_r) = _shape(task.shape, task.suite_seed)
+    cloud = _cloud(task.shape, task.suite_seed, task.seed, task.points)
+    base = {"shape": task.shape, "family": shape.family, "seed": task.seed, "defect": task.defect}
+    if task.defect == "clean":
+        return [{**base, "level": "", "level_index": 0, **score_curve(cloud, ref_v, ref_e, ref_v, ref_e, ref_r)}]
+    d = DEFECTS[task.defect]
+    rows = []
+    for i, level in enumerate(d.levels, start=1):
+        label = d.label(level)
+        rng = np.random.default_rng(np.random.SeedSequence(
+            [task.suite_seed, zlib.crc32(f"{task.shape}/{task.defect}/{label}".encode()), task.seed]))
+        made = apply_defect(task.defect, level, ref_v, ref_e, ref_r, rng,
+                            lambda p: signed_distance(shape, p, spacing=0.1))
+        if made is None or len(made[1]) == 0:
+            continue  # the defect does not apply to this shape (or leaves nothing)
+        rows.append({**base, "level": label, "level_index": i, **score_curve(cloud, *made, ref_v, ref_e, ref_r)})
+    return rows
+
+
+def run_task(task: Task) -> dict[str, Any]:
+    """A task's record (runs in a worker): its spec, status, rows, seconds; an error is one line."""
+    t0 = time.perf_counter()
+    try:
+        rows = _task_rows(task)
+        status, error = "ok", None
+    except Exception as exc:  # one task's failure is recorded, the run goes on
+        rows, status, error = [], "failed", f"{type(exc).__name__}: {str(exc).splitlines()[0] if str(exc) else ''}"
+    return {"key": task.key, "spec": task.spec(), "status": status, "error": error, "rows": rows,
+            "seconds": round(time.perf_counter() - t0, 3)}
+
+
+def _failed(task: Task, error: str) -> dict[str, Any]:
+    return {"key": task.key, "spec": task.spec(), "status": "failed", "error": error, "rows": [], "seconds": 0.0}
+
+
+# ---- the run ----------------------------------------------------------------------------------
+
+@dataclass
+class ValidityResult:
+    folder: Path
+    tasks: int
+    kept: int
+    ran: int
+    failed: list[dict[str, Any]]
+    rows: list[dict[str, Any]] = field(default_factory=list)
+    wall: float = 0.0
+    backend: str = ""
+
+
+def task_path(folder: Path, key: str) -> Path:
+    return folder / "tasks" / f"{key}.json"
+
+
+def _stored(folder: Path, task: Task) -> dict[str, Any] | None:
+    try:
+        with open(task_path(folder, task.key), encoding="utf-8") as fh:
+            rec = json.load(fh)
+    except (OSError, ValueError):
+        return None
+    if not isinstance(rec, dict) or rec.get("spec") != task.spec() or rec.get("status") != "ok":
+        return None
+    return rec
+
+
+def _write_json(path: Path, doc: Any) -> None:
+    from ..io.atomic import atomic_open
+
+    with atomic_open(path, "w") as fh:
+        json.dump(doc, fh, indent=None, allow_nan=True)
+        fh.write("\n")
+
+
+def read_rows(folder: str | os.PathLike) -> list[dict[str, Any]]:
+    """Every row of the stored tasks of a validity run (for the report)."""
+    rows = []
+    for p in sorted(Path(folder, "tasks").glob("*.json")):
+        with open(p, encoding="utf-8") as fh:
+            rows.extend(json.load(fh).get("rows", []))
+    return rows
+
+
+def run_validity(out: str | os.PathLike, tasks: list[Task], backend: Any, *, force: bool = False,
+                 figure: bool = True, progress: Callable[[int, int, str, str], None] | None = None,
+                 suite: str = "default") -> ValidityResult:
+    """Run (or resume) ``tasks`` into ``out`` on ``backend`` (:class:`skelcore.compare.backends.Backend`)
+    and write ``scores.csv``, ``validity.csv``, ``validity.md`` and ``validity.png`` there."""
+    from ..compare.backends import run_tasks
+    from ..compare.run_marker import claim_run_folder
+    from .validity_report import write_report
+
+    folder = claim_run_folder(out, "validity", force=force).path
+    (folder / "tasks").mkdir(exist_ok=True)
+    t0 = time.perf_counter()
+    todo, kept = [], 0
+    for task in tasks:
+        if _stored(folder, task) is None:
+            todo.append(task)
+        else:
+            kept += 1
+    result = ValidityResult(folder, len(tasks), kept, 0, [], backend=backend.describe())
+    done = [kept]
+
+    def on_result(rec: dict[str, Any]) -> None:
+        if rec["status"] == "ok":
+            _write_json(task_path(folder, rec["key"]), rec)
+            result.ran += 1
+        else:
+            result.failed.append(rec)
+        done[0] += 1
+        if progress is not None:
+            progress(done[0], len(tasks), rec["key"], rec["status"])
+
+    run_tasks(run_task, todo, backend, on_result, failed=_failed, key=lambda t: t.key)
+    for task in tasks:
+        rec = _stored(folder, task)
+        if rec is not None:
+            result.rows.extend(rec["rows"])
+    write_report(folder, result.rows, figure=figure,
+                 note=f"{suite} suite, {len(tasks)} tasks, skelcore {__version__}")
+    result.wall = time.perf_counter() - t0
+    return result
