@@ -72,6 +72,17 @@ def _display(*objects: Any) -> None:
     display(*objects)
 
 
+def _in_cell(panels: Sequence[Any], metric: str, size: tuple[int, int], backend: str, options: dict) -> None:
+    """The scene in the notebook's cell through pyvista (a static picture is closed once shown; an
+    interactive backend keeps its plotter)."""
+    from .plotter import make_plotter
+
+    pl = make_plotter(panels, metric, size, notebook=True, **options)
+    pl.show(jupyter_backend=backend)
+    if backend == "static":
+        pl.close()
+
+
 def show(ev: Any, metric: str = "centeredness", *, path: str | os.PathLike | None = None,
          jupyter_backend: str = "static", size: tuple[int, int] = _SIZE, clim: tuple[float, float] = (0.0, 1.0),
          colour_bar: bool = True, prefer: str = "curve", point_size: float = 7.0) -> Path | None:
@@ -89,9 +100,7 @@ def show(ev: Any, metric: str = "centeredness", *, path: str | os.PathLike | Non
         return render_png(panels, metric, size, **options)
 
     def notebook() -> None:
-        from .plotter import make_plotter
-
-        make_plotter(panels, metric, size, notebook=True, **options).show(jupyter_backend=jupyter_backend)
+        _in_cell(panels, metric, size, jupyter_backend, options)
 
     def window() -> None:
         from .plotter import make_plotter
@@ -150,10 +159,9 @@ def show_ab(ev_a: Any, ev_b: Any, metric: str = "centeredness", *, labels: tuple
     def notebook() -> None:
         from IPython.display import HTML
 
-        from .plotter import make_plotter
         from .summary_table import tables_html
 
-        make_plotter(panels, metric, size, notebook=True, **options).show(jupyter_backend=jupyter_backend)
+        _in_cell(panels, metric, size, jupyter_backend, options)
         _display(HTML(tables_html((ev_a, ev_b), labels)))
 
     def window() -> None:
