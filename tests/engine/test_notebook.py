@@ -39,7 +39,7 @@ def executed(tmp_path_factory):
     mp.setenv("IPYTHONDIR", str(root / "ipython"))  # no user profile or startup file in the run
     try:
         nb = nbformat.read(EXAMPLES / "quickstart.ipynb", as_version=4)
-        nbclient.NotebookClient(nb, kernel_name=KERNEL, timeout=600,
+        nbclient.NotebookClient(nb, kernel_name=KERNEL, timeout=600, startup_timeout=300,
                                 resources={"metadata": {"path": str(EXAMPLES)}}).execute()
     finally:
         mp.undo()
@@ -67,7 +67,6 @@ def _magenta(img: np.ndarray) -> int:
     return int((np.abs(img - np.array([255, 0, 255])) <= 30).all(axis=2).sum())
 
 
-@pytest.mark.slow
 def test_the_notebook_was_saved_without_outputs():
     nb = nbformat.read(EXAMPLES / "quickstart.ipynb", as_version=4)
     assert all(not c.get("outputs") for c in nb.cells if c.cell_type == "code")
