@@ -10,7 +10,8 @@ from pathlib import Path
 import pytest
 
 ROOT = Path(__file__).resolve().parents[2]
-FORBIDDEN = ("PySide6", "PyQt5", "PyQt6", "shiboken6", "qtpy", "pyvista", "pyvistaqt", "vtk", "vtkmodules", "matplotlib")
+FORBIDDEN = ("PySide6", "PyQt5", "PyQt6", "shiboken6", "qtpy", "pyvista", "pyvistaqt", "vtk", "vtkmodules", "matplotlib",
+             "IPython")
 # Reports and figures import their plotting lazily, inside the function that draws.
 LAZY_PLOTTING_OK = ("skelcore.experiments", "skelcore.compare", "skelcore.display")
 

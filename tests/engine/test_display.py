@@ -135,6 +135,16 @@ def test_with_a_display_show_opens_a_window(ev, tmp_path, monkeypatch):
     assert list(tmp_path.iterdir()) == []
 
 
+def test_importing_the_display_loads_no_plotting_library():
+    import subprocess
+    import sys
+
+    code = ("import sys, skelcore, skelcore.display, skelcore.evaluation, skelcore.compare.render\n"
+            "print(sorted(m for m in ('pyvista', 'vtk', 'matplotlib', 'IPython') if m in sys.modules))")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout
+    assert out.strip() == "[]"
+
+
 def test_bad_arguments(ev, tmp_path):
     with pytest.raises(ValueError, match="unknown metric 'thickness'"):
         ev.show("thickness")
