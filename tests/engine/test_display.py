@@ -64,10 +64,11 @@ def _near(img: np.ndarray, rgb, tol: int = 30) -> np.ndarray:
 
 def _lut_pixels(img: np.ndarray) -> np.ndarray:
     """Index into the 256-entry metric colour map of each pixel close to one of its colours, -1 else."""
-    lut = colors.lookup_table(colors.METRIC_COLORMAP, 256).astype(int)
-    d = np.abs(img[:, :, None, :] - lut[None, None, :, :]).max(axis=3)
-    best = d.argmin(axis=2)
-    return np.where(d.min(axis=2) <= 6, best, -1)
+    from scipy.spatial import cKDTree
+
+    lut = colors.lookup_table(colors.METRIC_COLORMAP, 256).astype(float)
+    dist, idx = cKDTree(lut).query(img.reshape(-1, 3).astype(float), p=np.inf, distance_upper_bound=6.5)
+    return np.where(np.isfinite(dist), idx, -1).reshape(img.shape[:2])
 
 
 def _bar_box(img: np.ndarray) -> np.ndarray:
