@@ -28,9 +28,11 @@ __all__ = [
     "load_curve",
     "load_any",
     "skeletonize",
+    "show_ab",
 ]
 
 _LAZY = {"evaluate": ".stages", "Evaluation": ".evaluation", "Scores": ".scores", "shapes": ".shapes", "skeletonize": ".skeleton",
+         "show_ab": ".display",
          **dict.fromkeys(("load_cloud", "load_points", "load_curve", "load_any", "write_points_ply",
                           "write_curve_ply"), ".io")}
 

@@ -250,3 +250,24 @@ class Evaluation:
 
         return to_open3d(self, metric, **options)
 
+
+    # ---- pictures and tables (skelcore.display; pyvista, matplotlib, IPython imported when drawing) ----
+    def show(self, metric: str = "centeredness", **options):
+        """The skeleton coloured by ``metric`` over the faint cloud, with its colour bar (NaN magenta):
+        in a notebook's cell, else a window, or a PNG whose path is returned (``path=``, or no display).
+        Options: :func:`skelcore.display.show.show`."""
+        from .display.show import show
+
+        return show(self, metric, **options)
+
+    def show_barcodes(self, **options):
+        """The H0 barcodes of the cloud and the skeletal set (SPEC 1), where :meth:`show` draws."""
+        from .display.show import show_barcodes
+
+        return show_barcodes(self, **options)
+
+    def _repr_html_(self) -> str:
+        """The paper's summary table, the defects and the warnings, for Jupyter."""
+        from .display.summary_table import summary_html
+
+        return summary_html(self)

@@ -9,31 +9,11 @@ import sys
 
 from ..errors import SkelInputError
 from ..params import Params
-from ..trust import DEFECT_CODES
-from ..scores import Scores, paper_table
+from ..display.summary_table import format_defects, format_table  # re-exported: the CLI's tables
+from ..scores import Scores
 
 __all__ = ["format_table", "format_defects", "format_reference", "print_warnings", "stderr_progress", "params_from_args",
            "positive_int", "positive_float", "nonnegative_float", "clear_progress_line"]
-
-
-def format_table(scores: Scores | dict) -> str:
-    """The paper's results layout: rows d_B/d_Wp, boundedness, centeredness, smoothness;
-    columns skeletal points / curve skeleton, each score with the number of elements it counted
-    (a :class:`Scores`, or a ``summary()`` / ``--json`` dict)."""
-    s = scores if isinstance(scores, Scores) else Scores.from_json_dict(scores)
-    rows = [("metric", "skeletal points", "curve skeleton"), *paper_table(s, every_row=False)]
-    widths = [max(len(r[i]) for r in rows) for i in range(3)]
-    lines = []
-    for k, r in enumerate(rows):
-        lines.append("  ".join(c.ljust(w) for c, w in zip(r, widths)).rstrip())
-        if k == 0:
-            lines.append("  ".join("-" * w for w in widths))
-    if s.d_B is not None:
-        lines.append(f"(eps* = {s.text('eps_star')}, K = {s.n_bars} bars compared)")
-    if s.coverage_skeletal is not None or s.coverage_curve is not None:
-        lines.append(f"(* SkelScope's own, not the paper's: covered fraction of the cloud (slack s = "
-                     f"{s.coverage_slack:g}, tau = {s.text('coverage_tau')}), mean / max gap, normalized units)")
-    return "\n".join(lines)
 
 
 def format_reference(scores: Scores | dict) -> str:
@@ -45,15 +25,6 @@ def format_reference(scores: Scores | dict) -> str:
             f"precision {s.text('reference_precision')}, recall {s.text('reference_recall')}, "
             f"F1 {s.text('reference_f1')} (within tau = {s.text('reference_tau')})\n"
             f"  graph (ours/reference): {counts}")
-
-
-def format_defects(warnings: list[dict]) -> str:
-    """The "defects" block under the paper's table (issue 22): one line per defect warning
-    (:data:`skelcore.trust.DEFECT_CODES`), "none found" otherwise."""
-    found = [w for w in warnings if w["code"] in DEFECT_CODES]
-    if not found:
-        return "defects: none found"
-    return "\n".join(["defects:"] + [f"  [{w['code']}] {w['message']}" for w in found])
 
 
 def print_warnings(warnings: list[dict]) -> None:

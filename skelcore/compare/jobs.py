@@ -203,27 +203,13 @@ def scores_from_doc(doc: dict[str, Any] | None) -> dict[str, float]:
 
 
 def _arrays(ev: Any) -> dict[str, np.ndarray]:
-    """The local values the report draws (float32 coordinates, NaN kept), and the whole evaluation
-    at full precision for the viewer (:mod:`skelcore.io.evaluation_files`)."""
+    """The local values the report draws (:func:`skelcore.display.picture_arrays.drawing_arrays`: float32
+    coordinates, NaN kept), and the whole evaluation at full precision for the viewer
+    (:mod:`skelcore.io.evaluation_files`)."""
+    from ..display.picture_arrays import drawing_arrays
     from ..io.evaluation_files import evaluation_arrays
 
-    f32 = lambda a: np.asarray(a, dtype=np.float32)  # noqa: E731
-    out = {"cloud": f32(ev.cloud)}
-    b_star = ev.params.beta_star
-    if ev.skeletal is not None:
-        s = ev.skeletal
-        out.update(skeletal=f32(s.points), skeletal_boundedness=f32(s.boundedness),
-                   skeletal_centeredness=f32(s.centeredness(b_star)), skeletal_smoothness=f32(s.smoothness))
-    if ev.curve is not None:
-        c = ev.curve
-        out.update(curve_vertices=f32(c.curve.vertices), curve_edges=np.asarray(c.curve.edges, np.int32),
-                   curve_samples=f32(c.samples), curve_sample_boundedness=f32(c.sample_boundedness),
-                   curve_sample_centeredness=f32(c.sample_centeredness(b_star)),
-                   curve_vertex_smoothness=f32(c.vertex_smoothness))
-    if ev.topology is not None:
-        out.update(cloud_barcode=np.asarray(ev.topology.cloud_barcode, np.float64),
-                   skeletal_barcode=np.asarray(ev.topology.skeletal_barcode, np.float64),
-                   eps_star=np.array([ev.topology.eps_star]), n_bars=np.array([ev.topology.n_bars]))
+    out = drawing_arrays(ev)
     out.update(evaluation_arrays(ev))
     return out
 

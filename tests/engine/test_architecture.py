@@ -10,9 +10,11 @@ from pathlib import Path
 import pytest
 
 ROOT = Path(__file__).resolve().parents[2]
-FORBIDDEN = ("PySide6", "PyQt5", "PyQt6", "shiboken6", "qtpy", "pyvista", "pyvistaqt", "vtk", "vtkmodules", "matplotlib")
+FORBIDDEN = ("PySide6", "PyQt5", "PyQt6", "shiboken6", "qtpy", "pyvista", "pyvistaqt", "vtk", "vtkmodules", "matplotlib",
+             "IPython")
 # Reports and figures import their plotting lazily, inside the function that draws.
-LAZY_PLOTTING_OK = ("skelcore.experiments", "skelcore.compare", "skelcore.benchmark.validity_report")
+LAZY_PLOTTING_OK = ("skelcore.experiments", "skelcore.compare", "skelcore.benchmark.validity_report",
+                    "skelcore.display")
 
 
 def _module_name(path: Path) -> str:
@@ -64,6 +66,9 @@ LAZY_DELEGATIONS = {
     ("skelcore.evaluation", "skelcore.interop.tables"),
     ("skelcore.evaluation", "skelcore.interop.graph_out"),
     ("skelcore.evaluation", "skelcore.interop.open3d_out"),
+    # pictures and tables for notebooks (issue 24 3): Evaluation.show, show_barcodes, _repr_html_
+    ("skelcore.evaluation", "skelcore.display.show"),
+    ("skelcore.evaluation", "skelcore.display.summary_table"),
 }
 
 
@@ -156,13 +161,15 @@ def test_the_cycle_finder_finds_a_cycle():
 #                                                             -> foundation, formats, metrics, scan, diagnostics, record
 #   adapters          skelcore.adapters: other skeletonizers by name (PyGEL, kimimaro, scikit-image)
 #                                                                                 -> foundation, formats
+#   display           skelcore.display: pictures and tables of an Evaluation (notebook, window, PNG)
+#                                                             -> foundation, formats, metrics, scan, diagnostics, record
 #   applications      skelcore.compare, skelcore.experiments, skelcore.benchmark  -> every layer above this line
 #   entry points      skelcore.cli, skelcore.__main__, the package facade skelcore/__init__ -> every layer
 # So: metrics never import the record, the stages or the evaluation files; the record imports no io; the
 # format readers and writers import no metric; compare and the CLI sit on top. A pattern "x.*" is the
 # package x and everything in it, any other an exact module; a module's layer is its longest pattern.
 _BELOW_APPS = ["foundation", "formats", "objects in", "skeletonizer", "adapters", "metrics", "scan", "diagnostics",
-               "record", "stages", "evaluation files"]
+               "record", "stages", "evaluation files", "display"]
 LAYERS: dict[str, tuple[list[str], list[str]]] = {
     "foundation": ([f"skelcore.{m}" for m in ("errors", "version", "params", "geometry", "parallel", "curve",
                                               "curve_sampling", "correspondence", "colors", "shapes",
@@ -182,6 +189,7 @@ LAYERS: dict[str, tuple[list[str], list[str]]] = {
                           "skelcore.interop.tables",
                           "skelcore.interop.graph_out", "skelcore.interop.open3d_out"],
                          ["foundation", "formats", "metrics", "scan", "diagnostics", "record"]),
+    "display": (["skelcore.display.*"], ["foundation", "formats", "metrics", "scan", "diagnostics", "record"]),
     "applications": (["skelcore.compare.*", "skelcore.experiments.*", "skelcore.benchmark.*"], _BELOW_APPS),
     "entry points": (["skelcore", "skelcore.__main__", "skelcore.cli.*"], [*_BELOW_APPS, "applications"]),
 }

@@ -1,0 +1,61 @@
+"""A pyvista plotter holding one scene per panel, side by side, for a window, a notebook or a PNG
+rendered off-screen. compare's renders, ``Evaluation.show`` and ``show_ab`` all make their plotter
+and their PNG here (one rendering code path, SPEC 5's colours from :mod:`.scene`).
+"""
+
+from __future__ import annotations
+
+import io as _io
+from typing import Any, Sequence
+
+import numpy as np
+
+from .scene import add_scene, quiet_vtk
+
+__all__ = ["Panel", "make_plotter", "render_png", "png_bytes"]
+
+#: one panel: the drawing arrays (:func:`skelcore.display.picture_arrays.drawing_arrays`) and its title (or None)
+Panel = tuple[dict[str, np.ndarray], "str | None"]
+
+
+def make_plotter(panels: Sequence[Panel], view: str, size: tuple[int, int], *, off_screen: bool = False,
+                 notebook: bool = False, colour_bar: bool = False, **scene: Any) -> Any:
+    """A plotter of ``len(panels)`` panels of ``size`` pixels each, every one drawing ``view``
+    (:func:`.scene.add_scene`'s options in ``scene``, the same ``clim`` for all); the colour bar, one
+    for all, in the last panel. The cameras are linked when there are several."""
+    import pyvista as pv
+
+    quiet_vtk()
+    n = len(panels)
+    kwargs: dict[str, Any] = {"window_size": [int(size[0]) * n, int(size[1])], "shape": (1, n), "border": False}
+    if notebook:
+        kwargs["notebook"] = True
+    elif off_screen:
+        kwargs["off_screen"] = True
+    pl = pv.Plotter(**kwargs)
+    for i, (arrays, title) in enumerate(panels):
+        pl.subplot(0, i)
+        add_scene(pl, arrays, view, colour_bar=colour_bar and i == n - 1, title=title, **scene)
+    if n > 1:
+        pl.link_views()
+    return pl
+
+
+def render_png(panels: Sequence[Panel], view: str, size: tuple[int, int], **options: Any) -> bytes:
+    """The panels rendered off-screen, as PNG bytes (:func:`make_plotter`'s options)."""
+    pl = make_plotter(panels, view, size, off_screen=True, **options)
+    try:
+        img = pl.screenshot(return_img=True)
+    finally:
+        pl.close()
+    return png_bytes(img)
+
+
+def png_bytes(img: np.ndarray) -> bytes:
+    """An (H, W, 3|4) uint8 image as PNG bytes (matplotlib's writer, imported here; no backend is
+    chosen, so a notebook's inline plots are left alone)."""
+    from matplotlib import image as mpimg
+
+    buf = _io.BytesIO()
+    mpimg.imsave(buf, np.ascontiguousarray(img), format="png")
+    return buf.getvalue()
