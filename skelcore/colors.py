@@ -19,6 +19,8 @@ __all__ = [
     "CURVE_COLOR",
     "PICK_COLOR",
     "SUPPORT_COLORS",
+    "DEFECT_COLORS",
+    "DEFECT_SKELETON",
     "hex_color",
     "COLORMAPS",
     "lookup_table",
@@ -50,6 +52,19 @@ SUPPORT_COLORS: dict[str, tuple[int, int, int]] = {
     "m_o": (120, 66, 18),  # the cloud centroid m_o (shape tells it from the neighbours)
     "links": (90, 90, 90),  # skeletal point -> its cloud point
 }
+
+#: A skeleton's defects (issue 22, docs/diagnostics.md), each in a colour of its own in report.html's
+#: defect picture: the missing parts' cloud points, the curve's edges on spurious branches, on spurious
+#: cycles and outside the shape. Apart (CIELAB distance >= 20, test) from every viridis entry, from
+#: magenta, from each other and from the colours above: deep rose, green (twigs), strong blue, orange.
+DEFECT_COLORS: dict[str, tuple[int, int, int]] = {
+    "incomplete": (210, 15, 135),
+    "spurious_branches": (0, 220, 0),
+    "spurious_cycles": (0, 45, 225),
+    "outside": (255, 100, 0),
+}
+#: The rest of the skeleton in the defect picture: a neutral grey, darker than the cloud's.
+DEFECT_SKELETON: tuple[int, int, int] = (110, 110, 110)
 
 
 def hex_color(rgb: tuple[int, int, int]) -> str:

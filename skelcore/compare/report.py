@@ -23,6 +23,7 @@ from ..trust import DEFECT_CODES
 from .leaderboard import Leaderboard
 from .profiles import Profile
 from .render import VIEWS, render_job
+from .render_defects import DEFECT_VIEW, defect_layers, legend_html, render_defects
 from .job_store import Store
 
 __all__ = ["write_report", "distributions_png"]
@@ -34,7 +35,8 @@ table{border-collapse:collapse;font-size:12px;margin:8px 0}
 td,th{border:1px solid #ccc;padding:3px 6px;text-align:left;vertical-align:middle}
 th{background:#f0f0f0}td.best{font-weight:bold;background:#eef7ee}
 .gt td{text-align:center}.gt img{width:180px;height:180px;display:block}
-.note{color:#555;font-size:12px}.fail{color:#a00}ul.warnings{margin:4px 0;padding-left:16px;font-size:12px;max-width:360px}
+.note{color:#555;font-size:12px}ul.legend{margin:4px 0;padding:0;list-style:none;font-size:11px;max-width:180px;text-align:left}
+.swatch{display:inline-block;width:10px;height:10px;margin-right:4px;border:1px solid #888;vertical-align:middle}.fail{color:#a00}ul.warnings{margin:4px 0;padding-left:16px;font-size:12px;max-width:360px}
 """
 _SCRIPT = """
 window.addEventListener('load',function(){var im=document.images,ok=0;
@@ -147,12 +149,20 @@ def _warnings_html(store: Store, r: dict[str, Any]) -> str:
     return f"<ul class=warnings>{items}</ul>"
 
 
+def _defects_cell(out_dir: str, store: Store, r: dict[str, Any], arrays: dict[str, np.ndarray], alt: str) -> str:
+    """The job's defect picture (only the defects it was warned of, each in its colour) and its legend."""
+    doc = (store.get(r["key"]) or {}).get("evaluation") or {}
+    layers = defect_layers(arrays, [w["code"] for w in doc.get("warnings") or [] if w["code"] in DEFECT_CODES])
+    png = render_defects(out_dir, r["key"], arrays, layers)
+    return f"<td>{_img(png.read_bytes(), alt)}{legend_html(layers)}</td>"
+
+
 def _graphic_table(out_dir: str, rows: list[dict[str, Any]], store: Store, shapes: list[str], methods: list[str],
                    conditions: list[str]) -> str:
     out = []
     for shape in shapes:
         out.append(f"<h3>{html.escape(shape)}</h3><table class=gt><tr><th>condition / method</th>"
-                   + "".join(f"<th>{v}</th>" for v in VIEWS) + "<th>scores (skeletal/curve)</th></tr>")
+                   + "".join(f"<th>{v}</th>" for v in VIEWS) + f"<th>{DEFECT_VIEW}</th><th>scores (skeletal/curve)</th></tr>")
         for cond in conditions:
             for meth in methods:
                 mine = [r for r in rows if r["shape"] == shape and r["condition"] == cond and r["method"] == meth]
@@ -161,11 +171,13 @@ def _graphic_table(out_dir: str, rows: list[dict[str, Any]], store: Store, shape
                 r = mine[0]  # the first seed
                 head = f"<td>{html.escape(cond)} ({html.escape(str(r.get('label', '')))})<br><b>{html.escape(meth)}</b></td>"
                 if r["status"] != "ok":
-                    out.append(f"<tr>{head}<td colspan={len(VIEWS) + 1} class=fail>{html.escape(r['status'])}: "
+                    out.append(f"<tr>{head}<td colspan={len(VIEWS) + 2} class=fail>{html.escape(r['status'])}: "
                                f"{html.escape(str(r.get('error', '')))}</td></tr>")
                     continue
-                pngs = render_job(out_dir, r["key"], store.arrays(r["key"]))
+                arrays = store.arrays(r["key"])
+                pngs = render_job(out_dir, r["key"], arrays)
                 imgs = "".join(f"<td>{_img(pngs[v].read_bytes(), f'{shape} {cond} {meth} {v}')}</td>" for v in VIEWS)
+                imgs += _defects_cell(out_dir, store, r, arrays, f"{shape} {cond} {meth} {DEFECT_VIEW}")
                 out.append(f"<tr>{head}{imgs}<td>{_scores_line(r)}{_warnings_html(store, r)}</td></tr>")
         out.append("</table>")
     return "".join(out)
@@ -204,8 +216,9 @@ def write_report(out_dir: str | os.PathLike, rows: list[dict[str, Any]], board: 
         parts.append("</table>")
     parts.append("<h2>Graphic table</h2><p class=note>Per shape and condition, for each method (first seed): the "
                  "skeleton (blue points, red curve) over the cloud, the H0 barcodes of the cloud and the skeleton "
-                 "(eps* dashed), and the skeleton coloured by boundedness, centeredness and smoothness (viridis 0..1, "
-                 "magenta = invalid).</p>")
+                 "(eps* dashed), the skeleton coloured by boundedness, centeredness and smoothness (viridis 0..1, "
+                 "magenta = invalid), and its defects: only those it was warned of, each in a colour of its own "
+                 "(legend under the picture) on the skeleton in grey.</p>")
     parts.append(_graphic_table(out_dir, rows, store, shapes, methods, conditions))
     parts.append(f"<script>{_SCRIPT}</script></body></html>\n")
     path = os.path.join(out_dir, "report.html")

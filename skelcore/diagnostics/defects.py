@@ -44,6 +44,14 @@ class CurveDefects:
         return {"spurious_branches": self.spurs.sample_flag, "spurious_cycles": self.cycles.sample_flag,
                 "outside": self.outside.sample_outside}
 
+    def edge_flags(self) -> dict[str, np.ndarray]:
+        """Per curve edge: on a spurious branch, on a spurious cycle's branch, with length outside
+        (what report.html draws in each defect's colour)."""
+        eb = np.asarray(self.branches.edge_branch, dtype=np.int64)
+        return {"spurious_branches": np.isin(eb, self.spurs.spurious),
+                "spurious_cycles": np.asarray(self.cycles.branch_spurious, bool)[eb] if len(eb) else np.zeros(0, bool),
+                "outside": np.asarray(self.outside.edge_outside_length) > 0}
+
     def to_dict(self) -> dict:
         return {
             "branches": self.branches.to_dict(),
