@@ -26,7 +26,7 @@ DEFECT_VIEW = "defects"
 #: two defects shows both: a core on a halo)
 DRAWN = ("incomplete", "outside", "spurious_cycles", "spurious_branches")
 DEFECT_LABELS = {
-    "incomplete": "missing parts (cloud points no skeleton element reaches)",
+    "incomplete": "missing parts",
     "outside": "edges outside the shape",
     "spurious_cycles": "spurious cycles",
     "spurious_branches": "spurious branches",

@@ -183,7 +183,7 @@ def test_the_legend_names_only_what_was_found(run):
     named = {m: set(re.findall(r"background:(#[0-9a-f]{6})", c)) for m, c in by.items()}
     hexes = {k: colors.hex_color(c) for k, c in colors.DEFECT_COLORS.items()}
     assert named["truth"] == set()
-    assert named["truncated"] == {hexes["incomplete"]} and "missing parts" in by["truncated"]
+    assert named["truncated"] == {hexes["incomplete"]} and "missing parts: " in by["truncated"]
     assert named["spurs"] == {hexes["spurious_branches"], hexes["outside"]}
     assert "spurious branches" in by["spurs"] and "outside the shape" in by["spurs"]
     assert hexes["spurious_cycles"] in named["loop"] and "spurious cycles" in by["loop"]
