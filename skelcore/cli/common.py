@@ -9,7 +9,7 @@ import sys
 
 from ..errors import SkelInputError
 from ..params import Params
-from ..trust import DEFECT_CODES
+from ..diagnostics.trust import DEFECT_CODES
 from ..scores import Scores, paper_table
 
 __all__ = ["format_table", "format_defects", "format_reference", "print_warnings", "stderr_progress", "params_from_args",
@@ -49,7 +49,7 @@ def format_reference(scores: Scores | dict) -> str:
 
 def format_defects(warnings: list[dict]) -> str:
     """The "defects" block under the paper's table (issue 22): one line per defect warning
-    (:data:`skelcore.trust.DEFECT_CODES`), "none found" otherwise."""
+    (:data:`skelcore.diagnostics.trust.DEFECT_CODES`), "none found" otherwise."""
     found = [w for w in warnings if w["code"] in DEFECT_CODES]
     if not found:
         return "defects: none found"

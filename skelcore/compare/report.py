@@ -19,7 +19,7 @@ import numpy as np
 
 from ..io.atomic import atomic_open
 from ..scores import COLUMN, column_keys, format_score, paired_columns
-from ..trust import DEFECT_CODES
+from ..diagnostics.trust import DEFECT_CODES
 from .leaderboard import Leaderboard
 from .leaderboard_html import LEADERBOARD_CSS, leaderboard_html
 from .profiles import Profile

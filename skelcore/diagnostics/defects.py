@@ -12,7 +12,7 @@ from ..curve import CurveSkeleton
 from ..curve_sampling import CurveSamples
 from ..geometry import Checkpoint, kd_tree, no_checkpoint
 from ..params import Params
-from ..trust import TrustWarning
+from .trust_warning import TrustWarning
 from .branches import Branches, decompose_branches
 from .cycles import CycleDefects, find_cycle_defects
 from .interior import cloud_subsample, voxelize_interior

@@ -9,12 +9,12 @@ from __future__ import annotations
 
 import csv
 import re
+from pathlib import Path
 
 import numpy as np
 import pytest
 
 from compare_helpers import manifest
-from conftest import SHARED_DATA
 from skelcore import skeletonize
 from skelcore.compare import Backend, run_compare
 from skelcore.compare.leaderboard_html import leaderboard_html
@@ -23,6 +23,7 @@ from skelcore.io import load_cloud, write_curve_ply, write_points_ply
 from skelcore.skeleton.degrade import voxel_grid_average
 
 BROKEN = ("truncated", "collapsed")
+SHARED_DATA = Path(__file__).resolve().parents[3] / "shared" / "data"  # tests/conftest.py's shared_data
 SHRINK = 0.03
 
 
