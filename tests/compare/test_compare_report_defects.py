@@ -18,6 +18,7 @@ from diagnostics_helpers import attach_path
 from skelcore import colors, shapes
 from skelcore.compare import Backend, run_compare
 from skelcore.compare.render import _bounds
+from skelcore.compare.render_defects import DRAWN
 from skelcore.io import write_curve_ply, write_points_ply
 
 SIZE = 320
@@ -144,7 +145,7 @@ def test_each_defect_is_drawn_in_its_colour_where_it_is_and_a_sound_job_shows_no
     for img in pics.values():
         assert img.shape[:2] == (SIZE, SIZE)
     # the sound job: the skeleton in grey, no pixel of any defect colour
-    for code in colors.DEFECT_COLORS:
+    for code in DRAWN:
         assert not _mask(pics["truth"], code).any(), code
     # truncated: the missing cloud points are the cut arm's (y > 1), drawn in the missing parts' colour
     miss = _mask(pics["truncated"], "incomplete")
@@ -152,9 +153,10 @@ def test_each_defect_is_drawn_in_its_colour_where_it_is_and_a_sound_job_shows_no
     cut_arm = sh.cloud[sh.cloud[:, 1] > 0.9]
     assert _near(miss, _project(sh.cloud, cut_arm), 3) > 0.95
     assert _near(miss, _project(sh.cloud, sh.cloud[sh.cloud[:, 1] < 0.5]), 1) < 0.2
-    for code in ("spurious_branches", "spurious_cycles", "outside"):
+    for code in DRAWN[1:]:
         assert not _mask(pics["truncated"], code).any(), code
-    # spurs: green on the spurs' edges (the edges added to the true curve), orange where they leave the shape
+    # spurs: the spurs' edges (those added to the true curve) in the spurious branches' colour, and where
+    # they leave the shape in the outside colour
     v, e = curves["spurs"]
     n_true = len(sh.curve_edges)
     spur_px = _project(sh.cloud, _segment_points(v, e[n_true:]))
@@ -163,7 +165,7 @@ def test_each_defect_is_drawn_in_its_colour_where_it_is_and_a_sound_job_shows_no
         assert mask.sum() > 20, code
         assert _near(mask, spur_px, 6) > 0.95, code
     assert not _mask(pics["spurs"], "incomplete").any() and not _mask(pics["spurs"], "spurious_cycles").any()
-    # the loop: blue on the short cycle (the chord and the arm between its ends, vertices 3-6)
+    # the loop: the short cycle in the spurious cycles' colour (the chord and the arm between its ends, vertices 3-6)
     v, e = curves["loop"]
     cyc = np.vstack([e[n_true:], [[3, 4], [4, 5], [5, 6]]])
     mask = _mask(pics["loop"], "spurious_cycles")
