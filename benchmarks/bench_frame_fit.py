@@ -4,7 +4,7 @@ A skeleton in voxel coordinates of a grid laid over the cloud (pitch = the longe
 (0, 0, 0) two voxels below the cloud's min corner, coordinates rounded to voxel indices, as kimimaro
 writes them): the hammer scan's cao curve and the exact and cao curves of the generated shapes
 (x 30). For each: the old suggestion (bounding boxes centred, scaled x 1 / 0.85 / 0.7, the most
-bounded), the new one (``skelcore.trust``), and the grid's own mapping: scale / the grid's pitch,
+bounded), the new one (``skelcore.diagnostics.trust``), and the grid's own mapping: scale / the grid's pitch,
 the largest point error (share of the cloud's diagonal), the curve's boundedness, centeredness and
 completeness under each, and the seconds the evaluation took.
 
@@ -30,7 +30,7 @@ from skelcore.diagnostics import missing_parts  # noqa: E402
 from skelcore.geometry import Normalization  # noqa: E402
 from skelcore.metrics.boundedness import boundedness  # noqa: E402
 from skelcore.params import Params  # noqa: E402
-from skelcore.trust import bbox_transform  # noqa: E402
+from skelcore.diagnostics.trust import bbox_transform  # noqa: E402
 
 SUGGESTED = re.compile(r"--skeleton-scale ([-\d.e+]+) --skeleton-offset ([-\d.e+]+) ([-\d.e+]+) ([-\d.e+]+)\)")
 

@@ -20,7 +20,7 @@ from .metrics.reference import ReferenceComparison
 from .metrics.topology import TopologyResult
 from .params import Params
 from .scan.scan_report import ScanReport
-from .trust import TrustWarning
+from .diagnostics.trust_warning import TrustWarning
 
 if TYPE_CHECKING:
     from .scores import Scores

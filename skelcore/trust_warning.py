@@ -1,47 +1,10 @@
-"""The warning record every trust check and diagnostic returns (``skelcore.trust`` re-exports it):
-a stable ``code`` and a one-line ``message`` with its numbers (docs/metrics.md 5.4, issue 22).
+"""Deprecated alias of :mod:`skelcore.diagnostics.trust_warning` (the warning record moved into the
+diagnostics, issue 22); removed in the next release. Import from ``skelcore.diagnostics.trust_warning``."""
 
-It lives in this leaf module, outside the diagnostics package, so that ``skelcore.trust`` (whose
-frame fit asks :func:`skelcore.diagnostics.missing_parts.missing_parts` for completeness) and the
-diagnostics import it without a cycle, whichever is imported first."""
+import warnings
 
-from __future__ import annotations
+from .diagnostics.trust_warning import *  # noqa: F401,F403
+from .diagnostics.trust_warning import __all__  # noqa: F401
 
-import re
-from dataclasses import dataclass
-
-__all__ = ["TrustWarning"]
-
-
-_NUMBER = r"([-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?)"
-_MAPPING = re.compile(rf"--skeleton-scale {_NUMBER} --skeleton-offset {_NUMBER} {_NUMBER} {_NUMBER}")
-#: where a message's command-line remedy starts (what precedes it is the finding)
-_REMEDIES = ("; give --skeletal-index", "; " + "map it with --skeleton-scale", " (or, if it is in other units, ")
-
-
-@dataclass(frozen=True)
-class TrustWarning:
-    """``message`` is the text the CLI prints and the JSON stores, with the command line's remedy.
-    ``finding`` (what was found) and ``mapping`` (the suggested ``(scale, offset)`` into the cloud's
-    frame, or None) are read from it, for a front end that words its own remedy (the viewer names its
-    menus and settings, issue 25); a warning read back from a file gives the same."""
-
-    code: str
-    message: str
-
-    def to_dict(self) -> dict[str, str]:
-        return {"code": self.code, "message": self.message}
-
-    @property
-    def finding(self) -> str:
-        cut = [i for i in (self.message.find(r) for r in _REMEDIES) if i >= 0]
-        return self.message[: min(cut)] if cut else self.message
-
-    @property
-    def mapping(self) -> tuple[float, tuple[float, float, float]] | None:
-        m = _MAPPING.search(self.message)
-        if m is None:
-            return None
-        s, x, y, z = (float(v) for v in m.groups())
-        return s, (x, y, z)
-
+warnings.warn("skelcore.trust_warning is deprecated: import from skelcore.diagnostics.trust_warning",
+              DeprecationWarning, stacklevel=2)

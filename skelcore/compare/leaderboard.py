@@ -36,7 +36,7 @@ class Entry:
     std: dict[str, float] = field(default_factory=dict)
     rank: dict[str, int | None] = field(default_factory=dict)
     profiles: dict[str, tuple[int, int]] = field(default_factory=dict)  # name -> (passed, applicable)
-    n_sound: int = 0  # finished jobs with no defect warning (skelcore.trust.DEFECT_CODES)
+    n_sound: int = 0  # finished jobs with no defect warning (skelcore.diagnostics.trust.DEFECT_CODES)
     #: column -> True when its mean includes a job with a defect: marked "†", never ranked (so never best)
     tainted: dict[str, bool] = field(default_factory=dict)
 

@@ -18,7 +18,7 @@ from typing import Any
 
 from ..errors import SkelInputError
 from ..scores import column_keys
-from ..trust import DEFECT_CODES
+from ..diagnostics.trust import DEFECT_CODES
 
 if sys.version_info >= (3, 11):
     import tomllib

@@ -19,10 +19,12 @@ import numpy as np
 
 from ..io.atomic import atomic_open
 from ..scores import COLUMN, column_keys, format_score, paired_columns
-from ..trust import DEFECT_CODES
+from ..diagnostics.trust import DEFECT_CODES
 from .leaderboard import Leaderboard
+from .leaderboard_html import LEADERBOARD_CSS, leaderboard_html
 from .profiles import Profile
 from .render import VIEWS, render_job
+from .render_defects import DEFECT_VIEW, defect_layers, legend_html, render_defects
 from .job_store import Store
 
 __all__ = ["write_report", "distributions_png"]
@@ -33,8 +35,9 @@ h1{font-size:22px}h2{font-size:18px;margin-top:28px;border-bottom:1px solid #ccc
 table{border-collapse:collapse;font-size:12px;margin:8px 0}
 td,th{border:1px solid #ccc;padding:3px 6px;text-align:left;vertical-align:middle}
 th{background:#f0f0f0}td.best{font-weight:bold;background:#eef7ee}
-.gt td{text-align:center}.gt img{width:180px;height:180px;display:block}
-.note{color:#555;font-size:12px}.fail{color:#a00}ul.warnings{margin:4px 0;padding-left:16px;font-size:12px;max-width:360px}
+.gt td{text-align:center}.gt img{width:160px;height:160px;display:block}
+.note{color:#555;font-size:12px}ul.legend{margin:4px 0;padding:0;list-style:none;font-size:11px;max-width:180px;text-align:left}
+.swatch{display:inline-block;width:10px;height:10px;margin-right:4px;border:1px solid #888;vertical-align:middle}.fail{color:#a00}ul.warnings{margin:4px 0;padding-left:16px;font-size:12px;max-width:360px;text-align:left}
 """
 _SCRIPT = """
 window.addEventListener('load',function(){var im=document.images,ok=0;
@@ -92,26 +95,6 @@ def distributions_png(rows: list[dict[str, Any]], methods: list[str], conditions
     return buf.getvalue()
 
 
-def _leaderboard_html(board: Leaderboard) -> str:
-    cols = board.columns()
-    out = ["<table><tr><th>method</th><th>condition</th><th>ok</th><th>sound</th>"]
-    out += [f"<th>{html.escape(c)} {board.arrow(c)}</th>" for c in cols]
-    out += [f"<th>{html.escape(p.name)}</th>" for p in board.profiles] + ["</tr>"]
-    for e in board.entries:
-        cells = board._cells(e, cols)
-        out.append(f"<tr><td>{html.escape(e.method)}</td><td>{html.escape(e.condition)}</td><td>{e.n_ok}/{e.n_jobs}</td>"
-                   f"<td{' class=fail' if e.n_sound < e.n_jobs else ''}>{e.n_sound}/{e.n_jobs}</td>")
-        for c, text in zip(cols, cells):
-            cls = ' class="best"' if e.rank.get(c) == 1 else ""
-            out.append(f"<td{cls}>{html.escape(text)}</td>")
-        for p in board.profiles:
-            passed, n = e.profiles[p.name]
-            out.append(f"<td>{'n/a' if n == 0 else f'{passed}/{n}'}</td>")
-        out.append("</tr>")
-    out.append("</table>")
-    return "".join(out)
-
-
 def _profiles_html(profiles: tuple[Profile, ...]) -> str:
     items = []
     for p in profiles:
@@ -147,12 +130,20 @@ def _warnings_html(store: Store, r: dict[str, Any]) -> str:
     return f"<ul class=warnings>{items}</ul>"
 
 
+def _defects_cell(out_dir: str, store: Store, r: dict[str, Any], arrays: dict[str, np.ndarray], alt: str) -> str:
+    """The job's defect picture (only the defects it was warned of, each in its colour) and its legend."""
+    doc = (store.get(r["key"]) or {}).get("evaluation") or {}
+    layers = defect_layers(arrays, [w["code"] for w in doc.get("warnings") or [] if w["code"] in DEFECT_CODES])
+    png = render_defects(out_dir, r["key"], arrays, layers)
+    return f"<td>{_img(png.read_bytes(), alt)}{legend_html(layers)}</td>"
+
+
 def _graphic_table(out_dir: str, rows: list[dict[str, Any]], store: Store, shapes: list[str], methods: list[str],
                    conditions: list[str]) -> str:
     out = []
     for shape in shapes:
         out.append(f"<h3>{html.escape(shape)}</h3><table class=gt><tr><th>condition / method</th>"
-                   + "".join(f"<th>{v}</th>" for v in VIEWS) + "<th>scores (skeletal/curve)</th></tr>")
+                   + "".join(f"<th>{v}</th>" for v in VIEWS) + f"<th>{DEFECT_VIEW}</th><th>scores (skeletal/curve)</th></tr>")
         for cond in conditions:
             for meth in methods:
                 mine = [r for r in rows if r["shape"] == shape and r["condition"] == cond and r["method"] == meth]
@@ -161,11 +152,13 @@ def _graphic_table(out_dir: str, rows: list[dict[str, Any]], store: Store, shape
                 r = mine[0]  # the first seed
                 head = f"<td>{html.escape(cond)} ({html.escape(str(r.get('label', '')))})<br><b>{html.escape(meth)}</b></td>"
                 if r["status"] != "ok":
-                    out.append(f"<tr>{head}<td colspan={len(VIEWS) + 1} class=fail>{html.escape(r['status'])}: "
+                    out.append(f"<tr>{head}<td colspan={len(VIEWS) + 2} class=fail>{html.escape(r['status'])}: "
                                f"{html.escape(str(r.get('error', '')))}</td></tr>")
                     continue
-                pngs = render_job(out_dir, r["key"], store.arrays(r["key"]))
+                arrays = store.arrays(r["key"])
+                pngs = render_job(out_dir, r["key"], arrays)
                 imgs = "".join(f"<td>{_img(pngs[v].read_bytes(), f'{shape} {cond} {meth} {v}')}</td>" for v in VIEWS)
+                imgs += _defects_cell(out_dir, store, r, arrays, f"{shape} {cond} {meth} {DEFECT_VIEW}")
                 out.append(f"<tr>{head}{imgs}<td>{_scores_line(r)}{_warnings_html(store, r)}</td></tr>")
         out.append("</table>")
     return "".join(out)
@@ -181,12 +174,12 @@ def write_report(out_dir: str | os.PathLike, rows: list[dict[str, Any]], board: 
     n_ok = sum(r["status"] == "ok" for r in rows)
     failed = [r for r in rows if r["status"] != "ok"]
     parts = [f"<!DOCTYPE html><html><head><meta charset='utf-8'><title>{html.escape(title)}</title>"
-             f"<style>{_CSS}</style></head><body data-images=''>",
+             f"<style>{_CSS}{LEADERBOARD_CSS}</style></head><body data-images=''>",
              f"<h1>{html.escape(title)}</h1><p class=note>skelcore {__version__}, "
              f"{time.strftime('%Y-%m-%d %H:%M UTC', time.gmtime())}; {len(rows)} jobs, {n_ok} ok, {len(failed)} failed"]
     for k, v in (meta or {}).items():
         parts.append(f"; {html.escape(str(k))}: {html.escape(str(v))}")
-    parts.append("</p><h2>Leaderboard</h2>" + _leaderboard_html(board))
+    parts.append("</p><h2>Leaderboard</h2>" + leaderboard_html(board))
     parts.append("<p class=note>Mean ± standard deviation over shapes and seeds of the finished jobs; (rank) among the "
                  "methods under the same condition, best in bold; ↓ lower is better, ↑ higher is better. "
                  "Profile columns: jobs passing / jobs the profile applies to. sound: finished jobs with no defect "
@@ -204,8 +197,9 @@ def write_report(out_dir: str | os.PathLike, rows: list[dict[str, Any]], board: 
         parts.append("</table>")
     parts.append("<h2>Graphic table</h2><p class=note>Per shape and condition, for each method (first seed): the "
                  "skeleton (blue points, red curve) over the cloud, the H0 barcodes of the cloud and the skeleton "
-                 "(eps* dashed), and the skeleton coloured by boundedness, centeredness and smoothness (viridis 0..1, "
-                 "magenta = invalid).</p>")
+                 "(eps* dashed), the skeleton coloured by boundedness, centeredness and smoothness (viridis 0..1, "
+                 "magenta = invalid), and its defects: only those it was warned of, each in a colour of its own "
+                 "(legend under the picture) on the skeleton in grey.</p>")
     parts.append(_graphic_table(out_dir, rows, store, shapes, methods, conditions))
     parts.append(f"<script>{_SCRIPT}</script></body></html>\n")
     path = os.path.join(out_dir, "report.html")

@@ -1,6 +1,6 @@
 """``results.csv``: one row per job of the manifest (in manifest order) from the store, with each
 application profile's verdict and reason, and the job's warning codes by name (``warnings``), those
-that are defects (``defects``, :data:`skelcore.trust.DEFECT_CODES`) and ``sound`` (1: no defect). Empty cells are missing scores, so pandas reads the
+that are defects (``defects``, :data:`skelcore.diagnostics.trust.DEFECT_CODES`) and ``sound`` (1: no defect). Empty cells are missing scores, so pandas reads the
 file as it is (``pd.read_csv``: NaN there, floats at full precision elsewhere).
 """
 
@@ -14,7 +14,7 @@ from typing import Any
 
 from ..io.atomic import atomic_open
 from ..scores import column_keys
-from ..trust import defect_codes
+from ..diagnostics.trust import defect_codes
 from .jobs import SCORE_COLUMNS, Job
 from .profiles import Profile
 from .job_store import Store, json_float

@@ -27,7 +27,7 @@ from ..curve import CurveSkeleton
 from ..curve_sampling import CurveSamples
 from ..geometry import Checkpoint, no_checkpoint
 from ..params import Params
-from ..trust import TrustWarning
+from .trust_warning import TrustWarning
 from .branches import Branches, decompose_branches, densify
 from .interior import VoxelShape, betti_numbers, voxelize_interior
 

@@ -12,7 +12,7 @@ from ..curve import CurveSkeleton
 from ..curve_sampling import CurveSamples
 from ..geometry import Checkpoint, kd_tree, no_checkpoint
 from ..params import Params
-from ..trust import TrustWarning
+from .trust_warning import TrustWarning
 from .branches import Branches, decompose_branches
 from .cycles import CycleDefects, find_cycle_defects
 from .interior import cloud_subsample, voxelize_interior
@@ -43,6 +43,14 @@ class CurveDefects:
     def sample_flags(self) -> dict[str, np.ndarray | None]:
         return {"spurious_branches": self.spurs.sample_flag, "spurious_cycles": self.cycles.sample_flag,
                 "outside": self.outside.sample_outside}
+
+    def edge_flags(self) -> dict[str, np.ndarray]:
+        """Per curve edge: on a spurious branch, on a spurious cycle's branch, with length outside
+        (what report.html draws in each defect's colour)."""
+        eb = np.asarray(self.branches.edge_branch, dtype=np.int64)
+        return {"spurious_branches": np.isin(eb, self.spurs.spurious),
+                "spurious_cycles": np.asarray(self.cycles.branch_spurious, bool)[eb] if len(eb) else np.zeros(0, bool),
+                "outside": np.asarray(self.outside.edge_outside_length) > 0}
 
     def to_dict(self) -> dict:
         return {

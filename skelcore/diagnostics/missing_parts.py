@@ -30,7 +30,7 @@ from ..curve import CurveSkeleton
 from ..geometry import Checkpoint, no_checkpoint, unique_rows
 from ..metrics.coverage import Coverage, coverage, coverage_tau
 from ..params import Params
-from ..trust_warning import TrustWarning
+from .trust_warning import TrustWarning
 
 __all__ = ["MissingRegion", "MissingParts", "missing_parts", "skeleton_elements"]
 

@@ -27,7 +27,7 @@ from ..curve import CurveSkeleton
 from ..curve_sampling import CurveSamples
 from ..geometry import Checkpoint, kd_tree, no_checkpoint
 from ..params import Params
-from ..trust import TrustWarning
+from .trust_warning import TrustWarning
 from .branches import Branches, decompose_branches
 from .interior import VoxelShape, cloud_subsample, median_spacing, voxelize_interior
 

@@ -24,9 +24,9 @@ DEFECT_BITS = {"spurious_branches": 1, "spurious_cycles": 2, "outside": 4, "inco
 class Diagnostics:
     """``summary``: the JSON block (completeness, missing parts, branches, cycles: skeleton / shape /
     spurious / missing, outside length share); ``arrays``: ``curve_vertex_branch``,
-    ``curve_sample_branch`` (-1: a junction), ``curve_vertex_defects``, ``curve_sample_defects``
-    (:data:`DEFECT_BITS`), ``skeletal_point_defects`` (the given skeletal set's ``outside`` bits),
-    ``cloud_missing_skeletal`` / ``cloud_missing_curve`` (the point's missing
+    ``curve_sample_branch`` (-1: a junction), ``curve_vertex_defects``, ``curve_sample_defects``,
+    ``curve_edge_defects`` (:data:`DEFECT_BITS`), ``skeletal_point_defects`` (the given skeletal set's
+    ``outside`` bits), ``cloud_missing_skeletal`` / ``cloud_missing_curve`` (the point's missing
     region, -1: explained or in no counted region)."""
 
     summary: dict[str, Any]
@@ -77,6 +77,7 @@ def diagnostics_record(curve: CurveDefects | None, missing_skeletal: MissingPart
         b = curve.branches
         arrays["curve_vertex_branch"] = np.asarray(b.vertex_branch, np.int64)
         arrays["curve_vertex_defects"] = _flags(curve.vertex_flags(), len(b.vertex_branch))
+        arrays["curve_edge_defects"] = _flags(curve.edge_flags(), len(b.edge_branch))
         if b.sample_branch is not None:
             arrays["curve_sample_branch"] = np.asarray(b.sample_branch, np.int64)
             arrays["curve_sample_defects"] = _flags(curve.sample_flags(), len(b.sample_branch))

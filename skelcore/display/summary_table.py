@@ -11,7 +11,7 @@ import html
 from typing import Any, Sequence
 
 from ..scores import Scores, paper_table
-from ..trust import DEFECT_CODES
+from ..diagnostics.trust import DEFECT_CODES
 
 __all__ = ["HEADER", "format_table", "table_notes", "format_defects", "summary_html", "tables_html"]
 
@@ -55,7 +55,7 @@ def _defects(warnings: Sequence[dict]) -> list[dict]:
 
 def format_defects(warnings: Sequence[dict]) -> str:
     """The "defects" block under the paper's table (issue 22): one line per defect warning
-    (:data:`skelcore.trust.DEFECT_CODES`), "none found" otherwise."""
+    (:data:`skelcore.diagnostics.trust.DEFECT_CODES`), "none found" otherwise."""
     found = _defects(warnings)
     if not found:
         return "defects: none found"

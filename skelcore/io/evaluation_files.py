@@ -36,7 +36,7 @@ from ..metrics.reference import ReferenceComparison
 from ..metrics.topology import TopologyResult
 from ..params import Params
 from ..scan.scan_report import ScanReport
-from ..trust import TrustWarning
+from ..diagnostics.trust_warning import TrustWarning
 from .atomic import atomic_open
 from .json_numbers import json_float, json_safe
 

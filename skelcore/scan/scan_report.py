@@ -13,7 +13,7 @@ from typing import Any
 
 import numpy as np
 
-from ..trust_warning import TrustWarning
+from ..diagnostics.trust_warning import TrustWarning
 from .prepare import Strays
 
 __all__ = ["ScanReport", "outliers_warning", "open_surface_warning"]

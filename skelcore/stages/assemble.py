@@ -12,7 +12,7 @@ import numpy as np
 from ..correspondence import aggregate_rows
 from ..evaluation import CurveLocal, Evaluation, SkeletalLocal
 from ..geometry import Checkpoint
-from ..trust import TrustWarning, frame_fit_warning, frame_warnings, no_correspondence_warning, smoothness_warning
+from ..diagnostics.trust import TrustWarning, frame_fit_warning, frame_warnings, no_correspondence_warning, smoothness_warning
 from ..diagnostics.record import diagnostics_record
 from .context import EvalContext
 from .scan_checks import scan_warnings

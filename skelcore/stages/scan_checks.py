@@ -19,7 +19,7 @@ from ..scan.escape import escaping_share, set_local_radii
 from ..scan.openings import find_openings
 from ..scan.prepare import find_strays
 from ..scan.scan_report import ScanReport, open_surface_warning, outliers_warning
-from ..trust import TrustWarning
+from ..diagnostics.trust_warning import TrustWarning
 from .context import EvalContext
 
 __all__ = ["scan_warnings"]

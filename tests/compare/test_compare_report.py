@@ -14,6 +14,9 @@ import pytest
 from compare_helpers import command, make_dataset, manifest
 from skelcore.cli import main
 from skelcore.compare import Backend, run_compare
+from skelcore.compare.render import VIEWS
+
+PICTURES = len(VIEWS) + 1  # per finished job: the paper's views and the defect picture
 
 CHROMIUM_FLAGS = ["--headless", "--no-sandbox", "--disable-gpu", "--disable-background-networking",
                   "--disable-component-update", "--disable-sync", "--no-first-run"]
@@ -74,8 +77,8 @@ def test_the_report_is_one_self_contained_file(run):
     assert not re.search(r"""(src|href)\s*=\s*["']?(https?:|//)""", text)
     assert "<link" not in text
     n_img = text.count("<img ")
-    # 4 finished jobs x 5 views + the distributions; the crashed jobs show their error instead
-    assert n_img == 4 * 5 + 1
+    # 4 finished jobs x (5 views + defects) + the distributions; the crashed jobs show their error instead
+    assert n_img == 4 * PICTURES + 1
     assert text.count("data:image/png;base64,") == n_img
     assert "exited with status 139" in text and "Leaderboard" in text and "our reading" in text
 
@@ -87,7 +90,7 @@ def test_headless_chromium_loads_every_image_and_draws_a_page(run, tmp_path):
     assert dom.returncode == 0, dom.stderr[-500:]
     loaded = re.search(r'data-images="(\d+)/(\d+)"', dom.stdout)
     assert loaded, "the page's load script did not run"
-    assert loaded.group(1) == loaded.group(2) == "21"
+    assert loaded.group(1) == loaded.group(2) == str(4 * PICTURES + 1)
     shot = tmp_path / "report.png"
     r = _browser(tmp_path, f"--screenshot={shot}", "--window-size=1400,2200", url)
     assert r.returncode == 0 and shot.exists(), r.stderr[-500:]
@@ -100,7 +103,7 @@ def test_headless_chromium_loads_every_image_and_draws_a_page(run, tmp_path):
 def test_each_render_shows_the_shape(run):
     root, res = run
     renders = sorted((root / "out" / "renders").glob("*.png"))
-    assert len(renders) == 4 * 5
+    assert len(renders) == 4 * PICTURES
     for p in renders:
         img = _image(p)
         assert img.shape[:2] == (320, 320) and _not_blank(img) > 0.005, p.name

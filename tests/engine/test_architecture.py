@@ -144,13 +144,15 @@ def test_the_cycle_finder_finds_a_cycle():
 # The engine's layers, bottom to top, and the lower layers each may import (its own always; an import
 # inside a function counts too, the LAZY_DELEGATIONS aside):
 #   foundation        errors, version, params, geometry, parallel, curve, curve_sampling, correspondence,
-#                     trust, colors, shapes, skeleton_mapping                     -> nothing else
+#                     colors, shapes, skeleton_mapping, diagnostics.trust_warning (the warning record; the
+#                     diagnostics package's __init__ imports nothing at import time) -> nothing else
 #   formats           skelcore.io: readers and writers of file formats, atomic writes, JSON numbers
 #                                                                                 -> foundation
 #   skeletonizer      skelcore.skeleton                                           -> foundation
 #   metrics           skelcore.metrics (each result type beside its metric)       -> foundation
 #   scan              skelcore.scan (openings, viewpoints, stray points, caps)    -> foundation, metrics
-#   diagnostics       skelcore.diagnostics, trust (the warnings; TrustWarning itself is in the foundation)
+#   diagnostics       skelcore.diagnostics, with the trust checks (diagnostics.trust; TrustWarning itself is
+#                     in the foundation)
 #                                                                                 -> foundation, formats, metrics
 #   record            the Evaluation (skelcore.evaluation, old name results), Scores
 #                                                             -> foundation, metrics, scan, diagnostics
@@ -173,7 +175,8 @@ _BELOW_APPS = ["foundation", "formats", "objects in", "skeletonizer", "adapters"
 LAYERS: dict[str, tuple[list[str], list[str]]] = {
     "foundation": ([f"skelcore.{m}" for m in ("errors", "version", "params", "geometry", "parallel", "curve",
                                               "curve_sampling", "correspondence", "colors", "shapes",
-                                              "skeleton_mapping", "trust_warning")], []),
+                                              "skeleton_mapping", "trust_warning", "diagnostics.trust_warning")],
+                   []),
     "formats": (["skelcore.io.*"], ["foundation"]),
     "skeletonizer": (["skelcore.skeleton.*"], ["foundation"]),
     "adapters": (["skelcore.adapters.*"], ["foundation", "formats"]),
@@ -300,17 +303,25 @@ def test_no_two_engine_modules_share_a_name():
     """A module's file name says what it holds, once: the CLI's subcommand modules aside (``cli/evaluate``
     is the ``evaluate`` subcommand), no two engine modules are called alike."""
     seen: dict[str, list[str]] = {}
+    shims = {old for old, _new, _attr in MOVED}
     for name, path in _modules("skelcore").items():
-        if path.name == "__init__.py" or name.startswith("skelcore.cli."):
+        if path.name == "__init__.py" or name.startswith("skelcore.cli.") or name in shims:
             continue
         seen.setdefault(path.stem, []).append(name)
     assert {stem: names for stem, names in seen.items() if len(names) > 1} == {}
 
 
-@pytest.mark.parametrize("old, new, attr", [
+# deprecated aliases of moved modules (old -> new, an attribute both have): each warns on import, and
+# its file name may repeat the new module's (the one exception to "no two modules share a name")
+MOVED = [
     ("skelcore.results", "skelcore.evaluation", "Evaluation"),
     ("skelcore.experiments.compare", "skelcore.compare", "run_compare"),
-])
+    ("skelcore.trust", "skelcore.diagnostics.trust", "frame_warnings"),
+    ("skelcore.trust_warning", "skelcore.diagnostics.trust_warning", "TrustWarning"),
+]
+
+
+@pytest.mark.parametrize("old, new, attr", MOVED)
 def test_moved_modules_still_import_with_a_deprecation_warning(old, new, attr):
     import importlib
     import subprocess
@@ -332,3 +343,26 @@ def test_old_compare_submodule_paths_name_the_renamed_modules():
             "from skelcore.experiments.compare.run_folder import open_run\n"
             "from skelcore.compare.finished_run import open_run as new\nprint(open_run is new)")
     assert subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout.strip() == "True"
+
+
+def test_the_warning_record_loads_no_diagnostic_and_every_diagnostics_module_imports_first():
+    """skelcore.diagnostics.trust_warning is the foundation's: importing it (a fresh interpreter) loads
+    none of the diagnostics nor scipy; each diagnostics module, and each user of the record, imports
+    first without a cycle; the package's names resolve (``missing_parts`` the function)."""
+    import subprocess
+    import sys
+
+    code = ("import sys\nimport skelcore.diagnostics.trust_warning as t\n"
+            "print(sorted(m for m in sys.modules if m.startswith(('skelcore.diagnostics.', 'scipy'))))")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout
+    assert out.strip() == "['skelcore.diagnostics.trust_warning']"
+    mods = [m for m in _modules("skelcore") if m.startswith("skelcore.diagnostics.")]
+    mods += ["skelcore.scan.scan_report", "skelcore.evaluation", "skelcore.stages.scan_checks"]
+    for m in mods:
+        subprocess.run([sys.executable, "-c", f"import {m}"], capture_output=True, text=True, check=True)
+    code = ("import skelcore.stages, skelcore.diagnostics.missing_parts\n"
+            "from skelcore.diagnostics import missing_parts, find_curve_defects, JUNCTION\n"
+            "import skelcore.diagnostics as d\n"
+            "print(callable(missing_parts), missing_parts is d.missing_parts, callable(find_curve_defects), JUNCTION)")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout
+    assert out.split() == ["True", "True", "True", "-1"]

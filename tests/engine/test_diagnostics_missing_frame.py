@@ -1,5 +1,5 @@
 """The ``frame`` suggestion proposes only a mapping under which the skeleton is bounded AND complete
-(issue 22, item 6; skelcore.trust.fit_frame): voxel coordinates of a grid laid over the cloud, as
+(issue 22, item 6; skelcore.diagnostics.trust.fit_frame): voxel coordinates of a grid laid over the cloud, as
 kimimaro and scikit-image write them, get the grid's pitch and origin back."""
 
 import re
@@ -12,7 +12,7 @@ from skelcore.curve import CurveSkeleton
 from skelcore.diagnostics import missing_parts
 from skelcore.geometry import Normalization
 from skelcore.metrics.boundedness import boundedness
-from skelcore.trust import bbox_transform, fit_frame, frame_fit_warning, frame_warnings
+from skelcore.diagnostics.trust import bbox_transform, fit_frame, frame_fit_warning, frame_warnings
 
 P = Params()
 SUGGESTED = re.compile(r"--skeleton-scale ([-\d.e+]+) --skeleton-offset ([-\d.e+]+) ([-\d.e+]+) ([-\d.e+]+)\)")

@@ -10,7 +10,7 @@ import pytest
 from skelcore import Params, evaluate, shapes
 from skelcore.scan.outliers import find_outliers
 from skelcore.scan.prepare import without_strays
-from skelcore.trust import frame_warnings
+from skelcore.diagnostics.trust import frame_warnings
 
 RADIUS = {"cylinder": 0.5, "torus": 0.3, "y": 0.25, "tree": 0.25}
 

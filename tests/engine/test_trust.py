@@ -103,7 +103,7 @@ def test_a_warning_gives_its_finding_and_suggested_mapping_apart_from_the_comman
     """Issue 25: a front end words its own remedy from ``finding`` and ``mapping``, read from the
     message (so a warning read back from a file gives the same); the suggested map undoes the one
     the skeleton was put in."""
-    from skelcore.trust import TrustWarning, frame_warnings, no_correspondence_warning
+    from skelcore.diagnostics.trust import TrustWarning, frame_warnings, no_correspondence_warning
 
     sh = shapes.y_shape(800, seed=1)
     (w,) = frame_warnings(sh.cloud, sh.curve_vertices * 40.0 + 7.0, "curve skeleton")
