@@ -94,9 +94,10 @@ def _rgb(c: tuple[int, int, int]) -> tuple[float, float, float]:
 def _render(arrays: dict[str, np.ndarray], layers: DefectLayers, size: tuple[int, int]) -> bytes:
     import pyvista as pv
 
-    from .render import _bounds, _lines, _png, _quiet_vtk
+    from ..display.plotter import png_bytes
+    from ..display.scene import _bounds, _lines, quiet_vtk
 
-    _quiet_vtk()
+    quiet_vtk()
     pl = pv.Plotter(off_screen=True, window_size=list(size))
     try:
         pl.set_background("white")
@@ -125,7 +126,7 @@ def _render(arrays: dict[str, np.ndarray], layers: DefectLayers, size: tuple[int
         img = pl.screenshot(return_img=True)
     finally:
         pl.close()
-    return _png(img)
+    return png_bytes(img)
 
 
 def render_defects(out_dir: str | os.PathLike, key: str, arrays: dict[str, np.ndarray], layers: DefectLayers,

@@ -17,7 +17,7 @@ from compare_helpers import manifest
 from diagnostics_helpers import attach_path
 from skelcore import colors, shapes
 from skelcore.compare import Backend, run_compare
-from skelcore.compare.render import _bounds
+from skelcore.display.scene import _bounds
 from skelcore.compare.render_defects import DRAWN
 from skelcore.io import write_curve_ply, write_points_ply
 
