@@ -8,6 +8,7 @@ their edits show up) and listed under "Developer notes" automatically, a new one
 
 from __future__ import annotations
 
+import importlib.util
 import os
 import sys
 from pathlib import Path
@@ -45,6 +46,7 @@ myst_heading_anchors = 3
 # autodoc with numpydoc-style docstrings (napoleon)
 autodoc_member_order = "bysource"
 autodoc_typehints = "signature"
+autodoc_preserve_defaults = True  # defaults as written (Params(), not its 80-field repr)
 autodoc_default_options = {"members": True, "undoc-members": False, "show-inheritance": False}
 napoleon_numpy_docstring = True
 napoleon_google_docstring = False
@@ -65,6 +67,26 @@ sphinx_gallery_conf = {
     "write_computation_times": False,
     "abort_on_example_error": True,
 }
+
+# MathJax from the sphinx-mathjax-offline package (the docs extra), so the formulas render without a
+# network; only the parts the pages use are copied (the package holds 24 MB). Without it: the CDN.
+try:
+    _MATHJAX = Path(importlib.util.find_spec("sphinx-mathjax-offline").origin).parent / "static" / "mathjax"
+except (AttributeError, ImportError, ValueError):
+    _MATHJAX = None
+if _MATHJAX is not None and (_MATHJAX / "tex-chtml.js").is_file():
+    mathjax_path = "mathjax/tex-chtml.js"
+
+
+def _copy_mathjax(app, exc) -> None:
+    if exc is None and _MATHJAX is not None and app.builder.format == "html":
+        from sphinx.util.fileutil import copy_asset
+
+        out = Path(app.outdir) / "_static" / "mathjax"
+        copy_asset(str(_MATHJAX / "tex-chtml.js"), str(out))
+        for sub in ("output/chtml/fonts/woff-v2", "ui"):
+            copy_asset(str(_MATHJAX / sub), str(out / sub))
+
 
 html_theme = "furo"
 html_title = f"SkelScope {release}"
@@ -125,4 +147,5 @@ def setup(app) -> dict:
 
     app.add_directive("command-help", CommandHelp)
     app.connect("source-read", _fill_notes)
+    app.connect("build-finished", _copy_mathjax)
     return {"parallel_read_safe": True, "parallel_write_safe": True}

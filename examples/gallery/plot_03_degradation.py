@@ -20,7 +20,7 @@ import numpy as np
 import skelcore
 from skelcore import shapes
 
-cyl = shapes.cylinder(n=1200, radius=0.5, length=4.0, seed=0)
+cyl = shapes.cylinder(n=2000, radius=0.5, length=4.0, seed=0)
 rng = np.random.default_rng(0)
 sigmas = np.array([0.0, 0.005, 0.03, 0.15, 0.45])  # x the radius
 rows = []
