@@ -17,14 +17,18 @@ from skelcore.scores import paper_table
 
 torus = shapes.torus(n=2000, R=1.0, r=0.3, seed=0)
 
-# the exact skeleton: each surface point projected onto the core circle (pointwise correspondence)
+# the exact skeleton: each surface point projected onto the core circle
+# (pointwise correspondence: row i of the skeleton is where cloud row i went)
 exact = torus.skeletal
-# a drifted one: each skeletal point moved halfway toward its own surface point, plus a little jitter
+# a drifted one: each skeletal point moved halfway toward its own surface point,
+# plus a little jitter
 rng = np.random.default_rng(1)
 drifted = exact + 0.5 * (torus.cloud - exact) + rng.normal(scale=0.01, size=exact.shape)
 
-evaluations = {"exact skeleton": skelcore.evaluate(torus.cloud, skeletal=exact),
-               "drifted halfway to the surface": skelcore.evaluate(torus.cloud, skeletal=drifted)}
+evaluations = {
+    "exact skeleton": skelcore.evaluate(torus.cloud, skeletal=exact),
+    "drifted halfway to the surface": skelcore.evaluate(torus.cloud, skeletal=drifted),
+}
 
 # %%
 # The paper's table for each (rows d_B / d_Wp, boundedness, centeredness, smoothness; the number of
@@ -40,7 +44,8 @@ for name, ev in evaluations.items():
 fig = plt.figure(figsize=(9, 4.2))
 for i, (name, ev) in enumerate(evaluations.items()):
     ax = fig.add_subplot(1, 2, i + 1, projection="3d")
-    ax.scatter(*torus.cloud[::3].T, s=1, color=colors.hex_color(colors.CLOUD_GREY), alpha=0.3)
+    grey = colors.hex_color(colors.CLOUD_GREY)
+    ax.scatter(*torus.cloud[::3].T, s=1, color=grey, alpha=0.3)
     c = ev.skeletal.centeredness(ev.params.beta_star)
     rgb = colors.map_to_rgb(c, 0, 1) / 255
     ax.scatter(*ev.skeletal.points.T, s=3, c=rgb)

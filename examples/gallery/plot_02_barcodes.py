@@ -24,13 +24,17 @@ cyl = shapes.cylinder(n=2000, radius=0.5, length=4.0, seed=0)
 centres = np.linspace(0.3, 3.7, 6)
 z = centres[np.abs(cyl.skeletal[:, 2:3] - centres).argmin(axis=1)]
 rng = np.random.default_rng(0)
-clumped = np.column_stack([np.zeros_like(z), np.zeros_like(z), z]) + rng.normal(scale=0.004, size=(len(z), 3))
+clumped = np.column_stack([np.zeros_like(z), np.zeros_like(z), z])
+clumped += rng.normal(scale=0.004, size=clumped.shape)
 
 fig, axes = plt.subplots(1, 2, figsize=(9, 3.6))
 for ax, (name, skeletal) in zip(axes, [("axis", cyl.skeletal), ("6 clumps", clumped)]):
     t = skelcore.evaluate(cyl.cloud, skeletal=skeletal).topology
-    draw_barcodes(ax, {"cloud_barcode": t.cloud_barcode, "skeletal_barcode": t.skeletal_barcode,
-                       "n_bars": np.array([t.n_bars]), "eps_star": np.array([t.eps_star])})
-    ax.set_title(f"{name}: d_B {t.bottleneck:.4f}, d_Wp {t.wasserstein:.4f}  (K = {t.n_bars})", fontsize=9)
+    draw_barcodes(ax, {"cloud_barcode": t.cloud_barcode,
+                       "skeletal_barcode": t.skeletal_barcode,
+                       "n_bars": np.array([t.n_bars]),
+                       "eps_star": np.array([t.eps_star])})
+    title = f"{name}: d_B {t.bottleneck:.4f}, d_Wp {t.wasserstein:.4f}  (K = {t.n_bars})"
+    ax.set_title(title, fontsize=9)
 fig.tight_layout()
 plt.show()

@@ -9,6 +9,8 @@ centeredness need one). Here a T shape's skeleton is sampled with 400 points, as
 it, and written in "voxel" units (x 100, shifted).
 """
 
+import textwrap
+
 import matplotlib.pyplot as plt
 import numpy as np
 
@@ -27,7 +29,7 @@ tool_points = (a[edge] + along * (b[edge] - a[edge])) * 100 + 50  # the tool's f
 # As the tool wrote it: in another frame, and 400 points for a 2,500-point cloud.
 ev = skelcore.evaluate(t.cloud, skeletal=tool_points)
 for w in ev.warnings:
-    print(f"{w.code}: {w.message}\n")
+    print(textwrap.fill(f"{w.code}: {w.message}", 88), end="\n\n")
 
 # %%
 # Mapped back (``--skeleton-scale 0.01 --skeleton-offset -0.5 -0.5 -0.5`` on the command line; the
@@ -37,15 +39,18 @@ mapped, _ = map_skeleton(tool_points, None, scale=0.01, offset=(-0.5, -0.5, -0.5
 ev = skelcore.evaluate(t.cloud, skeletal=mapped, correspondence="reverse")
 print("warnings:", [w.code for w in ev.warnings] or "none")
 print("correspondence:", ev.correspondence)
+summary = ev.summary()
 for metric in ("boundedness", "centeredness", "smoothness"):
-    print(f"{metric:13s} {ev.summary()[metric]['skeletal']:.3f}")
-print(f"d_B / d_Wp    {ev.summary()['topology']['bottleneck']:.4f} / {ev.summary()['topology']['wasserstein']:.4f}")
+    print(f"{metric:13s} {summary[metric]['skeletal']:.3f}")
+topo = summary["topology"]
+print(f"d_B / d_Wp    {topo['bottleneck']:.4f} / {topo['wasserstein']:.4f}")
 
 # %%
 # Each skeletal point's centeredness is the mean over the cloud points mapped to it; magenta: no
 # cloud point maps to it (NaN, SPEC 7), as happens where a tool samples its skeleton densely.
 fig, ax = plt.subplots(figsize=(7, 4.2))
-ax.scatter(t.cloud[:, 0], t.cloud[:, 2], s=1, color=colors.hex_color(colors.CLOUD_GREY), alpha=0.35)
+grey = colors.hex_color(colors.CLOUD_GREY)
+ax.scatter(t.cloud[:, 0], t.cloud[:, 2], s=1, color=grey, alpha=0.35)
 c = ev.skeletal.centeredness(ev.params.beta_star)
 ax.scatter(mapped[:, 0], mapped[:, 2], s=12, c=colors.map_to_rgb(c, 0, 1) / 255)
 ax.set_aspect("equal")
