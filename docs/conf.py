@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import importlib.util
 import os
+import re
 import sys
 from pathlib import Path
 
@@ -106,10 +107,41 @@ def developer_notes() -> list[str]:
     return sorted(p.stem for p in HERE.glob("*.md") if p.stem not in _NOT_NOTES)
 
 
-def _fill_notes(app, docname: str, source: list[str]) -> None:
+_SECTION = re.compile(r'^% include-section (\S+) "([^"]+)" "([^"]*)"$', re.MULTILINE)
+_LINK = re.compile(r"(\]\()(?!https?:|mailto:|#|/)([^)\s]+)(\))")
+
+
+def section_of(path: Path, start: str, end: str, rel: str) -> str:
+    """The text of ``path`` after the line starting ``start`` (the rest of that heading line first)
+    up to the line starting ``end`` (or the end); its relative links made relative to the page by
+    the prefix ``rel``, so a note's ``[x](compare.md)`` still reaches docs/compare.md."""
+    text = path.read_text(encoding="utf-8")
+    i = text.find("\n" + start)
+    if i < 0:
+        raise ValueError(f"{path.name}: no line starts with {start!r}")
+    body = text[i + 1 + len(start):]
+    if end:
+        j = body.find("\n" + end)
+        if j < 0:
+            raise ValueError(f"{path.name}: no line starts with {end!r} after {start!r}")
+        body = body[:j]
+    return _LINK.sub(lambda m: m.group(1) + rel + m.group(2) + m.group(3), body)
+
+
+def _fill_source(app, docname: str, source: list[str]) -> None:
     # the notes' toctree is filled in at read time, so a note added by anyone appears without an edit here
     if docname == "notes":
         source[0] = source[0].replace("@DEVELOPER_NOTES@", "\n".join(developer_notes()))
+    # "% include-section FILE START END": a section of a note, read at build time (its later edits show)
+    page_dir = (HERE / docname).parent
+
+    def put(m: re.Match) -> str:
+        path = (page_dir / m.group(1)).resolve()
+        app.env.note_dependency(str(path))
+        rel = os.path.relpath(path.parent, page_dir).replace(os.sep, "/") + "/"
+        return section_of(path, m.group(2), m.group(3), rel)
+
+    source[0] = _SECTION.sub(put, source[0])
 
 
 def command_help(command: str) -> str:
@@ -149,6 +181,6 @@ def setup(app) -> dict:
             return [block]
 
     app.add_directive("command-help", CommandHelp)
-    app.connect("source-read", _fill_notes)
+    app.connect("source-read", _fill_source)
     app.connect("build-finished", _copy_mathjax)
     return {"parallel_read_safe": True, "parallel_write_safe": True}
