@@ -90,6 +90,13 @@ def test_every_page_of_the_guide_is_built(site):
     api = (site / "api" / "evaluate.html").read_text()
     for name in ('id="skelcore.evaluate"', 'id="skelcore.Evaluation"', 'id="skelcore.Scores"', 'id="skelcore.Params"'):
         assert name in api, name
+    # each metric's page carries its section of docs/metrics.md as the file stands (read at build time)
+    notes = (ROOT / "docs" / "metrics.md").read_text()
+    for page, start, end in (("topology", "## 1.", "## 2."), ("boundedness", "## 2.", "## 3."),
+                             ("centeredness", "## 3.", "## 4."), ("smoothness", "## 4.", "## 5.")):
+        section = notes[notes.index("\n" + start):notes.index("\n" + end)]
+        first = re.search(r"^### [0-9.]+ ([^(`:]+)", section, re.MULTILINE).group(1).strip()
+        assert first in (site / "guide" / "metrics" / f"{page}.html").read_text(), (page, first)
     # the CLI page's help texts come from the parser itself
     cli = (site / "guide" / "cli.html").read_text()
     assert "usage: skelcore evaluate" in cli and "--boundedness-method" in cli
