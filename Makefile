@@ -9,7 +9,7 @@ APT_PACKAGES := xvfb xauth libxcb-icccm4 libxcb-keysyms1 libxcb-cursor0 libxcb-i
 	libxcb-render-util0 libxcb-xinerama0 libxcb-shape0 libxcb-randr0 libxcb-xkb1 libxkbcommon-x11-0 \
 	libegl1 libgl1 libdbus-1-3 libfontconfig1 chromium gcc python3-dev
 
-.PHONY: setup system venv run test test-interop screenshots bench samples clean
+.PHONY: setup system venv run test test-interop docs screenshots bench samples clean
 
 system:
 	@missing=""; for p in $(APT_PACKAGES); do dpkg -s $$p >/dev/null 2>&1 || missing="$$missing $$p"; done; \
@@ -42,6 +42,12 @@ test-interop: setup
 	$(PY) -m pytest -q -p no:cacheprovider tests/engine/test_interop_objects.py tests/engine/test_interop_outputs.py \
 		tests/engine/test_io_tool_formats.py tests/engine/test_io_convert.py
 
+# The documentation site (docs/conf.py) into docs/_build/html, warnings as errors; the gallery's scripts
+# (examples/gallery/plot_*.py) run during the build. The `test` extra holds the docs extra's packages.
+docs: setup
+	MPLBACKEND=Agg $(PY) -m sphinx -W --keep-going -q -b html docs docs/_build/html
+	@echo "open docs/_build/html/index.html"
+
 screenshots: setup
 	xvfb-run -a -s "-screen 0 1600x1000x24" $(PY) scripts/make_screenshots.py
 	xvfb-run -a -s "-screen 0 1366x768x24" $(PY) scripts/make_screenshots.py --laptop
@@ -54,4 +60,4 @@ samples: setup
 	$(PY) scripts/make_samples.py
 
 clean:
-	rm -rf $(VENV) build *.egg-info
+	rm -rf $(VENV) build *.egg-info docs/_build docs/gallery

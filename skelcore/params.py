@@ -36,7 +36,7 @@ class Params:
     curve_samples : total samples S along the curve skeleton, SPEC 3.
     slab_factor : slab width alpha = factor x bounding-box diagonal of the normalized cloud.
     ring_growth : ring isolation ratio (keep while next distance < ratio x last kept).
-    collinear_cos : |cos| at or above which a degree-2 vertex's neighbours count as collinear.
+    collinear_cos : ``|cos|`` at or above which a degree-2 vertex's neighbours count as collinear.
     tangent_k, smooth_k : neighbours for PCA tangents and for the tangent comparison, SPEC 4.
     coverage_slack : s of SkelScope's coverage (docs/metrics.md "Coverage"): a cloud point is covered
         when it lies within (1 + s) r(x) + tau of some skeleton element x of inscribed radius r(x).

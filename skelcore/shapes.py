@@ -14,6 +14,10 @@ import numpy as np
 
 @dataclass
 class Shape:
+    """A generated shape and its exact skeletons: ``cloud`` (N, 3) surface samples, ``skeletal`` (N, 3)
+    each cloud point projected onto the medial curve (pointwise correspondence, SPEC 0), and the true
+    curve skeleton as ``curve_vertices`` (V, 3) and ``curve_edges`` (E, 2)."""
+
     cloud: np.ndarray
     skeletal: np.ndarray
     curve_vertices: np.ndarray

@@ -26,6 +26,10 @@ __all__ = ["Backend", "parse_backend", "RunSummary", "run_jobs", "run_tasks"]
 
 @dataclass(frozen=True)
 class Backend:
+    """Where the jobs run: ``"serial"`` (this process), ``"pool"`` (``workers`` processes) or
+    ``"dask"`` (a scheduler at ``address``, or a LocalCluster of ``workers``); :func:`parse_backend`
+    reads the CLI's ``--jobs`` / ``--dask``."""
+
     kind: str  # "serial", "pool", "dask"
     workers: int = 1
     address: str | None = None  # dask: tcp://host:port, or None for a LocalCluster of `workers`

@@ -134,6 +134,9 @@ class ConditionSpec:
 
 @dataclass(frozen=True)
 class Manifest:
+    """A checked compare manifest (TOML): its shapes, methods, conditions, seeds and the evaluation
+    :class:`~skelcore.Params`; paths are resolved against the manifest's folder (docs/compare.md)."""
+
     path: str
     params: Params
     shapes: tuple[ShapeSpec, ...]

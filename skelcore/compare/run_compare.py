@@ -28,6 +28,9 @@ __all__ = ["CompareResult", "run_compare", "write_outputs", "load_index"]
 
 @dataclass
 class CompareResult:
+    """What :func:`run_compare` returns: the checked manifest, every job with its record, the run's
+    counts, the results.csv rows, the leaderboard and the paths of the files written (docs/compare.md)."""
+
     manifest: Manifest
     jobs: list[Job]
     summary: RunSummary

@@ -44,30 +44,54 @@ def evaluate(
 
     Parameters
     ----------
-    cloud : (N_o, 3) original cloud, user units.
-    skeletal : (N_s, 3) skeletal point set. Row i is where cloud row i went when N_s = N_o
-        ("pointwise"), or ``skeletal_index`` maps skeletal rows to cloud rows ("index"); otherwise
+    cloud : (N_o, 3) array
+        The original cloud, in the user's units (normalized inside, SPEC 0).
+    skeletal : (N_s, 3) array, optional
+        The skeletal point set. Row i is where cloud row i went when N_s = N_o ("pointwise"), or
+        ``skeletal_index`` maps skeletal rows to cloud rows ("index"); otherwise
         ``correspondence="reverse"`` maps every cloud point to its nearest skeletal point, and
-        without either topology and skeletal centeredness are not computed ("none", a warning).
-    curve : a :class:`CurveSkeleton` or a ``(vertices, edges)`` pair. With ``correspondence=
-        "reverse"`` and no skeletal set, the cloud's projections onto its edges are scored as the
-        skeletal set (topology, skeletal-style centeredness).
-    reference_curve : a ground-truth curve in the cloud's frame (needs ``curve``).
-    progress : ``progress(fraction, stage)``, called at checkpoints (throttled).
-    cancel : returning True makes the next checkpoint raise :class:`Cancelled` (in whichever stage checks
-        first when several run side by side).
-    on_stages : ``on_stages(names)`` whenever the set of stages running side by side changes (their
-        names in the order they started; empty between stages), e.g. for a label naming them all.
-    workers : threads running the independent stages side by side (None = all cores; 1 = one after the
-        other, in the order they are started: the skeletal boundedness first, the curve's last); the
-        values do not depend on it.
-    viewpoints : the sensors' positions (one x y z or several, the cloud's units) of a scan seen from
-        some sides only: boundedness counts the directions seen from them, skeletal centeredness
-        leaves out the viewing depth (docs/metrics.md 6.3; SkelScope's extension, None = the paper's).
-    remove_outliers : evaluate without the cloud's stray points (and their skeletal rows); they are
-        found and reported in any case (the ``outliers`` warning, docs/metrics.md 6.4).
-    cap_openings : close the cloud's small flat openings with points on their planes for boundedness,
-        as the paper did for its cave (docs/metrics.md 6.2).
+        without either, topology and skeletal centeredness are not computed ("none", a warning;
+        SPEC 7).
+    curve : CurveSkeleton or (vertices, edges), optional
+        The curve skeleton. With ``correspondence="reverse"`` and no skeletal set, the cloud's
+        projections onto its edges are scored as the skeletal set (topology, skeletal-style
+        centeredness).
+    params : Params
+        Every constant of SPEC.md (thresholds, neighbour counts, estimator).
+    progress : callable, optional
+        ``progress(fraction, stage)``, called at checkpoints (throttled).
+    cancel : callable, optional
+        Returning True makes the next checkpoint raise :class:`~skelcore.Cancelled` (in whichever
+        stage checks first when several run side by side).
+    skeletal_index : (N_s,) int array, optional
+        The cloud row each skeletal point corresponds to (SPEC 7 "index").
+    correspondence : {"auto", "pointwise", "index", "reverse", "none"}
+        How skeletal points map to cloud points (SPEC 7); "auto" picks from the inputs.
+    reference_curve : CurveSkeleton or (vertices, edges), optional
+        A ground-truth curve in the cloud's frame (needs ``curve``; SPEC 9).
+    inputs : dict, optional
+        Free-form description of the inputs (file names), kept in the JSON document.
+    workers : int, optional
+        Threads running the independent stages side by side (None = all cores; 1 = one after the
+        other); the values do not depend on it.
+    viewpoints : array of x y z, optional
+        The sensors' positions of a scan seen from some sides only: boundedness counts the directions
+        seen from them, skeletal centeredness leaves out the viewing depth (docs/metrics.md 6.3;
+        SkelScope's extension, None = the paper's).
+    remove_outliers : bool
+        Evaluate without the cloud's stray points (and their skeletal rows); they are found and
+        reported in any case (the ``outliers`` warning, docs/metrics.md 6.4).
+    cap_openings : bool
+        Close the cloud's small flat openings with points on their planes for boundedness, as the
+        paper did for its cave (docs/metrics.md 6.2).
+    on_stages : callable, optional
+        ``on_stages(names)`` whenever the set of stages running side by side changes (their names in
+        the order they started; empty between stages), e.g. for a label naming them all.
+
+    Returns
+    -------
+    Evaluation
+        Every local value, the overall scores (:meth:`Evaluation.summary`), warnings and diagnostics.
 
     Examples
     --------
