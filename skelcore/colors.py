@@ -19,6 +19,7 @@ __all__ = [
     "CURVE_COLOR",
     "PICK_COLOR",
     "SUPPORT_COLORS",
+    "DEFECT_COLORS",
     "hex_color",
     "COLORMAPS",
     "lookup_table",
@@ -49,6 +50,19 @@ SUPPORT_COLORS: dict[str, tuple[int, int, int]] = {
     "centre": (0, 176, 240),  # the ellipse's centre; m_s; the neighbour that sets the smoothness
     "m_o": (120, 66, 18),  # the cloud centroid m_o (shape tells it from the neighbours)
     "links": (90, 90, 90),  # skeletal point -> its cloud point
+}
+
+#: The viewer's defects (issue 25) and scan findings (issue 26), each drawn in a style of its own (halo,
+#: dashes, loop, large points) in a colour on neither colour map (at least 80 RGB units from every viridis
+#: entry), not magenta (NaN), not the pick marker's and apart from the skeleton's and the supports';
+#: the selected defect is redrawn in PICK_COLOR.
+DEFECT_COLORS: dict[str, tuple[int, int, int]] = {
+    "incomplete": (255, 160, 200),  # a missing part's cloud points (pink)
+    "spurious_branches": (230, 0, 110),  # halo around a spurious branch (rose)
+    "spurious_cycles": (0, 100, 0),  # halo around a spurious cycle's branches (dark green)
+    "outside": (120, 0, 200),  # dashes over the curve's edges outside the shape (violet)
+    "open_surface": (0, 0, 140),  # an opening's boundary loop (navy)
+    "outliers": (128, 0, 0),  # stray points (dark red, large)
 }
 
 

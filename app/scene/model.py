@@ -341,12 +341,30 @@ class Scene:
             info["xyz"] = tuple(float(v) for v in layer.points[index])
             if layer_name == "curve" and layer.curve is not None:
                 info["degree"] = int(layer.curve.degrees()[index])
+        branch = self.branch_of(layer_name, location, index)
+        if branch is not None:
+            from .defects import branch_details
+
+            info["branch"] = branch_details(self.evaluation, branch, self.beta_star)
         values = {}
         for name, q in layer.quantities.items():
             if q.location == location or (location in ("points", "vertices") and q.location in ("points", "vertices")):
                 values[name] = float(q.values[index])
         info["values"] = values
         return info
+
+    def branch_of(self, layer_name: str, location: str, index: int) -> int | None:
+        """The curve branch a curve vertex or sample lies on (issue 25: a click on the curve selects its
+        branch); None for a junction vertex, another layer, or before an evaluation with diagnostics."""
+        ev = self.evaluation
+        diag = None if ev is None else getattr(ev, "diagnostics", None)
+        if layer_name != "curve" or diag is None or getattr(ev, "curve", None) is None:
+            return None
+        key = {"vertices": "curve_vertex_branch", "samples": "curve_sample_branch"}.get(location)
+        arr = diag.arrays.get(key) if key else None
+        if arr is None or not 0 <= index < len(arr) or arr[index] < 0:
+            return None
+        return int(arr[index])
 
 
 def _without_column(ev: Any, name: str) -> Any:
