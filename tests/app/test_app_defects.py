@@ -154,3 +154,29 @@ def test_a_sound_skeleton_has_none(window):
     assert w.defects.rows == [] and "none found" in w.defects.panel.status.text()
     assert not [n for n in w.view.plotter.actors if n.startswith("defect-")]
     assert w.defects.overlay.legend is None
+
+
+def test_the_ab_view_counts_the_defects_of_a_and_b(window, defective):
+    """A: the defective skeleton; B: the cylinder's whole axis (sound). The table gets one row per code
+    found in either (A's count, B's, B - A, fewer is better) and the sound / not line; each side draws
+    its defects."""
+    s, curve, spur, ev_a = defective
+    w = _show(window, s, curve, ev_a)
+    truth = CurveSkeleton.from_raw(s.curve_vertices, s.curve_edges)
+    ev_b = evaluate(s.cloud, curve=truth)
+    view = w.compare.open(ev_a, ev_b, ("defective", "axis"))
+    labels = [view.cell(r, 0) for r in range(view.table.rowCount())]
+    n = len(view.rows)
+    assert labels[n:] == ["defects: incomplete", "defects: spurious_branches", "defects: outside",
+                          "sound (no defect warning)"]
+    for r in range(n, n + 3):
+        assert (view.cell(r, 1), view.cell(r, 2), view.cell(r, 3)) == ("1", "0", "-1")
+        assert view.table.item(r, 3).toolTip() == "B is better"
+    last = n + 3
+    assert view.cell(last, 1) == "not sound: incomplete, outside, spurious_branches" and view.cell(last, 2) == "sound"
+    pink = [a for a in view.plotter.renderers[0].actors.values()
+            if tuple(round(c * 255) for c in a.prop.color.float_rgb) == DEFECT_COLORS["incomplete"]]
+    assert len(pink) == 1
+    assert not [a for a in view.plotter.renderers[1].actors.values()
+                if tuple(round(c * 255) for c in a.prop.color.float_rgb) == DEFECT_COLORS["incomplete"]]
+    view.close()
