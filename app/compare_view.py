@@ -286,9 +286,12 @@ class CompareController(QtCore.QObject):
         params = ev_a.params
         cloud = ev_a.cloud
         correspondence = "reverse" if ev_a.correspondence == "reverse" else "auto"
+        scan = getattr(ev_a, "scan", None)
+        viewpoints = [list(v) for v in scan.viewpoints] if scan is not None and scan.viewpoints else None  # as A's
 
         def job(progress: Any, cancel: Any) -> Any:
-            return skelcore.evaluate(cloud, skeletal, curve, params, progress, cancel, correspondence=correspondence)
+            return skelcore.evaluate(cloud, skeletal, curve, params, progress, cancel, correspondence=correspondence,
+                                     viewpoints=viewpoints)
 
         self._pending = (ev_a, name)
         self.window.session.runner.start(job, self.NAME)
