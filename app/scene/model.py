@@ -99,13 +99,15 @@ class Scene:
         self.clear_evaluation()
         self._emit("layer", "skeletal")
 
-    def map_skeleton(self, scale: float, offset: tuple[float, float, float]) -> None:
-        """Map the loaded skeleton layers by ``v * scale + offset`` into the cloud's frame (a ``frame``
-        warning's remedy); mappings compose, ``Layer.mapping`` keeps the total."""
+    def map_skeleton(self, scale: float, offset: tuple[float, float, float],
+                     only: tuple[str, ...] = ("skeletal", "curve")) -> None:
+        """Map the loaded skeleton layers (those named in ``only``) by ``v * scale + offset`` into the
+        cloud's frame (a ``frame`` warning's remedy); mappings compose, ``Layer.mapping`` keeps the total."""
         from skelcore.skeleton_mapping import check_mapping, map_skeleton
 
         scale, offset = check_mapping(scale, offset)
-        sk, cv = self.skeletal, self.curve
+        sk = self.skeletal if "skeletal" in only else None
+        cv = self.curve if "curve" in only else None
         if sk is None and cv is None:
             raise ValueError("no skeleton loaded")
         points, curve = map_skeleton(None if sk is None else sk.points, None if cv is None else cv.curve, scale, offset)
