@@ -32,7 +32,7 @@ STYLES: dict[str, tuple[str, str]] = {
     "outside": ("dashes", "edge outside the shape"),
     "open_surface": ("loop", "opening (boundary loop)"),
     "outliers": ("large points", "stray point (outlier)"),
-    "selected": ("halo", "selected"),
+    "selected": ("halo", "selected (defect or branch)"),
 }
 LEGEND_LABELS = {key: label for key, (_style, label) in STYLES.items()}
 HALO_WIDTH, SELECTED_WIDTH, DASH_WIDTH, LOOP_WIDTH = 11.0, 14.0, 5.0, 3.0
@@ -155,10 +155,11 @@ class DefectOverlay:
         if curve is not None and len(row.edges):
             edges = np.asarray(curve.edges, dtype=np.int64).reshape(-1, 2)[row.edges]
             self._lines("selected", _segments(np.asarray(curve.vertices, float), edges), PICK_COLOR, SELECTED_WIDTH,
-                        offset=-160.0, legend=False, selected=True)
+                        offset=-160.0, selected=True)
         elif len(row.points):
             size = 12.0 if row.code == "outliers" else (cloud_size + 3.0 if len(row.cloud_rows) else 9.0)
-            self._points("selected", row.points, PICK_COLOR, size, offset=-350.0, legend=False, selected=True)
+            self._points("selected", row.points, PICK_COLOR, size, offset=-350.0, selected=True)
+        self._set_legend()
         self.view.request_render()
 
     def clear_selected(self) -> None:
@@ -166,6 +167,9 @@ class DefectOverlay:
             self.plotter.remove_actor(name, render=False)
             if name in self.names:
                 self.names.remove(name)
+        if self._selected and "selected" in self.shown:
+            self.shown.remove("selected")
+            self._set_legend()
         self._selected = []
 
     def set_visible(self, on: bool) -> None:
@@ -218,7 +222,8 @@ class DefectOverlay:
             style, label = STYLES[key]
             face = legend_face(style)
             # the symbol carries its colour as scalars; the entry's colour (the text's) stays black
-            face.point_data.set_array(np.tile(np.asarray(DEFECT_COLORS[key], np.uint8), (face.n_points, 1)), "rgb")
+            colour = DEFECT_COLORS.get(key, PICK_COLOR)
+            face.point_data.set_array(np.tile(np.asarray(colour, np.uint8), (face.n_points, 1)), "rgb")
             face.point_data.active_scalars_name = "rgb"
             legend.SetEntry(i, face, label, [0.0, 0.0, 0.0])
         legend.ScalarVisibilityOn()
