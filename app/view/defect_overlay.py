@@ -21,6 +21,7 @@ from skelcore.colors import DEFECT_COLORS, PICK_COLOR
 
 from ..scene.defects import DefectRow, opening_loop
 from .actors import display_coordinates, draw_in_front
+from .lod import lod_indices
 
 __all__ = ["DefectOverlay", "LEGEND_LABELS", "STYLES"]
 
@@ -36,6 +37,7 @@ STYLES: dict[str, tuple[str, str]] = {
 }
 LEGEND_LABELS = {key: label for key, (_style, label) in STYLES.items()}
 HALO_WIDTH, SELECTED_WIDTH, DASH_WIDTH, LOOP_WIDTH = 11.0, 14.0, 5.0, 3.0
+MAX_DRAWN = 300_000  # at most this many missing-part points drawn (an even subsample beyond)
 DASHES_PER_EDGE = 4  # each outside edge drawn as this many dashes with gaps between
 
 
@@ -110,6 +112,8 @@ class DefectOverlay:
         rows_missing = [r.cloud_rows for r in by_code.get("incomplete", []) if len(r.cloud_rows)]
         if rows_missing and cloud is not None:
             sel = np.unique(np.concatenate(rows_missing))
+            if len(sel) > MAX_DRAWN:  # a frame of millions more points costs seconds in software GL
+                sel = sel[lod_indices(len(sel), MAX_DRAWN)]
             self._points("incomplete", cloud[sel], DEFECT_COLORS["incomplete"], cloud_size + 2.0, offset=-100.0)
         if curve is not None:
             verts = np.asarray(curve.vertices, dtype=float)
