@@ -17,8 +17,6 @@ from typing import Any
 
 import numpy as np
 
-from skelcore.diagnostics.record import DEFECT_BITS
-
 __all__ = ["DefectRow", "DEFECT_TITLES", "defect_rows", "branch_flags", "branch_details", "branch_paths",
            "opening_loop", "defect_counts", "sound_line", "branch_edges", "branch_points"]
 
@@ -115,7 +113,9 @@ def branch_points(ev: Any, ids: list[int] | tuple[int, ...]) -> np.ndarray:
 
 def branch_flags(ev: Any) -> list[tuple[str, ...]]:
     """Per branch, the defect codes found on it: its samples' (or vertices') defect bits
-    (:data:`DEFECT_BITS`), the spurious-branch verdicts and the outside lengths over the threshold."""
+    (``skelcore.diagnostics.record.DEFECT_BITS``), the spurious-branch verdicts and the outside lengths over the threshold."""
+    from skelcore.diagnostics.record import DEFECT_BITS  # at use: the window's first frame needs no engine
+
     paths = branch_paths(ev)
     if not paths:
         return []
@@ -247,6 +247,8 @@ def _outside_rows(ev: Any) -> list[DefectRow]:
 
 def _outside_edges(ev: Any, arrays: dict[str, np.ndarray]) -> np.ndarray:
     """Curve edges holding a sample flagged ``outside``."""
+    from skelcore.diagnostics.record import DEFECT_BITS
+
     bits = arrays.get("curve_sample_defects")
     if bits is None or getattr(ev, "curve", None) is None or ev.curve.sample_edge is None:
         return np.zeros(0, np.int64)
