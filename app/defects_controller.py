@@ -49,6 +49,12 @@ class DefectsController(QtCore.QObject):
         # a result set again (even the same one) clears the picks and marks: the highlight goes too
         if event.kind == "quantities" or (event.kind == "layer" and self.scene.evaluation is not self._shown_ev):
             self.refresh()
+        elif event.kind == "stale" and self.scene.evaluation is not None:
+            # out-of-date results: their defects greyed like their colours, the selection kept
+            self.overlay.show(self.scene.evaluation, self.rows, self._cloud_size(), stale=bool(self.scene.stale))
+            if self.selected is not None:
+                self.overlay.select(self.scene.evaluation, self.selected, self._cloud_size())
+            self.overlay.set_visible(self.visible)
 
     def refresh(self) -> None:
         """The panel and the overlay from the scene's evaluation."""
@@ -57,7 +63,7 @@ class DefectsController(QtCore.QObject):
         self.selected = None
         self.rows = defect_rows(ev)
         self.panel.show_rows(None if ev is None else self.rows, "" if ev is None else sound_line(ev))
-        self.overlay.show(ev, self.rows, self._cloud_size())
+        self.overlay.show(ev, self.rows, self._cloud_size(), stale=bool(self.scene.stale))
         self.overlay.set_visible(self.visible)
 
     def _cloud_size(self) -> float:

@@ -22,6 +22,7 @@ from skelcore.colors import DEFECT_COLORS, PICK_COLOR
 from ..scene.defects import DefectRow, opening_loop
 from .actors import display_coordinates, draw_in_front
 from .lod import lod_indices
+from .style import greyed
 
 __all__ = ["DefectOverlay", "LEGEND_LABELS", "STYLES"]
 
@@ -85,6 +86,7 @@ class DefectOverlay:
         self.shown: list[str] = []  # the drawn sets' keys (STYLES), in legend order
         self.legend: Any = None
         self._selected: list[str] = []
+        self.stale = False
 
     @property
     def plotter(self) -> Any:
@@ -98,9 +100,12 @@ class DefectOverlay:
         self._set_legend()
         self.view.request_render()
 
-    def show(self, ev: Any, rows: list[DefectRow], cloud_size: float = 2.0) -> None:
-        """Draw every row of ``rows`` (the defects of ``ev``) by kind."""
+    def show(self, ev: Any, rows: list[DefectRow], cloud_size: float = 2.0, stale: bool = False) -> None:
+        """Draw every row of ``rows`` (the defects of ``ev``) by kind; ``stale``: washed toward grey, as the
+        metric colours of out-of-date results are (issue 25)."""
         self.clear()
+        self.stale = stale
+        colours = {k: greyed(c) if stale else c for k, c in DEFECT_COLORS.items()}
         if ev is None or not rows:
             return
         cloud = None if getattr(ev, "cloud", None) is None else np.asarray(ev.cloud, dtype=float)
@@ -114,18 +119,18 @@ class DefectOverlay:
             sel = np.unique(np.concatenate(rows_missing))
             if len(sel) > MAX_DRAWN:  # a frame of millions more points costs seconds in software GL
                 sel = sel[lod_indices(len(sel), MAX_DRAWN)]
-            self._points("incomplete", cloud[sel], DEFECT_COLORS["incomplete"], cloud_size + 2.0, offset=-100.0)
+            self._points("incomplete", cloud[sel], colours["incomplete"], cloud_size + 2.0, offset=-100.0)
         if curve is not None:
             verts = np.asarray(curve.vertices, dtype=float)
             edges = np.asarray(curve.edges, dtype=np.int64).reshape(-1, 2)
             for code in ("spurious_branches", "spurious_cycles"):
                 ids = [r.edges for r in by_code.get(code, []) if len(r.edges)]
                 if ids:
-                    self._lines(code, _segments(verts, edges[np.unique(np.concatenate(ids))]), DEFECT_COLORS[code],
+                    self._lines(code, _segments(verts, edges[np.unique(np.concatenate(ids))]), colours[code],
                                 HALO_WIDTH, opacity=0.45, offset=-150.0)
             ids = [r.edges for r in by_code.get("outside", []) if len(r.edges)]
             if ids:
-                self._lines("outside", dashed(verts, edges[np.unique(np.concatenate(ids))]), DEFECT_COLORS["outside"],
+                self._lines("outside", dashed(verts, edges[np.unique(np.concatenate(ids))]), colours["outside"],
                             DASH_WIDTH, offset=-500.0)
         openings = [o for o in (getattr(getattr(ev, "scan", None), "openings", None) or [])]
         if openings and cloud is not None:
@@ -141,11 +146,11 @@ class DefectOverlay:
                 pairs.append(np.column_stack([np.arange(n), (np.arange(n) + 1) % n]) + start)
                 start += n
             if pts:
-                self._lines("open_surface", _segments(np.vstack(pts), np.vstack(pairs)), DEFECT_COLORS["open_surface"],
+                self._lines("open_surface", _segments(np.vstack(pts), np.vstack(pairs)), colours["open_surface"],
                             LOOP_WIDTH, offset=-300.0)
         stray = [r.points for r in by_code.get("outliers", []) if len(r.points)]
         if stray:
-            self._points("outliers", np.vstack(stray), DEFECT_COLORS["outliers"], 12.0, spheres=True, offset=-300.0)
+            self._points("outliers", np.vstack(stray), colours["outliers"], 12.0, spheres=True, offset=-300.0)
         self._set_legend()
         self.view.request_render()
 
@@ -227,6 +232,7 @@ class DefectOverlay:
             face = legend_face(style)
             # the symbol carries its colour as scalars; the entry's colour (the text's) stays black
             colour = DEFECT_COLORS.get(key, PICK_COLOR)
+            colour = greyed(colour) if self.stale else colour
             face.point_data.set_array(np.tile(np.asarray(colour, np.uint8), (face.n_points, 1)), "rgb")
             face.point_data.active_scalars_name = "rgb"
             legend.SetEntry(i, face, label, [0.0, 0.0, 0.0])

@@ -180,3 +180,18 @@ def test_the_ab_view_counts_the_defects_of_a_and_b(window, defective):
     assert not [a for a in view.plotter.renderers[1].actors.values()
                 if tuple(round(c * 255) for c in a.prop.color.float_rgb) == DEFECT_COLORS["incomplete"]]
     view.close()
+
+
+def test_out_of_date_results_grey_their_defects_and_keep_the_selection(window, defective):
+    """Issue 25's stale state: a setting change greys the defects as it greys the metric colours."""
+    from app.view.style import greyed
+
+    s, curve, spur, ev = defective
+    w = _show(window, s, curve, ev)
+    w.defects.panel.select_row(1)
+    w.scene.set_stale("settings changed")
+    img = w.view.image()
+    assert not _has_colour(img, DEFECT_COLORS["incomplete"], tol=4) and _has_colour(img, greyed(DEFECT_COLORS["incomplete"]))
+    assert "defect-selected" in w.view.plotter.actors and w.defects.selected is w.defects.rows[1]
+    w.scene.set_stale("")
+    assert _has_colour(w.view.image(), DEFECT_COLORS["incomplete"])
