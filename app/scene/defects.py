@@ -216,32 +216,38 @@ def _cycle_rows(ev: Any) -> list[DefectRow]:
 
 
 def _outside_rows(ev: Any) -> list[DefectRow]:
+    """One row per branch with at least ``outside_min_radii`` local radii outside the shape; the
+    warning's own words when it fired on the length share alone, or for the skeletal set."""
     if "outside" not in _codes(ev):
         return []
     out = _summary(ev).get("outside") or {}
-    params = getattr(ev, "params", None)
-    min_radii = float(getattr(params, "outside_min_radii", 0.5))
+    min_radii = float(getattr(getattr(ev, "params", None), "outside_min_radii", 0.5))
     scale = _scale(ev)
-    arrays = _arrays(ev)
+    flagged = _outside_edges(ev, _arrays(ev))
+    curve = _curve(ev)
+
+    def edge_points(edges: np.ndarray) -> np.ndarray:
+        if curve is None or not len(edges):
+            return _NO_PLACE
+        return np.asarray(curve.vertices, float)[np.asarray(curve.edges).reshape(-1, 2)[edges].ravel()]
+
     rows = []
-    samples_out = _outside_edges(ev, arrays)
     for b in out.get("branches") or []:
         if b["radii"] < min_radii:
             continue
-        edges = np.intersect1d(branch_edges(ev, (b["id"],)), samples_out)
-        curve = _curve(ev)
-        pts = np.asarray(curve.vertices, float)[np.asarray(curve.edges)[edges].ravel()] if len(edges) else \
-            branch_points(ev, (b["id"],))
+        edges = np.intersect1d(branch_edges(ev, (b["id"],)), flagged)
+        pts = edge_points(edges) if len(edges) else branch_points(ev, (b["id"],))
         rows.append(DefectRow("outside", f"branch #{b['id']} outside the shape",
                               f"{b['length'] / scale:.3g} long outside ({b['radii']:.2g} local radii), up to "
                               f"{b['depth']:.2g} local radii out", "curve", branches=(b["id"],), edges=edges, points=pts))
-    said = {r.size for r in rows}
     for w in _warnings(ev):
-        if w.code == "outside" and ("skeletal points" in w.message or not rows):
-            if w.message not in said:
-                rows.append(DefectRow("outside", "outside the shape", w.message,
-                                      "skeletal" if "skeletal points" in w.message else "curve",
-                                      edges=samples_out if "skeletal points" not in w.message else np.zeros(0, np.int64)))
+        if w.code != "outside":
+            continue
+        if "skeletal points" in w.message:
+            rows.append(DefectRow("outside", "skeletal points outside the shape", w.message, "skeletal"))
+        elif not any(r.column == "curve" for r in rows):  # fired on the length share alone
+            rows.append(DefectRow("outside", "outside the shape", w.message, "curve", edges=flagged,
+                                  points=edge_points(flagged)))
     return rows
 
 
