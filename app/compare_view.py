@@ -20,7 +20,7 @@ from skelcore.scores import COLUMN, LOCAL_METRICS, Scores, column_keys, format_s
 
 from .window_api import ActionSpec, WindowApi
 
-__all__ = ["ab_rows", "CompareWindow", "CompareController"]
+__all__ = ["ab_rows", "ab_defect_rows", "CompareWindow", "CompareController"]
 
 def ab_rows(a: Any, b: Any) -> list[tuple[str, float, float, float]]:
     """(label, A, B, B - A) per compared paper score (:data:`skelcore.scores.SCORE_COLUMNS`) of two
@@ -33,7 +33,19 @@ def ab_rows(a: Any, b: Any) -> list[tuple[str, float, float, float]]:
             if not (math.isnan(fa[k]) and math.isnan(fb[k]))]
 
 
+def ab_defect_rows(ev_a: Any, ev_b: Any) -> list[tuple[str, float, float, float]]:
+    """(label, A, B, B - A) per defect code found in A or B: how many of each (the Defects panel's rows,
+    :func:`app.scene.defects.defect_rows`); fewer is better."""
+    from .scene.defects import DEFECT_TITLES, defect_counts
+
+    ca, cb = defect_counts(ev_a), defect_counts(ev_b)
+    return [(f"defects: {code}", float(ca.get(code, 0)), float(cb.get(code, 0)),
+             float(cb.get(code, 0) - ca.get(code, 0))) for code in DEFECT_TITLES if code in ca or code in cb]
+
+
 def _lower_is_better(label: str) -> bool:
+    if label.startswith("defects: "):
+        return True
     return any(c.label == label and c.better == "lower" for c in COLUMN.values())
 
 
@@ -75,16 +87,25 @@ class CompareWindow(QtWidgets.QWidget):
         layout.addLayout(top)
         layout.addWidget(split)
         self.rows = ab_rows(ev_a.scores(*self.thresholds), ev_b.scores(*self.thresholds))
+        from .scene.defects import sound_line
+
+        self.defect_rows = ab_defect_rows(ev_a, ev_b)  # issue 25: the defects of A and B
+        self.sound = (sound_line(ev_a), sound_line(ev_b))
         self._fill_table()
         self.draw()
         self.plotter.link_views()  # one camera for both renderers
         self.plotter.reset_camera()
 
     def _fill_table(self) -> None:
-        self.table.setRowCount(len(self.rows))
-        for r, (label, a, b, d) in enumerate(self.rows):
-            for c, text in enumerate((label, *(format_score(v, 4, nan="—") for v in (a, b)),
-                                       format_score(d, 4, nan="—", signed=True))):
+        """The scores, then one row per defect code found in A or B (counts) and the sound / not line."""
+        n_scores = len(self.rows)
+        self.table.setRowCount(n_scores + len(self.defect_rows) + 1)
+        for r, (label, a, b, d) in enumerate(self.rows + self.defect_rows):
+            if r < n_scores:
+                texts = (label, *(format_score(v, 4, nan="—") for v in (a, b)), format_score(d, 4, nan="—", signed=True))
+            else:
+                texts = (label, f"{a:.0f}", f"{b:.0f}", f"{d:+.0f}" if d else "0")
+            for c, text in enumerate(texts):
                 item = QtWidgets.QTableWidgetItem(text)
                 if c:
                     item.setTextAlignment(QtCore.Qt.AlignmentFlag.AlignRight | QtCore.Qt.AlignmentFlag.AlignVCenter)
@@ -93,6 +114,13 @@ class CompareWindow(QtWidgets.QWidget):
                     item.setForeground(QtCore.Qt.GlobalColor.darkGreen if better else QtCore.Qt.GlobalColor.darkRed)
                     item.setToolTip("B is better" if better else "A is better")
                 self.table.setItem(r, c, item)
+        last = n_scores + len(self.defect_rows)
+        for c, text in enumerate(("sound (no defect warning)", *self.sound, "")):
+            item = QtWidgets.QTableWidgetItem(text)
+            item.setToolTip(text)
+            if c in (1, 2):
+                item.setForeground(QtCore.Qt.GlobalColor.darkGreen if text == "sound" else QtCore.Qt.GlobalColor.darkRed)
+            self.table.setItem(last, c, item)
         self.table.resizeColumnsToContents()
 
     def cell(self, row: int, col: int) -> str:
@@ -129,6 +157,7 @@ class CompareWindow(QtWidgets.QWidget):
                                       scalar_bar_args={"title": metric, "color": "black", "vertical": True,
                                                        "position_x": 0.86, "position_y": 0.2, "height": 0.6,
                                                        "width": 0.06, "n_labels": 5, "fmt": "%.2f"})
+            self._draw_defects(ev)
             if ev.curve is not None:
                 curve = ev.curve.curve
                 edges = np.asarray(curve.edges, dtype=np.int64).reshape(-1, 2)
@@ -145,6 +174,37 @@ class CompareWindow(QtWidgets.QWidget):
                                           style="points", point_size=5, lighting=False, reset_camera=False,
                                           render=False, show_scalar_bar=False)
         self.plotter.render()
+
+    def _draw_defects(self, ev: Any) -> None:
+        """Missing parts' cloud points and halos around spurious branches and cycles, as in the main
+        view (:mod:`app.view.defect_overlay`'s colours and styles), in the current renderer."""
+        import pyvista as pv
+
+        from skelcore.colors import DEFECT_COLORS
+
+        from .scene.defects import defect_rows
+        from .view.actors import display_coordinates
+
+        rows = defect_rows(ev)
+        missing = [r.cloud_rows for r in rows if r.code == "incomplete" and len(r.cloud_rows)]
+        if missing and ev.cloud is not None:
+            sel = np.unique(np.concatenate(missing))
+            self.plotter.add_mesh(pv.PolyData(display_coordinates(np.asarray(ev.cloud)[sel])),
+                                  color=DEFECT_COLORS["incomplete"], style="points", point_size=4, lighting=False,
+                                  reset_camera=False, render=False)
+        if ev.curve is None:
+            return
+        verts = np.asarray(ev.curve.curve.vertices, dtype=float)
+        edges = np.asarray(ev.curve.curve.edges, dtype=np.int64).reshape(-1, 2)
+        for code in ("spurious_branches", "spurious_cycles", "outside"):
+            ids = [r.edges for r in rows if r.code == code and len(r.edges)]
+            if not ids:
+                continue
+            pick = edges[np.unique(np.concatenate(ids))]
+            cells = np.hstack([np.full((len(pick), 1), 2, dtype=np.int64), pick]).ravel()
+            self.plotter.add_mesh(pv.PolyData(display_coordinates(verts), lines=cells), color=DEFECT_COLORS[code],
+                                  line_width=9 if code != "outside" else 5, opacity=0.5 if code != "outside" else 1.0,
+                                  lighting=False, reset_camera=False, render=False)
 
     def image(self) -> np.ndarray:
         self.plotter.render()
@@ -226,9 +286,12 @@ class CompareController(QtCore.QObject):
         params = ev_a.params
         cloud = ev_a.cloud
         correspondence = "reverse" if ev_a.correspondence == "reverse" else "auto"
+        scan = getattr(ev_a, "scan", None)
+        viewpoints = [list(v) for v in scan.viewpoints] if scan is not None and scan.viewpoints else None  # as A's
 
         def job(progress: Any, cancel: Any) -> Any:
-            return skelcore.evaluate(cloud, skeletal, curve, params, progress, cancel, correspondence=correspondence)
+            return skelcore.evaluate(cloud, skeletal, curve, params, progress, cancel, correspondence=correspondence,
+                                     viewpoints=viewpoints)
 
         self._pending = (ev_a, name)
         self.window.session.runner.start(job, self.NAME)

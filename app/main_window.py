@@ -124,10 +124,14 @@ class MainWindow(QtWidgets.QMainWindow):
         # issue 11's features, each through the public interface (app.window_api)
         from .compare_run import RunBrowser
         from .compare_view import CompareController
+        from .defects_controller import DefectsController
         from .saved_sessions import SavedSessions
         from .support_controller import SupportController
+        from .viewpoint_controller import ViewpointController
 
         self.supports = SupportController(self)  # the picked element's support (dock, 3-D overlay, filter)
+        self.defects = DefectsController(self)  # the Defects dock, the defects in 3-D, a clicked branch (issue 25)
+        self.viewpoints = ViewpointController(self)  # Evaluate > Viewpoint from the camera / typed (issue 26)
         self.compare = CompareController(self)  # File > Compare with a second skeleton (B)
         self.compare_run = RunBrowser(self)  # File > Open comparison run, and drops of a run
         self.saved_sessions = SavedSessions(self)  # File > Save / Open session, File > Recent (issue 25)

@@ -84,6 +84,12 @@ class SavedSessions(QtCore.QObject):
         state.style = dict(scene.style)
         state.layers = {role: {"visible": layer.visible, "point_size": layer.point_size, "opacity": layer.opacity}
                         for role, layer in scene.layers.items()}
+        sk = scene.skeletal
+        if sk is not None and sk.index is not None and sk.index_path:
+            state.skeletal_index = fingerprint(sk.index_path, base)
+        state.mappings = {role: (float(layer.mapping[0]), tuple(float(v) for v in layer.mapping[1]))
+                          for role, layer in scene.layers.items() if role != "cloud" and layer.mapping is not None}
+        state.viewpoints = [tuple(float(v) for v in p) for p in w.session.viewpoints]
         state.camera = w.view.camera_state()
         picked = w.picked_element()
         if picked is not None:
@@ -148,12 +154,19 @@ class SavedSessions(QtCore.QObject):
         left = [k for k, v in saved.to_dict().items() if shown.to_dict()[k] != v]
         if left:
             problems.append("settings the Settings panel does not hold were left at their defaults: " + ", ".join(left))
-        if state.skeletal_index:
-            problems.append(f"skeletal index {os.path.basename(state.skeletal_index)}: not read (this viewer "
-                            "has no index files; correspondence as saved)")
+        index_at = None
+        if state.skeletal_index is not None:
+            where = locate("skeletal index", state.skeletal_index, path)
+            if where.problem:
+                problems.append(where.problem)
+            index_at = where.path
+        w.session.viewpoints = [tuple(p) for p in state.viewpoints]  # before the evaluation the loading starts
         self._restoring = True
         try:
-            problems += w.session.load_roles(found)
+            with w.session.batch():  # one evaluation, of the inputs as mapped and indexed
+                problems += w.session.load_roles(found)
+                problems += self._restore_index(index_at, state)
+                problems += self._restore_mappings(state)
         finally:
             self._restoring = False
         scene.set_metric(state.metric)
@@ -176,6 +189,34 @@ class SavedSessions(QtCore.QObject):
                 problems += self._restore_pick(state.picked)
         self._push({"session": os.path.abspath(path)})
         return problems
+
+    def _restore_index(self, index_at: str | None, state: SessionState) -> list[str]:
+        """The skeletal set's index file, found beside the session or where it was (SPEC 7)."""
+        from skelcore.io.correspondence_files import load_skeletal_index
+
+        scene = self.window.scene
+        if index_at is None or state.skeletal_index is None:
+            return []
+        name = os.path.basename(state.skeletal_index.path)
+        if scene.skeletal is None or scene.cloud is None:
+            return [f"skeletal index {name}: not used (no skeletal set and cloud loaded)"]
+        try:
+            index = load_skeletal_index(index_at, scene.skeletal.n_points, scene.cloud.n_points)
+        except SkelInputError as exc:
+            return [str(exc)]
+        scene.set_skeletal_index(index, index_at)
+        return []
+
+    def _restore_mappings(self, state: SessionState) -> list[str]:
+        """Each skeleton layer mapped into the cloud's frame as it was (Evaluate > Map skeleton…)."""
+        scene = self.window.scene
+        out = []
+        for role, (scale, offset) in state.mappings.items():
+            if role not in scene.layers:
+                out.append(f"the {_TITLES[role]}'s mapping (scale {scale:.6g}): its layer was not loaded")
+                continue
+            scene.map_skeleton(scale, offset, only=(role,))
+        return out
 
     def _restore_pick(self, picked: dict[str, Any]) -> list[str]:
         layer = self.window.scene.layers.get(picked["layer"])

@@ -59,6 +59,8 @@ class Session(QtCore.QObject):
         #: evaluations of at least this many points (cloud + skeletal set) run in a child process
         self.process_from = PROCESS_FROM
         self.auto_evaluate = True
+        #: the sensors' positions (issue 26: viewpoint-aware boundedness and centeredness; [] = the paper's scores)
+        self.viewpoints: list[tuple[float, float, float]] = []
         self.runner.succeeded.connect(self._task_succeeded)
         self.runner.failed.connect(self._task_failed)
         self.runner.finished.connect(lambda name: self.check_stale())
@@ -148,6 +150,20 @@ class Session(QtCore.QObject):
         self.message.emit(f"loaded {os.path.basename(str(path))} as the skeletal set's index")
         return True
 
+    def set_viewpoints(self, viewpoints: Any) -> None:
+        """The scan's viewpoints (x y z each, the cloud's units) for the next evaluations (the engine's
+        ``viewpoints=``); the shown results become stale until re-evaluated. [] goes back to the paper's
+        scores. ValueError for anything but finite triples."""
+        import math
+
+        pts = [tuple(float(v) for v in p) for p in (viewpoints or [])]
+        if any(len(p) != 3 or not all(math.isfinite(v) for v in p) for p in pts):
+            raise ValueError("a viewpoint is three finite numbers x y z")
+        self.viewpoints = pts
+        self.message.emit("viewpoint " + ("; ".join(" ".join(f"{v:.6g}" for v in p) for p in pts) if pts else "cleared")
+                          + ": re-evaluate to use it")
+        self.check_stale()
+
     def map_skeleton(self, scale: float, offset: tuple[float, float, float]) -> bool:
         """Evaluate > Map skeleton into the cloud's frame: the skeleton layers times ``scale`` plus
         ``offset`` (a ``frame`` warning's suggestion), then evaluated again."""
@@ -221,11 +237,19 @@ class Session(QtCore.QObject):
         except ValueError:
             return "settings changed"
         shown = ev.params
+        scan = getattr(ev, "scan", None)
+        used = [tuple(float(v) for v in p) for p in (scan.viewpoints if scan is not None else [])]
+        if self._shown_viewpoints is not None and self._shown_viewpoints != self.viewpoints:
+            return "settings changed"
+        if self._shown_viewpoints is None and used != self.viewpoints and (used or self.viewpoints):
+            return "settings changed"
         if self._shown_correspondence is not None and self.correspondence_provider() != self._shown_correspondence:
             return "settings changed"
         return "" if now.replace(beta_star=shown.beta_star, c_star=shown.c_star) == shown else "settings changed"
 
     _shown_correspondence: str | None = None  # what the shown evaluation was asked for (None: unknown)
+    _shown_viewpoints: list | None = None  # the viewpoints the shown evaluation was asked with (None: unknown)
+    _requested_viewpoints: list | None = None
     _requested_correspondence: str | None = None
 
     def check_stale(self) -> None:
@@ -283,6 +307,7 @@ class Session(QtCore.QObject):
             if evaluation is not None:
                 self._inputs_changed = False
                 self._shown_correspondence = None
+                self._shown_viewpoints = None
                 self.scene.set_evaluation(evaluation)
                 self._had_result = True
                 self.evaluated.emit(evaluation)
@@ -381,8 +406,9 @@ class Session(QtCore.QObject):
             if scene.skeletal.index_path:
                 inputs["skeletal_index"] = scene.skeletal.index_path
         self._requested_correspondence = correspondence
+        self._requested_viewpoints = list(self.viewpoints)
         kwargs = dict(skeletal=skeletal, curve=curve, params=params, inputs=inputs, correspondence=correspondence,
-                      skeletal_index=index)
+                      skeletal_index=index, viewpoints=[list(p) for p in self.viewpoints] or None)
         self._evaluated_layers = (scene.cloud, scene.skeletal, scene.curve)
         if len(cloud) + (0 if skeletal is None else len(skeletal)) >= self.process_from:
             def restore(ev: Any) -> Any:  # the child does not send the cloud back
@@ -442,6 +468,7 @@ class Session(QtCore.QObject):
                 return  # inputs changed meanwhile: this result describes other data
             scene.set_evaluation(result)
             self._shown_correspondence = self._requested_correspondence
+            self._shown_viewpoints = self._requested_viewpoints
             self._had_result = True
             self.check_stale()
             total = result.timings.get("total") if result.timings else None

@@ -4,8 +4,9 @@ Not :mod:`app.session`, the viewer's controller: this is the file format, withou
 the inputs' paths (relative to the session file when possible, absolute as well) with each file's
 size, modification time and SHA-256, so that opening it can tell a file that moved (missing) or
 changed from one that did not; the settings and thresholds (every ``skelcore.Params`` field) and the
-correspondence mode (SPEC 7); the metric, colour range and display options; the camera with the
-view's size; and the picked element. Written atomically (``skelcore.io.atomic``); read back with
+correspondence mode (SPEC 7) with the skeletal set's index file (a record like the inputs'); each skeleton
+layer's mapping into the cloud's frame (scale, offset); the scan's viewpoints (issue 26); the metric, colour
+range and display options; the camera with the view's size; and the picked element. Written atomically (``skelcore.io.atomic``); read back with
 every field checked, so a bad file is one line (``SkelInputError``) before anything changes.
 """
 
@@ -51,7 +52,9 @@ class SessionState:
     files: dict[str, FileRecord] = field(default_factory=dict)
     params: dict[str, Any] = field(default_factory=dict)
     correspondence: str = "auto"
-    skeletal_index: str | None = None  # reserved: an index file for a skeletal set (SPEC 7)
+    skeletal_index: FileRecord | None = None  # the skeletal set's index file (SPEC 7), found like the inputs
+    mappings: dict[str, tuple[float, tuple[float, float, float]]] = field(default_factory=dict)  # role -> scale, offset
+    viewpoints: list[tuple[float, float, float]] = field(default_factory=list)  # the scan's sensor positions
     metric: str = "boundedness"
     clim: tuple[float, float] | None = None
     edges_as_tubes: bool = False
@@ -87,11 +90,12 @@ def fingerprint(path: str | os.PathLike, base_dir: str | os.PathLike) -> FileRec
 def session_to_json(state: SessionState) -> dict[str, Any]:
     return {
         FORMAT: VERSION,
-        "files": {role: {"path": rec.path, "relative": rec.relative, "size": rec.size, "mtime": rec.mtime,
-                         "sha256": rec.sha256} for role, rec in state.files.items()},
+        "files": {role: _record_json(rec) for role, rec in state.files.items()},
         "params": {k: _json_value(v) for k, v in state.params.items()},
         "correspondence": state.correspondence,
-        "skeletal_index": state.skeletal_index,
+        "skeletal_index": None if state.skeletal_index is None else _record_json(state.skeletal_index),
+        "mappings": {role: {"scale": float(s), "offset": [float(v) for v in o]} for role, (s, o) in state.mappings.items()},
+        "viewpoints": [[float(v) for v in p] for p in state.viewpoints],
         "metric": state.metric,
         "clim": None if state.clim is None else [float(state.clim[0]), float(state.clim[1])],
         "edges_as_tubes": bool(state.edges_as_tubes),
@@ -142,12 +146,7 @@ def session_from_json(doc: Any, path: str | os.PathLike = "session") -> SessionS
     if not isinstance(files, dict) or set(files) - set(ROLES):
         raise bad(f"'files' must map {', '.join(ROLES)} to file records")
     for role, rec in files.items():
-        try:
-            relative = rec.get("relative")
-            state.files[role] = FileRecord(str(rec["path"]), None if relative is None else str(relative),
-                                           int(rec["size"]), float(rec["mtime"]), str(rec["sha256"]))
-        except (AttributeError, KeyError, TypeError, ValueError):
-            raise bad(f"the {role} file record needs path, size, mtime and sha256") from None
+        state.files[role] = _record(rec, role, bad)
     params = doc.get("params", {})
     if not isinstance(params, dict):
         raise bad("'params' must be an object")
@@ -164,7 +163,28 @@ def session_from_json(doc: Any, path: str | os.PathLike = "session") -> SessionS
     if state.correspondence not in CORRESPONDENCES:
         raise bad(f"correspondence must be one of {', '.join(CORRESPONDENCES)}")
     index = doc.get("skeletal_index")
-    state.skeletal_index = None if index is None else str(index)
+    if isinstance(index, str):  # written before the index had a record: its path alone
+        state.skeletal_index = FileRecord(index, None, -1, 0.0, "")
+    elif index is not None:
+        state.skeletal_index = _record(index, "skeletal index", bad)
+    mappings = doc.get("mappings", {})
+    if not isinstance(mappings, dict) or set(mappings) - {"skeletal", "curve"}:
+        raise bad("'mappings' must map skeletal, curve to a scale and an offset")
+    for role, m in mappings.items():
+        try:
+            scale, offset = float(m["scale"]), tuple(float(v) for v in m["offset"])
+        except (TypeError, KeyError, ValueError):
+            raise bad(f"the {role} mapping needs a scale and an offset x y z") from None
+        if len(offset) != 3 or not all(math.isfinite(v) for v in (scale, *offset)) or scale <= 0:
+            raise bad(f"the {role} mapping needs a scale > 0 and a finite offset x y z")
+        state.mappings[role] = (scale, offset)  # type: ignore[assignment]
+    viewpoints = doc.get("viewpoints", [])
+    try:
+        state.viewpoints = [tuple(float(v) for v in p) for p in viewpoints]  # type: ignore[misc]
+    except (TypeError, ValueError):
+        raise bad("viewpoints must be a list of x y z") from None
+    if any(len(p) != 3 or not all(math.isfinite(v) for v in p) for p in state.viewpoints):
+        raise bad("viewpoints must be a list of x y z")
     from .scene import METRICS
     from .scene.model import STYLE_DEFAULTS
 
@@ -244,6 +264,8 @@ def locate(role: str, record: FileRecord, session_path: str | os.PathLike) -> Lo
         where = " or ".join(dict.fromkeys(candidates))
         return Located(role, None, f"{name}: missing (the {role}; looked for {where})")
     st = os.stat(found)
+    if record.size < 0:  # an old session's index: its path only, nothing to compare
+        return Located(role, found)
     if st.st_size != record.size:
         return Located(role, found, f"{name}: changed since the session was saved (the {role}; "
                                     f"{record.size} bytes then, {st.st_size} now)")
@@ -251,6 +273,19 @@ def locate(role: str, record: FileRecord, session_path: str | os.PathLike) -> Lo
         return Located(role, found, f"{name}: changed since the session was saved (the {role}; same size, "
                                     "other content)")
     return Located(role, found)
+
+
+def _record_json(rec: FileRecord) -> dict[str, Any]:
+    return {"path": rec.path, "relative": rec.relative, "size": rec.size, "mtime": rec.mtime, "sha256": rec.sha256}
+
+
+def _record(rec: Any, what: str, bad: Any) -> FileRecord:
+    try:
+        relative = rec.get("relative")
+        return FileRecord(str(rec["path"]), None if relative is None else str(relative), int(rec["size"]),
+                          float(rec["mtime"]), str(rec["sha256"]))
+    except (AttributeError, KeyError, TypeError, ValueError):
+        raise bad(f"the {what} file record needs path, size, mtime and sha256") from None
 
 
 def _json_value(v: Any) -> Any:

@@ -16,6 +16,14 @@
 - ``window_hammer_skeletonized.png``: the real hammer scan (../shared/data, when present) skeletonized
   and evaluated, coloured by centeredness.
 - ``error_dialog.png``: the dialog a corrupt file gives, over the window that survives it.
+- Issue 25 defects (``--defects`` makes only these; they need the shared hammer): ``window_defects.png``, the
+  hammer with its cao curve cut to the middle of its handle (no head, no far end: pc-skeletor's truncated
+  output), the Defects dock listing the two missing parts, the larger one selected (framed, its cloud points
+  pink, highlighted in the pick colour); ``defects_panel.png``, the dock alone; ``window_branch.png``, a
+  click on the curve: the branch's length, radius, metric means and flags in the pick panel.
+- Issue 26: ``window_openings.png``, a one-sided scan of a cylinder (its front half) with its true axis: the
+  opening's boundary loop drawn, the ``open_surface`` warning and the paper's boundedness near 0 (what
+  Evaluate > Viewpoint… then corrects).
 - Issue 11 (``--supports`` makes only these): ``window_support_slab.png`` / ``support_slab_panel.png``
   (a curve sample's slab, ring and ellipse; ``support_slab_junction_panel.png`` near the junction), ``window_support_knn.png`` (a skeletal point's neighbours
   and centroids), ``support_directions_panel.png`` / ``support_paper_panel.png`` (direction map, paper
@@ -131,6 +139,11 @@ def main() -> int:
         print(f"wrote {path.relative_to(ROOT)}")
 
     settle(600)
+    if "--defects" in sys.argv:
+        defects_screenshots(window, settle, save, wait_for_runner, tmp)
+        window.session.runner.shutdown()
+        window.close()
+        return 0
     save(window, "window_empty.png")
 
     files = sample_files(tmp)
@@ -222,6 +235,8 @@ def main() -> int:
         settle()
         save(window, "window_hammer_skeletonized.png")
 
+    defects_screenshots(window, settle, save, wait_for_runner, tmp)
+
     # A corrupt file: the dialog, grabbed while it is open, then closed.
     bad = tmp / "broken_cloud.ply"
     bad.write_bytes(Path(files["cloud"]).read_bytes()[:400])
@@ -243,6 +258,62 @@ def main() -> int:
     window.session.runner.shutdown()
     window.close()
     return 0
+
+
+def defects_screenshots(window, settle, save, wait_for_runner, tmp: Path) -> None:
+    """Issue 25's Defects dock on the truncated cao hammer; issue 26's openings on a one-sided cylinder."""
+    import numpy as np
+
+    from skelcore import shapes
+    from skelcore.curve import CurveSkeleton
+    from skelcore.io import load_cloud, write_curve_ply, write_points_ply
+
+    hammer = ROOT.parent / "shared" / "data" / "hammer_4096.ply"
+    try:
+        from skelcore.skeleton import skeletonize
+    except ImportError:
+        skeletonize = None
+    if hammer.is_file() and skeletonize is not None:
+        _skeletal, curve = skeletonize(load_cloud(hammer), method="cao")
+        y = curve.vertices[:, 1]  # the handle runs along y from -199 to about 80, the head beyond
+        keep = (y > -60) & (y < 85)
+        new = -np.ones(len(keep), np.int64)
+        new[keep] = np.arange(int(keep.sum()))
+        cut = CurveSkeleton.from_raw(curve.vertices[keep], new[curve.edges[keep[curve.edges].all(axis=1)]])
+        path = tmp / "hammer_cao_half_handle_curve.ply"
+        write_curve_ply(path, cut.vertices, cut.edges)
+        window.session.load_files([str(hammer), str(path)])
+        wait_for_runner()
+        window.scene.set_metric("centeredness")
+        window.docks["Defects"].raise_()
+        window.view.standard_view("xy")
+        settle()
+        rows = window.defects.rows
+        biggest = max(range(len(rows)), key=lambda i: len(rows[i].cloud_rows)) if rows else -1
+        window.defects.panel.select_row(biggest)
+        settle(800)
+        save(window, "window_defects.png")
+        save(window.docks["Defects"], "defects_panel.png")
+        window.view.standard_view("xy")
+        settle()
+        tip = cut.vertices[int(np.argmax(cut.vertices[:, 1]))]
+        x, y = window.view.world_to_display(tip)
+        window.pick_element(window.view.pick_display(x, y))
+        settle(800)
+        save(window, "window_branch.png")
+        window.pick_element(None)
+    s = shapes.cylinder(n=4000, seed=1)
+    front = s.cloud[s.cloud[:, 1] > 0]
+    write_points_ply(tmp / "cylinder_front_cloud.ply", front)
+    write_curve_ply(tmp / "cylinder_axis_curve.ply", s.curve_vertices, s.curve_edges)
+    window.session.load_files([str(tmp / "cylinder_front_cloud.ply"), str(tmp / "cylinder_axis_curve.ply")])
+    wait_for_runner()
+    window.scene.set_metric("boundedness")
+    window.docks["Defects"].raise_()
+    window.view.standard_view("iso")
+    settle(800)
+    save(window, "window_openings.png")
+    window.docks["Barcodes"].raise_()
 
 
 def support_screenshots(window, settle, save) -> None:

@@ -14,7 +14,7 @@ class PickPanel(QtWidgets.QWidget):
         super().__init__(parent)
         self.text = QtWidgets.QPlainTextEdit(self)
         self.text.setReadOnly(True)
-        self.text.setMaximumHeight(140)
+        self.text.setMaximumHeight(180)  # a curve pick adds its branch (three lines)
         layout = QtWidgets.QVBoxLayout(self)
         layout.setContentsMargins(2, 2, 2, 2)
         layout.addWidget(self.text)

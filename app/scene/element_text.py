@@ -23,4 +23,17 @@ def format_element_info(info: dict[str, Any]) -> str:
         lines.append(f"{name} = {'nan (invalid)' if not math.isfinite(value) else f'{value:.4f}'}")
     if not info["values"]:
         lines.append("no local values (run an evaluation)")
+    b = info.get("branch")
+    if b is not None:
+        r = b["radius"]
+        lines.append(f"branch #{b['branch']} ({b['kind']}, {b['n_vertices']} vertices): length {b['length']:.4g}, "
+                     f"local radius {_num(r.get('median'))} (min {_num(r.get('min'))}, max {_num(r.get('max'))})")
+        lines.append("  means along it: " + ", ".join(f"{k} {_num(v, 4)}" for k, v in b["means"].items()))
+        lines.append("  flags: " + (", ".join(b["flags"]) if b["flags"] else "none"))
     return "\n".join(lines)
+
+
+def _num(v: Any, digits: int = 0) -> str:
+    if v is None or not math.isfinite(v):
+        return "nan"
+    return f"{v:.{digits}f}" if digits else f"{v:.4g}"

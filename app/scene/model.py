@@ -99,13 +99,15 @@ class Scene:
         self.clear_evaluation()
         self._emit("layer", "skeletal")
 
-    def map_skeleton(self, scale: float, offset: tuple[float, float, float]) -> None:
-        """Map the loaded skeleton layers by ``v * scale + offset`` into the cloud's frame (a ``frame``
-        warning's remedy); mappings compose, ``Layer.mapping`` keeps the total."""
+    def map_skeleton(self, scale: float, offset: tuple[float, float, float],
+                     only: tuple[str, ...] = ("skeletal", "curve")) -> None:
+        """Map the loaded skeleton layers (those named in ``only``) by ``v * scale + offset`` into the
+        cloud's frame (a ``frame`` warning's remedy); mappings compose, ``Layer.mapping`` keeps the total."""
         from skelcore.skeleton_mapping import check_mapping, map_skeleton
 
         scale, offset = check_mapping(scale, offset)
-        sk, cv = self.skeletal, self.curve
+        sk = self.skeletal if "skeletal" in only else None
+        cv = self.curve if "curve" in only else None
         if sk is None and cv is None:
             raise ValueError("no skeleton loaded")
         points, curve = map_skeleton(None if sk is None else sk.points, None if cv is None else cv.curve, scale, offset)
@@ -341,12 +343,30 @@ class Scene:
             info["xyz"] = tuple(float(v) for v in layer.points[index])
             if layer_name == "curve" and layer.curve is not None:
                 info["degree"] = int(layer.curve.degrees()[index])
+        branch = self.branch_of(layer_name, location, index)
+        if branch is not None:
+            from .defects import branch_details
+
+            info["branch"] = branch_details(self.evaluation, branch, self.beta_star)
         values = {}
         for name, q in layer.quantities.items():
             if q.location == location or (location in ("points", "vertices") and q.location in ("points", "vertices")):
                 values[name] = float(q.values[index])
         info["values"] = values
         return info
+
+    def branch_of(self, layer_name: str, location: str, index: int) -> int | None:
+        """The curve branch a curve vertex or sample lies on (issue 25: a click on the curve selects its
+        branch); None for a junction vertex, another layer, or before an evaluation with diagnostics."""
+        ev = self.evaluation
+        diag = None if ev is None else getattr(ev, "diagnostics", None)
+        if layer_name != "curve" or diag is None or getattr(ev, "curve", None) is None:
+            return None
+        key = {"vertices": "curve_vertex_branch", "samples": "curve_sample_branch"}.get(location)
+        arr = diag.arrays.get(key) if key else None
+        if arr is None or not 0 <= index < len(arr) or arr[index] < 0:
+            return None
+        return int(arr[index])
 
 
 def _without_column(ev: Any, name: str) -> Any:

@@ -445,6 +445,20 @@ class SceneView:
         self._fit_pending = True
         self.request_render()
 
+    def frame_box(self, lo: Any, hi: Any, min_share: float = 0.08, margin: float = 0.25) -> None:
+        """Frame the box (lo, hi) (a defect's place, issue 25), grown by ``margin`` of its size and to at
+        least ``min_share`` of the scene's diagonal on every side, so that it is seen in its context."""
+        from .actors import scene_diagonal
+
+        lo, hi = np.asarray(lo, dtype=float), np.asarray(hi, dtype=float)
+        half = np.maximum((hi - lo) / 2 * (1 + margin), 0.5 * min_share * scene_diagonal(self.scene))
+        centre = (lo + hi) / 2
+        corners = np.array([[x, y, z] for x in (-1, 1) for y in (-1, 1) for z in (-1, 1)]) * half + centre
+        self._fit_pending = False
+        self._camera_set = True
+        fit_camera(self.plotter, [corners])
+        self.request_render()
+
     def standard_view(self, name: str) -> None:
         """'xy', 'xz', 'yz' (and their negatives '-xy', ...) or 'iso'."""
         orient_standard_view(self.plotter, name)

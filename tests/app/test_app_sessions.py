@@ -258,3 +258,60 @@ def test_skelscope_session_restores_it_in_the_scripted_mode(window, files, tmp_p
     os.remove(files["curve"])
     assert main(["--session", path, "--screenshot", str(out), "--quit"]) == 0
     assert "skelscope: warning: y_curve.ply: missing" in capsys.readouterr().err
+
+
+@pytest.mark.window(auto_evaluate=True, dialogs="record")
+def test_a_session_keeps_the_skeletal_index_the_mapping_and_the_viewpoints(window, tmp_path, qtbot):
+    """Issue 25/26: a skeletal set of every third point with its index file, both skeleton layers in
+    another frame (a tenth the size, shifted) mapped back by scale 10 and an offset, and a viewpoint:
+    saved, then restored as they were and evaluated with them; a moved index is named in the one dialog."""
+    from skelcore.curve import CurveSkeleton
+    from skelcore.io import write_curve_ply
+
+    w = window
+    folder = tmp_path / "data"
+    folder.mkdir()
+    sh = shapes.y_shape(1200, seed=3)
+    files = write_shape_files(folder, sh)
+    rows = np.arange(1, len(sh.skeletal), 3)
+    shift = np.array([5.0, -2.0, 1.0])
+    write_points_ply(folder / "y_sub.ply", sh.skeletal[rows] / 10 + shift)
+    write_curve_ply(folder / "y_small_curve.ply", sh.curve_vertices / 10 + shift, sh.curve_edges)
+    (folder / "y_sub.idx").write_text("\n".join(map(str, rows)) + "\n")
+    w.session.load_as("cloud", files["cloud"])
+    w.session.load_as("skeletal", str(folder / "y_sub.ply"))
+    w.session.load_as("curve", str(folder / "y_small_curve.ply"))
+    assert w.session.load_index(str(folder / "y_sub.idx"))
+    offset = tuple(-10 * shift)
+    assert w.session.map_skeleton(10.0, offset)
+    assert w.viewpoints.set_text("0 0 5")
+    _wait_evaluated(w, qtbot)
+    path = str(tmp_path / "mapped_session.json")
+    w.saved_sessions.save(path)
+    doc = json.loads(open(path).read())
+    assert doc["skeletal_index"]["relative"] == os.path.join("data", "y_sub.idx") and doc["skeletal_index"]["sha256"]
+    assert doc["mappings"]["skeletal"] == doc["mappings"]["curve"] == {"scale": 10.0, "offset": list(offset)}
+    assert doc["viewpoints"] == [[0.0, 0.0, 5.0]]
+
+    w.session.close_all()
+    w.session.viewpoints = []
+    assert w.saved_sessions.open(path) == [] and w.dialogs == []
+    sk, cv = w.scene.skeletal, w.scene.curve
+    np.testing.assert_array_equal(sk.index, rows)
+    assert sk.index_path == str(folder / "y_sub.idx")
+    assert sk.mapping == cv.mapping == (10.0, offset)
+    np.testing.assert_allclose(sk.points, sh.skeletal[rows], atol=1e-9)  # back in the cloud's frame
+    np.testing.assert_allclose(cv.points, CurveSkeleton.from_raw(sh.curve_vertices, sh.curve_edges).vertices, atol=1e-9)
+    assert w.session.viewpoints == [(0.0, 0.0, 5.0)]
+    _wait_evaluated(w, qtbot)
+    ev = w.scene.evaluation
+    assert ev.correspondence == "index" and ev.scan.viewpoints == [[0.0, 0.0, 5.0]]
+    assert w.session.stale_reason() == ""
+
+    # the index moved away: named in the one dialog, the rest restored
+    os.replace(folder / "y_sub.idx", tmp_path / "elsewhere.idx")
+    w.session.close_all()
+    problems = w.saved_sessions.open(path)
+    assert len(w.dialogs) == 1 and len(problems) == 1
+    assert "y_sub.idx: missing (the skeletal index" in w.dialogs[0]
+    assert w.scene.skeletal.index is None and w.scene.skeletal.mapping == (10.0, offset)

@@ -73,3 +73,23 @@ def test_colors_module_does_not_import_matplotlib():
     code = "import sys, skelcore.colors, skelcore.io.export, skelcore.io; print('matplotlib' in sys.modules)"
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
     assert out.stdout.strip() == "False"
+
+
+def test_defect_colours_are_on_no_colour_map_and_apart_from_the_scene_and_each_other():
+    """Issue 25: the defects are drawn in colours the metric map does not use (METRIC_COLORMAP, at
+    least 80 RGB units from every entry), not magenta (NaN), not the pick marker's, apart from the
+    skeleton's, the cloud's and the supports' (45), and distinct from one another (60)."""
+    from skelcore.colors import (
+        CLOUD_GREY, CURVE_COLOR, DEFECT_COLORS, MAGENTA, METRIC_COLORMAP, PICK_COLOR, SKELETAL_COLOR, SUPPORT_COLORS,
+        lookup_table,
+    )
+
+    maps = lookup_table(METRIC_COLORMAP, 256).astype(float)
+    fixed = np.array([CURVE_COLOR, SKELETAL_COLOR, MAGENTA, PICK_COLOR, CLOUD_GREY, (255, 255, 255),
+                      *SUPPORT_COLORS.values()], dtype=float)
+    colours = np.array(list(DEFECT_COLORS.values()), dtype=float)
+    for name, c in zip(DEFECT_COLORS, colours):
+        assert np.linalg.norm(maps - c, axis=1).min() > 80, name
+        assert np.linalg.norm(fixed - c, axis=1).min() > 45, name
+    d = np.linalg.norm(colours[:, None] - colours[None], axis=2)
+    assert d[np.triu_indices(len(colours), 1)].min() > 60

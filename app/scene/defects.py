@@ -1,0 +1,386 @@
+"""An Evaluation's defects as the viewer lists and draws them (issue 25 "Defects on screen"; issue 26's
+openings and stray points), without Qt.
+
+:func:`defect_rows` turns ``Evaluation.diagnostics`` (skelcore/diagnostics/record.py), its warnings and
+its ``scan`` block into one :class:`DefectRow` per defect found: missing parts, spurious branches,
+spurious and missing cycles, branches outside the shape, ``collapse``, ``frame``, ``open_surface`` (one
+row per opening) and ``outliers``, each with its size in the engine's words and the geometry that
+frames and highlights it. :func:`branch_details` is a clicked branch: length, local radius, the metric
+means along it and its flags. Positions are in the user's units (the layers'); the engine's lengths are
+normalized (SPEC 0) and are turned back with ``Evaluation.normalization``.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+__all__ = ["DefectRow", "DEFECT_TITLES", "defect_rows", "branch_flags", "branch_details", "branch_paths",
+           "opening_loop", "defect_counts", "sound_line", "branch_edges", "branch_points"]
+
+#: the words a row starts with, per warning code (the CLI's defects block uses the codes themselves)
+DEFECT_TITLES = {
+    "incomplete": "missing part",
+    "spurious_branches": "spurious branch",
+    "spurious_cycles": "spurious cycle",
+    "missing_cycles": "missing cycle",
+    "outside": "outside the shape",
+    "collapse": "collapse",
+    "frame": "frame",
+    "open_surface": "opening",
+    "outliers": "stray points",
+}
+_NO_PLACE = np.zeros((0, 3))
+
+
+@dataclass
+class DefectRow:
+    """One defect: its warning ``code``, a short ``title``, its ``size`` in the engine's words, the
+    skeleton ``column`` it belongs to ("curve", "skeletal" or "" for the scan), and what to draw:
+    ``cloud_rows`` (rows of ``Evaluation.cloud``), ``branches`` (curve branch ids), ``edges`` (curve edge
+    ids) and ``points`` (every position that frames it: its bounding box is where the camera goes)."""
+
+    code: str
+    title: str
+    size: str
+    column: str = ""
+    cloud_rows: np.ndarray = field(default_factory=lambda: np.zeros(0, np.int64))
+    branches: tuple[int, ...] = ()
+    edges: np.ndarray = field(default_factory=lambda: np.zeros(0, np.int64))
+    points: np.ndarray = field(default_factory=lambda: _NO_PLACE)
+
+    def bounds(self) -> tuple[np.ndarray, np.ndarray] | None:
+        """(lo, hi) corners of the box the camera frames, None when the defect has no place (then the
+        whole scene)."""
+        if not len(self.points):
+            return None
+        return self.points.min(axis=0), self.points.max(axis=0)
+
+
+def _scale(ev: Any) -> float:
+    norm = getattr(ev, "normalization", None)
+    return float(norm.scale) if norm is not None and getattr(norm, "scale", 0) else 1.0
+
+
+def _summary(ev: Any) -> dict[str, Any]:
+    diag = getattr(ev, "diagnostics", None)
+    return {} if diag is None else (diag.summary or {})
+
+
+def _arrays(ev: Any) -> dict[str, np.ndarray]:
+    diag = getattr(ev, "diagnostics", None)
+    return {} if diag is None else (diag.arrays or {})
+
+
+def branch_paths(ev: Any) -> list[np.ndarray]:
+    """Each branch's curve vertices in order (the JSON branch list), empty without a curve's diagnostics."""
+    branches = (_summary(ev).get("branches") or {}).get("branches") or []
+    return [np.asarray(b["vertices"], dtype=np.int64) for b in branches]
+
+
+def _curve(ev: Any) -> Any:
+    return None if getattr(ev, "curve", None) is None else ev.curve.curve
+
+
+def branch_edges(ev: Any, ids: list[int] | tuple[int, ...]) -> np.ndarray:
+    """The curve edges of branches ``ids`` (consecutive vertices of their paths)."""
+    curve = _curve(ev)
+    paths = branch_paths(ev)
+    if curve is None or not paths:
+        return np.zeros(0, np.int64)
+    edges = np.sort(np.asarray(curve.edges, dtype=np.int64).reshape(-1, 2), axis=1)
+    pairs = [np.sort(np.column_stack([p[:-1], p[1:]]), axis=1) for i in ids if 0 <= i < len(paths)
+             for p in [paths[i]] if len(p) > 1]
+    if not pairs:
+        return np.zeros(0, np.int64)
+    want = np.unique(np.vstack(pairs), axis=0)
+    n = int(max(edges.max(initial=0), want.max(initial=0))) + 1
+    key = edges[:, 0] * n + edges[:, 1]
+    return np.flatnonzero(np.isin(key, want[:, 0] * n + want[:, 1]))
+
+
+def branch_points(ev: Any, ids: list[int] | tuple[int, ...]) -> np.ndarray:
+    curve = _curve(ev)
+    paths = branch_paths(ev)
+    if curve is None or not paths:
+        return _NO_PLACE
+    verts = np.asarray(curve.vertices, dtype=float)
+    idx = [paths[i] for i in ids if 0 <= i < len(paths)]
+    return verts[np.concatenate(idx)] if idx else _NO_PLACE
+
+
+def branch_flags(ev: Any) -> list[tuple[str, ...]]:
+    """Per branch, the defect codes found on it: its samples' (or vertices') defect bits
+    (``skelcore.diagnostics.record.DEFECT_BITS``), the spurious-branch verdicts and the outside lengths over the threshold."""
+    from skelcore.diagnostics.record import DEFECT_BITS  # at use: the window's first frame needs no engine
+
+    paths = branch_paths(ev)
+    if not paths:
+        return []
+    flags: list[set[str]] = [set() for _ in paths]
+    arrays = _arrays(ev)
+    for where in ("sample", "vertex"):
+        branch, bits = arrays.get(f"curve_{where}_branch"), arrays.get(f"curve_{where}_defects")
+        if branch is None or bits is None or len(branch) != len(bits):
+            continue
+        for code, bit in DEFECT_BITS.items():
+            on = np.unique(branch[(bits & bit) != 0])
+            for b in on[(on >= 0) & (on < len(paths))]:
+                flags[int(b)].add(code)
+    summary = _summary(ev)
+    for spur in (summary.get("spurious_branches") or {}).get("branches") or []:
+        if spur.get("spurious") and 0 <= spur["id"] < len(paths):
+            flags[spur["id"]].add("spurious_branches")
+    params = getattr(ev, "params", None)
+    min_radii = float(getattr(params, "outside_min_radii", 0.5))
+    for out in (summary.get("outside") or {}).get("branches") or []:
+        if out.get("radii", 0.0) >= min_radii and 0 <= out["id"] < len(paths):
+            flags[out["id"]].add("outside")
+    return [tuple(code for code in DEFECT_TITLES if code in f) for f in flags]
+
+
+def _warnings(ev: Any) -> list[Any]:
+    return list(getattr(ev, "warnings", None) or [])
+
+
+def _codes(ev: Any) -> set[str]:
+    return {w.code for w in _warnings(ev)}
+
+
+def _missing_rows(ev: Any) -> list[DefectRow]:
+    summary, arrays = _summary(ev), _arrays(ev)
+    cloud = None if getattr(ev, "cloud", None) is None else np.asarray(ev.cloud, dtype=float)
+    rows = []
+    for column, what in (("curve", "curve skeleton"), ("skeletal", "skeletal set")):
+        mp = (summary.get("missing_parts") or {}).get(column)
+        if not mp or not mp.get("incomplete"):
+            continue
+        region = arrays.get(f"cloud_missing_{column}")
+        counted = [r for r in mp.get("regions") or [] if r.get("counted")]
+        for r in counted:
+            sel = np.flatnonzero(region == r["id"]) if region is not None else np.zeros(0, np.int64)
+            pts = cloud[sel] if cloud is not None and len(sel) and sel.max() < len(cloud) else _NO_PLACE
+            rows.append(DefectRow(
+                "incomplete", f"missing part ({what})",
+                f"{r['share']:.1%} of the cloud, {r['n_points']} points, reaching {r['depth']:.2g} local radii "
+                f"beyond the skeleton", column, sel, points=pts))
+        if not counted:
+            rows.append(DefectRow("incomplete", f"incomplete ({what})",
+                                  f"explains only {mp['completeness']:.1%} of the cloud (completeness "
+                                  f"{mp['completeness']:.3f})", column))
+    return rows
+
+
+def _spur_rows(ev: Any) -> list[DefectRow]:
+    spurs = _summary(ev).get("spurious_branches") or {}
+    branches = (_summary(ev).get("branches") or {}).get("branches") or []
+    total = sum(b["length"] for b in branches) or 1.0
+    rows = []
+    for s in spurs.get("branches") or []:
+        if not s.get("spurious"):
+            continue
+        b = s["id"]
+        length = branches[b]["length"] if b < len(branches) else float("nan")
+        radii = "" if s.get("length_radii") is None else f"{s['length_radii']:.2g} local radii long, "
+        rows.append(DefectRow("spurious_branches", f"spurious branch #{b}",
+                              f"{radii}{length / total:.1%} of the curve's length; its end {s.get('reach') or 0:.2g} "
+                              f"junction radii out, {s.get('unique', 0)} of its {s.get('territory', 0)} nearest cloud "
+                              "points explained by it alone", "curve", branches=(b,),
+                              edges=branch_edges(ev, (b,)), points=branch_points(ev, (b,))))
+    return rows
+
+
+def _cycle_rows(ev: Any) -> list[DefectRow]:
+    summary = _summary(ev)
+    cycles = summary.get("cycles") or {}
+    basis = (summary.get("branches") or {}).get("cycles") or []
+    branches = (summary.get("branches") or {}).get("branches") or []
+    total = sum(b["length"] for b in branches) or 1.0
+    rows = []
+    codes = _codes(ev)
+    if "spurious_cycles" in codes:
+        for c in cycles.get("spurious_cycles") or []:
+            ids = tuple(int(b) for b, _sign in basis[c]) if c < len(basis) else ()
+            length = sum(branches[b]["length"] for b in ids if b < len(branches))
+            rows.append(DefectRow("spurious_cycles", f"spurious cycle #{c}",
+                                  f"goes around no tunnel of the shape ({cycles.get('shape', 0)} found); "
+                                  f"{len(ids)} branches, {length / total:.1%} of the curve's length", "curve",
+                                  branches=ids, edges=branch_edges(ev, ids), points=branch_points(ev, ids)))
+    if "missing_cycles" in codes:
+        rows.append(DefectRow("missing_cycles", "missing cycle",
+                              f"the shape has {cycles.get('shape', 0)} tunnels and the curve's {cycles.get('skeleton', 0)} "
+                              f"cycles go around {cycles.get('linked', 0)}: {cycles.get('missing', 0)} missing", "curve"))
+    return rows
+
+
+def _outside_rows(ev: Any) -> list[DefectRow]:
+    """One row per branch with at least ``outside_min_radii`` local radii outside the shape; the
+    warning's own words when it fired on the length share alone, or for the skeletal set."""
+    if "outside" not in _codes(ev):
+        return []
+    out = _summary(ev).get("outside") or {}
+    min_radii = float(getattr(getattr(ev, "params", None), "outside_min_radii", 0.5))
+    scale = _scale(ev)
+    flagged = _outside_edges(ev, _arrays(ev))
+    curve = _curve(ev)
+
+    def edge_points(edges: np.ndarray) -> np.ndarray:
+        if curve is None or not len(edges):
+            return _NO_PLACE
+        return np.asarray(curve.vertices, float)[np.asarray(curve.edges).reshape(-1, 2)[edges].ravel()]
+
+    rows = []
+    for b in out.get("branches") or []:
+        if b["radii"] < min_radii:
+            continue
+        edges = np.intersect1d(branch_edges(ev, (b["id"],)), flagged)
+        pts = edge_points(edges) if len(edges) else branch_points(ev, (b["id"],))
+        rows.append(DefectRow("outside", f"branch #{b['id']} outside the shape",
+                              f"{b['length'] / scale:.3g} long outside ({b['radii']:.2g} local radii), up to "
+                              f"{b['depth']:.2g} local radii out", "curve", branches=(b["id"],), edges=edges, points=pts))
+    for w in _warnings(ev):
+        if w.code != "outside":
+            continue
+        if "skeletal points" in w.message:
+            rows.append(DefectRow("outside", "skeletal points outside the shape", w.message, "skeletal"))
+        elif not any(r.column == "curve" for r in rows):  # fired on the length share alone
+            rows.append(DefectRow("outside", "outside the shape", w.message, "curve", edges=flagged,
+                                  points=edge_points(flagged)))
+    return rows
+
+
+def _outside_edges(ev: Any, arrays: dict[str, np.ndarray]) -> np.ndarray:
+    """Curve edges holding a sample flagged ``outside``."""
+    from skelcore.diagnostics.record import DEFECT_BITS
+
+    bits = arrays.get("curve_sample_defects")
+    if bits is None or getattr(ev, "curve", None) is None or ev.curve.sample_edge is None:
+        return np.zeros(0, np.int64)
+    edge = np.asarray(ev.curve.sample_edge, dtype=np.int64)
+    if len(edge) != len(bits):
+        return np.zeros(0, np.int64)
+    return np.unique(edge[(bits & DEFECT_BITS["outside"]) != 0])
+
+
+def _trust_rows(ev: Any) -> list[DefectRow]:
+    """``collapse`` and ``frame``: the warning's own words; placed on the skeleton they name."""
+    rows = []
+    for w in _warnings(ev):
+        if w.code not in ("collapse", "frame"):
+            continue
+        column = "skeletal" if "skeletal" in w.message else "curve"
+        pts = _NO_PLACE
+        if column == "curve" and _curve(ev) is not None:
+            pts = np.asarray(_curve(ev).vertices, dtype=float)
+        elif getattr(ev, "skeletal", None) is not None:
+            pts = np.asarray(ev.skeletal.points, dtype=float)
+        rows.append(DefectRow(w.code, DEFECT_TITLES[w.code], w.message, column, points=pts))
+    return rows
+
+
+def opening_loop(points: np.ndarray, centre: Any, normal: Any) -> np.ndarray:
+    """An opening's rim points in order around its centre (by angle in the plane square to its normal):
+    the boundary loop to draw."""
+    pts = np.asarray(points, dtype=float)
+    if len(pts) < 3:
+        return pts
+    n = np.asarray(normal, dtype=float)
+    n = n / (np.linalg.norm(n) or 1.0)
+    u = np.cross(n, [1.0, 0.0, 0.0] if abs(n[0]) < 0.9 else [0.0, 1.0, 0.0])
+    u /= np.linalg.norm(u)
+    v = np.cross(n, u)
+    d = pts - np.asarray(centre, dtype=float)
+    return pts[np.argsort(np.arctan2(d @ v, d @ u))]
+
+
+def _scan_rows(ev: Any) -> list[DefectRow]:
+    scan = getattr(ev, "scan", None)
+    cloud = None if getattr(ev, "cloud", None) is None else np.asarray(ev.cloud, dtype=float)
+    rows = []
+    if scan is None:
+        return rows
+    codes = _codes(ev)
+    for i, o in enumerate(scan.openings or []):
+        sel = np.asarray(o.get("rows") or [], dtype=np.int64)
+        pts = cloud[sel] if cloud is not None and len(sel) and sel.max() < len(cloud) else _NO_PLACE
+        kind = "open tube end" if o.get("kind") == "end" else "missing side"
+        size = "" if not np.isfinite(o.get("size", np.nan)) else f"{o['size']:.3g} local radii wide, "
+        state = " (capped)" if o.get("capped") else ""
+        rows.append(DefectRow("open_surface", f"opening #{i}: {kind}{state}",
+                              f"{size}{o.get('extent', 0):.3g} across, {o.get('n_rim', len(sel))} rim points"
+                              + ("" if "open_surface" in codes else " (too small to change boundedness)"),
+                              "", sel, points=pts))
+    found = scan.outliers or {}
+    if found.get("count"):
+        sel = np.asarray(found.get("rows") or [], dtype=np.int64)
+        message = next((w.message for w in _warnings(ev) if w.code == "outliers"), "")
+        removed = " (removed: evaluated without them)" if scan.outliers_removed else ""
+        pts = _NO_PLACE
+        if not scan.outliers_removed and cloud is not None and len(sel) and sel.max() < len(cloud):
+            pts = cloud[sel]
+        rows.append(DefectRow("outliers", f"{found['count']} stray points{removed}",
+                              message or f"bounding box {found.get('scale_ratio', 1):.3g} x as large", "",
+                              sel if not scan.outliers_removed else np.zeros(0, np.int64), points=pts))
+    return rows
+
+
+def defect_rows(ev: Any) -> list[DefectRow]:
+    """Every defect of ``ev`` found without a reference, in the order of the CLI's defects block, then the
+    scan's openings and stray points; [] for None."""
+    if ev is None:
+        return []
+    return (_missing_rows(ev) + _spur_rows(ev) + _cycle_rows(ev) + _outside_rows(ev) + _trust_rows(ev)
+            + _scan_rows(ev))
+
+
+def defect_counts(ev: Any) -> dict[str, int]:
+    """Rows per code (the A/B table's defect lines)."""
+    out: dict[str, int] = {}
+    for row in defect_rows(ev):
+        out[row.code] = out.get(row.code, 0) + 1
+    return out
+
+
+def sound_line(ev: Any) -> str:
+    """"sound" when no defect warning (:data:`skelcore.trust.DEFECT_CODES`) was raised, as compare's
+    "sound" column says, else "not sound: " and the codes."""
+    from skelcore.trust import defect_codes
+
+    codes = defect_codes(_warnings(ev)) if ev is not None else []
+    return "sound" if not codes else "not sound: " + ", ".join(codes)
+
+
+def branch_details(ev: Any, branch: int, beta_star: float | None = None) -> dict[str, Any]:
+    """A branch of the curve as the info panel shows it: its length (user units), local radius
+    (median, min, max), the means of each local metric along it (samples for boundedness and
+    centeredness, SPEC 3; vertices for smoothness, SPEC 4), its ends' degrees, kind and flags."""
+    branches = (_summary(ev).get("branches") or {}).get("branches") or []
+    if not 0 <= branch < len(branches):
+        raise ValueError(f"no branch {branch} (the curve has {len(branches)})")
+    b = branches[branch]
+    scale = _scale(ev)
+    radius = {k: (None if v is None else v / scale) for k, v in (b.get("radius") or {}).items()}
+    means: dict[str, float] = {}
+    c = getattr(ev, "curve", None)
+    arrays = _arrays(ev)
+    if c is not None:
+        sb = arrays.get("curve_sample_branch")
+        beta = beta_star if beta_star is not None else float(ev.params.beta_star)
+        if sb is not None and len(sb) == len(c.sample_boundedness):
+            on = sb == branch
+            if not on.any():  # a branch shorter than the sample spacing: the samples on its edges
+                on = np.isin(np.asarray(c.sample_edge), branch_edges(ev, (branch,)))
+            for name, values in (("boundedness", c.sample_boundedness), ("centeredness", c.sample_centeredness(beta))):
+                v = np.asarray(values, dtype=float)[on]
+                means[name] = float(np.nanmean(v)) if np.isfinite(v).any() else float("nan")
+        verts = np.asarray(b["vertices"], dtype=np.int64)
+        sm = np.asarray(c.vertex_smoothness, dtype=float)
+        if len(verts) and verts.max() < len(sm):
+            v = sm[verts]
+            means["smoothness"] = float(np.nanmean(v)) if np.isfinite(v).any() else float("nan")
+    flags = branch_flags(ev)
+    return {"branch": int(branch), "kind": b.get("kind", ""), "length": float(b["length"]) / scale,
+            "radius": radius, "end_degrees": list(b.get("end_degrees") or []), "n_vertices": len(b["vertices"]),
+            "means": means, "flags": list(flags[branch]) if branch < len(flags) else []}

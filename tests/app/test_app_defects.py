@@ -1,0 +1,197 @@
+"""Issue 25 "Defects on screen": the Defects dock lists each defect found with its size, selecting one
+frames the camera on it and highlights it; in 3-D, missing parts colour their cloud points, flagged
+branches and outside edges are drawn in styles of their own with a legend entry each; a switch hides
+them; a click on the curve selects its branch (length, radius, metric means, flags).
+
+The skeleton: a capped cylinder's axis with its lower 40 % cut (a missing part, below z = 1.6) and a
+straight spur from the axis out to 2 units sideways (radius 0.5: spurious and 1.5 of its 2 units
+outside the shape), so every answer is known."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from skelcore import evaluate, shapes
+from skelcore.colors import DEFECT_COLORS, PICK_COLOR
+from skelcore.curve import CurveSkeleton
+
+pytestmark = [pytest.mark.gui, pytest.mark.window(size=(1300, 850))]
+CUT_Z = 1.6
+
+
+def spurred_cut_cylinder():
+    s = shapes.cylinder(n=3000, seed=2)
+    axis = s.curve_vertices[8:]  # z from 1.6 to 4
+    z = axis[5, 2]
+    v = np.vstack([axis, [[0.7, 0, z], [1.4, 0, z], [2.0, 0, z]]])
+    n = len(v)
+    e = np.vstack([np.column_stack([np.arange(len(axis) - 1), np.arange(1, len(axis))]),
+                   [[5, n - 3], [n - 3, n - 2], [n - 2, n - 1]]])
+    return s, CurveSkeleton.from_raw(v, e), {n - 3, n - 2, n - 1}
+
+
+@pytest.fixture(scope="module")
+def defective():
+    s, curve, spur = spurred_cut_cylinder()
+    return s, curve, spur, evaluate(s.cloud, curve=curve)
+
+
+def _show(w, s, curve, ev):
+    w.session.show_arrays(s.cloud, None, curve, ev)
+    w.view.image()  # a frame at the final size: the camera is set
+    return w
+
+
+def _spur_edges(curve, spur):
+    e = np.asarray(curve.edges)
+    return set(np.flatnonzero(np.isin(e, list(spur)).any(axis=1)).tolist())
+
+
+def _has_colour(img, rgb, tol=12, at_least=5):
+    d = np.abs(img[..., :3].astype(int) - np.asarray(rgb)[None, None, :]).max(axis=2)
+    return int(np.count_nonzero(d <= tol)) >= at_least
+
+
+def test_the_dock_lists_each_defect_with_its_size(window, defective):
+    s, curve, spur, ev = defective
+    w = _show(window, s, curve, ev)
+    panel = w.defects.panel
+    assert "Defects" in w.docks
+    view_menu = next(a.menu() for a in w.menuBar().actions() if a.text() == "&View")
+    assert w.docks["Defects"].toggleViewAction() in view_menu.actions()
+    codes = [r.code for r in panel.rows]
+    assert codes == ["incomplete", "spurious_branches", "outside"]
+    assert panel.table.rowCount() == 3
+    missing, spur_row, outside = panel.rows
+    # the missing part: the cloud below the cut, in the engine's words (share, points, depth)
+    z = s.cloud[missing.cloud_rows, 2]
+    assert np.mean(z < CUT_Z) > 0.95 and len(missing.cloud_rows) > 0.2 * np.count_nonzero(s.cloud[:, 2] < CUT_Z)
+    assert f"{len(missing.cloud_rows)} points" in missing.size and "% of the cloud" in missing.size
+    # the spur: its three edges, and 1.5 of its 2 units outside (radius 0.5), as the engine measures it
+    assert set(spur_row.edges.tolist()) == _spur_edges(curve, spur)
+    assert set(outside.edges.tolist()) <= _spur_edges(curve, spur) and len(outside.edges) >= 2
+    length = float(outside.size.split(" long outside")[0])
+    assert length == pytest.approx(1.5, abs=0.15)
+    assert "not sound" in panel.status.text() and "incomplete" in panel.status.text()
+    assert panel.table.item(1, 1).text() == spur_row.size
+
+
+def test_selecting_a_row_frames_and_highlights_it(window, defective):
+    s, curve, spur, ev = defective
+    w = _show(window, s, curve, ev)
+    width, height = w.view.widget.width(), w.view.widget.height()
+    for index in (1, 0):
+        w.defects.panel.select_row(index)
+        row = w.defects.rows[index]
+        assert w.defects.selected is row
+        img = w.view.image()
+        ratio = w.view.plotter.devicePixelRatioF()
+        xy = np.array([w.view.world_to_display(p) for p in row.points]) / ratio
+        assert (xy >= 0).all() and (xy[:, 0] <= width).all() and (xy[:, 1] <= height).all()
+        extent = np.ptp(xy, axis=0)
+        assert max(extent[0] / width, extent[1] / height) > 0.25  # framed: it fills the view
+        assert "defect-selected" in w.view.plotter.actors
+        assert _has_colour(img, PICK_COLOR)
+    w.defects.panel.select_row(-1)
+    assert w.defects.selected is None and "defect-selected" not in w.view.plotter.actors
+
+
+def test_defects_are_drawn_in_styles_of_their_own_with_a_legend_and_can_be_hidden(window, defective):
+    s, curve, spur, ev = defective
+    w = _show(window, s, curve, ev)
+    actors = w.view.plotter.actors
+    missing = w.defects.rows[0]
+    assert actors["defect-incomplete"].GetMapper().GetInput().GetNumberOfPoints() == len(missing.cloud_rows)
+    halo, dashes = actors["defect-spurious_branches"], actors["defect-outside"]
+    curve_width = actors["curve-edges"].GetProperty().GetLineWidth()
+    assert halo.GetProperty().GetLineWidth() > 3 * curve_width  # a halo, not a recoloured edge
+    assert dashes.GetMapper().GetInput().GetNumberOfCells() > len(w.defects.rows[2].edges)  # cut into dashes
+    assert w.defects.overlay.legend_labels == ["missing part (cloud points)", "spurious branch",
+                                               "edge outside the shape"]
+    img = w.view.image()
+    assert _has_colour(img, DEFECT_COLORS["incomplete"])
+    w.actions_by_name["show_defects"].trigger()  # View > Show defects (Shift+D) off
+    assert not w.defects.visible and not w.defects.panel.show_box.isChecked()
+    assert not actors["defect-incomplete"].GetVisibility() and not w.defects.overlay.legend.GetVisibility()
+    assert not _has_colour(w.view.image(), DEFECT_COLORS["incomplete"])
+    w.defects.panel.show_box.setChecked(True)
+    assert w.defects.visible and w.actions_by_name["show_defects"].isChecked()
+    assert actors["defect-incomplete"].GetVisibility()
+
+
+def test_a_click_on_the_curve_selects_its_branch(window, qtbot, defective):
+    s, curve, spur, ev = defective
+    w = _show(window, s, curve, ev)
+    w.scene.set_visible("cloud", False)
+    w.view.image()
+    tip = curve.vertices[max(spur)]
+    x, y = w.view.world_to_display(tip)
+    info = w.view.pick_display(x, y)
+    w.pick_element(info)
+    b = info["branch"]
+    assert b["flags"] == ["spurious_branches", "outside"]
+    assert b["length"] == pytest.approx(2.0, rel=1e-6)  # from the axis out to x = 2
+    edges = sorted(_spur_edges(curve, spur))
+    on = np.isin(ev.curve.sample_edge, edges)
+    assert b["means"]["boundedness"] == pytest.approx(np.nanmean(ev.curve.sample_boundedness[on]), abs=0.02)
+    assert b["radius"]["median"] > 0
+    text = w.pick.text.toPlainText()
+    assert f"branch #{b['branch']}" in text and "spurious_branches, outside" in text and "length 2" in text
+    assert set(w.defects.selected.edges.tolist()) == set(edges)
+    assert "defect-selected" in w.view.plotter.actors
+    # an axis vertex: a branch with no flag
+    x, y = w.view.world_to_display(curve.vertices[1])
+    info = w.view.pick_display(x, y)
+    assert info["branch"]["flags"] == [] and info["branch"]["means"]["boundedness"] > 0.9
+
+
+def test_a_sound_skeleton_has_none(window):
+    sh = shapes.y_shape(1500, seed=3)
+    curve = CurveSkeleton.from_raw(sh.curve_vertices, sh.curve_edges)
+    ev = evaluate(sh.cloud, sh.skeletal, curve)
+    w = _show(window, sh, curve, ev)
+    assert w.defects.rows == [] and "none found" in w.defects.panel.status.text()
+    assert not [n for n in w.view.plotter.actors if n.startswith("defect-")]
+    assert w.defects.overlay.legend is None
+
+
+def test_the_ab_view_counts_the_defects_of_a_and_b(window, defective):
+    """A: the defective skeleton; B: the cylinder's whole axis (sound). The table gets one row per code
+    found in either (A's count, B's, B - A, fewer is better) and the sound / not line; each side draws
+    its defects."""
+    s, curve, spur, ev_a = defective
+    w = _show(window, s, curve, ev_a)
+    truth = CurveSkeleton.from_raw(s.curve_vertices, s.curve_edges)
+    ev_b = evaluate(s.cloud, curve=truth)
+    view = w.compare.open(ev_a, ev_b, ("defective", "axis"))
+    labels = [view.cell(r, 0) for r in range(view.table.rowCount())]
+    n = len(view.rows)
+    assert labels[n:] == ["defects: incomplete", "defects: spurious_branches", "defects: outside",
+                          "sound (no defect warning)"]
+    for r in range(n, n + 3):
+        assert (view.cell(r, 1), view.cell(r, 2), view.cell(r, 3)) == ("1", "0", "-1")
+        assert view.table.item(r, 3).toolTip() == "B is better"
+    last = n + 3
+    assert view.cell(last, 1) == "not sound: incomplete, outside, spurious_branches" and view.cell(last, 2) == "sound"
+    pink = [a for a in view.plotter.renderers[0].actors.values()
+            if tuple(round(c * 255) for c in a.prop.color.float_rgb) == DEFECT_COLORS["incomplete"]]
+    assert len(pink) == 1
+    assert not [a for a in view.plotter.renderers[1].actors.values()
+                if tuple(round(c * 255) for c in a.prop.color.float_rgb) == DEFECT_COLORS["incomplete"]]
+    view.close()
+
+
+def test_out_of_date_results_grey_their_defects_and_keep_the_selection(window, defective):
+    """Issue 25's stale state: a setting change greys the defects as it greys the metric colours."""
+    from app.view.style import greyed
+
+    s, curve, spur, ev = defective
+    w = _show(window, s, curve, ev)
+    w.defects.panel.select_row(1)
+    w.scene.set_stale("settings changed")
+    img = w.view.image()
+    assert not _has_colour(img, DEFECT_COLORS["incomplete"], tol=4) and _has_colour(img, greyed(DEFECT_COLORS["incomplete"]))
+    assert "defect-selected" in w.view.plotter.actors and w.defects.selected is w.defects.rows[1]
+    w.scene.set_stale("")
+    assert _has_colour(w.view.image(), DEFECT_COLORS["incomplete"])

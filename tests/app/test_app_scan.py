@@ -1,0 +1,84 @@
+"""Issue 26 in the viewer: the openings of a partial scan drawn as their boundary loops, stray points
+drawn in a style of their own (both with a legend entry and a Defects row), and the viewpoint set from
+the camera or typed, used by the next evaluation (viewpoint-aware boundedness)."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from skelcore import evaluate, shapes
+from skelcore.colors import DEFECT_COLORS
+from skelcore.curve import CurveSkeleton
+
+pytestmark = [pytest.mark.gui, pytest.mark.window(size=(1300, 850), dialogs="record")]
+
+
+def _half_cylinder():
+    """The cylinder's front half (y > 0), as one sensor on the +y side sees it, with its true axis."""
+    s = shapes.cylinder(n=4000, seed=1)
+    return s.cloud[s.cloud[:, 1] > 0], CurveSkeleton.from_raw(s.curve_vertices, s.curve_edges)
+
+
+def _has_colour(img, rgb, tol=12, at_least=5):
+    d = np.abs(img[..., :3].astype(int) - np.asarray(rgb)[None, None, :]).max(axis=2)
+    return int(np.count_nonzero(d <= tol)) >= at_least
+
+
+def test_openings_are_drawn_as_their_boundary_loops(window):
+    cloud, curve = _half_cylinder()
+    ev = evaluate(cloud, curve=curve)
+    assert ev.scan.openings and "open_surface" in {w.code for w in ev.warnings}
+    w = window
+    w.session.show_arrays(cloud, None, curve, ev)
+    rows = [r for r in w.defects.rows if r.code == "open_surface"]
+    assert len(rows) == len(ev.scan.openings)
+    rim = np.concatenate([np.asarray(o["rows"]) for o in ev.scan.openings])
+    loop = w.view.plotter.actors["defect-open_surface"].GetMapper().GetInput()
+    assert loop.GetNumberOfPoints() == len(rim) and loop.GetNumberOfCells() == len(rim)  # closed loops
+    np.testing.assert_allclose(np.sort(np.asarray(loop.points), axis=0), np.sort(cloud[rim], axis=0), atol=1e-5)
+    assert "opening (boundary loop)" in w.defects.overlay.legend_labels
+    assert _has_colour(w.view.image(), DEFECT_COLORS["open_surface"])
+    # the rim of a missing side lies on the cut plane y = 0 (the scan's edge)
+    assert np.median(np.abs(cloud[rim, 1])) < 0.05
+
+
+def test_stray_points_are_drawn_large_with_a_legend_entry(window):
+    s = shapes.cylinder(n=3000, seed=2)
+    far = np.array([[40.0, 0.0, 2.0]])  # 10 x the cylinder's extent away
+    cloud = np.vstack([s.cloud, far])
+    curve = CurveSkeleton.from_raw(s.curve_vertices, s.curve_edges)
+    ev = evaluate(cloud, curve=curve)
+    w = window
+    w.session.show_arrays(cloud, None, curve, ev)
+    (row,) = [r for r in w.defects.rows if r.code == "outliers"]
+    assert row.cloud_rows.tolist() == [len(s.cloud)] and "stray point" in row.size
+    actor = w.view.plotter.actors["defect-outliers"]
+    np.testing.assert_allclose(np.asarray(actor.GetMapper().GetInput().points), far, atol=1e-4)
+    assert actor.GetProperty().GetPointSize() >= 10 and "stray point (outlier)" in w.defects.overlay.legend_labels
+    w.defects.select(w.defects.rows.index(row))  # framed: the stray point in view
+    xy = np.array(w.view.world_to_display(far[0])) / w.view.plotter.devicePixelRatioF()
+    assert 0 <= xy[0] <= w.view.widget.width() and 0 <= xy[1] <= w.view.widget.height()
+
+
+def test_the_viewpoint_from_the_camera_or_typed_is_used_by_the_next_evaluation(window, qtbot):
+    cloud, curve = _half_cylinder()
+    w = window
+    w.session.show_arrays(cloud, None, curve)
+    w.session.start_evaluation()
+    qtbot.waitUntil(lambda: w.scene.evaluation is not None and not w.session.runner.running, timeout=60000)
+    paper = w.scene.scores().boundedness_curve
+    assert paper < 0.3  # the paper's boundedness: rays leave through the missing back
+    w.view.standard_view("xz")  # the camera on the -y side ... then typed: the sensor on +y
+    w.actions_by_name["viewpoint_camera"].trigger()
+    position = tuple(w.view.camera_state()["position"])
+    assert w.session.viewpoints == [pytest.approx(position)]
+    assert w.session.stale_reason() == "settings changed"
+    assert not w.viewpoints.set_text("0 1") and "three finite numbers" in w.dialogs[-1]
+    assert w.viewpoints.set_text("0 5 2")
+    w.session.start_evaluation()
+    qtbot.waitUntil(lambda: w.scene.evaluation is not None and not w.session.runner.running, timeout=60000)
+    assert w.scene.evaluation.scan.viewpoints == [[0.0, 5.0, 2.0]] and w.session.stale_reason() == ""
+    assert w.scene.scores().boundedness_curve >= 0.95  # issue 26's goal, through the window
+    w.actions_by_name["viewpoint_clear"].trigger()
+    assert w.session.viewpoints == [] and w.session.stale_reason() == "settings changed"
