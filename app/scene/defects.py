@@ -344,9 +344,9 @@ def defect_counts(ev: Any) -> dict[str, int]:
 
 
 def sound_line(ev: Any) -> str:
-    """"sound" when no defect warning (:data:`skelcore.trust.DEFECT_CODES`) was raised, as compare's
+    """"sound" when no defect warning (:data:`skelcore.diagnostics.trust.DEFECT_CODES`) was raised, as compare's
     "sound" column says, else "not sound: " and the codes."""
-    from skelcore.trust import defect_codes
+    from skelcore.diagnostics.trust import defect_codes
 
     codes = defect_codes(_warnings(ev)) if ev is not None else []
     return "sound" if not codes else "not sound: " + ", ".join(codes)
