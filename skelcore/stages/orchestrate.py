@@ -32,6 +32,7 @@ def evaluate(
     skeletal_index: np.ndarray | None = None,
     correspondence: str = "auto",
     reference_curve: CurveSkeleton | tuple | None = None,
+    reference_radius: np.ndarray | None = None,
     inputs: dict | None = None,
     workers: int | None = None,
     viewpoints=None,
@@ -52,7 +53,12 @@ def evaluate(
     curve : a :class:`CurveSkeleton` or a ``(vertices, edges)`` pair. With ``correspondence=
         "reverse"`` and no skeletal set, the cloud's projections onto its edges are scored as the
         skeletal set (topology, skeletal-style centeredness).
-    reference_curve : a ground-truth curve in the cloud's frame (needs ``curve``).
+    reference_curve : a ground-truth curve in the cloud's frame (needs ``curve``): the reference
+        comparison (``Evaluation.reference``) and the ground-truth metrics (``Evaluation.ground_truth``,
+        docs/metrics.md 5.3.1) in the cloud's units.
+    reference_radius : the reference's radius per vertex (the cloud's units); default its own
+        (``CurveSkeleton.radius``, read from PLY ``radius``, SWC, ...); where unknown, estimated from
+        the cloud.
     progress : ``progress(fraction, stage)``, called at checkpoints (throttled).
     cancel : returning True makes the next checkpoint raise :class:`Cancelled` (in whichever stage checks
         first when several run side by side).
@@ -76,7 +82,8 @@ def evaluate(
     """
     t_start = time.perf_counter()
     ctx = build_context(cloud, skeletal, curve, params, skeletal_index=skeletal_index,
-                        correspondence=correspondence, reference_curve=reference_curve, viewpoints=viewpoints,
+                        correspondence=correspondence, reference_curve=reference_curve,
+                        reference_radius=reference_radius, viewpoints=viewpoints,
                         remove_outliers=remove_outliers, cap_openings=cap_openings,
                         checkpoint=StageProgress({}, None, cancel).between("scan preparation"))
     stages = select(ctx)
