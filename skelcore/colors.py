@@ -17,6 +17,7 @@ __all__ = [
     "CLOUD_GREY",
     "SKELETAL_COLOR",
     "CURVE_COLOR",
+    "REFERENCE_COLOR",
     "PICK_COLOR",
     "SUPPORT_COLORS",
     "hex_color",
@@ -34,6 +35,9 @@ CLOUD_GREY: tuple[int, int, int] = (170, 170, 170)
 #: Uncoloured skeletal points and curve (no metric selected).
 SKELETAL_COLOR: tuple[int, int, int] = (31, 119, 180)
 CURVE_COLOR: tuple[int, int, int] = (214, 39, 40)
+#: A ground-truth (reference) curve, drawn as a thin line under the skeleton (issue 23): a grey darker
+#: than the cloud's, so it reads against the cloud and never as a skeleton colour.
+REFERENCE_COLOR: tuple[int, int, int] = (90, 90, 90)
 #: The colour map of the local metrics, over [0, 1], on screen and in exported files.
 METRIC_COLORMAP = "viridis"
 #: The picked element's marker: on neither colour map, not magenta, not a skeleton colour.

@@ -69,6 +69,7 @@ def _render_3d(arrays: dict[str, np.ndarray], view: str, size: tuple[int, int]) 
                       render_points_as_spheres=False)
         has_curve = "curve_vertices" in arrays and len(arrays.get("curve_edges", ())) > 0
         if view == "skeleton":
+            _add_reference(pl, arrays)
             if "skeletal" in arrays:
                 pl.add_points(np.asarray(arrays["skeletal"], float), color=_grey(colors.SKELETAL_COLOR), point_size=4)
             if has_curve:
@@ -89,6 +90,13 @@ def _render_3d(arrays: dict[str, np.ndarray], view: str, size: tuple[int, int]) 
     finally:
         pl.close()
     return _png(img)
+
+
+def _add_reference(pl: Any, arrays: dict[str, np.ndarray]) -> None:
+    """The shape's reference curve (issue 23), a thin grey line drawn before (under) the skeleton."""
+    if "reference_vertices" in arrays and len(arrays.get("reference_edges", ())):
+        pl.add_mesh(_lines(arrays["reference_vertices"], arrays["reference_edges"]),
+                    color=_grey(colors.REFERENCE_COLOR), line_width=1.5)
 
 
 def _bounds(pts: np.ndarray) -> list[float]:

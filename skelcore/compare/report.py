@@ -19,6 +19,7 @@ import numpy as np
 
 from ..io.atomic import atomic_open
 from ..scores import COLUMN, column_keys, format_score, paired_columns
+from ..colors import REFERENCE_COLOR, hex_color
 from ..trust import DEFECT_CODES
 from .leaderboard import Leaderboard
 from .profiles import Profile
@@ -136,6 +137,25 @@ def _scores_line(r: dict[str, Any]) -> str:
     return "<br>".join([items[0]] + [" ".join(items[i:i + 2]) for i in range(1, len(items), 2)])
 
 
+def _ground_truth_line(r: dict[str, Any]) -> str:
+    """The job's ground-truth scores (issue 23) under the paper's, when its shape has a reference."""
+    cols = [c for c in column_keys(group="ground truth", compared=True) if np.isfinite(float(r.get(c, math.nan)))]
+    if not cols:
+        return ""
+    items = [f"{COLUMN[c].short} {format_score(r[c], 0 if COLUMN[c].digits == 1 else COLUMN[c].digits)}" for c in cols]
+    return "<br><span class=gtline>ground truth: " + html.escape(", ".join(items)) + "</span>"
+
+
+def _reference_legend(rows: list[dict[str, Any]]) -> str:
+    """The legend entry of the reference line in the skeleton pictures, when a job has a reference."""
+    if not any(np.isfinite(float(r.get("gt_f1", math.nan))) for r in rows):
+        return ""
+    rgb = hex_color(REFERENCE_COLOR)
+    return (f" <span style='display:inline-block;width:24px;height:2px;background:{rgb};vertical-align:middle'>"
+            "</span> thin grey line: the reference (ground-truth) curve, drawn under the skeleton; \"ground truth\" "
+            "beside the pictures: its scores (docs/metrics.md 5.3.1).")
+
+
 def _warnings_html(store: Store, r: dict[str, Any]) -> str:
     """The job's warnings beside its pictures, defects first and in red (issue 22)."""
     doc = (store.get(r["key"]) or {}).get("evaluation") or {}
@@ -166,7 +186,7 @@ def _graphic_table(out_dir: str, rows: list[dict[str, Any]], store: Store, shape
                     continue
                 pngs = render_job(out_dir, r["key"], store.arrays(r["key"]))
                 imgs = "".join(f"<td>{_img(pngs[v].read_bytes(), f'{shape} {cond} {meth} {v}')}</td>" for v in VIEWS)
-                out.append(f"<tr>{head}{imgs}<td>{_scores_line(r)}{_warnings_html(store, r)}</td></tr>")
+                out.append(f"<tr>{head}{imgs}<td>{_scores_line(r)}{_ground_truth_line(r)}{_warnings_html(store, r)}</td></tr>")
         out.append("</table>")
     return "".join(out)
 
@@ -205,7 +225,7 @@ def write_report(out_dir: str | os.PathLike, rows: list[dict[str, Any]], board: 
     parts.append("<h2>Graphic table</h2><p class=note>Per shape and condition, for each method (first seed): the "
                  "skeleton (blue points, red curve) over the cloud, the H0 barcodes of the cloud and the skeleton "
                  "(eps* dashed), and the skeleton coloured by boundedness, centeredness and smoothness (viridis 0..1, "
-                 "magenta = invalid).</p>")
+                 "magenta = invalid)." + _reference_legend(rows) + "</p>")
     parts.append(_graphic_table(out_dir, rows, store, shapes, methods, conditions))
     parts.append(f"<script>{_SCRIPT}</script></body></html>\n")
     path = os.path.join(out_dir, "report.html")
