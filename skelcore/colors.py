@@ -17,6 +17,7 @@ __all__ = [
     "CLOUD_GREY",
     "SKELETAL_COLOR",
     "CURVE_COLOR",
+    "REFERENCE_COLOR",
     "PICK_COLOR",
     "SUPPORT_COLORS",
     "DEFECT_COLORS",
@@ -39,6 +40,9 @@ CURVE_COLOR: tuple[int, int, int] = (214, 39, 40)
 #: The skeleton in report.html's defect picture (skelcore/compare/render_defects.py), under the defects
 #: drawn in DEFECT_COLORS (below, the viewer's too): a neutral grey, darker than the cloud's.
 DEFECT_SKELETON: tuple[int, int, int] = (110, 110, 110)
+#: A ground-truth (reference) curve, drawn as a thin line under the skeleton (issue 23): a grey darker
+#: than the cloud's, so it reads against the cloud and never as a skeleton colour.
+REFERENCE_COLOR: tuple[int, int, int] = (90, 90, 90)
 #: The colour map of the local metrics, over [0, 1], on screen and in exported files.
 METRIC_COLORMAP = "viridis"
 #: The picked element's marker: on neither colour map, not magenta, not a skeleton colour.

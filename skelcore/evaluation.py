@@ -16,6 +16,7 @@ import numpy as np
 from .curve import CurveSkeleton
 from .geometry import Normalization
 from .metrics.coverage import Coverage
+from .metrics.ground_truth import GroundTruthComparison
 from .metrics.reference import ReferenceComparison
 from .metrics.topology import TopologyResult
 from .params import Params
@@ -120,6 +121,9 @@ class Evaluation:
     coverage_skeletal: Coverage | None = None
     coverage_curve: Coverage | None = None
     reference: ReferenceComparison | None = None
+    #: the ground-truth metrics against the reference (skelcore.metrics.ground_truth.GroundTruthComparison,
+    #: the inputs' units; docs/metrics.md 5.3.1)
+    ground_truth: GroundTruthComparison | None = None
     #: what could not be computed and why, e.g. {"topology": "..."}
     not_computed: dict[str, str] = field(default_factory=dict)
     #: the defects found without a reference (issue 22; skelcore.diagnostics.record.Diagnostics)

@@ -130,6 +130,16 @@ class Params:
     outlier_skeletal_radius : a skeletal point with fewer than outlier_min_neighbours other skeletal
         points within this many cloud spacings is a stray's image (contracted sets are dense: on the
         hammer and the apple tree every skeletal point has two within 1.7).
+
+    Ground truth (docs/metrics.md 5.3.1; given a reference curve; skelcore.metrics.ground_truth):
+
+    gt_thresholds, gt_threshold_max : precision / recall / F1 are averaged over the thresholds
+        k / gt_thresholds x gt_threshold_max local radii, k = 1..gt_thresholds.
+    gt_match_radii : junctions and endpoints match a reference node within this many of its radii.
+    gt_branch_radii : branch split / merge: a reference branch and one of ours are associated when at
+        least this many local radii of its length lie within this many local radii of ours.
+    gt_sample_step : both curves are sampled every this many x the reference's smallest radius.
+    gt_radius_k : where the reference has no radius, it is the median distance to this many cloud points.
     """
 
     normalize_by: Literal["longest_side", "diagonal"] = "longest_side"
@@ -206,6 +216,13 @@ class Params:
     outlier_radius: float = 10.0
     outlier_min_neighbours: int = 2
     outlier_skeletal_radius: float = 5.0
+    # ground truth (docs/metrics.md 5.3.1)
+    gt_thresholds: int = 20
+    gt_threshold_max: float = 1.0
+    gt_match_radii: float = 2.0
+    gt_branch_radii: float = 1.0
+    gt_sample_step: float = 0.1
+    gt_radius_k: int = 8
 
     def __post_init__(self) -> None:
         def bad(name: str, why: str) -> None:
@@ -281,6 +298,12 @@ class Params:
                 bad(name, "must be a positive integer")
         if int(self.open_k) < 3:
             bad("open_k", "must be at least 3")
+        for name in ("gt_threshold_max", "gt_match_radii", "gt_branch_radii", "gt_sample_step"):
+            if not float(getattr(self, name)) > 0:
+                bad(name, "must be > 0")
+        for name in ("gt_thresholds", "gt_radius_k"):
+            if int(getattr(self, name)) < 1:
+                bad(name, "must be a positive integer")
 
     def replace(self, **changes: Any) -> "Params":
         """A copy with some fields changed; an unknown name fails loudly."""

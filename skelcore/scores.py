@@ -6,7 +6,7 @@ from its ``Params`` unless given, SPEC 2-3) or read back from a stored ``evaluat
 (:meth:`Scores.from_json_dict`); both give equal records. ``None`` means not computed (no such input,
 no correspondence), NaN computed without a valid element (SPEC 5). Each field names where the
 document holds it; :data:`SCORE_COLUMNS` says how a score is labelled, rounded, ranked and grouped
-(paper, SkelScope's own, reference comparison, run facts). Adding a score is one field and one
+(paper, SkelScope's own, reference comparison, ground truth, diagnostics, run facts). Adding a score is one field and one
 column here (plus its value in the Evaluation and its JSON document).
 """
 
@@ -46,7 +46,7 @@ class ScoreColumn:
 
     ``key`` is the Scores field and the results.csv / leaderboard column; ``better`` "higher",
     "lower" or None (a fact, not ranked); ``digits`` the decimals shown (the leaderboard ranks on
-    them); ``group`` "paper", "skelscope", "reference" or "run"; ``metric`` / ``kind`` place a
+    them); ``group`` "paper", "skelscope", "reference", "ground truth", "diagnostics" or "run"; ``metric`` / ``kind`` place a
     per-representation score in the paper's table (row, column); ``count`` names the field with the
     number of elements it counted; ``detail`` a text shown after it, fields in braces; ``compared``
     makes it a column of ``skelcore compare`` (job records, results.csv, leaderboard, profiles).
@@ -101,6 +101,28 @@ SCORE_COLUMNS: tuple[ScoreColumn, ...] = (
     *_per_kind("boundedness", (r"$\mathcal{B}_{P_s}$", r"$\mathcal{B}_{G_s}$"), "fraction", short="bounded"),
     *_per_kind("centeredness", (r"$\mathcal{C}_s(P_s)$", r"$\mathcal{C}_s(G_s)$"), "fraction", short="centred"),
     *_per_kind("smoothness", (r"$S(P_s)$", r"$\mathfrak{S}_{G_s}$"), "mean in [0, 1]", short="smooth"),
+    # the ground-truth metrics against the reference (issue 23, docs/metrics.md 5.3.1): the cloud's units
+    # and local radii of the reference; the community's metrics, side by side with the paper's
+    ScoreColumn("gt_chamfer_radii", "chamfer (radii)", "CD r", r"CD$_r$", "local radii", "lower", 3, "ground truth",
+                compared=True),
+    ScoreColumn("gt_chamfer", "chamfer", "CD", "CD", "the cloud's units", "lower", 4, "ground truth", compared=True),
+    ScoreColumn("gt_precision", "precision", "P", "$P$", "fraction", "higher", 3, "ground truth", compared=True),
+    ScoreColumn("gt_recall", "recall", "R", "$R$", "fraction", "higher", 3, "ground truth", compared=True),
+    ScoreColumn("gt_f1", "F1", "F1", "$F_1$", "fraction", "higher", 3, "ground truth", compared=True),
+    ScoreColumn("gt_junction_precision", "junction precision", "J-P", "$J_P$", "fraction", "higher", 3, "ground truth",
+                compared=True),
+    ScoreColumn("gt_junction_recall", "junction recall", "J-R", "$J_R$", "fraction", "higher", 3, "ground truth",
+                compared=True),
+    ScoreColumn("gt_endpoint_precision", "endpoint precision", "E-P", "$E_P$", "fraction", "higher", 3, "ground truth",
+                compared=True),
+    ScoreColumn("gt_endpoint_recall", "endpoint recall", "E-R", "$E_R$", "fraction", "higher", 3, "ground truth",
+                compared=True),
+    ScoreColumn("gt_cycle_error", "|cycle count error|", "|dC|", r"$|\Delta C|$", "cycles", "lower", 1,
+                "ground truth", compared=True),
+    ScoreColumn("gt_length_ratio", "length ratio", "L/L*", "$L/L^*$", "ours / reference", None, 3, "ground truth",
+                compared=True),
+    ScoreColumn("gt_splits", "splits", "split", "splits", "count", "lower", 1, "ground truth", compared=True),
+    ScoreColumn("gt_merges", "merges", "merge", "merges", "count", "lower", 1, "ground truth", compared=True),
     # SkelScope's own (SPEC 8, docs/metrics.md 5)
     *_per_kind("coverage", (r"cov.\ $P_s$", r"cov.\ $G_s$"), "fraction of the cloud", group="skelscope", count=False,
                detail=_GAP, short="cover"),
@@ -218,6 +240,24 @@ class Scores:
     reference_endpoints: tuple[int, int] | None = _at("reference", "endpoints", read="pair")
     reference_components: tuple[int, int] | None = _at("reference", "components", read="pair")
     reference_cycles: tuple[int, int] | None = _at("reference", "cycles", read="pair")
+    # issue 23: the ground-truth metrics (docs/metrics.md 5.3.1); counts as (ours, reference[, matched])
+    gt_chamfer_radii: float | None = _at("ground_truth", "chamfer_radii")
+    gt_chamfer: float | None = _at("ground_truth", "chamfer")
+    gt_precision: float | None = _at("ground_truth", "precision")
+    gt_recall: float | None = _at("ground_truth", "recall")
+    gt_f1: float | None = _at("ground_truth", "f1")
+    gt_junction_precision: float | None = _at("ground_truth", "junction_precision")
+    gt_junction_recall: float | None = _at("ground_truth", "junction_recall")
+    gt_endpoint_precision: float | None = _at("ground_truth", "endpoint_precision")
+    gt_endpoint_recall: float | None = _at("ground_truth", "endpoint_recall")
+    gt_cycle_error: int | None = _at("ground_truth", "cycle_error", read="abs")
+    gt_length_ratio: float | None = _at("ground_truth", "length_ratio")
+    gt_splits: int | None = _at("ground_truth", "splits", read="int")
+    gt_merges: int | None = _at("ground_truth", "merges", read="int")
+    gt_junctions: tuple[int, ...] | None = _at("ground_truth", "junctions", read="tuple")
+    gt_endpoints: tuple[int, ...] | None = _at("ground_truth", "endpoints", read="tuple")
+    gt_cycles: tuple[int, ...] | None = _at("ground_truth", "cycles", read="tuple")
+    gt_radius_source: str | None = _at("ground_truth", "radius_source", read="str")
     # issue 22: the diagnostics (docs/diagnostics.md): share of the cloud explained, defects found
     completeness_skeletal: float | None = _at("diagnostics", "completeness", "skeletal", needs="skeletal")
     completeness_curve: float | None = _at("diagnostics", "completeness", "curve", needs="curve")
@@ -242,6 +282,7 @@ class Scores:
         doc = dict(ev.summary(b_star, c_star_))
         total = (ev.timings or {}).get("total")
         doc.update(reference=None if ev.reference is None else ev.reference.to_dict(),
+                   ground_truth=None if ev.ground_truth is None else ev.ground_truth.to_dict(),
                    diagnostics=None if ev.diagnostics is None else ev.diagnostics.to_dict(),
                    warnings=list(ev.warnings), params={"beta_star": b_star, "c_star": c_star_},
                    timings_s={} if total is None else {"total": round(float(total), 6)})
@@ -285,6 +326,12 @@ class Scores:
                 values[f.name] = int(value)
             elif meta["read"] == "pair":
                 values[f.name] = (int(value[0]), int(value[1]))
+            elif meta["read"] == "tuple":
+                values[f.name] = tuple(int(x) for x in value)
+            elif meta["read"] == "abs":
+                values[f.name] = abs(int(value))
+            elif meta["read"] == "str":
+                values[f.name] = str(value)
             else:
                 values[f.name] = _number(value)
         return cls(**values)

@@ -1,9 +1,10 @@
 """``make_benchmark``: write a suite's cases into a folder, resumably, refusing a folder that is not
 a benchmark (issue 23, item 1).
 
-The folder must be new, empty, or a benchmark of the same suite and seed (its ``.skelscope-bench``
-marker says so); anything else is one line naming it, unless ``force``, which (re)makes every case
-there and replaces files of the same names. A case is remade unless its record exists, matches its
+The folder must be new, empty, or a benchmark of the same suite, seed and generator (its
+``.skelscope-run`` marker of kind "bench" says so: :mod:`skelcore.compare.run_marker`, as for compare's
+runs); anything else is one line naming it, unless ``force``, which (re)makes every case there and
+replaces files of the same names. A case is remade unless its record exists, matches its
 spec and its two files are there, so an interrupted run resumes where it stopped. ``suite.json`` and
 ``compare.toml`` are rewritten at the end from the records. A crop case's reference is clipped to the
 kept half-space (the region scanned); every other case keeps the whole shape's skeleton (the object is
@@ -26,10 +27,13 @@ from .scan_effects import scan
 from .suite import GENERATOR_VERSION, Case, rng_for, suite_cases
 from .surface_sampling import SurfaceSampler
 from .tubes import BenchShape, reference_skeleton
-from .writer import (MARKER, cloud_path, read_json, record_path, reference_path, write_case_files, write_json,
-                     write_manifest)
+from ..compare.run_marker import claim_run_folder
+from .writer import cloud_path, read_json, record_path, reference_path, write_case_files, write_json, write_manifest
 
-__all__ = ["BenchResult", "make_benchmark", "clip_curve", "graph_summary"]
+__all__ = ["BenchResult", "make_benchmark", "clip_curve", "graph_summary", "KIND"]
+
+#: the kind of run a benchmark folder is (its ``.skelscope-run`` marker, :mod:`skelcore.compare.run_marker`)
+KIND = "bench"
 
 Progress = Callable[[int, int, str, str], None]
 
@@ -84,34 +88,11 @@ def graph_summary(vertices: np.ndarray, edges: np.ndarray, radius: np.ndarray) -
 
 
 def _claim(folder: Path, suite: str, seed: int, force: bool) -> tuple[bool, bool]:
-    """Make ``folder`` our benchmark or check that it is: (remake every case, it was ours before)."""
-    marker = {"skelscope_bench": 1, "suite": suite, "seed": int(seed), "generator": GENERATOR_VERSION}
-    if folder.exists() and not folder.is_dir():
-        raise SkelInputError("exists and is a file, not a benchmark folder", folder)
-    if not folder.exists():
-        try:
-            folder.mkdir(parents=True)
-        except OSError as exc:
-            raise SkelInputError(f"cannot create the benchmark folder: {exc.strerror or exc}", folder) from None
-    entries = os.listdir(folder)
-    remake, ours = force, False
-    if entries:
-        found = read_json(folder / MARKER)
-        if not isinstance(found, dict) or found.get("skelscope_bench") != 1:
-            if not force:
-                shown = ", ".join(sorted(entries)[:3]) + (", ..." if len(entries) > 3 else "")
-                raise SkelInputError(f"exists and is not a benchmark folder (no {MARKER} marker; it holds "
-                                     f"{shown}): choose a new folder, or pass --force to write into it", folder)
-        else:
-            ours = True
-        if ours and found != marker and not force:
-            raise SkelInputError(f"holds the {found.get('suite')!r} suite with seed {found.get('seed')} (generator "
-                                 f"{found.get('generator')}): choose another folder, or pass --force to remake it "
-                                 f"as the {suite!r} suite with seed {seed}", folder)
-    if not os.access(folder, os.W_OK | os.X_OK):
-        raise SkelInputError("benchmark folder is not writable", folder)
-    write_json(folder / MARKER, marker)
-    return remake, ours
+    """Make ``folder`` our benchmark or check that it is (:func:`skelcore.compare.run_marker.claim_run_folder`,
+    kind "bench", the suite, seed and generator in the marker): (remake every case, it was ours before)."""
+    details = {"suite": suite, "seed": int(seed), "generator": GENERATOR_VERSION}
+    claim = claim_run_folder(folder, KIND, force=force, details=details)
+    return force, claim.previous is not None
 
 
 def _remove_stale(folder: Path, names: set[str]) -> None:

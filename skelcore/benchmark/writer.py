@@ -7,8 +7,10 @@
   record is there and matches its spec is finished (resume);
 - ``suite.json``: every case's record; ``compare.toml``: a manifest for ``skelcore compare`` running
   the built-in skeletonizers on every case, with ``reference = "truth/{stem}_reference.ply"``;
-- ``.skelscope-bench``: the marker saying the folder is a benchmark (suite, seed, generator).
-Same inputs, same bytes: no dates, no absolute paths, keys in a fixed order.
+- ``.skelscope-run``: the marker saying the folder is a benchmark (kind "bench", suite, seed,
+  generator; written by :func:`skelcore.compare.run_marker.claim_run_folder`).
+Same inputs, same bytes (the marker aside, which records when the folder was made): no dates, no
+absolute paths, keys in a fixed order.
 """
 
 from __future__ import annotations
@@ -22,11 +24,8 @@ import numpy as np
 from ..io import write_curve_ply, write_points_ply
 from ..io.atomic import atomic_open
 
-__all__ = ["MARKER", "cloud_path", "reference_path", "record_path", "write_case_files", "write_json",
+__all__ = ["cloud_path", "reference_path", "record_path", "write_case_files", "write_json",
            "write_manifest", "read_json"]
-
-MARKER = ".skelscope-bench"
-
 
 def cloud_path(folder: Path, case: str) -> Path:
     return folder / "clouds" / f"{case}.ply"

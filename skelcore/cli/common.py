@@ -10,9 +10,9 @@ import sys
 from ..errors import SkelInputError
 from ..params import Params
 from ..display.summary_table import format_defects, format_table  # re-exported: the CLI's tables
-from ..scores import Scores
+from ..scores import Scores, format_score
 
-__all__ = ["format_table", "format_defects", "format_reference", "print_warnings", "stderr_progress", "params_from_args",
+__all__ = ["format_table", "format_defects", "format_reference", "format_ground_truth", "print_warnings", "stderr_progress", "params_from_args",
            "positive_int", "positive_float", "nonnegative_float", "clear_progress_line"]
 
 
@@ -25,6 +25,34 @@ def format_reference(scores: Scores | dict) -> str:
             f"precision {s.text('reference_precision')}, recall {s.text('reference_recall')}, "
             f"F1 {s.text('reference_f1')} (within tau = {s.text('reference_tau')})\n"
             f"  graph (ours/reference): {counts}")
+
+
+def format_ground_truth(block: dict) -> str:
+    """The "ground truth" block under the paper's table (issue 23, docs/metrics.md 5.3.1): the
+    ``ground_truth`` block of the ``--json`` document (``GroundTruthComparison.to_dict()``)."""
+    s = Scores.from_json_dict({"ground_truth": block})
+    b = block
+    source = {"reference": "the reference's file", "cloud": "estimated from the cloud",
+              "reference+cloud": "the reference's file, estimated from the cloud where unknown"}.get(
+        b["radius_source"], b["radius_source"])
+
+    def node(kind: str) -> str:
+        ours, ref, matched = b[f"{kind}s"]
+        return (f"{kind}s P {s.text(f'gt_{kind}_precision')} R {s.text(f'gt_{kind}_recall')} "
+                f"(ours {ours}, reference {ref}, matched {matched})")
+
+    thresholds = b["thresholds"]
+    return "\n".join([
+        f"ground truth (local radius r: {source}):",
+        f"  chamfer {s.text('gt_chamfer')} = {s.text('gt_chamfer_radii')} r (ours -> reference "
+        f"{format_score(b['chamfer_to_reference'], 4)}, reference -> ours {format_score(b['chamfer_from_reference'], 4)})",
+        f"  precision {s.text('gt_precision')}, recall {s.text('gt_recall')}, F1 {s.text('gt_f1')} (mean over "
+        f"{len(thresholds)} thresholds {thresholds[0]:g}..{thresholds[-1]:g} r)",
+        f"  {node('junction')}; {node('endpoint')}; within {b['match_radii']:g} r",
+        f"  cycles {b['cycles'][0]} / {b['cycles'][1]} (error {b['cycle_error']:+d}); length ratio "
+        f"{s.text('gt_length_ratio')}; branches {b['branches'][0]} / {b['branches'][1]}: {b['splits']} split(s), "
+        f"{b['merges']} merge(s)",
+    ])
 
 
 def print_warnings(warnings: list[dict]) -> None:

@@ -1,5 +1,5 @@
 """``skelcore evaluate``: score a skeleton against its cloud and print the paper's table, SkelScope's
-coverage row, the reference comparison and the trust warnings (exit 3 on a warning with --strict)."""
+coverage row, the reference comparison, the "ground truth" block and the trust warnings (exit 3 on a warning with --strict)."""
 
 from __future__ import annotations
 
@@ -10,7 +10,7 @@ import numpy as np
 
 from ..errors import SkelInputError
 from ..skeleton_mapping import map_skeleton
-from .common import (clear_progress_line, format_defects, format_reference, format_table, params_from_args, positive_float,
+from .common import (clear_progress_line, format_defects, format_ground_truth, format_reference, format_table, params_from_args, positive_float,
                      print_warnings, stderr_progress)
 
 __all__ = ["register", "run_evaluate", "EXIT_WARNINGS"]
@@ -37,7 +37,9 @@ def register(sub: argparse._SubParsersAction) -> None:
                    help="reverse: map every cloud point to its nearest skeletal point (or, with only --curve, "
                    "its nearest point on the curve) and score that pointwise set (default auto)")
     p.add_argument("--curve", metavar="F", help="curve skeleton (PLY with edges, OBJ, CG, SWC, polylines, PyGEL .graph, JSON/NPZ)")
-    p.add_argument("--reference-curve", metavar="F", help="ground-truth curve skeleton to compare --curve with")
+    p.add_argument("--reference-curve", metavar="F",
+                   help="ground-truth curve skeleton to compare --curve with (in the cloud's frame; its vertex radius "
+                   "when the file has one, else estimated from the cloud): prints a \"ground truth\" block")
     p.add_argument("--skeleton-scale", type=positive_float, metavar="S", default=1.0,
                    help="multiply skeletal and curve coordinates by S (e.g. voxel size) ...")
     p.add_argument("--skeleton-offset", type=float, nargs=3, metavar=("X", "Y", "Z"), default=(0.0, 0.0, 0.0),
@@ -162,6 +164,8 @@ def run_evaluate(args: argparse.Namespace) -> int:
     print(format_table(scores))
     if ev.reference is not None:
         print(format_reference(scores))
+    if ev.ground_truth is not None:
+        print(format_ground_truth(ev.ground_truth.to_dict()))
     corr = f"correspondence: {ev.correspondence}; " if ev.correspondence else ""
     print(f"{corr}boundedness estimator: {params.boundedness_method}; total {ev.timings['total']:.2f} s")
     print(format_defects(ev.warning_dicts()))

@@ -61,6 +61,7 @@ class JobOutput:
     evaluation: Any  # skelcore.evaluation.Evaluation
     timings: dict[str, float] = field(default_factory=dict)
     files: dict[str, str] = field(default_factory=dict)
+    reference: CurveSkeleton | None = None  # the shape's ground-truth curve (issue 23)
 
 
 _digests: dict[tuple[str, float, int], str] = {}
@@ -97,6 +98,8 @@ def _job_key(job: Job) -> str:
            "condition": job.condition.to_dict(), "seed": job.seed, "params": job.params.to_dict()}
     if job.shape.viewpoints:  # only then: the keys of runs without viewpoints stay as they were
         doc["viewpoints"] = [list(v) for v in job.shape.viewpoints]
+    if job.shape.reference:  # likewise: the reference's bytes (issue 23)
+        doc["reference"] = file_digest(job.shape.reference)
     text = json.dumps(doc, sort_keys=True, default=str)
     return hashlib.sha256(text.encode()).hexdigest()[:24]
 
@@ -179,10 +182,19 @@ def execute(job: Job, workdir: str | None = None, *, prefix: str = "", write_clo
     viewpoints = job.shape.viewpoints or _pcd_viewpoints(job.shape.path)
     if viewpoints:
         kwargs["viewpoints"] = np.asarray(viewpoints, dtype=float)
+    inputs_doc = {"cloud": files.get("cloud")}
+    reference = None
+    if job.shape.reference:
+        from .references import load_reference
+
+        reference = load_reference(job.shape.reference)
+        if curve is not None:  # the ground-truth metrics compare curves (docs/metrics.md 5.3.1)
+            kwargs["reference_curve"] = reference
+            inputs_doc["reference_curve"] = job.shape.reference
     ev = evaluate(pts, skeletal, curve, job.params, progress=part(0.5, 1.0), cancel=cancel,
-                  inputs={"cloud": files.get("cloud")}, **kwargs)
+                  inputs=inputs_doc, **kwargs)
     timings["evaluate"] = time.perf_counter() - t0
-    return JobOutput(pts, skeletal, curve, ev, timings, files)
+    return JobOutput(pts, skeletal, curve, ev, timings, files, reference)
 
 
 # ---- the worker's entry point -------------------------------------------------------------------
@@ -202,14 +214,17 @@ def scores_from_doc(doc: dict[str, Any] | None) -> dict[str, float]:
     return Scores.from_json_dict(doc).flat(SCORE_COLUMNS)
 
 
-def _arrays(ev: Any) -> dict[str, np.ndarray]:
+def _arrays(ev: Any, reference: CurveSkeleton | None = None) -> dict[str, np.ndarray]:
     """The local values the report draws (:func:`skelcore.display.picture_arrays.drawing_arrays`: float32
-    coordinates, NaN kept), and the whole evaluation at full precision for the viewer
-    (:mod:`skelcore.io.evaluation_files`)."""
+    coordinates, NaN kept), the shape's reference curve (drawn under the skeleton), and the whole
+    evaluation at full precision for the viewer (:mod:`skelcore.io.evaluation_files`)."""
     from ..display.picture_arrays import drawing_arrays
     from ..io.evaluation_files import evaluation_arrays
 
     out = drawing_arrays(ev)
+    if reference is not None:
+        out.update(reference_vertices=np.asarray(reference.vertices, np.float32),
+                   reference_edges=np.asarray(reference.edges, np.int32))
     out.update(evaluation_arrays(ev))
     return out
 
@@ -234,7 +249,7 @@ def run_job(job: Job) -> dict[str, Any]:
         doc = out.evaluation.to_json_dict()
         doc["inputs"]["cloud"]["path"] = job.shape.path
         rec.update(status="ok", evaluation=doc, timings=out.timings, n_points=int(len(out.points)),
-                   label=job.condition.label(len(out.points)), arrays=_arrays(out.evaluation))
+                   label=job.condition.label(len(out.points)), arrays=_arrays(out.evaluation, out.reference))
     except (SkelInputError, Cancelled) as exc:
         rec["error"] = one_line(exc)
     except MemoryError:

@@ -185,6 +185,6 @@ def build_leaderboard(rows: list[dict[str, Any]], profiles: tuple[Profile, ...],
         for c in COLUMNS:
             clean = [math.nan if e.tainted[c] else e.mean[c] for e in group]
             for e, r in zip(group, _ranks(clean, c in LOWER_IS_BETTER, COLUMN[c].digits)):
-                e.rank[c] = r if len(group) > 1 else None
+                e.rank[c] = r if len(group) > 1 and COLUMN[c].better else None  # a fact (length ratio): unranked
         entries += group
     return Leaderboard(entries, profiles)

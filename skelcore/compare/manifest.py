@@ -34,7 +34,7 @@ __all__ = ["ShapeSpec", "MethodSpec", "ConditionSpec", "Manifest", "load_manifes
 
 _KEYS = {
     "top": {"evaluation", "shapes", "methods", "conditions", "seeds"},
-    "shapes": {"path", "name", "suffix", "viewpoint"},
+    "shapes": {"path", "name", "suffix", "viewpoint", "reference", "tree"},
     "builtin": {"name", "kind", "method", "params"},
     "command": {"name", "kind", "command", "timeout", "correspondence"},
     "files": {"name", "kind", "curve", "skeletal", "skeletal_index", "correspondence", "scale", "offset"},
@@ -49,11 +49,15 @@ _PLACEHOLDER_RE = re.compile("|".join(re.escape(p) for p in _PLACEHOLDERS))
 class ShapeSpec:
     """One input cloud, named by its file stem less the entry's ``suffix`` ("_cloud"), or by the
     entry's ``name`` for a single file; ``viewpoints``: the sensor positions of a one-sided scan
-    (``viewpoint = [x, y, z]`` or a list of them; docs/metrics.md 6.3)."""
+    (``viewpoint = [x, y, z]`` or a list of them; docs/metrics.md 6.3); ``reference``: its
+    ground-truth curve skeleton (``reference = "truth/{stem}.ply"``, the shape's name for ``{stem}``;
+    issue 23), ``tree``: the shape is declared a tree (its reference may have no cycle)."""
 
     name: str
     path: str
     viewpoints: tuple[tuple[float, float, float], ...] = ()
+    reference: str | None = None
+    tree: bool = False
 
 
 @dataclass(frozen=True)
@@ -175,7 +179,7 @@ def parse_manifest(doc: dict[str, Any], path: str) -> Manifest:
 
     unknown("top level", doc, _KEYS["top"])
     params = _evaluation(doc.get("evaluation", {}), fail)
-    shapes = _shapes(doc.get("shapes"), base, fail, unknown)
+    shapes = _shapes(doc.get("shapes"), base, fail, unknown, params)
     methods = _methods(doc.get("methods"), base, shapes, fail, unknown)
     conditions = _conditions(doc.get("conditions", [{"name": "normal"}]), fail, unknown)
     seeds = _seeds(doc.get("seeds", [0]), "seeds", fail)
@@ -219,7 +223,7 @@ def _name(entry: dict, where: str, fail) -> str:
     return name
 
 
-def _shapes(value: Any, base: Path, fail, unknown) -> tuple[ShapeSpec, ...]:
+def _shapes(value: Any, base: Path, fail, unknown, params: Params = Params()) -> tuple[ShapeSpec, ...]:
     out: dict[str, ShapeSpec] = {}
     for i, entry in enumerate(_list_of_tables(value, "shapes", fail)):
         where = f"shapes[{i}]"
@@ -242,6 +246,11 @@ def _shapes(value: Any, base: Path, fail, unknown) -> tuple[ShapeSpec, ...]:
         if not isinstance(suffix, str):
             fail(f"{where}: suffix must be a string (cut from the end of each file stem)")
         viewpoints = _viewpoints(entry.get("viewpoint"), where, fail)
+        reference, tree = entry.get("reference"), entry.get("tree", False)
+        if reference is not None and (not isinstance(reference, str) or not reference):
+            fail(f"{where}: reference must be a file path or a template with {{stem}}, e.g. \"truth/{{stem}}.ply\"")
+        if not isinstance(tree, bool):
+            fail(f"{where}: tree must be true or false")
         for m in matches:
             stem = Path(m).stem
             if suffix and stem.endswith(suffix) and stem != suffix:
@@ -251,7 +260,16 @@ def _shapes(value: Any, base: Path, fail, unknown) -> tuple[ShapeSpec, ...]:
                 fail(f"{where}: name must be a non-empty string")
             if name in out and out[name].path != m:
                 fail(f"{where}: two shapes are named {name!r} ({out[name].path} and {m})")
-            out[name] = ShapeSpec(name, m, viewpoints)
+            ref = None
+            if reference is not None:
+                from .references import expand_reference, reference_problem
+
+                ref = expand_reference(reference, name, base)
+                problem = reference_problem(ref, m, tree=tree, params=params,
+                                            shown=reference.replace("{stem}", name))
+                if problem:
+                    fail(f"{where} ({name!r}): {problem}")
+            out[name] = ShapeSpec(name, m, viewpoints, ref, tree)
     return tuple(out.values())
 
 

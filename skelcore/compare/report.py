@@ -19,6 +19,7 @@ import numpy as np
 
 from ..io.atomic import atomic_open
 from ..scores import COLUMN, column_keys, format_score, paired_columns
+from ..colors import REFERENCE_COLOR, hex_color
 from ..diagnostics.trust import DEFECT_CODES
 from .leaderboard import Leaderboard
 from .leaderboard_html import LEADERBOARD_CSS, leaderboard_html
@@ -119,6 +120,25 @@ def _scores_line(r: dict[str, Any]) -> str:
     return "<br>".join([items[0]] + [" ".join(items[i:i + 2]) for i in range(1, len(items), 2)])
 
 
+def _ground_truth_line(r: dict[str, Any]) -> str:
+    """The job's ground-truth scores (issue 23) under the paper's, when its shape has a reference."""
+    cols = [c for c in column_keys(group="ground truth", compared=True) if np.isfinite(float(r.get(c, math.nan)))]
+    if not cols:
+        return ""
+    items = [f"{COLUMN[c].short} {format_score(r[c], 0 if COLUMN[c].digits == 1 else COLUMN[c].digits)}" for c in cols]
+    return "<br><span class=gtline>ground truth: " + html.escape(", ".join(items)) + "</span>"
+
+
+def _reference_legend(rows: list[dict[str, Any]]) -> str:
+    """The legend entry of the reference line in the skeleton pictures, when a job has a reference."""
+    if not any(np.isfinite(float(r.get("gt_f1", math.nan))) for r in rows):
+        return ""
+    rgb = hex_color(REFERENCE_COLOR)
+    return (f" <span style='display:inline-block;width:24px;height:2px;background:{rgb};vertical-align:middle'>"
+            "</span> thin grey line: the reference (ground-truth) curve, drawn under the skeleton; \"ground truth\" "
+            "beside the pictures: its scores (docs/metrics.md 5.3.1).")
+
+
 def _warnings_html(store: Store, r: dict[str, Any]) -> str:
     """The job's warnings beside its pictures, defects first and in red (issue 22)."""
     doc = (store.get(r["key"]) or {}).get("evaluation") or {}
@@ -159,7 +179,7 @@ def _graphic_table(out_dir: str, rows: list[dict[str, Any]], store: Store, shape
                 pngs = render_job(out_dir, r["key"], arrays)
                 imgs = "".join(f"<td>{_img(pngs[v].read_bytes(), f'{shape} {cond} {meth} {v}')}</td>" for v in VIEWS)
                 imgs += _defects_cell(out_dir, store, r, arrays, f"{shape} {cond} {meth} {DEFECT_VIEW}")
-                out.append(f"<tr>{head}{imgs}<td>{_scores_line(r)}{_warnings_html(store, r)}</td></tr>")
+                out.append(f"<tr>{head}{imgs}<td>{_scores_line(r)}{_ground_truth_line(r)}{_warnings_html(store, r)}</td></tr>")
         out.append("</table>")
     return "".join(out)
 
@@ -199,7 +219,7 @@ def write_report(out_dir: str | os.PathLike, rows: list[dict[str, Any]], board: 
                  "skeleton (blue points, red curve) over the cloud, the H0 barcodes of the cloud and the skeleton "
                  "(eps* dashed), the skeleton coloured by boundedness, centeredness and smoothness (viridis 0..1, "
                  "magenta = invalid), and its defects: only those it was warned of, each in a colour of its own "
-                 "(legend under the picture) on the skeleton in grey.</p>")
+                 "(legend under the picture) on the skeleton in grey." + _reference_legend(rows) + "</p>")
     parts.append(_graphic_table(out_dir, rows, store, shapes, methods, conditions))
     parts.append(f"<script>{_SCRIPT}</script></body></html>\n")
     path = os.path.join(out_dir, "report.html")

@@ -51,7 +51,8 @@ def run_compare(manifest_path: str | os.PathLike, out_dir: str | os.PathLike, ba
     """
     manifest = load_manifest(manifest_path)
     profiles = load_profiles(profiles_path)
-    inputs = tuple(s.path for s in manifest.shapes) + (manifest.path,)
+    inputs = tuple(s.path for s in manifest.shapes) + tuple(s.reference for s in manifest.shapes if s.reference) + (
+        manifest.path,)  # never written over
     jobs = make_jobs(manifest)
     claim_run_folder(out_dir, "compare", force=force, manifest=manifest.path, inputs=inputs)
     store = Store(out_dir, inputs=inputs)

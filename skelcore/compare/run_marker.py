@@ -5,14 +5,16 @@ so that a command never writes into a user's folder (issue 24).
 :func:`claim_run_folder` once, after checking their inputs and before writing anything:
 
 - DIR does not exist, or is an empty folder: it becomes a run (the marker is written);
-- DIR holds our marker of the same kind: the run is resumed (the marker is left as it was);
+- DIR holds our marker of the same kind (and the same ``details``, when the caller gives them: a
+  benchmark's suite, seed and generator): the run is resumed (the marker is left as it was);
 - anything else (a user's folder with a ``results.csv`` and notes, another kind of run, a run made
   by a skelcore older than the marker, an unreadable marker): refused with one line, unless
   ``force``, which writes the marker so that later runs resume without it.
 
 A run is recognised by the marker only, never by its file names: a folder that merely holds an
 ``index.json`` and a ``jobs/`` may be anyone's. The marker is JSON: ``skelscope_run`` (format
-version), ``kind``, ``skelcore`` (the version that created it), ``manifest`` and ``created`` (UTC).
+version), ``kind``, ``skelcore`` (the version that created it), ``manifest``, ``created`` (UTC) and the caller's
+``details``.
 """
 
 from __future__ import annotations
@@ -32,16 +34,20 @@ __all__ = ["MARKER", "MARKER_FORMAT", "RunClaim", "read_marker", "is_run_folder"
 
 MARKER = ".skelscope-run"
 MARKER_FORMAT = 1
+#: the marker ``skelcore bench make`` wrote before it used this one
+LEGACY_BENCH_MARKER = ".skelscope-bench"
 
 
 @dataclass(frozen=True)
 class RunClaim:
     """What :func:`claim_run_folder` found: ``state`` is "created" (new or empty folder), "resumed"
-    (our marker was there) or "forced" (written into a folder that was not a run, with ``force``)."""
+    (our marker was there) or "forced" (written into a folder that was not a run, or a run of other
+    ``details``, with ``force``); ``previous``: the marker of this kind that was there, else None."""
 
     path: Path
     state: str
     marker: dict[str, Any]
+    previous: dict[str, Any] | None = None
 
 
 def read_marker(folder: str | os.PathLike) -> dict[str, Any] | None:
@@ -62,10 +68,11 @@ def is_run_folder(folder: str | os.PathLike, kind: str | None = None) -> bool:
     return doc is not None and (kind is None or doc.get("kind") == kind)
 
 
-def _write_marker(folder: Path, kind: str, manifest: str | os.PathLike | None, inputs: Iterable[str]) -> dict[str, Any]:
+def _write_marker(folder: Path, kind: str, manifest: str | os.PathLike | None, inputs: Iterable[str],
+                  details: dict[str, Any] | None = None) -> dict[str, Any]:
     doc = {"skelscope_run": MARKER_FORMAT, "kind": kind, "skelcore": __version__,
            "manifest": None if manifest is None else os.path.abspath(os.fspath(manifest)),
-           "created": time.strftime("%Y-%m-%dT%H:%M:%SZ", time.gmtime())}
+           "created": time.strftime("%Y-%m-%dT%H:%M:%SZ", time.gmtime()), **(details or {})}
     with atomic_open(folder / MARKER, "w", inputs=tuple(inputs)) as fh:
         json.dump(doc, fh, indent=1)
         fh.write("\n")
@@ -74,7 +81,8 @@ def _write_marker(folder: Path, kind: str, manifest: str | os.PathLike | None, i
 
 def _refusal(folder: Path, kind: str, entries: list[str]) -> str:
     """One line: why ``folder`` is not a run of ``kind``, and what to do."""
-    replace = "choose a new --out, or pass --force to write into it (files of the same names are replaced)"
+    where = "a new --out" if kind == "compare" else "a new folder"
+    replace = f"choose {where}, or pass --force to write into it (files of the same names are replaced)"
     if (folder / MARKER).exists():
         doc = read_marker(folder)
         if doc is None:
@@ -83,14 +91,23 @@ def _refusal(folder: Path, kind: str, entries: list[str]) -> str:
     if kind == "compare" and "index.json" in entries and "jobs" in entries:
         return (f"looks like a {kind} run made before skelcore marked its runs (no {MARKER}): if it is "
                 "yours, pass --force once to resume it")
+    if kind == "bench" and LEGACY_BENCH_MARKER in entries:
+        return (f"looks like a benchmark made before skelcore marked its runs with {MARKER}: if it is yours, "
+                "pass --force once to remake it")
     shown = ", ".join(repr(e) for e in sorted(entries)[:3]) + (", ..." if len(entries) > 3 else "")
     return f"exists and is not a skelcore {kind} run (no {MARKER} marker; it holds {shown}): {replace}"
 
 
+def _describe(details: dict[str, Any]) -> str:
+    return ", ".join(f"{k} {v!r}" for k, v in details.items())
+
+
 def claim_run_folder(folder: str | os.PathLike, kind: str, *, force: bool = False,
-                     manifest: str | os.PathLike | None = None, inputs: Iterable[str] = ()) -> RunClaim:
+                     manifest: str | os.PathLike | None = None, inputs: Iterable[str] = (),
+                     details: dict[str, Any] | None = None) -> RunClaim:
     """Make ``folder`` a run of ``kind`` or resume it; a one-line SkelInputError (naming the folder)
-    when it is someone else's and ``force`` is False. Call it before writing anything there."""
+    when it is someone else's, or our run of ``kind`` with other ``details`` (kept in the marker), and
+    ``force`` is False. Call it before writing anything there."""
     p = Path(folder)
     if p.exists() and not p.is_dir():
         raise SkelInputError("output folder exists and is a file, not a folder", p)
@@ -105,15 +122,22 @@ def claim_run_folder(folder: str | os.PathLike, kind: str, *, force: bool = Fals
             entries = os.listdir(p)
         except OSError as exc:
             raise SkelInputError(f"cannot read the output folder: {exc.strerror or exc}", p) from None
+    previous = None
     if not entries:
         state = "created"
     else:
         doc = read_marker(p)
         if doc is not None and doc.get("kind") == kind:
-            return RunClaim(p, "resumed", doc)
-        if not force:
+            previous = doc
+            found = {k: doc.get(k) for k in (details or {})}
+            if found == dict(details or {}):
+                return RunClaim(p, "resumed", doc, doc)
+            if not force:
+                raise SkelInputError(f"holds a {kind} run of {_describe(found)}, not of {_describe(details or {})}: "
+                                     "choose a new folder, or pass --force to remake it", p)
+        elif not force:
             raise SkelInputError(_refusal(p, kind, entries), p)
         state = "forced"
     if not os.access(p, os.W_OK | os.X_OK):
         raise SkelInputError("output folder is not writable", p)
-    return RunClaim(p, state, _write_marker(p, kind, manifest, inputs))
+    return RunClaim(p, state, _write_marker(p, kind, manifest, inputs, details), previous)

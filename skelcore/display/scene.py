@@ -98,6 +98,10 @@ def add_scene(pl: Any, arrays: dict[str, np.ndarray], view: str, *, prefer: str 
                   render_points_as_spheres=False, reset_camera=False)
     has_curve = "curve_vertices" in arrays and len(arrays.get("curve_edges", ())) > 0
     if view == SKELETON_VIEW:
+        if "reference_vertices" in arrays and len(arrays.get("reference_edges", ())):
+            # the shape's ground-truth curve (issue 23): a thin grey line, drawn before (under) the skeleton
+            pl.add_mesh(_lines(arrays["reference_vertices"], arrays["reference_edges"]),
+                        color=_unit(colors.REFERENCE_COLOR), line_width=1.5, reset_camera=False)
         if "skeletal" in arrays:
             pl.add_points(np.asarray(arrays["skeletal"], float), color=_unit(colors.SKELETAL_COLOR), point_size=4,
                           reset_camera=False)

@@ -2,7 +2,7 @@
 here into an equal Evaluation.
 
 - ``to_json_dict`` / ``write_json``: the ``evaluate --json`` document (scores, counts, params, inputs,
-  warnings, coverage, reference, timings, the real-scan report; SPEC 5), also each compare job's
+  warnings, coverage, reference, ground truth, timings, the real-scan report; SPEC 5), also each compare job's
   ``evaluation`` record.
 - ``write_per_point``, ``cloud_columns``, ``write_barcodes``: the CSVs (NaN written ``nan``).
 - ``evaluation_arrays``: what the document lacks, for an npz (compare's ``jobs/KEY.npz``): the cloud,
@@ -32,6 +32,7 @@ from ..errors import SkelInputError
 from ..evaluation import CurveLocal, Evaluation, SkeletalLocal
 from ..geometry import Normalization
 from ..metrics.coverage import Coverage
+from ..metrics.ground_truth import GroundTruthComparison
 from ..metrics.reference import ReferenceComparison
 from ..metrics.topology import TopologyResult
 from ..params import Params
@@ -91,6 +92,7 @@ def to_json_dict(ev: Evaluation, version: str | None = None) -> dict[str, Any]:
         "warnings": ev.warning_dicts(),
         "coverage": summ["coverage"],
         "reference": None if ev.reference is None else ev.reference.to_dict(),
+        "ground_truth": None if ev.ground_truth is None else ev.ground_truth.to_dict(),
         "diagnostics": None if ev.diagnostics is None else ev.diagnostics.to_dict(),
         "timings_s": {k: round(float(v), 6) for k, v in ev.timings.items()},
     }
@@ -333,6 +335,8 @@ def evaluation_from_store(doc: dict[str, Any], arrays: dict[str, np.ndarray], wh
                 max_gap=json_float(block.get("max_gap")), tau=json_float(cov_doc.get("tau")),
                 slack=json_float(cov_doc.get("slack")), n_elements=int(a[f"ev_coverage_{kind}_n"][0])))
     ev.reference = _reference(doc.get("reference"))
+    if isinstance(doc.get("ground_truth"), dict):
+        ev.ground_truth = GroundTruthComparison.from_dict(doc["ground_truth"])
     if doc.get("diagnostics") is not None:
         from ..diagnostics.record import Diagnostics
 

@@ -15,7 +15,7 @@ counts (branches: maximal chains through degree-2 vertices).
 
 from __future__ import annotations
 
-from dataclasses import asdict, dataclass
+from dataclasses import asdict, dataclass, replace
 
 import numpy as np
 from scipy.optimize import linear_sum_assignment
@@ -29,15 +29,15 @@ from ..errors import SkelInputError
 from .reference import graph_counts
 
 __all__ = ["GroundTruthParams", "GroundTruthComparison", "compare_with_ground_truth", "curve_samples",
-           "branch_labels", "match_nodes", "radius_from_cloud"]
+           "branch_labels", "match_nodes", "radius_from_cloud", "reference_radius", "ground_truth"]
 
 _MAX_SAMPLES = 200_000
 
 
 @dataclass(frozen=True)
 class GroundTruthParams:
-    """The metrics' constants (docs/metrics.md 5.3.1); they join :class:`skelcore.Params` when the
-    metrics join ``evaluate``.
+    """The metrics' constants (docs/metrics.md 5.3.1); ``evaluate`` takes them from
+    :class:`skelcore.Params`' ``gt_`` fields (:meth:`from_params`).
 
     thresholds, threshold_max : precision / recall / F1 are averaged over the thresholds
         k / thresholds x threshold_max local radii, k = 1..thresholds.
@@ -62,6 +62,11 @@ class GroundTruthParams:
         for name in ("thresholds", "radius_k"):
             if int(getattr(self, name)) < 1:
                 raise ValueError(f"ground-truth parameter {name}={getattr(self, name)!r}: must be a positive integer")
+
+    @classmethod
+    def from_params(cls, params) -> "GroundTruthParams":
+        """The ``gt_`` fields of a :class:`skelcore.Params`."""
+        return cls(**{f: getattr(params, f"gt_{f}") for f in cls.__dataclass_fields__})
 
 
 @dataclass(frozen=True)
@@ -97,6 +102,19 @@ class GroundTruthComparison:
     def to_dict(self) -> dict:
         d = asdict(self)
         return {k: list(v) if isinstance(v, tuple) else v for k, v in d.items()}
+
+    @classmethod
+    def from_dict(cls, d: dict) -> "GroundTruthComparison":
+        """The inverse of :meth:`to_dict` (lists back to tuples; JSON's null back to NaN)."""
+        out = {}
+        for name, f in cls.__dataclass_fields__.items():
+            v = d[name]
+            if isinstance(v, list):
+                v = tuple(v)
+            elif v is None or (isinstance(v, str) and f.type == "float"):
+                v = {"inf": float("inf"), "-inf": float("-inf")}.get(v, float("nan"))
+            out[name] = v
+        return cls(**out)
 
 
 def curve_samples(curve: CurveSkeleton, step: float, radius: np.ndarray | None = None):
@@ -284,3 +302,34 @@ def _splits_merges(curve, reference, radius, reach, ref_samples, our_pts, our_ed
     assoc = overlap >= reach * mean_r[:, None]
     per_b, per_c = assoc.sum(axis=1), assoc.sum(axis=0)
     return int(np.maximum(per_b - 1, 0).sum()), int(np.maximum(per_c - 1, 0).sum()), (n_o, n_r)
+
+
+def reference_radius(reference: CurveSkeleton, given: np.ndarray | None, cloud: np.ndarray | None,
+                     k: int) -> tuple[np.ndarray | None, str]:
+    """The reference's radius per vertex and where it came from: ``given`` (its file's radius) where
+    finite and > 0, the cloud's estimate (:func:`radius_from_cloud`) elsewhere; "reference", "cloud"
+    or "reference+cloud". (None, "") when neither is there."""
+    r = None if given is None else np.asarray(given, float).ravel().copy()
+    if r is not None and r.shape != (reference.n_vertices,):
+        raise SkelInputError(f"reference radius has {r.size} values for {reference.n_vertices} vertices")
+    known = np.zeros(reference.n_vertices, bool) if r is None else np.isfinite(r) & (r > 0)
+    if known.all():
+        return r, "reference"
+    if cloud is None or not len(cloud):
+        return None, ""
+    if r is None:
+        r = np.full(reference.n_vertices, np.nan)
+    r[~known] = radius_from_cloud(reference.vertices[~known], np.asarray(cloud, float), k)
+    return r, "reference+cloud" if known.any() else "cloud"
+
+
+def ground_truth(curve: CurveSkeleton, reference: CurveSkeleton, cloud: np.ndarray | None, params,
+                 radius: np.ndarray | None = None) -> GroundTruthComparison:
+    """What ``evaluate`` computes (its "ground truth" stage): :func:`compare_with_ground_truth` with the
+    ``gt_`` constants of a :class:`skelcore.Params`, the radius from ``radius`` (else the reference's
+    own) completed from the cloud (:func:`reference_radius`); all in the inputs' units."""
+    p = GroundTruthParams.from_params(params)
+    given = reference.radius if radius is None else radius
+    r, source = reference_radius(reference, given, cloud, p.radius_k)
+    out = compare_with_ground_truth(curve, reference, r, cloud, params=p)
+    return out if source in ("", out.radius_source) else replace(out, radius_source=source)

@@ -49,6 +49,7 @@ def assemble(ctx: EvalContext, inputs: dict[str, Any] | None = None) -> Evaluati
     ev.coverage_skeletal = got.get("skeletal coverage")
     ev.coverage_curve = got.get("curve coverage")
     ev.reference = got.get("reference")
+    ev.ground_truth = got.get("ground truth")
     if any(k in got for k in ("curve defects", "skeletal outside", "skeletal missing parts", "curve missing parts")):
         ev.diagnostics = diagnostics_record(got.get("curve defects"), got.get("skeletal missing parts"),
                                             got.get("curve missing parts"), skeletal_outside=got.get("skeletal outside"))

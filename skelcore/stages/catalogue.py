@@ -3,7 +3,7 @@ progress bar that moves evenly; measured on 4k-point shapes), the column it fill
 the context (the stage that makes an input runs before it), when it applies and its function.
 
 The paper's four metrics on the skeletal set and the curve (SPEC 1-4), the reverse correspondence,
-SkelScope's coverage and the reference comparison (docs/metrics.md), the diagnostics (issue 22).  Start order (docs/performance.md
+SkelScope's coverage, the reference comparison and the ground-truth metrics (docs/metrics.md), the diagnostics (issue 22).  Start order (docs/performance.md
 8): the boundedness stages first (the longest), then what others wait for, then the rest in catalogue
 order, the curve's boundedness last when the skeletal set's runs.
 """
@@ -19,6 +19,7 @@ from ..correspondence import densify_curve, project_onto_curve, reverse_projecti
 from ..geometry import Checkpoint
 from ..metrics.centeredness import curve_centeredness, skeletal_centeredness
 from ..metrics.coverage import coverage
+from ..metrics.ground_truth import ground_truth
 from ..metrics.reference import compare_with_reference
 from ..metrics.smoothness import curve_smoothness_overall, curve_vertex_smoothness, skeletal_smoothness
 from ..metrics.topology import topological_similarity
@@ -119,6 +120,11 @@ def _reference(ctx: EvalContext, checkpoint: Checkpoint):
     return compare_with_reference(ctx.curve_n, ctx.reference_n, ctx.tau(checkpoint))
 
 
+def _ground_truth(ctx: EvalContext, checkpoint: Checkpoint):
+    """The community's metrics against the reference, in the user's units (docs/metrics.md 5.3.1)."""
+    return ground_truth(ctx.curve, ctx.reference, ctx.cloud, ctx.params)
+
+
 def _curve_defects(ctx: EvalContext, checkpoint: Checkpoint):
     """Branches, spurious branches, cycles, the parts outside (issue 22, docs/diagnostics.md)."""
     return find_curve_defects(ctx.cloud_n, ctx.curve_n, samples=ctx.samples,
@@ -180,6 +186,10 @@ def _reference_given(ctx: EvalContext) -> bool:
     return ctx.reference_n is not None
 
 
+def _ground_truth_given(ctx: EvalContext) -> bool:
+    return ctx.reference is not None and ctx.curve is not None and ctx.reference.n_edges > 0
+
+
 def _last_beside_skeletal(ctx: EvalContext) -> int:
     # the curve's boundedness is a quarter of the skeletal one on the hammer; started second, it held
     # the other thread while the rest waited
@@ -209,6 +219,8 @@ CATALOGUE: tuple[Stage, ...] = (
           fn=_curve_coverage),
     Stage("reference", weight=0.1, column="", inputs=("curve", "reference", "tau"), applies=_reference_given,
           fn=_reference),
+    Stage("ground truth", weight=0.3, column="", inputs=("cloud", "curve", "reference"), applies=_ground_truth_given,
+          fn=_ground_truth),
     Stage("curve defects", weight=0.5, column="", inputs=("cloud", "curve", "samples", "curve boundedness"),
           applies=_curve, fn=_curve_defects, start=LAST),
     Stage("skeletal outside", weight=0.1, column="", inputs=("cloud", "skeletal set", "skeletal boundedness"),

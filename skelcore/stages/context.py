@@ -61,6 +61,8 @@ class EvalContext:
     curve_n: CurveSkeleton | None = None
     samples: CurveSamples | None = None
     reference_n: CurveSkeleton | None = None
+    #: the reference in the user's units, with its radius (given, else its file's; NaN = unknown)
+    reference: CurveSkeleton | None = None
     #: SkelScope's coverage is exact and grows about as N^1.4 on tubes: only up to coverage_max_points
     with_coverage: bool = True
     not_computed: dict[str, str] = field(default_factory=dict)
@@ -165,6 +167,7 @@ def build_context(
     skeletal_index: np.ndarray | None,
     correspondence: str,
     reference_curve: CurveSkeleton | tuple | None,
+    reference_radius: np.ndarray | None = None,
     viewpoints=None,
     remove_outliers: bool = False,
     cap_openings: bool = False,
@@ -235,7 +238,14 @@ def build_context(
         if ctx.curve is None:
             raise SkelInputError("a reference curve is compared with a curve skeleton: give one")
         ref = CurveSkeleton.coerce(reference_curve, "reference curve")
+        if reference_radius is not None:
+            ref = _with_radius(ref, reference_radius)
+        ctx.reference = ref
+        if ref.n_edges == 0:
+            ctx.not_computed["ground truth"] = "the reference curve has no edges"
         ctx.reference_n = ref.transformed(norm.apply)
+    elif reference_radius is not None:
+        raise SkelInputError("a reference radius needs a reference curve")
     if ctx.curve is not None:
         ctx.curve_n = ctx.curve.transformed(norm.apply)
         ctx.samples = sample_curve(ctx.curve_n, params.curve_samples, collinear_cos=params.collinear_cos)
@@ -268,6 +278,21 @@ def _cap(ctx: EvalContext, checkpoint: Checkpoint) -> None:
                          for i, o in enumerate(ctx.openings)]
     ctx.scan.cap_points = int(len(caps.points))
     ctx.scan.timings["openings"] = time.perf_counter() - t0
+
+
+def _with_radius(ref: CurveSkeleton, radius) -> CurveSkeleton:
+    """``ref`` with ``reference_radius=``: one per vertex of the cleaned curve, or of the raw vertices
+    it came from (its ``vertex_map``); NaN or <= 0 = unknown (estimated from the cloud)."""
+    import dataclasses
+
+    r = np.asarray(radius, dtype=float).ravel()
+    if r.shape != (ref.n_vertices,):
+        if ref.vertex_map is None or r.size <= int(np.max(ref.vertex_map, initial=-1)):
+            raise SkelInputError(f"reference radius: {r.size} values for a reference curve of {ref.n_vertices} vertices")
+        r = r[ref.vertex_map]
+    if np.any(np.isinf(r)):
+        raise SkelInputError("reference radius: contains inf")
+    return dataclasses.replace(ref, radius=r)
 
 
 def _check_index(skeletal_index: np.ndarray, n_skel: int, n_cloud: int) -> np.ndarray:

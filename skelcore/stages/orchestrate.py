@@ -32,6 +32,7 @@ def evaluate(
     skeletal_index: np.ndarray | None = None,
     correspondence: str = "auto",
     reference_curve: CurveSkeleton | tuple | None = None,
+    reference_radius: np.ndarray | None = None,
     inputs: dict | None = None,
     workers: int | None = None,
     viewpoints=None,
@@ -68,7 +69,12 @@ def evaluate(
     correspondence : {"auto", "pointwise", "index", "reverse", "none"}
         How skeletal points map to cloud points (SPEC 7); "auto" picks from the inputs.
     reference_curve : CurveSkeleton or (vertices, edges), optional
-        A ground-truth curve in the cloud's frame (needs ``curve``; SPEC 9).
+        A ground-truth curve in the cloud's frame (needs ``curve``; SPEC 9): the reference comparison
+        (``Evaluation.reference``) and the ground-truth metrics (``Evaluation.ground_truth``,
+        docs/metrics.md 5.3.1) in the cloud's units.
+    reference_radius : (V,) array, optional
+        The reference's radius per vertex (the cloud's units); default its own (``CurveSkeleton.radius``,
+        read from PLY ``radius``, SWC, ...); where unknown, estimated from the cloud.
     inputs : dict, optional
         Free-form description of the inputs (file names), kept in the JSON document.
     workers : int, optional
@@ -100,7 +106,8 @@ def evaluate(
     """
     t_start = time.perf_counter()
     ctx = build_context(cloud, skeletal, curve, params, skeletal_index=skeletal_index,
-                        correspondence=correspondence, reference_curve=reference_curve, viewpoints=viewpoints,
+                        correspondence=correspondence, reference_curve=reference_curve,
+                        reference_radius=reference_radius, viewpoints=viewpoints,
                         remove_outliers=remove_outliers, cap_openings=cap_openings,
                         checkpoint=StageProgress({}, None, cancel).between("scan preparation"))
     stages = select(ctx)

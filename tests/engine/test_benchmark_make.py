@@ -22,7 +22,11 @@ else:  # pragma: no cover
 
 
 def _files(folder: Path) -> dict[str, bytes]:
-    return {str(p.relative_to(folder)): p.read_bytes() for p in sorted(folder.rglob("*")) if p.is_file()}
+    """Every file's bytes; the run marker's without its creation time."""
+    out = {str(p.relative_to(folder)): p.read_bytes() for p in sorted(folder.rglob("*")) if p.is_file()}
+    marker = json.loads(out.pop(".skelscope-run"))
+    out[".skelscope-run"] = json.dumps({k: v for k, v in marker.items() if k != "created"}).encode()
+    return out
 
 
 @pytest.fixture(scope="module")
@@ -42,7 +46,8 @@ def test_small_suite_writes_every_case(small):
         assert rec == json.loads((small / "cases" / f"{rec['name']}.json").read_text())
     assert {c["curve_skeleton"] for c in doc["cases"] if c["shape"] == "plate"} == {
         "curve skeleton ill-posed: the plate's medial axis is a sheet; the reference is only the rim's centre circle"}
-    assert json.loads((small / ".skelscope-bench").read_text())["suite"] == "small"
+    marker = json.loads((small / ".skelscope-run").read_text())  # compare's run marker, kind "bench"
+    assert (marker["kind"], marker["suite"], marker["seed"]) == ("bench", "small", 0)
 
 
 @pytest.mark.parametrize("case, count", [
@@ -119,7 +124,7 @@ def test_a_folder_that_is_not_a_benchmark_is_refused(tmp_path, capsys):
     (mine / "notes.txt").write_text("keep me")
     assert main(["bench", "make", str(mine), "--suite", "small", "--quiet"]) == 2
     err = capsys.readouterr().err
-    assert err.count("\n") == 1 and err.startswith("skelcore: error: ") and "not a benchmark folder" in err
+    assert err.count("\n") == 1 and err.startswith("skelcore: error: ") and "is not a skelcore bench run" in err
     assert sorted(p.name for p in mine.iterdir()) == ["notes.txt"]
     (tmp_path / "file").write_text("x")
     assert main(["bench", "make", str(tmp_path / "file"), "--quiet"]) == 2
@@ -135,7 +140,8 @@ def test_another_suite_or_seed_needs_force(small, tmp_path, capsys):
     shutil.copytree(small, folder)
     assert main(["bench", "make", str(folder), "--suite", "small", "--seed", "4", "--quiet"]) == 2
     err = capsys.readouterr().err
-    assert "holds the 'small' suite with seed 0" in err and err.count("\n") == 1
+    assert "holds a bench run of suite 'small', seed 0, generator" in err and err.count("\n") == 1
+    assert "not of suite 'small', seed 4" in err and "--force" in err
     (folder / "clouds" / "stale_case.ply").write_text("not ours")
     for sub, name in (("cases", "ghost.json"), ("clouds", "ghost.ply"), ("truth", "ghost_reference.ply")):
         (folder / sub / name).write_text("{}")  # a case of ours that the new suite does not have
@@ -161,3 +167,73 @@ def test_compare_manifest_names_every_case_with_its_reference(small):
     without = {**doc, "shapes": [{k: v for k, v in s.items() if k != "reference"} for s in doc["shapes"]]}
     m = parse_manifest(without, str(small / "compare.toml"))  # otherwise a valid compare manifest
     assert [s.name for s in m.shapes] == names
+
+
+def test_the_folder_marker_is_compares_run_marker(tmp_path, capsys):
+    """bench make claims its folder with compare's run marker (kind "bench"): a compare run, a
+    benchmark made before that marker and a benchmark's folder given to compare are refused with one
+    line, nothing touched."""
+    from skelcore.compare.run_marker import claim_run_folder
+
+    legacy = tmp_path / "legacy"
+    legacy.mkdir()
+    (legacy / ".skelscope-bench").write_text('{"skelscope_bench": 1, "suite": "small", "seed": 0}')
+    (legacy / "suite.json").write_text("{}")
+    assert main(["bench", "make", str(legacy), "--suite", "small", "--quiet"]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "made before skelcore marked its runs" in err and "--force once" in err
+    assert sorted(p.name for p in legacy.iterdir()) == [".skelscope-bench", "suite.json"]
+    run = tmp_path / "run"
+    claim_run_folder(run, "compare")
+    (run / "results.csv").write_text("mine")
+    assert main(["bench", "make", str(run), "--suite", "small", "--quiet"]) == 2
+    assert "is a skelcore 'compare' run, not a bench run" in capsys.readouterr().err
+    assert (run / "results.csv").read_text() == "mine" and not (run / "clouds").exists()
+    bench = tmp_path / "bench"
+    assert main(["bench", "make", str(bench), "--suite", "small", "--quiet"]) == 0
+    capsys.readouterr()
+    with pytest.raises(SkelInputError, match="is a skelcore 'bench' run, not a compare run"):
+        claim_run_folder(bench, "compare")
+
+
+def test_bench_make_then_the_compare_command_it_prints(tmp_path, capsys):
+    """End to end (issue 23): the small suite, then the printed ``skelcore compare`` command with the
+    built-in cao alone (the suite's manifest less its skelscope method, to keep the test short):
+    every job finishes and results.csv has the ground-truth columns filled, the references' radius
+    read from their files; a rerun does nothing again."""
+    import csv
+    import re
+    import shlex
+
+    from skelcore.scores import column_keys
+
+    bench = tmp_path / "bench"
+    assert main(["bench", "make", str(bench), "--suite", "small", "--quiet"]) == 0
+    printed = re.search(r"^run them: (skelcore compare .*)$", capsys.readouterr().out, re.M).group(1)
+    argv = shlex.split(printed)[1:]
+    assert argv[:2] == ["compare", str(bench / "compare.toml")] and argv[2:] == ["--out", "RUN_DIR"]
+    doc = (bench / "compare.toml").read_text()
+    cao = doc.replace('[[methods]]\nname = "skelscope"\nkind = "builtin"\nmethod = "skelscope"\n\n', "")
+    assert cao != doc
+    (bench / "compare_cao.toml").write_text(cao)
+    run = tmp_path / "run"
+    argv = ["compare", str(bench / "compare_cao.toml"), "--out", str(run), "--jobs", "1", "--no-report", "--quiet"]
+    assert main(argv) == 0
+    with open(run / "results.csv", newline="") as fh:
+        rows = list(csv.DictReader(fh))
+    assert [r["shape"] for r in rows] == [c.name for c in suite_cases("small")]
+    # every column but the node scores, NaN where there is no such node (a torus has no endpoint)
+    always = [k for k in column_keys(group="ground truth", compared=True) if "junction" not in k and "endpoint" not in k]
+    for r in rows:
+        assert r["status"] == "ok" and r["method"] == "cao", r["error"]
+        assert all(r[k] != "" for k in always), r["shape"]
+        assert 0 <= float(r["gt_f1"]) <= 1 and float(r["gt_chamfer_radii"]) >= 0
+    by = {r["shape"]: r for r in rows}
+    assert by["junction_y__clean"]["gt_junction_recall"] != "" and by["tube_a__clean"]["gt_junction_recall"] == ""
+    assert by["tube_a__clean"]["gt_endpoint_recall"] != "" and by["torus__clean"]["gt_endpoint_recall"] == ""
+    assert float(by["tube_a__clean"]["gt_f1"]) > 0.5  # cao on a clean tube: most of it within a radius
+    record = json.loads(next((run / "jobs").glob("*.json")).read_text())
+    assert record["evaluation"]["ground_truth"]["radius_source"] == "reference"
+    capsys.readouterr()
+    assert main(argv) == 0
+    assert "10 jobs: 10 already done" in capsys.readouterr().out

@@ -84,6 +84,7 @@ def test_the_cases_cover_each_mode_coverage_reference_and_nan(evaluations):
     assert evaluations["curve only, reverse"].skeletal.source == "curve"
     for ev in evaluations.values():
         assert ev.coverage_curve is not None and ev.reference is not None and ev.timings
+        assert ev.ground_truth is not None and ev.ground_truth.radius_source == "cloud"
         assert np.isnan(ev.curve.vertex_smoothness).any()  # the junction and the ends
     assert evaluations["none"].warnings and evaluations["none"].not_computed
     assert evaluations["reverse"].skeletal.rows is not None and evaluations["index"].skeletal.index is not None

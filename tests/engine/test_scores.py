@@ -129,18 +129,23 @@ def test_the_compare_record_is_the_flat_record(evaluations):
 
 def test_public_column_lists_stay_as_they_were():
     """results.csv, the job records and the leaderboard keep their columns (public formats); issue 22
-    added the diagnostics' columns and results.csv's sound / defects / warnings, nothing moved."""
+    added the diagnostics' columns and results.csv's sound / defects / warnings, issue 23 the ground-truth
+    block beside the paper's; nothing moved."""
+    ground_truth = ("gt_chamfer_radii", "gt_chamfer", "gt_precision", "gt_recall", "gt_f1", "gt_junction_precision",
+                    "gt_junction_recall", "gt_endpoint_precision", "gt_endpoint_recall", "gt_cycle_error",
+                    "gt_length_ratio", "gt_splits", "gt_merges")
     diagnostics = ("completeness_skeletal", "completeness_curve", "spurious_branches", "spurious_cycles",
                    "missing_cycles", "outside_length_share")
     record = ("d_B", "d_Wp", "boundedness_skeletal", "boundedness_curve", "centeredness_skeletal",
-              "centeredness_curve", "smoothness_skeletal", "smoothness_curve", "coverage_skeletal", "coverage_curve",
-              *diagnostics, "n_warnings")
+              "centeredness_curve", "smoothness_skeletal", "smoothness_curve", *ground_truth, "coverage_skeletal",
+              "coverage_curve", *diagnostics, "n_warnings")
     assert RECORD_KEYS == record
     assert LEADERBOARD_COLUMNS == (*record, "seconds")
     assert RESULTS_COLUMNS == ("shape", "method", "condition", "seed", "status", "error", *record, "seconds",
                                "sound", "defects", "warnings", "label", "n_points", "key")
     assert LOWER_IS_BETTER == {"d_B", "d_Wp", "spurious_branches", "spurious_cycles", "missing_cycles",
-                               "outside_length_share", "n_warnings", "seconds"}
+                               "outside_length_share", "n_warnings", "seconds", "gt_chamfer_radii", "gt_chamfer",
+                               "gt_cycle_error", "gt_splits", "gt_merges"}
 
 
 def test_row_follows_the_column_catalogue(evaluations):
@@ -152,7 +157,7 @@ def test_row_follows_the_column_catalogue(evaluations):
     for c in SCORE_COLUMNS:
         assert c.key in fields and c.better in ("higher", "lower", None) and c.digits >= 0
         assert c.count is None or c.count in fields
-        assert c.group in ("paper", "skelscope", "diagnostics", "reference", "run")
+        assert c.group in ("paper", "skelscope", "diagnostics", "reference", "ground truth", "run")
     assert [m for m, _s, _c in paired_columns("paper")] == ["boundedness", "centeredness", "smoothness"]
     assert column_keys(group="paper", compared=True)[:2] == ("d_B", "d_Wp")
 
