@@ -15,7 +15,7 @@ from ..curve import CurveSkeleton
 from ..errors import SkelInputError
 from ..metrics.reference import graph_counts
 from ..params import Params
-from ..trust import robust_box
+from ..diagnostics.trust import robust_box
 
 __all__ = ["expand_reference", "reference_problem", "load_reference"]
 
