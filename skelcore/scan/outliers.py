@@ -25,7 +25,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.spatial import cKDTree
 
-from ..geometry import Checkpoint, Normalization, no_checkpoint
+from ..geometry import Checkpoint, Normalization, no_checkpoint, timed_query
 from ..params import Params
 
 __all__ = ["Outliers", "find_outliers", "isolated_rows"]
@@ -72,7 +72,8 @@ def find_outliers(cloud: np.ndarray, params: Params = Params(), *, checkpoint: C
         return Outliers(np.zeros(0, np.int64), n, 1.0, 0.0)
     tree = cKDTree(cloud)
     checkpoint(0.1)
-    d, _ = tree.query(cloud, k=m + 1, workers=-1)
+    # in chunks of ~0.1 s with a checkpoint after each (one call over 1M points held a cancel for 1-4 s)
+    d, _ = timed_query(tree, cloud, m + 1, checkpoint, 0.1, 0.6)
     checkpoint(0.6)
     spacing = float(np.median(d[:, 1]))
     none = Outliers(np.zeros(0, np.int64), n, 1.0, 0.0, spacing)
