@@ -7,7 +7,14 @@ all threads (the fairer figure when other jobs share the cores).  Generated shap
 + 1 % jitter, curve = a 64-gon of the core circle.  Real clouds from ../shared/data/ are scored
 against the built-in skeletonizer's output (its time reported apart).  The yardstick: gudhi's
 Vietoris-Rips H0 of the hammer scan, timed in the same run.  The worst cancel latency is the longest
-gap between two cancel checks of a run (the cancel callback times itself).
+gap between two cancel checks of a run (the cancel callback times itself).  "diag" = the diagnostics'
+stages (curve defects, skeletal and curve missing parts; issue 22), their seconds and their share of
+all stages' seconds (the stages run side by side, so shares of the summed stage times), and their CPU
+seconds when run again alone on the same inputs over the evaluation's CPU seconds (robust to load).
+"torus N, coverage + diagnostics": coverage_max_points raised above N (issue 22's 1M case; above
+coverage_exact_points coverage is estimated on a subsample).  "viewpoint": issue 26's front half of a
+cylinder (2N points, y > 0) with its axis as skeletal set, plain and viewpoint-aware boundedness of the
+same elements, CPU seconds and their ratio.
 
     .venv/bin/python benchmarks/bench_engine.py                 # the issue-12 target table
     .venv/bin/python benchmarks/bench_engine.py --sizes 4096 16384 --no-real --no-targets   # by size
@@ -38,6 +45,7 @@ STAGES = [
     "skeletal coverage",
     "curve coverage",
 ]
+DIAG = ["curve defects", "skeletal missing parts", "curve missing parts"]
 
 
 def run_case(kind: str, arg: str, method: str) -> dict:
@@ -63,15 +71,21 @@ def run_case(kind: str, arg: str, method: str) -> dict:
                    cpu=time.process_time() - cpu0)
         out["peak_mb"] = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0
         return out
+    if kind == "viewpoint":
+        return out | _viewpoint_case(int(arg))
     curve_only = kind == "torus-curve"
-    if kind in ("torus", "torus-curve"):
+    params = Params(boundedness_method=method)
+    if kind == "torus-cov":
+        params = Params(boundedness_method=method, coverage_max_points=int(arg) + 1)
+    if kind in ("torus", "torus-curve", "torus-cov"):
         n = int(arg)
         shape = shapes.torus(n, R=1.0, r=0.3, n_curve=64, seed=0)
         rng = np.random.default_rng(0)
         cloud = shape.cloud
         skeletal = None if curve_only else shape.skeletal + rng.normal(scale=0.01, size=shape.skeletal.shape)
         curve = (shape.curve_vertices, shape.curve_edges)
-        out["case"] = f"torus {n}" + (", curve only" if curve_only else "")
+        out["case"] = f"torus {n}" + (", curve only" if curve_only else "") + (
+            ", coverage + diagnostics" if kind == "torus-cov" else "")
     else:
         from skelcore.io import load_cloud
         from skelcore.skeleton import skeletonize
@@ -105,12 +119,71 @@ def run_case(kind: str, arg: str, method: str) -> dict:
         return False
 
     cpu0 = time.process_time()
-    ev = evaluate(cloud, skeletal, curve, Params(boundedness_method=method), progress=progress, cancel=cancel)
+    ev = evaluate(cloud, skeletal, curve, params, progress=progress, cancel=cancel)
     out["cpu"] = time.process_time() - cpu0
     out.update(ev.timings)
+    stage_sum = sum(v for k, v in ev.timings.items() if k != "total")
+    out["diag"] = sum(ev.timings.get(k, 0.0) for k in DIAG)
+    out["diag_share"] = out["diag"] / stage_sum if stage_sum > 0 else 0.0
+    if kind != "real":
+        out["diag_cpu"] = _diagnostics_cpu(cloud, skeletal, curve, params, ev)
+        out["diag_cpu_share"] = out["diag_cpu"] / max(out["cpu"], 1e-9)
+    covs = [c for c in (ev.coverage_skeletal, ev.coverage_curve) if c is not None]
+    out["coverage_subsample"] = next((c.subsample for c in covs if c.subsample), None)
     out["cancel_gap"], out["cancel_stage"] = gaps["worst"], gaps["stage"]
     if kind == "real":  # the same evaluation again in the same process: no first-call loading
         out["second"] = evaluate(cloud, skeletal, curve, Params(boundedness_method=method)).timings["total"]
+    out["peak_mb"] = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0
+    return out
+
+
+def _diagnostics_cpu(cloud, skeletal, curve, params, ev) -> float:
+    """CPU seconds (all threads) of the diagnostics' stages run again alone on the evaluation's inputs,
+    with its curve boundedness and coverage as they read them (load-proof, unlike side-by-side walls)."""
+    from skelcore.geometry import no_checkpoint
+    from skelcore.stages.catalogue import CATALOGUE
+    from skelcore.stages.context import build_context
+
+    ctx = build_context(cloud, skeletal, curve, params, skeletal_index=None, correspondence="auto",
+                        reference_curve=None)
+    if ev.curve is not None:
+        ctx.results["curve boundedness"] = ev.curve.sample_boundedness
+    for key, cov in (("skeletal coverage", ev.coverage_skeletal), ("curve coverage", ev.coverage_curve)):
+        if cov is not None:
+            ctx.results[key] = cov
+    c0 = time.process_time()
+    for stage in CATALOGUE:
+        if stage.name in DIAG and stage.applies(ctx):
+            stage.fn(ctx, no_checkpoint)
+    return time.process_time() - c0
+
+
+def _viewpoint_case(n: int) -> dict:
+    """Issue 26: plain and viewpoint-aware boundedness of the same elements (CPU s of all threads)."""
+    import numpy as np
+
+    from skelcore import Params, shapes
+    from skelcore.geometry import Normalization
+    from skelcore.metrics.boundedness import boundedness
+    from skelcore.scan.viewpoint import seen_boundedness
+
+    c = shapes.cylinder(2 * n)
+    keep = c.cloud[:, 1] > 0
+    p = Params()
+    norm = Normalization.from_cloud(c.cloud[keep], p.normalize_by, p.normalized_size)
+    cloud, queries = norm.apply(c.cloud[keep]), norm.apply(c.skeletal[keep])
+    vp = norm.apply(np.array([[0.0, 40.0, 2.0]]))
+    out: dict = {"case": f"viewpoint, front half of a cylinder", "n_points": int(len(cloud))}
+    t0, c0 = time.perf_counter(), time.process_time()
+    plain = boundedness(cloud, queries, params=p)
+    out["plain"], out["plain_cpu"] = time.perf_counter() - t0, time.process_time() - c0
+    t0, c0 = time.perf_counter(), time.process_time()
+    seen = seen_boundedness(cloud, queries, vp, params=p, return_missing=True)[0]
+    out["seen"], out["seen_cpu"] = time.perf_counter() - t0, time.process_time() - c0
+    out["plain_score"] = float(np.mean(plain > p.beta_star))
+    out["seen_score"] = float(np.mean(seen > p.beta_star))
+    import resource
+
     out["peak_mb"] = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0
     return out
 
@@ -147,9 +220,17 @@ def _child(kind: str, arg: str, method: str, timeout: float) -> dict | None:
 
 
 def _row(r: dict) -> str:
+    if "seen" in r:
+        return (f"| {r['case']} | {r['n_points']} | plain boundedness {r['plain']:.2f} s ({r['plain_cpu']:.2f} CPU s, "
+                f"score {r['plain_score']:.3f}); viewpoint-aware {r['seen']:.2f} s ({r['seen_cpu']:.2f} CPU s, score "
+                f"{r['seen_score']:.3f}); CPU ratio x{r['seen_cpu'] / max(r['plain_cpu'], 1e-9):.1f} |")
     cells = [r["case"], str(r["n_points"])] + [f"{r[s]:.3f}" if s in r else "" for s in STAGES]
+    cells += [f"{r['diag']:.3f} ({100 * r['diag_share']:.0f} %)" if "diag" in r else ""]
+    cells += [f"{r['diag_cpu']:.2f} ({100 * r['diag_cpu_share']:.0f} %)" if "diag_cpu" in r else ""]
     cells += [f"{r['total']:.2f}", f"{r['cpu']:.2f}", f"{r['startup']:.2f}", f"{r['peak_mb']:.0f}",
               f"{r['cancel_gap']:.3f} ({r['cancel_stage']})" if "cancel_gap" in r else ""]
+    if r.get("coverage_subsample"):
+        cells[0] += f" (coverage on a subsample of {r['coverage_subsample']:,})"
     if "skeletonize" in r:
         cells[0] += f" (skeletonize {r['skeletonize']:.1f} s; again in-process {r['second']:.2f} s)"
     return "| " + " | ".join(cells) + " |"
@@ -162,6 +243,10 @@ def main() -> None:
     ap.add_argument("--no-real", action="store_true", help="skip ../shared/data clouds")
     ap.add_argument("--no-targets", action="store_true", help="only the size series (no Rips, no 100k, no curve-only)")
     ap.add_argument("--timeout", type=float, default=900.0, help="seconds per case before it is stopped")
+    ap.add_argument("--coverage-sizes", type=int, nargs="*", default=[1048576],
+                    help="torus sizes also run with coverage (coverage_max_points raised) and diagnostics")
+    ap.add_argument("--viewpoint-sizes", type=int, nargs="*", default=[65536],
+                    help="elements of the viewpoint case (issue 26; front half of a 2N-point cylinder)")
     ap.add_argument("--ratio-runs", type=int, default=0, metavar="N",
                     help="then N more pairs of (gudhi Rips H0, hammer) fresh processes, alternating, and the "
                          "median of their ratios (this VM's speed drifts between minutes)")
@@ -172,7 +257,7 @@ def main() -> None:
         return
     print(f"machine: {_cpu_model()}, {os.cpu_count()} cores, Python {platform.python_version()}, "
           f"load average at start {os.getloadavg()[0]:.1f}", flush=True)
-    head = ["case", "points"] + [s.replace("skeletal ", "skel ") for s in STAGES]
+    head = ["case", "points"] + [s.replace("skeletal ", "skel ") for s in STAGES] + ["diag s (share)", "diag CPU s alone (share of CPU)"]
     head += ["total s", "CPU s", "start-up s", "peak MB", "worst cancel gap s (stage)"]
     print("| " + " | ".join(head) + " |")
     print("|" + "---|" * len(head), flush=True)
@@ -186,6 +271,8 @@ def main() -> None:
     if not args.no_targets:
         cases += [("torus", "100000"), ("torus-curve", "1048576")]
     cases += [("torus", str(n)) for n in args.sizes]
+    cases += [("torus-cov", str(n)) for n in args.coverage_sizes]
+    cases += [("viewpoint", str(n)) for n in args.viewpoint_sizes]
     for kind, arg in cases:
         r = _child(kind, arg, args.method, args.timeout)
         if r is None:
@@ -203,6 +290,21 @@ def main() -> None:
                       ("torus 1048576, curve only", "<= 3 s")):
         if key in res:
             print(f"| {key} | {res[key]['total']:.2f} s, {res[key]['peak_mb']:.0f} MB | {goal} |")
+    for key, r in res.items():
+        if key.endswith("coverage + diagnostics"):
+            print(f"| {key} (issue 22) | {r['total']:.2f} s, {r['cpu']:.1f} CPU s, {r['peak_mb']:.0f} MB | < 25 s |")
+    shares = [(r["diag_share"], k) for k, r in res.items() if "diag_share" in r]
+    if shares:
+        top, key = max(shares)
+        print(f"| diagnostics' largest share of the stages' time | {100 * top:.0f} % ({key}) | <= 25 % |")
+    shares = [(r["diag_cpu_share"], k) for k, r in res.items() if "diag_cpu_share" in r]
+    if shares:
+        top, key = max(shares)
+        print(f"| diagnostics' largest CPU alone / the evaluation's CPU | {100 * top:.0f} % ({key}) | <= 25 % |")
+    for key, r in res.items():
+        if "seen" in r:
+            print(f"| viewpoint-aware / plain boundedness, {r['n_points']} cloud points (issue 26) | "
+                  f"x{r['seen_cpu'] / max(r['plain_cpu'], 1e-9):.1f} CPU ({r['seen_cpu']:.2f} / {r['plain_cpu']:.2f} s) | <= x3 |")
     apple = next((r for k, r in res.items() if k.startswith("apple")), None)
     if apple:
         print(f"| apple tree with the built-in skeleton, evaluation | {apple['total']:.2f} s | <= 2 s |")

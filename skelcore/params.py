@@ -45,6 +45,10 @@ class Params:
     coverage_max_points : coverage is computed for clouds of at most this many points (0: never);
         a skeletal set as large as the cloud costs about N^1.4 on tube-like shapes (torus, both cores:
         2.4 s at 256k, 16 s at 1M; docs/metrics.md 5.2).
+    coverage_exact_points : up to this many cloud points coverage is exact; above, it is estimated on a
+        random subsample of this many cloud points and at most as many skeleton elements (their radii
+        from the whole cloud), every other cloud point taking its nearest sampled point's gap and verdict
+        (the JSON's ``coverage.*.subsample`` says so; docs/metrics.md 5.2, docs/performance.md 11).
     frame_inside_fraction : the ``frame`` warning fires when fewer skeleton points than this fraction
         lie inside the cloud's bounding box (grown by 10 % of its diagonal).
     frame_extent_ratio : ... or when the skeleton's bounding-box diagonal is more than this many
@@ -122,6 +126,9 @@ class Params:
     cap_flatness : ... or whose rim lies farther than this x its radius from its plane (RMS).
     viewpoint_rows : with viewpoints, boundedness counts directions on an equal-area raster of
         viewpoint_rows x 2 viewpoint_rows.
+    viewpoint_share_cell : with viewpoints, elements farther than 4 cells from the cloud share one cast
+        of every direction per cubic cell of this side, in units of h (0: each element cast alone;
+        docs/metrics.md 6.3).
     outlier_k, outlier_std_ratio : statistical test (PCL / Open3D): a point is flagged when its mean
         distance to its outlier_k nearest neighbours exceeds the cloud's median of that by more than
         outlier_std_ratio robust standard deviations (1.4826 x MAD) ...
@@ -167,6 +174,7 @@ class Params:
     coverage_slack: float = 0.5
     coverage_tau_factor: float = 2.0
     coverage_max_points: int = 262144
+    coverage_exact_points: int = 262144
     frame_inside_fraction: float = 0.5
     frame_extent_ratio: float = 10.0
     collapse_extent: float = 0.1
@@ -211,6 +219,7 @@ class Params:
     cap_max_share: float = 0.1
     cap_flatness: float = 0.2
     viewpoint_rows: int = 16
+    viewpoint_share_cell: float = 0.5
     outlier_k: int = 8
     outlier_std_ratio: float = 6.0
     outlier_radius: float = 10.0
@@ -253,6 +262,8 @@ class Params:
                 bad(name, "must be a positive integer")
         if int(self.coverage_max_points) < 0:
             bad("coverage_max_points", "must be >= 0")
+        if int(self.coverage_exact_points) < 1:
+            bad("coverage_exact_points", "must be a positive integer")
         if not 0.0 < float(self.rays_near_angle) < 1.0:
             bad("rays_near_angle", "must be in (0, 1)")
         for name in ("missing_depth", "missing_link_factor"):
@@ -292,6 +303,8 @@ class Params:
         for name in ("open_surface_share", "cap_max_share"):
             if not 0.0 <= float(getattr(self, name)) <= 1.0:
                 bad(name, "must be in [0, 1]")
+        if not float(self.viewpoint_share_cell) >= 0:
+            bad("viewpoint_share_cell", "must be >= 0")
         for name in ("open_k", "open_min_fill", "open_max_points", "viewpoint_rows", "outlier_k",
                      "outlier_min_neighbours"):
             if int(getattr(self, name)) < 1:

@@ -17,7 +17,7 @@ the work runs on a random subsample and every cloud point takes its nearest samp
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Callable
 
 import numpy as np
@@ -193,8 +193,9 @@ def missing_parts(
     cloud : (N, 3) normalized cloud.
     skeleton : a skeletal point set (M, 3), curve samples, or a :class:`CurveSkeleton` (its edges
         densified as the evaluation's curve coverage does), normalized.
-    cov : the evaluation's :class:`Coverage` of these elements, if computed (then used as is: no
-        subsample); else computed here.
+    cov : the evaluation's :class:`Coverage` of these elements, if computed (then used as is; when it
+        was estimated on a subsample, the regions are found on that subsample and spread, the
+        completeness is its covered share); else computed here.
     tau : the coverage tolerance of the full cloud (``coverage_tau``), if known.
     what : how the warning names the skeleton ("curve skeleton", "skeletal point set").
     to_user : maps normalized points to user units for the regions' centroids.
@@ -210,11 +211,19 @@ def missing_parts(
     n = len(cloud)
     checkpoint(0.0)
     sub: np.ndarray | None = None
+    spread_factor = 1.0
+    full_covered = None
     if cov is not None:
         if len(cov.covered) != n:
             raise ValueError(f"coverage has {len(cov.covered)} cloud points, the cloud {n}")
         pts = cloud
         tau = float(cov.tau)
+        if cov.sample_rows is not None:  # estimated coverage: the regions on its sample, then spread
+            sub = cov.sample_rows
+            pts = cloud[sub]
+            full_covered = cov.covered
+            cov = replace(cov, gap=cov.gap[sub], covered=cov.covered[sub], sample_rows=None)
+            spread_factor = float(np.sqrt(n / len(pts)))
     else:
         if n > int(p.missing_max_points):
             rng = np.random.default_rng(SUBSAMPLE_SEED)
@@ -226,7 +235,8 @@ def missing_parts(
             pts = cloud
         if tau is None:
             tau = coverage_tau(pts, p, lambda f: checkpoint(0.1 * f))
-    spacing = float(tau) / float(p.coverage_tau_factor)
+    # the regions link sampled neighbours: the spacing of a surface sample grows as 1 / sqrt(density)
+    spacing = float(tau) / float(p.coverage_tau_factor) * spread_factor
     if keep is not None and not isinstance(skeleton, CurveSkeleton):
         skeleton = np.asarray(skeleton, dtype=float).reshape(-1, 3)[np.asarray(keep, dtype=bool)]
     if cov is None:
@@ -238,6 +248,9 @@ def missing_parts(
     explained_s = cov.covered
     if sub is not None:
         region, explained = _spread(cloud, pts, region_s, explained_s, spacing)
+        if full_covered is not None:  # the coverage's own verdicts: completeness = its fraction
+            explained = full_covered
+            region[explained] = -1
     else:
         region, explained = region_s, explained_s
     counts = np.bincount(region[region >= 0], minlength=len(regions))

@@ -7,7 +7,10 @@ nearest cloud point, its inscribed ball. A cloud point p has the gap g(p) = min_
 distance from the cloud to the balls) summarise it. p is covered when min_x |p - x| - (1 + s) r(x)
 <= tau (``Params.coverage_slack`` s, tau = ``coverage_tau_factor`` x median NN spacing): a curve's
 balls never fill a shape's ends, so a complete skeleton must not need them to.  All three searches
-are exact, in the compiled kernel ``_balls.c`` on every core, a checkpoint every ~0.1 s.
+are exact, in the compiled kernel ``_balls.c`` on every core, a checkpoint every ~0.1 s.  Above
+``Params.coverage_exact_points`` cloud points the gaps are found for a random subsample of the cloud
+and of the elements only (radii still from the whole cloud), the other points taking their nearest
+sampled point's answer (``Coverage.subsample``; docs/metrics.md 5.2, docs/performance.md 11).
 """
 
 from __future__ import annotations
@@ -37,11 +40,18 @@ MOST_ROWS = 262144
 THREAD_ROWS = 8192
 # covered: |p - x|^2 - R(x)^2 <= COVER_EPS x R_max^2 (the rounding allowance of the 4-D lifted query before)
 COVER_EPS = 1e-12
+# a timed chunk of at least twice this many rows is split over the threads (slow rows: a chunk of ~0.1 s
+# may hold only a few thousand, e.g. cloud points among a million overlapping balls)
+PIECE_ROWS = 256
+# the random subsample above coverage_exact_points (the same seed as the diagnostics' subsamples)
+SAMPLE_SEED = 0
 
 
 @dataclass
 class Coverage:
-    """Per cloud point ``gap`` and ``covered``; ``fraction``, ``mean_gap``, ``max_gap`` (normalized)."""
+    """Per cloud point ``gap`` and ``covered``; ``fraction``, ``mean_gap``, ``max_gap`` (normalized).
+    ``subsample``: None when exact, else how many cloud points were asked (``sample_rows``, sorted)
+    while the others took their nearest sampled point's values."""
 
     gap: np.ndarray
     covered: np.ndarray
@@ -51,9 +61,14 @@ class Coverage:
     tau: float
     slack: float
     n_elements: int
+    subsample: int | None = None
+    sample_rows: np.ndarray | None = None
 
     def to_dict(self) -> dict:
-        return {"fraction": self.fraction, "mean_gap": self.mean_gap, "max_gap": self.max_gap}
+        out = {"fraction": self.fraction, "mean_gap": self.mean_gap, "max_gap": self.max_gap}
+        if self.subsample is not None:
+            out["subsample"] = self.subsample
+        return out
 
 
 def coverage_tau(cloud: np.ndarray, params: Params = Params(), checkpoint: Checkpoint = no_checkpoint) -> float:
@@ -136,15 +151,18 @@ class BallTree:
 def _chunked(fn, n: int, checkpoint: Checkpoint, workers: int | None = None) -> None:
     """``fn(i0, i1)`` over [0, n) in chunks of about 0.1 s (``TimedChunks``), a checkpoint after each;
     a chunk is cut in 4 x ``workers`` contiguous pieces that ``workers`` threads (None: every core;
-    the kernel releases the GIL) take as they finish, so an unlucky piece delays little."""
+    the kernel releases the GIL) take as they finish, so an unlucky piece delays little.  Threads only
+    for ``n`` >= ``THREAD_ROWS``; a chunk is split when it holds >= 2 ``PIECE_ROWS`` (it was only from
+    ``THREAD_ROWS`` rows, so slow rows, ~0.1 s in fewer, ran on one thread: docs/performance.md 11)."""
     workers = max(1, int(workers or os.cpu_count() or 1))
     pool = ThreadPoolExecutor(max_workers=workers) if workers > 1 and n >= THREAD_ROWS else None
     try:
         for lo, hi in TimedChunks(n, first=256, most=MOST_ROWS):
-            if pool is None or hi - lo < THREAD_ROWS:
+            if pool is None or hi - lo < 2 * PIECE_ROWS:
                 fn(lo, hi)
             else:
-                cuts = np.linspace(lo, hi, 4 * workers + 1).astype(int)
+                pieces = min(4 * workers, (hi - lo) // PIECE_ROWS)
+                cuts = np.linspace(lo, hi, pieces + 1).astype(int)
                 for fut in [pool.submit(fn, a, b) for a, b in zip(cuts[:-1], cuts[1:])]:
                     fut.result()
             checkpoint(hi / n)
@@ -216,8 +234,11 @@ def coverage(
     checkpoint(0.0)
     tau = coverage_tau(cloud, params, _scaled(checkpoint, 0.0, 0.05)) if tau is None else float(tau)
     s = float(params.coverage_slack)
+    m = int(params.coverage_exact_points)
     if len(elements) == 0:
         gap, covered = np.full(len(cloud), np.inf), np.zeros(len(cloud), bool)
+    elif len(cloud) > m:
+        return _estimated(cloud, elements, m, tau, s, checkpoint, workers)
     else:
         build = _scaled(checkpoint, 0.05, 0.1)
         surface = BallTree(cloud, slab=True, checkpoint=build)
@@ -234,6 +255,11 @@ def coverage(
         gap, covered = np.zeros(len(cloud)), np.ones(len(cloud), bool)
         gap[surface.perm[rest]] = np.maximum(g, 0.0)
         covered[surface.perm[rest]] = c
+    return _summary(gap, covered, tau, s, len(elements))
+
+
+def _summary(gap: np.ndarray, covered: np.ndarray, tau: float, s: float, n_elements: int,
+             sample_rows: np.ndarray | None = None) -> Coverage:
     return Coverage(
         gap=gap,
         covered=covered,
@@ -242,5 +268,43 @@ def coverage(
         max_gap=float(gap.max()),
         tau=tau,
         slack=s,
-        n_elements=int(len(elements)),
+        n_elements=int(n_elements),
+        subsample=None if sample_rows is None else int(len(sample_rows)),
+        sample_rows=sample_rows,
     )
+
+
+def _estimated(cloud: np.ndarray, elements: np.ndarray, m: int, tau: float, s: float,
+               checkpoint: Checkpoint, workers: int | None) -> Coverage:
+    """Coverage above ``coverage_exact_points`` = m cloud points: the gaps of a random subsample of m
+    cloud points to the balls of at most m random elements, each radius r(x) still the distance to
+    the whole cloud (a sparser cloud would grow every ball); every other cloud point takes the gap and
+    verdict of its nearest sampled point.  The same rules as the exact path otherwise."""
+    rng = np.random.default_rng(SAMPLE_SEED)
+    n = len(cloud)
+    sample_rows = np.sort(rng.choice(n, m, replace=False))
+    if len(elements) > m:
+        elements = elements[np.sort(rng.choice(len(elements), m, replace=False))]
+    build = _scaled(checkpoint, 0.05, 0.1)
+    surface = BallTree(cloud, slab=True, checkpoint=build)
+    balls = BallTree(elements, checkpoint=build)
+    r = surface.nearest(balls.points, _scaled(checkpoint, 0.1, 0.35), workers)
+    contact = surface.last_index
+    balls.set_radii(r, (1.0 + s) * r + tau, surface.points[contact], _scaled(checkpoint, 0.35, 0.4), workers)
+    # the sample in the whole cloud's tree order (neighbours ask one after the other)
+    in_sample = np.zeros(n, bool)
+    in_sample[sample_rows] = True
+    at = np.flatnonzero(in_sample[surface.perm])  # tree positions of the sampled points
+    rest = np.ones(n, bool)
+    rest[contact] = False
+    ask = at[rest[at]]
+    g, c = balls.balls(surface.points[ask], floor=0.0, checkpoint=_scaled(checkpoint, 0.4, 0.8), workers=workers)
+    gap_t, cov_t = np.zeros(n), np.ones(n, bool)  # tree order; the sampled positions only are set
+    gap_t[ask], cov_t[ask] = np.maximum(g, 0.0), c
+    # every cloud point: its nearest sampled point's answer (the sampled ones: their own)
+    near = BallTree(surface.points[at], checkpoint=_scaled(checkpoint, 0.8, 0.85))
+    near.nearest(surface.points, _scaled(checkpoint, 0.85, 1.0), workers)
+    j = at[near.perm[near.last_index]]
+    gap, covered = np.empty(n), np.empty(n, bool)
+    gap[surface.perm], covered[surface.perm] = gap_t[j], cov_t[j]
+    return _summary(gap, covered, tau, s, len(elements), sample_rows)

@@ -25,7 +25,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.spatial import cKDTree
 
-from ..geometry import Checkpoint, Normalization, no_checkpoint
+from ..geometry import Checkpoint, Normalization, leaf_order, no_checkpoint, timed_query
 from ..params import Params
 
 __all__ = ["Outliers", "find_outliers", "isolated_rows"]
@@ -70,9 +70,11 @@ def find_outliers(cloud: np.ndarray, params: Params = Params(), *, checkpoint: C
     k = int(params.outlier_k)
     if n <= max(m, k) + 1:
         return Outliers(np.zeros(0, np.int64), n, 1.0, 0.0)
-    tree = cKDTree(cloud)
+    tree = cKDTree(cloud, balanced_tree=False)  # sliding midpoint: half the build time, the same distances
     checkpoint(0.1)
-    d, _ = tree.query(cloud, k=m + 1, workers=-1)
+    # in the tree's leaf order (cache-warm: 3.8 -> 1.4 s at 1M points, the same answers), in chunks of
+    # ~0.1 s with a checkpoint after each (one call over 1M points held a cancel for 1-4 s)
+    d, _ = timed_query(tree, cloud, m + 1, checkpoint, 0.1, 0.6, order=leaf_order(tree))
     checkpoint(0.6)
     spacing = float(np.median(d[:, 1]))
     none = Outliers(np.zeros(0, np.int64), n, 1.0, 0.0, spacing)
@@ -103,12 +105,15 @@ def find_outliers(cloud: np.ndarray, params: Params = Params(), *, checkpoint: C
     return Outliers(rows.astype(np.int64), n, float(ratio), shift, spacing)
 
 
-def isolated_rows(points: np.ndarray, spacing: float, params: Params = Params()) -> np.ndarray:
+def isolated_rows(points: np.ndarray, spacing: float, params: Params = Params(),
+                  checkpoint: Checkpoint = no_checkpoint) -> np.ndarray:
     """Rows of ``points`` (a skeletal set) with fewer than ``outlier_min_neighbours`` other points within
     ``outlier_skeletal_radius`` x ``spacing`` (the radius test with the cloud's spacing as yardstick)."""
     points = np.asarray(points, dtype=float)
     m = int(params.outlier_min_neighbours)
     if len(points) <= m or not spacing > 0:
         return np.zeros(0, np.int64)
-    d, _ = cKDTree(points).query(points, k=m + 1, workers=-1)
+    tree = cKDTree(points, balanced_tree=False)
+    checkpoint(0.0)
+    d, _ = timed_query(tree, points, m + 1, checkpoint, order=leaf_order(tree))  # as find_outliers'
     return np.flatnonzero(d[:, m] > float(params.outlier_skeletal_radius) * spacing).astype(np.int64)

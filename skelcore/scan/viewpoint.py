@@ -7,7 +7,9 @@ meets was scanned); an uncovered direction d is seen when e = q + r d (r: q's di
 faces a sensor (d . (v - e) > 0) and no scanned point lies in front of e on the sensor's line of sight
 (:class:`DepthImage`).  Several sensors: the union.  Directions are counted on an equal-area raster of
 ``viewpoint_rows`` x 2 ``viewpoint_rows``; each is cast on its own by the unchanged compiled kernel, its
-tree turned so that the direction is the one sample of a 1 x 1 raster.
+tree turned so that the direction is the one sample of a 1 x 1 raster; the sensors are asked only about
+the uncovered directions, and queries farther than 4 cells (``viewpoint_share_cell`` x h) from the cloud
+share their cell centroid's casts (docs/metrics.md 6.3, docs/performance.md 11).
 
 Skeletal centeredness (Eq. 10) with viewpoints leaves out the component of m_o - m_s along the mean
 viewing direction a(q) turned square to the skeleton, times m(q), the uncovered share of the directions
@@ -25,7 +27,7 @@ import numpy as np
 
 from ..geometry import Checkpoint, no_checkpoint, unique_rows
 from ..metrics.boundedness import in_raster_frame, prepared_cloud
-from ..metrics.rays_kernel import exact_plan, run_plan_here
+from ..metrics.rays_kernel import ALONE_WITHIN, exact_plan, run_plan_here
 from ..parallel import polled_streams
 from ..params import Params
 
@@ -96,7 +98,7 @@ class DepthImage:
         self.zbuf = zbuf
 
     def _project(self, points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        rel = (points - self.v) @ self.basis.T
+        rel = (points - self.v) @ np.ascontiguousarray(self.basis.T)  # a transposed view: 10-30 x slower
         z = rel[:, 2]
         depth = np.linalg.norm(rel, axis=1)
         with np.errstate(invalid="ignore", divide="ignore"):
@@ -125,14 +127,20 @@ def seen_directions(queries: np.ndarray, directions: np.ndarray, images: list[De
     q = np.asarray(queries, dtype=float)
     r = np.asarray(radius, dtype=float)
     out = np.zeros((len(q), len(directions)), bool)
-    chunk = max(1, 2_000_000 // max(1, len(directions)))
-    for i0 in range(0, len(q), chunk):
-        sl = slice(i0, i0 + chunk)
-        e = q[sl][:, None, :] + r[sl][:, None, None] * directions[None, :, :]
-        margin = np.repeat(0.5 * r[sl], len(directions))
-        for image in images:
-            facing = np.einsum("dk,qdk->qd", directions, image.v - e) > 0
-            out[sl] |= facing & ~image.hidden(e.reshape(-1, 3), margin).reshape(facing.shape)
+    for k, d in enumerate(np.asarray(directions, dtype=float)):
+        out[:, k] = _seen_along(q, r, d, images)
+    return out
+
+
+def _seen_along(q: np.ndarray, r: np.ndarray, d: np.ndarray, images: list[DepthImage]) -> np.ndarray:
+    """(Q,) bool: :func:`seen_directions` for one direction ``d``; each sensor's depth test only where
+    no sensor before it saw e and e faces it."""
+    e = q + r[:, None] * d
+    out = np.zeros(len(q), bool)
+    for image in images:
+        ask = np.flatnonzero(~out & ((image.v - e) @ d > 0))
+        if len(ask):
+            out[ask] = ~image.hidden(e[ask], 0.5 * r[ask])
     return out
 
 
@@ -155,15 +163,25 @@ class _TurnedTree:
     leaves: np.ndarray
 
 
-def _turned(tree, rot: np.ndarray, pad: float) -> _TurnedTree:
-    """The tree's points, leaf blocks and node centres turned by ``rot``; node radii grown by ``pad`` so that
-    the float32 rounding of the turned points never leaves a point outside its node's sphere."""
-    points = (tree.points.astype(np.float64) @ rot.T).astype(np.float32)
-    leaves = np.einsum("ij,ljk->lik", rot, tree.leaves.astype(np.float64)).astype(np.float32)  # NaN lanes stay NaN
-    nodes = tree.nodes.copy()
-    nodes["c"] = (nodes["c"].astype(np.float64) @ rot.T).astype(np.float32)
-    nodes["r"] += np.float32(pad)
-    return _TurnedTree(points, nodes, leaves)
+class _Turner:
+    """Turns a kernel tree by rotations, its coordinates kept in float64 once."""
+
+    def __init__(self, tree, pad: float):
+        self.points = tree.points.astype(np.float64)
+        self.leaves = tree.leaves.astype(np.float64)
+        self.centres = tree.nodes["c"].astype(np.float64)
+        self.nodes = tree.nodes.copy()
+        self.nodes["r"] += np.float32(pad)
+
+    def __call__(self, rot: np.ndarray) -> _TurnedTree:
+        """The tree's points, leaf blocks (NaN lanes stay NaN) and node centres turned by ``rot``; the
+        node radii grown by ``pad`` so that the float32 rounding of the turned points never leaves a
+        point outside its node's sphere."""
+        rt = np.ascontiguousarray(rot.T)  # OpenBLAS took 10-30 x longer with the transposed view (same bits)
+        nodes = self.nodes.copy()
+        nodes["c"] = (self.centres @ rt).astype(np.float32)
+        return _TurnedTree((self.points @ rt).astype(np.float32),
+                           nodes, np.matmul(rot, self.leaves).astype(np.float32))
 
 
 def seen_boundedness(
@@ -219,25 +237,26 @@ def seen_boundedness(
     cell = np.floor(q_r / (4.0 * h)).astype(np.int64)
     order = np.lexsort(cell.T[::-1])
     q_r = q_r[order]
+    # queries far from the cloud share one cast per cell (their centroid's; docs/metrics.md 6.3)
+    group, reps, rep_radius = _sharing(q_r, h, float(params.viewpoint_share_cell), prepared.tree)
+    checkpoint(0.0)
     points = prepared.tree.points.astype(np.float64)
-    radius = prepared.tree.clearance(q_r, np.inf)
-    radius = np.where(np.isfinite(radius), np.maximum(radius, h), h)
     images = [DepthImage(points, v, h) for v in v_r]
     checkpoint(0.0)
     directions = direction_raster(int(params.viewpoint_rows))
-    seen = seen_directions(q_r, directions, images, radius)
-    checkpoint(0.0)
     pad = 8.0 * float(np.finfo(np.float32).eps) * (float(np.abs(prepared.tree.points).max(initial=0.0)) + 1.0)
-    n_dir = len(directions)
+    n_dir, n_rep = len(directions), len(reps)
+    turn = _Turner(prepared.tree, pad)
     workers = max(1, int(workers or os.cpu_count() or 1))
     n_spans = min(n_dir, 4 * workers)
     bounds = np.linspace(0, n_dir, n_spans + 1).astype(int)
-    # every direction is cast: a covered direction was seen (the point it meets was scanned)
-    hit_seen = np.zeros((n_spans, len(q_r)), np.int64)  # covered (hence seen)
-    miss_seen = np.zeros((n_spans, len(q_r)), np.int64)
-    miss_behind = np.zeros((n_spans, len(q_r)), np.int64)
-    axes = viewing_axes(q_r, v_r)
-    behind = (axes @ directions.T) < 0  # (Q, D): the half of the directions facing away from the sensors
+    # every direction is cast: a covered direction was seen (the point it meets was scanned); the
+    # sensors' tests only for the directions left uncovered
+    hits = np.zeros((n_spans, n_rep), np.int64)  # covered (hence seen)
+    miss_seen = np.zeros((n_spans, n_rep), np.int64)
+    miss_behind = np.zeros((n_spans, n_rep), np.int64)
+    n_behind = np.zeros((n_spans, n_rep), np.int64)
+    axes = viewing_axes(reps, v_r)
     done = [0]
     lock = threading.Lock()
     stop = np.zeros(1, np.int32)
@@ -246,21 +265,24 @@ def seen_boundedness(
         for k in range(bounds[i], bounds[i + 1]):
             if stop[0]:
                 return
-            rot = _rotation_onto(directions[k])
-            q = q_r @ rot.T
-            hit = run_plan_here(_turned(prepared.tree, rot, pad), exact_plan(q, h), q, h, 1, 1, stop) > 0.5
-            hit_seen[i] += hit
-            miss_seen[i] += ~hit & seen[:, k]
-            miss_behind[i] += ~hit & behind[:, k]
+            d = directions[k]
+            rot = _rotation_onto(d)
+            q = reps @ np.ascontiguousarray(rot.T)
+            hit = run_plan_here(turn(rot), exact_plan(q, h), q, h, 1, 1, stop) > 0.5
+            hits[i] += hit
+            behind = axes @ d < 0  # the half of the directions facing away from the sensors
+            n_behind[i] += behind
+            miss = np.flatnonzero(~hit)
+            miss_seen[i, miss[_seen_along(reps[miss], rep_radius[miss], d, images)]] += 1
+            miss_behind[i, miss[behind[miss]]] += 1
             with lock:
                 done[0] += 1
 
     polled_streams(span, [(i,) for i in range(n_spans)], workers, checkpoint, lambda: done[0] / n_dir, stop)
-    hits, misses, missed_behind = hit_seen.sum(axis=0), miss_seen.sum(axis=0), miss_behind.sum(axis=0)
-    counted = hits + misses
-    beta_sorted = np.where(counted > 0, hits / np.maximum(counted, 1), 0.0)
-    n_behind = behind.sum(axis=1)
-    missing_sorted = np.where(n_behind > 0, missed_behind / np.maximum(n_behind, 1), 0.0)
+    hit_r, miss_r, behind_r = hits.sum(axis=0), miss_seen.sum(axis=0), n_behind.sum(axis=0)
+    counted = hit_r + miss_r
+    beta_sorted = np.where(counted > 0, hit_r / np.maximum(counted, 1), 0.0)[group]
+    missing_sorted = np.where(behind_r > 0, miss_behind.sum(axis=0) / np.maximum(behind_r, 1), 0.0)[group]
     beta_u = np.empty(len(uniq))
     beta_u[order] = beta_sorted
     out[:] = beta_u[inverse]
@@ -269,6 +291,54 @@ def seen_boundedness(
     share[:] = missing_u[inverse]
     checkpoint(1.0)
     return (out, share) if return_missing else out
+
+
+def _sharing(q: np.ndarray, h: float, share: float, tree) -> tuple:
+    """Queries farther than ``ALONE_WITHIN`` cells from the cloud share one cast per cubic cell of side
+    ``share`` x h, from their centroid (the rays estimator's far-field sharing, here of every
+    direction: docs/metrics.md 6.3); the others are cast alone.  Returns each query's group, the
+    groups' positions and their distance r to the cloud (at least h), groups in the queries' order.
+    Only the groups' r is searched unbounded (from a tube's axis the whole wall is nearly equidistant:
+    an unbounded search per query cost more than the casts)."""
+    n = len(q)
+
+    def clearance(points: np.ndarray, bound: float = np.inf) -> np.ndarray:
+        r = tree.clearance(points, bound)
+        return np.where(np.isfinite(r), np.maximum(r, h), h)
+
+    if not share > 0 or n == 0:
+        return np.arange(n), q, clearance(q)
+    cell = share * h
+    bound = ALONE_WITHIN * cell
+    radius = tree.clearance(q, bound * (1.0 + 1e-9))
+    lone = radius < bound
+    radius = np.maximum(radius, h)
+    keys = np.column_stack([np.floor(q / cell).astype(np.int64), np.where(lone, np.arange(1, n + 1), 0)])
+    by_key = np.lexsort(keys.T[::-1])
+    ks = keys[by_key]
+    first = np.r_[True, np.any(ks[1:] != ks[:-1], axis=1)]
+    group = np.empty(n, np.int64)
+    group[by_key] = np.cumsum(first) - 1
+    # number the groups in the order of their first query (the queries' Morton-like order)
+    n_groups = int(first.sum())
+    first_row = np.full(n_groups, n, np.int64)
+    np.minimum.at(first_row, group, np.arange(n))
+    rank = np.empty(n_groups, np.int64)
+    rank[np.argsort(first_row, kind="stable")] = np.arange(n_groups)
+    group = rank[group]
+    size = np.bincount(group, minlength=n_groups)
+    reps = np.column_stack([np.bincount(group, q[:, j], n_groups) for j in range(3)]) / size[:, None]
+    alone = size == 1
+    one = np.empty(n_groups, np.int64)
+    one[group] = np.arange(n)  # a member of each group (the one of a group of one)
+    reps[alone] = q[one[alone]]  # a query alone exactly where it is
+    rep_radius = np.empty(n_groups)
+    near = lone[one]  # groups of a query closer than the bound: its distance is known
+    rep_radius[near] = radius[one[near]]
+    far = np.flatnonzero(~near)
+    if len(far):
+        rep_radius[far] = clearance(reps[far])
+    return group, reps, rep_radius
 
 
 def viewing_axes(points: np.ndarray, viewpoints: np.ndarray) -> np.ndarray:
