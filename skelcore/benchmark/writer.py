@@ -69,7 +69,7 @@ def _toml_string(text: str) -> str:
 
 def write_manifest(folder: Path, records: list[dict[str, Any]], suite: str, seed: int) -> None:
     """``compare.toml``: the built-in skeletonizers (cao, skelscope) on every case, each case with its
-    reference curve."""
+    reference curve and, for a one-sided scan, its viewpoints (the sensors the scan was made from)."""
     lines = [
         f"# skelcore compare manifest of the benchmark in this folder (suite {suite!r}, seed {seed}),",
         "# written by `skelcore bench make`:  skelcore compare compare.toml --out runs/compare",
@@ -82,6 +82,10 @@ def write_manifest(folder: Path, records: list[dict[str, Any]], suite: str, seed
         lines += ["[[methods]]", f"name = {_toml_string(name)}", 'kind = "builtin"', f"method = {_toml_string(method)}", ""]
     for rec in records:
         lines += ["[[shapes]]", f"name = {_toml_string(rec['name'])}", f"path = {_toml_string(rec['files']['cloud'])}",
-                  'reference = "truth/{stem}_reference.ply"', ""]
+                  'reference = "truth/{stem}_reference.ply"']
+        eyes = (rec.get("scan") or {}).get("viewpoints")
+        if eyes:  # a one-sided scan: compare scores it from its sensors (docs/metrics.md 6.3, issue 26)
+            lines.append("viewpoint = [" + ", ".join("[" + ", ".join(repr(float(x)) for x in e) + "]" for e in eyes) + "]")
+        lines.append("")
     with atomic_open(folder / "compare.toml", "w") as fh:
         fh.write("\n".join(lines))

@@ -167,6 +167,11 @@ def test_compare_manifest_names_every_case_with_its_reference(small):
     without = {**doc, "shapes": [{k: v for k, v in s.items() if k != "reference"} for s in doc["shapes"]]}
     m = parse_manifest(without, str(small / "compare.toml"))  # otherwise a valid compare manifest
     assert [s.name for s in m.shapes] == names
+    # a one-sided scan carries the sensors it was made from (issue 26: compare scores what they saw)
+    views = {s.name: s.viewpoints for s in m.shapes}
+    rec = json.loads((small / "cases" / "junction_y__views-1.json").read_text())
+    assert views["junction_y__views-1"] == tuple(tuple(e) for e in rec["scan"]["viewpoints"]) and len(rec["scan"]["viewpoints"]) == 1
+    assert all(v == () for name, v in views.items() if "views" not in name)
 
 
 def test_the_folder_marker_is_compares_run_marker(tmp_path, capsys):
