@@ -10,6 +10,7 @@ jobs carry the ground-truth columns, docs/compare.md "Ground truth") and prints 
   paper metric, each oriented so that +1 means "the paper metric ranks as the truth does":
   over the methods (their means), over all jobs, and within each case (the methods ranked on one
   cloud, rho averaged over the cases where both columns vary);
+- all of it again on the cases every method finished;
 - the best and the worst job by GT F1, with their skeleton render (renders/KEY_skeleton.png).
 
     .venv/bin/python benchmarks/bench_leaderboard.py RUN_DIR
@@ -73,9 +74,14 @@ def _fmt(x: float, digits: int = 3) -> str:
     return "-" if not math.isfinite(x) else f"{x:.{digits}f}"
 
 
-def report(run: Path) -> str:
+def report(run: Path, common: bool = False) -> str:
+    """The tables; ``common``: only the cases every method finished (a method that fails on the hard
+    cases would otherwise be averaged over the easy ones alone)."""
     rows = list(csv.DictReader(open(run / "results.csv", newline="")))
     methods = list(dict.fromkeys(r["method"] for r in rows))
+    if common:
+        bad = {r["shape"] for r in rows if r["status"] != "ok"}
+        rows = [r for r in rows if r["shape"] not in bad]
     ok = [r for r in rows if r["status"] == "ok"]
     cols = (*SHOWN_TRUTH, *PAPER, "seconds")
     val = {c: np.array([_num(r[c]) for r in ok]) for c in cols}
@@ -150,7 +156,8 @@ def main(argv: list[str] | None = None) -> int:
     if not (a.run / "results.csv").is_file():
         print(f"{a.run}: no results.csv: not a finished skelcore compare run", file=sys.stderr)
         return 2
-    print(report(a.run))
+    print(f"## all jobs\n\n{report(a.run)}\n\n## the cases every method finished\n\n"
+          f"{report(a.run, common=True)}")
     return 0
 
 
