@@ -55,18 +55,6 @@ class VoxelShape:
         return self.origin + np.asarray(ijk, float) * self.size
 
 
-def _shifted(a: np.ndarray, d1: int, d2: int) -> np.ndarray:
-    """out[i, j] = a[i + d1, j + d2], False outside."""
-    out = np.zeros_like(a)
-    n1, n2 = a.shape
-    s1 = slice(max(0, -d1), n1 - max(0, d1))
-    s2 = slice(max(0, -d2), n2 - max(0, d2))
-    t1 = slice(max(0, d1), n1 - max(0, -d1))
-    t2 = slice(max(0, d2), n2 - max(0, -d2))
-    out[s1, s2] = a[t1, t2]
-    return out
-
-
 def _ray_hits(target: np.ndarray, d: np.ndarray) -> np.ndarray:
     """hit[v] = some target voxel at v + t d, t >= 1: one sweep of 2-D slices against ``d``."""
     axis = int(np.flatnonzero(d)[0])
@@ -77,9 +65,16 @@ def _ray_hits(target: np.ndarray, d: np.ndarray) -> np.ndarray:
     n = tg.shape[0]
     rng = range(n - 2, -1, -1) if step > 0 else range(1, n)
     d1, d2 = int(d[others[0]]), int(d[others[1]])
+    # hit[i] = (tg[j] | hit[j]) shifted by (d1, d2), written in place (the border stays False): no
+    # temporaries per slice (26 directions x ~100 slices per voxelization)
+    n1, n2 = tg.shape[1], tg.shape[2]
+    s1 = slice(max(0, -d1), n1 - max(0, d1))
+    s2 = slice(max(0, -d2), n2 - max(0, d2))
+    t1 = slice(max(0, d1), n1 - max(0, -d1))
+    t2 = slice(max(0, d2), n2 - max(0, -d2))
     for i in rng:
         j = i + step
-        hit[i] = _shifted(tg[j] | hit[j], d1, d2)
+        np.bitwise_or(tg[j, t1, t2], hit[j, t1, t2], out=hit[i, s1, s2])
     return np.moveaxis(hit, 0, axis)
 
 
