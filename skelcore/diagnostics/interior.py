@@ -15,7 +15,7 @@ the 6-connected components of the rest that do not reach the grid's border (cavi
 from __future__ import annotations
 
 import weakref
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 from scipy import ndimage
@@ -45,6 +45,13 @@ class VoxelShape:
     hits: np.ndarray
     origin: np.ndarray
     size: float
+    _solid: np.ndarray | None = field(default=None, repr=False, compare=False)
+
+    def solid(self) -> np.ndarray:
+        """``inside`` with its cavities filled (the outside test's "in the shape"), made once per grid."""
+        if self._solid is None:
+            self._solid = ndimage.binary_fill_holes(self.inside)
+        return self._solid
 
     def index_of(self, points: np.ndarray) -> np.ndarray:
         """(n, 3) voxel indices of points (clipped to the grid)."""
