@@ -134,6 +134,12 @@ def chunked_query(
 THREAD_QUERY_ROWS = 8192
 
 
+def query_workers(rows: int) -> int:
+    """cKDTree's ``workers`` for a query of ``rows`` rows: all threads from ``THREAD_QUERY_ROWS``, else one
+    (the answers do not depend on it)."""
+    return -1 if rows >= THREAD_QUERY_ROWS else 1
+
+
 def _query_spans(tree, queries, k, spans, checkpoint, lo, hi, order, kwargs) -> tuple[np.ndarray, np.ndarray]:
     """The k-NN answers of ``queries`` asked span by span (rows ``order[start:stop]`` or start:stop),
     a checkpoint after each: the loop of :func:`chunked_query` and :func:`timed_query`."""
@@ -144,8 +150,7 @@ def _query_spans(tree, queries, k, spans, checkpoint, lo, hi, order, kwargs) -> 
     for start, stop in spans:
         rows = slice(start, stop) if order is None else order[start:stop]
         # below THREAD_QUERY_ROWS, starting the threads costs more than they save (the same answers)
-        workers = -1 if stop - start >= THREAD_QUERY_ROWS else 1
-        d, i = tree.query(queries[rows], k=k, workers=workers, **kwargs)
+        d, i = tree.query(queries[rows], k=k, workers=query_workers(stop - start), **kwargs)
         dist[rows] = d.reshape(stop - start, k)
         idx[rows] = i.reshape(stop - start, k)
         checkpoint(lo + (hi - lo) * stop / max(n, 1))
