@@ -129,6 +129,17 @@ def chunked_query(
                         lo, hi, order, kwargs)
 
 
+#: spans of fewer query rows run on one thread: a 4096-row k = 5 query took 4.6 ms of CPU on one
+#: thread and 4.9 ms with all (2 cores, loaded), 256 rows 0.25 against 0.66 ms (docs/performance.md 12)
+THREAD_QUERY_ROWS = 8192
+
+
+def query_workers(rows: int) -> int:
+    """cKDTree's ``workers`` for a query of ``rows`` rows: all threads from ``THREAD_QUERY_ROWS``, else one
+    (the answers do not depend on it)."""
+    return -1 if rows >= THREAD_QUERY_ROWS else 1
+
+
 def _query_spans(tree, queries, k, spans, checkpoint, lo, hi, order, kwargs) -> tuple[np.ndarray, np.ndarray]:
     """The k-NN answers of ``queries`` asked span by span (rows ``order[start:stop]`` or start:stop),
     a checkpoint after each: the loop of :func:`chunked_query` and :func:`timed_query`."""
@@ -138,7 +149,8 @@ def _query_spans(tree, queries, k, spans, checkpoint, lo, hi, order, kwargs) -> 
     idx = np.empty((n, k), np.int64)
     for start, stop in spans:
         rows = slice(start, stop) if order is None else order[start:stop]
-        d, i = tree.query(queries[rows], k=k, workers=-1, **kwargs)
+        # below THREAD_QUERY_ROWS, starting the threads costs more than they save (the same answers)
+        d, i = tree.query(queries[rows], k=k, workers=query_workers(stop - start), **kwargs)
         dist[rows] = d.reshape(stop - start, k)
         idx[rows] = i.reshape(stop - start, k)
         checkpoint(lo + (hi - lo) * stop / max(n, 1))

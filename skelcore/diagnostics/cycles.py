@@ -352,7 +352,7 @@ def find_cycle_defects(
                                         min_spacing_factor=params.cycles_voxel_spacing,
                                         inside_share=params.beta_star,
                                         checkpoint=lambda f: checkpoint(0.5 * f))
-    solid = ndimage.binary_fill_holes(voxel_shape.inside)
+    solid = voxel_shape.solid()  # shared with the outside test (not written to)
     _, tunnels, _ = betti_numbers(solid)
     checkpoint(0.6)
     nc = branches.cycle_rank

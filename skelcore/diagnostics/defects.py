@@ -5,6 +5,7 @@ branches flagged with what each found (docs/diagnostics.md)."""
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Callable
 
 import numpy as np
 
@@ -15,7 +16,7 @@ from ..params import Params
 from .trust_warning import TrustWarning
 from .branches import Branches, decompose_branches
 from .cycles import CycleDefects, find_cycle_defects
-from .interior import cloud_subsample, voxelize_interior
+from .interior import VoxelShape, cloud_subsample, voxelize_interior
 from .outside import OutsideDefects, find_outside
 from .spurs import SpurDefects, find_spurious_branches
 
@@ -72,10 +73,13 @@ def find_curve_defects(
     skeletal_boundedness: np.ndarray | None = None,
     params: Params = Params(),
     checkpoint: Checkpoint = no_checkpoint,
+    interior: Callable[[Checkpoint], VoxelShape] | None = None,
 ) -> CurveDefects:
     """Branches, spurious branches, cycles and the parts outside of ``curve`` (and of ``skeletal``),
     all normalized (SPEC 0); ``sample_boundedness`` are the boundedness values of ``samples``. The
-    local radii come from at most ``diag_max_points`` of the cloud (``spurs.subsampled`` says when)."""
+    local radii come from at most ``diag_max_points`` of the cloud (``spurs.subsampled`` says when).
+    ``interior(checkpoint)`` gives the cloud's voxelized interior when it is shared (the evaluation's
+    stages make it once); default :func:`.interior.voxelize_interior` with ``params``."""
     import time
 
     t: dict[str, float] = {}
@@ -88,8 +92,11 @@ def find_curve_defects(
                                   cloud_tree=tree, checkpoint=lambda f: checkpoint(0.05 + 0.05 * f))
     t["branches"] = time.perf_counter() - t0
     t0 = time.perf_counter()
-    shape = voxelize_interior(cloud, voxels=params.cycles_voxels, min_spacing_factor=params.cycles_voxel_spacing,
-                              inside_share=params.beta_star, checkpoint=lambda f: checkpoint(0.1 + 0.1 * f))
+    if interior is None:
+        def interior(check: Checkpoint) -> VoxelShape:
+            return voxelize_interior(cloud, voxels=params.cycles_voxels, min_spacing_factor=params.cycles_voxel_spacing,
+                                     inside_share=params.beta_star, checkpoint=check)
+    shape = interior(lambda f: checkpoint(0.1 + 0.1 * f))
     t["interior"] = time.perf_counter() - t0
     t0 = time.perf_counter()
     spurs = find_spurious_branches(cloud, curve, params=params, branches=branches, cloud_tree=tree,

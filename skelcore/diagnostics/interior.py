@@ -15,7 +15,7 @@ the 6-connected components of the rest that do not reach the grid's border (cavi
 from __future__ import annotations
 
 import weakref
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 from scipy import ndimage
@@ -45,6 +45,13 @@ class VoxelShape:
     hits: np.ndarray
     origin: np.ndarray
     size: float
+    _solid: np.ndarray | None = field(default=None, repr=False, compare=False)
+
+    def solid(self) -> np.ndarray:
+        """``inside`` with its cavities filled (the outside test's "in the shape"), made once per grid."""
+        if self._solid is None:
+            self._solid = ndimage.binary_fill_holes(self.inside)
+        return self._solid
 
     def index_of(self, points: np.ndarray) -> np.ndarray:
         """(n, 3) voxel indices of points (clipped to the grid)."""
@@ -53,18 +60,6 @@ class VoxelShape:
 
     def centres(self, ijk: np.ndarray) -> np.ndarray:
         return self.origin + np.asarray(ijk, float) * self.size
-
-
-def _shifted(a: np.ndarray, d1: int, d2: int) -> np.ndarray:
-    """out[i, j] = a[i + d1, j + d2], False outside."""
-    out = np.zeros_like(a)
-    n1, n2 = a.shape
-    s1 = slice(max(0, -d1), n1 - max(0, d1))
-    s2 = slice(max(0, -d2), n2 - max(0, d2))
-    t1 = slice(max(0, d1), n1 - max(0, -d1))
-    t2 = slice(max(0, d2), n2 - max(0, -d2))
-    out[s1, s2] = a[t1, t2]
-    return out
 
 
 def _ray_hits(target: np.ndarray, d: np.ndarray) -> np.ndarray:
@@ -77,9 +72,16 @@ def _ray_hits(target: np.ndarray, d: np.ndarray) -> np.ndarray:
     n = tg.shape[0]
     rng = range(n - 2, -1, -1) if step > 0 else range(1, n)
     d1, d2 = int(d[others[0]]), int(d[others[1]])
+    # hit[i] = (tg[j] | hit[j]) shifted by (d1, d2), written in place (the border stays False): no
+    # temporaries per slice (26 directions x ~100 slices per voxelization)
+    n1, n2 = tg.shape[1], tg.shape[2]
+    s1 = slice(max(0, -d1), n1 - max(0, d1))
+    s2 = slice(max(0, -d2), n2 - max(0, d2))
+    t1 = slice(max(0, d1), n1 - max(0, -d1))
+    t2 = slice(max(0, d2), n2 - max(0, -d2))
     for i in rng:
         j = i + step
-        hit[i] = _shifted(tg[j] | hit[j], d1, d2)
+        np.bitwise_or(tg[j, t1, t2], hit[j, t1, t2], out=hit[i, s1, s2])
     return np.moveaxis(hit, 0, axis)
 
 

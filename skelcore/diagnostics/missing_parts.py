@@ -27,7 +27,7 @@ from scipy.spatial import cKDTree
 
 from ..correspondence import densify_curve
 from ..curve import CurveSkeleton
-from ..geometry import Checkpoint, no_checkpoint, unique_rows
+from ..geometry import Checkpoint, no_checkpoint, query_workers, unique_rows
 from ..metrics.coverage import Coverage, coverage, coverage_tau
 from ..params import Params
 from .trust_warning import TrustWarning
@@ -289,9 +289,9 @@ def _spread(cloud: np.ndarray, pts: np.ndarray, region_s: np.ndarray, explained_
     un = np.flatnonzero(~explained_s)
     if len(un) == 0:
         return region, explained
-    d, _ = cKDTree(pts[un]).query(cloud, distance_upper_bound=SPREAD * spacing, workers=-1)
+    d, _ = cKDTree(pts[un]).query(cloud, distance_upper_bound=SPREAD * spacing, workers=query_workers(len(cloud)))
     near = np.flatnonzero(np.isfinite(d))
-    j = cKDTree(pts).query(cloud[near], workers=-1)[1]
+    j = cKDTree(pts).query(cloud[near], workers=query_workers(len(near)))[1]
     region[near], explained[near] = region_s[j], explained_s[j]
     return region, explained
 
@@ -315,7 +315,7 @@ def _regions(pts: np.ndarray, cov: Coverage, spacing: float, p: Params, checkpoi
     link = float(p.missing_link_factor) * spacing
     k = min(LINK_K + 1, len(miss))
     if k > 1:
-        d, j = cKDTree(up).query(up, k=k, distance_upper_bound=link, workers=-1)
+        d, j = cKDTree(up).query(up, k=k, distance_upper_bound=link, workers=query_workers(len(up)))
         ok = np.isfinite(d[:, 1:])
         rows = np.repeat(np.arange(len(miss)), k - 1)[ok.ravel()]
         cols = j[:, 1:][ok]
@@ -343,7 +343,7 @@ def _regions(pts: np.ndarray, cov: Coverage, spacing: float, p: Params, checkpoi
         q = np.flatnonzero(in_big)
         tree = cKDTree(pts) if tree is None else tree
         kk = min(LINK_K + 1, n)
-        dd, jj = tree.query(up[q], k=kk, distance_upper_bound=link, workers=-1)
+        dd, jj = tree.query(up[q], k=kk, distance_upper_bound=link, workers=query_workers(len(q)))
         jj = np.where(np.isfinite(dd), jj, n)
         explained = np.concatenate([cov.covered, [False]])
         border = np.zeros(len(miss), bool)
@@ -368,7 +368,7 @@ def _regions(pts: np.ndarray, cov: Coverage, spacing: float, p: Params, checkpoi
             ring = up[main]
             rho = float(np.sqrt(np.mean(np.sum((ring - ring.mean(axis=0)) ** 2, axis=1))))
             rho = max(rho, spacing)
-            dist = cKDTree(up[b]).query(up[members], workers=-1)[0]
+            dist = cKDTree(up[b]).query(up[members], workers=query_workers(len(members)))[0]
             r_q = float(np.quantile(dist, float(p.missing_depth_quantile)))
             depth[c], reach[c], radius[c] = r_q / rho, r_q, rho
     deepest = np.zeros(n_comp, np.int64)

@@ -18,7 +18,6 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 
 import numpy as np
-from scipy import ndimage
 from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import connected_components
 from scipy.spatial import cKDTree
@@ -179,12 +178,12 @@ def find_outside(
     cycle test's); ``branches``, ``cloud_tree`` and ``voxel_shape`` may be passed when computed."""
     cloud = np.asarray(cloud, dtype=float)
     beta_star = params.beta_star
-    if cloud_tree is None and len(cloud):
+    if cloud_tree is None and len(cloud) and curve is not None:  # only the curve's parts read it
         cloud_tree = kd_tree(cloud_subsample(cloud, params.diag_max_points, seed))
     if voxel_shape is None:
         voxel_shape = voxelize_interior(cloud, voxels=params.cycles_voxels,
                                         min_spacing_factor=params.cycles_voxel_spacing, inside_share=beta_star)
-    solid = ndimage.binary_fill_holes(voxel_shape.inside)
+    solid = voxel_shape.solid()
 
     def in_shape(points: np.ndarray) -> np.ndarray:
         ijk = voxel_shape.index_of(points)

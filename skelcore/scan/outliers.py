@@ -25,7 +25,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.spatial import cKDTree
 
-from ..geometry import Checkpoint, Normalization, leaf_order, no_checkpoint, timed_query
+from ..geometry import Checkpoint, Normalization, leaf_order, no_checkpoint, query_workers, timed_query
 from ..params import Params
 
 __all__ = ["Outliers", "find_outliers", "isolated_rows"]
@@ -84,10 +84,10 @@ def find_outliers(cloud: np.ndarray, params: Params = Params(), *, checkpoint: C
     if len(candidates) == 0:
         return none
     sample = np.arange(n) if n <= REFERENCE_SAMPLE else np.random.default_rng(0).choice(n, REFERENCE_SAMPLE, replace=False)
-    ref = tree.query(cloud[sample], k=k + 1, workers=-1)[0][:, 1:].mean(axis=1)
+    ref = tree.query(cloud[sample], k=k + 1, workers=query_workers(len(sample)))[0][:, 1:].mean(axis=1)
     centre = float(np.median(ref))
     sigma = 1.4826 * float(np.median(np.abs(ref - centre)))
-    mean_d = tree.query(cloud[candidates], k=k + 1, workers=-1)[0][:, 1:].mean(axis=1)
+    mean_d = tree.query(cloud[candidates], k=k + 1, workers=query_workers(len(candidates)))[0][:, 1:].mean(axis=1)
     rows = candidates[mean_d > centre + float(params.outlier_std_ratio) * sigma]
     checkpoint(0.9)
     if len(rows) == 0 or len(rows) >= n - 1:

@@ -129,14 +129,15 @@ def _curve_defects(ctx: EvalContext, checkpoint: Checkpoint):
     """Branches, spurious branches, cycles, the parts outside (issue 22, docs/diagnostics.md)."""
     return find_curve_defects(ctx.cloud_n, ctx.curve_n, samples=ctx.samples,
                               sample_boundedness=ctx.results["curve boundedness"], params=ctx.params,
-                              checkpoint=checkpoint)
+                              checkpoint=checkpoint, interior=ctx.interior)
 
 
 def _skeletal_outside(ctx: EvalContext, checkpoint: Checkpoint):
     """The given skeletal set's points outside the shape, clustered (docs/diagnostics.md "Outside")."""
     return find_outside(ctx.cloud_n, None, skeletal=ctx.skeletal_n,
                         skeletal_boundedness=ctx.results["skeletal boundedness"], params=ctx.params,
-                        checkpoint=checkpoint)
+                        voxel_shape=ctx.interior(lambda f: checkpoint(0.5 * f)),
+                        checkpoint=lambda f: checkpoint(0.5 + 0.5 * f))
 
 
 def _missing(kind: str) -> Callable[[EvalContext, Checkpoint], object]:

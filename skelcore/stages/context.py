@@ -77,6 +77,8 @@ class EvalContext:
     unseen: dict[str, np.ndarray] = field(default_factory=dict)
     _tau: list[float] = field(default_factory=list, repr=False)
     _tau_lock: threading.Lock = field(default_factory=threading.Lock, repr=False)
+    _interior: list = field(default_factory=list, repr=False)
+    _interior_lock: threading.Lock = field(default_factory=threading.Lock, repr=False)
 
     @property
     def from_curve(self) -> bool:
@@ -148,6 +150,19 @@ class EvalContext:
             return None
         d = depth_axes(points_n, self.viewpoints_n, self.unseen["skeletal"])
         return d if rows is None else d[rows]
+
+    def interior(self, checkpoint: Checkpoint = no_checkpoint):
+        """The normalized cloud's voxelized interior (docs/diagnostics.md "Cycles"), made once by the first
+        diagnostic that asks (curve defects, skeletal outside: the same grid, the same parameters)."""
+        from ..diagnostics.interior import voxelize_interior
+
+        with self._interior_lock:
+            if not self._interior:
+                p = self.params
+                self._interior.append(voxelize_interior(self.cloud_n, voxels=p.cycles_voxels,
+                                                        min_spacing_factor=p.cycles_voxel_spacing,
+                                                        inside_share=p.beta_star, checkpoint=checkpoint))
+            return self._interior[0]
 
     def tau(self, checkpoint: Checkpoint) -> float:
         """Coverage's tau (the cloud's spacing, one kNN pass), computed by the first stage that asks, so

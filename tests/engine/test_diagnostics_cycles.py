@@ -163,3 +163,22 @@ def test_interior_cavities_are_filled_and_counted():
     shell = (r < 6) & (r > 3)
     assert betti_numbers(shell) == (1, 0, 1)
     assert betti_numbers(ndimage.binary_fill_holes(shell)) == (1, 0, 0)
+
+
+@pytest.mark.parametrize("seed", range(3))
+def test_lattice_rays_match_a_walk_along_each_ray(seed):
+    """The sweep that counts the interior's lattice rays against walking every ray voxel by voxel."""
+    from skelcore.diagnostics.interior import LATTICE_DIRECTIONS, _ray_hits
+
+    target = np.random.default_rng(seed).random((7, 9, 6)) < 0.08
+    shape = np.array(target.shape)
+    for d in LATTICE_DIRECTIONS:
+        want = np.zeros_like(target)
+        for v in np.ndindex(*target.shape):
+            p = np.array(v) + d
+            while np.all(p >= 0) and np.all(p < shape):
+                if target[tuple(p)]:
+                    want[v] = True
+                    break
+                p = p + d
+        np.testing.assert_array_equal(_ray_hits(target, d), want)
