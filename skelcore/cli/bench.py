@@ -8,18 +8,9 @@ import sys
 import time
 
 from ..errors import SkelInputError
+from .common import nonnegative_int
 
 __all__ = ["register", "run_bench_make_cli"]
-
-
-def _seed(text: str) -> int:
-    try:
-        value = int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected a whole number, got {text!r}") from None
-    if value < 0:
-        raise argparse.ArgumentTypeError(f"expected a number >= 0, got {text!r}")
-    return value
 
 
 def register(subparsers: argparse._SubParsersAction) -> argparse.ArgumentParser:
@@ -42,7 +33,7 @@ def register(subparsers: argparse._SubParsersAction) -> argparse.ArgumentParser:
     make.add_argument("--suite", choices=("default", "small"), default="default",
                       help="default: 120 cases, about 35 s to write, a few minutes of compare with cao; "
                       "small: 10 cases of about 1200 points (tests)")
-    make.add_argument("--seed", type=_seed, default=0, metavar="N", help="the seed every shape and scan is drawn from (0)")
+    make.add_argument("--seed", type=nonnegative_int, default=0, metavar="N", help="the seed every shape and scan is drawn from (0)")
     make.add_argument("--force", action="store_true",
                       help="remake every case, also in a folder that is not a benchmark or holds another "
                       "suite or seed (files of the same names are replaced)")

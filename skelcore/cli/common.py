@@ -13,7 +13,7 @@ from ..display.summary_table import format_defects, format_table  # re-exported:
 from ..scores import Scores, format_score
 
 __all__ = ["format_table", "format_defects", "format_reference", "format_ground_truth", "print_warnings", "stderr_progress", "params_from_args",
-           "positive_int", "positive_float", "nonnegative_float", "clear_progress_line"]
+           "positive_int", "nonnegative_int", "positive_float", "nonnegative_float", "clear_progress_line"]
 
 
 def format_reference(scores: Scores | dict) -> str:
@@ -88,14 +88,23 @@ def params_from_args(args: argparse.Namespace) -> Params:
     return params
 
 
-def positive_int(text: str) -> int:
+def _whole_number(text: str, least: int, what: str) -> int:
     try:
         value = int(text)
     except ValueError:
         raise argparse.ArgumentTypeError(f"expected a whole number, got {text!r}") from None
-    if value < 1:
-        raise argparse.ArgumentTypeError(f"expected a positive number, got {text!r}")
+    if value < least:
+        raise argparse.ArgumentTypeError(f"expected {what}, got {text!r}")
     return value
+
+
+def positive_int(text: str) -> int:
+    return _whole_number(text, 1, "a positive number")
+
+
+def nonnegative_int(text: str) -> int:
+    """A seed or a count that may be 0."""
+    return _whole_number(text, 0, "a number >= 0")
 
 
 def positive_float(text: str) -> float:
