@@ -114,6 +114,13 @@ class Task(QtCore.QObject):
         if names:
             self._progress(max(self._last[0], 0.0), names[-1])
 
+    def _failed(self, exc: BaseException) -> None:
+        """A failure is a dialog (``failed``), unless the run was cancelled: then no result at all."""
+        if self._cancel.is_set():
+            self.aborted.emit()
+        else:
+            self.failed.emit(exc, traceback.format_exc())
+
     def run(self) -> None:  # worker thread
         try:
             try:
@@ -121,10 +128,7 @@ class Task(QtCore.QObject):
             except Cancelled:
                 self.aborted.emit()
             except BaseException as exc:  # noqa: BLE001 - every failure becomes a dialog, never a crash
-                if self._cancel.is_set():
-                    self.aborted.emit()
-                else:
-                    self.failed.emit(exc, traceback.format_exc())
+                self._failed(exc)
             else:
                 if self._cancel.is_set():
                     self.aborted.emit()  # cancelled after the last checkpoint: still no result
@@ -202,10 +206,7 @@ class ProcessTask(Task):
         except Cancelled:
             self.aborted.emit()
         except BaseException as exc:  # noqa: BLE001 - every failure becomes a dialog, never a crash
-            if self._cancel.is_set():
-                self.aborted.emit()
-            else:
-                self.failed.emit(exc, traceback.format_exc())
+            self._failed(exc)
         finally:
             try:  # emitted before ``wait()`` returns: once the window has waited, this thread touches no Qt object
                 self.finished.emit()
