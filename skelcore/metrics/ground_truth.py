@@ -26,6 +26,7 @@ from scipy.spatial import cKDTree
 from ..correspondence import project_onto_curve
 from ..curve import CurveSkeleton
 from ..errors import SkelInputError
+from ..params import Params
 from .reference import graph_counts
 
 __all__ = ["GroundTruthParams", "GroundTruthComparison", "compare_with_ground_truth", "curve_samples",
@@ -48,12 +49,13 @@ class GroundTruthParams:
     radius_k : without a reference radius, it is the median distance to this many cloud points.
     """
 
-    thresholds: int = 20
-    threshold_max: float = 1.0
-    match_radii: float = 2.0
-    branch_radii: float = 1.0
-    sample_step: float = 0.1
-    radius_k: int = 8
+    # the defaults are Params' gt_ fields (one source of truth for the constants)
+    thresholds: int = Params.gt_thresholds
+    threshold_max: float = Params.gt_threshold_max
+    match_radii: float = Params.gt_match_radii
+    branch_radii: float = Params.gt_branch_radii
+    sample_step: float = Params.gt_sample_step
+    radius_k: int = Params.gt_radius_k
 
     def __post_init__(self) -> None:
         for name in ("threshold_max", "match_radii", "branch_radii", "sample_step"):
