@@ -282,6 +282,7 @@ def defects_screenshots(window, settle, save, wait_for_runner, tmp: Path) -> Non
         cut = CurveSkeleton.from_raw(curve.vertices[keep], new[curve.edges[keep[curve.edges].all(axis=1)]])
         path = tmp / "hammer_cao_half_handle_curve.ply"
         write_curve_ply(path, cut.vertices, cut.edges)
+        window.session.close_all()  # nothing of the earlier shots stays (a skeletal set would be kept)
         window.session.load_files([str(hammer), str(path)])
         wait_for_runner()
         window.scene.set_metric("centeredness")
@@ -306,6 +307,7 @@ def defects_screenshots(window, settle, save, wait_for_runner, tmp: Path) -> Non
     front = s.cloud[s.cloud[:, 1] > 0]
     write_points_ply(tmp / "cylinder_front_cloud.ply", front)
     write_curve_ply(tmp / "cylinder_axis_curve.ply", s.curve_vertices, s.curve_edges)
+    window.session.close_all()
     window.session.load_files([str(tmp / "cylinder_front_cloud.ply"), str(tmp / "cylinder_axis_curve.ply")])
     wait_for_runner()
     window.scene.set_metric("boundedness")
