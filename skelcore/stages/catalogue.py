@@ -26,6 +26,7 @@ from ..metrics.topology import topological_similarity
 from ..diagnostics.defects import find_curve_defects
 from ..diagnostics.missing_parts import missing_parts
 from ..diagnostics.outside import find_outside
+from ..scan.prepare import find_strays
 from .context import EvalContext
 
 __all__ = ["Stage", "CATALOGUE", "select", "start_order", "FIRST", "EARLY", "IN_TURN", "LAST"]
@@ -140,6 +141,12 @@ def _skeletal_outside(ctx: EvalContext, checkpoint: Checkpoint):
                         checkpoint=lambda f: checkpoint(0.5 + 0.5 * f))
 
 
+def _stray_points(ctx: EvalContext, checkpoint: Checkpoint):
+    """The cloud's stray points and, in pointwise correspondence, the skeletal set's isolated points
+    (docs/metrics.md 6.4): a stage beside the others, not a serial tail after them (docs/performance.md 13)."""
+    return find_strays(ctx.cloud, ctx.skeletal, ctx.params, pointwise=ctx.mode == "pointwise", checkpoint=checkpoint)
+
+
 def _missing(kind: str) -> Callable[[EvalContext, Checkpoint], object]:
     """Missing parts and completeness of one column (docs/diagnostics.md), from its coverage when computed."""
     def run(ctx: EvalContext, checkpoint: Checkpoint):
@@ -191,6 +198,11 @@ def _ground_truth_given(ctx: EvalContext) -> bool:
     return ctx.reference is not None and ctx.curve is not None and ctx.reference.n_edges > 0
 
 
+def _strays_not_yet_found(ctx: EvalContext) -> bool:
+    """``remove_outliers`` found them while building the context."""
+    return ctx.scan is None or not ctx.scan.outliers_removed
+
+
 def _last_beside_skeletal(ctx: EvalContext) -> int:
     # the curve's boundedness is a quarter of the skeletal one on the hammer; started second, it held
     # the other thread while the rest waited
@@ -222,6 +234,8 @@ CATALOGUE: tuple[Stage, ...] = (
           fn=_reference),
     Stage("ground truth", weight=0.3, column="", inputs=("cloud", "curve", "reference"), applies=_ground_truth_given,
           fn=_ground_truth),
+    Stage("stray points", weight=0.1, column="", inputs=("cloud", "skeletal set"), applies=_strays_not_yet_found,
+          fn=_stray_points),
     Stage("curve defects", weight=0.5, column="", inputs=("cloud", "curve", "samples", "curve boundedness"),
           applies=_curve, fn=_curve_defects, start=LAST),
     Stage("skeletal outside", weight=0.1, column="", inputs=("cloud", "skeletal set", "skeletal boundedness"),
