@@ -104,7 +104,8 @@ def _curve_smoothness(ctx: EvalContext, checkpoint: Checkpoint) -> tuple:
 
 def _skeletal_coverage(ctx: EvalContext, checkpoint: Checkpoint):
     tau = ctx.tau(lambda f: checkpoint(0.1 * f))
-    return coverage(ctx.cloud_n, ctx.skeletal_n, ctx.params, tau, checkpoint=lambda f: checkpoint(0.1 + 0.9 * f))
+    return coverage(ctx.cloud_n, ctx.skeletal_n, ctx.params, tau, checkpoint=lambda f: checkpoint(0.1 + 0.9 * f),
+                    index=ctx.cloud_index)
 
 
 def _curve_coverage(ctx: EvalContext, checkpoint: Checkpoint):
@@ -114,7 +115,7 @@ def _curve_coverage(ctx: EvalContext, checkpoint: Checkpoint):
     step = max(tau / p.coverage_tau_factor, float(curve_n.edge_lengths().sum()) / 200_000)
     pts, _ = densify_curve(curve_n, step)
     return coverage(ctx.cloud_n, np.vstack([pts, curve_n.vertices]), p, tau,
-                    checkpoint=lambda f: checkpoint(0.1 + 0.9 * f))
+                    checkpoint=lambda f: checkpoint(0.1 + 0.9 * f), index=ctx.cloud_index)
 
 
 def _reference(ctx: EvalContext, checkpoint: Checkpoint):
@@ -144,7 +145,9 @@ def _skeletal_outside(ctx: EvalContext, checkpoint: Checkpoint):
 def _stray_points(ctx: EvalContext, checkpoint: Checkpoint):
     """The cloud's stray points and, in pointwise correspondence, the skeletal set's isolated points
     (docs/metrics.md 6.4): a stage beside the others, not a serial tail after them (docs/performance.md 13)."""
-    return find_strays(ctx.cloud, ctx.skeletal, ctx.params, pointwise=ctx.mode == "pointwise", checkpoint=checkpoint)
+    spacings = ctx.spacings(lambda f: checkpoint(0.3 * f))  # shared with coverage's tau
+    return find_strays(ctx.cloud, ctx.skeletal, ctx.params, pointwise=ctx.mode == "pointwise",
+                       checkpoint=lambda f: checkpoint(0.3 + 0.7 * f), spacings=spacings)
 
 
 def _missing(kind: str) -> Callable[[EvalContext, Checkpoint], object]:
