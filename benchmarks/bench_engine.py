@@ -44,6 +44,7 @@ STAGES = [
     "curve smoothness",
     "skeletal coverage",
     "curve coverage",
+    "stray points",
 ]
 DIAG = ["curve defects", "skeletal missing parts", "curve missing parts"]
 

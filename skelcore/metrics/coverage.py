@@ -7,7 +7,7 @@ nearest cloud point, its inscribed ball. A cloud point p has the gap g(p) = min_
 distance from the cloud to the balls) summarise it. p is covered when min_x |p - x| - (1 + s) r(x)
 <= tau (``Params.coverage_slack`` s, tau = ``coverage_tau_factor`` x median NN spacing): a curve's
 balls never fill a shape's ends, so a complete skeleton must not need them to.  All three searches
-are exact, in the compiled kernel ``_balls.c`` on every core, a checkpoint every ~0.1 s.  Above
+are exact, in the compiled kernel ``_balls.c`` (:mod:`.ball_tree`) on every core, a checkpoint every ~0.1 s.  Above
 ``Params.coverage_exact_points`` cloud points the gaps are found for a random subsample of the cloud
 and of the elements only (radii still from the whole cloud), the other points taking their nearest
 sampled point's answer (``Coverage.subsample``; docs/metrics.md 5.2, docs/performance.md 11).
@@ -15,34 +15,17 @@ sampled point's answer (``Coverage.subsample``; docs/metrics.md 5.2, docs/perfor
 
 from __future__ import annotations
 
-import os
-from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
 
 import numpy as np
 
-from ..geometry import Checkpoint, TimedChunks, no_checkpoint, unique_rows
-from ..parallel import polled_build
+from ..geometry import Checkpoint, no_checkpoint, unique_rows
 from ..params import Params
-from . import _balls
+from .ball_tree import BallTree
+from .cloud_index import CloudIndex
 
 __all__ = ["Coverage", "coverage", "coverage_tau", "min_ball_excess", "covered_by_balls", "BallTree"]
 
-# one tree node as the kernel reads it (struct Node in _balls.c): 136 bytes
-NODE = np.dtype([("c", "<f8", (3,)), ("rho", "<f8"), ("rg", "<f8"), ("rc", "<f8"), ("n", "<f8", (3,)),
-                 ("t", "<f8"), ("w", "<f8"), ("k", "<f8", (3,)), ("rk", "<f8"), ("kid", "<i4"), ("lo", "<i4"), ("hi", "<i4"), ("pad", "<i4")])
-# points per tree leaf at most
-LEAF = 8
-# rows per timed chunk at most (a chunk is split over the threads)
-MOST_ROWS = 262144
-# below this many rows a chunk runs on the calling thread alone: the evaluation's stages already run side
-# by side, and on a small cloud the pieces' hand-over cost more than their work (docs/performance.md 8)
-THREAD_ROWS = 8192
-# covered: |p - x|^2 - R(x)^2 <= COVER_EPS x R_max^2 (the rounding allowance of the 4-D lifted query before)
-COVER_EPS = 1e-12
-# a timed chunk of at least twice this many rows is split over the threads (slow rows: a chunk of ~0.1 s
-# may hold only a few thousand, e.g. cloud points among a million overlapping balls)
-PIECE_ROWS = 256
 # the random subsample above coverage_exact_points (the same seed as the diagnostics' subsamples)
 SAMPLE_SEED = 0
 
@@ -84,98 +67,6 @@ def coverage_tau(cloud: np.ndarray, params: Params = Params(), checkpoint: Check
 
 def _scaled(checkpoint: Checkpoint, lo: float, hi: float) -> Checkpoint:
     return lambda f: checkpoint(lo + (hi - lo) * min(max(f, 0.0), 1.0))
-
-
-class BallTree:
-    """Points in a balanced KD-tree of bounding spheres (``_balls.build_tree``), in tree order:
-    ``points`` = input rows ``perm``.  With ``slab`` every node also bounds its points by a plane
-    (for nearest-point queries from inside a surface)."""
-
-    def __init__(self, points: np.ndarray, slab: bool = False, checkpoint: Checkpoint = no_checkpoint):
-        pts = np.ascontiguousarray(points, dtype=np.float64).reshape(-1, 3)
-        n = len(pts)
-        perm, srt = np.empty(n, np.int32), np.empty((n, 3))
-        nodes = np.empty(max(1, 2 * ((n + 3) // 4) + 2), NODE)
-        threads = max(1, os.cpu_count() or 1)
-        m = _build_polling(lambda stop: _balls.build_tree(pts, perm, srt, nodes, slab, stop, LEAF, threads), n, checkpoint)
-        self.nodes = nodes[:m]
-        self.perm = perm
-        self.points = srt
-        self.stats = np.zeros(2, np.int64)  # node visits, point tests of the queries so far
-
-    def nearest(self, queries: np.ndarray, checkpoint: Checkpoint = no_checkpoint,
-                workers: int | None = None, others: bool = False) -> np.ndarray:
-        """Distance from each query row to its nearest point, exact; ask in spatial order.  With
-        ``others`` the queries are ``self.points`` and each skips itself (nearest other point)."""
-        q = np.ascontiguousarray(queries, dtype=np.float64)
-        out, idx = np.empty(len(q)), np.empty(len(q), np.int32)
-
-        def run(i0: int, i1: int) -> None:
-            st = np.zeros(2, np.int64)
-            _balls.nearest(self.nodes, self.points, q, i0, i1, out, idx, st, others)
-            self.stats += st
-
-        _chunked(run, len(q), checkpoint, workers)
-        self.last_index = idx  # the nearest point of each query (tree order)
-        return out
-
-    def set_radii(self, r: np.ndarray, big_r: np.ndarray, contact: np.ndarray | None = None,
-                  checkpoint: Checkpoint = no_checkpoint, workers: int | None = None) -> None:
-        """Ball radii r (gap) and R (cover) of the points, tree order: every node's bounds.  ``contact``
-        (each ball's nearest cloud point, where r came from) lets a node bound its balls tighter."""
-        self.r = np.ascontiguousarray(r, dtype=np.float64)
-        self.big_r = np.ascontiguousarray(big_r, dtype=np.float64)
-        con = np.empty(0) if contact is None else np.ascontiguousarray(contact, dtype=np.float64)
-        _chunked(lambda i0, i1: _balls.refit(self.nodes, self.points, self.r, self.big_r, con, i0, i1),
-                 len(self.nodes), checkpoint, workers)
-
-    def balls(self, queries: np.ndarray, gap: bool = True, cover: bool = True, floor: float = -np.inf,
-              checkpoint: Checkpoint = no_checkpoint, workers: int | None = None) -> tuple:
-        """(min_x |q - x| - r(x), exact where above ``floor``, else some value <= floor; is some
-        |q - x|^2 - R(x)^2 <= COVER_EPS R_max^2) per query row, each None unless asked for."""
-        q = np.ascontiguousarray(queries, dtype=np.float64)
-        out_g = np.empty(len(q) if gap else 0)
-        out_c = np.zeros(len(q) if cover else 0, np.uint8)
-        top = float(self.big_r.max()) if len(self.big_r) else 0.0
-        eps = COVER_EPS * max(top * top, 1e-300)
-
-        def run(i0: int, i1: int) -> None:
-            st = np.zeros(2, np.int64)
-            _balls.balls(self.nodes, self.points, self.r, self.big_r, q, i0, i1, float(floor), eps, out_g, out_c, st)
-            self.stats += st
-
-        _chunked(run, len(q), checkpoint, workers)
-        return (out_g if gap else None), (out_c.view(bool) if cover else None)
-
-
-def _chunked(fn, n: int, checkpoint: Checkpoint, workers: int | None = None) -> None:
-    """``fn(i0, i1)`` over [0, n) in chunks of about 0.1 s (``TimedChunks``), a checkpoint after each;
-    a chunk is cut in 4 x ``workers`` contiguous pieces that ``workers`` threads (None: every core;
-    the kernel releases the GIL) take as they finish, so an unlucky piece delays little.  Threads only
-    for ``n`` >= ``THREAD_ROWS``; a chunk is split when it holds >= 2 ``PIECE_ROWS`` (it was only from
-    ``THREAD_ROWS`` rows, so slow rows, ~0.1 s in fewer, ran on one thread: docs/performance.md 11)."""
-    workers = max(1, int(workers or os.cpu_count() or 1))
-    pool = ThreadPoolExecutor(max_workers=workers) if workers > 1 and n >= THREAD_ROWS else None
-    try:
-        for lo, hi in TimedChunks(n, first=256, most=MOST_ROWS):
-            if pool is None or hi - lo < 2 * PIECE_ROWS:
-                fn(lo, hi)
-            else:
-                pieces = min(4 * workers, (hi - lo) // PIECE_ROWS)
-                cuts = np.linspace(lo, hi, pieces + 1).astype(int)
-                for fut in [pool.submit(fn, a, b) for a, b in zip(cuts[:-1], cuts[1:])]:
-                    fut.result()
-            checkpoint(hi / n)
-    finally:
-        if pool is not None:
-            pool.shutdown(wait=True)
-
-
-def _build_polling(build, n: int, checkpoint: Checkpoint) -> int:
-    """The kernel's tree build, polled (:func:`skelcore.parallel.polled_build`), then one checkpoint."""
-    m = polled_build(build, n, checkpoint, "skelscope-coverage-tree")
-    checkpoint(0.0)
-    return m
 
 
 def min_ball_excess(
@@ -222,29 +113,32 @@ def covered_by_balls(
 
 def coverage(
     cloud: np.ndarray, elements: np.ndarray, params: Params = Params(), tau: float | None = None,
-    checkpoint: Checkpoint = no_checkpoint, workers: int | None = None,
+    checkpoint: Checkpoint = no_checkpoint, workers: int | None = None, index: CloudIndex | None = None,
 ) -> Coverage:
     """Coverage of the (normalized) cloud by the medial balls of the (normalized) skeleton elements.
 
     The cloud's tree gives r(x) (elements asked in their tree's order) and the order in which the
     cloud points ask the elements' tree for gap and cover together.  Every tree build and every
-    ~0.1 s of queries checks ``checkpoint`` (cancel)."""
+    ~0.1 s of queries checks ``checkpoint`` (cancel).  ``index``: the cloud's shared search structures
+    (:class:`.cloud_index.CloudIndex` of this ``cloud``), the same values without building them again."""
     cloud = np.asarray(cloud, dtype=float)
     elements = unique_rows(np.asarray(elements, dtype=float), checkpoint)[0]  # as np.unique(axis=0), 10 x faster
     checkpoint(0.0)
-    tau = coverage_tau(cloud, params, _scaled(checkpoint, 0.0, 0.05)) if tau is None else float(tau)
+    if tau is None:
+        tau = (coverage_tau(cloud, params, _scaled(checkpoint, 0.0, 0.05)) if index is None else
+               float(params.coverage_tau_factor * np.median(index.spacings(_scaled(checkpoint, 0.0, 0.05)))))
+    tau = float(tau)
     s = float(params.coverage_slack)
     m = int(params.coverage_exact_points)
     if len(elements) == 0:
         gap, covered = np.full(len(cloud), np.inf), np.zeros(len(cloud), bool)
     elif len(cloud) > m:
-        return _estimated(cloud, elements, m, tau, s, checkpoint, workers)
+        return _estimated(cloud, elements, m, tau, s, checkpoint, workers, index)
     else:
         build = _scaled(checkpoint, 0.05, 0.1)
-        surface = BallTree(cloud, slab=True, checkpoint=build)
+        surface = BallTree(cloud, slab=True, checkpoint=build) if index is None else index.surface(build)
         balls = BallTree(elements, checkpoint=build)
-        r = surface.nearest(balls.points, _scaled(checkpoint, 0.1, 0.35), workers)
-        contact = surface.last_index
+        r, contact = surface.nearest(balls.points, _scaled(checkpoint, 0.1, 0.35), workers, return_index=True)
         # |p - x| - (1 + s) r <= tau  <=>  p lies in the ball of radius (1 + s) r + tau
         balls.set_radii(r, (1.0 + s) * r + tau, surface.points[contact], _scaled(checkpoint, 0.35, 0.4), workers)
         # a cloud point that is some element's nearest has excess exactly 0 for that ball (the same
@@ -275,7 +169,7 @@ def _summary(gap: np.ndarray, covered: np.ndarray, tau: float, s: float, n_eleme
 
 
 def _estimated(cloud: np.ndarray, elements: np.ndarray, m: int, tau: float, s: float,
-               checkpoint: Checkpoint, workers: int | None) -> Coverage:
+               checkpoint: Checkpoint, workers: int | None, index: CloudIndex | None = None) -> Coverage:
     """Coverage above ``coverage_exact_points`` = m cloud points: the gaps of a random subsample of m
     cloud points to the balls of at most m random elements, each radius r(x) still the distance to
     the whole cloud (a sparser cloud would grow every ball); every other cloud point takes the gap and
@@ -286,10 +180,9 @@ def _estimated(cloud: np.ndarray, elements: np.ndarray, m: int, tau: float, s: f
     if len(elements) > m:
         elements = elements[np.sort(rng.choice(len(elements), m, replace=False))]
     build = _scaled(checkpoint, 0.05, 0.1)
-    surface = BallTree(cloud, slab=True, checkpoint=build)
+    surface = BallTree(cloud, slab=True, checkpoint=build) if index is None else index.surface(build)
     balls = BallTree(elements, checkpoint=build)
-    r = surface.nearest(balls.points, _scaled(checkpoint, 0.1, 0.35), workers)
-    contact = surface.last_index
+    r, contact = surface.nearest(balls.points, _scaled(checkpoint, 0.1, 0.35), workers, return_index=True)
     balls.set_radii(r, (1.0 + s) * r + tau, surface.points[contact], _scaled(checkpoint, 0.35, 0.4), workers)
     # the sample in the whole cloud's tree order (neighbours ask one after the other)
     in_sample = np.zeros(n, bool)
@@ -302,9 +195,12 @@ def _estimated(cloud: np.ndarray, elements: np.ndarray, m: int, tau: float, s: f
     gap_t, cov_t = np.zeros(n), np.ones(n, bool)  # tree order; the sampled positions only are set
     gap_t[ask], cov_t[ask] = np.maximum(g, 0.0), c
     # every cloud point: its nearest sampled point's answer (the sampled ones: their own)
-    near = BallTree(surface.points[at], checkpoint=_scaled(checkpoint, 0.8, 0.85))
-    near.nearest(surface.points, _scaled(checkpoint, 0.85, 1.0), workers)
-    j = at[near.perm[near.last_index]]
+    if index is None:
+        near = BallTree(surface.points[at], checkpoint=_scaled(checkpoint, 0.8, 0.85))
+        _, idx = near.nearest(surface.points, _scaled(checkpoint, 0.85, 1.0), workers, return_index=True)
+        j = at[near.perm[idx]]
+    else:  # the skeletal set's and the curve's coverage share the sample, hence this spread
+        j = index.nearest_sampled(at, _scaled(checkpoint, 0.8, 1.0))
     gap, covered = np.empty(n), np.empty(n, bool)
     gap[surface.perm], covered[surface.perm] = gap_t[j], cov_t[j]
     return _summary(gap, covered, tau, s, len(elements), sample_rows)

@@ -26,6 +26,7 @@ from ..metrics.topology import topological_similarity
 from ..diagnostics.defects import find_curve_defects
 from ..diagnostics.missing_parts import missing_parts
 from ..diagnostics.outside import find_outside
+from ..scan.prepare import find_strays
 from .context import EvalContext
 
 __all__ = ["Stage", "CATALOGUE", "select", "start_order", "FIRST", "EARLY", "IN_TURN", "LAST"]
@@ -103,7 +104,8 @@ def _curve_smoothness(ctx: EvalContext, checkpoint: Checkpoint) -> tuple:
 
 def _skeletal_coverage(ctx: EvalContext, checkpoint: Checkpoint):
     tau = ctx.tau(lambda f: checkpoint(0.1 * f))
-    return coverage(ctx.cloud_n, ctx.skeletal_n, ctx.params, tau, checkpoint=lambda f: checkpoint(0.1 + 0.9 * f))
+    return coverage(ctx.cloud_n, ctx.skeletal_n, ctx.params, tau, checkpoint=lambda f: checkpoint(0.1 + 0.9 * f),
+                    index=ctx.cloud_index)
 
 
 def _curve_coverage(ctx: EvalContext, checkpoint: Checkpoint):
@@ -113,7 +115,7 @@ def _curve_coverage(ctx: EvalContext, checkpoint: Checkpoint):
     step = max(tau / p.coverage_tau_factor, float(curve_n.edge_lengths().sum()) / 200_000)
     pts, _ = densify_curve(curve_n, step)
     return coverage(ctx.cloud_n, np.vstack([pts, curve_n.vertices]), p, tau,
-                    checkpoint=lambda f: checkpoint(0.1 + 0.9 * f))
+                    checkpoint=lambda f: checkpoint(0.1 + 0.9 * f), index=ctx.cloud_index)
 
 
 def _reference(ctx: EvalContext, checkpoint: Checkpoint):
@@ -138,6 +140,14 @@ def _skeletal_outside(ctx: EvalContext, checkpoint: Checkpoint):
                         skeletal_boundedness=ctx.results["skeletal boundedness"], params=ctx.params,
                         voxel_shape=ctx.interior(lambda f: checkpoint(0.5 * f)),
                         checkpoint=lambda f: checkpoint(0.5 + 0.5 * f))
+
+
+def _stray_points(ctx: EvalContext, checkpoint: Checkpoint):
+    """The cloud's stray points and, in pointwise correspondence, the skeletal set's isolated points
+    (docs/metrics.md 6.4): a stage beside the others, not a serial tail after them (docs/performance.md 13)."""
+    spacings = ctx.spacings(lambda f: checkpoint(0.3 * f))  # shared with coverage's tau
+    return find_strays(ctx.cloud, ctx.skeletal, ctx.params, pointwise=ctx.mode == "pointwise",
+                       checkpoint=lambda f: checkpoint(0.3 + 0.7 * f), spacings=spacings)
 
 
 def _missing(kind: str) -> Callable[[EvalContext, Checkpoint], object]:
@@ -191,6 +201,11 @@ def _ground_truth_given(ctx: EvalContext) -> bool:
     return ctx.reference is not None and ctx.curve is not None and ctx.reference.n_edges > 0
 
 
+def _strays_not_yet_found(ctx: EvalContext) -> bool:
+    """``remove_outliers`` found them while building the context."""
+    return ctx.scan is None or not ctx.scan.outliers_removed
+
+
 def _last_beside_skeletal(ctx: EvalContext) -> int:
     # the curve's boundedness is a quarter of the skeletal one on the hammer; started second, it held
     # the other thread while the rest waited
@@ -222,6 +237,8 @@ CATALOGUE: tuple[Stage, ...] = (
           fn=_reference),
     Stage("ground truth", weight=0.3, column="", inputs=("cloud", "curve", "reference"), applies=_ground_truth_given,
           fn=_ground_truth),
+    Stage("stray points", weight=0.1, column="", inputs=("cloud", "skeletal set"), applies=_strays_not_yet_found,
+          fn=_stray_points),
     Stage("curve defects", weight=0.5, column="", inputs=("cloud", "curve", "samples", "curve boundedness"),
           applies=_curve, fn=_curve_defects, start=LAST),
     Stage("skeletal outside", weight=0.1, column="", inputs=("cloud", "skeletal set", "skeletal boundedness"),

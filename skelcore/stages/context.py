@@ -18,7 +18,7 @@ from ..curve_sampling import CurveSamples, sample_curve
 from ..errors import SkelInputError
 from ..geometry import Checkpoint, Normalization, as_points, no_checkpoint
 from ..metrics.boundedness import boundedness
-from ..metrics.coverage import coverage_tau
+from ..metrics.cloud_index import CloudIndex
 from ..params import Params
 from ..scan.capping import cap_openings
 from ..scan.openings import Opening, find_openings
@@ -75,10 +75,14 @@ class EvalContext:
     openings: list[Opening] | None = None
     scan: ScanReport | None = None
     unseen: dict[str, np.ndarray] = field(default_factory=dict)
-    _tau: list[float] = field(default_factory=list, repr=False)
-    _tau_lock: threading.Lock = field(default_factory=threading.Lock, repr=False)
+    #: the normalized cloud's search structures the stages share (coverage's trees, the spacings)
+    cloud_index: CloudIndex | None = field(default=None, repr=False)
     _interior: list = field(default_factory=list, repr=False)
     _interior_lock: threading.Lock = field(default_factory=threading.Lock, repr=False)
+
+    def __post_init__(self) -> None:
+        if self.cloud_index is None:
+            self.cloud_index = CloudIndex(self.cloud_n)
 
     @property
     def from_curve(self) -> bool:
@@ -165,12 +169,13 @@ class EvalContext:
             return self._interior[0]
 
     def tau(self, checkpoint: Checkpoint) -> float:
-        """Coverage's tau (the cloud's spacing, one kNN pass), computed by the first stage that asks, so
-        that a cancel is seen during it too (docs/metrics.md)."""
-        with self._tau_lock:
-            if not self._tau:
-                self._tau.append(coverage_tau(self.cloud_n, self.params, checkpoint))
-            return self._tau[0]
+        """Coverage's tau (``coverage_tau``: the factor x the cloud's median spacing) from the shared
+        nearest-other distances, made by the first stage that asks (docs/metrics.md 5.2)."""
+        return float(self.params.coverage_tau_factor * np.median(self.cloud_index.spacings(checkpoint)))
+
+    def spacings(self, checkpoint: Checkpoint) -> np.ndarray:
+        """Each cloud point's distance to its nearest other point, in the user's units."""
+        return self.cloud_index.spacings(checkpoint) / self.norm.scale
 
 
 def build_context(

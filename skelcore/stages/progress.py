@@ -59,7 +59,7 @@ class StageProgress:
                     # throttled (Orange3's habit), but a new stage is shown at once: the label names
                     # the stage that reported last
                     if stage != self._last_stage or overall - self._last >= 0.005 or fraction >= 1.0:
-                        overall = max(overall, self._last)  # never back by a rounding error
+                        overall = min(max(overall, self._last), 1.0)  # never back (or past 1) by a rounding error
                         self._last = overall
                         self._last_stage = stage
                         self._progress(overall, stage)

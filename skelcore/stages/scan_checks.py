@@ -1,5 +1,6 @@
 """The real-scan trust checks, run after the stages (docs/metrics.md 6): ``outliers`` (stray points in
-the cloud) and ``open_surface`` (openings through which the rays of otherwise bounded elements escape).
+the cloud, found by the "stray points" stage) and ``open_surface`` (openings through which the rays of
+otherwise bounded elements escape).
 
 The opening search only runs when some skeleton has at least ``open_surface_share`` of its elements
 unbounded (else no opening can change that share), and not with viewpoints (the scores then count
@@ -17,7 +18,6 @@ from ..evaluation import Evaluation
 from ..geometry import Checkpoint
 from ..scan.escape import escaping_share, set_local_radii
 from ..scan.openings import find_openings
-from ..scan.prepare import find_strays
 from ..scan.scan_report import ScanReport, open_surface_warning, outliers_warning
 from ..diagnostics.trust_warning import TrustWarning
 from .context import EvalContext
@@ -29,11 +29,8 @@ def scan_warnings(ctx: EvalContext, ev: Evaluation, checkpoint: Checkpoint) -> l
     """``outliers`` and ``open_surface`` for ``ev`` (whose ``scan`` report they fill in)."""
     out: list[TrustWarning] = []
     report = ev.scan if ev.scan is not None else ScanReport()
-    if not report.outliers_removed:
-        t0 = time.perf_counter()
-        strays = find_strays(ctx.cloud, ctx.skeletal, ctx.params, pointwise=ctx.mode == "pointwise",
-                             checkpoint=checkpoint)
-        report.timings["outliers"] = time.perf_counter() - t0
+    strays = ctx.results.get("stray points")  # the stage's; None when remove_outliers found them
+    if strays is not None:
         if strays.cloud.count or len(strays.skeletal_rows):
             report.outliers = strays.to_dict()
             out.append(outliers_warning(strays))

@@ -253,7 +253,7 @@ def test_the_engine_reports_the_stages_running_side_by_side():
     assert seen[-1] == ()
     started = {name for names in seen for name in names}
     assert started == {"topology", "skeletal boundedness", "skeletal centeredness", "skeletal smoothness",
-                       "skeletal coverage", "skeletal outside", "skeletal missing parts"}
+                       "skeletal coverage", "skeletal outside", "skeletal missing parts", "stray points"}
     assert max(len(names) for names in seen) == 2
     assert ev.topology is not None
 

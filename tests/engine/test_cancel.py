@@ -27,6 +27,7 @@ STAGES = [
     "curve smoothness",
     "skeletal coverage",
     "curve coverage",
+    "stray points",  # the real-scan check's search (docs/metrics.md 6.4), a stage beside the others
     "curve boundedness",
     "curve defects",  # the diagnostics (issue 22)
     "skeletal outside",

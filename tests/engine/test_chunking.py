@@ -17,7 +17,7 @@ from scipy.spatial import cKDTree
 from skelcore import geometry, shapes
 from skelcore.errors import Cancelled
 from skelcore.geometry import TimedChunks, chunked_query, kd_tree, leaf_order, lex_order, timed_query, unique_rows
-from skelcore.metrics import centeredness, coverage, smoothness
+from skelcore.metrics import ball_tree, centeredness, smoothness
 from skelcore.metrics.coverage import coverage as coverage_of, covered_by_balls, min_ball_excess
 from skelcore.shapes import torus
 
@@ -226,7 +226,7 @@ def test_covered_by_balls_matches_brute_force():
 def test_coverage_checks_often_and_stops_in_the_middle(monkeypatch):
     cloud, skel = _torus_case(4000)
     ref = coverage_of(cloud, skel)
-    monkeypatch.setattr(coverage, "TimedChunks", lambda n, first=256, target=0.1, most=65536: TimedChunks(n, 64, 0.0, 64))
+    monkeypatch.setattr(ball_tree, "TimedChunks", lambda n, first=256, target=0.1, most=65536: TimedChunks(n, 64, 0.0, 64))
     monkeypatch.setattr(geometry, "TimedChunks", lambda n, first=256, target=0.1, most=65536: TimedChunks(n, 64, 0.0, 64))
     calls = []
     got = coverage_of(cloud, skel, checkpoint=calls.append)
@@ -240,7 +240,7 @@ def test_coverage_checks_often_and_stops_in_the_middle(monkeypatch):
 
 
 def test_min_ball_excess_chunked_equals_brute_force(monkeypatch):
-    monkeypatch.setattr(coverage, "TimedChunks", lambda n, first=256, target=0.1, most=65536: TimedChunks(n, 50, 0.0, 50))
+    monkeypatch.setattr(ball_tree, "TimedChunks", lambda n, first=256, target=0.1, most=65536: TimedChunks(n, 50, 0.0, 50))
     rng = np.random.default_rng(7)
     pts = rng.uniform(-1, 1, (900, 3))
     centers = rng.uniform(-1, 1, (700, 3))

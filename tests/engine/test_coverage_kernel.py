@@ -17,7 +17,7 @@ from scipy.spatial import cKDTree
 from skelcore import Params, shapes
 from skelcore.errors import Cancelled
 from skelcore.geometry import TimedChunks, nearest_neighbor_distances
-from skelcore.metrics import _balls, coverage as cov
+from skelcore.metrics import _balls, ball_tree as cov
 from skelcore.metrics.coverage import BallTree, coverage, coverage_tau, covered_by_balls, min_ball_excess
 
 

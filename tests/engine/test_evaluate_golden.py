@@ -59,9 +59,10 @@ def test_evaluate_gives_the_stored_outputs_bit_for_bit(name, request):
 #: what later work adds without changing a stored value: new Params fields and new document blocks
 ADDITIONS = ("/doc/params/", "/doc/diagnostics: new", "/doc/ground_truth: new")
 #: the diagnostics' stages and warnings (issue 22: tests/engine/test_diagnostics*.py check them), and the
-#: ground-truth stage (issue 23: tests/engine/test_ground_truth_stage.py checks it)
+#: ground-truth stage (issue 23: tests/engine/test_ground_truth_stage.py checks it), and the stray-point
+#: search, a trust check's work that became a stage of its own (tests/engine/test_scan_outliers.py)
 DIAGNOSTIC_STAGES = ("curve defects", "skeletal outside", "skeletal missing parts", "curve missing parts",
-                     "ground truth")
+                     "ground truth", "stray points")
 DIAGNOSTIC_CODES = ("incomplete", "spurious_branches", "spurious_cycles", "missing_cycles", "outside")
 
 

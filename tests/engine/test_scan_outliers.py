@@ -113,3 +113,89 @@ def test_remove_outliers_keeps_the_correspondence():
     index = np.array([0, 2001, 5, 1999, 2000])
     c, s, idx, _, _, dropped = without_strays(cloud, cloud[index], index, False)
     assert dropped == 2 and idx.tolist() == [0, 5, 1999] and np.array_equal(c[idx], s)
+
+
+# ---- the crowded-cell prefilter and the shared spacings (docs/performance.md 13) --------------------
+
+@pytest.mark.parametrize("seed", range(6))
+def test_sparse_rows_are_the_brute_force_ones(seed):
+    """Brute force: the rows with fewer than ``others`` other points within the radius, on clouds with
+    copies, clusters and scattered points, at scales from 1e-3 to 1e3, the radius at distances that
+    occur (some pairs exactly at it)."""
+    from scipy.spatial.distance import cdist
+
+    from skelcore.scan.outliers import sparse_rows
+
+    rng = np.random.default_rng(seed)
+    pts = np.vstack([rng.uniform(0, 1, (300, 3)), rng.normal(0.5, 0.02, (300, 3)), np.repeat(rng.uniform(0, 1, (5, 3)), 4, 0)])
+    pts *= 10.0 ** rng.uniform(-3, 3)
+    dist = cdist(pts, pts)
+    sizes = []
+    for radius in np.quantile(dist[np.triu_indices(len(pts), 1)], [0.0005, 0.003, 0.03, 0.3], method="nearest"):
+        for others in (1, 2, 5):
+            within = (dist <= radius).sum(axis=1) - 1
+            expected = np.flatnonzero(within < others).tolist()
+            assert sparse_rows(pts, radius, others)[0].tolist() == expected
+            sizes.append(len(expected))
+    assert min(sizes) == 0 and 0 < np.median(sizes) < len(pts)  # not vacuous: all, some and none sparse
+
+
+def test_sparse_rows_ask_every_row_where_the_cells_overflow():
+    from skelcore.scan.outliers import sparse_rows
+
+    from scipy.spatial.distance import cdist
+
+    pts = np.vstack([np.random.default_rng(0).uniform(0, 1, (100, 3)), [[1e30, 1e30, 1e30]]])
+    expected = np.flatnonzero((cdist(pts, pts) <= 0.3).sum(axis=1) - 1 < 2).tolist()
+    assert 100 in expected and sparse_rows(pts, 0.3, 2)[0].tolist() == expected
+
+
+@pytest.mark.parametrize("case", ["clean", "far", "box", "sparse"])
+def test_outliers_from_shared_spacings_are_the_ones_searched_alone(case):
+    """``find_outliers(spacings=...)`` (the evaluation's path: the cloud's nearest-other distances from
+    the coverage tree, only uncrowded rows searched) finds the rows, spacing and ratios of the search
+    over every row, and so do the skeletal set's isolated rows."""
+    from skelcore.geometry import Normalization
+    from skelcore.metrics.cloud_index import CloudIndex
+    from skelcore.scan.outliers import isolated_rows
+
+    t = shapes.torus(4000)
+    lo, hi = t.cloud.min(axis=0), t.cloud.max(axis=0)
+    rng = np.random.default_rng(1)
+    extra = {"clean": np.zeros((0, 3)), "far": (hi + 10 * (hi - lo))[None],
+             "box": (lo + hi) / 2 + rng.uniform(-1, 1, (40, 3)) * (hi - lo),
+             "sparse": lo + rng.uniform(0, 1, (3, 3)) * (hi - lo) * [1, 1, 0.01]}[case]
+    cloud = np.vstack([t.cloud, extra])
+    skeletal = np.vstack([t.skeletal, extra])
+    norm = Normalization.from_cloud(cloud)
+    spacings = CloudIndex(norm.apply(cloud)).spacings() / norm.scale
+    alone, shared = find_outliers(cloud), find_outliers(cloud, spacings=spacings)
+    assert shared.rows.tolist() == alone.rows.tolist()
+    assert shared.spacing == pytest.approx(alone.spacing, rel=1e-12)
+    assert (shared.scale_ratio, shared.centre_shift) == pytest.approx((alone.scale_ratio, alone.centre_shift))
+    if case != "sparse":  # (three stray points inside the box: found or not, the same both ways)
+        assert (shared.count > 0) == (case in ("far", "box"))
+    from scipy.spatial import cKDTree
+
+    d = cKDTree(skeletal).query(skeletal, k=3)[0][:, 2]  # brute reference for the skeletal radius test
+    expected = np.flatnonzero(d > Params().outlier_skeletal_radius * alone.spacing).tolist()
+    assert isolated_rows(skeletal, alone.spacing).tolist() == expected
+
+
+def test_the_cloud_index_gives_the_values_each_stage_computed_alone():
+    """tau, the coverage (exact and estimated) with the shared index: the same bits as without it."""
+    from skelcore.metrics.cloud_index import CloudIndex
+    from skelcore.metrics.coverage import coverage, coverage_tau
+
+    t = shapes.torus(6000, seed=2)
+    cloud = t.cloud / np.ptp(t.cloud, axis=0).max()
+    skeletal = t.skeletal / np.ptp(t.cloud, axis=0).max()
+    index = CloudIndex(cloud)
+    tau = coverage_tau(cloud)
+    assert float(Params().coverage_tau_factor * np.median(index.spacings())) == tau
+    for params in (Params(), Params(coverage_exact_points=1500)):
+        for elements in (skeletal, skeletal[::7], skeletal[: len(skeletal) // 2]):
+            a = coverage(cloud, elements, params)
+            b = coverage(cloud, elements, params, index=index)
+            assert np.array_equal(a.gap, b.gap) and np.array_equal(a.covered, b.covered)
+            assert (a.tau, a.fraction, a.subsample) == (b.tau, b.fraction, b.subsample)

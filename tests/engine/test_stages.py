@@ -35,24 +35,25 @@ DIAG_WAITS = {"curve defects": ("curve boundedness",), "skeletal outside": ("ske
 
 @pytest.mark.parametrize("case, started, waits", [
     (dict(), ["skeletal boundedness", "topology", "skeletal centeredness", "skeletal smoothness", "curve centeredness",
-              "curve smoothness", "skeletal coverage", "curve coverage", "curve boundedness", *DIAG], DIAG_WAITS),
+              "curve smoothness", "skeletal coverage", "curve coverage", "stray points", "curve boundedness", *DIAG], DIAG_WAITS),
     (dict(correspondence="reverse", every=5),
      ["skeletal boundedness", "correspondence", "topology", "skeletal centeredness", "skeletal smoothness",
-      "curve centeredness", "curve smoothness", "skeletal coverage", "curve coverage", "curve boundedness", *DIAG],
+      "curve centeredness", "curve smoothness", "skeletal coverage", "curve coverage", "stray points",
+      "curve boundedness", *DIAG],
      {"topology": ("correspondence",), "skeletal centeredness": ("correspondence",), **DIAG_WAITS}),
     (dict(skeletal=False, correspondence="reverse"),
      ["curve boundedness", "skeletal boundedness", "correspondence", "curve centeredness", "curve smoothness",
-      "topology", "skeletal centeredness", "skeletal smoothness", "curve coverage", "curve defects",
+      "topology", "skeletal centeredness", "skeletal smoothness", "curve coverage", "stray points", "curve defects",
       "curve missing parts"],
      {**{s: ("correspondence",) for s in ("topology", "skeletal boundedness", "skeletal centeredness",
                                           "skeletal smoothness")},
       "curve defects": ("curve boundedness",), "curve missing parts": ("curve coverage",)}),
     # without coverage the missing parts compute their own (on a subsample above missing_max_points)
     (dict(every=5, params=Params(coverage_max_points=100)),
-     ["skeletal boundedness", "skeletal smoothness", "curve centeredness", "curve smoothness", "curve boundedness",
-      *DIAG], {"curve defects": ("curve boundedness",), "skeletal outside": ("skeletal boundedness",)}),
+     ["skeletal boundedness", "skeletal smoothness", "curve centeredness", "curve smoothness", "stray points",
+      "curve boundedness", *DIAG], {"curve defects": ("curve boundedness",), "skeletal outside": ("skeletal boundedness",)}),
     (dict(skeletal=False), ["curve boundedness", "curve centeredness", "curve smoothness", "curve coverage",
-                            "curve defects", "curve missing parts"],
+                            "stray points", "curve defects", "curve missing parts"],
      {"curve defects": ("curve boundedness",), "curve missing parts": ("curve coverage",)}),
 ])
 def test_stages_are_selected_started_and_wait_by_the_declared_rules(case, started, waits):

@@ -1,0 +1,70 @@
+"""The normalized cloud's search structures that several stages of one evaluation share
+(docs/performance.md 13): its coverage tree (:class:`~.ball_tree.BallTree` with slab bounds), each cloud
+point's distance to its nearest other point (coverage's tau, SPEC 8; the stray-point yardstick,
+docs/metrics.md 6.4), and the spread of the estimated coverage's subsample (each cloud point's nearest
+sampled point, docs/metrics.md 5.2).  At a million points each is about a CPU second, and the skeletal
+and curve coverage, tau and the stray points asked for them one by one.
+
+Each is made once, by the first stage that asks, under its own lock; a stage that asks meanwhile waits
+for it (a cancel stops the maker at its next checkpoint, and the waiter then at its first).  Every value
+is the one the stages computed alone: the same kernel on the same tree (tested).
+"""
+
+from __future__ import annotations
+
+import threading
+
+import numpy as np
+
+from ..geometry import Checkpoint, no_checkpoint
+from .ball_tree import BallTree
+
+__all__ = ["CloudIndex"]
+
+
+def _scaled(checkpoint: Checkpoint, lo: float, hi: float) -> Checkpoint:
+    return lambda f: checkpoint(lo + (hi - lo) * min(max(f, 0.0), 1.0))
+
+
+class CloudIndex:
+    """Lazily built, thread-safe search structures of one normalized cloud (module docstring)."""
+
+    def __init__(self, cloud: np.ndarray):
+        self.cloud = np.ascontiguousarray(cloud, dtype=np.float64).reshape(-1, 3)
+        self._surface: BallTree | None = None
+        self._spacings: np.ndarray | None = None
+        self._spread: dict[bytes, np.ndarray] = {}
+        self._locks = {name: threading.Lock() for name in ("surface", "spacings", "spread")}
+
+    def surface(self, checkpoint: Checkpoint = no_checkpoint) -> BallTree:
+        """The cloud's BallTree with slab bounds (coverage's r(x) and gap searches)."""
+        with self._locks["surface"]:
+            if self._surface is None:
+                self._surface = BallTree(self.cloud, slab=True, checkpoint=checkpoint)
+            return self._surface
+
+    def spacings(self, checkpoint: Checkpoint = no_checkpoint) -> np.ndarray:
+        """Per cloud row, the distance to its nearest other point (0 for a copy), exact."""
+        with self._locks["spacings"]:
+            if self._spacings is None:
+                if len(self.cloud) < 2:
+                    self._spacings = np.zeros(len(self.cloud))
+                else:
+                    tree = self.surface(_scaled(checkpoint, 0.0, 0.3))
+                    d, _ = tree.nearest(tree.points, _scaled(checkpoint, 0.3, 1.0), others=True, return_index=True)
+                    out = np.empty(len(d))
+                    out[tree.perm] = d
+                    self._spacings = out
+            return self._spacings
+
+    def nearest_sampled(self, at: np.ndarray, checkpoint: Checkpoint = no_checkpoint) -> np.ndarray:
+        """For every point of the surface tree (tree order), the tree position of its nearest point
+        among the tree positions ``at`` (a subsample; each sampled point is its own)."""
+        key = np.ascontiguousarray(at, dtype=np.int64).tobytes()
+        with self._locks["spread"]:
+            if key not in self._spread:
+                surface = self.surface(_scaled(checkpoint, 0.0, 0.1))
+                near = BallTree(surface.points[at], checkpoint=_scaled(checkpoint, 0.1, 0.3))
+                _, idx = near.nearest(surface.points, _scaled(checkpoint, 0.3, 1.0), return_index=True)
+                self._spread = {key: at[near.perm[idx]]}  # one subsample per evaluation: keep the last
+            return self._spread[key]
