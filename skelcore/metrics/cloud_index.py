@@ -1,9 +1,8 @@
 """The normalized cloud's search structures that several stages of one evaluation share
 (docs/performance.md 13): its coverage tree (:class:`~.ball_tree.BallTree` with slab bounds), each cloud
-point's distance to its nearest other point (coverage's tau, SPEC 8; the stray-point yardstick,
-docs/metrics.md 6.4), and the spread of the estimated coverage's subsample (each cloud point's nearest
-sampled point, docs/metrics.md 5.2).  At a million points each is about a CPU second, and the skeletal
-and curve coverage, tau and the stray points asked for them one by one.
+point's distance to its nearest other point (coverage's tau, SPEC 8), and the spread of the estimated
+coverage's subsample (each cloud point's nearest sampled point, docs/metrics.md 5.2).  At a million
+points each is about a CPU second, and the skeletal and curve coverage and tau made them one by one.
 
 Each is made once, by the first stage that asks, under its own lock; a stage that asks meanwhile waits
 for it (a cancel stops the maker at its next checkpoint, and the waiter then at its first).  Every value

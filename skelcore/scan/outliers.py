@@ -31,7 +31,8 @@ from ..params import Params
 
 __all__ = ["Outliers", "find_outliers", "isolated_rows", "sparse_rows"]
 
-#: points whose mean kNN distance makes the statistical test's yardstick (a random sample beyond)
+#: points whose nearest-neighbour distances give the spacing and the statistical test's yardstick (a
+#: random sample of this many beyond)
 REFERENCE_SAMPLE = 20_000
 
 
@@ -54,11 +55,13 @@ class Outliers:
                 "centre_shift": float(self.centre_shift), "spacing": float(self.spacing)}
 
 
-def find_outliers(cloud: np.ndarray, params: Params = Params(), *, checkpoint: Checkpoint = no_checkpoint,
-                  spacings: np.ndarray | None = None) -> Outliers:
+def find_outliers(cloud: np.ndarray, params: Params = Params(), *, checkpoint: Checkpoint = no_checkpoint) -> Outliers:
     """The outliers of ``cloud`` (module docstring) and how far they move SPEC 0's normalization.
-    ``spacings``: each point's distance to its nearest other point, when known (an evaluation shares
-    them with coverage's tau); then only the points that no crowded cell vouches for are searched.
+
+    The spacing (median nearest-neighbour distance) and the statistical test's yardstick come from one
+    query of at most ``REFERENCE_SAMPLE`` random points (every point below that; seed 0); the radius
+    test asks only the rows no crowded cell vouches for (:func:`sparse_rows`, exact).  At 1M points
+    ~1.2 CPU s (a kNN pass over every row and an exact median took 2-4; docs/performance.md 13).
 
     Examples
     --------
@@ -74,30 +77,21 @@ def find_outliers(cloud: np.ndarray, params: Params = Params(), *, checkpoint: C
     k = int(params.outlier_k)
     if n <= max(m, k) + 1:
         return Outliers(np.zeros(0, np.int64), n, 1.0, 0.0)
-    tree = None
-    if spacings is None:
-        tree = kd_tree(cloud, checkpoint, 0.0)  # sliding midpoint: half the build time, the same distances
-        checkpoint(0.1)
-        # in the tree's leaf order (cache-warm: 3.8 -> 1.4 s at 1M points, the same answers), in chunks of
-        # ~0.1 s with a checkpoint after each (one call over 1M points held a cancel for 1-4 s)
-        d, _ = timed_query(tree, cloud, m + 1, checkpoint, 0.1, 0.6, order=leaf_order(tree))
-        spacing = float(np.median(d[:, 1]))
-        radius = float(params.outlier_radius) * spacing
-        candidates = np.flatnonzero(d[:, m] > radius)
-    else:
-        spacing = float(np.median(spacings))
-        radius = float(params.outlier_radius) * spacing
-        candidates = np.zeros(0, np.int64)
-        if spacing > 0:
-            candidates, tree = sparse_rows(cloud, radius, m, lambda f: checkpoint(0.1 + 0.5 * f))
-    checkpoint(0.6)
-    if tree is None and len(candidates):  # the statistical test's yardstick is the whole cloud's
-        tree = kd_tree(cloud, checkpoint, 0.6)
-    none = Outliers(np.zeros(0, np.int64), n, 1.0, 0.0, spacing)
-    if not spacing > 0 or len(candidates) == 0:
-        return none
+    tree = kd_tree(cloud, checkpoint, 0.0)  # sliding midpoint: half the build time, the same distances
+    checkpoint(0.1)
     sample = np.arange(n) if n <= REFERENCE_SAMPLE else np.random.default_rng(0).choice(n, REFERENCE_SAMPLE, replace=False)
-    ref = tree.query(cloud[sample], k=k + 1, workers=query_workers(len(sample)))[0][:, 1:].mean(axis=1)
+    near = tree.query(cloud[sample], k=k + 1, workers=query_workers(len(sample)))[0]
+    spacing = float(np.median(near[:, 1]))
+    checkpoint(0.2)
+    none = Outliers(np.zeros(0, np.int64), n, 1.0, 0.0, spacing)
+    if not spacing > 0:
+        return none
+    candidates, _ = sparse_rows(cloud, float(params.outlier_radius) * spacing, m, lambda f: checkpoint(0.2 + 0.6 * f),
+                                tree=tree)
+    checkpoint(0.8)
+    if len(candidates) == 0:
+        return none
+    ref = near[:, 1:].mean(axis=1)
     centre = float(np.median(ref))
     sigma = 1.4826 * float(np.median(np.abs(ref - centre)))
     mean_d = tree.query(cloud[candidates], k=k + 1, workers=query_workers(len(candidates)))[0][:, 1:].mean(axis=1)
@@ -143,7 +137,7 @@ def sparse_rows(points: np.ndarray, radius: float, others: int, checkpoint: Chec
     points = np.asarray(points, dtype=float).reshape(-1, 3)
     if len(points) == 0:
         return np.zeros(0, np.int64), tree
-    ask = np.flatnonzero(~_crowded(points, radius, others))
+    ask = np.flatnonzero(~_crowded(points, radius, others, checkpoint))
     checkpoint(0.0)
     if len(ask) == 0:
         return np.zeros(0, np.int64), tree
@@ -154,8 +148,9 @@ def sparse_rows(points: np.ndarray, radius: float, others: int, checkpoint: Chec
     return ask[d[:, others] > radius].astype(np.int64), tree
 
 
-def _crowded(points: np.ndarray, radius: float, others: int) -> np.ndarray:
-    """Rows sharing a cell of diameter ``radius`` with ``others`` more (:func:`sparse_rows`)."""
+def _crowded(points: np.ndarray, radius: float, others: int, checkpoint: Checkpoint = no_checkpoint) -> np.ndarray:
+    """Rows sharing a cell of diameter ``radius`` with ``others`` more (:func:`sparse_rows`); a
+    checkpoint between the passes (1M rows: ~0.1 s each)."""
     out = np.zeros(len(points), bool)
     cell = radius / np.sqrt(3.0) * (1.0 - 1e-9)
     if not cell > 0:
@@ -167,7 +162,9 @@ def _crowded(points: np.ndarray, radius: float, others: int) -> np.ndarray:
     ijk = np.floor((points - lo) / cell).astype(np.int64)
     dims = ijk.max(axis=0) + 1
     key = ijk[:, 0] + dims[0] * (ijk[:, 1] + dims[1] * ijk[:, 2])
+    checkpoint(0.0)
     order = np.argsort(key)
+    checkpoint(0.0)
     sorted_key = key[order]
     starts = np.flatnonzero(np.r_[True, sorted_key[1:] != sorted_key[:-1]])
     counts = np.diff(np.r_[starts, len(key)])

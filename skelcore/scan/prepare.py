@@ -33,11 +33,9 @@ class Strays:
 
 
 def find_strays(cloud: np.ndarray, skeletal: np.ndarray | None, params: Params = Params(), *,
-                pointwise: bool = False, checkpoint: Checkpoint = no_checkpoint,
-                spacings: np.ndarray | None = None) -> Strays:
-    """The cloud's outliers and, for a skeletal set in pointwise correspondence, its isolated points
-    (``spacings``: the cloud's nearest-other distances when known, :func:`.outliers.find_outliers`)."""
-    found = find_outliers(cloud, params, checkpoint=checkpoint, spacings=spacings)
+                pointwise: bool = False, checkpoint: Checkpoint = no_checkpoint) -> Strays:
+    """The cloud's outliers and, for a skeletal set in pointwise correspondence, its isolated points."""
+    found = find_outliers(cloud, params, checkpoint=checkpoint)
     iso = (isolated_rows(skeletal, found.spacing, params, lambda f: checkpoint(1.0))
            if skeletal is not None and pointwise else np.zeros(0, np.int64))
     return Strays(found, iso)

@@ -145,9 +145,7 @@ def _skeletal_outside(ctx: EvalContext, checkpoint: Checkpoint):
 def _stray_points(ctx: EvalContext, checkpoint: Checkpoint):
     """The cloud's stray points and, in pointwise correspondence, the skeletal set's isolated points
     (docs/metrics.md 6.4): a stage beside the others, not a serial tail after them (docs/performance.md 13)."""
-    spacings = ctx.spacings(lambda f: checkpoint(0.3 * f))  # shared with coverage's tau
-    return find_strays(ctx.cloud, ctx.skeletal, ctx.params, pointwise=ctx.mode == "pointwise",
-                       checkpoint=lambda f: checkpoint(0.3 + 0.7 * f), spacings=spacings)
+    return find_strays(ctx.cloud, ctx.skeletal, ctx.params, pointwise=ctx.mode == "pointwise", checkpoint=checkpoint)
 
 
 def _missing(kind: str) -> Callable[[EvalContext, Checkpoint], object]:

@@ -173,10 +173,6 @@ class EvalContext:
         nearest-other distances, made by the first stage that asks (docs/metrics.md 5.2)."""
         return float(self.params.coverage_tau_factor * np.median(self.cloud_index.spacings(checkpoint)))
 
-    def spacings(self, checkpoint: Checkpoint) -> np.ndarray:
-        """Each cloud point's distance to its nearest other point, in the user's units."""
-        return self.cloud_index.spacings(checkpoint) / self.norm.scale
-
 
 def build_context(
     cloud: np.ndarray,

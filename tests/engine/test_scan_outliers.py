@@ -115,7 +115,7 @@ def test_remove_outliers_keeps_the_correspondence():
     assert dropped == 2 and idx.tolist() == [0, 5, 1999] and np.array_equal(c[idx], s)
 
 
-# ---- the crowded-cell prefilter and the shared spacings (docs/performance.md 13) --------------------
+# ---- the crowded-cell prefilter and the sampled spacing (docs/performance.md 13) ---------------------
 
 @pytest.mark.parametrize("seed", range(6))
 def test_sparse_rows_are_the_brute_force_ones(seed):
@@ -150,13 +150,25 @@ def test_sparse_rows_ask_every_row_where_the_cells_overflow():
     assert 100 in expected and sparse_rows(pts, 0.3, 2)[0].tolist() == expected
 
 
+def _reference_outliers(cloud: np.ndarray, spacing: float, params: Params = Params()) -> list[int]:
+    """The module docstring's two tests over every row by brute kNN (the yardstick over every row)."""
+    from scipy.spatial import cKDTree
+
+    d = cKDTree(cloud).query(cloud, k=params.outlier_k + 1)[0]
+    radius_fail = d[:, params.outlier_min_neighbours] > params.outlier_radius * spacing
+    mean_d = d[:, 1:].mean(axis=1)
+    centre = np.median(mean_d)
+    sigma = 1.4826 * np.median(np.abs(mean_d - centre))
+    return np.flatnonzero(radius_fail & (mean_d > centre + params.outlier_std_ratio * sigma)).tolist()
+
+
 @pytest.mark.parametrize("case", ["clean", "far", "box", "sparse"])
-def test_outliers_from_shared_spacings_are_the_ones_searched_alone(case):
-    """``find_outliers(spacings=...)`` (the evaluation's path: the cloud's nearest-other distances from
-    the coverage tree, only uncrowded rows searched) finds the rows, spacing and ratios of the search
-    over every row, and so do the skeletal set's isolated rows."""
-    from skelcore.geometry import Normalization
-    from skelcore.metrics.cloud_index import CloudIndex
+def test_outliers_are_the_brute_force_ones(case):
+    """``find_outliers`` (one sampled query for the spacing and the yardstick, only uncrowded rows
+    searched) against both tests run by brute force over every row, strays far away, in the box, and
+    three in a thin slab."""
+    from scipy.spatial import cKDTree
+
     from skelcore.scan.outliers import isolated_rows
 
     t = shapes.torus(4000)
@@ -167,19 +179,32 @@ def test_outliers_from_shared_spacings_are_the_ones_searched_alone(case):
              "sparse": lo + rng.uniform(0, 1, (3, 3)) * (hi - lo) * [1, 1, 0.01]}[case]
     cloud = np.vstack([t.cloud, extra])
     skeletal = np.vstack([t.skeletal, extra])
-    norm = Normalization.from_cloud(cloud)
-    spacings = CloudIndex(norm.apply(cloud)).spacings() / norm.scale
-    alone, shared = find_outliers(cloud), find_outliers(cloud, spacings=spacings)
-    assert shared.rows.tolist() == alone.rows.tolist()
-    assert shared.spacing == pytest.approx(alone.spacing, rel=1e-12)
-    assert (shared.scale_ratio, shared.centre_shift) == pytest.approx((alone.scale_ratio, alone.centre_shift))
-    if case != "sparse":  # (three stray points inside the box: found or not, the same both ways)
-        assert (shared.count > 0) == (case in ("far", "box"))
+    exact = float(np.median(cKDTree(cloud).query(cloud, k=2)[0][:, 1]))
+    found = find_outliers(cloud)
+    assert found.spacing == exact  # below REFERENCE_SAMPLE points the sample is every point
+    assert found.rows.tolist() == _reference_outliers(cloud, exact)
+    if case != "sparse":  # (three stray points inside the box: found or not, as the brute force says)
+        assert (found.count > 0) == (case in ("far", "box"))
+    d = cKDTree(skeletal).query(skeletal, k=3)[0][:, 2]  # brute reference for the skeletal radius test
+    expected = np.flatnonzero(d > Params().outlier_skeletal_radius * exact).tolist()
+    assert isolated_rows(skeletal, exact).tolist() == expected
+
+
+def test_a_large_cloud_takes_its_spacing_from_a_sample():
+    """Above REFERENCE_SAMPLE points the spacing is the median over a random sample: within 2 % of the
+    exact one, and the strays found are the brute-force ones."""
     from scipy.spatial import cKDTree
 
-    d = cKDTree(skeletal).query(skeletal, k=3)[0][:, 2]  # brute reference for the skeletal radius test
-    expected = np.flatnonzero(d > Params().outlier_skeletal_radius * alone.spacing).tolist()
-    assert isolated_rows(skeletal, alone.spacing).tolist() == expected
+    from skelcore.scan.outliers import REFERENCE_SAMPLE
+
+    t = shapes.torus(3 * REFERENCE_SAMPLE, seed=3)
+    lo, hi = t.cloud.min(axis=0), t.cloud.max(axis=0)
+    extra = (lo + hi) / 2 + np.random.default_rng(2).uniform(-1, 1, (60, 3)) * (hi - lo)
+    cloud = np.vstack([t.cloud, extra])
+    exact = float(np.median(cKDTree(cloud).query(cloud, k=2)[0][:, 1]))
+    found = find_outliers(cloud)
+    assert found.spacing == pytest.approx(exact, rel=0.02) and found.spacing != exact
+    assert found.count > 30 and found.rows.tolist() == _reference_outliers(cloud, found.spacing)
 
 
 def test_the_cloud_index_gives_the_values_each_stage_computed_alone():
