@@ -303,7 +303,9 @@ class _ArrayMemo:
     def __init__(self, size: int = 4):
         self._size = size
         self._entries: dict[int, tuple] = {}  # id -> (weakref to the array, digest, lock, result box)
-        self._lock = threading.Lock()
+        # reentrant: the cyclic garbage collector may free a kept array (and call _drop) in this very
+        # thread while it holds the lock
+        self._lock = threading.RLock()
 
     def get(self, array: np.ndarray, compute):
         digest = hashlib.blake2b(np.ascontiguousarray(array).view(np.uint8), digest_size=16).digest()
