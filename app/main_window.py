@@ -100,6 +100,7 @@ class MainWindow(QtWidgets.QMainWindow):
 
         self.session.params_provider = self.settings_panel.params
         self.session.correspondence_provider = self.settings_panel.correspondence
+        self.session.scan_options_provider = self.settings_panel.scan_options
         self.session.set_correspondence = self.settings_panel.set_correspondence
         self.session.ask_file = self._ask_index_file
         # the scripted mode waits for the evaluation it starts: no deferral there
@@ -175,11 +176,12 @@ class MainWindow(QtWidgets.QMainWindow):
         """The submenu a group is shown as (:data:`app.actions.SUBMENUS`), for a controller to fill."""
         return self.menus.submenus[group]
 
-    def set_settings(self, params: Any, correspondence: str) -> None:
-        """The Settings panel's parameters, the thresholds beta*, c* (summary panel and scene) and the
-        correspondence mode, from a ``skelcore.Params`` (a saved session)."""
+    def set_settings(self, params: Any, correspondence: str, scan_options: dict[str, bool] | None = None) -> None:
+        """The Settings panel's parameters, the thresholds beta*, c* (summary panel and scene), the
+        correspondence mode and the real-scan options, from a ``skelcore.Params`` (a saved session)."""
         self.settings_panel.set_params(params)
         self.settings_panel.set_correspondence(correspondence)
+        self.settings_panel.set_scan_options(**(scan_options or {}))
         self.scene.set_thresholds(params.beta_star, params.c_star)
         self.summary.set_thresholds(params.beta_star, params.c_star)
 

@@ -78,6 +78,7 @@ class SavedSessions(QtCore.QObject):
         state.files = {role: fingerprint(layer.path, base) for role, layer in scene.layers.items()}
         state.params = w.session.params().to_dict()
         state.correspondence = w.session.correspondence_provider()
+        state.scan_options = dict(w.session.scan_options_provider())
         state.metric = scene.metric
         state.clim = scene.clim
         state.edges_as_tubes = scene.edges_as_tubes
@@ -149,7 +150,7 @@ class SavedSessions(QtCore.QObject):
                 if where.path is not None:
                     found[role] = where.path
         saved = Params(**state.params) if state.params else Params()
-        w.set_settings(saved, state.correspondence)
+        w.set_settings(saved, state.correspondence, state.scan_options)
         shown = w.session.params()
         left = [k for k, v in saved.to_dict().items() if shown.to_dict()[k] != v]
         if left:

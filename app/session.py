@@ -52,6 +52,8 @@ class Session(QtCore.QObject):
         self.params_provider: Callable[[], Params] = Params
         #: "auto" or "reverse" (SPEC 7), e.g. the settings panel's choice
         self.correspondence_provider: Callable[[], str] = lambda: "auto"
+        #: ``remove_outliers`` / ``cap_openings`` for skelcore.evaluate (the settings panel's real-scan options)
+        self.scan_options_provider: Callable[[], dict[str, bool]] = dict
         #: sets that choice (a drop answered "skeletal set (no correspondence: reverse projection)")
         self.set_correspondence: Callable[[str], None] = lambda key: None
         #: ``ask_file(title) -> path or None``: an index file for a skeletal set (the window: a file dialog)
@@ -245,12 +247,16 @@ class Session(QtCore.QObject):
             return "settings changed"
         if self._shown_correspondence is not None and self.correspondence_provider() != self._shown_correspondence:
             return "settings changed"
+        if self._shown_scan_options is not None and self.scan_options_provider() != self._shown_scan_options:
+            return "settings changed"
         return "" if now.replace(beta_star=shown.beta_star, c_star=shown.c_star) == shown else "settings changed"
 
     _shown_correspondence: str | None = None  # what the shown evaluation was asked for (None: unknown)
     _shown_viewpoints: list | None = None  # the viewpoints the shown evaluation was asked with (None: unknown)
     _requested_viewpoints: list | None = None
     _requested_correspondence: str | None = None
+    _shown_scan_options: dict | None = None  # the real-scan options the shown evaluation was asked with
+    _requested_scan_options: dict | None = None
 
     def check_stale(self) -> None:
         reason = self.stale_reason()
@@ -308,6 +314,7 @@ class Session(QtCore.QObject):
                 self._inputs_changed = False
                 self._shown_correspondence = None
                 self._shown_viewpoints = None
+                self._shown_scan_options = None
                 self.scene.set_evaluation(evaluation)
                 self._had_result = True
                 self.evaluated.emit(evaluation)
@@ -407,8 +414,10 @@ class Session(QtCore.QObject):
                 inputs["skeletal_index"] = scene.skeletal.index_path
         self._requested_correspondence = correspondence
         self._requested_viewpoints = list(self.viewpoints)
+        self._requested_scan_options = dict(self.scan_options_provider())
         kwargs = dict(skeletal=skeletal, curve=curve, params=params, inputs=inputs, correspondence=correspondence,
-                      skeletal_index=index, viewpoints=[list(p) for p in self.viewpoints] or None)
+                      skeletal_index=index, viewpoints=[list(p) for p in self.viewpoints] or None,
+                      **self._requested_scan_options)
         self._evaluated_layers = (scene.cloud, scene.skeletal, scene.curve)
         if len(cloud) + (0 if skeletal is None else len(skeletal)) >= self.process_from:
             def restore(ev: Any) -> Any:  # the child does not send the cloud back
@@ -469,6 +478,7 @@ class Session(QtCore.QObject):
             scene.set_evaluation(result)
             self._shown_correspondence = self._requested_correspondence
             self._shown_viewpoints = self._requested_viewpoints
+            self._shown_scan_options = self._requested_scan_options
             self._had_result = True
             self.check_stale()
             total = result.timings.get("total") if result.timings else None

@@ -4,7 +4,8 @@ Not :mod:`app.session`, the viewer's controller: this is the file format, withou
 the inputs' paths (relative to the session file when possible, absolute as well) with each file's
 size, modification time and SHA-256, so that opening it can tell a file that moved (missing) or
 changed from one that did not; the settings and thresholds (every ``skelcore.Params`` field) and the
-correspondence mode (SPEC 7) with the skeletal set's index file (a record like the inputs'); each skeleton
+correspondence mode (SPEC 7) with the skeletal set's index file (a record like the inputs'), the real-scan
+options (``remove_outliers``, ``cap_openings``); each skeleton
 layer's mapping into the cloud's frame (scale, offset); the scan's viewpoints (issue 26); the metric, colour
 range and display options; the camera with the view's size; and the picked element. Written atomically (``skelcore.io.atomic``); read back with
 every field checked, so a bad file is one line (``SkelInputError``) before anything changes.
@@ -30,6 +31,8 @@ FORMAT = "skelscope_session"
 VERSION = 1
 ROLES = ("cloud", "skeletal", "curve")
 CORRESPONDENCES = ("auto", "reverse")
+#: skelcore.evaluate's real-scan options a session records (the Settings panel's check boxes)
+SCAN_OPTIONS = ("remove_outliers", "cap_openings")
 _HASH_CHUNK = 1 << 20
 
 
@@ -52,6 +55,7 @@ class SessionState:
     files: dict[str, FileRecord] = field(default_factory=dict)
     params: dict[str, Any] = field(default_factory=dict)
     correspondence: str = "auto"
+    scan_options: dict[str, bool] = field(default_factory=dict)  # remove_outliers, cap_openings (evaluate's)
     skeletal_index: FileRecord | None = None  # the skeletal set's index file (SPEC 7), found like the inputs
     mappings: dict[str, tuple[float, tuple[float, float, float]]] = field(default_factory=dict)  # role -> scale, offset
     viewpoints: list[tuple[float, float, float]] = field(default_factory=list)  # the scan's sensor positions
@@ -93,6 +97,7 @@ def session_to_json(state: SessionState) -> dict[str, Any]:
         "files": {role: _record_json(rec) for role, rec in state.files.items()},
         "params": {k: _json_value(v) for k, v in state.params.items()},
         "correspondence": state.correspondence,
+        "scan_options": {k: bool(v) for k, v in state.scan_options.items()},
         "skeletal_index": None if state.skeletal_index is None else _record_json(state.skeletal_index),
         "mappings": {role: {"scale": float(s), "offset": [float(v) for v in o]} for role, (s, o) in state.mappings.items()},
         "viewpoints": [[float(v) for v in p] for p in state.viewpoints],
@@ -162,6 +167,11 @@ def session_from_json(doc: Any, path: str | os.PathLike = "session") -> SessionS
     state.correspondence = str(doc.get("correspondence", "auto"))
     if state.correspondence not in CORRESPONDENCES:
         raise bad(f"correspondence must be one of {', '.join(CORRESPONDENCES)}")
+    options = doc.get("scan_options", {})
+    if not isinstance(options, dict) or set(options) - set(SCAN_OPTIONS) or \
+            not all(isinstance(v, bool) for v in options.values()):
+        raise bad(f"scan_options must map {' / '.join(SCAN_OPTIONS)} to true or false")
+    state.scan_options = dict(options)
     index = doc.get("skeletal_index")
     if isinstance(index, str):  # written before the index had a record: its path alone
         state.skeletal_index = FileRecord(index, None, -1, 0.0, "")

@@ -1,5 +1,7 @@
 """Evaluation parameters (a subset of skelcore's Params, SPEC 0-4) the user may change before a run,
-and the correspondence of a skeletal set with another point count than the cloud (SPEC 7)."""
+the correspondence of a skeletal set with another point count than the cloud (SPEC 7), and the real-scan
+options of ``skelcore.evaluate`` (docs/metrics.md 6.2 and 6.4: ``cap_openings``, ``remove_outliers``),
+which the ``open_surface`` and ``outliers`` warnings name."""
 
 from __future__ import annotations
 
@@ -47,6 +49,14 @@ class SettingsPanel(QtWidgets.QWidget):
             "'as loaded' uses the set's index file (File > Open skeletal index…) or, without one, leaves "
             "them out, with a warning"
         )
+        self.remove_outliers = QtWidgets.QCheckBox("evaluate without stray points", self)
+        self.remove_outliers.setToolTip(
+            "docs/metrics.md 6.4: leave out the cloud's stray points (they fail both the radius and the statistical "
+            "test) and their skeletal rows; they are found and reported (the outliers warning) either way")
+        self.cap_openings = QtWidgets.QCheckBox("close small flat openings", self)
+        self.cap_openings.setToolTip(
+            "docs/metrics.md 6.2: close the cloud's small flat openings with points on their planes for "
+            "boundedness, as the paper did for its cave (the open_surface warning)")
         form = QtWidgets.QFormLayout(self)
         form.addRow("correspondence", self.correspondence_choice)
         form.addRow("boundedness estimator", self.boundedness_method)
@@ -56,6 +66,10 @@ class SettingsPanel(QtWidgets.QWidget):
         form.addRow("k (smoothness)", self.smooth_k)
         form.addRow("curve samples", self.curve_samples)
         form.addRow("eps* quantile", self.eps_quantile)
+        form.addRow("stray points", self.remove_outliers)
+        form.addRow("openings", self.cap_openings)
+        for box in (self.remove_outliers, self.cap_openings):
+            box.toggled.connect(lambda *_: self.changed.emit())
         for w in (self.boundedness_method, self.normalize_by, self.correspondence_choice):
             w.currentTextChanged.connect(lambda *_: self.changed.emit())
         for w in (self.k_center, self.tangent_k, self.smooth_k, self.curve_samples, self.eps_quantile):
@@ -77,6 +91,14 @@ class SettingsPanel(QtWidgets.QWidget):
         if index < 0:
             raise ValueError(f"unknown correspondence {key!r}")
         self.correspondence_choice.setCurrentIndex(index)
+
+    def scan_options(self) -> dict[str, bool]:
+        """``remove_outliers=`` and ``cap_openings=`` for :func:`skelcore.evaluate`."""
+        return {"remove_outliers": self.remove_outliers.isChecked(), "cap_openings": self.cap_openings.isChecked()}
+
+    def set_scan_options(self, remove_outliers: bool = False, cap_openings: bool = False) -> None:
+        self.remove_outliers.setChecked(bool(remove_outliers))
+        self.cap_openings.setChecked(bool(cap_openings))
 
     def params(self, base: Params | None = None) -> Params:
         """The chosen parameters on top of ``base`` (thresholds are set in the summary panel)."""

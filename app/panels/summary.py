@@ -66,6 +66,12 @@ def _window_terms(text: str) -> str:
                   "map it with Evaluate > Map skeleton into the cloud's frame…", text)
     text = re.sub(r"--skeleton-scale ([-+0-9.eE]+)", r"scale \1", text)
     text = re.sub(r"--skeleton-offset ([-+0-9.eE]+) ([-+0-9.eE]+) ([-+0-9.eE]+)", r"offset \1 \2 \3", text)
+    text = text.replace("--remove-outliers evaluates without them",
+                        "Settings > stray points > evaluate without stray points leaves them out (F5 re-runs)")
+    text = text.replace("give the sensor position with --viewpoint X Y Z, or close small flat openings with "
+                        "--cap-openings",
+                        "give the sensor position with Evaluate > Viewpoint from the camera or Viewpoint…, or "
+                        "close small flat openings with Settings > openings (F5 re-runs)")
     return text.replace("; raise it with --set coverage_max_points=N)", ")")
 
 

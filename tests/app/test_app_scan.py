@@ -82,3 +82,49 @@ def test_the_viewpoint_from_the_camera_or_typed_is_used_by_the_next_evaluation(w
     assert w.scene.scores().boundedness_curve >= 0.95  # issue 26's goal, through the window
     w.actions_by_name["viewpoint_clear"].trigger()
     assert w.session.viewpoints == [] and w.session.stale_reason() == "settings changed"
+
+
+def test_the_scan_warnings_name_the_window_s_remedies_which_then_work(window, qtbot, tmp_path):
+    """The ``outliers`` and ``open_surface`` warnings name the Settings panel's check boxes and the
+    viewpoint actions, not command-line flags; ticking "evaluate without stray points" makes the next run
+    leave them out (stale until then), and a saved session keeps the boxes."""
+    import json
+
+    from app.panels.summary import window_warning
+
+    s = shapes.cylinder(n=3000, seed=2)
+    cloud = np.vstack([s.cloud, [[40.0, 0.0, 2.0]]])
+    curve = CurveSkeleton.from_raw(s.curve_vertices, s.curve_edges)
+    w = window
+    w.session.show_arrays(cloud, None, curve)
+    w.session.start_evaluation()
+    qtbot.waitUntil(lambda: w.scene.evaluation is not None and not w.session.runner.running, timeout=60000)
+    (stray,) = [x for x in w.scene.evaluation.warnings if x.code == "outliers"]
+    text = window_warning(stray)
+    assert "--" not in text and "Settings > stray points > evaluate without stray points" in text
+    assert not w.scene.evaluation.scan.outliers_removed
+    w.settings_panel.remove_outliers.setChecked(True)
+    assert w.session.stale_reason() == "settings changed"
+    w.session.start_evaluation()
+    qtbot.waitUntil(lambda: w.scene.evaluation is not None and not w.session.runner.running
+                    and w.scene.evaluation.scan is not None and w.scene.evaluation.scan.outliers_removed, timeout=60000)
+    assert w.session.stale_reason() == ""
+    assert w.scene.evaluation.normalization.scale == pytest.approx(evaluate(s.cloud, curve=curve).normalization.scale)
+    half, half_curve = _half_cylinder()
+    opened = [x for x in evaluate(half, curve=half_curve).warnings if x.code == "open_surface"]
+    assert opened and "--" not in window_warning(opened[0])
+    assert "Evaluate > Viewpoint from the camera" in window_warning(opened[0])
+    assert "Settings > openings" in window_warning(opened[0])
+    from skelcore.io import write_curve_ply, write_points_ply
+
+    write_points_ply(tmp_path / "c.ply", cloud)
+    write_curve_ply(tmp_path / "k.ply", s.curve_vertices, s.curve_edges)
+    w.session.close_all()
+    w.session.load_as("cloud", str(tmp_path / "c.ply"))
+    w.session.load_as("curve", str(tmp_path / "k.ply"))
+    path = tmp_path / "scan_session.json"
+    w.saved_sessions.save(str(path))
+    assert json.loads(path.read_text())["scan_options"] == {"remove_outliers": True, "cap_openings": False}
+    w.settings_panel.set_scan_options()
+    assert w.saved_sessions.open(str(path)) == [] and w.settings_panel.remove_outliers.isChecked()
+    w.settings_panel.set_scan_options()

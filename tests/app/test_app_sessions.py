@@ -159,6 +159,7 @@ def test_files_that_moved_or_changed_are_named_in_one_dialog_and_the_rest_is_loa
     ('{"skelscope_session": 1, "metric": "beauty"}', "metric must be one of"),
     ('{"skelscope_session": 1, "files": {"cloud": {"path": "x.ply"}}}', "the cloud file record needs"),
     ('{"skelscope_session": 1, "camera": {"position": [0, 0]}}', "the camera needs"),
+    ('{"skelscope_session": 1, "scan_options": {"remove_outliers": "yes"}}', "scan_options must map"),
 ])
 def test_a_bad_session_file_is_a_one_line_dialog_and_nothing_changes(window, files, tmp_path, content, says):
     w = window
