@@ -22,6 +22,11 @@ def no_checkpoint(_fraction: float) -> None:
     """Default checkpoint: does nothing."""
 
 
+def scaled_checkpoint(checkpoint: Checkpoint, lo: float, hi: float) -> Checkpoint:
+    """``checkpoint`` for a part of the work that runs from fraction ``lo`` to ``hi`` of the whole."""
+    return lambda f: checkpoint(lo + (hi - lo) * min(max(f, 0.0), 1.0))
+
+
 def matlab_round(x: float) -> int:
     """Round half away from zero, as MATLAB's ``round`` (Python's ``round`` rounds half to even)."""
     return int(np.sign(x) * np.floor(abs(x) + 0.5))

@@ -15,14 +15,10 @@ import threading
 
 import numpy as np
 
-from ..geometry import Checkpoint, no_checkpoint
+from ..geometry import Checkpoint, no_checkpoint, scaled_checkpoint
 from .ball_tree import BallTree
 
 __all__ = ["CloudIndex"]
-
-
-def _scaled(checkpoint: Checkpoint, lo: float, hi: float) -> Checkpoint:
-    return lambda f: checkpoint(lo + (hi - lo) * min(max(f, 0.0), 1.0))
 
 
 class CloudIndex:
@@ -49,8 +45,8 @@ class CloudIndex:
                 if len(self.cloud) < 2:
                     self._spacings = np.zeros(len(self.cloud))
                 else:
-                    tree = self.surface(_scaled(checkpoint, 0.0, 0.3))
-                    d, _ = tree.nearest(tree.points, _scaled(checkpoint, 0.3, 1.0), others=True, return_index=True)
+                    tree = self.surface(scaled_checkpoint(checkpoint, 0.0, 0.3))
+                    d, _ = tree.nearest(tree.points, scaled_checkpoint(checkpoint, 0.3, 1.0), others=True, return_index=True)
                     out = np.empty(len(d))
                     out[tree.perm] = d
                     self._spacings = out
@@ -62,8 +58,8 @@ class CloudIndex:
         key = np.ascontiguousarray(at, dtype=np.int64).tobytes()
         with self._locks["spread"]:
             if key not in self._spread:
-                surface = self.surface(_scaled(checkpoint, 0.0, 0.1))
-                near = BallTree(surface.points[at], checkpoint=_scaled(checkpoint, 0.1, 0.3))
-                _, idx = near.nearest(surface.points, _scaled(checkpoint, 0.3, 1.0), return_index=True)
+                surface = self.surface(scaled_checkpoint(checkpoint, 0.0, 0.1))
+                near = BallTree(surface.points[at], checkpoint=scaled_checkpoint(checkpoint, 0.1, 0.3))
+                _, idx = near.nearest(surface.points, scaled_checkpoint(checkpoint, 0.3, 1.0), return_index=True)
                 self._spread = {key: at[near.perm[idx]]}  # one subsample per evaluation: keep the last
             return self._spread[key]

@@ -19,7 +19,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..geometry import Checkpoint, no_checkpoint, unique_rows
+from ..geometry import Checkpoint, no_checkpoint, scaled_checkpoint, unique_rows
 from ..params import Params
 from .ball_tree import BallTree
 from .cloud_index import CloudIndex
@@ -54,19 +54,19 @@ class Coverage:
         return out
 
 
-def coverage_tau(cloud: np.ndarray, params: Params = Params(), checkpoint: Checkpoint = no_checkpoint) -> float:
+def coverage_tau(cloud: np.ndarray, params: Params = Params(), checkpoint: Checkpoint = no_checkpoint,
+                 index: CloudIndex | None = None) -> float:
     """tau = coverage_tau_factor x the cloud's median nearest-neighbour spacing (0 for a copy; the
-    values of ``geometry.nearest_neighbor_distances``, from the kernel's tree)."""
+    values of ``geometry.nearest_neighbor_distances``, from the kernel's tree); with ``index`` (the
+    cloud's :class:`.cloud_index.CloudIndex`) from its shared spacings, the same value."""
+    if index is not None:
+        return float(params.coverage_tau_factor * np.median(index.spacings(checkpoint)))
     cloud = np.asarray(cloud, dtype=float).reshape(-1, 3)
     if len(cloud) < 2:
         return 0.0
-    tree = BallTree(cloud, checkpoint=_scaled(checkpoint, 0.0, 0.3))
-    d = tree.nearest(tree.points, _scaled(checkpoint, 0.3, 1.0), others=True)
+    tree = BallTree(cloud, checkpoint=scaled_checkpoint(checkpoint, 0.0, 0.3))
+    d = tree.nearest(tree.points, scaled_checkpoint(checkpoint, 0.3, 1.0), others=True)
     return float(params.coverage_tau_factor * np.median(d))
-
-
-def _scaled(checkpoint: Checkpoint, lo: float, hi: float) -> Checkpoint:
-    return lambda f: checkpoint(lo + (hi - lo) * min(max(f, 0.0), 1.0))
 
 
 def min_ball_excess(
@@ -125,8 +125,7 @@ def coverage(
     elements = unique_rows(np.asarray(elements, dtype=float), checkpoint)[0]  # as np.unique(axis=0), 10 x faster
     checkpoint(0.0)
     if tau is None:
-        tau = (coverage_tau(cloud, params, _scaled(checkpoint, 0.0, 0.05)) if index is None else
-               float(params.coverage_tau_factor * np.median(index.spacings(_scaled(checkpoint, 0.0, 0.05)))))
+        tau = coverage_tau(cloud, params, scaled_checkpoint(checkpoint, 0.0, 0.05), index)
     tau = float(tau)
     s = float(params.coverage_slack)
     m = int(params.coverage_exact_points)
@@ -135,17 +134,17 @@ def coverage(
     elif len(cloud) > m:
         return _estimated(cloud, elements, m, tau, s, checkpoint, workers, index)
     else:
-        build = _scaled(checkpoint, 0.05, 0.1)
+        build = scaled_checkpoint(checkpoint, 0.05, 0.1)
         surface = BallTree(cloud, slab=True, checkpoint=build) if index is None else index.surface(build)
         balls = BallTree(elements, checkpoint=build)
-        r, contact = surface.nearest(balls.points, _scaled(checkpoint, 0.1, 0.35), workers, return_index=True)
+        r, contact = surface.nearest(balls.points, scaled_checkpoint(checkpoint, 0.1, 0.35), workers, return_index=True)
         # |p - x| - (1 + s) r <= tau  <=>  p lies in the ball of radius (1 + s) r + tau
-        balls.set_radii(r, (1.0 + s) * r + tau, surface.points[contact], _scaled(checkpoint, 0.35, 0.4), workers)
+        balls.set_radii(r, (1.0 + s) * r + tau, surface.points[contact], scaled_checkpoint(checkpoint, 0.35, 0.4), workers)
         # a cloud point that is some element's nearest has excess exactly 0 for that ball (the same
         # arithmetic both ways) and lies in its larger ball: gap 0, covered, no search
         rest = np.ones(len(cloud), bool)
         rest[contact] = False
-        g, c = balls.balls(surface.points[rest], floor=0.0, checkpoint=_scaled(checkpoint, 0.4, 1.0), workers=workers)
+        g, c = balls.balls(surface.points[rest], floor=0.0, checkpoint=scaled_checkpoint(checkpoint, 0.4, 1.0), workers=workers)
         gap, covered = np.zeros(len(cloud)), np.ones(len(cloud), bool)
         gap[surface.perm[rest]] = np.maximum(g, 0.0)
         covered[surface.perm[rest]] = c
@@ -179,11 +178,11 @@ def _estimated(cloud: np.ndarray, elements: np.ndarray, m: int, tau: float, s: f
     sample_rows = np.sort(rng.choice(n, m, replace=False))
     if len(elements) > m:
         elements = elements[np.sort(rng.choice(len(elements), m, replace=False))]
-    build = _scaled(checkpoint, 0.05, 0.1)
+    build = scaled_checkpoint(checkpoint, 0.05, 0.1)
     surface = BallTree(cloud, slab=True, checkpoint=build) if index is None else index.surface(build)
     balls = BallTree(elements, checkpoint=build)
-    r, contact = surface.nearest(balls.points, _scaled(checkpoint, 0.1, 0.35), workers, return_index=True)
-    balls.set_radii(r, (1.0 + s) * r + tau, surface.points[contact], _scaled(checkpoint, 0.35, 0.4), workers)
+    r, contact = surface.nearest(balls.points, scaled_checkpoint(checkpoint, 0.1, 0.35), workers, return_index=True)
+    balls.set_radii(r, (1.0 + s) * r + tau, surface.points[contact], scaled_checkpoint(checkpoint, 0.35, 0.4), workers)
     # the sample in the whole cloud's tree order (neighbours ask one after the other)
     in_sample = np.zeros(n, bool)
     in_sample[sample_rows] = True
@@ -191,16 +190,16 @@ def _estimated(cloud: np.ndarray, elements: np.ndarray, m: int, tau: float, s: f
     rest = np.ones(n, bool)
     rest[contact] = False
     ask = at[rest[at]]
-    g, c = balls.balls(surface.points[ask], floor=0.0, checkpoint=_scaled(checkpoint, 0.4, 0.8), workers=workers)
+    g, c = balls.balls(surface.points[ask], floor=0.0, checkpoint=scaled_checkpoint(checkpoint, 0.4, 0.8), workers=workers)
     gap_t, cov_t = np.zeros(n), np.ones(n, bool)  # tree order; the sampled positions only are set
     gap_t[ask], cov_t[ask] = np.maximum(g, 0.0), c
     # every cloud point: its nearest sampled point's answer (the sampled ones: their own)
     if index is None:
-        near = BallTree(surface.points[at], checkpoint=_scaled(checkpoint, 0.8, 0.85))
-        _, idx = near.nearest(surface.points, _scaled(checkpoint, 0.85, 1.0), workers, return_index=True)
+        near = BallTree(surface.points[at], checkpoint=scaled_checkpoint(checkpoint, 0.8, 0.85))
+        _, idx = near.nearest(surface.points, scaled_checkpoint(checkpoint, 0.85, 1.0), workers, return_index=True)
         j = at[near.perm[idx]]
     else:  # the skeletal set's and the curve's coverage share the sample, hence this spread
-        j = index.nearest_sampled(at, _scaled(checkpoint, 0.8, 1.0))
+        j = index.nearest_sampled(at, scaled_checkpoint(checkpoint, 0.8, 1.0))
     gap, covered = np.empty(n), np.empty(n, bool)
     gap[surface.perm], covered[surface.perm] = gap_t[j], cov_t[j]
     return _summary(gap, covered, tau, s, len(elements), sample_rows)

@@ -37,17 +37,9 @@ _MAX_SAMPLES = 200_000
 
 @dataclass(frozen=True)
 class GroundTruthParams:
-    """The metrics' constants (docs/metrics.md 5.3.1); ``evaluate`` takes them from
-    :class:`skelcore.Params`' ``gt_`` fields (:meth:`from_params`).
-
-    thresholds, threshold_max : precision / recall / F1 are averaged over the thresholds
-        k / thresholds x threshold_max local radii, k = 1..thresholds.
-    match_radii : junctions and endpoints match a reference node within this many of its radii.
-    branch_radii : branch split / merge: a reference branch and one of ours are associated when at
-        least this many local radii of its length lie within this many local radii of ours.
-    sample_step : both curves are sampled every this many x the reference's smallest radius.
-    radius_k : without a reference radius, it is the median distance to this many cloud points.
-    """
+    """The metrics' constants (docs/metrics.md 5.3.1), each the :class:`skelcore.Params` field of the
+    same name with the ``gt_`` prefix (documented there); ``evaluate`` takes them from it
+    (:meth:`from_params`)."""
 
     # the defaults are Params' gt_ fields (one source of truth for the constants)
     thresholds: int = Params.gt_thresholds

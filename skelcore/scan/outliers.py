@@ -86,8 +86,8 @@ def find_outliers(cloud: np.ndarray, params: Params = Params(), *, checkpoint: C
     none = Outliers(np.zeros(0, np.int64), n, 1.0, 0.0, spacing)
     if not spacing > 0:
         return none
-    candidates, _ = sparse_rows(cloud, float(params.outlier_radius) * spacing, m, lambda f: checkpoint(0.2 + 0.6 * f),
-                                tree=tree)
+    candidates = sparse_rows(cloud, float(params.outlier_radius) * spacing, m, lambda f: checkpoint(0.2 + 0.6 * f),
+                             tree=tree)
     checkpoint(0.8)
     if len(candidates) == 0:
         return none
@@ -121,13 +121,13 @@ def isolated_rows(points: np.ndarray, spacing: float, params: Params = Params(),
     if len(points) <= m or not spacing > 0:
         return np.zeros(0, np.int64)
     radius = float(params.outlier_skeletal_radius) * spacing
-    return sparse_rows(points, radius, m, checkpoint)[0]  # a contracted set: ~8 % of the rows asked
+    return sparse_rows(points, radius, m, checkpoint)  # a contracted set: ~8 % of the rows asked
 
 
 def sparse_rows(points: np.ndarray, radius: float, others: int, checkpoint: Checkpoint = no_checkpoint,
-                tree: cKDTree | None = None) -> tuple[np.ndarray, cKDTree | None]:
-    """(rows of ``points`` with fewer than ``others`` other points within ``radius``, exact; the points'
-    kd-tree if it was built, else ``tree``).
+                tree: cKDTree | None = None) -> np.ndarray:
+    """Rows of ``points`` with fewer than ``others`` other points within ``radius``, exact (``tree``: the
+    points' kd-tree, if the caller has one).
 
     Cubic cells of side radius / sqrt(3) (less a rounding margin) first: any two points of a cell are
     within ``radius``, so a row whose cell holds ``others`` more is not sparse.  Only the rest are asked
@@ -135,17 +135,15 @@ def sparse_rows(points: np.ndarray, radius: float, others: int, checkpoint: Chec
     over every row (~1.5 CPU s) becomes a sort, the tree's build and a short pass.  Every row is asked
     where the cells cannot be numbered in 63 bits (a stray point very far away)."""
     points = np.asarray(points, dtype=float).reshape(-1, 3)
-    if len(points) == 0:
-        return np.zeros(0, np.int64), tree
     ask = np.flatnonzero(~_crowded(points, radius, others, checkpoint))
     checkpoint(0.0)
     if len(ask) == 0:
-        return np.zeros(0, np.int64), tree
+        return np.zeros(0, np.int64)
     tree = kd_tree(points, checkpoint, 0.0) if tree is None else tree  # polled: 1M points held a cancel 0.6 s
     checkpoint(0.0)
     order = leaf_order(tree) if len(ask) == len(points) else None  # cache-warm when every row is asked
     d, _ = timed_query(tree, points[ask], others + 1, checkpoint, order=order)
-    return ask[d[:, others] > radius].astype(np.int64), tree
+    return ask[d[:, others] > radius].astype(np.int64)
 
 
 def _crowded(points: np.ndarray, radius: float, others: int, checkpoint: Checkpoint = no_checkpoint) -> np.ndarray:
@@ -153,7 +151,7 @@ def _crowded(points: np.ndarray, radius: float, others: int, checkpoint: Checkpo
     checkpoint between the passes (1M rows: ~0.1 s each)."""
     out = np.zeros(len(points), bool)
     cell = radius / np.sqrt(3.0) * (1.0 - 1e-9)
-    if not cell > 0:
+    if len(points) == 0 or not cell > 0:
         return out
     lo = points.min(axis=0)
     span = (points.max(axis=0) - lo) / cell

@@ -19,6 +19,7 @@ from ..errors import SkelInputError
 from ..geometry import Checkpoint, Normalization, as_points, no_checkpoint
 from ..metrics.boundedness import boundedness
 from ..metrics.cloud_index import CloudIndex
+from ..metrics.coverage import coverage_tau
 from ..params import Params
 from ..scan.capping import cap_openings
 from ..scan.openings import Opening, find_openings
@@ -171,7 +172,7 @@ class EvalContext:
     def tau(self, checkpoint: Checkpoint) -> float:
         """Coverage's tau (``coverage_tau``: the factor x the cloud's median spacing) from the shared
         nearest-other distances, made by the first stage that asks (docs/metrics.md 5.2)."""
-        return float(self.params.coverage_tau_factor * np.median(self.cloud_index.spacings(checkpoint)))
+        return coverage_tau(self.cloud_n, self.params, checkpoint, self.cloud_index)
 
 
 def build_context(

@@ -19,7 +19,7 @@ from skelcore.compare.leaderboard_html import bands, leaderboard_html
 from skelcore.compare.profiles import load_profiles
 from skelcore.compare.report import write_report
 from skelcore.scores import COLUMN
-from test_compare_report import _browser
+from headless_chromium import browser
 
 MEASURE = """<script>
 window.addEventListener('load', function () {
@@ -66,7 +66,7 @@ def _layout(tmp_path: Path, page: Path, width: int = 1400) -> dict:
     text = page.read_text()
     measured = tmp_path / "measured.html"
     measured.write_text(text.replace("</body>", MEASURE + "</body>"))
-    dom = _browser(tmp_path, "--dump-dom", f"--window-size={width},900", measured.resolve().as_uri())
+    dom = browser(tmp_path, "--dump-dom", f"--window-size={width},900", measured.resolve().as_uri())
     assert dom.returncode == 0, dom.stderr[-500:]
     found = re.search(r"data-layout=\"([^\"]*)\"", dom.stdout)
     assert found, "the measuring script did not run"

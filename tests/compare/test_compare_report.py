@@ -5,33 +5,18 @@ from __future__ import annotations
 
 import re
 import shutil
-import subprocess
 from pathlib import Path
 
 import numpy as np
 import pytest
 
 from compare_helpers import command, make_dataset, manifest
+from headless_chromium import browser
 from skelcore.cli import main
 from skelcore.compare import Backend, run_compare
 from skelcore.compare.render import VIEWS
 
 PICTURES = len(VIEWS) + 1  # per finished job: the paper's views and the defect picture
-
-CHROMIUM_FLAGS = ["--headless", "--no-sandbox", "--disable-gpu", "--disable-background-networking",
-                  "--disable-component-update", "--disable-sync", "--no-first-run"]
-
-
-def chromium() -> str:
-    exe = shutil.which("chromium") or shutil.which("chromium-browser")
-    assert exe, "headless Chromium is needed (Debian package 'chromium', installed by `make setup`)"
-    return exe
-
-
-def _browser(tmp: Path, *args: str) -> subprocess.CompletedProcess:
-    profile = tmp / f"chromium-profile-{len(list(tmp.glob('chromium-profile-*')))}"
-    return subprocess.run([chromium(), *CHROMIUM_FLAGS, f"--user-data-dir={profile}", *args],
-                          capture_output=True, text=True, timeout=120)
 
 
 @pytest.fixture(scope="module")
@@ -86,13 +71,13 @@ def test_the_report_is_one_self_contained_file(run):
 def test_headless_chromium_loads_every_image_and_draws_a_page(run, tmp_path):
     root, res = run
     url = Path(res.files["report"]).resolve().as_uri()
-    dom = _browser(tmp_path, "--dump-dom", url)
+    dom = browser(tmp_path, "--dump-dom", url)
     assert dom.returncode == 0, dom.stderr[-500:]
     loaded = re.search(r'data-images="(\d+)/(\d+)"', dom.stdout)
     assert loaded, "the page's load script did not run"
     assert loaded.group(1) == loaded.group(2) == str(4 * PICTURES + 1)
     shot = tmp_path / "report.png"
-    r = _browser(tmp_path, f"--screenshot={shot}", "--window-size=1400,2200", url)
+    r = browser(tmp_path, f"--screenshot={shot}", "--window-size=1400,2200", url)
     assert r.returncode == 0 and shot.exists(), r.stderr[-500:]
     img = _image(shot)
     assert img.shape[:2] == (2200, 1400)

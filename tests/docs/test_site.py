@@ -14,23 +14,10 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from headless_chromium import browser
+
 ROOT = Path(__file__).resolve().parents[2]
 pytestmark = pytest.mark.slow  # one Sphinx build, about 25 s of CPU
-
-CHROMIUM_FLAGS = ["--headless", "--no-sandbox", "--disable-gpu", "--disable-background-networking",
-                  "--disable-component-update", "--disable-sync", "--no-first-run"]
-
-
-def _chromium() -> str:
-    exe = shutil.which("chromium") or shutil.which("chromium-browser")
-    assert exe, "headless Chromium is needed (Debian package 'chromium', installed by `make setup`)"
-    return exe
-
-
-def _browser(tmp: Path, *args: str) -> subprocess.CompletedProcess:
-    profile = tmp / f"chromium-profile-{len(list(tmp.glob('chromium-profile-*')))}"
-    return subprocess.run([_chromium(), *CHROMIUM_FLAGS, f"--user-data-dir={profile}", *args],
-                          capture_output=True, text=True, timeout=120)
 
 
 def _image(path: Path) -> np.ndarray:
@@ -114,7 +101,7 @@ def test_front_page_renders_in_headless_chromium(site, tmp_path):
     url = (site / "index.html").resolve().as_uri()
     shot = tmp_path / "index.png"
     # one launch: the DOM after the page's scripts ran on stdout, and the page's picture
-    r = _browser(tmp_path, "--dump-dom", f"--screenshot={shot}", "--window-size=1300,1000", url)
+    r = browser(tmp_path, "--dump-dom", f"--screenshot={shot}", "--window-size=1300,1000", url)
     assert r.returncode == 0 and shot.exists(), r.stderr[-500:]
     assert re.search(r"<title>\s*SkelScope", r.stdout)
     assert "Getting started" in r.stdout and "The metrics" in r.stdout
@@ -127,7 +114,7 @@ def test_a_gallery_page_renders_with_its_picture(site, tmp_path):
     page = site / "gallery" / "plot_01_score_a_skeleton.html"
     url = page.resolve().as_uri()
     shot = tmp_path / "gallery.png"
-    r = _browser(tmp_path, "--dump-dom", f"--screenshot={shot}", "--window-size=1300,3000", url)
+    r = browser(tmp_path, "--dump-dom", f"--screenshot={shot}", "--window-size=1300,3000", url)
     assert r.returncode == 0 and shot.exists(), r.stderr[-500:]
     assert "Score a skeleton and colour it by centeredness" in r.stdout
     assert "d_B / d_Wp" in r.stdout  # the script's printed table, captured at build time

@@ -135,7 +135,7 @@ def test_sparse_rows_are_the_brute_force_ones(seed):
         for others in (1, 2, 5):
             within = (dist <= radius).sum(axis=1) - 1
             expected = np.flatnonzero(within < others).tolist()
-            assert sparse_rows(pts, radius, others)[0].tolist() == expected
+            assert sparse_rows(pts, radius, others).tolist() == expected
             sizes.append(len(expected))
     assert min(sizes) == 0 and 0 < np.median(sizes) < len(pts)  # not vacuous: all, some and none sparse
 
@@ -147,7 +147,7 @@ def test_sparse_rows_ask_every_row_where_the_cells_overflow():
 
     pts = np.vstack([np.random.default_rng(0).uniform(0, 1, (100, 3)), [[1e30, 1e30, 1e30]]])
     expected = np.flatnonzero((cdist(pts, pts) <= 0.3).sum(axis=1) - 1 < 2).tolist()
-    assert 100 in expected and sparse_rows(pts, 0.3, 2)[0].tolist() == expected
+    assert 100 in expected and sparse_rows(pts, 0.3, 2).tolist() == expected
 
 
 def _reference_outliers(cloud: np.ndarray, spacing: float, params: Params = Params()) -> list[int]:
