@@ -298,7 +298,7 @@ class RunBrowser(QtCore.QObject):
     def dropped(self, paths: list[str]) -> None:
         path = self.run_path(paths)
         if path:
-            QtCore.QTimer.singleShot(0, lambda: self.open(path))  # not inside the drop: the dialog may be modal
+            QtCore.QTimer.singleShot(0, self, lambda: self.open(path))  # not inside the drop: the dialog may be modal
 
     def choose(self) -> None:
         folder = QtWidgets.QFileDialog.getExistingDirectory(self.window.widget, "Open a skelcore compare output folder",

@@ -56,14 +56,14 @@ class CompareWindow(QtWidgets.QWidget):
                  thresholds: tuple[float, float] | None = None, parent: QtWidgets.QWidget | None = None,
                  context: str = "") -> None:
         super().__init__(parent, QtCore.Qt.WindowType.Window)
-        from pyvistaqt import QtInteractor
+        from .view.interactor import ClosingInteractor
 
         self.context = context  # e.g. a compare run's dataset, condition and seed
         self.setWindowTitle(f"SkelScope — A: {names[0]}  |  B: {names[1]}" + (f"  ({context})" if context else ""))
         self.resize(1400, 850)
         self.ev_a, self.ev_b, self.names = ev_a, ev_b, names
         self.thresholds = thresholds or (ev_a.params.beta_star, ev_a.params.c_star)
-        self.plotter = QtInteractor(self, shape=(1, 2), auto_update=False)
+        self.plotter = ClosingInteractor(self, shape=(1, 2), auto_update=False)
         self.metric_box = QtWidgets.QComboBox(self)
         self.metric_box.addItems(list(LOCAL_METRICS))
         self.metric_box.setCurrentText(metric)

@@ -92,7 +92,7 @@ class MainWindow(QtWidgets.QMainWindow):
             panel.drawn.connect(self._plot_drawn)
         for dock in ("Barcodes", "Histogram"):
             self.docks[dock].visibilityChanged.connect(lambda visible: visible and self._schedule_plots())
-        QtCore.QTimer.singleShot(0, self._size_docks)  # after the first layout, or Qt ignores it
+        QtCore.QTimer.singleShot(0, self, self._size_docks)  # after the first layout, or Qt ignores it
 
         self._build_status_bar()
         for spec in self.action_table():
@@ -137,9 +137,9 @@ class MainWindow(QtWidgets.QMainWindow):
         self.compare_run = RunBrowser(self)  # File > Open comparison run, and drops of a run
         self.saved_sessions = SavedSessions(self)  # File > Save / Open session, File > Recent (issue 25)
         self._update_actions()
-        QtCore.QTimer.singleShot(1500, preload_matplotlib)  # after the first frame, off the GUI thread
-        QtCore.QTimer.singleShot(2500, lambda: self.view.after_render(preload_engine))  # not during a frame
-        QtCore.QTimer.singleShot(4000, self._prepare_plots)
+        QtCore.QTimer.singleShot(1500, self, preload_matplotlib)  # after the first frame, off the GUI thread
+        QtCore.QTimer.singleShot(2500, self, lambda: self.view.after_render(preload_engine))  # not during a frame
+        QtCore.QTimer.singleShot(4000, self, self._prepare_plots)
 
     # ---- the interface for feature controllers (app.window_api.WindowApi) -----------------
     @property
@@ -525,7 +525,7 @@ class MainWindow(QtWidgets.QMainWindow):
         if "matplotlib.backends.backend_qtagg" in sys.modules and self.scene.evaluation is None:
             self.barcodes.prepare()
         elif "matplotlib.backends.backend_qtagg" not in sys.modules:
-            QtCore.QTimer.singleShot(1000, self._prepare_plots)
+            QtCore.QTimer.singleShot(1000, self, self._prepare_plots)
 
     def _schedule_plots(self) -> None:
         """Plots are redrawn one per event-loop turn (making the artists in one turn, drawing them in

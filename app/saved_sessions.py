@@ -59,7 +59,7 @@ class SavedSessions(QtCore.QObject):
                                      enabled=has_layers))
         # a set is recorded once the files loaded together are all in (a session records itself)
         window.session.loaded.connect(
-            lambda _role, _path: None if self._restoring else QtCore.QTimer.singleShot(0, self._record_set))
+            lambda _role, _path: None if self._restoring else QtCore.QTimer.singleShot(0, self, self._record_set))
         window.session.evaluated.connect(self._evaluated)
         window.scene.subscribe(self._on_scene)
         self.fill_menu()

@@ -254,7 +254,7 @@ def _start_ab(window: WindowApi, ab: tuple[str, Any] | None) -> None:
 
     def start_b(_ev: Any = None) -> None:
         window.session.evaluated.disconnect(start_b)
-        QtCore.QTimer.singleShot(0, lambda: window.compare.compare_arrays(skeletal, curve, name))
+        QtCore.QTimer.singleShot(0, window, lambda: window.compare.compare_arrays(skeletal, curve, name))
 
     window.session.evaluated.connect(start_b)
 

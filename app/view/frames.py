@@ -42,7 +42,7 @@ class FrameScheduler:
         """
         if not self._pending:
             self._pending = True
-            QtCore.QTimer.singleShot(0, self._timer.start)
+            QtCore.QTimer.singleShot(0, self._timer, self._timer.start)
 
     @property
     def pending(self) -> bool:

@@ -1,7 +1,8 @@
 """The Qt widget the 3D view draws in, and the input it handles itself.
 
-``DropInteractor`` hands drops to the viewer's loader and reports each painted frame; it also turns
-off multisampling under software GL. ``ClickFilter`` tells a click (a pick) from a camera drag.
+``ClosingInteractor`` lets go of Qt's GL surface when it closes; ``DropInteractor`` (the main view)
+also hands drops to the viewer's loader, reports each painted frame and turns off multisampling under
+software GL. ``ClickFilter`` tells a click (a pick) from a camera drag.
 """
 
 from __future__ import annotations
@@ -11,10 +12,39 @@ from typing import Any, Callable
 from pyvistaqt import QtInteractor
 from PySide6 import QtCore, QtGui
 
-__all__ = ["DropInteractor", "ClickFilter", "is_software_renderer"]
+__all__ = ["ClosingInteractor", "DropInteractor", "ClickFilter", "is_software_renderer"]
 
 
-class DropInteractor(QtInteractor):
+class ClosingInteractor(QtInteractor):
+    """A ``QtInteractor`` that drops its Python handles on Qt's GL context and surface once closed.
+
+    pyvistaqt keeps ``context().surface()`` as a ``QSurface`` wrapper. ``QSurface`` is not a QObject,
+    so PySide is never told when Qt deletes it with the widget, and the stale wrapper stays registered
+    at the freed address: the next Qt object made there comes back to Python as that ``QSurface``
+    (seen in CI: ``QMenu.addSeparator()`` returned a ``QSurface`` in the next window's menu bar).
+    A closed view never draws again, so the handles are let go while the C++ objects still live.
+    """
+
+    def close(self) -> bool:  # pyvistaqt tears VTK down here and in closeEvent
+        result = super().close()
+        self._release_gl_handles()
+        return result
+
+    def closeEvent(self, event: QtGui.QCloseEvent) -> None:  # noqa: N802
+        super().closeEvent(event)
+        self._release_gl_handles()
+
+    def _release_gl_handles(self) -> None:
+        forget = getattr(self, "_forget_context", None)  # pyvistaqt's own reset of _ctx/_surface/_gl
+        if forget is not None:
+            forget()
+        else:  # another pyvistaqt layout: the same attributes by name
+            for name in ("_surface", "_ctx"):
+                if hasattr(self, name):
+                    setattr(self, name, None)
+
+
+class DropInteractor(ClosingInteractor):
     """A ``QtInteractor`` whose drag-and-drop goes to the viewer's loader, not pyvista's reader.
 
     pyvistaqt's own ``dropEvent`` reads any dropped file with ``pyvista.read`` and adds it as a mesh;

@@ -187,7 +187,7 @@ class SceneView:
             if pickable is not None:
                 self._pickable[key] = pickable
                 if len(points) > LOD_POINTS:  # laid out for picking once drawn, not at the first click
-                    QtCore.QTimer.singleShot(0, lambda k=key, p=points: self.after_render(
+                    QtCore.QTimer.singleShot(0, self.plotter, lambda k=key, p=points: self.after_render(
                         lambda: self._sources.get(k) is p and self._pick_layout(k)))
             if lod and len(points) > LOD_POINTS:
                 idx = lod_indices(len(points), LOD_POINTS)
