@@ -32,8 +32,10 @@ setup: system venv
 run: setup
 	bash scripts/run_main_job.sh
 
+# Two workers (pytest-xdist), one test file per worker at a time (--dist loadfile: a file's fixtures are
+# built once); each worker has its own Xvfb (pytest-xvfb). One worker took 8.7 min, two 4.9 (docs/guide/testing.md).
 test: setup
-	$(PY) -m pytest -q -p no:cacheprovider tests
+	$(PY) -m pytest -q -p no:cacheprovider -n 2 --dist loadfile tests
 
 # Open3D (a ~400 MB wheel) and cloud-volume are kept out of `make test`: this installs the interop
 # extra and runs the tests of other libraries' objects, which skip Open3D's cases without it.
