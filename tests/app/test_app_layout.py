@@ -48,6 +48,30 @@ def test_every_dock_scrolls_its_panel_and_the_tall_columns_are_tabbed(window):
     assert window.docks["Histogram"] in window.tabifiedDockWidgets(window.docks["Barcodes"])
 
 
+def test_each_tab_group_has_one_tab_bar_even_before_the_event_loop_runs(qtbot, tmp_path):
+    """Qt 6.11 gives the second tab group made in a hidden window a second tab bar, drawn over the
+    "Picked element" dock until the event loop deletes it (deleteLater): a script that only calls
+    processEvents (the scripted mode, make_screenshots) kept it. The window makes its left tabs on
+    the first show instead."""
+    from PySide6 import QtCore
+
+    from app.main_window import MainWindow
+
+    w = MainWindow(settings=QtCore.QSettings(str(tmp_path / "s.ini"), QtCore.QSettings.Format.IniFormat))
+    qtbot.addWidget(w)
+    w.show()
+    for _ in range(5):
+        QtWidgets.QApplication.processEvents()  # no event loop: no deferred deletion
+    bars = [b for b in w.findChildren(QtWidgets.QTabBar) if b.isVisible()]
+    groups = sorted(tuple(b.tabText(i) for i in range(b.count())) for b in bars)
+    assert groups == [("Barcodes", "Histogram", "Defects"), ("Display", "Settings")], groups
+    for bar in bars:  # no bar over a dock outside its group
+        tabs = [bar.tabText(i) for i in range(bar.count())]
+        for name, dock in w.docks.items():
+            if dock.isVisible() and name not in tabs:
+                assert not bar.geometry().intersects(dock.geometry()), (tabs, name)
+
+
 def test_the_initial_size_is_the_screen_s_free_area_on_a_small_screen():
     from PySide6 import QtCore
 
