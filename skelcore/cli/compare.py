@@ -56,10 +56,13 @@ def run_compare_cli(args: argparse.Namespace) -> int:
         signal.signal(signal.SIGTERM, previous)
     s = result.summary
     print(result.leaderboard.to_markdown(), end="")
+    if result.leaderboard.sound is not None:
+        print("\nOver the cases where every method is sound:\n")
+        print(result.leaderboard.sound.to_markdown(), end="")
     print(f"{s.total} jobs: {s.skipped} already done, {s.ok} ran ok, {s.failed} failed; "
           f"{s.backend}, {s.wall:.1f} s")
     for rec in s.records:
         if rec["status"] != "ok":
             print(f"failed: {rec['shape']} / {rec['method']} / {rec['condition']} / seed {rec['seed']}: {rec['error']}")
-    print(f"results in {args.out} (results.csv, leaderboard.md/.csv/.tex" + ("" if args.no_report else ", report.html") + ")")
+    print(f"results in {args.out} (results.csv, leaderboard.md/.csv/.tex, leaderboard_sound.md/.csv/.tex" + ("" if args.no_report else ", report.html") + ")")
     return 0

@@ -2,6 +2,11 @@
 seeds) of every score of the jobs that finished, with its rank among the methods under that
 condition (1 = best, ties as printed share a rank; arrows as in the paper's table: lower is better for d_B, d_Wp, warnings and
 time, higher for the rest), and each application profile's pass rate. Markdown, CSV and LaTeX.
+
+A mean that includes a defective job is marked and never ranked, so one defect anywhere leaves a
+method unranked. :func:`build_sound_leaderboard` answers the question that remains: the same table
+over the cases (shape and seed) where every method is sound, so the methods are ranked on the same
+inputs, none of them broken there (docs/compare.md "Defects decide").
 """
 
 from __future__ import annotations
@@ -19,7 +24,7 @@ from ..io.atomic import atomic_open
 from ..scores import COLUMN, column_keys, format_score
 from .profiles import Profile
 
-__all__ = ["Entry", "Leaderboard", "build_leaderboard", "LOWER_IS_BETTER"]
+__all__ = ["Entry", "Leaderboard", "build_leaderboard", "build_sound_leaderboard", "LOWER_IS_BETTER"]
 
 COLUMNS = column_keys(compared=True)
 TAINT = "†"  # marks a mean that includes a defective job
@@ -45,6 +50,12 @@ class Entry:
 class Leaderboard:
     entries: list[Entry]
     profiles: tuple[Profile, ...]
+    #: for a board over the cases where every method is sound (:func:`build_sound_leaderboard`): per
+    #: condition, (cases kept, cases) and the methods left out for having no sound job there
+    sound_cases: dict[str, tuple[int, int]] | None = None
+    never_sound: dict[str, list[str]] = field(default_factory=dict)
+    #: on the run's board: the same table over the cases where every method is sound (written beside it)
+    sound: Leaderboard | None = None
 
     def arrow(self, col: str) -> str:
         return COLUMN[col].arrow
@@ -93,12 +104,32 @@ class Leaderboard:
         lines = ["| " + " | ".join(c.ljust(w) for c, w in zip(rows[0], widths)) + " |",
                  "|" + "|".join("-" * (w + 2) for w in widths) + "|"]
         lines += ["| " + " | ".join(c.ljust(w) for c, w in zip(r, widths)) + " |" for r in rows[1:]]
+        if self.sound_cases is not None:
+            return self._sound_markdown(lines)
         notes = ["", "Mean ± standard deviation over shapes and seeds of the jobs that finished; (rank) among the "
                  "methods under the same condition, 1 = best; ↓ lower is better, ↑ higher is better. Profile "
                  "columns: jobs passing / jobs it applies to (thresholds: our reading of the paper, section V-B). "
                  f"sound: finished jobs with no defect warning / jobs; {TAINT} a mean that includes a job with a "
                  "defect (not ranked: a defective skeleton is never shown best)."]
         return "\n".join(lines + notes) + "\n"
+
+    def scope_lines(self) -> list[str]:
+        """Per condition, which cases the sound-case board keeps and which methods it leaves out."""
+        out = []
+        for cond, (kept, n) in (self.sound_cases or {}).items():
+            line = f"{cond}: {kept} of {n} cases (shape, seed) where every method is sound"
+            if self.never_sound.get(cond):
+                line += f"; left out, sound on no case: {', '.join(self.never_sound[cond])}"
+            out.append(line)
+        return out
+
+    def _sound_markdown(self, table: list[str]) -> str:
+        notes = ["", *(f"- {line}" for line in self.scope_lines()), "",
+                 "Mean ± standard deviation over those cases only, so every method is scored on the same "
+                 "inputs and none is broken there; (rank) among the methods under the same condition, 1 = best."]
+        if not self.entries:
+            table = ["No case where every method is sound."]
+        return "\n".join(table + notes) + "\n"
 
     def to_latex(self) -> str:
         cols = self.columns()
@@ -115,13 +146,15 @@ class Leaderboard:
         lines += [r"\hline", r"\end{tabular}"]
         return "\n".join(lines) + "\n"
 
-    def write(self, out_dir: str | os.PathLike, inputs: tuple[str, ...] = ()) -> dict[str, str]:
+    def write(self, out_dir: str | os.PathLike, inputs: tuple[str, ...] = (), stem: str = "leaderboard") -> dict[str, str]:
         paths = {}
         for ext, text in (("md", self.to_markdown()), ("csv", self.to_csv()), ("tex", self.to_latex())):
-            path = os.path.join(out_dir, f"leaderboard.{ext}")
+            path = os.path.join(out_dir, f"{stem}.{ext}")
             with atomic_open(path, "w", inputs=inputs) as fh:
                 fh.write(text)
             paths[ext] = path
+        if self.sound is not None:
+            paths.update({f"sound_{k}": v for k, v in self.sound.write(out_dir, inputs, stem=f"{stem}_sound").items()})
         return paths
 
 
@@ -188,3 +221,28 @@ def build_leaderboard(rows: list[dict[str, Any]], profiles: tuple[Profile, ...],
                 e.rank[c] = r if len(group) > 1 and COLUMN[c].better else None  # a fact (length ratio): unranked
         entries += group
     return Leaderboard(entries, profiles)
+
+
+def build_sound_leaderboard(rows: list[dict[str, Any]], profiles: tuple[Profile, ...],
+                            methods: list[str], conditions: list[str]) -> Leaderboard:
+    """The leaderboard over the cases where every method is sound: per condition, the (shape, seed)
+    cases in which each method's job finished with no defect warning. A method sound on no case of a
+    condition is left out of it (named in ``never_sound``), or it would leave no case at all."""
+    kept_rows: list[dict[str, Any]] = []
+    cases: dict[str, tuple[int, int]] = {}
+    never: dict[str, list[str]] = {}
+    for cond in conditions:
+        mine = [r for r in rows if r["condition"] == cond]
+        if not mine:
+            continue
+        sound = {(r["shape"], r["seed"], r["method"]) for r in mine if r["status"] == "ok" and not r.get("defects")}
+        present = [m for m in methods if any(r["method"] == m for r in mine)]
+        never[cond] = [m for m in present if not any(key[2] == m for key in sound)]
+        ranked = [m for m in present if m not in never[cond]]
+        all_cases = list(dict.fromkeys((r["shape"], r["seed"]) for r in mine))
+        common = {c for c in all_cases if ranked and all((*c, m) in sound for m in ranked)}
+        cases[cond] = (len(common), len(all_cases))
+        kept_rows += [r for r in mine if r["method"] in ranked and (r["shape"], r["seed"]) in common]
+    board = build_leaderboard(kept_rows, profiles, methods, conditions)
+    board.sound_cases, board.never_sound = cases, never
+    return board

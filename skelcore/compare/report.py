@@ -204,6 +204,12 @@ def write_report(out_dir: str | os.PathLike, rows: list[dict[str, Any]], board: 
                  "methods under the same condition, best in bold; ↓ lower is better, ↑ higher is better. "
                  "Profile columns: jobs passing / jobs the profile applies to. sound: finished jobs with no defect "
                  "warning / jobs; † a mean that includes a job with a defect (never ranked, so never shown best).</p>")
+    if board.sound is not None:
+        parts.append("<h2>Leaderboard over the cases where every method is sound</h2><p class=note>"
+                     + "<br>".join(html.escape(line) for line in board.sound.scope_lines()) + "</p>"
+                     + (leaderboard_html(board.sound) if board.sound.entries else "<p>No case where every method is sound.</p>")
+                     + "<p class=note>The same columns over those cases only: every method is scored on the same "
+                     "inputs and none is broken there.</p>")
     parts.append("<h2>Application profiles</h2>" + _profiles_html(board.profiles))
     dist = distributions_png(rows, methods, conditions)
     if dist is not None:

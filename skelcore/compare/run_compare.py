@@ -1,4 +1,5 @@
-"""``run_compare``: manifest -> jobs -> store -> ``results.csv``, ``leaderboard.*``, ``report.html``.
+"""``run_compare``: manifest -> jobs -> store -> ``results.csv``, ``leaderboard.*`` (and
+``leaderboard_sound.*``, over the cases where every method is sound), ``report.html``.
 
 Claims DIR first (:mod:`.run_marker`: a new or empty folder, or one of our runs; never a user's
 folder unless forced). Also writes ``DIR/index.json`` (the jobs in manifest order and the run's
@@ -15,7 +16,7 @@ from typing import Any, Callable
 
 from ..io.atomic import atomic_open
 from .jobs import Job, make_jobs
-from .leaderboard import Leaderboard, build_leaderboard
+from .leaderboard import Leaderboard, build_leaderboard, build_sound_leaderboard
 from .manifest import Manifest, load_manifest
 from .profiles import Profile, load_profiles
 from .results_csv import collect_rows, write_results_csv
@@ -73,6 +74,7 @@ def write_outputs(out_dir: str | os.PathLike, manifest: Manifest, jobs: list[Job
     methods = [m.name for m in manifest.methods]
     conditions = [c.name for c in manifest.conditions]
     board = build_leaderboard(rows, profiles, methods, conditions)
+    board.sound = build_sound_leaderboard(rows, profiles, methods, conditions)
     files.update({f"leaderboard.{k}": v for k, v in board.write(out_dir, inputs=inputs).items()})
     if report:
         from .report import write_report

@@ -185,3 +185,24 @@ def test_on_the_hammer_alone_the_sound_methods_are_ranked_and_the_broken_ones_ar
     assert by["cao"].profiles["grasping"][0] == 1
     # the collapsed skeleton's d_B is close to cao's on the hammer (the issue's blob that d_B cannot tell)
     assert by["collapsed"].mean["d_B"] < 2 * by["cao"].mean["d_B"]
+
+
+def test_the_sound_case_board_ranks_cao_and_skelscope_where_both_are_sound(run, shared_data):
+    """The leaderboard over the cases where every method is sound: the broken ones are sound on no scan,
+    so they are left out (named); cao and skelscope are scored on the scans where both are sound, the
+    same means as a board of those jobs alone, and ranked."""
+    out, rows, res = run
+    board = res.leaderboard.sound
+    assert board.never_sound == {"normal": list(BROKEN)}
+    both = {r["shape"] for r in rows if r["method"] == "cao" and r["sound"] == "1"} & {
+        r["shape"] for r in rows if r["method"] == "skelscope" and r["sound"] == "1"}
+    assert both and board.sound_cases == {"normal": (len(both), 4)}
+    by = {e.method: e for e in board.entries}
+    assert set(by) == {"cao", "skelscope"} and by["cao"].n_jobs == len(both)
+    for m_ in ("cao", "skelscope"):
+        vals = [float(r["d_Wp"]) for r in rows if r["method"] == m_ and r["shape"] in both]
+        assert by[m_].mean["d_Wp"] == pytest.approx(np.mean(vals), rel=1e-12)
+    ranked = [c for c in board.columns() if by["cao"].rank.get(c) is not None]
+    assert len(ranked) >= 10 and not any(by["cao"].tainted.values())
+    text = (out / "leaderboard_sound.md").read_text()
+    assert f"normal: {len(both)} of 4 cases" in text and "truncated, collapsed" in text
