@@ -66,13 +66,13 @@ def test_loading_inputs_runs_one_evaluation_in_the_worker_and_fills_the_panels(w
     assert w.summary.cell_text("d_B / d_Wp", "skeletal points").startswith(f"{summary['topology']['bottleneck']:.4f}")
     assert w.summary.cell_text("smoothness", "curve skeleton").endswith(f"(n = {summary['counts']['smoothness']['curve']})")
     w.docks["Barcodes"].raise_()
-    qtbot.waitUntil(lambda: "d_B" in w.barcodes.title(), timeout=5000)
+    qtbot.waitUntil(lambda: "d_B" in w.barcodes.title(), timeout=30000)
     title = w.barcodes.title()
     assert "d_B" in title and "d_Wp" in title and f"K = {ev.topology.n_bars}" in title
     bar_axes = w.barcodes.figure.axes
     assert len(bar_axes) == 2 and all(len(ax.collections) >= 1 for ax in bar_axes)
     w.docks["Histogram"].raise_()
-    qtbot.waitUntil(lambda: w.histogram.threshold is not None, timeout=5000)
+    qtbot.waitUntil(lambda: w.histogram.threshold is not None, timeout=30000)
     assert w.histogram.threshold == pytest.approx(w.scene.beta_star)
     assert not w.progress.isVisible() and not w.session.runner.running
     assert w.scene.skeletal.quantities["boundedness"].values.shape == (1500,)
@@ -201,7 +201,7 @@ def test_a_landing_result_is_shown_in_separate_event_loop_turns(window, files, e
     w.session.load_files([files["cloud"], files["skeletal"], files["curve"]])
     w.docks["Barcodes"].raise_()
     w.barcodes.prepare()
-    qtbot.waitUntil(lambda: not w.view.render_pending and not w.barcodes.draw_pending, timeout=5000)
+    qtbot.waitUntil(lambda: not w.view.render_pending and not w.barcodes.draw_pending, timeout=30000)
     events: list[str] = []
 
     class PaintSpy(QtCore.QObject):
@@ -243,7 +243,7 @@ def test_barcodes_drawn_in_stages_give_the_same_pixels_as_one_draw(evaluation, q
     qtbot.waitExposed(panel)
     panel.prepare()
     panel.show_topology(evaluation.topology)
-    with qtbot.waitSignal(panel.drawn, timeout=5000):
+    with qtbot.waitSignal(panel.drawn, timeout=30000):
         panel.draw_now()  # the first of two stages now, the second in a later event-loop turn
     staged = np.asarray(panel.canvas.renderer.buffer_rgba()).copy()
     panel.canvas.draw()  # matplotlib's own whole-figure draw

@@ -386,7 +386,7 @@ def test_the_barcode_axis_labels_stay_inside_the_panel_in_their_shortest_form(qt
     qtbot.waitExposed(panel)
     panel.show_topology(evaluation.topology)
     panel.draw_now()
-    qtbot.waitUntil(lambda: not panel.draw_pending)
+    qtbot.waitUntil(lambda: not panel.draw_pending, timeout=30000)
     fig = panel.figure
     renderer = panel.canvas.get_renderer()
     ax = panel._axes()[1]

@@ -100,7 +100,7 @@ def test_a_saved_session_restores_everything_and_is_small_versioned_json_with_re
     assert _state(w) == before
     assert w.settings_panel.correspondence() == "reverse" and w.summary.beta_star.value() == 0.6
     # the pick lands once the evaluation has (it clears the pick panel), with its values, marked in 3D
-    qtbot.waitUntil(lambda: w.picked_element() is not None)
+    qtbot.waitUntil(lambda: w.picked_element() is not None, timeout=30000)
     assert w.picked_element()["index"] == 17 and w.picked_element()["values"] == picked["values"]
     assert "pick-marker" in w.view._actors
     assert w.dialogs == []
