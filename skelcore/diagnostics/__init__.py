@@ -18,7 +18,7 @@ __all__ = [
     "CycleDefects", "find_cycle_defects",
     "OutsideDefects", "find_outside",
     "CurveDefects", "find_curve_defects",
-    "VoxelShape", "voxelize_interior", "betti_numbers", "median_spacing",
+    "VoxelShape", "voxelize_interior", "betti_numbers", "wide_tunnels", "median_spacing",
     "MissingParts", "MissingRegion", "missing_parts", "skeleton_elements",
 ]
 _LAZY = {**dict.fromkeys(("JUNCTION", "Branches", "decompose_branches", "densify"), "branches"),
@@ -26,7 +26,7 @@ _LAZY = {**dict.fromkeys(("JUNCTION", "Branches", "decompose_branches", "densify
          **dict.fromkeys(("CycleDefects", "find_cycle_defects"), "cycles"),
          **dict.fromkeys(("OutsideDefects", "find_outside"), "outside"),
          **dict.fromkeys(("CurveDefects", "find_curve_defects"), "defects"),
-         **dict.fromkeys(("VoxelShape", "voxelize_interior", "betti_numbers", "median_spacing"), "interior"),
+         **dict.fromkeys(("VoxelShape", "voxelize_interior", "betti_numbers", "wide_tunnels", "median_spacing"), "interior"),
          **dict.fromkeys(("MissingParts", "MissingRegion", "missing_parts", "skeleton_elements"), "missing_parts")}
 
 

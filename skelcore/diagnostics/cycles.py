@@ -9,7 +9,8 @@ collar of outside voxels around X' = X plus the voxels near the skeleton, its 4 
 collar's edges, summed around the fundamental loops of a spanning tree, give the matrix K (cycles x
 loops) of linking numbers. rank K = the tunnels the cycles go around; taking the basis cycles
 shortest first, each whose row of K is in the span of those before is spurious; missing =
-beta1(X) - rank K. A cycle partly outside is measured in X' (a cycle through the air around a
+beta1(X) - rank K, where beta1(X) counts, once it exceeds rank K, only the tunnels wider than two
+voxels (:func:`.interior.wide_tunnels`: narrower ones are below the voxels' resolution). A cycle partly outside is measured in X' (a cycle through the air around a
 tunnel still goes around it; ``outside`` flags its edges).
 """
 
@@ -29,7 +30,7 @@ from ..geometry import Checkpoint, no_checkpoint
 from ..params import Params
 from .trust_warning import TrustWarning
 from .branches import Branches, decompose_branches, densify
-from .interior import VoxelShape, betti_numbers, voxelize_interior
+from .interior import VoxelShape, betti_numbers, voxelize_interior, wide_tunnels
 
 __all__ = ["CycleDefects", "find_cycle_defects", "solid_angle_polygon", "simplify_polygon"]
 
@@ -364,6 +365,8 @@ def find_cycle_defects(
         near = _near_cycles(curve, branches, voxel_shape, solid.shape)
         spurious, linking, rank = _classify(curve, branches, voxel_shape, solid | near, near, lengths,
                                             lambda f: checkpoint(0.7 + 0.25 * f))
+    if tunnels > rank:  # the tunnels no cycle goes around: only those wider than two voxels count
+        tunnels = max(rank, wide_tunnels(solid))
     missing = max(0, tunnels - rank)
     branch_spurious = np.zeros(len(branches), bool)
     for i in spurious:
