@@ -35,13 +35,9 @@ class ClosingInteractor(QtInteractor):
         self._release_gl_handles()
 
     def _release_gl_handles(self) -> None:
-        forget = getattr(self, "_forget_context", None)  # pyvistaqt's own reset of _ctx/_surface/_gl
+        forget = getattr(self, "_forget_context", None)  # pyvistaqt's reset of _ctx/_surface (its QOpenGLWidget base)
         if forget is not None:
             forget()
-        else:  # another pyvistaqt layout: the same attributes by name
-            for name in ("_surface", "_ctx"):
-                if hasattr(self, name):
-                    setattr(self, name, None)
 
 
 class DropInteractor(ClosingInteractor):

@@ -198,25 +198,17 @@ def betti_numbers(solid: np.ndarray) -> tuple[int, int, int]:
 
 
 def wide_tunnels(solid: np.ndarray) -> int:
-    """How many tunnels of ``solid`` (as :func:`betti_numbers`' beta1) a one-voxel thickening does not
-    close, bounded from above: the sum over the solid's 26-connected parts of min(beta1(part),
-    beta1(part grown by one voxel in the 26 directions)).
+    """How many tunnels of ``solid`` a one-voxel thickening does not close, bounded from above: the sum
+    over its 26-connected parts of min(beta1(part), beta1(part grown by one voxel)).
 
-    A tunnel at most two voxels across is below the interior's resolution: a stray point's voxel
-    touching the surface twice, noise bridging a gap, a wall seen through a sparse patch. On the
-    benchmark suite's exact skeletons these made most ``missing_cycles`` false alarms (docs/diagnostics.md
-    "False alarms on the benchmark suite"); a torus's hole is many voxels across. The exact count is
-    the persistent beta1 of solid -> grown (the H1 classes born in ``solid`` that live on in ``grown``;
-    gudhi's cubical persistence in the tests, 10-30 x slower and not interruptible). Each such class
-    lies in one part and is a tunnel of that part and of the part grown, so the bound is never below
-    it; it is that count unless growing a part also joins it into new tunnels (parts are grown apart,
-    so a stray voxel near the surface joins nothing): it can keep a false alarm, never hide a wide tunnel.
+    Tunnels at most two voxels across (a stray point's voxel touching the surface twice, noise
+    bridging a gap) are below the interior's resolution and made most ``missing_cycles`` false alarms
+    (docs/diagnostics.md "Cycles"). The exact count, the persistent beta1 of solid -> grown (gudhi in
+    the tests), is never above the bound: parts are grown apart, so the bound only keeps a tunnel that
+    growing a part creates, it never hides a wide one.
     """
-    s = np.asarray(solid, bool)
-    if betti_numbers(s)[1] == 0:
-        return 0
-    labels, _ = ndimage.label(s, structure=np.ones((3, 3, 3), bool))
     cube = np.ones((3, 3, 3), bool)
+    labels, _ = ndimage.label(np.asarray(solid, bool), structure=cube)
     total = 0
     for k, box in enumerate(ndimage.find_objects(labels), start=1):
         if box is None:

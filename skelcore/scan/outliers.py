@@ -23,7 +23,6 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-
 from scipy.spatial import cKDTree
 
 from ..geometry import Checkpoint, Normalization, kd_tree, leaf_order, no_checkpoint, query_workers, timed_query
