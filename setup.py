@@ -10,12 +10,21 @@ the CPU runs it (the same bits, 10-20 % faster; docs/boundedness.md 3.11).
 
 import platform
 
-from setuptools import Extension, setup
+from setuptools import Extension, find_namespace_packages, setup
 
 RAYCAST = dict(sources=["skelcore/metrics/_raycast.c"], extra_compile_args=["-O3", "-std=c99"])
 X86_64 = platform.machine().lower() in ("x86_64", "amd64")
 
+# The viewer's folder app/ installs as the package ``skelscope`` (never a top-level ``app``).
+def _packages(top: str) -> list[str]:
+    return find_namespace_packages(include=[top, f"{top}.*"], exclude=["*.__pycache__"])
+
+
+VIEWER = ["skelscope" + name[len("app"):] for name in _packages("app")]
+
 setup(
+    packages=_packages("skelcore") + VIEWER,
+    package_dir={"skelscope": "app"},
     ext_modules=[
         Extension("skelcore.metrics._raycast", **RAYCAST),
         *([Extension("skelcore.metrics._raycast_avx2", sources=RAYCAST["sources"],

@@ -1,6 +1,6 @@
 """SkelScope's desktop viewer (PySide6 + pyvistaqt) on top of the skelcore engine.
 
-Importing ``app`` is cheap: Qt, VTK and matplotlib are imported by the modules that need them.
+Installed as the package ``skelscope`` (the folder ``app/`` of the repository). Importing it is cheap: Qt, VTK and matplotlib are imported by the modules that need them.
 """
 
 from __future__ import annotations

@@ -5,7 +5,7 @@
 A thin main (silx's model): parse arguments, import Qt lazily, install an exception hook that shows
 errors in a dialog, open the window. Loading the inputs and the scripted mode (``--screenshot`` and
 ``--quit``: evaluate, colour, save the picture, exit 0 on success, 2 on bad input with one line on
-stderr, 1 on a bug) live in :mod:`app.scripted`.
+stderr, 1 on a bug) live in :mod:`skelscope.scripted`.
 """
 
 from __future__ import annotations
@@ -80,8 +80,22 @@ def _install_exception_hook(window: WindowApi) -> None:
     sys.excepthook = hook
 
 
+# The ``app`` extra: without one of these the viewer cannot start (the engine, ``skelcore``, needs none).
+VIEWER_LIBRARIES = ("PySide6", "pyvista", "pyvistaqt", "matplotlib")
+
+
+def missing_viewer_libraries() -> list[str]:
+    """The viewer's libraries that are not installed (none with ``pip install 'skelscope[app]'``)."""
+    import importlib.util
+
+    return [name for name in VIEWER_LIBRARIES if importlib.util.find_spec(name) is None]
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     args = build_parser().parse_args(argv)
+    missing = missing_viewer_libraries()
+    if missing:
+        return fail(f"the viewer needs {', '.join(missing)}, not installed: pip install 'skelscope[app]'")
     try:
         startup = check_arguments(args)
     except ValueError as exc:  # SkelInputError included: one line, exit 2, before any window

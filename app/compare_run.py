@@ -3,7 +3,7 @@
 File > "Open comparison run…" (or dropping the run's folder or its ``index.json`` on the window) opens
 a dialog listing the run's datasets, conditions, seeds and, for the chosen ones, each method's row of
 the report (status and scores); pick method A and method B and "Open A/B view" shows both stored
-Evaluations side by side (:class:`app.compare_view.CompareWindow`); "Show A (B) in the main window"
+Evaluations side by side (:class:`skelscope.compare_view.CompareWindow`); "Show A (B) in the main window"
 puts that stored result in the 3-D view, where picking shows each element's support. Nothing is
 recomputed: :mod:`skelcore.compare.finished_run` reads the jobs' records. Bad input is one
 dialog line; big rows are read in a thread.

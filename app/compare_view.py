@@ -4,7 +4,7 @@ One pyvista interactor split in two renderers that share one camera (linked came
 moves both), each drawing the cloud and its skeleton coloured by the chosen metric, and the summary
 table with A, B and B - A columns (the scores of :meth:`Evaluation.summary` at A's thresholds; green where B is better).
 File > "Compare with a second skeleton (B)…" loads B's files and evaluates them in the worker;
-File > "Open comparison run…" (:mod:`app.compare_run`) opens two report rows' stored results.
+File > "Open comparison run…" (:mod:`skelscope.compare_run`) opens two report rows' stored results.
 """
 
 from __future__ import annotations
@@ -35,7 +35,7 @@ def ab_rows(a: Any, b: Any) -> list[tuple[str, float, float, float]]:
 
 def ab_defect_rows(ev_a: Any, ev_b: Any) -> list[tuple[str, float, float, float]]:
     """(label, A, B, B - A) per defect code found in A or B: how many of each (the Defects panel's rows,
-    :func:`app.scene.defects.defect_rows`); fewer is better."""
+    :func:`skelscope.scene.defects.defect_rows`); fewer is better."""
     from .scene.defects import DEFECT_TITLES, defect_counts
 
     ca, cb = defect_counts(ev_a), defect_counts(ev_b)
@@ -177,7 +177,7 @@ class CompareWindow(QtWidgets.QWidget):
 
     def _draw_defects(self, ev: Any) -> None:
         """Missing parts' cloud points and halos around spurious branches and cycles, as in the main
-        view (:mod:`app.view.defect_overlay`'s colours and styles), in the current renderer."""
+        view (:mod:`skelscope.view.defect_overlay`'s colours and styles), in the current renderer."""
         import pyvista as pv
 
         from skelcore.colors import DEFECT_COLORS

@@ -1,7 +1,7 @@
 """Wires the defects (issue 25 "Defects on screen"; issue 26's openings and stray points) into the main
-window through its public interface (:class:`app.window_api.WindowApi`): the Defects dock lists the shown
-evaluation's defects (:func:`app.scene.defects.defect_rows`), the 3-D overlay draws them
-(:class:`app.view.defect_overlay.DefectOverlay`), View > Show defects (Shift+D) shows or hides them;
+window through its public interface (:class:`skelscope.window_api.WindowApi`): the Defects dock lists the shown
+evaluation's defects (:func:`skelscope.scene.defects.defect_rows`), the 3-D overlay draws them
+(:class:`skelscope.view.defect_overlay.DefectOverlay`), View > Show defects (Shift+D) shows or hides them;
 selecting a row frames the camera on its bounding box and highlights it, and a click on the curve
 highlights the clicked branch (whose length, radius, metric means and flags the pick panel shows).
 """

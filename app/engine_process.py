@@ -7,7 +7,7 @@ Cancel took up to 1.5 s to reach the engine and every Qt callback into Python (e
 overridden virtuals) waited for the worker: the File menu opened 2 s after the click. A child
 process shares no GIL with the window; killing it ends the work at once, wherever it is.
 
-The child is ``python -m app.engine_process READ_FD WRITE_FD`` (no Qt: it imports only skelcore), at
+The child is ``python -m skelscope.engine_process READ_FD WRITE_FD`` (no Qt: it imports only skelcore), at
 a lower CPU priority than the window. It reads one job, ``(kind, kwargs)``, and writes
 ``("progress", fraction, stage)``, ``("stages", names)`` and then ``("result", value)`` or
 ``("error", exception, traceback)``; it exits when the job is done or the window's end of the job
@@ -58,7 +58,7 @@ def start_child() -> tuple[subprocess.Popen, Connection, Connection]:
     root = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
     env["PYTHONPATH"] = os.pathsep.join([root, *[p for p in env.get("PYTHONPATH", "").split(os.pathsep) if p]])
     try:
-        proc = subprocess.Popen([sys.executable, "-m", "app.engine_process", str(job_r), str(msg_w)],
+        proc = subprocess.Popen([sys.executable, "-m", "skelscope.engine_process", str(job_r), str(msg_w)],
                                 pass_fds=(job_r, msg_w), env=env, stdin=subprocess.DEVNULL, close_fds=True)
     finally:
         os.close(job_r)

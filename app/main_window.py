@@ -1,7 +1,7 @@
 """The main window: the 3D view in the centre, dockable panels, menus, and the wiring between them.
 
-Thin on purpose (silx's advice): loading and computing live in :mod:`app.session`, the model in
-:mod:`app.scene`, drawing in :mod:`app.view`, file writing in :mod:`app.exports`.
+Thin on purpose (silx's advice): loading and computing live in :mod:`skelscope.session`, the model in
+:mod:`skelscope.scene`, drawing in :mod:`skelscope.view`, file writing in :mod:`skelscope.exports`.
 """
 
 from __future__ import annotations
@@ -39,7 +39,7 @@ class _KeyEater(QtCore.QObject):
 
 
 class MainWindow(QtWidgets.QMainWindow):
-    """The viewer's window; feature controllers see it as :class:`app.window_api.WindowApi`."""
+    """The viewer's window; feature controllers see it as :class:`skelscope.window_api.WindowApi`."""
 
     element_picked = QtCore.Signal(object)  # info dict of the picked element, or None (after the pick panel)
     closing = QtCore.Signal()  # emitted first thing in closeEvent
@@ -165,7 +165,7 @@ class MainWindow(QtWidgets.QMainWindow):
         return dock
 
     def add_action(self, spec: ActionSpec) -> QtGui.QAction:
-        """A menu action at the end of its group (:data:`app.actions.MENUS`); its conditions are kept up."""
+        """A menu action at the end of its group (:data:`skelscope.actions.MENUS`); its conditions are kept up."""
         action = self.menus.add(spec)
         self.menus.update()
         return action
@@ -175,7 +175,7 @@ class MainWindow(QtWidgets.QMainWindow):
         self._drop_handlers.append((accepts, drop))
 
     def submenu(self, group: str) -> QtWidgets.QMenu:
-        """The submenu a group is shown as (:data:`app.actions.SUBMENUS`), for a controller to fill."""
+        """The submenu a group is shown as (:data:`skelscope.actions.SUBMENUS`), for a controller to fill."""
         return self.menus.submenus[group]
 
     def set_settings(self, params: Any, correspondence: str, scan_options: dict[str, bool] | None = None) -> None:
@@ -418,7 +418,7 @@ class MainWindow(QtWidgets.QMainWindow):
 
     def _add_recent(self, path: str) -> None:
         """The files loaded, newest first: where file dialogs open (File > Recent lists sets and
-        sessions, :mod:`app.saved_sessions`)."""
+        sessions, :mod:`skelscope.saved_sessions`)."""
         path = os.path.abspath(path)
         files = [path] + [p for p in self.recent_files() if p != path]
         self.settings.setValue("recent_files", files[:MAX_RECENT])
@@ -762,4 +762,4 @@ def _refuse_existing(paths: list[str], overwrite: bool) -> None:
 def _study_available() -> bool:
     import importlib.util
 
-    return importlib.util.find_spec("app.study_dialog") is not None
+    return importlib.util.find_spec("skelscope.study_dialog") is not None

@@ -1,8 +1,8 @@
 """File > Save session / Open session, ``skelscope --session F``, and File > Recent (issue 25).
 
-A feature controller on :class:`app.window_api.WindowApi`. Saving captures the inputs, the settings
+A feature controller on :class:`skelscope.window_api.WindowApi`. Saving captures the inputs, the settings
 and thresholds, the correspondence mode, metric, colour range, display options, camera (with the
-view's size) and the picked element into one JSON file (:mod:`app.session_file`). Opening reads and
+view's size) and the picked element into one JSON file (:mod:`skelscope.session_file`). Opening reads and
 checks the whole file first (a bad file is a one-line dialog and nothing changes), finds each input
 beside the session or at its saved place, loads what it can, restores the rest, and says in ONE
 dialog which files are missing or changed (and anything else it could not restore).

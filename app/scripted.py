@@ -7,7 +7,7 @@ saved camera frames the data as it did), loads the inputs or restores the sessio
 starts the A/B view (``--skeleton-b``, ``--compare-run``), waits for the evaluation, saves the picture
 (``--scale``, ``--background``) and prints the scores; scripted (``--quit``) it closes the window and
 returns the exit status: 0 on success, 2 on bad input, 1 on a bug (an uncaught exception). It uses the
-window through :class:`app.window_api.WindowApi` only.
+window through :class:`skelscope.window_api.WindowApi` only.
 """
 
 from __future__ import annotations

@@ -23,7 +23,7 @@ __all__ = ["Session", "preload_engine", "PROCESS_FROM"]
 
 PROCESS_FROM = 200_000
 """Evaluations of at least this many points (cloud + skeletal set) run in a child process
-(:mod:`app.engine_process`): Cancel and quit are then a kill, and the window never waits for the
+(:mod:`skelscope.engine_process`): Cancel and quit are then a kill, and the window never waits for the
 engine's GIL. Smaller ones run in a thread (no process start, ~1 s of imports)."""
 
 
@@ -70,7 +70,7 @@ class Session(QtCore.QObject):
 
     # ---- loading --------------------------------------------------------------------------
     def load_files(self, paths: list[str]) -> list[tuple[str, str]]:
-        """Load files dropped or named together, deciding each one's role (see :mod:`app.loading`).
+        """Load files dropped or named together, deciding each one's role (see :mod:`skelscope.loading`).
 
         A file that fails shows its loader's one-line message; the others and what was loaded survive.
         Returns the (role, path) pairs loaded.

@@ -1,6 +1,6 @@
 """A saved viewer session as one small JSON file (File > Save session, ``skelscope --session F``).
 
-Not :mod:`app.session`, the viewer's controller: this is the file format, without widgets. A session holds
+Not :mod:`skelscope.session`, the viewer's controller: this is the file format, without widgets. A session holds
 the inputs' paths (relative to the session file when possible, absolute as well) with each file's
 size, modification time and SHA-256, so that opening it can tell a file that moved (missing) or
 changed from one that did not; the settings and thresholds (every ``skelcore.Params`` field) and the

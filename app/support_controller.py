@@ -4,8 +4,8 @@ threshold" box hides (and makes unpickable) every element whose value passes (be
 NaN stays shown).
 
 Supports of clouds of BACKGROUND_POINTS or more are computed in a thread of their own (a direction map
-of a 100k-point cloud takes seconds), the newest pick winning. Made by :class:`app.main_window.MainWindow`
-through its public interface (:class:`app.window_api.WindowApi`): it listens to ``element_picked`` and
+of a 100k-point cloud takes seconds), the newest pick winning. Made by :class:`skelscope.main_window.MainWindow`
+through its public interface (:class:`skelscope.window_api.WindowApi`): it listens to ``element_picked`` and
 subscribes to the scene after the view, so its overlay and filter are applied after the view's redraw.
 """
 

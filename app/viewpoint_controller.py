@@ -2,8 +2,8 @@
 3-D view's camera position as the sensor's, "Viewpoint…" types one or more (x y z; several separated by
 ";"), "Clear viewpoints" goes back to the paper's scores. The session passes them to the engine's
 ``viewpoints=`` (viewpoint-aware boundedness and centeredness, docs/metrics.md 6) at the next
-evaluation; until then the shown results are marked stale. Saved in sessions (:mod:`app.saved_sessions`).
-A feature controller on :class:`app.window_api.WindowApi`.
+evaluation; until then the shown results are marked stale. Saved in sessions (:mod:`skelscope.saved_sessions`).
+A feature controller on :class:`skelscope.window_api.WindowApi`.
 """
 
 from __future__ import annotations

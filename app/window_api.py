@@ -1,9 +1,9 @@
 """What feature controllers and the scripted mode may use of the main window (issue 21, item 4).
 
-The A/B view (:mod:`app.compare_view`), the comparison-run browser (:mod:`app.compare_run`), the
-support views (:mod:`app.support_controller`), saved sessions (:mod:`app.saved_sessions`) and the
-scripted mode (:mod:`app.scripted`) type their
-window as :class:`WindowApi`, which :class:`app.main_window.MainWindow` implements: they add docks,
+The A/B view (:mod:`skelscope.compare_view`), the comparison-run browser (:mod:`skelscope.compare_run`), the
+support views (:mod:`skelscope.support_controller`), saved sessions (:mod:`skelscope.saved_sessions`) and the
+scripted mode (:mod:`skelscope.scripted`) type their
+window as :class:`WindowApi`, which :class:`skelscope.main_window.MainWindow` implements: they add docks,
 menu actions (by named group, :class:`ActionSpec`), drop handlers and display options through it,
 and never touch the window's private attributes (``tests/app/test_window_api.py`` walks their code).
 A Protocol, not the class, so that no controller imports the window that installs it (no import cycle).
@@ -31,7 +31,7 @@ RIGHT = QtCore.Qt.DockWidgetArea.RightDockWidgetArea
 
 @dataclass(frozen=True)
 class ActionSpec:
-    """One menu action, as a row of the window's action table (:data:`app.actions.MENUS` names the groups).
+    """One menu action, as a row of the window's action table (:data:`skelscope.actions.MENUS` names the groups).
 
     ``run`` is called with no argument, or with the new state when the action is ``checked``-able;
     ``enabled`` and ``checked`` are read again whenever the scene or a task changes (None: always
@@ -48,7 +48,7 @@ class ActionSpec:
 
 
 class ABComparison(Protocol):
-    """The A/B view's controller as the scripted mode and the run browser use it (:mod:`app.compare_view`)."""
+    """The A/B view's controller as the scripted mode and the run browser use it (:mod:`skelscope.compare_view`)."""
 
     views: list[Any]  # the open A/B windows, newest last
 
@@ -59,7 +59,7 @@ class ABComparison(Protocol):
 
 
 class SessionFiles(Protocol):
-    """Saved sessions' controller as the scripted mode uses it (:mod:`app.saved_sessions`)."""
+    """Saved sessions' controller as the scripted mode uses it (:mod:`skelscope.saved_sessions`)."""
 
     def open(self, path: str) -> list[str]: ...
 

@@ -8,7 +8,7 @@ down at the engine's next checkpoint. The thread is a plain daemon ``threading.T
 (:meth:`TaskRunner.shutdown`) and the process can then exit with a thread still inside numpy.
 Following Orange3's ``concurrent`` helpers, a new task first retires the old one; progress is
 throttled to visible steps. Only plain Python objects cross threads: VTK stays on the GUI thread.
-Big evaluations run in a child process instead (:class:`ProcessTask`, :mod:`app.engine_process`),
+Big evaluations run in a child process instead (:class:`ProcessTask`, :mod:`skelscope.engine_process`),
 where Cancel is a kill. The stage shown names every stage running side by side (:func:`stage_label`).
 """
 
@@ -143,7 +143,7 @@ class Task(QtCore.QObject):
 
 
 class ProcessTask(Task):
-    """A job of :data:`app.engine_process.JOBS` in a child process, with :class:`Task`'s signals.
+    """A job of :data:`skelscope.engine_process.JOBS` in a child process, with :class:`Task`'s signals.
 
     A thread of this process sends the job and reads the child's messages (so neither a 50 MB job nor
     a 150 MB result blocks the window); Cancel kills the child, which stops the work at once, in any
@@ -244,7 +244,7 @@ class TaskRunner(QtCore.QObject):
 
     def start_process(self, kind: str, kwargs: dict[str, Any], name: str = "task",
                       restore: Callable[[Any], Any] | None = None) -> Task:
-        """Like :meth:`start`, for a job of :data:`app.engine_process.JOBS` run in a child process
+        """Like :meth:`start`, for a job of :data:`skelscope.engine_process.JOBS` run in a child process
         (``restore(result)`` runs in this process before ``succeeded``)."""
         return self._launch(ProcessTask(kind, kwargs, name, restore))
 

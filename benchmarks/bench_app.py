@@ -27,11 +27,11 @@ ROOT = Path(__file__).resolve().parents[1]
 _LAUNCH = r"""
 import sys, time
 t_start = float(sys.argv[1])
-from app.__main__ import import_view_libraries
+from skelscope.__main__ import import_view_libraries
 import_view_libraries()  # as skelscope's main does: the view's libraries first, then Qt
 from PySide6 import QtCore, QtWidgets
 app = QtWidgets.QApplication(["bench"])
-from app.main_window import MainWindow
+from skelscope.main_window import MainWindow
 t_imported = time.time()
 w = MainWindow(settings=QtCore.QSettings(sys.argv[3], QtCore.QSettings.Format.IniFormat))
 w.show()
@@ -83,7 +83,7 @@ def stall_during_evaluation(n: int = 4096) -> tuple[float, float, float]:
     """(longest heartbeat gap while the worker runs, longest including the result landing, eval s)."""
     from PySide6 import QtCore, QtWidgets
 
-    from app.main_window import MainWindow
+    from skelscope.main_window import MainWindow
     from skelcore import shapes
 
     app = QtWidgets.QApplication.instance() or QtWidgets.QApplication(["bench"])
@@ -128,7 +128,7 @@ def cancel_latency() -> float:
     """Seconds from Cancel to the worker having stopped, on a slow ('paper' estimator) 4096 run."""
     from PySide6 import QtCore, QtWidgets
 
-    from app.main_window import MainWindow
+    from skelscope.main_window import MainWindow
     from skelcore import shapes
     from skelcore.params import Params
 
@@ -158,7 +158,7 @@ def cancel_latency() -> float:
 def _million_window(n: int = 1_000_000, skeletal: bool = True):
     from PySide6 import QtCore, QtWidgets
 
-    from app.main_window import MainWindow
+    from skelscope.main_window import MainWindow
     from skelcore import shapes
 
     app = QtWidgets.QApplication.instance() or QtWidgets.QApplication(["bench"])
@@ -393,12 +393,12 @@ def pick_click_to_text(n: int = 1_000_000, picks: int = 3) -> list[float]:
 
 _QUIT = r"""
 import sys, time
-from app.__main__ import import_view_libraries
+from skelscope.__main__ import import_view_libraries
 import_view_libraries()
 from PySide6 import QtCore, QtWidgets
 app = QtWidgets.QApplication(["bench-quit"])
-from app.__main__ import _exited
-from app.main_window import MainWindow
+from skelscope.__main__ import _exited
+from skelscope.main_window import MainWindow
 from skelcore import shapes
 w = MainWindow(settings=QtCore.QSettings(sys.argv[1], QtCore.QSettings.Format.IniFormat))
 w.session.auto_evaluate = False

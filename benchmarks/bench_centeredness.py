@@ -14,7 +14,7 @@ import time
 import numpy as np
 
 from skelcore.curve import CurveSkeleton
-from skelcore.curve_sampling import sample_curve
+from skelcore.metrics.curve_sampling import sample_curve
 from skelcore.geometry import Normalization
 from skelcore.metrics.centeredness import curve_centeredness, skeletal_centeredness
 from skelcore.shapes import cylinder, y_shape

@@ -34,7 +34,7 @@ sys.path.insert(0, str(ROOT))
 from skelcore import Params, shapes  # noqa: E402
 from skelcore.benchmark import skeleton_defects as gen  # noqa: E402
 from skelcore.curve import CurveSkeleton  # noqa: E402
-from skelcore.curve_sampling import sample_curve  # noqa: E402
+from skelcore.metrics.curve_sampling import sample_curve  # noqa: E402
 from skelcore.diagnostics import find_curve_defects  # noqa: E402
 from skelcore.geometry import Normalization  # noqa: E402
 from skelcore.metrics.boundedness import boundedness  # noqa: E402

@@ -152,7 +152,7 @@ def command_help(command: str) -> str:
     os.environ["COLUMNS"] = "86"
     words = command.split()
     if words[0] == "skelscope":
-        from app.__main__ import build_parser as viewer_parser
+        from skelscope.__main__ import build_parser as viewer_parser
 
         return viewer_parser().format_help()
     from skelcore.cli.main import build_parser

@@ -67,7 +67,7 @@ def laptop_screenshot() -> int:
     from PySide6 import QtCore, QtWidgets
 
     app = QtWidgets.QApplication.instance() or QtWidgets.QApplication(["skelscope-screenshots"])
-    from app.main_window import MainWindow
+    from skelscope.main_window import MainWindow
 
     OUT.mkdir(exist_ok=True)
     tmp = Path(tempfile.mkdtemp(prefix="skelscope-shots-"))
@@ -108,7 +108,7 @@ def main() -> int:
     from PySide6 import QtCore, QtWidgets
 
     app = QtWidgets.QApplication.instance() or QtWidgets.QApplication(["skelscope-screenshots"])
-    from app.main_window import MainWindow
+    from skelscope.main_window import MainWindow
 
     OUT.mkdir(exist_ok=True)
     tmp = Path(tempfile.mkdtemp(prefix="skelscope-shots-"))

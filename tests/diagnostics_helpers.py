@@ -7,7 +7,7 @@ import numpy as np
 
 from skelcore import Params
 from skelcore.curve import CurveSkeleton
-from skelcore.curve_sampling import sample_curve
+from skelcore.metrics.curve_sampling import sample_curve
 from skelcore.geometry import Normalization
 from skelcore.metrics.boundedness import boundedness
 

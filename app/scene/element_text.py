@@ -1,6 +1,6 @@
 """Plain-text description of one picked skeleton element, for the pick panel and the status bar.
 
-It formats the dict :meth:`app.scene.model.Scene.element_info` returns; no Qt, so it is testable alone.
+It formats the dict :meth:`skelscope.scene.model.Scene.element_info` returns; no Qt, so it is testable alone.
 """
 
 from __future__ import annotations

@@ -1,6 +1,6 @@
 """The scene model: the loaded layers, the current evaluation and the display choices, without Qt.
 
-Every change goes through a ``Scene`` method, which emits a :class:`~app.scene.events.SceneEvent`
+Every change goes through a ``Scene`` method, which emits a :class:`~skelscope.scene.events.SceneEvent`
 to its subscribers (the 3D view and the panels redraw from it). Changing the thresholds updates
 the centeredness quantities and the scores from the kept ``Evaluation``, never re-evaluating.
 """

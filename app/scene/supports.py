@@ -46,7 +46,7 @@ _CACHE: dict[int, Any] = {}
 
 def _curve_samples_n(ev: Any) -> Any:
     """The curve's samples and directions in normalized units, as evaluate computed them."""
-    from skelcore.curve_sampling import sample_curve
+    from skelcore.metrics.curve_sampling import sample_curve
 
     key = id(ev)
     hit = _CACHE.get(key)

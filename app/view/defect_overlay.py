@@ -78,7 +78,7 @@ def legend_face(style: str) -> pv.PolyData:
 
 
 class DefectOverlay:
-    """Draws :class:`~app.scene.defects.DefectRow` geometry into a :class:`~app.view.SceneView`'s plotter."""
+    """Draws :class:`~skelscope.scene.defects.DefectRow` geometry into a :class:`~skelscope.view.SceneView`'s plotter."""
 
     def __init__(self, view: Any) -> None:
         self.view = view

@@ -219,7 +219,11 @@ def _run_dask(todo: list[Any], backend: Backend, file: Callable[[dict[str, Any]]
               failed: Callable[[Any, str], dict[str, Any]], key: Callable[[Any], str]) -> None:
     import logging
 
-    from distributed import Client, LocalCluster, as_completed
+    try:
+        from distributed import Client, LocalCluster, as_completed
+    except ImportError:
+        raise SkelInputError("--dask needs Dask's distributed scheduler, not installed: "
+                             "pip install 'skelscope[dask]'") from None
 
     cluster = None
     try:

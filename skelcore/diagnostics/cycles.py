@@ -25,7 +25,7 @@ from scipy.sparse.csgraph import breadth_first_order, connected_components, mini
 from scipy.spatial import cKDTree
 
 from ..curve import CurveSkeleton
-from ..curve_sampling import CurveSamples
+from ..metrics.curve_sampling import CurveSamples
 from ..geometry import Checkpoint, no_checkpoint
 from ..params import Params
 from .trust_warning import TrustWarning

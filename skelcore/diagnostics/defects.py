@@ -10,7 +10,7 @@ from typing import Callable
 import numpy as np
 
 from ..curve import CurveSkeleton
-from ..curve_sampling import CurveSamples
+from ..metrics.curve_sampling import CurveSamples
 from ..geometry import Checkpoint, kd_tree, no_checkpoint
 from ..params import Params
 from .trust_warning import TrustWarning

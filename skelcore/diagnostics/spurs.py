@@ -23,7 +23,7 @@ import numpy as np
 from scipy.spatial import cKDTree
 
 from ..curve import CurveSkeleton
-from ..curve_sampling import CurveSamples
+from ..metrics.curve_sampling import CurveSamples
 from ..geometry import Checkpoint, kd_tree, no_checkpoint
 from ..params import Params
 from .trust_warning import TrustWarning

@@ -10,7 +10,7 @@
 - ``trivial_smoothness``: no degree-2 vertex, so the curve's smoothness is 1 by definition.
 - ``no_correspondence``: topology and skeletal centeredness could not be computed.
 
-And which warning codes are a skeleton's defects (:data:`DEFECT_CODES`). Formerly ``skelcore.trust``.
+And which warning codes are a skeleton's defects (:data:`DEFECT_CODES`).
 """
 
 from __future__ import annotations

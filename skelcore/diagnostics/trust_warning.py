@@ -1,6 +1,6 @@
 """The warning record every trust check and diagnostic returns (``skelcore.diagnostics.trust``
 re-exports it): a stable ``code`` and a one-line ``message`` with its numbers (docs/metrics.md 5.4,
-issue 22). Formerly ``skelcore.trust_warning``.
+issue 22). 
 
 A leaf module (the standard library only) in a package whose ``__init__`` imports nothing at import
 time, so that the foundation's users of the record (the scan checks, the Evaluation) load neither the

@@ -14,7 +14,7 @@ from typing import Any
 import numpy as np
 
 from ..curve import CurveSkeleton
-from ..curve_sampling import CurveSamples, sample_curve
+from ..metrics.curve_sampling import CurveSamples, sample_curve
 from ..errors import SkelInputError
 from ..geometry import Checkpoint, Normalization, as_points, no_checkpoint
 from ..metrics.boundedness import boundedness

@@ -1,6 +1,6 @@
 """The one main-window fixture of the viewer's GUI tests.
 
-``window`` is a shown :class:`app.main_window.MainWindow` with a throwaway settings file; its runner
+``window`` is a shown :class:`skelscope.main_window.MainWindow` with a throwaway settings file; its runner
 is shut down (and its A/B windows closed) afterwards. A module or a test sets its options with
 ``@pytest.mark.window(...)``:
 
@@ -31,7 +31,7 @@ def window_options(request: pytest.FixtureRequest) -> dict:
 def window(request, qtbot, tmp_path, monkeypatch):
     from PySide6 import QtCore, QtWidgets
 
-    from app.main_window import MainWindow
+    from skelscope.main_window import MainWindow
 
     opts = window_options(request)
     dialogs: list[str] = []

@@ -12,7 +12,7 @@ import numpy as np
 import pytest
 from PySide6 import QtCore, QtGui, QtWidgets
 
-from app.__main__ import main
+from skelscope.__main__ import main
 from compare_helpers import make_dataset, manifest
 from shape_files import write_shape_files
 from skelcore import evaluate, shapes
@@ -88,7 +88,7 @@ def _fresh(m, shape: str, method: str):
 
 
 def test_the_dialog_lists_the_reports_rows_and_opens_the_ab_view_from_stored_results(window, run_dir, monkeypatch):
-    from app.compare_view import ab_rows
+    from skelscope.compare_view import ab_rows
 
     _root, m, out = run_dir
     assert "open_compare_run" in window.actions_by_name
@@ -292,7 +292,7 @@ def test_bad_ab_arguments_exit_2_with_one_line(argv, message, run_dir, tmp_path,
 
 def test_an_option_prefix_is_not_taken_for_skeleton_b(capsys):
     """argparse would read "--skeleton F" as "--skeleton-b F" and open the A/B view: it is an error."""
-    from app.__main__ import build_parser
+    from skelscope.__main__ import build_parser
 
     with pytest.raises(SystemExit) as exc:
         build_parser().parse_args(["cloud.ply", "--skeleton", "skel.ply"])
@@ -301,7 +301,7 @@ def test_an_option_prefix_is_not_taken_for_skeleton_b(capsys):
 
 
 def test_skeleton_b_on_the_command_line_is_evaluated_against_the_cloud(tmp_path, capsys, no_user_settings):
-    from app.compare_view import ab_rows
+    from skelscope.compare_view import ab_rows
 
     y = shapes.y_shape(800, seed=5)
     files = write_shape_files(tmp_path, y)

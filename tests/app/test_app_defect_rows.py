@@ -7,7 +7,7 @@ from __future__ import annotations
 import numpy as np
 from diagnostics_helpers import attach_path
 
-from app.scene.defects import defect_counts, defect_rows, sound_line
+from skelscope.scene.defects import defect_counts, defect_rows, sound_line
 from skelcore import evaluate, shapes
 from skelcore.curve import CurveSkeleton
 

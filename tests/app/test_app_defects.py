@@ -184,7 +184,7 @@ def test_the_ab_view_counts_the_defects_of_a_and_b(window, defective):
 
 def test_out_of_date_results_grey_their_defects_and_keep_the_selection(window, defective):
     """Issue 25's stale state: a setting change greys the defects as it greys the metric colours."""
-    from app.view.style import greyed
+    from skelscope.view.style import greyed
 
     s, curve, spur, ev = defective
     w = _show(window, s, curve, ev)

@@ -234,7 +234,7 @@ def test_a_landing_result_is_shown_in_separate_event_loop_turns(window, files, e
 
 
 def test_barcodes_drawn_in_stages_give_the_same_pixels_as_one_draw(evaluation, qtbot):
-    from app.panels.barcode import BarcodePanel
+    from skelscope.panels.barcode import BarcodePanel
 
     panel = BarcodePanel()
     qtbot.addWidget(panel)

@@ -12,7 +12,7 @@ import skelcore
 from skelcore import shapes
 from skelcore.io import write_curve_ply, write_points_ply
 
-from app.loading import (
+from skelscope.loading import (
     REPLACE_CLOUD, REPLACE_CLOUD_KEEP, SKELETAL_INDEX, SKELETAL_REVERSE, SKIP,
 )
 
@@ -153,7 +153,7 @@ def test_a_skeleton_in_another_frame_is_mapped_from_the_menu_the_warning_names(w
     (frame,) = [x for x in ev.warnings if x.code == "frame"]
     text = w.summary.details_text()
     assert "Evaluate > Map skeleton into the cloud's frame…" in text and "--skeleton" not in text
-    from app.map_dialog import MapSkeletonDialog, suggested_mapping
+    from skelscope.map_dialog import MapSkeletonDialog, suggested_mapping
 
     mapping = suggested_mapping(w.scene.evaluation)
     assert mapping == frame.mapping

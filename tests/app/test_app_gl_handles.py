@@ -36,7 +36,7 @@ def _alive(widget) -> bool:
 
 
 def test_a_closed_main_window_holds_no_gl_surface(qtbot, tmp_path):
-    from app.main_window import MainWindow
+    from skelscope.main_window import MainWindow
 
     before = len(_surface_wrappers())
     w = MainWindow(settings=QtCore.QSettings(str(tmp_path / "s.ini"), QtCore.QSettings.Format.IniFormat))
@@ -49,7 +49,7 @@ def test_a_closed_main_window_holds_no_gl_surface(qtbot, tmp_path):
 
 
 def test_a_closed_ab_view_holds_no_gl_surface(qtbot):
-    from app.compare_view import CompareWindow
+    from skelscope.compare_view import CompareWindow
 
     sh = shapes.cylinder(800, seed=1)
     ev = evaluate(sh.cloud, sh.skeletal)

@@ -55,7 +55,7 @@ def test_each_tab_group_has_one_tab_bar_even_before_the_event_loop_runs(qtbot, t
     the first show instead."""
     from PySide6 import QtCore
 
-    from app.main_window import MainWindow
+    from skelscope.main_window import MainWindow
 
     w = MainWindow(settings=QtCore.QSettings(str(tmp_path / "s.ini"), QtCore.QSettings.Format.IniFormat))
     qtbot.addWidget(w)
@@ -75,7 +75,7 @@ def test_each_tab_group_has_one_tab_bar_even_before_the_event_loop_runs(qtbot, t
 def test_the_initial_size_is_the_screen_s_free_area_on_a_small_screen():
     from PySide6 import QtCore
 
-    from app.main_window import DEFAULT_SIZE, initial_size
+    from skelscope.main_window import DEFAULT_SIZE, initial_size
 
     assert initial_size(QtCore.QSize(1920, 1200)) == DEFAULT_SIZE
     w, h = initial_size(QtCore.QSize(*LAPTOP))
@@ -103,7 +103,7 @@ _PROBE = r"""
 import json, sys
 from PySide6 import QtCore, QtWidgets
 app = QtWidgets.QApplication(["probe"])
-from app.main_window import MainWindow
+from skelscope.main_window import MainWindow
 w = MainWindow(settings=QtCore.QSettings(sys.argv[1], QtCore.QSettings.Format.IniFormat))
 w.session.ask = lambda q, o: o[0]
 w.show()

@@ -56,8 +56,8 @@ _QUIT_SCRIPT = textwrap.dedent(r"""
     import sys, time
     from PySide6 import QtCore, QtWidgets
     app = QtWidgets.QApplication(["skelscope-quit-test"])
-    from app.__main__ import _exited
-    from app.main_window import MainWindow
+    from skelscope.__main__ import _exited
+    from skelscope.main_window import MainWindow
     from skelcore import shapes
 
     w = MainWindow(settings=QtCore.QSettings(sys.argv[1], QtCore.QSettings.Format.IniFormat))
@@ -184,8 +184,8 @@ def test_the_stage_label_follows_the_stage_that_runs(window, qtbot):
 def test_quitting_waits_for_stuck_tasks_within_one_budget_and_keeps_the_settings(window, tmp_path, monkeypatch):
     """A task inside an engine call without a checkpoint (main window and Study dialog both): closing
     asks for at most SHUTDOWN_WAIT_S of waiting in all, never a second full wait for the Study."""
-    from app.study_dialog import StudyDialog
-    from app.worker import SHUTDOWN_WAIT_S, Task
+    from skelscope.study_dialog import StudyDialog
+    from skelscope.worker import SHUTDOWN_WAIT_S, Task
 
     w = window
     release = threading.Event()

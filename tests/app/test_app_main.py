@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 from PySide6 import QtCore, QtWidgets
 
-from app.__main__ import main
+from skelscope.__main__ import main
 from skelcore import shapes
 from shape_files import write_shape_files
 from skelcore.io import write_points_ply
@@ -100,7 +100,7 @@ def test_skeletonize_action_runs_in_the_worker_and_loads_both_skeletons(window, 
 
 
 def test_study_action_opens_the_study_dialog_for_the_loaded_cloud(window, tmp_path):
-    pytest.importorskip("app.study_dialog")
+    pytest.importorskip("skelscope.study_dialog")
     w = window
     cloud = tmp_path / "cyl.ply"
     write_points_ply(cloud, shapes.cylinder(500, seed=1).cloud)
@@ -113,7 +113,7 @@ def test_study_action_opens_the_study_dialog_for_the_loaded_cloud(window, tmp_pa
 
 
 def test_an_uncaught_exception_becomes_a_dialog_with_the_traceback(window, monkeypatch):
-    from app.__main__ import _install_exception_hook
+    from skelscope.__main__ import _install_exception_hook
 
     shown = []
     monkeypatch.setattr(QtWidgets.QMessageBox, "exec", lambda self: shown.append((self.text(), self.detailedText())) or 0)

@@ -193,7 +193,7 @@ def test_the_slab_plots_legend_sits_beside_its_data(window, qtbot):
 
 
 def test_a_setting_change_greys_the_3d_colours_and_the_histogram(window, qtbot, y_eval):
-    from app.view.style import greyed, make_lut
+    from skelscope.view.style import greyed, make_lut
 
     sh, curve, ev = y_eval
     w = window

@@ -165,7 +165,7 @@ def test_a_saved_camera_restores_the_view_and_the_scripted_mode_reads_it(evaluat
         (tmp_path / "bad.json").write_text("{}")
         w.load_camera(str(tmp_path / "bad.json"))
 
-    from app.__main__ import main
+    from skelscope.__main__ import main
 
     QtCore.QSettings.setPath(QtCore.QSettings.Format.NativeFormat, QtCore.QSettings.Scope.UserScope, str(tmp_path))
     import sys
@@ -240,7 +240,7 @@ def _dark_row_runs(img, x0: int) -> list[tuple[int, int, int]]:
 
 @pytest.mark.parametrize("docks", ["shown", "hidden"])  # a narrow view (title right-aligned) and a wide one
 def test_the_colour_bar_title_clears_the_top_label_and_the_view_edge_at_every_scale(evaluated, docks):
-    from app.view.colorbar import BAR_WIDTH, BAR_X
+    from skelscope.view.colorbar import BAR_WIDTH, BAR_X
 
     w = evaluated
     if docks == "hidden":
@@ -290,7 +290,7 @@ def test_the_orientation_axes_letters_grow_with_the_picture_not_three_times(eval
 
 
 def test_black_and_transparent_backgrounds_turn_the_text_white_and_leave_the_view_white(evaluated, tmp_path):
-    from app.view.colorbar import BAR_WIDTH, BAR_X
+    from skelscope.view.colorbar import BAR_WIDTH, BAR_X
 
     w = evaluated
     black = w.view.image(scale=2, background="black")
@@ -325,7 +325,7 @@ def test_a_saved_camera_reproduces_the_framing_through_its_view_size_and_size_se
 
     from matplotlib.image import imread
 
-    from app.__main__ import main
+    from skelscope.__main__ import main
 
     w = window
     w.session.load_files([files["cloud"], files["skeletal"]])
@@ -361,7 +361,7 @@ def test_the_scripted_background_option(files, tmp_path, capsys, monkeypatch):
 
     from matplotlib.image import imread
 
-    from app.__main__ import main
+    from skelscope.__main__ import main
 
     QtCore.QSettings.setPath(QtCore.QSettings.Format.NativeFormat, QtCore.QSettings.Scope.UserScope, str(tmp_path))
     monkeypatch.setattr(sys, "excepthook", sys.excepthook)
@@ -377,7 +377,7 @@ def test_the_scripted_background_option(files, tmp_path, capsys, monkeypatch):
 
 @pytest.mark.parametrize("width", [230, 300, 380, 520])
 def test_the_barcode_axis_labels_stay_inside_the_panel_in_their_shortest_form(qtbot, evaluation, width):
-    from app.panels.barcode import BarcodePanel, tick_text
+    from skelscope.panels.barcode import BarcodePanel, tick_text
 
     panel = BarcodePanel()
     qtbot.addWidget(panel)

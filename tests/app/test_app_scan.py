@@ -90,7 +90,7 @@ def test_the_scan_warnings_name_the_window_s_remedies_which_then_work(window, qt
     leave them out (stale until then), and a saved session keeps the boxes."""
     import json
 
-    from app.panels.summary import window_warning
+    from skelscope.panels.summary import window_warning
 
     s = shapes.cylinder(n=3000, seed=2)
     cloud = np.vstack([s.cloud, [[40.0, 0.0, 2.0]]])

@@ -8,9 +8,9 @@ from types import SimpleNamespace
 import numpy as np
 import pytest
 
-from app.loading import REPLACE_CLOUD, assign_roles, is_complete_set
-from app.panels.summary import summary_cells
-from app.scene import Scene, format_element_info
+from skelscope.loading import REPLACE_CLOUD, assign_roles, is_complete_set
+from skelscope.panels.summary import summary_cells
+from skelscope.scene import Scene, format_element_info
 from skelcore.curve import CurveSkeleton
 
 
@@ -104,7 +104,7 @@ def test_style_options_are_checked_and_emit_one_event():
 
 
 def test_tube_polylines_run_through_the_samples_in_order():
-    from app.view.actors import curve_polylines
+    from skelscope.view.actors import curve_polylines
 
     v = np.array([[0, 0, 0], [1, 0, 0], [1, 1, 0]], float)
     edges = np.array([[0, 1], [1, 2]])

@@ -232,7 +232,7 @@ def test_skelscope_session_restores_it_in_the_scripted_mode(window, files, tmp_p
 
     from matplotlib.image import imread
 
-    from app.__main__ import main
+    from skelscope.__main__ import main
 
     w = window
     _load(w, files)

@@ -51,13 +51,13 @@ def test_the_launch_imports_with_the_collector_paused_and_the_first_frame_needs_
     write_points_ply(cloud, shapes.sphere_surface(20000, seed=0))
     out = _python(f"""
         import gc, sys
-        from app.__main__ import import_view_libraries
+        from skelscope.__main__ import import_view_libraries
         import_view_libraries()
-        print("app.main_window" in sys.modules, gc.isenabled(), gc.get_freeze_count() > 10000)
+        print("skelscope.main_window" in sys.modules, gc.isenabled(), gc.get_freeze_count() > 10000)
         from PySide6 import QtCore, QtWidgets
         app = QtWidgets.QApplication(["startup-test"])
-        import app.main_window as window_module
-        from app.main_window import MainWindow
+        import skelscope.main_window as window_module
+        from skelscope.main_window import MainWindow
         window_module.preload_engine = lambda: None  # its timer could fire first on a loaded machine
         w = MainWindow(settings=QtCore.QSettings(sys.argv[2], QtCore.QSettings.Format.IniFormat))
         w.show()
@@ -77,7 +77,7 @@ def test_the_launch_imports_with_the_collector_paused_and_the_first_frame_needs_
 
 
 def test_skelscope_main_imports_the_view_libraries_before_qt(tmp_path):
-    """The real launch (``python -X importtime -m app CLOUD --screenshot OUT --quit``): pyvista (VTK,
+    """The real launch (``python -X importtime -m skelscope CLOUD --screenshot OUT --quit``): pyvista (VTK,
     matplotlib) has finished importing before PySide6 begins."""
     if not os.environ.get("DISPLAY"):
         pytest.skip("needs a display (pytest-xvfb)")
@@ -88,7 +88,7 @@ def test_skelscope_main_imports_the_view_libraries_before_qt(tmp_path):
     write_points_ply(cloud, shapes.sphere_surface(2000, seed=0))
     env = dict(os.environ, PYTHONPATH=str(ROOT) + os.pathsep + os.environ.get("PYTHONPATH", ""))
     # --size is checked before any window opens (app.view.camera): that must not import Qt either
-    out = subprocess.run([sys.executable, "-X", "importtime", "-m", "app", str(cloud), "--screenshot",
+    out = subprocess.run([sys.executable, "-X", "importtime", "-m", "skelscope", str(cloud), "--screenshot",
                           str(tmp_path / "out.png"), "--size", "320", "240", "--quit"], capture_output=True, text=True,
                          cwd=tmp_path, env=env, timeout=300)
     assert out.returncode == 0, out.stderr[-2000:]

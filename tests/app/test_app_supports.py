@@ -66,7 +66,7 @@ def test_a_curve_samples_plot_shows_a_circular_ring_centred_on_the_axis(cylinder
     np.testing.assert_allclose(pts["centre"][0, :2], 0.0, atol=0.02)
     assert {"support-slab", "support-ring", "support-centre"} <= set(w.supports.overlay.names)
     w.scene.set_visible("cloud", False)
-    from app.view.support_overlay import OVERLAY_COLOURS
+    from skelscope.view.support_overlay import OVERLAY_COLOURS
 
     assert _rgb_count(w.view.image(), OVERLAY_COLOURS["ring"][0]) > 20
     # a new result clears the highlight
@@ -166,7 +166,7 @@ def b_eval(cylinder_eval):
 
 
 def test_the_ab_table_shows_both_evaluations_and_their_differences(cylinder_window, cylinder_eval, b_eval):
-    from app.compare_view import ab_rows
+    from skelscope.compare_view import ab_rows
 
     w = cylinder_window
     _, _, ev_a = cylinder_eval

@@ -81,7 +81,7 @@ def test_cloud_coloured_by_its_coverage_gap(qtbot, window, files):
 
 
 def test_warnings_and_reference_in_the_summary(qtbot, window, files):
-    from app.panels.summary import detail_lines
+    from skelscope.panels.summary import detail_lines
 
     w = window
     cloud = skelcore.load_cloud(files["cloud"])

@@ -13,7 +13,7 @@ from skelcore import shapes
 from shape_files import write_shape_files
 from skelcore.colors import SKELETAL_COLOR, lookup_table
 from skelcore.io import write_points_ply
-from app.loading import REPLACE_CLOUD
+from skelscope.loading import REPLACE_CLOUD
 
 pytestmark = [pytest.mark.gui, pytest.mark.window(size=(1200, 800), dialogs="record")]
 

@@ -8,7 +8,7 @@ import time
 
 import pytest
 
-from app.worker import TaskRunner
+from skelscope.worker import TaskRunner
 from skelcore.errors import Cancelled
 
 pytestmark = pytest.mark.gui

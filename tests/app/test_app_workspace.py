@@ -96,8 +96,8 @@ def test_a_new_cloud_over_a_skeleton_asks_clears_by_default_and_refits_the_camer
 
 def _assert_fits(w, points):
     """Every point is drawn inside the view and left of the colour bar."""
-    from app.view.camera import FIT_X
-    from app.view.picking import pick_layout, project_to_display
+    from skelscope.view.camera import FIT_X
+    from skelscope.view.picking import pick_layout, project_to_display
 
     ren = w.view.plotter.renderer
     x, y, _ = project_to_display(ren, pick_layout(points))
@@ -222,7 +222,7 @@ def test_exports_are_named_after_the_data_and_never_replace_without_asking(windo
 
 
 def test_the_picture_dialog_has_file_scale_background_and_colour_bar(window, files, evaluation, tmp_path, monkeypatch):
-    from app.picture_dialog import PictureDialog
+    from skelscope.picture_dialog import PictureDialog
 
     w = window
     w.session.load_files([files["cloud"], files["skeletal"], files["curve"]])

@@ -8,7 +8,7 @@ pytest.importorskip("PySide6")
 
 from PySide6 import QtCore, QtWidgets  # noqa: E402
 
-from app.study_dialog import StudyDialog  # noqa: E402
+from skelscope.study_dialog import StudyDialog  # noqa: E402
 from skelcore import shapes  # noqa: E402
 from skelcore.io import write_points_ply  # noqa: E402
 

@@ -1,6 +1,6 @@
 """The main window's public interface (issue 21, item 4): no module of the viewer but the window itself
 touches a private attribute of the window (read from the source with ``ast``), the window implements
-:class:`app.window_api.WindowApi`, and actions are placed by menu group from one table."""
+:class:`skelscope.window_api.WindowApi`, and actions are placed by menu group from one table."""
 
 from __future__ import annotations
 
@@ -71,8 +71,8 @@ def test_the_walk_fails_on_a_violation_planted_in_a_real_controller():
 def test_the_window_implements_the_interface_and_controllers_add_actions_by_group(window):
     from PySide6 import QtWidgets
 
-    from app.actions import MENUS
-    from app.window_api import ActionSpec, WindowApi
+    from skelscope.actions import MENUS
+    from skelscope.window_api import ActionSpec, WindowApi
 
     assert isinstance(window, WindowApi)
     file_menu = window.menuBar().actions()[0].menu()

@@ -143,7 +143,7 @@ def test_the_cycle_finder_finds_a_cycle():
 
 # The engine's layers, bottom to top, and the lower layers each may import (its own always; an import
 # inside a function counts too, the LAZY_DELEGATIONS aside):
-#   foundation        errors, version, params, geometry, parallel, curve, curve_sampling, correspondence,
+#   foundation        errors, version, params, geometry, parallel, curve, correspondence,
 #                     colors, shapes, skeleton_mapping, diagnostics.trust_warning (the warning record; the
 #                     diagnostics package's __init__ imports nothing at import time) -> nothing else
 #   formats           skelcore.io: readers and writers of file formats, atomic writes, JSON numbers
@@ -154,7 +154,7 @@ def test_the_cycle_finder_finds_a_cycle():
 #   diagnostics       skelcore.diagnostics, with the trust checks (diagnostics.trust; TrustWarning itself is
 #                     in the foundation)
 #                                                                                 -> foundation, formats, metrics
-#   record            the Evaluation (skelcore.evaluation, old name results), Scores
+#   record            the Evaluation (skelcore.evaluation), Scores
 #                                                             -> foundation, metrics, scan, diagnostics
 #   stages            skelcore.stages (the evaluate pipeline) -> foundation, metrics, scan, diagnostics, record
 #   objects in        skelcore.interop's recognisers of other libraries' objects -> foundation, formats
@@ -174,16 +174,16 @@ _BELOW_APPS = ["foundation", "formats", "objects in", "skeletonizer", "adapters"
                "record", "stages", "evaluation files", "display"]
 LAYERS: dict[str, tuple[list[str], list[str]]] = {
     "foundation": ([f"skelcore.{m}" for m in ("errors", "version", "params", "geometry", "parallel", "curve",
-                                              "curve_sampling", "correspondence", "colors", "shapes",
-                                              "skeleton_mapping", "trust_warning", "diagnostics.trust_warning")],
+                                              "correspondence", "colors", "shapes",
+                                              "skeleton_mapping", "diagnostics.trust_warning")],
                    []),
     "formats": (["skelcore.io.*"], ["foundation"]),
     "skeletonizer": (["skelcore.skeleton.*"], ["foundation"]),
     "adapters": (["skelcore.adapters.*"], ["foundation", "formats"]),
     "metrics": (["skelcore.metrics.*"], ["foundation"]),
     "scan": (["skelcore.scan.*"], ["foundation", "metrics"]),
-    "diagnostics": (["skelcore.diagnostics.*", "skelcore.trust"], ["foundation", "formats", "metrics"]),
-    "record": (["skelcore.evaluation", "skelcore.results", "skelcore.scores"],
+    "diagnostics": (["skelcore.diagnostics.*"], ["foundation", "formats", "metrics"]),
+    "record": (["skelcore.evaluation", "skelcore.scores"],
                ["foundation", "metrics", "scan", "diagnostics"]),
     "stages": (["skelcore.stages.*"], ["foundation", "metrics", "scan", "diagnostics", "record"]),
     "objects in": (["skelcore.interop", "skelcore.interop.recognise", "skelcore.interop.objects_in",
@@ -303,46 +303,18 @@ def test_no_two_engine_modules_share_a_name():
     """A module's file name says what it holds, once: the CLI's subcommand modules aside (``cli/evaluate``
     is the ``evaluate`` subcommand), no two engine modules are called alike."""
     seen: dict[str, list[str]] = {}
-    shims = {old for old, _new, _attr in MOVED}
     for name, path in _modules("skelcore").items():
-        if path.name == "__init__.py" or name.startswith("skelcore.cli.") or name in shims:
+        if path.name == "__init__.py" or name.startswith("skelcore.cli."):
             continue
         seen.setdefault(path.stem, []).append(name)
     assert {stem: names for stem, names in seen.items() if len(names) > 1} == {}
 
 
-# deprecated aliases of moved modules (old -> new, an attribute both have): each warns on import, and
-# its file name may repeat the new module's (the one exception to "no two modules share a name")
-MOVED = [
-    ("skelcore.results", "skelcore.evaluation", "Evaluation"),
-    ("skelcore.experiments.compare", "skelcore.compare", "run_compare"),
-    ("skelcore.trust", "skelcore.diagnostics.trust", "frame_warnings"),
-    ("skelcore.trust_warning", "skelcore.diagnostics.trust_warning", "TrustWarning"),
-]
-
-
-@pytest.mark.parametrize("old, new, attr", MOVED)
-def test_moved_modules_still_import_with_a_deprecation_warning(old, new, attr):
-    import importlib
-    import subprocess
-    import sys
-
-    code = (f"import warnings; warnings.simplefilter('error', DeprecationWarning)\n"
-            f"try:\n    import {old}\nexcept DeprecationWarning as e:\n    print('warned', e)\n"
-            f"warnings.simplefilter('ignore')\nimport {old} as m, {new} as n\nprint(m.{attr} is n.{attr})")
-    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout
-    assert "warned" in out and out.strip().endswith("True")
-    assert importlib.import_module(new)
-
-
-def test_old_compare_submodule_paths_name_the_renamed_modules():
-    import subprocess
-    import sys
-
-    code = ("import warnings; warnings.simplefilter('ignore')\n"
-            "from skelcore.experiments.compare.run_folder import open_run\n"
-            "from skelcore.compare.finished_run import open_run as new\nprint(open_run is new)")
-    assert subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout.strip() == "True"
+def test_engine_top_level_is_small():
+    """At most 12 modules at skelcore's top level (``__init__`` and ``__main__`` aside): the rest live in
+    the subsystem folders that name them (docs/layout.md)."""
+    top = [p.stem for p in (ROOT / "skelcore").glob("*.py") if p.stem not in ("__init__", "__main__")]
+    assert len(top) <= 12, sorted(top)
 
 
 def test_the_warning_record_loads_no_diagnostic_and_every_diagnostics_module_imports_first():

@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from skelcore.curve import CurveSkeleton
-from skelcore.curve_sampling import sample_curve
+from skelcore.metrics.curve_sampling import sample_curve
 from skelcore.metrics.centeredness import (
     cross_section_centeredness,
     curve_centeredness,

@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 from skelcore import CurveSkeleton, shapes
-from skelcore.curve_sampling import sample_curve
+from skelcore.metrics.curve_sampling import sample_curve
 from skelcore.diagnostics import JUNCTION, decompose_branches
 
 

@@ -38,8 +38,10 @@ def test_wheel_holds_every_subpackage_and_the_license(wheel):
     for package in ROOT.joinpath("skelcore").rglob("__init__.py"):
         rel = package.relative_to(ROOT).as_posix()
         assert rel in names
-    for package in ROOT.joinpath("app").rglob("__init__.py"):
-        assert package.relative_to(ROOT).as_posix() in names
+    for package in ROOT.joinpath("app").rglob("__init__.py"):  # the viewer's folder installs as skelscope/
+        assert "skelscope/" + package.relative_to(ROOT / "app").as_posix() in names
+    assert not [n for n in names if n.startswith("app/")]  # nothing under a generic top-level name
+    assert not [n for n in names if n.endswith(".c")]  # the kernels ship compiled, their sources in the sdist
     meta = next(n for n in names if n.endswith("METADATA"))
     text = zipfile.ZipFile(wheel).read(meta).decode()
     assert "License-Expression: MIT" in text

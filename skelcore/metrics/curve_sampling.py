@@ -13,8 +13,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .curve import CurveSkeleton
-from .geometry import unit_rows
+from ..curve import CurveSkeleton
+from ..geometry import unit_rows
 
 __all__ = ["CurveSamples", "sample_curve", "sample_counts"]
 
