@@ -2,18 +2,30 @@
 coverage kernel (docs/metrics.md, section 5.2) and the topology stage's EMST (docs/performance.md,
 section 8).
 
-Everything else is declared in pyproject.toml.  The kernels are plain C against the CPython API (no numpy
+Also here: the package list (the viewer's folder ``app/`` installs as ``skelscope``) and the package
+index's long description; everything else is declared in pyproject.toml.  The kernels are plain C against the CPython API (no numpy
 headers), so building needs only a C compiler and the Python headers.  On x86-64 the rays kernel is built
 twice: for any x86-64 CPU, and with AVX2 as ``_raycast_avx2``, which ``rays_kernel`` imports only where
 the CPU runs it (the same bits, 10-20 % faster; docs/boundedness.md 3.11).
 """
 
 import platform
+import re
+from pathlib import Path
 
 from setuptools import Extension, find_namespace_packages, setup
 
 RAYCAST = dict(sources=["skelcore/metrics/_raycast.c"], extra_compile_args=["-O3", "-std=c99"])
 X86_64 = platform.machine().lower() in ("x86_64", "amd64")
+
+
+def long_description() -> str:
+    """README.md for the package index, where links relative to the repository lead nowhere: a relative
+    image is left out and a relative link keeps its text only (absolute links and anchors stay)."""
+    text = Path(__file__).with_name("README.md").read_text(encoding="utf-8")
+    text = re.sub(r"!\[[^\]]*\]\((?!https?://)[^)]*\)\n?", "", text)
+    return re.sub(r"\[([^\]]+)\]\((?!https?://|#)[^)]*\)", r"\1", text)
+
 
 # The viewer's folder app/ installs as the package ``skelscope`` (never a top-level ``app``).
 def _packages(top: str) -> list[str]:
@@ -23,6 +35,8 @@ def _packages(top: str) -> list[str]:
 VIEWER = ["skelscope" + name[len("app"):] for name in _packages("app")]
 
 setup(
+    long_description=long_description(),
+    long_description_content_type="text/markdown",
     packages=_packages("skelcore") + VIEWER,
     package_dir={"skelscope": "app"},
     ext_modules=[

@@ -338,3 +338,14 @@ def test_the_warning_record_loads_no_diagnostic_and_every_diagnostics_module_imp
             "print(callable(missing_parts), missing_parts is d.missing_parts, callable(find_curve_defects), JUNCTION)")
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout
     assert out.split() == ["True", "True", "True", "-1"]
+
+
+def test_the_viewer_is_imported_by_its_installed_name():
+    """The folder app/ installs as ``skelscope``: a test, script or benchmark importing ``app`` would load a
+    second copy of the viewer's modules beside the installed ones (a monkeypatch would miss the window's)."""
+    import re
+
+    pattern = re.compile(r"^\s*(import app\b|from app\b)", re.M)
+    hits = [str(p.relative_to(ROOT)) for folder in ("app", "tests", "scripts", "benchmarks", "docs", "examples")
+            for p in (ROOT / folder).rglob("*.py") if pattern.search(p.read_text(encoding="utf-8"))]
+    assert hits == []

@@ -83,3 +83,101 @@ def test_installed_wheel_evaluates_from_outside_the_repo(wheel, tmp_path):
     result = json.loads((shape / "out.json").read_text())
     assert result["boundedness"]["curve"] > 0.9
     assert result["centeredness"]["curve"] > 0.9
+
+
+def _pip(*args: str, timeout: int = 300) -> subprocess.CompletedProcess:
+    proc = subprocess.run([sys.executable, "-m", "pip", *args], capture_output=True, text=True, timeout=timeout)
+    assert proc.returncode == 0, proc.stdout + proc.stderr
+    return proc
+
+
+def test_installs_beside_a_project_that_ships_app(wheel, tmp_path):
+    """Another project's top-level ``app`` package and SkelScope install into one environment, and
+    uninstalling either leaves the other whole: SkelScope installs nothing under a generic name."""
+    other = tmp_path / "other"
+    (other / "app").mkdir(parents=True)
+    (other / "app" / "__init__.py").write_text("WHO = 'other'\n")
+    (other / "pyproject.toml").write_text(
+        '[build-system]\nrequires = ["setuptools>=61"]\nbuild-backend = "setuptools.build_meta"\n'
+        '[project]\nname = "other-app"\nversion = "1.0"\n[tool.setuptools]\npackages = ["app"]\n')
+    wheels = tmp_path / "wheels"
+    _pip("wheel", "-q", "--no-deps", "--no-build-isolation", "-w", str(wheels), str(other))
+    env_dir = tmp_path / "venv"
+    venv.EnvBuilder(with_pip=False).create(env_dir)
+    py = env_dir / "bin" / "python"
+    site = Path(subprocess.check_output(
+        [str(py), "-c", "import sysconfig; print(sysconfig.get_paths()['purelib'])"], text=True).strip())
+    (site / "zz_test_deps.pth").write_text(sysconfig.get_paths()["purelib"] + "\n")
+    (other_whl,) = wheels.glob("other_app-*.whl")
+    _pip("--python", str(py), "install", "-q", "--no-deps", "--no-index", str(other_whl), str(wheel))
+    probe = ("import app, skelscope, skelcore, skelscope.__main__ as m; "
+             "print(app.WHO, skelscope.__file__.startswith(%r), m.missing_viewer_libraries())" % str(site))
+    env = {k: v for k, v in os.environ.items() if k not in ("PYTHONPATH", "PYTHONHOME")}
+    out = subprocess.run([str(py), "-c", probe], cwd=tmp_path, capture_output=True, text=True, env=env)
+    assert out.stdout.split() == ["other", "True", "[]"], out.stdout + out.stderr
+    _pip("--python", str(py), "uninstall", "-q", "-y", "other-app")
+    assert (site / "skelscope" / "__init__.py").is_file() and (site / "skelscope" / "main_window.py").is_file()
+    assert not (site / "app").exists()
+    _pip("--python", str(py), "install", "-q", "--no-deps", "--no-index", str(other_whl))
+    _pip("--python", str(py), "uninstall", "-q", "-y", "skelscope")
+    assert (site / "app" / "__init__.py").read_text() == "WHO = 'other'\n"
+
+
+def test_viewer_without_its_libraries_says_so_in_one_line(wheel, tmp_path):
+    """``skelscope`` installed without the ``app`` extra (no PySide6, pyvista, pyvistaqt): the extra to
+    install in one line, exit 2; its help and the engine still work."""
+    deps = tmp_path / "deps"
+    deps.mkdir()
+    viewer_only = ("pyside6", "shiboken6", "pyvista", "pyvistaqt")
+    for entry in Path(sysconfig.get_paths()["purelib"]).iterdir():
+        if not entry.name.lower().startswith(viewer_only) and not entry.name.startswith("__editable__"):
+            (deps / entry.name).symlink_to(entry)
+    env_dir = tmp_path / "venv"
+    venv.EnvBuilder(with_pip=False).create(env_dir)
+    py = env_dir / "bin" / "python"
+    site = Path(subprocess.check_output(
+        [str(py), "-c", "import sysconfig; print(sysconfig.get_paths()['purelib'])"], text=True).strip())
+    (site / "zz_test_deps.pth").write_text(f"{deps}\n")
+    _pip("--python", str(py), "install", "-q", "--no-deps", "--no-index", str(wheel))
+    env = {k: v for k, v in os.environ.items() if k not in ("PYTHONPATH", "PYTHONHOME")}
+    run = [str(env_dir / "bin" / "skelscope")]
+    assert subprocess.run([*run, "--help"], capture_output=True, text=True, env=env, cwd=tmp_path).returncode == 0
+    proc = subprocess.run(run, capture_output=True, text=True, env=env, cwd=tmp_path)
+    assert proc.returncode == 2, proc.stderr
+    assert proc.stderr.count("\n") == 1 and "pip install 'skelscope[app]'" in proc.stderr, proc.stderr
+    assert "PySide6" in proc.stderr and "Traceback" not in proc.stderr
+    engine = subprocess.run([str(py), "-c", "import skelcore; print(skelcore.evaluate.__name__)"], capture_output=True,
+                            text=True, env=env, cwd=tmp_path)
+    assert engine.returncode == 0, engine.stderr
+
+
+def test_sdist_holds_the_project_and_builds_the_wheel(tmp_path):
+    """The source distribution is the whole tracked project (tests, docs, examples, samples, scans), and
+    its unpacked tree builds the wheel; the long description renders as the package index renders it."""
+    import tarfile
+
+    from readme_renderer.markdown import render
+
+    out = tmp_path / "dist"
+    proc = subprocess.run([sys.executable, "-m", "build", "--sdist", "--no-isolation", "-o", str(out), str(ROOT)],
+                          capture_output=True, text=True, timeout=300)
+    assert proc.returncode == 0, proc.stdout + proc.stderr
+    (sdist,) = out.glob("skelscope-*.tar.gz")
+    with tarfile.open(sdist) as tar:
+        names = {n.split("/", 1)[1] for n in tar.getnames() if "/" in n}
+        tar.extractall(tmp_path / "src", filter="data")
+    tracked = subprocess.run(["git", "ls-files"], cwd=ROOT, capture_output=True, text=True, check=True).stdout.split()
+    left_out = [f for f in tracked if f not in names and not f.startswith((".gitignore", "."))]
+    assert left_out == []
+    (src,) = (tmp_path / "src").iterdir()
+    _pip("wheel", "-q", "--no-deps", "--no-build-isolation", "-w", str(tmp_path / "whl"), str(src))
+    (whl,) = (tmp_path / "whl").glob("skelscope-*.whl")
+    meta = next(n for n in zipfile.ZipFile(whl).namelist() if n.endswith("METADATA"))
+    text = zipfile.ZipFile(whl).read(meta).decode()
+    description = text.split("\n\n", 1)[1]
+    assert "Description-Content-Type: text/markdown" in text
+    assert render(description) is not None and len(description) > 500
+    import re
+
+    relative = re.findall(r"\]\((?!https?://|#)[^)]*\)", description)
+    assert relative == []
