@@ -50,7 +50,7 @@ class Session(QtCore.QObject):
         self.runner = TaskRunner(self)
         self.ask: Ask = lambda question, options: options[0] if options else None
         self.params_provider: Callable[[], Params] = Params
-        #: "auto" or "reverse" (SPEC 7), e.g. the settings panel's choice
+        #: "auto" or "reverse" (docs/metrics.md 5.1), e.g. the settings panel's choice
         self.correspondence_provider: Callable[[], str] = lambda: "auto"
         #: ``remove_outliers`` / ``cap_openings`` for skelcore.evaluate (the settings panel's real-scan options)
         self.scan_options_provider: Callable[[], dict[str, bool]] = dict
@@ -133,7 +133,7 @@ class Session(QtCore.QObject):
             return None
 
     def load_index(self, path: str) -> bool:
-        """File > Open skeletal index…: one cloud row per point of the loaded skeletal set (SPEC 7);
+        """File > Open skeletal index…: one cloud row per point of the loaded skeletal set (docs/metrics.md 5.1);
         the correspondence setting goes back to "as loaded", which uses it."""
         from skelcore.io.correspondence_files import load_skeletal_index
 

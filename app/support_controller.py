@@ -35,7 +35,7 @@ _FILTERED = {"skeletal": ("skeletal", "points"), "curve-samples": ("curve", "sam
 
 
 def below_threshold(values: np.ndarray, threshold: float) -> np.ndarray:
-    """The elements an overall score does not count: value <= threshold, or NaN (SPEC 2-3)."""
+    """The elements an overall score does not count: value <= threshold, or NaN (docs/metrics.md 2-3)."""
     v = np.asarray(values, dtype=float)
     return ~(v > threshold)
 

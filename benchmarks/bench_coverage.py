@@ -1,4 +1,4 @@
-"""Coverage alone (SPEC 8; docs/metrics.md 5.2): skeletal and curve coverage of the hammer and apple
+"""Coverage alone (docs/metrics.md 5.2): skeletal and curve coverage of the hammer and apple
 tree scans (built-in skeletonizer, cached in /tmp) and of issue 12's torus by size, wall and CPU s,
 the worst gap between two checkpoints, with the load average.
 

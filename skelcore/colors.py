@@ -1,5 +1,5 @@
 """The one place for SkelScope's colours: perceptual colour maps (no matplotlib needed), the NaN colour
-(SPEC 5: magenta) and the fixed colours of the scene.
+(docs/metrics.md 5.5: magenta) and the fixed colours of the scene.
 
 The maps are matplotlib's viridis and plasma (public domain, by Stéfan van der Walt and Nathaniel
 Smith), stored as every 5th entry of their 256-entry tables and linearly interpolated in between;
@@ -30,7 +30,7 @@ __all__ = [
 ]
 
 MAGENTA: tuple[int, int, int] = (255, 0, 255)
-#: Invalid local values (NaN) are drawn in this colour (SPEC 5).
+#: Invalid local values (NaN) are drawn in this colour (docs/metrics.md 5.5).
 NAN_COLOR: tuple[int, int, int] = MAGENTA
 #: The original cloud, drawn as context behind the skeleton.
 CLOUD_GREY: tuple[int, int, int] = (170, 170, 170)
@@ -150,7 +150,7 @@ def map_to_rgb(
 
     The range defaults to the finite values' min and max (pass ``vmin=0, vmax=1`` for the metrics,
     whose values live in [0, 1]); values outside the range are clamped, +-inf go to the ends, NaN is
-    magenta (SPEC 5). A degenerate range (vmin == vmax) maps every finite value to the middle colour.
+    magenta (docs/metrics.md 5.5). A degenerate range (vmin == vmax) maps every finite value to the middle colour.
 
     >>> map_to_rgb(np.array([0.0, np.nan, 1.0]), 0, 1).tolist()
     [[68, 1, 84], [255, 0, 255], [253, 231, 37]]

@@ -1,4 +1,4 @@
-"""The two H0 barcodes (SPEC 1): the K compared bars of the cloud and of the skeletal point set,
+"""The two H0 barcodes (docs/metrics.md 1): the K compared bars of the cloud and of the skeletal point set,
 eps* marked, d_B and d_Wp in the title. Drawn on the panel's own matplotlib Figure (no pyplot, no
 global rc), so the viewer never changes anyone else's plots.
 

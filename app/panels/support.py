@@ -2,7 +2,7 @@
 
 A curve sample's centeredness: its slab's cloud points on the cross-section plane, the ring kept, the
 fitted ellipse, its centre and the sample (the paper's figure of the two cutting planes; Eq. 11,
-SPEC 3). Boundedness: the covered directions on an equal-area (longitude, z) map with beta (Eq. 5-6;
+docs/metrics.md 3). Boundedness: the covered directions on an equal-area (longitude, z) map with beta (Eq. 5-6;
 for the ``paper`` estimator its triangles in the same chart, counted ones filled) and, beside it, on a
 small 3-D sphere. A skeletal point's
 centeredness: its neighbours and the two centroids of Eq. 10, seen along the line m_s -> m_o.

@@ -3,7 +3,7 @@
 pyvista's ``add_scalar_bar`` costs several ms and a new bar re-renders its text, so the bar is made
 only when the coloured actor or the metric changes and is otherwise updated in place. The NaN legend
 is a magenta swatch with its label to the right of it (never over it, at any size or scale), below
-the bar, shown while any shown value is invalid (SPEC 5).
+the bar, shown while any shown value is invalid (docs/metrics.md 5.5).
 
 The bar's title is a text actor of its own, laid out before every frame from the view's size in
 pixels: centred over the bar but never past the view's right edge, its bottom half a label plus a

@@ -3,7 +3,7 @@
 It subscribes to the ``Scene`` and, per event, builds, recolours or hides actors, then asks for one
 frame; it also picks elements (numpy projection, :mod:`.picking`) and renders images at any scale.
 Only the view touches VTK, and only on the GUI thread. NaN is drawn magenta through the lookup
-table's NaN colour (SPEC 5); point actors are unlit (exact colour-map colours) unless drawn as shaded
+table's NaN colour (docs/metrics.md 5.5); point actors are unlit (exact colour-map colours) unless drawn as shaded
 spheres. Big layers get a level-of-detail twin shown while the camera moves (:mod:`.lod`).
 """
 

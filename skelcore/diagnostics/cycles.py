@@ -342,7 +342,7 @@ def find_cycle_defects(
     checkpoint: Checkpoint = no_checkpoint,
 ) -> CycleDefects:
     """Spurious and missing cycles of ``curve`` in the shape sampled by ``cloud`` (both normalized,
-    SPEC 0). ``branches``, ``voxel_shape`` and ``cloud_tree`` may be passed when computed; ``samples``
+    docs/metrics.md 0). ``branches``, ``voxel_shape`` and ``cloud_tree`` may be passed when computed; ``samples``
     (the curve samples) give the per-sample flags."""
     cloud = np.asarray(cloud, dtype=float)
     if branches is None:

@@ -1,4 +1,4 @@
-"""The paper's summary table of an evaluation (SPEC 5: rows d_B / d_Wp, boundedness, centeredness,
+"""The paper's summary table of an evaluation (docs/metrics.md 5.5: rows d_B / d_Wp, boundedness, centeredness,
 smoothness; columns skeletal points / curve skeleton, each score with its count) and the "defects"
 block under it (issue 22), as text (the CLI's ``evaluate``) and as HTML (``Evaluation._repr_html_``,
 ``show_ab`` in a notebook). The rows come from :func:`skelcore.scores.paper_table`, the numbers from
@@ -23,7 +23,7 @@ def _scores(scores: Scores | dict) -> Scores:
 
 
 def table_notes(scores: Scores | dict) -> list[str]:
-    """The lines under the table: eps* and K (SPEC 1), what the rows marked "*" are (SPEC 8)."""
+    """The lines under the table: eps* and K (docs/metrics.md 1), what the rows marked "*" are (docs/metrics.md 5.2)."""
     s = _scores(scores)
     notes = []
     if s.d_B is not None:

@@ -2,11 +2,11 @@
 here into an equal Evaluation.
 
 - ``to_json_dict`` / ``write_json``: the ``evaluate --json`` document (scores, counts, params, inputs,
-  warnings, coverage, reference, ground truth, timings, the real-scan report; SPEC 5), also each compare job's
+  warnings, coverage, reference, ground truth, timings, the real-scan report; docs/metrics.md 5.5), also each compare job's
   ``evaluation`` record.
 - ``write_per_point``, ``cloud_columns``, ``write_barcodes``: the CSVs (NaN written ``nan``).
 - ``evaluation_arrays``: what the document lacks, for an npz (compare's ``jobs/KEY.npz``): the cloud,
-  the skeletons, the raw local values (before SPEC 3's unbounded -> 0 rule, so thresholds can change),
+  the skeletons, the raw local values (before the unbounded -> 0 rule of docs/metrics.md 3.3, so thresholds can change),
   the correspondence rows, the curve samples' edges, the coverage gaps, the normalization, the
   barcodes, at full precision under ``ev_`` names; ``ev_meta`` keeps the inputs and the timings exactly.
 - ``evaluation_from_store``: the document and the arrays put back together, nothing recomputed;

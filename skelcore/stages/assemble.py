@@ -1,5 +1,5 @@
 """The Evaluation from the stages' results: the skeletal and curve columns (local values in the user's
-units, SPEC 2-4), coverage, the reference comparison, what was not computed, and the trust checks
+units, docs/metrics.md 2-4), coverage, the reference comparison, what was not computed, and the trust checks
 (frame, frame fit, smoothness, no correspondence; the real-scan checks of .scan_checks;
 docs/metrics.md) run after the stages."""
 

@@ -2,7 +2,7 @@
 progress bar that moves evenly; measured on 4k-point shapes), the column it fills, what it reads from
 the context (the stage that makes an input runs before it), when it applies and its function.
 
-The paper's four metrics on the skeletal set and the curve (SPEC 1-4), the reverse correspondence,
+The paper's four metrics on the skeletal set and the curve (docs/metrics.md 1-4), the reverse correspondence,
 SkelScope's coverage, the reference comparison and the ground-truth metrics (docs/metrics.md), the diagnostics (issue 22).  Start order (docs/performance.md
 8): the boundedness stages first (the longest), then what others wait for, then the rest in catalogue
 order, the curve's boundedness last when the skeletal set's runs.

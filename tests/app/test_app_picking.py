@@ -112,7 +112,7 @@ def test_a_skeletal_points_smoothness_support_shows_its_neighbours_tangents(wind
 
 
 def test_a_curve_vertex_smoothness_support_is_its_edges_angle(window):
-    """An L: the corner's two edges meet at 90 degrees, so s = 0 (SPEC 4); a vertex of degree 1 has none."""
+    """An L: the corner's two edges meet at 90 degrees, so s = 0 (docs/metrics.md 4); a vertex of degree 1 has none."""
     verts = np.array([[0.0, 0, 0], [1, 0, 0], [1, 1, 0]])
     curve = CurveSkeleton.from_raw(verts, np.array([[0, 1], [1, 2]]))
     pts = np.vstack([np.linspace(verts[0], verts[1], 200), np.linspace(verts[1], verts[2], 200)])

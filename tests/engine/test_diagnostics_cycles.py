@@ -53,7 +53,7 @@ def test_simplified_polygon_stays_within_tolerance():
 
 
 def test_voxel_interior_agrees_with_boundedness():
-    """The lattice rays classify like SPEC 2's boundedness: the torus's tube inside, its hole and
+    """The lattice rays classify like the boundedness of docs/metrics.md 2: the torus's tube inside, its hole and
     the space beside it outside."""
     s = shapes.torus(n=4000)
     norm = Normalization.from_cloud(s.cloud)

@@ -70,7 +70,7 @@ def test_export_writes_three_coloured_files_in_user_units(tmp_path):
     np.testing.assert_array_equal(np.column_stack([sk["x"], sk["y"], sk["z"]]), ev.skeletal.points)
     assert {"boundedness", "centeredness", "smoothness"} <= {p.name for p in sk.properties}
     c = np.asarray(sk["centeredness"], dtype=float)
-    # SPEC 3: unbounded points get c = 0; point 1 is bounded with NaN c, which stays NaN.
+    # docs/metrics.md 3: unbounded points get c = 0; point 1 is bounded with NaN c, which stays NaN.
     assert c[0] == pytest.approx(0.8) and np.isnan(c[1]) and np.all(c[10:] == 0.0)
     np.testing.assert_array_equal(_rgb(sk), map_to_rgb(ev.skeletal.centeredness(0.75), 0, 1))
     assert tuple(_rgb(sk)[1]) == MAGENTA

@@ -79,7 +79,7 @@ def test_show_draws_a_picture_in_the_cell(executed):
     assert len(pngs) == 1
     img = _png(pngs[0])
     assert img.shape[0] > 200 and img.shape[1] > 200
-    assert _magenta(img) > 10  # the curve's ends and junction have no smoothness (NaN, SPEC 4-5)
+    assert _magenta(img) > 10  # the curve's ends and junction have no smoothness (NaN, docs/metrics.md 4 and 5.5)
     assert len(_data(_cell(executed, "ev.show_barcodes()"), "image/png")) == 1
 
 

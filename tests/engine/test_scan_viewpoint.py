@@ -18,7 +18,7 @@ P16 = Params(viewpoint_rows=16)
 
 def _brute_force_fraction(cloud: np.ndarray, q: np.ndarray, rows: int) -> float:
     """Share of the raster's directions whose ray from q meets a ball of radius h around a cloud point
-    farther than h (SPEC 2), by testing every (direction, point) pair in numpy."""
+    farther than h (docs/metrics.md 2), by testing every (direction, point) pair in numpy."""
     h = rays_radius(cloud)
     dirs = direction_raster(rows) @ FRAME  # the raster is laid out in FRAME's coordinates
     w = cloud - q
