@@ -1,4 +1,4 @@
-"""File > Save session / Open session, ``skelscope --session F``, and File > Recent (issue 25).
+"""File > Save session / Open session, ``skelscope --session F``, and File > Recent.
 
 A feature controller on :class:`skelscope.window_api.WindowApi`. Saving captures the inputs, the settings
 and thresholds, the correspondence mode, metric, colour range, display options, camera (with the

@@ -6,7 +6,7 @@ size, modification time and SHA-256, so that opening it can tell a file that mov
 changed from one that did not; the settings and thresholds (every ``skelcore.Params`` field) and the
 correspondence mode (docs/metrics.md 5.1) with the skeletal set's index file (a record like the inputs'), the real-scan
 options (``remove_outliers``, ``cap_openings``); each skeleton
-layer's mapping into the cloud's frame (scale, offset); the scan's viewpoints (issue 26); the metric, colour
+layer's mapping into the cloud's frame (scale, offset); the scan's viewpoints; the metric, colour
 range and display options; the camera with the view's size; and the picked element. Written atomically (``skelcore.io.atomic``); read back with
 every field checked, so a bad file is one line (``SkelInputError``) before anything changes.
 """

@@ -1,4 +1,4 @@
-"""Wires issue 11's support views into the main window: a pick shows the element's support in the
+"""Wires the support views into the main window: a pick shows the element's support in the
 "Support" dock (2-D plot) and in the 3-D view (overlay); the Display panel's "only elements below the
 threshold" box hides (and makes unpickable) every element whose value passes (beta > beta*, c > c*;
 NaN stays shown).

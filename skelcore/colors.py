@@ -40,7 +40,7 @@ CURVE_COLOR: tuple[int, int, int] = (214, 39, 40)
 #: The skeleton in report.html's defect picture (skelcore/compare/render_defects.py), under the defects
 #: drawn in DEFECT_COLORS (below, the viewer's too): a neutral grey, darker than the cloud's.
 DEFECT_SKELETON: tuple[int, int, int] = (110, 110, 110)
-#: A ground-truth (reference) curve, drawn as a thin line under the skeleton (issue 23): a grey darker
+#: A ground-truth (reference) curve, drawn as a thin line under the skeleton: a grey darker
 #: than the cloud's, so it reads against the cloud and never as a skeleton colour.
 REFERENCE_COLOR: tuple[int, int, int] = (90, 90, 90)
 #: The colour map of the local metrics, over [0, 1], on screen and in exported files.
@@ -50,7 +50,7 @@ PICK_COLOR: tuple[int, int, int] = (255, 140, 0)
 #: The picked element's support (the viewer's Support dock and 3-D overlay, the same colour for the
 #: same thing in both), chosen apart from the skeleton's and the cloud's colours above, from magenta,
 #: from the pick marker and from the viridis map (dark purple -> teal -> yellow): browns, black and a
-#: light sky blue (issue 25: the slab's red was the curve's red).
+#: light sky blue (a red slab would be mistaken for the red curve).
 SUPPORT_COLORS: dict[str, tuple[int, int, int]] = {
     "slab": (214, 160, 90),  # the slab's cloud points; a skeletal point's corresponding cloud points
     "ring": (120, 66, 18),  # the ring kept; a skeletal point's or vertex's neighbours
@@ -60,7 +60,7 @@ SUPPORT_COLORS: dict[str, tuple[int, int, int]] = {
     "links": (90, 90, 90),  # skeletal point -> its cloud point
 }
 
-#: The viewer's defects (issue 25) and scan findings (issue 26), each drawn in a style of its own (halo,
+#: The viewer's defects and scan findings, each drawn in a style of its own (halo,
 #: dashes, loop, large points) in a colour on neither colour map (at least 80 RGB units from every viridis
 #: entry), not magenta (NaN), not the pick marker's and apart from the skeleton's and the supports';
 #: the selected defect is redrawn in PICK_COLOR.

@@ -126,7 +126,7 @@ class Evaluation:
     ground_truth: GroundTruthComparison | None = None
     #: what could not be computed and why, e.g. {"topology": "..."}
     not_computed: dict[str, str] = field(default_factory=dict)
-    #: the defects found without a reference (issue 22; skelcore.diagnostics.record.Diagnostics)
+    #: the defects found without a reference (skelcore.diagnostics.record.Diagnostics)
     diagnostics: Any = None
     #: real scans (docs/metrics.md 6): viewpoints, stray points, openings; None when no scan option was
     #: given and no scan warning fired
@@ -201,7 +201,7 @@ class Evaluation:
 
     # ---- serialisation: skelcore.io.evaluation_files, imported when called (the record imports no io) ----
     def to_json_dict(self, version: str | None = None) -> dict[str, Any]:
-        """The ``--json`` document of the CLI (issue 2); null where an input was not given."""
+        """The ``--json`` document of the CLI; null where an input was not given."""
         from .io import evaluation_files
 
         return evaluation_files.to_json_dict(self, version)

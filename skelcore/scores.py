@@ -101,7 +101,7 @@ SCORE_COLUMNS: tuple[ScoreColumn, ...] = (
     *_per_kind("boundedness", (r"$\mathcal{B}_{P_s}$", r"$\mathcal{B}_{G_s}$"), "fraction", short="bounded"),
     *_per_kind("centeredness", (r"$\mathcal{C}_s(P_s)$", r"$\mathcal{C}_s(G_s)$"), "fraction", short="centred"),
     *_per_kind("smoothness", (r"$S(P_s)$", r"$\mathfrak{S}_{G_s}$"), "mean in [0, 1]", short="smooth"),
-    # the ground-truth metrics against the reference (issue 23, docs/metrics.md 5.3.1): the cloud's units
+    # the ground-truth metrics against the reference (docs/metrics.md 5.3.1): the cloud's units
     # and local radii of the reference; the community's metrics, side by side with the paper's
     ScoreColumn("gt_chamfer_radii", "chamfer (radii)", "CD r", r"CD$_r$", "local radii", "lower", 3, "ground truth",
                 compared=True),
@@ -138,7 +138,7 @@ SCORE_COLUMNS: tuple[ScoreColumn, ...] = (
     ScoreColumn("reference_recall", "recall", "R", "recall", "fraction", "higher", 3, "reference"),
     ScoreColumn("reference_f1", "F1", "F1", "$F_1$", "fraction", "higher", 3, "reference"),
     ScoreColumn("reference_tau", "reference tau", "tau", r"$\tau$", "normalized units", None, 4, "reference"),
-    # the diagnostics (issue 22, docs/diagnostics.md)
+    # the diagnostics (docs/diagnostics.md)
     *(ScoreColumn(f"completeness_{kind}", f"completeness ({kind})", f"compl. {kind[0]}", rf"compl.\ ${'P_s' if kind == 'skeletal' else 'G_s'}$",
                   "fraction of the cloud", "higher", 3, "diagnostics", "completeness", kind, compared=True)
       for kind in KINDS),
@@ -240,7 +240,7 @@ class Scores:
     reference_endpoints: tuple[int, int] | None = _at("reference", "endpoints", read="pair")
     reference_components: tuple[int, int] | None = _at("reference", "components", read="pair")
     reference_cycles: tuple[int, int] | None = _at("reference", "cycles", read="pair")
-    # issue 23: the ground-truth metrics (docs/metrics.md 5.3.1); counts as (ours, reference[, matched])
+    # the ground-truth metrics (docs/metrics.md 5.3.1); counts as (ours, reference[, matched])
     gt_chamfer_radii: float | None = _at("ground_truth", "chamfer_radii")
     gt_chamfer: float | None = _at("ground_truth", "chamfer")
     gt_precision: float | None = _at("ground_truth", "precision")
@@ -258,7 +258,7 @@ class Scores:
     gt_endpoints: tuple[int, ...] | None = _at("ground_truth", "endpoints", read="tuple")
     gt_cycles: tuple[int, ...] | None = _at("ground_truth", "cycles", read="tuple")
     gt_radius_source: str | None = _at("ground_truth", "radius_source", read="str")
-    # issue 22: the diagnostics (docs/diagnostics.md): share of the cloud explained, defects found
+    # the diagnostics (docs/diagnostics.md): share of the cloud explained, defects found
     completeness_skeletal: float | None = _at("diagnostics", "completeness", "skeletal", needs="skeletal")
     completeness_curve: float | None = _at("diagnostics", "completeness", "curve", needs="curve")
     spurious_branches: int | None = _at("diagnostics", "spurious_branches", "spurious", read="int")

@@ -146,7 +146,7 @@ def y_shape(
     return Shape(cloud, skel, np.array(verts), np.array(edges))
 
 
-# --- unions of tubes: shapes whose curve skeleton is known exactly (issue 22's validation) ---------
+# --- unions of tubes: shapes whose curve skeleton is known exactly (the diagnostics' validation) ---
 #
 # A shape is a set of branches, each a polyline between two nodes with a constant tube radius; its
 # solid is the union of the tubes (points within the radius of the branch) and of a ball at every

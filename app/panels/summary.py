@@ -40,7 +40,7 @@ def summary_cells(summary: Scores | dict[str, Any] | None, evaluation: Any = Non
 
 def window_warning(w: Any) -> str:
     """A trust warning in the window's terms: its finding and the menu or setting that remedies it
-    (the engine's message names the command line's flags, issue 25)."""
+    (the engine's message names the command line's flags)."""
     finding = getattr(w, "finding", "") or w.message
     if w.code == "no_correspondence":
         return (f"{finding}: choose Settings > correspondence > reverse projection, or give its index with "

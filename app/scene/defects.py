@@ -1,4 +1,4 @@
-"""An Evaluation's defects as the viewer lists and draws them (issue 25 "Defects on screen"; issue 26's
+"""An Evaluation's defects as the viewer lists and draws them (with a scan's
 openings and stray points), without Qt.
 
 :func:`defect_rows` turns ``Evaluation.diagnostics`` (skelcore/diagnostics/record.py), its warnings and

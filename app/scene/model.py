@@ -133,7 +133,7 @@ class Scene:
     def remove_layer(self, name: str) -> None:
         """Close one layer (File > Close, the panel's remove button). The evaluation goes with it,
         except when one skeleton of two is closed: the other's column still describes the inputs
-        left, so it stays (issue 25: closing the curve kept nothing of the skeletal set's results)."""
+        left, so it stays (closing the curve keeps the skeletal set's results)."""
         if self.layers.pop(name, None) is not None:
             kept = _without_column(self.evaluation, name)
             if kept is None:
@@ -247,7 +247,7 @@ class Scene:
 
     def set_stale(self, reason: str) -> None:
         """Mark the shown results out of date (the session's stale reason): the view and the plots
-        draw them greyed until a re-run (issue 25)."""
+        draw them greyed until a re-run."""
         if reason != self.stale:
             self.stale = reason
             self._emit("stale")
@@ -356,7 +356,7 @@ class Scene:
         return info
 
     def branch_of(self, layer_name: str, location: str, index: int) -> int | None:
-        """The curve branch a curve vertex or sample lies on (issue 25: a click on the curve selects its
+        """The curve branch a curve vertex or sample lies on (a click on the curve selects its
         branch); None for a junction vertex, another layer, or before an evaluation with diagnostics."""
         ev = self.evaluation
         diag = None if ev is None else getattr(ev, "diagnostics", None)

@@ -1,4 +1,4 @@
-"""The local support behind a picked element's value, from the shown ``Evaluation`` (issue 11).
+"""The local support behind a picked element's value, from the shown ``Evaluation``.
 
 Which support depends on the element and the metric on screen: boundedness -> the direction map
 around the element (paper Eq. 5-6; for the ``paper`` estimator its triangles); centeredness of a

@@ -10,7 +10,7 @@ pixels: centred over the bar but never past the view's right edge, its bottom ha
 gap above the bar's top, so it clears the top label ("1.00") in a view of any size. A scaled picture
 (VTK's tiles) grows normalized positions and the bar's own text with the scale, but not a plain text
 actor's font: the title's and the NaN label's are multiplied by the scale for the picture, so the
-layout holds at any scale (issue 25).
+layout holds at any scale.
 """
 
 from __future__ import annotations

@@ -21,7 +21,7 @@ COLORMAP = METRIC_COLORMAP
 
 
 STALE_MIX = 0.7
-"""How far stale results' colours are washed toward light grey (issue 25: a setting changed, so the
+"""How far stale results' colours are washed toward light grey (a setting changed, so the
 colours on screen are not those a re-run would give)."""
 
 

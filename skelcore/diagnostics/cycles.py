@@ -1,5 +1,5 @@
 """The skeleton's cycles against the shape's tunnels -> ``spurious_cycles``, ``missing_cycles``
-(issue 22, item 4; docs/diagnostics.md "Cycles" has the derivation).
+(docs/diagnostics.md "Cycles" has the derivation).
 
 The shape X is voxelized (:mod:`.interior`); its tunnels are its first Betti number beta1(X). A
 cycle goes around a tunnel when it links a loop outside the shape (Alexander duality), so it is

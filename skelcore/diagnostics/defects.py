@@ -1,4 +1,4 @@
-"""All of a curve skeleton's defects at once (issue 22, items 1 and 3-5): one KD-tree of the cloud
+"""All of a curve skeleton's defects at once: one KD-tree of the cloud
 and one branch decomposition shared by the spurious-branch, cycle and outside diagnostics, and the
 branches flagged with what each found (docs/diagnostics.md)."""
 

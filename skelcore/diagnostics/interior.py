@@ -1,4 +1,4 @@
-"""The shape's interior as voxels, and its Betti numbers (issue 22, item 4; docs/diagnostics.md
+"""The shape's interior as voxels, and its Betti numbers (docs/diagnostics.md
 "Cycles").
 
 A voxel is inside when it holds cloud points or when the rays from its centre along the 26 lattice

@@ -1,5 +1,5 @@
-"""Missing parts: the parts of the shape a skeleton does not reach, and its completeness (issue 22,
-item 2; docs/diagnostics.md "Missing parts", "Completeness").
+"""Missing parts: the parts of the shape a skeleton does not reach, and its completeness
+(docs/diagnostics.md "Missing parts", "Completeness").
 
 A cloud point is explained when a skeleton element's medial ball, grown by the coverage slack,
 reaches it (docs/metrics.md 5.2, :mod:`skelcore.metrics.coverage`); completeness is the share explained. The

@@ -1,5 +1,5 @@
-"""Curve length and skeletal points outside the shape -> ``outside`` (issue 22, item 5;
-docs/diagnostics.md "Outside").
+"""Curve length and skeletal points outside the shape -> ``outside``
+(docs/diagnostics.md "Outside").
 
 A curve sample is unbounded when its boundedness <= beta* (docs/metrics.md 2, the values the evaluation
 computed). Each stands for its stretch of its edge (the sampling of docs/metrics.md 3.2); 200 samples are coarse on a

@@ -1,4 +1,4 @@
-"""Trust checks: conditions under which the paper's scores say nothing (issue 8; docs/metrics.md
+"""Trust checks: conditions under which the paper's scores say nothing (docs/metrics.md
 "Warnings"). Each is a :class:`TrustWarning` with a stable ``code``:
 
 - ``frame``: the skeleton lies mostly outside the cloud's bounding box, or its extent is more than
@@ -211,7 +211,7 @@ def frame_fit_warning(
     )]  # fmt: skip
 
 
-#: Warning codes that say the skeleton itself is wrong (issue 22), as opposed to caveats about what a
+#: Warning codes that say the skeleton itself is wrong, as opposed to caveats about what a
 #: score can mean (``trivial_smoothness``, ``no_correspondence``) or about the scan: ``--strict``,
 #: compare's "sound" column, the profiles' ``fail_on`` and the CLI's defects block read this set.
 DEFECT_CODES = frozenset({"frame", "collapse", "incomplete", "spurious_branches", "spurious_cycles",

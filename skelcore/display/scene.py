@@ -99,7 +99,7 @@ def add_scene(pl: Any, arrays: dict[str, np.ndarray], view: str, *, prefer: str 
     has_curve = "curve_vertices" in arrays and len(arrays.get("curve_edges", ())) > 0
     if view == SKELETON_VIEW:
         if "reference_vertices" in arrays and len(arrays.get("reference_edges", ())):
-            # the shape's ground-truth curve (issue 23): a thin grey line, drawn before (under) the skeleton
+            # the shape's ground-truth curve: a thin grey line, drawn before (under) the skeleton
             pl.add_mesh(_lines(arrays["reference_vertices"], arrays["reference_edges"]),
                         color=_unit(colors.REFERENCE_COLOR), line_width=1.5, reset_camera=False)
         if "skeletal" in arrays:

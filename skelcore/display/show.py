@@ -1,5 +1,5 @@
 """``Evaluation.show``, ``Evaluation.show_barcodes`` and ``skelcore.show_ab``: a picture of an
-evaluation wherever the user is (issue 24 3). In a Jupyter notebook it is drawn in the cell (the
+evaluation wherever the user is. In a Jupyter notebook it is drawn in the cell (the
 3-D scene through pyvista's notebook support: a static picture by default, trame's interactive view
 with ``jupyter_backend="trame"`` when trame is installed); given ``path=``, or with no display, it is
 written as a PNG and its path returned; else it opens in a window. The scenes are

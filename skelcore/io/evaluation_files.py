@@ -1,4 +1,4 @@
-"""An Evaluation saved and loaded, as a symmetric pair (issue 21): the files written here are read back
+"""An Evaluation saved and loaded, as a symmetric pair: the files written here are read back
 here into an equal Evaluation.
 
 - ``to_json_dict`` / ``write_json``: the ``evaluate --json`` document (scores, counts, params, inputs,
@@ -57,7 +57,7 @@ _CURVE = ("samples", "sample_edge", "sample_t", "sample_boundedness", "sample_ce
 
 # ---- the JSON document ------------------------------------------------------------------------
 def to_json_dict(ev: Evaluation, version: str | None = None) -> dict[str, Any]:
-    """The ``--json`` document of the CLI (issue 2); null where an input was not given."""
+    """The ``--json`` document of the CLI; null where an input was not given."""
     from ..version import __version__
 
     summ = ev.summary()
@@ -165,7 +165,7 @@ def cloud_columns(ev: Evaluation) -> dict[str, np.ndarray]:
 
 
 def _defect_columns(ev: Evaluation, element: str, n: int) -> tuple[list[tuple], list[str]]:
-    """The diagnostics' ``branch`` and ``defects`` (";"-joined codes) per curve sample or vertex (issue 22)."""
+    """The diagnostics' ``branch`` and ``defects`` (";"-joined codes) per curve sample or vertex."""
     arrays = {} if ev.diagnostics is None else ev.diagnostics.arrays
     if f"curve_{element}_branch" not in arrays:
         return [()] * n, []
@@ -176,7 +176,7 @@ def _defect_columns(ev: Evaluation, element: str, n: int) -> tuple[list[tuple], 
 
 
 def _skeletal_defect_column(ev: Evaluation, n: int) -> tuple[list[tuple], list[str]]:
-    """The diagnostics' ``defects`` per given skeletal point (``outside``; issue 22)."""
+    """The diagnostics' ``defects`` per given skeletal point (``outside``)."""
     arrays = {} if ev.diagnostics is None else ev.diagnostics.arrays
     bits = arrays.get("skeletal_point_defects")
     if bits is None or len(bits) != n:

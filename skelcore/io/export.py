@@ -12,7 +12,7 @@ the same picture as the viewer:
   and fraction t; coloured by ``color_by`` (centeredness when ``color_by`` is smoothness, which
   samples do not have).
 
-Each file's header says which metric its colours encode, in one comment line (issue 25):
+Each file's header says which metric its colours encode, in one comment line:
 ``comment colors: centeredness (viridis over [0, 1], NaN magenta)`` (:func:`colour_comment`).
 """
 

@@ -58,7 +58,7 @@ def assemble(ctx: EvalContext, inputs: dict[str, Any] | None = None) -> Evaluati
 
 
 def diagnostics_warnings(ctx: EvalContext) -> list[TrustWarning]:
-    """The diagnostics' defect warnings (issue 22), after the trust checks."""
+    """The diagnostics' defect warnings, after the trust checks."""
     out: list[TrustWarning] = []
     for name in ("skeletal missing parts", "curve missing parts", "curve defects", "skeletal outside"):
         found = ctx.results.get(name)

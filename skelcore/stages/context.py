@@ -1,4 +1,4 @@
-"""What the stages of an evaluation share (issue 21): the checked and normalized inputs, the curve's
+"""What the stages of an evaluation share: the checked and normalized inputs, the curve's
 samples, which correspondence the skeletal column has, what cannot be computed and why, tau, and each
 stage's result as soon as it is done.  :func:`build_context` checks the inputs (one-line
 :class:`SkelInputError`) and makes the decisions once, so the stages only read them.

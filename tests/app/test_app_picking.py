@@ -1,4 +1,4 @@
-"""Issue 25, "Picking and supports" and "Stale state": a click means what is drawn on top there; the
+"""Picking and supports, and the stale state: a click means what is drawn on top there; the
 picked element stays marked when the metric changes; smoothness has a support (dock and 3-D); the
 support's colours stand apart from the skeleton's, the ellipse is drawn in 3-D, every overlay has a
 legend entry and the slab plot's legend leaves its data alone; out-of-date results are greyed in the
@@ -138,7 +138,7 @@ def test_support_colours_stand_apart_from_the_skeleton_and_every_overlay_has_a_l
     viridis = lookup_table("viridis", 256).astype(float)
     for name, colour in SUPPORT_COLORS.items():
         c = np.asarray(colour, dtype=float)
-        assert np.linalg.norm(fixed - c, axis=1).min() > 60, name  # e.g. the old slab red vs the curve's
+        assert np.linalg.norm(fixed - c, axis=1).min() > 60, name  # e.g. a red slab against the red curve
         assert np.linalg.norm(viridis - c, axis=1).min() > 45, name
     sh, curve, ev = y_eval
     w = window

@@ -1,5 +1,5 @@
 """The benchmark's shapes: exact skeletons (graph counts, inside their shapes), surface samples on
-the exact surface and uniform, the canal conditions enforced (skelcore.benchmark, issue 23)."""
+the exact surface and uniform, the canal conditions enforced (skelcore.benchmark)."""
 
 from __future__ import annotations
 

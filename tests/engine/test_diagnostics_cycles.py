@@ -1,5 +1,4 @@
-"""The skeleton's cycles against the shape's tunnels (skelcore/diagnostics/cycles.py, interior.py;
-issue 22, 4)."""
+"""The skeleton's cycles against the shape's tunnels (skelcore/diagnostics/cycles.py, interior.py)."""
 
 from __future__ import annotations
 

@@ -1,4 +1,4 @@
-"""Evaluation.show, show_barcodes, _repr_html_ and skelcore.show_ab outside a notebook (issue 24 3):
+"""Evaluation.show, show_barcodes, _repr_html_ and skelcore.show_ab outside a notebook:
 the PNGs are read back and their pixels checked (the colour bar's viridis, magenta where an element
 is invalid, docs/metrics.md 5.5), the HTML table against the scores computed from the local arrays."""
 

@@ -128,7 +128,7 @@ def test_export_folder_that_is_a_file_is_an_input_error(tmp_path):
 @pytest.mark.parametrize("binary", [True, False])
 @pytest.mark.parametrize("color_by", ["boundedness", "centeredness", "smoothness"])
 def test_each_file_s_header_names_the_metric_its_colours_encode(tmp_path, color_by, binary):
-    """Issue 25: a coloured PLY says which metric its RGB encodes (one header comment), and that
+    """A coloured PLY says which metric its RGB encodes (one header comment), and that
     metric's values are the ones its colours come from; the files still read back as before."""
     from skelcore.io.export import colour_comment
 

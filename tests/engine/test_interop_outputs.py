@@ -1,4 +1,4 @@
-"""An Evaluation out to other libraries (issue 24, 1): ``to_frame`` rows hold the local arrays and the
+"""An Evaluation out to other libraries: ``to_frame`` rows hold the local arrays and the
 flags the overall scores count, ``to_networkx`` the curve with its values, ``to_open3d`` the curve
 coloured as the viewer colours it (skelcore.colors, NaN magenta)."""
 

@@ -1,5 +1,5 @@
 """examples/quickstart.ipynb executed in a real Jupyter kernel (nbclient + ipykernel) running this
-interpreter, and its outputs checked (issue 24 3): the picture of ``ev.show``, the summary table of
+interpreter, and its outputs checked: the picture of ``ev.show``, the summary table of
 ``ev``'s HTML repr, show_ab's picture and tables, and the defects naming the truncation."""
 
 from __future__ import annotations
@@ -70,7 +70,7 @@ def _magenta(img: np.ndarray) -> int:
 def test_the_notebook_was_saved_without_outputs():
     nb = nbformat.read(EXAMPLES / "quickstart.ipynb", as_version=4)
     assert all(not c.get("outputs") for c in nb.cells if c.cell_type == "code")
-    assert "../shared" not in json.dumps(nb)
+    assert "shared/data" not in json.dumps(nb)
 
 
 @pytest.mark.slow
