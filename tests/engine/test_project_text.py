@@ -1,7 +1,8 @@
-"""The project's text speaks of the project alone: no tracker numbers ("issue 23"), no citation of a
-specification outside the repository (the word SPEC: docs/metrics.md is the specification), no path
-to a folder outside the checkout (``../shared``) and no time of day of the work ("15:00 UTC").
-Read from the tracked files (``git ls-files``; every file on disk without git)."""
+"""The project's text speaks of the project alone: no tracker numbers, no citation of a specification
+outside the repository (docs/metrics.md is the specification), no path to a folder outside the
+checkout and no time of day of the work (the patterns below; written so that this file does not
+match them, though it is left out anyway). Read from the tracked files (``git ls-files``; every file
+on disk without git)."""
 
 from __future__ import annotations
 
@@ -23,9 +24,9 @@ PAGE_FILES = ("README.md", "CHANGELOG.md")
 
 FORBIDDEN = {
     "an issue number": re.compile(r"\b[Ii]ssues? #?[0-9]+"),
-    "the word SPEC": re.compile(r"\bSPEC\b"),
-    "a path outside the checkout": re.compile(r"\.\./shared"),
-    "a time of day": re.compile(r"\b\d{1,2}:\d{2} ?UTC"),
+    "the word S-P-E-C": re.compile(r"\bS[P]EC\b"),
+    "a path outside the checkout": re.compile(r"\.\./sh[a]red"),
+    "a time of day": re.compile(r"\b\d{1,2}:\d{2} ?U[T]C"),
 }
 
 
