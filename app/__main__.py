@@ -149,7 +149,7 @@ def _exited(code: int) -> NoReturn:
     ``app.worker.SHUTDOWN_WAIT_S``, its settings synced): leave now, with the event loop's status.
 
     Not through the interpreter's teardown: freeing a million-point scene, VTK's objects and every
-    module took 0.4-0.9 s after the window had closed (issue 25: Ctrl+Q in 0.5 s), and a task thread
+    module took 0.4-0.9 s after the window had closed (Ctrl+Q should take 0.5 s), and a task thread
     still inside an engine call would delay it further. Nothing is left to save by then."""
     sys.stdout.flush()
     sys.stderr.flush()

@@ -1,4 +1,4 @@
-"""Opening a ``skelcore compare`` run's report rows in the A/B view (issue 11), from their stored results.
+"""Opening a ``skelcore compare`` run's report rows in the A/B view, from their stored results.
 
 File > "Open comparison run…" (or dropping the run's folder or its ``index.json`` on the window) opens
 a dialog listing the run's datasets, conditions, seeds and, for the chosen ones, each method's row of

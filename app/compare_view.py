@@ -1,4 +1,4 @@
-"""Two skeletons of one cloud side by side (issue 11): A (the main window's) and B (another method's).
+"""Two skeletons of one cloud side by side: A (the main window's) and B (another method's).
 
 One pyvista interactor split in two renderers that share one camera (linked cameras: rotating either
 moves both), each drawing the cloud and its skeleton coloured by the chosen metric, and the summary
@@ -89,7 +89,7 @@ class CompareWindow(QtWidgets.QWidget):
         self.rows = ab_rows(ev_a.scores(*self.thresholds), ev_b.scores(*self.thresholds))
         from .scene.defects import sound_line
 
-        self.defect_rows = ab_defect_rows(ev_a, ev_b)  # issue 25: the defects of A and B
+        self.defect_rows = ab_defect_rows(ev_a, ev_b)  # the defects of A and B
         self.sound = (sound_line(ev_a), sound_line(ev_b))
         self._fill_table()
         self.draw()

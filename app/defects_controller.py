@@ -1,4 +1,4 @@
-"""Wires the defects (issue 25 "Defects on screen"; issue 26's openings and stray points) into the main
+"""Wires the defects (those of the skeleton, and a scan's openings and stray points) into the main
 window through its public interface (:class:`skelscope.window_api.WindowApi`): the Defects dock lists the shown
 evaluation's defects (:func:`skelscope.scene.defects.defect_rows`), the 3-D overlay draws them
 (:class:`skelscope.view.defect_overlay.DefectOverlay`), View > Show defects (Shift+D) shows or hides them;

@@ -1,4 +1,4 @@
-"""Big evaluations in a child process (issue 25, "Long work"): Cancel and quit are a kill, and the
+"""Big evaluations in a child process: Cancel and quit are a kill, and the
 window never waits for the engine's GIL.
 
 In a thread, a 1M-point evaluation held the GIL in long numpy and scipy calls (1.1-1.4 s between two

@@ -40,7 +40,7 @@ def ply_export_names(evaluation: Any, out_dir: str | os.PathLike, stem: str) -> 
 
 
 def with_thresholds(evaluation: Any, beta_star: float, c_star: float) -> Any:
-    """The evaluation as shown: same local values, the viewer's beta* and c* (SPEC 2-3)."""
+    """The evaluation as shown: same local values, the viewer's beta* and c* (docs/metrics.md 2-3)."""
     params = evaluation.params.replace(beta_star=float(beta_star), c_star=float(c_star))
     return dataclasses.replace(evaluation, params=params)
 

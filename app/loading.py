@@ -1,11 +1,11 @@
 """Which role a loaded file plays (cloud, skeletal point set, curve skeleton): Qt-free rules.
 
-Issue 3's rules for files dropped or named together: a file with edges is a curve skeleton; a point
-set with the cloud's point count is a skeletal point set (SPEC 0's pointwise correspondence); the first
+The rules for files dropped or named together: a file with edges is a curve skeleton; a point
+set with the cloud's point count is a skeletal point set (the pointwise correspondence of docs/metrics.md 0); the first
 point set is the cloud; a complete set dropped at once is assigned within itself. When that is
 ambiguous the ``ask`` callback decides (the window shows a dialog) and its default never replaces
 the loaded cloud. A point set with another count than the loaded cloud may also be a skeletal set
-scored by reverse projection or through an index file (SPEC 7, issue 25); replacing the cloud under a
+scored by reverse projection or through an index file (docs/metrics.md 5.1); replacing the cloud under a
 loaded skeleton says in the same answer whether the skeleton stays, so nothing is asked twice.
 """
 

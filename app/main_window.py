@@ -78,7 +78,7 @@ class MainWindow(QtWidgets.QMainWindow):
         self.add_dock("Display", self.display, LEFT)
         self.add_dock("Picked element", self.pick, LEFT)
         self.add_dock("Settings", self.settings_panel, LEFT)
-        # Tabs where a column would need more height than a laptop has (issue 25: fit 1366 x 768). The
+        # Tabs where a column would need more height than a laptop has (the window fits 1366 x 768). The
         # left column's are made when the window is first shown (showEvent); till then Settings is
         # hidden, so the column's minimum height is the tabbed one's.
         self.tabifyDockWidget(self.docks["Barcodes"], self.docks["Histogram"])
@@ -124,7 +124,7 @@ class MainWindow(QtWidgets.QMainWindow):
         self.display.layer_action.connect(self._layer_action)
         self.view.on_pick = self.pick_element
         self.scene.subscribe(self._on_scene)
-        # issue 11's features, each through the public interface (app.window_api)
+        # the feature controllers, each through the public interface (app.window_api)
         from .compare_run import RunBrowser
         from .compare_view import CompareController
         from .defects_controller import DefectsController
@@ -133,11 +133,11 @@ class MainWindow(QtWidgets.QMainWindow):
         from .viewpoint_controller import ViewpointController
 
         self.supports = SupportController(self)  # the picked element's support (dock, 3-D overlay, filter)
-        self.defects = DefectsController(self)  # the Defects dock, the defects in 3-D, a clicked branch (issue 25)
-        self.viewpoints = ViewpointController(self)  # Evaluate > Viewpoint from the camera / typed (issue 26)
+        self.defects = DefectsController(self)  # the Defects dock, the defects in 3-D, a clicked branch
+        self.viewpoints = ViewpointController(self)  # Evaluate > Viewpoint from the camera / typed
         self.compare = CompareController(self)  # File > Compare with a second skeleton (B)
         self.compare_run = RunBrowser(self)  # File > Open comparison run, and drops of a run
-        self.saved_sessions = SavedSessions(self)  # File > Save / Open session, File > Recent (issue 25)
+        self.saved_sessions = SavedSessions(self)  # File > Save / Open session, File > Recent
         self._update_actions()
         QtCore.QTimer.singleShot(1500, self, preload_matplotlib)  # after the first frame, off the GUI thread
         QtCore.QTimer.singleShot(2500, self, lambda: self.view.after_render(preload_engine))  # not during a frame
@@ -153,7 +153,7 @@ class MainWindow(QtWidgets.QMainWindow):
         """A dock named ``title`` in ``area`` (or split under the dock ``below``), listed in the View menu.
 
         The panel sits in a scroll area: a dock never asks for more room than the screen has (the
-        window's minimum size stays small, issue 25), a panel taller than its dock scrolls."""
+        window's minimum size stays small), a panel taller than its dock scrolls."""
         dock = QtWidgets.QDockWidget(title, self)
         dock.setObjectName(f"dock-{title}")
         dock.setWidget(scrolling(widget, dock))
@@ -217,7 +217,7 @@ class MainWindow(QtWidgets.QMainWindow):
         if info is not None:
             self.show_message(f"{info['element']} #{info['index']}", 5000)
         # The text on screen now, before the marker's frame (seconds at full detail for millions of
-        # points in software GL) and the support's computation (issue 25: 2.3 s from click to text).
+        # points in software GL) and the support's computation (text after both: 2.3 s from the click).
         self.pick.text.viewport().repaint()
         self.element_picked.emit(info)
 
@@ -553,7 +553,7 @@ class MainWindow(QtWidgets.QMainWindow):
             self._plots_timer.start()  # the next stale plot, after the event loop has turned
 
     def _stale_changed(self, reason: str) -> None:
-        """Out-of-date results: greyed in the summary, the 3D view and the histogram (issue 25)."""
+        """Out-of-date results: greyed in the summary, the 3D view and the histogram."""
         self.summary.set_stale(reason)
         self.scene.set_stale(reason)
 

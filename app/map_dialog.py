@@ -1,7 +1,7 @@
 """Evaluate > Map skeleton into the cloud's frame…: a scale and an offset applied to the loaded
 skeleton layers, ``v * scale + offset`` (:mod:`skelcore.skeleton_mapping`, the map the CLI's
 ``--skeleton-scale`` / ``--skeleton-offset`` apply), filled in with a ``frame`` warning's suggestion.
-The window's own remedy for skeletons written in another tool's units or origin (issue 25)."""
+The window's own remedy for skeletons written in another tool's units or origin."""
 
 from __future__ import annotations
 

@@ -1,4 +1,4 @@
-"""File > Save session / Open session, ``skelscope --session F``, and File > Recent (issue 25).
+"""File > Save session / Open session, ``skelscope --session F``, and File > Recent.
 
 A feature controller on :class:`skelscope.window_api.WindowApi`. Saving captures the inputs, the settings
 and thresholds, the correspondence mode, metric, colour range, display options, camera (with the
@@ -192,7 +192,7 @@ class SavedSessions(QtCore.QObject):
         return problems
 
     def _restore_index(self, index_at: str | None, state: SessionState) -> list[str]:
-        """The skeletal set's index file, found beside the session or where it was (SPEC 7)."""
+        """The skeletal set's index file, found beside the session or where it was (docs/metrics.md 5.1)."""
         from skelcore.io.correspondence_files import load_skeletal_index
 
         scene = self.window.scene

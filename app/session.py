@@ -50,7 +50,7 @@ class Session(QtCore.QObject):
         self.runner = TaskRunner(self)
         self.ask: Ask = lambda question, options: options[0] if options else None
         self.params_provider: Callable[[], Params] = Params
-        #: "auto" or "reverse" (SPEC 7), e.g. the settings panel's choice
+        #: "auto" or "reverse" (docs/metrics.md 5.1), e.g. the settings panel's choice
         self.correspondence_provider: Callable[[], str] = lambda: "auto"
         #: ``remove_outliers`` / ``cap_openings`` for skelcore.evaluate (the settings panel's real-scan options)
         self.scan_options_provider: Callable[[], dict[str, bool]] = dict
@@ -61,7 +61,7 @@ class Session(QtCore.QObject):
         #: evaluations of at least this many points (cloud + skeletal set) run in a child process
         self.process_from = PROCESS_FROM
         self.auto_evaluate = True
-        #: the sensors' positions (issue 26: viewpoint-aware boundedness and centeredness; [] = the paper's scores)
+        #: the sensors' positions (viewpoint-aware boundedness and centeredness; [] = the paper's scores)
         self.viewpoints: list[tuple[float, float, float]] = []
         self.runner.succeeded.connect(self._task_succeeded)
         self.runner.failed.connect(self._task_failed)
@@ -133,7 +133,7 @@ class Session(QtCore.QObject):
             return None
 
     def load_index(self, path: str) -> bool:
-        """File > Open skeletal index…: one cloud row per point of the loaded skeletal set (SPEC 7);
+        """File > Open skeletal index…: one cloud row per point of the loaded skeletal set (docs/metrics.md 5.1);
         the correspondence setting goes back to "as loaded", which uses it."""
         from skelcore.io.correspondence_files import load_skeletal_index
 
@@ -183,7 +183,7 @@ class Session(QtCore.QObject):
     def _new_cloud_over_skeleton(self, keep: set[str] = frozenset(), decided: bool | None = None) -> None:
         """A new cloud replaces the loaded one: the loaded skeleton layers (other than those in
         ``keep``, which arrive with the cloud) describe the old cloud, so ask whether to keep them,
-        unless the drop's question answered it already (``decided``, issue 25: one question, not
+        unless the drop's question answered it already (``decided``: one question, not
         two contradicting ones); the default (the question's first answer) clears them."""
         old = [name for name in ("skeletal", "curve") if name in self.scene.layers and name not in keep]
         if not old or self.scene.cloud is None:
@@ -301,7 +301,7 @@ class Session(QtCore.QObject):
         return failures
 
     def show_arrays(self, cloud: Any, skeletal: Any = None, curve: Any = None, evaluation: Any = None) -> None:
-        """Show in-memory inputs (a study variant, issue 4) in place of the loaded ones; evaluated
+        """Show in-memory inputs (a study variant) in place of the loaded ones; evaluated
         unless its ``evaluation`` is given."""
         with self.batch():
             self.scene.set_cloud(cloud, None)
@@ -355,8 +355,8 @@ class Session(QtCore.QObject):
 
     def _auto_start(self) -> None:
         """The evaluation of newly loaded inputs starts once the window has drawn them
-        (``after_render``): a worker started at once competed with the first frame for the cores
-        (issue 25: 6.8-10.4 s to the first frame of a 1M cloud with its 1M skeletal set)."""
+        (``after_render``): a worker started at once competes with the first frame for the cores
+        (6.8-10.4 s to the first frame of a 1M cloud with its 1M skeletal set)."""
         self._auto_token += 1
         token = self._auto_token
 
@@ -438,7 +438,7 @@ class Session(QtCore.QObject):
         return True
 
     def start_skeletonize(self, params: Any = None, method: str | None = None) -> bool:
-        """Skeletonize the loaded cloud (issue 4) in the worker; both results become layers.
+        """Skeletonize the loaded cloud in the worker; both results become layers.
 
         ``method`` "cao" (default) or "skelscope"; ``params`` its ``CaoParams`` / ``SkeletonizeParams``.
         """

@@ -4,9 +4,9 @@ Not :mod:`skelscope.session`, the viewer's controller: this is the file format, 
 the inputs' paths (relative to the session file when possible, absolute as well) with each file's
 size, modification time and SHA-256, so that opening it can tell a file that moved (missing) or
 changed from one that did not; the settings and thresholds (every ``skelcore.Params`` field) and the
-correspondence mode (SPEC 7) with the skeletal set's index file (a record like the inputs'), the real-scan
+correspondence mode (docs/metrics.md 5.1) with the skeletal set's index file (a record like the inputs'), the real-scan
 options (``remove_outliers``, ``cap_openings``); each skeleton
-layer's mapping into the cloud's frame (scale, offset); the scan's viewpoints (issue 26); the metric, colour
+layer's mapping into the cloud's frame (scale, offset); the scan's viewpoints; the metric, colour
 range and display options; the camera with the view's size; and the picked element. Written atomically (``skelcore.io.atomic``); read back with
 every field checked, so a bad file is one line (``SkelInputError``) before anything changes.
 """
@@ -56,7 +56,7 @@ class SessionState:
     params: dict[str, Any] = field(default_factory=dict)
     correspondence: str = "auto"
     scan_options: dict[str, bool] = field(default_factory=dict)  # remove_outliers, cap_openings (evaluate's)
-    skeletal_index: FileRecord | None = None  # the skeletal set's index file (SPEC 7), found like the inputs
+    skeletal_index: FileRecord | None = None  # the skeletal set's index file (docs/metrics.md 5.1), found like the inputs
     mappings: dict[str, tuple[float, tuple[float, float, float]]] = field(default_factory=dict)  # role -> scale, offset
     viewpoints: list[tuple[float, float, float]] = field(default_factory=list)  # the scan's sensor positions
     metric: str = "boundedness"

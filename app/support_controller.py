@@ -1,4 +1,4 @@
-"""Wires issue 11's support views into the main window: a pick shows the element's support in the
+"""Wires the support views into the main window: a pick shows the element's support in the
 "Support" dock (2-D plot) and in the 3-D view (overlay); the Display panel's "only elements below the
 threshold" box hides (and makes unpickable) every element whose value passes (beta > beta*, c > c*;
 NaN stays shown).
@@ -35,7 +35,7 @@ _FILTERED = {"skeletal": ("skeletal", "points"), "curve-samples": ("curve", "sam
 
 
 def below_threshold(values: np.ndarray, threshold: float) -> np.ndarray:
-    """The elements an overall score does not count: value <= threshold, or NaN (SPEC 2-3)."""
+    """The elements an overall score does not count: value <= threshold, or NaN (docs/metrics.md 2-3)."""
     v = np.asarray(values, dtype=float)
     return ~(v > threshold)
 

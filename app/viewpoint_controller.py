@@ -1,4 +1,4 @@
-"""The scan's viewpoint in the window (issue 26, item 4): Evaluate > "Viewpoint from the camera" takes the
+"""The scan's viewpoint in the window: Evaluate > "Viewpoint from the camera" takes the
 3-D view's camera position as the sensor's, "Viewpoint…" types one or more (x y z; several separated by
 ";"), "Clear viewpoints" goes back to the paper's scores. The session passes them to the engine's
 ``viewpoints=`` (viewpoint-aware boundedness and centeredness, docs/metrics.md 6) at the next

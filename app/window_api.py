@@ -1,4 +1,4 @@
-"""What feature controllers and the scripted mode may use of the main window (issue 21, item 4).
+"""What feature controllers and the scripted mode may use of the main window.
 
 The A/B view (:mod:`skelscope.compare_view`), the comparison-run browser (:mod:`skelscope.compare_run`), the
 support views (:mod:`skelscope.support_controller`), saved sessions (:mod:`skelscope.saved_sessions`) and the

@@ -29,7 +29,7 @@ JobFunction = Callable[[Callable[[float, str], None], Callable[[], bool]], Any]
 
 SHUTDOWN_WAIT_S = 1.5
 """How long quitting waits, in all, for cancelled tasks to reach a checkpoint before the process exits
-anyway: with the window's own teardown the process ends within issue 10's 2 s of Ctrl+Q."""
+anyway: with the window's own teardown the process ends within 2 s of Ctrl+Q."""
 
 
 THREAD_PREFIX = "skelscope-task-"
@@ -42,7 +42,7 @@ def threads_alive() -> bool:
 
 def stage_label(running: tuple[str, ...] | list[str], reporting: str = "") -> str:
     """The status bar's stage text: every stage running side by side, in the order they started
-    (issue 25: naming only the one that reported last made the label flip between them)."""
+    (naming only the one that reported last would make the label flip between them)."""
     return " + ".join(running) if running else reporting
 
 
@@ -147,7 +147,7 @@ class ProcessTask(Task):
 
     A thread of this process sends the job and reads the child's messages (so neither a 50 MB job nor
     a 150 MB result blocks the window); Cancel kills the child, which stops the work at once, in any
-    stage (issue 25). The thread then sees the pipe close and reports the abort."""
+    stage. The thread then sees the pipe close and reports the abort."""
 
     def __init__(self, kind: str, kwargs: dict[str, Any], name: str = "task",
                  restore: Callable[[Any], Any] | None = None, parent: QtCore.QObject | None = None) -> None:

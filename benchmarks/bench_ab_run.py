@@ -1,5 +1,5 @@
 """What keeping each job's whole Evaluation costs ``skelcore compare``, and how fast the viewer gets
-two report rows back (issue 11).
+two report rows back.
 
 One torus of --points points, two ``files`` methods (its true skeleton and a jittered copy, skeletal
 set and curve), condition normal, run serially into a fresh folder. Reports per job: the npz size

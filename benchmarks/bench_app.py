@@ -1,7 +1,7 @@
-"""Viewer benchmarks (issues 3, 10, 25): launch to first render for 100k / 1M-point clouds (and a 1M
+"""Viewer benchmarks: launch to first render for 100k / 1M-point clouds (and a 1M
 cloud dropped with its 1M skeletal set), frames while the camera moves (level of detail), a pick at 1M
 points (the projection alone, and a queued click to the pick panel's text painted), Cancel inside every
-stage of a 1M-point evaluation (in a child process, or ``--thread`` as before issue 25) with the longest
+stage of a 1M-point evaluation (in a child process, or in a thread with ``--thread``) with the longest
 GUI event-loop turn and the File menu's latency meanwhile, Ctrl+Q during it, the longest GUI
 event-loop stall during a 4096-point evaluation.
 
@@ -295,7 +295,7 @@ def cancel_in_every_stage(stages: tuple[str, ...] = CANCEL_STAGES, into: float =
     label names the stage (it names every stage running side by side), let it run ``into`` s more
     (less if the stage ends first) while the File menu is opened by a queued click, press Cancel.
 
-    ``thread``: the evaluation in a thread, as before issue 25 (stages after boundedness then reached
+    ``thread``: the evaluation in a thread instead of a child process (stages after boundedness then reached
     with :func:`_stand_in_boundedness`); else in a child process, as the window runs 1M points.
     Returns, per stage: (stage aimed at, label shown at Cancel, s until the stage began, s into it,
     s until the window was idle, s until the worker stopped (None: not within ``stop_wait`` s),
@@ -447,7 +447,7 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--cancel-stages", default=",".join(CANCEL_STAGES),
                         help="comma-separated stages to cancel in at 1M (default: all)")
     parser.add_argument("--thread", action="store_true",
-                        help="evaluate 1M points in a thread, as before issue 25 (default: a child process)")
+                        help="evaluate 1M points in a thread (default: a child process)")
     parser.add_argument("--skip-click", action="store_true", help="skip the click-to-text pick (evaluates 1M points)")
     parser.add_argument("--stop-wait", type=float, default=600.0, help="s to wait for the worker after a Cancel")
     parser.add_argument("--skip-frames", action="store_true", help="skip the 1M-point frames and pick")

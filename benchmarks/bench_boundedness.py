@@ -1,7 +1,7 @@
-"""Boundedness (SPEC 2) speed and accuracy by cloud size.
+"""Boundedness (docs/metrics.md 2) speed and accuracy by cloud size.
 
 Shapes as in bench_engine.py: a torus (R = 1, r = 0.3) sampled with N points; queries = its skeletal
-set (each point projected onto the core circle, 1 % jitter) + 200 curve samples, normalized (SPEC 0).
+set (each point projected onto the core circle, 1 % jitter) + 200 curve samples, normalized (docs/metrics.md 0).
 For every size: wall and CPU time of ``boundedness_rays`` with the default parameters, and its error
 against every-pair evaluation on a random subset of queries (the shared far field is the only
 approximation beyond the raster).  ``--brute`` also checks every-pair evaluation against a 200k

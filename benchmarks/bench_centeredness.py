@@ -1,4 +1,4 @@
-"""Time of skeletal and curve centeredness (SPEC 3) by cloud size, in normalized space.
+"""Time of skeletal and curve centeredness (docs/metrics.md 3) by cloud size, in normalized space.
 
 Shapes: a closed cylinder (skeletal set = projections onto the axis, curve = the axis shifted by
 0.2 r) and the Y shape (three arms, one joint). Curve: 200 samples. Best of ``--repeat`` runs.

@@ -1,5 +1,5 @@
-"""Coverage alone (SPEC 8; docs/metrics.md 5.2): skeletal and curve coverage of the hammer and apple
-tree scans (built-in skeletonizer, cached in /tmp) and of issue 12's torus by size, wall and CPU s,
+"""Coverage alone (docs/metrics.md 5.2): skeletal and curve coverage of the hammer and apple
+tree scans (built-in skeletonizer, cached in /tmp) and of bench_engine.py's torus by size, wall and CPU s,
 the worst gap between two checkpoints, with the load average.
 
 Torus: R = 1, r = 0.3, N points; skeletal set = each point's projection onto the core circle + 1 %
@@ -84,7 +84,7 @@ def case(name: str, cloud: np.ndarray, skeletal: np.ndarray, curve: CurveSkeleto
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--sizes", type=int, nargs="*", default=[16384, 65536, 262144, 1048576])
-    ap.add_argument("--no-real", action="store_true", help="skip the scans of ../shared/data")
+    ap.add_argument("--no-real", action="store_true", help="skip the shared scans (shared/data beside the repository)")
     args = ap.parse_args()
     print(f"{platform.processor() or platform.machine()}, {os.cpu_count()} cores, "
           f"load average at start {os.getloadavg()[0]:.2f}")

@@ -1,6 +1,6 @@
-"""Calibration and timing of the curve diagnostics (issue 22: spurious branches, cycles, outside;
+"""Calibration and timing of the curve diagnostics (spurious branches, cycles, outside;
 docs/diagnostics.md). Every case: a generated shape with a known curve skeleton (skelcore/shapes.py),
-normalized (SPEC 0), its curve sampled (SPEC 3) and the samples' boundedness computed (SPEC 2), then
+normalized (docs/metrics.md 0), its curve sampled (docs/metrics.md 3) and the samples' boundedness computed (docs/metrics.md 2), then
 :func:`skelcore.diagnostics.find_curve_defects`.
 
     .venv/bin/python benchmarks/bench_diagnostics.py false-alarms [--sizes 1000 4096 16384 100000]
@@ -241,7 +241,7 @@ def tangle(skeletal: np.ndarray, n: int = 400, k: int = 4, seed: int = 0) -> tup
 
 
 def hammer() -> None:
-    """Our skeletonizers' hammer skeletons as they are, then cao's with issue 22's defects."""
+    """Our skeletonizers' hammer skeletons as they are, then cao's with controlled defects."""
     import skelcore
 
     path = Path("/work/shared/data/hammer_4096.ply")

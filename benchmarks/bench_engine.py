@@ -1,22 +1,22 @@
-"""Engine speed against the targets of issue 12: full evaluations by size, real scans, cancel latency.
+"""Engine speed against its targets: full evaluations by size, real scans, cancel latency.
 
 Every case runs in a fresh subprocess, so its time includes the fresh process's first call
 ("start-up" = interpreter + imports, reported separately) and its peak resident memory (ru_maxrss) is its own; CPU s = process time of
 all threads (the fairer figure when other jobs share the cores).  Generated shapes: a torus
 (R = 1, r = 0.3) sampled with N points, skeletal set = each point's projection onto the core circle
-+ 1 % jitter, curve = a 64-gon of the core circle.  Real clouds from ../shared/data/ are scored
++ 1 % jitter, curve = a 64-gon of the core circle.  Real clouds from the shared data folder are scored
 against the built-in skeletonizer's output (its time reported apart).  The yardstick: gudhi's
 Vietoris-Rips H0 of the hammer scan, timed in the same run.  The worst cancel latency is the longest
 gap between two cancel checks of a run (the cancel callback times itself).  "diag" = the diagnostics'
-stages (curve defects, skeletal and curve missing parts; issue 22), their seconds and their share of
+stages (curve defects, skeletal and curve missing parts), their seconds and their share of
 all stages' seconds (the stages run side by side, so shares of the summed stage times), and their CPU
 seconds when run again alone on the same inputs over the evaluation's CPU seconds (robust to load).
-"torus N, coverage + diagnostics": coverage_max_points raised above N (issue 22's 1M case; above
-coverage_exact_points coverage is estimated on a subsample).  "viewpoint": issue 26's front half of a
+"torus N, coverage + diagnostics": coverage_max_points raised above N (the 1M case; above
+coverage_exact_points coverage is estimated on a subsample).  "viewpoint": the front half of a
 cylinder (2N points, y > 0) with its axis as skeletal set, plain and viewpoint-aware boundedness of the
 same elements, CPU seconds and their ratio.
 
-    .venv/bin/python benchmarks/bench_engine.py                 # the issue-12 target table
+    .venv/bin/python benchmarks/bench_engine.py                 # the target table
     .venv/bin/python benchmarks/bench_engine.py --sizes 4096 16384 --no-real --no-targets   # by size
 """
 
@@ -160,7 +160,7 @@ def _diagnostics_cpu(cloud, skeletal, curve, params, ev) -> float:
 
 
 def _viewpoint_case(n: int) -> dict:
-    """Issue 26: plain and viewpoint-aware boundedness of the same elements (CPU s of all threads)."""
+    """Plain and viewpoint-aware boundedness of the same elements (CPU s of all threads)."""
     import numpy as np
 
     from skelcore import Params, shapes
@@ -241,13 +241,13 @@ def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--sizes", type=int, nargs="*", default=[16384, 65536, 262144, 1048576])
     ap.add_argument("--method", default="rays", choices=("rays", "paper"))
-    ap.add_argument("--no-real", action="store_true", help="skip ../shared/data clouds")
+    ap.add_argument("--no-real", action="store_true", help="skip the shared scans (shared/data beside the repository)")
     ap.add_argument("--no-targets", action="store_true", help="only the size series (no Rips, no 100k, no curve-only)")
     ap.add_argument("--timeout", type=float, default=900.0, help="seconds per case before it is stopped")
     ap.add_argument("--coverage-sizes", type=int, nargs="*", default=[1048576],
                     help="torus sizes also run with coverage (coverage_max_points raised) and diagnostics")
     ap.add_argument("--viewpoint-sizes", type=int, nargs="*", default=[65536],
-                    help="elements of the viewpoint case (issue 26; front half of a 2N-point cylinder)")
+                    help="elements of the viewpoint case (front half of a 2N-point cylinder)")
     ap.add_argument("--ratio-runs", type=int, default=0, metavar="N",
                     help="then N more pairs of (gudhi Rips H0, hammer) fresh processes, alternating, and the "
                          "median of their ratios (this VM's speed drifts between minutes)")
@@ -293,7 +293,7 @@ def main() -> None:
             print(f"| {key} | {res[key]['total']:.2f} s, {res[key]['peak_mb']:.0f} MB | {goal} |")
     for key, r in res.items():
         if key.endswith("coverage + diagnostics"):
-            print(f"| {key} (issue 22) | {r['total']:.2f} s, {r['cpu']:.1f} CPU s, {r['peak_mb']:.0f} MB | < 25 s |")
+            print(f"| {key} | {r['total']:.2f} s, {r['cpu']:.1f} CPU s, {r['peak_mb']:.0f} MB | < 25 s |")
     shares = [(r["diag_share"], k) for k, r in res.items() if "diag_share" in r]
     if shares:
         top, key = max(shares)
@@ -304,7 +304,7 @@ def main() -> None:
         print(f"| diagnostics' largest CPU alone / the evaluation's CPU | {100 * top:.0f} % ({key}) | <= 25 % |")
     for key, r in res.items():
         if "seen" in r:
-            print(f"| viewpoint-aware / plain boundedness, {r['n_points']} cloud points (issue 26) | "
+            print(f"| viewpoint-aware / plain boundedness, {r['n_points']} cloud points | "
                   f"x{r['seen_cpu'] / max(r['plain_cpu'], 1e-9):.1f} CPU ({r['seen_cpu']:.2f} / {r['plain_cpu']:.2f} s) | <= x3 |")
     apple = next((r for k, r in res.items() if k.startswith("apple")), None)
     if apple:

@@ -1,10 +1,10 @@
-"""The ``frame`` suggestion before and after issue 22 (docs/diagnostics.md "Frame").
+"""The ``frame`` suggestion: the bounding-box rule against the refined fit (docs/diagnostics.md "Frame").
 
 A skeleton in voxel coordinates of a grid laid over the cloud (pitch = the longest side / 100, voxel
 (0, 0, 0) two voxels below the cloud's min corner, coordinates rounded to voxel indices, as kimimaro
 writes them): the hammer scan's cao curve and the exact and cao curves of the generated shapes
-(x 30). For each: the old suggestion (bounding boxes centred, scaled x 1 / 0.85 / 0.7, the most
-bounded), the new one (``skelcore.diagnostics.trust``), and the grid's own mapping: scale / the grid's pitch,
+(x 30). For each: the bounding-box suggestion ("old": boxes centred, scaled x 1 / 0.85 / 0.7, the most
+bounded), the refined fit ("new": ``skelcore.diagnostics.trust``), and the grid's own mapping: scale / the grid's pitch,
 the largest point error (share of the cloud's diagonal), the curve's boundedness, centeredness and
 completeness under each, and the seconds the evaluation took.
 
@@ -36,7 +36,7 @@ SUGGESTED = re.compile(r"--skeleton-scale ([-\d.e+]+) --skeleton-offset ([-\d.e+
 
 
 def old_suggestion(cloud, samples, p):
-    """The rule before issue 22: the most bounded of the bounding-box matches x 1, 0.85, 0.7."""
+    """The bounding-box rule: the most bounded of the bounding-box matches x 1, 0.85, 0.7."""
     norm = Normalization.from_cloud(cloud)
     c = norm.apply(cloud)
     s0, _ = bbox_transform(cloud, samples)

@@ -1,4 +1,4 @@
-"""Does the paper's leaderboard pick the skeleton closest to the truth? (issue 23, section 5)
+"""Does the paper's leaderboard pick the skeleton closest to the truth?
 
 Reads a ``skelcore compare`` run folder of a ``skelcore bench make`` suite (its results.csv, whose
 jobs carry the ground-truth columns, docs/compare.md "Ground truth") and prints Markdown:

@@ -1,4 +1,4 @@
-"""Validation of the real-scan additions (issue 26; docs/metrics.md 6.6): openings, ``open_surface``,
+"""Validation of the real-scan additions (docs/metrics.md 6.6): openings, ``open_surface``,
 viewpoint-aware scores, ``--cap-openings``, stray points.  Prints markdown tables.
 
 - closed: generated closed shapes (cylinder, torus, Y, tree) with 0-5 % noise (of the tube radius) and
@@ -6,7 +6,7 @@ viewpoint-aware scores, ``--cap-openings``, stray points.  Prints markdown table
 - partial: the same shapes scanned from 1-3 viewpoints (hidden point removal, sensors 10 extents away):
   openings, ``open_surface``, and the true skeleton's scores without and with the viewpoints against
   the complete shape's;
-- issue: the issue's table again (cylinder cut at y > -0.1 and y > 0, the hammer less 10 / 25 % of its
+- issue: partial scans of known shapes (cylinder cut at y > -0.1 and y > 0, the hammer less 10 / 25 % of its
   points on its -x side, a tube with open ends, capped), with viewpoints / caps;
 - outliers: one point at 10 x the hammer's extent, 40 points in a box twice the hammer's (in the cloud and
   the skeletal set), clean noisy shapes; with and without ``remove_outliers``;
@@ -115,7 +115,7 @@ def partial(quick: bool) -> None:
 
 
 def issue(quick: bool) -> None:
-    print("\n### The issue's table, with viewpoints and caps\n")
+    print("\n### Partial scans of known shapes, with viewpoints and caps\n")
     print("| cloud | skeleton | B curve | C curve | B skeletal | C skeletal | warnings |")
     print("|---|---|---|---|---|---|---|")
 
@@ -137,7 +137,7 @@ def issue(quick: bool) -> None:
     row("tube with open ends (length 16 r)", evaluate(t.cloud, t.skeletal, (t.curve_vertices, t.curve_edges)))
     row("the same, --cap-openings", evaluate(t.cloud, t.skeletal, (t.curve_vertices, t.curve_edges), cap_openings=True))
     if not (SHARED / "hammer_4096.ply").exists():
-        print("(hammer: ../shared/data absent)")
+        print("(hammer: the shared data folder is absent)")
         return
     from skelcore.io import load_cloud
 

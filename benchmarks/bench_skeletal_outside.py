@@ -1,6 +1,6 @@
-"""False alarms of the "skeletal outside" stage (issue 22, docs/diagnostics.md "Outside").
+"""False alarms of the "skeletal outside" stage (docs/diagnostics.md "Outside").
 
-Skeletal sets of both built-in skeletonizers on the shared scans (when ../shared/data is there) and on
+Skeletal sets of both built-in skeletonizers on the shared scans (when the shared data folder is there) and on
 generated shapes (2k / 20k points, 0 / 3 % isotropic noise): the share of skeletal points outside,
 the largest cluster's share (``outside`` fires above Params.outside_skeletal_share) and the stage's time.
 

@@ -1,6 +1,6 @@
 """Time of skelcore.skeletonize (rings + contraction + curve) for both methods, by cloud size.
 
-Cases: the paper's hammer (4096) and apple tree (grid 0.02, 8936) when ../shared/data is there,
+Cases: the paper's hammer (4096) and apple tree (grid 0.02, 8936) when the shared data folder is there,
 then the closed cylinder and the Y shape at each size. Reports the contraction iterations, the
 split between contraction and curve extraction, the curve's size, and the worst cancel latency
 seen when a cancel is raised mid-solve (``--cancel``). One run per case; quote ``uptime`` with it.

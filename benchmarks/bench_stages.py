@@ -1,6 +1,6 @@
 """Every stage but boundedness, by cloud size: time per stage and the longest gap between cancel checks.
 
-Issue 12's torus (benchmarks/bench_engine.py: R = 1, r = 0.3, N cloud points, skeletal set = each
+The torus of benchmarks/bench_engine.py (R = 1, r = 0.3, N cloud points, skeletal set = each
 point's projection onto the core circle + 1 % jitter, curve = a 64-gon, 200 samples) is evaluated
 with ``skelcore.evaluate(..., workers=1)`` (the stages one after the other, so that each stage's time,
 CPU and gaps are its own; an evaluation runs them side by side); boundedness (timed apart) is replaced, in this benchmark's process only

@@ -1,4 +1,4 @@
-"""Time of issue 8's additions by cloud size: coverage (skeletal set, curve), reverse projection onto
+"""Time of the trust additions by cloud size: coverage (skeletal set, curve), reverse projection onto
 a skeletal set and onto a curve, the reference comparison. CPU and wall seconds, with the load.
 
 Generated torus (N points), skeletal set = each point's projection onto the core circle + 1% jitter,

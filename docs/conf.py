@@ -1,4 +1,4 @@
-"""Sphinx configuration of SkelScope's documentation site (issue 24, section 4).
+"""Sphinx configuration of SkelScope's documentation site.
 
 Build: ``make docs`` (warnings are errors). The source is this folder: the user guide (``guide/``),
 the API reference (``api/``), the gallery (``../examples/gallery/plot_*.py``, run at build time into

@@ -1,7 +1,7 @@
 """docs/img/cave_opening.png: the shared cave scan's one opening, as skelcore.scan finds it.
 
-Why the cave gets ``open_surface`` (issue 26, docs/metrics.md 6): its passage ends open where the
-scan stops at y = +0.8. Needs ../shared/data (not in the repository).
+Why the cave gets ``open_surface`` (docs/metrics.md 6): its passage ends open where the
+scan stops at y = +0.8. Needs the shared scans (shared/data beside the repository, not in it).
 
     python scripts/make_cave_opening_figure.py [OUT.png]
 """

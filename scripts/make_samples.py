@@ -2,7 +2,7 @@
 
 Each sample is a cloud, a skeletal point set in pointwise correspondence and a curve skeleton, all
 PLY (the curve keeps its ``edge`` element). ``*_skeletal.ply`` is the exact medial projection (the
-ground truth: smoothness 1, centeredness as SPEC 6 says); ``*_curve.ply`` is the true axis with a
+ground truth: smoothness 1, centeredness as docs/metrics.md 5.6 says); ``*_curve.ply`` is the true axis with a
 small seeded jitter of its vertices, so curve smoothness varies a little; the Y shape's junction vertex
 has no smoothness value (drawn magenta). When the skeletonizer is
 available its output for each cloud is written too (``*_lbc_skeletal.ply``, ``*_lbc_curve.ply``).

@@ -12,19 +12,19 @@
   the whole screen of a laptop with the window filling it, the sample evaluated, an element picked
   and an evaluation running (status bar: stage, progress bar, Cancel). With ``QT_SCALE_FACTOR=1.5``
   (``--laptop`` again) it writes ``window_1366x768_scale1.5.png``.
-- ``window_skeletonized.png``: the skeletonizer's output for the sample cloud (issue 4), evaluated.
-- ``window_hammer_skeletonized.png``: the real hammer scan (../shared/data, when present) skeletonized
+- ``window_skeletonized.png``: the skeletonizer's output for the sample cloud, evaluated.
+- ``window_hammer_skeletonized.png``: the real hammer scan (the shared scans, when present) skeletonized
   and evaluated, coloured by centeredness.
 - ``error_dialog.png``: the dialog a corrupt file gives, over the window that survives it.
-- Issue 25 defects (``--defects`` makes only these; they need the shared hammer): ``window_defects.png``, the
+- Defects (``--defects`` makes only these; they need the shared hammer): ``window_defects.png``, the
   hammer with its cao curve cut to the middle of its handle (no head, no far end: pc-skeletor's truncated
   output), the Defects dock listing the two missing parts, the larger one selected (framed, its cloud points
   pink, highlighted in the pick colour); ``defects_panel.png``, the dock alone; ``window_branch.png``, a
   click on the curve: the branch's length, radius, metric means and flags in the pick panel.
-- Issue 26: ``window_openings.png``, a one-sided scan of a cylinder (its front half) with its true axis: the
+- Openings: ``window_openings.png``, a one-sided scan of a cylinder (its front half) with its true axis: the
   opening's boundary loop drawn, the ``open_surface`` warning and the paper's boundedness near 0 (what
   Evaluate > Viewpoint… then corrects).
-- Issue 11 (``--supports`` makes only these): ``window_support_slab.png`` / ``support_slab_panel.png``
+- Supports (``--supports`` makes only these): ``window_support_slab.png`` / ``support_slab_panel.png``
   (a curve sample's slab, ring and ellipse; ``support_slab_junction_panel.png`` near the junction), ``window_support_knn.png`` (a skeletal point's neighbours
   and centroids), ``support_directions_panel.png`` / ``support_paper_panel.png`` (direction map, paper
   triangles), ``window_filter.png`` (only the elements below beta*), ``window_ab.png`` (skeleton A
@@ -63,7 +63,7 @@ def sample_files(tmp: Path) -> dict[str, str]:
 
 
 def laptop_screenshot() -> int:
-    """Issue 25: the window on a 1366 x 768 screen, filling it as a maximized window would."""
+    """The window on a 1366 x 768 screen, filling it as a maximized window would."""
     from PySide6 import QtCore, QtWidgets
 
     app = QtWidgets.QApplication.instance() or QtWidgets.QApplication(["skelscope-screenshots"])
@@ -208,7 +208,7 @@ def main() -> int:
     window.save_screenshot(str(OUT / "figure_black.png"), scale=2, background="black")
     print("wrote screenshots/figure_black.png")
 
-    # Skeletonize the bare cloud (issue 4) and evaluate its output.
+    # Skeletonize the bare cloud and evaluate its output.
     try:
         import skelcore.skeleton.pipeline  # noqa: F401
     except ImportError:
@@ -261,7 +261,7 @@ def main() -> int:
 
 
 def defects_screenshots(window, settle, save, wait_for_runner, tmp: Path) -> None:
-    """Issue 25's Defects dock on the truncated cao hammer; issue 26's openings on a one-sided cylinder."""
+    """The Defects dock on the truncated cao hammer; the openings on a one-sided cylinder."""
     import numpy as np
 
     from skelcore import shapes
@@ -319,7 +319,7 @@ def defects_screenshots(window, settle, save, wait_for_runner, tmp: Path) -> Non
 
 
 def support_screenshots(window, settle, save) -> None:
-    """Issue 11: each metric's local support on screen, for elements on the Y's upper arm."""
+    """Each metric's local support on screen, for elements on the Y's upper arm."""
     import numpy as np
 
     import skelcore
@@ -381,7 +381,7 @@ def support_screenshots(window, settle, save) -> None:
 
 
 def ab_screenshot(window, settle) -> None:
-    """Issue 11: the bundled skeleton (A) against the skeletonizer's (B) of the same cloud, ``window_ab.png``."""
+    """The bundled skeleton (A) against the skeletonizer's (B) of the same cloud, ``window_ab.png``."""
     from PySide6 import QtCore
 
     try:
@@ -432,7 +432,7 @@ noise = 0.05
 
 
 def ab_run_screenshots(window, settle, save, tmp: Path) -> None:
-    """Issue 11: a ``skelcore compare`` run over the bundled samples (true skeletons, the stored LBC
+    """A ``skelcore compare`` run over the bundled samples (true skeletons, the stored LBC
     output, the built-in skeletonizer), its dialog and two report rows in the A/B view, stored results."""
     samples = ROOT / "resources" / "samples"
     if not (samples / "yshape_lbc_skeletal.ply").is_file():

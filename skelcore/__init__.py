@@ -1,5 +1,5 @@
 """skelcore: the SkelScope metric engine (topological similarity, boundedness, centeredness,
-smoothness of point-cloud skeletons; SPEC.md). Never imports Qt or VTK.
+smoothness of point-cloud skeletons; docs/metrics.md). Never imports Qt or VTK.
 
 ``evaluate``, ``Evaluation``, ``shapes``, ``skeletonize`` and the loaders are imported on first use:
 the viewer reads a cloud and draws its first frame without scipy's KD-trees and the metric modules.

@@ -1,5 +1,5 @@
 """The one place for SkelScope's colours: perceptual colour maps (no matplotlib needed), the NaN colour
-(SPEC 5: magenta) and the fixed colours of the scene.
+(docs/metrics.md 5.5: magenta) and the fixed colours of the scene.
 
 The maps are matplotlib's viridis and plasma (public domain, by Stéfan van der Walt and Nathaniel
 Smith), stored as every 5th entry of their 256-entry tables and linearly interpolated in between;
@@ -30,7 +30,7 @@ __all__ = [
 ]
 
 MAGENTA: tuple[int, int, int] = (255, 0, 255)
-#: Invalid local values (NaN) are drawn in this colour (SPEC 5).
+#: Invalid local values (NaN) are drawn in this colour (docs/metrics.md 5.5).
 NAN_COLOR: tuple[int, int, int] = MAGENTA
 #: The original cloud, drawn as context behind the skeleton.
 CLOUD_GREY: tuple[int, int, int] = (170, 170, 170)
@@ -40,7 +40,7 @@ CURVE_COLOR: tuple[int, int, int] = (214, 39, 40)
 #: The skeleton in report.html's defect picture (skelcore/compare/render_defects.py), under the defects
 #: drawn in DEFECT_COLORS (below, the viewer's too): a neutral grey, darker than the cloud's.
 DEFECT_SKELETON: tuple[int, int, int] = (110, 110, 110)
-#: A ground-truth (reference) curve, drawn as a thin line under the skeleton (issue 23): a grey darker
+#: A ground-truth (reference) curve, drawn as a thin line under the skeleton: a grey darker
 #: than the cloud's, so it reads against the cloud and never as a skeleton colour.
 REFERENCE_COLOR: tuple[int, int, int] = (90, 90, 90)
 #: The colour map of the local metrics, over [0, 1], on screen and in exported files.
@@ -50,7 +50,7 @@ PICK_COLOR: tuple[int, int, int] = (255, 140, 0)
 #: The picked element's support (the viewer's Support dock and 3-D overlay, the same colour for the
 #: same thing in both), chosen apart from the skeleton's and the cloud's colours above, from magenta,
 #: from the pick marker and from the viridis map (dark purple -> teal -> yellow): browns, black and a
-#: light sky blue (issue 25: the slab's red was the curve's red).
+#: light sky blue (a red slab would be mistaken for the red curve).
 SUPPORT_COLORS: dict[str, tuple[int, int, int]] = {
     "slab": (214, 160, 90),  # the slab's cloud points; a skeletal point's corresponding cloud points
     "ring": (120, 66, 18),  # the ring kept; a skeletal point's or vertex's neighbours
@@ -60,7 +60,7 @@ SUPPORT_COLORS: dict[str, tuple[int, int, int]] = {
     "links": (90, 90, 90),  # skeletal point -> its cloud point
 }
 
-#: The viewer's defects (issue 25) and scan findings (issue 26), each drawn in a style of its own (halo,
+#: The viewer's defects and scan findings, each drawn in a style of its own (halo,
 #: dashes, loop, large points) in a colour on neither colour map (at least 80 RGB units from every viridis
 #: entry), not magenta (NaN), not the pick marker's and apart from the skeleton's and the supports';
 #: the selected defect is redrawn in PICK_COLOR.
@@ -150,7 +150,7 @@ def map_to_rgb(
 
     The range defaults to the finite values' min and max (pass ``vmin=0, vmax=1`` for the metrics,
     whose values live in [0, 1]); values outside the range are clamped, +-inf go to the ends, NaN is
-    magenta (SPEC 5). A degenerate range (vmin == vmax) maps every finite value to the middle colour.
+    magenta (docs/metrics.md 5.5). A degenerate range (vmin == vmax) maps every finite value to the middle colour.
 
     >>> map_to_rgb(np.array([0.0, np.nan, 1.0]), 0, 1).tolist()
     [[68, 1, 84], [255, 0, 255], [253, 231, 37]]

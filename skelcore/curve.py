@@ -1,4 +1,4 @@
-"""The curve skeleton G_s = (V, E) as loaded and cleaned by SPEC 0."""
+"""The curve skeleton G_s = (V, E) as loaded and cleaned by docs/metrics.md 0."""
 
 from __future__ import annotations
 
@@ -14,7 +14,7 @@ from .errors import SkelInputError
 class CurveSkeleton:
     """Vertices (V x 3, float) and undirected edges (E x 2, int, each row i < j, unique, no loops).
 
-    Build with :func:`CurveSkeleton.from_raw`, which applies SPEC 0's cleaning rules, or
+    Build with :func:`CurveSkeleton.from_raw`, which applies the cleaning rules of docs/metrics.md 0, or
     :func:`CurveSkeleton.coerce` from any supported object (a pair, a LineSet, a networkx graph, ...).
     ``vertex_map[i]`` is the row of the raw vertex array that cleaned vertex i came from.
     ``radius[i]`` is vertex i's radius in the vertices' units (SWC, TreeQSM, PLY ``radius``), or None.

@@ -1,7 +1,7 @@
 """The Evaluation: every local value (NaN = invalid), both barcodes, overall scores with counts.
 
 Overall scores are derived from the local arrays on demand, so the viewer can change the
-thresholds beta* and c* without recomputing anything (SPEC 2-3: "bounded" is beta > beta*, and an
+thresholds beta* and c* without recomputing anything (docs/metrics.md 2-3: "bounded" is beta > beta*, and an
 unbounded element's centeredness is 0).
 """
 
@@ -31,7 +31,7 @@ __all__ = ["TopologyResult", "SkeletalLocal", "CurveLocal", "Evaluation", "apply
 
 
 def apply_unbounded_rule(c_raw: np.ndarray, beta: np.ndarray, beta_star: float) -> np.ndarray:
-    """SPEC 3: an element that is not bounded (beta <= beta*) gets c = 0, even where c was NaN."""
+    """docs/metrics.md 3: an element that is not bounded (beta <= beta*) gets c = 0, even where c was NaN."""
     c = np.array(c_raw, dtype=float, copy=True)
     c[~(np.asarray(beta) > beta_star)] = 0.0
     return c
@@ -75,7 +75,7 @@ class CurveLocal:
     """Local values per curve sample (boundedness, centeredness) and per vertex (smoothness).
 
     Sample i lies on edge ``sample_edge[i]`` at fraction ``sample_t[i]`` from its lower-index
-    vertex (SPEC 3 sampling). ``curve`` and ``samples`` are in the user's units.
+    vertex (the sampling of docs/metrics.md 3.2). ``curve`` and ``samples`` are in the user's units.
     """
 
     curve: CurveSkeleton
@@ -126,7 +126,7 @@ class Evaluation:
     ground_truth: GroundTruthComparison | None = None
     #: what could not be computed and why, e.g. {"topology": "..."}
     not_computed: dict[str, str] = field(default_factory=dict)
-    #: the defects found without a reference (issue 22; skelcore.diagnostics.record.Diagnostics)
+    #: the defects found without a reference (skelcore.diagnostics.record.Diagnostics)
     diagnostics: Any = None
     #: real scans (docs/metrics.md 6): viewpoints, stray points, openings; None when no scan option was
     #: given and no scan warning fired
@@ -134,7 +134,7 @@ class Evaluation:
 
     # ---- overall scores -------------------------------------------------------------------
     def summary(self, beta_star: float | None = None, c_star: float | None = None) -> dict[str, Any]:
-        """Overall scores and counts; thresholds default to the params' (SPEC 2-4)."""
+        """Overall scores and counts; thresholds default to the params' (docs/metrics.md 2-4)."""
         b_star = self.params.beta_star if beta_star is None else float(beta_star)
         c_star_ = self.params.c_star if c_star is None else float(c_star)
         out: dict[str, Any] = {
@@ -179,7 +179,7 @@ class Evaluation:
 
     def scores(self, beta_star: float | None = None, c_star: float | None = None) -> "Scores":
         """The overall scores as one flat record (:class:`skelcore.scores.Scores`), counted with
-        beta*, c* (default: the params' thresholds, SPEC 2-3); the values of :meth:`summary`."""
+        beta*, c* (default: the params' thresholds, docs/metrics.md 2-3); the values of :meth:`summary`."""
         from .scores import Scores
 
         return Scores.from_evaluation(self, beta_star, c_star)
@@ -201,7 +201,7 @@ class Evaluation:
 
     # ---- serialisation: skelcore.io.evaluation_files, imported when called (the record imports no io) ----
     def to_json_dict(self, version: str | None = None) -> dict[str, Any]:
-        """The ``--json`` document of the CLI (issue 2); null where an input was not given."""
+        """The ``--json`` document of the CLI; null where an input was not given."""
         from .io import evaluation_files
 
         return evaluation_files.to_json_dict(self, version)
@@ -265,7 +265,7 @@ class Evaluation:
         return show(self, metric, **options)
 
     def show_barcodes(self, **options):
-        """The H0 barcodes of the cloud and the skeletal set (SPEC 1), where :meth:`show` draws."""
+        """The H0 barcodes of the cloud and the skeletal set (docs/metrics.md 1), where :meth:`show` draws."""
         from .display.show import show_barcodes
 
         return show_barcodes(self, **options)

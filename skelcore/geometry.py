@@ -1,6 +1,6 @@
 """Shared small geometry: the normalization transform, kNN helpers, MATLAB-compatible rounding.
 
-Every metric works in normalized space (SPEC 0); everything written out goes back to user units.
+Every metric works in normalized space (docs/metrics.md 0); everything written out goes back to user units.
 """
 
 from __future__ import annotations

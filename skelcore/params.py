@@ -1,4 +1,4 @@
-"""Every constant of SPEC.md as one validated, frozen dataclass (the single source of truth)."""
+"""Every constant of docs/metrics.md as one validated, frozen dataclass (the single source of truth)."""
 
 from __future__ import annotations
 
@@ -9,19 +9,19 @@ from typing import Any, Literal
 
 @dataclass(frozen=True)
 class Params:
-    """Parameters of the evaluation; defaults reproduce the reference tool (SPEC.md).
+    """Parameters of the evaluation; defaults reproduce the reference tool (docs/metrics.md).
 
     Attributes
     ----------
-    normalize_by : "longest_side" (reference tool) or "diagonal" (paper's text), SPEC 0.
-    normalized_size : the chosen bounding-box measure becomes this length (1.6), SPEC 0.
+    normalize_by : "longest_side" (reference tool) or "diagonal" (paper's text), docs/metrics.md 0.
+    normalized_size : the chosen bounding-box measure becomes this length (1.6), docs/metrics.md 0.
     beta_star, c_star : thresholds; bounded means beta > beta_star, centred c > c_star (strict).
-    eps_quantile : quantile of the cloud's nearest-neighbour distances giving eps*, SPEC 1
+    eps_quantile : quantile of the cloud's nearest-neighbour distances giving eps*, docs/metrics.md 1
         (0.99 reference tool, 1.0 = the paper's max).
     min_bar_fraction, fallback_fraction : K < min_bar_fraction * N_o triggers
-        K = N_o - round(fallback_fraction * N_o) + 1 (SPEC 1).
-    boundedness_method : "rays" (default, rotation invariant) or "paper" (reference tool), SPEC 2.
-    rays_radius_factor : h = factor x median nearest-neighbour spacing of the cloud, SPEC 2.
+        K = N_o - round(fallback_fraction * N_o) + 1 (docs/metrics.md 1).
+    boundedness_method : "rays" (default, rotation invariant) or "paper" (reference tool), docs/metrics.md 2.
+    rays_radius_factor : h = factor x median nearest-neighbour spacing of the cloud, docs/metrics.md 2.
     rays_rows : latitude rows of the equal-area raster used by the rays estimator (2 x as many
         longitude bins); 48 keeps it within 0.004 of the exact union area (tests/engine/test_boundedness.py).
     rays_exact_pairs : up to this many (query, cloud point) pairs the rays estimator uses every pair;
@@ -32,12 +32,12 @@ class Params:
         1 / rays_near_angle >= 10 x rays_cluster_cell (5 x erred up to 0.08).
     paper_plane_threshold, paper_area_threshold : triangle-drop rule of the paper estimator.
     k_center : neighbours for skeletal-point centeredness; None = round(0.01 N_s) with the
-        reference tool's clamps (<10 -> 10, >50 -> 30), SPEC 3.
-    curve_samples : total samples S along the curve skeleton, SPEC 3.
+        reference tool's clamps (<10 -> 10, >50 -> 30), docs/metrics.md 3.
+    curve_samples : total samples S along the curve skeleton, docs/metrics.md 3.
     slab_factor : slab width alpha = factor x bounding-box diagonal of the normalized cloud.
     ring_growth : ring isolation ratio (keep while next distance < ratio x last kept).
     collinear_cos : ``|cos|`` at or above which a degree-2 vertex's neighbours count as collinear.
-    tangent_k, smooth_k : neighbours for PCA tangents and for the tangent comparison, SPEC 4.
+    tangent_k, smooth_k : neighbours for PCA tangents and for the tangent comparison, docs/metrics.md 4.
     coverage_slack : s of SkelScope's coverage (docs/metrics.md "Coverage"): a cloud point is covered
         when it lies within (1 + s) r(x) + tau of some skeleton element x of inscribed radius r(x).
     coverage_tau_factor : tau = factor x the cloud's median nearest-neighbour spacing (coverage and
@@ -360,7 +360,7 @@ def _convert(name: str, raw: str, default: Any) -> Any:
 
 
 def k_center_for(n_skeletal: int, params: Params) -> int:
-    """SPEC 3: k = round(0.01 N_s), <10 -> 10, >50 -> 30 (reference-tool quirk), unless set."""
+    """docs/metrics.md 3: k = round(0.01 N_s), <10 -> 10, >50 -> 30 (reference-tool quirk), unless set."""
     if params.k_center is not None:
         return int(params.k_center)
     from .geometry import matlab_round

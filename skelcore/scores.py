@@ -2,9 +2,9 @@
 formatter every table uses (CLI, summary panel, study, compare jobs, results.csv, leaderboard).
 
 A :class:`Scores` is made from an Evaluation (:meth:`Scores.from_evaluation`, thresholds beta*, c*
-from its ``Params`` unless given, SPEC 2-3) or read back from a stored ``evaluate --json`` document
+from its ``Params`` unless given, docs/metrics.md 2-3) or read back from a stored ``evaluate --json`` document
 (:meth:`Scores.from_json_dict`); both give equal records. ``None`` means not computed (no such input,
-no correspondence), NaN computed without a valid element (SPEC 5). Each field names where the
+no correspondence), NaN computed without a valid element (docs/metrics.md 5.5). Each field names where the
 document holds it; :data:`SCORE_COLUMNS` says how a score is labelled, rounded, ranked and grouped
 (paper, SkelScope's own, reference comparison, ground truth, diagnostics, run facts). Adding a score is one field and one
 column here (plus its value in the Evaluation and its JSON document).
@@ -19,9 +19,9 @@ from typing import Any, Callable, Iterable
 __all__ = ["Scores", "ScoreColumn", "SCORE_COLUMNS", "COLUMN", "KINDS", "format_score", "column_keys",
            "paired_columns", "paper_table"]
 
-#: the two skeleton representations, in the paper's column order (SPEC 0)
+#: the two skeleton representations, in the paper's column order (docs/metrics.md 0)
 KINDS = ("skeletal", "curve")
-#: the paper's local metrics (SPEC 2-4), in the order every table, menu and colour choice lists them
+#: the paper's local metrics (docs/metrics.md 2-4), in the order every table, menu and colour choice lists them
 LOCAL_METRICS = ("boundedness", "centeredness", "smoothness")
 
 
@@ -92,7 +92,7 @@ _GAP = "gap {coverage_KIND_mean_gap} / {coverage_KIND_max_gap}"
 
 #: Every column, in the order of :meth:`Scores.row` (and of results.csv and the leaderboard).
 SCORE_COLUMNS: tuple[ScoreColumn, ...] = (
-    # the paper's (SPEC 1-4)
+    # the paper's (docs/metrics.md 1-4)
     ScoreColumn("d_B", "d_B", "d_B", r"$d_B$", "normalized units", "lower", 4, "paper", "topology", compared=True),
     ScoreColumn("d_Wp", "d_Wp", "d_Wp", r"$d_{W_p}$", "normalized units", "lower", 4, "paper", "topology",
                 compared=True),
@@ -101,7 +101,7 @@ SCORE_COLUMNS: tuple[ScoreColumn, ...] = (
     *_per_kind("boundedness", (r"$\mathcal{B}_{P_s}$", r"$\mathcal{B}_{G_s}$"), "fraction", short="bounded"),
     *_per_kind("centeredness", (r"$\mathcal{C}_s(P_s)$", r"$\mathcal{C}_s(G_s)$"), "fraction", short="centred"),
     *_per_kind("smoothness", (r"$S(P_s)$", r"$\mathfrak{S}_{G_s}$"), "mean in [0, 1]", short="smooth"),
-    # the ground-truth metrics against the reference (issue 23, docs/metrics.md 5.3.1): the cloud's units
+    # the ground-truth metrics against the reference (docs/metrics.md 5.3.1): the cloud's units
     # and local radii of the reference; the community's metrics, side by side with the paper's
     ScoreColumn("gt_chamfer_radii", "chamfer (radii)", "CD r", r"CD$_r$", "local radii", "lower", 3, "ground truth",
                 compared=True),
@@ -123,14 +123,14 @@ SCORE_COLUMNS: tuple[ScoreColumn, ...] = (
                 compared=True),
     ScoreColumn("gt_splits", "splits", "split", "splits", "count", "lower", 1, "ground truth", compared=True),
     ScoreColumn("gt_merges", "merges", "merge", "merges", "count", "lower", 1, "ground truth", compared=True),
-    # SkelScope's own (SPEC 8, docs/metrics.md 5)
+    # SkelScope's own (docs/metrics.md 5.2)
     *_per_kind("coverage", (r"cov.\ $P_s$", r"cov.\ $G_s$"), "fraction of the cloud", group="skelscope", count=False,
                detail=_GAP, short="cover"),
     *(ScoreColumn(f"coverage_{kind}_{g}_gap", f"{g} coverage gap ({kind})", f"{g} gap {kind[0]}.",
                   rf"{g} gap ${'P_s' if kind == 'skeletal' else 'G_s'}$", "normalized units", "lower", 4, "skelscope",
                   "coverage", kind) for kind in KINDS for g in ("mean", "max")),
     ScoreColumn("coverage_tau", "coverage tau", "tau", r"$\tau$", "normalized units", None, 4, "skelscope", "coverage"),
-    # the comparison with a reference curve (SPEC 9)
+    # the comparison with a reference curve (docs/metrics.md 5.3)
     ScoreColumn("reference_chamfer", "chamfer", "chamfer", "chamfer", "normalized units", "lower", 4, "reference"),
     ScoreColumn("reference_hausdorff", "Hausdorff", "Hausdorff", "Hausdorff", "normalized units", "lower", 4,
                 "reference"),
@@ -138,7 +138,7 @@ SCORE_COLUMNS: tuple[ScoreColumn, ...] = (
     ScoreColumn("reference_recall", "recall", "R", "recall", "fraction", "higher", 3, "reference"),
     ScoreColumn("reference_f1", "F1", "F1", "$F_1$", "fraction", "higher", 3, "reference"),
     ScoreColumn("reference_tau", "reference tau", "tau", r"$\tau$", "normalized units", None, 4, "reference"),
-    # the diagnostics (issue 22, docs/diagnostics.md)
+    # the diagnostics (docs/diagnostics.md)
     *(ScoreColumn(f"completeness_{kind}", f"completeness ({kind})", f"compl. {kind[0]}", rf"compl.\ ${'P_s' if kind == 'skeletal' else 'G_s'}$",
                   "fraction of the cloud", "higher", 3, "diagnostics", "completeness", kind, compared=True)
       for kind in KINDS),
@@ -202,12 +202,12 @@ class Scores:
     Equality treats NaN as equal to NaN (a record read back equals the one written).
     """
 
-    # SPEC 1: topological similarity of the skeletal point set
+    # docs/metrics.md 1: topological similarity of the skeletal point set
     d_B: float | None = _at("topology", "bottleneck")
     d_Wp: float | None = _at("topology", "wasserstein")
     eps_star: float | None = _at("topology", "eps_star")
     n_bars: int | None = _at("topology", "n_bars", read="int")
-    # SPEC 2-4: fraction bounded, fraction centred, mean smoothness; with the elements counted
+    # docs/metrics.md 2-4: fraction bounded, fraction centred, mean smoothness; with the elements counted
     boundedness_skeletal: float | None = _pk("boundedness", "skeletal")
     boundedness_curve: float | None = _pk("boundedness", "curve")
     centeredness_skeletal: float | None = _pk("centeredness", "skeletal")
@@ -220,7 +220,7 @@ class Scores:
     n_centeredness_curve: int = _n("centeredness", "curve")
     n_smoothness_skeletal: int = _n("smoothness", "skeletal")
     n_smoothness_curve: int = _n("smoothness", "curve")
-    # SPEC 8: coverage (SkelScope's own)
+    # docs/metrics.md 5.2: coverage (SkelScope's own)
     coverage_skeletal: float | None = _at("coverage", "skeletal", "fraction")
     coverage_curve: float | None = _at("coverage", "curve", "fraction")
     coverage_skeletal_mean_gap: float | None = _at("coverage", "skeletal", "mean_gap")
@@ -229,7 +229,7 @@ class Scores:
     coverage_curve_max_gap: float | None = _at("coverage", "curve", "max_gap")
     coverage_slack: float | None = _at("coverage", "slack")
     coverage_tau: float | None = _at("coverage", "tau")
-    # SPEC 9: the comparison with a reference curve; graph counts are (ours, reference)
+    # docs/metrics.md 5.3: the comparison with a reference curve; graph counts are (ours, reference)
     reference_chamfer: float | None = _at("reference", "chamfer")
     reference_hausdorff: float | None = _at("reference", "hausdorff")
     reference_precision: float | None = _at("reference", "precision")
@@ -240,7 +240,7 @@ class Scores:
     reference_endpoints: tuple[int, int] | None = _at("reference", "endpoints", read="pair")
     reference_components: tuple[int, int] | None = _at("reference", "components", read="pair")
     reference_cycles: tuple[int, int] | None = _at("reference", "cycles", read="pair")
-    # issue 23: the ground-truth metrics (docs/metrics.md 5.3.1); counts as (ours, reference[, matched])
+    # the ground-truth metrics (docs/metrics.md 5.3.1); counts as (ours, reference[, matched])
     gt_chamfer_radii: float | None = _at("ground_truth", "chamfer_radii")
     gt_chamfer: float | None = _at("ground_truth", "chamfer")
     gt_precision: float | None = _at("ground_truth", "precision")
@@ -258,7 +258,7 @@ class Scores:
     gt_endpoints: tuple[int, ...] | None = _at("ground_truth", "endpoints", read="tuple")
     gt_cycles: tuple[int, ...] | None = _at("ground_truth", "cycles", read="tuple")
     gt_radius_source: str | None = _at("ground_truth", "radius_source", read="str")
-    # issue 22: the diagnostics (docs/diagnostics.md): share of the cloud explained, defects found
+    # the diagnostics (docs/diagnostics.md): share of the cloud explained, defects found
     completeness_skeletal: float | None = _at("diagnostics", "completeness", "skeletal", needs="skeletal")
     completeness_curve: float | None = _at("diagnostics", "completeness", "curve", needs="curve")
     spurious_branches: int | None = _at("diagnostics", "spurious_branches", "spurious", read="int")
@@ -276,7 +276,7 @@ class Scores:
     @classmethod
     def from_evaluation(cls, ev: Any, beta_star: float | None = None, c_star: float | None = None) -> "Scores":
         """The scores of a :class:`skelcore.evaluation.Evaluation`, counted with beta*, c* (default:
-        its ``params``' thresholds, SPEC 2-3), as its ``summary`` gives them."""
+        its ``params``' thresholds, docs/metrics.md 2-3), as its ``summary`` gives them."""
         b_star = ev.params.beta_star if beta_star is None else float(beta_star)
         c_star_ = ev.params.c_star if c_star is None else float(c_star)
         doc = dict(ev.summary(b_star, c_star_))
@@ -378,7 +378,7 @@ class Scores:
 
 def paper_table(scores: Scores | None, *, missing: str = "-", sep: str = " ", count: str = "n={}",
                 every_row: bool = True) -> list[tuple[str, str, str]]:
-    """The paper's results table (SPEC 5): (row, skeletal points cell, curve skeleton cell) for
+    """The paper's results table (docs/metrics.md 5.5): (row, skeletal points cell, curve skeleton cell) for
     d_B / d_Wp, each per-representation score with its count, then SkelScope's rows marked "*"
     (without ``every_row``, only those with a value)."""
     s = scores if scores is not None else Scores()

@@ -1,6 +1,6 @@
 """Analytic test shapes with known skeletons: dense uniform surface samples.
 
-Used by the tests (SPEC 6), the benchmarks and ``scripts/make_samples.py``. Each function returns a
+Used by the tests (docs/metrics.md 5.6), the benchmarks and ``scripts/make_samples.py``. Each function returns a
 ``Shape`` with the cloud, the skeletal point set in pointwise correspondence (each surface point
 projected onto the true medial curve) and the true curve skeleton as a polyline graph.
 """
@@ -15,7 +15,7 @@ import numpy as np
 @dataclass
 class Shape:
     """A generated shape and its exact skeletons: ``cloud`` (N, 3) surface samples, ``skeletal`` (N, 3)
-    each cloud point projected onto the medial curve (pointwise correspondence, SPEC 0), and the true
+    each cloud point projected onto the medial curve (pointwise correspondence, docs/metrics.md 0), and the true
     curve skeleton as ``curve_vertices`` (V, 3) and ``curve_edges`` (E, 2)."""
 
     cloud: np.ndarray
@@ -146,7 +146,7 @@ def y_shape(
     return Shape(cloud, skel, np.array(verts), np.array(edges))
 
 
-# --- unions of tubes: shapes whose curve skeleton is known exactly (issue 22's validation) ---------
+# --- unions of tubes: shapes whose curve skeleton is known exactly (the diagnostics' validation) ---
 #
 # A shape is a set of branches, each a polyline between two nodes with a constant tube radius; its
 # solid is the union of the tubes (points within the radius of the branch) and of a ball at every

@@ -3,8 +3,8 @@
 Other tools write skeletons in their own units or origin (voxel indices, another scale, a shifted
 frame). ``skelcore evaluate --skeleton-scale S --skeleton-offset X Y Z`` and a compare manifest's
 ``files`` method (``scale = S``, ``offset = [X, Y, Z]``) map them back with this one function, so
-both apply the same map (docs/skeletonizers.md, docs/compare.md; issues 8 and 22). The cloud is
-never mapped: the metrics (SPEC 1-4) are computed in the cloud's frame.
+both apply the same map (docs/skeletonizers.md, docs/compare.md). The cloud is
+never mapped: the metrics (docs/metrics.md 1-4) are computed in the cloud's frame.
 """
 
 from __future__ import annotations

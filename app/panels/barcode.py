@@ -1,8 +1,8 @@
-"""The two H0 barcodes (SPEC 1): the K compared bars of the cloud and of the skeletal point set,
+"""The two H0 barcodes (docs/metrics.md 1): the K compared bars of the cloud and of the skeletal point set,
 eps* marked, d_B and d_Wp in the title. Drawn on the panel's own matplotlib Figure (no pyplot, no
 global rc), so the viewer never changes anyone else's plots.
 
-The persistence axis keeps its labels inside the panel at any width (issue 25: "0.0200" was cut at
+The persistence axis keeps its labels inside the panel at any width (a label such as "0.0200" is not cut at
 the right edge): the margins are set in pixels on every resize, the labels are the shortest form of
 each value ("0.02", not "0.0200") and there are only as many as the width holds."""
 

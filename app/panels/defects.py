@@ -1,4 +1,4 @@
-"""The Defects panel (issue 25): one row per defect of the shown evaluation, with its size in the
+"""The Defects panel: one row per defect of the shown evaluation, with its size in the
 engine's words (:func:`skelscope.scene.defects.defect_rows`), the sound / not-sound line, and the switch that
 shows or hides the defects in the 3-D view. Selecting a row emits ``selected`` with its index."""
 

@@ -1,5 +1,5 @@
 """Histogram of the selected local metric (skeletal points and curve elements) with the threshold
-line an overall score counts against (beta* for boundedness, c* for centeredness; SPEC 2-3). Results
+line an overall score counts against (beta* for boundedness, c* for centeredness; docs/metrics.md 2-3). Results
 out of date (a setting changed) are drawn grey, with the reason."""
 
 from __future__ import annotations

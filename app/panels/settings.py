@@ -1,5 +1,5 @@
-"""Evaluation parameters (a subset of skelcore's Params, SPEC 0-4) the user may change before a run,
-the correspondence of a skeletal set with another point count than the cloud (SPEC 7), and the real-scan
+"""Evaluation parameters (a subset of skelcore's Params, docs/metrics.md 0-4) the user may change before a run,
+the correspondence of a skeletal set with another point count than the cloud (docs/metrics.md 5.1), and the real-scan
 options of ``skelcore.evaluate`` (docs/metrics.md 6.2 and 6.4: ``cap_openings``, ``remove_outliers``),
 which the ``open_surface`` and ``outliers`` warnings name."""
 
@@ -24,26 +24,26 @@ class SettingsPanel(QtWidgets.QWidget):
         d = Params()
         self.boundedness_method = QtWidgets.QComboBox(self)
         self.boundedness_method.addItems(["rays", "paper"])
-        self.boundedness_method.setToolTip("SPEC 2: 'rays' (rotation invariant) or 'paper' (the reference tool)")
+        self.boundedness_method.setToolTip("docs/metrics.md 2: 'rays' (rotation invariant) or 'paper' (the reference tool)")
         self.normalize_by = QtWidgets.QComboBox(self)
         self.normalize_by.addItems(["longest_side", "diagonal"])
-        self.normalize_by.setToolTip("SPEC 0: the bounding-box measure scaled to 1.6")
-        self.k_center = self._int(0, 10000, 0, "neighbours for skeletal centeredness; 0 = auto (SPEC 3)")
+        self.normalize_by.setToolTip("docs/metrics.md 0: the bounding-box measure scaled to 1.6")
+        self.k_center = self._int(0, 10000, 0, "neighbours for skeletal centeredness; 0 = auto (docs/metrics.md 3)")
         self.k_center.setSpecialValueText("auto")
-        self.tangent_k = self._int(1, 1000, d.tangent_k, "neighbours for PCA tangents (SPEC 4)")
-        self.smooth_k = self._int(1, 1000, d.smooth_k, "neighbours compared for smoothness (SPEC 4)")
-        self.curve_samples = self._int(1, 1_000_000, d.curve_samples, "samples S along the curve (SPEC 3)")
+        self.tangent_k = self._int(1, 1000, d.tangent_k, "neighbours for PCA tangents (docs/metrics.md 4)")
+        self.smooth_k = self._int(1, 1000, d.smooth_k, "neighbours compared for smoothness (docs/metrics.md 4)")
+        self.curve_samples = self._int(1, 1_000_000, d.curve_samples, "samples S along the curve (docs/metrics.md 3)")
         self.eps_quantile = QtWidgets.QDoubleSpinBox(self)
         self.eps_quantile.setRange(0.01, 1.0)
         self.eps_quantile.setDecimals(3)
         self.eps_quantile.setSingleStep(0.01)
         self.eps_quantile.setValue(d.eps_quantile)
-        self.eps_quantile.setToolTip("SPEC 1: quantile of nearest-neighbour distances giving eps*")
+        self.eps_quantile.setToolTip("docs/metrics.md 1: quantile of nearest-neighbour distances giving eps*")
         self.correspondence_choice = QtWidgets.QComboBox(self)
         for text, key in CORRESPONDENCE_CHOICES:
             self.correspondence_choice.addItem(text, key)
         self.correspondence_choice.setToolTip(
-            "SPEC 7: a skeletal set with another point count than the cloud has no row-by-row "
+            "docs/metrics.md 5.1: a skeletal set with another point count than the cloud has no row-by-row "
             "correspondence. 'reverse' maps every cloud point to its nearest skeletal point (with only "
             "a curve: its nearest point on the curve) and scores topology and centeredness on that set; "
             "'as loaded' uses the set's index file (File > Open skeletal index…) or, without one, leaves "

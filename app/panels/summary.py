@@ -1,8 +1,8 @@
 """The summary table in the paper's layout (rows d_B/d_Wp, boundedness, centeredness, smoothness;
-columns skeletal points / curve skeleton), each score with the number of elements it counted (SPEC 5),
-SkelScope's coverage row (SPEC 8, marked as not the paper's), the editable thresholds beta*, c*
-(SPEC 2-3) that re-score without recomputing, and below: the correspondence used (SPEC 7), the trust
-warnings, the reference comparison (SPEC 9), and a switch colouring the cloud by its coverage gap."""
+columns skeletal points / curve skeleton), each score with the number of elements it counted (docs/metrics.md 5.5),
+SkelScope's coverage row (docs/metrics.md 5.2, marked as not the paper's), the editable thresholds beta*, c*
+(docs/metrics.md 2-3) that re-score without recomputing, and below: the correspondence used (docs/metrics.md 5.1), the trust
+warnings, the reference comparison (docs/metrics.md 5.3), and a switch colouring the cloud by its coverage gap."""
 
 from __future__ import annotations
 
@@ -24,7 +24,7 @@ ROWS = tuple(row for row, _s, _c in paper_table(None, **_STYLE))
 def summary_cells(summary: Scores | dict[str, Any] | None, evaluation: Any = None) -> list[list[str]]:
     """The table's text, row by row (Qt-free so it can be tested and reused), from a :class:`Scores`
     or a ``summary()`` dict. Under reverse projection the skeletal centeredness counts cloud rows (the
-    pointwise set skel[rows] x cloud, SPEC 7), the other scores skeletal points: its cell says both."""
+    pointwise set skel[rows] x cloud, docs/metrics.md 5.1), the other scores skeletal points: its cell says both."""
     if summary is not None and not isinstance(summary, Scores):
         summary = Scores.from_json_dict(summary)
     cells = [[a, b] for _row, a, b in paper_table(summary, **_STYLE)]
@@ -40,7 +40,7 @@ def summary_cells(summary: Scores | dict[str, Any] | None, evaluation: Any = Non
 
 def window_warning(w: Any) -> str:
     """A trust warning in the window's terms: its finding and the menu or setting that remedies it
-    (the engine's message names the command line's flags, issue 25)."""
+    (the engine's message names the command line's flags)."""
     finding = getattr(w, "finding", "") or w.message
     if w.code == "no_correspondence":
         return (f"{finding}: choose Settings > correspondence > reverse projection, or give its index with "
@@ -142,8 +142,8 @@ class SummaryPanel(QtWidgets.QWidget):
         self.table.setVerticalScrollBarPolicy(QtCore.Qt.ScrollBarPolicy.ScrollBarAlwaysOff)
         self.table.setSizeAdjustPolicy(QtWidgets.QAbstractScrollArea.SizeAdjustPolicy.AdjustToContents)
         defaults = Params()
-        self.beta_star = self._spin("bounded means beta > beta* (SPEC 2)", defaults.beta_star)
-        self.c_star = self._spin("centred means c > c* (SPEC 3)", defaults.c_star)
+        self.beta_star = self._spin("bounded means beta > beta* (docs/metrics.md 2)", defaults.beta_star)
+        self.c_star = self._spin("centred means c > c* (docs/metrics.md 3)", defaults.c_star)
         self.details = QtWidgets.QLabel(NO_RESULT)
         self.details.setWordWrap(True)
         self.details.setTextInteractionFlags(QtCore.Qt.TextInteractionFlag.TextSelectableByMouse)

@@ -1,12 +1,12 @@
-"""The picked element's local support as a 2-D plot beside the pick panel (issue 11).
+"""The picked element's local support as a 2-D plot beside the pick panel.
 
 A curve sample's centeredness: its slab's cloud points on the cross-section plane, the ring kept, the
 fitted ellipse, its centre and the sample (the paper's figure of the two cutting planes; Eq. 11,
-SPEC 3). Boundedness: the covered directions on an equal-area (longitude, z) map with beta (Eq. 5-6;
+docs/metrics.md 3). Boundedness: the covered directions on an equal-area (longitude, z) map with beta (Eq. 5-6;
 for the ``paper`` estimator its triangles in the same chart, counted ones filled) and, beside it, on a
 small 3-D sphere. A skeletal point's
 centeredness: its neighbours and the two centroids of Eq. 10, seen along the line m_s -> m_o.
-Smoothness (issue 25): a skeletal point's tangent and its neighbours' tangents with each one's score
+Smoothness: a skeletal point's tangent and its neighbours' tangents with each one's score
 |1 - 2 theta / pi| (Eq. 13-14), the one setting the value marked; a curve vertex's two edges and
 their angle (Eq. 15). Lengths are in the user's units. Colours are the 3-D overlay's
 (:data:`skelcore.colors.SUPPORT_COLORS`); legends sit beside the plot, never on its data.
@@ -75,7 +75,7 @@ class SupportPanel(PlotPanel):
 
     @staticmethod
     def _legend(ax: Any) -> None:
-        """The legend beside the axes (issue 25: over the slab it hid the ring's points)."""
+        """The legend beside the axes (not over the slab, where it would hide the ring's points)."""
         ax.legend(fontsize=6, frameon=False, loc="upper left", bbox_to_anchor=(1.03, 1.0), borderaxespad=0.0,
                   markerscale=0.8)
 

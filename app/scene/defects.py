@@ -1,4 +1,4 @@
-"""An Evaluation's defects as the viewer lists and draws them (issue 25 "Defects on screen"; issue 26's
+"""An Evaluation's defects as the viewer lists and draws them (with a scan's
 openings and stray points), without Qt.
 
 :func:`defect_rows` turns ``Evaluation.diagnostics`` (skelcore/diagnostics/record.py), its warnings and
@@ -7,7 +7,7 @@ spurious and missing cycles, branches outside the shape, ``collapse``, ``frame``
 row per opening) and ``outliers``, each with its size in the engine's words and the geometry that
 frames and highlights it. :func:`branch_details` is a clicked branch: length, local radius, the metric
 means along it and its flags. Positions are in the user's units (the layers'); the engine's lengths are
-normalized (SPEC 0) and are turned back with ``Evaluation.normalization``.
+normalized (docs/metrics.md 0) and are turned back with ``Evaluation.normalization``.
 """
 
 from __future__ import annotations
@@ -355,7 +355,7 @@ def sound_line(ev: Any) -> str:
 def branch_details(ev: Any, branch: int, beta_star: float | None = None) -> dict[str, Any]:
     """A branch of the curve as the info panel shows it: its length (user units), local radius
     (median, min, max), the means of each local metric along it (samples for boundedness and
-    centeredness, SPEC 3; vertices for smoothness, SPEC 4), its ends' degrees, kind and flags."""
+    centeredness, docs/metrics.md 3; vertices for smoothness, docs/metrics.md 4), its ends' degrees, kind and flags."""
     branches = (_summary(ev).get("branches") or {}).get("branches") or []
     if not 0 <= branch < len(branches):
         raise ValueError(f"no branch {branch} (the curve has {len(branches)})")

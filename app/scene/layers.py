@@ -2,7 +2,7 @@
 
 A layer (the cloud, the skeletal point set, the curve skeleton) owns its local metrics as named
 scalar quantities, after Polyscope's structures/quantities; NaN stays NaN (the view draws it
-magenta, SPEC 5). Also the names every other module agrees on: the metrics, the layer order and
+magenta, docs/metrics.md 5.5). Also the names every other module agrees on: the metrics, the layer order and
 where each metric lives on the curve.
 """
 
@@ -18,11 +18,11 @@ from skelcore.scores import LOCAL_METRICS
 __all__ = ["METRICS", "LAYER_ORDER", "CURVE_LOCATION", "ScalarQuantity", "Layer"]
 
 METRICS = LOCAL_METRICS
-"""Local metrics the viewer can colour by (SPEC 2-4)."""
+"""Local metrics the viewer can colour by (docs/metrics.md 2-4)."""
 
 LAYER_ORDER = ("cloud", "skeletal", "curve")
 
-# Where each metric lives on the curve skeleton: per sample (SPEC 2-3) or per vertex (SPEC 4).
+# Where each metric lives on the curve skeleton: per sample (docs/metrics.md 2-3) or per vertex (docs/metrics.md 4).
 CURVE_LOCATION = {"boundedness": "samples", "centeredness": "samples", "smoothness": "vertices"}
 
 
@@ -53,7 +53,7 @@ class Layer:
     ``points`` are the layer's elements in user units: cloud points, skeletal points, or curve
     vertices; a curve also has ``edges`` and, once evaluated, the curve ``samples``. A skeletal set
     with another point count than the cloud may carry its ``index`` (one cloud row per skeletal
-    point, SPEC 7) and the file it came from. ``mapping`` is the ``(scale, offset)`` a skeleton layer
+    point, docs/metrics.md 5.1) and the file it came from. ``mapping`` is the ``(scale, offset)`` a skeleton layer
     was mapped by into the cloud's frame (its file holds the unmapped coordinates).
     """
 

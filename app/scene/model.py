@@ -27,7 +27,7 @@ class Scene:
     """Everything the viewer shows, and the current evaluation, without any Qt.
 
     Changing inputs drops the evaluation (its values would describe other data). Changing the
-    thresholds recomputes only the centeredness quantities (SPEC 3's unbounded -> 0 rule depends on
+    thresholds recomputes only the centeredness quantities (the unbounded -> 0 rule of docs/metrics.md 3.3 depends on
     beta*) and the overall scores, through ``Evaluation.summary``: nothing is re-evaluated.
     """
 
@@ -83,7 +83,7 @@ class Scene:
 
     def set_skeletal(self, points: np.ndarray, path: str | None = None, index: np.ndarray | None = None,
                      index_path: str | None = None) -> Layer:
-        """The skeletal point set; ``index`` maps its rows to cloud rows (SPEC 7), from ``index_path``."""
+        """The skeletal point set; ``index`` maps its rows to cloud rows (docs/metrics.md 5.1), from ``index_path``."""
         layer = Layer("skeletal", _points(points), path=path, point_size=6.0,
                       index=None if index is None else np.asarray(index, dtype=np.int64), index_path=index_path)
         return self._replace(layer)
@@ -133,7 +133,7 @@ class Scene:
     def remove_layer(self, name: str) -> None:
         """Close one layer (File > Close, the panel's remove button). The evaluation goes with it,
         except when one skeleton of two is closed: the other's column still describes the inputs
-        left, so it stays (issue 25: closing the curve kept nothing of the skeletal set's results)."""
+        left, so it stays (closing the curve keeps the skeletal set's results)."""
         if self.layers.pop(name, None) is not None:
             kept = _without_column(self.evaluation, name)
             if kept is None:
@@ -217,7 +217,7 @@ class Scene:
         self._emit("quantities")
 
     def set_thresholds(self, beta_star: float, c_star: float) -> None:
-        """New beta*, c*: centeredness (unbounded -> 0, SPEC 3) and scores follow, no recomputation."""
+        """New beta*, c*: centeredness (unbounded -> 0, docs/metrics.md 3) and scores follow, no recomputation."""
         self.beta_star, self.c_star = float(beta_star), float(c_star)
         ev = self.evaluation
         if ev is not None:
@@ -242,12 +242,12 @@ class Scene:
         return self.evaluation.scores(self.beta_star, self.c_star)
 
     def threshold_for(self, metric: str) -> float | None:
-        """The threshold an overall score counts against (none for smoothness, SPEC 4)."""
+        """The threshold an overall score counts against (none for smoothness, docs/metrics.md 4)."""
         return {"boundedness": self.beta_star, "centeredness": self.c_star}.get(metric)
 
     def set_stale(self, reason: str) -> None:
         """Mark the shown results out of date (the session's stale reason): the view and the plots
-        draw them greyed until a re-run (issue 25)."""
+        draw them greyed until a re-run."""
         if reason != self.stale:
             self.stale = reason
             self._emit("stale")
@@ -356,7 +356,7 @@ class Scene:
         return info
 
     def branch_of(self, layer_name: str, location: str, index: int) -> int | None:
-        """The curve branch a curve vertex or sample lies on (issue 25: a click on the curve selects its
+        """The curve branch a curve vertex or sample lies on (a click on the curve selects its
         branch); None for a junction vertex, another layer, or before an evaluation with diagnostics."""
         ev = self.evaluation
         diag = None if ev is None else getattr(ev, "diagnostics", None)

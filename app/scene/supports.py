@@ -1,8 +1,8 @@
-"""The local support behind a picked element's value, from the shown ``Evaluation`` (issue 11).
+"""The local support behind a picked element's value, from the shown ``Evaluation``.
 
 Which support depends on the element and the metric on screen: boundedness -> the direction map
 around the element (paper Eq. 5-6; for the ``paper`` estimator its triangles); centeredness of a
-curve sample -> its slab, ring and ellipse (Eq. 11, SPEC 3); centeredness of a skeletal point -> its
+curve sample -> its slab, ring and ellipse (Eq. 11, docs/metrics.md 3); centeredness of a skeletal point -> its
 k neighbours and the two centroids (Eq. 10); smoothness of a skeletal point -> its tangent, its
 neighbours' tangents and the angle setting the value (Eq. 13-14); of a curve vertex -> its two edges
 and their angle (Eq. 15). The engine's :mod:`skelcore.metrics.supports` computes

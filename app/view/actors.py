@@ -54,8 +54,8 @@ def curve_polylines(vertices: np.ndarray, edges: np.ndarray, values: np.ndarray,
     """The curve as polylines carrying a metric, for tubes coloured by it: (points, VTK line cells,
     values per point).
 
-    Per-vertex values (smoothness, SPEC 4): one line per edge between its two vertices. Per-sample
-    values (boundedness, centeredness, SPEC 3): each edge becomes a polyline from its first vertex
+    Per-vertex values (smoothness, docs/metrics.md 4): one line per edge between its two vertices. Per-sample
+    values (boundedness, centeredness, docs/metrics.md 3): each edge becomes a polyline from its first vertex
     through its samples (in order of t) to its second vertex; a vertex takes the value of the sample
     nearest to it, so the colour along an edge is the samples' colour.
     """

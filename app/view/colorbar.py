@@ -3,14 +3,14 @@
 pyvista's ``add_scalar_bar`` costs several ms and a new bar re-renders its text, so the bar is made
 only when the coloured actor or the metric changes and is otherwise updated in place. The NaN legend
 is a magenta swatch with its label to the right of it (never over it, at any size or scale), below
-the bar, shown while any shown value is invalid (SPEC 5).
+the bar, shown while any shown value is invalid (docs/metrics.md 5.5).
 
 The bar's title is a text actor of its own, laid out before every frame from the view's size in
 pixels: centred over the bar but never past the view's right edge, its bottom half a label plus a
 gap above the bar's top, so it clears the top label ("1.00") in a view of any size. A scaled picture
 (VTK's tiles) grows normalized positions and the bar's own text with the scale, but not a plain text
 actor's font: the title's and the NaN label's are multiplied by the scale for the picture, so the
-layout holds at any scale (issue 25).
+layout holds at any scale.
 """
 
 from __future__ import annotations

@@ -1,4 +1,4 @@
-"""The defects drawn over the 3-D view (issue 25 "Defects on screen", issue 26 item 4 and stray points).
+"""The defects drawn over the 3-D view (with a scan's openings and stray points).
 
 Each kind in a style of its own, in :data:`skelcore.colors.DEFECT_COLORS` (on neither colour map, not
 magenta): missing parts colour their cloud points; spurious branches and spurious cycles get a wide
@@ -102,7 +102,7 @@ class DefectOverlay:
 
     def show(self, ev: Any, rows: list[DefectRow], cloud_size: float = 2.0, stale: bool = False) -> None:
         """Draw every row of ``rows`` (the defects of ``ev``) by kind; ``stale``: washed toward grey, as the
-        metric colours of out-of-date results are (issue 25)."""
+        metric colours of out-of-date results are."""
         self.clear()
         self.stale = stale
         colours = {k: greyed(c) if stale else c for k, c in DEFECT_COLORS.items()}

@@ -71,7 +71,7 @@ def near_on_screen(renderer: Any, points_t: np.ndarray, x: float, y: float,
 
 def front_pick(candidates: list[tuple[Any, int, float, float, float, int]]) -> Any:
     """The element a click means, among ``(key, index, pixel distance, depth, drawn radius, layer
-    rank)`` candidates: what is drawn on top at the click point wins (issue 25).
+    rank)`` candidates: what is drawn on top at the click point wins.
 
     Of the elements whose drawn disc covers the click (distance <= radius), the one of the layer
     drawn in front wins (rank 0: an invalid element's larger magenta marker, drawn in front of

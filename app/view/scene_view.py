@@ -3,7 +3,7 @@
 It subscribes to the ``Scene`` and, per event, builds, recolours or hides actors, then asks for one
 frame; it also picks elements (numpy projection, :mod:`.picking`) and renders images at any scale.
 Only the view touches VTK, and only on the GUI thread. NaN is drawn magenta through the lookup
-table's NaN colour (SPEC 5); point actors are unlit (exact colour-map colours) unless drawn as shaded
+table's NaN colour (docs/metrics.md 5.5); point actors are unlit (exact colour-map colours) unless drawn as shaded
 spheres. Big layers get a level-of-detail twin shown while the camera moves (:mod:`.lod`).
 """
 
@@ -118,7 +118,7 @@ class SceneView:
     def _before_frame(self) -> None:
         """Right before a frame is drawn, at the widget's real size: a pending camera fit. The first
         frame of newly loaded big layers shows their level-of-detail twins (80k points each: a tenth
-        of a second in software GL where full detail took seconds, issue 25) and asks for the
+        of a second in software GL where full detail takes seconds) and asks for the
         full-detail frame right after it."""
         if self._fit_pending:
             self._fit_pending = False
@@ -446,7 +446,7 @@ class SceneView:
         self.request_render()
 
     def frame_box(self, lo: Any, hi: Any, min_share: float = 0.08, margin: float = 0.25) -> None:
-        """Frame the box (lo, hi) (a defect's place, issue 25), grown by ``margin`` of its size and to at
+        """Frame the box (lo, hi) (a defect's place), grown by ``margin`` of its size and to at
         least ``min_share`` of the scene's diagonal on every side, so that it is seen in its context."""
         from .actors import scene_diagonal
 

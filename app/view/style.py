@@ -1,4 +1,4 @@
-"""The viewer's colours. Everything shared with the files skelcore writes (NaN magenta, SPEC 5; the
+"""The viewer's colours. Everything shared with the files skelcore writes (NaN magenta, docs/metrics.md 5.5; the
 colour maps; the cloud and skeleton colours) comes from :mod:`skelcore.colors`, so the screen and an
 exported PLY agree; only view-only colours live here."""
 
@@ -21,7 +21,7 @@ COLORMAP = METRIC_COLORMAP
 
 
 STALE_MIX = 0.7
-"""How far stale results' colours are washed toward light grey (issue 25: a setting changed, so the
+"""How far stale results' colours are washed toward light grey (a setting changed, so the
 colours on screen are not those a re-run would give)."""
 
 

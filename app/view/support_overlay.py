@@ -1,4 +1,4 @@
-"""3-D highlights of the picked element's support (issues 11, 25), drawn over the scene in the same plotter.
+"""3-D highlights of the picked element's support, drawn over the scene in the same plotter.
 
 A curve sample: its slab's cloud points, the ring kept, the fitted ellipse and its centre. A skeletal
 point's centeredness: its k neighbours, their corresponding cloud points and the two centroids m_s,

@@ -40,7 +40,7 @@ for name, ev in evaluations.items():
 
 # %%
 # The local values, drawn over the faint cloud with the viewer's colours (viridis over [0, 1],
-# magenta for an invalid value, SPEC 5):
+# magenta for an invalid value, docs/metrics.md 5.5):
 fig = plt.figure(figsize=(9, 4.2))
 for i, (name, ev) in enumerate(evaluations.items()):
     ax = fig.add_subplot(1, 2, i + 1, projection="3d")

@@ -34,7 +34,7 @@ for w in ev.warnings:
 # %%
 # Mapped back (``--skeleton-scale 0.01 --skeleton-offset -0.5 -0.5 -0.5`` on the command line; the
 # warning's own estimate is close), and matched to the cloud by the paper's reverse projection
-# (``--correspondence reverse``: each cloud point goes to its nearest skeletal point, SPEC 7):
+# (``--correspondence reverse``: each cloud point goes to its nearest skeletal point, docs/metrics.md 5.1):
 mapped, _ = map_skeleton(tool_points, None, scale=0.01, offset=(-0.5, -0.5, -0.5))
 ev = skelcore.evaluate(t.cloud, skeletal=mapped, correspondence="reverse")
 print("warnings:", [w.code for w in ev.warnings] or "none")
@@ -47,7 +47,7 @@ print(f"d_B / d_Wp    {topo['bottleneck']:.4f} / {topo['wasserstein']:.4f}")
 
 # %%
 # Each skeletal point's centeredness is the mean over the cloud points mapped to it; magenta: no
-# cloud point maps to it (NaN, SPEC 7), as happens where a tool samples its skeleton densely.
+# cloud point maps to it (NaN, docs/metrics.md 5.1), as happens where a tool samples its skeleton densely.
 fig, ax = plt.subplots(figsize=(7, 4.2))
 grey = colors.hex_color(colors.CLOUD_GREY)
 ax.scatter(t.cloud[:, 0], t.cloud[:, 2], s=1, color=grey, alpha=0.35)

@@ -1,4 +1,4 @@
-"""Other skeletonizers runnable by name (issue 23 section 3): ``kind = "pygel"``, ``"kimimaro"`` or
+"""Other skeletonizers runnable by name: ``kind = "pygel"``, ``"kimimaro"`` or
 ``"skimage"`` in a compare manifest, or :func:`run` from Python. One module per tool
 (``pygel_ls``, ``kimimaro_teasar``, ``skimage_thinning``), the shared voxelization
 (``voxelize``, ``voxel_graph``), the parameter checks (``adapter_params``), the ``registry`` and

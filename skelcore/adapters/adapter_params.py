@@ -1,5 +1,5 @@
 """An adapter's parameters: each a name, a type, a default and a one-line description, checked once
-when the compare manifest is read (issue 23 section 3), so a typo costs a one-line error.
+when the compare manifest is read, so a typo costs a one-line error.
 
 ``resolve(specs, given)`` returns every parameter with its default filled in (what a job key
 hashes, so changing a default reruns the jobs it feeds) or raises ``ValueError`` with one line.

@@ -1,5 +1,5 @@
 """``python -m skelcore.adapters.child REQUEST.json``: run one adapter in a process of its own, so
-a tool that crashes (a segfault in its C++) or hangs fails one job, not the run (issue 23).
+a tool that crashes (a segfault in its C++) or hangs fails one job, not the run.
 
 The request names the ``kind``, its resolved ``params``, the ``cloud`` (.npy), the ``out`` file
 (.npz, written atomically) and the ``tool`` version string the job key was made with; a worker

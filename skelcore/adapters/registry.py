@@ -1,4 +1,4 @@
-"""The other tools a compare manifest can name by ``kind`` (issue 23 section 3): which package each
+"""The other tools a compare manifest can name by ``kind``: which package each
 needs, its parameters, what its skeletal set is, and its version for the job key.
 
 The tools are optional (``pip install 'skelscope[skeletonizers]'``). :func:`require` imports one

@@ -1,4 +1,4 @@
-"""Benchmarks with ground truth (issue 23): generated shapes with exact curve skeletons and radii
+"""Benchmarks with ground truth: generated shapes with exact curve skeletons and radii
 (``families``, ``tubes``), uniform surface samples (``surface_sampling``), graded scan effects
 (``scan_effects``), the suites (``suite``), the folder's files (``writer``, ``reference_ply``) and
 ``make_benchmark`` (``generate``), behind ``skelcore bench make DIR``."""

@@ -1,4 +1,4 @@
-"""The benchmark's shape families, each with an exact curve skeleton and radius (issue 23, item 1).
+"""The benchmark's shape families, each with an exact curve skeleton and radius.
 
 Random smooth tubes with varying radius; an elliptic (flattened) tube; Y, T and X junctions with
 unequal radii; plant-like trees of 2-4 levels; a torus and a genus-2 "theta" shape (legitimate

@@ -1,5 +1,5 @@
 """``make_benchmark``: write a suite's cases into a folder, resumably, refusing a folder that is not
-a benchmark (issue 23, item 1).
+a benchmark.
 
 The folder must be new, empty, or a benchmark of the same suite, seed and generator (its
 ``.skelscope-run`` marker of kind "bench" says so: :mod:`skelcore.compare.run_marker`, as for compare's

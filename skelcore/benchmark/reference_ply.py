@@ -1,10 +1,10 @@
 """Read a benchmark reference: a curve skeleton in PLY with an ``edge`` element and an optional
 per-vertex ``radius`` property (what :mod:`.writer` writes).
 
-The curve goes through :func:`skelcore.io.load_curve` (every format check and SPEC 0's cleaning);
-the radius is read beside it and follows the cleaned vertices. A stop-gap while
-``skelcore.curve.CurveSkeleton`` gains an optional radius and the PLY/SWC readers read it (issue 24):
-then this module reduces to ``load_curve``.
+The curve goes through :func:`skelcore.io.load_curve` (every format check and the cleaning of docs/metrics.md 0);
+the radius is read beside it and follows the cleaned vertices, since
+``skelcore.curve.CurveSkeleton`` has no radius of its own; were it to carry one, with the PLY/SWC
+readers reading it, this module would reduce to ``load_curve``.
 """
 
 from __future__ import annotations

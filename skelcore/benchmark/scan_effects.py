@@ -1,4 +1,4 @@
-"""Scan effects applied to a uniform surface sample, each at graded levels (issue 23, item 1).
+"""Scan effects applied to a uniform surface sample, each at graded levels.
 
 In this order: the density (``n_points``, 1k-200k) and its non-uniformity (Bernoulli thinning of
 uniform samples with keep probability ratio^-u, u in [0, 1] along a random direction, so density

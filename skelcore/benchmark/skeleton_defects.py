@@ -1,4 +1,4 @@
-"""Controlled defects of a curve skeleton at graded sizes (issue 23 item 4, docs/validity.md).
+"""Controlled defects of a curve skeleton at graded sizes (docs/validity.md).
 
 Each defect takes a curve as arrays (vertices V x 3, edges E x 2) with the local radius r per
 vertex (the benchmark's exact radius, or the distance to the cloud) and returns a new pair; sizes

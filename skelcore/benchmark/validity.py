@@ -1,4 +1,4 @@
-"""Which metric sees which defect (issue 23 item 4): ``skelcore bench validity --out DIR``.
+"""Which metric sees which defect: ``skelcore bench validity --out DIR``.
 
 On the benchmark's well-posed shapes (the suite's clean cases; the plate, whose curve skeleton is
 ill-posed, is left out) the EXACT curve skeleton gets each controlled defect of :mod:`.skeleton_defects` at

@@ -1,4 +1,4 @@
-"""The validity study's outputs (issue 23 item 4), each written atomically into the run's folder:
+"""The validity study's outputs, each written atomically into the run's folder:
 
 - ``scores.csv``: every row (shape, family, seed, defect, level, every metric, the ground truth);
 - ``validity.csv``: per metric and defect the AUC, Spearman rho, counts and the AUC per level;

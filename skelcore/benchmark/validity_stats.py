@@ -1,4 +1,4 @@
-"""The validity study's statistics (issue 23 item 4, docs/validity.md): per metric and defect, the
+"""The validity study's statistics (docs/validity.md): per metric and defect, the
 detection AUC (defective against clean) and the Spearman correlation with the ground-truth error.
 
 Each metric is oriented to a "badness" b (higher = worse) from its ``better`` direction: the

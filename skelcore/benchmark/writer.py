@@ -84,7 +84,7 @@ def write_manifest(folder: Path, records: list[dict[str, Any]], suite: str, seed
         lines += ["[[shapes]]", f"name = {_toml_string(rec['name'])}", f"path = {_toml_string(rec['files']['cloud'])}",
                   'reference = "truth/{stem}_reference.ply"']
         eyes = (rec.get("scan") or {}).get("viewpoints")
-        if eyes:  # a one-sided scan: compare scores it from its sensors (docs/metrics.md 6.3, issue 26)
+        if eyes:  # a one-sided scan: compare scores it from its sensors (docs/metrics.md 6.3)
             lines.append("viewpoint = [" + ", ".join("[" + ", ".join(repr(float(x)) for x in e) + "]" for e in eyes) + "]")
         lines.append("")
     with atomic_open(folder / "compare.toml", "w") as fh:

@@ -1,5 +1,5 @@
 """``skelcore bench make DIR``: write a benchmark of generated shapes with exact curve skeletons
-(:mod:`skelcore.benchmark`, issue 23)."""
+(:mod:`skelcore.benchmark`)."""
 
 from __future__ import annotations
 
@@ -18,7 +18,7 @@ def register(subparsers: argparse._SubParsersAction) -> argparse.ArgumentParser:
     p = subparsers.add_parser(
         "bench",
         help="benchmark with ground truth: generated shapes, exact curve skeletons, scan effects",
-        description="Benchmarks with ground truth (issue 23).",
+        description="Benchmarks with ground truth.",
     )
     sub = p.add_subparsers(dest="bench_command", required=True, metavar="ACTION")
     make = sub.add_parser(

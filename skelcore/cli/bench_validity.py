@@ -1,5 +1,5 @@
-"""``skelcore bench validity --out DIR``: which metric sees which defect (issue 23 item 4,
-:mod:`skelcore.benchmark.validity`, docs/validity.md)."""
+"""``skelcore bench validity --out DIR``: which metric sees which defect
+(:mod:`skelcore.benchmark.validity`, docs/validity.md)."""
 
 from __future__ import annotations
 

@@ -28,7 +28,7 @@ def format_reference(scores: Scores | dict) -> str:
 
 
 def format_ground_truth(block: dict) -> str:
-    """The "ground truth" block under the paper's table (issue 23, docs/metrics.md 5.3.1): the
+    """The "ground truth" block under the paper's table (docs/metrics.md 5.3.1): the
     ``ground_truth`` block of the ``--json`` document (``GroundTruthComparison.to_dict()``)."""
     s = Scores.from_json_dict({"ground_truth": block})
     b = block

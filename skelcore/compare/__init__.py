@@ -1,4 +1,4 @@
-"""``skelcore compare``: rank skeletonizers over a dataset (issue 9).
+"""``skelcore compare``: rank skeletonizers over a dataset.
 
 ``manifest`` (parse and check the TOML), ``jobs`` (one keyed job: degrade, skeletonize, evaluate),
 ``conditions``, ``methods``, ``backends`` (serial, process pool, Dask), ``job_store`` (resumable

@@ -1,4 +1,4 @@
-"""Reading a finished ``skelcore compare`` folder (issue 11): its datasets, methods and conditions, and
+"""Reading a finished ``skelcore compare`` folder: its datasets, methods and conditions, and
 one job's stored Evaluation, for the viewer's A/B view. Read only: nothing in the folder is written
 (unlike :class:`.store.Store`, which sweeps and creates), and nothing is recomputed.
 

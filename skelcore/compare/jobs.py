@@ -61,7 +61,7 @@ class JobOutput:
     evaluation: Any  # skelcore.evaluation.Evaluation
     timings: dict[str, float] = field(default_factory=dict)
     files: dict[str, str] = field(default_factory=dict)
-    reference: CurveSkeleton | None = None  # the shape's ground-truth curve (issue 23)
+    reference: CurveSkeleton | None = None  # the shape's ground-truth curve
 
 
 _digests: dict[tuple[str, float, int], str] = {}
@@ -98,7 +98,7 @@ def _job_key(job: Job) -> str:
            "condition": job.condition.to_dict(), "seed": job.seed, "params": job.params.to_dict()}
     if job.shape.viewpoints:  # only then: the keys of runs without viewpoints stay as they were
         doc["viewpoints"] = [list(v) for v in job.shape.viewpoints]
-    if job.shape.reference:  # likewise: the reference's bytes (issue 23)
+    if job.shape.reference:  # likewise: the reference's bytes
         doc["reference"] = file_digest(job.shape.reference)
     text = json.dumps(doc, sort_keys=True, default=str)
     return hashlib.sha256(text.encode()).hexdigest()[:24]

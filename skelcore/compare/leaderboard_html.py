@@ -1,4 +1,4 @@
-"""report.html's leaderboard, laid out to fit the page (issue 22: no wrapped cell at 1400 px).
+"""report.html's leaderboard, laid out to fit the page (no wrapped cell at 1400 px).
 
 The score columns are shown under a header row of their groups (``ScoreColumn.group``: the paper's,
 SkelScope's, the diagnostics', the run's, any added later) and a row of their short names

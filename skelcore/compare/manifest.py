@@ -1,5 +1,5 @@
 """The ``compare`` manifest (TOML): which shapes, methods, conditions and seeds to run, checked whole
-before any job starts so that a typo costs a one-line error, not an hour of jobs (issue 9).
+before any job starts so that a typo costs a one-line error, not an hour of jobs.
 
 Paths are relative to the manifest's folder. Every table accepts only the keys listed in
 ``_KEYS``; an unknown key, a glob that matches nothing, a command that is not on PATH, a missing
@@ -50,8 +50,8 @@ class ShapeSpec:
     """One input cloud, named by its file stem less the entry's ``suffix`` ("_cloud"), or by the
     entry's ``name`` for a single file; ``viewpoints``: the sensor positions of a one-sided scan
     (``viewpoint = [x, y, z]`` or a list of them; docs/metrics.md 6.3); ``reference``: its
-    ground-truth curve skeleton (``reference = "truth/{stem}.ply"``, the shape's name for ``{stem}``;
-    issue 23), ``tree``: the shape is declared a tree (its reference may have no cycle)."""
+    ground-truth curve skeleton (``reference = "truth/{stem}.ply"``, the shape's name for ``{stem}``),
+    ``tree``: the shape is declared a tree (its reference may have no cycle)."""
 
     name: str
     path: str
@@ -297,7 +297,7 @@ def skeletonize_accepts_method() -> bool:
 
 def python_executable() -> str:
     """What ``{python}`` stands for: the interpreter running skelcore (``sys.executable``), so a
-    script importing skelcore runs whether or not a venv is activated (issue 24)."""
+    script importing skelcore runs whether or not a venv is activated."""
     if not sys.executable:
         raise SkelInputError("{python}: cannot tell which Python interpreter runs skelcore (sys.executable is empty)")
     return sys.executable

@@ -62,7 +62,7 @@ class Profile:
     why: str
     criteria: tuple[Criterion, ...]
     when: str | None = None  # "noise", "sparse" or None (every condition)
-    fail_on: tuple[str, ...] = ()  # defect codes that fail the profile whatever the scores (issue 22)
+    fail_on: tuple[str, ...] = ()  # defect codes that fail the profile whatever the scores
 
     def applies(self, condition: dict[str, Any]) -> bool:
         if self.when == "noise":

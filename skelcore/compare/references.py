@@ -1,4 +1,4 @@
-"""A manifest shape's ``reference`` (its ground-truth curve skeleton, issue 23), checked when the manifest
+"""A manifest shape's ``reference`` (its ground-truth curve skeleton), checked when the manifest
 is, so that a wrong file costs one line before any job runs: the file exists and reads as a curve, it
 has edges, it lies in the cloud's frame and units (its bounding box against the cloud's, as the
 ``frame`` trust check measures them, docs/metrics.md), and it has no cycle when the shape is declared

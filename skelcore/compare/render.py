@@ -1,6 +1,6 @@
 """The pictures of one job, as in the paper's graphic table: the skeleton over the cloud, the two H0
 barcodes, and the skeleton coloured by boundedness, centeredness and smoothness (viridis, magenta =
-invalid, SPEC 5). The scenes and barcodes are drawn by :mod:`skelcore.display` (the code
+invalid, docs/metrics.md 5.5). The scenes and barcodes are drawn by :mod:`skelcore.display` (the code
 ``Evaluation.show`` uses too); PNGs are cached per job key in ``DIR/renders`` so a rerun redraws nothing.
 """
 

@@ -1,4 +1,4 @@
-"""report.html's defect picture of one job (issue 22, docs/compare.md "Defects decide"): the cloud in
+"""report.html's defect picture of one job (docs/compare.md "Defects decide"): the cloud in
 faint grey, the skeleton in a neutral grey, and on it only the defects the job was warned of, each in
 its colour of :data:`skelcore.colors.DEFECT_COLORS`: the missing parts' cloud points (``incomplete``),
 the curve's edges on spurious branches, on spurious cycles and outside the shape. The per-element

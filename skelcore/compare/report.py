@@ -121,7 +121,7 @@ def _scores_line(r: dict[str, Any]) -> str:
 
 
 def _ground_truth_line(r: dict[str, Any]) -> str:
-    """The job's ground-truth scores (issue 23) under the paper's, when its shape has a reference."""
+    """The job's ground-truth scores under the paper's, when its shape has a reference."""
     cols = [c for c in column_keys(group="ground truth", compared=True) if np.isfinite(float(r.get(c, math.nan)))]
     if not cols:
         return ""
@@ -140,7 +140,7 @@ def _reference_legend(rows: list[dict[str, Any]]) -> str:
 
 
 def _warnings_html(store: Store, r: dict[str, Any]) -> str:
-    """The job's warnings beside its pictures, defects first and in red (issue 22)."""
+    """The job's warnings beside its pictures, defects first and in red."""
     doc = (store.get(r["key"]) or {}).get("evaluation") or {}
     warnings = sorted(doc.get("warnings") or [], key=lambda w: w["code"] not in DEFECT_CODES)
     if not warnings:

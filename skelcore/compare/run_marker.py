@@ -1,5 +1,5 @@
 """Which folders are our runs: a ``.skelscope-run`` marker, written when a run's folder is claimed,
-so that a command never writes into a user's folder (issue 24).
+so that a command never writes into a user's folder.
 
 ``skelcore compare --out DIR`` (and the ``bench`` commands, with their own ``kind``) call
 :func:`claim_run_folder` once, after checking their inputs and before writing anything:

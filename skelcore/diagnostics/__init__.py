@@ -1,4 +1,4 @@
-"""Defects of a skeleton found without a reference skeleton (issue 22; docs/diagnostics.md): its
+"""Defects of a skeleton found without a reference skeleton (docs/diagnostics.md): its
 branches and cycle basis, spurious branches, spurious and missing cycles, parts outside the shape,
 missing parts and completeness; the trust checks (``trust``) and the warning record (``trust_warning``).
 

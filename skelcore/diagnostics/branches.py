@@ -1,4 +1,4 @@
-"""A curve skeleton cut into branches and a cycle basis (issue 22, item 1; docs/diagnostics.md
+"""A curve skeleton cut into branches and a cycle basis (docs/diagnostics.md
 "Branches").
 
 A branch is a maximal path whose inner vertices have degree 2, between two "nodes" (vertices of
@@ -413,7 +413,7 @@ def decompose_branches(
     cloud_tree: cKDTree | None = None,
     checkpoint: Checkpoint = no_checkpoint,
 ) -> Branches:
-    """Cut ``curve`` into branches and give its cycle basis (issue 22, item 1).
+    """Cut ``curve`` into branches and give its cycle basis.
 
     ``cloud`` (same frame as the curve) gives each branch its local radius, the distance from its
     points every ``step`` (default: 1/200 of the curve's length) to the nearest cloud point

@@ -1,5 +1,5 @@
 """The skeleton's cycles against the shape's tunnels -> ``spurious_cycles``, ``missing_cycles``
-(issue 22, item 4; docs/diagnostics.md "Cycles" has the derivation).
+(docs/diagnostics.md "Cycles" has the derivation).
 
 The shape X is voxelized (:mod:`.interior`); its tunnels are its first Betti number beta1(X). A
 cycle goes around a tunnel when it links a loop outside the shape (Alexander duality), so it is
@@ -342,7 +342,7 @@ def find_cycle_defects(
     checkpoint: Checkpoint = no_checkpoint,
 ) -> CycleDefects:
     """Spurious and missing cycles of ``curve`` in the shape sampled by ``cloud`` (both normalized,
-    SPEC 0). ``branches``, ``voxel_shape`` and ``cloud_tree`` may be passed when computed; ``samples``
+    docs/metrics.md 0). ``branches``, ``voxel_shape`` and ``cloud_tree`` may be passed when computed; ``samples``
     (the curve samples) give the per-sample flags."""
     cloud = np.asarray(cloud, dtype=float)
     if branches is None:

@@ -1,4 +1,4 @@
-"""All of a curve skeleton's defects at once (issue 22, items 1 and 3-5): one KD-tree of the cloud
+"""All of a curve skeleton's defects at once: one KD-tree of the cloud
 and one branch decomposition shared by the spurious-branch, cycle and outside diagnostics, and the
 branches flagged with what each found (docs/diagnostics.md)."""
 
@@ -76,7 +76,7 @@ def find_curve_defects(
     interior: Callable[[Checkpoint], VoxelShape] | None = None,
 ) -> CurveDefects:
     """Branches, spurious branches, cycles and the parts outside of ``curve`` (and of ``skeletal``),
-    all normalized (SPEC 0); ``sample_boundedness`` are the boundedness values of ``samples``. The
+    all normalized (docs/metrics.md 0); ``sample_boundedness`` are the boundedness values of ``samples``. The
     local radii come from at most ``diag_max_points`` of the cloud (``spurs.subsampled`` says when).
     ``interior(checkpoint)`` gives the cloud's voxelized interior when it is shared (the evaluation's
     stages make it once); default :func:`.interior.voxelize_interior` with ``params``."""

@@ -1,9 +1,9 @@
-"""The shape's interior as voxels, and its Betti numbers (issue 22, item 4; docs/diagnostics.md
+"""The shape's interior as voxels, and its Betti numbers (docs/diagnostics.md
 "Cycles").
 
 A voxel is inside when it holds cloud points or when the rays from its centre along the 26 lattice
-directions hit the (one voxel thicker) cloud-holding voxels in more than beta* of them: SPEC 2's
-boundedness (the share of rays from a point that hit the sampled surface), on the voxel lattice.
+directions hit the (one voxel thicker) cloud-holding voxels in more than beta* of them: the
+boundedness of docs/metrics.md 2 (the share of rays from a point that hit the sampled surface), on the voxel lattice.
 Scoring every voxel with the ``rays`` estimator itself would cost 13 s for a 48-voxel torus of 4096
 points; the lattice rays cost a few sweeps over the grid at any cloud size.
 

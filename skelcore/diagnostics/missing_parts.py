@@ -1,8 +1,8 @@
-"""Missing parts: the parts of the shape a skeleton does not reach, and its completeness (issue 22,
-item 2; docs/diagnostics.md "Missing parts", "Completeness").
+"""Missing parts: the parts of the shape a skeleton does not reach, and its completeness
+(docs/diagnostics.md "Missing parts", "Completeness").
 
 A cloud point is explained when a skeleton element's medial ball, grown by the coverage slack,
-reaches it (SPEC 8, :mod:`skelcore.metrics.coverage`); completeness is the share explained. The
+reaches it (docs/metrics.md 5.2, :mod:`skelcore.metrics.coverage`); completeness is the share explained. The
 unexplained points are linked into regions of the cloud (neighbours closer than
 ``missing_link_factor`` median spacings). A region's depth is how far it reaches beyond its border
 (the unexplained points next to explained ones), in the radius of that border: a contraction that

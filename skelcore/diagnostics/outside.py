@@ -1,8 +1,8 @@
-"""Curve length and skeletal points outside the shape -> ``outside`` (issue 22, item 5;
-docs/diagnostics.md "Outside").
+"""Curve length and skeletal points outside the shape -> ``outside``
+(docs/diagnostics.md "Outside").
 
-A curve sample is unbounded when its boundedness <= beta* (SPEC 2, the values the evaluation
-computed). Each stands for its stretch of its edge (SPEC 3's sampling); 200 samples are coarse on a
+A curve sample is unbounded when its boundedness <= beta* (docs/metrics.md 2, the values the evaluation
+computed). Each stands for its stretch of its edge (the sampling of docs/metrics.md 3.2); 200 samples are coarse on a
 long curve (one may stand for many local radii), so the edges holding an unbounded sample are walked
 every half voxel and a point counts as outside when its sample is unbounded and its voxel is not
 inside the shape (:mod:`.interior`, the cycle test's voxels): thin or partly scanned parts, whose
@@ -135,7 +135,7 @@ def _skeletal_clusters(points: np.ndarray, outside: np.ndarray, link: float, see
 def _outside_stretches(curve: CurveSkeleton, samples: CurveSamples, sample_out: np.ndarray, in_shape,
                        step: float) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """Points every ``step`` along the edges holding an unbounded sample, their edge, and whether each
-    is outside: its sample (the one whose stretch (t_prev, t] holds it, SPEC 3's sampling) is
+    is outside: its sample (the one whose stretch (t_prev, t] holds it, the sampling of docs/metrics.md 3.2) is
     unbounded and its voxel is not inside; and that sample."""
     bad = np.unique(samples.edge[sample_out])
     lengths = curve.edge_lengths()[bad]
@@ -174,7 +174,7 @@ def find_outside(
 ) -> OutsideDefects:
     """The parts of a skeleton outside the shape, from the boundedness of its curve ``samples``
     (``sample_boundedness``, one per sample) and/or of its ``skeletal`` points, against ``beta_star``
-    (SPEC 2), all normalized (SPEC 0), confirmed by the voxelized interior (``voxel_shape``, as the
+    (docs/metrics.md 2), all normalized (docs/metrics.md 0), confirmed by the voxelized interior (``voxel_shape``, as the
     cycle test's); ``branches``, ``cloud_tree`` and ``voxel_shape`` may be passed when computed."""
     cloud = np.asarray(cloud, dtype=float)
     beta_star = params.beta_star

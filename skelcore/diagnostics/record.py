@@ -1,4 +1,4 @@
-"""What an Evaluation keeps of its diagnostics (issue 22): the JSON ``diagnostics`` block and the
+"""What an Evaluation keeps of its diagnostics: the JSON ``diagnostics`` block and the
 per-element arrays (branch ids, defect codes per curve vertex and sample, missing cloud points), as
 plain data so that it is saved and read back like the rest of the Evaluation (skelcore.io.evaluation_files)."""
 

@@ -1,5 +1,5 @@
-"""Terminal branches the shape does not justify -> ``spurious_branches`` (issue 22, item 3;
-docs/diagnostics.md "Spurious branches").
+"""Terminal branches the shape does not justify -> ``spurious_branches``
+(docs/diagnostics.md "Spurious branches").
 
 A terminal branch (a degree-1 end, a junction at the other) is spurious when either of the two
 classical significance measures fails:
@@ -8,7 +8,7 @@ classical significance measures fails:
   the medial ball at J (distance from J to the cloud): it does not leave the junction's ball;
 - **explanation**: the cloud points nearest to it (its territory) are explained by the rest of the
   skeleton as well: a point is explained by an element x (curve point, every ``diag_step`` local
-  radii) when it lies within (1 + ``spur_slack``) r(x) + tau of it (coverage's rule, SPEC 8). The
+  radii) when it lies within (1 + ``spur_slack``) r(x) + tau of it (coverage's rule, docs/metrics.md 5.2). The
   branch is spurious when fewer than ``spur_min_points`` of its territory, or less than
   ``spur_unique`` of it, are explained by nothing else.
 
@@ -151,7 +151,7 @@ def find_spurious_branches(
     seed: int = 0,
 ) -> SpurDefects:
     """Spurious terminal branches of ``curve`` in the shape sampled by ``cloud`` (both normalized,
-    SPEC 0). ``branches`` and ``cloud_tree`` (a KD-tree of the cloud, or of its subsample of
+    docs/metrics.md 0). ``branches`` and ``cloud_tree`` (a KD-tree of the cloud, or of its subsample of
     ``diag_max_points``: the local radii come from it) may be passed when computed;
     ``samples`` (the curve samples) give the per-sample flags."""
     cloud = np.asarray(cloud, dtype=float)

@@ -1,4 +1,4 @@
-"""Trust checks: conditions under which the paper's scores say nothing (issue 8; docs/metrics.md
+"""Trust checks: conditions under which the paper's scores say nothing (docs/metrics.md
 "Warnings"). Each is a :class:`TrustWarning` with a stable ``code``:
 
 - ``frame``: the skeleton lies mostly outside the cloud's bounding box, or its extent is more than
@@ -109,7 +109,7 @@ def _hint(fit: "FrameFit | None") -> str:
 
 
 def _bounded_fraction(cloud: np.ndarray, params: Params) -> Callable[[np.ndarray], float]:
-    """The share of points (user units) bounded in ``cloud`` (SPEC 2, as the evaluation scores them)."""
+    """The share of points (user units) bounded in ``cloud`` (docs/metrics.md 2, as the evaluation scores them)."""
     from ..geometry import Normalization
     from ..metrics.boundedness import boundedness
 
@@ -138,7 +138,7 @@ def fit_frame(
     Only tried when the skeleton is under half bounded (``bounded_now`` < 0.5). Starts: its bounding
     box centred on the cloud's and scaled to its diagonal (x 1, 0.85, 0.7: a skeleton's box is smaller
     by the shape's thickness), best first by the objective; each is refined (Nelder-Mead on log scale
-    and offset) to the least mean gap of the cloud to the mapped skeleton's medial balls (SPEC 8's gap:
+    and offset) to the least mean gap of the cloud to the mapped skeleton's medial balls (the gap of docs/metrics.md 5.2:
     0 for a medial skeleton that reaches every part; moving it off the axis, shrinking or shifting it
     raise it). A refined mapping is proposed only when ``bounded_fraction(points)`` >= beta* and 0.25
     above ``bounded_now`` and the mapped skeleton is complete (no ``incomplete``: a shrunk mapping is
@@ -211,7 +211,7 @@ def frame_fit_warning(
     )]  # fmt: skip
 
 
-#: Warning codes that say the skeleton itself is wrong (issue 22), as opposed to caveats about what a
+#: Warning codes that say the skeleton itself is wrong, as opposed to caveats about what a
 #: score can mean (``trivial_smoothness``, ``no_correspondence``) or about the scan: ``--strict``,
 #: compare's "sound" column, the profiles' ``fail_on`` and the CLI's defects block read this set.
 DEFECT_CODES = frozenset({"frame", "collapse", "incomplete", "spurious_branches", "spurious_cycles",

@@ -1,6 +1,5 @@
 """The warning record every trust check and diagnostic returns (``skelcore.diagnostics.trust``
-re-exports it): a stable ``code`` and a one-line ``message`` with its numbers (docs/metrics.md 5.4,
-issue 22). 
+re-exports it): a stable ``code`` and a one-line ``message`` with its numbers (docs/metrics.md 5.4). 
 
 A leaf module (the standard library only) in a package whose ``__init__`` imports nothing at import
 time, so that the foundation's users of the record (the scan checks, the Evaluation) load neither the
@@ -26,7 +25,7 @@ class TrustWarning:
     """``message`` is the text the CLI prints and the JSON stores, with the command line's remedy.
     ``finding`` (what was found) and ``mapping`` (the suggested ``(scale, offset)`` into the cloud's
     frame, or None) are read from it, for a front end that words its own remedy (the viewer names its
-    menus and settings, issue 25); a warning read back from a file gives the same."""
+    menus and settings); a warning read back from a file gives the same."""
 
     code: str
     message: str

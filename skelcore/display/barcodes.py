@@ -1,4 +1,4 @@
-"""The two H0 barcodes of a picture (SPEC 1, the paper's barcode figure): the cloud's K compared bars
+"""The two H0 barcodes of a picture (docs/metrics.md 1, the paper's barcode figure): the cloud's K compared bars
 (grey) above the skeletal set's (blue), eps* dashed. compare's report and ``skelcore figure`` draw
 them with :func:`draw_barcodes`; ``Evaluation.show_barcodes`` with :func:`barcode_figure`.
 
@@ -23,7 +23,7 @@ def _unit(rgb: tuple[int, int, int]) -> tuple[float, float, float]:
 
 def draw_barcodes(ax: Any, arrays: dict[str, np.ndarray]) -> None:
     """Both H0 barcodes on one axis: the cloud's (grey) above the skeleton's (blue), the K compared
-    bars drawn solid, eps* dashed (paper, Fig. "barcodes"; SPEC 1)."""
+    bars drawn solid, eps* dashed (paper, Fig. "barcodes"; docs/metrics.md 1)."""
     if "cloud_barcode" not in arrays:
         ax.text(0.5, 0.5, "no skeletal points:\nno barcodes", ha="center", va="center", transform=ax.transAxes, fontsize=8)
         ax.set_axis_off()
@@ -62,7 +62,7 @@ def fill_barcode_figure(fig: Any, arrays: dict[str, np.ndarray], title: str | No
 
 
 def barcode_title(topology: Any) -> str:
-    """The viewer's barcode title: K and both distances (SPEC 1)."""
+    """The viewer's barcode title: K and both distances (docs/metrics.md 1)."""
     from ..scores import format_score
 
     return (f"H0, K = {int(topology.n_bars)}:  d_B = {format_score(topology.bottleneck, 4)},  "

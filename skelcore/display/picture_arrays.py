@@ -1,5 +1,5 @@
 """The arrays a picture of an Evaluation draws: the cloud, the skeletal points and the curve with
-their local values (centeredness after SPEC 3's unbounded rule, NaN = invalid), both H0 barcodes.
+their local values (centeredness after the unbounded rule of docs/metrics.md 3.3, NaN = invalid), both H0 barcodes.
 
 One dict for every picture: compare stores it per job (``jobs/KEY.npz``, float32 coordinates) and
 draws its report and figure from it; ``Evaluation.show`` draws the same dict made on the spot.

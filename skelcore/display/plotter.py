@@ -1,6 +1,6 @@
 """A pyvista plotter holding one scene per panel, side by side, for a window, a notebook or a PNG
 rendered off-screen. compare's renders, ``Evaluation.show`` and ``show_ab`` all make their plotter
-and their PNG here (one rendering code path, SPEC 5's colours from :mod:`.scene`).
+and their PNG here (one rendering code path, the colours of docs/metrics.md 5.5 from :mod:`.scene`).
 """
 
 from __future__ import annotations

@@ -1,5 +1,5 @@
 """One picture's 3-D scene on a pyvista plotter: the faint grey cloud, and over it the skeleton,
-plain (view "skeleton") or coloured by a local metric (viridis over ``clim``, NaN magenta, SPEC 5)
+plain (view "skeleton") or coloured by a local metric (viridis over ``clim``, NaN magenta, docs/metrics.md 5.5)
 with an optional colour bar. compare's renders (:mod:`skelcore.compare.render`), ``Evaluation.show``
 and ``show_ab`` all build their scenes here, from :func:`skelcore.display.picture_arrays.drawing_arrays`'s dict.
 
@@ -27,7 +27,7 @@ def _unit(rgb: tuple[int, int, int]) -> tuple[float, float, float]:
 def metric_values(arrays: dict[str, np.ndarray], metric: str,
                   prefer: str = "skeletal") -> tuple[np.ndarray, np.ndarray] | None:
     """(points, values) coloured by ``metric``: the skeletal points or the curve (its samples for
-    boundedness and centeredness, SPEC 3; its vertices for smoothness, SPEC 4), ``prefer``'s first
+    boundedness and centeredness, docs/metrics.md 3; its vertices for smoothness, docs/metrics.md 4), ``prefer``'s first
     when the arrays hold both; None when neither."""
     def skeletal():
         if "skeletal" in arrays:
@@ -99,7 +99,7 @@ def add_scene(pl: Any, arrays: dict[str, np.ndarray], view: str, *, prefer: str 
     has_curve = "curve_vertices" in arrays and len(arrays.get("curve_edges", ())) > 0
     if view == SKELETON_VIEW:
         if "reference_vertices" in arrays and len(arrays.get("reference_edges", ())):
-            # the shape's ground-truth curve (issue 23): a thin grey line, drawn before (under) the skeleton
+            # the shape's ground-truth curve: a thin grey line, drawn before (under) the skeleton
             pl.add_mesh(_lines(arrays["reference_vertices"], arrays["reference_edges"]),
                         color=_unit(colors.REFERENCE_COLOR), line_width=1.5, reset_camera=False)
         if "skeletal" in arrays:

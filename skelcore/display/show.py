@@ -1,9 +1,9 @@
 """``Evaluation.show``, ``Evaluation.show_barcodes`` and ``skelcore.show_ab``: a picture of an
-evaluation wherever the user is (issue 24 3). In a Jupyter notebook it is drawn in the cell (the
+evaluation wherever the user is. In a Jupyter notebook it is drawn in the cell (the
 3-D scene through pyvista's notebook support: a static picture by default, trame's interactive view
 with ``jupyter_backend="trame"`` when trame is installed); given ``path=``, or with no display, it is
 written as a PNG and its path returned; else it opens in a window. The scenes are
-:mod:`.scene`'s (viridis, magenta = invalid, SPEC 5), the tables :mod:`.summary_table`'.
+:mod:`.scene`'s (viridis, magenta = invalid, docs/metrics.md 5.5), the tables :mod:`.summary_table`'.
 """
 
 from __future__ import annotations
@@ -112,7 +112,7 @@ def show(ev: Any, metric: str = "centeredness", *, path: str | os.PathLike | Non
 
 def show_barcodes(ev: Any, *, path: str | os.PathLike | None = None, size: tuple[int, int] = (560, 420),
                   dpi: int = 100) -> Path | None:
-    """The H0 barcodes of the cloud and the skeletal set (SPEC 1), drawn as compare's figure draws
+    """The H0 barcodes of the cloud and the skeletal set (docs/metrics.md 1), drawn as compare's figure draws
     them, titled like the viewer's panel. Returns the PNG's path when one was written."""
     from .barcodes import barcode_title
 

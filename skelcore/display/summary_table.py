@@ -1,6 +1,6 @@
-"""The paper's summary table of an evaluation (SPEC 5: rows d_B / d_Wp, boundedness, centeredness,
+"""The paper's summary table of an evaluation (docs/metrics.md 5.5: rows d_B / d_Wp, boundedness, centeredness,
 smoothness; columns skeletal points / curve skeleton, each score with its count) and the "defects"
-block under it (issue 22), as text (the CLI's ``evaluate``) and as HTML (``Evaluation._repr_html_``,
+block under it, as text (the CLI's ``evaluate``) and as HTML (``Evaluation._repr_html_``,
 ``show_ab`` in a notebook). The rows come from :func:`skelcore.scores.paper_table`, the numbers from
 :class:`skelcore.scores.Scores`: one source for every table.
 """
@@ -23,7 +23,7 @@ def _scores(scores: Scores | dict) -> Scores:
 
 
 def table_notes(scores: Scores | dict) -> list[str]:
-    """The lines under the table: eps* and K (SPEC 1), what the rows marked "*" are (SPEC 8)."""
+    """The lines under the table: eps* and K (docs/metrics.md 1), what the rows marked "*" are (docs/metrics.md 5.2)."""
     s = _scores(scores)
     notes = []
     if s.d_B is not None:
@@ -54,7 +54,7 @@ def _defects(warnings: Sequence[dict]) -> list[dict]:
 
 
 def format_defects(warnings: Sequence[dict]) -> str:
-    """The "defects" block under the paper's table (issue 22): one line per defect warning
+    """The "defects" block under the paper's table: one line per defect warning
     (:data:`skelcore.diagnostics.trust.DEFECT_CODES`), "none found" otherwise."""
     found = _defects(warnings)
     if not found:

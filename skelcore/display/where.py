@@ -1,4 +1,4 @@
-"""Where a picture can go: into a Jupyter notebook, into a window, or only into a file (issue 24 3).
+"""Where a picture can go: into a Jupyter notebook, into a window, or only into a file.
 
 Nothing is imported to find out: a notebook kernel has imported IPython already, and a window needs
 a display server (``DISPLAY`` / ``WAYLAND_DISPLAY`` on Linux; macOS and Windows always have one).

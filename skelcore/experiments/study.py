@@ -201,7 +201,7 @@ def run_study(
     skeleton_cmd : instead of the built-in skeletonizer, a command line with ``{in}`` (the variant's
         cloud, written as PLY) and ``{out_skeletal}`` and/or ``{out_curve}`` placeholders (and
         ``{python}``, the interpreter running skelcore); run without a shell.
-    params : evaluation parameters (SPEC); ``skeletonize_params`` : :class:`CaoParams` or
+    params : evaluation parameters (docs/metrics.md); ``skeletonize_params`` : :class:`CaoParams` or
         :class:`SkeletonizeParams`; ``method`` : the built-in skeletonizer, "cao" (default) or
         "skelscope" (see :func:`skelcore.skeleton.skeletonize`).
     name : the shape's name in the table's first column.

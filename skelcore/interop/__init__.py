@@ -1,4 +1,4 @@
-"""Researchers' Python objects in and out (issue 24): Open3D, trimesh, networkx, navis, cloud-volume /
+"""Researchers' Python objects in and out: Open3D, trimesh, networkx, navis, cloud-volume /
 kimimaro skeletons and pandas tables become SkelScope's inputs (:mod:`.objects_in`, recognised by
 :mod:`.recognise` without importing any of those libraries); an Evaluation becomes a pandas table
 (:mod:`.tables`), a networkx graph (:mod:`.graph_out`) or a coloured Open3D LineSet (:mod:`.open3d_out`).

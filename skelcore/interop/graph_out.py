@@ -1,6 +1,6 @@
 """The evaluated curve skeleton as a networkx graph (``Evaluation.to_networkx``): node i is vertex i with
-its position and per-vertex values (degree, smoothness (SPEC 4), radius when known); each edge carries
-its length and its samples' boundedness and centeredness (SPEC 2-3: mean and fraction above the
+its position and per-vertex values (degree, smoothness (docs/metrics.md 4), radius when known); each edge carries
+its length and its samples' boundedness and centeredness (docs/metrics.md 2-3: mean and fraction above the
 threshold); ``graph.graph`` holds the overall scores. networkx is imported only here, when asked.
 """
 

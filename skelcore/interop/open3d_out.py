@@ -1,7 +1,7 @@
 """The evaluated curve skeleton as an Open3D LineSet coloured like the viewer (``Evaluation.to_open3d``).
 
 The colours come from :mod:`skelcore.colors` (the viewer's maps over the metrics' range [0, 1], NaN
-magenta, SPEC 5). As in the viewer, boundedness and centeredness colour each edge along its samples
+magenta, docs/metrics.md 5.5). As in the viewer, boundedness and centeredness colour each edge along its samples
 (a vertex takes its nearest sample's value) and smoothness colours it from its two vertices; Open3D
 colours whole segments, so every segment is halved and each half takes the value of its nearer end.
 Open3D is imported only here, when asked; :func:`curve_lines` gives the same arrays without it.

@@ -1,5 +1,5 @@
 """An Evaluation as a pandas DataFrame (``Evaluation.to_frame``): one row per element with every local
-value (NaN = invalid, SPEC 5) and the flags the overall scores count (SPEC 2-4), so a notebook can
+value (NaN = invalid, docs/metrics.md 5.5) and the flags the overall scores count (docs/metrics.md 2-4), so a notebook can
 filter, group and plot without knowing SkelScope's arrays. pandas is imported only here, when asked.
 """
 
@@ -69,7 +69,7 @@ def frame_columns(ev: "object", kind: str, beta_star: float | None = None,
 
 def to_frame(ev: "object", kind: str = "skeletal", *, beta_star: float | None = None, c_star: float | None = None):
     """A ``pandas.DataFrame`` of one kind of element: ``"skeletal"`` (points: boundedness, centeredness
-    after SPEC 3's unbounded -> 0 rule, its raw value, smoothness, the ``bounded`` / ``centered`` flags
+    after the unbounded -> 0 rule of docs/metrics.md 3.3, its raw value, smoothness, the ``bounded`` / ``centered`` flags
     at beta* / c*, validity), ``"curve_samples"`` (the same per sample, with its edge and t),
     ``"curve_vertices"`` (degree, smoothness, radius when known) or ``"cloud"`` (coverage gaps, the
     reverse correspondence's row). Thresholds default to the evaluation's params."""

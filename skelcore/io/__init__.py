@@ -2,7 +2,7 @@
 
 The format is detected from the file's content first (PLY, NPY/NPZ, JSON, PCD, OFF and .cg have a
 recognisable start) and from its extension otherwise, so a ``.txt`` that is really a PLY loads as a
-PLY. Every loader returns float64 coordinates in the file's own units (SPEC 0: normalization happens
+PLY. Every loader returns float64 coordinates in the file's own units (docs/metrics.md 0: normalization happens
 later), remembers the path so that no writer can overwrite it (:func:`atomic.protect`), and turns
 any problem into a one-line :class:`~skelcore.errors.SkelInputError` naming the file.
 """

@@ -1,12 +1,12 @@
-"""An Evaluation saved and loaded, as a symmetric pair (issue 21): the files written here are read back
+"""An Evaluation saved and loaded, as a symmetric pair: the files written here are read back
 here into an equal Evaluation.
 
 - ``to_json_dict`` / ``write_json``: the ``evaluate --json`` document (scores, counts, params, inputs,
-  warnings, coverage, reference, ground truth, timings, the real-scan report; SPEC 5), also each compare job's
+  warnings, coverage, reference, ground truth, timings, the real-scan report; docs/metrics.md 5.5), also each compare job's
   ``evaluation`` record.
 - ``write_per_point``, ``cloud_columns``, ``write_barcodes``: the CSVs (NaN written ``nan``).
 - ``evaluation_arrays``: what the document lacks, for an npz (compare's ``jobs/KEY.npz``): the cloud,
-  the skeletons, the raw local values (before SPEC 3's unbounded -> 0 rule, so thresholds can change),
+  the skeletons, the raw local values (before the unbounded -> 0 rule of docs/metrics.md 3.3, so thresholds can change),
   the correspondence rows, the curve samples' edges, the coverage gaps, the normalization, the
   barcodes, at full precision under ``ev_`` names; ``ev_meta`` keeps the inputs and the timings exactly.
 - ``evaluation_from_store``: the document and the arrays put back together, nothing recomputed;
@@ -57,7 +57,7 @@ _CURVE = ("samples", "sample_edge", "sample_t", "sample_boundedness", "sample_ce
 
 # ---- the JSON document ------------------------------------------------------------------------
 def to_json_dict(ev: Evaluation, version: str | None = None) -> dict[str, Any]:
-    """The ``--json`` document of the CLI (issue 2); null where an input was not given."""
+    """The ``--json`` document of the CLI; null where an input was not given."""
     from ..version import __version__
 
     summ = ev.summary()
@@ -165,7 +165,7 @@ def cloud_columns(ev: Evaluation) -> dict[str, np.ndarray]:
 
 
 def _defect_columns(ev: Evaluation, element: str, n: int) -> tuple[list[tuple], list[str]]:
-    """The diagnostics' ``branch`` and ``defects`` (";"-joined codes) per curve sample or vertex (issue 22)."""
+    """The diagnostics' ``branch`` and ``defects`` (";"-joined codes) per curve sample or vertex."""
     arrays = {} if ev.diagnostics is None else ev.diagnostics.arrays
     if f"curve_{element}_branch" not in arrays:
         return [()] * n, []
@@ -176,7 +176,7 @@ def _defect_columns(ev: Evaluation, element: str, n: int) -> tuple[list[tuple], 
 
 
 def _skeletal_defect_column(ev: Evaluation, n: int) -> tuple[list[tuple], list[str]]:
-    """The diagnostics' ``defects`` per given skeletal point (``outside``; issue 22)."""
+    """The diagnostics' ``defects`` per given skeletal point (``outside``)."""
     arrays = {} if ev.diagnostics is None else ev.diagnostics.arrays
     bits = arrays.get("skeletal_point_defects")
     if bits is None or len(bits) != n:

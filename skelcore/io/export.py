@@ -1,18 +1,18 @@
 """Coloured PLY export of an Evaluation (CLI ``--export-ply DIR`` and the viewer's File > Export).
 
 Three files, coordinates in the user's units, every local value as a float property with NaN kept
-(SPEC 5) and RGB from :mod:`skelcore.colors` (NaN magenta), so MeshLab, CloudCompare or Open3D show
+(docs/metrics.md 5.5) and RGB from :mod:`skelcore.colors` (NaN magenta), so MeshLab, CloudCompare or Open3D show
 the same picture as the viewer:
 
 - ``skeletal.ply``: skeletal points; boundedness, centeredness (after the unbounded -> 0 rule of
-  SPEC 3, at the evaluation's beta*), smoothness; coloured by ``color_by``.
-- ``curve.ply``: curve vertices with the ``edge`` element; smoothness (NaN unless degree 2, SPEC 4)
+  docs/metrics.md 3, at the evaluation's beta*), smoothness; coloured by ``color_by``.
+- ``curve.ply``: curve vertices with the ``edge`` element; smoothness (NaN unless degree 2, docs/metrics.md 4)
   and degree; coloured by smoothness.
-- ``curve_samples.ply``: the curve samples (SPEC 3 sampling); boundedness, centeredness, their edge
+- ``curve_samples.ply``: the curve samples (sampled as in docs/metrics.md 3.2); boundedness, centeredness, their edge
   and fraction t; coloured by ``color_by`` (centeredness when ``color_by`` is smoothness, which
   samples do not have).
 
-Each file's header says which metric its colours encode, in one comment line (issue 25):
+Each file's header says which metric its colours encode, in one comment line:
 ``comment colors: centeredness (viridis over [0, 1], NaN magenta)`` (:func:`colour_comment`).
 """
 

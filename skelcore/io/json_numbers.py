@@ -1,5 +1,5 @@
 """Numbers in SkelScope's JSON files, both ways: NaN is written as null and +-inf as "inf" / "-inf"
-(JSON has neither; SPEC 5 keeps NaN = invalid), numpy scalars as plain numbers.
+(JSON has neither; docs/metrics.md 5.5 keeps NaN = invalid), numpy scalars as plain numbers.
 
 One convention for every JSON document the engine writes: the ``evaluate --json`` document
 (:mod:`.evaluation_files`) and compare's per-job records (:mod:`skelcore.compare.job_store`).

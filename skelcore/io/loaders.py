@@ -1,7 +1,7 @@
 """Format detection and the loaders: ``load_cloud``, ``load_points``, ``load_curve``, ``load_any``.
 
 The format is detected from the file's content first and from its extension otherwise; every loader
-returns float64 coordinates in the file's units (SPEC 0), protects the path from writers and turns
+returns float64 coordinates in the file's units (docs/metrics.md 0), protects the path from writers and turns
 any problem into a one-line :class:`~skelcore.errors.SkelInputError` naming the file. Each loader also
 takes another library's object instead of a path (:mod:`skelcore.interop`) and checks it the same way.
 """
@@ -191,7 +191,7 @@ def _read_raw(path: str | os.PathLike) -> RawData:
 
 
 def _point_set(raw: RawData, path: str | os.PathLike, what: str) -> np.ndarray:
-    """SPEC 0 inputs must be usable: at least one point, all finite, not all at one position."""
+    """Inputs must be usable (docs/metrics.md 0): at least one point, all finite, not all at one position."""
     v = np.ascontiguousarray(raw.vertices, dtype=np.float64)
     if len(v) == 0:
         raise SkelInputError(f"{what} is empty (0 points)", path)
@@ -228,7 +228,7 @@ def _object_raw(obj: object, what: str) -> RawData:
 
 
 def load_cloud(path: str | os.PathLike | object) -> np.ndarray:
-    """The original cloud P_o as an (N, 3) float64 array in the file's units (SPEC 0). A mesh's or a
+    """The original cloud P_o as an (N, 3) float64 array in the file's units (docs/metrics.md 0). A mesh's or a
     curve file's vertices are accepted as points; so is an object (an Open3D PointCloud, ...)."""
     if not _is_path(path):
         return _point_set(_object_raw(path, "point cloud"), None, "point cloud")
@@ -254,7 +254,7 @@ def _curve(raw: RawData, path: str | os.PathLike) -> CurveSkeleton:
 
 
 def load_curve(path: str | os.PathLike | object) -> CurveSkeleton:
-    """A curve skeleton G_s = (V, E), cleaned by :meth:`CurveSkeleton.from_raw` (SPEC 0: NaN vertices
+    """A curve skeleton G_s = (V, E), cleaned by :meth:`CurveSkeleton.from_raw` (docs/metrics.md 0: NaN vertices
     dropped with a warning, duplicate edges and self-loops dropped, out-of-range index an error), with
     its per-vertex radius when the file has one. A curve object (a LineSet, a networkx graph, ...) too."""
     if not _is_path(path):

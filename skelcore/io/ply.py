@@ -329,7 +329,7 @@ def write_points_ply(
     comments: Iterable[str] = (),
 ) -> None:
     """Point set as PLY: ``double x y z``, ``uchar red green blue`` when ``colors`` (N x 3, 0..255) is
-    given, one ``float`` property per scalar (NaN kept as NaN, SPEC 5), each of ``comments`` as a
+    given, one ``float`` property per scalar (NaN kept as NaN, docs/metrics.md 5.5), each of ``comments`` as a
     header comment line. Atomic; never overwrites an input.
     """
     vertex = _vertex_array(points, scalars or {}, colors)

@@ -1,4 +1,4 @@
-"""Union-of-caps area on an equal-area latitude raster: the kernel of the ``rays`` estimator (SPEC 2).
+"""Union-of-caps area on an equal-area latitude raster: the kernel of the ``rays`` estimator (docs/metrics.md 2).
 
 Computes the covered area S of paper Eq. 6 (``eq.boundedness_pts``) as a union of spherical caps.
 The unit sphere of directions is cut into ``rows`` rows of equal height in z (so of equal area,
@@ -8,7 +8,7 @@ difference array, so the union of any number of caps costs one ``np.bincount`` a
 the exact union area up to the grid's sampling error, with no per-sample test.  The raster's frame
 is a fixed generic rotation of the world frame, so its rows never line up with the axis-aligned
 silhouettes common in scanned and synthetic shapes (the row errors would add up).  Everything runs in
-float32 on flat (query, point) pair arrays (SPEC 2's 0.01 is far above float32's precision).
+float32 on flat (query, point) pair arrays (the 0.01 of docs/metrics.md 2 is far above float32's precision).
 
 Cost, error measurements and alternatives tried: docs/boundedness.md.
 """
@@ -81,7 +81,7 @@ class CapRaster:
 
         ``qidx`` (any order) names the query of each pair in ``0..n_queries-1``; ``(dx, dy, dz)`` is
         p - q in the raster's frame (float32); ``h`` is the ball radius, a scalar or one per pair.
-        A pair with |p - q| <= h contributes nothing (SPEC 2: the query is inside that ball).
+        A pair with |p - q| <= h contributes nothing (docs/metrics.md 2: the query is inside that ball).
         """
         rows, bins = self.rows, self.bins
         f32 = np.float32

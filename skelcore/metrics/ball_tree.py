@@ -1,5 +1,5 @@
 """The compiled kernel's tree of bounding spheres (``_balls.c``) and its timed, threaded queries: nearest
-cloud point (coverage's r(x), tau's spacings), gap and cover to a set of balls (SPEC 8, docs/metrics.md
+cloud point (coverage's r(x), tau's spacings), gap and cover to a set of balls (docs/metrics.md
 5.2).  Coverage, the cloud's shared index (:mod:`.cloud_index`) and the diagnostics' ball tests use it.
 """
 

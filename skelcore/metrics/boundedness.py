@@ -1,4 +1,4 @@
-"""Boundedness beta(q) of skeletal points and curve samples (paper Sec. 2.2, Eqs. 5-6; SPEC 2).
+"""Boundedness beta(q) of skeletal points and curve samples (paper Sec. 2.2, Eqs. 5-6; docs/metrics.md 2).
 
 A skeleton should lie inside its shape: beta(q) is the share of the unit sphere of directions
 (p - q)/|p - q| that the cloud covers (Eq. 6); the overall scores (Eqs. 7-8) are taken in
@@ -40,9 +40,9 @@ def boundedness(
     params: Params = Params(),
     checkpoint: Checkpoint = no_checkpoint,
 ) -> np.ndarray:
-    """beta(q) for every query row with the estimator ``params.boundedness_method`` (SPEC 2).
+    """beta(q) for every query row with the estimator ``params.boundedness_method`` (docs/metrics.md 2).
 
-    Inputs are in normalized units (SPEC 0).  Returns one value per query row, in [0, 1] for
+    Inputs are in normalized units (docs/metrics.md 0).  Returns one value per query row, in [0, 1] for
     ``rays``.  An empty query set gives an empty array; an empty cloud gives zeros.
     """
     if params.boundedness_method == "paper":
@@ -66,7 +66,7 @@ def boundedness(
 
 
 def rays_radius(cloud: np.ndarray, radius_factor: float = 2.0, checkpoint: Checkpoint = no_checkpoint) -> float:
-    """h = radius_factor x the median nearest-neighbour spacing of the cloud (SPEC 2; copies of a point
+    """h = radius_factor x the median nearest-neighbour spacing of the cloud (docs/metrics.md 2; copies of a point
     are at distance 0), from the kernel's tree of the distinct points: the h ``boundedness_rays`` uses."""
     cloud = np.asarray(cloud, dtype=float)
     if len(cloud) < 2:
@@ -166,11 +166,11 @@ def boundedness_rays(
     workers: int | None = None,
     checkpoint: Checkpoint = no_checkpoint,
 ) -> np.ndarray:
-    """Fraction of rays from each query that hit a ball of radius h around a cloud point (SPEC 2).
+    """Fraction of rays from each query that hit a ball of radius h around a cloud point (docs/metrics.md 2).
 
     Parameters
     ----------
-    cloud : (N, 3) original cloud, normalized (SPEC 0).
+    cloud : (N, 3) original cloud, normalized (docs/metrics.md 0).
     queries : (Q, 3) skeletal points or curve samples.
     radius_factor : h = radius_factor x median nearest-neighbour spacing of ``cloud``.
     rows, bins : raster size (``bins`` defaults to 2 x rows: cells about square at the equator).
@@ -236,7 +236,7 @@ def boundedness_paper(
     area_threshold: float = 1e-4,
     checkpoint: Checkpoint = no_checkpoint,
 ) -> np.ndarray:
-    """The reference tool's triangulated-sphere estimator (SPEC 2 ``paper``; paper Sec. 2.2, Prop. 2).
+    """The reference tool's triangulated-sphere estimator (``paper`` in docs/metrics.md 2; paper Sec. 2.2, Prop. 2).
 
     Directions u = (q - p)/|q - p| (the reference tool's sign; cloud points at q itself are skipped)
     are projected by the sinusoidal projection (lon cos lat, lat) and triangulated in 2-D (Delaunay);

@@ -1,4 +1,4 @@
-"""Centeredness of a skeletal point set and of curve-skeleton samples (paper Sec. 2.3; SPEC 3).
+"""Centeredness of a skeletal point set and of curve-skeleton samples (paper Sec. 2.3; docs/metrics.md 3).
 
 A skeleton should approximate the medial axis; without a surface, the paper measures how far a
 skeleton element is from the centre of the cloud points it stands for.  ``skeletal_centeredness``:
@@ -42,7 +42,7 @@ def skeletal_centeredness(
     depth: np.ndarray | None = None,
     checkpoint: Checkpoint = no_checkpoint,
 ) -> np.ndarray:
-    """Centeredness of every skeletal point (SPEC 3; paper Eq. 10, ``eq.skeletal_point_centeredness``).
+    """Centeredness of every skeletal point (docs/metrics.md 3; paper Eq. 10, ``eq.skeletal_point_centeredness``).
 
     For skeletal point q_i take its k nearest skeletal neighbours (itself included; k from
     :func:`skelcore.params.k_center_for`, at most N_s), their centroid m_s, the centroid m_o of
@@ -209,7 +209,7 @@ def curve_centeredness(
     params: Params = Params(),
     checkpoint: Checkpoint = no_checkpoint,
 ) -> np.ndarray:
-    """Centeredness of curve samples from the cloud's cross-section (SPEC 3; paper Eq. 11,
+    """Centeredness of curve samples from the cloud's cross-section (docs/metrics.md 3; paper Eq. 11,
     ``eq.curve_point_centeredness``).
 
     For sample p with direction u: the slab of cloud points x with |u . (x - p)| < alpha / 2,
@@ -407,7 +407,7 @@ def _orthonormal_complement(u: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
 
 def ring_length(sorted_distances: np.ndarray, growth: float) -> int:
     """Length of the leading run of ``sorted_distances`` in which each next distance is
-    < growth x the previous one (SPEC 3 ring isolation). 0 for an empty array."""
+    < growth x the previous one (the ring isolation of docs/metrics.md 3.2). 0 for an empty array."""
     d = np.asarray(sorted_distances, dtype=float)
     if len(d) == 0:
         return 0
@@ -416,7 +416,7 @@ def ring_length(sorted_distances: np.ndarray, growth: float) -> int:
 
 
 def cross_section_centeredness(ring: np.ndarray, p_hat: np.ndarray | None = None) -> float:
-    """c = max(0, 1 - |p_hat - centre| / r) for one cross-section ring (SPEC 3).
+    """c = max(0, 1 - |p_hat - centre| / r) for one cross-section ring (docs/metrics.md 3).
 
     centre and r from :func:`fit_ellipse` (conic centre, mean semi-axis); with fewer than 5 points
     or no valid ellipse, centre = ring mean and r = largest distance from p_hat to a ring point.

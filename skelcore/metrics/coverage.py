@@ -1,5 +1,5 @@
 """Coverage: how much of the cloud a skeleton's medial balls reconstruct (SkelScope's own, not the
-paper's; SPEC 8, docs/metrics.md 5.2).
+paper's; docs/metrics.md 5.2).
 
 Each skeleton element x (skeletal point, curve sample) gets the radius r(x) = distance to its
 nearest cloud point, its inscribed ball. A cloud point p has the gap g(p) = min_x |p - x| - r(x)

@@ -1,7 +1,7 @@
-"""Samples along a curve skeleton and the curve direction at each (SPEC 3; paper, definitions
+"""Samples along a curve skeleton and the curve direction at each (docs/metrics.md 3; paper, definitions
 "curve skeleton point" and "associated points").
 
-The samples feed curve boundedness (SPEC 2) and curve centeredness (SPEC 3); the directions define
+The samples feed curve boundedness (docs/metrics.md 2) and curve centeredness (docs/metrics.md 3); the directions define
 the cutting slabs of curve centeredness, so only the line through a direction matters, not its sign.
 The reference tool's sampling quirk, direction rules and degenerate cases are listed in
 :func:`sample_curve`.
@@ -21,7 +21,7 @@ __all__ = ["CurveSamples", "sample_curve", "sample_counts"]
 
 @dataclass(frozen=True)
 class CurveSamples:
-    """Samples of a curve skeleton (SPEC 3).
+    """Samples of a curve skeleton (docs/metrics.md 3).
 
     points : (S, 3) sample positions.
     edge : (S,) int, row of ``curve.edges`` the sample lies on.
@@ -40,7 +40,7 @@ class CurveSamples:
 
 
 def sample_counts(edge_lengths: np.ndarray, n_samples: int) -> np.ndarray:
-    """n_e = max(1, round(len_e / total_len * S)) per edge, MATLAB rounding (SPEC 3).
+    """n_e = max(1, round(len_e / total_len * S)) per edge, MATLAB rounding (docs/metrics.md 3).
 
     With a total length of 0 every edge gets one sample.
     """
@@ -54,7 +54,7 @@ def sample_counts(edge_lengths: np.ndarray, n_samples: int) -> np.ndarray:
 
 
 def sample_curve(curve: CurveSkeleton, n_samples: int, *, collinear_cos: float = 0.99) -> CurveSamples:
-    """Sample ``curve`` with about ``n_samples`` points and give the curve direction at each (SPEC 3).
+    """Sample ``curve`` with about ``n_samples`` points and give the curve direction at each (docs/metrics.md 3).
 
     Conventions (the reference tool's, kept on purpose):
 
@@ -117,7 +117,7 @@ def sample_curve(curve: CurveSkeleton, n_samples: int, *, collinear_cos: float =
 def _end_vertex_directions(
     vertices: np.ndarray, edges: np.ndarray, edge_dir: np.ndarray, collinear_cos: float
 ) -> np.ndarray:
-    """Direction at the end vertex v_j of every edge (i, j), by v_j's degree (SPEC 3)."""
+    """Direction at the end vertex v_j of every edge (i, j), by v_j's degree (docs/metrics.md 3)."""
     n_v = len(vertices)
     degree = np.bincount(edges.ravel(), minlength=n_v)
     i, j = edges[:, 0], edges[:, 1]
@@ -145,7 +145,7 @@ def _circle_tangent(a: np.ndarray, v: np.ndarray, b: np.ndarray, collinear_cos: 
 
     With d1 = v - a and d2 = b - v the tangent is parallel to d1/|d1|^2 + d2/|d2|^2 (inscribed-angle
     theorem; no circumcentre needed). Nearly collinear points (|cos| >= collinear_cos, straight or
-    hairpin) or a neighbour at v use the chord b - a instead (SPEC 3).
+    hairpin) or a neighbour at v use the chord b - a instead (docs/metrics.md 3).
     """
     d1 = v - a
     d2 = b - v

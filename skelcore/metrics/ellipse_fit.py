@@ -1,6 +1,6 @@
 """Direct least-squares ellipse fit (Fitzgibbon, Pilu & Fisher 1999) in the numerically stable
 form of Halir & Flusser (1998): the cross-section centre and semi-axes l_a, l_b of curve
-centeredness (paper Eq. 11, ``eq.curve_point_centeredness``, and its remark; SPEC 3).  The paper
+centeredness (paper Eq. 11, ``eq.curve_point_centeredness``, and its remark; docs/metrics.md 3).  The paper
 prefers a fitted ellipse to the barycentre as the centre of a partly sampled cross-section.
 """
 

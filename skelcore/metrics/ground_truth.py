@@ -1,5 +1,5 @@
-"""A curve skeleton against a ground-truth curve with a radius: the community's metrics (issue 23;
-docs/metrics.md 5.3.1 gives every formula and its source).
+"""A curve skeleton against a ground-truth curve with a radius: the community's metrics
+(docs/metrics.md 5.3.1 gives every formula and its source).
 
 Both curves are cut into pieces of at most ``sample_step`` x the reference's smallest radius;
 each piece's midpoint is a sample weighted by its length (isolated vertices are left out, unless a

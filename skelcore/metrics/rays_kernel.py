@@ -1,7 +1,7 @@
 """Driver of the compiled ``rays`` kernel (``_raycast.c``): the cloud's tree, the cluster plan, the streams.
 
 beta(q) is the share of raster samples whose ray from q meets a ball of radius h around a cloud point
-(SPEC 2; the same samples as ``_rays.CapRaster``).  Queries are grouped in clusters (docs/boundedness.md
+(docs/metrics.md 2; the same samples as ``_rays.CapRaster``).  Queries are grouped in clusters (docs/boundedness.md
 1.6-1.7: cubic cells, finer cells near the surface, near-surface queries alone); each cluster's far field
 (points beyond its reach) is ray cast once from its centroid, its near field rasterised as exact caps
 from every member.  A cluster of one query at its own position is exact.  Clusters run in long contiguous
@@ -99,7 +99,7 @@ class BallTree:
 
     def median_spacing(self, counts: np.ndarray, checkpoint: Checkpoint = no_checkpoint) -> float:
         """Median nearest-neighbour distance over the original points, ``counts`` copies of each
-        distinct point (input order): a point with copies is at distance 0 from one (SPEC 2's h)."""
+        distinct point (input order): a point with copies is at distance 0 from one (the h of docs/metrics.md 2)."""
         if int(np.sum(counts)) < 2:
             return 0.0
         c = np.asarray(counts)[self.perm]

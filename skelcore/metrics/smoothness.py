@@ -1,4 +1,4 @@
-"""Smoothness of a skeletal point set (PCA tangents) and of a curve skeleton (vertex angles), SPEC 4.
+"""Smoothness of a skeletal point set (PCA tangents) and of a curve skeleton (vertex angles), docs/metrics.md 4.
 
 Paper Sec. 2.4: tangents by Prop. 3 (unnumbered covariance), the angle measure D_n of Eq. 13, local
 scores Eq. 14 (skeletal points) and Eq. 15 (curve vertices), overall scores Eq. 16 (mean, taken in
@@ -44,7 +44,7 @@ def skeletal_smoothness(
     params: Params = Params(),
     checkpoint: Checkpoint = no_checkpoint,
 ) -> np.ndarray:
-    """Local smoothness s_i of every skeletal point (SPEC 4); NaN where it cannot be computed.
+    """Local smoothness s_i of every skeletal point (docs/metrics.md 4); NaN where it cannot be computed.
 
     Tangent at q_i: eigenvector of the largest eigenvalue of C_i = (1/k) sum (q_j - q_i)(q_j - q_i)^T
     over its k = ``tangent_k`` nearest neighbours, excluding q_i itself and every point at q_i's exact
@@ -123,10 +123,10 @@ def _degree2_neighbours(curve: CurveSkeleton) -> tuple[np.ndarray, np.ndarray]:
 
 def curve_vertex_smoothness(curve: CurveSkeleton) -> np.ndarray:
     """s_v = |1 - 2 theta / pi| at each degree-2 vertex v with neighbours a, b, theta the angle
-    between a - v and b - v (SPEC 4): straight = 1, right angle = 0. Other degrees: NaN (no value,
+    between a - v and b - v (docs/metrics.md 4): straight = 1, right angle = 0. Other degrees: NaN (no value,
     drawn magenta), as is a degree-2 vertex coinciding with a neighbour (no angle).
 
-    Quirk kept from the paper's formula (SPEC 4): a full hairpin (theta = 0, the path folds back on
+    Quirk kept from the paper's formula (docs/metrics.md 4): a full hairpin (theta = 0, the path folds back on
     itself) also scores 1, exactly like a straight line.
     """
     s = np.full(curve.n_vertices, np.nan)
@@ -140,7 +140,7 @@ def curve_vertex_smoothness(curve: CurveSkeleton) -> np.ndarray:
 
 
 def curve_smoothness_overall(curve: CurveSkeleton, s: np.ndarray) -> tuple[float, int]:
-    """Length-weighted overall smoothness (SPEC 4) and the number of vertices it counted.
+    """Length-weighted overall smoothness (docs/metrics.md 4) and the number of vertices it counted.
 
     S = 1 - sum over degree-2 vertices of w_v (1 - s_v) / sum over all vertices of w_v, w_v = half
     the total length of the edges at v (so the denominator is the total edge length; vertices of

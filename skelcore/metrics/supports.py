@@ -1,15 +1,15 @@
 """The local support behind one element's metric value: what the paper's explanatory figures show.
 
 ``curve_sample_support``: the slab cut across a curve sample, its cross-section ring and the fitted
-ellipse (paper Eq. 11, SPEC 3; the figure of the two cutting planes). ``skeletal_point_support``:
+ellipse (paper Eq. 11, docs/metrics.md 3; the figure of the two cutting planes). ``skeletal_point_support``:
 the k neighbours, their corresponding cloud points and the two centroids of paper Eq. 10.
 ``direction_map``: the directions from a point that hit a cloud point's ball, on an equal-area
-(longitude, z) raster (paper Eq. 5-6, SPEC 2 ``rays``); ``paper_triangles``: the triangulated sphere of
+(longitude, z) raster (paper Eq. 5-6, ``rays`` in docs/metrics.md 2); ``paper_triangles``: the triangulated sphere of
 the reference tool's estimator. ``skeletal_smoothness_support``: a skeletal point's PCA tangent, its
 neighbours' tangents and the angle that sets its value (paper Eq. 13-14); ``curve_vertex_support``: a
 degree-2 vertex's two edges and their angle (Eq. 15). Each recomputes one element from scratch with plain numpy (no
 shared kernel), so it doubles as an independent check of the engine's value. Inputs are in
-normalized units (SPEC 0), like the metric functions.
+normalized units (docs/metrics.md 0), like the metric functions.
 """
 
 from __future__ import annotations
@@ -40,7 +40,7 @@ __all__ = [
 
 @dataclass(frozen=True)
 class SlabSupport:
-    """A curve sample's cross-section (SPEC 3), in the plane through p orthogonal to u.
+    """A curve sample's cross-section (docs/metrics.md 3), in the plane through p orthogonal to u.
 
     slab : cloud rows with |u . (x - p)| < alpha / 2.
     flat : (len(slab), 2) those points in the plane's basis (g, h), p at the origin.
@@ -156,7 +156,7 @@ def skeletal_point_support(corresponding_cloud: np.ndarray, skeletal: np.ndarray
 
 def direction_map(cloud: np.ndarray, query: np.ndarray, *, params: Params = Params(),
                   rows: int | None = None, bins: int | None = None, chunk: int = 65536) -> DirectionMap:
-    """Which directions from ``query`` hit a ball of radius h around a cloud point (SPEC 2 ``rays``).
+    """Which directions from ``query`` hit a ball of radius h around a cloud point (``rays`` in docs/metrics.md 2).
 
     The raster is the world frame's (z up), not the engine's rotated one, so its fraction agrees with
     the engine's beta within the raster's sampling error (about 0.004 at 48 rows), not bit for bit.
@@ -217,7 +217,7 @@ def direction_map(cloud: np.ndarray, query: np.ndarray, *, params: Params = Para
 
 @dataclass(frozen=True)
 class SmoothnessSupport:
-    """What a smoothness value is made of (SPEC 4): s = |1 - 2 theta / pi| for the angle theta between
+    """What a smoothness value is made of (docs/metrics.md 4): s = |1 - 2 theta / pi| for the angle theta between
     two directions, 1 on a straight line, 0 at a right angle.
 
     A skeletal point (Eq. 14): ``tangent`` at the point (PCA of its ``tangent_k`` nearest points), the

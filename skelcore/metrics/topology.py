@@ -1,7 +1,7 @@
-"""Topological similarity of a skeletal point set to its cloud (paper Sec. 2.1, Prop. 1; SPEC 1).
+"""Topological similarity of a skeletal point set to its cloud (paper Sec. 2.1, Prop. 1; docs/metrics.md 1).
 
 A good skeleton keeps the shape's connectivity, so the H0 barcodes of cloud and skeleton are compared:
-eps* (paper Eq. 2, 0.99 quantile per SPEC 1) picks the K compared bars, then the bottleneck distance
+eps* (paper Eq. 2, 0.99 quantile per docs/metrics.md 1) picks the K compared bars, then the bottleneck distance
 (Eq. 3) and the 1-Wasserstein distance divided by K (Eq. 4).  The H0 barcode of a Vietoris-Rips
 filtration is exactly the Euclidean minimum spanning tree's edge lengths plus one infinite bar; the
 EMST is computed exactly by Boruvka's algorithm over a KD-tree in compiled code (``_emst.c``), so no
@@ -41,7 +41,7 @@ _THREADED_EMST = 16384  # smaller sets: the kernel runs on this thread (a few ms
 
 @dataclass
 class TopologyResult:
-    """SPEC 1. Barcodes are (n, 2) arrays of (birth, death) in normalized units, longest first,
+    """docs/metrics.md 1: barcodes are (n, 2) arrays of (birth, death) in normalized units, longest first,
     the infinite bar first with death = inf; every bar, not only the K compared ones."""
 
     bottleneck: float
@@ -113,7 +113,7 @@ def _barcode_and_nn(points: np.ndarray, checkpoint: Checkpoint) -> tuple[np.ndar
 
 
 def h0_barcode(points: np.ndarray, *, checkpoint: Checkpoint = no_checkpoint) -> np.ndarray:
-    """H0 barcode of the Vietoris-Rips filtration of ``points`` (SPEC 1).
+    """H0 barcode of the Vietoris-Rips filtration of ``points`` (docs/metrics.md 1).
 
     Returns an (n, 2) array of (birth = 0, death) rows, longest first: the infinite bar, then one
     bar per EMST edge of the distinct points (full edge lengths). Duplicate points would give
@@ -132,7 +132,7 @@ def h0_barcode(points: np.ndarray, *, checkpoint: Checkpoint = no_checkpoint) ->
 # eps* and the number of compared bars
 # ---------------------------------------------------------------------------------------------
 def eps_star(cloud: np.ndarray, quantile: float = 0.99) -> float:
-    """SPEC 1: the ``quantile`` of the cloud's nearest-neighbour distances, as MATLAB's ``prctile``
+    """docs/metrics.md 1: the ``quantile`` of the cloud's nearest-neighbour distances, as MATLAB's ``prctile``
     (numpy ``method="hazen"``); quantile 1.0 is the paper's maximum."""
     if not 0.0 < quantile <= 1.0:
         raise ValueError(f"quantile must be in (0, 1], got {quantile}")
@@ -144,7 +144,7 @@ def _quantile(nn: np.ndarray, quantile: float) -> float:
 
 
 def compared_bar_count(cloud_barcode: np.ndarray, eps: float, n_cloud: int, *, params: Params = Params()) -> int:
-    """SPEC 1: K = bars of the cloud with persistence > eps* (the infinite bar counts); if
+    """docs/metrics.md 1: K = bars of the cloud with persistence > eps* (the infinite bar counts); if
     K < min_bar_fraction * N_o, the reference tool's fallback K = N_o - round(0.95 N_o) + 1."""
     bars = np.asarray(cloud_barcode, dtype=float).reshape(-1, 2)
     k = int(np.count_nonzero(bars[:, 1] - bars[:, 0] > eps))
@@ -302,7 +302,7 @@ def topological_similarity(
     checkpoint: Checkpoint = no_checkpoint,
 ) -> TopologyResult:
     """Bottleneck and normalized 1-Wasserstein distances between the K longest H0 bars of the
-    cloud and of the skeletal point set (SPEC 1; both inputs already normalized, SPEC 0).
+    cloud and of the skeletal point set (docs/metrics.md 1; both inputs already normalized, docs/metrics.md 0).
 
     K comes from :func:`compared_bar_count`; a diagram with fewer than K bars is compared whole;
     d_Wp = W1 / K. Barcodes and eps* are returned in normalized units, every bar included.

@@ -1,6 +1,6 @@
 """Stray points: background returns far from the scanned surface (docs/metrics.md 6.4).
 
-One stray point sets the cloud's bounding box, hence the normalization every metric runs in (SPEC 0):
+One stray point sets the cloud's bounding box, hence the normalization every metric runs in (docs/metrics.md 0):
 a point at 10 x the hammer's extent shrinks the hammer to a tenth and changes d_B and centeredness.
 A point is an outlier when it fails both tests of PCL and Open3D (so a point in a sparse but real part
 of a scan, which fails at most one, is kept):
@@ -55,7 +55,7 @@ class Outliers:
 
 
 def find_outliers(cloud: np.ndarray, params: Params = Params(), *, checkpoint: Checkpoint = no_checkpoint) -> Outliers:
-    """The outliers of ``cloud`` (module docstring) and how far they move SPEC 0's normalization.
+    """The outliers of ``cloud`` (module docstring) and how far they move the normalization of docs/metrics.md 0.
 
     The spacing (median nearest-neighbour distance) and the statistical test's yardstick come from one
     query of at most ``REFERENCE_SAMPLE`` random points (every point below that; seed 0); the radius

@@ -63,7 +63,7 @@ class ScanReport:
 
 
 def outliers_warning(strays: Strays) -> TrustWarning:
-    """``outliers``: their count and what they do to the normalization (SPEC 0)."""
+    """``outliers``: their count and what they do to the normalization (docs/metrics.md 0)."""
     found = strays.cloud
     moves = []
     if abs(found.scale_ratio - 1.0) > 1e-3:

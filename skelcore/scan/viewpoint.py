@@ -52,7 +52,7 @@ def check_viewpoints(viewpoints) -> np.ndarray:
 
 def direction_raster(rows: int) -> np.ndarray:
     """(rows x 2 rows, 3) unit directions at the cell centres of an equal-area latitude raster (rows of
-    equal height in z, Archimedes), the layout of the kernel's raster (SPEC 2)."""
+    equal height in z, Archimedes), the layout of the kernel's raster (docs/metrics.md 2)."""
     bins = 2 * int(rows)
     z = -1.0 + (np.arange(rows) + 0.5) * (2.0 / rows)
     lon = (np.arange(bins) + 0.5) * (2.0 * np.pi / bins)
@@ -199,7 +199,7 @@ def seen_boundedness(
 
     Parameters
     ----------
-    cloud, queries, viewpoints : (N, 3), (Q, 3), (m, 3), normalized (SPEC 0).
+    cloud, queries, viewpoints : (N, 3), (Q, 3), (m, 3), normalized (docs/metrics.md 0).
     params : ``rays_radius_factor`` (h), ``viewpoint_rows`` (the direction raster).
 
     Returns

@@ -1,6 +1,6 @@
 """``skeletonize``: from a bare cloud to both skeletal representations the metrics score.
 
-Normalizes the cloud (SPEC 0 transform, longest side 1.6, like the reference toolbox's
+Normalizes the cloud (the transform of docs/metrics.md 0, longest side 1.6, like the reference toolbox's
 ``GS.normalize``), contracts it and extracts the curve, returns both in the user's units.
 ``method="cao"`` (default) is the toolbox's own algorithm (:mod:`.cao_ring`, :mod:`.cao`,
 :mod:`.cao_curve`); ``method="skelscope"`` is our variant with its clean-up steps

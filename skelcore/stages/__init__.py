@@ -1,4 +1,4 @@
-"""The evaluation as a declared list of stages sharing one context (issue 21): ``context`` (inputs,
+"""The evaluation as a declared list of stages sharing one context: ``context`` (inputs,
 decisions, results), ``catalogue`` (the stages), ``progress`` (one progress bar and cancel),
 ``assemble`` (the Evaluation and the trust checks), ``orchestrate`` (:func:`evaluate`)."""
 

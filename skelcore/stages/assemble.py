@@ -1,5 +1,5 @@
 """The Evaluation from the stages' results: the skeletal and curve columns (local values in the user's
-units, SPEC 2-4), coverage, the reference comparison, what was not computed, and the trust checks
+units, docs/metrics.md 2-4), coverage, the reference comparison, what was not computed, and the trust checks
 (frame, frame fit, smoothness, no correspondence; the real-scan checks of .scan_checks;
 docs/metrics.md) run after the stages."""
 
@@ -58,7 +58,7 @@ def assemble(ctx: EvalContext, inputs: dict[str, Any] | None = None) -> Evaluati
 
 
 def diagnostics_warnings(ctx: EvalContext) -> list[TrustWarning]:
-    """The diagnostics' defect warnings (issue 22), after the trust checks."""
+    """The diagnostics' defect warnings, after the trust checks."""
     out: list[TrustWarning] = []
     for name in ("skeletal missing parts", "curve missing parts", "curve defects", "skeletal outside"):
         found = ctx.results.get(name)

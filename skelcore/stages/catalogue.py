@@ -1,9 +1,9 @@
-"""The stages of an evaluation, declared once (issue 21): each names its weight (relative cost, for a
+"""The stages of an evaluation, declared once: each names its weight (relative cost, for a
 progress bar that moves evenly; measured on 4k-point shapes), the column it fills, what it reads from
 the context (the stage that makes an input runs before it), when it applies and its function.
 
-The paper's four metrics on the skeletal set and the curve (SPEC 1-4), the reverse correspondence,
-SkelScope's coverage, the reference comparison and the ground-truth metrics (docs/metrics.md), the diagnostics (issue 22).  Start order (docs/performance.md
+The paper's four metrics on the skeletal set and the curve (docs/metrics.md 1-4), the reverse correspondence,
+SkelScope's coverage, the reference comparison and the ground-truth metrics (docs/metrics.md), the diagnostics.  Start order (docs/performance.md
 8): the boundedness stages first (the longest), then what others wait for, then the rest in catalogue
 order, the curve's boundedness last when the skeletal set's runs.
 """
@@ -128,7 +128,7 @@ def _ground_truth(ctx: EvalContext, checkpoint: Checkpoint):
 
 
 def _curve_defects(ctx: EvalContext, checkpoint: Checkpoint):
-    """Branches, spurious branches, cycles, the parts outside (issue 22, docs/diagnostics.md)."""
+    """Branches, spurious branches, cycles, the parts outside (docs/diagnostics.md)."""
     return find_curve_defects(ctx.cloud_n, ctx.curve_n, samples=ctx.samples,
                               sample_boundedness=ctx.results["curve boundedness"], params=ctx.params,
                               checkpoint=checkpoint, interior=ctx.interior)

@@ -1,4 +1,4 @@
-"""What the stages of an evaluation share (issue 21): the checked and normalized inputs, the curve's
+"""What the stages of an evaluation share: the checked and normalized inputs, the curve's
 samples, which correspondence the skeletal column has, what cannot be computed and why, tau, and each
 stage's result as soon as it is done.  :func:`build_context` checks the inputs (one-line
 :class:`SkelInputError`) and makes the decisions once, so the stages only read them.
@@ -45,7 +45,7 @@ STAGE_RESULTS = ("curve boundedness", "skeletal boundedness", "skeletal coverage
 
 @dataclass
 class EvalContext:
-    """Inputs in the user's units and normalized (``_n``, SPEC 0), the decisions made from them, and
+    """Inputs in the user's units and normalized (``_n``, docs/metrics.md 0), the decisions made from them, and
     ``results``: each stage's result by stage name (written by the orchestrator as a stage ends)."""
 
     params: Params
@@ -134,7 +134,7 @@ class EvalContext:
 
     def boundedness(self, points_n: np.ndarray, checkpoint: Checkpoint = no_checkpoint,
                     unseen: str | None = None) -> np.ndarray:
-        """Boundedness of normalized points as the stages score it: the paper's (SPEC 2), or with
+        """Boundedness of normalized points as the stages score it: the paper's (docs/metrics.md 2), or with
         viewpoints the share of the seen directions that are covered (docs/metrics.md 6.3); then, given a
         name in ``unseen``, also keeps there (``self.unseen``) how much of each point's unseen directions
         the cloud leaves uncovered."""
@@ -191,7 +191,7 @@ def build_context(
     checkpoint: Checkpoint = no_checkpoint,
 ) -> EvalContext:
     """Check the inputs of :func:`skelcore.evaluate`, take out stray points (``remove_outliers``),
-    normalize (SPEC 0), cap small flat openings (``cap_openings``) and decide the correspondence,
+    normalize (docs/metrics.md 0), cap small flat openings (``cap_openings``) and decide the correspondence,
     coverage and what cannot be computed.  ``checkpoint`` is reached by the scan options' work only."""
     if correspondence not in CORRESPONDENCE_CHOICES:
         raise SkelInputError(f"correspondence must be one of {', '.join(CORRESPONDENCE_CHOICES)}, got {correspondence!r}")

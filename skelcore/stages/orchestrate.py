@@ -40,36 +40,36 @@ def evaluate(
     cap_openings: bool = False,
     on_stages: Callable[[tuple[str, ...]], None] | None = None,
 ) -> Evaluation:
-    """Score a skeleton against its point cloud with the paper's four metrics (SPEC.md), the trust
+    """Score a skeleton against its point cloud with the paper's four metrics (docs/metrics.md), the trust
     checks, SkelScope's coverage and, given a ``reference_curve``, the comparison with it.
 
     Parameters
     ----------
     cloud : (N_o, 3) array
-        The original cloud, in the user's units (normalized inside, SPEC 0).
+        The original cloud, in the user's units (normalized inside, docs/metrics.md 0).
     skeletal : (N_s, 3) array, optional
         The skeletal point set. Row i is where cloud row i went when N_s = N_o ("pointwise"), or
         ``skeletal_index`` maps skeletal rows to cloud rows ("index"); otherwise
         ``correspondence="reverse"`` maps every cloud point to its nearest skeletal point, and
         without either, topology and skeletal centeredness are not computed ("none", a warning;
-        SPEC 7).
+        docs/metrics.md 5.1).
     curve : CurveSkeleton or (vertices, edges), optional
         The curve skeleton. With ``correspondence="reverse"`` and no skeletal set, the cloud's
         projections onto its edges are scored as the skeletal set (topology, skeletal-style
         centeredness).
     params : Params
-        Every constant of SPEC.md (thresholds, neighbour counts, estimator).
+        Every constant of docs/metrics.md (thresholds, neighbour counts, estimator).
     progress : callable, optional
         ``progress(fraction, stage)``, called at checkpoints (throttled).
     cancel : callable, optional
         Returning True makes the next checkpoint raise :class:`~skelcore.Cancelled` (in whichever
         stage checks first when several run side by side).
     skeletal_index : (N_s,) int array, optional
-        The cloud row each skeletal point corresponds to (SPEC 7 "index").
+        The cloud row each skeletal point corresponds to (the "index" mode of docs/metrics.md 5.1).
     correspondence : {"auto", "pointwise", "index", "reverse", "none"}
-        How skeletal points map to cloud points (SPEC 7); "auto" picks from the inputs.
+        How skeletal points map to cloud points (docs/metrics.md 5.1); "auto" picks from the inputs.
     reference_curve : CurveSkeleton or (vertices, edges), optional
-        A ground-truth curve in the cloud's frame (needs ``curve``; SPEC 9): the reference comparison
+        A ground-truth curve in the cloud's frame (needs ``curve``; docs/metrics.md 5.3): the reference comparison
         (``Evaluation.reference``) and the ground-truth metrics (``Evaluation.ground_truth``,
         docs/metrics.md 5.3.1) in the cloud's units.
     reference_radius : (V,) array, optional

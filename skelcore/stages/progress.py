@@ -24,7 +24,7 @@ class StageProgress:
     checkpoint raises, so the stages beside it stop too.  ``weights``: relative cost by stage name.
     ``on_stages(names)`` is called (under the same lock) whenever the set of running stages changes,
     with every stage running side by side in the order they started: a label naming only the stage
-    that reported last would flip between them (issue 25)."""
+    that reported last would flip between them."""
 
     def __init__(self, weights: dict[str, float], progress: Progress | None, cancel: Callable[[], bool] | None,
                  on_stages: Callable[[tuple[str, ...]], None] | None = None):

@@ -1,4 +1,4 @@
-"""Issue 11: a ``skelcore compare`` run's report rows open in the A/B view from their stored results
+"""A ``skelcore compare`` run's report rows open in the A/B view from their stored results
 (File > Open comparison run, drops, ``--compare-run``), ``--skeleton-b``, one-line errors, and the
 skeletal support under the "index" correspondence."""
 

@@ -1,4 +1,4 @@
-"""Issue 25 "Defects on screen": the Defects dock lists each defect found with its size, selecting one
+"""Defects on screen: the Defects dock lists each defect found with its size, selecting one
 frames the camera on it and highlights it; in 3-D, missing parts colour their cloud points, flagged
 branches and outside edges are drawn in styles of their own with a legend entry each; a switch hides
 them; a click on the curve selects its branch (length, radius, metric means, flags).
@@ -183,7 +183,7 @@ def test_the_ab_view_counts_the_defects_of_a_and_b(window, defective):
 
 
 def test_out_of_date_results_grey_their_defects_and_keep_the_selection(window, defective):
-    """Issue 25's stale state: a setting change greys the defects as it greys the metric colours."""
+    """The stale state: a setting change greys the defects as it greys the metric colours."""
     from skelscope.view.style import greyed
 
     s, curve, spur, ev = defective

@@ -126,7 +126,7 @@ def test_loading_new_inputs_during_a_run_drops_its_result(window, files, qtbot, 
 
 
 def test_an_invalid_evaluation_input_becomes_a_dialog(window, files, qtbot, tmp_path, monkeypatch):
-    # (a skeletal set of another size is no longer one: issue 8, tests/app/test_app_trust.py)
+    # (a skeletal set of another size is not one: tests/app/test_app_trust.py)
     def refuse(*args, **kwargs):
         raise skelcore.SkelInputError("skeletal point set: not what the engine accepts")
 
@@ -170,7 +170,7 @@ def test_every_export_reloads(evaluated, tmp_path):
     with open(out / "run_barcodes.csv") as fh:
         bars = list(csv.DictReader(fh))
     assert {r["diagram"] for r in bars} == {"cloud", "skeletal"} and any(r["death"] == "inf" for r in bars)
-    assert len(written) == 6  # + run_cloud.csv, the coverage gap per cloud point (issue 8)
+    assert len(written) == 6  # + run_cloud.csv, the coverage gap per cloud point
 
     png = w.save_screenshot(str(out / "view.png"), scale=2)
     from matplotlib.image import imread

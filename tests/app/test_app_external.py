@@ -1,4 +1,4 @@
-"""Issue 25, "External skeletons in the window": a point set with another point count than the cloud
+"""External skeletons in the window: a point set with another point count than the cloud
 can be loaded as a skeletal set scored by reverse projection or through an index file; a new cloud
 over a loaded skeleton asks one question; warnings name the window's menus and settings; a skeleton
 in another frame is mapped into the cloud's from a menu."""

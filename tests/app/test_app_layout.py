@@ -1,4 +1,4 @@
-"""The window fits a laptop screen (issue 25): 1366 x 768 at scale 1, and at Qt scale factors 1.5 and
+"""The window fits a laptop screen: 1366 x 768 at scale 1, and at Qt scale factors 1.5 and
 2 (checked in a fresh process under an Xvfb of that size, since the factor is read at start-up); the
 status bar with the progress bar and Cancel stays on screen; every dock can be reached (shown, or a
 tab beside a shown one, its panel scrolling when the dock is smaller than the panel) and, once

@@ -109,7 +109,7 @@ def _alive(pid: int) -> bool:
         return False
 
 
-# ---- every stage, the stage label, a bounded quit (issue 10's "Long work") -----------------------
+# ---- every stage, the stage label, a bounded quit (long work) --------------------------------
 
 _STAGES = ("topology", "skeletal boundedness", "skeletal centeredness", "skeletal smoothness", "curve boundedness",
            "curve centeredness", "curve smoothness", "skeletal coverage", "curve coverage")
@@ -215,7 +215,7 @@ def test_quitting_waits_for_stuck_tasks_within_one_budget_and_keeps_the_settings
 
 def test_the_stage_label_lists_every_stage_running_side_by_side(window, qtbot):
     """Two stages on two lanes report in turn: the label names both, in the order they started, and
-    does not flip to whichever reported last (issue 25)."""
+    does not flip to whichever reported last."""
     w = window
     go = threading.Event()
 

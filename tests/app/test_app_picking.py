@@ -1,4 +1,4 @@
-"""Issue 25, "Picking and supports" and "Stale state": a click means what is drawn on top there; the
+"""Picking and supports, and the stale state: a click means what is drawn on top there; the
 picked element stays marked when the metric changes; smoothness has a support (dock and 3-D); the
 support's colours stand apart from the skeleton's, the ellipse is drawn in 3-D, every overlay has a
 legend entry and the slab plot's legend leaves its data alone; out-of-date results are greyed in the
@@ -112,7 +112,7 @@ def test_a_skeletal_points_smoothness_support_shows_its_neighbours_tangents(wind
 
 
 def test_a_curve_vertex_smoothness_support_is_its_edges_angle(window):
-    """An L: the corner's two edges meet at 90 degrees, so s = 0 (SPEC 4); a vertex of degree 1 has none."""
+    """An L: the corner's two edges meet at 90 degrees, so s = 0 (docs/metrics.md 4); a vertex of degree 1 has none."""
     verts = np.array([[0.0, 0, 0], [1, 0, 0], [1, 1, 0]])
     curve = CurveSkeleton.from_raw(verts, np.array([[0, 1], [1, 2]]))
     pts = np.vstack([np.linspace(verts[0], verts[1], 200), np.linspace(verts[1], verts[2], 200)])
@@ -138,7 +138,7 @@ def test_support_colours_stand_apart_from_the_skeleton_and_every_overlay_has_a_l
     viridis = lookup_table("viridis", 256).astype(float)
     for name, colour in SUPPORT_COLORS.items():
         c = np.asarray(colour, dtype=float)
-        assert np.linalg.norm(fixed - c, axis=1).min() > 60, name  # e.g. the old slab red vs the curve's
+        assert np.linalg.norm(fixed - c, axis=1).min() > 60, name  # e.g. a red slab against the red curve
         assert np.linalg.norm(viridis - c, axis=1).min() > 45, name
     sh, curve, ev = y_eval
     w = window

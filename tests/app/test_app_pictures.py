@@ -220,7 +220,7 @@ def test_a_pick_among_a_million_skeletal_points_finds_the_clicked_one(window, qt
     assert np.linalg.norm(np.asarray(info["xyz"]) - skeletal[target]) < 0.02
 
 
-# ---- issue 25: pictures at any scale, camera framing, backgrounds, barcode labels --------------
+# ---- pictures at any scale, camera framing, backgrounds, barcode labels ------------------------
 
 def _dark_row_runs(img, x0: int) -> list[tuple[int, int, int]]:
     """Runs of rows holding dark (text) pixels in columns x0.., as (first row, last row, rightmost

@@ -1,4 +1,4 @@
-"""Issue 26 in the viewer: the openings of a partial scan drawn as their boundary loops, stray points
+"""Real scans in the viewer: the openings of a partial scan drawn as their boundary loops, stray points
 drawn in a style of their own (both with a legend entry and a Defects row), and the viewpoint set from
 the camera or typed, used by the next evaluation (viewpoint-aware boundedness)."""
 
@@ -79,7 +79,7 @@ def test_the_viewpoint_from_the_camera_or_typed_is_used_by_the_next_evaluation(w
     w.session.start_evaluation()
     qtbot.waitUntil(lambda: w.scene.evaluation is not None and not w.session.runner.running, timeout=60000)
     assert w.scene.evaluation.scan.viewpoints == [[0.0, 5.0, 2.0]] and w.session.stale_reason() == ""
-    assert w.scene.scores().boundedness_curve >= 0.95  # issue 26's goal, through the window
+    assert w.scene.scores().boundedness_curve >= 0.95  # the goal of viewpoint-aware scores, through the window
     w.actions_by_name["viewpoint_clear"].trigger()
     assert w.session.viewpoints == [] and w.session.stale_reason() == "settings changed"
 

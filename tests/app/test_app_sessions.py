@@ -1,4 +1,4 @@
-"""Saved sessions (issue 25): File > Save session / Open session and ``skelscope --session F`` restore
+"""Saved sessions: File > Save session / Open session and ``skelscope --session F`` restore
 the files, settings and thresholds, correspondence mode, metric, colour range, display options, camera
 and picked element from one small versioned JSON file; paths relative to it; files that moved or
 changed are named in ONE dialog and the rest is loaded; a bad file is a one-line dialog and nothing
@@ -263,7 +263,7 @@ def test_skelscope_session_restores_it_in_the_scripted_mode(window, files, tmp_p
 
 @pytest.mark.window(auto_evaluate=True, dialogs="record")
 def test_a_session_keeps_the_skeletal_index_the_mapping_and_the_viewpoints(window, tmp_path, qtbot):
-    """Issue 25/26: a skeletal set of every third point with its index file, both skeleton layers in
+    """A skeletal set of every third point with its index file, both skeleton layers in
     another frame (a tenth the size, shifted) mapped back by scale 10 and an offset, and a viewpoint:
     saved, then restored as they were and evaluated with them; a moved index is named in the one dialog."""
     from skelcore.curve import CurveSkeleton

@@ -1,4 +1,4 @@
-"""Start-up (issue 10, "1M points: first frame under 3 s"): the launch imports the view's libraries
+"""Start-up (1M points: first frame under 3 s): the launch imports the view's libraries
 before Qt, and the first frame of a cloud needs none of the engine's heavy modules (scipy's KD-trees,
 the metrics, gudhi, scikit-learn, the experiments), which ``skelcore`` imports on first use."""
 

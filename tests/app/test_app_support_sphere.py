@@ -1,4 +1,4 @@
-"""Issue 11: the boundedness support's directions also on a small 3-D sphere beside the equal-area
+"""The boundedness support's directions also on a small 3-D sphere beside the equal-area
 map, on a shape with a known answer (a point above a sphere sees the cap below it)."""
 
 from __future__ import annotations

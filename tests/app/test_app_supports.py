@@ -1,4 +1,4 @@
-"""Issue 11 in the window: a picked element's support plotted and highlighted, on shapes with known
+"""Supports in the window: a picked element's support plotted and highlighted, on shapes with known
 answers (a cylinder's cross-section, a point outside a sphere), and the below-threshold filter."""
 
 from __future__ import annotations
@@ -93,7 +93,7 @@ def test_a_skeletal_points_neighbours_and_centroids_are_shown(cylinder_window, c
     # switching the metric shows that metric's support for the same element
     w.scene.set_metric("boundedness")
     assert w.supports.support.kind == "directions" and w.supports.overlay.names == []
-    w.scene.set_metric("smoothness")  # (issue 25: smoothness has a support too, tests/app/test_app_picking.py)
+    w.scene.set_metric("smoothness")  # (smoothness has a support too, tests/app/test_app_picking.py)
     assert w.supports.support.kind == "smoothness"
 
 

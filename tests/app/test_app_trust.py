@@ -1,4 +1,4 @@
-"""The viewer's part of issue 8: a skeletal set of another size loads without an error dialog and is
+"""The viewer's trust checks: a skeletal set of another size loads without an error dialog and is
 scored with the correspondence chosen in the settings panel; warnings, the correspondence used,
 coverage (and the cloud coloured by its gap) and the reference comparison show in the summary."""
 
@@ -40,7 +40,7 @@ def test_skeletal_set_of_another_size_scores_by_the_chosen_correspondence(qtbot,
     assert w.summary.cell_text("d_B / d_Wp", "skeletal points") == "—"
     text = w.summary.details_text()
     assert "correspondence: none" in text and "warning [no_correspondence]" in text
-    # in the window's terms (issue 25): which setting or menu, never a command-line flag
+    # in the window's terms: which setting or menu, never a command-line flag
     assert "Settings > correspondence > reverse projection" in text and "File > Open skeletal index" in text
     assert "--" not in text
 

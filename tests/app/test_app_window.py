@@ -122,7 +122,7 @@ def test_magenta_appears_exactly_when_values_are_invalid(window, files):
     scene.curve.add_scalar_quantity("smoothness", np.where(degrees == 2, 0.9, 1.0), location="vertices")
     scene.set_metric("smoothness")
     assert _count(window.view.image(), (255, 0, 255)) == 0
-    # SPEC 4: a curve vertex that is not of degree 2 (the junction of the Y, the three tips) is NaN.
+    # docs/metrics.md 4: a curve vertex that is not of degree 2 (the junction of the Y, the three tips) is NaN.
     assert (degrees == 3).sum() == 1
     scene.curve.add_scalar_quantity("smoothness", np.where(degrees == 2, 0.9, math.nan), location="vertices")
     scene.set_metric("smoothness")
@@ -234,4 +234,4 @@ def test_settings_panel_builds_the_evaluation_parameters(window):
     assert (params.boundedness_method, params.k_center, params.curve_samples) == ("paper", 12, 50)
     assert params.beta_star == pytest.approx(0.6)
     panel.k_center.setValue(0)
-    assert window.session.params().k_center is None  # 0 shows "auto": SPEC 3's rule
+    assert window.session.params().k_center is None  # 0 shows "auto": the rule of docs/metrics.md 3

@@ -1,4 +1,4 @@
-"""The main window's public interface (issue 21, item 4): no module of the viewer but the window itself
+"""The main window's public interface: no module of the viewer but the window itself
 touches a private attribute of the window (read from the source with ``ast``), the window implements
 :class:`skelscope.window_api.WindowApi`, and actions are placed by menu group from one table."""
 

@@ -312,7 +312,7 @@ def test_a_run_killed_by_sigterm_resumes_without_losing_or_duplicating_a_job(dat
 
 
 def test_coverage_warnings_and_correspondence_reach_results_csv(data, tmp_path):
-    """Issue 8's fields: coverage fractions and the number of trust warnings are columns; a point
+    """The trust fields: coverage fractions and the number of trust warnings are columns; a point
     set that does not match the cloud row for row is scored with ``correspondence = "reverse"``."""
     root, _m = data
     m = manifest(root, """

@@ -1,4 +1,4 @@
-"""Other skeletonizers by name (issue 23 section 3): ``kind = "pygel"``, ``"kimimaro"``, ``"skimage"`` in a
+"""Other skeletonizers by name: ``kind = "pygel"``, ``"kimimaro"``, ``"skimage"`` in a
 compare manifest, run with the real libraries (the ``[skeletonizers]`` extra, in the ``test`` extra) on a
 cylinder and a Y whose exact skeletons are known (skelcore.shapes)."""
 

@@ -1,7 +1,7 @@
-"""Commands in manifests (issue 24): ``{python}`` is the interpreter running skelcore, so the shipped
+"""Commands in manifests: ``{python}`` is the interpreter running skelcore, so the shipped
 samples manifest's external method runs whatever ``python3`` is on PATH; and ``files`` methods map
-their skeletons with ``scale`` / ``offset`` as ``evaluate --skeleton-scale/--skeleton-offset`` does
-(issue 22)."""
+their skeletons with ``scale`` / ``offset`` as ``evaluate --skeleton-scale/--skeleton-offset``
+does."""
 
 from __future__ import annotations
 
@@ -64,7 +64,7 @@ def test_the_samples_axis_method_runs_when_python3_on_path_is_not_ours(tmp_path,
     assert axis.command.split()[0] == "{python}"
     assert command_argv(axis.command, "axis", {})[0] == sys.executable
 
-    # what the manifest used to say fails under this PATH, so the test below can tell the difference
+    # the command with python3 in place of {python} fails under this PATH, so the test below can tell the difference
     old = dataclasses.replace(axis, command=axis.command.replace("{python}", "python3"))
     job = next(j for j in make_jobs(m) if j.method.name == "axis" and j.condition.name == "normal")
     rec = run_job(dataclasses.replace(job, method=old))

@@ -1,4 +1,4 @@
-"""Issue 22 in compare: a job's defect warnings (skelcore.diagnostics.trust.DEFECT_CODES) reach results.csv by name,
+"""Defects in compare: a job's defect warnings (skelcore.diagnostics.trust.DEFECT_CODES) reach results.csv by name,
 fail the profiles that list them, keep the defective method out of the leaderboard's ranks (never shown
 best), count in its "sound" column and are named beside its pictures in report.html."""
 

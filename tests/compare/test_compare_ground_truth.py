@@ -1,4 +1,4 @@
-"""Issue 23 in compare: a shape's ``reference`` (a file or a ``{stem}`` template) reaches every job's
+"""Ground truth in compare: a shape's ``reference`` (a file or a ``{stem}`` template) reaches every job's
 evaluation, results.csv's and the leaderboard's "ground truth" columns and report.html (numbers, and the
 reference drawn under each skeleton); the job key follows the reference's bytes; a wrong reference
 (missing, unreadable, empty, in another frame or units, cyclic where the shape is declared a tree) is

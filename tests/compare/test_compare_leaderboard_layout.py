@@ -1,4 +1,4 @@
-"""report.html's leaderboard fits a 1400 px window without a wrapped cell (issue 22), measured in the
+"""report.html's leaderboard fits a 1400 px window without a wrapped cell, measured in the
 real headless Chromium: a script added to the page records, after layout, how many of the
 leaderboard's cells take more than one line and how far right its tables reach. The board holds a
 value in every compared column of SCORE_COLUMNS (so a group added to the catalogue is in the test),

@@ -99,7 +99,7 @@ def test_job_keys_follow_the_inputs_and_nothing_else(root, tmp_path):
         (('name = "truth"', 'name = "builtin"'), "two methods have this name"),
         (("[evaluation]", "colour = 1\n[evaluation]"), "top level: unknown key 'colour'"),
         (("[[conditions]]\nname = \"noise\"", "[[conditions]]\nname = \"normal\""), "two conditions"),
-        # evaluate() takes auto or reverse: "pointwise" used to pass the check and fail in every job
+        # evaluate() takes auto or reverse: "pointwise" fails the check, not every job
         (('curve = "skeletons/{stem}_curve.ply"', 'curve = "skeletons/{stem}_curve.ply"\ncorrespondence = "pointwise"'),
          "correspondence must be one of auto, reverse"),
     ],

@@ -1,4 +1,4 @@
-"""``skelcore compare --out DIR`` never writes into a user's folder (issue 24): DIR must be new, empty or
+"""``skelcore compare --out DIR`` never writes into a user's folder: DIR must be new, empty or
 one of our runs, recognised by its ``.skelscope-run`` marker (skelcore/compare/run_marker.py), not by
 its file names; anything else is one line and exit 2 before a file is touched, unless ``--force``."""
 

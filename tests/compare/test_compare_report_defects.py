@@ -1,4 +1,4 @@
-"""report.html draws each job's defects (issue 22): a compare run on the generated Y with its true
+"""report.html draws each job's defects: a compare run on the generated Y with its true
 curve and three broken copies (an arm truncated, spurs poking out, a chord closing a loop inside):
 each broken job's defect picture has pixels of its defects' colours where the defective elements
 project, the sound job's has none, and the legend names only what was found."""

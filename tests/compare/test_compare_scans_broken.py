@@ -1,4 +1,4 @@
-"""Issue 22 on the shared scans: a compare run over the hammer, the horse, the apple tree and the cave
+"""Defects on the shared scans: a compare run over the hammer, the horse, the apple tree and the cave
 with cao, skelscope and two broken copies of cao's skeletons as `files` methods (half of it cut away;
 everything shrunk to 3 % around its centroid). The broken ones are never shown best in any column of
 the leaderboard and fail every profile that applies. The apple tree is the paper's 1730-point voxel
@@ -59,7 +59,7 @@ def collapse(points: np.ndarray, centre: np.ndarray) -> np.ndarray:
 @pytest.fixture(scope="module")
 def run(tmp_path_factory):
     if not SHARED_DATA.is_dir():  # the shared_data fixture's rule, for a module-scoped run
-        pytest.skip("../shared/data is not present")
+        pytest.skip("the shared data folder is not present")
     shared_data = SHARED_DATA
     root = tmp_path_factory.mktemp("scans")
     for d in ("clouds", "skel"):
@@ -183,7 +183,7 @@ def test_on_the_hammer_alone_the_sound_methods_are_ranked_and_the_broken_ones_ar
         assert not [c for c in cols if by[m_].rank.get(c) == 1]
         assert all(passed == 0 for passed, _n in by[m_].profiles.values())
     assert by["cao"].profiles["grasping"][0] == 1
-    # the collapsed skeleton's d_B is close to cao's on the hammer (the issue's blob that d_B cannot tell)
+    # the collapsed skeleton's d_B is close to cao's on the hammer (a blob that d_B cannot tell apart)
     assert by["collapsed"].mean["d_B"] < 2 * by["cao"].mean["d_B"]
 
 

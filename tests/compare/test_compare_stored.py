@@ -1,5 +1,5 @@
 """A compare run keeps each job's whole Evaluation (skeletons, raw local values, index, rows) and
-``run_folder`` gives it back unchanged, read only, with one-line errors (issue 11: the viewer's A/B
+``run_folder`` gives it back unchanged, read only, with one-line errors (the viewer's A/B
 view opens the report's rows from the stored results)."""
 
 from __future__ import annotations

@@ -1,4 +1,4 @@
-"""The documentation site (issue 24, section 4): ``make docs``'s build, warnings as errors, from a copy
+"""The documentation site: ``make docs``'s build, warnings as errors, from a copy
 of the sources in a temporary folder (so the gallery really runs and nothing is written into the
 tree), then its front page and one gallery page opened in headless Chromium."""
 

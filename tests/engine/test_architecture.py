@@ -58,15 +58,15 @@ def _imports(name: str, path: Path, known: set[str]) -> list[tuple[str, int, boo
 # A public method kept on a lower module that hands its work to the module above it, imported inside the
 # method (never at module level): the only arrows allowed to point up, and they are no cycle at import time.
 LAZY_DELEGATIONS = {
-    ("skelcore.evaluation", "skelcore.io.evaluation_files"),  # Evaluation.write_json & co. (issue 21)
-    # other libraries' objects (issue 24): recognised only when one is given instead of an array / path
+    ("skelcore.evaluation", "skelcore.io.evaluation_files"),  # Evaluation.write_json & co.
+    # other libraries' objects: recognised only when one is given instead of an array / path
     ("skelcore.geometry", "skelcore.interop.objects_in"),
     ("skelcore.curve", "skelcore.interop.objects_in"),
     ("skelcore.io.loaders", "skelcore.interop.objects_in"),
     ("skelcore.evaluation", "skelcore.interop.tables"),
     ("skelcore.evaluation", "skelcore.interop.graph_out"),
     ("skelcore.evaluation", "skelcore.interop.open3d_out"),
-    # pictures and tables for notebooks (issue 24 3): Evaluation.show, show_barcodes, _repr_html_
+    # pictures and tables for notebooks: Evaluation.show, show_barcodes, _repr_html_
     ("skelcore.evaluation", "skelcore.display.show"),
     ("skelcore.evaluation", "skelcore.display.summary_table"),
 }
@@ -229,7 +229,7 @@ def test_no_arrow_runs_up_the_layers():
 
 
 def test_the_layer_check_finds_an_upward_arrow():
-    """What issue 21 removed would be caught: a metric importing the record, the record importing io,
+    """An upward import would be caught: a metric importing the record, the record importing io,
     a format reader importing a metric, an engine module importing compare."""
     edges = [("skelcore.metrics.topology", "skelcore.evaluation", 26, True),
              ("skelcore.evaluation", "skelcore.io.atomic", 19, True),

@@ -167,7 +167,7 @@ def test_compare_manifest_names_every_case_with_its_reference(small):
     without = {**doc, "shapes": [{k: v for k, v in s.items() if k != "reference"} for s in doc["shapes"]]}
     m = parse_manifest(without, str(small / "compare.toml"))  # otherwise a valid compare manifest
     assert [s.name for s in m.shapes] == names
-    # a one-sided scan carries the sensors it was made from (issue 26: compare scores what they saw)
+    # a one-sided scan carries the sensors it was made from (compare scores what they saw)
     views = {s.name: s.viewpoints for s in m.shapes}
     rec = json.loads((small / "cases" / "junction_y__views-1.json").read_text())
     assert views["junction_y__views-1"] == tuple(tuple(e) for e in rec["scan"]["viewpoints"]) and len(rec["scan"]["viewpoints"]) == 1
@@ -202,7 +202,7 @@ def test_the_folder_marker_is_compares_run_marker(tmp_path, capsys):
 
 
 def test_bench_make_then_the_compare_command_it_prints(tmp_path, capsys):
-    """End to end (issue 23): the small suite, then the printed ``skelcore compare`` command with the
+    """End to end: the small suite, then the printed ``skelcore compare`` command with the
     built-in cao alone (the suite's manifest less its skelscope method, to keep the test short):
     every job finishes and results.csv has the ground-truth columns filled, the references' radius
     read from their files; a rerun does nothing again."""

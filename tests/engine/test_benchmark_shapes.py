@@ -1,5 +1,5 @@
 """The benchmark's shapes: exact skeletons (graph counts, inside their shapes), surface samples on
-the exact surface and uniform, the canal conditions enforced (skelcore.benchmark, issue 23)."""
+the exact surface and uniform, the canal conditions enforced (skelcore.benchmark)."""
 
 from __future__ import annotations
 
@@ -69,7 +69,7 @@ def test_surface_samples_lie_on_the_exact_surface(name):
 
 @pytest.mark.parametrize("name", sorted(SHAPES))
 def test_exact_skeleton_lies_inside_its_shape(name):
-    """Boundedness (SPEC 2, rays) of the reference curve against a clean cloud of its shape is 1: it
+    """Boundedness (docs/metrics.md 2, rays) of the reference curve against a clean cloud of its shape is 1: it
     lies inside (tree_4's twigs, 0.03 thick, need more points to close their surface)."""
     shape = _shape(name)
     n = 8000 if name == "tree_4" else 2500

@@ -1,4 +1,4 @@
-"""``skelcore bench validity`` (issue 23 item 4): the controlled defects, the statistics, and a small
+"""``skelcore bench validity``: the controlled defects, the statistics, and a small
 run on the pool with its outputs, resume and bad --out."""
 
 from __future__ import annotations

@@ -1,4 +1,4 @@
-"""Boundedness (SPEC 2): the rays estimator against a brute-force direction grid and known values,
+"""Boundedness (docs/metrics.md 2): the rays estimator against a brute-force direction grid and known values,
 its invariances and edge cases, the level-of-detail far field, and the paper estimator."""
 
 from __future__ import annotations
@@ -111,7 +111,7 @@ def test_sphere_centre_is_bounded_and_twice_the_radius_is_about_the_cap_fraction
     cloud = sphere_surface(4096, 0.8, seed=7)
     beta = boundedness_rays(cloud, np.array([[0.0, 0, 0], [1.6, 0, 0], [0, -1.6, 0]]))
     # random uniform sampling, h = 2 x median spacing: caps cover the sphere ~2.8 times over, so about
-    # 1 - exp(-2.8) = 0.94 of it (the brute-force union agrees; SPEC's 0.95-0.97 is a rounder figure)
+    # 1 - exp(-2.8) = 0.94 of it (the brute-force union agrees; the 0.95-0.97 quoted for it is a rounder figure, docs/metrics.md 2)
     assert 0.9 < beta[0] < 0.97
     cap = (1 - np.sqrt(1 - 0.25)) / 2  # 0.067, plus the cap's widening by h
     assert cap < beta[1] < cap + 0.02
@@ -431,7 +431,7 @@ def test_paper_outside_point_off_the_seam_counts_the_cap_and_part_of_its_strip(s
     """Twice the radius away, cap of directions off the seam and the poles: Delaunay covers the cap
     (0.067) and the reference's unconditional strip covers it again where the loop's sides alternate,
     not along single-side runs (slivers): 0.103-0.118 measured on 1k-100k points, never 2 x cap.
-    SPEC's "about 0.08" is not what the published reference code gives (module docstring)."""
+    An expected "about 0.08" is not what the published reference code gives (module docstring; docs/metrics.md 2)."""
     cloud = sphere_surface(3000, 0.8, seed=seed)
     beta = boundedness_paper(cloud, np.array([[1.6, 0, 0], [0, 1.6, 0], [0, -1.6, 0], [1.1, 1.1, 0.3]]))
     assert np.all((beta > CAP + 0.03) & (beta < 2 * CAP - 0.01)), beta

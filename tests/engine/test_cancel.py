@@ -29,7 +29,7 @@ STAGES = [
     "curve coverage",
     "stray points",  # the real-scan check's search (docs/metrics.md 6.4), a stage beside the others
     "curve boundedness",
-    "curve defects",  # the diagnostics (issue 22)
+    "curve defects",  # the diagnostics
     "skeletal outside",
     "skeletal missing parts",
     "curve missing parts",

@@ -1,4 +1,4 @@
-"""Centeredness of skeletal points and curve samples (SPEC 3) and its analytic checks (SPEC 6)."""
+"""Centeredness of skeletal points and curve samples (docs/metrics.md 3) and its analytic checks (docs/metrics.md 5.6)."""
 
 from __future__ import annotations
 
@@ -39,7 +39,7 @@ def _away_from_caps(points):
 
 
 def _skeletal_reference(cloud, skel, k):
-    """Plain loops over SPEC 3's definition, neighbours by brute-force sorting."""
+    """Plain loops over the definition in docs/metrics.md 3, neighbours by brute-force sorting."""
     out = []
     for q in skel:
         d = np.sqrt(((skel - q) ** 2).sum(axis=1))
@@ -145,7 +145,7 @@ def test_skeletal_rejects_mismatched_rows():
 
 
 def test_skeletal_cylinder_about_85_percent_pass(dense_cylinder):
-    """SPEC 6: with k = 30 random ring points |m_o - m_s| / M is about 0.16; ~85% pass 0.75."""
+    """docs/metrics.md 5.6: with k = 30 random ring points |m_o - m_s| / M is about 0.16; ~85% pass 0.75."""
     shape = cylinder(20000, radius=RADIUS, length=LENGTH, capped=False, seed=2)
     c = skeletal_centeredness(shape.cloud, shape.skeletal, params=Params(k_center=30))
     assert np.all(np.isfinite(c))
@@ -165,7 +165,7 @@ def test_skeletal_points_pushed_to_one_side_score_low():
 
 
 def _curve_reference(cloud, points, directions, params):
-    """Straight from SPEC 3: every cloud point tested per sample, loops, fit_ellipse or fallback."""
+    """Straight from docs/metrics.md 3: every cloud point tested per sample, loops, fit_ellipse or fallback."""
     alpha = params.slab_factor * np.linalg.norm(cloud.max(0) - cloud.min(0))
     out = []
     for p, u in zip(points, directions):
@@ -220,7 +220,7 @@ def test_curve_matches_whole_cloud_reference_on_branching_shape(slab_factor):
 
 
 def test_curve_centred_axis_scores_one(dense_cylinder):
-    """SPEC 6: the axis of a dense closed cylinder is perfectly centred away from the caps."""
+    """docs/metrics.md 5.6: the axis of a dense closed cylinder is perfectly centred away from the caps."""
     s = _axis_samples(dense_cylinder)
     c = curve_centeredness(dense_cylinder.cloud, s.points, s.directions)
     mid = _away_from_caps(s.points)
@@ -230,7 +230,7 @@ def test_curve_centred_axis_scores_one(dense_cylinder):
 
 @pytest.mark.parametrize("fraction", [0.1, 0.3, 0.5])
 def test_curve_shifted_sideways_scores_one_minus_d_over_r(dense_cylinder, fraction):
-    """SPEC 6: the axis shifted sideways by d scores about 1 - d / r."""
+    """docs/metrics.md 5.6: the axis shifted sideways by d scores about 1 - d / r."""
     d = fraction * RADIUS
     s = _axis_samples(dense_cylinder, shift=(d / np.sqrt(2), d / np.sqrt(2), 0.0))
     c = curve_centeredness(dense_cylinder.cloud, s.points, s.directions)

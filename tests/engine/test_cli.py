@@ -67,13 +67,13 @@ def test_per_point_and_barcode_files(sample, tmp_path):
                "--per-point", prefix, "--barcodes", bars) == 0
     with open(f"{prefix}_skeletal.csv") as fh:
         rows = list(csv.reader(fh))
-    assert rows[0] == ["index", "x", "y", "z", "boundedness", "centeredness", "smoothness", "defects"]  # + issue 22
+    assert rows[0] == ["index", "x", "y", "z", "boundedness", "centeredness", "smoothness", "defects"]  # + the diagnostics' column
     assert {r[7] for r in rows[1:]} == {""}  # the true skeletal set: no point outside
     assert len(rows) == len(sh.cloud) + 1
     np.testing.assert_allclose([float(v) for v in rows[1][1:4]], sh.skeletal[0], rtol=1e-12)
     with open(f"{prefix}_curve_vertices.csv") as fh:
         rows = list(csv.reader(fh))
-    assert rows[0] == ["vertex", "x", "y", "z", "degree", "smoothness", "branch", "defects"]  # + issue 22
+    assert rows[0] == ["vertex", "x", "y", "z", "degree", "smoothness", "branch", "defects"]  # + the diagnostics' columns
     junction = [r for r in rows[1:] if r[4] == "3"]
     assert junction and junction[0][5] == "nan"
     with open(f"{prefix}_curve_samples.csv") as fh:

@@ -76,7 +76,7 @@ def test_colors_module_does_not_import_matplotlib():
 
 
 def test_defect_colours_are_on_no_colour_map_and_apart_from_the_scene_and_each_other():
-    """Issue 25: the defects are drawn in colours the metric map does not use (METRIC_COLORMAP, at
+    """The defects are drawn in colours the metric map does not use (METRIC_COLORMAP, at
     least 80 RGB units from every entry), not magenta (NaN), not the pick marker's, apart from the
     skeleton's, the cloud's and the supports' (45), and distinct from one another (60)."""
     from skelcore.colors import (

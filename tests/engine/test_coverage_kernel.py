@@ -27,7 +27,7 @@ def _dist(a: np.ndarray, b: np.ndarray) -> np.ndarray:
 
 
 def _brute_coverage(cloud: np.ndarray, elements: np.ndarray, params: Params, tau: float):
-    """SPEC 8 by brute force: r(x), gap, covered (|p - x|^2 - R^2 <= 1e-12 R_max^2, R = (1 + s) r + tau)."""
+    """Coverage (docs/metrics.md 5.2) by brute force: r(x), gap, covered (|p - x|^2 - R^2 <= 1e-12 R_max^2, R = (1 + s) r + tau)."""
     x = np.unique(elements, axis=0)
     d = _dist(cloud, x)
     r = d.min(axis=0)

@@ -41,7 +41,7 @@ def _curve_cov(sh, verts=None, edges=None):
 def test_capped_cylinder_axis_and_torus_circle_cover_the_shape():
     cyl = shapes.cylinder(3000, seed=1)
     tor = shapes.torus(3000, seed=1)
-    assert _curve_cov(cyl).fraction > 0.98  # SPEC 8: 1.0 on dense samples
+    assert _curve_cov(cyl).fraction > 0.98  # docs/metrics.md 5.2: 1.0 on dense samples
     assert _curve_cov(tor).fraction > 0.98
     no_slack = evaluate(cyl.cloud, curve=(cyl.curve_vertices, cyl.curve_edges), params=Params(coverage_slack=0.0))
     assert 0.7 < no_slack.coverage_curve.fraction < 0.9  # the balls never reach the cap rims
@@ -51,13 +51,13 @@ def test_half_axis_or_centroid_cover_far_less():
     cyl = shapes.cylinder(3000, seed=2)
     half = len(cyl.curve_vertices) // 2
     half_cov = _curve_cov(cyl, cyl.curve_vertices[: half + 1], cyl.curve_edges[:half])
-    assert 0.5 < half_cov.fraction < 0.7  # SPEC 8: about 0.6
+    assert 0.5 < half_cov.fraction < 0.7  # docs/metrics.md 5.2: about 0.6
     full = evaluate(cyl.cloud, cyl.skeletal)
     centroid = np.repeat(cyl.cloud.mean(axis=0)[None], len(cyl.cloud), 0)
     centroid += np.random.default_rng(0).normal(scale=1e-9, size=centroid.shape)
     collapsed = evaluate(cyl.cloud, centroid)
     assert full.coverage_skeletal.fraction > 0.9
-    assert collapsed.coverage_skeletal.fraction < 0.35  # SPEC 8: about 0.2
+    assert collapsed.coverage_skeletal.fraction < 0.35  # docs/metrics.md 5.2: about 0.2
     assert collapsed.coverage_skeletal.mean_gap > 5 * full.coverage_skeletal.mean_gap
 
 

@@ -1,4 +1,4 @@
-"""Curve sampling and sample directions (SPEC 3)."""
+"""Curve sampling and sample directions (docs/metrics.md 3)."""
 
 from __future__ import annotations
 

@@ -1,4 +1,4 @@
-"""Branches and the cycle basis of a curve skeleton (skelcore/diagnostics/branches.py; issue 22, 1)."""
+"""Branches and the cycle basis of a curve skeleton (skelcore/diagnostics/branches.py)."""
 
 from __future__ import annotations
 

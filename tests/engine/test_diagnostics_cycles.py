@@ -1,5 +1,4 @@
-"""The skeleton's cycles against the shape's tunnels (skelcore/diagnostics/cycles.py, interior.py;
-issue 22, 4)."""
+"""The skeleton's cycles against the shape's tunnels (skelcore/diagnostics/cycles.py, interior.py)."""
 
 from __future__ import annotations
 
@@ -53,7 +52,7 @@ def test_simplified_polygon_stays_within_tolerance():
 
 
 def test_voxel_interior_agrees_with_boundedness():
-    """The lattice rays classify like SPEC 2's boundedness: the torus's tube inside, its hole and
+    """The lattice rays classify like the boundedness of docs/metrics.md 2: the torus's tube inside, its hole and
     the space beside it outside."""
     s = shapes.torus(n=4000)
     norm = Normalization.from_cloud(s.cloud)

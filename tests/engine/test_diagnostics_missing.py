@@ -1,4 +1,4 @@
-"""Missing parts and completeness (issue 22, item 2; skelcore.diagnostics.missing_parts): shapes with
+"""Missing parts and completeness (skelcore.diagnostics.missing_parts): shapes with
 known skeletons, intact, stopped a radius short and with controlled defects; the hammer scan."""
 
 import json

@@ -1,5 +1,5 @@
 """The ``frame`` suggestion proposes only a mapping under which the skeleton is bounded AND complete
-(issue 22, item 6; skelcore.diagnostics.trust.fit_frame): voxel coordinates of a grid laid over the cloud, as
+(skelcore.diagnostics.trust.fit_frame): voxel coordinates of a grid laid over the cloud, as
 kimimaro and scikit-image write them, get the grid's pitch and origin back."""
 
 import re
@@ -71,7 +71,7 @@ def test_the_hammers_voxel_skeleton_gets_a_mapping_as_good_as_the_grids(shared_d
     assert s == pytest.approx(h, rel=0.06)
     true = evaluate(cloud, curve=(vox * h + origin, curve.edges)).summary()["centeredness"]["curve"]
     got = evaluate(cloud, curve=(vox * s + off, curve.edges))
-    # the old suggestion (bounding boxes, shrunk) left curve centeredness at 0.15 of the grid's 0.50
+    # the bounding-box suggestion (shrunk) leaves curve centeredness at 0.15 of the grid's 0.50
     assert got.summary()["centeredness"]["curve"] >= 0.8 * true
     assert got.summary()["boundedness"]["curve"] >= P.beta_star and complete(cloud, vox * s + off)
 

@@ -1,4 +1,4 @@
-"""Curve length and skeletal points outside the shape (skelcore/diagnostics/outside.py; issue 22, 5)."""
+"""Curve length and skeletal points outside the shape (skelcore/diagnostics/outside.py)."""
 
 from __future__ import annotations
 

@@ -1,4 +1,4 @@
-"""Spurious terminal branches (skelcore/diagnostics/spurs.py; issue 22, 3)."""
+"""Spurious terminal branches (skelcore/diagnostics/spurs.py)."""
 
 from __future__ import annotations
 

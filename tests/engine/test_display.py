@@ -1,6 +1,6 @@
-"""Evaluation.show, show_barcodes, _repr_html_ and skelcore.show_ab outside a notebook (issue 24 3):
+"""Evaluation.show, show_barcodes, _repr_html_ and skelcore.show_ab outside a notebook:
 the PNGs are read back and their pixels checked (the colour bar's viridis, magenta where an element
-is invalid, SPEC 5), the HTML table against the scores computed from the local arrays."""
+is invalid, docs/metrics.md 5.5), the HTML table against the scores computed from the local arrays."""
 
 from __future__ import annotations
 
@@ -78,7 +78,7 @@ def _bar_box(img: np.ndarray) -> np.ndarray:
 
 
 def test_show_writes_the_png_with_the_colour_bar_and_magenta_nan(ev, tmp_path):
-    assert np.isnan(ev.curve.vertex_smoothness).any()  # the ends and the junction (SPEC 4)
+    assert np.isnan(ev.curve.vertex_smoothness).any()  # the ends and the junction (docs/metrics.md 4)
     out = ev.show("smoothness", path=tmp_path / "s.png", size=SIZE)
     assert out == tmp_path / "s.png" and out.stat().st_size > 1000
     img = _rgb(out)
@@ -224,7 +224,7 @@ def test_repr_html_is_the_papers_table_with_the_defects(ev, ev_cut):
     rows = {r[0]: r[1:] for r in p.rows[1:]}
     assert list(rows)[:4] == ["d_B / d_Wp", "boundedness", "centeredness", "smoothness"]
     b_star = ev.params.beta_star
-    samples = ev.curve.sample_boundedness  # the fraction bounded, from the local values (SPEC 2)
+    samples = ev.curve.sample_boundedness  # the fraction bounded, from the local values (docs/metrics.md 2)
     assert rows["boundedness"][1] == f"{np.mean(samples > b_star):.3f} (n={len(samples)})"
     sm = ev.skeletal.smoothness
     assert rows["smoothness"][0] == f"{np.nanmean(sm):.3f} (n={np.isfinite(sm).sum()})"

@@ -1,4 +1,4 @@
-"""Fitzgibbon / Halir-Flusser ellipse fit (SPEC 3, curve centeredness)."""
+"""Fitzgibbon / Halir-Flusser ellipse fit (docs/metrics.md 3, curve centeredness)."""
 
 from __future__ import annotations
 

@@ -68,8 +68,8 @@ def test_unbounded_points_get_zero_centeredness():
 
 
 def test_without_correspondence_a_cloud_above_coverage_max_points_keeps_every_reason():
-    """Issue 21: the skeletal column's reasons (no correspondence) and coverage's (too many points) are
-    both reported; the first used to replace the second."""
+    """The skeletal column's reasons (no correspondence) and coverage's (too many points) are
+    both reported; the first does not replace the second."""
     sh = shapes.cylinder(400, seed=2)
     ev = evaluate(sh.cloud, sh.skeletal[::8], params=Params(coverage_max_points=100))
     assert ev.correspondence == "none" and len(ev.skeletal.points) == 50

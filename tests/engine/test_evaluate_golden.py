@@ -1,5 +1,5 @@
-"""``evaluate`` gives, bit for bit, the outputs stored in tests/engine/golden/evaluate_golden.json (issue 21,
-item 3: the stages refactor changes no value): the samples with both skeleton kinds, every correspondence
+"""``evaluate`` gives, bit for bit, the outputs stored in tests/engine/golden/evaluate_golden.json (the
+stages change no value): the samples with both skeleton kinds, every correspondence
 (pointwise, index, reverse from a set and from a curve alone, none), a reference curve, coverage on and
 off, one lane and all, and the shared hammer and apple tree with skeletons by ``skeletonize`` ("cao").
 
@@ -56,11 +56,11 @@ def test_evaluate_gives_the_stored_outputs_bit_for_bit(name, request):
     assert _added_after(_differences({k: v for k, v in stored.items() if k != "inputs"}, now)) == []
 
 
-#: what later work adds without changing a stored value: new Params fields and new document blocks
+#: what may be added without changing a stored value: new Params fields and new document blocks
 ADDITIONS = ("/doc/params/", "/doc/diagnostics: new", "/doc/ground_truth: new")
-#: the diagnostics' stages and warnings (issue 22: tests/engine/test_diagnostics*.py check them), and the
-#: ground-truth stage (issue 23: tests/engine/test_ground_truth_stage.py checks it), and the stray-point
-#: search, a trust check's work that became a stage of its own (tests/engine/test_scan_outliers.py)
+#: the diagnostics' stages and warnings (tests/engine/test_diagnostics*.py check them), and the
+#: ground-truth stage (tests/engine/test_ground_truth_stage.py checks it), and the stray-point
+#: search, a trust check's work run as a stage of its own (tests/engine/test_scan_outliers.py)
 DIAGNOSTIC_STAGES = ("curve defects", "skeletal outside", "skeletal missing parts", "curve missing parts",
                      "ground truth", "stray points")
 DIAGNOSTIC_CODES = ("incomplete", "spurious_branches", "spurious_cycles", "missing_cycles", "outside")

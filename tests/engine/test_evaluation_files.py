@@ -1,5 +1,5 @@
 """An Evaluation saved (the --json document + the npz compare stores) and read back is the same
-Evaluation, field by field (issue 21): every correspondence mode, coverage, a reference curve, NaN
+Evaluation, field by field: every correspondence mode, coverage, a reference curve, NaN
 kept, array dtypes and shapes, warnings, not_computed, normalization, params, inputs, timings."""
 
 from __future__ import annotations

@@ -70,7 +70,7 @@ def test_export_writes_three_coloured_files_in_user_units(tmp_path):
     np.testing.assert_array_equal(np.column_stack([sk["x"], sk["y"], sk["z"]]), ev.skeletal.points)
     assert {"boundedness", "centeredness", "smoothness"} <= {p.name for p in sk.properties}
     c = np.asarray(sk["centeredness"], dtype=float)
-    # SPEC 3: unbounded points get c = 0; point 1 is bounded with NaN c, which stays NaN.
+    # docs/metrics.md 3: unbounded points get c = 0; point 1 is bounded with NaN c, which stays NaN.
     assert c[0] == pytest.approx(0.8) and np.isnan(c[1]) and np.all(c[10:] == 0.0)
     np.testing.assert_array_equal(_rgb(sk), map_to_rgb(ev.skeletal.centeredness(0.75), 0, 1))
     assert tuple(_rgb(sk)[1]) == MAGENTA
@@ -128,7 +128,7 @@ def test_export_folder_that_is_a_file_is_an_input_error(tmp_path):
 @pytest.mark.parametrize("binary", [True, False])
 @pytest.mark.parametrize("color_by", ["boundedness", "centeredness", "smoothness"])
 def test_each_file_s_header_names_the_metric_its_colours_encode(tmp_path, color_by, binary):
-    """Issue 25: a coloured PLY says which metric its RGB encodes (one header comment), and that
+    """A coloured PLY says which metric its RGB encodes (one header comment), and that
     metric's values are the ones its colours come from; the files still read back as before."""
     from skelcore.io.export import colour_comment
 

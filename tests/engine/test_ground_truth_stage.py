@@ -1,4 +1,4 @@
-"""The ground-truth metrics as a stage of ``evaluate`` (issue 23, docs/metrics.md 5.3.1): a known answer
+"""The ground-truth metrics as a stage of ``evaluate`` (docs/metrics.md 5.3.1): a known answer
 (a cylinder's axis against the axis moved by a fifth of the radius), the radius from the reference, from
 ``reference_radius=``, from the cloud or from both, the Scores' "ground truth" columns, what is not
 computed, and the CLI's "ground truth" block and JSON document."""

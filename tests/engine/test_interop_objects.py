@@ -1,4 +1,4 @@
-"""Other libraries' objects as inputs (issue 24, 1): the same skeleton given as an Open3D, trimesh,
+"""Other libraries' objects as inputs: the same skeleton given as an Open3D, trimesh,
 networkx, navis, cloud-volume or pandas object scores the same as from its files; the objects are
 built with the real libraries (skipped one by one when a library is not installed)."""
 

@@ -1,4 +1,4 @@
-"""An Evaluation out to other libraries (issue 24, 1): ``to_frame`` rows hold the local arrays and the
+"""An Evaluation out to other libraries: ``to_frame`` rows hold the local arrays and the
 flags the overall scores count, ``to_networkx`` the curve with its values, ``to_open3d`` the curve
 coloured as the viewer colours it (skelcore.colors, NaN magenta)."""
 
@@ -40,7 +40,7 @@ def test_curve_frames_and_thresholds(ev):
     samples, verts = ev.to_frame("curve_samples"), ev.to_frame("curve_vertices")
     summ = ev.summary()
     assert samples["bounded"].mean() == pytest.approx(summ["boundedness"]["curve"])
-    # curve centeredness counts valid samples only (SPEC 3)
+    # curve centeredness counts valid samples only (docs/metrics.md 3)
     assert samples.loc[samples["centeredness_valid"], "centered"].mean() == pytest.approx(summ["centeredness"]["curve"])
     np.testing.assert_array_equal(verts["degree"].to_numpy(), ev.curve.vertex_degree)
     np.testing.assert_array_equal(verts["radius"].to_numpy(), ev.curve.curve.radius)
@@ -77,7 +77,7 @@ def test_curve_lines_are_coloured_like_the_viewer_with_magenta_for_invalid(ev):
     assert len(lines) == 2 * c.curve.n_edges
     expected = map_to_rgb(c.vertex_smoothness[c.curve.edges.ravel(order="F")], 0.0, 1.0)
     np.testing.assert_array_equal(colours, expected)
-    ends = c.vertex_degree == 1  # smoothness is NaN there (SPEC 4)
+    ends = c.vertex_degree == 1  # smoothness is NaN there (docs/metrics.md 4)
     assert ends.any()
     end_halves = np.isin(lines[:, 0], np.flatnonzero(ends))
     assert (colours[end_halves] == MAGENTA).all()

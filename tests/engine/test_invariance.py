@@ -1,5 +1,5 @@
 """Property tests: every metric is invariant under translation and uniform scaling of all inputs
-together (SPEC 0 normalizes them away), and rays boundedness under rotation (SPEC 2)."""
+together (the normalization of docs/metrics.md 0 removes them), and rays boundedness under rotation (docs/metrics.md 2)."""
 
 import numpy as np
 import pytest

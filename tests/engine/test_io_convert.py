@@ -1,4 +1,4 @@
-"""Curve and point-set writers and ``skelcore convert`` (issue 24, 2): every writer's file reads back
+"""Curve and point-set writers and ``skelcore convert``: every writer's file reads back
 the same (vertices, edges, radii), lossy targets are refused with the reason unless --lossy, the
 input is never overwritten and an existing output needs --force."""
 

@@ -1,4 +1,4 @@
-"""Other tools' skeleton files (issue 24, 2): networkx's GraphML and GEXF (parsed with entity expansion
+"""Other tools' skeleton files: networkx's GraphML and GEXF (parsed with entity expansion
 refused), TreeQSM ``.mat`` cylinder models, AdTree's PLY graph, Point2Skeleton's outputs, and a radius
 per vertex from PLY and SWC kept on the curve."""
 

@@ -1,5 +1,5 @@
 """examples/quickstart.ipynb executed in a real Jupyter kernel (nbclient + ipykernel) running this
-interpreter, and its outputs checked (issue 24 3): the picture of ``ev.show``, the summary table of
+interpreter, and its outputs checked: the picture of ``ev.show``, the summary table of
 ``ev``'s HTML repr, show_ab's picture and tables, and the defects naming the truncation."""
 
 from __future__ import annotations
@@ -70,7 +70,7 @@ def _magenta(img: np.ndarray) -> int:
 def test_the_notebook_was_saved_without_outputs():
     nb = nbformat.read(EXAMPLES / "quickstart.ipynb", as_version=4)
     assert all(not c.get("outputs") for c in nb.cells if c.cell_type == "code")
-    assert "../shared" not in json.dumps(nb)
+    assert "shared/data" not in json.dumps(nb)
 
 
 @pytest.mark.slow
@@ -79,7 +79,7 @@ def test_show_draws_a_picture_in_the_cell(executed):
     assert len(pngs) == 1
     img = _png(pngs[0])
     assert img.shape[0] > 200 and img.shape[1] > 200
-    assert _magenta(img) > 10  # the curve's ends and junction have no smoothness (NaN, SPEC 4-5)
+    assert _magenta(img) > 10  # the curve's ends and junction have no smoothness (NaN, docs/metrics.md 4 and 5.5)
     assert len(_data(_cell(executed, "ev.show_barcodes()"), "image/png")) == 1
 
 

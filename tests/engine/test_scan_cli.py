@@ -1,4 +1,4 @@
-"""The real-scan options end to end (issue 26): ``--viewpoint`` (and a PCD's VIEWPOINT), ``--remove-outliers``,
+"""The real-scan options end to end: ``--viewpoint`` (and a PCD's VIEWPOINT), ``--remove-outliers``,
 ``--cap-openings`` on the command line; the ``scan`` block of the JSON and its round trip; per-shape
 viewpoints in compare manifests."""
 

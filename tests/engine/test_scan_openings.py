@@ -1,4 +1,4 @@
-"""Openings of a scanned surface and the ``open_surface`` warning (issue 26 item 1; docs/metrics.md 6.1)."""
+"""Openings of a scanned surface and the ``open_surface`` warning (docs/metrics.md 6.1)."""
 
 from __future__ import annotations
 

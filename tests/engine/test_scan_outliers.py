@@ -1,4 +1,4 @@
-"""Stray points (issue 26, "Stray points"; docs/metrics.md 6.4): found by the statistical and the radius
+"""Stray points (docs/metrics.md 6.4): found by the statistical and the radius
 test, reported with what they do to the normalization, left out with ``remove_outliers``; ``frame`` and
 ``collapse`` measure robust extents."""
 
@@ -46,7 +46,7 @@ def _with_strays(shape, extra):
 
 @pytest.mark.parametrize("case", ["far", "box"])
 def test_stray_points_warn_and_are_left_out_on_request(case):
-    """The issue's two cases on a torus: the strays added to the cloud and the skeletal set."""
+    """Two cases on a torus: the strays added to the cloud and the skeletal set."""
     t = shapes.torus(3000)
     lo, hi = t.cloud.min(axis=0), t.cloud.max(axis=0)
     centre, extent = (lo + hi) / 2, hi - lo

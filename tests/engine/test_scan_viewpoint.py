@@ -1,4 +1,4 @@
-"""Viewpoint-aware scores (issue 26 item 2; docs/metrics.md 6.3): boundedness counts the uncovered
+"""Viewpoint-aware scores (docs/metrics.md 6.3): boundedness counts the uncovered
 directions a sensor could have seen; skeletal centeredness leaves out the unobserved depth."""
 
 from __future__ import annotations
@@ -18,7 +18,7 @@ P16 = Params(viewpoint_rows=16)
 
 def _brute_force_fraction(cloud: np.ndarray, q: np.ndarray, rows: int) -> float:
     """Share of the raster's directions whose ray from q meets a ball of radius h around a cloud point
-    farther than h (SPEC 2), by testing every (direction, point) pair in numpy."""
+    farther than h (docs/metrics.md 2), by testing every (direction, point) pair in numpy."""
     h = rays_radius(cloud)
     dirs = direction_raster(rows) @ FRAME  # the raster is laid out in FRAME's coordinates
     w = cloud - q
@@ -60,7 +60,7 @@ def test_a_sensor_on_the_scanned_side_cannot_see_the_missing_back(half_sphere):
 
 
 def test_front_half_cylinder_with_its_axis_and_the_sensor_on_its_side():
-    """The issue's goal: points with y > 0, the true axis, a sensor on the +y side."""
+    """The target case: points with y > 0, the true axis, a sensor on the +y side."""
     c = shapes.cylinder(4096)
     k = c.cloud[:, 1] > 0
     curve = (c.curve_vertices, c.curve_edges)

@@ -128,9 +128,9 @@ def test_the_compare_record_is_the_flat_record(evaluations):
 
 
 def test_public_column_lists_stay_as_they_were():
-    """results.csv, the job records and the leaderboard keep their columns (public formats); issue 22
-    added the diagnostics' columns and results.csv's sound / defects / warnings, issue 23 the ground-truth
-    block beside the paper's; nothing moved."""
+    """results.csv, the job records and the leaderboard keep their columns (public formats), with
+    the diagnostics' columns and results.csv's sound / defects / warnings, and the ground-truth
+    block beside the paper's; nothing moves."""
     ground_truth = ("gt_chamfer_radii", "gt_chamfer", "gt_precision", "gt_recall", "gt_f1", "gt_junction_precision",
                     "gt_junction_recall", "gt_endpoint_precision", "gt_endpoint_recall", "gt_cycle_error",
                     "gt_length_ratio", "gt_splits", "gt_merges")

@@ -1,6 +1,6 @@
 """skelcore.skeleton, method "cao" (the default): the toolbox's algorithm, its pieces against
 independent code, both methods' topology on shapes with known skeletons, and the paper's numbers on
-the shared scans (skipped when ../shared/data is absent)."""
+the shared scans (skipped when the shared data folder is absent)."""
 
 from __future__ import annotations
 
@@ -245,7 +245,7 @@ def test_a_cancel_mid_solve_returns_while_the_superlu_factorization_runs():
     np.testing.assert_allclose(small @ x, pts[:500], atol=1e-8)
 
 
-# ---- the paper's numbers (issue 13's table), default `rays` estimator -------------------------
+# ---- the paper's numbers (its results table), default `rays` estimator -------------------------
 
 def _scores(cloud, method="cao"):
     import skelcore
@@ -336,7 +336,7 @@ def test_hammer_starts_its_fans_as_the_toolbox_and_gets_its_weight(shared_data):
 
 
 def test_bundled_cylinder_gets_a_curve_along_most_of_its_length():
-    """Issue 22: the axis start gave 5 vertices over z 2.83-3.74 of the 0-4 cylinder; the toolbox's
+    """The axis start gives 5 vertices over z 2.83-3.74 of the 0-4 cylinder; the toolbox's
     own code gives 7 vertices over about 80 % of it, and so does the Qhull start."""
     import skelcore
     from skelcore.io import load_cloud

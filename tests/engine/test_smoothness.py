@@ -1,4 +1,4 @@
-"""Smoothness (SPEC 4): PCA-tangent skeletal smoothness and curve vertex smoothness."""
+"""Smoothness (docs/metrics.md 4): PCA-tangent skeletal smoothness and curve vertex smoothness."""
 
 from __future__ import annotations
 
@@ -14,7 +14,7 @@ from skelcore.shapes import cylinder
 
 
 def brute_force_smoothness(points: np.ndarray, tangent_k: int = 8, smooth_k: int = 4) -> np.ndarray:
-    """Plain-loop reading of SPEC 4, one point at a time."""
+    """Plain-loop reading of docs/metrics.md 4, one point at a time."""
     n = len(points)
     tangents = np.full((n, 3), np.nan)
     order_of = []
@@ -172,7 +172,7 @@ def test_straight_line_has_smoothness_one():
 
 
 def test_hairpin_scores_one_quirk_of_the_paper_formula():
-    # the path goes out and folds straight back: theta = 0, |1 - 0| = 1 (kept, SPEC 4)
+    # the path goes out and folds straight back: theta = 0, |1 - 0| = 1 (kept, docs/metrics.md 4)
     curve = polyline([[0, 0, 0], [1, 0, 0], [0.5, 0, 0]])
     assert curve_vertex_smoothness(curve)[1] == pytest.approx(1.0)
 

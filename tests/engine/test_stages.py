@@ -27,7 +27,7 @@ def test_every_stage_is_declared_once_with_a_weight_and_known_inputs():
         _ctx().made_by("skeleton")
 
 
-#: the diagnostics (issue 22) start last and wait for the results they read
+#: the diagnostics start last and wait for the results they read
 DIAG = ["curve defects", "skeletal outside", "skeletal missing parts", "curve missing parts"]
 DIAG_WAITS = {"curve defects": ("curve boundedness",), "skeletal outside": ("skeletal boundedness",),
               "skeletal missing parts": ("skeletal coverage",), "curve missing parts": ("curve coverage",)}

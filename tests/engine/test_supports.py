@@ -104,7 +104,7 @@ def test_paper_triangles_sum_to_the_paper_estimator():
 
 
 def test_smoothness_supports_reproduce_the_engines_values():
-    """Issue 25: the plain recomputation of one skeletal point's smoothness (its tangent and its
+    """The plain recomputation of one skeletal point's smoothness (its tangent and its
     neighbours') and of one curve vertex's angle agrees with the engine's vectorized values, coincident
     points included (contraction stacks them)."""
     from skelcore.curve import CurveSkeleton

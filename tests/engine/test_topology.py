@@ -1,4 +1,4 @@
-"""Topological similarity (SPEC 1): H0 barcodes, eps*, K, exact bottleneck and Wasserstein."""
+"""Topological similarity (docs/metrics.md 1): H0 barcodes, eps*, K, exact bottleneck and Wasserstein."""
 
 from __future__ import annotations
 

@@ -34,7 +34,7 @@ def test_collapse_warning_for_a_skeleton_shrunk_to_the_centroid():
     c = np.repeat(sh.cloud.mean(axis=0)[None], len(sh.cloud), 0)
     c += np.random.default_rng(0).normal(scale=1e-6, size=c.shape)
     ev = evaluate(sh.cloud, c)
-    assert codes(ev) == ["collapse", "incomplete"]  # a collapsed skeleton explains little of the cloud (issue 22)
+    assert codes(ev) == ["collapse", "incomplete"]  # a collapsed skeleton explains little of the cloud
     # the paper's scores reward it, which is why the warning exists
     assert ev.summary()["boundedness"]["skeletal"] > 0.9
 
@@ -100,7 +100,7 @@ def test_frame_warning_for_voxel_coordinates_inside_the_clouds_box():
 
 
 def test_a_warning_gives_its_finding_and_suggested_mapping_apart_from_the_command_line():
-    """Issue 25: a front end words its own remedy from ``finding`` and ``mapping``, read from the
+    """A front end words its own remedy from ``finding`` and ``mapping``, read from the
     message (so a warning read back from a file gives the same); the suggested map undoes the one
     the skeleton was put in."""
     from skelcore.diagnostics.trust import TrustWarning, frame_warnings, no_correspondence_warning
@@ -110,7 +110,7 @@ def test_a_warning_gives_its_finding_and_suggested_mapping_apart_from_the_comman
     assert "--skeleton" not in w.finding and w.message.startswith(w.finding)
     s, off = w.mapping
     mapped = (sh.curve_vertices * 40.0 + 7.0) * s + np.asarray(off)
-    # the frame fit (issue 22) proposes a bounded and complete map near the inverse (here a scale
+    # the frame fit proposes a bounded and complete map near the inverse (here a scale
     # 12 % short of 1/40: the arms' ends stay inside their caps), not the bounding boxes' match
     assert np.abs(mapped - sh.curve_vertices).max() < 0.1 * np.ptp(sh.cloud)
     back = TrustWarning(w.code, w.message)  # as read from a JSON document

@@ -1,12 +1,12 @@
-"""Golden outputs of ``skelcore.evaluate`` (issue 21, item 3): the cases, how one is recorded, and the
+"""Golden outputs of ``skelcore.evaluate``: the cases, how one is recorded, and the
 writer of ``evaluate_golden.json``.
 
-Recorded from the code before the stages refactor so that ``tests/engine/test_evaluate_golden.py`` can
-show the refactor changes no value, bit for bit: per case the ``--json`` document (minus the timings and
+Recorded so that ``tests/engine/test_evaluate_golden.py`` can show that a change of the code
+changes no value, bit for bit: per case the ``--json`` document (minus the timings and
 the version), a sha256 of every array of the Evaluation (local values, barcodes, coverage gaps, rows),
 the stages that ran (the timing keys), the stage labels in the order shown when the stages run one after
 the other (``workers=1``) and the last progress fraction.  The shared scans (hammer, apple tree at the
-paper's 0.02 grid, skeletons by ``skeletonize`` method "cao") are skipped when ../shared/data is absent.
+paper's 0.02 grid, skeletons by ``skeletonize`` method "cao") are skipped when the shared data folder is absent.
 
 Run ``PYTHONPATH=. python tests/engine/golden/make_golden.py`` to rewrite the file (only when a change of
 values is intended, and say why in the commit).
@@ -47,7 +47,7 @@ _SHARED_CACHE: dict[str, tuple] = {}
 
 def _shared(name: str) -> dict:
     """A shared scan and its "cao" skeletons (made once per process), with the fan start the golden
-    outputs were made with ("axis"; the default became the toolbox's Qhull start later, issue 22):
+    outputs were made with ("axis"; the default is the toolbox's Qhull start):
     these cases guard the evaluation, not the skeletonizer."""
     from skelcore import skeletonize
     from skelcore.skeleton import CaoParams
