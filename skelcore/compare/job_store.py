@@ -18,6 +18,7 @@ import numpy as np
 from ..errors import SkelInputError
 from ..io.atomic import atomic_open
 from ..io.json_numbers import json_float, json_safe
+from ..io.schemas import SCHEMA_VERSION
 
 __all__ = ["Store", "json_float"]  # json_float: from skelcore.io.json_numbers, re-exported
 
@@ -54,7 +55,8 @@ class Store:
 
     def put(self, record: dict[str, Any]) -> None:
         """Write a job's record (and its arrays, popped from ``record["arrays"]``) atomically."""
-        rec = dict(record)
+        # the format's version first (skelcore/io/schemas/compare_job.schema.json)
+        rec = {"schema_version": SCHEMA_VERSION, **{k: v for k, v in record.items() if k != "schema_version"}}
         arrays = rec.pop("arrays", None)
         key = rec["key"]
         if arrays:

@@ -13,6 +13,7 @@ import os
 from typing import Any
 
 from ..io.atomic import atomic_open
+from ..io.schemas import SCHEMA_VERSION
 from ..scores import column_keys
 from ..diagnostics.trust import defect_codes
 from .jobs import SCORE_COLUMNS, Job
@@ -60,12 +61,15 @@ def _cell(v: Any) -> str:
 
 
 def results_csv_text(rows: list[dict[str, Any]], profiles: tuple[Profile, ...]) -> str:
+    # the format's version is the last column (skelcore/io/schemas/results_csv.schema.json)
     header = list(COLUMNS) + [f"profile_{p.name}{s}" for p in profiles for s in ("", "_score", "_reason")]
+    header.append("schema_version")
     buf = _io.StringIO()
     w = csv.writer(buf, lineterminator="\n")
     w.writerow(header)
     for r in rows:
-        w.writerow([_cell(r.get(k, "")) for k in header])
+        cells = {**r, "schema_version": SCHEMA_VERSION}
+        w.writerow([_cell(cells.get(k, "")) for k in header])
     return buf.getvalue()
 
 

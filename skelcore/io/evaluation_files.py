@@ -40,6 +40,7 @@ from ..scan.scan_report import ScanReport
 from ..diagnostics.trust_warning import TrustWarning
 from .atomic import atomic_open
 from .json_numbers import json_float, json_safe
+from .schemas import SCHEMA_VERSION
 
 __all__ = [
     "to_json_dict", "write_json", "write_per_point", "cloud_columns", "write_barcodes",
@@ -64,6 +65,7 @@ def to_json_dict(ev: Evaluation, version: str | None = None) -> dict[str, Any]:
     params = ev.params.to_dict()
     params["boundedness_estimator"] = ev.params.boundedness_method
     doc = {
+        "schema_version": SCHEMA_VERSION,  # the format's (skelcore/io/schemas/evaluation.schema.json)
         "skelcore_version": version or __version__,
         "params": params,
         "inputs": {

@@ -445,3 +445,19 @@ def test_editing_the_profiles_changes_verdicts_without_recomputing(pool_run, dat
     assert "tube_follower" in (root / "out_pool" / "leaderboard.md").read_text().splitlines()[0]
     assert [p.name for p in res.leaderboard.profiles] == ["tube_follower"]
     run_compare(m, root / "out_pool", Backend("serial"), report=False)  # back to the shipped ones
+
+
+def test_job_records_and_results_csv_follow_their_schemas(pool_run, data):
+    """Every record and row of the run (builtin, command and files methods) validates against the shipped
+    JSON Schemas (skelcore/io/schemas; more cases in test_compare_schemas.py)."""
+    pytest.importorskip("jsonschema")
+    from skelcore.io.schemas import validator
+
+    root, _m = data
+    for path in (root / "out_pool" / "jobs").glob("*.json"):
+        assert not list(validator("compare_job").iter_errors(json.loads(path.read_text()))), path.name
+    with open(root / "out_pool" / "results.csv", newline="") as fh:
+        reader = csv.DictReader(fh)
+        rows = list(reader)
+    assert not list(validator("results_csv", "header").iter_errors(reader.fieldnames))
+    assert len(rows) == 10 and not [e for r in rows for e in validator("results_csv").iter_errors(r)]

@@ -47,7 +47,7 @@ def test_wheel_holds_every_subpackage_and_the_license(wheel):
     assert "License-Expression: MIT" in text
     assert any(n.endswith("licenses/LICENSE") for n in names)
     # package data the library reads at run time ships inside the packages
-    for data in ROOT.joinpath("skelcore").rglob("data/*"):
+    for data in [*ROOT.joinpath("skelcore").rglob("data/*"), *ROOT.joinpath("skelcore").rglob("schemas/*.json")]:
         assert data.relative_to(ROOT).as_posix() in names
 
 

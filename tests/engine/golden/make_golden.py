@@ -185,6 +185,7 @@ def record(kwargs: dict) -> dict:
     doc = ev.to_json_dict()
     doc.pop("timings_s")
     doc.pop("skelcore_version")
+    doc.pop("schema_version")
     arrays: dict[str, str | None] = {
         "cloud": array_sha(ev.cloud),
         "normalization": array_sha(np.append(ev.normalization.center, ev.normalization.scale)),
