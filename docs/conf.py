@@ -99,7 +99,7 @@ html_css_files = ["skelscope.css"]
 html_show_sourcelink = False
 
 # The pages of the user guide and the front matter; every other *.md here is a developer note.
-_NOT_NOTES = {"index", "changelog", "notes", "skeletonizers", "compare", "diagnostics"}
+_NOT_NOTES = {"index", "changelog", "credits", "notes", "skeletonizers", "compare", "diagnostics"}
 
 
 def developer_notes() -> list[str]:
