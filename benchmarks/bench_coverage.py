@@ -21,7 +21,7 @@ from pathlib import Path
 import numpy as np
 
 ROOT = Path(__file__).resolve().parents[1]
-SHARED = ROOT.parent / "shared" / "data"
+SCANS = ROOT / "resources" / "scans"
 sys.path.insert(0, str(ROOT))
 
 from skelcore import shapes  # noqa: E402
@@ -84,7 +84,7 @@ def case(name: str, cloud: np.ndarray, skeletal: np.ndarray, curve: CurveSkeleto
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--sizes", type=int, nargs="*", default=[16384, 65536, 262144, 1048576])
-    ap.add_argument("--no-real", action="store_true", help="skip the shared scans (shared/data beside the repository)")
+    ap.add_argument("--no-real", action="store_true", help="skip the real scans (resources/scans)")
     args = ap.parse_args()
     print(f"{platform.processor() or platform.machine()}, {os.cpu_count()} cores, "
           f"load average at start {os.getloadavg()[0]:.2f}")
@@ -92,8 +92,7 @@ def main() -> None:
     print("|---|---|---|---|---|---|---|---|", flush=True)
     if not args.no_real:
         for stem in ("hammer_4096", "apple_tree_22367"):
-            if (SHARED / f"{stem}.ply").is_file():
-                case(stem, *_scan(SHARED / f"{stem}.ply"))
+            case(stem, *_scan(SCANS / f"{stem}.ply"))
     for n in args.sizes:
         case(f"torus {n}", *_torus(n))
     print(f"load average at end {os.getloadavg()[0]:.2f}")

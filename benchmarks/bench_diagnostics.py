@@ -29,6 +29,7 @@ import numpy as np
 from scipy.spatial import cKDTree
 
 ROOT = Path(__file__).resolve().parents[1]
+SCANS = ROOT / "resources" / "scans"
 sys.path.insert(0, str(ROOT))
 
 from skelcore import Params, shapes  # noqa: E402
@@ -244,7 +245,7 @@ def hammer() -> None:
     """Our skeletonizers' hammer skeletons as they are, then cao's with controlled defects."""
     import skelcore
 
-    path = Path("/work/shared/data/hammer_4096.ply")
+    path = SCANS / "hammer_4096.ply"
     cloud = skelcore.load_cloud(str(path))
     rng = np.random.default_rng(22)
     for method in ("cao", "skelscope"):
@@ -275,13 +276,11 @@ def hammer() -> None:
 
 
 def scans() -> None:
-    """The shared real scans with our skeletonizers' curves: what is flagged, and where."""
+    """The real scans (resources/scans) with our skeletonizers' curves: what is flagged, and where."""
     import skelcore
 
     for name in ("hammer_4096.ply", "horse_1987_mesh.ply", "apple_tree_22367.ply", "cave_27375.ply"):
-        path = Path("/work/shared/data") / name
-        if not path.exists():
-            continue
+        path = SCANS / name
         cloud = skelcore.load_cloud(str(path))
         for method in ("cao", "skelscope"):
             t = time.perf_counter()

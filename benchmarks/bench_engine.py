@@ -4,7 +4,7 @@ Every case runs in a fresh subprocess, so its time includes the fresh process's 
 ("start-up" = interpreter + imports, reported separately) and its peak resident memory (ru_maxrss) is its own; CPU s = process time of
 all threads (the fairer figure when other jobs share the cores).  Generated shapes: a torus
 (R = 1, r = 0.3) sampled with N points, skeletal set = each point's projection onto the core circle
-+ 1 % jitter, curve = a 64-gon of the core circle.  Real clouds from the shared data folder are scored
++ 1 % jitter, curve = a 64-gon of the core circle.  Real clouds from resources/scans/ are scored
 against the built-in skeletonizer's output (its time reported apart).  The yardstick: gudhi's
 Vietoris-Rips H0 of the hammer scan, timed in the same run.  The worst cancel latency is the longest
 gap between two cancel checks of a run (the cancel callback times itself).  "diag" = the diagnostics'
@@ -33,7 +33,7 @@ import time
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
-SHARED = ROOT.parent / "shared" / "data"
+SCANS = ROOT / "resources" / "scans"
 STAGES = [
     "topology",
     "skeletal boundedness",
@@ -241,7 +241,7 @@ def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--sizes", type=int, nargs="*", default=[16384, 65536, 262144, 1048576])
     ap.add_argument("--method", default="rays", choices=("rays", "paper"))
-    ap.add_argument("--no-real", action="store_true", help="skip the shared scans (shared/data beside the repository)")
+    ap.add_argument("--no-real", action="store_true", help="skip the real scans (resources/scans)")
     ap.add_argument("--no-targets", action="store_true", help="only the size series (no Rips, no 100k, no curve-only)")
     ap.add_argument("--timeout", type=float, default=900.0, help="seconds per case before it is stopped")
     ap.add_argument("--coverage-sizes", type=int, nargs="*", default=[1048576],
@@ -263,12 +263,12 @@ def main() -> None:
     print("| " + " | ".join(head) + " |")
     print("|" + "---|" * len(head), flush=True)
     res: dict[str, dict] = {}
-    hammer = SHARED / "hammer_4096.ply"
+    hammer = SCANS / "hammer_4096.ply"
     cases: list[tuple[str, str]] = []
-    if not args.no_real and SHARED.is_dir():
-        if not args.no_targets and hammer.is_file():
+    if not args.no_real:
+        if not args.no_targets:
             cases.append(("rips", str(hammer)))
-        cases += [("real", str(p)) for p in sorted(SHARED.glob("*.ply")) if "mesh" not in p.stem]
+        cases += [("real", str(SCANS / f"{stem}.ply")) for stem in ("apple_tree_22367", "cave_27375", "hammer_4096")]
     if not args.no_targets:
         cases += [("torus", "100000"), ("torus-curve", "1048576")]
     cases += [("torus", str(n)) for n in args.sizes]

@@ -86,11 +86,9 @@ def main() -> None:
     p = Params()
     print("| case | mapping | scale / pitch | max error / diag | bounded | centred | completeness | eval s |")
     print("|---|---|---|---|---|---|---|---|")
-    hammer = ROOT.parent / "shared" / "data" / "hammer_4096.ply"
-    if hammer.exists():
-        cloud = skelcore.load_cloud(hammer)
-        _, curve = skelcore.skeletonize(cloud, method="cao")
-        case("hammer cao", cloud, curve, p)
+    cloud = skelcore.load_cloud(ROOT / "resources" / "scans" / "hammer_4096.ply")
+    _, curve = skelcore.skeletonize(cloud, method="cao")
+    case("hammer cao", cloud, curve, p)
     for name, sh in (("T", shapes.t_shape(6000)), ("Y", shapes.y_shape(6000)), ("tree3", shapes.tree3(8000)),
                      ("torus", shapes.torus(4096)), ("genus2", shapes.genus2(8000)), ("cylinder", shapes.cylinder(4096))):
         cloud = sh.cloud * 30

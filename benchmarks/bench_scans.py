@@ -32,7 +32,7 @@ from skelcore import Params, evaluate, shapes, skeletonize  # noqa: E402
 from skelcore.scan.openings import find_openings  # noqa: E402
 from skelcore.scan.synthetic import seen_from  # noqa: E402
 
-SHARED = ROOT.parent / "shared" / "data"
+SCANS = ROOT / "resources" / "scans"
 RADIUS = {"cylinder": 0.5, "torus": 0.3, "y": 0.25, "tree": 0.25}
 VIEWS = {
     "1 level": [[0, 1, 0]],
@@ -136,12 +136,9 @@ def issue(quick: bool) -> None:
     t = shapes.cylinder(8192, length=8.0, capped=False)
     row("tube with open ends (length 16 r)", evaluate(t.cloud, t.skeletal, (t.curve_vertices, t.curve_edges)))
     row("the same, --cap-openings", evaluate(t.cloud, t.skeletal, (t.curve_vertices, t.curve_edges), cap_openings=True))
-    if not (SHARED / "hammer_4096.ply").exists():
-        print("(hammer: the shared data folder is absent)")
-        return
     from skelcore.io import load_cloud
 
-    h = load_cloud(SHARED / "hammer_4096.ply")
+    h = load_cloud(SCANS / "hammer_4096.ply")
     sk, cv = skeletonize(h, method="cao")
     centre, extent = (h.min(axis=0) + h.max(axis=0)) / 2, np.ptp(h, axis=0)
     vp = [[centre[0] + 10 * extent.max(), centre[1], centre[2]]]
@@ -155,31 +152,30 @@ def issue(quick: bool) -> None:
 
 def outliers(quick: bool) -> None:
     print("\n### Stray points\n")
-    if (SHARED / "hammer_4096.ply").exists():
-        from skelcore.io import load_cloud
+    from skelcore.io import load_cloud
 
-        h = load_cloud(SHARED / "hammer_4096.ply")
-        sk, cv = skeletonize(h, method="cao")
-        centre, extent = (h.min(axis=0) + h.max(axis=0)) / 2, np.ptp(h, axis=0)
-        far = centre + 10 * extent * np.array([1.0, 0.3, 0.2])
-        print("| hammer (cao) | d_B | d_Wp | B skel / curve | C skel / curve | warnings |")
-        print("|---|---|---|---|---|---|")
+    h = load_cloud(SCANS / "hammer_4096.ply")
+    sk, cv = skeletonize(h, method="cao")
+    centre, extent = (h.min(axis=0) + h.max(axis=0)) / 2, np.ptp(h, axis=0)
+    far = centre + 10 * extent * np.array([1.0, 0.3, 0.2])
+    print("| hammer (cao) | d_B | d_Wp | B skel / curve | C skel / curve | warnings |")
+    print("|---|---|---|---|---|---|")
 
-        def row(label, ev):
-            s, t = ev.summary(), ev.summary()["topology"]
-            print(f"| {label} | {t['bottleneck']:.4f} | {t['wasserstein']:.5f} | {s['boundedness']['skeletal']:.3f} / "
-                  f"{s['boundedness']['curve']:.3f} | {s['centeredness']['skeletal']:.3f} / {s['centeredness']['curve']:.3f}"
-                  f" | {codes(ev)} |", flush=True)
+    def row(label, ev):
+        s, t = ev.summary(), ev.summary()["topology"]
+        print(f"| {label} | {t['bottleneck']:.4f} | {t['wasserstein']:.5f} | {s['boundedness']['skeletal']:.3f} / "
+              f"{s['boundedness']['curve']:.3f} | {s['centeredness']['skeletal']:.3f} / {s['centeredness']['curve']:.3f}"
+              f" | {codes(ev)} |", flush=True)
 
-        row("clean", evaluate(h, sk, cv))
-        for label, extra in (("+1 point at 10 x the extent", far[None, :]),) + tuple(
-                (f"+40 points in a box twice the extent (seed {seed})",
-                 centre + np.random.default_rng(seed).uniform(-1, 1, (40, 3)) * extent) for seed in (0, 1, 2)):
-            c2, s2 = np.vstack([h, extra]), np.vstack([sk, extra])
-            row(label, evaluate(c2, s2, cv))
-            row(label + ", remove_outliers", evaluate(c2, s2, cv, remove_outliers=True))
-            row(label + ", bounding-box extents (trust_extent_quantile = 0)",
-                evaluate(c2, s2, cv, params=Params(trust_extent_quantile=0.0)))
+    row("clean", evaluate(h, sk, cv))
+    for label, extra in (("+1 point at 10 x the extent", far[None, :]),) + tuple(
+            (f"+40 points in a box twice the extent (seed {seed})",
+             centre + np.random.default_rng(seed).uniform(-1, 1, (40, 3)) * extent) for seed in (0, 1, 2)):
+        c2, s2 = np.vstack([h, extra]), np.vstack([sk, extra])
+        row(label, evaluate(c2, s2, cv))
+        row(label + ", remove_outliers", evaluate(c2, s2, cv, remove_outliers=True))
+        row(label + ", bounding-box extents (trust_extent_quantile = 0)",
+            evaluate(c2, s2, cv, params=Params(trust_extent_quantile=0.0)))
     print("\n| clean shape | points | noise | outliers found |")
     print("|---|---|---|---|")
     from skelcore.scan.outliers import find_outliers
@@ -201,11 +197,10 @@ def timing(quick: bool) -> None:
     print("| case | queries | paper's rays | viewpoint-aware (one sensor) |")
     print("|---|---|---|---|")
     cases = []
-    if (SHARED / "hammer_4096.ply").exists():
-        from skelcore.io import load_cloud
+    from skelcore.io import load_cloud
 
-        h = load_cloud(SHARED / "hammer_4096.ply")
-        cases.append(("hammer, cao skeletal set", h, skeletonize(h, method="cao")[0]))
+    h = load_cloud(SCANS / "hammer_4096.ply")
+    cases.append(("hammer, cao skeletal set", h, skeletonize(h, method="cao")[0]))
     for n in (4096, 16384) if quick else (4096, 16384, 65536):
         t = shapes.torus(n)
         cases.append((f"torus {n}, skeletal set", t.cloud, t.skeletal))

@@ -1,6 +1,6 @@
 """False alarms of the "skeletal outside" stage (docs/diagnostics.md "Outside").
 
-Skeletal sets of both built-in skeletonizers on the shared scans (when the shared data folder is there) and on
+Skeletal sets of both built-in skeletonizers on the real scans (resources/scans) and on
 generated shapes (2k / 20k points, 0 / 3 % isotropic noise): the share of skeletal points outside,
 the largest cluster's share (``outside`` fires above Params.outside_skeletal_share) and the stage's time.
 
@@ -17,13 +17,12 @@ from skelcore.io import load_cloud
 from skelcore.skeleton.degrade import add_noise
 from skelcore.skeleton.pipeline import skeletonize
 
-SHARED = Path(__file__).resolve().parents[1].parent / "shared" / "data"
+SCANS = Path(__file__).resolve().parents[1] / "resources" / "scans"
 
 
 def cases():
     for name in ("hammer_4096.ply", "apple_tree_22367.ply", "cave_27375.ply", "horse_1987_mesh.ply"):
-        if (SHARED / name).exists():
-            yield name, load_cloud(SHARED / name)
+        yield name, load_cloud(SCANS / name)
     for family in ("cylinder", "y_shape", "torus"):
         for n in (2000, 20000):
             for noise in (0.0, 0.03):

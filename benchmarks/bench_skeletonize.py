@@ -1,6 +1,6 @@
 """Time of skelcore.skeletonize (rings + contraction + curve) for both methods, by cloud size.
 
-Cases: the paper's hammer (4096) and apple tree (grid 0.02, 8936) when the shared data folder is there,
+Cases: the paper's hammer (4096) and apple tree (grid 0.02, 8936) of resources/scans (unless --no-real),
 then the closed cylinder and the Y shape at each size. Reports the contraction iterations, the
 split between contraction and curve extraction, the curve's size, and the worst cancel latency
 seen when a cancel is raised mid-solve (``--cancel``). One run per case; quote ``uptime`` with it.
@@ -21,16 +21,16 @@ from skelcore.errors import Cancelled
 from skelcore.shapes import cylinder, y_shape
 from skelcore.skeleton import skeletonize
 
-DATA = Path(__file__).resolve().parents[1].parent / "shared" / "data"
+SCANS = Path(__file__).resolve().parents[1] / "resources" / "scans"
 
 
 def _cases(sizes: list[int], real: bool, names: list[str]):
-    if real and (DATA / "hammer_4096.ply").exists():
+    if real:
         from skelcore.io import load_cloud
         from skelcore.skeleton.degrade import voxel_grid_average
 
-        yield "hammer", load_cloud(DATA / "hammer_4096.ply")
-        yield "tree", voxel_grid_average(load_cloud(DATA / "apple_tree_22367.ply"), 0.02)[0]
+        yield "hammer", load_cloud(SCANS / "hammer_4096.ply")
+        yield "tree", voxel_grid_average(load_cloud(SCANS / "apple_tree_22367.ply"), 0.02)[0]
     makers = {"cylinder": cylinder, "y_shape": y_shape}
     for n in sizes:
         for name in names:
@@ -68,7 +68,7 @@ def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--sizes", type=int, nargs="+", default=[4096, 16384, 65536])
     ap.add_argument("--methods", nargs="+", default=["cao", "skelscope"])
-    ap.add_argument("--no-real", action="store_true", help="skip the shared scans")
+    ap.add_argument("--no-real", action="store_true", help="skip the real scans (resources/scans)")
     ap.add_argument("--shapes", nargs="+", default=["cylinder", "y_shape"], choices=["cylinder", "y_shape"])
     ap.add_argument("--solver", default=None, choices=["auto", "cholmod", "superlu"],
                     help="linear_solver of the method's parameters (default: the library's default)")

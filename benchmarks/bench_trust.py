@@ -65,14 +65,12 @@ def main() -> None:
         v = np.array([[np.cos(a), np.sin(a), 0.0] for a in np.linspace(0, 2 * np.pi, 64, endpoint=False)])
         curve = CurveSkeleton.from_raw(v, [[i, (i + 1) % 64] for i in range(64)])
         case("torus", t.cloud, skel, curve)
-    hammer = ROOT.parent / "shared" / "data" / "hammer_4096.ply"
-    if hammer.exists():
-        from skelcore import load_cloud
-        from skelcore.skeleton import skeletonize
+    from skelcore import load_cloud
+    from skelcore.skeleton import skeletonize
 
-        cloud = load_cloud(hammer)
-        skel, curve = skeletonize(cloud)
-        case("hammer", cloud, skel, curve)
+    cloud = load_cloud(ROOT / "resources" / "scans" / "hammer_4096.ply")
+    skel, curve = skeletonize(cloud)
+    case("hammer", cloud, skel, curve)
     print(f"load after: {os.getloadavg()[0]:.1f}")
 
 

@@ -1,7 +1,7 @@
-"""docs/img/cave_opening.png: the shared cave scan's one opening, as skelcore.scan finds it.
+"""docs/img/cave_opening.png: the real cave scan's one opening, as skelcore.scan finds it.
 
 Why the cave gets ``open_surface`` (docs/metrics.md 6): its passage ends open where the
-scan stops at y = +0.8. Needs the shared scans (shared/data beside the repository, not in it).
+scan stops at y = +0.8. The scan is resources/scans/cave_27375.ply.
 
     python scripts/make_cave_opening_figure.py [OUT.png]
 """
@@ -18,7 +18,7 @@ from skelcore.io.atomic import atomic_open
 from skelcore.scan.openings import find_openings
 
 ROOT = Path(__file__).resolve().parents[1]
-CAVE = ROOT.parent / "shared" / "data" / "cave_27375.ply"
+CAVE = ROOT / "resources" / "scans" / "cave_27375.ply"
 
 
 def main(out: Path) -> None:

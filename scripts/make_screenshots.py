@@ -13,10 +13,10 @@
   and an evaluation running (status bar: stage, progress bar, Cancel). With ``QT_SCALE_FACTOR=1.5``
   (``--laptop`` again) it writes ``window_1366x768_scale1.5.png``.
 - ``window_skeletonized.png``: the skeletonizer's output for the sample cloud, evaluated.
-- ``window_hammer_skeletonized.png``: the real hammer scan (the shared scans, when present) skeletonized
+- ``window_hammer_skeletonized.png``: the real hammer scan (resources/scans) skeletonized
   and evaluated, coloured by centeredness.
 - ``error_dialog.png``: the dialog a corrupt file gives, over the window that survives it.
-- Defects (``--defects`` makes only these; they need the shared hammer): ``window_defects.png``, the
+- Defects (``--defects`` makes only these; on the real hammer): ``window_defects.png``, the
   hammer with its cao curve cut to the middle of its handle (no head, no far end: pc-skeletor's truncated
   output), the Defects dock listing the two missing parts, the larger one selected (framed, its cloud points
   pink, highlighted in the pick colour); ``defects_panel.png``, the dock alone; ``window_branch.png``, a
@@ -223,9 +223,9 @@ def main() -> int:
         settle()
         save(window, "window_skeletonized.png")
 
-    # A real scan when the shared data folder is present (never copied into the repo).
-    hammer = ROOT.parent / "shared" / "data" / "hammer_4096.ply"
-    if hammer.is_file() and "skelcore.skeleton.pipeline" in sys.modules:
+    # A real scan (resources/scans).
+    hammer = ROOT / "resources" / "scans" / "hammer_4096.ply"
+    if "skelcore.skeleton.pipeline" in sys.modules:
         window.session.load_as("cloud", str(hammer))
         window.session.start_skeletonize()
         wait_for_runner()
@@ -268,12 +268,12 @@ def defects_screenshots(window, settle, save, wait_for_runner, tmp: Path) -> Non
     from skelcore.curve import CurveSkeleton
     from skelcore.io import load_cloud, write_curve_ply, write_points_ply
 
-    hammer = ROOT.parent / "shared" / "data" / "hammer_4096.ply"
+    hammer = ROOT / "resources" / "scans" / "hammer_4096.ply"
     try:
         from skelcore.skeleton import skeletonize
     except ImportError:
         skeletonize = None
-    if hammer.is_file() and skeletonize is not None:
+    if skeletonize is not None:
         _skeletal, curve = skeletonize(load_cloud(hammer), method="cao")
         y = curve.vertices[:, 1]  # the handle runs along y from -199 to about 80, the head beyond
         keep = (y > -60) & (y < 85)

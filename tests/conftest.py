@@ -1,4 +1,4 @@
-"""Shared fixtures: analytic shapes with known answers, and the optional real data folder."""
+"""Fixtures for every test: a seeded random generator, and the real scans shipped in resources/scans."""
 
 from __future__ import annotations
 
@@ -8,14 +8,15 @@ import numpy as np
 import pytest
 from shape_files import write_shape_files  # noqa: F401 - also importable from here, as before
 
-SHARED_DATA = Path(__file__).resolve().parents[2] / "shared" / "data"
+#: the real scans of the paper's toolbox, in the repository (resources/scans/README.md says what each is)
+SCANS = Path(__file__).resolve().parents[1] / "resources" / "scans"
 
 
-@pytest.fixture
-def shared_data() -> Path:
-    if not SHARED_DATA.is_dir():
-        pytest.skip("the shared data folder is not present")
-    return SHARED_DATA
+@pytest.fixture(scope="session")
+def scans() -> Path:
+    """The folder of the real scans (hammer_4096.ply, apple_tree_22367.ply, cave_27375.ply,
+    horse_1987_mesh.ply); part of the repository, so never skipped."""
+    return SCANS
 
 
 @pytest.fixture

@@ -1,4 +1,4 @@
-/* Compiled kernel of SkelScope's coverage (SPEC 8; design and numbers: docs/metrics.md, section 5.2).
+/* Compiled kernel of SkelScope's coverage (docs/metrics.md 5.2: design and numbers).
  *
  * Skeleton elements x carry radii r(x) = distance to the nearest cloud point.  Per cloud point p:
  * gap(p) = min_x |p - x| - r(x) (exact: the same double arithmetic as a brute-force loop), and

@@ -1,4 +1,4 @@
-/* Compiled Euclidean minimum spanning tree of SkelScope's topology stage (SPEC 1: the H0 barcode of a
+/* Compiled Euclidean minimum spanning tree of SkelScope's topology stage (docs/metrics.md 1: the H0 barcode of a
  * Vietoris-Rips filtration is the EMST's edge lengths; design and numbers: docs/performance.md, section 8).
  *
  * Boruvka's algorithm over a KD-tree of the (distinct) points.  Each round, every component takes its

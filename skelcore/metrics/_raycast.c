@@ -1,4 +1,4 @@
-/* Compiled kernel of the `rays` boundedness estimator (SPEC 2; design: docs/boundedness.md, section 3).
+/* Compiled kernel of the `rays` boundedness estimator (docs/metrics.md 2; design: docs/boundedness.md, section 3).
  *
  * beta(q) = share of the raster's direction samples s from q whose ray meets a ball of radius h around
  * a cloud point p with |p - q| > h.  A ray meets that ball iff s lies in p's cap of angular radius
@@ -312,7 +312,7 @@ static inline void set_bits(uint64_t *row, int a, int b) {
 /* acos on [-1, 1] to within 6e-12 rad, VD lanes at once: acos(x) = sqrt(1 - x) P11(x) on [0, 1] (the form
  * of Abramowitz & Stegun 4.4.46, coefficients refitted for degree 11 near-minimax absolute error),
  * acos(-x) = pi - acos(x).  It replaces glibc's acos call (12 % of the kernel's CPU on a scanned tree;
- * docs/boundedness.md 3.8); in lanes since session 7 (3.11: the same bits as the scalar form).  A cap's
+ * docs/boundedness.md 3.8); in lanes (3.11: the same bits as the scalar form).  A cap's
  * interval ends are truncated to bins (96 / 2 pi bins per rad), so a sample can change side only within
  * 1e-10 bins of a cap edge. */
 static inline vd acos_lanes(vd x) {

@@ -1,4 +1,4 @@
-"""Defects on the shared scans: a compare run over the hammer, the horse, the apple tree and the cave
+"""Defects on the real scans (resources/scans): a compare run over the hammer, the horse, the apple tree and the cave
 with cao, skelscope and two broken copies of cao's skeletons as `files` methods (half of it cut away;
 everything shrunk to 3 % around its centroid). The broken ones are never shown best in any column of
 the leaderboard and fail every profile that applies. The apple tree is the paper's 1730-point voxel
@@ -23,16 +23,15 @@ from skelcore.io import load_cloud, write_curve_ply, write_points_ply
 from skelcore.skeleton.degrade import voxel_grid_average
 
 BROKEN = ("truncated", "collapsed")
-SHARED_DATA = Path(__file__).resolve().parents[3] / "shared" / "data"  # tests/conftest.py's shared_data
 SHRINK = 0.03
 
 
-def _clouds(shared) -> dict[str, np.ndarray]:
+def _clouds(scans: Path) -> dict[str, np.ndarray]:
     return {
-        "hammer": load_cloud(shared / "hammer_4096.ply"),
-        "horse": load_cloud(shared / "horse_1987_mesh.ply"),  # a mesh: its vertices are the cloud
-        "apple_tree": voxel_grid_average(load_cloud(shared / "apple_tree_22367.ply"), 0.05)[0],
-        "cave": voxel_grid_average(load_cloud(shared / "cave_27375.ply"), 0.05)[0],
+        "hammer": load_cloud(scans / "hammer_4096.ply"),
+        "horse": load_cloud(scans / "horse_1987_mesh.ply"),  # a mesh: its vertices are the cloud
+        "apple_tree": voxel_grid_average(load_cloud(scans / "apple_tree_22367.ply"), 0.05)[0],
+        "cave": voxel_grid_average(load_cloud(scans / "cave_27375.ply"), 0.05)[0],
     }
 
 
@@ -57,14 +56,11 @@ def collapse(points: np.ndarray, centre: np.ndarray) -> np.ndarray:
 
 
 @pytest.fixture(scope="module")
-def run(tmp_path_factory):
-    if not SHARED_DATA.is_dir():  # the shared_data fixture's rule, for a module-scoped run
-        pytest.skip("the shared data folder is not present")
-    shared_data = SHARED_DATA
+def run(tmp_path_factory, scans):
     root = tmp_path_factory.mktemp("scans")
     for d in ("clouds", "skel"):
         (root / d).mkdir()
-    for name, cloud in _clouds(shared_data).items():
+    for name, cloud in _clouds(scans).items():
         write_points_ply(root / "clouds" / f"{name}.ply", cloud)
         skeletal, curve = skeletonize(cloud, method="cao")
         v, e = np.asarray(curve.vertices), np.asarray(curve.edges)
@@ -110,7 +106,7 @@ METHODS = """
 """
 
 
-def test_every_job_finishes_and_every_broken_job_has_a_defect(run, shared_data):
+def test_every_job_finishes_and_every_broken_job_has_a_defect(run):
     _out, rows, _res = run
     assert len(rows) == 16 and all(r["status"] == "ok" for r in rows), [r["error"] for r in rows if r["error"]]
     for r in rows:
@@ -120,7 +116,7 @@ def test_every_job_finishes_and_every_broken_job_has_a_defect(run, shared_data):
     assert all("collapse" in r["defects"].split(";") for r in collapsed)
 
 
-def test_the_broken_ones_are_never_shown_best(run, shared_data):
+def test_the_broken_ones_are_never_shown_best(run):
     """Over the four scans (every method has a defect somewhere, so nothing is ranked: docs/diagnostics.md);
     the hammer alone below has ranks."""
     out, _rows, res = run
@@ -145,7 +141,7 @@ def test_the_broken_ones_are_never_shown_best(run, shared_data):
             assert "class=best" not in row[1]
 
 
-def test_the_broken_ones_fail_every_profile_that_applies(run, shared_data):
+def test_the_broken_ones_fail_every_profile_that_applies(run):
     _out, rows, res = run
     profiles = load_profiles()
     for r in rows:
@@ -161,7 +157,7 @@ def test_the_broken_ones_fail_every_profile_that_applies(run, shared_data):
             assert all(passed == 0 for passed, _n in e.profiles.values())
 
 
-def test_on_the_hammer_alone_the_sound_methods_are_ranked_and_the_broken_ones_are_not(run, shared_data):
+def test_on_the_hammer_alone_the_sound_methods_are_ranked_and_the_broken_ones_are_not(run):
     """Over the four scans every method has a defect somewhere, so no mean is ranked (above); on the
     hammer, where cao and skelscope are sound, they are ranked and shown best, the broken ones not.
     The same stored jobs (a copy of the run; nothing is recomputed), only the hammer in the manifest."""
@@ -187,7 +183,7 @@ def test_on_the_hammer_alone_the_sound_methods_are_ranked_and_the_broken_ones_ar
     assert by["collapsed"].mean["d_B"] < 2 * by["cao"].mean["d_B"]
 
 
-def test_the_sound_case_board_ranks_cao_and_skelscope_where_both_are_sound(run, shared_data):
+def test_the_sound_case_board_ranks_cao_and_skelscope_where_both_are_sound(run):
     """The leaderboard over the cases where every method is sound: the broken ones are sound on no scan,
     so they are left out (named); cao and skelscope are scored on the scans where both are sound, the
     same means as a board of those jobs alone, and ranked."""

@@ -357,12 +357,12 @@ def test_cross_section_clamps_at_zero():
     assert cross_section_centeredness(ring) == 0.0
 
 
-def test_curve_grid_lookup_matches_reference_on_real_scan(shared_data):
+def test_curve_grid_lookup_matches_reference_on_real_scan(scans):
     from plyfile import PlyData
 
     from skelcore.geometry import Normalization
 
-    vertex = PlyData.read(str(shared_data / "hammer_4096.ply"))["vertex"]
+    vertex = PlyData.read(str(scans / "hammer_4096.ply"))["vertex"]
     raw = np.column_stack([vertex["x"], vertex["y"], vertex["z"]]).astype(float)
     cloud = Normalization.from_cloud(raw).apply(raw)
     rng = np.random.default_rng(9)

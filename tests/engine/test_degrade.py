@@ -90,10 +90,10 @@ def test_voxel_grid_boundary_in_decimal_is_not_split_by_binary_rounding():
     assert voxel[1] != voxel[3]
 
 
-def test_voxel_grid_counts_on_the_papers_apple_tree(shared_data):
+def test_voxel_grid_counts_on_the_papers_apple_tree(scans):
     from skelcore.io import load_cloud
 
-    tree = load_cloud(shared_data / "apple_tree_22367.ply")
+    tree = load_cloud(scans / "apple_tree_22367.ply")
     assert len(voxel_grid_average(tree, 0.02)[0]) == 8936
     assert len(voxel_grid_average(tree, 0.05)[0]) == 1730
 

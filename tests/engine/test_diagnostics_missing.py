@@ -189,10 +189,10 @@ def test_thresholds_are_one_documented_params_block():
 
 
 @pytest.mark.parametrize("method", ["cao", "skelscope"])
-def test_hammer_intact_is_complete_cut_handle_and_headless_are_not(shared_data, method):
+def test_hammer_intact_is_complete_cut_handle_and_headless_are_not(scans, method):
     from skelcore import load_cloud
 
-    cloud = load_cloud(shared_data / "hammer_4096.ply")
+    cloud = load_cloud(scans / "hammer_4096.ply")
     norm = Normalization.from_cloud(cloud)
     c = norm.apply(cloud)
     skel, curve = skeletonize(cloud, method=method)

@@ -59,10 +59,10 @@ def test_voxel_coordinates_of_a_t_get_the_grids_pitch_and_origin_back():
     assert "frame" not in [w.code for w in evaluate(cloud, curve=(mapped, sh.curve_edges)).warnings]
 
 
-def test_the_hammers_voxel_skeleton_gets_a_mapping_as_good_as_the_grids(shared_data):
+def test_the_hammers_voxel_skeleton_gets_a_mapping_as_good_as_the_grids(scans):
     from skelcore import load_cloud
 
-    cloud = load_cloud(shared_data / "hammer_4096.ply")
+    cloud = load_cloud(scans / "hammer_4096.ply")
     _, curve = skeletonize(cloud, method="cao")
     h, origin = voxel_grid(cloud, cells=100)
     vox = np.round((curve.vertices - origin) / h)

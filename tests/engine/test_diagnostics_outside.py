@@ -159,10 +159,10 @@ def test_diagnostic_params_are_validated(change):
         Params(**change)
 
 
-def test_hammer_with_our_skeletonizers_has_no_defect(shared_data):
+def test_hammer_with_our_skeletonizers_has_no_defect(scans):
     import skelcore
 
-    cloud = skelcore.load_cloud(str(shared_data / "hammer_4096.ply"))
+    cloud = skelcore.load_cloud(str(scans / "hammer_4096.ply"))
     for method in ("cao", "skelscope"):
         _, raw = skelcore.skeletonize(cloud, method=method)
         c, curve, samples, beta = normalized(cloud, raw.vertices, raw.edges)

@@ -1,7 +1,7 @@
 """``evaluate`` gives, bit for bit, the outputs stored in tests/engine/golden/evaluate_golden.json (the
 stages change no value): the samples with both skeleton kinds, every correspondence
 (pointwise, index, reverse from a set and from a curve alone, none), a reference curve, coverage on and
-off, one lane and all, and the shared hammer and apple tree with skeletons by ``skeletonize`` ("cao").
+off, one lane and all, and the real hammer and apple tree (resources/scans) with skeletons by ``skeletonize`` ("cao").
 
 Stored on this machine's build of the kernels: another CPU or BLAS may change the last bits (then rerun
 tests/engine/golden/make_golden.py there and compare the documents, not the hashes).
@@ -45,10 +45,8 @@ def _differences(stored, now, where: str = "") -> list[str]:
 
 
 @pytest.mark.parametrize("name", list(make_golden.CASES))
-def test_evaluate_gives_the_stored_outputs_bit_for_bit(name, request):
+def test_evaluate_gives_the_stored_outputs_bit_for_bit(name):
     case = make_golden.CASES[name]
-    if case["shared"]:
-        request.getfixturevalue("shared_data")
     stored = STORED[name]
     kwargs = case["make"]()
     assert make_golden.input_hashes(kwargs) == stored["inputs"], "the inputs changed (the skeletonizer?)"

@@ -385,8 +385,8 @@ def test_loaded_inputs_are_protected_from_writers(tmp_path):
     assert path.read_bytes() == before
 
 
-def test_real_hammer_cloud_loads_in_file_units(shared_data):
-    pts = load_cloud(shared_data / "hammer_4096.ply")
+def test_real_hammer_cloud_loads_in_file_units(scans):
+    pts = load_cloud(scans / "hammer_4096.ply")
     assert pts.shape == (4096, 3) and pts.dtype == np.float64
     np.testing.assert_allclose(pts[0], [-7.67962217330932617, -185.189102172851562, -13.0556678771972656], rtol=1e-7)
 

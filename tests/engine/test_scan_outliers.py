@@ -71,11 +71,11 @@ def test_stray_points_warn_and_are_left_out_on_request(case):
             assert b[metric][col] == pytest.approx(a[metric][col], rel=0.05, abs=1e-12)
 
 
-def test_hammer_cases_of_the_issue(shared_data):
+def test_hammer_cases_of_the_issue(scans):
     from skelcore import skeletonize
     from skelcore.io import load_cloud
 
-    h = load_cloud(shared_data / "hammer_4096.ply")
+    h = load_cloud(scans / "hammer_4096.ply")
     sk, curve = skeletonize(h, method="cao")
     centre, extent = (h.min(axis=0) + h.max(axis=0)) / 2, np.ptp(h, axis=0)
     clean = evaluate(h, sk, curve).summary()

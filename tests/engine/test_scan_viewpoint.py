@@ -112,11 +112,11 @@ def test_one_sided_scans_score_as_the_complete_shape(name, views):
         assert abs(with_v[metric]["curve"] - full[metric]["curve"]) <= 0.05
 
 
-def test_hammer_less_a_quarter_on_one_side_scores_as_the_complete_hammer(shared_data):
+def test_hammer_less_a_quarter_on_one_side_scores_as_the_complete_hammer(scans):
     from skelcore import skeletonize
     from skelcore.io import load_cloud
 
-    h = load_cloud(shared_data / "hammer_4096.ply")
+    h = load_cloud(scans / "hammer_4096.ply")
     _, curve = skeletonize(h, method="cao")
     keep = h[:, 0] > np.quantile(h[:, 0], 0.25)
     centre, extent = (h.min(axis=0) + h.max(axis=0)) / 2, np.ptp(h, axis=0)

@@ -169,12 +169,12 @@ def test_invalid_parameters_fail_loudly():
         SkeletonizeParams().replace(no_such_thing=1)
 
 
-def test_real_hammer_gives_a_connected_tree_inside_the_scan(shared_data):
+def test_real_hammer_gives_a_connected_tree_inside_the_scan(scans):
     from skelcore.io import load_cloud
     from skelcore.metrics.boundedness import boundedness
     from skelcore.params import Params
 
-    cloud = load_cloud(shared_data / "hammer_4096.ply")
+    cloud = load_cloud(scans / "hammer_4096.ply")
     skeletal, curve = skeletonize(cloud)
     assert _components(curve) == 1
     assert curve.n_edges == curve.n_vertices - 1
@@ -184,12 +184,12 @@ def test_real_hammer_gives_a_connected_tree_inside_the_scan(shared_data):
     assert np.mean(beta > 0.75) > 0.9
 
 
-def test_sparse_tree_curve_stays_connected(shared_data):
+def test_sparse_tree_curve_stays_connected(scans):
     # thin branches of the 1730-point tree hold balls of one or two points: they must not be cut
     from skelcore.skeleton.degrade import voxel_grid_average
     from skelcore.io import load_cloud
 
-    tree = voxel_grid_average(load_cloud(shared_data / "apple_tree_22367.ply"), 0.05)[0]
+    tree = voxel_grid_average(load_cloud(scans / "apple_tree_22367.ply"), 0.05)[0]
     _skeletal, curve = skeletonize(tree)
     assert _components(curve) == 1
     assert np.count_nonzero(curve.degrees() == 1) >= 6  # the tree's branch tips

@@ -1,6 +1,6 @@
 """skelcore.skeleton, method "cao" (the default): the toolbox's algorithm, its pieces against
 independent code, both methods' topology on shapes with known skeletons, and the paper's numbers on
-the shared scans (skipped when the shared data folder is absent)."""
+the real scans of resources/scans."""
 
 from __future__ import annotations
 
@@ -254,10 +254,10 @@ def _scores(cloud, method="cao"):
     return skelcore.evaluate(cloud, skeletal, curve).summary(), curve, info
 
 
-def test_hammer_reproduces_the_papers_row(shared_data):
+def test_hammer_reproduces_the_papers_row(scans):
     from skelcore.io import load_cloud
 
-    s, curve, info = _scores(load_cloud(shared_data / "hammer_4096.ply"))
+    s, curve, info = _scores(load_cloud(scans / "hammer_4096.ply"))
     assert s["topology"]["bottleneck"] == pytest.approx(0.0084, rel=0.05)
     assert s["topology"]["wasserstein"] == pytest.approx(0.0076, rel=0.05)
     assert s["centeredness"]["skeletal"] == pytest.approx(0.530, abs=0.02)
@@ -266,11 +266,11 @@ def test_hammer_reproduces_the_papers_row(shared_data):
     assert info.iterations == 3
 
 
-def test_tree_reproduces_the_papers_row(shared_data):
+def test_tree_reproduces_the_papers_row(scans):
     from skelcore.io import load_cloud
     from skelcore.skeleton.degrade import voxel_grid_average
 
-    tree = voxel_grid_average(load_cloud(shared_data / "apple_tree_22367.ply"), 0.02)[0]
+    tree = voxel_grid_average(load_cloud(scans / "apple_tree_22367.ply"), 0.02)[0]
     assert len(tree) == 8936
     s, curve, info = _scores(tree)
     assert s["topology"]["bottleneck"] == pytest.approx(0.00461, rel=0.05)
@@ -323,12 +323,12 @@ def test_fan_start_auto_uses_qhull_up_to_the_threshold():
         point_rings(np.random.default_rng(0).normal(size=(50, 3)), 8, fan_start="x")
 
 
-def test_hammer_starts_its_fans_as_the_toolbox_and_gets_its_weight(shared_data):
+def test_hammer_starts_its_fans_as_the_toolbox_and_gets_its_weight(scans):
     """With Qhull's fan starts the initial W_L is the toolbox's (17.197 in Octave, docs/skeletonize.md);
     the axis start gave 17.55."""
     from skelcore.io import load_cloud
 
-    cloud = load_cloud(shared_data / "hammer_4096.ply")
+    cloud = load_cloud(scans / "hammer_4096.ply")
     _s, curve, info = skeletonize(cloud, method="cao", return_info=True)
     assert info.fan_start == "qhull"
     assert info.initial_weight == pytest.approx(17.197, abs=0.001)

@@ -123,13 +123,13 @@ def test_h0_barcode_equals_dense_minimum_spanning_tree_on_larger_sets(rng):
         np.testing.assert_allclose(h0_barcode(points)[1:, 1], want, rtol=0, atol=1e-12)
 
 
-def test_hammer_scan_barcode_equals_dense_minimum_spanning_tree(shared_data):
+def test_hammer_scan_barcode_equals_dense_minimum_spanning_tree(scans):
     from scipy.sparse.csgraph import minimum_spanning_tree
     from scipy.spatial.distance import pdist, squareform
 
     from skelcore.io import load_cloud
 
-    cloud = load_cloud(shared_data / "hammer_4096.ply")
+    cloud = load_cloud(scans / "hammer_4096.ply")
     part = Normalization.from_cloud(cloud).apply(cloud)[::2]  # 2048 points keep the dense MST quick
     want = np.sort(minimum_spanning_tree(squareform(pdist(np.unique(part, axis=0)))).data)[::-1]
     np.testing.assert_allclose(h0_barcode(part)[1:, 1], want, rtol=0, atol=1e-12)

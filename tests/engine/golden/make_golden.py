@@ -5,11 +5,14 @@ Recorded so that ``tests/engine/test_evaluate_golden.py`` can show that a change
 changes no value, bit for bit: per case the ``--json`` document (minus the timings and
 the version), a sha256 of every array of the Evaluation (local values, barcodes, coverage gaps, rows),
 the stages that ran (the timing keys), the stage labels in the order shown when the stages run one after
-the other (``workers=1``) and the last progress fraction.  The shared scans (hammer, apple tree at the
-paper's 0.02 grid, skeletons by ``skeletonize`` method "cao") are skipped when the shared data folder is absent.
+the other (``workers=1``) and the last progress fraction.  Two of the cases are real scans of
+resources/scans (the hammer, the apple tree at the paper's 0.02 grid) with skeletons that
+``skeletonize`` method "cao" made once, stored in ``scan_skeletons.npz``: the skeletonizer's last bits
+follow the platform's scipy and BLAS, and these cases guard the evaluation, not the skeletonizer.
 
 Run ``PYTHONPATH=. python tests/engine/golden/make_golden.py`` to rewrite the file (only when a change of
-values is intended, and say why in the commit).
+values is intended, and say why in the commit); with ``--skeletons`` it first remakes the scans'
+skeletons.
 """
 
 from __future__ import annotations
@@ -25,8 +28,9 @@ import numpy as np
 HERE = Path(__file__).resolve().parent
 ROOT = HERE.parents[2]
 SAMPLES = ROOT / "resources" / "samples"
-SHARED = ROOT.parent / "shared" / "data"
+SCANS = ROOT / "resources" / "scans"
 GOLDEN = HERE / "evaluate_golden.json"
+SKELETONS = HERE / "scan_skeletons.npz"
 
 
 # ---- inputs ---------------------------------------------------------------------------------------
@@ -42,35 +46,47 @@ def _sample(shape: str, kind: str = "") -> dict:
     }
 
 
-_SHARED_CACHE: dict[str, tuple] = {}
-
-
-def _shared(name: str) -> dict:
-    """A shared scan and its "cao" skeletons (made once per process), with the fan start the golden
-    outputs were made with ("axis"; the default is the toolbox's Qhull start):
-    these cases guard the evaluation, not the skeletonizer."""
-    from skelcore import skeletonize
-    from skelcore.skeleton import CaoParams
+def _scan_cloud(name: str) -> np.ndarray:
     from skelcore.io import load_cloud
     from skelcore.skeleton.degrade import voxel_grid_average
 
-    if name not in _SHARED_CACHE:
-        if name == "hammer":
-            cloud = load_cloud(SHARED / "hammer_4096.ply")
-        else:  # the paper's "synthetic tree": the apple tree averaged on a 0.02 grid (8936 points)
-            cloud = voxel_grid_average(load_cloud(SHARED / "apple_tree_22367.ply"), 0.02)[0]
-        skeletal, curve = skeletonize(cloud, CaoParams(fan_start="axis"), method="cao")
-        _SHARED_CACHE[name] = (cloud, skeletal, curve)
-    cloud, skeletal, curve = _SHARED_CACHE[name]
-    return {"cloud": cloud, "skeletal": skeletal, "curve": curve}
+    if name == "hammer":
+        return load_cloud(SCANS / "hammer_4096.ply")
+    # the paper's "synthetic tree": the apple tree averaged on a 0.02 grid (8936 points)
+    return voxel_grid_average(load_cloud(SCANS / "apple_tree_22367.ply"), 0.02)[0]
+
+
+def write_scan_skeletons() -> None:
+    """``scan_skeletons.npz``: each scan's "cao" skeletons, with the fan start the golden outputs were
+    first made with ("axis"; the default became the toolbox's Qhull start later)."""
+    from skelcore import skeletonize
+    from skelcore.skeleton import CaoParams
+
+    out = {}
+    for name in ("hammer", "tree"):
+        skeletal, curve = skeletonize(_scan_cloud(name), CaoParams(fan_start="axis"), method="cao")
+        out[f"{name}_skeletal"] = np.asarray(skeletal)
+        out[f"{name}_curve_vertices"] = np.asarray(curve.vertices)
+        out[f"{name}_curve_edges"] = np.asarray(curve.edges)
+    np.savez_compressed(SKELETONS, **out)
+
+
+def _scan(name: str) -> dict:
+    """A real scan and its stored "cao" skeletons."""
+    from skelcore.curve import CurveSkeleton
+
+    with np.load(SKELETONS) as z:
+        skeletal = z[f"{name}_skeletal"]
+        curve = CurveSkeleton.from_raw(z[f"{name}_curve_vertices"], z[f"{name}_curve_edges"])
+    return {"cloud": _scan_cloud(name), "skeletal": skeletal, "curve": curve}
 
 
 def _rows(n: int, step: int) -> np.ndarray:
     return np.arange(0, n, step, dtype=np.int64)
 
 
-def _case(make: Callable[[], dict], shared: bool = False) -> dict:
-    return {"make": make, "shared": shared}
+def _case(make: Callable[[], dict]) -> dict:
+    return {"make": make}
 
 
 def _cases() -> dict[str, dict]:
@@ -122,9 +138,9 @@ def _cases() -> dict[str, dict]:
         s = _sample("torus", "lbc")
         return dict(cloud=s["cloud"], skeletal=s["skeletal"], workers=1)
 
-    def shared(name, workers=None):
+    def scan(name, workers=None):
         def make():
-            return dict(**_shared(name), workers=workers)
+            return dict(**_scan(name), workers=workers)
 
         return make
 
@@ -148,9 +164,9 @@ def _cases() -> dict[str, dict]:
         "torus_reference": _case(with_reference),
         "cylinder_lbc_curve_only_w1": _case(curve_only),
         "torus_lbc_skeletal_only_w1": _case(skeletal_only),
-        "hammer_cao": _case(shared("hammer"), shared=True),
-        "hammer_cao_w1": _case(shared("hammer", workers=1), shared=True),
-        "apple_tree_8936_cao": _case(shared("tree"), shared=True),
+        "hammer_cao": _case(scan("hammer")),
+        "hammer_cao_w1": _case(scan("hammer", workers=1)),
+        "apple_tree_8936_cao": _case(scan("tree")),
     }
 
 
@@ -240,11 +256,10 @@ def input_hashes(kwargs: dict) -> dict[str, str | None]:
 
 def main() -> None:
     sys.path.insert(0, str(ROOT))
+    if "--skeletons" in sys.argv[1:]:
+        write_scan_skeletons()
     out: dict[str, Any] = {}
     for name, case in CASES.items():
-        if case["shared"] and not SHARED.is_dir():
-            print(f"skip {name}: {SHARED} absent")
-            continue
         kwargs = case["make"]()
         out[name] = {"inputs": input_hashes(kwargs), **record(kwargs)}
         print(name, out[name]["stages"])
