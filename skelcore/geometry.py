@@ -138,7 +138,7 @@ def chunked_query(
 
 
 #: spans of fewer query rows run on one thread: a 4096-row k = 5 query took 4.6 ms of CPU on one
-#: thread and 4.9 ms with all (2 cores, loaded), 256 rows 0.25 against 0.66 ms (docs/performance.md 12)
+#: thread and 4.9 ms with all (2 cores, loaded), 256 rows 0.25 against 0.66 ms (docs/performance.md 6.3)
 THREAD_QUERY_ROWS = 8192
 
 
@@ -224,14 +224,14 @@ def knn(points: np.ndarray, queries: np.ndarray, k: int, tree: cKDTree | None = 
 
 def take_rows(array: np.ndarray, index: np.ndarray) -> np.ndarray:
     """``array[index]`` along the first axis (any index shape), by ``np.take``: the same values, 2.5-4 x
-    faster than fancy indexing for rows of 3 (a million rows: 0.27 -> 0.07 s; docs/performance.md 6)."""
+    faster than fancy indexing for rows of 3 (a million rows: 0.27 -> 0.07 s; docs/performance.md 6.4)."""
     return np.take(array, index, axis=0)
 
 
 def stable_argsort(values: np.ndarray) -> np.ndarray:
     """``np.argsort(values, kind="stable")`` of a 1-D array (equal values by index; NaN last), by numpy's
     unstable (vectorised) sort and a re-sort of the indices inside each run of equal values: 2-3 x faster
-    when ties are few (docs/performance.md 6)."""
+    when ties are few (docs/performance.md 6.4)."""
     values = np.asarray(values)
     if len(values) < 4096:  # below this the fix-up's few calls cost more than the sort saves
         return np.argsort(values, kind="stable")
@@ -278,7 +278,7 @@ def unique_rows(points: np.ndarray, checkpoint: Checkpoint = no_checkpoint) -> t
     Faster than ``np.unique(axis=0)``, which compares bytes.  From ``_MEMO_ROWS`` rows the answer is
     kept (read-only) for the same array with the same contents: an evaluation's boundedness, topology,
     smoothness and coverage each asked for the skeletal set's (1M rows: ~0.4 CPU s each,
-    docs/performance.md 13); a second caller meanwhile waits for the first.
+    docs/performance.md 6.4); a second caller meanwhile waits for the first.
     """
     points = np.asarray(points, dtype=float)
     if len(points) < _MEMO_ROWS:

@@ -69,7 +69,7 @@ def run_graph(tasks: list[GraphTask], workers: int | None = None, on_error: Call
     """Every task's result by name, the tasks run on ``workers`` threads (None = all cores; this thread
     is one of them), each thread taking the first task in list order whose ``after`` tasks are done.
 
-    For the independent stages of an evaluation (docs/performance.md 8): the long compiled ones first,
+    For the independent stages of an evaluation (docs/performance.md 6.2): the long compiled ones first,
     the others beside them.  At the first error ``on_error()`` is called (it should make the running
     tasks' checkpoints raise), no new task starts, every thread is joined and that first error is
     re-raised here.  A task's result does not depend on which thread ran it.

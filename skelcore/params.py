@@ -48,7 +48,7 @@ class Params:
     coverage_exact_points : up to this many cloud points coverage is exact; above, it is estimated on a
         random subsample of this many cloud points and at most as many skeleton elements (their radii
         from the whole cloud), every other cloud point taking its nearest sampled point's gap and verdict
-        (the JSON's ``coverage.*.subsample`` says so; docs/metrics.md 5.2, docs/performance.md 11).
+        (the JSON's ``coverage.*.subsample`` says so; docs/metrics.md 5.2, docs/performance.md 6.6).
     frame_inside_fraction : the ``frame`` warning fires when fewer skeleton points than this fraction
         lie inside the cloud's bounding box (grown by 10 % of its diagonal).
     frame_extent_ratio : ... or when the skeleton's bounding-box diagonal is more than this many

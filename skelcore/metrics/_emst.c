@@ -1,5 +1,5 @@
 /* Compiled Euclidean minimum spanning tree of SkelScope's topology stage (docs/metrics.md 1: the H0 barcode of a
- * Vietoris-Rips filtration is the EMST's edge lengths; design and numbers: docs/performance.md, section 8).
+ * Vietoris-Rips filtration is the EMST's edge lengths; design and numbers: docs/performance.md, section 6.1).
  *
  * Boruvka's algorithm over a KD-tree of the (distinct) points.  Each round, every component takes its
  * shortest outgoing edge.  A point's candidate is its nearest point in another component, found by a

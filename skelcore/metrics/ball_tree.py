@@ -24,7 +24,7 @@ LEAF = 8
 # rows per timed chunk at most (a chunk is split over the threads)
 MOST_ROWS = 262144
 # below this many rows a chunk runs on the calling thread alone: the evaluation's stages already run side
-# by side, and on a small cloud the pieces' hand-over cost more than their work (docs/performance.md 8)
+# by side, and on a small cloud the pieces' hand-over cost more than their work (docs/performance.md 6.2)
 THREAD_ROWS = 8192
 # covered: |p - x|^2 - R(x)^2 <= COVER_EPS x R_max^2 (the rounding allowance of the 4-D lifted query before)
 COVER_EPS = 1e-12
@@ -104,7 +104,7 @@ def _chunked(fn, n: int, checkpoint: Checkpoint, workers: int | None = None) -> 
     a chunk is cut in 4 x ``workers`` contiguous pieces that ``workers`` threads (None: every core;
     the kernel releases the GIL) take as they finish, so an unlucky piece delays little.  Threads only
     for ``n`` >= ``THREAD_ROWS``; a chunk is split when it holds >= 2 ``PIECE_ROWS`` (it was only from
-    ``THREAD_ROWS`` rows, so slow rows, ~0.1 s in fewer, ran on one thread: docs/performance.md 11)."""
+    ``THREAD_ROWS`` rows, so slow rows, ~0.1 s in fewer, ran on one thread: docs/performance.md 6.6)."""
     workers = max(1, int(workers or os.cpu_count() or 1))
     pool = ThreadPoolExecutor(max_workers=workers) if workers > 1 and n >= THREAD_ROWS else None
     try:

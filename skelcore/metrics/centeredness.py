@@ -124,8 +124,8 @@ def skeletal_centeredness(
         c[~(spread > 0)] = np.nan
         per_group[which] = c
 
-    # chunks on every core, each query single-threaded (docs/performance.md 6); one chunk (a small set)
-    # runs on this thread alone: the evaluation's other stages run beside it (docs/performance.md 8)
+    # chunks on every core, each query single-threaded (docs/performance.md 6.3); one chunk (a small set)
+    # runs on this thread alone: the evaluation's other stages run beside it (docs/performance.md 6.2)
     on_threads(span, [(lo, min(lo + _SKELETAL_CHUNK, n_groups)) for lo in range(0, n_groups, _SKELETAL_CHUNK)],
                threads, checkpoint)
     # coincident points have the same neighbours (ties go by index, not by self), so the same c
@@ -226,7 +226,7 @@ def curve_centeredness(
     about 1.5 x its points; at 1M points 15 % faster than cells of alpha): only the points of cells
     that can meet the slab are tested. The result equals that of testing every cloud point.  Clouds
     under 50k points take every sample at once in flat arrays, larger ones cut the rings per sample on
-    threads; both fit all rings in one batched call and give the same bits (docs/performance.md 7).
+    threads; both fit all rings in one batched call and give the same bits (docs/performance.md 6.5).
     """
     cloud = np.asarray(cloud, dtype=float)
     points = np.asarray(sample_points, dtype=float)
@@ -252,7 +252,7 @@ def curve_centeredness(
 
     if len(cloud) < _CURVE_AT_ONCE:
         # small clouds: every sample at once (a few dozen numpy calls in all instead of per sample;
-        # hammer scan 0.085 -> 0.011 s, docs/performance.md 7)
+        # hammer scan 0.085 -> 0.011 s, docs/performance.md 6.5)
         out[todo] = _all_samples_at_once(grid, points[todo], u[todo], g, h, half, growth, checkpoint)
         return out
 
@@ -272,9 +272,9 @@ def curve_centeredness(
         out[todo[span_[0] : span_[1]]] = found
 
     # the samples' slabs are independent and numpy releases the GIL in their big gathers, sorts and
-    # products: spans of samples on every core (docs/performance.md 6), each span's fits batched (a
+    # products: spans of samples on every core (docs/performance.md 6.3), each span's fits batched (a
     # set's fit does not depend on the others in its batch; one batch after the spans held a cancel
-    # for 0.4 s at 1M points, docs/performance.md 13)
+    # for 0.4 s at 1M points, docs/performance.md 4)
     step = _CURVE_SPAN
     on_threads(span_centeredness, [(i, min(i + step, len(todo))) for i in range(0, len(todo), step)], None,
                checkpoint, store)

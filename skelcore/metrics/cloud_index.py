@@ -1,5 +1,5 @@
 """The normalized cloud's search structures that several stages of one evaluation share
-(docs/performance.md 13): its coverage tree (:class:`~.ball_tree.BallTree` with slab bounds), each cloud
+(docs/performance.md 6.6): its coverage tree (:class:`~.ball_tree.BallTree` with slab bounds), each cloud
 point's distance to its nearest other point (coverage's tau, docs/metrics.md 5.2), and the spread of the estimated
 coverage's subsample (each cloud point's nearest sampled point, docs/metrics.md 5.2).  At a million
 points each is about a CPU second, and the skeletal and curve coverage and tau made them one by one.

@@ -10,7 +10,7 @@ balls never fill a shape's ends, so a complete skeleton must not need them to.  
 are exact, in the compiled kernel ``_balls.c`` (:mod:`.ball_tree`) on every core, a checkpoint every ~0.1 s.  Above
 ``Params.coverage_exact_points`` cloud points the gaps are found for a random subsample of the cloud
 and of the elements only (radii still from the whole cloud), the other points taking their nearest
-sampled point's answer (``Coverage.subsample``; docs/metrics.md 5.2, docs/performance.md 11).
+sampled point's answer (``Coverage.subsample``; docs/metrics.md 5.2, docs/performance.md 6.6).
 """
 
 from __future__ import annotations

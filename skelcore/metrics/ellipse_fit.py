@@ -57,7 +57,7 @@ def fit_ellipses(xy: np.ndarray, starts: np.ndarray) -> tuple[np.ndarray, np.nda
     Each set's scatter matrices are one BLAS product; every later step (condition, solve, the 3 x 3
     eigenproblem, the conic's geometry) is one LAPACK call on the stacked matrices of all sets, instead
     of a dozen numpy calls per set (curve centeredness fits about 200 cross-sections,
-    docs/performance.md 7).  Set i's numbers never depend on the other sets, so one set alone gives the
+    docs/performance.md 6.5).  Set i's numbers never depend on the other sets, so one set alone gives the
     same bits as in a batch.
 
     Returns ``centers`` (S, 2), ``semi_axes`` (S, 2, major first) and ``angles`` (S,), NaN for a set

@@ -307,7 +307,7 @@ class _CellCounts:
     """Number of distinct cubic cells of side ``finest`` x 2^j holding points, for j = 0, 1, ... in
     turn: the distinct cells of each size from those of the size before (floor(floor(y / 2) / 2^(j-1))
     = floor(y / 2^j), and dividing by a power of 2 is exact in floating point), so the same counts as
-    flooring every point at each size, from ever fewer rows (docs/performance.md 7)."""
+    flooring every point at each size, from ever fewer rows (docs/performance.md 6.1)."""
 
     def __init__(self, points: np.ndarray, finest: float, checkpoint: Checkpoint = no_checkpoint):
         self._rows = _distinct_rows(np.floor(points / finest).astype(np.int64), checkpoint)

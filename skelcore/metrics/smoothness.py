@@ -78,7 +78,7 @@ def skeletal_smoothness(
     nbr = np.empty((m, q), np.int64)
     spans = [(start, min(m, start + _CHUNK)) for start in range(0, m, _CHUNK)]
     threads = (os.cpu_count() or 1) if len(spans) > 1 else 1
-    workers = 1  # chunks on every core, each query on one (docs/performance.md 6); the stages run side by side (8)
+    workers = 1  # chunks on every core, each query on one (docs/performance.md 6.3); the stages run side by side (6.2)
 
     def tangent_span(start: int, stop: int) -> None:
         rows = visit[start:stop]

@@ -71,7 +71,7 @@ def _emst_lengths(points: np.ndarray, checkpoint: Checkpoint = no_checkpoint) ->
 
     The kernel runs in a helper thread (all cores for its searches) while this thread calls the
     checkpoint every 50 ms with the share of components merged; a cancel stops it within one block of
-    1024 searches.  The lengths do not depend on the number of threads (docs/performance.md 8).
+    1024 searches.  The lengths do not depend on the number of threads (docs/performance.md 6.1).
     """
     n = len(points)
     if n < 2:
@@ -311,7 +311,7 @@ def topological_similarity(
     skeletal = _as_points(skeletal)
     if len(cloud) == 0 or len(skeletal) == 0:
         raise ValueError("topological similarity needs a non-empty cloud and skeletal point set")
-    # one after the other: each EMST's searches use every core (docs/performance.md 8)
+    # one after the other: each EMST's searches use every core (docs/performance.md 6.1)
     cloud_bars, cloud_nn = _barcode_and_nn(cloud, lambda f: checkpoint(0.45 * f))
     skel_bars, _ = _barcode_and_nn(skeletal, lambda f: checkpoint(0.45 + 0.45 * f))
     eps = _quantile(cloud_nn, params.eps_quantile)  # = eps_star(cloud, quantile), without a new kNN

@@ -60,7 +60,7 @@ def find_outliers(cloud: np.ndarray, params: Params = Params(), *, checkpoint: C
     The spacing (median nearest-neighbour distance) and the statistical test's yardstick come from one
     query of at most ``REFERENCE_SAMPLE`` random points (every point below that; seed 0); the radius
     test asks only the rows no crowded cell vouches for (:func:`sparse_rows`, exact).  At 1M points
-    ~1.2 CPU s (a kNN pass over every row and an exact median took 2-4; docs/performance.md 13).
+    ~1.2 CPU s (a kNN pass over every row and an exact median took 2-4; docs/performance.md 6.6).
 
     Examples
     --------

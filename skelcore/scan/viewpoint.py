@@ -9,7 +9,7 @@ faces a sensor (d . (v - e) > 0) and no scanned point lies in front of e on the 
 ``viewpoint_rows`` x 2 ``viewpoint_rows``; each is cast on its own by the unchanged compiled kernel, its
 tree turned so that the direction is the one sample of a 1 x 1 raster; the sensors are asked only about
 the uncovered directions, and queries farther than 4 cells (``viewpoint_share_cell`` x h) from the cloud
-share their cell centroid's casts (docs/metrics.md 6.3, docs/performance.md 11).
+share their cell centroid's casts (docs/metrics.md 6.3, docs/performance.md 6.8).
 
 Skeletal centeredness (Eq. 10) with viewpoints leaves out the component of m_o - m_s along the mean
 viewing direction a(q) turned square to the skeleton, times m(q), the uncovered share of the directions

@@ -144,7 +144,7 @@ def _skeletal_outside(ctx: EvalContext, checkpoint: Checkpoint):
 
 def _stray_points(ctx: EvalContext, checkpoint: Checkpoint):
     """The cloud's stray points and, in pointwise correspondence, the skeletal set's isolated points
-    (docs/metrics.md 6.4): a stage beside the others, not a serial tail after them (docs/performance.md 13)."""
+    (docs/metrics.md 6.4): a stage beside the others, not a serial tail after them (docs/performance.md 6.6)."""
     return find_strays(ctx.cloud, ctx.skeletal, ctx.params, pointwise=ctx.mode == "pointwise", checkpoint=checkpoint)
 
 

@@ -115,7 +115,7 @@ def test_remove_outliers_keeps_the_correspondence():
     assert dropped == 2 and idx.tolist() == [0, 5, 1999] and np.array_equal(c[idx], s)
 
 
-# ---- the crowded-cell prefilter and the sampled spacing (docs/performance.md 13) ---------------------
+# ---- the crowded-cell prefilter and the sampled spacing (docs/performance.md 6.6) ---------------------
 
 @pytest.mark.parametrize("seed", range(6))
 def test_sparse_rows_are_the_brute_force_ones(seed):

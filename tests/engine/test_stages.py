@@ -1,6 +1,6 @@
 """The declared stages of an evaluation (skelcore/stages/catalogue.py): each declared once, reading only
 context items, waiting for the stage that makes its inputs, selected and started by the rules of
-docs/performance.md 8 (longest first; the curve's boundedness last when the skeletal set's runs)."""
+docs/performance.md 6.2 (longest first; the curve's boundedness last when the skeletal set's runs)."""
 
 from __future__ import annotations
 

@@ -1,4 +1,4 @@
-"""unique_rows keeps its answer for the same large array (docs/performance.md 13): the same values,
+"""unique_rows keeps its answer for the same large array (docs/performance.md 6.4): the same values,
 read-only, recomputed when the array's contents change, and an evaluation that reads it from every
 stage gives the arrays it gives without the memo."""
 
