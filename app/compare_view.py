@@ -285,7 +285,9 @@ class CompareController(QtCore.QObject):
             return False
         params = ev_a.params
         cloud = ev_a.cloud
-        correspondence = "reverse" if ev_a.correspondence == "reverse" else "auto"
+        # B's own set decides: pointwise when it has the cloud's rows, else A's choice of reverse projection
+        pointwise = skeletal is not None and len(skeletal) == len(cloud)
+        correspondence = "reverse" if ev_a.correspondence == "reverse" and not pointwise else "auto"
         scan = getattr(ev_a, "scan", None)
         viewpoints = [list(v) for v in scan.viewpoints] if scan is not None and scan.viewpoints else None  # as A's
 

@@ -166,6 +166,7 @@ class SavedSessions(QtCore.QObject):
         try:
             with w.session.batch():  # one evaluation, of the inputs as mapped and indexed
                 problems += w.session.load_roles(found)
+                w.session.set_correspondence(state.correspondence)  # the saved choice of the set just loaded
                 problems += self._restore_index(index_at, state)
                 problems += self._restore_mappings(state)
         finally:

@@ -171,7 +171,11 @@ class Session(QtCore.QObject):
         ``offset`` (a ``frame`` warning's suggestion), then evaluated again."""
         try:
             with self.batch():
-                self.scene.map_skeleton(scale, offset)
+                self._same_set = True
+                try:
+                    self.scene.map_skeleton(scale, offset)
+                finally:
+                    self._same_set = False
         except ValueError as exc:
             self.error.emit("Map skeleton", str(exc), "")
             return False
@@ -377,6 +381,8 @@ class Session(QtCore.QObject):
         return Session._Batch(self)
 
     def _on_scene(self, event: SceneEvent) -> None:
+        if event.kind == "layer" and event.layer == "skeletal":
+            self._new_skeletal_set()
         if event.kind == "layer":
             # The running evaluation describes old inputs: drop it (its result will never land).
             if self.runner.current_name == "evaluation":
@@ -384,6 +390,20 @@ class Session(QtCore.QObject):
             self._inputs_changed = True
         if event.kind in ("layer", "quantities"):
             self.check_stale()
+
+    _correspondence_of: Any = None  # the skeletal layer the correspondence setting was chosen for
+    _same_set = False  # the skeletal layer being replaced is the same set (mapped into the cloud's frame)
+
+    def _new_skeletal_set(self) -> None:
+        """A correspondence choice belongs to the skeletal set it was made for: another set (loaded,
+        swapped, skeletonized or closed) starts "as loaded" again, and its load decides (a drop's
+        answer, an index file). A set mapped into the cloud's frame stays the same set."""
+        layer = self.scene.skeletal
+        if layer is self._correspondence_of:
+            return
+        self._correspondence_of = layer
+        if not self._same_set and self.correspondence_provider() != "auto":
+            self.set_correspondence("auto")
 
     # ---- computing ------------------------------------------------------------------------
     def params(self) -> Params:
