@@ -436,7 +436,20 @@ class MainWindow(QtWidgets.QMainWindow):
             if paths and accepts(paths):
                 return drop
         files = [p for p in paths if os.path.isfile(p)]
-        return (lambda _paths: self.session.load_files(files)) if files else None
+        folders = [p for p in paths if os.path.isdir(p)]
+        if not files and not folders:
+            return None
+
+        def load(_paths: list[str]) -> None:
+            if folders:  # after the drop: the dialog is modal
+                names = ", ".join(os.path.basename(os.path.normpath(p)) for p in folders)
+                QtCore.QTimer.singleShot(0, self, lambda: self.show_error(
+                    "Could not load", f"{names}: a folder that is not a skelcore compare run (a run's folder holds "
+                    "index.json and jobs/): drop its files, or a compare run's folder"))
+            if files:
+                self.session.load_files(files)
+
+        return load
 
     def _drag(self, event: QtGui.QDragEnterEvent) -> None:
         if self._drop_handler(self._local_paths(event)) is not None:
