@@ -105,7 +105,7 @@ def test_the_dialog_lists_the_reports_rows_and_opens_the_ab_view_from_stored_res
     view = dialog.open_ab()
     assert view is not None and view.isVisible() and not window.session.runner.running
     assert "yshape, normal, seed 0" in view.windowTitle()
-    assert len(view.rows) == len(expected) == 8
+    assert len(view.rows) == len(expected) == 10  # 8 of the paper, 2 coverage rows (SkelScope's own)
     for (label, a, b, d), (label2, a2, b2, d2) in zip(view.rows, expected):
         assert label == label2 and a == pytest.approx(a2, abs=1e-12) and b == pytest.approx(b2, abs=1e-12)
         assert d == pytest.approx(d2, abs=1e-12)
