@@ -81,6 +81,10 @@ def _lower_is_better(label: str) -> bool:
     return any(_label(c.key) == label and c.better == "lower" for c in COLUMN.values())
 
 
+#: the A/B window's size on a screen with room for it
+AB_SIZE = (1400, 850)
+
+
 class CompareWindow(QtWidgets.QWidget):
     """A/B view of two evaluations of one cloud."""
 
@@ -92,7 +96,7 @@ class CompareWindow(QtWidgets.QWidget):
 
         self.context = context  # e.g. a compare run's dataset, condition and seed
         self.setWindowTitle(f"SkelScope — A: {names[0]}  |  B: {names[1]}" + (f"  ({context})" if context else ""))
-        self.resize(1400, 850)
+        self.fit_to_screen(self.screen())
         self.ev_a, self.ev_b, self.names = ev_a, ev_b, names
         self.thresholds = thresholds or (ev_a.params.beta_star, ev_a.params.c_star)
         self.plotter = ClosingInteractor(self, shape=(1, 2), auto_update=False)
@@ -171,6 +175,17 @@ class CompareWindow(QtWidgets.QWidget):
                 item.setForeground(QtCore.Qt.GlobalColor.darkGreen if text == "sound" else QtCore.Qt.GlobalColor.darkRed)
             self.table.setItem(last, c, item)
         self.table.resizeColumnsToContents()
+
+    def fit_to_screen(self, screen: Any) -> None:
+        """AB_SIZE, shrunk to ``screen``'s free area as the main window is, and placed inside it."""
+        from .main_window import FRAME_ALLOWANCE, initial_size
+
+        free = screen.availableGeometry()
+        width, height = initial_size(free.size(), AB_SIZE)
+        self.resize(width, height)
+        x = free.x() + max(0, (free.width() - width - FRAME_ALLOWANCE[0]) // 2)
+        y = free.y() + max(0, (free.height() - height - FRAME_ALLOWANCE[1]) // 2)
+        self.move(x, y)
 
     def cell(self, row: int, col: int) -> str:
         return self.table.item(row, col).text()
@@ -393,6 +408,7 @@ class CompareController(QtCore.QObject):
         if thresholds == "window":
             thresholds = (scene.beta_star, scene.c_star)
         view = CompareWindow(ev_a, ev_b, names, metric=scene.metric, thresholds=thresholds, context=context)
+        view.fit_to_screen(self.window.widget.screen())  # the main window's screen
         view.show()
         self.views = [v for v in self.views if v.isVisible()]
         self.views.append(view)

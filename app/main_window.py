@@ -741,10 +741,10 @@ FRAME_ALLOWANCE = (16, 48)
 """Room left on the screen for a window manager's frame and title bar (device-independent pixels)."""
 
 
-def initial_size(available: QtCore.QSize) -> tuple[int, int]:
-    """The window's first size: DEFAULT_SIZE, shrunk to the screen's free area (minus a frame)."""
-    return (max(200, min(DEFAULT_SIZE[0], available.width() - FRAME_ALLOWANCE[0])),
-            max(200, min(DEFAULT_SIZE[1], available.height() - FRAME_ALLOWANCE[1])))
+def initial_size(available: QtCore.QSize, default: tuple[int, int] = DEFAULT_SIZE) -> tuple[int, int]:
+    """The window's first size: ``default`` (DEFAULT_SIZE), shrunk to the screen's free area (minus a frame)."""
+    return (max(200, min(default[0], available.width() - FRAME_ALLOWANCE[0])),
+            max(200, min(default[1], available.height() - FRAME_ALLOWANCE[1])))
 
 
 def scrolling(widget: QtWidgets.QWidget, parent: QtWidgets.QWidget) -> QtWidgets.QScrollArea:

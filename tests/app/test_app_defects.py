@@ -250,3 +250,28 @@ def test_the_ab_view_greys_vacuous_scores_shows_coverage_and_the_defect_legend(w
         assert len(view._legends) == 1 + bool(view.legend_labels(1))
     finally:
         view.close()
+
+
+def test_the_ab_window_fits_the_screen(window, defective):
+    """The A/B window gets the room the screen has (the test's screen is smaller than its usual
+    1400 x 850), as the main window does; on a 1366 x 768 laptop it fits too."""
+    from PySide6 import QtCore
+
+    from skelscope.compare_view import AB_SIZE
+
+    s, curve, spur, ev = defective
+    w = _show(window, s, curve, ev)
+    view = w.compare.open(ev, ev, ("A", "same"))
+    try:
+        free = view.screen().availableGeometry()
+        assert free.width() < AB_SIZE[0] or free.height() < AB_SIZE[1]  # a real small-screen check
+        assert free.contains(view.frameGeometry()), (view.frameGeometry(), free)
+
+        class Laptop:
+            def availableGeometry(self):
+                return QtCore.QRect(0, 27, 1366, 741)  # 768 less a top panel
+
+        view.fit_to_screen(Laptop())
+        assert Laptop().availableGeometry().contains(QtCore.QRect(view.pos(), view.size()))
+    finally:
+        view.close()
