@@ -335,7 +335,7 @@ def test_an_input_error_in_the_child_process_is_one_dialog_line(window, qtbot):
 def test_the_first_frame_of_big_new_data_shows_its_twins_then_full_detail(window, qtbot, monkeypatch):
     """Newly loaded big layers are first drawn through their level-of-detail twins (quick in software
     GL), and the full-detail frame follows by itself; a big drop's evaluation starts after the first."""
-    import app.view.scene_view as scene_view
+    import skelscope.view.scene_view as scene_view
 
     monkeypatch.setattr(scene_view, "LOD_POINTS", 2000)
     w = window

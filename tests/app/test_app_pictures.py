@@ -187,7 +187,7 @@ def test_a_saved_camera_restores_the_view_and_the_scripted_mode_reads_it(evaluat
 
 
 def test_a_level_of_detail_twin_replaces_a_big_layer_while_the_camera_moves(window, qtbot, monkeypatch):
-    import app.view.scene_view as scene_view
+    import skelscope.view.scene_view as scene_view
 
     monkeypatch.setattr(scene_view, "LOD_POINTS", 2000)
     cloud = shapes.sphere_surface(10000, seed=1)
