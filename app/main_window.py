@@ -477,6 +477,22 @@ class MainWindow(QtWidgets.QMainWindow):
         for w in (self.stage, self.progress, self.cancel_button):
             w.setVisible(True)
         self._update_actions()
+        self._update_no_result()
+
+    def _update_no_result(self) -> None:
+        """What the Summary says while it has no result: the evaluation running, cancelled, not run
+        yet, or the inputs still to load."""
+        from .panels.summary import NO_RESULT
+
+        if self.session.runner.current_name == "evaluation":
+            text = "Evaluating… (Esc cancels)"
+        elif self.scene.can_evaluate() and self.session.evaluation_cancelled:
+            text = "Evaluation cancelled: the inputs are loaded; Evaluate (F5) runs it again."
+        elif self.scene.can_evaluate():
+            text = "Not evaluated yet: Evaluate (F5)."
+        else:
+            text = NO_RESULT
+        self.summary.set_no_result(text)
 
     def _task_progress(self, fraction: float, stage: str) -> None:
         self._pending_progress = (fraction, stage)
@@ -502,6 +518,7 @@ class MainWindow(QtWidgets.QMainWindow):
             self.stage.setText(shown)
 
     def _task_finished(self, _name: str) -> None:
+        self._update_no_result()
         if self.session.runner.running:
             return
         self._progress_timer.stop()
@@ -531,6 +548,7 @@ class MainWindow(QtWidgets.QMainWindow):
             self.pick.show_info(None)
             names = [os.path.basename(layer.path) for layer in self.scene.layers.values() if layer.path]
             self.setWindowTitle("SkelScope" + (f" — {', '.join(names)}" if names else ""))
+            self._update_no_result()
         self._update_actions()
 
     def _prepare_plots(self) -> None:

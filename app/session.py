@@ -384,6 +384,7 @@ class Session(QtCore.QObject):
         if event.kind == "layer" and event.layer == "skeletal":
             self._new_skeletal_set()
         if event.kind == "layer":
+            self.evaluation_cancelled = False
             # The running evaluation describes old inputs: drop it (its result will never land).
             if self.runner.current_name == "evaluation":
                 self.runner.discard()
@@ -439,6 +440,7 @@ class Session(QtCore.QObject):
                       skeletal_index=index, viewpoints=[list(p) for p in self.viewpoints] or None,
                       **self._requested_scan_options)
         self._evaluated_layers = (scene.cloud, scene.skeletal, scene.curve)
+        self.evaluation_cancelled = False
         if len(cloud) + (0 if skeletal is None else len(skeletal)) >= self.process_from:
             def restore(ev: Any) -> Any:  # the child does not send the cloud back
                 if ev.cloud is None:
@@ -485,6 +487,8 @@ class Session(QtCore.QObject):
         """Cancel (Esc, the status bar's button): the window is free at once and no result of the
         task can land; its thread stops at the engine's next checkpoint."""
         name = self.runner.current_name
+        if name == "evaluation":
+            self.evaluation_cancelled = True  # before the runner says so: the window words the Summary
         self.runner.discard()
         if name:
             self.message.emit(f"{name} cancelled")
@@ -527,6 +531,8 @@ class Session(QtCore.QObject):
 
     _evaluated_layers: tuple = ()
     _skeletonized_cloud: Any = None
+    #: the last evaluation was cancelled (Esc, Cancel) and neither a new run nor new inputs came since
+    evaluation_cancelled = False
 
 
 _ROLE_TITLES = {"cloud": "cloud", "skeletal": "skeletal point set", "curve": "curve skeleton"}
