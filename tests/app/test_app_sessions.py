@@ -346,3 +346,22 @@ def test_skelscope_session_opened_for_the_user_fits_the_screen_it_was_not_saved_
     shot = str(tmp_path / "s.png")
     assert check_arguments(build_parser().parse_args(["--session", path, "--screenshot", shot])).view_size == (1485, 950)
     assert check_arguments(build_parser().parse_args(["--session", path, "--size", "300", "200"])).view_size == (300, 200)
+
+
+def test_open_session_starts_in_the_sessions_folder_not_the_last_data_folder(window, files, tmp_path, monkeypatch):
+    from PySide6 import QtWidgets
+
+    w = window
+    _load(w, files)
+    kept = tmp_path / "sessions"
+    kept.mkdir()
+    w.saved_sessions.save(str(kept / "y_session.json"))
+    other = tmp_path / "other_data"
+    shutil.copytree(os.path.dirname(files["cloud"]), other)
+    w.session.load_files([str(other / os.path.basename(files["cloud"]))])  # newer data, elsewhere
+    assert w.last_dir() == str(other)
+    asked = []
+    monkeypatch.setattr(QtWidgets.QFileDialog, "getOpenFileName",
+                        lambda parent, title, folder, *a, **k: asked.append((title, folder)) or ("", ""))
+    w.saved_sessions.open_dialog()
+    assert asked == [("Open session", str(kept))]
