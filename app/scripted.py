@@ -262,11 +262,13 @@ def _start_ab(window: WindowApi, ab: tuple[str, Any] | None) -> None:
 
 def _save_ab_picture(app: QtWidgets.QApplication, window: WindowApi, path: str, scripted: bool) -> int:
     """The A/B window (split view and table) as PNG; 0, or the exit status of a failure."""
+    from .compare_view import AB_SIZE
     from .exports import write_png
 
     views = [v for v in window.compare.views if v.isVisible()]
     if not views:
         return fail("the A/B view did not open", 1 if window.bug else 2) if scripted else 0
+    views[-1].resize(*AB_SIZE)  # a picture of the same size on every screen (the window fits the user's)
     app.processEvents()
     try:
         out = write_png(path, views[-1].picture(), window.input_files())
