@@ -207,3 +207,15 @@ def test_the_correspondence_chosen_for_a_set_stays_when_it_is_mapped(window, fil
     w.session.load_files([paths["sub"]])
     assert w.session.map_skeleton(2.0, (0.0, 0.0, 0.0))
     assert w.settings_panel.correspondence() == "reverse"
+
+
+def test_reverse_projection_chosen_in_the_settings_stays_with_its_set(window, qtbot, files):
+    paths, sh, _ = files
+    w = window
+    w.session.load_as("cloud", paths["cloud"])
+    w.session.load_as("skeletal", paths["sub"])
+    w.settings_panel.set_correspondence("reverse")  # the no_correspondence warning's remedy
+    assert _evaluate(qtbot, w).correspondence == "reverse"
+    w.session.load_as("skeletal", paths["skeletal"])
+    assert w.settings_panel.correspondence() == "auto"
+    assert _evaluate(qtbot, w).correspondence == "pointwise"
