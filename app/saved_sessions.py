@@ -172,9 +172,9 @@ class SavedSessions(QtCore.QObject):
         try:
             with w.session.batch():  # one evaluation, of the inputs as mapped and indexed
                 problems += w.session.load_roles(found)
-                w.session.set_correspondence(state.correspondence)  # the saved choice of the set just loaded
                 problems += self._restore_index(index_at, state)
                 problems += self._restore_mappings(state)
+                w.session.set_correspondence(state.correspondence)  # the saved choice of the set just loaded
         finally:
             self._restoring = False
         scene.set_metric(state.metric)

@@ -365,3 +365,27 @@ def test_open_session_starts_in_the_sessions_folder_not_the_last_data_folder(win
                         lambda parent, title, folder, *a, **k: asked.append((title, folder)) or ("", ""))
     w.saved_sessions.open_dialog()
     assert asked == [("Open session", str(kept))]
+
+
+def test_a_session_keeps_reverse_projection_for_its_mapped_set_of_another_size(window, files, tmp_path):
+    """The correspondence chosen for a set of another size is restored with that set, also when the
+    set is mapped into the cloud's frame on restoring (a new layer of the same set)."""
+    from skelcore.io import load_points
+
+    from skelscope.loading import SKELETAL_REVERSE
+
+    w = window
+    sub = tmp_path / "sub.ply"
+    write_points_ply(sub, load_points(files["skeletal"])[::3] / 2.0)
+    w.session.load_files([files["cloud"]])
+    w.session.ask = lambda question, options: SKELETAL_REVERSE
+    w.session.load_files([str(sub)])
+    assert w.session.map_skeleton(2.0, (0.0, 0.0, 0.0))
+    assert w.settings_panel.correspondence() == "reverse"
+    path = str(tmp_path / "sub_session.json")
+    w.saved_sessions.save(path)
+    w.session.close_all()
+    w.set_settings(Params(), "auto")
+    assert w.saved_sessions.open(path) == []
+    assert w.scene.skeletal.mapping[0] == pytest.approx(2.0)
+    assert w.settings_panel.correspondence() == "reverse"
