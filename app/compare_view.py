@@ -14,7 +14,7 @@ import os
 from typing import Any
 
 import numpy as np
-from PySide6 import QtCore, QtWidgets
+from PySide6 import QtCore, QtGui, QtWidgets
 
 from skelcore.scores import COLUMN, LOCAL_METRICS, Scores, column_keys, format_score
 
@@ -22,15 +22,47 @@ from .window_api import ActionSpec, WindowApi
 
 __all__ = ["ab_rows", "ab_defect_rows", "CompareWindow", "CompareController"]
 
+#: the mark of SkelScope's own scores (coverage), as in the main window's summary
+OWN = "*"
+
+
+def _label(key: str) -> str:
+    return COLUMN[key].label + (OWN if COLUMN[key].group == "skelscope" else "")
+
+
 def ab_rows(a: Any, b: Any) -> list[tuple[str, float, float, float]]:
-    """(label, A, B, B - A) per compared paper score (:data:`skelcore.scores.SCORE_COLUMNS`) of two
+    """(label, A, B, B - A) per compared paper score (:data:`skelcore.scores.SCORE_COLUMNS`), then
+    SkelScope's coverage (labels marked "*", as in the main summary), of two
     :class:`~skelcore.scores.Scores` (or ``Evaluation.summary()`` dicts); NaN where either side has
     no such score (a missing topology, no curve), and a row left out when neither has it."""
     a, b = (s if isinstance(s, Scores) else Scores.from_json_dict(s) for s in (a, b))
-    keys = column_keys(group="paper", compared=True)
+    keys = column_keys(group=("paper", "skelscope"), compared=True)
     fa, fb = a.flat(keys), b.flat(keys)
-    return [(COLUMN[k].label, fa[k], fb[k], fb[k] - fa[k]) for k in keys
+    return [(_label(k), fa[k], fb[k], fb[k] - fa[k]) for k in keys
             if not (math.isnan(fa[k]) and math.isnan(fb[k]))]
+
+
+def vacuous_scores(ev: Any) -> dict[str, str]:
+    """The scores of ``ev`` that say nothing, by A/B row label, each with its warning: the curve's
+    smoothness without a degree-2 vertex (``trivial_smoothness``), and the scores a collapsed skeleton
+    gets for free (``collapse``: topology, boundedness, centeredness and smoothness of that skeleton;
+    its coverage stays, and tells)."""
+    out: dict[str, str] = {}
+    sk = getattr(ev, "skeletal", None)
+    topology_of = "curve" if sk is None or getattr(sk, "source", "skeletal") == "curve" else "skeletal"
+    for w in getattr(ev, "warnings", None) or []:
+        code = w["code"] if isinstance(w, dict) else w.code
+        message = w["message"] if isinstance(w, dict) else w.message
+        why = f"[{code}] {message}"
+        if code == "trivial_smoothness":
+            out.setdefault(_label("smoothness_curve"), why)
+        elif code == "collapse":
+            kind = "curve" if message.startswith("the curve skeleton") else "skeletal"
+            keys = [f"{metric}_{kind}" for metric in ("boundedness", "centeredness", "smoothness")]
+            keys += ["d_B", "d_Wp"] if kind == topology_of else []
+            for key in keys:
+                out.setdefault(_label(key), why)
+    return out
 
 
 def ab_defect_rows(ev_a: Any, ev_b: Any) -> list[tuple[str, float, float, float]]:
@@ -46,7 +78,11 @@ def ab_defect_rows(ev_a: Any, ev_b: Any) -> list[tuple[str, float, float, float]
 def _lower_is_better(label: str) -> bool:
     if label.startswith("defects: "):
         return True
-    return any(c.label == label and c.better == "lower" for c in COLUMN.values())
+    return any(_label(c.key) == label and c.better == "lower" for c in COLUMN.values())
+
+
+#: the A/B window's size on a screen with room for it
+AB_SIZE = (1400, 850)
 
 
 class CompareWindow(QtWidgets.QWidget):
@@ -60,7 +96,7 @@ class CompareWindow(QtWidgets.QWidget):
 
         self.context = context  # e.g. a compare run's dataset, condition and seed
         self.setWindowTitle(f"SkelScope — A: {names[0]}  |  B: {names[1]}" + (f"  ({context})" if context else ""))
-        self.resize(1400, 850)
+        self.fit_to_screen(self.screen())
         self.ev_a, self.ev_b, self.names = ev_a, ev_b, names
         self.thresholds = thresholds or (ev_a.params.beta_star, ev_a.params.c_star)
         self.plotter = ClosingInteractor(self, shape=(1, 2), auto_update=False)
@@ -90,6 +126,8 @@ class CompareWindow(QtWidgets.QWidget):
         from .scene.defects import sound_line
 
         self.defect_rows = ab_defect_rows(ev_a, ev_b)  # the defects of A and B
+        self.vacuous = (vacuous_scores(ev_a), vacuous_scores(ev_b))
+        self._legends: list[Any] = []  # the defect legends, one per half that draws defects
         self.sound = (sound_line(ev_a), sound_line(ev_b))
         self._fill_table()
         self.draw()
@@ -105,11 +143,26 @@ class CompareWindow(QtWidgets.QWidget):
                 texts = (label, *(format_score(v, 4, nan="—") for v in (a, b)), format_score(d, 4, nan="—", signed=True))
             else:
                 texts = (label, f"{a:.0f}", f"{b:.0f}", f"{d:+.0f}" if d else "0")
+            vacuous = [(side, v[label]) for side, v in zip("AB", self.vacuous) if r < n_scores and label in v]
             for c, text in enumerate(texts):
                 item = QtWidgets.QTableWidgetItem(text)
                 if c:
                     item.setTextAlignment(QtCore.Qt.AlignmentFlag.AlignRight | QtCore.Qt.AlignmentFlag.AlignVCenter)
-                if c == 3 and not math.isnan(d) and d != 0:
+                if c == 0 and label.endswith(OWN):
+                    item.setToolTip("SkelScope's own score, not the paper's: the fraction of the cloud covered by "
+                                    "the skeleton's medial balls")
+                if c in (1, 2) and label in self.vacuous[c - 1]:
+                    item.setText(f"{text} (vacuous)")
+                    item.setForeground(self.palette().color(QtGui.QPalette.ColorGroup.Disabled,
+                                                            QtGui.QPalette.ColorRole.Text))
+                    item.setToolTip(f"says nothing: {self.vacuous[c - 1][label]}")
+                if c == 3 and vacuous and not math.isnan(d):
+                    # a vacuous value is no improvement nor a loss: grey, never green or red
+                    item.setForeground(self.palette().color(QtGui.QPalette.ColorGroup.Disabled,
+                                                            QtGui.QPalette.ColorRole.Text))
+                    item.setToolTip("not compared: " + "; ".join(f"{side}'s {label} says nothing ({why})"
+                                                                for side, why in vacuous))
+                elif c == 3 and not math.isnan(d) and d != 0:
                     better = d < 0 if _lower_is_better(label) else d > 0  # distances: lower is better
                     item.setForeground(QtCore.Qt.GlobalColor.darkGreen if better else QtCore.Qt.GlobalColor.darkRed)
                     item.setToolTip("B is better" if better else "A is better")
@@ -122,6 +175,17 @@ class CompareWindow(QtWidgets.QWidget):
                 item.setForeground(QtCore.Qt.GlobalColor.darkGreen if text == "sound" else QtCore.Qt.GlobalColor.darkRed)
             self.table.setItem(last, c, item)
         self.table.resizeColumnsToContents()
+
+    def fit_to_screen(self, screen: Any) -> None:
+        """AB_SIZE, shrunk to ``screen``'s free area as the main window is, and placed inside it."""
+        from .main_window import FRAME_ALLOWANCE, initial_size
+
+        free = screen.availableGeometry()
+        width, height = initial_size(free.size(), AB_SIZE)
+        self.resize(width, height)
+        x = free.x() + max(0, (free.width() - width - FRAME_ALLOWANCE[0]) // 2)
+        y = free.y() + max(0, (free.height() - height - FRAME_ALLOWANCE[1]) // 2)
+        self.move(x, y)
 
     def cell(self, row: int, col: int) -> str:
         return self.table.item(row, col).text()
@@ -138,6 +202,9 @@ class CompareWindow(QtWidgets.QWidget):
         b_star, _c_star = self.thresholds
         lut = make_lut((0.0, 1.0))
         self.plotter.clear_actors()  # every renderer's
+        for renderer, legend in self._legends:
+            renderer.RemoveViewProp(legend)
+        self._legends = []
         for title in list(self.plotter.scalar_bars.keys()):
             self.plotter.remove_scalar_bar(title, render=False)
         for col, (ev, name) in enumerate(((self.ev_a, self.names[0]), (self.ev_b, self.names[1]))):
@@ -186,14 +253,37 @@ class CompareWindow(QtWidgets.QWidget):
         from .view.actors import display_coordinates
 
         rows = defect_rows(ev)
+        drawn: list[str] = []  # the legend's entries (the main view's styles and labels)
         missing = [r.cloud_rows for r in rows if r.code == "incomplete" and len(r.cloud_rows)]
         if missing and ev.cloud is not None:
             sel = np.unique(np.concatenate(missing))
             self.plotter.add_mesh(pv.PolyData(display_coordinates(np.asarray(ev.cloud)[sel])),
                                   color=DEFECT_COLORS["incomplete"], style="points", point_size=4, lighting=False,
                                   reset_camera=False, render=False)
-        if ev.curve is None:
-            return
+            drawn.append("incomplete")
+        if ev.curve is not None:
+            drawn += self._draw_curve_defects(ev, rows)
+        if drawn:
+            from .view.defect_overlay import defect_legend
+
+            legend = defect_legend(drawn)
+            self.plotter.renderer.AddViewProp(legend)
+            self._legends.append((self.plotter.renderer, legend))
+
+    def legend_labels(self, col: int) -> list[str]:
+        """The defect legend's entries of half ``col`` (0: A, 1: B); [] when it draws no defect."""
+        renderer = self.plotter.renderers[col]
+        return [legend.GetEntryString(i) for r, legend in self._legends if r is renderer
+                for i in range(legend.GetNumberOfEntries())]
+
+    def _draw_curve_defects(self, ev: Any, rows: list[Any]) -> list[str]:
+        import pyvista as pv
+
+        from skelcore.colors import DEFECT_COLORS
+
+        from .view.actors import display_coordinates
+
+        drawn = []
         verts = np.asarray(ev.curve.curve.vertices, dtype=float)
         edges = np.asarray(ev.curve.curve.edges, dtype=np.int64).reshape(-1, 2)
         for code in ("spurious_branches", "spurious_cycles", "outside"):
@@ -205,6 +295,8 @@ class CompareWindow(QtWidgets.QWidget):
             self.plotter.add_mesh(pv.PolyData(display_coordinates(verts), lines=cells), color=DEFECT_COLORS[code],
                                   line_width=9 if code != "outside" else 5, opacity=0.5 if code != "outside" else 1.0,
                                   lighting=False, reset_camera=False, render=False)
+            drawn.append(code)
+        return drawn
 
     def image(self) -> np.ndarray:
         self.plotter.render()
@@ -285,7 +377,9 @@ class CompareController(QtCore.QObject):
             return False
         params = ev_a.params
         cloud = ev_a.cloud
-        correspondence = "reverse" if ev_a.correspondence == "reverse" else "auto"
+        # B's own set decides: pointwise when it has the cloud's rows, else A's choice of reverse projection
+        pointwise = skeletal is not None and len(skeletal) == len(cloud)
+        correspondence = "reverse" if ev_a.correspondence == "reverse" and not pointwise else "auto"
         scan = getattr(ev_a, "scan", None)
         viewpoints = [list(v) for v in scan.viewpoints] if scan is not None and scan.viewpoints else None  # as A's
 
@@ -314,6 +408,7 @@ class CompareController(QtCore.QObject):
         if thresholds == "window":
             thresholds = (scene.beta_star, scene.c_star)
         view = CompareWindow(ev_a, ev_b, names, metric=scene.metric, thresholds=thresholds, context=context)
+        view.fit_to_screen(self.window.widget.screen())  # the main window's screen
         view.show()
         self.views = [v for v in self.views if v.isVisible()]
         self.views.append(view)

@@ -436,7 +436,20 @@ class MainWindow(QtWidgets.QMainWindow):
             if paths and accepts(paths):
                 return drop
         files = [p for p in paths if os.path.isfile(p)]
-        return (lambda _paths: self.session.load_files(files)) if files else None
+        folders = [p for p in paths if os.path.isdir(p)]
+        if not files and not folders:
+            return None
+
+        def load(_paths: list[str]) -> None:
+            if folders:  # after the drop: the dialog is modal
+                names = ", ".join(os.path.basename(os.path.normpath(p)) for p in folders)
+                QtCore.QTimer.singleShot(0, self, lambda: self.show_error(
+                    "Could not load", f"{names}: a folder that is not a skelcore compare run (a run's folder holds "
+                    "index.json and jobs/): drop its files, or a compare run's folder"))
+            if files:
+                self.session.load_files(files)
+
+        return load
 
     def _drag(self, event: QtGui.QDragEnterEvent) -> None:
         if self._drop_handler(self._local_paths(event)) is not None:
@@ -464,6 +477,22 @@ class MainWindow(QtWidgets.QMainWindow):
         for w in (self.stage, self.progress, self.cancel_button):
             w.setVisible(True)
         self._update_actions()
+        self._update_no_result()
+
+    def _update_no_result(self) -> None:
+        """What the Summary says while it has no result: the evaluation running, cancelled, not run
+        yet, or the inputs still to load."""
+        from .panels.summary import NO_RESULT
+
+        if self.session.runner.current_name == "evaluation":
+            text = "Evaluating… (Esc cancels)"
+        elif self.scene.can_evaluate() and self.session.evaluation_cancelled:
+            text = "Evaluation cancelled: the inputs are loaded; Evaluate (F5) runs it again."
+        elif self.scene.can_evaluate():
+            text = "Not evaluated yet: Evaluate (F5)."
+        else:
+            text = NO_RESULT
+        self.summary.set_no_result(text)
 
     def _task_progress(self, fraction: float, stage: str) -> None:
         self._pending_progress = (fraction, stage)
@@ -489,6 +518,7 @@ class MainWindow(QtWidgets.QMainWindow):
             self.stage.setText(shown)
 
     def _task_finished(self, _name: str) -> None:
+        self._update_no_result()
         if self.session.runner.running:
             return
         self._progress_timer.stop()
@@ -518,6 +548,7 @@ class MainWindow(QtWidgets.QMainWindow):
             self.pick.show_info(None)
             names = [os.path.basename(layer.path) for layer in self.scene.layers.values() if layer.path]
             self.setWindowTitle("SkelScope" + (f" — {', '.join(names)}" if names else ""))
+            self._update_no_result()
         self._update_actions()
 
     def _prepare_plots(self) -> None:
@@ -728,10 +759,10 @@ FRAME_ALLOWANCE = (16, 48)
 """Room left on the screen for a window manager's frame and title bar (device-independent pixels)."""
 
 
-def initial_size(available: QtCore.QSize) -> tuple[int, int]:
-    """The window's first size: DEFAULT_SIZE, shrunk to the screen's free area (minus a frame)."""
-    return (max(200, min(DEFAULT_SIZE[0], available.width() - FRAME_ALLOWANCE[0])),
-            max(200, min(DEFAULT_SIZE[1], available.height() - FRAME_ALLOWANCE[1])))
+def initial_size(available: QtCore.QSize, default: tuple[int, int] = DEFAULT_SIZE) -> tuple[int, int]:
+    """The window's first size: ``default`` (DEFAULT_SIZE), shrunk to the screen's free area (minus a frame)."""
+    return (max(200, min(default[0], available.width() - FRAME_ALLOWANCE[0])),
+            max(200, min(default[1], available.height() - FRAME_ALLOWANCE[1])))
 
 
 def scrolling(widget: QtWidgets.QWidget, parent: QtWidgets.QWidget) -> QtWidgets.QScrollArea:

@@ -118,8 +118,14 @@ class SavedSessions(QtCore.QObject):
         w.show_message(f"Session: wrote {os.path.basename(out)}")
 
     # ---- opening --------------------------------------------------------------------------
+    def sessions_dir(self) -> str:
+        """Where Open session looks first: the folder of the newest session saved or opened (sessions
+        are kept apart from the data they name), else the last data folder."""
+        folders = [os.path.dirname(e["session"]) for e in self.recent() if e.get("session")]
+        return next((f for f in folders if os.path.isdir(f)), self.window.last_dir())
+
     def open_dialog(self) -> None:
-        path, _ = QtWidgets.QFileDialog.getOpenFileName(self.window.widget, "Open session", self.window.last_dir(),
+        path, _ = QtWidgets.QFileDialog.getOpenFileName(self.window.widget, "Open session", self.sessions_dir(),
                                                         SESSION_FILTER)
         if path:
             self.open(path)
@@ -168,6 +174,7 @@ class SavedSessions(QtCore.QObject):
                 problems += w.session.load_roles(found)
                 problems += self._restore_index(index_at, state)
                 problems += self._restore_mappings(state)
+                w.session.set_correspondence(state.correspondence)  # the saved choice of the set just loaded
         finally:
             self._restoring = False
         scene.set_metric(state.metric)

@@ -2,8 +2,8 @@
 
 :func:`check_arguments` reads every input the options name (camera file, saved session, a compare
 run's stored results, skeleton B) before any window opens, so bad input is one line and exit 2.
-:func:`run` sizes the 3D view (``--size W H``, else the camera's or session's saved view size, so a
-saved camera frames the data as it did), loads the inputs or restores the session into the window,
+:func:`run` sizes the 3D view (``--size W H``, else for ``--screenshot`` the camera's or session's saved view size,
+so a saved camera frames the data as it did; a window for the user keeps fitting the screen), loads the inputs or restores the session into the window,
 starts the A/B view (``--skeleton-b``, ``--compare-run``), waits for the evaluation, saves the picture
 (``--scale``, ``--background``) and prints the scores; scripted (``--quit``) it closes the window and
 returns the exit status: 0 on success, 2 on bad input, 1 on a bug (an uncaught exception). It uses the
@@ -41,7 +41,7 @@ class Startup:
     camera: dict[str, Any] | None
     ab: tuple[str, Any] | None
     session: Any = None  # app.session_file.SessionState of --session
-    view_size: tuple[int, int] | None = None  # --size, else the camera's or the session's saved view size
+    view_size: tuple[int, int] | None = None  # --size, else (--screenshot) the camera's or the session's saved one
 
     @property
     def scripted(self) -> bool:
@@ -83,8 +83,9 @@ def check_arguments(args: argparse.Namespace) -> Startup:
 
         session = read_session(args.session)
     saved = camera if camera is not None else (session.camera if session is not None else None)
-    view_size = tuple(args.size) if args.size else (tuple(saved["view_size"]) if saved and saved.get("view_size")
-                                                     else None)
+    # a saved view size frames a --screenshot as it was framed; a window for the user fits their screen
+    view_size = tuple(args.size) if args.size else (tuple(saved["view_size"]) if args.screenshot and saved
+                                                     and saved.get("view_size") else None)
     return Startup(args, camera, _ab_inputs(args), session, view_size)
 
 
@@ -261,11 +262,13 @@ def _start_ab(window: WindowApi, ab: tuple[str, Any] | None) -> None:
 
 def _save_ab_picture(app: QtWidgets.QApplication, window: WindowApi, path: str, scripted: bool) -> int:
     """The A/B window (split view and table) as PNG; 0, or the exit status of a failure."""
+    from .compare_view import AB_SIZE
     from .exports import write_png
 
     views = [v for v in window.compare.views if v.isVisible()]
     if not views:
         return fail("the A/B view did not open", 1 if window.bug else 2) if scripted else 0
+    views[-1].resize(*AB_SIZE)  # a picture of the same size on every screen (the window fits the user's)
     app.processEvents()
     try:
         out = write_png(path, views[-1].picture(), window.input_files())

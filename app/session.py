@@ -171,7 +171,11 @@ class Session(QtCore.QObject):
         ``offset`` (a ``frame`` warning's suggestion), then evaluated again."""
         try:
             with self.batch():
-                self.scene.map_skeleton(scale, offset)
+                self._same_set = True
+                try:
+                    self.scene.map_skeleton(scale, offset)
+                finally:
+                    self._same_set = False
         except ValueError as exc:
             self.error.emit("Map skeleton", str(exc), "")
             return False
@@ -377,13 +381,30 @@ class Session(QtCore.QObject):
         return Session._Batch(self)
 
     def _on_scene(self, event: SceneEvent) -> None:
+        if event.kind == "layer" and event.layer == "skeletal":
+            self._new_skeletal_set()
         if event.kind == "layer":
+            self.evaluation_cancelled = False
             # The running evaluation describes old inputs: drop it (its result will never land).
             if self.runner.current_name == "evaluation":
                 self.runner.discard()
             self._inputs_changed = True
         if event.kind in ("layer", "quantities"):
             self.check_stale()
+
+    _correspondence_of: Any = None  # the skeletal layer the correspondence setting was chosen for
+    _same_set = False  # the skeletal layer being replaced is the same set (mapped into the cloud's frame)
+
+    def _new_skeletal_set(self) -> None:
+        """A correspondence choice belongs to the skeletal set it was made for: another set (loaded,
+        swapped, skeletonized or closed) starts "as loaded" again, and its load decides (a drop's
+        answer, an index file). A set mapped into the cloud's frame stays the same set."""
+        layer = self.scene.skeletal
+        if layer is self._correspondence_of:
+            return
+        self._correspondence_of = layer
+        if not self._same_set and self.correspondence_provider() != "auto":
+            self.set_correspondence("auto")
 
     # ---- computing ------------------------------------------------------------------------
     def params(self) -> Params:
@@ -419,6 +440,7 @@ class Session(QtCore.QObject):
                       skeletal_index=index, viewpoints=[list(p) for p in self.viewpoints] or None,
                       **self._requested_scan_options)
         self._evaluated_layers = (scene.cloud, scene.skeletal, scene.curve)
+        self.evaluation_cancelled = False
         if len(cloud) + (0 if skeletal is None else len(skeletal)) >= self.process_from:
             def restore(ev: Any) -> Any:  # the child does not send the cloud back
                 if ev.cloud is None:
@@ -465,6 +487,8 @@ class Session(QtCore.QObject):
         """Cancel (Esc, the status bar's button): the window is free at once and no result of the
         task can land; its thread stops at the engine's next checkpoint."""
         name = self.runner.current_name
+        if name == "evaluation":
+            self.evaluation_cancelled = True  # before the runner says so: the window words the Summary
         self.runner.discard()
         if name:
             self.message.emit(f"{name} cancelled")
@@ -507,6 +531,8 @@ class Session(QtCore.QObject):
 
     _evaluated_layers: tuple = ()
     _skeletonized_cloud: Any = None
+    #: the last evaluation was cancelled (Esc, Cancel) and neither a new run nor new inputs came since
+    evaluation_cancelled = False
 
 
 _ROLE_TITLES = {"cloud": "cloud", "skeletal": "skeletal point set", "curve": "curve skeleton"}

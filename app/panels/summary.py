@@ -155,6 +155,7 @@ class SummaryPanel(QtWidgets.QWidget):
         self.cloud_by_gap.setEnabled(False)
         self.cloud_by_gap.toggled.connect(self._emit_cloud_colouring)
         self._evaluation: Any = None
+        self.no_result = NO_RESULT  # the line shown without a result (see set_no_result)
         # Shown while the results are out of date (see set_stale).
         self.rerun = QtWidgets.QPushButton("", self)
         self.rerun.setStyleSheet("QPushButton { color: #8a4b00; font-weight: bold; }")
@@ -209,7 +210,7 @@ class SummaryPanel(QtWidgets.QWidget):
         self._grey(bool(self.stale))
         if summary is None or evaluation is None:
             # Nothing shown: no line may describe a run whose values are gone.
-            self.details.setText(NO_RESULT)
+            self.details.setText(self.no_result)
             return
         lines = detail_lines(summary, evaluation)
         warned = [i for i, t in enumerate(lines) if t.startswith("⚠")]
@@ -218,6 +219,13 @@ class SummaryPanel(QtWidgets.QWidget):
             f"<span style='color:#b35900'>{html.escape(t)}</span>" if i in warned else html.escape(t)
             for i, t in enumerate(lines)
         ))
+
+    def set_no_result(self, text: str) -> None:
+        """The line shown while there is no result: what is loaded, running or was cancelled, and how
+        to get a result (the window words it)."""
+        self.no_result = text
+        if self._evaluation is None:
+            self.details.setText(text)
 
     def details_text(self) -> str:
         """The text under the table, as plain lines."""

@@ -24,7 +24,7 @@ from .actors import display_coordinates, draw_in_front
 from .lod import lod_indices
 from .style import greyed
 
-__all__ = ["DefectOverlay", "LEGEND_LABELS", "STYLES"]
+__all__ = ["DefectOverlay", "LEGEND_LABELS", "STYLES", "defect_legend"]
 
 #: per drawn set: (style, legend label)
 STYLES: dict[str, tuple[str, str]] = {
@@ -75,6 +75,35 @@ def legend_face(style: str) -> pv.PolyData:
     if style == "loop":
         return make_legend_face(pv.Disc(inner=0.3, outer=0.5, c_res=24))
     return make_legend_face("circle")
+
+
+def defect_legend(keys: list[str], stale: bool = False) -> Any:
+    """The legend of the drawn defect styles ``keys`` (of :data:`STYLES`), in the view's bottom right: a
+    vtkLegendBoxActor for a renderer's ``AddViewProp`` (the main view's and each half of the A/B view's)."""
+    from vtkmodules.vtkRenderingAnnotation import vtkLegendBoxActor
+
+    legend = vtkLegendBoxActor()
+    legend.SetNumberOfEntries(len(keys))
+    for i, key in enumerate(keys):
+        style, label = STYLES[key]
+        face = legend_face(style)
+        # the symbol carries its colour as scalars; the entry's colour (the text's) stays black
+        colour = DEFECT_COLORS.get(key, PICK_COLOR)
+        colour = greyed(colour) if stale else colour
+        face.point_data.set_array(np.tile(np.asarray(colour, np.uint8), (face.n_points, 1)), "rgb")
+        face.point_data.active_scalars_name = "rgb"
+        legend.SetEntry(i, face, label, [0.0, 0.0, 0.0])
+    legend.ScalarVisibilityOn()
+    legend.UseBackgroundOn()
+    legend.SetBackgroundColor(0.925, 0.925, 0.925)
+    legend.BorderOn()
+    height = 0.035 * len(keys)
+    legend.GetPositionCoordinate().SetCoordinateSystemToNormalizedViewport()
+    legend.GetPositionCoordinate().SetValue(0.70, 0.01)
+    legend.GetPosition2Coordinate().SetCoordinateSystemToNormalizedViewport()
+    legend.GetPosition2Coordinate().SetValue(0.29, height)
+    legend.GetEntryTextProperty().SetColor(0, 0, 0)
+    return legend
 
 
 class DefectOverlay:
@@ -218,34 +247,12 @@ class DefectOverlay:
     def _set_legend(self) -> None:
         """One legend entry per drawn style (a vtkLegendBoxActor of its own: pyvista's one legend is the
         support overlay's)."""
-        from vtkmodules.vtkRenderingAnnotation import vtkLegendBoxActor
-
         if self.legend is not None:
             self.plotter.renderer.RemoveViewProp(self.legend)
             self.legend = None
         if not self.shown:
             return
-        legend = vtkLegendBoxActor()
-        legend.SetNumberOfEntries(len(self.shown))
-        for i, key in enumerate(self.shown):
-            style, label = STYLES[key]
-            face = legend_face(style)
-            # the symbol carries its colour as scalars; the entry's colour (the text's) stays black
-            colour = DEFECT_COLORS.get(key, PICK_COLOR)
-            colour = greyed(colour) if self.stale else colour
-            face.point_data.set_array(np.tile(np.asarray(colour, np.uint8), (face.n_points, 1)), "rgb")
-            face.point_data.active_scalars_name = "rgb"
-            legend.SetEntry(i, face, label, [0.0, 0.0, 0.0])
-        legend.ScalarVisibilityOn()
-        legend.UseBackgroundOn()
-        legend.SetBackgroundColor(0.925, 0.925, 0.925)
-        legend.BorderOn()
-        height = 0.035 * len(self.shown)
-        legend.GetPositionCoordinate().SetCoordinateSystemToNormalizedViewport()
-        legend.GetPositionCoordinate().SetValue(0.70, 0.01)
-        legend.GetPosition2Coordinate().SetCoordinateSystemToNormalizedViewport()
-        legend.GetPosition2Coordinate().SetValue(0.29, height)
-        legend.GetEntryTextProperty().SetColor(0, 0, 0)
+        legend = defect_legend(self.shown, self.stale)
         self.plotter.renderer.AddViewProp(legend)
         self.legend = legend
 

@@ -174,11 +174,11 @@ def test_the_ab_view_counts_the_defects_of_a_and_b(window, defective):
         assert view.table.item(r, 3).toolTip() == "B is better"
     last = n + 3
     assert view.cell(last, 1) == "not sound: incomplete, outside, spurious_branches" and view.cell(last, 2) == "sound"
-    pink = [a for a in view.plotter.renderers[0].actors.values()
-            if tuple(round(c * 255) for c in a.prop.color.float_rgb) == DEFECT_COLORS["incomplete"]]
+    pink = [a for a in view.plotter.renderers[0].actors.values() if hasattr(a, "prop")  # not the legend
+            and tuple(round(c * 255) for c in a.prop.color.float_rgb) == DEFECT_COLORS["incomplete"]]
     assert len(pink) == 1
-    assert not [a for a in view.plotter.renderers[1].actors.values()
-                if tuple(round(c * 255) for c in a.prop.color.float_rgb) == DEFECT_COLORS["incomplete"]]
+    assert not [a for a in view.plotter.renderers[1].actors.values() if hasattr(a, "prop")
+                and tuple(round(c * 255) for c in a.prop.color.float_rgb) == DEFECT_COLORS["incomplete"]]
     view.close()
 
 
@@ -195,3 +195,83 @@ def test_out_of_date_results_grey_their_defects_and_keep_the_selection(window, d
     assert "defect-selected" in w.view.plotter.actors and w.defects.selected is w.defects.rows[1]
     w.scene.set_stale("")
     assert _has_colour(w.view.image(), DEFECT_COLORS["incomplete"])
+
+
+def test_the_ab_view_greys_vacuous_scores_shows_coverage_and_the_defect_legend(window, defective):
+    """B is broken: a one-edge curve (no degree-2 vertex: its smoothness is 1 by definition) and a
+    skeletal set collapsed to a point (it scores well for nothing). Its vacuous scores are marked and
+    their differences grey, never green; coverage, which tells, is compared; each half draws the
+    defect legend of the main view."""
+    from PySide6 import QtCore
+
+    from skelscope.view.defect_overlay import LEGEND_LABELS
+
+    s, curve, spur, _ = defective
+    rng = np.random.default_rng(0)
+    bent = CurveSkeleton.from_raw(np.asarray(curve.vertices) + rng.normal(scale=0.03, size=np.shape(curve.vertices)),
+                                  curve.edges)  # A's smoothness under 1
+    ev_a = evaluate(s.cloud, curve=bent)
+    w = _show(window, s, bent, ev_a)
+    assert w.defects.overlay.legend is not None  # the main window has a defect legend
+    collapsed = s.cloud.mean(axis=0) + rng.normal(scale=1e-3, size=s.cloud.shape)
+    ends = s.curve_vertices[[0, -1]]
+    one_edge = CurveSkeleton.from_raw(ends, np.array([[0, 1]]))
+    ev_b = evaluate(s.cloud, collapsed, one_edge)
+    codes = {x.code for x in ev_b.warnings}
+    assert {"trivial_smoothness", "collapse"} <= codes
+    view = w.compare.open(ev_a, ev_b, ("defective", "broken"))
+    try:
+        labels = [view.cell(r, 0) for r in range(view.table.rowCount())]
+        rows = {label: (a, b, d) for label, a, b, d in view.rows}
+        green = QtCore.Qt.GlobalColor.darkGreen
+        for label in ("smoothness (curve)", "smoothness (skeletal)", "boundedness (skeletal)"):
+            r = labels.index(label)
+            assert view.cell(r, 2).endswith("(vacuous)") and "[" in view.table.item(r, 2).toolTip()
+        assert view.cell(labels.index("smoothness (skeletal)"), 3) == "—"  # A has no skeletal set
+        r = labels.index("smoothness (curve)")
+        assert rows["smoothness (curve)"][1] == 1.0 and rows["smoothness (curve)"][2] > 0  # was painted green
+        d_item = view.table.item(r, 3)
+        assert d_item.foreground().color() == view.palette().color(
+            view.palette().ColorGroup.Disabled, view.palette().ColorRole.Text)
+        assert "says nothing" in d_item.toolTip() and "trivial_smoothness" in d_item.toolTip()
+        assert "collapse" in view.table.item(labels.index("smoothness (skeletal)"), 2).toolTip()
+        # coverage, as in the main summary (marked as SkelScope's own), compared and coloured
+        summary_rows = [w.summary.table.verticalHeaderItem(i).text() for i in range(w.summary.table.rowCount())]
+        assert "coverage*" in summary_rows
+        r = labels.index("coverage (curve)*")
+        a, b, d = rows["coverage (curve)*"]
+        assert b > a and view.table.item(r, 3).foreground().color() == green  # the whole axis covers the cut
+        assert "not the paper's" in view.table.item(r, 0).toolTip()
+        assert view.cell(labels.index("coverage (skeletal)*"), 2) != "—"  # the collapsed set's, which tells
+        # the defect legend in each half that draws defects, in the main view's words
+        assert view.legend_labels(0) == [LEGEND_LABELS[k] for k in ("incomplete", "spurious_branches", "outside")]
+        view.metric_box.setCurrentText("boundedness")  # redrawn: one legend per half still
+        assert view.legend_labels(0) == [LEGEND_LABELS[k] for k in ("incomplete", "spurious_branches", "outside")]
+        assert len(view._legends) == 1 + bool(view.legend_labels(1))
+    finally:
+        view.close()
+
+
+def test_the_ab_window_fits_the_screen(window, defective):
+    """The A/B window gets the room the screen has (the test's screen is smaller than its usual
+    1400 x 850), as the main window does; on a 1366 x 768 laptop it fits too."""
+    from PySide6 import QtCore
+
+    from skelscope.compare_view import AB_SIZE
+
+    s, curve, spur, ev = defective
+    w = _show(window, s, curve, ev)
+    view = w.compare.open(ev, ev, ("A", "same"))
+    try:
+        free = view.screen().availableGeometry()
+        assert free.width() < AB_SIZE[0] or free.height() < AB_SIZE[1]  # a real small-screen check
+        assert free.contains(view.frameGeometry()), (view.frameGeometry(), free)
+
+        class Laptop:
+            def availableGeometry(self):
+                return QtCore.QRect(0, 27, 1366, 741)  # 768 less a top panel
+
+        view.fit_to_screen(Laptop())
+        assert Laptop().availableGeometry().contains(QtCore.QRect(view.pos(), view.size()))
+    finally:
+        view.close()

@@ -113,6 +113,28 @@ def test_cancel_stops_a_long_evaluation_and_no_result_lands(window, files, qtbot
     assert w.dialogs == []
 
 
+def test_the_summary_says_an_evaluation_was_cancelled_and_how_to_run_it_again(window, files, qtbot):
+    w = window
+    w.session.auto_evaluate = False
+    w.settings_panel.boundedness_method.setCurrentText("paper")  # slow enough to cancel
+    assert "load a cloud and a skeleton" in w.summary.details.text()
+    w.session.load_files([files["cloud"], files["skeletal"]])
+    assert "Not evaluated yet" in w.summary.details.text() and "F5" in w.summary.details.text()
+    assert w.session.start_evaluation()
+    assert "Evaluating" in w.summary.details.text()
+    task = w.session.runner._current
+    cancel = w.actions_by_name["cancel"]
+    assert cancel.isEnabled() and cancel.shortcut().toString() == "Esc"
+    cancel.trigger()
+    assert not w.session.runner.running
+    text = w.summary.details.text()
+    assert "cancelled" in text and "Evaluate (F5)" in text and "load a cloud" not in text
+    assert task.wait(20000)
+    w.session.close_layer("skeletal")  # no longer evaluable: what to load
+    assert "load a cloud and a skeleton" in w.summary.details.text()
+    assert w.dialogs == []
+
+
 def test_loading_new_inputs_during_a_run_drops_its_result(window, files, qtbot, tmp_path):
     w = window
     w.session.auto_evaluate = False

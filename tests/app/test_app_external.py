@@ -165,3 +165,57 @@ def test_a_skeleton_in_another_frame_is_mapped_from_the_menu_the_warning_names(w
     assert w.scene.curve.mapping == (pytest.approx(1 / 40.0), pytest.approx((-7.0 / 40.0,) * 3))
     ev = _evaluate(qtbot, w)
     assert not [x for x in ev.warnings if x.code == "frame"]
+
+
+@pytest.mark.parametrize("how", ["drop", "file_open"])
+def test_a_reverse_projection_choice_does_not_stick_to_the_next_skeletal_set(window, qtbot, files, how):
+    """Reverse projection chosen for a set of another size; a pointwise set loaded next is scored
+    pointwise, as from a fresh launch (and as A in the A/B view); the other set, reloaded, asks again."""
+    paths, sh, rows = files
+    w = window
+    w.session.load_files([paths["cloud"]])
+    _answering(w, SKELETAL_REVERSE)
+    w.session.load_files([paths["sub"]])
+    assert w.settings_panel.correspondence() == "reverse"
+    assert _evaluate(qtbot, w).correspondence == "reverse"
+    if how == "drop":
+        w.session.load_files([paths["skeletal"]])
+    else:
+        w.session.load_as("skeletal", paths["skeletal"])
+    assert w.settings_panel.correspondence() == "auto"
+    ev = _evaluate(qtbot, w)
+    fresh = skelcore.evaluate(sh.cloud, sh.skeletal)
+    assert ev.correspondence == fresh.correspondence == "pointwise"
+    assert ev.summary()["centeredness"]["skeletal"] == pytest.approx(fresh.summary()["centeredness"]["skeletal"])
+    assert w.summary.cell_text("centeredness", "skeletal points").startswith(
+        f"{fresh.summary()['centeredness']['skeletal']:.3f}")
+    with qtbot.waitSignal(w.session.runner.succeeded, timeout=120000):
+        assert w.compare.compare_arrays(sh.skeletal[::-1].copy(), None, "reversed rows")
+    view = w.compare.views[-1]
+    assert view.ev_a.correspondence == view.ev_b.correspondence == "pointwise"
+    # the set of another size decides again when it comes back: scored with no correspondence by default
+    w.session.load_as("skeletal", paths["sub"])
+    assert w.settings_panel.correspondence() == "auto"
+    assert w.dialogs == []
+
+
+def test_the_correspondence_chosen_for_a_set_stays_when_it_is_mapped(window, files):
+    paths, _, _ = files
+    w = window
+    w.session.load_files([paths["cloud"]])
+    _answering(w, SKELETAL_REVERSE)
+    w.session.load_files([paths["sub"]])
+    assert w.session.map_skeleton(2.0, (0.0, 0.0, 0.0))
+    assert w.settings_panel.correspondence() == "reverse"
+
+
+def test_reverse_projection_chosen_in_the_settings_stays_with_its_set(window, qtbot, files):
+    paths, sh, _ = files
+    w = window
+    w.session.load_as("cloud", paths["cloud"])
+    w.session.load_as("skeletal", paths["sub"])
+    w.settings_panel.set_correspondence("reverse")  # the no_correspondence warning's remedy
+    assert _evaluate(qtbot, w).correspondence == "reverse"
+    w.session.load_as("skeletal", paths["skeletal"])
+    assert w.settings_panel.correspondence() == "auto"
+    assert _evaluate(qtbot, w).correspondence == "pointwise"

@@ -316,3 +316,76 @@ def test_a_session_keeps_the_skeletal_index_the_mapping_and_the_viewpoints(windo
     assert len(w.dialogs) == 1 and len(problems) == 1
     assert "y_sub.idx: missing (the skeletal index" in w.dialogs[0]
     assert w.scene.skeletal.index is None and w.scene.skeletal.mapping == (10.0, offset)
+
+
+@pytest.mark.window(size=None, dialogs="record")  # the window's own size: it fits the screen
+def test_skelscope_session_opened_for_the_user_fits_the_screen_it_was_not_saved_on(window, files, tmp_path):
+    """A session saved on a larger screen (its 3-D view 1485 x 950): ``skelscope --session F`` opens a
+    window that fits this screen, as File > Open session does; only a scripted picture takes the saved
+    view size (it frames the picture as it was framed)."""
+    from skelscope.__main__ import build_parser
+    from skelscope.scripted import check_arguments, run
+
+    w = window
+    _load(w, files)
+    path = str(tmp_path / "big_session.json")
+    w.saved_sessions.save(path)
+    doc = json.loads(open(path).read())
+    doc["camera"]["view_size"] = [1485, 950]
+    open(path, "w").write(json.dumps(doc))
+    w.session.close_all()
+    free = w.screen().availableGeometry()
+    assert free.width() < 1485 or free.height() < 950  # this screen is smaller than the saved one
+    startup = check_arguments(build_parser().parse_args(["--session", path]))
+    assert startup.view_size is None
+    app = QtCore.QCoreApplication.instance()
+    assert run(app, w, startup) is None  # the event loop would run: an interactive launch
+    assert w.scene.cloud is not None and free.contains(w.frameGeometry()), (w.frameGeometry(), free)
+    assert w.dialogs == []
+    # the scripted picture keeps the saved size; --size is the user's
+    shot = str(tmp_path / "s.png")
+    assert check_arguments(build_parser().parse_args(["--session", path, "--screenshot", shot])).view_size == (1485, 950)
+    assert check_arguments(build_parser().parse_args(["--session", path, "--size", "300", "200"])).view_size == (300, 200)
+
+
+def test_open_session_starts_in_the_sessions_folder_not_the_last_data_folder(window, files, tmp_path, monkeypatch):
+    from PySide6 import QtWidgets
+
+    w = window
+    _load(w, files)
+    kept = tmp_path / "sessions"
+    kept.mkdir()
+    w.saved_sessions.save(str(kept / "y_session.json"))
+    other = tmp_path / "other_data"
+    shutil.copytree(os.path.dirname(files["cloud"]), other)
+    w.session.load_files([str(other / os.path.basename(files["cloud"]))])  # newer data, elsewhere
+    assert w.last_dir() == str(other)
+    asked = []
+    monkeypatch.setattr(QtWidgets.QFileDialog, "getOpenFileName",
+                        lambda parent, title, folder, *a, **k: asked.append((title, folder)) or ("", ""))
+    w.saved_sessions.open_dialog()
+    assert asked == [("Open session", str(kept))]
+
+
+def test_a_session_keeps_reverse_projection_for_its_mapped_set_of_another_size(window, files, tmp_path):
+    """The correspondence chosen for a set of another size is restored with that set, also when the
+    set is mapped into the cloud's frame on restoring (a new layer of the same set)."""
+    from skelcore.io import load_points
+
+    from skelscope.loading import SKELETAL_REVERSE
+
+    w = window
+    sub = tmp_path / "sub.ply"
+    write_points_ply(sub, load_points(files["skeletal"])[::3] / 2.0)
+    w.session.load_files([files["cloud"]])
+    w.session.ask = lambda question, options: SKELETAL_REVERSE
+    w.session.load_files([str(sub)])
+    assert w.session.map_skeleton(2.0, (0.0, 0.0, 0.0))
+    assert w.settings_panel.correspondence() == "reverse"
+    path = str(tmp_path / "sub_session.json")
+    w.saved_sessions.save(path)
+    w.session.close_all()
+    w.set_settings(Params(), "auto")
+    assert w.saved_sessions.open(path) == []
+    assert w.scene.skeletal.mapping[0] == pytest.approx(2.0)
+    assert w.settings_panel.correspondence() == "reverse"

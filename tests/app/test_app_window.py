@@ -235,3 +235,18 @@ def test_settings_panel_builds_the_evaluation_parameters(window):
     assert params.beta_star == pytest.approx(0.6)
     panel.k_center.setValue(0)
     assert window.session.params().k_center is None  # 0 shows "auto": the rule of docs/metrics.md 3
+
+
+def test_a_dropped_folder_that_is_not_a_compare_run_is_refused_with_one_line(window, files, tmp_path, qtbot):
+    folder = tmp_path / "plain_folder"
+    folder.mkdir()
+    drop = _drop(window.view.widget, [str(folder)])
+    assert drop.isAccepted()
+    qtbot.waitUntil(lambda: window.dialogs != [], timeout=5000)
+    (text,) = window.dialogs
+    assert "plain_folder" in text and "not a skelcore compare run" in text and "\n" not in text
+    assert window.scene.layers == {}
+    # dropped with files: the files load, the folder is named
+    _drop(window, [str(folder), files["cloud"]])
+    qtbot.waitUntil(lambda: len(window.dialogs) == 2, timeout=5000)
+    assert window.scene.cloud.path == files["cloud"] and "plain_folder" in window.dialogs[1]
