@@ -268,7 +268,8 @@ def build_context(
         raise SkelInputError("a reference radius needs a reference curve")
     if ctx.curve is not None:
         ctx.curve_n = ctx.curve.transformed(norm.apply)
-        ctx.samples = sample_curve(ctx.curve_n, params.curve_samples, collinear_cos=params.collinear_cos)
+        ctx.samples = sample_curve(ctx.curve_n, params.curve_samples, collinear_cos=params.collinear_cos,
+                                   method=params.curve_sampling)
 
     if cap_openings:
         _cap(ctx, checkpoint)
