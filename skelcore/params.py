@@ -349,6 +349,11 @@ class Params:
     def to_dict(self) -> dict[str, Any]:
         return dataclasses.asdict(self)
 
+    def __repr__(self) -> str:
+        """``Params(...)`` with only the fields that differ from the defaults (SPEC.md's values)."""
+        changed = [f"{f.name}={getattr(self, f.name)!r}" for f in fields(self) if getattr(self, f.name) != f.default]
+        return f"Params({', '.join(changed)})"
+
 
 def _convert(name: str, raw: str, default: Any) -> Any:
     if name == "k_center":
