@@ -60,6 +60,16 @@ def test_a_cloud_too_small_for_squared_distances_is_refused_in_one_line():
         skelcore.evaluate(pts * 1e-160, pts * 1e-160)
 
 
+def test_paper_boundedness_of_a_collinear_cloud_is_a_value_not_an_index_error():
+    """From a point of a line every direction to the others is +-u up to rounding: qhull's triangulation
+    of two tiny clusters used its added point at infinity (IndexError in paper_triangles)."""
+    rng = np.random.default_rng(92)
+    cloud = _degenerate("collinear", int(rng.integers(1, 60)), rng)  # row 22 was the failing query
+    ev = skelcore.evaluate(cloud, cloud, params=skelcore.Params(boundedness_method="paper"))
+    beta = ev.skeletal.boundedness
+    assert np.all((beta >= 0) & (beta <= 1))
+
+
 def test_the_limits_leave_ordinary_units_alone():
     """Kilometres in millimetres, or nanometres in metres, are far inside the limits."""
     pts = np.random.default_rng(1).normal(size=(60, 3))
@@ -166,15 +176,19 @@ kinds = st.sampled_from(["random", "collinear", "coplanar", "duplicates", "one p
 @few
 @given(kind=kinds, n=st.integers(1, 40), scale=scales, seed=st.integers(0, 2**16),
        spoil=st.sampled_from([None, np.nan, np.inf, -np.inf]),
-       skeletal=st.sampled_from(["same", "half", "reverse", "none"]))
-def test_evaluate_on_degenerate_clouds_ends_in_a_result_or_one_line(kind, n, scale, seed, spoil, skeletal):
+       skeletal=st.sampled_from(["same", "half", "reverse", "none"]), method=st.sampled_from(["rays", "paper"]),
+       scan=st.booleans())
+def test_evaluate_on_degenerate_clouds_ends_in_a_result_or_one_line(kind, n, scale, seed, spoil, skeletal, method,
+                                                                    scan):
     rng = np.random.default_rng(seed)
     cloud = _degenerate(kind, n, rng) * scale
     if spoil is not None:
         cloud[rng.integers(len(cloud)), rng.integers(3)] = spoil
     skel = {"same": cloud, "half": cloud[: max(1, len(cloud) // 2)], "reverse": cloud[:3], "none": None}[skeletal]
     corr = "reverse" if skeletal == "reverse" else "auto"
-    out = _own_error_or_result(lambda: skelcore.evaluate(cloud, skel, correspondence=corr))
+    params = skelcore.Params(boundedness_method=method)
+    out = _own_error_or_result(lambda: skelcore.evaluate(cloud, skel, params=params, correspondence=corr,
+                                                         remove_outliers=scan, cap_openings=scan))
     if not isinstance(out, SkelInputError):
         out.scores()
 
