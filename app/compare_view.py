@@ -19,6 +19,7 @@ from PySide6 import QtCore, QtGui, QtWidgets
 from skelcore.scores import COLUMN, LOCAL_METRICS, Scores, column_keys, format_score
 
 from .window_api import ActionSpec, WindowApi
+from .window_size import FRAME_ALLOWANCE, initial_size
 
 __all__ = ["ab_rows", "ab_defect_rows", "CompareWindow", "CompareController"]
 
@@ -178,7 +179,6 @@ class CompareWindow(QtWidgets.QWidget):
 
     def fit_to_screen(self, screen: Any) -> None:
         """AB_SIZE, shrunk to ``screen``'s free area as the main window is, and placed inside it."""
-        from .main_window import FRAME_ALLOWANCE, initial_size
 
         free = screen.availableGeometry()
         width, height = initial_size(free.size(), AB_SIZE)

@@ -22,6 +22,7 @@ from .scene import LAYER_ORDER, METRICS, Scene, SceneEvent
 from .session import Session, preload_engine
 from .view import SceneView
 from .window_api import LEFT, RIGHT, ActionSpec
+from .window_size import initial_size
 
 MAX_RECENT = 10
 OPEN_INDEX = "Open skeletal index…"
@@ -752,17 +753,6 @@ class MainWindow(QtWidgets.QMainWindow):
         self.settings.sync()  # the process may end with os._exit (a task still inside the engine)
         self.view.close()
         super().closeEvent(event)
-
-
-DEFAULT_SIZE = (1500, 950)
-FRAME_ALLOWANCE = (16, 48)
-"""Room left on the screen for a window manager's frame and title bar (device-independent pixels)."""
-
-
-def initial_size(available: QtCore.QSize, default: tuple[int, int] = DEFAULT_SIZE) -> tuple[int, int]:
-    """The window's first size: ``default`` (DEFAULT_SIZE), shrunk to the screen's free area (minus a frame)."""
-    return (max(200, min(default[0], available.width() - FRAME_ALLOWANCE[0])),
-            max(200, min(default[1], available.height() - FRAME_ALLOWANCE[1])))
 
 
 def scrolling(widget: QtWidgets.QWidget, parent: QtWidgets.QWidget) -> QtWidgets.QScrollArea:

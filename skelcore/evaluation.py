@@ -270,6 +270,25 @@ class Evaluation:
 
         return show_barcodes(self, **options)
 
+    def __repr__(self) -> str:
+        """The paper's table as the CLI prints it (:func:`skelcore.display.summary_table.format_table`,
+        docs/metrics.md 5.5; 3.3 for the counts), the warning codes and where the data are."""
+        from .display.summary_table import _caption, format_table
+
+        try:
+            lines = [_caption(self), format_table(self.scores())]
+        except Exception as exc:  # a repr must not fail in a console or a debugger
+            return f"<Evaluation: no summary ({type(exc).__name__}: {exc})>"
+        if repr(self.params) != "Params()":
+            lines.insert(1, f"params: {self.params!r}")
+        codes = [w.code for w in self.warnings]
+        lines.append(f"warnings: {', '.join(codes)}" if codes else "warnings: none")
+        if self.not_computed:
+            lines.append(f"not computed: {', '.join(self.not_computed)}")
+        lines.append("data: .scores() .summary() .warnings .skeletal .curve .to_frame(kind) .to_json_dict() "
+                     ".show(metric) .params")
+        return "\n".join(lines)
+
     def _repr_html_(self) -> str:
         """The paper's summary table, the defects and the warnings, for Jupyter."""
         from .display.summary_table import summary_html

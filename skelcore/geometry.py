@@ -366,7 +366,39 @@ def as_points(name: str, points: object) -> np.ndarray:
         raise SkelInputError(f"{name}: no points")
     if not np.all(np.isfinite(arr)):
         raise SkelInputError(f"{name}: coordinates contain NaN or inf")
+    check_magnitude(name, arr)
     return arr
+
+
+#: the largest coordinate (in absolute value) and the smallest extent of a point set that the engine
+#: accepts: squared distances (and their reciprocals, the smoothness weights) stay finite and normal
+#: in double precision well inside these bounds (docs/metrics.md 0)
+COORDINATE_LIMIT = 1e100
+EXTENT_LIMIT = 1e-100
+
+
+def check_magnitude(name: str, points: np.ndarray) -> None:
+    """A one-line SkelInputError when a finite coordinate exceeds :data:`COORDINATE_LIMIT` in absolute
+    value: the distances the engine computes in the user's units (stray points, openings, spacing)
+    would overflow (docs/metrics.md 0)."""
+    from .errors import SkelInputError
+
+    top = float(np.max(np.abs(points), initial=0.0))
+    if top > COORDINATE_LIMIT:
+        raise SkelInputError(f"{name}: coordinates reach {top:.3g}, above {COORDINATE_LIMIT:.0e}: squared distances "
+                             "would overflow in double precision; rescale the points")
+
+
+def check_extent(name: str, points: np.ndarray) -> None:
+    """A one-line SkelInputError when the bounding box's longest side is positive but below
+    :data:`EXTENT_LIMIT`: squared distances would underflow to 0 (docs/metrics.md 0)."""
+    from .errors import SkelInputError
+
+    lo, hi = bounding_box(points)
+    side = float(np.max(hi - lo, initial=0.0))
+    if 0 < side < EXTENT_LIMIT:
+        raise SkelInputError(f"{name}: the points span only {side:.3g}, below {EXTENT_LIMIT:.0e}: squared distances "
+                             "would underflow in double precision; rescale the points")
 
 
 def bbox_diagonal(points: np.ndarray) -> float:

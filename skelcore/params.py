@@ -34,6 +34,9 @@ class Params:
     k_center : neighbours for skeletal-point centeredness; None = round(0.01 N_s) with the
         reference tool's clamps (<10 -> 10, >50 -> 30), docs/metrics.md 3.
     curve_samples : total samples S along the curve skeleton, docs/metrics.md 3.
+    curve_sampling : "toolbox" (default, reference tool: each edge walked from its lower-index vertex,
+        so the samples depend on the vertex numbering) or "invariant" (each branch walked from a
+        canonical end chosen by coordinates), docs/metrics.md 3.
     slab_factor : slab width alpha = factor x bounding-box diagonal of the normalized cloud.
     ring_growth : ring isolation ratio (keep while next distance < ratio x last kept).
     collinear_cos : ``|cos|`` at or above which a degree-2 vertex's neighbours count as collinear.
@@ -166,6 +169,7 @@ class Params:
     paper_area_threshold: float = 1e-4
     k_center: int | None = None
     curve_samples: int = 200
+    curve_sampling: Literal["toolbox", "invariant"] = "toolbox"
     slab_factor: float = 0.02
     ring_growth: float = 1.5
     collinear_cos: float = 0.99
@@ -241,6 +245,8 @@ class Params:
             bad("normalize_by", "must be 'longest_side' or 'diagonal'")
         if self.boundedness_method not in ("rays", "paper"):
             bad("boundedness_method", "must be 'rays' or 'paper'")
+        if self.curve_sampling not in ("toolbox", "invariant"):
+            bad("curve_sampling", "must be 'toolbox' or 'invariant'")
         for name in ("normalized_size", "rays_radius_factor", "slab_factor", "paper_area_threshold", "rays_cluster_cell",
                      "coverage_tau_factor", "collapse_extent"):
             if not float(getattr(self, name)) > 0:
@@ -342,6 +348,11 @@ class Params:
 
     def to_dict(self) -> dict[str, Any]:
         return dataclasses.asdict(self)
+
+    def __repr__(self) -> str:
+        """``Params(...)`` with only the fields that differ from the defaults (docs/metrics.md's values)."""
+        changed = [f"{f.name}={getattr(self, f.name)!r}" for f in fields(self) if getattr(self, f.name) != f.default]
+        return f"Params({', '.join(changed)})"
 
 
 def _convert(name: str, raw: str, default: Any) -> Any:

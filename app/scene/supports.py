@@ -54,7 +54,7 @@ def _curve_samples_n(ev: Any) -> Any:
         return hit[1]
     p = ev.params
     curve_n = ev.curve.curve.transformed(ev.normalization.apply)
-    samples = sample_curve(curve_n, p.curve_samples, collinear_cos=p.collinear_cos)
+    samples = sample_curve(curve_n, p.curve_samples, collinear_cos=p.collinear_cos, method=p.curve_sampling)
     _CACHE.clear()
     _CACHE[key] = (ev, samples)
     return samples

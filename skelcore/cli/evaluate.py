@@ -9,6 +9,7 @@ import sys
 import numpy as np
 
 from ..errors import SkelInputError
+from ..params import Params
 from ..skeleton_mapping import map_skeleton
 from .common import (clear_progress_line, format_defects, format_ground_truth, format_reference, format_table, params_from_args, positive_float,
                      print_warnings, stderr_progress)
@@ -50,6 +51,9 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--barcodes", metavar="F", help="write every H0 bar of both diagrams as CSV")
     p.add_argument("--export-ply", metavar="DIR", help="write coloured PLY files of the skeleton into DIR")
     p.add_argument("--boundedness-method", choices=("rays", "paper"), help="boundedness estimator (default rays)")
+    p.add_argument("--curve-sampling", metavar="{toolbox,invariant}",
+                   help="where the curve's samples go: toolbox (default, the reference tool's: depends on how the "
+                   "curve's vertices are numbered) or invariant (each branch from a canonical end; docs/metrics.md 3)")
     p.add_argument("--viewpoint", type=float, nargs=3, action="append", metavar=("X", "Y", "Z"),
                    help="a sensor position in the cloud's units (repeatable): boundedness counts only what the "
                    "sensors could have seen (a scan from some sides only; default: a PCD's VIEWPOINT when set)")
@@ -117,13 +121,24 @@ def print_scan_notes(scan, args: argparse.Namespace) -> None:
                       f"{o.get('refused')}", file=sys.stderr)
 
 
+def _with_curve_sampling(params: Params, method: str | None) -> Params:
+    """``--curve-sampling``: a one-line SkelInputError on a value other than toolbox or invariant."""
+    from ..metrics.curve_sampling import SAMPLING_METHODS
+
+    if method is None:
+        return params
+    if method not in SAMPLING_METHODS:
+        raise SkelInputError(f"--curve-sampling must be {' or '.join(SAMPLING_METHODS)}, got {method!r}")
+    return params.replace(curve_sampling=method)
+
+
 def run_evaluate(args: argparse.Namespace) -> int:
     from .. import io
     from ..stages import evaluate
     from ..io.correspondence_files import load_skeletal, load_skeletal_index
     from ..io.export import export_ply
 
-    params = params_from_args(args)
+    params = _with_curve_sampling(params_from_args(args), args.curve_sampling)
     if not (args.skeletal or args.curve):
         raise SkelInputError("nothing to evaluate: give --skeletal and/or --curve")
     if args.skeletal_index and not args.skeletal:
@@ -167,7 +182,8 @@ def run_evaluate(args: argparse.Namespace) -> int:
     if ev.ground_truth is not None:
         print(format_ground_truth(ev.ground_truth.to_dict()))
     corr = f"correspondence: {ev.correspondence}; " if ev.correspondence else ""
-    print(f"{corr}boundedness estimator: {params.boundedness_method}; total {ev.timings['total']:.2f} s")
+    sampling = "" if params.curve_sampling == "toolbox" else f"curve sampling: {params.curve_sampling}; "
+    print(f"{corr}boundedness estimator: {params.boundedness_method}; {sampling}total {ev.timings['total']:.2f} s")
     print(format_defects(ev.warning_dicts()))
     print_warnings(ev.warning_dicts())
     print_scan_notes(ev.scan, args)

@@ -301,7 +301,11 @@ def paper_triangles(cloud: np.ndarray, q: np.ndarray, *, plane_threshold: float 
         hull = ConvexHull(flat).vertices  # the free-boundary loop, counter-clockwise
     except QhullError:
         return None  # all directions on one great circle through the poles, or coincident
-    simplices = tri.simplices
+    # a degenerate set (directions on one great circle, many coincident) can leave triangles on qhull's
+    # added point at infinity (index len(flat)): they are no part of the sphere
+    simplices = tri.simplices[(tri.simplices < len(flat)).all(axis=1)]
+    if len(simplices) == 0:
+        return None
     # orient counter-clockwise in the chart (as MATLAB's delaunayTriangulation): outward on the sphere
     a, b, c = flat[simplices[:, 0]], flat[simplices[:, 1]], flat[simplices[:, 2]]
     cw = (b[:, 0] - a[:, 0]) * (c[:, 1] - a[:, 1]) - (b[:, 1] - a[:, 1]) * (c[:, 0] - a[:, 0]) < 0

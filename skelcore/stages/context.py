@@ -16,7 +16,7 @@ import numpy as np
 from ..curve import CurveSkeleton
 from ..metrics.curve_sampling import CurveSamples, sample_curve
 from ..errors import SkelInputError
-from ..geometry import Checkpoint, Normalization, as_points, no_checkpoint
+from ..geometry import Checkpoint, Normalization, as_points, check_extent, check_magnitude, no_checkpoint
 from ..metrics.boundedness import boundedness
 from ..metrics.cloud_index import CloudIndex
 from ..metrics.coverage import coverage_tau
@@ -234,6 +234,7 @@ def build_context(
             raise SkelInputError("skeletal point set: every row went with the stray points")
         if len(cloud) < 2:
             raise SkelInputError("cloud: fewer than 2 points are left without the stray points")
+    check_extent("cloud", cloud)
     try:
         norm = Normalization.from_cloud(cloud, params.normalize_by, params.normalized_size)
     except ValueError:
@@ -247,6 +248,7 @@ def build_context(
 
     if curve is not None:
         ctx.curve = CurveSkeleton.coerce(curve, "curve")
+        check_magnitude("curve skeleton", ctx.curve.vertices)
     if correspondence == "reverse" and skeletal is None:
         if ctx.curve is None:
             raise SkelInputError("reverse correspondence needs a skeletal point set or a curve skeleton")
@@ -255,6 +257,7 @@ def build_context(
         if ctx.curve is None:
             raise SkelInputError("a reference curve is compared with a curve skeleton: give one")
         ref = CurveSkeleton.coerce(reference_curve, "reference curve")
+        check_magnitude("reference curve", ref.vertices)
         if reference_radius is not None:
             ref = _with_radius(ref, reference_radius)
         ctx.reference = ref
@@ -265,7 +268,8 @@ def build_context(
         raise SkelInputError("a reference radius needs a reference curve")
     if ctx.curve is not None:
         ctx.curve_n = ctx.curve.transformed(norm.apply)
-        ctx.samples = sample_curve(ctx.curve_n, params.curve_samples, collinear_cos=params.collinear_cos)
+        ctx.samples = sample_curve(ctx.curve_n, params.curve_samples, collinear_cos=params.collinear_cos,
+                                   method=params.curve_sampling)
 
     if cap_openings:
         _cap(ctx, checkpoint)

@@ -24,7 +24,7 @@ pytestmark = [pytest.mark.gui]
 
 ROOT = Path(__file__).resolve().parents[2]
 LAPTOP = (1366, 768)
-TITLE_BAR = 48  # the room main_window.FRAME_ALLOWANCE leaves for a window manager's frame
+TITLE_BAR = 48  # the room window_size.FRAME_ALLOWANCE leaves for a window manager's frame
 
 
 def test_the_minimum_size_fits_a_1366x768_screen_with_room_for_a_title_bar(window):
@@ -75,7 +75,7 @@ def test_each_tab_group_has_one_tab_bar_even_before_the_event_loop_runs(qtbot, t
 def test_the_initial_size_is_the_screen_s_free_area_on_a_small_screen():
     from PySide6 import QtCore
 
-    from skelscope.main_window import DEFAULT_SIZE, initial_size
+    from skelscope.window_size import DEFAULT_SIZE, initial_size
 
     assert initial_size(QtCore.QSize(1920, 1200)) == DEFAULT_SIZE
     w, h = initial_size(QtCore.QSize(*LAPTOP))
