@@ -110,6 +110,7 @@ def pytest_benchmark_update_machine_info(config: pytest.Config, machine_info: di
     machine_info["numpy_blas"] = _blas()
     machine_info["skelcore"] = skelcore.__version__
     machine_info["load_average_at_start"] = round(os.getloadavg()[0], 2)
+    machine_info["bench_large"] = bool(config.getoption("--bench-large"))
 
 
 # ---- timing ------------------------------------------------------------------------------------------
