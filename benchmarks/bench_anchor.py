@@ -1,7 +1,7 @@
 """The anchor: gudhi's Vietoris-Rips H0 persistence of the hammer scan (4096 points, no edge-length
-limit, the 1-skeleton), the yardstick of issue 12's targets. Every other case is read as its ratio to
-this one, timed in the same run (benchmarks/report.py), so a slower or busier machine moves both.
-The file's name sorts first: the anchor is timed before the other cases."""
+limit, the 1-skeleton), the yardstick of the engine's speed targets (docs/performance.md). Every other
+case is read as its ratio to this one, timed in the same run (benchmarks/report.py), so that a slower
+or busier machine moves both. The file's name sorts first: the anchor is timed before the others."""
 
 from __future__ import annotations
 

@@ -1,6 +1,6 @@
 """Boundedness alone (SPEC 2; docs/boundedness.md), the rays estimator with the default parameters, in
-normalized space (SPEC 0): issue 12's torus at 65,536 points with its skeletal set as the queries; and
-plain against viewpoint-aware boundedness (docs/metrics.md 6.3) of the same elements: the front half
+normalized space (SPEC 0): the reference torus at 65,536 points with its skeletal set as the queries;
+and plain against viewpoint-aware boundedness (docs/metrics.md 6.3) of the same elements: the front half
 (y > 0) of a 131,072-point cylinder with its axis as the skeletal set, one viewpoint in front."""
 
 from __future__ import annotations

@@ -1,7 +1,7 @@
 """Coverage alone (SPEC 8; docs/metrics.md 5.2): the cloud's coverage by the medial balls of the
 skeletal set, and of the curve densified as the evaluation does, in normalized space (SPEC 0), tau
-computed apart (untimed). Cases: the hammer with the built-in skeleton, issue 12's torus at 65,536
-points (coverage_max_points' default: the largest cloud an evaluation covers exactly)."""
+computed apart (untimed). Cases: the hammer with the built-in skeleton, the reference torus at 65,536
+points."""
 
 from __future__ import annotations
 

@@ -1,6 +1,6 @@
 """Full evaluations (``skelcore.evaluate``, every stage, the stages side by side as a user gets them):
-the hammer scan against the built-in skeletonizer's output, and issue 12's torus at 100k and 1M points
-(whole, curve only, and with coverage raised above the cloud's size so that coverage and the
+the hammer scan against the built-in skeletonizer's output, and the reference torus at 100k and 1M
+points (whole, curve only, and with coverage raised above the cloud's size so that coverage and the
 diagnostics run at 1M). Each case's per-stage seconds of its last round are in its extra_info.
 Timed in this process after one untimed call (the first call's imports and kernel loading aside)."""
 
@@ -47,7 +47,7 @@ def test_evaluate_torus_curve_only_1m(measure, benchmark, torus):
 @pytest.mark.large
 def test_evaluate_torus_coverage_and_diagnostics_1m(measure, benchmark, torus):
     """coverage_max_points raised above N (above coverage_exact_points coverage is estimated on a
-    subsample), so that coverage and the diagnostics that read it run at 1M (issue 22's case)."""
+    subsample), so that coverage and the diagnostics that read it run at 1M."""
     n = 1_048_576
     cloud, skeletal, curve = torus(n)
     params = Params(coverage_max_points=n + 1)

@@ -1,6 +1,6 @@
 """The benchmark suite's shared parts: its collection (``bench_*.py`` files, only when ``benchmarks/`` is
 given to pytest: ``make test`` runs ``tests/`` alone), the ``--bench-large`` option for the 1M-point
-cases, the inputs every module uses (the hammer scan and its built-in skeleton, issue 12's torus), the
+cases, the inputs every module uses (the hammer scan and its built-in skeleton, the reference torus), the
 machine described in the JSON, and :func:`measure`, which every case times with.
 
     .venv/bin/python -m pytest benchmarks --benchmark-json=results.json [--bench-large] [--bench-rounds N]
@@ -161,7 +161,7 @@ def hammer_skeleton(hammer):
 
 @lru_cache(maxsize=2)
 def _torus(n: int, curve_only: bool = False):
-    """Issue 12's torus: R = 1, r = 0.3, ``n`` points; skeletal set = each point's projection onto the
+    """The reference torus: R = 1, r = 0.3, ``n`` points; skeletal set = each point's projection onto the
     core circle + 1 % jitter (None with ``curve_only``); curve = a 64-gon of the core circle."""
     from skelcore import shapes
 

@@ -57,7 +57,8 @@ def render(results: dict) -> str:
         "`benchmarks/report.py`); do not edit by hand.",
         "",
         f"Machine: {_machine(info)}. Run of {when}"
-        + (f", commit {commit['id'][:10]}{' (with local changes)' if commit.get('dirty') else ''}" if commit.get("id") else "")
+        + (f", commit {commit['id'][:10]}" if commit.get("id") else "")
+        + (" (with local changes)" if commit.get("dirty") else "")
         + (f", load average {info['load_average_at_start']:g} at the start" if "load_average_at_start" in info else "")
         + ".",
         "",
