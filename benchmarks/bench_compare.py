@@ -1,7 +1,7 @@
 """A ``skelcore compare`` run (docs/compare.md): three generated 4096-point shapes (a cylinder, a torus,
 a Y shape) x two methods (the built-in skeletonizer, and an external command drawing the principal
 axis) under the normal condition, six jobs into a fresh folder each round (no job skipped), no report,
-in this process (the serial backend: the jobs' own time and the driver's, without a pool's start-up).
+in this process (the serial backend: the jobs' own time and the driver's, without a pool's start-up)."""
 
 from __future__ import annotations
 
