@@ -55,8 +55,15 @@ screenshots: setup
 	xvfb-run -a -s "-screen 0 1366x768x24" $(PY) scripts/make_screenshots.py --laptop
 	QT_SCALE_FACTOR=1.5 xvfb-run -a -s "-screen 0 1366x768x24" $(PY) scripts/make_screenshots.py --laptop
 
+# The benchmark suite (benchmarks/bench_*.py, pytest-benchmark; not part of `make test`), then its table in
+# docs/benchmark_results.md: each case's median and its ratio to the anchor (gudhi's Rips H0 of the hammer)
+# timed in the same run. The 1M-point cases: make bench BENCH_ARGS=--bench-large
+BENCH_JSON ?= build/benchmark_results.json
+BENCH_ARGS ?=
 bench: setup
-	$(PY) benchmarks/bench_engine.py
+	mkdir -p $(dir $(BENCH_JSON))
+	$(PY) -m pytest -p no:cacheprovider benchmarks --benchmark-json=$(BENCH_JSON) $(BENCH_ARGS)
+	$(PY) benchmarks/report.py $(BENCH_JSON) -o docs/benchmark_results.md
 
 samples: setup
 	$(PY) scripts/make_samples.py

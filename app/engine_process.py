@@ -2,7 +2,7 @@
 window never waits for the engine's GIL.
 
 In a thread, a 1M-point evaluation held the GIL in long numpy and scipy calls (1.1-1.4 s between two
-checkpoints in topology, centeredness and smoothness, measured with ``benchmarks/bench_app.py``), so
+checkpoints in topology, centeredness and smoothness, measured in the viewer, docs/performance.md 10), so
 Cancel took up to 1.5 s to reach the engine and every Qt callback into Python (event filters,
 overridden virtuals) waited for the worker: the File menu opened 2 s after the click. A child
 process shares no GIL with the window; killing it ends the work at once, wherever it is.

@@ -2,7 +2,7 @@
 press and its release (and for a moment after each wheel step), so a frame under software GL stays
 short; the full-detail frame follows once the camera rests.
 
-Measured with ``benchmarks/bench_app.py`` (frames of a 1M-point cloud while rotating).
+Measured under Xvfb with software GL (frames of a 1M-point cloud while rotating; docs/guide/viewer.md).
 """
 
 from __future__ import annotations

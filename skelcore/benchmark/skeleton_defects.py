@@ -8,8 +8,8 @@ defect that does not apply to a shape (truncation of a torus, a broken cycle on 
 None. Random choices come from the generator passed in (deterministic from a seed).
 
 The spur, chord, shortcut-chain and out-branch generators were the diagnostics calibration's
-(``benchmarks/bench_diagnostics.py``, docs/diagnostics.md "Calibration"), moved here unchanged and
-used from there; ``collapse_points`` and ``drop_vertices`` were ``benchmarks/diag_cases.py``'s.
+(docs/diagnostics.md "Calibration"), moved here unchanged from its script, as were
+``collapse_points`` and ``drop_vertices`` from its cases module.
 """
 
 from __future__ import annotations
@@ -31,7 +31,7 @@ Graph = tuple[np.ndarray, np.ndarray]
 Inside = Callable[[np.ndarray], np.ndarray]  # points -> signed distance to the shape's surface (< 0 inside)
 
 
-# ---- helpers (moved from benchmarks/bench_diagnostics.py) ----------------------------------------
+# ---- helpers (moved from the diagnostics calibration's script) -----------------------------------
 
 def _degrees(n: int, e: np.ndarray) -> np.ndarray:
     return np.bincount(np.asarray(e, np.int64).ravel(), minlength=n)

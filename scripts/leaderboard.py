@@ -13,7 +13,7 @@ jobs carry the ground-truth columns, docs/compare.md "Ground truth") and prints 
 - all of it again on the cases every method finished;
 - the best and the worst job by GT F1, with their skeleton render (renders/KEY_skeleton.png).
 
-    .venv/bin/python benchmarks/bench_leaderboard.py RUN_DIR
+    .venv/bin/python scripts/leaderboard.py RUN_DIR
 """
 
 from __future__ import annotations
