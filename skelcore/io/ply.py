@@ -371,9 +371,11 @@ def _gather(data: bytes, where: np.ndarray, code: str) -> np.ndarray:
     return out
 
 
-def _empty(e: _Element) -> dict[str, Column]:
+def _empty(e: _Element, text: bool = False) -> dict[str, Column]:
+    """Columns of an element without rows (of the declared types, float64 for ASCII as when it has rows)."""
     none = np.zeros(0, dtype=np.int64)
-    return {p.name: PlyList(none, np.zeros(0, p.code)) if p.is_list else np.zeros(0, p.code) for p in e.props}
+    code = (lambda p: "f8") if text else (lambda p: p.code)
+    return {p.name: PlyList(none, np.zeros(0, code(p))) if p.is_list else np.zeros(0, code(p)) for p in e.props}
 
 
 def _read_ascii(elements: list[_Element], data: bytes, start: int, header_lines: int, path: Path, wanted: set[int]):
@@ -401,7 +403,7 @@ def _read_ascii(elements: list[_Element], data: bytes, start: int, header_lines:
 def _ascii_element(e: _Element, text: bytes, first_line: int, path: Path) -> dict[str, Column]:
     """The ``e.count`` lines of ``text`` (the first is line ``first_line`` of the file) as columns."""
     if e.count == 0 or not e.props:
-        return _empty(e) if e.count == 0 else {}
+        return _empty(e, text=True) if e.count == 0 else {}
     table = None
     if text and not text.isspace():  # (loadtxt warns on no data)
         try:
