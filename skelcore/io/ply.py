@@ -295,7 +295,7 @@ def _list_length(order: str, p: _Prop, data: bytes, pos: int, e: _Element, row: 
     except struct.error:
         raise SkelInputError(f"truncated: PLY element '{e.name}' runs past the end of the file", path) from None
     if n < 0:
-        raise SkelInputError(f"PLY element '{e.name}' row {row}: negative length {n} of list '{p.name}'", path)
+        raise SkelInputError(f"PLY element '{e.name}' row {row + 1}: negative length {n} of list '{p.name}'", path)
     return n
 
 
@@ -328,7 +328,7 @@ def _binary_ragged(order: str, e: _Element, data: bytes, offset: int, path: Path
                 else:
                     (n,) = unpack(data, pos)
                     if n < 0:
-                        what = f"PLY element '{e.name}' row {row}"
+                        what = f"PLY element '{e.name}' row {row + 1}"
                         raise SkelInputError(f"{what}: negative length {n} of list '{segments[s][0].name}'", path)
                     pos += size
                     starts[s].append(pos)
@@ -339,7 +339,7 @@ def _binary_ragged(order: str, e: _Element, data: bytes, offset: int, path: Path
     except struct.error:
         pos = end + 1
     if pos > end:
-        raise SkelInputError(f"truncated: PLY element '{e.name}' row {row} runs past the end of the file", path)
+        raise SkelInputError(f"truncated: PLY element '{e.name}' row {row + 1} runs past the end of the file", path)
     cols: dict[str, Column] = {}
     for s, seg in enumerate(segments):
         at = np.asarray(starts[s], dtype=np.int64)
