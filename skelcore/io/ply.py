@@ -18,6 +18,7 @@ import io
 import os
 import re
 import struct
+from array import array
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Iterable, Mapping, Union
@@ -101,9 +102,10 @@ class _Element:
 
 
 def _parse_header(data: bytes, path: Path) -> tuple[str, list[_Element], int, int]:
-    """(format, elements, byte offset of the data, header lines). Checks every count and type before
-    any data is read, so a flipped digit in ``element vertex 3`` cannot make a reader allocate billions
-    of rows. Lines end in LF, CRLF or (a header written on classic Mac OS) CR alone."""
+    """(format, elements, byte offset of the data, header lines). Checks every type, and the binary
+    counts against the file's size (the ASCII ones against its lines: :func:`_read_ascii`), before any
+    data is read, so a flipped digit in ``element vertex 3`` cannot make a reader allocate billions of
+    rows. Lines end in LF, CRLF or (a header written on classic Mac OS) CR alone."""
     nl = b"\r" if data[3:4] == b"\r" and data[4:5] != b"\n" else b"\n"
     pos = 0
     fmt = None
@@ -167,6 +169,8 @@ def _find(elements: list[_Element], names: tuple[str, ...]) -> _Element | None:
 
 
 def read_ply(path: Path, data: bytes) -> RawData:
+    """The vertices (x y z, a radius when there is one) and the edges (``vertex1``/``vertex2`` pairs or
+    polylines) of a PLY file's bytes; other elements and properties are skipped."""
     if not is_ply(data[:8]):
         raise SkelInputError("not a PLY file (does not start with 'ply')", path)
     fmt, elements, start, header_lines = _parse_header(data, path)
@@ -229,7 +233,9 @@ def _read_elements(
     return _read_binary(order, elements, data, start, path, {id(e) for e in wanted})
 
 
-def _read_binary(order: str, elements: list[_Element], data: bytes, offset: int, path: Path, wanted: set[int]):
+def _read_binary(
+    order: str, elements: list[_Element], data: bytes, offset: int, path: Path, wanted: set[int]
+) -> dict[int, dict[str, Column]]:
     out: dict[int, dict[str, Column]] = {}
     for e in elements:
         if not wanted - out.keys():
@@ -316,8 +322,8 @@ def _binary_ragged(order: str, e: _Element, data: bytes, offset: int, path: Path
             plan.append((unpack, np.dtype(p.len_code).itemsize, np.dtype(p.code).itemsize))
         else:
             plan.append((None, sum(np.dtype(p.code).itemsize for p in seg), 0))
-    starts: list[list[int]] = [[] for _ in segments]
-    lengths: list[list[int]] = [[] for _ in segments]
+    starts = [array("q") for _ in segments]  # 8 bytes a row, not a Python int's 36
+    lengths = [array("q") for _ in segments]
     end, pos, row = len(data), offset, 0
     try:
         for row in range(e.count):
@@ -364,10 +370,11 @@ def _gather(data: bytes, where: np.ndarray, code: str) -> np.ndarray:
     size = dtype.itemsize
     out = np.empty(len(where), dtype=dtype)
     residue = where % size
-    for r in np.unique(residue):
+    for r in range(size):
         pick = residue == r
-        view = np.frombuffer(data, dtype=dtype, offset=int(r), count=(len(data) - int(r)) // size)
-        out[pick] = view[(where[pick] - r) // size]
+        if pick.any():
+            view = np.frombuffer(data, dtype=dtype, offset=r, count=(len(data) - r) // size)
+            out[pick] = view[(where[pick] - r) // size]
     return out
 
 
@@ -378,7 +385,9 @@ def _empty(e: _Element, text: bool = False) -> dict[str, Column]:
     return {p.name: PlyList(none, np.zeros(0, code(p))) if p.is_list else np.zeros(0, code(p)) for p in e.props}
 
 
-def _read_ascii(elements: list[_Element], data: bytes, start: int, header_lines: int, path: Path, wanted: set[int]):
+def _read_ascii(
+    elements: list[_Element], data: bytes, start: int, header_lines: int, path: Path, wanted: set[int]
+) -> dict[int, dict[str, Column]]:
     """One row per line (lists included); each wanted element's lines go to numpy's text parser."""
     if data.find(b"\r", start) >= 0:
         data, start = data[start:].replace(b"\r\n", b"\n").replace(b"\r", b"\n"), 0
@@ -452,9 +461,9 @@ def _ascii_constant_lists(e: _Element, table: np.ndarray) -> dict[str, Column] |
 
 def _ascii_rows(e: _Element, text: bytes, first_line: int, path: Path) -> dict[str, Column]:
     """Rows of varying length, one at a time (bounded by the element's count of lines)."""
-    scalars: dict[str, list[float]] = {p.name: [] for p in e.props if not p.is_list}
-    lengths: dict[str, list[int]] = {p.name: [] for p in e.props if p.is_list}
-    values: dict[str, list[float]] = {p.name: [] for p in e.props if p.is_list}
+    scalars = {p.name: array("d") for p in e.props if not p.is_list}
+    lengths = {p.name: array("q") for p in e.props if p.is_list}
+    values = {p.name: array("d") for p in e.props if p.is_list}
     what = f"PLY {e.name} row"
     for lineno, line in _numbered(text, first_line):
         tokens = line.split()
