@@ -159,9 +159,9 @@ def _read_reference(data: bytes) -> PlyData:
         return PlyData.read(io.BytesIO(data))
 
 
-def _respell(data: bytes, names: dict[str, str], crlf: bool) -> bytes:
-    """The header with every type under another of its names, and CRLF line ends when asked (the
-    ASCII data too)."""
+def _respell(data: bytes, names: dict[str, str], newline: bytes) -> bytes:
+    """The header with every type under another of its names, its lines ended by ``newline`` (LF, CRLF
+    or CR; the ASCII data's too)."""
     head, sep, body = data.partition(b"end_header\n")
     lines = []
     for line in head.decode("ascii").split("\n"):
@@ -169,12 +169,10 @@ def _respell(data: bytes, names: dict[str, str], crlf: bool) -> bytes:
         if words[0] == "property":
             words = [words[0], *(names.get(w, w) for w in words[1:-1]), words[-1]]
         lines.append(" ".join(words))
-    head = "\n".join(lines).encode("ascii")
-    if crlf:
-        head, sep = head.replace(b"\n", b"\r\n"), b"end_header\r\n"
-        if b"format ascii" in head:
-            body = body.replace(b"\n", b"\r\n")
-    return head + sep + body
+    head = "\n".join(lines).encode("ascii").replace(b"\n", newline)
+    if b"format ascii" in head:
+        body = body.replace(b"\n", newline)
+    return head + b"end_header" + newline + body
 
 
 @st.composite
@@ -210,13 +208,13 @@ def ply_layouts(draw) -> tuple[bytes, bytes]:
     data = _plyfile_bytes(elements, fmt, comments=["a comment"], obj_info=draw(st.lists(st.just("num_cols 1"),
                                                                                        max_size=1)))  # fmt: skip
     spelling = {name: draw(st.sampled_from(aliases)) for name, (_, aliases) in PLY_TYPES.items()}
-    return data, _respell(data, spelling, crlf=draw(st.booleans()))
+    return data, _respell(data, spelling, newline=draw(st.sampled_from([b"\n", b"\r\n", b"\r"])))
 
 
 @settings(max_examples=150, deadline=None, suppress_health_check=[HealthCheck.too_slow])
 @given(ply_layouts())
 def test_reader_reads_every_layout_as_plyfile_does(layout):
-    """Every element and property, scalar or list, of every type, byte order and line end: the same
+    """Every element and property, scalar or list, of every type, format and line end: the same
     values as plyfile's (exactly; NaN where NaN), binary columns of the declared type."""
     original, respelled = layout
     ref = _read_reference(original)
@@ -359,6 +357,14 @@ def test_plyfile_reads_what_we_write(tmp_path_factory, case):
     for el in ply.elements:
         for prop in el.properties:
             _assert_same_values(ours[el.name][prop.name], el.data[prop.name], ply.text)
+
+
+@pytest.mark.parametrize("binary", [True, False])
+def test_header_comments_stay_ascii(tmp_path, points, binary):
+    """A PLY header is ASCII: other characters of a comment are written as backslash escapes."""
+    path = tmp_path / "p.ply"
+    write_points_ply(path, points, binary=binary, comments=["colour by d\u00e9viation"])
+    assert PlyData.read(str(path)).comments == ["written by skelcore", "colour by d\\xe9viation"]
 
 
 def test_reads_and_writes_without_loading_plyfile():
