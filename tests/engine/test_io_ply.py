@@ -187,9 +187,9 @@ def ply_layouts(draw) -> tuple[bytes, bytes]:
         for j in range(draw(st.integers(1, 4))):
             prop, code = f"p{j}", PLY_TYPES[draw(st.sampled_from(sorted(PLY_TYPES)))][0]
             if draw(st.booleans()):  # a list property
-                fixed = draw(st.integers(0, 4))
-                lengths = [fixed] * count if draw(st.booleans()) else draw(st.lists(st.integers(0, 5), min_size=count,
-                                                                                    max_size=count))  # fmt: skip
+                lengths = draw(st.lists(st.integers(0, 5), min_size=count, max_size=count))
+                if draw(st.booleans()):  # one length for every row
+                    lengths = [draw(st.integers(0, 4))] * count
                 rows = np.empty(count, dtype=object)
                 for k, n in enumerate(lengths):
                     rows[k] = draw(hnp.arrays(np.dtype(code), n))
@@ -204,9 +204,8 @@ def ply_layouts(draw) -> tuple[bytes, bytes]:
             arr[prop] = col
         comments = draw(st.lists(st.sampled_from(["made by a test", "units: mm"]), max_size=1))
         elements.append(PlyElement.describe(arr, name, len_types=len_types, val_types=val_types, comments=comments))
-    fmt = draw(st.sampled_from(["ascii", "<", ">"]))
-    data = _plyfile_bytes(elements, fmt, comments=["a comment"], obj_info=draw(st.lists(st.just("num_cols 1"),
-                                                                                       max_size=1)))  # fmt: skip
+    obj_info = draw(st.lists(st.just("num_cols 1"), max_size=1))
+    data = _plyfile_bytes(elements, draw(st.sampled_from(["ascii", "<", ">"])), ["a comment"], obj_info)
     spelling = {name: draw(st.sampled_from(aliases)) for name, (_, aliases) in PLY_TYPES.items()}
     return data, _respell(data, spelling, newline=draw(st.sampled_from([b"\n", b"\r\n", b"\r"])))
 
@@ -302,9 +301,6 @@ def test_curves_of_every_layout_load_as_plyfile_reads_them(data):
     else:
         pairs = np.array([(a, b) for line in edge["vertex_indices"] for a, b in zip(line[:-1], line[1:])])
     np.testing.assert_array_equal(raw.edges, pairs.reshape(-1, 2))
-
-
-finite = st.floats(allow_nan=False, allow_infinity=False)
 
 
 @st.composite
