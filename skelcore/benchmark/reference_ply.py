@@ -13,11 +13,11 @@ import os
 from dataclasses import dataclass
 
 import numpy as np
-from plyfile import PlyData, PlyParseError
 
 from ..curve import CurveSkeleton
 from ..errors import SkelInputError
 from ..io import load_curve
+from ..io.ply import PlyList, is_ply, read_ply_elements
 
 __all__ = ["ReferenceCurve", "read_reference"]
 
@@ -35,20 +35,20 @@ def read_reference(path: str | os.PathLike) -> ReferenceCurve:
     one-line :class:`SkelInputError` naming the file)."""
     curve = load_curve(path)
     radius = None
-    with open(path, "rb") as fh:
-        is_ply = fh.read(3) == b"ply"
-    if is_ply:
-        try:
-            ply = PlyData.read(os.fspath(path))
-        except (OSError, ValueError, PlyParseError) as exc:
-            raise SkelInputError(f"cannot read the PLY's properties: {exc}", path) from None
-        vertex = next((el for el in ply.elements if el.name.lower() in ("vertex", "vertices")), None)
-        names = {p.name.lower(): p.name for p in vertex.properties} if vertex is not None else {}
+    try:
+        with open(path, "rb") as fh:
+            data = fh.read()
+    except OSError as exc:
+        raise SkelInputError(f"cannot read the file: {exc.strerror or exc}", path) from None
+    if is_ply(data[:8]):
+        tables = read_ply_elements(path, data, names=("vertex", "vertices"))
+        vertex = next(iter(tables.values()), {})
+        names = {name.lower(): name for name in vertex}
         if "radius" in names:
-            raw = np.asarray(vertex.data[names["radius"]])
-            if raw.dtype == object:
+            raw = vertex[names["radius"]]
+            if isinstance(raw, PlyList):
                 raise SkelInputError("PLY vertex property radius is a list, expected a number", path)
-            radius = raw.astype(np.float64)[curve.vertex_map]
+            radius = np.asarray(raw, dtype=np.float64)[curve.vertex_map]
             if not (np.all(np.isfinite(radius)) and np.all(radius > 0)):
                 raise SkelInputError("reference radius must be finite and > 0 at every vertex", path)
     return ReferenceCurve(curve, radius)

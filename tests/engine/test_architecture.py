@@ -1,6 +1,7 @@
 """The house rules, read from the source with ``ast`` (nothing is imported): no import cycle between
-skelcore modules, no GUI or plotting library imported by skelcore at module level, no engine
-module importing the command line, and package ``__init__`` files that only re-export."""
+skelcore modules, no GUI or plotting library imported by skelcore at module level, no plyfile (GPL)
+imported by skelcore or the viewer, no engine module importing the command line, and package
+``__init__`` files that only re-export."""
 
 from __future__ import annotations
 
@@ -265,6 +266,25 @@ def test_skelcore_never_imports_gui_or_plotting_at_module_level():
             if root in FORBIDDEN and (top or not name.startswith(LAZY_PLOTTING_OK)):
                 bad.append(f"{path.relative_to(ROOT)}:{line} imports {target}")
     assert bad == []
+
+
+def test_no_module_of_the_package_imports_plyfile():
+    """SkelScope is MIT and plyfile GPL-3.0-or-later: PLY is read and written by skelcore.io.ply, and
+    plyfile stays the tests' reference (the ``test`` extra), imported by no engine or viewer module,
+    at module level or inside a function."""
+    bad = []
+    for package in ("skelcore", "app"):
+        mods = _modules(package)
+        for name, path in mods.items():
+            bad += [f"{path.relative_to(ROOT)}:{line} imports {target}"
+                    for target, line, _ in _imports(name, path, set(mods)) if target.split(".")[0] == "plyfile"]
+    assert bad == []
+
+
+def test_the_plyfile_rule_finds_an_import(tmp_path):
+    module = tmp_path / "reader.py"
+    module.write_text("def read(path):\n    from plyfile import PlyData\n    return PlyData.read(path)\n")
+    assert [t for t, _, top in _imports("skelcore.io.reader", module, set()) if not top] == ["plyfile"]
 
 
 def test_no_engine_module_imports_the_cli():

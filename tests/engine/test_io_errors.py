@@ -29,6 +29,26 @@ def _ply_curve(vertices: str, edges: list[tuple[int, int]], n_vertices: int) -> 
     return (head + vertices + "".join(f"{a} {b}\n" for a, b in edges)).encode()
 
 
+def _ply_lists(face: str, rows: bytes, *, fmt: str = "binary_little_endian", faces: int = 2) -> bytes:
+    """A face element (the list property ``face``) before three float vertices (``rows`` then the
+    vertices' bytes, or their text in ASCII)."""
+    head = (f"ply\nformat {fmt} 1.0\nelement face {faces}\n{face}\nelement vertex 3\nproperty float x\n"
+            "property float y\nproperty float z\nend_header\n")  # fmt: skip
+    vertices = b"0 0 0\n1 0 0\n0 1 0\n" if fmt == "ascii" else np.eye(3, dtype="<f4").tobytes()
+    return head.encode() + rows + vertices
+
+
+def _ply_curve_props(edge_props: str, rows: bytes, edges: int = 1) -> bytes:
+    """Two vertices (lines 10 and 11) and ``edges`` rows of an edge element with ``edge_props`` (from line 12)."""
+    head = ("ply\nformat ascii 1.0\nelement vertex 2\nproperty float x\nproperty float y\nproperty float z\n"
+            f"element edge {edges}\n{edge_props}\nend_header\n0 0 0\n1 0 0\n")  # fmt: skip
+    return head.encode() + rows
+
+
+TRIANGLE = struct.pack("<B3i", 3, 0, 1, 2)
+FACE_LIST = "property list uchar int vertex_indices"
+
+
 def _npy(arr: np.ndarray) -> bytes:
     import io
 
@@ -62,6 +82,24 @@ CASES = [
     ("ply_empty_cloud", "c.ply", _ply_binary_cloud(n=0), load_cloud, "0 points"),
     ("ply_inf", "c.ply", b"ply\nformat ascii 1.0\nelement vertex 2\nproperty float x\nproperty float y\n"
      b"property float z\nend_header\n1 2 3\n1 inf 3\n", load_cloud, "infinite"),  # fmt: skip
+    ("ply_bad_element_count", "c.ply", b"ply\nformat ascii 1.0\nelement vertex -3\nend_header\n", load_cloud,
+     "bad element line"),  # fmt: skip
+    ("ply_crlf_missing_rows", "c.ply", b"ply\r\nformat ascii 1.0\r\nelement vertex 3\r\nproperty float x\r\n"
+     b"property float y\r\nproperty float z\r\nend_header\r\n1 2 3\r\n", load_cloud, "more rows than the file has"),
+    ("ply_big_endian_truncated", "c.ply", _ply_binary_cloud(cut=5).replace(b"little", b"big"), load_cloud, "truncated"),
+    ("ply_list_row_past_end", "c.ply", _ply_lists(FACE_LIST, TRIANGLE + struct.pack("<B", 200)), load_cloud,
+     "row 2 runs past the end"),  # fmt: skip
+    ("ply_list_count_too_big", "c.ply", _ply_lists(FACE_LIST, TRIANGLE, faces=4 * 10**9), load_cloud, "truncated"),
+    ("ply_list_length_too_big", "c.ply", _ply_lists("property list uint int vertex_indices",
+     struct.pack("<I", 2**32 - 1), faces=1), load_cloud, "runs past the end"),  # fmt: skip
+    ("ply_list_negative_length", "c.ply", _ply_lists("property list char int vertex_indices",
+     struct.pack("<b3i", 3, 0, 1, 2) + struct.pack("<b", -1)), load_cloud, "row 2: negative length -1"),  # fmt: skip
+    ("ply_list_unknown_type", "c.ply", _ply_lists("property list uchar real vertex_indices", b""), load_cloud,
+     "unknown type 'real'"),  # fmt: skip
+    ("ply_list_float_length", "c.ply", _ply_lists("property list float int vertex_indices", b""), load_cloud,
+     "integer type"),  # fmt: skip
+    ("ply_vertex_x_list", "c.ply", b"ply\nformat ascii 1.0\nelement vertex 1\nproperty list uchar float x\n"
+     b"property float y\nproperty float z\nend_header\n1 0 0 0\n", load_cloud, "property x is a list"),  # fmt: skip
     ("xyz_header_only", "c.csv", b"x,y,z\n", load_cloud, "no rows"),
     ("xyz_nan", "c.xyz", b"0 0 0\n1 nan 0\n0 1 0\n", load_points, "NaN"),
     ("xyz_all_coincident", "c.xyz", b"1 2 3\n1 2 3\n1 2 3\n", load_cloud, "same position"),
@@ -95,6 +133,20 @@ CASES = [
     ("ply_curve_inf", "s.ply", _ply_curve("0 0 0\n1 inf 0\n2 0 0\n", [(0, 1), (1, 2)], 3), load_curve, "inf"),
     ("ply_curve_all_nan", "s.ply", _ply_curve("nan 0 0\n1 nan 0\n", [(0, 1)], 2), load_curve, "no vertices"),
     ("curve_all_coincident", "s.ply", _ply_curve("1 1 1\n1 1 1\n", [(0, 1)], 2), load_curve, "same position"),
+    ("ply_edge_pair_list", "s.ply", _ply_curve_props("property list uchar int vertex1\nproperty int vertex2",
+     b"1 0 1\n"), load_curve, "property vertex1 is a list"),  # fmt: skip
+    ("ply_edge_no_indices", "s.ply", _ply_curve_props("property float weight", b"0.5\n"), load_curve,
+     "no vertex1/vertex2 properties (properties: weight)"),  # fmt: skip
+    ("ply_ascii_list_short_row", "s.ply", _ply_curve_props(FACE_LIST, b"3 0 1 0\n3 0 1\n", edges=2), load_curve,
+     "line 13 has 3 values, too few"),  # fmt: skip
+    ("ply_ascii_list_long_row", "s.ply", _ply_curve_props(FACE_LIST, b"3 0 1 0\n2 0 1 0\n", edges=2), load_curve,
+     "line 13 has 4 values, expected 3"),  # fmt: skip
+    ("ply_ascii_list_bad_length", "s.ply", _ply_curve_props(FACE_LIST, b"3 0 1 0\n1.5 0 1\n", edges=2), load_curve,
+     "line 13: list length '1.5'"),  # fmt: skip
+    ("ply_ascii_list_word", "s.ply", _ply_curve_props(FACE_LIST, b"3 0 1 0\n3 0 one 1\n", edges=2), load_curve,
+     "line 13: 'one' is not a number"),  # fmt: skip
+    ("ply_polyline_fractional_index", "s.ply", _ply_curve_props(FACE_LIST, b"2 0 0.5\n"), load_curve,
+     "whole numbers"),  # fmt: skip
     ("obj_line_index_out_of_range", "s.obj", b"v 0 0 0\nv 1 0 0\nl 1 9\n", load_curve, "line 3: vertex index 9"),
     ("obj_line_negative_too_far", "s.obj", b"v 0 0 0\nv 1 0 0\nl 1 -3\n", load_curve, "vertex index -3"),
     ("obj_line_index_zero", "s.obj", b"v 0 0 0\nv 1 0 0\nl 0 1\n", load_curve, "index 0"),
@@ -144,6 +196,24 @@ def test_bad_input_raises_one_line_naming_the_file(tmp_path, case_id, name, cont
         with pytest.raises(SkelInputError), warnings.catch_warnings():
             warnings.simplefilter("ignore")
             load_any(path)
+
+
+@pytest.mark.parametrize("case_id", ["ply_count_too_big", "ply_list_count_too_big", "ply_list_length_too_big",
+                                     "ply_list_row_past_end"])  # fmt: skip
+def test_ply_counts_beyond_the_file_allocate_nothing(tmp_path, case_id):
+    """A count or list length larger than the file is refused before memory is taken for it."""
+    import tracemalloc
+
+    _, name, content, loader, _ = next(c for c in CASES if c[0] == case_id)
+    path = _write_case(tmp_path, name, content, case_id)
+    tracemalloc.start()
+    try:
+        with pytest.raises(SkelInputError, match="truncated"):
+            loader(path)
+        peak = tracemalloc.get_traced_memory()[1]
+    finally:
+        tracemalloc.stop()
+    assert peak < 1_000_000
 
 
 def test_missing_file(tmp_path):

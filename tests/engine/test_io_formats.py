@@ -392,7 +392,7 @@ def test_real_hammer_cloud_loads_in_file_units(scans):
 
 
 @pytest.mark.parametrize("text", [False, True])
-def test_ply_layouts_outside_the_fast_path_load_through_plyfile(tmp_path, text):
+def test_ply_list_layouts_load(tmp_path, text):
     """A list element before the vertices, and edges stored as polylines in a list property."""
     v, e = make_curve()
     face = np.array([([0, 1, 2],)], dtype=[("vertex_indices", "i4", (3,))])

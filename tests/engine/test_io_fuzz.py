@@ -1,5 +1,7 @@
 """Fuzz the loaders: random truncations and byte flips of valid files of every format must give
-either a successful load or a one-line SkelInputError, never another exception (seeded, fast)."""
+either a successful load or a one-line SkelInputError, never another exception (seeded, fast). The
+PLY layouts with list properties (faces before the vertices, polylines as edges, ASCII and binary)
+are fuzzed beside the formats' files."""
 
 from __future__ import annotations
 
@@ -7,7 +9,8 @@ import warnings
 
 import numpy as np
 import pytest
-from test_io_formats import CLOUD_WRITERS, CURVE_WRITERS, make_cloud, make_curve
+from plyfile import PlyData, PlyElement
+from test_io_formats import CURVE_BRANCHES, CLOUD_WRITERS, CURVE_WRITERS, make_cloud, make_curve
 
 from skelcore.errors import SkelInputError
 from skelcore.io import load_any, load_cloud, load_curve
@@ -41,7 +44,43 @@ def _check(path, loader) -> str:
     return "ok"
 
 
-FILES = [("cloud", n) for n in sorted(CLOUD_WRITERS)] + [("curve", n) for n in sorted(CURVE_WRITERS)]
+def _vertices(pts: np.ndarray, normals: bool = False) -> PlyElement:
+    fields = [("x", "f4"), ("y", "f4"), ("z", "f4")] + [("normals", object)] * normals
+    vert = np.empty(len(pts), dtype=fields)
+    vert["x"], vert["y"], vert["z"] = pts.T
+    if normals:
+        vert["normals"] = [np.ones(k % 3, dtype="f4") for k in range(len(pts))]  # lengths vary
+    return PlyElement.describe(vert, "vertex", len_types={"normals": "u1"}, val_types={"normals": "f4"})
+
+
+def _faces(n: int) -> PlyElement:
+    face = np.empty(n, dtype=[("vertex_indices", object), ("flags", "u2")])
+    face["vertex_indices"] = [np.arange(3 + k % 2, dtype=np.int32) for k in range(n)]
+    face["flags"] = np.arange(n)
+    return PlyElement.describe(face, "face", len_types={"vertex_indices": "u1"}, val_types={"vertex_indices": "i4"})
+
+
+def _write_faces_first(path, pts, *, text: bool) -> None:
+    PlyData([_faces(5), _vertices(pts, normals=True)], text=text, byte_order="<").write(str(path))
+
+
+def _write_polylines(path, v, e, *, text: bool) -> None:
+    lines = np.empty(len(CURVE_BRANCHES), dtype=[("vertex_indices", object)])
+    lines["vertex_indices"] = [np.array(b, dtype=np.int32) for b in CURVE_BRANCHES]
+    edge = PlyElement.describe(lines, "edge", len_types={"vertex_indices": "u2"}, val_types={"vertex_indices": "i4"})
+    PlyData([_faces(2), _vertices(v), edge], text=text, byte_order=">").write(str(path))
+
+
+PLY_CLOUDS = {
+    "ply_faces_first_binary": (".ply", lambda path, pts: _write_faces_first(path, pts, text=False)),
+    "ply_faces_first_ascii": (".ply", lambda path, pts: _write_faces_first(path, pts, text=True)),
+}
+PLY_CURVES = {
+    "ply_polylines_binary": (".ply", lambda path, v, e: _write_polylines(path, v, e, text=False)),
+    "ply_polylines_ascii": (".ply", lambda path, v, e: _write_polylines(path, v, e, text=True)),
+}
+CLOUDS, CURVES = {**CLOUD_WRITERS, **PLY_CLOUDS}, {**CURVE_WRITERS, **PLY_CURVES}
+FILES = [("cloud", n) for n in sorted(CLOUDS)] + [("curve", n) for n in sorted(CURVES)]
 
 
 @pytest.mark.parametrize("kind,name", FILES)
@@ -51,12 +90,12 @@ def test_corrupted_files_raise_only_skelinputerror(tmp_path, kind, name):
     src = tmp_path / "src"
     src.mkdir()
     if kind == "cloud":
-        suffix, writer = CLOUD_WRITERS[name]
+        suffix, writer = CLOUDS[name]
         good = src / f"good{suffix}"
         writer(good, make_cloud(12, seed=seed))
         loaders = (load_cloud, load_any)
     else:
-        suffix, writer = CURVE_WRITERS[name]
+        suffix, writer = CURVES[name]
         good = src / f"good{suffix}"
         writer(good, *make_curve())
         loaders = (load_curve, load_any)
