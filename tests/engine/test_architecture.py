@@ -369,3 +369,61 @@ def test_the_viewer_is_imported_by_its_installed_name():
     hits = [str(p.relative_to(ROOT)) for folder in ("app", "tests", "scripts", "benchmarks", "docs", "examples")
             for p in (ROOT / folder).rglob("*.py") if pattern.search(p.read_text(encoding="utf-8"))]
     assert hits == []
+
+
+def _third_party_imports(folder: str) -> dict[str, bool]:
+    """The third-party top-level modules imported under ``folder``: name -> imported at module level
+    somewhere (False: only inside functions)."""
+    import sys
+
+    found: dict[str, bool] = {}
+    own = {"skelcore", "skelscope", "app"}
+    for path in (ROOT / folder).rglob("*.py"):
+        tree = ast.parse(path.read_text(encoding="utf-8"))
+        top_level = {id(n) for n in tree.body}
+        for node in ast.walk(tree):
+            if isinstance(node, ast.Import):
+                names = [a.name for a in node.names]
+            elif isinstance(node, ast.ImportFrom) and node.level == 0 and node.module:
+                names = [node.module]
+            else:
+                continue
+            for name in names:
+                top = name.split(".")[0]
+                if top in own or top in sys.stdlib_module_names or top == "__future__":
+                    continue
+                found[top] = found.get(top, False) or id(node) in top_level
+    return found
+
+
+def _requirement_names(requirements: list[str]) -> set[str]:
+    import re
+
+    return {re.split(r"[\s<>=!;\[~]", r, maxsplit=1)[0].lower().replace("_", "-") for r in requirements}
+
+
+def test_dependencies_are_what_the_package_imports():
+    """A required dependency is one the package imports, every library the engine imports at module
+    level is required, and every library imported only when used belongs to an extra."""
+    import importlib.metadata as md
+
+    try:
+        import tomllib
+    except ModuleNotFoundError:  # Python 3.10
+        import tomli as tomllib
+    project = tomllib.loads((ROOT / "pyproject.toml").read_text(encoding="utf-8"))["project"]
+    required = _requirement_names(project["dependencies"])
+    extras = {name: _requirement_names(reqs) for name, reqs in project["optional-dependencies"].items()}
+    dists = md.packages_distributions()
+
+    def dist_of(module: str) -> set[str]:
+        return {d.lower().replace("_", "-") for d in dists.get(module, [module])}
+
+    engine, viewer = _third_party_imports("skelcore"), _third_party_imports("app")
+    imported = set().union(*(dist_of(m) for m in {**engine, **viewer}))
+    assert required - imported - {"tomli"} == set()  # tomli: tomllib's stand-in before Python 3.11
+    at_module_level = {m for m, top in engine.items() if top}
+    assert [m for m in at_module_level if not dist_of(m) & required] == []
+    optional = set().union(*extras.values()) | required
+    assert [m for m in {**engine, **viewer} if not dist_of(m) & optional] == []
+    assert [m for m, top in viewer.items() if top and not dist_of(m) & (extras["app"] | required)] == []

@@ -38,9 +38,13 @@ def schema(name: str) -> dict[str, Any]:
 def validator(name: str, part: str | None = None) -> Any:
     """A ``jsonschema.Draft202012Validator`` for schema ``name`` (or its ``$defs`` entry ``part``, such
     as results_csv's ``header``), every shipped schema registered, so a job record's ``evaluation`` is
-    checked against the evaluation schema. Needs jsonschema >= 4.18 (not a dependency of skelcore)."""
-    import jsonschema
-    from referencing import Registry, Resource
+    checked against the evaluation schema. Needs jsonschema >= 4.18: ``pip install 'skelscope[schemas]'``."""
+    try:
+        import jsonschema
+        from referencing import Registry, Resource
+    except ModuleNotFoundError:
+        raise ModuleNotFoundError("validating against the schemas needs jsonschema >= 4.18, not installed: "
+                                  "pip install 'skelscope[schemas]'") from None
 
     registry = Registry().with_resources(
         (schema_id(n), Resource.from_contents(schema(n))) for n in NAMES)
