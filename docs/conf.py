@@ -99,11 +99,7 @@ html_css_files = ["skelscope.css"]
 html_show_sourcelink = False
 
 # The pages of the user guide and the front matter; every other *.md here is a developer note.
-<<<<<<< HEAD
-_NOT_NOTES = {"index", "changelog", "notes", "skeletonizers", "compare", "diagnostics", "output_formats"}
-=======
-_NOT_NOTES = {"index", "changelog", "credits", "notes", "skeletonizers", "compare", "diagnostics"}
->>>>>>> data
+_NOT_NOTES = {"index", "changelog", "credits", "notes", "skeletonizers", "compare", "diagnostics", "output_formats"}
 
 
 def developer_notes() -> list[str]:
