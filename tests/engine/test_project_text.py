@@ -17,7 +17,7 @@ THIS = Path(__file__).resolve()
 
 #: the folders of code whose Python files are checked, and the single Python files outside them
 CODE_DIRS = ("skelcore", "app", "tests", "benchmarks", "scripts", "examples")
-CODE_FILES = ("setup.py", "docs/conf.py")
+CODE_FILES = ("setup.py", "docs/conf.py", "pyproject.toml", "MANIFEST.in", "Makefile")
 #: the pages: every markdown file of docs/ and of the code folders, and these
 PAGE_DIRS = ("docs", *CODE_DIRS)
 PAGE_FILES = ("README.md", "CHANGELOG.md")
@@ -27,6 +27,7 @@ FORBIDDEN = {
     "the word S-P-E-C": re.compile(r"\bS[P]EC\b"),
     "a path outside the checkout": re.compile(r"\.\./sh[a]red"),
     "a time of day": re.compile(r"\b\d{1,2}:\d{2} ?U[T]C"),
+    "a merge conflict marker": re.compile(r"^(<{7}|>{7}) "),
 }
 
 
@@ -37,7 +38,8 @@ def _tracked(dirs: tuple[str, ...], files: tuple[str, ...], suffix: str) -> list
         paths = [ROOT / p for p in out if p]
     except (OSError, subprocess.SubprocessError):
         paths = [p for d in dirs for p in (ROOT / d).rglob("*")] + [ROOT / f for f in files]
-    return sorted(p for p in paths if p.suffix in (suffix, ".c" if suffix == ".py" else suffix) and p.is_file() and p.resolve() != THIS)
+    also = (".c", ".toml", ".cfg") if suffix == ".py" else ()
+    return sorted(p for p in paths if p.suffix in (suffix, *also) and p.is_file() and p.resolve() != THIS)
 
 
 def _offences(paths: list[Path]) -> list[str]:
