@@ -99,11 +99,23 @@ def _reuse(old_keys: list[bytes], old_values: np.ndarray, new_keys: list[bytes])
     return values, missing
 
 
+def _plan_is_exact(cloud: np.ndarray, samples: Any, params: Any, cache: dict[str, Any]) -> bool:
+    """:func:`rays_plan_is_exact` of these samples, kept for the last samples asked about (the next
+    update's old samples are this one's new)."""
+    known = cache.setdefault("exact plan", [])
+    for obj, flag in known:
+        if obj is samples:
+            return flag
+    flag = rays_plan_is_exact(cloud, samples.points, params)
+    known[:] = [*known[-1:], (samples, flag)]
+    return flag
+
+
 def _score_samples(old: EvalContext, ctx: EvalContext, cache: dict[str, Any]) -> None:
     """Curve boundedness and centeredness of the new samples: reused where a sample was scored before."""
     p, s_old, s_new = ctx.params, old.samples, ctx.samples
     cloud = ctx.bounded_cloud_n
-    if rays_plan_is_exact(cloud, s_new.points, p) and rays_plan_is_exact(cloud, s_old.points, p):
+    if _plan_is_exact(cloud, s_old, p, cache) and _plan_is_exact(cloud, s_new, p, cache):
         beta, todo = _reuse(_keys(s_old.points), old.results["curve boundedness"], _keys(s_new.points))
         if todo.any():
             beta[todo] = boundedness(cloud, s_new.points[todo], params=p, share_far_field=False)
