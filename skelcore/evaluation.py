@@ -131,6 +131,9 @@ class Evaluation:
     #: real scans (docs/metrics.md 6): viewpoints, stray points, openings; None when no scan option was
     #: given and no scan warning fired
     scan: ScanReport | None = None
+    #: how it was made (skelcore.stages.evaluation_source.EvaluationSource: evaluate's arguments and its
+    #: stages' context), what :meth:`update` scores an edited curve with; None when built otherwise
+    source: Any = field(default=None, repr=False, compare=False)
 
     # ---- overall scores -------------------------------------------------------------------
     def summary(self, beta_star: float | None = None, c_star: float | None = None) -> dict[str, Any]:
@@ -198,6 +201,16 @@ class Evaluation:
 
     def warning_dicts(self) -> list[dict[str, str]]:
         return [w.to_dict() for w in self.warnings]
+
+    # ---- proofreading: skelcore.edit.incremental, imported when called ----
+    def update(self, edited: Any, *, diagnostics: bool = True) -> "Evaluation":
+        """The Evaluation of the edited curve skeleton (a :class:`skelcore.edit.Change` or the new curve)
+        against the same cloud, skeletal set and params; the curve samples whose position and direction
+        did not change keep their values (the same as evaluating afresh). ``diagnostics=False`` leaves
+        out the curve's coverage, defects and missing parts (the slow part), named in ``not_computed``."""
+        from .edit.incremental import update_evaluation
+
+        return update_evaluation(self, edited, diagnostics=diagnostics)
 
     # ---- serialisation: skelcore.io.evaluation_files, imported when called (the record imports no io) ----
     def to_json_dict(self, version: str | None = None) -> dict[str, Any]:

@@ -30,7 +30,7 @@ from ..params import Params
 from ._rays import FRAME
 from .rays_kernel import BallTree, choose_plan, run_plan
 
-__all__ = ["boundedness", "boundedness_rays", "boundedness_paper", "rays_radius", "paper_triangles", "PaperTriangles",
+__all__ = ["boundedness", "rays_plan_is_exact", "boundedness_rays", "boundedness_paper", "rays_radius", "paper_triangles", "PaperTriangles",
            "prepared_cloud", "in_raster_frame"]
 
 def boundedness(
@@ -39,11 +39,13 @@ def boundedness(
     *,
     params: Params = Params(),
     checkpoint: Checkpoint = no_checkpoint,
+    share_far_field: bool | None = None,
 ) -> np.ndarray:
     """beta(q) for every query row with the estimator ``params.boundedness_method`` (docs/metrics.md 2).
 
     Inputs are in normalized units (docs/metrics.md 0).  Returns one value per query row, in [0, 1] for
-    ``rays``.  An empty query set gives an empty array; an empty cloud gives zeros.
+    ``rays``.  An empty query set gives an empty array; an empty cloud gives zeros.  ``share_far_field``:
+    :func:`boundedness_rays`' (None: decided by cost).
     """
     if params.boundedness_method == "paper":
         return boundedness_paper(
@@ -61,8 +63,34 @@ def boundedness(
         exact_pairs=params.rays_exact_pairs,
         near_angle=params.rays_near_angle,
         cluster_cell=params.rays_cluster_cell,
+        share_far_field=share_far_field,
         checkpoint=checkpoint,
     )
+
+
+def rays_plan_is_exact(cloud: np.ndarray, queries: np.ndarray, params: Params = Params()) -> bool:
+    """Whether :func:`boundedness` scores ``queries`` with every (query, point) pair, each query on its
+    own: then a query's value does not depend on the others asked with it (shared far fields do), so
+    values of an earlier call can be kept for the same points. False for the paper's estimator."""
+    if params.boundedness_method != "rays":
+        return False
+    cloud, queries = _as_points("cloud", cloud), _as_points("queries", queries)
+    if len(queries) == 0 or len(cloud) == 0:
+        return True
+    uniq_q = unique_rows(queries, no_checkpoint)[0]
+    prepared = _prepared_cloud(cloud, no_checkpoint)
+    q_r = _in_frame(uniq_q, prepared.centre)
+    h = params.rays_radius_factor * prepared.spacing
+    if not h > 0:
+        return True
+    near = h / params.rays_near_angle
+    rows = int(params.rays_rows)
+    plan = choose_plan(prepared.tree, q_r, h, near, params.rays_cluster_cell * h, rows * 2 * rows,
+                       params.rays_exact_pairs, None)
+    n = len(q_r)
+    return bool(len(plan.starts) == n + 1 and np.array_equal(plan.starts, np.arange(n + 1))
+                and np.array_equal(plan.order, np.arange(n)) and np.array_equal(plan.centres, q_r)
+                and np.all(plan.reach == near))
 
 
 def rays_radius(cloud: np.ndarray, radius_factor: float = 2.0, checkpoint: Checkpoint = no_checkpoint) -> float:

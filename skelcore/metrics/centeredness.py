@@ -24,7 +24,7 @@ from ..parallel import on_threads
 from ..params import Params, k_center_for
 from .ellipse_fit import fit_ellipses
 
-__all__ = ["skeletal_centeredness", "curve_centeredness", "ring_length", "cross_section_centeredness"]
+__all__ = ["skeletal_centeredness", "curve_centeredness", "slab_grid", "ring_length", "cross_section_centeredness"]
 
 # rows of skeletal points per kNN chunk: bounds memory (chunk x k x 3 floats) and keeps checkpoints
 # under ~0.1 s apart on a loaded machine
@@ -208,6 +208,7 @@ def curve_centeredness(
     *,
     params: Params = Params(),
     checkpoint: Checkpoint = no_checkpoint,
+    grid: "_SlabGrid | None" = None,
 ) -> np.ndarray:
     """Centeredness of curve samples from the cloud's cross-section (docs/metrics.md 3; paper Eq. 11,
     ``eq.curve_point_centeredness``).
@@ -227,6 +228,7 @@ def curve_centeredness(
     that can meet the slab are tested. The result equals that of testing every cloud point.  Clouds
     under 50k points take every sample at once in flat arrays, larger ones cut the rings per sample on
     threads; both fit all rings in one batched call and give the same bits (docs/performance.md 6.5).
+    ``grid``: :func:`slab_grid` of the same cloud and params, when kept from an earlier call.
     """
     cloud = np.asarray(cloud, dtype=float)
     points = np.asarray(sample_points, dtype=float)
@@ -247,7 +249,8 @@ def curve_centeredness(
         return out  # no direction, or a cloud without extent: every slab is empty
     growth = float(params.ring_growth)
     checkpoint(0.0)
-    grid = _SlabGrid(cloud, cell=max(half, diagonal / 512.0), checkpoint=checkpoint)
+    if grid is None:
+        grid = _SlabGrid(cloud, cell=max(half, diagonal / 512.0), checkpoint=checkpoint)
     g, h = _orthonormal_complement(u[todo])
 
     if len(cloud) < _CURVE_AT_ONCE:
@@ -355,6 +358,14 @@ def _dot3(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     """Row-wise dot products of (M, 3) ``a`` with (3,) or (M, 3) ``b`` by element-wise operations, so
     one sample alone and many samples at once round alike."""
     return a[:, 0] * b[..., 0] + a[:, 1] * b[..., 1] + a[:, 2] * b[..., 2]
+
+
+def slab_grid(cloud: np.ndarray, params: Params = Params()) -> "_SlabGrid":
+    """The cloud bucketed as :func:`curve_centeredness` buckets it (kept to score more samples later)."""
+    cloud = np.asarray(cloud, dtype=float)
+    diagonal = bbox_diagonal(cloud)
+    half = 0.5 * float(params.slab_factor) * diagonal
+    return _SlabGrid(cloud, cell=max(half, diagonal / 512.0))
 
 
 class _SlabGrid:

@@ -16,9 +16,10 @@ from ..params import Params
 from .assemble import assemble, diagnostics_warnings, trust_warnings
 from .catalogue import Stage, select, start_order
 from .context import EvalContext, build_context
+from .evaluation_source import EvaluationSource
 from .progress import Progress, StageProgress
 
-__all__ = ["evaluate"]
+__all__ = ["evaluate", "finish"]
 
 
 def evaluate(
@@ -105,6 +106,10 @@ def evaluate(
     >>> ev.summary()["boundedness"]["skeletal"]            # doctest: +SKIP
     """
     t_start = time.perf_counter()
+    args = dict(cloud=cloud, skeletal=skeletal, curve=curve, params=params, skeletal_index=skeletal_index,
+                correspondence=correspondence, reference_curve=reference_curve, reference_radius=reference_radius,
+                inputs=inputs, workers=workers, viewpoints=viewpoints, remove_outliers=remove_outliers,
+                cap_openings=cap_openings)
     ctx = build_context(cloud, skeletal, curve, params, skeletal_index=skeletal_index,
                         correspondence=correspondence, reference_curve=reference_curve,
                         reference_radius=reference_radius, viewpoints=viewpoints,
@@ -114,8 +119,18 @@ def evaluate(
     tracker = StageProgress({s.name: s.weight for s in stages}, progress, cancel, on_stages)
     tasks = [_task(stage, ctx, tracker) for stage in start_order(stages, ctx)]
     run_graph(tasks, workers, on_error=tracker.abort)
+    ev = finish(ctx, inputs, tracker.between("trust checks"))
+    ev.timings = dict(tracker.timings)
+    ev.timings["total"] = time.perf_counter() - t_start
+    ev.source = EvaluationSource(args=args, ctx=ctx)
+    return ev
+
+
+def finish(ctx: EvalContext, inputs: dict | None, checkpoint: Callable[[float], None]) -> Evaluation:
+    """The Evaluation of ``ctx`` once its stages are done: assembled, with the trust checks and the
+    diagnostics' warnings (an edited curve's update finishes the same way)."""
     ev = assemble(ctx, inputs)
-    ev.warnings += trust_warnings(ctx, ev, tracker.between("trust checks"))
+    ev.warnings += trust_warnings(ctx, ev, checkpoint)
     codes = {w.code for w in ev.warnings}
     if "frame" not in codes:  # in another frame, every diagnostic would say so too
         found = diagnostics_warnings(ctx)
@@ -127,8 +142,6 @@ def evaluate(
             # defeat: on the true axis of a half cylinder it fired (with viewpoints it reads what was seen)
             found = [w for w in found if w.code != "outside"]
         ev.warnings += found
-    ev.timings = dict(tracker.timings)
-    ev.timings["total"] = time.perf_counter() - t_start
     return ev
 
 

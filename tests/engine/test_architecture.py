@@ -70,6 +70,8 @@ LAZY_DELEGATIONS = {
     # pictures and tables for notebooks: Evaluation.show, show_barcodes, _repr_html_
     ("skelcore.evaluation", "skelcore.display.show"),
     ("skelcore.evaluation", "skelcore.display.summary_table"),
+    # the Evaluation of an edited curve: Evaluation.update
+    ("skelcore.evaluation", "skelcore.edit.incremental"),
 }
 
 
@@ -166,13 +168,18 @@ def test_the_cycle_finder_finds_a_cycle():
 #                                                                                 -> foundation, formats
 #   display           skelcore.display: pictures and tables of an Evaluation (notebook, window, PNG)
 #                                                             -> foundation, formats, metrics, scan, diagnostics, record
+#   edits             skelcore.edit: pure edits of a curve skeleton, the edit log
+#                                                             -> foundation, formats, metrics, diagnostics
+#   edit update       skelcore.edit.incremental (Evaluation.update)
+#                                                             -> foundation, formats, metrics, scan, diagnostics,
+#                                                                record, stages, edits
 #   applications      skelcore.compare, skelcore.experiments, skelcore.benchmark  -> every layer above this line
 #   entry points      skelcore.cli, skelcore.__main__, the package facade skelcore/__init__ -> every layer
 # So: metrics never import the record, the stages or the evaluation files; the record imports no io; the
 # format readers and writers import no metric; compare and the CLI sit on top. A pattern "x.*" is the
 # package x and everything in it, any other an exact module; a module's layer is its longest pattern.
 _BELOW_APPS = ["foundation", "formats", "objects in", "skeletonizer", "adapters", "metrics", "scan", "diagnostics",
-               "record", "stages", "evaluation files", "display"]
+               "record", "stages", "evaluation files", "display", "edits", "edit update"]
 LAYERS: dict[str, tuple[list[str], list[str]]] = {
     "foundation": ([f"skelcore.{m}" for m in ("errors", "version", "params", "geometry", "parallel", "curve",
                                               "correspondence", "colors", "shapes",
@@ -194,6 +201,9 @@ LAYERS: dict[str, tuple[list[str], list[str]]] = {
                           "skelcore.interop.graph_out", "skelcore.interop.open3d_out"],
                          ["foundation", "formats", "metrics", "scan", "diagnostics", "record"]),
     "display": (["skelcore.display.*"], ["foundation", "formats", "metrics", "scan", "diagnostics", "record"]),
+    "edits": (["skelcore.edit.*"], ["foundation", "formats", "metrics", "diagnostics"]),
+    "edit update": (["skelcore.edit.incremental"],
+                    ["foundation", "formats", "metrics", "scan", "diagnostics", "record", "stages", "edits"]),
     "applications": (["skelcore.compare.*", "skelcore.experiments.*", "skelcore.benchmark.*"], _BELOW_APPS),
     "entry points": (["skelcore", "skelcore.__main__", "skelcore.cli.*"], [*_BELOW_APPS, "applications"]),
 }

@@ -5,6 +5,7 @@
 - ``compare_job``: a compare job's record, ``jobs/KEY.json`` (:mod:`skelcore.compare.job_store`).
 - ``results_csv``: one row of compare's ``results.csv`` as :class:`csv.DictReader` reads it (column ->
   cell text); its ``$defs/header`` describes the ordered header row (:mod:`skelcore.compare.results_csv`).
+- ``edit_log``: the edits of a curve skeleton in order (:mod:`skelcore.edit`, ``skelcore edit``).
 
 Every document carries :data:`SCHEMA_VERSION` (the top level of the evaluation document, each job
 record, the last column of results.csv): additive changes bump the minor, removals and renames the

@@ -15,7 +15,7 @@ __all__ = ["SCHEMA_VERSION", "NAMES", "schema", "schema_id", "validator"]
 SCHEMA_VERSION = "1.0"
 
 #: the shipped schemas: ``NAME.schema.json`` in this package
-NAMES = ("evaluation", "compare_job", "results_csv")
+NAMES = ("evaluation", "compare_job", "results_csv", "edit_log")
 
 
 def schema_id(name: str) -> str:

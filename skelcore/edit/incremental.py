@@ -1,0 +1,132 @@
+"""The Evaluation of an edited curve skeleton (:meth:`skelcore.Evaluation.update`), equal to evaluating
+it afresh with the same cloud, skeletal set and params, but reusing what an edit cannot change: every
+stage that does not read the curve (the skeletal column, topology, stray points, the cloud's trees and
+interior), and each curve sample's boundedness and centeredness when a sample at the same position (and
+direction) was scored before. That is exact because each sample's value depends only on its position,
+direction, the cloud and the params: with the toolbox sampling an edit moves the samples of the edges
+whose length share or numbering changed, and those are scored again. Boundedness is reused only when
+the rays estimator scores every sample on its own (no far field shared between samples). Evaluations
+with a scan option, or whose skeletal column is the curve's projection, are evaluated again."""
+
+from __future__ import annotations
+
+import time
+from dataclasses import replace
+from typing import Any
+
+import numpy as np
+
+from ..curve import CurveSkeleton
+from ..errors import SkelInputError
+from ..evaluation import Evaluation
+from ..geometry import check_magnitude, no_checkpoint
+from ..metrics.boundedness import boundedness, rays_plan_is_exact
+from ..metrics.centeredness import curve_centeredness, slab_grid
+from ..metrics.curve_sampling import sample_curve
+from ..stages.catalogue import CATALOGUE
+from ..stages.context import EvalContext
+from ..stages.evaluation_source import EvaluationSource
+from ..stages.orchestrate import evaluate, finish
+from .change import Change
+
+__all__ = ["update_evaluation", "CURVE_STAGES", "DIAGNOSTIC_STAGES"]
+
+#: the stages whose result depends on the curve (their context inputs name it), scored again
+CURVE_STAGES = tuple(s.name for s in CATALOGUE
+                     if {"curve", "samples", "curve boundedness", "curve coverage"} & set(s.inputs)
+                     and s.name != "correspondence")  # of a given skeletal set: reads no curve
+#: left out by ``update(diagnostics=False)``
+DIAGNOSTIC_STAGES = ("curve coverage", "curve defects", "curve missing parts")
+_INCREMENTAL = ("curve boundedness", "curve centeredness")
+LEFT_OUT = "left out by Evaluation.update(diagnostics=False)"
+
+
+def update_evaluation(ev: Evaluation, edited: Change | CurveSkeleton | Any, *, diagnostics: bool = True) -> Evaluation:
+    """``ev``'s evaluation of the edited curve (a Change, or the new curve in any form
+    :meth:`CurveSkeleton.coerce` takes)."""
+    t0 = time.perf_counter()
+    curve = edited.curve if isinstance(edited, Change) else CurveSkeleton.coerce(edited, "edited curve")
+    if curve is None:
+        raise SkelInputError("this change carries no edited curve")
+    src = ev.source
+    if not isinstance(src, EvaluationSource):
+        raise SkelInputError("this Evaluation keeps no record of its inputs (it was not made by evaluate): "
+                             "evaluate the edited curve instead")
+    if src.args.get("curve") is None:
+        raise SkelInputError("update() scores an edited curve skeleton: this Evaluation has none")
+    args = dict(src.args, curve=curve)
+    old = src.ctx
+    if old is None or old.scan is not None or old.viewpoints_n is not None or old.from_curve:
+        new = evaluate(**args)
+        new.source.cache = src.cache
+        return new
+    check_magnitude("curve skeleton", curve.vertices)
+    ctx = _edited_context(old, curve)
+    _score_samples(old, ctx, src.cache)
+    for stage in CATALOGUE:
+        if stage.name in CURVE_STAGES and stage.name not in _INCREMENTAL and stage.applies(ctx):
+            if not diagnostics and stage.name in DIAGNOSTIC_STAGES:
+                ctx.not_computed[stage.name] = LEFT_OUT
+                continue
+            ctx.results[stage.name] = stage.fn(ctx, no_checkpoint)
+    out = finish(ctx, args.get("inputs"), no_checkpoint)
+    out.timings = {"update": time.perf_counter() - t0}
+    out.source = EvaluationSource(args=args, ctx=ctx, cache=src.cache)
+    return out
+
+
+def _edited_context(old: EvalContext, curve: CurveSkeleton) -> EvalContext:
+    """``old`` with the edited curve and its samples, the results of the stages that read no curve kept
+    (the cloud's trees and interior are shared)."""
+    p = old.params
+    curve_n = curve.transformed(old.norm.apply)
+    samples = sample_curve(curve_n, p.curve_samples, collinear_cos=p.collinear_cos, method=p.curve_sampling)
+    kept = {k: v for k, v in old.results.items() if k not in CURVE_STAGES}
+    return replace(old, curve=curve, curve_n=curve_n, samples=samples, results=kept,
+                   not_computed=dict(old.not_computed), unseen=dict(old.unseen))
+
+
+def _keys(*columns: np.ndarray) -> list[bytes]:
+    rows = np.ascontiguousarray(np.hstack(columns), dtype=np.float64)
+    return [r.tobytes() for r in rows]
+
+
+def _reuse(old_keys: list[bytes], old_values: np.ndarray, new_keys: list[bytes]) -> tuple[np.ndarray, np.ndarray]:
+    """(values, which are missing) for ``new_keys`` from the old (key, value) pairs."""
+    known = dict(zip(old_keys, np.asarray(old_values, dtype=float).tolist()))
+    values = np.array([known.get(k, np.nan) for k in new_keys], dtype=float)
+    missing = np.array([k not in known for k in new_keys], dtype=bool)
+    return values, missing
+
+
+def _plan_is_exact(cloud: np.ndarray, samples: Any, params: Any, cache: dict[str, Any]) -> bool:
+    """:func:`rays_plan_is_exact` of these samples, kept for the last samples asked about (the next
+    update's old samples are this one's new)."""
+    known = cache.setdefault("exact plan", [])
+    for obj, flag in known:
+        if obj is samples:
+            return flag
+    flag = rays_plan_is_exact(cloud, samples.points, params)
+    known[:] = [*known[-1:], (samples, flag)]
+    return flag
+
+
+def _score_samples(old: EvalContext, ctx: EvalContext, cache: dict[str, Any]) -> None:
+    """Curve boundedness and centeredness of the new samples: reused where a sample was scored before."""
+    p, s_old, s_new = ctx.params, old.samples, ctx.samples
+    cloud = ctx.bounded_cloud_n
+    if _plan_is_exact(cloud, s_old, p, cache) and _plan_is_exact(cloud, s_new, p, cache):
+        beta, todo = _reuse(_keys(s_old.points), old.results["curve boundedness"], _keys(s_new.points))
+        if todo.any():
+            beta[todo] = boundedness(cloud, s_new.points[todo], params=p, share_far_field=False)
+    else:
+        beta = ctx.boundedness(s_new.points)
+    ctx.results["curve boundedness"] = beta
+    c, todo = _reuse(_keys(s_old.points, s_old.directions), old.results["curve centeredness"],
+                     _keys(s_new.points, s_new.directions))
+    if todo.any():
+        if "slab grid" not in cache:
+            cache["slab grid"] = slab_grid(ctx.cloud_n, p)
+        c[todo] = curve_centeredness(ctx.cloud_n, s_new.points[todo], s_new.directions[todo], params=p,
+                                     grid=cache["slab grid"])
+    ctx.results["curve centeredness"] = c

@@ -1,0 +1,137 @@
+"""Evaluation.update against a fresh evaluate: random sequences of one to four edits on small shapes,
+every score, local value, coverage, diagnostic and warning equal to 1e-12 (the JSON document and the
+local arrays); diagnostics=False keeps the four metrics exact; a pickled Evaluation evaluates again."""
+
+from __future__ import annotations
+
+import math
+import pickle
+from functools import lru_cache
+
+import numpy as np
+import pytest
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
+
+import skelcore.edit as E
+from skelcore import SkelInputError, evaluate, shapes
+
+TOL = 1e-12
+
+
+@lru_cache(maxsize=None)
+def _base(name: str):
+    """(cloud, skeletal set or None, Evaluation) of a small shape, made once."""
+    if name == "y":
+        sh = shapes.y_shape(400, seed=2, n_curve_per_arm=6)
+        cloud, skeletal = sh.cloud, sh.skeletal
+    else:  # a torus: one cycle to cut, no skeletal set
+        sh = shapes.torus(500, n_curve=16, seed=1)
+        cloud, skeletal = sh.cloud, None
+    return cloud, skeletal, evaluate(cloud, skeletal, (sh.curve_vertices, sh.curve_edges))
+
+
+def _close(a, b, where="") -> None:
+    """Nested documents equal, numbers to TOL (NaN and None alike)."""
+    if isinstance(a, dict):
+        assert isinstance(b, dict) and set(a) == set(b), where
+        for k in set(a) - {"timings_s", "timings"}:  # seconds differ run to run
+            _close(a[k], b[k], f"{where}/{k}")
+    elif isinstance(a, (list, tuple)):
+        assert isinstance(b, (list, tuple)) and len(a) == len(b), where
+        for i, (x, y) in enumerate(zip(a, b)):
+            _close(x, y, f"{where}/{i}")
+    elif isinstance(a, float) and isinstance(b, float):
+        assert (math.isnan(a) and math.isnan(b)) or a == b or abs(a - b) <= TOL, (where, a, b)
+    else:
+        assert a == b, (where, a, b)
+
+
+def _same(updated, fresh) -> None:
+    _close(updated.to_json_dict(), fresh.to_json_dict())
+    a, b = updated.curve, fresh.curve
+    for name in ("samples", "sample_edge", "sample_t", "sample_boundedness", "sample_centeredness_raw",
+                 "vertex_degree", "vertex_smoothness"):
+        np.testing.assert_allclose(getattr(a, name), getattr(b, name), rtol=0, atol=TOL, err_msg=name)
+    assert np.array_equal(a.curve.edges, b.curve.edges) and np.array_equal(a.curve.vertices, b.curve.vertices)
+    if fresh.skeletal is not None:
+        for name in ("boundedness", "centeredness_raw", "smoothness"):
+            np.testing.assert_allclose(getattr(updated.skeletal, name), getattr(fresh.skeletal, name), rtol=0,
+                                       atol=TOL, err_msg=name)
+
+
+@st.composite
+def _edit(draw, curve):
+    """One edit's (function name, arguments) for ``curve``; some are refused (then skipped)."""
+    op = draw(st.sampled_from(["delete_vertex", "delete_edge", "prune_branch", "add_vertex", "add_edge",
+                               "split_edge", "merge_vertices", "move_vertex", "cut_cycle"]))
+    v = draw(st.integers(0, curve.n_vertices - 1))
+    edge = tuple(int(x) for x in curve.edges[draw(st.integers(0, curve.n_edges - 1))])
+    offset = np.array(draw(st.tuples(*[st.floats(-0.2, 0.2)] * 3)))
+    if op in ("delete_vertex",):
+        return op, {"vertex": v}
+    if op in ("delete_edge", "cut_cycle", "split_edge"):
+        return op, ({"edge": edge, "t": draw(st.floats(0.1, 0.9))} if op == "split_edge" else {"edge": edge})
+    if op == "prune_branch":
+        return op, {"branch": draw(st.integers(0, 6))}
+    if op == "add_vertex":
+        return op, {"position": (curve.vertices[v] + offset).tolist(), "attach_to": v}
+    if op == "add_edge":
+        return op, {"edge": (v, draw(st.integers(0, curve.n_vertices - 1)))}
+    if op == "merge_vertices":
+        return op, {"keep": edge[0], "remove": edge[1]}
+    return op, {"vertex": v, "position": (curve.vertices[v] + offset).tolist()}
+
+
+@settings(max_examples=20, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(st.sampled_from(["y", "torus"]), st.data())
+def test_update_equals_a_fresh_evaluation(name, data):
+    cloud, skeletal, ev = _base(name)
+    curve, changes = ev.curve.curve, []
+    for _ in range(data.draw(st.integers(1, 4))):
+        op, args = data.draw(_edit(curve))
+        try:
+            curve, change = E.apply(curve, {"op": op, "args": args})
+        except SkelInputError:
+            continue
+        changes.append(change)
+        ev = ev.update(change)
+    fresh = evaluate(cloud, skeletal, curve)
+    _same(ev, fresh)
+
+
+def test_without_diagnostics_the_metrics_stay_exact_and_the_rest_is_named():
+    cloud, skeletal, ev = _base("y")
+    new, change = E.prune_branch(ev.curve.curve, 0)
+    quick = ev.update(change, diagnostics=False)
+    fresh = evaluate(cloud, skeletal, new)
+    for key in ("boundedness", "centeredness", "smoothness", "topology"):
+        _close(quick.summary()[key], fresh.summary()[key], key)
+    np.testing.assert_array_equal(quick.curve.sample_centeredness_raw, fresh.curve.sample_centeredness_raw)
+    assert quick.coverage_curve is None and set(quick.not_computed) >= {"curve coverage", "curve defects"}
+    assert quick.timings["update"] > 0
+
+
+def test_a_pickled_evaluation_evaluates_again_and_an_unkept_one_refuses():
+    cloud, skeletal, ev = _base("torus")
+    copy = pickle.loads(pickle.dumps(ev))
+    assert copy.source.ctx is None
+    new, change = E.delete_edge(ev.curve.curve, tuple(ev.curve.curve.edges[0]))
+    _same(copy.update(change), evaluate(cloud, skeletal, new))
+    copy.source = None
+    with pytest.raises(SkelInputError, match="keeps no record"):
+        copy.update(new)
+
+
+@pytest.mark.parametrize("options", [{"reference_curve": "self"}, {"remove_outliers": True},
+                                     {"correspondence": "reverse"}])
+def test_update_with_a_reference_a_scan_option_or_reverse_correspondence(options):
+    """The reference comparison is made again; a scan option or the curve's projections evaluate again."""
+    sh = shapes.y_shape(400, seed=3, n_curve_per_arm=6)
+    curve = (sh.curve_vertices, sh.curve_edges)
+    if options.get("reference_curve") == "self":
+        options = {"reference_curve": curve}
+    skeletal = None if options.get("correspondence") == "reverse" else sh.skeletal
+    ev = evaluate(sh.cloud, skeletal, curve, **options)
+    new, change = E.prune_branch(ev.curve.curve, 1)
+    _same(ev.update(change), evaluate(sh.cloud, skeletal, new, **options))
