@@ -63,34 +63,39 @@ def default_voxel_size(points: np.ndarray) -> float:
     return VOXEL_SIZE_FACTOR * float(np.median(d))
 
 
-def grid_shape(extent: np.ndarray, size: float, closing: int) -> np.ndarray:
-    """The grid :func:`voxelize_solid` makes for a cloud of bounding-box ``extent`` (max - min)."""
-    pad = closing + 2  # room for the dilation and a border of background around the shape
-    return np.floor(np.asarray(extent, dtype=float) / size + pad + 0.5).astype(np.int64) + pad + 1
+def _origin(lo: np.ndarray, size: float, closing: int) -> np.ndarray:
+    return np.asarray(lo, dtype=float) - (closing + 2) * size  # room for the dilation and a background border
 
 
-def _voxel_count(extent: np.ndarray, size: float, closing: int) -> float:
-    return float(np.prod(grid_shape(extent, size, closing).astype(np.float64)))
+def grid_shape(lo: np.ndarray, hi: np.ndarray, size: float, closing: int) -> np.ndarray:
+    """The grid :func:`voxelize_solid` makes for a cloud whose bounding box runs from ``lo`` to ``hi``."""
+    index = np.floor((np.asarray(hi, dtype=float) - _origin(lo, size, closing)) / size + 0.5).astype(np.int64)
+    return index + closing + 3  # the last point's voxel, the border beyond it and one for the count
 
 
-def fitting_voxel_size(extent: np.ndarray, size: float, closing: int, max_voxels: int) -> float:
+def _voxel_count(box: tuple[np.ndarray, np.ndarray], size: float, closing: int) -> float:
+    return float(np.prod(grid_shape(*box, size, closing).astype(np.float64)))
+
+
+def fitting_voxel_size(lo: np.ndarray, hi: np.ndarray, size: float, closing: int, max_voxels: int) -> float:
     """The smallest voxel size >= ``size`` whose grid (:func:`grid_shape`) has at most ``max_voxels``
     voxels (``size`` itself when it fits; bisection to float precision otherwise)."""
-    if _voxel_count(extent, size, closing) <= max_voxels:
+    box = (lo, hi)
+    if _voxel_count(box, size, closing) <= max_voxels:
         return float(size)
     floor = (2 * closing + 5) ** 3  # the grid of a shape much smaller than one voxel
     if floor > max_voxels:
         raise SkelInputError(f"max_voxels {max_voxels:,} is below the smallest grid with closing {closing} "
                              f"({floor:,} voxels): raise max_voxels")
-    lo, hi = float(size), float(size)
-    while _voxel_count(extent, hi, closing) > max_voxels:
-        lo, hi = hi, hi * 2
-    for _ in range(200):  # lo does not fit, hi does
-        mid = 0.5 * (lo + hi)
-        if not lo < mid < hi:
+    lo_size, hi_size = float(size), float(size)
+    while _voxel_count(box, hi_size, closing) > max_voxels:
+        lo_size, hi_size = hi_size, hi_size * 2
+    for _ in range(200):  # lo_size does not fit, hi_size does
+        mid = 0.5 * (lo_size + hi_size)
+        if not lo_size < mid < hi_size:
             break
-        lo, hi = (lo, mid) if _voxel_count(extent, mid, closing) <= max_voxels else (mid, hi)
-    return hi
+        lo_size, hi_size = (lo_size, mid) if _voxel_count(box, mid, closing) <= max_voxels else (mid, hi_size)
+    return hi_size
 
 
 def voxelize_solid(points: np.ndarray, size: float | None = None, *, closing: int = 2,
@@ -100,16 +105,15 @@ def voxelize_solid(points: np.ndarray, size: float | None = None, *, closing: in
     pts = np.asarray(points, dtype=float)
     if len(pts) < 4:
         raise SkelInputError(f"a voxel skeleton needs at least 4 points, got {len(pts)}")
-    extent = pts.max(axis=0) - pts.min(axis=0)
+    lo, hi = pts.min(axis=0), pts.max(axis=0)
     if size is None:
         h0 = default_voxel_size(pts)
-        h = fitting_voxel_size(extent, h0, closing, max_voxels)
+        h = fitting_voxel_size(lo, hi, h0, closing, max_voxels)
         source = "spacing" if h == h0 else "max_voxels"
     else:
         h, source = float(size), "given"
-    pad = closing + 2
-    origin = pts.min(axis=0) - pad * h
-    shape = grid_shape(extent, h, closing)
+    origin = _origin(lo, h, closing)
+    shape = grid_shape(lo, hi, h, closing)
     total = int(np.prod(shape.astype(np.float64)))
     if total > max_voxels:
         raise SkelInputError(f"voxel_size {h:.4g} gives a {shape[0]} x {shape[1]} x {shape[2]} grid "

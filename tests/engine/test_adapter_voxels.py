@@ -62,11 +62,11 @@ def test_the_default_size_is_the_smallest_that_fits_max_voxels():
     assert (fine.size, fine.source) == (h0, "spacing")
     limit = fine.solid.size // 3
     grid = voxelize_solid(cloud, max_voxels=limit)
-    extent = np.ptp(cloud, axis=0)
+    box = cloud.min(axis=0), cloud.max(axis=0)
     assert grid.source == "max_voxels" and grid.size > h0 and grid.solid.size <= limit
-    assert np.prod(grid_shape(extent, grid.size * (1 - 1e-9), 2)) > limit
-    assert fitting_voxel_size(extent, grid.size, 2, limit) == grid.size
-    assert fitting_voxel_size(extent, 2 * grid.size, 2, limit) == 2 * grid.size  # never below the floor given
+    assert np.prod(grid_shape(*box, grid.size * (1 - 1e-9), 2)) > limit
+    assert fitting_voxel_size(*box, grid.size, 2, limit) == grid.size
+    assert fitting_voxel_size(*box, 2 * grid.size, 2, limit) == 2 * grid.size  # never below the floor given
     assert voxelize_solid(cloud, grid.size, max_voxels=limit).source == "given"
     assert grid.info() == {"voxel_size": grid.size, "voxel_size_source": "max_voxels",
                            "grid": list(grid.solid.shape), "voxels": int(grid.solid.sum())}
