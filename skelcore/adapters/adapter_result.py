@@ -18,7 +18,8 @@ class AdapterResult:
     """``correspondence`` is what ``evaluate`` is to use: "auto" when ``skeletal`` has one row per
     cloud row (the tool's own map: scored pointwise), "reverse" when the tool maps nothing (each
     cloud point then goes to its nearest point of the curve; docs/metrics.md 5.1). ``info``: sizes
-    worth reporting."""
+    worth reporting (the voxel adapters: the voxel size used, ``voxel_size_source`` "given",
+    "spacing" or "max_voxels", the grid and its solid voxels)."""
 
     curve: CurveSkeleton
     skeletal: np.ndarray | None = None

@@ -51,4 +51,4 @@ def skeletonize(points: np.ndarray, params: dict[str, Any]) -> AdapterResult:
     radius = np.asarray(sk.radii, dtype=float) * grid.size if getattr(sk, "radii", None) is not None else None
     curve = CurveSkeleton.from_raw(grid.to_cloud_frame(sk.vertices), np.asarray(sk.edges, dtype=np.int64),
                                    radius=radius)
-    return AdapterResult(curve, None, "reverse", {"voxel_size": grid.size, "voxels": int(grid.solid.sum())})
+    return AdapterResult(curve, None, "reverse", grid.info())

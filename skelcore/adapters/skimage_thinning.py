@@ -33,4 +33,4 @@ def skeletonize(points: np.ndarray, params: dict[str, Any]) -> AdapterResult:
     if len(voxels) == 0:
         raise SkelInputError(f"scikit-image's thinning left no voxel of the {int(grid.solid.sum())}-voxel solid")
     curve = CurveSkeleton.from_raw(grid.to_cloud_frame(voxels), voxel_edges(voxels))
-    return AdapterResult(curve, None, "reverse", {"voxel_size": grid.size, "voxels": int(grid.solid.sum())})
+    return AdapterResult(curve, None, "reverse", grid.info())

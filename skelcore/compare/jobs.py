@@ -62,6 +62,7 @@ class JobOutput:
     timings: dict[str, float] = field(default_factory=dict)
     files: dict[str, str] = field(default_factory=dict)
     reference: CurveSkeleton | None = None  # the shape's ground-truth curve
+    adapter: dict[str, Any] = field(default_factory=dict)  # an adapter's report (its voxel size, say)
 
 
 _digests: dict[tuple[str, float, int], str] = {}
@@ -150,6 +151,7 @@ def execute(job: Job, workdir: str | None = None, *, prefix: str = "", write_clo
         io.write_points_ply(files["cloud"], pts, inputs=inputs)
     t0 = time.perf_counter()
     index = None
+    adapter_info: dict[str, Any] = {}
     correspondence = m.correspondence  # an adapter says what its skeletal set is unless the manifest does
     if m.kind == "builtin":
         skeletal, curve = run_builtin(pts, m, progress=part(0.0, 0.5), cancel=cancel)
@@ -167,7 +169,7 @@ def execute(job: Job, workdir: str | None = None, *, prefix: str = "", write_clo
     elif m.kind in ADAPTER_KINDS:
         if progress is not None:
             progress(0.0, m.kind)
-        skeletal, curve, own = run_adapter(pts, m, cancel=cancel)
+        skeletal, curve, own, adapter_info = run_adapter(pts, m, cancel=cancel)
         correspondence = correspondence or own
     else:
         skeletal, curve, index, paths = read_files(m, job.shape.name, job.condition.name, job.seed)
@@ -194,7 +196,7 @@ def execute(job: Job, workdir: str | None = None, *, prefix: str = "", write_clo
     ev = evaluate(pts, skeletal, curve, job.params, progress=part(0.5, 1.0), cancel=cancel,
                   inputs=inputs_doc, **kwargs)
     timings["evaluate"] = time.perf_counter() - t0
-    return JobOutput(pts, skeletal, curve, ev, timings, files, reference)
+    return JobOutput(pts, skeletal, curve, ev, timings, files, reference, adapter_info)
 
 
 # ---- the worker's entry point -------------------------------------------------------------------
@@ -250,6 +252,8 @@ def run_job(job: Job) -> dict[str, Any]:
         doc["inputs"]["cloud"]["path"] = job.shape.path
         rec.update(status="ok", evaluation=doc, timings=out.timings, n_points=int(len(out.points)),
                    label=job.condition.label(len(out.points)), arrays=_arrays(out.evaluation, out.reference))
+        if out.adapter:
+            rec["adapter"] = out.adapter
     except (SkelInputError, Cancelled) as exc:
         rec["error"] = one_line(exc)
     except MemoryError:

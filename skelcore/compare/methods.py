@@ -11,7 +11,7 @@ import signal
 import subprocess
 import tempfile
 import time
-from typing import Callable
+from typing import Any, Callable
 
 import numpy as np
 
@@ -120,10 +120,11 @@ def _run_process(args: list[str], label: str, *, timeout: float | None = None,
 
 
 def run_adapter(points: np.ndarray, spec: MethodSpec, *, cancel: Callable[[], bool] | None = None,
-                label: str | None = None) -> tuple[np.ndarray | None, CurveSkeleton, str]:
+                label: str | None = None) -> tuple[np.ndarray | None, CurveSkeleton, str, dict[str, Any]]:
     """Run a tool adapter (``spec.kind`` in :data:`skelcore.adapters.KINDS`) on ``points`` in a child
     process (``python -m skelcore.adapters.child``): a crash or a hang past ``spec.timeout`` fails
-    this job with one line, and the run goes on. Returns (skeletal, curve, correspondence)."""
+    this job with one line, and the run goes on. Returns (skeletal, curve, correspondence, info: what
+    the adapter reports, such as the voxel size it used)."""
     label = label or f"method {spec.name!r}: {spec.kind}"
     root = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))  # holds skelcore/
     env = dict(os.environ)  # the child imports this very skelcore, installed or not
@@ -140,7 +141,8 @@ def run_adapter(points: np.ndarray, spec: MethodSpec, *, cancel: Callable[[], bo
             curve = CurveSkeleton.from_raw(z["curve_vertices"], z["curve_edges"], radius=radius)
             skeletal = z["skeletal"] if "skeletal" in z.files else None
             correspondence = str(z["correspondence"])
-    return skeletal, curve, correspondence
+            info = json.loads(str(z["info"])) if "info" in z.files else {}
+    return skeletal, curve, correspondence, info
 
 
 def read_files(spec: MethodSpec, stem: str, condition: str, seed: int

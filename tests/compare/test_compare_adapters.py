@@ -81,6 +81,9 @@ def test_every_tool_job_finishes_with_its_correspondence(run_dir):
             assert ev.correspondence == "pointwise" and len(ev.skeletal.points) == len(ev.cloud)
         else:  # the voxel tools map no point: the cloud is projected onto their curve
             assert ev.correspondence == "reverse" and ev.curve is not None
+            report = run_dir.record(job)["adapter"]  # the voxel size used is in the job's record
+            assert report["voxel_size_source"] == "spacing" and report["voxel_size"] > 0
+            assert report["voxels"] > 0 and len(report["grid"]) == 3
 
 
 @pytest.mark.parametrize("method", ["kimi", "thin"])
@@ -202,6 +205,7 @@ def test_a_failing_or_hanging_tool_fails_its_job_and_the_others_go_on(tmp_path):
         name = "tiny_grid"
         kind = "skimage"
         [methods.params]
+        voxel_size = 0.05
         max_voxels = 100
         [[methods]]
         name = "thin"
@@ -212,7 +216,7 @@ def test_a_failing_or_hanging_tool_fails_its_job_and_the_others_go_on(tmp_path):
     assert rows["slow"]["status"] == "failed"
     assert rows["slow"]["error"] == "method 'slow': kimimaro timed out after 0.001 s and was killed"
     assert rows["tiny_grid"]["status"] == "failed" and rows["tiny_grid"]["error"].startswith(
-        "method 'tiny_grid': skimage: voxel_size ") and "> max_voxels 100" in rows["tiny_grid"]["error"]
+        "method 'tiny_grid': skimage: voxel_size 0.05 gives ") and "> max_voxels 100" in rows["tiny_grid"]["error"]
     assert rows["thin"]["status"] == "ok"
 
 

@@ -1,6 +1,6 @@
 """The voxel adapters' shared pieces: a cloud's solid volume (the frame map with the half-voxel right,
-the fill, the one-line refusals) and skeleton voxels as a graph, checked against a brute-force
-statement of the triangle rule."""
+the fill, the voxel size chosen to fit ``max_voxels``, the one-line refusals) and skeleton voxels as
+a graph, checked against a brute-force statement of the triangle rule."""
 
 from __future__ import annotations
 
@@ -11,7 +11,7 @@ import pytest
 
 from skelcore import shapes
 from skelcore.adapters.voxel_graph import voxel_edges
-from skelcore.adapters.voxelize import default_voxel_size, voxelize_solid
+from skelcore.adapters.voxelize import default_voxel_size, fitting_voxel_size, grid_shape, voxelize_solid
 from skelcore.errors import SkelInputError
 
 
@@ -42,12 +42,51 @@ def test_the_default_voxel_size_is_twice_the_median_spacing():
     assert default_voxel_size(cloud) == pytest.approx(2 * 0.75)  # nearest distances 1, 1, 0.5, 0.5
 
 
-def test_an_open_shell_and_a_huge_grid_are_one_line_refusals():
+def test_an_open_shell_and_a_huge_given_grid_are_one_line_refusals():
     cloud = shapes.cylinder(3000, seed=1).cloud
     with pytest.raises(SkelInputError, match=r"voxel shell does not close at voxel_size .* \(raise closing or voxel_size\)"):
         voxelize_solid(cloud, default_voxel_size(cloud) / 2, closing=0)
-    with pytest.raises(SkelInputError, match=r"> max_voxels 1,000\): give a larger voxel_size"):
-        voxelize_solid(cloud, max_voxels=1000)
+    with pytest.raises(SkelInputError, match=r"^voxel_size 0\.05 gives a \d+ x \d+ x \d+ grid \([\d,]+ voxels > "
+                                             r"max_voxels 1,000\): give a larger voxel_size$"):
+        voxelize_solid(cloud, 0.05, max_voxels=1000)
+    with pytest.raises(SkelInputError, match=r"^max_voxels 500 is below the smallest grid with closing 2 \(729 voxels\)"):
+        voxelize_solid(cloud, max_voxels=500)
+
+
+def test_the_default_size_is_the_smallest_that_fits_max_voxels():
+    """The spacing default when its grid fits; else raised just enough: the grid fits, a slightly
+    smaller size would not, and the grid says where the size came from."""
+    cloud = shapes.cylinder(3000, seed=1).cloud
+    h0 = default_voxel_size(cloud)
+    fine = voxelize_solid(cloud)
+    assert (fine.size, fine.source) == (h0, "spacing")
+    limit = fine.solid.size // 3
+    grid = voxelize_solid(cloud, max_voxels=limit)
+    box = cloud.min(axis=0), cloud.max(axis=0)
+    assert grid.source == "max_voxels" and grid.size > h0 and grid.solid.size <= limit
+    assert np.prod(grid_shape(*box, grid.size * (1 - 1e-9), 2)) > limit
+    assert fitting_voxel_size(*box, grid.size, 2, limit) == grid.size
+    assert fitting_voxel_size(*box, 2 * grid.size, 2, limit) == 2 * grid.size  # never below the floor given
+    assert voxelize_solid(cloud, grid.size, max_voxels=limit).source == "given"
+    assert grid.info() == {"voxel_size": grid.size, "voxel_size_source": "max_voxels",
+                           "grid": list(grid.solid.shape), "voxels": int(grid.solid.sum())}
+
+
+@pytest.mark.parametrize("kind", ["skimage", "kimimaro"])
+def test_a_voxel_adapter_chooses_a_fitting_size_and_reports_it(kind):
+    """A grid too large for ``max_voxels`` at the default size runs at the chosen size (in the
+    result's info); the same limit with an explicit smaller size still refuses."""
+    from skelcore.adapters import run
+
+    pytest.importorskip("skimage" if kind == "skimage" else "kimimaro")
+    cloud = shapes.cylinder(1500, seed=0).cloud
+    limit = voxelize_solid(cloud).solid.size // 2
+    res = run(kind, cloud, {"max_voxels": limit})
+    info = res.info
+    assert info["voxel_size_source"] == "max_voxels" and info["voxel_size"] > default_voxel_size(cloud)
+    assert np.prod(info["grid"]) <= limit and res.curve.n_edges > 0
+    with pytest.raises(SkelInputError, match=r"> max_voxels [\d,]+\): give a larger voxel_size$"):
+        run(kind, cloud, {"max_voxels": limit, "voxel_size": default_voxel_size(cloud)})
 
 
 def _brute_edges(vox: np.ndarray) -> set[tuple[int, int]]:
