@@ -16,7 +16,7 @@ from __future__ import annotations
 import os
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any, Callable
+from typing import Any, Callable, Sequence
 
 import numpy as np
 
@@ -150,13 +150,20 @@ def _rounded(x: Any) -> Any:
 
 
 def make_benchmark(folder: str | os.PathLike, suite: str = "default", seed: int = 0, *, force: bool = False,
-                   progress: Progress | None = None) -> BenchResult:
+                   progress: Progress | None = None, sizes: Sequence[int] | None = None) -> BenchResult:
     """Write suite ``suite`` drawn from ``seed`` into ``folder`` (module docstring); ``progress(i,
-    total, case, status)`` is called after each case, status "made" or "kept"."""
-    if suite not in ("default", "small"):
-        raise SkelInputError(f"unknown suite {suite!r} (default or small)")
+    total, case, status)`` is called after each case, status "made" or "kept". The real suites
+    ("real", "real-small": traced neurons, :mod:`.real_suite`) take ``sizes``, their clouds' sizes."""
+    from .real_suite import REAL_SUITES, make_real_benchmark
+
+    if suite not in ("default", "small", *REAL_SUITES):
+        raise SkelInputError(f"unknown suite {suite!r} (default, small, {', '.join(REAL_SUITES)})")
     if not isinstance(seed, int) or seed < 0:
         raise SkelInputError(f"seed must be a whole number >= 0, got {seed!r}")
+    if suite in REAL_SUITES:
+        return make_real_benchmark(Path(folder), suite, seed, sizes=sizes, force=force, progress=progress)
+    if sizes is not None:
+        raise SkelInputError(f"sizes apply to the real suites only, not to {suite!r}")
     cases = suite_cases(suite)
     folder = Path(folder)
     remake, ours = _claim(folder, suite, seed, force)

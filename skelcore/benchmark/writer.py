@@ -67,15 +67,18 @@ def _toml_string(text: str) -> str:
     return json.dumps(text)  # a JSON string of printable ASCII is a TOML basic string
 
 
-def write_manifest(folder: Path, records: list[dict[str, Any]], suite: str, seed: int) -> None:
+def write_manifest(folder: Path, records: list[dict[str, Any]], suite: str, seed: int,
+                   notes: list[str] | None = None) -> None:
     """``compare.toml``: the built-in skeletonizers (cao, skelscope) on every case, each case with its
-    reference curve and, for a one-sided scan, its viewpoints (the sensors the scan was made from)."""
+    reference curve, ``tree = true`` when its record says so and, for a one-sided scan, its viewpoints
+    (the sensors the scan was made from); ``notes``: comment lines replacing the generated shapes' note."""
     lines = [
         f"# skelcore compare manifest of the benchmark in this folder (suite {suite!r}, seed {seed}),",
         "# written by `skelcore bench make`:  skelcore compare compare.toml --out runs/compare",
-        "# Each shape is one case of suite.json: its cloud and its exact curve skeleton (reference, a PLY",
-        "# with a per-vertex radius). Cases of the plate are marked ill-posed there: a thin plate has no",
-        "# well-defined curve skeleton (its reference is only the rim's centre circle).",
+        *(notes if notes is not None else [
+            "# Each shape is one case of suite.json: its cloud and its exact curve skeleton (reference, a PLY",
+            "# with a per-vertex radius). Cases of the plate are marked ill-posed there: a thin plate has no",
+            "# well-defined curve skeleton (its reference is only the rim's centre circle)."]),
         "",
     ]
     for name, method in (("cao", "cao"), ("skelscope", "skelscope")):
@@ -83,6 +86,8 @@ def write_manifest(folder: Path, records: list[dict[str, Any]], suite: str, seed
     for rec in records:
         lines += ["[[shapes]]", f"name = {_toml_string(rec['name'])}", f"path = {_toml_string(rec['files']['cloud'])}",
                   'reference = "truth/{stem}_reference.ply"']
+        if rec.get("tree"):
+            lines.append("tree = true")
         eyes = (rec.get("scan") or {}).get("viewpoints")
         if eyes:  # a one-sided scan: compare scores it from its sensors (docs/metrics.md 6.3)
             lines.append("viewpoint = [" + ", ".join("[" + ", ".join(repr(float(x)) for x in e) + "]" for e in eyes) + "]")
