@@ -8,7 +8,8 @@ a mesh sample's is its nearest SWC node's): 14 cases per neuron and size. ``real
 neuron at 30k, clean (the tests). A case is ``{neuron}_{size}__clean`` or
 ``{neuron}_{size}__{effect}-{level}``, written in the layout of :mod:`.writer` (the reference is the
 SWC with its radii, vertex order kept) plus ``truth/{neuron}_gt_facts.csv``, the per-node facts of
-:func:`.neurons.node_facts`, one file per neuron. Seeds and resume work as for the generated suites.
+:func:`.neurons.node_facts`, one file per neuron. Seeds and resume work as for the generated suites
+(:func:`.generate.make_benchmark` makes both).
 """
 
 from __future__ import annotations
@@ -16,18 +17,16 @@ from __future__ import annotations
 import hashlib
 import zlib
 from pathlib import Path
-from typing import Any, Callable, Sequence
-
-import numpy as np
+from typing import Any, Sequence
 
 from ..errors import SkelInputError
-from ..version import __version__
 from .neurons import NEURON_DIR, NEURON_IDS, MeshSampler, Neuron, load_neuron, node_facts, write_facts_csv
-from .scan_effects import ScanEffects, scan
-from .suite import EFFECT_LEVELS, GENERATOR_VERSION, _label, rng_for
-from .writer import record_path, write_case_files, write_json, write_manifest
+from .scan_effects import ScanEffects
+from .suite import EFFECT_LEVELS, GENERATOR_VERSION, _label
+from .writer import facts_path
 
-__all__ = ["REAL_SUITES", "REAL_SIZES", "REAL_EFFECTS", "RealCase", "real_cases", "facts_path", "make_real_benchmark"]
+__all__ = ["REAL_SUITES", "REAL_SIZES", "REAL_EFFECTS", "REAL_VERSION", "RealCase", "real_cases", "NeuronCache",
+           "MANIFEST_NOTES"]
 
 REAL_SUITES = ("real", "real-small")
 #: the sizes of the real suite, in points (before one-sided views thin a scan, outliers added after)
@@ -37,7 +36,12 @@ REAL_EFFECTS = ("views", "noise", "nonuniform", "outliers")
 #: bumped whenever a change to the real suite changes its output for the same seed and files
 REAL_VERSION = 1
 
-Progress = Callable[[int, int, str, str], None]
+#: compare.toml's note on the real suites' references
+MANIFEST_NOTES = [
+    "# Each case is a traced neuron's mesh sampled (resources/neurons, CC BY 4.0); its reference is the",
+    "# proofread SWC skeleton with radii, not an exact medial axis: truth/{neuron}_gt_facts.csv says which",
+    "# nodes lie outside the decimated mesh (docs/benchmark.md, the real suite).",
+]
 
 
 class RealCase:
@@ -74,23 +78,23 @@ def real_cases(suite: str, sizes: Sequence[int] | None = None) -> list[RealCase]
     return cases
 
 
-def facts_path(folder: Path, neuron: str) -> Path:
-    return folder / "truth" / f"{neuron}_gt_facts.csv"
-
-
 def _digest(path: Path) -> str:
     return hashlib.sha256(path.read_bytes()).hexdigest()[:16]
 
 
-class _NeuronCache:
+class NeuronCache:
     """Each neuron's files, sampler and facts, loaded the first time a case needs them."""
 
-    def __init__(self, folder: Path, source: Path) -> None:
+    def __init__(self, folder: Path, source: Path = NEURON_DIR) -> None:
         self.folder, self.source = folder, source
         self._neurons: dict[str, tuple[Neuron, MeshSampler, dict[str, Any]]] = {}
+        self._digests: dict[str, dict[str, str]] = {}
 
     def digests(self, nid: str) -> dict[str, str]:
-        return {f"{nid}.{ext}": _digest(self.source / f"{nid}.{ext}") for ext in ("obj", "swc")}
+        """The neuron's two files by their SHA-256 (a case's spec: a changed file remakes its cases)."""
+        if nid not in self._digests:
+            self._digests[nid] = {f"{nid}.{ext}": _digest(self.source / f"{nid}.{ext}") for ext in ("obj", "swc")}
+        return self._digests[nid]
 
     def get(self, nid: str) -> tuple[Neuron, MeshSampler, dict[str, Any]]:
         if nid not in self._neurons:
@@ -100,67 +104,3 @@ class _NeuronCache:
             sampler = MeshSampler(neuron.mesh, neuron.skeleton.vertices, neuron.skeleton.radius)
             self._neurons[nid] = (neuron, sampler, facts.summary())
         return self._neurons[nid]
-
-
-def _make_case(folder: Path, case: RealCase, spec: dict[str, Any], cache: _NeuronCache) -> dict[str, Any]:
-    from .generate import _rounded, graph_summary
-
-    neuron, sampler, facts = cache.get(case.neuron)
-    result = scan(sampler, case.effects, rng_for(spec["scan_seed"]))
-    sk = neuron.skeleton
-    write_case_files(folder, case.name, result.cloud, sk.vertices, sk.edges, sk.radius)
-    record = {
-        "name": case.name, "shape": case.neuron, "family": "neuron", "effect": case.effect, "level": case.level,
-        "size": case.size, "curve_skeleton": "traced", "tree": True,
-        "files": {"cloud": f"clouds/{case.name}.ply", "reference": f"truth/{case.name}_reference.ply",
-                  "facts": f"truth/{case.neuron}_gt_facts.csv"},
-        "points": int(len(result.cloud)), "scan": _rounded(result.info),
-        "reference": {**graph_summary(sk.vertices, sk.edges, sk.radius),
-                      "note": "the proofread SWC skeleton (not an exact medial axis; nodes outside the decimated mesh: "
-                              "see gt_facts)"},
-        "gt_facts": facts, "spec": spec,
-    }
-    write_json(record_path(folder, case.name), record)
-    return record
-
-
-def make_real_benchmark(folder: Path, suite: str, seed: int, *, sizes: Sequence[int] | None = None,
-                        force: bool = False, progress: Progress | None = None, source: Path | None = None):
-    """Write real suite ``suite`` into ``folder`` as :func:`.generate.make_benchmark` writes the
-    generated ones (resumable; ``suite.json`` and ``compare.toml`` rewritten from the records)."""
-    from .generate import BenchResult, _claim, _finished, _remove_stale, _rounded
-
-    if sizes is not None and (not sizes or any(int(s) < 1000 for s in sizes)):
-        raise SkelInputError("sizes must be whole numbers of points >= 1000")
-    source = Path(source) if source is not None else NEURON_DIR
-    cases = real_cases(suite, sizes)
-    remake, ours = _claim(folder, suite, seed, force)
-    if remake and ours:
-        _remove_stale(folder, {c.name for c in cases})
-    (folder / "truth").mkdir(exist_ok=True)
-    cache = _NeuronCache(folder, source)
-    digests: dict[str, dict[str, str]] = {}
-    records, made = [], 0
-    for i, case in enumerate(cases, start=1):
-        if case.neuron not in digests:
-            digests[case.neuron] = cache.digests(case.neuron)
-        spec = _rounded(case.spec(seed, digests[case.neuron]))
-        rec = None if remake else _finished(folder, case, spec)  # type: ignore[arg-type]
-        if rec is not None and not facts_path(folder, case.neuron).is_file():
-            rec = None
-        status = "kept" if rec is not None else "made"
-        if rec is None:
-            rec = _make_case(folder, case, spec, cache)
-            made += 1
-        records.append(rec)
-        if progress is not None:
-            progress(i, len(cases), case.name, status)
-    doc = {"skelscope_bench": 1, "suite": suite, "seed": seed, "generator": GENERATOR_VERSION, "real": REAL_VERSION,
-           "skelcore": __version__, "sizes": sorted({c.size for c in cases}), "cases": records}
-    write_json(folder / "suite.json", doc)
-    write_manifest(folder, records, suite, seed, notes=[
-        "# Each case is a traced neuron's mesh sampled (resources/neurons, CC BY 4.0); its reference is the",
-        "# proofread SWC skeleton with radii, not an exact medial axis: truth/{neuron}_gt_facts.csv says which",
-        "# nodes lie outside the decimated mesh (docs/benchmark.md, the real suite).",
-    ])
-    return BenchResult(folder, suite, seed, made, len(cases) - made, records)

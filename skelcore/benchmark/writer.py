@@ -3,6 +3,8 @@
 - ``clouds/{case}.ply``: the cloud (binary PLY, double x y z);
 - ``truth/{case}_reference.ply``: its exact curve skeleton (PLY with an ``edge`` element and a
   per-vertex ``radius``), the file :mod:`.reference_ply` reads;
+- ``truth/{neuron}_gt_facts.csv`` (the real suites only): the traced skeleton's per-node facts
+  (:mod:`.neurons`; docs/benchmark.md, the real suite);
 - ``cases/{case}.json``: the case's record (its spec, seeds, counts), written last: a case whose
   record is there and matches its spec is finished (resume);
 - ``suite.json``: every case's record; ``compare.toml``: a manifest for ``skelcore compare`` running
@@ -24,7 +26,7 @@ import numpy as np
 from ..io import write_curve_ply, write_points_ply
 from ..io.atomic import atomic_open
 
-__all__ = ["cloud_path", "reference_path", "record_path", "write_case_files", "write_json",
+__all__ = ["cloud_path", "reference_path", "record_path", "facts_path", "write_case_files", "write_json",
            "write_manifest", "read_json"]
 
 def cloud_path(folder: Path, case: str) -> Path:
@@ -37,6 +39,10 @@ def reference_path(folder: Path, case: str) -> Path:
 
 def record_path(folder: Path, case: str) -> Path:
     return folder / "cases" / f"{case}.json"
+
+
+def facts_path(folder: Path, neuron: str) -> Path:
+    return folder / "truth" / f"{neuron}_gt_facts.csv"
 
 
 def write_case_files(folder: Path, case: str, cloud: np.ndarray, vertices: np.ndarray, edges: np.ndarray,
