@@ -35,7 +35,7 @@ NEURON_DIR = Path(__file__).resolve().parents[2] / "resources" / "neurons"
 NEURON_IDS = ("722817260", "754534424", "754538881", "1734350788", "1734350908")
 #: a twig: an SWC node of radius below this many units (8 nm voxels); most outside nodes are on twigs
 TWIG_RADIUS = 15.0
-_CHUNK = 1 << 21  # point x triangle pairs held at once by the winding number
+_CHUNK = 1 << 19  # point x triangle (or group) pairs held at once by the winding number (about 100 MB)
 
 
 @dataclass(frozen=True)
