@@ -93,6 +93,11 @@ class NeuronCache:
     def digests(self, nid: str) -> dict[str, str]:
         """The neuron's two files by their SHA-256 (a case's spec: a changed file remakes its cases)."""
         if nid not in self._digests:
+            for ext in ("obj", "swc"):
+                if not (self.source / f"{nid}.{ext}").is_file():
+                    raise SkelInputError("not found: the real suites read resources/neurons of SkelScope's source "
+                                         "tree (the sdist or a checkout; the wheel does not ship it)",
+                                         self.source / f"{nid}.{ext}")
             self._digests[nid] = {f"{nid}.{ext}": _digest(self.source / f"{nid}.{ext}") for ext in ("obj", "swc")}
         return self._digests[nid]
 
