@@ -121,12 +121,14 @@ def _clusters(tri: np.ndarray, size: int) -> tuple[np.ndarray, np.ndarray]:
     return np.argsort(code, kind="stable"), np.arange(0, len(tri), size)
 
 
-def winding_numbers(mesh: TriangleMesh, points: np.ndarray, *, far: float = 2.0, exact: bool = False, size: int = 8) -> np.ndarray:
+def winding_numbers(mesh: TriangleMesh, points: np.ndarray, *, far: float = 2.0, exact: bool = False,
+                    size: int = 8) -> np.ndarray:
     """The generalized winding number of the mesh at each point: the sum of the triangles' signed
     solid angles over 4 pi; about 1 inside, 0 outside, fractional near a hole. Fast (Barill et al.
-    2018, first order): triangles are grouped in runs of ``size`` along a Morton curve, and a group farther
-    than ``far`` times its radius from the point counts as one dipole (its area-weighted normal); the
-    others are summed exactly, in chunks of bounded size. ``exact``: every triangle exactly."""
+    2018, first order): triangles are grouped in runs of ``size`` along a Morton curve, and a group
+    farther than ``far`` times its radius from the point counts as one dipole (its area-weighted
+    normal); the others are summed exactly, in chunks of bounded size (docs/benchmark.md, the real
+    suite). ``exact``: every triangle exactly."""
     pts = np.asarray(points, float).reshape(-1, 3)
     tri = mesh.triangles()
     out = np.zeros(len(pts))
@@ -142,8 +144,9 @@ def winding_numbers(mesh: TriangleMesh, points: np.ndarray, *, far: float = 2.0,
         half_cross = np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0]) / 2.0
         area = np.linalg.norm(half_cross, axis=1)
         w_area = np.bincount(cluster, weights=area, minlength=len(starts))
-        centre = np.column_stack([np.bincount(cluster, weights=area * tri[:, :, i].mean(axis=1), minlength=len(starts))
-                                  for i in range(3)]) / np.maximum(w_area, 1e-300)[:, None]
+        centre = np.column_stack([np.bincount(cluster, weights=area * tri[:, :, i].mean(axis=1),
+                                              minlength=len(starts)) for i in range(3)])
+        centre /= np.maximum(w_area, 1e-300)[:, None]
         normal = np.column_stack([np.bincount(cluster, weights=half_cross[:, i], minlength=len(starts)) for i in range(3)])
         reach = np.zeros(len(starts))
         np.maximum.at(reach, cluster, np.linalg.norm(tri - centre[cluster][:, None, :], axis=2).max(axis=1))
