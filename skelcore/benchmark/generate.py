@@ -8,7 +8,8 @@ replaces files of the same names. A case is remade unless its record exists, mat
 spec and its two files are there, so an interrupted run resumes where it stopped. ``suite.json`` and
 ``compare.toml`` are rewritten at the end from the records. A crop case's reference is clipped to the
 kept half-space (the region scanned); every other case keeps the whole shape's skeleton (the object is
-all there, the scan misses some of it).
+all there, the scan misses some of it). The real suites (traced neurons, :mod:`.real_suite`) go the
+same way, their cases made by :func:`_make_real_case` from a mesh sampler and the SWC.
 """
 
 from __future__ import annotations
