@@ -149,7 +149,7 @@ def test_surface_distance_is_the_brute_force_minimum(neurons):
 def test_the_neurons_facts(neurons):
     """What docs/benchmark.md reports: 3 of 5 meshes closed (no boundary edge); about half the traced
     nodes outside their mesh, about four in five on twigs (radius < 15 units). Measured on every 10th
-    node (the full figures, in the facts files, are within two points of these)."""
+    node (the full figures, docs/benchmark.md, are within five points of these)."""
     closed = {nid: n.mesh.boundary_edges() == 0 for nid, n in neurons.items()}
     assert closed == {"722817260": True, "754534424": True, "754538881": False, "1734350788": False, "1734350908": True}
     assert neurons["754538881"].mesh.boundary_edges() == 23 and neurons["1734350788"].mesh.boundary_edges() == 33
