@@ -1,7 +1,8 @@
 """Benchmarks with ground truth: generated shapes with exact curve skeletons and radii
 (``families``, ``tubes``), uniform surface samples (``surface_sampling``), graded scan effects
 (``scan_effects``), the suites (``suite``), the folder's files (``writer``, ``reference_ply``) and
-``make_benchmark`` (``generate``), behind ``skelcore bench make DIR``."""
+``make_benchmark`` (``generate``), behind ``skelcore bench make DIR``; the traced neurons as real
+shapes with ground truth (``neurons``, ``real_suite``)."""
 
 from .families import FAMILIES, make_shape
 from .generate import BenchResult, make_benchmark

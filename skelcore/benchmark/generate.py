@@ -8,7 +8,8 @@ replaces files of the same names. A case is remade unless its record exists, mat
 spec and its two files are there, so an interrupted run resumes where it stopped. ``suite.json`` and
 ``compare.toml`` are rewritten at the end from the records. A crop case's reference is clipped to the
 kept half-space (the region scanned); every other case keeps the whole shape's skeleton (the object is
-all there, the scan misses some of it).
+all there, the scan misses some of it). The real suites (traced neurons, :mod:`.real_suite`) go the
+same way, their cases made by :func:`_make_real_case` from a mesh sampler and the SWC.
 """
 
 from __future__ import annotations
@@ -16,7 +17,7 @@ from __future__ import annotations
 import os
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any, Callable
+from typing import Any, Callable, Sequence
 
 import numpy as np
 
@@ -28,7 +29,9 @@ from .suite import GENERATOR_VERSION, Case, rng_for, suite_cases
 from .surface_sampling import SurfaceSampler
 from .tubes import BenchShape, reference_skeleton
 from ..compare.run_marker import claim_run_folder
-from .writer import cloud_path, read_json, record_path, reference_path, write_case_files, write_json, write_manifest
+from .real_suite import MANIFEST_NOTES, REAL_SUITES, REAL_VERSION, NeuronCache, RealCase, real_cases
+from .writer import (cloud_path, facts_path, read_json, record_path, reference_path, write_case_files, write_json,
+                     write_manifest)
 
 __all__ = ["BenchResult", "make_benchmark", "clip_curve", "graph_summary", "KIND"]
 
@@ -150,13 +153,18 @@ def _rounded(x: Any) -> Any:
 
 
 def make_benchmark(folder: str | os.PathLike, suite: str = "default", seed: int = 0, *, force: bool = False,
-                   progress: Progress | None = None) -> BenchResult:
+                   progress: Progress | None = None, sizes: Sequence[int] | None = None) -> BenchResult:
     """Write suite ``suite`` drawn from ``seed`` into ``folder`` (module docstring); ``progress(i,
-    total, case, status)`` is called after each case, status "made" or "kept"."""
-    if suite not in ("default", "small"):
-        raise SkelInputError(f"unknown suite {suite!r} (default or small)")
+    total, case, status)`` is called after each case, status "made" or "kept". The real suites
+    ("real", "real-small": traced neurons, :mod:`.real_suite`) take ``sizes``, their clouds' sizes."""
+    if suite not in ("default", "small", *REAL_SUITES):
+        raise SkelInputError(f"unknown suite {suite!r} (default, small, {', '.join(REAL_SUITES)})")
     if not isinstance(seed, int) or seed < 0:
         raise SkelInputError(f"seed must be a whole number >= 0, got {seed!r}")
+    if suite in REAL_SUITES:
+        return _make_real(Path(folder), suite, seed, sizes, force, progress)
+    if sizes is not None:
+        raise SkelInputError(f"sizes apply to the real suites only, not to {suite!r}")
     cases = suite_cases(suite)
     folder = Path(folder)
     remake, ours = _claim(folder, suite, seed, force)
@@ -183,3 +191,56 @@ def make_benchmark(folder: str | os.PathLike, suite: str = "default", seed: int 
     write_json(folder / "suite.json", doc)
     write_manifest(folder, records, suite, seed)
     return BenchResult(folder, suite, seed, made, len(cases) - made, records)
+
+
+def _make_real_case(folder: Path, case: RealCase, spec: dict[str, Any], cache: NeuronCache) -> dict[str, Any]:
+    """A real suite's case (:mod:`.real_suite`): the neuron's mesh scanned, its SWC as the reference."""
+    neuron, sampler, facts = cache.get(case.neuron)
+    result = scan(sampler, case.effects, rng_for(spec["scan_seed"]))
+    sk = neuron.skeleton
+    write_case_files(folder, case.name, result.cloud, sk.vertices, sk.edges, sk.radius)
+    record = {
+        "name": case.name, "shape": case.neuron, "family": "neuron", "effect": case.effect, "level": case.level,
+        "size": case.size, "curve_skeleton": "traced", "tree": True,
+        "files": {"cloud": f"clouds/{case.name}.ply", "reference": f"truth/{case.name}_reference.ply",
+                  "facts": f"truth/{case.neuron}_gt_facts.csv"},
+        "points": int(len(result.cloud)), "scan": _rounded(result.info),
+        "reference": {**graph_summary(sk.vertices, sk.edges, sk.radius),
+                      "note": "the proofread SWC skeleton (not an exact medial axis; nodes outside the decimated mesh: "
+                              "see gt_facts)"},
+        "gt_facts": facts, "spec": spec,
+    }
+    write_json(record_path(folder, case.name), record)
+    return record
+
+
+def _make_real(folder: Path, suite: str, seed: int, sizes: Sequence[int] | None, force: bool,
+               progress: Progress | None) -> BenchResult:
+    """``make_benchmark`` for the real suites: the same claim, resume and files (:mod:`.real_suite`)."""
+    if sizes is not None and (not sizes or any(int(s) < 1000 for s in sizes)):
+        raise SkelInputError("sizes must be whole numbers of points >= 1000")
+    cases = real_cases(suite, sizes)
+    remake, ours = _claim(folder, suite, seed, force)
+    if remake and ours:
+        _remove_stale(folder, {c.name for c in cases})
+    (folder / "truth").mkdir(exist_ok=True)
+    cache = NeuronCache(folder)
+    records, made = [], 0
+    for i, case in enumerate(cases, start=1):
+        spec = _rounded(case.spec(seed, cache.digests(case.neuron)))
+        rec = None if remake else _finished(folder, case, spec)  # type: ignore[arg-type]
+        if rec is not None and not facts_path(folder, case.neuron).is_file():
+            rec = None
+        status = "kept" if rec is not None else "made"
+        if rec is None:
+            rec = _make_real_case(folder, case, spec, cache)
+            made += 1
+        records.append(rec)
+        if progress is not None:
+            progress(i, len(cases), case.name, status)
+    doc = {"skelscope_bench": 1, "suite": suite, "seed": seed, "generator": GENERATOR_VERSION, "real": REAL_VERSION,
+           "skelcore": __version__, "sizes": sorted({c.size for c in cases}), "cases": records}
+    write_json(folder / "suite.json", doc)
+    write_manifest(folder, records, suite, seed, notes=MANIFEST_NOTES)
+    return BenchResult(folder, suite, seed, made, len(cases) - made, records)
+

@@ -3,6 +3,8 @@
 - ``clouds/{case}.ply``: the cloud (binary PLY, double x y z);
 - ``truth/{case}_reference.ply``: its exact curve skeleton (PLY with an ``edge`` element and a
   per-vertex ``radius``), the file :mod:`.reference_ply` reads;
+- ``truth/{neuron}_gt_facts.csv`` (the real suites only): the traced skeleton's per-node facts
+  (:mod:`.neurons`; docs/benchmark.md, the real suite);
 - ``cases/{case}.json``: the case's record (its spec, seeds, counts), written last: a case whose
   record is there and matches its spec is finished (resume);
 - ``suite.json``: every case's record; ``compare.toml``: a manifest for ``skelcore compare`` running
@@ -24,7 +26,7 @@ import numpy as np
 from ..io import write_curve_ply, write_points_ply
 from ..io.atomic import atomic_open
 
-__all__ = ["cloud_path", "reference_path", "record_path", "write_case_files", "write_json",
+__all__ = ["cloud_path", "reference_path", "record_path", "facts_path", "write_case_files", "write_json",
            "write_manifest", "read_json"]
 
 def cloud_path(folder: Path, case: str) -> Path:
@@ -37,6 +39,10 @@ def reference_path(folder: Path, case: str) -> Path:
 
 def record_path(folder: Path, case: str) -> Path:
     return folder / "cases" / f"{case}.json"
+
+
+def facts_path(folder: Path, neuron: str) -> Path:
+    return folder / "truth" / f"{neuron}_gt_facts.csv"
 
 
 def write_case_files(folder: Path, case: str, cloud: np.ndarray, vertices: np.ndarray, edges: np.ndarray,
@@ -67,15 +73,18 @@ def _toml_string(text: str) -> str:
     return json.dumps(text)  # a JSON string of printable ASCII is a TOML basic string
 
 
-def write_manifest(folder: Path, records: list[dict[str, Any]], suite: str, seed: int) -> None:
+def write_manifest(folder: Path, records: list[dict[str, Any]], suite: str, seed: int,
+                   notes: list[str] | None = None) -> None:
     """``compare.toml``: the built-in skeletonizers (cao, skelscope) on every case, each case with its
-    reference curve and, for a one-sided scan, its viewpoints (the sensors the scan was made from)."""
+    reference curve, ``tree = true`` when its record says so and, for a one-sided scan, its viewpoints
+    (the sensors the scan was made from); ``notes``: comment lines replacing the generated shapes' note."""
     lines = [
         f"# skelcore compare manifest of the benchmark in this folder (suite {suite!r}, seed {seed}),",
         "# written by `skelcore bench make`:  skelcore compare compare.toml --out runs/compare",
-        "# Each shape is one case of suite.json: its cloud and its exact curve skeleton (reference, a PLY",
-        "# with a per-vertex radius). Cases of the plate are marked ill-posed there: a thin plate has no",
-        "# well-defined curve skeleton (its reference is only the rim's centre circle).",
+        *(notes if notes is not None else [
+            "# Each shape is one case of suite.json: its cloud and its exact curve skeleton (reference, a PLY",
+            "# with a per-vertex radius). Cases of the plate are marked ill-posed there: a thin plate has no",
+            "# well-defined curve skeleton (its reference is only the rim's centre circle)."]),
         "",
     ]
     for name, method in (("cao", "cao"), ("skelscope", "skelscope")):
@@ -83,6 +92,8 @@ def write_manifest(folder: Path, records: list[dict[str, Any]], suite: str, seed
     for rec in records:
         lines += ["[[shapes]]", f"name = {_toml_string(rec['name'])}", f"path = {_toml_string(rec['files']['cloud'])}",
                   'reference = "truth/{stem}_reference.ply"']
+        if rec.get("tree"):
+            lines.append("tree = true")
         eyes = (rec.get("scan") or {}).get("viewpoints")
         if eyes:  # a one-sided scan: compare scores it from its sensors (docs/metrics.md 6.3)
             lines.append("viewpoint = [" + ", ".join("[" + ", ".join(repr(float(x)) for x in e) + "]" for e in eyes) + "]")
