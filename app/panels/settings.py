@@ -23,10 +23,7 @@ class ElidingComboBox(QtWidgets.QComboBox):
         painter = QtWidgets.QStylePainter(self)
         opt = QtWidgets.QStyleOptionComboBox()
         self.initStyleOption(opt)
-        field = self.style().subControlRect(QtWidgets.QStyle.ComplexControl.CC_ComboBox, opt,
-                                            QtWidgets.QStyle.SubControl.SC_ComboBoxEditField, self)
-        opt.currentText = self.fontMetrics().elidedText(opt.currentText, QtCore.Qt.TextElideMode.ElideRight,
-                                                        field.width())
+        opt.currentText = self.shown_text()
         painter.drawComplexControl(QtWidgets.QStyle.ComplexControl.CC_ComboBox, opt)
         painter.drawControl(QtWidgets.QStyle.ControlElement.CE_ComboBoxLabel, opt)
 

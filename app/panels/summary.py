@@ -132,6 +132,8 @@ def cloud_gap_values(evaluation: Any) -> tuple[np.ndarray, str] | None:
             top = float(np.nanmax(gap)) if np.isfinite(gap).any() else 0.0
             return (gap / top if top > 0 else np.where(np.isfinite(gap), 0.0, np.nan)), kind
     return None
+
+
 GAP_TIP = ("each cloud point's distance to the union of the skeleton's medial balls, / the largest gap "
            "(0 = covered); magenta where undefined")
 _GAP_OF = {"skeletal": "skeletal point set", "curve": "curve skeleton"}
