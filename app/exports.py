@@ -46,10 +46,12 @@ def with_thresholds(evaluation: Any, beta_star: float, c_star: float) -> Any:
 
 
 def export_coloured_ply(evaluation: Any, out_dir: str | os.PathLike, inputs: Iterable[str] = (),
-                        color_by: str = "centeredness", stem: str = "skelscope") -> list[str]:
+                        color_by: str = "centeredness", stem: str = "skelscope",
+                        mappings: dict[str, Any] | None = None) -> list[str]:
     """Skeletal points, curve vertices with edges and curve samples as coloured PLY, RGB by the metric
     on screen and one float property per local metric (``skelcore.io.export.export_ply``), named
-    ``<stem>_skeletal.ply``, ``<stem>_curve.ply``, ``<stem>_curve_samples.ply``.
+    ``<stem>_skeletal.ply``, ``<stem>_curve.ply``, ``<stem>_curve_samples.ply``. ``mappings``: each
+    skeleton layer's ``(scale, offset)`` into the cloud's frame (``Layer.mapping``), said in the header.
 
     skelcore writes fixed names into a folder: they are written into a private folder beside the
     targets, then each renamed into place (atomic); a loaded input is never a target."""
@@ -67,7 +69,7 @@ def export_coloured_ply(evaluation: Any, out_dir: str | os.PathLike, inputs: Ite
     os.makedirs(str(out_dir), exist_ok=True)
     staging = tempfile.mkdtemp(prefix=".skelscope-export-", dir=str(out_dir))
     try:
-        written = export_ply(evaluation, staging, inputs=tuple(inputs), color_by=color_by)
+        written = export_ply(evaluation, staging, inputs=tuple(inputs), color_by=color_by, mappings=mappings)
         by_part = {os.path.splitext(os.path.basename(str(p)))[0]: str(p) for p in written}
         out = []
         for target in targets:

@@ -640,7 +640,11 @@ class MainWindow(QtWidgets.QMainWindow):
             raise ValueError("nothing to export: run an evaluation first")
         names = ply_export_names(ev, out_dir, self.export_stem())
         _refuse_existing(names, overwrite)
-        return export_coloured_ply(ev, out_dir, self.input_files(), color_by=self.scene.metric, stem=self.export_stem())
+        # the map of the skeleton layers the shown result was evaluated from (said in the files' header)
+        evaluated = self.session._evaluated_layers or (None, self.scene.skeletal, self.scene.curve)
+        mappings = {role: getattr(layer, "mapping", None) for role, layer in zip(("skeletal", "curve"), evaluated[1:])}
+        return export_coloured_ply(ev, out_dir, self.input_files(), color_by=self.scene.metric, stem=self.export_stem(),
+                                   mappings=mappings)
 
     def export_results(self, prefix: str, overwrite: bool = False) -> list[str]:
         ev = self._shown_evaluation()

@@ -4,13 +4,16 @@ threshold" box hides (and makes unpickable) every element whose value passes (be
 NaN stays shown).
 
 Supports of clouds of BACKGROUND_POINTS or more are computed in a thread of their own (a direction map
-of a 100k-point cloud takes seconds), the newest pick winning. Made by :class:`skelscope.main_window.MainWindow`
+of a 100k-point cloud takes seconds), the newest pick winning: a new pick, a new result and quitting
+stop the computation still running (:class:`_Job`), which would otherwise share the cores and the
+interpreter with the new one until its end. Made by :class:`skelscope.main_window.MainWindow`
 through its public interface (:class:`skelscope.window_api.WindowApi`): it listens to ``element_picked`` and
 subscribes to the scene after the view, so its overlay and filter are applied after the view's redraw.
 """
 
 from __future__ import annotations
 
+import ctypes
 import threading
 from typing import Any
 
@@ -27,7 +30,7 @@ from .view.style import MAGENTA
 from .view.support_overlay import SupportOverlay
 from .window_api import LEFT, WindowApi
 
-__all__ = ["SupportController", "below_threshold"]
+__all__ = ["SupportController", "SupportCancelled", "below_threshold"]
 
 # scene-view actor -> (layer, quantity location) the filter replaces
 _FILTERED = {"skeletal": ("skeletal", "points"), "curve-samples": ("curve", "samples"),
@@ -41,6 +44,51 @@ def below_threshold(values: np.ndarray, threshold: float) -> np.ndarray:
 
 
 BACKGROUND_POINTS = 20_000
+
+
+class SupportCancelled(BaseException):
+    """Raised inside a support computation that a newer pick (or a new result, or quitting) replaced (not
+    an Exception: no handler in the engine swallows it)."""
+
+
+class _Job:
+    """One support computed in a daemon thread; :meth:`cancel` stops it at the thread's next Python
+    step (the engine's support functions take no cancel callback: their numpy calls each last well under
+    a second even on a million points, so the exception raised into the thread lands within one)."""
+
+    def __init__(self, compute: Any, deliver: Any) -> None:
+        self._compute, self._deliver = compute, deliver
+        self._lock = threading.Lock()
+        self._computing = True
+        self.cancelled = False
+        self.thread = threading.Thread(target=self._run, name="skelscope-support", daemon=True)
+
+    def start(self) -> None:
+        self.thread.start()
+
+    def cancel(self) -> None:
+        with self._lock:
+            self.cancelled = True
+            if self._computing and self.thread.ident is not None and self.thread.is_alive():
+                ctypes.pythonapi.PyThreadState_SetAsyncExc(ctypes.c_ulong(self.thread.ident),
+                                                           ctypes.py_object(SupportCancelled))
+
+    def _run(self) -> None:
+        try:
+            try:
+                out: Any = self._compute()
+            except SupportCancelled:
+                raise
+            except Exception as exc:  # noqa: BLE001 - reported in the status bar, never a crash
+                out = exc
+            with self._lock:
+                self._computing = False
+            if not self.cancelled:
+                self._deliver(out)
+        except SupportCancelled:
+            pass  # replaced: nothing to deliver
+        except RuntimeError:  # the window closed meanwhile
+            pass
 
 
 class SupportController(QtCore.QObject):
@@ -65,9 +113,11 @@ class SupportController(QtCore.QObject):
         window.add_display_option(self.filter_box)
         self.background_points = BACKGROUND_POINTS
         self._token = 0
+        self._job: _Job | None = None
         self.busy = False
         self.ready.connect(self._ready)
         window.element_picked.connect(self.show_element)
+        window.closing.connect(self.cancel)
         self.scene.subscribe(self._on_scene)
         self._sync_filter_box()
 
@@ -77,6 +127,7 @@ class SupportController(QtCore.QObject):
         big cloud in a thread, shown when done (returns None meanwhile)."""
         self.info = info
         self._token += 1
+        self.cancel()
         ev, metric = self.scene.evaluation, self.scene.metric
         if ev is None or info is None or len(ev.cloud) < self.background_points:
             try:
@@ -90,19 +141,15 @@ class SupportController(QtCore.QObject):
         self.panel.show_support(ElementSupport("none", info.get("element", ""), int(info["index"]), metric,
                                                reason=f"computing the {metric} support…"))
         token = self._token
-
-        def run() -> None:
-            try:
-                out: Any = element_support(ev, info, metric)
-            except Exception as exc:  # noqa: BLE001 - reported in the status bar, never a crash
-                out = exc
-            try:
-                self.ready.emit(token, info, out)
-            except RuntimeError:  # the window closed meanwhile
-                pass
-
-        threading.Thread(target=run, name="skelscope-support", daemon=True).start()
+        self._job = _Job(lambda: element_support(ev, info, metric), lambda out: self.ready.emit(token, info, out))
+        self._job.start()
         return None
+
+    def cancel(self) -> None:
+        """Stop the support still computing, if any (its result would be dropped anyway)."""
+        job, self._job = self._job, None
+        if job is not None:
+            job.cancel()
 
     def _ready(self, token: int, info: Any, support: Any) -> None:
         if token != self._token:
@@ -120,6 +167,7 @@ class SupportController(QtCore.QObject):
         if event.kind in ("layer", "quantities"):
             self.info = None
             self._token += 1  # a support still computing describes the old result
+            self.cancel()
             self.busy = False
             self.overlay.clear()
             if self.support is not None:

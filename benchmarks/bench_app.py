@@ -74,3 +74,37 @@ def test_viewer_start_up(measure, benchmark, display, tmp_path, n):
     assert int(points) == n and render != "inf"
     benchmark.extra_info.update(n_points=n, display=display, imported_s=float(imported), window_s=float(window),
                                 loaded_s=float(loaded), first_frame_s=float(render))
+
+
+@pytest.mark.parametrize("n", [100_000, pytest.param(1_000_000, marks=pytest.mark.large)])
+def test_viewer_stale_support_stops(measure, benchmark, n):
+    """A pick's support still computing when a newer pick replaces it (the boundedness direction map of
+    a point inside a sphere of ``n`` points, seconds on a million): from the cancel to the end of its
+    thread, which until then shares the cores and the interpreter with the new pick's support."""
+    pytest.importorskip("PySide6")
+    from skelcore import shapes
+    from skelcore.metrics.supports import direction_map
+    from skelcore.params import Params
+    from skelscope.support_controller import _Job
+
+    cloud = shapes.sphere_surface(n, seed=0)
+    centre = cloud.mean(axis=0)
+    params = Params()
+    delivered: list[object] = []
+    t0 = time.perf_counter()
+    direction_map(cloud, centre, params=params)
+    whole = time.perf_counter() - t0
+
+    def start():
+        job = _Job(lambda: direction_map(cloud, centre, params=params), delivered.append)
+        job.start()
+        time.sleep(min(0.2, whole / 4))  # well inside the computation
+        return (job,), {}
+
+    def cancel(job):
+        job.cancel()
+        job.thread.join()
+
+    measure(cancel, rounds=5, setup=start)
+    assert delivered == []  # no stale result
+    benchmark.extra_info.update(n_points=n, whole_support_s=round(whole, 3))

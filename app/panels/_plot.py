@@ -39,7 +39,9 @@ class PlotPanel(QtWidgets.QWidget):
         self._layout = QtWidgets.QVBoxLayout(self)
         self._layout.setContentsMargins(2, 2, 2, 2)
         self._hint = QtWidgets.QLabel(hint, self)
-        self._hint.setAlignment(QtCore.Qt.AlignmentFlag.AlignCenter)
+        # at the top, a little down: a dock shorter than the plot (a small screen) shows its top
+        self._hint.setAlignment(QtCore.Qt.AlignmentFlag.AlignHCenter | QtCore.Qt.AlignmentFlag.AlignTop)
+        self._hint.setContentsMargins(0, 24, 0, 0)
         self._hint.setStyleSheet("color: grey")
         self._hint.setMinimumHeight(min_height)
         self._layout.addWidget(self._hint)

@@ -28,6 +28,8 @@ _HINT = "H0 barcodes appear here after an evaluation\nwith a skeletal point set"
 MARGINS_PX = {"left": 46, "right": 16, "top": 30, "bottom": 36}
 """Room around the two axes, in device-independent pixels: y labels, the last x tick label's right half,
 title, x labels."""
+TITLE_MARGIN_PX = 6  # the title's least distance from either edge (else it goes on two lines)
+TITLE_LINE_PX = 14  # the top margin's growth for a title on two lines
 TICK_SPACING_PX = 52  # at least this much width per persistence tick label
 
 
@@ -68,9 +70,11 @@ class BarcodePanel(PlotPanel):
         fig = self.figure
         ratio = float(getattr(self.canvas, "device_pixel_ratio", 1.0) or 1.0)  # Qt's scale factor: text grows too
         w, h = fig.bbox.width / ratio, fig.bbox.height / ratio  # device-independent pixels
-        m = MARGINS_PX
+        m = dict(MARGINS_PX)
         if w < 4 * (m["left"] + m["right"]) / 3 or h < 2 * (m["top"] + m["bottom"]):
             return  # not laid out yet (or absurdly small): keep the previous margins
+        if self._wrap_title(w, ratio):
+            m["top"] += TITLE_LINE_PX
         self._bar_axes[0].get_gridspec().update(left=m["left"] / w, right=1 - m["right"] / w,
                                                 top=1 - m["top"] / h, bottom=m["bottom"] / h)
         for ax in self._bar_axes:  # GridSpec.update moves the axes of pyplot's figures only
@@ -118,6 +122,8 @@ class BarcodePanel(PlotPanel):
         self._empty.set_visible(topology is None)
         if topology is None:
             self._title.set_text("")
+            self._title_lines = None
+            self.fit_margins()
             self.request_draw()
             return
         k = int(topology.n_bars)
@@ -141,8 +147,23 @@ class BarcodePanel(PlotPanel):
             ax.set_ylabel(f"{name}\n({len(bars)} bars)", fontsize=8)
         axes[0].legend(loc="lower right", fontsize=7, frameon=False)
         axes[1].set_xlim(0, x_end * 1.03)
-        self._title.set_text(f"H0, K = {k}:  d_B = {_fmt(topology.bottleneck)},  d_Wp = {_fmt(topology.wasserstein)}")
+        self._title_lines = (f"H0, K = {k}:", f"d_B = {_fmt(topology.bottleneck)},  d_Wp = {_fmt(topology.wasserstein)}")
+        self._title.set_text("  ".join(self._title_lines))
+        self.fit_margins()  # on two lines if the panel is too narrow for one
         self.request_draw()
+
+    def _wrap_title(self, width: float, ratio: float) -> bool:
+        """The title on one line if it fits ``width`` (device-independent pixels) with a margin on each
+        side, else on two (K, then the distances); whether it is on two."""
+        lines = getattr(self, "_title_lines", None)
+        if not lines or not self._title.get_text():
+            return False
+        self._title.set_text("  ".join(lines))
+        one = self._title.get_window_extent(renderer=self.canvas.get_renderer()).width / ratio
+        if one <= width - 2 * TITLE_MARGIN_PX:
+            return False
+        self._title.set_text("\n".join(lines))
+        return True
 
     def _draw_stages(self) -> list[list[Any]] | None:
         """The cloud's diagram, then the skeletal points' (~20-30 ms each in Agg): two event-loop

@@ -32,8 +32,11 @@ class DisplayPanel(QtWidgets.QWidget):
         self.fit_range = QtWidgets.QPushButton("fit", self)
         self.fit_range.setToolTip("fit the colour range to the shown values")
         self.fit_range.clicked.connect(self._fit_range)
+        # as narrow as its word (a push button's least width is wider): the range row fits a narrow dock
+        self.fit_range.setMaximumWidth(self.fit_range.fontMetrics().horizontalAdvance(" fit ") + 14)
         self.auto_range.toggled.connect(self._range_changed)
         range_row = QtWidgets.QHBoxLayout()
+        range_row.setSpacing(3)
         for w in (self.auto_range, self.vmin, self.vmax, self.fit_range):
             range_row.addWidget(w)
         self.tubes = QtWidgets.QCheckBox("edges as tubes (T)", self)
@@ -46,6 +49,7 @@ class DisplayPanel(QtWidgets.QWidget):
             self.style[name] = box
 
         grid = QtWidgets.QGridLayout()
+        grid.setHorizontalSpacing(4)  # the rows fit a narrow dock
         grid.addWidget(QtWidgets.QLabel("layer"), 0, 0)
         grid.addWidget(QtWidgets.QLabel("size"), 0, 1)
         grid.addWidget(QtWidgets.QLabel("opacity"), 0, 2)
@@ -80,6 +84,7 @@ class DisplayPanel(QtWidgets.QWidget):
         self.swap.clicked.connect(lambda: self.layer_action.emit("swap", ""))
 
         form = QtWidgets.QFormLayout()
+        form.setRowWrapPolicy(QtWidgets.QFormLayout.RowWrapPolicy.WrapLongRows)  # a narrow dock: rows wrap
         form.addRow("colour by", self.metric_box)
         form.addRow("range", range_row)
         layout = QtWidgets.QVBoxLayout(self)
@@ -108,7 +113,7 @@ class DisplayPanel(QtWidgets.QWidget):
         spin.setSingleStep(0.05)
         spin.setValue(value)
         spin.setKeyboardTracking(False)
-        spin.setMaximumWidth(72)
+        spin.setMaximumWidth(self.fontMetrics().horizontalAdvance("0.000") + 26)  # "0.000" and the arrows
         spin.valueChanged.connect(self._range_changed)
         return spin
 

@@ -5,7 +5,7 @@ which the ``open_surface`` and ``outliers`` warnings name."""
 
 from __future__ import annotations
 
-from PySide6 import QtCore, QtWidgets
+from PySide6 import QtCore, QtGui, QtWidgets
 
 from skelcore.params import Params
 
@@ -16,16 +16,53 @@ CORRESPONDENCE_CHOICES = (
 )
 
 
+class ElidingComboBox(QtWidgets.QComboBox):
+    """A combo box that ends its text with "…" when it is narrower than its text (a plain one cuts it)."""
+
+    def paintEvent(self, event: QtGui.QPaintEvent) -> None:  # noqa: N802
+        painter = QtWidgets.QStylePainter(self)
+        opt = QtWidgets.QStyleOptionComboBox()
+        self.initStyleOption(opt)
+        opt.currentText = self.shown_text()
+        painter.drawComplexControl(QtWidgets.QStyle.ComplexControl.CC_ComboBox, opt)
+        painter.drawControl(QtWidgets.QStyle.ControlElement.CE_ComboBoxLabel, opt)
+
+    def shown_text(self) -> str:
+        """The text as drawn (elided to the edit field's width)."""
+        opt = QtWidgets.QStyleOptionComboBox()
+        self.initStyleOption(opt)
+        field = self.style().subControlRect(QtWidgets.QStyle.ComplexControl.CC_ComboBox, opt,
+                                            QtWidgets.QStyle.SubControl.SC_ComboBoxEditField, self)
+        return self.fontMetrics().elidedText(self.currentText(), QtCore.Qt.TextElideMode.ElideRight, field.width())
+
+
+def fit_combo(combo: QtWidgets.QComboBox, least: int = 10) -> None:
+    """Let ``combo`` narrow to ``least`` characters (an :class:`ElidingComboBox` then elides its text)
+    and give each choice's full text in its tooltip (the combo's own tooltip starts with the current
+    choice)."""
+    combo.setSizeAdjustPolicy(QtWidgets.QComboBox.SizeAdjustPolicy.AdjustToMinimumContentsLengthWithIcon)
+    combo.setMinimumContentsLength(least)
+    base = combo.toolTip()
+    for i in range(combo.count()):
+        combo.setItemData(i, combo.itemText(i), QtCore.Qt.ItemDataRole.ToolTipRole)
+
+    def tip(text: str) -> None:
+        combo.setToolTip(f"{text}: {base}" if base else text)
+
+    combo.currentTextChanged.connect(tip)
+    tip(combo.currentText())
+
+
 class SettingsPanel(QtWidgets.QWidget):
     changed = QtCore.Signal()
 
     def __init__(self, parent: QtWidgets.QWidget | None = None) -> None:
         super().__init__(parent)
         d = Params()
-        self.boundedness_method = QtWidgets.QComboBox(self)
+        self.boundedness_method = ElidingComboBox(self)
         self.boundedness_method.addItems(["rays", "paper"])
         self.boundedness_method.setToolTip("docs/metrics.md 2: 'rays' (rotation invariant) or 'paper' (the reference tool)")
-        self.normalize_by = QtWidgets.QComboBox(self)
+        self.normalize_by = ElidingComboBox(self)
         self.normalize_by.addItems(["longest_side", "diagonal"])
         self.normalize_by.setToolTip("docs/metrics.md 0: the bounding-box measure scaled to 1.6")
         self.k_center = self._int(0, 10000, 0, "neighbours for skeletal centeredness; 0 = auto (docs/metrics.md 3)")
@@ -39,7 +76,7 @@ class SettingsPanel(QtWidgets.QWidget):
         self.eps_quantile.setSingleStep(0.01)
         self.eps_quantile.setValue(d.eps_quantile)
         self.eps_quantile.setToolTip("docs/metrics.md 1: quantile of nearest-neighbour distances giving eps*")
-        self.correspondence_choice = QtWidgets.QComboBox(self)
+        self.correspondence_choice = ElidingComboBox(self)
         for text, key in CORRESPONDENCE_CHOICES:
             self.correspondence_choice.addItem(text, key)
         self.correspondence_choice.setToolTip(
@@ -58,6 +95,10 @@ class SettingsPanel(QtWidgets.QWidget):
             "docs/metrics.md 6.2: close the cloud's small flat openings with points on their planes for "
             "boundedness, as the paper did for its cave (the open_surface warning)")
         form = QtWidgets.QFormLayout(self)
+        # a narrow dock (a small screen, a large scale factor): each value under its label, never cut off
+        form.setRowWrapPolicy(QtWidgets.QFormLayout.RowWrapPolicy.WrapLongRows)
+        for combo in (self.correspondence_choice, self.boundedness_method, self.normalize_by):
+            fit_combo(combo)
         form.addRow("correspondence", self.correspondence_choice)
         form.addRow("boundedness estimator", self.boundedness_method)
         form.addRow("normalization", self.normalize_by)

@@ -38,6 +38,16 @@ def summary_cells(summary: Scores | dict[str, Any] | None, evaluation: Any = Non
     return cells
 
 
+def cell_lines(text: str) -> str:
+    """A cell as the panel shows it: the value, then its count on a line of its own that breaks only
+    between its parts ("1.000  (n = 4000)" -> "1.000" / "(n = 4000)"), so that a narrow column wraps
+    where it reads well."""
+    value, sep, rest = text.partition("  (")
+    if not sep:
+        return text
+    return value + "\n(" + rest.replace(" = ", "\u202f=\u202f")
+
+
 def window_warning(w: Any) -> str:
     """A trust warning in the window's terms: its finding and the menu or setting that remedies it
     (the engine's message names the command line's flags)."""
@@ -122,6 +132,11 @@ def cloud_gap_values(evaluation: Any) -> tuple[np.ndarray, str] | None:
             top = float(np.nanmax(gap)) if np.isfinite(gap).any() else 0.0
             return (gap / top if top > 0 else np.where(np.isfinite(gap), 0.0, np.nan)), kind
     return None
+
+
+GAP_TIP = ("each cloud point's distance to the union of the skeleton's medial balls, / the largest gap "
+           "(0 = covered); magenta where undefined")
+_GAP_OF = {"skeletal": "skeletal point set", "curve": "curve skeleton"}
 NO_RESULT = "No evaluation yet: load a cloud and a skeleton, then Evaluate (F5)."
 
 
@@ -134,7 +149,7 @@ class SummaryPanel(QtWidgets.QWidget):
     def __init__(self, parent: QtWidgets.QWidget | None = None) -> None:
         super().__init__(parent)
         self.table = QtWidgets.QTableWidget(len(ROWS), len(COLUMNS), self)
-        self.table.setHorizontalHeaderLabels(list(COLUMNS))
+        self.table.setHorizontalHeaderLabels([c.replace(" ", "\n") for c in COLUMNS])  # narrow columns
         self.table.setVerticalHeaderLabels(list(ROWS))
         self.table.setEditTriggers(QtWidgets.QAbstractItemView.EditTrigger.NoEditTriggers)
         self.table.horizontalHeader().setSectionResizeMode(QtWidgets.QHeaderView.ResizeMode.Stretch)
@@ -147,11 +162,8 @@ class SummaryPanel(QtWidgets.QWidget):
         self.details = QtWidgets.QLabel(NO_RESULT)
         self.details.setWordWrap(True)
         self.details.setTextInteractionFlags(QtCore.Qt.TextInteractionFlag.TextSelectableByMouse)
-        self.cloud_by_gap = QtWidgets.QCheckBox("colour the cloud by its coverage gap", self)
-        self.cloud_by_gap.setToolTip(
-            "each cloud point's distance to the union of the skeleton's medial balls, / the largest gap "
-            "(0 = covered); magenta where undefined"
-        )
+        self.cloud_by_gap = QtWidgets.QCheckBox("colour the cloud by coverage gap", self)
+        self.cloud_by_gap.setToolTip(GAP_TIP)
         self.cloud_by_gap.setEnabled(False)
         self.cloud_by_gap.toggled.connect(self._emit_cloud_colouring)
         self._evaluation: Any = None
@@ -198,14 +210,17 @@ class SummaryPanel(QtWidgets.QWidget):
     def show_summary(self, summary: dict[str, Any] | None, evaluation: Any = None) -> None:
         for r, row in enumerate(summary_cells(summary, evaluation)):
             for c, text in enumerate(row):
-                item = QtWidgets.QTableWidgetItem(text)
+                item = QtWidgets.QTableWidgetItem(cell_lines(text))
+                item.setData(QtCore.Qt.ItemDataRole.UserRole, text)
+                item.setToolTip(text)
                 item.setTextAlignment(QtCore.Qt.AlignmentFlag.AlignCenter)
                 self.table.setItem(r, c, item)
         self._evaluation = evaluation
         gap = cloud_gap_values(evaluation)
         self.cloud_by_gap.setEnabled(gap is not None)
         if gap is not None:
-            self.cloud_by_gap.setText(f"colour the cloud by its coverage gap ({gap[1]})")
+            # which skeleton's gap in the tooltip: the box's text stays short enough for a narrow dock
+            self.cloud_by_gap.setToolTip(f"{GAP_TIP} (the {_GAP_OF[gap[1]]}'s balls)")
         self._emit_cloud_colouring()
         self._grey(bool(self.stale))
         if summary is None or evaluation is None:
@@ -262,4 +277,4 @@ class SummaryPanel(QtWidgets.QWidget):
 
     def cell_text(self, row: str, column: str) -> str:
         item = self.table.item(ROWS.index(row), COLUMNS.index(column))
-        return "" if item is None else item.text()
+        return "" if item is None else str(item.data(QtCore.Qt.ItemDataRole.UserRole))

@@ -52,7 +52,8 @@ class SupportPanel(PlotPanel):
         if support is None or (support.kind == "none") or (support.reason and support.detail is None):
             ax.set_axis_off()
             text = "pick a skeletal point or a curve sample" if support is None else support.reason
-            ax.text(0.5, 0.5, text, ha="center", va="center", wrap=True, transform=ax.transAxes, color="0.35",
+            # at the top: a dock shorter than the plot (a small screen) shows its top, not its middle
+            ax.text(0.5, 1.0, text, ha="center", va="top", wrap=True, transform=ax.transAxes, color="0.35",
                     fontsize=8)
             self.title = ""
         elif support.kind == "slab":

@@ -16,9 +16,12 @@ from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
+from scipy.sparse import coo_matrix
+from scipy.sparse.csgraph import connected_components, dijkstra, minimum_spanning_tree
+from scipy.spatial import cKDTree
 
 __all__ = ["DefectRow", "DEFECT_TITLES", "defect_rows", "branch_flags", "branch_details", "branch_paths",
-           "opening_loop", "defect_counts", "sound_line", "branch_edges", "branch_points"]
+           "opening_path", "rim_spacing", "defect_counts", "sound_line", "branch_edges", "branch_points"]
 
 #: the words a row starts with, per warning code (the CLI's defects block uses the codes themselves)
 DEFECT_TITLES = {
@@ -280,19 +283,90 @@ def _trust_rows(ev: Any) -> list[DefectRow]:
     return rows
 
 
-def opening_loop(points: np.ndarray, centre: Any, normal: Any) -> np.ndarray:
-    """An opening's rim points in order around its centre (by angle in the plane square to its normal):
-    the boundary loop to draw."""
+#: an opening's drawn path joins rim points at most this many times the rim's spacing apart
+RIM_LINK = 4.0
+#: side branches of a rim's path with fewer points are left out (the twigs of a rim a few points wide)
+RIM_BRANCH = 4
+
+
+def rim_spacing(points: np.ndarray) -> float:
+    """The rim's spacing: the median distance from a rim point to its nearest other (0 for fewer than 2)."""
     pts = np.asarray(points, dtype=float)
-    if len(pts) < 3:
-        return pts
-    n = np.asarray(normal, dtype=float)
-    n = n / (np.linalg.norm(n) or 1.0)
-    u = np.cross(n, [1.0, 0.0, 0.0] if abs(n[0]) < 0.9 else [0.0, 1.0, 0.0])
-    u /= np.linalg.norm(u)
-    v = np.cross(n, u)
-    d = pts - np.asarray(centre, dtype=float)
-    return pts[np.argsort(np.arctan2(d @ v, d @ u))]
+    if len(pts) < 2:
+        return 0.0
+    d, _ = cKDTree(pts).query(pts, k=2)
+    return float(np.median(d[:, 1]))
+
+
+def opening_path(points: np.ndarray, link: float = RIM_LINK) -> tuple[np.ndarray, np.ndarray]:
+    """An opening's rim drawn as the rim's own path: ``(vertices, pairs)`` of segments that never join
+    rim points more than ``link`` x the rim's spacing (:func:`rim_spacing`) apart.
+
+    The rim points are linked to their neighbours within that distance and each connected piece's
+    minimum spanning tree is drawn as paths: its longest (the rim followed from one end to the other,
+    closed when its ends are neighbours: a rim all round its opening), then the longest of what is left,
+    each joined to the drawn part by its tree edge, down to :data:`RIM_BRANCH` points (the side twigs of
+    a rim a few points wide are left out). A one-sided scan's rim is a long thin band: sorting it by angle
+    around its centre would draw chords across the shape."""
+    pts = np.asarray(points, dtype=float)
+    none = (np.zeros((0, 3)), np.zeros((0, 2), dtype=np.int64))
+    spacing = rim_spacing(pts)
+    if not spacing > 0:
+        return none
+    reach = float(link) * spacing
+    pairs = cKDTree(pts).query_pairs(reach, output_type="ndarray")
+    if not len(pairs):
+        return none
+    n = len(pts)
+    length = np.linalg.norm(pts[pairs[:, 0]] - pts[pairs[:, 1]], axis=1) + 1e-9 * spacing  # 0 = no edge
+    tree = minimum_spanning_tree(coo_matrix((length, (pairs[:, 0], pairs[:, 1])), shape=(n, n))).tocsr()
+    tree = (tree + tree.T).tocsr()
+    segments: list[tuple[int, int]] = []
+    drawn = np.zeros(n, dtype=bool)
+    left = np.ones(n, dtype=bool)
+    first = True
+    while True:
+        nodes = np.flatnonzero(left)
+        if not len(nodes):
+            break
+        sub = tree[nodes][:, nodes]
+        n_pieces, label = connected_components(sub, directed=False)
+        sizes = np.bincount(label, minlength=n_pieces)
+        grown = False
+        for piece in np.flatnonzero(sizes >= (2 if first else RIM_BRANCH)):
+            members = nodes[label == piece]
+            path = members[_longest_path(tree[members][:, members])]
+            segments += list(zip(path[:-1].tolist(), path[1:].tolist()))
+            if first and len(path) >= 4 and np.linalg.norm(pts[path[0]] - pts[path[-1]]) <= reach:
+                segments.append((int(path[-1]), int(path[0])))
+            joins = tree[path][:, np.flatnonzero(drawn)].tocoo()  # the tree edge to the part drawn before
+            segments += [(int(path[i]), int(np.flatnonzero(drawn)[j])) for i, j in zip(joins.row, joins.col)]
+            drawn[path] = True
+            grown = True
+        left = ~drawn & left
+        left[nodes[np.isin(label, np.flatnonzero(sizes < RIM_BRANCH))]] = False
+        first = False
+        if not grown:
+            break
+    if not segments:
+        return none
+    used = np.unique(np.asarray(segments).ravel())
+    index = np.full(n, -1, dtype=np.int64)
+    index[used] = np.arange(len(used))
+    return pts[used], index[np.asarray(segments, dtype=np.int64)]
+
+
+def _longest_path(tree: Any) -> np.ndarray:
+    """The longest path (by length) of a tree, as its node indices: farthest from any node, then farthest
+    from that one (the tree's diameter)."""
+    dist = dijkstra(tree, directed=False, indices=0)
+    a = int(np.argmax(np.where(np.isfinite(dist), dist, -1.0)))
+    dist, previous = dijkstra(tree, directed=False, indices=a, return_predecessors=True)
+    b = int(np.argmax(np.where(np.isfinite(dist), dist, -1.0)))
+    path = [b]
+    while path[-1] != a:
+        path.append(int(previous[path[-1]]))
+    return np.asarray(path[::-1], dtype=np.int64)
 
 
 def _scan_rows(ev: Any) -> list[DefectRow]:

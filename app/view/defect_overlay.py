@@ -3,11 +3,11 @@
 Each kind in a style of its own, in :data:`skelcore.colors.DEFECT_COLORS` (on neither colour map, not
 magenta): missing parts colour their cloud points; spurious branches and spurious cycles get a wide
 translucent halo around their edges (the metric colours stay readable inside it); curve edges outside
-the shape are dashed; openings are their boundary loops (rim points in order around the opening's
-centre); stray points are large dark-red points. The selected defect (the Defects panel's row) or
-branch (a click on the curve) is redrawn in the pick colour. A legend of the styles shown sits in the
-view's bottom right (the support legend holds the top left, the colour bar the right, the axes the
-bottom left). Actors are named ``defect-*``; only this module draws them.
+the shape are dashed; openings are their boundary loops (each rim followed along its points, never a
+chord longer than a few spacings); stray points are large dark-red points. The selected defect (the
+Defects panel's row) or branch (a click on the curve) is redrawn in the pick colour. A legend of the
+styles shown sits in the view's bottom right (the support legend holds the top left, the colour bar
+the right, the axes the bottom left). Actors are named ``defect-*``; only this module draws them.
 """
 
 from __future__ import annotations
@@ -19,7 +19,7 @@ import pyvista as pv
 
 from skelcore.colors import DEFECT_COLORS, PICK_COLOR
 
-from ..scene.defects import DefectRow, opening_loop
+from ..scene.defects import DefectRow, opening_path
 from .actors import display_coordinates, draw_in_front
 from .lod import lod_indices
 from .style import greyed
@@ -169,11 +169,10 @@ class DefectOverlay:
                 sel = np.asarray(o.get("rows") or [], dtype=np.int64)
                 if len(sel) < 3 or sel.max() >= len(cloud):
                     continue
-                loop = opening_loop(cloud[sel], o["centre"], o["normal"])
-                n = len(loop)
-                pts.append(loop)
-                pairs.append(np.column_stack([np.arange(n), (np.arange(n) + 1) % n]) + start)
-                start += n
+                verts, segs = opening_path(cloud[sel])
+                pts.append(verts)
+                pairs.append(segs + start)
+                start += len(verts)
             if pts:
                 self._lines("open_surface", _segments(np.vstack(pts), np.vstack(pairs)), colours["open_surface"],
                             LOOP_WIDTH, offset=-300.0)

@@ -19,6 +19,7 @@ from ..scene import CURVE_LOCATION, Scene, SceneEvent
 from .actors import curve_polylines, display_coordinates, draw_in_front, scene_diagonal
 from .camera import apply_camera_state, camera_state, fit_camera, orient_standard_view
 from .colorbar import ColourBar
+from .eye_dome import EyeDome
 from .frames import FrameScheduler
 from .interactor import ClickFilter, DropInteractor
 from .lod import LOD_POINTS, MotionFilter, lod_indices
@@ -65,6 +66,7 @@ class SceneView:
         self._hint = self._make_hint()
         self._axes_shown = False
         self._eye_dome = False
+        self.eye_dome = EyeDome(self.plotter)  # the scene shaded, the 2-D overlays on top unshaded
         self._apply_style()
         scene.subscribe(self._on_scene)
 
@@ -389,7 +391,7 @@ class SceneView:
                 actor.prop.lighting = style["spheres"]
         if style["eye_dome"] != self._eye_dome:
             self._eye_dome = style["eye_dome"]
-            (self.plotter.enable_eye_dome_lighting if self._eye_dome else self.plotter.disable_eye_dome_lighting)()
+            self.eye_dome.set(self._eye_dome)
         if style["axes"] != self._axes_shown:
             self._axes_shown = style["axes"]
             if self._axes_shown:
@@ -608,6 +610,7 @@ class SceneView:
         self.scene.unsubscribe(self._on_scene)
         self.plotter.removeEventFilter(self._motion_filter)
         self._frames.close()
+        self.eye_dome.close()
         self.plotter.close()
 
 

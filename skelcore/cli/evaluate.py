@@ -198,7 +198,8 @@ def run_evaluate(args: argparse.Namespace) -> int:
             raise SkelInputError("--barcodes: no barcodes without a correspondence (see the warning)")
         ev.write_barcodes(args.barcodes, inputs=guard)
     if args.export_ply:
-        export_ply(ev, args.export_ply, inputs=guard)
+        mapping = (float(args.skeleton_scale), tuple(args.skeleton_offset))
+        export_ply(ev, args.export_ply, inputs=guard, mappings={"skeletal": mapping, "curve": mapping})
     if args.strict and ev.warnings:
         print(f"skelcore: --strict: {len(ev.warnings)} warning(s), exit {EXIT_WARNINGS}", file=sys.stderr)
         return EXIT_WARNINGS

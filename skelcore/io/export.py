@@ -13,7 +13,9 @@ the same picture as the viewer:
   samples do not have).
 
 Each file's header says which metric its colours encode, in one comment line:
-``comment colors: centeredness (viridis over [0, 1], NaN magenta)`` (:func:`colour_comment`).
+``comment colors: centeredness (viridis over [0, 1], NaN magenta)`` (:func:`colour_comment`); and, for
+a skeleton mapped into the cloud's frame (``--skeleton-scale`` / ``--skeleton-offset``, the viewer's
+Map skeleton), which map gave its coordinates (:func:`mapping_comment`).
 """
 
 from __future__ import annotations
@@ -29,7 +31,7 @@ from ..errors import SkelInputError
 from .ply import write_curve_ply, write_points_ply
 from ..evaluation import Evaluation
 
-__all__ = ["export_ply", "COLOR_BY", "colour_comment"]
+__all__ = ["export_ply", "COLOR_BY", "colour_comment", "mapping_comment"]
 
 #: Metrics a file can be coloured by. Every metric lives in [0, 1], so the colour range is fixed.
 COLOR_BY = ("centeredness", "boundedness", "smoothness")
@@ -40,6 +42,18 @@ def colour_comment(metric: str) -> str:
     return f"colors: {metric} ({COLOUR_MAP} over [0, 1], NaN magenta)"
 
 
+def mapping_comment(scale: float, offset: Iterable[float]) -> str:
+    """The PLY header comment saying the coordinates were mapped into the cloud's frame, and how (the
+    skeleton's own file holds them unmapped)."""
+    s = f"{float(scale):.9g}"
+    o = " ".join(f"{float(v):.9g}" for v in offset)
+    return (f"mapping: skeleton mapped into the cloud's frame, v * scale + offset with scale {s} and offset {o} "
+            "(its input file holds the unmapped coordinates)")
+
+
+Mapping = tuple[float, Iterable[float]]
+
+
 def export_ply(
     evaluation: Evaluation,
     out_dir: str | os.PathLike,
@@ -47,9 +61,14 @@ def export_ply(
     inputs: Iterable[str | os.PathLike] = (),
     color_by: str = "centeredness",
     binary: bool = True,
+    mappings: dict[str, Mapping | None] | None = None,
 ) -> list[str]:
     """Write the coloured PLY files of ``evaluation`` into ``out_dir`` (created if missing); return
     their paths. Atomic, and never over a loaded input or one of ``inputs`` / the evaluation's inputs.
+
+    ``mappings`` gives, for ``"skeletal"`` and ``"curve"``, the ``(scale, offset)`` that skeleton was
+    mapped by into the cloud's frame before it was evaluated (None or the identity: not mapped); the
+    files of a mapped one say so in their header (:func:`mapping_comment`).
     """
     if color_by not in COLOR_BY:
         raise ValueError(f"color_by must be one of {', '.join(COLOR_BY)}, got {color_by!r}")
@@ -64,6 +83,14 @@ def export_ply(
     b_star = evaluation.params.beta_star
     written: list[str] = []
 
+    def mapped(role: str) -> list[str]:
+        from ..skeleton_mapping import is_identity
+
+        m = (mappings or {}).get(role)
+        if m is None or is_identity(m[0], tuple(m[1])):
+            return []
+        return [mapping_comment(m[0], m[1])]
+
     if evaluation.skeletal is not None:
         s = evaluation.skeletal
         values = {
@@ -74,7 +101,7 @@ def export_ply(
         path = out / "skeletal.ply"
         write_points_ply(
             path, s.points, scalars=values, colors=map_to_rgb(values[color_by], 0.0, 1.0, COLOUR_MAP),
-            inputs=guard, binary=binary, comments=[colour_comment(color_by)],
+            inputs=guard, binary=binary, comments=[colour_comment(color_by), *mapped("skeletal")],
         )  # fmt: skip
         written.append(str(path))
 
@@ -86,7 +113,7 @@ def export_ply(
             path, c.curve.vertices, c.curve.edges,
             scalars={"smoothness": smooth, "degree": np.asarray(c.vertex_degree, dtype=np.int32)},
             colors=map_to_rgb(smooth, 0.0, 1.0, COLOUR_MAP), inputs=guard, binary=binary,
-            comments=[colour_comment("smoothness")],
+            comments=[colour_comment("smoothness"), *mapped("curve")],
         )  # fmt: skip
         written.append(str(path))
 
@@ -101,7 +128,7 @@ def export_ply(
             scalars={**samples, "edge": np.asarray(c.sample_edge, dtype=np.int32),
                      "t": np.asarray(c.sample_t, dtype=np.float64)},
             colors=map_to_rgb(samples[by], 0.0, 1.0, COLOUR_MAP), inputs=guard, binary=binary,
-            comments=[colour_comment(by)],
+            comments=[colour_comment(by), *mapped("curve")],
         )  # fmt: skip
         written.append(str(path))
     return written

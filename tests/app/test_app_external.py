@@ -144,7 +144,7 @@ def test_a_new_cloud_over_a_loaded_skeleton_asks_one_question(window, files, kee
     assert ("skeletal" in w.scene.layers and "curve" in w.scene.layers) == keep
 
 
-def test_a_skeleton_in_another_frame_is_mapped_from_the_menu_the_warning_names(window, qtbot, files):
+def test_a_skeleton_in_another_frame_is_mapped_from_the_menu_the_warning_names(window, qtbot, files, tmp_path):
     paths, sh, _ = files
     w = window
     w.session.load_as("cloud", paths["cloud"])
@@ -165,6 +165,13 @@ def test_a_skeleton_in_another_frame_is_mapped_from_the_menu_the_warning_names(w
     assert w.scene.curve.mapping == (pytest.approx(1 / 40.0), pytest.approx((-7.0 / 40.0,) * 3))
     ev = _evaluate(qtbot, w)
     assert not [x for x in ev.warnings if x.code == "frame"]
+    # the coloured PLY of the mapped curve says in its header that, and how, it was mapped
+    written = w.export_ply(str(tmp_path / "ply"))
+    assert written
+    for path in written:
+        header = open(path, "rb").read().split(b"end_header")[0].decode("ascii")
+        (line,) = [ln for ln in header.splitlines() if ln.startswith("comment mapping:")]
+        assert "scale 0.025 and offset -0.175 -0.175 -0.175" in line and "cloud's frame" in line
 
 
 @pytest.mark.parametrize("how", ["drop", "file_open"])

@@ -184,3 +184,96 @@ def test_at_each_scale_factor_the_window_fits_1366x768_and_every_dock_is_reachab
         assert _inside(dock["rect"], screen), (name, dock["rect"], screen)
         # raised, the panel shows through its scroll area: whole, or by scrolling to the rest
         assert dock["viewport"][1] > 0 and dock["viewport"][1] + dock["scroll_max"] >= dock["panel_min_h"], (name, dock)
+
+
+_CONTENT_PROBE = r"""
+import json, sys
+from PySide6 import QtCore, QtWidgets
+app = QtWidgets.QApplication(["probe"])
+from skelscope.main_window import MainWindow
+from skelscope.panels.settings import ElidingComboBox
+w = MainWindow(settings=QtCore.QSettings(sys.argv[1], QtCore.QSettings.Format.IniFormat))
+w.session.ask = lambda q, o: o[0]
+w.setGeometry(w.screen().availableGeometry())
+w.show()
+def settle(ms=300):
+    loop = QtCore.QEventLoop(); QtCore.QTimer.singleShot(ms, loop.quit); loop.exec()
+settle()
+w.session.load_files(sys.argv[2:5])
+while w.session.runner.running:
+    settle(200)
+settle()
+out = {"docks": {}}
+for name, dock in w.docks.items():
+    dock.raise_()
+    settle(150)
+    area = dock.widget()
+    out["docks"][name] = {"hscroll": area.horizontalScrollBar().maximum(), "viewport": area.viewport().width(),
+                          "panel_min": area.widget().minimumSizeHint().width()}
+# the Summary: every column inside the table, every header line and every cell's unbreakable part in its column
+w.docks["Summary"].raise_(); settle(150)
+t = w.summary.table
+fm = t.fontMetrics()
+cols = [t.columnWidth(c) for c in range(t.columnCount())]
+out["summary"] = {"columns": cols, "header": t.verticalHeader().width(), "table_viewport": t.viewport().width(),
+                  "too_wide": []}
+for c in range(t.columnCount()):
+    for line in t.horizontalHeaderItem(c).text().split("\n"):
+        if fm.horizontalAdvance(line) > cols[c] - 4:
+            out["summary"]["too_wide"].append(line)
+    for r in range(t.rowCount()):
+        for line in t.item(r, c).text().split("\n"):
+            for word in line.split(" "):
+                if fm.horizontalAdvance(word) > cols[c] - 4:
+                    out["summary"]["too_wide"].append(word)
+# the Settings: labels whole, combo values whole or elided with their full text in the tooltip
+w.docks["Settings"].raise_(); settle(150)
+panel = w.settings_panel if hasattr(w, "settings_panel") else w.docks["Settings"].widget().widget()
+out["settings"] = {"labels_cut": [], "combos": []}
+for label in panel.findChildren(QtWidgets.QLabel):
+    if label.isVisible() and label.width() < label.sizeHint().width():
+        out["settings"]["labels_cut"].append(label.text())
+for combo in panel.findChildren(ElidingComboBox):
+    out["settings"]["combos"].append([combo.currentText(), combo.shown_text(), combo.toolTip()])
+# the barcode panel's title inside its figure
+w.docks["Barcodes"].raise_(); settle(400)
+fig = w.barcodes.figure
+box = w.barcodes._title.get_window_extent(renderer=w.barcodes.canvas.get_renderer())
+ratio = float(getattr(w.barcodes.canvas, "device_pixel_ratio", 1.0) or 1.0)
+out["barcode_title"] = {"x0": box.x0 / ratio, "x1": box.x1 / ratio, "width": fig.bbox.width / ratio,
+                        "text": w.barcodes.title()}
+print("PROBE " + json.dumps(out))
+w.session.runner.shutdown()
+w.close()
+"""
+
+
+def test_at_scale_1_5_on_1366x768_the_panels_show_their_content_whole(sample_files, tmp_path):
+    """In a fresh process at QT_SCALE_FACTOR=1.5 (911 x 512 device-independent pixels): no dock scrolls
+    sideways; the Summary shows both columns with every value and count whole; the Settings show every
+    label whole and every choice whole or elided with its full text in the tooltip; the barcode
+    panel's title keeps clear of the figure's edges."""
+    if shutil.which("xvfb-run") is None:
+        pytest.skip("xvfb-run not installed")
+    env = dict(os.environ, QT_SCALE_FACTOR="1.5", QT_QPA_PLATFORM="xcb",
+               PYTHONPATH=str(ROOT) + os.pathsep + os.environ.get("PYTHONPATH", ""))
+    env.pop("DISPLAY", None)
+    cmd = ["xvfb-run", "-a", "-s", f"-screen 0 {LAPTOP[0]}x{LAPTOP[1]}x24", sys.executable, "-c",
+           textwrap.dedent(_CONTENT_PROBE), str(tmp_path / "s.ini"),
+           sample_files["cloud"], sample_files["skeletal"], sample_files["curve"]]
+    run = subprocess.run(cmd, capture_output=True, text=True, cwd=ROOT, env=env, timeout=300)
+    line = next((ln for ln in run.stdout.splitlines() if ln.startswith("PROBE ")), None)
+    assert line is not None, run.stdout + run.stderr
+    got = json.loads(line[len("PROBE "):])
+    for name, dock in got["docks"].items():
+        assert dock["hscroll"] == 0, (name, dock)
+    summary = got["summary"]
+    assert sum(summary["columns"]) <= summary["table_viewport"] + 2, summary  # both columns in view
+    assert min(summary["columns"]) > 0 and summary["too_wide"] == [], summary
+    settings = got["settings"]
+    assert settings["labels_cut"] == [], settings
+    for full, shown, tip in settings["combos"]:
+        assert shown == full or (shown.endswith("…") and tip.startswith(full)), (full, shown, tip)
+    title = got["barcode_title"]
+    assert title["x0"] >= 4 and title["x1"] <= title["width"] - 4, title
+    assert "K = " in title["text"] and "d_Wp" in title["text"]

@@ -152,6 +152,32 @@ def test_figure_options_spheres_eye_dome_lighting_and_axes(evaluated):
     assert w.view._actors["skeletal"].prop.render_points_as_spheres
 
 
+def test_eye_dome_lighting_leaves_the_colour_bar_and_the_legends_crisp(window, evaluation):
+    """Eye-dome lighting shades the 3-D scene only: the colour bar, its labels and title, and the
+    support legend are the same pixels with it as without it (on screen and in a picture at scale 2),
+    while the points are shaded."""
+    from skelcore.curve import CurveSkeleton
+
+    ev = evaluation
+    w = window
+    w.session.show_arrays(ev.cloud, ev.skeletal.points, CurveSkeleton.from_raw(ev.curve.curve.vertices,
+                                                                              ev.curve.curve.edges), ev)
+    w.scene.set_metric("centeredness")
+    w.pick_element(w.scene.element_info("skeletal", "points", 5))  # the support's legend, top left
+    assert w.supports.overlay.names
+    plain, plain2 = w.view.image(), w.view.image(scale=2)
+    w.scene.set_style("eye_dome", True)
+    edl, edl2 = w.view.image(), w.view.image(scale=2)
+    for a, b in ((plain, edl), (plain2, edl2)):
+        h, wd = a.shape[:2]
+        bar = (slice(int(0.15 * h), int(0.85 * h)), slice(int(0.87 * wd), wd))  # the bar, its labels, its title
+        legend = (slice(0, int(0.12 * h)), slice(0, int(0.3 * wd)))
+        assert np.array_equal(a[bar], b[bar]) and np.array_equal(a[legend], b[legend])
+        assert not np.array_equal(a, b)  # the scene itself is shaded
+    w.scene.set_style("eye_dome", False)
+    assert np.array_equal(w.view.image(), plain)
+
+
 def test_a_saved_camera_restores_the_view_and_the_scripted_mode_reads_it(evaluated, files, tmp_path, capsys,
                                                                          monkeypatch):
     w = evaluated

@@ -6,10 +6,12 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from scipy.spatial import cKDTree
 
 from skelcore import evaluate, shapes
 from skelcore.colors import DEFECT_COLORS
 from skelcore.curve import CurveSkeleton
+from skelcore.io import load_cloud
 
 pytestmark = [pytest.mark.gui, pytest.mark.window(size=(1300, 850), dialogs="record")]
 
@@ -25,6 +27,18 @@ def _has_colour(img, rgb, tol=12, at_least=5):
     return int(np.count_nonzero(d <= tol)) >= at_least
 
 
+def _spacing(cloud):
+    return float(np.median(cKDTree(cloud).query(cloud, k=2)[0][:, 1]))
+
+
+def _drawn_segments(w):
+    """The drawn openings' points and the lengths of their segments."""
+    mesh = w.view.plotter.actors["defect-open_surface"].GetMapper().GetInput()
+    pts = np.asarray(mesh.points, dtype=float)
+    lines = np.asarray(mesh.lines).reshape(-1, 3)[:, 1:]
+    return pts, np.linalg.norm(pts[lines[:, 0]] - pts[lines[:, 1]], axis=1)
+
+
 def test_openings_are_drawn_as_their_boundary_loops(window):
     cloud, curve = _half_cylinder()
     ev = evaluate(cloud, curve=curve)
@@ -34,13 +48,38 @@ def test_openings_are_drawn_as_their_boundary_loops(window):
     rows = [r for r in w.defects.rows if r.code == "open_surface"]
     assert len(rows) == len(ev.scan.openings)
     rim = np.concatenate([np.asarray(o["rows"]) for o in ev.scan.openings])
-    loop = w.view.plotter.actors["defect-open_surface"].GetMapper().GetInput()
-    assert loop.GetNumberOfPoints() == len(rim) and loop.GetNumberOfCells() == len(rim)  # closed loops
-    np.testing.assert_allclose(np.sort(np.asarray(loop.points), axis=0), np.sort(cloud[rim], axis=0), atol=1e-5)
+    drawn, lengths = _drawn_segments(w)
+    assert len(drawn) >= 0.8 * len(rim)  # the rim followed along its points (side twigs left out)
+    assert cKDTree(cloud[rim]).query(drawn)[0].max() < 1e-4
+    assert lengths.max() <= 5 * _spacing(cloud)
     assert "opening (boundary loop)" in w.defects.overlay.legend_labels
     assert _has_colour(w.view.image(), DEFECT_COLORS["open_surface"])
     # the rim of a missing side lies on the cut plane y = 0 (the scan's edge)
     assert np.median(np.abs(cloud[rim, 1])) < 0.05
+
+
+def test_a_one_sided_scan_s_rim_is_drawn_along_the_rim_without_chords(window):
+    """The hammer seen from one side (its points with x above the median): the opening's rim is a long
+    thin band round the cut; drawn along its points, no segment crosses the shape."""
+    from pathlib import Path
+
+    hammer = load_cloud(str(Path(__file__).resolve().parents[2] / "resources" / "scans" / "hammer_4096.ply"))
+    half = hammer[hammer[:, 0] > np.median(hammer[:, 0])]
+    c = half.mean(axis=0)
+    axis = np.linalg.svd(half - c)[2][0]
+    t = (half - c) @ axis
+    line = CurveSkeleton.from_raw(c + np.outer(np.linspace(t.min(), t.max(), 20), axis),
+                                  np.column_stack([np.arange(19), np.arange(1, 20)]))
+    ev = evaluate(half, curve=line)
+    assert ev.scan.openings
+    w = window
+    w.session.show_arrays(half, None, line, ev)
+    rim = np.concatenate([np.asarray(o["rows"]) for o in ev.scan.openings])
+    drawn, lengths = _drawn_segments(w)
+    spacing = _spacing(half)
+    assert lengths.max() <= 5 * spacing  # an angular sort drew chords over 100 spacings long
+    assert len(drawn) >= 0.8 * len(rim) and len(lengths) >= 0.8 * len(drawn)
+    assert lengths.sum() >= 0.5 * np.ptp(half, axis=0).max()  # along the whole cut, not a few pieces
 
 
 def test_stray_points_are_drawn_large_with_a_legend_entry(window):

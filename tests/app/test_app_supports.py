@@ -236,6 +236,69 @@ def test_a_big_clouds_support_is_computed_in_a_thread_and_the_newest_pick_wins(c
     assert sup.detail.fraction == pytest.approx(ev.skeletal.boundedness[7], abs=0.01)
 
 
+def _slow_first_support(monkeypatch, slow_index: int) -> dict:
+    """Make the support of skeletal point ``slow_index`` a 30 s computation in small Python steps (one
+    sharing the interpreter with every other until it ends); the others are computed as usual."""
+    import time
+
+    import skelscope.support_controller as controller
+
+    real = controller.element_support
+    state = {"started": False, "finished": False}
+
+    def support(ev, info, metric):
+        if info is not None and info["index"] == slow_index:
+            state["started"] = True
+            end = time.monotonic() + 30.0
+            while time.monotonic() < end:
+                sum(i * i for i in range(2000))  # busy, holding the interpreter between steps
+            state["finished"] = True
+        return real(ev, info, metric)
+
+    monkeypatch.setattr(controller, "element_support", support)
+    return state
+
+
+def _support_threads() -> list:
+    import threading
+
+    return [t for t in threading.enumerate() if t.name == "skelscope-support" and t.is_alive()]
+
+
+def test_a_new_pick_stops_the_support_still_computing(cylinder_window, qtbot, monkeypatch):
+    import time
+
+    w = cylinder_window
+    w.supports.background_points = 0  # every cloud counts as big: supports in a thread
+    w.scene.set_metric("boundedness")
+    state = _slow_first_support(monkeypatch, 5)
+    assert w.supports.show_element(w.scene.element_info("skeletal", "points", 5)) is None
+    qtbot.waitUntil(lambda: state["started"], timeout=5000)
+    start = time.monotonic()
+    w.supports.show_element(w.scene.element_info("skeletal", "points", 7))
+    qtbot.waitUntil(lambda: not w.supports.busy, timeout=10000)
+    assert time.monotonic() - start < 5.0  # not after the first one's 30 s
+    assert w.supports.support.index == 7 and w.supports.support.kind == "directions"
+    qtbot.waitUntil(lambda: not _support_threads(), timeout=3000)  # the first computation stopped
+    assert not state["finished"]
+
+
+def test_quitting_stops_the_support_still_computing(cylinder_window, qtbot, monkeypatch):
+    import time
+
+    w = cylinder_window
+    w.supports.background_points = 0
+    w.scene.set_metric("boundedness")
+    state = _slow_first_support(monkeypatch, 5)
+    w.supports.show_element(w.scene.element_info("skeletal", "points", 5))
+    qtbot.waitUntil(lambda: state["started"], timeout=5000)
+    start = time.monotonic()
+    w.close()
+    assert time.monotonic() - start < 1.0
+    qtbot.waitUntil(lambda: not _support_threads(), timeout=3000)
+    assert not state["finished"]
+
+
 def test_a_real_click_on_a_curve_sample_fills_the_support_dock(cylinder_window, cylinder_eval, qtbot):
     w = cylinder_window
     _, _, ev = cylinder_eval

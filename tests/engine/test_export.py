@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import os
+
 import numpy as np
 import pytest
 from plyfile import PlyData
@@ -152,3 +154,26 @@ def test_each_file_s_header_names_the_metric_its_colours_encode(tmp_path, color_
     from skelcore.io import load_points
 
     assert load_points(tmp_path / "skeletal.ply").shape == ev.skeletal.points.shape
+
+
+def test_a_mapped_skeleton_s_files_say_which_map_gave_their_coordinates(tmp_path):
+    """``mappings``: the files of a skeleton mapped into the cloud's frame name the map in their header;
+    an identity map (or none) adds nothing."""
+    from skelcore import evaluate, shapes
+
+    s = shapes.cylinder(800, seed=0)
+    ev = evaluate(s.cloud, s.skeletal, CurveSkeleton.from_raw(s.curve_vertices, s.curve_edges))
+
+    def headers(folder, **kwargs):
+        out = {}
+        for path in export_ply(ev, tmp_path / folder, **kwargs):
+            text = open(path, "rb").read().split(b"end_header")[0].decode("ascii")
+            out[os.path.basename(path)] = [ln for ln in text.splitlines() if ln.startswith("comment mapping:")]
+        return out
+
+    got = headers("mapped", mappings={"skeletal": None, "curve": (2.5, (1.0, 0.0, -3.0))})
+    assert got["skeletal.ply"] == []
+    for name in ("curve.ply", "curve_samples.ply"):
+        (line,) = got[name]
+        assert "scale 2.5 and offset 1 0 -3" in line
+    assert all(v == [] for v in headers("identity", mappings={"curve": (1.0, (0.0, 0.0, 0.0))}).values())
