@@ -132,7 +132,7 @@ class MissingParts:
                 f"{self.completeness:.3f}; {len(self.regions)} unexplained regions{big}){sub}",
             )]  # fmt: skip
         said = "; ".join(f"{r.share:.1%} of the cloud around ({r.centroid[0]:.4g}, {r.centroid[1]:.4g}, "
-                         f"{r.centroid[2]:.4g}) reaching {r.depth:.2g} local radii beyond it" for r in parts[:3])
+                         f"{r.centroid[2]:.4g}){_depth_clause(r.depth)}" for r in parts[:3])
         more = f" and {len(parts) - 3} more" if len(parts) > 3 else ""
         n = len(parts)
         return [TrustWarning(
@@ -140,6 +140,16 @@ class MissingParts:
             f"the {self.what} does not reach {n} part{'s' if n > 1 else ''} of the shape: {said}{more}; "
             f"completeness {self.completeness:.3f}{sub}",
         )]  # fmt: skip
+
+
+def _depth_clause(depth: float) -> str:
+    """How far a region reaches, in words when it is no number: inf when no explained point
+    borders it, NaN when too small to be measured (the clause is left out)."""
+    if depth == np.inf:
+        return " with no explained point next to it"
+    if not np.isfinite(depth):
+        return ""
+    return f" reaching {depth:.2g} local radii beyond it"
 
 
 def skeleton_elements(skeleton: np.ndarray | CurveSkeleton, spacing: float, max_elements: int,

@@ -79,13 +79,17 @@ class OutsideDefects:
         out: list[TrustWarning] = []
         bad = self.defective_branches()
         if len(bad) or (self.total_length > 0 and self.length_share >= self.params.outside_min_share):
-            worst = int(np.argmax(self.branch_radii)) if len(self.branch_radii) else -1
             n_edges = int(np.count_nonzero(self.edge_outside_length > 0))
+            if self.radius > 0 and len(self.branch_radii):  # lengths in local radii only when one is known
+                worst = int(np.argmax(self.branch_radii))
+                most = (f", {self.branch_radii.sum():.2g} local radii, the most on branch {worst} "
+                        f"({self.branch_radii[worst]:.2g} radii, up to {self.depth[worst]:.2g} radii out)")
+            else:
+                most = ""
             out.append(TrustWarning(
                 "outside",
                 f"the curve skeleton leaves the shape on {len(bad)} branches ({n_edges} edges): "
-                f"{self.length_share:.1%} of its length, {self.branch_radii.sum():.2g} local radii, the most on "
-                f"branch {worst} ({self.branch_radii[worst]:.2g} radii, up to {self.depth[worst]:.2g} radii out)",
+                f"{self.length_share:.1%} of its length{most}",
             ))  # fmt: skip
         if self.skeletal_outside is not None and self.skeletal_cluster_share > self.params.outside_skeletal_share:
             out.append(TrustWarning(

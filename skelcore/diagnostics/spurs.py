@@ -26,7 +26,7 @@ from ..curve import CurveSkeleton
 from ..metrics.curve_sampling import CurveSamples
 from ..geometry import Checkpoint, kd_tree, no_checkpoint
 from ..params import Params
-from .trust_warning import TrustWarning
+from .trust_warning import TrustWarning, finite_range
 from .branches import Branches, decompose_branches, densify
 from .interior import cloud_subsample, median_spacing
 
@@ -74,12 +74,13 @@ class SpurDefects:
         n = len(self.spurious)
         if n < self.params.spurs_warn_count:
             return []
-        lr = self.length_radii[self.branch_spurious]
+        span = finite_range(self.length_radii[self.branch_spurious])  # none on a junction at a cloud point
+        long = f", {span} local radii long" if span is not None else ""
         return [TrustWarning(
             "spurious_branches",
             f"{n} of the curve's {len(self.terminal)} terminal branches are spurious (reach no farther than "
             f"their junction's ball or explain no part of the cloud the rest does not): {self.length_share:.1%} "
-            f"of the curve's length, {np.nanmin(lr):.2g}-{np.nanmax(lr):.2g} local radii long",
+            f"of the curve's length{long}",
         )]  # fmt: skip
 
     def to_dict(self) -> dict:
