@@ -168,7 +168,7 @@ def run_evaluate(args: argparse.Namespace) -> int:
         print(format_ground_truth(ev.ground_truth.to_dict()))
     corr = f"correspondence: {ev.correspondence}; " if ev.correspondence else ""
     print(f"{corr}boundedness estimator: {params.boundedness_method}; total {ev.timings['total']:.2f} s")
-    print(format_defects(ev.warning_dicts()))
+    print(format_defects(ev.warning_dicts(), ev.not_computed))
     print_warnings(ev.warning_dicts())
     print_scan_notes(ev.scan, args)
     if "coverage" in ev.not_computed:  # the others come with their warning (no_correspondence)

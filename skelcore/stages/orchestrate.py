@@ -117,19 +117,44 @@ def evaluate(
     ev = assemble(ctx, inputs)
     ev.warnings += trust_warnings(ctx, ev, tracker.between("trust checks"))
     codes = {w.code for w in ev.warnings}
-    if "frame" not in codes:  # in another frame, every diagnostic would say so too
+    ran = _defect_checks(ctx)
+    if "frame" in codes:  # in another frame, every diagnostic would say so too
+        ev.not_computed.update(dict.fromkeys(
+            ran, "the skeleton seems to be in another frame than the cloud (warning frame): its defects are not judged"))
+    else:
         found = diagnostics_warnings(ctx)
+        skipped: dict[str, str] = {}
         if "open_surface" in codes or ctx.viewpoints_n is not None:
             # the cycle test voxelizes the shape's interior, which an open scan does not enclose
-            found = [w for w in found if w.code not in ("spurious_cycles", "missing_cycles")]
+            why = ("the cloud is not a closed surface (warning open_surface)" if "open_surface" in codes
+                   else "the scan is seen from given viewpoints")
+            skipped.update(dict.fromkeys(("spurious_cycles", "missing_cycles"),
+                                         f"{why}: the shape's interior, which the cycle test voxelizes, is not enclosed"))
         if "open_surface" in codes:
             # and the outside test reads the paper's boundedness, which rays leaving through the openings
             # defeat: on the true axis of a half cylinder it fired (with viewpoints it reads what was seen)
-            found = [w for w in found if w.code != "outside"]
-        ev.warnings += found
+            skipped["outside"] = ("the cloud is not a closed surface (warning open_surface): rays leave through "
+                                  "its openings, so boundedness cannot tell outside from inside")
+        skipped = {k: v for k, v in skipped.items() if k in ran}
+        ev.not_computed.update(skipped)
+        ev.warnings += [w for w in found if w.code not in skipped]
     ev.timings = dict(tracker.timings)
     ev.timings["total"] = time.perf_counter() - t_start
     return ev
+
+
+def _defect_checks(ctx: EvalContext) -> list[str]:
+    """The defect warnings whose checks ran (docs/diagnostics.md): what a switched-off check names in
+    ``not_computed``."""
+    got = ctx.results
+    out: list[str] = []
+    if "skeletal missing parts" in got or "curve missing parts" in got:
+        out.append("incomplete")
+    if "curve defects" in got:
+        out += ["spurious_branches", "spurious_cycles", "missing_cycles"]
+    if "curve defects" in got or "skeletal outside" in got:
+        out.append("outside")
+    return out
 
 
 def _task(stage: Stage, ctx: EvalContext, tracker: StageProgress) -> GraphTask:
