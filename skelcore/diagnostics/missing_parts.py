@@ -91,6 +91,7 @@ class MissingParts:
     subsample: int | None
     what: str = "skeleton"
     thresholds: dict = field(default_factory=dict)
+    outside_elements: int = 0
 
     @property
     def counted(self) -> list[MissingRegion]:
@@ -196,6 +197,7 @@ def missing_parts(
     what: str = "skeleton",
     to_user: Callable[[np.ndarray], np.ndarray] = _identity,
     keep: np.ndarray | None = None,
+    inside: Callable[[np.ndarray], np.ndarray] | None = None,
     checkpoint: Checkpoint = no_checkpoint,
 ) -> MissingParts:
     """The parts of the (normalized) cloud the (normalized) skeleton does not reach, and its completeness.
@@ -214,6 +216,11 @@ def missing_parts(
     keep : for a point set, the rows whose balls may explain the cloud (e.g. the bounded ones: the
         ball of a point far outside the shape touches it from outside and "explains" it); ignored
         when ``cov`` is given.
+    inside : a test of normalized points, True in the shape (e.g. the voxelized interior): the
+        elements it rejects explain nothing (an edge through the air touches the cloud from outside
+        with balls as large as the gap it crosses; docs/diagnostics.md "Completeness"). When it
+        rejects some, the coverage is computed again without them (``cov`` is not used) and
+        ``outside_elements`` counts them.
     checkpoint : ``checkpoint(fraction)``, raises to cancel.
 
     An empty skeleton explains nothing: one region per connected part of the cloud, depth inf.
@@ -222,6 +229,14 @@ def missing_parts(
     cloud = np.asarray(cloud, dtype=float).reshape(-1, 3)
     n = len(cloud)
     checkpoint(0.0)
+    n_out = 0
+    if inside is not None and keep is not None and not isinstance(skeleton, CurveSkeleton):
+        skeleton, keep = np.asarray(skeleton, dtype=float).reshape(-1, 3)[np.asarray(keep, dtype=bool)], None
+    if inside is not None and cov is not None:  # the evaluation's coverage holds while every element is inside
+        tau = float(cov.tau)
+        elements = skeleton_elements(skeleton, tau / float(p.coverage_tau_factor), int(p.missing_max_elements))
+        if len(elements) and not np.all(inside(elements)):
+            cov = None
     sub: np.ndarray | None = None
     spread_factor = 1.0
     full_covered = None
@@ -253,6 +268,9 @@ def missing_parts(
         skeleton = np.asarray(skeleton, dtype=float).reshape(-1, 3)[np.asarray(keep, dtype=bool)]
     if cov is None:
         elements = skeleton_elements(skeleton, spacing, int(p.missing_max_elements), lambda f: checkpoint(0.1))
+        if inside is not None and len(elements):
+            ok = np.asarray(inside(elements), bool)
+            n_out, elements = int(np.count_nonzero(~ok)), elements[ok]
         cov = coverage(pts, elements, p, tau, checkpoint=lambda f: checkpoint(0.1 + 0.6 * f))
     checkpoint(0.7)
     region_s, regions = _regions(pts, cov, spacing, p, checkpoint)
@@ -279,6 +297,7 @@ def missing_parts(
         ))  # fmt: skip
     checkpoint(1.0)
     return MissingParts(
+        outside_elements=n_out,
         completeness=float(explained.mean()) if n else 1.0,
         explained=explained,
         region=region.astype(np.int32),

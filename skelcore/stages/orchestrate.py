@@ -13,7 +13,7 @@ from ..curve import CurveSkeleton
 from ..evaluation import Evaluation
 from ..parallel import GraphTask, run_graph
 from ..params import Params
-from .assemble import assemble, diagnostics_warnings, trust_warnings
+from .assemble import assemble, diagnostics_of, diagnostics_warnings, trust_warnings
 from .catalogue import Stage, select, start_order
 from .context import EvalContext, build_context
 from .progress import Progress, StageProgress
@@ -122,6 +122,8 @@ def evaluate(
         ev.not_computed.update(dict.fromkeys(
             ran, "the skeleton seems to be in another frame than the cloud (warning frame): its defects are not judged"))
     else:
+        if "open_surface" in codes:
+            _every_ball_explains(ctx, ev)
         found = diagnostics_warnings(ctx)
         skipped: dict[str, str] = {}
         if "open_surface" in codes or ctx.viewpoints_n is not None:
@@ -141,6 +143,25 @@ def evaluate(
     ev.timings = dict(tracker.timings)
     ev.timings["total"] = time.perf_counter() - t_start
     return ev
+
+
+def _every_ball_explains(ctx: EvalContext, ev: Evaluation) -> None:
+    """On an open surface the voxelized interior is not enclosed: the missing parts are found again
+    with every element's ball (docs/diagnostics.md "Completeness"), when some were left out as outside."""
+    from ..diagnostics.missing_parts import missing_parts
+
+    redone = False
+    for kind in ("skeletal", "curve"):
+        found = ctx.results.get(f"{kind} missing parts")
+        if found is None or not found.outside_elements:
+            continue
+        cov = ctx.results.get(f"{kind} coverage")
+        ctx.results[f"{kind} missing parts"] = missing_parts(
+            ctx.cloud_n, ctx.skeletal_n if kind == "skeletal" else ctx.curve_n, ctx.params, cov=cov,
+            tau=None if cov is None else cov.tau, what=found.what, to_user=ctx.norm.invert)
+        redone = True
+    if redone:
+        ev.diagnostics = diagnostics_of(ctx)
 
 
 def _defect_checks(ctx: EvalContext) -> list[str]:
