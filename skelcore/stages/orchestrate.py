@@ -136,10 +136,15 @@ def evaluate(
             # and the outside test reads the paper's boundedness, which rays leaving through the openings
             # defeat: on the true axis of a half cylinder it fired (with viewpoints it reads what was seen)
             skipped["outside"] = ("the cloud is not a closed surface (warning open_surface): rays leave through "
-                                  "its openings, so boundedness cannot tell outside from inside")
+                                  "its openings, so boundedness cannot tell outside from inside; only the branches "
+                                  f"reaching more than outside_reach = {ctx.params.outside_reach:g} local radii out "
+                                  "were looked for")
         skipped = {k: v for k, v in skipped.items() if k in ran}
         ev.not_computed.update(skipped)
         ev.warnings += [w for w in found if w.code not in skipped]
+        defects = ctx.results.get("curve defects")
+        if "outside" in skipped and defects is not None:  # the reach test needs no boundedness
+            ev.warnings += defects.outside.warnings(reach_only=True)
     ev.timings = dict(tracker.timings)
     ev.timings["total"] = time.perf_counter() - t_start
     return ev
