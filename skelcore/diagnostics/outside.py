@@ -233,14 +233,25 @@ def branch_reach(curve: CurveSkeleton, branches: Branches, cloud_tree: cKDTree, 
     far = np.flatnonzero(d > params.outside_reach * ref[pb])
     if not len(far):
         return out
+    side = one_sided(cloud_tree, pts[far], params.outside_one_sided)
+    np.maximum.at(out, pb[far[side]], d[far[side]] / ref[pb[far[side]]])
+    return out
+
+
+def one_sided(cloud_tree: cKDTree, points: np.ndarray, threshold: float) -> np.ndarray:
+    """Whether the 16 nearest cloud points of each point lie on one side of it: the mean of the unit
+    vectors to them is at least ``threshold`` long (a point outside a surface; inside a tube or a
+    ball, even half a tube, they surround it more: 2 / pi for a half ring). 65 536 points at a time."""
+    out = np.zeros(len(points), bool)
     k = min(_ONE_SIDED_K, cloud_tree.n)
-    for a in range(0, len(far), 65536):
-        part = far[a:a + 65536]
-        _, j = cloud_tree.query(pts[part], k=k)
-        u = cloud_tree.data[j.reshape(len(part), k)] - pts[part, None, :]
+    if not k:
+        return out
+    for a in range(0, len(points), 65536):
+        part = points[a:a + 65536]
+        _, j = cloud_tree.query(part, k=k)
+        u = cloud_tree.data[j.reshape(len(part), k)] - part[:, None, :]
         u /= np.maximum(np.linalg.norm(u, axis=2, keepdims=True), 1e-300)
-        one_sided = np.linalg.norm(u.mean(axis=1), axis=1) >= params.outside_one_sided
-        np.maximum.at(out, pb[part[one_sided]], d[part[one_sided]] / ref[pb[part[one_sided]]])
+        out[a:a + 65536] = np.linalg.norm(u.mean(axis=1), axis=1) >= threshold
     return out
 
 

@@ -151,9 +151,27 @@ def evaluate(
 
 
 def _every_ball_explains(ctx: EvalContext, ev: Evaluation) -> None:
-    """On an open surface the voxelized interior is not enclosed: the missing parts are found again
-    with every element's ball (docs/diagnostics.md "Completeness"), when some were left out as outside."""
+    """On an open surface the voxelized interior is not enclosed: when some elements were left out as
+    outside, the missing parts are found again leaving out only those in no solid voxel whose nearest
+    cloud points lie on one side (``outside_one_sided``; a half cylinder's axis sees a half ring, 2 / pi;
+    docs/diagnostics.md "Completeness")."""
+    from ..diagnostics.interior import cloud_subsample
     from ..diagnostics.missing_parts import missing_parts
+    from ..diagnostics.outside import one_sided
+    from ..geometry import kd_tree
+
+    trees: list = []
+
+    def inside(points: np.ndarray) -> np.ndarray:
+        shape = ctx.interior()
+        ijk = shape.index_of(points)
+        solid = shape.solid()[ijk[:, 0], ijk[:, 1], ijk[:, 2]]
+        if solid.all():
+            return solid
+        if not trees:
+            trees.append(kd_tree(cloud_subsample(ctx.cloud_n, ctx.params.diag_max_points)))
+        solid[~solid] = ~one_sided(trees[0], points[~solid], ctx.params.outside_one_sided)
+        return solid
 
     redone = False
     for kind in ("skeletal", "curve"):
@@ -163,7 +181,7 @@ def _every_ball_explains(ctx: EvalContext, ev: Evaluation) -> None:
         cov = ctx.results.get(f"{kind} coverage")
         ctx.results[f"{kind} missing parts"] = missing_parts(
             ctx.cloud_n, ctx.skeletal_n if kind == "skeletal" else ctx.curve_n, ctx.params, cov=cov,
-            tau=None if cov is None else cov.tau, what=found.what, to_user=ctx.norm.invert)
+            tau=None if cov is None else cov.tau, what=found.what, to_user=ctx.norm.invert, inside=inside)
         redone = True
     if redone:
         ev.diagnostics = diagnostics_of(ctx)
