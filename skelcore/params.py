@@ -80,6 +80,13 @@ class Params:
         length outside the shape (where its curve samples have boundedness <= beta_star and the
         cycle test's voxels are not inside) ...
     outside_min_share : ... or at least this share of the curve's length is outside.
+    outside_reach : ``outside`` also fires for a branch, however short, that reaches farther than
+        this many local radii from the cloud (the radius where it attaches: at its junction for a
+        terminal branch), at a point whose nearest cloud points lie on one side of it (docs/diagnostics.md
+        "Outside"): three spurs poking 8 radii out of a neuron were a few % of its length. Traced
+        skeletons' nodes lie up to about one radius outside a decimated mesh.
+    outside_one_sided : ... one side: the mean of the unit vectors to its 16 nearest cloud points
+        is at least this long (0: surrounded, as inside a tube or a ball; 1: all in one direction).
     outside_skeletal_share : ``outside`` fires when more than this share of a skeletal point set
         is outside (unbounded, in no inside voxel) in one cluster (points within outside_link x the
         cloud's median spacing).
@@ -196,6 +203,8 @@ class Params:
     cycles_warn_missing: int = 1
     outside_min_radii: float = 0.5
     outside_min_share: float = 0.05
+    outside_reach: float = 8.0
+    outside_one_sided: float = 0.7
     outside_skeletal_share: float = 0.05
     outside_link: float = 3.0
 
@@ -284,10 +293,11 @@ class Params:
                 bad(name, "must be an integer >= 1000")
         if self.k_center is not None and int(self.k_center) < 1:
             bad("k_center", "must be a positive integer or None")
-        for name in ("diag_step", "spur_reach", "cycles_voxel_spacing", "outside_min_radii", "outside_link"):
+        for name in ("diag_step", "spur_reach", "cycles_voxel_spacing", "outside_min_radii", "outside_link",
+                     "outside_reach"):
             if not float(getattr(self, name)) > 0:
                 bad(name, "must be > 0")
-        for name in ("spur_unique", "outside_min_share", "outside_skeletal_share"):
+        for name in ("spur_unique", "outside_min_share", "outside_skeletal_share", "outside_one_sided"):
             if not 0.0 <= float(getattr(self, name)) <= 1.0:
                 bad(name, "must be in [0, 1]")
         for name in ("diag_max_points", "cycles_voxels", "spurs_warn_count", "cycles_warn_spurious",

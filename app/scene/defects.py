@@ -419,11 +419,16 @@ def defect_counts(ev: Any) -> dict[str, int]:
 
 def sound_line(ev: Any) -> str:
     """"sound" when no defect warning (:data:`skelcore.diagnostics.trust.DEFECT_CODES`) was raised, as compare's
-    "sound" column says, else "not sound: " and the codes."""
-    from skelcore.diagnostics.trust import defect_codes
+    "sound" column says, else "not sound: " and the codes; then the defect checks that did not run
+    ("not checked: outside (why)", docs/diagnostics.md "Checks not run")."""
+    from skelcore.diagnostics.trust import defect_codes, unchecked_defects
 
     codes = defect_codes(_warnings(ev)) if ev is not None else []
-    return "sound" if not codes else "not sound: " + ", ".join(codes)
+    line = "sound" if not codes else "not sound: " + ", ".join(codes)
+    skipped = unchecked_defects(getattr(ev, "not_computed", None))
+    if skipped:
+        line += "; not checked: " + "; ".join(f"{code} ({why})" for code, why in skipped.items())
+    return line
 
 
 def branch_details(ev: Any, branch: int, beta_star: float | None = None) -> dict[str, Any]:

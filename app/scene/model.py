@@ -374,6 +374,8 @@ def _without_column(ev: Any, name: str) -> Any:
     it: coverage, the reference comparison, its warnings), or None when nothing of it stays valid."""
     from dataclasses import replace
 
+    from skelcore.diagnostics.trust import DEFECT_CODES
+
     if ev is None or name not in ("skeletal", "curve"):
         return None
     other = "curve" if name == "skeletal" else "skeletal"
@@ -386,7 +388,7 @@ def _without_column(ev: Any, name: str) -> Any:
     if name == "curve":
         return replace(ev, curve=None, coverage_curve=None, reference=None, warnings=warnings, inputs=inputs)
     return replace(ev, skeletal=None, topology=None, coverage_skeletal=None, correspondence=None, warnings=warnings,
-                   inputs=inputs, not_computed={k: v for k, v in ev.not_computed.items() if k == "coverage"})
+                   inputs=inputs, not_computed={k: v for k, v in ev.not_computed.items() if k == "coverage" or k in DEFECT_CODES})
 
 
 def _points(points: object) -> np.ndarray:

@@ -184,7 +184,7 @@ def run_evaluate(args: argparse.Namespace) -> int:
     corr = f"correspondence: {ev.correspondence}; " if ev.correspondence else ""
     sampling = "" if params.curve_sampling == "toolbox" else f"curve sampling: {params.curve_sampling}; "
     print(f"{corr}boundedness estimator: {params.boundedness_method}; {sampling}total {ev.timings['total']:.2f} s")
-    print(format_defects(ev.warning_dicts()))
+    print(format_defects(ev.warning_dicts(), ev.not_computed))
     print_warnings(ev.warning_dicts())
     print_scan_notes(ev.scan, args)
     if "coverage" in ev.not_computed:  # the others come with their warning (no_correspondence)

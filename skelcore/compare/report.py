@@ -20,7 +20,7 @@ import numpy as np
 from ..io.atomic import atomic_open
 from ..scores import COLUMN, column_keys, format_score, paired_columns
 from ..colors import REFERENCE_COLOR, hex_color
-from ..diagnostics.trust import DEFECT_CODES
+from ..diagnostics.trust import DEFECT_CODES, unchecked_defects
 from .leaderboard import Leaderboard
 from .leaderboard_html import LEADERBOARD_CSS, leaderboard_html
 from .profiles import Profile
@@ -143,10 +143,13 @@ def _warnings_html(store: Store, r: dict[str, Any]) -> str:
     """The job's warnings beside its pictures, defects first and in red."""
     doc = (store.get(r["key"]) or {}).get("evaluation") or {}
     warnings = sorted(doc.get("warnings") or [], key=lambda w: w["code"] not in DEFECT_CODES)
-    if not warnings:
+    skipped = unchecked_defects(doc.get("not_computed"))
+    if not warnings and not skipped:
         return "<br><span class=note>no warning</span>"
     items = "".join(f"<li{' class=fail' if w['code'] in DEFECT_CODES else ''}><b>{html.escape(w['code'])}</b>: "
                     f"{html.escape(w['message'])}</li>" for w in warnings)
+    items += "".join(f"<li class=note><b>not checked: {html.escape(code)}</b>: {html.escape(why)}</li>"
+                     for code, why in skipped.items())
     return f"<ul class=warnings>{items}</ul>"
 
 

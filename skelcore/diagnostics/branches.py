@@ -240,12 +240,14 @@ def _kind(path: np.ndarray, deg: np.ndarray) -> str:
 
 
 def _cycle_basis(paths: list[np.ndarray], kinds: list[str], lengths: np.ndarray,
-                 max_horton: int = 64) -> list[list[tuple[int, int]]]:
+                 max_horton: int = 64, max_horton_nodes: int = 1024) -> list[list[tuple[int, int]]]:
     """A cycle basis of the branch graph (nodes = branch ends, one edge per branch): every pure cycle
     and loop by itself, then a minimum-length basis of the rest (Horton's candidates: for every node
     v and branch x-y, the shortest paths v-x and y-v closed by the branch, taken shortest first while
-    independent over GF(2)). Beyond ``max_horton`` cycles, the fundamental cycles of a minimum
-    spanning forest (same count, not the shortest)."""
+    independent over GF(2)), on the graph's 2-core (the branches on some cycle: the trees hanging
+    off it take part in none). Beyond ``max_horton`` cycles or ``max_horton_nodes`` nodes of the core
+    (Horton keeps a nodes x nodes distance table), the fundamental cycles of a minimum spanning forest
+    (same count, not the shortest)."""
     cycles: list[list[tuple[int, int]]] = []
     graph_ids: list[int] = []
     for i, k in enumerate(kinds):
@@ -253,6 +255,7 @@ def _cycle_basis(paths: list[np.ndarray], kinds: list[str], lengths: np.ndarray,
             cycles.append([(i, 1)])
         elif k != "point":
             graph_ids.append(i)
+    graph_ids = _two_core(paths, graph_ids)
     if not graph_ids:
         return cycles
     nodes = sorted({int(paths[i][0]) for i in graph_ids} | {int(paths[i][-1]) for i in graph_ids})
@@ -264,7 +267,7 @@ def _cycle_basis(paths: list[np.ndarray], kinds: list[str], lengths: np.ndarray,
     rank = len(graph_ids) - nn + ncomp
     if rank == 0:
         return cycles
-    if rank > max_horton:
+    if rank > max_horton or nn > max_horton_nodes:
         return cycles + _fundamental_cycles(paths, graph_ids, lengths)
     from scipy.sparse.csgraph import dijkstra
 
@@ -318,6 +321,23 @@ def _cycle_basis(paths: list[np.ndarray], kinds: list[str], lengths: np.ndarray,
         members = [j for j in range(len(graph_ids)) if c >> j & 1]
         cycles.append(_ordered_cycle(members, a, b, graph_ids))
     return cycles
+
+
+def _two_core(paths: list[np.ndarray], graph_ids: list[int]) -> list[int]:
+    """The branches of ``graph_ids`` on some cycle of the branch graph: those with an end of no other
+    branch are dropped until none is left (the order kept)."""
+    if not graph_ids:
+        return graph_ids
+    ends = np.array([[int(paths[i][0]), int(paths[i][-1])] for i in graph_ids])
+    _, inv = np.unique(ends, return_inverse=True)
+    inv = inv.reshape(-1, 2)
+    keep = np.ones(len(graph_ids), bool)
+    while True:
+        deg = np.bincount(inv[keep].ravel(), minlength=int(inv.max()) + 1)
+        drop = keep & ((deg[inv[:, 0]] == 1) | (deg[inv[:, 1]] == 1))
+        if not drop.any():
+            return [g for g, k in zip(graph_ids, keep) if k]
+        keep &= ~drop
 
 
 def _ordered_cycle(members: list[int], a: np.ndarray, b: np.ndarray, graph_ids: list[int]) -> list[tuple[int, int]]:

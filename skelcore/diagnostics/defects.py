@@ -51,7 +51,8 @@ class CurveDefects:
         eb = np.asarray(self.branches.edge_branch, dtype=np.int64)
         return {"spurious_branches": np.isin(eb, self.spurs.spurious),
                 "spurious_cycles": np.asarray(self.cycles.branch_spurious, bool)[eb] if len(eb) else np.zeros(0, bool),
-                "outside": np.asarray(self.outside.edge_outside_length) > 0}
+                "outside": (np.asarray(self.outside.edge_outside_length) > 0)
+                | np.isin(eb, self.outside.far_branches())}
 
     def to_dict(self) -> dict:
         return {

@@ -91,6 +91,7 @@ class MissingParts:
     subsample: int | None
     what: str = "skeleton"
     thresholds: dict = field(default_factory=dict)
+    outside_elements: int = 0
 
     @property
     def counted(self) -> list[MissingRegion]:
@@ -132,7 +133,7 @@ class MissingParts:
                 f"{self.completeness:.3f}; {len(self.regions)} unexplained regions{big}){sub}",
             )]  # fmt: skip
         said = "; ".join(f"{r.share:.1%} of the cloud around ({r.centroid[0]:.4g}, {r.centroid[1]:.4g}, "
-                         f"{r.centroid[2]:.4g}) reaching {r.depth:.2g} local radii beyond it" for r in parts[:3])
+                         f"{r.centroid[2]:.4g}){_depth_clause(r.depth)}" for r in parts[:3])
         more = f" and {len(parts) - 3} more" if len(parts) > 3 else ""
         n = len(parts)
         return [TrustWarning(
@@ -140,6 +141,16 @@ class MissingParts:
             f"the {self.what} does not reach {n} part{'s' if n > 1 else ''} of the shape: {said}{more}; "
             f"completeness {self.completeness:.3f}{sub}",
         )]  # fmt: skip
+
+
+def _depth_clause(depth: float) -> str:
+    """How far a region reaches, in words when it is no number: inf when no explained point
+    borders it, NaN when too small to be measured (the clause is left out)."""
+    if depth == np.inf:
+        return " with no explained point next to it"
+    if not np.isfinite(depth):
+        return ""
+    return f" reaching {depth:.2g} local radii beyond it"
 
 
 def skeleton_elements(skeleton: np.ndarray | CurveSkeleton, spacing: float, max_elements: int,
@@ -186,6 +197,7 @@ def missing_parts(
     what: str = "skeleton",
     to_user: Callable[[np.ndarray], np.ndarray] = _identity,
     keep: np.ndarray | None = None,
+    inside: Callable[[np.ndarray], np.ndarray] | None = None,
     checkpoint: Checkpoint = no_checkpoint,
 ) -> MissingParts:
     """The parts of the (normalized) cloud the (normalized) skeleton does not reach, and its completeness.
@@ -204,6 +216,11 @@ def missing_parts(
     keep : for a point set, the rows whose balls may explain the cloud (e.g. the bounded ones: the
         ball of a point far outside the shape touches it from outside and "explains" it); ignored
         when ``cov`` is given.
+    inside : a test of normalized points, True in the shape (e.g. the voxelized interior): the
+        elements it rejects explain nothing (an edge through the air touches the cloud from outside
+        with balls as large as the gap it crosses; docs/diagnostics.md "Completeness"). When it
+        rejects some, the coverage is computed again without them (``cov`` is not used) and
+        ``outside_elements`` counts them.
     checkpoint : ``checkpoint(fraction)``, raises to cancel.
 
     An empty skeleton explains nothing: one region per connected part of the cloud, depth inf.
@@ -212,6 +229,14 @@ def missing_parts(
     cloud = np.asarray(cloud, dtype=float).reshape(-1, 3)
     n = len(cloud)
     checkpoint(0.0)
+    n_out = 0
+    if inside is not None and keep is not None and not isinstance(skeleton, CurveSkeleton):
+        skeleton, keep = np.asarray(skeleton, dtype=float).reshape(-1, 3)[np.asarray(keep, dtype=bool)], None
+    if inside is not None and cov is not None:  # the evaluation's coverage holds while every element is inside
+        tau = float(cov.tau)
+        elements = skeleton_elements(skeleton, tau / float(p.coverage_tau_factor), int(p.missing_max_elements))
+        if len(elements) and not np.all(inside(elements)):
+            cov = None
     sub: np.ndarray | None = None
     spread_factor = 1.0
     full_covered = None
@@ -243,6 +268,9 @@ def missing_parts(
         skeleton = np.asarray(skeleton, dtype=float).reshape(-1, 3)[np.asarray(keep, dtype=bool)]
     if cov is None:
         elements = skeleton_elements(skeleton, spacing, int(p.missing_max_elements), lambda f: checkpoint(0.1))
+        if inside is not None and len(elements):
+            ok = np.asarray(inside(elements), bool)
+            n_out, elements = int(np.count_nonzero(~ok)), elements[ok]
         cov = coverage(pts, elements, p, tau, checkpoint=lambda f: checkpoint(0.1 + 0.6 * f))
     checkpoint(0.7)
     region_s, regions = _regions(pts, cov, spacing, p, checkpoint)
@@ -269,6 +297,7 @@ def missing_parts(
         ))  # fmt: skip
     checkpoint(1.0)
     return MissingParts(
+        outside_elements=n_out,
         completeness=float(explained.mean()) if n else 1.0,
         explained=explained,
         region=region.astype(np.int32),

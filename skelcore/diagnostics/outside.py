@@ -27,7 +27,7 @@ from ..metrics.curve_sampling import CurveSamples
 from ..geometry import Checkpoint, kd_tree, no_checkpoint
 from ..params import Params
 from .trust_warning import TrustWarning
-from .branches import Branches, decompose_branches
+from .branches import Branches, decompose_branches, densify
 from .interior import VoxelShape, cloud_subsample, median_spacing, voxelize_interior
 
 __all__ = ["OutsideDefects", "find_outside"]
@@ -62,6 +62,7 @@ class OutsideDefects:
     params: Params = field(default_factory=Params)
     subsampled: int | None = None
     voxel_size: float = 0.0
+    reach: np.ndarray = field(default_factory=lambda: np.zeros(0))
 
     @property
     def length_share(self) -> float:
@@ -72,20 +73,48 @@ class OutsideDefects:
         """Length outside per branch in local radii."""
         return self.branch_outside_length / self.radius if self.radius > 0 else np.zeros_like(self.branch_outside_length)
 
-    def defective_branches(self) -> np.ndarray:
-        return np.flatnonzero(self.branch_radii >= self.params.outside_min_radii)
+    def far_branches(self) -> np.ndarray:
+        """Branches reaching more than ``outside_reach`` local radii out of the shape (``reach``)."""
+        return np.flatnonzero(self.reach > self.params.outside_reach) if len(self.reach) else np.zeros(0, np.int64)
 
-    def warnings(self) -> list[TrustWarning]:
+    def defective_branches(self, reach_only: bool = False) -> np.ndarray:
+        """Branches with ``outside_min_radii`` of length outside, or reaching too far (only those
+        with ``reach_only``: boundedness cannot tell outside on an open surface)."""
+        far = self.far_branches()
+        if reach_only:
+            return far
+        return np.union1d(np.flatnonzero(self.branch_radii >= self.params.outside_min_radii), far).astype(np.int64)
+
+    def warnings(self, reach_only: bool = False) -> list[TrustWarning]:
+        """``outside``; with ``reach_only`` only for the branches reaching too far (docs/diagnostics.md "Outside")."""
         out: list[TrustWarning] = []
+        if reach_only:
+            far = self.far_branches()
+            if len(far):
+                worst = int(far[np.argmax(self.reach[far])])
+                out.append(TrustWarning(
+                    "outside",
+                    f"{len(far)} branch{'es' if len(far) > 1 else ''} of the curve skeleton reach{'' if len(far) > 1 else 'es'} "
+                    f"more than {self.params.outside_reach:g} local radii out of the shape, the farthest branch {worst} "
+                    f"({self.reach[worst]:.2g} radii)",
+                ))  # fmt: skip
+            return out
         bad = self.defective_branches()
         if len(bad) or (self.total_length > 0 and self.length_share >= self.params.outside_min_share):
-            worst = int(np.argmax(self.branch_radii)) if len(self.branch_radii) else -1
             n_edges = int(np.count_nonzero(self.edge_outside_length > 0))
+            if self.radius > 0 and len(self.branch_radii):  # lengths in local radii only when one is known
+                worst = int(np.argmax(self.branch_radii))
+                most = (f", {self.branch_radii.sum():.2g} local radii, the most on branch {worst} "
+                        f"({self.branch_radii[worst]:.2g} radii, up to {self.depth[worst]:.2g} radii out)")
+            else:
+                most = ""
+            far = self.far_branches()
+            reach = (f"; {len(far)} reach{'' if len(far) > 1 else 'es'} more than {self.params.outside_reach:g} "
+                     f"local radii out (up to {float(self.reach[far].max()):.2g})") if len(far) else ""
             out.append(TrustWarning(
                 "outside",
                 f"the curve skeleton leaves the shape on {len(bad)} branches ({n_edges} edges): "
-                f"{self.length_share:.1%} of its length, {self.branch_radii.sum():.2g} local radii, the most on "
-                f"branch {worst} ({self.branch_radii[worst]:.2g} radii, up to {self.depth[worst]:.2g} radii out)",
+                f"{self.length_share:.1%} of its length{most}{reach}",
             ))  # fmt: skip
         if self.skeletal_outside is not None and self.skeletal_cluster_share > self.params.outside_skeletal_share:
             out.append(TrustWarning(
@@ -101,8 +130,9 @@ class OutsideDefects:
             "radius": float(self.radius),
             "branches": [
                 {"id": int(b), "length": float(self.branch_outside_length[b]), "radii": float(self.branch_radii[b]),
-                 "depth": float(self.depth[b])}
-                for b in np.flatnonzero(self.branch_outside_length > 0)
+                 "depth": float(self.depth[b]), "reach": float(self.reach[b]) if len(self.reach) else 0.0}
+                for b in np.flatnonzero((self.branch_outside_length > 0) | (self.reach > self.params.outside_reach)
+                                        if len(self.reach) else self.branch_outside_length > 0)
             ],
         }
         if self.skeletal_outside is not None:
@@ -155,6 +185,74 @@ def _outside_stretches(curve: CurveSkeleton, samples: CurveSamples, sample_out: 
     if out.any():
         out[out] = ~in_shape(pts[out])
     return pts, pe, out, cover
+
+
+_ONE_SIDED_K = 16  # cloud points whose directions tell one-sided from surrounded
+
+
+def branch_reach(curve: CurveSkeleton, branches: Branches, cloud_tree: cKDTree, radius: float,
+                 params: Params) -> np.ndarray:
+    """(B,) how far each branch reaches out of the shape, in local radii: the largest distance to the
+    cloud (less coverage's tau) of its points (every half local radius) whose nearest cloud points lie on one side
+    (``outside_one_sided``), over the radius where it attaches (at a junction the largest median
+    local radius of the branches meeting there; for an internal branch its smaller end's; the
+    median local radius otherwise);
+    0 where no point is farther than ``outside_reach`` such radii (docs/diagnostics.md "Outside").
+    Memory O(curve points)."""
+    nb = len(branches)
+    out = np.zeros(nb)
+    if not nb or curve.n_edges == 0 or not radius > 0 or cloud_tree.n == 0:
+        return out
+    total = float(curve.edge_lengths().sum())
+    pts, pe = densify(curve, max(0.5 * radius, total / 200_000))
+    keep = pe >= 0
+    pts, pb = pts[keep], branches.edge_branch[pe[keep]]
+    deg = curve.degrees()
+    # the radius at a junction: the largest median radius of the branches meeting there (a traced
+    # node may lie on the surface, its own distance to the cloud says nothing)
+    at: dict[int, list[tuple[float, int]]] = {}
+    med = np.where(np.isfinite(branches.radius_median), branches.radius_median, 0.0)
+    for b, path in enumerate(branches.paths):
+        for v in {int(path[0]), int(path[-1])}:
+            if deg[v] >= 3:
+                at.setdefault(v, []).append((float(med[b]), b))
+    ref = np.full(nb, radius)
+    for b, (path, kind) in enumerate(zip(branches.paths, branches.kind)):
+        if kind not in ("terminal", "internal"):
+            continue
+        # the others meeting at its junctions: a branch in the air has a large radius of its own
+        ends = [max((m for m, o in at[int(v)] if o != b), default=0.0) for v in {int(path[0]), int(path[-1])} if int(v) in at]
+        ends = [e for e in ends if e > 0]
+        if ends:
+            ref[b] = min(ends)
+    ref = np.where(ref > 0, ref, radius)
+    # a sparse cloud leaves gaps of its spacing on a thin part: the coverage's tolerance tau first
+    tau = params.coverage_tau_factor * median_spacing(cloud_tree.data)
+    d, _ = cloud_tree.query(pts)
+    d = np.maximum(d - tau, 0.0)
+    far = np.flatnonzero(d > params.outside_reach * ref[pb])
+    if not len(far):
+        return out
+    side = one_sided(cloud_tree, pts[far], params.outside_one_sided)
+    np.maximum.at(out, pb[far[side]], d[far[side]] / ref[pb[far[side]]])
+    return out
+
+
+def one_sided(cloud_tree: cKDTree, points: np.ndarray, threshold: float) -> np.ndarray:
+    """Whether the 16 nearest cloud points of each point lie on one side of it: the mean of the unit
+    vectors to them is at least ``threshold`` long (a point outside a surface; inside a tube or a
+    ball, even half a tube, they surround it more: 2 / pi for a half ring). 65 536 points at a time."""
+    out = np.zeros(len(points), bool)
+    k = min(_ONE_SIDED_K, cloud_tree.n)
+    if not k:
+        return out
+    for a in range(0, len(points), 65536):
+        part = points[a:a + 65536]
+        _, j = cloud_tree.query(part, k=k)
+        u = cloud_tree.data[j.reshape(len(part), k)] - part[:, None, :]
+        u /= np.maximum(np.linalg.norm(u, axis=2, keepdims=True), 1e-300)
+        out[a:a + 65536] = np.linalg.norm(u.mean(axis=1), axis=1) >= threshold
+    return out
 
 
 def find_outside(
@@ -213,6 +311,13 @@ def find_outside(
                 d, _ = cloud_tree.query(pts[out])
                 np.maximum.at(depth, branches.edge_branch[pe[out]], d / radius)
         vertex_flag[curve.edges[edge_len > 0].ravel()] = True
+    reach = np.zeros(nb)
+    if curve is not None and branches is not None and cloud_tree is not None and ne:
+        if not radius > 0:
+            radius = float(np.nanmedian(branches.radius_median)) if np.any(np.isfinite(branches.radius_median)) else 0.0
+        reach = branch_reach(curve, branches, cloud_tree, radius, params)
+        for b in np.flatnonzero(reach > params.outside_reach):
+            vertex_flag[branches.paths[b]] = True
     checkpoint(0.5)
     branch_len = np.bincount(branches.edge_branch, weights=edge_len, minlength=nb) if nb and ne else np.zeros(nb)
     sk_out = None
@@ -233,5 +338,5 @@ def find_outside(
         radius=radius, depth=depth, vertex_flag=vertex_flag,
         total_length=float(curve.edge_lengths().sum()) if curve is not None else 0.0, skeletal_outside=sk_out,
         skeletal_cluster_share=sk_share, skeletal_cluster=sk_cluster, params=params, subsampled=sub,
-        voxel_size=float(voxel_shape.size),
+        voxel_size=float(voxel_shape.size), reach=reach,
     )  # fmt: skip

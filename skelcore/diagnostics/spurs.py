@@ -26,7 +26,7 @@ from ..curve import CurveSkeleton
 from ..metrics.curve_sampling import CurveSamples
 from ..geometry import Checkpoint, kd_tree, no_checkpoint
 from ..params import Params
-from .trust_warning import TrustWarning
+from .trust_warning import TrustWarning, finite_range
 from .branches import Branches, decompose_branches, densify
 from .interior import cloud_subsample, median_spacing
 
@@ -74,12 +74,13 @@ class SpurDefects:
         n = len(self.spurious)
         if n < self.params.spurs_warn_count:
             return []
-        lr = self.length_radii[self.branch_spurious]
+        span = finite_range(self.length_radii[self.branch_spurious])  # none on a junction at a cloud point
+        long = f", {span} local radii long" if span is not None else ""
         return [TrustWarning(
             "spurious_branches",
             f"{n} of the curve's {len(self.terminal)} terminal branches are spurious (reach no farther than "
             f"their junction's ball or explain no part of the cloud the rest does not): {self.length_share:.1%} "
-            f"of the curve's length, {np.nanmin(lr):.2g}-{np.nanmax(lr):.2g} local radii long",
+            f"of the curve's length{long}",
         )]  # fmt: skip
 
     def to_dict(self) -> dict:
@@ -110,32 +111,90 @@ def curve_points(curve: CurveSkeleton, branches: Branches, step: float) -> tuple
     return pts, pb
 
 
+_QUERY_CELLS = 1 << 20  # neighbour entries (rows x k) one query of the spur test holds at once
+_K_MAX = 256  # beyond, the rows still crowded by their own branch are answered per branch
+
+
 def _explained_elsewhere(
-    tree: cKDTree, pts_branch: np.ndarray, reach: np.ndarray, queries: np.ndarray, own: np.ndarray, bound: float
+    pts: np.ndarray, pts_branch: np.ndarray, reach: np.ndarray, queries: np.ndarray, own: np.ndarray
 ) -> np.ndarray:
-    """For each query point, whether some curve point on another branch than ``own`` explains it
-    (|q - x| <= reach(x)). The k = 16 nearest first, k doubled for the rows that only met their own
-    branch within ``bound``."""
+    """For each query point, whether some curve point x on another branch than ``own`` explains it
+    (|q - x| <= reach(x)).
+
+    The curve points are grouped by reach in levels of a factor 2 (an edge through the air has balls
+    far larger than the shape's: one scale would blind the trees), each level searched by
+    :func:`_explained_in_level` while rows remain unexplained. Memory is O(curve points +
+    ``_QUERY_CELLS``) whatever the balls' sizes (docs/diagnostics.md "Peak memory")."""
     n = len(queries)
-    done = np.zeros(n, bool)
     out = np.zeros(n, bool)
+    ok = np.isfinite(reach) & (reach >= 0)
+    if not n or not ok.any():
+        return out
+    top = float(reach[ok].max())
+    level = np.full(len(reach), -1)
+    with np.errstate(divide="ignore"):
+        level[ok] = np.clip(np.floor(np.log2(top / np.maximum(reach[ok], top * 2.0**-60))), 0, 60).astype(int)
+    for lv in np.unique(level[ok])[::-1]:  # the small balls first: most rows end there
+        todo = np.flatnonzero(~out)
+        if not len(todo):
+            break
+        sel = np.flatnonzero(level == lv)
+        out[todo] = _explained_in_level(pts[sel], pts_branch[sel], reach[sel], queries[todo], own[todo])
+    return out
+
+
+def _explained_in_level(
+    pts: np.ndarray, pts_branch: np.ndarray, reach: np.ndarray, queries: np.ndarray, own: np.ndarray
+) -> np.ndarray:
+    """``_explained_elsewhere`` for curve points of reaches within a factor 2 of each other.
+
+    They are lifted to 4-D, x' = (x, sqrt(R^2 - reach(x)^2)) with R the largest reach, and q to
+    (q, 0): |q' - x'|^2 = |q - x|^2 - reach(x)^2 + R^2, so the nearest lifted points are those whose
+    balls q enters deepest and none beyond R explains q. The k = 16 nearest first, k doubled up to
+    ``_K_MAX`` while a row met only its own branch within R; the rows still crowded (inside many
+    balls of their own branch) get a tree of the other branches. Chunks of ``_QUERY_CELLS``
+    neighbours."""
+    n = len(queries)
+    out = np.zeros(n, bool)
+    big = float(np.max(reach))
+    lifted = np.column_stack([pts, np.sqrt(np.maximum(big * big - reach * reach, 0.0))])
+    tree = cKDTree(lifted)
+    bound = big * (1.0 + 1e-9) + 1e-300
+    q4 = np.column_stack([queries, np.zeros(n)])
     k = 16
     todo = np.arange(n)
-    while len(todo):
+    while len(todo) and k <= _K_MAX:
         kk = min(k, tree.n)
-        d, i = tree.query(queries[todo], k=kk, distance_upper_bound=bound)
-        d = d.reshape(len(todo), kk)
-        i = i.reshape(len(todo), kk)
-        valid = np.isfinite(d)
-        ii = np.where(valid, i, 0)
-        other = valid & (pts_branch[ii] != own[todo, None])
-        hit = other & (d <= reach[ii])
-        out[todo] = hit.any(axis=1)
-        # unresolved: every neighbour found was on the own branch and the search was cut by k
-        unresolved = ~out[todo] & valid[:, -1] & (kk < tree.n)
-        done[todo[~unresolved]] = True
-        todo = todo[unresolved]
+        crowded = np.zeros(len(todo), bool)
+        rows = max(1, _QUERY_CELLS // kk)
+        for a in range(0, len(todo), rows):
+            part = todo[a:a + rows]
+            d, i = tree.query(q4[part], k=kk, distance_upper_bound=bound)
+            valid = np.isfinite(d.reshape(len(part), kk))
+            ii = np.where(valid, i.reshape(len(part), kk), 0)
+            other = valid & (pts_branch[ii] != own[part, None])
+            dist = np.linalg.norm(pts[ii] - queries[part, None, :], axis=2)
+            out[part] = (other & (dist <= reach[ii])).any(axis=1)
+            # crowded: all k neighbours within R on the own branch (another branch may still explain it)
+            crowded[a:a + rows] = ~other.any(axis=1) & valid[:, -1] & (kk < tree.n)
+        todo = todo[crowded]
         k *= 2
+    for b in np.unique(own[todo]):
+        mine = todo[own[todo] == b]
+        others = np.flatnonzero(pts_branch != b)
+        if not len(others):
+            continue
+        sub = cKDTree(lifted[others])
+        kk = min(4, len(others))
+        rows = max(1, _QUERY_CELLS // kk)
+        for a in range(0, len(mine), rows):
+            part = mine[a:a + rows]
+            _, i = sub.query(q4[part], k=kk, distance_upper_bound=bound)
+            i = i.reshape(len(part), kk)
+            valid = i < len(others)
+            x = others[np.where(valid, i, 0)]
+            dist = np.linalg.norm(pts[x] - queries[part, None, :], axis=2)
+            out[part] = (valid & (dist <= reach[x])).any(axis=1)
     return out
 
 
@@ -186,7 +245,7 @@ def find_spurious_branches(
         in_term = is_term[own]
         q = use[in_term]
         checkpoint(0.4)
-        elsewhere = _explained_elsewhere(ptree, pb, explain, q, own[in_term], float(explain.max()))
+        elsewhere = _explained_elsewhere(pts, pb, explain, q, own[in_term])
         checkpoint(0.9)
         territory = np.bincount(own[in_term], minlength=nb)[:nb]
         unique = np.bincount(own[in_term][~elsewhere], minlength=nb)[:nb]

@@ -224,6 +224,13 @@ def defect_codes(warnings: list[dict[str, str]] | list[TrustWarning]) -> list[st
     return sorted(codes & DEFECT_CODES)
 
 
+def unchecked_defects(not_computed: dict[str, str] | None) -> dict[str, str]:
+    """The defect checks that did not run (``Evaluation.not_computed`` entries named by a defect
+    code) -> why: a block of defects names them, so that "none found" never hides a check left out
+    (docs/diagnostics.md "Checks not run")."""
+    return {k: str(v) for k, v in (not_computed or {}).items() if k in DEFECT_CODES}
+
+
 def smoothness_warning(degrees: np.ndarray) -> list[TrustWarning]:
     """``trivial_smoothness`` when the curve has no degree-2 vertex."""
     if np.count_nonzero(np.asarray(degrees) == 2) == 0:

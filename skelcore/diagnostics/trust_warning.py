@@ -11,13 +11,23 @@ from __future__ import annotations
 import re
 from dataclasses import dataclass
 
-__all__ = ["TrustWarning"]
+__all__ = ["TrustWarning", "finite_range"]
 
 
 _NUMBER = r"([-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?)"
 _MAPPING = re.compile(rf"--skeleton-scale {_NUMBER} --skeleton-offset {_NUMBER} {_NUMBER} {_NUMBER}")
 #: where a message's command-line remedy starts (what precedes it is the finding)
 _REMEDIES = ("; give --skeletal-index", "; " + "map it with --skeleton-scale", " (or, if it is in other units, ")
+
+
+def finite_range(values, spec: str = ".2g") -> str | None:
+    """"a-b" (or "a" when both agree) of the finite ``values`` in the format ``spec``, None when none
+    is finite: a message leaves the clause out rather than print "nan" (docs/diagnostics.md)."""
+    finite = [float(v) for v in values if v == v and abs(float(v)) != float("inf")]
+    if not finite:
+        return None
+    lo, hi = format(min(finite), spec), format(max(finite), spec)
+    return lo if lo == hi else f"{lo}-{hi}"
 
 
 @dataclass(frozen=True)

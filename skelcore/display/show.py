@@ -178,4 +178,4 @@ def _print_tables(evaluations: Sequence[Any], labels: Sequence[str]) -> None:
     from .summary_table import format_defects, format_table
 
     for ev, label in zip(evaluations, labels):
-        print(f"{label}:\n{format_table(ev.scores())}\n{format_defects(ev.warning_dicts())}\n")
+        print(f"{label}:\n{format_table(ev.scores())}\n{format_defects(ev.warning_dicts(), ev.not_computed)}\n")

@@ -11,7 +11,7 @@ import html
 from typing import Any, Sequence
 
 from ..scores import Scores, paper_table
-from ..diagnostics.trust import DEFECT_CODES
+from ..diagnostics.trust import DEFECT_CODES, unchecked_defects
 
 __all__ = ["HEADER", "format_table", "table_notes", "format_defects", "summary_html", "tables_html"]
 
@@ -53,13 +53,15 @@ def _defects(warnings: Sequence[dict]) -> list[dict]:
     return [w for w in warnings if w["code"] in DEFECT_CODES]
 
 
-def format_defects(warnings: Sequence[dict]) -> str:
+def format_defects(warnings: Sequence[dict], not_computed: dict[str, str] | None = None) -> str:
     """The "defects" block under the paper's table: one line per defect warning
-    (:data:`skelcore.diagnostics.trust.DEFECT_CODES`), "none found" otherwise."""
+    (:data:`skelcore.diagnostics.trust.DEFECT_CODES`), "none found" otherwise; then one line per
+    defect check that did not run, with why (``not_computed``; docs/diagnostics.md "Checks not run")."""
     found = _defects(warnings)
+    skipped = [f"  [not checked: {code}] {why}" for code, why in unchecked_defects(not_computed).items()]
     if not found:
-        return "defects: none found"
-    return "\n".join(["defects:"] + [f"  [{w['code']}] {w['message']}" for w in found])
+        return "\n".join(["defects: none found" + (" among the checks run" if skipped else "")] + skipped)
+    return "\n".join(["defects:"] + [f"  [{w['code']}] {w['message']}" for w in found] + skipped)
 
 
 _STYLE = ("<style>.skelscope-table td,.skelscope-table th{padding:2px 10px;text-align:left}"
@@ -89,6 +91,11 @@ def summary_html(ev: Any, title: str | None = None) -> str:
     else:
         out.append('<p class="skelscope-defects"><b>defects:</b></p><ul class="skelscope-defects">')
         out += [f"<li>[{_esc(w['code'])}] {_esc(w['message'])}</li>" for w in found]
+        out.append("</ul>")
+    skipped = unchecked_defects(getattr(ev, "not_computed", None))
+    if skipped:
+        out.append('<ul class="skelscope-defects">')
+        out += [f"<li>[not checked: {_esc(code)}] {_esc(why)}</li>" for code, why in skipped.items()]
         out.append("</ul>")
     others = [w for w in warnings if w not in found]
     if others:

@@ -17,7 +17,7 @@ from ..diagnostics.record import diagnostics_record
 from .context import EvalContext
 from .scan_checks import scan_warnings
 
-__all__ = ["assemble", "trust_warnings", "diagnostics_warnings"]
+__all__ = ["assemble", "trust_warnings", "diagnostics_warnings", "diagnostics_of"]
 
 
 def assemble(ctx: EvalContext, inputs: dict[str, Any] | None = None) -> Evaluation:
@@ -50,11 +50,18 @@ def assemble(ctx: EvalContext, inputs: dict[str, Any] | None = None) -> Evaluati
     ev.coverage_curve = got.get("curve coverage")
     ev.reference = got.get("reference")
     ev.ground_truth = got.get("ground truth")
-    if any(k in got for k in ("curve defects", "skeletal outside", "skeletal missing parts", "curve missing parts")):
-        ev.diagnostics = diagnostics_record(got.get("curve defects"), got.get("skeletal missing parts"),
-                                            got.get("curve missing parts"), skeletal_outside=got.get("skeletal outside"))
+    ev.diagnostics = diagnostics_of(ctx)
     ev.scan = ctx.scan
     return ev
+
+
+def diagnostics_of(ctx: EvalContext):
+    """The diagnostics' record (docs/diagnostics.md) of the stages' results, None when none ran."""
+    got = ctx.results
+    if not any(k in got for k in ("curve defects", "skeletal outside", "skeletal missing parts", "curve missing parts")):
+        return None
+    return diagnostics_record(got.get("curve defects"), got.get("skeletal missing parts"),
+                              got.get("curve missing parts"), skeletal_outside=got.get("skeletal outside"))
 
 
 def diagnostics_warnings(ctx: EvalContext) -> list[TrustWarning]:

@@ -13,7 +13,7 @@ from ..curve import CurveSkeleton
 from ..evaluation import Evaluation
 from ..parallel import GraphTask, run_graph
 from ..params import Params
-from .assemble import assemble, diagnostics_warnings, trust_warnings
+from .assemble import assemble, diagnostics_of, diagnostics_warnings, trust_warnings
 from .catalogue import Stage, select, start_order
 from .context import EvalContext, build_context
 from .evaluation_source import EvaluationSource
@@ -132,17 +132,86 @@ def finish(ctx: EvalContext, inputs: dict | None, checkpoint: Callable[[float], 
     ev = assemble(ctx, inputs)
     ev.warnings += trust_warnings(ctx, ev, checkpoint)
     codes = {w.code for w in ev.warnings}
-    if "frame" not in codes:  # in another frame, every diagnostic would say so too
+    ran = _defect_checks(ctx)
+    if "frame" in codes:  # in another frame, every diagnostic would say so too
+        ev.not_computed.update(dict.fromkeys(
+            ran, "the skeleton seems to be in another frame than the cloud (warning frame): its defects are not judged"))
+    else:
+        if "open_surface" in codes:
+            _every_ball_explains(ctx, ev)
         found = diagnostics_warnings(ctx)
+        skipped: dict[str, str] = {}
         if "open_surface" in codes or ctx.viewpoints_n is not None:
             # the cycle test voxelizes the shape's interior, which an open scan does not enclose
-            found = [w for w in found if w.code not in ("spurious_cycles", "missing_cycles")]
+            why = ("the cloud is not a closed surface (warning open_surface)" if "open_surface" in codes
+                   else "the scan is seen from given viewpoints")
+            skipped.update(dict.fromkeys(("spurious_cycles", "missing_cycles"),
+                                         f"{why}: the shape's interior, which the cycle test voxelizes, is not enclosed"))
         if "open_surface" in codes:
             # and the outside test reads the paper's boundedness, which rays leaving through the openings
             # defeat: on the true axis of a half cylinder it fired (with viewpoints it reads what was seen)
-            found = [w for w in found if w.code != "outside"]
-        ev.warnings += found
+            skipped["outside"] = ("the cloud is not a closed surface (warning open_surface): rays leave through "
+                                  "its openings, so boundedness cannot tell outside from inside; only the branches "
+                                  f"reaching more than outside_reach = {ctx.params.outside_reach:g} local radii out "
+                                  "were looked for")
+        skipped = {k: v for k, v in skipped.items() if k in ran}
+        ev.not_computed.update(skipped)
+        ev.warnings += [w for w in found if w.code not in skipped]
+        defects = ctx.results.get("curve defects")
+        if "outside" in skipped and defects is not None:  # the reach test needs no boundedness
+            ev.warnings += defects.outside.warnings(reach_only=True)
     return ev
+
+
+def _every_ball_explains(ctx: EvalContext, ev: Evaluation) -> None:
+    """On an open surface the voxelized interior is not enclosed: when some elements were left out as
+    outside, the missing parts are found again leaving out only those in no solid voxel whose nearest
+    cloud points lie on one side (``outside_one_sided``; a half cylinder's axis sees a half ring, 2 / pi;
+    docs/diagnostics.md "Completeness")."""
+    from ..diagnostics.interior import cloud_subsample
+    from ..diagnostics.missing_parts import missing_parts
+    from ..diagnostics.outside import one_sided
+    from ..geometry import kd_tree
+
+    trees: list = []
+
+    def inside(points: np.ndarray) -> np.ndarray:
+        shape = ctx.interior()
+        ijk = shape.index_of(points)
+        solid = shape.solid()[ijk[:, 0], ijk[:, 1], ijk[:, 2]]
+        if solid.all():
+            return solid
+        if not trees:
+            trees.append(kd_tree(cloud_subsample(ctx.cloud_n, ctx.params.diag_max_points)))
+        solid[~solid] = ~one_sided(trees[0], points[~solid], ctx.params.outside_one_sided)
+        return solid
+
+    redone = False
+    for kind in ("skeletal", "curve"):
+        found = ctx.results.get(f"{kind} missing parts")
+        if found is None or not found.outside_elements:
+            continue
+        cov = ctx.results.get(f"{kind} coverage")
+        ctx.results[f"{kind} missing parts"] = missing_parts(
+            ctx.cloud_n, ctx.skeletal_n if kind == "skeletal" else ctx.curve_n, ctx.params, cov=cov,
+            tau=None if cov is None else cov.tau, what=found.what, to_user=ctx.norm.invert, inside=inside)
+        redone = True
+    if redone:
+        ev.diagnostics = diagnostics_of(ctx)
+
+
+def _defect_checks(ctx: EvalContext) -> list[str]:
+    """The defect warnings whose checks ran (docs/diagnostics.md): what a switched-off check names in
+    ``not_computed``."""
+    got = ctx.results
+    out: list[str] = []
+    if "skeletal missing parts" in got or "curve missing parts" in got:
+        out.append("incomplete")
+    if "curve defects" in got:
+        out += ["spurious_branches", "spurious_cycles", "missing_cycles"]
+    if "curve defects" in got or "skeletal outside" in got:
+        out.append("outside")
+    return out
 
 
 def _task(stage: Stage, ctx: EvalContext, tracker: StageProgress) -> GraphTask:

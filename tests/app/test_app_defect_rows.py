@@ -48,3 +48,11 @@ def test_a_clean_shape_has_no_row_and_is_sound():
     s = shapes.torus(n=3000, seed=1)
     ev = evaluate(s.cloud, s.skeletal, CurveSkeleton.from_raw(s.curve_vertices, s.curve_edges))
     assert defect_rows(ev) == [] and sound_line(ev) == "sound" and defect_rows(None) == []
+
+
+def test_the_defects_dock_names_the_checks_that_did_not_run():
+    """The Defects dock's status line: a check switched off is named with its reason, never silent."""
+    from types import SimpleNamespace
+
+    ev = SimpleNamespace(warnings=[], not_computed={"outside": "the cloud is not a closed surface", "coverage": "x"})
+    assert sound_line(ev) == "sound; not checked: outside (the cloud is not a closed surface)"

@@ -203,3 +203,25 @@ def test_evaluate_tests_a_given_skeletal_set_for_points_outside(tmp_path):
     back = load_evaluation(tmp_path / "t.npz", tmp_path / "t.json")
     np.testing.assert_array_equal(back.diagnostics.arrays["skeletal_point_defects"], flags)
     assert back.diagnostics.summary["skeletal_outside"] == ev.diagnostics.summary["skeletal_outside"]
+
+
+def test_a_short_far_spur_is_outside_by_its_reach_alone():
+    """A tube's axis with one spur reaching 10 radii out (a few % of the curve's length): ``outside``
+    by the per-branch reach, which needs no boundedness (it stands on an open surface); the axis alone
+    reaches nowhere (docs/diagnostics.md "Outside")."""
+    from diagnostics_helpers import attach_path
+
+    from skelcore.diagnostics import find_outside
+
+    s = shapes.cylinder(n=3000, radius=0.25, length=4.0, seed=2)
+    v, e, ids = attach_path(s.curve_vertices, s.curve_edges, 10, s.curve_vertices[10] + [2.75, 0, 0], 2)
+    c, curve, samples, beta = normalized(s.cloud, v, e)
+    found = find_outside(c, curve, samples=samples, sample_boundedness=beta)
+    spur = found.branches.vertex_branch[ids[-1]]
+    assert list(found.far_branches()) == [spur] and found.reach[spur] > 8
+    assert spur in found.defective_branches(reach_only=True)
+    (w,) = found.warnings(reach_only=True)
+    assert "reaches more than 8 local radii" in w.message and "nan" not in w.message
+    c, curve, samples, beta = normalized(s.cloud, s.curve_vertices, s.curve_edges)
+    axis = find_outside(c, curve, samples=samples, sample_boundedness=beta)
+    assert not len(axis.far_branches()) and axis.warnings(reach_only=True) == [] and axis.warnings() == []
