@@ -16,9 +16,6 @@ from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
-from scipy.sparse import coo_matrix
-from scipy.sparse.csgraph import connected_components, dijkstra, minimum_spanning_tree
-from scipy.spatial import cKDTree
 
 __all__ = ["DefectRow", "DEFECT_TITLES", "defect_rows", "branch_flags", "branch_details", "branch_paths",
            "opening_path", "rim_spacing", "defect_counts", "sound_line", "branch_edges", "branch_points"]
@@ -153,6 +150,8 @@ def _codes(ev: Any) -> set[str]:
 
 
 def _missing_rows(ev: Any) -> list[DefectRow]:
+    from skelcore.diagnostics.missing_parts import depth_clause  # the engine's words for a depth
+
     summary, arrays = _summary(ev), _arrays(ev)
     cloud = None if getattr(ev, "cloud", None) is None else np.asarray(ev.cloud, dtype=float)
     rows = []
@@ -167,8 +166,8 @@ def _missing_rows(ev: Any) -> list[DefectRow]:
             pts = cloud[sel] if cloud is not None and len(sel) and sel.max() < len(cloud) else _NO_PLACE
             rows.append(DefectRow(
                 "incomplete", f"missing part ({what})",
-                f"{r['share']:.1%} of the cloud, {r['n_points']} points, reaching {r['depth']:.2g} local radii "
-                f"beyond the skeleton", column, sel, points=pts))
+                f"{r['share']:.1%} of the cloud, {r['n_points']} points"
+                f"{depth_clause(r.get('depth'), 'the skeleton')}", column, sel, points=pts))
         if not counted:
             rows.append(DefectRow("incomplete", f"incomplete ({what})",
                                   f"explains only {mp['completeness']:.1%} of the cloud (completeness "
@@ -291,6 +290,8 @@ RIM_BRANCH = 4
 
 def rim_spacing(points: np.ndarray) -> float:
     """The rim's spacing: the median distance from a rim point to its nearest other (0 for fewer than 2)."""
+    from scipy.spatial import cKDTree  # on first use: a cloud's first frame needs no KD-tree (start-up)
+
     pts = np.asarray(points, dtype=float)
     if len(pts) < 2:
         return 0.0
@@ -308,6 +309,10 @@ def opening_path(points: np.ndarray, link: float = RIM_LINK) -> tuple[np.ndarray
     each joined to the drawn part by its tree edge, down to :data:`RIM_BRANCH` points (the side twigs of
     a rim a few points wide are left out). A one-sided scan's rim is a long thin band: sorting it by angle
     around its centre would draw chords across the shape."""
+    from scipy.sparse import coo_matrix
+    from scipy.sparse.csgraph import connected_components, minimum_spanning_tree
+    from scipy.spatial import cKDTree
+
     pts = np.asarray(points, dtype=float)
     none = (np.zeros((0, 3)), np.zeros((0, 2), dtype=np.int64))
     spacing = rim_spacing(pts)
@@ -359,6 +364,8 @@ def opening_path(points: np.ndarray, link: float = RIM_LINK) -> tuple[np.ndarray
 def _longest_path(tree: Any) -> np.ndarray:
     """The longest path (by length) of a tree, as its node indices: farthest from any node, then farthest
     from that one (the tree's diameter)."""
+    from scipy.sparse.csgraph import dijkstra
+
     dist = dijkstra(tree, directed=False, indices=0)
     a = int(np.argmax(np.where(np.isfinite(dist), dist, -1.0)))
     dist, previous = dijkstra(tree, directed=False, indices=a, return_predecessors=True)

@@ -32,7 +32,7 @@ from ..metrics.coverage import Coverage, coverage, coverage_tau
 from ..params import Params
 from .trust_warning import TrustWarning
 
-__all__ = ["MissingRegion", "MissingParts", "missing_parts", "skeleton_elements"]
+__all__ = ["MissingRegion", "MissingParts", "missing_parts", "skeleton_elements", "depth_clause"]
 
 # neighbours per unexplained point in the region graph (edges also need to be shorter than the link)
 LINK_K = 8
@@ -133,7 +133,7 @@ class MissingParts:
                 f"{self.completeness:.3f}; {len(self.regions)} unexplained regions{big}){sub}",
             )]  # fmt: skip
         said = "; ".join(f"{r.share:.1%} of the cloud around ({r.centroid[0]:.4g}, {r.centroid[1]:.4g}, "
-                         f"{r.centroid[2]:.4g}){_depth_clause(r.depth)}" for r in parts[:3])
+                         f"{r.centroid[2]:.4g}){depth_clause(r.depth)}" for r in parts[:3])
         more = f" and {len(parts) - 3} more" if len(parts) > 3 else ""
         n = len(parts)
         return [TrustWarning(
@@ -143,14 +143,15 @@ class MissingParts:
         )]  # fmt: skip
 
 
-def _depth_clause(depth: float) -> str:
-    """How far a region reaches, in words when it is no number: inf when no explained point
-    borders it, NaN when too small to be measured (the clause is left out)."""
+def depth_clause(depth: float | str | None, beyond: str = "it") -> str:
+    """How far a region reaches, in words when it is no number: inf (``"inf"`` as the JSON writes it)
+    when no explained point borders it, NaN or None when too small to be measured (the clause is left out)."""
+    depth = np.nan if depth is None else float(depth)
     if depth == np.inf:
         return " with no explained point next to it"
     if not np.isfinite(depth):
         return ""
-    return f" reaching {depth:.2g} local radii beyond it"
+    return f" reaching {depth:.2g} local radii beyond {beyond}"
 
 
 def skeleton_elements(skeleton: np.ndarray | CurveSkeleton, spacing: float, max_elements: int,

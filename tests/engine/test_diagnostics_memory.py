@@ -46,6 +46,16 @@ _CHILD = textwrap.dedent("""
     import json, resource, sys
     import numpy as np
     resource.setrlimit(resource.RLIMIT_AS, (3 << 30, 3 << 30))
+
+
+    def _peak_mb():
+        # this process's own high-water mark (VmHWM); getrusage's ru_maxrss keeps the forking parent's
+        # peak across exec, so a child of a large test worker reads the worker's size
+        for line in open("/proc/self/status"):
+            if line.startswith("VmHWM:"):
+                return int(line.split()[1]) / 1024
+
+
     from skelcore.curve import CurveSkeleton
     from skelcore.diagnostics.defects import find_curve_defects
     from skelcore.io.loaders import load_curve
@@ -75,7 +85,7 @@ _CHILD = textwrap.dedent("""
     curve = CurveSkeleton.from_raw((curve.vertices - lo) * s, edges)
     found = find_curve_defects((cloud - lo) * s, curve)
     print(json.dumps({"codes": [w.code for w in found.warnings()], "cycles": len(found.branches.cycles),
-                      "peak_mb": resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024}))
+                      "peak_mb": _peak_mb()}))
 """)
 
 

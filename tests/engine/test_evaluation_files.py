@@ -22,7 +22,9 @@ from skelcore.params import Params
 
 def _differences(a, b, where: str = "ev") -> list[str]:
     """Every place where ``a`` and ``b`` differ, walking dataclass fields, dicts, lists and arrays
-    (arrays: same dtype, shape and values, NaN equal to NaN; numbers: NaN equal to NaN)."""
+    (arrays: same dtype, shape and values, NaN equal to NaN; numbers: NaN equal to NaN). Fields left out
+    of equality (``compare=False``: an Evaluation's ``source``, the live state ``update`` re-scores from,
+    never written to a file) are left out here too."""
     if isinstance(a, np.ndarray) or isinstance(b, np.ndarray):
         if not (isinstance(a, np.ndarray) and isinstance(b, np.ndarray)):
             return [f"{where}: {type(a).__name__} vs {type(b).__name__}"]
@@ -36,7 +38,7 @@ def _differences(a, b, where: str = "ev") -> list[str]:
     if type(a) is not type(b):
         return [f"{where}: {type(a).__name__} vs {type(b).__name__}"]
     if dataclasses.is_dataclass(a):
-        return [d for f in dataclasses.fields(a) for d in _differences(getattr(a, f.name), getattr(b, f.name),
+        return [d for f in dataclasses.fields(a) if f.compare for d in _differences(getattr(a, f.name), getattr(b, f.name),
                                                                           f"{where}.{f.name}")]
     if isinstance(a, dict):
         if list(a) != list(b):
