@@ -459,6 +459,57 @@ class Session(QtCore.QObject):
         self.message.emit("evaluating…")
         return True
 
+    def show_edited_curve(self, curve: Any, known: Any = None) -> str:
+        """The curve layer becomes ``curve`` (an edit, its undo or redo) and is scored again: ``known``
+        (the evaluation of ``curve`` kept by an undo step) is shown at once; else, when the shown
+        evaluation is of the curve before, ``Evaluation.update`` runs in the worker (only the curve's
+        samples that moved are scored again); else a full evaluation. A running evaluation is
+        dropped first (its result can never land). Returns "known", "update", "full" or "" (nothing
+        to score: no evaluation was shown and none was running)."""
+        from skelcore.edit import content_hash
+        from skelcore.stages.evaluation_source import EvaluationSource
+
+        scene = self.scene
+        old = scene.curve
+        if old is None:
+            raise ValueError("no curve skeleton loaded")
+        base = scene.evaluation
+        running = self.runner.current_name == "evaluation"
+        if running:
+            self.runner.discard()
+        src = None if base is None else getattr(base, "source", None)
+        updatable = (base is not None and getattr(base, "curve", None) is not None and isinstance(src, EvaluationSource)
+                     and src.args.get("curve") is not None and src.ctx is not None
+                     and content_hash(base.curve.curve) == content_hash(old.curve))
+        with self.batch():
+            scene.set_curve(curve, old.path, edited=True)
+            self._inputs_changed = False  # scored below, not by the automatic run
+        if known is not None:
+            scene.set_evaluation(known)
+            self._had_result = True
+            self.check_stale()
+            self.evaluated.emit(known)
+            return "known"
+        if base is None and not running and not self.auto_evaluate:
+            self.check_stale()
+            return ""
+        if not updatable:
+            return "full" if self.start_evaluation() else ""
+        self._evaluated_layers = (scene.cloud, scene.skeletal, scene.curve)
+        self._requested_correspondence = self._shown_correspondence
+        self._requested_viewpoints = self._shown_viewpoints
+        self._requested_scan_options = self._shown_scan_options
+        self.evaluation_cancelled = False
+
+        def job(progress: Any, cancel: Callable[[], bool]) -> Any:
+            progress(0.0, "scoring the edited curve")
+            return base.update(curve)
+
+        self.runner.start(job, "evaluation")
+        self.check_stale()
+        self.message.emit("scoring the edited curve…")
+        return "update"
+
     def start_skeletonize(self, params: Any = None, method: str | None = None) -> bool:
         """Skeletonize the loaded cloud in the worker; both results become layers.
 
