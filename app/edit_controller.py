@@ -68,6 +68,7 @@ class EditController(QtCore.QObject):
         self.selection: dict[str, Any] = {}  # {"kind": "branch"|"edge"|"vertex", "index": ...}
         self.vertices: list[int] = []  # the last vertices picked (Join joins the last two)
         self._applying = False
+        self._quiet = False  # a replayed log: the curve replaced without scoring each step
         #: how the last curve shown was scored: "known", "update", "full" or "" (Session.show_edited_curve)
         self.last_scoring = ""
         view = QtWidgets.QUndoView(self.stack)
@@ -152,7 +153,7 @@ class EditController(QtCore.QObject):
         """The stack's way to change the curve: shown, then scored (the known evaluation at once)."""
         self._applying = True
         try:
-            self.last_scoring = self.session.show_edited_curve(curve, known)
+            self.last_scoring = self.session.show_edited_curve(curve, known, score=not self._quiet)
         finally:
             self._applying = False
         self.selection, self.vertices = {}, []
@@ -301,6 +302,30 @@ class EditController(QtCore.QObject):
             return self.apply(f"cut cycle at {e[0]}-{e[1]}", [lambda c: edit.cut_cycle(c, e)])
         self.window.show_error("Edit refused", "no edge of this cycle can be cut without splitting the curve")
         return False
+
+    def replay(self, log: dict[str, Any]) -> list[str]:
+        """An edit log (a saved session's) replayed on the loaded curve, one undoable edit per
+        operation, scored once by the evaluation that follows; its problem in one line otherwise."""
+        import skelcore.edit as edit
+        from skelcore.errors import SkelInputError
+
+        layer = self.scene.curve
+        if layer is None:
+            return ["the curve's edits: no curve skeleton loaded"]
+        try:
+            _final, changes = edit.replay(layer.curve, log)
+        except SkelInputError as exc:
+            return [f"the curve's edits were not replayed: {exc}"]
+        self.original = layer.curve
+        before = layer.curve
+        self._quiet = True
+        try:
+            for change in changes:
+                self.stack.push(EditCommand(self, change.op.replace("_", " "), before, change.curve, [change]))
+                before = change.curve
+        finally:
+            self._quiet = False
+        return []
 
     # ---- saving ---------------------------------------------------------------------------
     def edit_log(self) -> dict[str, Any] | None:

@@ -202,6 +202,14 @@ class MainWindow(QtWidgets.QMainWindow):
         self.pick_element(info)
         return info
 
+    def curve_edits(self) -> dict[str, Any] | None:
+        """The edit log of the curve's edits done (None when it is not edited): saved in sessions."""
+        return self.edits.edit_log()
+
+    def replay_curve_edits(self, log: dict[str, Any]) -> list[str]:
+        """A session's edit log replayed on the loaded curve (undoable); the problems as lines."""
+        return self.edits.replay(log)
+
     def add_display_option(self, widget: QtWidgets.QWidget) -> None:
         """A control at the end of the Display panel."""
         self.display.add_option(widget)

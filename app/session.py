@@ -459,13 +459,14 @@ class Session(QtCore.QObject):
         self.message.emit("evaluating…")
         return True
 
-    def show_edited_curve(self, curve: Any, known: Any = None) -> str:
+    def show_edited_curve(self, curve: Any, known: Any = None, score: bool = True) -> str:
         """The curve layer becomes ``curve`` (an edit, its undo or redo) and is scored again: ``known``
         (the evaluation of ``curve`` kept by an undo step) is shown at once; else, when the shown
         evaluation is of the curve before, ``Evaluation.update`` runs in the worker (only the curve's
         samples that moved are scored again); else a full evaluation. A running evaluation is
         dropped first (its result can never land). Returns "known", "update", "full" or "" (nothing
-        to score: no evaluation was shown and none was running)."""
+        to score: no evaluation was shown and none was running). ``score=False`` only replaces the
+        curve (a session's edits replayed while it loads: its own evaluation follows)."""
         from skelcore.edit import content_hash
         from skelcore.stages.evaluation_source import EvaluationSource
 
@@ -477,6 +478,10 @@ class Session(QtCore.QObject):
         running = self.runner.current_name == "evaluation"
         if running:
             self.runner.discard()
+        if not score:
+            with self.batch():
+                scene.set_curve(curve, old.path, edited=True)
+            return ""
         src = None if base is None else getattr(base, "source", None)
         updatable = (base is not None and getattr(base, "curve", None) is not None and isinstance(src, EvaluationSource)
                      and src.args.get("curve") is not None and src.ctx is not None

@@ -155,3 +155,21 @@ def test_join_two_picked_vertices_and_cut_the_cycle(window, qtbot, tmp_path):
     assert w.edits.cut_selected_cycle()
     assert w.scene.curve.curve.n_edges == n_edges
     assert w.edits.stack.count() == 2
+
+
+def test_a_session_keeps_the_curve_edits(window, qtbot, tmp_path):
+    w = window
+    _cloud, curve_path, tip = loaded(qtbot, w, tmp_path)
+    w.edits.set_active(True)
+    w.select_element("curve", "vertices", tip)
+    assert w.edits.delete_selected()
+    edited = w.scene.curve.curve
+    session = w.saved_sessions.save(str(tmp_path / "edited_session.json"))
+    w.session.close_all()
+    assert w.edits.stack.count() == 0
+    assert w.saved_sessions.open(session) == []
+    assert w.scene.curve.path == curve_path and w.scene.curve.edited
+    assert edit.content_hash(w.scene.curve.curve) == edit.content_hash(edited)
+    assert w.edits.stack.count() == 1
+    w.edits.undo()
+    assert w.scene.curve.curve.n_vertices == load_curve(curve_path).n_vertices
