@@ -4,7 +4,7 @@ Edit mode (E) turns a pick on the curve (:mod:`skelscope.view.picking`) into a s
 vertex on a branch selects the branch, a junction vertex the vertex, a curve sample its edge; the last
 two vertices picked are kept for Join. Delete deletes the selected edge or vertex or prunes the selected
 branch, Shift+Delete deletes the picked vertex itself, "Cut cycle here" removes the selected edge of a
-cycle, Join adds the edge between the last two vertices picked. Each edit is one :class:`EditCommand` on
+cycle, Join adds the edge between the last two vertices picked, Ctrl+drag moves a curve vertex. Each edit is one :class:`EditCommand` on
 a QUndoStack (Ctrl+Z, Ctrl+Shift+Z) holding the curve before and after and the engine's changes
 (:mod:`skelcore.edit`), listed in the History dock; applying one shows the new curve and scores it
 again in the worker (:meth:`skelscope.session.Session.show_edited_curve`: ``Evaluation.update`` when
@@ -95,6 +95,8 @@ class EditController(QtCore.QObject):
         ):
             self.actions[spec.name] = (window.add_action(spec), spec)
         self.dock = dock
+        self.dragging: int | None = None  # the curve vertex a Ctrl+drag moves
+        window.view.plotter.installEventFilter(self)
         self.stack.indexChanged.connect(lambda _i: self._refresh_actions())
         window.element_picked.connect(self._picked)
         self.scene.subscribe(self._on_scene)
@@ -265,6 +267,42 @@ class EditController(QtCore.QObject):
                 self.select("vertex", index)
                 what = f"vertex #{index} (Delete removes it)"
         self.window.show_message(f"selected {what}", 8000)
+
+    # ---- dragging a vertex ----------------------------------------------------------------
+    def eventFilter(self, obj: QtCore.QObject, event: QtCore.QEvent) -> bool:  # noqa: N802
+        """In edit mode, Ctrl+drag on a curve vertex moves it (one undoable edit, on release) on the
+        plane through it facing the camera; the camera does not move meanwhile."""
+        t = event.type()
+        Type = QtCore.QEvent.Type  # noqa: N806
+        if t not in (Type.MouseButtonPress, Type.MouseMove, Type.MouseButtonRelease):
+            return False
+        if t == Type.MouseButtonPress:
+            if (not self._can_edit() or event.button() != QtCore.Qt.MouseButton.LeftButton
+                    or not event.modifiers() & QtCore.Qt.KeyboardModifier.ControlModifier):
+                return False
+            x, y = self.window.view.qt_to_display(event.position())
+            info = self.window.view.pick_display(x, y)
+            if info is None or info.get("layer") != "curve" or info.get("location") != "vertices":
+                return False
+            self.dragging = int(info["index"])
+            self.window.show_message(f"moving vertex #{self.dragging}: release to drop it", 5000)
+            return True
+        if self.dragging is None:
+            return False
+        if t == Type.MouseButtonRelease:
+            v, self.dragging = self.dragging, None
+            layer = self.scene.curve
+            if layer is not None and v < layer.curve.n_vertices:
+                x, y = self.window.view.qt_to_display(event.position())
+                self.move_vertex(v, self.window.view.display_to_world(x, y, layer.curve.vertices[v]))
+        return True
+
+    def move_vertex(self, v: int, xyz: Any) -> bool:
+        """Move curve vertex ``v`` to ``xyz`` (a drag's drop), as one undoable edit."""
+        import skelcore.edit as edit
+
+        xyz = tuple(float(c) for c in xyz)
+        return self.apply(f"move vertex #{v}", [lambda c: edit.move_vertex(c, v, xyz)])
 
     # ---- the Defects dock's rows ----------------------------------------------------------
     def row_actions(self, row: DefectRow) -> list[tuple[str, Callable[[], Any]]]:

@@ -173,3 +173,33 @@ def test_a_session_keeps_the_curve_edits(window, qtbot, tmp_path):
     assert w.edits.stack.count() == 1
     w.edits.undo()
     assert w.scene.curve.curve.n_vertices == load_curve(curve_path).n_vertices
+
+
+def test_ctrl_drag_moves_a_curve_vertex(window, qtbot, tmp_path):
+    from PySide6.QtTest import QTest
+
+    w = window
+    _cloud, _curve, tip = loaded(qtbot, w, tmp_path)
+    w.view.image()  # a frame at the final size: the camera is set
+    w.edits.set_active(True)
+    widget = w.view.plotter
+    ratio = widget.devicePixelRatioF()
+    old = w.scene.curve.curve.vertices[tip].copy()
+    target = np.array([0.2, 0.0, old[2]])  # back towards the axis
+
+    def qt_point(xyz):
+        x, y = w.view.world_to_display(xyz)
+        return QtCore.QPoint(round(x / ratio), round(widget.height() - y / ratio))
+
+    ctrl = QtCore.Qt.KeyboardModifier.ControlModifier
+    QTest.mousePress(widget, QtCore.Qt.MouseButton.LeftButton, ctrl, qt_point(old))
+    assert w.edits.dragging == tip
+    QTest.mouseRelease(widget, QtCore.Qt.MouseButton.LeftButton, ctrl, qt_point(target))
+    assert w.edits.dragging is None and w.edits.stack.count() == 1
+    moved = w.scene.curve.curve.vertices[tip]
+    x0, y0 = w.view.world_to_display(target)
+    x1, y1 = w.view.world_to_display(moved)
+    assert abs(x1 - x0) <= 2 * ratio and abs(y1 - y0) <= 2 * ratio  # drawn where it was dropped
+    assert np.linalg.norm(moved - old) > 0.5
+    wait_evaluated(qtbot, w)
+    assert_same_scores(w.scene.scores(), skelcore.evaluate(w.scene.evaluation.cloud, curve=w.scene.curve.curve).scores())
