@@ -155,7 +155,8 @@ class EditController(QtCore.QObject):
         """The stack's way to change the curve: shown, then scored (the known evaluation at once)."""
         self._applying = True
         try:
-            self.last_scoring = self.session.show_edited_curve(curve, known, score=not self._quiet)
+            self.last_scoring = self.session.show_edited_curve(curve, known, score=not self._quiet,
+                                                               edited=curve is not self.original)
         finally:
             self._applying = False
         self.selection, self.vertices = {}, []

@@ -459,14 +459,15 @@ class Session(QtCore.QObject):
         self.message.emit("evaluating…")
         return True
 
-    def show_edited_curve(self, curve: Any, known: Any = None, score: bool = True) -> str:
+    def show_edited_curve(self, curve: Any, known: Any = None, score: bool = True, edited: bool = True) -> str:
         """The curve layer becomes ``curve`` (an edit, its undo or redo) and is scored again: ``known``
         (the evaluation of ``curve`` kept by an undo step) is shown at once; else, when the shown
         evaluation is of the curve before, ``Evaluation.update`` runs in the worker (only the curve's
         samples that moved are scored again); else a full evaluation. A running evaluation is
         dropped first (its result can never land). Returns "known", "update", "full" or "" (nothing
         to score: no evaluation was shown and none was running). ``score=False`` only replaces the
-        curve (a session's edits replayed while it loads: its own evaluation follows)."""
+        curve (a session's edits replayed while it loads: its own evaluation follows). ``edited=False``:
+        the curve is the loaded one again (every edit undone)."""
         from skelcore.edit import content_hash
         from skelcore.stages.evaluation_source import EvaluationSource
 
@@ -480,15 +481,22 @@ class Session(QtCore.QObject):
             self.runner.discard()
         if not score:
             with self.batch():
-                scene.set_curve(curve, old.path, edited=True)
+                scene.set_curve(curve, old.path, edited=edited)
             return ""
         src = None if base is None else getattr(base, "source", None)
         updatable = (base is not None and getattr(base, "curve", None) is not None and isinstance(src, EvaluationSource)
                      and src.args.get("curve") is not None and src.ctx is not None
                      and content_hash(base.curve.curve) == content_hash(old.curve))
         with self.batch():
-            scene.set_curve(curve, old.path, edited=True)
+            scene.set_curve(curve, old.path, edited=edited)
             self._inputs_changed = False  # scored below, not by the automatic run
+        if known is not None:
+            try:
+                now = self.params()
+                if known.params.replace(beta_star=now.beta_star, c_star=now.c_star) != now:
+                    known = None  # kept under other settings: scored again
+            except ValueError:
+                known = None
         if known is not None:
             scene.set_evaluation(known)
             self._had_result = True

@@ -97,6 +97,7 @@ def test_prune_the_picked_twig_then_undo_redo_and_save(window, qtbot, tmp_path):
     assert w.edits.last_scoring == "known"  # the evaluation kept by the undo step: at once
     wait_evaluated(qtbot, w)
     assert_same_scores(w.scene.scores(), before)
+    assert "(edited)" not in w.windowTitle()  # every edit undone: the loaded curve again
     key(qtbot, w, "Ctrl+Shift+Z")
     wait_evaluated(qtbot, w)
     assert w.scene.curve.curve.n_vertices == edited.n_vertices
