@@ -8,7 +8,7 @@ units sideways: one spurious branch, partly outside."""
 
 from __future__ import annotations
 
-import dataclasses
+import json
 import os
 
 import numpy as np
@@ -107,6 +107,14 @@ def test_prune_the_picked_twig_then_undo_redo_and_save(window, qtbot, tmp_path):
     out = str(tmp_path / "cyl_pruned.ply")
     assert w.edits.save(out) == [out, str(tmp_path / "cyl_pruned.edits.json")]
     assert_same_scores(skelcore.evaluate(load_cloud(cloud_path), curve=load_curve(out)).scores(), w.scene.scores())
+    from skelcore.cli import main as skelcore_cli
+
+    report = tmp_path / "pruned.json"
+    assert skelcore_cli(["evaluate", cloud_path, "--curve", out, "--json", str(report)]) == 0  # `skelcore evaluate`
+    doc = json.loads(report.read_text())
+    shown = w.scene.scores()
+    for metric in ("boundedness", "centeredness", "smoothness"):
+        assert abs(doc[metric]["curve"] - getattr(shown, f"{metric}_curve")) <= 1e-12
     replayed, changes = edit.replay(load_curve(curve_path), edit.read_log(str(tmp_path / "cyl_pruned.edits.json")))
     assert [c.op for c in changes] == ["prune_branch"] and replayed.n_vertices == edited.n_vertices
 
