@@ -21,7 +21,7 @@ from PySide6 import QtCore, QtGui, QtWidgets
 
 from .scene import SceneEvent
 from .scene.defects import DefectRow
-from .window_api import LEFT, ActionSpec, WindowApi
+from .window_api import RIGHT, ActionSpec, WindowApi
 
 __all__ = ["EditController", "EditCommand", "edit_log_path"]
 
@@ -74,8 +74,11 @@ class EditController(QtCore.QObject):
         view = QtWidgets.QUndoView(self.stack)
         view.setEmptyLabel("loaded curve")
         self.history = view
-        dock = window.add_dock("History", view, LEFT)
-        dock.hide()
+        dock = window.add_dock("History", view, RIGHT)
+        if "Defects" in window.docks:  # a tab beside the Defects dock (a small screen has no room for another)
+            window.widget.tabifyDockWidget(window.docks["Defects"], dock)
+        if "Barcodes" in window.docks:
+            window.docks["Barcodes"].raise_()
         in_edit = self._can_edit
         self.actions: dict[str, tuple[QtGui.QAction, ActionSpec]] = {}
         for spec in (
