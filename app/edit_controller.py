@@ -15,13 +15,15 @@ format by its suffix) and its edit log beside it (``NAME.edits.json``).
 from __future__ import annotations
 
 import os
-from typing import Any, Callable
+from typing import TYPE_CHECKING, Any, Callable
 
 from PySide6 import QtCore, QtGui, QtWidgets
 
 from .scene import SceneEvent
-from .scene.defects import DefectRow
 from .window_api import RIGHT, ActionSpec, WindowApi
+
+if TYPE_CHECKING:
+    from .scene.defects import DefectRow
 
 __all__ = ["EditController", "EditCommand", "edit_log_path"]
 
@@ -309,7 +311,7 @@ class EditController(QtCore.QObject):
         return self.apply(f"move vertex #{v}", [lambda c: edit.move_vertex(c, v, xyz)])
 
     # ---- the Defects dock's rows ----------------------------------------------------------
-    def row_actions(self, row: DefectRow) -> list[tuple[str, Callable[[], Any]]]:
+    def row_actions(self, row: "DefectRow") -> list[tuple[str, Callable[[], Any]]]:
         """What a Defects row offers: prune a spurious branch, delete an outside edge, cut a spurious
         cycle (at the first of its edges whose removal keeps the curve in one piece)."""
         import skelcore.edit as edit
