@@ -327,8 +327,9 @@ class EditController(QtCore.QObject):
             out.append(("Prune this branch", lambda: self.apply(f"prune branch #{b}", [lambda c: edit.prune_branch(c, b)])))
         elif row.code == "outside" and edges:
             text = "Delete this edge" if len(edges) == 1 else f"Delete these {len(edges)} edges"
+            done = "delete an outside edge" if len(edges) == 1 else f"delete {len(edges)} outside edges"
             ops = [lambda c, e=e: edit.delete_edge(c, e) for e in edges]
-            out.append((text, lambda: self.apply(text.lower().replace("this", "an outside").replace("these", "outside"), ops)))
+            out.append((text, lambda: self.apply(done, ops)))
         elif row.code == "spurious_cycles" and edges:
             out.append(("Cut this cycle", lambda: self._cut_first(edges)))
         return out

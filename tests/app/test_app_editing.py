@@ -138,9 +138,12 @@ def test_a_defects_row_prunes_its_branch_and_an_edit_during_an_evaluation_drops_
     assert w.defects.actions_of(j)[0][0].startswith("Delete th")
     n = w.scene.curve.curve.n_vertices
 
+    w.defects.select(i)
+    assert w.defects.fix_button.isVisible() and w.defects.fix_button.text() == "Prune this branch"
     w.session.start_evaluation()  # running: the edit drops it, its result never lands
     assert w.session.runner.running
-    w.defects.run_row_action(i, "Prune this branch")
+    w.defects.panel.select_row(i)
+    w.defects.fix_button.click()
     assert w.scene.curve.curve.n_vertices < n
     wait_evaluated(qtbot, w)
     assert w.scene.evaluation.curve.curve is w.scene.curve.curve or \
