@@ -21,6 +21,8 @@ from .worker import TaskRunner
 
 __all__ = ["Session", "preload_engine", "PROCESS_FROM"]
 
+_UPDATE_LOCK = threading.Lock()  # Evaluation.update runs one at a time (Session.show_edited_curve)
+
 PROCESS_FROM = 200_000
 """Evaluations of at least this many points (cloud + skeletal set) run in a child process
 (:mod:`skelscope.engine_process`): Cancel and quit are then a kill, and the window never waits for the
@@ -515,8 +517,15 @@ class Session(QtCore.QObject):
         self.evaluation_cancelled = False
 
         def job(progress: Any, cancel: Callable[[], bool]) -> Any:
+            from skelcore.errors import Cancelled
+
             progress(0.0, "scoring the edited curve")
-            return base.update(curve)
+            # one update at a time: a dropped one (an edit came meanwhile) still runs to its end in its
+            # thread and shares the evaluation's caches; the next waits for it here, not in the window
+            with _UPDATE_LOCK:
+                if cancel():
+                    raise Cancelled("the edited curve's scoring was cancelled")
+                return base.update(curve)
 
         self.runner.start(job, "evaluation")
         self.check_stale()

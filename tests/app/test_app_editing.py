@@ -153,7 +153,7 @@ def test_a_defects_row_prunes_its_branch_and_an_edit_during_an_evaluation_drops_
     assert w.scene.curve.curve.n_vertices == n
 
 
-def test_join_two_picked_vertices_and_cut_the_cycle(window, qtbot, tmp_path):
+def test_join_two_picked_vertices_then_cut_the_cycle_while_the_join_is_scored(window, qtbot, tmp_path):
     w = window
     _cloud, _curve, tip = loaded(qtbot, w, tmp_path)
     w.edits.set_active(True)
@@ -162,11 +162,13 @@ def test_join_two_picked_vertices_and_cut_the_cycle(window, qtbot, tmp_path):
     w.select_element("curve", "vertices", 12)
     assert w.edits.join_picked()
     assert w.scene.curve.curve.n_edges == n_edges + 1
-    wait_evaluated(qtbot, w)
+    assert w.session.runner.running  # scoring the joined curve: the next edit drops it
     w.edits.select("edge", (12, tip))
     assert w.edits.cut_selected_cycle()
     assert w.scene.curve.curve.n_edges == n_edges
     assert w.edits.stack.count() == 2
+    wait_evaluated(qtbot, w)
+    assert_same_scores(w.scene.scores(), skelcore.evaluate(w.scene.evaluation.cloud, curve=w.scene.curve.curve).scores())
 
 
 def test_a_session_keeps_the_curve_edits(window, qtbot, tmp_path):
