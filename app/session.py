@@ -488,7 +488,8 @@ class Session(QtCore.QObject):
         src = None if base is None else getattr(base, "source", None)
         updatable = (base is not None and getattr(base, "curve", None) is not None and isinstance(src, EvaluationSource)
                      and src.args.get("curve") is not None and src.ctx is not None
-                     and content_hash(base.curve.curve) == content_hash(old.curve))
+                     and content_hash(base.curve.curve) == content_hash(old.curve)
+                     and not self.stale_reason())  # under the settings shown: else evaluated afresh with the new
         with self.batch():
             scene.set_curve(curve, old.path, edited=edited)
             self._inputs_changed = False  # scored below, not by the automatic run
