@@ -17,6 +17,7 @@ __all__ = ["MENUS", "SUBMENUS", "Menus"]
 MENUS: tuple[tuple[str, tuple[str, ...]], ...] = (
     ("&File", ("file.open", "file.session", "file.recent", "file.compare", "file.close", "file.close_all", "-", "file.export", "-",
                "file.quit")),
+    ("&Edit", ("edit.history", "-", "edit.mode", "edit.ops")),
     ("&Evaluate", ("evaluate.run", "-", "evaluate.colour")),
     ("&View", ("view.camera", "view.style", "-", "view.camera_files", "-", "view.docks")),
     ("&Tools", ("tools.skeletonize", "tools.study")),

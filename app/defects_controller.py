@@ -4,13 +4,15 @@ evaluation's defects (:func:`skelscope.scene.defects.defect_rows`), the 3-D over
 (:class:`skelscope.view.defect_overlay.DefectOverlay`), View > Show defects (Shift+D) shows or hides them;
 selecting a row frames the camera on its bounding box and highlights it, and a click on the curve
 highlights the clicked branch (whose length, radius, metric means and flags the pick panel shows).
+A row's context menu, and a button under the table for the selected row, offer its edits (``row_actions``, set by the window to the edit controller's:
+"Prune this branch", "Delete this edge", "Cut this cycle").
 """
 
 from __future__ import annotations
 
-from typing import Any
+from typing import Any, Callable
 
-from PySide6 import QtCore
+from PySide6 import QtCore, QtWidgets
 
 from .panels.defects import DefectsPanel
 from .scene import SceneEvent
@@ -38,6 +40,16 @@ class DefectsController(QtCore.QObject):
         main.tabifyDockWidget(window.docks["Barcodes"], dock)
         window.docks["Barcodes"].raise_()
         self.panel.selected.connect(self.select)
+        #: ``row_actions(row) -> [(text, run)]``: the edits a row offers in its context menu
+        self.row_actions: Callable[[DefectRow], list[tuple[str, Callable[[], Any]]]] = lambda row: []
+        table = self.panel.table
+        table.setContextMenuPolicy(QtCore.Qt.ContextMenuPolicy.CustomContextMenu)
+        table.customContextMenuRequested.connect(self._row_menu)
+        #: the selected row's edit as a button under the table (hidden when the row offers none)
+        self.fix_button = QtWidgets.QPushButton("", self.panel)
+        self.fix_button.setVisible(False)
+        self.fix_button.clicked.connect(self._fix_selected)
+        self.panel.layout().addWidget(self.fix_button)
         self.panel.show_toggled.connect(self.set_visible)
         self.action = window.add_action(ActionSpec("show_defects", "Show defects", "view.style", self.set_visible, "Shift+D",
                                      checked=lambda: self.visible))
@@ -62,9 +74,38 @@ class DefectsController(QtCore.QObject):
         self._shown_ev = ev
         self.selected = None
         self.rows = defect_rows(ev)
+        self.fix_button.setVisible(False)
         self.panel.show_rows(None if ev is None else self.rows, "" if ev is None else sound_line(ev))
         self.overlay.show(ev, self.rows, self._cloud_size(), stale=bool(self.scene.stale))
         self.overlay.set_visible(self.visible)
+
+    def actions_of(self, index: int) -> list[tuple[str, Callable[[], Any]]]:
+        """The edits the ``index``-th row offers (its context menu's entries)."""
+        return self.row_actions(self.rows[index]) if 0 <= index < len(self.rows) else []
+
+    def run_row_action(self, index: int, text: str) -> Any:
+        """Run the ``index``-th row's edit named ``text``, as its context menu would."""
+        for name, run in self.actions_of(index):
+            if name == text:
+                return run()
+        raise ValueError(f"row {index} offers no {text!r} (it offers: {[n for n, _ in self.actions_of(index)]})")
+
+    def _fix_selected(self) -> None:
+        index = self.panel.selected_row()
+        entries = self.actions_of(index)
+        if entries:
+            entries[0][1]()
+
+    def _row_menu(self, pos: QtCore.QPoint) -> None:
+        table = self.panel.table
+        index = table.indexAt(pos).row()
+        entries = self.actions_of(index)
+        if not entries:
+            return
+        menu = QtWidgets.QMenu(table)
+        for text, run in entries:
+            menu.addAction(text).triggered.connect(lambda _c=False, r=run: r())
+        menu.exec(table.viewport().mapToGlobal(pos))
 
     def _cloud_size(self) -> float:
         cloud = self.scene.cloud
@@ -75,10 +116,14 @@ class DefectsController(QtCore.QObject):
         ev = self.scene.evaluation
         if ev is None or not 0 <= index < len(self.rows):
             self.selected = None
+            self.fix_button.setVisible(False)
             self.overlay.select(ev, None)
             return
         row = self.rows[index]
         self.selected = row
+        entries = self.actions_of(index)
+        self.fix_button.setText(entries[0][0] if entries else "")
+        self.fix_button.setVisible(bool(entries))
         if self.panel.selected_row() != index:
             self.panel.blockSignals(True)
             self.panel.select_row(index)

@@ -129,12 +129,15 @@ class MainWindow(QtWidgets.QMainWindow):
         from .compare_run import RunBrowser
         from .compare_view import CompareController
         from .defects_controller import DefectsController
+        from .edit_controller import EditController
         from .saved_sessions import SavedSessions
         from .support_controller import SupportController
         from .viewpoint_controller import ViewpointController
 
         self.supports = SupportController(self)  # the picked element's support (dock, 3-D overlay, filter)
         self.defects = DefectsController(self)  # the Defects dock, the defects in 3-D, a clicked branch
+        self.edits = EditController(self)  # Edit mode, undo / redo, History dock, File > Save skeleton as
+        self.defects.row_actions = self.edits.row_actions  # a Defects row's "Prune this branch", ...
         self.viewpoints = ViewpointController(self)  # Evaluate > Viewpoint from the camera / typed
         self.compare = CompareController(self)  # File > Compare with a second skeleton (B)
         self.compare_run = RunBrowser(self)  # File > Open comparison run, and drops of a run
@@ -198,6 +201,14 @@ class MainWindow(QtWidgets.QMainWindow):
         self.view.mark(info["xyz"])
         self.pick_element(info)
         return info
+
+    def curve_edits(self) -> dict[str, Any] | None:
+        """The edit log of the curve's edits done (None when it is not edited): saved in sessions."""
+        return self.edits.edit_log()
+
+    def replay_curve_edits(self, log: dict[str, Any]) -> list[str]:
+        """A session's edit log replayed on the loaded curve (undoable); the problems as lines."""
+        return self.edits.replay(log)
 
     def add_display_option(self, widget: QtWidgets.QWidget) -> None:
         """A control at the end of the Display panel."""
@@ -547,7 +558,10 @@ class MainWindow(QtWidgets.QMainWindow):
             self._schedule_plots()
         elif event.kind == "layer":
             self.pick.show_info(None)
-            names = [os.path.basename(layer.path) for layer in self.scene.layers.values() if layer.path]
+            names = [os.path.basename(layer.path) + (" (edited)" if layer.edited else "")
+                     for layer in self.scene.layers.values() if layer.path]
+            if self.scene.curve is not None and self.scene.curve.edited and not self.scene.curve.path:
+                names.append("curve (edited)")
             self.setWindowTitle("SkelScope" + (f" — {', '.join(names)}" if names else ""))
             self._update_no_result()
         self._update_actions()

@@ -91,6 +91,7 @@ class SavedSessions(QtCore.QObject):
         state.mappings = {role: (float(layer.mapping[0]), tuple(float(v) for v in layer.mapping[1]))
                           for role, layer in scene.layers.items() if role != "cloud" and layer.mapping is not None}
         state.viewpoints = [tuple(float(v) for v in p) for p in w.session.viewpoints]
+        state.edits = w.curve_edits() if scene.curve is not None and scene.curve.edited else None
         state.camera = w.view.camera_state()
         picked = w.picked_element()
         if picked is not None:
@@ -174,6 +175,8 @@ class SavedSessions(QtCore.QObject):
                 problems += w.session.load_roles(found)
                 problems += self._restore_index(index_at, state)
                 problems += self._restore_mappings(state)
+                if state.edits is not None:
+                    problems += w.replay_curve_edits(state.edits)
                 w.session.set_correspondence(state.correspondence)  # the saved choice of the set just loaded
         finally:
             self._restoring = False

@@ -21,6 +21,8 @@ from .worker import TaskRunner
 
 __all__ = ["Session", "preload_engine", "PROCESS_FROM"]
 
+_UPDATE_LOCK = threading.Lock()  # Evaluation.update runs one at a time (Session.show_edited_curve)
+
 PROCESS_FROM = 200_000
 """Evaluations of at least this many points (cloud + skeletal set) run in a child process
 (:mod:`skelscope.engine_process`): Cancel and quit are then a kill, and the window never waits for the
@@ -458,6 +460,78 @@ class Session(QtCore.QObject):
         self.check_stale()
         self.message.emit("evaluating…")
         return True
+
+    def show_edited_curve(self, curve: Any, known: Any = None, score: bool = True, edited: bool = True) -> str:
+        """The curve layer becomes ``curve`` (an edit, its undo or redo) and is scored again: ``known``
+        (the evaluation of ``curve`` kept by an undo step) is shown at once; else, when the shown
+        evaluation is of the curve before, ``Evaluation.update`` runs in the worker (only the curve's
+        samples that moved are scored again); else a full evaluation. A running evaluation is
+        dropped first (its result can never land). Returns "known", "update", "full" or "" (nothing
+        to score: no evaluation was shown and none was running). ``score=False`` only replaces the
+        curve (a session's edits replayed while it loads: its own evaluation follows). ``edited=False``:
+        the curve is the loaded one again (every edit undone)."""
+        from skelcore.edit import content_hash
+        from skelcore.stages.evaluation_source import EvaluationSource
+
+        scene = self.scene
+        old = scene.curve
+        if old is None:
+            raise ValueError("no curve skeleton loaded")
+        base = scene.evaluation
+        running = self.runner.current_name == "evaluation"
+        if running:
+            self.runner.discard()
+        if not score:
+            with self.batch():
+                scene.set_curve(curve, old.path, edited=edited)
+            return ""
+        src = None if base is None else getattr(base, "source", None)
+        updatable = (base is not None and getattr(base, "curve", None) is not None and isinstance(src, EvaluationSource)
+                     and src.args.get("curve") is not None and src.ctx is not None
+                     and content_hash(base.curve.curve) == content_hash(old.curve)
+                     and not self.stale_reason())  # under the settings shown: else evaluated afresh with the new
+        with self.batch():
+            scene.set_curve(curve, old.path, edited=edited)
+            self._inputs_changed = False  # scored below, not by the automatic run
+        if known is not None:
+            try:
+                now = self.params()
+                if known.params.replace(beta_star=now.beta_star, c_star=now.c_star) != now:
+                    known = None  # kept under other settings: scored again
+            except ValueError:
+                known = None
+        if known is not None:
+            scene.set_evaluation(known)
+            self._had_result = True
+            self.check_stale()
+            self.evaluated.emit(known)
+            return "known"
+        if base is None and not running and not self.auto_evaluate:
+            self.check_stale()
+            return ""
+        if not updatable:
+            return "full" if self.start_evaluation() else ""
+        self._evaluated_layers = (scene.cloud, scene.skeletal, scene.curve)
+        self._requested_correspondence = self._shown_correspondence
+        self._requested_viewpoints = self._shown_viewpoints
+        self._requested_scan_options = self._shown_scan_options
+        self.evaluation_cancelled = False
+
+        def job(progress: Any, cancel: Callable[[], bool]) -> Any:
+            from skelcore.errors import Cancelled
+
+            progress(0.0, "scoring the edited curve")
+            # one update at a time: a dropped one (an edit came meanwhile) still runs to its end in its
+            # thread and shares the evaluation's caches; the next waits for it here, not in the window
+            with _UPDATE_LOCK:
+                if cancel():
+                    raise Cancelled("the edited curve's scoring was cancelled")
+                return base.update(curve)
+
+        self.runner.start(job, "evaluation")
+        self.check_stale()
+        self.message.emit("scoring the edited curve…")
+        return "update"
 
     def start_skeletonize(self, params: Any = None, method: str | None = None) -> bool:
         """Skeletonize the loaded cloud in the worker; both results become layers.

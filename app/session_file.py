@@ -6,7 +6,8 @@ size, modification time and SHA-256, so that opening it can tell a file that mov
 changed from one that did not; the settings and thresholds (every ``skelcore.Params`` field) and the
 correspondence mode (docs/metrics.md 5.1) with the skeletal set's index file (a record like the inputs'), the real-scan
 options (``remove_outliers``, ``cap_openings``); each skeleton
-layer's mapping into the cloud's frame (scale, offset); the scan's viewpoints; the metric, colour
+layer's mapping into the cloud's frame (scale, offset); the curve's edits (``edits``: skelcore's edit
+log, replayed on the loaded curve); the scan's viewpoints; the metric, colour
 range and display options; the camera with the view's size; and the picked element. Written atomically (``skelcore.io.atomic``); read back with
 every field checked, so a bad file is one line (``SkelInputError``) before anything changes.
 """
@@ -66,6 +67,7 @@ class SessionState:
     layers: dict[str, dict[str, Any]] = field(default_factory=dict)  # role -> visible, point_size, opacity
     camera: dict[str, Any] | None = None
     picked: dict[str, Any] | None = None  # layer, location, index
+    edits: dict[str, Any] | None = None  # the curve's edit log (skelcore.edit.new_log), None when not edited
 
     def paths(self) -> dict[str, str]:
         return {role: rec.path for role, rec in self.files.items()}
@@ -108,6 +110,7 @@ def session_to_json(state: SessionState) -> dict[str, Any]:
         "layers": {role: dict(opts) for role, opts in state.layers.items()},
         "camera": state.camera,
         "picked": state.picked,
+        **({} if state.edits is None else {"edits": state.edits}),
     }
 
 
@@ -188,6 +191,10 @@ def session_from_json(doc: Any, path: str | os.PathLike = "session") -> SessionS
         if len(offset) != 3 or not all(math.isfinite(v) for v in (scale, *offset)) or scale <= 0:
             raise bad(f"the {role} mapping needs a scale > 0 and a finite offset x y z")
         state.mappings[role] = (scale, offset)  # type: ignore[assignment]
+    edits = doc.get("edits")
+    if edits is not None and not (isinstance(edits, dict) and isinstance(edits.get("operations"), list)):
+        raise bad("'edits' must be an edit log (skelcore.edit.new_log, with its operations) or null")
+    state.edits = edits
     viewpoints = doc.get("viewpoints", [])
     try:
         state.viewpoints = [tuple(float(v) for v in p) for p in viewpoints]  # type: ignore[misc]

@@ -54,7 +54,8 @@ class Layer:
     vertices; a curve also has ``edges`` and, once evaluated, the curve ``samples``. A skeletal set
     with another point count than the cloud may carry its ``index`` (one cloud row per skeletal
     point, docs/metrics.md 5.1) and the file it came from. ``mapping`` is the ``(scale, offset)`` a skeleton layer
-    was mapped by into the cloud's frame (its file holds the unmapped coordinates).
+    was mapped by into the cloud's frame (its file holds the unmapped coordinates). ``edited``: a curve
+changed by the viewer's edits (:mod:`skelscope.edit_controller`); ``path`` stays the file it came from.
     """
 
     name: str
@@ -72,6 +73,7 @@ class Layer:
     index: np.ndarray | None = None
     index_path: str | None = None
     mapping: tuple[float, tuple[float, float, float]] | None = None
+    edited: bool = False  # a curve changed by edits since it was loaded (its file holds the curve before them)
 
     @property
     def n_points(self) -> int:

@@ -121,13 +121,17 @@ class Scene:
             else:
                 new = self.set_curve(curve, cv.path)
             new.mapping = total
-    def set_curve(self, curve: CurveSkeleton, path: str | None = None) -> Layer:
+    def set_curve(self, curve: CurveSkeleton, path: str | None = None, edited: bool = False) -> Layer:
+        """The curve layer (``edited``: the curve of ``path`` changed by edits, said in the title)."""
         # Curve vertices smaller than the skeletal points (6): the skeletal set lies on the curve and
         # its colours must stay visible around each vertex.
         layer = Layer(
             "curve", np.asarray(curve.vertices, dtype=float), path=path, edges=np.asarray(curve.edges),
-            curve=curve, point_size=4.0,
+            curve=curve, point_size=4.0, edited=edited,
         )
+        old = self.curve
+        if edited and old is not None:
+            layer.mapping = old.mapping
         return self._replace(layer)
 
     def remove_layer(self, name: str) -> None:

@@ -504,6 +504,24 @@ class SceneView:
         x, y, _ = ren.GetDisplayPoint()
         return float(x), float(y)
 
+    def display_to_world(self, x: float, y: float, at: Any) -> tuple[float, float, float]:
+        """The world point drawn at display point (x, y) (VTK's pixels, origin bottom left) at the depth
+        of world point ``at``: on the plane through ``at`` facing the camera (a dragged vertex)."""
+        ren = self.plotter.renderer
+        ren.SetWorldPoint(float(at[0]), float(at[1]), float(at[2]), 1.0)
+        ren.WorldToDisplay()
+        z = ren.GetDisplayPoint()[2]
+        ren.SetDisplayPoint(float(x), float(y), float(z))
+        ren.DisplayToWorld()
+        wx, wy, wz, w = ren.GetWorldPoint()
+        w = w or 1.0
+        return wx / w, wy / w, wz / w
+
+    def qt_to_display(self, pos: QtCore.QPointF) -> tuple[float, float]:
+        """A widget position (Qt's, origin top left, device-independent pixels) as VTK's display point."""
+        ratio = self.plotter.devicePixelRatioF()
+        return pos.x() * ratio, (self.plotter.height() - pos.y()) * ratio
+
     def pick_display(self, x: float, y: float) -> dict[str, Any] | None:
         """The skeleton element drawn nearest to display point (x, y), with every local value.
 

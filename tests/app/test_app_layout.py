@@ -64,7 +64,7 @@ def test_each_tab_group_has_one_tab_bar_even_before_the_event_loop_runs(qtbot, t
         QtWidgets.QApplication.processEvents()  # no event loop: no deferred deletion
     bars = [b for b in w.findChildren(QtWidgets.QTabBar) if b.isVisible()]
     groups = sorted(tuple(b.tabText(i) for i in range(b.count())) for b in bars)
-    assert groups == [("Barcodes", "Histogram", "Defects"), ("Display", "Settings")], groups
+    assert groups == [("Barcodes", "Histogram", "Defects", "History"), ("Display", "Settings")], groups
     for bar in bars:  # no bar over a dock outside its group
         tabs = [bar.tabText(i) for i in range(bar.count())]
         for name, dock in w.docks.items():
