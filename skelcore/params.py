@@ -121,6 +121,15 @@ class Params:
         else a missing side.
     open_surface_share : ``open_surface`` fires when at least this share of a skeleton's elements is
         unbounded only because its rays leave through openings.
+    open_resolved_diameter : a boundary point counts towards an opening only where the part is at
+        least this many of its spacings across (2 x its distance to the skeleton); thinner, the part is
+        sampled too thinly to resolve, where its neighbours are curved too (smallest / middle eigenvalue
+        of their covariance above open_thin_planarity: a flat cap's centre lies on the skeleton) ...
+    open_fill_reach : a missing side counts when at least half its fill lies within open_fill_reach x
+        the local radius (distance to the cloud) of the nearest skeleton element: across its part, not
+        across the gap between two parts.
+    thin_min_share : ... and warning ``thin_parts`` (which switches nothing off) names such parts when
+        their boundary points are at least this share of the cloud.
     cap_max_share : ``--cap-openings`` refuses an opening whose cap would add more than this share of
         the cloud's points ...
     cap_flatness : ... or whose rim lies farther than this x its radius from its plane (RMS).
@@ -216,6 +225,10 @@ class Params:
     open_end_flatness: float = 0.15
     open_end_roundness: float = 0.3
     open_surface_share: float = 0.02
+    open_resolved_diameter: float = 8.0
+    open_thin_planarity: float = 0.0
+    thin_min_share: float = 0.01
+    open_fill_reach: float = 1.5
     cap_max_share: float = 0.1
     cap_flatness: float = 0.2
     viewpoint_rows: int = 16
@@ -294,13 +307,13 @@ class Params:
             bad("spur_min_points", "must be >= 0")
         if not 0.0 <= float(self.trust_extent_quantile) < 0.5:
             bad("trust_extent_quantile", "must be in [0, 0.5)")
-        for name in ("open_link", "open_empty", "open_end_flatness", "open_end_roundness", "cap_flatness",
+        for name in ("open_link", "open_empty", "open_resolved_diameter", "open_fill_reach", "open_end_flatness", "open_end_roundness", "cap_flatness",
                      "outlier_std_ratio", "outlier_radius", "outlier_skeletal_radius"):
             if not float(getattr(self, name)) > 0:
                 bad(name, "must be > 0")
         if not 0.0 < float(self.open_angle) < 360.0:
             bad("open_angle", "must be in (0, 360) degrees")
-        for name in ("open_surface_share", "cap_max_share"):
+        for name in ("open_surface_share", "cap_max_share", "thin_min_share", "open_thin_planarity"):
             if not 0.0 <= float(getattr(self, name)) <= 1.0:
                 bad(name, "must be in [0, 1]")
         if not float(self.viewpoint_share_cell) >= 0:

@@ -15,7 +15,7 @@ from ..metrics.boundedness import boundedness
 from ..params import Params
 from .openings import Opening
 
-__all__ = ["set_local_radii", "escaping_share"]
+__all__ = ["set_local_radii", "escaping_share", "fill_near_skeleton"]
 
 
 def set_local_radii(openings: list[Opening], cloud: np.ndarray, skeleton: np.ndarray) -> None:
@@ -27,6 +27,19 @@ def set_local_radii(openings: list[Opening], cloud: np.ndarray, skeleton: np.nda
     for o in openings:
         d, _ = tree.query(cloud[o.rows], k=1, workers=-1)
         o.local_radius = float(np.median(d))
+
+
+def fill_near_skeleton(opening: Opening, skeleton: np.ndarray, radius: np.ndarray, reach: float,
+                       tree: cKDTree | None = None) -> float:
+    """Share of the opening's fill within ``reach`` x the local radius (``radius``: each skeleton
+    element's distance to the cloud) of the nearest skeleton element.  A missing piece of a part's
+    surface spans the part's cross-section, about one radius from its axis; a "fill" across the gap
+    between two branches lies outside both (docs/metrics.md 6.1)."""
+    if len(opening.fill) == 0 or len(skeleton) == 0:
+        return 0.0
+    tree = cKDTree(skeleton) if tree is None else tree
+    d, i = tree.query(opening.fill, k=1, workers=-1)
+    return float(np.mean(d <= reach * radius[i]))
 
 
 def escaping_share(

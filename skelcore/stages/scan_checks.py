@@ -1,6 +1,7 @@
 """The real-scan trust checks, run after the stages (docs/metrics.md 6): ``outliers`` (stray points in
 the cloud, found by the "stray points" stage) and ``open_surface`` (openings through which the rays of
-otherwise bounded elements escape).
+otherwise bounded elements escape) and ``thin_parts`` (where the "openings" are parts sampled too
+thinly to resolve, a few spacings across: they switch nothing off).
 
 The opening search only runs when some skeleton has at least ``open_surface_share`` of its elements
 unbounded (else no opening can change that share), and not with viewpoints (the scores then count
@@ -13,12 +14,13 @@ from __future__ import annotations
 import time
 
 import numpy as np
+from scipy.spatial import cKDTree
 
 from ..evaluation import Evaluation
 from ..geometry import Checkpoint
-from ..scan.escape import escaping_share, set_local_radii
-from ..scan.openings import find_openings
-from ..scan.scan_report import ScanReport, open_surface_warning, outliers_warning
+from ..scan.escape import escaping_share, fill_near_skeleton, set_local_radii
+from ..scan.openings import find_openings, thin_parts
+from ..scan.scan_report import ScanReport, open_surface_warning, outliers_warning, thin_parts_warning
 from ..diagnostics.trust_warning import TrustWarning
 from .context import EvalContext
 
@@ -52,25 +54,45 @@ def _columns(ctx: EvalContext, ev: Evaluation) -> list[tuple[str, np.ndarray, np
 
 
 def _open_surface(ctx: EvalContext, ev: Evaluation, report: ScanReport, checkpoint: Checkpoint) -> list[TrustWarning]:
+    """``open_surface`` from the openings of resolved parts, ``thin_parts`` from the boundary points of
+    parts too thin for their sampling (docs/metrics.md 6.1)."""
     p = ctx.params
     cols = [c for c in _columns(ctx, ev) if np.mean(~(np.asarray(c[2]) > p.beta_star)) >= p.open_surface_share]
     if not cols:
         return []
     t0 = time.perf_counter()
-    openings = ctx.openings if ctx.openings is not None else find_openings(ctx.cloud, p, checkpoint=checkpoint)
+    elements = np.vstack([ctx.norm.invert(c[1]) for c in _columns(ctx, ev)])
+    thin_rows: list[int] = []
+    if ctx.openings is not None:
+        openings = ctx.openings
+    else:
+        tree = cKDTree(elements)
+        openings = find_openings(ctx.cloud, p, checkpoint=checkpoint, thin_rows=thin_rows,
+                                 diameter=lambda pts: 2.0 * tree.query(pts, k=1, workers=-1)[0])
+    out: list[TrustWarning] = []
+    thin = thin_parts(ctx.cloud, np.asarray(thin_rows, np.int64), p)
+    if thin is not None:
+        report.thin_parts = thin
+        out.append(thin_parts_warning(thin))
     capped = {i for i, o in enumerate(report.openings or []) if o.get("capped")}
     open_now = [o for i, o in enumerate(openings) if i not in capped and len(o.dome)]
+    if open_now and ctx.openings is None:
+        # a missing side lies across its part, near the skeleton; a "side" across the gap between
+        # parts does not (an open tube end's flat fill may span a hole of the shape: kept)
+        radius = cKDTree(ctx.cloud).query(elements, k=1, workers=-1)[0]
+        for o in open_now:
+            o.notes["fill_near_skeleton"] = fill_near_skeleton(o, elements, radius, p.open_fill_reach, tree)
+        open_now = [o for o in open_now if o.kind == "end" or o.notes["fill_near_skeleton"] >= 0.5]
     if not open_now:
         report.timings["open_surface"] = time.perf_counter() - t0
-        return []
-    elements = [ctx.norm.invert(c[1]) for c in _columns(ctx, ev)]
-    set_local_radii(openings, ctx.cloud, np.vstack(elements))
+        return out
+    set_local_radii(openings, ctx.cloud, elements)
     domes_n = ctx.norm.apply(np.vstack([o.dome for o in open_now]))
     shares = {name: escaping_share(ctx.bounded_cloud_n, domes_n, pts, beta, p, checkpoint=checkpoint)
               for name, pts, beta in cols}
     report.timings["open_surface"] = time.perf_counter() - t0
     if max(shares.values()) < p.open_surface_share:
-        return []
+        return out
     if report.openings is None:
         report.openings = [dict(o.to_dict(), rows=o.rows.tolist(), capped=False, refused=None) for o in openings]
     else:  # --cap-openings found them: now with their local radii
@@ -78,4 +100,4 @@ def _open_surface(ctx: EvalContext, ev: Evaluation, report: ScanReport, checkpoi
             entry.update(local_radius=float(o.local_radius), size=float(o.size))
     report.escaping = dict(shares)
     sizes = [o.size for o in open_now if np.isfinite(o.size)]
-    return [open_surface_warning([o.kind for o in open_now], max(sizes) if sizes else float("nan"), shares)]
+    return [open_surface_warning([o.kind for o in open_now], max(sizes) if sizes else float("nan"), shares)] + out
