@@ -143,6 +143,8 @@ class Params:
         outlier_std_ratio robust standard deviations (1.4826 x MAD) ...
     outlier_radius, outlier_min_neighbours : ... and the radius test: fewer than outlier_min_neighbours
         other points within outlier_radius x the median spacing.  A stray point fails both.
+    outlier_local_k : both radius tests are also taken with the local spacing (the median nearest
+        distance of this many cloud points nearest to the point) as yardstick: a stray fails both.
     outlier_skeletal_radius : a skeletal point with fewer than outlier_min_neighbours other skeletal
         points within this many cloud spacings is a stray's image (contracted sets are dense: on the
         hammer and the apple tree every skeletal point has two within 1.7).
@@ -238,6 +240,7 @@ class Params:
     outlier_radius: float = 10.0
     outlier_min_neighbours: int = 2
     outlier_skeletal_radius: float = 5.0
+    outlier_local_k: int = 30
     # ground truth (docs/metrics.md 5.3.1)
     gt_thresholds: int = 20
     gt_threshold_max: float = 1.0
@@ -318,7 +321,7 @@ class Params:
                 bad(name, "must be in [0, 1]")
         if not float(self.viewpoint_share_cell) >= 0:
             bad("viewpoint_share_cell", "must be >= 0")
-        for name in ("open_k", "open_min_fill", "open_max_points", "viewpoint_rows", "outlier_k",
+        for name in ("open_k", "open_min_fill", "open_max_points", "viewpoint_rows", "outlier_k", "outlier_local_k",
                      "outlier_min_neighbours"):
             if int(getattr(self, name)) < 1:
                 bad(name, "must be a positive integer")
