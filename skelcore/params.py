@@ -71,6 +71,9 @@ class Params:
     cycles_voxels : voxels along the longest side of the cloud's box for the shape's interior ...
     cycles_voxel_spacing : ... but a voxel is at least this many median nearest-neighbour spacings
         of the cloud wide, so that the surface's voxels close.
+    cycles_close_voxels : no more cycles are legitimate than the interior with the voxels near the
+        skeleton's cycles has tunnels once gaps of up to 2 x this many voxels are closed (two strands
+        side by side through a thin part invent the tunnel between them).
     cycles_warn_spurious, cycles_warn_missing : ``spurious_cycles`` / ``missing_cycles`` fire from
         this many spurious / missing cycles.
     outside_min_radii : ``outside`` fires when a branch has at least this many local radii of
@@ -200,6 +203,7 @@ class Params:
     cycles_voxels: int = 96
     cycles_voxel_spacing: float = 1.5
     cycles_warn_spurious: int = 1
+    cycles_close_voxels: int = 4
     cycles_warn_missing: int = 1
     outside_min_radii: float = 0.5
     outside_min_share: float = 0.05
@@ -300,7 +304,7 @@ class Params:
         for name in ("spur_unique", "outside_min_share", "outside_skeletal_share"):
             if not 0.0 <= float(getattr(self, name)) <= 1.0:
                 bad(name, "must be in [0, 1]")
-        for name in ("diag_max_points", "cycles_voxels", "spurs_warn_count", "cycles_warn_spurious",
+        for name in ("diag_max_points", "cycles_voxels", "cycles_close_voxels", "spurs_warn_count", "cycles_warn_spurious",
                      "cycles_warn_missing"):
             if int(getattr(self, name)) < 1:
                 bad(name, "must be a positive integer")
