@@ -13,9 +13,9 @@ from scipy.spatial import cKDTree
 from ..geometry import Checkpoint, no_checkpoint
 from ..metrics.boundedness import boundedness
 from ..params import Params
-from .openings import Opening
+from .openings import Opening, find_openings
 
-__all__ = ["set_local_radii", "escaping_share", "fill_near_skeleton"]
+__all__ = ["set_local_radii", "escaping_share", "fill_near_skeleton", "skeleton_openings"]
 
 
 def set_local_radii(openings: list[Opening], cloud: np.ndarray, skeleton: np.ndarray) -> None:
@@ -62,3 +62,23 @@ def escaping_share(
     closed = np.vstack([cloud_n, domes_n])
     again = boundedness(closed, elements_n[low], params=params, checkpoint=checkpoint)
     return float(np.count_nonzero(again > params.beta_star)) / len(beta)
+
+
+def skeleton_openings(cloud: np.ndarray, skeleton: np.ndarray, params: Params = Params(), *,
+                      checkpoint: Checkpoint = no_checkpoint) -> tuple[list[Opening], list[Opening], np.ndarray]:
+    """(every opening, those that count, the thin parts' boundary rows) of ``cloud`` judged with a
+    skeleton's elements (both in the cloud's units; docs/metrics.md 6.1): boundary points of parts fewer
+    than ``open_resolved_diameter`` spacings across join no opening, and a missing side counts when at
+    least half its fill lies within ``open_fill_reach`` local radii of the skeleton."""
+    skeleton = np.asarray(skeleton, dtype=float)
+    tree = cKDTree(skeleton)
+    thin_rows: list[int] = []
+    openings = find_openings(cloud, params, checkpoint=checkpoint, thin_rows=thin_rows,
+                             diameter=lambda pts: 2.0 * tree.query(pts, k=1, workers=-1)[0])
+    counted = [o for o in openings if len(o.dome)]
+    if counted:
+        radius = cKDTree(cloud).query(skeleton, k=1, workers=-1)[0]
+        for o in counted:
+            o.notes["fill_near_skeleton"] = fill_near_skeleton(o, skeleton, radius, params.open_fill_reach, tree)
+        counted = [o for o in counted if o.kind == "end" or o.notes["fill_near_skeleton"] >= 0.5]
+    return openings, counted, np.asarray(thin_rows, np.int64)

@@ -14,12 +14,11 @@ from __future__ import annotations
 import time
 
 import numpy as np
-from scipy.spatial import cKDTree
 
 from ..evaluation import Evaluation
 from ..geometry import Checkpoint
-from ..scan.escape import escaping_share, fill_near_skeleton, set_local_radii
-from ..scan.openings import find_openings, thin_parts
+from ..scan.escape import escaping_share, set_local_radii, skeleton_openings
+from ..scan.openings import thin_parts
 from ..scan.scan_report import ScanReport, open_surface_warning, outliers_warning, thin_parts_warning
 from ..diagnostics.trust_warning import TrustWarning
 from .context import EvalContext
@@ -62,27 +61,18 @@ def _open_surface(ctx: EvalContext, ev: Evaluation, report: ScanReport, checkpoi
         return []
     t0 = time.perf_counter()
     elements = np.vstack([ctx.norm.invert(c[1]) for c in _columns(ctx, ev)])
-    thin_rows: list[int] = []
-    if ctx.openings is not None:
+    capped = {i for i, o in enumerate(report.openings or []) if o.get("capped")}
+    if ctx.openings is not None:  # --cap-openings found them
         openings = ctx.openings
+        open_now = [o for i, o in enumerate(openings) if i not in capped and len(o.dome)]
+        thin_rows = np.zeros(0, np.int64)
     else:
-        tree = cKDTree(elements)
-        openings = find_openings(ctx.cloud, p, checkpoint=checkpoint, thin_rows=thin_rows,
-                                 diameter=lambda pts: 2.0 * tree.query(pts, k=1, workers=-1)[0])
+        openings, open_now, thin_rows = skeleton_openings(ctx.cloud, elements, p, checkpoint=checkpoint)
     out: list[TrustWarning] = []
-    thin = thin_parts(ctx.cloud, np.asarray(thin_rows, np.int64), p)
+    thin = thin_parts(ctx.cloud, thin_rows, p)
     if thin is not None:
         report.thin_parts = thin
         out.append(thin_parts_warning(thin))
-    capped = {i for i, o in enumerate(report.openings or []) if o.get("capped")}
-    open_now = [o for i, o in enumerate(openings) if i not in capped and len(o.dome)]
-    if open_now and ctx.openings is None:
-        # a missing side lies across its part, near the skeleton; a "side" across the gap between
-        # parts does not (an open tube end's flat fill may span a hole of the shape: kept)
-        radius = cKDTree(ctx.cloud).query(elements, k=1, workers=-1)[0]
-        for o in open_now:
-            o.notes["fill_near_skeleton"] = fill_near_skeleton(o, elements, radius, p.open_fill_reach, tree)
-        open_now = [o for o in open_now if o.kind == "end" or o.notes["fill_near_skeleton"] >= 0.5]
     if not open_now:
         report.timings["open_surface"] = time.perf_counter() - t0
         return out

@@ -162,7 +162,7 @@ def _reference_outliers(cloud: np.ndarray, spacing: float, params: Params = Para
     centre = np.median(mean_d)
     sigma = 1.4826 * np.median(np.abs(mean_d - centre))
     nn = d[:, 1]
-    local = np.median(nn[tree.query(cloud, k=params.outlier_local_k)[1]], axis=1)
+    local = np.quantile(nn[tree.query(cloud, k=params.outlier_local_k)[1]], 0.25, axis=1)
     local_fail = d[:, params.outlier_min_neighbours] > params.outlier_radius * local
     return np.flatnonzero(radius_fail & local_fail & (mean_d > centre + params.outlier_std_ratio * sigma)).tolist()
 
