@@ -131,6 +131,9 @@ class Params:
     open_fill_reach : a missing side counts when at least half its fill lies within open_fill_reach x
         the local radius (distance to the cloud) of the nearest skeleton element: across its part, not
         across the gap between two parts.
+    sparse_ratio : ``sparse_boundedness`` fires when at least open_surface_share of a skeleton's elements
+        are unbounded where the cloud's local spacing (outlier_local_k points) exceeds this many x its
+        median spacing.
     thin_min_share : ... and warning ``thin_parts`` (which switches nothing off) names such parts when
         their boundary points are at least this share of the cloud.
     cap_max_share : ``--cap-openings`` refuses an opening whose cap would add more than this share of
@@ -235,6 +238,7 @@ class Params:
     open_thin_planarity: float = 0.0
     thin_min_share: float = 0.01
     open_fill_reach: float = 1.5
+    sparse_ratio: float = 2.0
     cap_max_share: float = 0.1
     cap_flatness: float = 0.2
     viewpoint_rows: int = 16
@@ -314,7 +318,7 @@ class Params:
             bad("spur_min_points", "must be >= 0")
         if not 0.0 <= float(self.trust_extent_quantile) < 0.5:
             bad("trust_extent_quantile", "must be in [0, 0.5)")
-        for name in ("open_link", "open_empty", "open_resolved_diameter", "open_fill_reach", "open_end_flatness", "open_end_roundness", "cap_flatness",
+        for name in ("open_link", "open_empty", "open_resolved_diameter", "open_fill_reach", "sparse_ratio", "open_end_flatness", "open_end_roundness", "cap_flatness",
                      "outlier_std_ratio", "outlier_radius", "outlier_skeletal_radius"):
             if not float(getattr(self, name)) > 0:
                 bad(name, "must be > 0")

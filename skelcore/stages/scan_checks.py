@@ -19,7 +19,10 @@ from ..evaluation import Evaluation
 from ..geometry import Checkpoint
 from ..scan.escape import escaping_share, set_local_radii, skeleton_openings
 from ..scan.openings import thin_parts
-from ..scan.scan_report import ScanReport, open_surface_warning, outliers_warning, thin_parts_warning
+from ..diagnostics.interior import median_spacing
+from ..scan.outliers import local_spacing
+from ..scan.scan_report import (ScanReport, open_surface_warning, outliers_warning, sparse_boundedness_warning,
+                                 thin_parts_warning)
 from ..diagnostics.trust_warning import TrustWarning
 from .context import EvalContext
 
@@ -37,6 +40,7 @@ def scan_warnings(ctx: EvalContext, ev: Evaluation, checkpoint: Checkpoint) -> l
             out.append(outliers_warning(strays))
     if ctx.viewpoints_n is None:
         out += _open_surface(ctx, ev, report, checkpoint)
+        out += _sparse_boundedness(ctx, ev, report)
     if out and ev.scan is None:
         ev.scan = report
     return out
@@ -91,3 +95,25 @@ def _open_surface(ctx: EvalContext, ev: Evaluation, report: ScanReport, checkpoi
     report.escaping = dict(shares)
     sizes = [o.size for o in open_now if np.isfinite(o.size)]
     return [open_surface_warning([o.kind for o in open_now], max(sizes) if sizes else float("nan"), shares)] + out
+
+
+def _sparse_boundedness(ctx: EvalContext, ev: Evaluation, report: ScanReport) -> list[TrustWarning]:
+    """``sparse_boundedness``: the share of a skeleton's elements that are unbounded where the cloud around
+    them is sampled more than ``sparse_ratio`` x as sparsely as its median (docs/metrics.md 6.1): the rays
+    (2 median spacings wide) pass between the samples there, and the paper's boundedness falls with the
+    sampling, not the skeleton.  Switches nothing off."""
+    p = ctx.params
+    shares: dict[str, float] = {}
+    global_spacing = median_spacing(ctx.cloud_n)
+    if not global_spacing > 0:
+        return []
+    for name, pts, beta in _columns(ctx, ev):
+        low = np.flatnonzero(~(np.asarray(beta) > p.beta_star))
+        if len(beta) == 0 or len(low) < p.open_surface_share * len(beta):
+            continue
+        near = local_spacing(ctx.cloud_n, np.asarray(pts)[low], int(p.outlier_local_k))
+        shares[name] = float(np.count_nonzero(near > p.sparse_ratio * global_spacing)) / len(beta)
+    if not shares or max(shares.values()) < p.open_surface_share:
+        return []
+    report.sparse = dict(shares)
+    return [sparse_boundedness_warning(shares, p.sparse_ratio)]

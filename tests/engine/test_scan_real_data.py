@@ -151,3 +151,23 @@ def test_strands_through_a_thin_part_invent_no_tunnel():
     r = find_cycle_defects(norm.apply(cloud), curve)
     assert r.n_cycles == 5 and r.shape_tunnels == 1 and r.n_spurious >= 1
     assert "spurious_cycles" in {w.code for w in r.warnings()}
+
+
+def test_a_half_ten_times_sparser_says_its_boundedness_is_the_samplings():
+    """The exact axis of the torus scores about 0.45 with one half 10 x sparser: ``sparse_boundedness``
+    names the share unbounded where the cloud is sparse; clean, it does not fire."""
+    from skelcore.benchmark.validity import _shape
+    from skelcore.correspondence import project_onto_curve
+    from skelcore.curve import CurveSkeleton
+    from skelcore.stages.orchestrate import evaluate
+
+    _, sampler, (v, e, _) = _shape("torus", 0)
+    curve = CurveSkeleton.from_raw(v, e)
+    half = _half_sparse("torus", 1200)
+    ev = evaluate(half, skeletal=project_onto_curve(half, curve)[0], curve=curve)
+    (w,) = [w for w in ev.warnings if w.code == "sparse_boundedness"]
+    assert ev.summary()["boundedness"]["curve"] < 0.6 and ev.scan.sparse["curve"] > 0.1
+    assert f"{ev.scan.sparse['curve']:.0%} of the curve samples" in w.message
+    clean = sampler.sample(1200, np.random.default_rng(0)).points
+    ev = evaluate(clean, skeletal=project_onto_curve(clean, curve)[0], curve=curve)
+    assert "sparse_boundedness" not in {w.code for w in ev.warnings}
