@@ -68,7 +68,7 @@ def test_a_one_sided_scan_of_a_tube_is_still_open():
     from skelcore.stages.orchestrate import evaluate
 
     _, sampler, (v, e, _) = _shape("tube_a", 0)
-    cloud = scan(sampler, ScanEffects(n_points=5000, views=1), np.random.default_rng(0)).cloud
+    cloud = scan(sampler, ScanEffects(n_points=3000, views=1), np.random.default_rng(0)).cloud
     curve = CurveSkeleton.from_raw(v, e)
     ev = evaluate(cloud, skeletal=project_onto_curve(cloud, curve)[0], curve=curve)
     codes = {w.code for w in ev.warnings}
