@@ -208,7 +208,7 @@ def thin_parts(cloud: np.ndarray, rows: np.ndarray, params: Params = Params()) -
         return None
     lo, hi = pts[keep].min(axis=0), pts[keep].max(axis=0)
     return {"parts": int(np.count_nonzero(sizes >= 5)), "points": int(keep.sum()), "share": float(len(rows) / len(cloud)),
-            "box": [[float(x) for x in lo], [float(x) for x in hi]], "rows": rows[keep].tolist()}
+            "box": [[float(x) for x in lo], [float(x) for x in hi]]}
 
 
 def _without_nested(openings: list[Opening]) -> list[Opening]:
