@@ -74,6 +74,9 @@ class Params:
     cycles_voxels : voxels along the longest side of the cloud's box for the shape's interior ...
     cycles_voxel_spacing : ... but a voxel is at least this many median nearest-neighbour spacings
         of the cloud wide, so that the surface's voxels close.
+    cycles_close_voxels : no more cycles are legitimate than the interior with the voxels near the
+        skeleton's cycles has tunnels once gaps of up to 2 x this many voxels are closed (two strands
+        side by side through a thin part invent the tunnel between them).
     cycles_warn_spurious, cycles_warn_missing : ``spurious_cycles`` / ``missing_cycles`` fire from
         this many spurious / missing cycles.
     outside_min_radii : ``outside`` fires when a branch has at least this many local radii of
@@ -131,6 +134,18 @@ class Params:
         else a missing side.
     open_surface_share : ``open_surface`` fires when at least this share of a skeleton's elements is
         unbounded only because its rays leave through openings.
+    open_resolved_diameter : a boundary point counts towards an opening only where the part is at
+        least this many of its spacings across (2 x its distance to the skeleton); thinner, the part is
+        sampled too thinly to resolve, where its neighbours are curved too (smallest / middle eigenvalue
+        of their covariance above open_thin_planarity: a flat cap's centre lies on the skeleton) ...
+    open_fill_reach : a missing side counts when at least half its fill lies within open_fill_reach x
+        the local radius (distance to the cloud) of the nearest skeleton element: across its part, not
+        across the gap between two parts.
+    sparse_ratio : ``sparse_boundedness`` fires when at least open_surface_share of a skeleton's elements
+        are unbounded where the cloud's local spacing (outlier_local_k points) exceeds this many x its
+        median spacing.
+    thin_min_share : ... and warning ``thin_parts`` (which switches nothing off) names such parts when
+        their boundary points are at least this share of the cloud.
     cap_max_share : ``--cap-openings`` refuses an opening whose cap would add more than this share of
         the cloud's points ...
     cap_flatness : ... or whose rim lies farther than this x its radius from its plane (RMS).
@@ -144,6 +159,8 @@ class Params:
         outlier_std_ratio robust standard deviations (1.4826 x MAD) ...
     outlier_radius, outlier_min_neighbours : ... and the radius test: fewer than outlier_min_neighbours
         other points within outlier_radius x the median spacing.  A stray point fails both.
+    outlier_local_k : both radius tests are also taken with the local spacing (the median nearest
+        distance of this many cloud points nearest to the point) as yardstick: a stray fails both.
     outlier_skeletal_radius : a skeletal point with fewer than outlier_min_neighbours other skeletal
         points within this many cloud spacings is a stray's image (contracted sets are dense: on the
         hammer and the apple tree every skeletal point has two within 1.7).
@@ -200,6 +217,7 @@ class Params:
     cycles_voxels: int = 96
     cycles_voxel_spacing: float = 1.5
     cycles_warn_spurious: int = 1
+    cycles_close_voxels: int = 4
     cycles_warn_missing: int = 1
     outside_min_radii: float = 0.5
     outside_min_share: float = 0.05
@@ -229,6 +247,11 @@ class Params:
     open_end_flatness: float = 0.15
     open_end_roundness: float = 0.3
     open_surface_share: float = 0.02
+    open_resolved_diameter: float = 8.0
+    open_thin_planarity: float = 0.0
+    thin_min_share: float = 0.01
+    open_fill_reach: float = 1.5
+    sparse_ratio: float = 2.0
     cap_max_share: float = 0.1
     cap_flatness: float = 0.2
     viewpoint_rows: int = 16
@@ -238,6 +261,7 @@ class Params:
     outlier_radius: float = 10.0
     outlier_min_neighbours: int = 2
     outlier_skeletal_radius: float = 5.0
+    outlier_local_k: int = 30
     # ground truth (docs/metrics.md 5.3.1)
     gt_thresholds: int = 20
     gt_threshold_max: float = 1.0
@@ -300,7 +324,7 @@ class Params:
         for name in ("spur_unique", "outside_min_share", "outside_skeletal_share", "outside_one_sided"):
             if not 0.0 <= float(getattr(self, name)) <= 1.0:
                 bad(name, "must be in [0, 1]")
-        for name in ("diag_max_points", "cycles_voxels", "spurs_warn_count", "cycles_warn_spurious",
+        for name in ("diag_max_points", "cycles_voxels", "cycles_close_voxels", "spurs_warn_count", "cycles_warn_spurious",
                      "cycles_warn_missing"):
             if int(getattr(self, name)) < 1:
                 bad(name, "must be a positive integer")
@@ -310,18 +334,18 @@ class Params:
             bad("spur_min_points", "must be >= 0")
         if not 0.0 <= float(self.trust_extent_quantile) < 0.5:
             bad("trust_extent_quantile", "must be in [0, 0.5)")
-        for name in ("open_link", "open_empty", "open_end_flatness", "open_end_roundness", "cap_flatness",
+        for name in ("open_link", "open_empty", "open_resolved_diameter", "open_fill_reach", "sparse_ratio", "open_end_flatness", "open_end_roundness", "cap_flatness",
                      "outlier_std_ratio", "outlier_radius", "outlier_skeletal_radius"):
             if not float(getattr(self, name)) > 0:
                 bad(name, "must be > 0")
         if not 0.0 < float(self.open_angle) < 360.0:
             bad("open_angle", "must be in (0, 360) degrees")
-        for name in ("open_surface_share", "cap_max_share"):
+        for name in ("open_surface_share", "cap_max_share", "thin_min_share", "open_thin_planarity"):
             if not 0.0 <= float(getattr(self, name)) <= 1.0:
                 bad(name, "must be in [0, 1]")
         if not float(self.viewpoint_share_cell) >= 0:
             bad("viewpoint_share_cell", "must be >= 0")
-        for name in ("open_k", "open_min_fill", "open_max_points", "viewpoint_rows", "outlier_k",
+        for name in ("open_k", "open_min_fill", "open_max_points", "viewpoint_rows", "outlier_k", "outlier_local_k",
                      "outlier_min_neighbours"):
             if int(getattr(self, name)) < 1:
                 bad(name, "must be a positive integer")

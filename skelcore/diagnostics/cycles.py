@@ -365,6 +365,17 @@ def find_cycle_defects(
         near = _near_cycles(curve, branches, voxel_shape, solid.shape)
         spurious, linking, rank = _classify(curve, branches, voxel_shape, solid | near, near, lengths,
                                             lambda f: checkpoint(0.7 + 0.25 * f))
+    if rank > tunnels:
+        # X' gains a tunnel between any two strands of the skeleton that leave X side by side (where a
+        # thin part opens the interior): a tunnel that closing X' by a few voxels fills is no tunnel of
+        # the shape, and the cycles beyond the rest, the longest first, are spurious
+        closed = ndimage.binary_closing(np.pad(solid | near, 2), structure=np.ones((3, 3, 3), bool),
+                                        iterations=int(params.cycles_close_voxels))
+        most = max(tunnels, betti_numbers(closed)[1])
+        kept = [int(i) for i in np.argsort(lengths, kind="stable") if i not in set(spurious)]
+        if len(kept) > most:
+            spurious = sorted(spurious + kept[most:])
+            rank = most
     if tunnels > rank:  # the tunnels no cycle goes around: only those wider than two voxels count
         tunnels = max(rank, wide_tunnels(solid))
     missing = max(0, tunnels - rank)

@@ -57,6 +57,7 @@ def boundary_mask(
     angle: float = np.pi / 2,
     tree: cKDTree | None = None,
     spacing_out: np.ndarray | None = None,
+    reach_out: np.ndarray | None = None,
     checkpoint: Checkpoint = no_checkpoint,
 ) -> np.ndarray:
     """True for the points on the cloud's boundary (PCL's angle criterion, see the module docstring).
@@ -69,6 +70,7 @@ def boundary_mask(
         a gap above pi / 2 with probability about 29 (3/4)^28 = 0.001.
     angle : the largest gap (radians) that an interior point may have.
     spacing_out : an (N,) array that receives each point's distance to its nearest other point.
+    reach_out : an (N,) array that receives each point's distance to its k-th nearest other point.
 
     Examples
     --------
@@ -90,6 +92,8 @@ def boundary_mask(
         dist, idx = tree.query(cloud[i0:i1], k=k + 1, workers=-1)
         if spacing_out is not None:
             spacing_out[i0:i1] = dist[:, 1]
+        if reach_out is not None:
+            reach_out[i0:i1] = dist[:, k]
         nb = idx[:, 1:]
         frames = tangent_frames(cloud, idx)
         out[i0:i1] = largest_angle_gap(cloud[nb] - cloud[i0:i1, None, :], frames) > angle

@@ -16,6 +16,7 @@ else a missing ``side``.
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from typing import Callable
 
 import numpy as np
 from scipy.sparse import coo_matrix
@@ -26,7 +27,7 @@ from ..geometry import Checkpoint, no_checkpoint
 from ..params import Params
 from .boundary import boundary_mask, largest_angle_gap
 
-__all__ = ["Opening", "find_openings", "median_spacing", "fill_rim"]
+__all__ = ["Opening", "find_openings", "thin_parts", "median_spacing", "fill_rim"]
 
 #: rim points used by the surround test of the fill (evenly spread); enough for gaps well under 90 degrees
 RIM_SAMPLE = 512
@@ -53,6 +54,7 @@ class Opening:
     dome: np.ndarray  # (m', 3) the fill bulged away from the cloud, where it is empty
     spacing: float  # the grid step of the fill and the dome (2 x the median spacing near the rim)
     local_radius: float = float("nan")  # the shape's radius at the rim (from a skeleton, set later)
+    rim_spacing: float = float("nan")  # median nearest-neighbour distance of the rim's points
     notes: dict = field(default_factory=dict)
 
     @property
@@ -83,6 +85,7 @@ class Opening:
             "flatness": float(self.flatness),
             "roundness": float(self.roundness),
             "local_radius": float(self.local_radius * scale),
+            "rim_spacing": float(self.rim_spacing * scale),
             "size": float(self.size),
         }
 
@@ -101,8 +104,17 @@ def find_openings(
     params: Params = Params(),
     *,
     checkpoint: Checkpoint = no_checkpoint,
+    diameter: Callable[[np.ndarray], np.ndarray] | None = None,
+    thin_rows: list | None = None,
 ) -> list[Opening]:
     """The openings of ``cloud`` (module docstring), largest fill first.
+
+    ``diameter`` (points -> the shape's local diameter there, e.g. twice the distance to a skeleton)
+    marks the boundary points of parts fewer than ``open_resolved_diameter`` of their spacings across
+    as thin: there the k nearest neighbours wrap round the part and the angle test sees gaps in any
+    sampling (docs/metrics.md 6.1), when their neighbours are curved too (smallest / middle eigenvalue
+    of their covariance above ``open_thin_planarity``). Thin points join no opening; their cloud rows are
+    appended to ``thin_rows``.
 
     Above ``open_max_points`` points the boundary test runs on a random subsample of that many (fixed
     seed); ``rows`` then index the full cloud all the same.  A closed, evenly sampled surface has none.
@@ -125,16 +137,36 @@ def find_openings(
     pts = cloud[rows]
     tree = cKDTree(pts)
     nn = np.empty(len(pts))
+    reach = np.empty(len(pts))
+    k = int(min(params.open_k, len(pts) - 1))
     checkpoint(0.05)
-    on_rim = boundary_mask(pts, k=int(params.open_k), angle=np.radians(params.open_angle), tree=tree,
-                           spacing_out=nn, checkpoint=lambda f: checkpoint(0.05 + 0.6 * f))
+    on_rim = boundary_mask(pts, k=k, angle=np.radians(params.open_angle), tree=tree,
+                           spacing_out=nn, reach_out=reach, checkpoint=lambda f: checkpoint(0.05 + 0.6 * f))
     spacing = float(np.median(nn))
     rim = np.flatnonzero(on_rim)
+    if len(rows) < n and len(rim):  # the spacing near a rim is the full cloud's, not the subsample's
+        reach[rim] = cKDTree(cloud).query(pts[rim], k=k + 1, workers=-1)[0][:, k]
+    # a rim point's spacing from its k-th neighbour (the half disc its k neighbours cover): the median
+    # nearest distance of a uniform sample is sqrt(ln 2 / 2k) x that; its own nearest neighbour may be
+    # the far side of a sheet thinner than the sampling, which made rims of dense crumples
+    nn = reach * np.sqrt(np.log(2.0) / (2 * k))
+    thin = np.zeros(len(rim), bool)
+    if diameter is not None and len(rim):
+        thin = np.asarray(diameter(pts[rim]), float) < float(params.open_resolved_diameter) * nn[rim]
+        if thin.any():  # ... and curved at the scale of its neighbours (a flat cap's centre is on the skeleton)
+            nb = pts[tree.query(pts[rim[thin]], k=k + 1, workers=-1)[1]]
+            nb = nb - nb.mean(axis=1, keepdims=True)
+            ev = np.linalg.eigvalsh(np.matmul(nb.transpose(0, 2, 1), nb))
+            thin[np.flatnonzero(thin)] = ev[:, 0] > float(params.open_thin_planarity) * ev[:, 1]
+    if thin_rows is not None:
+        thin_rows.extend(rows[rim[thin]].tolist())
+    rim = rim[~thin]
     if len(rim) < 3 or not spacing > 0:
         return []
-    if len(rows) < n:  # the spacing near a rim is the full cloud's, not the subsample's
-        nn = np.zeros(len(pts))
-        nn[rim] = cKDTree(cloud).query(pts[rim], k=2, workers=-1)[0][:, 1]
+    # the rays of boundedness are h = rays_radius_factor x the cloud's median spacing wide: a gap narrower
+    # than a few of those spacings lets none through, however dense the rim (a crumpled, self-overlapping
+    # mesh is sampled many times more densely than the cloud, and "gaps" there are the cloud's spacing)
+    floor = spacing * float(np.sqrt(len(pts) / n))
     pairs = cKDTree(pts[rim]).query_pairs(float(params.open_link) * spacing, output_type="ndarray")
     graph = coo_matrix((np.ones(len(pairs)), (pairs[:, 0], pairs[:, 1])), shape=(len(rim), len(rim)))
     n_groups, label = connected_components(graph, directed=False)
@@ -144,14 +176,39 @@ def find_openings(
     for i, g in enumerate(candidates):
         members = rim[label == g]
         local = float(np.median(nn[members]))
-        opening = _opening(pts, members, tree, local if local > 0 else spacing, params)
+        opening = _opening(pts, members, tree, local if local > 0 else spacing, params, floor)
         if opening is not None:
             opening.rows = rows[members]
+            opening.rim_spacing = local if local > 0 else spacing
             out.append(opening)
         checkpoint(0.65 + 0.35 * (i + 1) / len(candidates))
     out = _without_nested(out)
     out.sort(key=lambda o: -len(o.fill))
     return out
+
+
+def thin_parts(cloud: np.ndarray, rows: np.ndarray, params: Params = Params()) -> dict | None:
+    """The boundary points left out as parts too thin for their sampling (:func:`find_openings`'s
+    ``thin_rows``), linked within ``open_link`` of their median spacings into parts of at least 5: their
+    count, points and box (the cloud's units); None when they are fewer than ``thin_min_share`` of the
+    cloud (a few twigs do not change a score; docs/metrics.md 6.1)."""
+    cloud = np.asarray(cloud, dtype=float)
+    rows = np.unique(np.asarray(rows, np.int64))
+    if len(rows) < max(5, float(params.thin_min_share) * len(cloud)):
+        return None
+    pts = cloud[rows]
+    tree = cKDTree(pts)
+    link = float(params.open_link) * float(np.median(cKDTree(cloud).query(pts, k=2, workers=-1)[0][:, 1]))
+    pairs = tree.query_pairs(link, output_type="ndarray")
+    graph = coo_matrix((np.ones(len(pairs)), (pairs[:, 0], pairs[:, 1])), shape=(len(pts), len(pts)))
+    n_groups, label = connected_components(graph, directed=False)
+    sizes = np.bincount(label, minlength=n_groups)
+    keep = np.isin(label, np.flatnonzero(sizes >= 5))
+    if not keep.any():
+        return None
+    lo, hi = pts[keep].min(axis=0), pts[keep].max(axis=0)
+    return {"parts": int(np.count_nonzero(sizes >= 5)), "points": int(keep.sum()), "share": float(len(rows) / len(cloud)),
+            "box": [[float(x) for x in lo], [float(x) for x in hi]]}
 
 
 def _without_nested(openings: list[Opening]) -> list[Opening]:
@@ -168,7 +225,8 @@ def _without_nested(openings: list[Opening]) -> list[Opening]:
     return kept
 
 
-def _opening(pts: np.ndarray, members: np.ndarray, tree: cKDTree, spacing: float, params: Params) -> Opening | None:
+def _opening(pts: np.ndarray, members: np.ndarray, tree: cKDTree, spacing: float, params: Params,
+             floor: float = 0.0) -> Opening | None:
     rim = pts[members]
     centre = rim.mean(axis=0)
     _, sv, vt = np.linalg.svd(rim - centre, full_matrices=False)
@@ -188,7 +246,7 @@ def _opening(pts: np.ndarray, members: np.ndarray, tree: cKDTree, spacing: float
         return None
     basis = np.stack([e1, e2, normal])
     fill3 = centre + flat @ basis
-    empty = float(params.open_empty) * spacing
+    empty = float(params.open_empty) * max(spacing, floor)
     fill_d, _ = tree.query(fill3, k=1, workers=-1)
     fill = fill3[fill_d > empty]
     if len(fill) < int(params.open_min_fill):

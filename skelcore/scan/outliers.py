@@ -12,8 +12,14 @@ of a scan, which fails at most one, is kept):
   the cloud's typical value, both taken robustly (median, 1.4826 x MAD: the strays must not widen the
   yardstick that finds them).
 
+Both yardsticks are also taken locally (:func:`local_spacing`: the lower quartile of the nearest-neighbour
+distances of the ``outlier_local_k`` cloud points nearest to the point): a point is a stray only when it also has
+fewer than ``outlier_min_neighbours`` others within ``outlier_radius`` local spacings, so a part sampled
+10 x more sparsely than the rest (whose points are a few global spacings apart) keeps its points, while a
+stray among dense surface points still fails (its nearest cloud points are the surface's).
+
 A skeletal point set in pointwise correspondence is held to the radius test alone, with the cloud's
-spacing as the yardstick (:func:`isolated_rows`): contraction stacks skeletal points, so their own spacing
+spacing, global and local, as the yardstick (:func:`isolated_rows`): contraction stacks skeletal points, so their own spacing
 says nothing, and a contracted set is dense (on the hammer and the apple tree no skeletal point has its second neighbour
 beyond 1.7 cloud spacings), so a skeletal point five spacings from all others is a stray's image.
 """
@@ -28,7 +34,12 @@ from scipy.spatial import cKDTree
 from ..geometry import Checkpoint, Normalization, kd_tree, leaf_order, no_checkpoint, query_workers, timed_query
 from ..params import Params
 
-__all__ = ["Outliers", "find_outliers", "isolated_rows", "sparse_rows"]
+__all__ = ["Outliers", "find_outliers", "isolated_rows", "sparse_rows", "local_spacing"]
+
+#: the quantile of the nearest-neighbour distances around a point taken as its local spacing: the
+#: lower quarter, so that strays among a point's neighbours (5-20 % of a cloud in the benchmark's
+#: outliers effect) do not widen the yardstick that finds them
+LOCAL_QUANTILE = 0.25
 
 #: points whose nearest-neighbour distances give the spacing and the statistical test's yardstick (a
 #: random sample of this many beyond)
@@ -95,6 +106,10 @@ def find_outliers(cloud: np.ndarray, params: Params = Params(), *, checkpoint: C
     sigma = 1.4826 * float(np.median(np.abs(ref - centre)))
     mean_d = tree.query(cloud[candidates], k=k + 1, workers=query_workers(len(candidates)))[0][:, 1:].mean(axis=1)
     rows = candidates[mean_d > centre + float(params.outlier_std_ratio) * sigma]
+    if len(rows):  # and isolated by the spacing around them, not only the cloud's
+        local = local_spacing(cloud, cloud[rows], int(params.outlier_local_k), tree)
+        d_m = tree.query(cloud[rows], k=m + 1, workers=query_workers(len(rows)))[0][:, m]
+        rows = rows[d_m > float(params.outlier_radius) * local]
     checkpoint(0.9)
     if len(rows) == 0 or len(rows) >= n - 1:
         return none
@@ -112,15 +127,44 @@ def find_outliers(cloud: np.ndarray, params: Params = Params(), *, checkpoint: C
 
 
 def isolated_rows(points: np.ndarray, spacing: float, params: Params = Params(),
-                  checkpoint: Checkpoint = no_checkpoint) -> np.ndarray:
+                  checkpoint: Checkpoint = no_checkpoint, cloud: np.ndarray | None = None) -> np.ndarray:
     """Rows of ``points`` (a skeletal set) with fewer than ``outlier_min_neighbours`` other points within
-    ``outlier_skeletal_radius`` x ``spacing`` (the radius test with the cloud's spacing as yardstick)."""
+    ``outlier_skeletal_radius`` x ``spacing`` (the radius test with the cloud's spacing as yardstick) and,
+    given the ``cloud`` in pointwise correspondence, also within that many x the cloud's local spacing at
+    its row (:func:`local_spacing`; a sparsely sampled part contracts to a sparse skeletal set), and that
+    lies no farther from its cloud row than the other skeletal points do (else the contraction flung a
+    surface point off: the skeleton's defect, which the diagnostics judge, not a stray of the scan)."""
     points = np.asarray(points, dtype=float)
     m = int(params.outlier_min_neighbours)
     if len(points) <= m or not spacing > 0:
         return np.zeros(0, np.int64)
     radius = float(params.outlier_skeletal_radius) * spacing
-    return sparse_rows(points, radius, m, checkpoint)  # a contracted set: ~8 % of the rows asked
+    rows = sparse_rows(points, radius, m, checkpoint)  # a contracted set: ~8 % of the rows asked
+    if len(rows) and cloud is not None and len(cloud) == len(points):
+        cloud = np.asarray(cloud, dtype=float)
+        tree = cKDTree(cloud)
+        local = local_spacing(cloud, cloud[rows], int(params.outlier_local_k), tree)
+        skel_tree = cKDTree(points)
+        d_m = skel_tree.query(points[rows], k=m + 1, workers=-1)[0][:, m]
+        moved = np.linalg.norm(points[rows] - cloud[rows], axis=1)
+        to_skeleton = skel_tree.query(cloud[rows], k=2, workers=-1)[0]  # its own image may be the nearest
+        to_others = np.where(np.isclose(to_skeleton[:, 0], moved), to_skeleton[:, 1], to_skeleton[:, 0])
+        far = float(params.outlier_skeletal_radius) * local
+        # a stray's image stays with its point; a surface point that the contraction flung farther than
+        # the rest of the skeleton is from it is the skeleton's defect (the diagnostics judge it), not a stray
+        rows = rows[(d_m > far) & (moved <= to_others)]
+    return rows
+
+
+def local_spacing(cloud: np.ndarray, at: np.ndarray, k: int, tree: cKDTree | None = None) -> np.ndarray:
+    """The cloud's spacing around each point of ``at``: the lower quartile (``LOCAL_QUANTILE``) of the
+    nearest-neighbour distances of its ``k`` nearest cloud points (docs/metrics.md 6.4).  A stray's nearest cloud points are mostly the surface's,
+    so its own isolation does not widen its yardstick."""
+    tree = cKDTree(cloud) if tree is None else tree
+    k = int(min(k, len(cloud) - 1))
+    near = tree.query(np.asarray(at, float), k=k, workers=-1)[1]
+    nn = tree.query(cloud[near.ravel()], k=2, workers=-1)[0][:, 1].reshape(near.shape)
+    return np.quantile(nn, LOCAL_QUANTILE, axis=1)
 
 
 def sparse_rows(points: np.ndarray, radius: float, others: int, checkpoint: Checkpoint = no_checkpoint,

@@ -36,7 +36,7 @@ def find_strays(cloud: np.ndarray, skeletal: np.ndarray | None, params: Params =
                 pointwise: bool = False, checkpoint: Checkpoint = no_checkpoint) -> Strays:
     """The cloud's outliers and, for a skeletal set in pointwise correspondence, its isolated points."""
     found = find_outliers(cloud, params, checkpoint=checkpoint)
-    iso = (isolated_rows(skeletal, found.spacing, params, lambda f: checkpoint(1.0))
+    iso = (isolated_rows(skeletal, found.spacing, params, lambda f: checkpoint(1.0), cloud=cloud)
            if skeletal is not None and pointwise else np.zeros(0, np.int64))
     return Strays(found, iso)
 

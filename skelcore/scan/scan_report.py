@@ -16,7 +16,7 @@ import numpy as np
 from ..diagnostics.trust_warning import TrustWarning
 from .prepare import Strays
 
-__all__ = ["ScanReport", "outliers_warning", "open_surface_warning"]
+__all__ = ["ScanReport", "outliers_warning", "open_surface_warning", "thin_parts_warning", "sparse_boundedness_warning"]
 
 
 @dataclass
@@ -30,6 +30,8 @@ class ScanReport:
     openings: list[dict[str, Any]] | None = None  # Opening.to_dict() + rows, capped, refused
     cap_points: int = 0  # points added by --cap-openings (boundedness only)
     escaping: dict[str, float | None] = field(default_factory=dict)  # column -> share unbounded through openings
+    thin_parts: dict[str, Any] | None = None  # openings.thin_parts(): parts too thin for their sampling
+    sparse: dict[str, float] = field(default_factory=dict)  # column -> share unbounded where sampled sparsely
     timings: dict[str, float] = field(default_factory=dict)
 
     def to_dict(self) -> dict[str, Any]:
@@ -41,6 +43,8 @@ class ScanReport:
             "openings": self.openings,
             "cap_points": int(self.cap_points),
             "escaping": dict(self.escaping),
+            "thin_parts": self.thin_parts,
+            "sparse": dict(self.sparse),
             "timings_s": {k: round(float(v), 6) for k, v in self.timings.items()},
         }
 
@@ -54,6 +58,8 @@ class ScanReport:
             openings=doc.get("openings"),
             cap_points=int(doc.get("cap_points", 0)),
             escaping=dict(doc.get("escaping") or {}),
+            thin_parts=doc.get("thin_parts"),
+            sparse=dict(doc.get("sparse") or {}),
             timings={k: float(v) for k, v in (doc.get("timings_s") or {}).items()},
         )
 
@@ -99,4 +105,31 @@ def open_surface_warning(kinds: list[str], largest: float, shares: dict[str, flo
         f"the cloud is not a closed surface ({', '.join(parts)}{size}): {through} are unbounded only because their "
         "rays leave through the openings (the paper's boundedness assumes a closed surface); give the sensor "
         "position with --viewpoint X Y Z, or close small flat openings with --cap-openings",
+    )
+
+
+def thin_parts_warning(thin: dict[str, Any]) -> TrustWarning:
+    """``thin_parts``: parts of the cloud sampled too thinly to resolve (:func:`.openings.thin_parts`),
+    where and how many; it switches no other verdict off (docs/metrics.md 6.1)."""
+    lo, hi = thin["box"]
+    parts = thin["parts"]
+    return TrustWarning(
+        "thin_parts",
+        f"{parts} part{'s' if parts != 1 else ''} of the shape {'are' if parts != 1 else 'is'} sampled too thinly to "
+        f"resolve (fewer spacings across than a surface needs; {thin['points']} boundary points, "
+        f"{thin['share']:.1%} of the cloud, from ({', '.join(f'{x:.4g}' for x in lo)}) to "
+        f"({', '.join(f'{x:.4g}' for x in hi)})): their gaps are not taken for openings, and boundedness there "
+        "counts rays through the gaps between samples; sample more densely",
+    )
+
+
+def sparse_boundedness_warning(shares: dict[str, float], ratio: float) -> TrustWarning:
+    """``sparse_boundedness``: the share of each skeleton's elements unbounded where the cloud is sampled
+    more than ``ratio`` x as sparsely as its median (docs/metrics.md 6.1)."""
+    names = {"skeletal": "skeletal points", "curve": "curve samples"}
+    which = " and ".join(f"{share:.0%} of the {names[col]}" for col, share in shares.items())
+    return TrustWarning(
+        "sparse_boundedness",
+        f"{which} are unbounded where the cloud is sampled more than {ratio:g} x as sparsely as its median: "
+        "their rays may pass between the samples, so boundedness there measures the sampling, not the skeleton",
     )

@@ -151,15 +151,20 @@ def test_sparse_rows_ask_every_row_where_the_cells_overflow():
 
 
 def _reference_outliers(cloud: np.ndarray, spacing: float, params: Params = Params()) -> list[int]:
-    """The module docstring's two tests over every row by brute kNN (the yardstick over every row)."""
+    """The module docstring's tests over every row by brute kNN (the yardstick over every row; the local
+    spacing: the median nearest distance of each row's outlier_local_k nearest points)."""
     from scipy.spatial import cKDTree
 
-    d = cKDTree(cloud).query(cloud, k=params.outlier_k + 1)[0]
+    tree = cKDTree(cloud)
+    d = tree.query(cloud, k=params.outlier_k + 1)[0]
     radius_fail = d[:, params.outlier_min_neighbours] > params.outlier_radius * spacing
     mean_d = d[:, 1:].mean(axis=1)
     centre = np.median(mean_d)
     sigma = 1.4826 * np.median(np.abs(mean_d - centre))
-    return np.flatnonzero(radius_fail & (mean_d > centre + params.outlier_std_ratio * sigma)).tolist()
+    nn = d[:, 1]
+    local = np.quantile(nn[tree.query(cloud, k=params.outlier_local_k)[1]], 0.25, axis=1)
+    local_fail = d[:, params.outlier_min_neighbours] > params.outlier_radius * local
+    return np.flatnonzero(radius_fail & local_fail & (mean_d > centre + params.outlier_std_ratio * sigma)).tolist()
 
 
 @pytest.mark.parametrize("case", ["clean", "far", "box", "sparse"])
