@@ -1,27 +1,14 @@
 """Stray points: background returns far from the scanned surface (docs/metrics.md 6.4).
 
-One stray point sets the cloud's bounding box, hence the normalization every metric runs in (docs/metrics.md 0):
-a point at 10 x the hammer's extent shrinks the hammer to a tenth and changes d_B and centeredness.
-A point is an outlier when it fails both tests of PCL and Open3D (so a point in a sparse but real part
-of a scan, which fails at most one, is kept):
-
-- radius test (``RadiusOutlierRemoval`` / ``remove_radius_outlier``): fewer than
-  ``outlier_min_neighbours`` other points within ``outlier_radius`` x the cloud's median spacing;
-- statistical test (``StatisticalOutlierRemoval`` / ``remove_statistical_outlier``): its mean distance
-  to its ``outlier_k`` nearest neighbours is more than ``outlier_std_ratio`` standard deviations above
-  the cloud's typical value, both taken robustly (median, 1.4826 x MAD: the strays must not widen the
-  yardstick that finds them).
-
-Both yardsticks are also taken locally (:func:`local_spacing`: the lower quartile of the nearest-neighbour
-distances of the ``outlier_local_k`` cloud points nearest to the point): a point is a stray only when it also has
-fewer than ``outlier_min_neighbours`` others within ``outlier_radius`` local spacings, so a part sampled
-10 x more sparsely than the rest (whose points are a few global spacings apart) keeps its points, while a
-stray among dense surface points still fails (its nearest cloud points are the surface's).
-
-A skeletal point set in pointwise correspondence is held to the radius test alone, with the cloud's
-spacing, global and local, as the yardstick (:func:`isolated_rows`): contraction stacks skeletal points, so their own spacing
-says nothing, and a contracted set is dense (on the hammer and the apple tree no skeletal point has its second neighbour
-beyond 1.7 cloud spacings), so a skeletal point five spacings from all others is a stray's image.
+One stray point sets the normalization every metric runs in (docs/metrics.md 0), so strays change
+d_B and centeredness. A point is an outlier when it fails both of PCL's and Open3D's tests (a point in
+a sparse but real part fails at most one): the radius test (fewer than ``outlier_min_neighbours``
+others within ``outlier_radius`` x the median spacing) and the statistical test (its mean distance to
+its ``outlier_k`` nearest neighbours more than ``outlier_std_ratio`` robust deviations above the
+cloud's). Both yardsticks are also taken locally (:func:`local_spacing`, the lower quartile of the
+spacings of its ``outlier_local_k`` nearest points), so a part sampled 10 x more sparsely keeps its
+points. A skeletal set in pointwise correspondence is held to the radius test alone with the cloud's
+spacing (:func:`isolated_rows`): contraction stacks skeletal points, so their own spacing says nothing.
 """
 
 from __future__ import annotations
