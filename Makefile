@@ -63,7 +63,7 @@ BENCH_ARGS ?=
 bench: setup
 	mkdir -p $(dir $(BENCH_JSON))
 	$(PY) -m pytest -p no:cacheprovider benchmarks --benchmark-json=$(BENCH_JSON) $(BENCH_ARGS)
-	$(PY) benchmarks/report.py $(BENCH_JSON) -o docs/benchmark_results.md
+	$(PY) benchmarks/report.py $(BENCH_JSON) -o docs/benchmark_results.md --readme README.md
 
 samples: setup
 	$(PY) scripts/make_samples.py

@@ -1,7 +1,10 @@
 """The Markdown table of a benchmark run: each case's median seconds and its ratio to the anchor's
 median (gudhi's Rips H0 of the hammer, timed in the same run), with the machine named.
 
-    .venv/bin/python benchmarks/report.py RESULTS.json [-o docs/benchmark_results.md]
+    .venv/bin/python benchmarks/report.py RESULTS.json [-o docs/benchmark_results.md] [--readme README.md]
+
+``--readme`` also rewrites the README's short table (the lines between its two ``README_MARKS``) from
+the same run: the cases of ``README_CASES`` that the run holds.
 
 RESULTS.json is pytest-benchmark's ``--benchmark-json`` of ``pytest benchmarks`` (``make bench``).
 """
@@ -54,6 +57,46 @@ def _seconds(s: float) -> str:
     return f"{s:.3f}" if s < 10 else f"{s:.1f}"
 
 
+#: the README's short table: case name in the JSON -> what it is (the rest: docs/benchmark_results.md)
+README_CASES = {
+    "test_evaluate_hammer": "full evaluation of the hammer scan (4,096 points; skeletal set and curve)",
+    "test_evaluate_torus[100000]": "full evaluation of a 100,000-point torus",
+    "test_evaluate_torus[1048576]": "full evaluation of a 1,048,576-point torus",
+    "test_evaluate_torus_curve_only_1m": "the 1M torus, curve skeleton only",
+    "test_diagnostics_hammer": "the hammer's diagnostics alone",
+    "test_skeletonize_hammer[cao]": "skeletonizing the hammer (the paper's algorithm)",
+    "test_compare_run_serial": "a compare run of 6 jobs, one after the other",
+    "test_viewer_start_up[100000]": "the viewer's first frame of a 100,000-point cloud, from launch",
+}
+README_MARKS = ("<!-- benchmark table: written by make bench (benchmarks/report.py) -->",
+                "<!-- end of the benchmark table -->")
+
+
+def readme_table(results: dict) -> str:
+    """The README's short table: median seconds and ratio to the anchor, the machine named."""
+    benches = {b["name"]: b for b in results.get("benchmarks", [])}
+    anchor = next((b for b in benches.values() if b.get("extra_info", {}).get("anchor")), None)
+    base = anchor["stats"]["median"] if anchor else float("nan")
+    lines = [f"Machine: {_machine(results.get('machine_info', {}))}; the anchor, gudhi's Rips H0 of the "
+             f"hammer, took {_seconds(base)} s in this run.", "",
+             "| what | median s | x Rips H0 of the hammer |", "|---|---|---|"]
+    for name, what in README_CASES.items():
+        if name in benches:
+            median = benches[name]["stats"]["median"]
+            lines.append(f"| {what} | {_seconds(median)} | {median / base:.3g} |")
+    return "\n".join(lines)
+
+
+def write_readme(path: Path, results: dict) -> None:
+    """Replace the README's table between :data:`README_MARKS` (both must be there)."""
+    text = path.read_text(encoding="utf-8")
+    start, end = text.find(README_MARKS[0]), text.find(README_MARKS[1])
+    if start < 0 or end < start:
+        raise SystemExit(f"{path}: the benchmark table's marks are missing")
+    head = text[:start + len(README_MARKS[0])]
+    path.write_text(f"{head}\n{readme_table(results)}\n{text[end:]}", encoding="utf-8")
+
+
 def render(results: dict) -> str:
     benches = results.get("benchmarks", [])
     anchor = next((b for b in benches if b.get("extra_info", {}).get("anchor")), None)
@@ -104,8 +147,12 @@ def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("results", type=Path, help="pytest-benchmark's --benchmark-json file")
     ap.add_argument("-o", "--output", type=Path, help="write the Markdown here (default: standard output)")
+    ap.add_argument("--readme", type=Path, help="also rewrite this README's short table from the run")
     args = ap.parse_args(argv)
-    text = render(json.loads(args.results.read_text(encoding="utf-8")))
+    results = json.loads(args.results.read_text(encoding="utf-8"))
+    text = render(results)
+    if args.readme:
+        write_readme(args.readme, results)
     if args.output:
         args.output.write_text(text, encoding="utf-8")
     else:
