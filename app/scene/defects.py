@@ -4,8 +4,9 @@ openings and stray points), without Qt.
 :func:`defect_rows` turns ``Evaluation.diagnostics`` (skelcore/diagnostics/record.py), its warnings and
 its ``scan`` block into one :class:`DefectRow` per defect found: missing parts, spurious branches,
 spurious and missing cycles, branches outside the shape, ``collapse``, ``frame``, ``open_surface`` (one
-row per opening) and ``outliers``, each with its size in the engine's words and the geometry that
-frames and highlights it. :func:`branch_details` is a clicked branch: length, local radius, the metric
+row per opening), ``outliers``, ``thin_parts`` and ``sparse_boundedness`` (the scan's: no defects of the
+skeleton), each with its size in the engine's words and the geometry that frames and highlights it.
+:func:`branch_details` is a clicked branch: length, local radius, the metric
 means along it and its flags. Positions are in the user's units (the layers'); the engine's lengths are
 normalized (docs/metrics.md 0) and are turned back with ``Evaluation.normalization``.
 """
@@ -31,6 +32,8 @@ DEFECT_TITLES = {
     "frame": "frame",
     "open_surface": "opening",
     "outliers": "stray points",
+    "thin_parts": "thin parts",
+    "sparse_boundedness": "sparse sampling",
 }
 _NO_PLACE = np.zeros((0, 3))
 
@@ -404,12 +407,49 @@ def _scan_rows(ev: Any) -> list[DefectRow]:
         rows.append(DefectRow("outliers", f"{found['count']} stray points{removed}",
                               message or f"bounding box {found.get('scale_ratio', 1):.3g} x as large", "",
                               sel if not scan.outliers_removed else np.zeros(0, np.int64), points=pts))
+    rows += _thin_rows(ev, scan, cloud) + _sparse_rows(ev, scan)
     return rows
+
+
+def _message(ev: Any, code: str) -> str:
+    return next((w.message for w in _warnings(ev) if w.code == code), "")
+
+
+def _thin_rows(ev: Any, scan: Any, cloud: np.ndarray | None) -> list[DefectRow]:
+    """``thin_parts``: one row for the parts sampled too thinly to resolve, highlighting their boundary
+    points when the record carries their rows, else framing their box."""
+    thin = getattr(scan, "thin_parts", None) or {}
+    if not thin.get("parts"):
+        return []
+    sel = np.asarray(thin.get("rows") or [], dtype=np.int64)
+    if cloud is not None and len(sel) and sel.max() < len(cloud):
+        pts = cloud[sel]
+    else:
+        sel = np.zeros(0, np.int64)
+        box = np.asarray(thin.get("box") or [], dtype=float)
+        pts = box.reshape(-1, 3) if box.size == 6 and np.isfinite(box).all() else _NO_PLACE
+    n = int(thin["parts"])
+    size = (f"{thin.get('points', 0)} boundary points, {thin.get('share', 0.0):.1%} of the cloud, sampled too "
+            "thinly to resolve: their gaps are not openings, and boundedness there counts rays through them")
+    return [DefectRow("thin_parts", f"{n} thin part{'s' if n != 1 else ''}", size, "", sel, points=pts)]
+
+
+def _sparse_rows(ev: Any, scan: Any) -> list[DefectRow]:
+    """``sparse_boundedness``: one row (no place: the whole scene) with the share of each skeleton's
+    elements unbounded where the cloud is sampled sparsely."""
+    shares = getattr(scan, "sparse", None) or {}
+    message = _message(ev, "sparse_boundedness")
+    if not shares and not message:
+        return []
+    names = {"skeletal": "skeletal points", "curve": "curve samples"}
+    which = " and ".join(f"{share:.0%} of the {names.get(col, col)}" for col, share in shares.items())
+    return [DefectRow("sparse_boundedness", "boundedness falls with sparse sampling",
+                      message or f"{which} are unbounded where the cloud is sampled sparsely", "")]
 
 
 def defect_rows(ev: Any) -> list[DefectRow]:
     """Every defect of ``ev`` found without a reference, in the order of the CLI's defects block, then the
-    scan's openings and stray points; [] for None."""
+    scan's openings, stray points, thin parts and sparse sampling; [] for None."""
     if ev is None:
         return []
     return (_missing_rows(ev) + _spur_rows(ev) + _cycle_rows(ev) + _outside_rows(ev) + _trust_rows(ev)

@@ -193,7 +193,7 @@ class DefectOverlay:
             edges = np.asarray(curve.edges, dtype=np.int64).reshape(-1, 2)[row.edges]
             self._lines("selected", _segments(np.asarray(curve.vertices, float), edges), PICK_COLOR, SELECTED_WIDTH,
                         offset=-160.0, selected=True)
-        elif len(row.points):
+        elif len(row.points) and not (row.code == "thin_parts" and not len(row.cloud_rows)):  # a box: framed only
             size = 12.0 if row.code == "outliers" else (cloud_size + 3.0 if len(row.cloud_rows) else 9.0)
             self._points("selected", row.points, PICK_COLOR, size, offset=-350.0, selected=True)
         self._set_legend()

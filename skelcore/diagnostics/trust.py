@@ -214,6 +214,9 @@ def frame_fit_warning(
 #: Warning codes that say the skeleton itself is wrong, as opposed to caveats about what a
 #: score can mean (``trivial_smoothness``, ``no_correspondence``) or about the scan: ``--strict``,
 #: compare's "sound" column, the profiles' ``fail_on`` and the CLI's defects block read this set.
+#: The scan's warnings stay out: ``open_surface``, ``outliers``, ``thin_parts`` (parts sampled too thinly
+#: to resolve) and ``sparse_boundedness`` (boundedness falls where the cloud is sparse) are facts about
+#: the cloud, true of every skeleton evaluated on it, not faults of the skeleton.
 DEFECT_CODES = frozenset({"frame", "collapse", "incomplete", "spurious_branches", "spurious_cycles",
                           "missing_cycles", "outside"})
 
