@@ -1,0 +1,163 @@
+"""Candidate actions, one per defect the judge found (docs/repair.md "Actions"): prune a spurious or
+far-reaching terminal branch, delete the edge outside the shape, cut a spurious cycle at its weakest
+edge, join two components by their closest vertex pair when the join stays inside the shape. Each
+action is a short list of edit-log entries; the order is fixed (deterministic repairs)."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Any, Callable
+
+import numpy as np
+from scipy.sparse import coo_matrix
+from scipy.sparse.csgraph import connected_components
+from scipy.spatial import cKDTree
+
+from ..curve import CurveSkeleton
+from .findings import Findings
+
+__all__ = ["Action", "propose", "component_labels"]
+
+InShape = Callable[[np.ndarray], np.ndarray]
+
+
+@dataclass
+class Action:
+    """What to do (``entries``: ``{"op", "args"}`` of the edit log, applied in order) and why:
+    the defect ``code``, its ``target`` (branch or cycle id of the evaluation), a sentence, and the
+    edge ids of the current curve it touches (their local scores go into the log)."""
+
+    code: str
+    target: dict[str, Any]
+    reason: str
+    entries: list[dict[str, Any]]
+    edges: np.ndarray = field(default_factory=lambda: np.zeros(0, np.int64))
+
+
+def component_labels(curve: CurveSkeleton) -> tuple[int, np.ndarray]:
+    """Connected components of the curve's graph (isolated vertices count as their own)."""
+    n = curve.n_vertices
+    e = curve.edges
+    g = coo_matrix((np.ones(len(e)), (e[:, 0], e[:, 1])), shape=(n, n))
+    return connected_components(g, directed=False)
+
+
+def _edge_id(curve: CurveSkeleton, a: int, b: int) -> int:
+    lo, hi = min(a, b), max(a, b)
+    return int(np.flatnonzero((curve.edges[:, 0] == lo) & (curve.edges[:, 1] == hi))[0])
+
+
+def _delete_edge_entries(curve: CurveSkeleton, edge: np.ndarray) -> list[dict[str, Any]]:
+    """Delete the edge, then the ends it leaves alone (higher id first: the lower ids stay)."""
+    a, b = int(edge[0]), int(edge[1])
+    deg = np.bincount(curve.edges.ravel(), minlength=curve.n_vertices)
+    out: list[dict[str, Any]] = [{"op": "delete_edge", "args": {"edge": [a, b]}}]
+    for v in sorted((a, b), reverse=True):
+        if deg[v] == 1:
+            out.append({"op": "delete_vertex", "args": {"vertex": v}})
+    return out
+
+
+def _prunes(f: Findings, ids: np.ndarray, code: str, why: str) -> list[Action]:
+    br = f.defects.branches
+    out = []
+    for b in ids:
+        b = int(b)
+        if br.kind[b] != "terminal":
+            continue
+        out.append(Action(code, {"branch": b}, why, [{"op": "prune_branch", "args": {"branch": b}}],
+                          np.flatnonzero(br.edge_branch == b)))
+    return out
+
+
+def _outside_edges(curve: CurveSkeleton, f: Findings) -> list[Action]:
+    od, br = f.defects.outside, f.defects.branches
+    out = []
+    length = np.asarray(od.edge_outside_length, float)
+    for b in od.defective_branches():
+        b = int(b)
+        if br.kind[b] == "terminal":
+            continue  # pruned whole (see propose)
+        on = np.flatnonzero((br.edge_branch == b) & (length > 0))
+        if not len(on):
+            continue
+        k = int(on[np.argmax(length[on])])
+        out.append(Action("outside", {"branch": b, "edge": curve.edges[k].tolist()},
+                          f"edge {curve.edges[k].tolist()} of branch {b} runs {length[k]:.3g} outside the shape "
+                          "(the longest outside stretch of the branch): deleted",
+                          _delete_edge_entries(curve, curve.edges[k]), np.array([k])))
+    return out
+
+
+def _weakest_edges(curve: CurveSkeleton, f: Findings, cycle: int, count: int = 2) -> list[int]:
+    """The cycle's edges, weakest first: the longest outside stretch, then the lowest mean local
+    boundedness + centeredness of its samples (an edge without samples: its ends' neighbours' mean)."""
+    edges = f.defects.branches.cycle_edges(cycle)
+    length = np.asarray(f.defects.outside.edge_outside_length, float)
+    keys = []
+    for k in edges:
+        loc = f.local(np.array([k]))
+        score = sum(v for v in loc.values() if v is not None) if loc["boundedness"] is not None else 2.0
+        keys.append((-round(float(length[k]), 9), round(score, 9), int(k)))
+    return [k for _, _, k in sorted(keys)[:count]]
+
+
+def _cycle_cuts(curve: CurveSkeleton, f: Findings) -> list[Action]:
+    out = []
+    for i in f.defects.cycles.spurious:
+        for k in _weakest_edges(curve, f, int(i)):
+            e = curve.edges[k].tolist()
+            out.append(Action("spurious_cycles", {"cycle": int(i), "edge": e},
+                              f"cycle {int(i)} goes around no tunnel of the shape: cut at its weakest edge {e}",
+                              [{"op": "cut_cycle", "args": {"edge": e}}], np.array([k])))
+    return out
+
+
+def _joins(curve: CurveSkeleton, f: Findings, in_shape: InShape | None, step: float) -> list[Action]:
+    """Each smaller component joined to the rest by its closest vertex pair, when the segment is inside."""
+    if in_shape is None:
+        return []
+    n, labels = component_labels(curve)
+    deg = np.bincount(curve.edges.ravel(), minlength=curve.n_vertices)
+    sizes = np.bincount(labels, minlength=n)
+    real = [c for c in range(n) if deg[labels == c].sum() > 0]
+    if len(real) < 2:
+        return []
+    main = max(real, key=lambda c: (sizes[c], -c))
+    out = []
+    for c in sorted((c for c in real if c != main), key=lambda c: (sizes[c], c)):
+        mine = np.flatnonzero(labels == c)
+        rest = np.flatnonzero((labels != c) & (deg > 0))
+        d, j = cKDTree(curve.vertices[rest]).query(curve.vertices[mine])
+        order = np.lexsort((mine, d))
+        for i in order[:3]:  # the three closest pairs: the first whose segment stays inside
+            a, b = int(mine[i]), int(rest[j[i]])
+            pa, pb = curve.vertices[a], curve.vertices[b]
+            m = max(2, int(np.ceil(float(d[i]) / step)) + 1)
+            pts = pa + np.linspace(0, 1, m)[:, None] * (pb - pa)
+            if bool(np.all(in_shape(pts))):
+                out.append(Action("components", {"component_vertex": a, "edge": sorted([a, b])},
+                                  f"component of vertex {a} ({len(mine)} vertices) joined to the rest at its "
+                                  f"closest inside pair ({a}, {b}), {float(d[i]):.3g} apart",
+                                  [{"op": "add_edge", "args": {"edge": sorted([a, b])}}]))
+                break
+    return out
+
+
+def propose(curve: CurveSkeleton, f: Findings, in_shape: InShape | None = None, join_step: float = 0.0
+            ) -> list[Action]:
+    """The candidate actions for ``curve`` from its findings, in the order they are tried: spurious
+    branches, far or outside terminal branches, outside edges, spurious cycles, components."""
+    if f.defects is None:
+        return []
+    d = f.defects
+    acts = _prunes(f, d.spurs.spurious, "spurious_branches",
+                   "a spurious terminal branch (explains no part of the cloud the rest does not): pruned")
+    seen = {a.target["branch"] for a in acts}
+    acts += [a for a in _prunes(f, d.outside.defective_branches(), "outside",
+                                "a terminal branch leaving the shape: pruned") if a.target["branch"] not in seen]
+    acts += _outside_edges(curve, f)
+    acts += _cycle_cuts(curve, f)
+    acts += _joins(curve, f, in_shape, join_step)
+    # longer spurious branches first within each kind would change little; the order above is the rule
+    return acts
