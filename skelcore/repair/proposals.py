@@ -19,6 +19,7 @@ from .findings import Findings
 __all__ = ["Action", "propose", "component_labels"]
 
 InShape = Callable[[np.ndarray], np.ndarray]
+Route = Callable[[CurveSkeleton, int], "np.ndarray | None"]
 
 
 @dataclass
@@ -70,7 +71,19 @@ def _prunes(f: Findings, ids: np.ndarray, code: str, why: str) -> list[Action]:
     return out
 
 
-def _outside_edges(curve: CurveSkeleton, f: Findings) -> list[Action]:
+def _reroute_entries(curve: CurveSkeleton, edge: np.ndarray, inner: np.ndarray) -> list[dict[str, Any]]:
+    """Delete the edge, then walk from its lower end through the new points to its higher end."""
+    a, b = int(edge[0]), int(edge[1])
+    out: list[dict[str, Any]] = [{"op": "delete_edge", "args": {"edge": [a, b]}}]
+    prev, n = a, curve.n_vertices
+    for i, p in enumerate(inner):
+        out.append({"op": "add_vertex", "args": {"position": [float(x) for x in p], "attach_to": prev}})
+        prev = n + i
+    out.append({"op": "add_edge", "args": {"edge": [min(prev, b), max(prev, b)]}})
+    return out
+
+
+def _outside_edges(curve: CurveSkeleton, f: Findings, route: Route | None = None) -> list[Action]:
     od, br = f.defects.outside, f.defects.branches
     out = []
     length = np.asarray(od.edge_outside_length, float)
@@ -86,6 +99,12 @@ def _outside_edges(curve: CurveSkeleton, f: Findings) -> list[Action]:
                           f"edge {curve.edges[k].tolist()} of branch {b} runs {length[k]:.3g} outside the shape "
                           "(the longest outside stretch of the branch): deleted",
                           _delete_edge_entries(curve, curve.edges[k]), np.array([k])))
+        inner = None if route is None else route(curve, k)
+        if inner is not None and len(inner):
+            out.append(Action("outside", {"branch": b, "edge": curve.edges[k].tolist()},
+                              f"edge {curve.edges[k].tolist()} of branch {b} runs {length[k]:.3g} outside the shape: "
+                              f"rerouted through the shape ({len(inner)} new vertices)",
+                              _reroute_entries(curve, curve.edges[k], inner), np.array([k])))
     return out
 
 
@@ -144,10 +163,11 @@ def _joins(curve: CurveSkeleton, f: Findings, in_shape: InShape | None, step: fl
     return out
 
 
-def propose(curve: CurveSkeleton, f: Findings, in_shape: InShape | None = None, join_step: float = 0.0
-            ) -> list[Action]:
+def propose(curve: CurveSkeleton, f: Findings, in_shape: InShape | None = None, join_step: float = 0.0,
+            route: Route | None = None) -> list[Action]:
     """The candidate actions for ``curve`` from its findings, in the order they are tried: spurious
-    branches, far or outside terminal branches, outside edges, spurious cycles, components."""
+    branches, far or outside terminal branches, outside edges (deleted, else rerouted by ``route``),
+    spurious cycles, components."""
     if f.defects is None:
         return []
     d = f.defects
@@ -156,8 +176,7 @@ def propose(curve: CurveSkeleton, f: Findings, in_shape: InShape | None = None, 
     seen = {a.target["branch"] for a in acts}
     acts += [a for a in _prunes(f, d.outside.defective_branches(), "outside",
                                 "a terminal branch leaving the shape: pruned") if a.target["branch"] not in seen]
-    acts += _outside_edges(curve, f)
+    acts += _outside_edges(curve, f, route)
     acts += _cycle_cuts(curve, f)
     acts += _joins(curve, f, in_shape, join_step)
-    # longer spurious branches first within each kind would change little; the order above is the rule
     return acts

@@ -22,6 +22,7 @@ from .checks import check_curve, check_frame
 from .findings import read_findings
 from .guard import verdict
 from .proposals import Action, propose
+from .reroute import route_inside
 
 __all__ = ["RepairResult", "repair"]
 
@@ -48,11 +49,12 @@ def _rounded(measures: dict[str, float | None]) -> dict[str, float | None]:
     return {k: None if v is None else round(v, 4) for k, v in measures.items()}
 
 
-def _in_shape(ev: Evaluation) -> tuple[Callable[[np.ndarray], np.ndarray] | None, float]:
-    """Inside the shape (the diagnostics' voxelized interior, holes filled) and its voxel in user units."""
+def _in_shape(ev: Evaluation) -> tuple[Callable[[np.ndarray], np.ndarray] | None, float, Any]:
+    """Inside the shape (the diagnostics' voxelized interior, holes filled), its voxel in user units,
+    and the router through it (:func:`.reroute.route_inside`)."""
     ctx = getattr(ev.source, "ctx", None)
     if ctx is None:
-        return None, 0.0
+        return None, 0.0, None
     vs = ctx.interior()
     solid = vs.solid()
 
@@ -60,7 +62,10 @@ def _in_shape(ev: Evaluation) -> tuple[Callable[[np.ndarray], np.ndarray] | None
         ijk = vs.index_of(ctx.norm.apply(np.asarray(points, float)))
         return solid[ijk[:, 0], ijk[:, 1], ijk[:, 2]]
 
-    return inside, float(vs.size) / float(ctx.norm.scale)
+    def route(curve: CurveSkeleton, edge: int) -> np.ndarray | None:
+        return route_inside(curve, edge, vs, ctx.norm)
+
+    return inside, float(vs.size) / float(ctx.norm.scale), route
 
 
 def _try(curve: CurveSkeleton, action: Action) -> CurveSkeleton:
@@ -105,8 +110,8 @@ def repair(cloud: np.ndarray, curve: CurveSkeleton | tuple, skeletal: np.ndarray
             stopped = "no defect left"
             break
         tell(rnd / p.repair_max_rounds, f"round {rnd + 1}")
-        inside, voxel = _in_shape(ev)
-        candidates = propose(cur, found, inside, p.repair_join_step * voxel)
+        inside, voxel, route = _in_shape(ev)
+        candidates = propose(cur, found, inside, p.repair_join_step * voxel, route)
         done = False
         for action in candidates[:p.repair_max_tries]:
             check()
