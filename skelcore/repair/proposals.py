@@ -83,6 +83,29 @@ def _reroute_entries(curve: CurveSkeleton, edge: np.ndarray, inner: np.ndarray) 
     return out
 
 
+def _splits(curve: CurveSkeleton, edge_ids: np.ndarray) -> bool:
+    """Whether removing these edges leaves more components of edges than before."""
+    keep = np.ones(curve.n_edges, bool)
+    keep[edge_ids] = False
+    if not keep.any():
+        return True
+    deg = np.bincount(curve.edges[keep].ravel(), minlength=curve.n_vertices)
+    n0, l0 = component_labels(curve)
+    rest = CurveSkeleton(vertices=curve.vertices, edges=curve.edges[keep])
+    n1, l1 = component_labels(rest)
+    return len(np.unique(l1[deg > 0])) > len(np.unique(l0[np.bincount(curve.edges.ravel(), minlength=curve.n_vertices) > 0]))
+
+
+def _branch_delete(curve: CurveSkeleton, f: Findings, b: int, code: str, target: dict[str, Any], why: str
+                   ) -> Action | None:
+    """Delete branch ``b`` whole (edges and inner vertices) when that splits nothing."""
+    br = f.defects.branches
+    edges = np.flatnonzero(br.edge_branch == b)
+    if br.kind[b] in ("terminal", "path", "cycle", "point") or _splits(curve, edges):
+        return None
+    return Action(code, {**target, "branch": b}, why, [{"op": "delete_branch", "args": {"branch": b}}], edges)
+
+
 def _outside_edges(curve: CurveSkeleton, f: Findings, route: Route | None = None) -> list[Action]:
     od, br = f.defects.outside, f.defects.branches
     out = []
@@ -91,6 +114,10 @@ def _outside_edges(curve: CurveSkeleton, f: Findings, route: Route | None = None
         b = int(b)
         if br.kind[b] == "terminal":
             continue  # pruned whole (see propose)
+        whole = _branch_delete(curve, f, b, "outside", {}, f"branch {b} (between two junctions) leaves the shape "
+                               f"for {float(od.branch_outside_length[b]):.3g}: deleted whole, the rest stays connected")
+        if whole is not None:
+            out.append(whole)
         on = np.flatnonzero((br.edge_branch == b) & (length > 0))
         if not len(on):
             continue
@@ -121,9 +148,26 @@ def _weakest_edges(curve: CurveSkeleton, f: Findings, cycle: int, count: int = 2
     return [k for _, _, k in sorted(keys)[:count]]
 
 
+def _weakest_branches(f: Findings, cycle: int) -> list[int]:
+    """The cycle's branches, weakest first: the most length outside, then the lowest mean local
+    boundedness + centeredness."""
+    br, od = f.defects.branches, f.defects.outside
+    keys = []
+    for b in sorted({int(b) for b, _ in br.cycles[cycle]}):
+        loc = f.local(np.flatnonzero(br.edge_branch == b))
+        score = sum(v for v in loc.values() if v is not None) if loc["boundedness"] is not None else 2.0
+        keys.append((-round(float(od.branch_outside_length[b]), 9), round(score, 9), b))
+    return [b for _, _, b in sorted(keys)]
+
+
 def _cycle_cuts(curve: CurveSkeleton, f: Findings) -> list[Action]:
     out = []
     for i in f.defects.cycles.spurious:
+        for b in _weakest_branches(f, int(i))[:1]:
+            a = _branch_delete(curve, f, b, "spurious_cycles", {"cycle": int(i)},
+                               f"cycle {int(i)} goes around no tunnel of the shape: its weakest branch {b} deleted")
+            if a is not None:
+                out.append(a)
         for k in _weakest_edges(curve, f, int(i)):
             e = curve.edges[k].tolist()
             out.append(Action("spurious_cycles", {"cycle": int(i), "edge": e},
