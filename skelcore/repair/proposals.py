@@ -196,9 +196,7 @@ def _joins(curve: CurveSkeleton, f: Findings, in_shape: InShape | None, step: fl
         for i in order[:3]:  # the three closest pairs: the first whose segment stays inside
             a, b = int(mine[i]), int(rest[j[i]])
             pa, pb = curve.vertices[a], curve.vertices[b]
-            m = max(2, int(np.ceil(float(d[i]) / step)) + 1)
-            pts = pa + np.linspace(0, 1, m)[:, None] * (pb - pa)
-            if bool(np.all(in_shape(pts))):
+            if _inside_segment(in_shape, pa, pb, step):
                 out.append(Action("components", {"component_vertex": a, "edge": sorted([a, b])},
                                   f"component of vertex {a} ({len(mine)} vertices) joined to the rest at its "
                                   f"closest inside pair ({a}, {b}), {float(d[i]):.3g} apart",
@@ -207,11 +205,41 @@ def _joins(curve: CurveSkeleton, f: Findings, in_shape: InShape | None, step: fl
     return out
 
 
+def _inside_segment(in_shape: InShape, pa: np.ndarray, pb: np.ndarray, step: float) -> bool:
+    m = max(2, int(np.ceil(float(np.linalg.norm(pb - pa)) / max(step, 1e-12))) + 1)
+    return bool(np.all(in_shape(pa + np.linspace(0, 1, m)[:, None] * (pb - pa))))
+
+
+def _close_gaps(curve: CurveSkeleton, f: Findings, in_shape: InShape | None, step: float) -> list[Action]:
+    """A tunnel no cycle goes around: the closest pairs of free ends of one component joined by a
+    segment inside the shape (a cycle broken by a gap closes again)."""
+    if in_shape is None or f.tally.get("missing_cycles", 0) == 0:
+        return []
+    deg = np.bincount(curve.edges.ravel(), minlength=curve.n_vertices)
+    ends = np.flatnonzero(deg == 1)
+    if len(ends) < 2:
+        return []
+    _, labels = component_labels(curve)
+    p = curve.vertices[ends]
+    d = np.linalg.norm(p[:, None] - p[None], axis=2)
+    i, j = np.triu_indices(len(ends), 1)
+    same = labels[ends[i]] == labels[ends[j]]
+    i, j = i[same], j[same]
+    out = []
+    for k in np.lexsort((j, i, d[i, j]))[:3]:
+        a, b = int(ends[i[k]]), int(ends[j[k]])
+        if _inside_segment(in_shape, curve.vertices[a], curve.vertices[b], step):
+            out.append(Action("missing_cycles", {"edge": [a, b]},
+                              f"a tunnel no cycle goes around: free ends {a} and {b}, {float(d[i[k], j[k]]):.3g} "
+                              "apart, joined inside the shape", [{"op": "add_edge", "args": {"edge": [a, b]}}]))
+    return out
+
+
 def propose(curve: CurveSkeleton, f: Findings, in_shape: InShape | None = None, join_step: float = 0.0,
             route: Route | None = None) -> list[Action]:
     """The candidate actions for ``curve`` from its findings, in the order they are tried: spurious
     branches, far or outside terminal branches, outside edges (deleted, else rerouted by ``route``),
-    spurious cycles, components."""
+    spurious cycles, components, free ends closing a missing cycle."""
     if f.defects is None:
         return []
     d = f.defects
@@ -223,4 +251,5 @@ def propose(curve: CurveSkeleton, f: Findings, in_shape: InShape | None = None, 
     acts += _outside_edges(curve, f, route)
     acts += _cycle_cuts(curve, f)
     acts += _joins(curve, f, in_shape, join_step)
+    acts += _close_gaps(curve, f, in_shape, join_step)
     return acts

@@ -144,3 +144,14 @@ def test_cli_refuses_bad_inputs_in_one_line(files, capsys, curve, out, match):
     code = main(["repair", str(d / "cloud.ply"), "--curve", str(d / curve), "--out-curve", str(d / out), "--quiet"])
     err = capsys.readouterr().err
     assert code == 2 and match in err and err.count("\n") == 1
+
+
+def test_two_pieces_of_a_tube_are_joined_and_a_broken_ring_closes(tube):
+    e = tube.curve_edges[np.any(tube.curve_edges != [9, 10], axis=1)]
+    r = skelcore.repair(tube.cloud, (tube.curve_vertices, e))
+    assert r.tally_before["components"] == 1 and r.tally_after["components"] == 0
+    assert r.log["operations"][0] == {**r.log["operations"][0], "op": "add_edge", "args": {"edge": [9, 10]}}
+    s = shapes.torus(3000)
+    ring = s.curve_edges[np.any(s.curve_edges != [0, 1], axis=1)]
+    r = skelcore.repair(s.cloud, (s.curve_vertices, ring))
+    assert r.tally_before["missing_cycles"] == 1 and r.tally_after["missing_cycles"] == 0
