@@ -155,3 +155,10 @@ def test_two_pieces_of_a_tube_are_joined_and_a_broken_ring_closes(tube):
     ring = s.curve_edges[np.any(s.curve_edges != [0, 1], axis=1)]
     r = skelcore.repair(s.cloud, (s.curve_vertices, ring))
     assert r.tally_before["missing_cycles"] == 1 and r.tally_after["missing_cycles"] == 0
+
+
+def test_the_log_meets_the_edit_log_schema(twig_repair):
+    pytest.importorskip("jsonschema")
+    from skelcore.io.schemas import validator
+
+    validator("edit_log").validate(json.loads(json.dumps(twig_repair.log)))
