@@ -1,7 +1,7 @@
 """Measure skelcore.repair on a benchmark suite (docs/repair.md "Measured"): for each case, the curves
 of the built-in skeletonizers and, on the clean cases, the reference with one controlled defect
 (skelcore.benchmark.skeleton_defects at its middle level); GT F1 and the defect counts before and
-after repair, the time per repair. Usage: python scripts/repair_bench.py SUITE_DIR OUT.json"""
+after repair, the time per repair. Usage: python scripts/repair_bench.py SUITE_DIR|samples OUT.json"""
 
 from __future__ import annotations
 
@@ -44,7 +44,27 @@ def _job(name: str, what: str, cloud: np.ndarray, curve: CurveSkeleton, ref: Cur
     return row
 
 
+def samples(out: str) -> None:
+    """The bundled samples (resources/samples): each skeletonizer's curve and the bundled LBC curve."""
+    root = Path(__file__).resolve().parents[1] / "resources" / "samples"
+    rows = []
+    for name in ("cylinder", "torus", "yshape"):
+        cloud = load_cloud(root / f"{name}_cloud.ply")
+        ref = load_curve(root / f"{name}_curve.ply")
+        if ref.radius is None:
+            from skelcore.metrics.ground_truth import radius_from_cloud
+            ref = CurveSkeleton(vertices=ref.vertices, edges=ref.edges, radius=radius_from_cloud(ref.vertices, cloud, 8))
+        curves = {m: skelcore.skeletonize(cloud, method=m)[1] for m in METHODS}
+        curves["lbc (bundled)"] = load_curve(root / f"{name}_lbc_curve.ply")
+        for what, curve in curves.items():
+            rows.append(_job(name, what, cloud, curve, ref))
+            print(" ", rows[-1], flush=True)
+    Path(out).write_text(json.dumps(rows, indent=1))
+
+
 def main(suite: str, out: str) -> None:
+    if suite == "samples":
+        return samples(out)
     root = Path(suite)
     meta = json.loads((root / "suite.json").read_text())
     rows = []

@@ -26,6 +26,9 @@ from .reroute import route_inside
 
 __all__ = ["RepairResult", "repair"]
 
+#: defect warnings no action answers yet (docs/repair.md "What is left")
+UNTALLIED = {"incomplete"}
+
 
 @dataclass
 class RepairResult:
@@ -107,7 +110,8 @@ def repair(cloud: np.ndarray, curve: CurveSkeleton | tuple, skeletal: np.ndarray
     for rnd in range(p.repair_max_rounds):
         check()
         if found.total == 0:
-            stopped = "no defect left"
+            left = sorted(set(found.warnings) & UNTALLIED)
+            stopped = f"left: {', '.join(left)} (not acted on)" if left else "no defect left"
             break
         tell(rnd / p.repair_max_rounds, f"round {rnd + 1}")
         inside, voxel, route = _in_shape(ev)
