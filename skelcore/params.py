@@ -164,6 +164,7 @@ class Params:
     repair_completeness_drop, repair_outside_rise : the never-worse rule: an action is rejected when the
         curve's completeness drops, or its outside length share rises, by more than this.
     repair_score_drop : ... or when curve boundedness or curve centeredness drops by more than this.
+    repair_fill_missing : skelcore.repair also tries to fill a missing part (a new stretch of curve).
     repair_join_step : a join between components is tried only when every point along it, every this
         many x the voxel size of the shape's interior, lies inside the shape.
     """
@@ -262,6 +263,7 @@ class Params:
     repair_outside_rise: float = 0.0
     repair_score_drop: float = 0.02
     repair_join_step: float = 0.5
+    repair_fill_missing: bool = True
 
     def __post_init__(self) -> None:
         def bad(name: str, why: str) -> None:

@@ -15,20 +15,21 @@ __all__ = ["Findings", "read_findings", "MEASURES", "TALLIED"]
 #: the measures of an Evaluation the never-worse rule watches (None when not computed)
 MEASURES = ("completeness", "outside_share", "boundedness", "centeredness")
 #: the defect counts whose sum must go down for an action to count as progress
-TALLIED = ("spurious_branches", "spurious_cycles", "outside", "components", "missing_cycles")
+TALLIED = ("spurious_branches", "spurious_cycles", "outside", "components", "missing_cycles", "missing_parts")
 
 
 @dataclass
 class Findings:
     """``measures``: :data:`MEASURES`; ``tally``: the count of each :data:`TALLIED` defect;
     ``defects``: the evaluation's :class:`~skelcore.diagnostics.defects.CurveDefects`; ``warnings``:
-    the warning codes; ``sample_edge``, ``sample_beta``, ``sample_c``: the curve samples' edge and
+    the warning codes; ``missing``: the curve's missing parts; ``sample_edge``, ``sample_beta``, ``sample_c``: the curve samples' edge and
     local boundedness / centeredness (what an action's "why" quotes and the weakest edge is chosen by)."""
 
     measures: dict[str, float | None]
     tally: dict[str, int]
     defects: Any
     warnings: list[str]
+    missing: Any = None
     sample_edge: np.ndarray = field(default_factory=lambda: np.zeros(0, np.int64))
     sample_beta: np.ndarray = field(default_factory=lambda: np.zeros(0))
     sample_c: np.ndarray = field(default_factory=lambda: np.zeros(0))
@@ -71,8 +72,11 @@ def read_findings(ev: Evaluation) -> Findings:
         tally["missing_cycles"] = int(defects.cycles.missing)
         tally["outside"] = int(len(defects.outside.defective_branches()))
         tally["components"] = int(br.n_components) - 1 - sum(k == "point" for k in br.kind)
+    missing = None if ctx is None else ctx.results.get("curve missing parts")
+    if missing is not None:
+        tally["missing_parts"] = len(missing.counted)
     cl = ev.curve
     beta = np.asarray(cl.sample_boundedness, float) if cl is not None else np.zeros(0)
     c = np.asarray(cl.sample_centeredness(ev.params.beta_star), float) if cl is not None else np.zeros(0)
     edge = np.asarray(cl.sample_edge, np.int64) if cl is not None else np.zeros(0, np.int64)
-    return Findings(measures, tally, defects, [w.code for w in ev.warnings], edge, beta, c)
+    return Findings(measures, tally, defects, [w.code for w in ev.warnings], missing, edge, beta, c)

@@ -22,6 +22,7 @@ from .checks import check_curve, check_frame
 from .findings import read_findings
 from .guard import verdict
 from .proposals import Action, propose
+from .fill import fill_missing
 from .reroute import route_inside
 
 __all__ = ["RepairResult", "repair"]
@@ -116,6 +117,8 @@ def repair(cloud: np.ndarray, curve: CurveSkeleton | tuple, skeletal: np.ndarray
         tell(rnd / p.repair_max_rounds, f"round {rnd + 1}")
         inside, voxel, route = _in_shape(ev)
         candidates = propose(cur, found, inside, p.repair_join_step * voxel, route)
+        if p.repair_fill_missing:
+            candidates += fill_missing(cur, found.missing, np.asarray(ev.source.args["cloud"], float))
         done = False
         for action in candidates[:p.repair_max_tries]:
             check()
