@@ -162,3 +162,10 @@ def test_the_log_meets_the_edit_log_schema(twig_repair):
     from skelcore.io.schemas import validator
 
     validator("edit_log").validate(json.loads(json.dumps(twig_repair.log)))
+
+
+def test_repair_is_deterministic_and_reports_progress(tube, twig_repair):
+    seen = []
+    again = skelcore.repair(tube.cloud, _twig(tube), progress=lambda f, what: seen.append((f, what)))
+    assert json.dumps(again.log) == json.dumps(twig_repair.log)
+    assert seen[0][0] == 0.0 and seen[-1] == (1.0, "done")
