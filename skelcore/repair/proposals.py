@@ -83,6 +83,48 @@ def _reroute_entries(curve: CurveSkeleton, edge: np.ndarray, inner: np.ndarray) 
     return out
 
 
+def _trims(curve: CurveSkeleton, f: Findings, ids: np.ndarray, in_shape: InShape | None, step: float
+           ) -> list[Action]:
+    """A terminal branch leaving the shape loses only its tip: the first vertex outside moves back to
+    where its edge leaves the shape, the vertices beyond it go (highest id first: the lower ids stay)."""
+    if in_shape is None:
+        return []
+    br, od = f.defects.branches, f.defects.outside
+    length = np.asarray(od.edge_outside_length, float)
+    deg = np.bincount(curve.edges.ravel(), minlength=curve.n_vertices)
+    key = {(int(a), int(b)): k for k, (a, b) in enumerate(curve.edges)}
+    out = []
+    for b in ids:
+        b = int(b)
+        if br.kind[b] != "terminal":
+            continue
+        path = [int(v) for v in br.paths[b]]
+        if deg[path[0]] == 1:
+            path = path[::-1]  # junction first, free end last
+        i = len(path) - 1
+        while i > 0 and length[key[tuple(sorted((path[i - 1], path[i])))]] > 0:
+            i -= 1
+        if i == len(path) - 1:
+            continue  # no edge outside at the tip
+        w, prev = path[i + 1], path[i]  # the first vertex beyond the last inside edge
+        pa, pb = curve.vertices[prev], curve.vertices[w]
+        m = max(2, int(np.ceil(float(np.linalg.norm(pb - pa)) / max(step, 1e-12))) + 1)
+        pts = pa + np.linspace(0, 1, m)[:, None] * (pb - pa)
+        inside = np.asarray(in_shape(pts), bool)
+        if not inside[0]:
+            continue
+        last = int(np.argmin(inside)) - 1 if not inside.all() else m - 1
+        if last <= 0:
+            continue
+        entries: list[dict[str, Any]] = [{"op": "move_vertex", "args": {"vertex": w,
+                                                                       "position": [float(x) for x in pts[last]]}}]
+        entries += [{"op": "delete_vertex", "args": {"vertex": v}} for v in sorted(path[i + 2:], reverse=True)]
+        edges = np.array([key[tuple(sorted((path[k - 1], path[k])))] for k in range(i + 1, len(path))])
+        out.append(Action("outside", {"branch": b}, f"terminal branch {b} leaves the shape: its tip cut back "
+                          f"to where it leaves ({len(path) - i - 2} vertices beyond removed)", entries, edges))
+    return out
+
+
 def _splits(curve: CurveSkeleton, edge_ids: np.ndarray) -> bool:
     """Whether removing these edges leaves more components of edges than before."""
     keep = np.ones(curve.n_edges, bool)
@@ -112,8 +154,6 @@ def _outside_edges(curve: CurveSkeleton, f: Findings, route: Route | None = None
     length = np.asarray(od.edge_outside_length, float)
     for b in od.defective_branches():
         b = int(b)
-        if br.kind[b] == "terminal":
-            continue  # pruned whole (see propose)
         whole = _branch_delete(curve, f, b, "outside", {}, f"branch {b} (between two junctions) leaves the shape "
                                f"for {float(od.branch_outside_length[b]):.3g}: deleted whole, the rest stays connected")
         if whole is not None:
@@ -238,7 +278,7 @@ def _close_gaps(curve: CurveSkeleton, f: Findings, in_shape: InShape | None, ste
 def propose(curve: CurveSkeleton, f: Findings, in_shape: InShape | None = None, join_step: float = 0.0,
             route: Route | None = None) -> list[Action]:
     """The candidate actions for ``curve`` from its findings, in the order they are tried: spurious
-    branches, far or outside terminal branches, outside edges (deleted, else rerouted by ``route``),
+    branches, the outside tips of terminal branches, far or outside terminal branches, outside edges (deleted, else rerouted by ``route``),
     spurious cycles, components, free ends closing a missing cycle."""
     if f.defects is None:
         return []
@@ -246,6 +286,7 @@ def propose(curve: CurveSkeleton, f: Findings, in_shape: InShape | None = None, 
     acts = _prunes(f, d.spurs.spurious, "spurious_branches",
                    "a spurious terminal branch (explains no part of the cloud the rest does not): pruned")
     seen = {a.target["branch"] for a in acts}
+    acts += [a for a in _trims(curve, f, d.outside.defective_branches(), in_shape, join_step) if a.target["branch"] not in seen]
     acts += [a for a in _prunes(f, d.outside.defective_branches(), "outside",
                                 "a terminal branch leaving the shape: pruned") if a.target["branch"] not in seen]
     acts += _outside_edges(curve, f, route)
