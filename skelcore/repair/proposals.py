@@ -96,33 +96,43 @@ def _trims(curve: CurveSkeleton, f: Findings, ids: np.ndarray, in_shape: InShape
     out = []
     for b in ids:
         b = int(b)
-        if br.kind[b] != "terminal":
+        if br.kind[b] not in ("terminal", "path"):
             continue
         path = [int(v) for v in br.paths[b]]
-        if deg[path[0]] == 1:
+        if br.kind[b] == "terminal" and deg[path[0]] == 1:
             path = path[::-1]  # junction first, free end last
-        i = len(path) - 1
-        while i > 0 and length[key[tuple(sorted((path[i - 1], path[i])))]] > 0:
-            i -= 1
-        if i == len(path) - 1:
-            continue  # no edge outside at the tip
-        w, prev = path[i + 1], path[i]  # the first vertex beyond the last inside edge
-        pa, pb = curve.vertices[prev], curve.vertices[w]
-        m = max(2, int(np.ceil(float(np.linalg.norm(pb - pa)) / max(step, 1e-12))) + 1)
-        pts = pa + np.linspace(0, 1, m)[:, None] * (pb - pa)
-        inside = np.asarray(in_shape(pts), bool)
-        if not inside[0]:
-            continue
-        last = int(np.argmin(inside)) - 1 if not inside.all() else m - 1
-        if last <= 0:
-            continue
-        entries: list[dict[str, Any]] = [{"op": "move_vertex", "args": {"vertex": w,
-                                                                       "position": [float(x) for x in pts[last]]}}]
-        entries += [{"op": "delete_vertex", "args": {"vertex": v}} for v in sorted(path[i + 2:], reverse=True)]
-        edges = np.array([key[tuple(sorted((path[k - 1], path[k])))] for k in range(i + 1, len(path))])
-        out.append(Action("outside", {"branch": b}, f"terminal branch {b} leaves the shape: its tip cut back "
-                          f"to where it leaves ({len(path) - i - 2} vertices beyond removed)", entries, edges))
+        for way in ([path] if br.kind[b] == "terminal" else [path, path[::-1]]):
+            a = _trim(curve, way, b, length, key, in_shape, step)
+            if a is not None:
+                out.append(a)
+                break
     return out
+
+
+def _trim(curve: CurveSkeleton, path: list[int], b: int, length: np.ndarray, key: dict, in_shape: InShape,
+          step: float) -> Action | None:
+    """The tip of ``path`` (its last vertex the free end) cut back to where it leaves the shape."""
+    i = len(path) - 1
+    while i > 0 and length[key[tuple(sorted((path[i - 1], path[i])))]] > 0:
+        i -= 1
+    if i == len(path) - 1:
+        return None  # no edge outside at the tip
+    w, prev = path[i + 1], path[i]  # the first vertex beyond the last inside edge
+    pa, pb = curve.vertices[prev], curve.vertices[w]
+    m = max(2, int(np.ceil(float(np.linalg.norm(pb - pa)) / max(step, 1e-12))) + 1)
+    pts = pa + np.linspace(0, 1, m)[:, None] * (pb - pa)
+    inside = np.asarray(in_shape(pts), bool)
+    if not inside[0]:
+        return None
+    last = int(np.argmin(inside)) - 1 if not inside.all() else m - 1
+    if last <= 0:
+        return None
+    entries: list[dict[str, Any]] = [{"op": "move_vertex", "args": {"vertex": w,
+                                                                   "position": [float(x) for x in pts[last]]}}]
+    entries += [{"op": "delete_vertex", "args": {"vertex": v}} for v in sorted(path[i + 2:], reverse=True)]
+    edges = np.array([key[tuple(sorted((path[k - 1], path[k])))] for k in range(i + 1, len(path))])
+    return Action("outside", {"branch": b}, f"branch {b} leaves the shape at its free end: the tip cut back to "
+                  f"where it leaves ({len(path) - i - 2} vertices beyond removed)", entries, edges)
 
 
 def _splits(curve: CurveSkeleton, edge_ids: np.ndarray) -> bool:

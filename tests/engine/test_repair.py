@@ -169,3 +169,12 @@ def test_repair_is_deterministic_and_reports_progress(tube, twig_repair):
     again = skelcore.repair(tube.cloud, _twig(tube), progress=lambda f, what: seen.append((f, what)))
     assert json.dumps(again.log) == json.dumps(twig_repair.log)
     assert seen[0][0] == 0.0 and seen[-1] == (1.0, "done")
+
+
+def test_a_tip_through_the_cap_is_cut_back_to_the_shape(tube):
+    v = tube.curve_vertices.copy()
+    v[20, 2] = 4.6  # the last vertex 0.6 beyond the cap at z = 4
+    r = skelcore.repair(tube.cloud, (v, tube.curve_edges))
+    assert [o["op"] for o in r.log["operations"]] == ["move_vertex"]
+    assert r.curve.vertices[20, 2] == pytest.approx(4.0, abs=0.05)
+    assert r.tally_after["outside"] == 0
