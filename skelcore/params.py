@@ -174,6 +174,16 @@ class Params:
         least this many local radii of its length lie within this many local radii of ours.
     gt_sample_step : both curves are sampled every this many x the reference's smallest radius.
     gt_radius_k : where the reference has no radius, it is the median distance to this many cloud points.
+    repair_max_rounds : skelcore.repair acts at most this many times (docs/repair.md).
+    repair_max_tries : candidate actions tried (each evaluated) per round before giving up.
+    repair_max_components : a curve with more components than this is refused by skelcore.repair
+        (joining thousands of fragments pairwise is not a repair; skeletonize again).
+    repair_completeness_drop, repair_outside_rise : the never-worse rule: an action is rejected when the
+        curve's completeness drops, or its outside length share rises, by more than this.
+    repair_score_drop : ... or when curve boundedness or curve centeredness drops by more than this.
+    repair_fill_missing : skelcore.repair also tries to fill a missing part (a new stretch of curve).
+    repair_join_step : a join between components is tried only when every point along it, every this
+        many x the voxel size of the shape's interior, lies inside the shape.
     """
 
     normalize_by: Literal["longest_side", "diagonal"] = "longest_side"
@@ -269,6 +279,15 @@ class Params:
     gt_branch_radii: float = 1.0
     gt_sample_step: float = 0.1
     gt_radius_k: int = 8
+    # repair (docs/repair.md)
+    repair_max_rounds: int = 40
+    repair_max_tries: int = 6
+    repair_max_components: int = 200
+    repair_completeness_drop: float = 0.0
+    repair_outside_rise: float = 0.0
+    repair_score_drop: float = 0.02
+    repair_join_step: float = 0.5
+    repair_fill_missing: bool = True
 
     def __post_init__(self) -> None:
         def bad(name: str, why: str) -> None:
@@ -354,6 +373,14 @@ class Params:
         for name in ("gt_threshold_max", "gt_match_radii", "gt_branch_radii", "gt_sample_step"):
             if not float(getattr(self, name)) > 0:
                 bad(name, "must be > 0")
+        for name in ("repair_max_rounds", "repair_max_tries", "repair_max_components"):
+            if int(getattr(self, name)) < 1:
+                bad(name, "must be a positive integer")
+        for name in ("repair_completeness_drop", "repair_outside_rise", "repair_score_drop"):
+            if not float(getattr(self, name)) >= 0:
+                bad(name, "must be >= 0")
+        if not float(self.repair_join_step) > 0:
+            bad("repair_join_step", "must be > 0")
         for name in ("gt_thresholds", "gt_radius_k"):
             if int(getattr(self, name)) < 1:
                 bad(name, "must be a positive integer")

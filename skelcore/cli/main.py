@@ -12,12 +12,12 @@ import warnings
 from typing import Sequence
 
 from ..errors import SkelInputError
-from . import bench, compare, convert, edit, evaluate, figure, skeletonize, study
+from . import bench, compare, convert, edit, evaluate, figure, repair, skeletonize, study
 
 __all__ = ["build_parser", "main"]
 
 DESCRIPTION = "skelcore command line: evaluate a skeleton against its cloud; print the paper's table."
-SUBCOMMANDS = (evaluate, study, skeletonize, compare, figure, convert, edit, bench)
+SUBCOMMANDS = (evaluate, study, skeletonize, compare, figure, convert, edit, repair, bench)
 
 
 def build_parser() -> argparse.ArgumentParser:

@@ -173,7 +173,8 @@ def test_the_cycle_finder_finds_a_cycle():
 #   edit update       skelcore.edit.incremental (Evaluation.update)
 #                                                             -> foundation, formats, metrics, scan, diagnostics,
 #                                                                record, stages, edits
-#   applications      skelcore.compare, skelcore.experiments, skelcore.benchmark  -> every layer above this line
+#   applications      skelcore.compare, skelcore.experiments, skelcore.benchmark, skelcore.repair
+#                                                                                 -> every layer above this line
 #   entry points      skelcore.cli, skelcore.__main__, the package facade skelcore/__init__ -> every layer
 # So: metrics never import the record, the stages or the evaluation files; the record imports no io; the
 # format readers and writers import no metric; compare and the CLI sit on top. A pattern "x.*" is the
@@ -204,7 +205,8 @@ LAYERS: dict[str, tuple[list[str], list[str]]] = {
     "edits": (["skelcore.edit.*"], ["foundation", "formats", "metrics", "diagnostics"]),
     "edit update": (["skelcore.edit.incremental"],
                     ["foundation", "formats", "metrics", "scan", "diagnostics", "record", "stages", "edits"]),
-    "applications": (["skelcore.compare.*", "skelcore.experiments.*", "skelcore.benchmark.*"], _BELOW_APPS),
+    "applications": (["skelcore.compare.*", "skelcore.experiments.*", "skelcore.benchmark.*", "skelcore.repair.*"],
+                     _BELOW_APPS),
     "entry points": (["skelcore", "skelcore.__main__", "skelcore.cli.*"], [*_BELOW_APPS, "applications"]),
 }
 

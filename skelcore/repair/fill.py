@@ -1,0 +1,90 @@
+"""Candidate actions for a missing part (docs/repair.md "Missing parts"): the unexplained cloud
+region becomes a new stretch of curve attached at the nearest vertex, either the centroids of the
+region's slabs along its main axis (a tube's end seen all around: the slab centroids lie on its axis)
+or the region skeletonized by :func:`skelcore.skeletonize` (``skelscope``). Tried last."""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+from scipy.spatial import cKDTree
+
+from ..curve import CurveSkeleton
+from ..errors import SkelInputError
+from .proposals import Action
+
+__all__ = ["fill_missing"]
+
+
+def _slab_line(pts: np.ndarray, step: float) -> np.ndarray:
+    """Centroids of slabs ``step`` wide across the region's main axis, in order along it."""
+    c = pts.mean(axis=0)
+    axis = np.linalg.svd(pts - c, full_matrices=False)[2][0]
+    t = (pts - c) @ axis
+    k = np.floor((t - t.min()) / step).astype(np.int64)
+    out = [pts[k == i].mean(axis=0) for i in np.unique(k) if np.count_nonzero(k == i) >= 3]
+    return np.array(out).reshape(-1, 3)
+
+
+def _attach_polyline(curve: CurveSkeleton, line: np.ndarray) -> tuple[list[dict[str, Any]], int] | None:
+    used = np.flatnonzero(np.bincount(curve.edges.ravel(), minlength=curve.n_vertices) > 0)
+    d, j = cKDTree(curve.vertices[used]).query(line[[0, -1]])
+    if d[1] < d[0]:
+        line, d, j = line[::-1], d[::-1], j[::-1]
+    line = line[1:]  # the slab at the curve holds the junction's surface too: off the axis
+    j0 = int(cKDTree(curve.vertices[used]).query(line[0])[1])
+    j = (j0, j[1])
+    prev, n, out = int(used[j[0]]), curve.n_vertices, []
+    for i, p in enumerate(line):
+        out.append({"op": "add_vertex", "args": {"position": [float(x) for x in p], "attach_to": prev}})
+        prev = n + i
+    return out, int(used[j[0]])
+
+
+def _skeleton_entries(curve: CurveSkeleton, pts: np.ndarray) -> tuple[list[dict[str, Any]], int] | None:
+    from ..skeleton import skeletonize
+
+    try:
+        part = skeletonize(pts, method="skelscope")[1]
+    except (SkelInputError, ValueError, np.linalg.LinAlgError, RuntimeError):
+        return None
+    if part.n_edges == 0:
+        return None
+    used = np.flatnonzero(np.bincount(curve.edges.ravel(), minlength=curve.n_vertices) > 0)
+    keep = np.flatnonzero(np.bincount(part.edges.ravel(), minlength=part.n_vertices) > 0)
+    d, j = cKDTree(curve.vertices[used]).query(part.vertices[keep])
+    first = int(np.argmin(d))
+    n = curve.n_vertices
+    new_id = {int(v): n + i for i, v in enumerate(keep)}
+    out = [{"op": "add_vertex", "args": {"position": [float(x) for x in part.vertices[v]],
+                                         "attach_to": int(used[j[first]]) if i == first else None}}
+           for i, v in enumerate(keep)]
+    out += [{"op": "add_edge", "args": {"edge": sorted([new_id[int(a)], new_id[int(b)]])}} for a, b in part.edges]
+    return out, int(used[j[first]])
+
+
+def fill_missing(curve: CurveSkeleton, missing: Any, cloud: np.ndarray, max_regions: int = 2) -> list[Action]:
+    """One or two actions per counted missing region (largest first) of ``missing``
+    (:class:`~skelcore.diagnostics.missing_parts.MissingParts` of the evaluated ``cloud``)."""
+    if missing is None or not missing.counted or len(missing.region) != len(cloud):
+        return []
+    e = curve.edges
+    step = float(np.median(np.linalg.norm(curve.vertices[e[:, 0]] - curve.vertices[e[:, 1]], axis=1)))
+    out = []
+    for reg in missing.counted[:max_regions]:
+        pts = cloud[missing.region == reg.id]
+        if len(pts) < 10:
+            continue
+        target = {"region": int(reg.id)}
+        line = _slab_line(pts, max(step, 1e-12))
+        if len(line) >= 3:
+            entries, at = _attach_polyline(curve, line)
+            out.append(Action("incomplete", target, f"missing region {reg.id} ({reg.n_points} points): the "
+                              f"centroids of its slabs ({len(line)}) attached at vertex {at}", entries))
+        made = _skeleton_entries(curve, pts)
+        if made is not None:
+            entries, at = made
+            out.append(Action("incomplete", target, f"missing region {reg.id} ({reg.n_points} points) "
+                              f"skeletonized and attached at vertex {at}", entries))
+    return out

@@ -1,0 +1,30 @@
+"""The never-worse rule (docs/repair.md "Never worse"): an action is kept only when it lowers the count
+of defects and costs no completeness, no outside share and no noticeable curve boundedness or
+centeredness; otherwise it is rejected, with the reason logged."""
+
+from __future__ import annotations
+
+from ..params import Params
+from .findings import Findings
+
+__all__ = ["verdict"]
+
+
+def verdict(before: Findings, after: Findings, params: Params) -> str | None:
+    """None when ``after`` may replace ``before``; else why not (one phrase)."""
+    b, a = before.measures, after.measures
+    why = []
+    if b["completeness"] is not None and (a["completeness"] is None
+                                          or a["completeness"] < b["completeness"] - params.repair_completeness_drop):
+        why.append(f"completeness {b['completeness']:.4f} -> {a['completeness'] if a['completeness'] is None else round(a['completeness'], 4)}")
+    if b["outside_share"] is not None and a["outside_share"] is not None \
+            and a["outside_share"] > b["outside_share"] + params.repair_outside_rise:
+        why.append(f"outside share {b['outside_share']:.4f} -> {a['outside_share']:.4f}")
+    for m in ("boundedness", "centeredness"):
+        if b[m] is not None and (a[m] is None or a[m] < b[m] - params.repair_score_drop):
+            why.append(f"curve {m} {b[m]:.4f} -> {a[m] if a[m] is None else round(a[m], 4)}")
+    if why:
+        return "worse: " + "; ".join(why)
+    if after.total >= before.total:
+        return f"no progress: {before.total} defect(s) before, {after.total} after"
+    return None

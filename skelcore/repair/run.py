@@ -1,0 +1,157 @@
+"""The repair loop (docs/repair.md): evaluate, try the candidate actions in order, keep the first the
+never-worse rule accepts, evaluate again (:meth:`skelcore.Evaluation.update`), until no tallied defect
+is left, no candidate helps or ``Params.repair_max_rounds`` is reached. Every action tried is logged
+with why: kept ones in the edit log's ``operations`` (replayable with ``skelcore edit``), rejected
+ones under ``rejected``."""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass, field
+from typing import Any, Callable
+
+import numpy as np
+
+from ..curve import CurveSkeleton
+from ..edit import apply, new_log
+from ..errors import Cancelled, SkelInputError
+from ..evaluation import Evaluation
+from ..params import Params
+from ..stages import evaluate
+from .checks import check_curve, check_frame
+from .findings import read_findings
+from .guard import verdict
+from .proposals import Action, propose
+from .fill import fill_missing
+from .reroute import route_inside
+
+__all__ = ["RepairResult", "repair"]
+
+#: defect warnings no action answers yet (docs/repair.md "What is left")
+UNTALLIED = {"incomplete"}
+
+
+@dataclass
+class RepairResult:
+    """``curve``: the repaired curve; ``log``: the edit log from the input curve (each operation with a
+    ``why``; ``rejected`` lists the actions refused); ``before`` / ``after``: the first and last
+    Evaluation; ``accepted`` / ``rejected``: counts; ``stopped``: why the loop ended; ``seconds``."""
+
+    curve: CurveSkeleton
+    log: dict[str, Any]
+    before: Evaluation
+    after: Evaluation
+    accepted: int = 0
+    rejected: int = 0
+    stopped: str = ""
+    seconds: float = 0.0
+    tally_before: dict[str, int] = field(default_factory=dict)
+    tally_after: dict[str, int] = field(default_factory=dict)
+
+
+def _rounded(measures: dict[str, float | None]) -> dict[str, float | None]:
+    return {k: None if v is None else round(v, 4) for k, v in measures.items()}
+
+
+def _in_shape(ev: Evaluation) -> tuple[Callable[[np.ndarray], np.ndarray] | None, float, Any]:
+    """Inside the shape (the diagnostics' voxelized interior, holes filled), its voxel in user units,
+    and the router through it (:func:`.reroute.route_inside`)."""
+    ctx = getattr(ev.source, "ctx", None)
+    if ctx is None:
+        return None, 0.0, None
+    vs = ctx.interior()
+    solid = vs.solid()
+
+    def inside(points: np.ndarray) -> np.ndarray:
+        ijk = vs.index_of(ctx.norm.apply(np.asarray(points, float)))
+        return solid[ijk[:, 0], ijk[:, 1], ijk[:, 2]]
+
+    def route(curve: CurveSkeleton, edge: int) -> np.ndarray | None:
+        return route_inside(curve, edge, vs, ctx.norm)
+
+    return inside, float(vs.size) / float(ctx.norm.scale), route
+
+
+def _try(curve: CurveSkeleton, action: Action) -> CurveSkeleton:
+    for i, entry in enumerate(action.entries):
+        curve, _ = apply(curve, entry, f"{action.code} step {i}")
+    return curve
+
+
+def repair(cloud: np.ndarray, curve: CurveSkeleton | tuple, skeletal: np.ndarray | None = None,
+           params: Params | None = None, cancel: Callable[[], bool] | None = None,
+           progress: Callable[[float, str], None] | None = None) -> RepairResult:
+    """Repair ``curve`` against ``cloud`` from the judge's findings (docs/repair.md); deterministic for
+    a given input. Refuses (SkelInputError, one line) a curve without edges, one of more than
+    ``params.repair_max_components`` components and one the ``frame`` check finds in another frame;
+    ``cancel()`` returning True raises :class:`~skelcore.Cancelled` at the next evaluation or action."""
+    t0 = time.perf_counter()
+    p = params or Params()
+    start = CurveSkeleton.coerce(curve, "curve")
+    if start is None:
+        raise SkelInputError("repair needs a curve skeleton")
+    check_curve(start, p)
+
+    def check() -> None:
+        if cancel is not None and cancel():
+            raise Cancelled("repair cancelled")
+
+    def tell(fraction: float, what: str) -> None:
+        if progress is not None:
+            progress(min(1.0, fraction), what)
+
+    tell(0.0, "evaluating the curve")
+    first = evaluate(cloud, skeletal=skeletal, curve=start, params=p, cancel=cancel)
+    check_frame(first)
+    ev, cur, found = first, start, read_findings(first)
+    ops: list[dict[str, Any]] = []
+    rejected: list[dict[str, Any]] = []
+    tally0 = dict(found.tally)
+    stopped = f"repair_max_rounds={p.repair_max_rounds} reached"
+    for rnd in range(p.repair_max_rounds):
+        check()
+        if found.total == 0:
+            left = sorted(set(found.warnings) & UNTALLIED)
+            stopped = f"left: {', '.join(left)} (not acted on)" if left else "no defect left"
+            break
+        tell(rnd / p.repair_max_rounds, f"round {rnd + 1}")
+        inside, voxel, route = _in_shape(ev)
+        candidates = propose(cur, found, inside, p.repair_join_step * voxel, route)
+        if p.repair_fill_missing:
+            candidates += fill_missing(cur, found.missing, np.asarray(ev.source.args["cloud"], float))
+        done = False
+        for action in candidates[:p.repair_max_tries]:
+            check()
+            why: dict[str, Any] = {"defect": action.code, **action.target, "reason": action.reason,
+                                   "local_before": found.local(action.edges), "before": _rounded(found.measures),
+                                   "defects_before": found.total}
+            try:
+                new = _try(cur, action)
+            except SkelInputError as exc:
+                rejected.append({"entries": action.entries, "why": {**why, "rejected": f"not applicable: {exc}"}})
+                continue
+            new_ev = ev.update(new)
+            new_found = read_findings(new_ev)
+            why.update(after=_rounded(new_found.measures), defects_after=new_found.total)
+            refusal = verdict(found, new_found, p)
+            if refusal is not None:
+                rejected.append({"entries": action.entries, "why": {**why, "rejected": refusal}})
+                continue
+            for k, entry in enumerate(action.entries):
+                ops.append({**entry, "why": {**why, "step": f"{k + 1} of {len(action.entries)}"}})
+            ev, cur, found, done = new_ev, new, new_found, True
+            break
+        if not done:
+            stopped = "no candidate action helps" if candidates else "no action for the defects left"
+            break
+    log = new_log(start, [])
+    log["operations"] = ops
+    log["rejected"] = rejected
+    log["repair"] = {"stopped": stopped, "defects_before": tally0, "defects_after": dict(found.tally),
+                     "measures_before": _rounded(read_findings(first).measures),
+                     "measures_after": _rounded(found.measures)}
+    tell(1.0, "done")
+    n_acc = sum(1 for o in ops if o["why"]["step"].startswith("1 of"))
+    return RepairResult(curve=cur, log=log, before=first, after=ev, accepted=n_acc, rejected=len(rejected),
+                        stopped=stopped, seconds=time.perf_counter() - t0, tally_before=tally0,
+                        tally_after=dict(found.tally))
