@@ -34,7 +34,7 @@ __all__ = [
 ]
 
 _LAZY = {"evaluate": ".stages", "Evaluation": ".evaluation", "Scores": ".scores", "shapes": ".shapes", "skeletonize": ".skeleton",
-         "show_ab": ".display", "repair": ".repair", "RepairResult": ".repair",
+         "show_ab": ".display", "repair": ".skeleton_repair", "RepairResult": ".skeleton_repair",
          **dict.fromkeys(("load_cloud", "load_points", "load_curve", "load_any", "write_points_ply",
                           "write_curve_ply"), ".io")}
 
@@ -45,5 +45,5 @@ def __getattr__(name: str):
     import importlib
 
     module = importlib.import_module(_LAZY[name], __name__)
-    return module if name in ("shapes", "repair") else getattr(module, name)
+    return module if name == "shapes" else getattr(module, name)
 

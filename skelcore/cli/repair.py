@@ -46,7 +46,7 @@ def run_repair(args: argparse.Namespace) -> int:
     from ..errors import SkelInputError
     from ..io.correspondence_files import load_skeletal
     from ..io.writers import CURVE_SUFFIXES, write_curve
-    from ..repair import repair
+    from ..skeleton_repair import repair
     from .common import clear_progress_line, stderr_progress
 
     out = Path(args.out_curve)

@@ -173,7 +173,7 @@ def test_the_cycle_finder_finds_a_cycle():
 #   edit update       skelcore.edit.incremental (Evaluation.update)
 #                                                             -> foundation, formats, metrics, scan, diagnostics,
 #                                                                record, stages, edits
-#   applications      skelcore.compare, skelcore.experiments, skelcore.benchmark, skelcore.repair
+#   applications      skelcore.compare, skelcore.experiments, skelcore.benchmark, skelcore.skeleton_repair
 #                                                                                 -> every layer above this line
 #   entry points      skelcore.cli, skelcore.__main__, the package facade skelcore/__init__ -> every layer
 # So: metrics never import the record, the stages or the evaluation files; the record imports no io; the
@@ -205,7 +205,7 @@ LAYERS: dict[str, tuple[list[str], list[str]]] = {
     "edits": (["skelcore.edit.*"], ["foundation", "formats", "metrics", "diagnostics"]),
     "edit update": (["skelcore.edit.incremental"],
                     ["foundation", "formats", "metrics", "scan", "diagnostics", "record", "stages", "edits"]),
-    "applications": (["skelcore.compare.*", "skelcore.experiments.*", "skelcore.benchmark.*", "skelcore.repair.*"],
+    "applications": (["skelcore.compare.*", "skelcore.experiments.*", "skelcore.benchmark.*", "skelcore.skeleton_repair.*"],
                      _BELOW_APPS),
     "entry points": (["skelcore", "skelcore.__main__", "skelcore.cli.*"], [*_BELOW_APPS, "applications"]),
 }

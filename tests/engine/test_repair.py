@@ -15,8 +15,8 @@ from skelcore import Cancelled, CurveSkeleton, Params, SkelInputError, shapes
 from skelcore.cli import main
 from skelcore.edit import delete_vertex, replay
 from skelcore.io import load_curve, write_curve_ply, write_points_ply
-from skelcore.repair.findings import read_findings
-from skelcore.repair.guard import verdict
+from skelcore.skeleton_repair.findings import read_findings
+from skelcore.skeleton_repair.guard import verdict
 
 DEFECT_CODES = {"spurious_branches", "spurious_cycles", "missing_cycles", "outside", "incomplete"}
 
