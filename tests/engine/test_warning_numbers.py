@@ -45,9 +45,9 @@ def test_degenerate_skeletons_say_no_nan(cloud, name):
 
 
 def test_builders_leave_undefined_numbers_out():
-    from skelcore.diagnostics.missing_parts import _depth_clause
+    from skelcore.diagnostics.missing_parts import depth_clause
 
     assert finite_range([np.nan, np.nan]) is None
     assert finite_range([np.nan, 0.5, np.inf, 2.0]) == "0.5-2"
     assert finite_range([3.0]) == "3"
-    assert _depth_clause(np.nan) == "" and "inf" not in _depth_clause(np.inf)
+    assert depth_clause(np.nan) == "" and "inf" not in depth_clause(np.inf)
