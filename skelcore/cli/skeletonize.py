@@ -17,7 +17,9 @@ def register(subparsers: argparse._SubParsersAction) -> argparse.ArgumentParser:
         "skeletonize",
         help="skeletonize a cloud (Laplacian contraction): skeletal points and curve skeleton",
         description="Laplacian-based contraction (Cao et al. 2010): writes the skeletal point set "
-        "(one point per cloud point, same order) and the curve skeleton as PLY.",
+        "(one point per cloud point, same order) and the curve skeleton as PLY. The curve is then repaired "
+        "from its defects (skelcore repair: each action kept only when nothing gets worse; docs/repair.md); "
+        "--raw writes the algorithm's curve as it is.",
     )
     p.add_argument("cloud", help="point cloud file")
     p.add_argument("--out-skeletal", metavar="F", help="write the skeletal point set (PLY)")
@@ -25,6 +27,9 @@ def register(subparsers: argparse._SubParsersAction) -> argparse.ArgumentParser:
     p.add_argument("--method", choices=("cao", "skelscope"), default="cao",
                    help="cao: the paper's toolbox algorithm, step by step (default); skelscope: ours, "
                    "with clean-up of shortcuts, cycles and spurs (sturdier on noisy scans)")
+    p.add_argument("--raw", action="store_true", help="the algorithm's curve as it is, not repaired (the "
+                   "paper's toolbox exactly with --method cao)")
+    p.add_argument("--log", metavar="F", help="write the repair's edit log (JSON; replay with skelcore edit)")
     p.add_argument("--quiet", action="store_true", help="do not print progress")
     p.set_defaults(func=run_skeletonize_cli)
     return p
@@ -37,20 +42,53 @@ def run_skeletonize_cli(args: argparse.Namespace) -> int:
     try:
         if not (args.out_skeletal or args.out_curve):
             raise SkelInputError("nothing to write: give --out-skeletal and/or --out-curve")
-        for out in (args.out_skeletal, args.out_curve):
+        if args.log and (args.raw or not args.out_curve):
+            raise SkelInputError("--log is the repair's edit log: it needs --out-curve and no --raw")
+        for out in (args.out_skeletal, args.out_curve, args.log):
             if out:
                 io.atomic.check_output_file(out, (args.cloud,))
         cloud = io.load_cloud(args.cloud)
         progress = stderr_progress(args.quiet)
         skeletal, curve, info = skeletonize(cloud, progress=progress, return_info=True, method=args.method)
         clear_progress_line(progress)
+        repaired = None
+        if args.out_curve and not args.raw:
+            repaired = _repaired(cloud, skeletal, curve, progress)
         if args.out_skeletal:
             io.write_points_ply(args.out_skeletal, skeletal, inputs=(args.cloud,))
         if args.out_curve:
-            io.write_curve_ply(args.out_curve, curve.vertices, curve.edges, inputs=(args.cloud,))
+            out = curve if repaired is None else repaired.curve
+            io.write_curve_ply(args.out_curve, out.vertices, out.edges, inputs=(args.cloud,))
+        if args.log and repaired is not None:
+            from ..edit import write_log
+
+            write_log(args.log, repaired.log, (args.cloud,))
     except SkelInputError as exc:
         print(f"skelcore: error: {exc}", file=sys.stderr)
         return 2
     print(f"{len(cloud)} points contracted ({info.method}) in {info.iterations} iterations ({info.stop_reason}); "
           f"curve: {curve.n_vertices} vertices, {curve.n_edges} edges; {info.timings['total']:.2f} s")
+    if repaired is not None:
+        before = {k: v for k, v in repaired.tally_before.items() if v}
+        after = {k: v for k, v in repaired.tally_after.items() if v}
+        print(f"repaired: defects {before or 'none'} -> {after or 'none'}; {repaired.accepted} action(s) kept, "
+              f"{repaired.rejected} rejected; curve: {repaired.curve.n_vertices} vertices, "
+              f"{repaired.curve.n_edges} edges; {repaired.seconds:.2f} s")
     return 0
+
+
+def _repaired(cloud, skeletal, curve, progress):
+    """The curve repaired from its defects; a curve the repair refuses (no edges, in pieces beyond
+    ``repair_max_components``) is written as the algorithm gave it, and the refusal is printed."""
+    from ..skeleton_repair import repair
+
+    if curve.n_edges == 0:
+        print("not repaired: the curve has no edges", file=sys.stderr)
+        return None
+    try:
+        result = repair(cloud, curve, skeletal=skeletal, progress=progress)
+    except SkelInputError as exc:
+        print(f"not repaired: {exc}", file=sys.stderr)
+        return None
+    clear_progress_line(progress)
+    return result
