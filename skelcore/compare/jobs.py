@@ -175,6 +175,12 @@ def execute(job: Job, workdir: str | None = None, *, prefix: str = "", write_clo
         skeletal, curve, index, paths = read_files(m, job.shape.name, job.condition.name, job.seed)
         files.update(paths)
     timings["skeletonize"] = time.perf_counter() - t0
+    if m.repair and curve is not None and curve.n_edges:
+        from ..skeleton_repair import repair
+
+        t0 = time.perf_counter()
+        curve = repair(pts, curve, cancel=cancel).curve  # the method's curve repaired (docs/repair.md)
+        timings["repair"] = time.perf_counter() - t0
     t0 = time.perf_counter()
     kwargs: dict[str, Any] = {}
     if index is not None:

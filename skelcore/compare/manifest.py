@@ -35,10 +35,10 @@ __all__ = ["ShapeSpec", "MethodSpec", "ConditionSpec", "Manifest", "load_manifes
 _KEYS = {
     "top": {"evaluation", "shapes", "methods", "conditions", "seeds"},
     "shapes": {"path", "name", "suffix", "viewpoint", "reference", "tree"},
-    "builtin": {"name", "kind", "method", "params"},
-    "command": {"name", "kind", "command", "timeout", "correspondence"},
-    "files": {"name", "kind", "curve", "skeletal", "skeletal_index", "correspondence", "scale", "offset"},
-    "adapter": {"name", "kind", "params", "timeout", "correspondence"},  # kind = a skelcore.adapters KIND
+    "builtin": {"name", "kind", "method", "params", "repair"},
+    "command": {"name", "kind", "command", "timeout", "correspondence", "repair"},
+    "files": {"name", "kind", "curve", "skeletal", "skeletal_index", "correspondence", "scale", "offset", "repair"},
+    "adapter": {"name", "kind", "params", "timeout", "correspondence", "repair"},  # kind = a skelcore.adapters KIND
     "conditions": {"name", "noise", "model", "sparse", "grid", "fps", "base_grid", "seeds"},
 }
 _PLACEHOLDERS = ("{python}", "{in}", "{out_skeletal}", "{out_curve}")
@@ -84,12 +84,14 @@ class MethodSpec:
     scale: float | None = None  # files: skeleton coordinates * scale + offset (None: not mapped)
     offset: tuple[float, float, float] | None = None
     tool: str | None = None  # an adapter's tool and version, "kimimaro 5.8.5; adapter 1"
+    repair: bool = False  # the method's curve repaired (skelcore.repair) before it is scored
 
     def to_dict(self) -> dict[str, Any]:
-        """The definition a job key hashes; ``scale`` / ``offset`` / ``tool`` only when set, so the
-        keys of runs made before they existed still hold."""
+        """The definition a job key hashes; ``scale`` / ``offset`` / ``tool`` only when set and
+        ``repair`` only when true, so the keys of runs made before they existed still hold."""
         return {f.name: getattr(self, f.name) for f in fields(self)
-                if not (f.name in ("scale", "offset", "tool") and getattr(self, f.name) is None)}
+                if not (f.name in ("scale", "offset", "tool") and getattr(self, f.name) is None)
+                and not (f.name == "repair" and not self.repair)}
 
     def file_templates(self) -> dict[str, str]:
         return {k: v for k, v in (("curve", self.curve), ("skeletal", self.skeletal),
@@ -353,6 +355,12 @@ def _methods(value: Any, base: Path, shapes, fail, unknown) -> tuple[MethodSpec,
             spec = _files(entry, name, where, base, shapes, fail)
         if "correspondence" in entry:
             spec = _with_correspondence(spec, entry["correspondence"], where, fail)
+        if "repair" in entry:
+            if not isinstance(entry["repair"], bool):
+                fail(f"{where}: repair must be true or false")
+            import dataclasses
+
+            spec = dataclasses.replace(spec, repair=entry["repair"])
         out.append(spec)
     return tuple(out)
 

@@ -279,3 +279,22 @@ def test_builtin_method_is_passed_only_when_skeletonize_takes_it(root, monkeypat
     monkeypatch.setattr(skeleton, "skeletonize", real)
     with pytest.raises(SkelInputError, match="unknown skeletonize method 'magic'"):
         load_manifest(manifest(root, body.replace('method = "cao"', 'method = "magic"')))
+
+
+def test_a_method_repaired_is_another_job_scored_on_its_repaired_curve(root):
+    """``repair = true`` on a method: its own job key (a method without it keeps the key it had), and the
+    job scores the curve ``skelcore.repair`` gives (the repair's seconds in the timings)."""
+    from skelcore.compare.jobs import execute
+
+    body = GOOD.replace('[[methods]]\nname = "truth"', '[[methods]]\nname = "builtin repaired"\nkind = "builtin"\n'
+                        'repair = true\n[methods.params]\nmax_iterations = 5\n[[methods]]\nname = "truth"')
+    m = load_manifest(manifest(root, body))
+    assert [x.repair for x in m.methods] == [False, True, False]
+    plain = {j.key for j in make_jobs(load_manifest(manifest(root, GOOD, name="plain.toml")))}
+    jobs = make_jobs(m)
+    assert {j.key for j in jobs if not j.method.repair} == plain
+    job = next(j for j in jobs if j.method.repair and j.condition.name == "normal" and j.shape.name == "yshape")
+    out = execute(job)
+    assert "repair" in out.timings and out.curve is not None and out.curve.n_edges > 0
+    with pytest.raises(SkelInputError, match="repair must be true or false"):
+        load_manifest(manifest(root, body.replace("repair = true", 'repair = "yes"'), name="bad.toml"))
