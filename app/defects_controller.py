@@ -6,6 +6,9 @@ selecting a row frames the camera on its bounding box and highlights it, and a c
 highlights the clicked branch (whose length, radius, metric means and flags the pick panel shows).
 A row's context menu, and a button under the table for the selected row, offer its edits (``row_actions``, set by the window to the edit controller's:
 "Prune this branch", "Delete this edge", "Cut this cycle").
+Evaluate > Next defect (N) and Previous defect (Shift+N) walk the rows, wrapping around; a row's context
+menu marks it "fixed", "accepted" or "ignored" (:data:`MARKS`), shown in the table's mark column and kept
+by :func:`mark_key` across evaluations, in saved sessions and in the saved edit log ("defect_marks").
 """
 
 from __future__ import annotations
@@ -20,7 +23,25 @@ from .scene.defects import DefectRow, branch_edges, branch_points, defect_rows, 
 from .view.defect_overlay import DefectOverlay
 from .window_api import RIGHT, ActionSpec, WindowApi
 
-__all__ = ["DefectsController"]
+__all__ = ["DefectsController", "MARKS", "mark_key", "row_keys"]
+
+MARKS = ("fixed", "accepted", "ignored")
+
+
+def mark_key(code: str, title: str, nth: int) -> str:
+    """A defect's key for its mark: its code, its title and its index among the rows of that code."""
+    return f"{code}|{title}|{nth}"
+
+
+def row_keys(rows: list[DefectRow]) -> list[str]:
+    """Each row's :func:`mark_key`, in order."""
+    seen: dict[str, int] = {}
+    keys = []
+    for row in rows:
+        nth = seen.get(row.code, 0)
+        seen[row.code] = nth + 1
+        keys.append(mark_key(row.code, row.title, nth))
+    return keys
 
 
 class DefectsController(QtCore.QObject):
@@ -34,6 +55,9 @@ class DefectsController(QtCore.QObject):
         self.rows: list[DefectRow] = []
         self.visible = True
         self.selected: DefectRow | None = None  # the highlighted defect or clicked branch
+        #: mark_key -> one of MARKS; kept while a new evaluation still has the key
+        self.marks: dict[str, str] = {}
+        self.keys: list[str] = []
         self._shown_ev: Any = None
         dock = window.add_dock("Defects", self.panel, RIGHT)
         main = window.widget
@@ -53,6 +77,10 @@ class DefectsController(QtCore.QObject):
         self.panel.show_toggled.connect(self.set_visible)
         self.action = window.add_action(ActionSpec("show_defects", "Show defects", "view.style", self.set_visible, "Shift+D",
                                      checked=lambda: self.visible))
+        window.add_action(ActionSpec("next_defect", "Next defect", "evaluate.colour", lambda: self.step(1), "N",
+                                     enabled=lambda: bool(self.rows)))
+        window.add_action(ActionSpec("previous_defect", "Previous defect", "evaluate.colour", lambda: self.step(-1),
+                                     "Shift+N", enabled=lambda: bool(self.rows)))
         window.element_picked.connect(self._picked)
         self.scene.subscribe(self._on_scene)
         self.refresh()
@@ -74,10 +102,46 @@ class DefectsController(QtCore.QObject):
         self._shown_ev = ev
         self.selected = None
         self.rows = defect_rows(ev)
+        self.keys = row_keys(self.rows)
+        if ev is not None:  # a new evaluation keeps the marks whose defect it still has
+            self.marks = {k: v for k, v in self.marks.items() if k in self.keys}
         self.fix_button.setVisible(False)
-        self.panel.show_rows(None if ev is None else self.rows, "" if ev is None else sound_line(ev))
+        self.panel.show_rows(None if ev is None else self.rows, "" if ev is None else sound_line(ev), self._row_marks())
         self.overlay.show(ev, self.rows, self._cloud_size(), stale=bool(self.scene.stale))
         self.overlay.set_visible(self.visible)
+
+    def _row_marks(self) -> list[str]:
+        return [self.marks.get(k, "") for k in self.keys]
+
+    def step(self, by: int) -> int:
+        """Select and frame the row ``by`` rows after the selected one (wrapping; from none: the first
+        or the last). Returns its index (-1: no rows)."""
+        if not self.rows:
+            return -1
+        current = self.panel.selected_row()
+        index = (0 if by > 0 else len(self.rows) - 1) if current < 0 else (current + by) % len(self.rows)
+        self.select(index)
+        return index
+
+    def mark(self, index: int, mark: str | None) -> None:
+        """Mark the ``index``-th row (one of :data:`MARKS`; None or "" clears its mark)."""
+        if mark and mark not in MARKS:
+            raise ValueError(f"mark must be one of {', '.join(MARKS)}")
+        if not 0 <= index < len(self.rows):
+            return
+        key = self.keys[index]
+        if mark:
+            self.marks[key] = mark
+        else:
+            self.marks.pop(key, None)
+        self.panel.set_marks(self._row_marks())
+
+    def set_marks(self, marks: dict[str, str]) -> None:
+        """Marks as saved (a session): kept whole until the next evaluation, which keeps those it has."""
+        self.marks = {str(k): str(v) for k, v in marks.items() if v in MARKS}
+        if self.scene.evaluation is not None and not self.window.session.runner.running:
+            self.marks = {k: v for k, v in self.marks.items() if k in self.keys}
+        self.panel.set_marks(self._row_marks())
 
     def actions_of(self, index: int) -> list[tuple[str, Callable[[], Any]]]:
         """The edits the ``index``-th row offers (its context menu's entries)."""
@@ -96,16 +160,30 @@ class DefectsController(QtCore.QObject):
         if entries:
             entries[0][1]()
 
+    def row_menu(self, index: int) -> QtWidgets.QMenu | None:
+        """The ``index``-th row's context menu: its edits, then "Mark fixed / accepted / ignored"
+        (checked: its mark; unchecking clears it). None for no row."""
+        if not 0 <= index < len(self.rows):
+            return None
+        menu = QtWidgets.QMenu(self.panel.table)
+        for text, run in self.actions_of(index):
+            menu.addAction(text).triggered.connect(lambda _c=False, r=run: r())
+        if menu.actions():
+            menu.addSeparator()
+        current = self.marks.get(self.keys[index], "")
+        for m in MARKS:
+            act = menu.addAction(f"Mark {m}")
+            act.setCheckable(True)
+            act.setChecked(current == m)
+            act.triggered.connect(lambda on, i=index, mk=m: self.mark(i, mk if on else None))
+        return menu
+
     def _row_menu(self, pos: QtCore.QPoint) -> None:
         table = self.panel.table
-        index = table.indexAt(pos).row()
-        entries = self.actions_of(index)
-        if not entries:
-            return
-        menu = QtWidgets.QMenu(table)
-        for text, run in entries:
-            menu.addAction(text).triggered.connect(lambda _c=False, r=run: r())
-        menu.exec(table.viewport().mapToGlobal(pos))
+        menu = self.row_menu(table.indexAt(pos).row())
+        if menu is not None:
+            menu.exec(table.viewport().mapToGlobal(pos))
+            menu.deleteLater()
 
     def _cloud_size(self) -> float:
         cloud = self.scene.cloud

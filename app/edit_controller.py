@@ -418,6 +418,9 @@ class EditController(QtCore.QObject):
         written = [path]
         log = self.edit_log()
         if log is not None:
+            defects = getattr(self.window, "defects", None)
+            if defects is not None and defects.marks:  # the Defects dock's marks, beside the operations
+                log = {**log, "defect_marks": dict(defects.marks)}
             edit.write_log(log_path, log)
             written.append(log_path)
         self.window.show_message(f"saved {', '.join(os.path.basename(p) for p in written)}", 8000)

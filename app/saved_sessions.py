@@ -92,6 +92,8 @@ class SavedSessions(QtCore.QObject):
                           for role, layer in scene.layers.items() if role != "cloud" and layer.mapping is not None}
         state.viewpoints = [tuple(float(v) for v in p) for p in w.session.viewpoints]
         state.edits = w.curve_edits() if scene.curve is not None and scene.curve.edited else None
+        defects = getattr(w, "defects", None)
+        state.defect_marks = dict(defects.marks) if defects is not None else {}
         state.camera = w.view.camera_state()
         picked = w.picked_element()
         if picked is not None:
@@ -192,6 +194,9 @@ class SavedSessions(QtCore.QObject):
                 scene.set_opacity(role, opts["opacity"])
         if state.camera is not None and scene.layers:
             w.view.set_camera_state(state.camera)
+        defects = getattr(w, "defects", None)
+        if defects is not None:  # the next evaluation keeps those whose defect it has
+            defects.set_marks(state.defect_marks)
         self._pending_pick = None
         if state.picked is not None:
             if w.session.runner.running:  # after the evaluation lands (it clears the pick panel)

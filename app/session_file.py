@@ -68,6 +68,7 @@ class SessionState:
     camera: dict[str, Any] | None = None
     picked: dict[str, Any] | None = None  # layer, location, index
     edits: dict[str, Any] | None = None  # the curve's edit log (skelcore.edit.new_log), None when not edited
+    defect_marks: dict[str, str] = field(default_factory=dict)  # Defects dock: mark key -> fixed / accepted / ignored
 
     def paths(self) -> dict[str, str]:
         return {role: rec.path for role, rec in self.files.items()}
@@ -111,6 +112,7 @@ def session_to_json(state: SessionState) -> dict[str, Any]:
         "camera": state.camera,
         "picked": state.picked,
         **({} if state.edits is None else {"edits": state.edits}),
+        **({"defect_marks": dict(state.defect_marks)} if state.defect_marks else {}),
     }
 
 
@@ -195,6 +197,11 @@ def session_from_json(doc: Any, path: str | os.PathLike = "session") -> SessionS
     if edits is not None and not (isinstance(edits, dict) and isinstance(edits.get("operations"), list)):
         raise bad("'edits' must be an edit log (skelcore.edit.new_log, with its operations) or null")
     state.edits = edits
+    marks = doc.get("defect_marks", {})
+    if not isinstance(marks, dict) or not all(isinstance(k, str) and v in ("fixed", "accepted", "ignored")
+                                              for k, v in marks.items()):
+        raise bad("'defect_marks' must map defect keys to fixed, accepted or ignored")
+    state.defect_marks = dict(marks)
     viewpoints = doc.get("viewpoints", [])
     try:
         state.viewpoints = [tuple(float(v) for v in p) for p in viewpoints]  # type: ignore[misc]

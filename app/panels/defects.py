@@ -28,8 +28,11 @@ class DefectsPanel(QtWidgets.QWidget):
         self.show_box = QtWidgets.QCheckBox("show defects in 3D (Shift+D)", self)
         self.show_box.setChecked(True)
         self.show_box.toggled.connect(self.show_toggled)
-        self.table = QtWidgets.QTableWidget(0, 2, self)
-        self.table.setHorizontalHeaderLabels(["defect", "size"])
+        self.marks: list[str] = []
+        self._sound = ""
+        self._shown = False
+        self.table = QtWidgets.QTableWidget(0, 3, self)
+        self.table.setHorizontalHeaderLabels(["defect", "size", "mark"])
         self.table.verticalHeader().setVisible(False)
         self.table.setEditTriggers(QtWidgets.QAbstractItemView.EditTrigger.NoEditTriggers)
         self.table.setSelectionBehavior(QtWidgets.QAbstractItemView.SelectionBehavior.SelectRows)
@@ -44,8 +47,8 @@ class DefectsPanel(QtWidgets.QWidget):
         layout.addWidget(self.show_box)
         layout.addWidget(self.table, 1)
 
-    def show_rows(self, rows: list[DefectRow] | None, sound: str = "") -> None:
-        """The rows of an evaluation (None: no evaluation shown)."""
+    def show_rows(self, rows: list[DefectRow] | None, sound: str = "", marks: list[str] | None = None) -> None:
+        """The rows of an evaluation (None: no evaluation shown), each with its mark ("": none)."""
         self.table.blockSignals(True)
         self.table.clearSelection()
         self.rows = list(rows or [])
@@ -60,15 +63,30 @@ class DefectsPanel(QtWidgets.QWidget):
             size.setToolTip(row.size)
             self.table.setItem(i, 0, title)
             self.table.setItem(i, 1, size)
+            self.table.setItem(i, 2, QtWidgets.QTableWidgetItem(""))
+        self.table.blockSignals(False)
+        self._sound = sound
+        self._shown = rows is not None
+        self.set_marks(marks or [])
+
+    def set_marks(self, marks: list[str]) -> None:
+        """Each row's mark ("fixed", "accepted", "ignored" or ""), and the status line's unmarked count."""
+        self.marks = list(marks) + [""] * (len(self.rows) - len(marks))
+        for i, mark in enumerate(self.marks[:len(self.rows)]):
+            item = self.table.item(i, 2)
+            if item is not None:
+                item.setText(mark)
         self.table.resizeColumnToContents(0)
         self.table.resizeRowsToContents()
-        self.table.blockSignals(False)
-        if rows is None:
+        sound = self._sound
+        if not self._shown:
             self.status.setText(NO_EVALUATION)
         elif not self.rows:
             self.status.setText(f"{NONE_FOUND} ({sound})" if sound else NONE_FOUND)
         else:
-            self.status.setText(f"{len(self.rows)} found; {sound}" if sound else f"{len(self.rows)} found")
+            open_ = sum(1 for m in self.marks[:len(self.rows)] if not m)
+            found = f"{len(self.rows)} found, {open_} unmarked"
+            self.status.setText(f"{found}; {sound}" if sound else found)
 
     def select_row(self, index: int) -> None:
         """Select a row as a click would (-1 clears)."""
