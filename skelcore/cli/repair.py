@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import argparse
 from pathlib import Path
+from typing import Any
 
 __all__ = ["register", "run_repair"]
 
@@ -71,9 +72,14 @@ def run_repair(args: argparse.Namespace) -> int:
     write_curve(out, result.curve, inputs=inputs, lossy=True)
     if args.log:
         write_log(args.log, result.log, inputs)
+    print(f"{args.curve}: {curve.n_vertices} vertices, {curve.n_edges} edges; {repair_summary(result)} "
+          f"({result.stopped}); {out}: {result.curve.n_vertices} vertices, {result.curve.n_edges} edges")
+    return 0
+
+
+def repair_summary(result: Any) -> str:
+    """A repair in words: the defect counts before and after, the actions kept and rejected."""
     before = {k: v for k, v in result.tally_before.items() if v}
     after = {k: v for k, v in result.tally_after.items() if v}
-    print(f"{args.curve}: {curve.n_vertices} vertices, {curve.n_edges} edges; defects {before or 'none'} -> "
-          f"{after or 'none'}; {result.accepted} action(s) kept, {result.rejected} rejected ({result.stopped}); "
-          f"{out}: {result.curve.n_vertices} vertices, {result.curve.n_edges} edges")
-    return 0
+    return (f"defects {before or 'none'} -> {after or 'none'}; {result.accepted} action(s) kept, "
+            f"{result.rejected} rejected")

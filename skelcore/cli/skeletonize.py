@@ -69,10 +69,9 @@ def run_skeletonize_cli(args: argparse.Namespace) -> int:
     print(f"{len(cloud)} points contracted ({info.method}) in {info.iterations} iterations ({info.stop_reason}); "
           f"curve: {curve.n_vertices} vertices, {curve.n_edges} edges; {info.timings['total']:.2f} s")
     if repaired is not None:
-        before = {k: v for k, v in repaired.tally_before.items() if v}
-        after = {k: v for k, v in repaired.tally_after.items() if v}
-        print(f"repaired: defects {before or 'none'} -> {after or 'none'}; {repaired.accepted} action(s) kept, "
-              f"{repaired.rejected} rejected; curve: {repaired.curve.n_vertices} vertices, "
+        from .repair import repair_summary
+
+        print(f"repaired: {repair_summary(repaired)}; curve: {repaired.curve.n_vertices} vertices, "
               f"{repaired.curve.n_edges} edges; {repaired.seconds:.2f} s")
     return 0
 
