@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import os
 import platform
+import time
 from functools import lru_cache
 from pathlib import Path
 from typing import Callable
@@ -122,13 +123,29 @@ def measure(benchmark, request) -> Callable:
     """``measure(fn, rounds=3, warmup=1, setup=None)``: ``fn`` timed ``rounds`` times, one call per
     round, after ``warmup`` untimed calls (first-call loading left out); ``setup`` (untimed) returns
     ``(args, kwargs)`` for each call. ``--bench-rounds`` overrides every case's rounds. The load average
-    before and after goes into the case's extra_info."""
+    before and after, the 95th percentile of the rounds' seconds (``p95``, numpy's linear interpolation)
+    and the median CPU seconds of this process per round (``cpu_median``: what the shared cores' load
+    does not inflate) go into the case's extra_info."""
     forced = request.config.getoption("--bench-rounds")
 
     def run(fn: Callable, *, rounds: int = 3, warmup: int = 1, setup: Callable | None = None):
+        cpu: list[float] = []
+
+        def timed(*args, **kwargs):
+            t0 = time.process_time()
+            try:
+                return fn(*args, **kwargs)
+            finally:
+                cpu.append(time.process_time() - t0)
+
         benchmark.extra_info["load_average_before"] = round(os.getloadavg()[0], 2)
-        out = benchmark.pedantic(fn, setup=setup, rounds=forced or rounds, warmup_rounds=warmup, iterations=1)
+        out = benchmark.pedantic(timed, setup=setup, rounds=forced or rounds, warmup_rounds=warmup, iterations=1)
         benchmark.extra_info["load_average_after"] = round(os.getloadavg()[0], 2)
+        data = list(getattr(getattr(benchmark.stats, "stats", None), "data", None) or [])
+        if data:
+            benchmark.extra_info["p95"] = float(np.percentile(data, 95))
+        if cpu[warmup:]:
+            benchmark.extra_info["cpu_median"] = float(np.median(cpu[warmup:]))
         return out
 
     return run

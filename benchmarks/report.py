@@ -120,8 +120,8 @@ def render(results: dict) -> str:
         "untimed call (first-call imports and loading left out), except the viewer's start-up, a fresh "
         "process each round.",
         "",
-        "| case | median s | ratio to the anchor | min - max s | rounds | load average before / after |",
-        "|---|---|---|---|---|---|",
+        "| case | median s | ratio to the anchor | p95 s | min - max s | rounds | load average before / after |",
+        "|---|---|---|---|---|---|---|",
     ]
     base = anchor["stats"]["median"] if anchor else None
     for b in sorted(benches, key=lambda b: b is not anchor):
@@ -130,7 +130,8 @@ def render(results: dict) -> str:
         extra = b.get("extra_info", {})
         load = " / ".join(f"{extra[k]:.1f}" if k in extra else "-"
                           for k in ("load_average_before", "load_average_after"))
-        lines.append(f"| {_case(b)} | {_seconds(st['median'])} | {ratio} | {_seconds(st['min'])} - "
+        p95 = _seconds(extra["p95"]) if "p95" in extra else "-"
+        lines.append(f"| {_case(b)} | {_seconds(st['median'])} | {ratio} | {p95} | {_seconds(st['min'])} - "
                      f"{_seconds(st['max'])} | {st['rounds']} | {load} |")
     if not anchor:
         lines += ["", "No anchor in this run (gudhi missing or the hammer scan not found): no ratios."]
@@ -139,7 +140,9 @@ def render(results: dict) -> str:
     lines += ["", "The load average (1 minute) is the machine's as the case started and ended: well above the "
               "number of cores, every figure is inflated, and the cases that run on several threads (the "
               "evaluation runs its stages side by side) may be inflated more than the anchor (one thread). "
-              "Each case's inputs and details (points, per-stage seconds) are in its `extra_info` in the JSON."]
+              "Each case's inputs and details (points, per-stage seconds) are in its `extra_info` in the JSON. "
+              "p95 is the 95th percentile of the case's rounds (linear interpolation: with few rounds it lies "
+              "near the slowest)."]
     return "\n".join(lines) + "\n"
 
 
