@@ -10,6 +10,7 @@ with a scan option, or whose skeletal column is the curve's projection, are eval
 
 from __future__ import annotations
 
+import threading
 import time
 from dataclasses import replace
 from typing import Any
@@ -23,7 +24,8 @@ from ..geometry import check_magnitude, no_checkpoint
 from ..metrics.boundedness import boundedness, rays_plan_is_exact
 from ..metrics.centeredness import curve_centeredness, slab_grid
 from ..metrics.curve_sampling import sample_curve
-from ..stages.catalogue import CATALOGUE
+from ..parallel import GraphTask, run_graph
+from ..stages.catalogue import CATALOGUE, Stage, start_order
 from ..stages.context import EvalContext
 from ..stages.evaluation_source import EvaluationSource
 from ..stages.orchestrate import evaluate, finish
@@ -37,7 +39,7 @@ CURVE_STAGES = tuple(s.name for s in CATALOGUE
                      and s.name != "correspondence")  # of a given skeletal set: reads no curve
 #: left out by ``update(diagnostics=False)``
 DIAGNOSTIC_STAGES = ("curve coverage", "curve defects", "curve missing parts")
-_INCREMENTAL = ("curve boundedness", "curve centeredness")
+_GRID_LOCK = threading.Lock()  # one slab grid per cache, even when two updates run at once
 LEFT_OUT = "left out by Evaluation.update(diagnostics=False)"
 
 
@@ -62,17 +64,38 @@ def update_evaluation(ev: Evaluation, edited: Change | CurveSkeleton | Any, *, d
         return new
     check_magnitude("curve skeleton", curve.vertices)
     ctx = _edited_context(old, curve)
-    _score_samples(old, ctx, src.cache)
-    for stage in CATALOGUE:
-        if stage.name in CURVE_STAGES and stage.name not in _INCREMENTAL and stage.applies(ctx):
-            if not diagnostics and stage.name in DIAGNOSTIC_STAGES:
-                ctx.not_computed[stage.name] = LEFT_OUT
-                continue
-            ctx.results[stage.name] = stage.fn(ctx, no_checkpoint)
+    run_graph(_tasks(old, ctx, src.cache, diagnostics), args.get("workers"))
     out = finish(ctx, args.get("inputs"), no_checkpoint)
     out.timings = {"update": time.perf_counter() - t0}
     out.source = EvaluationSource(args=args, ctx=ctx, cache=src.cache)
     return out
+
+
+def _tasks(old: EvalContext, ctx: EvalContext, cache: dict[str, Any], diagnostics: bool) -> list[GraphTask]:
+    """The curve's stages as graph tasks, run side by side as :func:`evaluate` runs them (its start
+    order: the curve's coverage beside the samples' scoring, the defects once the boundedness is in):
+    the samples' boundedness and centeredness from the old values where they can be kept, the others
+    computed again; ``diagnostics=False`` names the left-out ones in ``not_computed``."""
+    incremental = {"curve boundedness": lambda: _sample_boundedness(old, ctx, cache),
+                   "curve centeredness": lambda: _sample_centeredness(old, ctx, cache)}
+    stages = []
+    for stage in start_order([s for s in CATALOGUE if s.name in CURVE_STAGES and s.applies(ctx)], ctx):
+        if not diagnostics and stage.name in DIAGNOSTIC_STAGES:
+            ctx.not_computed[stage.name] = LEFT_OUT
+        else:
+            stages.append(stage)
+    names = {s.name for s in stages}
+
+    def task(stage: Stage) -> GraphTask:
+        fn = incremental.get(stage.name) or (lambda: stage.fn(ctx, no_checkpoint))
+
+        def run() -> object:
+            ctx.results[stage.name] = fn()
+            return ctx.results[stage.name]
+
+        return GraphTask(stage.name, run, tuple(a for a in stage.after(ctx) if a in names))
+
+    return [task(s) for s in stages]
 
 
 def _edited_context(old: EvalContext, curve: CurveSkeleton) -> EvalContext:
@@ -111,22 +134,29 @@ def _plan_is_exact(cloud: np.ndarray, samples: Any, params: Any, cache: dict[str
     return flag
 
 
-def _score_samples(old: EvalContext, ctx: EvalContext, cache: dict[str, Any]) -> None:
-    """Curve boundedness and centeredness of the new samples: reused where a sample was scored before."""
+def _sample_boundedness(old: EvalContext, ctx: EvalContext, cache: dict[str, Any]) -> np.ndarray:
+    """Curve boundedness of the new samples: kept where a sample was scored before at the same place,
+    when both samplings are scored pair by pair (else all again, as :func:`evaluate` would)."""
     p, s_old, s_new = ctx.params, old.samples, ctx.samples
     cloud = ctx.bounded_cloud_n
-    if _plan_is_exact(cloud, s_old, p, cache) and _plan_is_exact(cloud, s_new, p, cache):
-        beta, todo = _reuse(_keys(s_old.points), old.results["curve boundedness"], _keys(s_new.points))
-        if todo.any():
-            beta[todo] = boundedness(cloud, s_new.points[todo], params=p, share_far_field=False)
-    else:
-        beta = ctx.boundedness(s_new.points)
-    ctx.results["curve boundedness"] = beta
+    if not (_plan_is_exact(cloud, s_old, p, cache) and _plan_is_exact(cloud, s_new, p, cache)):
+        return ctx.boundedness(s_new.points)
+    beta, todo = _reuse(_keys(s_old.points), old.results["curve boundedness"], _keys(s_new.points))
+    if todo.any():
+        beta[todo] = boundedness(cloud, s_new.points[todo], params=p, share_far_field=False)
+    return beta
+
+
+def _sample_centeredness(old: EvalContext, ctx: EvalContext, cache: dict[str, Any]) -> np.ndarray:
+    """Curve centeredness of the new samples: kept where a sample was scored before at the same place
+    and direction."""
+    p, s_old, s_new = ctx.params, old.samples, ctx.samples
     c, todo = _reuse(_keys(s_old.points, s_old.directions), old.results["curve centeredness"],
                      _keys(s_new.points, s_new.directions))
     if todo.any():
-        if "slab grid" not in cache:
-            cache["slab grid"] = slab_grid(ctx.cloud_n, p)
+        with _GRID_LOCK:
+            if "slab grid" not in cache:
+                cache["slab grid"] = slab_grid(ctx.cloud_n, p)
         c[todo] = curve_centeredness(ctx.cloud_n, s_new.points[todo], s_new.directions[todo], params=p,
                                      grid=cache["slab grid"])
-    ctx.results["curve centeredness"] = c
+    return c
