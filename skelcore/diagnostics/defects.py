@@ -8,6 +8,7 @@ from dataclasses import dataclass
 from typing import Callable
 
 import numpy as np
+from scipy.spatial import cKDTree
 
 from ..curve import CurveSkeleton
 from ..metrics.curve_sampling import CurveSamples
@@ -75,12 +76,14 @@ def find_curve_defects(
     params: Params = Params(),
     checkpoint: Checkpoint = no_checkpoint,
     interior: Callable[[Checkpoint], VoxelShape] | None = None,
+    cloud_tree: cKDTree | None = None,
 ) -> CurveDefects:
     """Branches, spurious branches, cycles and the parts outside of ``curve`` (and of ``skeletal``),
     all normalized (docs/metrics.md 0); ``sample_boundedness`` are the boundedness values of ``samples``. The
     local radii come from at most ``diag_max_points`` of the cloud (``spurs.subsampled`` says when).
     ``interior(checkpoint)`` gives the cloud's voxelized interior when it is shared (the evaluation's
-    stages make it once); default :func:`.interior.voxelize_interior` with ``params``."""
+    stages make it once); default :func:`.interior.voxelize_interior` with ``params``. ``cloud_tree``: the
+    KD-tree of ``cloud_subsample(cloud, params.diag_max_points)`` when kept (an edit's update)."""
     import time
 
     t: dict[str, float] = {}
@@ -88,7 +91,8 @@ def find_curve_defects(
     cloud = np.asarray(cloud, dtype=float)
     # the local radii from at most diag_max_points of the cloud (a 1M-point tree costs 1-2 s; the
     # radii grow by about the subsample's spacing, a few % of a radius)
-    tree = kd_tree(cloud_subsample(cloud, params.diag_max_points), lambda f: checkpoint(0.05 * f))
+    tree = cloud_tree if cloud_tree is not None else kd_tree(cloud_subsample(cloud, params.diag_max_points),
+                                                             lambda f: checkpoint(0.05 * f))
     branches = decompose_branches(curve, cloud=cloud, sample_edge=None if samples is None else samples.edge,
                                   cloud_tree=tree, checkpoint=lambda f: checkpoint(0.05 + 0.05 * f))
     t["branches"] = time.perf_counter() - t0

@@ -28,6 +28,7 @@ from scipy.spatial import cKDTree
 from ..correspondence import densify_curve
 from ..curve import CurveSkeleton
 from ..geometry import Checkpoint, no_checkpoint, query_workers, unique_rows
+from ..metrics.cloud_index import kept_index
 from ..metrics.coverage import Coverage, coverage, coverage_tau
 from ..params import Params
 from .trust_warning import TrustWarning
@@ -261,8 +262,9 @@ def missing_parts(
             tau = None if tau is None else float(tau) * float(np.sqrt(n / len(pts)))
         else:
             pts = cloud
+        index = kept_index(pts, cloud)  # an edit's update asks again about the same points
         if tau is None:
-            tau = coverage_tau(pts, p, lambda f: checkpoint(0.1 * f))
+            tau = coverage_tau(pts, p, lambda f: checkpoint(0.1 * f), index)
     # the regions link sampled neighbours: the spacing of a surface sample grows as 1 / sqrt(density)
     spacing = float(tau) / float(p.coverage_tau_factor) * spread_factor
     if keep is not None and not isinstance(skeleton, CurveSkeleton):
@@ -272,7 +274,7 @@ def missing_parts(
         if inside is not None and len(elements):
             ok = np.asarray(inside(elements), bool)
             n_out, elements = int(np.count_nonzero(~ok)), elements[ok]
-        cov = coverage(pts, elements, p, tau, checkpoint=lambda f: checkpoint(0.1 + 0.6 * f))
+        cov = coverage(pts, elements, p, tau, checkpoint=lambda f: checkpoint(0.1 + 0.6 * f), index=index)
     checkpoint(0.7)
     region_s, regions = _regions(pts, cov, spacing, p, checkpoint)
     checkpoint(0.9)

@@ -11,14 +11,16 @@ is the one the stages computed alone: the same kernel on the same tree (tested).
 
 from __future__ import annotations
 
+import hashlib
 import threading
+import weakref
 
 import numpy as np
 
 from ..geometry import Checkpoint, no_checkpoint, scaled_checkpoint
 from .ball_tree import BallTree
 
-__all__ = ["CloudIndex"]
+__all__ = ["CloudIndex", "kept_index"]
 
 
 class CloudIndex:
@@ -63,3 +65,31 @@ class CloudIndex:
                 _, idx = near.nearest(surface.points, scaled_checkpoint(checkpoint, 0.3, 1.0), return_index=True)
                 self._spread = {key: at[near.perm[idx]]}  # one subsample per evaluation: keep the last
             return self._spread[key]
+
+
+# the last CloudIndex of kept_index: its points' digest, the index, and a weak reference to its owner
+_kept: dict = {}
+_kept_lock = threading.Lock()
+
+
+def kept_index(points: np.ndarray, owner: np.ndarray) -> CloudIndex:
+    """A :class:`CloudIndex` of ``points``, the same one while points of the same bytes come back and
+    ``owner`` (the array they were taken from, or the array it is a view of) lives: a missing-parts search on a subsample of a
+    million-point cloud rebuilds its tree and spacings (about a CPU second) at every edit's update
+    otherwise. Only the last is kept; the values are those of a new index (the same structures)."""
+    pts = np.ascontiguousarray(points, dtype=np.float64).reshape(-1, 3)
+    digest = hashlib.blake2b(pts.view(np.uint8), digest_size=16).digest()
+    while isinstance(getattr(owner, "base", None), np.ndarray):  # a view's buffer: the array that lives
+        owner = owner.base
+    with _kept_lock:
+        ref = _kept.get("owner")
+        if ref is not None and ref() is owner and _kept.get("digest") == digest:
+            return _kept["index"]
+        index = CloudIndex(pts)
+        try:
+            ref = weakref.ref(owner, lambda r: _kept.clear() if _kept.get("owner") is r else None)
+        except TypeError:  # not weak-referenceable: not kept
+            _kept.clear()
+            return index
+        _kept.update(owner=ref, digest=digest, index=index)
+        return index

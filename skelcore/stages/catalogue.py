@@ -131,7 +131,8 @@ def _curve_defects(ctx: EvalContext, checkpoint: Checkpoint):
     """Branches, spurious branches, cycles, the parts outside (docs/diagnostics.md)."""
     return find_curve_defects(ctx.cloud_n, ctx.curve_n, samples=ctx.samples,
                               sample_boundedness=ctx.results["curve boundedness"], params=ctx.params,
-                              checkpoint=checkpoint, interior=ctx.interior)
+                              checkpoint=checkpoint, interior=ctx.interior,
+                              cloud_tree=ctx.diag_tree(lambda f: checkpoint(0.05 * f)))
 
 
 def _skeletal_outside(ctx: EvalContext, checkpoint: Checkpoint):

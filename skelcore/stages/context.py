@@ -80,6 +80,8 @@ class EvalContext:
     cloud_index: CloudIndex | None = field(default=None, repr=False)
     _interior: list = field(default_factory=list, repr=False)
     _interior_lock: threading.Lock = field(default_factory=threading.Lock, repr=False)
+    _diag_tree: list = field(default_factory=list, repr=False)
+    _diag_tree_lock: threading.Lock = field(default_factory=threading.Lock, repr=False)
 
     def __post_init__(self) -> None:
         if self.cloud_index is None:
@@ -168,6 +170,19 @@ class EvalContext:
                                                         min_spacing_factor=p.cycles_voxel_spacing,
                                                         inside_share=p.beta_star, checkpoint=checkpoint))
             return self._interior[0]
+
+    def diag_tree(self, checkpoint: Checkpoint = no_checkpoint):
+        """The KD-tree of at most ``diag_max_points`` of the normalized cloud that the diagnostics' local
+        radii come from (:func:`skelcore.diagnostics.interior.cloud_subsample`), made once: an edit's
+        update shares it with the evaluation it updates."""
+        from ..diagnostics.interior import cloud_subsample
+        from ..geometry import kd_tree
+
+        with self._diag_tree_lock:
+            if not self._diag_tree:
+                self._diag_tree.append(kd_tree(cloud_subsample(self.cloud_n, self.params.diag_max_points),
+                                               checkpoint))
+            return self._diag_tree[0]
 
     def tau(self, checkpoint: Checkpoint) -> float:
         """Coverage's tau (``coverage_tau``: the factor x the cloud's median spacing) from the shared

@@ -168,12 +168,8 @@ def _every_ball_explains(ctx: EvalContext, ev: Evaluation) -> None:
     outside, the missing parts are found again leaving out only those in no solid voxel whose nearest
     cloud points lie on one side (``outside_one_sided``; a half cylinder's axis sees a half ring, 2 / pi;
     docs/diagnostics.md "Completeness")."""
-    from ..diagnostics.interior import cloud_subsample
     from ..diagnostics.missing_parts import missing_parts
     from ..diagnostics.outside import one_sided
-    from ..geometry import kd_tree
-
-    trees: list = []
 
     def inside(points: np.ndarray) -> np.ndarray:
         shape = ctx.interior()
@@ -181,9 +177,7 @@ def _every_ball_explains(ctx: EvalContext, ev: Evaluation) -> None:
         solid = shape.solid()[ijk[:, 0], ijk[:, 1], ijk[:, 2]]
         if solid.all():
             return solid
-        if not trees:
-            trees.append(kd_tree(cloud_subsample(ctx.cloud_n, ctx.params.diag_max_points)))
-        solid[~solid] = ~one_sided(trees[0], points[~solid], ctx.params.outside_one_sided)
+        solid[~solid] = ~one_sided(ctx.diag_tree(), points[~solid], ctx.params.outside_one_sided)
         return solid
 
     redone = False
