@@ -27,16 +27,12 @@ from ..metrics.curve_sampling import sample_curve
 from ..parallel import GraphTask, run_graph
 from ..stages.catalogue import CATALOGUE, Stage, start_order
 from ..stages.context import EvalContext
-from ..stages.evaluation_source import EvaluationSource
+from ..stages.evaluation_source import CURVE_STAGES, EvaluationSource
 from ..stages.orchestrate import evaluate, finish
 from .change import Change
 
 __all__ = ["update_evaluation", "CURVE_STAGES", "DIAGNOSTIC_STAGES"]
 
-#: the stages whose result depends on the curve (their context inputs name it), scored again
-CURVE_STAGES = tuple(s.name for s in CATALOGUE
-                     if {"curve", "samples", "curve boundedness", "curve coverage"} & set(s.inputs)
-                     and s.name != "correspondence")  # of a given skeletal set: reads no curve
 #: left out by ``update(diagnostics=False)``
 DIAGNOSTIC_STAGES = ("curve coverage", "curve defects", "curve missing parts")
 _GRID_LOCK = threading.Lock()  # one slab grid per cache, even when two updates run at once
