@@ -135,3 +135,32 @@ def test_update_with_a_reference_a_scan_option_or_reverse_correspondence(options
     ev = evaluate(sh.cloud, skeletal, curve, **options)
     new, change = E.prune_branch(ev.curve.curve, 1)
     _same(ev.update(change), evaluate(sh.cloud, skeletal, new, **options))
+
+
+def test_the_missing_parts_subsample_index_is_kept_across_updates_and_dropped_with_the_cloud():
+    """Above missing_max_points (and without coverage) the missing parts search a subsample: its tree and
+    spacings are made once and kept while the evaluation's cloud lives; an update using them equals a
+    fresh evaluate; the context keeps of the curve's stages only the samples' values."""
+    import gc
+
+    from skelcore import Params
+    from skelcore.metrics import cloud_index
+
+    sh = shapes.y_shape(3000, seed=4, n_curve_per_arm=6)
+    params = Params(missing_max_points=1000, coverage_max_points=500)
+    base = evaluate(sh.cloud, curve=(sh.curve_vertices, sh.curve_edges), params=params).curve.curve
+    new, change = E.move_vertex(base, 3, base.vertices[3] + np.array([0.0, 0.02, 0.0]))
+    fresh = evaluate(sh.cloud, curve=new, params=params)
+    ev = evaluate(sh.cloud, curve=base, params=params)
+    kept = cloud_index._kept.get("index")
+    assert kept is not None and len(kept.cloud) == 1000
+    assert set(ev.source.ctx.results) & {"curve defects", "curve missing parts"} == set()
+    updated = ev.update(change)
+    assert cloud_index._kept.get("index") is kept
+    assert "cloud_missing_curve" in updated.diagnostics.arrays
+    _same(updated, fresh)
+    np.testing.assert_array_equal(updated.diagnostics.arrays["cloud_missing_curve"],
+                                  fresh.diagnostics.arrays["cloud_missing_curve"])
+    del ev, updated
+    gc.collect()
+    assert not cloud_index._kept
