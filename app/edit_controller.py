@@ -107,6 +107,11 @@ class EditController(QtCore.QObject):
         self.scene.subscribe(self._on_scene)
 
     # ---- state ----------------------------------------------------------------------------
+    @property
+    def applying(self) -> bool:
+        """The curve is being replaced by an edit, its undo or its redo (the same skeleton, edited)."""
+        return self._applying
+
     def _can_edit(self) -> bool:
         return self.active and self.scene.curve is not None
 

@@ -138,6 +138,7 @@ class MainWindow(QtWidgets.QMainWindow):
         self.defects = DefectsController(self)  # the Defects dock, the defects in 3-D, a clicked branch
         self.edits = EditController(self)  # Edit mode, undo / redo, History dock, File > Save skeleton as
         self.defects.row_actions = self.edits.row_actions  # a Defects row's "Prune this branch", ...
+        self.defects.is_edit = lambda: self.edits.applying  # an edit keeps the skeleton's marks
         self.viewpoints = ViewpointController(self)  # Evaluate > Viewpoint from the camera / typed
         self.compare = CompareController(self)  # File > Compare with a second skeleton (B)
         self.compare_run = RunBrowser(self)  # File > Open comparison run, and drops of a run
