@@ -129,6 +129,7 @@ class MainWindow(QtWidgets.QMainWindow):
         from .compare_run import RunBrowser
         from .compare_view import CompareController
         from .defects_controller import DefectsController
+        from .edit_compare import EditCompare
         from .edit_controller import EditController
         from .saved_sessions import SavedSessions
         from .support_controller import SupportController
@@ -141,6 +142,7 @@ class MainWindow(QtWidgets.QMainWindow):
         self.defects.is_edit = lambda: self.edits.applying  # an edit keeps the skeleton's marks
         self.viewpoints = ViewpointController(self)  # Evaluate > Viewpoint from the camera / typed
         self.compare = CompareController(self)  # File > Compare with a second skeleton (B)
+        self.edit_compare = EditCompare(self, self.edits)  # Edit > the loaded curve against the edited one (A/B)
         self.compare_run = RunBrowser(self)  # File > Open comparison run, and drops of a run
         self.saved_sessions = SavedSessions(self)  # File > Save / Open session, File > Recent
         self._update_actions()
