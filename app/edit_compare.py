@@ -40,10 +40,16 @@ class EditCompare(QtCore.QObject):
         self.button.setToolTip(TEXT)
         self.button.clicked.connect(self.open)
         edits.history_buttons.addWidget(self.button)
-        edits.stack.indexChanged.connect(lambda _i: self.button.setEnabled(self.can_open()))
+        edits.stack.indexChanged.connect(self._refresh)
         self.button.setEnabled(False)
         window.session.runner.succeeded.connect(self._succeeded)
         window.session.evaluated.connect(self._scored)
+
+    def _refresh(self, _index: int = 0) -> None:
+        import shiboken6
+
+        if shiboken6.isValid(self.edits.stack) and shiboken6.isValid(self.button):  # not while the window goes
+            self.button.setEnabled(self.can_open())
 
     def can_open(self) -> bool:
         """The curve has edits (the stack's position is past its start)."""
