@@ -146,7 +146,8 @@ def run(app: QtWidgets.QApplication, window: WindowApi, startup: Startup) -> int
             if startup.edits is not None and window.scene.curve is not None:  # scored once, edited
                 problems = window.replay_curve_edits(startup.edits)
                 if problems:
-                    session.auto_evaluate = session.auto_evaluate and not scripted
+                    if scripted:  # no picture of the curve unedited
+                        session.auto_evaluate = False
                     window.show_error("Edit log", problems[0])
                 elif scripted:
                     print(f"skelscope: replayed {len(startup.edits['operations'])} edit(s) of "
