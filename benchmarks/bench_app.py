@@ -111,7 +111,7 @@ def test_viewer_stale_support_stops(measure, benchmark, n):
 
 
 @pytest.mark.parametrize("edit", ["edge", "branch"])
-def test_viewer_edit_to_recoloured_frame(measure, benchmark, display, edit):
+def test_viewer_edit_to_recoloured_frame(measure, benchmark, display, tmp_path, edit):
     """Proofreading's loop in the window (docs/guide/viewer.md "Editing the curve skeleton"): an edge
     (``edge``) or a branch (``branch``) selected in edit mode, Delete pressed (the Edit menu's action,
     the real path: the engine's edit, the curve redrawn, ``Evaluation.update`` in the worker), until
@@ -129,8 +129,7 @@ def test_viewer_edit_to_recoloured_frame(measure, benchmark, display, edit):
 
     y = shapes.y_shape(100_000, seed=0)
     cloud, curve = y.cloud, CurveSkeleton.from_raw(y.curve_vertices, y.curve_edges)
-    w = MainWindow(settings=QtCore.QSettings(str(ROOT / "benchmarks" / ".bench_app.ini"),
-                                             QtCore.QSettings.Format.IniFormat))
+    w = MainWindow(settings=QtCore.QSettings(str(tmp_path / "s.ini"), QtCore.QSettings.Format.IniFormat))
     w.session.auto_evaluate = False
     w.resize(1100, 750)
     w.show()
