@@ -143,6 +143,9 @@ def _peak_rss_mb(fn: Callable):
     def read(key: str) -> float:
         return int(re.search(rf"{key}:\s+(\d+)", Path("/proc/self/status").read_text()).group(1)) / 1024
 
+    import gc
+
+    gc.collect()  # what the earlier rounds left goes before the mark is reset
     try:
         before = read("VmRSS")
         Path("/proc/self/clear_refs").write_text("5")
