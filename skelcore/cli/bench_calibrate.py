@@ -66,7 +66,7 @@ def _machine() -> str:
 
 def run_calibrate_cli(args: argparse.Namespace) -> int:
     from ..benchmark.calibration import calibration_tasks, run_calibration
-    from ..benchmark.calibration.report import fill_docs, markdown, summary_rows
+    from ..benchmark.calibration.calib_tables import fill_docs, markdown, summary_rows
     from ..compare.backends import Backend
 
     def progress(i: int, total: int, key: str, status: str) -> None:

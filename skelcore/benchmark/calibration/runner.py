@@ -115,7 +115,7 @@ def run_calibration(out: str | os.PathLike, tasks: list[Task], backend: Any, *, 
     ``rows.csv`` and ``calibration.md`` there (:func:`.report.write_report`)."""
     from ...compare.backends import run_tasks
     from ...compare.run_marker import claim_run_folder
-    from .report import write_report
+    from .calib_tables import write_report
 
     folder = claim_run_folder(out, "calibrate", force=force).path
     (folder / "tasks").mkdir(exist_ok=True)
