@@ -87,7 +87,7 @@ def run_calibrate_cli(args: argparse.Namespace) -> int:
                                  command=command, machine=_machine())
         if args.docs:
             fill_docs(args.docs, markdown(summary_rows(result.rows), command=command, machine=_machine(),
-                                          wall=result.wall, n_rows=len(result.rows)))
+                                          wall=result.wall if result.ran else 0.0, rows=result.rows))
     except SkelInputError as exc:
         print(f"skelcore: error: {exc}", file=sys.stderr)
         return 2

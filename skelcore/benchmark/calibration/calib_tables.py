@@ -89,14 +89,16 @@ def _size(suite: str, size: int) -> str:
 
 
 def markdown(summary: list[dict[str, Any]], *, command: str = "", machine: str = "", wall: float = 0.0,
-             n_rows: int = 0) -> str:
+             rows: list[dict[str, Any]] | None = None) -> str:
     """The tables: per code and density (conditions pooled), then hits / positives and false alarms /
-    negatives per scan condition."""
+    negatives per scan condition; ``wall`` (s) is named when tasks ran, the evaluations' seconds always."""
     lines = []
     if command:
-        lines.append(f"Run: `{command}`" + (f"; {machine}" if machine else "") + (f"; {wall / 60:.1f} min wall" if wall
-                                                                                   else "") +
-                     f"; {n_rows} evaluated skeletons.")
+        rows = rows or []
+        evals = sum(float(r.get("seconds") or 0.0) for r in rows)
+        lines.append(f"Run: `{command}`" + (f"; {machine}" if machine else "") +
+                     (f"; {wall / 60:.1f} min wall" if wall >= 60 else "") +
+                     f"; {len(rows)} evaluated skeletons, {evals / 60:.1f} min of evaluation summed over the workers.")
         lines.append("")
     lines += ["Precision = TP / (TP + FP), recall = TP / (TP + FN), false alarms = FP / (FP + TN), each with its "
               "Wilson 95 % interval; `-`: no case to count. Thresholds (`skelcore.Params`) were tuned on the suite "
@@ -147,7 +149,7 @@ def write_report(folder: str | os.PathLike, rows: list[dict[str, Any]], *, comma
     summary = summary_rows(rows)
     for name, text in (("rows.csv", _csv_text(rows)), ("calibration.csv", _csv_text(summary)),
                        ("calibration.md", markdown(summary, command=command, machine=machine, wall=wall,
-                                                   n_rows=len(rows)))):
+                                                   rows=rows))):
         with atomic_open(folder / name, "w") as fh:
             fh.write(text)
     return summary
