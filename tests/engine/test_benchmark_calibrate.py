@@ -72,6 +72,10 @@ def test_unknown_names_are_one_line_errors():
         calibration_tasks(["nope"])
     with pytest.raises(SkelInputError, match="unknown skeleton kind"):
         calibration_tasks(["synthetic-small"], kinds=["warts"])
+    with pytest.raises(SkelInputError, match="unknown shape"):
+        calibration_tasks(["synthetic-small"], shapes=["hammer"])
+    with pytest.raises(SkelInputError, match="cannot read"):
+        fill_docs("/nonexistent/page.md", "x")
 
 
 def test_a_tiny_run_counts_hits_and_false_alarms(tmp_path, capsys):

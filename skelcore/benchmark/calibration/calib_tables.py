@@ -162,7 +162,11 @@ def fill_docs(path: str | os.PathLike, table: str) -> None:
     from ...io.atomic import atomic_open
 
     p = Path(path)
-    text = p.read_text(encoding="utf-8")
+    try:
+        text = p.read_text(encoding="utf-8")
+    except (OSError, UnicodeDecodeError) as exc:
+        raise SkelInputError(f"cannot read the page for the tables: {exc.strerror if isinstance(exc, OSError) else exc}",
+                             p) from None
     start, end = text.find(DOC_MARKS[0]), text.find(DOC_MARKS[1])
     if start < 0 or end < start:
         raise SkelInputError("the calibration markers are missing (two lines: " + " / ".join(DOC_MARKS) + ")", p)

@@ -87,6 +87,10 @@ def calibration_tasks(suites: Sequence[str], *, sizes: Sequence[int] | None = No
     ones at ``points`` (default: the suite's), optionally fewer shapes, conditions or kinds; a
     one-line SkelInputError for an unknown name."""
     tasks = []
+    known_shapes = {x for name in suites if name in SUITES for x in SUITES[name].shapes}
+    for x in shapes or ():
+        if x not in known_shapes:
+            raise SkelInputError(f"unknown shape {x!r} for these suites (known: {', '.join(sorted(known_shapes))})")
     for name in suites:
         if name not in SUITES:
             raise SkelInputError(f"unknown suite {name!r} (known: {', '.join(SUITES)})")
