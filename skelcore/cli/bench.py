@@ -48,6 +48,9 @@ def register(subparsers: argparse._SubParsersAction) -> argparse.ArgumentParser:
     from .bench_validity import register_validity
 
     register_validity(sub)
+    from .bench_calibrate import register_calibrate
+
+    register_calibrate(sub, _sizes)
     return p
 
 

@@ -1,0 +1,179 @@
+"""The truth per warning code for one evaluated skeleton: 1 (the defect or condition is there), 0
+(it is not) or None (left out of both rates), from what the suite knows (docs/diagnostics.md
+"Precision and recall per warning").
+
+Injected kinds decide the skeleton codes (spurs: ``spurious_branches``, a chord: ``spurious_cycles``,
+a broken cycle: ``missing_cycles``, collapse 0.9: ``collapse``, another frame: ``frame``); geometry
+decides ``outside`` (how far the skeleton leaves the shape, in the nearest reference radius) and
+``incomplete`` (the reference's length farther than two radii from the skeleton); the scan decides
+the cloud codes. On a neuron, about half the traced nodes lie outside the decimated mesh: a flag on a
+branch mostly outside it is the mesh's decimation, neither a hit nor a false alarm.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+from scipy.sparse import coo_matrix
+from scipy.sparse.csgraph import connected_components
+from scipy.spatial import cKDTree
+
+from ...params import Params
+from .skeletons import Made, World
+
+__all__ = ["OUT_YES", "OUT_NO", "MISS_YES", "MISS_NO", "origin", "outside_depth", "uncovered_radii",
+           "thin_share", "row_truth"]
+
+#: ``outside`` is true from this depth out of the shape (local radii; the shortcut generator's promise)
+OUT_YES = 0.5
+#: ... and false below this depth (in between: left out)
+OUT_NO = 0.1
+#: ``incomplete`` is true when more than this length of the reference (local radii) lies farther than
+#: two radii from the skeleton, false under MISS_NO (docs/diagnostics.md "Missing parts", Calibration)
+MISS_YES, MISS_NO = 2.0, 1.0
+#: kinds that move the whole skeleton: every branch and cycle verdict on them is left out
+GLOBAL_KINDS = ("collapse", "frame", "nodes_only")
+
+
+def origin(made: Made, ref_v: np.ndarray) -> np.ndarray:
+    """Per vertex of ``made``, the reference vertex at the same place, or -1 (injected or moved)."""
+    d, i = cKDTree(ref_v).query(made.vertices)
+    tol = 1e-9 * float(np.ptp(ref_v, axis=0).max())
+    return np.where(d <= tol, i, -1)
+
+
+def _samples(v: np.ndarray, e: np.ndarray, step: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Points along each edge at most ``step`` (per edge) apart, and their edge."""
+    length = np.linalg.norm(v[e[:, 1]] - v[e[:, 0]], axis=1)
+    n = np.clip(np.ceil(length / np.maximum(step, 1e-12)).astype(int), 1, 400)
+    edge = np.repeat(np.arange(len(e)), n + 1)
+    t = np.concatenate([np.linspace(0.0, 1.0, k + 1) for k in n])
+    pts = v[e[edge, 0]] + t[:, None] * (v[e[edge, 1]] - v[e[edge, 0]])
+    return pts, edge
+
+
+def _radius_at(points: np.ndarray, w: World) -> np.ndarray:
+    return w.ref[2][cKDTree(w.ref[0]).query(points)[1]]
+
+
+def outside_depth(made: Made, w: World, orig: np.ndarray) -> float:
+    """How far the skeleton leaves the shape, in local radii (max over points along its edges). On a
+    neuron only the injected edges count: the traced nodes outside the decimated mesh are the mesh's."""
+    e = made.edges
+    if w.facts is not None:
+        e = e[(orig[e] < 0).any(axis=1)]
+        if not len(e):
+            return 0.0
+    r_v = _radius_at(made.vertices, w)
+    pts, _ = _samples(made.vertices, e, 0.25 * np.minimum(r_v[e[:, 0]], r_v[e[:, 1]]))
+    depth = np.asarray(w.depth(pts), float) / _radius_at(pts, w)
+    depth = np.where(np.isfinite(depth), depth, 1e9)  # +inf: beyond the distance's reach, far out
+    return float(depth.max()) if len(depth) else 0.0
+
+
+def uncovered_radii(made: Made, w: World) -> float:
+    """The reference's length (in its local radii) farther than two local radii from the skeleton;
+    on a neuron only along nodes inside the mesh or within one radius of it (the cloud shows them)."""
+    rv, re, rr = w.ref
+    ref_pts, edge = _samples(rv, re, 0.5 * np.minimum(rr[re[:, 0]], rr[re[:, 1]]))
+    seg = np.linalg.norm(rv[re[:, 1]] - rv[re[:, 0]], axis=1)
+    per_edge = np.bincount(edge, minlength=len(re))
+    weight = seg[edge] / np.maximum(per_edge[edge], 1)
+    near = cKDTree(rv).query(ref_pts)[1]
+    r = rr[near]
+    r_made = _radius_at(made.vertices, w)
+    pts, _ = _samples(made.vertices, made.edges, 0.25 * np.minimum(r_made[made.edges[:, 0]], r_made[made.edges[:, 1]]))
+    if not len(pts):
+        pts = made.vertices
+    d = cKDTree(pts).query(ref_pts)[0]
+    far = d > 2.0 * r
+    if w.facts is not None:
+        far &= np.asarray(w.facts.outside_radii)[near] <= 1.0
+    return float(np.sum(weight[far] / r[far]))
+
+
+def thin_share(w: World, params: Params) -> float:
+    """The share of surface points on a part fewer than ``open_resolved_diameter`` spacings across
+    (2 x its local radius over the cloud's spacing there, 16 nearest neighbours)."""
+    ok = np.isfinite(w.local_radius)
+    pts = w.cloud[ok]
+    tree = cKDTree(pts)
+    nn = tree.query(pts, k=2, workers=-1)[0][:, 1]
+    idx = tree.query(pts, k=16, workers=-1)[1]
+    spacing = np.median(nn[idx], axis=1)
+    return float(np.mean(2.0 * w.local_radius[ok] / spacing < float(params.open_resolved_diameter)))
+
+
+def _decimation_only(flag: np.ndarray, branch: np.ndarray | None, orig: np.ndarray, w: World) -> bool:
+    """True when every flagged branch lies mostly on traced nodes outside the mesh (a neuron's)."""
+    if w.facts is None or not flag.any() or branch is None:
+        return False
+    inside = np.asarray(w.facts.inside, bool)
+    for b in np.unique(branch[flag]):
+        members = (branch == b) if b >= 0 else flag
+        known = orig[members & (orig >= 0)]
+        if not len(known) or np.mean(inside[known]) >= 0.5:
+            return False
+    return True
+
+
+def _spurs_located(made: Made, orig: np.ndarray, flag: np.ndarray | None) -> bool | None:
+    """Every injected spur (a component of the injected vertices) has a flagged vertex."""
+    if flag is None:
+        return None
+    new = np.flatnonzero(orig < 0)
+    e = made.edges[(orig[made.edges] < 0).all(axis=1)]
+    n = len(made.vertices)
+    g = coo_matrix((np.ones(len(e)), (e[:, 0], e[:, 1])), shape=(n, n))
+    _, comp = connected_components(g, directed=False)
+    return all(flag[new[comp[new] == c]].any() for c in np.unique(comp[new]))
+
+
+def row_truth(made: Made, w: World, condition: str, fired: set[str], arrays: dict[str, np.ndarray],
+              first: bool, params: Params = Params()) -> dict[str, Any]:
+    """Truth per code (``truth_{code}``: 1, 0 or None) and the facts behind it for one skeleton;
+    ``first``: the cloud's first (intact) skeleton, the only one counted for the cloud codes."""
+    from ...diagnostics.record import DEFECT_BITS
+
+    k = made.kind
+    orig = origin(made, w.ref[0])
+    vflags = arrays.get("curve_vertex_defects")
+    if vflags is not None and len(vflags) != len(made.vertices):
+        vflags = None
+    branch = arrays.get("curve_vertex_branch")
+    branch = branch if branch is not None and len(branch) == len(made.vertices) else None
+    t: dict[str, Any] = {}
+    skeleton_ok = k not in GLOBAL_KINDS and k != "no_correspondence"
+    t["spurious_branches"] = (1 if k == "spurs" else 0) if skeleton_ok else None
+    t["spurious_cycles"] = None if not skeleton_ok or k == "shortcut" else int(k == "chord_cycle")
+    t["missing_cycles"] = int(k == "broken_cycle") if skeleton_ok else None
+    depth = outside_depth(made, w, orig) if k not in ("frame", "no_correspondence") else float("nan")
+    t["outside"] = None if not np.isfinite(depth) else (1 if depth >= OUT_YES else 0 if depth <= OUT_NO else None)
+    missing = uncovered_radii(made, w) if k not in ("frame", "no_correspondence") else float("nan")
+    t["incomplete"] = None if not np.isfinite(missing) else (
+        1 if missing > MISS_YES else 0 if missing < MISS_NO else None)
+    t["collapse"] = int(k == "collapse")
+    t["frame"] = int(k == "frame")
+    if first:
+        thin = thin_share(w, params)
+        t["outliers"] = int(condition == "outliers")
+        t["open_surface"] = int(condition == "views") if (w.closed or condition == "views") else None
+        t["thin_parts"] = 1 if thin >= params.thin_min_share else 0 if thin < 0.5 * params.thin_min_share else None
+        t["sparse_boundedness"] = int(condition == "nonuniform")
+    else:
+        thin = float("nan")
+        t.update(dict.fromkeys(("outliers", "open_surface", "thin_parts", "sparse_boundedness")))
+    deg = np.bincount(made.edges.ravel(), minlength=len(made.vertices))
+    t["trivial_smoothness"] = int(not (deg == 2).any())
+    t["no_correspondence"] = int(made.skeletal is not None)
+    located = None
+    for code, bit in (("spurious_branches", DEFECT_BITS["spurious_branches"]), ("outside", DEFECT_BITS["outside"])):
+        if t[code] == 0 and code in fired and vflags is not None and \
+                _decimation_only((vflags & bit) > 0, branch, orig, w):
+            t[code] = None  # the mesh lost the twig: the cloud does not show it
+    if k == "spurs" and "spurious_branches" in fired:
+        located = _spurs_located(made, orig, None if vflags is None else (vflags & DEFECT_BITS["spurious_branches"]) > 0)
+    out = {f"truth_{c}": v for c, v in t.items()}
+    out.update(outside_depth=depth, uncovered_radii=missing, thin_share=thin, spurs_located=located)
+    return out
