@@ -42,9 +42,10 @@ def lod_order(n: int, keep: int = LOD_POINTS) -> np.ndarray:
 
 
 class DetailLevel:
-    """The twins' point count, chosen from the measured time of the frames drawn while moving: a
-    frame over FRAME_BUDGET_S steps down the ladder as far as its excess asks, one well under it
-    (a third) steps up one. The count is kept between drags: the next drag starts where this ended."""
+    """The twins' point count, chosen from measured frame times: the first drag over new data starts
+    from the last full-detail frame's cost a point (:meth:`fit`); then a frame drawn while moving over
+    FRAME_BUDGET_S steps down the ladder as far as its excess asks, one well under it (a third) steps
+    up one. The count is kept between drags: the next drag starts where this one ended."""
 
     def __init__(self, ladder: tuple[int, ...] = LOD_LADDER, budget_s: float = FRAME_BUDGET_S) -> None:
         self.ladder = tuple(ladder)
@@ -54,6 +55,15 @@ class DetailLevel:
     @property
     def points(self) -> int:
         return self.ladder[self.step]
+
+    def fit(self, seconds: float, points: int, twins: int) -> None:
+        """Start from a full-detail frame of ``points`` points that took ``seconds``: the largest count
+        whose ``twins`` twins would be drawn within the budget at that cost a point."""
+        if points <= 0 or seconds <= 0 or twins <= 0:
+            return
+        per_point = seconds / points
+        fits = [i for i, n in enumerate(self.ladder) if n * twins * per_point <= self.budget_s]
+        self.step = fits[0] if fits else len(self.ladder) - 1
 
     def frame_took(self, seconds: float) -> bool:
         """Account for a moving frame of ``seconds``; True when the count changed."""

@@ -59,6 +59,8 @@ class SceneView:
         self.moving = False  # the camera is being moved: level-of-detail twins shown
         self.detail = DetailLevel()  # how many points the twins draw
         self._moving_frames = 0  # frames begun since the camera started moving
+        self._full_points = 0  # points of the big layers in the last frame begun at full detail
+        self._detail_fitted = False  # the twins' count was set from a full-detail frame of this data
         self._frames = FrameScheduler(self.plotter)  # also sets plotter.on_frame
         self.plotter.before_frame = self._before_frame
         self.on_pick: Callable[[dict[str, Any] | None], None] | None = None
@@ -138,6 +140,8 @@ class SceneView:
             if not self.moving:
                 self._set_moving(True)
                 self._frames.after_frame(lambda: self._set_moving(False))  # requests the full frame
+        self._full_points = 0 if self.moving else sum(
+            len(self._sources[k]) for k in self._lod if self._actors[k].GetVisibility())
 
     def rebuild(self) -> None:
         for name in ("cloud", "skeletal", "curve"):
@@ -206,6 +210,7 @@ class SceneView:
                                                               spheres=False)  # flat discs while moving
                 self._meshes[f"{key}-lod"] = twin
                 self._lod[key] = idx
+                self._detail_fitted = False  # new big data: its first drag starts from its full frame's cost
                 self._apply_detail(key)
         if values is not None:
             values = np.asarray(values, dtype=float)
@@ -288,6 +293,12 @@ class SceneView:
                 continue
             self._actors[key].SetVisibility(self._shown(key, layer))
             self._actors[f"{key}-lod"].SetVisibility(self._shown(f"{key}-lod", layer))
+        if moving and self._full_points and not self._detail_fitted:
+            # the first drag over this data: from the last full-detail frame's cost a point
+            shown = sum(1 for k in self._lod if self._actors[f"{k}-lod"].GetVisibility())
+            self.detail.fit(self.plotter.frame_seconds, self._full_points, shown)
+            self._detail_fitted = True
+            self._apply_detail()
         if self._lod and not moving:
             self.request_render()  # the full-detail frame once the camera rests
 

@@ -242,10 +242,15 @@ def test_the_twins_draw_fewer_points_when_moving_frames_run_over_budget(window, 
     assert level.frame_took(FRAME_BUDGET_S * 3.5) and level.points == 2000  # 3.5x over: two halvings
     assert not level.frame_took(FRAME_BUDGET_S / 2) and level.points == 2000
     assert level.frame_took(FRAME_BUDGET_S / 5) and level.points == 4000
+    level.fit(FRAME_BUDGET_S * 10, 80_000, 2)  # 2 twins of 8000 would take 2 budgets; 2 of 4000 one
+    assert level.points == 4000
+    level.fit(FRAME_BUDGET_S * 1000, 80_000, 2)
+    assert level.points == 1000  # the smallest when none fits
     monkeypatch.setattr(scene_view, "LOD_POINTS", 2000)
     window.scene.set_cloud(shapes.sphere_surface(10000, seed=1))
     view = window.view
     view.detail = DetailLevel(ladder=(2000, 1000, 500))
+    view._detail_fitted = True  # the step rule alone (a full frame's fit is checked above)
     twin = view._meshes["cloud-lod"]
     assert twin.n_points == 2000 and twin.n_verts == 2000
     view._set_moving(True)
