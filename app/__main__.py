@@ -1,4 +1,4 @@
-"""``skelscope [CLOUD] [--skeletal F] [--curve F] [--session F] [--metric NAME] [--screenshot OUT.png] [--camera F]
+"""``skelscope [CLOUD] [--skeletal F] [--curve F [--edits LOG.json]] [--session F] [--metric NAME] [--screenshot OUT.png] [--camera F]
 [--size W H] [--background white|black|transparent] [--quit]`` (and the A/B view: ``--skeleton-b F``, or
 ``--compare-run DIR --a METHOD --b METHOD [--dataset NAME]``)
 
@@ -39,6 +39,9 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--curve", metavar="F", help="curve skeleton (a file with edges)")
     p.add_argument("--session", metavar="F", help="a session saved by File > Save session (files, settings, "
                    "display, camera, picked element); instead of CLOUD, --skeletal, --curve")
+    p.add_argument("--edits", metavar="LOG.json", help="an edit log (Save skeleton as…'s NAME.edits.json, "
+                   "skelcore edit's --ops) replayed on --curve before it is scored, as undoable edits; a log made "
+                   "for another skeleton is refused")
     p.add_argument("--metric", choices=METRIC_CHOICES, default=None,
                    help="local metric to colour by (default: the session's, else boundedness)")
     p.add_argument("--screenshot", metavar="OUT.png", help="save the 3D view as PNG once evaluated")

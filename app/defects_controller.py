@@ -9,10 +9,14 @@ A row's context menu, and a button under the table for the selected row, offer i
 Evaluate > Next defect (N) and Previous defect (Shift+N) walk the rows, wrapping around; a row's context
 menu marks it "fixed", "accepted" or "ignored" (:data:`MARKS`), shown in the table's mark column and kept
 by :func:`mark_key` across evaluations, in saved sessions and in the saved edit log ("defect_marks").
+Marks belong to the skeleton they were made for (:meth:`DefectsController.skeleton_key`: the cloud,
+skeletal set and curve as loaded; an edit keeps the skeleton): another skeleton or cloud starts
+unmarked, and reopening one brings its marks back.
 """
 
 from __future__ import annotations
 
+import os
 from typing import Any, Callable
 
 from PySide6 import QtCore, QtWidgets
@@ -59,6 +63,13 @@ class DefectsController(QtCore.QObject):
         self.marks: dict[str, str] = {}
         self.keys: list[str] = []
         self._shown_ev: Any = None
+        #: ``is_edit() -> bool``: the layer change under way is an edit of the shown curve (the window
+        #: sets it to the edit controller's), which keeps the skeleton and so its marks
+        self.is_edit: Callable[[], bool] = lambda: False
+        self._ids: dict[str, str] = {}  # role -> the identity of its layer as loaded (skeleton_key)
+        self._serial = 0  # numbers data loaded without a file (each one another skeleton)
+        self._skeleton: tuple[str, ...] = self.skeleton_key()
+        self._kept: dict[tuple[str, ...], dict[str, str]] = {}  # the marks of skeletons shown before
         dock = window.add_dock("Defects", self.panel, RIGHT)
         main = window.widget
         main.tabifyDockWidget(window.docks["Barcodes"], dock)
@@ -85,7 +96,38 @@ class DefectsController(QtCore.QObject):
         self.scene.subscribe(self._on_scene)
         self.refresh()
 
+    def skeleton_key(self) -> tuple[str, ...]:
+        """The skeleton shown, as its marks know it: per role (cloud, skeletal, curve), its file, or a
+        number for data loaded without one; "" for no layer."""
+        return tuple(self._ids.get(role, "") for role in ("cloud", "skeletal", "curve"))
+
+    def _layer_changed(self, role: str) -> None:
+        """A layer loaded, replaced or closed: unless an edit, the marks go with the skeleton they were
+        made for (kept aside) and the new skeleton's come back (none if never marked)."""
+        layer = self.scene.layers.get(role)
+        if role == "curve" and layer is not None and self.is_edit():
+            return
+        if layer is None:
+            self._ids.pop(role, None)
+        elif layer.path:
+            self._ids[role] = os.path.abspath(layer.path)
+        else:
+            self._serial += 1
+            self._ids[role] = f"#{self._serial}"
+        key = self.skeleton_key()
+        if key == self._skeleton:
+            return
+        if self.marks:
+            self._kept[self._skeleton] = dict(self.marks)
+        else:
+            self._kept.pop(self._skeleton, None)
+        self._skeleton = key
+        self.marks = dict(self._kept.get(key, {}))
+        self.panel.set_marks(self._row_marks())
+
     def _on_scene(self, event: SceneEvent) -> None:
+        if event.kind == "layer" and event.layer in ("cloud", "skeletal", "curve"):
+            self._layer_changed(event.layer)
         # a result set again (even the same one) clears the picks and marks: the highlight goes too
         if event.kind == "quantities" or (event.kind == "layer" and self.scene.evaluation is not self._shown_ev):
             self.refresh()
@@ -137,7 +179,8 @@ class DefectsController(QtCore.QObject):
         self.panel.set_marks(self._row_marks())
 
     def set_marks(self, marks: dict[str, str]) -> None:
-        """Marks as saved (a session): kept whole until the next evaluation, which keeps those it has."""
+        """Marks as saved (a session) for the skeleton shown: kept whole until the next evaluation,
+        which keeps those it has."""
         self.marks = {str(k): str(v) for k, v in marks.items() if v in MARKS}
         if self.scene.evaluation is not None and not self.window.session.runner.running:
             self.marks = {k: v for k, v in self.marks.items() if k in self.keys}

@@ -6,7 +6,8 @@ two vertices picked are kept for Join. Delete deletes the selected edge or verte
 branch, Shift+Delete deletes the picked vertex itself, "Cut cycle here" removes the selected edge of a
 cycle, Join adds the edge between the last two vertices picked, Ctrl+drag moves a curve vertex. Each edit is one :class:`EditCommand` on
 a QUndoStack (Ctrl+Z, Ctrl+Shift+Z) holding the curve before and after and the engine's changes
-(:mod:`skelcore.edit`), listed in the History dock; applying one shows the new curve and scores it
+(:mod:`skelcore.edit`), listed in the History dock (its button opens the loaded curve against the
+edited one in the A/B view, :mod:`skelscope.edit_compare`); applying one shows the new curve and scores it
 again in the worker (:meth:`skelscope.session.Session.show_edited_curve`: ``Evaluation.update`` when
 the shown evaluation is of the curve before). File > Save skeleton as… writes the edited curve (the
 format by its suffix) and its edit log beside it (``NAME.edits.json``).
@@ -76,7 +77,13 @@ class EditController(QtCore.QObject):
         view = QtWidgets.QUndoView(self.stack)
         view.setEmptyLabel("loaded curve")
         self.history = view
-        dock = window.add_dock("History", view, RIGHT)
+        box = QtWidgets.QWidget()  # the list, and a row of buttons under it (history_buttons)
+        layout = QtWidgets.QVBoxLayout(box)
+        layout.setContentsMargins(0, 0, 0, 0)
+        layout.addWidget(view)
+        self.history_buttons = QtWidgets.QHBoxLayout()
+        layout.addLayout(self.history_buttons)
+        dock = window.add_dock("History", box, RIGHT)
         if "Defects" in window.docks:  # a tab beside the Defects dock (a small screen has no room for another)
             window.widget.tabifyDockWidget(window.docks["Defects"], dock)
         if "Barcodes" in window.docks:
@@ -107,6 +114,11 @@ class EditController(QtCore.QObject):
         self.scene.subscribe(self._on_scene)
 
     # ---- state ----------------------------------------------------------------------------
+    @property
+    def applying(self) -> bool:
+        """The curve is being replaced by an edit, its undo or its redo (the same skeleton, edited)."""
+        return self._applying
+
     def _can_edit(self) -> bool:
         return self.active and self.scene.curve is not None
 

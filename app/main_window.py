@@ -129,6 +129,7 @@ class MainWindow(QtWidgets.QMainWindow):
         from .compare_run import RunBrowser
         from .compare_view import CompareController
         from .defects_controller import DefectsController
+        from .edit_compare import EditCompare
         from .edit_controller import EditController
         from .saved_sessions import SavedSessions
         from .support_controller import SupportController
@@ -138,8 +139,10 @@ class MainWindow(QtWidgets.QMainWindow):
         self.defects = DefectsController(self)  # the Defects dock, the defects in 3-D, a clicked branch
         self.edits = EditController(self)  # Edit mode, undo / redo, History dock, File > Save skeleton as
         self.defects.row_actions = self.edits.row_actions  # a Defects row's "Prune this branch", ...
+        self.defects.is_edit = lambda: self.edits.applying  # an edit keeps the skeleton's marks
         self.viewpoints = ViewpointController(self)  # Evaluate > Viewpoint from the camera / typed
         self.compare = CompareController(self)  # File > Compare with a second skeleton (B)
+        self.edit_compare = EditCompare(self, self.edits)  # Edit > the loaded curve against the edited one (A/B)
         self.compare_run = RunBrowser(self)  # File > Open comparison run, and drops of a run
         self.saved_sessions = SavedSessions(self)  # File > Save / Open session, File > Recent
         self._update_actions()

@@ -1,9 +1,10 @@
 """The viewer started with inputs from the command line, and its scripted mode (``--screenshot``, ``--quit``).
 
 :func:`check_arguments` reads every input the options name (camera file, saved session, a compare
-run's stored results, skeleton B) before any window opens, so bad input is one line and exit 2.
+run's stored results, skeleton B, edit log) before any window opens, so bad input is one line and exit 2.
 :func:`run` sizes the 3D view (``--size W H``, else for ``--screenshot`` the camera's or session's saved view size,
-so a saved camera frames the data as it did; a window for the user keeps fitting the screen), loads the inputs or restores the session into the window,
+so a saved camera frames the data as it did; a window for the user keeps fitting the screen), loads the inputs
+(with ``--edits``, the edit log replayed on the curve before it is scored) or restores the session into the window,
 starts the A/B view (``--skeleton-b``, ``--compare-run``), waits for the evaluation, saves the picture
 (``--scale``, ``--background``) and prints the scores; scripted (``--quit``) it closes the window and
 returns the exit status: 0 on success, 2 on bad input, 1 on a bug (an uncaught exception). It uses the
@@ -42,6 +43,7 @@ class Startup:
     ab: tuple[str, Any] | None
     session: Any = None  # app.session_file.SessionState of --session
     view_size: tuple[int, int] | None = None  # --size, else (--screenshot) the camera's or the session's saved one
+    edits: dict[str, Any] | None = None  # --edits: the edit log, checked against --curve
 
     @property
     def scripted(self) -> bool:
@@ -86,7 +88,28 @@ def check_arguments(args: argparse.Namespace) -> Startup:
     # a saved view size frames a --screenshot as it was framed; a window for the user fits their screen
     view_size = tuple(args.size) if args.size else (tuple(saved["view_size"]) if args.screenshot and saved
                                                      and saved.get("view_size") else None)
-    return Startup(args, camera, _ab_inputs(args), session, view_size)
+    return Startup(args, camera, _ab_inputs(args), session, view_size, _edit_log(args))
+
+
+def _edit_log(args: argparse.Namespace) -> dict[str, Any] | None:
+    """--edits read and replayed once on --curve: a log that is not one, made for another skeleton or
+    with an operation that does not apply is one line naming the log (SkelInputError)."""
+    if not args.edits:
+        return None
+    if not args.curve:
+        raise ValueError("--edits LOG.json goes with --curve C, the curve skeleton it was made for")
+    import skelcore.edit as edit
+    from skelcore.errors import SkelInputError
+    from skelcore.io import load_curve
+
+    log = edit.read_log(args.edits)
+    try:
+        edit.replay(load_curve(args.curve), log)
+    except SkelInputError as exc:
+        if exc.path is not None:  # the curve's own file
+            raise
+        raise SkelInputError(f"{exc} (--curve {args.curve})", args.edits) from None
+    return log
 
 
 def run(app: QtWidgets.QApplication, window: WindowApi, startup: Startup) -> int | None:
@@ -120,6 +143,15 @@ def run(app: QtWidgets.QApplication, window: WindowApi, startup: Startup) -> int
             for role, path in (("cloud", args.cloud), ("skeletal", args.skeletal), ("curve", args.curve)):
                 if path and not session.load_as(role, path) and scripted:
                     session.auto_evaluate = False
+            if startup.edits is not None and window.scene.curve is not None:  # scored once, edited
+                problems = window.replay_curve_edits(startup.edits)
+                if problems:
+                    if scripted:  # no picture of the curve unedited
+                        session.auto_evaluate = False
+                    window.show_error("Edit log", problems[0])
+                elif scripted:
+                    print(f"skelscope: replayed {len(startup.edits['operations'])} edit(s) of "
+                          f"{os.path.basename(args.edits)} on {os.path.basename(args.curve)}")
     if args.metric:
         window.scene.set_metric(args.metric)
     if camera is not None:

@@ -21,7 +21,7 @@ from .worker import TaskRunner
 
 __all__ = ["Session", "preload_engine", "PROCESS_FROM"]
 
-_UPDATE_LOCK = threading.Lock()  # Evaluation.update runs one at a time (Session.show_edited_curve)
+UPDATE_LOCK = threading.Lock()  # Evaluation.update runs one at a time (Session.show_edited_curve)
 
 PROCESS_FROM = 200_000
 """Evaluations of at least this many points (cloud + skeletal set) run in a child process
@@ -523,7 +523,7 @@ class Session(QtCore.QObject):
             progress(0.0, "scoring the edited curve")
             # one update at a time: a dropped one (an edit came meanwhile) still runs to its end in its
             # thread and shares the evaluation's caches; the next waits for it here, not in the window
-            with _UPDATE_LOCK:
+            with UPDATE_LOCK:
                 if cancel():
                     raise Cancelled("the edited curve's scoring was cancelled")
                 return base.update(curve)

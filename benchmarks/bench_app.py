@@ -7,6 +7,7 @@ phases (imports, window, loaded, first frame; seconds from the launch) are in ex
 The camera (``large``): a window showing a 1M cloud with its 1M skeletal set is rotated by real
 mouse events on the view (press, moves, release): one frame while the button is down, and the
 release to the full-detail frame; frames are counted at the render window's EndEvent.
+Editing: Delete on a curve of the 100k Y, to the frame recoloured by its new scores (see its case).
 Needs a display: pytest-xvfb starts Xvfb for the run when it is installed (software OpenGL);
 without DISPLAY the cases are skipped."""
 
@@ -131,6 +132,82 @@ def test_viewer_stale_support_stops(measure, benchmark, n):
     measure(cancel, rounds=5, setup=start)
     assert delivered == []  # no stale result
     benchmark.extra_info.update(n_points=n, whole_support_s=round(whole, 3))
+
+
+@pytest.mark.parametrize("edit", ["edge", "branch"])
+def test_viewer_edit_to_recoloured_frame(measure, benchmark, display, tmp_path, edit):
+    """Proofreading's loop in the window (docs/guide/viewer.md "Editing the curve skeleton"): an edge
+    (``edge``) or a branch (``branch``) selected in edit mode, Delete pressed (the Edit menu's action,
+    the real path: the engine's edit, the curve redrawn, ``Evaluation.update`` in the worker), until
+    the frame recoloured by the new scores is painted. The Y of 100k points (curve only) and the edits
+    of bench_edit.py (its edge 5, its branch 0), whose ``update`` alone that module times. ``scored_s``:
+    until the scores landed; the rest is the recolouring and its frame. Each round starts from the
+    loaded curve again (Ctrl+Z, untimed). The goal: 0.15 s."""
+    from PySide6 import QtCore, QtWidgets
+
+    from skelscope.main_window import MainWindow
+
+    app = QtWidgets.QApplication.instance() or QtWidgets.QApplication(["bench"])
+    from skelcore import shapes
+    from skelcore.curve import CurveSkeleton
+
+    y = shapes.y_shape(100_000, seed=0)
+    cloud, curve = y.cloud, CurveSkeleton.from_raw(y.curve_vertices, y.curve_edges)
+    w = MainWindow(settings=QtCore.QSettings(str(tmp_path / "s.ini"), QtCore.QSettings.Format.IniFormat))
+    w.session.auto_evaluate = False
+    w.resize(1100, 750)
+    w.show()
+    rendered: list[float] = []
+    w.view.plotter.ren_win.AddObserver("EndEvent", lambda *a: rendered.append(time.perf_counter()))
+    landed: list[float] = []
+    w.session.evaluated.connect(lambda _ev: landed.append(time.perf_counter()))
+
+    def idle(until: float = 600.0) -> None:
+        deadline = time.perf_counter() + until
+        while (w.session.runner.running or w.view.render_pending) and time.perf_counter() < deadline:
+            app.processEvents()
+            time.sleep(0.002)
+        app.processEvents()
+
+    try:
+        w.session.show_arrays(cloud, None, curve)
+        assert w.session.start_evaluation()
+        idle()
+        assert w.scene.evaluation is not None, w.errors
+        w.edits.set_active(True)
+        delete = w.actions_by_name["edit_delete"]
+
+        def setup():
+            if w.edits.stack.index():
+                w.actions_by_name["undo"].trigger()  # the loaded curve, its evaluation kept by the step
+            idle()
+            if edit == "edge":  # what a pick on the edge's samples selects
+                w.edits.select("edge", tuple(int(v) for v in curve.edges[5]))
+            else:  # a pick on a vertex of branch 0
+                w.edits.select("branch", 0)
+            idle()
+            landed.clear()
+            return (), {}
+
+        def press_delete():
+            t0 = time.perf_counter()
+            delete.trigger()
+            while time.perf_counter() - t0 < 600:
+                app.processEvents()
+                if landed and [t for t in rendered if t > landed[0]] and not w.view.render_pending:
+                    break
+                time.sleep(0.001)
+            assert landed, w.errors
+            scored.append(landed[0] - t0)
+
+        scored: list[float] = []
+        measure(press_delete, rounds=5, setup=setup)
+        assert w.edits.last_scoring == "update" and w.scene.curve.curve.n_edges < curve.n_edges
+    finally:
+        w.session.runner.shutdown()
+        w.close()
+    benchmark.extra_info.update(n_points=len(cloud), edit=edit, display=display,
+                                scored_s=round(sorted(scored)[len(scored) // 2], 4), goal_s=0.15)
 
 
 class _Drag:

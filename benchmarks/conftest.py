@@ -134,6 +134,33 @@ def measure(benchmark, request) -> Callable:
     return run
 
 
+def _peak_rss_mb(fn: Callable):
+    """``(fn(), peak MB, MB before)``: the process's resident-set high-water mark while ``fn`` runs
+    (Linux: ``VmHWM`` of /proc/self/status, reset by writing 5 to /proc/self/clear_refs), and its
+    resident set before; (fn(), None, None) where the kernel does not offer it."""
+    import re
+
+    def read(key: str) -> float:
+        return int(re.search(rf"{key}:\s+(\d+)", Path("/proc/self/status").read_text()).group(1)) / 1024
+
+    import gc
+
+    gc.collect()  # what the earlier rounds left goes before the mark is reset
+    try:
+        before = read("VmRSS")
+        Path("/proc/self/clear_refs").write_text("5")
+    except OSError:
+        return fn(), None, None
+    out = fn()
+    return out, round(read("VmHWM"), 1), round(before, 1)
+
+
+@pytest.fixture
+def peak_rss_mb() -> Callable:
+    """``peak_rss_mb(fn)`` -> (fn(), peak MB, MB before): see :func:`_peak_rss_mb`."""
+    return _peak_rss_mb
+
+
 # ---- inputs ------------------------------------------------------------------------------------------
 
 

@@ -52,7 +52,8 @@ class Outliers:
                 "centre_shift": float(self.centre_shift), "spacing": float(self.spacing)}
 
 
-def find_outliers(cloud: np.ndarray, params: Params = Params(), *, checkpoint: Checkpoint = no_checkpoint) -> Outliers:
+def find_outliers(cloud: np.ndarray, params: Params = Params(), *, checkpoint: Checkpoint = no_checkpoint,
+                  tree: cKDTree | None = None) -> Outliers:
     """The outliers of ``cloud`` (module docstring) and how far they move the normalization of docs/metrics.md 0.
 
     The spacing (median nearest-neighbour distance) and the statistical test's yardstick come from one
@@ -74,7 +75,8 @@ def find_outliers(cloud: np.ndarray, params: Params = Params(), *, checkpoint: C
     k = int(params.outlier_k)
     if n <= max(m, k) + 1:
         return Outliers(np.zeros(0, np.int64), n, 1.0, 0.0)
-    tree = kd_tree(cloud, checkpoint, 0.0)  # sliding midpoint: half the build time, the same distances
+    if tree is None:  # sliding midpoint: half the build time, the same distances
+        tree = kd_tree(cloud, checkpoint, 0.0)
     checkpoint(0.1)
     sample = np.arange(n) if n <= REFERENCE_SAMPLE else np.random.default_rng(0).choice(n, REFERENCE_SAMPLE, replace=False)
     near = tree.query(cloud[sample], k=k + 1, workers=query_workers(len(sample)))[0]
@@ -114,24 +116,25 @@ def find_outliers(cloud: np.ndarray, params: Params = Params(), *, checkpoint: C
 
 
 def isolated_rows(points: np.ndarray, spacing: float, params: Params = Params(),
-                  checkpoint: Checkpoint = no_checkpoint, cloud: np.ndarray | None = None) -> np.ndarray:
+                  checkpoint: Checkpoint = no_checkpoint, cloud: np.ndarray | None = None,
+                  cloud_tree: cKDTree | None = None) -> np.ndarray:
     """Rows of ``points`` (a skeletal set) with fewer than ``outlier_min_neighbours`` other points within
     ``outlier_skeletal_radius`` x ``spacing`` (the radius test with the cloud's spacing as yardstick) and,
     given the ``cloud`` in pointwise correspondence, also within that many x the cloud's local spacing at
     its row (:func:`local_spacing`; a sparsely sampled part contracts to a sparse skeletal set), and that
     lies no farther from its cloud row than the other skeletal points do (else the contraction flung a
-    surface point off: the skeleton's defect, which the diagnostics judge, not a stray of the scan)."""
+    surface point off: the skeleton's defect, which the diagnostics judge, not a stray of the scan).
+    ``cloud_tree``: the cloud's kd-tree when the caller has one (:func:`find_outliers`' own)."""
     points = np.asarray(points, dtype=float)
     m = int(params.outlier_min_neighbours)
     if len(points) <= m or not spacing > 0:
         return np.zeros(0, np.int64)
     radius = float(params.outlier_skeletal_radius) * spacing
-    rows = sparse_rows(points, radius, m, checkpoint)  # a contracted set: ~8 % of the rows asked
+    rows, skel_tree = _sparse_rows_and_tree(points, radius, m, checkpoint)  # a contracted set: ~8 % asked
     if len(rows) and cloud is not None and len(cloud) == len(points):
         cloud = np.asarray(cloud, dtype=float)
-        tree = cKDTree(cloud)
+        tree = kd_tree(cloud, checkpoint, 0.0) if cloud_tree is None else cloud_tree
         local = local_spacing(cloud, cloud[rows], int(params.outlier_local_k), tree)
-        skel_tree = cKDTree(points)
         d_m = skel_tree.query(points[rows], k=m + 1, workers=-1)[0][:, m]
         moved = np.linalg.norm(points[rows] - cloud[rows], axis=1)
         to_skeleton = skel_tree.query(cloud[rows], k=2, workers=-1)[0]  # its own image may be the nearest
@@ -164,16 +167,22 @@ def sparse_rows(points: np.ndarray, radius: float, others: int, checkpoint: Chec
     of the tree: on a clean 1M-point scan about 5 % of the rows, on a contracted set 8 %, so a kNN pass
     over every row (~1.5 CPU s) becomes a sort, the tree's build and a short pass.  Every row is asked
     where the cells cannot be numbered in 63 bits (a stray point very far away)."""
+    return _sparse_rows_and_tree(points, radius, others, checkpoint, tree)[0]
+
+
+def _sparse_rows_and_tree(points: np.ndarray, radius: float, others: int, checkpoint: Checkpoint = no_checkpoint,
+                          tree: cKDTree | None = None) -> tuple[np.ndarray, cKDTree | None]:
+    """:func:`sparse_rows` and the points' kd-tree it built or was given (None: no row needed it)."""
     points = np.asarray(points, dtype=float).reshape(-1, 3)
     ask = np.flatnonzero(~_crowded(points, radius, others, checkpoint))
     checkpoint(0.0)
     if len(ask) == 0:
-        return np.zeros(0, np.int64)
+        return np.zeros(0, np.int64), tree
     tree = kd_tree(points, checkpoint, 0.0) if tree is None else tree  # polled: 1M points held a cancel 0.6 s
     checkpoint(0.0)
     order = leaf_order(tree) if len(ask) == len(points) else None  # cache-warm when every row is asked
     d, _ = timed_query(tree, points[ask], others + 1, checkpoint, order=order)
-    return ask[d[:, others] > radius].astype(np.int64)
+    return ask[d[:, others] > radius].astype(np.int64), tree
 
 
 def _crowded(points: np.ndarray, radius: float, others: int, checkpoint: Checkpoint = no_checkpoint) -> np.ndarray:

@@ -14,7 +14,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..geometry import Checkpoint, no_checkpoint
+from ..geometry import Checkpoint, kd_tree, no_checkpoint
 from ..params import Params
 from .outliers import Outliers, find_outliers, isolated_rows
 
@@ -35,8 +35,10 @@ class Strays:
 def find_strays(cloud: np.ndarray, skeletal: np.ndarray | None, params: Params = Params(), *,
                 pointwise: bool = False, checkpoint: Checkpoint = no_checkpoint) -> Strays:
     """The cloud's outliers and, for a skeletal set in pointwise correspondence, its isolated points."""
-    found = find_outliers(cloud, params, checkpoint=checkpoint)
-    iso = (isolated_rows(skeletal, found.spacing, params, lambda f: checkpoint(1.0), cloud=cloud)
+    cloud = np.asarray(cloud, dtype=float)
+    tree = kd_tree(cloud, checkpoint, 0.0) if len(cloud) > 1 else None  # one tree for both tests
+    found = find_outliers(cloud, params, checkpoint=checkpoint, tree=tree)
+    iso = (isolated_rows(skeletal, found.spacing, params, lambda f: checkpoint(1.0), cloud=cloud, cloud_tree=tree)
            if skeletal is not None and pointwise else np.zeros(0, np.int64))
     return Strays(found, iso)
 

@@ -217,3 +217,109 @@ def test_ctrl_drag_moves_a_curve_vertex(window, qtbot, tmp_path):
     assert np.linalg.norm(moved - old) > 0.5
     wait_evaluated(qtbot, w)
     assert_same_scores(w.scene.scores(), skelcore.evaluate(w.scene.evaluation.cloud, curve=w.scene.curve.curve).scores())
+
+
+def _ab_values(rows):
+    return np.array([[a, b] for _label, a, b, _d in rows], dtype=float)
+
+
+def test_the_ab_view_opens_the_loaded_curve_against_the_edited_one(window, qtbot, tmp_path):
+    """Edit > Compare the loaded curve with the edited one: A the curve as loaded, B the edited one,
+    both scored; the table equals fresh evaluations of both. At once when an undo step kept A's
+    evaluation; else A is scored in the worker, after the edited curve's own scoring has landed."""
+    from skelscope.compare_view import ab_rows
+
+    w = window
+    cloud_path, curve_path, tip = loaded(qtbot, w, tmp_path)
+    action = w.actions_by_name["compare_edited"]
+    assert not action.isEnabled() and not w.edit_compare.button.isEnabled()  # no edit yet
+    original = w.scene.curve.curve
+    w.edits.set_active(True)
+    w.select_element("curve", "vertices", tip)
+    key(qtbot, w, "Delete")
+    wait_evaluated(qtbot, w)
+    assert action.isEnabled() and w.edit_compare.button.isEnabled()
+    w.edit_compare.button.click()  # the History dock's button: A's evaluation kept by the undo step
+    assert len(w.compare.views) == 1
+    view = w.compare.views[-1]
+    assert view.ev_a.curve.curve is original and view.ev_b is w.scene.evaluation
+    assert view.names == ("cyl_curve.ply as loaded", "cyl_curve.ply edited (1 edit)")
+    cloud = load_cloud(cloud_path)
+    th = (w.scene.beta_star, w.scene.c_star)
+    fresh_a = skelcore.evaluate(cloud, curve=original)
+    fresh_b = skelcore.evaluate(cloud, curve=w.scene.curve.curve)
+    want = _ab_values(ab_rows(fresh_a.scores(*th), fresh_b.scores(*th)))
+    np.testing.assert_allclose(_ab_values(view.rows), want, rtol=0, atol=1e-12)
+    spur = next(r for r, (label, *_v) in enumerate(view.rows + view.defect_rows)
+                if label == "defects: spurious_branches")
+    assert view.cell(spur, 1) == "1" and view.cell(spur, 2) == "0"
+
+    # a saved session's edits (replayed: no evaluation of the loaded curve kept): asked while the
+    # edited curve is scored, the view waits for it, then scores A in the worker
+    session = w.saved_sessions.save(str(tmp_path / "edited_session.json"))
+    w.compare.close_views()
+    w.session.close_all()
+    w.session.auto_evaluate = True
+    assert w.saved_sessions.open(session) == []
+    assert w.session.runner.running and w.edits.stack.command(0).ev_before is None
+    action.trigger()
+    assert w.compare.views == []
+    qtbot.waitUntil(lambda: len(w.compare.views) == 1, timeout=60000)
+    view = w.compare.views[-1]
+    assert view.ev_b is w.scene.evaluation and view.ev_a is not fresh_a
+    np.testing.assert_allclose(_ab_values(view.rows), want, rtol=0, atol=1e-12)
+
+
+@pytest.mark.window(dialogs="record")
+def test_an_edit_that_would_leave_nothing_is_refused_and_undo_stops_at_the_start(window, qtbot, tmp_path):
+    """Pruning the only branch, or deleting the middle vertex of a two-edge curve, would leave no curve:
+    one dialog line, nothing changes; Undo is disabled with nothing to undo (Ctrl+Z then does nothing)."""
+    s = shapes.cylinder(n=3000, seed=2)
+    cloud, curve_path = str(tmp_path / "cyl.ply"), str(tmp_path / "stub.ply")
+    write_point_set(cloud, s.cloud)
+    write_curve(curve_path, CurveSkeleton.from_raw(s.curve_vertices[[9, 10, 11]], np.array([[0, 1], [1, 2]])))
+    w = window
+    assert w.session.load_roles({"cloud": cloud, "curve": curve_path}) == []
+    w.session.start_evaluation()
+    wait_evaluated(qtbot, w)
+    undo, redo = w.actions_by_name["undo"], w.actions_by_name["redo"]
+    assert not undo.isEnabled() and not redo.isEnabled()  # nothing to undo at the start
+    shown = w.scene.curve.curve
+    key(qtbot, w, "E")
+    w.select_element("curve", "vertices", 0)  # an end: selects the one branch
+    assert w.edits.selection["kind"] == "branch"
+    key(qtbot, w, "Delete")
+    assert w.dialogs[-1] == "this edit would leave the curve without vertices"
+    w.edits.select("vertex", 1)
+    assert not w.edits.delete_selected()
+    assert w.dialogs[-1] == "this edit would leave the curve without edges" and len(w.dialogs) == 2
+    assert w.scene.curve.curve is shown and not w.scene.curve.edited and w.edits.stack.count() == 0
+    assert not undo.isEnabled() and not w.session.runner.running and w.scene.evaluation is not None
+
+    w.edits.select("edge", (1, 2))  # one edit, undone: the start again, Undo disabled
+    key(qtbot, w, "Delete")
+    assert undo.isEnabled()
+    key(qtbot, w, "Ctrl+Z")
+    assert not undo.isEnabled() and redo.isEnabled() and w.scene.curve.curve is shown
+    w.edits.undo()  # past the start (a script's call): nothing happens
+    assert w.scene.curve.curve is shown and w.edits.stack.index() == 0 and not w.scene.curve.edited
+
+
+def test_an_edit_while_the_loaded_curve_is_scored_for_the_ab_view_cancels_that_view(window, qtbot, tmp_path):
+    """The A/B view's scoring of the loaded curve runs in the worker: an edit meanwhile cancels it (the
+    view never opens with a B no longer shown) and the edited curve is scored as after any edit."""
+    w = window
+    _cloud, _curve, tip = loaded(qtbot, w, tmp_path)
+    w.edits.set_active(True)
+    w.select_element("curve", "vertices", tip)
+    assert w.edits.delete_selected()
+    wait_evaluated(qtbot, w)
+    w.edits.stack.command(0).ev_before = None  # no evaluation of the loaded curve kept: A in the worker
+    assert w.edit_compare.open() and w.session.runner.current_name == w.edit_compare.NAME
+    w.edits.select("edge", (0, 1))
+    assert w.edits.delete_selected()  # the A/B scoring cancelled, the edited curve scored instead
+    assert w.session.runner.current_name == "evaluation"
+    wait_evaluated(qtbot, w)
+    qtbot.wait(200)
+    assert w.compare.views == []
+    assert_same_scores(w.scene.scores(), skelcore.evaluate(w.scene.evaluation.cloud, curve=w.scene.curve.curve).scores())

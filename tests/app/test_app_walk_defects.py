@@ -117,3 +117,47 @@ def test_n_walks_the_defects_and_marks_survive_a_saved_session(window, qtbot, tm
     validator("edit_log").validate(log)  # its JSON Schema allows the key
     with pytest.raises(ValidationError):
         validator("edit_log").validate({**log, "defect_marks": {missing_key: "done"}})
+
+
+@pytest.mark.window(size=(1100, 750), auto_evaluate=True, dialogs="record", questions="default")
+def test_marks_belong_to_the_skeleton_they_were_made_for(window, qtbot, tmp_path):
+    """Another curve or another cloud opened: no mark of the skeleton before shows; that skeleton
+    reopened (or its saved session opened) brings them back; an edit keeps them."""
+    from skelcore.curve import CurveSkeleton
+
+    s, curve, _spur = spurred_cut_cylinder()
+    cloud, curve_a = str(tmp_path / "cut_cloud.ply"), str(tmp_path / "cut_curve.ply")
+    curve_b, cloud_b = str(tmp_path / "cut_curve_b.ply"), str(tmp_path / "cut_cloud_b.ply")
+    write_points_ply(cloud, s.cloud)
+    write_curve_ply(curve_a, curve.vertices, curve.edges)
+    axis = CurveSkeleton.from_raw(s.curve_vertices, s.curve_edges)  # the whole axis: another skeleton
+    write_curve_ply(curve_b, axis.vertices, axis.edges)
+    write_points_ply(cloud_b, s.cloud[::2])
+    w, d = window, window.defects
+    w.session.load_files([cloud, curve_a])
+    _wait_evaluated(w, qtbot)
+    spur = next(i for i, r in enumerate(d.rows) if r.code == "spurious_branches")
+    d.mark(spur, "accepted")
+    marked = dict(d.marks)
+    session = w.saved_sessions.save(str(tmp_path / "a_session.json"))
+
+    assert w.session.load_as("curve", curve_b)  # another curve skeleton of the same cloud
+    assert d.marks == {}  # at once, not only once its evaluation has landed
+    qtbot.waitUntil(lambda: w.scene.evaluation is not None and not w.session.runner.running, timeout=60000)
+    assert d.marks == {} and "accepted" not in [d.panel.table.item(r, 2).text() for r in range(len(d.rows))]
+    assert w.session.load_as("curve", curve_a)  # the first one again: its marks are back
+    _wait_evaluated(w, qtbot)
+    assert d.marks == marked and d.panel.table.item(spur, 2).text() == "accepted"
+
+    assert w.session.load_as("cloud", cloud_b)  # another cloud (the question's default clears the curve)
+    assert d.marks == {}
+    assert w.saved_sessions.open(session) == []  # the session carries them
+    _wait_evaluated(w, qtbot)
+    assert d.marks == marked and d.panel.table.item(spur, 2).text() == "accepted"
+
+    w.edits.set_active(True)  # an edit keeps the skeleton, so its marks
+    d.mark(next(i for i, r in enumerate(d.rows) if r.code == "incomplete"), "ignored")
+    w.edits.select("vertex", int(curve.n_vertices - 1))
+    assert w.edits.delete_selected()
+    qtbot.waitUntil(lambda: not w.session.runner.running, timeout=60000)
+    assert "ignored" in d.marks.values()
