@@ -1,9 +1,15 @@
-"""The viewer's start-up (docs/guide/viewer.md): a fresh process launched, skelscope's imports in its
-order (the view's libraries, then Qt), the main window shown, a PLY cloud of 100k points (1M with
-``--bench-large``) loaded, until its first frame is rendered; the process then exits at once. Its
-own phases (imports, window, loaded, first frame; seconds from the launch) are in the case's
-extra_info. Needs a display: pytest-xvfb starts Xvfb for the run when it is installed (software
-OpenGL); without DISPLAY the cases are skipped."""
+"""The viewer at scale (docs/performance.md section 5, docs/guide/viewer.md).
+
+Start-up: a fresh process launched, skelscope's imports in its order (the view's libraries, then
+Qt), the main window shown, a PLY cloud of 100k points (1M with ``--bench-large``, alone and with a
+1M skeletal set) loaded, until its first frame is rendered; the process then exits at once. Its
+phases (imports, window, loaded, first frame; seconds from the launch) are in extra_info.
+The camera (``large``): a window showing a 1M cloud with its 1M skeletal set is rotated by real
+mouse events on the view (press, moves, release): one frame while the button is down, and the
+release to the full-detail frame; frames are counted at the render window's EndEvent.
+Editing: Delete on a curve of the 100k Y, to the frame recoloured by its new scores (see its case).
+Needs a display: pytest-xvfb starts Xvfb for the run when it is installed (software OpenGL);
+without DISPLAY the cases are skipped."""
 
 from __future__ import annotations
 
@@ -13,11 +19,13 @@ import sys
 import time
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 ROOT = Path(__file__).resolve().parents[1]
 
-#: argv: launch time, the cloud's PLY, a settings file. Prints the phases' seconds from the launch.
+#: argv: launch time, the cloud's PLY, a settings file, the skeletal set's PLY or "". Prints the phases'
+#: seconds from the launch.
 _LAUNCH = r"""
 import os, sys, time
 t_start = float(sys.argv[1])
@@ -28,13 +36,16 @@ app = QtWidgets.QApplication(["bench"])
 from skelscope.main_window import MainWindow
 t_imported = time.time()
 w = MainWindow(settings=QtCore.QSettings(sys.argv[3], QtCore.QSettings.Format.IniFormat))
+w.session.auto_evaluate = False  # the first frame alone (a launch evaluates after it)
 w.show()
 app.processEvents()
 t_window = time.time()
 rendered = []
 w.view.plotter.ren_win.AddObserver("EndEvent", lambda *a: rendered.append(time.time()))
 t_load = time.time()
-assert w.session.load_as("cloud", sys.argv[2]), w.errors
+with w.session.batch():  # dropped together
+    assert w.session.load_as("cloud", sys.argv[2])
+    assert not sys.argv[4] or w.session.load_as("skeletal", sys.argv[4])
 t_loaded = time.time()
 while not [t for t in rendered if t >= t_load] and time.time() < t_loaded + 300:  # the next event-loop turn
     app.processEvents()
@@ -54,17 +65,30 @@ def display() -> str:
     return os.environ["DISPLAY"]
 
 
-@pytest.mark.parametrize("n", [100_000, pytest.param(1_000_000, marks=pytest.mark.large)])
-def test_viewer_start_up(measure, benchmark, display, tmp_path, n):
+def _write_inputs(folder: Path, n: int) -> tuple[Path, Path]:
+    """A sphere of ``n`` points and a skeletal set of as many (the sphere shrunk, 1 % jitter) as PLY."""
     from skelcore import shapes
     from skelcore.io import write_points_ply
 
-    path = tmp_path / f"cloud_{n}.ply"
-    write_points_ply(path, shapes.sphere_surface(n, seed=0))
+    cloud = shapes.sphere_surface(n, seed=0)
+    paths = folder / f"cloud_{n}.ply", folder / f"skeletal_{n}.ply"
+    write_points_ply(paths[0], cloud)
+    write_points_ply(paths[1], 0.3 * cloud + np.random.default_rng(1).normal(scale=0.01, size=cloud.shape))
+    return paths
+
+
+@pytest.mark.parametrize("n,skeletal", [
+    pytest.param(100_000, False, id="100000"),
+    pytest.param(1_000_000, False, marks=pytest.mark.large, id="1000000"),
+    pytest.param(1_000_000, True, marks=pytest.mark.large, id="1000000+skeletal"),
+])
+def test_viewer_start_up(measure, benchmark, display, tmp_path, n, skeletal):
+    path, skeletal_path = _write_inputs(tmp_path, n)
     phases: list[list[str]] = []
 
     def launch():
-        out = subprocess.run([sys.executable, "-c", _LAUNCH, repr(time.time()), str(path), str(tmp_path / "s.ini")],
+        out = subprocess.run([sys.executable, "-c", _LAUNCH, repr(time.time()), str(path), str(tmp_path / "s.ini"),
+                              str(skeletal_path) if skeletal else ""],
                              capture_output=True, text=True, cwd=ROOT, timeout=600)
         assert out.returncode == 0, out.stderr[-2000:]
         phases.append(out.stdout.split())
@@ -72,7 +96,7 @@ def test_viewer_start_up(measure, benchmark, display, tmp_path, n):
     measure(launch, rounds=3)
     imported, window, loaded, render, points = phases[-1]
     assert int(points) == n and render != "inf"
-    benchmark.extra_info.update(n_points=n, display=display, imported_s=float(imported), window_s=float(window),
+    benchmark.extra_info.update(n_points=n, skeletal_points=n if skeletal else 0, display=display, imported_s=float(imported), window_s=float(window),
                                 loaded_s=float(loaded), first_frame_s=float(render))
 
 
@@ -184,3 +208,115 @@ def test_viewer_edit_to_recoloured_frame(measure, benchmark, display, tmp_path, 
         w.close()
     benchmark.extra_info.update(n_points=len(cloud), edit=edit, display=display,
                                 scored_s=round(sorted(scored)[len(scored) // 2], 4), goal_s=0.15)
+
+
+class _Drag:
+    """A main window showing ``cloud`` and ``skeletal`` (PLY paths), rotated by real mouse events on
+    its 3D view; every frame is logged at the render window's EndEvent with whether full detail
+    (the layers themselves, not their level-of-detail twins) was on screen."""
+
+    def __init__(self, tmp: Path, cloud: Path, skeletal: Path) -> None:
+        from skelscope.__main__ import import_view_libraries
+
+        import_view_libraries()
+        from PySide6 import QtCore, QtWidgets
+
+        from skelscope.main_window import MainWindow
+
+        self.app = QtWidgets.QApplication.instance() or QtWidgets.QApplication(["bench"])
+        self.window = MainWindow(settings=QtCore.QSettings(str(tmp / "s.ini"), QtCore.QSettings.Format.IniFormat))
+        self.window.session.auto_evaluate = False  # the camera alone
+        self.window.show()
+        self.view = self.window.view
+        self.frames: list[tuple[float, bool]] = []  # (time, full detail shown)
+        self.view.plotter.ren_win.AddObserver("EndEvent", lambda *a: self.frames.append(
+            (time.perf_counter(), bool(self.view._actors["cloud"].GetVisibility()))))
+        with self.window.session.batch():
+            assert self.window.session.load_as("cloud", str(cloud))
+            assert self.window.session.load_as("skeletal", str(skeletal))
+        self.wait(lambda: self.frames and self.frames[-1][1] and not self.view.render_pending)
+        self.x = 0
+
+    def wait(self, done, limit: float = 120.0) -> None:
+        from PySide6 import QtCore
+
+        end = time.perf_counter() + limit
+        while not done():
+            assert time.perf_counter() < end, "no frame"
+            self.app.processEvents(QtCore.QEventLoop.ProcessEventsFlag.AllEvents, 5)
+
+    def send(self, kind: str) -> None:
+        """A left-button press, move (3 pixels on) or release on the view, through Qt's event queue."""
+        from PySide6 import QtCore, QtGui, QtWidgets
+
+        t = QtCore.QEvent.Type
+        left, none = QtCore.Qt.MouseButton.LeftButton, QtCore.Qt.MouseButton.NoButton
+        event_type, button, buttons = {"press": (t.MouseButtonPress, left, left), "move": (t.MouseMove, none, left),
+                                       "release": (t.MouseButtonRelease, left, none)}[kind]
+        if kind == "move":
+            self.x += 3
+        widget = self.view.plotter
+        pos = QtCore.QPointF(widget.rect().center() + QtCore.QPoint(self.x % 200 - 100, 0))
+        QtWidgets.QApplication.postEvent(widget, QtGui.QMouseEvent(
+            event_type, pos, widget.mapToGlobal(pos), button, buttons, QtCore.Qt.KeyboardModifier.NoModifier))
+
+    def drag_frame(self) -> None:
+        """One move with the button down, until its frame is painted."""
+        n = len(self.frames)
+        self.send("move")
+        self.wait(lambda: len(self.frames) > n)
+
+    def drag_for(self, seconds: float) -> float:
+        """Frames a second while moves arrive as fast as the window takes them (a held drag)."""
+        n, start = len(self.frames), time.perf_counter()
+        while time.perf_counter() < start + seconds:
+            self.send("move")
+            self.app.processEvents()
+        frames = [t for t, _ in self.frames[n:]]
+        return (len(frames) - 1) / (frames[-1] - frames[0]) if len(frames) > 1 else 0.0
+
+    def release(self) -> None:
+        """The button released, until the full-detail frame is painted."""
+        n = len(self.frames)
+        self.send("release")
+        self.wait(lambda: any(full for _, full in self.frames[n:]))
+
+    def close(self) -> None:
+        self.window.close()
+        self.window.deleteLater()
+        self.app.processEvents()
+
+
+@pytest.fixture(scope="module")
+def drag(display, tmp_path_factory):
+    tmp = tmp_path_factory.mktemp("drag")
+    d = _Drag(tmp, *_write_inputs(tmp, 1_000_000))
+    yield d
+    d.close()
+
+
+@pytest.mark.large
+def test_viewer_rotate_frame(measure, benchmark, drag):
+    """One frame while a 1M cloud with its 1M skeletal set is rotated (the mouse button held down)."""
+    drag.send("press")
+    drag.app.processEvents()
+    try:
+        fps = drag.drag_for(3.0)
+        measure(drag.drag_frame, rounds=20, warmup=3)
+    finally:
+        drag.release()
+    benchmark.extra_info.update(n_points=1_000_000, skeletal_points=1_000_000, frames_per_second=round(fps, 2),
+                                frames_per_second_from_median=round(1 / benchmark.stats.stats.median, 2))
+
+
+@pytest.mark.large
+def test_viewer_release_to_full_detail(measure, benchmark, drag):
+    """From the release of a drag of a 1M cloud with its 1M skeletal set to its full-detail frame."""
+    def press():
+        drag.send("press")
+        for _ in range(5):
+            drag.drag_frame()
+        return (), {}
+
+    measure(drag.release, rounds=3, warmup=1, setup=press)
+    benchmark.extra_info.update(n_points=1_000_000, skeletal_points=1_000_000)

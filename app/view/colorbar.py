@@ -40,8 +40,9 @@ class ColourBar:
         self.actor: Any = None  # the actor the colour bar describes
         self.swatch, self.label = self._make_nan_legend()
         self.title = self._make_title()
+        self.held = False  # True while the camera moves: the view's size holds, so does the layout
         # laid out right before each render (the view's size is then final)
-        plotter.renderer.AddObserver("StartEvent", lambda *_: self.layout())
+        plotter.renderer.AddObserver("StartEvent", lambda *_: self.held or self.layout())
 
     def update(self, actor: Any, scene: Scene) -> None:
         """Describe ``actor`` (None: no bar) coloured by ``scene.metric``; the NaN legend is shown

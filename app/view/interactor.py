@@ -2,11 +2,12 @@
 
 ``ClosingInteractor`` lets go of Qt's GL surface when it closes; ``DropInteractor`` (the main view)
 also hands drops to the viewer's loader, reports each painted frame and turns off multisampling under
-software GL. ``ClickFilter`` tells a click (a pick) from a camera drag.
+software GL, timing each. ``ClickFilter`` tells a click (a pick) from a camera drag.
 """
 
 from __future__ import annotations
 
+import time
 from typing import Any, Callable
 
 from pyvistaqt import QtInteractor
@@ -54,6 +55,7 @@ class DropInteractor(ClosingInteractor):
         self.software_gl: bool | None = None  # known once the GL context exists
         self.on_frame: Callable[[], None] | None = None  # called after each frame is painted
         self.before_frame: Callable[[], None] | None = None  # called right before each frame
+        self.frame_seconds = 0.0  # how long the last frame took to paint (render and blit)
 
     def initializeGL(self) -> None:  # noqa: N802
         super().initializeGL()
@@ -68,7 +70,9 @@ class DropInteractor(ClosingInteractor):
     def paintGL(self) -> None:  # noqa: N802
         if self.before_frame is not None:
             self.before_frame()
+        start = time.perf_counter()
         super().paintGL()
+        self.frame_seconds = time.perf_counter() - start
         if self.on_frame is not None:
             self.on_frame()
 

@@ -4,7 +4,8 @@ It subscribes to the ``Scene`` and, per event, builds, recolours or hides actors
 frame; it also picks elements (numpy projection, :mod:`.picking`) and renders images at any scale.
 Only the view touches VTK, and only on the GUI thread. NaN is drawn magenta through the lookup
 table's NaN colour (docs/metrics.md 5.5); point actors are unlit (exact colour-map colours) unless drawn as shaded
-spheres. Big layers get a level-of-detail twin shown while the camera moves (:mod:`.lod`).
+spheres. Big layers get a level-of-detail twin shown while the camera moves, its size set from the
+measured time of the moving frames (:mod:`.lod`).
 """
 
 from __future__ import annotations
@@ -22,7 +23,7 @@ from .colorbar import ColourBar
 from .eye_dome import EyeDome
 from .frames import FrameScheduler
 from .interactor import ClickFilter, DropInteractor
-from .lod import LOD_POINTS, MotionFilter, lod_indices
+from .lod import LOD_POINTS, DetailLevel, MotionFilter, lod_order
 from .picking import front_pick, near_on_screen, pick_layout
 from .style import (
     CLOUD_GREY, CURVE_EDGE, CURVE_VERTEX, MAGENTA, PICK_MARKER, SKELETAL_PLAIN, greyed, make_lut, plain_lut,
@@ -56,6 +57,10 @@ class SceneView:
         self._camera_set = False
         self._fit_pending = False
         self.moving = False  # the camera is being moved: level-of-detail twins shown
+        self.detail = DetailLevel()  # how many points the twins draw
+        self._moving_frames = 0  # frames begun since the camera started moving
+        self._full_points = 0  # points of the big layers in the last frame begun at full detail
+        self._detail_fitted = False  # the twins' count was set from a full-detail frame of this data
         self._frames = FrameScheduler(self.plotter)  # also sets plotter.on_frame
         self.plotter.before_frame = self._before_frame
         self.on_pick: Callable[[dict[str, Any] | None], None] | None = None
@@ -125,11 +130,18 @@ class SceneView:
         if self._fit_pending:
             self._fit_pending = False
             fit_camera(self.plotter, self._visible_points())
+        if self.moving:
+            # the previous frame was drawn moving too (the first one after a press may upload a twin)
+            if self._moving_frames and self.detail.frame_took(self.plotter.frame_seconds):
+                self._apply_detail()
+            self._moving_frames += 1
         if self._coarse_first:
             self._coarse_first = False
             if not self.moving:
                 self._set_moving(True)
                 self._frames.after_frame(lambda: self._set_moving(False))  # requests the full frame
+        self._full_points = 0 if self.moving else sum(
+            len(self._sources[k]) for k in self._lod if self._actors[k].GetVisibility())
 
     def rebuild(self) -> None:
         for name in ("cloud", "skeletal", "curve"):
@@ -192,11 +204,14 @@ class SceneView:
                     QtCore.QTimer.singleShot(0, self.plotter, lambda k=key, p=points: self.after_render(
                         lambda: self._sources.get(k) is p and self._pick_layout(k)))
             if lod and len(points) > LOD_POINTS:
-                idx = lod_indices(len(points), LOD_POINTS)
+                idx = lod_order(len(points), LOD_POINTS)  # any prefix is a spread subsample
                 twin = pv.PolyData(display_coordinates(np.asarray(points)[idx]))
-                self._actors[f"{key}-lod"] = self._add_points(f"{key}-lod", twin, plain, size, layer.opacity, False)
+                self._actors[f"{key}-lod"] = self._add_points(f"{key}-lod", twin, plain, size, layer.opacity, False,
+                                                              spheres=False)  # flat discs while moving
                 self._meshes[f"{key}-lod"] = twin
                 self._lod[key] = idx
+                self._detail_fitted = False  # new big data: its first drag starts from its full frame's cost
+                self._apply_detail(key)
         if values is not None:
             values = np.asarray(values, dtype=float)
         self._colour_points(key, values, plain)
@@ -218,8 +233,9 @@ class SceneView:
             draw_in_front(nan_actor, -400.0)
             self._actors[f"{key}-nan"] = nan_actor
 
-    def _add_points(self, key: str, mesh: pv.PolyData, colour: Any, size: float, opacity: float, pickable: bool) -> Any:
-        spheres = self.scene.style["spheres"]
+    def _add_points(self, key: str, mesh: pv.PolyData, colour: Any, size: float, opacity: float, pickable: bool,
+                    spheres: bool | None = None) -> Any:
+        spheres = self.scene.style["spheres"] if spheres is None else spheres
         actor = self.plotter.add_mesh(
             mesh, color=colour, style="points", point_size=size, opacity=opacity, lighting=spheres, name=key,
             reset_camera=False, render=False, render_points_as_spheres=spheres, pickable=pickable,
@@ -254,17 +270,35 @@ class SceneView:
             return self.moving
         return not (self.moving and f"{key}-lod" in self._actors)
 
+    def _apply_detail(self, key: str | None = None) -> None:
+        """Each twin (or ``key``'s) draws its first ``detail.points`` points: a new vertex list, its
+        points and colours already uploaded."""
+        for name in [key] if key is not None else list(self._lod):
+            twin = self._meshes[f"{name}-lod"]
+            keep = min(self.detail.points, twin.n_points)
+            if twin.n_verts != keep:
+                twin.verts = np.column_stack([np.ones(keep, dtype=np.int64), np.arange(keep)]).ravel()
+
     def _set_moving(self, moving: bool) -> None:
-        """The camera starts or stops moving (mouse drag, wheel): swap in or out the twins."""
+        """The camera starts or stops moving (mouse drag, wheel): swap in or out the twins (visibility
+        only: both stay built); the colour bar keeps its layout while moving (the view's size holds)."""
         if moving == self.moving:
             return
         self.moving = moving
+        self._moving_frames = 0
+        self._colour_bar.held = moving
         for key in list(self._lod):
             layer = self.scene.layers.get(key.split("-")[0])
             if layer is None:
                 continue
             self._actors[key].SetVisibility(self._shown(key, layer))
             self._actors[f"{key}-lod"].SetVisibility(self._shown(f"{key}-lod", layer))
+        if moving and self._full_points and not self._detail_fitted:
+            # the first drag over this data: from the last full-detail frame's cost a point
+            shown = sum(1 for k in self._lod if self._actors[f"{k}-lod"].GetVisibility())
+            self.detail.fit(self.plotter.frame_seconds, self._full_points, shown)
+            self._detail_fitted = True
+            self._apply_detail()
         if self._lod and not moving:
             self.request_render()  # the full-detail frame once the camera rests
 
@@ -386,7 +420,7 @@ class SceneView:
         """The figure options: shaded spheres, eye-dome lighting, the orientation axes."""
         style = self.scene.style
         for key, actor in self._actors.items():
-            if key not in ("curve-edges", "pick-marker"):
+            if key not in ("curve-edges", "pick-marker") and not key.endswith("-lod"):  # twins: flat discs
                 actor.prop.render_points_as_spheres = style["spheres"]
                 actor.prop.lighting = style["spheres"]
         if style["eye_dome"] != self._eye_dome:

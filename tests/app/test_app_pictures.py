@@ -232,6 +232,37 @@ def test_a_level_of_detail_twin_replaces_a_big_layer_while_the_camera_moves(wind
     qtbot.mouseRelease(view.widget, QtCore.Qt.MouseButton.LeftButton, pos=centre)
 
 
+def test_the_twins_draw_fewer_points_when_moving_frames_run_over_budget(window, qtbot, monkeypatch):
+    """A frame drawn while moving that takes longer than the budget halves the twins' points as often
+    as its excess asks (vertex lists only: the twin's uploaded points stay); quick frames step back up."""
+    import skelscope.view.scene_view as scene_view
+    from skelscope.view.lod import FRAME_BUDGET_S, DetailLevel
+
+    level = DetailLevel(ladder=(8000, 4000, 2000, 1000))
+    assert level.frame_took(FRAME_BUDGET_S * 3.5) and level.points == 2000  # 3.5x over: two halvings
+    assert not level.frame_took(FRAME_BUDGET_S / 2) and level.points == 2000
+    assert level.frame_took(FRAME_BUDGET_S / 5) and level.points == 4000
+    level.fit(FRAME_BUDGET_S * 10, 80_000, 2)  # 2 twins of 8000 would take 2 budgets; 2 of 4000 one
+    assert level.points == 4000
+    level.fit(FRAME_BUDGET_S * 1000, 80_000, 2)
+    assert level.points == 1000  # the smallest when none fits
+    monkeypatch.setattr(scene_view, "LOD_POINTS", 2000)
+    window.scene.set_cloud(shapes.sphere_surface(10000, seed=1))
+    view = window.view
+    view.detail = DetailLevel(ladder=(2000, 1000, 500))
+    view._detail_fitted = True  # the step rule alone (a full frame's fit is checked above)
+    twin = view._meshes["cloud-lod"]
+    assert twin.n_points == 2000 and twin.n_verts == 2000
+    view._set_moving(True)
+    view.plotter.frame_seconds = FRAME_BUDGET_S * 1.5
+    view._before_frame()  # the first moving frame: may upload the twin, not counted
+    assert twin.n_verts == 2000
+    view._before_frame()
+    assert twin.n_verts == 1000 and twin.n_points == 2000
+    view._set_moving(False)
+    assert view.detail.points == 1000  # the next drag starts there
+
+
 def test_a_pick_among_a_million_skeletal_points_finds_the_clicked_one(window, qtbot):
     cloud = shapes.sphere_surface(1_000_000, seed=0)
     skeletal = cloud * 0.5
