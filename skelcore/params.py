@@ -45,6 +45,8 @@ class Params:
         when it lies within (1 + s) r(x) + tau of some skeleton element x of inscribed radius r(x).
     coverage_tau_factor : tau = factor x the cloud's median nearest-neighbour spacing (coverage and
         the reference comparison's precision / recall).
+    coverage_radius_quantile : the balls' radii r(x) grow by the noise shortfall, this quantile of the
+        excess |p - x| - r(x) of the cloud points nearest to them (docs/metrics.md 5.2); 0: r(x) alone.
     coverage_max_points : coverage is computed for clouds of at most this many points (0: never);
         a skeletal set as large as the cloud costs about N^1.4 on tube-like shapes (torus, both cores:
         2.4 s at 256k, 16 s at 1M; docs/metrics.md 5.2).
@@ -211,6 +213,7 @@ class Params:
     smooth_k: int = 4
     coverage_slack: float = 0.5
     coverage_tau_factor: float = 2.0
+    coverage_radius_quantile: float = 0.25
     coverage_max_points: int = 262144
     coverage_exact_points: int = 262144
     frame_inside_fraction: float = 0.5
@@ -305,6 +308,8 @@ class Params:
                 bad(name, "must be > 0")
         if not float(self.coverage_slack) >= 0:
             bad("coverage_slack", "must be >= 0")
+        if not 0 <= float(self.coverage_radius_quantile) < 1:
+            bad("coverage_radius_quantile", "must be in [0, 1)")
         if not float(self.frame_extent_ratio) > 1:
             bad("frame_extent_ratio", "must be > 1")
         for name in ("beta_star", "c_star", "min_bar_fraction", "fallback_fraction", "collinear_cos",
