@@ -143,6 +143,8 @@ class Params:
     open_fill_reach : a missing side counts when at least half its fill lies within open_fill_reach x
         the local radius (distance to the cloud) of the nearest skeleton element: across its part, not
         across the gap between two parts.
+    boundedness_density_aware : boundedness casts also against points filled into the cloud's sparse
+        parts (local spacing above sparse_ratio x the median, docs/metrics.md 6.6); False = the paper's.
     sparse_ratio : ``sparse_boundedness`` fires when at least open_surface_share of a skeleton's elements
         are unbounded where the cloud's local spacing (outlier_local_k points) exceeds this many x its
         median spacing.
@@ -265,6 +267,7 @@ class Params:
     thin_min_share: float = 0.01
     open_fill_reach: float = 1.5
     sparse_ratio: float = 2.0
+    boundedness_density_aware: bool = False
     cap_max_share: float = 0.1
     cap_flatness: float = 0.2
     viewpoint_rows: int = 16
