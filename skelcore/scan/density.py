@@ -16,8 +16,8 @@ from ..params import Params
 
 __all__ = ["density_fill"]
 
-#: a point is in a sparse part when the median distance of its FILL_K nearest points exceeds this many
-#: x the cloud's median of it (a uniform sample's spread stays under it; one half 10 x sparser: 3.2 x)
+#: a point is in a sparse part when the median distance of its FILL_K nearest points (the median of it
+#: over itself and them) exceeds this many x the cloud's median of it (one half 10 x sparser: 3.2 x)
 FILL_RATIO = 1.5
 #: neighbours each sparse point is joined to (a fan around it: the segments cross its gaps)
 FILL_K = 6
@@ -43,7 +43,8 @@ def density_fill(cloud: np.ndarray, params: Params = Params(), checkpoint: Check
         return np.zeros((0, 3))
     # a point's spacing: the median distance of its FILL_K nearest points, against the cloud's median of it
     own = np.median(d[:, 1:], axis=1)
-    sparse = np.flatnonzero(own > FILL_RATIO * float(np.median(own)))
+    part = np.median(own[j], axis=1)  # and its neighbours': a sparse part, not a random gap
+    sparse = np.flatnonzero(part > FILL_RATIO * float(np.median(own)))
     checkpoint(0.7)
     if len(sparse) == 0:
         return np.zeros((0, 3))
