@@ -215,7 +215,7 @@ class Params:
     smooth_k: int = 4
     coverage_slack: float = 0.5
     coverage_tau_factor: float = 2.0
-    coverage_radius_quantile: float = 0.25
+    coverage_radius_quantile: float = 0.1
     coverage_max_points: int = 262144
     coverage_exact_points: int = 262144
     frame_inside_fraction: float = 0.5
