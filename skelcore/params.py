@@ -143,8 +143,8 @@ class Params:
     open_fill_reach : a missing side counts when at least half its fill lies within open_fill_reach x
         the local radius (distance to the cloud) of the nearest skeleton element: across its part, not
         across the gap between two parts.
-    boundedness_density_aware : boundedness casts also against points filled into the cloud's sparse
-        parts (local spacing above sparse_ratio x the median, docs/metrics.md 6.6); False = the paper's.
+    boundedness_density_aware : boundedness casts also against points filled into the cloud's sparsely
+        sampled parts, h kept the scanned cloud's (docs/metrics.md 6.8); False = the paper's.
     sparse_ratio : ``sparse_boundedness`` fires when at least open_surface_share of a skeleton's elements
         are unbounded where the cloud's local spacing (outlier_local_k points) exceeds this many x its
         median spacing.

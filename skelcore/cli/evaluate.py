@@ -64,7 +64,7 @@ def register(sub: argparse._SubParsersAction) -> None:
                    "(as the paper did for its cave)")
     p.add_argument("--density-aware", action="store_true",
                    help="boundedness casts also against points filled into the cloud's sparsely sampled parts "
-                   "(docs/metrics.md 6.6; default: the paper's boundedness)")
+                   "(docs/metrics.md 6.8; default: the paper's boundedness)")
     p.add_argument("--set", metavar="NAME=VALUE", action="append", default=[], help="set any Params field (repeatable)")
     p.add_argument("--strict", action="store_true", help="exit 3 when the evaluation carries a warning")
     p.add_argument("--quiet", action="store_true", help="do not print progress")

@@ -1,5 +1,5 @@
 """Density-aware boundedness (``Params.boundedness_density_aware``, ``--density-aware``; docs/metrics.md
-6.6): where a cloud is sampled more sparsely than its median, the rays of the
+6.8): where a cloud is sampled more sparsely than its median, the rays of the
 paper's boundedness (2 median spacings wide) pass between its samples and an exact axis scores 0.37-0.50
 with one half of its cloud 10 x sparser.  Each such point is joined to its ``FILL_K`` nearest cloud
 points by segments sampled at the median spacing; the points on them enter boundedness only (as the

@@ -1,4 +1,4 @@
-"""Density-aware boundedness (docs/metrics.md 6.6): with one half of a torus 10 x sparser the paper's
+"""Density-aware boundedness (docs/metrics.md 6.8): with one half of a torus 10 x sparser the paper's
 boundedness of its exact axis falls with the sampling and ``sparse_boundedness`` says so; with
 ``boundedness_density_aware`` the sparse half is cast against filled points and the axis is bounded
 again, while the default stays the paper's and a uniform cloud gets few points."""
