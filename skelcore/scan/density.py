@@ -55,7 +55,10 @@ def density_fill(cloud: np.ndarray, params: Params = Params(), checkpoint: Check
     # a segment across a tube (its far side among the neighbours) would put points near the axis
     reach = FILL_REACH * own[sparse]
     keep = (steps >= 2) & (length <= np.repeat(reach, FILL_K))
-    a, b, steps = a[keep], b[keep], steps[keep]
+    # each segment once (two sparse neighbours list each other: the same points twice, and copies of a
+    # point would make the filled cloud's median spacing 0)
+    pair, first_at = np.unique(np.sort(np.column_stack([a[keep], b[keep]]), axis=1), axis=0, return_index=True)
+    a, b, steps = pair[:, 0], pair[:, 1], steps[keep][first_at]
     # the inner points of each segment: t = 1 / m, ..., (m - 1) / m
     seg = np.repeat(np.arange(len(a)), steps - 1)
     first = np.concatenate([[0], np.cumsum(steps - 1)[:-1]])

@@ -283,9 +283,10 @@ def build_context(
         fill = density_fill(ctx.cloud_n, params, checkpoint)
         if len(fill):
             h = rays_radius(ctx.bounded_cloud_n, params.rays_radius_factor)
-            ctx.capped_cloud_n = np.vstack([ctx.bounded_cloud_n, fill])
-            spacing = rays_radius(ctx.capped_cloud_n, 1.0)
+            filled = np.vstack([ctx.bounded_cloud_n, fill])
+            spacing = rays_radius(filled, 1.0)
             if spacing > 0:  # the filled points must not narrow the rays: h stays the scanned cloud's
+                ctx.capped_cloud_n = filled
                 ctx.bounded_params = params.replace(rays_radius_factor=h / spacing)
 
     if ctx.mode == "none":

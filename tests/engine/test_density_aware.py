@@ -41,7 +41,9 @@ def test_a_uniform_cloud_gets_no_filled_points(torus):
 
     half, uniform, _ = torus
     assert len(density_fill(uniform)) < 0.1 * len(uniform)  # a few random gaps: 6 %
-    assert len(density_fill(half)) > len(half)
+    fill = density_fill(half)
+    assert len(fill) > len(half)
+    assert len(np.unique(fill, axis=0)) == len(fill)  # each segment once: copies made the median spacing 0
 
 
 def test_the_cli_flag_sets_the_parameter(tmp_path):
