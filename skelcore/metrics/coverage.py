@@ -31,11 +31,15 @@ __all__ = ["Coverage", "coverage", "coverage_tau", "min_ball_excess", "covered_b
 
 # the random subsample above coverage_exact_points (the same seed as the diagnostics' subsamples)
 SAMPLE_SEED = 0
-# the noise shortfall of the radii (noise_shortfall): cloud points it reads, a cell's fewest territory points, cell side in sample spacings, the share of r(x) it ignores
+# the noise shortfall of the radii (noise_shortfall): cloud points it reads, a cell's fewest territory
+# points, cell side in sample spacings, the shortfall (in r(x)) below which a cloud counts as clean
 NOISE_SAMPLE = 20_000
 NOISE_MIN_POINTS = 8
 NOISE_CELL = 4.0
 NOISE_DEAD = 0.1
+# a cell's territory is a shell when its excess spreads (between the quantile q and 1 - q) over at most
+# this many x its radius (Gaussian noise of 0.25 r at 20k points: about 1.4)
+NOISE_SPREAD = 2.0
 
 
 @dataclass
@@ -168,9 +172,10 @@ def noise_shortfall(cloud: np.ndarray, elements: np.ndarray, r: np.ndarray, quan
     of 0.25 r, r(x) is 0.36-0.50 r at 20k points and falls as the cloud grows, so the balls explain
     less and less of a clean axis.  The cloud points nearest to an element (its territory) lie around
     its true radius: per cell of elements (``NOISE_CELL`` sample spacings; the cloud read on a sample of
-    at most ``NOISE_SAMPLE``) the ``quantile`` of their excess |p - x| - r(x).  A low quantile: the
-    territory of a flat part's element starts at its narrow side (excess about 0), a noisy one's well
-    beyond its nearest point.  Less ``NOISE_DEAD`` x r(x), so that clean clouds keep r(x) exactly."""
+    at most ``NOISE_SAMPLE``) the ``quantile`` of their excess |p - x| - r(x), over the cell's median
+    r(x); the median over the cells whose excess spreads like a shell's (``NOISE_SPREAD``; a missing
+    part's end cell spreads over its length), times r(x), when above ``NOISE_DEAD`` (clean clouds keep
+    r(x) exactly).  A low quantile: a flat part's territory starts at its narrow side (excess about 0)."""
     n_el = len(elements)
     out = np.zeros(n_el)
     if not quantile > 0 or n_el == 0 or len(cloud) < 2 * NOISE_MIN_POINTS:
@@ -186,9 +191,23 @@ def noise_shortfall(cloud: np.ndarray, elements: np.ndarray, r: np.ndarray, quan
     group = cell[owner]
     n_cells = int(cell.max()) + 1
     count = np.bincount(group, minlength=n_cells)
-    shortfall = np.where(count >= NOISE_MIN_POINTS, _group_quantile(excess, group, n_cells, quantile), 0.0)
+    ok = count >= NOISE_MIN_POINTS
+    radius = _group_quantile(r[owner], group, n_cells, 0.5)
+    ok &= radius > 0
+    if not ok.any():
+        return out
+    # one figure for the cloud: the median over the cells of the shortfall in units of their radius,
+    # over the cells whose territory is a shell (a missing part or the cloud around a stub in the air is
+    # an end cell's territory: its excess spreads over lengths, not a noise's width); none when most
+    # cells are not
+    low = _group_quantile(excess, group, n_cells, quantile)
+    high = _group_quantile(excess, group, n_cells, 1.0 - quantile)
+    shell = ok & (high - low <= NOISE_SPREAD * radius)
+    if np.count_nonzero(shell) < 0.5 * np.count_nonzero(ok):
+        return out
+    ratio = float(np.median(low[shell] / radius[shell]))
     checkpoint(1.0)
-    return np.maximum(shortfall[cell] - NOISE_DEAD * r, 0.0)
+    return ratio * r if ratio > NOISE_DEAD else out
 
 
 def _group_quantile(values: np.ndarray, group: np.ndarray, n_groups: int, q: float) -> np.ndarray:
