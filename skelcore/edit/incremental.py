@@ -118,7 +118,7 @@ def _score_samples(old: EvalContext, ctx: EvalContext, cache: dict[str, Any]) ->
     if _plan_is_exact(cloud, s_old, p, cache) and _plan_is_exact(cloud, s_new, p, cache):
         beta, todo = _reuse(_keys(s_old.points), old.results["curve boundedness"], _keys(s_new.points))
         if todo.any():
-            beta[todo] = boundedness(cloud, s_new.points[todo], params=p, share_far_field=False)
+            beta[todo] = boundedness(cloud, s_new.points[todo], params=ctx.bounded_params or p, share_far_field=False)
     else:
         beta = ctx.boundedness(s_new.points)
     ctx.results["curve boundedness"] = beta
