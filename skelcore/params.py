@@ -45,6 +45,9 @@ class Params:
         when it lies within (1 + s) r(x) + tau of some skeleton element x of inscribed radius r(x).
     coverage_tau_factor : tau = factor x the cloud's median nearest-neighbour spacing (coverage and
         the reference comparison's precision / recall).
+    coverage_radius_quantile : the balls' radii r(x) grow by the cloud's noise shortfall, from this
+        quantile of the excess |p - x| - r(x) of the cloud points nearest to them (docs/metrics.md 5.2
+        "Noise"); 0: r(x) alone.
     coverage_max_points : coverage is computed for clouds of at most this many points (0: never);
         a skeletal set as large as the cloud costs about N^1.4 on tube-like shapes (torus, both cores:
         2.4 s at 256k, 16 s at 1M; docs/metrics.md 5.2).
@@ -141,6 +144,8 @@ class Params:
     open_fill_reach : a missing side counts when at least half its fill lies within open_fill_reach x
         the local radius (distance to the cloud) of the nearest skeleton element: across its part, not
         across the gap between two parts.
+    boundedness_density_aware : boundedness casts also against points filled into the cloud's sparsely
+        sampled parts, h kept the scanned cloud's (docs/metrics.md 6.8); False = the paper's.
     sparse_ratio : ``sparse_boundedness`` fires when at least open_surface_share of a skeleton's elements
         are unbounded where the cloud's local spacing (outlier_local_k points) exceeds this many x its
         median spacing.
@@ -211,6 +216,7 @@ class Params:
     smooth_k: int = 4
     coverage_slack: float = 0.5
     coverage_tau_factor: float = 2.0
+    coverage_radius_quantile: float = 0.1
     coverage_max_points: int = 262144
     coverage_exact_points: int = 262144
     frame_inside_fraction: float = 0.5
@@ -262,6 +268,7 @@ class Params:
     thin_min_share: float = 0.01
     open_fill_reach: float = 1.5
     sparse_ratio: float = 2.0
+    boundedness_density_aware: bool = False
     cap_max_share: float = 0.1
     cap_flatness: float = 0.2
     viewpoint_rows: int = 16
@@ -305,6 +312,8 @@ class Params:
                 bad(name, "must be > 0")
         if not float(self.coverage_slack) >= 0:
             bad("coverage_slack", "must be >= 0")
+        if not 0 <= float(self.coverage_radius_quantile) < 1:
+            bad("coverage_radius_quantile", "must be in [0, 1)")
         if not float(self.frame_extent_ratio) > 1:
             bad("frame_extent_ratio", "must be > 1")
         for name in ("beta_star", "c_star", "min_bar_fraction", "fallback_fraction", "collinear_cos",

@@ -62,6 +62,9 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--cap-openings", action="store_true",
                    help="close small flat openings of the cloud with points on their planes for boundedness "
                    "(as the paper did for its cave)")
+    p.add_argument("--density-aware", action="store_true",
+                   help="boundedness casts also against points filled into the cloud's sparsely sampled parts "
+                   "(docs/metrics.md 6.8; default: the paper's boundedness)")
     p.add_argument("--set", metavar="NAME=VALUE", action="append", default=[], help="set any Params field (repeatable)")
     p.add_argument("--strict", action="store_true", help="exit 3 when the evaluation carries a warning")
     p.add_argument("--quiet", action="store_true", help="do not print progress")
@@ -139,6 +142,8 @@ def run_evaluate(args: argparse.Namespace) -> int:
     from ..io.export import export_ply
 
     params = _with_curve_sampling(params_from_args(args), args.curve_sampling)
+    if args.density_aware:
+        params = params.replace(boundedness_density_aware=True)
     if not (args.skeletal or args.curve):
         raise SkelInputError("nothing to evaluate: give --skeletal and/or --curve")
     if args.skeletal_index and not args.skeletal:

@@ -139,7 +139,7 @@ def _sample_boundedness(old: EvalContext, ctx: EvalContext, cache: dict[str, Any
         return ctx.boundedness(s_new.points)
     beta, todo = _reuse(_keys(s_old.points), old.results["curve boundedness"], _keys(s_new.points))
     if todo.any():
-        beta[todo] = boundedness(cloud, s_new.points[todo], params=p, share_far_field=False)
+        beta[todo] = boundedness(cloud, s_new.points[todo], params=ctx.bounded_params or p, share_far_field=False)
     return beta
 
 

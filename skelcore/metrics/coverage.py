@@ -5,7 +5,8 @@ Each skeleton element x (skeletal point, curve sample) gets the radius r(x) = di
 nearest cloud point, its inscribed ball. A cloud point p has the gap g(p) = min_x |p - x| - r(x)
 (>= 0: its distance to the union of the balls); ``mean_gap`` and ``max_gap`` (one-sided Hausdorff
 distance from the cloud to the balls) summarise it. p is covered when min_x |p - x| - (1 + s) r(x)
-<= tau (``Params.coverage_slack`` s, tau = ``coverage_tau_factor`` x median NN spacing): a curve's
+<= tau (``Params.coverage_slack`` s, tau = ``coverage_tau_factor`` x median NN spacing; r(x) plus the
+noise shortfall of :func:`noise_shortfall`, ``coverage_radius_quantile``): a curve's
 balls never fill a shape's ends, so a complete skeleton must not need them to.  All three searches
 are exact, in the compiled kernel ``_balls.c`` (:mod:`.ball_tree`) on every core, a checkpoint every ~0.1 s.  Above
 ``Params.coverage_exact_points`` cloud points the gaps are found for a random subsample of the cloud
@@ -18,16 +19,27 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+from scipy.spatial import cKDTree
 
 from ..geometry import Checkpoint, no_checkpoint, scaled_checkpoint, unique_rows
 from ..params import Params
 from .ball_tree import BallTree
 from .cloud_index import CloudIndex
 
-__all__ = ["Coverage", "coverage", "coverage_tau", "min_ball_excess", "covered_by_balls", "BallTree"]
+__all__ = ["Coverage", "coverage", "coverage_tau", "min_ball_excess", "covered_by_balls", "BallTree",
+           "noise_shortfall"]
 
 # the random subsample above coverage_exact_points (the same seed as the diagnostics' subsamples)
 SAMPLE_SEED = 0
+# the noise shortfall of the radii (noise_shortfall): cloud points it reads, a cell's fewest territory
+# points, cell side in sample spacings, the shortfall (in r(x)) below which a cloud counts as clean
+NOISE_SAMPLE = 20_000
+NOISE_MIN_POINTS = 8
+NOISE_CELL = 4.0
+NOISE_DEAD = 0.1
+# a cell's territory is a shell when its excess spreads (between the quantile q and 1 - q) over at most
+# this many x its radius (Gaussian noise of 0.25 r at 20k points: about 1.4)
+NOISE_SPREAD = 2.0
 
 
 @dataclass
@@ -132,16 +144,17 @@ def coverage(
     if len(elements) == 0:
         gap, covered = np.full(len(cloud), np.inf), np.zeros(len(cloud), bool)
     elif len(cloud) > m:
-        return _estimated(cloud, elements, m, tau, s, checkpoint, workers, index)
+        return _estimated(cloud, elements, m, tau, s, checkpoint, workers, index, params)
     else:
         build = scaled_checkpoint(checkpoint, 0.05, 0.1)
         surface = BallTree(cloud, slab=True, checkpoint=build) if index is None else index.surface(build)
         balls = BallTree(elements, checkpoint=build)
-        r, contact = surface.nearest(balls.points, scaled_checkpoint(checkpoint, 0.1, 0.35), workers, return_index=True)
+        r, contact, rim = _radii(surface, balls, cloud, params, scaled_checkpoint(checkpoint, 0.1, 0.35), workers)
         # |p - x| - (1 + s) r <= tau  <=>  p lies in the ball of radius (1 + s) r + tau
-        balls.set_radii(r, (1.0 + s) * r + tau, surface.points[contact], scaled_checkpoint(checkpoint, 0.35, 0.4), workers)
-        # a cloud point that is some element's nearest has excess exactly 0 for that ball (the same
-        # arithmetic both ways) and lies in its larger ball: gap 0, covered, no search
+        balls.set_radii(r, (1.0 + s) * r + tau, rim, scaled_checkpoint(checkpoint, 0.35, 0.4), workers)
+        # a cloud point that is some element's nearest has excess at most 0 for that ball (exactly 0
+        # without a noise shortfall: the same arithmetic both ways) and lies in its larger ball: gap 0,
+        # covered, no search
         rest = np.ones(len(cloud), bool)
         rest[contact] = False
         g, c = balls.balls(surface.points[rest], floor=0.0, checkpoint=scaled_checkpoint(checkpoint, 0.4, 1.0), workers=workers)
@@ -149,6 +162,75 @@ def coverage(
         gap[surface.perm[rest]] = np.maximum(g, 0.0)
         covered[surface.perm[rest]] = c
     return _summary(gap, covered, tau, s, len(elements))
+
+
+def noise_shortfall(cloud: np.ndarray, elements: np.ndarray, r: np.ndarray, quantile: float,
+                    checkpoint: Checkpoint = no_checkpoint) -> np.ndarray:
+    """How much noise shrinks each element's radius r(x) (its nearest cloud point's distance), >= 0.
+
+    The nearest of many noisy points lies well inside the true surface: on a tube with Gaussian noise
+    of 0.25 r, r(x) is 0.36-0.50 r at 20k points and falls as the cloud grows, so the balls explain
+    less and less of a clean axis.  The cloud points nearest to an element (its territory) lie around
+    its true radius: per cell of elements (``NOISE_CELL`` sample spacings; the cloud read on a sample of
+    at most ``NOISE_SAMPLE``) the ``quantile`` of their excess |p - x| - r(x), over the cell's median
+    r(x); the median over the cells whose excess spreads like a shell's (``NOISE_SPREAD``; a missing
+    part's end cell spreads over its length), times r(x), when above ``NOISE_DEAD`` (clean clouds keep
+    r(x) exactly).  A low quantile: a flat part's territory starts at its narrow side (excess about 0)."""
+    n_el = len(elements)
+    out = np.zeros(n_el)
+    if not quantile > 0 or n_el == 0 or len(cloud) < 2 * NOISE_MIN_POINTS:
+        return out
+    rng = np.random.default_rng(SAMPLE_SEED)
+    pts = cloud if len(cloud) <= NOISE_SAMPLE else cloud[np.sort(rng.choice(len(cloud), NOISE_SAMPLE, replace=False))]
+    spacing = float(np.median(cKDTree(pts).query(pts, k=2)[0][:, 1]))
+    checkpoint(0.4)
+    dist, owner = cKDTree(elements).query(pts)
+    excess = np.maximum(dist - r[owner], 0.0)
+    cells = np.floor((elements - elements.min(axis=0)) / max(NOISE_CELL * spacing, 1e-12)).astype(np.int64)
+    cell = np.unique(cells, axis=0, return_inverse=True)[1].reshape(-1)
+    group = cell[owner]
+    n_cells = int(cell.max()) + 1
+    count = np.bincount(group, minlength=n_cells)
+    ok = count >= NOISE_MIN_POINTS
+    radius = _group_quantile(r[owner], group, n_cells, 0.5)
+    ok &= radius > 0
+    if not ok.any():
+        return out
+    # one figure for the cloud: the median over the cells of the shortfall in units of their radius,
+    # over the cells whose territory is a shell (a missing part or the cloud around a stub in the air is
+    # an end cell's territory: its excess spreads over lengths, not a noise's width); none when most
+    # cells are not
+    low = _group_quantile(excess, group, n_cells, quantile)
+    high = _group_quantile(excess, group, n_cells, 1.0 - quantile)
+    shell = ok & (high - low <= NOISE_SPREAD * radius)
+    if np.count_nonzero(shell) < 0.5 * np.count_nonzero(ok):
+        return out
+    ratio = float(np.median(low[shell] / radius[shell]))
+    checkpoint(1.0)
+    return ratio * r if ratio > NOISE_DEAD else out
+
+
+def _group_quantile(values: np.ndarray, group: np.ndarray, n_groups: int, q: float) -> np.ndarray:
+    """The (lower) ``q`` quantile of ``values`` in each group 0 .. n_groups - 1 (0 for an empty one)."""
+    order = np.lexsort((values, group))
+    count = np.bincount(group, minlength=n_groups)
+    start = np.concatenate([[0], np.cumsum(count)[:-1]])
+    at = start + np.floor(q * np.maximum(count - 1, 0)).astype(np.int64)
+    out = np.zeros(n_groups)
+    has = count > 0
+    out[has] = values[order][at[has]]
+    return out
+
+
+def _radii(surface: BallTree, balls: BallTree, cloud: np.ndarray, params: Params, checkpoint: Checkpoint,
+           workers: int | None) -> tuple[np.ndarray, np.ndarray, np.ndarray | None]:
+    """Each ball's radius in tree order, r(x) plus its noise shortfall; its nearest cloud point's tree
+    position; that point when it lies on the ball's rim (None once a shortfall grew some ball)."""
+    r, contact = surface.nearest(balls.points, scaled_checkpoint(checkpoint, 0.0, 0.8), workers, return_index=True)
+    add = noise_shortfall(cloud, balls.points, r, float(params.coverage_radius_quantile), scaled_checkpoint(checkpoint, 0.8, 1.0))
+    if add.any():
+        return r + add, contact, None
+    return r, contact, surface.points[contact]
 
 
 def _summary(gap: np.ndarray, covered: np.ndarray, tau: float, s: float, n_elements: int,
@@ -168,7 +250,8 @@ def _summary(gap: np.ndarray, covered: np.ndarray, tau: float, s: float, n_eleme
 
 
 def _estimated(cloud: np.ndarray, elements: np.ndarray, m: int, tau: float, s: float,
-               checkpoint: Checkpoint, workers: int | None, index: CloudIndex | None = None) -> Coverage:
+               checkpoint: Checkpoint, workers: int | None, index: CloudIndex | None = None,
+               params: Params = Params()) -> Coverage:
     """Coverage above ``coverage_exact_points`` = m cloud points: the gaps of a random subsample of m
     cloud points to the balls of at most m random elements, each radius r(x) still the distance to
     the whole cloud (a sparser cloud would grow every ball); every other cloud point takes the gap and
@@ -181,8 +264,8 @@ def _estimated(cloud: np.ndarray, elements: np.ndarray, m: int, tau: float, s: f
     build = scaled_checkpoint(checkpoint, 0.05, 0.1)
     surface = BallTree(cloud, slab=True, checkpoint=build) if index is None else index.surface(build)
     balls = BallTree(elements, checkpoint=build)
-    r, contact = surface.nearest(balls.points, scaled_checkpoint(checkpoint, 0.1, 0.35), workers, return_index=True)
-    balls.set_radii(r, (1.0 + s) * r + tau, surface.points[contact], scaled_checkpoint(checkpoint, 0.35, 0.4), workers)
+    r, contact, rim = _radii(surface, balls, cloud, params, scaled_checkpoint(checkpoint, 0.1, 0.35), workers)
+    balls.set_radii(r, (1.0 + s) * r + tau, rim, scaled_checkpoint(checkpoint, 0.35, 0.4), workers)
     # the sample in the whole cloud's tree order (neighbours ask one after the other)
     in_sample = np.zeros(n, bool)
     in_sample[sample_rows] = True

@@ -131,5 +131,6 @@ def sparse_boundedness_warning(shares: dict[str, float], ratio: float) -> TrustW
     return TrustWarning(
         "sparse_boundedness",
         f"{which} are unbounded where the cloud is sampled more than {ratio:g} x as sparsely as its median: "
-        "their rays may pass between the samples, so boundedness there measures the sampling, not the skeleton",
+        "their rays may pass between the samples, so boundedness there measures the sampling, not the skeleton; "
+        "--density-aware (boundedness_density_aware) casts them also against points filled into the sparse parts",
     )

@@ -17,11 +17,12 @@ from ..curve import CurveSkeleton
 from ..metrics.curve_sampling import CurveSamples, sample_curve
 from ..errors import SkelInputError
 from ..geometry import Checkpoint, Normalization, as_points, check_extent, check_magnitude, no_checkpoint
-from ..metrics.boundedness import boundedness
+from ..metrics.boundedness import boundedness, rays_radius
 from ..metrics.cloud_index import CloudIndex
 from ..metrics.coverage import coverage_tau
 from ..params import Params
 from ..scan.capping import cap_openings
+from ..scan.density import density_fill
 from ..scan.openings import Opening, find_openings
 from ..scan.prepare import without_strays
 from ..scan.scan_report import ScanReport
@@ -73,6 +74,9 @@ class EvalContext:
     #: (user units, rows of ``cloud``); what the scan report will say (None: no scan option given)
     viewpoints_n: np.ndarray | None = None
     capped_cloud_n: np.ndarray | None = None
+    #: the params boundedness runs with: ``params``, or with density-aware filling the rays' radius
+    #: factor that keeps h = rays_radius_factor x the scanned cloud's own median spacing
+    bounded_params: Params | None = None
     openings: list[Opening] | None = None
     scan: ScanReport | None = None
     unseen: dict[str, np.ndarray] = field(default_factory=dict)
@@ -131,7 +135,8 @@ class EvalContext:
 
     @property
     def bounded_cloud_n(self) -> np.ndarray:
-        """The cloud boundedness runs on: the normalized cloud, with the caps of ``--cap-openings``."""
+        """The cloud boundedness runs on: the normalized cloud, with the caps of ``--cap-openings`` and the
+        points ``boundedness_density_aware`` fills into its sparse parts."""
         return self.cloud_n if self.capped_cloud_n is None else self.capped_cloud_n
 
     def boundedness(self, points_n: np.ndarray, checkpoint: Checkpoint = no_checkpoint,
@@ -141,12 +146,13 @@ class EvalContext:
         name in ``unseen``, also keeps there (``self.unseen``) how much of each point's unseen directions
         the cloud leaves uncovered."""
         if self.viewpoints_n is None:
-            return boundedness(self.bounded_cloud_n, points_n, params=self.params, checkpoint=checkpoint)
+            return boundedness(self.bounded_cloud_n, points_n, params=self.bounded_params or self.params,
+                               checkpoint=checkpoint)
         if unseen is None:
-            return seen_boundedness(self.bounded_cloud_n, points_n, self.viewpoints_n, params=self.params,
-                                    checkpoint=checkpoint)
+            return seen_boundedness(self.bounded_cloud_n, points_n, self.viewpoints_n,
+                                    params=self.bounded_params or self.params, checkpoint=checkpoint)
         beta, self.unseen[unseen] = seen_boundedness(self.bounded_cloud_n, points_n, self.viewpoints_n,
-                                                     params=self.params, return_missing=True,
+                                                     params=self.bounded_params or self.params, return_missing=True,
                                                      checkpoint=checkpoint)
         return beta
 
@@ -288,6 +294,15 @@ def build_context(
 
     if cap_openings:
         _cap(ctx, checkpoint)
+    if params.boundedness_density_aware:  # points filled into the sparse parts, for boundedness only
+        fill = density_fill(ctx.cloud_n, params, checkpoint)
+        if len(fill):
+            h = rays_radius(ctx.bounded_cloud_n, params.rays_radius_factor)
+            filled = np.vstack([ctx.bounded_cloud_n, fill])
+            spacing = rays_radius(filled, 1.0)
+            if spacing > 0:  # the filled points must not narrow the rays: h stays the scanned cloud's
+                ctx.capped_cloud_n = filled
+                ctx.bounded_params = params.replace(rays_radius_factor=h / spacing)
 
     if ctx.mode == "none":
         reason = (f"the skeletal set has {len(ctx.skeletal)} points and the cloud {len(cloud)}; "
