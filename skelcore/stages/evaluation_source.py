@@ -11,7 +11,7 @@ from typing import Any
 from .catalogue import CATALOGUE
 from .context import EvalContext
 
-__all__ = ["EvaluationSource", "CURVE_STAGES", "REUSED"]
+__all__ = ["EvaluationSource", "CURVE_STAGES", "REUSED", "READ_BY_REPAIR"]
 
 #: the stages whose result depends on the curve (their context inputs name it): an update runs them again
 CURVE_STAGES = tuple(s.name for s in CATALOGUE
@@ -19,6 +19,8 @@ CURVE_STAGES = tuple(s.name for s in CATALOGUE
                      and s.name != "correspondence")  # of a given skeletal set: reads no curve
 #: of those, the results an update reads (the samples' values it keeps where a sample did not move)
 REUSED = ("curve boundedness", "curve centeredness")
+#: kept too: the repair reads the defects and missing parts found (skeleton_repair.findings)
+READ_BY_REPAIR = ("curve defects", "curve missing parts")
 
 
 @dataclass
@@ -26,17 +28,16 @@ class EvaluationSource:
     """``args``: the keyword arguments :func:`skelcore.evaluate` was called with (progress, cancel and
     on_stages left out); ``ctx``: the stages' context, None once pickled; ``cache``: what updates
     share (built on first use, e.g. the cloud's slab grid). Of the curve's stages the context keeps only the
-    results an update reads (``REUSED``)."""
+    results an update or the repair reads (``REUSED``, ``READ_BY_REPAIR``)."""
 
     args: dict[str, Any]
     ctx: EvalContext | None = None
     cache: dict[str, Any] = field(default_factory=dict)
 
     def __post_init__(self) -> None:
-        # the other curve stages' results are the Evaluation's own or are never read again (at 1M points
-        # the curve's missing parts hold 5 MB of per-point arrays)
+        # the other curve stages' results are the Evaluation's own or are never read again
         if self.ctx is not None:
-            for name in set(CURVE_STAGES) - set(REUSED):
+            for name in set(CURVE_STAGES) - set(REUSED) - set(READ_BY_REPAIR):
                 self.ctx.results.pop(name, None)
 
     def __getstate__(self) -> dict[str, Any]:

@@ -140,7 +140,8 @@ def test_update_with_a_reference_a_scan_option_or_reverse_correspondence(options
 def test_the_missing_parts_subsample_index_is_kept_across_updates_and_dropped_with_the_cloud():
     """Above missing_max_points (and without coverage) the missing parts search a subsample: its tree and
     spacings are made once and kept while the evaluation's cloud lives; an update using them equals a
-    fresh evaluate; the context keeps of the curve's stages only the samples' values."""
+    fresh evaluate; the context keeps of the curve's stages only the samples' values and what the repair
+    reads (the defects, the missing parts)."""
     import gc
 
     from skelcore import Params
@@ -154,7 +155,8 @@ def test_the_missing_parts_subsample_index_is_kept_across_updates_and_dropped_wi
     ev = evaluate(sh.cloud, curve=base, params=params)
     kept = cloud_index._kept.get("index")
     assert kept is not None and len(kept.cloud) == 1000
-    assert set(ev.source.ctx.results) & {"curve defects", "curve missing parts"} == set()
+    assert {"curve defects", "curve missing parts"} <= set(ev.source.ctx.results)
+    assert "curve coverage" not in ev.source.ctx.results
     updated = ev.update(change)
     assert cloud_index._kept.get("index") is kept
     assert "cloud_missing_curve" in updated.diagnostics.arrays
