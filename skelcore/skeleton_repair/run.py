@@ -23,6 +23,7 @@ from .findings import read_findings
 from .guard import verdict
 from .proposals import Action, propose
 from .fill import fill_missing
+from .recentre import RECENTRE, recentre
 from .reroute import route_inside
 
 __all__ = ["RepairResult", "repair"]
@@ -72,6 +73,11 @@ def _in_shape(ev: Evaluation) -> tuple[Callable[[np.ndarray], np.ndarray] | None
     return inside, float(vs.size) / float(ctx.norm.scale), route
 
 
+def _no_defect_left(found: Any) -> str:
+    left = sorted(set(found.warnings) & UNTALLIED)
+    return f"left: {', '.join(left)} (not acted on)" if left else "no defect left"
+
+
 def _try(curve: CurveSkeleton, action: Action) -> CurveSkeleton:
     for i, entry in enumerate(action.entries):
         curve, _ = apply(curve, entry, f"{action.code} step {i}")
@@ -110,15 +116,16 @@ def repair(cloud: np.ndarray, curve: CurveSkeleton | tuple, skeletal: np.ndarray
     stopped = f"repair_max_rounds={p.repair_max_rounds} reached"
     for rnd in range(p.repair_max_rounds):
         check()
-        if found.total == 0:
-            left = sorted(set(found.warnings) & UNTALLIED)
-            stopped = f"left: {', '.join(left)} (not acted on)" if left else "no defect left"
+        drift = recentre(cur, found, np.asarray(ev.source.args["cloud"], float), p) if p.repair_recentre else []
+        if found.total == 0 and not drift:
+            stopped = _no_defect_left(found)
             break
         tell(rnd / p.repair_max_rounds, f"round {rnd + 1}")
         inside, voxel, route = _in_shape(ev)
         candidates = propose(cur, found, inside, p.repair_join_step * voxel, route)
         if p.repair_fill_missing:
             candidates += fill_missing(cur, found.missing, np.asarray(ev.source.args["cloud"], float))
+        candidates += drift
         done = False
         for action in candidates[:p.repair_max_tries]:
             check()
@@ -133,7 +140,7 @@ def repair(cloud: np.ndarray, curve: CurveSkeleton | tuple, skeletal: np.ndarray
             new_ev = ev.update(new)
             new_found = read_findings(new_ev)
             why.update(after=_rounded(new_found.measures), defects_after=new_found.total)
-            refusal = verdict(found, new_found, p)
+            refusal = verdict(found, new_found, p, recentring=action.code == RECENTRE)
             if refusal is not None:
                 rejected.append({"entries": action.entries, "why": {**why, "rejected": refusal}})
                 continue
@@ -142,7 +149,8 @@ def repair(cloud: np.ndarray, curve: CurveSkeleton | tuple, skeletal: np.ndarray
             ev, cur, found, done = new_ev, new, new_found, True
             break
         if not done:
-            stopped = "no candidate action helps" if candidates else "no action for the defects left"
+            stopped = ("no candidate action helps" if candidates else "no action for the defects left"
+                       ) if found.total else _no_defect_left(found)
             break
     log = new_log(start, [])
     log["operations"] = ops
