@@ -1,20 +1,22 @@
 """Re-centring of branches that drift to the surface (docs/repair.md "Actions"): a curve vertex whose
 cross-section says it is not centred (c <= c*, docs/metrics.md section 3.3) moves to the centre of
 that cross-section, the slab ring's fitted centre exactly as curve centeredness computes it
-(docs/metrics.md section 3.2). One action per branch, its vertices moved by ``move_vertex``."""
+(docs/metrics.md section 3.2). One action per run of degree-2 vertices between two nodes (a branch),
+its vertices moved by ``move_vertex``."""
 
 from __future__ import annotations
 
 from typing import Any
 
 import numpy as np
+from scipy.sparse import coo_matrix
+from scipy.sparse.csgraph import connected_components
 
 from ..curve import CurveSkeleton
 from ..geometry import bbox_diagonal, stable_argsort
 from ..metrics.centeredness import ring_length, slab_grid
 from ..metrics.ellipse_fit import fit_ellipses
 from ..params import Params
-from .findings import Findings
 from .proposals import Action
 
 __all__ = ["RECENTRE", "cross_section_centres", "recentre"]
@@ -36,6 +38,15 @@ def _tangents(curve: CurveSkeleton, ids: np.ndarray) -> np.ndarray:
     t = curve.vertices[nb[ids, 1]] - curve.vertices[nb[ids, 0]]
     n = np.linalg.norm(t, axis=1, keepdims=True)
     return np.divide(t, n, out=np.full_like(t, np.nan), where=n > 0)
+
+
+def _runs(curve: CurveSkeleton, deg: np.ndarray) -> np.ndarray:
+    """A label per vertex: the runs of degree-2 vertices between nodes (ends, junctions) share one."""
+    e = curve.edges
+    keep = (deg[e[:, 0]] == 2) & (deg[e[:, 1]] == 2)
+    n = curve.n_vertices
+    g = coo_matrix((np.ones(int(keep.sum())), (e[keep, 0], e[keep, 1])), shape=(n, n))
+    return connected_components(g, directed=False)[1]
 
 
 def cross_section_centres(cloud: np.ndarray, points: np.ndarray, dirs: np.ndarray, params: Params
@@ -80,10 +91,11 @@ def cross_section_centres(cloud: np.ndarray, points: np.ndarray, dirs: np.ndarra
     return centre, radius, c
 
 
-def recentre(curve: CurveSkeleton, f: Findings, cloud: np.ndarray, params: Params) -> list[Action]:
+def recentre(curve: CurveSkeleton, cloud: np.ndarray, params: Params) -> list[Action]:
     """One action per branch holding inner vertices that are not centred (c <= ``params.c_star``):
-    each moves to its cross-section's centre when that lies within the ring's radius; branches with
-    the lowest mean c first (ties by branch id)."""
+    each moves to its cross-section's centre when that lies within the ring's radius and the vertex is
+    centred (c > c*) in the cross-section cut there again (a ring caught by another branch or a bad
+    fit moves nothing); branches with the lowest mean c first (ties by their lowest vertex)."""
     deg = np.bincount(curve.edges.ravel(), minlength=curve.n_vertices)
     inner = np.flatnonzero(deg == 2)
     if not len(inner) or not len(cloud):
@@ -94,23 +106,24 @@ def recentre(curve: CurveSkeleton, f: Findings, cloud: np.ndarray, params: Param
     centre, radius, c = cross_section_centres(np.asarray(cloud, float), curve.vertices[inner], u, params)
     shift = np.linalg.norm(centre - curve.vertices[inner], axis=1)
     move = np.isfinite(c) & (c <= float(params.c_star)) & (shift <= radius) & (shift > 0)
+    if move.any():  # kept only where the vertex is centred in the cross-section at its new place too
+        _, _, c_new = cross_section_centres(np.asarray(cloud, float), centre[move], u[move], params)
+        move[np.flatnonzero(move)[~(c_new > float(params.c_star))]] = False
     if not move.any():
         return []
-    branch_of = np.zeros(curve.n_vertices, np.int64)
-    if f.defects is not None:
-        for b, path in enumerate(f.defects.branches.paths):
-            branch_of[np.asarray(path, np.int64)[1:-1]] = b
+    run = _runs(curve, deg)
     groups: dict[int, list[int]] = {}
     for i in np.flatnonzero(move):
-        groups.setdefault(int(branch_of[inner[i]]), []).append(int(i))
+        groups.setdefault(int(run[inner[i]]), []).append(int(i))
     out = []
-    for b in sorted(groups, key=lambda b: (float(np.mean(c[groups[b]])), b)):
+    for b in sorted(groups, key=lambda b: (float(np.mean(c[groups[b]])), int(inner[groups[b]].min()))):
         rows = groups[b]
         entries: list[dict[str, Any]] = [{"op": "move_vertex", "args": {
             "vertex": int(inner[i]), "position": [float(x) for x in centre[i]]}} for i in rows]
         on = np.isin(curve.edges, inner[rows]).any(axis=1)
-        out.append(Action(RECENTRE, {"branch": b},
-                          f"{len(rows)} vertices of branch {b} off the centre of their cross-sections (mean c "
-                          f"{float(np.mean(c[rows])):.3g} <= c*={params.c_star}): moved to the centres, by "
-                          f"{float(np.mean(shift[rows])):.3g} on average", entries, np.flatnonzero(on)))
+        first = int(inner[rows].min())
+        out.append(Action(RECENTRE, {"vertex": first, "vertices": len(rows)},
+                          f"{len(rows)} vertices of the branch through vertex {first} off the centre of their "
+                          f"cross-sections (mean c {float(np.mean(c[rows])):.3g} <= c*={params.c_star}): moved to "
+                          f"the centres, by {float(np.mean(shift[rows])):.3g} on average", entries, np.flatnonzero(on)))
     return out

@@ -137,7 +137,7 @@ def repair(cloud: np.ndarray, curve: CurveSkeleton | tuple | None, skeletal: np.
     stopped = f"repair_max_rounds={p.repair_max_rounds} reached"
     for rnd in range(p.repair_max_rounds):
         check()
-        drift = recentre(cur, found, np.asarray(ev.source.args["cloud"], float), p) if p.repair_recentre else []
+        drift = recentre(cur, np.asarray(ev.source.args["cloud"], float), p) if p.repair_recentre else []
         if found.total == 0 and not drift:
             stopped = _no_defect_left(found)
             break
