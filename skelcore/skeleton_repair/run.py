@@ -138,6 +138,7 @@ def repair(cloud: np.ndarray, curve: CurveSkeleton | tuple | None, skeletal: np.
     for rnd in range(p.repair_max_rounds):
         check()
         drift = recentre(cur, np.asarray(ev.source.args["cloud"], float), p) if p.repair_recentre else []
+        drift = [a for a in drift if all(a.entries != r["entries"] for r in rejected)]
         if found.total == 0 and not drift:
             stopped = _no_defect_left(found)
             break
@@ -146,7 +147,7 @@ def repair(cloud: np.ndarray, curve: CurveSkeleton | tuple | None, skeletal: np.
         candidates = propose(cur, found, inside, p.repair_join_step * voxel, route)
         if p.repair_fill_missing:
             candidates += fill_missing(cur, found.missing, np.asarray(ev.source.args["cloud"], float))
-        candidates += drift
+        candidates += drift  # a re-centring once rejected is not tried again (the same moves)
         done = False
         for action in candidates[:p.repair_max_tries]:
             check()
