@@ -101,7 +101,7 @@ def _try(curve: CurveSkeleton, action: Action) -> CurveSkeleton:
     return curve
 
 
-def repair(cloud: np.ndarray, curve: CurveSkeleton | tuple | None, skeletal: np.ndarray | None = None,
+def repair(cloud: np.ndarray, curve: CurveSkeleton | tuple | None = None, skeletal: np.ndarray | None = None,
            params: Params | None = None, cancel: Callable[[], bool] | None = None,
            progress: Callable[[float, str], None] | None = None) -> RepairResult:
     """Repair ``curve`` against ``cloud`` from the judge's findings (docs/repair.md); deterministic for
@@ -114,9 +114,9 @@ def repair(cloud: np.ndarray, curve: CurveSkeleton | tuple | None, skeletal: np.
     extracted = ""
     if curve is None and skeletal is not None:
         curve, extracted = curve_from_skeletal(cloud, skeletal), f"the curve was extracted from the skeletal set by {HOW}"
+    if curve is None:
+        raise SkelInputError("repair needs a curve skeleton or a skeletal set")
     start = CurveSkeleton.coerce(curve, "curve")
-    if start is None:
-        raise SkelInputError("repair needs a curve skeleton")
     check_curve(start, p)
 
     def check() -> None:

@@ -134,3 +134,8 @@ def test_cli_refuses_in_one_line(files, capsys, extra, match):
     err = capsys.readouterr().err
     assert code == 2 and match in err and err.count("\n") == 1
     assert not (d / "x.ply").exists() and (d / "skel.ply").stat().st_size > 100
+
+
+def test_a_repair_needs_a_curve_or_a_skeletal_set(files):
+    with pytest.raises(skelcore.SkelInputError, match="a curve skeleton or a skeletal set"):
+        skelcore.repair(load_cloud(files / "cloud.ply"))
