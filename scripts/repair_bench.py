@@ -22,7 +22,7 @@ from skelcore.io import load_cloud, load_curve
 from skelcore.metrics.ground_truth import compare_with_ground_truth
 
 METHODS = ("cao", "skelscope")
-DEFECT_NAMES = ("spurs", "shortcut", "chord_cycle", "broken_cycle", "missing_branch", "noise")
+DEFECT_NAMES = ("spurs", "shortcut", "chord_cycle", "broken_cycle", "missing_branch", "noise", "offset")
 WARN = ("spurious_branches", "spurious_cycles", "missing_cycles", "outside", "incomplete")
 
 

@@ -189,6 +189,10 @@ class Params:
     repair_fill_missing : skelcore.repair also tries to fill a missing part (a new stretch of curve).
     repair_join_step : a join between components is tried only when every point along it, every this
         many x the voxel size of the shape's interior, lies inside the shape.
+    repair_recentre : skelcore.repair also moves off-centre curve vertices (c <= c_star) to the centre of
+        their cross-section.
+    repair_centre_gain : a re-centring that removes no defect is kept when curve centeredness rises by at
+        least this (and completeness, boundedness and the defect count do not get worse).
     """
 
     normalize_by: Literal["longest_side", "diagonal"] = "longest_side"
@@ -295,6 +299,8 @@ class Params:
     repair_score_drop: float = 0.02
     repair_join_step: float = 0.5
     repair_fill_missing: bool = True
+    repair_recentre: bool = True
+    repair_centre_gain: float = 0.01
 
     def __post_init__(self) -> None:
         def bad(name: str, why: str) -> None:
@@ -385,7 +391,7 @@ class Params:
         for name in ("repair_max_rounds", "repair_max_tries", "repair_max_components"):
             if int(getattr(self, name)) < 1:
                 bad(name, "must be a positive integer")
-        for name in ("repair_completeness_drop", "repair_outside_rise", "repair_score_drop"):
+        for name in ("repair_completeness_drop", "repair_outside_rise", "repair_score_drop", "repair_centre_gain"):
             if not float(getattr(self, name)) >= 0:
                 bad(name, "must be >= 0")
         if not float(self.repair_join_step) > 0:

@@ -1,11 +1,13 @@
-"""``skelcore repair CLOUD --curve C [--skeletal S] --out-curve C2 [--log F]``: repair a curve skeleton
-from the judge's findings (docs/repair.md) and write the repaired curve and the edit log (replayable
-with ``skelcore edit``). Never overwrites a file nor an input; refuses in one line (exit 2) a curve
-without edges, one in another frame, one of too many components."""
+"""``skelcore repair CLOUD --curve C [--skeletal S] --out-curve C2 [--out-skeletal S2] [--log F]``: repair
+a curve skeleton from the judge's findings (docs/repair.md) and write the repaired curve, the repaired
+skeletal set and the edit log (replayable with ``skelcore edit``). Without --curve the curve is
+extracted from S. Never overwrites a file nor an input; refuses in one line (exit 2) a curve without
+edges, one in another frame, one of too many components."""
 
 from __future__ import annotations
 
 import argparse
+import sys
 from pathlib import Path
 from typing import Any
 
@@ -19,12 +21,18 @@ def register(subparsers: argparse._SubParsersAction) -> argparse.ArgumentParser:
         description="Evaluate CURVE against CLOUD, act on the defects found (spurious branches pruned, edges "
         "outside the shape deleted, spurious cycles cut at their weakest edge, components joined inside the "
         "shape), keep each action only when nothing gets worse, and write the repaired curve to C2 (its "
-        "extension picks the format) and, with --log, the edit log of what was done and why (docs/repair.md). "
-        "C2 and F must not exist yet.")
+        "extension picks the format), with --out-skeletal the repaired skeletal set (one row per cloud row) and, "
+        "with --log, the edit log of what was done and why (docs/repair.md). Without --curve the curve is "
+        "extracted from the skeletal set S (the cao skeletonizer's curve step) and repaired. "
+        "C2, S2 and F must not exist yet.")
     p.add_argument("cloud", metavar="CLOUD", help="the point cloud")
-    p.add_argument("--curve", metavar="C", required=True, help="the curve skeleton to repair")
-    p.add_argument("--skeletal", metavar="S", help="the skeletal point set (optional; scored alongside)")
+    p.add_argument("--curve", metavar="C", help="the curve skeleton to repair (else extracted from S)")
+    p.add_argument("--skeletal", metavar="S",
+                   help="the skeletal point set, one row per cloud row (scored alongside; without --curve the "
+                   "curve is extracted from it)")
     p.add_argument("--out-curve", metavar="C2", required=True, help="the repaired curve to write (a new file)")
+    p.add_argument("--out-skeletal", metavar="S2",
+                   help="the repaired skeletal set to write, one row per cloud row (a new file; docs/repair.md)")
     p.add_argument("--log", metavar="F", help="the edit log to write (JSON, a new file)")
     p.add_argument("--quiet", action="store_true", help="no progress line")
     p.set_defaults(func=run_repair)
@@ -46,35 +54,73 @@ def run_repair(args: argparse.Namespace) -> int:
     from ..edit import write_log
     from ..errors import SkelInputError
     from ..io.correspondence_files import load_skeletal
-    from ..io.writers import CURVE_SUFFIXES, write_curve
+    from ..io.writers import CURVE_SUFFIXES, POINT_SUFFIXES, write_curve, write_point_set
     from ..skeleton_repair import repair
+    from ..skeleton_repair.from_skeletal import HOW
+    from ..skeleton_repair.skeletal_out import repaired_skeletal
     from .common import clear_progress_line, stderr_progress
 
+    if not (args.curve or args.skeletal):
+        raise SkelInputError("nothing to repair: give --curve and/or --skeletal")
     out = Path(args.out_curve)
     inputs = tuple(p for p in (args.cloud, args.curve, args.skeletal) if p)
     if out.suffix.lower() not in CURVE_SUFFIXES:
         raise SkelInputError(f"no curve writer for {out.suffix or '(no extension)'} "
                              f"(writable: {', '.join(CURVE_SUFFIXES)})", out)
-    _new_file(out, inputs)
-    if args.log:
-        if Path(args.log).resolve() == out.resolve():
-            raise SkelInputError("--log and --out-curve name the same file", args.log)
-        _new_file(Path(args.log), inputs)
+    outs = _outputs(out, args, POINT_SUFFIXES, inputs)
     cloud = io.load_cloud(args.cloud)
-    curve = io.load_curve(args.curve)
-    skeletal = load_skeletal(args.skeletal, cloud)[0] if args.skeletal else None
+    skeletal = None
+    if args.skeletal:
+        skeletal, index, _fmt = load_skeletal(args.skeletal, cloud)
+        if index is not None or len(skeletal) != len(cloud):
+            raise SkelInputError(f"repair takes a skeletal set with one row per cloud row ({len(skeletal)} rows, "
+                                 f"the cloud has {len(cloud)})", args.skeletal)
+    curve = io.load_curve(args.curve) if args.curve else None
+    if curve is None:
+        print(f"skelcore: {args.skeletal}: no --curve: the curve was extracted from the skeletal set by {HOW}",
+              file=sys.stderr)
     progress = stderr_progress(args.quiet)
     result = repair(cloud, curve, skeletal=skeletal, progress=progress)
     clear_progress_line(progress)
-    for path in (out, Path(args.log) if args.log else None):
-        if path is not None and path.exists():  # appeared while we worked
+    if result.extracted:
+        result.log["repair"]["extracted"] = f"the curve was extracted from the skeletal set {args.skeletal} by {HOW}"
+    for path in outs:
+        if path.exists():  # appeared while we worked
             raise SkelInputError("exists: refusing to overwrite it", path)
     write_curve(out, result.curve, inputs=inputs, lossy=True)
+    moved = ""
+    if args.out_skeletal:
+        s2, n_moved = repaired_skeletal(cloud, result.start, result.curve, skeletal)
+        write_point_set(args.out_skeletal, s2, inputs=inputs)
+        moved = f"; {args.out_skeletal}: {len(s2)} skeletal points, {n_moved} moved onto the repaired curve"
     if args.log:
         write_log(args.log, result.log, inputs)
-    print(f"{args.curve}: {curve.n_vertices} vertices, {curve.n_edges} edges; {repair_summary(result)} "
-          f"({result.stopped}); {out}: {result.curve.n_vertices} vertices, {result.curve.n_edges} edges")
+    start = args.curve or f"the curve of {args.skeletal}"
+    first = result.start
+    print(f"{start}: {first.n_vertices} vertices, {first.n_edges} edges; {repair_summary(result)} "
+          f"({result.stopped}); {out}: {result.curve.n_vertices} vertices, {result.curve.n_edges} edges{moved}")
     return 0
+
+
+def _outputs(out: Path, args: argparse.Namespace, point_suffixes: tuple[str, ...], inputs: tuple[str, ...]
+             ) -> list[Path]:
+    """The files to write, each checked: new, not an input, not another output, a known format."""
+    from ..errors import SkelInputError
+
+    outs = [out]
+    for flag, name in (("--out-skeletal", args.out_skeletal), ("--log", args.log)):
+        if not name:
+            continue
+        path = Path(name)
+        if flag == "--out-skeletal" and path.suffix.lower() not in point_suffixes:
+            raise SkelInputError(f"no point-set writer for {path.suffix or '(no extension)'} "
+                                 f"(writable: {', '.join(point_suffixes)})", path)
+        if any(path.resolve() == o.resolve() for o in outs):
+            raise SkelInputError(f"{flag} names a file another output names", path)
+        outs.append(path)
+    for path in outs:
+        _new_file(path, inputs)
+    return outs
 
 
 def repair_summary(result: Any) -> str:

@@ -1,6 +1,7 @@
 """The never-worse rule (docs/repair.md "Never worse"): an action is kept only when it lowers the count
 of defects and costs no completeness, no outside share and no noticeable curve boundedness or
-centeredness; otherwise it is rejected, with the reason logged."""
+centeredness; a re-centring may instead raise curve centeredness by ``Params.repair_centre_gain``
+with no more defects and no lower boundedness; otherwise it is rejected, with the reason logged."""
 
 from __future__ import annotations
 
@@ -10,8 +11,9 @@ from .findings import Findings
 __all__ = ["verdict"]
 
 
-def verdict(before: Findings, after: Findings, params: Params) -> str | None:
-    """None when ``after`` may replace ``before``; else why not (one phrase)."""
+def verdict(before: Findings, after: Findings, params: Params, recentring: bool = False) -> str | None:
+    """None when ``after`` may replace ``before``; else why not (one phrase). ``recentring``: the
+    action only moved vertices to their cross-sections' centres (docs/repair.md "Never worse")."""
     b, a = before.measures, after.measures
     why = []
     if b["completeness"] is not None and (a["completeness"] is None
@@ -25,6 +27,24 @@ def verdict(before: Findings, after: Findings, params: Params) -> str | None:
             why.append(f"curve {m} {b[m]:.4f} -> {a[m] if a[m] is None else round(a[m], 4)}")
     if why:
         return "worse: " + "; ".join(why)
+    if recentring and after.total == before.total:
+        return _recentred(b, a, params)
     if after.total >= before.total:
         return f"no progress: {before.total} defect(s) before, {after.total} after"
     return None
+
+
+def _recentred(b: dict, a: dict, params: Params) -> str | None:
+    """A re-centring with no more defects: kept when curve centeredness rises by the gain and curve
+    boundedness does not drop at all."""
+    if b["boundedness"] is not None and (a["boundedness"] or 0.0) < b["boundedness"]:
+        return f"worse: curve boundedness {b['boundedness']:.4f} -> {_r(a['boundedness'])}"
+    if b["centeredness"] is None or a["centeredness"] is None \
+            or a["centeredness"] < b["centeredness"] + params.repair_centre_gain:
+        return (f"no progress: curve centeredness {_r(b['centeredness'])} -> {_r(a['centeredness'])} "
+                f"(less than repair_centre_gain={params.repair_centre_gain} higher)")
+    return None
+
+
+def _r(x: float | None) -> float | None:
+    return None if x is None else round(x, 4)

@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import time
 from dataclasses import dataclass, field
+from functools import cached_property
 from typing import Any, Callable
 
 import numpy as np
@@ -20,10 +21,13 @@ from ..params import Params
 from ..stages import evaluate
 from .checks import check_curve, check_frame
 from .findings import read_findings
+from .from_skeletal import HOW, curve_from_skeletal
 from .guard import verdict
 from .proposals import Action, propose
 from .fill import fill_missing
+from .recentre import RECENTRE, recentre
 from .reroute import route_inside
+from .skeletal_out import repaired_skeletal
 
 __all__ = ["RepairResult", "repair"]
 
@@ -35,7 +39,9 @@ UNTALLIED = {"incomplete"}
 class RepairResult:
     """``curve``: the repaired curve; ``log``: the edit log from the input curve (each operation with a
     ``why``; ``rejected`` lists the actions refused); ``before`` / ``after``: the first and last
-    Evaluation; ``accepted`` / ``rejected``: counts; ``stopped``: why the loop ended; ``seconds``."""
+    Evaluation; ``accepted`` / ``rejected``: counts; ``stopped``: why the loop ended; ``seconds``;
+    ``extracted``: how the curve was made when only a skeletal set was given; ``skeletal``: the
+    repaired skeletal set (:func:`.skeletal_out.repaired_skeletal`)."""
 
     curve: CurveSkeleton
     log: dict[str, Any]
@@ -47,6 +53,18 @@ class RepairResult:
     seconds: float = 0.0
     tally_before: dict[str, int] = field(default_factory=dict)
     tally_after: dict[str, int] = field(default_factory=dict)
+    extracted: str = ""
+
+    @property
+    def start(self) -> CurveSkeleton:
+        """The curve the repair started from (given, or extracted from the skeletal set)."""
+        return CurveSkeleton.coerce(self.before.source.args["curve"], "curve")
+
+    @cached_property
+    def skeletal(self) -> np.ndarray:
+        """The repaired skeletal set, one row per cloud row (docs/repair.md)."""
+        args = self.before.source.args
+        return repaired_skeletal(args["cloud"], self.start, self.curve, args.get("skeletal"))[0]
 
 
 def _rounded(measures: dict[str, float | None]) -> dict[str, float | None]:
@@ -72,24 +90,33 @@ def _in_shape(ev: Evaluation) -> tuple[Callable[[np.ndarray], np.ndarray] | None
     return inside, float(vs.size) / float(ctx.norm.scale), route
 
 
+def _no_defect_left(found: Any) -> str:
+    left = sorted(set(found.warnings) & UNTALLIED)
+    return f"left: {', '.join(left)} (not acted on)" if left else "no defect left"
+
+
 def _try(curve: CurveSkeleton, action: Action) -> CurveSkeleton:
     for i, entry in enumerate(action.entries):
         curve, _ = apply(curve, entry, f"{action.code} step {i}")
     return curve
 
 
-def repair(cloud: np.ndarray, curve: CurveSkeleton | tuple, skeletal: np.ndarray | None = None,
+def repair(cloud: np.ndarray, curve: CurveSkeleton | tuple | None = None, skeletal: np.ndarray | None = None,
            params: Params | None = None, cancel: Callable[[], bool] | None = None,
            progress: Callable[[float, str], None] | None = None) -> RepairResult:
     """Repair ``curve`` against ``cloud`` from the judge's findings (docs/repair.md); deterministic for
     a given input. Refuses (SkelInputError, one line) a curve without edges, one of more than
     ``params.repair_max_components`` components and one the ``frame`` check finds in another frame;
-    ``cancel()`` returning True raises :class:`~skelcore.Cancelled` at the next evaluation or action."""
+    ``cancel()`` returning True raises :class:`~skelcore.Cancelled` at the next evaluation or action.
+    ``curve`` None: the curve extracted from ``skeletal`` (:mod:`.from_skeletal`) is repaired."""
     t0 = time.perf_counter()
     p = params or Params()
+    extracted = ""
+    if curve is None and skeletal is not None:
+        curve, extracted = curve_from_skeletal(cloud, skeletal), f"the curve was extracted from the skeletal set by {HOW}"
+    if curve is None:
+        raise SkelInputError("repair needs a curve skeleton or a skeletal set")
     start = CurveSkeleton.coerce(curve, "curve")
-    if start is None:
-        raise SkelInputError("repair needs a curve skeleton")
     check_curve(start, p)
 
     def check() -> None:
@@ -110,15 +137,17 @@ def repair(cloud: np.ndarray, curve: CurveSkeleton | tuple, skeletal: np.ndarray
     stopped = f"repair_max_rounds={p.repair_max_rounds} reached"
     for rnd in range(p.repair_max_rounds):
         check()
-        if found.total == 0:
-            left = sorted(set(found.warnings) & UNTALLIED)
-            stopped = f"left: {', '.join(left)} (not acted on)" if left else "no defect left"
+        drift = recentre(cur, np.asarray(ev.source.args["cloud"], float), p) if p.repair_recentre else []
+        drift = [a for a in drift if all(a.entries != r["entries"] for r in rejected)]
+        if found.total == 0 and not drift:
+            stopped = _no_defect_left(found)
             break
         tell(rnd / p.repair_max_rounds, f"round {rnd + 1}")
         inside, voxel, route = _in_shape(ev)
         candidates = propose(cur, found, inside, p.repair_join_step * voxel, route)
         if p.repair_fill_missing:
             candidates += fill_missing(cur, found.missing, np.asarray(ev.source.args["cloud"], float))
+        candidates += drift  # a re-centring once rejected is not tried again (the same moves)
         done = False
         for action in candidates[:p.repair_max_tries]:
             check()
@@ -133,7 +162,7 @@ def repair(cloud: np.ndarray, curve: CurveSkeleton | tuple, skeletal: np.ndarray
             new_ev = ev.update(new)
             new_found = read_findings(new_ev)
             why.update(after=_rounded(new_found.measures), defects_after=new_found.total)
-            refusal = verdict(found, new_found, p)
+            refusal = verdict(found, new_found, p, recentring=action.code == RECENTRE)
             if refusal is not None:
                 rejected.append({"entries": action.entries, "why": {**why, "rejected": refusal}})
                 continue
@@ -142,7 +171,8 @@ def repair(cloud: np.ndarray, curve: CurveSkeleton | tuple, skeletal: np.ndarray
             ev, cur, found, done = new_ev, new, new_found, True
             break
         if not done:
-            stopped = "no candidate action helps" if candidates else "no action for the defects left"
+            stopped = ("no candidate action helps" if candidates else "no action for the defects left"
+                       ) if found.total else _no_defect_left(found)
             break
     log = new_log(start, [])
     log["operations"] = ops
@@ -150,8 +180,10 @@ def repair(cloud: np.ndarray, curve: CurveSkeleton | tuple, skeletal: np.ndarray
     log["repair"] = {"stopped": stopped, "defects_before": tally0, "defects_after": dict(found.tally),
                      "measures_before": _rounded(read_findings(first).measures),
                      "measures_after": _rounded(found.measures)}
+    if extracted:
+        log["repair"]["extracted"] = extracted
     tell(1.0, "done")
     n_acc = sum(1 for o in ops if o["why"]["step"].startswith("1 of"))
     return RepairResult(curve=cur, log=log, before=first, after=ev, accepted=n_acc, rejected=len(rejected),
                         stopped=stopped, seconds=time.perf_counter() - t0, tally_before=tally0,
-                        tally_after=dict(found.tally))
+                        tally_after=dict(found.tally), extracted=extracted)
