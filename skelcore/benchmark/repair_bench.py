@@ -1,5 +1,5 @@
 """The repair measured on a benchmark folder (docs/repair.md "Measured"): every case's cloud skeletonized
-by each tool (the built-in ``cao`` / ``skelscope``, the adapters ``pygel`` / ``kimimaro`` / ``skimage``),
+by each tool (the built-in ``cao`` / ``skelscope`` / ``default``, the adapters ``pygel`` / ``kimimaro`` / ``skimage``),
 then repaired; on a generated suite's clean tube cases also the reference with one controlled defect
 (:mod:`.skeleton_defects` at its middle level). Per job: GT F1 (docs/metrics.md 5.3.1) and the defect
 warnings and tallies before and after, the seconds of the skeletonization and of the repair.
@@ -25,8 +25,9 @@ from ..errors import SkelInputError
 __all__ = ["BUILT_IN", "DEFECT_NAMES", "WARNINGS", "RepairCase", "repair_cases", "skeletonize_with", "repair_job",
            "run_repair_bench"]
 
-#: the skeletonizers of skelcore itself; the adapters' kinds (skelcore.adapters.KINDS) may be named too
-BUILT_IN = ("cao", "skelscope")
+#: the skeletonizers of skelcore itself ("default": what skelcore skeletonize starts from, cao or the
+#: axis curve on thin parts); the adapters' kinds (skelcore.adapters.KINDS) may be named too
+BUILT_IN = ("cao", "skelscope", "default")
 #: the controlled defects put on a clean tube case's reference
 DEFECT_NAMES = ("spurs", "shortcut", "chord_cycle", "broken_cycle", "missing_branch", "noise")
 #: the defect warnings counted before and after
@@ -84,6 +85,11 @@ def repair_cases(folder: str | Path, only: Sequence[str] = ()) -> Iterator[Repai
 def skeletonize_with(tool: str, cloud: np.ndarray, params: dict[str, Any] | None = None
                      ) -> tuple[CurveSkeleton, np.ndarray | None]:
     """The curve (and the pointwise skeletal set when the tool gives one) of ``tool`` on ``cloud``."""
+    if tool == "default":
+        from ..skeleton.default import default_skeleton
+
+        skeletal, curve, _info, _choice = default_skeleton(cloud)
+        return curve, skeletal
     if tool in BUILT_IN:
         from ..skeleton import skeletonize
 

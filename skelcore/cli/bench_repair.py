@@ -29,7 +29,8 @@ def register_repair(actions: argparse._SubParsersAction) -> argparse.ArgumentPar
     p.add_argument("--out", required=True, metavar="FILE", help="the rows as JSON; the table and summary beside "
                    "it as FILE.md")
     p.add_argument("--tools", nargs="+", default=["cao", "skelscope"], metavar="NAME",
-                   help="cao, skelscope (built in) and the adapters pygel, kimimaro, skimage (default: cao skelscope)")
+                   help="cao, skelscope, default (what skelcore skeletonize starts from: cao, or the axis curve on thin "
+                   "parts) and the adapters pygel, kimimaro, skimage (default: cao skelscope)")
     p.add_argument("--cases", nargs="+", default=[], metavar="PATTERN", help="only cases whose names match a "
                    "shell pattern (e.g. '*_100k__clean')")
     p.add_argument("--set", dest="settings", action="append", default=[], metavar="TOOL.NAME=VALUE",
@@ -72,7 +73,12 @@ def run_bench_repair_cli(args: argparse.Namespace) -> int:
         io.atomic.check_output_file(args.out, source)
         io.atomic.check_output_file(md, source)
 
+        done: list[dict] = []
+
         def progress(row: dict) -> None:
+            done.append(row)  # the rows so far, rewritten after each job: a long run cut off keeps them
+            with io.atomic.atomic_open(args.out, "w", inputs=source) as fh:
+                json.dump(done, fh, indent=1)
             if not args.quiet:
                 after = row.get("f1_after", row.get("failed") or row.get("refused"))
                 print(f"{row['case']} {row['job']}: GT F1 {row.get('f1_before', '-')} -> {after}", file=sys.stderr,
