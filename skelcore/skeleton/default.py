@@ -4,7 +4,8 @@ first moved onto its local axes (:func:`.local_axis.axis_contract`, a few second
 the median move is the local thickness. When cao's ball (``sample_radius_factor`` x the bounding
 box's diagonal) exceeds ``AxisParams.thin_ratio`` thicknesses, one ball would swallow whole branches
 (a neuron: a ball of 730 units over dendrites of radius 20), so the axis curve of those moved points
-is taken and cao is not run; otherwise cao runs unchanged (``--raw`` is always cao's own curve).
+is taken and cao is not run, provided the thickness is ``thin_min_spacings`` spacings or more (on a
+surface scan the points hardly move); otherwise cao runs unchanged (``--raw`` is always cao's curve).
 """
 
 from __future__ import annotations
@@ -54,7 +55,7 @@ def default_skeleton(cloud: np.ndarray, progress: Progress | None = None, cancel
     thickness = local_thickness(pts, moved)
     ball = float(cao.sample_radius_factor) * float(np.linalg.norm(np.ptp(pts, axis=0)))
     ratio = ball / max(thickness, 1e-12 * max(ball, 1e-300))
-    if ratio <= float(axis.thin_ratio):
+    if ratio <= float(axis.thin_ratio) or thickness < float(axis.thin_min_spacings) * moved.spacing:
         skeletal, curve, info = skeletonize(pts, cao, progress, cancel, method="cao", return_info=True)
         return skeletal, curve, info, DefaultChoice("cao", ratio, thickness, moved.spacing)
     t1 = time.perf_counter()

@@ -232,7 +232,8 @@ class AxisParams:
     cloud neighbours whose samples are joined (8); ``thin_ratio``: the default pipeline takes the axis
     curve instead of cao's when cao's sampling ball (``CaoParams.sample_radius_factor`` x the bounding
     box's diagonal) exceeds this many local thicknesses (4; calibrated on the generated suites, where it
-    stays below 1: docs/skeletonize.md "Thin parts")."""
+    stays below 1: docs/skeletonize.md "Thin parts") and the thickness is at least ``thin_min_spacings``
+    spacings (1.5: a surface scan's points hardly move, a tube's move by its radius)."""
 
     neighbors: int = 16
     iterations: int = 12
@@ -240,6 +241,7 @@ class AxisParams:
     sample_spacings: float = 3.0
     connect_neighbors: int = 8
     thin_ratio: float = 4.0
+    thin_min_spacings: float = 1.5
 
 
 
