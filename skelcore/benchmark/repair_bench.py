@@ -113,17 +113,15 @@ def _warned(ev: Any) -> list[str]:
     return sorted({w.code for w in ev.warnings} & set(WARNINGS))
 
 
-def repair_job(case: RepairCase, job: str, curve: CurveSkeleton, skeletal: np.ndarray | None,
-               seconds_skeletonize: float | None = None) -> dict[str, Any]:
+def repair_job(case: RepairCase, job: str, curve: CurveSkeleton, seconds_skeletonize: float | None = None
+               ) -> dict[str, Any]:
     """One repair of ``curve`` against the case's cloud: GT F1, warnings and tallies before and after."""
     from ..skeleton_repair import repair
 
     row: dict[str, Any] = {"case": case.name, "job": job, "f1_before": _f1(curve, case.reference),
                            "seconds_skeletonize": None if seconds_skeletonize is None else round(seconds_skeletonize, 2)}
-    if skeletal is not None and len(skeletal) != len(case.cloud):
-        skeletal = None
-    try:
-        r = repair(case.cloud, curve, skeletal=skeletal)
+    try:  # the curve alone, as skelcore skeletonize repairs it (docs/repair.md "The real suite")
+        r = repair(case.cloud, curve)
     except SkelInputError as exc:
         return {**row, "refused": str(exc)}
     row.update(f1_after=_f1(r.curve, case.reference), seconds_repair=round(r.seconds, 2), kept=r.accepted,
@@ -164,14 +162,14 @@ def run_repair_bench(folder: str | Path, tools: Sequence[str] = BUILT_IN, *, onl
         for tool in tools:
             t0 = time.perf_counter()
             try:
-                curve, skeletal = skeletonize_with(tool, case.cloud, (params or {}).get(tool))
+                curve, _skeletal = skeletonize_with(tool, case.cloud, (params or {}).get(tool))
             except (SkelInputError, ValueError, MemoryError) as exc:
                 done({"case": case.name, "job": tool, "failed": " ".join(str(exc).split())[:200]})
                 continue
-            done(repair_job(case, tool, curve, skeletal, time.perf_counter() - t0))
+            done(repair_job(case, tool, curve, time.perf_counter() - t0))
         if case.bundled is not None:
-            done(repair_job(case, "lbc (bundled)", case.bundled, None))
+            done(repair_job(case, "lbc (bundled)", case.bundled))
         if defects and case.defects:
             for job, curve in _defect_jobs(case):
-                done(repair_job(case, job, curve, None))
+                done(repair_job(case, job, curve))
     return rows

@@ -61,7 +61,7 @@ def run_skeletonize_cli(args: argparse.Namespace) -> int:
         clear_progress_line(progress)
         repaired = None
         if args.out_curve and not args.raw:
-            repaired = _repaired(cloud, skeletal, curve, progress)
+            repaired = _repaired(cloud, curve, progress)
         if args.out_skeletal:
             io.write_points_ply(args.out_skeletal, skeletal, inputs=(args.cloud,))
         if args.out_curve:
@@ -87,16 +87,18 @@ def run_skeletonize_cli(args: argparse.Namespace) -> int:
     return 0
 
 
-def _repaired(cloud, skeletal, curve, progress):
+def _repaired(cloud, curve, progress):
     """The curve repaired from its defects; a curve the repair refuses (no edges, in pieces beyond
-    ``repair_max_components``) is written as the algorithm gave it, and the refusal is printed."""
+    ``repair_max_components``) is written as the algorithm gave it, and the refusal is printed. The
+    repair evaluates the curve without the skeletal set: none of its findings uses it, and scoring it
+    is most of a first evaluation's time (docs/repair.md "The real suite")."""
     from ..skeleton_repair import repair
 
     if curve.n_edges == 0:
         print("not repaired: the curve has no edges", file=sys.stderr)
         return None
     try:
-        result = repair(cloud, curve, skeletal=skeletal, progress=progress)
+        result = repair(cloud, curve, progress=progress)  # the curve alone: same findings, faster
     except SkelInputError as exc:
         print(f"not repaired: {exc}", file=sys.stderr)
         return None
