@@ -40,3 +40,16 @@ def test_the_axis_moves_keep_a_thin_tube_its_length():
     assert np.median(np.linalg.norm(moved.points[:, :2], axis=1)) < 0.005
     assert abs(local_thickness(cloud, moved) - 0.02) < 0.005
     assert axis_curve(moved).n_vertices > 10
+
+
+def test_the_command_says_it_took_the_axis_curve(tmp_path, capsys):
+    from skelcore.cli.main import main
+    from skelcore.io import load_curve, write_points_ply
+
+    cloud = shapes.cylinder(2000, radius=0.01, length=4.0, capped=False, seed=4).cloud
+    src, out = tmp_path / "thin.ply", tmp_path / "c.ply"
+    write_points_ply(src, cloud)
+    assert main(["skeletonize", str(src), "--out-curve", str(out), "--quiet"]) == 0
+    printed = capsys.readouterr().out
+    assert "thin parts" in printed and "(axis)" in printed and "repaired:" in printed
+    assert np.ptp(load_curve(out).vertices[:, 2]) > 3.8
