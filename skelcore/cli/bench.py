@@ -45,12 +45,14 @@ def register(subparsers: argparse._SubParsersAction) -> argparse.ArgumentParser:
                       "suite or seed (files of the same names are replaced)")
     make.add_argument("--quiet", action="store_true", help="no line per case")
     make.set_defaults(func=run_bench_make_cli)
+    from .bench_repair import register_repair
     from .bench_validity import register_validity
 
     register_validity(sub)
     from .bench_calibrate import register_calibrate
 
     register_calibrate(sub, _sizes)
+    register_repair(sub)
     return p
 
 

@@ -19,7 +19,9 @@ def register(subparsers: argparse._SubParsersAction) -> argparse.ArgumentParser:
         description="Laplacian-based contraction (Cao et al. 2010): writes the skeletal point set "
         "(one point per cloud point, same order) and the curve skeleton as PLY. The curve is then repaired "
         "from its defects (skelcore repair: each action kept only when nothing gets worse; docs/repair.md); "
-        "--raw writes the algorithm's curve as it is.",
+        "--raw writes the algorithm's curve as it is. With --method cao and no --raw, a cloud whose parts are "
+        "far thinner than cao's sampling ball (a neuron's dendrites) starts from the axis curve at the "
+        "cloud's own spacing instead (docs/skeletonize.md, thin parts).",
     )
     p.add_argument("cloud", help="point cloud file")
     p.add_argument("--out-skeletal", metavar="F", help="write the skeletal point set (PLY)")
@@ -49,11 +51,17 @@ def run_skeletonize_cli(args: argparse.Namespace) -> int:
                 io.atomic.check_output_file(out, (args.cloud,))
         cloud = io.load_cloud(args.cloud)
         progress = stderr_progress(args.quiet)
-        skeletal, curve, info = skeletonize(cloud, progress=progress, return_info=True, method=args.method)
+        choice = None
+        if args.method == "cao" and not args.raw:
+            from ..skeleton.default import default_skeleton
+
+            skeletal, curve, info, choice = default_skeleton(cloud, progress=progress)
+        else:
+            skeletal, curve, info = skeletonize(cloud, progress=progress, return_info=True, method=args.method)
         clear_progress_line(progress)
         repaired = None
         if args.out_curve and not args.raw:
-            repaired = _repaired(cloud, skeletal, curve, progress)
+            repaired = _repaired(cloud, curve, progress)
         if args.out_skeletal:
             io.write_points_ply(args.out_skeletal, skeletal, inputs=(args.cloud,))
         if args.out_curve:
@@ -66,6 +74,9 @@ def run_skeletonize_cli(args: argparse.Namespace) -> int:
     except SkelInputError as exc:
         print(f"skelcore: error: {exc}", file=sys.stderr)
         return 2
+    if choice is not None and choice.method == "axis":
+        print(f"thin parts: cao's sampling ball is {choice.ratio:.1f} local thicknesses ({choice.thickness:.4g} units); "
+              f"the axis curve at the cloud's spacing ({choice.spacing:.4g}) is taken instead")
     print(f"{len(cloud)} points contracted ({info.method}) in {info.iterations} iterations ({info.stop_reason}); "
           f"curve: {curve.n_vertices} vertices, {curve.n_edges} edges; {info.timings['total']:.2f} s")
     if repaired is not None:
@@ -76,16 +87,18 @@ def run_skeletonize_cli(args: argparse.Namespace) -> int:
     return 0
 
 
-def _repaired(cloud, skeletal, curve, progress):
+def _repaired(cloud, curve, progress):
     """The curve repaired from its defects; a curve the repair refuses (no edges, in pieces beyond
-    ``repair_max_components``) is written as the algorithm gave it, and the refusal is printed."""
+    ``repair_max_components``) is written as the algorithm gave it, and the refusal is printed. The
+    repair evaluates the curve without the skeletal set: none of its findings uses it, and scoring it
+    is most of a first evaluation's time (docs/repair.md "The real suite")."""
     from ..skeleton_repair import repair
 
     if curve.n_edges == 0:
         print("not repaired: the curve has no edges", file=sys.stderr)
         return None
     try:
-        result = repair(cloud, curve, skeletal=skeletal, progress=progress)
+        result = repair(cloud, curve, progress=progress)  # the curve alone: same findings, faster
     except SkelInputError as exc:
         print(f"not repaired: {exc}", file=sys.stderr)
         return None

@@ -13,7 +13,7 @@ from typing import Callable
 
 from ..errors import Cancelled
 
-__all__ = ["CaoParams", "SkeletonizeParams", "SkeletonizeInfo", "Reporter", "Progress"]
+__all__ = ["CaoParams", "SkeletonizeParams", "AxisParams", "SkeletonizeInfo", "Reporter", "Progress"]
 
 Progress = Callable[[float, str], None]
 
@@ -219,6 +219,29 @@ class SkeletonizeParams(_Replaceable):
             bad("min_sample_points", "must be >= 1")
         if float(self.short_cycle_factor) < 0:
             bad("short_cycle_factor", "must be >= 0")
+
+
+
+@dataclass(frozen=True)
+class AxisParams:
+    """Constants of the axis curve (:mod:`.local_axis`) and of the default pipeline's choice (:mod:`.default`).
+
+    ``neighbors`` k of the centroids (16); ``iterations`` of the moves (12); ``linearity`` above which
+    the move along the main axis is removed ((l1 - l2) / l1 of the neighbourhood's covariance, 0.5);
+    ``sample_spacings`` the sampling ball's radius in spacings (3); ``connect_neighbors`` the nearest
+    cloud neighbours whose samples are joined (8); ``thin_ratio``: the default pipeline takes the axis
+    curve instead of cao's when cao's sampling ball (``CaoParams.sample_radius_factor`` x the bounding
+    box's diagonal) exceeds this many local thicknesses (4; calibrated on the generated suites, where it
+    stays below 1: docs/skeletonize.md "Thin parts") and the thickness is at least ``thin_min_spacings``
+    spacings (1.5: a surface scan's points hardly move, a tube's move by its radius)."""
+
+    neighbors: int = 16
+    iterations: int = 12
+    linearity: float = 0.5
+    sample_spacings: float = 3.0
+    connect_neighbors: int = 8
+    thin_ratio: float = 4.0
+    thin_min_spacings: float = 1.5
 
 
 

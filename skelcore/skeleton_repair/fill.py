@@ -1,7 +1,8 @@
 """Candidate actions for a missing part (docs/repair.md "Missing parts"): the unexplained cloud
-region becomes a new stretch of curve attached at the nearest vertex, either the centroids of the
+region becomes a new stretch of curve attached at the nearest vertex: the centroids of the
 region's slabs along its main axis (a tube's end seen all around: the slab centroids lie on its axis)
-or the region skeletonized by :func:`skelcore.skeletonize` (``skelscope``). Tried last."""
+the region skeletonized by :func:`skelcore.skeletonize` (``skelscope``), or the region's axis curve
+at its own spacing (:mod:`skelcore.skeleton.local_axis`: a thin branch). Tried last."""
 
 from __future__ import annotations
 
@@ -42,13 +43,9 @@ def _attach_polyline(curve: CurveSkeleton, line: np.ndarray) -> tuple[list[dict[
     return out, int(used[j[0]])
 
 
-def _skeleton_entries(curve: CurveSkeleton, pts: np.ndarray) -> tuple[list[dict[str, Any]], int] | None:
-    from ..skeleton import skeletonize
-
-    try:
-        part = skeletonize(pts, method="skelscope")[1]
-    except (SkelInputError, ValueError, np.linalg.LinAlgError, RuntimeError):
-        return None
+def _part_entries(curve: CurveSkeleton, part: CurveSkeleton) -> tuple[list[dict[str, Any]], int] | None:
+    """The edit-log entries adding ``part`` (its vertices on edges, its edges), attached by its vertex
+    nearest the curve to that vertex of the curve."""
     if part.n_edges == 0:
         return None
     used = np.flatnonzero(np.bincount(curve.edges.ravel(), minlength=curve.n_vertices) > 0)
@@ -62,6 +59,33 @@ def _skeleton_entries(curve: CurveSkeleton, pts: np.ndarray) -> tuple[list[dict[
            for i, v in enumerate(keep)]
     out += [{"op": "add_edge", "args": {"edge": sorted([new_id[int(a)], new_id[int(b)]])}} for a, b in part.edges]
     return out, int(used[j[first]])
+
+
+def _skeleton_entries(curve: CurveSkeleton, pts: np.ndarray) -> tuple[list[dict[str, Any]], int] | None:
+    from ..skeleton import skeletonize
+
+    try:
+        part = skeletonize(pts, method="skelscope")[1]
+    except (SkelInputError, ValueError, np.linalg.LinAlgError, RuntimeError):
+        return None
+    return _part_entries(curve, part)
+
+
+def _axis_entries(curve: CurveSkeleton, pts: np.ndarray) -> tuple[list[dict[str, Any]], int] | None:
+    """The region's axis curve at its own spacing (:mod:`skelcore.skeleton.local_axis`), its largest
+    piece: a thin missing branch, which the whole-region skeletonizers reduce to a few vertices."""
+    from ..skeleton.local_axis import axis_contract, axis_curve
+    from .proposals import component_labels
+
+    if len(pts) < 20:
+        return None
+    part = axis_curve(axis_contract(pts))
+    if part.n_edges == 0:
+        return None
+    _, label = component_labels(part)
+    big = np.bincount(label[part.edges[:, 0]]).argmax()
+    edges = part.edges[label[part.edges[:, 0]] == big]
+    return _part_entries(curve, CurveSkeleton.from_raw(part.vertices, edges))
 
 
 def fill_missing(curve: CurveSkeleton, missing: Any, cloud: np.ndarray, max_regions: int = 2) -> list[Action]:
@@ -87,4 +111,9 @@ def fill_missing(curve: CurveSkeleton, missing: Any, cloud: np.ndarray, max_regi
             entries, at = made
             out.append(Action("incomplete", target, f"missing region {reg.id} ({reg.n_points} points) "
                               f"skeletonized and attached at vertex {at}", entries))
+        made = _axis_entries(curve, pts)
+        if made is not None:
+            entries, at = made
+            out.append(Action("incomplete", target, f"missing region {reg.id} ({reg.n_points} points): its "
+                              f"axis curve at its own spacing attached at vertex {at}", entries))
     return out

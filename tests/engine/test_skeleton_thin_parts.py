@@ -1,0 +1,55 @@
+"""The default pipeline's start on thin parts (docs/skeletonize.md "Thin parts"): the axis curve at the
+cloud's spacing is taken only when cao's sampling ball exceeds ``AxisParams.thin_ratio`` local
+thicknesses; it follows a thin tube's axis end to end, as a tree; a stout shape keeps cao's curve."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from skelcore import shapes
+from skelcore.skeleton import CaoParams, skeletonize
+from skelcore.skeleton.default import default_skeleton
+from skelcore.skeleton.local_axis import axis_contract, axis_curve, local_thickness
+
+
+def test_a_thin_tube_takes_the_axis_curve_along_its_whole_length():
+    cloud = shapes.cylinder(3000, radius=0.01, length=4.0, capped=False, seed=1).cloud
+    skeletal, curve, info, choice = default_skeleton(cloud)
+    assert choice.method == "axis" and info.method == "axis" and choice.ratio > 4.0
+    assert 0.005 < choice.thickness < 0.015  # about the radius
+    assert skeletal.shape == cloud.shape
+    off_axis = np.linalg.norm(curve.vertices[:, :2], axis=1)
+    assert off_axis.max() < 0.01  # on the axis, not on the wall
+    z = curve.vertices[:, 2]
+    assert z.min() < 0.1 and z.max() > 3.9  # not shortened
+    assert curve.n_edges == curve.n_vertices - 1  # a spanning tree of one component
+
+
+def test_a_stout_shape_keeps_caos_curve_exactly():
+    cloud = shapes.cylinder(1500, radius=0.5, length=4.0, seed=2).cloud
+    _sk, curve, info, choice = default_skeleton(cloud)
+    assert choice.method == "cao" and choice.ratio < 1.0
+    _sk2, raw = skeletonize(cloud, CaoParams(), method="cao")
+    assert np.array_equal(curve.vertices, raw.vertices) and np.array_equal(curve.edges, raw.edges)
+
+
+def test_the_axis_moves_keep_a_thin_tube_its_length():
+    cloud = shapes.cylinder(2000, radius=0.02, length=2.0, capped=False, seed=3).cloud
+    moved = axis_contract(cloud)
+    assert np.ptp(moved.points[:, 2]) > 1.9
+    assert np.median(np.linalg.norm(moved.points[:, :2], axis=1)) < 0.005
+    assert abs(local_thickness(cloud, moved) - 0.02) < 0.005
+    assert axis_curve(moved).n_vertices > 10
+
+
+def test_the_command_says_it_took_the_axis_curve(tmp_path, capsys):
+    from skelcore.cli.main import main
+    from skelcore.io import load_curve, write_points_ply
+
+    cloud = shapes.cylinder(2000, radius=0.01, length=4.0, capped=False, seed=4).cloud
+    src, out = tmp_path / "thin.ply", tmp_path / "c.ply"
+    write_points_ply(src, cloud)
+    assert main(["skeletonize", str(src), "--out-curve", str(out), "--quiet"]) == 0
+    printed = capsys.readouterr().out
+    assert "thin parts" in printed and "(axis)" in printed and "repaired:" in printed
+    assert np.ptp(load_curve(out).vertices[:, 2]) > 3.8
