@@ -106,16 +106,12 @@ def _membership(paths: list[np.ndarray], n_edges: int) -> csr_matrix:
 
 
 def _overlap(a_pts, a_w, a_edge, a_reach, a_paths, b_pts, b_edge, b_paths, n_a_edges, n_b_edges) -> np.ndarray:
-    """Length of each path of A (rows) lying within reach of each path of B (columns): a sample of A
-    is covered by B's path Q when a sample of Q lies within its reach."""
-    near = cKDTree(b_pts).query_ball_point(a_pts, a_reach)
-    rows = np.repeat(np.arange(len(a_pts)), [len(x) for x in near])
-    cols = b_edge[np.concatenate([np.asarray(x, np.int64) for x in near])] if len(rows) else np.empty(0, np.int64)
-    sample_edge = csr_matrix((np.ones(len(rows)), (rows, cols)), shape=(len(a_pts), n_b_edges))
-    covered = (sample_edge @ _membership(b_paths, n_b_edges).T) > 0  # samples x B paths
-    a_sample = _membership(a_paths, n_a_edges) @ csr_matrix(
-        (a_w, (a_edge, np.arange(len(a_pts)))), shape=(n_a_edges, len(a_pts)))  # A paths x samples, weights
-    return np.asarray((a_sample @ covered.astype(float)).todense())
+    """Length of each path of A (rows) lying near each path of B (columns): a sample of A is covered
+    by B's path Q when its nearest sample of B lies within its reach and on an edge of Q."""
+    d, j = cKDTree(b_pts).query(a_pts, k=1)
+    ok = d <= a_reach * (1 + 1e-9)
+    w = csr_matrix((a_w[ok], (a_edge[ok], b_edge[j[ok]])), shape=(n_a_edges, n_b_edges))
+    return np.asarray((_membership(a_paths, n_a_edges) @ w @ _membership(b_paths, n_b_edges).T).todense())
 
 
 def _path_scores(curve, reference, root_point, ours, ref, share) -> tuple[float, float, float, int, int]:
