@@ -112,7 +112,7 @@ def test_ring_cycles_and_no_paths():
 
 # ---- swclib (MIT): its SSD metric is Vaa3D's ESA / DSA / PDS on nodes resampled every S ------
 
-def _swc_rows(path, n: int = 800):
+def _swc_rows(path, n: int = 400):
     """The first ``n`` nodes of an SWC whose parents are among them (a sub-arbor: parents come first)."""
     rows = np.loadtxt(path, comments="#", ndmin=2)[:n]
     keep = np.isin(rows[:, 6], np.r_[-1, rows[:, 0]])
