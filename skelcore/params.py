@@ -179,6 +179,11 @@ class Params:
         least this many local radii of its length lie within this many local radii of ours.
     gt_sample_step : both curves are sampled every this many x the reference's smallest radius.
     gt_radius_k : where the reference has no radius, it is the median distance to this many cloud points.
+    gt_diag_thresholds : the absolute thresholds of docs/metrics.md 5.3.2, shares of the reference's
+        bounding-box diagonal, written as text ("0.01 0.02 0.05": 1, 2 and 5 %).
+    gt_cover_share : a branch or a root-to-leaf path counts as found when more than this share of its
+        length lies within gt_threshold_max local radii of the other curve (docs/metrics.md 5.3.2).
+    gt_substantial : ESA / DSA / PDS call a distance substantial above this share of the diagonal.
     repair_max_rounds : skelcore.repair acts at most this many times (docs/repair.md).
     repair_max_tries : candidate actions tried (each evaluated) per round before giving up.
     repair_max_components : a curve with more components than this is refused by skelcore.repair
@@ -290,6 +295,9 @@ class Params:
     gt_branch_radii: float = 1.0
     gt_sample_step: float = 0.1
     gt_radius_k: int = 8
+    gt_diag_thresholds: str = "0.01 0.02 0.05"
+    gt_cover_share: float = 0.8
+    gt_substantial: float = 0.02
     # repair (docs/repair.md)
     repair_max_rounds: int = 40
     repair_max_tries: int = 6
@@ -399,6 +407,16 @@ class Params:
         for name in ("gt_thresholds", "gt_radius_k"):
             if int(getattr(self, name)) < 1:
                 bad(name, "must be a positive integer")
+        if not 0.0 < float(self.gt_cover_share) < 1.0:
+            bad("gt_cover_share", "must be in (0, 1)")
+        if not float(self.gt_substantial) > 0:
+            bad("gt_substantial", "must be > 0")
+        try:
+            shares = [float(x) for x in str(self.gt_diag_thresholds).replace(",", " ").split()]
+        except ValueError:
+            shares = []
+        if not shares or min(shares) <= 0:
+            bad("gt_diag_thresholds", "must be shares > 0 of the diagonal, e.g. '0.01 0.02 0.05'")
 
     def replace(self, **changes: Any) -> "Params":
         """A copy with some fields changed; an unknown name fails loudly."""

@@ -22,21 +22,23 @@ import json
 import os
 import time
 import zlib
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any, Callable
 
 import numpy as np
 
 from ..errors import SkelInputError
+from ..params import Params
 from ..version import __version__
+from .neurons import NEURON_IDS
 from .skeleton_defects import DEFECTS, apply_defect
 
 __all__ = ["VALIDITY_SUITES", "ValiditySuite", "Task", "validity_tasks", "score_curve", "run_task", "run_validity",
-           "task_path", "ValidityResult", "WARNING_CODES", "GT_KEYS", "read_rows", "TASK_VERSION"]
+           "task_path", "ValidityResult", "WARNING_CODES", "GT_KEYS", "COMMUNITY_KEYS", "read_rows", "TASK_VERSION"]
 
 #: Bumped whenever a change alters a task's rows for the same spec (stored tasks are then redone).
-TASK_VERSION = 1
+TASK_VERSION = 2
 
 #: the warning codes recorded per row as 0/1 columns ``warn_{code}``
 WARNING_CODES = ("incomplete", "spurious_branches", "spurious_cycles", "missing_cycles", "outside", "collapse")
@@ -44,6 +46,10 @@ WARNING_CODES = ("incomplete", "spurious_branches", "spurious_cycles", "missing_
 #: the ground-truth fields recorded per row as ``gt_{name}`` (docs/metrics.md 5.3.1)
 GT_KEYS = ("f1", "precision", "recall", "chamfer_radii", "junction_precision", "junction_recall",
            "endpoint_precision", "endpoint_recall", "cycle_error", "length_ratio", "splits", "merges")
+#: the other communities' ground-truth metrics recorded as ``gt_{name}`` (docs/metrics.md 5.3.2)
+COMMUNITY_KEYS = ("diag_f1_1", "diag_f1_2", "diag_f1_5", "diag_precision_2", "diag_recall_2", "chamfer_diag",
+                  "branch_precision", "branch_recall", "branch_f1", "dup_precision", "betti0_error", "betti1_error",
+                  "radius_error", "esa", "dsa", "pds", "path_precision", "path_recall", "path_f1")
 
 
 @dataclass(frozen=True)
@@ -60,6 +66,8 @@ VALIDITY_SUITES = {
     "small": ValiditySuite("small", ("junction_y", "torus", "tube_a"), 1200, 2),
     "default": ValiditySuite("default", ("tube_a", "tube_b", "elliptic", "junction_y", "junction_t", "junction_x",
                                          "tree_2", "tree_3", "tree_4", "torus", "genus2", "hand"), 5000, 3),
+    # the real suite: the traced neurons of resources/neurons, their SWC the exact skeleton
+    "neurons": ValiditySuite("neurons", NEURON_IDS, 3000, 1),
 }
 
 
@@ -94,9 +102,10 @@ def validity_tasks(suite: str = "default", *, seed: int = 0, seeds: int | None =
     s = VALIDITY_SUITES[suite]
     from .suite import SHAPES
 
+    known = list(NEURON_IDS) if suite == "neurons" else [n for n in SHAPES if n != "plate"]
     for name in shapes or ():
-        if name not in SHAPES or name == "plate":
-            raise SkelInputError(f"unknown shape {name!r} (known: {', '.join(n for n in SHAPES if n != 'plate')})")
+        if name not in known:
+            raise SkelInputError(f"unknown shape {name!r} (known: {', '.join(known)})")
     for name in defects or ():
         if name not in DEFECTS:
             raise SkelInputError(f"unknown defect {name!r} (known: {', '.join(DEFECTS)})")
@@ -111,6 +120,47 @@ def validity_tasks(suite: str = "default", *, seed: int = 0, seeds: int | None =
 
 
 # ---- one task ---------------------------------------------------------------------------------
+
+#: a neuron's ground-truth metrics sample both curves every this many x its smallest radius (not
+#: 0.1: a traced neuron is 25,000 of its thinnest radii long; docs/validity.md "The traced neurons")
+NEURON_SAMPLE_STEP = 1.0
+
+
+@dataclass(frozen=True)
+class _Subject:
+    """What a task needs of a shape or neuron: its family, sampler, exact skeleton and signed distance."""
+
+    family: str
+    sampler: Any
+    reference: tuple[np.ndarray, np.ndarray, np.ndarray]
+    surface: Callable[[np.ndarray], np.ndarray]
+    sample_step: float  # the ground-truth metrics' sample step, in the reference's smallest radius
+
+
+@functools.lru_cache(maxsize=2)
+def _subject(name: str, suite_seed: int) -> _Subject:
+    if name not in NEURON_IDS:
+        from .tubes import signed_distance
+
+        shape, sampler, ref = _shape(name, suite_seed)
+        return _Subject(shape.family, sampler, ref, lambda p: signed_distance(shape, p, spacing=0.1),
+                        Params.gt_sample_step)
+    from ..correspondence import project_onto_curve
+    from ..metrics.ground_truth import _at_projection
+    from .neurons import MeshSampler, load_neuron
+
+    neuron = load_neuron(name)
+    sk = neuron.skeleton
+    ref = (sk.vertices, sk.edges, np.asarray(sk.radius, float))
+
+    def surface(p: np.ndarray) -> np.ndarray:
+        """Signed distance to the traced tube (the SWC's nodes and radii; < 0 inside): the mesh and
+        the tracing disagree on thin twigs, and a shortcut must leave the tracing's own tube."""
+        q, qe = project_onto_curve(p, sk)
+        return np.linalg.norm(q - p, axis=1) - _at_projection(sk, ref[2], q, qe)
+
+    return _Subject("neuron", MeshSampler(neuron.mesh, sk.vertices, ref[2]), ref, surface, NEURON_SAMPLE_STEP)
+
 
 @functools.lru_cache(maxsize=4)
 def _shape(name: str, suite_seed: int):
@@ -128,7 +178,7 @@ def _shape(name: str, suite_seed: int):
 def _cloud(name: str, suite_seed: int, seed: int, points: int) -> np.ndarray:
     from .scan_effects import ScanEffects, scan
 
-    _, sampler, _ = _shape(name, suite_seed)
+    sampler = _subject(name, suite_seed).sampler
     rng = np.random.default_rng(np.random.SeedSequence([suite_seed, zlib.crc32(f"validity/{name}".encode()), seed]))
     return scan(sampler, ScanEffects(n_points=points), rng).cloud
 
@@ -138,12 +188,14 @@ def _nan(x: Any) -> float:
 
 
 def score_curve(cloud: np.ndarray, vertices: np.ndarray, edges: np.ndarray, ref_v: np.ndarray, ref_e: np.ndarray,
-                ref_r: np.ndarray) -> dict[str, float]:
+                ref_r: np.ndarray, sample_step: float = Params.gt_sample_step) -> dict[str, float]:
     """Every metric of one curve: the evaluation's scores (Scores columns), the warnings as 0/1,
-    the ground-truth metrics (``gt_*``) and the ground-truth error ``gt_error`` = 1 - F1."""
+    the ground-truth metrics (``gt_*``, docs/metrics.md 5.3.1 and 5.3.2; the curve's radius for the
+    radius error is the cloud's estimate at its vertices) and the ground-truth error ``gt_error`` = 1 - F1."""
     from ..correspondence import project_onto_curve
     from ..curve import CurveSkeleton
-    from ..metrics.ground_truth import compare_with_ground_truth
+    from ..metrics.ground_truth import GroundTruthParams, compare_with_ground_truth, radius_from_cloud
+    from ..metrics.gt_community import CommunityParams, community_metrics
     from ..scores import Scores
     from ..stages.orchestrate import evaluate
 
@@ -153,32 +205,37 @@ def score_curve(cloud: np.ndarray, vertices: np.ndarray, edges: np.ndarray, ref_
     row: dict[str, float] = {k: _nan(v) for k, v in Scores.from_evaluation(ev).flat().items()}
     codes = {w.code for w in ev.warnings}
     row.update({f"warn_{c}": float(c in codes) for c in WARNING_CODES})
-    gt = compare_with_ground_truth(curve, CurveSkeleton.from_raw(ref_v, ref_e), ref_r)
+    reference = CurveSkeleton.from_raw(ref_v, ref_e)
+    gt = compare_with_ground_truth(curve, reference, ref_r, params=GroundTruthParams(sample_step=sample_step))
     row.update({f"gt_{k}": float(getattr(gt, k)) for k in GT_KEYS})
+    own_r = radius_from_cloud(curve.vertices, cloud, Params.gt_radius_k)
+    more = community_metrics(curve, reference, ref_r, curve_radius=own_r,
+                             params=replace(CommunityParams(), sample_step=sample_step))
+    row.update({f"gt_{k}": float(more[k]) for k in COMMUNITY_KEYS})
     row["gt_error"] = 1.0 - float(gt.f1)
     row["n_vertices"], row["n_edges"] = float(curve.n_vertices), float(curve.n_edges)
     return row
 
 
 def _task_rows(task: Task) -> list[dict[str, Any]]:
-    from .tubes import signed_distance
-
-    shape, _, (ref_v, ref_e, ref_r) = _shape(task.shape, task.suite_seed)
+    subject = _subject(task.shape, task.suite_seed)
+    ref_v, ref_e, ref_r = subject.reference
     cloud = _cloud(task.shape, task.suite_seed, task.seed, task.points)
-    base = {"shape": task.shape, "family": shape.family, "seed": task.seed, "defect": task.defect}
+    base = {"shape": task.shape, "family": subject.family, "seed": task.seed, "defect": task.defect}
     if task.defect == "clean":
-        return [{**base, "level": "", "level_index": 0, **score_curve(cloud, ref_v, ref_e, ref_v, ref_e, ref_r)}]
+        return [{**base, "level": "", "level_index": 0, **score_curve(cloud, ref_v, ref_e, ref_v, ref_e, ref_r,
+                                                                     subject.sample_step)}]
     d = DEFECTS[task.defect]
     rows = []
     for i, level in enumerate(d.levels, start=1):
         label = d.label(level)
         rng = np.random.default_rng(np.random.SeedSequence(
             [task.suite_seed, zlib.crc32(f"{task.shape}/{task.defect}/{label}".encode()), task.seed]))
-        made = apply_defect(task.defect, level, ref_v, ref_e, ref_r, rng,
-                            lambda p: signed_distance(shape, p, spacing=0.1))
+        made = apply_defect(task.defect, level, ref_v, ref_e, ref_r, rng, subject.surface)
         if made is None or len(made[1]) == 0:
             continue  # the defect does not apply to this shape (or leaves nothing)
-        rows.append({**base, "level": label, "level_index": i, **score_curve(cloud, *made, ref_v, ref_e, ref_r)})
+        rows.append({**base, "level": label, "level_index": i, **score_curve(cloud, *made, ref_v, ref_e, ref_r,
+                                                                                subject.sample_step)})
     return rows
 
 

@@ -1,35 +1,39 @@
-"""The validity study's statistics (docs/validity.md): per metric and defect, the
-detection AUC (defective against clean) and the Spearman correlation with the ground-truth error.
+"""The validity study's statistics (docs/validity.md "Statistics"), from scipy.stats.
 
-Each metric is oriented to a "badness" b (higher = worse) from its ``better`` direction: the
-column's in :data:`skelcore.scores.SCORE_COLUMNS` where it has one, else this module's table
-(:data:`METRICS`); a signed count (the cycle count error) is taken as |x|, a ratio that is best at 1
-(the length ratio) as |log x|. Then
+Each metric is oriented to a "badness" b (higher = worse): its ``better`` direction in
+:data:`skelcore.scores.SCORE_COLUMNS` where it has one, else :data:`METRICS`' (|x| for a signed
+error, |log x| for a ratio best at 1). Per metric and defect:
 
-- AUC = P(b_defective > b_clean) + P(=) / 2 (Mann-Whitney), over every clean row and every defective
-  row (all levels, shapes and seeds) of the shapes the defect applies to; NaN values are left out,
-  and with fewer than two values on either side the AUC is NaN. 0.5 = blind, 1 = always worse on
-  the defective skeleton, below 0.5 = better on it (the metric rewards the defect).
-- Spearman rho between b and the ground-truth error (``gt_error`` = 1 - the ground-truth F1, F1
-  averaged over thresholds up to one local radius) over the same rows (ties averaged; NaN when
-  either is constant).
-- A paper metric is **blind** to a defect when its AUC lies within 0.5 +- 0.1 (:data:`BLIND`).
+- pooled AUC = P(b_defective > b_clean) + P(=) / 2 (``mannwhitneyu``'s U / (n1 n2)), all levels;
+- paired AUC = P(b_defective > b_clean of the same shape and seed) + P(=) / 2, the effect (mean
+  paired difference of b) and the Wilcoxon signed-rank p-value (``wilcoxon``, zeros split);
+- 95 % percentile intervals of both AUCs and the effect by ``bootstrap`` over (shape, seed)
+  clusters (the levels of one shape and seed share their clean skeleton, so they are resampled
+  together);
+- Spearman rho (``spearmanr``) between b and the ground-truth error 1 - F1;
+- a metric is **blind** to a defect when the paired AUC's interval holds 0.5 (:func:`is_blind`).
 """
 
 from __future__ import annotations
 
 import math
+import warnings
 from dataclasses import dataclass
-from typing import Any, Iterable
+from typing import Any, Callable, Iterable
 
 import numpy as np
+from scipy.stats import bootstrap, mannwhitneyu, spearmanr, wilcoxon
 
 from ..scores import COLUMN
 
-__all__ = ["MetricSpec", "METRICS", "BLIND", "badness", "auc", "spearman", "validity_table", "blind_spots"]
+__all__ = ["MetricSpec", "METRICS", "BLIND", "CONFIDENCE", "RESAMPLES", "badness", "auc", "spearman",
+           "cluster_interval", "validity_table", "is_blind", "blind_spots"]
 
-#: |AUC - 0.5| <= BLIND: the metric cannot see the defect
+#: without intervals, |AUC - 0.5| <= BLIND: the metric cannot see the defect (the former rule)
 BLIND = 0.1
+#: the bootstrap intervals' confidence level and number of resamples
+CONFIDENCE = 0.95
+RESAMPLES = 2000
 
 
 @dataclass(frozen=True)
@@ -70,6 +74,19 @@ METRICS: tuple[MetricSpec, ...] = (
     MetricSpec("gt_length_ratio", "GT log length ratio (abs)", "ground truth", "abslog"),
     MetricSpec("gt_splits", "GT splits", "ground truth", "lower"),
     MetricSpec("gt_merges", "GT merges", "ground truth", "lower"),
+    # the other communities' (docs/metrics.md 5.3.2); ESA is the Chamfer distance over the diagonal
+    *(MetricSpec(f"gt_diag_f1_{k}", f"GT F1 at {k} % diag", "ground truth", "higher") for k in (1, 2, 5)),
+    MetricSpec("gt_branch_precision", "GT branch precision", "ground truth", "higher"),
+    MetricSpec("gt_branch_recall", "GT branch recall", "ground truth", "higher"),
+    MetricSpec("gt_branch_f1", "GT branch F1", "ground truth", "higher"),
+    MetricSpec("gt_dup_precision", "GT duplicate-aware precision", "ground truth", "higher"),
+    MetricSpec("gt_betti0_error", "GT Betti-0 error (abs)", "ground truth", "abs"),
+    MetricSpec("gt_betti1_error", "GT Betti-1 error (abs)", "ground truth", "abs"),
+    MetricSpec("gt_radius_error", "GT radius error", "ground truth", "lower"),
+    MetricSpec("gt_esa", "GT ESA (diag)", "ground truth", "lower"),
+    MetricSpec("gt_dsa", "GT DSA (diag)", "ground truth", "lower"),
+    MetricSpec("gt_pds", "GT PDS", "ground truth", "lower"),
+    MetricSpec("gt_path_f1", "GT path F1", "ground truth", "higher"),
 )
 
 
@@ -88,23 +105,13 @@ def badness(values: Iterable[Any], orient: str) -> np.ndarray:
     raise ValueError(f"unknown orientation {orient!r}")
 
 
-def _ranks(x: np.ndarray) -> np.ndarray:
-    """Ranks 1..n, ties given their average rank."""
-    _, inverse, counts = np.unique(x, return_inverse=True, return_counts=True)
-    upper = np.cumsum(counts)
-    return (upper - (counts - 1) / 2.0)[inverse]
-
-
 def auc(bad_defective: np.ndarray, bad_clean: np.ndarray) -> float:
-    """P(defective worse than clean) + ties / 2, NaN values left out; NaN with fewer than 2 a side."""
-    a = np.asarray(bad_defective, float)
-    b = np.asarray(bad_clean, float)
-    a, b = a[~np.isnan(a)], b[~np.isnan(b)]
+    """P(defective worse than clean) + ties / 2, NaN values left out; NaN with fewer than 2 a side
+    (scipy's Mann-Whitney U of the defective side over n_defective x n_clean)."""
+    a, b = _finite(bad_defective), _finite(bad_clean)
     if len(a) < 2 or len(b) < 2:
         return float("nan")
-    ranks = _ranks(np.concatenate([a, b]))
-    u = ranks[: len(a)].sum() - len(a) * (len(a) + 1) / 2
-    return float(u / (len(a) * len(b)))
+    return float(mannwhitneyu(a, b, alternative="two-sided").statistic / (len(a) * len(b)))
 
 
 def spearman(x: np.ndarray, y: np.ndarray) -> float:
@@ -114,13 +121,88 @@ def spearman(x: np.ndarray, y: np.ndarray) -> float:
     x, y = x[ok], y[ok]
     if len(x) < 3 or np.ptp(x) == 0 or np.ptp(y) == 0:
         return float("nan")
-    rx, ry = _ranks(x), _ranks(y)
-    return float(np.corrcoef(rx, ry)[0, 1])
+    return float(spearmanr(x, y).statistic)
+
+
+def _finite(x: Any) -> np.ndarray:
+    x = np.asarray(x, float)
+    return x[~np.isnan(x)]
+
+
+def cluster_interval(statistic: Callable[[np.ndarray], np.ndarray], n_clusters: int,
+                     seed: int = 0) -> tuple[float, float]:
+    """Percentile bootstrap interval (:data:`CONFIDENCE`, :data:`RESAMPLES`; scipy.stats.bootstrap)
+    of a statistic of cluster multiplicities: ``statistic(M)`` maps a (B, C) count matrix (how often
+    each of the C clusters was drawn) to B values. NaN draws are left out; (NaN, NaN) below 2 clusters."""
+    if n_clusters < 2:
+        return float("nan"), float("nan")
+
+    def stat(idx: np.ndarray, axis: int = -1) -> np.ndarray:
+        idx = np.moveaxis(np.asarray(idx, np.int64), axis, -1)
+        flat = idx.reshape(-1, idx.shape[-1])
+        counts = np.zeros((len(flat), n_clusters))
+        np.add.at(counts, (np.repeat(np.arange(len(flat)), flat.shape[1]), flat.ravel()), 1.0)
+        return statistic(counts).reshape(idx.shape[:-1])
+
+    with warnings.catch_warnings(), np.errstate(invalid="ignore", divide="ignore"):
+        warnings.simplefilter("ignore")
+        res = bootstrap((np.arange(n_clusters),), stat, vectorized=True, n_resamples=RESAMPLES,
+                        confidence_level=CONFIDENCE, method="percentile", rng=np.random.default_rng(seed))
+        lo, hi = float(res.confidence_interval.low), float(res.confidence_interval.high)
+        if np.isnan(lo) or np.isnan(hi):
+            dist = res.bootstrap_distribution
+            if np.isnan(dist).all():
+                return float("nan"), float("nan")
+            alpha = (1 - CONFIDENCE) / 2
+            lo, hi = (float(np.nanquantile(dist, q)) for q in (alpha, 1 - alpha))
+    return lo, hi
+
+
+def _pooled(b_bad: np.ndarray, c_bad: np.ndarray, b_clean: np.ndarray, c_clean: np.ndarray, n: int):
+    """AUC (defective vs clean, pooled) and its cluster-bootstrap interval."""
+    ok_b, ok_c = ~np.isnan(b_bad), ~np.isnan(b_clean)
+    b_bad, c_bad, b_clean, c_clean = b_bad[ok_b], c_bad[ok_b], b_clean[ok_c], c_clean[ok_c]
+    value = auc(b_bad, b_clean)
+    if np.isnan(value):
+        return value, (float("nan"), float("nan"))
+    g = (b_bad[:, None] > b_clean[None, :]) + 0.5 * (b_bad[:, None] == b_clean[None, :])
+    s = np.zeros((n, n))
+    np.add.at(s, (np.repeat(c_bad, len(c_clean)), np.tile(c_clean, len(c_bad))), g.ravel())
+    nd, nc = np.bincount(c_bad, minlength=n), np.bincount(c_clean, minlength=n)
+
+    def stat(m: np.ndarray) -> np.ndarray:
+        return np.einsum("bi,ij,bj->b", m, s, m) / ((m @ nd) * (m @ nc))
+
+    return value, cluster_interval(stat, n)
+
+
+def _paired(delta: np.ndarray, cluster: np.ndarray, n: int) -> dict[str, Any]:
+    """Paired AUC P(delta > 0) + P(= 0) / 2, the mean paired difference, their cluster-bootstrap
+    intervals, and the Wilcoxon signed-rank p-value (scipy.stats.wilcoxon, zeros split)."""
+    ok = ~np.isnan(delta)
+    delta, cluster = delta[ok], cluster[ok]
+    nan2 = (float("nan"), float("nan"))
+    if len(delta) == 0:
+        return {"auc_paired": float("nan"), "auc_paired_ci": nan2, "effect": float("nan"), "effect_ci": nan2,
+                "wilcoxon_p": float("nan"), "n_pairs": 0}
+    win = (delta > 0) + 0.5 * (delta == 0)
+    w, d, t = (np.bincount(cluster, weights=x, minlength=n) for x in (win, delta, np.ones(len(delta))))
+    p = float("nan")
+    if np.any(delta != 0) and len(delta) >= 2:
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            p = float(wilcoxon(delta, zero_method="zsplit").pvalue)
+    return {"auc_paired": float(win.mean()), "auc_paired_ci": cluster_interval(lambda m: (m @ w) / (m @ t), n),
+            "effect": float(delta.mean()), "effect_ci": cluster_interval(lambda m: (m @ d) / (m @ t), n, seed=1),
+            "wilcoxon_p": p, "n_pairs": int(len(delta))}
 
 
 def validity_table(rows: list[dict[str, Any]], metrics: tuple[MetricSpec, ...] = METRICS) -> list[dict[str, Any]]:
-    """One record per (metric, defect): auc, spearman, n_clean, n_defective (and the levels' AUCs,
-    ``auc_levels``, mild to strong), for every defect present in ``rows``."""
+    """One record per (metric, defect): auc (pooled) and its interval ``auc_ci``, the paired analysis
+    (each defective skeleton against the clean one of its shape and seed: ``auc_paired`` and
+    interval, ``effect`` = mean paired difference of the badness and interval, ``wilcoxon_p``,
+    ``n_pairs``), spearman, n_clean, n_defective and ``auc_levels`` (mild to strong); intervals are
+    bootstraps over (shape, seed) clusters. Every defect present in ``rows``."""
     from .skeleton_defects import DEFECTS
 
     present = {r["defect"] for r in rows}
@@ -129,34 +211,54 @@ def validity_table(rows: list[dict[str, Any]], metrics: tuple[MetricSpec, ...] =
     out = []
     for d in defects:
         bad_rows = [r for r in rows if r["defect"] == d]
-        shapes = {r["shape"] for r in bad_rows}
-        clean_d = [r for r in clean if r["shape"] in shapes]
+        units = {(r["shape"], str(r["seed"])) for r in bad_rows}
+        clean_d = [r for r in clean if (r["shape"], str(r["seed"])) in units] or \
+            [r for r in clean if r["shape"] in {u[0] for u in units}]
+        ids = {u: i for i, u in enumerate(sorted(units | {(r["shape"], str(r["seed"])) for r in clean_d}))}
+        c_bad = np.array([ids[(r["shape"], str(r["seed"]))] for r in bad_rows], np.int64)
+        c_clean = np.array([ids[(r["shape"], str(r["seed"]))] for r in clean_d], np.int64)
+        partner = {(r["shape"], str(r["seed"])): r for r in clean_d}
         levels = sorted({int(r["level_index"]) for r in bad_rows})
         both = clean_d + bad_rows
         err = np.array([float(r["gt_error"]) for r in both])
         for m in metrics:
             b_clean = badness((r.get(m.key) for r in clean_d), m.orient)
             b_bad = badness((r.get(m.key) for r in bad_rows), m.orient)
+            b_partner = badness((partner.get((r["shape"], str(r["seed"])), {}).get(m.key) for r in bad_rows), m.orient)
             per_level = []
             for lv in levels:
                 sel = [r for r in bad_rows if int(r["level_index"]) == lv]
                 per_level.append(auc(badness((r.get(m.key) for r in sel), m.orient), b_clean))
-            out.append({"metric": m.key, "label": m.label, "group": m.group, "defect": d,
-                        "auc": auc(b_bad, b_clean), "spearman": spearman(np.concatenate([b_clean, b_bad]), err),
-                        "n_clean": int(np.count_nonzero(~np.isnan(b_clean))),
-                        "n_defective": int(np.count_nonzero(~np.isnan(b_bad))), "auc_levels": per_level})
+            value, ci = _pooled(b_bad, c_bad, b_clean, c_clean, len(ids))
+            rec = {"metric": m.key, "label": m.label, "group": m.group, "defect": d, "auc": value, "auc_ci": ci,
+                   **_paired(b_bad - b_partner, c_bad, len(ids)),
+                   "spearman": spearman(np.concatenate([b_clean, b_bad]), err),
+                   "n_clean": int(np.count_nonzero(~np.isnan(b_clean))),
+                   "n_defective": int(np.count_nonzero(~np.isnan(b_bad))), "auc_levels": per_level}
+            out.append(rec)
     return out
 
 
+def is_blind(rec: dict[str, Any]) -> bool:
+    """Blind: the paired AUC's interval holds 0.5 (the pooled AUC's when there are no pairs); an
+    interval that cannot be drawn (NaN) says nothing."""
+    lo, hi = rec.get("auc_paired_ci", (float("nan"),) * 2) if rec.get("n_pairs") else rec.get("auc_ci", (float("nan"),) * 2)
+    return not (math.isnan(lo) or math.isnan(hi)) and lo <= 0.5 <= hi
+
+
 def blind_spots(table: list[dict[str, Any]], group: str = "paper") -> dict[str, list[str]]:
-    """Per metric of ``group``: the defects it cannot see (AUC within 0.5 +- BLIND; a NaN AUC, no
-    value on one side, is not counted)."""
+    """Per metric of ``group``: the defects it cannot see (:func:`is_blind`; a record without
+    intervals falls back to its AUC within 0.5 +- :data:`BLIND`)."""
     out: dict[str, list[str]] = {}
     for rec in table:
         if rec["group"] != group:
             continue
-        a = rec["auc"]
         out.setdefault(rec["metric"], [])
-        if not math.isnan(a) and abs(a - 0.5) <= BLIND + 1e-12:
+        if "auc_ci" in rec or "auc_paired_ci" in rec:
+            blind = is_blind(rec)
+        else:
+            a = rec["auc"]
+            blind = not math.isnan(a) and abs(a - 0.5) <= BLIND + 1e-12
+        if blind:
             out[rec["metric"]].append(rec["defect"])
     return out

@@ -27,8 +27,9 @@ def register_validity(actions: argparse._SubParsersAction) -> argparse.ArgumentP
     )
     p.add_argument("--out", required=True, metavar="DIR",
                    help="output folder (new, empty, or a validity run: resumed)")
-    p.add_argument("--suite", choices=("default", "small"), default="default",
-                   help="default: 12 shapes at 5000 points, 3 seeds; small: 3 shapes at 1200 points, 2 seeds")
+    p.add_argument("--suite", choices=("default", "small", "neurons"), default="default",
+                   help="default: 12 shapes at 5000 points, 3 seeds; small: 3 shapes at 1200 points, 2 seeds; "
+                   "neurons: the 5 traced neurons of resources/neurons at 3000 points, 1 seed")
     p.add_argument("--seed", type=int, default=0, metavar="N",
                    help="the suite seed shapes and defects are drawn from (0)")
     p.add_argument("--seeds", type=positive_int, metavar="K", help="clouds (and defect draws) per shape (the suite's)")
@@ -71,7 +72,8 @@ def _terminate(signum, frame):  # noqa: ARG001
 
 def run_validity_cli(args: argparse.Namespace) -> int:
     from ..benchmark.validity import run_validity, validity_tasks
-    from ..benchmark.validity_stats import blind_spots, validity_table
+    from ..benchmark.validity_report import set_tables
+    from ..benchmark.validity_stats import blind_spots
 
     def progress(i: int, total: int, key: str, status: str) -> None:
         if not args.quiet:
@@ -89,9 +91,9 @@ def run_validity_cli(args: argparse.Namespace) -> int:
         return 2
     finally:
         signal.signal(signal.SIGTERM, previous)
-    table = validity_table(result.rows)
-    for metric, blind in blind_spots(table).items():
-        print(f"{metric}: blind to {', '.join(blind) if blind else 'none'}")
+    for name, table in set_tables(result.rows).items():
+        for metric, blind in blind_spots(table).items():
+            print(f"{name} {metric}: blind to {', '.join(blind) if blind else 'none'}")
     print(f"{result.tasks} tasks: {result.kept} already done, {result.ran} ran, {len(result.failed)} failed; "
           f"{len(result.rows)} scored skeletons; {result.backend}, {result.wall:.1f} s")
     for rec in result.failed:

@@ -15,7 +15,7 @@ from scipy.sparse.csgraph import connected_components
 
 from skelcore.benchmark import skeleton_defects as sd
 from skelcore.benchmark.validity import _shape
-from skelcore.benchmark.validity_stats import auc, blind_spots, spearman
+from skelcore.benchmark.validity_stats import auc, blind_spots, is_blind, spearman, validity_table
 from skelcore.benchmark.tubes import signed_distance
 from skelcore.cli.main import main
 
@@ -108,6 +108,53 @@ def test_auc_and_spearman_against_their_definitions():
     stats = pytest.importorskip("scipy.stats")
     a, b = rng.integers(0, 4, 50).astype(float), rng.integers(0, 6, 50).astype(float)  # ties
     assert math.isclose(spearman(a, b), stats.spearmanr(a, b)[0], abs_tol=1e-12)
+
+
+def _ranks_auc(a, b):
+    """The study's former own code (average ranks, Mann-Whitney U): the library call must equal it."""
+    x = np.concatenate([a, b])
+    _, inv, counts = np.unique(x, return_inverse=True, return_counts=True)
+    ranks = (np.cumsum(counts) - (counts - 1) / 2.0)[inv]
+    return (ranks[: len(a)].sum() - len(a) * (len(a) + 1) / 2) / (len(a) * len(b))
+
+
+def test_auc_is_sklearns_roc_auc_and_the_former_rank_formula():
+    metrics = pytest.importorskip("sklearn.metrics")
+    rng = np.random.default_rng(4)
+    for _ in range(5):
+        a, b = rng.integers(0, 5, 23).astype(float), rng.integers(0, 4, 17).astype(float)  # many ties
+        want = metrics.roc_auc_score(np.r_[np.ones(23), np.zeros(17)], np.r_[a, b])
+        assert math.isclose(auc(a, b), want, abs_tol=1e-12) and math.isclose(auc(a, b), _ranks_auc(a, b), abs_tol=1e-12)
+
+
+def _rows(effect: float, noise: float, shapes: int = 8, seed: int = 0):
+    """Clean rows with a wide spread between shapes; each defective level adds ``effect`` x level."""
+    rng = np.random.default_rng(seed)
+    rows = []
+    for k in range(shapes):
+        base = 10.0 * rng.normal()
+        rows.append({"shape": f"s{k}", "seed": 0, "defect": "clean", "level": "", "level_index": 0, "d_B": base,
+                     "gt_error": 0.0})
+        for lv in (1, 2, 3):
+            rows.append({"shape": f"s{k}", "seed": 0, "defect": "spurs", "level": str(lv), "level_index": lv,
+                         "d_B": base + effect * lv + noise * rng.normal(), "gt_error": 0.1 * lv})
+    return rows
+
+
+def test_pairing_sees_what_pooling_hides_and_blind_needs_the_interval():
+    from skelcore.benchmark.validity_stats import METRICS
+
+    d_b = tuple(m for m in METRICS if m.key == "d_B")
+    # a small shift against a large spread between shapes: pooled AUC near 0.5, every pair worse
+    rec = validity_table(_rows(0.5, 0.01), d_b)[0]
+    assert rec["auc"] < 0.7 and rec["auc_paired"] == 1.0 and rec["auc_paired_ci"] == (1.0, 1.0)
+    assert rec["n_pairs"] == 24 and math.isclose(rec["effect"], 1.0, abs_tol=0.01)
+    assert rec["effect_ci"][0] > 0.9 and rec["wilcoxon_p"] < 1e-4
+    assert not is_blind(rec)
+    # no effect, only noise: the paired interval holds 0.5, so blind
+    rec = validity_table(_rows(0.0, 1.0), d_b)[0]
+    assert rec["auc_paired_ci"][0] <= 0.5 <= rec["auc_paired_ci"][1] and is_blind(rec)
+    assert blind_spots([{**rec, "group": "paper"}]) == {"d_B": ["spurs"]}
 
 
 ARGS = ["bench", "validity", "--suite", "small", "--shapes", "junction_y", "tube_a", "--defects", "truncation",
