@@ -14,12 +14,13 @@ from __future__ import annotations
 
 import itertools
 import os
+from typing import Callable
 
 import numpy as np
 from scipy.spatial import cKDTree
 
 from ..geometry import (
-    Checkpoint, bbox_diagonal, bounding_box, kd_tree, leaf_order, lex_order, no_checkpoint, take_rows, unit_rows,
+    Checkpoint, bbox_diagonal, bounding_box, kd_tree, leaf_order, lex_order, no_checkpoint, stable_argsort, take_rows, unit_rows,
 )
 from ..parallel import on_threads
 from ..params import Params, k_center_for
@@ -33,6 +34,8 @@ _SKELETAL_CHUNK = 4096
 _CURVE_SPAN = 4  # curve samples per thread task (about 5-25 ms at 1M points)
 _CURVE_AT_ONCE = 50_000  # smaller clouds: all samples at once in flat arrays; larger: per sample on threads
 _CURVE_BATCH_PAIRS = 2_000_000  # ball candidates per batch of samples taken at once (memory: about 60 bytes each)
+_BALL_ROUNDS = 1  # ball searches before a sample's whole slab is taken (the next ones rarely end a ring)
+_BALL_FIRST = 0.5  # the first ball's 2-D reach, in alpha / 2 (the neuron at 100k points: 8.6 -> 6.5 s against 1.0)
 _BALL_MARGIN = 1e-9  # relative: the ring search's balls and the box's reach are this much larger than exact
 
 
@@ -256,15 +259,16 @@ def curve_centeredness(
     g, h = _orthonormal_complement(u[todo])
 
     if len(cloud) < _CURVE_AT_ONCE:
-        # small clouds: the samples in batches of flat arrays on this thread (hammer scan 0.085 -> 0.011 s,
-        # docs/performance.md 6.5); a batch holds about _CURVE_BATCH_PAIRS candidates of the first ball
-        first = grid.tree.query_ball_point(points[todo], _ball_radius(np.full(len(todo), half), half),
+        # small clouds: the samples in batches of flat arrays on this thread (docs/performance.md 6.5); a
+        # batch holds about _CURVE_BATCH_PAIRS candidates of the first ball
+        first = grid.tree.query_ball_point(points[todo], _ball_radius(np.full(len(todo), _BALL_FIRST * half), half),
                                            return_length=True)
         bounds = np.r_[0, np.cumsum(first)]
         lo = 0
         while lo < len(todo):
             hi = lo + max(1, int(np.searchsorted(bounds[lo:], bounds[lo] + _CURVE_BATCH_PAIRS, side="right")) - 1)
-            ring, starts = _rings(grid, points[todo[lo:hi]], u[todo[lo:hi]], g[lo:hi], h[lo:hi], half, growth)
+            ring, starts = _rings(grid, points[todo[lo:hi]], u[todo[lo:hi]], g[lo:hi], h[lo:hi], half, growth,
+                                  lambda: checkpoint(lo / len(todo)))
             out[todo[lo:hi]] = _rings_centeredness(ring, starts)
             lo = hi
             checkpoint(lo / len(todo))
@@ -294,6 +298,7 @@ def _ball_radius(reach: np.ndarray, half: float) -> np.ndarray:
 
 def _rings(
     grid: "_SlabGrid", points: np.ndarray, u: np.ndarray, g: np.ndarray, h: np.ndarray, half: float, growth: float,
+    tick: Callable[[], None] = lambda: None,
 ) -> tuple[np.ndarray, np.ndarray]:
     """The rings of the samples (p, u) with plane axes (g, h): ring points in the plane (p at the origin)
     sample after sample, and each sample's start in them.
@@ -302,15 +307,18 @@ def _rings(
     of radius :func:`_ball_radius` (R) around p.  The ball's slab points with distance <= R, sorted by
     (distance, grid row), are the head of the whole slab's sorted list; the ring is final when it breaks
     inside them, when growth x its last distance <= R (the next point, beyond R, breaks it) or when R
-    reaches past the cloud's box; otherwise R doubles.  Same candidates' values and order as testing
-    every grid row: the same rings, bit for bit (docs/performance.md 6.5).
+    reaches past the cloud's box; otherwise R doubles, and after ``_BALL_ROUNDS`` balls the sample's whole
+    slab is taken (:func:`_slab_ring`, ``tick`` after each).  The same candidates' values in the same order
+    as testing every grid row: the same rings, bit for bit (docs/performance.md 6.5).
     """
     n = len(points)
     far = np.linalg.norm(np.maximum(np.abs(grid.lo - points), np.abs(grid.hi - points)), axis=1) * (1.0 + _BALL_MARGIN)
-    reach = np.full(n, half)
+    reach = np.full(n, _BALL_FIRST * half)
     todo = np.arange(n)
     kept_sid, kept_flat = [np.empty(0, np.int64)], [np.empty((0, 2))]
-    while len(todo):
+    for _ in range(_BALL_ROUNDS):
+        if not len(todo):
+            break
         r = reach[todo]
         found = grid.tree.query_ball_point(points[todo], _ball_radius(r, half), return_sorted=True)
         counts = np.fromiter(map(len, found), np.int64, count=len(found))
@@ -324,9 +332,9 @@ def _rings(
         dist = np.hypot(flat[:, 0], flat[:, 1])
         near = dist <= r[loc]
         loc, dist, flat = loc[near], dist[near], flat[near]
-        order = np.lexsort((dist, loc))  # stable: equal distances keep the grid's row order
-        loc, dist, flat = loc[order], dist[order], flat[order]
         starts = np.searchsorted(loc, np.arange(len(todo) + 1))
+        order = _order_within(dist, starts)  # stable: equal distances keep the grid's row order
+        dist, flat = dist[order], flat[order]
         in_ring, ring_len = _leading_rings(loc, dist, starts, growth)
         count = np.diff(starts)
         last = dist[np.maximum(starts[:-1] + ring_len - 1, 0)] if len(dist) else np.zeros(len(todo))
@@ -337,9 +345,38 @@ def _rings(
         kept_flat.append(flat[keep])
         reach[todo] = np.maximum(2.0 * r, grown)
         todo = todo[~done]
+    if len(todo):  # rings wider than the balls (often a long thin shape's whole slab): the slab by grid cells
+        for i in todo.tolist():
+            ring = _slab_ring(grid, points[i], u[i], g[i], h[i], half, growth)
+            kept_sid.append(np.full(len(ring), i))
+            kept_flat.append(ring)
+            tick()
     sid = np.concatenate(kept_sid)
     order = np.argsort(sid, kind="stable")
     return np.concatenate(kept_flat)[order], np.searchsorted(sid[order], np.arange(n + 1))
+
+
+def _slab_ring(
+    grid: "_SlabGrid", p: np.ndarray, u: np.ndarray, g: np.ndarray, h: np.ndarray, half: float, growth: float,
+) -> np.ndarray:
+    """One sample's ring from its whole slab: the points of every grid cell that can meet the slab, in
+    grid order, tested, sorted stably by distance and cut (p at the origin)."""
+    rel = grid.slab_candidates(p, u, half) - p
+    rel = np.compress(np.abs(_dot3(rel, u)) < half, rel, axis=0)  # = rel[mask], 2 x faster
+    flat = np.column_stack([_dot3(rel, g), _dot3(rel, h)])
+    dist = np.hypot(flat[:, 0], flat[:, 1])
+    order = stable_argsort(dist)
+    return flat[order[: ring_length(dist[order], growth)]]
+
+
+def _order_within(values: np.ndarray, starts: np.ndarray) -> np.ndarray:
+    """The stable order of ``values`` inside each run ``starts[i]:starts[i + 1]`` (runs kept in place):
+    ``np.lexsort((values, run))`` by one sort per run, 5-10 x faster on runs of hundreds to thousands."""
+    order = np.empty(len(values), np.int64)
+    for a, b in zip(starts[:-1].tolist(), starts[1:].tolist()):
+        if b > a:
+            order[a:b] = stable_argsort(values[a:b]) + a
+    return order
 
 
 def _leading_rings(sid: np.ndarray, dist: np.ndarray, starts: np.ndarray, growth: float) -> tuple[np.ndarray, np.ndarray]:
@@ -388,10 +425,8 @@ def slab_grid(cloud: np.ndarray, params: Params = Params()) -> "_SlabGrid":
 
 
 class _SlabGrid:
-    """Cloud points sorted by cubic cell (the order of equal ring distances) and a kd-tree of them.
-
-    The cells' side, max(alpha / 2, diagonal / 512), fixes the order in which equal 2-D distances enter
-    a ring, hence the ellipse fit's sums: kept so the values stay the same bits."""
+    """Cloud points bucketed in cubic cells (sorted by cell) for slab lookups, and a kd-tree of them
+    for ball lookups; the grid order is the order of equal ring distances (the ellipse fit's sums)."""
 
     def __init__(self, cloud: np.ndarray, cell: float, checkpoint: Checkpoint = no_checkpoint) -> None:
         self.lo, self.hi = bounding_box(cloud)
@@ -403,7 +438,31 @@ class _SlabGrid:
         order = np.argsort(key, kind="stable")
         checkpoint(0.0)
         self.points = take_rows(cloud, order)
+        srt = key[order]  # already sorted: cell boundaries by one diff, not a second sort (np.unique)
+        self.starts = np.flatnonzero(np.r_[True, srt[1:] != srt[:-1]])
+        self.counts = np.diff(np.r_[self.starts, len(srt)])
+        keys = srt[self.starts]
+        cell_ijk = np.column_stack([keys % dims[0], (keys // dims[0]) % dims[1], keys // (dims[0] * dims[1])])
+        self.centres = self.lo + (cell_ijk + 0.5) * cell
+        self.half_cell = 0.5 * cell
+        checkpoint(0.0)
         self.tree = kd_tree(self.points, checkpoint)  # rows of ``points``: ball queries in grid order
+
+    def reach(self, u: np.ndarray, half: float) -> np.ndarray:
+        """How far from the slab's mid-plane a cell centre may lie for the cell to meet the slab, for
+        unit rows ``u``: a cube's extent along u is half_cell x |u|_1; the small margin absorbs round-off."""
+        return half + self.half_cell * np.abs(u).sum(axis=-1) * (1 + 1e-9) + 1e-12
+
+    def slab_candidates(self, p: np.ndarray, u: np.ndarray, half: float) -> np.ndarray:
+        """Points of every cell that may meet the slab |u . (x - p)| < half (a superset of it)."""
+        hit = np.flatnonzero(np.abs((self.centres - p) @ u) < self.reach(u, half))
+        return take_rows(self.points, self.cell_rows(hit))
+
+    def cell_rows(self, cells: np.ndarray) -> np.ndarray:
+        """Rows of ``self.points`` of the given cells, cell after cell, each cell's in grid order."""
+        starts, counts = self.starts[cells], self.counts[cells]
+        shift = np.repeat(starts - (np.cumsum(counts) - counts), counts)
+        return np.arange(int(counts.sum())) + shift
 
 
 def _orthonormal_complement(u: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
