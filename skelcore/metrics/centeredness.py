@@ -227,12 +227,12 @@ def curve_centeredness(
     Invalid (NaN): a NaN direction (joint vertex), fewer than 3 ring points. The unbounded -> 0
     rule is NOT applied here.
 
-    The slab is a thin plate spanning the whole cloud, so candidates come from a uniform grid of
-    cells (side max(alpha / 2, diagonal / 512): half the slab's width, so the cells that meet it hold
-    about 1.5 x its points; at 1M points 15 % faster than cells of alpha): only the points of cells
-    that can meet the slab are tested. The result equals that of testing every cloud point.  Clouds
-    under 50k points take every sample at once in flat arrays, larger ones cut the rings per sample on
-    threads; both fit all rings in one batched call and give the same bits (docs/performance.md 6.5).
+    The slab is a plate spanning the whole cloud, but only its points up to the ring's end matter: they
+    are taken first from a ball around p (a kd-tree), and from the whole slab (the points of the grid
+    cells that can meet it; cells of side max(alpha / 2, diagonal / 512)) only when the ring reaches
+    past the ball.  Either way the result equals that of testing every cloud point, in the grid's order
+    for equal distances.  Clouds under 50k points take the samples in batches of flat arrays, larger
+    ones in spans on threads; both give the same bits (docs/performance.md 6.5).
     ``grid``: :func:`slab_grid` of the same cloud and params, when kept from an earlier call.
     """
     cloud = np.asarray(cloud, dtype=float)
