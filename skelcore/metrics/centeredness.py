@@ -315,7 +315,7 @@ def _rings(
     far = np.linalg.norm(np.maximum(np.abs(grid.lo - points), np.abs(grid.hi - points)), axis=1) * (1.0 + _BALL_MARGIN)
     reach = np.full(n, _BALL_FIRST * half)
     todo = np.arange(n)
-    kept_sid, kept_flat = [np.empty(0, np.int64)], [np.empty((0, 2))]
+    rings = [np.empty((0, 2))] * n  # each sample's ring, joined in sample order once (no sort of them all)
     for _ in range(_BALL_ROUNDS):
         if not len(todo):
             break
@@ -340,20 +340,15 @@ def _rings(
         last = dist[np.maximum(starts[:-1] + ring_len - 1, 0)] if len(dist) else np.zeros(len(todo))
         grown = np.where(count > 0, growth * last, 0.0)
         done = (ring_len < count) | ((count > 0) & (grown <= r)) | (r >= far[todo])
-        keep = in_ring & done[loc]
-        kept_sid.append(todo[loc[keep]])
-        kept_flat.append(flat[keep])
+        for i, ring in zip(todo[done].tolist(), np.split(flat[in_ring & done[loc]], np.cumsum(ring_len[done])[:-1])):
+            rings[i] = ring
         reach[todo] = np.maximum(2.0 * r, grown)
         todo = todo[~done]
     if len(todo):  # rings wider than the balls (often a long thin shape's whole slab): the slab by grid cells
         for i in todo.tolist():
-            ring = _slab_ring(grid, points[i], u[i], g[i], h[i], half, growth)
-            kept_sid.append(np.full(len(ring), i))
-            kept_flat.append(ring)
+            rings[i] = _slab_ring(grid, points[i], u[i], g[i], h[i], half, growth)
             tick()
-    sid = np.concatenate(kept_sid)
-    order = np.argsort(sid, kind="stable")
-    return np.concatenate(kept_flat)[order], np.searchsorted(sid[order], np.arange(n + 1))
+    return np.concatenate(rings), np.r_[0, np.cumsum([len(ring) for ring in rings])]
 
 
 def _slab_ring(
