@@ -12,7 +12,9 @@ beta* and c* without recomputing.  Departures from the paper and the reference t
 
 from __future__ import annotations
 
+import itertools
 import os
+from typing import Callable
 
 import numpy as np
 from scipy.spatial import cKDTree
@@ -31,7 +33,11 @@ __all__ = ["skeletal_centeredness", "curve_centeredness", "slab_grid", "ring_len
 _SKELETAL_CHUNK = 4096
 _CURVE_SPAN = 4  # curve samples per thread task (about 5-25 ms at 1M points)
 _CURVE_AT_ONCE = 50_000  # smaller clouds: all samples at once in flat arrays; larger: per sample on threads
-_CURVE_BATCH_PAIRS = 2_000_000  # slab candidates per batch of samples taken at once (memory: 24 bytes each)
+_CURVE_BATCH_PAIRS = 2_000_000  # ball candidates per batch of samples taken at once (memory: about 60 bytes each)
+_BALL_ROUNDS = 1  # ball searches before a sample's whole slab is taken (the next ones rarely end a ring)
+# the first ball's 2-D reach, in alpha / 2 (neuron, 100k points: 6.5 CPU s, 8.6 with 1.0; one run each, load 8.7)
+_BALL_FIRST = 0.5
+_BALL_MARGIN = 1e-9  # relative: the ring search's balls and the box's reach are this much larger than exact
 
 
 def skeletal_centeredness(
@@ -222,12 +228,12 @@ def curve_centeredness(
     Invalid (NaN): a NaN direction (joint vertex), fewer than 3 ring points. The unbounded -> 0
     rule is NOT applied here.
 
-    The slab is a thin plate spanning the whole cloud, so candidates come from a uniform grid of
-    cells (side max(alpha / 2, diagonal / 512): half the slab's width, so the cells that meet it hold
-    about 1.5 x its points; at 1M points 15 % faster than cells of alpha): only the points of cells
-    that can meet the slab are tested. The result equals that of testing every cloud point.  Clouds
-    under 50k points take every sample at once in flat arrays, larger ones cut the rings per sample on
-    threads; both fit all rings in one batched call and give the same bits (docs/performance.md 6.5).
+    The slab is a plate spanning the whole cloud, but only its points up to the ring's end matter: they
+    are taken first from a ball around p (a kd-tree), and from the whole slab (the points of the grid
+    cells that can meet it; cells of side max(alpha / 2, diagonal / 512)) only when the ring reaches
+    past the ball.  Either way the result equals that of testing every cloud point, in the grid's order
+    for equal distances.  Clouds under 50k points take the samples in batches of flat arrays, larger
+    ones in spans on threads; both give the same bits (docs/performance.md 6.5).
     ``grid``: :func:`slab_grid` of the same cloud and params, when kept from an earlier call.
     """
     cloud = np.asarray(cloud, dtype=float)
@@ -254,73 +260,119 @@ def curve_centeredness(
     g, h = _orthonormal_complement(u[todo])
 
     if len(cloud) < _CURVE_AT_ONCE:
-        # small clouds: every sample at once (a few dozen numpy calls in all instead of per sample;
-        # hammer scan 0.085 -> 0.011 s, docs/performance.md 6.5)
-        out[todo] = _all_samples_at_once(grid, points[todo], u[todo], g, h, half, growth, checkpoint)
+        # small clouds: the samples in batches of flat arrays on this thread (docs/performance.md 6.5); a
+        # batch holds about _CURVE_BATCH_PAIRS candidates of the first ball
+        first = grid.tree.query_ball_point(points[todo], _ball_radius(np.full(len(todo), _BALL_FIRST * half), half),
+                                           return_length=True)
+        bounds = np.r_[0, np.cumsum(first)]
+        lo = 0
+        while lo < len(todo):
+            hi = lo + max(1, int(np.searchsorted(bounds[lo:], bounds[lo] + _CURVE_BATCH_PAIRS, side="right")) - 1)
+            ring, starts = _rings(grid, points[todo[lo:hi]], u[todo[lo:hi]], g[lo:hi], h[lo:hi], half, growth,
+                                  lambda: checkpoint(lo / len(todo)))
+            out[todo[lo:hi]] = _rings_centeredness(ring, starts)
+            lo = hi
+            checkpoint(lo / len(todo))
         return out
 
-    def ring_of(i: int) -> np.ndarray:
-        rel = grid.slab_candidates(points[todo[i]], u[todo[i]], half) - points[todo[i]]
-        rel = np.compress(np.abs(_dot3(rel, u[todo[i]])) < half, rel, axis=0)  # = rel[mask], 2 x faster
-        flat = np.column_stack([_dot3(rel, g[i]), _dot3(rel, h[i])])  # p_hat is the origin
-        dist = np.hypot(flat[:, 0], flat[:, 1])
-        order = stable_argsort(dist)
-        return flat[order[: ring_length(dist[order], growth)]]
-
     def span_centeredness(i0: int, i1: int) -> np.ndarray:
-        rings = [ring_of(i) for i in range(i0, i1)]
-        return _rings_centeredness(np.concatenate(rings).reshape(-1, 2), np.r_[0, np.cumsum([len(r) for r in rings])])
+        return _rings_centeredness(*_rings(grid, points[todo[i0:i1]], u[todo[i0:i1]], g[i0:i1], h[i0:i1], half, growth))
 
     def store(span_: tuple[int, int], found: np.ndarray) -> None:
         out[todo[span_[0] : span_[1]]] = found
 
-    # the samples' slabs are independent and numpy releases the GIL in their big gathers, sorts and
-    # products: spans of samples on every core (docs/performance.md 6.3), each span's fits batched (a
-    # set's fit does not depend on the others in its batch; one batch after the spans held a cancel
-    # for 0.4 s at 1M points, docs/performance.md 4)
+    # the samples' slabs are independent and numpy and the kd-tree release the GIL: spans of samples on
+    # every core (docs/performance.md 6.3), each span's fits batched (a set's fit does not depend on the
+    # others in its batch; one batch after the spans held a cancel for 0.4 s at 1M points,
+    # docs/performance.md 4)
     step = _CURVE_SPAN
     on_threads(span_centeredness, [(i, min(i + step, len(todo))) for i in range(0, len(todo), step)], None,
                checkpoint, store)
     return out
 
 
-def _all_samples_at_once(
-    grid: "_SlabGrid", points: np.ndarray, u: np.ndarray, g: np.ndarray, h: np.ndarray, half: float,
-    growth: float, checkpoint: Checkpoint,
-) -> np.ndarray:
-    """:func:`curve_centeredness`'s per-sample steps (slab, ring, fit) for all samples in flat arrays.
+def _ball_radius(reach: np.ndarray, half: float) -> np.ndarray:
+    """Radius of the ball around p that holds every slab point within 2-D distance ``reach`` of p:
+    sqrt(reach^2 + (alpha / 2)^2), with a margin that absorbs round-off."""
+    return np.sqrt(reach * reach + half * half) * (1.0 + _BALL_MARGIN)
 
-    The candidates of each sample come in the order ``_SlabGrid.slab_candidates`` gives them, the
-    products are the same element-wise operations (:func:`_dot3`), the rings are sorted stably by
-    distance and fitted by the same batched fit: the same values as the per-sample path, bit for bit.
+
+def _rings(
+    grid: "_SlabGrid", points: np.ndarray, u: np.ndarray, g: np.ndarray, h: np.ndarray, half: float, growth: float,
+    tick: Callable[[], None] = lambda: None,
+) -> tuple[np.ndarray, np.ndarray]:
+    """The rings of the samples (p, u) with plane axes (g, h): ring points in the plane (p at the origin)
+    sample after sample, and each sample's start in them.
+
+    Only slab points up to the ring's end matter, and a slab point at 2-D distance <= R lies in the ball
+    of radius :func:`_ball_radius` (R) around p.  The ball's slab points with distance <= R, sorted by
+    (distance, grid row), are the head of the whole slab's sorted list; the ring is final when it breaks
+    inside them, when growth x its last distance <= R (the next point, beyond R, breaks it) or when R
+    reaches past the cloud's box; otherwise R doubles, and after ``_BALL_ROUNDS`` balls the sample's whole
+    slab is taken (:func:`_slab_ring`, ``tick`` after each).  The same candidates' values in the same order
+    as testing every grid row: the same rings, bit for bit (docs/performance.md 6.5).
     """
     n = len(points)
-    out = np.full(n, np.nan)
-    reach = grid.reach(u, half)
-    offset = np.einsum("sk,sk->s", points, u)
-    lo = 0
-    while lo < n:
-        # a batch of samples: its (sample, cell) test matrix and its slab candidates bounded in memory
-        hi = min(n, lo + max(1, _CURVE_BATCH_PAIRS // max(1, len(grid.centres))))
-        hit_s, hit_c = np.nonzero(np.abs(np.einsum("ck,sk->sc", grid.centres, u[lo:hi]) - offset[lo:hi, None])
-                                  < reach[lo:hi, None])  # sample-major: each sample's cells in grid order
-        bounds = np.r_[0, np.cumsum(np.bincount(hit_s, weights=grid.counts[hit_c], minlength=hi - lo))]
-        hi = lo + max(1, int(np.searchsorted(bounds, _CURVE_BATCH_PAIRS, side="right")) - 1)
-        sel = hit_s < hi - lo
-        cs, cc = hit_s[sel] + lo, hit_c[sel]
-        sid = np.repeat(cs, grid.counts[cc])
-        rel = take_rows(grid.points, grid.cell_rows(cc)) - take_rows(points, sid)
+    far = np.linalg.norm(np.maximum(np.abs(grid.lo - points), np.abs(grid.hi - points)), axis=1) * (1.0 + _BALL_MARGIN)
+    reach = np.full(n, _BALL_FIRST * half)
+    todo = np.arange(n)
+    rings = [np.empty((0, 2))] * n  # each sample's ring, joined in sample order once (no sort of them all)
+    for _ in range(_BALL_ROUNDS):
+        if not len(todo):
+            break
+        r = reach[todo]
+        found = grid.tree.query_ball_point(points[todo], _ball_radius(r, half), return_sorted=True)
+        counts = np.fromiter(map(len, found), np.int64, count=len(found))
+        rows = np.fromiter(itertools.chain.from_iterable(found), np.int64, count=int(counts.sum()))
+        loc = np.repeat(np.arange(len(todo)), counts)
+        sid = todo[loc]
+        rel = take_rows(grid.points, rows) - take_rows(points, sid)
         inside = np.abs(_dot3(rel, take_rows(u, sid))) < half
-        rel, sid = np.compress(inside, rel, axis=0), sid[inside]
+        rel, loc, sid = np.compress(inside, rel, axis=0), loc[inside], sid[inside]
         flat = np.column_stack([_dot3(rel, take_rows(g, sid)), _dot3(rel, take_rows(h, sid))])
         dist = np.hypot(flat[:, 0], flat[:, 1])
-        order = np.lexsort((dist, sid))  # stable: equal distances keep the candidates' order
-        sid, dist, flat = sid[order], dist[order], flat[order]
-        in_ring, ring_len = _leading_rings(sid, dist, np.searchsorted(sid, np.arange(lo, hi + 1)), growth)
-        out[lo:hi] = _rings_centeredness(flat[in_ring], np.r_[0, np.cumsum(ring_len)])
-        lo = hi
-        checkpoint(lo / n)
-    return out
+        near = dist <= r[loc]
+        loc, dist, flat = loc[near], dist[near], flat[near]
+        starts = np.searchsorted(loc, np.arange(len(todo) + 1))
+        order = _order_within(dist, starts)  # stable: equal distances keep the grid's row order
+        dist, flat = dist[order], flat[order]
+        in_ring, ring_len = _leading_rings(loc, dist, starts, growth)
+        count = np.diff(starts)
+        last = dist[np.maximum(starts[:-1] + ring_len - 1, 0)] if len(dist) else np.zeros(len(todo))
+        grown = np.where(count > 0, growth * last, 0.0)
+        done = (ring_len < count) | ((count > 0) & (grown <= r)) | (r >= far[todo])
+        for i, ring in zip(todo[done].tolist(), np.split(flat[in_ring & done[loc]], np.cumsum(ring_len[done])[:-1])):
+            rings[i] = ring
+        reach[todo] = np.maximum(2.0 * r, grown)
+        todo = todo[~done]
+    if len(todo):  # rings wider than the balls (often a long thin shape's whole slab): the slab by grid cells
+        for i in todo.tolist():
+            rings[i] = _slab_ring(grid, points[i], u[i], g[i], h[i], half, growth)
+            tick()
+    return np.concatenate(rings), np.r_[0, np.cumsum([len(ring) for ring in rings])]
+
+
+def _slab_ring(
+    grid: "_SlabGrid", p: np.ndarray, u: np.ndarray, g: np.ndarray, h: np.ndarray, half: float, growth: float,
+) -> np.ndarray:
+    """One sample's ring from its whole slab: the points of every grid cell that can meet the slab, in
+    grid order, tested, sorted stably by distance and cut (p at the origin)."""
+    rel = grid.slab_candidates(p, u, half) - p
+    rel = np.compress(np.abs(_dot3(rel, u)) < half, rel, axis=0)  # = rel[mask], 2 x faster
+    flat = np.column_stack([_dot3(rel, g), _dot3(rel, h)])
+    dist = np.hypot(flat[:, 0], flat[:, 1])
+    order = stable_argsort(dist)
+    return flat[order[: ring_length(dist[order], growth)]]
+
+
+def _order_within(values: np.ndarray, starts: np.ndarray) -> np.ndarray:
+    """The stable order of ``values`` inside each run ``starts[i]:starts[i + 1]`` (runs kept in place):
+    ``np.lexsort((values, run))`` by one sort per run, about 5 x faster on runs of 700."""
+    order = np.empty(len(values), np.int64)
+    for a, b in zip(starts[:-1].tolist(), starts[1:].tolist()):
+        if b > a:
+            order[a:b] = stable_argsort(values[a:b]) + a
+    return order
 
 
 def _leading_rings(sid: np.ndarray, dist: np.ndarray, starts: np.ndarray, growth: float) -> tuple[np.ndarray, np.ndarray]:
@@ -369,11 +421,12 @@ def slab_grid(cloud: np.ndarray, params: Params = Params()) -> "_SlabGrid":
 
 
 class _SlabGrid:
-    """Cloud points bucketed in cubic cells (sorted by cell), for fast slab candidate lookup."""
+    """Cloud points bucketed in cubic cells (sorted by cell) for slab lookups, and a kd-tree of them
+    for ball lookups; the grid order is the order of equal ring distances (the ellipse fit's sums)."""
 
     def __init__(self, cloud: np.ndarray, cell: float, checkpoint: Checkpoint = no_checkpoint) -> None:
-        lo = bounding_box(cloud)[0]
-        ijk = np.floor((cloud - lo) / cell).astype(np.int64)
+        self.lo, self.hi = bounding_box(cloud)
+        ijk = np.floor((cloud - self.lo) / cell).astype(np.int64)
         checkpoint(0.0)
         dims = ijk.max(axis=0) + 1
         key = ijk[:, 0] + dims[0] * (ijk[:, 1] + dims[1] * ijk[:, 2])
@@ -386,24 +439,26 @@ class _SlabGrid:
         self.counts = np.diff(np.r_[self.starts, len(srt)])
         keys = srt[self.starts]
         cell_ijk = np.column_stack([keys % dims[0], (keys // dims[0]) % dims[1], keys // (dims[0] * dims[1])])
-        self.centres = lo + (cell_ijk + 0.5) * cell
+        self.centres = self.lo + (cell_ijk + 0.5) * cell
         self.half_cell = 0.5 * cell
+        checkpoint(0.0)
+        self.tree = kd_tree(self.points, checkpoint)  # rows of ``points``: ball queries in grid order
 
     def reach(self, u: np.ndarray, half: float) -> np.ndarray:
         """How far from the slab's mid-plane a cell centre may lie for the cell to meet the slab, for
         unit rows ``u``: a cube's extent along u is half_cell x |u|_1; the small margin absorbs round-off."""
         return half + self.half_cell * np.abs(u).sum(axis=-1) * (1 + 1e-9) + 1e-12
 
+    def slab_candidates(self, p: np.ndarray, u: np.ndarray, half: float) -> np.ndarray:
+        """Points of every cell that may meet the slab |u . (x - p)| < half (a superset of it)."""
+        hit = np.flatnonzero(np.abs((self.centres - p) @ u) < self.reach(u, half))
+        return take_rows(self.points, self.cell_rows(hit))
+
     def cell_rows(self, cells: np.ndarray) -> np.ndarray:
         """Rows of ``self.points`` of the given cells, cell after cell, each cell's in grid order."""
         starts, counts = self.starts[cells], self.counts[cells]
         shift = np.repeat(starts - (np.cumsum(counts) - counts), counts)
         return np.arange(int(counts.sum())) + shift
-
-    def slab_candidates(self, p: np.ndarray, u: np.ndarray, half: float) -> np.ndarray:
-        """Points of every cell that may meet the slab |u . (x - p)| < half (a superset of it)."""
-        hit = np.flatnonzero(np.abs((self.centres - p) @ u) < self.reach(u, half))
-        return take_rows(self.points, self.cell_rows(hit))
 
 
 def _orthonormal_complement(u: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

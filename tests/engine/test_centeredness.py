@@ -382,3 +382,42 @@ def test_the_neighbour_mean_is_numpys_mean_bit_for_bit(rng):
     for k in (1, 2, 10, 41):
         slot = rng.integers(0, 500, size=(300, k))
         assert np.array_equal(_neighbour_mean(values, slot), values[slot].mean(axis=1))
+
+
+@pytest.mark.parametrize("rounds, first", [(1, 0.5), (3, 0.1), (1, 4.0)])
+def test_curve_ball_rings_equal_whole_slab_rings(monkeypatch, scans, rounds, first):
+    """Rings found in balls around p (docs/performance.md 6.5) are the whole slab's rings, bit for bit,
+    NaNs included, on both paths: an integer lattice (exact distance ties, rings cut inside a tie run),
+    the hammer scan, a branching shape and a torus, with random and axis directions."""
+    from plyfile import PlyData
+
+    from skelcore.geometry import Normalization
+    from skelcore.metrics import centeredness
+
+    rng = np.random.default_rng(11)
+    side = [(x, y) for x in range(-4, 5) for y in range(-4, 5) if max(abs(x), abs(y)) == 4]
+    lattice = np.array([(x, y, z) for z in range(20) for x, y in side], dtype=float)
+    vertex = PlyData.read(str(scans / "hammer_4096.ply"))["vertex"]
+    raw = np.column_stack([vertex["x"], vertex["y"], vertex["z"]]).astype(float)
+    hammer = Normalization.from_cloud(raw).apply(raw)
+    branch, ring = y_shape(4000, seed=2).cloud, torus(4000, 1.0, 0.3, seed=3).cloud
+    cases = [  # (cloud, points, directions, slab factor): a thick slab holds the lattice's rings in the first balls
+        (lattice * 0.1, np.column_stack([rng.integers(-2, 3, (40, 2)), rng.integers(1, 19, 40)]) * 0.1,
+         np.tile([0.0, 0, 1], (40, 1)), 0.3),  # ties whose order changes the fit's sums
+        (lattice, np.column_stack([rng.integers(-2, 3, (40, 2)), rng.integers(1, 19, 40)]), np.tile([0.0, 0, 1], (40, 1)), 0.05),
+        (lattice, np.column_stack([rng.integers(-2, 3, (40, 2)), rng.integers(1, 19, 40)]), rng.normal(size=(40, 3)) * [0.1, 0.1, 1], 0.05),
+        (hammer, hammer[rng.choice(len(hammer), 40)] * 0.8, rng.normal(size=(40, 3)), 0.05),
+        (branch, branch[rng.choice(len(branch), 40)] * 0.5, rng.normal(size=(40, 3)), 0.05),
+        (ring, ring[rng.choice(len(ring), 40)] * 0.9, rng.normal(size=(40, 3)), 0.05),
+    ]
+    for cloud, pts, dirs, slab in cases:
+        dirs[3] = np.nan
+        monkeypatch.setattr(centeredness, "_BALL_ROUNDS", 0)  # every ring from its whole slab
+        want = centeredness.curve_centeredness(cloud, pts, dirs, params=Params(slab_factor=slab))
+        monkeypatch.setattr(centeredness, "_BALL_ROUNDS", rounds)
+        monkeypatch.setattr(centeredness, "_BALL_FIRST", first)
+        for at_once in (0, 10**12):
+            monkeypatch.setattr(centeredness, "_CURVE_AT_ONCE", at_once)
+            got = centeredness.curve_centeredness(cloud, pts, dirs, params=Params(slab_factor=slab))
+            assert np.array_equal(got, want, equal_nan=True)
+        assert np.isfinite(want).sum() >= 10
