@@ -14,13 +14,13 @@ from skelcore import Params, evaluate
 DIAG = ("curve defects", "skeletal missing parts", "curve missing parts")
 
 
-def _with_peak(benchmark, peak_rss_mb, fn):
-    """``fn`` run once more, untimed, with the process's peak resident memory recorded in extra_info
-    (``peak_rss_mb``; ``rss_before_mb``: the inputs and the earlier cases already held)."""
-    ev, peak, before = peak_rss_mb(fn)
-    benchmark.extra_info["peak_rss_mb"] = peak
-    benchmark.extra_info["rss_before_mb"] = before
-    return ev
+def _with_peak(benchmark, peak_rss_mb, call: str, curve_only: bool = False) -> None:
+    """The peak resident memory (``peak_rss_mb`` in extra_info) of a fresh process that makes the
+    torus and runs ``call`` on it (``cloud``, ``skeletal``, ``curve``, ``n``, ``Params``, ``evaluate``
+    in scope), imports and inputs included."""
+    setup = ("from conftest import _torus\nfrom skelcore import Params, evaluate\nn = 1_048_576\n"
+             f"cloud, skeletal, curve = _torus(n, curve_only={curve_only})\n")
+    benchmark.extra_info["peak_rss_mb"] = peak_rss_mb(setup + call)
 
 
 def _record(benchmark, ev, n_points: int) -> None:
@@ -43,8 +43,7 @@ def test_evaluate_torus(measure, benchmark, torus, n, peak_rss_mb):
     cloud, skeletal, curve = torus(n)
     ev = measure(lambda: evaluate(cloud, skeletal, curve), rounds=3, warmup=1 if n < 1_000_000 else 0)
     if n >= 1_000_000:
-        del ev  # the timed rounds' result is not held while the peak is measured
-        ev = _with_peak(benchmark, peak_rss_mb, lambda: evaluate(cloud, skeletal, curve))
+        _with_peak(benchmark, peak_rss_mb, "evaluate(cloud, skeletal, curve)")
     _record(benchmark, ev, n)
 
 
@@ -52,8 +51,8 @@ def test_evaluate_torus(measure, benchmark, torus, n, peak_rss_mb):
 def test_evaluate_torus_curve_only_1m(measure, benchmark, torus, peak_rss_mb):
     n = 1_048_576
     cloud, _skeletal, curve = torus(n, curve_only=True)
-    measure(lambda: evaluate(cloud, None, curve), rounds=3, warmup=1)
-    ev = _with_peak(benchmark, peak_rss_mb, lambda: evaluate(cloud, None, curve))
+    ev = measure(lambda: evaluate(cloud, None, curve), rounds=3, warmup=1)
+    _with_peak(benchmark, peak_rss_mb, "evaluate(cloud, None, curve)", curve_only=True)
     _record(benchmark, ev, n)
 
 
@@ -64,6 +63,6 @@ def test_evaluate_torus_coverage_and_diagnostics_1m(measure, benchmark, torus, p
     n = 1_048_576
     cloud, skeletal, curve = torus(n)
     params = Params(coverage_max_points=n + 1)
-    measure(lambda: evaluate(cloud, skeletal, curve, params), rounds=3, warmup=0)
-    ev = _with_peak(benchmark, peak_rss_mb, lambda: evaluate(cloud, skeletal, curve, params))
+    ev = measure(lambda: evaluate(cloud, skeletal, curve, params), rounds=3, warmup=0)
+    _with_peak(benchmark, peak_rss_mb, "evaluate(cloud, skeletal, curve, Params(coverage_max_points=n + 1))")
     _record(benchmark, ev, n)

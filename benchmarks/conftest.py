@@ -151,30 +151,28 @@ def measure(benchmark, request) -> Callable:
     return run
 
 
-def _peak_rss_mb(fn: Callable):
-    """``(fn(), peak MB, MB before)``: the process's resident-set high-water mark while ``fn`` runs
-    (Linux: ``VmHWM`` of /proc/self/status, reset by writing 5 to /proc/self/clear_refs), and its
-    resident set before; (fn(), None, None) where the kernel does not offer it."""
-    import re
+def _peak_rss_mb(code: str) -> float | None:
+    """The peak resident memory (MB; Linux ``VmHWM``) of a fresh Python process that runs ``code`` with
+    this folder's helpers importable (``from conftest import _torus``): what a user's process holds at
+    most, imports and inputs included. None where the kernel does not report it."""
+    import subprocess
+    import sys
 
-    def read(key: str) -> float:
-        return int(re.search(rf"{key}:\s+(\d+)", Path("/proc/self/status").read_text()).group(1)) / 1024
-
-    import gc
-
-    gc.collect()  # what the earlier rounds left goes before the mark is reset
+    tail = ("\nimport re\nfrom pathlib import Path\n"
+            "print(re.search(r'VmHWM:\\s+(\\d+)', Path('/proc/self/status').read_text()).group(1))")
+    done = subprocess.run([sys.executable, "-c", code + tail], cwd=Path(__file__).parent, capture_output=True,
+                          text=True)
+    if done.returncode != 0:
+        raise RuntimeError(done.stderr.strip().splitlines()[-1] if done.stderr.strip() else "child failed")
     try:
-        before = read("VmRSS")
-        Path("/proc/self/clear_refs").write_text("5")
-    except OSError:
-        return fn(), None, None
-    out = fn()
-    return out, round(read("VmHWM"), 1), round(before, 1)
+        return round(int(done.stdout.split()[-1]) / 1024, 1)
+    except (ValueError, IndexError):
+        return None
 
 
 @pytest.fixture
 def peak_rss_mb() -> Callable:
-    """``peak_rss_mb(fn)`` -> (fn(), peak MB, MB before): see :func:`_peak_rss_mb`."""
+    """``peak_rss_mb(code)`` -> the peak MB of a fresh process running ``code``: :func:`_peak_rss_mb`."""
     return _peak_rss_mb
 
 

@@ -135,10 +135,9 @@ def render(results: dict) -> str:
                      f"{_seconds(st['max'])} | {st['rounds']} | {load} |")
     peaks = [b for b in benches if b.get("extra_info", {}).get("peak_rss_mb")]
     if peaks:
-        lines += ["", "Peak resident memory of the process during one more call of the case (the high-water mark, "
-                  "reset just before it; the process already held the inputs and what earlier cases left):", ""]
-        lines += [f"- {_case(b)}: {b['extra_info']['peak_rss_mb']:.0f} MB (held before: "
-                  f"{b['extra_info'].get('rss_before_mb') or 0:.0f} MB)" for b in peaks]
+        lines += ["", "Peak resident memory of a fresh process that makes the case's inputs and runs it once "
+                  "(its high-water mark, imports and inputs included):", ""]
+        lines += [f"- {_case(b)}: {b['extra_info']['peak_rss_mb']:.0f} MB" for b in peaks]
     if not anchor:
         lines += ["", "No anchor in this run (gudhi missing or the hammer scan not found): no ratios."]
     if not info.get("bench_large"):
