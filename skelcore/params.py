@@ -46,7 +46,7 @@ class Params:
     coverage_tau_factor : tau = factor x the cloud's median nearest-neighbour spacing (coverage and
         the reference comparison's precision / recall).
     coverage_radius_quantile : the balls' radii r(x) grow by the cloud's noise shortfall, from this
-        quantile of the excess |p - x| - r(x) of the cloud points nearest to them (docs/metrics.md 5.2
+        quantile of the excess ``|p - x| - r(x)`` of the cloud points nearest to them (docs/metrics.md 5.2
         "Noise"); 0: r(x) alone.
     coverage_max_points : coverage is computed for clouds of at most this many points (0: never);
         a skeletal set as large as the cloud costs about N^1.4 on tube-like shapes (torus, both cores:
