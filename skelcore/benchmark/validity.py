@@ -18,12 +18,9 @@ Dask (:func:`skelcore.compare.backends.run_tasks`); each finished task is writte
 from __future__ import annotations
 
 import functools
-import json
 import os
-import time
 import zlib
-from dataclasses import dataclass, field, replace
-from pathlib import Path
+from dataclasses import dataclass, replace
 from typing import Any, Callable
 
 import numpy as np
@@ -33,9 +30,10 @@ from ..params import Params
 from ..version import __version__
 from .neurons import NEURON_IDS
 from .skeleton_defects import DEFECTS, apply_defect
+from .task_store import TaskRun, read_rows, run_stored_tasks, task_path, task_record
 
 __all__ = ["VALIDITY_SUITES", "ValiditySuite", "Task", "validity_tasks", "score_curve", "run_task", "run_validity",
-           "task_path", "ValidityResult", "WARNING_CODES", "GT_KEYS", "COMMUNITY_KEYS", "read_rows", "TASK_VERSION"]
+           "task_path", "WARNING_CODES", "GT_KEYS", "COMMUNITY_KEYS", "read_rows", "TASK_VERSION"]
 
 #: Bumped whenever a change alters a task's rows for the same spec (stored tasks are then redone).
 TASK_VERSION = 2
@@ -241,103 +239,21 @@ def _task_rows(task: Task) -> list[dict[str, Any]]:
 
 def run_task(task: Task) -> dict[str, Any]:
     """A task's record (runs in a worker): its spec, status, rows, seconds; an error is one line."""
-    t0 = time.perf_counter()
-    try:
-        rows = _task_rows(task)
-        status, error = "ok", None
-    except Exception as exc:  # one task's failure is recorded, the run goes on
-        rows, status, error = [], "failed", f"{type(exc).__name__}: {str(exc).splitlines()[0] if str(exc) else ''}"
-    return {"key": task.key, "spec": task.spec(), "status": status, "error": error, "rows": rows,
-            "seconds": round(time.perf_counter() - t0, 3)}
-
-
-def _failed(task: Task, error: str) -> dict[str, Any]:
-    return {"key": task.key, "spec": task.spec(), "status": "failed", "error": error, "rows": [], "seconds": 0.0}
+    return task_record(task, _task_rows)
 
 
 # ---- the run ----------------------------------------------------------------------------------
 
-@dataclass
-class ValidityResult:
-    folder: Path
-    tasks: int
-    kept: int
-    ran: int
-    failed: list[dict[str, Any]]
-    rows: list[dict[str, Any]] = field(default_factory=list)
-    wall: float = 0.0
-    backend: str = ""
-
-
-def task_path(folder: Path, key: str) -> Path:
-    return folder / "tasks" / f"{key}.json"
-
-
-def _stored(folder: Path, task: Task) -> dict[str, Any] | None:
-    try:
-        with open(task_path(folder, task.key), encoding="utf-8") as fh:
-            rec = json.load(fh)
-    except (OSError, ValueError):
-        return None
-    if not isinstance(rec, dict) or rec.get("spec") != task.spec() or rec.get("status") != "ok":
-        return None
-    return rec
-
-
-def _write_json(path: Path, doc: Any) -> None:
-    from ..io.atomic import atomic_open
-
-    with atomic_open(path, "w") as fh:
-        json.dump(doc, fh, indent=None, allow_nan=True)
-        fh.write("\n")
-
-
-def read_rows(folder: str | os.PathLike) -> list[dict[str, Any]]:
-    """Every row of the stored tasks of a validity run (for the report)."""
-    rows = []
-    for p in sorted(Path(folder, "tasks").glob("*.json")):
-        with open(p, encoding="utf-8") as fh:
-            rows.extend(json.load(fh).get("rows", []))
-    return rows
-
-
 def run_validity(out: str | os.PathLike, tasks: list[Task], backend: Any, *, force: bool = False,
                  figure: bool = True, progress: Callable[[int, int, str, str], None] | None = None,
-                 suite: str = "default") -> ValidityResult:
+                 suite: str = "default") -> TaskRun:
     """Run (or resume) ``tasks`` into ``out`` on ``backend`` (:class:`skelcore.compare.backends.Backend`)
     and write ``scores.csv``, ``validity.csv``, ``validity.md`` and ``validity.png`` there."""
-    from ..compare.backends import run_tasks
     from ..compare.run_marker import claim_run_folder
     from .validity_report import write_report
 
     folder = claim_run_folder(out, "validity", force=force).path
-    (folder / "tasks").mkdir(exist_ok=True)
-    t0 = time.perf_counter()
-    todo, kept = [], 0
-    for task in tasks:
-        if _stored(folder, task) is None:
-            todo.append(task)
-        else:
-            kept += 1
-    result = ValidityResult(folder, len(tasks), kept, 0, [], backend=backend.describe())
-    done = [kept]
-
-    def on_result(rec: dict[str, Any]) -> None:
-        if rec["status"] == "ok":
-            _write_json(task_path(folder, rec["key"]), rec)
-            result.ran += 1
-        else:
-            result.failed.append(rec)
-        done[0] += 1
-        if progress is not None:
-            progress(done[0], len(tasks), rec["key"], rec["status"])
-
-    run_tasks(run_task, todo, backend, on_result, failed=_failed, key=lambda t: t.key)
-    for task in tasks:
-        rec = _stored(folder, task)
-        if rec is not None:
-            result.rows.extend(rec["rows"])
+    result = run_stored_tasks(folder, tasks, run_task, backend, progress)
     write_report(folder, result.rows, figure=figure,
                  note=f"{suite} suite, {len(tasks)} tasks, skelcore {__version__}")
-    result.wall = time.perf_counter() - t0
     return result

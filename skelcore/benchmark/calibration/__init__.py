@@ -10,7 +10,7 @@ the pool, resume), ``calib_tables`` (counts, Wilson intervals, CSV and markdown,
 
 from .grid import CODES, CONDITIONS, SUITES, Task, calibration_tasks
 from .calib_tables import summary_rows, write_report
-from .runner import CalibrationResult, run_calibration, run_task
+from .runner import run_calibration, run_task
 
 __all__ = ["CODES", "CONDITIONS", "SUITES", "Task", "calibration_tasks", "summary_rows", "write_report",
-           "CalibrationResult", "run_calibration", "run_task"]
+           "run_calibration", "run_task"]
