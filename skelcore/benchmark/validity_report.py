@@ -78,24 +78,18 @@ def markdown_table(table: list[dict[str, Any]]) -> str:
     cell = {(r["metric"], r["defect"]): r for r in table}
     labels = {m.key: (m.label, m.group) for m in METRICS}
     metrics = list(dict.fromkeys(r["metric"] for r in table))
-    lines = ["Paired AUC [95 % interval] (each defective skeleton against its shape's and seed's clean one):", "",
-             "| metric | group | " + " | ".join(defects) + " |", "|---|---|" + "---|" * len(defects)]
-    for m in metrics:
-        lab, grp = labels.get(m, (m, ""))
-        cells = []
-        for d in defects:
-            r = cell.get((m, d))
-            cells.append("-" if r is None else f"{_fmt(r.get('auc_paired'))} {_ci(r, 'auc_paired_ci')}")
-        lines.append(f"| {lab} | {grp} | " + " | ".join(cells) + " |")
-    lines += ["", "Pooled AUC [95 % interval] (Spearman rho with 1 - GT F1):", "",
-              "| metric | group | " + " | ".join(defects) + " |", "|---|---|" + "---|" * len(defects)]
-    for m in metrics:
-        lab, grp = labels.get(m, (m, ""))
-        cells = []
-        for d in defects:
-            r = cell.get((m, d))
-            cells.append("-" if r is None else f"{_fmt(r['auc'])} {_ci(r, 'auc_ci')} ({_fmt(r['spearman'])})")
-        lines.append(f"| {lab} | {grp} | " + " | ".join(cells) + " |")
+    def table_of(title: str, text: Any) -> list[str]:
+        out = [title, "", "| metric | group | " + " | ".join(defects) + " |", "|---|---|" + "---|" * len(defects)]
+        for m in metrics:
+            lab, grp = labels.get(m, (m, ""))
+            cells = ["-" if cell.get((m, d)) is None else text(cell[(m, d)]) for d in defects]
+            out.append(f"| {lab} | {grp} | " + " | ".join(cells) + " |")
+        return out
+
+    lines = table_of("Paired AUC [95 % interval] (each defective skeleton against its shape's and seed's clean one):",
+                     lambda r: f"{_fmt(r.get('auc_paired'))} {_ci(r, 'auc_paired_ci')}")
+    lines += [""] + table_of("Pooled AUC [95 % interval] (Spearman rho with 1 - GT F1):",
+                             lambda r: f"{_fmt(r['auc'])} {_ci(r, 'auc_ci')} ({_fmt(r['spearman'])})")
     lines += ["", "AUC per level (mild, medium, strong) for the paper's metrics and the ground-truth F1:", "",
               "| metric | " + " | ".join(defects) + " |", "|---|" + "---|" * len(defects)]
     for m in [k for k in metrics if labels.get(k, ("", ""))[1] == "paper"] + ["gt_f1"]:

@@ -47,16 +47,11 @@ class Made:
     level: Any = None
 
 
-@functools.lru_cache(maxsize=2)
 def _shape(name: str, suite_seed: int):
-    from ..families import make_shape
-    from ..suite import SHAPES
-    from ..surface_sampling import SurfaceSampler
-    from ..tubes import reference_skeleton
+    """The suite's shape, its sampler and exact skeleton: the validity study's, cached there."""
+    from ..validity import _shape as validity_shape
 
-    entry = SHAPES[name]
-    shape = make_shape(name, entry.family, np.random.SeedSequence(entry.seed(suite_seed)), **entry.params)
-    return shape, SurfaceSampler(shape), reference_skeleton(shape)
+    return validity_shape(name, suite_seed)
 
 
 @functools.lru_cache(maxsize=1)
