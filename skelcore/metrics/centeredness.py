@@ -20,11 +20,13 @@ import numpy as np
 from scipy.spatial import cKDTree
 
 from ..geometry import (
-    Checkpoint, bbox_diagonal, bounding_box, kd_tree, leaf_order, lex_order, no_checkpoint, stable_argsort, take_rows, unit_rows,
+    Checkpoint, bbox_diagonal, bounding_box, kd_tree, leaf_order, lex_order, no_checkpoint, stable_argsort, take_rows,
+    unique_rows, unit_rows,
 )
 from ..parallel import on_threads
 from ..params import Params, k_center_for
 from .ellipse_fit import fit_ellipses
+from .position_knn import SHARED_FROM, PositionNeighbours, position_neighbours
 
 __all__ = ["skeletal_centeredness", "curve_centeredness", "slab_grid", "ring_length", "cross_section_centeredness"]
 
@@ -96,11 +98,16 @@ def skeletal_centeredness(
     checkpoint(0.0)
     groups = _CoincidentGroups(skel, checkpoint)
     checkpoint(0.0)
-    tree = kd_tree(groups.positions, checkpoint)
+    # the tree, and the head of each answer, shared with skeletal smoothness (docs/performance.md 6.4)
+    shared = _shared_neighbours(skel, groups.positions, checkpoint)
+    if shared is None:
+        tree = kd_tree(groups.positions, checkpoint)
+        # groups are visited in the tree's leaf order and the rows gathered in member (x-sorted) order:
+        # both keep a chunk's memory traffic local (3 x faster at 1M points, same arithmetic)
+        visit = leaf_order(tree)
+    else:
+        tree, visit = shared.tree(groups.positions, checkpoint)
     checkpoint(0.0)
-    # groups are visited in the tree's leaf order and the rows gathered in member (x-sorted) order:
-    # both keep a chunk's memory traffic local (3 x faster at 1M points, same arithmetic)
-    visit = leaf_order(tree)
     skel_m = take_rows(skel, groups.members)
     checkpoint(0.0)
     cloud_m = take_rows(cloud, groups.members)
@@ -115,7 +122,7 @@ def skeletal_centeredness(
 
     def span(lo: int, hi: int) -> None:
         which = visit[lo:hi]
-        slot = groups.k_nearest_slots(tree, which, k, workers=1)
+        slot = groups.k_nearest_slots(tree, which, k, workers=1, publish=None if shared is None else shared.publish)
         m_s = _neighbour_mean(skel_m, slot)
         neighbours_o = take_rows(cloud_m, slot)
         m_o = _neighbour_mean(cloud_m, slot)
@@ -136,6 +143,17 @@ def skeletal_centeredness(
                threads, checkpoint)
     # coincident points have the same neighbours (ties go by index, not by self), so the same c
     return per_group[groups.group_of]
+
+
+def _shared_neighbours(skel: np.ndarray, positions: np.ndarray, checkpoint: Checkpoint) -> PositionNeighbours | None:
+    """The distinct positions' shared index (:mod:`.position_knn`) when ``positions`` are, byte for byte,
+    ``unique_rows``' kept answer for these skeletal points (the array smoothness reads), else None."""
+    if len(positions) < SHARED_FROM:
+        return None
+    uniq = unique_rows(skel, checkpoint)[0]
+    if uniq.shape != positions.shape or uniq.tobytes() != positions.tobytes():  # -0.0: other bytes, not shared
+        return None
+    return position_neighbours(uniq)
 
 
 def _unobserved(shift: np.ndarray, depth: np.ndarray, around: np.ndarray) -> np.ndarray:
@@ -183,16 +201,20 @@ class _CoincidentGroups:
         self.group_of = np.empty(len(points), dtype=np.int64)
         self.group_of[order] = np.cumsum(new) - 1
 
-    def k_nearest_slots(self, tree: cKDTree, queries: np.ndarray, k: int, workers: int = -1) -> np.ndarray:
+    def k_nearest_slots(self, tree: cKDTree, queries: np.ndarray, k: int, workers: int = -1,
+                        publish: Callable | None = None) -> np.ndarray:
         """(len(queries), k) indices into ``members`` (so rows ``members[...]``): the k points nearest
         to each query group's position, equal distances in row order. Whole groups are taken nearest
         first; the last one contributes its lowest-index members. (Distinct positions at exactly
-        equal distances keep the tree's order.)
+        equal distances keep the tree's order.)  ``publish(queries, distances, groups)`` is handed the
+        tree's answers (:meth:`.position_knn.PositionNeighbours.publish`).
         """
         n_q = len(queries)
         k_groups = min(k, len(self.positions))  # every group has >= 1 member, so k groups suffice
-        _, near = tree.query(take_rows(self.positions, queries), k=k_groups, workers=workers)
+        dist, near = tree.query(take_rows(self.positions, queries), k=k_groups, workers=workers)
         near = near.reshape(n_q, k_groups)
+        if publish is not None:
+            publish(queries, dist.reshape(n_q, k_groups), near)
         if self.single:  # no coincident points: the k nearest groups are the k nearest points
             return self.starts[near]
         cum = np.cumsum(self.counts[near], axis=1)  # >= k in the last column

@@ -19,6 +19,7 @@ from ..curve import CurveSkeleton
 from ..geometry import Checkpoint, kd_tree, leaf_order, no_checkpoint, take_rows, unique_rows, unit_rows
 from ..parallel import on_threads
 from ..params import Params
+from .position_knn import position_neighbours
 
 __all__ = ["skeletal_smoothness", "curve_vertex_smoothness", "curve_smoothness_overall"]
 
@@ -71,9 +72,14 @@ def skeletal_smoothness(
     # each distinct neighbour position holds >= 1 point, so max(kt, ks) positions always suffice
     q = min(m - 1, max(kt, ks))
     checkpoint(0.02)
-    tree = kd_tree(uniq, checkpoint, 0.02)
+    # the tree, and the answers skeletal centeredness has found, shared with it (docs/performance.md 6.4)
+    shared = position_neighbours(uniq)
+    if shared is None:
+        tree = kd_tree(uniq, checkpoint, 0.02)
+        visit = leaf_order(tree)  # blocks of spatial neighbours: cache-warm queries and gathers
+    else:
+        tree, visit = shared.tree(uniq, checkpoint, 0.02)
     checkpoint(0.05)
-    visit = leaf_order(tree)  # blocks of spatial neighbours: cache-warm queries and gathers
     tangents = np.full((m, 3), np.nan)
     nbr = np.empty((m, q), np.int64)
     spans = [(start, min(m, start + _CHUNK)) for start in range(0, m, _CHUNK)]
@@ -82,8 +88,7 @@ def skeletal_smoothness(
 
     def tangent_span(start: int, stop: int) -> None:
         rows = visit[start:stop]
-        _, idx = tree.query(take_rows(uniq, rows), k=q + 1, workers=workers)
-        idx = idx.reshape(stop - start, q + 1)[:, 1:]  # column 0 is the position itself
+        idx = _neighbours(rows, q + 1)[:, 1:]  # column 0 is the position itself
         nbr[rows] = idx
         weight = _taken(counts[idx], kt).astype(float)
         diff = take_rows(uniq, idx) - take_rows(uniq, rows)[:, None, :]
@@ -93,7 +98,25 @@ def skeletal_smoothness(
         t[~np.any(cov.reshape(len(cov), -1) != 0, axis=1)] = np.nan
         tangents[rows] = t
 
-    on_threads(tangent_span, spans, threads, lambda f: checkpoint(0.05 + 0.75 * f))
+    def _neighbours(rows: np.ndarray, k: int) -> np.ndarray:
+        """The k nearest positions of ``rows``: published by centeredness where its answer fixes them,
+        else asked here (the same answers: :mod:`.position_knn`)."""
+        if shared is None:
+            return tree.query(take_rows(uniq, rows), k=k, workers=workers)[1].reshape(len(rows), k)
+        ready, found = shared.reuse(rows, k)
+        idx = np.empty((len(rows), k), np.int64)
+        idx[ready] = found
+        if not ready.all():
+            ask = ~ready
+            idx[ask] = tree.query(take_rows(uniq, rows[ask]), k=k, workers=workers)[1].reshape(-1, k)
+        return idx
+
+    # with a shared index, from the end of the leaf order: centeredness answers from its start, so a
+    # stage beside it meets its answers (docs/performance.md 6.4)
+    on_threads(tangent_span, spans if shared is None else spans[::-1], threads,
+               lambda f: checkpoint(0.05 + 0.75 * f))
+    if shared is not None:
+        shared.close()
     s_unique = np.empty(m)
 
     def score_span(start: int, stop: int) -> None:

@@ -1,0 +1,101 @@
+"""The k-d tree of a skeletal set's distinct positions and the head of each position's neighbour list,
+shared by skeletal centeredness and smoothness (docs/performance.md 6.4).
+
+Both stages ask every distinct position for its nearest positions in the same tree: centeredness for
+k_center (30 at 1M points), smoothness for tangent_k + 1 (9).  The first k answers of a query are
+fixed by the tree alone once their distances strictly increase up to the (k + 1)-th, so a row that
+centeredness has answered needs no second query for smoothness; a row with equal distances there is
+asked again (scipy orders ties by its own search).  One index is kept, for the last array of distinct
+positions (``unique_rows``' read-only answer) while that array lives; smoothness closes it when done.
+"""
+
+from __future__ import annotations
+
+import threading
+import weakref
+
+import numpy as np
+from scipy.spatial import cKDTree
+
+from ..geometry import Checkpoint, kd_tree, leaf_order, no_checkpoint
+
+__all__ = ["PositionNeighbours", "position_neighbours", "HEAD", "SHARED_FROM"]
+
+#: neighbour columns kept per position (smoothness asks for tangent_k + 1 = 9 by default)
+HEAD = 10
+# from this many distinct positions the index is shared (below, a second query costs little)
+SHARED_FROM = 65536
+
+
+class PositionNeighbours:
+    """One array of distinct positions: its tree (built once, under a lock) and, per position, the
+    first ``HEAD`` neighbour indices published by a query of more neighbours, with how many leading
+    columns their distances fix (``sure``; 0 = not published)."""
+
+    def __init__(self, n: int):
+        self._tree: tuple[cKDTree, np.ndarray] | None = None
+        self._build = threading.Lock()
+        self._table = threading.Lock()
+        self.head = np.zeros((n, HEAD), np.int32)
+        self.sure = np.zeros(n, np.int8)
+        self.closed = False
+
+    def tree(self, positions: np.ndarray, checkpoint: Checkpoint = no_checkpoint,
+             fraction: float = 0.0) -> tuple[cKDTree, np.ndarray]:
+        """(``geometry.kd_tree`` of ``positions``, its leaf order), made by the first caller."""
+        with self._build:
+            if self._tree is None:
+                tree = kd_tree(positions, checkpoint, fraction)
+                self._tree = (tree, leaf_order(tree))
+            return self._tree
+
+    def publish(self, rows: np.ndarray, dist: np.ndarray, near: np.ndarray) -> None:
+        """Keep the head of ``rows``' answers (``tree.query`` distances and indices, nearest first)."""
+        cols = min(HEAD + 1, near.shape[1])
+        if cols < 2 or self.closed:
+            return
+        tie = dist[:, 1:cols] == dist[:, : cols - 1]  # columns j and j + 1 tie: j columns at most are fixed
+        sure = np.where(tie.any(axis=1), tie.argmax(axis=1), cols - 1).astype(np.int8)
+        with self._table:
+            if not self.closed:
+                self.head[rows, : cols - 1] = near[:, : cols - 1]
+                self.sure[rows] = sure
+
+    def reuse(self, rows: np.ndarray, k: int) -> tuple[np.ndarray, np.ndarray]:
+        """(which of ``rows`` have their k nearest fixed by a published answer, those answers)."""
+        with self._table:
+            if k > HEAD or self.closed:
+                return np.zeros(len(rows), bool), np.empty((0, k), np.int32)
+            ready = self.sure[rows] >= k
+            return ready, self.head[rows[ready], :k]
+
+    def close(self) -> None:
+        """Drop the table and the tree: nothing will read them again."""
+        with self._table:
+            self.closed = True
+            self.head = self.sure = None
+        with self._build:
+            self._tree = None
+
+
+_kept: dict = {}
+_kept_lock = threading.Lock()
+
+
+def position_neighbours(positions: np.ndarray) -> PositionNeighbours | None:
+    """The shared :class:`PositionNeighbours` of this array object (read-only, as ``unique_rows`` keeps
+    it), a new one for another; None for a small or writeable array or a closed index (each stage then
+    works alone, as it would without the other)."""
+    if len(positions) < SHARED_FROM or positions.flags.writeable:
+        return None
+    with _kept_lock:
+        ref = _kept.get("positions")
+        if ref is None or ref() is not positions:
+            try:
+                ref = weakref.ref(positions, lambda r: _kept.clear() if _kept.get("positions") is r else None)
+            except TypeError:  # not weak-referenceable: not shared
+                return None
+            _kept.clear()
+            _kept.update(positions=ref, index=PositionNeighbours(len(positions)))
+        index = _kept["index"]
+        return None if index.closed else index
