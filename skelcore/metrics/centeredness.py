@@ -125,7 +125,9 @@ def skeletal_centeredness(
         slot = groups.k_nearest_slots(tree, which, k, workers=1, publish=None if shared is None else shared.publish)
         m_s = _neighbour_mean(skel_m, slot)
         neighbours_o = take_rows(cloud_m, slot)
-        m_o = _neighbour_mean(cloud_m, slot)
+        # the gathered rows summed in neighbour order (numpy sums a middle axis in order), then divided:
+        # _neighbour_mean's bits without a second gather
+        m_o = np.add.reduce(neighbours_o, axis=1) / slot.shape[1]
         diff = neighbours_o - m_s[:, None, :]
         spread = np.sqrt(np.einsum("ijk,ijk->ij", diff, diff)).mean(axis=1)
         shift = m_o - m_s
