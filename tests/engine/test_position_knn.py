@@ -1,0 +1,71 @@
+"""Work shared between stages (docs/performance.md 6.4, 6.6) gives the bits each stage gives alone:
+skeletal centeredness and smoothness over one index of the distinct positions, and coverage's noise
+shortfall's nearest elements."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from scipy.spatial import cKDTree
+
+from skelcore.metrics import centeredness, coverage, position_knn, smoothness
+from skelcore.metrics.centeredness import skeletal_centeredness
+from skelcore.metrics.smoothness import skeletal_smoothness
+from skelcore.params import Params
+
+
+def _lattice_set() -> np.ndarray:
+    """70k distinct positions (more than position_knn.SHARED_FROM): half a unit lattice, whose
+    neighbours tie everywhere, half of it jittered (no ties), and coincident copies of some rows."""
+    g = np.stack(np.meshgrid(np.arange(46), np.arange(46), np.arange(33), indexing="ij"), -1).reshape(-1, 3) * 0.1
+    g = g.astype(float)
+    half = len(g) // 2
+    g[half:] += np.random.default_rng(0).normal(scale=0.02, size=(len(g) - half, 3))
+    return np.concatenate([g, g[:1500], g[-1500:]])
+
+
+def test_shared_positions_give_each_stage_its_own_bits(monkeypatch):
+    skel = _lattice_set()
+    assert len(np.unique(skel, axis=0)) >= position_knn.SHARED_FROM
+    cloud = skel + np.random.default_rng(1).normal(scale=0.05, size=skel.shape)
+    params = Params(k_center=position_knn.HEAD + 2)  # enough columns to publish, a quicker query
+    reused = []
+    reuse = position_knn.PositionNeighbours.reuse
+
+    def counting(self, rows, k):
+        ready, found = reuse(self, rows, k)
+        reused.append(int(ready.sum()))
+        return ready, found
+
+    monkeypatch.setattr(position_knn.PositionNeighbours, "reuse", counting)
+    s_points = skel.copy()  # one array for both stages, as an evaluation hands them
+    c = skeletal_centeredness(cloud, s_points, params=params)
+    s = skeletal_smoothness(s_points, params=params)
+    # the jittered half is taken from centeredness' answers, the tied lattice asked again
+    assert 0.3 * len(s_points) < sum(reused) < 0.8 * len(s_points)
+    with monkeypatch.context() as m:
+        m.setattr(centeredness, "position_neighbours", lambda positions: None)
+        m.setattr(smoothness, "position_neighbours", lambda positions: None)
+        alone_c = skeletal_centeredness(cloud, skel.copy(), params=params)
+        alone_s = skeletal_smoothness(skel.copy(), params=params)
+    assert c.tobytes() == alone_c.tobytes()
+    assert s.tobytes() == alone_s.tobytes()
+
+
+def test_noise_shortfall_nearest_element_is_the_balanced_trees_answer():
+    rng = np.random.default_rng(2)
+    lattice = np.stack(np.meshgrid(*[np.arange(12.0)] * 3, indexing="ij"), -1).reshape(-1, 3)
+    for elements, pts in ((lattice[::3], lattice + 0.5), (rng.normal(size=(5000, 3)), rng.normal(size=(3000, 3))),
+                          (lattice[:1], lattice)):
+        dist, owner = coverage._nearest_element(elements, pts)
+        ref_d, ref_i = cKDTree(elements).query(pts)
+        assert dist.tobytes() == ref_d.tobytes()
+        assert np.array_equal(owner, ref_i)
+
+
+def test_noise_cells_are_labelled_as_np_unique_labels_them():
+    rng = np.random.default_rng(3)
+    for cells in (rng.integers(0, 40, (20000, 3)), rng.integers(0, 2, (50, 3)), np.zeros((1, 3), np.int64),
+                  np.array([[0, 0, 2**40], [2**40, 0, 0], [0, 2**40, 0]])):
+        want = np.unique(cells, axis=0, return_inverse=True)[1].reshape(-1)
+        assert np.array_equal(coverage._row_labels(cells), want)
