@@ -42,12 +42,17 @@ class PositionNeighbours:
 
     def tree(self, positions: np.ndarray, checkpoint: Checkpoint = no_checkpoint,
              fraction: float = 0.0) -> tuple[cKDTree, np.ndarray]:
-        """(``geometry.kd_tree`` of ``positions``, its leaf order), made by the first caller."""
-        with self._build:
+        """(``geometry.kd_tree`` of ``positions``, its leaf order), made by the first caller; a second
+        caller waits for it, calling its checkpoint every 50 ms (a cancel is seen meanwhile)."""
+        while not self._build.acquire(timeout=0.05):
+            checkpoint(fraction)
+        try:
             if self._tree is None:
                 tree = kd_tree(positions, checkpoint, fraction)
                 self._tree = (tree, leaf_order(tree))
             return self._tree
+        finally:
+            self._build.release()
 
     def publish(self, rows: np.ndarray, dist: np.ndarray, near: np.ndarray) -> None:
         """Keep the head of ``rows``' answers (``tree.query`` distances and indices, nearest first)."""
