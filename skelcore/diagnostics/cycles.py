@@ -30,7 +30,7 @@ from ..geometry import Checkpoint, no_checkpoint
 from ..params import Params
 from .trust_warning import TrustWarning
 from .branches import Branches, decompose_branches, densify
-from .interior import VoxelShape, betti_numbers, voxelize_interior, wide_tunnels
+from .interior import VoxelShape, betti_numbers, firm_tunnels, voxelize_interior
 
 __all__ = ["CycleDefects", "find_cycle_defects", "solid_angle_polygon", "simplify_polygon"]
 
@@ -376,8 +376,11 @@ def find_cycle_defects(
         if len(kept) > most:
             spurious = sorted(spurious + kept[most:])
             rank = most
-    if tunnels > rank:  # the tunnels no cycle goes around: only those wider than two voxels count
-        tunnels = max(rank, wide_tunnels(solid))
+    if tunnels > rank:  # the tunnels no cycle goes around: only the wide ones every interior keeps count
+        tunnels = max(rank, firm_tunnels(cloud, voxel_shape, inside_share=params.beta_star,
+                                         strict_share=params.cycles_strict_share,
+                                         block=params.cycles_support_voxels, min_points=params.cycles_support_points,
+                                         share=params.cycles_support_share))
     missing = max(0, tunnels - rank)
     branch_spurious = np.zeros(len(branches), bool)
     for i in spurious:
