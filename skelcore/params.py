@@ -254,7 +254,7 @@ class Params:
     cycles_support_voxels: int = 5
     cycles_support_points: int = 3
     cycles_support_share: float = 0.05
-    cycles_strict_share: float = 0.85
+    cycles_strict_share: float = 0.9
     outside_min_radii: float = 0.5
     outside_min_share: float = 0.05
     outside_reach: float = 8.0
