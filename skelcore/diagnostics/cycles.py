@@ -9,9 +9,10 @@ collar of outside voxels around X' = X plus the voxels near the skeleton, its 4 
 collar's edges, summed around the fundamental loops of a spanning tree, give the matrix K (cycles x
 loops) of linking numbers. rank K = the tunnels the cycles go around; taking the basis cycles
 shortest first, each whose row of K is in the span of those before is spurious; missing =
-beta1(X) - rank K, where beta1(X) counts, once it exceeds rank K, only the tunnels wider than two
-voxels (:func:`.interior.wide_tunnels`). A cycle partly outside is measured in X' (a cycle through the
-air around a tunnel still goes around it; ``outside`` flags its edges).
+beta1(X) - rank K, where beta1(X) counts, once it exceeds rank K, only the firm tunnels
+(:func:`.interior.firm_tunnels`: wide, and kept without stray points' voxels and at a stricter inside
+share). A cycle partly outside is measured in X' (a cycle through the air around a tunnel still goes
+around it; ``outside`` flags its edges).
 """
 
 from __future__ import annotations
