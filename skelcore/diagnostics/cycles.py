@@ -381,7 +381,8 @@ def find_cycle_defects(
         tunnels = max(rank, firm_tunnels(cloud, voxel_shape, inside_share=params.beta_star,
                                          strict_share=params.cycles_strict_share,
                                          block=params.cycles_support_voxels, min_points=params.cycles_support_points,
-                                         share=params.cycles_support_share))
+                                         share=params.cycles_support_share,
+                                         checkpoint=lambda f: checkpoint(0.95 + 0.04 * f)))
     missing = max(0, tunnels - rank)
     branch_spurious = np.zeros(len(branches), bool)
     for i in spurious:
