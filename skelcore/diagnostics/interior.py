@@ -10,7 +10,7 @@ points; the lattice rays cost a few sweeps over the grid at any cloud size.
 The interior is the union of its closed voxel cubes; its Betti numbers come from the Euler
 characteristic (beta1 = beta0 + beta2 - chi), beta0 from its 26-connected components and beta2 from
 the 6-connected components of the rest that do not reach the grid's border (cavities). The tunnels
-``missing_cycles`` counts are those every way of building the interior keeps (:func:`firm_tunnels`).
+``missing_cycles`` counts are those that three ways of building the interior all keep (:func:`firm_tunnels`).
 """
 
 from __future__ import annotations
