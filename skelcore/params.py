@@ -70,8 +70,9 @@ class Params:
     spur_reach : a terminal branch is spurious when its far end stays within spur_reach x r_J of its
         junction (r_J: the local radius at the junction) ...
     spur_unique : ... or when fewer than this share of the cloud points nearest to it lie beyond the
-        rest of the skeleton's grown balls ((1 + spur_slack) r + tau, coverage's rule) ...
-    spur_min_points : ... or fewer than this many points do (both: it explains almost nothing).
+        rest of the skeleton's grown balls ((1 + spur_slack) r, no spacing-sized tau) ...
+    spur_min_points : ... or fewer than this many points do (1: none; a count, unlike the share,
+        grows with the density).
     spur_slack : see spur_unique.
     spurs_warn_count : ``spurious_branches`` fires from this many spurious branches.
     cycles_voxels : voxels along the longest side of the cloud's box for the shape's interior ...
@@ -243,7 +244,7 @@ class Params:
     diag_step: float = 0.25
     spur_reach: float = 1.0
     spur_unique: float = 0.1
-    spur_min_points: int = 5
+    spur_min_points: int = 1
     spur_slack: float = 0.25
     spurs_warn_count: int = 1
     cycles_voxels: int = 96
