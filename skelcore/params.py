@@ -82,6 +82,13 @@ class Params:
         side by side through a thin part invent the tunnel between them).
     cycles_warn_spurious, cycles_warn_missing : ``spurious_cycles`` / ``missing_cycles`` fire from
         this many spurious / missing cycles.
+    cycles_support_voxels, cycles_support_points, cycles_support_share : the tunnels that no cycle
+        goes around are counted on the interior again without the voxels of isolated points: those
+        whose block of this many voxels a side holds fewer than max(points, share x the median such
+        count over the cloud's points) points (stray points in the air) ...
+    cycles_strict_share : ... and must persist when the inside share rises from beta_star to this
+        (a tube's inside sees its surface along nearly all 26 rays; a gap between noisy strands
+        along fewer): docs/diagnostics.md "Cycles".
     outside_min_radii : ``outside`` fires when a branch has at least this many local radii of
         length outside the shape (where its curve samples have boundedness <= beta_star and the
         cycle test's voxels are not inside) ...
@@ -248,6 +255,10 @@ class Params:
     cycles_warn_spurious: int = 1
     cycles_close_voxels: int = 4
     cycles_warn_missing: int = 1
+    cycles_support_voxels: int = 5
+    cycles_support_points: int = 3
+    cycles_support_share: float = 0.05
+    cycles_strict_share: float = 0.9
     outside_min_radii: float = 0.5
     outside_min_share: float = 0.05
     outside_reach: float = 8.0
@@ -368,11 +379,12 @@ class Params:
                      "outside_reach", "outside_voxel_radii"):
             if not float(getattr(self, name)) > 0:
                 bad(name, "must be > 0")
-        for name in ("spur_unique", "outside_min_share", "outside_skeletal_share", "outside_one_sided"):
+        for name in ("spur_unique", "outside_min_share", "outside_skeletal_share", "outside_one_sided",
+                     "cycles_support_share", "cycles_strict_share"):
             if not 0.0 <= float(getattr(self, name)) <= 1.0:
                 bad(name, "must be in [0, 1]")
         for name in ("diag_max_points", "cycles_voxels", "cycles_close_voxels", "spurs_warn_count", "cycles_warn_spurious",
-                     "cycles_warn_missing"):
+                     "cycles_warn_missing", "cycles_support_voxels", "cycles_support_points"):
             if int(getattr(self, name)) < 1:
                 bad(name, "must be a positive integer")
         if not float(self.spur_slack) >= 0:
