@@ -7,9 +7,9 @@ long curve (one may stand for many local radii), so the edges holding an unbound
 every half voxel and a point counts as outside when its sample is unbounded, its voxel is not
 inside the shape (:mod:`.interior`, the cycle test's voxels) and its nearest cloud points lie on one
 side (a half-scanned tube's axis sees a half ring): thin or partly scanned parts stay inside. Voxels
-coarser than ``outside_voxel_radii`` local radii cannot tell (a traced neuron): then only the reach test runs. The length outside is summed per edge and per branch
-and measured in local radii: one edge through the air is a defect even when the overall boundedness
-is 0.95. Skeletal points outside (unbounded and not in an inside voxel) are grouped into clusters
+coarser than ``outside_voxel_radii`` local radii cannot tell (a traced neuron): then only the reach
+test runs. The length outside is summed per edge and per branch and measured in local radii: one
+edge through the air is a defect even when the overall boundedness is 0.95. Skeletal points outside (unbounded and not in an inside voxel) are grouped into clusters
 (within ``outside_link`` x the cloud's median spacing); one large cluster is a part of the skeleton
 that left the shape, scattered single points are not.
 """
@@ -306,7 +306,7 @@ def find_outside(
         return solid[ijk[:, 0], ijk[:, 1], ijk[:, 2]]
 
     def in_shape_seen(points: np.ndarray) -> np.ndarray:
-        """Inside by the voxels, or surrounded by the cloud (what an open scan can say; docs/diagnostics.md "Outside")."""
+        """Inside by the voxels, or surrounded by the cloud (docs/diagnostics.md "Outside")."""
         got = in_shape(points)
         if cloud_tree is not None and not got.all():
             got[~got] = ~one_sided(cloud_tree, points[~got], params.outside_one_sided)
