@@ -9,9 +9,10 @@ inside the shape (:mod:`.interior`, the cycle test's voxels) and its nearest clo
 side (a half-scanned tube's axis sees a half ring): thin or partly scanned parts stay inside. Voxels
 coarser than ``outside_voxel_radii`` local radii cannot tell (a traced neuron): then only the reach
 test runs. The length outside is summed per edge and per branch and measured in local radii: one
-edge through the air is a defect even when the overall boundedness is 0.95. Skeletal points outside (unbounded and not in an inside voxel) are grouped into clusters
-(within ``outside_link`` x the cloud's median spacing); one large cluster is a part of the skeleton
-that left the shape, scattered single points are not.
+edge through the air is a defect even when the overall boundedness is 0.95. Skeletal points outside
+(unbounded and not in an inside voxel) are grouped into clusters (within ``outside_link`` x the
+cloud's median spacing); one large cluster is a part of the skeleton that left the shape, scattered
+single points are not.
 """
 
 from __future__ import annotations
