@@ -100,7 +100,11 @@ class Params:
         "Outside"): three spurs poking 8 radii out of a neuron were a few % of its length. Traced
         skeletons' nodes lie up to about one radius outside a decimated mesh.
     outside_one_sided : ... one side: the mean of the unit vectors to its 16 nearest cloud points
-        is at least this long (0: surrounded, as inside a tube or a ball; 1: all in one direction).
+        is at least this long (0: surrounded, as inside a tube or a ball; 1: all in one direction);
+        the length test also counts a point outside only where this holds.
+    outside_voxel_radii : the length test runs only when the interior's voxel is at most this many
+        median local radii (coarser voxels cannot tell a part's inside from a few radii beyond it:
+        a traced neuron, voxel about 9 radii); otherwise only the reach test runs.
     outside_skeletal_share : ``outside`` fires when more than this share of a skeletal point set
         is outside (unbounded, in no inside voxel) in one cluster (points within outside_link x the
         cloud's median spacing).
@@ -260,6 +264,7 @@ class Params:
     outside_min_share: float = 0.05
     outside_reach: float = 8.0
     outside_one_sided: float = 0.7
+    outside_voxel_radii: float = 3.0
     outside_skeletal_share: float = 0.05
     outside_link: float = 3.0
 
@@ -372,7 +377,7 @@ class Params:
         if self.k_center is not None and int(self.k_center) < 1:
             bad("k_center", "must be a positive integer or None")
         for name in ("diag_step", "spur_reach", "cycles_voxel_spacing", "outside_min_radii", "outside_link",
-                     "outside_reach"):
+                     "outside_reach", "outside_voxel_radii"):
             if not float(getattr(self, name)) > 0:
                 bad(name, "must be > 0")
         for name in ("spur_unique", "outside_min_share", "outside_skeletal_share", "outside_one_sided",
