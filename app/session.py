@@ -15,13 +15,13 @@ from PySide6 import QtCore
 from skelcore.errors import SkelInputError
 from skelcore.params import Params
 
+from .edit_scoring import DEFECTS_TASK, UPDATE_LOCK, UPDATING, defects_job, defects_pending, scores_job
 from .loading import ROLES, Ask, assign_roles
 from .scene import Scene, SceneEvent
 from .worker import TaskRunner
 
-__all__ = ["Session", "preload_engine", "PROCESS_FROM"]
+__all__ = ["Session", "preload_engine", "PROCESS_FROM", "UPDATE_LOCK"]
 
-UPDATE_LOCK = threading.Lock()  # Evaluation.update runs one at a time (Session.show_edited_curve)
 
 PROCESS_FROM = 200_000
 """Evaluations of at least this many points (cloud + skeletal set) run in a child process
@@ -43,7 +43,9 @@ class Session(QtCore.QObject):
     error = QtCore.Signal(str, str, str)  # title, one-line message, details ("" when none)
     message = QtCore.Signal(str)  # status-bar text
     loaded = QtCore.Signal(str, str)  # role, path
-    evaluated = QtCore.Signal(object)  # the Evaluation now shown
+    evaluated = QtCore.Signal(object)  # the Evaluation now shown (complete: never an edit's first phase)
+    #: an edit's first phase shown: its scores, the curve's defects still updating (skelscope.edit_scoring)
+    scores_shown = QtCore.Signal(object)
     stale_changed = QtCore.Signal(str)  # why the shown results are out of date ("" when they are not)
 
     def __init__(self, scene: Scene | None = None, parent: QtCore.QObject | None = None) -> None:
@@ -478,7 +480,7 @@ class Session(QtCore.QObject):
         if old is None:
             raise ValueError("no curve skeleton loaded")
         base = scene.evaluation
-        running = self.runner.current_name == "evaluation"
+        running = self.runner.current_name in ("evaluation", DEFECTS_TASK)  # a stale second phase too
         if running:
             self.runner.discard()
         if not score:
@@ -516,19 +518,7 @@ class Session(QtCore.QObject):
         self._requested_viewpoints = self._shown_viewpoints
         self._requested_scan_options = self._shown_scan_options
         self.evaluation_cancelled = False
-
-        def job(progress: Any, cancel: Callable[[], bool]) -> Any:
-            from skelcore.errors import Cancelled
-
-            progress(0.0, "scoring the edited curve")
-            # one update at a time: a dropped one (an edit came meanwhile) still runs to its end in its
-            # thread and shares the evaluation's caches; the next waits for it here, not in the window
-            with UPDATE_LOCK:
-                if cancel():
-                    raise Cancelled("the edited curve's scoring was cancelled")
-                return base.update(curve)
-
-        self.runner.start(job, "evaluation")
+        self.runner.start(scores_job(base, curve), "evaluation")  # the four metrics; the defects follow
         self.check_stale()
         self.message.emit("scoring the edited curve…")
         return "update"
@@ -579,8 +569,22 @@ class Session(QtCore.QObject):
             self._shown_scan_options = self._requested_scan_options
             self._had_result = True
             self.check_stale()
+            if defects_pending(result):  # an edit's first phase: its defects in a second task
+                self._defects_of = result
+                self.runner.start(defects_job(result), DEFECTS_TASK)
+                self.message.emit(f"scores of the edited curve shown; {UPDATING}")
+                self.scores_shown.emit(result)
+                return
             total = result.timings.get("total") if result.timings else None
             self.message.emit("evaluation done" + (f" in {total:.2f} s" if total is not None else ""))
+            self.evaluated.emit(result)
+        elif name == DEFECTS_TASK:
+            if scene.evaluation is not self._defects_of or self._evaluated_layers != (scene.cloud, scene.skeletal,
+                                                                                     scene.curve):
+                return  # another evaluation shown meanwhile
+            scene.set_evaluation(result)
+            self.check_stale()
+            self.message.emit("the edited curve's defects updated")
             self.evaluated.emit(result)
         elif name == "skeletonization":
             if self._skeletonized_cloud is not scene.cloud:
@@ -605,6 +609,7 @@ class Session(QtCore.QObject):
 
     _evaluated_layers: tuple = ()
     _skeletonized_cloud: Any = None
+    _defects_of: Any = None  # the first phase whose defects the DEFECTS_TASK finds
     #: the last evaluation was cancelled (Esc, Cancel) and neither a new run nor new inputs came since
     evaluation_cancelled = False
 
