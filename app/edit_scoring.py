@@ -43,13 +43,17 @@ def scores_job(base: Any, curve: Any) -> Job:
     return job
 
 
-def defects_job(partial: Any) -> Job:
-    """The second phase: ``partial`` with the curve's coverage, defects and missing parts."""
+def defects_job(partial: Any, start: threading.Event | None = None) -> Job:
+    """The second phase: ``partial`` with the curve's coverage, defects and missing parts, once
+    ``start`` is set (the first phase's frame painted: the two would share the interpreter's lock)."""
 
     def job(progress: Callable[[float, str], None], cancel: Callable[[], bool]) -> Any:
         from skelcore.errors import Cancelled
 
         progress(0.0, "finding the edited curve's defects")
+        while start is not None and not start.wait(0.005):
+            if cancel():
+                raise Cancelled("the edited curve's defects were cancelled")
         with UPDATE_LOCK:
             if cancel():
                 raise Cancelled("the edited curve's defects were cancelled")

@@ -65,6 +65,9 @@ class Session(QtCore.QObject):
         #: evaluations of at least this many points (cloud + skeletal set) run in a child process
         self.process_from = PROCESS_FROM
         self.auto_evaluate = True
+        #: ``after_scores(fn)``: ``fn()`` once an edit's first phase is on screen (the window: after its
+        #: frame), when the second phase may start
+        self.after_scores: Callable[[Callable[[], None]], None] = lambda fn: fn()
         #: the sensors' positions (viewpoint-aware boundedness and centeredness; [] = the paper's scores)
         self.viewpoints: list[tuple[float, float, float]] = []
         self.runner.succeeded.connect(self._task_succeeded)
@@ -571,7 +574,9 @@ class Session(QtCore.QObject):
             self.check_stale()
             if defects_pending(result):  # an edit's first phase: its defects in a second task
                 self._defects_of = result
-                self.runner.start(defects_job(result), DEFECTS_TASK)
+                painted = threading.Event()
+                self.runner.start(defects_job(result, painted), DEFECTS_TASK)
+                self.after_scores(painted.set)  # it starts once the recoloured frame is on screen
                 self.message.emit(f"scores of the edited curve shown; {UPDATING}")
                 self.scores_shown.emit(result)
                 return

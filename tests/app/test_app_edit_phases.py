@@ -28,8 +28,8 @@ def held(monkeypatch):
 
     gate = threading.Event()
 
-    def defects_job(partial):
-        real = edit_scoring.defects_job(partial)
+    def defects_job(partial, start=None):
+        real = edit_scoring.defects_job(partial, start)
 
         def job(progress, cancel):
             while not gate.wait(0.01) and not cancel():

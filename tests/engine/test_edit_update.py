@@ -192,3 +192,27 @@ def test_the_two_phases_equal_one_update_and_a_fresh_evaluation(name, edit):
     assert quick.diagnostics_left_out
     newer, change2 = E.delete_edge(new, tuple(new.edges[-1]))
     _same(quick.update(change2), evaluate(cloud, skeletal, newer))  # a first phase updates like any
+
+
+def test_the_cloud_only_values_the_diagnostics_ask_again_are_kept_per_array():
+    """The cloud's spacing is kept for a few arrays at once (the diagnostics ask of the cloud and of
+    its subsample's tree data; one entry made them evict each other at every update), the coverage's
+    noise sample for the last cloud; equal to computing them afresh, dropped with their array."""
+    import gc
+
+    from skelcore.diagnostics import interior
+    from skelcore.metrics import coverage
+
+    rng = np.random.default_rng(5)
+    a, b = rng.random((3000, 3)), rng.random((500, 3))
+    first = interior.median_spacing(a), interior.median_spacing(b)
+    assert (interior.median_spacing(a), interior.median_spacing(b)) == first
+    assert first[0] == interior.median_spacing(a.copy())  # a fresh array: computed again, the same
+    big = rng.random((coverage.NOISE_SAMPLE + 10, 3))
+    for cloud in (a, big):
+        pts, spacing = coverage._noise_sample(cloud)
+        assert coverage._noise_sample(cloud)[0] is pts and coverage._noise_sample(cloud.copy())[1] == spacing
+        assert coverage._noise_sample(cloud)[1] == spacing
+    del a, b, big, cloud, pts
+    gc.collect()
+    assert not coverage._last_noise and len(interior._last_spacing) <= interior._SPACINGS_KEPT
