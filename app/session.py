@@ -393,10 +393,10 @@ class Session(QtCore.QObject):
         if event.kind == "layer":
             self.evaluation_cancelled = False
             # The running evaluation describes old inputs: drop it (its result will never land).
-            if self.runner.current_name == "evaluation":
+            if self.runner.current_name in ("evaluation", DEFECTS_TASK):
                 self.runner.discard()
             self._inputs_changed = True
-        if event.kind in ("layer", "quantities"):
+        if event.kind in ("layer", "quantities") and not self._swapping_curve:
             self.check_stale()
 
     _correspondence_of: Any = None  # the skeletal layer the correspondence setting was chosen for
@@ -495,9 +495,13 @@ class Session(QtCore.QObject):
                      and src.args.get("curve") is not None and src.ctx is not None
                      and content_hash(base.curve.curve) == content_hash(old.curve)
                      and not self.stale_reason())  # under the settings shown: else evaluated afresh with the new
-        with self.batch():
-            scene.set_curve(curve, old.path, edited=edited)
-            self._inputs_changed = False  # scored below, not by the automatic run
+        self._swapping_curve = True  # scored below: not "inputs changed" meanwhile (a grey frame each way)
+        try:
+            with self.batch():
+                scene.set_curve(curve, old.path, edited=edited)
+                self._inputs_changed = False  # scored below, not by the automatic run
+        finally:
+            self._swapping_curve = False
         if known is not None:
             try:
                 now = self.params()
@@ -515,7 +519,9 @@ class Session(QtCore.QObject):
             self.check_stale()
             return ""
         if not updatable:
-            return "full" if self.start_evaluation() else ""
+            started = self.start_evaluation()
+            self.check_stale()
+            return "full" if started else ""
         self._evaluated_layers = (scene.cloud, scene.skeletal, scene.curve)
         self._requested_correspondence = self._shown_correspondence
         self._requested_viewpoints = self._shown_viewpoints
@@ -615,6 +621,7 @@ class Session(QtCore.QObject):
     _evaluated_layers: tuple = ()
     _skeletonized_cloud: Any = None
     _defects_of: Any = None  # the first phase whose defects the DEFECTS_TASK finds
+    _swapping_curve = False  # show_edited_curve replacing the curve it scores right after
     #: the last evaluation was cancelled (Esc, Cancel) and neither a new run nor new inputs came since
     evaluation_cancelled = False
 
