@@ -24,6 +24,9 @@ __all__ = ["Session", "preload_engine", "PROCESS_FROM", "UPDATE_LOCK"]
 
 
 PROCESS_FROM = 200_000
+FRAME_HOLD_S = 0.15
+"""After an edit the view waits at most this long for the first phase's scores (the goal from the key
+to the recoloured frame), so a quick update draws the edited curve once, coloured."""
 """Evaluations of at least this many points (cloud + skeletal set) run in a child process
 (:mod:`skelscope.engine_process`): Cancel and quit are then a kill, and the window never waits for the
 engine's GIL. Smaller ones run in a thread (no process start, ~1 s of imports)."""
@@ -68,6 +71,10 @@ class Session(QtCore.QObject):
         #: ``after_scores(fn)``: ``fn()`` once an edit's first phase is on screen (the window: after its
         #: frame), when the second phase may start
         self.after_scores: Callable[[Callable[[], None]], None] = lambda fn: fn()
+        #: ``hold_frames(seconds)`` / ``release_frames()``: the view's frames wait for an edit's scores
+        #: (at most FRAME_HOLD_S), so the edited curve and its colours come in one frame
+        self.hold_frames: Callable[[float], None] = lambda seconds: None
+        self.release_frames: Callable[[], None] = lambda: None
         #: the sensors' positions (viewpoint-aware boundedness and centeredness; [] = the paper's scores)
         self.viewpoints: list[tuple[float, float, float]] = []
         self.runner.succeeded.connect(self._task_succeeded)
@@ -495,6 +502,8 @@ class Session(QtCore.QObject):
                      and src.args.get("curve") is not None and src.ctx is not None
                      and content_hash(base.curve.curve) == content_hash(old.curve)
                      and not self.stale_reason())  # under the settings shown: else evaluated afresh with the new
+        if updatable and known is None:
+            self.hold_frames(FRAME_HOLD_S)  # released when the scores land (_task_succeeded, _task_failed)
         self._swapping_curve = True  # scored below: not "inputs changed" meanwhile (a grey frame each way)
         try:
             with self.batch():
@@ -570,6 +579,8 @@ class Session(QtCore.QObject):
     def _task_succeeded(self, name: str, result: Any) -> None:
         scene = self.scene
         if name == "evaluation":
+            self.release_frames()  # after this event's changes: one frame shows them all
+        if name == "evaluation":
             if self._evaluated_layers != (scene.cloud, scene.skeletal, scene.curve):
                 return  # inputs changed meanwhile: this result describes other data
             scene.set_evaluation(result)
@@ -612,6 +623,7 @@ class Session(QtCore.QObject):
 
     @QtCore.Slot(str, object, str)
     def _task_failed(self, name: str, exc: Any, tb: str) -> None:
+        self.release_frames()
         if isinstance(exc, (SkelInputError, ValueError)):
             self.error.emit(f"{name.capitalize()} failed", str(exc), "")
         else:

@@ -115,6 +115,14 @@ class SceneView:
     def render_pending(self) -> bool:
         return self._frames.pending
 
+    def hold_frames(self, seconds: float) -> None:
+        """Requested frames wait at most ``seconds`` or until :meth:`release_frames` (an edit's curve
+        and its scores in one frame, :mod:`.frames`)."""
+        self._frames.hold(seconds)
+
+    def release_frames(self) -> None:
+        self._frames.release()
+
     def after_render(self, fn: Callable[[], None]) -> None:
         """Call ``fn`` once the pending frame has been painted (at once if none is pending), so work
         that follows a change (the plots) starts after the frame, never in the same event-loop turn."""

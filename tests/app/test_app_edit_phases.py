@@ -108,3 +108,19 @@ def test_a_further_edit_an_undo_or_a_cancel_stops_a_stale_second_phase(window, q
     key(qtbot, w, "Ctrl+Z")  # the loaded curve: its whole evaluation, kept by the first step
     assert w.edits.last_scoring == "known" and w.scene.evaluation is first
     assert not w.defects.panel.pending and w.defects.rows
+
+
+def test_held_frames_wait_for_the_release_or_the_hold_s_end(window, qtbot):
+    """An edit holds the view's frames until its scores land (FRAME_HOLD_S at most): one frame shows
+    the edited curve coloured; a hold that nothing releases ends by itself."""
+    w = window
+    qtbot.waitUntil(lambda: not w.view.render_pending, timeout=10000)
+    w.view.hold_frames(30.0)
+    w.view.request_render()
+    qtbot.wait(150)
+    assert w.view.render_pending  # held
+    w.view.release_frames()
+    qtbot.waitUntil(lambda: not w.view.render_pending, timeout=10000)
+    w.view.hold_frames(0.2)
+    w.view.request_render()
+    qtbot.waitUntil(lambda: not w.view.render_pending, timeout=10000)  # the hold ran out
