@@ -6,7 +6,9 @@ direction) was scored before. That is exact because each sample's value depends 
 direction, the cloud and the params: with the toolbox sampling an edit moves the samples of the edges
 whose length share or numbering changed, and those are scored again. Boundedness is reused only when
 the rays estimator scores every sample on its own (no far field shared between samples). Evaluations
-with a scan option, or whose skeletal column is the curve's projection, are evaluated again."""
+with a scan option, or whose skeletal column is the curve's projection, are evaluated again.
+:func:`complete_update` adds the curve's diagnostics to an update that left them out (a viewer's
+second phase), the two together equal to one update."""
 
 from __future__ import annotations
 
