@@ -88,6 +88,9 @@ def complete_update(ev: Evaluation, cancel: Callable[[], bool] | None = None) ->
     t0 = time.perf_counter()
     names = left_out(ev)
     if not names:
+        if LEFT_OUT in ev.not_computed.values():  # a pickled first phase: its context is gone
+            raise SkelInputError("this Evaluation keeps no record of its inputs (it was pickled): "
+                                 "update or evaluate the edited curve with its diagnostics instead")
         return ev
     src = ev.source
     old = src.ctx

@@ -190,6 +190,8 @@ def test_the_two_phases_equal_one_update_and_a_fresh_evaluation(name, edit):
     _same(full, evaluate(cloud, skeletal, new))
     _close(quick.to_json_dict(), before)
     assert quick.diagnostics_left_out
+    with pytest.raises(SkelInputError, match="keeps no record"):
+        pickle.loads(pickle.dumps(quick)).complete_update()
     newer, change2 = E.delete_edge(new, tuple(new.edges[-1]))
     _same(quick.update(change2), evaluate(cloud, skeletal, newer))  # a first phase updates like any
 
