@@ -115,6 +115,14 @@ class SceneView:
     def render_pending(self) -> bool:
         return self._frames.pending
 
+    def hold_frames(self, seconds: float) -> None:
+        """Requested frames wait at most ``seconds`` or until :meth:`release_frames` (an edit's curve
+        and its scores in one frame, :mod:`.frames`)."""
+        self._frames.hold(seconds)
+
+    def release_frames(self) -> None:
+        self._frames.release()
+
     def after_render(self, fn: Callable[[], None]) -> None:
         """Call ``fn`` once the pending frame has been painted (at once if none is pending), so work
         that follows a change (the plots) starts after the frame, never in the same event-loop turn."""
@@ -314,7 +322,11 @@ class SceneView:
     _cloud_values: np.ndarray | None = None
 
     def set_cloud_values(self, values: np.ndarray | None) -> None:
-        """Colour the cloud by per-point values in [0, 1] (the coverage gap), NaN magenta; None: grey."""
+        """Colour the cloud by per-point values in [0, 1] (the coverage gap), NaN magenta; None: grey.
+        Grey asked again of a grey cloud (every result landing asks) redraws nothing: at 100k points
+        the cloud's actor takes 80 ms to build, which an edit's recoloured frame would wait for."""
+        if values is None and self._cloud_values is None and "cloud" in self._actors:
+            return
         self._cloud_values = None if values is None else np.asarray(values, dtype=float)
         self._build_cloud()
         self.request_render()

@@ -15,6 +15,7 @@ the 6-connected components of the rest that do not reach the grid's border (cavi
 
 from __future__ import annotations
 
+import threading
 import weakref
 from dataclasses import dataclass, field
 
@@ -96,8 +97,11 @@ def cloud_subsample(cloud: np.ndarray, max_points: int, seed: int = 0) -> np.nda
     return cloud[np.sort(pick)]
 
 
-# the last cloud's spacing, reused while the same array comes back (the diagnostics ask three times)
+# the last clouds' spacings, reused while the same array comes back (the diagnostics ask three times, of
+# the cloud and of its subsample's tree data: one entry would make them evict each other at every update)
 _last_spacing: dict = {}
+_SPACINGS_KEPT = 4
+_spacing_lock = threading.Lock()
 
 
 def median_spacing(cloud: np.ndarray, max_points: int = 20000) -> float:
@@ -110,17 +114,23 @@ def median_spacing(cloud: np.ndarray, max_points: int = 20000) -> float:
     n = len(cloud)
     if n < 2:
         return 0.0
-    ref = _last_spacing.get("cloud")
-    if ref is not None and ref() is cloud and _last_spacing.get("key") == (n, max_points):
-        return _last_spacing["value"]
+    hit = _last_spacing.get((id(cloud), n, max_points))
+    if hit is not None and hit[0]() is cloud:
+        return hit[1]
     m = min(n, int(max_points))
     sub = cloud if m == n else cloud[np.random.default_rng(0).choice(n, m, replace=False)]
     d, _ = cKDTree(sub).query(sub, k=2)
     value = float(np.median(d[:, 1])) * float(np.sqrt(m / n))
+    key = (id(cloud), n, max_points)
     try:
-        _last_spacing.update(cloud=weakref.ref(cloud), key=(n, max_points), value=value)
+        ref = weakref.ref(cloud, lambda r, k=key, kept=_last_spacing: kept.pop(k, None)
+                          if kept.get(k, (None,))[0] is r else None)
     except TypeError:  # not weak-referenceable: no cache
-        pass
+        return value
+    with _spacing_lock:  # the diagnostics run side by side
+        _last_spacing[key] = (ref, value)
+        while len(_last_spacing) > _SPACINGS_KEPT:  # the oldest first (dicts keep their insertion order)
+            _last_spacing.pop(next(iter(_last_spacing)), None)
     return value
 
 
