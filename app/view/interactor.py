@@ -62,7 +62,8 @@ class DropInteractor(ClosingInteractor):
         self._painting = False
         iren = self.ren_win.GetInteractor()
         iren.SetEnableRender(False)
-        iren.AddObserver("RenderEvent", lambda *_: self._painting or self.update())
+        tag = iren.AddObserver("RenderEvent", lambda *_: self._painting or self.update())
+        self._vtk_observers.append((iren, tag))  # removed with pyvistaqt's own when the widget closes
 
     def initializeGL(self) -> None:  # noqa: N802
         super().initializeGL()

@@ -65,7 +65,7 @@ class SceneView:
         self._resting = RestingCull()  # at rest, big layers draw only the points that can show
         self._scale = 1  # the scale of the picture being rendered (1: the view itself)
         # every render, also those VTK's interaction starts itself, draws the points of its own camera
-        self.plotter.ren_win.AddObserver("StartEvent", lambda *_: self.moving or self._rest_detail())
+        self._start_observer = self.plotter.ren_win.AddObserver("StartEvent", lambda *_: self.moving or self._rest_detail())
         self._frames = FrameScheduler(self.plotter)  # also sets plotter.on_frame
         self.plotter.before_frame = self._before_frame
         self.on_pick: Callable[[dict[str, Any] | None], None] | None = None
@@ -678,6 +678,7 @@ class SceneView:
     def close(self) -> None:
         self.scene.unsubscribe(self._on_scene)
         self.plotter.removeEventFilter(self._motion_filter)
+        self.plotter.ren_win.RemoveObserver(self._start_observer)  # VTK's hold on this view let go
         self._frames.close()
         self.eye_dome.close()
         self.plotter.close()
