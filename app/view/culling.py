@@ -10,6 +10,7 @@ The layers' arrays stay whole: picking and colouring index the real points.
 
 from __future__ import annotations
 
+import time
 from dataclasses import dataclass
 from typing import Any
 
@@ -54,6 +55,7 @@ class RestingCull:
     def __init__(self) -> None:
         self._key: tuple | None = None
         self.drawn: dict[str, int] = {}  # layer actor name -> points it draws
+        self.seconds = 0.0  # how long the last recomputation took (projection and visibility)
 
     def forget(self, name: str) -> None:
         """Layer ``name`` was rebuilt (its new mesh draws every point): recompute at the next frame."""
@@ -76,6 +78,7 @@ class RestingCull:
             self.drawn[k] = c.mesh.n_points
         if not culled:
             return
+        start = time.perf_counter()
         w, h = renderer.GetSize()
         x0, y0 = (renderer.GetViewport()[i] * renderer.GetRenderWindow().GetSize()[i] for i in (0, 1))
         screen = []
@@ -85,3 +88,4 @@ class RestingCull:
         for (k, c), idx in zip(culled.items(), visible_points(screen, w, h)):
             set_vertices(c.mesh, idx)
             self.drawn[k] = len(idx)
+        self.seconds = time.perf_counter() - start

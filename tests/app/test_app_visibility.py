@@ -65,3 +65,102 @@ def test_points_off_the_view_or_behind_the_camera_are_dropped():
     z = np.array([0.0, 0.0, np.inf, 0.0])
     kept = visible_points([ScreenPoints(x, np.full(4, 5.0), z, 2, True)], 10, 10)
     assert kept[0].tolist() == [0]
+
+
+@pytest.fixture
+def big(window, monkeypatch):
+    """The window showing a sphere of 30k points with a skeletal set inside it, both 'big' (over a
+    lowered LOD_POINTS): so both are thinned at rest."""
+    import skelscope.view.scene_view as scene_view
+    from skelcore import shapes
+
+    monkeypatch.setattr(scene_view, "LOD_POINTS", 2000)
+    cloud = shapes.sphere_surface(30_000, seed=0)
+    skeletal = 0.3 * cloud + np.random.default_rng(1).normal(scale=0.01, size=cloud.shape)
+    window.scene.set_cloud(cloud)
+    window.scene.set_skeletal(skeletal)
+    return window, cloud, skeletal
+
+
+def _every_point(view, monkeypatch):
+    """The view's picture with every point drawn (thinning is for software GL only)."""
+    monkeypatch.setattr(view.plotter, "software_gl", False)
+    try:
+        return view.image()
+    finally:
+        monkeypatch.setattr(view.plotter, "software_gl", True)
+
+
+@pytest.mark.gui
+@pytest.mark.window(size=(900, 700))
+def test_at_rest_the_big_layers_draw_only_what_shows_and_the_picture_is_the_same(big, monkeypatch):
+    window, cloud, skeletal = big
+    view = window.view
+    assert view.plotter.software_gl
+    camera = view.plotter.renderer.GetActiveCamera()
+    for turn in range(3):
+        thin = view.image()
+        drawn = dict(view._resting.drawn)
+        assert np.array_equal(thin, _every_point(view, monkeypatch)), f"turn {turn}"
+        assert drawn["skeletal"] < len(skeletal) / 4 and drawn["cloud"] < len(cloud)
+        camera.Azimuth(40)
+        camera.Elevation(25)
+        camera.OrthogonalizeViewUp()
+    view.image()
+    behind_glass = view._resting.drawn["skeletal"]
+    window.scene.set_opacity("cloud", 1.0)  # an opaque cloud hides its own back and most of the skeletal set
+    thin = view.image()
+    assert view._resting.drawn["cloud"] < len(cloud) * 0.7 and view._resting.drawn["skeletal"] < behind_glass
+    assert np.array_equal(thin, _every_point(view, monkeypatch))
+
+
+@pytest.mark.gui
+@pytest.mark.window(size=(900, 700))
+def test_a_pick_among_thinned_points_names_the_real_point_and_other_scales_draw_every_point(big):
+    from skelscope.view.picking import pick_layout, project_to_display
+
+    window, cloud, skeletal = big
+    view = window.view
+    window.scene.set_visible("cloud", False)
+    view.image()
+    mesh = view._meshes["skeletal"]
+    shown = np.asarray(mesh.verts).reshape(-1, 2)[:, 1]
+    assert 0 < len(shown) < len(skeletal) / 4
+    x, y, z = project_to_display(view.plotter.renderer, pick_layout(skeletal[shown]))
+    front = int(np.argmin(z))  # the nearest point drawn: on top at its centre
+    info = view.pick_display(float(x[front]), float(y[front]))
+    assert info is not None and info["index"] == int(shown[front]) and info["index"] >= len(shown) // 2
+    assert np.allclose(info["xyz"], skeletal[info["index"]])
+    big_picture = view.image(scale=2)
+    assert big_picture.shape[1] == 2 * view.image().shape[1]
+    view.image(scale=2)
+    assert view._resting.drawn["skeletal"] == len(skeletal)  # another scale: every point
+    view.image()
+    assert view._resting.drawn["skeletal"] == len(shown)  # the view's own: thinned again
+
+
+@pytest.mark.gui
+def test_vtk_interaction_draws_through_the_paint_once_per_frame(big, qtbot):
+    """A drag's release (VTK's interactor style renders at its end) and the view's full-detail frame
+    are one render, not two: VTK's own render requests wait for the paint."""
+    from PySide6 import QtCore
+
+    window = big[0]
+    view = window.view
+    frames: list[bool] = []
+    view.plotter.ren_win.AddObserver("EndEvent", lambda *a: frames.append(bool(view._actors["cloud"].GetVisibility())))
+    view.request_render()
+    qtbot.waitUntil(lambda: not view.render_pending and bool(frames), timeout=20000)
+    qtbot.wait(50)
+    frames.clear()
+    view.plotter.ren_win.GetInteractor().Render()  # what the interactor style asks on every move
+    assert frames == []  # nothing drawn at once
+    qtbot.waitUntil(lambda: len(frames) == 1, timeout=20000)
+    centre = view.widget.rect().center()
+    qtbot.mousePress(view.widget, QtCore.Qt.MouseButton.LeftButton, pos=centre)
+    assert view.moving
+    frames.clear()
+    qtbot.mouseRelease(view.widget, QtCore.Qt.MouseButton.LeftButton, pos=centre + QtCore.QPoint(30, 0))
+    qtbot.waitUntil(lambda: bool(frames) and not view.render_pending, timeout=20000)
+    qtbot.wait(100)
+    assert frames == [True]  # full detail, drawn once
