@@ -42,8 +42,8 @@ class ScreenPoints:
 def _anchors(pos: np.ndarray, size: int) -> tuple[np.ndarray, np.ndarray]:
     """The first pixel a point's square may start at, rounded down and up within EDGE_PX: a square of
     ``size`` pixels centred at ``pos`` covers the pixels whose centres lie in [pos - size/2, pos + size/2)."""
-    start = pos - 0.5 * size - 0.5
-    return np.ceil(start - EDGE_PX).astype(np.int64), np.ceil(start + EDGE_PX).astype(np.int64)
+    start = pos - np.float32(0.5 * size + 0.5)
+    return np.ceil(start - np.float32(EDGE_PX)).astype(np.int32), np.ceil(start + np.float32(EDGE_PX)).astype(np.int32)
 
 
 def visible_points(layers: list[ScreenPoints], width: int, height: int) -> list[np.ndarray]:
@@ -54,14 +54,15 @@ def visible_points(layers: list[ScreenPoints], width: int, height: int) -> list[
     front = np.full(shape, np.inf, dtype=np.float32)  # the opaque points' depth per pixel
     anchors = []
     for p in layers:
-        xa, xb = _anchors(np.asarray(p.x, dtype=np.float64), p.size)
-        ya, yb = _anchors(np.asarray(p.y, dtype=np.float64), p.size)
+        xa, xb = _anchors(np.asarray(p.x, dtype=np.float32), p.size)
+        ya, yb = _anchors(np.asarray(p.y, dtype=np.float32), p.size)
         on = (xb > -p.size) & (xa < width) & (yb > -p.size) & (ya < height) & np.isfinite(p.z)
         anchors.append((xa, xb, ya, yb, on))
         if p.opaque:
             sure = on & (xa == xb) & (ya == yb)
             grid = np.full(shape, np.inf, dtype=np.float32)
-            np.minimum.at(grid.ravel(), (ya[sure] + pad) * shape[1] + xa[sure] + pad, p.z[sure].astype(np.float32))
+            np.minimum.at(grid.ravel(), (ya[sure] + pad).astype(np.int64) * shape[1] + xa[sure] + pad,
+                          p.z[sure].astype(np.float32))
             for axis in (0, 1):  # a pixel's depth: the least over the anchors whose square covers it
                 grid = minimum_filter1d(grid, p.size, axis=axis, mode="constant", cval=np.inf,
                                         origin=(p.size - 1) // 2)
@@ -75,9 +76,11 @@ def visible_points(layers: list[ScreenPoints], width: int, height: int) -> list[
                                        origin=-(p.size // 2))
         idx = np.flatnonzero(on)
         flat = deepest.ravel()
-        row_a, row_b = (ya[idx] + pad) * shape[1], (yb[idx] + pad) * shape[1]
-        col_a, col_b = xa[idx] + pad, xb[idx] + pad
-        reach = np.maximum(np.maximum(flat[row_a + col_a], flat[row_a + col_b]),
-                           np.maximum(flat[row_b + col_a], flat[row_b + col_b]))
+        reach = flat[(ya[idx] + pad).astype(np.int64) * shape[1] + xa[idx] + pad]
+        edge = np.flatnonzero((xa[idx] != xb[idx]) | (ya[idx] != yb[idx]))  # either square may be drawn
+        if len(edge):
+            e = idx[edge]
+            rows = [(y + pad).astype(np.int64) * shape[1] for y in (ya[e], yb[e])]
+            reach[edge] = np.max([flat[r + x + pad] for r in rows for x in (xa[e], xb[e])], axis=0)
         kept.append(idx[p.z[idx] <= reach + DEPTH_MARGIN])
     return kept
