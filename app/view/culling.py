@@ -49,6 +49,20 @@ def _camera_key(renderer: Any) -> tuple:
             cam.GetViewUp(), cam.GetViewAngle(), cam.GetParallelProjection(), cam.GetParallelScale())
 
 
+def _rounding(renderer: Any, points_t: np.ndarray) -> np.ndarray:
+    """A bound (pixels) on how far float32 projections (numpy's here, GL's) may put each point from its
+    exact display position: tiny, unless the camera is zoomed so far in that a pixel nears the
+    coordinates' float32 spacing. From the composite matrix, the coordinates' magnitude and each point's w."""
+    w, h = renderer.GetSize()
+    m = renderer.GetActiveCamera().GetCompositeProjectionTransformMatrix(w / h if h else 1.0, -1, 1)
+    mat = np.array([[m.GetElement(i, j) for j in range(4)] for i in range(4)])
+    reach = np.abs(mat[:, :3]) @ np.abs(points_t).max(axis=1).astype(float) + np.abs(mat[:, 3])
+    hw = mat[3, :3].astype(np.float32) @ points_t + np.float32(mat[3, 3])
+    scale = 16 * float(np.finfo(np.float32).eps) * 0.5 * max(w, h) * (max(reach[0], reach[1]) + reach[3])
+    with np.errstate(divide="ignore"):
+        return np.float32(scale) / np.abs(hw)
+
+
 class RestingCull:
     """The vertex lists the big layers draw at rest, recomputed only when what they depend on changed."""
 
@@ -84,7 +98,8 @@ class RestingCull:
         screen = []
         for k, c in culled.items():
             x, y, z = project_to_display(renderer, c.points_t)
-            screen.append(ScreenPoints(x - x0, y - y0, z, int(sizes[k]), c.actor.GetProperty().GetOpacity() >= 1.0))
+            screen.append(ScreenPoints(x - x0, y - y0, z, int(sizes[k]), c.actor.GetProperty().GetOpacity() >= 1.0,
+                                       _rounding(renderer, c.points_t)))
         for (k, c), idx in zip(culled.items(), visible_points(screen, w, h)):
             set_vertices(c.mesh, idx)
             self.drawn[k] = len(idx)

@@ -6,8 +6,8 @@ points lose every depth test. The opaque points' depth per pixel is a scatter of
 anchor and a running minimum over ``s`` anchors; a point can show when its depth is at most the
 largest of those depths over its own square. Drawing only those, in their order, gives the same
 image: every pixel's depth test is won by the same point (ties kept, with a depth margin).
-A point within ``EDGE_PX`` of a pixel boundary (GL could round it either way) is an occluder of
-nothing, and is tested on either anchor.
+A point within ``EDGE_PX`` (or its own rounding bound) of a pixel boundary (GL could round it either
+way) is an occluder of nothing, and is tested on either anchor.
 """
 
 from __future__ import annotations
@@ -30,20 +30,25 @@ GL's depth buffer (24 bits) and its float32 vertex transform round at about a te
 class ScreenPoints:
     """One layer projected: display ``x``, ``y`` (pixels, origin bottom left), normalized depth ``z``
     (inf behind the camera), its GL point ``size`` in pixels, and whether it hides what lies behind
-    (``opaque``: a translucent layer is tested against the opaque ones but hides nothing)."""
+    (``opaque``: a translucent layer is tested against the opaque ones but hides nothing); ``edge``:
+    how far (pixels) a display position may be from where GL rounds it, at least EDGE_PX."""
 
     x: np.ndarray
     y: np.ndarray
     z: np.ndarray
     size: int
     opaque: bool
+    edge: np.ndarray | float = EDGE_PX
 
 
-def _anchors(pos: np.ndarray, size: int) -> tuple[np.ndarray, np.ndarray]:
-    """The first pixel a point's square may start at, rounded down and up within EDGE_PX: a square of
+def _anchors(pos: np.ndarray, size: int, edge: np.ndarray | float) -> tuple[np.ndarray, np.ndarray]:
+    """The first pixel a point's square may start at, rounded down and up within ``edge``: a square of
     ``size`` pixels centred at ``pos`` covers the pixels whose centres lie in [pos - size/2, pos + size/2)."""
-    start = pos - np.float32(0.5 * size + 0.5)
-    return np.ceil(start - np.float32(EDGE_PX)).astype(np.int32), np.ceil(start + np.float32(EDGE_PX)).astype(np.int32)
+    far = np.float32(1e6)  # off the view either way; keeps the anchors' int32 exact (NaN: dropped by its depth)
+    start = np.clip(pos, -far, far) - np.float32(0.5 * size + 0.5)
+    edge = np.clip(np.asarray(edge, dtype=np.float32), np.float32(EDGE_PX), far)
+    with np.errstate(invalid="ignore"):
+        return np.ceil(start - edge).astype(np.int32), np.ceil(start + edge).astype(np.int32)
 
 
 def visible_points(layers: list[ScreenPoints], width: int, height: int) -> list[np.ndarray]:
@@ -54,8 +59,8 @@ def visible_points(layers: list[ScreenPoints], width: int, height: int) -> list[
     front = np.full(shape, np.inf, dtype=np.float32)  # the opaque points' depth per pixel
     anchors = []
     for p in layers:
-        xa, xb = _anchors(np.asarray(p.x, dtype=np.float32), p.size)
-        ya, yb = _anchors(np.asarray(p.y, dtype=np.float32), p.size)
+        xa, xb = _anchors(np.asarray(p.x, dtype=np.float32), p.size, p.edge)
+        ya, yb = _anchors(np.asarray(p.y, dtype=np.float32), p.size, p.edge)
         on = (xb > -p.size) & (xa < width) & (yb > -p.size) & (ya < height) & np.isfinite(p.z)
         anchors.append((xa, xb, ya, yb, on))
         if p.opaque:
@@ -82,5 +87,7 @@ def visible_points(layers: list[ScreenPoints], width: int, height: int) -> list[
             e = idx[edge]
             rows = [(y + pad).astype(np.int64) * shape[1] for y in (ya[e], yb[e])]
             reach[edge] = np.max([flat[r + x + pad] for r in rows for x in (xa[e], xb[e])], axis=0)
+            wide = (xb[e] - xa[e] > 1) | (yb[e] - ya[e] > 1)  # squares between the two: kept outright
+            reach[edge[wide]] = np.inf
         kept.append(idx[p.z[idx] <= reach + DEPTH_MARGIN])
     return kept

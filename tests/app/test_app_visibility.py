@@ -61,10 +61,21 @@ def test_the_points_kept_draw_the_same_pixels_as_all_of_them(seed):
 
 
 def test_points_off_the_view_or_behind_the_camera_are_dropped():
-    x = np.array([5.0, -20.0, 5.0, 50.0])
-    z = np.array([0.0, 0.0, np.inf, 0.0])
-    kept = visible_points([ScreenPoints(x, np.full(4, 5.0), z, 2, True)], 10, 10)
+    x = np.array([5.0, -20.0, 5.0, 50.0, 1e12, np.nan])
+    z = np.array([0.0, 0.0, np.inf, 0.0, 0.0, np.nan])
+    kept = visible_points([ScreenPoints(x, np.full(6, 5.0), z, 2, True)], 10, 10)
     assert kept[0].tolist() == [0]
+
+
+def test_a_wide_rounding_bound_keeps_every_point_that_could_show():
+    """Far zoomed in, a point's display position is only known to within more than a pixel: it hides
+    nothing and is kept wherever its square could fall."""
+    front = ScreenPoints(np.array([2.0, 8.0]), np.array([5.0, 5.0]), np.array([0.0, 0.0]), 4, True)  # x 0-3, 6-9
+    behind = ScreenPoints(np.array([5.0, 5.0]), np.array([5.0, 5.0]), np.array([0.5, 0.5]), 2, True,
+                          edge=np.array([0.0, 1.6]))  # the first covers x 4-5; the second may cover 3-4 or 5-6
+    assert visible_points([front, behind], 10, 10)[1].tolist() == [0, 1]
+    behind.x[:] = 4.0  # x 3-4: hidden at column 3 only, visible at column 4
+    assert visible_points([front, behind], 10, 10)[1].tolist() == [0, 1]
 
 
 @pytest.fixture
