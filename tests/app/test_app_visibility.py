@@ -120,9 +120,13 @@ def test_at_rest_the_big_layers_draw_only_what_shows_and_the_picture_is_the_same
     view.image()
     behind_glass = view._resting.drawn["skeletal"]
     window.scene.set_opacity("cloud", 1.0)  # an opaque cloud hides its own back and most of the skeletal set
+    values = np.linspace(0.0, 1.0, len(cloud))
+    values[::50] = np.nan  # invalid values: magenta
+    view.set_cloud_values(values)
     thin = view.image()
     assert view._resting.drawn["cloud"] < len(cloud) * 0.7 and view._resting.drawn["skeletal"] < behind_glass
     assert np.array_equal(thin, _every_point(view, monkeypatch))
+    assert np.all(thin[..., :3] == (255, 0, 255), axis=-1).sum() > 100
 
 
 @pytest.mark.gui
