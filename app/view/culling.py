@@ -5,6 +5,9 @@ depth test. Before a full-detail frame, when the camera, the view's size or the 
 the last one, every big layer is projected (numpy) and its vertex list set to the points that can win
 a pixel, in their order: the same image, far fewer points. Only flat points of whole-pixel sizes at a
 device pixel ratio of 1 are thinned (their footprint is known); otherwise a layer draws all its points.
+A translucent layer hides nothing, so only its points behind opaque ones or off the view drop: it is
+thinned only when most of its box lies off the view (its points behind the skeletal set inside it
+were a few percent at 1M, for more time than they saved).
 The layers' arrays stay whole: picking and colouring index the real points.
 """
 
@@ -63,6 +66,21 @@ def _rounding(renderer: Any, points_t: np.ndarray) -> np.ndarray:
         return np.float32(scale) / np.abs(hw)
 
 
+def _mostly_off_view(renderer: Any, actor: Any) -> bool:
+    """Whether most of the screen box of ``actor``'s bounds lies off the view (or behind the camera)."""
+    b = actor.GetBounds()
+    corners = np.array([[x, y, z] for x in b[:2] for y in b[2:4] for z in b[4:]], dtype=np.float32).T
+    x, y, z = project_to_display(renderer, corners)
+    if not np.all(np.isfinite(z)):
+        return True
+    w, h = renderer.GetSize()
+    x0, y0 = (renderer.GetViewport()[i] * renderer.GetRenderWindow().GetSize()[i] for i in (0, 1))
+    x, y = x - x0, y - y0
+    area = max(float(np.ptp(x) * np.ptp(y)), 1e-9)
+    inside = max(0.0, min(x.max(), w) - max(x.min(), 0)) * max(0.0, min(y.max(), h) - max(y.min(), 0))
+    return inside / area < 0.5
+
+
 class RestingCull:
     """The vertex lists the big layers draw at rest, recomputed only when what they depend on changed."""
 
@@ -85,7 +103,8 @@ class RestingCull:
         if key == self._key:
             return
         self._key = key
-        culled = {k: c for k, c in shown.items() if thin and sizes[k] == int(sizes[k]) and sizes[k] >= 1}
+        culled = {k: c for k, c in shown.items() if thin and sizes[k] == int(sizes[k]) and sizes[k] >= 1
+                  and (c.actor.GetProperty().GetOpacity() >= 1.0 or _mostly_off_view(renderer, c.actor))}
         for k, c in shown.items():
             if k not in culled and self.drawn.get(k, c.mesh.n_points) != c.mesh.n_points:
                 set_vertices(c.mesh, None)
