@@ -5,7 +5,8 @@ frame; it also picks elements (numpy projection, :mod:`.picking`) and renders im
 Only the view touches VTK, and only on the GUI thread. NaN is drawn magenta through the lookup
 table's NaN colour (docs/metrics.md 5.5); point actors are unlit (exact colour-map colours) unless drawn as shaded
 spheres. Big layers get a level-of-detail twin shown while the camera moves, its size set from the
-measured time of the moving frames (:mod:`.lod`).
+measured time of the moving frames (:mod:`.lod`); at rest they draw only their points that can show
+(:mod:`.culling`).
 """
 
 from __future__ import annotations
