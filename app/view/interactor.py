@@ -79,13 +79,16 @@ class DropInteractor(ClosingInteractor):
         if self.before_frame is not None:
             self.before_frame()
         start = time.perf_counter()
-        iren = self.ren_win.GetInteractor()
+        window = getattr(self, "ren_win", None)  # None once closed
+        iren = window.GetInteractor() if window is not None else None
         self._painting = True
-        iren.SetEnableRender(True)
+        if iren is not None:
+            iren.SetEnableRender(True)
         try:
             super().paintGL()
         finally:
-            iren.SetEnableRender(False)
+            if iren is not None:
+                iren.SetEnableRender(False)
             self._painting = False
         self.frame_seconds = time.perf_counter() - start
         if self.on_frame is not None:
