@@ -66,10 +66,12 @@ def _rounding(renderer: Any, points_t: np.ndarray) -> np.ndarray:
         return np.float32(scale) / np.abs(hw)
 
 
-def _mostly_off_view(renderer: Any, actor: Any) -> bool:
-    """Whether most of the screen box of ``actor``'s bounds lies off the view (or behind the camera)."""
-    b = actor.GetBounds()
-    corners = np.array([[x, y, z] for x in b[:2] for y in b[2:4] for z in b[4:]], dtype=np.float32).T
+def _mostly_off_view(renderer: Any, points_t: np.ndarray) -> bool:
+    """Whether most of the screen box of the points' bounding box lies off the view (or behind the
+    camera). From the points themselves: VTK's bounds of a thinned mesh are those of its drawn points."""
+    lo, hi = points_t.min(axis=1), points_t.max(axis=1)
+    corners = np.array([[x, y, z] for x in (lo[0], hi[0]) for y in (lo[1], hi[1]) for z in (lo[2], hi[2])],
+                       dtype=np.float32).T
     x, y, z = project_to_display(renderer, corners)
     if not np.all(np.isfinite(z)):
         return True
@@ -104,7 +106,7 @@ class RestingCull:
             return
         self._key = key
         culled = {k: c for k, c in shown.items() if thin and sizes[k] == int(sizes[k]) and sizes[k] >= 1
-                  and (c.actor.GetProperty().GetOpacity() >= 1.0 or _mostly_off_view(renderer, c.actor))}
+                  and (c.actor.GetProperty().GetOpacity() >= 1.0 or _mostly_off_view(renderer, c.points_t))}
         for k, c in shown.items():
             if k not in culled and self.drawn.get(k, c.mesh.n_points) != c.mesh.n_points:
                 set_vertices(c.mesh, None)
