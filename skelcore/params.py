@@ -166,6 +166,10 @@ class Params:
         other points within outlier_radius x the median spacing.  A stray point fails both.
     outlier_local_k : both radius tests are also taken with the local spacing (the median nearest
         distance of this many cloud points nearest to the point) as yardstick: a stray fails both.
+    outlier_off_surface_cos, outlier_surface_points : ... and it lies off the surface, not in a gap of
+        it: the median |cos| between its offset from its outlier_surface_points nearest non-isolated
+        points and their normals exceeds outlier_off_surface_cos, and none of them is a rim point
+        (open_k, open_angle).  A one-sided scan's lone points lie along the surface or across a rim.
     outlier_skeletal_radius : a skeletal point with fewer than outlier_min_neighbours other skeletal
         points within this many cloud spacings is a stray's image (contracted sets are dense: on the
         hammer and the apple tree every skeletal point has two within 1.7).
@@ -288,6 +292,8 @@ class Params:
     outlier_min_neighbours: int = 2
     outlier_skeletal_radius: float = 5.0
     outlier_local_k: int = 30
+    outlier_off_surface_cos: float = 0.5
+    outlier_surface_points: int = 3
     # ground truth (docs/metrics.md 5.3.1)
     gt_thresholds: int = 20
     gt_threshold_max: float = 1.0
@@ -382,13 +388,14 @@ class Params:
                 bad(name, "must be > 0")
         if not 0.0 < float(self.open_angle) < 360.0:
             bad("open_angle", "must be in (0, 360) degrees")
-        for name in ("open_surface_share", "cap_max_share", "thin_min_share", "open_thin_planarity"):
+        for name in ("open_surface_share", "cap_max_share", "thin_min_share", "open_thin_planarity",
+                     "outlier_off_surface_cos"):
             if not 0.0 <= float(getattr(self, name)) <= 1.0:
                 bad(name, "must be in [0, 1]")
         if not float(self.viewpoint_share_cell) >= 0:
             bad("viewpoint_share_cell", "must be >= 0")
         for name in ("open_k", "open_min_fill", "open_max_points", "viewpoint_rows", "outlier_k", "outlier_local_k",
-                     "outlier_min_neighbours"):
+                     "outlier_min_neighbours", "outlier_surface_points"):
             if int(getattr(self, name)) < 1:
                 bad(name, "must be a positive integer")
         if int(self.open_k) < 3:
