@@ -169,7 +169,8 @@ class Params:
     outlier_off_surface_cos, outlier_surface_points : ... and it lies off the surface, not in a gap of
         it: the median |cos| between its offset from its outlier_surface_points nearest non-isolated
         points and their normals exceeds outlier_off_surface_cos, and none of them is a rim point
-        (open_k, open_angle).  A one-sided scan's lone points lie along the surface or across a rim.
+        (open_k, open_angle), or it lies beyond their box.  A one-sided scan's lone points lie along
+        the surface or across a rim.
     outlier_skeletal_radius : a skeletal point with fewer than outlier_min_neighbours other skeletal
         points within this many cloud spacings is a stray's image (contracted sets are dense: on the
         hammer and the apple tree every skeletal point has two within 1.7).

@@ -6,6 +6,7 @@ point left alone by the sampling (a one-sided scan's occlusions, a part sampled 
 lies in a gap of that surface: its nearest surface points see it along their tangent plane, or lie
 on the rim of the gap (PCL's boundary test, :mod:`.boundary`).  Isolation alone cannot tell the two
 apart (a one-sided neuron scan leaves lone points 10-30 spacings from the rest); the direction can.
+A point beyond the box of the surface points is in no gap: it stays a stray whatever its direction.
 """
 
 from __future__ import annotations
@@ -24,7 +25,8 @@ def off_surface(cloud: np.ndarray, rows: np.ndarray, surface: np.ndarray, params
     (a bool mask of the cloud): the median |cos| between its offset from its ``outlier_surface_points``
     nearest surface points and their normals (PCA of their ``open_k`` nearest surface points) exceeds
     ``outlier_off_surface_cos``, and none of them is a rim point (largest angular gap between its
-    neighbours above ``open_angle``).  All True when the surface has too few points to judge."""
+    neighbours above ``open_angle``); or it lies beyond the surface points' box (a gap lies between
+    them; such a point sets the normalization).  All True when the surface has too few points to judge."""
     cloud = np.asarray(cloud, dtype=float)
     rows = np.asarray(rows, np.int64)
     base = cloud[np.asarray(surface, bool)]
