@@ -151,6 +151,9 @@ class Params:
         median spacing.
     thin_min_share : ... and warning ``thin_parts`` (which switches nothing off) names such parts when
         their boundary points are at least this share of the cloud.
+    open_one_sided : ... such parts are seen from one side when the mean unit direction from their axis
+        to their points, averaged over them, is longer than this share of its mean length (closed
+        neuron meshes 0.14-0.17, one-sided scans 0.52-0.56): their mirrored points close them.
     cap_max_share : ``--cap-openings`` refuses an opening whose cap would add more than this share of
         the cloud's points ...
     cap_flatness : ... or whose rim lies farther than this x its radius from its plane (RMS).
@@ -280,6 +283,7 @@ class Params:
     open_resolved_diameter: float = 8.0
     open_thin_planarity: float = 0.0
     thin_min_share: float = 0.01
+    open_one_sided: float = 0.35
     open_fill_reach: float = 1.5
     sparse_ratio: float = 2.0
     boundedness_density_aware: bool = False
@@ -389,7 +393,7 @@ class Params:
                 bad(name, "must be > 0")
         if not 0.0 < float(self.open_angle) < 360.0:
             bad("open_angle", "must be in (0, 360) degrees")
-        for name in ("open_surface_share", "cap_max_share", "thin_min_share", "open_thin_planarity",
+        for name in ("open_surface_share", "cap_max_share", "thin_min_share", "open_thin_planarity", "open_one_sided",
                      "outlier_off_surface_cos"):
             if not 0.0 <= float(getattr(self, name)) <= 1.0:
                 bad(name, "must be in [0, 1]")

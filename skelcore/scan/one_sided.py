@@ -1,0 +1,77 @@
+"""Thin parts seen from one side: the missing side of a one-sided scan where the parts are too thin for
+the opening search (docs/metrics.md 6.1).
+
+The rim of a one-sided scan of a neuron runs along every thin branch, where :func:`.openings.find_openings`
+sets the boundary points aside as thin (its k neighbours wrap round the part in any sampling), so no
+opening was found and the rays left through the missing side unseen.  What tells a half tube from a
+whole one is where its points lie around the axis: from each thin boundary point's nearest skeleton
+element, the mean unit direction to the cloud points within two local radii.  On a closed part these
+point every way and cancel over the cloud (the traced axes are off-centre: about 0.15 of their mean
+length remains); seen from one side, they all point towards the sensor (0.5 and more).  Above
+``open_one_sided`` the missing side is the visible points mirrored through their axis elements.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from scipy.spatial import cKDTree
+
+from ..params import Params
+from .openings import Opening, median_spacing
+
+__all__ = ["one_sided_thin", "facing"]
+
+
+def facing(cloud: np.ndarray, tree: cKDTree, elements: np.ndarray, reach: np.ndarray) -> np.ndarray:
+    """(len(elements), 3): the mean unit direction from each element to the cloud points within its
+    ``reach`` (zero where none)."""
+    out = np.zeros((len(elements), 3))
+    for i, near in enumerate(tree.query_ball_point(elements, reach, workers=-1)):
+        if near:
+            u = cloud[near] - elements[i]
+            n = np.linalg.norm(u, axis=1, keepdims=True)
+            out[i] = np.mean(np.divide(u, n, out=np.zeros_like(u), where=n > 0), axis=0)
+    return out
+
+
+def one_sided_thin(cloud: np.ndarray, skeleton: np.ndarray, thin_rows: np.ndarray,
+                   params: Params = Params()) -> Opening | None:
+    """The missing side of the thin parts (module docstring) as one opening of kind "side" whose fill
+    and dome are the mirrored points farther than a median spacing from the cloud; None when the thin
+    boundary points are fewer than ``thin_min_share`` of the cloud or face no common way."""
+    cloud = np.asarray(cloud, dtype=float)
+    rows = np.unique(np.asarray(thin_rows, np.int64))
+    if len(rows) < max(8, float(params.thin_min_share) * len(cloud)) or len(skeleton) == 0:
+        return None
+    tree = cKDTree(cloud)
+    skel_tree = cKDTree(skeleton)
+    to_axis, which = skel_tree.query(cloud[rows], k=1, workers=-1)
+    elements, first = np.unique(which, return_index=True)
+    axis = skeleton[elements]
+    reach = 2.0 * np.maximum(tree.query(axis, k=1, workers=-1)[0], to_axis[first])
+    u = facing(cloud, tree, axis, reach)
+    length = np.linalg.norm(u, axis=1)
+    common = np.linalg.norm(u.mean(axis=0)) / max(float(length.mean()), 1e-300)
+    if not common > float(params.open_one_sided):
+        return None
+    spacing = median_spacing(cloud, tree)
+    mirrored = [2.0 * axis[i] - cloud[near] for i, near in enumerate(tree.query_ball_point(axis, reach, workers=-1))
+                if near]
+    dome = np.vstack(mirrored) if mirrored else np.empty((0, 3))
+    dome = dome[tree.query(dome, k=1, workers=-1)[0] > spacing]
+    if len(dome) and spacing > 0:  # one point per cell of a spacing
+        _, keep = np.unique(np.floor(dome / spacing).astype(np.int64), axis=0, return_index=True)
+        dome = dome[np.sort(keep)]
+    if len(dome) < int(params.open_min_fill):
+        return None
+    rim = cloud[rows]
+    centre = rim.mean(axis=0)
+    normal = -u.mean(axis=0) / np.linalg.norm(u.mean(axis=0))  # away from the cloud: where the sensor was not
+    dist = np.linalg.norm(rim - centre, axis=1)
+    plane_normal = np.linalg.svd(rim - centre, full_matrices=False)[2][2]
+    flatness = float(np.sqrt(np.mean(((rim - centre) @ plane_normal) ** 2)) / max(float(dist.mean()), 1e-300))
+    opening = Opening(rows=rows, centre=centre, normal=normal, radius=float(dist.mean()), extent=2.0 * float(dist.max()),
+                      flatness=flatness, roundness=float(dist.std() / max(dist.mean(), 1e-300)), surrounds=False,
+                      kind="side", fill=dome, dome=dome, spacing=spacing, rim_spacing=spacing)
+    opening.notes["one_sided"] = float(common)
+    return opening
