@@ -22,15 +22,23 @@ from .openings import Opening, median_spacing
 __all__ = ["one_sided_thin", "facing"]
 
 
-def facing(cloud: np.ndarray, tree: cKDTree, elements: np.ndarray, reach: np.ndarray) -> np.ndarray:
+def facing(cloud: np.ndarray, tree: cKDTree, elements: np.ndarray, reach: np.ndarray, skeleton: np.ndarray,
+           min_points: int = 8) -> np.ndarray:
     """(len(elements), 3): the mean unit direction from each element to the cloud points within its
-    ``reach`` (zero where none)."""
+    ``reach``, across the axis (its component along the principal direction of the element's 8 nearest
+    ``skeleton`` elements left out: a density that changes along a part is no side); zero where fewer
+    than ``min_points`` points are near (too few to show a side)."""
     out = np.zeros((len(elements), 3))
+    skel_tree = cKDTree(skeleton)
+    nb = skel_tree.query(elements, k=min(8, len(skeleton)), workers=-1)[1].reshape(len(elements), -1)
+    along = skeleton[nb] - skeleton[nb].mean(axis=1, keepdims=True)
+    axis = np.linalg.eigh(np.matmul(along.transpose(0, 2, 1), along))[1][:, :, 2]
     for i, near in enumerate(tree.query_ball_point(elements, reach, workers=-1)):
-        if near:
+        if len(near) >= min_points:
             u = cloud[near] - elements[i]
             n = np.linalg.norm(u, axis=1, keepdims=True)
-            out[i] = np.mean(np.divide(u, n, out=np.zeros_like(u), where=n > 0), axis=0)
+            m = np.mean(np.divide(u, n, out=np.zeros_like(u), where=n > 0), axis=0)
+            out[i] = m - (m @ axis[i]) * axis[i]
     return out
 
 
@@ -49,10 +57,17 @@ def one_sided_thin(cloud: np.ndarray, skeleton: np.ndarray, thin_rows: np.ndarra
     elements, first = np.unique(which, return_index=True)
     axis = skeleton[elements]
     reach = 2.0 * np.maximum(tree.query(axis, k=1, workers=-1)[0], to_axis[first])
-    u = facing(cloud, tree, axis, reach)
+    u = facing(cloud, tree, axis, reach, skeleton)
     length = np.linalg.norm(u, axis=1)
-    common = np.linalg.norm(u.mean(axis=0)) / max(float(length.mean()), 1e-300)
-    if not common > float(params.open_one_sided):
+    if not length.any():
+        return None
+    judged = np.flatnonzero(length > 0)
+    # one element per cell of two reaches (neighbouring elements share their points: one sample)
+    cell = np.floor(axis[judged] / (2.0 * float(np.median(reach[judged])))).astype(np.int64)
+    judged = judged[np.unique(cell, axis=0, return_index=True)[1]]
+    common = np.linalg.norm(u[judged].mean(axis=0)) / float(length[judged].mean())
+    # n random directions average to about 1 / sqrt(n) of their length: three times that is no chance
+    if not common > max(float(params.open_one_sided), 3.0 / np.sqrt(len(judged))):
         return None
     spacing = median_spacing(cloud, tree)
     mirrored = [2.0 * axis[i] - cloud[near] for i, near in enumerate(tree.query_ball_point(axis, reach, workers=-1))
