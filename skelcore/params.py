@@ -153,7 +153,7 @@ class Params:
         their boundary points are at least this share of the cloud.
     open_one_sided : ... such parts are seen from one side when the mean unit direction from their axis
         to their points, averaged over them, is longer than this share of its mean length (closed
-        neuron meshes 0.14-0.17, one-sided scans 0.52-0.56): their mirrored points close them.
+        neuron clouds 0.18-0.29, one-sided scans 0.68-0.69): their mirrored points close them.
     cap_max_share : ``--cap-openings`` refuses an opening whose cap would add more than this share of
         the cloud's points ...
     cap_flatness : ... or whose rim lies farther than this x its radius from its plane (RMS).
