@@ -163,6 +163,9 @@ class Params:
         median spacing.
     thin_min_share : ... and warning ``thin_parts`` (which switches nothing off) names such parts when
         their boundary points are at least this share of the cloud.
+    open_one_sided : ... such parts are seen from one side when the mean unit direction from their axis
+        to their points, averaged over them, is longer than this share of its mean length (closed
+        neuron clouds 0.18-0.29, one-sided scans 0.68-0.69): their mirrored points close them.
     cap_max_share : ``--cap-openings`` refuses an opening whose cap would add more than this share of
         the cloud's points ...
     cap_flatness : ... or whose rim lies farther than this x its radius from its plane (RMS).
@@ -178,6 +181,11 @@ class Params:
         other points within outlier_radius x the median spacing.  A stray point fails both.
     outlier_local_k : both radius tests are also taken with the local spacing (the median nearest
         distance of this many cloud points nearest to the point) as yardstick: a stray fails both.
+    outlier_off_surface_cos, outlier_surface_points : ... and it lies off the surface, not in a gap of
+        it: the median |cos| between its offset from its outlier_surface_points nearest non-isolated
+        points and their normals exceeds outlier_off_surface_cos, and none of them is a rim point
+        (open_k, open_angle), or it lies beyond their box.  A one-sided scan's lone points lie along
+        the surface or across a rim.
     outlier_skeletal_radius : a skeletal point with fewer than outlier_min_neighbours other skeletal
         points within this many cloud spacings is a stray's image (contracted sets are dense: on the
         hammer and the apple tree every skeletal point has two within 1.7).
@@ -292,6 +300,7 @@ class Params:
     open_resolved_diameter: float = 8.0
     open_thin_planarity: float = 0.0
     thin_min_share: float = 0.01
+    open_one_sided: float = 0.35
     open_fill_reach: float = 1.5
     sparse_ratio: float = 2.0
     boundedness_density_aware: bool = False
@@ -305,6 +314,8 @@ class Params:
     outlier_min_neighbours: int = 2
     outlier_skeletal_radius: float = 5.0
     outlier_local_k: int = 30
+    outlier_off_surface_cos: float = 0.5
+    outlier_surface_points: int = 3
     # ground truth (docs/metrics.md 5.3.1)
     gt_thresholds: int = 20
     gt_threshold_max: float = 1.0
@@ -400,13 +411,14 @@ class Params:
                 bad(name, "must be > 0")
         if not 0.0 < float(self.open_angle) < 360.0:
             bad("open_angle", "must be in (0, 360) degrees")
-        for name in ("open_surface_share", "cap_max_share", "thin_min_share", "open_thin_planarity"):
+        for name in ("open_surface_share", "cap_max_share", "thin_min_share", "open_thin_planarity", "open_one_sided",
+                     "outlier_off_surface_cos"):
             if not 0.0 <= float(getattr(self, name)) <= 1.0:
                 bad(name, "must be in [0, 1]")
         if not float(self.viewpoint_share_cell) >= 0:
             bad("viewpoint_share_cell", "must be >= 0")
         for name in ("open_k", "open_min_fill", "open_max_points", "viewpoint_rows", "outlier_k", "outlier_local_k",
-                     "outlier_min_neighbours"):
+                     "outlier_min_neighbours", "outlier_surface_points"):
             if int(getattr(self, name)) < 1:
                 bad(name, "must be a positive integer")
         if int(self.open_k) < 3:
