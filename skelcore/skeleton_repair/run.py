@@ -135,9 +135,10 @@ def repair(cloud: np.ndarray, curve: CurveSkeleton | tuple | None = None, skelet
     rejected: list[dict[str, Any]] = []
     tally0 = dict(found.tally)
     stopped = f"repair_max_rounds={p.repair_max_rounds} reached"
+    memo: dict = {}  # cross-sections cut by the re-centring, kept over the rounds
     for rnd in range(p.repair_max_rounds):
         check()
-        drift = recentre(cur, np.asarray(ev.source.args["cloud"], float), p) if p.repair_recentre else []
+        drift = recentre(cur, np.asarray(ev.source.args["cloud"], float), p, memo) if p.repair_recentre else []
         drift = [a for a in drift if all(a.entries != r["entries"] for r in rejected)]
         if found.total == 0 and not drift:
             stopped = _no_defect_left(found)
