@@ -19,6 +19,7 @@ from scipy.sparse.csgraph import minimum_spanning_tree
 from scipy.spatial import cKDTree
 
 from ..curve import CurveSkeleton
+from .axis_rings import ring_curve
 from .cao_curve import farthest_sampling_by_sphere
 from .skeleton_params import AxisParams
 
@@ -74,9 +75,14 @@ def local_thickness(cloud: np.ndarray, moved: AxisContraction) -> float:
 
 
 def axis_curve(moved: AxisContraction, params: AxisParams | None = None) -> CurveSkeleton:
-    """The curve of the moved points (module docstring): ball samples, joined along the cloud's kNN,
-    the minimum spanning forest of the joins by length."""
+    """The curve of the moved points: by rings (:func:`.axis_rings.ring_curve`, the default) or, with
+    ``params.curve`` "balls", ball samples joined along the cloud's kNN, the minimum spanning forest
+    of the joins by length (module docstring)."""
     p_ = params or AxisParams()
+    if p_.curve == "rings":
+        return ring_curve(moved.points, moved.spacing, p_)
+    if p_.curve != "balls":
+        raise ValueError(f"axis curve {p_.curve!r}: rings or balls")
     spl, label = farthest_sampling_by_sphere(moved.points, p_.sample_spacings * moved.spacing)
     verts = moved.points[spl]
     m = int(min(p_.connect_neighbors, moved.neighbors.shape[1] - 1))
