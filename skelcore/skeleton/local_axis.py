@@ -1,12 +1,12 @@
 """A curve skeleton at the cloud's own spacing, for shapes with parts thinner than cao's sampling ball
 (docs/skeletonize.md "Thin parts"): each point moves, a few times, to the centroid of its k nearest
 cloud neighbours' current positions, the move's component along the neighbourhood's main axis removed
-where the neighbourhood is linear (so tubes shrink onto their axis without shortening); the moved
-points are sampled by balls of a few spacings (:func:`.cao_curve.farthest_sampling_by_sphere`), two
-samples are joined when their points are near neighbours in the cloud, and the curve is the minimum
-spanning forest of that graph. Every length is in spacings (the median nearest-neighbour distance),
-none in bounding-box fractions. :func:`local_thickness` (the median move) tells how thin the parts are.
-"""
+where the neighbourhood is linear (so tubes shrink onto their axis without shortening). The curve of
+the moved points is by rings (:mod:`.axis_rings`, the default) or, with ``AxisParams.curve`` "balls",
+by balls of a few spacings (:func:`.cao_curve.farthest_sampling_by_sphere`), two samples joined when
+their points are near neighbours in the cloud, the minimum spanning forest of that graph. Every length
+is in spacings (the median nearest-neighbour distance), none in bounding-box fractions.
+:func:`local_thickness` (the median move) tells how thin the parts are."""
 
 from __future__ import annotations
 
