@@ -61,16 +61,12 @@ def simplify_chains(curve: CurveSkeleton, tolerance: float, longest: float) -> C
     for _ in range(4):
         n = len(v)
         deg = np.bincount(e.ravel(), minlength=n)
-        nb = np.full((n, 2), -1, np.int64)
-        fill = np.zeros(n, np.int64)
-        for a, b in e:
-            if deg[a] == 2:
-                nb[a, fill[a]] = b
-                fill[a] += 1
-            if deg[b] == 2:
-                nb[b, fill[b]] = a
-                fill[b] += 1
+        ends, other = np.concatenate([e[:, 0], e[:, 1]]), np.concatenate([e[:, 1], e[:, 0]])
+        order = np.argsort(ends, kind="stable")
+        first = np.r_[0, np.cumsum(deg)[:-1]]
         inner = np.flatnonzero(deg == 2)
+        nb = np.full((n, 2), -1, np.int64)
+        nb[inner, 0], nb[inner, 1] = other[order[first[inner]]], other[order[first[inner] + 1]]
         a, b = v[nb[inner, 0]], v[nb[inner, 1]]
         ab = b - a
         L = np.linalg.norm(ab, axis=1)
