@@ -182,7 +182,7 @@ class Params:
     outlier_local_k : both radius tests are also taken with the local spacing (the median nearest
         distance of this many cloud points nearest to the point) as yardstick: a stray fails both.
     outlier_off_surface_cos, outlier_surface_points : ... and it lies off the surface, not in a gap of
-        it: the median |cos| between its offset from its outlier_surface_points nearest non-isolated
+        it: the median ``|cos|`` between its offset from its outlier_surface_points nearest non-isolated
         points and their normals exceeds outlier_off_surface_cos, and none of them is a rim point
         (open_k, open_angle), or it lies beyond their box.  A one-sided scan's lone points lie along
         the surface or across a rim.
