@@ -21,6 +21,7 @@ from typing import Any, Callable
 
 from PySide6 import QtCore, QtWidgets
 
+from .edit_scoring import DEFECTS_TASK, UPDATING, defects_pending
 from .panels.defects import DefectsPanel
 from .scene import SceneEvent
 from .scene.defects import DefectRow, branch_edges, branch_points, defect_rows, sound_line
@@ -94,7 +95,14 @@ class DefectsController(QtCore.QObject):
                                      "Shift+N", enabled=lambda: bool(self.rows)))
         window.element_picked.connect(self._picked)
         self.scene.subscribe(self._on_scene)
+        for signal in (window.session.runner.finished, window.session.runner.cancelled):
+            signal.connect(self._task_ended)
         self.refresh()
+
+    def _task_ended(self, _name: str) -> None:
+        """An edit's second phase cancelled: the dock says so (its line follows the worker)."""
+        if self.panel.pending and self.panel.pending != self.pending_line(self.scene.evaluation):
+            self.refresh()
 
     def skeleton_key(self) -> tuple[str, ...]:
         """The skeleton shown, as its marks know it: per role (cloud, skeletal, curve), its file, or a
@@ -139,18 +147,30 @@ class DefectsController(QtCore.QObject):
             self.overlay.set_visible(self.visible)
 
     def refresh(self) -> None:
-        """The panel and the overlay from the scene's evaluation."""
+        """The panel and the overlay from the scene's evaluation; an edit's first phase (its defects
+        still updating, :mod:`skelscope.edit_scoring`) shows no rows and keeps every mark."""
         ev = self.scene.evaluation
         self._shown_ev = ev
         self.selected = None
-        self.rows = defect_rows(ev)
+        pending = self.pending_line(ev)
+        self.rows = [] if pending else defect_rows(ev)
         self.keys = row_keys(self.rows)
-        if ev is not None:  # a new evaluation keeps the marks whose defect it still has
+        if ev is not None and not pending:  # a new evaluation keeps the marks whose defect it still has
             self.marks = {k: v for k, v in self.marks.items() if k in self.keys}
         self.fix_button.setVisible(False)
-        self.panel.show_rows(None if ev is None else self.rows, "" if ev is None else sound_line(ev), self._row_marks())
+        self.panel.show_rows(None if ev is None else self.rows, "" if ev is None or pending else sound_line(ev),
+                             self._row_marks(), pending)
         self.overlay.show(ev, self.rows, self._cloud_size(), stale=bool(self.scene.stale))
         self.overlay.set_visible(self.visible)
+
+    def pending_line(self, ev: Any) -> str:
+        """What the dock says of an edit's first phase: its defects updating, or not updated (the second
+        phase cancelled); "" for a whole evaluation."""
+        if not defects_pending(ev):
+            return ""
+        if self.window.session.runner.current_name in (DEFECTS_TASK, "evaluation"):
+            return UPDATING
+        return "defects not updated (cancelled): Evaluate (F5) finds them"
 
     def _row_marks(self) -> list[str]:
         return [self.marks.get(k, "") for k in self.keys]

@@ -2,8 +2,8 @@
 
 Opens the A/B view (:class:`skelscope.compare_view.CompareWindow`, through the window's ``compare``)
 with A = the curve skeleton as loaded and B = the edited one, both scored against the same cloud,
-skeletal set and settings. B is the shown evaluation (an edit still being scored: the view opens once
-it lands); A is the evaluation an undo step kept of the loaded curve, else the shown one's
+skeletal set and settings. B is the shown evaluation (an edit still being scored, or its defects: the view opens
+once the whole evaluation lands); A is the evaluation an undo step kept of the loaded curve, else the shown one's
 ``Evaluation.update`` back to the loaded curve, in the worker (the same as a fresh evaluation).
 """
 
@@ -14,6 +14,7 @@ from typing import TYPE_CHECKING, Any, Callable
 
 from PySide6 import QtCore, QtWidgets
 
+from .edit_scoring import DEFECTS_TASK, UPDATE_LOCK
 from .window_api import ActionSpec, WindowApi
 
 if TYPE_CHECKING:
@@ -61,7 +62,7 @@ class EditCompare(QtCore.QObject):
         if not self.can_open():
             w.show_message("no edits: the curve is as loaded")
             return False
-        if w.session.runner.current_name == "evaluation":
+        if w.session.runner.current_name in ("evaluation", DEFECTS_TASK):  # B's scores or its defects
             self._waiting = True
             w.show_message("A/B: waiting for the edited curve's scores")
             return True
@@ -74,7 +75,6 @@ class EditCompare(QtCore.QObject):
             self._show(ev_a, ev_b)
             return True
         original = self.edits.original
-        from .session import UPDATE_LOCK
 
         def job(progress: Callable[[float, str], None], cancel: Callable[[], bool]) -> Any:
             progress(0.0, "scoring the loaded curve")

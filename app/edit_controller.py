@@ -161,10 +161,14 @@ class EditController(QtCore.QObject):
             self._refresh_actions()
 
     def evaluation_of(self, curve: Any) -> Any:
-        """The shown evaluation when it is of ``curve`` (kept by the undo step), else None."""
+        """The shown evaluation when it is of ``curve`` (kept by the undo step), else None; never an
+        edit's first phase (its defects still updating: an undo step keeps whole evaluations)."""
+        from .edit_scoring import defects_pending
+
         ev = self.scene.evaluation
         layer = self.scene.curve
-        if ev is None or layer is None or layer.curve is not curve or self.session.stale_reason():
+        if (ev is None or layer is None or layer.curve is not curve or self.session.stale_reason()
+                or defects_pending(ev)):
             return None
         return ev
 

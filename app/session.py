@@ -15,15 +15,18 @@ from PySide6 import QtCore
 from skelcore.errors import SkelInputError
 from skelcore.params import Params
 
+from .edit_scoring import DEFECTS_TASK, UPDATE_LOCK, UPDATING, defects_job, defects_pending, scores_job
 from .loading import ROLES, Ask, assign_roles
 from .scene import Scene, SceneEvent
 from .worker import TaskRunner
 
-__all__ = ["Session", "preload_engine", "PROCESS_FROM"]
+__all__ = ["Session", "preload_engine", "PROCESS_FROM", "UPDATE_LOCK"]
 
-UPDATE_LOCK = threading.Lock()  # Evaluation.update runs one at a time (Session.show_edited_curve)
 
 PROCESS_FROM = 200_000
+FRAME_HOLD_S = 0.15
+"""After an edit the view waits at most this long for the first phase's scores (the goal from the key
+to the recoloured frame), so a quick update draws the edited curve once, coloured."""
 """Evaluations of at least this many points (cloud + skeletal set) run in a child process
 (:mod:`skelscope.engine_process`): Cancel and quit are then a kill, and the window never waits for the
 engine's GIL. Smaller ones run in a thread (no process start, ~1 s of imports)."""
@@ -43,7 +46,9 @@ class Session(QtCore.QObject):
     error = QtCore.Signal(str, str, str)  # title, one-line message, details ("" when none)
     message = QtCore.Signal(str)  # status-bar text
     loaded = QtCore.Signal(str, str)  # role, path
-    evaluated = QtCore.Signal(object)  # the Evaluation now shown
+    evaluated = QtCore.Signal(object)  # the Evaluation now shown (complete: never an edit's first phase)
+    #: an edit's first phase shown: its scores, the curve's defects still updating (skelscope.edit_scoring)
+    scores_shown = QtCore.Signal(object)
     stale_changed = QtCore.Signal(str)  # why the shown results are out of date ("" when they are not)
 
     def __init__(self, scene: Scene | None = None, parent: QtCore.QObject | None = None) -> None:
@@ -63,6 +68,13 @@ class Session(QtCore.QObject):
         #: evaluations of at least this many points (cloud + skeletal set) run in a child process
         self.process_from = PROCESS_FROM
         self.auto_evaluate = True
+        #: ``after_scores(fn)``: ``fn()`` once an edit's first phase is on screen (the window: after its
+        #: frame), when the second phase may start
+        self.after_scores: Callable[[Callable[[], None]], None] = lambda fn: fn()
+        #: ``hold_frames(seconds)`` / ``release_frames()``: the view's frames wait for an edit's scores
+        #: (at most FRAME_HOLD_S), so the edited curve and its colours come in one frame
+        self.hold_frames: Callable[[float], None] = lambda seconds: None
+        self.release_frames: Callable[[], None] = lambda: None
         #: the sensors' positions (viewpoint-aware boundedness and centeredness; [] = the paper's scores)
         self.viewpoints: list[tuple[float, float, float]] = []
         self.runner.succeeded.connect(self._task_succeeded)
@@ -388,10 +400,10 @@ class Session(QtCore.QObject):
         if event.kind == "layer":
             self.evaluation_cancelled = False
             # The running evaluation describes old inputs: drop it (its result will never land).
-            if self.runner.current_name == "evaluation":
+            if self.runner.current_name in ("evaluation", DEFECTS_TASK):
                 self.runner.discard()
             self._inputs_changed = True
-        if event.kind in ("layer", "quantities"):
+        if event.kind in ("layer", "quantities") and not self._swapping_curve:
             self.check_stale()
 
     _correspondence_of: Any = None  # the skeletal layer the correspondence setting was chosen for
@@ -478,7 +490,7 @@ class Session(QtCore.QObject):
         if old is None:
             raise ValueError("no curve skeleton loaded")
         base = scene.evaluation
-        running = self.runner.current_name == "evaluation"
+        running = self.runner.current_name in ("evaluation", DEFECTS_TASK)  # a stale second phase too
         if running:
             self.runner.discard()
         if not score:
@@ -490,9 +502,15 @@ class Session(QtCore.QObject):
                      and src.args.get("curve") is not None and src.ctx is not None
                      and content_hash(base.curve.curve) == content_hash(old.curve)
                      and not self.stale_reason())  # under the settings shown: else evaluated afresh with the new
-        with self.batch():
-            scene.set_curve(curve, old.path, edited=edited)
-            self._inputs_changed = False  # scored below, not by the automatic run
+        if updatable and known is None:
+            self.hold_frames(FRAME_HOLD_S)  # released when the scores land (_task_succeeded, _task_failed)
+        self._swapping_curve = True  # scored below: not "inputs changed" meanwhile (a grey frame each way)
+        try:
+            with self.batch():
+                scene.set_curve(curve, old.path, edited=edited)
+                self._inputs_changed = False  # scored below, not by the automatic run
+        finally:
+            self._swapping_curve = False
         if known is not None:
             try:
                 now = self.params()
@@ -510,25 +528,15 @@ class Session(QtCore.QObject):
             self.check_stale()
             return ""
         if not updatable:
-            return "full" if self.start_evaluation() else ""
+            started = self.start_evaluation()
+            self.check_stale()
+            return "full" if started else ""
         self._evaluated_layers = (scene.cloud, scene.skeletal, scene.curve)
         self._requested_correspondence = self._shown_correspondence
         self._requested_viewpoints = self._shown_viewpoints
         self._requested_scan_options = self._shown_scan_options
         self.evaluation_cancelled = False
-
-        def job(progress: Any, cancel: Callable[[], bool]) -> Any:
-            from skelcore.errors import Cancelled
-
-            progress(0.0, "scoring the edited curve")
-            # one update at a time: a dropped one (an edit came meanwhile) still runs to its end in its
-            # thread and shares the evaluation's caches; the next waits for it here, not in the window
-            with UPDATE_LOCK:
-                if cancel():
-                    raise Cancelled("the edited curve's scoring was cancelled")
-                return base.update(curve)
-
-        self.runner.start(job, "evaluation")
+        self.runner.start(scores_job(base, curve), "evaluation")  # the four metrics; the defects follow
         self.check_stale()
         self.message.emit("scoring the edited curve…")
         return "update"
@@ -571,6 +579,8 @@ class Session(QtCore.QObject):
     def _task_succeeded(self, name: str, result: Any) -> None:
         scene = self.scene
         if name == "evaluation":
+            self.release_frames()  # after this event's changes: one frame shows them all
+        if name == "evaluation":
             if self._evaluated_layers != (scene.cloud, scene.skeletal, scene.curve):
                 return  # inputs changed meanwhile: this result describes other data
             scene.set_evaluation(result)
@@ -579,8 +589,24 @@ class Session(QtCore.QObject):
             self._shown_scan_options = self._requested_scan_options
             self._had_result = True
             self.check_stale()
+            if defects_pending(result):  # an edit's first phase: its defects in a second task
+                self._defects_of = result
+                painted = threading.Event()
+                self.runner.start(defects_job(result, painted), DEFECTS_TASK)
+                self.after_scores(painted.set)  # it starts once the recoloured frame is on screen
+                self.message.emit(f"scores of the edited curve shown; {UPDATING}")
+                self.scores_shown.emit(result)
+                return
             total = result.timings.get("total") if result.timings else None
             self.message.emit("evaluation done" + (f" in {total:.2f} s" if total is not None else ""))
+            self.evaluated.emit(result)
+        elif name == DEFECTS_TASK:
+            if scene.evaluation is not self._defects_of or self._evaluated_layers != (scene.cloud, scene.skeletal,
+                                                                                     scene.curve):
+                return  # another evaluation shown meanwhile
+            scene.set_evaluation(result)
+            self.check_stale()
+            self.message.emit("the edited curve's defects updated")
             self.evaluated.emit(result)
         elif name == "skeletonization":
             if self._skeletonized_cloud is not scene.cloud:
@@ -597,6 +623,7 @@ class Session(QtCore.QObject):
 
     @QtCore.Slot(str, object, str)
     def _task_failed(self, name: str, exc: Any, tb: str) -> None:
+        self.release_frames()
         if isinstance(exc, (SkelInputError, ValueError)):
             self.error.emit(f"{name.capitalize()} failed", str(exc), "")
         else:
@@ -605,6 +632,8 @@ class Session(QtCore.QObject):
 
     _evaluated_layers: tuple = ()
     _skeletonized_cloud: Any = None
+    _defects_of: Any = None  # the first phase whose defects the DEFECTS_TASK finds
+    _swapping_curve = False  # show_edited_curve replacing the curve it scores right after
     #: the last evaluation was cancelled (Esc, Cancel) and neither a new run nor new inputs came since
     evaluation_cancelled = False
 

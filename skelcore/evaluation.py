@@ -212,6 +212,21 @@ class Evaluation:
 
         return update_evaluation(self, edited, diagnostics=diagnostics)
 
+    def complete_update(self, cancel: Any = None) -> "Evaluation":
+        """This ``update(..., diagnostics=False)`` with the curve's coverage, defects and missing parts
+        added: equal to ``update(change)`` (a viewer shows the four metrics first, then these); ``self``
+        when nothing was left out. ``cancel()`` True stops it (:class:`skelcore.errors.Cancelled`)."""
+        from .edit.incremental import complete_update
+
+        return complete_update(self, cancel)
+
+    @property
+    def diagnostics_left_out(self) -> tuple[str, ...]:
+        """The curve's stages an ``update(diagnostics=False)`` left out (() when none)."""
+        from .edit.incremental import left_out
+
+        return left_out(self)
+
     # ---- serialisation: skelcore.io.evaluation_files, imported when called (the record imports no io) ----
     def to_json_dict(self, version: str | None = None) -> dict[str, Any]:
         """The ``--json`` document of the CLI; null where an input was not given."""

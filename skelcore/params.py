@@ -70,8 +70,9 @@ class Params:
     spur_reach : a terminal branch is spurious when its far end stays within spur_reach x r_J of its
         junction (r_J: the local radius at the junction) ...
     spur_unique : ... or when fewer than this share of the cloud points nearest to it lie beyond the
-        rest of the skeleton's grown balls ((1 + spur_slack) r + tau, coverage's rule) ...
-    spur_min_points : ... or fewer than this many points do (both: it explains almost nothing).
+        rest of the skeleton's grown balls ((1 + spur_slack) r, no spacing-sized tau) ...
+    spur_min_points : ... or fewer than this many points do (1: none; a count, unlike the share,
+        grows with the density).
     spur_slack : see spur_unique.
     spurs_warn_count : ``spurious_branches`` fires from this many spurious branches.
     cycles_voxels : voxels along the longest side of the cloud's box for the shape's interior ...
@@ -82,6 +83,13 @@ class Params:
         side by side through a thin part invent the tunnel between them).
     cycles_warn_spurious, cycles_warn_missing : ``spurious_cycles`` / ``missing_cycles`` fire from
         this many spurious / missing cycles.
+    cycles_support_voxels, cycles_support_points, cycles_support_share : the tunnels that no cycle
+        goes around are counted on the interior again without the voxels of isolated points: those
+        whose block of this many voxels a side holds fewer than max(points, share x the median such
+        count over the cloud's points) points (stray points in the air) ...
+    cycles_strict_share : ... and must persist when the inside share rises from beta_star to this
+        (a tube's inside sees its surface along nearly all 26 rays; a gap between noisy strands
+        along fewer): docs/diagnostics.md "Cycles".
     outside_min_radii : ``outside`` fires when a branch has at least this many local radii of
         length outside the shape (where its curve samples have boundedness <= beta_star and the
         cycle test's voxels are not inside) ...
@@ -92,7 +100,11 @@ class Params:
         "Outside"): three spurs poking 8 radii out of a neuron were a few % of its length. Traced
         skeletons' nodes lie up to about one radius outside a decimated mesh.
     outside_one_sided : ... one side: the mean of the unit vectors to its 16 nearest cloud points
-        is at least this long (0: surrounded, as inside a tube or a ball; 1: all in one direction).
+        is at least this long (0: surrounded, as inside a tube or a ball; 1: all in one direction);
+        the length test also counts a point outside only where this holds.
+    outside_voxel_radii : the length test runs only when the interior's voxel is at most this many
+        median local radii (coarser voxels cannot tell a part's inside from a few radii beyond it:
+        a traced neuron, voxel about 9 radii); otherwise only the reach test runs.
     outside_skeletal_share : ``outside`` fires when more than this share of a skeletal point set
         is outside (unbounded, in no inside voxel) in one cluster (points within outside_link x the
         cloud's median spacing).
@@ -151,6 +163,9 @@ class Params:
         median spacing.
     thin_min_share : ... and warning ``thin_parts`` (which switches nothing off) names such parts when
         their boundary points are at least this share of the cloud.
+    open_one_sided : ... such parts are seen from one side when the mean unit direction from their axis
+        to their points, averaged over them, is longer than this share of its mean length (closed
+        neuron clouds 0.18-0.29, one-sided scans 0.68-0.69): their mirrored points close them.
     cap_max_share : ``--cap-openings`` refuses an opening whose cap would add more than this share of
         the cloud's points ...
     cap_flatness : ... or whose rim lies farther than this x its radius from its plane (RMS).
@@ -166,6 +181,11 @@ class Params:
         other points within outlier_radius x the median spacing.  A stray point fails both.
     outlier_local_k : both radius tests are also taken with the local spacing (the median nearest
         distance of this many cloud points nearest to the point) as yardstick: a stray fails both.
+    outlier_off_surface_cos, outlier_surface_points : ... and it lies off the surface, not in a gap of
+        it: the median ``|cos|`` between its offset from its outlier_surface_points nearest non-isolated
+        points and their normals exceeds outlier_off_surface_cos, and none of them is a rim point
+        (open_k, open_angle), or it lies beyond their box.  A one-sided scan's lone points lie along
+        the surface or across a rim.
     outlier_skeletal_radius : a skeletal point with fewer than outlier_min_neighbours other skeletal
         points within this many cloud spacings is a stray's image (contracted sets are dense: on the
         hammer and the apple tree every skeletal point has two within 1.7).
@@ -236,7 +256,7 @@ class Params:
     diag_step: float = 0.25
     spur_reach: float = 1.0
     spur_unique: float = 0.1
-    spur_min_points: int = 5
+    spur_min_points: int = 1
     spur_slack: float = 0.25
     spurs_warn_count: int = 1
     cycles_voxels: int = 96
@@ -244,10 +264,15 @@ class Params:
     cycles_warn_spurious: int = 1
     cycles_close_voxels: int = 4
     cycles_warn_missing: int = 1
+    cycles_support_voxels: int = 5
+    cycles_support_points: int = 3
+    cycles_support_share: float = 0.05
+    cycles_strict_share: float = 0.9
     outside_min_radii: float = 0.5
     outside_min_share: float = 0.05
     outside_reach: float = 8.0
     outside_one_sided: float = 0.7
+    outside_voxel_radii: float = 3.0
     outside_skeletal_share: float = 0.05
     outside_link: float = 3.0
 
@@ -275,6 +300,7 @@ class Params:
     open_resolved_diameter: float = 8.0
     open_thin_planarity: float = 0.0
     thin_min_share: float = 0.01
+    open_one_sided: float = 0.35
     open_fill_reach: float = 1.5
     sparse_ratio: float = 2.0
     boundedness_density_aware: bool = False
@@ -288,6 +314,8 @@ class Params:
     outlier_min_neighbours: int = 2
     outlier_skeletal_radius: float = 5.0
     outlier_local_k: int = 30
+    outlier_off_surface_cos: float = 0.5
+    outlier_surface_points: int = 3
     # ground truth (docs/metrics.md 5.3.1)
     gt_thresholds: int = 20
     gt_threshold_max: float = 1.0
@@ -360,14 +388,15 @@ class Params:
         if self.k_center is not None and int(self.k_center) < 1:
             bad("k_center", "must be a positive integer or None")
         for name in ("diag_step", "spur_reach", "cycles_voxel_spacing", "outside_min_radii", "outside_link",
-                     "outside_reach"):
+                     "outside_reach", "outside_voxel_radii"):
             if not float(getattr(self, name)) > 0:
                 bad(name, "must be > 0")
-        for name in ("spur_unique", "outside_min_share", "outside_skeletal_share", "outside_one_sided"):
+        for name in ("spur_unique", "outside_min_share", "outside_skeletal_share", "outside_one_sided",
+                     "cycles_support_share", "cycles_strict_share"):
             if not 0.0 <= float(getattr(self, name)) <= 1.0:
                 bad(name, "must be in [0, 1]")
         for name in ("diag_max_points", "cycles_voxels", "cycles_close_voxels", "spurs_warn_count", "cycles_warn_spurious",
-                     "cycles_warn_missing"):
+                     "cycles_warn_missing", "cycles_support_voxels", "cycles_support_points"):
             if int(getattr(self, name)) < 1:
                 bad(name, "must be a positive integer")
         if not float(self.spur_slack) >= 0:
@@ -382,13 +411,14 @@ class Params:
                 bad(name, "must be > 0")
         if not 0.0 < float(self.open_angle) < 360.0:
             bad("open_angle", "must be in (0, 360) degrees")
-        for name in ("open_surface_share", "cap_max_share", "thin_min_share", "open_thin_planarity"):
+        for name in ("open_surface_share", "cap_max_share", "thin_min_share", "open_thin_planarity", "open_one_sided",
+                     "outlier_off_surface_cos"):
             if not 0.0 <= float(getattr(self, name)) <= 1.0:
                 bad(name, "must be in [0, 1]")
         if not float(self.viewpoint_share_cell) >= 0:
             bad("viewpoint_share_cell", "must be >= 0")
         for name in ("open_k", "open_min_fill", "open_max_points", "viewpoint_rows", "outlier_k", "outlier_local_k",
-                     "outlier_min_neighbours"):
+                     "outlier_min_neighbours", "outlier_surface_points"):
             if int(getattr(self, name)) < 1:
                 bad(name, "must be a positive integer")
         if int(self.open_k) < 3:

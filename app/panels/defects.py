@@ -31,6 +31,7 @@ class DefectsPanel(QtWidgets.QWidget):
         self.marks: list[str] = []
         self._sound = ""
         self._shown = False
+        self._pending = ""
         self.table = QtWidgets.QTableWidget(0, 3, self)
         self.table.setHorizontalHeaderLabels(["defect", "size", "mark"])
         self.table.verticalHeader().setVisible(False)
@@ -47,8 +48,13 @@ class DefectsPanel(QtWidgets.QWidget):
         layout.addWidget(self.show_box)
         layout.addWidget(self.table, 1)
 
-    def show_rows(self, rows: list[DefectRow] | None, sound: str = "", marks: list[str] | None = None) -> None:
-        """The rows of an evaluation (None: no evaluation shown), each with its mark ("": none)."""
+    def show_rows(self, rows: list[DefectRow] | None, sound: str = "", marks: list[str] | None = None,
+                  pending: str = "") -> None:
+        """The rows of an evaluation (None: no evaluation shown), each with its mark ("": none);
+        ``pending``: no rows yet, this line instead (an edit's defects still updating)."""
+        self._pending = pending
+        if pending:
+            rows, marks = [], []
         self.table.blockSignals(True)
         self.table.clearSelection()
         self.rows = list(rows or [])
@@ -69,6 +75,11 @@ class DefectsPanel(QtWidgets.QWidget):
         self._shown = rows is not None
         self.set_marks(marks or [])
 
+    @property
+    def pending(self) -> str:
+        """The line shown instead of rows ("" when rows are shown)."""
+        return self._pending
+
     def set_marks(self, marks: list[str]) -> None:
         """Each row's mark ("fixed", "accepted", "ignored" or ""), and the status line's unmarked count."""
         self.marks = list(marks) + [""] * (len(self.rows) - len(marks))
@@ -79,7 +90,9 @@ class DefectsPanel(QtWidgets.QWidget):
         self.table.resizeColumnToContents(0)
         self.table.resizeRowsToContents()
         sound = self._sound
-        if not self._shown:
+        if self._pending:
+            self.status.setText(self._pending)
+        elif not self._shown:
             self.status.setText(NO_EVALUATION)
         elif not self.rows:
             self.status.setText(f"{NONE_FOUND} ({sound})" if sound else NONE_FOUND)

@@ -70,6 +70,8 @@ def _window_terms(text: str) -> str:
     """Command-line flags in a stored message (an evaluation read back from a file) in window terms."""
     import re
 
+    text = text.replace("left out by Evaluation.update(diagnostics=False)",
+                        "updating… (an edit's defects follow its scores)")
     text = re.sub(r"give --skeletal-index F or --correspondence reverse",
                   "choose Settings > correspondence > reverse projection, or File > Open skeletal index…", text)
     text = re.sub(r"map it with --skeleton-scale S --skeleton-offset X Y Z",

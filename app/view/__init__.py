@@ -2,7 +2,8 @@
 
 Only this package touches VTK, and only on the GUI thread. Modules: :mod:`.scene_view` (the
 ``SceneView``), :mod:`.interactor` (the Qt widget and its input), :mod:`.frames` (frame
-scheduling), :mod:`.actors` (actor-building helpers), :mod:`.colorbar`, :mod:`.camera`, :mod:`.style`.
+scheduling), :mod:`.actors` (actor-building helpers), :mod:`.lod` (twins while moving), :mod:`.culling`
+and :mod:`.visibility` (the points that can show at rest), :mod:`.colorbar`, :mod:`.camera`, :mod:`.style`.
 
 The names below are imported on first use: reading a camera file (:mod:`.camera`, no Qt) before any
 window opens must not import Qt ahead of VTK (``app.__main__.import_view_libraries``).

@@ -6,6 +6,7 @@ for a frame, and work that should follow the frame (the plots) waits for the pai
 
 from __future__ import annotations
 
+import time
 from typing import Any, Callable
 
 from PySide6 import QtCore
@@ -30,6 +31,7 @@ class FrameScheduler:
         self._timer.setSingleShot(True)
         self._timer.setInterval(RENDER_DELAY_MS)
         self._timer.timeout.connect(self._render_now)
+        self._held_until = 0.0  # time.monotonic() before which a requested frame waits (hold)
         plotter.on_frame = self.frame_done
 
     def request(self) -> None:
@@ -57,8 +59,23 @@ class FrameScheduler:
         else:
             fn()
 
+    def hold(self, seconds: float) -> None:
+        """Requested frames wait at most ``seconds`` (or until :meth:`release`): a change whose
+        follow-up is on its way (an edited curve, its scores) makes one frame, not two."""
+        self._held_until = time.monotonic() + max(0.0, float(seconds))
+
+    def release(self) -> None:
+        """End a :meth:`hold`: a pending frame is drawn now (after the usual delay)."""
+        self._held_until = 0.0
+        if self._pending:
+            self._timer.start(RENDER_DELAY_MS)
+
     def _render_now(self) -> None:
         if not self._pending:
+            return
+        wait = self._held_until - time.monotonic()
+        if wait > 0:
+            self._timer.start(max(1, int(wait * 1000)))
             return
         if getattr(self.plotter, "_closed", False) or not self.plotter.isVisible():
             self.frame_done()  # nothing to paint: whatever waited for the frame goes ahead

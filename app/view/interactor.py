@@ -56,6 +56,14 @@ class DropInteractor(ClosingInteractor):
         self.on_frame: Callable[[], None] | None = None  # called after each frame is painted
         self.before_frame: Callable[[], None] | None = None  # called right before each frame
         self.frame_seconds = 0.0  # how long the last frame took to paint (render and blit)
+        # VTK's interaction (a drag, a release, a key) asks for a repaint instead of rendering at once:
+        # a render outside a paint is not shown until the paint that follows it, which rendered again,
+        # so every frame it asked for was drawn twice.
+        self._painting = False
+        iren = self.ren_win.GetInteractor()
+        iren.SetEnableRender(False)
+        tag = iren.AddObserver("RenderEvent", lambda *_: self._painting or self.update())
+        self._vtk_observers.append((iren, tag))  # removed with pyvistaqt's own when the widget closes
 
     def initializeGL(self) -> None:  # noqa: N802
         super().initializeGL()
@@ -71,7 +79,17 @@ class DropInteractor(ClosingInteractor):
         if self.before_frame is not None:
             self.before_frame()
         start = time.perf_counter()
-        super().paintGL()
+        window = getattr(self, "ren_win", None)  # None once closed
+        iren = window.GetInteractor() if window is not None else None
+        self._painting = True
+        if iren is not None:
+            iren.SetEnableRender(True)
+        try:
+            super().paintGL()
+        finally:
+            if iren is not None:
+                iren.SetEnableRender(False)
+            self._painting = False
         self.frame_seconds = time.perf_counter() - start
         if self.on_frame is not None:
             self.on_frame()

@@ -5,7 +5,8 @@ frame; it also picks elements (numpy projection, :mod:`.picking`) and renders im
 Only the view touches VTK, and only on the GUI thread. NaN is drawn magenta through the lookup
 table's NaN colour (docs/metrics.md 5.5); point actors are unlit (exact colour-map colours) unless drawn as shaded
 spheres. Big layers get a level-of-detail twin shown while the camera moves, its size set from the
-measured time of the moving frames (:mod:`.lod`).
+measured time of the moving frames (:mod:`.lod`); at rest they draw only their points that can show
+(:mod:`.culling`).
 """
 
 from __future__ import annotations
@@ -20,6 +21,7 @@ from ..scene import CURVE_LOCATION, Scene, SceneEvent
 from .actors import curve_polylines, display_coordinates, draw_in_front, scene_diagonal
 from .camera import apply_camera_state, camera_state, fit_camera, orient_standard_view
 from .colorbar import ColourBar
+from .culling import CulledLayer, RestingCull
 from .eye_dome import EyeDome
 from .frames import FrameScheduler
 from .interactor import ClickFilter, DropInteractor
@@ -61,6 +63,10 @@ class SceneView:
         self._moving_frames = 0  # frames begun since the camera started moving
         self._full_points = 0  # points of the big layers in the last frame begun at full detail
         self._detail_fitted = False  # the twins' count was set from a full-detail frame of this data
+        self._resting = RestingCull()  # at rest, big layers draw only the points that can show
+        self._scale = 1  # the scale of the picture being rendered (1: the view itself)
+        # every render, also those VTK's interaction starts itself, draws the points of its own camera
+        self._start_observer = self.plotter.ren_win.AddObserver("StartEvent", lambda *_: self.moving or self._rest_detail())
         self._frames = FrameScheduler(self.plotter)  # also sets plotter.on_frame
         self.plotter.before_frame = self._before_frame
         self.on_pick: Callable[[dict[str, Any] | None], None] | None = None
@@ -115,6 +121,14 @@ class SceneView:
     def render_pending(self) -> bool:
         return self._frames.pending
 
+    def hold_frames(self, seconds: float) -> None:
+        """Requested frames wait at most ``seconds`` or until :meth:`release_frames` (an edit's curve
+        and its scores in one frame, :mod:`.frames`)."""
+        self._frames.hold(seconds)
+
+    def release_frames(self) -> None:
+        self._frames.release()
+
     def after_render(self, fn: Callable[[], None]) -> None:
         """Call ``fn`` once the pending frame has been painted (at once if none is pending), so work
         that follows a change (the plots) starts after the frame, never in the same event-loop turn."""
@@ -140,8 +154,18 @@ class SceneView:
             if not self.moving:
                 self._set_moving(True)
                 self._frames.after_frame(lambda: self._set_moving(False))  # requests the full frame
+        if not self.moving:
+            self._rest_detail()
         self._full_points = 0 if self.moving else sum(
-            len(self._sources[k]) for k in self._lod if self._actors[k].GetVisibility())
+            self._resting.drawn.get(k, len(self._sources[k])) for k in self._lod if self._actors[k].GetVisibility())
+
+    def _rest_detail(self) -> None:
+        """At rest, each big layer draws only its points that can show in this frame (:mod:`.culling`):
+        under software GL, flat points, at a device pixel ratio of 1 and the view's own scale."""
+        thin = (bool(self.plotter.software_gl) and self._scale == 1 and not self.scene.style["spheres"]
+                and self.plotter.devicePixelRatioF() == 1.0)
+        layers = {k: CulledLayer(self._meshes[k], self._actors[k], self._pick_layout(k)) for k in self._lod}
+        self._resting.apply(self.plotter.renderer, layers, thin)
 
     def rebuild(self) -> None:
         for name in ("cloud", "skeletal", "curve"):
@@ -198,6 +222,7 @@ class SceneView:
             self._actors[key] = actor
             self._sources[key] = points
             self._meshes[key] = mesh
+            self._resting.forget(key)  # a new mesh draws every point
             if pickable is not None:
                 self._pickable[key] = pickable
                 if len(points) > LOD_POINTS:  # laid out for picking once drawn, not at the first click
@@ -314,7 +339,11 @@ class SceneView:
     _cloud_values: np.ndarray | None = None
 
     def set_cloud_values(self, values: np.ndarray | None) -> None:
-        """Colour the cloud by per-point values in [0, 1] (the coverage gap), NaN magenta; None: grey."""
+        """Colour the cloud by per-point values in [0, 1] (the coverage gap), NaN magenta; None: grey.
+        Grey asked again of a grey cloud (every result landing asks) redraws nothing: at 100k points
+        the cloud's actor takes 80 ms to build, which an edit's recoloured frame would wait for."""
+        if values is None and self._cloud_values is None and "cloud" in self._actors:
+            return
         self._cloud_values = None if values is None else np.asarray(values, dtype=float)
         self._build_cloud()
         self.request_render()
@@ -639,7 +668,7 @@ class SceneView:
             raise ValueError(f"background must be one of {', '.join(BACKGROUNDS)}, got {background!r}")
         self._before_frame()
         self._set_moving(False)
-        scale = int(scale)
+        scale = self._scale = int(scale)  # thinned for this view only: a picture at another scale draws every point
         restore = _scaled_props(self._actors.values(), scale)
         restore += self._colour_bar.for_picture(scale, visible=colour_bar, background=background)
         restore += _axes_for_picture(self.plotter.renderer.axes_actor if self._axes_shown else None, scale, background)
@@ -653,6 +682,7 @@ class SceneView:
         finally:
             for undo in restore:
                 undo()
+            self._scale = 1
         self._frames.frame_done()  # the pending frame is the one rendered here
         if scale != 1 or not colour_bar or background != "white":
             self.request_render()  # the view itself back to its own sizes and colours
@@ -661,6 +691,7 @@ class SceneView:
     def close(self) -> None:
         self.scene.unsubscribe(self._on_scene)
         self.plotter.removeEventFilter(self._motion_filter)
+        self.plotter.ren_win.RemoveObserver(self._start_observer)  # VTK's hold on this view let go
         self._frames.close()
         self.eye_dome.close()
         self.plotter.close()

@@ -9,9 +9,10 @@ collar of outside voxels around X' = X plus the voxels near the skeleton, its 4 
 collar's edges, summed around the fundamental loops of a spanning tree, give the matrix K (cycles x
 loops) of linking numbers. rank K = the tunnels the cycles go around; taking the basis cycles
 shortest first, each whose row of K is in the span of those before is spurious; missing =
-beta1(X) - rank K, where beta1(X) counts, once it exceeds rank K, only the tunnels wider than two
-voxels (:func:`.interior.wide_tunnels`). A cycle partly outside is measured in X' (a cycle through the
-air around a tunnel still goes around it; ``outside`` flags its edges).
+beta1(X) - rank K, where beta1(X) counts, once it exceeds rank K, only the firm tunnels
+(:func:`.interior.firm_tunnels`: wide, and kept without stray points' voxels and at a stricter inside
+share). A cycle partly outside is measured in X' (a cycle through the air around a tunnel still goes
+around it; ``outside`` flags its edges).
 """
 
 from __future__ import annotations
@@ -30,7 +31,7 @@ from ..geometry import Checkpoint, no_checkpoint
 from ..params import Params
 from .trust_warning import TrustWarning
 from .branches import Branches, decompose_branches, densify
-from .interior import VoxelShape, betti_numbers, voxelize_interior, wide_tunnels
+from .interior import VoxelShape, betti_numbers, firm_tunnels, voxelize_interior
 
 __all__ = ["CycleDefects", "find_cycle_defects", "solid_angle_polygon", "simplify_polygon"]
 
@@ -376,8 +377,12 @@ def find_cycle_defects(
         if len(kept) > most:
             spurious = sorted(spurious + kept[most:])
             rank = most
-    if tunnels > rank:  # the tunnels no cycle goes around: only those wider than two voxels count
-        tunnels = max(rank, wide_tunnels(solid))
+    if tunnels > rank:  # the tunnels no cycle goes around: only the wide ones every interior keeps count
+        tunnels = max(rank, firm_tunnels(cloud, voxel_shape, inside_share=params.beta_star,
+                                         strict_share=params.cycles_strict_share,
+                                         block=params.cycles_support_voxels, min_points=params.cycles_support_points,
+                                         share=params.cycles_support_share,
+                                         checkpoint=lambda f: checkpoint(0.95 + 0.04 * f)))
     missing = max(0, tunnels - rank)
     branch_spurious = np.zeros(len(branches), bool)
     for i in spurious:

@@ -9,11 +9,13 @@ points; the lattice rays cost a few sweeps over the grid at any cloud size.
 
 The interior is the union of its closed voxel cubes; its Betti numbers come from the Euler
 characteristic (beta1 = beta0 + beta2 - chi), beta0 from its 26-connected components and beta2 from
-the 6-connected components of the rest that do not reach the grid's border (cavities).
+the 6-connected components of the rest that do not reach the grid's border (cavities). The tunnels
+``missing_cycles`` counts are those that three ways of building the interior all keep (:func:`firm_tunnels`).
 """
 
 from __future__ import annotations
 
+import threading
 import weakref
 from dataclasses import dataclass, field
 
@@ -23,7 +25,7 @@ from scipy import ndimage
 from ..geometry import Checkpoint, bounding_box, no_checkpoint
 
 __all__ = ["VoxelShape", "voxelize_interior", "betti_numbers", "wide_tunnels", "median_spacing", "cloud_subsample",
-           "LATTICE_DIRECTIONS"]
+           "supported_voxels", "ray_interior", "ray_hits_share", "firm_tunnels", "LATTICE_DIRECTIONS"]
 
 #: the 26 lattice directions (each component -1, 0 or 1, not all 0)
 LATTICE_DIRECTIONS = np.array([(a, b, c) for a in (-1, 0, 1) for b in (-1, 0, 1) for c in (-1, 0, 1)
@@ -95,8 +97,11 @@ def cloud_subsample(cloud: np.ndarray, max_points: int, seed: int = 0) -> np.nda
     return cloud[np.sort(pick)]
 
 
-# the last cloud's spacing, reused while the same array comes back (the diagnostics ask three times)
+# the last clouds' spacings, reused while the same array comes back (the diagnostics ask three times, of
+# the cloud and of its subsample's tree data: one entry would make them evict each other at every update)
 _last_spacing: dict = {}
+_SPACINGS_KEPT = 4
+_spacing_lock = threading.Lock()
 
 
 def median_spacing(cloud: np.ndarray, max_points: int = 20000) -> float:
@@ -109,17 +114,23 @@ def median_spacing(cloud: np.ndarray, max_points: int = 20000) -> float:
     n = len(cloud)
     if n < 2:
         return 0.0
-    ref = _last_spacing.get("cloud")
-    if ref is not None and ref() is cloud and _last_spacing.get("key") == (n, max_points):
-        return _last_spacing["value"]
+    hit = _last_spacing.get((id(cloud), n, max_points))
+    if hit is not None and hit[0]() is cloud:
+        return hit[1]
     m = min(n, int(max_points))
     sub = cloud if m == n else cloud[np.random.default_rng(0).choice(n, m, replace=False)]
     d, _ = cKDTree(sub).query(sub, k=2)
     value = float(np.median(d[:, 1])) * float(np.sqrt(m / n))
+    key = (id(cloud), n, max_points)
     try:
-        _last_spacing.update(cloud=weakref.ref(cloud), key=(n, max_points), value=value)
+        ref = weakref.ref(cloud, lambda r, k=key, kept=_last_spacing: kept.pop(k, None)
+                          if kept.get(k, (None,))[0] is r else None)
     except TypeError:  # not weak-referenceable: no cache
-        pass
+        return value
+    with _spacing_lock:  # the diagnostics run side by side
+        _last_spacing[key] = (ref, value)
+        while len(_last_spacing) > _SPACINGS_KEPT:  # the oldest first (dicts keep their insertion order)
+            _last_spacing.pop(next(iter(_last_spacing)), None)
     return value
 
 
@@ -149,14 +160,42 @@ def voxelize_interior(
     occ = np.zeros(shape, bool)
     occ[ijk[:, 0], ijk[:, 1], ijk[:, 2]] = True
     checkpoint(0.2)
-    grown = ndimage.binary_dilation(occ, structure=np.ones((3, 3, 3), bool))
-    count = np.zeros(shape, np.uint8)
-    for k, dvec in enumerate(LATTICE_DIRECTIONS):
-        count += _ray_hits(grown, dvec)
-        checkpoint(0.2 + 0.8 * (k + 1) / len(LATTICE_DIRECTIONS))
-    hits = count / float(len(LATTICE_DIRECTIONS))
+    hits = ray_hits_share(occ, lambda f: checkpoint(0.2 + 0.8 * f))
     inside = occ | (hits > inside_share)
     return VoxelShape(inside=inside, occupied=occ, hits=hits, origin=origin, size=size)
+
+
+def ray_hits_share(surface: np.ndarray, checkpoint: Checkpoint = no_checkpoint) -> np.ndarray:
+    """Per voxel, the share of its 26 lattice rays that meet ``surface`` grown by one voxel."""
+    grown = ndimage.binary_dilation(surface, structure=np.ones((3, 3, 3), bool))
+    count = np.zeros(surface.shape, np.uint8)
+    for k, dvec in enumerate(LATTICE_DIRECTIONS):
+        count += _ray_hits(grown, dvec)
+        checkpoint((k + 1) / len(LATTICE_DIRECTIONS))
+    return count / float(len(LATTICE_DIRECTIONS))
+
+
+def supported_voxels(cloud: np.ndarray, vs: VoxelShape, *, block: int = 5, min_points: int = 3,
+                     share: float = 0.05) -> np.ndarray:
+    """The occupied voxels whose block of ``block``^3 voxels around them holds at least max(``min_points``,
+    ``share`` x the median such count over the cloud's points) points: a stray point alone in the
+    box's air is dropped, a surface patch (even one 10 x sparser than the rest) is kept. The median is
+    taken over points, not voxels, so that strays (one voxel each) do not set it."""
+    ijk = vs.index_of(cloud)
+    counts = np.zeros(vs.occupied.shape, np.float64)
+    np.add.at(counts, (ijk[:, 0], ijk[:, 1], ijk[:, 2]), 1.0)
+    around = np.rint(ndimage.uniform_filter(counts, size=int(block), mode="constant") * float(block) ** 3)
+    need = max(float(min_points), float(share) * float(np.median(around[ijk[:, 0], ijk[:, 1], ijk[:, 2]])))
+    return vs.occupied & (around >= need)
+
+
+def ray_interior(surface: np.ndarray, shares: tuple[float, ...],
+                 checkpoint: Checkpoint = no_checkpoint) -> list[np.ndarray]:
+    """The interiors bounded by the voxels ``surface``, one per inside share (``surface`` or more than
+    that share of the lattice rays meet it grown by one), cavities filled: :func:`voxelize_interior`'s
+    rule on given surface voxels, at several shares for one sweep of the rays."""
+    hits = ray_hits_share(surface, checkpoint)
+    return [ndimage.binary_fill_holes(surface | (hits > s)) for s in shares]
 
 
 def betti_numbers(solid: np.ndarray) -> tuple[int, int, int]:
@@ -220,3 +259,26 @@ def wide_tunnels(solid: np.ndarray) -> int:
         if tunnels:
             total += min(tunnels, betti_numbers(ndimage.binary_dilation(np.pad(part, 1), structure=cube))[1])
     return total
+
+
+def firm_tunnels(cloud: np.ndarray, vs: VoxelShape, *, inside_share: float, strict_share: float, block: int = 5,
+                 min_points: int = 3, share: float = 0.05, checkpoint: Checkpoint = no_checkpoint) -> int:
+    """The tunnels of the interior that survive each way it can invent one, bounded from above: the
+    least :func:`wide_tunnels` count of the interior, of the interior rebuilt without the voxels of
+    isolated points (:func:`supported_voxels`: a stray's voxel and its ray shadow bridge nothing) and of
+    that one at the ``strict_share`` (a gap between noisy strands passes beta* but not the stricter
+    share; a tube's inside passes both). Each interior keeps the shape's tunnels, so the least count
+    never hides one; a false one goes where any of the three lacks it (docs/diagnostics.md "Cycles")."""
+    count = wide_tunnels(vs.solid())
+    if count == 0:
+        return 0
+    kept = supported_voxels(cloud, vs, block=block, min_points=min_points, share=share)
+    if np.array_equal(kept, vs.occupied):  # nothing isolated: the same rays, only the stricter share
+        solids = [ndimage.binary_fill_holes(vs.occupied | (vs.hits > strict_share))]
+    else:
+        solids = ray_interior(kept, (inside_share, strict_share), checkpoint)
+    for solid in solids:
+        count = min(count, wide_tunnels(solid))
+        if count == 0:
+            break
+    return count

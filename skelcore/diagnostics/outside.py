@@ -4,13 +4,15 @@
 A curve sample is unbounded when its boundedness <= beta* (docs/metrics.md 2, the values the evaluation
 computed). Each stands for its stretch of its edge (the sampling of docs/metrics.md 3.2); 200 samples are coarse on a
 long curve (one may stand for many local radii), so the edges holding an unbounded sample are walked
-every half voxel and a point counts as outside when its sample is unbounded and its voxel is not
-inside the shape (:mod:`.interior`, the cycle test's voxels): thin or partly scanned parts, whose
-points boundedness cannot surround, stay inside. The length outside is summed per edge and per branch
-and measured in local radii: one edge through the air is a defect even when the overall boundedness
-is 0.95. Skeletal points outside (unbounded and not in an inside voxel) are grouped into clusters
-(within ``outside_link`` x the cloud's median spacing); one large cluster is a part of the skeleton
-that left the shape, scattered single points are not.
+every half voxel and a point counts as outside when its sample is unbounded, its voxel is not
+inside the shape (:mod:`.interior`, the cycle test's voxels) and its nearest cloud points lie on one
+side (a half-scanned tube's axis sees a half ring): thin or partly scanned parts stay inside. Voxels
+coarser than ``outside_voxel_radii`` local radii cannot tell (a traced neuron): then only the reach
+test runs. The length outside is summed per edge and per branch and measured in local radii: one
+edge through the air is a defect even when the overall boundedness is 0.95. Skeletal points outside
+(unbounded and not in an inside voxel) are grouped into clusters (within ``outside_link`` x the
+cloud's median spacing); one large cluster is a part of the skeleton that left the shape, scattered
+single points are not.
 """
 
 from __future__ import annotations
@@ -63,6 +65,17 @@ class OutsideDefects:
     subsampled: int | None = None
     voxel_size: float = 0.0
     reach: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    length_test: bool = True
+
+    @property
+    def unchecked(self) -> str | None:
+        """Why the length test did not run (its voxels coarser than the parts), or None."""
+        if self.length_test:
+            return None
+        return (f"the shape's interior voxels ({self.voxel_size / self.radius:.2g} local radii) are coarser than "
+                f"outside_voxel_radii = {self.params.outside_voxel_radii:g}: they cannot tell a part's inside from a "
+                f"few radii beyond it; only the branches reaching more than outside_reach = "
+                f"{self.params.outside_reach:g} local radii out were looked for")
 
     @property
     def length_share(self) -> float:
@@ -81,14 +94,14 @@ class OutsideDefects:
         """Branches with ``outside_min_radii`` of length outside, or reaching too far (only those
         with ``reach_only``: boundedness cannot tell outside on an open surface)."""
         far = self.far_branches()
-        if reach_only:
+        if reach_only or not self.length_test:
             return far
         return np.union1d(np.flatnonzero(self.branch_radii >= self.params.outside_min_radii), far).astype(np.int64)
 
     def warnings(self, reach_only: bool = False) -> list[TrustWarning]:
         """``outside``; with ``reach_only`` only for the branches reaching too far (docs/diagnostics.md "Outside")."""
         out: list[TrustWarning] = []
-        if reach_only:
+        if reach_only or not self.length_test:
             far = self.far_branches()
             if len(far):
                 worst = int(far[np.argmax(self.reach[far])])
@@ -98,7 +111,9 @@ class OutsideDefects:
                     f"more than {self.params.outside_reach:g} local radii out of the shape, the farthest branch {worst} "
                     f"({self.reach[worst]:.2g} radii)",
                 ))  # fmt: skip
-            return out
+            if reach_only:
+                return out
+            return out + self._skeletal_warnings()
         bad = self.defective_branches()
         if len(bad) or (self.total_length > 0 and self.length_share >= self.params.outside_min_share):
             n_edges = int(np.count_nonzero(self.edge_outside_length > 0))
@@ -116,6 +131,10 @@ class OutsideDefects:
                 f"the curve skeleton leaves the shape on {len(bad)} branches ({n_edges} edges): "
                 f"{self.length_share:.1%} of its length{most}{reach}",
             ))  # fmt: skip
+        return out + self._skeletal_warnings()
+
+    def _skeletal_warnings(self) -> list[TrustWarning]:
+        out: list[TrustWarning] = []
         if self.skeletal_outside is not None and self.skeletal_cluster_share > self.params.outside_skeletal_share:
             out.append(TrustWarning(
                 "outside",
@@ -166,7 +185,7 @@ def _outside_stretches(curve: CurveSkeleton, samples: CurveSamples, sample_out: 
                        step: float) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """Points every ``step`` along the edges holding an unbounded sample, their edge, and whether each
     is outside: its sample (the one whose stretch (t_prev, t] holds it, the sampling of docs/metrics.md 3.2) is
-    unbounded and its voxel is not inside; and that sample."""
+    unbounded and ``in_shape`` rejects it; and that sample."""
     bad = np.unique(samples.edge[sample_out])
     lengths = curve.edge_lengths()[bad]
     m = np.maximum(np.ceil(lengths / step).astype(np.int64), 2)
@@ -287,6 +306,13 @@ def find_outside(
         ijk = voxel_shape.index_of(points)
         return solid[ijk[:, 0], ijk[:, 1], ijk[:, 2]]
 
+    def in_shape_seen(points: np.ndarray) -> np.ndarray:
+        """Inside by the voxels, or surrounded by the cloud (docs/diagnostics.md "Outside")."""
+        got = in_shape(points)
+        if cloud_tree is not None and not got.all():
+            got[~got] = ~one_sided(cloud_tree, points[~got], params.outside_one_sided)
+        return got
+
     sample_edge = None if samples is None else samples.edge
     if curve is not None and branches is None:
         branches = decompose_branches(curve, cloud=cloud, sample_edge=sample_edge, cloud_tree=cloud_tree)
@@ -297,13 +323,17 @@ def find_outside(
     radius = 0.0
     depth = np.zeros(nb)
     vertex_flag = np.zeros(curve.n_vertices if curve is not None else 0, bool)
-    if curve is not None and samples is not None and sample_boundedness is not None and ne and len(samples):
+    if nb:
+        radius = float(np.nanmedian(branches.radius_median)) if np.any(np.isfinite(branches.radius_median)) else 0.0
+    # voxels coarser than a few local radii: one holds a thin part and its surroundings alike
+    length_test = not (radius > 0 and voxel_shape.size > params.outside_voxel_radii * radius)
+    if length_test and curve is not None and samples is not None and sample_boundedness is not None and ne \
+            and len(samples):
         beta = np.asarray(sample_boundedness, dtype=float)
         unbounded = ~(beta > beta_star) & np.isfinite(beta)
         sample_out = np.zeros(len(beta), bool)
-        radius = float(np.nanmedian(branches.radius_median)) if np.any(np.isfinite(branches.radius_median)) else 0.0
         if unbounded.any():
-            pts, pe, out, cover = _outside_stretches(curve, samples, unbounded, in_shape, 0.5 * voxel_shape.size)
+            pts, pe, out, cover = _outside_stretches(curve, samples, unbounded, in_shape_seen, 0.5 * voxel_shape.size)
             sample_out[cover[out]] = True
             edge_len = np.bincount(pe, weights=out * (curve.edge_lengths()[pe] / np.bincount(pe, minlength=ne)[pe]),
                                    minlength=ne)
@@ -338,5 +368,5 @@ def find_outside(
         radius=radius, depth=depth, vertex_flag=vertex_flag,
         total_length=float(curve.edge_lengths().sum()) if curve is not None else 0.0, skeletal_outside=sk_out,
         skeletal_cluster_share=sk_share, skeletal_cluster=sk_cluster, params=params, subsampled=sub,
-        voxel_size=float(voxel_shape.size), reach=reach,
+        voxel_size=float(voxel_shape.size), reach=reach, length_test=length_test,
     )  # fmt: skip

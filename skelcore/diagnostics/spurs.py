@@ -8,11 +8,13 @@ classical significance measures fails:
   the medial ball at J (distance from J to the cloud): it does not leave the junction's ball;
 - **explanation**: the cloud points nearest to it (its territory) are explained by the rest of the
   skeleton as well: a point is explained by an element x (curve point, every ``diag_step`` local
-  radii) when it lies within (1 + ``spur_slack``) r(x) + tau of it (coverage's rule, docs/metrics.md 5.2). The
-  branch is spurious when fewer than ``spur_min_points`` of its territory, or less than
-  ``spur_unique`` of it, are explained by nothing else.
+  radii) when it lies within (1 + ``spur_slack``) r(x) of it. The branch is spurious when fewer than
+  ``spur_min_points`` of its territory, or less than ``spur_unique`` of it, are explained by nothing
+  else.
 
-Its size: length in multiples of r_J and share of the curve's length.
+No spacing-sized allowance (coverage's tau) grows the balls: r(x) is measured to the samples, so a
+part's own points need none, and two spacings let a thick part swallow every point of a twig as thin
+as the spacing (docs/diagnostics.md "Spurious branches"). Size: length in r_J, share of the length.
 """
 
 from __future__ import annotations
@@ -28,7 +30,7 @@ from ..geometry import Checkpoint, kd_tree, no_checkpoint
 from ..params import Params
 from .trust_warning import TrustWarning, finite_range
 from .branches import Branches, decompose_branches, densify
-from .interior import cloud_subsample, median_spacing
+from .interior import cloud_subsample
 
 __all__ = ["SpurDefects", "find_spurious_branches", "curve_points"]
 
@@ -235,8 +237,7 @@ def find_spurious_branches(
         r_x, _ = cloud_tree.query(pts)
         checkpoint(0.2)
         use = cloud_subsample(cloud, params.diag_max_points, seed)
-        tau = params.coverage_tau_factor * median_spacing(cloud)
-        explain = (1.0 + params.spur_slack) * r_x + tau
+        explain = (1.0 + params.spur_slack) * r_x  # no tau: see the module's docstring
         ptree = cKDTree(pts)
         _, near = ptree.query(use)
         own = pb[near]

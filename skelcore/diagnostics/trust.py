@@ -54,13 +54,15 @@ def _diag(points: np.ndarray, quantile: float = 0.0) -> float:
 
 
 def frame_warnings(cloud: np.ndarray, skeleton: np.ndarray, what: str, params: Params = Params(),
-                   bounded_fraction: Callable[[np.ndarray], float] | None = None) -> list[TrustWarning]:
+                   bounded_fraction: Callable[[np.ndarray], float] | None = None,
+                   cloud_box: tuple[np.ndarray, np.ndarray] | None = None) -> list[TrustWarning]:
     """``frame`` / ``collapse`` for one skeleton's points (both arrays in the user's units). A ``frame``
     message proposes a scale and offset only when :func:`fit_frame` finds one under which the skeleton
     is bounded and complete (``bounded_fraction(points)``: the share of points bounded, by default
-    the rays boundedness against this cloud)."""
+    the rays boundedness against this cloud). ``cloud_box``: the cloud's ``robust_box`` at the params'
+    quantile when already known (an edit's update keeps it)."""
     q = float(params.trust_extent_quantile)  # stray points stretch neither box (docs/metrics.md 6)
-    lo, hi = robust_box(cloud, q)
+    lo, hi = robust_box(cloud, q) if cloud_box is None else cloud_box
     d_cloud = float(np.linalg.norm(hi - lo))  # = _diag(cloud, q)
     margin = 0.1 * d_cloud
     inside = np.all((skeleton >= lo - margin) & (skeleton <= hi + margin), axis=1)

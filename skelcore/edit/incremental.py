@@ -6,21 +6,23 @@ direction) was scored before. That is exact because each sample's value depends 
 direction, the cloud and the params: with the toolbox sampling an edit moves the samples of the edges
 whose length share or numbering changed, and those are scored again. Boundedness is reused only when
 the rays estimator scores every sample on its own (no far field shared between samples). Evaluations
-with a scan option, or whose skeletal column is the curve's projection, are evaluated again."""
+with a scan option, or whose skeletal column is the curve's projection, are evaluated again.
+:func:`complete_update` adds the curve's diagnostics to an update that left them out (a viewer's
+second phase), the two together equal to one update."""
 
 from __future__ import annotations
 
 import threading
 import time
 from dataclasses import replace
-from typing import Any
+from typing import Any, Callable
 
 import numpy as np
 
 from ..curve import CurveSkeleton
-from ..errors import SkelInputError
+from ..errors import Cancelled, SkelInputError
 from ..evaluation import Evaluation
-from ..geometry import check_magnitude, no_checkpoint
+from ..geometry import check_magnitude, no_checkpoint, unique_rows
 from ..metrics.boundedness import boundedness, rays_plan_is_exact
 from ..metrics.centeredness import curve_centeredness, slab_grid
 from ..metrics.curve_sampling import sample_curve
@@ -31,11 +33,12 @@ from ..stages.evaluation_source import CURVE_STAGES, EvaluationSource
 from ..stages.orchestrate import evaluate, finish
 from .change import Change
 
-__all__ = ["update_evaluation", "CURVE_STAGES", "DIAGNOSTIC_STAGES"]
+__all__ = ["update_evaluation", "complete_update", "left_out", "CURVE_STAGES", "DIAGNOSTIC_STAGES"]
 
 #: left out by ``update(diagnostics=False)``
 DIAGNOSTIC_STAGES = ("curve coverage", "curve defects", "curve missing parts")
 _GRID_LOCK = threading.Lock()  # one slab grid per cache, even when two updates run at once
+_PLAN_LOCK = threading.Lock()  # the kept plans' flags, read and trimmed by updates side by side
 LEFT_OUT = "left out by Evaluation.update(diagnostics=False)"
 
 
@@ -63,7 +66,57 @@ def update_evaluation(ev: Evaluation, edited: Change | CurveSkeleton | Any, *, d
     run_graph(_tasks(old, ctx, src.cache, diagnostics), args.get("workers"))
     out = finish(ctx, args.get("inputs"), no_checkpoint)
     out.timings = {"update": time.perf_counter() - t0}
+    results = dict(ctx.results)
     out.source = EvaluationSource(args=args, ctx=ctx, cache=src.cache)
+    if left_out(out):  # what the source drops, kept until complete_update has finished it again
+        out.source.rest = {k: v for k, v in results.items() if k not in ctx.results}
+    return out
+
+
+def left_out(ev: Evaluation) -> tuple[str, ...]:
+    """The curve's stages ``update(diagnostics=False)`` left out of ``ev`` (() when none)."""
+    src = ev.source
+    ctx = src.ctx if isinstance(src, EvaluationSource) else None
+    return () if ctx is None else tuple(n for n in DIAGNOSTIC_STAGES if ctx.not_computed.get(n) == LEFT_OUT)
+
+
+def complete_update(ev: Evaluation, cancel: Callable[[], bool] | None = None) -> Evaluation:
+    """``ev`` (an ``update(diagnostics=False)``) with the curve's coverage, defects and missing parts it
+    left out: the Evaluation ``update(change)`` gives, ``ev`` itself unchanged (the second phase of an
+    edit's scoring, docs/performance.md 6.10). ``cancel()`` True stops it at a stage's next checkpoint
+    (:class:`Cancelled`). ``ev`` when nothing was left out."""
+    t0 = time.perf_counter()
+    names = left_out(ev)
+    if not names:
+        if LEFT_OUT in ev.not_computed.values():  # a pickled first phase: its context is gone
+            raise SkelInputError("this Evaluation keeps no record of its inputs (it was pickled): "
+                                 "update or evaluate the edited curve with its diagnostics instead")
+        return ev
+    src = ev.source
+    old = src.ctx
+    unset = {k: v for k, v in old.not_computed.items() if k not in names}
+    ctx = replace(old, results={**old.results, **src.rest}, not_computed=unset, unseen=dict(old.unseen))
+
+    def checkpoint(_fraction: float = 0.0) -> None:
+        if cancel is not None and cancel():
+            raise Cancelled("the edited curve's defects were cancelled")
+
+    stages = start_order([s for s in CATALOGUE if s.name in names and s.applies(ctx)], ctx)
+
+    def task(stage: Stage) -> GraphTask:
+        def run() -> object:
+            checkpoint()
+            ctx.results[stage.name] = stage.fn(ctx, checkpoint)
+            return ctx.results[stage.name]
+
+        return GraphTask(stage.name, run, tuple(a for a in stage.after(ctx) if a in names))
+
+    run_graph([task(s) for s in stages], src.args.get("workers"))
+    checkpoint()
+    out = finish(ctx, src.args.get("inputs"), checkpoint)
+    out.timings = {"update": ev.timings.get("update", 0.0) + time.perf_counter() - t0,
+                   "diagnostics": time.perf_counter() - t0}
+    out.source = EvaluationSource(args=src.args, ctx=ctx, cache=src.cache)
     return out
 
 
@@ -101,8 +154,9 @@ def _edited_context(old: EvalContext, curve: CurveSkeleton) -> EvalContext:
     curve_n = curve.transformed(old.norm.apply)
     samples = sample_curve(curve_n, p.curve_samples, collinear_cos=p.collinear_cos, method=p.curve_sampling)
     kept = {k: v for k, v in old.results.items() if k not in CURVE_STAGES}
+    unset = {k: v for k, v in old.not_computed.items() if v != LEFT_OUT}  # an update of a first phase
     return replace(old, curve=curve, curve_n=curve_n, samples=samples, results=kept,
-                   not_computed=dict(old.not_computed), unseen=dict(old.unseen))
+                   not_computed=unset, unseen=dict(old.unseen))
 
 
 def _keys(*columns: np.ndarray) -> list[bytes]:
@@ -119,14 +173,19 @@ def _reuse(old_keys: list[bytes], old_values: np.ndarray, new_keys: list[bytes])
 
 
 def _plan_is_exact(cloud: np.ndarray, samples: Any, params: Any, cache: dict[str, Any]) -> bool:
-    """:func:`rays_plan_is_exact` of these samples, kept for the last samples asked about (the next
-    update's old samples are this one's new)."""
-    known = cache.setdefault("exact plan", [])
-    for obj, flag in known:
-        if obj is samples:
-            return flag
-    flag = rays_plan_is_exact(cloud, samples.points, params)
-    known[:] = [*known[-1:], (samples, flag)]
+    """:func:`rays_plan_is_exact` of these samples, kept by their distinct positions (the plan is made
+    of those alone, in lexicographic order, against the same cloud and params for every update of
+    one evaluation): a deleted edge keeps every position, and at 1M points the plan takes 0.1 s."""
+    key = np.ascontiguousarray(unique_rows(np.asarray(samples.points, dtype=float), no_checkpoint)[0]).tobytes()
+    with _PLAN_LOCK:
+        flag = cache.setdefault("exact plans", {}).get(key)
+    if flag is None:
+        flag = rays_plan_is_exact(cloud, samples.points, params)
+        with _PLAN_LOCK:
+            known = cache["exact plans"]
+            known[key] = flag
+            while len(known) > 8:  # the last few samplings (an undo comes back to one)
+                known.pop(next(iter(known)))
     return flag
 
 

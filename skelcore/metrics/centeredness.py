@@ -273,7 +273,9 @@ def curve_centeredness(
         return out
     u = unit_rows(dirs)
     todo = np.flatnonzero(np.all(np.isfinite(u), axis=1) & np.all(np.isfinite(points), axis=1))
-    diagonal = bbox_diagonal(cloud)
+    # a kept grid holds the cloud's bounding box: the same bits, without a pass over the cloud (an edit's
+    # update scores a few samples against a million points)
+    diagonal = bbox_diagonal(cloud) if grid is None else float(np.linalg.norm(grid.hi - grid.lo))
     half = 0.5 * float(params.slab_factor) * diagonal
     if len(todo) == 0 or not half > 0:
         return out  # no direction, or a cloud without extent: every slab is empty

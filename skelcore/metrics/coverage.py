@@ -16,6 +16,7 @@ sampled point's answer (``Coverage.subsample``; docs/metrics.md 5.2, docs/perfor
 
 from __future__ import annotations
 
+import weakref
 from dataclasses import dataclass
 
 import numpy as np
@@ -180,9 +181,7 @@ def noise_shortfall(cloud: np.ndarray, elements: np.ndarray, r: np.ndarray, quan
     out = np.zeros(n_el)
     if not quantile > 0 or n_el == 0 or len(cloud) < 2 * NOISE_MIN_POINTS:
         return out
-    rng = np.random.default_rng(SAMPLE_SEED)
-    pts = cloud if len(cloud) <= NOISE_SAMPLE else cloud[np.sort(rng.choice(len(cloud), NOISE_SAMPLE, replace=False))]
-    spacing = float(np.median(cKDTree(pts).query(pts, k=2)[0][:, 1]))
+    pts, spacing = _noise_sample(cloud)
     checkpoint(0.4)
     dist, owner = _nearest_element(elements, pts)
     excess = np.maximum(dist - r[owner], 0.0)
@@ -236,6 +235,27 @@ def _row_labels(cells: np.ndarray) -> np.ndarray:
         return np.unique(cells, axis=0, return_inverse=True)[1].reshape(-1)
     key = (cells[:, 0] * span[1] + cells[:, 1]) * span[2] + cells[:, 2]
     return np.unique(key, return_inverse=True)[1].reshape(-1)
+
+
+def _noise_sample(cloud: np.ndarray) -> tuple[np.ndarray, float]:
+    """:func:`noise_shortfall`'s sample of the cloud and its median spacing, kept for the last cloud
+    while the same array comes back (an edited curve's coverage reads the same cloud at every update)."""
+    hit = _last_noise.get("entry")  # one tuple, replaced whole: coverage stages run side by side
+    if hit is not None and hit[0]() is cloud and hit[1] == len(cloud):
+        return (cloud if hit[2] is None else hit[2]), hit[3]
+    rng = np.random.default_rng(SAMPLE_SEED)
+    pts = cloud if len(cloud) <= NOISE_SAMPLE else cloud[np.sort(rng.choice(len(cloud), NOISE_SAMPLE, replace=False))]
+    spacing = float(np.median(cKDTree(pts).query(pts, k=2)[0][:, 1]))
+    try:
+        ref = weakref.ref(cloud, lambda r, kept=_last_noise: kept.pop("entry", None)
+                          if kept.get("entry", (None,))[0] is r else None)
+    except TypeError:  # not weak-referenceable: no reuse
+        return pts, spacing
+    _last_noise["entry"] = (ref, len(cloud), None if pts is cloud else pts, spacing)  # never the cloud itself
+    return pts, spacing
+
+
+_last_noise: dict = {}
 
 
 def _group_quantile(values: np.ndarray, group: np.ndarray, n_groups: int, q: float) -> np.ndarray:

@@ -13,6 +13,7 @@ from scipy.spatial import cKDTree
 from ..geometry import Checkpoint, no_checkpoint
 from ..metrics.boundedness import boundedness
 from ..params import Params
+from .one_sided import one_sided_thin
 from .openings import Opening, find_openings
 
 __all__ = ["set_local_radii", "escaping_share", "fill_near_skeleton", "skeleton_openings"]
@@ -69,16 +70,21 @@ def skeleton_openings(cloud: np.ndarray, skeleton: np.ndarray, params: Params = 
     """(every opening, those that count, the thin parts' boundary rows) of ``cloud`` judged with a
     skeleton's elements (both in the cloud's units; docs/metrics.md 6.1): boundary points of parts fewer
     than ``open_resolved_diameter`` spacings across join no opening, and a missing side counts when at
-    least half its fill lies within ``open_fill_reach`` local radii of the skeleton."""
+    least half its fill lies within ``open_fill_reach`` local radii of the skeleton.  Thin parts seen
+    from one side add one opening, their mirrored missing side (:mod:`.one_sided`)."""
     skeleton = np.asarray(skeleton, dtype=float)
     tree = cKDTree(skeleton)
     thin_rows: list[int] = []
     openings = find_openings(cloud, params, checkpoint=checkpoint, thin_rows=thin_rows,
                              diameter=lambda pts: 2.0 * tree.query(pts, k=1, workers=-1)[0])
+    thin = np.asarray(thin_rows, np.int64)
+    mirror = one_sided_thin(cloud, skeleton, thin, params)  # thin parts seen from one side
+    if mirror is not None:
+        openings.append(mirror)
     counted = [o for o in openings if len(o.dome)]
     if counted:
         radius = cKDTree(cloud).query(skeleton, k=1, workers=-1)[0]
         for o in counted:
             o.notes["fill_near_skeleton"] = fill_near_skeleton(o, skeleton, radius, params.open_fill_reach, tree)
         counted = [o for o in counted if o.kind == "end" or o.notes["fill_near_skeleton"] >= 0.5]
-    return openings, counted, np.asarray(thin_rows, np.int64)
+    return openings, counted, thin

@@ -7,8 +7,9 @@ others within ``outlier_radius`` x the median spacing) and the statistical test 
 its ``outlier_k`` nearest neighbours more than ``outlier_std_ratio`` robust deviations above the
 cloud's). Both yardsticks are also taken locally (:func:`local_spacing`, the lower quartile of the
 spacings of its ``outlier_local_k`` nearest points), so a part sampled 10 x more sparsely keeps its
-points. A skeletal set in pointwise correspondence is held to the radius test alone with the cloud's
-spacing (:func:`isolated_rows`): contraction stacks skeletal points, so their own spacing says nothing.
+points. Last, a stray lies off the surface along its normal, where a lone sample of a one-sided scan
+lies in a gap of it (:mod:`.off_surface`). A skeletal set in pointwise correspondence is held to the
+radius test alone with the cloud's spacing (:func:`isolated_rows`): contraction stacks skeletal points, so their own spacing says nothing.
 """
 
 from __future__ import annotations
@@ -20,6 +21,7 @@ from scipy.spatial import cKDTree
 
 from ..geometry import Checkpoint, Normalization, kd_tree, leaf_order, no_checkpoint, query_workers, timed_query
 from ..params import Params
+from .off_surface import off_surface
 
 __all__ = ["Outliers", "find_outliers", "isolated_rows", "sparse_rows", "local_spacing"]
 
@@ -99,6 +101,10 @@ def find_outliers(cloud: np.ndarray, params: Params = Params(), *, checkpoint: C
         local = local_spacing(cloud, cloud[rows], int(params.outlier_local_k), tree)
         d_m = tree.query(cloud[rows], k=m + 1, workers=query_workers(len(rows)))[0][:, m]
         rows = rows[d_m > float(params.outlier_radius) * local]
+    if len(rows):  # and off the surface, not in a gap of it (.off_surface)
+        surface = np.ones(n, bool)
+        surface[candidates] = False
+        rows = rows[off_surface(cloud, rows, surface, params)]
     checkpoint(0.9)
     if len(rows) == 0 or len(rows) >= n - 1:
         return none

@@ -60,8 +60,9 @@ def default_skeleton(cloud: np.ndarray, progress: Progress | None = None, cancel
         return skeletal, curve, info, DefaultChoice("cao", ratio, thickness, moved.spacing)
     t1 = time.perf_counter()
     curve = axis_curve(moved, axis)
+    band = float(axis.ring_width if axis.curve == "rings" else axis.sample_spacings)
     info = SkeletonizeInfo(iterations=int(axis.iterations), ring_ratios=[], stop_reason="axis curve (thin parts)",
-                           sample_radius=float(axis.sample_spacings) * moved.spacing, n_samples=int(curve.n_vertices),
+                           sample_radius=band * moved.spacing, n_samples=int(curve.n_vertices),
                            timings={"contraction": t1 - t0, "curve": time.perf_counter() - t1,
                                     "total": time.perf_counter() - t0}, method="axis")
     if progress is not None:

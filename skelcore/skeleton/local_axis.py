@@ -1,12 +1,12 @@
 """A curve skeleton at the cloud's own spacing, for shapes with parts thinner than cao's sampling ball
 (docs/skeletonize.md "Thin parts"): each point moves, a few times, to the centroid of its k nearest
 cloud neighbours' current positions, the move's component along the neighbourhood's main axis removed
-where the neighbourhood is linear (so tubes shrink onto their axis without shortening); the moved
-points are sampled by balls of a few spacings (:func:`.cao_curve.farthest_sampling_by_sphere`), two
-samples are joined when their points are near neighbours in the cloud, and the curve is the minimum
-spanning forest of that graph. Every length is in spacings (the median nearest-neighbour distance),
-none in bounding-box fractions. :func:`local_thickness` (the median move) tells how thin the parts are.
-"""
+where the neighbourhood is linear (so tubes shrink onto their axis without shortening). The curve of
+the moved points is by rings (:mod:`.axis_rings`, the default) or, with ``AxisParams.curve`` "balls",
+by balls of a few spacings (:func:`.cao_curve.farthest_sampling_by_sphere`), two samples joined when
+their points are near neighbours in the cloud, the minimum spanning forest of that graph. Every length
+is in spacings (the median nearest-neighbour distance), none in bounding-box fractions.
+:func:`local_thickness` (the median move) tells how thin the parts are."""
 
 from __future__ import annotations
 
@@ -19,6 +19,7 @@ from scipy.sparse.csgraph import minimum_spanning_tree
 from scipy.spatial import cKDTree
 
 from ..curve import CurveSkeleton
+from .axis_rings import ring_curve
 from .cao_curve import farthest_sampling_by_sphere
 from .skeleton_params import AxisParams
 
@@ -74,9 +75,14 @@ def local_thickness(cloud: np.ndarray, moved: AxisContraction) -> float:
 
 
 def axis_curve(moved: AxisContraction, params: AxisParams | None = None) -> CurveSkeleton:
-    """The curve of the moved points (module docstring): ball samples, joined along the cloud's kNN,
-    the minimum spanning forest of the joins by length."""
+    """The curve of the moved points: by rings (:func:`.axis_rings.ring_curve`, the default) or, with
+    ``params.curve`` "balls", ball samples joined along the cloud's kNN, the minimum spanning forest
+    of the joins by length (module docstring)."""
     p_ = params or AxisParams()
+    if p_.curve == "rings":
+        return ring_curve(moved.points, moved.spacing, p_)
+    if p_.curve != "balls":
+        raise ValueError(f"axis curve {p_.curve!r}: rings or balls")
     spl, label = farthest_sampling_by_sphere(moved.points, p_.sample_spacings * moved.spacing)
     verts = moved.points[spl]
     m = int(min(p_.connect_neighbors, moved.neighbors.shape[1] - 1))

@@ -233,7 +233,11 @@ class AxisParams:
     curve instead of cao's when cao's sampling ball (``CaoParams.sample_radius_factor`` x the bounding
     box's diagonal) exceeds this many local thicknesses (4; calibrated on the generated suites, where it
     stays below 1: docs/skeletonize.md "Thin parts") and the thickness is at least ``thin_min_spacings``
-    spacings (1.5: a surface scan's points hardly move, a tube's move by its radius)."""
+    spacings (1.5: a surface scan's points hardly move, a tube's move by its radius). ``curve``: "rings"
+    (:mod:`.axis_rings`: bands of ``ring_width`` spacings of geodesic distance on the moved points' kNN
+    graph of ``ring_neighbors``, each band's parts joined over ``ring_connect`` neighbours, degree-2
+    vertices within ``simplify_spacings`` of their neighbours' segment, at most ``simplify_longest``
+    long, dropped) or "balls" (the ball samples above)."""
 
     neighbors: int = 16
     iterations: int = 12
@@ -242,6 +246,12 @@ class AxisParams:
     connect_neighbors: int = 8
     thin_ratio: float = 4.0
     thin_min_spacings: float = 1.5
+    curve: str = "rings"
+    ring_neighbors: int = 16
+    ring_width: float = 1.0
+    ring_connect: int = 48
+    simplify_spacings: float = 0.25
+    simplify_longest: float = 4.0
 
 
 

@@ -75,11 +75,12 @@ def _axis_entries(curve: CurveSkeleton, pts: np.ndarray) -> tuple[list[dict[str,
     """The region's axis curve at its own spacing (:mod:`skelcore.skeleton.local_axis`), its largest
     piece: a thin missing branch, which the whole-region skeletonizers reduce to a few vertices."""
     from ..skeleton.local_axis import axis_contract, axis_curve
+    from ..skeleton.skeleton_params import AxisParams
     from .proposals import component_labels
 
     if len(pts) < 20:
         return None
-    part = axis_curve(axis_contract(pts))
+    part = axis_curve(axis_contract(pts), AxisParams(curve="balls"))
     if part.n_edges == 0:
         return None
     _, label = component_labels(part)

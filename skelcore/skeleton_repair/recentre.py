@@ -13,8 +13,8 @@ from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import connected_components
 
 from ..curve import CurveSkeleton
-from ..geometry import bbox_diagonal, stable_argsort
-from ..metrics.centeredness import ring_length, slab_grid
+from ..geometry import bbox_diagonal
+from ..metrics.centeredness import _BALL_FIRST, _ball_radius, _orthonormal_complement, _rings, slab_grid
 from ..metrics.ellipse_fit import fit_ellipses
 from ..params import Params
 from .proposals import Action
@@ -23,6 +23,7 @@ __all__ = ["RECENTRE", "cross_section_centres", "recentre"]
 
 #: the defect code of a re-centring in the edit log's ``why`` (the never-worse rule's exception)
 RECENTRE = "off_centre"
+_BATCH_PAIRS = 2_000_000  # first-ball candidates held at once (about 60 bytes each)
 
 
 def _tangents(curve: CurveSkeleton, ids: np.ndarray) -> np.ndarray:
@@ -49,53 +50,72 @@ def _runs(curve: CurveSkeleton, deg: np.ndarray) -> np.ndarray:
     return connected_components(g, directed=False)[1]
 
 
-def cross_section_centres(cloud: np.ndarray, points: np.ndarray, dirs: np.ndarray, params: Params
-                          ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+def cross_section_centres(cloud: np.ndarray, points: np.ndarray, dirs: np.ndarray, params: Params,
+                          grid: Any = None) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """For each point with unit direction: the fitted centre of its slab ring (user units), the
     ring's radius and the point's centeredness c (docs/metrics.md section 3.2); NaN where the ring
-    has fewer than 3 points."""
+    has fewer than 3 points. The rings are curve centeredness's own (its ball-first search, in
+    batches of about ``_BATCH_PAIRS`` candidates); ``grid``: :func:`slab_grid` of the cloud, if kept."""
     m = len(points)
     centre, radius, c = np.full((m, 3), np.nan), np.full(m, np.nan), np.full(m, np.nan)
     if m == 0 or len(cloud) == 0:
         return centre, radius, c
-    grid = slab_grid(cloud, params)
     half = 0.5 * float(params.slab_factor) * bbox_diagonal(cloud)
-    flats, frames = [], []
-    for p, u in zip(points, dirs):
-        g = np.cross(u, [1.0, 0, 0] if abs(u[0]) < 0.9 else [0, 1.0, 0])
-        g /= np.linalg.norm(g)
-        h = np.cross(u, g)
-        rel = grid.slab_candidates(p, u, half) - p
-        rel = rel[np.abs(rel @ u) < half]
-        flat = np.column_stack([rel @ g, rel @ h])
-        dist = np.hypot(flat[:, 0], flat[:, 1])
-        order = stable_argsort(dist)
-        flats.append(flat[order[: ring_length(dist[order], float(params.ring_growth))]])
-        frames.append((g, h))
-    starts = np.r_[0, np.cumsum([len(f) for f in flats])]
-    ring = np.concatenate(flats).reshape(-1, 2)
-    ctr, axes, _ = fit_ellipses(ring, starts)
-    r = (axes[:, 0] + axes[:, 1]) / 2.0
-    for i in range(m):
-        pts = ring[starts[i]:starts[i + 1]]
-        if len(pts) < 3:
-            continue
-        if np.isnan(ctr[i, 0]):  # no ellipse: the ring's mean and its farthest point, as the metric does
-            ctr[i], r[i] = pts.mean(axis=0), float(np.hypot(pts[:, 0], pts[:, 1]).max())
-        if not r[i] > 0:
-            continue
-        g, h = frames[i]
-        centre[i] = points[i] + ctr[i, 0] * g + ctr[i, 1] * h
-        radius[i] = r[i]
-        c[i] = max(0.0, 1.0 - float(np.hypot(*ctr[i])) / r[i])
+    if not half > 0:
+        return centre, radius, c
+    grid = slab_grid(cloud, params) if grid is None else grid
+    points = np.asarray(points, float)
+    u = np.asarray(dirs, float)
+    g, h = _orthonormal_complement(u)
+    first = grid.tree.query_ball_point(points, _ball_radius(np.full(m, _BALL_FIRST * half), half), return_length=True)
+    bounds = np.r_[0, np.cumsum(first)]
+    lo = 0
+    while lo < m:
+        hi = lo + max(1, int(np.searchsorted(bounds[lo:], bounds[lo] + _BATCH_PAIRS, side="right")) - 1)
+        ring, starts = _rings(grid, points[lo:hi], u[lo:hi], g[lo:hi], h[lo:hi], half, float(params.ring_growth))
+        ctr, axes, _ = fit_ellipses(ring, starts)
+        r = (axes[:, 0] + axes[:, 1]) / 2.0
+        for j in range(hi - lo):
+            pts = ring[starts[j]:starts[j + 1]]
+            if len(pts) < 3:
+                continue
+            if np.isnan(ctr[j, 0]):  # no ellipse: the ring's mean and its farthest point, as the metric does
+                ctr[j], r[j] = pts.mean(axis=0), float(np.hypot(pts[:, 0], pts[:, 1]).max())
+            if not r[j] > 0:
+                continue
+            i = lo + j
+            centre[i] = points[i] + ctr[j, 0] * g[i] + ctr[j, 1] * h[i]
+            radius[i] = r[j]
+            c[i] = max(0.0, 1.0 - float(np.hypot(*ctr[j])) / r[j])
+        lo = hi
     return centre, radius, c
 
 
-def recentre(curve: CurveSkeleton, cloud: np.ndarray, params: Params) -> list[Action]:
+def _centres_memo(cloud: np.ndarray, points: np.ndarray, dirs: np.ndarray, params: Params,
+                  memo: dict | None) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """:func:`cross_section_centres`, each (point, direction) computed once per ``memo`` (a repair's
+    rounds change few vertices: the others' cross-sections are looked up, bit for bit the same)."""
+    if memo is None:
+        return cross_section_centres(cloud, points, dirs, params)
+    keys = [p.tobytes() + u.tobytes() for p, u in zip(points, dirs)]
+    new = [i for i, k in enumerate(keys) if k not in memo]
+    if new:
+        if "grid" not in memo:
+            memo["grid"] = slab_grid(cloud, params)
+        got = cross_section_centres(cloud, points[new], dirs[new], params, memo["grid"])
+        for j, i in enumerate(new):
+            memo[keys[i]] = (got[0][j], got[1][j], got[2][j])
+    rows = [memo[k] for k in keys]
+    return (np.array([r[0] for r in rows]).reshape(-1, 3), np.array([r[1] for r in rows], float),
+            np.array([r[2] for r in rows], float))
+
+
+def recentre(curve: CurveSkeleton, cloud: np.ndarray, params: Params, memo: dict | None = None) -> list[Action]:
     """One action per branch holding inner vertices that are not centred (c <= ``params.c_star``):
     each moves to its cross-section's centre when that lies within the ring's radius and the vertex is
     centred (c > c*) in the cross-section cut there again (a ring caught by another branch or a bad
-    fit moves nothing); branches with the lowest mean c first (ties by their lowest vertex)."""
+    fit moves nothing); branches with the lowest mean c first (ties by their lowest vertex). ``memo``:
+    a dict kept over a repair's rounds (cross-sections already cut, the cloud's slab grid)."""
     deg = np.bincount(curve.edges.ravel(), minlength=curve.n_vertices)
     inner = np.flatnonzero(deg == 2)
     if not len(inner) or not len(cloud):
@@ -103,11 +123,11 @@ def recentre(curve: CurveSkeleton, cloud: np.ndarray, params: Params) -> list[Ac
     u = _tangents(curve, inner)
     ok = np.all(np.isfinite(u), axis=1)
     inner, u = inner[ok], u[ok]
-    centre, radius, c = cross_section_centres(np.asarray(cloud, float), curve.vertices[inner], u, params)
+    centre, radius, c = _centres_memo(np.asarray(cloud, float), curve.vertices[inner], u, params, memo)
     shift = np.linalg.norm(centre - curve.vertices[inner], axis=1)
     move = np.isfinite(c) & (c <= float(params.c_star)) & (shift <= radius) & (shift > 0)
     if move.any():  # kept only where the vertex is centred in the cross-section at its new place too
-        _, _, c_new = cross_section_centres(np.asarray(cloud, float), centre[move], u[move], params)
+        _, _, c_new = _centres_memo(np.asarray(cloud, float), centre[move], u[move], params, memo)
         move[np.flatnonzero(move)[~(c_new > float(params.c_star))]] = False
     if not move.any():
         return []

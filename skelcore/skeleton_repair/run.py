@@ -95,6 +95,15 @@ def _no_defect_left(found: Any) -> str:
     return f"left: {', '.join(left)} (not acted on)" if left else "no defect left"
 
 
+def _drift(cur: CurveSkeleton, ev: Evaluation, p: Params, memo: dict, rejected: list[dict[str, Any]]) -> list[Action]:
+    """The re-centrings of ``cur`` (none when ``repair_recentre`` is off); one once rejected is not
+    tried again (the same moves)."""
+    if not p.repair_recentre:
+        return []
+    drift = recentre(cur, np.asarray(ev.source.args["cloud"], float), p, memo)
+    return [a for a in drift if all(a.entries != r["entries"] for r in rejected)]
+
+
 def _try(curve: CurveSkeleton, action: Action) -> CurveSkeleton:
     for i, entry in enumerate(action.entries):
         curve, _ = apply(curve, entry, f"{action.code} step {i}")
@@ -135,10 +144,10 @@ def repair(cloud: np.ndarray, curve: CurveSkeleton | tuple | None = None, skelet
     rejected: list[dict[str, Any]] = []
     tally0 = dict(found.tally)
     stopped = f"repair_max_rounds={p.repair_max_rounds} reached"
+    memo: dict = {}  # cross-sections cut by the re-centring, kept over the rounds
     for rnd in range(p.repair_max_rounds):
         check()
-        drift = recentre(cur, np.asarray(ev.source.args["cloud"], float), p) if p.repair_recentre else []
-        drift = [a for a in drift if all(a.entries != r["entries"] for r in rejected)]
+        drift = _drift(cur, ev, p, memo, rejected) if found.total == 0 else None
         if found.total == 0 and not drift:
             stopped = _no_defect_left(found)
             break
@@ -147,7 +156,8 @@ def repair(cloud: np.ndarray, curve: CurveSkeleton | tuple | None = None, skelet
         candidates = propose(cur, found, inside, p.repair_join_step * voxel, route)
         if p.repair_fill_missing:
             candidates += fill_missing(cur, found.missing, np.asarray(ev.source.args["cloud"], float))
-        candidates += drift  # a re-centring once rejected is not tried again (the same moves)
+        if len(candidates) < p.repair_max_tries:  # re-centrings come last: cut only when they may be tried
+            candidates += drift if drift is not None else _drift(cur, ev, p, memo, rejected)
         done = False
         for action in candidates[:p.repair_max_tries]:
             check()

@@ -102,14 +102,15 @@ def trust_warnings(ctx: EvalContext, ev: Evaluation, checkpoint: Checkpoint) -> 
         return float(np.mean(beta > p.beta_star))
 
     out: list[TrustWarning] = []
+    box = ctx.cloud_box(p.trust_extent_quantile)
     if ctx.skeletal is not None:
-        found = frame_warnings(cloud, ctx.skeletal, "skeletal point set", p)
+        found = frame_warnings(cloud, ctx.skeletal, "skeletal point set", p, cloud_box=box)
         if not found:
             now = float(np.mean(ev.skeletal.boundedness > p.beta_star))
             found = frame_fit_warning(cloud, ctx.skeletal, now, bounded_fraction, "skeletal point set", p)
         out += found
     if ctx.curve is not None:
-        found = frame_warnings(cloud, ctx.curve.vertices, "curve skeleton", p)
+        found = frame_warnings(cloud, ctx.curve.vertices, "curve skeleton", p, cloud_box=box)
         if not found:
             now = float(np.mean(ev.curve.sample_boundedness > p.beta_star))
             found = frame_fit_warning(cloud, ev.curve.samples, now, bounded_fraction, "curve skeleton", p)

@@ -86,6 +86,7 @@ class EvalContext:
     _interior_lock: threading.Lock = field(default_factory=threading.Lock, repr=False)
     _diag_tree: list = field(default_factory=list, repr=False)
     _diag_tree_lock: threading.Lock = field(default_factory=threading.Lock, repr=False)
+    _cloud_box: dict = field(default_factory=dict, repr=False)
 
     def __post_init__(self) -> None:
         if self.cloud_index is None:
@@ -189,6 +190,17 @@ class EvalContext:
                 self._diag_tree.append(kd_tree(cloud_subsample(self.cloud_n, self.params.diag_max_points),
                                                checkpoint))
             return self._diag_tree[0]
+
+    def cloud_box(self, quantile: float) -> tuple[np.ndarray, np.ndarray]:
+        """The cloud's box from the ``quantile`` to the 1 - ``quantile`` quantile of each coordinate
+        (user units, :func:`skelcore.diagnostics.trust.robust_box`) the trust checks read, made once: an
+        edit's update shares it (at 1M points the quantiles take 70 ms)."""
+        from ..diagnostics.trust import robust_box
+
+        key = float(quantile)
+        if key not in self._cloud_box:
+            self._cloud_box[key] = robust_box(self.cloud, key)
+        return self._cloud_box[key]
 
     def tau(self, checkpoint: Checkpoint) -> float:
         """Coverage's tau (``coverage_tau``: the factor x the cloud's median spacing) from the shared

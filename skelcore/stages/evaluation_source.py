@@ -33,6 +33,9 @@ class EvaluationSource:
     args: dict[str, Any]
     ctx: EvalContext | None = None
     cache: dict[str, Any] = field(default_factory=dict)
+    #: an update that left out the curve's diagnostics: the curve's other results, which finishing it
+    #: (skelcore.edit.incremental.complete_update) assembles again
+    rest: dict[str, Any] = field(default_factory=dict)
 
     def __post_init__(self) -> None:
         # the other curve stages' results are the Evaluation's own or are never read again
@@ -41,4 +44,4 @@ class EvaluationSource:
                 self.ctx.results.pop(name, None)
 
     def __getstate__(self) -> dict[str, Any]:
-        return {"args": self.args, "ctx": None, "cache": {}}
+        return {"args": self.args, "ctx": None, "cache": {}, "rest": {}}

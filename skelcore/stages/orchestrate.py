@@ -160,6 +160,8 @@ def finish(ctx: EvalContext, inputs: dict | None, checkpoint: Callable[[float], 
         defects = ctx.results.get("curve defects")
         if "outside" in skipped and defects is not None:  # the reach test needs no boundedness
             ev.warnings += defects.outside.warnings(reach_only=True)
+        elif defects is not None and defects.outside.unchecked:  # voxels too coarse: its warnings are the reach test's
+            ev.not_computed["outside"] = defects.outside.unchecked
     return ev
 
 

@@ -67,6 +67,22 @@ def test_outcome_counts_a_spur_warning_only_where_the_spurs_are():
     assert 0.0 < out["precision_lo"] < 0.75 < out["precision_hi"] <= 1.0  # Wilson, not the normal interval
 
 
+def test_the_tuning_neurons_rows_stand_apart_from_the_held_out_ones():
+    from skelcore.benchmark.calibration.calib_tables import REAL_TUNING, TUNING_NEURONS, markdown
+
+    base = {"suite": "real", "size": 30000, "condition": "clean", "truth_outside": 0, "fired_outside": 1}
+    rows = [{**base, "shape": TUNING_NEURONS[0]}, {**base, "shape": "722817260", "fired_outside": 0}]
+    s = [x for x in summary_rows(rows) if x["code"] == "outside" and x["condition"] == "all"]
+    by = {x["suite"]: x for x in s}
+    assert set(by) == {"real, held-out neurons", REAL_TUNING}
+    assert (by["real, held-out neurons"]["tn"], by["real, held-out neurons"]["held_out"]) == (1, True)
+    assert (by[REAL_TUNING]["fp"], by[REAL_TUNING]["held_out"]) == (1, False)
+    collapse = next(x for x in summary_rows(rows) if x["code"] == "collapse" and x["suite"] == REAL_TUNING)
+    assert collapse["held_out"]  # tuned on the synthetic suite alone: the tuning neurons hold it out
+    text = markdown(summary_rows(rows))
+    assert "| real, tuning neurons 30k |" in text and "tuning data |" in text
+
+
 def test_unknown_names_are_one_line_errors():
     with pytest.raises(SkelInputError, match="unknown suite"):
         calibration_tasks(["nope"])

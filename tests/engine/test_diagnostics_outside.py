@@ -225,3 +225,38 @@ def test_a_short_far_spur_is_outside_by_its_reach_alone():
     c, curve, samples, beta = normalized(s.cloud, s.curve_vertices, s.curve_edges)
     axis = find_outside(c, curve, samples=samples, sample_boundedness=beta)
     assert not len(axis.far_branches()) and axis.warnings(reach_only=True) == [] and axis.warnings() == []
+
+
+def test_on_a_traced_neuron_the_coarse_voxels_leave_only_the_reach_test():
+    """A traced neuron's neurites are thinner than the interior's voxels (several local radii), which
+    cannot tell a neurite from a few radii beside it: the length test stands down (``unchecked`` says
+    so), and the traced skeleton with every sample unbounded (what a one-sided scan gives) is not
+    ``outside``, where the voxels alone flagged it; a branch reaching far into the air still is, by its
+    reach (docs/diagnostics.md "Outside")."""
+    from skelcore.benchmark.neurons import MeshSampler, load_neuron
+    from skelcore.curve import CurveSkeleton
+    from skelcore.metrics.curve_sampling import sample_curve
+
+    neuron = load_neuron("1734350908")
+    sk = neuron.skeleton
+    radius = np.asarray(sk.radius, float)
+    cloud = MeshSampler(neuron.mesh, sk.vertices, radius).sample(6000, np.random.default_rng(0)).points
+    p = Params()
+    norm = Normalization.from_cloud(cloud, p.normalize_by, p.normalized_size)
+
+    def outside(v: np.ndarray, e: np.ndarray, params: Params = p):
+        curve = CurveSkeleton.from_raw(norm.apply(v), e)
+        samples = sample_curve(curve, params.curve_samples, collinear_cos=params.collinear_cos)
+        return find_outside(norm.apply(cloud), curve, samples=samples, sample_boundedness=np.zeros(len(samples)),
+                            params=params)
+
+    v, e = np.asarray(sk.vertices, float), np.asarray(sk.edges, np.int64)
+    intact = outside(v, e)
+    assert not intact.length_test and intact.voxel_size > p.outside_voxel_radii * intact.radius
+    assert intact.warnings() == [] and "outside_voxel_radii" in intact.unchecked
+    assert outside(v, e, Params(outside_voxel_radii=100.0)).warnings()  # the voxels alone: a false alarm
+    tip = int(np.argmax(v[:, 0]))
+    v2, e2, ids = attach_path(v, e, tip, v[tip] + [60.0 * float(np.median(radius)), 0, 0], 6)
+    far = outside(v2, e2)
+    (w,) = far.warnings()
+    assert far.branches.vertex_branch[ids[-1]] in far.far_branches() and "reaches more than 8 local radii" in w.message

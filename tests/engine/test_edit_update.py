@@ -166,3 +166,55 @@ def test_the_missing_parts_subsample_index_is_kept_across_updates_and_dropped_wi
     del ev, updated
     gc.collect()
     assert not cloud_index._kept
+
+
+@pytest.mark.parametrize("name,edit", [("y", "prune_branch"), ("y", "move_vertex"), ("torus", "delete_edge")])
+def test_the_two_phases_equal_one_update_and_a_fresh_evaluation(name, edit):
+    """update(diagnostics=False) then complete_update() equals update() and a fresh evaluate; the first
+    phase is left as it was, names what it left out, and a cancel stops the second."""
+    from skelcore.errors import Cancelled
+
+    cloud, skeletal, ev = _base(name)
+    curve = ev.curve.curve
+    new, change = {"prune_branch": lambda: E.prune_branch(curve, 0),
+                   "move_vertex": lambda: E.move_vertex(curve, 3, curve.vertices[3] + np.array([0.0, 0.03, 0.0])),
+                   "delete_edge": lambda: E.delete_edge(curve, tuple(curve.edges[0]))}[edit]()
+    quick = ev.update(change, diagnostics=False)
+    assert quick.diagnostics_left_out and not ev.diagnostics_left_out
+    before = quick.to_json_dict()
+    with pytest.raises(Cancelled):
+        quick.complete_update(cancel=lambda: True)
+    full = quick.complete_update()
+    assert not full.diagnostics_left_out and full.complete_update() is full
+    _same(full, ev.update(change))
+    _same(full, evaluate(cloud, skeletal, new))
+    _close(quick.to_json_dict(), before)
+    assert quick.diagnostics_left_out
+    with pytest.raises(SkelInputError, match="keeps no record"):
+        pickle.loads(pickle.dumps(quick)).complete_update()
+    newer, change2 = E.delete_edge(new, tuple(new.edges[-1]))
+    _same(quick.update(change2), evaluate(cloud, skeletal, newer))  # a first phase updates like any
+
+
+def test_the_cloud_only_values_the_diagnostics_ask_again_are_kept_per_array():
+    """The cloud's spacing is kept for a few arrays at once (the diagnostics ask of the cloud and of
+    its subsample's tree data; one entry made them evict each other at every update), the coverage's
+    noise sample for the last cloud; equal to computing them afresh, dropped with their array."""
+    import gc
+
+    from skelcore.diagnostics import interior
+    from skelcore.metrics import coverage
+
+    rng = np.random.default_rng(5)
+    a, b = rng.random((3000, 3)), rng.random((500, 3))
+    first = interior.median_spacing(a), interior.median_spacing(b)
+    assert (interior.median_spacing(a), interior.median_spacing(b)) == first
+    assert first[0] == interior.median_spacing(a.copy())  # a fresh array: computed again, the same
+    big = rng.random((coverage.NOISE_SAMPLE + 10, 3))
+    for cloud in (a, big):
+        pts, spacing = coverage._noise_sample(cloud)
+        assert coverage._noise_sample(cloud)[0] is pts and coverage._noise_sample(cloud.copy())[1] == spacing
+        assert coverage._noise_sample(cloud)[1] == spacing
+    del a, b, big, cloud, pts
+    gc.collect()
+    assert not coverage._last_noise and len(interior._last_spacing) <= interior._SPACINGS_KEPT

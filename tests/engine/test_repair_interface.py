@@ -143,3 +143,20 @@ def test_cli_refuses_in_one_line(files, capsys, extra, match):
 def test_a_repair_needs_a_curve_or_a_skeletal_set(files):
     with pytest.raises(skelcore.SkelInputError, match="a curve skeleton or a skeletal set"):
         skelcore.repair(load_cloud(files / "cloud.ply"))
+
+
+def test_the_recentring_memo_gives_the_same_actions_and_recuts_only_what_moved(drifted):
+    from skelcore.skeleton_repair.recentre import recentre
+
+    s, _ref, start, _r = drifted
+    plain = recentre(start, s.cloud, Params())
+    memo: dict = {}
+    first = recentre(start, s.cloud, Params(), memo)
+    cut = len(memo)
+    again = recentre(start, s.cloud, Params(), memo)
+    assert plain and [a.entries for a in first] == [a.entries for a in plain] == [a.entries for a in again]
+    assert len(memo) == cut  # the unchanged curve: every cross-section looked up, none cut again
+    v = start.vertices.copy()
+    v[15, 2] -= 0.1 * R
+    recentre(CurveSkeleton.from_raw(v, start.edges), s.cloud, Params(), memo)
+    assert cut < len(memo) <= cut + 3 * 2  # the moved vertex and its two neighbours' tangents, both cuts

@@ -101,7 +101,9 @@ def test_a_half_ten_times_sparser_has_no_strays(name):
 
 
 def test_strays_in_the_box_are_still_found():
-    """The suite's outliers effect (5 % of the points uniform in the grown box)."""
+    """The suite's outliers effect (5 % of the points uniform in the grown box). The off-surface test
+    excuses a few strays inside the surface points' box (121 of 250 found, 125 without it): the
+    normalization without the strays found is the same."""
     from skelcore.benchmark.scan_effects import ScanEffects, scan
     from skelcore.benchmark.validity import _shape
     from skelcore.scan.outliers import find_outliers
@@ -109,8 +111,52 @@ def test_strays_in_the_box_are_still_found():
     _, sampler, _ = _shape("torus", 0)
     s = scan(sampler, ScanEffects(n_points=5000, outliers=0.05), np.random.default_rng(0))
     strays = np.flatnonzero(np.isnan(s.local_radius))
-    found = find_outliers(s.cloud).rows
-    assert set(found) <= set(strays) and len(found) >= 0.5 * len(strays)
+    found = find_outliers(s.cloud)
+    assert set(found.rows) <= set(strays) and found.count >= 0.45 * len(strays)
+    without = find_outliers(s.cloud, Params(outlier_off_surface_cos=0.0, open_angle=359.9))
+    assert found.count < without.count and found.scale_ratio == pytest.approx(without.scale_ratio, rel=1e-3)
+
+
+def _one_sided(neuron: str, n: int = 15_000) -> np.ndarray:
+    """A neuron's mesh sampled, then what one sensor sees of it (hidden point removal, gamma 3)."""
+    from skelcore.scan.synthetic import visible_from
+
+    cloud = _sample_obj(NEURONS / f"{neuron}.obj", n)
+    lo, hi = cloud.min(axis=0), cloud.max(axis=0)
+    eye = (lo + hi) / 2 + 2.5 * float(np.linalg.norm(hi - lo)) * np.array([1.0, 0.0, 0.5])
+    return cloud[visible_from(cloud, eye)]
+
+
+@pytest.mark.parametrize("neuron", ["1734350908", "1734350788"])
+def test_a_one_sided_neuron_scan_has_no_strays_but_strays_added_to_it_are_found(neuron):
+    """Its lone points (occlusions leave them 10-30 spacings from the rest) lie in gaps of the surface
+    (6 and 13 were strays before the off-surface test); the suite's strays, 5 % uniform in the grown
+    box, are found all the same, and nothing else."""
+    from skelcore.scan.outliers import find_outliers
+
+    scan = _one_sided(neuron)
+    assert 3000 < len(scan) < 4000 and find_outliers(scan).count == 0
+    lo, hi = scan.min(axis=0), scan.max(axis=0)
+    grow = 0.1 * float(np.linalg.norm(hi - lo))
+    strays = np.random.default_rng(1).uniform(lo - grow, hi + grow, size=(len(scan) // 20, 3))
+    found = find_outliers(np.vstack([scan, strays])).rows
+    assert found.min() >= len(scan) and len(found) >= 0.3 * len(strays)
+
+
+@pytest.mark.parametrize("neuron", ["1734350908", "1734350788"])
+def test_a_one_sided_neuron_scan_is_open_where_its_thin_parts_face_one_way(neuron):
+    """Its rim runs along thin branches, which join no opening: no opening counted before. Their points
+    now face one common way from the traced axis (more than open_one_sided), their mirror is the
+    missing side; the whole mesh sampled at 15k points has none."""
+    from skelcore.scan.escape import skeleton_openings
+
+    elements = _swc_elements(NEURONS / f"{neuron}.swc")
+    _, counted, thin = skeleton_openings(_one_sided(neuron), elements)
+    (mirror,) = [o for o in counted if "one_sided" in o.notes]
+    assert mirror.kind == "side" and mirror.notes["one_sided"] > Params().open_one_sided and len(mirror.dome) > 100
+    assert len(thin) > 1000  # thin_parts still names them
+    _, counted, _ = skeleton_openings(_sample_obj(NEURONS / f"{neuron}.obj", 15_000), elements)
+    assert counted == []
 
 
 def test_a_flung_skeletal_point_is_no_stray_but_a_strays_image_is():

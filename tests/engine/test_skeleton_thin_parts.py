@@ -53,3 +53,36 @@ def test_the_command_says_it_took_the_axis_curve(tmp_path, capsys):
     printed = capsys.readouterr().out
     assert "thin parts" in printed and "(axis)" in printed and "repaired:" in printed
     assert np.ptp(load_curve(out).vertices[:, 2]) > 3.8
+
+
+def test_the_ring_curve_follows_a_thin_y_to_its_three_tips():
+    from skelcore.correspondence import project_onto_curve
+    from skelcore.curve import CurveSkeleton
+
+    s = shapes.y_shape(12000, radius=0.01, seed=5)
+    _sk, curve, _info, choice = default_skeleton(s.cloud)
+    assert choice.method == "axis"
+    truth = CurveSkeleton.from_raw(s.curve_vertices, s.curve_edges)
+    off = np.linalg.norm(curve.vertices - project_onto_curve(curve.vertices, truth)[0], axis=1)
+    assert off.max() < 0.01  # every vertex inside the tube, on its axis
+    tips = s.curve_vertices[np.bincount(s.curve_edges.ravel(), minlength=len(s.curve_vertices)) == 1]
+    assert all(np.linalg.norm(curve.vertices - t, axis=1).min() < 0.01 for t in tips)
+    deg = np.bincount(curve.edges.ravel(), minlength=curve.n_vertices)
+    assert np.linalg.norm(curve.vertices[deg >= 3], axis=1).min() < 0.03  # the junction at the origin
+    assert curve.n_edges == curve.n_vertices - 1
+
+
+def test_the_ball_curve_is_kept_as_an_option_and_chains_are_thinned_not_moved():
+    from skelcore.skeleton.axis_rings import simplify_chains
+    from skelcore.skeleton.skeleton_params import AxisParams
+    from skelcore.curve import CurveSkeleton
+
+    cloud = shapes.cylinder(2000, radius=0.02, length=2.0, capped=False, seed=3).cloud
+    moved = axis_contract(cloud)
+    rings, balls = axis_curve(moved), axis_curve(moved, AxisParams(curve="balls"))
+    assert rings.n_vertices > 10 and balls.n_vertices > 10
+    line = CurveSkeleton.from_raw(np.column_stack([np.zeros((11, 2)), np.linspace(0, 1, 11)]),
+                                  np.column_stack([np.arange(10), np.arange(1, 11)]))
+    thin = simplify_chains(line, 1e-9, 0.25)
+    assert thin.n_vertices == 6 and thin.n_edges == 5  # every other inner vertex, the ends kept
+    assert set(map(float, thin.vertices[:, 2])) <= set(map(float, line.vertices[:, 2]))

@@ -15,15 +15,32 @@ from scipy.stats import binomtest
 
 from .grid import CODES, CONDITIONS
 
-__all__ = ["DOC_MARKS", "TUNED_ON", "outcome", "summary_rows", "markdown", "write_report", "fill_docs"]
+__all__ = ["DOC_MARKS", "TUNED_ON", "TUNING_NEURONS", "REAL_TUNING", "group_of", "outcome", "summary_rows", "markdown", "write_report", "fill_docs"]
 
 #: the lines between which docs/diagnostics.md holds the generated tables
 DOC_MARKS = ("<!-- calibration tables: written by skelcore bench calibrate --docs -->",
              "<!-- end of the calibration tables -->")
 
-#: which suite chose each code's thresholds (Params): the other suite's numbers are held out
+#: the traced neurons some codes' thresholds were chosen on; the other neurons are held out and their
+#: rows are reported apart from these (docs/diagnostics.md "Precision and recall per warning")
+TUNING_NEURONS = ("1734350788", "1734350908")
+
+#: the real suite's label for the tuning neurons' rows
+REAL_TUNING = "real, tuning neurons"
+
+#: which data chose each code's thresholds (Params): every other row is held out
 TUNED_ON = {c: "synthetic" for c in CODES}
+TUNED_ON.update({c: "synthetic + tuning neurons" for c in
+                 ("spurious_branches", "missing_cycles", "outside", "outliers", "open_surface")})
 TUNED_ON.update(trivial_smoothness="none (a fact of the curve)", no_correspondence="none (a fact of the inputs)")
+
+
+def group_of(row: dict[str, Any]) -> str:
+    """The row's table group: its suite, the real suite split into its held-out and tuning neurons."""
+    suite = str(row["suite"])
+    if suite.startswith("real"):
+        return REAL_TUNING if str(row.get("shape", "")) in TUNING_NEURONS else f"{suite}, held-out neurons"
+    return suite
 
 
 def outcome(row: dict[str, Any], code: str) -> str | None:
@@ -38,6 +55,14 @@ def outcome(row: dict[str, Any], code: str) -> str | None:
             return "fn"
         return "tp" if fired else "fn"
     return "fp" if fired else "tn"
+
+
+def _tuned_here(code: str, group: str) -> bool:
+    """Whether ``code``'s thresholds were chosen on the rows of ``group``."""
+    tuned = TUNED_ON[code]
+    if group == REAL_TUNING:
+        return "tuning neurons" in tuned
+    return group.startswith("synthetic") and tuned.startswith("synthetic")
 
 
 def _ci(k: int, n: int) -> tuple[float | None, float | None, float | None]:
@@ -60,10 +85,11 @@ def summary_rows(rows: list[dict[str, Any]]) -> list[dict[str, Any]]:
     """One record per (code, suite, size, condition or "all"): counts, precision, recall and the
     false-alarm rate, each with its Wilson interval."""
     out = []
-    groups = sorted({(r["suite"], int(r["size"])) for r in rows}, key=lambda g: (g[0] != "synthetic", g[1]))
+    groups = sorted({(group_of(r), int(r["size"])) for r in rows},
+                    key=lambda g: (g[0] != "synthetic", g[0] == REAL_TUNING, g[1]))
     for code in CODES:
         for suite, size in groups:
-            mine = [r for r in rows if r["suite"] == suite and int(r["size"]) == size]
+            mine = [r for r in rows if group_of(r) == suite and int(r["size"]) == size]
             for cond in ("all", *CONDITIONS):
                 sel = mine if cond == "all" else [r for r in mine if r["condition"] == cond]
                 if not sel:
@@ -76,7 +102,7 @@ def summary_rows(rows: list[dict[str, Any]]) -> list[dict[str, Any]]:
                             "precision": p, "precision_lo": plo, "precision_hi": phi,
                             "recall": rc, "recall_lo": rlo, "recall_hi": rhi,
                             "false_alarm": fa, "false_alarm_lo": falo, "false_alarm_hi": fahi,
-                            "tuned_on": TUNED_ON[code]})
+                            "tuned_on": TUNED_ON[code], "held_out": not _tuned_here(code, suite)})
     return out
 
 
@@ -101,21 +127,24 @@ def markdown(summary: list[dict[str, Any]], *, command: str = "", machine: str =
                      f"; {len(rows)} evaluated skeletons, {evals / 60:.1f} min of evaluation summed over the workers.")
         lines.append("")
     lines += ["Precision = TP / (TP + FP), recall = TP / (TP + FN), false alarms = FP / (FP + TN), each with its "
-              "Wilson 95 % interval; `-`: no case to count. Thresholds (`skelcore.Params`) were tuned on the suite "
-              "named in the last column: the other suite's rows are held out.", "",
-              "| code | suite, density | TP | FN | FP | TN | precision | recall | false alarms | tuned on |",
-              "|---|---|---|---|---|---|---|---|---|---|"]
+              "Wilson 95 % interval; `-`: no case to count. Thresholds (`skelcore.Params`) were tuned on the data "
+              "named in the column \"tuned on\" (the tuning neurons: " + ", ".join(TUNING_NEURONS) + "); the last "
+              "column says whether a row is held out or is that tuning data.", "",
+              "| code | suite, density | TP | FN | FP | TN | precision | recall | false alarms | tuned on | these rows |",
+              "|---|---|---|---|---|---|---|---|---|---|---|"]
     for s in (x for x in summary if x["condition"] == "all"):
         lines.append(f"| `{s['code']}` | {_size(s['suite'], s['size'])} | {s['tp']} | {s['fn']} | {s['fp']} | {s['tn']} | "
                      f"{_fmt(s['precision'], s['precision_lo'], s['precision_hi'])} | "
                      f"{_fmt(s['recall'], s['recall_lo'], s['recall_hi'])} | "
-                     f"{_fmt(s['false_alarm'], s['false_alarm_lo'], s['false_alarm_hi'])} | {s['tuned_on']} |")
+                     f"{_fmt(s['false_alarm'], s['false_alarm_lo'], s['false_alarm_hi'])} | {s['tuned_on']} | "
+                     f"{'held out' if s['held_out'] else 'tuning data'} |")
     conds = list(CONDITIONS)
     lines += ["", "Per scan condition: hits / positives, false alarms / negatives (`-`: none to count).", "",
               "| code | suite, density | " + " | ".join(conds) + " |", "|---|---|" + "---|" * len(conds)]
     by = {(s["code"], s["suite"], s["size"], s["condition"]): s for s in summary}
     for code in CODES:
-        for suite, size in sorted({(s["suite"], s["size"]) for s in summary}, key=lambda g: (g[0] != "synthetic", g[1])):
+        for suite, size in sorted({(s["suite"], s["size"]) for s in summary},
+                                  key=lambda g: (g[0] != "synthetic", g[0] == REAL_TUNING, g[1])):
             cells = []
             for c in conds:
                 s = by.get((code, suite, size, c))

@@ -1,0 +1,50 @@
+"""Whether an isolated point lies off the sampled surface or in a gap of it (docs/metrics.md 6.4).
+
+A stray point lands anywhere in the volume, and the shortest way from it to a surface runs along the
+surface's normal: its nearest surface points see it straight above their tangent plane.  A surface
+point left alone by the sampling (a one-sided scan's occlusions, a part sampled 10 x more sparsely)
+lies in a gap of that surface: its nearest surface points see it along their tangent plane, or lie
+on the rim of the gap (PCL's boundary test, :mod:`.boundary`).  Isolation alone cannot tell the two
+apart (a one-sided neuron scan leaves lone points 10-30 spacings from the rest); the direction can.
+A point beyond the box of the surface points is in no gap: it stays a stray whatever its direction.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from scipy.spatial import cKDTree
+
+from ..params import Params
+from .boundary import largest_angle_gap, tangent_frames
+
+__all__ = ["off_surface"]
+
+
+def off_surface(cloud: np.ndarray, rows: np.ndarray, surface: np.ndarray, params: Params = Params()) -> np.ndarray:
+    """(len(rows),) bool: the point at each row lies off the surface sampled by the rows ``surface``
+    (a bool mask of the cloud): the median |cos| between its offset from its ``outlier_surface_points``
+    nearest surface points and their normals (PCA of their ``open_k`` nearest surface points) exceeds
+    ``outlier_off_surface_cos``, and none of them is a rim point (largest angular gap between its
+    neighbours above ``open_angle``); or it lies beyond the surface points' box (a gap lies between
+    them; such a point sets the normalization).  All True when the surface has too few points to judge."""
+    cloud = np.asarray(cloud, dtype=float)
+    rows = np.asarray(rows, np.int64)
+    base = cloud[np.asarray(surface, bool)]
+    k = int(params.open_k)
+    m = int(params.outlier_surface_points)
+    if len(rows) == 0 or len(base) < max(k, m) + 1:
+        return np.ones(len(rows), bool)
+    tree = cKDTree(base)
+    _, near = tree.query(cloud[rows], k=m, workers=-1)
+    near = near.reshape(len(rows), m)
+    uniq, inverse = np.unique(near, return_inverse=True)
+    _, nb = tree.query(base[uniq], k=k + 1, workers=-1)
+    frames = tangent_frames(base, nb)
+    rim = largest_angle_gap(base[nb[:, 1:]] - base[uniq][:, None, :], frames) > np.radians(params.open_angle)
+    inverse = inverse.reshape(near.shape)
+    offset = cloud[rows][:, None, :] - base[near]
+    length = np.linalg.norm(offset, axis=2)
+    cos = np.abs(np.einsum("ijk,ijk->ij", offset, frames[inverse, 2])) / np.maximum(length, 1e-300)
+    gap = (np.median(cos, axis=1) <= float(params.outlier_off_surface_cos)) | rim[inverse].any(axis=1)
+    inside = np.all((cloud[rows] >= base.min(axis=0)) & (cloud[rows] <= base.max(axis=0)), axis=1)
+    return ~(gap & inside)
