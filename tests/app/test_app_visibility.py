@@ -185,3 +185,20 @@ def test_vtk_interaction_draws_through_the_paint_once_per_frame(big, qtbot):
     qtbot.waitUntil(lambda: bool(frames) and not view.render_pending, timeout=20000)
     qtbot.wait(100)
     assert frames == [True]  # full detail, drawn once
+
+
+@pytest.mark.gui
+@pytest.mark.window(size=(900, 700))
+def test_software_gl_blends_the_translucent_cloud_in_order_with_the_same_picture(big):
+    window, _cloud, _skeletal = big
+    view = window.view
+    renderer = view.plotter.renderer
+    assert view.plotter.software_gl and not renderer.GetUseOIT()
+    plain = view.image().astype(int)
+    renderer.SetUseOIT(True)  # VTK's default: order-independent translucency
+    try:
+        oit = view.image().astype(int)
+    finally:
+        renderer.SetUseOIT(False)
+    assert np.abs(plain - oit).max() <= 2  # a uniform translucent layer: the blend order does not matter
+    assert (np.abs(plain - oit).max(axis=-1) > 0).mean() < 0.2
