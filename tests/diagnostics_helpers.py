@@ -32,3 +32,19 @@ def attach_path(verts: np.ndarray, edges: np.ndarray, start: int, end_point: np.
     ids = np.arange(len(verts), len(verts) + len(pts))
     chain = np.concatenate([[start], ids] + ([[to]] if to is not None else []))
     return np.vstack([verts, pts]), np.vstack([edges, np.column_stack([chain[:-1], chain[1:]])]), ids
+
+
+def sparse_half(sampler, n: int, rng: np.random.Generator, first: np.ndarray | None = None) -> np.ndarray:
+    """``n`` points of ``sampler`` (a SurfaceSampler) whose half beyond the median of the longest side
+    keeps a tenth of its points: ``first`` (or a fresh sample) thinned, then further samples thinned
+    alike until ``n`` are kept."""
+    pts = sampler.sample(n, rng).points if first is None else first
+    axis = int(np.argmax(np.ptp(pts, axis=0)))
+    median = float(np.median(pts[:, axis]))
+    parts, have = [], 0
+    while have < n:
+        keep = (pts[:, axis] < median) | (rng.uniform(size=len(pts)) < 0.1)
+        parts.append(pts[keep])
+        have += int(keep.sum())
+        pts = sampler.sample(n, rng).points
+    return np.vstack(parts)[:n]

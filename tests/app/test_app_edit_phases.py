@@ -43,8 +43,18 @@ def held(monkeypatch):
     gate.set()
 
 
+def prune_tip_to_second_phase(qtbot, w, tip: int) -> None:
+    """Edit mode on, the tip vertex selected and deleted, until the edit's second phase runs."""
+    from skelscope.edit_scoring import DEFECTS_TASK
+
+    key(qtbot, w, "E")
+    w.select_element("curve", "vertices", tip)
+    key(qtbot, w, "Delete")
+    qtbot.waitUntil(lambda: w.session.runner.current_name == DEFECTS_TASK, timeout=30000)
+
+
 def test_the_defects_follow_the_scores_and_never_mix_with_them(window, qtbot, tmp_path, held):
-    from skelscope.edit_scoring import DEFECTS_TASK, UPDATING
+    from skelscope.edit_scoring import UPDATING
 
     w = window
     cloud_path, _curve, tip = loaded(qtbot, w, tmp_path)
@@ -53,10 +63,7 @@ def test_the_defects_follow_the_scores_and_never_mix_with_them(window, qtbot, tm
     marks = dict(w.defects.marks)
     landed = []
     w.session.evaluated.connect(landed.append)
-    key(qtbot, w, "E")
-    w.select_element("curve", "vertices", tip)
-    key(qtbot, w, "Delete")
-    qtbot.waitUntil(lambda: w.session.runner.current_name == DEFECTS_TASK, timeout=30000)
+    prune_tip_to_second_phase(qtbot, w, tip)
     partial = w.scene.evaluation
     edited = w.scene.curve.curve
     fresh = skelcore.evaluate(load_cloud(cloud_path), curve=edited)
@@ -83,10 +90,7 @@ def test_a_further_edit_an_undo_or_a_cancel_stops_a_stale_second_phase(window, q
     first = w.scene.evaluation
     landed = []
     w.session.evaluated.connect(landed.append)
-    key(qtbot, w, "E")
-    w.select_element("curve", "vertices", tip)
-    key(qtbot, w, "Delete")
-    qtbot.waitUntil(lambda: w.session.runner.current_name == DEFECTS_TASK, timeout=30000)
+    prune_tip_to_second_phase(qtbot, w, tip)
     pruned = w.scene.curve.curve
     w.edits.select("edge", tuple(int(v) for v in pruned.edges[0]))  # the cylinder's first edge
     key(qtbot, w, "Delete")

@@ -39,15 +39,9 @@ def _tube_cloud(shape: BenchShape, n: int, *, noise: float = 0.0, sparse_half: b
     pts = s.points + rng.normal(size=s.points.shape) * (noise * s.radius)[:, None]
     if not sparse_half:
         return pts
-    axis = int(np.argmax(np.ptp(pts, axis=0)))
-    median = float(np.median(pts[:, axis]))
-    parts, have = [], 0
-    while have < n:
-        keep = (pts[:, axis] < median) | (rng.uniform(size=len(pts)) < 0.1)
-        parts.append(pts[keep])
-        have += int(keep.sum())
-        pts = sampler.sample(n, rng).points
-    return np.vstack(parts)[:n]
+    from diagnostics_helpers import sparse_half as thin_half
+
+    return thin_half(sampler, n, rng, first=pts)
 
 
 def _trefoil() -> BenchShape:

@@ -80,17 +80,9 @@ def _half_sparse(name: str, n: int = 5000, seed: int = 0) -> np.ndarray:
     from skelcore.benchmark.validity import _shape
 
     _, sampler, _ = _shape(name, 0)
-    rng = np.random.default_rng(seed)
-    first = sampler.sample(n, rng).points
-    axis = int(np.argmax(np.ptp(first, axis=0)))
-    median = float(np.median(first[:, axis]))
-    parts, have, pts = [], 0, first
-    while have < n:
-        keep = (pts[:, axis] < median) | (rng.uniform(size=len(pts)) < 0.1)
-        parts.append(pts[keep])
-        have += int(keep.sum())
-        pts = sampler.sample(n, rng).points
-    return np.vstack(parts)[:n]
+    from diagnostics_helpers import sparse_half
+
+    return sparse_half(sampler, n, np.random.default_rng(seed))
 
 
 @pytest.mark.parametrize("name", ["tube_a", "junction_x", "torus"])
