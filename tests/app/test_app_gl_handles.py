@@ -18,6 +18,9 @@ pytestmark = pytest.mark.gui
 
 
 def _surface_wrappers() -> list[object]:
+    """The live QSurface wrappers, once the widgets earlier tests left for deferred deletion are gone
+    (else one of theirs, counted before, would vanish during the test)."""
+    QtCore.QCoreApplication.sendPostedEvents(None, QtCore.QEvent.Type.DeferredDelete)
     gc.collect()
     return [o for o in gc.get_objects() if isinstance(o, QtGui.QSurface)]
 
