@@ -78,12 +78,19 @@ def skeleton_openings(cloud: np.ndarray, skeleton: np.ndarray, params: Params = 
     openings = find_openings(cloud, params, checkpoint=checkpoint, thin_rows=thin_rows,
                              diameter=lambda pts: 2.0 * tree.query(pts, k=1, workers=-1)[0])
     thin = np.asarray(thin_rows, np.int64)
-    mirror = one_sided_thin(cloud, skeleton, thin, params)  # thin parts seen from one side
+    kept: list[cKDTree] = []
+
+    def cloud_tree() -> cKDTree:  # built once, and only when asked
+        if not kept:
+            kept.append(cKDTree(cloud))
+        return kept[0]
+
+    mirror = one_sided_thin(cloud, skeleton, thin, params, cloud_tree=cloud_tree, skel_tree=tree)  # seen from one side
     if mirror is not None:
         openings.append(mirror)
     counted = [o for o in openings if len(o.dome)]
     if counted:
-        radius = cKDTree(cloud).query(skeleton, k=1, workers=-1)[0]
+        radius = cloud_tree().query(skeleton, k=1, workers=-1)[0]
         for o in counted:
             o.notes["fill_near_skeleton"] = fill_near_skeleton(o, skeleton, radius, params.open_fill_reach, tree)
         counted = [o for o in counted if o.kind == "end" or o.notes["fill_near_skeleton"] >= 0.5]

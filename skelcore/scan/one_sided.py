@@ -14,6 +14,8 @@ their axis elements.
 
 from __future__ import annotations
 
+from typing import Callable
+
 import numpy as np
 from scipy.spatial import cKDTree
 
@@ -23,42 +25,45 @@ from .openings import Opening, median_spacing
 __all__ = ["one_sided_thin", "facing"]
 
 
-def facing(cloud: np.ndarray, tree: cKDTree, elements: np.ndarray, reach: np.ndarray, skeleton: np.ndarray,
+def facing(cloud: np.ndarray, elements: np.ndarray, near: list, skeleton: np.ndarray, skel_tree: cKDTree,
            min_points: int = 8) -> np.ndarray:
-    """(len(elements), 3): the mean unit direction from each element to the cloud points within its
-    ``reach``, across the axis (its component along the principal direction of the element's 8 nearest
-    ``skeleton`` elements left out: a density that changes along a part is no side); zero where fewer
-    than ``min_points`` points are near (too few to show a side)."""
+    """(len(elements), 3): the mean unit direction from each element to its cloud points ``near`` (the
+    rows within its reach), across the axis (its component along the principal direction of the
+    element's 8 nearest ``skeleton`` elements, ``skel_tree`` their tree, left out: a density that
+    changes along a part is no side); zero where fewer than ``min_points`` points are near (too few to
+    show a side)."""
     out = np.zeros((len(elements), 3))
-    skel_tree = cKDTree(skeleton)
     nb = skel_tree.query(elements, k=min(8, len(skeleton)), workers=-1)[1].reshape(len(elements), -1)
     along = skeleton[nb] - skeleton[nb].mean(axis=1, keepdims=True)
     axis = np.linalg.eigh(np.matmul(along.transpose(0, 2, 1), along))[1][:, :, 2]
-    for i, near in enumerate(tree.query_ball_point(elements, reach, workers=-1)):
-        if len(near) >= min_points:
-            u = cloud[near] - elements[i]
+    for i, rows in enumerate(near):
+        if len(rows) >= min_points:
+            u = cloud[rows] - elements[i]
             n = np.linalg.norm(u, axis=1, keepdims=True)
             m = np.mean(np.divide(u, n, out=np.zeros_like(u), where=n > 0), axis=0)
             out[i] = m - (m @ axis[i]) * axis[i]
     return out
 
 
-def one_sided_thin(cloud: np.ndarray, skeleton: np.ndarray, thin_rows: np.ndarray,
-                   params: Params = Params()) -> Opening | None:
+def one_sided_thin(cloud: np.ndarray, skeleton: np.ndarray, thin_rows: np.ndarray, params: Params = Params(), *,
+                   cloud_tree: Callable[[], cKDTree] | None = None,
+                   skel_tree: cKDTree | None = None) -> Opening | None:
     """The missing side of the thin parts (module docstring) as one opening of kind "side" whose fill
     and dome are the mirrored points farther than a median spacing from the cloud; None when the thin
-    boundary points are fewer than ``thin_min_share`` of the cloud or face no common way."""
+    boundary points are fewer than ``thin_min_share`` of the cloud or face no common way.
+    ``cloud_tree`` (gives the cloud's kd-tree, built once by the caller) and ``skel_tree``: shared trees."""
     cloud = np.asarray(cloud, dtype=float)
     rows = np.unique(np.asarray(thin_rows, np.int64))
     if len(rows) < max(8, float(params.thin_min_share) * len(cloud)) or len(skeleton) == 0:
         return None
-    tree = cKDTree(cloud)
-    skel_tree = cKDTree(skeleton)
+    tree = cKDTree(cloud) if cloud_tree is None else cloud_tree()
+    skel_tree = cKDTree(skeleton) if skel_tree is None else skel_tree
     to_axis, which = skel_tree.query(cloud[rows], k=1, workers=-1)
     elements, first = np.unique(which, return_index=True)
     axis = skeleton[elements]
     reach = 2.0 * np.maximum(tree.query(axis, k=1, workers=-1)[0], to_axis[first])
-    u = facing(cloud, tree, axis, reach, skeleton)
+    near = tree.query_ball_point(axis, reach, workers=-1)
+    u = facing(cloud, axis, near, skeleton, skel_tree)
     length = np.linalg.norm(u, axis=1)
     if not length.any():
         return None
@@ -71,8 +76,7 @@ def one_sided_thin(cloud: np.ndarray, skeleton: np.ndarray, thin_rows: np.ndarra
     if not common > max(float(params.open_one_sided), 3.0 / np.sqrt(len(judged))):
         return None
     spacing = median_spacing(cloud, tree)
-    mirrored = [2.0 * axis[i] - cloud[near] for i, near in enumerate(tree.query_ball_point(axis, reach, workers=-1))
-                if near]
+    mirrored = [2.0 * axis[i] - cloud[rows] for i, rows in enumerate(near) if rows]
     dome = np.vstack(mirrored) if mirrored else np.empty((0, 3))
     dome = dome[tree.query(dome, k=1, workers=-1)[0] > spacing]
     if len(dome) and spacing > 0:  # one point per cell of a spacing
