@@ -25,7 +25,7 @@ from scipy import ndimage
 from ..geometry import Checkpoint, bounding_box, no_checkpoint
 
 __all__ = ["VoxelShape", "voxelize_interior", "betti_numbers", "wide_tunnels", "median_spacing", "cloud_subsample",
-           "supported_voxels", "ray_interior", "ray_hits_share", "firm_tunnels", "LATTICE_DIRECTIONS"]
+           "supported_voxels", "ray_interior", "ray_hits_share", "firm_tunnels", "fill_holes", "LATTICE_DIRECTIONS"]
 
 #: the 26 lattice directions (each component -1, 0 or 1, not all 0)
 LATTICE_DIRECTIONS = np.array([(a, b, c) for a in (-1, 0, 1) for b in (-1, 0, 1) for c in (-1, 0, 1)
@@ -52,7 +52,7 @@ class VoxelShape:
     def solid(self) -> np.ndarray:
         """``inside`` with its cavities filled (the outside test's "in the shape"), made once per grid."""
         if self._solid is None:
-            self._solid = ndimage.binary_fill_holes(self.inside)
+            self._solid = fill_holes(self.inside)
         return self._solid
 
     def index_of(self, points: np.ndarray) -> np.ndarray:
@@ -62,6 +62,22 @@ class VoxelShape:
 
     def centres(self, ijk: np.ndarray) -> np.ndarray:
         return self.origin + np.asarray(ijk, float) * self.size
+
+
+def fill_holes(mask: np.ndarray) -> np.ndarray:
+    """``mask`` with its holes filled: ``scipy.ndimage.binary_fill_holes`` (the same voxels), by one
+    labelling of the rest (face-connected, as there) instead of a flood from the border (a third of its
+    time on the interior's grids). Empty parts not touching the grid's border are holes."""
+    mask = np.asarray(mask, bool)
+    labels, n = ndimage.label(~mask)
+    if n == 0:
+        return mask.copy()
+    outside = np.zeros(n + 1, bool)
+    for axis in range(mask.ndim):
+        for end in (0, -1):
+            outside[np.take(labels, end, axis=axis)] = True
+    outside[0] = False  # the mask's own voxels
+    return ~outside[labels]
 
 
 def _ray_hits(target: np.ndarray, d: np.ndarray) -> np.ndarray:
@@ -195,12 +211,13 @@ def ray_interior(surface: np.ndarray, shares: tuple[float, ...],
     that share of the lattice rays meet it grown by one), cavities filled: :func:`voxelize_interior`'s
     rule on given surface voxels, at several shares for one sweep of the rays."""
     hits = ray_hits_share(surface, checkpoint)
-    return [ndimage.binary_fill_holes(surface | (hits > s)) for s in shares]
+    return [fill_holes(surface | (hits > s)) for s in shares]
 
 
-def betti_numbers(solid: np.ndarray) -> tuple[int, int, int]:
+def betti_numbers(solid: np.ndarray, filled: bool = False) -> tuple[int, int, int]:
     """(beta0, beta1, beta2) of the union of the closed unit cubes of ``solid`` (a bool grid with
-    an empty border): chi = V - E + F - C counted on the cubical complex."""
+    an empty border): chi = V - E + F - C counted on the cubical complex. ``filled``: ``solid`` has
+    no cavity (:func:`fill_holes`' output), so beta2 = 0 without labelling the rest."""
     s = np.pad(np.asarray(solid, bool), 1)
     c = int(s.sum())
     # a face normal to axis a lies between the two cubes beside it along a
@@ -229,6 +246,8 @@ def betti_numbers(solid: np.ndarray) -> tuple[int, int, int]:
     verts = int(acc.sum())
     chi = verts - edges + faces - c
     _, b0 = ndimage.label(s, structure=np.ones((3, 3, 3), bool))
+    if filled:
+        return int(b0), int(b0 - chi), 0
     lab, nc = ndimage.label(~s)
     border = np.unique(np.concatenate([lab[0].ravel(), lab[-1].ravel(), lab[:, 0].ravel(), lab[:, -1].ravel(),
                                        lab[:, :, 0].ravel(), lab[:, :, -1].ravel()]))
@@ -274,7 +293,7 @@ def firm_tunnels(cloud: np.ndarray, vs: VoxelShape, *, inside_share: float, stri
         return 0
     kept = supported_voxels(cloud, vs, block=block, min_points=min_points, share=share)
     if np.array_equal(kept, vs.occupied):  # nothing isolated: the same rays, only the stricter share
-        solids = [ndimage.binary_fill_holes(vs.occupied | (vs.hits > strict_share))]
+        solids = [fill_holes(vs.occupied | (vs.hits > strict_share))]
     else:
         solids = ray_interior(kept, (inside_share, strict_share), checkpoint)
     for solid in solids:
