@@ -120,10 +120,12 @@ _SPACINGS_KEPT = 4
 _spacing_lock = threading.Lock()
 
 
-def median_spacing(cloud: np.ndarray, max_points: int = 20000) -> float:
+def median_spacing(cloud: np.ndarray, max_points: int = 20000, spacings: np.ndarray | None = None) -> float:
     """The cloud's median nearest-neighbour spacing, from a random subsample of at most
     ``max_points`` (seed 0) scaled by sqrt(m / n): a surface sample's spacing shrinks as
-    1 / sqrt(density). Exact for clouds of at most ``max_points``."""
+    1 / sqrt(density). Exact for clouds of at most ``max_points``; for those, ``spacings`` (each row's
+    exact distance to its nearest other row, when the caller has them) give the same value without a
+    search."""
     from scipy.spatial import cKDTree
 
     cloud = np.asarray(cloud, dtype=float)
@@ -134,9 +136,12 @@ def median_spacing(cloud: np.ndarray, max_points: int = 20000) -> float:
     if hit is not None and hit[0]() is cloud:
         return hit[1]
     m = min(n, int(max_points))
-    sub = cloud if m == n else cloud[np.random.default_rng(0).choice(n, m, replace=False)]
-    d, _ = cKDTree(sub).query(sub, k=2)
-    value = float(np.median(d[:, 1])) * float(np.sqrt(m / n))
+    if m == n and spacings is not None and len(spacings) == n:
+        value = float(np.median(np.asarray(spacings, dtype=float)))
+    else:
+        sub = cloud if m == n else cloud[np.random.default_rng(0).choice(n, m, replace=False)]
+        d, _ = cKDTree(sub).query(sub, k=2)
+        value = float(np.median(d[:, 1])) * float(np.sqrt(m / n))
     key = (id(cloud), n, max_points)
     try:
         ref = weakref.ref(cloud, lambda r, k=key, kept=_last_spacing: kept.pop(k, None)

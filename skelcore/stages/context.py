@@ -168,11 +168,13 @@ class EvalContext:
     def interior(self, checkpoint: Checkpoint = no_checkpoint):
         """The normalized cloud's voxelized interior (docs/diagnostics.md "Cycles"), made once by the first
         diagnostic that asks (curve defects, skeletal outside: the same grid, the same parameters)."""
-        from ..diagnostics.interior import voxelize_interior
+        from ..diagnostics.interior import median_spacing, voxelize_interior
 
         with self._interior_lock:
             if not self._interior:
                 p = self.params
+                if self.with_coverage:  # coverage's tau reads the same exact spacings: one search for both
+                    median_spacing(self.cloud_n, spacings=self.cloud_index.spacings(checkpoint))
                 self._interior.append(voxelize_interior(self.cloud_n, voxels=p.cycles_voxels,
                                                         min_spacing_factor=p.cycles_voxel_spacing,
                                                         inside_share=p.beta_star, checkpoint=checkpoint))
