@@ -753,6 +753,16 @@ class MainWindow(QtWidgets.QMainWindow):
             self.docks["Display"].raise_()
         super().showEvent(event)
 
+    def event(self, event: QtCore.QEvent) -> bool:
+        """A tab bar of tabbed docks shows its titles whole, scrolling its tabs when they do not fit: Qt
+        elides them ("Barco…", "Def…" in a narrow dock at 1.5 x on 1366 x 768), which hides which
+        panel each tab opens. Set when Qt polishes the bar, after its own setup (which sets eliding)."""
+        if event.type() == QtCore.QEvent.Type.ChildPolished and isinstance(event.child(), QtWidgets.QTabBar):
+            bar = event.child()
+            bar.setElideMode(QtCore.Qt.TextElideMode.ElideNone)
+            bar.setUsesScrollButtons(True)
+        return super().event(event)
+
     # ---- closing --------------------------------------------------------------------------
     def closeEvent(self, event: QtGui.QCloseEvent) -> None:  # noqa: N802
         """Quitting cancels any running task and waits for it at most SHUTDOWN_WAIT_S in all (a task
