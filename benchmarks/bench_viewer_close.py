@@ -25,9 +25,10 @@ import pytest
 
 from bench_app import ROOT, _write_inputs, display  # noqa: F401 - the display fixture
 
-#: argv: the cloud's PLY, the skeletal set's PLY, a settings file, "done" or "computing". Prints "ready"
-#: and the evaluation's seconds once the pick is made, waits for a line on stdin, presses Ctrl+Q, prints
-#: the key's and the event loop's end's time.time(), then exits as skelscope does.
+#: argv: the cloud's PLY, the skeletal set's PLY, a settings file, "done", "computing" or "evaluating".
+#: Prints "ready" and the evaluation's seconds once the pick is made, waits for a line on stdin, presses
+#: Ctrl+Q, prints the key's and the event loop's end's time.time() and how Ctrl+Q was given (the key, or
+#: its action where no window manager made the window active), then exits as skelscope does.
 _CLOSE = r"""
 import select, sys, time
 from skelscope.__main__ import _exited, import_view_libraries
@@ -79,18 +80,19 @@ idle(lambda: QtWidgets.QApplication.activeWindow() is w or time.time() > t0 + ev
 print(f"ready {evaluated:.3f}", flush=True)
 idle(lambda: select.select([sys.stdin], [], [], 0)[0])
 sys.stdin.readline()
-pressed = []
+pressed, via = [], []
 
 def press():  # the key, when the window is active (no window manager may make it so), else its action
     pressed.append(time.time())
     if QtWidgets.QApplication.activeWindow() is w:
         QTest.keyClick(w, QtCore.Qt.Key.Key_Q, QtCore.Qt.KeyboardModifier.ControlModifier)
     if w.isVisible():
+        via.append("action")
         w.actions_by_name["quit"].trigger()
 
 QtCore.QTimer.singleShot(0, press)
 code = app.exec()
-print(f"{pressed[0]!r} {time.time()!r}", flush=True)
+print(f"{pressed[0]!r} {time.time()!r} {via[0] if via else 'key'}", flush=True)
 _exited(code)
 """
 
@@ -115,6 +117,7 @@ def test_viewer_close_after_work(measure, benchmark, display, tmp_path, n, suppo
     window_s: list[float] = []  # the key to the event loop's end (closeEvent, the view's close)
     exit_s: list[float] = []  # the event loop's end to the exit seen (os._exit, the kernel's teardown)
     evaluated_s: list[float] = []
+    given: list[str] = []  # "key" (Ctrl+Q typed on the active window) or "action" (its action triggered)
 
     def launch():
         proc = subprocess.Popen([sys.executable, "-c", _CLOSE, str(cloud), str(skeletal), str(tmp_path / "s.ini"),
@@ -135,7 +138,9 @@ def test_viewer_close_after_work(measure, benchmark, display, tmp_path, n, suppo
         ended = time.time()
         line = proc.stdout.readline()
         assert proc.returncode == 0 and line, proc.stderr.read()[-2000:]
-        pressed, loop_end = (float(v) for v in line.split())
+        pressed, loop_end, how = line.split()
+        pressed, loop_end = float(pressed), float(loop_end)
+        given.append(how)
         key_s.append(pressed - sent)
         window_s.append(loop_end - pressed)
         exit_s.append(ended - loop_end)
@@ -144,5 +149,5 @@ def test_viewer_close_after_work(measure, benchmark, display, tmp_path, n, suppo
     benchmark.extra_info.update(n_points=n, skeletal_points=n // 2 if support == "evaluating" else n, support=support,
                                 display=display,
                                 key_s=[round(s, 3) for s in key_s], window_close_s=[round(s, 3) for s in window_s],
-                                exit_s=[round(s, 3) for s in exit_s],
+                                exit_s=[round(s, 3) for s in exit_s], ctrl_q=given,
                                 evaluation_s=[round(s, 3) for s in evaluated_s])
