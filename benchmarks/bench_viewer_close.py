@@ -8,10 +8,10 @@ timed from the key to the process's end (the parent sees the exit). ``support``:
 support shown before the key; ``computing``, the key pressed 0.3 s into it; ``evaluating``, no pick,
 the key pressed 2 s into the evaluation of the cloud with half its skeletal set (150k points: in a
 thread of the window's process, which closing once waited for, up to ``SHUTDOWN_WAIT_S``, 1.5 s).
-extra_info splits each
-close: ``key_s`` (the line sent to the key pressed), ``window_close_s`` (the key to the event loop's
-end: closeEvent, the view's close), ``exit_s`` (to the exit the parent sees); and the evaluation's
-seconds (untimed).
+extra_info splits each close: ``key_s`` (the line sent to the key pressed), ``window_close_s`` (the
+key to the event loop's end: closeEvent, the view's close; ``window_close_cpu_s``, that thread's CPU
+seconds meanwhile, which the load does not inflate), ``exit_s`` (to the exit the parent sees); and
+the evaluation's seconds (untimed).
 Needs a display (pytest-xvfb); the 1M cases are ``large``.
 """
 
@@ -80,10 +80,11 @@ idle(lambda: QtWidgets.QApplication.activeWindow() is w or time.time() > t0 + ev
 print(f"ready {evaluated:.3f}", flush=True)
 idle(lambda: select.select([sys.stdin], [], [], 0)[0])
 sys.stdin.readline()
-pressed, via = [], []
+pressed, via, cpu = [], [], []
 
 def press():  # the key, when the window is active (no window manager may make it so), else its action
     pressed.append(time.time())
+    cpu.append(time.thread_time())
     if QtWidgets.QApplication.activeWindow() is w:
         QTest.keyClick(w, QtCore.Qt.Key.Key_Q, QtCore.Qt.KeyboardModifier.ControlModifier)
     if w.isVisible():
@@ -92,7 +93,7 @@ def press():  # the key, when the window is active (no window manager may make i
 
 QtCore.QTimer.singleShot(0, press)
 code = app.exec()
-print(f"{pressed[0]!r} {time.time()!r} {via[0] if via else 'key'}", flush=True)
+print(f"{pressed[0]!r} {time.time()!r} {via[0] if via else 'key'} {time.thread_time() - cpu[0]!r}", flush=True)
 _exited(code)
 """
 
@@ -117,6 +118,7 @@ def test_viewer_close_after_work(measure, benchmark, display, tmp_path, n, suppo
     window_s: list[float] = []  # the key to the event loop's end (closeEvent, the view's close)
     exit_s: list[float] = []  # the event loop's end to the exit seen (os._exit, the kernel's teardown)
     evaluated_s: list[float] = []
+    window_cpu_s: list[float] = []  # the window's thread's CPU seconds from the key to the event loop's end
     given: list[str] = []  # "key" (Ctrl+Q typed on the active window) or "action" (its action triggered)
 
     def launch():
@@ -138,9 +140,10 @@ def test_viewer_close_after_work(measure, benchmark, display, tmp_path, n, suppo
         ended = time.time()
         line = proc.stdout.readline()
         assert proc.returncode == 0 and line, proc.stderr.read()[-2000:]
-        pressed, loop_end, how = line.split()
+        pressed, loop_end, how, cpu = line.split()
         pressed, loop_end = float(pressed), float(loop_end)
         given.append(how)
+        window_cpu_s.append(float(cpu))
         key_s.append(pressed - sent)
         window_s.append(loop_end - pressed)
         exit_s.append(ended - loop_end)
@@ -149,5 +152,6 @@ def test_viewer_close_after_work(measure, benchmark, display, tmp_path, n, suppo
     benchmark.extra_info.update(n_points=n, skeletal_points=n // 2 if support == "evaluating" else n, support=support,
                                 display=display,
                                 key_s=[round(s, 3) for s in key_s], window_close_s=[round(s, 3) for s in window_s],
+                                window_close_cpu_s=[round(s, 3) for s in window_cpu_s],
                                 exit_s=[round(s, 3) for s in exit_s], ctrl_q=given,
                                 evaluation_s=[round(s, 3) for s in evaluated_s])
