@@ -12,6 +12,7 @@ second phase), the two together equal to one update."""
 
 from __future__ import annotations
 
+import os
 import threading
 import time
 from dataclasses import replace
@@ -20,6 +21,7 @@ from typing import Any, Callable
 import numpy as np
 
 from ..curve import CurveSkeleton
+from ..diagnostics.spur_cache import SpurMemo
 from ..errors import Cancelled, SkelInputError
 from ..evaluation import Evaluation
 from ..geometry import check_magnitude, no_checkpoint, unique_rows
@@ -156,7 +158,7 @@ def _edited_context(old: EvalContext, curve: CurveSkeleton) -> EvalContext:
     kept = {k: v for k, v in old.results.items() if k not in CURVE_STAGES}
     unset = {k: v for k, v in old.not_computed.items() if v != LEFT_OUT}  # an update of a first phase
     return replace(old, curve=curve, curve_n=curve_n, samples=samples, results=kept,
-                   not_computed=unset, unseen=dict(old.unseen))
+                   not_computed=unset, unseen=dict(old.unseen), spur_memo=SpurMemo(old.spur_memo.latest()))
 
 
 def _keys(*columns: np.ndarray) -> list[bytes]:
@@ -212,6 +214,8 @@ def _sample_centeredness(old: EvalContext, ctx: EvalContext, cache: dict[str, An
         with _GRID_LOCK:
             if "slab grid" not in cache:
                 cache["slab grid"] = slab_grid(ctx.cloud_n, p)
+        # one span per core: a span's fits are one batched call (180 samples of a prune: 0.13 -> 0.08 CPU s)
+        span = -(-int(todo.sum()) // max(1, os.cpu_count() or 1))
         c[todo] = curve_centeredness(ctx.cloud_n, s_new.points[todo], s_new.directions[todo], params=p,
-                                     grid=cache["slab grid"])
+                                     grid=cache["slab grid"], span=span)
     return c

@@ -1,0 +1,147 @@
+"""The spur test's nearest-ball search (whether another branch explains a cloud point,
+:func:`skelcore.diagnostics.spurs.find_spurious_branches`) kept from one curve to the next of the same
+cloud and params, so that an edit's update asks again only the points the edit can change
+(docs/performance.md 6.10).
+
+A point q's answer is "some curve point x of another branch than q's own has |q - x| <= reach(x)",
+and reach(x) depends on x's position alone (the cloud is the same). So q keeps its earlier answer
+when it was asked before, no curve position added or removed has q in its ball, and every position
+whose ball holds q has a label of another branch than q's own now exactly when it had one then
+(branch numbers change from curve to curve: only these relations are compared). Every other point is
+asked again; the answers equal a search of the whole curve."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Callable
+
+import numpy as np
+from scipy.spatial import cKDTree
+
+__all__ = ["SpurSearch", "SpurMemo"]
+
+#: a search function (curve points, their branches, reaches, queries, the queries' own branches) -> bool
+Search = Callable[[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray], np.ndarray]
+_MARGIN = 1e-6  # relative: a ball counts as holding q up to this much beyond its reach (more asked again)
+
+
+@dataclass(frozen=True)
+class SpurSearch:
+    """One curve's search: its points, their branch labels and reaches; the rows of the cloud's
+    subsample asked (sorted), each one's own branch and answer; the subsample's size."""
+
+    pts: np.ndarray
+    labels: np.ndarray
+    reach: np.ndarray
+    rows: np.ndarray
+    own: np.ndarray
+    answer: np.ndarray
+    n_use: int
+
+
+class SpurMemo:
+    """An evaluation's spur search (``current``) and the one of the curve it was updated from
+    (``previous``, None after a fresh evaluation); ``asked``: how many points the last search asked
+    (of how many)."""
+
+    def __init__(self, previous: SpurSearch | None = None) -> None:
+        self.previous = previous
+        self.current: SpurSearch | None = None
+        self.asked: tuple[int, int] = (0, 0)
+
+    def latest(self) -> SpurSearch | None:
+        """The newest search known here (what an update of this evaluation starts from)."""
+        return self.current if self.current is not None else self.previous
+
+    def search(self, fn: Search, pts: np.ndarray, labels: np.ndarray, reach: np.ndarray, queries: np.ndarray,
+               rows: np.ndarray, own: np.ndarray, n_use: int) -> np.ndarray:
+        """``fn``'s answers for ``queries`` (rows ``rows`` of a subsample of ``n_use`` points), from
+        the previous search where they cannot have changed; keeps this search as ``current``."""
+        prev = self.previous
+        redo = np.ones(len(rows), bool)
+        answer = np.zeros(len(rows), bool)
+        if prev is not None and prev.n_use == n_use and len(rows):
+            at = np.minimum(np.searchsorted(prev.rows, rows), max(len(prev.rows) - 1, 0))
+            known = (prev.rows[at] == rows) if len(prev.rows) else np.zeros(len(rows), bool)
+            redo = ~known
+            if known.any():
+                redo |= _touched(prev, pts, labels, reach, queries, own, at, known)
+                answer[~redo] = prev.answer[at[~redo]]
+        if redo.any():
+            answer[redo] = fn(pts, labels, reach, queries[redo], own[redo])
+        self.asked = (int(redo.sum()), len(rows))
+        self.current = SpurSearch(pts, labels, reach, rows, own, answer, int(n_use))
+        return answer
+
+
+def _touched(prev: SpurSearch, pts: np.ndarray, labels: np.ndarray, reach: np.ndarray, queries: np.ndarray,
+             own: np.ndarray, at: np.ndarray, known: np.ndarray) -> np.ndarray:
+    """The queries asked before whose answer the edit may change: inside the ball of a position
+    added or removed, or of a kept position whose labels relate otherwise to the query's own branch."""
+    o_pos, o_lo, o_hi, o_reach = _positions(prev.pts, prev.labels, prev.reach)
+    n_pos, n_lo, n_hi, n_reach = _positions(pts, labels, reach)
+    index = {k: i for i, k in enumerate(_keys(o_pos))}
+    match = np.array([index.get(k, -1) for k in _keys(n_pos)], dtype=np.int64)
+    common = match >= 0
+    gone = np.ones(len(o_pos), bool)
+    gone[match[common]] = False
+    changed = np.vstack([o_pos[gone], n_pos[~common]])
+    changed_reach = np.concatenate([o_reach[gone], n_reach[~common]])
+    out = np.zeros(len(known), bool)
+    out[known] = _inside_any(changed, changed_reach, queries[known])
+    # kept positions: lowest and highest label before (a) and now (b); a position "has another branch
+    # than a0" unless its only label is a0
+    a_lo, a_hi = o_lo[match[common]], o_hi[match[common]]
+    b_lo, b_hi, kept, kept_reach = n_lo[common], n_hi[common], n_pos[common], n_reach[common]
+    check = np.flatnonzero(known & ~out)
+    a0, b0 = prev.own[at[check]], own[check]
+    pairs, which = np.unique(np.column_stack([a0, b0]), axis=0, return_inverse=True)
+    for j, (x, y) in enumerate(pairs.tolist()):
+        differs = ~((a_lo == x) & (a_hi == x)) != ~((b_lo == y) & (b_hi == y))
+        if differs.any():
+            sel = check[np.ravel(which) == j]
+            out[sel] = _inside_any(kept[differs], kept_reach[differs], queries[sel])
+    return out
+
+
+def _positions(pts: np.ndarray, labels: np.ndarray, reach: np.ndarray) -> tuple[np.ndarray, ...]:
+    """The distinct positions of curve points, each one's lowest and highest label and its reach (the
+    same at a position)."""
+    pts = np.ascontiguousarray(pts, dtype=float)
+    if not len(pts):
+        return pts.reshape(0, 3), np.zeros(0, np.int64), np.zeros(0, np.int64), np.zeros(0)
+    _, first, inverse = np.unique(_void(pts), return_index=True, return_inverse=True)
+    inverse = np.ravel(inverse)
+    lo = np.full(len(first), np.iinfo(np.int64).max)
+    hi = np.full(len(first), np.iinfo(np.int64).min)
+    np.minimum.at(lo, inverse, labels)
+    np.maximum.at(hi, inverse, labels)
+    return pts[first], lo, hi, np.asarray(reach, dtype=float)[first]
+
+
+def _void(pts: np.ndarray) -> np.ndarray:
+    return np.ascontiguousarray(pts, dtype=float).view(np.dtype((np.void, 8 * pts.shape[1])))[:, 0]
+
+
+def _keys(pts: np.ndarray) -> list[bytes]:
+    return [r.tobytes() for r in _void(pts)]
+
+
+def _inside_any(centres: np.ndarray, radii: np.ndarray, queries: np.ndarray) -> np.ndarray:
+    """Whether each query lies within some ball (centre, radius), up to ``_MARGIN`` beyond it (never
+    less): the nearest ball in the lifted 4-D distance |q - c|^2 - r^2 + R^2 (R the largest radius)."""
+    out = np.zeros(len(queries), bool)
+    ok = np.isfinite(radii) & (radii >= 0)
+    if not len(queries) or not ok.any():
+        return out
+    centres, radii = centres[ok], radii[ok]
+    big = float(radii.max())
+    lo, hi = centres.min(axis=0) - big * (1 + _MARGIN), centres.max(axis=0) + big * (1 + _MARGIN)
+    near = np.flatnonzero(np.all((queries >= lo) & (queries <= hi), axis=1))
+    if not len(near):
+        return out
+    lifted = np.column_stack([centres, np.sqrt(np.maximum(big * big - radii * radii, 0.0))])
+    q4 = np.column_stack([queries[near], np.zeros(len(near))])
+    d, _ = cKDTree(lifted).query(q4, k=1, distance_upper_bound=big * (1 + _MARGIN) + 1e-300)
+    out[near] = np.isfinite(d)
+    return out
