@@ -238,13 +238,14 @@ def find_spurious_branches(
         step = params.diag_step * r_typ if r_typ > 0 else (total / 200 if total > 0 else 1.0)
         step = max(step, total / 200_000 if total > 0 else step)
         pts, pb = curve_points(curve, branches, step)
-        r_x, _ = cloud_tree.query(pts)
+        memo = search_memo
+        r_x = cloud_tree.query(pts)[0] if memo is None else memo.radii(pts, cloud_tree)
         checkpoint(0.2)
-        use = cloud_subsample(cloud, params.diag_max_points, seed)
+        use = (cloud_subsample(cloud, params.diag_max_points, seed) if memo is None else
+               memo.subsample(cloud, (params.diag_max_points, seed),
+                              lambda: cloud_subsample(cloud, params.diag_max_points, seed)))
         explain = (1.0 + params.spur_slack) * r_x  # no tau: see the module's docstring
-        ptree = cKDTree(pts)
-        _, near = ptree.query(use)
-        own = pb[near]
+        own = pb[cKDTree(pts).query(use)[1]] if memo is None else memo.own_branch(pts, pb, use)
         is_term = np.zeros(nb + 1, bool)
         is_term[terminal] = True
         in_term = is_term[own]

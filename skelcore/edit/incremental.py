@@ -21,7 +21,6 @@ from typing import Any, Callable
 import numpy as np
 
 from ..curve import CurveSkeleton
-from ..diagnostics.spur_cache import SpurMemo
 from ..errors import Cancelled, SkelInputError
 from ..evaluation import Evaluation
 from ..geometry import check_magnitude, no_checkpoint, unique_rows
@@ -158,7 +157,7 @@ def _edited_context(old: EvalContext, curve: CurveSkeleton) -> EvalContext:
     kept = {k: v for k, v in old.results.items() if k not in CURVE_STAGES}
     unset = {k: v for k, v in old.not_computed.items() if v != LEFT_OUT}  # an update of a first phase
     return replace(old, curve=curve, curve_n=curve_n, samples=samples, results=kept,
-                   not_computed=unset, unseen=dict(old.unseen), spur_memo=SpurMemo(old.spur_memo.latest()))
+                   not_computed=unset, unseen=dict(old.unseen), spur_memo=old.spur_memo.next())
 
 
 def _keys(*columns: np.ndarray) -> list[bytes]:
