@@ -146,35 +146,36 @@ class SpurMemo:
 
 def _touched(prev: SpurSearch, pts: np.ndarray, labels: np.ndarray, reach: np.ndarray, queries: np.ndarray,
              own: np.ndarray, at: np.ndarray, known: np.ndarray) -> np.ndarray:
-    """The queries asked before whose answer the edit may change: inside the ball of a position
-    added or removed, or of a kept position whose labels relate otherwise to the query's own branch."""
+    """The queries asked before whose answer the edit may change. A position "explains q" when its
+    ball holds q and it has a label other than q's own branch (a0 then, b0 now); a query may change
+    only inside the ball of a position removed that had another label than a0, added that has another
+    than b0, or kept whose "another label" differs between the two (split or merged branches)."""
     o_pos, o_lo, o_hi, o_reach = _positions(prev.pts, prev.labels, prev.reach)
     n_pos, n_lo, n_hi, n_reach = _positions(pts, labels, reach)
     match = _match(o_pos, n_pos)
     common = match >= 0
     gone = np.ones(len(o_pos), bool)
     gone[match[common]] = False
-    changed = np.vstack([o_pos[gone], n_pos[~common]])
-    changed_reach = np.concatenate([o_reach[gone], n_reach[~common]])
     out = np.zeros(len(known), bool)
-    out[known] = _inside_any(changed, changed_reach, queries[known])
-    # kept positions: lowest and highest label before (a) and now (b); a position "has another branch
-    # than a0" unless its only label is a0
-    a_lo, a_hi = o_lo[match[common]], o_hi[match[common]]
-    b_lo, b_hi, kept, kept_reach = n_lo[common], n_hi[common], n_pos[common], n_reach[common]
-    check = np.flatnonzero(known & ~out)
-    a0, b0 = prev.own[at[check]], own[check]
+    check = np.flatnonzero(known)
     if not len(check):
         return out
-    base = int(max(a0.max(), b0.max())) + 2  # labels are >= -1: one integer per (a0, b0) pair
+    a0, b0 = prev.own[at[check]], own[check]
+    base = int(max(a0.max(), b0.max(), 0)) + 2  # labels are >= -1: one integer per (a0, b0) pair
     pairs, which = np.unique((a0 + 1) * base + (b0 + 1), return_inverse=True)
     which = np.ravel(which)
+    a_lo, a_hi = o_lo[match[common]], o_hi[match[common]]  # kept positions, then and now
+    b_lo, b_hi = n_lo[common], n_hi[common]
     for j, key in enumerate(pairs.tolist()):
         x, y = key // base - 1, key % base - 1
+        removed = gone & ~((o_lo == x) & (o_hi == x))
+        added = ~common & ~((n_lo == y) & (n_hi == y))
         differs = ~((a_lo == x) & (a_hi == x)) != ~((b_lo == y) & (b_hi == y))
-        if differs.any():
+        balls = np.vstack([o_pos[removed], n_pos[~common][added[~common]], n_pos[common][differs]])
+        radii = np.concatenate([o_reach[removed], n_reach[~common][added[~common]], n_reach[common][differs]])
+        if len(balls):
             sel = check[which == j]
-            out[sel] = _inside_any(kept[differs], kept_reach[differs], queries[sel])
+            out[sel] = _inside_any(balls, radii, queries[sel])
     return out
 
 
