@@ -12,6 +12,7 @@ asked again; the answers equal a search of the whole curve."""
 
 from __future__ import annotations
 
+import threading
 from dataclasses import dataclass
 from typing import Callable
 
@@ -57,7 +58,7 @@ class SpurMemo:
         self.current: SpurSearch | None = None
         self.asked: tuple[int, int] = (0, 0)
         self.shared = {} if shared is None else shared  # the cloud's subsample, kept along the updates
-        self._now: dict = {}
+        self._local = threading.local()  # one search's steps, per thread (two may finish one update at once)
 
     def latest(self) -> SpurSearch | None:
         """The newest search known here (what an update of this evaluation starts from)."""
@@ -80,7 +81,7 @@ class SpurMemo:
             known[:] = False
         if (~known).any():
             r[~known] = tree.query(pos[~known])[0]
-        self._now = {"pts": pts, "pos": pos, "inverse": inverse, "match": match, "radius": r, "tree": tree}
+        self._local.now = {"pts": pts, "pos": pos, "inverse": inverse, "match": match, "radius": r, "tree": tree}
         return r[inverse]
 
     def subsample(self, cloud: np.ndarray, key: tuple, make: Callable[[], np.ndarray]) -> np.ndarray:
@@ -94,7 +95,7 @@ class SpurMemo:
         """The label of the curve point nearest to each row of ``use`` (``labels[cKDTree(pts).query(use)[1]]``):
         a row keeps its nearest position when that position is kept with one label and no added position
         comes as near; the others are asked of the whole curve."""
-        now, prev = self._now, self.previous
+        now, prev = self._local.now, self.previous
         pos, inverse, match = now["pos"], now["inverse"], now["match"]
         lo, hi = _label_range(labels, inverse, len(pos))
         redo = np.ones(len(use), bool)
@@ -137,7 +138,7 @@ class SpurMemo:
         if redo.any():
             answer[redo] = fn(pts, labels, reach, queries[redo], own[redo])
         self.asked = (int(redo.sum()), len(rows))
-        now = self._now
+        now = getattr(self._local, "now", {})
         if now.get("pts") is pts and now.get("n_use") == n_use:
             self.current = SpurSearch(pts, labels, reach, rows, own, answer, int(n_use), now["pos"], now["radius"],
                                       now["near_pos"], now["near_d"], now["tree"])
