@@ -274,3 +274,22 @@ def test_an_edit_update_asks_the_spur_test_again_only_near_the_edit():
     asked, of = updated.source.ctx.spur_memo.asked
     assert updated.source.ctx.spur_memo.previous is ev.source.ctx.spur_memo.current
     assert of > 0 and asked < of
+
+
+def test_curve_centeredness_in_larger_spans_gives_the_same_bits():
+    """An update asks curve centeredness for one span of samples per core (``span=``): the same bits as
+    the default spans of 4, on a cloud above the size where the samples go in spans."""
+    from skelcore import Params
+    from skelcore.curve import CurveSkeleton
+    from skelcore.metrics import centeredness as C
+    from skelcore.metrics.curve_sampling import sample_curve
+
+    sh = shapes.y_shape(C._CURVE_AT_ONCE + 2000, seed=6, n_curve_per_arm=6)
+    s = sample_curve(CurveSkeleton(sh.curve_vertices, sh.curve_edges), 24)
+    p = Params()
+    grid = C.slab_grid(sh.cloud, p)
+    base = C.curve_centeredness(sh.cloud, s.points, s.directions, params=p, grid=grid)
+    assert np.isfinite(base).sum() > 12
+    for span in (1, 7, len(s.points)):
+        got = C.curve_centeredness(sh.cloud, s.points, s.directions, params=p, grid=grid, span=span)
+        np.testing.assert_array_equal(got, base)
