@@ -251,11 +251,11 @@ def find_spurious_branches(
         in_term = is_term[own]
         q = use[in_term]
         checkpoint(0.4)
-        if search_memo is None:
+        if memo is None:
             elsewhere = _explained_elsewhere(pts, pb, explain, q, own[in_term])
         else:
-            elsewhere = search_memo.search(_explained_elsewhere, pts, pb, explain, q, np.flatnonzero(in_term),
-                                           own[in_term], len(use))
+            elsewhere = memo.search(_explained_elsewhere, pts, pb, explain, q, np.flatnonzero(in_term), own[in_term],
+                                    len(use))
         checkpoint(0.9)
         territory = np.bincount(own[in_term], minlength=nb)[:nb]
         unique = np.bincount(own[in_term][~elsewhere], minlength=nb)[:nb]
