@@ -263,6 +263,7 @@ def missing_parts(
         else:
             pts = cloud
         index = kept_index(pts, cloud)  # an edit's update asks again about the same points
+        pts = index.cloud  # the same bits; the same array at every update (coverage keeps its noise sample)
         if tau is None:
             tau = coverage_tau(pts, p, lambda f: checkpoint(0.1 * f), index)
     # the regions link sampled neighbours: the spacing of a surface sample grows as 1 / sqrt(density)
