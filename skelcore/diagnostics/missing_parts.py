@@ -244,7 +244,7 @@ def missing_parts(
     if inside is not None and cov is not None:  # the evaluation's coverage holds while every element is inside
         tau = float(cov.tau)
         elements = skeleton_elements(skeleton, tau / float(p.coverage_tau_factor), int(p.missing_max_elements))
-        if len(elements) and not np.all(inside(elements)):
+        if len(elements) and _in_air(elements, inside, cloud, p).any():
             cov = None
     sub: np.ndarray | None = None
     spread_factor = 1.0
@@ -279,7 +279,7 @@ def missing_parts(
     if cov is None:
         elements = skeleton_elements(skeleton, spacing, int(p.missing_max_elements), lambda f: checkpoint(0.1))
         if inside is not None and len(elements):
-            ok = np.asarray(inside(elements), bool)
+            ok = ~_in_air(elements, inside, pts, p)
             n_out, elements = int(np.count_nonzero(~ok)), elements[ok]
         cov = coverage(pts, elements, p, tau, checkpoint=lambda f: checkpoint(0.1 + 0.6 * f), index=index)
     checkpoint(0.7)
@@ -346,6 +346,20 @@ def _spread(cloud: np.ndarray, pts: np.ndarray, region_s: np.ndarray, explained_
             j = sample_tree.query(part[near], workers=query_workers(len(near)))[1]
             region[lo + near], explained[lo + near] = region_s[j], explained_s[j]
     return region, explained
+
+
+def _in_air(elements: np.ndarray, inside: Callable[[np.ndarray], np.ndarray], pts: np.ndarray,
+            p: Params) -> np.ndarray:
+    """The elements whose balls explain nothing: ``inside`` rejects them and their ball (their
+    distance to the cloud) is over ``missing_air_ball`` x the median ball of the elements it accepts
+    (an edge through the air crosses gaps far wider than the shape; the axis of a tube seen from
+    one side lies in no solid voxel with the tube's own radius); all it rejects when it accepts none."""
+    out = ~np.asarray(inside(elements), bool)
+    if not out.any() or out.all():
+        return out
+    r = cKDTree(pts).query(elements, workers=query_workers(len(elements)))[0]
+    out &= r > float(p.missing_air_ball) * float(np.median(r[~out]))
+    return out
 
 
 def _small_points(skeleton: np.ndarray | CurveSkeleton, tree: cKDTree, spacing: float, p: Params) -> float:
