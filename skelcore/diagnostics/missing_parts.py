@@ -29,7 +29,7 @@ from scipy.spatial import cKDTree
 
 from ..correspondence import densify_curve
 from ..curve import CurveSkeleton
-from ..geometry import Checkpoint, no_checkpoint, query_workers, unique_rows
+from ..geometry import Checkpoint, kd_tree, no_checkpoint, query_workers, unique_rows
 from ..metrics.cloud_index import kept_index
 from ..metrics.coverage import Coverage, coverage, coverage_tau
 from ..params import Params
@@ -357,7 +357,7 @@ def _in_air(elements: np.ndarray, inside: Callable[[np.ndarray], np.ndarray], pt
     out = ~np.asarray(inside(elements), bool)
     if not out.any() or out.all():
         return out
-    r = cKDTree(pts).query(elements, workers=query_workers(len(elements)))[0]
+    r = kd_tree(pts).query(elements, workers=query_workers(len(elements)))[0]
     out &= r > float(p.missing_air_ball) * float(np.median(r[~out]))
     return out
 
