@@ -372,6 +372,22 @@ static inline double near_bound2(const Node *nd, const double *q, double best) {
     return b2 * (1.0 - 1e-12);
 }
 
+/* What the walk reads after a node it pushes: its children's bounds (the first 88 bytes of each, two
+ * lines) or its leaf's points, asked of memory while it walks on (at 1M points the 136-byte nodes outgrow
+ * the caches); no value depends on it. */
+static inline void prefetch_below(const Node *nd, const Node *nodes, const double *p) {
+    if (nd->kid >= 0) {
+        const char *k = (const char *)(nodes + nd->kid);
+        __builtin_prefetch(k);
+        __builtin_prefetch(k + 80);
+        __builtin_prefetch(k + sizeof(Node));
+        __builtin_prefetch(k + sizeof(Node) + 80);
+    } else {
+        const char *a = (const char *)(p + 3 * (size_t)nd->lo), *b = (const char *)(p + 3 * (size_t)nd->hi);
+        for (; a < b; a += 64) __builtin_prefetch(a);
+    }
+}
+
 /* nearest(nodes, points (n,3) f64 tree order, queries (m,3) f64, i0, i1, dist out (m) f64,
  *         index out (m) i32 (tree order), stats out (2) i64: nodes visited, points tested[, others])
  * Distance from each query of [i0, i1) to its nearest point, exact (sqrt(dx^2 + dy^2 + dz^2), the
@@ -432,6 +448,8 @@ static PyObject *py_nearest(PyObject *self, PyObject *args) {
             }
             const Node *a = nodes + nd->kid, *b = a + 1;
             double da = near_bound2(a, x, best), db = near_bound2(b, x, best);
+            if (da < best2) prefetch_below(a, nodes, p);
+            if (db < best2) prefetch_below(b, nodes, p);
             if (da <= db) {
                 if (db < best2) { stack[sp].node = nd->kid + 1; stack[sp++].d = db; }
                 if (da < best2) { stack[sp].node = nd->kid; stack[sp++].d = da; }

@@ -497,6 +497,13 @@ static int32_t walk(const Tree *t, Walker *w, int32_t root, int32_t skip, int32_
  * cheaper in packets (docs/boundedness.md 3.11) */
 #define WALK_UP 2
 
+/* A stream whose hints settled fewer than HINT_MIN per mille of a cluster's far rays sends the rays of the
+ * next HINT_REST clusters straight to packets, then tries the hints again: where a cluster's move is many
+ * leaves wide (the 1M torus: 3 % of hint tries hit) a failed try costs a leaf test or two and a walk up for
+ * nothing.  The hints only order the search, so beta is the same either way. */
+#define HINT_MIN 100
+#define HINT_REST 7
+
 /* Does the ray from o along s meet a ball around a point with |p - o| > cut?  1 yes, 0 no, -1 not settled:
  * the caller walks it from the root in a packet (walk_packet).  Exact either way; the hints only order the
  * search.  hint[0], hint[1] = the leaf and the point a nearby ray hit (the same sample from the previous
@@ -531,6 +538,20 @@ static int ray_hits(const Tree *t, Walker *w, const float *o, const float *s, fl
     hint[1] = w->hit_point;
     w->last_leaf = leaf;
     return 1;
+}
+
+/* What a walk reads after the node: its children's pair (one cache line where the pair is aligned,
+ * BallTree) or its leaf block, asked of memory while the walk tests the nodes before it (at 1M points the
+ * tree is larger than the caches and a visit waits on memory); no value depends on it. */
+static inline void prefetch_below(const Tree *t, const Node *nd) {
+    int32_t k = nd->kid;
+    if (k >= 0) {
+        __builtin_prefetch(t->nodes + k);
+    } else {
+        const float *L = t->leaf + 3 * LEAF_SIZE * (size_t)(-1 - k);
+        __builtin_prefetch(L);
+        __builtin_prefetch(L + 3 * LEAF_SIZE - 1);
+    }
 }
 
 /* Up to PACKET rays from one origin that the hints did not settle (mostly rays that escape: they cost most
@@ -600,6 +621,8 @@ static void walk_packet(const Tree *t, Walker *w, Packet *pk, const float *o, fl
             continue;
         }
         const Node *a = t->nodes + k, *b = a + 1;
+        prefetch_below(t, a);
+        prefetch_below(t, b);
         float ab = (a->c[0] - b->c[0]) * mx + (a->c[1] - b->c[1]) * my + (a->c[2] - b->c[2]) * mz;
         int32_t first = ab <= 0.0f ? k : k + 1;  /* nearer along the rays: popped first */
         w->stack[sp] = 2 * k + 1 - first; masks[sp] = (uint16_t)m; sp++;
@@ -694,7 +717,7 @@ static int64_t near_raster(const Raster *r, const Tree *t, const Near *near, int
  *          starts (k1 - k0 + 1) i64 into queries, centres (k,3) f64, reach (k) f64 (all clusters),
  *          cluster range [k0, k1), h, rows, bins, beta out (q) f64,
  *          stats out (6) i64: node visits, near caps, far rays, near points, hint tries, hint hits,
- *          stop (1) i32, done out (1) i64)
+ *          stop (1) i32, done out (1) i64[, hint_min, hint_rest: HINT_MIN, HINT_REST])
  * beta of the queries of clusters k0..k1-1 (queries holds just theirs, grouped by cluster), one cluster
  * after the other, so that each far ray can start from the leaf its sample hit from the previous cluster.
  * `done` counts the clusters finished (read by another thread for progress); once another thread sets
@@ -703,8 +726,9 @@ static PyObject *py_clusters(PyObject *self, PyObject *args) {
     Py_buffer pts, nds, lvs, qs, starts, cen, rch, beta, stats, stop_buf, done_buf;
     int k0, k1, rows, bins;
     double h;
-    if (!PyArg_ParseTuple(args, "y*y*y*y*y*y*y*iidiiw*w*w*w*", &pts, &nds, &lvs, &qs, &starts, &cen, &rch,
-                          &k0, &k1, &h, &rows, &bins, &beta, &stats, &stop_buf, &done_buf))
+    int hint_min = HINT_MIN, hint_rest = HINT_REST;
+    if (!PyArg_ParseTuple(args, "y*y*y*y*y*y*y*iidiiw*w*w*w*|ii", &pts, &nds, &lvs, &qs, &starts, &cen, &rch,
+                          &k0, &k1, &h, &rows, &bins, &beta, &stats, &stop_buf, &done_buf, &hint_min, &hint_rest))
         return NULL;
     volatile const int32_t *stop = (volatile const int32_t *)stop_buf.buf;
     volatile int64_t *done_count = (volatile int64_t *)done_buf.buf;
@@ -759,8 +783,12 @@ static PyObject *py_clusters(PyObject *self, PyObject *args) {
     const double h2 = h * h;
     const double total = (double)rows * bins;
     double prev[3] = {0.0, 0.0, 0.0};
+    int rest = 0;  /* clusters left whose far rays skip their hints (HINT_MIN) */
     for (int k = k0; k < k1 && !*stop; k++) {
         const double *c = cc + 3 * (size_t)k;
+        const int use_hints = rest == 0;
+        if (rest > 0) rest--;
+        int64_t tried = 0, settled = 0;
         const float cf[3] = {(float)c[0], (float)c[1], (float)c[2]};
         const double reach = rr[k];
         const double cut = reach > h ? reach : h;
@@ -803,7 +831,12 @@ static PyObject *py_clusters(PyObject *self, PyObject *args) {
                         rays++;
                         int32_t *hint = hints + 2 * ((size_t)j * bins + b);
                         uint64_t *word = far + (size_t)j * r.words + x, bit = UINT64_C(1) << (b & 63);
-                        int hit = ray_hits(&t, &w, cf, s, (float)cut, (float)h, hint);
+                        int hit = -1;
+                        if (use_hints) {
+                            hit = ray_hits(&t, &w, cf, s, (float)cut, (float)h, hint);
+                            tried++;
+                            settled += hit >= 0;
+                        }
                         if (hit > 0) *word |= bit;
                         if (hit < 0) {
                             pk.sx[pk.n] = s[0]; pk.sy[pk.n] = s[1]; pk.sz[pk.n] = s[2];
@@ -815,6 +848,9 @@ static PyObject *py_clusters(PyObject *self, PyObject *args) {
             }
             if (pk.n) walk_packet(&t, &w, &pk, cf, (float)cut, (float)h);
         }
+        /* hints that settled under hint_min per mille of the rays tried: the next hint_rest clusters go
+         * straight to packets (their hits still refresh the hints) */
+        if (use_hints && tried > 0 && 1000 * settled < (int64_t)hint_min * tried) rest = hint_rest;
         /* pass 2: member raster | far field (members beyond the first chunk are rasterised again) */
         for (int64_t i = q0; i < q1; i++) {
             int64_t slot = (i - q0) % slots;

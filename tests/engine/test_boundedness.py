@@ -251,6 +251,31 @@ def test_values_do_not_depend_on_how_the_clusters_are_cut_into_streams(monkeypat
     assert np.array_equal(runs[0], runs[1]) and np.array_equal(runs[0], runs[2])
 
 
+def test_skipping_the_hints_where_they_fail_changes_no_value():
+    """A stream skips its hints for a few clusters where they settled too few far rays (docs/boundedness.md
+    3.10); hints only order the search, so hints always, never and the default policy give the same bits,
+    and the policy does skip tries."""
+    from skelcore.metrics import _raycast
+    from skelcore.metrics.rays_kernel import BallTree, choose_plan
+
+    shape = torus(3000, 1.0, 0.3, n_curve=32, seed=9)
+    queries = shape.skeletal[::4] + np.random.default_rng(9).normal(scale=0.01, size=shape.skeletal[::4].shape)
+    tree = BallTree(shape.cloud)
+    h = 2.0 * rays_radius(shape.cloud, 1.0)
+    plan = choose_plan(tree, queries, h, 10 * h, h, 4608, 0, True)
+    k = len(plan.starts) - 1
+    args = (tree.points, tree.nodes, tree.leaves, np.ascontiguousarray(queries[plan.order]), plan.starts,
+            plan.centres, plan.reach, 0, k, h, 48, 96)
+    runs = []
+    for policy in ((), (0, 0), (1001, 10**6)):  # the default, hints always, hints never
+        beta, stats = np.zeros(len(queries)), np.zeros(6, np.int64)
+        assert _raycast.clusters(*args, beta, stats, np.zeros(1, np.int32), np.zeros(1, np.int64), *policy) == k
+        runs.append((beta, stats))
+    assert k > 20 and runs[0][0].any()
+    assert np.array_equal(runs[0][0], runs[1][0]) and np.array_equal(runs[0][0], runs[2][0])
+    assert runs[2][1][4] < runs[1][1][4]  # fewer hint tries when skipped
+
+
 def test_a_cancel_while_the_kernel_streams_run_stops_them(monkeypatch):
     """The checkpoint is polled while the streams run; a cancel sets the kernel's stop flag, each stream
     returns after the cluster it is in, and no thread is left behind."""
