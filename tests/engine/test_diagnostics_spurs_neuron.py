@@ -10,6 +10,7 @@ import pytest
 from scipy.spatial import cKDTree
 
 from skelcore.benchmark.neurons import MeshSampler, load_neuron
+from skelcore import Params
 from skelcore.curve import CurveSkeleton
 from skelcore.diagnostics import find_spurious_branches
 
@@ -76,7 +77,7 @@ def test_the_intact_traced_crop_is_quiet(neuron, points):
 
 def test_spurs_off_unresolved_neurites_are_not_judged(neuron):
     """Two traced radii sideways from every degree-2 node of radius under 15 (20-30 units, one or two
-    spacings at 30k points): mostly the cloud does not resolve the neurite (r_J under three
+    spacings at 30k points): mostly the cloud does not resolve the neurite (r_J under 2.5
     spacings), so the spur is neither spurious nor justified but unresolved, like the traced twigs
     there; none is flagged."""
     cloud, v, e, _, tip, rad = _crop(neuron, 30_000)
@@ -90,7 +91,7 @@ def test_spurs_off_unresolved_neurites_are_not_judged(neuron):
         r = find_spurious_branches(cloud, curve)
         b = r.branches.vertex_branch[spur_tip]
         assert r.spacing is not None and r.unresolved is not None
-        assert (r.junction_radius[b] < 3 * r.spacing[b]) == r.unresolved[b]
+        assert (r.junction_radius[b] < Params().spur_resolved_spacings * r.spacing[b]) == r.unresolved[b]
         unresolved.append(r.unresolved[b])
         assert not r.branch_spurious[b] and not r.branch_spurious[r.branches.vertex_branch[tip]]
     assert np.mean(unresolved) >= 0.8  # the rest: stubs inside a flattened neurite's ball
@@ -98,7 +99,7 @@ def test_spurs_off_unresolved_neurites_are_not_judged(neuron):
 
 def test_spurs_out_of_resolved_neurites_are_flagged(neuron):
     """Four traced radii sideways from the degree-2 nodes where the cloud resolves the neurite (r_J
-    at least three spacings, traced radius under 30): out through the membrane, every one is
+    at least 2.5 spacings, traced radius under 30): out through the membrane, every one is
     flagged, and the twig never is."""
     cloud, v, e, _, tip, rad = _crop(neuron, 30_000)
     deg = np.bincount(e.ravel(), minlength=len(v))
