@@ -1,5 +1,4 @@
-"""Terminal branches the shape does not justify -> ``spurious_branches``
-(docs/diagnostics.md "Spurious branches").
+"""Terminal branches the shape does not justify -> ``spurious_branches``.
 
 A terminal branch (a degree-1 end, a junction at the other) is spurious when either of the two
 classical significance measures fails:
