@@ -265,7 +265,7 @@ class Params:
     spur_unique: float = 0.1
     spur_min_points: int = 1
     spur_slack: float = 0.25
-    spur_resolved_spacings: float = 2.5
+    spur_resolved_spacings: float = 2.0
     spur_stub_share: float = 0.005
     spurs_warn_count: int = 1
     cycles_voxels: int = 96

@@ -77,7 +77,7 @@ def test_the_intact_traced_crop_is_quiet(neuron, points):
 
 def test_spurs_off_unresolved_neurites_are_not_judged(neuron):
     """Two traced radii sideways from every degree-2 node of radius under 15 (20-30 units, one or two
-    spacings at 30k points): mostly the cloud does not resolve the neurite (r_J under 2.5
+    spacings at 30k points): mostly the cloud does not resolve the neurite (r_J under two
     spacings), so the spur is neither spurious nor justified but unresolved, like the traced twigs
     there; none is flagged."""
     cloud, v, e, _, tip, rad = _crop(neuron, 30_000)
@@ -99,7 +99,7 @@ def test_spurs_off_unresolved_neurites_are_not_judged(neuron):
 
 def test_spurs_out_of_resolved_neurites_are_flagged(neuron):
     """Four traced radii sideways from the degree-2 nodes where the cloud resolves the neurite (r_J
-    at least 2.5 spacings, traced radius under 30): out through the membrane, every one is
+    at least two spacings, traced radius under 30): out through the membrane, every one is
     flagged, and the twig never is."""
     cloud, v, e, _, tip, rad = _crop(neuron, 30_000)
     deg = np.bincount(e.ravel(), minlength=len(v))
