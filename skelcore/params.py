@@ -74,6 +74,13 @@ class Params:
     spur_min_points : ... or fewer than this many points do (1: none; a count, unlike the share,
         grows with the density).
     spur_slack : see spur_unique.
+    spur_resolved_spacings : a terminal branch is judged only where its junction's radius r_J is at
+        least this many cloud spacings (the median nearest-neighbour distance of the 16 points nearest
+        the junction); below, the cloud does not resolve a twig there and the branch is counted
+        ``unresolved``, neither spurious nor justified.
+    spur_stub_share : a stub (its far end within spur_reach x r_J: inside the junction's inscribed
+        ball, so inside the shape) shorter than this share of the curve's length is counted among the
+        ``stubs``, not spurious: it changes no metric by more than that share.
     spurs_warn_count : ``spurious_branches`` fires from this many spurious branches.
     cycles_voxels : voxels along the longest side of the cloud's box for the shape's interior ...
     cycles_voxel_spacing : ... but a voxel is at least this many median nearest-neighbour spacings
@@ -268,6 +275,8 @@ class Params:
     spur_unique: float = 0.1
     spur_min_points: int = 1
     spur_slack: float = 0.25
+    spur_resolved_spacings: float = 2.0
+    spur_stub_share: float = 0.005
     spurs_warn_count: int = 1
     cycles_voxels: int = 96
     cycles_voxel_spacing: float = 1.5
@@ -413,8 +422,9 @@ class Params:
                      "cycles_warn_missing", "cycles_support_voxels", "cycles_support_points"):
             if int(getattr(self, name)) < 1:
                 bad(name, "must be a positive integer")
-        if not float(self.spur_slack) >= 0:
-            bad("spur_slack", "must be >= 0")
+        for name in ("spur_slack", "spur_resolved_spacings", "spur_stub_share"):
+            if not float(getattr(self, name)) >= 0:
+                bad(name, "must be >= 0")
         if int(self.spur_min_points) < 0:
             bad("spur_min_points", "must be >= 0")
         if not 0.0 <= float(self.trust_extent_quantile) < 0.5:

@@ -1,5 +1,4 @@
-"""Terminal branches the shape does not justify -> ``spurious_branches``
-(docs/diagnostics.md "Spurious branches").
+"""Terminal branches the shape does not justify -> ``spurious_branches``.
 
 A terminal branch (a degree-1 end, a junction at the other) is spurious when either of the two
 classical significance measures fails:
@@ -13,8 +12,10 @@ classical significance measures fails:
   else.
 
 No spacing-sized allowance (coverage's tau) grows the balls: r(x) is measured to the samples, so a
-part's own points need none, and two spacings let a thick part swallow every point of a twig as thin
-as the spacing (docs/diagnostics.md "Spurious branches"). Size: length in r_J, share of the length.
+part's own points need none. Where r_J is under ``spur_resolved_spacings`` cloud spacings the cloud
+cannot tell a twig from a spur: the branch is ``unresolved``, not judged; a stub (short) under
+``spur_stub_share`` of the curve's length lies inside the shape and is one of the ``stubs``
+(docs/diagnostics.md "Spurious branches"). Size: length in r_J, share of the length.
 """
 
 from __future__ import annotations
@@ -33,7 +34,7 @@ from .branches import Branches, decompose_branches, densify
 from .interior import cloud_subsample
 from .spur_cache import SpurMemo
 
-__all__ = ["SpurDefects", "find_spurious_branches", "curve_points"]
+__all__ = ["SpurDefects", "find_spurious_branches", "curve_points", "junction_spacing"]
 
 
 @dataclass
@@ -46,7 +47,9 @@ class SpurDefects:
     branch_spurious : (B,) bool. vertex_flag : (V,) bool, the vertices of spurious branches (not
     their junction); sample_flag : (S,) bool or None, the curve samples on them.
     length_radii : (B,) length / r_J. subsampled : the number of cloud points used when the cloud
-    was subsampled (``diag_max_points``), else None.
+    was subsampled (``diag_max_points``), else None. spacing : (B,) the cloud's spacing at the
+    junction; unresolved, stub : (B,) bool, terminal branches not judged (r_J under
+    ``spur_resolved_spacings`` spacings) and short stubs under ``spur_stub_share`` (neither spurious).
     """
 
     branches: Branches
@@ -62,6 +65,12 @@ class SpurDefects:
     total_length: float
     subsampled: int | None = None
     params: Params = field(default_factory=Params)
+    spacing: np.ndarray | None = None
+    unresolved: np.ndarray | None = None
+    stub: np.ndarray | None = None
+
+    def _count(self, flags: np.ndarray | None) -> int:
+        return int(np.count_nonzero(flags)) if flags is not None else 0
 
     @property
     def spurious(self) -> np.ndarray:
@@ -79,11 +88,13 @@ class SpurDefects:
             return []
         span = finite_range(self.length_radii[self.branch_spurious])  # none on a junction at a cloud point
         long = f", {span} local radii long" if span is not None else ""
+        unresolved = self._count(self.unresolved)
+        aside = f"; {unresolved} more in parts the cloud does not resolve, not judged" if unresolved else ""
         return [TrustWarning(
             "spurious_branches",
             f"{n} of the curve's {len(self.terminal)} terminal branches are spurious (reach no farther than "
             f"their junction's ball or explain no part of the cloud the rest does not): {self.length_share:.1%} "
-            f"of the curve's length{long}",
+            f"of the curve's length{long}{aside}",
         )]  # fmt: skip
 
     def to_dict(self) -> dict:
@@ -94,10 +105,14 @@ class SpurDefects:
             "terminal": int(len(self.terminal)),
             "spurious": int(len(self.spurious)),
             "length_share": self.length_share,
+            "unresolved": self._count(self.unresolved),
+            "stubs": self._count(self.stub),
             "branches": [
                 {"id": int(b), "reach": num(self.reach[b]), "length_radii": num(self.length_radii[b]),
                  "territory": int(self.territory[b]), "unique": int(self.unique[b]),
-                 "spurious": bool(self.branch_spurious[b])}
+                 "spurious": bool(self.branch_spurious[b]),
+                 "unresolved": bool(self.unresolved[b]) if self.unresolved is not None else False,
+                 "stub": bool(self.stub[b]) if self.stub is not None else False}
                 for b in self.terminal
             ],
             "subsampled": self.subsampled,
@@ -268,10 +283,19 @@ def find_spurious_branches(
             rj, _ = cloud_tree.query(curve.vertices[j])
             r_j[b] = rj
             reach[b] = reach_b / rj if rj > 0 else np.inf
-    short = reach <= params.spur_reach
+    spacing = np.full(nb, np.nan)
+    if len(terminal) and len(cloud):
+        spacing[terminal] = junction_spacing(cloud_tree, curve, branches, terminal)
+    with np.errstate(invalid="ignore"):
+        unresolved = np.zeros(nb, bool)
+        unresolved[terminal] = (r_j < params.spur_resolved_spacings * spacing)[terminal]
+        short = reach <= params.spur_reach
+    total_length = float(branches.length.sum())
+    stub = np.zeros(nb, bool)
+    stub[terminal] = (short & ~unresolved & (branches.length < params.spur_stub_share * total_length))[terminal]
     lonely = (unique < params.spur_min_points) | (unique < params.spur_unique * np.maximum(territory, 1))
     branch_spurious = np.zeros(nb, bool)
-    branch_spurious[terminal] = (short | lonely)[terminal]
+    branch_spurious[terminal] = ((short | lonely) & ~unresolved & ~stub)[terminal]
     with np.errstate(divide="ignore", invalid="ignore"):
         length_radii = np.where(r_j > 0, branches.length / r_j, np.nan)
     vertex_flag = np.zeros(curve.n_vertices, bool)
@@ -283,5 +307,21 @@ def find_spurious_branches(
     return SpurDefects(
         branches=branches, terminal=terminal, reach=reach, junction_radius=r_j, territory=territory, unique=unique,
         branch_spurious=branch_spurious, vertex_flag=vertex_flag, sample_flag=sample_flag, length_radii=length_radii,
-        total_length=float(branches.length.sum()), subsampled=subsampled, params=params,
+        total_length=total_length, subsampled=subsampled, params=params, spacing=spacing, unresolved=unresolved,
+        stub=stub,
     )  # fmt: skip
+
+
+def junction_spacing(cloud_tree: cKDTree, curve: CurveSkeleton, branches: Branches, terminal: np.ndarray) -> np.ndarray:
+    """Per terminal branch, the cloud's spacing at its junction: the median nearest-neighbour distance
+    among the 16 cloud points nearest the junction (the cloud of ``cloud_tree``, as r_J's)."""
+    deg = curve.degrees()
+    ends = np.array([p[0] if deg[p[0]] != 1 else p[-1] for p in (branches.paths[b] for b in terminal)], np.int64)
+    k = int(min(16, cloud_tree.n))
+    if k < 2:
+        return np.zeros(len(terminal))
+    _, near = cloud_tree.query(curve.vertices[ends], k=k)
+    rows = np.unique(near)
+    nn = np.zeros(cloud_tree.n)
+    nn[rows] = cloud_tree.query(cloud_tree.data[rows], k=2)[0][:, 1]
+    return np.median(nn[near], axis=1)

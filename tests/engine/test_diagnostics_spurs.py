@@ -91,3 +91,35 @@ def test_branches_can_be_shared_and_no_terminal_branch_is_fine():
     r = find_spurious_branches(c, curve, branches=b)
     assert r.branches is b and len(r.terminal) == 0 and r.warnings() == []
     assert r.to_dict()["spurious"] == 0
+
+
+def test_a_stub_under_the_stub_share_is_counted_not_spurious():
+    """A spur of 0.5 bar radii stays inside its junction's ball (inside the shape): about 4 % of the
+    T's curve, spurious by default, one of the ``stubs`` once that is under ``spur_stub_share``."""
+    s = shapes.t_shape(n=4000, bar_radius=0.3, seed=4)
+    a = _bar_vertex(s, 1.0)
+    v, e, ids = attach_path(s.curve_vertices, s.curve_edges, a, s.curve_vertices[a] + [0, 0.15, 0], 3)
+    c, curve, samples, _ = normalized(s.cloud, v, e)
+    spur = None
+    for share, spurious in ((0.005, True), (0.1, False)):
+        r = find_spurious_branches(c, curve, samples=samples, params=Params(spur_stub_share=share))
+        spur = r.branches.vertex_branch[ids[-1]]
+        assert r.branch_spurious[spur] == spurious and r.stub[spur] == (not spurious)
+        assert r.to_dict()["stubs"] == int(not spurious) and r.to_dict()["unresolved"] == 0
+    assert r.reach[spur] < 1 and r.warnings() == []
+
+
+def test_a_part_under_the_resolved_spacings_is_not_judged():
+    """A spur of 2 bar radii is spurious; with ``spur_resolved_spacings`` above the bar's radius in
+    cloud spacings it is counted unresolved instead, and nothing warns."""
+    s = shapes.t_shape(n=4000, bar_radius=0.3, seed=4)
+    v, e, ids = attach_path(s.curve_vertices, s.curve_edges, _bar_vertex(s, 1.0),
+                            s.curve_vertices[_bar_vertex(s, 1.0)] + [0, 0.6, 0], 3)
+    c, curve, samples, _ = normalized(s.cloud, v, e)
+    r = find_spurious_branches(c, curve, samples=samples)
+    spur = r.branches.vertex_branch[ids[-1]]
+    ratio = r.junction_radius[spur] / r.spacing[spur]
+    assert ratio > Params().spur_resolved_spacings and r.branch_spurious[spur]
+    r = find_spurious_branches(c, curve, samples=samples, params=Params(spur_resolved_spacings=1.01 * ratio))
+    assert r.unresolved[spur] and not r.branch_spurious[spur] and r.to_dict()["unresolved"] >= 1
+    assert r.warnings() == []
