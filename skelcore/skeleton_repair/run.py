@@ -27,6 +27,7 @@ from .proposals import Action, propose
 from .fill import fill_missing
 from .recentre import RECENTRE, recentre
 from .reroute import route_inside
+from .screen import first_look
 from .skeletal_out import repaired_skeletal
 
 __all__ = ["RepairResult", "repair"]
@@ -169,7 +170,13 @@ def repair(cloud: np.ndarray, curve: CurveSkeleton | tuple | None = None, skelet
             except SkelInputError as exc:
                 rejected.append({"entries": action.entries, "why": {**why, "rejected": f"not applicable: {exc}"}})
                 continue
-            new_ev = ev.update(new)
+            pre = ev.update(new, diagnostics=False)  # the cheap first look (screen.py), then the rest
+            seen, refusal = first_look(found, pre, p)
+            if refusal is not None:
+                why.update(after=_rounded(seen), defects_after=None)
+                rejected.append({"entries": action.entries, "why": {**why, "rejected": refusal}})
+                continue
+            new_ev = pre.complete_update(cancel)
             new_found = read_findings(new_ev)
             why.update(after=_rounded(new_found.measures), defects_after=new_found.total)
             refusal = verdict(found, new_found, p, recentring=action.code == RECENTRE)
