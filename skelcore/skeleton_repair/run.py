@@ -30,7 +30,7 @@ from .reroute import route_inside
 from .screen import first_look
 from .skeletal_out import repaired_skeletal
 
-__all__ = ["RepairResult", "repair"]
+__all__ = ["RepairResult", "repair", "in_turn"]
 
 #: defect warnings no action answers yet (docs/repair.md "What is left")
 UNTALLIED = {"incomplete"}
@@ -105,6 +105,18 @@ def _drift(cur: CurveSkeleton, ev: Evaluation, p: Params, memo: dict, rejected: 
     return [a for a in drift if all(a.entries != r["entries"] for r in rejected)]
 
 
+def in_turn(actions: list[Action]) -> list[Action]:
+    """The candidates with every defect kind in its turn: the first of each kind (in the order the
+    kinds come), then the second of each, and so on; within a kind the order stays. So a round's
+    ``repair_max_tries`` are not all spent on one kind (cuts of many spurious cycles) while a missing
+    part waits behind them."""
+    queues: dict[str, list[Action]] = {}
+    for a in actions:
+        queues.setdefault(a.code, []).append(a)
+    depth = max((len(q) for q in queues.values()), default=0)
+    return [q[i] for i in range(depth) for q in queues.values() if i < len(q)]
+
+
 def _try(curve: CurveSkeleton, action: Action) -> CurveSkeleton:
     for i, entry in enumerate(action.entries):
         curve, _ = apply(curve, entry, f"{action.code} step {i}")
@@ -157,6 +169,7 @@ def repair(cloud: np.ndarray, curve: CurveSkeleton | tuple | None = None, skelet
         candidates = propose(cur, found, inside, p.repair_join_step * voxel, route)
         if p.repair_fill_missing:
             candidates += fill_missing(cur, found.missing, np.asarray(ev.source.args["cloud"], float))
+        candidates = in_turn(candidates)
         if len(candidates) < p.repair_max_tries:  # re-centrings come last: cut only when they may be tried
             candidates += drift if drift is not None else _drift(cur, ev, p, memo, rejected)
         done = False
