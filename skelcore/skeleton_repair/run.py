@@ -105,16 +105,18 @@ def _drift(cur: CurveSkeleton, ev: Evaluation, p: Params, memo: dict, rejected: 
     return [a for a in drift if all(a.entries != r["entries"] for r in rejected)]
 
 
-def in_turn(actions: list[Action]) -> list[Action]:
-    """The candidates with every defect kind in its turn: the first of each kind (in the order the
-    kinds come), then the second of each, and so on; within a kind the order stays. So a round's
-    ``repair_max_tries`` are not all spent on one kind (cuts of many spurious cycles) while a missing
-    part waits behind them."""
-    queues: dict[str, list[Action]] = {}
-    for a in actions:
-        queues.setdefault(a.code, []).append(a)
-    depth = max((len(q) for q in queues.values()), default=0)
-    return [q[i] for i in range(depth) for q in queues.values() if i < len(q)]
+def in_turn(actions: list[Action], tries: int) -> list[Action]:
+    """The first ``tries`` candidates, then the first of each defect kind left out of them: tried only
+    when all those failed (the loop stops at the first kept), so a fill of a missing part waiting
+    behind six refused cycle cuts still has its turn, and no round that kept an action before changes."""
+    head = actions[:tries]
+    kinds = {a.code for a in head}
+    rest = []
+    for a in actions[tries:]:
+        if a.code not in kinds:
+            kinds.add(a.code)
+            rest.append(a)
+    return head + rest
 
 
 def _try(curve: CurveSkeleton, action: Action) -> CurveSkeleton:
@@ -169,11 +171,10 @@ def repair(cloud: np.ndarray, curve: CurveSkeleton | tuple | None = None, skelet
         candidates = propose(cur, found, inside, p.repair_join_step * voxel, route)
         if p.repair_fill_missing:
             candidates += fill_missing(cur, found.missing, np.asarray(ev.source.args["cloud"], float))
-        candidates = in_turn(candidates)
         if len(candidates) < p.repair_max_tries:  # re-centrings come last: cut only when they may be tried
             candidates += drift if drift is not None else _drift(cur, ev, p, memo, rejected)
         done = False
-        for action in candidates[:p.repair_max_tries]:
+        for action in in_turn(candidates, p.repair_max_tries):
             check()
             why: dict[str, Any] = {"defect": action.code, **action.target, "reason": action.reason,
                                    "local_before": found.local(action.edges), "before": _rounded(found.measures),
