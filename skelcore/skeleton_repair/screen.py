@@ -2,15 +2,14 @@
 diagnostics (curve boundedness and centeredness), then its coverage and completeness alone. An action
 these already make worse is rejected without the curve's defects, the dear part of an update at 100k
 points; one that passes gets the whole update (:meth:`~skelcore.Evaluation.complete_update`). The
-measures are those the whole update gives (the same stages on the same inputs), so the decisions are
-the never-worse rule's own."""
+measures are those the whole update gives (the same stages on the same inputs, computed once), so the
+decisions are the never-worse rule's own."""
 
 from __future__ import annotations
 
-from dataclasses import replace
-
 import numpy as np
 
+from ..edit.incremental import LEFT_OUT
 from ..evaluation import Evaluation
 from ..geometry import no_checkpoint
 from ..params import Params
@@ -28,15 +27,18 @@ def _num(x: object) -> float | None:
 
 def _completeness(pre: Evaluation) -> tuple[bool, float | None]:
     """(whether it could be computed, the curve's completeness) of an update left without
-    diagnostics, as the whole update's missing-parts stage computes it (after the coverage)."""
+    diagnostics, as the whole update's stages compute it (the coverage, then the missing parts). Both
+    results are handed on to ``pre``'s context as computed, so that its
+    :meth:`~skelcore.Evaluation.complete_update` adds only the curve's defects."""
     ctx = getattr(pre.source, "ctx", None)
     cov, miss = _STAGES["curve coverage"], _STAGES["curve missing parts"]
-    if ctx is None or not miss.applies(ctx):
+    if ctx is None or not miss.applies(ctx) or ctx.not_computed.get(miss.name) != LEFT_OUT:
         return False, None
-    seen = ctx
-    if cov.applies(ctx):
-        seen = replace(ctx, results={**ctx.results, "curve coverage": cov.fn(ctx, no_checkpoint)})
-    return True, _num(getattr(miss.fn(seen, no_checkpoint), "completeness", None))
+    for stage in (cov, miss):
+        if stage.applies(ctx):
+            ctx.results[stage.name] = stage.fn(ctx, no_checkpoint)
+            ctx.not_computed.pop(stage.name, None)
+    return True, _num(getattr(ctx.results[miss.name], "completeness", None))
 
 
 def first_look(before: Findings, pre: Evaluation, params: Params) -> tuple[dict[str, float | None], str | None]:
