@@ -53,6 +53,7 @@ docs: setup
 screenshots: setup
 	xvfb-run -a -s "-screen 0 1600x1000x24" $(PY) scripts/make_screenshots.py
 	xvfb-run -a -s "-screen 0 1366x768x24" $(PY) scripts/make_screenshots.py --laptop
+	xvfb-run -a -s "-screen 0 1920x1080x24" $(PY) scripts/make_screenshots.py --laptop
 	QT_SCALE_FACTOR=1.5 xvfb-run -a -s "-screen 0 1366x768x24" $(PY) scripts/make_screenshots.py --laptop
 
 # The benchmark suite (benchmarks/bench_*.py, pytest-benchmark; not part of `make test`), then its table in

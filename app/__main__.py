@@ -148,8 +148,8 @@ def import_view_libraries() -> None:
 
 
 def _exited(code: int) -> NoReturn:
-    """The event loop has ended (the window closed, its task cancelled and waited for at most
-    ``app.worker.SHUTDOWN_WAIT_S``, its settings synced): leave now, with the event loop's status.
+    """The event loop has ended (the window closed, its tasks cancelled and detached, never waited
+    for, its settings synced): leave now, with the event loop's status.
 
     Not through the interpreter's teardown: freeing a million-point scene, VTK's objects and every
     module took 0.4-0.9 s after the window had closed (Ctrl+Q should take 0.5 s), and a task thread

@@ -18,6 +18,7 @@ from PySide6 import QtCore, QtGui, QtWidgets
 
 from skelcore.scores import COLUMN, LOCAL_METRICS, Scores, column_keys, format_score
 
+from .edit_scoring import defects_pending
 from .window_api import ActionSpec, WindowApi
 from .window_size import FRAME_ALLOWANCE, initial_size
 
@@ -82,6 +83,9 @@ def _lower_is_better(label: str) -> bool:
     return any(_label(c.key) == label and c.better == "lower" for c in COLUMN.values())
 
 
+#: the tooltip of a defect count the A/B view does not know (Esc stopped the edit's second phase)
+NOT_COMPUTED = "the edited curve's defects were not computed (Esc stopped them; Evaluate, F5, finds them)"
+
 #: the A/B window's size on a screen with room for it
 AB_SIZE = (1400, 850)
 
@@ -127,6 +131,8 @@ class CompareWindow(QtWidgets.QWidget):
         from .scene.defects import sound_line
 
         self.defect_rows = ab_defect_rows(ev_a, ev_b)  # the defects of A and B
+        # an edit's first phase whose defects Esc stopped: its defect counts are not known, not 0
+        self.pending = tuple(defects_pending(ev) for ev in (ev_a, ev_b))
         self.vacuous = (vacuous_scores(ev_a), vacuous_scores(ev_b))
         self._legends: list[Any] = []  # the defect legends, one per half that draws defects
         self.sound = (sound_line(ev_a), sound_line(ev_b))
@@ -142,6 +148,8 @@ class CompareWindow(QtWidgets.QWidget):
         for r, (label, a, b, d) in enumerate(self.rows + self.defect_rows):
             if r < n_scores:
                 texts = (label, *(format_score(v, 4, nan="—") for v in (a, b)), format_score(d, 4, nan="—", signed=True))
+            elif any(self.pending):
+                texts = (label, *("not computed" if p else f"{v:.0f}" for p, v in zip(self.pending, (a, b))), "—")
             else:
                 texts = (label, f"{a:.0f}", f"{b:.0f}", f"{d:+.0f}" if d else "0")
             vacuous = [(side, v[label]) for side, v in zip("AB", self.vacuous) if r < n_scores and label in v]
@@ -157,7 +165,9 @@ class CompareWindow(QtWidgets.QWidget):
                     item.setForeground(self.palette().color(QtGui.QPalette.ColorGroup.Disabled,
                                                             QtGui.QPalette.ColorRole.Text))
                     item.setToolTip(f"says nothing: {self.vacuous[c - 1][label]}")
-                if c == 3 and vacuous and not math.isnan(d):
+                if r >= n_scores and c and any(self.pending):
+                    item.setToolTip(NOT_COMPUTED)
+                elif c == 3 and vacuous and not math.isnan(d):
                     # a vacuous value is no improvement nor a loss: grey, never green or red
                     item.setForeground(self.palette().color(QtGui.QPalette.ColorGroup.Disabled,
                                                             QtGui.QPalette.ColorRole.Text))
@@ -169,10 +179,13 @@ class CompareWindow(QtWidgets.QWidget):
                     item.setToolTip("B is better" if better else "A is better")
                 self.table.setItem(r, c, item)
         last = n_scores + len(self.defect_rows)
-        for c, text in enumerate(("sound (no defect warning)", *self.sound, "")):
+        sound = ["not computed" if p else t for p, t in zip(self.pending, self.sound)]
+        for c, text in enumerate(("sound (no defect warning)", *sound, "")):
             item = QtWidgets.QTableWidgetItem(text)
-            item.setToolTip(text)
-            if c in (1, 2):
+            item.setToolTip(NOT_COMPUTED if text == "not computed" else text)
+            if text == "not computed":
+                item.setForeground(self.palette().color(QtGui.QPalette.ColorGroup.Disabled, QtGui.QPalette.ColorRole.Text))
+            elif c in (1, 2):
                 item.setForeground(QtCore.Qt.GlobalColor.darkGreen if text == "sound" else QtCore.Qt.GlobalColor.darkRed)
             self.table.setItem(last, c, item)
         self.table.resizeColumnsToContents()

@@ -3,8 +3,9 @@
 Opens the A/B view (:class:`skelscope.compare_view.CompareWindow`, through the window's ``compare``)
 with A = the curve skeleton as loaded and B = the edited one, both scored against the same cloud,
 skeletal set and settings. B is the shown evaluation (an edit still being scored, or its defects: the view opens
-once the whole evaluation lands); A is the evaluation an undo step kept of the loaded curve, else the shown one's
-``Evaluation.update`` back to the loaded curve, in the worker (the same as a fresh evaluation).
+once the whole evaluation lands; Esc stopping the defects opens it at once, B's defects "not computed"); A is the
+evaluation an undo step kept of the loaded curve, else the shown one's ``Evaluation.update`` back to the loaded
+curve, in the worker (the same as a fresh evaluation).
 """
 
 from __future__ import annotations
@@ -44,6 +45,7 @@ class EditCompare(QtCore.QObject):
         edits.stack.indexChanged.connect(self._refresh)
         self.button.setEnabled(False)
         window.session.runner.succeeded.connect(self._succeeded)
+        window.session.runner.cancelled.connect(self._cancelled)
         window.session.evaluated.connect(self._scored)
 
     def _refresh(self, _index: int = 0) -> None:
@@ -56,8 +58,9 @@ class EditCompare(QtCore.QObject):
         """The curve has edits (the stack's position is past its start)."""
         return self.edits.original is not None and self.edits.stack.index() > 0 and self.window.scene.curve is not None
 
-    def open(self) -> bool:
-        """Open the A/B view now, or once the scores it needs are known (True when it will open)."""
+    def open(self, partial: bool = False) -> bool:
+        """Open the A/B view now, or once the scores it needs are known (True when it will open);
+        ``partial``: with B's four metrics alone when its defects were stopped (Esc)."""
         w = self.window
         if not self.can_open():
             w.show_message("no edits: the curve is as loaded")
@@ -66,7 +69,7 @@ class EditCompare(QtCore.QObject):
             self._waiting = True
             w.show_message("A/B: waiting for the edited curve's scores")
             return True
-        ev_b = self.edits.evaluation_of(w.scene.curve.curve)
+        ev_b = self.edits.evaluation_of(w.scene.curve.curve, partial=partial)
         if ev_b is None:
             w.show_error("Compare with the loaded curve", "score the edited curve first (Evaluate, F5)")
             return False
@@ -100,6 +103,22 @@ class EditCompare(QtCore.QObject):
         if self._waiting and not self.window.session.runner.running:
             self._waiting = False
             QtCore.QTimer.singleShot(0, self, self.open)
+
+    def _cancelled(self, name: str) -> None:
+        """Esc stopped what the view waited for: the defects (the view opens at once with B's four
+        metrics, its defects "not computed"), or B's scores (nothing to show: it does not open). Seen
+        after the event, when a further edit's scoring, which the view then waits for, has started."""
+        if self._waiting:
+            QtCore.QTimer.singleShot(0, self, lambda: self._after_cancel(name))
+
+    def _after_cancel(self, name: str) -> None:
+        if not self._waiting or self.window.session.runner.current_name in ("evaluation", DEFECTS_TASK):
+            return  # opened meanwhile, or still waiting for a further edit's scores
+        self._waiting = False
+        if name == DEFECTS_TASK:
+            self.open(partial=True)
+        else:
+            self.window.show_message("A/B: the edited curve's scoring was cancelled")
 
     def _succeeded(self, name: str, result: Any) -> None:
         if name != self.NAME or self._pending is None:

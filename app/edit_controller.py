@@ -160,15 +160,16 @@ class EditController(QtCore.QObject):
                 self.active = False
             self._refresh_actions()
 
-    def evaluation_of(self, curve: Any) -> Any:
+    def evaluation_of(self, curve: Any, partial: bool = False) -> Any:
         """The shown evaluation when it is of ``curve`` (kept by the undo step), else None; never an
-        edit's first phase (its defects still updating: an undo step keeps whole evaluations)."""
+        edit's first phase (its defects still updating: an undo step keeps whole evaluations) unless
+        ``partial`` (the A/B view after Esc stopped the defects: it shows what is there)."""
         from .edit_scoring import defects_pending
 
         ev = self.scene.evaluation
         layer = self.scene.curve
         if (ev is None or layer is None or layer.curve is not curve or self.session.stale_reason()
-                or defects_pending(ev)):
+                or (defects_pending(ev) and not partial)):
             return None
         return ev
 

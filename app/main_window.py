@@ -753,26 +753,31 @@ class MainWindow(QtWidgets.QMainWindow):
             self.docks["Display"].raise_()
         super().showEvent(event)
 
+    def event(self, event: QtCore.QEvent) -> bool:
+        """A tab bar of tabbed docks shows its titles whole, scrolling its tabs when they do not fit: Qt
+        elides them ("Barco…", "Def…" in a narrow dock at 1.5 x on 1366 x 768), which hides which
+        panel each tab opens. Set when Qt polishes the bar, after its own setup (which sets eliding)."""
+        if event.type() == QtCore.QEvent.Type.ChildPolished and isinstance(event.child(), QtWidgets.QTabBar):
+            bar = event.child()
+            bar.setElideMode(QtCore.Qt.TextElideMode.ElideNone)
+            bar.setUsesScrollButtons(True)
+        return super().event(event)
+
     # ---- closing --------------------------------------------------------------------------
     def closeEvent(self, event: QtGui.QCloseEvent) -> None:  # noqa: N802
-        """Quitting cancels any running task and waits for it at most SHUTDOWN_WAIT_S in all (a task
-        inside an engine call without a checkpoint is left to the process exit, see app.__main__)."""
-        import time
-
-        from .worker import SHUTDOWN_WAIT_S
-
+        """Quitting waits for no work: every task is cancelled and detached (its result can never land;
+        an engine child process is killed, a thread stops at its next checkpoint or with the process,
+        which leaves by ``os._exit``, see app.__main__), and ``closing`` stops the support still
+        computing. Waiting for stale work made Ctrl+Q take up to ``SHUTDOWN_WAIT_S`` longer."""
         self.closing.emit()
-        deadline = time.monotonic() + SHUTDOWN_WAIT_S
         runners = [self.session.runner]
         study = getattr(self, "_study_dialog", None)
         if study is not None:
             runners.append(study.runner)
         for runner in runners:
             runner.discard()
-        for runner in runners:
-            runner.wait_all(int(max(0.0, deadline - time.monotonic()) * 1000))
         if study is not None:
-            study.hide()  # not close(): its closeEvent would wait for its runner again, past the deadline
+            study.hide()  # not close(): its closeEvent would handle its runner again
         self.settings.sync()  # the process may end with os._exit (a task still inside the engine)
         self.view.close()
         super().closeEvent(event)

@@ -233,9 +233,9 @@ class StudyDialog(QtWidgets.QDialog):
             opener(row.cloud, row.skeletal, row.curve, row.evaluation)
 
     def closeEvent(self, event: Any) -> None:  # noqa: N802
-        self.runner.shutdown()
+        self.runner.discard()  # cancelled and detached, not waited for: its result can never land
         super().closeEvent(event)
 
     def reject(self) -> None:
-        self.runner.shutdown()
+        self.runner.discard()
         super().reject()

@@ -4,8 +4,9 @@ The job function gets ``progress(fraction, stage)`` and ``cancel()`` and passes 
 which checks ``cancel`` at its checkpoints and raises ``Cancelled``. Cancel takes effect in the window
 at once: the task is disconnected and whatever it still delivers is dropped, while its thread winds
 down at the engine's next checkpoint. The thread is a plain daemon ``threading.Thread`` (not a
-``QThread``, whose object destroyed while running aborts the process): quitting waits a bounded time
-(:meth:`TaskRunner.shutdown`) and the process can then exit with a thread still inside numpy.
+``QThread``, whose object destroyed while running aborts the process): closing the window cancels and
+detaches every task, and the process exits with a thread still inside numpy (:meth:`TaskRunner.shutdown`
+waits a bounded time, for scripts).
 Following Orange3's ``concurrent`` helpers, a new task first retires the old one; progress is
 throttled to visible steps. Only plain Python objects cross threads: VTK stays on the GUI thread.
 Big evaluations run in a child process instead (:class:`ProcessTask`, :mod:`skelscope.engine_process`),
@@ -28,8 +29,8 @@ __all__ = ["Task", "ProcessTask", "TaskRunner", "SHUTDOWN_WAIT_S", "THREAD_PREFI
 JobFunction = Callable[[Callable[[float, str], None], Callable[[], bool]], Any]
 
 SHUTDOWN_WAIT_S = 1.5
-"""How long quitting waits, in all, for cancelled tasks to reach a checkpoint before the process exits
-anyway: with the window's own teardown the process ends within 2 s of Ctrl+Q."""
+"""How long :meth:`TaskRunner.shutdown` (scripts, the scripted mode, tests) waits, in all, for cancelled
+tasks to reach a checkpoint. Closing the window waits for none (it cancels and detaches them)."""
 
 
 THREAD_PREFIX = "skelscope-task-"

@@ -4,7 +4,8 @@ deleted, a vertex moved. ``update`` alone (the four metrics, diagnostics=False: 
 ``complete_update`` of that (the curve's coverage and diagnostics: its second phase), ``update`` with the
 diagnostics in one call, and the fresh evaluation. Each case's extra_info holds the p95 of its rounds (the
 targets: 100 ms at 100k, 500 ms at 1M, docs/performance.md "Updating after an edit"), its median CPU
-seconds and the samples scored again. The base evaluation is made once per size, untimed."""
+seconds, the samples scored again and, with the diagnostics, how many of the cloud points the spur test
+tests it asked again (the others keep the base evaluation's answers, diagnostics/spur_cache.py). The base evaluation is made once per size, untimed."""
 
 from __future__ import annotations
 
@@ -49,6 +50,10 @@ def _run(measure, benchmark, n: int, edit: str, how: str, rounds: int, fresh_rou
     benchmark.extra_info["n_points"] = n
     benchmark.extra_info["samples"] = len(out.curve.samples)
     benchmark.extra_info["samples_at_new_places"] = int(rescored)
+    memo = getattr(out.source.ctx, "spur_memo", None) if out.source is not None else None
+    if how in ("second_phase", "update_with_diagnostics") and memo is not None:
+        asked, of = memo.asked  # the spur test's points asked again, of those it tests
+        benchmark.extra_info["spur_points_asked"] = [asked, of]
 
 
 @pytest.mark.parametrize("how", HOW)

@@ -8,10 +8,10 @@
 - ``figure_spheres.png``: File > Save picture at scale 2 with points as shaded spheres (points, lines
   and text grow with the scale); ``figure_eye_dome.png``: eye-dome lighting, no colour bar, no axes;
   ``figure_black.png``: scale 2 on a black background (the colour bar's and the axes' text white).
-- ``window_1366x768.png`` (``--laptop``, run under a 1366 x 768 screen; ``make screenshots`` does):
-  the whole screen of a laptop with the window filling it, the sample evaluated, an element picked
+- ``window_WxH.png`` (``--laptop``, run under a W x H screen; ``make screenshots`` does 1366 x 768 and
+  1920 x 1080): the whole screen with the window filling it, the sample evaluated, an element picked
   and an evaluation running (status bar: stage, progress bar, Cancel). With ``QT_SCALE_FACTOR=1.5``
-  (``--laptop`` again) it writes ``window_1366x768_scale1.5.png``.
+  (``--laptop`` again) it writes ``window_WxH_scale1.5.png``.
 - ``window_skeletonized.png``: the skeletonizer's output for the sample cloud, evaluated.
 - ``window_hammer_skeletonized.png``: the real hammer scan (resources/scans) skeletonized
   and evaluated, coloured by centeredness.
@@ -63,7 +63,7 @@ def sample_files(tmp: Path) -> dict[str, str]:
 
 
 def laptop_screenshot() -> int:
-    """The window on a 1366 x 768 screen, filling it as a maximized window would."""
+    """The window on the whole screen (1366 x 768, 1920 x 1080), filling it as a maximized window would."""
     from PySide6 import QtCore, QtWidgets
 
     app = QtWidgets.QApplication.instance() or QtWidgets.QApplication(["skelscope-screenshots"])
@@ -96,8 +96,10 @@ def laptop_screenshot() -> int:
     window.session.start_evaluation()  # a run in progress: the status bar's stage, progress and Cancel
     settle(250)
     scale = os.environ.get("QT_SCALE_FACTOR", "1")
-    name = "window_1366x768.png" if scale in ("", "1") else f"window_1366x768_scale{scale}.png"
-    QtWidgets.QApplication.primaryScreen().grabWindow(0).save(str(OUT / name))
+    shot = QtWidgets.QApplication.primaryScreen().grabWindow(0)  # the whole screen, in device pixels
+    size = f"{shot.width()}x{shot.height()}"
+    name = f"window_{size}.png" if scale in ("", "1") else f"window_{size}_scale{scale}.png"
+    shot.save(str(OUT / name))
     print(f"wrote screenshots/{name} (screen {screen.size().width()} x {screen.size().height()} at scale {scale})")
     window.session.runner.shutdown()
     window.close()

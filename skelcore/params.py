@@ -116,6 +116,16 @@ class Params:
         contraction stopping a radius short of a rounded end reaches about one or less
         (docs/diagnostics.md "Missing parts").
     missing_min_share : ... and when it holds at least this share of the cloud (noise, a few points).
+    missing_min_area, missing_small_depth : ... or when it holds the surface of at least this many
+        squared median ball radii (points x the cloud's median spacing squared; 36: a tube's 6 radii)
+        and reaches this depth: on a branching arbor one branch is a small share of the cloud, and
+        its depth in its own border radius tells it from a shallow strip once it has a border and
+        points beyond; the strips an intact traced neuron leaves reach up to 1.3
+        (docs/diagnostics.md "Completeness").
+    missing_air_ball : an element in no solid voxel of the interior (and one-sided on an open
+        surface) explains nothing when its ball is over this many x the median ball of the elements
+        inside: an edge through the air crosses gaps wider than the shape, the axis of a tube seen
+        from one side keeps the tube's radius (docs/diagnostics.md "Completeness").
     missing_large_share : a region holding this share of the cloud counts whatever its depth (a
         skeleton shrunk to the centre of a ring: its ball is wide, the ring unexplained).
     missing_min_completeness : ``incomplete`` also fires when the skeleton explains less than this
@@ -279,6 +289,9 @@ class Params:
     # diagnostics: missing parts (docs/diagnostics.md)
     missing_depth: float = 1.25
     missing_min_share: float = 0.01
+    missing_min_area: float = 36.0
+    missing_small_depth: float = 2.0
+    missing_air_ball: float = 2.0
     missing_large_share: float = 0.5
     missing_min_completeness: float = 0.6
     missing_depth_quantile: float = 0.95
@@ -375,7 +388,8 @@ class Params:
             bad("coverage_exact_points", "must be a positive integer")
         if not 0.0 < float(self.rays_near_angle) < 1.0:
             bad("rays_near_angle", "must be in (0, 1)")
-        for name in ("missing_depth", "missing_link_factor"):
+        for name in ("missing_depth", "missing_link_factor", "missing_small_depth", "missing_min_area",
+                     "missing_air_ball"):
             if not float(getattr(self, name)) > 0:
                 bad(name, "must be > 0")
         for name in ("missing_min_share", "missing_large_share", "missing_min_completeness",

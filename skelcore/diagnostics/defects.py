@@ -19,6 +19,7 @@ from .branches import Branches, decompose_branches
 from .cycles import CycleDefects, find_cycle_defects
 from .interior import VoxelShape, cloud_subsample, voxelize_interior
 from .outside import OutsideDefects, find_outside
+from .spur_cache import SpurMemo
 from .spurs import SpurDefects, find_spurious_branches
 
 __all__ = ["CurveDefects", "find_curve_defects"]
@@ -77,13 +78,15 @@ def find_curve_defects(
     checkpoint: Checkpoint = no_checkpoint,
     interior: Callable[[Checkpoint], VoxelShape] | None = None,
     cloud_tree: cKDTree | None = None,
+    spur_memo: SpurMemo | None = None,
 ) -> CurveDefects:
     """Branches, spurious branches, cycles and the parts outside of ``curve`` (and of ``skeletal``),
     all normalized (docs/metrics.md 0); ``sample_boundedness`` are the boundedness values of ``samples``. The
     local radii come from at most ``diag_max_points`` of the cloud (``spurs.subsampled`` says when).
     ``interior(checkpoint)`` gives the cloud's voxelized interior when it is shared (the evaluation's
     stages make it once); default :func:`.interior.voxelize_interior` with ``params``. ``cloud_tree``: the
-    KD-tree of ``cloud_subsample(cloud, params.diag_max_points)`` when kept (an edit's update)."""
+    KD-tree of ``cloud_subsample(cloud, params.diag_max_points)`` when kept (an edit's update);
+    ``spur_memo``: the spur test's search kept from an earlier curve (:mod:`.spur_cache`)."""
     import time
 
     t: dict[str, float] = {}
@@ -105,7 +108,7 @@ def find_curve_defects(
     t["interior"] = time.perf_counter() - t0
     t0 = time.perf_counter()
     spurs = find_spurious_branches(cloud, curve, params=params, branches=branches, cloud_tree=tree,
-                                   checkpoint=lambda f: checkpoint(0.2 + 0.3 * f))
+                                   checkpoint=lambda f: checkpoint(0.2 + 0.3 * f), search_memo=spur_memo)
     t["spurs"] = time.perf_counter() - t0
     t0 = time.perf_counter()
     cycles = find_cycle_defects(cloud, curve, params=params, branches=branches, cloud_tree=tree, voxel_shape=shape,

@@ -8,8 +8,10 @@ unexplained points are linked into regions of the cloud (neighbours closer than
 (the unexplained points next to explained ones), in the radius of that border: a contraction that
 stops a radius short of a rounded end leaves a cap about one radius deep, a missing arm or half
 handle reaches several, the wide sides of a flat part a curve crosses reach less than their width.
-A region counts (warning ``incomplete``) when depth >= ``missing_depth`` and share >=
-``missing_min_share``, or share >= ``missing_large_share``; it also fires when the completeness is
+A region counts (warning ``incomplete``) when depth >= ``missing_depth`` and it holds
+``missing_min_share`` of the cloud, or depth >= ``missing_small_depth`` and it holds the surface of
+``missing_min_area`` squared median ball radii (one branch of an arbor is a small share of it), or
+share >= ``missing_large_share``; it also fires when the completeness is
 under ``missing_min_completeness``. Above ``missing_max_points`` cloud points
 the work runs on a random subsample and every cloud point takes its nearest sample's verdict
 (``subsample`` says so).
@@ -27,7 +29,7 @@ from scipy.spatial import cKDTree
 
 from ..correspondence import densify_curve
 from ..curve import CurveSkeleton
-from ..geometry import Checkpoint, no_checkpoint, query_workers, unique_rows
+from ..geometry import Checkpoint, kd_tree, no_checkpoint, query_workers, unique_rows
 from ..metrics.cloud_index import kept_index
 from ..metrics.coverage import Coverage, coverage, coverage_tau
 from ..params import Params
@@ -44,6 +46,10 @@ BORDER_LINK = 3.0
 SPREAD = 4.0
 #: cloud rows spread per call between two checkpoints (about 0.1 s at 1M points)
 SPREAD_CHUNK = 131_072
+# elements whose distance to the cloud gives the median ball radius of missing_min_area
+SMALL_ELEMENTS = 20_000
+# regions under missing_min_share with fewer points are not measured (no tree is built for them)
+SMALL_FEWEST = 8
 # seed of the subsample taken above missing_max_points (the verdicts must not depend on a run)
 SUBSAMPLE_SEED = 0
 
@@ -54,9 +60,10 @@ class MissingRegion:
 
     ``share``: its share of the cloud; ``depth``: how far it reaches beyond its border (``reach``, the
     quantile distance to the border, normalized units) in the border's radius ``border_radius``; NaN
-    for regions under ``missing_min_share``, inf for a region no explained point touches;
-    ``centroid`` in the units of ``to_user`` (user units in an evaluation); ``deepest``: the cloud row
-    farthest from the skeleton's balls; ``counted``: a missing part (``incomplete``)."""
+    for regions under both ``missing_min_share`` and ``missing_min_area``, inf for a region no
+    explained point touches; ``centroid`` in the units of ``to_user`` (user units in an evaluation);
+    ``deepest``: the cloud row farthest from the skeleton's balls; ``counted``: a missing part
+    (``incomplete``)."""
 
     id: int
     n_points: int
@@ -237,7 +244,7 @@ def missing_parts(
     if inside is not None and cov is not None:  # the evaluation's coverage holds while every element is inside
         tau = float(cov.tau)
         elements = skeleton_elements(skeleton, tau / float(p.coverage_tau_factor), int(p.missing_max_elements))
-        if len(elements) and not np.all(inside(elements)):
+        if len(elements) and _in_air(elements, inside, cloud, p).any():
             cov = None
     sub: np.ndarray | None = None
     spread_factor = 1.0
@@ -263,6 +270,7 @@ def missing_parts(
         else:
             pts = cloud
         index = kept_index(pts, cloud)  # an edit's update asks again about the same points
+        pts = index.cloud  # the same bits; the same array at every update (coverage keeps its noise sample)
         if tau is None:
             tau = coverage_tau(pts, p, lambda f: checkpoint(0.1 * f), index)
     # the regions link sampled neighbours: the spacing of a surface sample grows as 1 / sqrt(density)
@@ -272,11 +280,12 @@ def missing_parts(
     if cov is None:
         elements = skeleton_elements(skeleton, spacing, int(p.missing_max_elements), lambda f: checkpoint(0.1))
         if inside is not None and len(elements):
-            ok = np.asarray(inside(elements), bool)
+            ok = ~_in_air(elements, inside, pts, p)
             n_out, elements = int(np.count_nonzero(~ok)), elements[ok]
         cov = coverage(pts, elements, p, tau, checkpoint=lambda f: checkpoint(0.1 + 0.6 * f), index=index)
     checkpoint(0.7)
-    region_s, regions = _regions(pts, cov, spacing, p, checkpoint)
+    region_s, regions = _regions(pts, cov, spacing, p, checkpoint,
+                                 small=lambda tree: _small_points(skeleton, tree, spacing, p))
     checkpoint(0.9)
     explained_s = cov.covered
     if sub is not None:
@@ -295,8 +304,8 @@ def missing_parts(
             id=k, n_points=int(counts[k]), share=share, depth=r["depth"], reach=r["reach"],
             border_radius=r["border_radius"], centroid=np.asarray(to_user(r["centroid"][None]))[0],
             deepest=int(r["deepest"] if sub is None else sub[r["deepest"]]),
-            counted=bool((share >= p.missing_min_share and r["depth"] >= p.missing_depth)
-                         or share >= p.missing_large_share),
+            counted=bool(r["depth"] >= (p.missing_depth if share >= p.missing_min_share else p.missing_small_depth)
+                         or share >= p.missing_large_share),  # NaN: not measured
         ))  # fmt: skip
     checkpoint(1.0)
     return MissingParts(
@@ -309,6 +318,8 @@ def missing_parts(
         subsample=None if sub is None else int(len(sub)),
         what=what,
         thresholds={"missing_depth": float(p.missing_depth), "missing_min_share": float(p.missing_min_share),
+                    "missing_min_area": float(p.missing_min_area),
+                    "missing_small_depth": float(p.missing_small_depth),
                     "missing_large_share": float(p.missing_large_share),
                     "missing_min_completeness": float(p.missing_min_completeness)},
     )
@@ -338,16 +349,44 @@ def _spread(cloud: np.ndarray, pts: np.ndarray, region_s: np.ndarray, explained_
     return region, explained
 
 
+def _in_air(elements: np.ndarray, inside: Callable[[np.ndarray], np.ndarray], pts: np.ndarray,
+            p: Params) -> np.ndarray:
+    """The elements whose balls explain nothing: ``inside`` rejects them and their ball (their
+    distance to the cloud) is over ``missing_air_ball`` x the median ball of the elements it accepts
+    (an edge through the air crosses gaps far wider than the shape; the axis of a tube seen from
+    one side lies in no solid voxel with the tube's own radius); all it rejects when it accepts none."""
+    out = ~np.asarray(inside(elements), bool)
+    if not out.any() or out.all():
+        return out
+    r = kd_tree(pts).query(elements, workers=query_workers(len(elements)))[0]
+    out &= r > float(p.missing_air_ball) * float(np.median(r[~out]))
+    return out
+
+
+def _small_points(skeleton: np.ndarray | CurveSkeleton, tree: cKDTree, spacing: float, p: Params) -> float:
+    """The fewest points of a region smaller than ``missing_min_share`` that is measured: the surface
+    of ``missing_min_area`` squared median ball radii (a point stands for a spacing squared), so the
+    same part of the shape at any density (inf without elements or spacing)."""
+    elements = skeleton_elements(skeleton, spacing, int(p.missing_max_elements))
+    if not len(elements) or not spacing > 0 or tree.n == 0:
+        return np.inf
+    elements = elements[:: max(1, len(elements) // SMALL_ELEMENTS)]  # a median needs no more
+    r = float(np.median(tree.query(elements, workers=query_workers(len(elements)))[0]))
+    return max(float(p.missing_min_area) * r * r / (spacing * spacing), 1.0)
+
+
 def _regions(pts: np.ndarray, cov: Coverage, spacing: float, p: Params, checkpoint: Checkpoint,
-             tree: cKDTree | None = None) -> tuple[np.ndarray, list[dict]]:
+             tree: cKDTree | None = None, small: Callable[[cKDTree], float] | None = None
+             ) -> tuple[np.ndarray, list[dict]]:
     """Region id per point (-1 explained; ids by size, largest first) and each region's numbers.
 
     Border: the region's points with an explained point among their neighbours (within the link).
     Radius at the border: the RMS distance of the largest connected piece of the border from its
     centroid (a ring around a tube: the tube's radius; it is the cross-section's extent, not an
     inscribed ball's, so a flat part a curve crosses is not a missing part). Depth: the region's
-    ``missing_depth_quantile`` distance to its border over that radius. Regions under
-    ``missing_min_share`` of the points get no depth (NaN): they cannot count."""
+    ``missing_depth_quantile`` distance to its border over that radius. Regions under both
+    ``missing_min_share`` of the points and ``small(tree)`` points (the area rule; asked only when
+    such a region holds ``SMALL_FEWEST`` points) get no depth (NaN): they cannot count."""
     n = len(pts)
     region = np.full(n, -1, np.int64)
     miss = np.flatnonzero(~cov.covered)
@@ -375,7 +414,11 @@ def _regions(pts: np.ndarray, cov: Coverage, spacing: float, p: Params, checkpoi
     sums = np.zeros((n_comp, 3))
     np.add.at(sums, label, up)
     centroid = sums / size[:, None]
-    big = np.flatnonzero(size >= max(1.0, float(p.missing_min_share) * n))
+    floor = max(1.0, float(p.missing_min_share) * n)
+    if small is not None and np.any((size < floor) & (size >= SMALL_FEWEST)):
+        tree = cKDTree(pts) if tree is None else tree
+        floor = min(floor, max(float(SMALL_FEWEST), small(tree)))
+    big = np.flatnonzero(size >= floor)
     depth = np.full(n_comp, np.nan)
     reach = np.full(n_comp, np.nan)
     radius = np.full(n_comp, np.nan)

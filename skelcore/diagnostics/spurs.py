@@ -31,6 +31,7 @@ from ..params import Params
 from .trust_warning import TrustWarning, finite_range
 from .branches import Branches, decompose_branches, densify
 from .interior import cloud_subsample
+from .spur_cache import SpurMemo
 
 __all__ = ["SpurDefects", "find_spurious_branches", "curve_points"]
 
@@ -210,11 +211,14 @@ def find_spurious_branches(
     cloud_tree: cKDTree | None = None,
     checkpoint: Checkpoint = no_checkpoint,
     seed: int = 0,
+    search_memo: SpurMemo | None = None,
 ) -> SpurDefects:
     """Spurious terminal branches of ``curve`` in the shape sampled by ``cloud`` (both normalized,
     docs/metrics.md 0). ``branches`` and ``cloud_tree`` (a KD-tree of the cloud, or of its subsample of
     ``diag_max_points``: the local radii come from it) may be passed when computed;
-    ``samples`` (the curve samples) give the per-sample flags."""
+    ``samples`` (the curve samples) give the per-sample flags. ``search_memo``: the nearest-ball search
+    kept from an earlier curve of the same cloud and params (an edit's update asks again only the
+    points the edit can change, :mod:`.spur_cache`; the same answers)."""
     cloud = np.asarray(cloud, dtype=float)
     if cloud_tree is None and len(cloud):
         cloud_tree = kd_tree(cloud_subsample(cloud, params.diag_max_points, seed), checkpoint)
@@ -234,19 +238,24 @@ def find_spurious_branches(
         step = params.diag_step * r_typ if r_typ > 0 else (total / 200 if total > 0 else 1.0)
         step = max(step, total / 200_000 if total > 0 else step)
         pts, pb = curve_points(curve, branches, step)
-        r_x, _ = cloud_tree.query(pts)
+        memo = search_memo
+        r_x = cloud_tree.query(pts)[0] if memo is None else memo.radii(pts, cloud_tree)
         checkpoint(0.2)
-        use = cloud_subsample(cloud, params.diag_max_points, seed)
+        use = (cloud_subsample(cloud, params.diag_max_points, seed) if memo is None else
+               memo.subsample(cloud, (params.diag_max_points, seed),
+                              lambda: cloud_subsample(cloud, params.diag_max_points, seed)))
         explain = (1.0 + params.spur_slack) * r_x  # no tau: see the module's docstring
-        ptree = cKDTree(pts)
-        _, near = ptree.query(use)
-        own = pb[near]
+        own = pb[cKDTree(pts).query(use)[1]] if memo is None else memo.own_branch(pts, pb, use)
         is_term = np.zeros(nb + 1, bool)
         is_term[terminal] = True
         in_term = is_term[own]
         q = use[in_term]
         checkpoint(0.4)
-        elsewhere = _explained_elsewhere(pts, pb, explain, q, own[in_term])
+        if memo is None:
+            elsewhere = _explained_elsewhere(pts, pb, explain, q, own[in_term])
+        else:
+            elsewhere = memo.search(_explained_elsewhere, pts, pb, explain, q, np.flatnonzero(in_term), own[in_term],
+                                    len(use))
         checkpoint(0.9)
         territory = np.bincount(own[in_term], minlength=nb)[:nb]
         unique = np.bincount(own[in_term][~elsewhere], minlength=nb)[:nb]

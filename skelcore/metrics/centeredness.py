@@ -239,6 +239,7 @@ def curve_centeredness(
     params: Params = Params(),
     checkpoint: Checkpoint = no_checkpoint,
     grid: "_SlabGrid | None" = None,
+    span: int | None = None,
 ) -> np.ndarray:
     """Centeredness of curve samples from the cloud's cross-section (docs/metrics.md 3; paper Eq. 11,
     ``eq.curve_point_centeredness``).
@@ -258,7 +259,9 @@ def curve_centeredness(
     past the ball.  Either way the result equals that of testing every cloud point, in the grid's order
     for equal distances.  Clouds under 50k points take the samples in batches of flat arrays, larger
     ones in spans on threads; both give the same bits (docs/performance.md 6.5).
-    ``grid``: :func:`slab_grid` of the same cloud and params, when kept from an earlier call.
+    ``grid``: :func:`slab_grid` of the same cloud and params, when kept from an earlier call. ``span``:
+    samples per thread task on large clouds (default 4; an edit's update asks for larger ones: fewer
+    batched fits, the same bits).
     """
     cloud = np.asarray(cloud, dtype=float)
     points = np.asarray(sample_points, dtype=float)
@@ -311,7 +314,7 @@ def curve_centeredness(
     # every core (docs/performance.md 6.3), each span's fits batched (a set's fit does not depend on the
     # others in its batch; one batch after the spans held a cancel for 0.4 s at 1M points,
     # docs/performance.md 4)
-    step = _CURVE_SPAN
+    step = max(1, int(span)) if span else _CURVE_SPAN
     on_threads(span_centeredness, [(i, min(i + step, len(todo))) for i in range(0, len(todo), step)], None,
                checkpoint, store)
     return out

@@ -58,9 +58,10 @@ def find_outliers(cloud: np.ndarray, params: Params = Params(), *, checkpoint: C
                   tree: cKDTree | None = None) -> Outliers:
     """The outliers of ``cloud`` (module docstring) and how far they move the normalization of docs/metrics.md 0.
 
-    The spacing (median nearest-neighbour distance) and the statistical test's yardstick come from one
-    query of at most ``REFERENCE_SAMPLE`` random points (every point below that; seed 0); the radius
-    test asks only the rows no crowded cell vouches for (:func:`sparse_rows`, exact).  At 1M points
+    The spacing (median nearest-neighbour distance) and the statistical test's yardstick come from at
+    most ``REFERENCE_SAMPLE`` random points (every point below that; seed 0), the yardstick only when
+    some row is sparse; the radius test asks only the rows no crowded cell vouches for
+    (:func:`sparse_rows`, exact).  At 1M points
     ~1.2 CPU s (a kNN pass over every row and an exact median took 2-4; docs/performance.md 6.6).
 
     Examples
@@ -81,8 +82,9 @@ def find_outliers(cloud: np.ndarray, params: Params = Params(), *, checkpoint: C
         tree = kd_tree(cloud, checkpoint, 0.0)
     checkpoint(0.1)
     sample = np.arange(n) if n <= REFERENCE_SAMPLE else np.random.default_rng(0).choice(n, REFERENCE_SAMPLE, replace=False)
-    near = tree.query(cloud[sample], k=k + 1, workers=query_workers(len(sample)))[0]
-    spacing = float(np.median(near[:, 1]))
+    # the nearest other point first: a clean cloud has no sparse row, and the statistical test's
+    # yardstick (k + 1 neighbours, twice the query) is asked only when some row is (the same distances)
+    spacing = float(np.median(tree.query(cloud[sample], k=2, workers=query_workers(len(sample)))[0][:, 1]))
     checkpoint(0.2)
     none = Outliers(np.zeros(0, np.int64), n, 1.0, 0.0, spacing)
     if not spacing > 0:
@@ -92,6 +94,7 @@ def find_outliers(cloud: np.ndarray, params: Params = Params(), *, checkpoint: C
     checkpoint(0.8)
     if len(candidates) == 0:
         return none
+    near = tree.query(cloud[sample], k=k + 1, workers=query_workers(len(sample)))[0]
     ref = near[:, 1:].mean(axis=1)
     centre = float(np.median(ref))
     sigma = 1.4826 * float(np.median(np.abs(ref - centre)))

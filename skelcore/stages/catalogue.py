@@ -132,7 +132,7 @@ def _curve_defects(ctx: EvalContext, checkpoint: Checkpoint):
     return find_curve_defects(ctx.cloud_n, ctx.curve_n, samples=ctx.samples,
                               sample_boundedness=ctx.results["curve boundedness"], params=ctx.params,
                               checkpoint=checkpoint, interior=ctx.interior,
-                              cloud_tree=ctx.diag_tree(lambda f: checkpoint(0.05 * f)))
+                              cloud_tree=ctx.diag_tree(lambda f: checkpoint(0.05 * f)), spur_memo=ctx.spur_memo)
 
 
 def _skeletal_outside(ctx: EvalContext, checkpoint: Checkpoint):

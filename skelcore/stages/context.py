@@ -15,6 +15,7 @@ import numpy as np
 
 from ..curve import CurveSkeleton
 from ..metrics.curve_sampling import CurveSamples, sample_curve
+from ..diagnostics.spur_cache import SpurMemo
 from ..errors import SkelInputError
 from ..geometry import Checkpoint, Normalization, as_points, check_extent, check_magnitude, no_checkpoint
 from ..metrics.boundedness import boundedness, rays_radius
@@ -87,6 +88,9 @@ class EvalContext:
     _diag_tree: list = field(default_factory=list, repr=False)
     _diag_tree_lock: threading.Lock = field(default_factory=threading.Lock, repr=False)
     _cloud_box: dict = field(default_factory=dict, repr=False)
+    #: the spur test's search of this curve, and of the curve an update started from (its next update
+    #: asks again only what the edit can change: skelcore.diagnostics.spur_cache)
+    spur_memo: SpurMemo = field(default_factory=SpurMemo, repr=False)
 
     def __post_init__(self) -> None:
         if self.cloud_index is None:
@@ -168,11 +172,13 @@ class EvalContext:
     def interior(self, checkpoint: Checkpoint = no_checkpoint):
         """The normalized cloud's voxelized interior (docs/diagnostics.md "Cycles"), made once by the first
         diagnostic that asks (curve defects, skeletal outside: the same grid, the same parameters)."""
-        from ..diagnostics.interior import voxelize_interior
+        from ..diagnostics.interior import median_spacing, voxelize_interior
 
         with self._interior_lock:
             if not self._interior:
                 p = self.params
+                if self.with_coverage:  # coverage's tau reads the same exact spacings: one search for both
+                    median_spacing(self.cloud_n, spacings=self.cloud_index.spacings(checkpoint))
                 self._interior.append(voxelize_interior(self.cloud_n, voxels=p.cycles_voxels,
                                                         min_spacing_factor=p.cycles_voxel_spacing,
                                                         inside_share=p.beta_star, checkpoint=checkpoint))

@@ -221,6 +221,19 @@ def test_dropping_a_run_folder_or_its_index_opens_the_dialog(window, run_dir, qt
     assert errors == [] and window.scene.cloud is None  # nothing was loaded as a cloud
 
 
+def test_a_dropped_folder_that_is_not_a_run_is_refused_in_one_line_naming_it(window, tmp_path, qtbot, errors):
+    """A folder of data files (no index.json, no jobs/) dropped on the window: taken (not a silent
+    no-op), then one dialog line naming the folder and what a run's folder holds; nothing is loaded."""
+    folder = tmp_path / "scans"
+    folder.mkdir()
+    write_points_ply(folder / "cloud.ply", shapes.sphere_surface(200, seed=0))
+    assert _drop(window, folder, qtbot)
+    qtbot.waitUntil(lambda: errors != [], timeout=5000)
+    assert len(errors) == 1 and "\n" not in errors[0], errors
+    assert errors[0].startswith("scans: ") and "not a skelcore compare run" in errors[0]
+    assert window.scene.cloud is None and window.compare_run.dialog is None
+
+
 def test_bad_runs_and_failed_jobs_are_one_line_dialogs(window, run_dir, tmp_path, errors):
     _root, _m, out = run_dir
     assert window.compare_run.open(tmp_path / "missing") is None

@@ -128,3 +128,34 @@ def test_held_frames_wait_for_the_release_or_the_hold_s_end(window, qtbot):
     w.view.hold_frames(0.2)
     w.view.request_render()
     qtbot.waitUntil(lambda: not w.view.render_pending, timeout=10000)  # the hold ran out
+
+
+def test_after_esc_stops_the_defects_the_waiting_ab_view_opens_at_once_with_what_is_there(
+        window, qtbot, tmp_path, held):
+    """The A/B view asked for during the second phase waits for it; Esc stops it and the view opens
+    at once: B's four metrics shown, its defect counts and sound line "not computed" (never 0 or
+    "sound"), A's whole, B - A of the defects not coloured."""
+    from PySide6 import QtCore, QtGui
+
+    w = window
+    _cloud_path, _curve, tip = loaded(qtbot, w, tmp_path)
+    prune_tip_to_second_phase(qtbot, w, tip)
+    partial = w.scene.evaluation
+    assert w.edit_compare.open() and w.compare.views == []  # waits for the defects
+    key(qtbot, w, "Escape")
+    qtbot.waitUntil(lambda: len(w.compare.views) == 1, timeout=5000)
+    assert not w.session.runner.running and not w.edit_compare._waiting
+    view = w.compare.views[-1]
+    assert view.ev_b is partial and view.pending == (False, True)
+    assert view.ev_a.curve.curve is w.edits.original
+    shown = w.scene.scores()  # the first phase's four metrics, in B's column
+    boundedness = next(r for r, (label, *_v) in enumerate(view.rows) if label.startswith("boundedness")
+                       and abs(view.rows[r][2] - shown.boundedness_curve) <= 1e-12)
+    assert view.cell(boundedness, 2) not in ("—", "not computed")
+    assert view.defect_rows, "A's defects listed"
+    for r in range(len(view.rows), len(view.rows) + len(view.defect_rows)):
+        assert view.cell(r, 2) == "not computed" and view.cell(r, 3) == "—"
+        colour = view.table.item(r, 3).foreground().color()
+        assert colour not in (QtGui.QColor(QtCore.Qt.GlobalColor.darkGreen), QtGui.QColor(QtCore.Qt.GlobalColor.darkRed))
+    last = len(view.rows) + len(view.defect_rows)
+    assert view.cell(last, 2) == "not computed" and view.cell(last, 1).startswith("not sound")

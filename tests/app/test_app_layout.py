@@ -242,6 +242,12 @@ box = w.barcodes._title.get_window_extent(renderer=w.barcodes.canvas.get_rendere
 ratio = float(getattr(w.barcodes.canvas, "device_pixel_ratio", 1.0) or 1.0)
 out["barcode_title"] = {"x0": box.x0 / ratio, "x1": box.x1 / ratio, "width": fig.bbox.width / ratio,
                         "text": w.barcodes.title()}
+# the tabs of tabbed docks: each title whole (the bar scrolls its tabs when they do not fit), also with
+# the right-hand docks narrowed to 180 pixels
+w.resizeDocks([w.docks["Barcodes"]], [180], QtCore.Qt.Orientation.Horizontal)
+settle(300)
+out["tabs"] = [[bar.tabText(i), bar.tabRect(i).width(), bar.fontMetrics().horizontalAdvance(bar.tabText(i))]
+               for bar in w.findChildren(QtWidgets.QTabBar) if bar.isVisible() for i in range(bar.count())]
 print("PROBE " + json.dumps(out))
 w.session.runner.shutdown()
 w.close()
@@ -252,7 +258,7 @@ def test_at_scale_1_5_on_1366x768_the_panels_show_their_content_whole(sample_fil
     """In a fresh process at QT_SCALE_FACTOR=1.5 (911 x 512 device-independent pixels): no dock scrolls
     sideways; the Summary shows both columns with every value and count whole; the Settings show every
     label whole and every choice whole or elided with its full text in the tooltip; the barcode
-    panel's title keeps clear of the figure's edges."""
+    panel's title keeps clear of the figure's edges; the docks' tabs show their titles whole."""
     if shutil.which("xvfb-run") is None:
         pytest.skip("xvfb-run not installed")
     env = dict(os.environ, QT_SCALE_FACTOR="1.5", QT_QPA_PLATFORM="xcb",
@@ -274,6 +280,9 @@ def test_at_scale_1_5_on_1366x768_the_panels_show_their_content_whole(sample_fil
     assert settings["labels_cut"] == [], settings
     for full, shown, tip in settings["combos"]:
         assert shown == full or (shown.endswith("…") and tip.startswith(full)), (full, shown, tip)
+    assert {"Barcodes", "Histogram", "Defects", "History"} <= {t[0] for t in got["tabs"]}, got["tabs"]
+    for text, width, needed in got["tabs"]:
+        assert width >= needed, (text, width, needed)  # not "Barco…", "Def…"
     title = got["barcode_title"]
     assert title["x0"] >= 4 and title["x1"] <= title["width"] - 4, title
     assert "K = " in title["text"] and "d_Wp" in title["text"]

@@ -218,3 +218,78 @@ def test_the_cloud_only_values_the_diagnostics_ask_again_are_kept_per_array():
     del a, b, big, cloud, pts
     gc.collect()
     assert not coverage._last_noise and len(interior._last_spacing) <= interior._SPACINGS_KEPT
+
+
+@settings(max_examples=25, deadline=None)
+@given(st.integers(0, 10_000), st.sampled_from(["move", "split", "merge", "drop"]))
+def test_the_kept_spur_search_answers_as_a_search_of_the_whole_curve(seed, how):
+    """The spur test's search kept from one curve (diagnostics/spur_cache.py) answers the next curve's
+    points, nearest branches and cloud distances as asking them all again does, for points moved,
+    removed and branches split or merged, and asks fewer than all when little changed."""
+    from scipy.spatial import cKDTree
+
+    from skelcore.diagnostics.spur_cache import SpurMemo
+    from skelcore.diagnostics.spurs import _explained_elsewhere
+
+    rng = np.random.default_rng(seed)
+    use = rng.random((1500, 3))
+    tree = cKDTree(use)
+    pts = rng.random((60, 3))
+    labels = np.repeat(np.arange(4), 15)
+    pts[15] = pts[30]  # a junction: one position, two branches
+
+    def run(memo, pts, labels):
+        reach = 1.25 * memo.radii(pts, tree) + 0.05
+        own = memo.own_branch(pts, labels, use)
+        rows = np.flatnonzero(own != 3)
+        got = memo.search(_explained_elsewhere, pts, labels, reach, use[rows], rows, own[rows], len(use))
+        want_own = labels[cKDTree(pts).query(use)[1]]
+        want = _explained_elsewhere(pts, labels, reach, use[rows], want_own[rows])
+        np.testing.assert_array_equal(own, want_own)
+        np.testing.assert_array_equal(got, want)
+        np.testing.assert_array_equal(reach, 1.25 * tree.query(pts)[0] + 0.05)
+
+    first = SpurMemo()
+    run(first, pts, labels)
+    new_pts, new_labels = pts.copy(), labels.copy()
+    if how == "move":
+        new_pts[rng.integers(0, 60)] += rng.normal(0, 0.05, 3)
+    elif how == "split":
+        new_labels[20:30] = 7
+    elif how == "merge":
+        new_labels[new_labels == 2] = 1
+    else:
+        new_pts, new_labels = new_pts[5:], new_labels[5:]
+    memo = first.next()
+    run(memo, new_pts, new_labels)
+    assert memo.previous is first.current and memo.current is not None
+    assert 0 <= memo.asked[0] <= memo.asked[1]
+
+
+def test_an_edit_update_asks_the_spur_test_again_only_near_the_edit():
+    cloud, skeletal, ev = _base("y")
+    curve = ev.curve.curve
+    new, change = E.move_vertex(curve, 3, curve.vertices[3] + np.array([0.0, 0.01, 0.0]))
+    updated = ev.update(change)
+    asked, of = updated.source.ctx.spur_memo.asked
+    assert updated.source.ctx.spur_memo.previous is ev.source.ctx.spur_memo.current
+    assert of > 0 and asked < of
+
+
+def test_curve_centeredness_in_larger_spans_gives_the_same_bits():
+    """An update asks curve centeredness for one span of samples per core (``span=``): the same bits as
+    the default spans of 4, on a cloud above the size where the samples go in spans."""
+    from skelcore import Params
+    from skelcore.curve import CurveSkeleton
+    from skelcore.metrics import centeredness as C
+    from skelcore.metrics.curve_sampling import sample_curve
+
+    sh = shapes.y_shape(C._CURVE_AT_ONCE + 2000, seed=6, n_curve_per_arm=6)
+    s = sample_curve(CurveSkeleton(sh.curve_vertices, sh.curve_edges), 24)
+    p = Params()
+    grid = C.slab_grid(sh.cloud, p)
+    base = C.curve_centeredness(sh.cloud, s.points, s.directions, params=p, grid=grid)
+    assert np.isfinite(base).sum() > 12
+    for span in (1, 7, len(s.points)):
+        got = C.curve_centeredness(sh.cloud, s.points, s.directions, params=p, grid=grid, span=span)
+        np.testing.assert_array_equal(got, base)

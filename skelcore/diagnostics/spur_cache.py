@@ -1,0 +1,252 @@
+"""The spur test's nearest-ball search (whether another branch explains a cloud point,
+:func:`skelcore.diagnostics.spurs.find_spurious_branches`) kept from one curve to the next of the same
+cloud and params, so that an edit's update asks again only the points the edit can change
+(docs/performance.md 6.10).
+
+A point q's answer is "some curve point x of another branch than q's own has |q - x| <= reach(x)",
+and reach(x) depends on x's position alone (the cloud is the same). So q keeps its earlier answer
+when it was asked before, no curve position added or removed has q in its ball, and every position
+whose ball holds q has a label of another branch than q's own now exactly when it had one then
+(branch numbers change from curve to curve: only these relations are compared). Every other point is
+asked again; the answers equal a search of the whole curve."""
+
+from __future__ import annotations
+
+import threading
+from dataclasses import dataclass
+from typing import Callable
+
+import numpy as np
+from scipy.spatial import cKDTree
+
+__all__ = ["SpurSearch", "SpurMemo"]
+
+#: a search function (curve points, their branches, reaches, queries, the queries' own branches) -> bool
+Search = Callable[[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray], np.ndarray]
+_MARGIN = 1e-6  # relative: a ball counts as holding q up to this much beyond its reach (more asked again)
+
+
+@dataclass(frozen=True)
+class SpurSearch:
+    """One curve's search: its points, their branch labels and reaches; the rows of the cloud's
+    subsample asked (sorted), each one's own branch and answer; the subsample's size; the distinct
+    positions of the points with their cloud distance, and each subsample row's nearest position and
+    its distance (the own branch's search); the cloud tree the distances came from."""
+
+    pts: np.ndarray
+    labels: np.ndarray
+    reach: np.ndarray
+    rows: np.ndarray
+    own: np.ndarray
+    answer: np.ndarray
+    n_use: int
+    pos: np.ndarray
+    pos_radius: np.ndarray
+    near_pos: np.ndarray
+    near_d: np.ndarray
+    tree: object
+
+
+class SpurMemo:
+    """An evaluation's spur search (``current``) and the one of the curve it was updated from
+    (``previous``, None after a fresh evaluation); ``asked``: how many points the last search asked
+    (of how many). Its methods are called in the order of :func:`find_spurious_branches`: ``radii``,
+    ``subsample``, ``own_branch``, ``search``, all for the same curve points."""
+
+    def __init__(self, previous: SpurSearch | None = None, shared: dict | None = None) -> None:
+        self.previous = previous
+        self.current: SpurSearch | None = None
+        self.asked: tuple[int, int] = (0, 0)
+        self.shared = {} if shared is None else shared  # the cloud's subsample, kept along the updates
+        self._local = threading.local()  # one search's steps, per thread (two may finish one update at once)
+
+    def latest(self) -> SpurSearch | None:
+        """The newest search known here (what an update of this evaluation starts from)."""
+        return self.current if self.current is not None else self.previous
+
+    def next(self) -> "SpurMemo":
+        """The memo of an evaluation updated from this one."""
+        return SpurMemo(self.latest(), self.shared)
+
+    def radii(self, pts: np.ndarray, tree: cKDTree) -> np.ndarray:
+        """``tree.query(pts)``'s distances, kept for the positions the previous search had."""
+        pos, first, inverse = _distinct(pts)
+        prev = self.previous
+        match = _match(prev.pos, pos) if prev is not None else np.full(len(pos), -1)
+        r = np.empty(len(pos))
+        known = match >= 0
+        if prev is not None and prev.tree is tree:
+            r[known] = prev.pos_radius[match[known]]
+        else:
+            known[:] = False
+        if (~known).any():
+            r[~known] = tree.query(pos[~known])[0]
+        self._local.now = {"pts": pts, "pos": pos, "inverse": inverse, "match": match, "radius": r, "tree": tree}
+        return r[inverse]
+
+    def subsample(self, cloud: np.ndarray, key: tuple, make: Callable[[], np.ndarray]) -> np.ndarray:
+        """``make()`` (the cloud's subsample of size and seed ``key``), made once for the same cloud array."""
+        kept = self.shared.get("use")
+        if kept is None or kept[0] is not cloud or kept[1] != key:
+            kept = self.shared["use"] = (cloud, key, make())
+        return kept[2]
+
+    def own_branch(self, pts: np.ndarray, labels: np.ndarray, use: np.ndarray) -> np.ndarray:
+        """The label of the curve point nearest to each row of ``use`` (``labels[cKDTree(pts).query(use)[1]]``):
+        a row keeps its nearest position when that position is kept with one label and no added position
+        comes as near; the others are asked of the whole curve."""
+        now, prev = self._local.now, self.previous
+        pos, inverse, match = now["pos"], now["inverse"], now["match"]
+        lo, hi = _label_range(labels, inverse, len(pos))
+        redo = np.ones(len(use), bool)
+        near_pos = np.zeros(len(use), np.int64)
+        near_d = np.zeros(len(use))
+        if prev is not None and prev.n_use == len(use):
+            back = np.full(len(prev.pos), -1)
+            back[match[match >= 0]] = np.flatnonzero(match >= 0)
+            m = back[prev.near_pos]
+            ok = m >= 0
+            ok[ok] = lo[m[ok]] == hi[m[ok]]
+            added = np.flatnonzero(match < 0)
+            if len(added) and ok.any():
+                d_new = _nearest_within(pos[added], use, np.where(ok, prev.near_d, -1.0))
+                ok &= ~(d_new <= prev.near_d * (1 + 1e-9))
+            near_pos[ok], near_d[ok] = m[ok], prev.near_d[ok]
+            redo = ~ok
+        own = np.empty(len(use), labels.dtype)
+        own[~redo] = lo[near_pos[~redo]]
+        if redo.any():
+            d, i = cKDTree(pts).query(use[redo])
+            own[redo], near_pos[redo], near_d[redo] = labels[i], inverse[i], d
+        now.update(near_pos=near_pos, near_d=near_d, n_use=len(use))
+        return own
+
+    def search(self, fn: Search, pts: np.ndarray, labels: np.ndarray, reach: np.ndarray, queries: np.ndarray,
+               rows: np.ndarray, own: np.ndarray, n_use: int) -> np.ndarray:
+        """``fn``'s answers for ``queries`` (rows ``rows`` of a subsample of ``n_use`` points), from
+        the previous search where they cannot have changed; keeps this search as ``current``."""
+        prev = self.previous
+        redo = np.ones(len(rows), bool)
+        answer = np.zeros(len(rows), bool)
+        if prev is not None and prev.n_use == n_use and len(rows):
+            at = np.minimum(np.searchsorted(prev.rows, rows), max(len(prev.rows) - 1, 0))
+            known = (prev.rows[at] == rows) if len(prev.rows) else np.zeros(len(rows), bool)
+            redo = ~known
+            if known.any():
+                redo |= _touched(prev, pts, labels, reach, queries, own, at, known)
+                answer[~redo] = prev.answer[at[~redo]]
+        if redo.any():
+            answer[redo] = fn(pts, labels, reach, queries[redo], own[redo])
+        self.asked = (int(redo.sum()), len(rows))
+        now = getattr(self._local, "now", {})
+        if now.get("pts") is pts and now.get("n_use") == n_use:
+            self.current = SpurSearch(pts, labels, reach, rows, own, answer, int(n_use), now["pos"], now["radius"],
+                                      now["near_pos"], now["near_d"], now["tree"])
+        return answer
+
+
+def _touched(prev: SpurSearch, pts: np.ndarray, labels: np.ndarray, reach: np.ndarray, queries: np.ndarray,
+             own: np.ndarray, at: np.ndarray, known: np.ndarray) -> np.ndarray:
+    """The queries asked before whose answer the edit may change. A position "explains q" when its
+    ball holds q and it has a label other than q's own branch (a0 then, b0 now); a query may change
+    only inside the ball of a position removed that had another label than a0, added that has another
+    than b0, or kept whose "another label" differs between the two (split or merged branches)."""
+    o_pos, o_lo, o_hi, o_reach = _positions(prev.pts, prev.labels, prev.reach)
+    n_pos, n_lo, n_hi, n_reach = _positions(pts, labels, reach)
+    match = _match(o_pos, n_pos)
+    common = match >= 0
+    gone = np.ones(len(o_pos), bool)
+    gone[match[common]] = False
+    out = np.zeros(len(known), bool)
+    check = np.flatnonzero(known)
+    if not len(check):
+        return out
+    a0, b0 = prev.own[at[check]], own[check]
+    base = int(max(a0.max(), b0.max(), 0)) + 2  # labels are >= -1: one integer per (a0, b0) pair
+    pairs, which = np.unique((a0 + 1) * base + (b0 + 1), return_inverse=True)
+    which = np.ravel(which)
+    a_lo, a_hi = o_lo[match[common]], o_hi[match[common]]  # kept positions, then and now
+    b_lo, b_hi = n_lo[common], n_hi[common]
+    for j, key in enumerate(pairs.tolist()):
+        x, y = key // base - 1, key % base - 1
+        removed = gone & ~((o_lo == x) & (o_hi == x))
+        added = ~common & ~((n_lo == y) & (n_hi == y))
+        differs = ~((a_lo == x) & (a_hi == x)) != ~((b_lo == y) & (b_hi == y))
+        balls = np.vstack([o_pos[removed], n_pos[~common][added[~common]], n_pos[common][differs]])
+        radii = np.concatenate([o_reach[removed], n_reach[~common][added[~common]], n_reach[common][differs]])
+        if len(balls):
+            sel = check[which == j]
+            out[sel] = _inside_any(balls, radii, queries[sel])
+    return out
+
+
+def _distinct(pts: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The distinct rows of ``pts`` (in byte order), the first row of each and each row's one."""
+    pts = np.ascontiguousarray(pts, dtype=float)
+    if not len(pts):
+        return pts.reshape(0, 3), np.zeros(0, np.int64), np.zeros(0, np.int64)
+    _, first, inverse = np.unique(_void(pts), return_index=True, return_inverse=True)
+    return pts[first], first, np.ravel(inverse)
+
+
+def _label_range(labels: np.ndarray, inverse: np.ndarray, n: int) -> tuple[np.ndarray, np.ndarray]:
+    """The lowest and highest label at each of ``n`` positions."""
+    lo = np.full(n, np.iinfo(np.int64).max)
+    hi = np.full(n, np.iinfo(np.int64).min)
+    np.minimum.at(lo, inverse, labels)
+    np.maximum.at(hi, inverse, labels)
+    return lo, hi
+
+
+def _match(old: np.ndarray, new: np.ndarray) -> np.ndarray:
+    """For each row of ``new``, the row of ``old`` with the same bits, or -1."""
+    index = {k: i for i, k in enumerate(_keys(old))}
+    return np.array([index.get(k, -1) for k in _keys(new)], dtype=np.int64)
+
+
+def _nearest_within(centres: np.ndarray, queries: np.ndarray, bound: np.ndarray) -> np.ndarray:
+    """Each query's distance to the nearest centre, inf where none is within ``bound`` (per query; a
+    negative bound skips the query) up to a small margin."""
+    out = np.full(len(queries), np.inf)
+    lo, hi = centres.min(axis=0), centres.max(axis=0)
+    b = (bound * (1 + _MARGIN))[:, None]
+    near = np.flatnonzero((bound >= 0) & np.all((queries >= lo - b) & (queries <= hi + b), axis=1))
+    if len(near):
+        out[near] = cKDTree(centres).query(queries[near], k=1)[0]
+    return out
+
+
+def _positions(pts: np.ndarray, labels: np.ndarray, reach: np.ndarray) -> tuple[np.ndarray, ...]:
+    """The distinct positions of curve points, each one's lowest and highest label and its reach (the
+    same at a position)."""
+    pos, first, inverse = _distinct(pts)
+    lo, hi = _label_range(labels, inverse, len(pos))
+    return pos, lo, hi, np.asarray(reach, dtype=float)[first]
+
+
+def _void(pts: np.ndarray) -> np.ndarray:
+    return np.ascontiguousarray(pts, dtype=float).view(np.dtype((np.void, 8 * pts.shape[1])))[:, 0]
+
+
+def _keys(pts: np.ndarray) -> list[bytes]:
+    return [r.tobytes() for r in _void(pts)]
+
+
+def _inside_any(centres: np.ndarray, radii: np.ndarray, queries: np.ndarray) -> np.ndarray:
+    """Whether each query lies within some ball (centre, radius), up to ``_MARGIN`` beyond it (never
+    less): the nearest ball in the lifted 4-D distance |q - c|^2 - r^2 + R^2 (R the largest radius)."""
+    out = np.zeros(len(queries), bool)
+    ok = np.isfinite(radii) & (radii >= 0)
+    if not len(queries) or not ok.any():
+        return out
+    centres, radii = centres[ok], radii[ok]
+    big = float(radii.max())
+    lo, hi = centres.min(axis=0) - big * (1 + _MARGIN), centres.max(axis=0) + big * (1 + _MARGIN)
+    near = np.flatnonzero(np.all((queries >= lo) & (queries <= hi), axis=1))
+    if not len(near):
+        return out
+    lifted = np.column_stack([centres, np.sqrt(np.maximum(big * big - radii * radii, 0.0))])
+    q4 = np.column_stack([queries[near], np.zeros(len(near))])
+    d, _ = cKDTree(lifted).query(q4, k=1, distance_upper_bound=big * (1 + _MARGIN) + 1e-300)
+    out[near] = np.isfinite(d)
+    return out
