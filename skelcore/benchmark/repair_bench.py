@@ -2,7 +2,8 @@
 by each tool (the built-in ``cao`` / ``skelscope`` / ``default``, the adapters ``pygel`` / ``kimimaro`` / ``skimage``),
 then repaired; on a generated suite's clean tube cases also the reference with one controlled defect
 (:mod:`.skeleton_defects` at its middle level). Per job: GT F1 (docs/metrics.md 5.3.1) and the defect
-warnings and tallies before and after, the seconds of the skeletonization and of the repair.
+warnings and tallies before and after, the seconds of the skeletonization and of the repair (wall
+clock, and CPU of the process's threads: ``cpu_skeletonize``, ``cpu_repair``).
 ``samples`` instead of a folder: the bundled samples of resources/samples. Behind
 ``skelcore bench repair``; the table and summary are :mod:`.repair_table`'s.
 """
@@ -120,11 +121,13 @@ def repair_job(case: RepairCase, job: str, curve: CurveSkeleton, seconds_skeleto
 
     row: dict[str, Any] = {"case": case.name, "job": job, "f1_before": _f1(curve, case.reference),
                            "seconds_skeletonize": None if seconds_skeletonize is None else round(seconds_skeletonize, 2)}
+    cpu = time.process_time()
     try:  # the curve alone, as skelcore skeletonize repairs it (docs/repair.md "The real suite")
         r = repair(case.cloud, curve)
     except SkelInputError as exc:
         return {**row, "refused": str(exc)}
-    row.update(f1_after=_f1(r.curve, case.reference), seconds_repair=round(r.seconds, 2), kept=r.accepted,
+    row.update(f1_after=_f1(r.curve, case.reference), seconds_repair=round(r.seconds, 2),
+               cpu_repair=round(time.process_time() - cpu, 2), kept=r.accepted,
                rejected=r.rejected, stopped=r.stopped, tally_before=dict(r.tally_before),
                tally_after=dict(r.tally_after), warnings_before=_warned(r.before), warnings_after=_warned(r.after))
     return row
@@ -160,13 +163,14 @@ def run_repair_bench(folder: str | Path, tools: Sequence[str] = BUILT_IN, *, onl
 
     for case in repair_cases(folder, only):
         for tool in tools:
-            t0 = time.perf_counter()
+            t0, cpu = time.perf_counter(), time.process_time()
             try:
                 curve, _skeletal = skeletonize_with(tool, case.cloud, (params or {}).get(tool))
             except (SkelInputError, ValueError, MemoryError) as exc:
                 done({"case": case.name, "job": tool, "failed": " ".join(str(exc).split())[:200]})
                 continue
-            done(repair_job(case, tool, curve, time.perf_counter() - t0))
+            cpu = time.process_time() - cpu
+            done({**repair_job(case, tool, curve, time.perf_counter() - t0), "cpu_skeletonize": round(cpu, 2)})
         if case.bundled is not None:
             done(repair_job(case, "lbc (bundled)", case.bundled))
         if defects and case.defects:

@@ -27,9 +27,10 @@ from .proposals import Action, propose
 from .fill import fill_missing
 from .recentre import RECENTRE, recentre
 from .reroute import route_inside
+from .screen import first_look
 from .skeletal_out import repaired_skeletal
 
-__all__ = ["RepairResult", "repair"]
+__all__ = ["RepairResult", "repair", "in_turn"]
 
 #: defect warnings no action answers yet (docs/repair.md "What is left")
 UNTALLIED = {"incomplete"}
@@ -104,6 +105,20 @@ def _drift(cur: CurveSkeleton, ev: Evaluation, p: Params, memo: dict, rejected: 
     return [a for a in drift if all(a.entries != r["entries"] for r in rejected)]
 
 
+def in_turn(actions: list[Action], tries: int) -> list[Action]:
+    """The first ``tries`` candidates, then the first of each defect kind left out of them: tried only
+    when all those failed (the loop stops at the first kept), so a fill of a missing part waiting
+    behind six refused cycle cuts still has its turn, and no round that kept an action before changes."""
+    head = actions[:tries]
+    kinds = {a.code for a in head}
+    rest = []
+    for a in actions[tries:]:
+        if a.code not in kinds:
+            kinds.add(a.code)
+            rest.append(a)
+    return head + rest
+
+
 def _try(curve: CurveSkeleton, action: Action) -> CurveSkeleton:
     for i, entry in enumerate(action.entries):
         curve, _ = apply(curve, entry, f"{action.code} step {i}")
@@ -159,7 +174,7 @@ def repair(cloud: np.ndarray, curve: CurveSkeleton | tuple | None = None, skelet
         if len(candidates) < p.repair_max_tries:  # re-centrings come last: cut only when they may be tried
             candidates += drift if drift is not None else _drift(cur, ev, p, memo, rejected)
         done = False
-        for action in candidates[:p.repair_max_tries]:
+        for action in in_turn(candidates, p.repair_max_tries):
             check()
             why: dict[str, Any] = {"defect": action.code, **action.target, "reason": action.reason,
                                    "local_before": found.local(action.edges), "before": _rounded(found.measures),
@@ -169,7 +184,13 @@ def repair(cloud: np.ndarray, curve: CurveSkeleton | tuple | None = None, skelet
             except SkelInputError as exc:
                 rejected.append({"entries": action.entries, "why": {**why, "rejected": f"not applicable: {exc}"}})
                 continue
-            new_ev = ev.update(new)
+            pre = ev.update(new, diagnostics=False)  # the cheap first look (screen.py), then the rest
+            seen, refusal = first_look(found, pre, p)
+            if refusal is not None:
+                why.update(after=_rounded(seen), defects_after=None)
+                rejected.append({"entries": action.entries, "why": {**why, "rejected": refusal}})
+                continue
+            new_ev = pre.complete_update(cancel)
             new_found = read_findings(new_ev)
             why.update(after=_rounded(new_found.measures), defects_after=new_found.total)
             refusal = verdict(found, new_found, p, recentring=action.code == RECENTRE)

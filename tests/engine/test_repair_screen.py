@@ -1,0 +1,77 @@
+"""The repair's first look at a candidate (docs/repair.md "Never worse"): the update without
+diagnostics, then coverage and completeness alone, gives the measures of the whole update and refuses
+only what the never-worse rule refuses; and every defect kind has its turn before a round gives up. Checked on
+a crop of a traced neuron of resources/neurons (its real twigs: pruning them loses completeness)."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+import skelcore
+from skelcore import Params
+from skelcore.benchmark.neurons import MeshSampler, load_neuron
+from skelcore.curve import CurveSkeleton
+from skelcore.edit import apply
+from skelcore.skeleton_repair.findings import read_findings
+from skelcore.skeleton_repair.guard import verdict
+from skelcore.skeleton_repair.proposals import Action, _prunes
+from skelcore.skeleton_repair.run import in_turn
+from skelcore.skeleton_repair.screen import first_look
+
+NEURON, CENTRE_NODE, CROP = "1734350788", 1990, 300.0  # a tuning neuron; a ball around one junction
+
+
+@pytest.fixture(scope="module")
+def crop() -> tuple[np.ndarray, CurveSkeleton]:
+    """The cloud of 30k samples of the whole mesh and the traced skeleton, both cut to the ball."""
+    neuron = load_neuron(NEURON)
+    sk = neuron.skeleton
+    centre = sk.vertices[int(np.flatnonzero(np.asarray(neuron.node_ids) == CENTRE_NODE)[0])]
+    cloud = MeshSampler(neuron.mesh, sk.vertices, np.asarray(sk.radius, float)).sample(
+        30_000, np.random.default_rng(0)).points
+    cloud = cloud[np.linalg.norm(cloud - centre, axis=1) <= CROP]
+    keep = np.linalg.norm(sk.vertices - centre, axis=1) <= CROP
+    e = sk.edges[keep[sk.edges].all(axis=1)]
+    used = np.unique(e)
+    remap = np.full(len(sk.vertices), -1)
+    remap[used] = np.arange(len(used))
+    return cloud, CurveSkeleton.from_raw(sk.vertices[used], remap[e])
+
+
+def test_the_first_look_agrees_with_the_whole_update(crop):
+    """Every terminal branch of the crop pruned in turn: the first look's completeness, boundedness
+    and centeredness are the whole update's, and what it refuses the rule refuses."""
+    cloud, curve = crop
+    p = Params()
+    ev = skelcore.evaluate(cloud, curve=curve)
+    found = read_findings(ev)
+    terminal = [b for b, kind in enumerate(found.defects.branches.kind) if kind == "terminal"]
+    assert len(terminal) >= 3
+    refused = 0
+    for act in _prunes(found, np.asarray(terminal[:3]), "spurious_branches", "test"):
+        new = apply(curve, act.entries[0], "test")[0]
+        pre = ev.update(new, diagnostics=False)
+        seen, why = first_look(found, pre, p)
+        full, done = read_findings(ev.update(new)), read_findings(pre.complete_update())
+        assert done.measures == full.measures and done.tally == full.tally  # the coverage handed on
+        for m in ("completeness", "boundedness", "centeredness"):
+            assert seen[m] == pytest.approx(full.measures[m], abs=1e-12)
+        if why is not None:
+            refused += 1
+            assert why.startswith("worse: ") and verdict(found, full, p) is not None
+    assert refused >= 1  # real twigs explain cloud of their own
+
+
+def _act(code: str, k: int) -> Action:
+    return Action(code, {"k": k}, "", [])
+
+
+def test_every_defect_kind_has_its_turn():
+    """Eight cuts of spurious cycles before two fills of a missing part and an outside edge: the six
+    tries of a round are the first six cuts as before, then the first fill and the outside edge."""
+    acts = [_act("spurious_cycles", k) for k in range(8)] + [_act("incomplete", 0), _act("incomplete", 1),
+                                                             _act("outside", 0)]
+    order = [(a.code, a.target["k"]) for a in in_turn(acts, 6)]
+    assert order == [("spurious_cycles", k) for k in range(6)] + [("incomplete", 0), ("outside", 0)]
+    assert in_turn(acts[:3], 6) == acts[:3]
