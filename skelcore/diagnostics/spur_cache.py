@@ -23,6 +23,7 @@ __all__ = ["SpurSearch", "SpurMemo"]
 
 #: a search function (curve points, their branches, reaches, queries, the queries' own branches) -> bool
 Search = Callable[[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray], np.ndarray]
+_PAIRS_MAX = 32  # (then, now) own-branch pairs tested one by one; beyond, their queries are asked again
 _MARGIN = 1e-6  # relative: a ball counts as holding q up to this much beyond its reach (more asked again)
 
 
@@ -150,7 +151,9 @@ def _touched(prev: SpurSearch, pts: np.ndarray, labels: np.ndarray, reach: np.nd
     """The queries asked before whose answer the edit may change. A position "explains q" when its
     ball holds q and it has a label other than q's own branch (a0 then, b0 now); a query may change
     only inside the ball of a position removed that had another label than a0, added that has another
-    than b0, or kept whose "another label" differs between the two (split or merged branches)."""
+    than b0, or kept whose "another label" differs between the two (split or merged branches). Where
+    a0 = b0 those are among the positions removed, added or relabelled, one search for all such
+    queries; the others per (a0, b0) pair, all asked again beyond ``_PAIRS_MAX`` pairs."""
     o_pos, o_lo, o_hi, o_reach = _positions(prev.pts, prev.labels, prev.reach)
     n_pos, n_lo, n_hi, n_reach = _positions(pts, labels, reach)
     match = _match(o_pos, n_pos)
@@ -162,11 +165,24 @@ def _touched(prev: SpurSearch, pts: np.ndarray, labels: np.ndarray, reach: np.nd
     if not len(check):
         return out
     a0, b0 = prev.own[at[check]], own[check]
-    base = int(max(a0.max(), b0.max(), 0)) + 2  # labels are >= -1: one integer per (a0, b0) pair
-    pairs, which = np.unique((a0 + 1) * base + (b0 + 1), return_inverse=True)
-    which = np.ravel(which)
     a_lo, a_hi = o_lo[match[common]], o_hi[match[common]]  # kept positions, then and now
     b_lo, b_hi = n_lo[common], n_hi[common]
+    same = a0 == b0
+    if same.any():
+        relabelled = (a_lo != b_lo) | (a_hi != b_hi)
+        balls = np.vstack([o_pos[gone], n_pos[~common], n_pos[common][relabelled]])
+        radii = np.concatenate([o_reach[gone], n_reach[~common], n_reach[common][relabelled]])
+        if len(balls):
+            out[check[same]] = _inside_any(balls, radii, queries[check[same]])
+    check, a0, b0 = check[~same], a0[~same], b0[~same]
+    if not len(check):
+        return out
+    base = int(max(a0.max(), b0.max(), 0)) + 2  # labels are >= -1: one integer per (a0, b0) pair
+    pairs, which = np.unique((a0 + 1) * base + (b0 + 1), return_inverse=True)
+    if len(pairs) > _PAIRS_MAX:
+        out[check] = True
+        return out
+    which = np.ravel(which)
     for j, key in enumerate(pairs.tolist()):
         x, y = key // base - 1, key % base - 1
         removed = gone & ~((o_lo == x) & (o_hi == x))

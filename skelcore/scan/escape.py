@@ -65,17 +65,20 @@ def escaping_share(
     return float(np.count_nonzero(again > params.beta_star)) / len(beta)
 
 
-def skeleton_openings(cloud: np.ndarray, skeleton: np.ndarray, params: Params = Params(), *,
-                      checkpoint: Checkpoint = no_checkpoint) -> tuple[list[Opening], list[Opening], np.ndarray]:
+def skeleton_openings(
+    cloud: np.ndarray, skeleton: np.ndarray, params: Params = Params(), *,
+    checkpoint: Checkpoint = no_checkpoint, memo: dict | None = None,
+) -> tuple[list[Opening], list[Opening], np.ndarray]:
     """(every opening, those that count, the thin parts' boundary rows) of ``cloud`` judged with a
     skeleton's elements (both in the cloud's units; docs/metrics.md 6.1): boundary points of parts fewer
     than ``open_resolved_diameter`` spacings across join no opening, and a missing side counts when at
     least half its fill lies within ``open_fill_reach`` local radii of the skeleton.  Thin parts seen
-    from one side add one opening, their mirrored missing side (:mod:`.one_sided`)."""
+    from one side add one opening, their mirrored missing side (:mod:`.one_sided`). ``memo``: see
+    :func:`.openings.find_openings`."""
     skeleton = np.asarray(skeleton, dtype=float)
     tree = cKDTree(skeleton)
     thin_rows: list[int] = []
-    openings = find_openings(cloud, params, checkpoint=checkpoint, thin_rows=thin_rows,
+    openings = find_openings(cloud, params, checkpoint=checkpoint, thin_rows=thin_rows, memo=memo,
                              diameter=lambda pts: 2.0 * tree.query(pts, k=1, workers=-1)[0])
     thin = np.asarray(thin_rows, np.int64)
     kept: list[cKDTree] = []

@@ -15,6 +15,7 @@ else a missing ``side``.
 
 from __future__ import annotations
 
+import copy
 from dataclasses import dataclass, field
 from typing import Callable
 
@@ -35,6 +36,7 @@ RIM_SAMPLE = 512
 MAX_FILL = 200_000
 #: grid points per batch of the surround test
 FILL_CHUNK = 2048
+_MEMO_RIMS = 4096  # rims' openings a memo keeps (emptied beyond)
 
 
 @dataclass
@@ -106,6 +108,7 @@ def find_openings(
     checkpoint: Checkpoint = no_checkpoint,
     diameter: Callable[[np.ndarray], np.ndarray] | None = None,
     thin_rows: list | None = None,
+    memo: dict | None = None,
 ) -> list[Opening]:
     """The openings of ``cloud`` (module docstring), largest fill first.
 
@@ -118,6 +121,8 @@ def find_openings(
 
     Above ``open_max_points`` points the boundary test runs on a random subsample of that many (fixed
     seed); ``rows`` then index the full cloud all the same.  A closed, evenly sampled surface has none.
+    ``memo`` (a dict kept along an evaluation's updates) keeps the boundary test of the same cloud array
+    and each rim's opening: after an edit only the rims whose thin points changed are looked at again.
 
     Examples
     --------
@@ -131,25 +136,14 @@ def find_openings(
     n = len(cloud)
     if n < max(int(params.open_k) + 1, 8):
         return []
-    rows = np.arange(n)
-    if n > int(params.open_max_points):
-        rows = np.sort(np.random.default_rng(0).choice(n, int(params.open_max_points), replace=False))
-    pts = cloud[rows]
-    tree = cKDTree(pts)
-    nn = np.empty(len(pts))
-    reach = np.empty(len(pts))
+    prefix = memo.get("boundary") if memo is not None else None
+    if prefix is None or prefix[0] is not cloud or prefix[1] != params:
+        prefix = (cloud, params, *_boundary(cloud, params, checkpoint))
+        if memo is not None:
+            memo.clear()
+            memo["boundary"] = prefix
+    rows, pts, tree, nn, spacing, rim = prefix[2:]
     k = int(min(params.open_k, len(pts) - 1))
-    checkpoint(0.05)
-    on_rim = boundary_mask(pts, k=k, angle=np.radians(params.open_angle), tree=tree,
-                           spacing_out=nn, reach_out=reach, checkpoint=lambda f: checkpoint(0.05 + 0.6 * f))
-    spacing = float(np.median(nn))
-    rim = np.flatnonzero(on_rim)
-    if len(rows) < n and len(rim):  # the spacing near a rim is the full cloud's, not the subsample's
-        reach[rim] = cKDTree(cloud).query(pts[rim], k=k + 1, workers=-1)[0][:, k]
-    # a rim point's spacing from its k-th neighbour (the half disc its k neighbours cover): the median
-    # nearest distance of a uniform sample is sqrt(ln 2 / 2k) x that; its own nearest neighbour may be
-    # the far side of a sheet thinner than the sampling, which made rims of dense crumples
-    nn = reach * np.sqrt(np.log(2.0) / (2 * k))
     thin = np.zeros(len(rim), bool)
     if diameter is not None and len(rim):
         thin = np.asarray(diameter(pts[rim]), float) < float(params.open_resolved_diameter) * nn[rim]
@@ -173,18 +167,51 @@ def find_openings(
     sizes = np.bincount(label, minlength=n_groups)
     out = []
     candidates = [g for g in np.argsort(-sizes) if sizes[g] >= 5]
+    kept = memo.setdefault("rims", {}) if memo is not None else {}
+    if len(kept) > _MEMO_RIMS:
+        kept.clear()
     for i, g in enumerate(candidates):
         members = rim[label == g]
-        local = float(np.median(nn[members]))
-        opening = _opening(pts, members, tree, local if local > 0 else spacing, params, floor)
-        if opening is not None:
-            opening.rows = rows[members]
-            opening.rim_spacing = local if local > 0 else spacing
-            out.append(opening)
+        key = members.tobytes()
+        if key not in kept:
+            local = float(np.median(nn[members]))
+            opening = _opening(pts, members, tree, local if local > 0 else spacing, params, floor)
+            if opening is not None:
+                opening.rows = rows[members]
+                opening.rim_spacing = local if local > 0 else spacing
+            kept[key] = opening
+        if kept[key] is not None:
+            out.append(copy.deepcopy(kept[key]))  # callers set local radii and notes on theirs
         checkpoint(0.65 + 0.35 * (i + 1) / len(candidates))
     out = _without_nested(out)
     out.sort(key=lambda o: -len(o.fill))
     return out
+
+
+def _boundary(cloud: np.ndarray, params: Params, checkpoint: Checkpoint) -> tuple:
+    """The skeleton-free part of :func:`find_openings`: (rows tested, their points, their tree, each
+    point's spacing from its k-th neighbour, the median spacing, the rim's indices into the points)."""
+    n = len(cloud)
+    rows = np.arange(n)
+    if n > int(params.open_max_points):
+        rows = np.sort(np.random.default_rng(0).choice(n, int(params.open_max_points), replace=False))
+    pts = cloud[rows]
+    tree = cKDTree(pts)
+    nn = np.empty(len(pts))
+    reach = np.empty(len(pts))
+    k = int(min(params.open_k, len(pts) - 1))
+    checkpoint(0.05)
+    on_rim = boundary_mask(pts, k=k, angle=np.radians(params.open_angle), tree=tree,
+                           spacing_out=nn, reach_out=reach, checkpoint=lambda f: checkpoint(0.05 + 0.6 * f))
+    spacing = float(np.median(nn))
+    rim = np.flatnonzero(on_rim)
+    if len(rows) < n and len(rim):  # the spacing near a rim is the full cloud's, not the subsample's
+        reach[rim] = cKDTree(cloud).query(pts[rim], k=k + 1, workers=-1)[0][:, k]
+    # a rim point's spacing from its k-th neighbour (the half disc its k neighbours cover): the median
+    # nearest distance of a uniform sample is sqrt(ln 2 / 2k) x that; its own nearest neighbour may be
+    # the far side of a sheet thinner than the sampling, which made rims of dense crumples
+    nn = reach * np.sqrt(np.log(2.0) / (2 * k))
+    return rows, pts, tree, nn, spacing, rim
 
 
 def thin_parts(cloud: np.ndarray, rows: np.ndarray, params: Params = Params()) -> dict | None:

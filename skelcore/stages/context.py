@@ -91,6 +91,9 @@ class EvalContext:
     #: the spur test's search of this curve, and of the curve an update started from (its next update
     #: asks again only what the edit can change: skelcore.diagnostics.spur_cache)
     spur_memo: SpurMemo = field(default_factory=SpurMemo, repr=False)
+    #: the openings' boundary test of the cloud and each rim's opening, shared along the updates
+    #: (skelcore.scan.openings.find_openings)
+    openings_memo: dict = field(default_factory=dict, repr=False)
 
     def __post_init__(self) -> None:
         if self.cloud_index is None:

@@ -71,7 +71,8 @@ def _open_surface(ctx: EvalContext, ev: Evaluation, report: ScanReport, checkpoi
         open_now = [o for i, o in enumerate(openings) if i not in capped and len(o.dome)]
         thin_rows = np.zeros(0, np.int64)
     else:
-        openings, open_now, thin_rows = skeleton_openings(ctx.cloud, elements, p, checkpoint=checkpoint)
+        openings, open_now, thin_rows = skeleton_openings(ctx.cloud, elements, p, checkpoint=checkpoint,
+                                                               memo=ctx.openings_memo)
     out: list[TrustWarning] = []
     thin = thin_parts(ctx.cloud, thin_rows, p)
     if thin is not None:

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import json
+
 import numpy as np
 import pytest
 
@@ -128,3 +130,23 @@ def test_hidden_point_removal_keeps_the_near_half_of_a_sphere():
     s = shapes.sphere_surface(4000)
     seen = visible_from(s, np.array([0.0, 0, 10]))
     assert s[seen, 2].min() > -0.1 and 0.4 < seen.mean() < 0.55
+
+
+def test_a_memo_gives_the_openings_of_a_fresh_search_when_the_thin_rims_change():
+    """find_openings with a memo kept along calls (as an evaluation's updates keep it) gives what a
+    fresh search gives, for skeletons that mark different rim points thin (docs/metrics.md 6.1)."""
+    tube = shapes.cylinder(4000, capped=False).cloud
+    memo: dict = {}
+    counts = []
+    for scale in (10.0, 1e-3, 10.0):  # nothing thin, every rim point thin, nothing thin again
+        diameter = (lambda pts, s=scale: np.full(len(pts), s))
+        rows_memo: list = []
+        rows_fresh: list = []
+        got = find_openings(tube, memo=memo, diameter=diameter, thin_rows=rows_memo)
+        want = find_openings(tube, diameter=diameter, thin_rows=rows_fresh)
+        assert json.dumps([o.to_dict() for o in got]) == json.dumps([o.to_dict() for o in want])  # NaN alike
+        assert rows_memo == rows_fresh
+        for o in got:
+            o.local_radius = -1.0  # a caller's changes stay its own
+        counts.append(len(got))
+    assert counts == [2, 0, 2] and "boundary" in memo
