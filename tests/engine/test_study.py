@@ -101,7 +101,7 @@ def test_the_same_seed_repeats_the_study(cloud):
 
 def test_user_skeleton_command_is_run_per_variant(cloud, tmp_path):
     cmd = (f"{shlex.quote(sys.executable)} -m skelcore skeletonize {{in}} "
-           "--out-skeletal {out_skeletal} --out-curve {out_curve} --quiet")
+           "--out-skeletal {out_skeletal} --out-curve {out_curve} --raw --quiet")  # the study's cao is raw
     ours = run_study(cloud, noise=0, sparse=500, seed=2)
     theirs = run_study(cloud, noise=0, sparse=500, seed=2, skeleton_cmd=cmd, out_dir=tmp_path)
     # the built-in skeletonizer run as an external program gives the same table
