@@ -48,3 +48,24 @@ def sparse_half(sampler, n: int, rng: np.random.Generator, first: np.ndarray | N
         have += int(keep.sum())
         pts = sampler.sample(n, rng).points
     return np.vstack(parts)[:n]
+
+
+def traced_crop(neuron, centre_node: int, radius: float, points: int, seed: int = 0):
+    """A shipped traced neuron (``skelcore.benchmark.neurons.load_neuron``) cut to a ball of ``radius``
+    around its node ``centre_node``: (the cloud of ``points`` samples of the whole mesh inside the ball,
+    the traced vertices and edges inside it, each kept vertex's old index as a map old -> new (-1 when
+    dropped), the kept vertices' traced radii)."""
+    from skelcore.benchmark.neurons import MeshSampler
+
+    sk = neuron.skeleton
+    at = {int(i): k for k, i in enumerate(neuron.node_ids)}
+    centre = sk.vertices[at[int(centre_node)]]
+    cloud = MeshSampler(neuron.mesh, sk.vertices, np.asarray(sk.radius, float)).sample(
+        points, np.random.default_rng(seed)).points
+    cloud = cloud[np.linalg.norm(cloud - centre, axis=1) <= radius]
+    keep = np.linalg.norm(sk.vertices - centre, axis=1) <= radius
+    e = sk.edges[keep[sk.edges].all(axis=1)]
+    used = np.unique(e)
+    remap = np.full(len(sk.vertices), -1)
+    remap[used] = np.arange(len(used))
+    return cloud, sk.vertices[used], remap[e], remap, np.asarray(sk.radius)[used]

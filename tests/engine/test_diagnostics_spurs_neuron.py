@@ -9,7 +9,8 @@ import numpy as np
 import pytest
 from scipy.spatial import cKDTree
 
-from skelcore.benchmark.neurons import MeshSampler, load_neuron
+from diagnostics_helpers import traced_crop
+from skelcore.benchmark.neurons import load_neuron
 from skelcore import Params
 from skelcore.curve import CurveSkeleton
 from skelcore.diagnostics import find_spurious_branches
@@ -28,18 +29,9 @@ def neuron():
 def _crop(neuron, points: int, seed: int = 0):
     """The cloud of ``points`` samples of the whole mesh (the suite's density) and the traced
     skeleton, both cut to a ball around the twig's junction; the ids of the junction and the tip."""
-    sk = neuron.skeleton
+    cloud, v, e, remap, r = traced_crop(neuron, JUNCTION, CROP, points, seed)
     at = {int(i): k for k, i in enumerate(neuron.node_ids)}
-    centre = sk.vertices[at[JUNCTION]]
-    cloud = MeshSampler(neuron.mesh, sk.vertices, np.asarray(sk.radius, float)).sample(
-        points, np.random.default_rng(seed)).points
-    cloud = cloud[np.linalg.norm(cloud - centre, axis=1) <= CROP]
-    keep = np.linalg.norm(sk.vertices - centre, axis=1) <= CROP
-    e = sk.edges[keep[sk.edges].all(axis=1)]
-    used = np.unique(e)
-    remap = np.full(len(sk.vertices), -1)
-    remap[used] = np.arange(len(used))
-    return cloud, sk.vertices[used], remap[e], remap[at[JUNCTION]], remap[at[TIP]], np.asarray(sk.radius)[used]
+    return cloud, v, e, remap[at[JUNCTION]], remap[at[TIP]], r
 
 
 @pytest.mark.parametrize("points", [30_000, 100_000])

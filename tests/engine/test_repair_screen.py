@@ -10,7 +10,8 @@ import pytest
 
 import skelcore
 from skelcore import Params
-from skelcore.benchmark.neurons import MeshSampler, load_neuron
+from diagnostics_helpers import traced_crop
+from skelcore.benchmark.neurons import load_neuron
 from skelcore.curve import CurveSkeleton
 from skelcore.edit import apply
 from skelcore.skeleton_repair.findings import read_findings
@@ -25,18 +26,8 @@ NEURON, CENTRE_NODE, CROP = "1734350788", 1990, 300.0  # a tuning neuron; a ball
 @pytest.fixture(scope="module")
 def crop() -> tuple[np.ndarray, CurveSkeleton]:
     """The cloud of 30k samples of the whole mesh and the traced skeleton, both cut to the ball."""
-    neuron = load_neuron(NEURON)
-    sk = neuron.skeleton
-    centre = sk.vertices[int(np.flatnonzero(np.asarray(neuron.node_ids) == CENTRE_NODE)[0])]
-    cloud = MeshSampler(neuron.mesh, sk.vertices, np.asarray(sk.radius, float)).sample(
-        30_000, np.random.default_rng(0)).points
-    cloud = cloud[np.linalg.norm(cloud - centre, axis=1) <= CROP]
-    keep = np.linalg.norm(sk.vertices - centre, axis=1) <= CROP
-    e = sk.edges[keep[sk.edges].all(axis=1)]
-    used = np.unique(e)
-    remap = np.full(len(sk.vertices), -1)
-    remap[used] = np.arange(len(used))
-    return cloud, CurveSkeleton.from_raw(sk.vertices[used], remap[e])
+    cloud, v, e, _, _ = traced_crop(load_neuron(NEURON), CENTRE_NODE, CROP, 30_000)
+    return cloud, CurveSkeleton.from_raw(v, e)
 
 
 def test_the_first_look_agrees_with_the_whole_update(crop):
