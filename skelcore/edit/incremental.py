@@ -121,6 +121,24 @@ def complete_update(ev: Evaluation, cancel: Callable[[], bool] | None = None) ->
     return out
 
 
+def compute_left_out(ev: Evaluation, names: tuple[str, ...]) -> dict[str, Any] | None:
+    """The stages ``names`` that ``ev`` (an ``update(diagnostics=False)``) left out, computed now in its
+    context in that order and no longer left out, so that :func:`complete_update` adds only the others;
+    their results by name. None when ``ev`` keeps no context or its last named stage was not left out
+    or does not apply (a candidate's first look in repair, docs/repair.md "Never worse")."""
+    ctx = getattr(ev.source, "ctx", None)
+    by_name = {s.name: s for s in CATALOGUE}
+    last = by_name[names[-1]]
+    if ctx is None or not last.applies(ctx) or ctx.not_computed.get(last.name) != LEFT_OUT:
+        return None
+    done = {}
+    for stage in (by_name[n] for n in names):
+        if stage.applies(ctx):
+            done[stage.name] = ctx.results[stage.name] = stage.fn(ctx, no_checkpoint)
+            ctx.not_computed.pop(stage.name, None)
+    return done
+
+
 def _tasks(old: EvalContext, ctx: EvalContext, cache: dict[str, Any], diagnostics: bool) -> list[GraphTask]:
     """The curve's stages as graph tasks, run side by side as :func:`evaluate` runs them (its start
     order: the curve's coverage beside the samples' scoring, the defects once the boundedness is in):

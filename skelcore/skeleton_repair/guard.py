@@ -8,23 +8,14 @@ from __future__ import annotations
 from ..params import Params
 from .findings import Findings
 
-__all__ = ["verdict"]
+__all__ = ["verdict", "worse"]
 
 
 def verdict(before: Findings, after: Findings, params: Params, recentring: bool = False) -> str | None:
     """None when ``after`` may replace ``before``; else why not (one phrase). ``recentring``: the
     action only moved vertices to their cross-sections' centres (docs/repair.md "Never worse")."""
     b, a = before.measures, after.measures
-    why = []
-    if b["completeness"] is not None and (a["completeness"] is None
-                                          or a["completeness"] < b["completeness"] - params.repair_completeness_drop):
-        why.append(f"completeness {b['completeness']:.4f} -> {a['completeness'] if a['completeness'] is None else round(a['completeness'], 4)}")
-    if b["outside_share"] is not None and a["outside_share"] is not None \
-            and a["outside_share"] > b["outside_share"] + params.repair_outside_rise:
-        why.append(f"outside share {b['outside_share']:.4f} -> {a['outside_share']:.4f}")
-    for m in ("boundedness", "centeredness"):
-        if b[m] is not None and (a[m] is None or a[m] < b[m] - params.repair_score_drop):
-            why.append(f"curve {m} {b[m]:.4f} -> {a[m] if a[m] is None else round(a[m], 4)}")
+    why = worse(b, a, params)
     if why:
         return "worse: " + "; ".join(why)
     if recentring and after.total == before.total:
@@ -32,6 +23,23 @@ def verdict(before: Findings, after: Findings, params: Params, recentring: bool 
     if after.total >= before.total:
         return f"no progress: {before.total} defect(s) before, {after.total} after"
     return None
+
+
+def worse(b: dict, a: dict, params: Params, *, completeness: bool = True) -> list[str]:
+    """The never-worse bounds the measures ``a`` break against ``b`` (one phrase each): completeness
+    (unless ``completeness`` is False: not known yet), the outside share (when both are known), curve
+    boundedness and centeredness."""
+    why = []
+    if completeness and b["completeness"] is not None and (
+            a["completeness"] is None or a["completeness"] < b["completeness"] - params.repair_completeness_drop):
+        why.append(f"completeness {b['completeness']:.4f} -> {_r(a['completeness'])}")
+    if b["outside_share"] is not None and a["outside_share"] is not None \
+            and a["outside_share"] > b["outside_share"] + params.repair_outside_rise:
+        why.append(f"outside share {b['outside_share']:.4f} -> {a['outside_share']:.4f}")
+    for m in ("boundedness", "centeredness"):
+        if b[m] is not None and (a[m] is None or a[m] < b[m] - params.repair_score_drop):
+            why.append(f"curve {m} {b[m]:.4f} -> {_r(a[m])}")
+    return why
 
 
 def _recentred(b: dict, a: dict, params: Params) -> str | None:
