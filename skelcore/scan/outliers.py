@@ -8,7 +8,8 @@ its ``outlier_k`` nearest neighbours more than ``outlier_std_ratio`` robust devi
 cloud's). Both yardsticks are also taken locally (:func:`local_spacing`, the lower quartile of the
 spacings of its ``outlier_local_k`` nearest points), so a part sampled 10 x more sparsely keeps its
 points. Last, a stray lies off the surface along its normal, where a lone sample of a one-sided scan
-lies in a gap of it (:mod:`.off_surface`). A skeletal set in pointwise correspondence is held to the
+lies in a gap of it (:mod:`.off_surface`); and a point within the radius of one that is kept is kept
+(:func:`border_rows`, DBSCAN's border points). A skeletal set in pointwise correspondence is held to the
 radius test alone with the cloud's spacing (:func:`isolated_rows`): contraction stacks skeletal points, so their own spacing says nothing.
 """
 
@@ -23,7 +24,7 @@ from ..geometry import Checkpoint, Normalization, kd_tree, leaf_order, no_checkp
 from ..params import Params
 from .off_surface import off_surface
 
-__all__ = ["Outliers", "find_outliers", "isolated_rows", "sparse_rows", "local_spacing"]
+__all__ = ["Outliers", "find_outliers", "border_rows", "isolated_rows", "sparse_rows", "local_spacing"]
 
 #: the quantile of the nearest-neighbour distances around a point taken as its local spacing: the
 #: lower quarter, so that strays among a point's neighbours (5-20 % of a cloud in the benchmark's
@@ -108,6 +109,8 @@ def find_outliers(cloud: np.ndarray, params: Params = Params(), *, checkpoint: C
         surface = np.ones(n, bool)
         surface[candidates] = False
         rows = rows[off_surface(cloud, rows, surface, params)]
+    if len(rows):  # and linked to no point that is kept (a sliver of the surface, not a stray)
+        rows = rows[~border_rows(cloud, rows, float(params.outlier_radius) * spacing, tree)]
     checkpoint(0.9)
     if len(rows) == 0 or len(rows) >= n - 1:
         return none
@@ -122,6 +125,26 @@ def find_outliers(cloud: np.ndarray, params: Params = Params(), *, checkpoint: C
     ratio = without.scale / with_them.scale
     shift = float(np.linalg.norm(with_them.center - without.center) * without.scale / params.normalized_size)
     return Outliers(rows.astype(np.int64), n, float(ratio), shift, spacing)
+
+
+def border_rows(cloud: np.ndarray, rows: np.ndarray, radius: float, tree: cKDTree) -> np.ndarray:
+    """(len(rows),) bool: the flagged point at each row lies within ``radius`` of a point not flagged, or
+    of a flagged point that is itself such a border point (to a fixed point): DBSCAN's border points.
+    A stray falls in the volume independently of the surface, so the points within the radius test's
+    reach of it are strays too, or none; a lone sample of a one-sided scan is the visible sliver of a
+    part (the 100k one-sided neuron scans: pairs 5 spacings apart, one of them kept), linked to it."""
+    rows = np.asarray(rows, np.int64)
+    flagged = np.zeros(len(cloud), bool)
+    flagged[rows] = True
+    linked = np.zeros(len(rows), bool)
+    while True:
+        ask = np.flatnonzero(~linked)
+        near = tree.query_ball_point(cloud[rows[ask]], radius) if len(ask) else []
+        new = ask[np.array([not flagged[nb].all() for nb in near], bool).reshape(-1)]
+        if len(new) == 0:
+            return linked
+        linked[new] = True
+        flagged[rows[new]] = False
 
 
 def isolated_rows(points: np.ndarray, spacing: float, params: Params = Params(),
