@@ -229,3 +229,28 @@ def test_the_cloud_index_gives_the_values_each_stage_computed_alone():
             b = coverage(cloud, elements, params, index=index)
             assert np.array_equal(a.gap, b.gap) and np.array_equal(a.covered, b.covered)
             assert (a.tau, a.fraction, a.subsample) == (b.tau, b.fraction, b.subsample)
+
+
+def test_a_lone_point_linked_to_a_kept_point_is_kept_a_lone_pair_is_not():
+    """The border rule (docs/metrics.md 6.4): a flagged point within the radius of a kept point, or of
+    a flagged point so linked, is kept; two strays near each other and far from the rest stay strays."""
+    from scipy.spatial import cKDTree
+
+    from skelcore.scan.outliers import border_rows
+
+    plane = np.c_[np.mgrid[0:20, 0:20].reshape(2, -1).T.astype(float), np.zeros(400)]
+    cloud = np.vstack([plane, [[10, 10, 5], [10, 10, 9], [100, 0, 50], [100, 0, 54]]])
+    linked = border_rows(cloud, np.arange(400, 404), 6.0, cKDTree(cloud))
+    assert linked.tolist() == [True, True, False, False]
+
+
+def test_a_one_sided_neuron_scan_at_100k_has_no_stray_but_its_lone_pairs(monkeypatch):
+    """Tuning neuron 1734350788 seen from one side at 100k points (the calibration's cloud): two lone
+    points, each 5 spacings from a point the tests keep, were its strays before the border rule."""
+    import skelcore.scan.outliers as outliers
+    from skelcore.benchmark.calibration.skeletons import world
+
+    cloud = world("real", "1734350788", 100_000, "views", 0).cloud
+    assert find_outliers(cloud).count == 0
+    monkeypatch.setattr(outliers, "border_rows", lambda c, rows, r, tree: np.zeros(len(rows), bool))
+    assert find_outliers(cloud).count == 2
