@@ -25,7 +25,7 @@ from scipy import ndimage
 from ..geometry import Checkpoint, bounding_box, no_checkpoint
 
 __all__ = ["VoxelShape", "voxelize_interior", "betti_numbers", "wide_tunnels", "median_spacing", "cloud_subsample",
-           "supported_voxels", "ray_interior", "ray_hits_share", "firm_tunnels", "fill_holes", "grow_by_one",
+           "supported_voxels", "ray_interior", "ray_hits_share", "firm_tunnels", "resolved_part", "resolved_radius", "fill_holes", "grow_by_one",
            "LATTICE_DIRECTIONS"]
 
 #: the 26 lattice directions (each component -1, 0 or 1, not all 0)
@@ -301,17 +301,46 @@ def wide_tunnels(solid: np.ndarray) -> int:
     return total
 
 
+def resolved_part(solid: np.ndarray, radius: float) -> np.ndarray:
+    """``solid`` opened by a ball of ``radius`` voxels (Euclidean distance transforms): the union of the
+    balls of that radius that fit inside it. A ring with a part thinner than the ball, or two parts
+    joined through a neck thinner than it, loses its tunnel; a thicker ring keeps it."""
+    core = ndimage.distance_transform_edt(solid) > radius
+    if not core.any():
+        return core
+    return ndimage.distance_transform_edt(~core) <= radius
+
+
+def resolved_radius(cloud: np.ndarray, vs: VoxelShape, diameter: float) -> float:
+    """The ball, in voxels, of :func:`resolved_part` for parts ``diameter`` median cloud spacings
+    across: half that in voxels, plus one voxel (half a voxel from an inside voxel's centre to the
+    interior's boundary, and half a voxel by which the voxels holding surface points stand out beyond
+    the surface on average); 0 when ``diameter`` is 0 (no test)."""
+    if not diameter > 0:
+        return 0.0
+    return 0.5 * float(diameter) * median_spacing(cloud) / float(vs.size) + 1.0
+
+
 def firm_tunnels(cloud: np.ndarray, vs: VoxelShape, *, inside_share: float, strict_share: float, block: int = 5,
-                 min_points: int = 3, share: float = 0.05, checkpoint: Checkpoint = no_checkpoint) -> int:
+                 min_points: int = 3, share: float = 0.05, resolved_diameter: float = 0.0,
+                 checkpoint: Checkpoint = no_checkpoint) -> int:
     """The tunnels of the interior that survive each way it can invent one, bounded from above: the
-    least :func:`wide_tunnels` count of the interior, of the interior rebuilt without the voxels of
-    isolated points (:func:`supported_voxels`: a stray's voxel and its ray shadow bridge nothing) and of
-    that one at the ``strict_share`` (a gap between noisy strands passes beta* but not the stricter
-    share; a tube's inside passes both). Each interior keeps the shape's tunnels, so the least count
-    never hides one; a false one goes where any of the three lacks it (docs/diagnostics.md "Cycles")."""
+    least :func:`wide_tunnels` count of the interior, of its part the sampling resolves
+    (:func:`resolved_part`: parts at least ``resolved_diameter`` median spacings across; two thin
+    branches passing closer than the cloud resolves join into a ring no thicker), of the interior
+    rebuilt without the voxels of isolated points (:func:`supported_voxels`: a stray's voxel and its ray
+    shadow bridge nothing) and of that one at the ``strict_share`` (a gap between noisy strands passes
+    beta* but not the stricter share; a tube's inside passes both). Each interior keeps the resolved
+    tunnels, so the least count never hides one; a false one goes where any lacks it
+    (docs/diagnostics.md "Cycles")."""
     count = wide_tunnels(vs.solid())
     if count == 0:
         return 0
+    radius = resolved_radius(cloud, vs, resolved_diameter)
+    if radius > 0:
+        count = min(count, wide_tunnels(resolved_part(vs.solid(), radius)))
+        if count == 0:
+            return 0
     kept = supported_voxels(cloud, vs, block=block, min_points=min_points, share=share)
     if np.array_equal(kept, vs.occupied):  # nothing isolated: the same rays, only the stricter share
         solids = [fill_holes(vs.occupied | (vs.hits > strict_share))]
