@@ -178,15 +178,17 @@ def isolated_rows(points: np.ndarray, spacing: float, params: Params = Params(),
     return rows
 
 
-def local_spacing(cloud: np.ndarray, at: np.ndarray, k: int, tree: cKDTree | None = None) -> np.ndarray:
+def local_spacing(cloud: np.ndarray, at: np.ndarray, k: int, tree: cKDTree | None = None,
+                  quantile: float = LOCAL_QUANTILE) -> np.ndarray:
     """The cloud's spacing around each point of ``at``: the lower quartile (``LOCAL_QUANTILE``) of the
     nearest-neighbour distances of its ``k`` nearest cloud points (docs/metrics.md 6.4).  A stray's nearest cloud points are mostly the surface's,
-    so its own isolation does not widen its yardstick."""
+    so its own isolation does not widen its yardstick.  ``quantile`` 0.5: the sampling's own spacing
+    there (``sparse_boundedness``: the lower quartile reads a density gradient's denser side)."""
     tree = cKDTree(cloud) if tree is None else tree
     k = int(min(k, len(cloud) - 1))
     near = tree.query(np.asarray(at, float), k=k, workers=-1)[1]
     nn = tree.query(cloud[near.ravel()], k=2, workers=-1)[0][:, 1].reshape(near.shape)
-    return np.quantile(nn, LOCAL_QUANTILE, axis=1)
+    return np.quantile(nn, quantile, axis=1)
 
 
 def sparse_rows(points: np.ndarray, radius: float, others: int, checkpoint: Checkpoint = no_checkpoint,

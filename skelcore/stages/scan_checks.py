@@ -100,7 +100,9 @@ def _open_surface(ctx: EvalContext, ev: Evaluation, report: ScanReport, checkpoi
 
 def _sparse_boundedness(ctx: EvalContext, ev: Evaluation, report: ScanReport) -> list[TrustWarning]:
     """``sparse_boundedness``: the share of a skeleton's elements that are unbounded where the cloud around
-    them is sampled more than ``sparse_ratio`` x as sparsely as its median (docs/metrics.md 6.1): the rays
+    them (the median spacing of its outlier_local_k nearest points, not the outlier test's lower
+    quartile, which a density gradient's denser side sets) is sampled more than ``sparse_ratio`` x as
+    sparsely as its median (docs/metrics.md 6.1): the rays
     (2 median spacings wide) pass between the samples there, and the paper's boundedness falls with the
     sampling, not the skeleton.  Switches nothing off."""
     p = ctx.params
@@ -112,7 +114,7 @@ def _sparse_boundedness(ctx: EvalContext, ev: Evaluation, report: ScanReport) ->
         low = np.flatnonzero(~(np.asarray(beta) > p.beta_star))
         if len(beta) == 0 or len(low) < p.open_surface_share * len(beta):
             continue
-        near = local_spacing(ctx.cloud_n, np.asarray(pts)[low], int(p.outlier_local_k))
+        near = local_spacing(ctx.cloud_n, np.asarray(pts)[low], int(p.outlier_local_k), quantile=0.5)
         shares[name] = float(np.count_nonzero(near > p.sparse_ratio * global_spacing)) / len(beta)
     if not shares or max(shares.values()) < p.open_surface_share:
         return []

@@ -16,9 +16,9 @@ from .grid import CODES, Task
 __all__ = ["run_task", "evaluate_kind", "run_calibration", "read_rows", "task_path"]
 
 
-def evaluate_kind(task: Task, w, kind: str, first: bool) -> dict[str, Any] | None:
+def evaluate_kind(task: Task, w, kind: str, first: bool, drop: float | None = None) -> dict[str, Any] | None:
     """One skeleton kind on the task's cloud: the codes fired and the truth per code (None when the
-    kind does not apply to this shape)."""
+    kind does not apply to this shape); ``drop``: the sparse part's toll on boundedness (truth.sparse_drop)."""
     from ...curve import CurveSkeleton
     from ...stages.orchestrate import evaluate
     from .skeletons import make_kind
@@ -36,7 +36,7 @@ def evaluate_kind(task: Task, w, kind: str, first: bool) -> dict[str, Any] | Non
            "condition": task.condition, "kind": kind, "level": json.dumps(made.level),
            "fired": ";".join(sorted(fired)), "seconds": round(seconds, 3)}
     row.update({f"fired_{c}": int(c in fired) for c in CODES})
-    row.update(row_truth(made, w, task.condition, fired, arrays, first))
+    row.update(row_truth(made, w, task.condition, fired, arrays, first, drop=drop))
     return {k: (None if isinstance(v, float) and not np.isfinite(v) else v) for k, v in row.items()}
 
 
@@ -49,9 +49,14 @@ def _task_rows(task: Task) -> list[dict[str, Any]]:
     from .skeletons import world
 
     w = world(task.suite, task.shape, task.size, task.condition, task.suite_seed)
+    drop = None
+    if task.condition == "nonuniform":  # the truth of sparse_boundedness: against the uniform cloud
+        from .truth import sparse_drop
+
+        drop = sparse_drop(w, world(task.suite, task.shape, task.size, "clean", task.suite_seed).cloud)
     rows = []
     for i, kind in enumerate(task.kinds):
-        row = evaluate_kind(task, w, kind, first=(i == 0))
+        row = evaluate_kind(task, w, kind, first=(i == 0), drop=drop)
         if row is not None:
             rows.append(row)
     return rows

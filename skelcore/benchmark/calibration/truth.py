@@ -23,7 +23,7 @@ from ...params import Params
 from .skeletons import Made, World
 
 __all__ = ["OUT_YES", "OUT_NO", "MISS_YES", "MISS_NO", "origin", "outside_depth", "uncovered_radii",
-           "thin_share", "row_truth"]
+           "thin_share", "unbounded_share", "sparse_drop", "row_truth"]
 
 #: ``outside`` is true from this depth out of the shape (local radii; the shortcut generator's promise)
 OUT_YES = 0.5
@@ -105,6 +105,26 @@ def thin_share(w: World, params: Params) -> float:
     return float(np.mean(2.0 * w.local_radius[ok] / spacing < float(params.open_resolved_diameter)))
 
 
+def unbounded_share(cloud: np.ndarray, w: World, params: Params) -> float:
+    """The share of the reference curve's samples (half a local radius apart) that are unbounded
+    (boundedness at most beta*) against ``cloud``, both in the cloud's normalization."""
+    from ...geometry import Normalization
+    from ...metrics.boundedness import boundedness
+
+    rv, re, rr = w.ref
+    pts, _ = _samples(np.asarray(rv, float), np.asarray(re, np.int64), 0.5 * np.minimum(rr[re[:, 0]], rr[re[:, 1]]))
+    norm = Normalization.from_cloud(cloud, params.normalize_by, params.normalized_size)
+    beta = boundedness(norm.apply(cloud), norm.apply(pts), params=params)
+    return float(np.mean(~(beta > params.beta_star))) if len(beta) else 0.0
+
+
+def sparse_drop(w: World, uniform: np.ndarray, params: Params = Params()) -> float:
+    """How much the sparse part lowers the reference skeleton's boundedness: the share of its samples
+    unbounded against the non-uniform cloud ``w.cloud`` less that against the ``uniform`` cloud of the
+    same shape and size (the truth of ``sparse_boundedness``)."""
+    return unbounded_share(w.cloud, w, params) - unbounded_share(uniform, w, params)
+
+
 def _decimation_only(flag: np.ndarray, branch: np.ndarray | None, orig: np.ndarray, w: World) -> bool:
     """True when every flagged branch lies mostly on traced nodes outside the mesh (a neuron's)."""
     if w.facts is None or not flag.any() or branch is None:
@@ -131,9 +151,11 @@ def _spurs_located(made: Made, orig: np.ndarray, flag: np.ndarray | None) -> boo
 
 
 def row_truth(made: Made, w: World, condition: str, fired: set[str], arrays: dict[str, np.ndarray],
-              first: bool, params: Params = Params()) -> dict[str, Any]:
+              first: bool, params: Params = Params(), drop: float | None = None) -> dict[str, Any]:
     """Truth per code (``truth_{code}``: 1, 0 or None) and the facts behind it for one skeleton;
-    ``first``: the cloud's first (intact) skeleton, the only one counted for the cloud codes."""
+    ``first``: the cloud's first (intact) skeleton, the only one counted for the cloud codes;
+    ``drop``: :func:`sparse_drop` on a non-uniform cloud (``sparse_boundedness`` true from
+    ``open_surface_share``, false under half that, left out in between; false on the other clouds)."""
     from ...diagnostics.record import DEFECT_BITS
 
     k = made.kind
@@ -160,7 +182,9 @@ def row_truth(made: Made, w: World, condition: str, fired: set[str], arrays: dic
         t["outliers"] = int(condition == "outliers")
         t["open_surface"] = int(condition == "views") if (w.closed or condition == "views") else None
         t["thin_parts"] = 1 if thin >= params.thin_min_share else 0 if thin < 0.5 * params.thin_min_share else None
-        t["sparse_boundedness"] = int(condition == "nonuniform")
+        share = float(params.open_surface_share)
+        t["sparse_boundedness"] = 0 if condition != "nonuniform" else None if drop is None else (
+            1 if drop >= share else 0 if drop < 0.5 * share else None)
     else:
         thin = float("nan")
         t.update(dict.fromkeys(("outliers", "open_surface", "thin_parts", "sparse_boundedness")))
@@ -175,5 +199,6 @@ def row_truth(made: Made, w: World, condition: str, fired: set[str], arrays: dic
     if k == "spurs" and "spurious_branches" in fired:
         located = _spurs_located(made, orig, None if vflags is None else (vflags & DEFECT_BITS["spurious_branches"]) > 0)
     out = {f"truth_{c}": v for c, v in t.items()}
-    out.update(outside_depth=depth, uncovered_radii=missing, thin_share=thin, spurs_located=located)
+    out.update(outside_depth=depth, uncovered_radii=missing, thin_share=thin, spurs_located=located,
+               sparse_drop=float("nan") if drop is None or not first else drop)
     return out
