@@ -51,3 +51,19 @@ def test_the_cli_flag_sets_the_parameter(tmp_path):
 
     args = build_parser().parse_args(["evaluate", "cloud.ply", "--curve", "c.ply", "--density-aware"])
     assert args.density_aware
+
+
+def test_a_density_gradient_lowers_the_exact_axis_and_the_warning_says_so():
+    """The calibration's non-uniform tube (10 x across it, 5000 points): the sparse end leaves 24 % of
+    the exact axis unbounded (none on the uniform cloud: the truth, ``truth.sparse_drop``), and
+    ``sparse_boundedness`` fires, which the lower-quartile yardstick (1.4 x the median there) never let."""
+    from skelcore.benchmark.calibration.skeletons import world
+    from skelcore.benchmark.calibration.truth import sparse_drop
+    from skelcore.curve import CurveSkeleton
+    from skelcore.stages.orchestrate import evaluate
+
+    w = world("synthetic", "tube_a", 5000, "nonuniform", 0)
+    assert sparse_drop(w, world("synthetic", "tube_a", 5000, "clean", 0).cloud) > 0.1
+    v, e, _ = w.ref
+    ev = evaluate(w.cloud, curve=CurveSkeleton.from_raw(np.asarray(v, float), np.asarray(e, np.int64)), workers=1)
+    assert "sparse_boundedness" in {x.code for x in ev.warnings}
