@@ -110,7 +110,9 @@ def find_outliers(cloud: np.ndarray, params: Params = Params(), *, checkpoint: C
         surface[candidates] = False
         rows = rows[off_surface(cloud, rows, surface, params)]
     if len(rows):  # and linked to no point that is kept (a sliver of the surface, not a stray)
-        rows = rows[~border_rows(cloud, rows, float(params.outlier_radius) * spacing, tree)]
+        base = np.delete(cloud, candidates, axis=0)
+        beyond = ~np.all((cloud[rows] >= base.min(axis=0)) & (cloud[rows] <= base.max(axis=0)), axis=1)
+        rows = rows[~border_rows(cloud, rows, float(params.outlier_radius) * spacing, tree, stays=beyond)]
     checkpoint(0.9)
     if len(rows) == 0 or len(rows) >= n - 1:
         return none
@@ -127,18 +129,22 @@ def find_outliers(cloud: np.ndarray, params: Params = Params(), *, checkpoint: C
     return Outliers(rows.astype(np.int64), n, float(ratio), shift, spacing)
 
 
-def border_rows(cloud: np.ndarray, rows: np.ndarray, radius: float, tree: cKDTree) -> np.ndarray:
+def border_rows(cloud: np.ndarray, rows: np.ndarray, radius: float, tree: cKDTree,
+                stays: np.ndarray | None = None) -> np.ndarray:
     """(len(rows),) bool: the flagged point at each row lies within ``radius`` of a point not flagged, or
     of a flagged point that is itself such a border point (to a fixed point): DBSCAN's border points.
     A stray falls in the volume independently of the surface, so the points within the radius test's
     reach of it are strays too, or none; a lone sample of a one-sided scan is the visible sliver of a
-    part (the 100k one-sided neuron scans: pairs 5 spacings apart, one of them kept), linked to it."""
+    part (the 100k one-sided neuron scans: pairs 5 spacings apart, one of them kept), linked to it.
+    ``stays``: rows never linked (beyond the surface points' box, as in :mod:`.off_surface`: the
+    strays that set the normalization)."""
     rows = np.asarray(rows, np.int64)
     flagged = np.zeros(len(cloud), bool)
     flagged[rows] = True
     linked = np.zeros(len(rows), bool)
+    fixed = np.zeros(len(rows), bool) if stays is None else np.asarray(stays, bool)
     while True:
-        ask = np.flatnonzero(~linked)
+        ask = np.flatnonzero(~linked & ~fixed)
         near = tree.query_ball_point(cloud[rows[ask]], radius) if len(ask) else []
         new = ask[np.array([not flagged[nb].all() for nb in near], bool).reshape(-1)]
         if len(new) == 0:

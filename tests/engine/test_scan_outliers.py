@@ -252,5 +252,5 @@ def test_a_one_sided_neuron_scan_at_100k_has_no_stray_but_its_lone_pairs(monkeyp
 
     cloud = world("real", "1734350788", 100_000, "views", 0).cloud
     assert find_outliers(cloud).count == 0
-    monkeypatch.setattr(outliers, "border_rows", lambda c, rows, r, tree: np.zeros(len(rows), bool))
+    monkeypatch.setattr(outliers, "border_rows", lambda c, rows, r, tree, stays=None: np.zeros(len(rows), bool))
     assert find_outliers(cloud).count == 2

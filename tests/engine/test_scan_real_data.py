@@ -94,7 +94,7 @@ def test_a_half_ten_times_sparser_has_no_strays(name):
 
 def test_strays_in_the_box_are_still_found():
     """The suite's outliers effect (5 % of the points uniform in the grown box). The off-surface test
-    and the border rule excuse a few strays inside the surface points' box (111 of 250 found; 121
+    and the border rule excuse a few strays inside the surface points' box (116 of 250 found; 121
     without the border rule, 125 without the off-surface test): the normalization without the strays found is the same."""
     from skelcore.benchmark.scan_effects import ScanEffects, scan
     from skelcore.benchmark.validity import _shape
@@ -104,7 +104,7 @@ def test_strays_in_the_box_are_still_found():
     s = scan(sampler, ScanEffects(n_points=5000, outliers=0.05), np.random.default_rng(0))
     strays = np.flatnonzero(np.isnan(s.local_radius))
     found = find_outliers(s.cloud)
-    assert set(found.rows) <= set(strays) and found.count >= 0.4 * len(strays)
+    assert set(found.rows) <= set(strays) and found.count >= 0.45 * len(strays)
     without = find_outliers(s.cloud, Params(outlier_off_surface_cos=0.0, open_angle=359.9))
     assert found.count < without.count and found.scale_ratio == pytest.approx(without.scale_ratio, rel=1e-3)
 
