@@ -96,7 +96,8 @@ class Params:
         count over the cloud's points) points (stray points in the air) ...
     cycles_strict_share : ... and must persist when the inside share rises from beta_star to this
         (a tube's inside sees its surface along nearly all 26 rays; a gap between noisy strands
-        along fewer): docs/diagnostics.md "Cycles".
+        along fewer), and in the interior's part at least open_resolved_diameter spacings across:
+        docs/diagnostics.md "Cycles".
     outside_min_radii : ``outside`` fires when a branch has at least this many local radii of
         length outside the shape (where its curve samples have boundedness <= beta_star and the
         cycle test's voxels are not inside) ...
@@ -176,8 +177,8 @@ class Params:
     boundedness_density_aware : boundedness casts also against points filled into the cloud's sparsely
         sampled parts, h kept the scanned cloud's (docs/metrics.md 6.8); False = the paper's.
     sparse_ratio : ``sparse_boundedness`` fires when at least open_surface_share of a skeleton's elements
-        are unbounded where the cloud's local spacing (outlier_local_k points) exceeds this many x its
-        median spacing.
+        are unbounded where the cloud's local spacing (the median over outlier_local_k points) exceeds
+        this many x its median spacing.
     thin_min_share : ... and warning ``thin_parts`` (which switches nothing off) names such parts when
         their boundary points are at least this share of the cloud.
     open_one_sided : ... such parts are seen from one side when the mean unit direction from their axis
