@@ -50,6 +50,11 @@ setup(
             extra_compile_args=["-O3", "-std=c99"],
         ),
         Extension(
+            "skelcore.metrics._centroids",
+            sources=["skelcore/metrics/_centroids.c"],
+            extra_compile_args=["-O3", "-std=c99", "-ffp-contract=off"],
+        ),
+        Extension(
             "skelcore.metrics._emst",
             sources=["skelcore/metrics/_emst.c"],
             extra_compile_args=["-O3", "-std=gnu99"],
