@@ -11,13 +11,11 @@ classical significance measures fails:
   ``spur_min_points`` of its territory, or less than ``spur_unique`` of it, are explained by nothing
   else.
 
-No spacing-sized allowance (coverage's tau) grows the balls: r(x) is measured to the samples, so a
-part's own points need none. Where r_J is under ``spur_resolved_spacings`` cloud spacings the cloud
-cannot tell a twig from a spur: the branch is ``unresolved``, not judged; a stub (short) under
-``spur_stub_share`` of the curve's length lies inside the shape and is one of the ``stubs``
-(docs/diagnostics.md "Spurious branches"). On a cloud seen from one side (:mod:`.spur_sides`
-at least ``spur_one_sided``) a branch failing the explanation measure alone is ``unseen``, not
-judged: the sensor may not have looked at it. Size: length in r_J, share of the length.
+No tau grows the balls (r(x) is measured to the samples). Not judged: ``unresolved`` where r_J is
+under ``spur_resolved_spacings`` cloud spacings; ``stubs`` (short) under ``spur_stub_share`` of the
+curve's length; ``unseen`` where only the explanation measure fails on a cloud seen from one side
+(:mod:`.spur_sides`, ``spur_one_sided``). docs/diagnostics.md "Spurious branches". Size: length in
+r_J, share of the length.
 """
 
 from __future__ import annotations
