@@ -280,7 +280,7 @@ class Params:
     spur_slack: float = 0.25
     spur_resolved_spacings: float = 2.0
     spur_stub_share: float = 0.005
-    spur_one_sided: float = 0.15
+    spur_one_sided: float = 0.18
     spurs_warn_count: int = 1
     cycles_voxels: int = 96
     cycles_voxel_spacing: float = 1.5

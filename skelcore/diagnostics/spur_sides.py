@@ -4,9 +4,9 @@ needs the twig's own points, which a one-sided scan leaves out wherever the sens
 From curve points one per cell of 4 typical radii (at most ``_ELEMENTS`` of them), the mean unit
 direction to the cloud points within two local radii, across the axis (the principal direction of
 the 8 nearest curve points, left out: a density changing along a part is no side). On a surface
-scanned all round these cancel, point by point and over the curve (0.01-0.05 long on the tuning
-neurons and the synthetic suite's clean clouds); seen from one side they all point towards the
-sensor (0.27-0.45). The measure is the length of their mean (docs/diagnostics.md "Spurious
+scanned all round these cancel, point by point and over the curve (at most 0.16 long on the
+tuning neurons and the synthetic suite's clouds); seen from one side they all point towards the
+sensor (0.21-0.48). The measure is the length of their mean (docs/diagnostics.md "Spurious
 branches", rule 5).
 """
 
