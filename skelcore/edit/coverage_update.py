@@ -1,0 +1,202 @@
+"""The curve's coverage after an edit (docs/metrics.md section 5.2), updated by difference: the same
+values as :func:`skelcore.metrics.coverage.coverage` of the edited curve's elements, to the bit. An
+element's radius depends on its position alone (its nearest cloud point) while the noise shortfall
+keeps its ratio, so kept elements keep their radii; a cloud point's gap is a minimum and its verdict an
+"any" over the balls, so only the points a removed ball could have decided are asked again of every
+ball, and the others take the minimum of their old gap and the added balls' (the cover test's rounding
+allowance reads the largest ball: when it changes, or the shortfall's ratio does, all is asked again,
+as above ``coverage_exact_points`` where coverage is estimated on a subsample)."""
+
+from __future__ import annotations
+
+import threading
+import weakref
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from ..correspondence import densify_curve
+from ..geometry import no_checkpoint, unique_rows
+from ..metrics.ball_tree import COVER_EPS, BallTree
+from ..metrics.coverage import Coverage, _summary, coverage, noise_shortfall
+from ..stages.context import EvalContext
+
+__all__ = ["CoverageMemo", "curve_coverage", "link_contexts"]
+
+_LOCK = threading.Lock()
+_KEEP = 8  # memos kept per evaluation's cache (the last few curves: an undo comes back to one)
+
+
+@dataclass
+class CoverageMemo:
+    """One curve's coverage in the cloud's surface-tree order: its elements (unique rows) and, per
+    element, the nearest cloud distance r0, the ball radii r and R, the nearest point's tree position;
+    per cloud point the gap and the verdict."""
+
+    keys: dict[bytes, int]
+    r0: np.ndarray
+    r: np.ndarray
+    big_r: np.ndarray
+    contact: np.ndarray
+    gap_t: np.ndarray
+    cov_t: np.ndarray
+    elements: np.ndarray
+
+
+def _elements(ctx: EvalContext) -> tuple[np.ndarray, float]:
+    """The curve's coverage elements (catalogue's curve coverage stage: the curve densified to
+    tau / coverage_tau_factor, at most 200k pieces, plus its vertices) and tau."""
+    p, curve_n = ctx.params, ctx.curve_n
+    tau = ctx.tau(no_checkpoint)
+    step = max(tau / p.coverage_tau_factor, float(curve_n.edge_lengths().sum()) / 200_000)
+    pts, _ = densify_curve(curve_n, step)
+    return np.vstack([pts, curve_n.vertices]), tau
+
+
+def _store(cache: dict[str, Any], ctx: EvalContext, memo: CoverageMemo) -> None:
+    with _LOCK:
+        kept = cache.setdefault("coverage memos", {})
+        kept[id(ctx)] = (weakref.ref(ctx), memo)
+        while len(kept) > _KEEP:
+            kept.pop(next(iter(kept)))
+
+
+def _memo(cache: dict[str, Any], ctx: EvalContext | None) -> CoverageMemo | None:
+    with _LOCK:
+        hit = cache.get("coverage memos", {}).get(id(ctx))
+    return hit[1] if hit is not None and hit[0]() is ctx else None
+
+
+def link_contexts(cache: dict[str, Any], child: EvalContext, parent: EvalContext) -> None:
+    """Remember that ``child`` (an update's context) was edited from ``parent``, for its second phase."""
+    with _LOCK:
+        links = cache.setdefault("coverage parents", {})
+        links[id(child)] = (weakref.ref(child), weakref.ref(parent))
+        while len(links) > _KEEP:
+            links.pop(next(iter(links)))
+
+
+def parent_of(cache: dict[str, Any], child: EvalContext) -> EvalContext | None:
+    """The context ``child`` was edited from (:func:`link_contexts`), None when not known."""
+    with _LOCK:
+        hit = cache.get("coverage parents", {}).get(id(child))
+    return hit[1]() if hit is not None and hit[0]() is child else None
+
+
+def _full(ctx: EvalContext, elements: np.ndarray, tau: float) -> tuple[Coverage, CoverageMemo | None]:
+    """:func:`coverage` (its exact path, the same steps) with the memo of what it computed."""
+    p, cloud, index = ctx.params, ctx.cloud_n, ctx.cloud_index
+    if len(elements) == 0 or index is None or len(cloud) > int(p.coverage_exact_points):
+        return coverage(cloud, elements, p, tau, index=index), None
+    s = float(p.coverage_slack)
+    surface = index.surface()
+    balls = BallTree(elements)
+    r0, contact = surface.nearest(balls.points, return_index=True)
+    add = noise_shortfall(cloud, balls.points, r0, float(p.coverage_radius_quantile))
+    r = r0 + add if add.any() else r0
+    big_r = (1.0 + s) * r + tau
+    balls.set_radii(r, big_r, None if add.any() else surface.points[contact])
+    rest = np.ones(len(cloud), bool)
+    rest[contact] = False
+    g, c = balls.balls(surface.points[rest], floor=0.0)
+    gap_t, cov_t = np.zeros(len(cloud)), np.ones(len(cloud), bool)
+    gap_t[rest], cov_t[rest] = np.maximum(g, 0.0), c
+    keys = {row.tobytes(): i for i, row in enumerate(balls.points)}
+    memo = CoverageMemo(keys, r0, r, big_r, contact, gap_t, cov_t, balls.points)
+    return _to_cloud(surface.perm, gap_t, cov_t, tau, s, len(balls.points)), memo
+
+
+def _to_cloud(perm: np.ndarray, gap_t: np.ndarray, cov_t: np.ndarray, tau: float, s: float, n_el: int) -> Coverage:
+    gap, covered = np.empty(len(perm)), np.empty(len(perm), bool)
+    gap[perm], covered[perm] = gap_t, cov_t
+    return _summary(gap, covered, tau, s, n_el)
+
+
+def _near_box(points: np.ndarray, centers: np.ndarray, reach: np.ndarray, cover_reach: float) -> np.ndarray:
+    """Points that a ball of ``centers`` could reach: within max radius + ``reach`` (per point) or
+    ``cover_reach`` of the centers' bounding box (a superset, by a relative 1e-9)."""
+    lo, hi = centers.min(axis=0), centers.max(axis=0)
+    d = np.linalg.norm(np.maximum(np.maximum(lo - points, points - hi), 0.0), axis=1)
+    return (d <= (np.maximum(reach, cover_reach)) * (1 + 1e-9) + 1e-12)
+
+
+def _sub_tree(points: np.ndarray, r: np.ndarray, big_r: np.ndarray) -> BallTree:
+    tree = BallTree(points)
+    tree.set_radii(r[tree.perm], big_r[tree.perm])
+    return tree
+
+
+def curve_coverage(ctx: EvalContext, parent: EvalContext | None, cache: dict[str, Any]) -> Coverage:
+    """The curve coverage stage's result for ``ctx``, by difference from ``parent``'s when its memo
+    is kept (made here once for a parent without one); its own memo kept for the next edit."""
+    elements, tau = _elements(ctx)
+    old = _memo(cache, parent)
+    if old is None and parent is not None and parent.curve_n is not None:
+        old_el, old_tau = _elements(parent)
+        if old_tau == tau:
+            old = _full(parent, unique_rows(np.asarray(old_el, float))[0], tau)[1]
+            if old is not None:
+                _store(cache, parent, old)
+    elements = unique_rows(np.asarray(elements, dtype=float))[0]
+    out = None if old is None else _by_difference(ctx, old, elements, tau)
+    if out is None:
+        out = _full(ctx, elements, tau)
+    if out[1] is not None:
+        _store(cache, ctx, out[1])
+    return out[0]
+
+
+def _by_difference(ctx: EvalContext, old: CoverageMemo, elements: np.ndarray,
+                   tau: float) -> tuple[Coverage, CoverageMemo] | None:
+    """The coverage of ``elements`` from ``old``'s, None when it must be computed whole."""
+    p, cloud, index = ctx.params, ctx.cloud_n, ctx.cloud_index
+    if len(elements) == 0 or index is None or len(cloud) > int(p.coverage_exact_points):
+        return None
+    s = float(p.coverage_slack)
+    surface = index.surface()
+    balls = BallTree(elements)
+    pts = balls.points
+    at = np.array([old.keys.get(row.tobytes(), -1) for row in pts], dtype=np.int64)
+    kept = at >= 0
+    r0 = np.empty(len(pts))
+    contact = np.empty(len(pts), dtype=old.contact.dtype)
+    r0[kept], contact[kept] = old.r0[at[kept]], old.contact[at[kept]]
+    if (~kept).any():
+        r0[~kept], contact[~kept] = surface.nearest(pts[~kept], return_index=True)
+    add = noise_shortfall(cloud, pts, r0, float(p.coverage_radius_quantile))
+    r = r0 + add if add.any() else r0
+    big_r = (1.0 + s) * r + tau
+    if not (np.array_equal(r[kept], old.r[at[kept]]) and big_r.max() == old.big_r.max()):
+        return None  # the shortfall's ratio or the cover test's allowance changed: all again
+    balls.set_radii(r, big_r, None if add.any() else surface.points[contact])
+    eps = COVER_EPS * max(float(big_r.max()) ** 2, 1e-300)
+    gap_t, cov_t = old.gap_t.copy(), old.cov_t.copy()
+    points = surface.points
+    gone = np.ones(len(old.r), bool)
+    gone[at[kept]] = False
+    redo = np.zeros(len(cloud), bool)
+    if gone.any():  # points a removed ball may have decided: asked again of every ball
+        near = np.flatnonzero(_near_box(points, old.elements[gone], old.r[gone].max() + gap_t,
+                                        float(np.sqrt(old.big_r[gone].max() ** 2 + eps))))
+        if len(near):
+            tree = _sub_tree(old.elements[gone], old.r[gone], old.big_r[gone])
+            g, c = tree.balls(points[near], top=float(old.big_r.max()))
+            redo[near] = c | (g <= gap_t[near])
+    if (~kept).any():  # the others: their old answer or an added ball's
+        near = np.flatnonzero(_near_box(points, pts[~kept], r[~kept].max() + gap_t,
+                                        float(np.sqrt(big_r[~kept].max() ** 2 + eps))) & ~redo)
+        if len(near):
+            tree = _sub_tree(pts[~kept], r[~kept], big_r[~kept])
+            g, c = tree.balls(points[near], floor=0.0, top=float(big_r.max()))
+            gap_t[near] = np.minimum(gap_t[near], np.maximum(g, 0.0))
+            cov_t[near] |= c
+    redo[contact] = False
+    ask = np.flatnonzero(redo)
+    if len(ask):
+        g, c = balls.balls(points[ask], floor=0.0)
+        gap_t[ask], cov_t[ask] = np.maximum(g, 0.0), c
+    gap_t[contact], cov_t[contact] = 0.0, True
+    keys = {row.tobytes(): i for i, row in enumerate(pts)}
+    memo = CoverageMemo(keys, r0, r, big_r, contact, gap_t, cov_t, pts)
+    return _to_cloud(surface.perm, gap_t, cov_t, tau, s, len(pts)), memo
