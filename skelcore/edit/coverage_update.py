@@ -84,15 +84,17 @@ def parent_of(cache: dict[str, Any], child: EvalContext) -> EvalContext | None:
     return hit[1]() if hit is not None and hit[0]() is child else None
 
 
-def _full(ctx: EvalContext, elements: np.ndarray, tau: float) -> tuple[Coverage, CoverageMemo | None]:
-    """:func:`coverage` (its exact path, the same steps) with the memo of what it computed."""
+def _full(ctx: EvalContext, elements: np.ndarray, tau: float,
+          old: CoverageMemo | None = None) -> tuple[Coverage, CoverageMemo | None]:
+    """:func:`coverage` (its exact path, the same steps) with the memo of what it computed; the
+    elements ``old`` holds keep their nearest cloud distance."""
     p, cloud, index = ctx.params, ctx.cloud_n, ctx.cloud_index
     if len(elements) == 0 or index is None or len(cloud) > int(p.coverage_exact_points):
         return coverage(cloud, elements, p, tau, index=index), None
     s = float(p.coverage_slack)
     surface = index.surface()
     balls = BallTree(elements)
-    r0, contact = surface.nearest(balls.points, return_index=True)
+    at, r0, contact = _nearest(surface, balls.points, old)
     add = noise_shortfall(cloud, balls.points, r0, float(p.coverage_radius_quantile))
     r = r0 + add if add.any() else r0
     big_r = (1.0 + s) * r + tau
@@ -105,6 +107,22 @@ def _full(ctx: EvalContext, elements: np.ndarray, tau: float) -> tuple[Coverage,
     keys = {row.tobytes(): i for i, row in enumerate(balls.points)}
     memo = CoverageMemo(keys, r0, r, big_r, contact, gap_t, cov_t, balls.points)
     return _to_cloud(surface.perm, gap_t, cov_t, tau, s, len(balls.points)), memo
+
+
+def _nearest(surface: BallTree, pts: np.ndarray, old: CoverageMemo | None) -> tuple[np.ndarray, ...]:
+    """(each element's row in ``old``, -1 if new; its nearest cloud distance; that point's tree
+    position): the kept elements' from ``old``, the others asked of the cloud's tree."""
+    if old is None:
+        r0, contact = surface.nearest(pts, return_index=True)
+        return np.full(len(pts), -1, np.int64), r0, contact
+    at = np.array([old.keys.get(row.tobytes(), -1) for row in pts], dtype=np.int64)
+    kept = at >= 0
+    r0 = np.empty(len(pts))
+    contact = np.empty(len(pts), dtype=old.contact.dtype)
+    r0[kept], contact[kept] = old.r0[at[kept]], old.contact[at[kept]]
+    if (~kept).any():
+        r0[~kept], contact[~kept] = surface.nearest(pts[~kept], return_index=True)
+    return at, r0, contact
 
 
 def _to_cloud(perm: np.ndarray, gap_t: np.ndarray, cov_t: np.ndarray, tau: float, s: float, n_el: int) -> Coverage:
@@ -149,7 +167,7 @@ def curve_coverage(ctx: EvalContext, parent: EvalContext | None, cache: dict[str
 
 def _by_difference(ctx: EvalContext, old: CoverageMemo, elements: np.ndarray,
                    tau: float) -> tuple[Coverage, CoverageMemo] | None:
-    """The coverage of ``elements`` from ``old``'s, None when it must be computed whole."""
+    """The coverage of ``elements`` from ``old``'s, None above ``coverage_exact_points``."""
     p, cloud, index = ctx.params, ctx.cloud_n, ctx.cloud_index
     if len(elements) == 0 or index is None or len(cloud) > int(p.coverage_exact_points):
         return None
@@ -157,18 +175,13 @@ def _by_difference(ctx: EvalContext, old: CoverageMemo, elements: np.ndarray,
     surface = index.surface()
     balls = BallTree(elements)
     pts = balls.points
-    at = np.array([old.keys.get(row.tobytes(), -1) for row in pts], dtype=np.int64)
+    at, r0, contact = _nearest(surface, pts, old)
     kept = at >= 0
-    r0 = np.empty(len(pts))
-    contact = np.empty(len(pts), dtype=old.contact.dtype)
-    r0[kept], contact[kept] = old.r0[at[kept]], old.contact[at[kept]]
-    if (~kept).any():
-        r0[~kept], contact[~kept] = surface.nearest(pts[~kept], return_index=True)
     add = noise_shortfall(cloud, pts, r0, float(p.coverage_radius_quantile))
     r = r0 + add if add.any() else r0
     big_r = (1.0 + s) * r + tau
     if not (np.array_equal(r[kept], old.r[at[kept]]) and big_r.max() == old.big_r.max()):
-        return None  # the shortfall's ratio or the cover test's allowance changed: all again
+        return _full(ctx, elements, tau, old)  # the shortfall's ratio or the allowance changed: all again
     balls.set_radii(r, big_r, None if add.any() else surface.points[contact])
     eps = COVER_EPS * max(float(big_r.max()) ** 2, 1e-300)
     gap_t, cov_t = old.gap_t.copy(), old.cov_t.copy()
