@@ -151,9 +151,9 @@ def _touched(prev: SpurSearch, pts: np.ndarray, labels: np.ndarray, reach: np.nd
     """The queries asked before whose answer the edit may change. A position "explains q" when its
     ball holds q and it has a label other than q's own branch (a0 then, b0 now); a query may change
     only inside the ball of a position removed that had another label than a0, added that has another
-    than b0, or kept whose "another label" differs between the two (split or merged branches). Where
-    a0 = b0 those are among the positions removed, added or relabelled, one search for all such
-    queries; the others per (a0, b0) pair, all asked again beyond ``_PAIRS_MAX`` pairs."""
+    than b0, or kept whose "another label" differs between the two (split or merged branches): one
+    search per (a0, b0) pair. Beyond ``_PAIRS_MAX`` pairs, the queries where a0 = b0 are searched in
+    every position removed, added or relabelled at once and the others are all asked again."""
     o_pos, o_lo, o_hi, o_reach = _positions(prev.pts, prev.labels, prev.reach)
     n_pos, n_lo, n_hi, n_reach = _positions(pts, labels, reach)
     match = _match(o_pos, n_pos)
@@ -167,7 +167,10 @@ def _touched(prev: SpurSearch, pts: np.ndarray, labels: np.ndarray, reach: np.nd
     a0, b0 = prev.own[at[check]], own[check]
     a_lo, a_hi = o_lo[match[common]], o_hi[match[common]]  # kept positions, then and now
     b_lo, b_hi = n_lo[common], n_hi[common]
-    same = a0 == b0
+    base = int(max(a0.max(), b0.max(), 0)) + 2  # labels are >= -1: one integer per (a0, b0) pair
+    # per pair when few (a removed or moved position of q's own branch cannot have explained q);
+    # else one search of every position removed, added or relabelled for the queries where a0 = b0
+    same = a0 == b0 if len(np.unique((a0 + 1) * base + (b0 + 1))) > _PAIRS_MAX else np.zeros(len(a0), bool)
     if same.any():
         relabelled = (a_lo != b_lo) | (a_hi != b_hi)
         balls = np.vstack([o_pos[gone], n_pos[~common], n_pos[common][relabelled]])
@@ -177,7 +180,6 @@ def _touched(prev: SpurSearch, pts: np.ndarray, labels: np.ndarray, reach: np.nd
     check, a0, b0 = check[~same], a0[~same], b0[~same]
     if not len(check):
         return out
-    base = int(max(a0.max(), b0.max(), 0)) + 2  # labels are >= -1: one integer per (a0, b0) pair
     pairs, which = np.unique((a0 + 1) * base + (b0 + 1), return_inverse=True)
     if len(pairs) > _PAIRS_MAX:
         out[check] = True

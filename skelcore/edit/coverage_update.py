@@ -64,7 +64,10 @@ def _store(cache: dict[str, Any], ctx: EvalContext, memo: CoverageMemo) -> None:
 
 def _memo(cache: dict[str, Any], ctx: EvalContext | None) -> CoverageMemo | None:
     with _LOCK:
-        hit = cache.get("coverage memos", {}).get(id(ctx))
+        kept = cache.get("coverage memos", {})
+        hit = kept.pop(id(ctx), None)
+        if hit is not None:
+            kept[id(ctx)] = hit  # the last asked stays longest (each edit of one curve asks for its memo)
     return hit[1] if hit is not None and hit[0]() is ctx else None
 
 
