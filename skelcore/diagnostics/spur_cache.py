@@ -168,23 +168,23 @@ def _touched(prev: SpurSearch, pts: np.ndarray, labels: np.ndarray, reach: np.nd
     a_lo, a_hi = o_lo[match[common]], o_hi[match[common]]  # kept positions, then and now
     b_lo, b_hi = n_lo[common], n_hi[common]
     base = int(max(a0.max(), b0.max(), 0)) + 2  # labels are >= -1: one integer per (a0, b0) pair
+    pairs, which = _pairs((a0 + 1) * base + (b0 + 1), base)
     # per pair when few (a removed or moved position of q's own branch cannot have explained q);
     # else one search of every position removed, added or relabelled for the queries where a0 = b0
-    same = a0 == b0 if len(np.unique((a0 + 1) * base + (b0 + 1))) > _PAIRS_MAX else np.zeros(len(a0), bool)
-    if same.any():
+    if len(pairs) > _PAIRS_MAX:
+        same = a0 == b0
         relabelled = (a_lo != b_lo) | (a_hi != b_hi)
         balls = np.vstack([o_pos[gone], n_pos[~common], n_pos[common][relabelled]])
         radii = np.concatenate([o_reach[gone], n_reach[~common], n_reach[common][relabelled]])
-        if len(balls):
+        if len(balls) and same.any():
             out[check[same]] = _inside_any(balls, radii, queries[check[same]])
-    check, a0, b0 = check[~same], a0[~same], b0[~same]
-    if not len(check):
-        return out
-    pairs, which = np.unique((a0 + 1) * base + (b0 + 1), return_inverse=True)
-    if len(pairs) > _PAIRS_MAX:
-        out[check] = True
-        return out
-    which = np.ravel(which)
+        check, a0, b0 = check[~same], a0[~same], b0[~same]
+        if not len(check):
+            return out
+        pairs, which = _pairs((a0 + 1) * base + (b0 + 1), base)
+        if len(pairs) > _PAIRS_MAX:
+            out[check] = True
+            return out
     for j, key in enumerate(pairs.tolist()):
         x, y = key // base - 1, key % base - 1
         removed = gone & ~((o_lo == x) & (o_hi == x))
@@ -196,6 +196,18 @@ def _touched(prev: SpurSearch, pts: np.ndarray, labels: np.ndarray, reach: np.nd
             sel = check[which == j]
             out[sel] = _inside_any(balls, radii, queries[sel])
     return out
+
+
+def _pairs(key: np.ndarray, base: int) -> tuple[np.ndarray, np.ndarray]:
+    """``np.unique(key, return_inverse=True)`` of non-negative integers below ``base`` squared, by
+    counting when that range is small (the queries' (then, now) own-branch pairs; no sort of 100k)."""
+    if base * base > 4 * len(key) + 1024:
+        pairs, which = np.unique(key, return_inverse=True)
+        return pairs, np.ravel(which)
+    present = np.bincount(key, minlength=base * base) > 0
+    pairs = np.flatnonzero(present)
+    rank = np.cumsum(present) - 1
+    return pairs, rank[key]
 
 
 def _distinct(pts: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -226,9 +238,14 @@ def _nearest_within(centres: np.ndarray, queries: np.ndarray, bound: np.ndarray)
     """Each query's distance to the nearest centre, inf where none is within ``bound`` (per query; a
     negative bound skips the query) up to a small margin."""
     out = np.full(len(queries), np.inf)
+    if not len(queries) or not bound.max() >= 0:
+        return out
     lo, hi = centres.min(axis=0), centres.max(axis=0)
-    b = (bound * (1 + _MARGIN))[:, None]
-    near = np.flatnonzero((bound >= 0) & np.all((queries >= lo - b) & (queries <= hi + b), axis=1))
+    top = float(bound.max()) * (1 + _MARGIN)  # first within the largest bound, then each its own
+    cand = np.flatnonzero(np.all((queries >= lo - top) & (queries <= hi + top), axis=1))
+    b = (bound[cand] * (1 + _MARGIN))[:, None]
+    q = queries[cand]
+    near = cand[(bound[cand] >= 0) & np.all((q >= lo - b) & (q <= hi + b), axis=1)]
     if len(near):
         out[near] = cKDTree(centres).query(queries[near], k=1)[0]
     return out
