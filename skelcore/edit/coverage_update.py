@@ -17,9 +17,11 @@ from typing import Any
 import numpy as np
 
 from ..correspondence import densify_curve
-from ..geometry import no_checkpoint, unique_rows
+from scipy.spatial import cKDTree
+
+from ..geometry import kd_tree, no_checkpoint, unique_rows
 from ..metrics.ball_tree import COVER_EPS, BallTree
-from ..metrics.coverage import Coverage, _summary, coverage, noise_shortfall
+from ..metrics.coverage import NOISE_MIN_POINTS, Coverage, _noise_sample, _summary, coverage, noise_shortfall
 from ..stages.context import EvalContext
 
 __all__ = ["CoverageMemo", "curve_coverage", "link_contexts"]
@@ -32,7 +34,8 @@ _KEEP = 8  # memos kept per evaluation's cache (the last few curves: an undo com
 class CoverageMemo:
     """One curve's coverage in the cloud's surface-tree order: its elements (unique rows) and, per
     element, the nearest cloud distance r0, the ball radii r and R, the nearest point's tree position;
-    per cloud point the gap and the verdict."""
+    per cloud point the gap and the verdict; per point of the noise shortfall's sample its nearest
+    element's distance and row and whether two were as near (None when the shortfall reads none)."""
 
     keys: dict[bytes, int]
     r0: np.ndarray
@@ -42,6 +45,7 @@ class CoverageMemo:
     gap_t: np.ndarray
     cov_t: np.ndarray
     elements: np.ndarray
+    near: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None
 
 
 def _elements(ctx: EvalContext) -> tuple[np.ndarray, float]:
@@ -98,7 +102,9 @@ def _full(ctx: EvalContext, elements: np.ndarray, tau: float,
     surface = index.surface()
     balls = BallTree(elements)
     at, r0, contact = _nearest(surface, balls.points, old)
-    add = noise_shortfall(cloud, balls.points, r0, float(p.coverage_radius_quantile))
+    near = _sample_nearest(ctx, balls.points, old, at)
+    add = noise_shortfall(cloud, balls.points, r0, float(p.coverage_radius_quantile),
+                          nearest=None if near is None else near[:2])
     r = r0 + add if add.any() else r0
     big_r = (1.0 + s) * r + tau
     balls.set_radii(r, big_r, None if add.any() else surface.points[contact])
@@ -108,7 +114,7 @@ def _full(ctx: EvalContext, elements: np.ndarray, tau: float,
     gap_t, cov_t = np.zeros(len(cloud)), np.ones(len(cloud), bool)
     gap_t[rest], cov_t[rest] = np.maximum(g, 0.0), c
     keys = {row.tobytes(): i for i, row in enumerate(balls.points)}
-    memo = CoverageMemo(keys, r0, r, big_r, contact, gap_t, cov_t, balls.points)
+    memo = CoverageMemo(keys, r0, r, big_r, contact, gap_t, cov_t, balls.points, near)
     return _to_cloud(surface.perm, gap_t, cov_t, tau, s, len(balls.points)), memo
 
 
@@ -180,7 +186,9 @@ def _by_difference(ctx: EvalContext, old: CoverageMemo, elements: np.ndarray,
     pts = balls.points
     at, r0, contact = _nearest(surface, pts, old)
     kept = at >= 0
-    add = noise_shortfall(cloud, pts, r0, float(p.coverage_radius_quantile))
+    sample_near = _sample_nearest(ctx, pts, old, at)
+    add = noise_shortfall(cloud, pts, r0, float(p.coverage_radius_quantile),
+                          nearest=None if sample_near is None else sample_near[:2])
     r = r0 + add if add.any() else r0
     big_r = (1.0 + s) * r + tau
     if not (np.array_equal(r[kept], old.r[at[kept]]) and big_r.max() == old.big_r.max()):
@@ -214,5 +222,44 @@ def _by_difference(ctx: EvalContext, old: CoverageMemo, elements: np.ndarray,
         gap_t[ask], cov_t[ask] = np.maximum(g, 0.0), c
     gap_t[contact], cov_t[contact] = 0.0, True
     keys = {row.tobytes(): i for i, row in enumerate(pts)}
-    memo = CoverageMemo(keys, r0, r, big_r, contact, gap_t, cov_t, pts)
+    memo = CoverageMemo(keys, r0, r, big_r, contact, gap_t, cov_t, pts, sample_near)
     return _to_cloud(surface.perm, gap_t, cov_t, tau, s, len(pts)), memo
+
+
+def _sample_nearest(ctx: EvalContext, elements: np.ndarray, old: CoverageMemo | None,
+                    at: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray] | None:
+    """Each point of the noise shortfall's sample: its nearest element's distance and row, and whether
+    two were as near, as the shortfall finds them (its two nearest of ``geometry.kd_tree``, the
+    balanced tree's answer for a tie); by difference from ``old`` (``at``: each element's row in it)
+    where the old nearest is kept and was no tie: the added elements' nearest when nearer, a tie when
+    as near. None when the shortfall reads no sample."""
+    p, cloud = ctx.params, ctx.cloud_n
+    if not float(p.coverage_radius_quantile) > 0 or len(elements) < 2 or len(cloud) < 2 * NOISE_MIN_POINTS:
+        return None
+    pts = _noise_sample(cloud)[0]
+    if old is None or old.near is None:
+        redo = np.ones(len(pts), bool)
+        dist, owner = np.empty(len(pts)), np.empty(len(pts), np.int64)
+    else:
+        back = np.full(len(old.r), -1, np.int64)
+        back[at[at >= 0]] = np.flatnonzero(at >= 0)
+        dist, owner = old.near[0].copy(), back[old.near[1]]
+        redo = (owner < 0) | old.near[2]
+    tie = np.zeros(len(pts), bool)
+    added = np.flatnonzero(at < 0)
+    ok = np.flatnonzero(~redo)
+    if len(added) and len(ok):
+        d, i = cKDTree(elements[added]).query(pts[ok], k=2 if len(added) > 1 else 1)
+        d, i = d.reshape(len(ok), -1), i.reshape(len(ok), -1)
+        nearer = d[:, 0] < dist[ok]
+        dist[ok[nearer]], owner[ok[nearer]] = d[nearer, 0], added[i[nearer, 0]]
+        tie[ok] = (d[:, 0] == dist[ok]) & ~nearer
+        if d.shape[1] > 1:
+            tie[ok] |= nearer & (d[:, 0] == d[:, 1])
+    if redo.any():
+        d, i = kd_tree(elements).query(pts[redo], k=2)
+        dist[redo], owner[redo] = d[:, 0], i[:, 0]
+        tie[redo] = d[:, 0] == d[:, 1]
+    if tie.any():
+        dist[tie], owner[tie] = cKDTree(elements).query(pts[tie])
+    return dist, owner, tie

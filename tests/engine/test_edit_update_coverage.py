@@ -62,3 +62,18 @@ def test_coverage_by_difference_equals_coverage_computed_whole(name, monkeypatch
     ref = _whole(second)
     np.testing.assert_array_equal(second.coverage_curve.gap, ref.gap)
     np.testing.assert_array_equal(second.coverage_curve.covered, ref.covered)
+
+
+def test_the_noise_samples_nearest_element_by_difference_is_the_shortfalls_own():
+    """Each noise-sample point's nearest element kept by difference equals the shortfall's own search
+    (the same distances and rows), ties included: elements on a grid, so many points lie as near two."""
+    from skelcore.metrics import coverage as C
+
+    _, ev = _base("torus")
+    curve = ev.curve.curve
+    new = ev.update(E.delete_edge(curve, tuple(curve.edges[3]))[1])
+    for up in (new, new.update(E.move_vertex(new.curve.curve, 6, new.curve.curve.vertices[6] + 0.02)[1])):
+        memo = CU._memo(up.source.cache, up.source.ctx)
+        d, i = C._nearest_element(memo.elements, C._noise_sample(up.source.ctx.cloud_n)[0])
+        np.testing.assert_array_equal(memo.near[0], d)
+        np.testing.assert_array_equal(memo.near[1], i)
