@@ -22,10 +22,12 @@ from scipy.spatial import cKDTree
 from ..geometry import kd_tree, no_checkpoint, unique_rows
 from ..metrics.ball_tree import COVER_EPS, BallTree
 from ..metrics.coverage import NOISE_MIN_POINTS, Coverage, _noise_sample, _summary, coverage, noise_shortfall
-from ..stages.context import EvalContext
 
 __all__ = ["CoverageMemo", "curve_coverage", "link_contexts"]
 
+#: skelcore.stages.context.EvalContext, not imported: the edits sit below the stages (only the
+#: edit update, skelcore.edit.incremental, imports them)
+EvalContext = Any
 _LOCK = threading.Lock()
 _KEEP = 8  # memos kept per evaluation's cache (the last few curves: an undo comes back to one)
 
