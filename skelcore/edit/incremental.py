@@ -139,9 +139,13 @@ def compute_left_out(ev: Evaluation, names: tuple[str, ...]) -> dict[str, Any] |
     if ctx is None or not last.applies(ctx) or ctx.not_computed.get(last.name) != LEFT_OUT:
         return None
     done = {}
+    parent = parent_of(ev.source.cache, ctx)
     for stage in (by_name[n] for n in names):
         if stage.applies(ctx):
-            done[stage.name] = ctx.results[stage.name] = stage.fn(ctx, no_checkpoint)
+            if stage.name == "curve coverage" and parent is not None:  # by difference (coverage_update)
+                done[stage.name] = ctx.results[stage.name] = curve_coverage(ctx, parent, ev.source.cache)
+            else:
+                done[stage.name] = ctx.results[stage.name] = stage.fn(ctx, no_checkpoint)
             ctx.not_computed.pop(stage.name, None)
     return done
 
