@@ -21,7 +21,7 @@ from scipy.spatial import cKDTree
 
 from ..geometry import kd_tree, no_checkpoint, unique_rows
 from ..metrics.ball_tree import COVER_EPS, BallTree
-from ..metrics.coverage import NOISE_MIN_POINTS, Coverage, _noise_sample, _summary, coverage, noise_shortfall
+from ..metrics.coverage import NOISE_MIN_POINTS, SAMPLE_SEED, Coverage, _noise_sample, _summary, coverage, noise_shortfall
 
 __all__ = ["CoverageMemo", "curve_coverage", "link_contexts"]
 
@@ -48,6 +48,7 @@ class CoverageMemo:
     cov_t: np.ndarray
     elements: np.ndarray
     near: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None
+    queries: tuple | None = None  # _queries: the positions searched (gap_t, cov_t are theirs)
 
 
 def _elements(ctx: EvalContext) -> tuple[np.ndarray, float]:
@@ -95,10 +96,12 @@ def parent_of(cache: dict[str, Any], child: EvalContext) -> EvalContext | None:
 
 def _full(ctx: EvalContext, elements: np.ndarray, tau: float,
           old: CoverageMemo | None = None) -> tuple[Coverage, CoverageMemo | None]:
-    """:func:`coverage` (its exact path, the same steps) with the memo of what it computed; the
-    elements ``old`` holds keep their nearest cloud distance."""
+    """:func:`coverage` (the same steps; above ``coverage_exact_points`` its estimate on the same
+    subsample) with the memo of what it computed; the elements ``old`` holds keep their nearest cloud
+    distance."""
     p, cloud, index = ctx.params, ctx.cloud_n, ctx.cloud_index
-    if len(elements) == 0 or index is None or len(cloud) > int(p.coverage_exact_points):
+    queries = _queries(ctx, elements, old)
+    if queries is None:
         return coverage(cloud, elements, p, tau, index=index), None
     s = float(p.coverage_slack)
     surface = index.surface()
@@ -112,12 +115,36 @@ def _full(ctx: EvalContext, elements: np.ndarray, tau: float,
     balls.set_radii(r, big_r, None if add.any() else surface.points[contact])
     rest = np.ones(len(cloud), bool)
     rest[contact] = False
-    g, c = balls.balls(surface.points[rest], floor=0.0)
-    gap_t, cov_t = np.zeros(len(cloud)), np.ones(len(cloud), bool)
-    gap_t[rest], cov_t[rest] = np.maximum(g, 0.0), c
+    ask = rest[queries[0]]
+    g, c = balls.balls(surface.points[queries[0][ask]], floor=0.0)
+    gap_q, cov_q = np.zeros(len(queries[0])), np.ones(len(queries[0]), bool)
+    gap_q[ask], cov_q[ask] = np.maximum(g, 0.0), c
     keys = {row.tobytes(): i for i, row in enumerate(balls.points)}
-    memo = CoverageMemo(keys, r0, r, big_r, contact, gap_t, cov_t, balls.points, near)
-    return _to_cloud(surface.perm, gap_t, cov_t, tau, s, len(balls.points)), memo
+    memo = CoverageMemo(keys, r0, r, big_r, contact, gap_q, cov_q, balls.points, near, queries)
+    return _to_cloud(ctx, memo, tau, s), memo
+
+
+def _queries(ctx: EvalContext, elements: np.ndarray, old: CoverageMemo | None) -> tuple | None:
+    """(the surface-tree positions whose gaps coverage searches, each tree position's row among them
+    or -1, the sampled cloud rows or None): every point, or above ``coverage_exact_points`` the
+    subsample of :func:`coverage`'s estimate (the same seed); None when coverage is computed as is
+    (no elements, no cloud index, more elements than that subsample)."""
+    p, cloud, index = ctx.params, ctx.cloud_n, ctx.cloud_index
+    n, m = len(cloud), int(p.coverage_exact_points)
+    if len(elements) == 0 or index is None or len(elements) > m:
+        return None
+    if old is not None and old.queries is not None and len(old.queries[1]) == n:
+        return old.queries
+    perm = index.surface().perm
+    if n <= m:
+        return np.arange(n), np.arange(n), None
+    sample_rows = np.sort(np.random.default_rng(SAMPLE_SEED).choice(n, m, replace=False))
+    in_sample = np.zeros(n, bool)
+    in_sample[sample_rows] = True
+    at = np.flatnonzero(in_sample[perm])
+    row = np.full(n, -1, np.int64)
+    row[at] = np.arange(len(at))
+    return at, row, sample_rows
 
 
 def _nearest(surface: BallTree, pts: np.ndarray, old: CoverageMemo | None) -> tuple[np.ndarray, ...]:
@@ -136,10 +163,19 @@ def _nearest(surface: BallTree, pts: np.ndarray, old: CoverageMemo | None) -> tu
     return at, r0, contact
 
 
-def _to_cloud(perm: np.ndarray, gap_t: np.ndarray, cov_t: np.ndarray, tau: float, s: float, n_el: int) -> Coverage:
+def _to_cloud(ctx: EvalContext, memo: CoverageMemo, tau: float, s: float) -> Coverage:
+    """The Coverage of the memo's gaps and verdicts (searched at its query positions; every other
+    point, above ``coverage_exact_points``, takes its nearest sampled point's)."""
+    surface = ctx.cloud_index.surface()
+    at, row, sample_rows = memo.queries
+    gap_t, cov_t = memo.gap_t, memo.cov_t
+    if sample_rows is not None:
+        j = row[ctx.cloud_index.nearest_sampled(at)]
+        gap_t, cov_t = gap_t[j], cov_t[j]
+    perm = surface.perm
     gap, covered = np.empty(len(perm)), np.empty(len(perm), bool)
     gap[perm], covered[perm] = gap_t, cov_t
-    return _summary(gap, covered, tau, s, n_el)
+    return _summary(gap, covered, tau, s, len(memo.elements), sample_rows)
 
 
 def _near_box(points: np.ndarray, centers: np.ndarray, reach: np.ndarray, cover_reach: float) -> np.ndarray:
@@ -178,9 +214,10 @@ def curve_coverage(ctx: EvalContext, parent: EvalContext | None, cache: dict[str
 
 def _by_difference(ctx: EvalContext, old: CoverageMemo, elements: np.ndarray,
                    tau: float) -> tuple[Coverage, CoverageMemo] | None:
-    """The coverage of ``elements`` from ``old``'s, None above ``coverage_exact_points``."""
+    """The coverage of ``elements`` from ``old``'s, None when computed as is (:func:`_queries`)."""
     p, cloud, index = ctx.params, ctx.cloud_n, ctx.cloud_index
-    if len(elements) == 0 or index is None or len(cloud) > int(p.coverage_exact_points):
+    queries = _queries(ctx, elements, old)
+    if queries is None or old.queries is not queries:
         return None
     s = float(p.coverage_slack)
     surface = index.surface()
@@ -197,11 +234,11 @@ def _by_difference(ctx: EvalContext, old: CoverageMemo, elements: np.ndarray,
         return _full(ctx, elements, tau, old)  # the shortfall's ratio or the allowance changed: all again
     balls.set_radii(r, big_r, None if add.any() else surface.points[contact])
     eps = COVER_EPS * max(float(big_r.max()) ** 2, 1e-300)
-    gap_t, cov_t = old.gap_t.copy(), old.cov_t.copy()
-    points = surface.points
+    gap_t, cov_t = old.gap_t.copy(), old.cov_t.copy()  # per query position
+    points = surface.points[queries[0]]
     gone = np.ones(len(old.r), bool)
     gone[at[kept]] = False
-    redo = np.zeros(len(cloud), bool)
+    redo = np.zeros(len(points), bool)
     if gone.any():  # points a removed ball may have decided: asked again of every ball
         near = np.flatnonzero(_near_box(points, old.elements[gone], old.r[gone].max() + gap_t,
                                         float(np.sqrt(old.big_r[gone].max() ** 2 + eps))))
@@ -217,15 +254,17 @@ def _by_difference(ctx: EvalContext, old: CoverageMemo, elements: np.ndarray,
             g, c = tree.balls(points[near], floor=0.0, top=float(big_r.max()))
             gap_t[near] = np.minimum(gap_t[near], np.maximum(g, 0.0))
             cov_t[near] |= c
-    redo[contact] = False
+    touching = queries[1][contact]
+    touching = touching[touching >= 0]
+    redo[touching] = False
     ask = np.flatnonzero(redo)
     if len(ask):
         g, c = balls.balls(points[ask], floor=0.0)
         gap_t[ask], cov_t[ask] = np.maximum(g, 0.0), c
-    gap_t[contact], cov_t[contact] = 0.0, True
+    gap_t[touching], cov_t[touching] = 0.0, True
     keys = {row.tobytes(): i for i, row in enumerate(pts)}
-    memo = CoverageMemo(keys, r0, r, big_r, contact, gap_t, cov_t, pts, sample_near)
-    return _to_cloud(surface.perm, gap_t, cov_t, tau, s, len(pts)), memo
+    memo = CoverageMemo(keys, r0, r, big_r, contact, gap_t, cov_t, pts, sample_near, queries)
+    return _to_cloud(ctx, memo, tau, s), memo
 
 
 def _sample_nearest(ctx: EvalContext, elements: np.ndarray, old: CoverageMemo | None,

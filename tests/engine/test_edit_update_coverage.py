@@ -11,20 +11,21 @@ import numpy as np
 import pytest
 
 import skelcore.edit as E
-from skelcore import evaluate, shapes
+from skelcore import Params, evaluate, shapes
 from skelcore.edit import coverage_update as CU
 from skelcore.metrics.coverage import coverage
 
 
 @lru_cache(maxsize=None)
 def _base(name: str):
-    if name == "torus":
+    params = Params(coverage_exact_points=1000) if name == "torus, estimated" else Params()
+    if name.startswith("torus"):  # estimated: coverage on a subsample of 1000 points, spread to all
         sh = shapes.torus(3000, n_curve=24, seed=2)
         cloud = sh.cloud
     else:  # Gaussian noise of a fifth of the radius: the radii grow by the noise shortfall
         sh = shapes.y_shape(3000, seed=4, n_curve_per_arm=8)
         cloud = sh.cloud + np.random.default_rng(5).normal(0.0, 0.05, sh.cloud.shape)
-    return cloud, evaluate(cloud, curve=(sh.curve_vertices, sh.curve_edges))
+    return cloud, evaluate(cloud, curve=(sh.curve_vertices, sh.curve_edges), params=params)
 
 
 def _whole(ev):
@@ -35,7 +36,7 @@ def _whole(ev):
 
 
 
-@pytest.mark.parametrize("name", ["noisy y", "torus"])
+@pytest.mark.parametrize("name", ["noisy y", "torus", "torus, estimated"])
 def test_coverage_by_difference_equals_coverage_computed_whole(name, monkeypatch):
     _, ev = _base(name)
     whole = []
@@ -49,12 +50,13 @@ def test_coverage_by_difference_equals_coverage_computed_whole(name, monkeypatch
         np.testing.assert_array_equal(up.coverage_curve.gap, ref.gap)
         np.testing.assert_array_equal(up.coverage_curve.covered, ref.covered)
         assert up.coverage_curve.fraction == ref.fraction and up.coverage_curve.max_gap == ref.max_gap
+        assert up.coverage_curve.subsample == ref.subsample == (1000 if "estimated" in name else None)
     if name == "noisy y":
         memo = CU._memo(ev.source.cache, ev.source.ctx)
         assert (memo.r > memo.r0).all()  # the shortfall path was the one taken
     # the base's memo, once: each update then went by difference (with noise, the shortfall's ratio
     # moves with the curve: the radii change, all is asked again, the kept elements' distances reused)
-    assert len(whole) == (1 if name == "torus" else 3)
+    assert len(whole) == (3 if name == "noisy y" else 1)
     # a chain: the second edit from the first's update, in two phases
     first = ev.update(changes[0])
     c2 = E.move_vertex(first.curve.curve, 2, first.curve.curve.vertices[2] + np.array([0.02, 0.0, 0.0]))[1]
