@@ -106,7 +106,8 @@ def complete_update(ev: Evaluation, cancel: Callable[[], bool] | None = None) ->
 
     stages = start_order([s for s in CATALOGUE if s.name in names and s.applies(ctx)], ctx)
     parent = parent_of(src.cache, old)
-    link_contexts(src.cache, ctx, parent) if parent is not None else None
+    if parent is not None:  # the completed update is edited from the same curve
+        link_contexts(src.cache, ctx, parent)
 
     def task(stage: Stage) -> GraphTask:
         def run() -> object:
