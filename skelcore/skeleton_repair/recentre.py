@@ -19,7 +19,7 @@ from ..metrics.ellipse_fit import fit_ellipses
 from ..params import Params
 from .proposals import Action
 
-__all__ = ["RECENTRE", "cross_section_centres", "recentre"]
+__all__ = ["RECENTRE", "cross_section_centres", "recentre", "settled"]
 
 #: the defect code of a re-centring in the edit log's ``why`` (the never-worse rule's exception)
 RECENTRE = "off_centre"
@@ -110,14 +110,32 @@ def _centres_memo(cloud: np.ndarray, points: np.ndarray, dirs: np.ndarray, param
             np.array([r[2] for r in rows], float))
 
 
-def recentre(curve: CurveSkeleton, cloud: np.ndarray, params: Params, memo: dict | None = None) -> list[Action]:
+def settled(curve: CurveSkeleton, sample_edge: np.ndarray, sample_t: np.ndarray, sample_c: np.ndarray,
+            c_star: float) -> np.ndarray:
+    """Per vertex: whether the evaluation's curve samples lying on it all say it needs no cut here:
+    each is centred (c > ``c_star``) or has no ring (NaN: fewer than 3 points in its slab ring). A
+    vertex no sample lies on is not settled."""
+    n = curve.n_vertices
+    t = np.asarray(sample_t, float)
+    at = (t == 0.0) | (t == 1.0)
+    e = curve.edges[np.asarray(sample_edge, np.int64)[at]]
+    v = np.where(t[at] == 1.0, e.max(axis=1), e.min(axis=1))
+    c = np.asarray(sample_c, float)[at]
+    seen = np.bincount(v, minlength=n) > 0
+    cut = np.bincount(v, weights=(np.isfinite(c) & ~(c > c_star)).astype(float), minlength=n) > 0
+    return seen & ~cut
+
+
+def recentre(curve: CurveSkeleton, cloud: np.ndarray, params: Params, memo: dict | None = None,
+             skip: np.ndarray | None = None) -> list[Action]:
     """One action per branch holding inner vertices that are not centred (c <= ``params.c_star``):
     each moves to its cross-section's centre when that lies within the ring's radius and the vertex is
     centred (c > c*) in the cross-section cut there again (a ring caught by another branch or a bad
     fit moves nothing); branches with the lowest mean c first (ties by their lowest vertex). ``memo``:
-    a dict kept over a repair's rounds (cross-sections already cut, the cloud's slab grid)."""
+    a dict kept over a repair's rounds (cross-sections already cut, the cloud's slab grid); ``skip``:
+    per vertex, True where no cross-section is cut (:func:`settled`: the evaluation found it centred)."""
     deg = np.bincount(curve.edges.ravel(), minlength=curve.n_vertices)
-    inner = np.flatnonzero(deg == 2)
+    inner = np.flatnonzero((deg == 2) if skip is None else (deg == 2) & ~np.asarray(skip, bool))
     if not len(inner) or not len(cloud):
         return []
     u = _tangents(curve, inner)
