@@ -176,3 +176,18 @@ def test_the_recentring_cuts_only_where_the_evaluation_finds_no_centre(drifted):
     plain = recentre(start, s.cloud, Params(), full)
     assert [a.entries for a in recentre(start, s.cloud, Params(), part, skip)] == [a.entries for a in plain]
     assert len(part) < len(full)
+
+
+def test_the_first_recentrings_wanted_are_cut_alone(drifted):
+    from skelcore.skeleton_repair.findings import read_findings
+    from skelcore.skeleton_repair.recentre import recentre, settled, vertex_centeredness
+
+    s, _ref, start, r = drifted
+    f = read_findings(r.before)
+    skip = settled(start, f.sample_edge, f.sample_t, f.sample_c, Params().c_star)
+    vc = vertex_centeredness(start, f.sample_edge, f.sample_t, f.sample_c)
+    assert np.nanmax(vc[12:20]) <= Params().c_star < np.nanmin(vc[skip])
+    plain = recentre(start, s.cloud, Params(), None, skip)
+    lazy = recentre(start, s.cloud, Params(), None, skip, vc, want=1)
+    assert len(lazy) == 1 and lazy[0].entries in [a.entries for a in plain]
+    assert recentre(start, s.cloud, Params(), None, skip, vc, want=1, fresh=lambda a: False) == []
