@@ -22,8 +22,8 @@ TALLIED = ("spurious_branches", "spurious_cycles", "outside", "components", "mis
 class Findings:
     """``measures``: :data:`MEASURES`; ``tally``: the count of each :data:`TALLIED` defect;
     ``defects``: the evaluation's :class:`~skelcore.diagnostics.defects.CurveDefects`; ``warnings``:
-    the warning codes; ``missing``: the curve's missing parts; ``sample_edge``, ``sample_beta``, ``sample_c``: the curve samples' edge and
-    local boundedness / centeredness (what an action's "why" quotes and the weakest edge is chosen by)."""
+    the warning codes; ``missing``: the curve's missing parts; ``sample_edge``, ``sample_beta``, ``sample_c``, ``sample_t``: the curve samples' edge,
+    local boundedness / centeredness and place on the edge (what an action's "why" quotes and the weakest edge is chosen by)."""
 
     measures: dict[str, float | None]
     tally: dict[str, int]
@@ -33,6 +33,7 @@ class Findings:
     sample_edge: np.ndarray = field(default_factory=lambda: np.zeros(0, np.int64))
     sample_beta: np.ndarray = field(default_factory=lambda: np.zeros(0))
     sample_c: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    sample_t: np.ndarray = field(default_factory=lambda: np.zeros(0))
 
     @property
     def total(self) -> int:
@@ -79,4 +80,5 @@ def read_findings(ev: Evaluation) -> Findings:
     beta = np.asarray(cl.sample_boundedness, float) if cl is not None else np.zeros(0)
     c = np.asarray(cl.sample_centeredness(ev.params.beta_star), float) if cl is not None else np.zeros(0)
     edge = np.asarray(cl.sample_edge, np.int64) if cl is not None else np.zeros(0, np.int64)
-    return Findings(measures, tally, defects, [w.code for w in ev.warnings], missing, edge, beta, c)
+    t = np.asarray(cl.sample_t, float) if cl is not None else np.zeros(0)
+    return Findings(measures, tally, defects, [w.code for w in ev.warnings], missing, edge, beta, c, t)

@@ -6,7 +6,7 @@ its vertices moved by ``move_vertex``."""
 
 from __future__ import annotations
 
-from typing import Any
+from typing import Any, Callable
 
 import numpy as np
 from scipy.sparse import coo_matrix
@@ -19,11 +19,12 @@ from ..metrics.ellipse_fit import fit_ellipses
 from ..params import Params
 from .proposals import Action
 
-__all__ = ["RECENTRE", "cross_section_centres", "recentre"]
+__all__ = ["RECENTRE", "cross_section_centres", "recentre", "settled", "vertex_centeredness"]
 
 #: the defect code of a re-centring in the edit log's ``why`` (the never-worse rule's exception)
 RECENTRE = "off_centre"
 _BATCH_PAIRS = 2_000_000  # first-ball candidates held at once (about 60 bytes each)
+_LAZY_VERTICES = 256  # inner vertices cut at once when only the first actions are wanted
 
 
 def _tangents(curve: CurveSkeleton, ids: np.ndarray) -> np.ndarray:
@@ -110,40 +111,106 @@ def _centres_memo(cloud: np.ndarray, points: np.ndarray, dirs: np.ndarray, param
             np.array([r[2] for r in rows], float))
 
 
-def recentre(curve: CurveSkeleton, cloud: np.ndarray, params: Params, memo: dict | None = None) -> list[Action]:
-    """One action per branch holding inner vertices that are not centred (c <= ``params.c_star``):
-    each moves to its cross-section's centre when that lies within the ring's radius and the vertex is
-    centred (c > c*) in the cross-section cut there again (a ring caught by another branch or a bad
-    fit moves nothing); branches with the lowest mean c first (ties by their lowest vertex). ``memo``:
-    a dict kept over a repair's rounds (cross-sections already cut, the cloud's slab grid)."""
-    deg = np.bincount(curve.edges.ravel(), minlength=curve.n_vertices)
-    inner = np.flatnonzero(deg == 2)
-    if not len(inner) or not len(cloud):
-        return []
+def vertex_centeredness(curve: CurveSkeleton, sample_edge: np.ndarray, sample_t: np.ndarray,
+                        sample_c: np.ndarray) -> np.ndarray:
+    """Per vertex: the lowest c of the evaluation's curve samples lying on it (NaN where none lies on
+    it or none has a ring)."""
+    t = np.asarray(sample_t, float)
+    at = (t == 0.0) | (t == 1.0)
+    e = curve.edges[np.asarray(sample_edge, np.int64)[at]]
+    v = np.where(t[at] == 1.0, e.max(axis=1), e.min(axis=1))
+    c = np.asarray(sample_c, float)[at]
+    out = np.full(curve.n_vertices, np.inf)
+    np.minimum.at(out, v[np.isfinite(c)], c[np.isfinite(c)])
+    out[np.isinf(out)] = np.nan
+    return out
+
+
+def settled(curve: CurveSkeleton, sample_edge: np.ndarray, sample_t: np.ndarray, sample_c: np.ndarray,
+            c_star: float) -> np.ndarray:
+    """Per vertex: whether the evaluation's curve samples lying on it all say it needs no cut here:
+    each is centred (c > ``c_star``) or has no ring (NaN: fewer than 3 points in its slab ring). A
+    vertex no sample lies on is not settled."""
+    t = np.asarray(sample_t, float)
+    at = (t == 0.0) | (t == 1.0)
+    e = curve.edges[np.asarray(sample_edge, np.int64)[at]]
+    seen = np.bincount(np.where(t[at] == 1.0, e.max(axis=1), e.min(axis=1)), minlength=curve.n_vertices) > 0
+    c = vertex_centeredness(curve, sample_edge, sample_t, sample_c)
+    return seen & ~(np.isfinite(c) & ~(c > c_star))
+
+
+def _moves(curve: CurveSkeleton, cloud: np.ndarray, params: Params, memo: dict | None, inner: np.ndarray,
+           run: np.ndarray) -> dict[int, Action]:
+    """The re-centring of each branch (label of ``run``) among the inner vertices ``inner``."""
     u = _tangents(curve, inner)
     ok = np.all(np.isfinite(u), axis=1)
     inner, u = inner[ok], u[ok]
-    centre, radius, c = _centres_memo(np.asarray(cloud, float), curve.vertices[inner], u, params, memo)
+    centre, radius, c = _centres_memo(cloud, curve.vertices[inner], u, params, memo)
     shift = np.linalg.norm(centre - curve.vertices[inner], axis=1)
     move = np.isfinite(c) & (c <= float(params.c_star)) & (shift <= radius) & (shift > 0)
     if move.any():  # kept only where the vertex is centred in the cross-section at its new place too
-        _, _, c_new = _centres_memo(np.asarray(cloud, float), centre[move], u[move], params, memo)
+        _, _, c_new = _centres_memo(cloud, centre[move], u[move], params, memo)
         move[np.flatnonzero(move)[~(c_new > float(params.c_star))]] = False
-    if not move.any():
-        return []
-    run = _runs(curve, deg)
     groups: dict[int, list[int]] = {}
     for i in np.flatnonzero(move):
         groups.setdefault(int(run[inner[i]]), []).append(int(i))
-    out = []
-    for b in sorted(groups, key=lambda b: (float(np.mean(c[groups[b]])), int(inner[groups[b]].min()))):
-        rows = groups[b]
+    out = {}
+    for b, rows in groups.items():
         entries: list[dict[str, Any]] = [{"op": "move_vertex", "args": {
             "vertex": int(inner[i]), "position": [float(x) for x in centre[i]]}} for i in rows]
         on = np.isin(curve.edges, inner[rows]).any(axis=1)
         first = int(inner[rows].min())
-        out.append(Action(RECENTRE, {"vertex": first, "vertices": len(rows)},
-                          f"{len(rows)} vertices of the branch through vertex {first} off the centre of their "
-                          f"cross-sections (mean c {float(np.mean(c[rows])):.3g} <= c*={params.c_star}): moved to "
-                          f"the centres, by {float(np.mean(shift[rows])):.3g} on average", entries, np.flatnonzero(on)))
+        out[b] = Action(RECENTRE, {"vertex": first, "vertices": len(rows), "mean_c": float(np.mean(c[rows]))},
+                        f"{len(rows)} vertices of the branch through vertex {first} off the centre of their "
+                        f"cross-sections (mean c {float(np.mean(c[rows])):.3g} <= c*={params.c_star}): moved to "
+                        f"the centres, by {float(np.mean(shift[rows])):.3g} on average", entries, np.flatnonzero(on))
     return out
+
+
+def recentre(curve: CurveSkeleton, cloud: np.ndarray, params: Params, memo: dict | None = None,
+             skip: np.ndarray | None = None, vertex_c: np.ndarray | None = None, want: int | None = None,
+             fresh: Callable[[Action], bool] | None = None) -> list[Action]:
+    """One action per branch holding inner vertices that are not centred (c <= ``params.c_star``):
+    each moves to its cross-section's centre when that lies within the ring's radius and the vertex is
+    centred (c > c*) in the cross-section cut there again (a ring caught by another branch or a bad
+    fit moves nothing); branches with the lowest mean c first (ties by their lowest vertex). ``memo``:
+    cross-sections already cut (kept over a repair's rounds); ``skip``: vertices not cut
+    (:func:`settled`); ``fresh``: the actions kept. With ``vertex_c`` (:func:`vertex_centeredness`)
+    and ``want``, branches are cut in the order of their vertices' mean ``vertex_c`` (no value: c*),
+    a batch at a time, until ``want`` actions are found: the first ones, not all."""
+    deg = np.bincount(curve.edges.ravel(), minlength=curve.n_vertices)
+    inner = np.flatnonzero((deg == 2) if skip is None else (deg == 2) & ~np.asarray(skip, bool))
+    if not len(inner) or not len(cloud):
+        return []
+    cloud = np.asarray(cloud, float)
+    run = _runs(curve, deg)
+    keep = fresh or (lambda _a: True)
+    if vertex_c is None or want is None:
+        acts = _moves(curve, cloud, params, memo, inner, run)
+        ranked = sorted(acts, key=lambda b: (acts[b].target["mean_c"], acts[b].target["vertex"]))
+        return [_public(acts[b]) for b in ranked if keep(acts[b])]
+    vc = np.where(np.isfinite(vertex_c[inner]), vertex_c[inner], float(params.c_star))
+    labels, where = np.unique(run[inner], return_inverse=True)
+    count = np.bincount(where)
+    mean = np.bincount(where, weights=vc) / count
+    first = np.full(len(labels), np.iinfo(np.int64).max)
+    np.minimum.at(first, where, inner)
+    out: list[Action] = []
+    order = np.lexsort((first, mean))
+    lo = 0
+    while lo < len(order) and len(out) < want:
+        hi, size = lo, 0
+        while hi < len(order) and size < _LAZY_VERTICES:
+            size += int(count[order[hi]])
+            hi += 1
+        batch = np.isin(where, order[lo:hi])
+        acts = _moves(curve, cloud, params, memo, inner[batch], run)
+        out += [_public(acts[int(labels[k])]) for k in order[lo:hi]
+                if int(labels[k]) in acts and keep(acts[int(labels[k])])]
+        lo = hi
+    return out[:want]
+
+
+def _public(a: Action) -> Action:
+    a.target.pop("mean_c", None)
+    return a

@@ -25,7 +25,7 @@ from .from_skeletal import HOW, curve_from_skeletal
 from .guard import verdict
 from .proposals import Action, propose
 from .fill import fill_missing
-from .recentre import RECENTRE, recentre
+from .recentre import RECENTRE, recentre, settled, vertex_centeredness
 from .reroute import route_inside
 from .screen import first_look
 from .skeletal_out import repaired_skeletal
@@ -96,13 +96,18 @@ def _no_defect_left(found: Any) -> str:
     return f"left: {', '.join(left)} (not acted on)" if left else "no defect left"
 
 
-def _drift(cur: CurveSkeleton, ev: Evaluation, p: Params, memo: dict, rejected: list[dict[str, Any]]) -> list[Action]:
-    """The re-centrings of ``cur`` (none when ``repair_recentre`` is off); one once rejected is not
-    tried again (the same moves)."""
-    if not p.repair_recentre:
+def _drift(cur: CurveSkeleton, ev: Evaluation, found: Any, p: Params, memo: dict,
+           rejected: list[dict[str, Any]], want: int) -> list[Action]:
+    """The first ``want`` re-centrings of ``cur`` (none when ``repair_recentre`` is off), cut only at
+    the vertices the evaluation's own samples do not find centred, branch by branch in the order of
+    their samples' centeredness (:func:`.recentre.recentre`); one once rejected is not tried again
+    (the same moves)."""
+    if not p.repair_recentre or want < 1:
         return []
-    drift = recentre(cur, np.asarray(ev.source.args["cloud"], float), p, memo)
-    return [a for a in drift if all(a.entries != r["entries"] for r in rejected)]
+    skip = settled(cur, found.sample_edge, found.sample_t, found.sample_c, p.c_star)
+    vc = vertex_centeredness(cur, found.sample_edge, found.sample_t, found.sample_c)
+    return recentre(cur, np.asarray(ev.source.args["cloud"], float), p, memo, skip, vc, want,
+                    lambda a: all(a.entries != r["entries"] for r in rejected))
 
 
 def in_turn(actions: list[Action], tries: int) -> list[Action]:
@@ -162,7 +167,7 @@ def repair(cloud: np.ndarray, curve: CurveSkeleton | tuple | None = None, skelet
     memo: dict = {}  # cross-sections cut by the re-centring, kept over the rounds
     for rnd in range(p.repair_max_rounds):
         check()
-        drift = _drift(cur, ev, p, memo, rejected) if found.total == 0 else None
+        drift = _drift(cur, ev, found, p, memo, rejected, p.repair_max_tries) if found.total == 0 else None
         if found.total == 0 and not drift:
             stopped = _no_defect_left(found)
             break
@@ -172,7 +177,8 @@ def repair(cloud: np.ndarray, curve: CurveSkeleton | tuple | None = None, skelet
         if p.repair_fill_missing:
             candidates += fill_missing(cur, found.missing, np.asarray(ev.source.args["cloud"], float))
         if len(candidates) < p.repair_max_tries:  # re-centrings come last: cut only when they may be tried
-            candidates += drift if drift is not None else _drift(cur, ev, p, memo, rejected)
+            candidates += drift if drift is not None else _drift(cur, ev, found, p, memo, rejected,
+                                                                  p.repair_max_tries - len(candidates))
         done = False
         for action in in_turn(candidates, p.repair_max_tries):
             check()

@@ -160,3 +160,34 @@ def test_the_recentring_memo_gives_the_same_actions_and_recuts_only_what_moved(d
     v[15, 2] -= 0.1 * R
     recentre(CurveSkeleton.from_raw(v, start.edges), s.cloud, Params(), memo)
     assert cut < len(memo) <= cut + 3 * 2  # the moved vertex and its two neighbours' tangents, both cuts
+
+
+def test_the_recentring_cuts_only_where_the_evaluation_finds_no_centre(drifted):
+    from skelcore.skeleton_repair.findings import read_findings
+    from skelcore.skeleton_repair.recentre import recentre, settled
+
+    s, _ref, start, r = drifted
+    f = read_findings(r.before)
+    skip = settled(start, f.sample_edge, f.sample_t, f.sample_c, Params().c_star)
+    inner = np.bincount(start.edges.ravel(), minlength=start.n_vertices) == 2
+    assert 0 < int((skip & inner).sum()) < int(inner.sum())  # the centred arms' vertices are skipped
+    assert not skip[12:20].any()  # the drifted ones are cut
+    full, part = {}, {}
+    plain = recentre(start, s.cloud, Params(), full)
+    assert [a.entries for a in recentre(start, s.cloud, Params(), part, skip)] == [a.entries for a in plain]
+    assert len(part) < len(full)
+
+
+def test_the_first_recentrings_wanted_are_cut_alone(drifted):
+    from skelcore.skeleton_repair.findings import read_findings
+    from skelcore.skeleton_repair.recentre import recentre, settled, vertex_centeredness
+
+    s, _ref, start, r = drifted
+    f = read_findings(r.before)
+    skip = settled(start, f.sample_edge, f.sample_t, f.sample_c, Params().c_star)
+    vc = vertex_centeredness(start, f.sample_edge, f.sample_t, f.sample_c)
+    assert np.nanmax(vc[12:20]) <= Params().c_star < np.nanmin(vc[skip])
+    plain = recentre(start, s.cloud, Params(), None, skip)
+    lazy = recentre(start, s.cloud, Params(), None, skip, vc, want=1)
+    assert len(lazy) == 1 and lazy[0].entries in [a.entries for a in plain]
+    assert recentre(start, s.cloud, Params(), None, skip, vc, want=1, fresh=lambda a: False) == []
