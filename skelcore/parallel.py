@@ -16,7 +16,7 @@ from typing import Callable
 
 from .geometry import Checkpoint, no_checkpoint
 
-__all__ = ["on_threads", "GraphTask", "run_graph", "polled_build", "polled_streams"]
+__all__ = ["on_threads", "GraphTask", "run_graph", "polled_build", "polled_streams", "Cores"]
 
 
 def on_threads(
@@ -56,6 +56,41 @@ def on_threads(
                 fut.cancel()
 
 
+class Cores:
+    """The cores shared by the lanes of a :func:`run_graph` and the compiled streams their stages start.
+
+    A lane holds a core while it runs a task; a stage that waits on its streams (:func:`polled_streams`)
+    lends its lane's core to them, and each stream takes a core per span, never while a lane waits for
+    one.  So the compiled kernel runs on the cores the Python stages (which hold the GIL) leave free and
+    on every core once none is left to run: two of those stages side by side share one core's worth of
+    GIL, while the kernel beside them loses nothing (docs/performance.md 3).
+    """
+
+    def __init__(self, n: int):
+        self._free = n
+        self._lanes_waiting = 0
+        self._cond = threading.Condition()
+
+    def take(self, lane: bool) -> None:
+        with self._cond:
+            self._lanes_waiting += lane
+            try:
+                while self._free == 0 or (not lane and self._lanes_waiting):
+                    self._cond.wait()
+                self._free -= 1
+            finally:
+                self._lanes_waiting -= lane
+
+    def give(self) -> None:
+        with self._cond:
+            self._free += 1
+            self._cond.notify_all()
+
+
+# the Cores of the run_graph lane this thread is (unset outside run_graph: streams take every core)
+_lane = threading.local()
+
+
 @dataclass(frozen=True)
 class GraphTask:
     """One piece of work for :func:`run_graph`: ``fn()`` once every task named in ``after`` is done."""
@@ -78,6 +113,7 @@ def run_graph(tasks: list[GraphTask], workers: int | None = None, on_error: Call
     if len(set(names)) != len(names) or any(a not in names for t in tasks for a in t.after):
         raise ValueError("run_graph: task names must be unique and every 'after' must name a task")
     workers = max(1, min(len(tasks), int(workers or os.cpu_count() or 1)))
+    cores = Cores(max(workers, os.cpu_count() or 1))
     results: dict = {}
     started: set = set()
     done: set = set()
@@ -95,7 +131,15 @@ def run_graph(tasks: list[GraphTask], workers: int | None = None, on_error: Call
             return None
 
     def work() -> None:
+        _lane.cores = cores
+        try:
+            lane()
+        finally:
+            _lane.cores = None
+
+    def lane() -> None:
         while (task := next_task()) is not None:
+            cores.take(lane=True)
             try:
                 value = task.fn()
             except BaseException as exc:  # the first error wins; the others stop at a checkpoint
@@ -105,6 +149,8 @@ def run_graph(tasks: list[GraphTask], workers: int | None = None, on_error: Call
                 if on_error is not None:
                     on_error()
                 return
+            finally:
+                cores.give()
             with cond:
                 results[task.name] = value
                 done.add(task.name)
@@ -165,6 +211,27 @@ def polled_streams(
         return
     workers = max(1, min(len(spans), int(workers or os.cpu_count() or 1)))
     checkpoint(progress())
+    cores = getattr(_lane, "cores", None)
+    if cores is None:
+        _streams(fn, spans, workers, checkpoint, progress, stop, poll)
+        return
+
+    def gated(*span):
+        cores.take(lane=False)
+        try:
+            return fn(*span)
+        finally:
+            cores.give()
+
+    cores.give()  # this lane only polls: its core is the streams'
+    try:
+        _streams(gated, spans, workers, checkpoint, progress, stop, poll)
+    finally:
+        cores.take(lane=True)
+
+
+def _streams(fn: Callable, spans: list, workers: int, checkpoint: Checkpoint, progress: Callable[[], float],
+             stop, poll: float) -> None:
     with ThreadPoolExecutor(max_workers=workers, thread_name_prefix="skelscope-stream") as pool:
         futures = [pool.submit(fn, *span) for span in spans]
         try:

@@ -5,7 +5,8 @@ the context (the stage that makes an input runs before it), when it applies and 
 The paper's four metrics on the skeletal set and the curve (docs/metrics.md 1-4), the reverse correspondence,
 SkelScope's coverage, the reference comparison and the ground-truth metrics (docs/metrics.md), the diagnostics.  Start order (docs/performance.md
 8): the boundedness stages first (the longest), then what others wait for, then the rest in catalogue
-order, the curve's boundedness last when the skeletal set's runs.
+order; the skeletal set's boundedness waits for the curve's, so that one lane runs both kernels while
+the other runs the Python stages (curve defects among them, not after them).
 """
 
 from __future__ import annotations
@@ -46,6 +47,7 @@ class Stage:
     applies: Callable[[EvalContext], bool]
     fn: Callable[[EvalContext, Checkpoint], object]
     start: int | Callable[[EvalContext], int] = IN_TURN  # start group, or a function of the context
+    follows: Callable[[EvalContext], tuple[str, ...]] | None = None  # stages it starts after (not inputs)
 
     def start_group(self, ctx: EvalContext) -> int:
         return self.start(ctx) if callable(self.start) else self.start
@@ -53,6 +55,10 @@ class Stage:
     def after(self, ctx: EvalContext) -> tuple[str, ...]:
         """The stages that make its inputs in this evaluation."""
         return tuple(dict.fromkeys(s for s in map(ctx.made_by, self.inputs) if s is not None))
+
+    def waits(self, ctx: EvalContext) -> tuple[str, ...]:
+        """The stages it starts after: those that make its inputs, then those it follows by schedule."""
+        return tuple(dict.fromkeys(self.after(ctx) + (self.follows(ctx) if self.follows else ())))
 
 
 # ---- the stages' functions --------------------------------------------------------------------
@@ -211,10 +217,16 @@ def _strays_not_yet_found(ctx: EvalContext) -> bool:
     return ctx.scan is None or not ctx.scan.outliers_removed
 
 
-def _last_beside_skeletal(ctx: EvalContext) -> int:
-    # the curve's boundedness is a quarter of the skeletal one on the hammer; started second, it held
-    # the other thread while the rest waited
-    return LAST if ctx.skeletal is not None else FIRST
+def _after_the_curves(ctx: EvalContext) -> int:
+    return FIRST if ctx.curve is None else EARLY
+
+
+def _the_curves_kernel_first(ctx: EvalContext) -> tuple[str, ...]:
+    # one lane runs the curve's kernel (a quarter of the skeletal one on the hammer), then the skeletal
+    # set's, each on the cores the other lane's Python stages leave free (parallel.Cores) and on both
+    # once those are done; started side by side they held both lanes while the Python stages waited,
+    # and the curve's started last left curve defects (which reads it) alone at the end
+    return ("curve boundedness",) if ctx.curve is not None else ()
 
 
 CATALOGUE: tuple[Stage, ...] = (
@@ -223,14 +235,14 @@ CATALOGUE: tuple[Stage, ...] = (
     Stage("topology", weight=1.0, column="skeletal", inputs=("cloud", "skeletal points", "rows"),
           applies=_skeletal_corresponded, fn=_topology),
     Stage("skeletal boundedness", weight=4.0, column="skeletal", inputs=("cloud", "skeletal points"), applies=_skeletal,
-          fn=_skeletal_boundedness, start=FIRST),
+          fn=_skeletal_boundedness, start=_after_the_curves, follows=_the_curves_kernel_first),
     Stage("skeletal centeredness", weight=0.5, column="skeletal",
           inputs=("cloud", "skeletal points", "rows", "index", "unseen"),
           applies=_skeletal_corresponded, fn=_skeletal_centeredness),
     Stage("skeletal smoothness", weight=0.5, column="skeletal", inputs=("skeletal points",), applies=_skeletal,
           fn=_skeletal_smoothness),
     Stage("curve boundedness", weight=1.0, column="curve", inputs=("cloud", "samples"), applies=_curve,
-          fn=_curve_boundedness, start=_last_beside_skeletal),
+          fn=_curve_boundedness, start=FIRST),
     Stage("curve centeredness", weight=1.0, column="curve", inputs=("cloud", "samples"), applies=_curve,
           fn=_curve_centeredness),
     Stage("curve smoothness", weight=0.1, column="curve", inputs=("curve",), applies=_curve, fn=_curve_smoothness),

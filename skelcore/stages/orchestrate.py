@@ -117,7 +117,8 @@ def evaluate(
                         checkpoint=StageProgress({}, None, cancel).between("scan preparation"))
     stages = select(ctx)
     tracker = StageProgress({s.name: s.weight for s in stages}, progress, cancel, on_stages)
-    tasks = [_task(stage, ctx, tracker) for stage in start_order(stages, ctx)]
+    names = {s.name for s in stages}
+    tasks = [_task(stage, ctx, tracker, names) for stage in start_order(stages, ctx)]
     run_graph(tasks, workers, on_error=tracker.abort)
     ev = finish(ctx, inputs, tracker.between("trust checks"))
     ev.timings = dict(tracker.timings)
@@ -210,11 +211,12 @@ def _defect_checks(ctx: EvalContext) -> list[str]:
     return out
 
 
-def _task(stage: Stage, ctx: EvalContext, tracker: StageProgress) -> GraphTask:
-    """The stage as a graph task: its result lands in ``ctx.results`` as soon as it is done."""
+def _task(stage: Stage, ctx: EvalContext, tracker: StageProgress, names: set[str]) -> GraphTask:
+    """The stage as a graph task: its result lands in ``ctx.results`` as soon as it is done; it starts
+    after the selected stages it waits for."""
 
     def run() -> object:
         ctx.results[stage.name] = tracker.run(stage.name, stage.fn, ctx)
         return ctx.results[stage.name]
 
-    return GraphTask(stage.name, run, stage.after(ctx))
+    return GraphTask(stage.name, run, tuple(a for a in stage.waits(ctx) if a in names))

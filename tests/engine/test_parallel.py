@@ -129,3 +129,47 @@ def test_a_cancel_sets_the_stop_flag_and_waits_for_the_streams_and_an_error_in_o
     with pytest.raises(ValueError, match="bad span"):
         polled_streams(failing, [(0,), (1,)], 2, lambda f: None, lambda: 0.0, stop, poll=0.01)
     assert stop[0] == 1 and _no_stream_thread()
+
+
+def _spans_beside(busy_lane: bool, monkeypatch) -> tuple[int, int]:
+    """(most spans of a stage's streams running at once while the other lane ran a stage, most at all):
+    two cores, a stage waiting on 24 streams of 20 ms and, when ``busy_lane``, a stage of 0.15 s beside
+    it on the other lane, started once the streams have."""
+    import skelcore.parallel as parallel
+
+    monkeypatch.setattr(parallel.os, "cpu_count", lambda: 2)
+    lock = threading.Lock()
+    running, most, most_beside = [0], [0], [0]
+    other_busy, streaming = threading.Event(), threading.Event()
+
+    def span(i: int) -> None:
+        streaming.set()
+        with lock:
+            running[0] += 1
+            most[0] = max(most[0], running[0])
+            if other_busy.is_set():
+                most_beside[0] = max(most_beside[0], running[0])
+        time.sleep(0.02)
+        with lock:
+            running[0] -= 1
+
+    def kernel_stage() -> None:
+        polled_streams(span, [(i,) for i in range(24)], None, lambda f: None, lambda: 0.0, np.zeros(1, np.int32))
+
+    def python_stage() -> None:
+        streaming.wait(5.0)
+        other_busy.set()
+        time.sleep(0.15)
+        other_busy.clear()
+
+    tasks = [GraphTask("kernel", kernel_stage)] + ([GraphTask("python", python_stage)] if busy_lane else [])
+    run_graph(tasks, 2)
+    return most_beside[0], most[0]
+
+
+def test_a_kernels_streams_take_the_cores_the_other_lane_leaves_free(monkeypatch):
+    """parallel.Cores: while the other lane runs a stage, one stream runs; once it is done, two."""
+    beside, most = _spans_beside(True, monkeypatch)
+    assert beside == 1 and most == 2
+    assert _spans_beside(False, monkeypatch) == (0, 2)
+    assert _no_lane_thread()

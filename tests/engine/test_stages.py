@@ -1,6 +1,6 @@
 """The declared stages of an evaluation (skelcore/stages/catalogue.py): each declared once, reading only
 context items, waiting for the stage that makes its inputs, selected and started by the rules of
-docs/performance.md 6.2 (longest first; the curve's boundedness last when the skeletal set's runs)."""
+docs/performance.md 6.2 (the kernels first: the curve's boundedness, then the skeletal set's after it)."""
 
 from __future__ import annotations
 
@@ -34,15 +34,16 @@ DIAG_WAITS = {"curve defects": ("curve boundedness",), "skeletal outside": ("ske
 
 
 @pytest.mark.parametrize("case, started, waits", [
-    (dict(), ["skeletal boundedness", "topology", "skeletal centeredness", "skeletal smoothness", "curve centeredness",
-              "curve smoothness", "skeletal coverage", "curve coverage", "stray points", "curve boundedness", *DIAG], DIAG_WAITS),
+    (dict(), ["curve boundedness", "skeletal boundedness", "topology", "skeletal centeredness", "skeletal smoothness",
+              "curve centeredness", "curve smoothness", "skeletal coverage", "curve coverage", "stray points", *DIAG],
+     DIAG_WAITS),
     (dict(correspondence="reverse", every=5),
-     ["skeletal boundedness", "correspondence", "topology", "skeletal centeredness", "skeletal smoothness",
-      "curve centeredness", "curve smoothness", "skeletal coverage", "curve coverage", "stray points",
-      "curve boundedness", *DIAG],
+     ["curve boundedness", "correspondence", "skeletal boundedness", "topology", "skeletal centeredness",
+      "skeletal smoothness", "curve centeredness", "curve smoothness", "skeletal coverage", "curve coverage",
+      "stray points", *DIAG],
      {"topology": ("correspondence",), "skeletal centeredness": ("correspondence",), **DIAG_WAITS}),
     (dict(skeletal=False, correspondence="reverse"),
-     ["curve boundedness", "skeletal boundedness", "correspondence", "curve centeredness", "curve smoothness",
+     ["curve boundedness", "correspondence", "skeletal boundedness", "curve centeredness", "curve smoothness",
       "topology", "skeletal centeredness", "skeletal smoothness", "curve coverage", "stray points", "curve defects",
       "curve missing parts"],
      {**{s: ("correspondence",) for s in ("topology", "skeletal boundedness", "skeletal centeredness",
@@ -50,8 +51,8 @@ DIAG_WAITS = {"curve defects": ("curve boundedness",), "skeletal outside": ("ske
       "curve defects": ("curve boundedness",), "curve missing parts": ("curve coverage",)}),
     # without coverage the missing parts compute their own (on a subsample above missing_max_points)
     (dict(every=5, params=Params(coverage_max_points=100)),
-     ["skeletal boundedness", "skeletal smoothness", "curve centeredness", "curve smoothness", "stray points",
-      "curve boundedness", *DIAG], {"curve defects": ("curve boundedness",), "skeletal outside": ("skeletal boundedness",)}),
+     ["curve boundedness", "skeletal boundedness", "skeletal smoothness", "curve centeredness", "curve smoothness",
+      "stray points", *DIAG], {"curve defects": ("curve boundedness",), "skeletal outside": ("skeletal boundedness",)}),
     (dict(skeletal=False), ["curve boundedness", "curve centeredness", "curve smoothness", "curve coverage",
                             "stray points", "curve defects", "curve missing parts"],
      {"curve defects": ("curve boundedness",), "curve missing parts": ("curve coverage",)}),
@@ -61,3 +62,7 @@ def test_stages_are_selected_started_and_wait_by_the_declared_rules(case, starte
     order = start_order(select(ctx), ctx)
     assert [s.name for s in order] == started
     assert {s.name: s.after(ctx) for s in order if s.after(ctx)} == waits
+    # by schedule only: the skeletal set's kernel starts on the lane that ran the curve's
+    assert {s.name: s.waits(ctx)[-1] for s in order if s.waits(ctx) != s.after(ctx)} == (
+        {"skeletal boundedness": "curve boundedness"} if any(s.name == "skeletal boundedness" for s in order)
+        and case.get("curve", True) else {})
