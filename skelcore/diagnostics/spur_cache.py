@@ -32,7 +32,9 @@ class SpurSearch:
     """One curve's search: its points, their branch labels and reaches; the rows of the cloud's
     subsample asked (sorted), each one's own branch and answer; the subsample's size; the distinct
     positions of the points with their cloud distance, and each subsample row's nearest position and
-    its distance (the own branch's search); the cloud tree the distances came from."""
+    its distance (the own branch's search); the cloud tree the distances came from; whether another
+    position lies as near to the row up to rounding (a tie the whole curve's search may break either
+    way: such a row is asked again at every update)."""
 
     pts: np.ndarray
     labels: np.ndarray
@@ -46,6 +48,7 @@ class SpurSearch:
     near_pos: np.ndarray
     near_d: np.ndarray
     tree: object
+    near_tied: np.ndarray | None = None
 
 
 class SpurMemo:
@@ -94,20 +97,23 @@ class SpurMemo:
 
     def own_branch(self, pts: np.ndarray, labels: np.ndarray, use: np.ndarray) -> np.ndarray:
         """The label of the curve point nearest to each row of ``use`` (``labels[cKDTree(pts).query(use)[1]]``):
-        a row keeps its nearest position when that position is kept with one label and no added position
-        comes as near; the others are asked of the whole curve."""
+        a row keeps its nearest position when that position is kept with one label, no other position
+        was as near (a tie) and no added position comes as near; the others are asked of the whole curve."""
         now, prev = self._local.now, self.previous
         pos, inverse, match = now["pos"], now["inverse"], now["match"]
         lo, hi = _label_range(labels, inverse, len(pos))
         redo = np.ones(len(use), bool)
         near_pos = np.zeros(len(use), np.int64)
         near_d = np.zeros(len(use))
+        tied = np.zeros(len(use), bool)
         if prev is not None and prev.n_use == len(use):
             back = np.full(len(prev.pos), -1)
             back[match[match >= 0]] = np.flatnonzero(match >= 0)
             m = back[prev.near_pos]
             ok = m >= 0
             ok[ok] = lo[m[ok]] == hi[m[ok]]
+            if prev.near_tied is not None:
+                ok &= ~prev.near_tied
             added = np.flatnonzero(match < 0)
             if len(added) and ok.any():
                 d_new = _nearest_within(pos[added], use, np.where(ok, prev.near_d, -1.0))
@@ -119,7 +125,10 @@ class SpurMemo:
         if redo.any():
             d, i = cKDTree(pts).query(use[redo])
             own[redo], near_pos[redo], near_d[redo] = labels[i], inverse[i], d
-        now.update(near_pos=near_pos, near_d=near_d, n_use=len(use))
+            if len(pos) > 1:  # a second position as near: the kd-tree's choice between them is not kept
+                second = cKDTree(pos).query(use[redo], k=2)[0][:, 1]
+                tied[redo] = second <= d * (1 + 1e-9)
+        now.update(near_pos=near_pos, near_d=near_d, near_tied=tied, n_use=len(use))
         return own
 
     def search(self, fn: Search, pts: np.ndarray, labels: np.ndarray, reach: np.ndarray, queries: np.ndarray,
@@ -142,7 +151,7 @@ class SpurMemo:
         now = getattr(self._local, "now", {})
         if now.get("pts") is pts and now.get("n_use") == n_use:
             self.current = SpurSearch(pts, labels, reach, rows, own, answer, int(n_use), now["pos"], now["radius"],
-                                      now["near_pos"], now["near_d"], now["tree"])
+                                      now["near_pos"], now["near_d"], now["tree"], now["near_tied"])
         return answer
 
 

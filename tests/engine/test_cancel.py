@@ -16,9 +16,10 @@ from skelcore import evaluate
 from skelcore.errors import Cancelled
 from skelcore.shapes import torus
 
-# the order of the stages run one after the other (workers=1); with more workers they run side by side,
-# the longest first (the skeletal boundedness), the curve's boundedness last
+# the order of the stages run one after the other (workers=1): the curve's boundedness first and the
+# skeletal set's after it (with more workers they share a lane, the Python stages beside them)
 STAGES = [
+    "curve boundedness",
     "skeletal boundedness",
     "topology",
     "skeletal centeredness",
@@ -28,7 +29,6 @@ STAGES = [
     "skeletal coverage",
     "curve coverage",
     "stray points",  # the real-scan check's search (docs/metrics.md 6.4), a stage beside the others
-    "curve boundedness",
     "curve defects",  # the diagnostics
     "skeletal outside",
     "skeletal missing parts",

@@ -296,3 +296,17 @@ def test_curve_centeredness_in_larger_spans_gives_the_same_bits():
     for span in (1, 7, len(s.points)):
         got = C.curve_centeredness(sh.cloud, s.points, s.directions, params=p, grid=grid, span=span)
         np.testing.assert_array_equal(got, base)
+
+
+def test_a_tie_between_two_nearest_curve_points_is_asked_again():
+    """Two vertices added on vertices of the torus' curve: its samples meet at one place from two
+    branches, and a cloud point has two nearest curve points at one distance; the spur search's kept
+    answer for it must be the one the whole curve's search gives."""
+    cloud, skeletal, ev = _base("torus")
+    curve = ev.curve.curve
+    for op, args in (("add_vertex", {"position": curve.vertices[0].tolist(), "attach_to": 0}),
+                     ("add_vertex", {"position": curve.vertices[4].tolist(), "attach_to": 4}),
+                     ("delete_vertex", {"vertex": 0})):
+        curve, change = E.apply(curve, {"op": op, "args": args})
+        ev = ev.update(change)
+    _same(ev, evaluate(cloud, skeletal, curve))
