@@ -7,7 +7,8 @@ a broken cycle: ``missing_cycles``, collapse 0.9: ``collapse``, another frame: `
 decides ``outside`` (how far the skeleton leaves the shape, in the nearest reference radius) and
 ``incomplete`` (the reference's length farther than two radii from the skeleton); the scan decides
 the cloud codes. On a neuron, about half the traced nodes lie outside the decimated mesh: a flag on a
-branch mostly outside it is the mesh's decimation, neither a hit nor a false alarm.
+branch mostly outside it is the mesh's decimation, neither a hit nor a false alarm; and a defect
+under the size the cloud resolves (``outside_seen``, ``uncovered_area``) is left out, not a miss.
 """
 
 from __future__ import annotations
@@ -22,8 +23,8 @@ from scipy.spatial import cKDTree
 from ...params import Params
 from .skeletons import Made, World
 
-__all__ = ["OUT_YES", "OUT_NO", "MISS_YES", "MISS_NO", "origin", "outside_depth", "uncovered_radii",
-           "thin_share", "row_truth"]
+__all__ = ["OUT_YES", "OUT_NO", "MISS_YES", "MISS_NO", "MISS_AREA", "origin", "outside_depth", "outside_seen",
+           "uncovered_radii", "uncovered_area", "thin_share", "row_truth"]
 
 #: ``outside`` is true from this depth out of the shape (local radii; the shortcut generator's promise)
 OUT_YES = 0.5
@@ -32,6 +33,9 @@ OUT_NO = 0.1
 #: ``incomplete`` is true when more than this length of the reference (local radii) lies farther than
 #: two radii from the skeleton, false under MISS_NO (docs/diagnostics.md "Missing parts", Calibration)
 MISS_YES, MISS_NO = 2.0, 1.0
+#: on a neuron, ``incomplete`` is true only when the uncovered part also holds this much of the
+#: cloud's surface (squared median local radii: a tube about 6 radii long); smaller: left out
+MISS_AREA = 36.0
 #: kinds that move the whole skeleton: every branch and cycle verdict on them is left out
 GLOBAL_KINDS = ("collapse", "frame", "nodes_only")
 
@@ -72,9 +76,23 @@ def outside_depth(made: Made, w: World, orig: np.ndarray) -> float:
     return float(depth.max()) if len(depth) else 0.0
 
 
-def uncovered_radii(made: Made, w: World) -> float:
-    """The reference's length (in its local radii) farther than two local radii from the skeleton;
-    on a neuron only along nodes inside the mesh or within one radius of it (the cloud shows them)."""
+def outside_seen(made: Made, w: World, orig: np.ndarray, params: Params = Params()) -> float:
+    """How far the injected edges reach beyond the cloud's tolerance tau (coverage's, docs/metrics.md
+    5.2), in the nearest reference radius: a part within tau of the cloud lies on the sampled surface
+    for every measure, the cloud cannot show it out (a neuron's, sampled from a decimated mesh)."""
+    e = made.edges[(orig[made.edges] < 0).any(axis=1)]
+    if not len(e) or not len(w.cloud):
+        return 0.0
+    r_v = _radius_at(made.vertices, w)
+    pts, _ = _samples(made.vertices, e, 0.25 * np.minimum(r_v[e[:, 0]], r_v[e[:, 1]]))
+    tree = cKDTree(w.cloud)
+    tau = params.coverage_tau_factor * float(np.median(tree.query(w.cloud, k=2)[0][:, 1]))
+    d = (tree.query(pts)[0] - tau) / _radius_at(pts, w)
+    return float(d.max())
+
+
+def _uncovered(made: Made, w: World) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """The reference's samples, their length weight, local radius and whether each is uncovered."""
     rv, re, rr = w.ref
     ref_pts, edge = _samples(rv, re, 0.5 * np.minimum(rr[re[:, 0]], rr[re[:, 1]]))
     seg = np.linalg.norm(rv[re[:, 1]] - rv[re[:, 0]], axis=1)
@@ -90,7 +108,28 @@ def uncovered_radii(made: Made, w: World) -> float:
     far = d > 2.0 * r
     if w.facts is not None:
         far &= np.asarray(w.facts.outside_radii)[near] <= 1.0
+    return ref_pts, weight, r, far
+
+
+def uncovered_radii(made: Made, w: World) -> float:
+    """The reference's length (in its local radii) farther than two local radii from the skeleton;
+    on a neuron only along nodes inside the mesh or within one radius of it (the cloud shows them)."""
+    _, weight, r, far = _uncovered(made, w)
     return float(np.sum(weight[far] / r[far]))
+
+
+def uncovered_area(made: Made, w: World) -> float:
+    """The cloud's surface around the uncovered reference (its points nearest to an uncovered sample,
+    x the median spacing squared), in squared median local radii of the cloud: how much of the shape
+    the missing part is, whatever the density."""
+    ref_pts, _, _, far = _uncovered(made, w)
+    ok = np.isfinite(w.local_radius)
+    cloud = w.cloud[ok]
+    if not far.any() or len(cloud) < 2:
+        return 0.0
+    owner = cKDTree(ref_pts).query(cloud)[1]
+    spacing = float(np.median(cKDTree(cloud).query(cloud, k=2)[0][:, 1]))
+    return float(np.count_nonzero(far[owner]) * spacing ** 2 / np.median(w.local_radius[ok]) ** 2)
 
 
 def thin_share(w: World, params: Params) -> float:
@@ -153,6 +192,14 @@ def row_truth(made: Made, w: World, condition: str, fired: set[str], arrays: dic
     missing = uncovered_radii(made, w) if k not in ("frame", "no_correspondence") else float("nan")
     t["incomplete"] = None if not np.isfinite(missing) else (
         1 if missing > MISS_YES else 0 if missing < MISS_NO else None)
+    seen = area = float("nan")
+    if w.facts is not None:  # a neuron: a defect under what its cloud resolves is left out
+        if t["outside"] == 1:
+            seen = outside_seen(made, w, orig, params)
+            t["outside"] = 1 if seen >= OUT_YES else None
+        if t["incomplete"] == 1:
+            area = uncovered_area(made, w)
+            t["incomplete"] = 1 if area >= MISS_AREA else None
     t["collapse"] = int(k == "collapse")
     t["frame"] = int(k == "frame")
     if first:
@@ -175,5 +222,6 @@ def row_truth(made: Made, w: World, condition: str, fired: set[str], arrays: dic
     if k == "spurs" and "spurious_branches" in fired:
         located = _spurs_located(made, orig, None if vflags is None else (vflags & DEFECT_BITS["spurious_branches"]) > 0)
     out = {f"truth_{c}": v for c, v in t.items()}
-    out.update(outside_depth=depth, uncovered_radii=missing, thin_share=thin, spurs_located=located)
+    out.update(outside_depth=depth, outside_seen=seen, uncovered_radii=missing, uncovered_area=area, thin_share=thin,
+               spurs_located=located)
     return out
