@@ -13,6 +13,7 @@ import pytest
 from skelcore.benchmark.calibration.skeletons import Made, World, _mesh_depth
 from skelcore.benchmark.calibration.truth import (MISS_AREA, MISS_YES, OUT_YES, origin, outside_depth, outside_seen,
                                                   row_truth, uncovered_area, uncovered_radii)
+from skelcore.benchmark.calibration.uncovered import visible_removal
 from skelcore.benchmark.neurons import MeshSampler, load_neuron
 
 #: a tuning neuron; the twig: SWC nodes 1990 (its junction) - 4354 - 4355 (its tip), radius 10; a
@@ -78,3 +79,15 @@ def test_a_spur_within_the_clouds_tolerance_is_left_out(crop):
         assert outside_depth(made, w, origin(made, v)) >= OUT_YES  # out of the mesh
     assert outside_seen(short, w, origin(short, v)) < OUT_YES and _truth(short, w)["truth_outside"] is None
     assert outside_seen(long_, w, origin(long_, v)) >= OUT_YES and _truth(long_, w)["truth_outside"] == 1
+
+
+def test_the_removal_drawn_on_a_neuron_is_one_the_cloud_shows(crop):
+    """The calibration's removed branch on a neuron holds MISS_AREA of the cloud's surface, or none is
+    drawn (on this crop every terminal branch is a twig or cut by the crop)."""
+    w, _ = crop
+    got = visible_removal(w, np.random.default_rng(0))
+    if got is not None:
+        assert uncovered_area(Made("missing_branch", *got), w) >= MISS_AREA
+    w_big = World(w.cloud, w.local_radius / 3.0, w.ref, w.depth, False, w.facts)  # parts 3 x thinner than said
+    got = visible_removal(w_big, np.random.default_rng(0))
+    assert got is not None and uncovered_area(Made("missing_branch", *got), w_big) >= MISS_AREA

@@ -22,6 +22,7 @@ from scipy.spatial import cKDTree
 
 from ...params import Params
 from .skeletons import Made, World
+from .uncovered import MISS_AREA, _radius_at, _samples, uncovered_area, uncovered_radii
 
 __all__ = ["OUT_YES", "OUT_NO", "MISS_YES", "MISS_NO", "MISS_AREA", "origin", "outside_depth", "outside_seen",
            "uncovered_radii", "uncovered_area", "thin_share", "row_truth"]
@@ -33,9 +34,6 @@ OUT_NO = 0.1
 #: ``incomplete`` is true when more than this length of the reference (local radii) lies farther than
 #: two radii from the skeleton, false under MISS_NO (docs/diagnostics.md "Missing parts", Calibration)
 MISS_YES, MISS_NO = 2.0, 1.0
-#: on a neuron, ``incomplete`` is true only when the uncovered part also holds this much of the
-#: cloud's surface (squared median local radii: a tube about 6 radii long); smaller: left out
-MISS_AREA = 36.0
 #: kinds that move the whole skeleton: every branch and cycle verdict on them is left out
 GLOBAL_KINDS = ("collapse", "frame", "nodes_only")
 
@@ -45,20 +43,6 @@ def origin(made: Made, ref_v: np.ndarray) -> np.ndarray:
     d, i = cKDTree(ref_v).query(made.vertices)
     tol = 1e-9 * float(np.ptp(ref_v, axis=0).max())
     return np.where(d <= tol, i, -1)
-
-
-def _samples(v: np.ndarray, e: np.ndarray, step: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Points along each edge at most ``step`` (per edge) apart, and their edge."""
-    length = np.linalg.norm(v[e[:, 1]] - v[e[:, 0]], axis=1)
-    n = np.clip(np.ceil(length / np.maximum(step, 1e-12)).astype(int), 1, 400)
-    edge = np.repeat(np.arange(len(e)), n + 1)
-    t = np.concatenate([np.linspace(0.0, 1.0, k + 1) for k in n])
-    pts = v[e[edge, 0]] + t[:, None] * (v[e[edge, 1]] - v[e[edge, 0]])
-    return pts, edge
-
-
-def _radius_at(points: np.ndarray, w: World) -> np.ndarray:
-    return w.ref[2][cKDTree(w.ref[0]).query(points)[1]]
 
 
 def outside_depth(made: Made, w: World, orig: np.ndarray) -> float:
@@ -89,47 +73,6 @@ def outside_seen(made: Made, w: World, orig: np.ndarray, params: Params = Params
     tau = params.coverage_tau_factor * float(np.median(tree.query(w.cloud, k=2)[0][:, 1]))
     d = (tree.query(pts)[0] - tau) / _radius_at(pts, w)
     return float(d.max())
-
-
-def _uncovered(made: Made, w: World) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-    """The reference's samples, their length weight, local radius and whether each is uncovered."""
-    rv, re, rr = w.ref
-    ref_pts, edge = _samples(rv, re, 0.5 * np.minimum(rr[re[:, 0]], rr[re[:, 1]]))
-    seg = np.linalg.norm(rv[re[:, 1]] - rv[re[:, 0]], axis=1)
-    per_edge = np.bincount(edge, minlength=len(re))
-    weight = seg[edge] / np.maximum(per_edge[edge], 1)
-    near = cKDTree(rv).query(ref_pts)[1]
-    r = rr[near]
-    r_made = _radius_at(made.vertices, w)
-    pts, _ = _samples(made.vertices, made.edges, 0.25 * np.minimum(r_made[made.edges[:, 0]], r_made[made.edges[:, 1]]))
-    if not len(pts):
-        pts = made.vertices
-    d = cKDTree(pts).query(ref_pts)[0]
-    far = d > 2.0 * r
-    if w.facts is not None:
-        far &= np.asarray(w.facts.outside_radii)[near] <= 1.0
-    return ref_pts, weight, r, far
-
-
-def uncovered_radii(made: Made, w: World) -> float:
-    """The reference's length (in its local radii) farther than two local radii from the skeleton;
-    on a neuron only along nodes inside the mesh or within one radius of it (the cloud shows them)."""
-    _, weight, r, far = _uncovered(made, w)
-    return float(np.sum(weight[far] / r[far]))
-
-
-def uncovered_area(made: Made, w: World) -> float:
-    """The cloud's surface around the uncovered reference (its points nearest to an uncovered sample,
-    x the median spacing squared), in squared median local radii of the cloud: how much of the shape
-    the missing part is, whatever the density."""
-    ref_pts, _, _, far = _uncovered(made, w)
-    ok = np.isfinite(w.local_radius)
-    cloud = w.cloud[ok]
-    if not far.any() or len(cloud) < 2:
-        return 0.0
-    owner = cKDTree(ref_pts).query(cloud)[1]
-    spacing = float(np.median(cKDTree(cloud).query(cloud, k=2)[0][:, 1]))
-    return float(np.count_nonzero(far[owner]) * spacing ** 2 / np.median(w.local_radius[ok]) ** 2)
 
 
 def thin_share(w: World, params: Params) -> float:
