@@ -53,8 +53,9 @@ class SupportCancelled(BaseException):
 
 class _Job:
     """One support computed in a daemon thread; :meth:`cancel` stops it at the thread's next Python
-    step (the engine's support functions take no cancel callback: their numpy calls each last well under
-    a second even on a million points, so the exception raised into the thread lands within one)."""
+    step (an exception raised into the thread, landing after the numpy call under way: a few
+    milliseconds, the direction map running in small chunks) or at :meth:`checkpoint`, which the
+    cloud's tree build polls while its C threads run without the interpreter. Nothing joins it."""
 
     def __init__(self, compute: Any, deliver: Any) -> None:
         self._compute, self._deliver = compute, deliver
@@ -65,6 +66,13 @@ class _Job:
 
     def start(self) -> None:
         self.thread.start()
+
+    def checkpoint(self, _fraction: float = 0.0) -> None:
+        """Raise :class:`SupportCancelled` once cancelled (the engine's checkpoint signature)."""
+        if self.cancelled:
+            with self._lock:  # cancel() has raised it into this thread too, or will not now
+                self._computing = False
+            raise SupportCancelled
 
     def cancel(self) -> None:
         with self._lock:
@@ -141,7 +149,9 @@ class SupportController(QtCore.QObject):
         self.panel.show_support(ElementSupport("none", info.get("element", ""), int(info["index"]), metric,
                                                reason=f"computing the {metric} support…"))
         token = self._token
-        self._job = _Job(lambda: element_support(ev, info, metric), lambda out: self.ready.emit(token, info, out))
+        job = _Job(None, lambda out: self.ready.emit(token, info, out))
+        job._compute = lambda: element_support(ev, info, metric, job.checkpoint)
+        self._job = job
         self._job.start()
         return None
 

@@ -81,6 +81,9 @@ class Params:
     spur_stub_share : a stub (its far end within spur_reach x r_J: inside the junction's inscribed
         ball, so inside the shape) shorter than this share of the curve's length is counted among the
         ``stubs``, not spurious: it changes no metric by more than that share.
+    spur_one_sided : on a cloud seen from one side (the mean direction from the curve to its cloud
+        points, across the axis, at least this long: docs/diagnostics.md "Spurious branches") a
+        terminal branch failing only the explanation measure is counted ``unseen``, not judged.
     spurs_warn_count : ``spurious_branches`` fires from this many spurious branches.
     cycles_voxels : voxels along the longest side of the cloud's box for the shape's interior ...
     cycles_voxel_spacing : ... but a voxel is at least this many median nearest-neighbour spacings
@@ -277,6 +280,7 @@ class Params:
     spur_slack: float = 0.25
     spur_resolved_spacings: float = 2.0
     spur_stub_share: float = 0.005
+    spur_one_sided: float = 0.18
     spurs_warn_count: int = 1
     cycles_voxels: int = 96
     cycles_voxel_spacing: float = 1.5
@@ -414,7 +418,7 @@ class Params:
                      "outside_reach", "outside_voxel_radii"):
             if not float(getattr(self, name)) > 0:
                 bad(name, "must be > 0")
-        for name in ("spur_unique", "outside_min_share", "outside_skeletal_share", "outside_one_sided",
+        for name in ("spur_unique", "spur_one_sided", "outside_min_share", "outside_skeletal_share", "outside_one_sided",
                      "cycles_support_share", "cycles_strict_share"):
             if not 0.0 <= float(getattr(self, name)) <= 1.0:
                 bad(name, "must be in [0, 1]")

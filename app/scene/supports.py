@@ -7,12 +7,17 @@ k neighbours and the two centroids (Eq. 10); smoothness of a skeletal point -> i
 neighbours' tangents and the angle setting the value (Eq. 13-14); of a curve vertex -> its two edges
 and their angle (Eq. 15). The engine's :mod:`skelcore.metrics.supports` computes
 them in normalized units; this module picks the rows and maps 3-D points back to the user's units.
+
+A support computed in a thread of the window (a direction map over a million points takes seconds) is
+given a ``checkpoint`` that raises once the pick is replaced or the window closes: the cloud's tree
+(built once per evaluation, with its GIL released) stops at it, and the direction map runs in chunks
+of ``DIRECTION_CHUNK`` points, so no numpy call holds the interpreter for long.
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from typing import Any
+from typing import Any, Callable
 
 import numpy as np
 
@@ -42,6 +47,24 @@ class ElementSupport:
 
 
 _CACHE: dict[int, Any] = {}
+_CLOUD: dict[int, Any] = {}
+
+DIRECTION_CHUNK = 8192
+"""Cloud points per step of a direction map: each numpy call of a step lasts a few milliseconds, so the
+window's thread never waits long for the interpreter while a support computes beside it."""
+
+
+def _cloud_n(ev: Any) -> np.ndarray:
+    """The cloud in normalized units, one array per evaluation: the engine keeps the tree and spacing of
+    the last array it prepared, so a second pick on the same result reuses them (seconds at 1M)."""
+    key = id(ev)
+    hit = _CLOUD.get(key)
+    if hit is not None and hit[0] is ev:
+        return hit[1]
+    cloud_n = np.ascontiguousarray(ev.normalization.apply(ev.cloud), dtype=float)
+    _CLOUD.clear()
+    _CLOUD[key] = (ev, cloud_n)
+    return cloud_n
 
 
 def _curve_samples_n(ev: Any) -> Any:
@@ -64,13 +87,14 @@ def _none(info: dict[str, Any], metric: str, reason: str) -> ElementSupport:
     return ElementSupport("none", info.get("element", ""), int(info.get("index", -1)), metric, reason=reason)
 
 
-def element_support(ev: Any, info: dict[str, Any] | None, metric: str) -> ElementSupport | None:
-    """The support of the picked element ``info`` (``Scene.element_info``) for ``metric``."""
+def element_support(ev: Any, info: dict[str, Any] | None, metric: str,
+                    checkpoint: Callable[[float], None] | None = None) -> ElementSupport | None:
+    """The support of the picked element ``info`` (``Scene.element_info``) for ``metric``;
+    ``checkpoint`` (called now and then, it may raise to stop) is for a computation in a thread."""
     if ev is None or info is None:
         return None
     layer, location, i = info["layer"], info["location"], int(info["index"])
-    norm = ev.normalization
-    cloud_n = norm.apply(ev.cloud)
+    cloud_n = _cloud_n(ev)
     if metric == "smoothness":
         return _smoothness(ev, info)
     if layer == "curve" and location == "vertices":
@@ -86,14 +110,15 @@ def element_support(ev: Any, info: dict[str, Any] | None, metric: str) -> Elemen
     else:
         return _none(info, metric, "pick a skeletal point or a curve sample")
     if metric == "boundedness":
-        return _boundedness(ev, info, cloud_n, q_user)
+        return _boundedness(ev, info, cloud_n, q_user, checkpoint)
     if layer == "curve":
         return _slab(ev, info, cloud_n, i)
     return _knn(ev, info, cloud_n, i)
 
 
-def _boundedness(ev: Any, info: dict[str, Any], cloud_n: np.ndarray, q_user: np.ndarray) -> ElementSupport:
-    from skelcore.metrics.boundedness import paper_triangles
+def _boundedness(ev: Any, info: dict[str, Any], cloud_n: np.ndarray, q_user: np.ndarray,
+                 checkpoint: Callable[[float], None] | None) -> ElementSupport:
+    from skelcore.metrics.boundedness import paper_triangles, rays_radius
     from skelcore.metrics.supports import direction_map
 
     p = ev.params
@@ -108,7 +133,10 @@ def _boundedness(ev: Any, info: dict[str, Any], cloud_n: np.ndarray, q_user: np.
         if out.detail is None:
             out.reason = "fewer than 3 distinct directions: no triangulation (beta = 0)"
     else:
-        out.detail = direction_map(cloud_n, q_n, params=p)
+        if checkpoint is not None:  # the tree and spacing, stoppable; direction_map then finds them kept
+            rays_radius(cloud_n, p.rays_radius_factor, checkpoint)
+            checkpoint(0.0)
+        out.detail = direction_map(cloud_n, q_n, params=p, chunk=DIRECTION_CHUNK)
     return out
 
 

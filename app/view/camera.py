@@ -16,7 +16,7 @@ import numpy as np
 from skelcore.errors import SkelInputError
 from skelcore.io.atomic import atomic_open
 
-__all__ = ["fit_camera", "orient_standard_view", "camera_state", "apply_camera_state", "save_camera", "load_camera",
+__all__ = ["fit_camera", "axes_viewport", "AXES_PIXELS", "orient_standard_view", "camera_state", "apply_camera_state", "save_camera", "load_camera",
            "check_camera", "FIT_X", "FIT_Y", "MAX_VIEW_SIZE"]
 
 WINDOW_CENTER_X = 0.12
@@ -24,6 +24,10 @@ WINDOW_CENTER_X = 0.12
 FIT_X = (-0.95, 0.72)
 """Where the data may lie across the view (viewport units): the colour bar starts at 0.74 (x = 0.87)."""
 FIT_Y = (-0.92, 0.92)
+AXES_PIXELS = 120
+"""The orientation axes' square in the view's lower-left corner, in pixels at scale 1: pyvista's
+default, a fifth of the view's width and height, drew the axes over the data at 1920 x 1080."""
+_AXES_MARGIN = 8  # pixels kept free around the axes' square (a point drawn beside it has a size)
 _FIT_POINTS = 20000  # points per layer projected to fit the view (plus each layer's extreme points)
 
 
@@ -43,9 +47,28 @@ def _fit_samples(point_sets: Iterable[np.ndarray]) -> np.ndarray:
     return np.concatenate(out) if out else np.zeros((0, 3))
 
 
+def axes_viewport(width: int, height: int, ratio: float = 1.0) -> tuple[float, float, float, float]:
+    """The orientation axes' viewport (render-window units, [0, 1]) for a view of ``width`` x ``height``
+    device pixels at ``ratio`` device pixels a pixel: an ``AXES_PIXELS`` square in the lower-left corner."""
+    side = AXES_PIXELS * ratio
+    return 0.0, 0.0, min(0.5, side / max(width, 1)), min(0.5, side / max(height, 1))
+
+
+def _keep_clear(plotter: Any) -> tuple[float, float] | None:
+    """The lower-left box (view units, [-1, 1]) the data must stay out of: the orientation axes' square
+    and a margin, when the axes are shown."""
+    widget = getattr(plotter.renderer, "axes_widget", None)
+    if widget is None or not widget.GetEnabled():
+        return None
+    w, h = plotter.renderer.GetSize()
+    _x0, _y0, x1, y1 = widget.GetViewport()
+    return -1.0 + 2.0 * (x1 + _AXES_MARGIN / max(w, 1)), -1.0 + 2.0 * (y1 + _AXES_MARGIN / max(h, 1))
+
+
 def fit_camera(plotter: Any, point_sets: Iterable[np.ndarray] = ()) -> None:
     """Frame the data left of the colour bar: the projection centre moves left, then the view zooms
-    so that every point in ``point_sets`` (all visible data when empty) lies inside FIT_X x FIT_Y."""
+    so that every point in ``point_sets`` (all visible data when empty) lies inside FIT_X x FIT_Y and
+    out of the orientation axes' corner (zooming out further only if the data reaches into it)."""
     # Through the renderer: Plotter.reset_camera and a first Plotter.camera access both render a
     # frame synchronously, and a frame of a 1M-point cloud costs 0.3-1 s in software GL.
     ren = plotter.renderer
@@ -65,6 +88,7 @@ def fit_camera(plotter: Any, point_sets: Iterable[np.ndarray] = ()) -> None:
     if not len(pts):
         camera.zoom(0.9)
         return
+    clear = _keep_clear(plotter)
     for _ in range(4):  # perspective: zooming scales projected offsets exactly; depth clipping may shift a bit
         x, y = _view_coordinates(ren, pts)
         if not len(x):
@@ -87,6 +111,12 @@ def fit_camera(plotter: Any, point_sets: Iterable[np.ndarray] = ()) -> None:
             (x.max() - cx) / (FIT_X[1] - cx), (cx - x.min()) / (cx - FIT_X[0]),
             (y.max() - cy) / (FIT_Y[1] - cy), (cy - y.min()) / (cy - FIT_Y[0]), 1e-6,
         )
+        if clear is not None and cx > clear[0] and cy > clear[1]:
+            # a point in the corner leaves it once zooming brings it right of or above the box
+            inside = (x < clear[0]) & (y < clear[1])
+            if inside.any():
+                need = max(need, float(np.minimum((cx - x[inside]) / (cx - clear[0]),
+                                                  (cy - y[inside]) / (cy - clear[1])).max()))
         if 0.98 <= need <= 1.0:
             break
         need *= 1.003  # land just inside the free area

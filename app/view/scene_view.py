@@ -19,7 +19,7 @@ from PySide6 import QtCore
 
 from ..scene import CURVE_LOCATION, Scene, SceneEvent
 from .actors import curve_polylines, display_coordinates, draw_in_front, scene_diagonal
-from .camera import apply_camera_state, camera_state, fit_camera, orient_standard_view
+from .camera import apply_camera_state, axes_viewport, camera_state, fit_camera, orient_standard_view
 from .colorbar import ColourBar
 from .culling import CulledLayer, RestingCull
 from .eye_dome import EyeDome
@@ -141,6 +141,7 @@ class SceneView:
         frame of newly loaded big layers shows their level-of-detail twins (80k points each: a tenth
         of a second in software GL where full detail takes seconds) and asks for the
         full-detail frame right after it."""
+        self._size_axes()
         if self._fit_pending:
             self._fit_pending = False
             fit_camera(self.plotter, self._visible_points())
@@ -462,8 +463,18 @@ class SceneView:
                     fixed_size_labels(self.plotter.add_axes(interactive=False, color="black", line_width=2))
                 else:
                     self.plotter.show_axes()
+                self._size_axes()
             else:
                 self.plotter.hide_axes()
+
+    def _size_axes(self) -> None:
+        """The orientation axes in a fixed square of the lower-left corner, whatever the view's size."""
+        widget = self.plotter.renderer.axes_widget
+        if widget is not None:
+            w, h = self.plotter.renderer.GetSize()
+            port = axes_viewport(w, h, self.plotter.devicePixelRatioF())
+            if tuple(widget.GetViewport()) != port:
+                widget.SetViewport(*port)
 
     def _make_hint(self) -> Any:
         """The empty window's hint, centred; hidden once anything is loaded."""

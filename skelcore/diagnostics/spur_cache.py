@@ -151,9 +151,9 @@ def _touched(prev: SpurSearch, pts: np.ndarray, labels: np.ndarray, reach: np.nd
     """The queries asked before whose answer the edit may change. A position "explains q" when its
     ball holds q and it has a label other than q's own branch (a0 then, b0 now); a query may change
     only inside the ball of a position removed that had another label than a0, added that has another
-    than b0, or kept whose "another label" differs between the two (split or merged branches). Where
-    a0 = b0 those are among the positions removed, added or relabelled, one search for all such
-    queries; the others per (a0, b0) pair, all asked again beyond ``_PAIRS_MAX`` pairs."""
+    than b0, or kept whose "another label" differs between the two (split or merged branches): one
+    search per (a0, b0) pair. Beyond ``_PAIRS_MAX`` pairs, the queries where a0 = b0 are searched in
+    every position removed, added or relabelled at once and the others are all asked again."""
     o_pos, o_lo, o_hi, o_reach = _positions(prev.pts, prev.labels, prev.reach)
     n_pos, n_lo, n_hi, n_reach = _positions(pts, labels, reach)
     match = _match(o_pos, n_pos)
@@ -167,22 +167,24 @@ def _touched(prev: SpurSearch, pts: np.ndarray, labels: np.ndarray, reach: np.nd
     a0, b0 = prev.own[at[check]], own[check]
     a_lo, a_hi = o_lo[match[common]], o_hi[match[common]]  # kept positions, then and now
     b_lo, b_hi = n_lo[common], n_hi[common]
-    same = a0 == b0
-    if same.any():
+    base = int(max(a0.max(), b0.max(), 0)) + 2  # labels are >= -1: one integer per (a0, b0) pair
+    pairs, which = _pairs((a0 + 1) * base + (b0 + 1), base)
+    # per pair when few (a removed or moved position of q's own branch cannot have explained q);
+    # else one search of every position removed, added or relabelled for the queries where a0 = b0
+    if len(pairs) > _PAIRS_MAX:
+        same = a0 == b0
         relabelled = (a_lo != b_lo) | (a_hi != b_hi)
         balls = np.vstack([o_pos[gone], n_pos[~common], n_pos[common][relabelled]])
         radii = np.concatenate([o_reach[gone], n_reach[~common], n_reach[common][relabelled]])
-        if len(balls):
+        if len(balls) and same.any():
             out[check[same]] = _inside_any(balls, radii, queries[check[same]])
-    check, a0, b0 = check[~same], a0[~same], b0[~same]
-    if not len(check):
-        return out
-    base = int(max(a0.max(), b0.max(), 0)) + 2  # labels are >= -1: one integer per (a0, b0) pair
-    pairs, which = np.unique((a0 + 1) * base + (b0 + 1), return_inverse=True)
-    if len(pairs) > _PAIRS_MAX:
-        out[check] = True
-        return out
-    which = np.ravel(which)
+        check, a0, b0 = check[~same], a0[~same], b0[~same]
+        if not len(check):
+            return out
+        pairs, which = _pairs((a0 + 1) * base + (b0 + 1), base)
+        if len(pairs) > _PAIRS_MAX:
+            out[check] = True
+            return out
     for j, key in enumerate(pairs.tolist()):
         x, y = key // base - 1, key % base - 1
         removed = gone & ~((o_lo == x) & (o_hi == x))
@@ -194,6 +196,18 @@ def _touched(prev: SpurSearch, pts: np.ndarray, labels: np.ndarray, reach: np.nd
             sel = check[which == j]
             out[sel] = _inside_any(balls, radii, queries[sel])
     return out
+
+
+def _pairs(key: np.ndarray, base: int) -> tuple[np.ndarray, np.ndarray]:
+    """``np.unique(key, return_inverse=True)`` of non-negative integers below ``base`` squared, by
+    counting when that range is small (the queries' (then, now) own-branch pairs; no sort of 100k)."""
+    if base * base > 4 * len(key) + 1024:
+        pairs, which = np.unique(key, return_inverse=True)
+        return pairs, np.ravel(which)
+    present = np.bincount(key, minlength=base * base) > 0
+    pairs = np.flatnonzero(present)
+    rank = np.cumsum(present) - 1
+    return pairs, rank[key]
 
 
 def _distinct(pts: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -224,9 +238,14 @@ def _nearest_within(centres: np.ndarray, queries: np.ndarray, bound: np.ndarray)
     """Each query's distance to the nearest centre, inf where none is within ``bound`` (per query; a
     negative bound skips the query) up to a small margin."""
     out = np.full(len(queries), np.inf)
+    if not len(queries) or not bound.max() >= 0:
+        return out
     lo, hi = centres.min(axis=0), centres.max(axis=0)
-    b = (bound * (1 + _MARGIN))[:, None]
-    near = np.flatnonzero((bound >= 0) & np.all((queries >= lo - b) & (queries <= hi + b), axis=1))
+    top = float(bound.max()) * (1 + _MARGIN)  # first within the largest bound, then each its own
+    cand = _in_box(queries, lo - top, hi + top)
+    b = (bound[cand] * (1 + _MARGIN))[:, None]
+    q = queries[cand]
+    near = cand[(bound[cand] >= 0) & np.all((q >= lo - b) & (q <= hi + b), axis=1)]
     if len(near):
         out[near] = cKDTree(centres).query(queries[near], k=1)[0]
     return out
@@ -238,6 +257,16 @@ def _positions(pts: np.ndarray, labels: np.ndarray, reach: np.ndarray) -> tuple[
     pos, first, inverse = _distinct(pts)
     lo, hi = _label_range(labels, inverse, len(pos))
     return pos, lo, hi, np.asarray(reach, dtype=float)[first]
+
+
+def _in_box(queries: np.ndarray, lo: np.ndarray, hi: np.ndarray) -> np.ndarray:
+    """The rows of ``queries`` with lo <= q <= hi in every coordinate (``np.flatnonzero(np.all(...))``),
+    one coordinate at a time on the rows left (a small box of 100k queries: about 7 x faster)."""
+    rows = np.arange(len(queries))
+    for k in range(queries.shape[1]):
+        col = queries[rows, k] if k else queries[:, 0]
+        rows = rows[(col >= lo[k]) & (col <= hi[k])]
+    return rows
 
 
 def _void(pts: np.ndarray) -> np.ndarray:
@@ -258,7 +287,7 @@ def _inside_any(centres: np.ndarray, radii: np.ndarray, queries: np.ndarray) -> 
     centres, radii = centres[ok], radii[ok]
     big = float(radii.max())
     lo, hi = centres.min(axis=0) - big * (1 + _MARGIN), centres.max(axis=0) + big * (1 + _MARGIN)
-    near = np.flatnonzero(np.all((queries >= lo) & (queries <= hi), axis=1))
+    near = _in_box(queries, lo, hi)
     if not len(near):
         return out
     lifted = np.column_stack([centres, np.sqrt(np.maximum(big * big - radii * radii, 0.0))])

@@ -11,11 +11,11 @@ classical significance measures fails:
   ``spur_min_points`` of its territory, or less than ``spur_unique`` of it, are explained by nothing
   else.
 
-No spacing-sized allowance (coverage's tau) grows the balls: r(x) is measured to the samples, so a
-part's own points need none. Where r_J is under ``spur_resolved_spacings`` cloud spacings the cloud
-cannot tell a twig from a spur: the branch is ``unresolved``, not judged; a stub (short) under
-``spur_stub_share`` of the curve's length lies inside the shape and is one of the ``stubs``
-(docs/diagnostics.md "Spurious branches"). Size: length in r_J, share of the length.
+No tau grows the balls (r(x) is measured to the samples). Not judged: ``unresolved`` where r_J is
+under ``spur_resolved_spacings`` cloud spacings; ``stubs`` (short) under ``spur_stub_share`` of the
+curve's length; ``unseen`` where only the explanation measure fails on a cloud seen from one side
+(:mod:`.spur_sides`, ``spur_one_sided``). docs/diagnostics.md "Spurious branches". Size: length in
+r_J, share of the length.
 """
 
 from __future__ import annotations
@@ -33,6 +33,7 @@ from .trust_warning import TrustWarning, finite_range
 from .branches import Branches, decompose_branches, densify
 from .interior import cloud_subsample
 from .spur_cache import SpurMemo
+from .spur_sides import one_sidedness
 
 __all__ = ["SpurDefects", "find_spurious_branches", "curve_points", "junction_spacing"]
 
@@ -50,6 +51,8 @@ class SpurDefects:
     was subsampled (``diag_max_points``), else None. spacing : (B,) the cloud's spacing at the
     junction; unresolved, stub : (B,) bool, terminal branches not judged (r_J under
     ``spur_resolved_spacings`` spacings) and short stubs under ``spur_stub_share`` (neither spurious).
+    one_sided : how far the cloud is seen from one side (:mod:`.spur_sides`); unseen : (B,) bool,
+    terminal branches failing the explanation measure alone on a one-sided cloud (not judged).
     """
 
     branches: Branches
@@ -68,6 +71,8 @@ class SpurDefects:
     spacing: np.ndarray | None = None
     unresolved: np.ndarray | None = None
     stub: np.ndarray | None = None
+    one_sided: float = 0.0
+    unseen: np.ndarray | None = None
 
     def _count(self, flags: np.ndarray | None) -> int:
         return int(np.count_nonzero(flags)) if flags is not None else 0
@@ -90,6 +95,8 @@ class SpurDefects:
         long = f", {span} local radii long" if span is not None else ""
         unresolved = self._count(self.unresolved)
         aside = f"; {unresolved} more in parts the cloud does not resolve, not judged" if unresolved else ""
+        unseen = self._count(self.unseen)
+        aside += f"; {unseen} more with no point of their own on a cloud seen from one side, not judged" if unseen else ""
         return [TrustWarning(
             "spurious_branches",
             f"{n} of the curve's {len(self.terminal)} terminal branches are spurious (reach no farther than "
@@ -107,12 +114,15 @@ class SpurDefects:
             "length_share": self.length_share,
             "unresolved": self._count(self.unresolved),
             "stubs": self._count(self.stub),
+            "unseen": self._count(self.unseen),
+            "one_sided": float(self.one_sided),
             "branches": [
                 {"id": int(b), "reach": num(self.reach[b]), "length_radii": num(self.length_radii[b]),
                  "territory": int(self.territory[b]), "unique": int(self.unique[b]),
                  "spurious": bool(self.branch_spurious[b]),
                  "unresolved": bool(self.unresolved[b]) if self.unresolved is not None else False,
-                 "stub": bool(self.stub[b]) if self.stub is not None else False}
+                 "stub": bool(self.stub[b]) if self.stub is not None else False,
+                 "unseen": bool(self.unseen[b]) if self.unseen is not None else False}
                 for b in self.terminal
             ],
             "subsampled": self.subsampled,
@@ -247,6 +257,7 @@ def find_spurious_branches(
     territory = np.zeros(nb, np.int64)
     unique = np.zeros(nb, np.int64)
     subsampled = int(params.diag_max_points) if len(cloud) > params.diag_max_points else None
+    sided = 0.0
     if len(terminal) and len(cloud):
         r_typ = float(np.nanmedian(branches.radius_median)) if np.any(np.isfinite(branches.radius_median)) else 0.0
         total = float(branches.length.sum())
@@ -255,6 +266,7 @@ def find_spurious_branches(
         pts, pb = curve_points(curve, branches, step)
         memo = search_memo
         r_x = cloud_tree.query(pts)[0] if memo is None else memo.radii(pts, cloud_tree)
+        sided = one_sidedness(cloud_tree, pts, r_x, r_typ if r_typ > 0 else step, seed)
         checkpoint(0.2)
         use = (cloud_subsample(cloud, params.diag_max_points, seed) if memo is None else
                memo.subsample(cloud, (params.diag_max_points, seed),
@@ -294,8 +306,11 @@ def find_spurious_branches(
     stub = np.zeros(nb, bool)
     stub[terminal] = (short & ~unresolved & (branches.length < params.spur_stub_share * total_length))[terminal]
     lonely = (unique < params.spur_min_points) | (unique < params.spur_unique * np.maximum(territory, 1))
+    unseen = np.zeros(nb, bool)
+    if sided >= params.spur_one_sided:  # a twig the sensor did not see has no point: not judged
+        unseen[terminal] = (lonely & ~short & ~unresolved)[terminal]
     branch_spurious = np.zeros(nb, bool)
-    branch_spurious[terminal] = ((short | lonely) & ~unresolved & ~stub)[terminal]
+    branch_spurious[terminal] = ((short | lonely) & ~unresolved & ~stub & ~unseen)[terminal]
     with np.errstate(divide="ignore", invalid="ignore"):
         length_radii = np.where(r_j > 0, branches.length / r_j, np.nan)
     vertex_flag = np.zeros(curve.n_vertices, bool)
@@ -308,7 +323,7 @@ def find_spurious_branches(
         branches=branches, terminal=terminal, reach=reach, junction_radius=r_j, territory=territory, unique=unique,
         branch_spurious=branch_spurious, vertex_flag=vertex_flag, sample_flag=sample_flag, length_radii=length_radii,
         total_length=total_length, subsampled=subsampled, params=params, spacing=spacing, unresolved=unresolved,
-        stub=stub,
+        stub=stub, one_sided=sided, unseen=unseen,
     )  # fmt: skip
 
 

@@ -33,6 +33,7 @@ from ..stages.context import EvalContext
 from ..stages.evaluation_source import CURVE_STAGES, EvaluationSource
 from ..stages.orchestrate import evaluate, finish
 from .change import Change
+from .coverage_update import curve_coverage, link_contexts, parent_of
 
 __all__ = ["update_evaluation", "complete_update", "left_out", "CURVE_STAGES", "DIAGNOSTIC_STAGES"]
 
@@ -64,6 +65,7 @@ def update_evaluation(ev: Evaluation, edited: Change | CurveSkeleton | Any, *, d
         return new
     check_magnitude("curve skeleton", curve.vertices)
     ctx = _edited_context(old, curve)
+    link_contexts(src.cache, ctx, old)
     run_graph(_tasks(old, ctx, src.cache, diagnostics), args.get("workers"))
     out = finish(ctx, args.get("inputs"), no_checkpoint)
     out.timings = {"update": time.perf_counter() - t0}
@@ -103,10 +105,16 @@ def complete_update(ev: Evaluation, cancel: Callable[[], bool] | None = None) ->
             raise Cancelled("the edited curve's defects were cancelled")
 
     stages = start_order([s for s in CATALOGUE if s.name in names and s.applies(ctx)], ctx)
+    parent = parent_of(src.cache, old)
+    if parent is not None:  # the completed update is edited from the same curve
+        link_contexts(src.cache, ctx, parent)
 
     def task(stage: Stage) -> GraphTask:
         def run() -> object:
             checkpoint()
+            if stage.name == "curve coverage":  # by difference from the curve edited (coverage_update)
+                ctx.results[stage.name] = curve_coverage(ctx, parent, src.cache)
+                return ctx.results[stage.name]
             ctx.results[stage.name] = stage.fn(ctx, checkpoint)
             return ctx.results[stage.name]
 
@@ -132,9 +140,13 @@ def compute_left_out(ev: Evaluation, names: tuple[str, ...]) -> dict[str, Any] |
     if ctx is None or not last.applies(ctx) or ctx.not_computed.get(last.name) != LEFT_OUT:
         return None
     done = {}
+    parent = parent_of(ev.source.cache, ctx)
     for stage in (by_name[n] for n in names):
         if stage.applies(ctx):
-            done[stage.name] = ctx.results[stage.name] = stage.fn(ctx, no_checkpoint)
+            if stage.name == "curve coverage" and parent is not None:  # by difference (coverage_update)
+                done[stage.name] = ctx.results[stage.name] = curve_coverage(ctx, parent, ev.source.cache)
+            else:
+                done[stage.name] = ctx.results[stage.name] = stage.fn(ctx, no_checkpoint)
             ctx.not_computed.pop(stage.name, None)
     return done
 
@@ -145,7 +157,8 @@ def _tasks(old: EvalContext, ctx: EvalContext, cache: dict[str, Any], diagnostic
     the samples' boundedness and centeredness from the old values where they can be kept, the others
     computed again; ``diagnostics=False`` names the left-out ones in ``not_computed``."""
     incremental = {"curve boundedness": lambda: _sample_boundedness(old, ctx, cache),
-                   "curve centeredness": lambda: _sample_centeredness(old, ctx, cache)}
+                   "curve centeredness": lambda: _sample_centeredness(old, ctx, cache),
+                   "curve coverage": lambda: curve_coverage(ctx, old, cache)}
     stages = []
     for stage in start_order([s for s in CATALOGUE if s.name in CURVE_STAGES and s.applies(ctx)], ctx):
         if not diagnostics and stage.name in DIAGNOSTIC_STAGES:

@@ -81,13 +81,16 @@ class BallTree:
                  len(self.nodes), checkpoint, workers)
 
     def balls(self, queries: np.ndarray, gap: bool = True, cover: bool = True, floor: float = -np.inf,
-              checkpoint: Checkpoint = no_checkpoint, workers: int | None = None) -> tuple:
+              checkpoint: Checkpoint = no_checkpoint, workers: int | None = None,
+              top: float | None = None) -> tuple:
         """(min_x |q - x| - r(x), exact where above ``floor``, else some value <= floor; is some
-        |q - x|^2 - R(x)^2 <= COVER_EPS R_max^2) per query row, each None unless asked for."""
+        |q - x|^2 - R(x)^2 <= COVER_EPS R_max^2) per query row, each None unless asked for.  ``top``:
+        the R_max of that allowance (default these balls'; a subset of balls asked as their whole set)."""
         q = np.ascontiguousarray(queries, dtype=np.float64)
         out_g = np.empty(len(q) if gap else 0)
         out_c = np.zeros(len(q) if cover else 0, np.uint8)
-        top = float(self.big_r.max()) if len(self.big_r) else 0.0
+        if top is None:
+            top = float(self.big_r.max()) if len(self.big_r) else 0.0
         eps = COVER_EPS * max(top * top, 1e-300)
 
         def run(i0: int, i1: int) -> None:

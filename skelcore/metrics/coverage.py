@@ -166,7 +166,8 @@ def coverage(
 
 
 def noise_shortfall(cloud: np.ndarray, elements: np.ndarray, r: np.ndarray, quantile: float,
-                    checkpoint: Checkpoint = no_checkpoint) -> np.ndarray:
+                    checkpoint: Checkpoint = no_checkpoint,
+                    nearest: tuple[np.ndarray, np.ndarray] | None = None) -> np.ndarray:
     """How much noise shrinks each element's radius r(x) (its nearest cloud point's distance), >= 0.
 
     The nearest of many noisy points lies well inside the true surface: on a tube with Gaussian noise
@@ -176,14 +177,16 @@ def noise_shortfall(cloud: np.ndarray, elements: np.ndarray, r: np.ndarray, quan
     at most ``NOISE_SAMPLE``) the ``quantile`` of their excess |p - x| - r(x), over the cell's median
     r(x); the median over the cells whose excess spreads like a shell's (``NOISE_SPREAD``; a missing
     part's end cell spreads over its length), times r(x), when above ``NOISE_DEAD`` (clean clouds keep
-    r(x) exactly).  A low quantile: a flat part's territory starts at its narrow side (excess about 0)."""
+    r(x) exactly).  A low quantile: a flat part's territory starts at its narrow side (excess about 0).
+    ``nearest``: each sampled point's (distance, row) of its nearest element, as computed here, when
+    known (an edited curve's, skelcore/edit/coverage_update.py)."""
     n_el = len(elements)
     out = np.zeros(n_el)
     if not quantile > 0 or n_el == 0 or len(cloud) < 2 * NOISE_MIN_POINTS:
         return out
     pts, spacing = _noise_sample(cloud)
     checkpoint(0.4)
-    dist, owner = _nearest_element(elements, pts)
+    dist, owner = _nearest_element(elements, pts) if nearest is None else nearest
     excess = np.maximum(dist - r[owner], 0.0)
     cells = np.floor((elements - elements.min(axis=0)) / max(NOISE_CELL * spacing, 1e-12)).astype(np.int64)
     cell = _row_labels(cells)

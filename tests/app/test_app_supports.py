@@ -246,14 +246,14 @@ def _slow_first_support(monkeypatch, slow_index: int) -> dict:
     real = controller.element_support
     state = {"started": False, "finished": False}
 
-    def support(ev, info, metric):
+    def support(ev, info, metric, checkpoint=None):
         if info is not None and info["index"] == slow_index:
             state["started"] = True
             end = time.monotonic() + 30.0
             while time.monotonic() < end:
                 sum(i * i for i in range(2000))  # busy, holding the interpreter between steps
             state["finished"] = True
-        return real(ev, info, metric)
+        return real(ev, info, metric, checkpoint)
 
     monkeypatch.setattr(controller, "element_support", support)
     return state

@@ -245,3 +245,37 @@ def test_the_picture_dialog_has_file_scale_background_and_colour_bar(window, fil
     view = w.view.widget
     assert img.shape == (2 * view.height(), 2 * view.width(), 4) and img[..., 3].min() == 0
     assert "fig.png" in w.statusBar().currentMessage()
+
+
+def test_the_orientation_axes_keep_a_small_corner_the_data_stays_out_of(window, tmp_path):
+    """The axes sit in an AXES_PIXELS square of the lower-left corner (pyvista's fifth of the view drew
+    them over an arm of the Y at 1920 x 1080), and a fit keeps every point out of that square: a rod
+    from the lower left to the upper right, seen from above, ends in the corner unless the fit zooms
+    out for it."""
+    from skelcore.io import write_points_ply
+    from skelscope.view.camera import AXES_PIXELS
+    from skelscope.view.picking import pick_layout, project_to_display
+
+    w = window
+    w.view.image()
+    ren = w.view.plotter.renderer
+    width, height = ren.GetSize()
+    rng = np.random.default_rng(0)  # along the diagonal of the area a fit fills (FIT_X x FIT_Y)
+    rod = rng.uniform(-1.0, 1.0, size=(3000, 1)) * [0.835 * width, 0.92 * height, 0.0] / height
+    rod += rng.normal(scale=0.002, size=rod.shape)
+    write_points_ply(tmp_path / "rod.ply", rod)
+    w.session.load_as("cloud", str(tmp_path / "rod.ply"))
+    assert w.scene.style["axes"]
+    w.view.standard_view("xy")
+    w.view.image()
+    side = AXES_PIXELS * w.view.plotter.devicePixelRatioF()
+    x0, y0, x1, y1 = ren.axes_widget.GetViewport()
+    assert (x0, y0) == (0.0, 0.0) and x1 * width == pytest.approx(side) and y1 * height == pytest.approx(side)
+    x, y, _ = project_to_display(ren, pick_layout(rod))
+    assert not np.any((x < side) & (y < side))  # none under the axes ...
+    assert min(x.min(), y.min()) < 1.5 * side  # ... and the rod's end just beside them
+    w.display.style["axes"].setChecked(False)  # no axes: the fit fills the corner again
+    w.view.standard_view("xy")
+    w.view.image()
+    x, y, _ = project_to_display(ren, pick_layout(rod))
+    assert np.any((x < side) & (y < side))

@@ -375,13 +375,29 @@ def test_curve_grid_lookup_matches_reference_on_real_scan(scans):
     np.testing.assert_allclose(got, want, atol=1e-9)
 
 
-def test_the_neighbour_mean_is_numpys_mean_bit_for_bit(rng):
-    from skelcore.metrics.centeredness import _neighbour_mean
+def test_the_neighbour_sums_are_numpys_bit_for_bit(rng):
+    """The compiled m_s, m_o and M of skeletal centeredness (docs/performance.md 6.4) are the bits of the
+    array code they replace: sums of gathered rows in order (m_s from its first row, m_o by numpy's
+    reduce), einsum's squared lengths and numpy's pairwise mean, for
+    k below, at and above numpy's blocks of 8 and 128, at scales 1e-3 to 1e3 and with -0.0 and repeats."""
+    from skelcore.metrics.centeredness import _neighbour_sums
 
-    values = rng.normal(size=(500, 3)) * 1e3 + 7.0
-    for k in (1, 2, 10, 41):
-        slot = rng.integers(0, 500, size=(300, k))
-        assert np.array_equal(_neighbour_mean(values, slot), values[slot].mean(axis=1))
+    for k in (1, 2, 7, 8, 9, 10, 30, 41, 129, 300):
+        scale = 10.0 ** rng.integers(-3, 4, size=(600, 1))
+        values = np.round(rng.normal(size=(600, 3)) * scale, 2)
+        values[::7] = -0.0
+        cloud = values + rng.normal(size=values.shape) * scale
+        slot = rng.integers(0, 600, size=(300, k))
+        m_s, m_o, spread = _neighbour_sums(values, cloud, slot)
+        total = values[slot[:, 0]].copy()  # the rows summed in order from the first, then divided
+        for j in range(1, k):
+            total += values[slot[:, j]]
+        d = cloud[slot] - (total / k)[:, None, :]
+        assert m_s.tobytes() == (total / k).tobytes()
+        assert m_o.tobytes() == (np.add.reduce(cloud[slot], axis=1) / k).tobytes()
+        assert spread.tobytes() == np.sqrt(np.einsum("ijk,ijk->ij", d, d)).mean(axis=1).tobytes()
+    with pytest.raises(ValueError, match="neighbour_sums"):
+        _neighbour_sums(values, cloud, np.full((3, 2), 600))
 
 
 @pytest.mark.parametrize("rounds, first", [(1, 0.5), (3, 0.1), (1, 4.0)])

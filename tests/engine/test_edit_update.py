@@ -54,6 +54,9 @@ def _same(updated, fresh) -> None:
                  "vertex_degree", "vertex_smoothness"):
         np.testing.assert_allclose(getattr(a, name), getattr(b, name), rtol=0, atol=TOL, err_msg=name)
     assert np.array_equal(a.curve.edges, b.curve.edges) and np.array_equal(a.curve.vertices, b.curve.vertices)
+    if fresh.coverage_curve is not None:  # kept by difference (edit/coverage_update.py): the same bits
+        np.testing.assert_array_equal(updated.coverage_curve.gap, fresh.coverage_curve.gap)
+        np.testing.assert_array_equal(updated.coverage_curve.covered, fresh.coverage_curve.covered)
     if fresh.skeletal is not None:
         for name in ("boundedness", "centeredness_raw", "smoothness"):
             np.testing.assert_allclose(getattr(updated.skeletal, name), getattr(fresh.skeletal, name), rtol=0,

@@ -6,9 +6,11 @@ Injected kinds decide the skeleton codes (spurs: ``spurious_branches``, a chord:
 a broken cycle: ``missing_cycles``, collapse 0.9: ``collapse``, another frame: ``frame``); geometry
 decides ``outside`` (how far the skeleton leaves the shape, in the nearest reference radius) and
 ``incomplete`` (the reference's length farther than two radii from the skeleton); the scan decides
-the cloud codes. On a neuron, about half the traced nodes lie outside the decimated mesh: a flag on a
-branch mostly outside it is the mesh's decimation, neither a hit nor a false alarm; and a defect
-under the size the cloud resolves (``outside_seen``, ``uncovered_area``) is left out, not a miss.
+the cloud codes. On a neuron, about half the traced nodes lie outside the decimated mesh the cloud is
+drawn from: an ``outside`` flag on a branch mostly outside it is neither a hit nor a false alarm, and
+``spurious_branches`` is decided twig by twig (:func:`twig_kinds`: a twig wholly beyond the mesh is
+spurious relative to the cloud, one within a radius of it is not); a defect under the size the cloud
+resolves (``outside_seen``, ``uncovered_area``) is left out, not a miss.
 """
 
 from __future__ import annotations
@@ -25,7 +27,7 @@ from .skeletons import Made, World
 from .uncovered import MISS_AREA, _radius_at, _samples, uncovered_area, uncovered_radii
 
 __all__ = ["OUT_YES", "OUT_NO", "MISS_YES", "MISS_NO", "MISS_AREA", "origin", "outside_depth", "outside_seen",
-           "uncovered_radii", "uncovered_area", "thin_share", "row_truth"]
+           "uncovered_radii", "uncovered_area", "thin_share", "row_truth", "TWIG_OUT", "twig_kinds"]
 
 #: ``outside`` is true from this depth out of the shape (local radii; the shortcut generator's promise)
 OUT_YES = 0.5
@@ -34,6 +36,10 @@ OUT_NO = 0.1
 #: ``incomplete`` is true when more than this length of the reference (local radii) lies farther than
 #: two radii from the skeleton, false under MISS_NO (docs/diagnostics.md "Missing parts", Calibration)
 MISS_YES, MISS_NO = 2.0, 1.0
+#: a neuron's traced twig (a terminal branch's own nodes) is shown by the cloud when every node lies inside
+#: the mesh or at most this many traced radii out of it, beyond the cloud when every node lies farther
+#: (docs/benchmark.md "The real suite", docs/diagnostics.md "Precision and recall per warning")
+TWIG_OUT = 1.0
 #: kinds that move the whole skeleton: every branch and cycle verdict on them is left out
 GLOBAL_KINDS = ("collapse", "frame", "nodes_only")
 
@@ -100,6 +106,37 @@ def _decimation_only(flag: np.ndarray, branch: np.ndarray | None, orig: np.ndarr
     return True
 
 
+def twig_kinds(made: Made, orig: np.ndarray, w: World, branch: np.ndarray) -> dict[int, str]:
+    """Per branch id of ``branch`` (the evaluation's branch per vertex, -1 at junctions), "shown",
+    "beyond" or "partly" by the traced nodes on it (``TWIG_OUT``); a branch with no traced node (all
+    injected) is "shown": nothing of the traced skeleton lies beyond the cloud there."""
+    out_r = np.asarray(w.facts.outside_radii, float)
+    kinds: dict[int, str] = {}
+    for b in np.unique(branch[branch >= 0]):
+        known = orig[(branch == b) & (orig >= 0)]
+        far = out_r[known] > TWIG_OUT
+        kinds[int(b)] = "beyond" if len(known) and far.all() else "partly" if far.any() else "shown"
+    return kinds
+
+
+def _beyond_twigs(made: Made, orig: np.ndarray, w: World) -> int:
+    """The terminal branches of the traced skeleton in ``made`` whose every own node lies more than
+    ``TWIG_OUT`` traced radii out of the mesh."""
+    from ...curve import CurveSkeleton
+    from ...diagnostics.branches import decompose_branches
+
+    curve = CurveSkeleton.from_raw(made.vertices, made.edges)
+    br = decompose_branches(curve)
+    deg = curve.degrees()
+    out_r = np.asarray(w.facts.outside_radii, float)
+    n = 0
+    for b in br.terminal():
+        own = [v for v in br.paths[b] if deg[v] <= 2]
+        known = orig[np.asarray(own, np.int64)]
+        n += int(len(own) > 0 and (known >= 0).all() and (out_r[known] > TWIG_OUT).all())
+    return n
+
+
 def _spurs_located(made: Made, orig: np.ndarray, flag: np.ndarray | None) -> bool | None:
     """Every injected spur (a component of the injected vertices) has a flagged vertex."""
     if flag is None:
@@ -158,13 +195,25 @@ def row_truth(made: Made, w: World, condition: str, fired: set[str], arrays: dic
     t["trivial_smoothness"] = int(not (deg == 2).any())
     t["no_correspondence"] = int(made.skeletal is not None)
     located = None
-    for code, bit in (("spurious_branches", DEFECT_BITS["spurious_branches"]), ("outside", DEFECT_BITS["outside"])):
-        if t[code] == 0 and code in fired and vflags is not None and \
-                _decimation_only((vflags & bit) > 0, branch, orig, w):
-            t[code] = None  # the mesh lost the twig: the cloud does not show it
+    if t["outside"] == 0 and "outside" in fired and vflags is not None and \
+            _decimation_only((vflags & DEFECT_BITS["outside"]) > 0, branch, orig, w):
+        t["outside"] = None  # the mesh lost the twig: the cloud does not show it
+    twigs: dict[str, Any] = dict.fromkeys(("twigs_beyond", "flagged_shown", "flagged_beyond", "flagged_partly"))
+    if w.facts is not None and t["spurious_branches"] == 0:
+        # the traced skeleton against the cloud: its twigs beyond the mesh are spurious there
+        twigs["twigs_beyond"] = beyond = _beyond_twigs(made, orig, w)
+        t["spurious_branches"] = int(beyond > 0)
+        if "spurious_branches" in fired:
+            t["spurious_branches"] = None
+            if vflags is not None and branch is not None:
+                flag = (vflags & DEFECT_BITS["spurious_branches"]) > 0
+                kinds = twig_kinds(made, orig, w, np.where(flag, branch, -1))
+                for k in ("shown", "beyond", "partly"):
+                    twigs[f"flagged_{k}"] = sum(v == k for v in kinds.values())
+                t["spurious_branches"] = 0 if twigs["flagged_shown"] else 1 if twigs["flagged_beyond"] else None
     if k == "spurs" and "spurious_branches" in fired:
         located = _spurs_located(made, orig, None if vflags is None else (vflags & DEFECT_BITS["spurious_branches"]) > 0)
     out = {f"truth_{c}": v for c, v in t.items()}
     out.update(outside_depth=depth, outside_seen=seen, uncovered_radii=missing, uncovered_area=area, thin_share=thin,
-               spurs_located=located)
+               spurs_located=located, **twigs)
     return out
