@@ -12,7 +12,7 @@ from ...errors import SkelInputError
 __all__ = ["CODES", "CONDITIONS", "KINDS", "SUITES", "Task", "calibration_tasks", "TASK_VERSION"]
 
 #: bumped whenever a change alters a task's rows for the same spec (stored tasks are then redone)
-TASK_VERSION = 3
+TASK_VERSION = 4
 
 #: every warning code the evaluation emits, in the tables' order
 CODES = ("spurious_branches", "spurious_cycles", "missing_cycles", "outside", "incomplete", "collapse", "frame",

@@ -14,6 +14,7 @@ import numpy as np
 
 from ..skeleton_defects import add_chord, add_shortcuts, add_spurs, break_cycle, collapse_points, drop_branches, \
     truncate
+from .uncovered import visible_removal
 
 __all__ = ["World", "Made", "world", "make_kind", "nodes_only", "LEVELS"]
 
@@ -151,6 +152,8 @@ def make_kind(kind: str, w: World, key: str, suite_seed: int) -> Made | None:
         got = add_chord(v, e, r, float(level), rng)
     elif kind == "broken_cycle":
         got = break_cycle(v, e, r, float(level), rng)
+    elif kind == "missing_branch" and w.facts is not None:  # a neuron: a branch its cloud can show missing
+        got = visible_removal(w, rng)
     elif kind == "missing_branch":
         got = drop_branches(v, e, int(level), rng)
     elif kind == "truncation":

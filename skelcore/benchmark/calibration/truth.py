@@ -9,7 +9,8 @@ decides ``outside`` (how far the skeleton leaves the shape, in the nearest refer
 the cloud codes. On a neuron, about half the traced nodes lie outside the decimated mesh the cloud is
 drawn from: an ``outside`` flag on a branch mostly outside it is neither a hit nor a false alarm, and
 ``spurious_branches`` is decided twig by twig (:func:`twig_kinds`: a twig wholly beyond the mesh is
-spurious relative to the cloud, one within a radius of it is not).
+spurious relative to the cloud, one within a radius of it is not); a defect under the size the cloud
+resolves (``outside_seen``, ``uncovered_area``) is left out, not a miss.
 """
 
 from __future__ import annotations
@@ -23,9 +24,11 @@ from scipy.spatial import cKDTree
 
 from ...params import Params
 from .skeletons import Made, World
+from .uncovered import MISS_AREA, _radius_at, _samples, uncovered_area, uncovered_radii
 
-__all__ = ["OUT_YES", "OUT_NO", "MISS_YES", "MISS_NO", "origin", "outside_depth", "uncovered_radii",
-           "thin_share", "unbounded_share", "sparse_drop", "row_truth", "TWIG_OUT", "twig_kinds"]
+__all__ = ["OUT_YES", "OUT_NO", "MISS_YES", "MISS_NO", "MISS_AREA", "origin", "outside_depth", "outside_seen",
+           "uncovered_radii", "uncovered_area", "thin_share", "unbounded_share", "sparse_drop", "row_truth", "TWIG_OUT",
+           "twig_kinds"]
 
 #: ``outside`` is true from this depth out of the shape (local radii; the shortcut generator's promise)
 OUT_YES = 0.5
@@ -49,20 +52,6 @@ def origin(made: Made, ref_v: np.ndarray) -> np.ndarray:
     return np.where(d <= tol, i, -1)
 
 
-def _samples(v: np.ndarray, e: np.ndarray, step: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Points along each edge at most ``step`` (per edge) apart, and their edge."""
-    length = np.linalg.norm(v[e[:, 1]] - v[e[:, 0]], axis=1)
-    n = np.clip(np.ceil(length / np.maximum(step, 1e-12)).astype(int), 1, 400)
-    edge = np.repeat(np.arange(len(e)), n + 1)
-    t = np.concatenate([np.linspace(0.0, 1.0, k + 1) for k in n])
-    pts = v[e[edge, 0]] + t[:, None] * (v[e[edge, 1]] - v[e[edge, 0]])
-    return pts, edge
-
-
-def _radius_at(points: np.ndarray, w: World) -> np.ndarray:
-    return w.ref[2][cKDTree(w.ref[0]).query(points)[1]]
-
-
 def outside_depth(made: Made, w: World, orig: np.ndarray) -> float:
     """How far the skeleton leaves the shape, in local radii (max over points along its edges). On a
     neuron only the injected edges count: the traced nodes outside the decimated mesh are the mesh's."""
@@ -78,25 +67,19 @@ def outside_depth(made: Made, w: World, orig: np.ndarray) -> float:
     return float(depth.max()) if len(depth) else 0.0
 
 
-def uncovered_radii(made: Made, w: World) -> float:
-    """The reference's length (in its local radii) farther than two local radii from the skeleton;
-    on a neuron only along nodes inside the mesh or within one radius of it (the cloud shows them)."""
-    rv, re, rr = w.ref
-    ref_pts, edge = _samples(rv, re, 0.5 * np.minimum(rr[re[:, 0]], rr[re[:, 1]]))
-    seg = np.linalg.norm(rv[re[:, 1]] - rv[re[:, 0]], axis=1)
-    per_edge = np.bincount(edge, minlength=len(re))
-    weight = seg[edge] / np.maximum(per_edge[edge], 1)
-    near = cKDTree(rv).query(ref_pts)[1]
-    r = rr[near]
-    r_made = _radius_at(made.vertices, w)
-    pts, _ = _samples(made.vertices, made.edges, 0.25 * np.minimum(r_made[made.edges[:, 0]], r_made[made.edges[:, 1]]))
-    if not len(pts):
-        pts = made.vertices
-    d = cKDTree(pts).query(ref_pts)[0]
-    far = d > 2.0 * r
-    if w.facts is not None:
-        far &= np.asarray(w.facts.outside_radii)[near] <= 1.0
-    return float(np.sum(weight[far] / r[far]))
+def outside_seen(made: Made, w: World, orig: np.ndarray, params: Params = Params()) -> float:
+    """How far the injected edges reach beyond the cloud's tolerance tau (coverage's, docs/metrics.md
+    5.2), in the nearest reference radius: a part within tau of the cloud lies on the sampled surface
+    for every measure, the cloud cannot show it out (a neuron's, sampled from a decimated mesh)."""
+    e = made.edges[(orig[made.edges] < 0).any(axis=1)]
+    if not len(e) or not len(w.cloud):
+        return 0.0
+    r_v = _radius_at(made.vertices, w)
+    pts, _ = _samples(made.vertices, e, 0.25 * np.minimum(r_v[e[:, 0]], r_v[e[:, 1]]))
+    tree = cKDTree(w.cloud)
+    tau = params.coverage_tau_factor * float(np.median(tree.query(w.cloud, k=2)[0][:, 1]))
+    d = (tree.query(pts)[0] - tau) / _radius_at(pts, w)
+    return float(d.max())
 
 
 def thin_share(w: World, params: Params) -> float:
@@ -212,6 +195,14 @@ def row_truth(made: Made, w: World, condition: str, fired: set[str], arrays: dic
     missing = uncovered_radii(made, w) if k not in ("frame", "no_correspondence") else float("nan")
     t["incomplete"] = None if not np.isfinite(missing) else (
         1 if missing > MISS_YES else 0 if missing < MISS_NO else None)
+    seen = area = float("nan")
+    if w.facts is not None:  # a neuron: a defect under what its cloud resolves is left out
+        if t["outside"] == 1:
+            seen = outside_seen(made, w, orig, params)
+            t["outside"] = 1 if seen >= OUT_YES else None
+        if t["incomplete"] == 1:
+            area = uncovered_area(made, w)
+            t["incomplete"] = 1 if area >= MISS_AREA else None
     t["collapse"] = int(k == "collapse")
     t["frame"] = int(k == "frame")
     if first:
@@ -248,6 +239,6 @@ def row_truth(made: Made, w: World, condition: str, fired: set[str], arrays: dic
     if k == "spurs" and "spurious_branches" in fired:
         located = _spurs_located(made, orig, None if vflags is None else (vflags & DEFECT_BITS["spurious_branches"]) > 0)
     out = {f"truth_{c}": v for c, v in t.items()}
-    out.update(outside_depth=depth, uncovered_radii=missing, thin_share=thin, spurs_located=located,
-               sparse_drop=float("nan") if drop is None or not first else drop, **twigs)
+    out.update(outside_depth=depth, outside_seen=seen, uncovered_radii=missing, uncovered_area=area, thin_share=thin,
+               spurs_located=located, sparse_drop=float("nan") if drop is None or not first else drop, **twigs)
     return out
