@@ -16,9 +16,9 @@ from skelcore.skeleton_repair.findings import TALLIED, Findings
 from skelcore.skeleton_repair.guard import verdict
 
 
-def _found(outside_share: float, outside: int = 1, completeness: float = 0.5) -> Findings:
+def _found(outside_share: float, outside: int = 1, completeness: float = 0.5, **more: int) -> Findings:
     tally = dict.fromkeys(TALLIED, 0)
-    tally["outside"] = outside
+    tally.update(outside=outside, **more)
     return Findings({"completeness": completeness, "outside_share": outside_share, "boundedness": 0.6,
                      "centeredness": 0.3}, tally, None, [])
 
@@ -32,6 +32,8 @@ def test_an_outside_action_with_the_same_defects_needs_the_gain():
     assert small.startswith("no progress") and "repair_outside_gain" in small
     assert verdict(before, _found(0.15, completeness=0.4), p, outside=True).startswith("worse: completeness")
     assert verdict(before, _found(0.15, outside=2), p, outside=True).startswith("no progress")
+    # an outside branch traded for a lost tunnel (a chord through a torus's hole deleted): the same count
+    assert verdict(before, _found(0.0, outside=0, missing_cycles=1), p, outside=True).startswith("no progress")
 
 
 def test_cao_torus_with_outliers_is_rerouted_round_the_tube(tmp_path):
