@@ -239,8 +239,9 @@ class Params:
         their cross-section.
     repair_centre_gain : a re-centring that removes no defect is kept when curve centeredness rises by at
         least this (and completeness, boundedness and the defect count do not get worse).
-    repair_outside_gain : an action on an outside branch that leaves every defect count as it was is kept
-        when the curve's outside length share falls by at least this (and the never-worse bounds hold).
+    repair_outside_gain : an action on an outside branch that leaves as many defects (no more missing
+        cycles or components) is kept when the curve's outside length share falls by at least this
+        (and the never-worse bounds hold).
     """
 
     normalize_by: Literal["longest_side", "diagonal"] = "longest_side"

@@ -34,6 +34,9 @@ def test_an_outside_action_with_the_same_defects_needs_the_gain():
     assert verdict(before, _found(0.15, outside=2), p, outside=True).startswith("no progress")
     # an outside branch traded for a lost tunnel (a chord through a torus's hole deleted): the same count
     assert verdict(before, _found(0.0, outside=0, missing_cycles=1), p, outside=True).startswith("no progress")
+    # a spurious cycle opened into a spur (the Y's shortcut cut one outside edge at a time): a fair trade
+    cyc = _found(0.30, spurious_cycles=1)
+    assert verdict(cyc, _found(0.15, spurious_branches=1), p, outside=True) is None
 
 
 def test_cao_torus_with_outliers_is_rerouted_round_the_tube(tmp_path):
