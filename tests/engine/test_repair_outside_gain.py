@@ -1,7 +1,7 @@
 """The never-worse rule's outside exception (docs/repair.md "Never worse"): an action on an outside
 branch that removes no defect is kept when the outside length share falls by
-``repair_outside_gain``. cao's curve of the small suite's torus with 5 % outliers is an arc closed by
-two chords through the hole, both on one branch: rerouting the first leaves the branch counted."""
+``repair_outside_gain``. cao's curve of the small suite's torus with 5 % outliers is two arcs joined by
+two chords through the hole, one branch: rerouting the first chord leaves the branch counted."""
 
 from __future__ import annotations
 
