@@ -239,6 +239,9 @@ class Params:
         their cross-section.
     repair_centre_gain : a re-centring that removes no defect is kept when curve centeredness rises by at
         least this (and completeness, boundedness and the defect count do not get worse).
+    repair_outside_gain : an action on an outside branch that leaves as many defects (no more missing
+        cycles or components) is kept when the curve's outside length share falls by at least this
+        (and the never-worse bounds hold).
     """
 
     normalize_by: Literal["longest_side", "diagonal"] = "longest_side"
@@ -364,6 +367,7 @@ class Params:
     repair_fill_missing: bool = True
     repair_recentre: bool = True
     repair_centre_gain: float = 0.01
+    repair_outside_gain: float = 0.01
 
     def __post_init__(self) -> None:
         def bad(name: str, why: str) -> None:
@@ -458,7 +462,8 @@ class Params:
         for name in ("repair_max_rounds", "repair_max_tries", "repair_max_components"):
             if int(getattr(self, name)) < 1:
                 bad(name, "must be a positive integer")
-        for name in ("repair_completeness_drop", "repair_outside_rise", "repair_score_drop", "repair_centre_gain"):
+        for name in ("repair_completeness_drop", "repair_outside_rise", "repair_score_drop", "repair_centre_gain",
+                     "repair_outside_gain"):
             if not float(getattr(self, name)) >= 0:
                 bad(name, "must be >= 0")
         if not float(self.repair_join_step) > 0:

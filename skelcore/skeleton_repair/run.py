@@ -199,7 +199,7 @@ def repair(cloud: np.ndarray, curve: CurveSkeleton | tuple | None = None, skelet
             new_ev = pre.complete_update(cancel)
             new_found = read_findings(new_ev)
             why.update(after=_rounded(new_found.measures), defects_after=new_found.total)
-            refusal = verdict(found, new_found, p, recentring=action.code == RECENTRE)
+            refusal = verdict(found, new_found, p, recentring=action.code == RECENTRE, outside=action.code == "outside")
             if refusal is not None:
                 rejected.append({"entries": action.entries, "why": {**why, "rejected": refusal}})
                 continue
