@@ -135,8 +135,9 @@ class Params:
         (docs/diagnostics.md "Completeness").
     missing_air_ball : an element in no solid voxel of the interior (and one-sided on an open
         surface) explains nothing when its ball is over this many x the median ball of the elements
-        inside: an edge through the air crosses gaps wider than the shape, the axis of a tube seen
-        from one side keeps the tube's radius (docs/diagnostics.md "Completeness").
+        inside, or when it faces the shape from outside (one median ball beyond its nearest cloud
+        point is inside): an edge through the air crosses gaps wider than the shape, the axis of a
+        tube seen from one side keeps the tube's radius (docs/diagnostics.md "Completeness").
     missing_large_share : a region holding this share of the cloud counts whatever its depth (a
         skeleton shrunk to the centre of a ring: its ball is wide, the ring unexplained).
     missing_min_completeness : ``incomplete`` also fires when the skeleton explains less than this

@@ -351,16 +351,25 @@ def _spread(cloud: np.ndarray, pts: np.ndarray, region_s: np.ndarray, explained_
 
 def _in_air(elements: np.ndarray, inside: Callable[[np.ndarray], np.ndarray], pts: np.ndarray,
             p: Params) -> np.ndarray:
-    """The elements whose balls explain nothing: ``inside`` rejects them and their ball (their
+    """The elements whose balls explain nothing: ``inside`` rejects them and either their ball (their
     distance to the cloud) is over ``missing_air_ball`` x the median ball of the elements it accepts
-    (an edge through the air crosses gaps far wider than the shape; the axis of a tube seen from
-    one side lies in no solid voxel with the tube's own radius); all it rejects when it accepts none."""
+    (an edge through the air crosses gaps far wider than the shape), or they face the shape from
+    outside: the point one median ball beyond their nearest cloud point, away from them, is inside
+    (a chord across a torus's hole sees the ring's solid behind its inner side). The axis of a tube
+    seen from one side lies in no solid voxel, keeps the tube's radius and sees air behind the
+    cloud. All it rejects when it accepts none."""
     out = ~np.asarray(inside(elements), bool)
     if not out.any() or out.all():
         return out
-    r = kd_tree(pts).query(elements, workers=query_workers(len(elements)))[0]
-    out &= r > float(p.missing_air_ball) * float(np.median(r[~out]))
-    return out
+    r, j = kd_tree(pts).query(elements, workers=query_workers(len(elements)))
+    median = float(np.median(r[~out]))
+    wide = r > float(p.missing_air_ball) * median
+    rows = np.flatnonzero(out & ~wide & (r > 0))
+    facing = np.zeros(len(elements), bool)
+    if len(rows):
+        u = (pts[j[rows]] - elements[rows]) / r[rows, None]
+        facing[rows] = np.asarray(inside(pts[j[rows]] + median * u), bool)
+    return out & (wide | facing)
 
 
 def _small_points(skeleton: np.ndarray | CurveSkeleton, tree: cKDTree, spacing: float, p: Params) -> float:

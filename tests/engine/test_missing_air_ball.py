@@ -13,11 +13,13 @@ from skelcore.params import Params
 
 
 def _half_tube():
-    """A cylinder's points with y > 0 (one side seen), its axis, and an interior test that rejects
-    the axis's half z > 2 (the voxels of a half tube are not solid there; the tube runs along z)."""
+    """A cylinder's points with y > 0 (one side seen), its axis, and an interior test that holds the
+    solid tube for z < 2 only (the voxels of a half tube are not solid there; the tube runs along z;
+    the air beside the tube is outside, as in a voxelized interior)."""
     s = shapes.cylinder(n=4000, radius=0.25, length=4.0, capped=False, seed=3)
     cloud = s.cloud[s.cloud[:, 1] > 0]
-    return cloud, s.curve_vertices, s.curve_edges, lambda p: np.asarray(p)[:, 2] < 2.0
+    return cloud, s.curve_vertices, s.curve_edges, lambda p: (np.asarray(p)[:, 2] < 2.0) & (
+        np.linalg.norm(np.asarray(p)[:, :2], axis=1) < 0.25 + 0.01)
 
 
 def test_a_half_seen_tube_axis_keeps_its_balls():

@@ -50,7 +50,9 @@ def test_cao_torus_with_outliers_is_rerouted_round_the_tube(tmp_path):
 
     first = r.log["operations"][0]["why"]
     assert first["defect"] == "outside" and "rerouted" in first["reason"]
-    assert first["defects_after"] == first["defects_before"]  # the branch still counted: the share fell
+    # the branch still counted, the share fell (the chords' missing parts count since the chords' balls
+    # explain nothing: docs/diagnostics.md "Completeness", so one of them goes with the first reroute)
+    assert first["defects_after"] == first["defects_before"] - 1
     assert first["after"]["outside_share"] < first["before"]["outside_share"] - Params().repair_outside_gain
     assert r.tally_after["outside"] == 0 and not np.any(list(r.tally_after.values()))
     assert f1(curve) < 0.4 and f1(r.curve) > 0.85
