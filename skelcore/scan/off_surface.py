@@ -17,7 +17,7 @@ from scipy.spatial import cKDTree
 from ..params import Params
 from .boundary import largest_angle_gap, tangent_frames
 
-__all__ = ["off_surface"]
+__all__ = ["off_surface", "beyond_box"]
 
 
 def off_surface(cloud: np.ndarray, rows: np.ndarray, surface: np.ndarray, params: Params = Params()) -> np.ndarray:
@@ -46,5 +46,10 @@ def off_surface(cloud: np.ndarray, rows: np.ndarray, surface: np.ndarray, params
     length = np.linalg.norm(offset, axis=2)
     cos = np.abs(np.einsum("ijk,ijk->ij", offset, frames[inverse, 2])) / np.maximum(length, 1e-300)
     gap = (np.median(cos, axis=1) <= float(params.outlier_off_surface_cos)) | rim[inverse].any(axis=1)
-    inside = np.all((cloud[rows] >= base.min(axis=0)) & (cloud[rows] <= base.max(axis=0)), axis=1)
-    return ~(gap & inside)
+    return ~(gap & ~beyond_box(cloud, rows, base))
+
+
+def beyond_box(cloud: np.ndarray, rows: np.ndarray, base: np.ndarray) -> np.ndarray:
+    """(len(rows),) bool: the point at each row lies outside the bounding box of the points ``base``
+    (the surface's): no gap of the surface lies there, and such a point sets the normalization."""
+    return ~np.all((cloud[rows] >= base.min(axis=0)) & (cloud[rows] <= base.max(axis=0)), axis=1)

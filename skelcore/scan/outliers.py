@@ -22,7 +22,7 @@ from scipy.spatial import cKDTree
 
 from ..geometry import Checkpoint, Normalization, kd_tree, leaf_order, no_checkpoint, query_workers, timed_query
 from ..params import Params
-from .off_surface import off_surface
+from .off_surface import beyond_box, off_surface
 
 __all__ = ["Outliers", "find_outliers", "border_rows", "isolated_rows", "sparse_rows", "local_spacing"]
 
@@ -105,13 +105,12 @@ def find_outliers(cloud: np.ndarray, params: Params = Params(), *, checkpoint: C
         local = local_spacing(cloud, cloud[rows], int(params.outlier_local_k), tree)
         d_m = tree.query(cloud[rows], k=m + 1, workers=query_workers(len(rows)))[0][:, m]
         rows = rows[d_m > float(params.outlier_radius) * local]
+    surface = np.ones(n, bool)
+    surface[candidates] = False
     if len(rows):  # and off the surface, not in a gap of it (.off_surface)
-        surface = np.ones(n, bool)
-        surface[candidates] = False
         rows = rows[off_surface(cloud, rows, surface, params)]
     if len(rows):  # and linked to no point that is kept (a sliver of the surface, not a stray)
-        base = np.delete(cloud, candidates, axis=0)
-        beyond = ~np.all((cloud[rows] >= base.min(axis=0)) & (cloud[rows] <= base.max(axis=0)), axis=1)
+        beyond = beyond_box(cloud, rows, cloud[surface])
         rows = rows[~border_rows(cloud, rows, float(params.outlier_radius) * spacing, tree, stays=beyond)]
     checkpoint(0.9)
     if len(rows) == 0 or len(rows) >= n - 1:
