@@ -16,12 +16,12 @@ from typing import Any
 
 import numpy as np
 
-from ..correspondence import densify_curve
 from scipy.spatial import cKDTree
 
 from ..geometry import kd_tree, no_checkpoint, unique_rows
 from ..metrics.ball_tree import COVER_EPS, BallTree
-from ..metrics.coverage import NOISE_MIN_POINTS, SAMPLE_SEED, Coverage, _noise_sample, _summary, coverage, noise_shortfall
+from ..metrics.coverage import (NOISE_MIN_POINTS, SAMPLE_SEED, Coverage, _noise_sample, _summary, coverage,
+                                curve_elements, noise_shortfall)
 
 __all__ = ["CoverageMemo", "curve_coverage", "link_contexts"]
 
@@ -52,13 +52,10 @@ class CoverageMemo:
 
 
 def _elements(ctx: EvalContext) -> tuple[np.ndarray, float]:
-    """The curve's coverage elements (catalogue's curve coverage stage: the curve densified to
-    tau / coverage_tau_factor, at most 200k pieces, plus its vertices) and tau."""
-    p, curve_n = ctx.params, ctx.curve_n
+    """The curve's coverage elements (:func:`skelcore.metrics.coverage.curve_elements`, as the curve
+    coverage stage takes them) and tau."""
     tau = ctx.tau(no_checkpoint)
-    step = max(tau / p.coverage_tau_factor, float(curve_n.edge_lengths().sum()) / 200_000)
-    pts, _ = densify_curve(curve_n, step)
-    return np.vstack([pts, curve_n.vertices]), tau
+    return curve_elements(ctx.curve_n, tau, ctx.params), tau
 
 
 def _store(cache: dict[str, Any], ctx: EvalContext, memo: CoverageMemo) -> None:

@@ -22,12 +22,14 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.spatial import cKDTree
 
+from ..correspondence import densify_curve
+from ..curve import CurveSkeleton
 from ..geometry import Checkpoint, kd_tree, no_checkpoint, scaled_checkpoint, unique_rows
 from ..params import Params
 from .ball_tree import BallTree
 from .cloud_index import CloudIndex
 
-__all__ = ["Coverage", "coverage", "coverage_tau", "min_ball_excess", "covered_by_balls", "BallTree",
+__all__ = ["Coverage", "coverage", "coverage_tau", "curve_elements", "min_ball_excess", "covered_by_balls", "BallTree",
            "noise_shortfall"]
 
 # the random subsample above coverage_exact_points (the same seed as the diagnostics' subsamples)
@@ -81,6 +83,14 @@ def coverage_tau(cloud: np.ndarray, params: Params = Params(), checkpoint: Check
     d = tree.nearest(tree.points, scaled_checkpoint(checkpoint, 0.3, 1.0), others=True)
     return float(params.coverage_tau_factor * np.median(d))
 
+
+
+def curve_elements(curve: CurveSkeleton, tau: float, params: Params) -> np.ndarray:
+    """A curve's coverage elements: the curve densified to tau / ``coverage_tau_factor`` (at most 200k
+    pieces) plus its vertices (docs/metrics.md section 5.2)."""
+    step = max(tau / params.coverage_tau_factor, float(curve.edge_lengths().sum()) / 200_000)
+    pts, _ = densify_curve(curve, step)
+    return np.vstack([pts, curve.vertices])
 
 def min_ball_excess(
     points: np.ndarray, centers: np.ndarray, radii: np.ndarray, floor: float = -np.inf,

@@ -16,10 +16,10 @@ from typing import Callable
 
 import numpy as np
 
-from ..correspondence import densify_curve, project_onto_curve, reverse_projection
+from ..correspondence import project_onto_curve, reverse_projection
 from ..geometry import Checkpoint
 from ..metrics.centeredness import curve_centeredness, skeletal_centeredness
-from ..metrics.coverage import coverage
+from ..metrics.coverage import coverage, curve_elements
 from ..metrics.ground_truth import ground_truth
 from ..metrics.reference import compare_with_reference
 from ..metrics.smoothness import curve_smoothness_overall, curve_vertex_smoothness, skeletal_smoothness
@@ -115,12 +115,9 @@ def _skeletal_coverage(ctx: EvalContext, checkpoint: Checkpoint):
 
 
 def _curve_coverage(ctx: EvalContext, checkpoint: Checkpoint):
-    """The curve densified to tau / coverage_tau_factor (at most 200k pieces) plus its vertices."""
-    p, curve_n = ctx.params, ctx.curve_n
+    """The curve's coverage elements (:func:`curve_elements`) against the cloud."""
     tau = ctx.tau(lambda f: checkpoint(0.1 * f))
-    step = max(tau / p.coverage_tau_factor, float(curve_n.edge_lengths().sum()) / 200_000)
-    pts, _ = densify_curve(curve_n, step)
-    return coverage(ctx.cloud_n, np.vstack([pts, curve_n.vertices]), p, tau,
+    return coverage(ctx.cloud_n, curve_elements(ctx.curve_n, tau, ctx.params), ctx.params, tau,
                     checkpoint=lambda f: checkpoint(0.1 + 0.9 * f), index=ctx.cloud_index)
 
 
