@@ -111,14 +111,19 @@ def _centres_memo(cloud: np.ndarray, points: np.ndarray, dirs: np.ndarray, param
             np.array([r[2] for r in rows], float))
 
 
+def _on_vertices(curve: CurveSkeleton, sample_edge: np.ndarray, sample_t: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The curve samples lying on a vertex (t 0 or 1 along their edge) and that vertex of each."""
+    t = np.asarray(sample_t, float)
+    at = (t == 0.0) | (t == 1.0)
+    e = curve.edges[np.asarray(sample_edge, np.int64)[at]]
+    return at, np.where(t[at] == 1.0, e.max(axis=1), e.min(axis=1))
+
+
 def vertex_centeredness(curve: CurveSkeleton, sample_edge: np.ndarray, sample_t: np.ndarray,
                         sample_c: np.ndarray) -> np.ndarray:
     """Per vertex: the lowest c of the evaluation's curve samples lying on it (NaN where none lies on
     it or none has a ring)."""
-    t = np.asarray(sample_t, float)
-    at = (t == 0.0) | (t == 1.0)
-    e = curve.edges[np.asarray(sample_edge, np.int64)[at]]
-    v = np.where(t[at] == 1.0, e.max(axis=1), e.min(axis=1))
+    at, v = _on_vertices(curve, sample_edge, sample_t)
     c = np.asarray(sample_c, float)[at]
     out = np.full(curve.n_vertices, np.inf)
     np.minimum.at(out, v[np.isfinite(c)], c[np.isfinite(c)])
@@ -131,10 +136,7 @@ def settled(curve: CurveSkeleton, sample_edge: np.ndarray, sample_t: np.ndarray,
     """Per vertex: whether the evaluation's curve samples lying on it all say it needs no cut here:
     each is centred (c > ``c_star``) or has no ring (NaN: fewer than 3 points in its slab ring). A
     vertex no sample lies on is not settled."""
-    t = np.asarray(sample_t, float)
-    at = (t == 0.0) | (t == 1.0)
-    e = curve.edges[np.asarray(sample_edge, np.int64)[at]]
-    seen = np.bincount(np.where(t[at] == 1.0, e.max(axis=1), e.min(axis=1)), minlength=curve.n_vertices) > 0
+    seen = np.bincount(_on_vertices(curve, sample_edge, sample_t)[1], minlength=curve.n_vertices) > 0
     c = vertex_centeredness(curve, sample_edge, sample_t, sample_c)
     return seen & ~(np.isfinite(c) & ~(c > c_star))
 
