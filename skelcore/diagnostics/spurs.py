@@ -87,6 +87,19 @@ class SpurDefects:
             return 0.0
         return float(self.branches.length[self.branch_spurious].sum()) / self.total_length
 
+    @property
+    def unchecked(self) -> str | None:
+        """Which terminal branches were not judged (unresolved, unseen), or None: a check left out in
+        part says so (docs/diagnostics.md "Checks not run")."""
+        unresolved, unseen = self._count(self.unresolved), self._count(self.unseen)
+        if not unresolved + unseen:
+            return None
+        parts = ([f"{unresolved} in parts the cloud does not resolve (a junction ball under "
+                  f"spur_resolved_spacings = {self.params.spur_resolved_spacings:g} spacings)"] if unresolved else [])
+        parts += [f"{unseen} with no point of their own on a cloud seen from one side"] if unseen else []
+        return (f"{unresolved + unseen} of the curve's {len(self.terminal)} terminal branches were not judged: "
+                + "; ".join(parts))
+
     def warnings(self) -> list[TrustWarning]:
         n = len(self.spurious)
         if n < self.params.spurs_warn_count:

@@ -163,6 +163,8 @@ def finish(ctx: EvalContext, inputs: dict | None, checkpoint: Callable[[float], 
             ev.warnings += defects.outside.warnings(reach_only=True)
         elif defects is not None and defects.outside.unchecked:  # voxels too coarse: its warnings are the reach test's
             ev.not_computed["outside"] = defects.outside.unchecked
+        if defects is not None and defects.spurs.unchecked:  # twigs the cloud cannot show: not judged
+            ev.not_computed["spurious_branches"] = defects.spurs.unchecked
     return ev
 
 

@@ -85,6 +85,9 @@ def _without_diagnostics(rec: dict) -> dict:
     if isinstance(rec.get("doc"), dict):
         rec["doc"] = dict(rec["doc"])
         rec["doc"]["warnings"] = [w for w in rec["doc"].get("warnings", []) if w["code"] not in DIAGNOSTIC_CODES]
+        if isinstance(rec["doc"].get("not_computed"), dict):  # a diagnostic's "not checked" (part of it)
+            rec["doc"]["not_computed"] = {k: v for k, v in rec["doc"]["not_computed"].items()
+                                          if k not in DIAGNOSTIC_CODES}
     return rec
 
 
