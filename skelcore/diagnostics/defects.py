@@ -108,7 +108,8 @@ def find_curve_defects(
     t["interior"] = time.perf_counter() - t0
     t0 = time.perf_counter()
     spurs = find_spurious_branches(cloud, curve, params=params, branches=branches, cloud_tree=tree,
-                                   checkpoint=lambda f: checkpoint(0.2 + 0.3 * f), search_memo=spur_memo)
+                                   checkpoint=lambda f: checkpoint(0.2 + 0.3 * f), search_memo=spur_memo,
+                                   voxel_shape=shape)
     t["spurs"] = time.perf_counter() - t0
     t0 = time.perf_counter()
     cycles = find_cycle_defects(cloud, curve, params=params, branches=branches, cloud_tree=tree, voxel_shape=shape,

@@ -34,6 +34,8 @@ from .branches import Branches, decompose_branches, densify
 from .interior import cloud_subsample
 from .spur_cache import SpurMemo
 from .spur_sides import one_sidedness
+from .spur_balls import balls_in_shape
+from .interior import VoxelShape
 
 __all__ = ["SpurDefects", "find_spurious_branches", "curve_points", "junction_spacing"]
 
@@ -250,13 +252,15 @@ def find_spurious_branches(
     checkpoint: Checkpoint = no_checkpoint,
     seed: int = 0,
     search_memo: SpurMemo | None = None,
+    voxel_shape: VoxelShape | None = None,
 ) -> SpurDefects:
     """Spurious terminal branches of ``curve`` in the shape sampled by ``cloud`` (both normalized,
     docs/metrics.md 0). ``branches`` and ``cloud_tree`` (a KD-tree of the cloud, or of its subsample of
     ``diag_max_points``: the local radii come from it) may be passed when computed;
     ``samples`` (the curve samples) give the per-sample flags. ``search_memo``: the nearest-ball search
     kept from an earlier curve of the same cloud and params (an edit's update asks again only the
-    points the edit can change, :mod:`.spur_cache`; the same answers)."""
+    points the edit can change, :mod:`.spur_cache`; the same answers). ``voxel_shape``: the cloud's
+    voxelized interior; when given, only balls the shape holds explain (:mod:`.spur_balls`)."""
     cloud = np.asarray(cloud, dtype=float)
     if cloud_tree is None and len(cloud):
         cloud_tree = kd_tree(cloud_subsample(cloud, params.diag_max_points, seed), checkpoint)
@@ -285,6 +289,8 @@ def find_spurious_branches(
                memo.subsample(cloud, (params.diag_max_points, seed),
                               lambda: cloud_subsample(cloud, params.diag_max_points, seed)))
         explain = (1.0 + params.spur_slack) * r_x  # no tau: see the module's docstring
+        if voxel_shape is not None:  # a ball through the air explains nothing
+            explain = np.where(balls_in_shape(voxel_shape, pts, r_x), explain, -1.0)
         own = pb[cKDTree(pts).query(use)[1]] if memo is None else memo.own_branch(pts, pb, use)
         is_term = np.zeros(nb + 1, bool)
         is_term[terminal] = True

@@ -1,0 +1,40 @@
+"""Which curve balls may explain cloud points in the spur test: the balls of the shape.
+
+The explanation measure reads the rest of the skeleton's balls (radius r(x), the distance from x to
+the cloud) as a reconstruction of the shape. A curve point through the air (an edge that leaves the
+shape) has a ball as large as its distance to the nearest part, often tens of local radii, whose
+grown shell sweeps over every twig around it: those twigs would be "explained" by air. A ball is
+of the shape when the voxelized solid (:mod:`.interior`, the cycle test's) holds its centre and the
+26 lattice directions at r(x) less one voxel; a ball under one voxel is below what the grid can
+judge and is kept (docs/diagnostics.md "Spurious branches", rule 2).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from .interior import VoxelShape
+
+__all__ = ["balls_in_shape"]
+
+_DIRECTIONS = np.array([(i, j, k) for i in (-1, 0, 1) for j in (-1, 0, 1) for k in (-1, 0, 1)
+                        if (i, j, k) != (0, 0, 0)], float)
+_DIRECTIONS /= np.linalg.norm(_DIRECTIONS, axis=1, keepdims=True)
+
+
+def balls_in_shape(voxel_shape: VoxelShape, pts: np.ndarray, radius: np.ndarray) -> np.ndarray:
+    """(n,) bool: the ball of ``radius`` at each of ``pts`` lies in the shape's solid (module
+    docstring); True for balls under one voxel. A function of the point and the cloud alone."""
+    pts = np.asarray(pts, float)
+    radius = np.asarray(radius, float)
+    size = float(voxel_shape.size)
+    keep = ~(radius > size)
+    big = np.flatnonzero(~keep)
+    if not len(big):
+        return keep
+    solid = voxel_shape.solid()
+    probes = pts[big, None, :] + (radius[big] - size)[:, None, None] * np.vstack([np.zeros((1, 3)), _DIRECTIONS])
+    ijk = voxel_shape.index_of(probes.reshape(-1, 3))
+    inside = solid[ijk[:, 0], ijk[:, 1], ijk[:, 2]].reshape(len(big), -1)
+    keep[big] = inside.all(axis=1)
+    return keep
