@@ -7,9 +7,9 @@ classical significance measures fails:
   the medial ball at J (distance from J to the cloud): it does not leave the junction's ball;
 - **explanation**: the cloud points nearest to it (its territory) are explained by the rest of the
   skeleton as well: a point is explained by an element x (curve point, every ``diag_step`` local
-  radii) when it lies within (1 + ``spur_slack``) r(x) of it. The branch is spurious when fewer than
-  ``spur_min_points`` of its territory, or less than ``spur_unique`` of it, are explained by nothing
-  else.
+  radii, whose ball the shape holds: :mod:`.spur_balls`) when it lies within (1 + ``spur_slack``) r(x)
+  of it. Spurious when fewer than ``spur_min_points`` of its territory, or less than ``spur_unique``
+  of it, are explained by nothing else.
 
 No tau grows the balls (r(x) is measured to the samples). Not judged: ``unresolved`` where r_J is
 under ``spur_resolved_spacings`` cloud spacings; ``stubs`` (short) under ``spur_stub_share`` of the
