@@ -20,6 +20,7 @@ __all__ = ["balls_in_shape"]
 _DIRECTIONS = np.array([(i, j, k) for i in (-1, 0, 1) for j in (-1, 0, 1) for k in (-1, 0, 1)
                         if (i, j, k) != (0, 0, 0)], float)
 _DIRECTIONS /= np.linalg.norm(_DIRECTIONS, axis=1, keepdims=True)
+_CHUNK = 1 << 15  # balls probed at once
 
 
 def balls_in_shape(voxel_shape: VoxelShape, pts: np.ndarray, radius: np.ndarray) -> np.ndarray:
@@ -33,8 +34,10 @@ def balls_in_shape(voxel_shape: VoxelShape, pts: np.ndarray, radius: np.ndarray)
     if not len(big):
         return keep
     solid = voxel_shape.solid()
-    probes = pts[big, None, :] + (radius[big] - size)[:, None, None] * np.vstack([np.zeros((1, 3)), _DIRECTIONS])
-    ijk = voxel_shape.index_of(probes.reshape(-1, 3))
-    inside = solid[ijk[:, 0], ijk[:, 1], ijk[:, 2]].reshape(len(big), -1)
-    keep[big] = inside.all(axis=1)
+    rays = np.vstack([np.zeros((1, 3)), _DIRECTIONS])
+    for a in range(0, len(big), _CHUNK):  # bounded memory: 27 probes per ball
+        part = big[a:a + _CHUNK]
+        probes = pts[part, None, :] + (radius[part] - size)[:, None, None] * rays
+        ijk = voxel_shape.index_of(probes.reshape(-1, 3))
+        keep[part] = solid[ijk[:, 0], ijk[:, 1], ijk[:, 2]].reshape(len(part), -1).all(axis=1)
     return keep

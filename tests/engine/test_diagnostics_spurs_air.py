@@ -52,3 +52,16 @@ def test_balls_through_the_air_explain_nothing(crop):
     quiet = find_spurious_branches(cloud, intact, voxel_shape=shape)
     assert len(kept.spurious) == len(quiet.spurious) >= 0
     assert find_spurious_branches(cloud, intact).spurious.tolist() == quiet.spurious.tolist()
+
+
+def test_a_ball_of_the_shape_lies_in_its_solid():
+    """On a sampled unit sphere: the centre's ball of radius 0.9 is the shape's, one of 2.5 pokes out,
+    a ball centred outside is not the shape's, and a ball under one voxel is kept (not judged)."""
+    from skelcore.diagnostics.spur_balls import balls_in_shape
+
+    p = np.random.default_rng(0).normal(size=(5000, 3))
+    p /= np.linalg.norm(p, axis=1, keepdims=True)
+    shape = voxelize_interior(p)
+    centres = np.array([[0, 0, 0], [0, 0, 0], [3, 0, 0], [0.95, 0, 0]], float)
+    radii = np.array([0.9, 2.5, 2.0, 0.5 * shape.size])
+    assert balls_in_shape(shape, centres, radii).tolist() == [True, False, False, True]
