@@ -254,3 +254,20 @@ def test_a_one_sided_neuron_scan_at_100k_has_no_stray_but_its_lone_pairs(monkeyp
     assert find_outliers(cloud).count == 0
     monkeypatch.setattr(outliers, "border_rows", lambda c, rows, r, tree, stays=None: np.zeros(len(rows), bool))
     assert find_outliers(cloud).count == 2
+
+
+def test_a_lone_sample_behind_a_parts_front_is_kept_a_stray_above_it_is_not(monkeypatch):
+    """The front of a tube (a one-sided scan of it) and two lone points 0.6 from its crest, 20
+    spacings: one beneath the front, where the part hides what lies behind it (a sample seen past a
+    nearer part's silhouette, as on tuning neuron 1734350788 seen from one side at 300k points), one
+    above it. Both lie along the surface's normal; only the side the surface bends towards tells them
+    apart (scan/off_surface.concave_side)."""
+    import skelcore.scan.off_surface as off
+
+    rng = np.random.default_rng(0)
+    th, x = rng.uniform(np.pi / 18, 17 * np.pi / 18, 6000), rng.uniform(0, 10, 6000)
+    front = np.column_stack([x, np.cos(th), np.sin(th)])
+    cloud = np.vstack([front, [[5.0, 0.0, 0.4], [5.0, 0.0, 1.6]]])
+    assert find_outliers(cloud).rows.tolist() == [6001]
+    monkeypatch.setattr(off, "concave_side", lambda points, *a: np.zeros(len(points), bool))
+    assert find_outliers(cloud).rows.tolist() == [6000, 6001]
