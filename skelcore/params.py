@@ -101,6 +101,8 @@ class Params:
         (a tube's inside sees its surface along nearly all 26 rays; a gap between noisy strands
         along fewer), and in the interior's part at least open_resolved_diameter spacings across:
         docs/diagnostics.md "Cycles".
+    cycles_resolved_voxels : ... and at least this many voxels across (the grid's own resolution:
+        where the box sets the voxel, two branches closer than the grid resolves join into a ring).
     outside_min_radii : ``outside`` fires when a branch has at least this many local radii of
         length outside the shape (where its curve samples have boundedness <= beta_star and the
         cycle test's voxels are not inside) ...
@@ -296,6 +298,7 @@ class Params:
     cycles_support_points: int = 3
     cycles_support_share: float = 0.05
     cycles_strict_share: float = 0.9
+    cycles_resolved_voxels: float = 3.0
     outside_min_radii: float = 0.5
     outside_min_share: float = 0.05
     outside_reach: float = 8.0
@@ -420,7 +423,7 @@ class Params:
                 bad(name, "must be an integer >= 1000")
         if self.k_center is not None and int(self.k_center) < 1:
             bad("k_center", "must be a positive integer or None")
-        for name in ("diag_step", "spur_reach", "cycles_voxel_spacing", "outside_min_radii", "outside_link",
+        for name in ("diag_step", "spur_reach", "cycles_voxel_spacing", "cycles_resolved_voxels", "outside_min_radii", "outside_link",
                      "outside_reach", "outside_voxel_radii"):
             if not float(getattr(self, name)) > 0:
                 bad(name, "must be > 0")

@@ -383,6 +383,7 @@ def find_cycle_defects(
                                          block=params.cycles_support_voxels, min_points=params.cycles_support_points,
                                          share=params.cycles_support_share,
                                          resolved_diameter=params.open_resolved_diameter,
+                                         resolved_voxels=params.cycles_resolved_voxels,
                                          checkpoint=lambda f: checkpoint(0.95 + 0.04 * f)))
     missing = max(0, tunnels - rank)
     branch_spurious = np.zeros(len(branches), bool)

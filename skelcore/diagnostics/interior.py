@@ -311,23 +311,25 @@ def resolved_part(solid: np.ndarray, radius: float) -> np.ndarray:
     return ndimage.distance_transform_edt(~core) <= radius
 
 
-def resolved_radius(cloud: np.ndarray, vs: VoxelShape, diameter: float) -> float:
+def resolved_radius(cloud: np.ndarray, vs: VoxelShape, diameter: float, voxels: float = 0.0) -> float:
     """The ball, in voxels, of :func:`resolved_part` for parts ``diameter`` median cloud spacings
-    across: half that in voxels, plus one voxel (half a voxel from an inside voxel's centre to the
-    interior's boundary, and half a voxel by which the voxels holding surface points stand out beyond
-    the surface on average); 0 when ``diameter`` is 0 (no test)."""
+    across, and at least ``voxels`` voxels across (the grid's resolution: where the box sets the voxel,
+    a gap between two parts finer than it closes): half that in voxels, plus one voxel (half a voxel
+    from an inside voxel's centre to the interior's boundary, and half a voxel by which the voxels
+    holding surface points stand out beyond the surface on average); 0 when ``diameter`` is 0 (no test)."""
     if not diameter > 0:
         return 0.0
-    return 0.5 * float(diameter) * median_spacing(cloud) / float(vs.size) + 1.0
+    return 0.5 * max(float(diameter) * median_spacing(cloud) / float(vs.size), float(voxels)) + 1.0
 
 
 def firm_tunnels(cloud: np.ndarray, vs: VoxelShape, *, inside_share: float, strict_share: float, block: int = 5,
                  min_points: int = 3, share: float = 0.05, resolved_diameter: float = 0.0,
-                 checkpoint: Checkpoint = no_checkpoint) -> int:
+                 resolved_voxels: float = 0.0, checkpoint: Checkpoint = no_checkpoint) -> int:
     """The tunnels of the interior that survive each way it can invent one, bounded from above: the
     least :func:`wide_tunnels` count of the interior, of its part the sampling resolves
-    (:func:`resolved_part`: parts at least ``resolved_diameter`` median spacings across; two thin
-    branches passing closer than the cloud resolves join into a ring no thicker), of the interior
+    (:func:`resolved_part`: parts at least ``resolved_diameter`` median spacings and ``resolved_voxels``
+    voxels across; two thin branches passing closer than the cloud or the grid resolves join into a
+    ring no thicker), of the interior
     rebuilt without the voxels of isolated points (:func:`supported_voxels`: a stray's voxel and its ray
     shadow bridge nothing) and of that one at the ``strict_share`` (a gap between noisy strands passes
     beta* but not the stricter share; a tube's inside passes both). Each interior keeps the resolved
@@ -336,7 +338,7 @@ def firm_tunnels(cloud: np.ndarray, vs: VoxelShape, *, inside_share: float, stri
     count = wide_tunnels(vs.solid())
     if count == 0:
         return 0
-    radius = resolved_radius(cloud, vs, resolved_diameter)
+    radius = resolved_radius(cloud, vs, resolved_diameter, resolved_voxels)
     if radius > 0:
         count = min(count, wide_tunnels(resolved_part(vs.solid(), radius)))
         if count == 0:

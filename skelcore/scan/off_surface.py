@@ -6,6 +6,9 @@ point left alone by the sampling (a one-sided scan's occlusions, a part sampled 
 lies in a gap of that surface: its nearest surface points see it along their tangent plane, or lie
 on the rim of the gap (PCL's boundary test, :mod:`.boundary`).  Isolation alone cannot tell the two
 apart (a one-sided neuron scan leaves lone points 10-30 spacings from the rest); the direction can.
+A one-sided scan also keeps lone samples seen just past the silhouette of a nearer part: they lie behind
+that part's visible front, on the side its surface bends towards (:func:`concave_side`), where a stray
+falling outside a convex part never lies.
 A point beyond the box of the surface points is in no gap: it stays a stray whatever its direction.
 """
 
@@ -17,16 +20,18 @@ from scipy.spatial import cKDTree
 from ..params import Params
 from .boundary import largest_angle_gap, tangent_frames
 
-__all__ = ["off_surface", "beyond_box"]
+__all__ = ["off_surface", "beyond_box", "concave_side"]
 
 
-def off_surface(cloud: np.ndarray, rows: np.ndarray, surface: np.ndarray, params: Params = Params()) -> np.ndarray:
+def off_surface(cloud: np.ndarray, rows: np.ndarray, surface: np.ndarray, params: Params = Params(),
+                reach: float = np.inf) -> np.ndarray:
     """(len(rows),) bool: the point at each row lies off the surface sampled by the rows ``surface``
     (a bool mask of the cloud): the median |cos| between its offset from its ``outlier_surface_points``
     nearest surface points and their normals (PCA of their ``open_k`` nearest surface points) exceeds
-    ``outlier_off_surface_cos``, and none of them is a rim point (largest angular gap between its
-    neighbours above ``open_angle``); or it lies beyond the surface points' box (a gap lies between
-    them; such a point sets the normalization).  All True when the surface has too few points to judge."""
+    ``outlier_off_surface_cos``, none of them is a rim point (largest angular gap between its
+    neighbours above ``open_angle``) and it lies on their convex side (:func:`concave_side`, patches
+    of at most ``reach``); or it lies beyond the surface points' box (a gap lies between them; such a
+    point sets the normalization).  All True when the surface has too few points to judge."""
     cloud = np.asarray(cloud, dtype=float)
     rows = np.asarray(rows, np.int64)
     base = cloud[np.asarray(surface, bool)]
@@ -46,6 +51,7 @@ def off_surface(cloud: np.ndarray, rows: np.ndarray, surface: np.ndarray, params
     length = np.linalg.norm(offset, axis=2)
     cos = np.abs(np.einsum("ijk,ijk->ij", offset, frames[inverse, 2])) / np.maximum(length, 1e-300)
     gap = (np.median(cos, axis=1) <= float(params.outlier_off_surface_cos)) | rim[inverse].any(axis=1)
+    gap |= concave_side(cloud[rows], base, near, frames[inverse, 2], reach, tree)
     return ~(gap & ~beyond_box(cloud, rows, base))
 
 
@@ -53,3 +59,24 @@ def beyond_box(cloud: np.ndarray, rows: np.ndarray, base: np.ndarray) -> np.ndar
     """(len(rows),) bool: the point at each row lies outside the bounding box of the points ``base``
     (the surface's): no gap of the surface lies there, and such a point sets the normalization."""
     return ~np.all((cloud[rows] >= base.min(axis=0)) & (cloud[rows] <= base.max(axis=0)), axis=1)
+
+
+def concave_side(points: np.ndarray, base: np.ndarray, near: np.ndarray, normals: np.ndarray, reach: float,
+                 tree: cKDTree) -> np.ndarray:
+    """(len(points),) bool: each point lies on the side its nearest surface points' patches bend
+    towards, for most of them (rows of ``near`` into ``base``, with their ``normals``): the centroid of
+    the surface points within the point's distance (at most ``reach``) of each lies on the point's side
+    of that one's tangent plane.  A one-sided scan sees a lone sample past the silhouette of a nearer
+    part, behind its visible front: on its concave side.  A stray outside a convex part lies on the
+    other side; above a flat patch, either."""
+    points = np.asarray(points, float)
+    if len(points) == 0:
+        return np.zeros(0, bool)
+    at = base[near]  # (rows, m, 3)
+    offset = points[:, None, :] - at
+    radius = np.minimum(np.linalg.norm(offset, axis=2), float(reach))
+    side = np.zeros(near.shape, bool)
+    for (i, j), members in zip(np.ndindex(near.shape), tree.query_ball_point(at.reshape(-1, 3), radius.ravel())):
+        bend = (base[members].mean(axis=0) - at[i, j]) @ normals[i, j]
+        side[i, j] = bend * (offset[i, j] @ normals[i, j]) > 0
+    return 2 * side.sum(axis=1) > near.shape[1]

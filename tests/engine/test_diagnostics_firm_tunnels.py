@@ -136,3 +136,29 @@ def test_two_branches_closer_than_the_cloud_resolves_make_no_tunnel():
     vs, r = _defects(w.cloud, np.asarray(v, float), np.asarray(e, np.int64))
     assert wide_tunnels(vs.solid()) == 1
     assert r.missing == 0 and r.warnings() == []
+
+
+def _ring(tube: float, gap_voxels: float, n: int = 10_000) -> np.ndarray:
+    """``n`` points on a ring of radius 1 and tube radius ``tube``, cut open by a gap of that many
+    voxels of the default grid (the box / ``cycles_voxels``) between its two ends."""
+    rng = np.random.default_rng(0)
+    gap = gap_voxels * 2 * (1 + tube) / P.cycles_voxels
+    th, ph = rng.uniform(gap / 2, 2 * np.pi - gap / 2, n), rng.uniform(0, 2 * np.pi, n)
+    ring = 1 + tube * np.cos(ph)
+    return np.column_stack([ring * np.cos(th), ring * np.sin(th), tube * np.sin(ph)])
+
+
+def test_two_ends_closer_than_the_grid_resolves_make_no_tunnel():
+    """A ring cut open by a gap of 0.8 voxels, its tube 10 spacings across (the sampling resolves it)
+    but 2.3 voxels (the box sets the voxel, 4.6 spacings): the voxels close the gap into a ring, as
+    they joined two branches of the suite's 4-level tree at 20,000 points. A ring counts only where its
+    parts are ``cycles_resolved_voxels`` voxels across; a ring 5.5 voxels across keeps its tunnel."""
+    shared = dict(inside_share=P.beta_star, strict_share=P.cycles_strict_share,
+                  resolved_diameter=P.open_resolved_diameter)
+    cut = Normalization.from_cloud(_ring(0.025, 0.8), P.normalize_by, P.normalized_size).apply(_ring(0.025, 0.8))
+    vs = _interior(cut)
+    assert wide_tunnels(vs.solid()) == 1
+    assert firm_tunnels(cut, vs, **shared) == 1  # the sampling's resolution alone
+    assert firm_tunnels(cut, vs, resolved_voxels=P.cycles_resolved_voxels, **shared) == 0
+    whole = Normalization.from_cloud(_ring(0.06, 0.0), P.normalize_by, P.normalized_size).apply(_ring(0.06, 0.0))
+    assert firm_tunnels(whole, _interior(whole), resolved_voxels=P.cycles_resolved_voxels, **shared) == 1
