@@ -32,7 +32,7 @@ from ..params import Params
 from .trust_warning import TrustWarning, finite_range
 from .branches import Branches, decompose_branches, densify
 from .interior import cloud_subsample
-from .spur_balls import explained_by_balls
+from .spur_pairs import explained_by_balls
 from .spur_cache import SpurMemo
 from .spur_sides import one_sidedness
 
