@@ -97,8 +97,10 @@ def fill_holes(mask: np.ndarray) -> np.ndarray:
 
 
 def _ray_hits(target: np.ndarray, d: np.ndarray) -> np.ndarray:
-    """hit[v] = some target voxel at v + t d, t >= 1: one sweep of 2-D slices against ``d``."""
-    axis = int(np.flatnonzero(d)[0])
+    """hit[v] = some target voxel at v + t d, t >= 1: one sweep of 2-D slices against ``d``, along the
+    shortest of the axes ``d`` moves on (each step of t moves on all of them: fewer, larger slices)."""
+    moves = np.flatnonzero(d)
+    axis = int(moves[np.argmin(np.asarray(target.shape)[moves])])
     step = int(d[axis])
     others = [a for a in range(3) if a != axis]
     tg = np.moveaxis(target, axis, 0)

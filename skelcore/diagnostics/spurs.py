@@ -32,6 +32,7 @@ from ..params import Params
 from .trust_warning import TrustWarning, finite_range
 from .branches import Branches, decompose_branches, densify
 from .interior import cloud_subsample
+from .spur_pairs import explained_by_balls
 from .spur_cache import SpurMemo
 from .spur_sides import one_sidedness
 from .spur_balls import balls_in_shape
@@ -173,6 +174,9 @@ def _explained_elsewhere(
     ok = np.isfinite(reach) & (reach >= 0)
     if not n or not ok.any():
         return out
+    few = explained_by_balls(pts, pts_branch, reach, queries, own)  # the same answers, when the balls hold few points
+    if few is not None:
+        return few
     top = float(reach[ok].max())
     level = np.full(len(reach), -1)
     with np.errstate(divide="ignore"):

@@ -1,0 +1,51 @@
+"""The spur test's nearest-ball search (:func:`skelcore.diagnostics.spurs._explained_elsewhere`) when its
+balls hold few points: each curve point's ball asked once of a tree of the queries, every pair found
+tested as the level search tests it, so the answers are the same bits (docs/performance.md 3, "The
+hammer"). On a small cloud this replaces the levels' k-nearest rounds (about two thirds of the test)."""
+
+from __future__ import annotations
+
+import numpy as np
+from scipy.spatial import cKDTree
+
+__all__ = ["explained_by_balls"]
+
+#: at most this many (curve point, query) pairs inside the balls: beyond, the level search (less memory)
+PAIRS_MAX = 1 << 18
+#: and only when queries x curve points is at most this (counting the pairs is then cheap)
+CELLS_MAX = 1 << 24
+#: balls smaller than this share of the largest (a curve point on a cloud point): the level search
+TINY = 2.0**-40
+
+
+def explained_by_balls(pts: np.ndarray, pts_branch: np.ndarray, reach: np.ndarray, queries: np.ndarray,
+                       own: np.ndarray) -> np.ndarray | None:
+    """For each query q, whether a curve point x of another branch than ``own[q]`` has
+    |q - x| <= reach(x) (the norm computed as the level search computes it); None when the balls hold
+    more than ``PAIRS_MAX`` pairs or the search is too large to count them (the caller's search then)."""
+    n = len(queries)
+    if n == 0 or len(pts) * n > CELLS_MAX:
+        return None
+    idx = np.flatnonzero(np.isfinite(reach) & (reach >= 0))
+    out = np.zeros(n, bool)
+    if not len(idx):
+        return out
+    if reach[idx].min() < reach[idx].max() * TINY:
+        return None  # the level search's bound underflows for such balls (a zero ball explains nothing there)
+    # a little wider than the balls (the tree's squared distances round otherwise): the test below decides
+    radius = reach[idx] * (1.0 + 1e-9) + 1e-300
+    tree = cKDTree(queries)
+    counts = np.asarray(tree.query_ball_point(pts[idx], radius, return_length=True), np.int64)
+    total = int(counts.sum())
+    if total > PAIRS_MAX:
+        return None
+    if total == 0:
+        return out
+    found = tree.query_ball_point(pts[idx], radius, return_sorted=False)
+    qi = np.fromiter((q for ball in found for q in ball), np.int64, count=total)
+    xi = np.repeat(idx, counts)
+    other = pts_branch[xi] != own[qi]
+    xi, qi = xi[other], qi[other]
+    dist = np.linalg.norm(pts[xi] - queries[qi], axis=1)
+    out[qi[dist <= reach[xi]]] = True
+    return out
