@@ -24,6 +24,7 @@ __all__ = ["SpurSearch", "SpurMemo"]
 #: a search function (curve points, their branches, reaches, queries, the queries' own branches) -> bool
 Search = Callable[[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray], np.ndarray]
 _PAIRS_MAX = 32  # (then, now) own-branch pairs tested one by one; beyond, their queries are asked again
+_SIDES_MAX = 8192  # one-sidedness' kept directions (at most 400 per curve, about 150 bytes each)
 _MARGIN = 1e-6  # relative: a ball counts as holding q up to this much beyond its reach (more asked again)
 
 
@@ -88,6 +89,15 @@ class SpurMemo:
         self._local.now = {"pts": pts, "pos": pos, "inverse": inverse, "match": match, "radius": r, "tree": tree}
         return r[inverse]
 
+    def sides(self, tree: cKDTree) -> dict:
+        """The one-sidedness' mean directions by (position, radius) against ``tree``
+        (:func:`.spur_sides.one_sidedness`'s ``kept``), shared along the updates; a new one for
+        another tree, emptied beyond ``_SIDES_MAX`` entries."""
+        kept = self.shared.get("sides")
+        if kept is None or kept[0] is not tree or len(kept[1]) > _SIDES_MAX:
+            kept = self.shared["sides"] = (tree, {})
+        return kept[1]
+
     def subsample(self, cloud: np.ndarray, key: tuple, make: Callable[[], np.ndarray]) -> np.ndarray:
         """``make()`` (the cloud's subsample of size and seed ``key``), made once for the same cloud array."""
         kept = self.shared.get("use")
@@ -139,8 +149,11 @@ class SpurMemo:
         redo = np.ones(len(rows), bool)
         answer = np.zeros(len(rows), bool)
         if prev is not None and prev.n_use == n_use and len(rows):
-            at = np.minimum(np.searchsorted(prev.rows, rows), max(len(prev.rows) - 1, 0))
-            known = (prev.rows[at] == rows) if len(prev.rows) else np.zeros(len(rows), bool)
+            slot = np.full(n_use, -1, np.int64)  # each subsample row's place among the rows asked before
+            slot[prev.rows] = np.arange(len(prev.rows))
+            at = slot[rows]
+            known = at >= 0
+            at = np.maximum(at, 0)
             redo = ~known
             if known.any():
                 redo |= _touched(prev, pts, labels, reach, queries, own, at, known)

@@ -310,3 +310,26 @@ def test_a_tie_between_two_nearest_curve_points_is_asked_again():
         curve, change = E.apply(curve, {"op": op, "args": args})
         ev = ev.update(change)
     _same(ev, evaluate(cloud, skeletal, curve))
+
+
+def test_the_kept_one_sidedness_gives_the_same_value():
+    """The spur test's one-sidedness reads each asked curve point's mean direction from the kept ones
+    (``one_sidedness(..., kept=)``, shared along an evaluation's updates): the same value as asking the
+    cloud at every point, for a curve with points kept, moved and added."""
+    from scipy.spatial import cKDTree
+
+    from skelcore.diagnostics.spur_sides import one_sidedness
+
+    sh = shapes.y_shape(3000, seed=4, n_curve_per_arm=6)
+    tree = cKDTree(sh.cloud)
+    pts = np.vstack([np.linspace(v, w, 12) for v, w in zip(sh.curve_vertices[:-1], sh.curve_vertices[1:])])
+    r_x = tree.query(pts)[0]
+    kept: dict = {}
+    first = one_sidedness(tree, pts, r_x, float(np.median(r_x)), kept=kept)
+    assert first == one_sidedness(tree, pts, r_x, float(np.median(r_x))) and kept
+    moved = np.vstack([pts[::2], pts[1::4] + 0.01])
+    r_m = tree.query(moved)[0]
+    n_kept = len(kept)
+    assert one_sidedness(tree, moved, r_m, float(np.median(r_x)), kept=kept) == \
+        one_sidedness(tree, moved, r_m, float(np.median(r_x)))
+    assert len(kept) > n_kept
