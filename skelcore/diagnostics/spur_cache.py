@@ -263,11 +263,11 @@ def _nearest_within(centres: np.ndarray, queries: np.ndarray, bound: np.ndarray)
     if not len(queries) or not bound.max() >= 0:
         return out
     lo, hi = centres.min(axis=0), centres.max(axis=0)
-    top = float(bound.max()) * (1 + _MARGIN)  # first within the largest bound, then each its own
-    cand = _in_box(queries, lo - top, hi + top)
-    b = (bound[cand] * (1 + _MARGIN))[:, None]
-    q = queries[cand]
-    near = cand[(bound[cand] >= 0) & np.all((q >= lo - b) & (q <= hi + b), axis=1)]
+    b = bound * (1 + _MARGIN)
+    near = np.flatnonzero(bound >= 0)  # then within each its own bound of the centres' box, a coordinate at a time
+    for k in range(queries.shape[1]):
+        col, bk = queries[near, k], b[near]
+        near = near[(col >= lo[k] - bk) & (col <= hi[k] + bk)]
     if len(near):
         out[near] = cKDTree(centres).query(queries[near], k=1)[0]
     return out
