@@ -19,13 +19,41 @@ from typing import Callable
 import numpy as np
 from scipy.spatial import cKDTree
 
-__all__ = ["SpurSearch", "SpurMemo"]
+__all__ = ["SpurSearch", "SpurMemo", "NearestByBalls", "same_tree"]
 
 #: a search function (curve points, their branches, reaches, queries, the queries' own branches) -> bool
 Search = Callable[[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray], np.ndarray]
 _PAIRS_MAX = 32  # (then, now) own-branch pairs tested one by one; beyond, their queries are asked again
 _SIDES_MAX = 8192  # one-sidedness' kept directions (at most 400 per curve, about 150 bytes each)
 _MARGIN = 1e-6  # relative: a ball counts as holding q up to this much beyond its reach (more asked again)
+
+
+class NearestByBalls:
+    """A KD-tree of the whole cloud whose one-nearest queries (rows of points) the cloud's ball tree
+    answers (:meth:`skelcore.metrics.ball_tree.BallTree.nearest`, built on the same points: the same
+    distance bits, sqrt(dx^2 + dy^2 + dz^2) of each pair, about 3 x faster from a tube's axis, where a
+    KD-tree visits the whole wall); the index is that of a nearest point, on a tie perhaps another than
+    the KD-tree's. Everything else is the KD-tree's (``kd``). An edit's update hands it to the curve's
+    diagnostics, which read the distances alone."""
+
+    def __init__(self, kd: cKDTree, index: object) -> None:
+        self.kd, self._index = kd, index  # a skelcore.metrics.cloud_index.CloudIndex of the same points
+
+    def query(self, x: np.ndarray, k: int = 1, **options: object) -> tuple[np.ndarray, np.ndarray]:
+        q = np.asarray(x, dtype=float)
+        if k != 1 or options or q.ndim != 2 or q.shape[1] != 3 or not len(q):
+            return self.kd.query(x, k=k, **options)
+        balls = self._index.surface()
+        d, at = balls.nearest(q, return_index=True)
+        return d, balls.perm[at].astype(np.int64)
+
+    def __getattr__(self, name: str) -> object:
+        return getattr(self.kd, name)
+
+
+def same_tree(a: object, b: object) -> bool:
+    """Whether two trees are one (a :class:`NearestByBalls` is its KD-tree)."""
+    return getattr(a, "kd", a) is getattr(b, "kd", b)
 
 
 @dataclass(frozen=True)
@@ -80,7 +108,7 @@ class SpurMemo:
         match = _match(prev.pos, pos) if prev is not None else np.full(len(pos), -1)
         r = np.empty(len(pos))
         known = match >= 0
-        if prev is not None and prev.tree is tree:
+        if prev is not None and same_tree(prev.tree, tree):
             r[known] = prev.pos_radius[match[known]]
         else:
             known[:] = False
@@ -94,7 +122,7 @@ class SpurMemo:
         (:func:`.spur_sides.one_sidedness`'s ``kept``), shared along the updates; a new one for
         another tree, emptied beyond ``_SIDES_MAX`` entries."""
         kept = self.shared.get("sides")
-        if kept is None or kept[0] is not tree or len(kept[1]) > _SIDES_MAX:
+        if kept is None or not same_tree(kept[0], tree) or len(kept[1]) > _SIDES_MAX:
             kept = self.shared["sides"] = (tree, {})
         return kept[1]
 

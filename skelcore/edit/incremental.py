@@ -21,6 +21,7 @@ from typing import Any, Callable
 import numpy as np
 
 from ..curve import CurveSkeleton
+from ..diagnostics.spur_cache import NearestByBalls
 from ..errors import Cancelled, SkelInputError
 from ..evaluation import Evaluation
 from ..geometry import check_magnitude, no_checkpoint, unique_rows
@@ -187,8 +188,19 @@ def _edited_context(old: EvalContext, curve: CurveSkeleton) -> EvalContext:
     samples = sample_curve(curve_n, p.curve_samples, collinear_cos=p.collinear_cos, method=p.curve_sampling)
     kept = {k: v for k, v in old.results.items() if k not in CURVE_STAGES}
     unset = {k: v for k, v in old.not_computed.items() if v != LEFT_OUT}  # an update of a first phase
-    return replace(old, curve=curve, curve_n=curve_n, samples=samples, results=kept,
-                   not_computed=unset, unseen=dict(old.unseen), spur_memo=old.spur_memo.next())
+    return replace(old, curve=curve, curve_n=curve_n, samples=samples, results=kept, not_computed=unset,
+                   unseen=dict(old.unseen), spur_memo=old.spur_memo.next(), _diag_tree=_diag_tree(old))
+
+
+def _diag_tree(old: EvalContext) -> list:
+    """The diagnostics' tree for the edited curve: ``old``'s, whose one-nearest distances the cloud
+    index's ball tree gives when the tree holds the whole cloud (:class:`NearestByBalls`, the same bits;
+    the curve's branch radii and the outside test's walk ask it from the axis)."""
+    tree = old._diag_tree[0] if old._diag_tree else None
+    if (tree is None or isinstance(tree, NearestByBalls) or old.cloud_index is None
+            or len(old.cloud_n) > old.params.diag_max_points or tree.n != len(old.cloud_n)):
+        return old._diag_tree
+    return [NearestByBalls(tree, old.cloud_index)]
 
 
 def _keys(*columns: np.ndarray) -> list[bytes]:

@@ -333,3 +333,25 @@ def test_the_kept_one_sidedness_gives_the_same_value():
     assert one_sidedness(tree, moved, r_m, float(np.median(r_x)), kept=kept) == \
         one_sidedness(tree, moved, r_m, float(np.median(r_x)))
     assert len(kept) > n_kept
+
+
+def test_the_ball_tree_answers_the_diagnostics_nearest_distances_to_the_bit():
+    """An update's diagnostics ask their one-nearest distances of the cloud index's ball tree
+    (``spur_cache.NearestByBalls``): the KD-tree's bits, from a tube's axis, off it and from the cloud's
+    own points; other queries are the KD-tree's own."""
+    from scipy.spatial import cKDTree
+
+    from skelcore.diagnostics.spur_cache import NearestByBalls, same_tree
+    from skelcore.metrics.cloud_index import CloudIndex
+
+    sh = shapes.y_shape(5000, seed=3, n_curve_per_arm=6)
+    kd = cKDTree(sh.cloud)
+    tree = NearestByBalls(kd, CloudIndex(sh.cloud))
+    rng = np.random.default_rng(0)
+    axis = np.vstack([np.linspace(v, w, 50) for v, w in zip(sh.curve_vertices[:-1], sh.curve_vertices[1:])])
+    for q in (axis, axis + rng.normal(0, 0.05, axis.shape), sh.cloud[::7]):
+        d, i = tree.query(q)
+        np.testing.assert_array_equal(d, kd.query(q)[0])
+        np.testing.assert_array_equal(np.linalg.norm(sh.cloud[i] - q, axis=1), d)
+    np.testing.assert_array_equal(tree.query(axis, k=3)[1], kd.query(axis, k=3)[1])
+    assert tree.n == kd.n and same_tree(tree, kd) and not same_tree(tree, cKDTree(sh.cloud))
