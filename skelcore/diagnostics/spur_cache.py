@@ -29,21 +29,22 @@ _MARGIN = 1e-6  # relative: a ball counts as holding q up to this much beyond it
 
 
 class NearestByBalls:
-    """A KD-tree of the whole cloud whose one-nearest queries (rows of points) the cloud's ball tree
-    answers (:meth:`skelcore.metrics.ball_tree.BallTree.nearest`, built on the same points: the same
+    """A KD-tree of the cloud (or of its subsample) whose one-nearest queries (rows of points) a ball
+    tree of the same points answers (:meth:`skelcore.metrics.ball_tree.BallTree.nearest`: the same
     distance bits, sqrt(dx^2 + dy^2 + dz^2) of each pair, about 3 x faster from a tube's axis, where a
     KD-tree visits the whole wall); the index is that of a nearest point, on a tie perhaps another than
-    the KD-tree's. Everything else is the KD-tree's (``kd``). An edit's update hands it to the curve's
-    diagnostics, which read the distances alone."""
+    the KD-tree's. Everything else is the KD-tree's (``kd``). ``balls()`` gives the ball tree (built on
+    ``kd.data``, its ``perm`` to the rows). An edit's update hands it to the curve's diagnostics, which
+    read the distances alone."""
 
-    def __init__(self, kd: cKDTree, index: object) -> None:
-        self.kd, self._index = kd, index  # a skelcore.metrics.cloud_index.CloudIndex of the same points
+    def __init__(self, kd: cKDTree, balls: Callable[[], object]) -> None:
+        self.kd, self._balls = kd, balls
 
     def query(self, x: np.ndarray, k: int = 1, **options: object) -> tuple[np.ndarray, np.ndarray]:
         q = np.asarray(x, dtype=float)
         if k != 1 or options or q.ndim != 2 or q.shape[1] != 3 or not len(q):
             return self.kd.query(x, k=k, **options)
-        balls = self._index.surface()
+        balls = self._balls()
         d, at = balls.nearest(q, return_index=True)
         return d, balls.perm[at].astype(np.int64)
 

@@ -342,16 +342,39 @@ def test_the_ball_tree_answers_the_diagnostics_nearest_distances_to_the_bit():
     from scipy.spatial import cKDTree
 
     from skelcore.diagnostics.spur_cache import NearestByBalls, same_tree
+    from skelcore.metrics.ball_tree import BallTree
     from skelcore.metrics.cloud_index import CloudIndex
 
     sh = shapes.y_shape(5000, seed=3, n_curve_per_arm=6)
     kd = cKDTree(sh.cloud)
-    tree = NearestByBalls(kd, CloudIndex(sh.cloud))
+    tree = NearestByBalls(kd, CloudIndex(sh.cloud).surface)
+    sub = sh.cloud[::3]  # a subsample's tree and its own ball tree
+    kd_sub = cKDTree(sub)
+    tree_sub = NearestByBalls(kd_sub, lambda: BallTree(sub, slab=True))
     rng = np.random.default_rng(0)
     axis = np.vstack([np.linspace(v, w, 50) for v, w in zip(sh.curve_vertices[:-1], sh.curve_vertices[1:])])
     for q in (axis, axis + rng.normal(0, 0.05, axis.shape), sh.cloud[::7]):
-        d, i = tree.query(q)
-        np.testing.assert_array_equal(d, kd.query(q)[0])
-        np.testing.assert_array_equal(np.linalg.norm(sh.cloud[i] - q, axis=1), d)
+        for t, k, pts in ((tree, kd, sh.cloud), (tree_sub, kd_sub, sub)):
+            d, i = t.query(q)
+            np.testing.assert_array_equal(d, k.query(q)[0])
+            np.testing.assert_array_equal(np.linalg.norm(pts[i] - q, axis=1), d)
     np.testing.assert_array_equal(tree.query(axis, k=3)[1], kd.query(axis, k=3)[1])
     assert tree.n == kd.n and same_tree(tree, kd) and not same_tree(tree, cKDTree(sh.cloud))
+
+
+def test_an_update_on_a_subsampled_cloud_equals_a_fresh_evaluation():
+    """Above ``diag_max_points`` the diagnostics read a subsample's tree, and an update asks its
+    one-nearest distances of a ball tree of that subsample (made once): the fresh evaluation's values."""
+    from skelcore import Params
+    from skelcore.diagnostics.spur_cache import NearestByBalls
+
+    sh = shapes.y_shape(1200, seed=5, n_curve_per_arm=6)
+    p = Params(diag_max_points=500)
+    ev = evaluate(sh.cloud, curve=(sh.curve_vertices, sh.curve_edges), params=p)
+    curve = ev.curve.curve
+    for op, args in (("move_vertex", {"vertex": 3, "position": (curve.vertices[3] + 0.02).tolist()}),
+                     ("delete_edge", {"edge": tuple(int(x) for x in curve.edges[4])})):
+        curve, change = E.apply(curve, {"op": op, "args": args})
+        ev = ev.update(change)
+        _same(ev, evaluate(sh.cloud, curve=curve, params=p))
+    assert isinstance(ev.source.ctx.diag_tree(), NearestByBalls)
