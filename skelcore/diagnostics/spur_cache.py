@@ -161,12 +161,20 @@ class SpurMemo:
             redo = ~ok
         own = np.empty(len(use), labels.dtype)
         own[~redo] = lo[near_pos[~redo]]
-        if redo.any():
-            d, i = cKDTree(pts).query(use[redo])
-            own[redo], near_pos[redo], near_d[redo] = labels[i], inverse[i], d
-            if len(pos) > 1:  # a second position as near: the kd-tree's choice between them is not kept
-                second = cKDTree(pos).query(use[redo], k=2)[0][:, 1]
-                tied[redo] = second <= d * (1 + 1e-9)
+        rows = np.flatnonzero(redo)
+        if len(rows) and len(pos) > 1:
+            # the two nearest positions: a row whose nearest is no tie (a second position as near: the
+            # kd-tree's choice between them is not kept) and carries one label takes it; the others
+            # ask the curve points, as the whole curve's search does
+            dd, ii = cKDTree(pos).query(use[rows], k=2)
+            tied[rows] = dd[:, 1] <= dd[:, 0] * (1 + 1e-9)
+            plain = ~tied[rows] & (lo[ii[:, 0]] == hi[ii[:, 0]])
+            one = rows[plain]
+            own[one], near_pos[one], near_d[one] = lo[ii[plain, 0]], ii[plain, 0], dd[plain, 0]
+            rows = rows[~plain]
+        if len(rows):
+            d, i = cKDTree(pts).query(use[rows])
+            own[rows], near_pos[rows], near_d[rows] = labels[i], inverse[i], d
         now.update(near_pos=near_pos, near_d=near_d, near_tied=tied, n_use=len(use))
         return own
 
