@@ -49,6 +49,8 @@ class NearestByBalls:
         return d, balls.perm[at].astype(np.int64)
 
     def __getattr__(self, name: str) -> object:
+        if name.startswith("__") or name in ("kd", "_balls"):  # not set yet (a copy, an unpickling)
+            raise AttributeError(name)
         return getattr(self.kd, name)
 
 
