@@ -19,12 +19,44 @@ from typing import Callable
 import numpy as np
 from scipy.spatial import cKDTree
 
-__all__ = ["SpurSearch", "SpurMemo"]
+__all__ = ["SpurSearch", "SpurMemo", "NearestByBalls", "same_tree"]
 
 #: a search function (curve points, their branches, reaches, queries, the queries' own branches) -> bool
 Search = Callable[[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray], np.ndarray]
 _PAIRS_MAX = 32  # (then, now) own-branch pairs tested one by one; beyond, their queries are asked again
+_SIDES_MAX = 8192  # one-sidedness' kept directions (at most 400 per curve, about 150 bytes each)
 _MARGIN = 1e-6  # relative: a ball counts as holding q up to this much beyond its reach (more asked again)
+
+
+class NearestByBalls:
+    """A KD-tree of the cloud (or of its subsample) whose one-nearest queries (rows of points) a ball
+    tree of the same points answers (:meth:`skelcore.metrics.ball_tree.BallTree.nearest`: the same
+    distance bits, sqrt(dx^2 + dy^2 + dz^2) of each pair, about 3 x faster from a tube's axis, where a
+    KD-tree visits the whole wall); the index is that of a nearest point, on a tie perhaps another than
+    the KD-tree's. Everything else is the KD-tree's (``kd``). ``balls()`` gives the ball tree (built on
+    ``kd.data``, its ``perm`` to the rows). An edit's update hands it to the curve's diagnostics, which
+    read the distances alone."""
+
+    def __init__(self, kd: cKDTree, balls: Callable[[], object]) -> None:
+        self.kd, self._balls = kd, balls
+
+    def query(self, x: np.ndarray, k: int = 1, **options: object) -> tuple[np.ndarray, np.ndarray]:
+        q = np.asarray(x, dtype=float)
+        if k != 1 or options or q.ndim != 2 or q.shape[1] != 3 or not len(q):
+            return self.kd.query(x, k=k, **options)
+        balls = self._balls()
+        d, at = balls.nearest(q, return_index=True)
+        return d, balls.perm[at].astype(np.int64)
+
+    def __getattr__(self, name: str) -> object:
+        if name.startswith("__") or name in ("kd", "_balls"):  # not set yet (a copy, an unpickling)
+            raise AttributeError(name)
+        return getattr(self.kd, name)
+
+
+def same_tree(a: object, b: object) -> bool:
+    """Whether two trees are one (a :class:`NearestByBalls` is its KD-tree)."""
+    return getattr(a, "kd", a) is getattr(b, "kd", b)
 
 
 @dataclass(frozen=True)
@@ -79,7 +111,7 @@ class SpurMemo:
         match = _match(prev.pos, pos) if prev is not None else np.full(len(pos), -1)
         r = np.empty(len(pos))
         known = match >= 0
-        if prev is not None and prev.tree is tree:
+        if prev is not None and same_tree(prev.tree, tree):
             r[known] = prev.pos_radius[match[known]]
         else:
             known[:] = False
@@ -87,6 +119,15 @@ class SpurMemo:
             r[~known] = tree.query(pos[~known])[0]
         self._local.now = {"pts": pts, "pos": pos, "inverse": inverse, "match": match, "radius": r, "tree": tree}
         return r[inverse]
+
+    def sides(self, tree: cKDTree) -> dict:
+        """The one-sidedness' mean directions by (position, radius) against ``tree``
+        (:func:`.spur_sides.one_sidedness`'s ``kept``), shared along the updates; a new one for
+        another tree, emptied beyond ``_SIDES_MAX`` entries."""
+        kept = self.shared.get("sides")
+        if kept is None or not same_tree(kept[0], tree) or len(kept[1]) > _SIDES_MAX:
+            kept = self.shared["sides"] = (tree, {})
+        return kept[1]
 
     def subsample(self, cloud: np.ndarray, key: tuple, make: Callable[[], np.ndarray]) -> np.ndarray:
         """``make()`` (the cloud's subsample of size and seed ``key``), made once for the same cloud array."""
@@ -122,12 +163,20 @@ class SpurMemo:
             redo = ~ok
         own = np.empty(len(use), labels.dtype)
         own[~redo] = lo[near_pos[~redo]]
-        if redo.any():
-            d, i = cKDTree(pts).query(use[redo])
-            own[redo], near_pos[redo], near_d[redo] = labels[i], inverse[i], d
-            if len(pos) > 1:  # a second position as near: the kd-tree's choice between them is not kept
-                second = cKDTree(pos).query(use[redo], k=2)[0][:, 1]
-                tied[redo] = second <= d * (1 + 1e-9)
+        rows = np.flatnonzero(redo)
+        if len(rows) and len(pos) > 1:
+            # the two nearest positions: a row whose nearest is no tie (a second position as near: the
+            # kd-tree's choice between them is not kept) and carries one label takes it; the others
+            # ask the curve points, as the whole curve's search does
+            dd, ii = cKDTree(pos).query(use[rows], k=2)
+            tied[rows] = dd[:, 1] <= dd[:, 0] * (1 + 1e-9)
+            plain = ~tied[rows] & (lo[ii[:, 0]] == hi[ii[:, 0]])
+            one = rows[plain]
+            own[one], near_pos[one], near_d[one] = lo[ii[plain, 0]], ii[plain, 0], dd[plain, 0]
+            rows = rows[~plain]
+        if len(rows):
+            d, i = cKDTree(pts).query(use[rows])
+            own[rows], near_pos[rows], near_d[rows] = labels[i], inverse[i], d
         now.update(near_pos=near_pos, near_d=near_d, near_tied=tied, n_use=len(use))
         return own
 
@@ -139,8 +188,11 @@ class SpurMemo:
         redo = np.ones(len(rows), bool)
         answer = np.zeros(len(rows), bool)
         if prev is not None and prev.n_use == n_use and len(rows):
-            at = np.minimum(np.searchsorted(prev.rows, rows), max(len(prev.rows) - 1, 0))
-            known = (prev.rows[at] == rows) if len(prev.rows) else np.zeros(len(rows), bool)
+            slot = np.full(n_use, -1, np.int64)  # each subsample row's place among the rows asked before
+            slot[prev.rows] = np.arange(len(prev.rows))
+            at = slot[rows]
+            known = at >= 0
+            at = np.maximum(at, 0)
             redo = ~known
             if known.any():
                 redo |= _touched(prev, pts, labels, reach, queries, own, at, known)
@@ -250,11 +302,11 @@ def _nearest_within(centres: np.ndarray, queries: np.ndarray, bound: np.ndarray)
     if not len(queries) or not bound.max() >= 0:
         return out
     lo, hi = centres.min(axis=0), centres.max(axis=0)
-    top = float(bound.max()) * (1 + _MARGIN)  # first within the largest bound, then each its own
-    cand = _in_box(queries, lo - top, hi + top)
-    b = (bound[cand] * (1 + _MARGIN))[:, None]
-    q = queries[cand]
-    near = cand[(bound[cand] >= 0) & np.all((q >= lo - b) & (q <= hi + b), axis=1)]
+    b = bound * (1 + _MARGIN)
+    near = np.flatnonzero(bound >= 0)  # then within each its own bound of the centres' box, a coordinate at a time
+    for k in range(queries.shape[1]):
+        col, bk = queries[near, k], b[near]
+        near = near[(col >= lo[k] - bk) & (col <= hi[k] + bk)]
     if len(near):
         out[near] = cKDTree(centres).query(queries[near], k=1)[0]
     return out

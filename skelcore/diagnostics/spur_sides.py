@@ -20,9 +20,12 @@ __all__ = ["one_sidedness"]
 _ELEMENTS = 400  # curve points asked: the mean of this many unit vectors is steady to about 0.05
 
 
-def one_sidedness(cloud_tree: cKDTree, pts: np.ndarray, r_x: np.ndarray, r_typ: float, seed: int = 0) -> float:
+def one_sidedness(cloud_tree: cKDTree, pts: np.ndarray, r_x: np.ndarray, r_typ: float, seed: int = 0,
+                  kept: dict | None = None) -> float:
     """The length of the mean direction from the curve points ``pts`` (local radii ``r_x``) to their
-    cloud points across the axis (module docstring); 0 when no curve point has 8 cloud points near."""
+    cloud points across the axis (module docstring); 0 when no curve point has 8 cloud points near.
+    ``kept``: each asked point's mean direction by (position, radius), for this ``cloud_tree`` alone
+    (an edit's update asks the cloud only at new ones, :mod:`.spur_cache`; the same values)."""
     pts = np.asarray(pts, float)
     if len(pts) < 2 or not r_typ > 0:
         return 0.0
@@ -34,13 +37,22 @@ def one_sidedness(cloud_tree: cKDTree, pts: np.ndarray, r_x: np.ndarray, r_typ: 
     nb = cKDTree(pts).query(el, k=min(8, len(pts)))[1].reshape(len(el), -1)
     along = pts[nb] - pts[nb].mean(axis=1, keepdims=True)
     axis = np.linalg.eigh(np.matmul(along.transpose(0, 2, 1), along))[1][:, :, 2]
-    near = cloud_tree.query_ball_point(el, 2.0 * r_x[pick])
-    data = cloud_tree.data
+    radius = 2.0 * r_x[pick]
+    keys = [e.tobytes() + r.tobytes() for e, r in zip(el, radius)]
+    kept = {} if kept is None else kept
+    new = [i for i, key in enumerate(keys) if key not in kept]
+    if new:
+        data = cloud_tree.data
+        for i, rows in zip(new, cloud_tree.query_ball_point(el[new], radius[new])):
+            m = None
+            if len(rows) >= 8:
+                d = data[rows] - el[i]
+                n = np.linalg.norm(d, axis=1, keepdims=True)
+                m = np.mean(np.divide(d, n, out=np.zeros_like(d), where=n > 0), axis=0)
+            kept[keys[i]] = m
     u = []
-    for i, rows in enumerate(near):
-        if len(rows) >= 8:
-            d = data[rows] - el[i]
-            n = np.linalg.norm(d, axis=1, keepdims=True)
-            m = np.mean(np.divide(d, n, out=np.zeros_like(d), where=n > 0), axis=0)
+    for i, key in enumerate(keys):
+        m = kept[key]
+        if m is not None:
             u.append(m - (m @ axis[i]) * axis[i])
     return float(np.linalg.norm(np.mean(u, axis=0))) if u else 0.0

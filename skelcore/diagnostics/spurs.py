@@ -287,7 +287,8 @@ def find_spurious_branches(
         pts, pb = curve_points(curve, branches, step)
         memo = search_memo
         r_x = cloud_tree.query(pts)[0] if memo is None else memo.radii(pts, cloud_tree)
-        sided = one_sidedness(cloud_tree, pts, r_x, r_typ if r_typ > 0 else step, seed)
+        sided = one_sidedness(cloud_tree, pts, r_x, r_typ if r_typ > 0 else step, seed,
+                              None if memo is None else memo.sides(cloud_tree))
         checkpoint(0.2)
         use = (cloud_subsample(cloud, params.diag_max_points, seed) if memo is None else
                memo.subsample(cloud, (params.diag_max_points, seed),

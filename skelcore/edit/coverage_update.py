@@ -179,8 +179,16 @@ def _near_box(points: np.ndarray, centers: np.ndarray, reach: np.ndarray, cover_
     """Points that a ball of ``centers`` could reach: within max radius + ``reach`` (per point) or
     ``cover_reach`` of the centers' bounding box (a superset, by a relative 1e-9)."""
     lo, hi = centers.min(axis=0), centers.max(axis=0)
-    d = np.linalg.norm(np.maximum(np.maximum(lo - points, points - hi), 0.0), axis=1)
-    return (d <= (np.maximum(reach, cover_reach)) * (1 + 1e-9) + 1e-12)
+    bound = np.maximum(reach, cover_reach) * (1 + 1e-9) + 1e-12
+    rows = np.arange(len(points))  # first each coordinate alone (a loose bound), then the distance
+    for k in range(points.shape[1]):
+        col, b = points[rows, k], bound[rows] * (1 + 1e-9)
+        rows = rows[(col >= lo[k] - b) & (col <= hi[k] + b)]
+    p = points[rows]
+    d = np.linalg.norm(np.maximum(np.maximum(lo - p, p - hi), 0.0), axis=1)
+    out = np.zeros(len(points), bool)
+    out[rows[d <= bound[rows]]] = True
+    return out
 
 
 def _sub_tree(points: np.ndarray, r: np.ndarray, big_r: np.ndarray) -> BallTree:

@@ -21,9 +21,11 @@ from typing import Any, Callable
 import numpy as np
 
 from ..curve import CurveSkeleton
+from ..diagnostics.spur_cache import NearestByBalls
 from ..errors import Cancelled, SkelInputError
 from ..evaluation import Evaluation
 from ..geometry import check_magnitude, no_checkpoint, unique_rows
+from ..metrics.ball_tree import BallTree
 from ..metrics.boundedness import boundedness, rays_plan_is_exact
 from ..metrics.centeredness import curve_centeredness, slab_grid
 from ..metrics.curve_sampling import sample_curve
@@ -40,6 +42,7 @@ __all__ = ["update_evaluation", "complete_update", "left_out", "CURVE_STAGES", "
 #: left out by ``update(diagnostics=False)``
 DIAGNOSTIC_STAGES = ("curve coverage", "curve defects", "curve missing parts")
 _GRID_LOCK = threading.Lock()  # one slab grid per cache, even when two updates run at once
+_TREE_LOCK = threading.Lock()  # one ball tree of the diagnostics' points per evaluation
 _PLAN_LOCK = threading.Lock()  # the kept plans' flags, read and trimmed by updates side by side
 LEFT_OUT = "left out by Evaluation.update(diagnostics=False)"
 
@@ -64,7 +67,7 @@ def update_evaluation(ev: Evaluation, edited: Change | CurveSkeleton | Any, *, d
         new.source.cache = src.cache
         return new
     check_magnitude("curve skeleton", curve.vertices)
-    ctx = _edited_context(old, curve)
+    ctx = _edited_context(old, curve, src.cache)
     link_contexts(src.cache, ctx, old)
     run_graph(_tasks(old, ctx, src.cache, diagnostics), args.get("workers"))
     out = finish(ctx, args.get("inputs"), no_checkpoint)
@@ -179,7 +182,7 @@ def _tasks(old: EvalContext, ctx: EvalContext, cache: dict[str, Any], diagnostic
     return [task(s) for s in stages]
 
 
-def _edited_context(old: EvalContext, curve: CurveSkeleton) -> EvalContext:
+def _edited_context(old: EvalContext, curve: CurveSkeleton, cache: dict[str, Any]) -> EvalContext:
     """``old`` with the edited curve and its samples, the results of the stages that read no curve kept
     (the cloud's trees and interior are shared)."""
     p = old.params
@@ -187,8 +190,41 @@ def _edited_context(old: EvalContext, curve: CurveSkeleton) -> EvalContext:
     samples = sample_curve(curve_n, p.curve_samples, collinear_cos=p.collinear_cos, method=p.curve_sampling)
     kept = {k: v for k, v in old.results.items() if k not in CURVE_STAGES}
     unset = {k: v for k, v in old.not_computed.items() if v != LEFT_OUT}  # an update of a first phase
-    return replace(old, curve=curve, curve_n=curve_n, samples=samples, results=kept,
-                   not_computed=unset, unseen=dict(old.unseen), spur_memo=old.spur_memo.next())
+    return replace(old, curve=curve, curve_n=curve_n, samples=samples, results=kept, not_computed=unset,
+                   unseen=dict(old.unseen), spur_memo=old.spur_memo.next(), _diag_tree=_diag_tree(old, cache))
+
+
+def _diag_tree(old: EvalContext, cache: dict[str, Any]) -> list:
+    """The diagnostics' tree for the edited curve: ``old``'s, whose one-nearest distances a ball tree
+    of the same points gives (:class:`NearestByBalls`, the same bits; the curve's branch radii and the
+    outside test's walk ask them from the axis): the cloud index's when the tree holds the whole cloud,
+    else one of the subsample made once per evaluation (kept in ``cache``)."""
+    tree = old._diag_tree[0] if old._diag_tree else None
+    if tree is None or isinstance(tree, NearestByBalls):
+        return old._diag_tree
+    with _TREE_LOCK:
+        kept = cache.get("diagnostics' nearest")
+        if kept is None or kept.kd is not tree:
+            if old.cloud_index is not None and tree.n == len(old.cloud_n) <= old.params.diag_max_points:
+                kept = NearestByBalls(tree, old.cloud_index.surface)
+            else:
+                kept = NearestByBalls(tree, _balls_of(tree.data))
+            cache["diagnostics' nearest"] = kept
+    return [kept]
+
+
+def _balls_of(points: np.ndarray) -> Callable[[], BallTree]:
+    """A ball tree of ``points``, built at its first call (then kept)."""
+    made: list = []
+    lock = threading.Lock()
+
+    def get() -> BallTree:
+        with lock:
+            if not made:
+                made.append(BallTree(points, slab=True))
+            return made[0]
+
+    return get
 
 
 def _keys(*columns: np.ndarray) -> list[bytes]:

@@ -310,3 +310,71 @@ def test_a_tie_between_two_nearest_curve_points_is_asked_again():
         curve, change = E.apply(curve, {"op": op, "args": args})
         ev = ev.update(change)
     _same(ev, evaluate(cloud, skeletal, curve))
+
+
+def test_the_kept_one_sidedness_gives_the_same_value():
+    """The spur test's one-sidedness reads each asked curve point's mean direction from the kept ones
+    (``one_sidedness(..., kept=)``, shared along an evaluation's updates): the same value as asking the
+    cloud at every point, for a curve with points kept, moved and added."""
+    from scipy.spatial import cKDTree
+
+    from skelcore.diagnostics.spur_sides import one_sidedness
+
+    sh = shapes.y_shape(3000, seed=4, n_curve_per_arm=6)
+    tree = cKDTree(sh.cloud)
+    pts = np.vstack([np.linspace(v, w, 12) for v, w in zip(sh.curve_vertices[:-1], sh.curve_vertices[1:])])
+    r_x = tree.query(pts)[0]
+    kept: dict = {}
+    first = one_sidedness(tree, pts, r_x, float(np.median(r_x)), kept=kept)
+    assert first == one_sidedness(tree, pts, r_x, float(np.median(r_x))) and kept
+    moved = np.vstack([pts[::2], pts[1::4] + 0.01])
+    r_m = tree.query(moved)[0]
+    n_kept = len(kept)
+    assert one_sidedness(tree, moved, r_m, float(np.median(r_x)), kept=kept) == \
+        one_sidedness(tree, moved, r_m, float(np.median(r_x)))
+    assert len(kept) > n_kept
+
+
+def test_the_ball_tree_answers_the_diagnostics_nearest_distances_to_the_bit():
+    """An update's diagnostics ask their one-nearest distances of the cloud index's ball tree
+    (``spur_cache.NearestByBalls``): the KD-tree's bits, from a tube's axis, off it and from the cloud's
+    own points; other queries are the KD-tree's own."""
+    from scipy.spatial import cKDTree
+
+    from skelcore.diagnostics.spur_cache import NearestByBalls, same_tree
+    from skelcore.metrics.ball_tree import BallTree
+    from skelcore.metrics.cloud_index import CloudIndex
+
+    sh = shapes.y_shape(5000, seed=3, n_curve_per_arm=6)
+    kd = cKDTree(sh.cloud)
+    tree = NearestByBalls(kd, CloudIndex(sh.cloud).surface)
+    sub = sh.cloud[::3]  # a subsample's tree and its own ball tree
+    kd_sub = cKDTree(sub)
+    tree_sub = NearestByBalls(kd_sub, lambda: BallTree(sub, slab=True))
+    rng = np.random.default_rng(0)
+    axis = np.vstack([np.linspace(v, w, 50) for v, w in zip(sh.curve_vertices[:-1], sh.curve_vertices[1:])])
+    for q in (axis, axis + rng.normal(0, 0.05, axis.shape), sh.cloud[::7]):
+        for t, k, pts in ((tree, kd, sh.cloud), (tree_sub, kd_sub, sub)):
+            d, i = t.query(q)
+            np.testing.assert_array_equal(d, k.query(q)[0])
+            np.testing.assert_array_equal(np.linalg.norm(pts[i] - q, axis=1), d)
+    np.testing.assert_array_equal(tree.query(axis, k=3)[1], kd.query(axis, k=3)[1])
+    assert tree.n == kd.n and same_tree(tree, kd) and not same_tree(tree, cKDTree(sh.cloud))
+
+
+def test_an_update_on_a_subsampled_cloud_equals_a_fresh_evaluation():
+    """Above ``diag_max_points`` the diagnostics read a subsample's tree, and an update asks its
+    one-nearest distances of a ball tree of that subsample (made once): the fresh evaluation's values."""
+    from skelcore import Params
+    from skelcore.diagnostics.spur_cache import NearestByBalls
+
+    sh = shapes.y_shape(1200, seed=5, n_curve_per_arm=6)
+    p = Params(diag_max_points=500)
+    ev = evaluate(sh.cloud, curve=(sh.curve_vertices, sh.curve_edges), params=p)
+    curve = ev.curve.curve
+    for op, args in (("move_vertex", {"vertex": 3, "position": (curve.vertices[3] + 0.02).tolist()}),
+                     ("delete_edge", {"edge": tuple(int(x) for x in curve.edges[4])})):
+        curve, change = E.apply(curve, {"op": op, "args": args})
+        ev = ev.update(change)
+        _same(ev, evaluate(sh.cloud, curve=curve, params=p))
+    assert isinstance(ev.source.ctx.diag_tree(), NearestByBalls)
