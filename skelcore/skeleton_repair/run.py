@@ -203,7 +203,7 @@ def repair(cloud: np.ndarray, curve: CurveSkeleton | tuple | None = None, skelet
                 continue
             with clock.phase("first look"):  # the cheap first look (screen.py), then the rest
                 pre = ev.update(new, diagnostics=False)
-                seen, refusal = first_look(found, pre, p)
+                seen, refusal = first_look(found, pre, p, recentring=action.code == RECENTRE)
             if refusal is not None:
                 why.update(after=_rounded(seen), defects_after=None)
                 rejected.append({"entries": action.entries, "why": {**why, "rejected": refusal}})
