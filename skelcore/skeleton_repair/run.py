@@ -7,6 +7,7 @@ ones under ``rejected``."""
 from __future__ import annotations
 
 import time
+from itertools import islice
 from dataclasses import dataclass, field
 from functools import cached_property
 from typing import Any, Callable
@@ -24,7 +25,7 @@ from .findings import read_findings
 from .from_skeletal import HOW, curve_from_skeletal
 from .guard import verdict
 from .proposals import Action, propose
-from .fill import fill_missing
+from .fill import fill_actions
 from .phases import PhaseClock
 from .recentre import RECENTRE, recentre, settled, vertex_centeredness
 from .reroute import route_inside
@@ -183,8 +184,9 @@ def repair(cloud: np.ndarray, curve: CurveSkeleton | tuple | None = None, skelet
         with clock.phase("proposals"):
             inside, voxel, route = _in_shape(ev)
             candidates = propose(cur, found, inside, p.repair_join_step * voxel, route)
-            if p.repair_fill_missing:
-                candidates += fill_missing(cur, found.missing, np.asarray(ev.source.args["cloud"], float))
+            if p.repair_fill_missing:  # only the fills in_turn may try: the round's free tries, or the first
+                fills = fill_actions(cur, found.missing, np.asarray(ev.source.args["cloud"], float))
+                candidates += islice(fills, max(1, p.repair_max_tries - len(candidates)))
         if len(candidates) < p.repair_max_tries:  # re-centrings come last: cut only when they may be tried
             if drift is None:
                 with clock.phase("re-centring cuts"):
