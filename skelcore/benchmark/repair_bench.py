@@ -3,7 +3,8 @@ by each tool (the built-in ``cao`` / ``skelscope`` / ``default``, the adapters `
 then repaired; on a generated suite's clean tube cases also the reference with one controlled defect
 (:mod:`.skeleton_defects` at its middle level). Per job: GT F1 (docs/metrics.md 5.3.1) and the defect
 warnings and tallies before and after, the seconds of the skeletonization and of the repair (wall
-clock, and CPU of the process's threads: ``cpu_skeletonize``, ``cpu_repair``).
+clock, and CPU of the process's threads: ``cpu_skeletonize``, ``cpu_repair``, and the repair's CPU by
+phase, ``cpu_phases``: :attr:`~skelcore.skeleton_repair.RepairResult.phases`).
 ``samples`` instead of a folder: the bundled samples of resources/samples. Behind
 ``skelcore bench repair``; the table and summary are :mod:`.repair_table`'s.
 """
@@ -129,7 +130,8 @@ def repair_job(case: RepairCase, job: str, curve: CurveSkeleton, seconds_skeleto
     row.update(f1_after=_f1(r.curve, case.reference), seconds_repair=round(r.seconds, 2),
                cpu_repair=round(time.process_time() - cpu, 2), kept=r.accepted,
                rejected=r.rejected, stopped=r.stopped, tally_before=dict(r.tally_before),
-               tally_after=dict(r.tally_after), warnings_before=_warned(r.before), warnings_after=_warned(r.after))
+               tally_after=dict(r.tally_after), warnings_before=_warned(r.before), warnings_after=_warned(r.after),
+               cpu_phases=r.phases)
     return row
 
 

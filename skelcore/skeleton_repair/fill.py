@@ -2,11 +2,12 @@
 region becomes a new stretch of curve attached at the nearest vertex: the centroids of the
 region's slabs along its main axis (a tube's end seen all around: the slab centroids lie on its axis)
 the region skeletonized by :func:`skelcore.skeletonize` (``skelscope``), or the region's axis curve
-at its own spacing (:mod:`skelcore.skeleton.local_axis`: a thin branch). Tried last."""
+at its own spacing (:mod:`skelcore.skeleton.local_axis`: a thin branch). Tried last, and made one at
+a time (:func:`fill_actions`): a round takes only those it may try."""
 
 from __future__ import annotations
 
-from typing import Any
+from typing import Any, Iterator
 
 import numpy as np
 from scipy.spatial import cKDTree
@@ -15,7 +16,7 @@ from ..curve import CurveSkeleton
 from ..errors import SkelInputError
 from .proposals import Action
 
-__all__ = ["fill_missing"]
+__all__ = ["fill_missing", "fill_actions"]
 
 
 def _slab_line(pts: np.ndarray, step: float) -> np.ndarray:
@@ -90,13 +91,18 @@ def _axis_entries(curve: CurveSkeleton, pts: np.ndarray) -> tuple[list[dict[str,
 
 
 def fill_missing(curve: CurveSkeleton, missing: Any, cloud: np.ndarray, max_regions: int = 2) -> list[Action]:
-    """One or two actions per counted missing region (largest first) of ``missing``
+    """Up to three actions per counted missing region (largest first) of ``missing``
     (:class:`~skelcore.diagnostics.missing_parts.MissingParts` of the evaluated ``cloud``)."""
+    return list(fill_actions(curve, missing, cloud, max_regions))
+
+
+def fill_actions(curve: CurveSkeleton, missing: Any, cloud: np.ndarray, max_regions: int = 2) -> Iterator[Action]:
+    """:func:`fill_missing`'s actions one at a time, in its order: each is made (a region's
+    skeletonization, its axis curve) only when asked for."""
     if missing is None or not missing.counted or len(missing.region) != len(cloud):
-        return []
+        return
     e = curve.edges
     step = float(np.median(np.linalg.norm(curve.vertices[e[:, 0]] - curve.vertices[e[:, 1]], axis=1)))
-    out = []
     for reg in missing.counted[:max_regions]:
         pts = cloud[missing.region == reg.id]
         if len(pts) < 10:
@@ -105,16 +111,15 @@ def fill_missing(curve: CurveSkeleton, missing: Any, cloud: np.ndarray, max_regi
         line = _slab_line(pts, max(step, 1e-12))
         if len(line) >= 3:
             entries, at = _attach_polyline(curve, line)
-            out.append(Action("incomplete", target, f"missing region {reg.id} ({reg.n_points} points): the "
-                              f"centroids of its slabs ({len(line)}) attached at vertex {at}", entries))
+            yield Action("incomplete", target, f"missing region {reg.id} ({reg.n_points} points): the "
+                         f"centroids of its slabs ({len(line)}) attached at vertex {at}", entries)
         made = _skeleton_entries(curve, pts)
         if made is not None:
             entries, at = made
-            out.append(Action("incomplete", target, f"missing region {reg.id} ({reg.n_points} points) "
-                              f"skeletonized and attached at vertex {at}", entries))
+            yield Action("incomplete", target, f"missing region {reg.id} ({reg.n_points} points) "
+                         f"skeletonized and attached at vertex {at}", entries)
         made = _axis_entries(curve, pts)
         if made is not None:
             entries, at = made
-            out.append(Action("incomplete", target, f"missing region {reg.id} ({reg.n_points} points): its "
-                              f"axis curve at its own spacing attached at vertex {at}", entries))
-    return out
+            yield Action("incomplete", target, f"missing region {reg.id} ({reg.n_points} points): its "
+                         f"axis curve at its own spacing attached at vertex {at}", entries)

@@ -1,6 +1,6 @@
 """The never-worse rule (docs/repair.md "Never worse"): an action is kept only when it lowers the count
 of defects and costs no completeness, no outside share and no noticeable curve boundedness or
-centeredness; a re-centring may instead raise curve centeredness by ``Params.repair_centre_gain``
+centeredness; a re-centring must instead raise curve centeredness by ``Params.repair_centre_gain``
 with no more defects and no lower boundedness, and an action on a branch outside the shape may instead
 lower the outside length share by ``Params.repair_outside_gain`` with as many defects, no tunnel lost
 and no piece cut off (the tally counts a branch with two edges outside once, until both are back);
@@ -11,7 +11,7 @@ from __future__ import annotations
 from ..params import Params
 from .findings import Findings
 
-__all__ = ["verdict", "worse", "KEPT_WHOLE"]
+__all__ = ["verdict", "worse", "recentred", "KEPT_WHOLE"]
 
 #: the defects an outside action that lowers the outside share may not add: a tunnel's cycle lost (a
 #: chord through a torus's hole deleted) or a piece cut off; a spur for a spurious cycle is a fair trade
@@ -27,8 +27,11 @@ def verdict(before: Findings, after: Findings, params: Params, recentring: bool 
     why = worse(b, a, params)
     if why:
         return "worse: " + "; ".join(why)
-    if recentring and after.total == before.total:
-        return _recentred(b, a, params)
+    if recentring:  # a gain of its own whatever the count: what the first look decides (screen.py)
+        why = recentred(b, a, params)
+        if why is None and after.total > before.total:
+            why = f"no progress: {before.total} defect(s) before, {after.total} after"
+        return why
     if outside and after.total == before.total and all(after.tally[k] <= before.tally[k] for k in KEPT_WHOLE):
         return _less_outside(b, a, params, before.total)
     if after.total >= before.total:
@@ -53,9 +56,9 @@ def worse(b: dict, a: dict, params: Params, *, completeness: bool = True) -> lis
     return why
 
 
-def _recentred(b: dict, a: dict, params: Params) -> str | None:
-    """A re-centring with no more defects: kept when curve centeredness rises by the gain and curve
-    boundedness does not drop at all."""
+def recentred(b: dict, a: dict, params: Params) -> str | None:
+    """None when a re-centring raises curve centeredness by the gain and does not lower curve
+    boundedness at all (``b`` / ``a``: the measures before / after); else why not."""
     if b["boundedness"] is not None and (a["boundedness"] or 0.0) < b["boundedness"]:
         return f"worse: curve boundedness {b['boundedness']:.4f} -> {_r(a['boundedness'])}"
     if b["centeredness"] is None or a["centeredness"] is None \

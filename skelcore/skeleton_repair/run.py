@@ -7,6 +7,7 @@ ones under ``rejected``."""
 from __future__ import annotations
 
 import time
+from itertools import islice
 from dataclasses import dataclass, field
 from functools import cached_property
 from typing import Any, Callable
@@ -24,7 +25,8 @@ from .findings import read_findings
 from .from_skeletal import HOW, curve_from_skeletal
 from .guard import verdict
 from .proposals import Action, propose
-from .fill import fill_missing
+from .fill import fill_actions
+from .phases import PhaseClock
 from .recentre import RECENTRE, recentre, settled, vertex_centeredness
 from .reroute import route_inside
 from .screen import first_look
@@ -42,7 +44,8 @@ class RepairResult:
     ``why``; ``rejected`` lists the actions refused); ``before`` / ``after``: the first and last
     Evaluation; ``accepted`` / ``rejected``: counts; ``stopped``: why the loop ended; ``seconds``;
     ``extracted``: how the curve was made when only a skeletal set was given; ``skeletal``: the
-    repaired skeletal set (:func:`.skeletal_out.repaired_skeletal`)."""
+    repaired skeletal set (:func:`.skeletal_out.repaired_skeletal`); ``phases``: CPU seconds and runs
+    per phase (:class:`.phases.PhaseClock`)."""
 
     curve: CurveSkeleton
     log: dict[str, Any]
@@ -55,6 +58,7 @@ class RepairResult:
     tally_before: dict[str, int] = field(default_factory=dict)
     tally_after: dict[str, int] = field(default_factory=dict)
     extracted: str = ""
+    phases: dict[str, dict[str, float | int]] = field(default_factory=dict)
 
     @property
     def start(self) -> CurveSkeleton:
@@ -157,7 +161,9 @@ def repair(cloud: np.ndarray, curve: CurveSkeleton | tuple | None = None, skelet
             progress(min(1.0, fraction), what)
 
     tell(0.0, "evaluating the curve")
-    first = evaluate(cloud, skeletal=skeletal, curve=start, params=p, cancel=cancel)
+    clock = PhaseClock()
+    with clock.phase("first evaluation"):
+        first = evaluate(cloud, skeletal=skeletal, curve=start, params=p, cancel=cancel)
     check_frame(first)
     ev, cur, found = first, start, read_findings(first)
     ops: list[dict[str, Any]] = []
@@ -167,18 +173,25 @@ def repair(cloud: np.ndarray, curve: CurveSkeleton | tuple | None = None, skelet
     memo: dict = {}  # cross-sections cut by the re-centring, kept over the rounds
     for rnd in range(p.repair_max_rounds):
         check()
-        drift = _drift(cur, ev, found, p, memo, rejected, p.repair_max_tries) if found.total == 0 else None
+        drift = None
+        if found.total == 0:
+            with clock.phase("re-centring cuts"):
+                drift = _drift(cur, ev, found, p, memo, rejected, p.repair_max_tries)
         if found.total == 0 and not drift:
             stopped = _no_defect_left(found)
             break
         tell(rnd / p.repair_max_rounds, f"round {rnd + 1}")
-        inside, voxel, route = _in_shape(ev)
-        candidates = propose(cur, found, inside, p.repair_join_step * voxel, route)
-        if p.repair_fill_missing:
-            candidates += fill_missing(cur, found.missing, np.asarray(ev.source.args["cloud"], float))
+        with clock.phase("proposals"):
+            inside, voxel, route = _in_shape(ev)
+            candidates = propose(cur, found, inside, p.repair_join_step * voxel, route)
+            if p.repair_fill_missing:  # only the fills in_turn may try: the round's free tries, or the first
+                fills = fill_actions(cur, found.missing, np.asarray(ev.source.args["cloud"], float))
+                candidates += islice(fills, max(1, p.repair_max_tries - len(candidates)))
         if len(candidates) < p.repair_max_tries:  # re-centrings come last: cut only when they may be tried
-            candidates += drift if drift is not None else _drift(cur, ev, found, p, memo, rejected,
-                                                                  p.repair_max_tries - len(candidates))
+            if drift is None:
+                with clock.phase("re-centring cuts"):
+                    drift = _drift(cur, ev, found, p, memo, rejected, p.repair_max_tries - len(candidates))
+            candidates += drift
         done = False
         for action in in_turn(candidates, p.repair_max_tries):
             check()
@@ -190,14 +203,16 @@ def repair(cloud: np.ndarray, curve: CurveSkeleton | tuple | None = None, skelet
             except SkelInputError as exc:
                 rejected.append({"entries": action.entries, "why": {**why, "rejected": f"not applicable: {exc}"}})
                 continue
-            pre = ev.update(new, diagnostics=False)  # the cheap first look (screen.py), then the rest
-            seen, refusal = first_look(found, pre, p)
+            with clock.phase("first look"):  # the cheap first look (screen.py), then the rest
+                pre = ev.update(new, diagnostics=False)
+                seen, refusal = first_look(found, pre, p, recentring=action.code == RECENTRE)
             if refusal is not None:
                 why.update(after=_rounded(seen), defects_after=None)
                 rejected.append({"entries": action.entries, "why": {**why, "rejected": refusal}})
                 continue
-            new_ev = pre.complete_update(cancel)
-            new_found = read_findings(new_ev)
+            with clock.phase("whole update"):
+                new_ev = pre.complete_update(cancel)
+                new_found = read_findings(new_ev)
             why.update(after=_rounded(new_found.measures), defects_after=new_found.total)
             refusal = verdict(found, new_found, p, recentring=action.code == RECENTRE, outside=action.code == "outside")
             if refusal is not None:
@@ -223,4 +238,4 @@ def repair(cloud: np.ndarray, curve: CurveSkeleton | tuple | None = None, skelet
     n_acc = sum(1 for o in ops if o["why"]["step"].startswith("1 of"))
     return RepairResult(curve=cur, log=log, before=first, after=ev, accepted=n_acc, rejected=len(rejected),
                         stopped=stopped, seconds=time.perf_counter() - t0, tally_before=tally0,
-                        tally_after=dict(found.tally), extracted=extracted)
+                        tally_after=dict(found.tally), extracted=extracted, phases=clock.table())

@@ -1,8 +1,9 @@
 """A candidate's cheap first look (docs/repair.md "Never worse"): the edited curve's update without its
 diagnostics (curve boundedness and centeredness), then its coverage and completeness alone. An action
 these already make worse is rejected without the curve's defects, the dear part of an update at 100k
-points; one that passes gets the whole update (:meth:`~skelcore.Evaluation.complete_update`). The
-measures are those the whole update gives (the same stages on the same inputs, computed once), so the
+points, and a re-centring without its own gain (:func:`.guard.recentred`) before its coverage too;
+one that passes gets the whole update (:meth:`~skelcore.Evaluation.complete_update`). The measures
+are those the whole update gives (the same stages on the same inputs, computed once), so the
 decisions are the never-worse rule's own."""
 
 from __future__ import annotations
@@ -13,7 +14,7 @@ from ..edit.incremental import compute_left_out
 from ..evaluation import Evaluation
 from ..params import Params
 from .findings import Findings
-from .guard import worse
+from .guard import recentred, worse
 
 __all__ = ["first_look"]
 
@@ -32,14 +33,18 @@ def _completeness(pre: Evaluation) -> tuple[bool, float | None]:
     return True, _num(getattr(done["curve missing parts"], "completeness", None))
 
 
-def first_look(before: Findings, pre: Evaluation, params: Params) -> tuple[dict[str, float | None], str | None]:
+def first_look(before: Findings, pre: Evaluation, params: Params, recentring: bool = False
+               ) -> tuple[dict[str, float | None], str | None]:
     """(the measures known without defects, why the action is worse or None) for ``pre``, the
     candidate's ``update(..., diagnostics=False)``: completeness, curve boundedness and centeredness
-    against ``before`` with the bounds of :func:`.guard.verdict`; the outside share stays None."""
+    against ``before`` with the bounds of :func:`.guard.verdict`; the outside share stays None.
+    ``recentring``: a re-centring, refused before its completeness when it has not its gain."""
     s = pre.summary()
-    known, completeness = _completeness(pre)
-    a = {"completeness": completeness, "outside_share": None,
+    a = {"completeness": None, "outside_share": None,
          "boundedness": _num(s["boundedness"]["curve"]), "centeredness": _num(s["centeredness"]["curve"])}
+    if recentring and (why_not := recentred(before.measures, a, params)) is not None:
+        return a, why_not
+    known, a["completeness"] = _completeness(pre)
     why = worse(before.measures, a, params, completeness=known)
     return a, ("worse: " + "; ".join(why)) if why else None
 

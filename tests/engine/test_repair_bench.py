@@ -18,6 +18,7 @@ def test_bench_repair_on_the_bundled_cylinder(tmp_path, capsys):
     for r in rows:
         assert 0.5 < r["f1_before"] <= 1.0 and r["f1_after"] >= r["f1_before"] - MARGIN
         assert set(r) >= {"tally_before", "tally_after", "warnings_before", "warnings_after", "seconds_repair"}
+        assert r["cpu_phases"]["first evaluation"]["n"] == 1  # the repair's CPU by phase
     assert rows[0]["seconds_skeletonize"] > 0 and rows[1]["seconds_skeletonize"] is None
     s = summarize(rows)
     assert s["all"]["jobs"] == 2 and s["all"]["worse"] == 0 and s["cao"]["timed"] == 1

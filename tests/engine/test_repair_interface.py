@@ -86,6 +86,37 @@ def test_a_recentring_needs_a_centeredness_gain_and_nothing_worse(after, ok):
     assert verdict(before, after, Params()) is not None  # any other action must lower the defect count
 
 
+def test_a_recentring_that_lowers_the_count_still_needs_its_gain():
+    """A re-centring is judged by its own gain even when the count falls (what its first look can
+    decide without the defects); any other action with one defect fewer is kept."""
+    before, after = _findings(0.70, n=1), _findings(0.705, n=0)
+    assert verdict(before, after, Params(), recentring=True).startswith("no progress: curve centeredness")
+    assert verdict(before, _findings(0.72, n=0), Params(), recentring=True) is None
+    assert verdict(before, after, Params()) is None
+
+
+def test_a_recentring_without_its_gain_is_refused_at_first_look(drifted):
+    """The drifted arm's re-centring moved back again, then a no-op move: the first look refuses the
+    latter without its completeness (None), and the whole update would refuse it as well."""
+    from skelcore.edit import apply
+    from skelcore.skeleton_repair.findings import read_findings
+    from skelcore.skeleton_repair.screen import first_look
+
+    s, _ref, start, r = drifted
+    p = Params()
+    ev = r.after
+    found = read_findings(ev)
+    v = int(r.log["operations"][0]["args"]["vertex"])
+    still = apply(r.curve, {"op": "move_vertex", "args": {"vertex": v, "position": r.curve.vertices[v].tolist()}},
+                  "test")[0]
+    pre = ev.update(still, diagnostics=False)
+    seen, why = first_look(found, pre, p, recentring=True)
+    assert why.startswith("no progress: curve centeredness") and seen["completeness"] is None
+    assert verdict(found, read_findings(ev.update(still)), p, recentring=True) == why
+    seen, why = first_look(found, ev.update(still, diagnostics=False), p)  # any other action: completeness
+    assert why is None and seen["completeness"] == pytest.approx(found.measures["completeness"])
+
+
 def test_the_curve_of_a_skeletal_set_is_the_one_skeletonize_makes():
     s = shapes.y_shape(1200)
     skeletal, curve = skelcore.skeletonize(s.cloud, method="cao")

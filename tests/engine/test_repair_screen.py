@@ -66,3 +66,27 @@ def test_every_defect_kind_has_its_turn():
     order = [(a.code, a.target["k"]) for a in in_turn(acts, 6)]
     assert order == [("spurious_cycles", k) for k in range(6)] + [("incomplete", 0), ("outside", 0)]
     assert in_turn(acts[:3], 6) == acts[:3]
+
+
+def test_a_fill_is_made_only_when_a_round_asks_for_it(monkeypatch):
+    """A tube whose curve stops halfway: its upper half is a counted missing region. The fills come one
+    at a time in fill_missing's order, and the first (the slabs' centroids) is made without the region's
+    skeletonization, which a round whose tries are taken never asks for."""
+    from skelcore import shapes
+    from skelcore.skeleton_repair import fill
+
+    s = shapes.cylinder(1500)
+    half = s.curve_edges[(s.curve_edges < 11).all(axis=1)]
+    curve = CurveSkeleton.from_raw(s.curve_vertices[:11], half)
+    found = read_findings(skelcore.evaluate(s.cloud, curve=curve))
+    assert found.missing.counted
+    every = fill.fill_missing(curve, found.missing, s.cloud)
+    assert len(every) >= 2 and [a.entries for a in fill.fill_actions(curve, found.missing, s.cloud)] == \
+        [a.entries for a in every]
+
+    def no(*_a, **_k):
+        raise AssertionError("made before it was asked for")
+
+    monkeypatch.setattr(fill, "_skeleton_entries", no)
+    first = next(fill.fill_actions(curve, found.missing, s.cloud))
+    assert first.entries == every[0].entries and "slabs" in first.reason
