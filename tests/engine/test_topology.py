@@ -351,3 +351,20 @@ def test_topological_similarity_reports_progress_and_honours_cancel():
 
     with pytest.raises(Stop):
         topological_similarity(cloud, skel, checkpoint=cancel)
+
+
+def test_topology_gives_the_cloud_index_the_spacings_it_would_search(rng):
+    # the cloud's EMST's first round is each row's nearest other distance: the shared index takes it
+    # instead of its own search, so every value must be its search's bits (copies at 0, rounded ties)
+    from skelcore.metrics.cloud_index import CloudIndex
+
+    cloud = np.round(rng.normal(size=(20000, 3)), 2)
+    cloud = np.vstack([cloud, cloud[:50]])
+    given = CloudIndex(cloud)
+    topological_similarity(cloud, cloud[::3] * 0.5, cloud_spacings=given.offer_spacings)
+    searched = CloudIndex(cloud).spacings()
+    assert given._spacings is not None and given.spacings() is given._spacings
+    assert given.spacings().tobytes() == searched.tobytes()
+    kept = given.spacings()
+    given.offer_spacings(np.zeros(len(cloud)))  # known already: not replaced
+    assert given.spacings() is kept
