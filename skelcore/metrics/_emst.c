@@ -8,8 +8,11 @@
  * components only grow, so a candidate whose far end is still in another component is still that point's
  * nearest, and one that fell inside leaves a lower bound (its length) that spares the search while the
  * component already has a shorter candidate.  Ties only ever form cycles of equal-length edges, which the
- * union-find merge drops, so the multiset of lengths is exact.  Lengths are sqrt of the sum of squared
- * coordinate differences in double precision, in that order (as scipy's cKDTree computes them).
+ * union-find merge drops, so the multiset of lengths is exact.  The first round keeps each point's KNN
+ * nearest others (sorted; nothing left out is closer than the last): a later round takes a point's
+ * candidate from that list, the first entry outside its component, and searches only for points whose
+ * whole list lies inside.  Lengths are sqrt of the sum of squared coordinate differences in double
+ * precision, in that order (as scipy's cKDTree computes them).
  *
  * The searches of a round run on `threads` threads in blocks of BLOCK points (a shared counter hands out
  * the blocks); the stop flag is read before every block and at every node of the build with more than
