@@ -8,8 +8,11 @@
  * components only grow, so a candidate whose far end is still in another component is still that point's
  * nearest, and one that fell inside leaves a lower bound (its length) that spares the search while the
  * component already has a shorter candidate.  Ties only ever form cycles of equal-length edges, which the
- * union-find merge drops, so the multiset of lengths is exact.  Lengths are sqrt of the sum of squared
- * coordinate differences in double precision, in that order (as scipy's cKDTree computes them).
+ * union-find merge drops, so the multiset of lengths is exact.  The first round keeps each point's KNN
+ * nearest others (sorted; nothing left out is closer than the last): a later round takes a point's
+ * candidate from that list, the first entry outside its component, and searches only for points whose
+ * whole list lies inside.  Lengths are sqrt of the sum of squared coordinate differences in double
+ * precision, in that order (as scipy's cKDTree computes them).
  *
  * The searches of a round run on `threads` threads in blocks of BLOCK points (a shared counter hands out
  * the blocks); the stop flag is read before every block and at every node of the build with more than
@@ -31,6 +34,7 @@
 #define STACK 256
 #define BLOCK 1024
 #define MAX_THREADS 64
+#define KNN 6              /* neighbours each point keeps from the first round (docs/performance.md 6.1) */
 
 typedef struct {
     double lo[3], hi[3];   /* bounding box of the node's points */
@@ -123,6 +127,10 @@ typedef struct {
     int32_t *cand_j;       /* ... and its far end (-1: none) */
     double *lower;         /* nothing of another component is closer than this */
     int64_t *bound_bits;   /* per component (root point): best candidate length so far, as bits */
+    int32_t *knn;          /* each point's KNN nearest others (first round), nearest first, -1 past the end */
+    double *kth;           /* nothing outside that list is closer than this (inf: it holds every other point) */
+    uint8_t *cursor;       /* list entries before it are known to lie in the point's component */
+    int first;             /* the first round: every point's KNN nearest others */
     int64_t next_block;    /* shared block counter of the current round */
     int64_t n_blocks;
     int stopped;
@@ -191,6 +199,63 @@ static int32_t search(const Tree *t, const int32_t *comp, int32_t i, int32_t c, 
     return bestj;
 }
 
+/* KNN nearest other points of point i into list (nearest first; -1 past the end), their squared
+ * distances into d2s; returns how many.  Every point left out is at least d2s[KNN - 1] away. */
+static int search_knn(const Tree *t, int32_t i, int32_t *list, double *d2s) {
+    const double *x = &t->P[3 * i];
+    int32_t stack[STACK];
+    double sd[STACK];
+    int top = 0, m = 0;
+    const Node *N = t->nodes;
+    stack[top] = 0; sd[top] = box_d2(&N[0], x); top++;
+    while (top) {
+        top--;
+        int32_t k = stack[top];
+        double worst = (m == KNN) ? d2s[KNN - 1] : INFINITY;
+        if (!(sd[top] < worst)) continue;
+        const Node *nd = &N[k];
+        if (nd->kid < 0) {
+            for (int32_t j = nd->a; j < nd->b; j++) {
+                if (j == i) continue;
+                const double *y = &t->P[3 * j];
+                double dx = x[0] - y[0], dy = x[1] - y[1], dz = x[2] - y[2];
+                double d2 = dx * dx + dy * dy + dz * dz;
+                if (m == KNN && !(d2 < d2s[KNN - 1])) continue;
+                int p = (m < KNN) ? m++ : KNN - 1;  /* sorted insert, ascending */
+                while (p > 0 && d2s[p - 1] > d2) {
+                    d2s[p] = d2s[p - 1]; list[p] = list[p - 1]; p--;
+                }
+                d2s[p] = d2; list[p] = j;
+            }
+            continue;
+        }
+        double worst2 = (m == KNN) ? d2s[KNN - 1] : INFINITY;
+        double dl = box_d2(&N[nd->kid], x), dr = box_d2(&N[nd->kid + 1], x);
+        if (top + 2 > STACK) continue;  /* cannot happen: depth <= log2(n / LEAF) + 1 */
+        if (dl <= dr) {
+            if (dr < worst2) { stack[top] = nd->kid + 1; sd[top] = dr; top++; }
+            if (dl < worst2) { stack[top] = nd->kid; sd[top] = dl; top++; }
+        } else {
+            if (dl < worst2) { stack[top] = nd->kid; sd[top] = dl; top++; }
+            if (dr < worst2) { stack[top] = nd->kid + 1; sd[top] = dr; top++; }
+        }
+    }
+    for (int p = m; p < KNN; p++) list[p] = -1;
+    return m;
+}
+
+/* the first entry of point i's list outside component c (its nearest point of another component:
+ * nothing closer lies outside the list), or -1 with lower[i] raised to the list's reach */
+static int32_t from_list(State *s, int32_t i, int32_t c) {
+    const int32_t *list = &s->knn[(size_t)i * KNN];
+    int p = s->cursor[i];
+    while (p < KNN && list[p] >= 0 && s->comp[list[p]] == c) p++;
+    s->cursor[i] = (uint8_t)p;
+    if (p < KNN && list[p] >= 0) return list[p];
+    if (s->kth[i] > s->lower[i]) s->lower[i] = s->kth[i];
+    return -1;
+}
+
 static void *search_blocks(void *arg) {
     State *s = (State *)arg;
     const Tree *t = s->t;
@@ -199,9 +264,34 @@ static void *search_blocks(void *arg) {
         int64_t blk = __atomic_fetch_add(&s->next_block, 1, __ATOMIC_RELAXED);
         if (blk >= s->n_blocks) return NULL;
         int32_t i0 = (int32_t)(blk * BLOCK), i1 = i0 + BLOCK < t->n ? i0 + BLOCK : t->n;
+        if (s->first) {
+            for (int32_t i = i0; i < i1; i++) {
+                int32_t *list = &s->knn[(size_t)i * KNN];
+                double d2s[KNN];
+                int m = search_knn(t, i, list, d2s);
+                s->kth[i] = (m == KNN) ? sqrt(d2s[KNN - 1]) : INFINITY;
+                s->cursor[i] = 0;
+                if (m == 0) continue;  /* cannot happen: n >= 2 */
+                s->cand_d[i] = sqrt(d2s[0]);
+                s->cand_j[i] = list[0];
+                s->cursor[i] = 1;
+                lower_bound(&s->bound_bits[s->comp[i]], s->cand_d[i]);
+            }
+            continue;
+        }
         for (int32_t i = i0; i < i1; i++) {
             if (s->cand_j[i] >= 0) continue;
             int32_t c = s->comp[i];
+            int32_t near = from_list(s, i, c);
+            if (near >= 0) {  /* the same arithmetic as search() */
+                const double *x = &t->P[3 * i], *y = &t->P[3 * near];
+                double dx = x[0] - y[0], dy = x[1] - y[1], dz = x[2] - y[2];
+                double d = sqrt(dx * dx + dy * dy + dz * dz);
+                s->cand_d[i] = d;
+                s->cand_j[i] = near;
+                lower_bound(&s->bound_bits[c], d);
+                continue;
+            }
             double bound = bits_to_d(__atomic_load_n(&s->bound_bits[c], __ATOMIC_RELAXED));
             if (s->lower[i] >= bound) continue;
             double d2;
@@ -259,7 +349,10 @@ static int64_t emst(const double *pts, int32_t n, double *lengths, double *nn, v
     s.bound_bits = malloc(sizeof(int64_t) * (size_t)n);
     parent = malloc(sizeof(int32_t) * (size_t)n);
     pick = malloc(sizeof(int32_t) * (size_t)n);
-    if (!pick || !t.P || !t.perm || !t.nodes || !s.comp || !s.cand_d || !s.cand_j || !s.lower || !s.bound_bits || !parent) {
+    s.knn = malloc(sizeof(int32_t) * KNN * (size_t)n);
+    s.kth = malloc(sizeof(double) * (size_t)n);
+    s.cursor = malloc((size_t)n);
+    if (!s.knn || !s.kth || !s.cursor || !pick || !t.P || !t.perm || !t.nodes || !s.comp || !s.cand_d || !s.cand_j || !s.lower || !s.bound_bits || !parent) {
         status = -2;
         goto done;
     }
@@ -276,6 +369,7 @@ static int64_t emst(const double *pts, int32_t n, double *lengths, double *nn, v
     }
     int64_t n_comp = n;
     int first = 1;
+    s.first = 1;
     if (threads < 1) threads = 1;
     if (threads > MAX_THREADS) threads = MAX_THREADS;
     while (n_comp > 1) {
@@ -312,6 +406,7 @@ static int64_t emst(const double *pts, int32_t n, double *lengths, double *nn, v
         if (first) {  /* every point searched with no bound: its nearest other point */
             for (int32_t i = 0; i < n; i++) nn[t.perm[i]] = s.cand_d[i];
             first = 0;
+            s.first = 0;
         }
         /* each component's shortest candidate, the first in point order among equals */
         for (int32_t i = 0; i < n; i++) if (s.comp[i] == i) pick[i] = -1;
@@ -340,7 +435,7 @@ static int64_t emst(const double *pts, int32_t n, double *lengths, double *nn, v
     status = m;
 done:
     free(t.P); free(t.perm); free(t.nodes); free(s.comp); free(s.cand_d); free(s.cand_j); free(s.lower);
-    free(s.bound_bits); free(parent); free(pick);
+    free(s.bound_bits); free(parent); free(pick); free(s.knn); free(s.kth); free(s.cursor);
     return status;
 }
 

@@ -54,6 +54,17 @@ class CloudIndex:
                     self._spacings = out
             return self._spacings
 
+    def offer_spacings(self, spacings: np.ndarray) -> None:
+        """Take the spacings from a search already made (topology's EMST, the same bits as
+        :meth:`spacings`) unless they are known or being searched right now."""
+        if self._spacings is not None or not self._locks["spacings"].acquire(blocking=False):
+            return
+        try:
+            if self._spacings is None and len(spacings) == len(self.cloud):
+                self._spacings = np.asarray(spacings, dtype=np.float64)
+        finally:
+            self._locks["spacings"].release()
+
     def nearest_sampled(self, at: np.ndarray, checkpoint: Checkpoint = no_checkpoint) -> np.ndarray:
         """For every point of the surface tree (tree order), the tree position of its nearest point
         among the tree positions ``at`` (a subsample; each sampled point is its own)."""

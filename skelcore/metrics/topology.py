@@ -18,6 +18,7 @@ from __future__ import annotations
 import heapq
 import os
 from dataclasses import dataclass
+from typing import Callable
 
 import numpy as np
 
@@ -300,12 +301,16 @@ def topological_similarity(
     *,
     params: Params = Params(),
     checkpoint: Checkpoint = no_checkpoint,
+    cloud_spacings: Callable[[np.ndarray], None] | None = None,
 ) -> TopologyResult:
     """Bottleneck and normalized 1-Wasserstein distances between the K longest H0 bars of the
     cloud and of the skeletal point set (docs/metrics.md 1; both inputs already normalized, docs/metrics.md 0).
 
     K comes from :func:`compared_bar_count`; a diagram with fewer than K bars is compared whole;
     d_Wp = W1 / K. Barcodes and eps* are returned in normalized units, every bar included.
+    ``cloud_spacings`` is called with each cloud row's distance to its nearest other row (0 for a copy;
+    the EMST's first round, the bits of the coverage kernel's search) as soon as they are known, so the
+    cloud's shared index need not search them again (docs/performance.md 6.6).
     """
     cloud = _as_points(cloud)
     skeletal = _as_points(skeletal)
@@ -313,6 +318,8 @@ def topological_similarity(
         raise ValueError("topological similarity needs a non-empty cloud and skeletal point set")
     # one after the other: each EMST's searches use every core (docs/performance.md 6.1)
     cloud_bars, cloud_nn = _barcode_and_nn(cloud, lambda f: checkpoint(0.45 * f))
+    if cloud_spacings is not None:
+        cloud_spacings(cloud_nn)
     skel_bars, _ = _barcode_and_nn(skeletal, lambda f: checkpoint(0.45 + 0.45 * f))
     eps = _quantile(cloud_nn, params.eps_quantile)  # = eps_star(cloud, quantile), without a new kNN
     k = compared_bar_count(cloud_bars, eps, len(cloud), params=params)

@@ -72,7 +72,8 @@ def _correspondence(ctx: EvalContext, checkpoint: Checkpoint) -> np.ndarray:
 
 def _topology(ctx: EvalContext, checkpoint: Checkpoint):
     pointwise = ctx.skeletal_points()[ctx.rows()] if ctx.skeletal_mode == "reverse" else ctx.skeletal_points()
-    return topological_similarity(ctx.cloud_n, pointwise, params=ctx.params, checkpoint=checkpoint)
+    return topological_similarity(ctx.cloud_n, pointwise, params=ctx.params, checkpoint=checkpoint,
+                                  cloud_spacings=ctx.cloud_index.offer_spacings)
 
 
 def _skeletal_boundedness(ctx: EvalContext, checkpoint: Checkpoint) -> np.ndarray:

@@ -123,6 +123,28 @@ def test_h0_barcode_equals_dense_minimum_spanning_tree_on_larger_sets(rng):
         np.testing.assert_allclose(h0_barcode(points)[1:, 1], want, rtol=0, atol=1e-12)
 
 
+def test_emst_kernel_lengths_are_a_dense_minimum_spanning_trees_bits(rng):
+    # the first round keeps each point's nearest few and later rounds take their candidates from that
+    # list where it reaches outside the component: the lengths must still be the exact EMST's, bit for
+    # bit (weights in the kernel's arithmetic), also with fewer points than the list and with ties
+    from scipy.sparse.csgraph import minimum_spanning_tree
+
+    def dense(points):
+        d = points[:, None, :] - points[None, :, :]
+        return np.sort(minimum_spanning_tree(np.sqrt(d[..., 0] * d[..., 0] + d[..., 1] * d[..., 1]
+                                                     + d[..., 2] * d[..., 2])).data)
+
+    sets = [rng.normal(size=(n, 3)) for n in range(2, 10)]
+    sets += [np.stack(np.meshgrid(*[np.arange(7.0)] * 3), -1).reshape(-1, 3) * 0.1,  # all ties
+             np.unique(np.round(rng.normal(size=(2500, 3)) * 0.3, 1), axis=0),
+             rng.normal(size=(2000, 3)) * 0.001 + rng.uniform(-1, 1, size=(12, 3))[np.arange(2000) % 12]]
+    for points in sets:
+        want = dense(points)
+        for threads in (1, 2):
+            m, lengths, _ = _kernel_emst(points, threads)
+            assert m == len(points) - 1 and np.sort(lengths).tobytes() == want.tobytes()
+
+
 def test_hammer_scan_barcode_equals_dense_minimum_spanning_tree(scans):
     from scipy.sparse.csgraph import minimum_spanning_tree
     from scipy.spatial.distance import pdist, squareform
@@ -351,3 +373,20 @@ def test_topological_similarity_reports_progress_and_honours_cancel():
 
     with pytest.raises(Stop):
         topological_similarity(cloud, skel, checkpoint=cancel)
+
+
+def test_topology_gives_the_cloud_index_the_spacings_it_would_search(rng):
+    # the cloud's EMST's first round is each row's nearest other distance: the shared index takes it
+    # instead of its own search, so every value must be its search's bits (copies at 0, rounded ties)
+    from skelcore.metrics.cloud_index import CloudIndex
+
+    cloud = np.round(rng.normal(size=(20000, 3)), 2)
+    cloud = np.vstack([cloud, cloud[:50]])
+    given = CloudIndex(cloud)
+    topological_similarity(cloud, cloud[::3] * 0.5, cloud_spacings=given.offer_spacings)
+    searched = CloudIndex(cloud).spacings()
+    assert given._spacings is not None and given.spacings() is given._spacings
+    assert given.spacings().tobytes() == searched.tobytes()
+    kept = given.spacings()
+    given.offer_spacings(np.zeros(len(cloud)))  # known already: not replaced
+    assert given.spacings() is kept
