@@ -384,13 +384,18 @@ def _slab_ring(
     grid: "_SlabGrid", p: np.ndarray, u: np.ndarray, g: np.ndarray, h: np.ndarray, half: float, growth: float,
 ) -> np.ndarray:
     """One sample's ring from its whole slab: the points of every grid cell that can meet the slab, in
-    grid order, tested, sorted stably by distance and cut (p at the origin)."""
-    rel = grid.slab_candidates(p, u, half) - p
-    rel = np.compress(np.abs(_dot3(rel, u)) < half, rel, axis=0)  # = rel[mask], 2 x faster
-    flat = np.column_stack([_dot3(rel, g), _dot3(rel, h)])
-    dist = np.hypot(flat[:, 0], flat[:, 1])
+    grid order, tested, sorted stably by distance and cut (p at the origin).  Coordinates are taken
+    column by column (contiguous, about 1.5 x faster than rows of 3), with :func:`_dot3`'s operations in
+    its order: the same bits."""
+    rows = grid.slab_rows(p, u, half)
+    x, y, z = (grid.columns[k].take(rows) - p[k] for k in range(3))
+    inside = np.abs(x * u[0] + y * u[1] + z * u[2]) < half
+    x, y, z = (np.compress(inside, c) for c in (x, y, z))  # = c[mask], 2 x faster
+    fg, fh = x * g[0] + y * g[1] + z * g[2], x * h[0] + y * h[1] + z * h[2]
+    dist = np.hypot(fg, fh)
     order = stable_argsort(dist)
-    return flat[order[: ring_length(dist[order], growth)]]
+    keep = order[: ring_length(dist[order], growth)]
+    return np.column_stack([fg.take(keep), fh.take(keep)])
 
 
 def _order_within(values: np.ndarray, starts: np.ndarray) -> np.ndarray:
@@ -470,6 +475,8 @@ class _SlabGrid:
         self.centres = self.lo + (cell_ijk + 0.5) * cell
         self.half_cell = 0.5 * cell
         checkpoint(0.0)
+        self.columns = np.ascontiguousarray(self.points.T)  # x, y and z apart: the slab's tests on contiguous arrays
+        checkpoint(0.0)
         self.tree = kd_tree(self.points, checkpoint)  # rows of ``points``: ball queries in grid order
 
     def reach(self, u: np.ndarray, half: float) -> np.ndarray:
@@ -479,8 +486,11 @@ class _SlabGrid:
 
     def slab_candidates(self, p: np.ndarray, u: np.ndarray, half: float) -> np.ndarray:
         """Points of every cell that may meet the slab |u . (x - p)| < half (a superset of it)."""
-        hit = np.flatnonzero(np.abs((self.centres - p) @ u) < self.reach(u, half))
-        return take_rows(self.points, self.cell_rows(hit))
+        return take_rows(self.points, self.slab_rows(p, u, half))
+
+    def slab_rows(self, p: np.ndarray, u: np.ndarray, half: float) -> np.ndarray:
+        """Rows of ``self.points`` of every cell that may meet the slab, in grid order."""
+        return self.cell_rows(np.flatnonzero(np.abs((self.centres - p) @ u) < self.reach(u, half)))
 
     def cell_rows(self, cells: np.ndarray) -> np.ndarray:
         """Rows of ``self.points`` of the given cells, cell after cell, each cell's in grid order."""
