@@ -207,6 +207,7 @@ def missing_parts(
     to_user: Callable[[np.ndarray], np.ndarray] = _identity,
     keep: np.ndarray | None = None,
     inside: Callable[[np.ndarray], np.ndarray] | None = None,
+    cloud_tree: Callable[[], cKDTree] | None = None,
     checkpoint: Checkpoint = no_checkpoint,
 ) -> MissingParts:
     """The parts of the (normalized) cloud the (normalized) skeleton does not reach, and its completeness.
@@ -230,6 +231,8 @@ def missing_parts(
         with balls as large as the gap it crosses; docs/diagnostics.md "Completeness"). When it
         rejects some, the coverage is computed again without them (``cov`` is not used) and
         ``outside_elements`` counts them.
+    cloud_tree : gives ``cKDTree(cloud)`` kept by the caller (an edit's update asks about the same
+        cloud each time), used when the regions are found on the whole cloud; else built here.
     checkpoint : ``checkpoint(fraction)``, raises to cancel.
 
     An empty skeleton explains nothing: one region per connected part of the cloud, depth inf.
@@ -284,7 +287,8 @@ def missing_parts(
             n_out, elements = int(np.count_nonzero(~ok)), elements[ok]
         cov = coverage(pts, elements, p, tau, checkpoint=lambda f: checkpoint(0.1 + 0.6 * f), index=index)
     checkpoint(0.7)
-    region_s, regions = _regions(pts, cov, spacing, p, checkpoint,
+    kept_tree = cloud_tree if sub is None and cloud_tree is not None else None
+    region_s, regions = _regions(pts, cov, spacing, p, checkpoint, tree=kept_tree,
                                  small=lambda tree: _small_points(skeleton, tree, spacing, p))
     checkpoint(0.9)
     explained_s = cov.covered
@@ -385,7 +389,7 @@ def _small_points(skeleton: np.ndarray | CurveSkeleton, tree: cKDTree, spacing: 
 
 
 def _regions(pts: np.ndarray, cov: Coverage, spacing: float, p: Params, checkpoint: Checkpoint,
-             tree: cKDTree | None = None, small: Callable[[cKDTree], float] | None = None
+             tree: Callable[[], cKDTree] | None = None, small: Callable[[cKDTree], float] | None = None
              ) -> tuple[np.ndarray, list[dict]]:
     """Region id per point (-1 explained; ids by size, largest first) and each region's numbers.
 
@@ -395,8 +399,16 @@ def _regions(pts: np.ndarray, cov: Coverage, spacing: float, p: Params, checkpoi
     inscribed ball's, so a flat part a curve crosses is not a missing part). Depth: the region's
     ``missing_depth_quantile`` distance to its border over that radius. Regions under both
     ``missing_min_share`` of the points and ``small(tree)`` points (the area rule; asked only when
-    such a region holds ``SMALL_FEWEST`` points) get no depth (NaN): they cannot count."""
+    such a region holds ``SMALL_FEWEST`` points) get no depth (NaN): they cannot count. ``tree()``
+    gives ``cKDTree(pts)`` when it is kept (built here at most once otherwise)."""
     n = len(pts)
+    made: list[cKDTree] = []
+
+    def pts_tree() -> cKDTree:
+        if not made:
+            made.append(cKDTree(pts) if tree is None else tree())
+        return made[0]
+
     region = np.full(n, -1, np.int64)
     miss = np.flatnonzero(~cov.covered)
     if len(miss) == 0:
@@ -425,8 +437,7 @@ def _regions(pts: np.ndarray, cov: Coverage, spacing: float, p: Params, checkpoi
     centroid = sums / size[:, None]
     floor = max(1.0, float(p.missing_min_share) * n)
     if small is not None and np.any((size < floor) & (size >= SMALL_FEWEST)):
-        tree = cKDTree(pts) if tree is None else tree
-        floor = min(floor, max(float(SMALL_FEWEST), small(tree)))
+        floor = min(floor, max(float(SMALL_FEWEST), small(pts_tree())))
     big = np.flatnonzero(size >= floor)
     depth = np.full(n_comp, np.nan)
     reach = np.full(n_comp, np.nan)
@@ -435,9 +446,8 @@ def _regions(pts: np.ndarray, cov: Coverage, spacing: float, p: Params, checkpoi
         # border points of the big regions: an explained cloud point among their neighbours
         in_big = np.isin(label, big)
         q = np.flatnonzero(in_big)
-        tree = cKDTree(pts) if tree is None else tree
         kk = min(LINK_K + 1, n)
-        dd, jj = tree.query(up[q], k=kk, distance_upper_bound=link, workers=query_workers(len(q)))
+        dd, jj = pts_tree().query(up[q], k=kk, distance_upper_bound=link, workers=query_workers(len(q)))
         jj = np.where(np.isfinite(dd), jj, n)
         explained = np.concatenate([cov.covered, [False]])
         border = np.zeros(len(miss), bool)

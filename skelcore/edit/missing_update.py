@@ -1,0 +1,53 @@
+"""The curve missing parts stage of an edit's update: the stage's own call
+(:mod:`skelcore.stages.catalogue`), with the KD-tree of the normalized cloud its regions ask about
+kept from one update of an evaluation to the next (the same tree, so the same bits; at 100k points
+its build was two fifths of the stage after a pruned branch, docs/performance.md 6.10)."""
+
+from __future__ import annotations
+
+import threading
+from typing import Any, Callable
+
+import numpy as np
+from scipy.spatial import cKDTree
+
+from ..diagnostics.missing_parts import MissingParts, missing_parts
+from ..geometry import Checkpoint, no_checkpoint
+
+__all__ = ["curve_missing_parts"]
+
+#: skelcore.stages.context.EvalContext, not imported: the edits sit below the stages
+EvalContext = Any
+_LOCK = threading.Lock()
+_KEY = "missing parts' cloud tree"
+
+
+def _cloud_tree(ctx: EvalContext, cache: dict[str, Any]) -> Callable[[], cKDTree]:
+    """``cKDTree(ctx.cloud_n)``, built at its first call and kept in ``cache`` with that array (every
+    update of one evaluation shares its normalized cloud)."""
+    cloud = ctx.cloud_n
+
+    def get() -> cKDTree:
+        with _LOCK:
+            kept = cache.get(_KEY)
+            if kept is None or kept[0] is not cloud:
+                kept = (cloud, cKDTree(cloud))
+                cache[_KEY] = kept
+        return kept[1]
+
+    return get
+
+
+def curve_missing_parts(ctx: EvalContext, cache: dict[str, Any],
+                        checkpoint: Checkpoint = no_checkpoint) -> MissingParts:
+    """The curve missing parts stage's result for ``ctx`` (an edit's update), the cloud's tree kept."""
+    cov = ctx.results.get("curve coverage")
+    inside = None
+    if ctx.viewpoints_n is None:  # a scan seen from some sides encloses no interior
+        def inside(points: np.ndarray) -> np.ndarray:
+            shape = ctx.interior()
+            ijk = shape.index_of(points)
+            return shape.solid()[ijk[:, 0], ijk[:, 1], ijk[:, 2]]
+    return missing_parts(ctx.cloud_n, ctx.curve_n, ctx.params, cov=cov, tau=None if cov is None else cov.tau,
+                         what="curve skeleton", to_user=ctx.norm.invert, inside=inside,
+                         cloud_tree=_cloud_tree(ctx, cache), checkpoint=checkpoint)
