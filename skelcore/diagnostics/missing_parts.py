@@ -416,8 +416,10 @@ def _regions(pts: np.ndarray, cov: Coverage, spacing: float, p: Params, checkpoi
     up = pts[miss]
     link = float(p.missing_link_factor) * spacing
     k = min(LINK_K + 1, len(miss))
+    # with a kept tree, one search of it gives most points' neighbours both ways (_from_kept)
+    kept = None if tree is None or k < 2 else _from_kept(pts_tree(), up, miss, link)
     if k > 1:
-        d, j = cKDTree(up).query(up, k=k, distance_upper_bound=link, workers=query_workers(len(up)))
+        d, j = _unexplained_neighbours(up, k, link, kept)
         ok = np.isfinite(d[:, 1:])
         rows = np.repeat(np.arange(len(miss)), k - 1)[ok.ravel()]
         cols = j[:, 1:][ok]
@@ -447,8 +449,7 @@ def _regions(pts: np.ndarray, cov: Coverage, spacing: float, p: Params, checkpoi
         in_big = np.isin(label, big)
         q = np.flatnonzero(in_big)
         kk = min(LINK_K + 1, n)
-        dd, jj = pts_tree().query(up[q], k=kk, distance_upper_bound=link, workers=query_workers(len(q)))
-        jj = np.where(np.isfinite(dd), jj, n)
+        jj = _cloud_neighbours(pts_tree(), up, q, kk, link, kept)
         explained = np.concatenate([cov.covered, [False]])
         border = np.zeros(len(miss), bool)
         border[q] = explained[jj].any(axis=1)
@@ -481,3 +482,62 @@ def _regions(pts: np.ndarray, cov: Coverage, spacing: float, p: Params, checkpoi
     out = [{"depth": float(depth[c]), "reach": float(reach[c]), "border_radius": float(radius[c]),
             "centroid": centroid[c], "deepest": int(deepest[c])} for c in range(n_comp)]
     return region, out
+
+
+def _from_kept(tree: cKDTree, up: np.ndarray, miss: np.ndarray, link: float) -> tuple[np.ndarray, ...]:
+    """The ``LINK_K + 2`` nearest cloud points within the link of each unexplained point ``up``
+    (rows ``miss`` of the cloud) from the cloud's tree: (distances, cloud rows, n where none, their
+    rows in ``up`` or -1)."""
+    n = tree.n
+    d, j = tree.query(up, k=min(LINK_K + 2, n), distance_upper_bound=link, workers=query_workers(len(up)))
+    d, j = d.reshape(len(up), -1), j.reshape(len(up), -1)
+    at = np.full(n + 1, -1, np.int64)
+    at[miss] = np.arange(len(miss))
+    return d, j, at[j]
+
+
+def _unique_first(d: np.ndarray, c: int) -> np.ndarray:
+    """Rows whose first ``c`` neighbours are the only ``c`` nearest (any search finds the same):
+    fewer found within the link, or the next strictly farther."""
+    if d.shape[1] <= c:
+        return np.ones(len(d), bool)
+    return ~np.isfinite(d[:, c - 1]) | (d[:, c] > d[:, c - 1])
+
+
+def _unexplained_neighbours(up: np.ndarray, k: int, link: float, kept: tuple | None) -> tuple[np.ndarray, ...]:
+    """Each unexplained point's ``k`` nearest unexplained points within the link, as
+    ``cKDTree(up).query`` gives them: from ``kept`` where its ``k`` nearest cloud points are the only
+    ones, all unexplained and none as near as the point itself (the same sets, themselves first)."""
+    if kept is None:
+        return cKDTree(up).query(up, k=k, distance_upper_bound=link, workers=query_workers(len(up)))
+    fd, _, fu = kept
+    d, j = fd[:, :k].copy(), fu[:, :k].copy()
+    found = np.isfinite(d)
+    clean = _unique_first(fd, k) & ((j >= 0) | ~found).all(axis=1)
+    if k > 1:
+        clean &= d[:, 1] > 0
+    j[~found] = len(up)
+    redo = np.flatnonzero(~clean)
+    if len(redo):
+        d[redo], j[redo] = cKDTree(up).query(up[redo], k=k, distance_upper_bound=link,
+                                             workers=query_workers(len(redo)))
+    return d, j
+
+
+def _cloud_neighbours(tree: cKDTree, up: np.ndarray, q: np.ndarray, kk: int, link: float,
+                      kept: tuple | None) -> np.ndarray:
+    """The cloud rows of the ``kk`` nearest cloud points within the link of the unexplained points
+    ``up[q]`` (n where fewer): from ``kept`` where they are the only ``kk`` nearest, else searched."""
+    n = tree.n
+    if kept is None:
+        jj = np.zeros((len(q), kk), np.int64)
+        redo = np.arange(len(q))
+    else:
+        fd, fj, _ = kept
+        jj = np.where(np.isfinite(fd[q, :kk]), fj[q, :kk], n)
+        redo = np.flatnonzero(~_unique_first(fd[q], kk))
+    if len(redo):
+        dd, j = tree.query(up[q[redo]], k=kk, distance_upper_bound=link, workers=query_workers(len(redo)))
+        dd, j = dd.reshape(len(redo), -1), j.reshape(len(redo), -1)
+        jj[redo] = np.where(np.isfinite(dd), j, n)
+    return jj
