@@ -23,7 +23,7 @@ from dataclasses import dataclass, field, replace
 from typing import Callable
 
 import numpy as np
-from scipy.sparse import coo_matrix
+from scipy.sparse import coo_matrix, csr_matrix
 from scipy.sparse.csgraph import connected_components
 from scipy.spatial import cKDTree
 
@@ -421,11 +421,12 @@ def _regions(pts: np.ndarray, cov: Coverage, spacing: float, p: Params, checkpoi
     if k > 1:
         d, j = _unexplained_neighbours(up, k, link, kept)
         ok = np.isfinite(d[:, 1:])
-        rows = np.repeat(np.arange(len(miss)), k - 1)[ok.ravel()]
         cols = j[:, 1:][ok]
+        starts = np.concatenate([[0], np.cumsum(ok.sum(axis=1))])
     else:
-        rows = cols = np.empty(0, np.int64)
-    graph = coo_matrix((np.ones(len(rows), np.int8), (rows, cols)), shape=(len(miss), len(miss)))
+        cols, starts = np.empty(0, np.int64), np.zeros(len(miss) + 1, np.int64)
+    # row by row already: compressed rows directly (the labels follow the rows' order, as from any form)
+    graph = csr_matrix((np.ones(len(cols)), cols, starts), shape=(len(miss), len(miss)))
     n_comp, label = connected_components(graph, directed=False)
     checkpoint(0.75)
     size = np.bincount(label, minlength=n_comp)
