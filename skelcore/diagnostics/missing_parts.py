@@ -207,7 +207,7 @@ def missing_parts(
     to_user: Callable[[np.ndarray], np.ndarray] = _identity,
     keep: np.ndarray | None = None,
     inside: Callable[[np.ndarray], np.ndarray] | None = None,
-    cloud_tree: Callable[[], cKDTree] | None = None,
+    cloud_tree: Callable[[np.ndarray], cKDTree] | None = None,
     checkpoint: Checkpoint = no_checkpoint,
 ) -> MissingParts:
     """The parts of the (normalized) cloud the (normalized) skeleton does not reach, and its completeness.
@@ -231,8 +231,9 @@ def missing_parts(
         with balls as large as the gap it crosses; docs/diagnostics.md "Completeness"). When it
         rejects some, the coverage is computed again without them (``cov`` is not used) and
         ``outside_elements`` counts them.
-    cloud_tree : gives ``cKDTree(cloud)`` kept by the caller (an edit's update asks about the same
-        cloud each time), used when the regions are found on the whole cloud; else built here.
+    cloud_tree : ``cloud_tree(points)`` gives ``cKDTree(points)`` of the points the regions are found
+        on (the cloud or its subsample, not an estimated ``cov``'s sample), kept by the caller (an
+        edit's update asks about the same points each time); else built here.
     checkpoint : ``checkpoint(fraction)``, raises to cancel.
 
     An empty skeleton explains nothing: one region per connected part of the cloud, depth inf.
@@ -287,7 +288,8 @@ def missing_parts(
             n_out, elements = int(np.count_nonzero(~ok)), elements[ok]
         cov = coverage(pts, elements, p, tau, checkpoint=lambda f: checkpoint(0.1 + 0.6 * f), index=index)
     checkpoint(0.7)
-    kept_tree = cloud_tree if sub is None and cloud_tree is not None else None
+    # not for an estimated coverage's sample: a new array each time
+    kept_tree = None if cloud_tree is None or full_covered is not None else (lambda: cloud_tree(pts))
     region_s, regions = _regions(pts, cov, spacing, p, checkpoint, tree=kept_tree,
                                  small=lambda tree: _small_points(skeleton, tree, spacing, p))
     checkpoint(0.9)

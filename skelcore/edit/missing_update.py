@@ -1,7 +1,7 @@
 """The curve missing parts stage of an edit's update: the stage's own call
-(:mod:`skelcore.stages.catalogue`), with the KD-tree of the normalized cloud its regions ask about
-kept from one update of an evaluation to the next (the same tree, so the same bits; at 100k points
-its build was two fifths of the stage after a pruned branch, docs/performance.md 6.10)."""
+(:mod:`skelcore.stages.catalogue`), with the KD-tree of the points its regions ask about (the
+normalized cloud or its kept subsample) kept from one update of an evaluation to the next, which
+lets the regions take most neighbours from one search of it (the same bits; docs/performance.md 6.10)."""
 
 from __future__ import annotations
 
@@ -22,16 +22,16 @@ _LOCK = threading.Lock()
 _KEY = "missing parts' cloud tree"
 
 
-def _cloud_tree(ctx: EvalContext, cache: dict[str, Any]) -> Callable[[], cKDTree]:
-    """``cKDTree(ctx.cloud_n)``, built at its first call and kept in ``cache`` with that array (every
-    update of one evaluation shares its normalized cloud)."""
-    cloud = ctx.cloud_n
+def _cloud_tree(cache: dict[str, Any]) -> Callable[[np.ndarray], cKDTree]:
+    """``cKDTree(points)``, kept in ``cache`` with that array: every update of one evaluation asks about
+    the same array (its normalized cloud, or above ``missing_max_points`` the subsample that
+    :func:`skelcore.metrics.cloud_index.kept_index` keeps); another array replaces it."""
 
-    def get() -> cKDTree:
+    def get(points: np.ndarray) -> cKDTree:
         with _LOCK:
             kept = cache.get(_KEY)
-            if kept is None or kept[0] is not cloud:
-                kept = (cloud, cKDTree(cloud))
+            if kept is None or kept[0] is not points:
+                kept = (points, cKDTree(points))
                 cache[_KEY] = kept
         return kept[1]
 
@@ -50,4 +50,4 @@ def curve_missing_parts(ctx: EvalContext, cache: dict[str, Any],
             return shape.solid()[ijk[:, 0], ijk[:, 1], ijk[:, 2]]
     return missing_parts(ctx.cloud_n, ctx.curve_n, ctx.params, cov=cov, tau=None if cov is None else cov.tau,
                          what="curve skeleton", to_user=ctx.norm.invert, inside=inside,
-                         cloud_tree=_cloud_tree(ctx, cache), checkpoint=checkpoint)
+                         cloud_tree=_cloud_tree(cache), checkpoint=checkpoint)

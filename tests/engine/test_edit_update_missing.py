@@ -1,7 +1,7 @@
 """The missing parts of an edit's update (skelcore/edit/missing_update.py): with the cloud's tree kept,
 the regions' neighbours come mostly from one search of it, the others searched as before; the same
 regions, depths and points as without it, on a pruned Y, on a lattice cloud with repeated points (ties
-and zero distances everywhere, the searches it must fall back on) and through an edit's update."""
+and zero distances everywhere, the searches it must fall back on) through an edit's update, and on the kept subsample above missing_max_points."""
 
 from __future__ import annotations
 
@@ -66,3 +66,23 @@ def test_update_keeps_the_tree_and_equals_a_fresh_evaluation(pruned, monkeypatch
     assert any(r.counted for r in a.regions)  # the pruned arm is missing
     assert np.array_equal(a.region, b.region) and np.array_equal(a.explained, b.explained)
     assert [r.to_dict() for r in a.regions] == [r.to_dict() for r in b.regions]
+
+
+def test_above_missing_max_points_the_subsample_tree_is_kept():
+    """Without the curve's coverage and above ``missing_max_points`` the regions are found on the kept
+    subsample: its tree is kept (the same array), and a pruned branch's update equals a fresh evaluation."""
+    from skelcore import Params
+
+    sh = shapes.y_shape(3000, seed=4, n_curve_per_arm=6)
+    params = Params(missing_max_points=1000, coverage_max_points=500)
+    ev = evaluate(sh.cloud, curve=(sh.curve_vertices, sh.curve_edges), params=params)
+    new, change = E.prune_branch(ev.curve.curve, 0)
+    first, second = ev.update(change), ev.update(change)
+    kept = ev.source.cache["missing parts' cloud tree"]
+    assert len(kept[0]) == 1000 and kept[1].n == 1000
+    fresh = evaluate(sh.cloud, curve=new, params=params)
+    for up in (first, second):
+        a, b = up.source.ctx.results["curve missing parts"], fresh.source.ctx.results["curve missing parts"]
+        assert a.subsample == 1000 and any(r.counted for r in a.regions)
+        assert np.array_equal(a.region, b.region) and np.array_equal(a.explained, b.explained)
+        assert [r.to_dict() for r in a.regions] == [r.to_dict() for r in b.regions]
