@@ -1,7 +1,8 @@
 """The missing parts of an edit's update (skelcore/edit/missing_update.py): with the cloud's tree kept,
 the regions' neighbours come mostly from one search of it, the others searched as before; the same
-regions, depths and points as without it, on a pruned Y, on a lattice cloud with repeated points (ties
-and zero distances everywhere, the searches it must fall back on) through an edit's update, and on the kept subsample above missing_max_points."""
+regions, depths and points as without it, on a lattice cloud with repeated points (ties and zero
+distances everywhere, the searches it must fall back on), through a pruned Y's update, and on the kept
+subsample above missing_max_points."""
 
 from __future__ import annotations
 
