@@ -87,3 +87,15 @@ def test_above_missing_max_points_the_subsample_tree_is_kept():
         assert a.subsample == 1000 and any(r.counted for r in a.regions)
         assert np.array_equal(a.region, b.region) and np.array_equal(a.explained, b.explained)
         assert [r.to_dict() for r in a.regions] == [r.to_dict() for r in b.regions]
+
+
+def test_a_first_phase_completed_again_and_again_keeps_its_parent(pruned):
+    """Each completion links its own context; the first phase's link to the curve it was edited from
+    stays (else after eight completions its coverage was computed whole, not by difference)."""
+    from skelcore.edit import coverage_update as CU
+
+    ev, change = pruned
+    quick = ev.update(change, diagnostics=False)
+    for _ in range(CU._KEEP + 3):
+        quick.complete_update()
+    assert CU.parent_of(quick.source.cache, quick.source.ctx) is ev.source.ctx
