@@ -23,15 +23,18 @@ _KEY = "missing parts' cloud tree"
 
 
 def _cloud_tree(cache: dict[str, Any]) -> Callable[[np.ndarray], cKDTree]:
-    """``cKDTree(points)``, kept in ``cache`` with that array: every update of one evaluation asks about
+    """``cKDTree(points)``, kept in ``cache`` with those points: every update of one evaluation asks about
     the same array (its normalized cloud, or above ``missing_max_points`` the subsample that
     :func:`skelcore.metrics.cloud_index.kept_index` keeps); another array replaces it."""
 
     def get(points: np.ndarray) -> cKDTree:
+        # the same memory, shape and strides (missing_parts asks through a new view of the same array);
+        # the view kept holds that memory, so no other array can take its place
+        key = (points.__array_interface__["data"][0], points.shape, points.strides, points.dtype.str)
         with _LOCK:
             kept = cache.get(_KEY)
-            if kept is None or kept[0] is not points:
-                kept = (points, cKDTree(points))
+            if kept is None or kept[0] != key:
+                kept = (key, cKDTree(points), points)
                 cache[_KEY] = kept
         return kept[1]
 

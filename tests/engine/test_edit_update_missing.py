@@ -61,6 +61,9 @@ def test_update_keeps_the_tree_and_equals_a_fresh_evaluation(pruned, monkeypatch
     real = MP._from_kept
     monkeypatch.setattr(MP, "_from_kept", lambda *a: calls.append(1) or real(*a))
     up = ev.update(change)
+    tree = ev.source.cache["missing parts' cloud tree"][1]
+    ev.update(change)
+    assert ev.source.cache["missing parts' cloud tree"][1] is tree  # built once per evaluation
     fresh = evaluate(ev.source.args["cloud"], curve=change.curve)
     assert calls, "the update did not take the kept tree's path"
     a, b = up.source.ctx.results["curve missing parts"], fresh.source.ctx.results["curve missing parts"]
@@ -78,9 +81,12 @@ def test_above_missing_max_points_the_subsample_tree_is_kept():
     params = Params(missing_max_points=1000, coverage_max_points=500)
     ev = evaluate(sh.cloud, curve=(sh.curve_vertices, sh.curve_edges), params=params)
     new, change = E.prune_branch(ev.curve.curve, 0)
-    first, second = ev.update(change), ev.update(change)
+    first = ev.update(change)
+    tree = ev.source.cache["missing parts' cloud tree"][1]
+    second = ev.update(change)
     kept = ev.source.cache["missing parts' cloud tree"]
-    assert len(kept[0]) == 1000 and kept[1].n == 1000
+    assert kept[1] is tree
+    assert len(kept[2]) == 1000 and kept[1].n == 1000
     fresh = evaluate(sh.cloud, curve=new, params=params)
     for up in (first, second):
         a, b = up.source.ctx.results["curve missing parts"], fresh.source.ctx.results["curve missing parts"]
