@@ -23,7 +23,7 @@ from dataclasses import dataclass, field, replace
 from typing import Callable
 
 import numpy as np
-from scipy.sparse import coo_matrix
+from scipy.sparse import coo_matrix, csr_matrix
 from scipy.sparse.csgraph import connected_components
 from scipy.spatial import cKDTree
 
@@ -207,6 +207,7 @@ def missing_parts(
     to_user: Callable[[np.ndarray], np.ndarray] = _identity,
     keep: np.ndarray | None = None,
     inside: Callable[[np.ndarray], np.ndarray] | None = None,
+    cloud_tree: Callable[[np.ndarray], cKDTree] | None = None,
     checkpoint: Checkpoint = no_checkpoint,
 ) -> MissingParts:
     """The parts of the (normalized) cloud the (normalized) skeleton does not reach, and its completeness.
@@ -230,6 +231,9 @@ def missing_parts(
         with balls as large as the gap it crosses; docs/diagnostics.md "Completeness"). When it
         rejects some, the coverage is computed again without them (``cov`` is not used) and
         ``outside_elements`` counts them.
+    cloud_tree : ``cloud_tree(points)`` gives ``cKDTree(points)`` of the points the regions are found
+        on (the cloud or its subsample, not an estimated ``cov``'s sample), kept by the caller (an
+        edit's update asks about the same points each time); else built here.
     checkpoint : ``checkpoint(fraction)``, raises to cancel.
 
     An empty skeleton explains nothing: one region per connected part of the cloud, depth inf.
@@ -284,7 +288,9 @@ def missing_parts(
             n_out, elements = int(np.count_nonzero(~ok)), elements[ok]
         cov = coverage(pts, elements, p, tau, checkpoint=lambda f: checkpoint(0.1 + 0.6 * f), index=index)
     checkpoint(0.7)
-    region_s, regions = _regions(pts, cov, spacing, p, checkpoint,
+    # not for an estimated coverage's sample: a new array each time
+    kept_tree = None if cloud_tree is None or full_covered is not None else (lambda: cloud_tree(pts))
+    region_s, regions = _regions(pts, cov, spacing, p, checkpoint, tree=kept_tree,
                                  small=lambda tree: _small_points(skeleton, tree, spacing, p))
     checkpoint(0.9)
     explained_s = cov.covered
@@ -385,7 +391,7 @@ def _small_points(skeleton: np.ndarray | CurveSkeleton, tree: cKDTree, spacing: 
 
 
 def _regions(pts: np.ndarray, cov: Coverage, spacing: float, p: Params, checkpoint: Checkpoint,
-             tree: cKDTree | None = None, small: Callable[[cKDTree], float] | None = None
+             tree: Callable[[], cKDTree] | None = None, small: Callable[[cKDTree], float] | None = None
              ) -> tuple[np.ndarray, list[dict]]:
     """Region id per point (-1 explained; ids by size, largest first) and each region's numbers.
 
@@ -395,8 +401,16 @@ def _regions(pts: np.ndarray, cov: Coverage, spacing: float, p: Params, checkpoi
     inscribed ball's, so a flat part a curve crosses is not a missing part). Depth: the region's
     ``missing_depth_quantile`` distance to its border over that radius. Regions under both
     ``missing_min_share`` of the points and ``small(tree)`` points (the area rule; asked only when
-    such a region holds ``SMALL_FEWEST`` points) get no depth (NaN): they cannot count."""
+    such a region holds ``SMALL_FEWEST`` points) get no depth (NaN): they cannot count. ``tree()``
+    gives ``cKDTree(pts)`` when it is kept (built here at most once otherwise)."""
     n = len(pts)
+    made: list[cKDTree] = []
+
+    def pts_tree() -> cKDTree:
+        if not made:
+            made.append(cKDTree(pts) if tree is None else tree())
+        return made[0]
+
     region = np.full(n, -1, np.int64)
     miss = np.flatnonzero(~cov.covered)
     if len(miss) == 0:
@@ -404,14 +418,17 @@ def _regions(pts: np.ndarray, cov: Coverage, spacing: float, p: Params, checkpoi
     up = pts[miss]
     link = float(p.missing_link_factor) * spacing
     k = min(LINK_K + 1, len(miss))
+    # with a kept tree, one search of it gives most points' neighbours both ways (_from_kept)
+    kept = None if tree is None or k < 2 else _from_kept(pts_tree(), up, miss, link)
     if k > 1:
-        d, j = cKDTree(up).query(up, k=k, distance_upper_bound=link, workers=query_workers(len(up)))
+        d, j = _unexplained_neighbours(up, k, link, kept)
         ok = np.isfinite(d[:, 1:])
-        rows = np.repeat(np.arange(len(miss)), k - 1)[ok.ravel()]
         cols = j[:, 1:][ok]
+        starts = np.concatenate([[0], np.cumsum(ok.sum(axis=1))])
     else:
-        rows = cols = np.empty(0, np.int64)
-    graph = coo_matrix((np.ones(len(rows), np.int8), (rows, cols)), shape=(len(miss), len(miss)))
+        cols, starts = np.empty(0, np.int64), np.zeros(len(miss) + 1, np.int64)
+    # row by row already: compressed rows directly (the labels follow the rows' order, as from any form)
+    graph = csr_matrix((np.ones(len(cols)), cols, starts), shape=(len(miss), len(miss)))
     n_comp, label = connected_components(graph, directed=False)
     checkpoint(0.75)
     size = np.bincount(label, minlength=n_comp)
@@ -425,8 +442,7 @@ def _regions(pts: np.ndarray, cov: Coverage, spacing: float, p: Params, checkpoi
     centroid = sums / size[:, None]
     floor = max(1.0, float(p.missing_min_share) * n)
     if small is not None and np.any((size < floor) & (size >= SMALL_FEWEST)):
-        tree = cKDTree(pts) if tree is None else tree
-        floor = min(floor, max(float(SMALL_FEWEST), small(tree)))
+        floor = min(floor, max(float(SMALL_FEWEST), small(pts_tree())))
     big = np.flatnonzero(size >= floor)
     depth = np.full(n_comp, np.nan)
     reach = np.full(n_comp, np.nan)
@@ -435,10 +451,8 @@ def _regions(pts: np.ndarray, cov: Coverage, spacing: float, p: Params, checkpoi
         # border points of the big regions: an explained cloud point among their neighbours
         in_big = np.isin(label, big)
         q = np.flatnonzero(in_big)
-        tree = cKDTree(pts) if tree is None else tree
         kk = min(LINK_K + 1, n)
-        dd, jj = tree.query(up[q], k=kk, distance_upper_bound=link, workers=query_workers(len(q)))
-        jj = np.where(np.isfinite(dd), jj, n)
+        jj = _cloud_neighbours(pts_tree(), up, q, kk, link, kept)
         explained = np.concatenate([cov.covered, [False]])
         border = np.zeros(len(miss), bool)
         border[q] = explained[jj].any(axis=1)
@@ -471,3 +485,62 @@ def _regions(pts: np.ndarray, cov: Coverage, spacing: float, p: Params, checkpoi
     out = [{"depth": float(depth[c]), "reach": float(reach[c]), "border_radius": float(radius[c]),
             "centroid": centroid[c], "deepest": int(deepest[c])} for c in range(n_comp)]
     return region, out
+
+
+def _from_kept(tree: cKDTree, up: np.ndarray, miss: np.ndarray, link: float) -> tuple[np.ndarray, ...]:
+    """The ``LINK_K + 2`` nearest cloud points within the link of each unexplained point ``up``
+    (rows ``miss`` of the cloud) from the cloud's tree: (distances, cloud rows, n where none, their
+    rows in ``up`` or -1)."""
+    n = tree.n
+    d, j = tree.query(up, k=min(LINK_K + 2, n), distance_upper_bound=link, workers=query_workers(len(up)))
+    d, j = d.reshape(len(up), -1), j.reshape(len(up), -1)
+    at = np.full(n + 1, -1, np.int64)
+    at[miss] = np.arange(len(miss))
+    return d, j, at[j]
+
+
+def _unique_first(d: np.ndarray, c: int) -> np.ndarray:
+    """Rows whose first ``c`` neighbours are the only ``c`` nearest (any search finds the same):
+    fewer found within the link, or the next strictly farther."""
+    if d.shape[1] <= c:
+        return np.ones(len(d), bool)
+    return ~np.isfinite(d[:, c - 1]) | (d[:, c] > d[:, c - 1])
+
+
+def _unexplained_neighbours(up: np.ndarray, k: int, link: float, kept: tuple | None) -> tuple[np.ndarray, ...]:
+    """Each unexplained point's ``k`` nearest unexplained points within the link, as
+    ``cKDTree(up).query`` gives them: from ``kept`` where its ``k`` nearest cloud points are the only
+    ones, all unexplained and none as near as the point itself (the same sets, themselves first)."""
+    if kept is None:
+        return cKDTree(up).query(up, k=k, distance_upper_bound=link, workers=query_workers(len(up)))
+    fd, _, fu = kept
+    d, j = fd[:, :k].copy(), fu[:, :k].copy()
+    found = np.isfinite(d)
+    clean = _unique_first(fd, k) & ((j >= 0) | ~found).all(axis=1)
+    if k > 1:
+        clean &= d[:, 1] > 0
+    j[~found] = len(up)
+    redo = np.flatnonzero(~clean)
+    if len(redo):
+        d[redo], j[redo] = cKDTree(up).query(up[redo], k=k, distance_upper_bound=link,
+                                             workers=query_workers(len(redo)))
+    return d, j
+
+
+def _cloud_neighbours(tree: cKDTree, up: np.ndarray, q: np.ndarray, kk: int, link: float,
+                      kept: tuple | None) -> np.ndarray:
+    """The cloud rows of the ``kk`` nearest cloud points within the link of the unexplained points
+    ``up[q]`` (n where fewer): from ``kept`` where they are the only ``kk`` nearest, else searched."""
+    n = tree.n
+    if kept is None:
+        jj = np.zeros((len(q), kk), np.int64)
+        redo = np.arange(len(q))
+    else:
+        fd, fj, _ = kept
+        jj = np.where(np.isfinite(fd[q, :kk]), fj[q, :kk], n)
+        redo = np.flatnonzero(~_unique_first(fd[q], kk))
+    if len(redo):
+        dd, j = tree.query(up[q[redo]], k=kk, distance_upper_bound=link, workers=query_workers(len(redo)))
+        dd, j = dd.reshape(len(redo), -1), j.reshape(len(redo), -1)
+        jj[redo] = np.where(np.isfinite(dd), j, n)
+    return jj

@@ -85,9 +85,13 @@ def link_contexts(cache: dict[str, Any], child: EvalContext, parent: EvalContext
 
 
 def parent_of(cache: dict[str, Any], child: EvalContext) -> EvalContext | None:
-    """The context ``child`` was edited from (:func:`link_contexts`), None when not known."""
+    """The context ``child`` was edited from (:func:`link_contexts`), None when not known; the link
+    asked stays longest (a first phase completed again and again keeps its parent)."""
     with _LOCK:
-        hit = cache.get("coverage parents", {}).get(id(child))
+        links = cache.get("coverage parents", {})
+        hit = links.pop(id(child), None)
+        if hit is not None:
+            links[id(child)] = hit
     return hit[1]() if hit is not None and hit[0]() is child else None
 
 

@@ -36,6 +36,7 @@ from ..stages.evaluation_source import CURVE_STAGES, EvaluationSource
 from ..stages.orchestrate import evaluate, finish
 from .change import Change
 from .coverage_update import curve_coverage, link_contexts, parent_of
+from .missing_update import curve_missing_parts
 
 __all__ = ["update_evaluation", "complete_update", "left_out", "CURVE_STAGES", "DIAGNOSTIC_STAGES"]
 
@@ -118,6 +119,9 @@ def complete_update(ev: Evaluation, cancel: Callable[[], bool] | None = None) ->
             if stage.name == "curve coverage":  # by difference from the curve edited (coverage_update)
                 ctx.results[stage.name] = curve_coverage(ctx, parent, src.cache)
                 return ctx.results[stage.name]
+            if stage.name == "curve missing parts":  # the cloud's tree kept (missing_update)
+                ctx.results[stage.name] = curve_missing_parts(ctx, src.cache, checkpoint)
+                return ctx.results[stage.name]
             ctx.results[stage.name] = stage.fn(ctx, checkpoint)
             return ctx.results[stage.name]
 
@@ -148,6 +152,8 @@ def compute_left_out(ev: Evaluation, names: tuple[str, ...]) -> dict[str, Any] |
         if stage.applies(ctx):
             if stage.name == "curve coverage" and parent is not None:  # by difference (coverage_update)
                 done[stage.name] = ctx.results[stage.name] = curve_coverage(ctx, parent, ev.source.cache)
+            elif stage.name == "curve missing parts":
+                done[stage.name] = ctx.results[stage.name] = curve_missing_parts(ctx, ev.source.cache)
             else:
                 done[stage.name] = ctx.results[stage.name] = stage.fn(ctx, no_checkpoint)
             ctx.not_computed.pop(stage.name, None)
@@ -161,7 +167,8 @@ def _tasks(old: EvalContext, ctx: EvalContext, cache: dict[str, Any], diagnostic
     computed again; ``diagnostics=False`` names the left-out ones in ``not_computed``."""
     incremental = {"curve boundedness": lambda: _sample_boundedness(old, ctx, cache),
                    "curve centeredness": lambda: _sample_centeredness(old, ctx, cache),
-                   "curve coverage": lambda: curve_coverage(ctx, old, cache)}
+                   "curve coverage": lambda: curve_coverage(ctx, old, cache),
+                   "curve missing parts": lambda: curve_missing_parts(ctx, cache)}
     stages = []
     for stage in start_order([s for s in CATALOGUE if s.name in CURVE_STAGES and s.applies(ctx)], ctx):
         if not diagnostics and stage.name in DIAGNOSTIC_STAGES:

@@ -1,0 +1,107 @@
+"""The missing parts of an edit's update (skelcore/edit/missing_update.py): with the cloud's tree kept,
+the regions' neighbours come mostly from one search of it, the others searched as before; the same
+regions, depths and points as without it, on a lattice cloud with repeated points (ties and zero
+distances everywhere, the searches it must fall back on), through a pruned Y's update, and on the kept
+subsample above missing_max_points."""
+
+from __future__ import annotations
+
+import sys
+from types import SimpleNamespace
+
+import numpy as np
+import pytest
+from scipy.spatial import cKDTree
+
+import skelcore.edit as E
+from skelcore import evaluate, shapes
+import skelcore.diagnostics.missing_parts  # noqa: F401  (the package exports a function of that name)
+
+MP = sys.modules["skelcore.diagnostics.missing_parts"]
+
+
+def _same(a, b) -> None:
+    assert np.array_equal(a[0], b[0])
+    assert len(a[1]) == len(b[1])
+    for x, y in zip(a[1], b[1]):
+        for key in x:
+            assert np.array_equal(np.asarray(x[key]), np.asarray(y[key]), equal_nan=True), key
+
+
+def _regions(pts, cov, spacing, params, tree):
+    return MP._regions(pts, cov, spacing, params, lambda f: None, tree=tree, small=lambda t: 30.0)
+
+
+@pytest.fixture(scope="module")
+def pruned():
+    sh = shapes.y_shape(4000, seed=0, n_curve_per_arm=8)
+    ev = evaluate(sh.cloud, curve=(sh.curve_vertices, sh.curve_edges))
+    new, change = E.prune_branch(ev.curve.curve, 0)
+    return ev, change
+
+
+def test_kept_tree_gives_the_same_regions_on_a_lattice_with_repeats(pruned):
+    ev, _ = pruned
+    params = ev.source.ctx.params
+    rng = np.random.default_rng(1)
+    grid = np.stack(np.meshgrid(np.arange(24), np.arange(24), np.arange(5), indexing="ij"), -1).reshape(-1, 3)
+    grid = np.vstack([grid, grid[rng.choice(len(grid), 400)]]) * 0.01
+    tree = cKDTree(grid)
+    for share in (0.3, 0.6):
+        covered = rng.random(len(grid)) > share
+        covered[: len(grid) // 3] = True
+        c = SimpleNamespace(covered=covered, gap=rng.random(len(grid)))  # what the regions read
+        for spacing in (0.005, 0.01, 0.013):
+            _same(_regions(grid, c, spacing, params, None), _regions(grid, c, spacing, params, lambda: tree))
+
+
+def test_update_keeps_the_tree_and_equals_a_fresh_evaluation(pruned, monkeypatch):
+    ev, change = pruned
+    calls = []
+    real = MP._from_kept
+    monkeypatch.setattr(MP, "_from_kept", lambda *a: calls.append(1) or real(*a))
+    up = ev.update(change)
+    tree = ev.source.cache["missing parts' cloud tree"][1]
+    ev.update(change)
+    assert ev.source.cache["missing parts' cloud tree"][1] is tree  # built once per evaluation
+    fresh = evaluate(ev.source.args["cloud"], curve=change.curve)
+    assert calls, "the update did not take the kept tree's path"
+    a, b = up.source.ctx.results["curve missing parts"], fresh.source.ctx.results["curve missing parts"]
+    assert any(r.counted for r in a.regions)  # the pruned arm is missing
+    assert np.array_equal(a.region, b.region) and np.array_equal(a.explained, b.explained)
+    assert [r.to_dict() for r in a.regions] == [r.to_dict() for r in b.regions]
+
+
+def test_above_missing_max_points_the_subsample_tree_is_kept():
+    """Without the curve's coverage and above ``missing_max_points`` the regions are found on the kept
+    subsample: its tree is kept (the same array), and a pruned branch's update equals a fresh evaluation."""
+    from skelcore import Params
+
+    sh = shapes.y_shape(3000, seed=4, n_curve_per_arm=6)
+    params = Params(missing_max_points=1000, coverage_max_points=500)
+    ev = evaluate(sh.cloud, curve=(sh.curve_vertices, sh.curve_edges), params=params)
+    new, change = E.prune_branch(ev.curve.curve, 0)
+    first = ev.update(change)
+    tree = ev.source.cache["missing parts' cloud tree"][1]
+    second = ev.update(change)
+    kept = ev.source.cache["missing parts' cloud tree"]
+    assert kept[1] is tree
+    assert len(kept[2]) == 1000 and kept[1].n == 1000
+    fresh = evaluate(sh.cloud, curve=new, params=params)
+    for up in (first, second):
+        a, b = up.source.ctx.results["curve missing parts"], fresh.source.ctx.results["curve missing parts"]
+        assert a.subsample == 1000 and any(r.counted for r in a.regions)
+        assert np.array_equal(a.region, b.region) and np.array_equal(a.explained, b.explained)
+        assert [r.to_dict() for r in a.regions] == [r.to_dict() for r in b.regions]
+
+
+def test_a_first_phase_completed_again_and_again_keeps_its_parent(pruned):
+    """Each completion links its own context; the first phase's link to the curve it was edited from
+    stays (else after eight completions its coverage was computed whole, not by difference)."""
+    from skelcore.edit import coverage_update as CU
+
+    ev, change = pruned
+    quick = ev.update(change, diagnostics=False)
+    for _ in range(CU._KEEP + 3):
+        quick.complete_update()
+    assert CU.parent_of(quick.source.cache, quick.source.ctx) is ev.source.ctx
