@@ -6,7 +6,8 @@ The paper's four metrics on the skeletal set and the curve (docs/metrics.md 1-4)
 SkelScope's coverage, the reference comparison and the ground-truth metrics (docs/metrics.md), the diagnostics.  Start order (docs/performance.md
 8): the boundedness stages first (the longest), then what others wait for, then the rest in catalogue
 order; the skeletal set's boundedness waits for the curve's, so that one lane runs both kernels while
-the other runs the Python stages (curve defects among them, not after them).
+the other runs the Python stages (curve defects among them, not after them); topology follows
+skeletal centeredness on a large skeletal set, whose neighbours its EMST takes.
 """
 
 from __future__ import annotations
