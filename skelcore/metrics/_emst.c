@@ -11,7 +11,9 @@
  * union-find merge drops, so the multiset of lengths is exact.  The first round keeps each point's KNN
  * nearest others (sorted; nothing left out is closer than the last): a later round takes a point's
  * candidate from that list, the first entry outside its component, and searches only for points whose
- * whole list lies inside.  Lengths are sqrt of the sum of squared coordinate differences in double
+ * whole list lies inside.  The caller may hand those lists in, from another search of the same
+ * points (centeredness' k nearest positions, docs/performance.md 6.1): each is checked to be KNN other
+ * points in non-decreasing distance, and searched here if not.  Lengths are sqrt of the sum of squared coordinate differences in double
  * precision, in that order (as scipy's cKDTree computes them).
  *
  * The searches of a round run on `threads` threads in blocks of BLOCK points (a shared counter hands out
@@ -130,6 +132,7 @@ typedef struct {
     int32_t *knn;          /* each point's KNN nearest others (first round), nearest first, -1 past the end */
     double *kth;           /* nothing outside that list is closer than this (inf: it holds every other point) */
     uint8_t *cursor;       /* list entries before it are known to lie in the point's component */
+    const int32_t *given;  /* the caller's first-round lists (tree order), n x KNN, or NULL */
     int first;             /* the first round: every point's KNN nearest others */
     int64_t next_block;    /* shared block counter of the current round */
     int64_t n_blocks;
@@ -244,6 +247,23 @@ static int search_knn(const Tree *t, int32_t i, int32_t *list, double *d2s) {
     return m;
 }
 
+/* point i's KNN nearest others from the caller's list (another search's answer, nearest first: nothing
+ * left out is closer than its last), their squared distances in this kernel's arithmetic; 0 (search
+ * instead) unless they are KNN other points in non-decreasing order of those distances */
+static int take_given(const Tree *t, const int32_t *given, int32_t i, int32_t *list, double *d2s) {
+    const double *x = &t->P[3 * i];
+    for (int p = 0; p < KNN; p++) {
+        int32_t j = given[(size_t)i * KNN + p];
+        if (j < 0 || j >= t->n || j == i) return 0;
+        const double *y = &t->P[3 * j];
+        double dx = x[0] - y[0], dy = x[1] - y[1], dz = x[2] - y[2];
+        d2s[p] = dx * dx + dy * dy + dz * dz;
+        if (p > 0 && d2s[p] < d2s[p - 1]) return 0;
+        list[p] = j;
+    }
+    return 1;
+}
+
 /* the first entry of point i's list outside component c (its nearest point of another component:
  * nothing closer lies outside the list), or -1 with lower[i] raised to the list's reach */
 static int32_t from_list(State *s, int32_t i, int32_t c) {
@@ -268,7 +288,7 @@ static void *search_blocks(void *arg) {
             for (int32_t i = i0; i < i1; i++) {
                 int32_t *list = &s->knn[(size_t)i * KNN];
                 double d2s[KNN];
-                int m = search_knn(t, i, list, d2s);
+                int m = (s->given && take_given(t, s->given, i, list, d2s)) ? KNN : search_knn(t, i, list, d2s);
                 s->kth[i] = (m == KNN) ? sqrt(d2s[KNN - 1]) : INFINITY;
                 s->cursor[i] = 0;
                 if (m == 0) continue;  /* cannot happen: n >= 2 */
@@ -331,11 +351,11 @@ static void set_labels(Tree *t, const int32_t *comp) {
 
 /* The whole EMST; returns the number of edges (n - 1), -1 on a stop, -2 out of memory. */
 static int64_t emst(const double *pts, int32_t n, double *lengths, double *nn, volatile int32_t *stop,
-                    int64_t *components, int threads) {
+                    int64_t *components, int threads, const int32_t *given) {
     Tree t = {0};
     State s = {0};
     int64_t m = 0, status = 0;
-    int32_t *parent = NULL, *pick = NULL;
+    int32_t *parent = NULL, *pick = NULL, *given_t = NULL;
     t.n = n;
     t.stop = stop;
     t.n_nodes = 2 * ((n + LEAF - 1) / LEAF) * 2 + 2;  /* generous: median splits give < 2 n / (LEAF / 2) */
@@ -364,6 +384,17 @@ static int64_t emst(const double *pts, int32_t n, double *lengths, double *nn, v
         if (r > 0) { status = -1; goto done; }
     }
     s.t = &t;
+    if (given) {  /* the caller's lists, rows and entries in tree order (pick: input row -> tree order) */
+        given_t = malloc(sizeof(int32_t) * KNN * (size_t)n);
+        if (!given_t) { status = -2; goto done; }
+        for (int32_t i = 0; i < n; i++) pick[t.perm[i]] = i;
+        for (int32_t i = 0; i < n; i++)
+            for (int p = 0; p < KNN; p++) {
+                int32_t j = given[(size_t)t.perm[i] * KNN + p];
+                given_t[(size_t)i * KNN + p] = (j >= 0 && j < n) ? pick[j] : -1;
+            }
+        s.given = given_t;
+    }
     for (int32_t i = 0; i < n; i++) {
         parent[i] = i; s.comp[i] = i; s.cand_j[i] = -1; s.lower[i] = 0.0;
     }
@@ -435,32 +466,42 @@ static int64_t emst(const double *pts, int32_t n, double *lengths, double *nn, v
     status = m;
 done:
     free(t.P); free(t.perm); free(t.nodes); free(s.comp); free(s.cand_d); free(s.cand_j); free(s.lower);
-    free(s.bound_bits); free(parent); free(pick); free(s.knn); free(s.kth); free(s.cursor);
+    free(s.bound_bits); free(parent); free(pick); free(s.knn); free(s.kth); free(s.cursor); free(given_t);
     return status;
 }
 
 /* emst(points float64 (n, 3), lengths float64 (n - 1) out, nn float64 (n) out, stop int32[1],
- *      components int64[1] out (progress), threads) -> edges written */
+ *      components int64[1] out (progress), threads, first int32 (n, 6) or None) -> edges written;
+ * `first`: each point's 6 nearest other points (input rows, nearest first) from another search, taken
+ * as the first round's lists (a list that is not checks out is searched) */
 static PyObject *py_emst(PyObject *self, PyObject *args) {
-    Py_buffer pts, len, nn, stop, comps;
+    Py_buffer pts, len, nn, stop, comps, first = {0};
     int threads = 1;
-    if (!PyArg_ParseTuple(args, "y*w*w*w*w*|i", &pts, &len, &nn, &stop, &comps, &threads)) return NULL;
+    PyObject *first_obj = Py_None;
+    if (!PyArg_ParseTuple(args, "y*w*w*w*w*|iO", &pts, &len, &nn, &stop, &comps, &threads, &first_obj)) return NULL;
+    if (first_obj != Py_None && PyObject_GetBuffer(first_obj, &first, PyBUF_SIMPLE) < 0) {
+        PyBuffer_Release(&pts); PyBuffer_Release(&len); PyBuffer_Release(&nn); PyBuffer_Release(&stop);
+        PyBuffer_Release(&comps);
+        return NULL;
+    }
     int64_t n = pts.len / (Py_ssize_t)(3 * sizeof(double));
     int64_t r = 0;
     if (n > INT32_MAX / 4 || len.len < (Py_ssize_t)(sizeof(double) * (n > 0 ? n - 1 : 0)) ||
-        nn.len < (Py_ssize_t)(sizeof(double) * n) || stop.len < 4 || comps.len < 8) {
+        nn.len < (Py_ssize_t)(sizeof(double) * n) || stop.len < 4 || comps.len < 8 ||
+        (first.buf && first.len != (Py_ssize_t)(sizeof(int32_t) * KNN * n))) {
         PyErr_SetString(PyExc_ValueError, "emst: buffer sizes do not match the points");
         r = -4;
     } else if (n >= 2) {
         Py_BEGIN_ALLOW_THREADS
         r = emst((const double *)pts.buf, (int32_t)n, (double *)len.buf, (double *)nn.buf,
-                 (volatile int32_t *)stop.buf, (int64_t *)comps.buf, threads);
+                 (volatile int32_t *)stop.buf, (int64_t *)comps.buf, threads, (const int32_t *)first.buf);
         Py_END_ALLOW_THREADS
         if (r == -2) PyErr_NoMemory();
         if (r == -3) PyErr_SetString(PyExc_RuntimeError, "emst: a Boruvka round made no progress");
     }
     PyBuffer_Release(&pts); PyBuffer_Release(&len); PyBuffer_Release(&nn); PyBuffer_Release(&stop);
     PyBuffer_Release(&comps);
+    if (first.buf) PyBuffer_Release(&first);
     if (r < -1) return NULL;
     return PyLong_FromLongLong(r);
 }

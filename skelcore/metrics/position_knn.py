@@ -19,7 +19,7 @@ from scipy.spatial import cKDTree
 
 from ..geometry import Checkpoint, kd_tree, leaf_order, no_checkpoint
 
-__all__ = ["PositionNeighbours", "position_neighbours", "HEAD", "SHARED_FROM"]
+__all__ = ["PositionNeighbours", "position_neighbours", "published_others", "HEAD", "SHARED_FROM"]
 
 #: neighbour columns kept per position (smoothness asks for tangent_k + 1 = 9 by default)
 HEAD = 10
@@ -38,6 +38,7 @@ class PositionNeighbours:
         self._table = threading.Lock()
         self.head = np.zeros((n, HEAD), np.int32)
         self.sure = np.zeros(n, np.int8)
+        self.width = HEAD  # columns of ``head`` every publication filled
         self.closed = False
 
     def tree(self, positions: np.ndarray, checkpoint: Checkpoint = no_checkpoint,
@@ -65,6 +66,7 @@ class PositionNeighbours:
             if not self.closed:
                 self.head[rows, : cols - 1] = near[:, : cols - 1]
                 self.sure[rows] = sure
+                self.width = min(self.width, cols - 1)
 
     def reuse(self, rows: np.ndarray, k: int) -> tuple[np.ndarray, np.ndarray]:
         """(which of ``rows`` have their k nearest fixed by a published answer, those answers)."""
@@ -73,6 +75,17 @@ class PositionNeighbours:
                 return np.zeros(len(rows), bool), np.empty((0, k), np.int32)
             ready = self.sure[rows] >= k
             return ready, self.head[rows[ready], :k]
+
+    def others(self, k: int) -> np.ndarray | None:
+        """Every position's k nearest other positions, nearest first (columns 1..k of the published
+        answers; column 0 is the position itself, the only one at distance 0), or None unless every
+        row is published with that many columns."""
+        with self._table:
+            if self.closed or k + 1 > self.width or not self.sure.all():
+                return None
+            if not np.array_equal(self.head[:, 0], np.arange(len(self.head))):
+                return None
+            return self.head[:, 1 : k + 1].copy()
 
     def close(self) -> None:
         """Drop the table and the tree: nothing will read them again."""
@@ -104,3 +117,12 @@ def position_neighbours(positions: np.ndarray) -> PositionNeighbours | None:
             _kept.update(positions=ref, index=PositionNeighbours(len(positions)))
         index = _kept["index"]
         return None if index.closed else index
+
+
+def published_others(positions: np.ndarray, k: int) -> np.ndarray | None:
+    """:meth:`PositionNeighbours.others` of the index kept for this very array, when one is (never
+    makes one): topology's EMST takes them as its first round (docs/performance.md 6.1)."""
+    with _kept_lock:
+        ref = _kept.get("positions")
+        index = _kept.get("index") if ref is not None and ref() is positions else None
+    return None if index is None else index.others(k)

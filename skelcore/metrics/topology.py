@@ -26,6 +26,7 @@ from ..geometry import Checkpoint, matlab_round, nearest_neighbor_distances, no_
 from ..parallel import polled_build
 from ..params import Params
 from . import _emst
+from .position_knn import published_others
 
 __all__ = [
     "TopologyResult",
@@ -38,6 +39,7 @@ __all__ = [
 ]
 
 _THREADED_EMST = 16384  # smaller sets: the kernel runs on this thread (a few ms, no polling needed)
+_FIRST_ROUND = 6  # neighbours per point of the kernel's first round (KNN in _emst.c)
 
 
 @dataclass
@@ -65,7 +67,8 @@ def _as_points(points: np.ndarray) -> np.ndarray:
     return pts
 
 
-def _emst_lengths(points: np.ndarray, checkpoint: Checkpoint = no_checkpoint) -> tuple[np.ndarray, np.ndarray]:
+def _emst_lengths(points: np.ndarray, checkpoint: Checkpoint = no_checkpoint,
+                  first: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
     """Edge lengths of the Euclidean minimum spanning tree of distinct points (Boruvka over a KD-tree,
     exact; compiled in ``_emst.c``), and each point's nearest-neighbour distance (its first round, used
     for eps*).
@@ -73,6 +76,8 @@ def _emst_lengths(points: np.ndarray, checkpoint: Checkpoint = no_checkpoint) ->
     The kernel runs in a helper thread (all cores for its searches) while this thread calls the
     checkpoint every 50 ms with the share of components merged; a cancel stops it within one block of
     1024 searches.  The lengths do not depend on the number of threads (docs/performance.md 6.1).
+    ``first``: each point's 6 nearest other points (rows, nearest first) from another search, the first
+    round's lists instead of its own searches; the same bits either way (the rounds verify candidates).
     """
     n = len(points)
     if n < 2:
@@ -82,26 +87,33 @@ def _emst_lengths(points: np.ndarray, checkpoint: Checkpoint = no_checkpoint) ->
     nn = np.empty(n)
     components = np.array([n], np.int64)
     threads = os.cpu_count() or 1
+    if first is not None:
+        first = np.ascontiguousarray(first, dtype=np.int32)
+        if first.shape != (n, _FIRST_ROUND):
+            first = None
 
     def merged() -> float:
         return (1.0 - float(components[0]) / n) ** 0.5
 
-    m = polled_build(lambda stop: _emst.emst(pts, lengths, nn, stop, components, threads), n, checkpoint,
+    m = polled_build(lambda stop: _emst.emst(pts, lengths, nn, stop, components, threads, first), n, checkpoint,
                      "skelscope-emst", _THREADED_EMST, progress=merged)
     if m != n - 1:  # cannot happen: every round merges, and a cancel is raised by polled_build's checkpoint
         raise RuntimeError(f"EMST: {m} edges for {n} points")
     return lengths, nn
 
 
-def _barcode_and_nn(points: np.ndarray, checkpoint: Checkpoint) -> tuple[np.ndarray, np.ndarray]:
+def _barcode_and_nn(points: np.ndarray, checkpoint: Checkpoint,
+                    shared: bool = False) -> tuple[np.ndarray, np.ndarray]:
     """H0 barcode (see :func:`h0_barcode`) and every point's nearest-neighbour distance (0 for a
-    duplicate), from one kNN pass."""
+    duplicate), from one kNN pass; ``shared``: the first round from the distinct positions' neighbours
+    that centeredness published (:mod:`.position_knn`), when it has."""
     if len(points) == 0:
         return np.empty((0, 2)), np.empty(0)
     checkpoint(0.0)
     uniq, inverse, counts = unique_rows(points, checkpoint)
     checkpoint(0.02)
-    lengths, nn_unique = _emst_lengths(uniq, lambda f: checkpoint(0.02 + 0.96 * f))
+    first = published_others(uniq, _FIRST_ROUND) if shared else None
+    lengths, nn_unique = _emst_lengths(uniq, lambda f: checkpoint(0.02 + 0.96 * f), first)
     checkpoint(0.98)
     deaths = np.sort(lengths)[::-1]
     deaths = deaths[deaths > 0]
@@ -320,7 +332,7 @@ def topological_similarity(
     cloud_bars, cloud_nn = _barcode_and_nn(cloud, lambda f: checkpoint(0.45 * f))
     if cloud_spacings is not None:
         cloud_spacings(cloud_nn)
-    skel_bars, _ = _barcode_and_nn(skeletal, lambda f: checkpoint(0.45 + 0.45 * f))
+    skel_bars, _ = _barcode_and_nn(skeletal, lambda f: checkpoint(0.45 + 0.45 * f), shared=True)
     eps = _quantile(cloud_nn, params.eps_quantile)  # = eps_star(cloud, quantile), without a new kNN
     k = compared_bar_count(cloud_bars, eps, len(cloud), params=params)
     checkpoint(0.92)

@@ -6,7 +6,8 @@ The paper's four metrics on the skeletal set and the curve (docs/metrics.md 1-4)
 SkelScope's coverage, the reference comparison and the ground-truth metrics (docs/metrics.md), the diagnostics.  Start order (docs/performance.md
 8): the boundedness stages first (the longest), then what others wait for, then the rest in catalogue
 order; the skeletal set's boundedness waits for the curve's, so that one lane runs both kernels while
-the other runs the Python stages (curve defects among them, not after them).
+the other runs the Python stages (curve defects among them, not after them); topology follows
+skeletal centeredness on a large skeletal set, whose neighbours its EMST takes.
 """
 
 from __future__ import annotations
@@ -21,6 +22,7 @@ from ..geometry import Checkpoint
 from ..metrics.centeredness import curve_centeredness, skeletal_centeredness
 from ..metrics.coverage import coverage, curve_elements
 from ..metrics.ground_truth import ground_truth
+from ..metrics.position_knn import SHARED_FROM
 from ..metrics.reference import compare_with_reference
 from ..metrics.smoothness import curve_smoothness_overall, curve_vertex_smoothness, skeletal_smoothness
 from ..metrics.topology import topological_similarity
@@ -227,11 +229,19 @@ def _the_curves_kernel_first(ctx: EvalContext) -> tuple[str, ...]:
     return ("curve boundedness",) if ctx.curve is not None else ()
 
 
+def _the_shared_neighbours_first(ctx: EvalContext) -> tuple[str, ...]:
+    # a large skeletal set's EMST takes its first round from the k nearest positions that centeredness
+    # publishes (metrics/position_knn.py): about 1.2 CPU s less at 1M points (docs/performance.md 6.1)
+    if ctx.from_curve or ctx.skeletal_mode != "pointwise" or ctx.skeletal_n is None:
+        return ()
+    return ("skeletal centeredness",) if len(ctx.skeletal_n) >= SHARED_FROM else ()
+
+
 CATALOGUE: tuple[Stage, ...] = (
     Stage("correspondence", weight=0.3, column="skeletal", inputs=("cloud", "skeletal set", "curve"), applies=_reverse,
           fn=_correspondence, start=EARLY),
     Stage("topology", weight=1.0, column="skeletal", inputs=("cloud", "skeletal points", "rows"),
-          applies=_skeletal_corresponded, fn=_topology),
+          applies=_skeletal_corresponded, fn=_topology, follows=_the_shared_neighbours_first),
     Stage("skeletal boundedness", weight=4.0, column="skeletal", inputs=("cloud", "skeletal points"), applies=_skeletal,
           fn=_skeletal_boundedness, start=_after_the_curves, follows=_the_curves_kernel_first),
     Stage("skeletal centeredness", weight=0.5, column="skeletal",

@@ -69,3 +69,20 @@ def test_noise_cells_are_labelled_as_np_unique_labels_them():
                   np.array([[0, 0, 2**40], [2**40, 0, 0], [0, 2**40, 0]])):
         want = np.unique(cells, axis=0, return_inverse=True)[1].reshape(-1)
         assert np.array_equal(coverage._row_labels(cells), want)
+
+
+def test_published_others_are_the_heads_without_the_position_itself():
+    # topology's EMST takes them as its first round: only when every row is published, only for the
+    # very array the index was made for, never making an index
+    pts = np.random.default_rng(2).normal(size=(position_knn.SHARED_FROM, 3))
+    pts.flags.writeable = False
+    assert position_knn.published_others(pts, 6) is None  # no index for it yet
+    index = position_knn.position_neighbours(pts)
+    dist, near = cKDTree(pts).query(pts, 12)
+    index.publish(np.arange(len(pts) - 1), dist[:-1], near[:-1])
+    assert position_knn.published_others(pts, 6) is None  # the last row is not published
+    index.publish(np.arange(len(pts) - 1, len(pts)), dist[-1:], near[-1:])
+    assert np.array_equal(position_knn.published_others(pts, 6), near[:, 1:7])
+    assert position_knn.published_others(pts.copy(), 6) is None
+    index.close()
+    assert position_knn.published_others(pts, 6) is None

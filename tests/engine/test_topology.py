@@ -145,6 +145,24 @@ def test_emst_kernel_lengths_are_a_dense_minimum_spanning_trees_bits(rng):
             assert m == len(points) - 1 and np.sort(lengths).tobytes() == want.tobytes()
 
 
+def test_emst_kernel_first_round_from_another_search_gives_the_same_bits(rng):
+    # topology hands the kernel centeredness' k nearest positions as its first round: the lengths and
+    # nearest distances must be those of its own searches, with ties (a lattice, rounded points) and
+    # threads; lists that are not sorted or name the point itself are searched instead
+    from scipy.spatial import cKDTree
+
+    sets = [np.stack(np.meshgrid(*[np.arange(28.0)] * 3), -1).reshape(-1, 3) * 0.1,  # 21952, all ties
+            np.unique(np.round(rng.normal(size=(20000, 3)), 1), axis=0), rng.normal(size=(3000, 3))]
+    for points in sets:
+        pts = np.ascontiguousarray(points)
+        own_len, own_nn = topology._emst_lengths(pts)
+        near = cKDTree(pts).query(pts, 7)[1]
+        assert np.array_equal(near[:, 0], np.arange(len(pts)))
+        for first in (near[:, 1:], near[:, :0:-1], near[:, :6]):  # given, reversed, with the point itself
+            lengths, nn = topology._emst_lengths(pts, first=first)
+            assert np.sort(lengths).tobytes() == np.sort(own_len).tobytes() and nn.tobytes() == own_nn.tobytes()
+
+
 def test_hammer_scan_barcode_equals_dense_minimum_spanning_tree(scans):
     from scipy.sparse.csgraph import minimum_spanning_tree
     from scipy.spatial.distance import pdist, squareform
