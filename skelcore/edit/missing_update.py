@@ -45,12 +45,6 @@ def curve_missing_parts(ctx: EvalContext, cache: dict[str, Any],
                         checkpoint: Checkpoint = no_checkpoint) -> MissingParts:
     """The curve missing parts stage's result for ``ctx`` (an edit's update), the cloud's tree kept."""
     cov = ctx.results.get("curve coverage")
-    inside = None
-    if ctx.viewpoints_n is None:  # a scan seen from some sides encloses no interior
-        def inside(points: np.ndarray) -> np.ndarray:
-            shape = ctx.interior()
-            ijk = shape.index_of(points)
-            return shape.solid()[ijk[:, 0], ijk[:, 1], ijk[:, 2]]
     return missing_parts(ctx.cloud_n, ctx.curve_n, ctx.params, cov=cov, tau=None if cov is None else cov.tau,
-                         what="curve skeleton", to_user=ctx.norm.invert, inside=inside,
+                         what="curve skeleton", to_user=ctx.norm.invert, inside=ctx.solid_test(),
                          cloud_tree=_cloud_tree(cache), checkpoint=checkpoint)

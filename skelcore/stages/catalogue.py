@@ -161,14 +161,8 @@ def _missing(kind: str) -> Callable[[EvalContext, Checkpoint], object]:
         skeleton = ctx.skeletal_n if kind == "skeletal" else ctx.curve_n
         cov = ctx.results.get(f"{kind} coverage")
         what = "skeletal point set" if kind == "skeletal" else "curve skeleton"
-        inside = None
-        if ctx.viewpoints_n is None:  # a scan seen from some sides encloses no interior
-            def inside(points: np.ndarray) -> np.ndarray:
-                shape = ctx.interior()
-                ijk = shape.index_of(points)
-                return shape.solid()[ijk[:, 0], ijk[:, 1], ijk[:, 2]]
         return missing_parts(ctx.cloud_n, skeleton, ctx.params, cov=cov, tau=None if cov is None else cov.tau,
-                             what=what, to_user=ctx.norm.invert, inside=inside, checkpoint=checkpoint)
+                             what=what, to_user=ctx.norm.invert, inside=ctx.solid_test(), checkpoint=checkpoint)
 
     return run
 

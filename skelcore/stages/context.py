@@ -9,7 +9,7 @@ from __future__ import annotations
 import threading
 import time
 from dataclasses import dataclass, field
-from typing import Any
+from typing import Any, Callable
 
 import numpy as np
 
@@ -186,6 +186,20 @@ class EvalContext:
                                                         min_spacing_factor=p.cycles_voxel_spacing,
                                                         inside_share=p.beta_star, checkpoint=checkpoint))
             return self._interior[0]
+
+    def solid_test(self) -> Callable[[np.ndarray], np.ndarray] | None:
+        """Whether normalized points lie in the cloud's voxelized solid (:meth:`interior`), the test the
+        missing parts use to tell air from the shape; None for a scan seen from some sides, which
+        encloses no interior (docs/diagnostics.md "Missing parts")."""
+        if self.viewpoints_n is not None:
+            return None
+
+        def inside(points: np.ndarray) -> np.ndarray:
+            shape = self.interior()
+            ijk = shape.index_of(points)
+            return shape.solid()[ijk[:, 0], ijk[:, 1], ijk[:, 2]]
+
+        return inside
 
     def diag_tree(self, checkpoint: Checkpoint = no_checkpoint):
         """The KD-tree of at most ``diag_max_points`` of the normalized cloud that the diagnostics' local
