@@ -13,13 +13,11 @@ from __future__ import annotations
 
 import numpy as np
 
-from .interior import VoxelShape
+from .interior import LATTICE_DIRECTIONS, VoxelShape
 
 __all__ = ["balls_in_shape"]
 
-_DIRECTIONS = np.array([(i, j, k) for i in (-1, 0, 1) for j in (-1, 0, 1) for k in (-1, 0, 1)
-                        if (i, j, k) != (0, 0, 0)], float)
-_DIRECTIONS /= np.linalg.norm(_DIRECTIONS, axis=1, keepdims=True)
+_DIRECTIONS = LATTICE_DIRECTIONS / np.linalg.norm(LATTICE_DIRECTIONS, axis=1, keepdims=True)
 _CHUNK = 1 << 15  # balls probed at once
 
 
