@@ -228,6 +228,11 @@ class Params:
     gt_cover_share : a branch or a root-to-leaf path counts as found when more than this share of its
         length lies within gt_threshold_max local radii of the other curve (docs/metrics.md 5.3.2).
     gt_substantial : ESA / DSA / PDS call a distance substantial above this share of the diagonal.
+    gt_held_radii : where the reference's nodes are known to lie off the surface the cloud was drawn
+        from (a traced neuron on its decimated mesh), a node is held (the cloud can show it) when it
+        lies inside or at most this many of its radii outside; precision / recall / F1 are also given
+        on the held reference (docs/metrics.md 5.3.1). = gt_threshold_max: a node farther out is beyond
+        every threshold for a curve inside the surface.
     repair_max_rounds : skelcore.repair acts at most this many times (docs/repair.md).
     repair_max_tries : candidate actions tried (each evaluated) per round before giving up.
     repair_max_components : a curve with more components than this is refused by skelcore.repair
@@ -360,6 +365,7 @@ class Params:
     gt_diag_thresholds: str = "0.01 0.02 0.05"
     gt_cover_share: float = 0.8
     gt_substantial: float = 0.02
+    gt_held_radii: float = 1.0
     # repair (docs/repair.md)
     repair_max_rounds: int = 40
     repair_max_tries: int = 6
@@ -479,6 +485,8 @@ class Params:
             bad("gt_cover_share", "must be in (0, 1)")
         if not float(self.gt_substantial) > 0:
             bad("gt_substantial", "must be > 0")
+        if not float(self.gt_held_radii) >= 0:
+            bad("gt_held_radii", "must be >= 0 (radii outside the surface)")
         try:
             shares = [float(x) for x in str(self.gt_diag_thresholds).replace(",", " ").split()]
         except ValueError:

@@ -27,7 +27,8 @@ from ..io.mesh import TriangleMesh, read_obj_mesh
 from .surface_sampling import SurfacePoints
 
 __all__ = ["NEURON_DIR", "NEURON_IDS", "Neuron", "load_neuron", "MeshSampler", "winding_numbers",
-           "inside_mesh", "surface_distance", "NodeFacts", "node_facts", "write_facts_csv", "TWIG_RADIUS"]
+           "inside_mesh", "surface_distance", "NodeFacts", "node_facts", "write_facts_csv", "read_outside_radii",
+           "TWIG_RADIUS"]
 
 #: the folder of the shipped neurons (the source tree's resources/neurons)
 NEURON_DIR = Path(__file__).resolve().parents[2] / "resources" / "neurons"
@@ -293,3 +294,31 @@ def write_facts_csv(path: str | os.PathLike, neuron: Neuron, facts: NodeFacts) -
             fh.write(f"{i},{int(neuron.node_ids[i])},{v[i, 0]:.6g},{v[i, 1]:.6g},{v[i, 2]:.6g},{facts.radius[i]:.6g},"
                      f"{int(facts.inside[i])},{facts.winding[i]:.6f},{facts.distance[i]:.6g},"
                      f"{facts.outside_by[i]:.6g},{facts.outside_radii[i]:.6g}\n")
+
+
+def read_outside_radii(path: str | os.PathLike, n_vertices: int | None = None) -> np.ndarray:
+    """The ``outside_by_radii`` column of a facts file (:func:`write_facts_csv`), in its ``vertex``
+    order: how far each reference vertex lies outside the mesh, in its radii (0 inside). One-line
+    SkelInputError naming the file when it is unreadable, lacks the column or has another vertex count."""
+    from ..errors import SkelInputError
+
+    try:
+        with open(path, encoding="utf-8") as fh:
+            header = fh.readline().strip().split(",")
+            data = np.loadtxt(fh, delimiter=",", ndmin=2)
+    except OSError as exc:
+        raise SkelInputError(f"cannot read the facts file ({exc.strerror or 'unreadable'})", path) from None
+    except (ValueError, UnicodeDecodeError):
+        raise SkelInputError("not a facts file (a header line, then numbers separated by commas)", path) from None
+    if "vertex" not in header or "outside_by_radii" not in header or data.shape[1] != len(header):
+        raise SkelInputError("not a facts file (needs the columns vertex and outside_by_radii)", path)
+    vertex = data[:, header.index("vertex")].astype(np.int64)
+    if n_vertices is not None and len(vertex) != n_vertices:
+        raise SkelInputError(f"the facts have {len(vertex)} rows for a reference of {n_vertices} vertices", path)
+    if not np.array_equal(np.sort(vertex), np.arange(len(vertex))):
+        raise SkelInputError("the facts' vertex column must number the rows 0..n-1", path)
+    out = np.empty(len(vertex))
+    out[vertex] = data[:, header.index("outside_by_radii")]
+    if not (np.all(np.isfinite(out)) and np.all(out >= 0)):
+        raise SkelInputError("outside_by_radii must be finite and >= 0", path)
+    return out

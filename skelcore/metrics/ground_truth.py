@@ -10,7 +10,9 @@ thresholds t_k = k / K x ``threshold_max`` local radii, averaged over k = 1..K (
 area, its thresholds in local radii); junctions (degree >= 3) and endpoints (degree 1) matched one
 to one within ``match_radii`` x r of the reference node (PyNeval's branch/leaf metric: Hungarian,
 scipy's linear_sum_assignment); cycle count error E - V + C; length ratio; branch split / merge
-counts (branches: maximal chains through degree-2 vertices).
+counts (branches: maximal chains through degree-2 vertices). Given how far each reference node lies
+outside the surface the cloud was drawn from, precision / recall / F1 also on the held reference:
+the samples owned by nodes within ``held_radii`` of their radii of it (5.3.1 "The held reference").
 """
 
 from __future__ import annotations
@@ -30,7 +32,7 @@ from ..params import Params
 from .reference import graph_counts
 
 __all__ = ["GroundTruthParams", "GroundTruthComparison", "compare_with_ground_truth", "curve_samples",
-           "branch_labels", "match_nodes", "radius_from_cloud", "reference_radius", "ground_truth"]
+           "branch_labels", "match_nodes", "radius_from_cloud", "reference_radius", "ground_truth", "piece_shares"]
 
 _MAX_SAMPLES = 200_000
 
@@ -48,6 +50,7 @@ class GroundTruthParams:
     branch_radii: float = Params.gt_branch_radii
     sample_step: float = Params.gt_sample_step
     radius_k: int = Params.gt_radius_k
+    held_radii: float = Params.gt_held_radii
 
     def __post_init__(self) -> None:
         for name in ("threshold_max", "match_radii", "branch_radii", "sample_step"):
@@ -56,6 +59,8 @@ class GroundTruthParams:
         for name in ("thresholds", "radius_k"):
             if int(getattr(self, name)) < 1:
                 raise ValueError(f"ground-truth parameter {name}={getattr(self, name)!r}: must be a positive integer")
+        if not float(self.held_radii) >= 0:
+            raise ValueError(f"ground-truth parameter held_radii={self.held_radii!r}: must be >= 0")
 
     @classmethod
     def from_params(cls, params) -> "GroundTruthParams":
@@ -66,7 +71,9 @@ class GroundTruthParams:
 @dataclass(frozen=True)
 class GroundTruthComparison:
     """Scores of a curve against a reference; distances in the inputs' units, counts as
-    (ours, reference[, matched]); NaN where a ratio has nothing to count (no junctions, say)."""
+    (ours, reference[, matched]); NaN where a ratio has nothing to count (no junctions, say). The
+    ``held_`` fields: None unless the reference's nodes' distances outside the surface were given
+    (``held_nodes`` = (held, all) reference vertices, ``held_share`` the held share of its length)."""
 
     chamfer: float
     chamfer_to_reference: float
@@ -92,6 +99,12 @@ class GroundTruthComparison:
     match_radii: float
     branch_radii: float
     radius_source: str
+    held_precision: float | None = None
+    held_recall: float | None = None
+    held_f1: float | None = None
+    held_share: float | None = None
+    held_nodes: tuple[int, int] | None = None
+    held_radii: float | None = None
 
     def to_dict(self) -> dict:
         d = asdict(self)
@@ -99,9 +112,12 @@ class GroundTruthComparison:
 
     @classmethod
     def from_dict(cls, d: dict) -> "GroundTruthComparison":
-        """The inverse of :meth:`to_dict` (lists back to tuples; JSON's null back to NaN)."""
+        """The inverse of :meth:`to_dict` (lists back to tuples; JSON's null back to NaN; a ``held_``
+        field absent or null stays None)."""
         out = {}
         for name, f in cls.__dataclass_fields__.items():
+            if name.startswith("held_") and d.get(name) is None:
+                continue
             v = d[name]
             if isinstance(v, list):
                 v = tuple(v)
@@ -203,12 +219,14 @@ def _at_projection(curve: CurveSkeleton, radius: np.ndarray, q: np.ndarray, edge
 
 
 def compare_with_ground_truth(curve: CurveSkeleton, reference: CurveSkeleton, reference_radius: np.ndarray | None = None,
-                              cloud: np.ndarray | None = None, *,
-                              params: GroundTruthParams | None = None) -> GroundTruthComparison:
+                              cloud: np.ndarray | None = None, *, params: GroundTruthParams | None = None,
+                              outside_radii: np.ndarray | None = None) -> GroundTruthComparison:
     """Score ``curve`` against ``reference`` (same frame and units); ``reference_radius`` per reference
-    vertex, else estimated from ``cloud`` (one of them is needed). Module docstring and
-    docs/metrics.md 5.3.1 for the definitions."""
+    vertex, else estimated from ``cloud`` (one of them is needed); ``outside_radii`` per reference
+    vertex (how far outside the cloud's surface, in its radii; 0 inside) adds the ``held_`` scores.
+    Module docstring and docs/metrics.md 5.3.1 for the definitions."""
     p = params or GroundTruthParams()
+    held = _held_nodes(outside_radii, reference, p.held_radii)
     if reference.n_edges == 0:
         raise SkelInputError("the reference curve has no edges")
     if reference_radius is not None:
@@ -224,6 +242,7 @@ def compare_with_ground_truth(curve: CurveSkeleton, reference: CurveSkeleton, re
     if not (np.all(np.isfinite(radius)) and np.all(radius > 0)):
         raise SkelInputError("reference radius must be finite and > 0 at every vertex")
     radius = radius[np.unique(reference.edges)]
+    held = None if held is None else held[np.unique(reference.edges)]
     reference = _edges_only(reference)
 
     lengths = (float(curve.edge_lengths().sum()) if curve.n_edges else 0.0, float(reference.edge_lengths().sum()))
@@ -255,6 +274,9 @@ def compare_with_ground_truth(curve: CurveSkeleton, reference: CurveSkeleton, re
                                                 (ref_pts, ref_w, ref_edge, ref_r, d_ref), our_pts, our_edge)
     cyc_o, cyc_r = graph_counts(curve)["cycles"], graph_counts(reference)["cycles"]
     c_to, c_from = wmean(d_ours, our_w), wmean(d_ref, ref_w)
+    held_scores = {} if held is None else _held_scores(
+        reference, held, step, (q, qe, d_ours, r_ours, our_w), (d_ref, ref_r, ref_w), thresholds * slack,
+        float(p.held_radii))
     return GroundTruthComparison(
         chamfer=(c_to + c_from) / 2, chamfer_to_reference=c_to, chamfer_from_reference=c_from,
         chamfer_radii=(wmean(d_ours / r_ours, our_w) + wmean(d_ref / ref_r, ref_w)) / 2,
@@ -268,8 +290,73 @@ def compare_with_ground_truth(curve: CurveSkeleton, reference: CurveSkeleton, re
         length=lengths, length_ratio=lengths[0] / lengths[1] if lengths[1] > 0 else float("nan"),
         branches=n_branches, splits=splits, merges=merges,
         thresholds=tuple(float(t) for t in thresholds), match_radii=float(p.match_radii),
-        branch_radii=float(p.branch_radii), radius_source=source,
+        branch_radii=float(p.branch_radii), radius_source=source, **held_scores,
     )
+
+
+def _held_nodes(outside_radii: np.ndarray | None, reference: CurveSkeleton, tolerance: float) -> np.ndarray | None:
+    """Per reference vertex: inside the cloud's surface or at most ``tolerance`` of its radii outside."""
+    if outside_radii is None:
+        return None
+    out = np.asarray(outside_radii, float).ravel()
+    if out.shape != (reference.n_vertices,):
+        raise SkelInputError(f"the reference's outside distances have {out.size} values for {reference.n_vertices} vertices")
+    if not (np.all(np.isfinite(out)) and np.all(out >= 0)):
+        raise SkelInputError("the reference's outside distances must be finite and >= 0 (0: inside)")
+    return out <= tolerance
+
+
+def piece_shares(curve: CurveSkeleton, step: float, node_weight: np.ndarray) -> np.ndarray:
+    """Per sample of :func:`curve_samples` (same ``step``), the ``node_weight`` of the edge's end
+    nearer to it (each vertex owns the half of each of its edges next to it; a piece midway between
+    both ends gets their mean). A curve without edges: the vertices' own."""
+    node_weight = np.asarray(node_weight, float)
+    e = curve.edges
+    if len(e) == 0:
+        return node_weight.copy()
+    n = np.maximum(np.ceil(curve.edge_lengths() / step).astype(np.int64), 1)
+    edge = np.repeat(np.arange(len(e)), n)
+    i = np.arange(len(edge)) - np.concatenate([[0], np.cumsum(n)[:-1]])[edge]
+    side = np.sign(2 * i + 1 - n[edge])  # -1: first half, 0: the middle piece, +1: second half
+    a, b = node_weight[e[edge, 0]], node_weight[e[edge, 1]]
+    return np.where(side < 0, a, np.where(side > 0, b, (a + b) / 2))
+
+
+def _projection_shares(reference: CurveSkeleton, node_weight: np.ndarray, q: np.ndarray, edge: np.ndarray) -> np.ndarray:
+    """``node_weight`` of the reference vertex nearer to each projection q along its edge ``edge``
+    (-1: q is a vertex, its own); midway, the two ends' mean."""
+    node_weight = np.asarray(node_weight, float)
+    out = np.empty(len(q))
+    iso = edge < 0
+    if iso.any():
+        _, nearest = cKDTree(reference.vertices).query(q[iso], k=1)
+        out[iso] = node_weight[nearest]
+    e = reference.edges[edge[~iso]]
+    da = np.linalg.norm(q[~iso] - reference.vertices[e[:, 0]], axis=1)
+    db = np.linalg.norm(q[~iso] - reference.vertices[e[:, 1]], axis=1)
+    a, b = node_weight[e[:, 0]], node_weight[e[:, 1]]
+    out[~iso] = np.where(da < db, a, np.where(db < da, b, (a + b) / 2))
+    return out
+
+
+def _held_scores(reference, held, step, ours, refs, limits, tolerance) -> dict:
+    """Precision / recall / F1 on the held reference (docs/metrics.md 5.3.1 "The held reference"):
+    the reference samples owned by held vertices, and our samples whose nearest reference point is."""
+    q, qe, d_ours, r_ours, our_w = ours
+    d_ref, ref_r, ref_w = refs
+    h_ref = ref_w * piece_shares(reference, step, held)
+    h_ours = our_w * _projection_shares(reference, held, q, qe)
+    share = float(h_ref.sum() / ref_w.sum())
+
+    def mean_hits(d, r, w):
+        return np.array([np.sum(w * (d <= t * r)) / np.sum(w) if np.sum(w) > 0 else np.nan for t in limits])
+
+    prec, rec = mean_hits(d_ours, r_ours, h_ours), mean_hits(d_ref, ref_r, h_ref)
+    with np.errstate(invalid="ignore"):
+        f1 = np.where(prec + rec > 0, 2 * prec * rec / np.where(prec + rec > 0, prec + rec, 1.0), 0.0)
+    f1 = np.where(np.isnan(prec) | np.isnan(rec), np.nan, f1)
+    return {"held_precision": float(prec.mean()), "held_recall": float(rec.mean()), "held_f1": float(f1.mean()),
+            "held_share": share, "held_nodes": (int(held.sum()), int(len(held))), "held_radii": tolerance}
 
 
 def _splits_merges(curve, reference, radius, reach, ref_samples, our_pts, our_edge):
@@ -318,12 +405,13 @@ def reference_radius(reference: CurveSkeleton, given: np.ndarray | None, cloud: 
 
 
 def ground_truth(curve: CurveSkeleton, reference: CurveSkeleton, cloud: np.ndarray | None, params,
-                 radius: np.ndarray | None = None) -> GroundTruthComparison:
+                 radius: np.ndarray | None = None, outside_radii: np.ndarray | None = None) -> GroundTruthComparison:
     """What ``evaluate`` computes (its "ground truth" stage): :func:`compare_with_ground_truth` with the
     ``gt_`` constants of a :class:`skelcore.Params`, the radius from ``radius`` (else the reference's
-    own) completed from the cloud (:func:`reference_radius`); all in the inputs' units."""
+    own) completed from the cloud (:func:`reference_radius`); all in the inputs' units.
+    ``outside_radii``: the reference's facts, for the held scores (``skelcore evaluate --reference-facts``)."""
     p = GroundTruthParams.from_params(params)
     given = reference.radius if radius is None else radius
     r, source = reference_radius(reference, given, cloud, p.radius_k)
-    out = compare_with_ground_truth(curve, reference, r, cloud, params=p)
+    out = compare_with_ground_truth(curve, reference, r, cloud, params=p, outside_radii=outside_radii)
     return out if source in ("", out.radius_source) else replace(out, radius_source=source)
