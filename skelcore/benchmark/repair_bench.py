@@ -1,7 +1,8 @@
 """The repair measured on a benchmark folder (docs/repair.md "Measured"): every case's cloud skeletonized
 by each tool (the built-in ``cao`` / ``skelscope`` / ``default``, the adapters ``pygel`` / ``kimimaro`` / ``skimage``),
 then repaired; on a generated suite's clean tube cases also the reference with one controlled defect
-(:mod:`.skeleton_defects` at its middle level). Per job: GT F1 (docs/metrics.md 5.3.1) and the defect
+(:mod:`.skeleton_defects` at its middle level). Per job: GT F1 (docs/metrics.md 5.3.1; on a real
+suite's case also ``held_f1``, on the reference the cloud can show: the case's facts file) and the defect
 warnings and tallies before and after, the seconds of the skeletonization and of the repair (wall
 clock, and CPU of the process's threads: ``cpu_skeletonize``, ``cpu_repair``, and the repair's CPU by
 phase, ``cpu_phases``: :attr:`~skelcore.skeleton_repair.RepairResult.phases`).
@@ -23,6 +24,7 @@ import numpy as np
 
 from ..curve import CurveSkeleton
 from ..errors import SkelInputError
+from .neurons import read_outside_radii
 
 __all__ = ["BUILT_IN", "DEFECT_NAMES", "WARNINGS", "RepairCase", "repair_cases", "skeletonize_with", "repair_job",
            "run_repair_bench"]
@@ -48,6 +50,7 @@ class RepairCase:
     shape: str = ""
     seed: int = 0
     bundled: CurveSkeleton | None = None
+    outside_radii: np.ndarray | None = None
 
 
 def _samples() -> Iterator[RepairCase]:
@@ -79,9 +82,12 @@ def repair_cases(folder: str | Path, only: Sequence[str] = ()) -> Iterator[Repai
         if only and not any(fnmatch.fnmatch(c["name"], p) for p in only):
             continue
         generated = c.get("curve_skeleton") != "traced"
-        yield RepairCase(c["name"], load_cloud(root / c["files"]["cloud"]), load_curve(root / c["files"]["reference"]),
+        ref = load_curve(root / c["files"]["reference"])
+        facts = c["files"].get("facts")
+        yield RepairCase(c["name"], load_cloud(root / c["files"]["cloud"]), ref,
                          defects=generated and c.get("effect") == "clean" and c.get("shape") != "plate",
-                         shape=str(c.get("shape", "")), seed=int(meta.get("seed", 0)))
+                         shape=str(c.get("shape", "")), seed=int(meta.get("seed", 0)),
+                         outside_radii=None if not facts else read_outside_radii(root / facts, ref.n_vertices))
 
 
 def skeletonize_with(tool: str, cloud: np.ndarray, params: dict[str, Any] | None = None
@@ -103,12 +109,15 @@ def skeletonize_with(tool: str, cloud: np.ndarray, params: dict[str, Any] | None
     return res.curve, (res.skeletal if res.correspondence == "auto" else None)
 
 
-def _f1(curve: CurveSkeleton, ref: CurveSkeleton) -> float:
+def _f1(curve: CurveSkeleton, case: RepairCase, when: str) -> dict[str, float]:
+    """``f1_{when}`` and, when the case's facts are known, ``held_f1_{when}`` (docs/metrics.md 5.3.1)."""
     from ..metrics.ground_truth import compare_with_ground_truth
 
+    held = case.outside_radii is not None
     if curve.n_edges == 0:
-        return 0.0
-    return round(float(compare_with_ground_truth(curve, ref, ref.radius).f1), 4)
+        return {f"f1_{when}": 0.0, **({f"held_f1_{when}": 0.0} if held else {})}
+    gt = compare_with_ground_truth(curve, case.reference, case.reference.radius, outside_radii=case.outside_radii)
+    return {f"f1_{when}": round(float(gt.f1), 4), **({f"held_f1_{when}": round(float(gt.held_f1), 4)} if held else {})}
 
 
 def _warned(ev: Any) -> list[str]:
@@ -120,14 +129,14 @@ def repair_job(case: RepairCase, job: str, curve: CurveSkeleton, seconds_skeleto
     """One repair of ``curve`` against the case's cloud: GT F1, warnings and tallies before and after."""
     from ..skeleton_repair import repair
 
-    row: dict[str, Any] = {"case": case.name, "job": job, "f1_before": _f1(curve, case.reference),
+    row: dict[str, Any] = {"case": case.name, "job": job, **_f1(curve, case, "before"),
                            "seconds_skeletonize": None if seconds_skeletonize is None else round(seconds_skeletonize, 2)}
     cpu = time.process_time()
     try:  # the curve alone, as skelcore skeletonize repairs it (docs/repair.md "The real suite")
         r = repair(case.cloud, curve)
     except SkelInputError as exc:
         return {**row, "refused": str(exc)}
-    row.update(f1_after=_f1(r.curve, case.reference), seconds_repair=round(r.seconds, 2),
+    row.update(**_f1(r.curve, case, "after"), seconds_repair=round(r.seconds, 2),
                cpu_repair=round(time.process_time() - cpu, 2), kept=r.accepted,
                rejected=r.rejected, stopped=r.stopped, tally_before=dict(r.tally_before),
                tally_after=dict(r.tally_after), warnings_before=_warned(r.before), warnings_after=_warned(r.after),

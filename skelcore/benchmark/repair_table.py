@@ -1,4 +1,5 @@
-"""The repair benchmark's rows (:mod:`.repair_bench`) in words: per tool the mean GT F1 before and after,
+"""The repair benchmark's rows (:mod:`.repair_bench`) in words: per tool the mean GT F1 before and after
+(and on the held reference, where the cases' facts are known),
 the jobs made worse or better by more than :data:`MARGIN`, the defect warnings of each kind before and
 after, the repair's seconds against the skeletonization's; and one Markdown table row per job (the
 tables of docs/repair.md "Measured")."""
@@ -38,6 +39,7 @@ def summarize(rows: Sequence[dict[str, Any]]) -> dict[str, dict[str, Any]]:
             "repaired": len(ok), "worse": int(np.sum(f1 < f0 - MARGIN)), "better": int(np.sum(f1 > f0 + MARGIN)),
             "f1_before": round(float(f0.mean()), 3) if len(ok) else None,
             "f1_after": round(float(f1.mean()), 3) if len(ok) else None,
+            **_held_means([r for r in ok if "held_f1_after" in r]),
             "warnings_before": dict(Counter(w for r in ok for w in r["warnings_before"])),
             "warnings_after": dict(Counter(w for r in ok for w in r["warnings_after"])),
             "seconds_repair_median": round(float(np.median(rep)), 2) if len(ok) else None,
@@ -46,6 +48,13 @@ def summarize(rows: Sequence[dict[str, Any]]) -> dict[str, dict[str, Any]]:
             "repair_within_skeletonize": sum(x <= 1.0 for x in ratio) if ratio else None, "timed": len(ratio),
         }
     return out
+
+
+def _held_means(rs: Sequence[dict[str, Any]]) -> dict[str, float]:
+    """Mean GT F1 on the held reference before and after (docs/metrics.md 5.3.1), when any row has it."""
+    if not rs:
+        return {}
+    return {f"held_f1_{w}": round(float(np.mean([r[f"held_f1_{w}"] for r in rs])), 3) for w in ("before", "after")}
 
 
 def _kinds(counts: dict[str, int]) -> str:
@@ -64,7 +73,8 @@ def summary_lines(rows: Sequence[dict[str, Any]]) -> list[str]:
             f"(within it: {s['repair_within_skeletonize']} of {s['timed']})"
         lines.append(f"{key}: jobs {s['jobs']}, failed {s['failed']}, refused {s['refused']}, worse by > {MARGIN} GT F1: "
                      f"{s['worse']}, better by > {MARGIN}: {s['better']}, mean GT F1 {s['f1_before']} -> {s['f1_after']}, "
-                     f"defect warnings {_kinds(s['warnings_before'])} -> {_kinds(s['warnings_after'])}, repair s median "
+                     + (f"held {s['held_f1_before']} -> {s['held_f1_after']}, " if "held_f1_before" in s else "")
+                     + f"defect warnings {_kinds(s['warnings_before'])} -> {_kinds(s['warnings_after'])}, repair s median "
                      f"{s['seconds_repair_median']} max {s['seconds_repair_max']}{within}")
     return lines
 

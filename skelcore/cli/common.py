@@ -52,7 +52,18 @@ def format_ground_truth(block: dict) -> str:
         f"  cycles {b['cycles'][0]} / {b['cycles'][1]} (error {b['cycle_error']:+d}); length ratio "
         f"{s.text('gt_length_ratio')}; branches {b['branches'][0]} / {b['branches'][1]}: {b['splits']} split(s), "
         f"{b['merges']} merge(s)",
+        *_held_line(b),
     ])
+
+
+def _held_line(b: dict) -> list[str]:
+    """The scores on the held reference (docs/metrics.md 5.3.1), when the reference's facts were given."""
+    if b.get("held_f1") is None:
+        return []
+    held, total = b["held_nodes"]
+    return [f"  held reference (nodes at most {b['held_radii']:g} r outside the cloud's surface: {held} of {total}, "
+            f"{100 * b['held_share']:.1f} % of its length): precision {format_score(b['held_precision'], 3)}, recall "
+            f"{format_score(b['held_recall'], 3)}, F1 {format_score(b['held_f1'], 3)}"]
 
 
 def print_warnings(warnings: list[dict]) -> None:

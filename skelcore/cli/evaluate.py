@@ -41,6 +41,10 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--reference-curve", metavar="F",
                    help="ground-truth curve skeleton to compare --curve with (in the cloud's frame; its vertex radius "
                    "when the file has one, else estimated from the cloud): prints a \"ground truth\" block")
+    p.add_argument("--reference-facts", metavar="F",
+                   help="how far each reference vertex lies outside the surface the cloud was drawn from (CSV with the "
+                   "columns vertex and outside_by_radii, as a real suite's truth/ID_gt_facts.csv): the ground truth "
+                   "block adds precision, recall and F1 on the reference the cloud can show (docs/metrics.md 5.3.1)")
     p.add_argument("--skeleton-scale", type=positive_float, metavar="S", default=1.0,
                    help="multiply skeletal and curve coordinates by S (e.g. voxel size) ...")
     p.add_argument("--skeleton-offset", type=float, nargs=3, metavar=("X", "Y", "Z"), default=(0.0, 0.0, 0.0),
@@ -150,10 +154,13 @@ def run_evaluate(args: argparse.Namespace) -> int:
         raise SkelInputError("--skeletal-index needs --skeletal")
     if args.reference_curve and not args.curve:
         raise SkelInputError("--reference-curve is compared with a curve skeleton: give --curve")
+    if args.reference_facts and not args.reference_curve:
+        raise SkelInputError("--reference-facts describes the reference's vertices: give --reference-curve")
     if args.skeletal_index and args.correspondence == "reverse":
         raise SkelInputError("give either --skeletal-index or --correspondence reverse, not both")
     inputs = {"cloud": args.cloud, "skeletal": args.skeletal, "curve": args.curve,
-              "skeletal_index": args.skeletal_index, "reference_curve": args.reference_curve}
+              "skeletal_index": args.skeletal_index, "reference_curve": args.reference_curve,
+              "reference_facts": args.reference_facts}
     guard = tuple(p for p in inputs.values() if p)
     _check_outputs(args, guard)
     if args.barcodes and args.skeletal is None and args.correspondence != "reverse":
@@ -171,6 +178,7 @@ def run_evaluate(args: argparse.Namespace) -> int:
             index = load_skeletal_index(args.skeletal_index, len(skeletal), len(cloud))
     curve = io.load_curve(args.curve) if args.curve else None
     reference = io.load_curve(args.reference_curve) if args.reference_curve else None
+    outside = _reference_facts(args.reference_facts, reference)
 
     skeletal, curve = map_skeleton(skeletal, curve, float(args.skeleton_scale), tuple(args.skeleton_offset))
 
@@ -180,6 +188,10 @@ def run_evaluate(args: argparse.Namespace) -> int:
                   correspondence=args.correspondence, reference_curve=reference, inputs=inputs,
                   viewpoints=viewpoints, remove_outliers=args.remove_outliers, cap_openings=args.cap_openings)
     clear_progress_line(progress)
+    if outside is not None and ev.ground_truth is not None:  # the stage again, with the facts: the held scores
+        from ..metrics.ground_truth import ground_truth
+
+        ev.ground_truth = ground_truth(curve, reference, cloud, params, outside_radii=outside)
     scores = ev.scores()
     print(format_table(scores))
     if ev.reference is not None:
@@ -209,3 +221,16 @@ def run_evaluate(args: argparse.Namespace) -> int:
         print(f"skelcore: --strict: {len(ev.warnings)} warning(s), exit {EXIT_WARNINGS}", file=sys.stderr)
         return EXIT_WARNINGS
     return 0
+
+
+def _reference_facts(path: str | None, reference):
+    """``--reference-facts``: the facts file's outside_by_radii per vertex of the loaded reference
+    (its rows are the reference file's vertices; the cleaned curve's ``vertex_map`` picks them)."""
+    if not path:
+        return None
+    from ..benchmark.neurons import read_outside_radii
+
+    out = read_outside_radii(path)
+    if len(out) <= int(reference.vertex_map.max()):
+        raise SkelInputError(f"the facts have {len(out)} rows for a reference of {int(reference.vertex_map.max()) + 1} vertices", path)
+    return out[reference.vertex_map]

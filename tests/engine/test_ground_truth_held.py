@@ -1,0 +1,106 @@
+"""Ground truth on the held reference (docs/metrics.md 5.3.1 "The held reference"): on a piece of a
+shipped neuron with its real facts (inside the decimated mesh, distance outside it), the held scores
+leave out exactly the nodes more than ``gt_held_radii`` of their radii outside, equal the plain
+scores where every node is held, and the facts file is read back (one clear line when it is bad)."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from scipy.sparse import coo_matrix
+from scipy.sparse.csgraph import breadth_first_order
+
+from skelcore.benchmark.neurons import (load_neuron, read_outside_radii, surface_distance, winding_numbers,
+                                        write_facts_csv, NodeFacts)
+from skelcore.curve import CurveSkeleton
+from skelcore.errors import SkelInputError
+from skelcore.metrics.ground_truth import GroundTruthParams, compare_with_ground_truth
+
+PARAMS = GroundTruthParams(sample_step=0.5)  # coarser samples: a few thousand, the test stays fast
+
+
+@pytest.fixture(scope="module")
+def piece():
+    """600 traced nodes of neuron 722817260 (a breadth-first walk from its middle node: twigs, a fifth
+    of them more than a radius out of the mesh), their facts against the mesh, and a curve: the nodes
+    moved by up to 0.6 of their radii, those more than a radius out by 1.5 (as a curve inside the mesh)."""
+    neuron = load_neuron("722817260")
+    sk = neuron.skeleton
+    n = sk.n_vertices
+    adj = coo_matrix((np.ones(len(sk.edges)), (sk.edges[:, 0], sk.edges[:, 1])), shape=(n, n))
+    keep = np.sort(breadth_first_order(adj, n // 2, directed=False, return_predecessors=False)[:600])
+    remap = np.full(n, -1)
+    remap[keep] = np.arange(len(keep))
+    e = remap[sk.edges]
+    e = e[(e >= 0).all(axis=1)]
+    ref = CurveSkeleton(vertices=sk.vertices[keep], edges=e, radius=sk.radius[keep])
+    inside = winding_numbers(neuron.mesh, ref.vertices) > 0.5
+    outside = np.where(inside, 0.0, surface_distance(neuron.mesh, ref.vertices)) / ref.radius
+    rng = np.random.default_rng(5)
+    step = rng.normal(size=ref.vertices.shape)
+    size = np.where(outside > 1.0, 1.5, rng.uniform(0, 0.6, len(step)))
+    step *= (size * ref.radius / np.linalg.norm(step, axis=1))[:, None]
+    curve = CurveSkeleton(vertices=ref.vertices + step, edges=ref.edges)
+    return ref, outside, curve
+
+
+def test_all_held_is_the_plain_comparison(piece):
+    ref, _, curve = piece
+    plain = compare_with_ground_truth(curve, ref, ref.radius, params=PARAMS)
+    held = compare_with_ground_truth(curve, ref, ref.radius, params=PARAMS, outside_radii=np.zeros(ref.n_vertices))
+    assert (held.held_precision, held.held_recall, held.held_f1) == (plain.precision, plain.recall, plain.f1)
+    assert held.held_share == 1.0 and held.held_nodes == (ref.n_vertices, ref.n_vertices)
+    assert plain.held_f1 is None and plain.to_dict() == {**held.to_dict(), **{k: None for k in held.to_dict()
+                                                                               if k.startswith("held_")}}
+    assert type(held).from_dict(held.to_dict()) == held and type(plain).from_dict(plain.to_dict()) == plain
+
+
+def test_the_held_reference_drops_exactly_the_nodes_outside_the_tolerance(piece):
+    ref, outside, curve = piece
+    far = outside > PARAMS.held_radii
+    assert 0.1 < far.mean() < 0.5  # the data: a real share of these nodes lies beyond a radius out
+    got = compare_with_ground_truth(curve, ref, ref.radius, params=PARAMS, outside_radii=outside)
+    assert got.held_nodes == (int((~far).sum()), ref.n_vertices)
+    # how far beyond the tolerance a dropped node lies does not matter; a held node at it still counts
+    moved = compare_with_ground_truth(curve, ref, ref.radius, params=PARAMS,
+                                      outside_radii=np.where(far, 10 * outside + 5, np.where(outside > 0, 1.0, 0.0)))
+    assert (moved.held_precision, moved.held_recall, moved.held_share) == (got.held_precision, got.held_recall,
+                                                                          got.held_share)
+    # independently: the reference cut at its edges' midpoints, the dropped nodes' halves taken away
+    e = ref.edges
+    mid = (ref.vertices[e[:, 0]] + ref.vertices[e[:, 1]]) / 2
+    m = ref.n_vertices + np.arange(len(e))
+    halves = np.concatenate([np.column_stack([e[:, 0], m]), np.column_stack([e[:, 1], m])])
+    own = np.concatenate([e[:, 0], e[:, 1]])
+    halves = halves[~far[own]]
+    used, inv = np.unique(halves, return_inverse=True)
+    allv = np.vstack([ref.vertices, mid])
+    allr = np.concatenate([ref.radius, (ref.radius[e[:, 0]] + ref.radius[e[:, 1]]) / 2])
+    kept = CurveSkeleton(vertices=allv[used], edges=inv.reshape(-1, 2), radius=allr[used])
+    alone = compare_with_ground_truth(curve, kept, kept.radius, params=PARAMS)
+    assert got.held_recall == pytest.approx(alone.recall, abs=0.01)
+    assert got.held_share == pytest.approx(kept.edge_lengths().sum() / ref.edge_lengths().sum(), abs=0.01)
+    assert got.held_recall > got.recall + 0.03  # and the dropped part mattered (0.827 against 0.777)
+
+
+def test_the_facts_file_is_read_back_and_a_bad_one_named(piece, tmp_path):
+    ref, outside, _ = piece
+    facts = NodeFacts(outside == 0, (outside == 0).astype(float), outside * ref.radius, outside * ref.radius,
+                      outside, ref.radius, 0)
+
+    class Neuron:
+        skeleton, node_ids = ref, np.arange(ref.n_vertices)
+
+    path = tmp_path / "n_gt_facts.csv"
+    write_facts_csv(path, Neuron, facts)
+    back = read_outside_radii(path, ref.n_vertices)
+    assert np.allclose(back, outside, rtol=1e-5, atol=1e-9)
+    for text, what in (("vertex,x\n0,1\n", "needs the columns"), ("vertex,outside_by_radii\n0,a\n", "numbers"),
+                       ("vertex,outside_by_radii\n0,-1\n", ">= 0")):
+        bad = tmp_path / "bad.csv"
+        bad.write_text(text)
+        with pytest.raises(SkelInputError, match=what) as exc:
+            read_outside_radii(bad)
+        assert str(exc.value).startswith(str(bad)) and "\n" not in str(exc.value)
+    with pytest.raises(SkelInputError, match="rows for a reference"):
+        read_outside_radii(path, ref.n_vertices + 1)
