@@ -5,6 +5,8 @@ scores where every node is held, and the facts file is read back (one clear line
 
 from __future__ import annotations
 
+import json
+
 import numpy as np
 import pytest
 from scipy.sparse import coo_matrix
@@ -104,3 +106,31 @@ def test_the_facts_file_is_read_back_and_a_bad_one_named(piece, tmp_path):
         assert str(exc.value).startswith(str(bad)) and "\n" not in str(exc.value)
     with pytest.raises(SkelInputError, match="rows for a reference"):
         read_outside_radii(path, ref.n_vertices + 1)
+
+
+def test_evaluate_reference_facts_adds_the_held_line(tmp_path, capsys):
+    """``skelcore evaluate --reference-facts``: the plain block unchanged, a "held reference" line and
+    the ``held_`` fields in the JSON; the facts without a reference are refused (exit 2)."""
+    from skelcore import shapes
+    from skelcore.cli import main
+    from skelcore.io import write_curve_ply, write_points_ply
+
+    sh = shapes.cylinder(1500, radius=0.5, seed=2)
+    v, e = sh.curve_vertices, sh.curve_edges
+    write_points_ply(tmp_path / "cloud.ply", sh.cloud)
+    write_curve_ply(tmp_path / "curve.ply", v, e)
+    write_curve_ply(tmp_path / "ref.ply", v + [0.1, 0, 0], e, scalars={"radius": np.full(len(v), 0.5)})
+    far = np.arange(len(v)) >= len(v) // 2
+    (tmp_path / "facts.csv").write_text("vertex,outside_by_radii\n" + "".join(
+        f"{i},{2.0 if far[i] else 0.0}\n" for i in range(len(v))))
+    args = ["evaluate", str(tmp_path / "cloud.ply"), "--curve", str(tmp_path / "curve.ply"), "--reference-curve",
+            str(tmp_path / "ref.ply"), "--quiet"]
+    assert main(args + ["--reference-facts", str(tmp_path / "facts.csv"), "--json", str(tmp_path / "ev.json")]) == 0
+    out = capsys.readouterr().out
+    assert "precision 0.850, recall 0.850, F1 0.850" in out
+    assert f"held reference (nodes at most 1 r outside the cloud's surface: {int((~far).sum())} of {len(v)}" in out
+    doc = json.loads((tmp_path / "ev.json").read_text())["ground_truth"]
+    assert doc["f1"] == pytest.approx(0.85) and doc["held_f1"] == pytest.approx(0.85, abs=0.02)
+    assert doc["held_nodes"] == [int((~far).sum()), len(v)] and 0.3 < doc["held_share"] < 0.7
+    assert main(args[:4] + ["--reference-facts", str(tmp_path / "facts.csv")]) == 2
+    assert "give --reference-curve" in capsys.readouterr().err
