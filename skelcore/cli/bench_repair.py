@@ -81,7 +81,8 @@ def run_bench_repair_cli(args: argparse.Namespace) -> int:
                 json.dump(done, fh, indent=1)
             if not args.quiet:
                 after = row.get("f1_after", row.get("failed") or row.get("refused"))
-                print(f"{row['case']} {row['job']}: GT F1 {row.get('f1_before', '-')} -> {after}", file=sys.stderr,
+                held = f" (held {row['held_f1_before']} -> {row.get('held_f1_after', '-')})" if "held_f1_before" in row else ""
+                print(f"{row['case']} {row['job']}: GT F1 {row.get('f1_before', '-')} -> {after}{held}", file=sys.stderr,
                       flush=True)
 
         rows = run_repair_bench(args.source, args.tools, only=args.cases, defects=not args.no_defects,
