@@ -134,3 +134,36 @@ def test_evaluate_reference_facts_adds_the_held_line(tmp_path, capsys):
     assert doc["held_nodes"] == [int((~far).sum()), len(v)] and 0.3 < doc["held_share"] < 0.7
     assert main(args[:4] + ["--reference-facts", str(tmp_path / "facts.csv")]) == 2
     assert "give --reference-curve" in capsys.readouterr().err
+
+
+def test_bench_repair_rows_carry_the_held_f1_where_the_facts_are_known(tmp_path):
+    """A traced case whose record names its facts file gets ``held_f1_*`` (and the summary their
+    means); a case without facts gets none."""
+    import json as _json
+
+    from skelcore import shapes
+    from skelcore.benchmark.repair_bench import _f1, repair_cases
+    from skelcore.benchmark.repair_table import summarize
+    from skelcore.io import write_curve_ply, write_points_ply
+
+    sh = shapes.cylinder(600, radius=0.5, seed=2)
+    v, e = sh.curve_vertices, sh.curve_edges
+    for d in ("cases", "clouds", "truth"):
+        (tmp_path / d).mkdir()
+    write_points_ply(tmp_path / "clouds" / "c.ply", sh.cloud)
+    write_curve_ply(tmp_path / "truth" / "c_reference.ply", v, e, scalars={"radius": np.full(len(v), 0.5)})
+    (tmp_path / "truth" / "n_gt_facts.csv").write_text("vertex,outside_by_radii\n" + "".join(
+        f"{i},{3.0 if i == 0 else 0.0}\n" for i in range(len(v))))
+    (tmp_path / "suite.json").write_text(_json.dumps({"seed": 0}))
+    files = {"cloud": "clouds/c.ply", "reference": "truth/c_reference.ply"}
+    for name, extra in (("a", {"facts": "truth/n_gt_facts.csv"}), ("b", {})):
+        (tmp_path / "cases" / f"{name}.json").write_text(_json.dumps(
+            {"name": name, "curve_skeleton": "traced", "effect": "clean", "files": {**files, **extra}}))
+    with_facts, without = list(repair_cases(tmp_path))
+    assert with_facts.outside_radii.tolist() == [3.0] + [0.0] * (len(v) - 1) and without.outside_radii is None
+    moved = CurveSkeleton(vertices=v + [0.1, 0, 0], edges=with_facts.reference.edges)
+    row = {"case": "a", "job": "x", **_f1(moved, with_facts, "before"), **_f1(moved, with_facts, "after"),
+           "seconds_repair": 1.0, "warnings_before": [], "warnings_after": []}
+    assert row["f1_before"] == pytest.approx(0.85) and row["held_f1_before"] == pytest.approx(0.85, abs=0.02)
+    assert set(_f1(moved, without, "before")) == {"f1_before"}
+    assert summarize([row])["x"]["held_f1_after"] == round(row["held_f1_after"], 3)
