@@ -129,7 +129,12 @@ def test_evaluate_reference_facts_adds_the_held_line(tmp_path, capsys):
     out = capsys.readouterr().out
     assert "precision 0.850, recall 0.850, F1 0.850" in out
     assert f"held reference (nodes at most 1 r outside the cloud's surface: {int((~far).sum())} of {len(v)}" in out
-    doc = json.loads((tmp_path / "ev.json").read_text())["ground_truth"]
+    full = json.loads((tmp_path / "ev.json").read_text())
+    pytest.importorskip("jsonschema")
+    from skelcore.io.schemas import validator
+
+    assert [e.message for e in validator("evaluation").iter_errors(full)] == []
+    doc = full["ground_truth"]
     assert doc["f1"] == pytest.approx(0.85) and doc["held_f1"] == pytest.approx(0.85, abs=0.02)
     assert doc["held_nodes"] == [int((~far).sum()), len(v)] and 0.3 < doc["held_share"] < 0.7
     assert main(args[:4] + ["--reference-facts", str(tmp_path / "facts.csv")]) == 2
