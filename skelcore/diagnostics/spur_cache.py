@@ -225,7 +225,9 @@ def _touched(prev: SpurSearch, pts: np.ndarray, labels: np.ndarray, reach: np.nd
     check = np.flatnonzero(known)
     if not len(check):
         return out
-    a0, b0 = prev.own[at[check]], own[check]
+    to_new = _renumbering(o_lo, o_hi, n_lo, n_hi, match)  # a prune renumbers the branches after it
+    o_lo, o_hi = to_new[o_lo + 1], to_new[o_hi + 1]
+    a0, b0 = to_new[prev.own[at[check]] + 1], own[check]
     a_lo, a_hi = o_lo[match[common]], o_hi[match[common]]  # kept positions, then and now
     b_lo, b_hi = n_lo[common], n_hi[common]
     base = int(max(a0.max(), b0.max(), 0)) + 2  # labels are >= -1: one integer per (a0, b0) pair
@@ -257,6 +259,32 @@ def _touched(prev: SpurSearch, pts: np.ndarray, labels: np.ndarray, reach: np.nd
             sel = check[which == j]
             out[sel] = _inside_any(balls, radii, queries[sel])
     return out
+
+
+def _renumbering(o_lo: np.ndarray, o_hi: np.ndarray, n_lo: np.ndarray, n_hi: np.ndarray, match: np.ndarray
+                 ) -> np.ndarray:
+    """One-to-one old label -> new label (at old label + 1): each old branch to the new label most of
+    its kept one-label positions carry, when no old branch with more took it; the rest to labels no new
+    position has. "Another branch than q's own" reads the same under any one-to-one renaming, so the
+    answers kept stay exact; the renaming only makes the (then, now) pairs few again after an edit
+    renumbered the branches (one pair per query otherwise, and every query asked again)."""
+    n_old = int(o_hi.max()) + 2 if len(o_hi) else 1
+    top = int(n_hi.max()) + 1 if len(n_hi) else 0
+    kept = np.flatnonzero(match >= 0)
+    was = match[kept]
+    one = (o_lo[was] == o_hi[was]) & (n_lo[kept] == n_hi[kept])
+    key = (o_lo[was][one] + 1) * (top + 1) + (n_lo[kept][one] + 1)
+    pairs, counts = np.unique(key, return_counts=True)
+    to_new = np.full(n_old, np.iinfo(np.int64).min, np.int64)
+    taken: set[int] = set()
+    for k in pairs[np.lexsort((pairs, -counts))].tolist():  # the most shared first, ties by label
+        x, y = k // (top + 1), k % (top + 1) - 1
+        if to_new[x] == np.iinfo(np.int64).min and y not in taken:
+            to_new[x] = y
+            taken.add(y)
+    free = to_new == np.iinfo(np.int64).min
+    to_new[free] = top + np.arange(int(free.sum()))
+    return to_new
 
 
 def _pairs(key: np.ndarray, base: int) -> tuple[np.ndarray, np.ndarray]:
