@@ -23,7 +23,7 @@ from ..metrics.ball_tree import COVER_EPS, BallTree
 from ..metrics.coverage import (NOISE_MIN_POINTS, SAMPLE_SEED, Coverage, _noise_sample, _summary, coverage,
                                 curve_elements, noise_shortfall)
 
-__all__ = ["CoverageMemo", "curve_coverage", "link_contexts"]
+__all__ = ["CoverageMemo", "curve_coverage", "link_contexts", "carry_memo"]
 
 #: skelcore.stages.context.EvalContext, not imported: the edits sit below the stages (only the
 #: edit update, skelcore.edit.incremental, imports them)
@@ -81,6 +81,14 @@ def link_contexts(cache: dict[str, Any], child: EvalContext, parent: EvalContext
         links[id(child)] = (weakref.ref(child), weakref.ref(parent))
         while len(links) > _KEEP:
             links.pop(next(iter(links)))
+
+
+def carry_memo(cache: dict[str, Any], done: EvalContext, to: EvalContext) -> None:
+    """Keep ``done``'s coverage memo for ``to`` too, a context of the same curve (an update's first
+    look completed: the next edits of that curve start from it instead of computing it whole again)."""
+    memo = _memo(cache, done)
+    if memo is not None:
+        _store(cache, to, memo)
 
 
 def parent_of(cache: dict[str, Any], child: EvalContext) -> EvalContext | None:
