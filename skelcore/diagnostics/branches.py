@@ -473,12 +473,16 @@ def decompose_branches(
         tree = cloud_tree if cloud_tree is not None else kd_tree(np.asarray(cloud, float))
         r, _ = tree.query(pts)
         checkpoint(0.8)
-        order = np.argsort(pb, kind="stable")
+        # per branch its radii's min, median and max, all branches in one sort (np.median's values:
+        # the middle one, or the mean of the two middle ones)
+        order = np.lexsort((r, pb))
+        rs = r[order]
         bounds = np.searchsorted(pb[order], np.arange(nb + 1))
-        for i in range(nb):
-            seg = r[order[bounds[i]:bounds[i + 1]]]
-            if len(seg):
-                rmin[i], rmed[i], rmax[i] = seg.min(), np.median(seg), seg.max()
+        n_on = np.diff(bounds)
+        has = n_on > 0
+        lo, n_on = bounds[:-1][has], n_on[has]
+        rmin[has], rmax[has] = rs[lo], rs[lo + n_on - 1]
+        rmed[has] = (rs[lo + (n_on - 1) // 2] + rs[lo + n_on // 2]) / 2.0
     sample_branch = None
     if sample_edge is not None:
         se = np.asarray(sample_edge, dtype=np.int64)

@@ -117,7 +117,8 @@ class SpurMemo:
             known[:] = False
         if (~known).any():
             r[~known] = tree.query(pos[~known])[0]
-        self._local.now = {"pts": pts, "pos": pos, "inverse": inverse, "match": match, "radius": r, "tree": tree}
+        self._local.now = {"pts": pts, "pos": pos, "first": first, "inverse": inverse, "match": match, "radius": r,
+                           "tree": tree}
         return r[inverse]
 
     def sides(self, tree: cKDTree) -> dict:
@@ -195,7 +196,9 @@ class SpurMemo:
             at = np.maximum(at, 0)
             redo = ~known
             if known.any():
-                redo |= _touched(prev, pts, labels, reach, queries, own, at, known)
+                now = getattr(self._local, "now", {})
+                redo |= _touched(prev, pts, labels, reach, queries, own, at, known,
+                                 now if now.get("pts") is pts else None)
                 answer[~redo] = prev.answer[at[~redo]]
         if redo.any():
             answer[redo] = fn(pts, labels, reach, queries[redo], own[redo])
@@ -208,16 +211,22 @@ class SpurMemo:
 
 
 def _touched(prev: SpurSearch, pts: np.ndarray, labels: np.ndarray, reach: np.ndarray, queries: np.ndarray,
-             own: np.ndarray, at: np.ndarray, known: np.ndarray) -> np.ndarray:
+             own: np.ndarray, at: np.ndarray, known: np.ndarray, now: dict | None = None) -> np.ndarray:
     """The queries asked before whose answer the edit may change. A position "explains q" when its
     ball holds q and it has a label other than q's own branch (a0 then, b0 now); a query may change
     only inside the ball of a position removed that had another label than a0, added that has another
     than b0, or kept whose "another label" differs between the two (split or merged branches): one
     search per (a0, b0) pair. Beyond ``_PAIRS_MAX`` pairs, the queries where a0 = b0 are searched in
-    every position removed, added or relabelled at once and the others are all asked again."""
+    every position removed, added or relabelled at once and the others are all asked again. ``now``:
+    the distinct positions of ``pts`` and their match with ``prev``'s, as :meth:`SpurMemo.radii` found them."""
     o_pos, o_lo, o_hi, o_reach = _positions(prev.pts, prev.labels, prev.reach)
-    n_pos, n_lo, n_hi, n_reach = _positions(pts, labels, reach)
-    match = _match(o_pos, n_pos)
+    if now is None:
+        n_pos, n_lo, n_hi, n_reach = _positions(pts, labels, reach)
+        match = _match(o_pos, n_pos)
+    else:
+        n_pos, match = now["pos"], now["match"]
+        n_lo, n_hi = _label_range(labels, now["inverse"], len(n_pos))
+        n_reach = np.asarray(reach, dtype=float)[now["first"]]
     common = match >= 0
     gone = np.ones(len(o_pos), bool)
     gone[match[common]] = False
@@ -225,7 +234,9 @@ def _touched(prev: SpurSearch, pts: np.ndarray, labels: np.ndarray, reach: np.nd
     check = np.flatnonzero(known)
     if not len(check):
         return out
-    a0, b0 = prev.own[at[check]], own[check]
+    to_new = _renumbering(o_lo, o_hi, n_lo, n_hi, match)  # a prune renumbers the branches after it
+    o_lo, o_hi = np.minimum(to_new[o_lo + 1], to_new[o_hi + 1]), np.maximum(to_new[o_lo + 1], to_new[o_hi + 1])
+    a0, b0 = to_new[prev.own[at[check]] + 1], own[check]
     a_lo, a_hi = o_lo[match[common]], o_hi[match[common]]  # kept positions, then and now
     b_lo, b_hi = n_lo[common], n_hi[common]
     base = int(max(a0.max(), b0.max(), 0)) + 2  # labels are >= -1: one integer per (a0, b0) pair
@@ -259,6 +270,32 @@ def _touched(prev: SpurSearch, pts: np.ndarray, labels: np.ndarray, reach: np.nd
     return out
 
 
+def _renumbering(o_lo: np.ndarray, o_hi: np.ndarray, n_lo: np.ndarray, n_hi: np.ndarray, match: np.ndarray
+                 ) -> np.ndarray:
+    """One-to-one old label -> new label (at old label + 1): each old branch to the new label most of
+    its kept one-label positions carry, when no old branch with more took it; the rest to labels no new
+    position has. "Another branch than q's own" reads the same under any one-to-one renaming, so the
+    answers kept stay exact; the renaming only makes the (then, now) pairs few again after an edit
+    renumbered the branches (one pair per query otherwise, and every query asked again)."""
+    n_old = int(o_hi.max()) + 2 if len(o_hi) else 1
+    top = int(n_hi.max()) + 1 if len(n_hi) else 0
+    kept = np.flatnonzero(match >= 0)
+    was = match[kept]
+    one = (o_lo[was] == o_hi[was]) & (n_lo[kept] == n_hi[kept])
+    key = (o_lo[was][one] + 1) * (top + 1) + (n_lo[kept][one] + 1)
+    pairs, counts = np.unique(key, return_counts=True)
+    to_new = np.full(n_old, np.iinfo(np.int64).min, np.int64)
+    taken: set[int] = set()
+    for k in pairs[np.lexsort((pairs, -counts))].tolist():  # the most shared first, ties by label
+        x, y = k // (top + 1), k % (top + 1) - 1
+        if to_new[x] == np.iinfo(np.int64).min and y not in taken:
+            to_new[x] = y
+            taken.add(y)
+    free = to_new == np.iinfo(np.int64).min
+    to_new[free] = top + np.arange(int(free.sum()))
+    return to_new
+
+
 def _pairs(key: np.ndarray, base: int) -> tuple[np.ndarray, np.ndarray]:
     """``np.unique(key, return_inverse=True)`` of non-negative integers below ``base`` squared, by
     counting when that range is small (the queries' (then, now) own-branch pairs; no sort of 100k)."""
@@ -290,9 +327,15 @@ def _label_range(labels: np.ndarray, inverse: np.ndarray, n: int) -> tuple[np.nd
 
 
 def _match(old: np.ndarray, new: np.ndarray) -> np.ndarray:
-    """For each row of ``new``, the row of ``old`` with the same bits, or -1."""
-    index = {k: i for i, k in enumerate(_keys(old))}
-    return np.array([index.get(k, -1) for k in _keys(new)], dtype=np.int64)
+    """For each row of ``new``, the row of ``old`` (distinct rows) with the same bits, or -1: one sort
+    of both rows' bytes."""
+    if not len(old) or not len(new):
+        return np.full(len(new), -1, np.int64)
+    _, key = np.unique(np.concatenate([_void(old), _void(new)]), return_inverse=True)
+    key = np.ravel(key)
+    at = np.full(int(key.max()) + 1, -1, np.int64)
+    at[key[:len(old)]] = np.arange(len(old))
+    return at[key[len(old):]]
 
 
 def _nearest_within(centres: np.ndarray, queries: np.ndarray, bound: np.ndarray) -> np.ndarray:
@@ -332,10 +375,6 @@ def _in_box(queries: np.ndarray, lo: np.ndarray, hi: np.ndarray) -> np.ndarray:
 
 def _void(pts: np.ndarray) -> np.ndarray:
     return np.ascontiguousarray(pts, dtype=float).view(np.dtype((np.void, 8 * pts.shape[1])))[:, 0]
-
-
-def _keys(pts: np.ndarray) -> list[bytes]:
-    return [r.tobytes() for r in _void(pts)]
 
 
 def _inside_any(centres: np.ndarray, radii: np.ndarray, queries: np.ndarray) -> np.ndarray:

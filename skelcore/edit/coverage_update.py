@@ -23,7 +23,7 @@ from ..metrics.ball_tree import COVER_EPS, BallTree
 from ..metrics.coverage import (NOISE_MIN_POINTS, SAMPLE_SEED, Coverage, _noise_sample, _summary, coverage,
                                 curve_elements, noise_shortfall)
 
-__all__ = ["CoverageMemo", "curve_coverage", "link_contexts"]
+__all__ = ["CoverageMemo", "curve_coverage", "link_contexts", "carry_memo"]
 
 #: skelcore.stages.context.EvalContext, not imported: the edits sit below the stages (only the
 #: edit update, skelcore.edit.incremental, imports them)
@@ -34,12 +34,11 @@ _KEEP = 8  # memos kept per evaluation's cache (the last few curves: an undo com
 
 @dataclass
 class CoverageMemo:
-    """One curve's coverage in the cloud's surface-tree order: its elements (unique rows) and, per
-    element, the nearest cloud distance r0, the ball radii r and R, the nearest point's tree position;
+    """One curve's coverage in the cloud's surface-tree order: its elements (unique rows, ``elements``)
+    and, per element, the nearest cloud distance r0, the ball radii r and R, the nearest point's tree position;
     per cloud point the gap and the verdict; per point of the noise shortfall's sample its nearest
     element's distance and row and whether two were as near (None when the shortfall reads none)."""
 
-    keys: dict[bytes, int]
     r0: np.ndarray
     r: np.ndarray
     big_r: np.ndarray
@@ -84,6 +83,14 @@ def link_contexts(cache: dict[str, Any], child: EvalContext, parent: EvalContext
             links.pop(next(iter(links)))
 
 
+def carry_memo(cache: dict[str, Any], done: EvalContext, to: EvalContext) -> None:
+    """Keep ``done``'s coverage memo for ``to`` too, a context of the same curve (an update's first
+    look completed: the next edits of that curve start from it instead of computing it whole again)."""
+    memo = _memo(cache, done)
+    if memo is not None:
+        _store(cache, to, memo)
+
+
 def parent_of(cache: dict[str, Any], child: EvalContext) -> EvalContext | None:
     """The context ``child`` was edited from (:func:`link_contexts`), None when not known; the link
     asked stays longest (a first phase completed again and again keeps its parent)."""
@@ -120,8 +127,7 @@ def _full(ctx: EvalContext, elements: np.ndarray, tau: float,
     g, c = balls.balls(surface.points[queries[0][ask]], floor=0.0)
     gap_q, cov_q = np.zeros(len(queries[0])), np.ones(len(queries[0]), bool)
     gap_q[ask], cov_q[ask] = np.maximum(g, 0.0), c
-    keys = {row.tobytes(): i for i, row in enumerate(balls.points)}
-    memo = CoverageMemo(keys, r0, r, big_r, contact, gap_q, cov_q, balls.points, near, queries)
+    memo = CoverageMemo(r0, r, big_r, contact, gap_q, cov_q, balls.points, near, queries)
     return _to_cloud(ctx, memo, tau, s), memo
 
 
@@ -154,7 +160,7 @@ def _nearest(surface: BallTree, pts: np.ndarray, old: CoverageMemo | None) -> tu
     if old is None:
         r0, contact = surface.nearest(pts, return_index=True)
         return np.full(len(pts), -1, np.int64), r0, contact
-    at = np.array([old.keys.get(row.tobytes(), -1) for row in pts], dtype=np.int64)
+    at = _rows_in(old.elements, pts)
     kept = at >= 0
     r0 = np.empty(len(pts))
     contact = np.empty(len(pts), dtype=old.contact.dtype)
@@ -162,6 +168,19 @@ def _nearest(surface: BallTree, pts: np.ndarray, old: CoverageMemo | None) -> tu
     if (~kept).any():
         r0[~kept], contact[~kept] = surface.nearest(pts[~kept], return_index=True)
     return at, r0, contact
+
+
+def _rows_in(old: np.ndarray, new: np.ndarray) -> np.ndarray:
+    """For each row of ``new``, the row of ``old`` (distinct rows) with the same bits, or -1: one sort
+    of both rows' bytes (a dict of 40k rows' bytes took as long as the rest of a first look's coverage)."""
+    if not len(old) or not len(new):
+        return np.full(len(new), -1, np.int64)
+    rows = np.ascontiguousarray(np.vstack([old, new]), dtype=np.float64)
+    _, key = np.unique(rows.view(np.dtype((np.void, 8 * rows.shape[1])))[:, 0], return_inverse=True)
+    key = np.ravel(key)
+    at = np.full(int(key.max()) + 1, -1, np.int64)
+    at[key[:len(old)]] = np.arange(len(old))
+    return at[key[len(old):]]
 
 
 def _to_cloud(ctx: EvalContext, memo: CoverageMemo, tau: float, s: float) -> Coverage:
@@ -271,8 +290,7 @@ def _by_difference(ctx: EvalContext, old: CoverageMemo, elements: np.ndarray,
         g, c = balls.balls(points[ask], floor=0.0)
         gap_t[ask], cov_t[ask] = np.maximum(g, 0.0), c
     gap_t[touching], cov_t[touching] = 0.0, True
-    keys = {row.tobytes(): i for i, row in enumerate(pts)}
-    memo = CoverageMemo(keys, r0, r, big_r, contact, gap_t, cov_t, pts, sample_near, queries)
+    memo = CoverageMemo(r0, r, big_r, contact, gap_t, cov_t, pts, sample_near, queries)
     return _to_cloud(ctx, memo, tau, s), memo
 
 

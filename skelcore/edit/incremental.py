@@ -35,7 +35,7 @@ from ..stages.context import EvalContext
 from ..stages.evaluation_source import CURVE_STAGES, EvaluationSource
 from ..stages.orchestrate import evaluate, finish
 from .change import Change
-from .coverage_update import curve_coverage, link_contexts, parent_of
+from .coverage_update import carry_memo, curve_coverage, link_contexts, parent_of
 from .missing_update import curve_missing_parts
 
 __all__ = ["update_evaluation", "complete_update", "left_out", "CURVE_STAGES", "DIAGNOSTIC_STAGES"]
@@ -112,6 +112,8 @@ def complete_update(ev: Evaluation, cancel: Callable[[], bool] | None = None) ->
     parent = parent_of(src.cache, old)
     if parent is not None:  # the completed update is edited from the same curve
         link_contexts(src.cache, ctx, parent)
+    if "curve coverage" not in names:  # computed before (a first look): its memo serves the next edits
+        carry_memo(src.cache, old, ctx)
 
     def task(stage: Stage) -> GraphTask:
         def run() -> object:

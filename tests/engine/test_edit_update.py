@@ -224,11 +224,12 @@ def test_the_cloud_only_values_the_diagnostics_ask_again_are_kept_per_array():
 
 
 @settings(max_examples=25, deadline=None)
-@given(st.integers(0, 10_000), st.sampled_from(["move", "split", "merge", "drop"]))
+@given(st.integers(0, 10_000), st.sampled_from(["move", "split", "merge", "drop", "renumber", "prune"]))
 def test_the_kept_spur_search_answers_as_a_search_of_the_whole_curve(seed, how):
     """The spur test's search kept from one curve (diagnostics/spur_cache.py) answers the next curve's
     points, nearest branches and cloud distances as asking them all again does, for points moved,
-    removed and branches split or merged, and asks fewer than all when little changed."""
+    removed, branches split or merged, renumbered or pruned (the branches after it renumbered), and
+    asks fewer than all when little changed: none again when only the numbers changed."""
     from scipy.spatial import cKDTree
 
     from skelcore.diagnostics.spur_cache import SpurMemo
@@ -237,14 +238,14 @@ def test_the_kept_spur_search_answers_as_a_search_of_the_whole_curve(seed, how):
     rng = np.random.default_rng(seed)
     use = rng.random((1500, 3))
     tree = cKDTree(use)
-    pts = rng.random((60, 3))
-    labels = np.repeat(np.arange(4), 15)
+    pts = rng.random((120, 3))
+    labels = np.repeat(np.arange(40), 3)  # more branches than the pairs tested one by one (_PAIRS_MAX)
     pts[15] = pts[30]  # a junction: one position, two branches
 
-    def run(memo, pts, labels):
+    def run(memo, pts, labels, skip=3):
         reach = 1.25 * memo.radii(pts, tree) + 0.05
         own = memo.own_branch(pts, labels, use)
-        rows = np.flatnonzero(own != 3)
+        rows = np.flatnonzero(own != skip)
         got = memo.search(_explained_elsewhere, pts, labels, reach, use[rows], rows, own[rows], len(use))
         want_own = labels[cKDTree(pts).query(use)[1]]
         want = _explained_elsewhere(pts, labels, reach, use[rows], want_own[rows])
@@ -254,19 +255,26 @@ def test_the_kept_spur_search_answers_as_a_search_of_the_whole_curve(seed, how):
 
     first = SpurMemo()
     run(first, pts, labels)
-    new_pts, new_labels = pts.copy(), labels.copy()
+    new_pts, new_labels, skip = pts.copy(), labels.copy(), 3
     if how == "move":
-        new_pts[rng.integers(0, 60)] += rng.normal(0, 0.05, 3)
+        new_pts[rng.integers(0, 120)] += rng.normal(0, 0.05, 3)
     elif how == "split":
-        new_labels[20:30] = 7
+        new_labels[20:30] = 47
     elif how == "merge":
         new_labels[new_labels == 2] = 1
+    elif how == "renumber":
+        order = rng.permutation(40)
+        new_labels, skip = order[labels], order[3]
+    elif how == "prune":  # branch 0 gone, the others numbered one lower
+        new_pts, new_labels, skip = new_pts[3:], new_labels[3:] - 1, 2
     else:
         new_pts, new_labels = new_pts[5:], new_labels[5:]
     memo = first.next()
-    run(memo, new_pts, new_labels)
+    run(memo, new_pts, new_labels, skip)
     assert memo.previous is first.current and memo.current is not None
     assert 0 <= memo.asked[0] <= memo.asked[1]
+    if how == "renumber":
+        assert memo.asked[0] == 0
 
 
 def test_an_edit_update_asks_the_spur_test_again_only_near_the_edit():

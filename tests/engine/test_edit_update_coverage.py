@@ -79,3 +79,24 @@ def test_the_noise_samples_nearest_element_by_difference_is_the_shortfalls_own()
         d, i = C._nearest_element(memo.elements, C._noise_sample(up.source.ctx.cloud_n)[0])
         np.testing.assert_array_equal(memo.near[0], d)
         np.testing.assert_array_equal(memo.near[1], i)
+
+
+def test_a_first_look_completed_hands_its_coverage_on_to_the_next_edits(monkeypatch):
+    """A repair's candidate kept (its coverage computed at its first look, then its defects by
+    ``complete_update``) is the base of the next round: that Evaluation's next edits go by difference
+    from the coverage of the first look, none computed whole, the same values."""
+    from skelcore.edit.incremental import compute_left_out
+
+    _, ev = _base("torus")
+    curve = ev.curve.curve
+    pre = ev.update(E.delete_edge(curve, tuple(curve.edges[3]))[1], diagnostics=False)
+    compute_left_out(pre, ("curve coverage", "curve missing parts"))
+    kept = pre.complete_update()
+    whole = []
+    monkeypatch.setattr(CU, "_full", lambda *a, f=CU._full: (whole.append(1), f(*a))[1])
+    nxt = kept.curve.curve
+    up = kept.update(E.move_vertex(nxt, 4, nxt.vertices[4] + np.array([0.0, 0.03, 0.01]))[1])
+    ref = _whole(up)
+    np.testing.assert_array_equal(up.coverage_curve.gap, ref.gap)
+    np.testing.assert_array_equal(up.coverage_curve.covered, ref.covered)
+    assert whole == []
