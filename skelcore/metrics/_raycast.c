@@ -560,7 +560,20 @@ static inline void prefetch_below(const Tree *t, const Node *nd) {
  * node can hold a hit for a ray only if some of its points lie beyond the cut and the ray passes within
  * its radius + h of its centre; a ray meets a point's ball iff point_hit.  Exact per ray, so the hits do
  * not depend on which rays share a packet (docs/boundedness.md 3.10-3.11). */
+#ifndef PACKET
 #define PACKET 16
+#endif
+
+/* The needed samples are cast tile by tile, TILE_ROWS rows x TILE_BINS bins (a power of 2 up to 64, so a
+ * tile lies in one word of a row), rows in turn within a tile: the rays a packet collects then point
+ * into one compact patch of the sphere instead of a long strip of one row, and share more nodes. */
+#ifndef TILE_ROWS
+#define TILE_ROWS 4
+#endif
+#ifndef TILE_BINS
+#define TILE_BINS 4
+#endif
+#define TILE_MASK ((TILE_BINS) >= 64 ? ~UINT64_C(0) : (UINT64_C(1) << (TILE_BINS)) - 1)
 typedef struct {
     float sx[PACKET], sy[PACKET], sz[PACKET];  /* the rays' directions; lanes from n on are masked out */
     int32_t *hint[PACKET];
@@ -571,8 +584,8 @@ typedef struct {
 
 static void walk_packet(const Tree *t, Walker *w, Packet *pk, const float *o, float cut, float h) {
     const float h2 = h * h, cut2 = cut * cut;
-    unsigned active = (1u << pk->n) - 1u;
-    uint16_t masks[256];
+    unsigned active = pk->n >= 32 ? ~0u : (1u << pk->n) - 1u;
+    uint32_t masks[256];
     float mx = 0.0f, my = 0.0f, mz = 0.0f;  /* the rays' summed direction: children in its order */
     for (int l = 0; l < pk->n; l++) { mx += pk->sx[l]; my += pk->sy[l]; mz += pk->sz[l]; }
     vf sx[PACKET / VF], sy[PACKET / VF], sz[PACKET / VF];
@@ -582,7 +595,7 @@ static void walk_packet(const Tree *t, Walker *w, Packet *pk, const float *o, fl
         memcpy(&sz[g], pk->sz + VF * g, sizeof(vf));
     }
     int sp = 0;
-    w->stack[sp] = 0; masks[sp] = (uint16_t)active; sp++;
+    w->stack[sp] = 0; masks[sp] = active; sp++;
     while (sp > 0 && active) {
         sp--;
         int32_t node = w->stack[sp];
@@ -607,11 +620,30 @@ static void walk_packet(const Tree *t, Walker *w, Packet *pk, const float *o, fl
         if (!m) continue;
         int32_t k = nd->kid;
         if (k < 0) {
-            for (int l = 0; l < pk->n; l++) {
-                if (!(m >> l & 1u)) continue;
-                const float s[3] = {pk->sx[l], pk->sy[l], pk->sz[l]};
-                int32_t p = leaf_hit(t, node, o, s, cut2, h2);
-                if (p < 0) continue;
+            /* leaf_hit for every open ray, the rays' common part (w = p - o, d2 > cut2) once */
+            const float *L = t->leaf + 3 * LEAF_SIZE * (size_t)(-1 - k);
+            vf lx[LEAF_SIZE / VF], ly[LEAF_SIZE / VF], lz[LEAF_SIZE / VF], ld2[LEAF_SIZE / VF];
+            vfi lfar[LEAF_SIZE / VF];
+            for (int g = 0; g < LEAF_SIZE / VF; g++) {
+                vf x, y, z;
+                memcpy(&x, L + VF * g, sizeof x);
+                memcpy(&y, L + LEAF_SIZE + VF * g, sizeof y);
+                memcpy(&z, L + 2 * LEAF_SIZE + VF * g, sizeof z);
+                lx[g] = x - o[0]; ly[g] = y - o[1]; lz[g] = z - o[2];
+                ld2[g] = lx[g] * lx[g] + ly[g] * ly[g] + lz[g] * lz[g];
+                lfar[g] = ld2[g] > cut2;
+            }
+            for (unsigned open = m; open; open &= open - 1) {
+                const int l = __builtin_ctz(open);
+                const float s0 = pk->sx[l], s1 = pk->sy[l], s2 = pk->sz[l];
+                unsigned mask = 0;
+                for (int g = 0; g < LEAF_SIZE / VF; g++) {
+                    vf tt = lx[g] * s0 + ly[g] * s1 + lz[g] * s2;
+                    vfi hit = lfar[g] & (tt > 0.0f) & (ld2[g] - tt * tt <= h2);
+                    mask |= lane_mask(hit) << (VF * g);
+                }
+                if (!mask) continue;
+                int32_t p = nd->lo + __builtin_ctz(mask);
                 active &= ~(1u << l);
                 pk->hint[l][0] = node;
                 pk->hint[l][1] = p;
@@ -625,8 +657,8 @@ static void walk_packet(const Tree *t, Walker *w, Packet *pk, const float *o, fl
         prefetch_below(t, b);
         float ab = (a->c[0] - b->c[0]) * mx + (a->c[1] - b->c[1]) * my + (a->c[2] - b->c[2]) * mz;
         int32_t first = ab <= 0.0f ? k : k + 1;  /* nearer along the rays: popped first */
-        w->stack[sp] = 2 * k + 1 - first; masks[sp] = (uint16_t)m; sp++;
-        w->stack[sp] = first; masks[sp] = (uint16_t)m; sp++;
+        w->stack[sp] = 2 * k + 1 - first; masks[sp] = m; sp++;
+        w->stack[sp] = first; masks[sp] = m; sp++;
     }
     pk->n = 0;
 }
@@ -820,28 +852,32 @@ static PyObject *py_clusters(PyObject *self, PyObject *args) {
         memset(far, 0, nw * sizeof(uint64_t));
         w.last_leaf = -1;
         if (n > 0) {
-            for (int j = 0; j < rows; j++) {
-                for (int x = 0; x < r.words; x++) {
-                    uint64_t todo = need[(size_t)j * r.words + x];
-                    while (todo) {
-                        int b = 64 * x + __builtin_ctzll(todo);
-                        todo &= todo - 1;
-                        float s[3] = {(float)(r.s[j] * r.cos_lon[b]), (float)(r.s[j] * r.sin_lon[b]),
-                                      (float)r.z[j]};
-                        rays++;
-                        int32_t *hint = hints + 2 * ((size_t)j * bins + b);
-                        uint64_t *word = far + (size_t)j * r.words + x, bit = UINT64_C(1) << (b & 63);
-                        int hit = -1;
-                        if (use_hints) {
-                            hit = ray_hits(&t, &w, cf, s, (float)cut, (float)h, hint);
-                            tried++;
-                            settled += hit >= 0;
-                        }
-                        if (hit > 0) *word |= bit;
-                        if (hit < 0) {
-                            pk.sx[pk.n] = s[0]; pk.sy[pk.n] = s[1]; pk.sz[pk.n] = s[2];
-                            pk.hint[pk.n] = hint; pk.word[pk.n] = word; pk.bit[pk.n] = bit;
-                            if (++pk.n == PACKET) walk_packet(&t, &w, &pk, cf, (float)cut, (float)h);
+            for (int j0 = 0; j0 < rows; j0 += TILE_ROWS) {
+                const int j1 = j0 + TILE_ROWS < rows ? j0 + TILE_ROWS : rows;
+                for (int b0 = 0; b0 < bins; b0 += TILE_BINS) {
+                    const int x = b0 >> 6;
+                    for (int j = j0; j < j1; j++) {
+                        uint64_t todo = (need[(size_t)j * r.words + x] >> (b0 & 63)) & TILE_MASK;
+                        while (todo) {
+                            int b = b0 + __builtin_ctzll(todo);
+                            todo &= todo - 1;
+                            float s[3] = {(float)(r.s[j] * r.cos_lon[b]), (float)(r.s[j] * r.sin_lon[b]),
+                                          (float)r.z[j]};
+                            rays++;
+                            int32_t *hint = hints + 2 * ((size_t)j * bins + b);
+                            uint64_t *word = far + (size_t)j * r.words + x, bit = UINT64_C(1) << (b & 63);
+                            int hit = -1;
+                            if (use_hints) {
+                                hit = ray_hits(&t, &w, cf, s, (float)cut, (float)h, hint);
+                                tried++;
+                                settled += hit >= 0;
+                            }
+                            if (hit > 0) *word |= bit;
+                            if (hit < 0) {
+                                pk.sx[pk.n] = s[0]; pk.sy[pk.n] = s[1]; pk.sz[pk.n] = s[2];
+                                pk.hint[pk.n] = hint; pk.word[pk.n] = word; pk.bit[pk.n] = bit;
+                                if (++pk.n == PACKET) walk_packet(&t, &w, &pk, cf, (float)cut, (float)h);
+                            }
                         }
                     }
                 }
