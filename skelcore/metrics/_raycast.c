@@ -5,7 +5,7 @@
  * asin(h / |p - q|), so this is the union-of-caps raster of _rays.py, sample for sample.
  *
  * Queries come in clusters (centre c, reach r).  Near points (|p - c| <= r) are rasterised as exact caps
- * from every member query (per-row longitude intervals, law of cosines), nearest first, stopping when a
+ * from every member query (per-row longitude intervals, law of cosines), nearest shells first, stopping when a
  * raster is full.  Far points (|p - c| > r) are handled once per cluster: one any-hit ray cast from c,
  * through a KD-tree of bounding spheres, per sample that some member left open (cost ~ samples x depth,
  * not ~ points).  A cluster of one query at its own position is exact for any r.
@@ -612,6 +612,9 @@ static void walk_packet(const Tree *t, Walker *w, Packet *pk, const float *o, fl
         /* the rays' part: off2 = d2 - tt^2 where tt > 0, else d2 (d2 - 0 = d2 exactly) */
         unsigned pass = 0;
         for (int g = 0; g < PACKET / VF; g++) {
+#ifdef SKIP_GROUPS
+            if (!((m >> (VF * g)) & ((1u << VF) - 1u))) continue;
+#endif
             vf tt = wx * sx[g] + wy * sy[g] + wz * sz[g];
             vf sq = (vf)((vfi)(tt * tt) & (tt > 0.0f));
             pass |= lane_mask(d2 - sq <= reach2) << (VF * g);
@@ -663,40 +666,27 @@ static void walk_packet(const Tree *t, Walker *w, Packet *pk, const float *o, fl
     pk->n = 0;
 }
 
-/* Points with |p - c| <= reach, nearest first, into idx; returns their number */
+/* Points with |p - c| <= reach, nearest shell first (shell_order), into out; returns their number */
 typedef struct { double d2; int32_t i; } Near;
 
-static inline int near_less(const Near *x, const Near *y) {
-    return x->d2 < y->d2 || (x->d2 == y->d2 && x->i < y->i);
-}
-
-/* nearest first, ties by index (a total order: any sort gives the same result; qsort's calls through a
- * comparator cost twice as much) */
-static void sort_near(Near *v, int32_t n) {
-    while (n > 24) {
-        /* median of three to v[0], then Hoare partition */
-        int32_t mid = n / 2;
-        if (near_less(&v[mid], &v[0])) { Near t = v[mid]; v[mid] = v[0]; v[0] = t; }
-        if (near_less(&v[n - 1], &v[0])) { Near t = v[n - 1]; v[n - 1] = v[0]; v[0] = t; }
-        if (near_less(&v[n - 1], &v[mid])) { Near t = v[n - 1]; v[n - 1] = v[mid]; v[mid] = t; }
-        Near pivot = v[mid];
-        int32_t i = -1, j = n;
-        for (;;) {
-            do i++; while (near_less(&v[i], &pivot));
-            do j--; while (near_less(&pivot, &v[j]));
-            if (i >= j) break;
-            Near t = v[i]; v[i] = v[j]; v[j] = t;
-        }
-        /* recurse into the smaller side, loop on the larger (stack depth <= log2 n) */
-        if (j + 1 < n - j - 1) { sort_near(v, j + 1); v += j + 1; n -= j + 1; }
-        else { sort_near(v + j + 1, n - j - 1); n = j + 1; }
+/* Near points in shells of equal width in d2 (SHELLS of them over the reach), nearest shell first, each in
+ * the tree's order: a counting sort in two passes through `tmp`.  Only the order in which the caps are drawn
+ * (the biggest first, so that rows fill early) depends on it, not the union of the caps: the same beta. */
+#define SHELLS 128
+static void shell_order(Near *v, Near *tmp, int32_t n, double r2) {
+    int32_t first[SHELLS + 1];
+    memset(first, 0, sizeof first);
+    const double scale = r2 > 0.0 ? SHELLS / r2 : 0.0;
+    for (int32_t i = 0; i < n; i++) {
+        int b = (int)(v[i].d2 * scale);
+        first[(b < SHELLS - 1 ? b : SHELLS - 1) + 1]++;
     }
-    for (int32_t a = 1; a < n; a++) {
-        Near x = v[a];
-        int32_t b = a - 1;
-        while (b >= 0 && near_less(&x, &v[b])) { v[b + 1] = v[b]; b--; }
-        v[b + 1] = x;
+    for (int b = 0; b < SHELLS; b++) first[b + 1] += first[b];
+    for (int32_t i = 0; i < n; i++) {
+        int b = (int)(v[i].d2 * scale);
+        tmp[first[b < SHELLS - 1 ? b : SHELLS - 1]++] = v[i];
     }
+    memcpy(v, tmp, sizeof(Near) * (size_t)n);
 }
 
 static int32_t collect_near(const Tree *t, int32_t *stack, const double *c, double reach, Near *out) {
@@ -721,11 +711,11 @@ static int32_t collect_near(const Tree *t, int32_t *stack, const double *c, doub
             if (d2 <= r2) { out[m].d2 = d2; out[m].i = i; m++; }
         }
     }
-    sort_near(out, m);
+    shell_order(out, out + m, m, r2);
     return m;
 }
 
-/* One query's near caps (points nearest first, |p - q| > h) into a cleared bitmap; returns caps drawn */
+/* One query's near caps (points nearest shell first, |p - q| > h) into a cleared bitmap; returns caps drawn */
 #define MEMBER_CHUNK 1024
 static int64_t near_raster(const Raster *r, const Tree *t, const Near *near, int32_t m, const double *qi,
                            double h, double h2, uint64_t *bits, uint8_t *full) {
@@ -801,7 +791,7 @@ static PyObject *py_clusters(PyObject *self, PyObject *args) {
     full = (uint8_t *)calloc((size_t)rows * slots, 1);
     hints = (int32_t *)malloc(sizeof(int32_t) * 2 * (size_t)rows * bins);  /* leaf, point per sample */
     stack = (int32_t *)malloc(sizeof(int32_t) * 256);
-    near = (Near *)malloc(sizeof(Near) * (size_t)(n > 0 ? n : 1));
+    near = (Near *)malloc(2 * sizeof(Near) * (size_t)(n > 0 ? n : 1));  /* and shell_order's scratch */
     if (!far || !full || !stack || !near || !hints) { PyErr_NoMemory(); goto done; }
     for (int i = 0; i < 2 * rows * bins; i++) hints[i] = -1;
     need = far + nw;
