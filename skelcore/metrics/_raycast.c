@@ -556,23 +556,19 @@ static inline void prefetch_below(const Tree *t, const Node *nd) {
 
 /* Up to PACKET rays from one origin that the hints did not settle (mostly rays that escape: they cost most
  * of the walks), walked from the root together: one traversal, each node tested against every ray still open
- * (the shared part of the test once, the rays' part VF lanes at a time), each leaf tested ray by ray.  A
+ * (the shared part of the test once, the rays' part VF lanes at a time), each leaf tested ray by ray (its
+ * points' offsets from the origin once).  A
  * node can hold a hit for a ray only if some of its points lie beyond the cut and the ray passes within
  * its radius + h of its centre; a ray meets a point's ball iff point_hit.  Exact per ray, so the hits do
  * not depend on which rays share a packet (docs/boundedness.md 3.10-3.11). */
-#ifndef PACKET
-#define PACKET 16
-#endif
+#define PACKET 32
 
 /* The needed samples are cast tile by tile, TILE_ROWS rows x TILE_BINS bins (a power of 2 up to 64, so a
  * tile lies in one word of a row), rows in turn within a tile: the rays a packet collects then point
- * into one compact patch of the sphere instead of a long strip of one row, and share more nodes. */
-#ifndef TILE_ROWS
-#define TILE_ROWS 4
-#endif
-#ifndef TILE_BINS
+ * into one compact patch of the sphere (8 x 4 cells, about 19 x 15 degrees at the equator) instead of a
+ * strip of one row, and share more nodes (docs/boundedness.md 3.10). */
+#define TILE_ROWS 8
 #define TILE_BINS 4
-#endif
 #define TILE_MASK ((TILE_BINS) >= 64 ? ~UINT64_C(0) : (UINT64_C(1) << (TILE_BINS)) - 1)
 typedef struct {
     float sx[PACKET], sy[PACKET], sz[PACKET];  /* the rays' directions; lanes from n on are masked out */
@@ -612,9 +608,6 @@ static void walk_packet(const Tree *t, Walker *w, Packet *pk, const float *o, fl
         /* the rays' part: off2 = d2 - tt^2 where tt > 0, else d2 (d2 - 0 = d2 exactly) */
         unsigned pass = 0;
         for (int g = 0; g < PACKET / VF; g++) {
-#ifdef SKIP_GROUPS
-            if (!((m >> (VF * g)) & ((1u << VF) - 1u))) continue;
-#endif
             vf tt = wx * sx[g] + wy * sy[g] + wz * sz[g];
             vf sq = (vf)((vfi)(tt * tt) & (tt > 0.0f));
             pass |= lane_mask(d2 - sq <= reach2) << (VF * g);
