@@ -5,7 +5,7 @@
  * asin(h / |p - q|), so this is the union-of-caps raster of _rays.py, sample for sample.
  *
  * Queries come in clusters (centre c, reach r).  Near points (|p - c| <= r) are rasterised as exact caps
- * from every member query (per-row longitude intervals, law of cosines), nearest first, stopping when a
+ * from every member query (per-row longitude intervals, law of cosines), nearest shells first, stopping when a
  * raster is full.  Far points (|p - c| > r) are handled once per cluster: one any-hit ray cast from c,
  * through a KD-tree of bounding spheres, per sample that some member left open (cost ~ samples x depth,
  * not ~ points).  A cluster of one query at its own position is exact for any r.
@@ -556,11 +556,20 @@ static inline void prefetch_below(const Tree *t, const Node *nd) {
 
 /* Up to PACKET rays from one origin that the hints did not settle (mostly rays that escape: they cost most
  * of the walks), walked from the root together: one traversal, each node tested against every ray still open
- * (the shared part of the test once, the rays' part VF lanes at a time), each leaf tested ray by ray.  A
+ * (the shared part of the test once, the rays' part VF lanes at a time), each leaf tested ray by ray (its
+ * points' offsets from the origin once).  A
  * node can hold a hit for a ray only if some of its points lie beyond the cut and the ray passes within
  * its radius + h of its centre; a ray meets a point's ball iff point_hit.  Exact per ray, so the hits do
  * not depend on which rays share a packet (docs/boundedness.md 3.10-3.11). */
-#define PACKET 16
+#define PACKET 32
+
+/* The needed samples are cast tile by tile, TILE_ROWS rows x TILE_BINS bins (a power of 2 up to 64, so a
+ * tile lies in one word of a row), rows in turn within a tile: the rays a packet collects then point
+ * into one compact patch of the sphere (8 x 4 cells, about 19 x 15 degrees at the equator) instead of a
+ * strip of one row, and share more nodes (docs/boundedness.md 3.10). */
+#define TILE_ROWS 8
+#define TILE_BINS 4
+#define TILE_MASK ((TILE_BINS) >= 64 ? ~UINT64_C(0) : (UINT64_C(1) << (TILE_BINS)) - 1)
 typedef struct {
     float sx[PACKET], sy[PACKET], sz[PACKET];  /* the rays' directions; lanes from n on are masked out */
     int32_t *hint[PACKET];
@@ -571,8 +580,8 @@ typedef struct {
 
 static void walk_packet(const Tree *t, Walker *w, Packet *pk, const float *o, float cut, float h) {
     const float h2 = h * h, cut2 = cut * cut;
-    unsigned active = (1u << pk->n) - 1u;
-    uint16_t masks[256];
+    unsigned active = pk->n >= 32 ? ~0u : (1u << pk->n) - 1u;
+    uint32_t masks[256];
     float mx = 0.0f, my = 0.0f, mz = 0.0f;  /* the rays' summed direction: children in its order */
     for (int l = 0; l < pk->n; l++) { mx += pk->sx[l]; my += pk->sy[l]; mz += pk->sz[l]; }
     vf sx[PACKET / VF], sy[PACKET / VF], sz[PACKET / VF];
@@ -582,7 +591,7 @@ static void walk_packet(const Tree *t, Walker *w, Packet *pk, const float *o, fl
         memcpy(&sz[g], pk->sz + VF * g, sizeof(vf));
     }
     int sp = 0;
-    w->stack[sp] = 0; masks[sp] = (uint16_t)active; sp++;
+    w->stack[sp] = 0; masks[sp] = active; sp++;
     while (sp > 0 && active) {
         sp--;
         int32_t node = w->stack[sp];
@@ -607,11 +616,30 @@ static void walk_packet(const Tree *t, Walker *w, Packet *pk, const float *o, fl
         if (!m) continue;
         int32_t k = nd->kid;
         if (k < 0) {
-            for (int l = 0; l < pk->n; l++) {
-                if (!(m >> l & 1u)) continue;
-                const float s[3] = {pk->sx[l], pk->sy[l], pk->sz[l]};
-                int32_t p = leaf_hit(t, node, o, s, cut2, h2);
-                if (p < 0) continue;
+            /* leaf_hit for every open ray, the rays' common part (w = p - o, d2 > cut2) once */
+            const float *L = t->leaf + 3 * LEAF_SIZE * (size_t)(-1 - k);
+            vf lx[LEAF_SIZE / VF], ly[LEAF_SIZE / VF], lz[LEAF_SIZE / VF], ld2[LEAF_SIZE / VF];
+            vfi lfar[LEAF_SIZE / VF];
+            for (int g = 0; g < LEAF_SIZE / VF; g++) {
+                vf x, y, z;
+                memcpy(&x, L + VF * g, sizeof x);
+                memcpy(&y, L + LEAF_SIZE + VF * g, sizeof y);
+                memcpy(&z, L + 2 * LEAF_SIZE + VF * g, sizeof z);
+                lx[g] = x - o[0]; ly[g] = y - o[1]; lz[g] = z - o[2];
+                ld2[g] = lx[g] * lx[g] + ly[g] * ly[g] + lz[g] * lz[g];
+                lfar[g] = ld2[g] > cut2;
+            }
+            for (unsigned open = m; open; open &= open - 1) {
+                const int l = __builtin_ctz(open);
+                const float s0 = pk->sx[l], s1 = pk->sy[l], s2 = pk->sz[l];
+                unsigned mask = 0;
+                for (int g = 0; g < LEAF_SIZE / VF; g++) {
+                    vf tt = lx[g] * s0 + ly[g] * s1 + lz[g] * s2;
+                    vfi hit = lfar[g] & (tt > 0.0f) & (ld2[g] - tt * tt <= h2);
+                    mask |= lane_mask(hit) << (VF * g);
+                }
+                if (!mask) continue;
+                int32_t p = nd->lo + __builtin_ctz(mask);
                 active &= ~(1u << l);
                 pk->hint[l][0] = node;
                 pk->hint[l][1] = p;
@@ -625,46 +653,33 @@ static void walk_packet(const Tree *t, Walker *w, Packet *pk, const float *o, fl
         prefetch_below(t, b);
         float ab = (a->c[0] - b->c[0]) * mx + (a->c[1] - b->c[1]) * my + (a->c[2] - b->c[2]) * mz;
         int32_t first = ab <= 0.0f ? k : k + 1;  /* nearer along the rays: popped first */
-        w->stack[sp] = 2 * k + 1 - first; masks[sp] = (uint16_t)m; sp++;
-        w->stack[sp] = first; masks[sp] = (uint16_t)m; sp++;
+        w->stack[sp] = 2 * k + 1 - first; masks[sp] = m; sp++;
+        w->stack[sp] = first; masks[sp] = m; sp++;
     }
     pk->n = 0;
 }
 
-/* Points with |p - c| <= reach, nearest first, into idx; returns their number */
+/* Points with |p - c| <= reach, nearest shell first (shell_order), into out; returns their number */
 typedef struct { double d2; int32_t i; } Near;
 
-static inline int near_less(const Near *x, const Near *y) {
-    return x->d2 < y->d2 || (x->d2 == y->d2 && x->i < y->i);
-}
-
-/* nearest first, ties by index (a total order: any sort gives the same result; qsort's calls through a
- * comparator cost twice as much) */
-static void sort_near(Near *v, int32_t n) {
-    while (n > 24) {
-        /* median of three to v[0], then Hoare partition */
-        int32_t mid = n / 2;
-        if (near_less(&v[mid], &v[0])) { Near t = v[mid]; v[mid] = v[0]; v[0] = t; }
-        if (near_less(&v[n - 1], &v[0])) { Near t = v[n - 1]; v[n - 1] = v[0]; v[0] = t; }
-        if (near_less(&v[n - 1], &v[mid])) { Near t = v[n - 1]; v[n - 1] = v[mid]; v[mid] = t; }
-        Near pivot = v[mid];
-        int32_t i = -1, j = n;
-        for (;;) {
-            do i++; while (near_less(&v[i], &pivot));
-            do j--; while (near_less(&pivot, &v[j]));
-            if (i >= j) break;
-            Near t = v[i]; v[i] = v[j]; v[j] = t;
-        }
-        /* recurse into the smaller side, loop on the larger (stack depth <= log2 n) */
-        if (j + 1 < n - j - 1) { sort_near(v, j + 1); v += j + 1; n -= j + 1; }
-        else { sort_near(v + j + 1, n - j - 1); n = j + 1; }
+/* Near points in shells of equal width in d2 (SHELLS of them over the reach), nearest shell first, each in
+ * the tree's order: a counting sort in two passes through `tmp`.  Only the order in which the caps are drawn
+ * (the biggest first, so that rows fill early) depends on it, not the union of the caps: the same beta. */
+#define SHELLS 128
+static void shell_order(Near *v, Near *tmp, int32_t n, double r2) {
+    int32_t first[SHELLS + 1];
+    memset(first, 0, sizeof first);
+    const double scale = r2 > 0.0 ? SHELLS / r2 : 0.0;
+    for (int32_t i = 0; i < n; i++) {
+        int b = (int)(v[i].d2 * scale);
+        first[(b < SHELLS - 1 ? b : SHELLS - 1) + 1]++;
     }
-    for (int32_t a = 1; a < n; a++) {
-        Near x = v[a];
-        int32_t b = a - 1;
-        while (b >= 0 && near_less(&x, &v[b])) { v[b + 1] = v[b]; b--; }
-        v[b + 1] = x;
+    for (int b = 0; b < SHELLS; b++) first[b + 1] += first[b];
+    for (int32_t i = 0; i < n; i++) {
+        int b = (int)(v[i].d2 * scale);
+        tmp[first[b < SHELLS - 1 ? b : SHELLS - 1]++] = v[i];
     }
+    memcpy(v, tmp, sizeof(Near) * (size_t)n);
 }
 
 static int32_t collect_near(const Tree *t, int32_t *stack, const double *c, double reach, Near *out) {
@@ -689,11 +704,11 @@ static int32_t collect_near(const Tree *t, int32_t *stack, const double *c, doub
             if (d2 <= r2) { out[m].d2 = d2; out[m].i = i; m++; }
         }
     }
-    sort_near(out, m);
+    shell_order(out, out + m, m, r2);
     return m;
 }
 
-/* One query's near caps (points nearest first, |p - q| > h) into a cleared bitmap; returns caps drawn */
+/* One query's near caps (points nearest shell first, |p - q| > h) into a cleared bitmap; returns caps drawn */
 #define MEMBER_CHUNK 1024
 static int64_t near_raster(const Raster *r, const Tree *t, const Near *near, int32_t m, const double *qi,
                            double h, double h2, uint64_t *bits, uint8_t *full) {
@@ -769,7 +784,7 @@ static PyObject *py_clusters(PyObject *self, PyObject *args) {
     full = (uint8_t *)calloc((size_t)rows * slots, 1);
     hints = (int32_t *)malloc(sizeof(int32_t) * 2 * (size_t)rows * bins);  /* leaf, point per sample */
     stack = (int32_t *)malloc(sizeof(int32_t) * 256);
-    near = (Near *)malloc(sizeof(Near) * (size_t)(n > 0 ? n : 1));
+    near = (Near *)malloc(2 * sizeof(Near) * (size_t)(n > 0 ? n : 1));  /* and shell_order's scratch */
     if (!far || !full || !stack || !near || !hints) { PyErr_NoMemory(); goto done; }
     for (int i = 0; i < 2 * rows * bins; i++) hints[i] = -1;
     need = far + nw;
@@ -820,28 +835,32 @@ static PyObject *py_clusters(PyObject *self, PyObject *args) {
         memset(far, 0, nw * sizeof(uint64_t));
         w.last_leaf = -1;
         if (n > 0) {
-            for (int j = 0; j < rows; j++) {
-                for (int x = 0; x < r.words; x++) {
-                    uint64_t todo = need[(size_t)j * r.words + x];
-                    while (todo) {
-                        int b = 64 * x + __builtin_ctzll(todo);
-                        todo &= todo - 1;
-                        float s[3] = {(float)(r.s[j] * r.cos_lon[b]), (float)(r.s[j] * r.sin_lon[b]),
-                                      (float)r.z[j]};
-                        rays++;
-                        int32_t *hint = hints + 2 * ((size_t)j * bins + b);
-                        uint64_t *word = far + (size_t)j * r.words + x, bit = UINT64_C(1) << (b & 63);
-                        int hit = -1;
-                        if (use_hints) {
-                            hit = ray_hits(&t, &w, cf, s, (float)cut, (float)h, hint);
-                            tried++;
-                            settled += hit >= 0;
-                        }
-                        if (hit > 0) *word |= bit;
-                        if (hit < 0) {
-                            pk.sx[pk.n] = s[0]; pk.sy[pk.n] = s[1]; pk.sz[pk.n] = s[2];
-                            pk.hint[pk.n] = hint; pk.word[pk.n] = word; pk.bit[pk.n] = bit;
-                            if (++pk.n == PACKET) walk_packet(&t, &w, &pk, cf, (float)cut, (float)h);
+            for (int j0 = 0; j0 < rows; j0 += TILE_ROWS) {
+                const int j1 = j0 + TILE_ROWS < rows ? j0 + TILE_ROWS : rows;
+                for (int b0 = 0; b0 < bins; b0 += TILE_BINS) {
+                    const int x = b0 >> 6;
+                    for (int j = j0; j < j1; j++) {
+                        uint64_t todo = (need[(size_t)j * r.words + x] >> (b0 & 63)) & TILE_MASK;
+                        while (todo) {
+                            int b = b0 + __builtin_ctzll(todo);
+                            todo &= todo - 1;
+                            float s[3] = {(float)(r.s[j] * r.cos_lon[b]), (float)(r.s[j] * r.sin_lon[b]),
+                                          (float)r.z[j]};
+                            rays++;
+                            int32_t *hint = hints + 2 * ((size_t)j * bins + b);
+                            uint64_t *word = far + (size_t)j * r.words + x, bit = UINT64_C(1) << (b & 63);
+                            int hit = -1;
+                            if (use_hints) {
+                                hit = ray_hits(&t, &w, cf, s, (float)cut, (float)h, hint);
+                                tried++;
+                                settled += hit >= 0;
+                            }
+                            if (hit > 0) *word |= bit;
+                            if (hit < 0) {
+                                pk.sx[pk.n] = s[0]; pk.sy[pk.n] = s[1]; pk.sz[pk.n] = s[2];
+                                pk.hint[pk.n] = hint; pk.word[pk.n] = word; pk.bit[pk.n] = bit;
+                                if (++pk.n == PACKET) walk_packet(&t, &w, &pk, cf, (float)cut, (float)h);
+                            }
                         }
                     }
                 }
