@@ -12,7 +12,6 @@ beta* and c* without recomputing.  Departures from the paper and the reference t
 
 from __future__ import annotations
 
-import itertools
 import os
 from typing import Callable
 
@@ -384,9 +383,7 @@ def _ring_columns(
         if not len(todo):
             break
         r = reach[todo]
-        found = grid.tree.query_ball_point(points[todo], _ball_radius(r, half), return_sorted=True)
-        counts = np.fromiter(map(len, found), np.int64, count=len(found))
-        rows = np.fromiter(itertools.chain.from_iterable(found), np.int64, count=int(counts.sum()))
+        rows, counts = _ball_rows(grid, points[todo], _ball_radius(r, half))
         loc = np.repeat(np.arange(len(todo)), counts)
         sid = todo[loc]
         rel = take_rows(grid.points, rows) - take_rows(points, sid)
@@ -415,6 +412,20 @@ def _ring_columns(
             tick()
     return (np.concatenate([ring[0] for ring in rings]), np.concatenate([ring[1] for ring in rings]),
             np.r_[0, np.cumsum([len(ring[0]) for ring in rings])])
+
+
+def _ball_rows(grid: "_SlabGrid", points: np.ndarray, radius: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Rows of ``grid.points`` within ``radius`` of each point, each point's in grid order, and their
+    counts: the kd-tree's unsorted lists as arrays, put in order by one sort of (point, row) keys (about
+    1.6 x faster than its sorted lists through Python integers)."""
+    found = grid.tree.query_ball_point(points, radius, return_sorted=False)
+    counts = np.fromiter(map(len, found), np.int64, count=len(found))
+    if not counts.sum():
+        return np.zeros(0, np.int64), counts
+    offset = np.repeat(np.arange(len(found), dtype=np.int64) * len(grid.points), counts)
+    key = np.concatenate([np.array(rows, np.int64) for rows in found]) + offset
+    key.sort()
+    return key - offset, counts
 
 
 def _slab_ring(
