@@ -35,7 +35,7 @@ __all__ = ["skeletal_centeredness", "curve_centeredness", "slab_grid", "ring_len
 _SKELETAL_CHUNK = 4096
 _CURVE_SPAN = 4  # curve samples per thread task (about 5-25 ms at 1M points)
 _CURVE_AT_ONCE = 50_000  # smaller clouds: all samples at once in flat arrays; larger: per sample on threads
-_CURVE_SOLVE_BATCH = 8192  # sets per stacked solve after the spans (about 10 ms of LAPACK each)
+_CURVE_SOLVE_BATCH = 8192  # sets per stacked solve after the spans (about 50 CPU ms each, load 7)
 _CURVE_BATCH_PAIRS = 2_000_000  # ball candidates per batch of samples taken at once (memory: about 60 bytes each)
 _BALL_ROUNDS = 1  # ball searches before a sample's whole slab is taken (the next ones rarely end a ring)
 # the first ball's 2-D reach, in alpha / 2 (neuron, 100k points: 6.5 CPU s, 8.6 with 1.0; one run each, load 8.7)
