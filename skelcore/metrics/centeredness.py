@@ -334,11 +334,21 @@ def curve_centeredness(
         fitted = part.use[~np.isnan(found[part.use, 0])]
         centers[fitted], axes[fitted] = found[fitted], semi[fitted]
         checkpoint(1.0)
-    # a set the solve rejected takes the ring's mean and farthest point: its ring again, alone (rare)
-    for i in np.flatnonzero(np.isnan(centers[:, 0]) & np.isnan(spare_r) & (counts >= 3)).tolist():
-        x, y, starts = _ring_columns(grid, points[todo[i : i + 1]], u[todo[i : i + 1]], g[i : i + 1], h[i : i + 1],
-                                     half, growth)
-        spare_centre[i], spare_r[i] = (a[0] for a in _spare_fits(x, y, starts, np.zeros(1, np.int64)))
+    # a set the solve rejected takes the ring's mean and farthest point: its ring found again (rare on real
+    # scans; a flat sheet's rings are all collinear, so on threads too)
+    redo = np.flatnonzero(np.isnan(centers[:, 0]) & np.isnan(spare_r) & (counts >= 3))
+
+    def span_spares(i0: int, i1: int) -> tuple[np.ndarray, np.ndarray]:
+        ids = redo[i0:i1]
+        x, y, starts = _ring_columns(grid, points[todo[ids]], u[todo[ids]], g[ids], h[ids], half, growth)
+        return _spare_fits(x, y, starts, np.arange(len(ids)))
+
+    def keep(span_: tuple[int, int], found: tuple[np.ndarray, np.ndarray]) -> None:
+        ids = redo[span_[0] : span_[1]]
+        spare_centre[ids], spare_r[ids] = found
+
+    on_threads(span_spares, [(i, min(i + step, len(redo))) for i in range(0, len(redo), step)], None,
+               lambda _: checkpoint(1.0), keep)
     out[todo] = _centeredness(centers, axes, counts, spare_centre, spare_r)
     return out
 
