@@ -12,7 +12,6 @@ beta* and c* without recomputing.  Departures from the paper and the reference t
 
 from __future__ import annotations
 
-import itertools
 import os
 from typing import Callable
 
@@ -26,7 +25,7 @@ from ..geometry import (
 from ..parallel import on_threads
 from ..params import Params, k_center_for
 from . import _centroids
-from .ellipse_fit import fit_ellipses
+from .ellipse_fit import EllipseSums, ellipse_sums, ellipses_from_sums
 from .position_knn import SHARED_FROM, PositionNeighbours, position_neighbours
 
 __all__ = ["skeletal_centeredness", "curve_centeredness", "slab_grid", "ring_length", "cross_section_centeredness"]
@@ -36,6 +35,7 @@ __all__ = ["skeletal_centeredness", "curve_centeredness", "slab_grid", "ring_len
 _SKELETAL_CHUNK = 4096
 _CURVE_SPAN = 4  # curve samples per thread task (about 5-25 ms at 1M points)
 _CURVE_AT_ONCE = 50_000  # smaller clouds: all samples at once in flat arrays; larger: per sample on threads
+_CURVE_SOLVE_BATCH = 8192  # sets per stacked solve after the spans (about 50 CPU ms each, load 7)
 _CURVE_BATCH_PAIRS = 2_000_000  # ball candidates per batch of samples taken at once (memory: about 60 bytes each)
 _BALL_ROUNDS = 1  # ball searches before a sample's whole slab is taken (the next ones rarely end a ring)
 # the first ball's 2-D reach, in alpha / 2 (neuron, 100k points: 6.5 CPU s, 8.6 with 1.0; one run each, load 8.7)
@@ -296,26 +296,60 @@ def curve_centeredness(
         lo = 0
         while lo < len(todo):
             hi = lo + max(1, int(np.searchsorted(bounds[lo:], bounds[lo] + _CURVE_BATCH_PAIRS, side="right")) - 1)
-            ring, starts = _rings(grid, points[todo[lo:hi]], u[todo[lo:hi]], g[lo:hi], h[lo:hi], half, growth,
-                                  lambda: checkpoint(lo / len(todo)))
-            out[todo[lo:hi]] = _rings_centeredness(ring, starts)
+            x, y, starts = _ring_columns(grid, points[todo[lo:hi]], u[todo[lo:hi]], g[lo:hi], h[lo:hi], half, growth,
+                                         lambda: checkpoint(lo / len(todo)))
+            out[todo[lo:hi]] = _rings_centeredness(x, y, starts)
             lo = hi
             checkpoint(lo / len(todo))
         return out
 
-    def span_centeredness(i0: int, i1: int) -> np.ndarray:
-        return _rings_centeredness(*_rings(grid, points[todo[i0:i1]], u[todo[i0:i1]], g[i0:i1], h[i0:i1], half, growth))
+    counts = np.zeros(len(todo), np.int64)
+    spare_centre, spare_r = np.full((len(todo), 2), np.nan), np.full(len(todo), np.nan)
+    parts: list[EllipseSums] = []
 
-    def store(span_: tuple[int, int], found: np.ndarray) -> None:
-        out[todo[span_[0] : span_[1]]] = found
+    def span_sums(i0: int, i1: int) -> tuple[EllipseSums, np.ndarray, np.ndarray, np.ndarray]:
+        x, y, starts = _ring_columns(grid, points[todo[i0:i1]], u[todo[i0:i1]], g[i0:i1], h[i0:i1], half, growth)
+        sums = ellipse_sums(x, y, starts)
+        unfitted = np.ones(len(starts) - 1, bool)
+        unfitted[sums.use] = False
+        centre, r = _spare_fits(x, y, starts, np.flatnonzero(unfitted & (np.diff(starts) >= 3)))
+        return sums.shifted(i0), np.diff(starts), centre, r
+
+    def store(span_: tuple[int, int], found: tuple) -> None:
+        parts.append(found[0])
+        counts[span_[0] : span_[1]], spare_centre[span_[0] : span_[1]], spare_r[span_[0] : span_[1]] = found[1:]
 
     # the samples' slabs are independent and numpy and the kd-tree release the GIL: spans of samples on
-    # every core (docs/performance.md 6.3), each span's fits batched (a set's fit does not depend on the
-    # others in its batch; one batch after the spans held a cancel for 0.4 s at 1M points,
-    # docs/performance.md 4)
+    # every core (docs/performance.md 6.3), each span's rings reduced to their fits' sums there (a ring
+    # leaves its thread as 36 numbers); the stacked solves of all the sets follow in batches (a set's fit
+    # does not depend on the others in its batch), a checkpoint after each (docs/performance.md 4)
     step = max(1, int(span)) if span else _CURVE_SPAN
-    on_threads(span_centeredness, [(i, min(i + step, len(todo))) for i in range(0, len(todo), step)], None,
+    on_threads(span_sums, [(i, min(i + step, len(todo))) for i in range(0, len(todo), step)], None,
                checkpoint, store)
+    sums = EllipseSums.joined(parts)
+    centers, axes = np.full((len(todo), 2), np.nan), np.full((len(todo), 2), np.nan)
+    for lo in range(0, len(sums.use), _CURVE_SOLVE_BATCH):
+        part = EllipseSums(*(a[lo : lo + _CURVE_SOLVE_BATCH] for a in sums))
+        found, semi, _ = ellipses_from_sums(part, len(todo))
+        fitted = part.use[~np.isnan(found[part.use, 0])]
+        centers[fitted], axes[fitted] = found[fitted], semi[fitted]
+        checkpoint(1.0)
+    # a set the solve rejected takes the ring's mean and farthest point: its ring found again (rare on real
+    # scans; a flat sheet's rings are all collinear, so on threads too)
+    redo = np.flatnonzero(np.isnan(centers[:, 0]) & np.isnan(spare_r) & (counts >= 3))
+
+    def span_spares(i0: int, i1: int) -> tuple[np.ndarray, np.ndarray]:
+        ids = redo[i0:i1]
+        x, y, starts = _ring_columns(grid, points[todo[ids]], u[todo[ids]], g[ids], h[ids], half, growth)
+        return _spare_fits(x, y, starts, np.arange(len(ids)))
+
+    def keep(span_: tuple[int, int], found: tuple[np.ndarray, np.ndarray]) -> None:
+        ids = redo[span_[0] : span_[1]]
+        spare_centre[ids], spare_r[ids] = found
+
+    on_threads(span_spares, [(i, min(i + step, len(redo))) for i in range(0, len(redo), step)], None,
+               lambda _: checkpoint(1.0), keep)
+    out[todo] = _centeredness(centers, axes, counts, spare_centre, spare_r)
     return out
 
 
@@ -329,8 +363,17 @@ def _rings(
     grid: "_SlabGrid", points: np.ndarray, u: np.ndarray, g: np.ndarray, h: np.ndarray, half: float, growth: float,
     tick: Callable[[], None] = lambda: None,
 ) -> tuple[np.ndarray, np.ndarray]:
-    """The rings of the samples (p, u) with plane axes (g, h): ring points in the plane (p at the origin)
-    sample after sample, and each sample's start in them.
+    """The rings of :func:`_ring_columns` as (M, 2) ring points and each sample's start in them."""
+    x, y, starts = _ring_columns(grid, points, u, g, h, half, growth, tick)
+    return np.column_stack([x, y]), starts
+
+
+def _ring_columns(
+    grid: "_SlabGrid", points: np.ndarray, u: np.ndarray, g: np.ndarray, h: np.ndarray, half: float, growth: float,
+    tick: Callable[[], None] = lambda: None,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The rings of the samples (p, u) with plane axes (g, h): the ring points' plane coordinates x and y
+    (p at the origin) sample after sample, and each sample's start in them.
 
     Only slab points up to the ring's end matter, and a slab point at 2-D distance <= R lies in the ball
     of radius :func:`_ball_radius` (R) around p.  The ball's slab points with distance <= R, sorted by
@@ -344,45 +387,60 @@ def _rings(
     far = np.linalg.norm(np.maximum(np.abs(grid.lo - points), np.abs(grid.hi - points)), axis=1) * (1.0 + _BALL_MARGIN)
     reach = np.full(n, _BALL_FIRST * half)
     todo = np.arange(n)
-    rings = [np.empty((0, 2))] * n  # each sample's ring, joined in sample order once (no sort of them all)
+    none = np.empty(0)
+    rings = [(none, none)] * n  # each sample's ring, joined in sample order once (no sort of them all)
     for _ in range(_BALL_ROUNDS):
         if not len(todo):
             break
         r = reach[todo]
-        found = grid.tree.query_ball_point(points[todo], _ball_radius(r, half), return_sorted=True)
-        counts = np.fromiter(map(len, found), np.int64, count=len(found))
-        rows = np.fromiter(itertools.chain.from_iterable(found), np.int64, count=int(counts.sum()))
+        rows, counts = _ball_rows(grid, points[todo], _ball_radius(r, half))
         loc = np.repeat(np.arange(len(todo)), counts)
         sid = todo[loc]
         rel = take_rows(grid.points, rows) - take_rows(points, sid)
         inside = np.abs(_dot3(rel, take_rows(u, sid))) < half
         rel, loc, sid = np.compress(inside, rel, axis=0), loc[inside], sid[inside]
-        flat = np.column_stack([_dot3(rel, take_rows(g, sid)), _dot3(rel, take_rows(h, sid))])
-        dist = np.hypot(flat[:, 0], flat[:, 1])
+        fx, fy = _dot3(rel, take_rows(g, sid)), _dot3(rel, take_rows(h, sid))
+        dist = np.hypot(fx, fy)
         near = dist <= r[loc]
-        loc, dist, flat = loc[near], dist[near], flat[near]
+        loc, dist, fx, fy = loc[near], dist[near], fx[near], fy[near]
         starts = np.searchsorted(loc, np.arange(len(todo) + 1))
         order = _order_within(dist, starts)  # stable: equal distances keep the grid's row order
-        dist, flat = dist[order], flat[order]
+        dist, fx, fy = dist[order], fx[order], fy[order]
         in_ring, ring_len = _leading_rings(loc, dist, starts, growth)
         count = np.diff(starts)
         last = dist[np.maximum(starts[:-1] + ring_len - 1, 0)] if len(dist) else np.zeros(len(todo))
         grown = np.where(count > 0, growth * last, 0.0)
         done = (ring_len < count) | ((count > 0) & (grown <= r)) | (r >= far[todo])
-        for i, ring in zip(todo[done].tolist(), np.split(flat[in_ring & done[loc]], np.cumsum(ring_len[done])[:-1])):
-            rings[i] = ring
+        keep, cut = in_ring & done[loc], np.cumsum(ring_len[done])[:-1]
+        for i, rx, ry in zip(todo[done].tolist(), np.split(fx[keep], cut), np.split(fy[keep], cut)):
+            rings[i] = (rx, ry)
         reach[todo] = np.maximum(2.0 * r, grown)
         todo = todo[~done]
     if len(todo):  # rings wider than the balls (often a long thin shape's whole slab): the slab by grid cells
         for i in todo.tolist():
             rings[i] = _slab_ring(grid, points[i], u[i], g[i], h[i], half, growth)
             tick()
-    return np.concatenate(rings), np.r_[0, np.cumsum([len(ring) for ring in rings])]
+    return (np.concatenate([ring[0] for ring in rings]), np.concatenate([ring[1] for ring in rings]),
+            np.r_[0, np.cumsum([len(ring[0]) for ring in rings])])
+
+
+def _ball_rows(grid: "_SlabGrid", points: np.ndarray, radius: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Rows of ``grid.points`` within ``radius`` of each point, each point's in grid order, and their
+    counts: the kd-tree's unsorted lists as arrays, put in order by one sort of (point, row) keys (about
+    1.6 x faster than its sorted lists through Python integers)."""
+    found = grid.tree.query_ball_point(points, radius, return_sorted=False)
+    counts = np.fromiter(map(len, found), np.int64, count=len(found))
+    if not counts.sum():
+        return np.zeros(0, np.int64), counts
+    offset = np.repeat(np.arange(len(found), dtype=np.int64) * len(grid.points), counts)
+    key = np.concatenate([np.array(rows, np.int64) for rows in found]) + offset
+    key.sort()
+    return key - offset, counts
 
 
 def _slab_ring(
     grid: "_SlabGrid", p: np.ndarray, u: np.ndarray, g: np.ndarray, h: np.ndarray, half: float, growth: float,
-) -> np.ndarray:
+) -> tuple[np.ndarray, np.ndarray]:
     """One sample's ring from its whole slab: the points of every grid cell that can meet the slab, in
     grid order, tested, sorted stably by distance and cut (p at the origin).  Coordinates are taken
     column by column (contiguous, about 1.5 x faster than rows of 3), with :func:`_dot3`'s operations in
@@ -395,7 +453,7 @@ def _slab_ring(
     dist = np.hypot(fg, fh)
     order = stable_argsort(dist)
     keep = order[: ring_length(dist[order], growth)]
-    return np.column_stack([fg.take(keep), fh.take(keep)])
+    return fg.take(keep), fh.take(keep)
 
 
 def _order_within(values: np.ndarray, starts: np.ndarray) -> np.ndarray:
@@ -423,19 +481,38 @@ def _leading_rings(sid: np.ndarray, dist: np.ndarray, starts: np.ndarray, growth
     return position < np.repeat(ring_len, counts), ring_len
 
 
-def _rings_centeredness(ring: np.ndarray, starts: np.ndarray) -> np.ndarray:
-    """:func:`cross_section_centeredness` (p_hat at the origin) of ``ring[starts[i]:starts[i + 1]]``
-    for every i: one batched fit; the sets it rejects (fewer than 5 points, or no ellipse) take the
-    ring mean and the farthest ring point instead.  Set i's value does not depend on the other sets."""
-    centers, axes, _ = fit_ellipses(ring, starts)
-    r = (axes[:, 0] + axes[:, 1]) / 2.0
-    for i in np.flatnonzero(np.isnan(centers[:, 0]) & (np.diff(starts) >= 3)):
-        pts = ring[starts[i] : starts[i + 1]]
-        centers[i] = pts.mean(axis=0)
+def _rings_centeredness(x: np.ndarray, y: np.ndarray, starts: np.ndarray) -> np.ndarray:
+    """:func:`cross_section_centeredness` (p_hat at the origin) of the ring ``x[starts[i]:starts[i + 1]]``
+    (and y) for every i: one batched fit; the sets it rejects (fewer than 5 points, or no ellipse) take
+    the ring mean and the farthest ring point instead.  Set i's value does not depend on the other sets."""
+    counts = np.diff(starts)
+    sums = ellipse_sums(x, y, starts)
+    centers, axes, _ = ellipses_from_sums(sums, len(counts))
+    spare_centre, spare_r = _spare_fits(x, y, starts, np.flatnonzero(np.isnan(centers[:, 0]) & (counts >= 3)))
+    return _centeredness(centers, axes, counts, spare_centre, spare_r)
+
+
+def _spare_fits(x: np.ndarray, y: np.ndarray, starts: np.ndarray, which: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The ring mean and the distance of the farthest ring point of the sets ``which`` (NaN for the
+    others): the stand-in for a fit the solver rejects."""
+    centre, r = np.full((len(starts) - 1, 2), np.nan), np.full(len(starts) - 1, np.nan)
+    for i in np.asarray(which).tolist():
+        pts = np.column_stack([x[starts[i] : starts[i + 1]], y[starts[i] : starts[i + 1]]])
+        centre[i] = pts.mean(axis=0)
         r[i] = np.sqrt(pts[:, 0] ** 2 + pts[:, 1] ** 2).max()
+    return centre, r
+
+
+def _centeredness(centers: np.ndarray, axes: np.ndarray, counts: np.ndarray, spare_centre: np.ndarray,
+                  spare_r: np.ndarray) -> np.ndarray:
+    """c = max(0, 1 - |centre| / r) of every ring: the fit's centre and mean semi-axis, or where there is
+    no fit the ring's mean and farthest point; NaN for fewer than 3 points or r not > 0."""
+    r = (axes[:, 0] + axes[:, 1]) / 2.0
+    spare = np.isnan(centers[:, 0]) & (counts >= 3)
+    centers, r = np.where(spare[:, None], spare_centre, centers), np.where(spare, spare_r, r)
     with np.errstate(invalid="ignore", divide="ignore"):
         c = np.maximum(0.0, 1.0 - np.sqrt(centers[:, 0] ** 2 + centers[:, 1] ** 2) / r)
-    c[~(r > 0) | ~np.isfinite(r) | (np.diff(starts) < 3)] = np.nan
+    c[~(r > 0) | ~np.isfinite(r) | (counts < 3)] = np.nan
     return c
 
 
@@ -489,8 +566,11 @@ class _SlabGrid:
         return take_rows(self.points, self.slab_rows(p, u, half))
 
     def slab_rows(self, p: np.ndarray, u: np.ndarray, half: float) -> np.ndarray:
-        """Rows of ``self.points`` of every cell that may meet the slab, in grid order."""
-        return self.cell_rows(np.flatnonzero(np.abs((self.centres - p) @ u) < self.reach(u, half)))
+        """Rows of ``self.points`` of every cell that may meet the slab, in grid order.  The centres'
+        heights as c . u - p . u (one product, no (cells, 3) difference), with a margin for its round-off."""
+        size = float(np.abs(self.centres).max(initial=0.0)) + float(np.abs(p).max())
+        reach = self.reach(u, half) + 1e-12 * size
+        return self.cell_rows(np.flatnonzero(np.abs(self.centres @ u - float(p @ u)) < reach))
 
     def cell_rows(self, cells: np.ndarray) -> np.ndarray:
         """Rows of ``self.points`` of the given cells, cell after cell, each cell's in grid order."""
@@ -529,4 +609,4 @@ def cross_section_centeredness(ring: np.ndarray, p_hat: np.ndarray | None = None
     ring = np.asarray(ring, dtype=float).reshape(-1, 2)
     if p_hat is not None:
         ring = ring - np.asarray(p_hat, dtype=float).reshape(2)
-    return float(_rings_centeredness(ring, np.array([0, len(ring)]))[0])
+    return float(_rings_centeredness(ring[:, 0].copy(), ring[:, 1].copy(), np.array([0, len(ring)]))[0])

@@ -6,9 +6,11 @@ prefers a fitted ellipse to the barycentre as the centre of a partly sampled cro
 
 from __future__ import annotations
 
+from typing import NamedTuple
+
 import numpy as np
 
-__all__ = ["fit_ellipse", "fit_ellipses"]
+__all__ = ["fit_ellipse", "fit_ellipses", "EllipseSums", "ellipse_sums", "ellipses_from_sums"]
 
 # C1^-1 for the constraint 4ac - b^2 = 1 on (a, b, c): C1 = [[0, 0, 2], [0, -1, 0], [2, 0, 0]]
 _C1_INV = np.array([[0.0, 0.0, 0.5], [0.0, -1.0, 0.0], [0.5, 0.0, 0.0]])
@@ -54,11 +56,11 @@ def fit_ellipse(xy: np.ndarray) -> tuple[np.ndarray, np.ndarray, float] | None:
 def fit_ellipses(xy: np.ndarray, starts: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """:func:`fit_ellipse` of many point sets at once: set i is ``xy[starts[i]:starts[i + 1]]``.
 
-    Each set's scatter matrices are one BLAS product; every later step (condition, solve, the 3 x 3
-    eigenproblem, the conic's geometry) is one LAPACK call on the stacked matrices of all sets, instead
-    of a dozen numpy calls per set (curve centeredness fits about 200 cross-sections,
-    docs/performance.md 6.5).  Set i's numbers never depend on the other sets, so one set alone gives the
-    same bits as in a batch.
+    Each set's scatter matrices are one BLAS product (:func:`ellipse_sums`); every later step
+    (condition, solve, the 3 x 3 eigenproblem, the conic's geometry) is one LAPACK call on the stacked
+    matrices of all sets (:func:`ellipses_from_sums`), instead of a dozen numpy calls per set (curve
+    centeredness fits thousands of cross-sections, docs/performance.md 6.5).  Set i's numbers never
+    depend on the other sets, so one set alone gives the same bits as in a batch.
 
     Returns ``centers`` (S, 2), ``semi_axes`` (S, 2, major first) and ``angles`` (S,), NaN for a set
     that has fewer than 5 points, a non-finite point, degenerate points (e.g. collinear) or no real
@@ -66,30 +68,78 @@ def fit_ellipses(xy: np.ndarray, starts: np.ndarray) -> tuple[np.ndarray, np.nda
     """
     xy = np.asarray(xy, dtype=float).reshape(-1, 2)
     starts = np.asarray(starts, dtype=np.int64)
-    n_sets = len(starts) - 1
-    centers, axes, angles = np.full((n_sets, 2), np.nan), np.full((n_sets, 2), np.nan), np.full(n_sets, np.nan)
-    # per set: centred and scaled to unit RMS radius (the constrained problem is invariant under
-    # both), then the scatter matrices of D1 = [x^2, xy, y^2] and D2 = [x, y, 1] (a loop: a set may
-    # hold tens of thousands of points, and its products go through BLAS)
-    use, origins, scales, s1s, s2s, s3s = [], [], [], [], [], []
-    for i in range(n_sets):
-        pts = xy[starts[i] : starts[i + 1]]
-        if len(pts) < 5 or not np.all(np.isfinite(pts)):
+    return ellipses_from_sums(ellipse_sums(xy[:, 0].copy(), xy[:, 1].copy(), starts), len(starts) - 1)
+
+
+class EllipseSums(NamedTuple):
+    """The per-set part of :func:`fit_ellipses`: the sets fitted (``use``), their centroids
+    (``origin``, (K, 2)), RMS radii (``scale``) and 6 x 6 scatter matrices of the scaled points (``sc``)."""
+
+    use: np.ndarray
+    origin: np.ndarray
+    scale: np.ndarray
+    sc: np.ndarray
+
+    def shifted(self, offset: int) -> "EllipseSums":
+        """The same sums with set numbers moved by ``offset`` (a batch's place among more sets)."""
+        return self._replace(use=self.use + offset)
+
+    @staticmethod
+    def joined(parts: "list[EllipseSums]") -> "EllipseSums":
+        """Several batches' sums as one (set numbers as they are)."""
+        if not parts:
+            return EllipseSums(np.zeros(0, np.int64), np.zeros((0, 2)), np.zeros(0), np.zeros((0, 6, 6)))
+        return EllipseSums(*(np.concatenate(arrays) for arrays in zip(*parts)))
+
+
+def ellipse_sums(x: np.ndarray, y: np.ndarray, starts: np.ndarray) -> EllipseSums:
+    """Centroid, RMS radius and scatter matrix of every set ``x[starts[i]:starts[i + 1]]`` (and y): the
+    points centred and scaled to unit RMS radius (the constrained problem is invariant under both), then
+    D^T D of D = [x^2, xy, y^2, x, y, 1] (one BLAS product per set: a set may hold tens of thousands of
+    points).  Contiguous columns and one buffer for D; the centroid is a running sum, as ``mean(axis=0)``
+    of the (n, 2) points adds row after row: the same bits as the points' rows, without their strides."""
+    x, y = np.ascontiguousarray(x, dtype=float), np.ascontiguousarray(y, dtype=float)
+    starts = np.asarray(starts, dtype=np.int64)
+    sizes = np.diff(starts)
+    big = int(sizes.max()) if len(sizes) else 0
+    design = np.empty((big, 6))
+    design[:, 5] = 1.0
+    running = np.empty(big)
+    use, origins, scales, scs = [], [], [], []
+    for i in np.flatnonzero(sizes >= 5).tolist():
+        a, b = int(starts[i]), int(starts[i + 1])
+        n = b - a
+        xs, ys = x[a:b], y[a:b]
+        if not (np.isfinite(xs).all() and np.isfinite(ys).all()):
             continue
-        origin = pts.mean(axis=0)
-        centred = pts - origin
-        scale = float(np.sqrt(np.mean(np.einsum("ij,ij->i", centred, centred))))
+        origin = np.array([np.cumsum(xs, out=running[:n])[-1], np.cumsum(ys, out=running[:n])[-1]]) / n
+        cx, cy = xs - origin[0], ys - origin[1]
+        scale = float(np.sqrt(np.mean(cx * cx + cy * cy)))
         if not scale > 0:
             continue
-        x, y = (centred / scale).T
-        d = np.column_stack([x * x, x * y, y * y, x, y, np.ones_like(x)])
-        sc = d.T @ d
-        use.append(i), origins.append(origin), scales.append(scale)
-        s1s.append(sc[:3, :3]), s2s.append(sc[:3, 3:]), s3s.append(sc[3:, 3:])
+        cx /= scale
+        cy /= scale
+        d = design[:n]
+        np.multiply(cx, cx, out=d[:, 0])
+        np.multiply(cx, cy, out=d[:, 1])
+        np.multiply(cy, cy, out=d[:, 2])
+        d[:, 3] = cx
+        d[:, 4] = cy
+        use.append(i), origins.append(origin), scales.append(scale), scs.append(d.T @ d)
     if not use:
+        return EllipseSums.joined([])
+    return EllipseSums(np.array(use, np.int64), np.array(origins), np.array(scales), np.array(scs))
+
+
+def ellipses_from_sums(sums: EllipseSums, n_sets: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The fits of :func:`fit_ellipses` from the sets' :func:`ellipse_sums` (sets 0 .. n_sets - 1; the
+    ones not in ``sums.use`` are NaN): the reduced 3 x 3 eigenproblem and the conic's geometry, each step
+    one call on the stacked matrices."""
+    centers, axes, angles = np.full((n_sets, 2), np.nan), np.full((n_sets, 2), np.nan), np.full(n_sets, np.nan)
+    use, origin, scale = sums.use, sums.origin, sums.scale
+    if not len(use):
         return centers, axes, angles
-    use, origin, scale = np.array(use), np.array(origins), np.array(scales)
-    s1, s2, s3 = np.array(s1s), np.array(s2s), np.array(s3s)
+    s1, s2, s3 = (np.ascontiguousarray(part) for part in (sums.sc[:, :3, :3], sums.sc[:, :3, 3:], sums.sc[:, 3:, 3:]))
     # s3 is singular exactly when the points are collinear; the cutoff is relative (unit RMS data)
     with np.errstate(invalid="ignore", divide="ignore", over="ignore"):
         ok = np.linalg.cond(s3) <= 1e12

@@ -437,3 +437,31 @@ def test_curve_ball_rings_equal_whole_slab_rings(monkeypatch, scans, rounds, fir
             got = centeredness.curve_centeredness(cloud, pts, dirs, params=Params(slab_factor=slab))
             assert np.array_equal(got, want, equal_nan=True)
         assert np.isfinite(want).sum() >= 10
+
+
+def test_curve_rings_the_solver_rejects_on_both_paths(monkeypatch):
+    """The large-cloud path fits its rings' sums after the spans (docs/performance.md 6.5); a ring the
+    stacked solve rejects (collinear: a flat sheet cut across) takes its ring's mean and farthest point,
+    found again, and rings of 3 or 4 points take them at once: both paths equal, bit for bit, and equal
+    the whole-cloud reference."""
+    from skelcore.metrics import centeredness
+
+    rng = np.random.default_rng(8)
+    sheet = np.column_stack([rng.uniform(0, 1, 1500), rng.uniform(0, 0.3, 1500), np.zeros(1500)])
+    t = rng.uniform(0, 2 * np.pi, 600)
+    tube = np.column_stack([rng.uniform(4, 5, 600), 0.1 * np.cos(t), 0.1 * np.sin(t)])
+    three, four = ([[x, 0.01 * np.cos(a), 0.01 * np.sin(a)] for a in np.arange(k) * 2 * np.pi / k] for x, k in ((2.0, 3), (3.0, 4)))
+    cloud = np.vstack([sheet, tube, three, four])
+    above = np.column_stack([rng.uniform(0.2, 0.8, 12), rng.uniform(0.1, 0.2, 12), np.full(12, 0.1)])  # rings: lines
+    points = np.vstack([above, [[2.0, 0.001, 0.0], [3.0, 0.001, 0.0]], [[4.5, 0.01, 0.0], [4.2, 0.0, 0.0]]])
+    dirs = np.tile([1.0, 0.0, 0.0], (len(points), 1))
+    params = Params()
+    want = _curve_reference(cloud, points, dirs, params)
+    outs = []
+    for at_once in (10**12, 0):
+        monkeypatch.setattr(centeredness, "_CURVE_AT_ONCE", at_once)
+        outs.append(curve_centeredness(cloud, points, dirs, params=params))
+    assert np.array_equal(outs[0], outs[1], equal_nan=True)
+    np.testing.assert_array_equal(np.isnan(outs[1]), np.isnan(want))
+    np.testing.assert_allclose(outs[1], want, atol=1e-9)
+    assert np.isfinite(want).all()
