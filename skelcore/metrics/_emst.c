@@ -22,7 +22,10 @@
  * (non-negative doubles order as their bit patterns), and each component's edge is picked afterwards, in
  * point order, from the candidates: the lengths do not depend on the threads.
  *
- * Plain C with the buffer protocol (no numpy headers at build time); the entry point releases the GIL.
+ * The same tree (leaves of KNN_LEAF points) also answers k-nearest queries (knn_tree, knn_query): the
+ * skeletal set's distinct positions of skeletal centeredness and smoothness (docs/performance.md 6.4).
+ *
+ * Plain C with the buffer protocol (no numpy headers at build time); the entry points release the GIL.
  */
 #define PY_SSIZE_T_CLEAN
 #include <Python.h>
@@ -50,6 +53,7 @@ typedef struct {
     int32_t *perm;         /* tree order -> input row */
     Node *nodes;
     int32_t n_nodes, n;
+    int32_t leaf;          /* most points in a leaf (LEAF for the EMST) */
     volatile int32_t *stop;
 } Tree;
 
@@ -103,7 +107,7 @@ static int build(Tree *t) {
         Node *nd = &t->nodes[k];
         if (nd->b - nd->a > 65536 && *t->stop) { free(todo); return 1; }
         node_box(t->P, nd);
-        if (nd->b - nd->a <= LEAF) { nd->kid = -1; continue; }
+        if (nd->b - nd->a <= t->leaf) { nd->kid = -1; continue; }
         int ax = 0;
         double w = nd->hi[0] - nd->lo[0];
         for (int d = 1; d < 3; d++) if (nd->hi[d] - nd->lo[d] > w) { w = nd->hi[d] - nd->lo[d]; ax = d; }
@@ -357,6 +361,7 @@ static int64_t emst(const double *pts, int32_t n, double *lengths, double *nn, v
     int64_t m = 0, status = 0;
     int32_t *parent = NULL, *pick = NULL, *given_t = NULL;
     t.n = n;
+    t.leaf = LEAF;
     t.stop = stop;
     t.n_nodes = 2 * ((n + LEAF - 1) / LEAF) * 2 + 2;  /* generous: median splits give < 2 n / (LEAF / 2) */
     t.P = malloc(sizeof(double) * 3 * (size_t)n);
@@ -470,6 +475,159 @@ done:
     return status;
 }
 
+/* ---- k nearest neighbours of query points, the order scipy's cKDTree gives where distances fix it ----
+ * (the skeletal set's distinct positions of skeletal centeredness and smoothness, docs/performance.md 6.4)
+ * A tree of the points (the EMST's build) kept in a capsule; a query walks it nearest child first and keeps
+ * the kq nearest by squared distance, summed as cKDTree sums them (dx^2, then + dy^2, then + dz^2), in a
+ * sorted list.  A row whose kq squared distances are not strictly increasing is flagged: its order (or,
+ * at the kq-th, its set) is scipy's search's own, and the caller asks scipy for that row. */
+#define KNN_MAX 256
+#define KNN_LEAF 32        /* points per leaf: k = 31 queries at 1M, about 20 % less CPU than leaves of 8 */
+
+static void knn_free(PyObject *cap) {
+    Tree *t = (Tree *)PyCapsule_GetPointer(cap, "skelcore.knn_tree");
+    if (!t) return;
+    free(t->P); free(t->perm); free(t->nodes); free(t);
+}
+
+static int knn_one(const Tree *t, const double *x, int kq, int32_t *list, double *d2s) {
+    int32_t stack[STACK];
+    double sd[STACK];
+    int top = 0, m = 0;
+    const Node *N = t->nodes;
+    const double *P = t->P;
+    stack[top] = 0; sd[top] = box_d2(&N[0], x); top++;
+    double worst = INFINITY;
+    while (top) {
+        top--;
+        if (!(sd[top] < worst)) continue;
+        const Node *nd = &N[stack[top]];
+        if (nd->kid < 0) {
+            for (int32_t j = nd->a; j < nd->b; j++) {
+                const double *y = &P[3 * j];
+                double dx = x[0] - y[0], dy = x[1] - y[1], dz = x[2] - y[2];
+                double d2 = dx * dx + dy * dy + dz * dz;
+                if (!(d2 < worst)) continue;
+                int p = (m < kq) ? m++ : kq - 1;  /* sorted insert, ascending */
+                while (p > 0 && d2s[p - 1] > d2) { d2s[p] = d2s[p - 1]; list[p] = list[p - 1]; p--; }
+                d2s[p] = d2; list[p] = j;
+                if (m == kq) worst = d2s[kq - 1];
+            }
+            continue;
+        }
+        const Node *l = &N[nd->kid], *r = &N[nd->kid + 1];
+        __builtin_prefetch(l); __builtin_prefetch(r);
+        double dl = box_d2(l, x), dr = box_d2(r, x);
+        if (top + 2 > STACK) continue;  /* cannot happen: depth <= log2(n / LEAF) + 1 */
+        if (dl <= dr) {
+            if (dr < worst) { stack[top] = nd->kid + 1; sd[top] = dr; top++; }
+            if (dl < worst) { stack[top] = nd->kid; sd[top] = dl; top++; }
+        } else {
+            if (dl < worst) { stack[top] = nd->kid; sd[top] = dl; top++; }
+            if (dr < worst) { stack[top] = nd->kid + 1; sd[top] = dr; top++; }
+        }
+    }
+    return m;
+}
+
+
+/* knn_tree(points float64 (n, 3), stop int32[1]) -> capsule, or None when stopped (the stop flag is read
+ * at every node of the build with more than 65,536 points) */
+static PyObject *py_knn_tree(PyObject *self, PyObject *args) {
+    Py_buffer pts, stop;
+    if (!PyArg_ParseTuple(args, "y*w*", &pts, &stop)) return NULL;
+    int64_t n = pts.len / (Py_ssize_t)(3 * sizeof(double));
+    if (n < 1 || n > INT32_MAX / 4 || stop.len < 4) {
+        PyBuffer_Release(&pts); PyBuffer_Release(&stop);
+        PyErr_SetString(PyExc_ValueError, "knn_tree: between 1 and 2^29 points and a stop flag");
+        return NULL;
+    }
+    Tree *t = calloc(1, sizeof(Tree));
+    int r = -1;
+    if (t) {
+        t->n = (int32_t)n;
+        t->leaf = KNN_LEAF;
+        t->n_nodes = 2 * ((t->n + KNN_LEAF - 1) / KNN_LEAF) * 2 + 2;
+        t->P = malloc(sizeof(double) * 3 * (size_t)n);
+        t->perm = malloc(sizeof(int32_t) * (size_t)n);
+        t->nodes = malloc(sizeof(Node) * (size_t)t->n_nodes);
+        t->stop = (volatile int32_t *)stop.buf;
+        if (t->P && t->perm && t->nodes) {
+            Py_BEGIN_ALLOW_THREADS
+            memcpy(t->P, pts.buf, sizeof(double) * 3 * (size_t)n);
+            for (int32_t i = 0; i < t->n; i++) t->perm[i] = i;
+            r = build(t);
+            Py_END_ALLOW_THREADS
+        }
+        t->stop = NULL;  /* read by the build only */
+    }
+    PyBuffer_Release(&pts); PyBuffer_Release(&stop);
+    if (r != 0) {
+        if (t) { free(t->P); free(t->perm); free(t->nodes); free(t); }
+        if (r > 0) Py_RETURN_NONE;
+        return PyErr_NoMemory();
+    }
+    PyObject *cap = PyCapsule_New(t, "skelcore.knn_tree", knn_free);
+    if (!cap) { free(t->P); free(t->perm); free(t->nodes); free(t); }
+    return cap;
+}
+
+/* knn_order(tree, out int64 (n)): the points' rows in the tree's leaf order (spatial neighbours together) */
+static PyObject *py_knn_order(PyObject *self, PyObject *args) {
+    PyObject *cap;
+    Py_buffer out;
+    if (!PyArg_ParseTuple(args, "Ow*", &cap, &out)) return NULL;
+    Tree *t = (Tree *)PyCapsule_GetPointer(cap, "skelcore.knn_tree");
+    int ok = t && out.len == (Py_ssize_t)(sizeof(int64_t) * t->n);
+    if (ok) for (int32_t i = 0; i < t->n; i++) ((int64_t *)out.buf)[i] = t->perm[i];
+    else if (t) PyErr_SetString(PyExc_ValueError, "knn_order: one int64 per point");
+    PyBuffer_Release(&out);
+    if (!ok) return NULL;
+    Py_RETURN_NONE;
+}
+
+/* knn_query(tree, queries float64 (q, 3), kq, dist float64 (q, kq) out, idx int64 (q, kq) out,
+ *           unsure uint8 (q) out) -> rows flagged unsure (kq squared distances not strictly increasing) */
+static PyObject *py_knn_query(PyObject *self, PyObject *args) {
+    PyObject *cap;
+    Py_buffer qs, dist, idx, unsure;
+    int kq;
+    if (!PyArg_ParseTuple(args, "Oy*iw*w*w*", &cap, &qs, &kq, &dist, &idx, &unsure)) return NULL;
+    Tree *t = (Tree *)PyCapsule_GetPointer(cap, "skelcore.knn_tree");
+    int64_t q = qs.len / (Py_ssize_t)(3 * sizeof(double));
+    int64_t flagged = -1;
+    if (!t) {
+        /* error set by PyCapsule_GetPointer */
+    } else if (kq < 1 || kq > KNN_MAX || kq > t->n || dist.len != (Py_ssize_t)(sizeof(double) * kq * q) ||
+               idx.len != (Py_ssize_t)(sizeof(int64_t) * kq * q) || unsure.len != q) {
+        PyErr_SetString(PyExc_ValueError, "knn_query: buffer sizes do not match the queries");
+    } else {
+        flagged = 0;
+        Py_BEGIN_ALLOW_THREADS
+        const double *Q = (const double *)qs.buf;
+        double *D = (double *)dist.buf;
+        int64_t *I = (int64_t *)idx.buf;
+        uint8_t *U = (uint8_t *)unsure.buf;
+        int32_t list[KNN_MAX];
+        double d2s[KNN_MAX];
+        for (int64_t i = 0; i < q; i++) {
+            knn_one(t, &Q[3 * i], kq, list, d2s);
+            int bad = 0;
+            for (int p = 0; p < kq; p++) {
+                D[i * kq + p] = sqrt(d2s[p]);
+                I[i * kq + p] = t->perm[list[p]];
+                if (p > 0 && !(d2s[p - 1] < d2s[p])) bad = 1;
+            }
+            U[i] = (uint8_t)bad;
+            flagged += bad;
+        }
+        Py_END_ALLOW_THREADS
+    }
+    PyBuffer_Release(&qs); PyBuffer_Release(&dist); PyBuffer_Release(&idx); PyBuffer_Release(&unsure);
+    if (flagged < 0) return NULL;
+    return PyLong_FromLongLong(flagged);
+}
+
 /* emst(points float64 (n, 3), lengths float64 (n - 1) out, nn float64 (n) out, stop int32[1],
  *      components int64[1] out (progress), threads, first int32 (n, 6) or None) -> edges written;
  * `first`: each point's 6 nearest other points (input rows, nearest first) from another search, taken
@@ -508,6 +666,9 @@ static PyObject *py_emst(PyObject *self, PyObject *args) {
 
 static PyMethodDef methods[] = {
     {"emst", py_emst, METH_VARARGS, "Edge lengths of the Euclidean minimum spanning tree (Boruvka, exact)."},
+    {"knn_tree", py_knn_tree, METH_VARARGS, "A KD-tree of points (float64 (n, 3)) for knn_query, in a capsule."},
+    {"knn_order", py_knn_order, METH_VARARGS, "The points' rows in the kNN tree's leaf order."},
+    {"knn_query", py_knn_query, METH_VARARGS, "The kq nearest points of each query by squared distance; rows with equal ones flagged."},
     {NULL, NULL, 0, NULL},
 };
 

@@ -7,6 +7,7 @@ fixed by the tree alone once their distances strictly increase up to the (k + 1)
 centeredness has answered needs no second query for smoothness; a row with equal distances there is
 asked again (scipy orders ties by its own search).  One index is kept, for the last array of distinct
 positions (``unique_rows``' read-only answer) while that array lives; smoothness closes it when done.
+Its tree is :class:`ExactKnn`: the compiled kNN of ``_emst.c``, scipy's answers where distances fix them.
 """
 
 from __future__ import annotations
@@ -18,13 +19,66 @@ import numpy as np
 from scipy.spatial import cKDTree
 
 from ..geometry import Checkpoint, kd_tree, leaf_order, no_checkpoint
+from ..parallel import polled_build
+from . import _emst
 
-__all__ = ["PositionNeighbours", "position_neighbours", "published_others", "HEAD", "SHARED_FROM"]
+__all__ = ["ExactKnn", "PositionNeighbours", "position_neighbours", "published_others", "HEAD", "SHARED_FROM"]
 
 #: neighbour columns kept per position (smoothness asks for tangent_k + 1 = 9 by default)
 HEAD = 10
 # from this many distinct positions the index is shared (below, a second query costs little)
 SHARED_FROM = 65536
+
+
+class ExactKnn:
+    """``cKDTree.query``'s answers (distances and indices, nearest first) from the compiled kNN of
+    ``_emst.c`` (docs/performance.md 6.4): about 1.7 x less CPU for k = 30 at 1M points.  The kernel
+    asks k + 1 neighbours, squared distances summed as cKDTree sums them; a row whose k + 1 squared
+    distances are all distinct has scipy's answer by its distances alone, a row with equal ones (a tie
+    scipy orders by its own search, or at the k-th, picks) is asked of ``geometry.kd_tree`` of the same
+    points, built at the first such row.  ``indices``: the kernel's leaf order (cache-warm visits)."""
+
+    def __init__(self, points: np.ndarray, handle: object):
+        self.points = points
+        self._handle = handle
+        self._scipy: cKDTree | None = None
+        self._lock = threading.Lock()
+        self.indices = np.empty(len(points), np.int64)
+        _emst.knn_order(handle, self.indices)
+
+    @classmethod
+    def build(cls, points: np.ndarray, checkpoint: Checkpoint = no_checkpoint,
+              fraction: float = 0.0) -> "ExactKnn | None":
+        """The kernel's tree of finite ``points`` (n, 3), a cancel seen while it builds; None otherwise."""
+        pts = np.ascontiguousarray(points, dtype=np.float64)
+        if pts.ndim != 2 or pts.shape[1] != 3 or len(pts) == 0 or not np.isfinite(pts).all():
+            return None
+        handle = polled_build(lambda stop: _emst.knn_tree(pts, stop), len(pts), lambda f: checkpoint(fraction),
+                              "kNN tree build")
+        return None if handle is None else cls(pts, handle)
+
+    def scipy_tree(self) -> cKDTree:
+        """``geometry.kd_tree`` of the points (rows with equal distances are its answers), built once."""
+        with self._lock:
+            if self._scipy is None:
+                self._scipy = kd_tree(self.points)
+            return self._scipy
+
+    def query(self, x: np.ndarray, k: int = 1, workers: int = 1) -> tuple[np.ndarray, np.ndarray]:
+        """``cKDTree(points).query(x, k, workers=workers)`` with ``kd_tree``'s answers, the same bits."""
+        x = np.ascontiguousarray(x, dtype=np.float64)
+        n = len(self.points)
+        if k < 2 or k > min(n, 255) or x.ndim != 2 or x.shape[1] != 3 or not np.isfinite(x).all():
+            return self.scipy_tree().query(x, k=k, workers=workers)
+        kq = min(k + 1, n)  # one more: the k-th must be strictly nearer than the next
+        dist, idx = np.empty((len(x), kq)), np.empty((len(x), kq), np.int64)
+        unsure = np.empty(len(x), np.uint8)
+        flagged = _emst.knn_query(self._handle, x, kq, dist, idx, unsure)
+        dist, idx = dist[:, :k], idx[:, :k]
+        if flagged:
+            rows = np.flatnonzero(unsure)
+            dist[rows], idx[rows] = self.scipy_tree().query(x[rows], k=k, workers=workers)
+        return np.ascontiguousarray(dist), np.ascontiguousarray(idx)
 
 
 class PositionNeighbours:
@@ -33,7 +87,7 @@ class PositionNeighbours:
     columns their distances fix (``sure``; 0 = not published)."""
 
     def __init__(self, n: int):
-        self._tree: tuple[cKDTree, np.ndarray] | None = None
+        self._tree: tuple[ExactKnn | cKDTree, np.ndarray] | None = None
         self._build = threading.Lock()
         self._table = threading.Lock()
         self.head = np.zeros((n, HEAD), np.int32)
@@ -42,14 +96,16 @@ class PositionNeighbours:
         self.closed = False
 
     def tree(self, positions: np.ndarray, checkpoint: Checkpoint = no_checkpoint,
-             fraction: float = 0.0) -> tuple[cKDTree, np.ndarray]:
-        """(``geometry.kd_tree`` of ``positions``, its leaf order), made by the first caller; a second
-        caller waits for it, calling its checkpoint every 50 ms (a cancel is seen meanwhile)."""
+             fraction: float = 0.0) -> tuple[ExactKnn | cKDTree, np.ndarray]:
+        """(a tree of ``positions`` whose ``query`` answers as ``geometry.kd_tree``'s: :class:`ExactKnn`,
+        or that tree itself for points the kernel does not take; its leaf order), made by the first
+        caller; a second caller waits for it, calling its checkpoint every 50 ms (a cancel is seen
+        meanwhile)."""
         while not self._build.acquire(timeout=0.05):
             checkpoint(fraction)
         try:
             if self._tree is None:
-                tree = kd_tree(positions, checkpoint, fraction)
+                tree = ExactKnn.build(positions, checkpoint, fraction) or kd_tree(positions, checkpoint, fraction)
                 self._tree = (tree, leaf_order(tree))
             return self._tree
         finally:

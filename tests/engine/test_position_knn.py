@@ -9,6 +9,7 @@ import pytest
 from scipy.spatial import cKDTree
 
 from skelcore.metrics import centeredness, coverage, position_knn, smoothness
+from skelcore.geometry import kd_tree
 from skelcore.metrics.centeredness import skeletal_centeredness
 from skelcore.metrics.smoothness import skeletal_smoothness
 from skelcore.params import Params
@@ -86,3 +87,27 @@ def test_published_others_are_the_heads_without_the_position_itself():
     assert position_knn.published_others(pts.copy(), 6) is None
     index.close()
     assert position_knn.published_others(pts, 6) is None
+
+
+def test_exact_knn_gives_the_kd_trees_answers_bit_for_bit():
+    # the compiled kNN answers where the k + 1 squared distances rise strictly; rows with equal ones (a
+    # lattice ties everywhere, rounded points often) take the kd-tree's own answer: the same bits either way
+    rng = np.random.default_rng(4)
+    lattice = np.stack(np.meshgrid(*[np.arange(16.0)] * 3, indexing="ij"), -1).reshape(-1, 3) * 0.1
+    half = len(lattice) // 2
+    lattice[half:] += rng.normal(scale=0.02, size=(len(lattice) - half, 3))
+    for pts, tied in ((lattice, True), (np.round(rng.normal(size=(3000, 3)), 2), True),
+                      (rng.normal(size=(3000, 3)) * 1e-3 + 5.0, False), (rng.normal(size=(12, 3)), False)):
+        pts = np.unique(pts, axis=0)
+        exact = position_knn.ExactKnn.build(pts)
+        tree = kd_tree(pts)
+        ask = pts[rng.permutation(len(pts))[:1500]]
+        for k in sorted({2, 9, 30, min(len(pts), 64), len(pts)}):
+            if k > len(pts) or k > 255:
+                continue
+            d, i = exact.query(ask, k=k, workers=1)
+            want_d, want_i = tree.query(ask, k=k, workers=1)
+            assert d.tobytes() == want_d.tobytes() and np.array_equal(i, want_i), (len(pts), k)
+        assert (exact._scipy is not None) == tied  # the kd-tree is built only for rows that tie
+        assert sorted(exact.indices.tolist()) == list(range(len(pts)))
+    assert position_knn.ExactKnn.build(np.array([[0.0, 0.0, np.nan]])) is None
