@@ -108,7 +108,7 @@ def find_outliers(cloud: np.ndarray, params: Params = Params(), *, checkpoint: C
     surface = np.ones(n, bool)
     surface[candidates] = False
     if len(rows):  # and off the surface, not in a gap of it (.off_surface)
-        rows = rows[off_surface(cloud, rows, surface, params, float(params.outlier_radius) * spacing)]
+        rows = rows[off_surface(cloud, rows, surface, params, float(params.outlier_radius) * spacing, spacing)]
     if len(rows):  # and linked to no point that is kept (a sliver of the surface, not a stray)
         beyond = beyond_box(cloud, rows, cloud[surface])
         rows = rows[~border_rows(cloud, rows, float(params.outlier_radius) * spacing, tree, stays=beyond)]
