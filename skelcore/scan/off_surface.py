@@ -22,6 +22,7 @@ from scipy.spatial import cKDTree
 
 from ..params import Params
 from .boundary import largest_angle_gap, tangent_frames
+from .enclosed import free_rays
 
 __all__ = ["off_surface", "beyond_box", "concave_side", "behind_front"]
 
@@ -105,17 +106,5 @@ def behind_front(points: np.ndarray, base: np.ndarray, near: np.ndarray, radius:
     start = base[near].reshape(-1, 3)
     way = start - np.repeat(points, near.shape[1], axis=0)
     way /= np.maximum(np.linalg.norm(way, axis=1, keepdims=True), 1e-300)
-    lo, hi = base.min(axis=0) - radius, base.max(axis=0) + radius
-    free = np.ones(len(start), bool)
-    alive = np.arange(len(start))
-    t = radius * (1.0 + 1e-6)  # the first ball just misses the surface point itself
-    while len(alive):
-        at = start[alive] + t * way[alive]
-        alive = alive[np.all((at >= lo) & (at <= hi), axis=1)]
-        if len(alive) == 0:
-            break
-        hit = tree.query_ball_point(start[alive] + t * way[alive], radius, return_length=True) > 0
-        free[alive[hit]] = False
-        alive = alive[~hit]
-        t += radius
+    free = free_rays(start, way, radius, tree, base.min(axis=0), base.max(axis=0))
     return 2 * free.reshape(near.shape).sum(axis=1) > near.shape[1]
