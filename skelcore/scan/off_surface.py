@@ -35,8 +35,9 @@ def off_surface(cloud: np.ndarray, rows: np.ndarray, surface: np.ndarray, params
     ``outlier_off_surface_cos``, none of them is a rim point (largest angular gap between its
     neighbours above ``open_angle``) and it lies on their convex side (:func:`concave_side`, patches
     of at most ``reach``) and not behind the front they show (:func:`behind_front`, rays of the
-    boundedness' radius ``rays_radius_factor`` x ``spacing``; not asked when ``spacing`` is 0); or it lies beyond the surface points' box (a gap lies between them; such a
-    point sets the normalization).  All True when the surface has too few points to judge."""
+    boundedness' radius ``rays_radius_factor`` x ``spacing``; not asked when ``spacing`` is 0); or
+    it lies beyond the surface points' box (a gap lies between them; such a point sets the
+    normalization).  All True when the surface has too few points to judge."""
     cloud = np.asarray(cloud, dtype=float)
     rows = np.asarray(rows, np.int64)
     base = cloud[np.asarray(surface, bool)]
@@ -95,7 +96,7 @@ def behind_front(points: np.ndarray, base: np.ndarray, near: np.ndarray, radius:
     """(len(points),) bool: each point lies behind the front its nearest surface points show (rows of
     ``near`` into ``base``, ``tree`` its kd-tree), for most of them: the ray from that surface point
     straight away from the point leaves the box of ``base`` with no surface point within ``radius``
-    of it (balls of that radius every ``radius`` along it, the first just past the surface point).
+    of it (:func:`.enclosed.free_rays`).
     A scan sees a front from the open side: beyond it on that ray lies nothing, so a point on the
     other side is behind it, a sample seen past a silhouette.  Outside a closed part, the ray from its
     nearest surface points crosses the part and meets its far wall (the boundedness' rays stop there,
