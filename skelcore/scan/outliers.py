@@ -9,7 +9,8 @@ cloud's). Both yardsticks are also taken locally (:func:`local_spacing`, the low
 spacings of its ``outlier_local_k`` nearest points), so a part sampled 10 x more sparsely keeps its
 points. Last, a stray lies off the surface along its normal, where a lone sample of a one-sided scan
 lies in a gap of it (:mod:`.off_surface`); and a point within the radius of one that is kept is kept
-(:func:`border_rows`, DBSCAN's border points). A skeletal set in pointwise correspondence is held to the
+(:func:`border_rows`, DBSCAN's border points); a point the surface encloses is no return from the air
+(:mod:`.enclosed`). A skeletal set in pointwise correspondence is held to the
 radius test alone with the cloud's spacing (:func:`isolated_rows`): contraction stacks skeletal points, so their own spacing says nothing.
 """
 
@@ -22,6 +23,7 @@ from scipy.spatial import cKDTree
 
 from ..geometry import Checkpoint, Normalization, kd_tree, leaf_order, no_checkpoint, query_workers, timed_query
 from ..params import Params
+from .enclosed import enclosed
 from .off_surface import beyond_box, off_surface
 
 __all__ = ["Outliers", "find_outliers", "border_rows", "isolated_rows", "sparse_rows", "local_spacing"]
@@ -108,10 +110,13 @@ def find_outliers(cloud: np.ndarray, params: Params = Params(), *, checkpoint: C
     surface = np.ones(n, bool)
     surface[candidates] = False
     if len(rows):  # and off the surface, not in a gap of it (.off_surface)
-        rows = rows[off_surface(cloud, rows, surface, params, float(params.outlier_radius) * spacing)]
+        rows = rows[off_surface(cloud, rows, surface, params, float(params.outlier_radius) * spacing, spacing)]
     if len(rows):  # and linked to no point that is kept (a sliver of the surface, not a stray)
         beyond = beyond_box(cloud, rows, cloud[surface])
         rows = rows[~border_rows(cloud, rows, float(params.outlier_radius) * spacing, tree, stays=beyond)]
+    if len(rows):  # and in the air, not enclosed by the surface (.enclosed)
+        base = cloud[surface]
+        rows = rows[~enclosed(cloud[rows], base, cKDTree(base), spacing, params)]
     checkpoint(0.9)
     if len(rows) == 0 or len(rows) >= n - 1:
         return none

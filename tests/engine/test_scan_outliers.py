@@ -249,13 +249,16 @@ def test_a_lone_point_linked_to_a_kept_point_is_kept_a_lone_pair_is_not():
 
 def test_a_one_sided_neuron_scan_at_100k_has_no_stray_but_its_lone_pairs(monkeypatch):
     """Tuning neuron 1734350788 seen from one side at 100k points (the calibration's cloud): two lone
-    points, each 5 spacings from a point the tests keep, were its strays before the border rule."""
+    points, each 5 spacings from a point the tests keep, were its strays before the border rule (one of
+    them the surface around it also bounds: scan/enclosed.py)."""
     import skelcore.scan.outliers as outliers
     from skelcore.benchmark.calibration.skeletons import world
 
     cloud = world("real", "1734350788", 100_000, "views", 0).cloud
     assert find_outliers(cloud).count == 0
     monkeypatch.setattr(outliers, "border_rows", lambda c, rows, r, tree, stays=None: np.zeros(len(rows), bool))
+    assert find_outliers(cloud).count == 1
+    monkeypatch.setattr(outliers, "enclosed", lambda points, *a: np.zeros(len(points), bool))
     assert find_outliers(cloud).count == 2
 
 
@@ -264,9 +267,11 @@ def test_a_lone_sample_behind_a_parts_front_is_kept_a_stray_above_it_is_not(monk
     spacings: one beneath the front, where the part hides what lies behind it (a sample seen past a
     nearer part's silhouette, as on tuning neuron 1734350788 seen from one side at 300k points), one
     above it. Both lie along the surface's normal; only the side the surface bends towards tells them
-    apart (scan/off_surface.concave_side)."""
+    apart (scan/off_surface.concave_side): the rays of behind_front leave on both sides of a front
+    whose back is missing, so that test is left out here."""
     import skelcore.scan.off_surface as off
 
+    monkeypatch.setattr(off, "behind_front", lambda points, *a: np.zeros(len(points), bool))
     rng = np.random.default_rng(0)
     th, x = rng.uniform(np.pi / 18, 17 * np.pi / 18, 6000), rng.uniform(0, 10, 6000)
     front = np.column_stack([x, np.cos(th), np.sin(th)])
