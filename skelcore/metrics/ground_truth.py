@@ -202,13 +202,20 @@ def _edges_only(curve: CurveSkeleton) -> CurveSkeleton:
     return CurveSkeleton(vertices=curve.vertices[used], edges=remap[curve.edges], vertex_map=curve.vertex_map[used])
 
 
-def _at_projection(curve: CurveSkeleton, radius: np.ndarray, q: np.ndarray, edge: np.ndarray) -> np.ndarray:
-    """The radius, linear along each edge, at points q lying on the given edges (-1: a vertex)."""
+def _at_vertices(vertices: np.ndarray, values: np.ndarray, q: np.ndarray, edge: np.ndarray):
+    """An output array for points q on edges ``edge``, filled where q is a vertex (edge -1) with the
+    value of its nearest vertex; returns it and that mask (the caller fills the rest along edges)."""
     out = np.empty(len(q))
     iso = edge < 0
     if iso.any():
-        _, nearest = cKDTree(curve.vertices).query(q[iso], k=1)
-        out[iso] = radius[nearest]
+        _, nearest = cKDTree(vertices).query(q[iso], k=1)
+        out[iso] = values[nearest]
+    return out, iso
+
+
+def _at_projection(curve: CurveSkeleton, radius: np.ndarray, q: np.ndarray, edge: np.ndarray) -> np.ndarray:
+    """The radius, linear along each edge, at points q lying on the given edges (-1: a vertex)."""
+    out, iso = _at_vertices(curve.vertices, radius, q, edge)
     e = curve.edges[edge[~iso]]
     a, b = curve.vertices[e[:, 0]], curve.vertices[e[:, 1]]
     ab = b - a
@@ -326,11 +333,7 @@ def _projection_shares(reference: CurveSkeleton, node_weight: np.ndarray, q: np.
     """``node_weight`` of the reference vertex nearer to each projection q along its edge ``edge``
     (-1: q is a vertex, its own); midway, the two ends' mean."""
     node_weight = np.asarray(node_weight, float)
-    out = np.empty(len(q))
-    iso = edge < 0
-    if iso.any():
-        _, nearest = cKDTree(reference.vertices).query(q[iso], k=1)
-        out[iso] = node_weight[nearest]
+    out, iso = _at_vertices(reference.vertices, node_weight, q, edge)
     e = reference.edges[edge[~iso]]
     da = np.linalg.norm(q[~iso] - reference.vertices[e[:, 0]], axis=1)
     db = np.linalg.norm(q[~iso] - reference.vertices[e[:, 1]], axis=1)
