@@ -30,12 +30,12 @@ from scipy.spatial import cKDTree
 from ..correspondence import densify_curve
 from ..curve import CurveSkeleton
 from ..geometry import Checkpoint, kd_tree, no_checkpoint, query_workers, unique_rows
-from ..metrics.cloud_index import kept_index
+from ..metrics.cloud_index import CloudIndex, kept_index
 from ..metrics.coverage import Coverage, coverage, coverage_tau
 from ..params import Params
 from .trust_warning import TrustWarning
 
-__all__ = ["MissingRegion", "MissingParts", "missing_parts", "skeleton_elements", "depth_clause"]
+__all__ = ["MissingRegion", "MissingParts", "missing_parts", "skeleton_elements", "coverage_elements", "depth_clause"]
 
 # neighbours per unexplained point in the region graph (edges also need to be shorter than the link)
 LINK_K = 8
@@ -192,6 +192,18 @@ def skeleton_elements(skeleton: np.ndarray | CurveSkeleton, spacing: float, max_
         cell *= 1.5
 
 
+def coverage_elements(skeleton: np.ndarray | CurveSkeleton, pts: np.ndarray, spacing: float, p: Params,
+                      inside: Callable[[np.ndarray], np.ndarray] | None,
+                      checkpoint: Checkpoint = no_checkpoint) -> tuple[np.ndarray, int]:
+    """The elements whose balls explain the points ``pts`` (:func:`skeleton_elements` every ``spacing``),
+    without those ``inside`` rejects as in the air (:func:`_in_air`), and how many it rejected."""
+    elements = skeleton_elements(skeleton, spacing, int(p.missing_max_elements), checkpoint)
+    if inside is None or not len(elements):
+        return elements, 0
+    ok = ~_in_air(elements, inside, pts, p)
+    return elements[ok], int(np.count_nonzero(~ok))
+
+
 def _identity(points: np.ndarray) -> np.ndarray:
     return points
 
@@ -208,6 +220,7 @@ def missing_parts(
     keep: np.ndarray | None = None,
     inside: Callable[[np.ndarray], np.ndarray] | None = None,
     cloud_tree: Callable[[np.ndarray], cKDTree] | None = None,
+    coverage_of: Callable[[np.ndarray, np.ndarray, float, CloudIndex], Coverage] | None = None,
     checkpoint: Checkpoint = no_checkpoint,
 ) -> MissingParts:
     """The parts of the (normalized) cloud the (normalized) skeleton does not reach, and its completeness.
@@ -234,6 +247,9 @@ def missing_parts(
     cloud_tree : ``cloud_tree(points)`` gives ``cKDTree(points)`` of the points the regions are found
         on (the cloud or its subsample, not an estimated ``cov``'s sample), kept by the caller (an
         edit's update asks about the same points each time); else built here.
+    coverage_of : ``coverage_of(points, elements, tau, index)`` gives ``coverage(points, elements,
+        params, tau, index=index)`` when the coverage is computed here (an edit's update gives it by
+        difference from the curve edited, skelcore/edit/missing_update.py); else computed as is.
     checkpoint : ``checkpoint(fraction)``, raises to cancel.
 
     An empty skeleton explains nothing: one region per connected part of the cloud, depth inf.
@@ -282,11 +298,11 @@ def missing_parts(
     if keep is not None and not isinstance(skeleton, CurveSkeleton):
         skeleton = np.asarray(skeleton, dtype=float).reshape(-1, 3)[np.asarray(keep, dtype=bool)]
     if cov is None:
-        elements = skeleton_elements(skeleton, spacing, int(p.missing_max_elements), lambda f: checkpoint(0.1))
-        if inside is not None and len(elements):
-            ok = ~_in_air(elements, inside, pts, p)
-            n_out, elements = int(np.count_nonzero(~ok)), elements[ok]
-        cov = coverage(pts, elements, p, tau, checkpoint=lambda f: checkpoint(0.1 + 0.6 * f), index=index)
+        elements, n_out = coverage_elements(skeleton, pts, spacing, p, inside, lambda f: checkpoint(0.1))
+        if coverage_of is not None:
+            cov = coverage_of(pts, elements, float(tau), index)
+        else:
+            cov = coverage(pts, elements, p, tau, checkpoint=lambda f: checkpoint(0.1 + 0.6 * f), index=index)
     checkpoint(0.7)
     # not for an estimated coverage's sample: a new array each time
     kept_tree = None if cloud_tree is None or full_covered is not None else (lambda: cloud_tree(pts))

@@ -23,7 +23,7 @@ from ..metrics.ball_tree import COVER_EPS, BallTree
 from ..metrics.coverage import (NOISE_MIN_POINTS, SAMPLE_SEED, Coverage, _noise_sample, _summary, coverage,
                                 curve_elements, noise_shortfall)
 
-__all__ = ["CoverageMemo", "curve_coverage", "link_contexts", "carry_memo"]
+__all__ = ["CoverageMemo", "curve_coverage", "coverage_from", "link_contexts", "carry_memo"]
 
 #: skelcore.stages.context.EvalContext, not imported: the edits sit below the stages (only the
 #: edit update, skelcore.edit.incremental, imports them)
@@ -57,17 +57,19 @@ def _elements(ctx: EvalContext) -> tuple[np.ndarray, float]:
     return curve_elements(ctx.curve_n, tau, ctx.params), tau
 
 
-def _store(cache: dict[str, Any], ctx: EvalContext, memo: CoverageMemo) -> None:
+def _store(cache: dict[str, Any], ctx: EvalContext, memo: Any, name: str = "coverage memos") -> None:
+    """Keep ``memo`` for ``ctx`` in ``cache[name]`` (the last ``_KEEP``), while ``ctx`` lives."""
     with _LOCK:
-        kept = cache.setdefault("coverage memos", {})
+        kept = cache.setdefault(name, {})
         kept[id(ctx)] = (weakref.ref(ctx), memo)
         while len(kept) > _KEEP:
             kept.pop(next(iter(kept)))
 
 
-def _memo(cache: dict[str, Any], ctx: EvalContext | None) -> CoverageMemo | None:
+def _memo(cache: dict[str, Any], ctx: EvalContext | None, name: str = "coverage memos") -> Any:
+    """The memo :func:`_store` keeps for ``ctx`` in ``cache[name]``, None when none."""
     with _LOCK:
-        kept = cache.get("coverage memos", {})
+        kept = cache.get(name, {})
         hit = kept.pop(id(ctx), None)
         if hit is not None:
             kept[id(ctx)] = hit  # the last asked stays longest (each edit of one curve asks for its memo)
@@ -100,6 +102,15 @@ def parent_of(cache: dict[str, Any], child: EvalContext) -> EvalContext | None:
         if hit is not None:
             links[id(child)] = hit
     return hit[1]() if hit is not None and hit[0]() is child else None
+
+
+def coverage_from(view: Any, old: CoverageMemo | None, elements: np.ndarray,
+                  tau: float) -> tuple[Coverage, CoverageMemo | None]:
+    """:func:`coverage` of ``elements`` (distinct rows) in the cloud of ``view`` (``params``, ``cloud_n``
+    and its ``cloud_index``), by difference from ``old`` (a memo of the same cloud and tau) when it
+    can, else whole; with its memo (None when coverage was computed as is)."""
+    out = None if old is None else _by_difference(view, old, elements, tau)
+    return out if out is not None else _full(view, elements, tau, old)
 
 
 def _full(ctx: EvalContext, elements: np.ndarray, tau: float,

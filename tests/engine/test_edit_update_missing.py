@@ -105,3 +105,42 @@ def test_a_first_phase_completed_again_and_again_keeps_its_parent(pruned):
     for _ in range(CU._KEEP + 3):
         quick.complete_update()
     assert CU.parent_of(quick.source.cache, quick.source.ctx) is ev.source.ctx
+
+
+def test_the_missing_parts_coverage_by_difference_equals_it_computed_whole(monkeypatch):
+    """Above ``coverage_max_points`` the missing parts compute their own coverage of the kept
+    subsample: an update takes it by difference from the curve edited (skelcore/edit/missing_update.py),
+    each gap and verdict those of ``coverage`` of the same elements, along a chain of edits."""
+    from skelcore import Params
+    from skelcore.edit import coverage_update as CU
+    from skelcore.edit import missing_update as MU
+    from skelcore.metrics.coverage import coverage
+
+    sh = shapes.y_shape(3000, seed=4, n_curve_per_arm=6)
+    params = Params(missing_max_points=1000, coverage_max_points=500)
+    ev = evaluate(sh.cloud, curve=(sh.curve_vertices, sh.curve_edges), params=params)
+    seen, differences = [], []
+    real_from, real_diff = MU.coverage_from, CU._by_difference
+    monkeypatch.setattr(MU, "coverage_from", lambda *a: seen.append((a, real_from(*a))) or seen[-1][1])
+    monkeypatch.setattr(CU, "_by_difference", lambda *a: differences.append(1) or real_diff(*a))
+    curve = first = ev.curve.curve
+    for edit in ("prune", "move", "delete", "undo"):
+        if edit == "prune":
+            curve, change = E.prune_branch(curve, 0)
+        elif edit == "move":
+            curve, change = E.move_vertex(curve, 3, curve.vertices[3] + np.array([0.0, 0.02, 0.0]))
+        elif edit == "delete":
+            curve, change = E.delete_edge(curve, tuple(curve.edges[2]))
+        else:  # back to the first curve: the pruned arm's balls added again
+            curve = change = first
+        ev = ev.update(change)
+        fresh = evaluate(sh.cloud, curve=curve, params=params)
+        a, b = ev.source.ctx.results["curve missing parts"], fresh.source.ctx.results["curve missing parts"]
+        assert np.array_equal(a.region, b.region) and np.array_equal(a.explained, b.explained)
+        assert [r.to_dict() for r in a.regions] == [r.to_dict() for r in b.regions]
+    assert len(differences) >= 4  # each edit's coverage by difference (the first's parent memo made whole)
+    for (view, old, elements, tau), (cov, _) in seen:
+        whole = coverage(view.cloud_n, elements, params, tau, index=view.cloud_index)
+        assert np.array_equal(cov.gap, whole.gap) and np.array_equal(cov.covered, whole.covered)
+        assert cov.n_elements == whole.n_elements
+    assert sum(old is not None for (_, old, _, _), _ in seen) >= 4
