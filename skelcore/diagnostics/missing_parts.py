@@ -221,6 +221,7 @@ def missing_parts(
     inside: Callable[[np.ndarray], np.ndarray] | None = None,
     cloud_tree: Callable[[np.ndarray], cKDTree] | None = None,
     coverage_of: Callable[[np.ndarray, np.ndarray, float, CloudIndex], Coverage] | None = None,
+    nearest_sample: Callable[[np.ndarray, np.ndarray, Checkpoint], tuple[np.ndarray, np.ndarray]] | None = None,
     checkpoint: Checkpoint = no_checkpoint,
 ) -> MissingParts:
     """The parts of the (normalized) cloud the (normalized) skeleton does not reach, and its completeness.
@@ -250,6 +251,9 @@ def missing_parts(
     coverage_of : ``coverage_of(points, elements, tau, index)`` gives ``coverage(points, elements,
         params, tau, index=index)`` when the coverage is computed here (an edit's update gives it by
         difference from the curve edited, skelcore/edit/missing_update.py); else computed as is.
+    nearest_sample : ``nearest_sample(cloud, points, checkpoint)`` gives each cloud point's distance
+        and row of its nearest point of the subsample ``points`` (``cloud_tree(points).query(cloud)``),
+        kept by the caller: the spread then reads it instead of searching (:func:`_spread`).
     checkpoint : ``checkpoint(fraction)``, raises to cancel.
 
     An empty skeleton explains nothing: one region per connected part of the cloud, depth inf.
@@ -311,8 +315,9 @@ def missing_parts(
     checkpoint(0.9)
     explained_s = cov.covered
     if sub is not None:
+        nearest = None if nearest_sample is None or full_covered is not None else nearest_sample
         region, explained = _spread(cloud, pts, region_s, explained_s, spacing,
-                                    lambda f: checkpoint(0.9 + 0.1 * f))
+                                    lambda f: checkpoint(0.9 + 0.1 * f), nearest)
         if full_covered is not None:  # the coverage's own verdicts: completeness = its fraction
             explained = full_covered
             region[explained] = -1
@@ -348,16 +353,21 @@ def missing_parts(
 
 
 def _spread(cloud: np.ndarray, pts: np.ndarray, region_s: np.ndarray, explained_s: np.ndarray,
-            spacing: float, checkpoint: Checkpoint = no_checkpoint) -> tuple[np.ndarray, np.ndarray]:
+            spacing: float, checkpoint: Checkpoint = no_checkpoint,
+            nearest: Callable[[np.ndarray, np.ndarray, Checkpoint], tuple[np.ndarray, np.ndarray]] | None = None,
+            ) -> tuple[np.ndarray, np.ndarray]:
     """Every cloud point takes the verdict of its nearest sample ``pts``; only points within
     ``SPREAD`` spacings of an unexplained sample are looked up (the rest are explained: a point
     farther than that from every sample, its nearest one included, is no sample's neighbour).
-    ``SPREAD_CHUNK`` cloud rows at a time, a checkpoint between (one 1M-row query held a cancel)."""
+    ``SPREAD_CHUNK`` cloud rows at a time, a checkpoint between (one 1M-row query held a cancel).
+    With ``nearest`` (each cloud point's nearest sample, kept): see :func:`_spread_kept`."""
     region = np.full(len(cloud), -1, np.int64)
     explained = np.ones(len(cloud), bool)
     un = np.flatnonzero(~explained_s)
     if len(un) == 0:
         return region, explained
+    if nearest is not None:
+        return _spread_kept(cloud, pts, region_s, explained_s, spacing, nearest(cloud, pts, checkpoint))
     unexplained_tree, sample_tree = cKDTree(pts[un]), None
     for lo in range(0, len(cloud), SPREAD_CHUNK):
         checkpoint(lo / len(cloud))
@@ -368,6 +378,28 @@ def _spread(cloud: np.ndarray, pts: np.ndarray, region_s: np.ndarray, explained_
             sample_tree = cKDTree(pts) if sample_tree is None else sample_tree
             j = sample_tree.query(part[near], workers=query_workers(len(near)))[1]
             region[lo + near], explained[lo + near] = region_s[j], explained_s[j]
+    return region, explained
+
+
+def _spread_kept(cloud: np.ndarray, pts: np.ndarray, region_s: np.ndarray, explained_s: np.ndarray,
+                 spacing: float, near: tuple[np.ndarray, np.ndarray]) -> tuple[np.ndarray, np.ndarray]:
+    """:func:`_spread` from each cloud point's nearest sample ``near`` (distance, row): a point whose
+    nearest sample is explained takes the default (explained, no region) either way; one whose nearest
+    is unexplained has it as its nearest unexplained sample too, so it is looked up when that distance
+    is under ``SPREAD`` spacings (the search's strict test on squared distances: the few within a
+    relative 1e-9 of the bound are asked of the unexplained samples' tree as there)."""
+    d, j = near
+    bound = SPREAD * spacing
+    un = ~explained_s[j]
+    near_un = un & (d < bound * (1 - 1e-9))
+    edge = np.flatnonzero(un & ~near_un & (d <= bound * (1 + 1e-9)))
+    if len(edge):
+        tree = cKDTree(pts[np.flatnonzero(~explained_s)])
+        near_un[edge] = np.isfinite(tree.query(cloud[edge], distance_upper_bound=bound)[0])
+    rows = np.flatnonzero(near_un)
+    region = np.full(len(cloud), -1, np.int64)
+    explained = np.ones(len(cloud), bool)
+    region[rows], explained[rows] = region_s[j[rows]], explained_s[j[rows]]
     return region, explained
 
 

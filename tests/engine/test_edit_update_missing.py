@@ -144,3 +144,24 @@ def test_the_missing_parts_coverage_by_difference_equals_it_computed_whole(monke
         assert np.array_equal(cov.gap, whole.gap) and np.array_equal(cov.covered, whole.covered)
         assert cov.n_elements == whole.n_elements
     assert sum(old is not None for (_, old, _, _), _ in seen) >= 4
+
+
+def test_the_spread_from_kept_nearest_samples_equals_the_searched_one():
+    """The spread reads each cloud point's kept nearest sample: the same regions and verdicts as its
+    search, with cloud points at the bound of ``SPREAD`` spacings (on a lattice: exact distances) and
+    points whose nearest sample is explained but an unexplained one lies within the bound."""
+    rng = np.random.default_rng(3)
+    pts = np.stack(np.meshgrid(np.arange(30), np.arange(30), np.arange(3), indexing="ij"), -1).reshape(-1, 3) * 0.5
+    spacing = 0.5
+    bound = MP.SPREAD * spacing  # 2.0: lattice points at 2.0 and offsets that land on the bound exactly
+    cloud = np.vstack([pts + rng.normal(0, 0.2, pts.shape), pts + [0.0, 0.0, bound], pts + [0.25, 0.0, 0.0],
+                       rng.uniform(-3, 18, (3000, 3))])
+    tree = cKDTree(pts)
+    kept = tree.query(cloud)
+    for share in (0.3, 0.9, 0.995):
+        explained_s = rng.random(len(pts)) > share
+        region_s = np.where(explained_s, -1, rng.integers(0, 5, len(pts)))
+        searched = MP._spread(cloud, pts, region_s, explained_s, spacing)
+        read = MP._spread(cloud, pts, region_s, explained_s, spacing, nearest=lambda c, p, f: kept)
+        assert np.array_equal(searched[0], read[0]) and np.array_equal(searched[1], read[1])
+        assert (~searched[1]).any() and searched[1].any()
