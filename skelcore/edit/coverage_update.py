@@ -214,9 +214,11 @@ def _near_box(points: np.ndarray, centers: np.ndarray, reach: np.ndarray, cover_
     ``cover_reach`` of the centers' bounding box (a superset, by a relative 1e-9)."""
     lo, hi = centers.min(axis=0), centers.max(axis=0)
     bound = np.maximum(reach, cover_reach) * (1 + 1e-9) + 1e-12
-    rows = np.arange(len(points))  # first each coordinate alone (a loose bound), then the distance
-    for k in range(points.shape[1]):
-        col, b = points[rows, k], bound[rows] * (1 + 1e-9)
+    loose = bound * (1 + 1e-9)  # first each coordinate alone (a loose bound), then the distance
+    col = points[:, 0]  # the first over all points without gathering them
+    rows = np.flatnonzero((col >= lo[0] - loose) & (col <= hi[0] + loose))
+    for k in range(1, points.shape[1]):
+        col, b = points[rows, k], loose[rows]
         rows = rows[(col >= lo[k] - b) & (col <= hi[k] + b)]
     p = points[rows]
     d = np.linalg.norm(np.maximum(np.maximum(lo - p, p - hi), 0.0), axis=1)
@@ -274,7 +276,7 @@ def _by_difference(ctx: EvalContext, old: CoverageMemo, elements: np.ndarray,
     balls.set_radii(r, big_r, None if add.any() else surface.points[contact])
     eps = COVER_EPS * max(float(big_r.max()) ** 2, 1e-300)
     gap_t, cov_t = old.gap_t.copy(), old.cov_t.copy()  # per query position
-    points = surface.points[queries[0]]
+    points = surface.points if queries[2] is None else surface.points[queries[0]]  # every point: in order
     gone = np.ones(len(old.r), bool)
     gone[at[kept]] = False
     redo = np.zeros(len(points), bool)
@@ -327,6 +329,8 @@ def _sample_nearest(ctx: EvalContext, elements: np.ndarray, old: CoverageMemo | 
     tie = np.zeros(len(pts), bool)
     added = np.flatnonzero(at < 0)
     ok = np.flatnonzero(~redo)
+    if len(added) and len(ok):  # only the points whose old distance reaches the added elements' box
+        ok = ok[_near_box(pts[ok], elements[added], dist[ok], 0.0)]
     if len(added) and len(ok):
         d, i = cKDTree(elements[added]).query(pts[ok], k=2 if len(added) > 1 else 1)
         d, i = d.reshape(len(ok), -1), i.reshape(len(ok), -1)
