@@ -222,6 +222,7 @@ def missing_parts(
     cloud_tree: Callable[[np.ndarray], cKDTree] | None = None,
     coverage_of: Callable[[np.ndarray, np.ndarray, float, CloudIndex], Coverage] | None = None,
     nearest_sample: Callable[[np.ndarray, np.ndarray, Checkpoint], tuple[np.ndarray, np.ndarray]] | None = None,
+    neighbours: Callable[[cKDTree, np.ndarray, int, float], tuple[np.ndarray, np.ndarray]] | None = None,
     checkpoint: Checkpoint = no_checkpoint,
 ) -> MissingParts:
     """The parts of the (normalized) cloud the (normalized) skeleton does not reach, and its completeness.
@@ -254,6 +255,8 @@ def missing_parts(
     nearest_sample : ``nearest_sample(cloud, points, checkpoint)`` gives each cloud point's distance
         and row of its nearest point of the subsample ``points`` (``cloud_tree(points).query(cloud)``),
         kept by the caller: the spread then reads it instead of searching (:func:`_spread`).
+    neighbours : ``neighbours(tree, rows, k, link)`` gives ``tree.query(points[rows], k,
+        distance_upper_bound=link)`` (the kept tree's), each row's answer kept by the caller.
     checkpoint : ``checkpoint(fraction)``, raises to cancel.
 
     An empty skeleton explains nothing: one region per connected part of the cloud, depth inf.
@@ -311,6 +314,7 @@ def missing_parts(
     # not for an estimated coverage's sample: a new array each time
     kept_tree = None if cloud_tree is None or full_covered is not None else (lambda: cloud_tree(pts))
     region_s, regions = _regions(pts, cov, spacing, p, checkpoint, tree=kept_tree,
+                                 neighbours=None if kept_tree is None else neighbours,
                                  small=lambda tree: _small_points(skeleton, tree, spacing, p))
     checkpoint(0.9)
     explained_s = cov.covered
@@ -439,7 +443,8 @@ def _small_points(skeleton: np.ndarray | CurveSkeleton, tree: cKDTree, spacing: 
 
 
 def _regions(pts: np.ndarray, cov: Coverage, spacing: float, p: Params, checkpoint: Checkpoint,
-             tree: Callable[[], cKDTree] | None = None, small: Callable[[cKDTree], float] | None = None
+             tree: Callable[[], cKDTree] | None = None, small: Callable[[cKDTree], float] | None = None,
+             neighbours: Callable[[cKDTree, np.ndarray, int, float], tuple[np.ndarray, np.ndarray]] | None = None,
              ) -> tuple[np.ndarray, list[dict]]:
     """Region id per point (-1 explained; ids by size, largest first) and each region's numbers.
 
@@ -450,7 +455,8 @@ def _regions(pts: np.ndarray, cov: Coverage, spacing: float, p: Params, checkpoi
     ``missing_depth_quantile`` distance to its border over that radius. Regions under both
     ``missing_min_share`` of the points and ``small(tree)`` points (the area rule; asked only when
     such a region holds ``SMALL_FEWEST`` points) get no depth (NaN): they cannot count. ``tree()``
-    gives ``cKDTree(pts)`` when it is kept (built here at most once otherwise)."""
+    gives ``cKDTree(pts)`` when it is kept (built here at most once otherwise), ``neighbours`` its
+    searches' answers kept per point (:func:`_from_kept`)."""
     n = len(pts)
     made: list[cKDTree] = []
 
@@ -467,7 +473,7 @@ def _regions(pts: np.ndarray, cov: Coverage, spacing: float, p: Params, checkpoi
     link = float(p.missing_link_factor) * spacing
     k = min(LINK_K + 1, len(miss))
     # with a kept tree, one search of it gives most points' neighbours both ways (_from_kept)
-    kept = None if tree is None or k < 2 else _from_kept(pts_tree(), up, miss, link)
+    kept = None if tree is None or k < 2 else _from_kept(pts_tree(), up, miss, link, neighbours)
     if k > 1:
         d, j = _unexplained_neighbours(up, k, link, kept)
         ok = np.isfinite(d[:, 1:])
@@ -535,12 +541,17 @@ def _regions(pts: np.ndarray, cov: Coverage, spacing: float, p: Params, checkpoi
     return region, out
 
 
-def _from_kept(tree: cKDTree, up: np.ndarray, miss: np.ndarray, link: float) -> tuple[np.ndarray, ...]:
+def _from_kept(tree: cKDTree, up: np.ndarray, miss: np.ndarray, link: float,
+               neighbours: Callable[[cKDTree, np.ndarray, int, float], tuple[np.ndarray, np.ndarray]] | None = None,
+               ) -> tuple[np.ndarray, ...]:
     """The ``LINK_K + 2`` nearest cloud points within the link of each unexplained point ``up``
-    (rows ``miss`` of the cloud) from the cloud's tree: (distances, cloud rows, n where none, their
-    rows in ``up`` or -1)."""
+    (rows ``miss`` of the cloud) from the cloud's tree (or its answers kept, ``neighbours``):
+    (distances, cloud rows, n where none, their rows in ``up`` or -1)."""
     n = tree.n
-    d, j = tree.query(up, k=min(LINK_K + 2, n), distance_upper_bound=link, workers=query_workers(len(up)))
+    if neighbours is not None:
+        d, j = neighbours(tree, miss, min(LINK_K + 2, n), link)
+    else:
+        d, j = tree.query(up, k=min(LINK_K + 2, n), distance_upper_bound=link, workers=query_workers(len(up)))
     d, j = d.reshape(len(up), -1), j.reshape(len(up), -1)
     at = np.full(n + 1, -1, np.int64)
     at[miss] = np.arange(len(miss))

@@ -27,6 +27,7 @@ EvalContext = Any
 _LOCK = threading.Lock()
 _KEY = "missing parts' cloud tree"
 _NEAREST = "missing parts' nearest samples"
+_NEIGHBOURS = "missing parts' kept neighbours"
 _MEMOS = "missing parts' coverage memos"  # per curve: (the points' index, tau, CoverageMemo)
 
 
@@ -74,6 +75,30 @@ def _nearest_sample(cache: dict[str, Any], tree: Callable[[np.ndarray], cKDTree]
     return get
 
 
+def _neighbours(cache: dict[str, Any]) -> Callable[[cKDTree, np.ndarray, int, float], tuple[np.ndarray, np.ndarray]]:
+    """The regions' search of the kept tree, ``tree.query(tree.data[rows], k, distance_upper_bound=link)``,
+    each row's answer kept in ``cache`` for that tree, k and link (a row's answer depends on them
+    alone; the unexplained points of one update are mostly those of the next): only rows not asked
+    before are searched. 12 bytes a point of the tree per neighbour, made at the first update."""
+
+    def get(tree: cKDTree, rows: np.ndarray, k: int, link: float) -> tuple[np.ndarray, np.ndarray]:
+        with _LOCK:
+            kept = cache.get(_NEIGHBOURS)
+            if kept is None or kept[0] is not tree or kept[1] != (k, link):
+                kept = (tree, (k, link), np.zeros(tree.n, bool), np.empty((tree.n, k)), np.empty((tree.n, k), np.int32))
+                cache[_NEIGHBOURS] = kept
+            _, _, known, d, j = kept
+            new = rows[~known[rows]]
+        if len(new):
+            dn, jn = tree.query(tree.data[new], k=k, distance_upper_bound=link, workers=query_workers(len(new)))
+            with _LOCK:
+                d[new], j[new] = dn.reshape(len(new), k), jn.reshape(len(new), k)
+                known[new] = True
+        return d[rows], j[rows].astype(np.int64)
+
+    return get
+
+
 def _coverage_of(ctx: EvalContext, parent: EvalContext | None, cache: dict[str, Any],
                  inside: Callable[[np.ndarray], np.ndarray] | None,
                  checkpoint: Checkpoint) -> Callable[[np.ndarray, np.ndarray, float, CloudIndex], Coverage]:
@@ -109,5 +134,6 @@ def curve_missing_parts(ctx: EvalContext, cache: dict[str, Any], checkpoint: Che
     inside, tree = ctx.solid_test(), _cloud_tree(cache)
     return missing_parts(ctx.cloud_n, ctx.curve_n, ctx.params, cov=cov, tau=None if cov is None else cov.tau,
                          what="curve skeleton", to_user=ctx.norm.invert, inside=inside,
-                         cloud_tree=tree, nearest_sample=_nearest_sample(cache, tree), checkpoint=checkpoint,
+                         cloud_tree=tree, nearest_sample=_nearest_sample(cache, tree),
+                         neighbours=_neighbours(cache), checkpoint=checkpoint,
                          coverage_of=_coverage_of(ctx, parent, cache, inside, checkpoint))

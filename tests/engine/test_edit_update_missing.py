@@ -165,3 +165,31 @@ def test_the_spread_from_kept_nearest_samples_equals_the_searched_one():
         read = MP._spread(cloud, pts, region_s, explained_s, spacing, nearest=lambda c, p, f: kept)
         assert np.array_equal(searched[0], read[0]) and np.array_equal(searched[1], read[1])
         assert (~searched[1]).any() and searched[1].any()
+
+
+def test_the_kept_neighbours_give_the_same_regions_as_searching(pruned):
+    """The regions' search of the kept tree answered from each point's kept answer
+    (missing_update._neighbours): the same regions as without the tree, on a lattice with repeats, the
+    unexplained points of one call partly those of the next; a changed link searches anew."""
+    from skelcore.edit import missing_update as MU
+
+    ev, _ = pruned
+    params = ev.source.ctx.params
+    rng = np.random.default_rng(2)
+    grid = np.stack(np.meshgrid(np.arange(24), np.arange(24), np.arange(5), indexing="ij"), -1).reshape(-1, 3)
+    grid = np.vstack([grid, grid[rng.choice(len(grid), 400)]]) * 0.01
+    tree, cache, asked = cKDTree(grid), {}, []
+    kept = MU._neighbours(cache)
+
+    def neighbours(t, rows, k, link):
+        asked.append(len(rows))
+        return kept(t, rows, k, link)
+
+    for spacing in (0.002, 0.013):
+        for share in (0.3, 0.5, 0.6):
+            covered = rng.random(len(grid)) > share
+            c = SimpleNamespace(covered=covered, gap=rng.random(len(grid)))
+            with_kept = MP._regions(grid, c, spacing, params, lambda f: None, tree=lambda: tree,
+                                    small=lambda t: 30.0, neighbours=neighbours)
+            _same(_regions(grid, c, spacing, params, None), with_kept)
+    assert len(asked) == 6 and cache[MU._NEIGHBOURS][2].sum() < len(grid)  # some rows never asked
