@@ -355,7 +355,7 @@ def find_cycle_defects(
                                         inside_share=params.beta_star,
                                         checkpoint=lambda f: checkpoint(0.5 * f))
     solid = voxel_shape.solid()  # shared with the outside test (not written to)
-    _, tunnels, _ = betti_numbers(solid, filled=True)
+    tunnels = voxel_shape.solid_tunnels()
     checkpoint(0.6)
     nc = branches.cycle_rank
     lengths = np.array([float(sum(branches.length[b] for b, _ in branches.cycles[i])) for i in range(nc)])

@@ -49,12 +49,20 @@ class VoxelShape:
     origin: np.ndarray
     size: float
     _solid: np.ndarray | None = field(default=None, repr=False, compare=False)
+    _tunnels: int | None = field(default=None, repr=False, compare=False)
 
     def solid(self) -> np.ndarray:
         """``inside`` with its cavities filled (the outside test's "in the shape"), made once per grid."""
         if self._solid is None:
             self._solid = fill_holes(self.inside)
         return self._solid
+
+    def solid_tunnels(self) -> int:
+        """The tunnels of :meth:`solid` (its beta1, :func:`betti_numbers`), counted once per grid: the
+        cycle test asks it of every curve an edit's update scores against the same cloud."""
+        if self._tunnels is None:
+            self._tunnels = betti_numbers(self.solid(), filled=True)[1]
+        return self._tunnels
 
     def index_of(self, points: np.ndarray) -> np.ndarray:
         """(n, 3) voxel indices of points (clipped to the grid)."""

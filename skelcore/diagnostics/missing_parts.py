@@ -30,12 +30,12 @@ from scipy.spatial import cKDTree
 from ..correspondence import densify_curve
 from ..curve import CurveSkeleton
 from ..geometry import Checkpoint, kd_tree, no_checkpoint, query_workers, unique_rows
-from ..metrics.cloud_index import kept_index
+from ..metrics.cloud_index import CloudIndex, kept_index
 from ..metrics.coverage import Coverage, coverage, coverage_tau
 from ..params import Params
 from .trust_warning import TrustWarning
 
-__all__ = ["MissingRegion", "MissingParts", "missing_parts", "skeleton_elements", "depth_clause"]
+__all__ = ["MissingRegion", "MissingParts", "missing_parts", "skeleton_elements", "coverage_elements", "depth_clause"]
 
 # neighbours per unexplained point in the region graph (edges also need to be shorter than the link)
 LINK_K = 8
@@ -192,6 +192,18 @@ def skeleton_elements(skeleton: np.ndarray | CurveSkeleton, spacing: float, max_
         cell *= 1.5
 
 
+def coverage_elements(skeleton: np.ndarray | CurveSkeleton, pts: np.ndarray, spacing: float, p: Params,
+                      inside: Callable[[np.ndarray], np.ndarray] | None,
+                      checkpoint: Checkpoint = no_checkpoint) -> tuple[np.ndarray, int]:
+    """The elements whose balls explain the points ``pts`` (:func:`skeleton_elements` every ``spacing``),
+    without those ``inside`` rejects as in the air (:func:`_in_air`), and how many it rejected."""
+    elements = skeleton_elements(skeleton, spacing, int(p.missing_max_elements), checkpoint)
+    if inside is None or not len(elements):
+        return elements, 0
+    ok = ~_in_air(elements, inside, pts, p)
+    return elements[ok], int(np.count_nonzero(~ok))
+
+
 def _identity(points: np.ndarray) -> np.ndarray:
     return points
 
@@ -208,6 +220,9 @@ def missing_parts(
     keep: np.ndarray | None = None,
     inside: Callable[[np.ndarray], np.ndarray] | None = None,
     cloud_tree: Callable[[np.ndarray], cKDTree] | None = None,
+    coverage_of: Callable[[np.ndarray, np.ndarray, float, CloudIndex], Coverage] | None = None,
+    nearest_sample: Callable[[np.ndarray, np.ndarray, Checkpoint], tuple[np.ndarray, np.ndarray]] | None = None,
+    neighbours: Callable[[cKDTree, np.ndarray, int, float], tuple[np.ndarray, np.ndarray]] | None = None,
     checkpoint: Checkpoint = no_checkpoint,
 ) -> MissingParts:
     """The parts of the (normalized) cloud the (normalized) skeleton does not reach, and its completeness.
@@ -234,6 +249,14 @@ def missing_parts(
     cloud_tree : ``cloud_tree(points)`` gives ``cKDTree(points)`` of the points the regions are found
         on (the cloud or its subsample, not an estimated ``cov``'s sample), kept by the caller (an
         edit's update asks about the same points each time); else built here.
+    coverage_of : ``coverage_of(points, elements, tau, index)`` gives ``coverage(points, elements,
+        params, tau, index=index)`` when the coverage is computed here (an edit's update gives it by
+        difference from the curve edited, skelcore/edit/missing_update.py); else computed as is.
+    nearest_sample : ``nearest_sample(cloud, points, checkpoint)`` gives each cloud point's distance
+        and row of its nearest point of the subsample ``points`` (``cloud_tree(points).query(cloud)``),
+        kept by the caller: the spread then reads it instead of searching (:func:`_spread`).
+    neighbours : ``neighbours(tree, rows, k, link)`` gives ``tree.query(points[rows], k,
+        distance_upper_bound=link)`` (the kept tree's), each row's answer kept by the caller.
     checkpoint : ``checkpoint(fraction)``, raises to cancel.
 
     An empty skeleton explains nothing: one region per connected part of the cloud, depth inf.
@@ -282,21 +305,23 @@ def missing_parts(
     if keep is not None and not isinstance(skeleton, CurveSkeleton):
         skeleton = np.asarray(skeleton, dtype=float).reshape(-1, 3)[np.asarray(keep, dtype=bool)]
     if cov is None:
-        elements = skeleton_elements(skeleton, spacing, int(p.missing_max_elements), lambda f: checkpoint(0.1))
-        if inside is not None and len(elements):
-            ok = ~_in_air(elements, inside, pts, p)
-            n_out, elements = int(np.count_nonzero(~ok)), elements[ok]
-        cov = coverage(pts, elements, p, tau, checkpoint=lambda f: checkpoint(0.1 + 0.6 * f), index=index)
+        elements, n_out = coverage_elements(skeleton, pts, spacing, p, inside, lambda f: checkpoint(0.1))
+        if coverage_of is not None:
+            cov = coverage_of(pts, elements, float(tau), index)
+        else:
+            cov = coverage(pts, elements, p, tau, checkpoint=lambda f: checkpoint(0.1 + 0.6 * f), index=index)
     checkpoint(0.7)
     # not for an estimated coverage's sample: a new array each time
     kept_tree = None if cloud_tree is None or full_covered is not None else (lambda: cloud_tree(pts))
     region_s, regions = _regions(pts, cov, spacing, p, checkpoint, tree=kept_tree,
+                                 neighbours=None if kept_tree is None else neighbours,
                                  small=lambda tree: _small_points(skeleton, tree, spacing, p))
     checkpoint(0.9)
     explained_s = cov.covered
     if sub is not None:
+        nearest = None if nearest_sample is None or full_covered is not None else nearest_sample
         region, explained = _spread(cloud, pts, region_s, explained_s, spacing,
-                                    lambda f: checkpoint(0.9 + 0.1 * f))
+                                    lambda f: checkpoint(0.9 + 0.1 * f), nearest)
         if full_covered is not None:  # the coverage's own verdicts: completeness = its fraction
             explained = full_covered
             region[explained] = -1
@@ -332,16 +357,21 @@ def missing_parts(
 
 
 def _spread(cloud: np.ndarray, pts: np.ndarray, region_s: np.ndarray, explained_s: np.ndarray,
-            spacing: float, checkpoint: Checkpoint = no_checkpoint) -> tuple[np.ndarray, np.ndarray]:
+            spacing: float, checkpoint: Checkpoint = no_checkpoint,
+            nearest: Callable[[np.ndarray, np.ndarray, Checkpoint], tuple[np.ndarray, np.ndarray]] | None = None,
+            ) -> tuple[np.ndarray, np.ndarray]:
     """Every cloud point takes the verdict of its nearest sample ``pts``; only points within
     ``SPREAD`` spacings of an unexplained sample are looked up (the rest are explained: a point
     farther than that from every sample, its nearest one included, is no sample's neighbour).
-    ``SPREAD_CHUNK`` cloud rows at a time, a checkpoint between (one 1M-row query held a cancel)."""
+    ``SPREAD_CHUNK`` cloud rows at a time, a checkpoint between (one 1M-row query held a cancel).
+    With ``nearest`` (each cloud point's nearest sample, kept): see :func:`_spread_kept`."""
     region = np.full(len(cloud), -1, np.int64)
     explained = np.ones(len(cloud), bool)
     un = np.flatnonzero(~explained_s)
     if len(un) == 0:
         return region, explained
+    if nearest is not None:
+        return _spread_kept(cloud, pts, region_s, explained_s, spacing, nearest(cloud, pts, checkpoint))
     unexplained_tree, sample_tree = cKDTree(pts[un]), None
     for lo in range(0, len(cloud), SPREAD_CHUNK):
         checkpoint(lo / len(cloud))
@@ -352,6 +382,28 @@ def _spread(cloud: np.ndarray, pts: np.ndarray, region_s: np.ndarray, explained_
             sample_tree = cKDTree(pts) if sample_tree is None else sample_tree
             j = sample_tree.query(part[near], workers=query_workers(len(near)))[1]
             region[lo + near], explained[lo + near] = region_s[j], explained_s[j]
+    return region, explained
+
+
+def _spread_kept(cloud: np.ndarray, pts: np.ndarray, region_s: np.ndarray, explained_s: np.ndarray,
+                 spacing: float, near: tuple[np.ndarray, np.ndarray]) -> tuple[np.ndarray, np.ndarray]:
+    """:func:`_spread` from each cloud point's nearest sample ``near`` (distance, row): a point whose
+    nearest sample is explained takes the default (explained, no region) either way; one whose nearest
+    is unexplained has it as its nearest unexplained sample too, so it is looked up when that distance
+    is under ``SPREAD`` spacings (the search's strict test on squared distances: the few within a
+    relative 1e-9 of the bound are asked of the unexplained samples' tree as there)."""
+    d, j = near
+    bound = SPREAD * spacing
+    un = ~explained_s[j]
+    near_un = un & (d < bound * (1 - 1e-9))
+    edge = np.flatnonzero(un & ~near_un & (d <= bound * (1 + 1e-9)))
+    if len(edge):
+        tree = cKDTree(pts[np.flatnonzero(~explained_s)])
+        near_un[edge] = np.isfinite(tree.query(cloud[edge], distance_upper_bound=bound)[0])
+    rows = np.flatnonzero(near_un)
+    region = np.full(len(cloud), -1, np.int64)
+    explained = np.ones(len(cloud), bool)
+    region[rows], explained[rows] = region_s[j[rows]], explained_s[j[rows]]
     return region, explained
 
 
@@ -391,7 +443,8 @@ def _small_points(skeleton: np.ndarray | CurveSkeleton, tree: cKDTree, spacing: 
 
 
 def _regions(pts: np.ndarray, cov: Coverage, spacing: float, p: Params, checkpoint: Checkpoint,
-             tree: Callable[[], cKDTree] | None = None, small: Callable[[cKDTree], float] | None = None
+             tree: Callable[[], cKDTree] | None = None, small: Callable[[cKDTree], float] | None = None,
+             neighbours: Callable[[cKDTree, np.ndarray, int, float], tuple[np.ndarray, np.ndarray]] | None = None,
              ) -> tuple[np.ndarray, list[dict]]:
     """Region id per point (-1 explained; ids by size, largest first) and each region's numbers.
 
@@ -402,7 +455,8 @@ def _regions(pts: np.ndarray, cov: Coverage, spacing: float, p: Params, checkpoi
     ``missing_depth_quantile`` distance to its border over that radius. Regions under both
     ``missing_min_share`` of the points and ``small(tree)`` points (the area rule; asked only when
     such a region holds ``SMALL_FEWEST`` points) get no depth (NaN): they cannot count. ``tree()``
-    gives ``cKDTree(pts)`` when it is kept (built here at most once otherwise)."""
+    gives ``cKDTree(pts)`` when it is kept (built here at most once otherwise), ``neighbours`` its
+    searches' answers kept per point (:func:`_from_kept`)."""
     n = len(pts)
     made: list[cKDTree] = []
 
@@ -419,7 +473,7 @@ def _regions(pts: np.ndarray, cov: Coverage, spacing: float, p: Params, checkpoi
     link = float(p.missing_link_factor) * spacing
     k = min(LINK_K + 1, len(miss))
     # with a kept tree, one search of it gives most points' neighbours both ways (_from_kept)
-    kept = None if tree is None or k < 2 else _from_kept(pts_tree(), up, miss, link)
+    kept = None if tree is None or k < 2 else _from_kept(pts_tree(), up, miss, link, neighbours)
     if k > 1:
         d, j = _unexplained_neighbours(up, k, link, kept)
         ok = np.isfinite(d[:, 1:])
@@ -487,12 +541,17 @@ def _regions(pts: np.ndarray, cov: Coverage, spacing: float, p: Params, checkpoi
     return region, out
 
 
-def _from_kept(tree: cKDTree, up: np.ndarray, miss: np.ndarray, link: float) -> tuple[np.ndarray, ...]:
+def _from_kept(tree: cKDTree, up: np.ndarray, miss: np.ndarray, link: float,
+               neighbours: Callable[[cKDTree, np.ndarray, int, float], tuple[np.ndarray, np.ndarray]] | None = None,
+               ) -> tuple[np.ndarray, ...]:
     """The ``LINK_K + 2`` nearest cloud points within the link of each unexplained point ``up``
-    (rows ``miss`` of the cloud) from the cloud's tree: (distances, cloud rows, n where none, their
-    rows in ``up`` or -1)."""
+    (rows ``miss`` of the cloud) from the cloud's tree (or its answers kept, ``neighbours``):
+    (distances, cloud rows, n where none, their rows in ``up`` or -1)."""
     n = tree.n
-    d, j = tree.query(up, k=min(LINK_K + 2, n), distance_upper_bound=link, workers=query_workers(len(up)))
+    if neighbours is not None:
+        d, j = neighbours(tree, miss, min(LINK_K + 2, n), link)
+    else:
+        d, j = tree.query(up, k=min(LINK_K + 2, n), distance_upper_bound=link, workers=query_workers(len(up)))
     d, j = d.reshape(len(up), -1), j.reshape(len(up), -1)
     at = np.full(n + 1, -1, np.int64)
     at[miss] = np.arange(len(miss))

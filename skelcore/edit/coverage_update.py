@@ -23,7 +23,7 @@ from ..metrics.ball_tree import COVER_EPS, BallTree
 from ..metrics.coverage import (NOISE_MIN_POINTS, SAMPLE_SEED, Coverage, _noise_sample, _summary, coverage,
                                 curve_elements, noise_shortfall)
 
-__all__ = ["CoverageMemo", "curve_coverage", "link_contexts", "carry_memo"]
+__all__ = ["CoverageMemo", "curve_coverage", "coverage_from", "link_contexts", "carry_memo"]
 
 #: skelcore.stages.context.EvalContext, not imported: the edits sit below the stages (only the
 #: edit update, skelcore.edit.incremental, imports them)
@@ -57,17 +57,19 @@ def _elements(ctx: EvalContext) -> tuple[np.ndarray, float]:
     return curve_elements(ctx.curve_n, tau, ctx.params), tau
 
 
-def _store(cache: dict[str, Any], ctx: EvalContext, memo: CoverageMemo) -> None:
+def _store(cache: dict[str, Any], ctx: EvalContext, memo: Any, name: str = "coverage memos") -> None:
+    """Keep ``memo`` for ``ctx`` in ``cache[name]`` (the last ``_KEEP``), while ``ctx`` lives."""
     with _LOCK:
-        kept = cache.setdefault("coverage memos", {})
+        kept = cache.setdefault(name, {})
         kept[id(ctx)] = (weakref.ref(ctx), memo)
         while len(kept) > _KEEP:
             kept.pop(next(iter(kept)))
 
 
-def _memo(cache: dict[str, Any], ctx: EvalContext | None) -> CoverageMemo | None:
+def _memo(cache: dict[str, Any], ctx: EvalContext | None, name: str = "coverage memos") -> Any:
+    """The memo :func:`_store` keeps for ``ctx`` in ``cache[name]``, None when none."""
     with _LOCK:
-        kept = cache.get("coverage memos", {})
+        kept = cache.get(name, {})
         hit = kept.pop(id(ctx), None)
         if hit is not None:
             kept[id(ctx)] = hit  # the last asked stays longest (each edit of one curve asks for its memo)
@@ -100,6 +102,15 @@ def parent_of(cache: dict[str, Any], child: EvalContext) -> EvalContext | None:
         if hit is not None:
             links[id(child)] = hit
     return hit[1]() if hit is not None and hit[0]() is child else None
+
+
+def coverage_from(view: Any, old: CoverageMemo | None, elements: np.ndarray,
+                  tau: float) -> tuple[Coverage, CoverageMemo | None]:
+    """:func:`coverage` of ``elements`` (distinct rows) in the cloud of ``view`` (``params``, ``cloud_n``
+    and its ``cloud_index``), by difference from ``old`` (a memo of the same cloud and tau) when it
+    can, else whole; with its memo (None when coverage was computed as is)."""
+    out = None if old is None else _by_difference(view, old, elements, tau)
+    return out if out is not None else _full(view, elements, tau, old)
 
 
 def _full(ctx: EvalContext, elements: np.ndarray, tau: float,
@@ -203,9 +214,11 @@ def _near_box(points: np.ndarray, centers: np.ndarray, reach: np.ndarray, cover_
     ``cover_reach`` of the centers' bounding box (a superset, by a relative 1e-9)."""
     lo, hi = centers.min(axis=0), centers.max(axis=0)
     bound = np.maximum(reach, cover_reach) * (1 + 1e-9) + 1e-12
-    rows = np.arange(len(points))  # first each coordinate alone (a loose bound), then the distance
-    for k in range(points.shape[1]):
-        col, b = points[rows, k], bound[rows] * (1 + 1e-9)
+    loose = bound * (1 + 1e-9)  # first each coordinate alone (a loose bound), then the distance
+    col = points[:, 0]  # the first over all points without gathering them
+    rows = np.flatnonzero((col >= lo[0] - loose) & (col <= hi[0] + loose))
+    for k in range(1, points.shape[1]):
+        col, b = points[rows, k], loose[rows]
         rows = rows[(col >= lo[k] - b) & (col <= hi[k] + b)]
     p = points[rows]
     d = np.linalg.norm(np.maximum(np.maximum(lo - p, p - hi), 0.0), axis=1)
@@ -263,7 +276,7 @@ def _by_difference(ctx: EvalContext, old: CoverageMemo, elements: np.ndarray,
     balls.set_radii(r, big_r, None if add.any() else surface.points[contact])
     eps = COVER_EPS * max(float(big_r.max()) ** 2, 1e-300)
     gap_t, cov_t = old.gap_t.copy(), old.cov_t.copy()  # per query position
-    points = surface.points[queries[0]]
+    points = surface.points if queries[2] is None else surface.points[queries[0]]  # every point: in order
     gone = np.ones(len(old.r), bool)
     gone[at[kept]] = False
     redo = np.zeros(len(points), bool)
@@ -316,6 +329,8 @@ def _sample_nearest(ctx: EvalContext, elements: np.ndarray, old: CoverageMemo | 
     tie = np.zeros(len(pts), bool)
     added = np.flatnonzero(at < 0)
     ok = np.flatnonzero(~redo)
+    if len(added) and len(ok):  # only the points whose old distance reaches the added elements' box
+        ok = ok[_near_box(pts[ok], elements[added], dist[ok], 0.0)]
     if len(added) and len(ok):
         d, i = cKDTree(elements[added]).query(pts[ok], k=2 if len(added) > 1 else 1)
         d, i = d.reshape(len(ok), -1), i.reshape(len(ok), -1)

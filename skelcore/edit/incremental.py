@@ -122,7 +122,7 @@ def complete_update(ev: Evaluation, cancel: Callable[[], bool] | None = None) ->
                 ctx.results[stage.name] = curve_coverage(ctx, parent, src.cache)
                 return ctx.results[stage.name]
             if stage.name == "curve missing parts":  # the cloud's tree kept (missing_update)
-                ctx.results[stage.name] = curve_missing_parts(ctx, src.cache, checkpoint)
+                ctx.results[stage.name] = curve_missing_parts(ctx, src.cache, checkpoint, parent)
                 return ctx.results[stage.name]
             ctx.results[stage.name] = stage.fn(ctx, checkpoint)
             return ctx.results[stage.name]
@@ -155,7 +155,7 @@ def compute_left_out(ev: Evaluation, names: tuple[str, ...]) -> dict[str, Any] |
             if stage.name == "curve coverage" and parent is not None:  # by difference (coverage_update)
                 done[stage.name] = ctx.results[stage.name] = curve_coverage(ctx, parent, ev.source.cache)
             elif stage.name == "curve missing parts":
-                done[stage.name] = ctx.results[stage.name] = curve_missing_parts(ctx, ev.source.cache)
+                done[stage.name] = ctx.results[stage.name] = curve_missing_parts(ctx, ev.source.cache, parent=parent)
             else:
                 done[stage.name] = ctx.results[stage.name] = stage.fn(ctx, no_checkpoint)
             ctx.not_computed.pop(stage.name, None)
@@ -170,7 +170,7 @@ def _tasks(old: EvalContext, ctx: EvalContext, cache: dict[str, Any], diagnostic
     incremental = {"curve boundedness": lambda: _sample_boundedness(old, ctx, cache),
                    "curve centeredness": lambda: _sample_centeredness(old, ctx, cache),
                    "curve coverage": lambda: curve_coverage(ctx, old, cache),
-                   "curve missing parts": lambda: curve_missing_parts(ctx, cache)}
+                   "curve missing parts": lambda: curve_missing_parts(ctx, cache, parent=old)}
     stages = []
     for stage in start_order([s for s in CATALOGUE if s.name in CURVE_STAGES and s.applies(ctx)], ctx):
         if not diagnostics and stage.name in DIAGNOSTIC_STAGES:

@@ -105,3 +105,91 @@ def test_a_first_phase_completed_again_and_again_keeps_its_parent(pruned):
     for _ in range(CU._KEEP + 3):
         quick.complete_update()
     assert CU.parent_of(quick.source.cache, quick.source.ctx) is ev.source.ctx
+
+
+def test_the_missing_parts_coverage_by_difference_equals_it_computed_whole(monkeypatch):
+    """Above ``coverage_max_points`` the missing parts compute their own coverage of the kept
+    subsample: an update takes it by difference from the curve edited (skelcore/edit/missing_update.py),
+    each gap and verdict those of ``coverage`` of the same elements, along a chain of edits."""
+    from skelcore import Params
+    from skelcore.edit import coverage_update as CU
+    from skelcore.edit import missing_update as MU
+    from skelcore.metrics.coverage import coverage
+
+    sh = shapes.y_shape(3000, seed=4, n_curve_per_arm=6)
+    params = Params(missing_max_points=1000, coverage_max_points=500)
+    ev = evaluate(sh.cloud, curve=(sh.curve_vertices, sh.curve_edges), params=params)
+    seen, differences = [], []
+    real_from, real_diff = MU.coverage_from, CU._by_difference
+    monkeypatch.setattr(MU, "coverage_from", lambda *a: seen.append((a, real_from(*a))) or seen[-1][1])
+    monkeypatch.setattr(CU, "_by_difference", lambda *a: differences.append(1) or real_diff(*a))
+    curve = first = ev.curve.curve
+    for edit in ("prune", "move", "delete", "undo"):
+        if edit == "prune":
+            curve, change = E.prune_branch(curve, 0)
+        elif edit == "move":
+            curve, change = E.move_vertex(curve, 3, curve.vertices[3] + np.array([0.0, 0.02, 0.0]))
+        elif edit == "delete":
+            curve, change = E.delete_edge(curve, tuple(curve.edges[2]))
+        else:  # back to the first curve: the pruned arm's balls added again
+            curve = change = first
+        ev = ev.update(change)
+        fresh = evaluate(sh.cloud, curve=curve, params=params)
+        a, b = ev.source.ctx.results["curve missing parts"], fresh.source.ctx.results["curve missing parts"]
+        assert np.array_equal(a.region, b.region) and np.array_equal(a.explained, b.explained)
+        assert [r.to_dict() for r in a.regions] == [r.to_dict() for r in b.regions]
+    assert len(differences) >= 4  # each edit's coverage by difference (the first's parent memo made whole)
+    for (view, old, elements, tau), (cov, _) in seen:
+        whole = coverage(view.cloud_n, elements, params, tau, index=view.cloud_index)
+        assert np.array_equal(cov.gap, whole.gap) and np.array_equal(cov.covered, whole.covered)
+        assert cov.n_elements == whole.n_elements
+    assert sum(old is not None for (_, old, _, _), _ in seen) >= 4
+
+
+def test_the_spread_from_kept_nearest_samples_equals_the_searched_one():
+    """The spread reads each cloud point's kept nearest sample: the same regions and verdicts as its
+    search, with cloud points at the bound of ``SPREAD`` spacings (on a lattice: exact distances) and
+    points whose nearest sample is explained but an unexplained one lies within the bound."""
+    rng = np.random.default_rng(3)
+    pts = np.stack(np.meshgrid(np.arange(30), np.arange(30), np.arange(3), indexing="ij"), -1).reshape(-1, 3) * 0.5
+    spacing = 0.5
+    bound = MP.SPREAD * spacing  # 2.0: lattice points at 2.0 and offsets that land on the bound exactly
+    cloud = np.vstack([pts + rng.normal(0, 0.2, pts.shape), pts + [0.0, 0.0, bound], pts + [0.25, 0.0, 0.0],
+                       rng.uniform(-3, 18, (3000, 3))])
+    tree = cKDTree(pts)
+    kept = tree.query(cloud)
+    for share in (0.3, 0.9, 0.995):
+        explained_s = rng.random(len(pts)) > share
+        region_s = np.where(explained_s, -1, rng.integers(0, 5, len(pts)))
+        searched = MP._spread(cloud, pts, region_s, explained_s, spacing)
+        read = MP._spread(cloud, pts, region_s, explained_s, spacing, nearest=lambda c, p, f: kept)
+        assert np.array_equal(searched[0], read[0]) and np.array_equal(searched[1], read[1])
+        assert (~searched[1]).any() and searched[1].any()
+
+
+def test_the_kept_neighbours_give_the_same_regions_as_searching(pruned):
+    """The regions' search of the kept tree answered from each point's kept answer
+    (missing_update._neighbours): the same regions as without the tree, on a lattice with repeats, the
+    unexplained points of one call partly those of the next; a changed link searches anew."""
+    from skelcore.edit import missing_update as MU
+
+    ev, _ = pruned
+    params = ev.source.ctx.params
+    rng = np.random.default_rng(2)
+    grid = np.stack(np.meshgrid(np.arange(24), np.arange(24), np.arange(5), indexing="ij"), -1).reshape(-1, 3)
+    grid = np.vstack([grid, grid[rng.choice(len(grid), 400)]]) * 0.01
+    tree, cache, asked = cKDTree(grid), {}, []
+    kept = MU._neighbours(cache)
+
+    def neighbours(t, rows, k, link):
+        asked.append(len(rows))
+        return kept(t, rows, k, link)
+
+    for spacing in (0.002, 0.013):
+        for share in (0.3, 0.5, 0.6):
+            covered = rng.random(len(grid)) > share
+            c = SimpleNamespace(covered=covered, gap=rng.random(len(grid)))
+            with_kept = MP._regions(grid, c, spacing, params, lambda f: None, tree=lambda: tree,
+                                    small=lambda t: 30.0, neighbours=neighbours)
+            _same(_regions(grid, c, spacing, params, None), with_kept)
+    assert len(asked) == 6 and cache[MU._NEIGHBOURS][2].sum() < len(grid)  # some rows never asked
