@@ -152,8 +152,7 @@ class SpurMemo:
             back = np.full(len(prev.pos), -1)
             back[match[match >= 0]] = np.flatnonzero(match >= 0)
             m = back[prev.near_pos]
-            ok = m >= 0
-            ok[ok] = lo[m[ok]] == hi[m[ok]]
+            ok = np.append(lo == hi, False)[m]  # kept with one label (m = -1: the appended False)
             if prev.near_tied is not None:
                 ok &= ~prev.near_tied
             added = np.flatnonzero(match < 0)
@@ -346,7 +345,9 @@ def _nearest_within(centres: np.ndarray, queries: np.ndarray, bound: np.ndarray)
         return out
     lo, hi = centres.min(axis=0), centres.max(axis=0)
     b = bound * (1 + _MARGIN)
-    near = np.flatnonzero(bound >= 0)  # then within each its own bound of the centres' box, a coordinate at a time
+    # within the largest bound of the centres' box (no copy of the queries), then within each one's own
+    near = _in_box(queries, lo - b.max(), hi + b.max())
+    near = near[bound[near] >= 0]
     for k in range(queries.shape[1]):
         col, bk = queries[near, k], b[near]
         near = near[(col >= lo[k] - bk) & (col <= hi[k] + bk)]
