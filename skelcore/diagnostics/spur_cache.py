@@ -137,6 +137,18 @@ class SpurMemo:
             kept = self.shared["use"] = (cloud, key, make())
         return kept[2]
 
+    def index(self, queries: np.ndarray) -> tuple | None:
+        """The subsample's first coordinates sorted and their rows, made once along the updates
+        (:func:`_in_box`); None for other queries than the subsample."""
+        kept = self.shared.get("use")
+        if kept is None or queries is not kept[2] or queries.ndim != 2 or not len(queries):
+            return None
+        index = self.shared.get("index")
+        if index is None or index[0] is not queries:
+            order = np.argsort(queries[:, 0], kind="stable")
+            index = self.shared["index"] = (queries, queries[order, 0], order)
+        return index[1:]
+
     def own_branch(self, pts: np.ndarray, labels: np.ndarray, use: np.ndarray) -> np.ndarray:
         """The label of the curve point nearest to each row of ``use`` (``labels[cKDTree(pts).query(use)[1]]``):
         a row keeps its nearest position when that position is kept with one label, no other position
@@ -157,7 +169,7 @@ class SpurMemo:
                 ok &= ~prev.near_tied
             added = np.flatnonzero(match < 0)
             if len(added) and ok.any():
-                d_new = _nearest_within(pos[added], use, np.where(ok, prev.near_d, -1.0))
+                d_new = _nearest_within(pos[added], use, np.where(ok, prev.near_d, -1.0), self.index(use))
                 ok &= ~(d_new <= prev.near_d * (1 + 1e-9))
             near_pos[ok], near_d[ok] = m[ok], prev.near_d[ok]
             redo = ~ok
@@ -188,17 +200,21 @@ class SpurMemo:
         redo = np.ones(len(rows), bool)
         answer = np.zeros(len(rows), bool)
         if prev is not None and prev.n_use == n_use and len(rows):
-            slot = np.full(n_use, -1, np.int64)  # each subsample row's place among the rows asked before
-            slot[prev.rows] = np.arange(len(prev.rows))
-            at = slot[rows]
-            known = at >= 0
-            at = np.maximum(at, 0)
+            if np.array_equal(prev.rows, rows):  # the same rows asked (no branch became or ceased terminal)
+                at, known = np.arange(len(rows)), np.ones(len(rows), bool)
+            else:
+                slot = np.full(n_use, -1, np.int64)  # each subsample row's place among the rows asked before
+                slot[prev.rows] = np.arange(len(prev.rows))
+                at = slot[rows]
+                known = at >= 0
+                at = np.maximum(at, 0)
             redo = ~known
             if known.any():
                 now = getattr(self._local, "now", {})
                 redo |= _touched(prev, pts, labels, reach, queries, own, at, known,
-                                 now if now.get("pts") is pts else None)
-                answer[~redo] = prev.answer[at[~redo]]
+                                 now if now.get("pts") is pts else None, self.index(queries))
+                keep = ~redo
+                answer[keep] = prev.answer[at[keep]]
         if redo.any():
             answer[redo] = fn(pts, labels, reach, queries[redo], own[redo])
         self.asked = (int(redo.sum()), len(rows))
@@ -210,14 +226,16 @@ class SpurMemo:
 
 
 def _touched(prev: SpurSearch, pts: np.ndarray, labels: np.ndarray, reach: np.ndarray, queries: np.ndarray,
-             own: np.ndarray, at: np.ndarray, known: np.ndarray, now: dict | None = None) -> np.ndarray:
+             own: np.ndarray, at: np.ndarray, known: np.ndarray, now: dict | None = None,
+             index: tuple | None = None) -> np.ndarray:
     """The queries asked before whose answer the edit may change. A position "explains q" when its
     ball holds q and it has a label other than q's own branch (a0 then, b0 now); a query may change
     only inside the ball of a position removed that had another label than a0, added that has another
     than b0, or kept whose "another label" differs between the two (split or merged branches): one
     search per (a0, b0) pair. Beyond ``_PAIRS_MAX`` pairs, the queries where a0 = b0 are searched in
     every position removed, added or relabelled at once and the others are all asked again. ``now``:
-    the distinct positions of ``pts`` and their match with ``prev``'s, as :meth:`SpurMemo.radii` found them."""
+    the distinct positions of ``pts`` and their match with ``prev``'s, as :meth:`SpurMemo.radii` found them;
+    ``index``: the queries' :meth:`SpurMemo.index`."""
     o_pos, o_lo, o_hi, o_reach = _positions(prev.pts, prev.labels, prev.reach)
     if now is None:
         n_pos, n_lo, n_hi, n_reach = _positions(pts, labels, reach)
@@ -233,9 +251,12 @@ def _touched(prev: SpurSearch, pts: np.ndarray, labels: np.ndarray, reach: np.nd
     check = np.flatnonzero(known)
     if not len(check):
         return out
+    every = len(check) == len(known)  # then check is every query: no gathers through it
     to_new = _renumbering(o_lo, o_hi, n_lo, n_hi, match)  # a prune renumbers the branches after it
     o_lo, o_hi = np.minimum(to_new[o_lo + 1], to_new[o_hi + 1]), np.maximum(to_new[o_lo + 1], to_new[o_hi + 1])
-    a0, b0 = to_new[prev.own[at[check]] + 1], own[check]
+    same_rows = every and len(at) == len(prev.own) and np.array_equal(at, np.arange(len(at)))
+    a0 = to_new[(prev.own if same_rows else prev.own[at[check]]) + 1]
+    b0 = own if every else own[check]
     a_lo, a_hi = o_lo[match[common]], o_hi[match[common]]  # kept positions, then and now
     b_lo, b_hi = n_lo[common], n_hi[common]
     base = int(max(a0.max(), b0.max(), 0)) + 2  # labels are >= -1: one integer per (a0, b0) pair
@@ -256,17 +277,40 @@ def _touched(prev: SpurSearch, pts: np.ndarray, labels: np.ndarray, reach: np.nd
         if len(pairs) > _PAIRS_MAX:
             out[check] = True
             return out
-    for j, key in enumerate(pairs.tolist()):
+    per_pair = []
+    for key in pairs.tolist():
         x, y = key // base - 1, key % base - 1
         removed = gone & ~((o_lo == x) & (o_hi == x))
         added = ~common & ~((n_lo == y) & (n_hi == y))
         differs = ~((a_lo == x) & (a_hi == x)) != ~((b_lo == y) & (b_hi == y))
         balls = np.vstack([o_pos[removed], n_pos[~common][added[~common]], n_pos[common][differs]])
         radii = np.concatenate([o_reach[removed], n_reach[~common][added[~common]], n_reach[common][differs]])
+        per_pair.append((balls, radii))
+    # the queries in the box of every pair's balls (a scan without copies), then each pair's among them
+    lo, hi = _balls_box([b for b, _ in per_pair], [r for _, r in per_pair])
+    if lo is None:
+        return out
+    near = _in_box(queries, lo, hi, index)
+    pair_of = np.full(len(known), -1, np.int64)
+    pair_of[check] = which
+    near_pair = pair_of[near]
+    for j, (balls, radii) in enumerate(per_pair):
         if len(balls):
-            sel = check[which == j]
+            sel = near[near_pair == j]
             out[sel] = _inside_any(balls, radii, queries[sel])
     return out
+
+
+def _balls_box(centres: list[np.ndarray], radii: list[np.ndarray]) -> tuple[np.ndarray | None, np.ndarray | None]:
+    """The box of the balls (centre, radius) with a finite radius >= 0 in all the lists, widened as
+    :func:`_inside_any` widens its own; (None, None) without one."""
+    c = np.vstack([np.zeros((0, 3))] + [np.asarray(x, float).reshape(-1, 3) for x in centres])
+    r = np.concatenate([np.zeros(0)] + [np.asarray(x, float) for x in radii])
+    ok = np.isfinite(r) & (r >= 0)
+    if not ok.any():
+        return None, None
+    big = float(r[ok].max()) * (1 + _MARGIN)
+    return c[ok].min(axis=0) - big, c[ok].max(axis=0) + big
 
 
 def _renumbering(o_lo: np.ndarray, o_hi: np.ndarray, n_lo: np.ndarray, n_hi: np.ndarray, match: np.ndarray
@@ -337,16 +381,17 @@ def _match(old: np.ndarray, new: np.ndarray) -> np.ndarray:
     return at[key[len(old):]]
 
 
-def _nearest_within(centres: np.ndarray, queries: np.ndarray, bound: np.ndarray) -> np.ndarray:
+def _nearest_within(centres: np.ndarray, queries: np.ndarray, bound: np.ndarray, index: tuple | None = None
+                    ) -> np.ndarray:
     """Each query's distance to the nearest centre, inf where none is within ``bound`` (per query; a
-    negative bound skips the query) up to a small margin."""
+    negative bound skips the query) up to a small margin. ``index``: as :func:`_in_box`'s."""
     out = np.full(len(queries), np.inf)
     if not len(queries) or not bound.max() >= 0:
         return out
     lo, hi = centres.min(axis=0), centres.max(axis=0)
     b = bound * (1 + _MARGIN)
     # within the largest bound of the centres' box (no copy of the queries), then within each one's own
-    near = _in_box(queries, lo - b.max(), hi + b.max())
+    near = np.sort(_in_box(queries, lo - b.max(), hi + b.max(), index))
     near = near[bound[near] >= 0]
     for k in range(queries.shape[1]):
         col, bk = queries[near, k], b[near]
@@ -364,9 +409,18 @@ def _positions(pts: np.ndarray, labels: np.ndarray, reach: np.ndarray) -> tuple[
     return pos, lo, hi, np.asarray(reach, dtype=float)[first]
 
 
-def _in_box(queries: np.ndarray, lo: np.ndarray, hi: np.ndarray) -> np.ndarray:
-    """The rows of ``queries`` with lo <= q <= hi in every coordinate (``np.flatnonzero(np.all(...))``),
-    one coordinate at a time on the rows left (a small box of 100k queries: about 7 x faster)."""
+def _in_box(queries: np.ndarray, lo: np.ndarray, hi: np.ndarray, index: tuple | None = None) -> np.ndarray:
+    """The rows of ``queries`` with lo <= q <= hi in every coordinate (``np.flatnonzero(np.all(...))``,
+    perhaps in another order), one coordinate at a time on the rows left (a small box of 100k queries:
+    about 7 x faster). ``index``: the queries' first coordinates sorted and their rows
+    (:meth:`SpurMemo.index`), which give the rows within the first bounds by two bisections."""
+    if index is not None:
+        xs, order = index
+        rows = order[np.searchsorted(xs, lo[0], "left"):np.searchsorted(xs, hi[0], "right")]
+        for k in range(1, queries.shape[1]):
+            col = queries[rows, k]
+            rows = rows[(col >= lo[k]) & (col <= hi[k])]
+        return rows
     rows = np.arange(len(queries))
     for k in range(queries.shape[1]):
         col = queries[rows, k] if k else queries[:, 0]
