@@ -25,6 +25,7 @@ __all__ = ["SpurSearch", "SpurMemo", "NearestByBalls", "same_tree"]
 Search = Callable[[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray], np.ndarray]
 _PAIRS_MAX = 32  # (then, now) own-branch pairs tested one by one; beyond, their queries are asked again
 _SIDES_MAX = 8192  # one-sidedness' kept directions (at most 400 per curve, about 150 bytes each)
+_FEW = 16  # centres met one by one (a KD-tree's build and walk cost more)
 _MARGIN = 1e-6  # relative: a ball counts as holding q up to this much beyond its reach (more asked again)
 
 
@@ -384,7 +385,8 @@ def _match(old: np.ndarray, new: np.ndarray) -> np.ndarray:
 def _nearest_within(centres: np.ndarray, queries: np.ndarray, bound: np.ndarray, index: tuple | None = None
                     ) -> np.ndarray:
     """Each query's distance to the nearest centre, inf where none is within ``bound`` (per query; a
-    negative bound skips the query) up to a small margin. ``index``: as :func:`_in_box`'s."""
+    negative bound skips the query) up to a small margin; perhaps a last bit off the KD-tree's (it only
+    chooses the rows asked again, which get the whole search's answer). ``index``: as :func:`_in_box`'s."""
     out = np.full(len(queries), np.inf)
     if not len(queries) or not bound.max() >= 0:
         return out
@@ -396,7 +398,13 @@ def _nearest_within(centres: np.ndarray, queries: np.ndarray, bound: np.ndarray,
     for k in range(queries.shape[1]):
         col, bk = queries[near, k], b[near]
         near = near[(col >= lo[k] - bk) & (col <= hi[k] + bk)]
-    if len(near):
+    if len(near) and len(centres) <= _FEW:  # a moved vertex: a few centres, every distance at once
+        q = queries[near]
+        d2 = np.full(len(near), np.inf)
+        for c in centres:
+            np.minimum(d2, ((q - c) ** 2).sum(axis=1), out=d2)
+        out[near] = np.sqrt(d2)
+    elif len(near):
         out[near] = cKDTree(centres).query(queries[near], k=1)[0]
     return out
 
