@@ -172,10 +172,9 @@ class SpurMemo:
             if len(added) and ok.any():
                 d_new = _nearest_within(pos[added], use, np.where(ok, prev.near_d, -1.0), self.index(use))
                 ok &= ~(d_new <= prev.near_d * (1 + 1e-9))
-            near_pos[ok], near_d[ok] = m[ok], prev.near_d[ok]
+            near_pos, near_d = np.where(ok, m, 0), np.where(ok, prev.near_d, 0.0)
             redo = ~ok
-        own = np.empty(len(use), labels.dtype)
-        own[~redo] = lo[near_pos[~redo]]
+        own = (lo[near_pos] if len(pos) else near_pos).astype(labels.dtype, copy=False)  # redo rows: below
         rows = np.flatnonzero(redo)
         if len(rows) and len(pos) > 1:
             # the two nearest positions: a row whose nearest is no tie (a second position as near: the
