@@ -286,7 +286,13 @@ def _touched(prev: SpurSearch, pts: np.ndarray, labels: np.ndarray, reach: np.nd
         balls = np.vstack([o_pos[removed], n_pos[~common][added[~common]], n_pos[common][differs]])
         radii = np.concatenate([o_reach[removed], n_reach[~common][added[~common]], n_reach[common][differs]])
         per_pair.append((balls, radii))
-    # the queries in the box of every pair's balls (a scan without copies), then each pair's among them
+    if index is None:  # each pair's queries, then those in its balls' box (_inside_any)
+        for j, (balls, radii) in enumerate(per_pair):
+            if len(balls):
+                sel = check[which == j]
+                out[sel] = _inside_any(balls, radii, queries[sel])
+        return out
+    # the queries in the box of every pair's balls (two bisections of the index), then each pair's among them
     lo, hi = _balls_box([b for b, _ in per_pair], [r for _, r in per_pair])
     if lo is None:
         return out
