@@ -25,6 +25,7 @@ __all__ = ["SpurSearch", "SpurMemo", "NearestByBalls", "same_tree"]
 Search = Callable[[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray], np.ndarray]
 _PAIRS_MAX = 32  # (then, now) own-branch pairs tested one by one; beyond, their queries are asked again
 _SIDES_MAX = 8192  # one-sidedness' kept directions (at most 400 per curve, about 150 bytes each)
+_FEW = 16  # centres met one by one (a KD-tree's build and walk cost more)
 _MARGIN = 1e-6  # relative: a ball counts as holding q up to this much beyond its reach (more asked again)
 
 
@@ -137,6 +138,18 @@ class SpurMemo:
             kept = self.shared["use"] = (cloud, key, make())
         return kept[2]
 
+    def index(self, queries: np.ndarray) -> tuple | None:
+        """The subsample's first coordinates sorted and their rows, made once along the updates
+        (:func:`_in_box`); None for other queries than the subsample."""
+        kept = self.shared.get("use")
+        if kept is None or queries is not kept[2] or queries.ndim != 2 or not len(queries):
+            return None
+        index = self.shared.get("index")
+        if index is None or index[0] is not queries:
+            order = np.argsort(queries[:, 0], kind="stable")
+            index = self.shared["index"] = (queries, queries[order, 0], order)
+        return index[1:]
+
     def own_branch(self, pts: np.ndarray, labels: np.ndarray, use: np.ndarray) -> np.ndarray:
         """The label of the curve point nearest to each row of ``use`` (``labels[cKDTree(pts).query(use)[1]]``):
         a row keeps its nearest position when that position is kept with one label, no other position
@@ -152,18 +165,16 @@ class SpurMemo:
             back = np.full(len(prev.pos), -1)
             back[match[match >= 0]] = np.flatnonzero(match >= 0)
             m = back[prev.near_pos]
-            ok = m >= 0
-            ok[ok] = lo[m[ok]] == hi[m[ok]]
+            ok = np.append(lo == hi, False)[m]  # kept with one label (m = -1: the appended False)
             if prev.near_tied is not None:
                 ok &= ~prev.near_tied
             added = np.flatnonzero(match < 0)
             if len(added) and ok.any():
-                d_new = _nearest_within(pos[added], use, np.where(ok, prev.near_d, -1.0))
+                d_new = _nearest_within(pos[added], use, np.where(ok, prev.near_d, -1.0), self.index(use))
                 ok &= ~(d_new <= prev.near_d * (1 + 1e-9))
-            near_pos[ok], near_d[ok] = m[ok], prev.near_d[ok]
+            near_pos, near_d = np.where(ok, m, 0), np.where(ok, prev.near_d, 0.0)
             redo = ~ok
-        own = np.empty(len(use), labels.dtype)
-        own[~redo] = lo[near_pos[~redo]]
+        own = (lo[near_pos] if len(pos) else near_pos).astype(labels.dtype, copy=False)  # redo rows: below
         rows = np.flatnonzero(redo)
         if len(rows) and len(pos) > 1:
             # the two nearest positions: a row whose nearest is no tie (a second position as near: the
@@ -189,17 +200,21 @@ class SpurMemo:
         redo = np.ones(len(rows), bool)
         answer = np.zeros(len(rows), bool)
         if prev is not None and prev.n_use == n_use and len(rows):
-            slot = np.full(n_use, -1, np.int64)  # each subsample row's place among the rows asked before
-            slot[prev.rows] = np.arange(len(prev.rows))
-            at = slot[rows]
-            known = at >= 0
-            at = np.maximum(at, 0)
+            if np.array_equal(prev.rows, rows):  # the same rows asked (no branch became or ceased terminal)
+                at, known = np.arange(len(rows)), np.ones(len(rows), bool)
+            else:
+                slot = np.full(n_use, -1, np.int64)  # each subsample row's place among the rows asked before
+                slot[prev.rows] = np.arange(len(prev.rows))
+                at = slot[rows]
+                known = at >= 0
+                at = np.maximum(at, 0)
             redo = ~known
             if known.any():
                 now = getattr(self._local, "now", {})
                 redo |= _touched(prev, pts, labels, reach, queries, own, at, known,
-                                 now if now.get("pts") is pts else None)
-                answer[~redo] = prev.answer[at[~redo]]
+                                 now if now.get("pts") is pts else None, self.index(queries))
+                keep = ~redo
+                answer[keep] = prev.answer[at[keep]]
         if redo.any():
             answer[redo] = fn(pts, labels, reach, queries[redo], own[redo])
         self.asked = (int(redo.sum()), len(rows))
@@ -211,14 +226,16 @@ class SpurMemo:
 
 
 def _touched(prev: SpurSearch, pts: np.ndarray, labels: np.ndarray, reach: np.ndarray, queries: np.ndarray,
-             own: np.ndarray, at: np.ndarray, known: np.ndarray, now: dict | None = None) -> np.ndarray:
+             own: np.ndarray, at: np.ndarray, known: np.ndarray, now: dict | None = None,
+             index: tuple | None = None) -> np.ndarray:
     """The queries asked before whose answer the edit may change. A position "explains q" when its
     ball holds q and it has a label other than q's own branch (a0 then, b0 now); a query may change
     only inside the ball of a position removed that had another label than a0, added that has another
     than b0, or kept whose "another label" differs between the two (split or merged branches): one
     search per (a0, b0) pair. Beyond ``_PAIRS_MAX`` pairs, the queries where a0 = b0 are searched in
     every position removed, added or relabelled at once and the others are all asked again. ``now``:
-    the distinct positions of ``pts`` and their match with ``prev``'s, as :meth:`SpurMemo.radii` found them."""
+    the distinct positions of ``pts`` and their match with ``prev``'s, as :meth:`SpurMemo.radii` found them;
+    ``index``: the queries' :meth:`SpurMemo.index`."""
     o_pos, o_lo, o_hi, o_reach = _positions(prev.pts, prev.labels, prev.reach)
     if now is None:
         n_pos, n_lo, n_hi, n_reach = _positions(pts, labels, reach)
@@ -234,9 +251,12 @@ def _touched(prev: SpurSearch, pts: np.ndarray, labels: np.ndarray, reach: np.nd
     check = np.flatnonzero(known)
     if not len(check):
         return out
+    every = len(check) == len(known)  # then check is every query: no gathers through it
     to_new = _renumbering(o_lo, o_hi, n_lo, n_hi, match)  # a prune renumbers the branches after it
     o_lo, o_hi = np.minimum(to_new[o_lo + 1], to_new[o_hi + 1]), np.maximum(to_new[o_lo + 1], to_new[o_hi + 1])
-    a0, b0 = to_new[prev.own[at[check]] + 1], own[check]
+    same_rows = every and len(at) == len(prev.own) and np.array_equal(at, np.arange(len(at)))
+    a0 = to_new[(prev.own if same_rows else prev.own[at[check]]) + 1]
+    b0 = own if every else own[check]
     a_lo, a_hi = o_lo[match[common]], o_hi[match[common]]  # kept positions, then and now
     b_lo, b_hi = n_lo[common], n_hi[common]
     base = int(max(a0.max(), b0.max(), 0)) + 2  # labels are >= -1: one integer per (a0, b0) pair
@@ -257,17 +277,46 @@ def _touched(prev: SpurSearch, pts: np.ndarray, labels: np.ndarray, reach: np.nd
         if len(pairs) > _PAIRS_MAX:
             out[check] = True
             return out
-    for j, key in enumerate(pairs.tolist()):
+    per_pair = []
+    for key in pairs.tolist():
         x, y = key // base - 1, key % base - 1
         removed = gone & ~((o_lo == x) & (o_hi == x))
         added = ~common & ~((n_lo == y) & (n_hi == y))
         differs = ~((a_lo == x) & (a_hi == x)) != ~((b_lo == y) & (b_hi == y))
         balls = np.vstack([o_pos[removed], n_pos[~common][added[~common]], n_pos[common][differs]])
         radii = np.concatenate([o_reach[removed], n_reach[~common][added[~common]], n_reach[common][differs]])
+        per_pair.append((balls, radii))
+    if index is None:  # each pair's queries, then those in its balls' box (_inside_any)
+        for j, (balls, radii) in enumerate(per_pair):
+            if len(balls):
+                sel = check[which == j]
+                out[sel] = _inside_any(balls, radii, queries[sel])
+        return out
+    # the queries in the box of every pair's balls (two bisections of the index), then each pair's among them
+    lo, hi = _balls_box([b for b, _ in per_pair], [r for _, r in per_pair])
+    if lo is None:
+        return out
+    near = _in_box(queries, lo, hi, index)
+    pair_of = np.full(len(known), -1, np.int64)
+    pair_of[check] = which
+    near_pair = pair_of[near]
+    for j, (balls, radii) in enumerate(per_pair):
         if len(balls):
-            sel = check[which == j]
+            sel = near[near_pair == j]
             out[sel] = _inside_any(balls, radii, queries[sel])
     return out
+
+
+def _balls_box(centres: list[np.ndarray], radii: list[np.ndarray]) -> tuple[np.ndarray | None, np.ndarray | None]:
+    """The box of the balls (centre, radius) with a finite radius >= 0 in all the lists, widened as
+    :func:`_inside_any` widens its own; (None, None) without one."""
+    c = np.vstack([np.zeros((0, 3))] + [np.asarray(x, float).reshape(-1, 3) for x in centres])
+    r = np.concatenate([np.zeros(0)] + [np.asarray(x, float) for x in radii])
+    ok = np.isfinite(r) & (r >= 0)
+    if not ok.any():
+        return None, None
+    big = float(r[ok].max()) * (1 + _MARGIN)
+    return c[ok].min(axis=0) - big, c[ok].max(axis=0) + big
 
 
 def _renumbering(o_lo: np.ndarray, o_hi: np.ndarray, n_lo: np.ndarray, n_hi: np.ndarray, match: np.ndarray
@@ -338,19 +387,29 @@ def _match(old: np.ndarray, new: np.ndarray) -> np.ndarray:
     return at[key[len(old):]]
 
 
-def _nearest_within(centres: np.ndarray, queries: np.ndarray, bound: np.ndarray) -> np.ndarray:
+def _nearest_within(centres: np.ndarray, queries: np.ndarray, bound: np.ndarray, index: tuple | None = None
+                    ) -> np.ndarray:
     """Each query's distance to the nearest centre, inf where none is within ``bound`` (per query; a
-    negative bound skips the query) up to a small margin."""
+    negative bound skips the query) up to a small margin; perhaps a last bit off the KD-tree's (it only
+    chooses the rows asked again, which get the whole search's answer). ``index``: as :func:`_in_box`'s."""
     out = np.full(len(queries), np.inf)
     if not len(queries) or not bound.max() >= 0:
         return out
     lo, hi = centres.min(axis=0), centres.max(axis=0)
     b = bound * (1 + _MARGIN)
-    near = np.flatnonzero(bound >= 0)  # then within each its own bound of the centres' box, a coordinate at a time
+    # within the largest bound of the centres' box (no copy of the queries), then within each one's own
+    near = np.sort(_in_box(queries, lo - b.max(), hi + b.max(), index))
+    near = near[bound[near] >= 0]
     for k in range(queries.shape[1]):
         col, bk = queries[near, k], b[near]
         near = near[(col >= lo[k] - bk) & (col <= hi[k] + bk)]
-    if len(near):
+    if len(near) and len(centres) <= _FEW:  # a moved vertex: a few centres, every distance at once
+        q = queries[near]
+        d2 = np.full(len(near), np.inf)
+        for c in centres:
+            np.minimum(d2, ((q - c) ** 2).sum(axis=1), out=d2)
+        out[near] = np.sqrt(d2)
+    elif len(near):
         out[near] = cKDTree(centres).query(queries[near], k=1)[0]
     return out
 
@@ -363,9 +422,18 @@ def _positions(pts: np.ndarray, labels: np.ndarray, reach: np.ndarray) -> tuple[
     return pos, lo, hi, np.asarray(reach, dtype=float)[first]
 
 
-def _in_box(queries: np.ndarray, lo: np.ndarray, hi: np.ndarray) -> np.ndarray:
-    """The rows of ``queries`` with lo <= q <= hi in every coordinate (``np.flatnonzero(np.all(...))``),
-    one coordinate at a time on the rows left (a small box of 100k queries: about 7 x faster)."""
+def _in_box(queries: np.ndarray, lo: np.ndarray, hi: np.ndarray, index: tuple | None = None) -> np.ndarray:
+    """The rows of ``queries`` with lo <= q <= hi in every coordinate (``np.flatnonzero(np.all(...))``,
+    perhaps in another order), one coordinate at a time on the rows left (a small box of 100k queries:
+    about 7 x faster). ``index``: the queries' first coordinates sorted and their rows
+    (:meth:`SpurMemo.index`), which give the rows within the first bounds by two bisections."""
+    if index is not None:
+        xs, order = index
+        rows = order[np.searchsorted(xs, lo[0], "left"):np.searchsorted(xs, hi[0], "right")]
+        for k in range(1, queries.shape[1]):
+            col = queries[rows, k]
+            rows = rows[(col >= lo[k]) & (col <= hi[k])]
+        return rows
     rows = np.arange(len(queries))
     for k in range(queries.shape[1]):
         col = queries[rows, k] if k else queries[:, 0]

@@ -300,7 +300,7 @@ def find_spurious_branches(
         is_term = np.zeros(nb + 1, bool)
         is_term[terminal] = True
         in_term = is_term[own]
-        q = use[in_term]
+        q = use if in_term.all() else use[in_term]  # the subsample itself when every point is terminal's
         checkpoint(0.4)
         if memo is None:
             elsewhere = _explained_elsewhere(pts, pb, explain, q, own[in_term])
