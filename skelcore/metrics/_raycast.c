@@ -51,6 +51,7 @@ typedef float vf __attribute__((vector_size(4 * VF)));
 typedef int32_t vfi __attribute__((vector_size(4 * VF)));
 typedef double vd __attribute__((vector_size(8 * VD)));
 typedef int64_t vdi __attribute__((vector_size(8 * VD)));
+typedef int32_t vdw __attribute__((vector_size(4 * VD)));  /* VD lanes of int32 */
 
 static inline unsigned lane_mask(vfi m) {  /* bit l set iff lane l of the comparison holds */
 #if defined(__AVX__)
@@ -251,8 +252,9 @@ done:
 typedef struct {
     int rows, bins, words;     /* words per row */
     double *z, *s, *inv_s, *z_over_s, *cos_lon, *sin_lon;
-    double *row_c, *row_half;  /* add_cap's scratch: per row, the interval's cosine and half-width in bins */
+    int32_t *row_start, *row_len;  /* add_cap's scratch: per row, the interval's first bin and length */
     uint64_t last_mask;        /* valid bits of a row's last word */
+    uint64_t *below;           /* rows of two words: below[2 x .. 2 x + 1] = bits [0, x), x = 0 .. bins */
 } Raster;
 
 static int raster_init(Raster *r, int rows, int bins) {
@@ -262,14 +264,14 @@ static int raster_init(Raster *r, int rows, int bins) {
     r->last_mask = (bins % 64) ? ((UINT64_C(1) << (bins % 64)) - 1) : ~UINT64_C(0);
     /* every per-row array has VD - 1 padding entries (add_cap reads rows VD at a time) */
     const int pad = rows + VD - 1;
-    r->z = (double *)calloc((size_t)(6 * pad + 2 * bins), sizeof(double));
+    r->z = (double *)calloc((size_t)(5 * pad + 2 * bins), sizeof(double));
     if (!r->z) return -1;
     r->s = r->z + pad;
     r->inv_s = r->s + pad;
     r->z_over_s = r->inv_s + pad;
-    r->row_c = r->z_over_s + pad;
-    r->row_half = r->row_c + pad;
-    r->cos_lon = r->row_half + pad;
+    r->row_start = (int32_t *)(r->z_over_s + pad);  /* two int32 arrays in one double array's room */
+    r->row_len = r->row_start + pad;
+    r->cos_lon = r->z_over_s + 2 * pad;
     r->sin_lon = r->cos_lon + bins;
     for (int j = 0; j < rows; j++) {
         double z = -1.0 + (j + 0.5) * (2.0 / rows);
@@ -277,6 +279,15 @@ static int raster_init(Raster *r, int rows, int bins) {
         r->s[j] = sqrt(1.0 - z * z);
         r->inv_s[j] = 1.0 / r->s[j];
         r->z_over_s[j] = z / r->s[j];
+    }
+    r->below = NULL;
+    if (r->words == 2) {  /* add_cap's interval masks by table (bins 65 ... 128, the usual raster) */
+        r->below = (uint64_t *)calloc(2 * (size_t)(bins + 1), sizeof(uint64_t));
+        if (!r->below) { free(r->z); r->z = NULL; return -1; }
+        for (int x = 0; x <= bins; x++) {
+            r->below[2 * x] = x >= 64 ? ~UINT64_C(0) : (UINT64_C(1) << x) - 1;
+            r->below[2 * x + 1] = x <= 64 ? 0 : x == 128 ? ~UINT64_C(0) : (UINT64_C(1) << (x - 64)) - 1;
+        }
     }
     for (int k = 0; k < bins; k++) {
         double lon = (k + 0.5) * (TWO_PI / bins);
@@ -286,7 +297,7 @@ static int raster_init(Raster *r, int rows, int bins) {
     return 0;
 }
 
-static void raster_free(Raster *r) { free(r->z); }
+static void raster_free(Raster *r) { free(r->z); free(r->below); }
 
 /* one raster's bits: rows x words, plus the count of full rows */
 static inline int row_is_full(const Raster *r, const uint64_t *row) {
@@ -361,36 +372,52 @@ static int add_cap(const Raster *r, uint64_t *bits, uint8_t *full, double dx, do
     if (rho < 1e-30) rho = 1e-30;
     double a0 = cosa / rho, a1 = uz / rho;
     double centre = atan2(dy, dx) * (bins / TWO_PI) + bins + 0.5;
-    /* the rows' cosines and half-widths VD rows at a time (the acos chains overlap), then the rows */
+    /* each row's interval VD rows at a time (the acos chains overlap): its first bin and its length, from
+     * the cosine c and the half-width in bins; c <= -1 is a whole row.  Both ends are positive (centre
+     * >= bins / 2 + 0.5 >= half), so the conversion truncates as (int) of each end would. */
+    const vd cen = (vd){0} + centre;
     for (int j = open; j < end; j += VD) {
         vd is, zs;
         memcpy(&is, r->inv_s + j, sizeof is);
         memcpy(&zs, r->z_over_s + j, sizeof zs);
         vd c = a0 * is - a1 * zs;
-        vdi hi = c > 1.0, lo = c < -1.0;  /* clamped for the acos; c <= -1 (a whole row) uses no half-width */
+        vdi hi = c > 1.0, lo = c < -1.0;  /* clamped for the acos */
         vd cl = (vd)((hi & (vdi)((vd){0} + 1.0)) | (lo & (vdi)((vd){0} - 1.0)) | (~(hi | lo) & (vdi)c));
         vd half = acos_lanes(cl) * (bins / TWO_PI);
-        memcpy(r->row_c + j, &c, sizeof c);
-        memcpy(r->row_half + j, &half, sizeof half);
+        vdw whole = __builtin_convertvector(c <= -1.0, vdw);
+        vdw start = __builtin_convertvector(cen - half, vdw);
+        vdw len = __builtin_convertvector(cen + half, vdw) - start;
+        vdw over = len > bins;
+        len = (over & bins) | (~over & len);
+        start -= (start >= bins) & bins;
+        start &= ~whole;
+        len = (whole & bins) | (~whole & len);
+        memcpy(r->row_start + j, &start, sizeof start);
+        memcpy(r->row_len + j, &len, sizeof len);
     }
     int newly = 0;
-    for (int j = open; j < end; j++) {
-        if (full[j]) continue;
-        uint64_t *row = bits + (size_t)j * r->words;
-        double c = r->row_c[j];
-        int start, length;
-        if (c <= -1.0) {
-            start = 0;
-            length = bins;
-        } else {
-            double half = r->row_half[j];
-            start = (int)(centre - half);
-            length = (int)(centre + half) - start;
-            if (length <= 0) continue;
-            if (length > bins) length = bins;
-            if (start >= bins) start -= bins;
+    if (r->below) {  /* two words a row: [start, stop) and its wrap past bins as table masks, no branches */
+        const uint64_t *below = r->below;
+        for (int j = open; j < end; j++) {
+            const int length = r->row_len[j];
+            if (full[j] || length <= 0) continue;
+            const int start = r->row_start[j], stop = start + length;  /* start < bins, length <= bins */
+            const int inside = stop < bins ? stop : bins, wrapped = stop > bins ? stop - bins : 0;
+            const uint64_t *in = below + 2 * inside, *out = below + 2 * start, *wr = below + 2 * wrapped;
+            uint64_t *row = bits + 2 * (size_t)j;
+            const uint64_t w0 = row[0] | (in[0] & ~out[0]) | wr[0];
+            const uint64_t w1 = row[1] | (in[1] & ~out[1]) | wr[1];
+            row[0] = w0;
+            row[1] = w1;
+            if ((~w0 | (w1 ^ r->last_mask)) == 0) { full[j] = 1; newly++; }
         }
-        int stop = start + length;
+        return newly;
+    }
+    for (int j = open; j < end; j++) {
+        const int length = r->row_len[j];
+        if (full[j] || length <= 0) continue;
+        uint64_t *row = bits + (size_t)j * r->words;
+        const int start = r->row_start[j], stop = start + length;
         if (stop > bins) {
             set_bits(row, start, bins);
             set_bits(row, 0, stop - bins);
