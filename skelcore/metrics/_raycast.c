@@ -252,7 +252,7 @@ done:
 typedef struct {
     int rows, bins, words;     /* words per row */
     double *z, *s, *inv_s, *z_over_s, *cos_lon, *sin_lon;
-    int32_t *row_start, *row_len;  /* add_cap's scratch: per row, the interval's first bin and length */
+    int32_t *row_start, *row_in, *row_wrap;  /* add_cap's scratch per row: bins [start, in) and [0, wrap) */
     uint64_t last_mask;        /* valid bits of a row's last word */
     uint64_t *below;           /* rows of two words: below[2 x .. 2 x + 1] = bits [0, x), x = 0 .. bins */
 } Raster;
@@ -264,14 +264,15 @@ static int raster_init(Raster *r, int rows, int bins) {
     r->last_mask = (bins % 64) ? ((UINT64_C(1) << (bins % 64)) - 1) : ~UINT64_C(0);
     /* every per-row array has VD - 1 padding entries (add_cap reads rows VD at a time) */
     const int pad = rows + VD - 1;
-    r->z = (double *)calloc((size_t)(5 * pad + 2 * bins), sizeof(double));
+    r->z = (double *)calloc((size_t)(6 * pad + 2 * bins), sizeof(double));
     if (!r->z) return -1;
     r->s = r->z + pad;
     r->inv_s = r->s + pad;
     r->z_over_s = r->inv_s + pad;
-    r->row_start = (int32_t *)(r->z_over_s + pad);  /* two int32 arrays in one double array's room */
-    r->row_len = r->row_start + pad;
-    r->cos_lon = r->z_over_s + 2 * pad;
+    r->row_start = (int32_t *)(r->z_over_s + pad);  /* three int32 arrays in two double arrays' room */
+    r->row_in = r->row_start + pad;
+    r->row_wrap = r->row_in + pad;
+    r->cos_lon = r->z_over_s + 3 * pad;
     r->sin_lon = r->cos_lon + bins;
     for (int j = 0; j < rows; j++) {
         double z = -1.0 + (j + 0.5) * (2.0 / rows);
@@ -374,7 +375,8 @@ static int add_cap(const Raster *r, uint64_t *bits, uint8_t *full, double dx, do
     double centre = atan2(dy, dx) * (bins / TWO_PI) + bins + 0.5;
     /* each row's interval VD rows at a time (the acos chains overlap): its first bin and its length, from
      * the cosine c and the half-width in bins; c <= -1 is a whole row.  Both ends are positive (centre
-     * >= bins / 2 + 0.5 >= half), so the conversion truncates as (int) of each end would. */
+     * >= bins / 2 + 0.5 >= half), so the conversion truncates as (int) of each end would.  Stored as
+     * [start, in) and its wrap [0, wrap) past bins; an empty interval as in = start, wrap = 0. */
     const vd cen = (vd){0} + centre;
     for (int j = open; j < end; j += VD) {
         vd is, zs;
@@ -392,18 +394,20 @@ static int add_cap(const Raster *r, uint64_t *bits, uint8_t *full, double dx, do
         start -= (start >= bins) & bins;
         start &= ~whole;
         len = (whole & bins) | (~whole & len);
+        vdw stop = start + (len & (len > 0));
+        vdw past = stop > bins;
+        vdw in = (past & bins) | (~past & stop), wrap = past & (stop - bins);
         memcpy(r->row_start + j, &start, sizeof start);
-        memcpy(r->row_len + j, &len, sizeof len);
+        memcpy(r->row_in + j, &in, sizeof in);
+        memcpy(r->row_wrap + j, &wrap, sizeof wrap);
     }
     int newly = 0;
     if (r->below) {  /* two words a row: [start, stop) and its wrap past bins as table masks, no branches */
         const uint64_t *below = r->below;
         for (int j = open; j < end; j++) {
-            const int length = r->row_len[j];
-            if (full[j] || length <= 0) continue;
-            const int start = r->row_start[j], stop = start + length;  /* start < bins, length <= bins */
-            const int inside = stop < bins ? stop : bins, wrapped = stop > bins ? stop - bins : 0;
-            const uint64_t *in = below + 2 * inside, *out = below + 2 * start, *wr = below + 2 * wrapped;
+            if (full[j]) continue;
+            const uint64_t *in = below + 2 * r->row_in[j], *out = below + 2 * r->row_start[j];
+            const uint64_t *wr = below + 2 * r->row_wrap[j];
             uint64_t *row = bits + 2 * (size_t)j;
             const uint64_t w0 = row[0] | (in[0] & ~out[0]) | wr[0];
             const uint64_t w1 = row[1] | (in[1] & ~out[1]) | wr[1];
@@ -414,16 +418,11 @@ static int add_cap(const Raster *r, uint64_t *bits, uint8_t *full, double dx, do
         return newly;
     }
     for (int j = open; j < end; j++) {
-        const int length = r->row_len[j];
-        if (full[j] || length <= 0) continue;
+        const int start = r->row_start[j], in = r->row_in[j], wrap = r->row_wrap[j];
+        if (full[j] || (in == start && wrap == 0)) continue;
         uint64_t *row = bits + (size_t)j * r->words;
-        const int start = r->row_start[j], stop = start + length;
-        if (stop > bins) {
-            set_bits(row, start, bins);
-            set_bits(row, 0, stop - bins);
-        } else {
-            set_bits(row, start, stop);
-        }
+        set_bits(row, start, in);
+        set_bits(row, 0, wrap);
         if (row_is_full(r, row)) { full[j] = 1; newly++; }
     }
     return newly;
