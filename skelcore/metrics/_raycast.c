@@ -75,6 +75,17 @@ static inline vd sqrt_lanes(vd q) {
     return q;
 #endif
 }
+
+static inline vd clamp_lanes(vd q) {  /* q clamped to [-1, 1] (q never NaN): max, then min */
+#if defined(__AVX__)
+    return (vd)_mm256_min_pd(_mm256_max_pd((__m256d)q, _mm256_set1_pd(-1.0)), _mm256_set1_pd(1.0));
+#elif defined(__SSE2__)
+    return (vd)_mm_min_pd(_mm_max_pd((__m128d)q, _mm_set1_pd(-1.0)), _mm_set1_pd(1.0));
+#else
+    for (int l = 0; l < VD; l++) q[l] = q[l] > 1.0 ? 1.0 : q[l] < -1.0 ? -1.0 : q[l];
+    return q;
+#endif
+}
 #define TWO_PI 6.283185307179586476925286766559
 
 /* ------------------------------------------------------------------------------------------------ */
@@ -383,9 +394,7 @@ static int add_cap(const Raster *r, uint64_t *bits, uint8_t *full, double dx, do
         memcpy(&is, r->inv_s + j, sizeof is);
         memcpy(&zs, r->z_over_s + j, sizeof zs);
         vd c = a0 * is - a1 * zs;
-        vdi hi = c > 1.0, lo = c < -1.0;  /* clamped for the acos */
-        vd cl = (vd)((hi & (vdi)((vd){0} + 1.0)) | (lo & (vdi)((vd){0} - 1.0)) | (~(hi | lo) & (vdi)c));
-        vd half = acos_lanes(cl) * (bins / TWO_PI);
+        vd half = acos_lanes(clamp_lanes(c)) * (bins / TWO_PI);
         vdw whole = __builtin_convertvector(c <= -1.0, vdw);
         vdw start = __builtin_convertvector(cen - half, vdw);
         vdw len = __builtin_convertvector(cen + half, vdw) - start;
