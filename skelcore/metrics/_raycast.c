@@ -51,6 +51,7 @@ typedef float vf __attribute__((vector_size(4 * VF)));
 typedef int32_t vfi __attribute__((vector_size(4 * VF)));
 typedef double vd __attribute__((vector_size(8 * VD)));
 typedef int64_t vdi __attribute__((vector_size(8 * VD)));
+typedef int32_t vdw __attribute__((vector_size(4 * VD)));  /* VD lanes of int32 */
 
 static inline unsigned lane_mask(vfi m) {  /* bit l set iff lane l of the comparison holds */
 #if defined(__AVX__)
@@ -71,6 +72,17 @@ static inline vd sqrt_lanes(vd q) {
     return (vd)_mm_sqrt_pd((__m128d)q);
 #else
     for (int l = 0; l < VD; l++) q[l] = sqrt(q[l]);
+    return q;
+#endif
+}
+
+static inline vd clamp_lanes(vd q) {  /* q clamped to [-1, 1] (q never NaN): max, then min */
+#if defined(__AVX__)
+    return (vd)_mm256_min_pd(_mm256_max_pd((__m256d)q, _mm256_set1_pd(-1.0)), _mm256_set1_pd(1.0));
+#elif defined(__SSE2__)
+    return (vd)_mm_min_pd(_mm_max_pd((__m128d)q, _mm_set1_pd(-1.0)), _mm_set1_pd(1.0));
+#else
+    for (int l = 0; l < VD; l++) q[l] = q[l] > 1.0 ? 1.0 : q[l] < -1.0 ? -1.0 : q[l];
     return q;
 #endif
 }
@@ -251,8 +263,9 @@ done:
 typedef struct {
     int rows, bins, words;     /* words per row */
     double *z, *s, *inv_s, *z_over_s, *cos_lon, *sin_lon;
-    double *row_c, *row_half;  /* add_cap's scratch: per row, the interval's cosine and half-width in bins */
+    int32_t *row_start, *row_in, *row_wrap;  /* add_cap's scratch per row: bins [start, in) and [0, wrap) */
     uint64_t last_mask;        /* valid bits of a row's last word */
+    uint64_t *below;           /* rows of two words: below[2 x .. 2 x + 1] = bits [0, x), x = 0 .. bins */
 } Raster;
 
 static int raster_init(Raster *r, int rows, int bins) {
@@ -267,9 +280,10 @@ static int raster_init(Raster *r, int rows, int bins) {
     r->s = r->z + pad;
     r->inv_s = r->s + pad;
     r->z_over_s = r->inv_s + pad;
-    r->row_c = r->z_over_s + pad;
-    r->row_half = r->row_c + pad;
-    r->cos_lon = r->row_half + pad;
+    r->row_start = (int32_t *)(r->z_over_s + pad);  /* three int32 arrays in two double arrays' room */
+    r->row_in = r->row_start + pad;
+    r->row_wrap = r->row_in + pad;
+    r->cos_lon = r->z_over_s + 3 * pad;
     r->sin_lon = r->cos_lon + bins;
     for (int j = 0; j < rows; j++) {
         double z = -1.0 + (j + 0.5) * (2.0 / rows);
@@ -277,6 +291,15 @@ static int raster_init(Raster *r, int rows, int bins) {
         r->s[j] = sqrt(1.0 - z * z);
         r->inv_s[j] = 1.0 / r->s[j];
         r->z_over_s[j] = z / r->s[j];
+    }
+    r->below = NULL;
+    if (r->words == 2) {  /* add_cap's interval masks by table (bins 65 ... 128, the usual raster) */
+        r->below = (uint64_t *)calloc(2 * (size_t)(bins + 1), sizeof(uint64_t));
+        if (!r->below) { free(r->z); r->z = NULL; return -1; }
+        for (int x = 0; x <= bins; x++) {
+            r->below[2 * x] = x >= 64 ? ~UINT64_C(0) : (UINT64_C(1) << x) - 1;
+            r->below[2 * x + 1] = x <= 64 ? 0 : x == 128 ? ~UINT64_C(0) : (UINT64_C(1) << (x - 64)) - 1;
+        }
     }
     for (int k = 0; k < bins; k++) {
         double lon = (k + 0.5) * (TWO_PI / bins);
@@ -286,7 +309,7 @@ static int raster_init(Raster *r, int rows, int bins) {
     return 0;
 }
 
-static void raster_free(Raster *r) { free(r->z); }
+static void raster_free(Raster *r) { free(r->z); free(r->below); }
 
 /* one raster's bits: rows x words, plus the count of full rows */
 static inline int row_is_full(const Raster *r, const uint64_t *row) {
@@ -361,42 +384,54 @@ static int add_cap(const Raster *r, uint64_t *bits, uint8_t *full, double dx, do
     if (rho < 1e-30) rho = 1e-30;
     double a0 = cosa / rho, a1 = uz / rho;
     double centre = atan2(dy, dx) * (bins / TWO_PI) + bins + 0.5;
-    /* the rows' cosines and half-widths VD rows at a time (the acos chains overlap), then the rows */
+    /* each row's interval VD rows at a time (the acos chains overlap): its first bin and its length, from
+     * the cosine c and the half-width in bins; c <= -1 is a whole row.  Both ends are positive (centre
+     * >= bins / 2 + 0.5 >= half), so the conversion truncates as (int) of each end would.  Stored as
+     * [start, in) and its wrap [0, wrap) past bins; an empty interval as in = start, wrap = 0. */
+    const vd cen = (vd){0} + centre;
     for (int j = open; j < end; j += VD) {
         vd is, zs;
         memcpy(&is, r->inv_s + j, sizeof is);
         memcpy(&zs, r->z_over_s + j, sizeof zs);
         vd c = a0 * is - a1 * zs;
-        vdi hi = c > 1.0, lo = c < -1.0;  /* clamped for the acos; c <= -1 (a whole row) uses no half-width */
-        vd cl = (vd)((hi & (vdi)((vd){0} + 1.0)) | (lo & (vdi)((vd){0} - 1.0)) | (~(hi | lo) & (vdi)c));
-        vd half = acos_lanes(cl) * (bins / TWO_PI);
-        memcpy(r->row_c + j, &c, sizeof c);
-        memcpy(r->row_half + j, &half, sizeof half);
+        vd half = acos_lanes(clamp_lanes(c)) * (bins / TWO_PI);
+        vdw whole = __builtin_convertvector(c <= -1.0, vdw);
+        vdw start = __builtin_convertvector(cen - half, vdw);
+        vdw len = __builtin_convertvector(cen + half, vdw) - start;
+        vdw over = len > bins;
+        len = (over & bins) | (~over & len);
+        start -= (start >= bins) & bins;
+        start &= ~whole;
+        len = (whole & bins) | (~whole & len);
+        vdw stop = start + (len & (len > 0));
+        vdw past = stop > bins;
+        vdw in = (past & bins) | (~past & stop), wrap = past & (stop - bins);
+        memcpy(r->row_start + j, &start, sizeof start);
+        memcpy(r->row_in + j, &in, sizeof in);
+        memcpy(r->row_wrap + j, &wrap, sizeof wrap);
     }
     int newly = 0;
+    if (r->below) {  /* two words a row: [start, stop) and its wrap past bins as table masks, no branches */
+        const uint64_t *below = r->below;
+        for (int j = open; j < end; j++) {
+            if (full[j]) continue;
+            const uint64_t *in = below + 2 * r->row_in[j], *out = below + 2 * r->row_start[j];
+            const uint64_t *wr = below + 2 * r->row_wrap[j];
+            uint64_t *row = bits + 2 * (size_t)j;
+            const uint64_t w0 = row[0] | (in[0] & ~out[0]) | wr[0];
+            const uint64_t w1 = row[1] | (in[1] & ~out[1]) | wr[1];
+            row[0] = w0;
+            row[1] = w1;
+            if ((~w0 | (w1 ^ r->last_mask)) == 0) { full[j] = 1; newly++; }
+        }
+        return newly;
+    }
     for (int j = open; j < end; j++) {
-        if (full[j]) continue;
+        const int start = r->row_start[j], in = r->row_in[j], wrap = r->row_wrap[j];
+        if (full[j] || (in == start && wrap == 0)) continue;
         uint64_t *row = bits + (size_t)j * r->words;
-        double c = r->row_c[j];
-        int start, length;
-        if (c <= -1.0) {
-            start = 0;
-            length = bins;
-        } else {
-            double half = r->row_half[j];
-            start = (int)(centre - half);
-            length = (int)(centre + half) - start;
-            if (length <= 0) continue;
-            if (length > bins) length = bins;
-            if (start >= bins) start -= bins;
-        }
-        int stop = start + length;
-        if (stop > bins) {
-            set_bits(row, start, bins);
-            set_bits(row, 0, stop - bins);
-        } else {
-            set_bits(row, start, stop);
-        }
+        set_bits(row, start, in);
+        set_bits(row, 0, wrap);
         if (row_is_full(r, row)) { full[j] = 1; newly++; }
     }
     return newly;
