@@ -185,13 +185,10 @@ def run_evaluate(args: argparse.Namespace) -> int:
     viewpoints = _viewpoints(args)
     progress = stderr_progress(args.quiet)
     ev = evaluate(cloud, skeletal, curve, params, progress=progress, skeletal_index=index,
-                  correspondence=args.correspondence, reference_curve=reference, inputs=inputs,
-                  viewpoints=viewpoints, remove_outliers=args.remove_outliers, cap_openings=args.cap_openings)
+                  correspondence=args.correspondence, reference_curve=reference, reference_outside=outside,
+                  inputs=inputs, viewpoints=viewpoints, remove_outliers=args.remove_outliers,
+                  cap_openings=args.cap_openings)
     clear_progress_line(progress)
-    if outside is not None and ev.ground_truth is not None:  # the stage again, with the facts: the held scores
-        from ..metrics.ground_truth import ground_truth
-
-        ev.ground_truth = ground_truth(curve, reference, cloud, params, outside_radii=outside)
     scores = ev.scores()
     print(format_table(scores))
     if ev.reference is not None:

@@ -130,7 +130,7 @@ def _reference(ctx: EvalContext, checkpoint: Checkpoint):
 
 def _ground_truth(ctx: EvalContext, checkpoint: Checkpoint):
     """The community's metrics against the reference, in the user's units (docs/metrics.md 5.3.1)."""
-    return ground_truth(ctx.curve, ctx.reference, ctx.cloud, ctx.params)
+    return ground_truth(ctx.curve, ctx.reference, ctx.cloud, ctx.params, outside_radii=ctx.reference_outside)
 
 
 def _curve_defects(ctx: EvalContext, checkpoint: Checkpoint):

@@ -66,6 +66,8 @@ class EvalContext:
     reference_n: CurveSkeleton | None = None
     #: the reference in the user's units, with its radius (given, else its file's; NaN = unknown)
     reference: CurveSkeleton | None = None
+    #: per reference vertex, how far it lies outside the cloud's surface in its radii (the held scores)
+    reference_outside: np.ndarray | None = None
     #: SkelScope's coverage is exact and grows about as N^1.4 on tubes: only up to coverage_max_points
     with_coverage: bool = True
     not_computed: dict[str, str] = field(default_factory=dict)
@@ -241,6 +243,7 @@ def build_context(
     correspondence: str,
     reference_curve: CurveSkeleton | tuple | None,
     reference_radius: np.ndarray | None = None,
+    reference_outside: np.ndarray | None = None,
     viewpoints=None,
     remove_outliers: bool = False,
     cap_openings: bool = False,
@@ -317,11 +320,15 @@ def build_context(
         if reference_radius is not None:
             ref = _with_radius(ref, reference_radius)
         ctx.reference = ref
+        if reference_outside is not None:
+            ctx.reference_outside = _per_reference_vertex(ref, reference_outside)
         if ref.n_edges == 0:
             ctx.not_computed["ground truth"] = "the reference curve has no edges"
         ctx.reference_n = ref.transformed(norm.apply)
     elif reference_radius is not None:
         raise SkelInputError("a reference radius needs a reference curve")
+    elif reference_outside is not None:
+        raise SkelInputError("the reference's outside distances need a reference curve")
     if ctx.curve is not None:
         ctx.curve_n = ctx.curve.transformed(norm.apply)
         ctx.samples = sample_curve(ctx.curve_n, params.curve_samples, collinear_cos=params.collinear_cos,
@@ -379,6 +386,15 @@ def _with_radius(ref: CurveSkeleton, radius) -> CurveSkeleton:
     if np.any(np.isinf(r)):
         raise SkelInputError("reference radius: contains inf")
     return dataclasses.replace(ref, radius=r)
+
+
+def _per_reference_vertex(ref: CurveSkeleton, values) -> np.ndarray:
+    """``reference_outside=``: one value per vertex of the cleaned curve, or of the raw vertices it came
+    from (its ``vertex_map``, as a facts file lists them)."""
+    v = np.asarray(values, dtype=float).ravel()
+    if v.shape != (ref.n_vertices,) and ref.vertex_map is not None and v.size > int(np.max(ref.vertex_map, initial=-1)):
+        v = v[ref.vertex_map]
+    return v  # its length and values are checked by the ground truth (docs/metrics.md 5.3.1)
 
 
 def _check_index(skeletal_index: np.ndarray, n_skel: int, n_cloud: int) -> np.ndarray:

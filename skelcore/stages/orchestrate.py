@@ -34,6 +34,7 @@ def evaluate(
     correspondence: str = "auto",
     reference_curve: CurveSkeleton | tuple | None = None,
     reference_radius: np.ndarray | None = None,
+    reference_outside: np.ndarray | None = None,
     inputs: dict | None = None,
     workers: int | None = None,
     viewpoints=None,
@@ -76,6 +77,9 @@ def evaluate(
     reference_radius : (V,) array, optional
         The reference's radius per vertex (the cloud's units); default its own (``CurveSkeleton.radius``,
         read from PLY ``radius``, SWC, ...); where unknown, estimated from the cloud.
+    reference_outside : (V,) array, optional
+        How far each reference vertex lies outside the surface the cloud was drawn from, in its radii
+        (0: inside; a real suite's facts): the ground truth adds its held scores (docs/metrics.md 5.3.1).
     inputs : dict, optional
         Free-form description of the inputs (file names), kept in the JSON document.
     workers : int, optional
@@ -108,11 +112,12 @@ def evaluate(
     t_start = time.perf_counter()
     args = dict(cloud=cloud, skeletal=skeletal, curve=curve, params=params, skeletal_index=skeletal_index,
                 correspondence=correspondence, reference_curve=reference_curve, reference_radius=reference_radius,
-                inputs=inputs, workers=workers, viewpoints=viewpoints, remove_outliers=remove_outliers,
-                cap_openings=cap_openings)
+                reference_outside=reference_outside, inputs=inputs, workers=workers, viewpoints=viewpoints,
+                remove_outliers=remove_outliers, cap_openings=cap_openings)
     ctx = build_context(cloud, skeletal, curve, params, skeletal_index=skeletal_index,
                         correspondence=correspondence, reference_curve=reference_curve,
-                        reference_radius=reference_radius, viewpoints=viewpoints,
+                        reference_radius=reference_radius, reference_outside=reference_outside,
+                        viewpoints=viewpoints,
                         remove_outliers=remove_outliers, cap_openings=cap_openings,
                         checkpoint=StageProgress({}, None, cancel).between("scan preparation"))
     stages = select(ctx)
