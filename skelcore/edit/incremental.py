@@ -12,7 +12,6 @@ second phase), the two together equal to one update."""
 
 from __future__ import annotations
 
-import os
 import threading
 import time
 from dataclasses import replace
@@ -289,8 +288,10 @@ def _sample_centeredness(old: EvalContext, ctx: EvalContext, cache: dict[str, An
         with _GRID_LOCK:
             if "slab grid" not in cache:
                 cache["slab grid"] = slab_grid(ctx.cloud_n, p)
-        # one span per core: a span's fits are one batched call (180 samples of a prune: 0.13 -> 0.08 CPU s)
-        span = -(-int(todo.sum()) // max(1, os.cpu_count() or 1))
+        # one span on this thread: its fits are one batched call, and the rays kernel's threads and the
+        # diagnostics already hold the other cores (180 samples of a prune: 0.14 -> 0.06 CPU s; the whole
+        # update 0.41 -> 0.38 CPU s, docs/performance.md 6.10)
+        span = int(todo.sum())
         c[todo] = curve_centeredness(ctx.cloud_n, s_new.points[todo], s_new.directions[todo], params=p,
                                      grid=cache["slab grid"], span=span)
     return c
