@@ -52,6 +52,9 @@ SMALL_ELEMENTS = 20_000
 SMALL_FEWEST = 8
 # seed of the subsample taken above missing_max_points (the verdicts must not depend on a run)
 SUBSAMPLE_SEED = 0
+# unexplained points whose neighbours the kept search does not settle are searched among the unexplained
+# points near them while they are at most this share of all (_near_rows), else in a tree of all
+NEAR_ROWS_SHARE = 0.25
 
 
 @dataclass
@@ -488,7 +491,7 @@ def _regions(pts: np.ndarray, cov: Coverage, spacing: float, p: Params, checkpoi
     # with a kept tree, one search of it gives most points' neighbours both ways (_from_kept)
     kept = None if tree is None or k < 2 else _from_kept(pts_tree(), up, miss, link, neighbours)
     if k > 1:
-        d, j = _unexplained_neighbours(up, k, link, kept)
+        d, j = _unexplained_neighbours(up, k, link, kept, None if kept is None else (pts_tree(), miss))
         ok = np.isfinite(d[:, 1:])
         cols = j[:, 1:][ok]
         starts = np.concatenate([[0], np.cumsum(ok.sum(axis=1))])
@@ -579,10 +582,13 @@ def _unique_first(d: np.ndarray, c: int) -> np.ndarray:
     return ~np.isfinite(d[:, c - 1]) | (d[:, c] > d[:, c - 1])
 
 
-def _unexplained_neighbours(up: np.ndarray, k: int, link: float, kept: tuple | None) -> tuple[np.ndarray, ...]:
+def _unexplained_neighbours(up: np.ndarray, k: int, link: float, kept: tuple | None,
+                            cloud: tuple[cKDTree, np.ndarray] | None = None) -> tuple[np.ndarray, ...]:
     """Each unexplained point's ``k`` nearest unexplained points within the link, as
-    ``cKDTree(up).query`` gives them: from ``kept`` where its ``k`` nearest cloud points are the only
-    ones, all unexplained and none as near as the point itself (the same sets, themselves first)."""
+    ``cKDTree(up).query`` gives them (the same sets; equally near ones may come in another order):
+    from ``kept`` where its ``k`` nearest cloud points are the only ones, all unexplained and none as
+    near as the point itself (the same sets, themselves first); the others from :func:`_near_rows`
+    when the cloud's tree and the unexplained rows ``cloud`` are given, else searched."""
     if kept is None:
         return cKDTree(up).query(up, k=k, distance_upper_bound=link, workers=query_workers(len(up)))
     fd, _, fu = kept
@@ -593,10 +599,35 @@ def _unexplained_neighbours(up: np.ndarray, k: int, link: float, kept: tuple | N
         clean &= d[:, 1] > 0
     j[~found] = len(up)
     redo = np.flatnonzero(~clean)
+    if len(redo) and cloud is not None and len(redo) <= NEAR_ROWS_SHARE * len(up):
+        d[redo], j[redo], left = _near_rows(up, redo, k, link, *cloud)
+        redo = redo[left]
     if len(redo):
         d[redo], j[redo] = cKDTree(up).query(up[redo], k=k, distance_upper_bound=link,
                                              workers=query_workers(len(redo)))
     return d, j
+
+
+def _near_rows(up: np.ndarray, rows: np.ndarray, k: int, link: float, tree: cKDTree,
+               miss: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """``cKDTree(up).query(up[rows], k, distance_upper_bound=link)`` from a tree of the unexplained
+    points within the link of ``rows`` alone (found in the cloud's ``tree``, ``up`` = its rows
+    ``miss``): every point a row can find is in it, so where a row's ``k``-th is the only one as near
+    (:func:`_unique_first`) and no other point as near as itself, its set is the whole tree's; the
+    rows where not (ties), True in the third array, are left to the caller. A tree of all ``up`` for a
+    few rows took most of the regions' search after a pruned arm (30k points for 189 rows at 100k)."""
+    at = np.full(tree.n, -1, np.int64)
+    at[miss] = np.arange(len(miss))
+    hits = tree.query_ball_point(up[rows], link * (1 + 1e-9), return_sorted=False)
+    near = at[np.concatenate([np.asarray(h, np.int64) for h in hits])] if len(hits) else np.zeros(0, np.int64)
+    near = np.unique(near[near >= 0])  # the rows themselves among them
+    dd, jj = cKDTree(up[near]).query(up[rows], k=k + 1, distance_upper_bound=link)
+    dd, jj = dd.reshape(len(rows), -1), jj.reshape(len(rows), -1)
+    jj = np.where(np.isfinite(dd), np.concatenate([near, [len(up)]])[np.minimum(jj, len(near))], len(up))
+    left = ~_unique_first(dd, k)
+    if k > 1:
+        left |= ~(dd[:, 1] > 0)
+    return dd[:, :k], jj[:, :k], left
 
 
 def _cloud_neighbours(tree: cKDTree, up: np.ndarray, q: np.ndarray, kk: int, link: float,

@@ -224,3 +224,28 @@ def test_the_subsample_its_index_and_tau_are_made_once_per_evaluation(monkeypatc
         assert repr([r.to_dict() for r in a.regions]) == repr([r.to_dict() for r in b.regions])  # NaN depths
     assert len(made) == 1 and len(taus) == 1
     assert np.array_equal(made[0], np.sort(np.random.default_rng(MP.SUBSAMPLE_SEED).choice(3000, 1200, replace=False)))
+
+
+@pytest.mark.parametrize("lattice", [True, False])
+def test_the_rows_searched_among_the_near_unexplained_points_find_the_whole_trees_sets(lattice):
+    """``_near_rows``: each row's neighbours searched in a tree of the unexplained points within the
+    link of the rows asked are those of a tree of all unexplained points (the same distances and
+    sets), except the rows it leaves (a tie at the k-th, a point as near as the row itself): on a
+    lattice with repeated points, where it must leave some, and on a random cloud."""
+    rng = np.random.default_rng(3)
+    if lattice:
+        pts = np.stack(np.meshgrid(np.arange(20), np.arange(20), np.arange(6), indexing="ij"), -1).reshape(-1, 3)
+        pts = np.vstack([pts, pts[rng.choice(len(pts), 300)]]) * 0.01
+    else:
+        pts = rng.random((3000, 3)) * 0.2
+    miss = np.flatnonzero(rng.random(len(pts)) < 0.5)
+    up = pts[miss]
+    for link in (0.011, 0.02, 0.035):
+        rows = rng.choice(len(up), 150, replace=False)
+        d, j, left = MP._near_rows(up, rows, 9, link, cKDTree(pts), miss)
+        rd, rj = cKDTree(up).query(up[rows], k=9, distance_upper_bound=link)
+        ok = np.flatnonzero(~left)
+        assert len(ok) > (30 if lattice else 140) and (left.any() if lattice else True)
+        np.testing.assert_array_equal(d[ok], rd[ok])
+        for a, b in zip(j[ok], rj[ok]):
+            assert sorted(a) == sorted(b)
