@@ -55,6 +55,10 @@ SUBSAMPLE_SEED = 0
 # unexplained points whose neighbours the kept search does not settle are searched among the unexplained
 # points near them while they are at most this share of all (_near_rows), else in a tree of all
 NEAR_ROWS_SHARE = 0.25
+# a region's depth quantile: from this many points the distances to its border are searched only where
+# the bounds from QUANTILE_CENTRES of the border points leave them near the quantile (_quantile_distance)
+QUANTILE_FEWEST = 2048
+QUANTILE_CENTRES = 16
 
 
 @dataclass
@@ -546,13 +550,55 @@ def _regions(pts: np.ndarray, cov: Coverage, spacing: float, p: Params, checkpoi
             ring = up[main]
             rho = float(np.sqrt(np.mean(np.sum((ring - ring.mean(axis=0)) ** 2, axis=1))))
             rho = max(rho, spacing)
-            dist = cKDTree(up[b]).query(up[members], workers=query_workers(len(members)))[0]
-            r_q = float(np.quantile(dist, float(p.missing_depth_quantile)))
+            r_q = _quantile_distance(up[b], up[members], float(p.missing_depth_quantile))
             depth[c], reach[c], radius[c] = r_q / rho, r_q, rho
     deepest = miss[_last_largest(cov.gap[miss], label, n_comp)]  # each region's point farthest from the balls
     out = [{"depth": float(depth[c]), "reach": float(reach[c]), "border_radius": float(radius[c]),
             "centroid": centroid[c], "deepest": int(deepest[c])} for c in range(n_comp)]
     return region, out
+
+
+def _quantile_distance(border: np.ndarray, pts: np.ndarray, q: float) -> float:
+    """``np.quantile`` of each point's distance to its nearest ``border`` point (``cKDTree(border).query``),
+    the same bits, searched only for the points whose distance may hold the quantile's order statistics:
+    each distance lies within the reach of ``QUANTILE_CENTRES`` of the border points (each border point's
+    distance to the nearest of them) below its distance to the nearest of them; the points surely below
+    (above) those statistics enter as -inf (inf), which moves no statistic between them. A region of
+    30k points whose border is a ring of 189 took 18 ms of CPU searched whole."""
+    n = len(pts)
+    tree = cKDTree(border)
+    if n < QUANTILE_FEWEST or len(border) < 2 * QUANTILE_CENTRES:
+        return float(np.quantile(tree.query(pts, workers=query_workers(n))[0], q))
+    centres = border[:: len(border) // QUANTILE_CENTRES]
+    to_c = np.sqrt(_nearest_squared(pts, centres))
+    reach = float(np.sqrt(_nearest_squared(border, centres).max())) * (1 + 1e-9)
+    upper = to_c * (1 + 1e-9)  # a relative 1e-9 for the rounding of either search
+    lower = to_c * (1 - 1e-9) - reach
+    h = int(np.floor((n - 1) * q))
+    k0, k1 = max(h - 1, 0), min(h + 2, n - 1)  # the ranks np.quantile reads, and one more each side
+    below = upper < np.partition(lower, k0)[k0]
+    above = lower > np.partition(upper, k1)[k1]
+    ask = np.flatnonzero(~below & ~above)
+    dist = np.where(below, -np.inf, np.inf)
+    dist[ask] = tree.query(pts[ask], workers=query_workers(len(ask)))[0]
+    return float(np.quantile(dist, q))
+
+
+def _nearest_squared(pts: np.ndarray, centres: np.ndarray) -> np.ndarray:
+    """Each point's squared distance to its nearest centre (a few centres: one pass each over the
+    points' coordinates, stored column by column)."""
+    cols = np.ascontiguousarray(pts.T)
+    out = np.full(len(pts), np.inf)
+    d, t = np.empty(len(pts)), np.empty(len(pts))
+    for c in centres:
+        np.subtract(cols[0], c[0], out=d)
+        np.multiply(d, d, out=d)
+        for k in (1, 2):
+            np.subtract(cols[k], c[k], out=t)
+            np.multiply(t, t, out=t)
+            d += t
+        np.minimum(out, d, out=out)
+    return out
 
 
 def _last_largest(values: np.ndarray, label: np.ndarray, n_labels: int) -> np.ndarray:

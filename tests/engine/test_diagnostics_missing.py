@@ -228,3 +228,30 @@ def test_each_regions_farthest_point_is_the_last_of_its_largest_gaps():
         want = np.zeros(9, np.int64)
         want[label[order]] = order
         np.testing.assert_array_equal(mp._last_largest(gap, label, 9), want)
+
+
+@pytest.mark.parametrize("shape", ["ring", "lattice", "cloud"])
+def test_the_depth_quantile_searched_near_its_rank_is_the_whole_searchs(shape):
+    """``_quantile_distance``: the quantile of each point's distance to its nearest border point, the
+    distances searched only near the quantile's rank, equals ``np.quantile`` of them all searched (the
+    same bits), for several quantiles: a tube's end cap and its ring of border points, a lattice (many
+    equal distances), a random cloud and border."""
+    import sys
+
+    from scipy.spatial import cKDTree
+
+    mp = sys.modules["skelcore.diagnostics.missing_parts"]
+    rng = np.random.default_rng(11)
+    if shape == "ring":
+        t = rng.random(6000) * 2 * np.pi
+        pts = np.c_[np.cos(t), np.sin(t), rng.random(6000) * 5.0]
+        border = pts[pts[:, 2] < 0.05]
+    elif shape == "lattice":
+        pts = np.stack(np.meshgrid(np.arange(30), np.arange(30), np.arange(6), indexing="ij"), -1).reshape(-1, 3) * 0.1
+        border = pts[pts[:, 0] == 0]
+    else:
+        pts, border = rng.random((4000, 3)), rng.random((300, 3))
+    assert len(pts) >= mp.QUANTILE_FEWEST and len(border) >= 2 * mp.QUANTILE_CENTRES
+    whole = cKDTree(border).query(pts)[0]
+    for q in (0.0, 0.5, 0.9, 0.95, 0.999, 1.0):
+        assert mp._quantile_distance(border, pts, q) == np.quantile(whole, q)
