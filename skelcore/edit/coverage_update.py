@@ -30,6 +30,11 @@ __all__ = ["CoverageMemo", "curve_coverage", "coverage_from", "link_contexts", "
 EvalContext = Any
 _LOCK = threading.Lock()
 _KEEP = 8  # memos kept per evaluation's cache (the last few curves: an undo comes back to one)
+# the removed balls' own search is skipped when a probe of every REDO_PROBE-th point near them finds at
+# least REDO_SHARE of them decided by a removed ball (a pruned arm: all its points are asked again of
+# every ball either way; docs/performance.md 6.10)
+REDO_PROBE = 32
+REDO_SHARE = 0.5
 
 
 @dataclass
@@ -227,6 +232,22 @@ def _near_box(points: np.ndarray, centers: np.ndarray, reach: np.ndarray, cover_
     return out
 
 
+def _decided_by_removed(points: np.ndarray, gap: np.ndarray, old: CoverageMemo, gone: np.ndarray) -> np.ndarray:
+    """Which of ``points`` (their old gaps ``gap``) a removed ball (``gone`` of ``old``'s) may have
+    decided: inside its cover radius, or its gap no larger than the point's. All of them, unasked, when
+    a probe of every ``REDO_PROBE``-th finds at least ``REDO_SHARE`` so: asking every ball again gives
+    a point's answer whether a removed ball decided it or not (the same bits), and the removed balls'
+    search of every point would cost about as much as that (after a prune, 40k of 100k points)."""
+    tree = _sub_tree(old.elements[gone], old.r[gone], old.big_r[gone])
+    top = float(old.big_r.max())
+    if len(points) >= 4 * REDO_PROBE:
+        g, c = tree.balls(points[::REDO_PROBE], top=top)
+        if np.count_nonzero(c | (g <= gap[::REDO_PROBE])) >= REDO_SHARE * len(g):
+            return np.ones(len(points), bool)
+    g, c = tree.balls(points, top=top)
+    return c | (g <= gap)
+
+
 def _sub_tree(points: np.ndarray, r: np.ndarray, big_r: np.ndarray) -> BallTree:
     tree = BallTree(points)
     tree.set_radii(r[tree.perm], big_r[tree.perm])
@@ -284,9 +305,7 @@ def _by_difference(ctx: EvalContext, old: CoverageMemo, elements: np.ndarray,
         near = np.flatnonzero(_near_box(points, old.elements[gone], old.r[gone].max() + gap_t,
                                         float(np.sqrt(old.big_r[gone].max() ** 2 + eps))))
         if len(near):
-            tree = _sub_tree(old.elements[gone], old.r[gone], old.big_r[gone])
-            g, c = tree.balls(points[near], top=float(old.big_r.max()))
-            redo[near] = c | (g <= gap_t[near])
+            redo[near] = _decided_by_removed(points[near], gap_t[near], old, gone)
     if (~kept).any():  # the others: their old answer or an added ball's
         near = np.flatnonzero(_near_box(points, pts[~kept], r[~kept].max() + gap_t,
                                         float(np.sqrt(big_r[~kept].max() ** 2 + eps))) & ~redo)

@@ -14,10 +14,12 @@ from typing import Any, Callable
 import numpy as np
 from scipy.spatial import cKDTree
 
-from ..diagnostics.missing_parts import SPREAD_CHUNK, MissingParts, coverage_elements, missing_parts
+from ..diagnostics.missing_parts import (SPREAD_CHUNK, MissingParts, coverage_elements, missing_parts,
+                                         sampled_points)
 from ..geometry import Checkpoint, no_checkpoint, query_workers, unique_rows
 from ..metrics.cloud_index import CloudIndex
 from ..metrics.coverage import Coverage
+from ..params import Params
 from .coverage_update import _memo, _store, coverage_from
 
 __all__ = ["curve_missing_parts"]
@@ -29,6 +31,7 @@ _KEY = "missing parts' cloud tree"
 _NEAREST = "missing parts' nearest samples"
 _NEIGHBOURS = "missing parts' kept neighbours"
 _MEMOS = "missing parts' coverage memos"  # per curve: (the points' index, tau, CoverageMemo)
+_SAMPLED = "missing parts' points"
 
 
 def _cloud_tree(cache: dict[str, Any]) -> Callable[[np.ndarray], cKDTree]:
@@ -71,6 +74,35 @@ def _nearest_sample(cache: dict[str, Any], tree: Callable[[np.ndarray], cKDTree]
         with _LOCK:  # the arrays kept hold that memory: no other array takes their place
             cache[_NEAREST] = (key, (d, j), cloud, pts)
         return d, j
+
+    return get
+
+
+def _sampled(cache: dict[str, Any]) -> Callable[[np.ndarray, Params], tuple[np.ndarray | None, CloudIndex,
+                                                                           Callable[[Checkpoint], float]]]:
+    """``missing_parts``' subsample, its index and its tau
+    (:func:`skelcore.diagnostics.missing_parts.sampled_points`), kept in ``cache`` for the same cloud
+    array (every update of one evaluation reads its normalized cloud) and params; the tau found at its
+    first call."""
+
+    def get(cloud: np.ndarray, p: Params) -> tuple[np.ndarray | None, CloudIndex, Callable[[Checkpoint], float]]:
+        key = (cloud.__array_interface__["data"][0], cloud.shape, cloud.strides, cloud.dtype.str,
+               int(p.missing_max_points), float(p.coverage_tau_factor))
+        with _LOCK:
+            kept = cache.get(_SAMPLED)
+        if kept is None or kept[0] != key:
+            sub, index, tau = sampled_points(cloud, p)
+            found: list[float] = []
+
+            def kept_tau(checkpoint: Checkpoint) -> float:
+                if not found:
+                    found.append(tau(checkpoint))
+                return found[0]
+
+            kept = (key, (sub, index, kept_tau), cloud)  # the array kept holds that memory
+            with _LOCK:
+                cache[_SAMPLED] = kept
+        return kept[1]
 
     return get
 
@@ -135,5 +167,5 @@ def curve_missing_parts(ctx: EvalContext, cache: dict[str, Any], checkpoint: Che
     return missing_parts(ctx.cloud_n, ctx.curve_n, ctx.params, cov=cov, tau=None if cov is None else cov.tau,
                          what="curve skeleton", to_user=ctx.norm.invert, inside=inside,
                          cloud_tree=tree, nearest_sample=_nearest_sample(cache, tree),
-                         neighbours=_neighbours(cache), checkpoint=checkpoint,
+                         neighbours=_neighbours(cache), sampled=_sampled(cache), checkpoint=checkpoint,
                          coverage_of=_coverage_of(ctx, parent, cache, inside, checkpoint))

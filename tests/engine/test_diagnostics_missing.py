@@ -210,3 +210,48 @@ def test_hammer_intact_is_complete_cut_handle_and_headless_are_not(scans, method
     assert half.incomplete and half.counted[0].centroid[1] < -60
     headless = missing_parts(c, norm.apply(skel[skel[:, 1] < 85]), P, to_user=norm.invert)
     assert headless.incomplete and headless.counted[0].centroid[1] > 85
+
+
+def test_each_regions_farthest_point_is_the_last_of_its_largest_gaps():
+    """``_last_largest`` (a region's deepest point) gives the last row of each label's largest value,
+    as sorting by label then value gives it: gaps with many ties, one with NaN (sorted then)."""
+    import sys
+
+    mp = sys.modules["skelcore.diagnostics.missing_parts"]
+    rng = np.random.default_rng(7)
+    for nan in (False, True):
+        label = rng.integers(0, 9, 5000)
+        gap = rng.integers(0, 30, 5000).astype(float)
+        if nan:
+            gap[17] = np.nan
+        order = np.lexsort((gap, label))
+        want = np.zeros(9, np.int64)
+        want[label[order]] = order
+        np.testing.assert_array_equal(mp._last_largest(gap, label, 9), want)
+
+
+@pytest.mark.parametrize("shape", ["ring", "lattice", "cloud"])
+def test_the_depth_quantile_searched_near_its_rank_is_the_whole_searchs(shape):
+    """``_quantile_distance``: the quantile of each point's distance to its nearest border point, the
+    distances searched only near the quantile's rank, equals ``np.quantile`` of them all searched (the
+    same bits), for several quantiles: a tube's end cap and its ring of border points, a lattice (many
+    equal distances), a random cloud and border."""
+    import sys
+
+    from scipy.spatial import cKDTree
+
+    mp = sys.modules["skelcore.diagnostics.missing_parts"]
+    rng = np.random.default_rng(11)
+    if shape == "ring":
+        t = rng.random(6000) * 2 * np.pi
+        pts = np.c_[np.cos(t), np.sin(t), rng.random(6000) * 5.0]
+        border = pts[pts[:, 2] < 0.05]
+    elif shape == "lattice":
+        pts = np.stack(np.meshgrid(np.arange(30), np.arange(30), np.arange(6), indexing="ij"), -1).reshape(-1, 3) * 0.1
+        border = pts[pts[:, 0] == 0]
+    else:
+        pts, border = rng.random((4000, 3)), rng.random((300, 3))
+    assert len(pts) >= mp.QUANTILE_FEWEST and len(border) >= 2 * mp.QUANTILE_CENTRES
+    whole = cKDTree(border).query(pts)[0]
+    for q in (0.0, 0.5, 0.9, 0.95, 0.999, 1.0):
+        assert mp._quantile_distance(border, pts, q) == np.quantile(whole, q)

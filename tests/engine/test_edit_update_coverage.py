@@ -100,3 +100,32 @@ def test_a_first_look_completed_hands_its_coverage_on_to_the_next_edits(monkeypa
     np.testing.assert_array_equal(up.coverage_curve.gap, ref.gap)
     np.testing.assert_array_equal(up.coverage_curve.covered, ref.covered)
     assert whole == []
+
+
+@pytest.mark.parametrize("share", [0.0, 2.0])
+def test_the_points_near_removed_balls_asked_again_unprobed_give_the_same_coverage(share, monkeypatch):
+    """The points near removed balls all asked again of every ball (the probe finds most decided by a
+    removed one: ``REDO_SHARE`` 0) or only those a removed ball decided (never skipped: 2): the same
+    gaps and verdicts as computing the coverage whole, after a pruned branch and a deleted edge."""
+    sh = shapes.y_shape(4000, seed=3, n_curve_per_arm=8)
+    ev = evaluate(sh.cloud, curve=(sh.curve_vertices, sh.curve_edges))
+    monkeypatch.setattr(CU, "REDO_SHARE", share)
+    answers, asked = [], []  # the points near removed balls; how many the removed balls' tree asked
+
+    def sub_tree(*a, f=CU._sub_tree):
+        tree = f(*a)
+        tree.balls = lambda q, *b, g=tree.balls, **k: (asked.append(len(q)), g(q, *b, **k))[1]
+        return tree
+
+    monkeypatch.setattr(CU, "_sub_tree", sub_tree)
+    monkeypatch.setattr(CU, "_decided_by_removed",
+                        lambda *a, f=CU._decided_by_removed: (answers.append(len(a[0])), f(*a))[1])
+    curve = ev.curve.curve
+    for change in (E.prune_branch(curve, 0)[1], E.delete_edge(curve, tuple(curve.edges[3]))[1]):
+        up = ev.update(change)
+        ref = _whole(up)
+        np.testing.assert_array_equal(up.coverage_curve.gap, ref.gap)
+        np.testing.assert_array_equal(up.coverage_curve.covered, ref.covered)
+    assert len(answers) == 2 and min(answers) > 4 * CU.REDO_PROBE
+    probes = [-(-n // CU.REDO_PROBE) for n in answers]  # the path asked for was taken
+    assert asked == (probes if share == 0.0 else [probes[0], answers[0], probes[1], answers[1]])

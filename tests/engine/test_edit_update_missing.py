@@ -193,3 +193,59 @@ def test_the_kept_neighbours_give_the_same_regions_as_searching(pruned):
                                     small=lambda t: 30.0, neighbours=neighbours)
             _same(_regions(grid, c, spacing, params, None), with_kept)
     assert len(asked) == 6 and cache[MU._NEIGHBOURS][2].sum() < len(grid)  # some rows never asked
+
+
+def test_the_subsample_its_index_and_tau_are_made_once_per_evaluation(monkeypatch):
+    """Above ``missing_max_points`` without the curve's coverage, an evaluation's updates draw the
+    subsample, check its index and find its tau once (missing_update keeps them), and each update's
+    missing parts equal a fresh evaluation's (a wrong row or tau kept would move the regions)."""
+    from skelcore import Params
+    from skelcore.edit import missing_update as MU
+
+    sh = shapes.y_shape(3000, seed=2, n_curve_per_arm=6)
+    params = Params(missing_max_points=1200, coverage_max_points=500)
+    ev = evaluate(sh.cloud, curve=(sh.curve_vertices, sh.curve_edges), params=params)
+    made, taus = [], []
+
+    def sampled(cloud, p, f=MP.sampled_points):
+        sub, index, tau = f(cloud, p)
+        made.append(sub)
+        return sub, index, lambda c: (taus.append(1), tau(c))[1]
+
+    monkeypatch.setattr(MU, "sampled_points", sampled)
+    curve = ev.curve.curve
+    for new, change in (E.prune_branch(curve, 0), E.delete_edge(curve, tuple(curve.edges[4])),
+                        E.prune_branch(curve, 0)):
+        up = ev.update(change)
+        fresh = evaluate(sh.cloud, curve=new, params=params)
+        a, b = up.source.ctx.results["curve missing parts"], fresh.source.ctx.results["curve missing parts"]
+        assert a.subsample == 1200 and a.completeness == b.completeness
+        assert np.array_equal(a.region, b.region) and np.array_equal(a.explained, b.explained)
+        assert repr([r.to_dict() for r in a.regions]) == repr([r.to_dict() for r in b.regions])  # NaN depths
+    assert len(made) == 1 and len(taus) == 1
+    assert np.array_equal(made[0], np.sort(np.random.default_rng(MP.SUBSAMPLE_SEED).choice(3000, 1200, replace=False)))
+
+
+@pytest.mark.parametrize("lattice", [True, False])
+def test_the_rows_searched_among_the_near_unexplained_points_find_the_whole_trees_sets(lattice):
+    """``_near_rows``: each row's neighbours searched in a tree of the unexplained points within the
+    link of the rows asked are those of a tree of all unexplained points (the same distances and
+    sets), except the rows it leaves (a tie at the k-th, a point as near as the row itself): on a
+    lattice with repeated points, where it must leave some, and on a random cloud."""
+    rng = np.random.default_rng(3)
+    if lattice:
+        pts = np.stack(np.meshgrid(np.arange(20), np.arange(20), np.arange(6), indexing="ij"), -1).reshape(-1, 3)
+        pts = np.vstack([pts, pts[rng.choice(len(pts), 300)]]) * 0.01
+    else:
+        pts = rng.random((3000, 3)) * 0.2
+    miss = np.flatnonzero(rng.random(len(pts)) < 0.5)
+    up = pts[miss]
+    for link in (0.011, 0.02, 0.035):
+        rows = rng.choice(len(up), 150, replace=False)
+        d, j, left = MP._near_rows(up, rows, 9, link, cKDTree(pts), miss)
+        rd, rj = cKDTree(up).query(up[rows], k=9, distance_upper_bound=link)
+        ok = np.flatnonzero(~left)
+        assert len(ok) > (30 if lattice else 140) and (left.any() if lattice else True)
+        np.testing.assert_array_equal(d[ok], rd[ok])
+        for a, b in zip(j[ok], rj[ok]):
+            assert sorted(a) == sorted(b)
