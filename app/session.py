@@ -399,8 +399,9 @@ class Session(QtCore.QObject):
             self._new_skeletal_set()
         if event.kind == "layer":
             self.evaluation_cancelled = False
-            # The running evaluation describes old inputs: drop it (its result will never land).
-            if self.runner.current_name in ("evaluation", DEFECTS_TASK):
+            # The running evaluation describes old inputs: drop it (its result will never land);
+            # not the edited curve's own scoring, started just before its swap (show_edited_curve).
+            if self.runner.current_name in ("evaluation", DEFECTS_TASK) and not self._scoring_swap:
                 self.runner.discard()
             self._inputs_changed = True
         if event.kind in ("layer", "quantities") and not self._swapping_curve:
@@ -502,15 +503,6 @@ class Session(QtCore.QObject):
                      and src.args.get("curve") is not None and src.ctx is not None
                      and content_hash(base.curve.curve) == content_hash(old.curve)
                      and not self.stale_reason())  # under the settings shown: else evaluated afresh with the new
-        if updatable and known is None:
-            self.hold_frames(FRAME_HOLD_S)  # released when the scores land (_task_succeeded, _task_failed)
-        self._swapping_curve = True  # scored below: not "inputs changed" meanwhile (a grey frame each way)
-        try:
-            with self.batch():
-                scene.set_curve(curve, old.path, edited=edited)
-                self._inputs_changed = False  # scored below, not by the automatic run
-        finally:
-            self._swapping_curve = False
         if known is not None:
             try:
                 now = self.params()
@@ -518,6 +510,29 @@ class Session(QtCore.QObject):
                     known = None  # kept under other settings: scored again
             except ValueError:
                 known = None
+        update = updatable and known is None
+        if update:
+            self.hold_frames(FRAME_HOLD_S)  # released when the scores land (_task_succeeded, _task_failed)
+            # The first phase starts before the curve is swapped and redrawn: the engine's kernels
+            # run while this thread redraws (docs/performance.md 6.10).
+            self._requested_correspondence = self._shown_correspondence
+            self._requested_viewpoints = self._shown_viewpoints
+            self._requested_scan_options = self._shown_scan_options
+            self.evaluation_cancelled = False
+            self.runner.start(scores_job(base, curve), "evaluation")  # the four metrics; the defects follow
+        self._swapping_curve = True  # scored: not "inputs changed" meanwhile (a grey frame each way)
+        self._scoring_swap = update
+        try:
+            with self.batch():
+                scene.set_curve(curve, old.path, edited=edited)
+                self._inputs_changed = False  # scored here, not by the automatic run
+        finally:
+            self._swapping_curve = self._scoring_swap = False
+        if update:
+            self._evaluated_layers = (scene.cloud, scene.skeletal, scene.curve)
+            self.check_stale()
+            self.message.emit("scoring the edited curve…")
+            return "update"
         if known is not None:
             scene.set_evaluation(known)
             self._had_result = True
@@ -527,19 +542,9 @@ class Session(QtCore.QObject):
         if base is None and not running and not self.auto_evaluate:
             self.check_stale()
             return ""
-        if not updatable:
-            started = self.start_evaluation()
-            self.check_stale()
-            return "full" if started else ""
-        self._evaluated_layers = (scene.cloud, scene.skeletal, scene.curve)
-        self._requested_correspondence = self._shown_correspondence
-        self._requested_viewpoints = self._shown_viewpoints
-        self._requested_scan_options = self._shown_scan_options
-        self.evaluation_cancelled = False
-        self.runner.start(scores_job(base, curve), "evaluation")  # the four metrics; the defects follow
+        started = self.start_evaluation()
         self.check_stale()
-        self.message.emit("scoring the edited curve…")
-        return "update"
+        return "full" if started else ""
 
     def start_skeletonize(self, params: Any = None, method: str | None = None) -> bool:
         """Skeletonize the loaded cloud in the worker; both results become layers.
@@ -634,6 +639,7 @@ class Session(QtCore.QObject):
     _skeletonized_cloud: Any = None
     _defects_of: Any = None  # the first phase whose defects the DEFECTS_TASK finds
     _swapping_curve = False  # show_edited_curve replacing the curve it scores right after
+    _scoring_swap = False  # ... whose first phase already runs (it describes the new curve: kept)
     #: the last evaluation was cancelled (Esc, Cancel) and neither a new run nor new inputs came since
     evaluation_cancelled = False
 
