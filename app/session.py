@@ -24,12 +24,12 @@ __all__ = ["Session", "preload_engine", "PROCESS_FROM", "UPDATE_LOCK"]
 
 
 PROCESS_FROM = 200_000
-FRAME_HOLD_S = 0.15
-"""After an edit the view waits at most this long for the first phase's scores (the goal from the key
-to the recoloured frame), so a quick update draws the edited curve once, coloured."""
 """Evaluations of at least this many points (cloud + skeletal set) run in a child process
 (:mod:`skelscope.engine_process`): Cancel and quit are then a kill, and the window never waits for the
 engine's GIL. Smaller ones run in a thread (no process start, ~1 s of imports)."""
+FRAME_HOLD_S = 0.15
+"""After an edit the view waits at most this long for the first phase's scores (the goal from the key
+to the recoloured frame), so a quick update draws the edited curve once, coloured."""
 
 
 def preload_engine() -> None:
@@ -75,6 +75,9 @@ class Session(QtCore.QObject):
         #: (at most FRAME_HOLD_S), so the edited curve and its colours come in one frame
         self.hold_frames: Callable[[float], None] = lambda seconds: None
         self.release_frames: Callable[[], None] = lambda: None
+        #: ``draw_now()``: the view's pending frame drawn at once (an edit's first phase landed: its
+        #: recoloured frame before Qt repaints the panels)
+        self.draw_now: Callable[[], None] = lambda: None
         #: the sensors' positions (viewpoint-aware boundedness and centeredness; [] = the paper's scores)
         self.viewpoints: list[tuple[float, float, float]] = []
         self.runner.succeeded.connect(self._task_succeeded)
@@ -588,19 +591,23 @@ class Session(QtCore.QObject):
         if name == "evaluation":
             if self._evaluated_layers != (scene.cloud, scene.skeletal, scene.curve):
                 return  # inputs changed meanwhile: this result describes other data
+            painted = threading.Event()
+            if defects_pending(result):  # an edit's first phase: its defects in a second task, started
+                # before the scores are shown, so every panel says "updating" at once (not "cancelled"
+                # until the task's end refreshes it, after the frame: a second frame)
+                self._defects_of = result
+                self.runner.start(defects_job(result, painted), DEFECTS_TASK)
             scene.set_evaluation(result)
             self._shown_correspondence = self._requested_correspondence
             self._shown_viewpoints = self._requested_viewpoints
             self._shown_scan_options = self._requested_scan_options
             self._had_result = True
             self.check_stale()
-            if defects_pending(result):  # an edit's first phase: its defects in a second task
-                self._defects_of = result
-                painted = threading.Event()
-                self.runner.start(defects_job(result, painted), DEFECTS_TASK)
+            if defects_pending(result):
                 self.after_scores(painted.set)  # it starts once the recoloured frame is on screen
                 self.message.emit(f"scores of the edited curve shown; {UPDATING}")
                 self.scores_shown.emit(result)
+                self.draw_now()
                 return
             total = result.timings.get("total") if result.timings else None
             self.message.emit("evaluation done" + (f" in {total:.2f} s" if total is not None else ""))
