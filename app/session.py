@@ -27,10 +27,11 @@ PROCESS_FROM = 200_000
 """Evaluations of at least this many points (cloud + skeletal set) run in a child process
 (:mod:`skelscope.engine_process`): Cancel and quit are then a kill, and the window never waits for the
 engine's GIL. Smaller ones run in a thread (no process start, ~1 s of imports)."""
-FRAME_HOLD_S = 0.5
+FRAME_HOLD_S = 1.0
 """After an edit the view waits at most this long for the first phase's scores, so the update draws
-the edited curve once, coloured: a frame drawn meanwhile (0.1-0.2 s of both cores under software GL
-at 100k points) slows the update and the recoloured frame by as much (docs/performance.md 6.10)."""
+the edited curve once, coloured: a frame drawn meanwhile (0.09 CPU s at 100k points under software GL,
+on both cores) slows the update and so the recoloured frame; on a loaded machine a pruned branch's
+first phase took 0.5-1 s with it (docs/performance.md 6.10)."""
 
 
 def preload_engine() -> None:
