@@ -85,6 +85,8 @@ class Session(QtCore.QObject):
         self.runner.succeeded.connect(self._task_succeeded)
         self.runner.failed.connect(self._task_failed)
         self.runner.finished.connect(lambda name: self.check_stale())
+        # an edit's first phase cancelled or dropped: its curve is drawn now, not when the hold ends
+        self.runner.cancelled.connect(lambda name: self.release_frames())
         self.scene.subscribe(self._on_scene)
 
     # ---- loading --------------------------------------------------------------------------

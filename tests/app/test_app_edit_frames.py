@@ -79,3 +79,36 @@ def test_an_empty_defect_overlay_cleared_or_shown_again_asks_for_no_frame(window
     overlay.clear()
     overlay.set_visible(True)
     assert not w.view.render_pending
+
+
+def test_a_cancelled_first_phase_lets_the_edited_curve_be_drawn_at_once(window, qtbot, tmp_path, monkeypatch):
+    """Esc while an edit's scores are computed: the view's hold (FRAME_HOLD_S) ends with the task, so the
+    edited curve is drawn at the next frame, uncoloured."""
+    import threading
+
+    import skelscope.session as session
+
+    w = window
+    _cloud, _curve, tip = loaded(qtbot, w, tmp_path)
+    entered = threading.Event()
+
+    def scores_job(base, curve):
+        def job(progress, cancel):
+            from skelcore.errors import Cancelled
+
+            entered.set()
+            while not cancel():
+                threading.Event().wait(0.01)
+            raise Cancelled("cancelled")
+
+        return job
+
+    monkeypatch.setattr(session, "scores_job", scores_job)
+    key(qtbot, w, "E")
+    w.select_element("curve", "vertices", tip)
+    key(qtbot, w, "Delete")
+    assert entered.wait(30) and w.view._frames._held_until > 0  # held for the scores
+    key(qtbot, w, "Escape")
+    assert not w.session.runner.running and w.view._frames._held_until == 0.0
+    qtbot.waitUntil(lambda: not w.view.render_pending, timeout=10000)
+    assert w.scene.evaluation is None and w.scene.curve.edited
