@@ -58,6 +58,7 @@ class MainWindow(QtWidgets.QMainWindow):
         self.view = SceneView(self.scene, self)
         self.session.after_scores = self.view.after_render  # an edit's defects after its recoloured frame
         self.session.hold_frames, self.session.release_frames = self.view.hold_frames, self.view.release_frames
+        self.session.draw_now = self.view.draw_now  # an edit's recoloured frame before the panels' repaint
         self.setCentralWidget(self.view.widget)
         self._key_eater = _KeyEater(self)
         self.view.widget.installEventFilter(self._key_eater)

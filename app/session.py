@@ -24,12 +24,14 @@ __all__ = ["Session", "preload_engine", "PROCESS_FROM", "UPDATE_LOCK"]
 
 
 PROCESS_FROM = 200_000
-FRAME_HOLD_S = 0.15
-"""After an edit the view waits at most this long for the first phase's scores (the goal from the key
-to the recoloured frame), so a quick update draws the edited curve once, coloured."""
 """Evaluations of at least this many points (cloud + skeletal set) run in a child process
 (:mod:`skelscope.engine_process`): Cancel and quit are then a kill, and the window never waits for the
 engine's GIL. Smaller ones run in a thread (no process start, ~1 s of imports)."""
+FRAME_HOLD_S = 1.0
+"""After an edit the view waits at most this long for the first phase's scores, so the update draws
+the edited curve once, coloured: a frame drawn meanwhile (0.09 CPU s at 100k points under software GL,
+on both cores) slows the update and so the recoloured frame; on a loaded machine a pruned branch's
+first phase took 0.5-1 s with it (docs/performance.md 6.10)."""
 
 
 def preload_engine() -> None:
@@ -75,11 +77,16 @@ class Session(QtCore.QObject):
         #: (at most FRAME_HOLD_S), so the edited curve and its colours come in one frame
         self.hold_frames: Callable[[float], None] = lambda seconds: None
         self.release_frames: Callable[[], None] = lambda: None
+        #: ``draw_now()``: the view's pending frame drawn at once (an edit's first phase landed: its
+        #: recoloured frame before Qt repaints the panels)
+        self.draw_now: Callable[[], None] = lambda: None
         #: the sensors' positions (viewpoint-aware boundedness and centeredness; [] = the paper's scores)
         self.viewpoints: list[tuple[float, float, float]] = []
         self.runner.succeeded.connect(self._task_succeeded)
         self.runner.failed.connect(self._task_failed)
         self.runner.finished.connect(lambda name: self.check_stale())
+        # an edit's first phase cancelled or dropped: its curve is drawn now, not when the hold ends
+        self.runner.cancelled.connect(lambda name: self.release_frames())
         self.scene.subscribe(self._on_scene)
 
     # ---- loading --------------------------------------------------------------------------
@@ -399,8 +406,9 @@ class Session(QtCore.QObject):
             self._new_skeletal_set()
         if event.kind == "layer":
             self.evaluation_cancelled = False
-            # The running evaluation describes old inputs: drop it (its result will never land).
-            if self.runner.current_name in ("evaluation", DEFECTS_TASK):
+            # The running evaluation describes old inputs: drop it (its result will never land);
+            # not the edited curve's own scoring, started just before its swap (show_edited_curve).
+            if self.runner.current_name in ("evaluation", DEFECTS_TASK) and not self._scoring_swap:
                 self.runner.discard()
             self._inputs_changed = True
         if event.kind in ("layer", "quantities") and not self._swapping_curve:
@@ -502,15 +510,6 @@ class Session(QtCore.QObject):
                      and src.args.get("curve") is not None and src.ctx is not None
                      and content_hash(base.curve.curve) == content_hash(old.curve)
                      and not self.stale_reason())  # under the settings shown: else evaluated afresh with the new
-        if updatable and known is None:
-            self.hold_frames(FRAME_HOLD_S)  # released when the scores land (_task_succeeded, _task_failed)
-        self._swapping_curve = True  # scored below: not "inputs changed" meanwhile (a grey frame each way)
-        try:
-            with self.batch():
-                scene.set_curve(curve, old.path, edited=edited)
-                self._inputs_changed = False  # scored below, not by the automatic run
-        finally:
-            self._swapping_curve = False
         if known is not None:
             try:
                 now = self.params()
@@ -518,6 +517,29 @@ class Session(QtCore.QObject):
                     known = None  # kept under other settings: scored again
             except ValueError:
                 known = None
+        update = updatable and known is None
+        if update:
+            self.hold_frames(FRAME_HOLD_S)  # released when the scores land (_task_succeeded, _task_failed)
+            # The first phase starts before the curve is swapped and redrawn: the engine's kernels
+            # run while this thread redraws (docs/performance.md 6.10).
+            self._requested_correspondence = self._shown_correspondence
+            self._requested_viewpoints = self._shown_viewpoints
+            self._requested_scan_options = self._shown_scan_options
+            self.evaluation_cancelled = False
+            self.runner.start(scores_job(base, curve), "evaluation")  # the four metrics; the defects follow
+        self._swapping_curve = True  # scored: not "inputs changed" meanwhile (a grey frame each way)
+        self._scoring_swap = update
+        try:
+            with self.batch():
+                scene.set_curve(curve, old.path, edited=edited)
+                self._inputs_changed = False  # scored here, not by the automatic run
+        finally:
+            self._swapping_curve = self._scoring_swap = False
+        if update:
+            self._evaluated_layers = (scene.cloud, scene.skeletal, scene.curve)
+            self.check_stale()
+            self.message.emit("scoring the edited curve…")
+            return "update"
         if known is not None:
             scene.set_evaluation(known)
             self._had_result = True
@@ -527,19 +549,9 @@ class Session(QtCore.QObject):
         if base is None and not running and not self.auto_evaluate:
             self.check_stale()
             return ""
-        if not updatable:
-            started = self.start_evaluation()
-            self.check_stale()
-            return "full" if started else ""
-        self._evaluated_layers = (scene.cloud, scene.skeletal, scene.curve)
-        self._requested_correspondence = self._shown_correspondence
-        self._requested_viewpoints = self._shown_viewpoints
-        self._requested_scan_options = self._shown_scan_options
-        self.evaluation_cancelled = False
-        self.runner.start(scores_job(base, curve), "evaluation")  # the four metrics; the defects follow
+        started = self.start_evaluation()
         self.check_stale()
-        self.message.emit("scoring the edited curve…")
-        return "update"
+        return "full" if started else ""
 
     def start_skeletonize(self, params: Any = None, method: str | None = None) -> bool:
         """Skeletonize the loaded cloud in the worker; both results become layers.
@@ -583,19 +595,23 @@ class Session(QtCore.QObject):
         if name == "evaluation":
             if self._evaluated_layers != (scene.cloud, scene.skeletal, scene.curve):
                 return  # inputs changed meanwhile: this result describes other data
+            painted = threading.Event()
+            if defects_pending(result):  # an edit's first phase: its defects in a second task, started
+                # before the scores are shown, so every panel says "updating" at once (not "cancelled"
+                # until the task's end refreshes it, after the frame: a second frame)
+                self._defects_of = result
+                self.runner.start(defects_job(result, painted), DEFECTS_TASK)
             scene.set_evaluation(result)
             self._shown_correspondence = self._requested_correspondence
             self._shown_viewpoints = self._requested_viewpoints
             self._shown_scan_options = self._requested_scan_options
             self._had_result = True
             self.check_stale()
-            if defects_pending(result):  # an edit's first phase: its defects in a second task
-                self._defects_of = result
-                painted = threading.Event()
-                self.runner.start(defects_job(result, painted), DEFECTS_TASK)
+            if defects_pending(result):
                 self.after_scores(painted.set)  # it starts once the recoloured frame is on screen
                 self.message.emit(f"scores of the edited curve shown; {UPDATING}")
                 self.scores_shown.emit(result)
+                self.draw_now()
                 return
             total = result.timings.get("total") if result.timings else None
             self.message.emit("evaluation done" + (f" in {total:.2f} s" if total is not None else ""))
@@ -634,6 +650,7 @@ class Session(QtCore.QObject):
     _skeletonized_cloud: Any = None
     _defects_of: Any = None  # the first phase whose defects the DEFECTS_TASK finds
     _swapping_curve = False  # show_edited_curve replacing the curve it scores right after
+    _scoring_swap = False  # ... whose first phase already runs (it describes the new curve: kept)
     #: the last evaluation was cancelled (Esc, Cancel) and neither a new run nor new inputs came since
     evaluation_cancelled = False
 

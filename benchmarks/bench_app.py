@@ -144,7 +144,11 @@ def test_viewer_edit_to_recoloured_frame(measure, benchmark, display, tmp_path, 
     (curve only) and the edits of bench_edit.py (its edge 5, its branch 0). ``scored_s``: until the
     scores landed; ``defects_s``: until the second phase (the curve's coverage and defects) landed and
     its frame was painted, the whole update seen. Each round starts from the loaded curve again (Ctrl+Z,
-    untimed). The goal: 0.15 s to the recoloured frame."""
+    untimed). The path's phases (medians, seconds from the key; docs/performance.md 6.10): ``edit_s``
+    the edit applied and its curve redrawn (the key's handler returned), ``worker_s`` the first phase's
+    task started, ``frame_start_s`` the recoloured frame begun (``frame_s`` its drawing), and
+    ``frames_between``, the frames drawn between the key and the recoloured one. The goal: 0.15 s to
+    the recoloured frame."""
     from PySide6 import QtCore, QtWidgets
 
     from skelscope.main_window import MainWindow
@@ -161,6 +165,11 @@ def test_viewer_edit_to_recoloured_frame(measure, benchmark, display, tmp_path, 
     w.show()
     rendered: list[float] = []
     w.view.plotter.ren_win.AddObserver("EndEvent", lambda *a: rendered.append(time.perf_counter()))
+    begun: list[float] = []  # the frames' starts
+    w.view.plotter.ren_win.AddObserver("StartEvent", lambda *a: begun.append(time.perf_counter()))
+    started: list[float] = []  # the first phase's task started
+    w.session.runner.started.connect(lambda name: name == "evaluation" and started.append(time.perf_counter()))
+    phases: dict[str, list[float]] = {k: [] for k in ("edit_s", "worker_s", "frame_start_s", "frame_s", "frames_between")}
     landed: list[float] = []  # the first phase's scores shown
     w.session.scores_shown.connect(lambda _ev: landed.append(time.perf_counter()))
     whole: list[float] = []  # the whole evaluation shown (the second phase)
@@ -198,12 +207,14 @@ def test_viewer_edit_to_recoloured_frame(measure, benchmark, display, tmp_path, 
             idle()
             landed.clear()
             whole.clear()
+            started.clear()
             return (), {}
 
         def press_delete():
             t0 = time.perf_counter()
             pressed.append(t0)
             delete.trigger()
+            t_edit = time.perf_counter()
             while time.perf_counter() - t0 < 600:
                 app.processEvents()
                 if landed and [t for t in rendered if t > landed[0]] and not w.view.render_pending:
@@ -211,6 +222,13 @@ def test_viewer_edit_to_recoloured_frame(measure, benchmark, display, tmp_path, 
                 time.sleep(0.001)
             assert landed, w.errors
             scored.append(landed[0] - t0)
+            end = min(t for t in rendered if t > landed[0])
+            start = max(t for t in begun if t < end)
+            phases["edit_s"].append(t_edit - t0)
+            phases["worker_s"].append(started[0] - t0 if started else float("nan"))
+            phases["frame_start_s"].append(start - t0)
+            phases["frame_s"].append(end - start)
+            phases["frames_between"].append(float(len([t for t in rendered if t0 < t < end])))
 
         scored: list[float] = []
         measure(press_delete, rounds=5, setup=setup)
@@ -221,7 +239,8 @@ def test_viewer_edit_to_recoloured_frame(measure, benchmark, display, tmp_path, 
         w.close()
     benchmark.extra_info.update(n_points=len(cloud), edit=edit, display=display,
                                 scored_s=round(float(np.median(scored[1:])), 4),  # not the warm-up
-                                defects_s=round(float(np.median(defects[1:])), 4), goal_s=0.15)  # not the warm-up
+                                defects_s=round(float(np.median(defects[1:])), 4), goal_s=0.15,  # not the warm-up
+                                **{k: round(float(np.median(v[1:])), 4) for k, v in phases.items()})
 
 
 class _Drag:

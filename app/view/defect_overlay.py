@@ -122,12 +122,16 @@ class DefectOverlay:
         return self.view.plotter
 
     def clear(self) -> None:
+        """Remove every drawn set; a frame only when something was drawn (an edit's first phase clears
+        an empty overlay after its recoloured frame: no second frame for it)."""
+        drawn = bool(self.names or self._selected or self.legend is not None)
         self.clear_selected()
         for name in self.names:
             self.plotter.remove_actor(name, render=False)
         self.names, self.shown = [], []
         self._set_legend()
-        self.view.request_render()
+        if drawn:
+            self.view.request_render()
 
     def show(self, ev: Any, rows: list[DefectRow], cloud_size: float = 2.0, stale: bool = False) -> None:
         """Draw every row of ``rows`` (the defects of ``ev``) by kind; ``stale``: washed toward grey, as the
@@ -210,13 +214,18 @@ class DefectOverlay:
         self._selected = []
 
     def set_visible(self, on: bool) -> None:
+        """Show or hide the drawn sets and their legend; a frame only when one of them changes."""
+        changed = False
         for name in self.names:
             actor = self.plotter.actors.get(name)
-            if actor is not None:
+            if actor is not None and bool(actor.GetVisibility()) != bool(on):
                 actor.SetVisibility(on)
-        if self.legend is not None:
+                changed = True
+        if self.legend is not None and bool(self.legend.GetVisibility()) != (on and bool(self.shown)):
             self.legend.SetVisibility(on and bool(self.shown))
-        self.view.request_render()
+            changed = True
+        if changed:
+            self.view.request_render()
 
     # ---- drawing --------------------------------------------------------------------------
     def _points(self, key: str, points: np.ndarray, colour: Any, size: float, spheres: bool = False,

@@ -70,6 +70,14 @@ class FrameScheduler:
         if self._pending:
             self._timer.start(RENDER_DELAY_MS)
 
+    def draw_now(self) -> None:
+        """Draw the pending frame at once, held or not, before Qt repaints the panels the same change
+        updated (an edit's recoloured curve: the frame the user waits for, the panels' text after it;
+        docs/performance.md 6.10)."""
+        self._held_until = 0.0
+        if self._pending:
+            self._render_now()
+
     def _render_now(self) -> None:
         if not self._pending:
             return

@@ -129,6 +129,10 @@ class SceneView:
     def release_frames(self) -> None:
         self._frames.release()
 
+    def draw_now(self) -> None:
+        """The pending frame drawn at once, before the panels' repaint (:meth:`.frames.FrameScheduler.draw_now`)."""
+        self._frames.draw_now()
+
     def after_render(self, fn: Callable[[], None]) -> None:
         """Call ``fn`` once the pending frame has been painted (at once if none is pending), so work
         that follows a change (the plots) starts after the frame, never in the same event-loop turn."""

@@ -1,0 +1,114 @@
+"""The frames of an edit (docs/guide/viewer.md "Editing the curve skeleton", docs/performance.md 6.10):
+the first phase is already running when the edited curve is swapped in and redrawn (and is kept, not
+dropped as a change of inputs); when its scores land the recoloured frame is drawn at once, the
+Defects dock says "updating" from that moment, and no further frame follows until the second phase
+lands. The shape: the cylinder with a twig of test_app_editing."""
+
+from __future__ import annotations
+
+import pytest
+
+from test_app_edit_phases import held, prune_tip_to_second_phase  # noqa: F401 - the fixture
+from test_app_editing import key, loaded, wait_evaluated
+
+pytestmark = [pytest.mark.gui, pytest.mark.window(questions="default")]
+
+
+def test_the_first_phase_runs_while_the_edited_curve_is_redrawn(window, qtbot, tmp_path):
+    from skelscope.scene import SceneEvent
+
+    w = window
+    _cloud, _curve, tip = loaded(qtbot, w, tmp_path)
+    at_swap: list[tuple[str | None, object]] = []
+
+    def on_scene(event: SceneEvent) -> None:
+        if event.kind == "layer" and event.layer == "curve":
+            at_swap.append((w.session.runner.current_name, w.session.runner._current))
+
+    w.scene.subscribe(on_scene)
+    key(qtbot, w, "E")
+    w.select_element("curve", "vertices", tip)
+    key(qtbot, w, "Delete")
+    task = w.session.runner._current
+    assert at_swap == [("evaluation", task)]  # started before the swap, the same task after it
+    assert w.edits.last_scoring == "update"
+    wait_evaluated(qtbot, w)
+    assert w.scene.evaluation is not None and w.scene.evaluation.curve.curve is w.scene.curve.curve
+
+
+def test_the_recoloured_frame_comes_at_once_and_alone(window, qtbot, tmp_path, held):  # noqa: F811
+    from skelscope.edit_scoring import UPDATING
+
+    w = window
+    _cloud, _curve, tip = loaded(qtbot, w, tmp_path)
+    frames: list[int] = []
+    w.view.plotter.ren_win.AddObserver("EndEvent", lambda *_a: frames.append(1))
+    seen: dict[str, object] = {}
+
+    def landed(_ev: object) -> None:  # the first phase's scores in the scene, before its frame
+        seen["frames"] = len(frames)
+        seen["pending"] = w.defects.panel.pending
+
+    w.session.scores_shown.connect(landed)
+    prune_tip_to_second_phase(qtbot, w, tip)
+    qtbot.waitUntil(lambda: "frames" in seen, timeout=30000)
+    assert seen["pending"] == UPDATING  # the dock says "updating" as the scores land, never "cancelled"
+    assert len(frames) == seen["frames"] + 1  # the recoloured frame, drawn in the same turn
+    assert not w.view.render_pending
+    qtbot.wait(400)  # the second phase held: nothing else to draw
+    assert len(frames) == seen["frames"] + 1 and w.defects.panel.pending == UPDATING
+    held.set()
+    wait_evaluated(qtbot, w)
+    qtbot.waitUntil(lambda: not w.view.render_pending, timeout=10000)
+    assert len(frames) >= seen["frames"] + 2 and not w.defects.panel.pending  # the defects' frame
+
+
+def test_an_empty_defect_overlay_cleared_or_shown_again_asks_for_no_frame(window, qtbot, tmp_path):
+    """Refreshing a Defects dock with nothing drawn (an edit's first phase) costs no frame; clearing
+    drawn defects does."""
+    w = window
+    loaded(qtbot, w, tmp_path)
+    overlay = w.defects.overlay
+    qtbot.waitUntil(lambda: not w.view.render_pending, timeout=10000)
+    assert overlay.names  # the twig's defects drawn
+    overlay.set_visible(w.defects.visible)  # as they are: nothing changes
+    assert not w.view.render_pending
+    overlay.clear()
+    assert w.view.render_pending
+    qtbot.waitUntil(lambda: not w.view.render_pending, timeout=10000)
+    overlay.clear()
+    overlay.set_visible(True)
+    assert not w.view.render_pending
+
+
+def test_a_cancelled_first_phase_lets_the_edited_curve_be_drawn_at_once(window, qtbot, tmp_path, monkeypatch):
+    """Esc while an edit's scores are computed: the view's hold (FRAME_HOLD_S) ends with the task, so the
+    edited curve is drawn at the next frame, uncoloured."""
+    import threading
+
+    import skelscope.session as session
+
+    w = window
+    _cloud, _curve, tip = loaded(qtbot, w, tmp_path)
+    entered = threading.Event()
+
+    def scores_job(base, curve):
+        def job(progress, cancel):
+            from skelcore.errors import Cancelled
+
+            entered.set()
+            while not cancel():
+                threading.Event().wait(0.01)
+            raise Cancelled("cancelled")
+
+        return job
+
+    monkeypatch.setattr(session, "scores_job", scores_job)
+    key(qtbot, w, "E")
+    w.select_element("curve", "vertices", tip)
+    key(qtbot, w, "Delete")
+    assert entered.wait(30) and w.view._frames._held_until > 0  # held for the scores
+    key(qtbot, w, "Escape")
+    assert not w.session.runner.running and w.view._frames._held_until == 0.0
+    qtbot.waitUntil(lambda: not w.view.render_pending, timeout=10000)
+    assert w.scene.evaluation is None and w.scene.curve.edited
