@@ -24,7 +24,7 @@ from ..geometry import (
 )
 from ..parallel import on_threads
 from ..params import Params, k_center_for
-from . import _centroids
+from . import _centroids, _rings as _rings_kernel
 from .ellipse_fit import EllipseSums, ellipse_sums, ellipses_from_sums
 from .position_knn import SHARED_FROM, PositionNeighbours, position_neighbours
 
@@ -41,6 +41,9 @@ _BALL_ROUNDS = 1  # ball searches before a sample's whole slab is taken (the nex
 # the first ball's 2-D reach, in alpha / 2 (neuron, 100k points: 6.5 CPU s, 8.6 with 1.0; one run each, load 8.7)
 _BALL_FIRST = 0.5
 _BALL_MARGIN = 1e-9  # relative: the ring search's balls and the box's reach are this much larger than exact
+# rings by the compiled kernel (_rings.c); False: by the array code below, its reference (the same bits, tested)
+_COMPILED_RINGS = True
+_KERNEL_BATCH = 256  # samples per kernel call on small clouds (a checkpoint between calls)
 
 
 def skeletal_centeredness(
@@ -290,9 +293,12 @@ def curve_centeredness(
     if len(cloud) < _CURVE_AT_ONCE:
         # small clouds: the samples in batches of flat arrays on this thread (docs/performance.md 6.5); a
         # batch holds about _CURVE_BATCH_PAIRS candidates of the first ball
-        first = grid.tree.query_ball_point(points[todo], _ball_radius(np.full(len(todo), _BALL_FIRST * half), half),
-                                           return_length=True)
-        bounds = np.r_[0, np.cumsum(first)]
+        if _COMPILED_RINGS:
+            bounds = np.arange(len(todo) + 1) * (_CURVE_BATCH_PAIRS // _KERNEL_BATCH)
+        else:
+            first = grid.tree.query_ball_point(points[todo], _ball_radius(np.full(len(todo), _BALL_FIRST * half), half),
+                                               return_length=True)
+            bounds = np.r_[0, np.cumsum(first)]
         lo = 0
         while lo < len(todo):
             hi = lo + max(1, int(np.searchsorted(bounds[lo:], bounds[lo] + _CURVE_BATCH_PAIRS, side="right")) - 1)
@@ -383,6 +389,8 @@ def _ring_columns(
     slab is taken (:func:`_slab_ring`, ``tick`` after each).  The same candidates' values in the same order
     as testing every grid row: the same rings, bit for bit (docs/performance.md 6.5).
     """
+    if _COMPILED_RINGS:
+        return _kernel_rings(grid, points, u, g, h, half, growth)
     n = len(points)
     far = np.linalg.norm(np.maximum(np.abs(grid.lo - points), np.abs(grid.hi - points)), axis=1) * (1.0 + _BALL_MARGIN)
     reach = np.full(n, _BALL_FIRST * half)
@@ -422,6 +430,19 @@ def _ring_columns(
             tick()
     return (np.concatenate([ring[0] for ring in rings]), np.concatenate([ring[1] for ring in rings]),
             np.r_[0, np.cumsum([len(ring[0]) for ring in rings])])
+
+
+def _kernel_rings(
+    grid: "_SlabGrid", points: np.ndarray, u: np.ndarray, g: np.ndarray, h: np.ndarray, half: float, growth: float,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """:func:`_ring_columns` by the compiled kernel ``_rings.c``: the same rings, bit for bit (tested), from
+    the grid's cells around p in growing balls (the first of reach ``_BALL_FIRST`` x alpha / 2), without the
+    kd-tree or the whole slab's arrays (docs/performance.md 6.5)."""
+    f8 = lambda a: np.ascontiguousarray(a, np.float64)  # noqa: E731
+    fx, fy, starts = _rings_kernel.rings(grid.columns, grid.keys, grid.starts, grid.counts, grid.lines, f8(grid.centres), grid.frame,
+                                         grid.dims, f8(points), f8(u), f8(g), f8(h), float(half), float(growth),
+                                         float(_BALL_FIRST * half))
+    return np.frombuffer(fx, np.float64), np.frombuffer(fy, np.float64), np.frombuffer(starts, np.int64)
 
 
 def _ball_rows(grid: "_SlabGrid", points: np.ndarray, radius: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -553,8 +574,20 @@ class _SlabGrid:
         self.half_cell = 0.5 * cell
         checkpoint(0.0)
         self.columns = np.ascontiguousarray(self.points.T)  # x, y and z apart: the slab's tests on contiguous arrays
-        checkpoint(0.0)
-        self.tree = kd_tree(self.points, checkpoint)  # rows of ``points``: ball queries in grid order
+        self.keys, self.dims = np.ascontiguousarray(keys, np.int64), np.ascontiguousarray(dims, np.int64)
+        # each line of cells (j, k)'s first occupied cell: the compiled rings' lookups without a search of all keys
+        self.lines = np.searchsorted(self.keys, np.arange(int(dims[1] * dims[2]) + 1, dtype=np.int64) * int(dims[0]))
+        # the compiled rings' frame: the grid's corner, its cell side and the coordinates' magnitude
+        self.frame = np.array([*self.lo, cell, float(np.abs(np.r_[self.lo, self.hi]).max())], dtype=float)
+        self._tree: cKDTree | None = None
+
+    @property
+    def tree(self) -> cKDTree:
+        """A kd-tree of ``points`` (ball queries in grid order), built on first use: the compiled rings
+        look cells up in the grid itself."""
+        if self._tree is None:
+            self._tree = kd_tree(self.points)
+        return self._tree
 
     def reach(self, u: np.ndarray, half: float) -> np.ndarray:
         """How far from the slab's mid-plane a cell centre may lie for the cell to meet the slab, for
