@@ -329,6 +329,97 @@ static int one_ring(const Grid *G, Search *S, double growth, double first, Vec *
     return 1;
 }
 
+/* numpy's pairwise summation of n contiguous doubles (umath loops, pairwise_sum) */
+static double pairwise_sum(const double *a, Py_ssize_t n) {
+    if (n < 8) {
+        double res = 0.0;
+        for (Py_ssize_t i = 0; i < n; i++) res += a[i];
+        return res;
+    }
+    if (n <= 128) {
+        double r[8];
+        Py_ssize_t i;
+        for (int j = 0; j < 8; j++) r[j] = a[j];
+        for (i = 8; i < n - (n % 8); i += 8)
+            for (int j = 0; j < 8; j++) r[j] += a[i + j];
+        double res = ((r[0] + r[1]) + (r[2] + r[3])) + ((r[4] + r[5]) + (r[6] + r[7]));
+        for (; i < n; i++) res += a[i];
+        return res;
+    }
+    Py_ssize_t n2 = n / 2;
+    n2 -= n2 % 8;
+    return pairwise_sum(a, n2) + pairwise_sum(a + n2, n - n2);
+}
+
+/* The part of ellipse_fit.ellipse_sums before its BLAS product, for sets lo..hi - 1 of x, y (set i is
+ * starts[i]:starts[i + 1]): a set of >= 5 finite points gets its centroid (running sums / n), its RMS radius
+ * (sqrt of numpy's pairwise mean of cx^2 + cy^2) and, where that is > 0, its rows [cx^2, cx cy, cy^2, cx, cy, 1]
+ * of the centred points / radius from row starts[i] - starts[lo] of `design`; ok[i - lo] = 1 for those. */
+static void design_rows(const double *x, const double *y, const int64_t *starts, Py_ssize_t lo, Py_ssize_t hi,
+                        double *design, double *origin, double *scale, int8_t *ok, double *t) {
+    for (Py_ssize_t i = lo; i < hi; i++) {
+        const Py_ssize_t a = (Py_ssize_t)starts[i], n = (Py_ssize_t)starts[i + 1] - a;
+        const double *xs = x + a, *ys = y + a;
+        ok[i - lo] = 0;
+        if (n < 5) continue;
+        int finite = 1;
+        for (Py_ssize_t j = 0; j < n; j++) finite &= isfinite(xs[j]) && isfinite(ys[j]);
+        if (!finite) continue;
+        double sx = xs[0], sy = ys[0];
+        for (Py_ssize_t j = 1; j < n; j++) { sx += xs[j]; sy += ys[j]; }
+        const double ox = sx / (double)n, oy = sy / (double)n;
+        for (Py_ssize_t j = 0; j < n; j++) {
+            const double cx = xs[j] - ox, cy = ys[j] - oy;
+            t[j] = cx * cx + cy * cy;
+        }
+        const double sc = sqrt(pairwise_sum(t, n) / (double)n);
+        if (!(sc > 0)) continue;
+        double *d = design + 6 * (a - (Py_ssize_t)starts[lo]);
+        for (Py_ssize_t j = 0; j < n; j++, d += 6) {
+            const double cx = (xs[j] - ox) / sc, cy = (ys[j] - oy) / sc;
+            d[0] = cx * cx; d[1] = cx * cy; d[2] = cy * cy; d[3] = cx; d[4] = cy; d[5] = 1.0;
+        }
+        origin[2 * (i - lo)] = ox;
+        origin[2 * (i - lo) + 1] = oy;
+        scale[i - lo] = sc;
+        ok[i - lo] = 1;
+    }
+}
+
+/* design(x (M,) f64, y (M,) f64, starts (S + 1,) i64, lo, hi, design out (>= rows of sets lo..hi-1, 6) f64,
+ *        origin out (hi - lo, 2) f64, scale out (hi - lo,) f64, ok out (hi - lo,) i8) */
+static PyObject *py_design(PyObject *self, PyObject *args) {
+    Py_buffer xb, yb, sb, db, ob, cb, kb;
+    Py_ssize_t lo, hi;
+    if (!PyArg_ParseTuple(args, "y*y*y*nnw*w*w*w*", &xb, &yb, &sb, &lo, &hi, &db, &ob, &cb, &kb)) return NULL;
+    const int64_t *starts = (const int64_t *)sb.buf;
+    const Py_ssize_t m = xb.len / (Py_ssize_t)sizeof(double), n_sets = sb.len / (Py_ssize_t)sizeof(int64_t) - 1;
+    int ok = yb.len == xb.len && 0 <= lo && lo <= hi && hi <= n_sets && ob.len == 2 * (hi - lo) * (Py_ssize_t)sizeof(double)
+             && cb.len == (hi - lo) * (Py_ssize_t)sizeof(double) && kb.len == hi - lo;
+    Py_ssize_t big = 0;
+    for (Py_ssize_t i = lo; ok && i < hi; i++) {
+        ok = starts[i] >= 0 && starts[i] <= starts[i + 1] && starts[i + 1] <= m;
+        if (ok && starts[i + 1] - starts[i] > big) big = (Py_ssize_t)(starts[i + 1] - starts[i]);
+    }
+    ok = ok && (hi == lo || db.len >= 6 * (Py_ssize_t)(starts[hi] - starts[lo]) * (Py_ssize_t)sizeof(double));
+    double *t = ok ? (double *)malloc((size_t)(big + 1) * sizeof(double)) : NULL;
+    if (ok && t) {
+        Py_BEGIN_ALLOW_THREADS
+        design_rows((const double *)xb.buf, (const double *)yb.buf, starts, lo, hi, (double *)db.buf, (double *)ob.buf,
+                    (double *)cb.buf, (int8_t *)kb.buf, t);
+        Py_END_ALLOW_THREADS
+    }
+    free(t);
+    PyBuffer_Release(&xb); PyBuffer_Release(&yb); PyBuffer_Release(&sb); PyBuffer_Release(&db);
+    PyBuffer_Release(&ob); PyBuffer_Release(&cb); PyBuffer_Release(&kb);
+    if (!ok) {
+        PyErr_SetString(PyExc_ValueError, "design: inconsistent sets or output arrays");
+        return NULL;
+    }
+    if (!t) return PyErr_NoMemory();
+    Py_RETURN_NONE;
+}
+
 static PyObject *doubles(const Vec *a) {
     return PyByteArray_FromStringAndSize((const char *)a->v, (Py_ssize_t)(a->n * (Py_ssize_t)sizeof(double)));
 }
@@ -412,6 +503,7 @@ static PyObject *py_rings(PyObject *self, PyObject *args) {
 
 static PyMethodDef methods[] = {
     {"rings", py_rings, METH_VARARGS, "Per curve sample: its slab ring's plane coordinates, in ring order."},
+    {"design", py_design, METH_VARARGS, "Per point set: centroid, RMS radius and the ellipse fit's design rows."},
     {NULL, NULL, 0, NULL},
 };
 
