@@ -66,9 +66,10 @@ static int pts_reserve(Pts *a, Py_ssize_t need) {
 
 static void pts_free(Pts *a) { free(a->d); free(a->fg); free(a->fh); free(a->row); }
 
-typedef struct {             /* sort scratch: keys and positions, twice, and the pool positions sorted */
+typedef struct {             /* sort scratch: keys and positions, twice, the pool positions sorted, buckets */
     uint64_t *key, *key2;
     int32_t *idx, *idx2, *from;
+    uint32_t *bucket;
     Py_ssize_t cap;
 } Scratch;
 
@@ -80,11 +81,14 @@ static int scratch_reserve(Scratch *a, Py_ssize_t need) {
 #define GROW(f, t) p = realloc(a->f, (size_t)cap * sizeof(t)); if (!p) return 0; a->f = (t *)p;
     GROW(key, uint64_t) GROW(key2, uint64_t) GROW(idx, int32_t) GROW(idx2, int32_t) GROW(from, int32_t)
 #undef GROW
+    p = realloc(a->bucket, ((size_t)cap + 2) * sizeof(uint32_t));
+    if (!p) return 0;
+    a->bucket = (uint32_t *)p;
     a->cap = cap;
     return 1;
 }
 
-static void scratch_free(Scratch *a) { free(a->key); free(a->key2); free(a->idx); free(a->idx2); free(a->from); }
+static void scratch_free(Scratch *a) { free(a->key); free(a->key2); free(a->idx); free(a->idx2); free(a->from); free(a->bucket); }
 
 /* A distance's sort key: a non-negative double orders as its bits; every NaN after +inf (numpy's sorts put
  * NaN last). */
@@ -95,28 +99,29 @@ static inline uint64_t dist_key(double d) {
     return k;
 }
 
-/* s->idx[0..n) = positions 0..n-1 in the stable order of key[0..n) (equal keys keep their positions' order) */
-static void stable_order(Scratch *s, Py_ssize_t n) {
-    uint64_t *key = s->key, *key2 = s->key2;
-    int32_t *idx = s->idx, *idx2 = s->idx2;
-    for (Py_ssize_t i = 0; i < n; i++) idx[i] = (int32_t)i;
-    if (n <= SMALL_SORT) {  /* insertion sort */
-        for (Py_ssize_t i = 1; i < n; i++) {
-            const uint64_t k = key[i];
-            Py_ssize_t j = i;
-            while (j > 0 && key[j - 1] > k) {
-                key[j] = key[j - 1];
-                idx[j] = idx[j - 1];
-                j--;
-            }
-            key[j] = k;
-            idx[j] = (int32_t)i;
+/* Stable insertion sort of (key, idx)[0..n) by key. */
+static void insertion(uint64_t *key, int32_t *idx, Py_ssize_t n) {
+    for (Py_ssize_t i = 1; i < n; i++) {
+        const uint64_t k = key[i];
+        const int32_t at = idx[i];
+        Py_ssize_t j = i;
+        while (j > 0 && key[j - 1] > k) {
+            key[j] = key[j - 1];
+            idx[j] = idx[j - 1];
+            j--;
         }
-        return;
+        key[j] = k;
+        idx[j] = at;
     }
-    /* LSD radix sort (stable), the bytes all keys share skipped */
+}
+
+/* Stable LSD radix sort of (key, idx)[0..n) by key, with (tk, ti)[0..n) as scratch; bytes all keys share
+ * are skipped.  The result is left in (key, idx). */
+static void radix(uint64_t *key, int32_t *idx, uint64_t *tk, int32_t *ti, Py_ssize_t n) {
     uint32_t count[8][256];
     memset(count, 0, sizeof count);
+    uint64_t *k0 = key;
+    int32_t *i0 = idx;
     for (Py_ssize_t i = 0; i < n; i++) {
         const uint64_t k = key[i];
         for (int b = 0; b < 8; b++) count[b][(k >> (8 * b)) & 255]++;
@@ -132,13 +137,65 @@ static void stable_order(Scratch *s, Py_ssize_t n) {
         }
         for (Py_ssize_t i = 0; i < n; i++) {
             const uint32_t at = cnt[(key[i] >> (8 * b)) & 255]++;
-            key2[at] = key[i];
-            idx2[at] = idx[i];
+            tk[at] = key[i];
+            ti[at] = idx[i];
         }
-        uint64_t *tk = key; key = key2; key2 = tk;
-        int32_t *ti = idx; idx = idx2; idx2 = ti;
+        uint64_t *sk = key; key = tk; tk = sk;
+        int32_t *si = idx; idx = ti; ti = si;
     }
-    if (idx != s->idx) memcpy(s->idx, idx, (size_t)n * sizeof(int32_t));
+    if (key != k0) {
+        memcpy(k0, key, (size_t)n * sizeof(uint64_t));
+        memcpy(i0, idx, (size_t)n * sizeof(int32_t));
+    }
+}
+
+/* s->idx[0..n) = positions 0..n-1 in the stable order of key[0..n) (equal keys keep their positions' order):
+ * a counting sort into about n buckets of equal spans of the keys (a key's bucket grows with the key: NaN's
+ * last), then each bucket by insertion (a long one by radix). */
+static void stable_order(Scratch *s, Py_ssize_t n) {
+    uint64_t *key = s->key, *key2 = s->key2;
+    int32_t *idx = s->idx, *idx2 = s->idx2;
+    for (Py_ssize_t i = 0; i < n; i++) idx[i] = (int32_t)i;
+    if (n <= SMALL_SORT) {
+        insertion(key, idx, n);
+        return;
+    }
+    uint64_t lo = UINT64_MAX, hi = 0;
+    for (Py_ssize_t i = 0; i < n; i++) {
+        const uint64_t k = key[i];
+        if (k == UINT64_MAX) continue;
+        lo = k < lo ? k : lo;
+        hi = k > hi ? k : hi;
+    }
+    if (lo > hi) return;  /* every distance NaN: the order as it is */
+    int shift = 0;
+    while (((hi - lo) >> shift) >= (uint64_t)n) shift++;
+    const Py_ssize_t nb = (Py_ssize_t)((hi - lo) >> shift) + 2;  /* the last bucket: NaN */
+    uint32_t *cnt = s->bucket;
+    memset(cnt, 0, (size_t)nb * sizeof(uint32_t));
+#define BUCKET(k) ((k) == UINT64_MAX ? nb - 1 : (Py_ssize_t)(((k) - lo) >> shift))
+    for (Py_ssize_t i = 0; i < n; i++) cnt[BUCKET(key[i])]++;
+    uint32_t sum = 0;
+    for (Py_ssize_t b = 0; b < nb; b++) {
+        const uint32_t t = cnt[b];
+        cnt[b] = sum;
+        sum += t;
+    }
+    for (Py_ssize_t i = 0; i < n; i++) {
+        const uint32_t at = cnt[BUCKET(key[i])]++;
+        key2[at] = key[i];
+        idx2[at] = idx[i];
+    }
+#undef BUCKET
+    /* cnt[b] is now bucket b's end */
+    Py_ssize_t start = 0;
+    for (Py_ssize_t b = 0; b < nb - 1; b++) {
+        const Py_ssize_t end = (Py_ssize_t)cnt[b], m = end - start;
+        if (m > 4 * SMALL_SORT) radix(key2 + start, idx2 + start, key + start, idx + start, m);
+        else if (m > 1) insertion(key2 + start, idx2 + start, m);
+        start = end;
+    }
+    memcpy(s->idx, idx2, (size_t)n * sizeof(int32_t));
 }
 
 static inline Py_ssize_t lower_bound(const int64_t *keys, Py_ssize_t lo, Py_ssize_t hi, int64_t want) {
