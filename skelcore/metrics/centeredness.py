@@ -43,7 +43,9 @@ _BALL_FIRST = 0.5
 _BALL_MARGIN = 1e-9  # relative: the ring search's balls and the box's reach are this much larger than exact
 # rings by the compiled kernel (_rings.c); False: by the array code below, its reference (the same bits, tested)
 _COMPILED_RINGS = True
-_KERNEL_BATCH = 256  # samples per kernel call on small clouds (a checkpoint between calls)
+# a sample's share of a batch of _CURVE_BATCH_PAIRS on small clouds with the kernel (256 samples per call by
+# default, a checkpoint between calls)
+_KERNEL_SAMPLE_PAIRS = _CURVE_BATCH_PAIRS // 256
 
 
 def skeletal_centeredness(
@@ -294,7 +296,7 @@ def curve_centeredness(
         # small clouds: the samples in batches of flat arrays on this thread (docs/performance.md 6.5); a
         # batch holds about _CURVE_BATCH_PAIRS candidates of the first ball
         if _COMPILED_RINGS:
-            bounds = np.arange(len(todo) + 1) * (_CURVE_BATCH_PAIRS // _KERNEL_BATCH)
+            bounds = np.arange(len(todo) + 1) * _KERNEL_SAMPLE_PAIRS
         else:
             first = grid.tree.query_ball_point(points[todo], _ball_radius(np.full(len(todo), _BALL_FIRST * half), half),
                                                return_length=True)
