@@ -257,11 +257,10 @@ def curve_centeredness(
     Invalid (NaN): a NaN direction (joint vertex), fewer than 3 ring points. The unbounded -> 0
     rule is NOT applied here.
 
-    The slab is a plate spanning the whole cloud, but only its points up to the ring's end matter: they
-    are taken first from a ball around p (a kd-tree), and from the whole slab (the points of the grid
-    cells that can meet it; cells of side max(alpha / 2, diagonal / 512)) only when the ring reaches
-    past the ball.  Either way the result equals that of testing every cloud point, in the grid's order
-    for equal distances.  Clouds under 50k points take the samples in batches of flat arrays, larger
+    The slab is a plate spanning the whole cloud, but only its points up to the ring's end matter: a
+    compiled kernel takes them from the grid cells (side max(alpha / 2, diagonal / 512)) in growing balls
+    around p (the array code, its reference: one kd-tree ball, then the whole slab).  Either way the result
+    equals that of testing every cloud point, in the grid's order for equal distances.  Clouds under 50k points take the samples in batches of flat arrays, larger
     ones in spans on threads; both give the same bits (docs/performance.md 6.5).
     ``grid``: :func:`slab_grid` of the same cloud and params, when kept from an earlier call. ``span``:
     samples per thread task on large clouds (default 4; an edit's update asks for larger ones: fewer
@@ -389,7 +388,8 @@ def _ring_columns(
     inside them, when growth x its last distance <= R (the next point, beyond R, breaks it) or when R
     reaches past the cloud's box; otherwise R doubles, and after ``_BALL_ROUNDS`` balls the sample's whole
     slab is taken (:func:`_slab_ring`, ``tick`` after each).  The same candidates' values in the same order
-    as testing every grid row: the same rings, bit for bit (docs/performance.md 6.5).
+    as testing every grid row: the same rings, bit for bit (docs/performance.md 6.5).  With
+    ``_COMPILED_RINGS`` (the default) :func:`_kernel_rings` answers; the array code here is its reference.
     """
     if _COMPILED_RINGS:
         return _kernel_rings(grid, points, u, g, h, half, growth)
@@ -440,9 +440,9 @@ def _kernel_rings(
     """:func:`_ring_columns` by the compiled kernel ``_rings.c``: the same rings, bit for bit (tested), from
     the grid's cells around p in growing balls (the first of reach ``_BALL_FIRST`` x alpha / 2), without the
     kd-tree or the whole slab's arrays (docs/performance.md 6.5)."""
-    f8 = lambda a: np.ascontiguousarray(a, np.float64)  # noqa: E731
-    fx, fy, starts = _rings_kernel.rings(grid.columns, grid.keys, grid.starts, grid.counts, grid.lines, f8(grid.centres), grid.frame,
-                                         grid.dims, f8(points), f8(u), f8(g), f8(h), float(half), float(growth),
+    samples = (np.ascontiguousarray(a, np.float64) for a in (points, u, g, h))
+    fx, fy, starts = _rings_kernel.rings(grid.columns, grid.keys, grid.starts, grid.counts, grid.lines, grid.centres,
+                                         grid.frame, grid.dims, *samples, float(half), float(growth),
                                          float(_BALL_FIRST * half))
     return np.frombuffer(fx, np.float64), np.frombuffer(fy, np.float64), np.frombuffer(starts, np.int64)
 
@@ -572,7 +572,7 @@ class _SlabGrid:
         self.counts = np.diff(np.r_[self.starts, len(srt)])
         keys = srt[self.starts]
         cell_ijk = np.column_stack([keys % dims[0], (keys // dims[0]) % dims[1], keys // (dims[0] * dims[1])])
-        self.centres = self.lo + (cell_ijk + 0.5) * cell
+        self.centres = np.ascontiguousarray(self.lo + (cell_ijk + 0.5) * cell, dtype=np.float64)
         self.half_cell = 0.5 * cell
         checkpoint(0.0)
         self.columns = np.ascontiguousarray(self.points.T)  # x, y and z apart: the slab's tests on contiguous arrays
