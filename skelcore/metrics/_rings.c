@@ -191,8 +191,13 @@ static void stable_order(Scratch *s, Py_ssize_t n) {
     Py_ssize_t start = 0;
     for (Py_ssize_t b = 0; b < nb - 1; b++) {
         const Py_ssize_t end = (Py_ssize_t)cnt[b], m = end - start;
-        if (m > 4 * SMALL_SORT) radix(key2 + start, idx2 + start, key + start, idx + start, m);
-        else if (m > 1) insertion(key2 + start, idx2 + start, m);
+        if (m > 4 * SMALL_SORT) {
+            Py_ssize_t tied = 1;  /* a long bucket of one distance (a tube's exact radius) is in order already */
+            while (tied < m && key2[start + tied] == key2[start]) tied++;
+            if (tied < m) radix(key2 + start, idx2 + start, key + start, idx + start, m);
+        } else if (m > 1) {
+            insertion(key2 + start, idx2 + start, m);
+        }
         start = end;
     }
     memcpy(s->idx, idx2, (size_t)n * sizeof(int32_t));
