@@ -27,7 +27,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#define SMALL_SORT 32        /* up to this many keys an insertion sort beats the radix sort */
+#define SMALL_SORT 32        /* up to this many keys an insertion sort; a bucket of over 4 x this: radix */
 #define MARGIN 1e-9          /* relative allowance of the cell tests for round-off (a superset of cells is harmless) */
 
 typedef struct {             /* a growing array of doubles */
@@ -88,7 +88,9 @@ static int scratch_reserve(Scratch *a, Py_ssize_t need) {
     return 1;
 }
 
-static void scratch_free(Scratch *a) { free(a->key); free(a->key2); free(a->idx); free(a->idx2); free(a->from); free(a->bucket); }
+static void scratch_free(Scratch *a) {
+    free(a->key); free(a->key2); free(a->idx); free(a->idx2); free(a->from); free(a->bucket);
+}
 
 /* A distance's sort key: a non-negative double orders as its bits; every NaN after +inf (numpy's sorts put
  * NaN last). */
@@ -293,7 +295,8 @@ static int gather(const Grid *G, Search *S, const int64_t *box) {
         for (int64_t j = box[2]; j <= box[3]; j++) {
             const int64_t line = j + d1 * k, first = box[0] + d0 * line, last = box[1] + d0 * line;
             const Py_ssize_t end = (Py_ssize_t)G->lines[line + 1];
-            for (Py_ssize_t at = lower_bound(G->keys, (Py_ssize_t)G->lines[line], end, first); at < end && G->keys[at] <= last; at++)
+            Py_ssize_t at = lower_bound(G->keys, (Py_ssize_t)G->lines[line], end, first);
+            for (; at < end && G->keys[at] <= last; at++)
                 if (!take_cell(G, at, S)) return 0;
         }
     }
@@ -456,7 +459,8 @@ static PyObject *py_design(PyObject *self, PyObject *args) {
     if (!PyArg_ParseTuple(args, "y*y*y*nnw*w*w*w*", &xb, &yb, &sb, &lo, &hi, &db, &ob, &cb, &kb)) return NULL;
     const int64_t *starts = (const int64_t *)sb.buf;
     const Py_ssize_t m = xb.len / (Py_ssize_t)sizeof(double), n_sets = sb.len / (Py_ssize_t)sizeof(int64_t) - 1;
-    int ok = yb.len == xb.len && 0 <= lo && lo <= hi && hi <= n_sets && ob.len == 2 * (hi - lo) * (Py_ssize_t)sizeof(double)
+    int ok = yb.len == xb.len && 0 <= lo && lo <= hi && hi <= n_sets
+             && ob.len == 2 * (hi - lo) * (Py_ssize_t)sizeof(double)
              && cb.len == (hi - lo) * (Py_ssize_t)sizeof(double) && kb.len == hi - lo;
     Py_ssize_t big = 0;
     for (Py_ssize_t i = lo; ok && i < hi; i++) {
@@ -486,14 +490,15 @@ static PyObject *doubles(const Vec *a) {
     return PyByteArray_FromStringAndSize((const char *)a->v, (Py_ssize_t)(a->n * (Py_ssize_t)sizeof(double)));
 }
 
-/* rings(columns (3, N) f64, keys (C,) i64, starts (C,) i64, counts (C,) i64, lines (d1 d2 + 1,) i64, centres (C, 3) f64,
+/* rings(columns (3, N) f64, keys (C,) i64, starts (C,) i64, counts (C,) i64, lines (d1 d2 + 1,) i64,
+ *       centres (C, 3) f64,
  *       frame (lo0, lo1, lo2, cell, size) f64, dims (3,) i64, points (S, 3), u, g, h (S, 3) f64,
  *       half, growth, first) -> (fx, fy, starts) as bytearrays of f64, f64, i64 (S + 1) */
 static PyObject *py_rings(PyObject *self, PyObject *args) {
     Py_buffer col, ky, st, ct, ln, ce, fr, dm, pt, ub, gb, hb;
     double half, growth, first;
-    if (!PyArg_ParseTuple(args, "y*y*y*y*y*y*y*y*y*y*y*y*ddd", &col, &ky, &st, &ct, &ln, &ce, &fr, &dm, &pt, &ub, &gb, &hb,
-                          &half, &growth, &first))
+    if (!PyArg_ParseTuple(args, "y*y*y*y*y*y*y*y*y*y*y*y*ddd", &col, &ky, &st, &ct, &ln, &ce, &fr, &dm, &pt, &ub,
+                          &gb, &hb, &half, &growth, &first))
         return NULL;
     Py_buffer *all[] = {&col, &ky, &st, &ct, &ln, &ce, &fr, &dm, &pt, &ub, &gb, &hb};
     const int n_buf = (int)(sizeof all / sizeof all[0]);
@@ -510,7 +515,8 @@ static PyObject *py_rings(PyObject *self, PyObject *args) {
     const Py_ssize_t n_lines = ok ? (Py_ssize_t)(dims[1] * dims[2]) : 0;
     const int64_t *lines = (const int64_t *)ln.buf;
     ok = ok && ln.len == (n_lines + 1) * (Py_ssize_t)sizeof(int64_t);
-    for (Py_ssize_t i = 0; ok && i <= n_lines; i++) ok = lines[i] >= 0 && lines[i] <= n_cells && (i == 0 || lines[i] >= lines[i - 1]);
+    for (Py_ssize_t i = 0; ok && i <= n_lines; i++)
+        ok = lines[i] >= 0 && lines[i] <= n_cells && (i == 0 || lines[i] >= lines[i - 1]);
     const int64_t *starts = (const int64_t *)st.buf, *counts = (const int64_t *)ct.buf;
     const int64_t *keys = (const int64_t *)ky.buf;
     for (Py_ssize_t i = 0; ok && i < n_cells; i++)

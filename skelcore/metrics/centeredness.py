@@ -260,8 +260,9 @@ def curve_centeredness(
     The slab is a plate spanning the whole cloud, but only its points up to the ring's end matter: a
     compiled kernel takes them from the grid cells (side max(alpha / 2, diagonal / 512)) in growing balls
     around p (the array code, its reference: one kd-tree ball, then the whole slab).  Either way the result
-    equals that of testing every cloud point, in the grid's order for equal distances.  Clouds under 50k points take the samples in batches of flat arrays, larger
-    ones in spans on threads; both give the same bits (docs/performance.md 6.5).
+    equals that of testing every cloud point, in the grid's order for equal distances.  Clouds under 50k
+    points take the samples in batches of flat arrays, larger ones in spans on threads; both give the
+    same bits (docs/performance.md 6.5).
     ``grid``: :func:`slab_grid` of the same cloud and params, when kept from an earlier call. ``span``:
     samples per thread task on large clouds (default 4; an edit's update asks for larger ones: fewer
     batched fits, the same bits).
@@ -293,7 +294,7 @@ def curve_centeredness(
 
     if len(cloud) < _CURVE_AT_ONCE:
         # small clouds: the samples in batches of flat arrays on this thread (docs/performance.md 6.5); a
-        # batch holds about _CURVE_BATCH_PAIRS candidates of the first ball
+        # batch holds about _CURVE_BATCH_PAIRS candidates of the first ball (the kernel's: 256 samples)
         if _COMPILED_RINGS:
             bounds = np.arange(len(todo) + 1) * _KERNEL_SAMPLE_PAIRS
         else:
@@ -578,7 +579,8 @@ class _SlabGrid:
         self.columns = np.ascontiguousarray(self.points.T)  # x, y and z apart: the slab's tests on contiguous arrays
         self.keys, self.dims = np.ascontiguousarray(keys, np.int64), np.ascontiguousarray(dims, np.int64)
         # each line of cells (j, k)'s first occupied cell: the compiled rings' lookups without a search of all keys
-        self.lines = np.searchsorted(self.keys, np.arange(int(dims[1] * dims[2]) + 1, dtype=np.int64) * int(dims[0]))
+        lines = np.arange(int(dims[1] * dims[2]) + 1, dtype=np.int64) * int(dims[0])
+        self.lines = np.searchsorted(self.keys, lines).astype(np.int64)
         # the compiled rings' frame: the grid's corner, its cell side and the coordinates' magnitude
         self.frame = np.array([*self.lo, cell, float(np.abs(np.r_[self.lo, self.hi]).max())], dtype=float)
         self._tree: cKDTree | None = None

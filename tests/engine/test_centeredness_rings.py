@@ -91,7 +91,8 @@ def test_compiled_rings_a_neuron(monkeypatch):
     from skelcore.benchmark.neurons import MeshSampler, load_neuron
 
     nr = load_neuron("722817260")
-    cloud = MeshSampler(nr.mesh, nr.skeleton.vertices, nr.skeleton.radius).sample(30_000, np.random.default_rng(0)).points
+    sampler = MeshSampler(nr.mesh, nr.skeleton.vertices, nr.skeleton.radius)
+    cloud = sampler.sample(30_000, np.random.default_rng(0)).points
     samples = sample_curve(nr.skeleton, 300)
     keep = np.all(np.isfinite(samples.directions), axis=1)
     points, dirs = samples.points[keep][::3], samples.directions[keep][::3]
