@@ -1,6 +1,6 @@
 # One-command set-up on a fresh Debian machine as root: system packages, .venv, the project.
 # chromium: the test suite renders skelcore compare's report.html in headless Chromium.
-# gcc, python3-dev: the install compiles the kernels (skelcore/metrics/_raycast.c, _balls.c, _centroids.c, _emst.c).
+# gcc, python3-dev: the install compiles the kernels (skelcore/metrics/_raycast.c, _balls.c, _centroids.c, _rings.c, _emst.c).
 SHELL := /bin/bash
 PYTHON ?= python3
 VENV := .venv
