@@ -1,6 +1,6 @@
 """Build step for the compiled modules: the rays boundedness kernel (docs/boundedness.md, section 3), the
-coverage kernel (docs/metrics.md, section 5.2), skeletal centeredness' neighbour sums and the topology
-stage's EMST (docs/performance.md, sections 6.4 and 6.1).
+coverage kernel (docs/metrics.md, section 5.2), skeletal centeredness' neighbour sums, curve centeredness'
+rings and the topology stage's EMST (docs/performance.md, sections 6.4, 6.5 and 6.1).
 
 Also here: the package list (the viewer's folder ``app/`` installs as ``skelscope``) and the package
 index's long description; everything else is declared in pyproject.toml.  The kernels are plain C against the CPython API (no numpy
@@ -52,6 +52,11 @@ setup(
         Extension(
             "skelcore.metrics._centroids",
             sources=["skelcore/metrics/_centroids.c"],
+            extra_compile_args=["-O3", "-std=c99", "-ffp-contract=off"],
+        ),
+        Extension(
+            "skelcore.metrics._rings",
+            sources=["skelcore/metrics/_rings.c"],
             extra_compile_args=["-O3", "-std=c99", "-ffp-contract=off"],
         ),
         Extension(

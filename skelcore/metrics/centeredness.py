@@ -24,7 +24,7 @@ from ..geometry import (
 )
 from ..parallel import on_threads
 from ..params import Params, k_center_for
-from . import _centroids
+from . import _centroids, _rings as _rings_kernel
 from .ellipse_fit import EllipseSums, ellipse_sums, ellipses_from_sums
 from .position_knn import SHARED_FROM, PositionNeighbours, position_neighbours
 
@@ -41,6 +41,11 @@ _BALL_ROUNDS = 1  # ball searches before a sample's whole slab is taken (the nex
 # the first ball's 2-D reach, in alpha / 2 (neuron, 100k points: 6.5 CPU s, 8.6 with 1.0; one run each, load 8.7)
 _BALL_FIRST = 0.5
 _BALL_MARGIN = 1e-9  # relative: the ring search's balls and the box's reach are this much larger than exact
+# rings by the compiled kernel (_rings.c); False: by the array code below, its reference (the same bits, tested)
+_COMPILED_RINGS = True
+# a sample's share of a batch of _CURVE_BATCH_PAIRS on small clouds with the kernel (256 samples per call by
+# default, a checkpoint between calls)
+_KERNEL_SAMPLE_PAIRS = _CURVE_BATCH_PAIRS // 256
 
 
 def skeletal_centeredness(
@@ -252,12 +257,12 @@ def curve_centeredness(
     Invalid (NaN): a NaN direction (joint vertex), fewer than 3 ring points. The unbounded -> 0
     rule is NOT applied here.
 
-    The slab is a plate spanning the whole cloud, but only its points up to the ring's end matter: they
-    are taken first from a ball around p (a kd-tree), and from the whole slab (the points of the grid
-    cells that can meet it; cells of side max(alpha / 2, diagonal / 512)) only when the ring reaches
-    past the ball.  Either way the result equals that of testing every cloud point, in the grid's order
-    for equal distances.  Clouds under 50k points take the samples in batches of flat arrays, larger
-    ones in spans on threads; both give the same bits (docs/performance.md 6.5).
+    The slab is a plate spanning the whole cloud, but only its points up to the ring's end matter: a
+    compiled kernel takes them from the grid cells (side max(alpha / 2, diagonal / 512)) in growing balls
+    around p (the array code, its reference: one kd-tree ball, then the whole slab).  Either way the result
+    equals that of testing every cloud point, in the grid's order for equal distances.  Clouds under 50k
+    points take the samples in batches of flat arrays, larger ones in spans on threads; both give the
+    same bits (docs/performance.md 6.5).
     ``grid``: :func:`slab_grid` of the same cloud and params, when kept from an earlier call. ``span``:
     samples per thread task on large clouds (default 4; an edit's update asks for larger ones: fewer
     batched fits, the same bits).
@@ -289,10 +294,13 @@ def curve_centeredness(
 
     if len(cloud) < _CURVE_AT_ONCE:
         # small clouds: the samples in batches of flat arrays on this thread (docs/performance.md 6.5); a
-        # batch holds about _CURVE_BATCH_PAIRS candidates of the first ball
-        first = grid.tree.query_ball_point(points[todo], _ball_radius(np.full(len(todo), _BALL_FIRST * half), half),
-                                           return_length=True)
-        bounds = np.r_[0, np.cumsum(first)]
+        # batch holds about _CURVE_BATCH_PAIRS candidates of the first ball (the kernel's: 256 samples)
+        if _COMPILED_RINGS:
+            bounds = np.arange(len(todo) + 1) * _KERNEL_SAMPLE_PAIRS
+        else:
+            first = grid.tree.query_ball_point(points[todo], _ball_radius(np.full(len(todo), _BALL_FIRST * half), half),
+                                               return_length=True)
+            bounds = np.r_[0, np.cumsum(first)]
         lo = 0
         while lo < len(todo):
             hi = lo + max(1, int(np.searchsorted(bounds[lo:], bounds[lo] + _CURVE_BATCH_PAIRS, side="right")) - 1)
@@ -381,8 +389,11 @@ def _ring_columns(
     inside them, when growth x its last distance <= R (the next point, beyond R, breaks it) or when R
     reaches past the cloud's box; otherwise R doubles, and after ``_BALL_ROUNDS`` balls the sample's whole
     slab is taken (:func:`_slab_ring`, ``tick`` after each).  The same candidates' values in the same order
-    as testing every grid row: the same rings, bit for bit (docs/performance.md 6.5).
+    as testing every grid row: the same rings, bit for bit (docs/performance.md 6.5).  With
+    ``_COMPILED_RINGS`` (the default) :func:`_kernel_rings` answers; the array code here is its reference.
     """
+    if _COMPILED_RINGS:
+        return _kernel_rings(grid, points, u, g, h, half, growth)
     n = len(points)
     far = np.linalg.norm(np.maximum(np.abs(grid.lo - points), np.abs(grid.hi - points)), axis=1) * (1.0 + _BALL_MARGIN)
     reach = np.full(n, _BALL_FIRST * half)
@@ -422,6 +433,19 @@ def _ring_columns(
             tick()
     return (np.concatenate([ring[0] for ring in rings]), np.concatenate([ring[1] for ring in rings]),
             np.r_[0, np.cumsum([len(ring[0]) for ring in rings])])
+
+
+def _kernel_rings(
+    grid: "_SlabGrid", points: np.ndarray, u: np.ndarray, g: np.ndarray, h: np.ndarray, half: float, growth: float,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """:func:`_ring_columns` by the compiled kernel ``_rings.c``: the same rings, bit for bit (tested), from
+    the grid's cells around p in growing balls (the first of reach ``_BALL_FIRST`` x alpha / 2), without the
+    kd-tree or the whole slab's arrays (docs/performance.md 6.5)."""
+    samples = (np.ascontiguousarray(a, np.float64) for a in (points, u, g, h))
+    fx, fy, starts = _rings_kernel.rings(grid.columns, grid.keys, grid.starts, grid.counts, grid.lines, grid.centres,
+                                         grid.frame, grid.dims, *samples, float(half), float(growth),
+                                         float(_BALL_FIRST * half))
+    return np.frombuffer(fx, np.float64), np.frombuffer(fy, np.float64), np.frombuffer(starts, np.int64)
 
 
 def _ball_rows(grid: "_SlabGrid", points: np.ndarray, radius: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -549,12 +573,25 @@ class _SlabGrid:
         self.counts = np.diff(np.r_[self.starts, len(srt)])
         keys = srt[self.starts]
         cell_ijk = np.column_stack([keys % dims[0], (keys // dims[0]) % dims[1], keys // (dims[0] * dims[1])])
-        self.centres = self.lo + (cell_ijk + 0.5) * cell
+        self.centres = np.ascontiguousarray(self.lo + (cell_ijk + 0.5) * cell, dtype=np.float64)
         self.half_cell = 0.5 * cell
         checkpoint(0.0)
         self.columns = np.ascontiguousarray(self.points.T)  # x, y and z apart: the slab's tests on contiguous arrays
-        checkpoint(0.0)
-        self.tree = kd_tree(self.points, checkpoint)  # rows of ``points``: ball queries in grid order
+        self.keys, self.dims = np.ascontiguousarray(keys, np.int64), np.ascontiguousarray(dims, np.int64)
+        # each line of cells (j, k)'s first occupied cell: the compiled rings' lookups without a search of all keys
+        lines = np.arange(int(dims[1] * dims[2]) + 1, dtype=np.int64) * int(dims[0])
+        self.lines = np.searchsorted(self.keys, lines).astype(np.int64)
+        # the compiled rings' frame: the grid's corner, its cell side and the coordinates' magnitude
+        self.frame = np.array([*self.lo, cell, float(np.abs(np.r_[self.lo, self.hi]).max())], dtype=float)
+        self._tree: cKDTree | None = None
+
+    @property
+    def tree(self) -> cKDTree:
+        """A kd-tree of ``points`` (ball queries in grid order), built on first use: the compiled rings
+        look cells up in the grid itself."""
+        if self._tree is None:
+            self._tree = kd_tree(self.points)
+        return self._tree
 
     def reach(self, u: np.ndarray, half: float) -> np.ndarray:
         """How far from the slab's mid-plane a cell centre may lie for the cell to meet the slab, for

@@ -10,10 +10,13 @@ from typing import NamedTuple
 
 import numpy as np
 
+from . import _rings
+
 __all__ = ["fit_ellipse", "fit_ellipses", "EllipseSums", "ellipse_sums", "ellipses_from_sums"]
 
 # C1^-1 for the constraint 4ac - b^2 = 1 on (a, b, c): C1 = [[0, 0, 2], [0, -1, 0], [2, 0, 0]]
 _C1_INV = np.array([[0.0, 0.0, 0.5], [0.0, -1.0, 0.0], [0.5, 0.0, 0.0]])
+_DESIGN_ROWS = 1 << 15  # rows of D filled per compiled call, in one reused buffer (1.5 MB: stays in cache)
 
 
 def fit_ellipse(xy: np.ndarray) -> tuple[np.ndarray, np.ndarray, float] | None:
@@ -96,8 +99,36 @@ def ellipse_sums(x: np.ndarray, y: np.ndarray, starts: np.ndarray) -> EllipseSum
     """Centroid, RMS radius and scatter matrix of every set ``x[starts[i]:starts[i + 1]]`` (and y): the
     points centred and scaled to unit RMS radius (the constrained problem is invariant under both), then
     D^T D of D = [x^2, xy, y^2, x, y, 1] (one BLAS product per set: a set may hold tens of thousands of
-    points).  Contiguous columns and one buffer for D; the centroid is a running sum, as ``mean(axis=0)``
-    of the (n, 2) points adds row after row: the same bits as the points' rows, without their strides."""
+    points).  Centroids, radii and the rows of D come from the compiled ``_rings.design`` for many sets per
+    call (numpy's arithmetic: running sums, a pairwise mean; the same bits as :func:`_reference_sums`,
+    tested), into one reused buffer; only the products stay per set (docs/performance.md 6.5)."""
+    x, y = np.ascontiguousarray(x, dtype=float), np.ascontiguousarray(y, dtype=float)
+    starts = np.ascontiguousarray(starts, dtype=np.int64)
+    n_sets = len(starts) - 1
+    if n_sets < 1:
+        return EllipseSums.joined([])
+    big = int(np.diff(starts).max())
+    design = np.empty((min(int(starts[-1] - starts[0]), max(big, _DESIGN_ROWS)), 6))
+    parts, scs = [], []
+    lo = 0
+    while lo < n_sets:  # sets lo .. hi - 1: at most _DESIGN_ROWS rows (or one larger set)
+        hi = min(n_sets, max(lo + 1, int(np.searchsorted(starts, starts[lo] + _DESIGN_ROWS, side="right")) - 1))
+        origin, scale, ok = np.empty((hi - lo, 2)), np.empty(hi - lo), np.zeros(hi - lo, np.int8)
+        _rings.design(x, y, starts, lo, hi, design, origin, scale, ok)
+        fitted = np.flatnonzero(ok)
+        base = int(starts[lo])
+        for a, b in zip((starts[lo + fitted] - base).tolist(), (starts[lo + fitted + 1] - base).tolist()):
+            d = design[a:b]
+            scs.append(d.T @ d)
+        parts.append((lo + fitted, origin[fitted], scale[fitted]))
+        lo = hi
+    if not scs:
+        return EllipseSums.joined([])
+    return EllipseSums(*(np.concatenate(arrays) for arrays in zip(*parts)), np.array(scs))
+
+
+def _reference_sums(x: np.ndarray, y: np.ndarray, starts: np.ndarray) -> EllipseSums:
+    """:func:`ellipse_sums` by numpy alone, set after set (the reference of the compiled rows: the same bits)."""
     x, y = np.ascontiguousarray(x, dtype=float), np.ascontiguousarray(y, dtype=float)
     starts = np.asarray(starts, dtype=np.int64)
     sizes = np.diff(starts)

@@ -1,0 +1,157 @@
+"""Curve centeredness' compiled rings (``_rings.c``) and ellipse sums against the array code they replace
+(docs/performance.md 6.5): the same bits, ties and degenerate slabs included."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from skelcore.curve import CurveSkeleton
+from skelcore.metrics import _rings, centeredness
+from skelcore.metrics.curve_sampling import sample_curve
+from skelcore.metrics.ellipse_fit import _reference_sums, ellipse_sums
+from skelcore.params import Params
+from skelcore.shapes import torus, y_shape
+
+
+def _lattice() -> np.ndarray:
+    """Square rings of integer points stacked along z: exact ties of 2-D distance."""
+    side = [(x, y) for x in range(-4, 5) for y in range(-4, 5) if max(abs(x), abs(y)) == 4]
+    return np.array([(x, y, z) for z in range(20) for x, y in side], dtype=float)
+
+
+def _cases(scans):
+    """(name, cloud, sample points, directions, slab factor)."""
+    from plyfile import PlyData
+
+    from skelcore.geometry import Normalization
+
+    rng = np.random.default_rng(21)
+    vertex = PlyData.read(str(scans / "hammer_4096.ply"))["vertex"]
+    raw = np.column_stack([vertex["x"], vertex["y"], vertex["z"]]).astype(float)
+    hammer = Normalization.from_cloud(raw).apply(raw)
+    branch = y_shape(6000, seed=2)
+    on_axis = sample_curve(CurveSkeleton.from_raw(branch.curve_vertices, branch.curve_edges), 60)
+    ring = torus(5000, 1.0, 0.3, seed=3).cloud
+    lattice = _lattice()
+    lat_pts = np.column_stack([rng.integers(-2, 3, (40, 2)), rng.integers(1, 19, 40)]).astype(float)
+    twice = np.repeat(rng.normal(size=(1500, 3)), 3, axis=0)  # every point three times
+    sheet = np.column_stack([rng.uniform(0, 1, 3000), rng.uniform(0, 0.3, 3000), np.zeros(3000)])
+    blob = rng.normal(size=(4000, 3))
+    far = np.vstack([blob[:20] * 0.5, [[40.0, 0, 0], [0, -40.0, 0], [0, 0, 60.0]]])  # slabs empty or far away
+    return [
+        ("y on its axis", branch.cloud, on_axis.points, on_axis.directions, 0.02),  # exact ties on the tube
+        ("y, random", branch.cloud, branch.cloud[rng.choice(6000, 40)] * 0.5, rng.normal(size=(40, 3)), 0.05),
+        ("torus", ring, ring[rng.choice(len(ring), 40)] * 0.9, rng.normal(size=(40, 3)), 0.02),
+        ("hammer", hammer, hammer[rng.choice(len(hammer), 40)] * 0.8, rng.normal(size=(40, 3)), 0.02),
+        ("lattice, z", lattice, lat_pts, np.tile([0.0, 0.0, 1.0], (40, 1)), 0.05),
+        ("lattice, thick", lattice * 0.1, lat_pts * 0.1, np.tile([0.0, 0.0, 1.0], (40, 1)), 0.3),
+        ("lattice, tilted", lattice, lat_pts, rng.normal(size=(40, 3)) * [0.1, 0.1, 1.0], 0.05),
+        ("duplicates", twice, twice[rng.choice(len(twice), 40)] * 0.5, rng.normal(size=(40, 3)), 0.02),
+        ("sheet across", sheet, sheet[rng.choice(3000, 20)], np.tile([1.0, 0.0, 0.0], (20, 1)), 0.02),
+        ("sheet in plane", sheet, sheet[rng.choice(3000, 20)], np.tile([0.0, 0.0, 1.0], (20, 1)), 0.02),
+        ("blob, far samples", blob, far, rng.normal(size=(len(far), 3)), 0.02),
+    ]
+
+
+def _rings_both_ways(monkeypatch, cloud, points, dirs, slab):
+    params = Params(slab_factor=slab)
+    grid = centeredness.slab_grid(cloud, params)
+    half = 0.5 * slab * float(np.linalg.norm(grid.hi - grid.lo))
+    u = centeredness.unit_rows(dirs)
+    g, h = centeredness._orthonormal_complement(u)
+    out = []
+    for compiled in (False, True):
+        monkeypatch.setattr(centeredness, "_COMPILED_RINGS", compiled)
+        out.append(centeredness._ring_columns(grid, points, u, g, h, half, params.ring_growth))
+    return out
+
+
+def test_compiled_rings_are_the_array_codes_bit_for_bit(monkeypatch, scans):
+    """Every sample's ring (plane coordinates in ring order, and the starts) from the kernel equals the array
+    code's: a branching shape on and off its axis, a torus, the hammer scan, an integer lattice (exact ties,
+    rings cut inside a tie run), repeated points, a flat sheet cut across and in its plane, samples whose
+    slab is empty; the rings must hold ties between distinct points, so a kernel that orders equal distances
+    otherwise than the grid's rows fails here."""
+    tied = 0
+    for name, cloud, points, dirs, slab in _cases(scans):
+        (x0, y0, s0), (x1, y1, s1) = _rings_both_ways(monkeypatch, cloud, points, dirs, slab)
+        assert s1.tobytes() == s0.tobytes(), name
+        assert x1.tobytes() == x0.tobytes() and y1.tobytes() == y0.tobytes(), name
+        d = np.hypot(x0, y0)
+        same = (d[1:] == d[:-1]) & ((x0[1:] != x0[:-1]) | (y0[1:] != y0[:-1]))
+        cut = s0[(s0 > 0) & (s0 < len(d))]
+        same[cut - 1] = False  # not across two rings
+        tied += int(same.sum())
+    assert tied > 1000
+
+
+def test_compiled_rings_a_neuron(monkeypatch):
+    """A real neuron at 30k points with its traced curve (thin branches, a soma's rings of thousands)."""
+    from skelcore.benchmark.neurons import MeshSampler, load_neuron
+
+    nr = load_neuron("722817260")
+    sampler = MeshSampler(nr.mesh, nr.skeleton.vertices, nr.skeleton.radius)
+    cloud = sampler.sample(30_000, np.random.default_rng(0)).points
+    samples = sample_curve(nr.skeleton, 300)
+    keep = np.all(np.isfinite(samples.directions), axis=1)
+    points, dirs = samples.points[keep][::3], samples.directions[keep][::3]
+    (x0, y0, s0), (x1, y1, s1) = _rings_both_ways(monkeypatch, cloud, points, dirs, 0.02)
+    assert s1.tobytes() == s0.tobytes() and x1.tobytes() == x0.tobytes() and y1.tobytes() == y0.tobytes()
+    assert np.diff(s0).max() > 1000 and (np.diff(s0) >= 3).sum() > 20
+
+
+@pytest.mark.parametrize("at_once", [0, 10**12])
+def test_compiled_centeredness_is_the_array_codes(monkeypatch, scans, at_once):
+    """curve_centeredness with the kernel equals the array code on both paths (spans on threads, batches)."""
+    monkeypatch.setattr(centeredness, "_CURVE_AT_ONCE", at_once)
+    finite = 0
+    for name, cloud, points, dirs, slab in _cases(scans):
+        dirs = dirs.copy()
+        dirs[3] = np.nan
+        got = []
+        for compiled in (False, True):
+            monkeypatch.setattr(centeredness, "_COMPILED_RINGS", compiled)
+            got.append(centeredness.curve_centeredness(cloud, points, dirs, params=Params(slab_factor=slab)))
+        assert got[1].tobytes() == got[0].tobytes(), name
+        finite += int(np.isfinite(got[0]).sum())
+    assert finite > 200
+
+
+def test_rings_kernel_rejects_inconsistent_arrays():
+    grid = centeredness.slab_grid(np.random.default_rng(0).normal(size=(100, 3)))
+    p = np.zeros((1, 3))
+    u = np.array([[0.0, 0.0, 1.0]])
+    args = [grid.columns, grid.keys, grid.starts, grid.counts, grid.lines, grid.centres, grid.frame, grid.dims,
+            p, u, np.array([[1.0, 0, 0]]), np.array([[0.0, 1, 0]]), 0.1, 1.5, 0.05]
+    _rings.rings(*args)
+    bad = list(args)
+    bad[1] = grid.keys[::-1].copy()  # keys out of order
+    with pytest.raises(ValueError, match="rings"):
+        _rings.rings(*bad)
+    bad = list(args)
+    bad[9] = np.zeros((2, 3))  # directions for another number of samples
+    with pytest.raises(ValueError, match="rings"):
+        _rings.rings(*bad)
+
+
+def test_ellipse_sums_are_the_numpy_loops_bit_for_bit():
+    """The compiled centroids, radii and design rows (docs/performance.md 6.5) give numpy's sums: running
+    sums, a pairwise mean at sizes below, at and above numpy's blocks (8, 128, 8192), sets of fewer than 5
+    points, a non-finite point, a zero radius, sets spread over several calls."""
+    rng = np.random.default_rng(4)
+    for trial in range(24):
+        sizes = rng.integers(0, int(rng.choice([12, 300, 20000])), size=int(rng.integers(1, 120)))
+        if trial % 3 == 0:
+            sizes = np.r_[sizes, 7, 8, 9, 127, 128, 129, 8192, 8193]
+        starts = np.r_[0, np.cumsum(sizes)]
+        t = rng.uniform(0, 2 * np.pi, starts[-1])
+        x = np.cos(t) * rng.uniform(0.5, 2.0) * 10.0 ** rng.integers(-3, 3) + rng.normal(scale=0.05, size=len(t))
+        y = np.sin(t) + rng.normal(scale=0.05, size=len(t))
+        if len(sizes) > 3:
+            x[starts[1] : starts[2]], y[starts[1] : starts[2]] = 1.0, 2.0  # all points equal: radius 0
+            x[starts[2]] = np.nan
+        got, want = ellipse_sums(x, y, starts), _reference_sums(x, y, starts)
+        for a, b in zip(got, want):
+            assert a.shape == b.shape and a.tobytes() == b.tobytes()
+        assert len(want.use) > 0 or sizes.max() < 5
