@@ -342,7 +342,8 @@ class _ArrayMemo:
 
 
 #: unique_rows' memo (from this many rows): from the hammer's size, the skeletal set's positions are one
-#: read-only array for every stage, so centeredness and smoothness share their index (metrics/position_knn.py)
+#: read-only array for every stage, so centeredness and smoothness share their index (metrics/position_knn.py;
+#: docs/performance.md 6.4)
 _MEMO_ROWS = 1024
 _UNIQUE_MEMO = _ArrayMemo()
 

@@ -108,9 +108,10 @@ def run_graph(tasks: list[GraphTask], workers: int | None = None, on_error: Call
     the others beside them.  Each thread's first task is handed out, its core taken, before any starts:
     a compiled stage's streams then take only the cores no lane holds, and a lane started a moment later
     does not wait for one of its spans (on the hammer the Python stages started a stream span, ~13 ms,
-    late).  At the first error ``on_error()`` is called (it should make the running tasks' checkpoints
-    raise), no new task starts, every thread is joined and that first error is re-raised here.  A
-    task's result does not depend on which thread ran it.
+    late: docs/performance.md 3, "The hammer's Python stages, cut").  At the first error
+    ``on_error()`` is called (it should make the running tasks' checkpoints raise), no new task starts,
+    every thread is joined and that first error is re-raised here.  A task's result does not depend on
+    which thread ran it.
     """
     names = [t.name for t in tasks]
     if len(set(names)) != len(names) or any(a not in names for t in tasks for a in t.after):

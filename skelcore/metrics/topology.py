@@ -322,7 +322,7 @@ def _least_feasible(xa: np.ndarray, xb: np.ndarray, hi: float) -> float | None:
     Feasibility is monotone in t (a larger t drops a prefix of the points that must be matched and
     widens every interval, also in rounded arithmetic), so the bisection's every answer is ``mid >=
     t``: the same end as asking the Hall test, in about 15 tests instead of about 55 (the test is
-    most of the bottleneck's Python time; docs/performance.md 3, "The hammer")."""
+    most of the bottleneck's Python time; docs/performance.md 3, "The hammer's Python stages, cut")."""
     cands = [xa / 2.0, xb / 2.0, np.array([hi])]
     for x, y in ((xa, xb), (xb, xa)):
         if len(x) and len(y):
