@@ -341,8 +341,10 @@ class _ArrayMemo:
                 del self._entries[key]
 
 
-#: unique_rows' memo (from this many rows)
-_MEMO_ROWS = 65536
+#: unique_rows' memo (from this many rows): from the hammer's size, the skeletal set's positions are one
+#: read-only array for every stage, so centeredness and smoothness share their index (metrics/position_knn.py;
+#: docs/performance.md 6.4)
+_MEMO_ROWS = 1024
 _UNIQUE_MEMO = _ArrayMemo()
 
 

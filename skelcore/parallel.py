@@ -105,9 +105,13 @@ def run_graph(tasks: list[GraphTask], workers: int | None = None, on_error: Call
     is one of them), each thread taking the first task in list order whose ``after`` tasks are done.
 
     For the independent stages of an evaluation (docs/performance.md 6.2): the long compiled ones first,
-    the others beside them.  At the first error ``on_error()`` is called (it should make the running
-    tasks' checkpoints raise), no new task starts, every thread is joined and that first error is
-    re-raised here.  A task's result does not depend on which thread ran it.
+    the others beside them.  Each thread's first task is handed out, its core taken, before any starts:
+    a compiled stage's streams then take only the cores no lane holds, and a lane started a moment later
+    does not wait for one of its spans (on the hammer the Python stages started a stream span, ~13 ms,
+    late: docs/performance.md 3, "The hammer's Python stages, cut").  At the first error
+    ``on_error()`` is called (it should make the running tasks' checkpoints raise), no new task starts,
+    every thread is joined and that first error is re-raised here.  A task's result does not depend on
+    which thread ran it.
     """
     names = [t.name for t in tasks]
     if len(set(names)) != len(names) or any(a not in names for t in tasks for a in t.after):
@@ -130,16 +134,34 @@ def run_graph(tasks: list[GraphTask], workers: int | None = None, on_error: Call
                 cond.wait()
             return None
 
-    def work() -> None:
+    def first_tasks() -> list:
+        """The first ready tasks in list order, one per thread (None: no task ready for it yet), each
+        started and holding its core."""
+        firsts = []
+        for _ in range(workers):
+            ready = next((t for t in tasks if t.name not in started and all(a in done for a in t.after)), None)
+            if ready is not None:
+                started.add(ready.name)
+                cores.take(lane=True)
+            firsts.append(ready)
+        return firsts
+
+    def work(first: GraphTask | None) -> None:
         _lane.cores = cores
         try:
-            lane()
+            lane(first)
         finally:
             _lane.cores = None
 
-    def lane() -> None:
-        while (task := next_task()) is not None:
-            cores.take(lane=True)
+    def lane(first: GraphTask | None) -> None:
+        task = first
+        if first is not None and errors:  # another lane failed before this one started: not begun
+            cores.give()
+            return
+        while task is not None or (task := next_task()) is not None:
+            if task is not first:
+                cores.take(lane=True)
+            first = None
             try:
                 value = task.fn()
             except BaseException as exc:  # the first error wins; the others stop at a checkpoint
@@ -155,12 +177,15 @@ def run_graph(tasks: list[GraphTask], workers: int | None = None, on_error: Call
                 results[task.name] = value
                 done.add(task.name)
                 cond.notify_all()
+            task = None
 
-    helpers = [threading.Thread(target=work, name=f"skelscope-lane-{i}", daemon=True) for i in range(1, workers)]
+    firsts = first_tasks()
+    helpers = [threading.Thread(target=work, args=(firsts[i],), name=f"skelscope-lane-{i}", daemon=True)
+               for i in range(1, workers)]
     for th in helpers:
         th.start()
     try:
-        work()
+        work(firsts[0])
     finally:
         for th in helpers:
             th.join()

@@ -5,6 +5,8 @@ hammer"). On a small cloud this replaces the levels' k-nearest rounds (about two
 
 from __future__ import annotations
 
+import itertools
+
 import numpy as np
 from scipy.spatial import cKDTree
 
@@ -42,7 +44,7 @@ def explained_by_balls(pts: np.ndarray, pts_branch: np.ndarray, reach: np.ndarra
     if total == 0:
         return out
     found = tree.query_ball_point(pts[idx], radius, return_sorted=False)
-    qi = np.fromiter((q for ball in found for q in ball), np.int64, count=total)
+    qi = np.fromiter(itertools.chain.from_iterable(found), np.int64, count=total)  # no generator frame per pair
     xi = np.repeat(idx, counts)
     other = pts_branch[xi] != own[qi]
     xi, qi = xi[other], qi[other]

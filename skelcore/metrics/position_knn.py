@@ -26,8 +26,10 @@ __all__ = ["ExactKnn", "PositionNeighbours", "position_neighbours", "published_o
 
 #: neighbour columns kept per position (smoothness asks for tangent_k + 1 = 9 by default)
 HEAD = 10
-# from this many distinct positions the index is shared (below, a second query costs little)
-SHARED_FROM = 65536
+# from this many distinct positions the index is shared: on the hammer (4,096) the compiled kNN and the
+# reused heads cut centeredness + smoothness from 36 to 25 CPU ms (docs/performance.md 3, "The hammer's
+# Python stages, cut"); below, a query takes well under a millisecond
+SHARED_FROM = 1024
 
 
 class ExactKnn:

@@ -22,7 +22,6 @@ from ..geometry import Checkpoint
 from ..metrics.centeredness import curve_centeredness, skeletal_centeredness
 from ..metrics.coverage import coverage, curve_elements
 from ..metrics.ground_truth import ground_truth
-from ..metrics.position_knn import SHARED_FROM
 from ..metrics.reference import compare_with_reference
 from ..metrics.smoothness import curve_smoothness_overall, curve_vertex_smoothness, skeletal_smoothness
 from ..metrics.topology import topological_similarity
@@ -36,6 +35,10 @@ __all__ = ["Stage", "CATALOGUE", "select", "start_order", "FIRST", "EARLY", "IN_
 
 #: start groups (list scheduling: the longest first so that the other thread takes the rest beside it)
 FIRST, EARLY, IN_TURN, LAST = range(4)
+# from this many skeletal points topology waits for centeredness' neighbours (its EMST's first round);
+# on smaller sets the lists save the EMST nothing measurable (hammer: 11.6 -> 11.5 CPU ms), so it
+# does not wait
+_EMST_LISTS_FROM = 65536
 
 
 @dataclass(frozen=True)
@@ -228,7 +231,7 @@ def _the_shared_neighbours_first(ctx: EvalContext) -> tuple[str, ...]:
     # publishes (metrics/position_knn.py): about 1.2 CPU s less at 1M points (docs/performance.md 6.1)
     if ctx.from_curve or ctx.skeletal_mode != "pointwise" or ctx.skeletal_n is None:
         return ()
-    return ("skeletal centeredness",) if len(ctx.skeletal_n) >= SHARED_FROM else ()
+    return ("skeletal centeredness",) if len(ctx.skeletal_n) >= _EMST_LISTS_FROM else ()
 
 
 CATALOGUE: tuple[Stage, ...] = (

@@ -173,3 +173,32 @@ def test_a_kernels_streams_take_the_cores_the_other_lane_leaves_free(monkeypatch
     assert beside == 1 and most == 2
     assert _spans_beside(False, monkeypatch) == (0, 2)
     assert _no_lane_thread()
+
+
+def test_a_lanes_first_task_holds_its_core_before_any_stream_starts(monkeypatch):
+    """run_graph hands each lane its first task and core before any runs: a lane whose thread starts
+    late still finds its core, not both taken by the other lane's streams."""
+    import skelcore.parallel as parallel
+
+    monkeypatch.setattr(parallel.os, "cpu_count", lambda: 2)
+
+    class LateThread(threading.Thread):
+        def run(self):
+            if self.name.startswith("skelscope-lane"):
+                time.sleep(0.1)  # the helper lane begins after the other lane's streams have
+            super().run()
+
+    monkeypatch.setattr(parallel.threading, "Thread", LateThread)
+    python_started = threading.Event()
+    waited_out = []
+
+    def span(i: int) -> None:
+        if not python_started.wait(2.0):  # a stream waits for the Python stage to begin
+            waited_out.append(i)
+
+    def kernel_stage() -> None:
+        polled_streams(span, [(i,) for i in range(4)], None, lambda f: None, lambda: 0.0, np.zeros(1, np.int32))
+
+    run_graph([GraphTask("kernel", kernel_stage), GraphTask("python", python_started.set)], 2)
+    assert waited_out == []
+    assert _no_lane_thread()

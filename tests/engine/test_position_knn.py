@@ -111,3 +111,27 @@ def test_exact_knn_gives_the_kd_trees_answers_bit_for_bit():
         assert (exact._scipy is not None) == tied  # the kd-tree is built only for rows that tie
         assert sorted(exact.indices.tolist()) == list(range(len(pts)))
     assert position_knn.ExactKnn.build(np.array([[0.0, 0.0, np.nan]])) is None
+
+
+def test_a_small_set_shares_the_index_with_each_stages_bits(monkeypatch):
+    # from SHARED_FROM (below the hammer's 4,096 positions) an evaluation's skeletal stages share it
+    g = np.stack(np.meshgrid(np.arange(16), np.arange(16), np.arange(12), indexing="ij"), -1).reshape(-1, 3) * 0.1
+    g[len(g) // 2:] += np.random.default_rng(4).normal(scale=0.02, size=(len(g) - len(g) // 2, 3))
+    skel = np.concatenate([g, g[:200], g[-200:]])
+    assert position_knn.SHARED_FROM <= len(g) < 65536
+    cloud = skel + np.random.default_rng(5).normal(scale=0.05, size=skel.shape)
+    reused = []
+    reuse = position_knn.PositionNeighbours.reuse
+    monkeypatch.setattr(position_knn.PositionNeighbours, "reuse",
+                        lambda self, rows, k: reused.append(int(reuse(self, rows, k)[0].sum())) or reuse(self, rows, k))
+    s_points = skel.copy()
+    c = skeletal_centeredness(cloud, s_points, params=Params())
+    s = skeletal_smoothness(s_points, params=Params())
+    assert sum(reused) > 0.3 * len(g)
+    with monkeypatch.context() as m:
+        m.setattr(centeredness, "position_neighbours", lambda positions: None)
+        m.setattr(smoothness, "position_neighbours", lambda positions: None)
+        alone_c = skeletal_centeredness(cloud, skel.copy(), params=Params())
+        alone_s = skeletal_smoothness(skel.copy(), params=Params())
+    assert c.tobytes() == alone_c.tobytes()
+    assert s.tobytes() == alone_s.tobytes()

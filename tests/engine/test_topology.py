@@ -408,3 +408,33 @@ def test_topology_gives_the_cloud_index_the_spacings_it_would_search(rng):
     kept = given.spacings()
     given.offer_spacings(np.zeros(len(cloud)))  # known already: not replaced
     assert given.spacings() is kept
+
+
+def test_bottleneck_bisection_from_the_least_feasible_candidate_ends_where_the_hall_test_ends_it(rng, monkeypatch):
+    # the shortcut answers the bisection by comparing with the least feasible float: the same end, the same bits
+    from skelcore.metrics import topology
+
+    fast = 0
+    for trial in range(300):
+        n, m = (int(v) for v in rng.integers(0, 60, 2))
+        kind = trial % 3
+        draw = [lambda k: rng.random(k), lambda k: np.round(rng.random(k), 2), lambda k: rng.exponential(size=k)][kind]
+        xa, xb = np.sort(draw(n)), np.sort(draw(m))
+        if kind == 1 and n and m:  # shared deaths: ties between the diagrams
+            xb[: min(n, m) // 2] = xa[: min(n, m) // 2]
+            xb = np.sort(xb)
+        if not (len(xa) or len(xb)) or topology._bottleneck_feasible(xa, xb, 0.0):
+            continue
+        hi = max(xa[-1] if len(xa) else 0.0, xb[-1] if len(xb) else 0.0) / 2.0
+        plain = topology._bisection_end(hi, lambda t: topology._bottleneck_feasible(xa, xb, t))
+        least = topology._least_feasible(xa, xb, hi)
+        if least is not None:
+            fast += 1
+            assert topology._bottleneck_feasible(xa, xb, least)
+            assert topology._bisection_end(hi, lambda t: t >= least) == plain
+        a, b = np.column_stack([np.zeros(n), xa]), np.column_stack([np.zeros(m), xb])
+        with monkeypatch.context() as mp:
+            mp.setattr(topology, "_least_feasible", lambda *args: None)
+            alone = bottleneck_h0(a, b)
+        assert np.float64(bottleneck_h0(a, b)).tobytes() == np.float64(alone).tobytes()
+    assert fast > 150
