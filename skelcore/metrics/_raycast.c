@@ -578,11 +578,11 @@ static inline const int32_t *moved_hint(const Tree *t, const Move *mv, const flo
  * search.  hint[0], hint[1] = the leaf and the point a nearby ray hit (the same sample from the previous
  * cluster): that point first (a centre one cell away usually still sees it), then the point and the leaf of
  * the sample its hit moved to (moved_hint), then its leaf, then the previous ray's leaf, then the subtrees of
- * the hinted leaf's WALK_UP nearest ancestors. */
+ * the WALK_UP nearest ancestors of the moved hint's leaf where it was tried, else of the hinted leaf. */
 static int ray_hits(const Tree *t, Walker *w, const float *o, const float *s, float cut, float h,
                     int32_t *hint, const Move *mv, int j, int bin) {
     const float h2 = h * h, cut2 = cut * cut;
-    int32_t a = hint[0], b = w->last_leaf, p;
+    int32_t a = hint[0], b = w->last_leaf, p, up_from = -1;
     if (hint[1] >= 0) {
         w->hint_tries++;
         if (point_hit(t, hint[1], o, s, cut2, h2)) { w->hint_hits++; w->last_leaf = a; return 1; }
@@ -601,6 +601,7 @@ static int ray_hits(const Tree *t, Walker *w, const float *o, const float *s, fl
                 if ((p = leaf_hit(t, cand[0], o, s, cut2, h2)) >= 0) {
                     w->hint_hits++; hint[0] = cand[0]; hint[1] = p; w->last_leaf = cand[0]; return 1;
                 }
+                up_from = cand[0];
             }
         }
     }
@@ -614,7 +615,8 @@ static int ray_hits(const Tree *t, Walker *w, const float *o, const float *s, fl
     }
     if (a < 0) return -1;
     int32_t leaf = -1;
-    int32_t prev = a, node = t->nodes[a].par;
+    const int32_t start = up_from >= 0 ? up_from : a;
+    int32_t prev = start, node = t->nodes[start].par;
     for (int up = 0; up < WALK_UP && node >= 0 && leaf < 0; up++) {
         leaf = walk(t, w, node, prev, a, b, o, s, cut, h);
         prev = node;
