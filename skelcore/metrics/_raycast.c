@@ -539,18 +539,71 @@ static int32_t walk(const Tree *t, Walker *w, int32_t root, int32_t skip, int32_
 #define HINT_MIN 100
 #define HINT_REST 7
 
+/* The move of the rays' origin since the previous cluster, and the raster's hints (moved_hint) */
+typedef struct {
+    float d[3];
+    int on, rows, bins;
+    int32_t *hints;
+    const float *lon_scale;  /* per row: bins / 2 pi / s_j^2 (longitude change in bins per unit of x dy - y dx) */
+} Move;
+
+/* The hint of the sample whose ray from the previous origin passed where this ray passes now: the sample's
+ * own hint point p (hit from the previous origin o - d at tt along s) has moved with the origin to about
+ * o + tt s, which the previous origin saw along v = tt s + d; the cell of v (its row from v's z, its bin
+ * from the first-order change of longitude) holds the point that ray hit.  Only a candidate, tested exactly
+ * (point_hit, leaf_hit) like every hint: where the origin moves along a wall, as curve samples along a tube's
+ * axis, the sample's own hint point misses by the move (docs/boundedness.md 3.14).  NULL where there is none. */
+static inline const int32_t *moved_hint(const Tree *t, const Move *mv, const float *o, const float *s, int j, int b,
+                                        int32_t pt) {
+    const float *p = t->pts + 3 * (size_t)pt;
+    const float sd = s[0] * mv->d[0] + s[1] * mv->d[1] + s[2] * mv->d[2];
+    const float tt = (p[0] - o[0]) * s[0] + (p[1] - o[1]) * s[1] + (p[2] - o[2]) * s[2] + sd;
+    if (!(tt > 0.0f)) return NULL;
+    const float inv = 1.0f / tt;
+    /* first order in d / tt: v / |v| = s + (d - (s . d) s) / tt */
+    const float z = s[2] + (mv->d[2] - s[2] * sd) * inv;
+    const float lon = (s[0] * mv->d[1] - s[1] * mv->d[0]) * inv * mv->lon_scale[j];
+    const float y = (z + 1.0f) * (0.5f * mv->rows);
+    if (!(y >= 0.0f && y < mv->rows && lon > -0.5f * mv->bins && lon < 0.5f * mv->bins)) return NULL;
+    const int j2 = (int)y;
+    int b2 = b + (int)floorf(lon + 0.5f);
+    if (b2 == b && j2 == j) return NULL;
+    b2 += b2 < 0 ? mv->bins : b2 >= mv->bins ? -mv->bins : 0;
+    const int32_t *cand = mv->hints + 2 * ((size_t)j2 * mv->bins + b2);
+    return cand[1] >= 0 && cand[1] != pt ? cand : NULL;
+}
+
 /* Does the ray from o along s meet a ball around a point with |p - o| > cut?  1 yes, 0 no, -1 not settled:
  * the caller walks it from the root in a packet (walk_packet).  Exact either way; the hints only order the
  * search.  hint[0], hint[1] = the leaf and the point a nearby ray hit (the same sample from the previous
- * cluster): that point first (a centre one cell away usually still sees it), then its leaf, then the
- * previous ray's leaf, then the subtrees of the hinted leaf's WALK_UP nearest ancestors. */
+ * cluster): that point first (a centre one cell away usually still sees it), then the point and the leaf of
+ * the sample its hit moved to (moved_hint), then its leaf, then the previous ray's leaf, then the subtrees of
+ * the WALK_UP nearest ancestors of the moved hint's leaf where it was tried, else of the hinted leaf. */
 static int ray_hits(const Tree *t, Walker *w, const float *o, const float *s, float cut, float h,
-                    int32_t *hint) {
+                    int32_t *hint, const Move *mv, int j, int bin) {
     const float h2 = h * h, cut2 = cut * cut;
-    int32_t a = hint[0], b = w->last_leaf, p;
+    int32_t a = hint[0], b = w->last_leaf, p, up_from = -1;
     if (hint[1] >= 0) {
         w->hint_tries++;
         if (point_hit(t, hint[1], o, s, cut2, h2)) { w->hint_hits++; w->last_leaf = a; return 1; }
+        const int32_t *cand = mv->on ? moved_hint(t, mv, o, s, j, bin, hint[1]) : NULL;
+        if (cand) {
+            w->hint_tries++;
+            if (point_hit(t, cand[1], o, s, cut2, h2)) {
+                w->hint_hits++;
+                hint[0] = cand[0];
+                hint[1] = cand[1];
+                w->last_leaf = cand[0];
+                return 1;
+            }
+            if (cand[0] != a && cand[0] >= 0) {
+                w->hint_tries++;
+                if ((p = leaf_hit(t, cand[0], o, s, cut2, h2)) >= 0) {
+                    w->hint_hits++; hint[0] = cand[0]; hint[1] = p; w->last_leaf = cand[0]; return 1;
+                }
+                up_from = cand[0];
+            }
+        }
     }
     if (a >= 0) {
         w->hint_tries++;
@@ -562,7 +615,8 @@ static int ray_hits(const Tree *t, Walker *w, const float *o, const float *s, fl
     }
     if (a < 0) return -1;
     int32_t leaf = -1;
-    int32_t prev = a, node = t->nodes[a].par;
+    const int32_t start = up_from >= 0 ? up_from : a;
+    int32_t prev = start, node = t->nodes[start].par;
     for (int up = 0; up < WALK_UP && node >= 0 && leaf < 0; up++) {
         leaf = walk(t, w, node, prev, a, b, o, s, cut, h);
         prev = node;
@@ -795,6 +849,7 @@ static PyObject *py_clusters(PyObject *self, PyObject *args) {
     uint64_t *far = NULL, *need = NULL, *bits = NULL;
     uint8_t *full = NULL;
     int32_t *stack = NULL, *hints = NULL;
+    float *lon_scale = NULL;
     Near *near = NULL;
     if (stop_buf.len < (Py_ssize_t)sizeof(int32_t) || done_buf.len < (Py_ssize_t)sizeof(int64_t)) {
         PyErr_SetString(PyExc_ValueError, "clusters: stop needs one int32, done one int64");
@@ -820,8 +875,10 @@ static PyObject *py_clusters(PyObject *self, PyObject *args) {
     hints = (int32_t *)malloc(sizeof(int32_t) * 2 * (size_t)rows * bins);  /* leaf, point per sample */
     stack = (int32_t *)malloc(sizeof(int32_t) * 256);
     near = (Near *)malloc(2 * sizeof(Near) * (size_t)(n > 0 ? n : 1));  /* and shell_order's scratch */
-    if (!far || !full || !stack || !near || !hints) { PyErr_NoMemory(); goto done; }
+    lon_scale = (float *)malloc(sizeof(float) * (size_t)rows);
+    if (!far || !full || !stack || !near || !hints || !lon_scale) { PyErr_NoMemory(); goto done; }
     for (int i = 0; i < 2 * rows * bins; i++) hints[i] = -1;
+    for (int j = 0; j < rows; j++) lon_scale[j] = (float)(bins / TWO_PI / (r.s[j] * r.s[j]));
     need = far + nw;
     bits = need + nw;
     Py_BEGIN_ALLOW_THREADS
@@ -846,8 +903,11 @@ static PyObject *py_clusters(PyObject *self, PyObject *args) {
         const int64_t n_mem = q1 - q0;
         /* hints from a cluster far away would only lengthen the walks */
         double jx = c[0] - prev[0], jy = c[1] - prev[1], jz = c[2] - prev[2];
-        if (k == k0 || jx * jx + jy * jy + jz * jz > 4.0 * reach * reach)
+        const int reset = k == k0 || jx * jx + jy * jy + jz * jz > 4.0 * reach * reach;
+        if (reset)
             for (int i = 0; i < 2 * rows * bins; i++) hints[i] = -1;
+        Move mv = {{(float)jx, (float)jy, (float)jz}, !reset && (jx != 0.0 || jy != 0.0 || jz != 0.0), rows, bins,
+                   hints, lon_scale};
         memcpy(prev, c, sizeof prev);
         int32_t m = n > 0 ? collect_near(&t, stack, c, reach, near) : 0;
         nears += m;
@@ -886,7 +946,7 @@ static PyObject *py_clusters(PyObject *self, PyObject *args) {
                             uint64_t *word = far + (size_t)j * r.words + x, bit = UINT64_C(1) << (b & 63);
                             int hit = -1;
                             if (use_hints) {
-                                hit = ray_hits(&t, &w, cf, s, (float)cut, (float)h, hint);
+                                hit = ray_hits(&t, &w, cf, s, (float)cut, (float)h, hint, &mv, j, b);
                                 tried++;
                                 settled += hit >= 0;
                             }
@@ -927,7 +987,7 @@ static PyObject *py_clusters(PyObject *self, PyObject *args) {
     result = PyLong_FromLongLong((long long)finished);
 done:
     raster_free(&r);
-    free(far); free(full); free(stack); free(near); free(hints);
+    free(far); free(full); free(stack); free(near); free(hints); free(lon_scale);
     PyBuffer_Release(&pts); PyBuffer_Release(&nds); PyBuffer_Release(&lvs); PyBuffer_Release(&qs); PyBuffer_Release(&starts);
     PyBuffer_Release(&cen); PyBuffer_Release(&rch);
     PyBuffer_Release(&beta); PyBuffer_Release(&stats); PyBuffer_Release(&stop_buf); PyBuffer_Release(&done_buf);

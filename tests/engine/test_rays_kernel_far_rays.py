@@ -1,0 +1,93 @@
+"""The rays kernel's far rays (docs/boundedness.md 3.10-3.11) against an exhaustive ray test of every point:
+whatever prunes the walks (packets' lane groups with no open ray, the walk up from a hint, hints skipped
+or always tried), a sample is hit iff some point beyond the cut passes the kernel's float32 ball test."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from skelcore.metrics import rays_kernel
+from skelcore.metrics.boundedness import rays_radius
+from skelcore.metrics.rays_kernel import BallTree
+from skelcore.shapes import torus
+
+ROWS, BINS = 48, 96
+
+
+def _directions() -> np.ndarray:
+    """The raster's sample directions as the kernel casts them: float32 of s_j cos(lon_k), s_j sin(lon_k), z_j."""
+    z = -1.0 + (np.arange(ROWS) + 0.5) * (2.0 / ROWS)
+    s = np.sqrt(1.0 - z * z)
+    lon = (np.arange(BINS) + 0.5) * (2.0 * np.pi / BINS)
+    return np.stack([(s[:, None] * np.cos(lon)[None, :]).astype(np.float32),
+                     (s[:, None] * np.sin(lon)[None, :]).astype(np.float32),
+                     np.repeat(z.astype(np.float32)[:, None], BINS, axis=1)], axis=-1).reshape(-1, 3)
+
+
+def _exhaustive_beta(points: np.ndarray, origins: np.ndarray, h: float) -> np.ndarray:
+    """Share of samples whose ray from the (float32) origin meets a ball of radius h around a point with
+    |p - o|^2 > h^2: the kernel's point test (float32, the same operations in the same order) on every point."""
+    s = _directions()
+    hf = np.float32(h)
+    h2 = hf * hf
+    out = np.empty(len(origins))
+    for i, o in enumerate(origins.astype(np.float32)):
+        w = points - o
+        d2 = w[:, 0] * w[:, 0] + w[:, 1] * w[:, 1] + w[:, 2] * w[:, 2]
+        keep = d2 > h2
+        w, d2 = w[keep], d2[keep]
+        tt = np.outer(s[:, 0], w[:, 0]) + np.outer(s[:, 1], w[:, 1])
+        tt += np.outer(s[:, 2], w[:, 2])
+        hit = (tt > 0) & (d2[None, :] - tt * tt <= h2)
+        out[i] = np.count_nonzero(hit.any(axis=1)) / len(s)
+    return out
+
+
+@pytest.fixture(scope="module")
+def case():
+    shape = torus(1200, 1.0, 0.3, n_curve=32, seed=4)
+    rng = np.random.default_rng(4)
+    tree = BallTree(shape.cloud)
+    h = rays_radius(shape.cloud)
+    # an arc of the core circle in steps of 1.5 h (within the two reaches that keep the hints, so each
+    # ray also tries the hint its sample's moved hit suggests), an arc off the core, and scattered queries
+    angle = np.arange(24) * 1.5 * h
+    arc = np.column_stack([np.cos(angle), np.sin(angle), np.zeros_like(angle)])
+    queries = np.vstack([arc, arc * 1.15 + [0.0, 0.0, 0.1], rng.uniform(-1.4, 1.4, (10, 3)), [[0.0, 0.0, 0.0]]])
+    queries = np.ascontiguousarray(queries, np.float64)
+    return tree, queries, h, _exhaustive_beta(tree.points, queries, h)
+
+
+@pytest.mark.parametrize("policy", [(), (0, 0), (1001, 10**6)], ids=["default", "hints-always", "hints-never"])
+def test_far_rays_hit_exactly_where_some_point_passes_the_ball_test(case, policy):
+    """Clusters of one query at its own position with reach h: no near caps, every sample a far ray; each
+    build's beta equals the exhaustive test's bit for bit (a lane group skipped with an open ray, or a
+    walk cut short, would lose hits)."""
+    from skelcore.metrics import _raycast
+
+    modules = [_raycast]
+    if _raycast.cpu_has_avx2():
+        try:
+            from skelcore.metrics import _raycast_avx2
+
+            modules.append(_raycast_avx2)
+        except ImportError:
+            pass
+    tree, queries, h, ref = case
+    n = len(queries)
+    assert 0.05 < float(np.mean(ref > 0.9)) < 0.95  # bounded and open queries both present
+    for module in modules:
+        beta, stats = np.zeros(n), np.zeros(6, np.int64)
+        module.clusters(tree.points, tree.nodes, tree.leaves, queries, np.arange(n + 1, dtype=np.int64), queries,
+                        np.full(n, h), 0, n, float(h), ROWS, BINS, beta, stats, np.zeros(1, np.int32),
+                        np.zeros(1, np.int64), *policy)
+        assert stats[1] == 0 and stats[2] > 0.9 * n * ROWS * BINS  # no near caps: the far rays decide
+        assert np.array_equal(beta, ref), module.__name__
+
+
+def test_the_kernel_in_use_is_one_of_the_two_builds():
+    from skelcore.metrics import _raycast
+
+    assert rays_kernel._raycast.__name__.rsplit(".", 1)[-1] in ("_raycast", "_raycast_avx2")
+    assert _raycast.LEAF_SIZE == rays_kernel.LEAF_SIZE
