@@ -109,6 +109,14 @@ SCORE_COLUMNS: tuple[ScoreColumn, ...] = (
     ScoreColumn("gt_precision", "precision", "P", "$P$", "fraction", "higher", 3, "ground truth", compared=True),
     ScoreColumn("gt_recall", "recall", "R", "$R$", "fraction", "higher", 3, "ground truth", compared=True),
     ScoreColumn("gt_f1", "F1", "F1", "$F_1$", "fraction", "higher", 3, "ground truth", compared=True),
+    # on the held reference, where the reference's facts are given (a real suite's traced neuron):
+    # only its nodes the cloud can show (docs/metrics.md 5.3.1 "The held reference")
+    ScoreColumn("gt_held_precision", "held precision", "held P", "$P_h$", "fraction", "higher", 3, "ground truth",
+                compared=True),
+    ScoreColumn("gt_held_recall", "held recall", "held R", "$R_h$", "fraction", "higher", 3, "ground truth",
+                compared=True),
+    ScoreColumn("gt_held_f1", "held F1", "held F1", "$F_{1,h}$", "fraction", "higher", 3, "ground truth",
+                compared=True),
     ScoreColumn("gt_junction_precision", "junction precision", "J-P", "$J_P$", "fraction", "higher", 3, "ground truth",
                 compared=True),
     ScoreColumn("gt_junction_recall", "junction recall", "J-R", "$J_R$", "fraction", "higher", 3, "ground truth",
@@ -246,6 +254,10 @@ class Scores:
     gt_precision: float | None = _at("ground_truth", "precision")
     gt_recall: float | None = _at("ground_truth", "recall")
     gt_f1: float | None = _at("ground_truth", "f1")
+    # None without the reference's facts (the block's held_nodes null), NaN computed without a sample
+    gt_held_precision: float | None = _at("ground_truth", "held_precision", read="held")
+    gt_held_recall: float | None = _at("ground_truth", "held_recall", read="held")
+    gt_held_f1: float | None = _at("ground_truth", "held_f1", read="held")
     gt_junction_precision: float | None = _at("ground_truth", "junction_precision")
     gt_junction_recall: float | None = _at("ground_truth", "junction_recall")
     gt_endpoint_precision: float | None = _at("ground_truth", "endpoint_precision")
@@ -320,6 +332,8 @@ class Scores:
             value = node.get(path[-1])
             if meta["read"] == "len":
                 values[f.name] = len(value or [])
+            elif value is None and meta["read"] == "held":  # computed (NaN) only when the facts were given
+                values[f.name] = math.nan if node.get("held_nodes") is not None else None
             elif value is None:
                 values[f.name] = null(meta) if meta["read"] == "float" else None
             elif meta["read"] == "int":

@@ -76,7 +76,8 @@ def _toml_string(text: str) -> str:
 def write_manifest(folder: Path, records: list[dict[str, Any]], suite: str, seed: int,
                    notes: list[str] | None = None) -> None:
     """``compare.toml``: the built-in skeletonizers (cao, skelscope) on every case, each case with its
-    reference curve, ``tree = true`` when its record says so and, for a one-sided scan, its viewpoints
+    reference curve (and its facts file, ``reference_facts``, when its record names one: a real suite's
+    case), ``tree = true`` when its record says so and, for a one-sided scan, its viewpoints
     (the sensors the scan was made from); ``notes``: comment lines replacing the generated shapes' note."""
     lines = [
         f"# skelcore compare manifest of the benchmark in this folder (suite {suite!r}, seed {seed}),",
@@ -92,6 +93,9 @@ def write_manifest(folder: Path, records: list[dict[str, Any]], suite: str, seed
     for rec in records:
         lines += ["[[shapes]]", f"name = {_toml_string(rec['name'])}", f"path = {_toml_string(rec['files']['cloud'])}",
                   'reference = "truth/{stem}_reference.ply"']
+        facts = (rec.get("files") or {}).get("facts")
+        if facts:  # a real suite's traced reference: compare adds the held scores (docs/metrics.md 5.3.1)
+            lines.append(f"reference_facts = {_toml_string(facts)}")
         if rec.get("tree"):
             lines.append("tree = true")
         eyes = (rec.get("scan") or {}).get("viewpoints")

@@ -29,12 +29,15 @@ from .conditions import degrade
 from .manifest import ConditionSpec, Manifest, MethodSpec, ShapeSpec, expand_template
 
 __all__ = ["Job", "JobOutput", "make_jobs", "execute", "run_job", "scores_from_doc", "SCORE_COLUMNS",
-           "file_digest"]
+           "HELD_COLUMNS", "file_digest"]
 
 Progress = Callable[[float, str], None]
 
 #: the scores a job's record holds (:mod:`skelcore.scores`' compared columns; "seconds" is the job's own)
 SCORE_COLUMNS = tuple(k for k in column_keys(compared=True) if k != "seconds")
+#: the scores on the held reference (docs/metrics.md 5.3.1): in a record only where the shape's
+#: reference has facts (``reference_facts``)
+HELD_COLUMNS = ("gt_held_precision", "gt_held_recall", "gt_held_f1")
 
 
 @dataclass(frozen=True)
@@ -101,6 +104,8 @@ def _job_key(job: Job) -> str:
         doc["viewpoints"] = [list(v) for v in job.shape.viewpoints]
     if job.shape.reference:  # likewise: the reference's bytes
         doc["reference"] = file_digest(job.shape.reference)
+    if job.shape.reference_facts:  # and its facts' (the held scores)
+        doc["reference_facts"] = file_digest(job.shape.reference_facts)
     text = json.dumps(doc, sort_keys=True, default=str)
     return hashlib.sha256(text.encode()).hexdigest()[:24]
 
@@ -193,12 +198,15 @@ def execute(job: Job, workdir: str | None = None, *, prefix: str = "", write_clo
     inputs_doc = {"cloud": files.get("cloud")}
     reference = None
     if job.shape.reference:
-        from .references import load_reference
+        from .references import load_reference, load_reference_outside
 
         reference = load_reference(job.shape.reference)
         if curve is not None:  # the ground-truth metrics compare curves (docs/metrics.md 5.3.1)
             kwargs["reference_curve"] = reference
             inputs_doc["reference_curve"] = job.shape.reference
+            if job.shape.reference_facts:  # and the held scores, on the nodes the cloud can show
+                kwargs["reference_outside"] = load_reference_outside(job.shape.reference_facts, reference)
+                inputs_doc["reference_facts"] = job.shape.reference_facts
     ev = evaluate(pts, skeletal, curve, job.params, progress=part(0.5, 1.0), cancel=cancel,
                   inputs=inputs_doc, **kwargs)
     timings["evaluate"] = time.perf_counter() - t0
@@ -216,10 +224,13 @@ def _pcd_viewpoints(path: str) -> tuple:
 
 
 def scores_from_doc(doc: dict[str, Any] | None) -> dict[str, float]:
-    """Flat scores of an ``evaluate --json`` document; NaN where not computed (all NaN without one)."""
+    """Flat scores of an ``evaluate --json`` document; NaN where not computed (all NaN without one).
+    The held ground-truth scores (:data:`HELD_COLUMNS`) only when computed, from the shape's
+    ``reference_facts``: absent otherwise, not NaN (docs/compare.md "Ground truth")."""
     if not doc:
-        return {k: math.nan for k in SCORE_COLUMNS}
-    return Scores.from_json_dict(doc).flat(SCORE_COLUMNS)
+        return {k: math.nan for k in SCORE_COLUMNS if k not in HELD_COLUMNS}
+    scores = Scores.from_json_dict(doc)
+    return scores.flat([k for k in SCORE_COLUMNS if k not in HELD_COLUMNS or scores.get(k) is not None])
 
 
 def _arrays(ev: Any, reference: CurveSkeleton | None = None) -> dict[str, np.ndarray]:

@@ -34,7 +34,7 @@ __all__ = ["ShapeSpec", "MethodSpec", "ConditionSpec", "Manifest", "load_manifes
 
 _KEYS = {
     "top": {"evaluation", "shapes", "methods", "conditions", "seeds"},
-    "shapes": {"path", "name", "suffix", "viewpoint", "reference", "tree"},
+    "shapes": {"path", "name", "suffix", "viewpoint", "reference", "reference_facts", "tree"},
     "builtin": {"name", "kind", "method", "params", "repair"},
     "command": {"name", "kind", "command", "timeout", "correspondence", "repair"},
     "files": {"name", "kind", "curve", "skeletal", "skeletal_index", "correspondence", "scale", "offset", "repair"},
@@ -51,13 +51,16 @@ class ShapeSpec:
     entry's ``name`` for a single file; ``viewpoints``: the sensor positions of a one-sided scan
     (``viewpoint = [x, y, z]`` or a list of them; docs/metrics.md 6.3); ``reference``: its
     ground-truth curve skeleton (``reference = "truth/{stem}.ply"``, the shape's name for ``{stem}``),
-    ``tree``: the shape is declared a tree (its reference may have no cycle)."""
+    ``tree``: the shape is declared a tree (its reference may have no cycle); ``reference_facts``: how
+    far each reference vertex lies outside the surface the cloud was drawn from (a real suite's
+    ``truth/{neuron}_gt_facts.csv``), for the held ground-truth scores (docs/metrics.md 5.3.1)."""
 
     name: str
     path: str
     viewpoints: tuple[tuple[float, float, float], ...] = ()
     reference: str | None = None
     tree: bool = False
+    reference_facts: str | None = None
 
 
 @dataclass(frozen=True)
@@ -253,6 +256,12 @@ def _shapes(value: Any, base: Path, fail, unknown, params: Params = Params()) ->
             fail(f"{where}: reference must be a file path or a template with {{stem}}, e.g. \"truth/{{stem}}.ply\"")
         if not isinstance(tree, bool):
             fail(f"{where}: tree must be true or false")
+        facts = entry.get("reference_facts")
+        if facts is not None and (not isinstance(facts, str) or not facts):
+            fail(f"{where}: reference_facts must be a file path or a template with {{stem}}, "
+                 "e.g. \"truth/{{stem}}_gt_facts.csv\"")
+        if facts is not None and reference is None:
+            fail(f"{where}: reference_facts describes the reference's vertices: give reference too")
         for m in matches:
             stem = Path(m).stem
             if suffix and stem.endswith(suffix) and stem != suffix:
@@ -262,16 +271,21 @@ def _shapes(value: Any, base: Path, fail, unknown, params: Params = Params()) ->
                 fail(f"{where}: name must be a non-empty string")
             if name in out and out[name].path != m:
                 fail(f"{where}: two shapes are named {name!r} ({out[name].path} and {m})")
-            ref = None
+            ref = ref_facts = None
             if reference is not None:
-                from .references import expand_reference, reference_problem
+                from .references import expand_reference, facts_problem, reference_problem
 
                 ref = expand_reference(reference, name, base)
                 problem = reference_problem(ref, m, tree=tree, params=params,
                                             shown=reference.replace("{stem}", name))
                 if problem:
                     fail(f"{where} ({name!r}): {problem}")
-            out[name] = ShapeSpec(name, m, viewpoints, ref, tree)
+                if facts is not None:
+                    ref_facts = expand_reference(facts, name, base)
+                    problem = facts_problem(ref_facts, ref, shown=facts.replace("{stem}", name))
+                    if problem:
+                        fail(f"{where} ({name!r}): {problem}")
+            out[name] = ShapeSpec(name, m, viewpoints, ref, tree, ref_facts)
     return tuple(out.values())
 
 

@@ -2,7 +2,9 @@
 is, so that a wrong file costs one line before any job runs: the file exists and reads as a curve, it
 has edges, it lies in the cloud's frame and units (its bounding box against the cloud's, as the
 ``frame`` trust check measures them, docs/metrics.md), and it has no cycle when the shape is declared
-a tree (``tree = true``).
+a tree (``tree = true``). Its facts (``reference_facts``: how far each of its vertices lies outside
+the surface the cloud was drawn from, a real suite's ``truth/{neuron}_gt_facts.csv``) are checked
+against it too: one row per vertex of the reference file.
 """
 
 from __future__ import annotations
@@ -17,7 +19,7 @@ from ..metrics.reference import graph_counts
 from ..params import Params
 from ..diagnostics.trust import robust_box
 
-__all__ = ["expand_reference", "reference_problem", "load_reference"]
+__all__ = ["expand_reference", "reference_problem", "load_reference", "facts_problem", "load_reference_outside"]
 
 
 def expand_reference(template: str, stem: str, base: str | os.PathLike) -> str:
@@ -31,6 +33,34 @@ def load_reference(path: str) -> CurveSkeleton:
     from ..io import load_curve
 
     return load_curve(path)
+
+
+def load_reference_outside(path: str, reference: CurveSkeleton) -> np.ndarray:
+    """The facts' ``outside_by_radii`` per vertex of the loaded ``reference`` (the file's rows are the
+    reference file's vertices; the loaded curve's ``vertex_map`` picks them), as ``evaluate``'s
+    ``reference_outside`` takes them (docs/metrics.md 5.3.1). A file of another vertex count, or not a
+    facts file, is a one-line SkelInputError naming it."""
+    from ..benchmark.neurons import read_outside_radii
+
+    rows = int(np.max(reference.vertex_map)) + 1 if reference.vertex_map is not None else reference.n_vertices
+    out = read_outside_radii(path, rows)
+    return out if reference.vertex_map is None else out[reference.vertex_map]
+
+
+def facts_problem(path: str, reference_path: str, *, shown: str | None = None) -> str | None:
+    """What is wrong with ``path`` as the facts of the reference at ``reference_path`` (one line naming
+    it as ``shown``), or None (the reference's own problems are :func:`reference_problem`'s)."""
+    shown = shown or path
+    if not os.path.isfile(path):
+        return f"reference_facts {shown} not found"
+    try:
+        load_reference_outside(path, load_reference(reference_path))
+    except SkelInputError as exc:
+        text = str(exc)
+        if exc.path and text.startswith(f"{exc.path}: "):
+            text = text[len(exc.path) + 2:]  # named once, as the manifest wrote it
+        return f"reference_facts {shown}: {text}"
+    return None
 
 
 def reference_problem(path: str, cloud_path: str, *, tree: bool = False, params: Params = Params(),

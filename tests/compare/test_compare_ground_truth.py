@@ -23,6 +23,7 @@ from skelcore.io import write_curve_ply, write_points_ply
 from skelcore.scores import column_keys
 
 GT = column_keys(group="ground truth", compared=True)
+HELD = ("gt_held_precision", "gt_held_recall", "gt_held_f1")  # only with the reference's facts (none here)
 SHIFT = 0.05
 
 BODY = """
@@ -93,13 +94,25 @@ def test_results_csv_carries_the_ground_truth_columns(run):
     assert float(by[("cyl", "shifted")]["gt_chamfer_radii"]) == pytest.approx(SHIFT / 0.5)
     assert by[("yshape", "truth")]["gt_junction_precision"] == "1.0"
     assert by[("cyl", "truth")]["gt_junction_precision"] == ""  # no junction on either side: NaN
+    assert all(r[k] == "" for r in rows for k in HELD)  # no facts: the held columns stay empty
+
+
+def test_without_facts_the_records_have_no_held_scores(run):
+    """A reference without facts (``reference_facts``) computes no held scores: absent from every
+    job's record, not NaN-filled (docs/compare.md "Ground truth")."""
+    out, rows, _ = run
+    for path in (out / "jobs").glob("*.json"):
+        rec = json.loads(path.read_text())
+        assert rec["status"] == "ok" and not set(rec["scores"]) & set(HELD), path.name
+        assert rec["evaluation"]["ground_truth"] is None or rec["evaluation"]["ground_truth"]["held_f1"] is None
 
 
 def test_the_leaderboard_ranks_the_ground_truth_block(run):
     out, _rows, result = run
     board = result.leaderboard
     cols = board.columns()
-    assert set(GT) - {"gt_junction_precision", "gt_junction_recall"} <= set(cols)
+    assert set(GT) - {"gt_junction_precision", "gt_junction_recall", *HELD} <= set(cols)
+    assert not set(HELD) & set(cols)  # no facts: no held column on the board
     first_gt = cols.index("gt_chamfer_radii")
     assert cols[first_gt - 1] == "smoothness_curve"  # beside the paper's block
     rank = {e.method: e.rank for e in board.entries}
@@ -107,7 +120,7 @@ def test_the_leaderboard_ranks_the_ground_truth_block(run):
     assert rank["truth"]["gt_chamfer"] == 1 and rank["points"]["gt_chamfer"] is None
     assert rank["truth"]["gt_length_ratio"] is None  # a fact, not ranked
     md = (out / "leaderboard.md").read_text()
-    assert "gt_f1 ↑" in md and "gt_chamfer_radii ↓" in md
+    assert "gt_f1 ↑" in md and "gt_chamfer_radii ↓" in md and "held" not in md
 
 
 def test_report_shows_the_numbers_and_draws_the_reference(run):

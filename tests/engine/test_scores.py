@@ -13,7 +13,7 @@ import pytest
 
 from skelcore import Params, evaluate, shapes
 from skelcore.cli.common import format_reference, format_table
-from skelcore.compare.jobs import SCORE_COLUMNS as RECORD_KEYS, scores_from_doc
+from skelcore.compare.jobs import HELD_COLUMNS, SCORE_COLUMNS as RECORD_KEYS, scores_from_doc
 from skelcore.compare.leaderboard import COLUMNS as LEADERBOARD_COLUMNS, LOWER_IS_BETTER
 from skelcore.compare.results_csv import COLUMNS as RESULTS_COLUMNS
 from skelcore.scores import COLUMN, SCORE_COLUMNS, Scores, column_keys, format_score, paired_columns, paper_table
@@ -31,6 +31,10 @@ def evaluations():
         "both": evaluate(cyl.cloud, cyl.skeletal, (cyl.curve_vertices, cyl.curve_edges), p),
         "reference": evaluate(y.cloud, y.skeletal, (y.curve_vertices, y.curve_edges), p,
                               reference_curve=(y.curve_vertices[::2], np.array([[0, 1], [1, 2]]))),
+        # the reference's facts: its third vertex 3 radii outside the surface (docs/metrics.md 5.3.1)
+        "held": evaluate(y.cloud, curve=(y.curve_vertices, y.curve_edges), params=p,
+                         reference_curve=(y.curve_vertices[::2], np.array([[0, 1], [1, 2]])),
+                         reference_outside=np.r_[0.0, 0.0, 3.0, np.zeros(len(y.curve_vertices[::2]) - 3)]),
         "curve only": evaluate(y.cloud, curve=(y.curve_vertices, y.curve_edges), params=p),
         "no correspondence": evaluate(cyl.cloud, cyl.skeletal[:60], params=p),
         "other frame": evaluate(cyl.cloud, cyl.skeletal * 30 + 100, params=p),
@@ -119,19 +123,36 @@ def test_the_compare_record_is_the_flat_record(evaluations):
     for ev in evaluations.values():
         doc = ev.to_json_dict()
         flat = scores_from_doc(doc)
-        assert list(flat) == list(RECORD_KEYS)
+        held = ev.ground_truth is not None and ev.ground_truth.held_f1 is not None
+        assert list(flat) == [k for k in RECORD_KEYS if held or k not in HELD_COLUMNS]  # held: only with facts
         want = ev.scores()
         for k, v in flat.items():
             w = want.get(k)
             assert (math.isnan(v) and w is None) or _nan_equal(v, float(w)), k
-    assert all(math.isnan(v) for v in scores_from_doc(None).values())
+    assert all(math.isnan(v) for v in scores_from_doc(None).values()) and not set(scores_from_doc(None)) & set(HELD_COLUMNS)
+    held = scores_from_doc(evaluations["held"].to_json_dict())
+    assert 0 < held["gt_held_f1"] <= 1 and held["gt_held_f1"] != held["gt_f1"]
+
+
+def test_held_scores_are_none_without_facts_and_read_back_with_them(evaluations):
+    """None (not computed) without the reference's facts, NaN never invented; with them, the ground
+    truth's own values, the same read back from the JSON document."""
+    for name in ("reference", "curve only"):
+        s = evaluations[name].scores()
+        assert all(s.get(k) is None for k in HELD_COLUMNS), name
+    ev = evaluations["held"]
+    s, gt = ev.scores(), ev.ground_truth
+    assert (s.gt_held_precision, s.gt_held_recall, s.gt_held_f1) == (gt.held_precision, gt.held_recall, gt.held_f1)
+    assert Scores.from_json_dict(json.loads(json.dumps(ev.to_json_dict()))) == s
+    assert gt.held_nodes == (2, 3) and gt.held_f1 != gt.f1  # the reference's third vertex left out
 
 
 def test_public_column_lists_stay_as_they_were():
     """results.csv, the job records and the leaderboard keep their columns (public formats), with
     the diagnostics' columns and results.csv's sound / defects / warnings, and the ground-truth
-    block beside the paper's; nothing moves."""
-    ground_truth = ("gt_chamfer_radii", "gt_chamfer", "gt_precision", "gt_recall", "gt_f1", "gt_junction_precision",
+    block beside the paper's (the held scores beside the plain F1); nothing moves."""
+    ground_truth = ("gt_chamfer_radii", "gt_chamfer", "gt_precision", "gt_recall", "gt_f1", "gt_held_precision",
+                    "gt_held_recall", "gt_held_f1", "gt_junction_precision",
                     "gt_junction_recall", "gt_endpoint_precision", "gt_endpoint_recall", "gt_cycle_error",
                     "gt_length_ratio", "gt_splits", "gt_merges")
     diagnostics = ("completeness_skeletal", "completeness_curve", "spurious_branches", "spurious_cycles",
