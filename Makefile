@@ -19,7 +19,7 @@ system:
 	  $$SUDO apt-get update -qq && DEBIAN_FRONTEND=noninteractive $$SUDO apt-get install -y -qq $$missing >/dev/null; \
 	fi
 
-$(VENV)/.installed: pyproject.toml setup.py skelcore/metrics/_raycast.c skelcore/metrics/_balls.c skelcore/metrics/_centroids.c skelcore/metrics/_rings.c skelcore/metrics/_emst.c
+$(VENV)/.installed: pyproject.toml setup.py skelcore/metrics/_raycast.c skelcore/metrics/_balls.c skelcore/metrics/_centroids.c skelcore/metrics/_rings.c skelcore/metrics/_pairwise_sum.h skelcore/metrics/_emst.c
 	test -x $(PY) || $(PYTHON) -m venv $(VENV)
 	$(PY) -m pip install -q --upgrade pip
 	$(PY) -m pip install -q -e '.[test]'

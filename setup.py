@@ -52,11 +52,13 @@ setup(
         Extension(
             "skelcore.metrics._centroids",
             sources=["skelcore/metrics/_centroids.c"],
+            depends=["skelcore/metrics/_pairwise_sum.h"],
             extra_compile_args=["-O3", "-std=c99", "-ffp-contract=off"],
         ),
         Extension(
             "skelcore.metrics._rings",
             sources=["skelcore/metrics/_rings.c"],
+            depends=["skelcore/metrics/_pairwise_sum.h"],
             extra_compile_args=["-O3", "-std=c99", "-ffp-contract=off"],
         ),
         Extension(

@@ -15,31 +15,9 @@
 #include <math.h>
 #include <stdint.h>
 #include <stdlib.h>
+#include "_pairwise_sum.h"
 
-#define PW_BLOCKSIZE 128
 #define MAX_K 4096
-
-/* numpy's pairwise summation of n contiguous doubles (umath loops, pairwise_sum) */
-static double pairwise_sum(const double *a, Py_ssize_t n) {
-    if (n < 8) {
-        double res = 0.0;
-        for (Py_ssize_t i = 0; i < n; i++) res += a[i];
-        return res;
-    }
-    if (n <= PW_BLOCKSIZE) {
-        double r[8];
-        Py_ssize_t i;
-        for (int j = 0; j < 8; j++) r[j] = a[j];
-        for (i = 8; i < n - (n % 8); i += 8)
-            for (int j = 0; j < 8; j++) r[j] += a[i + j];
-        double res = ((r[0] + r[1]) + (r[2] + r[3])) + ((r[4] + r[5]) + (r[6] + r[7]));
-        for (; i < n; i++) res += a[i];
-        return res;
-    }
-    Py_ssize_t n2 = n / 2;
-    n2 -= n2 % 8;
-    return pairwise_sum(a, n2) + pairwise_sum(a + n2, n - n2);
-}
 
 /* neighbour_sums(skeletal (N,3) f64, cloud (N,3) f64, slot (n,k) i64, m_s out (n,3) f64, m_o out (n,3) f64,
  *                spread out (n) f64); every slot in [0, N) (the caller's) */

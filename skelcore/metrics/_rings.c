@@ -26,6 +26,7 @@
 #include <stdint.h>
 #include <stdlib.h>
 #include <string.h>
+#include "_pairwise_sum.h"
 
 #define SMALL_SORT 32        /* up to this many keys an insertion sort; a bucket of over 4 x this: radix */
 #define MARGIN 1e-9          /* relative allowance of the cell tests for round-off (a superset of cells is harmless) */
@@ -392,28 +393,6 @@ static int one_ring(const Grid *G, Search *S, double growth, double first, Vec *
     fx->n += len;
     fy->n += len;
     return 1;
-}
-
-/* numpy's pairwise summation of n contiguous doubles (umath loops, pairwise_sum) */
-static double pairwise_sum(const double *a, Py_ssize_t n) {
-    if (n < 8) {
-        double res = 0.0;
-        for (Py_ssize_t i = 0; i < n; i++) res += a[i];
-        return res;
-    }
-    if (n <= 128) {
-        double r[8];
-        Py_ssize_t i;
-        for (int j = 0; j < 8; j++) r[j] = a[j];
-        for (i = 8; i < n - (n % 8); i += 8)
-            for (int j = 0; j < 8; j++) r[j] += a[i + j];
-        double res = ((r[0] + r[1]) + (r[2] + r[3])) + ((r[4] + r[5]) + (r[6] + r[7]));
-        for (; i < n; i++) res += a[i];
-        return res;
-    }
-    Py_ssize_t n2 = n / 2;
-    n2 -= n2 % 8;
-    return pairwise_sum(a, n2) + pairwise_sum(a + n2, n - n2);
 }
 
 /* The part of ellipse_fit.ellipse_sums before its BLAS product, for sets lo..hi - 1 of x, y (set i is
