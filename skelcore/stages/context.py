@@ -298,7 +298,8 @@ def build_context(
         norm = Normalization.from_cloud(cloud, params.normalize_by, params.normalized_size)
     except ValueError:
         raise SkelInputError("cloud: all points coincide") from None
-    ctx = EvalContext(params=params, cloud=cloud, norm=norm, cloud_n=norm.apply(cloud), mode=mode, scan=scan)
+    ctx = EvalContext(params=params, cloud=cloud, norm=norm, cloud_n=_read_only(norm.apply(cloud)), mode=mode,
+                      scan=scan)
     if viewpoints is not None:
         ctx.viewpoints_n = norm.apply(viewpoints)
         scan.viewpoints = viewpoints.tolist()
@@ -343,7 +344,7 @@ def build_context(
             filled = np.vstack([ctx.bounded_cloud_n, fill])
             spacing = rays_radius(filled, 1.0)
             if spacing > 0:  # the filled points must not narrow the rays: h stays the scanned cloud's
-                ctx.capped_cloud_n = filled
+                ctx.capped_cloud_n = _read_only(filled)
                 ctx.bounded_params = params.replace(rays_radius_factor=h / spacing)
 
     if ctx.mode == "none":
@@ -360,13 +361,20 @@ def build_context(
     return ctx
 
 
+def _read_only(a: np.ndarray) -> np.ndarray:
+    """The evaluation's own normalized clouds are never written: read-only, boundedness reuses its prepared
+    cloud for them without hashing a million rows on every edit's update (docs/boundedness.md 3.15)."""
+    a.flags.writeable = False
+    return a
+
+
 def _cap(ctx: EvalContext, checkpoint: Checkpoint) -> None:
     """``--cap-openings``: find the openings, cap the small flat ones into ``capped_cloud_n``."""
     t0 = time.perf_counter()
     ctx.openings = find_openings(ctx.cloud, ctx.params, checkpoint=checkpoint)
     caps = cap_openings(ctx.openings, len(ctx.cloud), ctx.params)
     if len(caps.points):
-        ctx.capped_cloud_n = np.vstack([ctx.cloud_n, ctx.norm.apply(caps.points)])
+        ctx.capped_cloud_n = _read_only(np.vstack([ctx.cloud_n, ctx.norm.apply(caps.points)]))
     ctx.scan.openings = [dict(o.to_dict(), rows=o.rows.tolist(), capped=i in caps.capped, refused=caps.refused.get(i))
                          for i, o in enumerate(ctx.openings)]
     ctx.scan.cap_points = int(len(caps.points))

@@ -601,6 +601,48 @@ def test_the_prepared_cloud_is_reused_only_for_the_same_unchanged_array():
     assert "prepared" not in b._last_prepared  # nothing kept once the array is gone
 
 
+def test_a_frozen_cloud_is_reused_without_its_digest_and_a_view_of_a_writeable_one_is_not(monkeypatch):
+    """A read-only array that owns its data cannot change: its preparation is reused without hashing it; a
+    read-only view of a writeable array can change through its base, so it is hashed and prepared anew."""
+    from skelcore.metrics import boundedness as b
+
+    queries = np.zeros((1, 3))
+    frozen = _sphere(2000, seed=6)
+    frozen.flags.writeable = False
+    first = boundedness_rays(frozen, queries)
+    prepared = b._last_prepared["prepared"]
+    assert prepared.digest is None
+
+    def no_digest(cloud):
+        raise AssertionError("a frozen cloud was hashed")
+
+    monkeypatch.setattr(b, "_digest", no_digest)
+    assert np.array_equal(boundedness_rays(frozen, queries), first) and b._last_prepared["prepared"] is prepared
+    monkeypatch.undo()
+
+    base = _sphere(2000, seed=7)
+    view = base[:]
+    view.flags.writeable = False
+    assert not b._frozen(view) and b._frozen(frozen)
+    before = boundedness_rays(view, queries)
+    prepared = b._last_prepared["prepared"]
+    assert prepared.digest is not None
+    base[:1000] *= 3.0  # through the writeable base: the view's bytes change
+    changed = boundedness_rays(view, queries)
+    assert b._last_prepared["prepared"] is not prepared
+    assert np.array_equal(changed, boundedness_rays(base.copy(), queries)) and not np.array_equal(changed, before)
+
+
+def test_the_evaluations_normalized_cloud_is_frozen():
+    """The stages never write the normalized cloud; frozen, the rays reuse its tree without a digest."""
+    from skelcore import evaluate, shapes
+    from skelcore.metrics.boundedness import _frozen
+
+    shape = shapes.torus(3000, seed=0)
+    ev = evaluate(shape.cloud, curve=(shape.curve_vertices, shape.curve_edges))
+    assert _frozen(ev.source.ctx.bounded_cloud_n) and _frozen(ev.source.ctx.cloud_n)
+
+
 @pytest.mark.parametrize("copies", [30, 900])  # a few copies (kept in the tree), many (rebuilt without)
 def test_copies_of_cloud_points_change_nothing_but_the_spacing_rule(copies):
     """Exact copies cover the same caps; h counts each copy at distance 0, as rays_radius does."""
