@@ -528,9 +528,10 @@ static int32_t walk(const Tree *t, Walker *w, int32_t root, int32_t skip, int32_
 }
 
 /* levels a ray that its hints did not settle walks up from its hinted leaf (each ancestor's other subtree)
- * before it is left to a packet from the root: hits nearby are found there, misses (escaping rays) are
- * cheaper in packets (docs/boundedness.md 3.11) */
-#define WALK_UP 2
+ * before it is left to a packet from the root.  2 paid before the tiles and the 32-ray packets (3.10); with
+ * them every such ray goes straight to a packet: 3-4 % less CPU on an edit's samples, the hammer and the
+ * scans (docs/boundedness.md 3.15) */
+#define WALK_UP 0
 
 /* A stream whose hints hit fewer than HINT_MIN per mille of its recent clusters' far rays sends the rays of
  * the next HINT_REST clusters straight to packets, then tries the hints again: where a cluster's move is
