@@ -536,10 +536,10 @@ static int32_t walk(const Tree *t, Walker *w, int32_t root, int32_t skip, int32_
 /* A stream whose hints hit fewer than HINT_MIN per mille of its recent clusters' far rays sends the rays of
  * the next HINT_REST clusters straight to packets, then tries the hints again: where a cluster's move is
  * many leaves wide (the 1M torus: 3 % of hint tries hit; an edit's moved samples at 1M points: 18 % of the
- * rays) a failed try costs a point test, leaf tests and a walk up for nothing.  Only the hints' own hits
- * count (a point or a leaf tried), not the walk up's, and over the recent clusters (each cluster's counts
- * added to half the previous sum), so one cluster's luck decides nothing (docs/boundedness.md 3.15).  The
- * hints only order the search, so beta is the same either way. */
+ * rays) a failed try costs a point test and leaf tests for nothing.  Only the hints' own hits count (a
+ * point or a leaf tried), not the rays a walk up (WALK_UP) finds, and over the recent clusters (each
+ * cluster's counts added to half the previous sums), so one cluster's luck decides nothing
+ * (docs/boundedness.md 3.15).  The hints only order the search, so beta is the same either way. */
 #define HINT_MIN 250
 #define HINT_REST 7
 
