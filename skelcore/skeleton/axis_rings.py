@@ -3,8 +3,11 @@ cut into bands of geodesic distance from one end of each piece (the Reeb graph o
 their kNN graph); each band's connected parts are the curve's vertices, at their points' centroids,
 and two vertices are joined when points of their parts are near neighbours. A band is a cross-section
 wherever the distance runs along a branch, so a twig whose radius is near the spacing still gets its
-own vertex every band, at the centre of its points. The curve is the minimum spanning forest of the
-joins, its nearly straight degree-2 vertices dropped. Every length is in spacings.
+own vertex every band, at the centre of its points. Given the cloud, that centre weights each point by
+its depth (distance to the nearest cloud point) to the power ``AxisParams.ring_depth_power``: the
+medial axis is where the depth peaks, and a band's shallow points (the wall of a part the moves have
+not yet shrunk, a flat fringe) pull its plain centroid off it. The curve is the minimum spanning forest
+of the joins, its nearly straight degree-2 vertices dropped. Every length is in spacings.
 """
 
 from __future__ import annotations
@@ -17,7 +20,7 @@ from scipy.spatial import cKDTree
 from ..curve import CurveSkeleton
 from .skeleton_params import AxisParams
 
-__all__ = ["ring_curve", "geodesic_bands", "simplify_chains"]
+__all__ = ["ring_curve", "geodesic_bands", "simplify_chains", "depth_weights"]
 
 
 def _knn(points: np.ndarray, k: int) -> tuple[np.ndarray, np.ndarray]:
@@ -53,6 +56,27 @@ def geodesic_bands(points: np.ndarray, spacing: float, params: AxisParams | None
     return np.floor(dist / (float(p_.ring_width) * spacing)).astype(np.int64)
 
 
+def depth_weights(points: np.ndarray, cloud: np.ndarray, power: float) -> np.ndarray:
+    """Each moved point's weight in its band's centre: its distance to the nearest cloud point, to
+    ``power`` (docs/skeletonize.md "Thin parts": the medial axis is where that depth peaks)."""
+    depth, _ = cKDTree(np.asarray(cloud, float)).query(points, k=1, workers=-1)
+    return np.asarray(depth, float) ** float(power)
+
+
+def _part_centres(points: np.ndarray, part: np.ndarray, n_parts: int, weights: np.ndarray | None) -> np.ndarray:
+    """Each part's centroid, weighted when ``weights`` are given (a part whose weights are all 0, every
+    point on the cloud, gets its plain centroid)."""
+    count = np.bincount(part, minlength=n_parts).astype(float)
+    plain = np.column_stack([np.bincount(part, weights=points[:, j], minlength=n_parts) for j in range(3)]) / count[:, None]
+    if weights is None:
+        return plain
+    total = np.bincount(part, weights=weights, minlength=n_parts)
+    ok = total > 0
+    weighted = np.column_stack([np.bincount(part, weights=weights * points[:, j], minlength=n_parts)
+                                for j in range(3)]) / np.where(ok, total, 1.0)[:, None]
+    return np.where(ok[:, None], weighted, plain)
+
+
 def simplify_chains(curve: CurveSkeleton, tolerance: float, longest: float) -> CurveSkeleton:
     """Degree-2 vertices within ``tolerance`` of the segment joining their neighbours dropped (that
     segment taking their two edges) when it is no longer than ``longest``; never two neighbours at once,
@@ -86,8 +110,11 @@ def simplify_chains(curve: CurveSkeleton, tolerance: float, longest: float) -> C
     return CurveSkeleton.from_raw(v[used], remap[e])
 
 
-def ring_curve(points: np.ndarray, spacing: float, params: AxisParams | None = None) -> CurveSkeleton:
-    """The curve of the moved points by rings (module docstring)."""
+def ring_curve(points: np.ndarray, spacing: float, params: AxisParams | None = None,
+               cloud: np.ndarray | None = None) -> CurveSkeleton:
+    """The curve of the moved points by rings (module docstring); with the ``cloud`` they were moved
+    from, each band part's vertex is its points' depth-weighted centroid (:func:`depth_weights`), else
+    (or with ``ring_depth_power`` 0) their plain centroid."""
     p_ = params or AxisParams()
     pts = np.asarray(points, float)
     n = len(pts)
@@ -100,8 +127,9 @@ def ring_curve(points: np.ndarray, spacing: float, params: AxisParams | None = N
     same = band[rows] == band[cols]
     g = coo_matrix((np.ones(int(same.sum())), (rows[same], cols[same])), shape=(n, n))
     n_parts, part = connected_components(g, directed=False)
-    count = np.bincount(part, minlength=n_parts).astype(float)
-    verts = np.column_stack([np.bincount(part, weights=pts[:, j], minlength=n_parts) for j in range(3)]) / count[:, None]
+    power = float(p_.ring_depth_power)
+    weights = None if cloud is None or power == 0 else depth_weights(pts, cloud, power)
+    verts = _part_centres(pts, part, n_parts, weights)
     pairs = np.sort(np.column_stack([part[rows[~same]], part[cols[~same]]]), axis=1)
     pairs = np.unique(pairs[pairs[:, 0] != pairs[:, 1]], axis=0)
     if len(pairs) == 0:

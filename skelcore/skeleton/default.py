@@ -59,7 +59,7 @@ def default_skeleton(cloud: np.ndarray, progress: Progress | None = None, cancel
         skeletal, curve, info = skeletonize(pts, cao, progress, cancel, method="cao", return_info=True)
         return skeletal, curve, info, DefaultChoice("cao", ratio, thickness, moved.spacing)
     t1 = time.perf_counter()
-    curve = axis_curve(moved, axis)
+    curve = axis_curve(moved, axis, pts)
     band = float(axis.ring_width if axis.curve == "rings" else axis.sample_spacings)
     info = SkeletonizeInfo(iterations=int(axis.iterations), ring_ratios=[], stop_reason="axis curve (thin parts)",
                            sample_radius=band * moved.spacing, n_samples=int(curve.n_vertices),

@@ -74,13 +74,15 @@ def local_thickness(cloud: np.ndarray, moved: AxisContraction) -> float:
     return float(np.median(np.linalg.norm(moved.points - np.asarray(cloud, float), axis=1)))
 
 
-def axis_curve(moved: AxisContraction, params: AxisParams | None = None) -> CurveSkeleton:
-    """The curve of the moved points: by rings (:func:`.axis_rings.ring_curve`, the default) or, with
+def axis_curve(moved: AxisContraction, params: AxisParams | None = None,
+               cloud: np.ndarray | None = None) -> CurveSkeleton:
+    """The curve of the moved points: by rings (:func:`.axis_rings.ring_curve`, the default; given the
+    ``cloud`` they were moved from, each ring's centre weights its points by their depth in it) or, with
     ``params.curve`` "balls", ball samples joined along the cloud's kNN, the minimum spanning forest
     of the joins by length (module docstring)."""
     p_ = params or AxisParams()
     if p_.curve == "rings":
-        return ring_curve(moved.points, moved.spacing, p_)
+        return ring_curve(moved.points, moved.spacing, p_, cloud)
     if p_.curve != "balls":
         raise ValueError(f"axis curve {p_.curve!r}: rings or balls")
     spl, label = farthest_sampling_by_sphere(moved.points, p_.sample_spacings * moved.spacing)

@@ -237,7 +237,9 @@ class AxisParams:
     (:mod:`.axis_rings`: bands of ``ring_width`` spacings of geodesic distance on the moved points' kNN
     graph of ``ring_neighbors``, each band's parts joined over ``ring_connect`` neighbours, degree-2
     vertices within ``simplify_spacings`` of their neighbours' segment, at most ``simplify_longest``
-    long, dropped) or "balls" (the ball samples above)."""
+    long, dropped; a band part's vertex is its points' centroid weighted by their depth, the distance
+    to the nearest cloud point, to ``ring_depth_power``: 2, chosen on two neurons, docs/skeletonize.md
+    "Thin parts"; 0 the plain centroid) or "balls" (the ball samples above)."""
 
     neighbors: int = 16
     iterations: int = 12
@@ -252,6 +254,7 @@ class AxisParams:
     ring_connect: int = 48
     simplify_spacings: float = 0.25
     simplify_longest: float = 4.0
+    ring_depth_power: float = 2.0
 
 
 

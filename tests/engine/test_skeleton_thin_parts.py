@@ -86,3 +86,44 @@ def test_the_ball_curve_is_kept_as_an_option_and_chains_are_thinned_not_moved():
     thin = simplify_chains(line, 1e-9, 0.25)
     assert thin.n_vertices == 6 and thin.n_edges == 5  # every other inner vertex, the ends kept
     assert set(map(float, thin.vertices[:, 2])) <= set(map(float, line.vertices[:, 2]))
+
+
+def _rod_and_wall(keep_from: float, radius: float = 0.05, step: float = 0.01):
+    """A rod of moved points inside a tube's wall: every grid point of the tube's cross-sections with
+    x >= keep_from x radius (all of it for -1), and the wall (the cloud) around them."""
+    g = np.arange(-radius, radius + 1e-9, step)
+    x, y = np.meshgrid(g, g)
+    keep = (x * x + y * y < (0.95 * radius) ** 2) & (x >= keep_from * radius)
+    z = np.arange(0.0, 2.0, step)
+    section = np.column_stack([x[keep], y[keep]])
+    points = np.column_stack([np.tile(section, (len(z), 1)), np.repeat(z, len(section))])
+    a = np.linspace(0, 2 * np.pi, 64, endpoint=False)
+    zw = np.arange(0.0, 2.0, step / 2)
+    wall = np.column_stack([np.tile(radius * np.cos(a), len(zw)), np.tile(radius * np.sin(a), len(zw)), np.repeat(zw, len(a))])
+    return points, wall
+
+
+def test_the_ring_centres_weight_deep_points_and_leave_a_lopsided_rods_centroid():
+    from skelcore.skeleton.axis_rings import ring_curve
+    from skelcore.skeleton.skeleton_params import AxisParams
+
+    points, wall = _rod_and_wall(-0.3)  # a disk less a segment on one side: its centroid is off the axis
+    plain = ring_curve(points, 0.01, AxisParams(ring_depth_power=0.0), cloud=wall)
+    deep = ring_curve(points, 0.01, cloud=wall)
+    mid = lambda c: c.vertices[(c.vertices[:, 2] > 0.3) & (c.vertices[:, 2] < 1.7)]
+    off_plain = np.median(np.linalg.norm(mid(plain)[:, :2], axis=1))
+    off_deep = np.median(np.linalg.norm(mid(deep)[:, :2], axis=1))
+    assert off_plain > 0.005  # a tenth of the radius off the axis
+    assert off_deep < 0.5 * off_plain  # the deep points sit near the axis
+    no_cloud = ring_curve(points, 0.01)
+    assert np.array_equal(no_cloud.vertices, plain.vertices) and np.array_equal(no_cloud.edges, plain.edges)
+
+
+def test_the_ring_centres_of_a_symmetric_rod_stay_on_its_axis():
+    from skelcore.skeleton.axis_rings import ring_curve
+
+    points, wall = _rod_and_wall(-1.0)
+    deep = ring_curve(points, 0.01, cloud=wall)
+    inner = deep.vertices[(deep.vertices[:, 2] > 0.3) & (deep.vertices[:, 2] < 1.7)]
+    assert len(inner) > 20
+    assert np.linalg.norm(inner[:, :2], axis=1).max() < 0.002  # weighting a symmetric ring moves nothing
