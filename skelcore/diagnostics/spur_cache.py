@@ -82,6 +82,8 @@ class SpurSearch:
     near_d: np.ndarray
     tree: object
     near_tied: np.ndarray | None = None
+    first: np.ndarray | None = None  # each of ``pos``'s first row in ``pts`` (:func:`_distinct`), and
+    inverse: np.ndarray | None = None  # each row's position: the next update's _touched sorts them not again
 
 
 class SpurMemo:
@@ -221,7 +223,8 @@ class SpurMemo:
         now = getattr(self._local, "now", {})
         if now.get("pts") is pts and now.get("n_use") == n_use:
             self.current = SpurSearch(pts, labels, reach, rows, own, answer, int(n_use), now["pos"], now["radius"],
-                                      now["near_pos"], now["near_d"], now["tree"], now["near_tied"])
+                                      now["near_pos"], now["near_d"], now["tree"], now["near_tied"], now["first"],
+                                      now["inverse"])
         return answer
 
 
@@ -236,7 +239,11 @@ def _touched(prev: SpurSearch, pts: np.ndarray, labels: np.ndarray, reach: np.nd
     every position removed, added or relabelled at once and the others are all asked again. ``now``:
     the distinct positions of ``pts`` and their match with ``prev``'s, as :meth:`SpurMemo.radii` found them;
     ``index``: the queries' :meth:`SpurMemo.index`."""
-    o_pos, o_lo, o_hi, o_reach = _positions(prev.pts, prev.labels, prev.reach)
+    if prev.first is not None and prev.inverse is not None:  # _positions of prev, from its own search
+        o_pos, o_reach = prev.pos, np.asarray(prev.reach, dtype=float)[prev.first]
+        o_lo, o_hi = _label_range(prev.labels, prev.inverse, len(o_pos))
+    else:
+        o_pos, o_lo, o_hi, o_reach = _positions(prev.pts, prev.labels, prev.reach)
     if now is None:
         n_pos, n_lo, n_hi, n_reach = _positions(pts, labels, reach)
         match = _match(o_pos, n_pos)
