@@ -27,6 +27,7 @@ _PAIRS_MAX = 32  # (then, now) own-branch pairs tested one by one; beyond, their
 _SIDES_MAX = 8192  # one-sidedness' kept directions (at most 400 per curve, about 150 bytes each)
 _FEW = 16  # centres met one by one (a KD-tree's build and walk cost more)
 _MARGIN = 1e-6  # relative: a ball counts as holding q up to this much beyond its reach (more asked again)
+_KEPT_SETS = 6  # one-nearest answers of the last query sets kept (an update asks most of the last curve's points)
 
 
 class NearestByBalls:
@@ -36,21 +37,46 @@ class NearestByBalls:
     KD-tree visits the whole wall); the index is that of a nearest point, on a tie perhaps another than
     the KD-tree's. Everything else is the KD-tree's (``kd``). ``balls()`` gives the ball tree (built on
     ``kd.data``, its ``perm`` to the rows). An edit's update hands it to the curve's diagnostics, which
-    read the distances alone."""
+    read the distances alone.
+
+    The answers of the last ``_KEPT_SETS`` query sets are kept: a row with the bits of a row asked
+    before (found by a hash of its bytes, its bits compared) takes that row's answer, the ball tree's
+    for the same row, so the same bits; the updates of one evaluation (a repair's candidates) ask
+    their curves' branch radii and outside walks mostly at the points the last one asked."""
 
     def __init__(self, kd: cKDTree, balls: Callable[[], object]) -> None:
         self.kd, self._balls = kd, balls
+        self._kept: list[tuple[np.ndarray, ...]] = []
+        self._kept_lock = threading.Lock()
 
     def query(self, x: np.ndarray, k: int = 1, **options: object) -> tuple[np.ndarray, np.ndarray]:
         q = np.asarray(x, dtype=float)
         if k != 1 or options or q.ndim != 2 or q.shape[1] != 3 or not len(q):
             return self.kd.query(x, k=k, **options)
-        balls = self._balls()
-        d, at = balls.nearest(q, return_index=True)
-        return d, balls.perm[at].astype(np.int64)
+        key, words = _row_hash(q), _words(q)
+        d, at = np.zeros(len(q)), np.full(len(q), -1, np.int64)
+        with self._kept_lock:
+            kept = list(self._kept)
+        for sorted_key, order, kept_words, kept_d, kept_at in reversed(kept):  # the newest first
+            rows = np.flatnonzero(at < 0)
+            if not len(rows):
+                break
+            slot = np.minimum(np.searchsorted(sorted_key, key[rows]), len(order) - 1)
+            cand = order[slot]
+            same = (sorted_key[slot] == key[rows]) & np.all(kept_words[cand] == words[rows], axis=1)
+            d[rows[same]], at[rows[same]] = kept_d[cand[same]], kept_at[cand[same]]
+        todo = np.flatnonzero(at < 0)
+        if len(todo):
+            balls = self._balls()
+            dd, ii = balls.nearest(q[todo], return_index=True)
+            d[todo], at[todo] = dd, balls.perm[ii]
+        order = np.argsort(key, kind="stable")
+        with self._kept_lock:
+            self._kept = (self._kept + [(key[order], order, words.copy(), d.copy(), at.copy())])[-_KEPT_SETS:]
+        return d, at
 
     def __getattr__(self, name: str) -> object:
-        if name.startswith("__") or name in ("kd", "_balls"):  # not set yet (a copy, an unpickling)
+        if name.startswith("__") or name in ("kd", "_balls", "_kept", "_kept_lock"):  # not set yet (a copy)
             raise AttributeError(name)
         return getattr(self.kd, name)
 

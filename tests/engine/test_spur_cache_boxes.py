@@ -66,3 +66,38 @@ def test_rows_matched_by_their_hash_are_those_of_the_byte_sort(monkeypatch):
     assert (weak[-10:] == -1).all() and (weak >= 0).sum() > 1900
     monkeypatch.setattr(sc, "_row_hash", lambda p: np.zeros(len(p), np.uint64))  # every old hash shared
     np.testing.assert_array_equal(sc._match(old, new), want)
+
+
+def test_the_kept_nearest_answers_are_the_ball_trees_for_the_same_rows(monkeypatch):
+    """NearestByBalls keeps the answers of its last query sets: a set asked again, in part, shuffled, with
+    rows of one last bit or one sign changed, gets the distances and rows a fresh tree gives, also when the
+    hash is weak (rows of one first coordinate share it: their bits decide), and writing to an answer
+    changes no later one."""
+    from skelcore.metrics.ball_tree import BallTree
+
+    rng = np.random.default_rng(8)
+    cloud = rng.normal(size=(4000, 3))
+    axis = rng.normal(size=(3000, 3)) * 0.3
+    axis[:50, 0] = 0.0
+
+    def fresh():
+        return sc.NearestByBalls(cKDTree(cloud), lambda: BallTree(cloud, slab=True))
+
+    def check(tree, q):
+        d, i = tree.query(q)
+        want_d, want_i = fresh().query(q)
+        np.testing.assert_array_equal(d, want_d)
+        np.testing.assert_array_equal(i, want_i)
+        d[:] = -1.0
+        i[:] = -1
+
+    tree = fresh()
+    nudged = np.column_stack([axis[:, 0], np.nextafter(axis[:, 1], 9.0), axis[:, 2]])
+    for q in (axis, axis[rng.permutation(3000)[:2000]], np.vstack([axis[:100] * [-1.0, 1.0, 1.0], nudged[:500]]),
+              np.vstack([axis[::2], axis[::3]])):
+        check(tree, q)
+    assert len(tree._kept) == 4
+    monkeypatch.setattr(sc, "_row_hash", lambda p: sc._words(p)[:, 0].copy())  # rows of one x share a hash
+    weak = fresh()
+    for q in (axis, nudged, axis[:50] + [0.0, 1e-3, 0.0], axis[:80]):
+        check(weak, q)
