@@ -19,7 +19,7 @@ from typing import Callable
 import numpy as np
 from scipy.spatial import cKDTree
 
-__all__ = ["SpurSearch", "SpurMemo", "NearestByBalls", "same_tree"]
+__all__ = ["SpurSearch", "SpurMemo", "NearestByBalls", "same_tree", "row_hash", "row_words"]
 
 #: a search function (curve points, their branches, reaches, queries, the queries' own branches) -> bool
 Search = Callable[[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray], np.ndarray]
@@ -53,7 +53,7 @@ class NearestByBalls:
         q = np.asarray(x, dtype=float)
         if k != 1 or options or q.ndim != 2 or q.shape[1] != 3 or not len(q):
             return self.kd.query(x, k=k, **options)
-        key, words = _row_hash(q), _words(q)
+        key, words = row_hash(q), row_words(q)
         d, at = np.zeros(len(q)), np.full(len(q), -1, np.int64)
         with self._kept_lock:
             kept = list(self._kept)
@@ -415,26 +415,26 @@ def _match(old: np.ndarray, new: np.ndarray) -> np.ndarray:
     hash, by that sort (:func:`_match_sorted`)."""
     if not len(old) or not len(new):
         return np.full(len(new), -1, np.int64)
-    old_key, new_key = _row_hash(old), _row_hash(new)
+    old_key, new_key = row_hash(old), row_hash(new)
     order = np.argsort(old_key)
     sorted_key = old_key[order]
     if len(sorted_key) > 1 and not np.all(sorted_key[1:] != sorted_key[:-1]):
         return _match_sorted(old, new)
     at = np.minimum(np.searchsorted(sorted_key, new_key), len(order) - 1)
     cand = order[at]
-    same = (sorted_key[at] == new_key) & np.all(_words(old)[cand] == _words(new), axis=1)
+    same = (sorted_key[at] == new_key) & np.all(row_words(old)[cand] == row_words(new), axis=1)
     return np.where(same, cand, -1).astype(np.int64)
 
 
-def _words(pts: np.ndarray) -> np.ndarray:
+def row_words(pts: np.ndarray) -> np.ndarray:
     """The rows' bytes as 64-bit words (the same bits, -0.0 and 0.0 apart)."""
     rows = np.ascontiguousarray(pts, dtype=float)
     return rows.view(np.uint64).reshape(len(rows), -1)
 
 
-def _row_hash(pts: np.ndarray) -> np.ndarray:
+def row_hash(pts: np.ndarray) -> np.ndarray:
     """A 64-bit hash of each row's bytes (equal bits, equal hashes; multiplications wrap around)."""
-    w = _words(pts)
+    w = row_words(pts)
     mix = np.array([0x9E3779B97F4A7C15, 0xC2B2AE3D27D4EB4F, 0x165667B19E3779F9, 0xD6E8FEB86659FD93], np.uint64)
     h = np.zeros(len(w), np.uint64)
     for k in range(w.shape[1]):

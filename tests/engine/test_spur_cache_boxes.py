@@ -60,11 +60,11 @@ def test_rows_matched_by_their_hash_are_those_of_the_byte_sort(monkeypatch):
     assert (want >= 0).sum() == 2000 and (want[2000:] == -1).all()
     np.testing.assert_array_equal(sc._match(old, new), want)
     # a hash of the first word alone: new rows meet old rows of the same hash and other bits
-    monkeypatch.setattr(sc, "_row_hash", lambda p: sc._words(p)[:, 0] * np.uint64(3))
+    monkeypatch.setattr(sc, "row_hash", lambda p: sc.row_words(p)[:, 0] * np.uint64(3))
     weak = sc._match(old[10:], new)
     np.testing.assert_array_equal(weak, sc._match_sorted(old[10:], new))
     assert (weak[-10:] == -1).all() and (weak >= 0).sum() > 1900
-    monkeypatch.setattr(sc, "_row_hash", lambda p: np.zeros(len(p), np.uint64))  # every old hash shared
+    monkeypatch.setattr(sc, "row_hash", lambda p: np.zeros(len(p), np.uint64))  # every old hash shared
     np.testing.assert_array_equal(sc._match(old, new), want)
 
 
@@ -97,7 +97,7 @@ def test_the_kept_nearest_answers_are_the_ball_trees_for_the_same_rows(monkeypat
               np.vstack([axis[::2], axis[::3]])):
         check(tree, q)
     assert len(tree._kept) == 4
-    monkeypatch.setattr(sc, "_row_hash", lambda p: sc._words(p)[:, 0].copy())  # rows of one x share a hash
+    monkeypatch.setattr(sc, "row_hash", lambda p: sc.row_words(p)[:, 0].copy())  # rows of one x share a hash
     weak = fresh()
     for q in (axis, nudged, axis[:50] + [0.0, 1e-3, 0.0], axis[:80]):
         check(weak, q)
