@@ -11,6 +11,8 @@ cycle; its size is the curve's cycle rank E - V + C.
 
 from __future__ import annotations
 
+import threading
+from collections import OrderedDict
 from dataclasses import dataclass, field, replace
 
 import numpy as np
@@ -21,10 +23,15 @@ from scipy.spatial import cKDTree
 from ..curve import CurveSkeleton
 from ..geometry import Checkpoint, kd_tree, no_checkpoint
 
-__all__ = ["Branches", "decompose_branches", "densify", "JUNCTION"]
+__all__ = ["Branches", "decompose_branches", "branch_paths", "densify", "JUNCTION"]
 
 #: branch id of a junction vertex (degree >= 3), which lies on several branches
 JUNCTION = -1
+# the chains of the last few edge sets kept (a repair's round prunes branches of one curve, which its
+# evaluation decomposed, once per candidate); keyed by the vertex count and the edges' bytes
+_CHAINS_KEPT = 4
+_chains_kept: OrderedDict = OrderedDict()
+_chains_lock = threading.Lock()
 
 
 @dataclass(frozen=True)
@@ -222,6 +229,26 @@ def _chains(curve: CurveSkeleton, deg: np.ndarray) -> tuple[list[np.ndarray], np
         pos = np.searchsorted(key_path[srt], key_edge)
         edge_branch = bid[srt[pos]]
     return paths, edge_branch
+
+
+def branch_paths(curve: CurveSkeleton) -> tuple[list[np.ndarray], np.ndarray]:
+    """The branches' vertex paths and the branch of each edge (:func:`decompose_branches`' ``paths``
+    and ``edge_branch``), which depend on the edges alone: kept for the last few edge sets (the same
+    arrays' copies), so that deleting a branch of a curve just decomposed does not walk it again."""
+    edges = np.ascontiguousarray(curve.edges, dtype=np.int64)
+    key = (int(curve.n_vertices), edges.shape, edges.tobytes())
+    with _chains_lock:
+        kept = _chains_kept.get(key)
+        if kept is not None:
+            _chains_kept.move_to_end(key)
+    if kept is None:
+        kept = _chains(curve, curve.degrees())
+        with _chains_lock:
+            _chains_kept[key] = kept
+            while len(_chains_kept) > _CHAINS_KEPT:
+                _chains_kept.popitem(last=False)
+    paths, edge_branch = kept
+    return [p.copy() for p in paths], edge_branch.copy()
 
 
 def _kind(path: np.ndarray, deg: np.ndarray) -> str:
@@ -442,7 +469,7 @@ def decompose_branches(
     branch of its edge. Junction vertices (degree >= 3) get the branch id :data:`JUNCTION`.
     """
     deg = curve.degrees()
-    paths, edge_branch = _chains(curve, deg)
+    paths, edge_branch = branch_paths(curve)
     checkpoint(0.3)
     kinds = [_kind(p, deg) for p in paths]
     nb = len(paths)

@@ -19,6 +19,7 @@ the work runs on a random subsample and every cloud point takes its nearest samp
 
 from __future__ import annotations
 
+import threading
 from dataclasses import dataclass, field, replace
 from typing import Callable
 
@@ -33,6 +34,7 @@ from ..geometry import Checkpoint, kd_tree, no_checkpoint, query_workers, unique
 from ..metrics.cloud_index import CloudIndex, kept_index
 from ..metrics.coverage import Coverage, coverage, coverage_tau
 from ..params import Params
+from .spur_cache import row_hash, row_words
 from .trust_warning import TrustWarning
 
 __all__ = ["MissingRegion", "MissingParts", "missing_parts", "skeleton_elements", "coverage_elements", "depth_clause"]
@@ -50,6 +52,13 @@ SPREAD_CHUNK = 131_072
 SMALL_ELEMENTS = 20_000
 # regions under missing_min_share with fewer points are not measured (no tree is built for them)
 SMALL_FEWEST = 8
+# the area rule's kept element distances (_element_distances): every element asked the first time when the
+# subsample takes one of at most this many; at most this many rows kept per tree, for the last this many trees
+_SMALL_EVERY = 2
+_SMALL_ROWS = 400_000
+_SMALL_TREES = 2
+_SMALL_KEPT: list[tuple] = []
+_SMALL_LOCK = threading.Lock()
 # seed of the subsample taken above missing_max_points (the verdicts must not depend on a run)
 SUBSAMPLE_SEED = 0
 # unexplained points whose neighbours the kept search does not settle are searched among the unexplained
@@ -457,9 +466,53 @@ def _small_points(skeleton: np.ndarray | CurveSkeleton, tree: cKDTree, spacing: 
     elements = skeleton_elements(skeleton, spacing, int(p.missing_max_elements))
     if not len(elements) or not spacing > 0 or tree.n == 0:
         return np.inf
-    elements = elements[:: max(1, len(elements) // SMALL_ELEMENTS)]  # a median needs no more
-    r = float(np.median(tree.query(elements, workers=query_workers(len(elements)))[0]))
+    step = max(1, len(elements) // SMALL_ELEMENTS)  # a median needs no more
+    r = float(np.median(_element_distances(tree, elements, step)))
     return max(float(p.missing_min_area) * r * r / (spacing * spacing), 1.0)
+
+
+def _element_distances(tree: cKDTree, elements: np.ndarray, step: int) -> np.ndarray:
+    """``tree.query(elements[::step])``'s distances. The answers of the last element sets asked of
+    ``tree`` are kept (``_SMALL_KEPT``): an element with the bits of one asked before (a hash of its
+    bytes, its bits compared) takes its distance, the tree's for the same point; the first time a tree
+    is asked with a step of at most ``_SMALL_EVERY``, every element is asked, so that the next curves'
+    subsamples (an edit shifts which elements a step picks) find theirs (docs/repair.md "The repair's
+    own costs cut")."""
+    sub = elements[::step]
+    with _SMALL_LOCK:
+        kept = next((k for k in _SMALL_KEPT if k[0] is tree), None)
+    if kept is None and step <= _SMALL_EVERY:
+        every = np.ascontiguousarray(elements, dtype=float)
+        d_all = tree.query(every, workers=query_workers(len(every)))[0]
+        _keep_distances(tree, every, d_all, None)
+        return d_all[::step]
+    d = np.zeros(len(sub))
+    miss = np.ones(len(sub), bool)
+    if kept is not None:
+        key, words = row_hash(sub), row_words(sub)
+        _, sorted_key, order, kept_words, kept_d = kept
+        slot = np.minimum(np.searchsorted(sorted_key, key), len(order) - 1)
+        cand = order[slot]
+        miss = ~((sorted_key[slot] == key) & np.all(kept_words[cand] == words, axis=1))
+        d[~miss] = kept_d[cand[~miss]]
+    if miss.any():
+        ask = np.ascontiguousarray(sub[miss], dtype=float)
+        d[miss] = tree.query(ask, workers=query_workers(len(ask)))[0]
+        _keep_distances(tree, ask, d[miss], kept)
+    return d
+
+
+def _keep_distances(tree: cKDTree, points: np.ndarray, d: np.ndarray, kept: tuple | None) -> None:
+    """Keep ``points``' distances for ``tree``, with ``kept``'s while both hold at most
+    ``_SMALL_ROWS`` rows (the oldest tree's dropped beyond ``_SMALL_TREES``)."""
+    words, d = row_words(points).copy(), np.asarray(d, float).copy()
+    if kept is not None and len(kept[3]) + len(words) <= _SMALL_ROWS:
+        words, d = np.vstack([kept[3], words]), np.concatenate([kept[4], d])
+    key = row_hash(words.view(np.float64))
+    order = np.argsort(key, kind="stable")
+    with _SMALL_LOCK:
+        _SMALL_KEPT[:] = [k for k in _SMALL_KEPT if k[0] is not tree][-(_SMALL_TREES - 1):]
+        _SMALL_KEPT.append((tree, key[order], order, words, d))
 
 
 def _regions(pts: np.ndarray, cov: Coverage, spacing: float, p: Params, checkpoint: Checkpoint,

@@ -6,7 +6,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..curve import CurveSkeleton
-from ..diagnostics.branches import decompose_branches
+from ..diagnostics.branches import branch_paths
 from ..errors import SkelInputError
 from .change import Change, keep_vertices
 
@@ -18,12 +18,12 @@ def delete_branch(curve: CurveSkeleton, branch: int, *, _op: str = "delete_branc
     (a junction end stays); the remaining ids close up (``change.id_map``)."""
     if isinstance(branch, (bool, np.bool_)) or not isinstance(branch, (int, np.integer)):
         raise SkelInputError(f"branch id must be an integer, got {branch!r}")
-    b = decompose_branches(curve)
-    if not 0 <= int(branch) < len(b.paths):
-        raise SkelInputError(f"branch id {int(branch)} out of range for {len(b.paths)} branches")
+    paths, edge_branch = branch_paths(curve)  # the decomposition's, kept when it was just made
+    if not 0 <= int(branch) < len(paths):
+        raise SkelInputError(f"branch id {int(branch)} out of range for {len(paths)} branches")
     k = int(branch)
-    edges = curve.edges[b.edge_branch != k] if curve.n_edges else curve.edges
-    path = np.unique(b.paths[k])
+    edges = curve.edges[edge_branch != k] if curve.n_edges else curve.edges
+    path = np.unique(paths[k])
     still_used = np.zeros(curve.n_vertices, dtype=bool)
     still_used[edges.ravel()] = True
     gone = path[~still_used[path]]

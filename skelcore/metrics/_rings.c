@@ -30,6 +30,9 @@
 
 #define SMALL_SORT 32        /* up to this many keys an insertion sort; a bucket of over 4 x this: radix */
 #define MARGIN 1e-9          /* relative allowance of the cell tests for round-off (a superset of cells is harmless) */
+/* relative: a pool point whose fg^2 + fh^2 exceeds (R (1 + this))^2 lies beyond R whatever the rounding of the
+ * square (a few units in the last place) and of hypot (under one), so its distance is not computed yet */
+#define REACH_SLACK 1e-6
 
 typedef struct {             /* a growing array of doubles */
     double *v;
@@ -47,7 +50,7 @@ static int vec_reserve(Vec *a, Py_ssize_t need) {
     return 1;
 }
 
-typedef struct {             /* slab points: distance, plane coordinates, grid row */
+typedef struct {             /* slab points: distance (in the pool its square, extend_head), plane coordinates, grid row */
     double *d, *fg, *fh;
     int32_t *row;
     Py_ssize_t n, cap;
@@ -259,7 +262,7 @@ static inline int take_cell(const Grid *G, Py_ssize_t at, Search *S) {
         const double x = G->X[r] - p0, y = G->Y[r] - p1, z = G->Z[r] - p2;
         if (!(fabs(x * u0 + y * u1 + z * u2) < half)) continue;
         const double fg = x * g0 + y * g1 + z * g2, fh = x * h0 + y * h1 + z * h2;
-        pool->d[n] = hypot(fg, fh);
+        pool->d[n] = fg * fg + fh * fh;  /* its square, a bound: the distance is taken in extend_head */
         pool->fg[n] = fg;
         pool->fh[n] = fh;
         pool->row[n] = (int32_t)r;
@@ -326,17 +329,25 @@ static int merge_pool(Search *S, Py_ssize_t a) {
 }
 
 /* The pool's points within R (all when whole), in the stable order of their distances (the pool is in grid
- * order), onto the head's end; the rest stay in the pool, in grid order. */
+ * order), onto the head's end; the rest stay in the pool, in grid order.  The pool holds each point's
+ * fg^2 + fh^2 (take_cell): libm's hypot, the distance, is called only where that square does not already
+ * put the point beyond R (REACH_SLACK below), the same test and the same distances as calling it for all. */
 static int extend_head(Search *S) {
     Pts *pool = &S->pool, *head = &S->head;
     Scratch *s = &S->sort;
     if (!scratch_reserve(s, pool->n) || !pts_reserve(head, head->n + pool->n)) return 0;
     Py_ssize_t m = 0, keep = 0;
+    const double bound = S->R * (1.0 + REACH_SLACK), far = bound * bound;
+    const int bounded = !S->whole && far > 1e-200 && far < 1e200;  /* no overflow or underflow of squares */
     for (Py_ssize_t i = 0; i < pool->n; i++) {
-        const double d = pool->d[i];
+        const double sq = pool->d[i];
+        if (bounded && sq > far && sq < INFINITY) continue;  /* hypot > R for certain: it stays in the pool */
+        const double d = hypot(pool->fg[i], pool->fh[i]);
         if (S->whole || d <= S->R) {
             s->key[m] = dist_key(d);
             s->from[m] = (int32_t)i;
+            pool->d[i] = d;
+            pool->row[i] = -1 - pool->row[i];  /* marked: it moves to the head */
             m++;
         }
     }
@@ -350,7 +361,7 @@ static int extend_head(Search *S) {
     }
     head->n += m;
     for (Py_ssize_t i = 0; i < pool->n; i++) {
-        if (S->whole || pool->d[i] <= S->R) continue;
+        if (pool->row[i] < 0) continue;
         pool->d[keep] = pool->d[i];
         pool->fg[keep] = pool->fg[i];
         pool->fh[keep] = pool->fh[i];

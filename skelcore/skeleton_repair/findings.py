@@ -57,9 +57,11 @@ def _num(x: Any) -> float | None:
 def read_findings(ev: Evaluation) -> Findings:
     """The findings of ``ev`` (an evaluation of a curve skeleton with its diagnostics)."""
     s = ev.summary()
-    diag = ev.diagnostics.summary if ev.diagnostics is not None else {}
-    outside = diag.get("outside") or {}
-    measures = {"completeness": _num((diag.get("completeness") or {}).get("curve")),
+    # two keys of the diagnostics' summary, not the whole (its per-branch lists: skelcore/diagnostics/record.py)
+    diag = ev.diagnostics
+    outside = (diag.part("outside") if diag is not None else None) or {}
+    completeness = (diag.part("completeness") if diag is not None else None) or {}
+    measures = {"completeness": _num(completeness.get("curve")),
                 "outside_share": _num(outside.get("length_share")),
                 "boundedness": _num(s["boundedness"]["curve"]),
                 "centeredness": _num(s["centeredness"]["curve"])}

@@ -155,3 +155,26 @@ def test_ellipse_sums_are_the_numpy_loops_bit_for_bit():
         for a, b in zip(got, want):
             assert a.shape == b.shape and a.tobytes() == b.tobytes()
         assert len(want.use) > 0 or sizes.max() < 5
+
+
+def test_a_ring_that_reaches_the_first_ball_s_edge_keeps_its_outer_points(monkeypatch):
+    """The kernel computes a pool point's distance only when its squared plane distance does not put it
+    beyond the ball's reach R already (REACH_SLACK in _rings.c). Two circles about the sample, the inner at
+    R / growth (the ring would end there if nothing lay between it and R) and the outer just inside R: a
+    bound that left out points at up to 1 % below R would drop the outer circle from the first ball and end
+    the ring at the inner one."""
+    params = Params()
+    growth = float(params.ring_growth)
+    corners = np.array([[x, y, z] for x in (-10.0, 10.0) for y in (-10.0, 10.0) for z in (-10.0, 10.0)])
+    grid = centeredness.slab_grid(corners, params)
+    half = 0.5 * params.slab_factor * float(np.linalg.norm(grid.hi - grid.lo))
+    first = centeredness._BALL_FIRST * half
+    angle = np.linspace(0.0, 2.0 * np.pi, 24, endpoint=False)
+    circle = np.column_stack([np.cos(angle), np.sin(angle), np.zeros(24)])
+    inner, outer = 0.998 * first / growth, 0.995 * first
+    assert outer < growth * inner
+    cloud = np.vstack([corners, inner * circle, outer * circle + [0.0, 0.0, 1e-3 * half]])
+    points, dirs = np.zeros((1, 3)), np.array([[0.0, 0.0, 1.0]])
+    (x0, y0, s0), (x1, y1, s1) = _rings_both_ways(monkeypatch, cloud, points, dirs, params.slab_factor)
+    assert s0.tolist() == [0, 48]  # both circles in the ring
+    assert s1.tobytes() == s0.tobytes() and x1.tobytes() == x0.tobytes() and y1.tobytes() == y0.tobytes()

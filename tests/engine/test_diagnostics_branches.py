@@ -188,3 +188,28 @@ def test_degenerate_curves_run_through_every_diagnostic(edges):
     d = find_curve_defects(s.cloud, curve)
     assert len(d.branches) >= 1 and d.cycles.n_cycles == 0 and d.warnings() == []
     assert d.to_dict()["branches"]["n_branches"] == len(d.branches)
+
+
+def test_kept_branch_paths_are_the_walks_own_and_copies():
+    """branch_paths keeps the chains of the last edge sets: a curve with the same edges (other
+    vertices) gets the same paths, one more (isolated) vertex or another edge set its own, and the arrays
+    handed out are copies (writing to them changes no later answer)."""
+    from skelcore.diagnostics import branches as B
+
+    curve = _curve(shapes.y_shape(n=3000))
+    want, want_eb = B._chains(curve, curve.degrees())
+    got, eb = B.branch_paths(curve)
+    assert len(got) == len(want) and all(np.array_equal(a, b) for a, b in zip(got, want))
+    assert np.array_equal(eb, want_eb)
+    got[0][:] = -7
+    eb[:] = -7
+    moved = CurveSkeleton.from_raw(curve.vertices + 1.0, curve.edges)
+    again, eb2 = B.branch_paths(moved)
+    assert all(np.array_equal(a, b) for a, b in zip(again, want)) and np.array_equal(eb2, want_eb)
+    extra = CurveSkeleton.from_raw(np.vstack([curve.vertices, [[5.0, 5.0, 5.0]]]), curve.edges)
+    with_point, _ = B.branch_paths(extra)
+    assert len(with_point) == len(want) + 1 and with_point[-1].tolist() == [curve.n_vertices]
+    cut = CurveSkeleton.from_raw(curve.vertices, curve.edges[1:])
+    assert len(B.branch_paths(cut)[0]) == len(B._chains(cut, cut.degrees())[0]) != len(want)
+    b = decompose_branches(curve)
+    assert all(np.array_equal(a, c) for a, c in zip(b.paths, want))

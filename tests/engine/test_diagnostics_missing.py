@@ -255,3 +255,34 @@ def test_the_depth_quantile_searched_near_its_rank_is_the_whole_searchs(shape):
     whole = cKDTree(border).query(pts)[0]
     for q in (0.0, 0.5, 0.9, 0.95, 0.999, 1.0):
         assert mp._quantile_distance(border, pts, q) == np.quantile(whole, q)
+
+
+def test_the_area_rules_kept_element_distances_are_the_trees(monkeypatch):
+    """The area rule's cloud distances of a curve's elements (every ``step``-th) are kept per tree: a
+    next curve's subsample, shifted by an edit, with elements moved by a last bit or added, gets the
+    distances a fresh query gives, also with a weak hash (elements of one x share it: their bits decide)."""
+    import importlib
+
+    from scipy.spatial import cKDTree
+
+    mp = importlib.import_module("skelcore.diagnostics.missing_parts")
+    sc = importlib.import_module("skelcore.diagnostics.spur_cache")
+    rng = np.random.default_rng(3)
+    tree = cKDTree(rng.normal(size=(3000, 3)))
+    first = rng.normal(size=(4000, 3)) * 0.5
+    first[:40, 0] = 0.25
+    moved = first.copy()
+    moved[100:200, 1] = np.nextafter(moved[100:200, 1], 9.0)
+    sets = [(first, 2), (first[1:], 2), (np.vstack([first[:50], rng.normal(size=(30, 3)), first[51:]]), 2),
+            (moved, 2), (first, 3), (np.vstack([first[:40] + [0.0, 1e-3, 0.0], first]), 2)]
+
+    def run(tree):
+        monkeypatch.setattr(mp, "_SMALL_KEPT", [])
+        for elements, step in sets:
+            got = mp._element_distances(tree, elements, step)
+            np.testing.assert_array_equal(got, tree.query(elements[::step])[0])
+        assert any(k[0] is tree and len(k[3]) >= len(first) for k in mp._SMALL_KEPT)
+
+    run(tree)
+    monkeypatch.setattr(mp, "row_hash", lambda p: sc.row_words(p)[:, 0].copy())
+    run(cKDTree(rng.normal(size=(3000, 3))))

@@ -252,6 +252,9 @@ def test_the_kept_spur_search_answers_as_a_search_of_the_whole_curve(seed, how):
         np.testing.assert_array_equal(own, want_own)
         np.testing.assert_array_equal(got, want)
         np.testing.assert_array_equal(reach, 1.25 * tree.query(pts)[0] + 0.05)
+        kept = memo.current  # its distinct positions' rows, which the next update reads instead of sorting again
+        assert kept.pos[kept.inverse].tobytes() == np.ascontiguousarray(pts).tobytes()
+        assert kept.pos.tobytes() == np.ascontiguousarray(pts)[kept.first].tobytes()
 
     first = SpurMemo()
     run(first, pts, labels)

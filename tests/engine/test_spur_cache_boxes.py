@@ -44,3 +44,60 @@ def test_the_nearest_of_a_few_centres_within_bounds_is_the_kd_trees():
         inside = (bound >= 0) & (full <= bound)
         assert np.array_equal(d[inside], full[inside])  # the same bits where it counts
         assert np.all(np.isinf(d[bound < 0]))
+
+
+def test_rows_matched_by_their_hash_are_those_of_the_byte_sort(monkeypatch):
+    """_match finds each new row's old row of the same bits by a hash of the bytes: the byte sort's answer
+    (-0.0 is not 0.0; a row differing in one last bit is not matched), also when the hash is weak (rows of
+    one first coordinate share it: the bits decide) or the old rows' hashes collide (the sort answers)."""
+    rng = np.random.default_rng(5)
+    old = rng.random((3000, 3))
+    old[:10, 0] = 0.0
+    new = np.vstack([old[rng.permutation(3000)[:2000]], rng.random((500, 3)), old[:10] * [-1.0, 1.0, 1.0],
+                     np.nextafter(old[20:30], 2.0),
+                     np.column_stack([old[40:50, 0], np.nextafter(old[40:50, 1], 2.0), old[40:50, 2]])])
+    want = sc._match_sorted(old, new)
+    assert (want >= 0).sum() == 2000 and (want[2000:] == -1).all()
+    np.testing.assert_array_equal(sc._match(old, new), want)
+    # a hash of the first word alone: new rows meet old rows of the same hash and other bits
+    monkeypatch.setattr(sc, "row_hash", lambda p: sc.row_words(p)[:, 0] * np.uint64(3))
+    weak = sc._match(old[10:], new)
+    np.testing.assert_array_equal(weak, sc._match_sorted(old[10:], new))
+    assert (weak[-10:] == -1).all() and (weak >= 0).sum() > 1900
+    monkeypatch.setattr(sc, "row_hash", lambda p: np.zeros(len(p), np.uint64))  # every old hash shared
+    np.testing.assert_array_equal(sc._match(old, new), want)
+
+
+def test_the_kept_nearest_answers_are_the_ball_trees_for_the_same_rows(monkeypatch):
+    """NearestByBalls keeps the answers of its last query sets: a set asked again, in part, shuffled, with
+    rows of one last bit or one sign changed, gets the distances and rows a fresh tree gives, also when the
+    hash is weak (rows of one first coordinate share it: their bits decide), and writing to an answer
+    changes no later one."""
+    from skelcore.metrics.ball_tree import BallTree
+
+    rng = np.random.default_rng(8)
+    cloud = rng.normal(size=(4000, 3))
+    axis = rng.normal(size=(3000, 3)) * 0.3
+    axis[:50, 0] = 0.0
+
+    def fresh():
+        return sc.NearestByBalls(cKDTree(cloud), lambda: BallTree(cloud, slab=True))
+
+    def check(tree, q):
+        d, i = tree.query(q)
+        want_d, want_i = fresh().query(q)
+        np.testing.assert_array_equal(d, want_d)
+        np.testing.assert_array_equal(i, want_i)
+        d[:] = -1.0
+        i[:] = -1
+
+    tree = fresh()
+    nudged = np.column_stack([axis[:, 0], np.nextafter(axis[:, 1], 9.0), axis[:, 2]])
+    for q in (axis, axis[rng.permutation(3000)[:2000]], np.vstack([axis[:100] * [-1.0, 1.0, 1.0], nudged[:500]]),
+              np.vstack([axis[::2], axis[::3]])):
+        check(tree, q)
+    assert len(tree._kept) == 4
+    monkeypatch.setattr(sc, "row_hash", lambda p: sc.row_words(p)[:, 0].copy())  # rows of one x share a hash
+    weak = fresh()
+    for q in (axis, nudged, axis[:50] + [0.0, 1e-3, 0.0], axis[:80]):
+        check(weak, q)
