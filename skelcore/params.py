@@ -250,6 +250,11 @@ class Params:
     repair_outside_gain : an action on an outside branch that leaves as many defects (no more missing
         cycles or components) is kept when the curve's outside length share falls by at least this
         (and the never-worse bounds hold).
+    repair_batch_tries : per round and batched kind (spurs, spurious cycles), how many batches of its
+        actions apart from one another skelcore.repair judges together before its single tries
+        (docs/repair.md "Batches"); 0: no batches, one action per round.
+    repair_batch_gap : the members of a batch lie farther apart than this many x the curve's median
+        edge length (and share no vertex or neighbour), so that each one's effect is its own.
     """
 
     normalize_by: Literal["longest_side", "diagonal"] = "longest_side"
@@ -378,6 +383,8 @@ class Params:
     repair_recentre: bool = True
     repair_centre_gain: float = 0.01
     repair_outside_gain: float = 0.01
+    repair_batch_tries: int = 3
+    repair_batch_gap: float = 2.0
 
     def __post_init__(self) -> None:
         def bad(name: str, why: str) -> None:
@@ -478,6 +485,10 @@ class Params:
                 bad(name, "must be >= 0")
         if not float(self.repair_join_step) > 0:
             bad("repair_join_step", "must be > 0")
+        if int(self.repair_batch_tries) < 0:
+            bad("repair_batch_tries", "must be >= 0")
+        if not float(self.repair_batch_gap) >= 0:
+            bad("repair_batch_gap", "must be >= 0")
         for name in ("gt_thresholds", "gt_radius_k"):
             if int(getattr(self, name)) < 1:
                 bad(name, "must be a positive integer")
