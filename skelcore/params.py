@@ -233,7 +233,8 @@ class Params:
         lies inside or at most this many of its radii outside; precision / recall / F1 are also given
         on the held reference (docs/metrics.md 5.3.1). = gt_threshold_max: a node farther out is beyond
         every threshold for a curve inside the surface.
-    repair_max_rounds : skelcore.repair acts at most this many times (docs/repair.md).
+    repair_max_rounds : skelcore.repair acts in at most this many rounds, one action or one batch each
+        (docs/repair.md).
     repair_max_tries : candidate actions tried (each evaluated) per round before giving up.
     repair_max_components : a curve with more components than this is refused by skelcore.repair
         (joining thousands of fragments pairwise is not a repair; skeletonize again).
