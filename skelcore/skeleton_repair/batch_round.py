@@ -1,9 +1,9 @@
 """A round's batches (docs/repair.md "Batches"): before the single tries, each batched kind in its turn
 (the kind after the last kept batch's first) gathers its members (:func:`.batch.members`), is judged
 by one update and kept, or tried again without the members to blame, at most
-``Params.repair_batch_tries`` times, not when half of them or more are to blame; a kind whose batches
-are all refused in a round is not batched again (its actions stay single tries), so a curve whose
-actions are mostly refused pays one or a few batch tries once."""
+``Params.repair_batch_tries`` times; a kind whose batches are all refused in a round is not batched
+again (its actions stay single tries), so a curve whose actions are mostly refused pays a few batch
+tries once."""
 
 from __future__ import annotations
 
@@ -52,10 +52,7 @@ def _gap(curve: CurveSkeleton, p: Params) -> float:
 
 
 def _smaller(batch: list[Member], blamed: set[int]) -> list[Member]:
-    """The batch without the members to blame, or its first half when none are named; none when half
-    or more are to blame (the kind's actions are mostly refused: left to the single tries)."""
-    if 2 * len(blamed) >= len(batch):
-        return []
+    """The batch without the members to blame, or its first half when none are named."""
     if blamed:
         return [m for i, m in enumerate(batch) if i not in blamed]
     return batch[: len(batch) // 2]
