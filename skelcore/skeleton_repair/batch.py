@@ -45,6 +45,7 @@ class Member:
     edges: np.ndarray
     touched: np.ndarray
     signature: tuple
+    key: frozenset = frozenset()
 
 
 def _key(curve: CurveSkeleton, vertices: np.ndarray) -> frozenset:
@@ -74,11 +75,13 @@ def _neighbours(curve: CurveSkeleton, vertices: np.ndarray) -> np.ndarray:
     return np.union1d(vertices, e[on].ravel())
 
 
-def members(curve: CurveSkeleton, f: Findings, candidates: list[Action], code: str, gap: float) -> list[Member]:
+def members(curve: CurveSkeleton, f: Findings, candidates: list[Action], code: str, gap: float,
+            skip: set | frozenset = frozenset()) -> list[Member]:
     """The candidates of kind ``code`` that may go together, in their order: a spur's prune, or a
     spurious cycle's cut at its weakest edge (its first cut; the branch deletions are left to the
     single tries), each kept when its vertices and their neighbours share no vertex with a member
-    chosen before and lie farther than ``gap`` from them."""
+    chosen before and lie farther than ``gap`` from them; ``skip``: the keys of members blamed in an
+    earlier batch (the positions of a spur's vertices, of a cut edge's ends), left to the single tries."""
     br = f.defects.branches
     pool: list[Member] = []
     seen_cycles: set[int] = set()
@@ -89,14 +92,18 @@ def members(curve: CurveSkeleton, f: Findings, candidates: list[Action], code: s
         if code == "spurious_branches" and op == "prune_branch":
             touched = np.asarray(br.paths[int(a.target["branch"])], np.int64)
             sig = ("spurious_branches", _key(curve, touched))
+            key = sig[1]
         elif code == "spurious_cycles" and op == "cut_cycle" and int(a.target["cycle"]) not in seen_cycles:
             seen_cycles.add(int(a.target["cycle"]))
             cyc = br.cycle_edges(int(a.target["cycle"]))
             touched = np.unique(curve.edges[cyc])
             sig = ("spurious_cycles", int(a.target["cycle"]))
+            key = _key(curve, np.asarray(a.entries[0]["args"]["edge"]))
         else:
             continue
-        pool.append(Member(a, np.asarray(a.edges, np.int64), touched, sig))
+        if key in skip:
+            continue
+        pool.append(Member(a, np.asarray(a.edges, np.int64), touched, sig, key))
     if len(pool) < 2:
         return pool
     owner = np.concatenate([np.full(len(m.touched), i) for i, m in enumerate(pool)])

@@ -1,9 +1,9 @@
 """A round's batches (docs/repair.md "Batches"): before the single tries, each batched kind in its turn
 (the kind after the last kept batch's first) gathers its members (:func:`.batch.members`), is judged
 by one update and kept, or tried again without the members to blame, at most
-``Params.repair_batch_tries`` times; a kind whose batches are all refused in a round is not batched
-again (its actions stay single tries), so a curve whose actions are mostly refused pays a few batch
-tries once."""
+``Params.repair_batch_tries`` times; a member once blamed is left to the single tries; a kind whose
+batches are all refused in a round rests 2, then 4, 8... rounds (its actions single tries meanwhile),
+so a curve whose actions are mostly refused pays a few batch tries now and then."""
 
 from __future__ import annotations
 
@@ -27,10 +27,15 @@ __all__ = ["BatchState", "batch_step"]
 
 @dataclass
 class BatchState:
-    """Whose turn it is (an index into :data:`.batch.BATCHED`) and the kinds no longer batched."""
+    """Whose turn it is (an index into :data:`.batch.BATCHED`), the round, per kind the round it is
+    batched again after its batches were all refused and how many times they were, and the keys of
+    the members blamed so far (:attr:`.batch.Member.key`)."""
 
     turn: int = 0
-    resting: set[str] = field(default_factory=set)
+    round: int = 0
+    rest_until: dict[str, int] = field(default_factory=dict)
+    refused: dict[str, int] = field(default_factory=dict)
+    blamed: set = field(default_factory=set)
 
 
 def _rounded(measures: dict[str, float | None]) -> dict[str, float | None]:
@@ -52,27 +57,30 @@ def _gap(curve: CurveSkeleton, p: Params) -> float:
 
 
 def _smaller(batch: list[Member], blamed: set[int]) -> list[Member]:
-    """The batch without the members to blame, or its first half when none are named."""
-    if blamed:
-        return [m for i, m in enumerate(batch) if i not in blamed]
-    return batch[: len(batch) // 2]
+    """The first half of the batch without the members to blame (a new defect is laid at the nearest
+    member's door, not always the right one: halving reaches a sound batch in a few tries)."""
+    rest = [m for i, m in enumerate(batch) if i not in blamed]
+    return rest[: len(rest) // 2]
 
 
 def batch_step(ev: Evaluation, cur: CurveSkeleton, found: Findings, candidates: list[Action], p: Params,
                state: BatchState, clock: PhaseClock, rejected: list[dict[str, Any]],
-               cancel: Callable[[], bool] | None = None
+               cancel: Callable[[], bool] | None = None, last: bool = False
                ) -> tuple[Evaluation, CurveSkeleton, Findings, list[dict[str, Any]]] | None:
     """The first batch the rule keeps this round: (its evaluation, curve, findings, the log's
-    operations with their ``why``), or None; refused batches are appended to ``rejected``."""
+    operations with their ``why``), or None; refused batches are appended to ``rejected``.
+    ``last``: the round's single tries all failed; the resting kinds have their turn before the
+    repair stops."""
     if p.repair_batch_tries < 1 or found.defects is None:
         return None
     cloud = np.asarray(ev.source.args["cloud"], float)
     n = len(BATCHED)
+    state.round += 0 if last else 1
     for code in (BATCHED[(state.turn + k) % n] for k in range(n)):
-        if code in state.resting:
-            continue
+        if (state.round < state.rest_until.get(code, 0)) != last:
+            continue  # a resting kind waits; on the last call only the resting kinds are tried
         with clock.phase("proposals"):
-            batch = members(cur, found, candidates, code, _gap(cur, p))
+            batch = members(cur, found, candidates, code, _gap(cur, p), state.blamed)
             batch = [m for m in batch if not predicted_worse(found, cur, m, p)] if len(batch) >= 2 else []
         if len(batch) < 2:
             continue
@@ -91,6 +99,7 @@ def batch_step(ev: Evaluation, cur: CurveSkeleton, found: Findings, candidates: 
                 why.update(after=_rounded(seen), defects_after=None)
                 blamed = blame_lost(cur, batch, cloud, _explained(ev), _explained(pre), _gap(cur, p))
                 rejected.append({"entries": [], "why": {**why, "rejected": refusal, "blamed": len(blamed)}})
+                state.blamed |= {batch[i].key for i in blamed}
                 batch = _smaller(batch, blamed)
                 continue
             with clock.phase("whole update"):
@@ -108,6 +117,7 @@ def batch_step(ev: Evaluation, cur: CurveSkeleton, found: Findings, candidates: 
                         refusal = "not applicable: the members' operations give another curve"
             if refusal is not None:
                 rejected.append({"entries": [], "why": {**why, "rejected": refusal, "blamed": len(blamed)}})
+                state.blamed |= {batch[i].key for i in blamed}
                 batch = _smaller(batch, blamed)
                 continue
             ops = []
@@ -120,5 +130,6 @@ def batch_step(ev: Evaluation, cur: CurveSkeleton, found: Findings, candidates: 
                     ops.append({**entry, "why": {**own, "step": f"{k + 1} of {len(member_entries)}"}})
             state.turn = (BATCHED.index(code) + 1) % n
             return new_ev, new, new_found, ops
-        state.resting.add(code)
+        state.refused[code] = state.refused.get(code, 0) + 1
+        state.rest_until[code] = state.round + 2 ** state.refused[code]
     return None

@@ -229,6 +229,12 @@ def repair(cloud: np.ndarray, curve: CurveSkeleton | tuple | None = None, skelet
                 ops.append({**entry, "why": {**why, "step": f"{k + 1} of {len(action.entries)}"}})
             ev, cur, found, done = new_ev, new, new_found, True
             break
+        if not done and batches.rest_until:  # before giving up, the kinds resting from batches
+            kept = batch_step(ev, cur, found, candidates, p, batches, clock, rejected, cancel, last=True)
+            if kept is not None:
+                ev, cur, found, batch_ops = kept
+                ops += batch_ops
+                continue
         if not done:
             stopped = ("no candidate action helps" if candidates else "no action for the defects left"
                        ) if found.total else _no_defect_left(found)
