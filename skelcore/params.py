@@ -233,7 +233,8 @@ class Params:
         lies inside or at most this many of its radii outside; precision / recall / F1 are also given
         on the held reference (docs/metrics.md 5.3.1). = gt_threshold_max: a node farther out is beyond
         every threshold for a curve inside the surface.
-    repair_max_rounds : skelcore.repair acts at most this many times (docs/repair.md).
+    repair_max_rounds : skelcore.repair acts in at most this many rounds, one action or one batch each
+        (docs/repair.md).
     repair_max_tries : candidate actions tried (each evaluated) per round before giving up.
     repair_max_components : a curve with more components than this is refused by skelcore.repair
         (joining thousands of fragments pairwise is not a repair; skeletonize again).
@@ -250,6 +251,11 @@ class Params:
     repair_outside_gain : an action on an outside branch that leaves as many defects (no more missing
         cycles or components) is kept when the curve's outside length share falls by at least this
         (and the never-worse bounds hold).
+    repair_batch_tries : per round and batched kind (spurs, spurious cycles), how many batches of its
+        actions apart from one another skelcore.repair judges together before its single tries
+        (docs/repair.md "Batches"); 0: no batches, one action per round.
+    repair_batch_gap : the members of a batch lie farther apart than this many x the curve's median
+        edge length (and share no vertex or neighbour), so that each one's effect is its own.
     """
 
     normalize_by: Literal["longest_side", "diagonal"] = "longest_side"
@@ -378,6 +384,8 @@ class Params:
     repair_recentre: bool = True
     repair_centre_gain: float = 0.01
     repair_outside_gain: float = 0.01
+    repair_batch_tries: int = 3
+    repair_batch_gap: float = 2.0
 
     def __post_init__(self) -> None:
         def bad(name: str, why: str) -> None:
@@ -478,6 +486,10 @@ class Params:
                 bad(name, "must be >= 0")
         if not float(self.repair_join_step) > 0:
             bad("repair_join_step", "must be > 0")
+        if int(self.repair_batch_tries) < 0:
+            bad("repair_batch_tries", "must be >= 0")
+        if not float(self.repair_batch_gap) >= 0:
+            bad("repair_batch_gap", "must be >= 0")
         for name in ("gt_thresholds", "gt_radius_k"):
             if int(getattr(self, name)) < 1:
                 bad(name, "must be a positive integer")

@@ -148,12 +148,13 @@ def _splits(curve: CurveSkeleton, edge_ids: np.ndarray) -> bool:
     return len(np.unique(l1[deg > 0])) > len(np.unique(l0[np.bincount(curve.edges.ravel(), minlength=curve.n_vertices) > 0]))
 
 
-def _branch_delete(curve: CurveSkeleton, f: Findings, b: int, code: str, target: dict[str, Any], why: str
-                   ) -> Action | None:
-    """Delete branch ``b`` whole (edges and inner vertices) when that splits nothing."""
+def _branch_delete(curve: CurveSkeleton, f: Findings, b: int, code: str, target: dict[str, Any], why: str,
+                   on_cycle: bool = False) -> Action | None:
+    """Delete branch ``b`` whole (edges and inner vertices) when that splits nothing (``on_cycle``: the
+    branch lies on a cycle, so it splits nothing)."""
     br = f.defects.branches
     edges = np.flatnonzero(br.edge_branch == b)
-    if br.kind[b] in ("terminal", "path", "cycle", "point") or _splits(curve, edges):
+    if br.kind[b] in ("terminal", "path", "cycle", "point") or (not on_cycle and _splits(curve, edges)):
         return None
     return Action(code, {**target, "branch": b}, why, [{"op": "delete_branch", "args": {"branch": b}}], edges)
 
@@ -185,40 +186,70 @@ def _outside_edges(curve: CurveSkeleton, f: Findings, route: Route | None = None
     return out
 
 
-def _weakest_edges(curve: CurveSkeleton, f: Findings, cycle: int, count: int = 2) -> list[int]:
+class _Local:
+    """:meth:`.findings.Findings.local` for many edge sets at once: the samples grouped by edge once
+    (a stable sort, so each group keeps the samples' order), each set's samples gathered in the order
+    ``np.isin`` would pick them, hence the same means to the bit."""
+
+    def __init__(self, f: Findings) -> None:
+        self.f = f
+        self.order = np.argsort(f.sample_edge, kind="stable")
+        self.sorted = f.sample_edge[self.order]
+
+    def __call__(self, edges: np.ndarray) -> dict[str, float | None]:
+        edges = np.unique(np.asarray(edges, np.int64))
+        lo = np.searchsorted(self.sorted, edges, "left")
+        hi = np.searchsorted(self.sorted, edges, "right")
+        if not (hi > lo).any():
+            return {"boundedness": None, "centeredness": None}
+        on = np.sort(np.concatenate([self.order[a:b] for a, b in zip(lo, hi)]))
+        c = self.f.sample_c[on]
+        c = c[np.isfinite(c)]
+        return {"boundedness": round(float(np.mean(self.f.sample_beta[on])), 4),
+                "centeredness": round(float(np.mean(c)), 4) if len(c) else None}
+
+
+def _weakest_edges(curve: CurveSkeleton, f: Findings, cycle: int, count: int = 2, local: _Local | None = None
+                   ) -> list[int]:
     """The cycle's edges, weakest first: the longest outside stretch, then the lowest mean local
     boundedness + centeredness of its samples (an edge without samples: its ends' neighbours' mean)."""
     edges = f.defects.branches.cycle_edges(cycle)
     length = np.asarray(f.defects.outside.edge_outside_length, float)
+    local = local or _Local(f)
     keys = []
     for k in edges:
-        loc = f.local(np.array([k]))
+        loc = local(np.array([k]))
         score = sum(v for v in loc.values() if v is not None) if loc["boundedness"] is not None else 2.0
         keys.append((-round(float(length[k]), 9), round(score, 9), int(k)))
     return [k for _, _, k in sorted(keys)[:count]]
 
 
-def _weakest_branches(f: Findings, cycle: int) -> list[int]:
+def _weakest_branches(f: Findings, cycle: int, local: _Local | None = None) -> list[int]:
     """The cycle's branches, weakest first: the most length outside, then the lowest mean local
     boundedness + centeredness."""
     br, od = f.defects.branches, f.defects.outside
+    local = local or _Local(f)
     keys = []
     for b in sorted({int(b) for b, _ in br.cycles[cycle]}):
-        loc = f.local(np.flatnonzero(br.edge_branch == b))
+        loc = local(np.flatnonzero(br.edge_branch == b))
         score = sum(v for v in loc.values() if v is not None) if loc["boundedness"] is not None else 2.0
         keys.append((-round(float(od.branch_outside_length[b]), 9), round(score, 9), b))
     return [b for _, _, b in sorted(keys)]
 
 
 def _cycle_cuts(curve: CurveSkeleton, f: Findings) -> list[Action]:
+    """Per spurious cycle: its weakest branch deleted whole (a branch on a cycle is no bridge: deleting
+    it splits nothing, so :func:`_splits` need not be asked), then cuts at its two weakest edges."""
     out = []
+    local = _Local(f)
     for i in f.defects.cycles.spurious:
-        for b in _weakest_branches(f, int(i))[:1]:
+        for b in _weakest_branches(f, int(i), local)[:1]:
             a = _branch_delete(curve, f, b, "spurious_cycles", {"cycle": int(i)},
-                               f"cycle {int(i)} goes around no tunnel of the shape: its weakest branch {b} deleted")
+                               f"cycle {int(i)} goes around no tunnel of the shape: its weakest branch {b} deleted",
+                               on_cycle=True)
             if a is not None:
                 out.append(a)
-        for k in _weakest_edges(curve, f, int(i)):
+        for k in _weakest_edges(curve, f, int(i), local=local):
             e = curve.edges[k].tolist()
             out.append(Action("spurious_cycles", {"cycle": int(i), "edge": e},
                               f"cycle {int(i)} goes around no tunnel of the shape: cut at its weakest edge {e}",

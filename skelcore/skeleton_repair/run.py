@@ -25,6 +25,7 @@ from .findings import read_findings
 from .from_skeletal import HOW, curve_from_skeletal
 from .guard import verdict
 from .proposals import Action, propose
+from .batch_round import BatchState, batch_step
 from .fill import fill_actions
 from .phases import PhaseClock
 from .recentre import RECENTRE, recentre, settled, vertex_centeredness
@@ -171,6 +172,7 @@ def repair(cloud: np.ndarray, curve: CurveSkeleton | tuple | None = None, skelet
     tally0 = dict(found.tally)
     stopped = f"repair_max_rounds={p.repair_max_rounds} reached"
     memo: dict = {}  # cross-sections cut by the re-centring, kept over the rounds
+    batches = BatchState()
     for rnd in range(p.repair_max_rounds):
         check()
         drift = None
@@ -192,6 +194,11 @@ def repair(cloud: np.ndarray, curve: CurveSkeleton | tuple | None = None, skelet
                 with clock.phase("re-centring cuts"):
                     drift = _drift(cur, ev, found, p, memo, rejected, p.repair_max_tries - len(candidates))
             candidates += drift
+        kept = batch_step(ev, cur, found, candidates, p, batches, clock, rejected, cancel)
+        if kept is not None:  # a batch of one kind's actions apart from one another (batch_round.py)
+            ev, cur, found, batch_ops = kept
+            ops += batch_ops
+            continue
         done = False
         for action in in_turn(candidates, p.repair_max_tries):
             check()
@@ -222,6 +229,12 @@ def repair(cloud: np.ndarray, curve: CurveSkeleton | tuple | None = None, skelet
                 ops.append({**entry, "why": {**why, "step": f"{k + 1} of {len(action.entries)}"}})
             ev, cur, found, done = new_ev, new, new_found, True
             break
+        if not done and batches.rest_until:  # before giving up, the kinds resting from batches
+            kept = batch_step(ev, cur, found, candidates, p, batches, clock, rejected, cancel, last=True)
+            if kept is not None:
+                ev, cur, found, batch_ops = kept
+                ops += batch_ops
+                continue
         if not done:
             stopped = ("no candidate action helps" if candidates else "no action for the defects left"
                        ) if found.total else _no_defect_left(found)
