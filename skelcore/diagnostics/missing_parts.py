@@ -34,7 +34,7 @@ from ..geometry import Checkpoint, kd_tree, no_checkpoint, query_workers, unique
 from ..metrics.cloud_index import CloudIndex, kept_index
 from ..metrics.coverage import Coverage, coverage, coverage_tau
 from ..params import Params
-from .spur_cache import row_hash, row_words
+from .spur_cache import find_rows, row_hash, row_words
 from .trust_warning import TrustWarning
 
 __all__ = ["MissingRegion", "MissingParts", "missing_parts", "skeleton_elements", "coverage_elements", "depth_clause"]
@@ -491,9 +491,8 @@ def _element_distances(tree: cKDTree, elements: np.ndarray, step: int) -> np.nda
     if kept is not None:
         key, words = row_hash(sub), row_words(sub)
         _, sorted_key, order, kept_words, kept_d = kept
-        slot = np.minimum(np.searchsorted(sorted_key, key), len(order) - 1)
-        cand = order[slot]
-        miss = ~((sorted_key[slot] == key) & np.all(kept_words[cand] == words, axis=1))
+        cand, same = find_rows(sorted_key, order, kept_words, key, words)
+        miss = ~same
         d[~miss] = kept_d[cand[~miss]]
     if miss.any():
         ask = np.ascontiguousarray(sub[miss], dtype=float)

@@ -19,7 +19,7 @@ from typing import Callable
 import numpy as np
 from scipy.spatial import cKDTree
 
-__all__ = ["SpurSearch", "SpurMemo", "NearestByBalls", "same_tree", "row_hash", "row_words"]
+__all__ = ["SpurSearch", "SpurMemo", "NearestByBalls", "same_tree", "row_hash", "row_words", "find_rows"]
 
 #: a search function (curve points, their branches, reaches, queries, the queries' own branches) -> bool
 Search = Callable[[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray], np.ndarray]
@@ -61,9 +61,7 @@ class NearestByBalls:
             rows = np.flatnonzero(at < 0)
             if not len(rows):
                 break
-            slot = np.minimum(np.searchsorted(sorted_key, key[rows]), len(order) - 1)
-            cand = order[slot]
-            same = (sorted_key[slot] == key[rows]) & np.all(kept_words[cand] == words[rows], axis=1)
+            cand, same = find_rows(sorted_key, order, kept_words, key[rows], words[rows])
             d[rows[same]], at[rows[same]] = kept_d[cand[same]], kept_at[cand[same]]
         todo = np.flatnonzero(at < 0)
         if len(todo):
@@ -420,10 +418,18 @@ def _match(old: np.ndarray, new: np.ndarray) -> np.ndarray:
     sorted_key = old_key[order]
     if len(sorted_key) > 1 and not np.all(sorted_key[1:] != sorted_key[:-1]):
         return _match_sorted(old, new)
-    at = np.minimum(np.searchsorted(sorted_key, new_key), len(order) - 1)
-    cand = order[at]
-    same = (sorted_key[at] == new_key) & np.all(row_words(old)[cand] == row_words(new), axis=1)
+    cand, same = find_rows(sorted_key, order, row_words(old), new_key, row_words(new))
     return np.where(same, cand, -1).astype(np.int64)
+
+
+def find_rows(sorted_key: np.ndarray, order: np.ndarray, kept_words: np.ndarray, key: np.ndarray,
+              words: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Each asked row's candidate among kept rows (``order`` sorts their :func:`row_hash` into
+    ``sorted_key``; ``kept_words`` their :func:`row_words`) and whether it has the same bits: the row
+    of equal hash, its words compared."""
+    slot = np.minimum(np.searchsorted(sorted_key, key), len(order) - 1)
+    cand = order[slot]
+    return cand, (sorted_key[slot] == key) & np.all(kept_words[cand] == words, axis=1)
 
 
 def row_words(pts: np.ndarray) -> np.ndarray:
