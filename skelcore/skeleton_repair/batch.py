@@ -161,7 +161,7 @@ def predicted_worse(f: Findings, curve: CurveSkeleton, m: Member, p: Params) -> 
             return True
     if b["outside_share"] is not None and f.defects is not None:
         out = np.asarray(f.defects.outside.edge_outside_length, float)
-        length = np.linalg.norm(curve.vertices[curve.edges[:, 0]] - curve.vertices[curve.edges[:, 1]], axis=1)
+        length = curve.edge_lengths()
         keep = np.ones(len(length), bool)
         keep[m.edges] = False
         if len(out) == len(length) and length[keep].sum() > 0 \
@@ -170,10 +170,16 @@ def predicted_worse(f: Findings, curve: CurveSkeleton, m: Member, p: Params) -> 
     return False
 
 
-def _nearest_member(curve: CurveSkeleton, batch: list[Member], points: np.ndarray) -> np.ndarray:
-    """The index of the member nearest to each point (by its touched vertices)."""
+def _member_points(curve: CurveSkeleton, batch: list[Member]) -> tuple[np.ndarray, np.ndarray]:
+    """The members' touched vertices' positions and the member each belongs to."""
     pts = np.vstack([curve.vertices[m.touched] for m in batch])
     owner = np.concatenate([np.full(len(m.touched), i) for i, m in enumerate(batch)])
+    return pts, owner
+
+
+def _nearest_member(curve: CurveSkeleton, batch: list[Member], points: np.ndarray) -> np.ndarray:
+    """The index of the member nearest to each point (by its touched vertices)."""
+    pts, owner = _member_points(curve, batch)
     return owner[cKDTree(pts).query(np.asarray(points, float).reshape(-1, 3))[1]]
 
 
@@ -188,8 +194,7 @@ def blame_lost(curve: CurveSkeleton, batch: list[Member], cloud: np.ndarray, bef
     lost = np.flatnonzero(np.asarray(before, bool) & ~np.asarray(after, bool))
     if not len(lost):
         return set()
-    pts = np.vstack([curve.vertices[m.touched] for m in batch])
-    owner = np.concatenate([np.full(len(m.touched), i) for i, m in enumerate(batch)])
+    pts, owner = _member_points(curve, batch)
     tree = cKDTree(pts)
     d, _ = tree.query(cloud[lost])
     out: set[int] = set()
@@ -243,7 +248,7 @@ def log_entries(curve: CurveSkeleton, batch: list[Member]) -> tuple[CurveSkeleto
             entry = {"op": "cut_cycle", "args": {"edge": [min(a, b), max(a, b)]}}
         else:
             path = ids[m.touched]
-            deg = np.bincount(cur.edges.ravel(), minlength=cur.n_vertices)
+            deg = cur.degrees()
             ends = [int(v) for v in (path[0], path[-1]) if v >= 0 and deg[v] == 1]
             if not ends or (path < 0).any():
                 raise SkelInputError("a spur of the batch has no free end left")
