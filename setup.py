@@ -1,6 +1,7 @@
 """Build step for the compiled modules: the rays boundedness kernel (docs/boundedness.md, section 3), the
 coverage kernel (docs/metrics.md, section 5.2), skeletal centeredness' neighbour sums, curve centeredness'
-rings and the topology stage's EMST (docs/performance.md, sections 6.4, 6.5 and 6.1).
+rings, the topology stage's EMST and the missing parts' connected components (docs/performance.md,
+sections 6.4, 6.5, 6.1 and 6.10).
 
 Also here: the package list (the viewer's folder ``app/`` installs as ``skelscope``) and the package
 index's long description; everything else is declared in pyproject.toml.  The kernels are plain C against the CPython API (no numpy
@@ -60,6 +61,11 @@ setup(
             sources=["skelcore/metrics/_rings.c"],
             depends=["skelcore/metrics/_pairwise_sum.h"],
             extra_compile_args=["-O3", "-std=c99", "-ffp-contract=off"],
+        ),
+        Extension(
+            "skelcore.metrics._components",
+            sources=["skelcore/metrics/_components.c"],
+            extra_compile_args=["-O3", "-std=c99"],
         ),
         Extension(
             "skelcore.metrics._emst",

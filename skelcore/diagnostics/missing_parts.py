@@ -24,14 +24,13 @@ from dataclasses import dataclass, field, replace
 from typing import Callable
 
 import numpy as np
-from scipy.sparse import coo_matrix, csr_matrix
-from scipy.sparse.csgraph import connected_components
 from scipy.spatial import cKDTree
 
 from ..correspondence import densify_curve
 from ..curve import CurveSkeleton
 from ..geometry import Checkpoint, kd_tree, no_checkpoint, query_workers, unique_rows
 from ..metrics.cloud_index import CloudIndex, kept_index
+from ..metrics.components import undirected_components
 from ..metrics.coverage import Coverage, coverage, coverage_tau
 from ..params import Params
 from .spur_cache import find_rows, row_hash, row_words
@@ -128,8 +127,16 @@ class MissingParts:
 
     @property
     def missing(self) -> np.ndarray:
-        ids = np.array([r.id for r in self.counted], dtype=np.int64)
-        return np.isin(self.region, ids) if len(ids) else np.zeros(len(self.region), bool)
+        return self.missing_region() >= 0
+
+    def missing_region(self) -> np.ndarray:
+        """Per cloud point, the id of its region when that region counts, else -1 (int64): a table of the
+        regions (-1 last) read at each point's region, not a search of the counted ids (at 1M points
+        10.6 -> 2.8 ms, in the update's serial tail; docs/performance.md 6.10)."""
+        table = np.full(len(self.regions) + 1, -1, np.int64)
+        ids = [r.id for r in self.counted]
+        table[ids] = ids
+        return table[np.asarray(self.region)]
 
     @property
     def missing_share(self) -> float:
@@ -553,9 +560,8 @@ def _regions(pts: np.ndarray, cov: Coverage, spacing: float, p: Params, checkpoi
         starts = np.concatenate([[0], np.cumsum(ok.sum(axis=1))])
     else:
         cols, starts = np.empty(0, np.int64), np.zeros(len(miss) + 1, np.int64)
-    # row by row already: compressed rows directly (the labels follow the rows' order, as from any form)
-    graph = csr_matrix((np.ones(len(cols)), cols, starts), shape=(len(miss), len(miss)))
-    n_comp, label = connected_components(graph, directed=False)
+    # each row's links as edges: scipy's undirected labels by a union-find (docs/performance.md 6.10)
+    n_comp, label = undirected_components(len(miss), np.repeat(np.arange(len(miss)), np.diff(starts)), cols)
     checkpoint(0.75)
     size = np.bincount(label, minlength=n_comp)
     rank = np.empty(n_comp, np.int64)
@@ -588,8 +594,7 @@ def _regions(pts: np.ndarray, cov: Coverage, spacing: float, p: Params, checkpoi
         piece = np.zeros(len(miss), np.int64)
         if len(bi) > 1:
             pairs = cKDTree(up[bi]).query_pairs(BORDER_LINK * link, output_type="ndarray")
-            bg = coo_matrix((np.ones(len(pairs), np.int8), (pairs[:, 0], pairs[:, 1])), shape=(len(bi), len(bi)))
-            piece[bi] = connected_components(bg, directed=False)[1]
+            piece[bi] = undirected_components(len(bi), pairs[:, 0], pairs[:, 1])[1]
         for c in big:
             checkpoint(0.75 + 0.15 * float(c) / max(1, n_comp))
             members = np.flatnonzero(label == c)

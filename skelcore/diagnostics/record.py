@@ -98,7 +98,7 @@ def _flags(named: dict[str, np.ndarray | None], n: int) -> np.ndarray:
 
 
 def _missing_region(mp: MissingParts) -> np.ndarray:
-    return np.where(mp.missing, mp.region, -1).astype(np.int64)
+    return mp.missing_region()
 
 
 def diagnostics_record(curve: CurveDefects | None, missing_skeletal: MissingParts | None,

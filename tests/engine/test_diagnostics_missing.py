@@ -2,6 +2,7 @@
 known skeletons, intact, stopped a radius short and with controlled defects; the hammer scan."""
 
 import json
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -60,6 +61,16 @@ def test_an_arm_removed_is_one_missing_part_where_the_arm_was():
     assert np.allclose(part.centroid, sh.cloud[mp.missing].mean(axis=0), atol=1e-9)  # user units
     (w,) = mp.warnings()
     assert w.code == "incomplete" and f"{part.share:.1%}" in w.message and f"{mp.completeness:.3f}" in w.message
+    # the counted regions' ids per point (the diagnostics' cloud array): the region where it counts, -1
+    # elsewhere; with a second, uncounted region among the explained points to leave out
+    region = mp.region.copy()
+    region[np.flatnonzero(mp.region < 0)[:40]] = 1
+    two = replace(mp, region=region, regions=[part, replace(part, id=1, counted=False)])
+    for m in (mp, two):
+        want = np.where(np.isin(m.region, [r.id for r in m.counted]), m.region, -1)
+        assert m.missing_region().dtype == np.int64 and np.array_equal(m.missing_region(), want)
+        assert np.array_equal(m.missing, want >= 0)
+    assert (two.missing_region() == -1).sum() == (mp.region == -1).sum()
 
 
 def test_stopping_a_radius_short_is_not_missing_but_half_a_cylinder_is():
