@@ -45,6 +45,8 @@ _GRID_LOCK = threading.Lock()  # one slab grid per cache, even when two updates 
 _TREE_LOCK = threading.Lock()  # one ball tree of the diagnostics' points per evaluation
 _PLAN_LOCK = threading.Lock()  # the kept plans' flags, read and trimmed by updates side by side
 LEFT_OUT = "left out by Evaluation.update(diagnostics=False)"
+#: moved samples per call of the rays kernel (each sample is scored on its own: the same bits in any grouping)
+_RAYS_CHUNK = 20
 
 
 def update_evaluation(ev: Evaluation, edited: Change | CurveSkeleton | Any, *, diagnostics: bool = True) -> Evaluation:
@@ -273,8 +275,13 @@ def _sample_boundedness(old: EvalContext, ctx: EvalContext, cache: dict[str, Any
     if not (_plan_is_exact(cloud, s_old, p, cache) and _plan_is_exact(cloud, s_new, p, cache)):
         return ctx.boundedness(s_new.points)
     beta, todo = _reuse(_keys(s_old.points), old.results["curve boundedness"], _keys(s_new.points))
-    if todo.any():
-        beta[todo] = boundedness(cloud, s_new.points[todo], params=ctx.bounded_params or p, share_far_field=False)
+    rows = np.flatnonzero(todo)
+    # in chunks, one call each: a call's two streams end together, and a chunk's stream waits for the core
+    # the other lane's stages hold only until they are done, so both cores stay busy to the end (a pruned
+    # branch's 180 samples in one call ran its second stream alone after them; docs/performance.md 6.10)
+    for lo in range(0, len(rows), _RAYS_CHUNK):
+        part = rows[lo:lo + _RAYS_CHUNK]
+        beta[part] = boundedness(cloud, s_new.points[part], params=ctx.bounded_params or p, share_far_field=False)
     return beta
 
 

@@ -290,6 +290,33 @@ def test_an_edit_update_asks_the_spur_test_again_only_near_the_edit():
     assert of > 0 and asked < of
 
 
+def test_the_moved_samples_boundedness_in_chunks_gives_the_same_bits(monkeypatch):
+    """An update scores its moved samples' boundedness in calls of ``_RAYS_CHUNK`` samples (each sample
+    on its own): the same bits as a fresh evaluation, whatever the chunk, every moved sample asked once."""
+    import skelcore.edit.incremental as inc
+
+    cloud, skeletal, ev = _base("y")
+    new, change = E.prune_branch(ev.curve.curve, 0)
+    fresh = evaluate(cloud, skeletal, new).curve.sample_boundedness
+    calls = []
+    real = inc.boundedness
+
+    def counted(cloud_, points, **kw):
+        calls.append(len(points))
+        return real(cloud_, points, **kw)
+
+    monkeypatch.setattr(inc, "boundedness", counted)
+    old = {p.tobytes() for p in ev.curve.samples}
+    for chunk in (7, 1000):
+        calls.clear()
+        monkeypatch.setattr(inc, "_RAYS_CHUNK", chunk)
+        got = ev.update(change, diagnostics=False).curve
+        moved = sum(p.tobytes() not in old for p in got.samples)
+        assert moved > 50 and sum(calls) == moved and max(calls) == min(chunk, moved)
+        assert len(calls) == -(-moved // chunk)
+        np.testing.assert_array_equal(got.sample_boundedness, fresh)
+
+
 def test_curve_centeredness_in_larger_spans_gives_the_same_bits():
     """An update asks curve centeredness for one span of samples per core (``span=``): the same bits as
     the default spans of 4, on a cloud above the size where the samples go in spans."""
