@@ -45,8 +45,9 @@ _GRID_LOCK = threading.Lock()  # one slab grid per cache, even when two updates 
 _TREE_LOCK = threading.Lock()  # one ball tree of the diagnostics' points per evaluation
 _PLAN_LOCK = threading.Lock()  # the kept plans' flags, read and trimmed by updates side by side
 LEFT_OUT = "left out by Evaluation.update(diagnostics=False)"
-#: moved samples per call of the rays kernel (each sample is scored on its own: the same bits in any grouping)
-_RAYS_CHUNK = 20
+#: the fewest moved samples per call of the rays kernel while the other stages run (each sample is scored
+#: on its own: the same bits in any grouping; each call's streams start without hints, docs/boundedness.md 3.9)
+_RAYS_CHUNK = 10
 
 
 def update_evaluation(ev: Evaluation, edited: Change | CurveSkeleton | Any, *, diagnostics: bool = True) -> Evaluation:
@@ -168,7 +169,8 @@ def _tasks(old: EvalContext, ctx: EvalContext, cache: dict[str, Any], diagnostic
     order: the curve's coverage beside the samples' scoring, the defects once the boundedness is in):
     the samples' boundedness and centeredness from the old values where they can be kept, the others
     computed again; ``diagnostics=False`` names the left-out ones in ``not_computed``."""
-    incremental = {"curve boundedness": lambda: _sample_boundedness(old, ctx, cache),
+    beside = threading.Event()  # set when the stages that run beside the curve's boundedness are done
+    incremental = {"curve boundedness": lambda: _sample_boundedness(old, ctx, cache, beside),
                    "curve centeredness": lambda: _sample_centeredness(old, ctx, cache),
                    "curve coverage": lambda: curve_coverage(ctx, old, cache),
                    "curve missing parts": lambda: curve_missing_parts(ctx, cache, parent=old)}
@@ -179,17 +181,35 @@ def _tasks(old: EvalContext, ctx: EvalContext, cache: dict[str, Any], diagnostic
         else:
             stages.append(stage)
     names = {s.name for s in stages}
+    after = {s.name: tuple(a for a in s.after(ctx) if a in names) for s in stages}
+    pending = {n for n in names if not _waits_for(n, "curve boundedness", after)}
+    lock = threading.Lock()
+
+    def done(name: str) -> None:
+        with lock:
+            pending.discard(name)
+            if not pending:
+                beside.set()
 
     def task(stage: Stage) -> GraphTask:
         fn = incremental.get(stage.name) or (lambda: stage.fn(ctx, no_checkpoint))
 
         def run() -> object:
-            ctx.results[stage.name] = fn()
+            try:
+                ctx.results[stage.name] = fn()
+            finally:
+                done(stage.name)
             return ctx.results[stage.name]
 
-        return GraphTask(stage.name, run, tuple(a for a in stage.after(ctx) if a in names))
+        return GraphTask(stage.name, run, after[stage.name])
 
+    done("curve boundedness")  # not beside itself
     return [task(s) for s in stages]
+
+
+def _waits_for(name: str, other: str, after: dict[str, tuple[str, ...]]) -> bool:
+    """Whether task ``name`` is ``other`` or starts after it, directly or not."""
+    return name == other or any(_waits_for(a, other, after) for a in after.get(name, ()))
 
 
 def _edited_context(old: EvalContext, curve: CurveSkeleton, cache: dict[str, Any]) -> EvalContext:
@@ -267,21 +287,30 @@ def _plan_is_exact(cloud: np.ndarray, samples: Any, params: Any, cache: dict[str
     return flag
 
 
-def _sample_boundedness(old: EvalContext, ctx: EvalContext, cache: dict[str, Any]) -> np.ndarray:
+def _sample_boundedness(old: EvalContext, ctx: EvalContext, cache: dict[str, Any],
+                        beside: threading.Event | None = None) -> np.ndarray:
     """Curve boundedness of the new samples: kept where a sample was scored before at the same place,
-    when both samplings are scored pair by pair (else all again, as :func:`evaluate` would)."""
+    when both samplings are scored pair by pair (else all again, as :func:`evaluate` would). ``beside``
+    set: the stages that run beside it are done."""
     p, s_old, s_new = ctx.params, old.samples, ctx.samples
     cloud = ctx.bounded_cloud_n
     if not (_plan_is_exact(cloud, s_old, p, cache) and _plan_is_exact(cloud, s_new, p, cache)):
         return ctx.boundedness(s_new.points)
     beta, todo = _reuse(_keys(s_old.points), old.results["curve boundedness"], _keys(s_new.points))
     rows = np.flatnonzero(todo)
-    # in chunks, one call each: a call's two streams end together, and a chunk's stream waits for the core
-    # the other lane's stages hold only until they are done, so both cores stay busy to the end (a pruned
-    # branch's 180 samples in one call ran its second stream alone after them; docs/performance.md 6.10)
-    for lo in range(0, len(rows), _RAYS_CHUNK):
-        part = rows[lo:lo + _RAYS_CHUNK]
-        beta[part] = boundedness(cloud, s_new.points[part], params=ctx.bounded_params or p, share_far_field=False)
+    # while the other lane's stages hold their core, half of the samples left in one stream on this lane's
+    # core; once they are done (or few are left), the rest in one call on every core. In one call, its
+    # second stream waited for the core those stages held and ran alone after them (a pruned branch's
+    # 180 samples at 100k points); every call's streams start without hints (docs/performance.md 6.10)
+    lo = 0
+    while lo < len(rows):
+        left = len(rows) - lo
+        alone = beside is not None and not beside.is_set() and left > 2 * _RAYS_CHUNK
+        take = max(_RAYS_CHUNK, left // 2) if alone else left
+        part = rows[lo:lo + take]
+        beta[part] = boundedness(cloud, s_new.points[part], params=ctx.bounded_params or p, share_far_field=False,
+                                 workers=1 if alone else None)
+        lo += take
     return beta
 
 

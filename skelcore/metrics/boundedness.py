@@ -40,11 +40,13 @@ def boundedness(
     params: Params = Params(),
     checkpoint: Checkpoint = no_checkpoint,
     share_far_field: bool | None = None,
+    workers: int | None = None,
 ) -> np.ndarray:
     """beta(q) for every query row with the estimator ``params.boundedness_method`` (docs/metrics.md 2).
 
     Inputs are in normalized units (docs/metrics.md 0).  Returns one value per query row, in [0, 1] for
-    ``rays``.  An empty query set gives an empty array; an empty cloud gives zeros.  ``share_far_field``:
+    ``rays``.  An empty query set gives an empty array; an empty cloud gives zeros.  ``share_far_field``
+    and ``workers`` (threads of the rays kernel, None = all cores; the values do not depend on it):
     :func:`boundedness_rays`' (None: decided by cost).
     """
     if params.boundedness_method == "paper":
@@ -65,6 +67,7 @@ def boundedness(
         cluster_cell=params.rays_cluster_cell,
         share_far_field=share_far_field,
         checkpoint=checkpoint,
+        workers=workers,
     )
 
 

@@ -290,31 +290,46 @@ def test_an_edit_update_asks_the_spur_test_again_only_near_the_edit():
     assert of > 0 and asked < of
 
 
-def test_the_moved_samples_boundedness_in_chunks_gives_the_same_bits(monkeypatch):
-    """An update scores its moved samples' boundedness in calls of ``_RAYS_CHUNK`` samples (each sample
-    on its own): the same bits as a fresh evaluation, whatever the chunk, every moved sample asked once."""
+def test_the_moved_samples_boundedness_in_parts_gives_the_same_bits(monkeypatch):
+    """An update scores its moved samples' boundedness, while the stages beside it run, half of those
+    left at a time in one stream, then the rest at once (each sample on its own): the same bits as a
+    fresh evaluation either way, every moved sample asked once."""
+    import threading
+
     import skelcore.edit.incremental as inc
 
     cloud, skeletal, ev = _base("y")
     new, change = E.prune_branch(ev.curve.curve, 0)
     fresh = evaluate(cloud, skeletal, new).curve.sample_boundedness
+    up = ev.update(change, diagnostics=False)
+    np.testing.assert_array_equal(up.curve.sample_boundedness, fresh)
     calls = []
     real = inc.boundedness
 
     def counted(cloud_, points, **kw):
-        calls.append(len(points))
+        calls.append((len(points), kw.get("workers")))
         return real(cloud_, points, **kw)
 
     monkeypatch.setattr(inc, "boundedness", counted)
+    monkeypatch.setattr(inc, "_RAYS_CHUNK", 4)
     old = {p.tobytes() for p in ev.curve.samples}
-    for chunk in (7, 1000):
+    moved = sum(p.tobytes() not in old for p in up.curve.samples)
+    assert moved > 50
+    running, done = threading.Event(), threading.Event()
+    done.set()
+    for beside in (running, done, None):
         calls.clear()
-        monkeypatch.setattr(inc, "_RAYS_CHUNK", chunk)
-        got = ev.update(change, diagnostics=False).curve
-        moved = sum(p.tobytes() not in old for p in got.samples)
-        assert moved > 50 and sum(calls) == moved and max(calls) == min(chunk, moved)
-        assert len(calls) == -(-moved // chunk)
-        np.testing.assert_array_equal(got.sample_boundedness, fresh)
+        got = inc._sample_boundedness(ev.source.ctx, up.source.ctx, ev.source.cache, beside)
+        np.testing.assert_array_equal(got, fresh)
+        assert sum(n for n, _ in calls) == moved
+        if beside is running:  # halves in one stream each while the others run, the last few at once
+            want, left = [], moved
+            while left > 8:
+                want.append((max(4, left // 2), 1))
+                left -= want[-1][0]
+            assert calls == want + [(left, None)]
+        else:
+            assert calls == [(moved, None)]
 
 
 def test_curve_centeredness_in_larger_spans_gives_the_same_bits():
