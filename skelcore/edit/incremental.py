@@ -298,7 +298,7 @@ def _sample_boundedness(old: EvalContext, ctx: EvalContext, cache: dict[str, Any
         return ctx.boundedness(s_new.points)
     beta, todo = _reuse(_keys(s_old.points), old.results["curve boundedness"], _keys(s_new.points))
     rows = np.flatnonzero(todo)
-    # while the other lane's stages hold their core, half of the samples left in one stream on this lane's
+    # while the other lane's stages hold their core, a third of the samples left in one stream on this lane's
     # core; once they are done (or few are left), the rest in one call on every core. In one call, its
     # second stream waited for the core those stages held and ran alone after them (a pruned branch's
     # 180 samples at 100k points); every call's streams start without hints (docs/performance.md 6.10)
@@ -306,7 +306,7 @@ def _sample_boundedness(old: EvalContext, ctx: EvalContext, cache: dict[str, Any
     while lo < len(rows):
         left = len(rows) - lo
         alone = beside is not None and not beside.is_set() and left > 2 * _RAYS_CHUNK
-        take = max(_RAYS_CHUNK, left // 2) if alone else left
+        take = max(_RAYS_CHUNK, left // 3) if alone else left
         part = rows[lo:lo + take]
         beta[part] = boundedness(cloud, s_new.points[part], params=ctx.bounded_params or p, share_far_field=False,
                                  workers=1 if alone else None)

@@ -291,7 +291,7 @@ def test_an_edit_update_asks_the_spur_test_again_only_near_the_edit():
 
 
 def test_the_moved_samples_boundedness_in_parts_gives_the_same_bits(monkeypatch):
-    """An update scores its moved samples' boundedness, while the stages beside it run, half of those
+    """An update scores its moved samples' boundedness, while the stages beside it run, a third of those
     left at a time in one stream, then the rest at once (each sample on its own): the same bits as a
     fresh evaluation either way, every moved sample asked once."""
     import threading
@@ -325,7 +325,7 @@ def test_the_moved_samples_boundedness_in_parts_gives_the_same_bits(monkeypatch)
         if beside is running:  # halves in one stream each while the others run, the last few at once
             want, left = [], moved
             while left > 8:
-                want.append((max(4, left // 2), 1))
+                want.append((max(4, left // 3), 1))
                 left -= want[-1][0]
             assert calls == want + [(left, None)]
         else:
