@@ -12,6 +12,7 @@ second phase), the two together equal to one update."""
 
 from __future__ import annotations
 
+import os
 import threading
 import time
 from dataclasses import replace
@@ -72,7 +73,7 @@ def update_evaluation(ev: Evaluation, edited: Change | CurveSkeleton | Any, *, d
     check_magnitude("curve skeleton", curve.vertices)
     ctx = _edited_context(old, curve, src.cache)
     link_contexts(src.cache, ctx, old)
-    run_graph(_tasks(old, ctx, src.cache, diagnostics), args.get("workers"))
+    run_graph(_tasks(old, ctx, src.cache, diagnostics, args.get("workers")), args.get("workers"))
     out = finish(ctx, args.get("inputs"), no_checkpoint)
     out.timings = {"update": time.perf_counter() - t0}
     results = dict(ctx.results)
@@ -164,12 +165,16 @@ def compute_left_out(ev: Evaluation, names: tuple[str, ...]) -> dict[str, Any] |
     return done
 
 
-def _tasks(old: EvalContext, ctx: EvalContext, cache: dict[str, Any], diagnostics: bool) -> list[GraphTask]:
+def _tasks(old: EvalContext, ctx: EvalContext, cache: dict[str, Any], diagnostics: bool,
+           workers: int | None = None) -> list[GraphTask]:
     """The curve's stages as graph tasks, run side by side as :func:`evaluate` runs them (its start
     order: the curve's coverage beside the samples' scoring, the defects once the boundedness is in):
     the samples' boundedness and centeredness from the old values where they can be kept, the others
-    computed again; ``diagnostics=False`` names the left-out ones in ``not_computed``."""
+    computed again; ``diagnostics=False`` names the left-out ones in ``not_computed``; ``workers``:
+    run_graph's (1: one lane, nothing runs beside the curve's boundedness)."""
     beside = threading.Event()  # set when the stages that run beside the curve's boundedness are done
+    if int(workers or os.cpu_count() or 1) <= 1:
+        beside.set()
     incremental = {"curve boundedness": lambda: _sample_boundedness(old, ctx, cache, beside),
                    "curve centeredness": lambda: _sample_centeredness(old, ctx, cache),
                    "curve coverage": lambda: curve_coverage(ctx, old, cache),
@@ -298,8 +303,8 @@ def _sample_boundedness(old: EvalContext, ctx: EvalContext, cache: dict[str, Any
         return ctx.boundedness(s_new.points)
     beta, todo = _reuse(_keys(s_old.points), old.results["curve boundedness"], _keys(s_new.points))
     rows = np.flatnonzero(todo)
-    # while the other lane's stages hold their core, a third of the samples left in one stream on this lane's
-    # core; once they are done (or few are left), the rest in one call on every core. In one call, its
+    # while the other lane's stages hold their core, a third of the samples left in streams on the other
+    # cores (one on two cores); once they are done (or few are left), the rest in one call on every core. In one call, its
     # second stream waited for the core those stages held and ran alone after them (a pruned branch's
     # 180 samples at 100k points); every call's streams start without hints (docs/performance.md 6.10)
     lo = 0
@@ -309,7 +314,7 @@ def _sample_boundedness(old: EvalContext, ctx: EvalContext, cache: dict[str, Any
         take = max(_RAYS_CHUNK, left // 3) if alone else left
         part = rows[lo:lo + take]
         beta[part] = boundedness(cloud, s_new.points[part], params=ctx.bounded_params or p, share_far_field=False,
-                                 workers=1 if alone else None)
+                                 workers=max(1, (os.cpu_count() or 1) - 1) if alone else None)
         lo += take
     return beta
 

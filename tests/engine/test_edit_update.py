@@ -5,6 +5,7 @@ local arrays); diagnostics=False keeps the four metrics exact; a pickled Evaluat
 from __future__ import annotations
 
 import math
+import os
 import pickle
 from functools import lru_cache
 
@@ -322,14 +323,18 @@ def test_the_moved_samples_boundedness_in_parts_gives_the_same_bits(monkeypatch)
         got = inc._sample_boundedness(ev.source.ctx, up.source.ctx, ev.source.cache, beside)
         np.testing.assert_array_equal(got, fresh)
         assert sum(n for n, _ in calls) == moved
-        if beside is running:  # halves in one stream each while the others run, the last few at once
+        if beside is running:  # thirds while the others run (one stream on two cores), the last few at once
             want, left = [], moved
             while left > 8:
-                want.append((max(4, left // 3), 1))
+                want.append((max(4, left // 3), max(1, (os.cpu_count() or 1) - 1)))
                 left -= want[-1][0]
             assert calls == want + [(left, None)]
         else:
             assert calls == [(moved, None)]
+    calls.clear()  # one lane (workers=1): nothing runs beside, the moved samples in one call
+    ev1 = evaluate(cloud, skeletal, ev.curve.curve, workers=1)
+    np.testing.assert_array_equal(ev1.update(change).curve.sample_boundedness, fresh)
+    assert calls == [(moved, None)]
 
 
 def test_curve_centeredness_in_larger_spans_gives_the_same_bits():
