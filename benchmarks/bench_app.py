@@ -135,13 +135,14 @@ def test_viewer_stale_support_stops(measure, benchmark, n):
     benchmark.extra_info.update(n_points=n, whole_support_s=round(whole, 3))
 
 
-@pytest.mark.parametrize("edit", ["edge", "branch"])
+@pytest.mark.parametrize("edit", ["edge", "branch", "vertex"])
 def test_viewer_edit_to_recoloured_frame(measure, benchmark, display, tmp_path, edit):
     """Proofreading's loop in the window (docs/guide/viewer.md "Editing the curve skeleton"): an edge
     (``edge``) or a branch (``branch``) selected in edit mode, Delete pressed (the Edit menu's action,
     the real path: the engine's edit, the curve redrawn, the first phase's ``Evaluation.update`` in the
-    worker), until the frame recoloured by the new scores is painted (timed). The Y of 100k points
-    (curve only) and the edits of bench_edit.py (its edge 5, its branch 0). ``scored_s``: until the
+    worker), or a curve vertex dropped (``vertex``: the Ctrl+drag's release handler, ``move_vertex``),
+    until the frame recoloured by the new scores is painted (timed). The Y of 100k points (curve only)
+    and the edits of bench_edit.py (its edge 5, its branch 0, its vertex 5 moved by 0.01 in y). ``scored_s``: until the
     scores landed; ``defects_s``: until the second phase (the curve's coverage and defects) landed and
     its frame was painted, the whole update seen. Each round starts from the loaded curve again (Ctrl+Z,
     untimed). The path's phases (medians, seconds from the key; docs/performance.md 6.10): ``edit_s``
@@ -202,7 +203,7 @@ def test_viewer_edit_to_recoloured_frame(measure, benchmark, display, tmp_path, 
             idle()
             if edit == "edge":  # what a pick on the edge's samples selects
                 w.edits.select("edge", tuple(int(v) for v in curve.edges[5]))
-            else:  # a pick on a vertex of branch 0
+            elif edit == "branch":  # a pick on a vertex of branch 0
                 w.edits.select("branch", 0)
             idle()
             landed.clear()
@@ -213,7 +214,10 @@ def test_viewer_edit_to_recoloured_frame(measure, benchmark, display, tmp_path, 
         def press_delete():
             t0 = time.perf_counter()
             pressed.append(t0)
-            delete.trigger()
+            if edit == "vertex":  # what the drag's release does
+                w.edits.move_vertex(5, curve.vertices[5] + np.array([0.0, 0.01, 0.0]))
+            else:
+                delete.trigger()
             t_edit = time.perf_counter()
             while time.perf_counter() - t0 < 600:
                 app.processEvents()

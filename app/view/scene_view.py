@@ -18,7 +18,7 @@ import pyvista as pv
 from PySide6 import QtCore
 
 from ..scene import CURVE_LOCATION, Scene, SceneEvent
-from .actors import curve_polylines, display_coordinates, draw_in_front, scene_diagonal
+from .actors import curve_polylines, display_coordinates, draw_in_front, line_cells, scene_diagonal
 from .camera import apply_camera_state, axes_viewport, camera_state, fit_camera, orient_standard_view
 from .colorbar import ColourBar
 from .culling import CulledLayer, RestingCull
@@ -34,6 +34,8 @@ from .style import (
 __all__ = ["SceneView", "EMPTY_HINT"]
 
 EMPTY_HINT = "Drop a cloud and its skeleton here, or File > Open"
+KEPT_ACTORS = ("curve-vertices", "curve-samples")
+"""Small layers' actors kept (hidden) when dropped and given their next points in place."""
 
 
 class SceneView:
@@ -52,6 +54,7 @@ class SceneView:
         self._lod: dict[str, np.ndarray] = {}  # layer actor name -> indices of its level-of-detail twin
         self._pick_coords: dict[str, np.ndarray] = {}  # actor name -> its points laid out for picking
         self._invalid: dict[str, np.ndarray] = {}  # actor name -> its elements drawn as magenta markers
+        self._spare: dict[str, Any] = {}  # KEPT_ACTORS name -> its hidden actor, dropped from the scene
         self.picked: dict[str, Any] | None = None  # the picked element (marked in 3-D until the data changes)
         self._lut: tuple[tuple[tuple[float, float], bool], pv.LookupTable] | None = None
         self._edges_as_tubes: bool | None = None  # how the curve's edge actor was built
@@ -185,8 +188,13 @@ class SceneView:
             self._drop(f"{name}-lod")
 
     def _drop(self, name: str) -> None:
-        if self._actors.pop(name, None) is not None:
-            self.plotter.remove_actor(name, render=False)
+        actor = self._actors.pop(name, None)
+        if actor is not None:
+            if name in KEPT_ACTORS:  # hidden, kept for the next points of this name (:meth:`_swap_points`)
+                actor.SetVisibility(False)
+                self._spare[name] = actor
+            else:
+                self.plotter.remove_actor(name, render=False)
         self._pickable.pop(name, None)
         self._sources.pop(name, None)
         self._coloured.pop(name, None)
@@ -218,6 +226,8 @@ class SceneView:
         from the same array is recoloured in place: a new result re-uploads scalars, not geometry.
         A layer of more than LOD_POINTS points also gets a subsampled twin, shown while the camera moves."""
         actor = self._actors.get(key)
+        if (actor is None or self._sources.get(key) is not points) and not lod:
+            actor = self._swap_points(key, points, layer, size, pickable)
         if actor is None or self._sources.get(key) is not points:
             self._remove(key)
             mesh = pv.PolyData(display_coordinates(points))
@@ -262,6 +272,35 @@ class SceneView:
             nan_actor.SetVisibility(layer.visible)
             draw_in_front(nan_actor, -400.0)
             self._actors[f"{key}-nan"] = nan_actor
+
+    def _swap_points(self, key: str, points: np.ndarray, layer: Any, size: float,
+                     pickable: tuple[str, str] | None) -> Any:
+        """The actor of a small layer (one of KEPT_ACTORS: the curve's vertices and samples) given
+        new points in place: an edit's new curve, its samples once scored. A new actor costs pyvista
+        several ms (add_mesh, remove_actor) on the path from an edit's key to its recoloured frame
+        (docs/performance.md 6.10); the mapper, its shader and its depth offset stay. None when the
+        key has no actor to keep."""
+        if key not in KEPT_ACTORS:
+            return None
+        actor = self._actors.get(key) or self._spare.pop(key, None)
+        if actor is None:
+            return None
+        self._drop(f"{key}-nan")
+        for kept in (self._pick_coords, self._invalid, self._pickable):
+            kept.pop(key, None)
+        mesh = pv.PolyData(display_coordinates(points))
+        actor.mapper.dataset = mesh
+        spheres = self.scene.style["spheres"]
+        actor.prop.render_points_as_spheres = spheres
+        actor.prop.lighting = spheres
+        actor.prop.point_size = size
+        actor.prop.opacity = layer.opacity
+        self._actors[key] = actor
+        self._sources[key] = points
+        self._meshes[key] = mesh
+        if pickable is not None:
+            self._pickable[key] = pickable
+        return actor
 
     def _add_points(self, key: str, mesh: pv.PolyData, colour: Any, size: float, opacity: float, pickable: bool,
                     spheres: bool | None = None) -> Any:
@@ -383,9 +422,11 @@ class SceneView:
                                layer.samples, layer.sample_edge, layer.sample_t)
 
     def _build_curve_edges(self) -> None:
+        layer = self.scene.curve
+        if self._swap_lines(layer):
+            return
         self._remove("curve-edges")
         self._edges_as_tubes = None
-        layer = self.scene.curve
         if layer is None:
             return
         self._edges_as_tubes = self.scene.edges_as_tubes
@@ -397,7 +438,7 @@ class SceneView:
             radius = 0.004 * scene_diagonal(self.scene)
             coloured = self._tube_values()
             if coloured is None:
-                cells = np.hstack([np.full((len(edges), 1), 2, dtype=np.int64), edges]).ravel()
+                cells = line_cells(edges)
                 mesh = pv.PolyData(verts, lines=cells).tube(radius=radius, n_sides=12)
                 actor = self.plotter.add_mesh(mesh, color=CURVE_EDGE, name="curve-edges", reset_camera=False,
                                               render=False, pickable=False, smooth_shading=True)
@@ -413,7 +454,7 @@ class SceneView:
                                               reset_camera=False, render=False, pickable=False, smooth_shading=True,
                                               show_scalar_bar=False)
         else:
-            cells = np.hstack([np.full((len(edges), 1), 2, dtype=np.int64), edges]).ravel()
+            cells = line_cells(edges)
             lines = pv.PolyData(verts, lines=cells)
             actor = self.plotter.add_mesh(lines, color=CURVE_EDGE, style="wireframe", line_width=2.5,
                                           lighting=False, name="curve-edges", reset_camera=False,
@@ -421,6 +462,18 @@ class SceneView:
         actor.SetVisibility(layer.visible)
         draw_in_front(actor)
         self._actors["curve-edges"] = actor
+
+    def _swap_lines(self, layer: Any) -> bool:
+        """The curve's edges drawn as lines again (an edit, its undo or redo): the new lines go into
+        the actor already built, as :meth:`_swap_points` does for the points."""
+        actor = self._actors.get("curve-edges")
+        if (actor is None or layer is None or self.scene.edges_as_tubes or self._edges_as_tubes is not False
+                or not len(layer.edges)):
+            return False
+        lines = line_cells(layer.edges)
+        actor.mapper.dataset = pv.PolyData(np.ascontiguousarray(layer.points, dtype=float), lines=lines)
+        actor.SetVisibility(layer.visible)
+        return True
 
     def _colour_curve(self) -> None:
         layer = self.scene.curve
