@@ -20,6 +20,7 @@ from PySide6 import QtCore
 from ..scene import CURVE_LOCATION, Scene, SceneEvent
 from .actors import curve_polylines, display_coordinates, draw_in_front, line_cells, scene_diagonal
 from .camera import apply_camera_state, axes_viewport, camera_state, fit_camera, orient_standard_view
+from .cloud_layer import MIN_CLOUD_POINTS, CloudFrame, CloudLayer
 from .colorbar import ColourBar
 from .culling import CulledLayer, RestingCull
 from .eye_dome import EyeDome
@@ -69,7 +70,9 @@ class SceneView:
         self._resting = RestingCull()  # at rest, big layers draw only the points that can show
         self._scale = 1  # the scale of the picture being rendered (1: the view itself)
         # every render, also those VTK's interaction starts itself, draws the points of its own camera
-        self._start_observer = self.plotter.ren_win.AddObserver("StartEvent", lambda *_: self.moving or self._rest_detail())
+        self._start_observer = self.plotter.ren_win.AddObserver("StartEvent", lambda *_: self._before_render())
+        self._picture = False  # a picture is being rendered (image()): the cloud drawn whole
+        self._cloud_layer = CloudLayer(self.plotter, self._cloud_frame)  # the far cloud drawn once (at rest)
         self._frames = FrameScheduler(self.plotter)  # also sets plotter.on_frame
         self.plotter.before_frame = self._before_frame
         self.on_pick: Callable[[dict[str, Any] | None], None] | None = None
@@ -122,7 +125,8 @@ class SceneView:
 
     @property
     def render_pending(self) -> bool:
-        return self._frames.pending
+        """A frame is due, or the cloud's image (:mod:`.cloud_layer`) is about to be made."""
+        return self._frames.pending or self._cloud_layer.build_pending
 
     def hold_frames(self, seconds: float) -> None:
         """Requested frames wait at most ``seconds`` or until :meth:`release_frames` (an edit's curve
@@ -166,6 +170,24 @@ class SceneView:
             self._rest_detail()
         self._full_points = 0 if self.moving else sum(
             self._resting.drawn.get(k, len(self._sources[k])) for k in self._lod if self._actors[k].GetVisibility())
+
+    def _before_render(self) -> None:
+        """Right before every render: at rest, the points each big layer draws, and the cloud's near
+        points over its image when that shows this view (:mod:`.cloud_layer`)."""
+        if self.moving:
+            self._cloud_layer.off(self._cloud_frame())
+            return
+        self._rest_detail()
+        self._cloud_layer.apply()
+
+    def _cloud_frame(self) -> CloudFrame | None:
+        actor, mesh = self._actors.get("cloud"), self._meshes.get("cloud")
+        if actor is None or mesh is None or mesh.n_points < MIN_CLOUD_POINTS:
+            return None
+        allowed = (bool(self.plotter.software_gl) and self._scale == 1 and not self.moving and not self._picture
+                   and not self._eye_dome and self.plotter.devicePixelRatioF() == 1.0)
+        return CloudFrame(actor, mesh, self._pick_layout("cloud"),
+                          self._resting.drawn.get("cloud", mesh.n_points) == mesh.n_points, allowed)
 
     def _rest_detail(self) -> None:
         """At rest, each big layer draws only its points that can show in this frame (:mod:`.culling`):
@@ -737,6 +759,7 @@ class SceneView:
         self._before_frame()
         self._set_moving(False)
         scale = self._scale = int(scale)  # thinned for this view only: a picture at another scale draws every point
+        self._picture = True
         restore = _scaled_props(self._actors.values(), scale)
         restore += self._colour_bar.for_picture(scale, visible=colour_bar, background=background)
         restore += _axes_for_picture(self.plotter.renderer.axes_actor if self._axes_shown else None, scale, background)
@@ -751,6 +774,7 @@ class SceneView:
             for undo in restore:
                 undo()
             self._scale = 1
+            self._picture = False
         self._frames.frame_done()  # the pending frame is the one rendered here
         if scale != 1 or not colour_bar or background != "white":
             self.request_render()  # the view itself back to its own sizes and colours
@@ -761,6 +785,7 @@ class SceneView:
         self.plotter.removeEventFilter(self._motion_filter)
         self.plotter.ren_win.RemoveObserver(self._start_observer)  # VTK's hold on this view let go
         self._frames.close()
+        self._cloud_layer.close()
         self.eye_dome.close()
         self.plotter.close()
 
