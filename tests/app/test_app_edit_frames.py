@@ -116,7 +116,7 @@ def test_a_cancelled_first_phase_lets_the_edited_curve_be_drawn_at_once(window, 
 
 def test_an_edit_keeps_the_curves_actors_and_swaps_their_points(window, qtbot, tmp_path):
     """The edited curve goes into the actors already built (no pyvista actor made or removed on the way
-    to the recoloured frame): each shows the new curve's vertices, samples and edges, and a pick finds
+    to the recoloured frame, the colour bar hidden meanwhile, not made again): each shows the new curve's vertices, samples and edges, and a pick finds
     the new curve's elements, never a sample of the curve before."""
     import numpy as np
 
@@ -127,13 +127,16 @@ def test_an_edit_keeps_the_curves_actors_and_swaps_their_points(window, qtbot, t
     before = {n: view._actors[n] for n in names}
     curve_props = sorted(n for n in view.plotter.renderer.actors if n.startswith("curve"))
     old_samples = w.scene.curve.samples.copy()
+    bar = view.plotter.scalar_bars[w.scene.metric]
     key(qtbot, w, "E")
     w.select_element("curve", "vertices", tip)
     key(qtbot, w, "Delete")
     assert "curve-samples" not in view._actors and "curve-samples" not in view._pickable  # not scored yet
+    assert not bar.GetVisibility()  # nothing coloured: hidden, not removed
     wait_evaluated(qtbot, w)
     layer = w.scene.curve
     assert {n: view._actors[n] for n in names} == before
+    assert view.plotter.scalar_bars[w.scene.metric] is bar and bar.GetVisibility()
     assert sorted(n for n in view.plotter.renderer.actors if n.startswith("curve")) == curve_props
     np.testing.assert_allclose(view._meshes["curve-vertices"].points, layer.points, rtol=1e-6)
     np.testing.assert_allclose(view._meshes["curve-samples"].points, layer.samples, rtol=1e-6)
