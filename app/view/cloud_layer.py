@@ -139,11 +139,7 @@ class CloudLayer:
         dynamic = self._dynamic(frame)
         if dynamic is not None and self._shows(frame) and self._covers(dynamic):
             if not self.applied or self._mesh is not frame.mesh:
-                set_vertices(frame.mesh, self._near)
-                self._mesh = frame.mesh
-                self.renderer.SetBackgroundTexture(self._texture)
-                self.renderer.TexturedBackgroundOn()
-                self.applied = True
+                self._use(frame)
             return
         self.off(frame)
         if dynamic is not None and self._frame_key(frame) != self._refused:
@@ -210,6 +206,17 @@ class CloudLayer:
         self.builds += 1
         if not self._covers(dynamic):  # an element just off the view: never made again for this view
             self._refused, self._key = self._frame_key(frame), None
+            set_vertices(frame.mesh, None)
+            return
+        self._use(frame)  # set now, while idle: the frame on screen is already this picture
+
+    def _use(self, frame: CloudFrame) -> None:
+        """The near points over the image from the next render on."""
+        set_vertices(frame.mesh, self._near)
+        self._mesh = frame.mesh
+        self.renderer.SetBackgroundTexture(self._texture)
+        self.renderer.TexturedBackgroundOn()
+        self.applied = True
 
     def _draw_far(self, frame: CloudFrame, far_idx: np.ndarray, w: int, h: int) -> Any:
         from vtkmodules.util.numpy_support import numpy_to_vtk, vtk_to_numpy
@@ -230,13 +237,15 @@ class CloudLayer:
             set_vertices(frame.mesh, far_idx)
             window.SwapBuffersOff()  # kept in VTK's framebuffer: not shown, no repaint asked
             window.Render()
-            self.plotter.makeCurrent()
+            window.MakeCurrent()  # VTK's own make-current: Qt's would rebind the widget's framebuffer
             x0, y0 = ren.GetOrigin()
             pixels = vtkUnsignedCharArray()
             window.GetRGBACharPixelData(x0, y0, x0 + w - 1, y0 + h - 1, 0, pixels)
+        except BaseException:
+            set_vertices(frame.mesh, None)
+            raise
         finally:
             window.SwapBuffersOn()
-            set_vertices(frame.mesh, None)
             for p in hidden:
                 p.SetVisibility(True)
             for r in others:

@@ -89,7 +89,7 @@ def test_a_moved_camera_or_a_coloured_cloud_draws_the_whole_cloud(shown, qtbot):
     _frame(w)
     assert not layer.applied and layer.build_pending and w.view.render_pending
     _settle(qtbot, w)
-    assert layer.builds == builds + 1
+    assert layer.builds == builds + 1 and layer.applied  # set while idle, for the next frame
     assert np.array_equal(_frame(w), _whole(w)) and layer.applied is False  # _whole turned it off last
     _frame(w)
     assert layer.applied
