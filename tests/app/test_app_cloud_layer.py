@@ -88,8 +88,14 @@ def test_a_moved_camera_or_a_coloured_cloud_draws_the_whole_cloud(shown, qtbot):
     w.view.plotter.renderer.GetActiveCamera().Azimuth(20)
     _frame(w)
     assert not layer.applied and layer.build_pending and w.view.render_pending
+    renders, paints = [], []
+    w.view.plotter.ren_win.AddObserver("EndEvent", lambda *_a: renders.append(1))
+    painted = w.view.plotter.on_frame
+    w.view.plotter.on_frame = lambda: (paints.append(1), painted())
     _settle(qtbot, w)
+    qtbot.wait(50)
     assert layer.builds == builds + 1 and layer.applied  # set while idle, for the next frame
+    assert len(renders) == 1 and not paints  # the far points' render, never shown, no repaint asked
     assert np.array_equal(_frame(w), _whole(w)) and layer.applied is False  # _whole turned it off last
     _frame(w)
     assert layer.applied
