@@ -155,10 +155,6 @@ class CloudLayer:
             set_vertices(frame.mesh, None)
         self._mesh = None
 
-    def forget(self) -> None:
-        """The image no longer shows the view (a picture at another scale or background)."""
-        self._key = None
-
     def close(self) -> None:
         self._timer.stop()
         self.renderer.TexturedBackgroundOff()
