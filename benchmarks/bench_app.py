@@ -135,20 +135,22 @@ def test_viewer_stale_support_stops(measure, benchmark, n):
     benchmark.extra_info.update(n_points=n, whole_support_s=round(whole, 3))
 
 
-@pytest.mark.parametrize("edit", ["edge", "branch"])
+@pytest.mark.parametrize("edit", ["edge", "branch", "vertex"])
 def test_viewer_edit_to_recoloured_frame(measure, benchmark, display, tmp_path, edit):
     """Proofreading's loop in the window (docs/guide/viewer.md "Editing the curve skeleton"): an edge
     (``edge``) or a branch (``branch``) selected in edit mode, Delete pressed (the Edit menu's action,
     the real path: the engine's edit, the curve redrawn, the first phase's ``Evaluation.update`` in the
-    worker), until the frame recoloured by the new scores is painted (timed). The Y of 100k points
-    (curve only) and the edits of bench_edit.py (its edge 5, its branch 0). ``scored_s``: until the
+    worker), or a curve vertex dropped (``vertex``: the Ctrl+drag's release handler, ``move_vertex``),
+    until the frame recoloured by the new scores is painted (timed). The Y of 100k points (curve only)
+    and the edits of bench_edit.py (its edge 5, its branch 0, its vertex 5 moved by 0.01 in y). ``scored_s``: until the
     scores landed; ``defects_s``: until the second phase (the curve's coverage and defects) landed and
     its frame was painted, the whole update seen. Each round starts from the loaded curve again (Ctrl+Z,
     untimed). The path's phases (medians, seconds from the key; docs/performance.md 6.10): ``edit_s``
     the edit applied and its curve redrawn (the key's handler returned), ``worker_s`` the first phase's
     task started, ``frame_start_s`` the recoloured frame begun (``frame_s`` its drawing), and
-    ``frames_between``, the frames drawn between the key and the recoloured one. The goal: 0.15 s to
-    the recoloured frame."""
+    ``frames_between``, the frames drawn between the key and the recoloured one, ``over_image`` the share
+    of recoloured frames that drew only the cloud's near points over its image (app/view/cloud_layer.py).
+    The goal: 0.15 s to the recoloured frame."""
     from PySide6 import QtCore, QtWidgets
 
     from skelscope.main_window import MainWindow
@@ -164,12 +166,20 @@ def test_viewer_edit_to_recoloured_frame(measure, benchmark, display, tmp_path, 
     w.resize(1100, 750)
     w.show()
     rendered: list[float] = []
-    w.view.plotter.ren_win.AddObserver("EndEvent", lambda *a: rendered.append(time.perf_counter()))
+    layer = getattr(w.view, "_cloud_layer", None)  # the far cloud's image (app/view/cloud_layer.py)
+    over_image: dict[float, bool] = {}  # a frame's end -> it drew the near cloud points over the image
+
+    def frame_ended(*_a: object) -> None:
+        rendered.append(time.perf_counter())
+        over_image[rendered[-1]] = bool(layer is not None and layer.applied)
+
+    w.view.plotter.ren_win.AddObserver("EndEvent", frame_ended)
     begun: list[float] = []  # the frames' starts
     w.view.plotter.ren_win.AddObserver("StartEvent", lambda *a: begun.append(time.perf_counter()))
     started: list[float] = []  # the first phase's task started
     w.session.runner.started.connect(lambda name: name == "evaluation" and started.append(time.perf_counter()))
-    phases: dict[str, list[float]] = {k: [] for k in ("edit_s", "worker_s", "frame_start_s", "frame_s", "frames_between")}
+    phases: dict[str, list[float]] = {k: [] for k in ("edit_s", "worker_s", "frame_start_s", "frame_s", "frames_between",
+                                                      "over_image")}
     landed: list[float] = []  # the first phase's scores shown
     w.session.scores_shown.connect(lambda _ev: landed.append(time.perf_counter()))
     whole: list[float] = []  # the whole evaluation shown (the second phase)
@@ -202,7 +212,7 @@ def test_viewer_edit_to_recoloured_frame(measure, benchmark, display, tmp_path, 
             idle()
             if edit == "edge":  # what a pick on the edge's samples selects
                 w.edits.select("edge", tuple(int(v) for v in curve.edges[5]))
-            else:  # a pick on a vertex of branch 0
+            elif edit == "branch":  # a pick on a vertex of branch 0
                 w.edits.select("branch", 0)
             idle()
             landed.clear()
@@ -213,7 +223,10 @@ def test_viewer_edit_to_recoloured_frame(measure, benchmark, display, tmp_path, 
         def press_delete():
             t0 = time.perf_counter()
             pressed.append(t0)
-            delete.trigger()
+            if edit == "vertex":  # what the drag's release does
+                w.edits.move_vertex(5, curve.vertices[5] + np.array([0.0, 0.01, 0.0]))
+            else:
+                delete.trigger()
             t_edit = time.perf_counter()
             while time.perf_counter() - t0 < 600:
                 app.processEvents()
@@ -229,6 +242,7 @@ def test_viewer_edit_to_recoloured_frame(measure, benchmark, display, tmp_path, 
             phases["frame_start_s"].append(start - t0)
             phases["frame_s"].append(end - start)
             phases["frames_between"].append(float(len([t for t in rendered if t0 < t < end])))
+            phases["over_image"].append(float(over_image[end]))
 
         scored: list[float] = []
         measure(press_delete, rounds=5, setup=setup)
@@ -240,7 +254,8 @@ def test_viewer_edit_to_recoloured_frame(measure, benchmark, display, tmp_path, 
     benchmark.extra_info.update(n_points=len(cloud), edit=edit, display=display,
                                 scored_s=round(float(np.median(scored[1:])), 4),  # not the warm-up
                                 defects_s=round(float(np.median(defects[1:])), 4), goal_s=0.15,  # not the warm-up
-                                **{k: round(float(np.median(v[1:])), 4) for k, v in phases.items()})
+                                **{k: round(float((np.mean if k == "over_image" else np.median)(v[1:])), 4)
+                                   for k, v in phases.items()})
 
 
 class _Drag:

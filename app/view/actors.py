@@ -12,7 +12,7 @@ import numpy as np
 
 from ..scene import Scene
 
-__all__ = ["display_coordinates", "draw_in_front", "scene_diagonal", "curve_polylines"]
+__all__ = ["display_coordinates", "draw_in_front", "scene_diagonal", "line_cells", "curve_polylines"]
 
 
 def display_coordinates(points: np.ndarray) -> np.ndarray:
@@ -48,6 +48,12 @@ def scene_diagonal(scene: Scene) -> float:
     return 1.0
 
 
+def line_cells(edges: np.ndarray) -> np.ndarray:
+    """VTK line cells (2, a, b per edge) of an (E, 2) edge array."""
+    edges = np.asarray(edges, dtype=np.int64).reshape(-1, 2)
+    return np.hstack([np.full((len(edges), 1), 2, dtype=np.int64), edges]).ravel()
+
+
 def curve_polylines(vertices: np.ndarray, edges: np.ndarray, values: np.ndarray, location: str,
                     samples: np.ndarray | None = None, sample_edge: np.ndarray | None = None,
                     sample_t: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -64,7 +70,7 @@ def curve_polylines(vertices: np.ndarray, edges: np.ndarray, values: np.ndarray,
     values = np.asarray(values, dtype=float)
     n_edges = len(edges)
     if location == "vertices" or samples is None or not len(samples):
-        cells = np.hstack([np.full((n_edges, 1), 2, dtype=np.int64), edges]).ravel()
+        cells = line_cells(edges)
         vals = values if location == "vertices" else np.full(len(verts), np.nan)
         return verts, cells, vals
     from scipy.spatial import cKDTree

@@ -1,7 +1,8 @@
 """The view's single colour bar (which metric the coloured actor shows) and its NaN legend.
 
 pyvista's ``add_scalar_bar`` costs several ms and a new bar re-renders its text, so the bar is made
-only when the coloured actor or the metric changes and is otherwise updated in place. The NaN legend
+only when the coloured actor or the metric changes and is otherwise updated in place; with nothing
+coloured it is hidden, not removed (an edit's curve uncoloured until its scores land). The NaN legend
 is a magenta swatch with its label to the right of it (never over it, at any size or scale), below
 the bar, shown while any shown value is invalid (docs/metrics.md 5.5).
 
@@ -48,14 +49,16 @@ class ColourBar:
         """Describe ``actor`` (None: no bar) coloured by ``scene.metric``; the NaN legend is shown
         while any shown value is invalid."""
         bars = self.plotter.scalar_bars
-        if actor is None or actor is not self.actor or scene.metric not in bars:
+        if actor is None:  # hidden, kept: an edit's curve is coloured again by the same actor (scene_view.KEPT_ACTORS)
+            for bar in bars.values():
+                bar.SetVisibility(False)
+            self._show_nan(False)
+            self.title.SetVisibility(False)
+            return
+        if actor is not self.actor or scene.metric not in bars:
             for title in list(bars.keys()):
                 self.plotter.remove_scalar_bar(title, render=False)
             self.actor = actor
-            if actor is None:
-                self._show_nan(False)
-                self.title.SetVisibility(False)
-                return
             self.plotter.add_scalar_bar(
                 title=scene.metric, mapper=actor.mapper, n_labels=5, fmt="%.2f", color="black",
                 vertical=True, position_x=BAR_X, position_y=BAR_Y, width=BAR_WIDTH, height=BAR_HEIGHT,
@@ -66,6 +69,8 @@ class ColourBar:
             self.title.SetVisibility(True)
             self.layout()
         bar = bars[scene.metric]
+        bar.SetVisibility(True)
+        self.title.SetVisibility(True)
         bar.SetLookupTable(actor.mapper.lookup_table)
         bar.SetDrawNanAnnotation(False)
         self._show_nan(scene.n_invalid_shown() > 0)

@@ -22,7 +22,7 @@ import numpy as np
 from .picking import project_to_display
 from .visibility import ScreenPoints, visible_points
 
-__all__ = ["CulledLayer", "RestingCull", "set_vertices"]
+__all__ = ["CulledLayer", "RestingCull", "camera_key", "set_vertices"]
 
 
 @dataclass
@@ -46,7 +46,8 @@ def set_vertices(mesh: Any, idx: np.ndarray | None) -> None:
     mesh.SetVerts(cells)
 
 
-def _camera_key(renderer: Any) -> tuple:
+def camera_key(renderer: Any) -> tuple:
+    """What a frame's projection of the points depends on: the renderer's size and viewport, the camera."""
     cam = renderer.GetActiveCamera()
     return (tuple(renderer.GetSize()), tuple(renderer.GetViewport()), cam.GetPosition(), cam.GetFocalPoint(),
             cam.GetViewUp(), cam.GetViewAngle(), cam.GetParallelProjection(), cam.GetParallelScale())
@@ -100,7 +101,7 @@ class RestingCull:
         """Set each visible layer's vertex list for the camera of ``renderer``; ``thin`` False: all points."""
         shown = {k: c for k, c in layers.items() if c.actor.GetVisibility()}
         sizes = {k: float(c.actor.GetProperty().GetPointSize()) for k, c in shown.items()}
-        key = (thin, _camera_key(renderer) if thin else None,
+        key = (thin, camera_key(renderer) if thin else None,
                tuple((k, id(c.mesh), sizes[k], c.actor.GetProperty().GetOpacity()) for k, c in sorted(shown.items())))
         if key == self._key:
             return

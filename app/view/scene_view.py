@@ -18,8 +18,9 @@ import pyvista as pv
 from PySide6 import QtCore
 
 from ..scene import CURVE_LOCATION, Scene, SceneEvent
-from .actors import curve_polylines, display_coordinates, draw_in_front, scene_diagonal
+from .actors import curve_polylines, display_coordinates, draw_in_front, line_cells, scene_diagonal
 from .camera import apply_camera_state, axes_viewport, camera_state, fit_camera, orient_standard_view
+from .cloud_layer import MIN_CLOUD_POINTS, CloudFrame, CloudLayer
 from .colorbar import ColourBar
 from .culling import CulledLayer, RestingCull
 from .eye_dome import EyeDome
@@ -34,6 +35,8 @@ from .style import (
 __all__ = ["SceneView", "EMPTY_HINT"]
 
 EMPTY_HINT = "Drop a cloud and its skeleton here, or File > Open"
+KEPT_ACTORS = ("curve-vertices", "curve-samples")
+"""Small layers' actors kept (hidden) when dropped and given their next points in place."""
 
 
 class SceneView:
@@ -52,6 +55,7 @@ class SceneView:
         self._lod: dict[str, np.ndarray] = {}  # layer actor name -> indices of its level-of-detail twin
         self._pick_coords: dict[str, np.ndarray] = {}  # actor name -> its points laid out for picking
         self._invalid: dict[str, np.ndarray] = {}  # actor name -> its elements drawn as magenta markers
+        self._spare: dict[str, Any] = {}  # KEPT_ACTORS name -> its hidden actor, dropped from the scene
         self.picked: dict[str, Any] | None = None  # the picked element (marked in 3-D until the data changes)
         self._lut: tuple[tuple[tuple[float, float], bool], pv.LookupTable] | None = None
         self._edges_as_tubes: bool | None = None  # how the curve's edge actor was built
@@ -66,7 +70,9 @@ class SceneView:
         self._resting = RestingCull()  # at rest, big layers draw only the points that can show
         self._scale = 1  # the scale of the picture being rendered (1: the view itself)
         # every render, also those VTK's interaction starts itself, draws the points of its own camera
-        self._start_observer = self.plotter.ren_win.AddObserver("StartEvent", lambda *_: self.moving or self._rest_detail())
+        self._start_observer = self.plotter.ren_win.AddObserver("StartEvent", lambda *_: self._before_render())
+        self._picture = False  # a picture is being rendered (image()): the cloud drawn whole
+        self._cloud_layer = CloudLayer(self.plotter, self._cloud_frame)  # the far cloud drawn once (at rest)
         self._frames = FrameScheduler(self.plotter)  # also sets plotter.on_frame
         self.plotter.before_frame = self._before_frame
         self.on_pick: Callable[[dict[str, Any] | None], None] | None = None
@@ -119,7 +125,8 @@ class SceneView:
 
     @property
     def render_pending(self) -> bool:
-        return self._frames.pending
+        """A frame is due, or the cloud's image (:mod:`.cloud_layer`) is about to be made."""
+        return self._frames.pending or self._cloud_layer.build_pending
 
     def hold_frames(self, seconds: float) -> None:
         """Requested frames wait at most ``seconds`` or until :meth:`release_frames` (an edit's curve
@@ -164,6 +171,24 @@ class SceneView:
         self._full_points = 0 if self.moving else sum(
             self._resting.drawn.get(k, len(self._sources[k])) for k in self._lod if self._actors[k].GetVisibility())
 
+    def _before_render(self) -> None:
+        """Right before every render: at rest, the points each big layer draws, and the cloud's near
+        points over its image when that shows this view (:mod:`.cloud_layer`)."""
+        if self.moving:
+            self._cloud_layer.off(self._cloud_frame())
+            return
+        self._rest_detail()
+        self._cloud_layer.apply()
+
+    def _cloud_frame(self) -> CloudFrame | None:
+        actor, mesh = self._actors.get("cloud"), self._meshes.get("cloud")
+        if actor is None or mesh is None or mesh.n_points < MIN_CLOUD_POINTS:
+            return None
+        allowed = (bool(self.plotter.software_gl) and self._scale == 1 and not self.moving and not self._picture
+                   and not self._eye_dome and self.plotter.devicePixelRatioF() == 1.0)
+        return CloudFrame(actor, mesh, self._pick_layout("cloud"),
+                          self._resting.drawn.get("cloud", mesh.n_points) == mesh.n_points, allowed)
+
     def _rest_detail(self) -> None:
         """At rest, each big layer draws only its points that can show in this frame (:mod:`.culling`):
         under software GL, flat points, at a device pixel ratio of 1 and the view's own scale."""
@@ -185,8 +210,13 @@ class SceneView:
             self._drop(f"{name}-lod")
 
     def _drop(self, name: str) -> None:
-        if self._actors.pop(name, None) is not None:
-            self.plotter.remove_actor(name, render=False)
+        actor = self._actors.pop(name, None)
+        if actor is not None:
+            if name in KEPT_ACTORS:  # hidden, kept for the next points of this name (:meth:`_swap_points`)
+                actor.SetVisibility(False)
+                self._spare[name] = actor
+            else:
+                self.plotter.remove_actor(name, render=False)
         self._pickable.pop(name, None)
         self._sources.pop(name, None)
         self._coloured.pop(name, None)
@@ -218,6 +248,8 @@ class SceneView:
         from the same array is recoloured in place: a new result re-uploads scalars, not geometry.
         A layer of more than LOD_POINTS points also gets a subsampled twin, shown while the camera moves."""
         actor = self._actors.get(key)
+        if (actor is None or self._sources.get(key) is not points) and not lod:
+            actor = self._swap_points(key, points, layer, size, pickable)
         if actor is None or self._sources.get(key) is not points:
             self._remove(key)
             mesh = pv.PolyData(display_coordinates(points))
@@ -262,6 +294,35 @@ class SceneView:
             nan_actor.SetVisibility(layer.visible)
             draw_in_front(nan_actor, -400.0)
             self._actors[f"{key}-nan"] = nan_actor
+
+    def _swap_points(self, key: str, points: np.ndarray, layer: Any, size: float,
+                     pickable: tuple[str, str] | None) -> Any:
+        """The actor of a small layer (one of KEPT_ACTORS: the curve's vertices and samples) given
+        new points in place: an edit's new curve, its samples once scored. A new actor costs pyvista
+        several ms (add_mesh, remove_actor) on the path from an edit's key to its recoloured frame
+        (docs/performance.md 6.10); the mapper, its shader and its depth offset stay. None when the
+        key has no actor to keep."""
+        if key not in KEPT_ACTORS:
+            return None
+        actor = self._actors.get(key) or self._spare.pop(key, None)
+        if actor is None:
+            return None
+        self._drop(f"{key}-nan")
+        for kept in (self._pick_coords, self._invalid, self._pickable):
+            kept.pop(key, None)
+        mesh = pv.PolyData(display_coordinates(points))
+        actor.mapper.dataset = mesh
+        spheres = self.scene.style["spheres"]
+        actor.prop.render_points_as_spheres = spheres
+        actor.prop.lighting = spheres
+        actor.prop.point_size = size
+        actor.prop.opacity = layer.opacity
+        self._actors[key] = actor
+        self._sources[key] = points
+        self._meshes[key] = mesh
+        if pickable is not None:
+            self._pickable[key] = pickable
+        return actor
 
     def _add_points(self, key: str, mesh: pv.PolyData, colour: Any, size: float, opacity: float, pickable: bool,
                     spheres: bool | None = None) -> Any:
@@ -383,9 +444,11 @@ class SceneView:
                                layer.samples, layer.sample_edge, layer.sample_t)
 
     def _build_curve_edges(self) -> None:
+        layer = self.scene.curve
+        if self._swap_lines(layer):
+            return
         self._remove("curve-edges")
         self._edges_as_tubes = None
-        layer = self.scene.curve
         if layer is None:
             return
         self._edges_as_tubes = self.scene.edges_as_tubes
@@ -397,7 +460,7 @@ class SceneView:
             radius = 0.004 * scene_diagonal(self.scene)
             coloured = self._tube_values()
             if coloured is None:
-                cells = np.hstack([np.full((len(edges), 1), 2, dtype=np.int64), edges]).ravel()
+                cells = line_cells(edges)
                 mesh = pv.PolyData(verts, lines=cells).tube(radius=radius, n_sides=12)
                 actor = self.plotter.add_mesh(mesh, color=CURVE_EDGE, name="curve-edges", reset_camera=False,
                                               render=False, pickable=False, smooth_shading=True)
@@ -413,7 +476,7 @@ class SceneView:
                                               reset_camera=False, render=False, pickable=False, smooth_shading=True,
                                               show_scalar_bar=False)
         else:
-            cells = np.hstack([np.full((len(edges), 1), 2, dtype=np.int64), edges]).ravel()
+            cells = line_cells(edges)
             lines = pv.PolyData(verts, lines=cells)
             actor = self.plotter.add_mesh(lines, color=CURVE_EDGE, style="wireframe", line_width=2.5,
                                           lighting=False, name="curve-edges", reset_camera=False,
@@ -421,6 +484,18 @@ class SceneView:
         actor.SetVisibility(layer.visible)
         draw_in_front(actor)
         self._actors["curve-edges"] = actor
+
+    def _swap_lines(self, layer: Any) -> bool:
+        """The curve's edges drawn as lines again (an edit, its undo or redo): the new lines go into
+        the actor already built, as :meth:`_swap_points` does for the points."""
+        actor = self._actors.get("curve-edges")
+        if (actor is None or layer is None or self.scene.edges_as_tubes or self._edges_as_tubes is not False
+                or not len(layer.edges)):
+            return False
+        lines = line_cells(layer.edges)
+        actor.mapper.dataset = pv.PolyData(np.ascontiguousarray(layer.points, dtype=float), lines=lines)
+        actor.SetVisibility(layer.visible)
+        return True
 
     def _colour_curve(self) -> None:
         layer = self.scene.curve
@@ -684,6 +759,7 @@ class SceneView:
         self._before_frame()
         self._set_moving(False)
         scale = self._scale = int(scale)  # thinned for this view only: a picture at another scale draws every point
+        self._picture = True
         restore = _scaled_props(self._actors.values(), scale)
         restore += self._colour_bar.for_picture(scale, visible=colour_bar, background=background)
         restore += _axes_for_picture(self.plotter.renderer.axes_actor if self._axes_shown else None, scale, background)
@@ -698,6 +774,7 @@ class SceneView:
             for undo in restore:
                 undo()
             self._scale = 1
+            self._picture = False
         self._frames.frame_done()  # the pending frame is the one rendered here
         if scale != 1 or not colour_bar or background != "white":
             self.request_render()  # the view itself back to its own sizes and colours
@@ -708,6 +785,7 @@ class SceneView:
         self.plotter.removeEventFilter(self._motion_filter)
         self.plotter.ren_win.RemoveObserver(self._start_observer)  # VTK's hold on this view let go
         self._frames.close()
+        self._cloud_layer.close()
         self.eye_dome.close()
         self.plotter.close()
 

@@ -112,3 +112,41 @@ def test_a_cancelled_first_phase_lets_the_edited_curve_be_drawn_at_once(window, 
     assert not w.session.runner.running and w.view._frames._held_until == 0.0
     qtbot.waitUntil(lambda: not w.view.render_pending, timeout=10000)
     assert w.scene.evaluation is None and w.scene.curve.edited
+
+
+def test_an_edit_keeps_the_curves_actors_and_swaps_their_points(window, qtbot, tmp_path):
+    """The edited curve goes into the actors already built (no pyvista actor made or removed on the way
+    to the recoloured frame, the colour bar hidden meanwhile, not made again): each shows the new curve's vertices, samples and edges, and a pick finds
+    the new curve's elements, never a sample of the curve before."""
+    import numpy as np
+
+    w = window
+    _cloud, _curve, tip = loaded(qtbot, w, tmp_path)
+    view = w.view
+    names = ("curve-vertices", "curve-samples", "curve-edges")
+    before = {n: view._actors[n] for n in names}
+    curve_props = sorted(n for n in view.plotter.renderer.actors if n.startswith("curve"))
+    old_samples = w.scene.curve.samples.copy()
+    bar = view.plotter.scalar_bars[w.scene.metric]
+    key(qtbot, w, "E")
+    w.select_element("curve", "vertices", tip)
+    key(qtbot, w, "Delete")
+    assert "curve-samples" not in view._actors and "curve-samples" not in view._pickable  # not scored yet
+    assert not bar.GetVisibility()  # nothing coloured: hidden, not removed
+    wait_evaluated(qtbot, w)
+    layer = w.scene.curve
+    assert {n: view._actors[n] for n in names} == before
+    assert view.plotter.scalar_bars[w.scene.metric] is bar and bar.GetVisibility()
+    assert sorted(n for n in view.plotter.renderer.actors if n.startswith("curve")) == curve_props
+    np.testing.assert_allclose(view._meshes["curve-vertices"].points, layer.points, rtol=1e-6)
+    np.testing.assert_allclose(view._meshes["curve-samples"].points, layer.samples, rtol=1e-6)
+    assert len(layer.samples) != len(old_samples)  # the twig's samples went with it
+    assert view._actors["curve-edges"].mapper.dataset.n_lines == len(layer.edges)
+    assert view._actors["curve-samples"].GetVisibility() and view._actors["curve-vertices"].GetVisibility()
+    qtbot.waitUntil(lambda: not view.render_pending, timeout=10000)
+    for xyz in (layer.points[3], layer.samples[7]):
+        info = view.pick_display(*view.world_to_display(xyz))  # what is drawn there: the new curve's
+        assert info is not None and info["layer"] == "curve"
+        drawn = layer.points if info["location"] == "vertices" else layer.samples
+        np.testing.assert_allclose(info["xyz"], drawn[info["index"]], atol=1e-12)
+        assert np.linalg.norm(np.subtract(view.world_to_display(info["xyz"]), view.world_to_display(xyz))) < 8
