@@ -301,7 +301,7 @@ class Params:
     spur_min_points: int = 1
     spur_slack: float = 0.25
     spur_resolved_spacings: float = 2.0
-    spur_twig_spacings: float = 1.0
+    spur_twig_spacings: float = 0.5
     spur_stub_share: float = 0.005
     spur_one_sided: float = 0.18
     spurs_warn_count: int = 1
