@@ -13,7 +13,7 @@ classical significance measures fails:
 
 No tau grows the balls (r(x) is measured to the samples). Not judged: ``unresolved`` where r_J is
 under ``spur_resolved_spacings`` cloud spacings, or where a branch failing only the explanation
-measure ends under ``spur_twig_spacings`` spacings past (1 + ``spur_slack``) r_J (:func:`unsampled_twig`:
+measure ends under ``spur_twig_spacings`` spacings past its junction's ball (:func:`unsampled_twig`:
 no sample of its own can be expected there); ``stubs`` (short) under ``spur_stub_share`` of the
 curve's length; ``unseen`` where only the explanation measure fails on a cloud seen from one side
 (:mod:`.spur_sides`, ``spur_one_sided``). docs/diagnostics.md "Spurious branches". Size: length in
@@ -354,12 +354,12 @@ def find_spurious_branches(
 
 def unsampled_twig(reach: np.ndarray, r_j: np.ndarray, spacing: np.ndarray, params: Params = Params()) -> np.ndarray:
     """Per branch, whether its far end reaches under ``spur_twig_spacings`` junction spacings past the
-    explanation's reach at its junction ((1 + ``spur_slack``) r_J): the part of a twig that could hold
-    points of its own is shorter than the cloud's spacing there, so a real twig gets none and the
+    junction's ball (``spur_reach`` r_J): a real twig that short bulges out of its parent by less than
+    the cloud's spacing there, so it has no sample of its own beyond the parent's grown balls and the
     explanation measure cannot tell it from a spur (docs/diagnostics.md "Spurious branches", rule 3).
     ``reach`` in units of ``r_j``; NaN gives False."""
     with np.errstate(invalid="ignore"):
-        return (reach - 1.0 - params.spur_slack) * r_j < params.spur_twig_spacings * spacing
+        return (reach - params.spur_reach) * r_j < params.spur_twig_spacings * spacing
 
 
 def junction_spacing(cloud_tree: cKDTree, curve: CurveSkeleton, branches: Branches, terminal: np.ndarray) -> np.ndarray:

@@ -92,9 +92,9 @@ def test_spurs_off_unresolved_neurites_are_not_judged(neuron):
 def test_spurs_out_of_resolved_neurites_are_flagged(neuron):
     """Four traced radii sideways from the degree-2 nodes where the cloud resolves the neurite (r_J
     at least two spacings, traced radius under 30): a spur within its junction's ball fails by reach,
-    one ending past the explained ball ((1 + spur_slack) r_J) by ``spur_twig_spacings`` spacings or
-    more fails by explanation, both flagged; one ending in between is unresolved (no sample of a real
-    twig there could be its own); the twig is never flagged."""
+    one ending ``spur_twig_spacings`` spacings or more past it fails by explanation, both flagged; one
+    ending in between is unresolved (a real twig there has no sample of its own); the twig is never
+    flagged."""
     p = Params()
     cloud, v, e, _, tip, rad = _crop(neuron, 30_000)
     deg = np.bincount(e.ravel(), minlength=len(v))
@@ -108,7 +108,7 @@ def test_spurs_out_of_resolved_neurites_are_flagged(neuron):
         curve, spur_tip = _spur(v, e, a, 4.0, rad)
         r = find_spurious_branches(cloud, curve)
         b = r.branches.vertex_branch[spur_tip]
-        past = (r.reach[b] - 1.0 - p.spur_slack) * r.junction_radius[b]
+        past = (r.reach[b] - p.spur_reach) * r.junction_radius[b]
         between = r.reach[b] > p.spur_reach and past < p.spur_twig_spacings * r.spacing[b]
         assert r.branch_spurious[b] != between and r.unresolved[b] == between
         assert not r.branch_spurious[r.branches.vertex_branch[tip]]
