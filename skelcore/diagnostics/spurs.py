@@ -55,7 +55,8 @@ class SpurDefects:
     length_radii : (B,) length / r_J. subsampled : the number of cloud points used when the cloud
     was subsampled (``diag_max_points``), else None. spacing : (B,) the cloud's spacing at the
     junction; unresolved, stub : (B,) bool, terminal branches not judged (r_J under
-    ``spur_resolved_spacings`` spacings, or :func:`unsampled_twig`) and short stubs under ``spur_stub_share`` (neither spurious).
+    ``spur_resolved_spacings`` spacings, or :func:`unsampled_twig`) and short stubs under
+    ``spur_stub_share`` (neither spurious).
     one_sided : how far the cloud is seen from one side (:mod:`.spur_sides`); unseen : (B,) bool,
     terminal branches failing the explanation measure alone on a one-sided cloud (not judged).
     """

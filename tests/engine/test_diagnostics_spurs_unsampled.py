@@ -62,7 +62,10 @@ def test_the_rule_reads_the_part_past_the_junction_ball_in_spacings():
     r_j = np.full(5, 2.0)
     s = np.ones(5)
     # past r_J: 0.4, 1.2, 1.6, 4.0 spacings; NaN is never unsampled; 0 turns the rule off
-    assert unsampled_twig(reach, r_j, s, Params(spur_twig_spacings=1.5)).tolist() == [True, True, False, False, False]
-    assert unsampled_twig(reach, r_j, s, Params(spur_twig_spacings=1.0)).tolist() == [True, False, False, False, False]
-    assert unsampled_twig(reach, r_j, 2 * s, Params(spur_twig_spacings=1.0)).tolist() == [True, True, True, False, False]
-    assert not unsampled_twig(reach, r_j, s, Params(spur_twig_spacings=0.0)).any()
+    def got(k: float, spacing: np.ndarray) -> list[bool]:
+        return unsampled_twig(reach, r_j, spacing, Params(spur_twig_spacings=k)).tolist()
+
+    assert got(1.5, s) == [True, True, False, False, False]
+    assert got(1.0, s) == [True, False, False, False, False]
+    assert got(1.0, 2 * s) == [True, True, True, False, False]
+    assert not any(got(0.0, s))
