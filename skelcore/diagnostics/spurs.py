@@ -12,7 +12,9 @@ classical significance measures fails:
   of it, are explained by nothing else.
 
 No tau grows the balls (r(x) is measured to the samples). Not judged: ``unresolved`` where r_J is
-under ``spur_resolved_spacings`` cloud spacings; ``stubs`` (short) under ``spur_stub_share`` of the
+under ``spur_resolved_spacings`` cloud spacings, or where a branch failing only the explanation
+measure ends under ``spur_twig_spacings`` spacings past its junction's ball (:func:`unsampled_twig`:
+no sample of its own can be expected there); ``stubs`` (short) under ``spur_stub_share`` of the
 curve's length; ``unseen`` where only the explanation measure fails on a cloud seen from one side
 (:mod:`.spur_sides`, ``spur_one_sided``). docs/diagnostics.md "Spurious branches". Size: length in
 r_J, share of the length.
@@ -38,7 +40,7 @@ from .spur_sides import one_sidedness
 from .spur_balls import balls_in_shape
 from .interior import VoxelShape
 
-__all__ = ["SpurDefects", "find_spurious_branches", "curve_points", "junction_spacing"]
+__all__ = ["SpurDefects", "find_spurious_branches", "curve_points", "junction_spacing", "unsampled_twig"]
 
 
 @dataclass
@@ -53,7 +55,8 @@ class SpurDefects:
     length_radii : (B,) length / r_J. subsampled : the number of cloud points used when the cloud
     was subsampled (``diag_max_points``), else None. spacing : (B,) the cloud's spacing at the
     junction; unresolved, stub : (B,) bool, terminal branches not judged (r_J under
-    ``spur_resolved_spacings`` spacings) and short stubs under ``spur_stub_share`` (neither spurious).
+    ``spur_resolved_spacings`` spacings, or :func:`unsampled_twig`) and short stubs under
+    ``spur_stub_share`` (neither spurious).
     one_sided : how far the cloud is seen from one side (:mod:`.spur_sides`); unseen : (B,) bool,
     terminal branches failing the explanation measure alone on a one-sided cloud (not judged).
     """
@@ -98,7 +101,8 @@ class SpurDefects:
         if not unresolved + unseen:
             return None
         parts = ([f"{unresolved} in parts the cloud does not resolve (a junction ball under "
-                  f"spur_resolved_spacings = {self.params.spur_resolved_spacings:g} spacings)"] if unresolved else [])
+                  f"spur_resolved_spacings = {self.params.spur_resolved_spacings:g} spacings, or a twig ending under "
+                  f"spur_twig_spacings = {self.params.spur_twig_spacings:g} spacings past it)"] if unresolved else [])
         parts += [f"{unseen} with no point of their own on a cloud seen from one side"] if unseen else []
         return (f"{unresolved + unseen} of the curve's {len(self.terminal)} terminal branches were not judged: "
                 + "; ".join(parts))
@@ -319,14 +323,15 @@ def find_spurious_branches(
     spacing = np.full(nb, np.nan)
     if len(terminal) and len(cloud):
         spacing[terminal] = junction_spacing(cloud_tree, curve, branches, terminal)
+    lonely = (unique < params.spur_min_points) | (unique < params.spur_unique * np.maximum(territory, 1))
     with np.errstate(invalid="ignore"):
-        unresolved = np.zeros(nb, bool)
-        unresolved[terminal] = (r_j < params.spur_resolved_spacings * spacing)[terminal]
         short = reach <= params.spur_reach
+        unresolved = np.zeros(nb, bool)
+        unresolved[terminal] = ((r_j < params.spur_resolved_spacings * spacing)
+                                | (lonely & ~short & unsampled_twig(reach, r_j, spacing, params)))[terminal]
     total_length = float(branches.length.sum())
     stub = np.zeros(nb, bool)
     stub[terminal] = (short & ~unresolved & (branches.length < params.spur_stub_share * total_length))[terminal]
-    lonely = (unique < params.spur_min_points) | (unique < params.spur_unique * np.maximum(territory, 1))
     unseen = np.zeros(nb, bool)
     if sided >= params.spur_one_sided:  # a twig the sensor did not see has no point: not judged
         unseen[terminal] = (lonely & ~short & ~unresolved)[terminal]
@@ -346,6 +351,16 @@ def find_spurious_branches(
         total_length=total_length, subsampled=subsampled, params=params, spacing=spacing, unresolved=unresolved,
         stub=stub, one_sided=sided, unseen=unseen,
     )  # fmt: skip
+
+
+def unsampled_twig(reach: np.ndarray, r_j: np.ndarray, spacing: np.ndarray, params: Params = Params()) -> np.ndarray:
+    """Per branch, whether its far end reaches under ``spur_twig_spacings`` junction spacings past the
+    junction's ball (``spur_reach`` r_J): a real twig that short bulges out of its parent by less than
+    the cloud's spacing there, so it has no sample of its own beyond the parent's grown balls and the
+    explanation measure cannot tell it from a spur (docs/diagnostics.md "Spurious branches", rule 3).
+    ``reach`` in units of ``r_j``; NaN gives False."""
+    with np.errstate(invalid="ignore"):
+        return (reach - params.spur_reach) * r_j < params.spur_twig_spacings * spacing
 
 
 def junction_spacing(cloud_tree: cKDTree, curve: CurveSkeleton, branches: Branches, terminal: np.ndarray) -> np.ndarray:
