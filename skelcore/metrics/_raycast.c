@@ -1076,7 +1076,9 @@ static PyObject *py_nn_dist(PyObject *self, PyObject *args) {
 /* near_stats(points (n,3) f32 tree order, nodes, queries (q,3) f64, radius, bound, counts out (q) i64,
  *            clearance out (q) f64): per query, the number of points within `radius`, and the distance
  * to the nearest point if it is below `bound` (else inf).  For the cluster plan's cost estimate and its
- * near-surface test. */
+ * near-surface test.  The node tests compare squares (no square root per node): the padded radii (BallTree)
+ * keep every point of a node well inside its sphere, so a test that rounding tips either way changes which
+ * nodes are opened, never a count or a distance. */
 static PyObject *py_near_stats(PyObject *self, PyObject *args) {
     Py_buffer pts, nds, qs, counts, clear;
     double radius, bound;
@@ -1099,9 +1101,9 @@ static PyObject *py_near_stats(PyObject *self, PyObject *args) {
             while (sp > 0) {
                 const Node *nd = t.nodes + stack[--sp];
                 double wx = nd->c[0] - p[0], wy = nd->c[1] - p[1], wz = nd->c[2] - p[2];
-                double d = sqrt(wx * wx + wy * wy + wz * wz);
-                if (d - nd->r > radius) continue;
-                if (d + nd->r <= radius) { c += nd->hi - nd->lo; continue; }
+                double d2 = wx * wx + wy * wy + wz * wz, out = radius + nd->r, in = radius - nd->r;
+                if (d2 > out * out) continue;
+                if (in >= 0.0 && d2 <= in * in) { c += nd->hi - nd->lo; continue; }
                 if (nd->kid >= 0) { stack[sp++] = nd->kid; stack[sp++] = nd->kid + 1; continue; }
                 for (int32_t k = nd->lo; k < nd->hi; k++) {
                     const float *o = t.pts + 3 * (size_t)k;
@@ -1118,7 +1120,8 @@ static PyObject *py_near_stats(PyObject *self, PyObject *args) {
             while (sp > 0) {
                 const Node *nd = t.nodes + stack[--sp];
                 double wx = nd->c[0] - p[0], wy = nd->c[1] - p[1], wz = nd->c[2] - p[2];
-                if (sqrt(wx * wx + wy * wy + wz * wz) - nd->r > best) continue;
+                const double lim = best + nd->r;  /* |p - c| - r > best, without a square root */
+                if (wx * wx + wy * wy + wz * wz > lim * lim) continue;
                 if (nd->kid >= 0) {
                     const Node *a = t.nodes + nd->kid, *b = a + 1;
                     double da = (a->c[0] - p[0]) * (a->c[0] - p[0]) + (a->c[1] - p[1]) * (a->c[1] - p[1]) +
