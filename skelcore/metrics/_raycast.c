@@ -747,9 +747,9 @@ static void walk_packet(const Tree *t, Walker *w, Packet *pk, const float *o, fl
             }
             continue;
         }
-        /* both children tested here (their pair shares a cache line), only those with an open ray pushed: 11 %
-         * fewer mispredicted branches; what lies below both is asked of memory before the tests, as early as
-         * it can be (after the tests: 1M points 10 % slower; docs/boundedness.md 3.16) */
+        /* both children tested here (their pair shares a cache line), only those with an open ray pushed (fewer
+         * mispredicted branches); what lies below both is asked of memory before the tests, as early as it can
+         * be (after the tests: 1M points 4-11 % slower; docs/boundedness.md 3.16) */
         const Node *a = t->nodes + k, *b = a + 1;
         prefetch_below(t, a);
         prefetch_below(t, b);
