@@ -649,8 +649,8 @@ static inline void prefetch_below(const Tree *t, const Node *nd) {
 
 /* Up to PACKET rays from one origin that the hints did not settle (mostly rays that escape: they cost most
  * of the walks), walked from the root together: one traversal, each node tested against every ray still open
- * (the shared part of the test once, the rays' part VF lanes at a time), each leaf tested ray by ray (its
- * points' offsets from the origin once).  A
+ * (the shared part of the test once, the rays' part VF lanes at a time) as its parent is visited, each leaf
+ * tested ray by ray (its points' offsets from the origin once).  A
  * node can hold a hit for a ray only if some of its points lie beyond the cut and the ray passes within
  * its radius + h of its centre; a ray meets a point's ball iff point_hit.  Exact per ray, so the hits do
  * not depend on which rays share a packet (docs/boundedness.md 3.10-3.11). */
@@ -671,6 +671,26 @@ typedef struct {
     int n;
 } Packet;
 
+/* The rays of `m` that the node can hold a hit for: some of its points lie beyond the cut and the ray passes
+ * within its radius + h of its centre (node_passes, the rays' part VF lanes at a time). */
+static inline unsigned packet_pass(const Node *nd, const float *o, const vf *sx, const vf *sy, const vf *sz,
+                                   float cut, float h, unsigned m) {
+    float wx = nd->c[0] - o[0], wy = nd->c[1] - o[1], wz = nd->c[2] - o[2];
+    float rad = nd->r;
+    float d2 = wx * wx + wy * wy + wz * wz;
+    float lim = cut - rad;
+    if (lim > 0.0f && d2 <= lim * lim) return 0;
+    float reach2 = (rad + h) * (rad + h);
+    /* the rays' part: off2 = d2 - tt^2 where tt > 0, else d2 (d2 - 0 = d2 exactly) */
+    unsigned pass = 0;
+    for (int g = 0; g < PACKET / VF; g++) {
+        vf tt = wx * sx[g] + wy * sy[g] + wz * sz[g];
+        vf sq = (vf)((vfi)(tt * tt) & (tt > 0.0f));
+        pass |= lane_mask(d2 - sq <= reach2) << (VF * g);
+    }
+    return m & pass;
+}
+
 static void walk_packet(const Tree *t, Walker *w, Packet *pk, const float *o, float cut, float h) {
     const float h2 = h * h, cut2 = cut * cut;
     unsigned active = pk->n >= 32 ? ~0u : (1u << pk->n) - 1u;
@@ -684,29 +704,15 @@ static void walk_packet(const Tree *t, Walker *w, Packet *pk, const float *o, fl
         memcpy(&sz[g], pk->sz + VF * g, sizeof(vf));
     }
     int sp = 0;
-    w->stack[sp] = 0; masks[sp] = active; sp++;
+    w->visits++;
+    unsigned m0 = packet_pass(t->nodes, o, sx, sy, sz, cut, h, active);
+    if (m0) { w->stack[sp] = 0; masks[sp] = m0; sp++; }
     while (sp > 0 && active) {
         sp--;
         int32_t node = w->stack[sp];
         unsigned m = masks[sp] & active;
         if (!m) continue;
         const Node *nd = t->nodes + node;
-        float wx = nd->c[0] - o[0], wy = nd->c[1] - o[1], wz = nd->c[2] - o[2];
-        float rad = nd->r;
-        float d2 = wx * wx + wy * wy + wz * wz;
-        w->visits++;
-        float lim = cut - rad;
-        if (lim > 0.0f && d2 <= lim * lim) continue;
-        float reach2 = (rad + h) * (rad + h);
-        /* the rays' part: off2 = d2 - tt^2 where tt > 0, else d2 (d2 - 0 = d2 exactly) */
-        unsigned pass = 0;
-        for (int g = 0; g < PACKET / VF; g++) {
-            vf tt = wx * sx[g] + wy * sy[g] + wz * sz[g];
-            vf sq = (vf)((vfi)(tt * tt) & (tt > 0.0f));
-            pass |= lane_mask(d2 - sq <= reach2) << (VF * g);
-        }
-        m &= pass;
-        if (!m) continue;
         int32_t k = nd->kid;
         if (k < 0) {
             /* leaf_hit for every open ray, the rays' common part (w = p - o, d2 > cut2) once */
@@ -741,13 +747,23 @@ static void walk_packet(const Tree *t, Walker *w, Packet *pk, const float *o, fl
             }
             continue;
         }
+        /* both children tested here (their pair shares a cache line), only those with an open ray pushed (fewer
+         * mispredicted branches); what lies below both is asked of memory before the tests, as early as it can
+         * be (after the tests: 1M points 4-11 % slower; docs/boundedness.md 3.16) */
         const Node *a = t->nodes + k, *b = a + 1;
         prefetch_below(t, a);
         prefetch_below(t, b);
+        const unsigned ma = packet_pass(a, o, sx, sy, sz, cut, h, m), mb = packet_pass(b, o, sx, sy, sz, cut, h, m);
+        w->visits += 2;
         float ab = (a->c[0] - b->c[0]) * mx + (a->c[1] - b->c[1]) * my + (a->c[2] - b->c[2]) * mz;
-        int32_t first = ab <= 0.0f ? k : k + 1;  /* nearer along the rays: popped first */
-        w->stack[sp] = 2 * k + 1 - first; masks[sp] = m; sp++;
-        w->stack[sp] = first; masks[sp] = m; sp++;
+        /* the nearer along the rays popped first */
+        if (ab <= 0.0f) {
+            if (mb) { w->stack[sp] = k + 1; masks[sp] = mb; sp++; }
+            if (ma) { w->stack[sp] = k; masks[sp] = ma; sp++; }
+        } else {
+            if (ma) { w->stack[sp] = k; masks[sp] = ma; sp++; }
+            if (mb) { w->stack[sp] = k + 1; masks[sp] = mb; sp++; }
+        }
     }
     pk->n = 0;
 }
@@ -1063,7 +1079,9 @@ static PyObject *py_nn_dist(PyObject *self, PyObject *args) {
 /* near_stats(points (n,3) f32 tree order, nodes, queries (q,3) f64, radius, bound, counts out (q) i64,
  *            clearance out (q) f64): per query, the number of points within `radius`, and the distance
  * to the nearest point if it is below `bound` (else inf).  For the cluster plan's cost estimate and its
- * near-surface test. */
+ * near-surface test.  The node tests compare squares (no square root per node): the padded radii (BallTree)
+ * keep every point of a node well inside its sphere, so a test that rounding tips either way changes which
+ * nodes are opened, never a count or a distance. */
 static PyObject *py_near_stats(PyObject *self, PyObject *args) {
     Py_buffer pts, nds, qs, counts, clear;
     double radius, bound;
@@ -1086,9 +1104,9 @@ static PyObject *py_near_stats(PyObject *self, PyObject *args) {
             while (sp > 0) {
                 const Node *nd = t.nodes + stack[--sp];
                 double wx = nd->c[0] - p[0], wy = nd->c[1] - p[1], wz = nd->c[2] - p[2];
-                double d = sqrt(wx * wx + wy * wy + wz * wz);
-                if (d - nd->r > radius) continue;
-                if (d + nd->r <= radius) { c += nd->hi - nd->lo; continue; }
+                double d2 = wx * wx + wy * wy + wz * wz, out = radius + nd->r, in = radius - nd->r;
+                if (d2 > out * out) continue;
+                if (in >= 0.0 && d2 <= in * in) { c += nd->hi - nd->lo; continue; }
                 if (nd->kid >= 0) { stack[sp++] = nd->kid; stack[sp++] = nd->kid + 1; continue; }
                 for (int32_t k = nd->lo; k < nd->hi; k++) {
                     const float *o = t.pts + 3 * (size_t)k;
@@ -1105,7 +1123,8 @@ static PyObject *py_near_stats(PyObject *self, PyObject *args) {
             while (sp > 0) {
                 const Node *nd = t.nodes + stack[--sp];
                 double wx = nd->c[0] - p[0], wy = nd->c[1] - p[1], wz = nd->c[2] - p[2];
-                if (sqrt(wx * wx + wy * wy + wz * wz) - nd->r > best) continue;
+                const double lim = best + nd->r;  /* |p - c| - r > best, without a square root */
+                if (wx * wx + wy * wy + wz * wz > lim * lim) continue;
                 if (nd->kid >= 0) {
                     const Node *a = t.nodes + nd->kid, *b = a + 1;
                     double da = (a->c[0] - p[0]) * (a->c[0] - p[0]) + (a->c[1] - p[1]) * (a->c[1] - p[1]) +
