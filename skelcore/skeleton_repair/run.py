@@ -23,7 +23,7 @@ from ..stages import evaluate
 from .checks import check_curve, check_frame
 from .findings import read_findings
 from .from_skeletal import HOW, curve_from_skeletal
-from .guard import verdict
+from .guard import FILL, verdict
 from .proposals import Action, propose
 from .batch_round import BatchState, batch_step
 from .fill import fill_actions
@@ -116,14 +116,18 @@ def _drift(cur: CurveSkeleton, ev: Evaluation, found: Any, p: Params, memo: dict
 
 
 def in_turn(actions: list[Action], tries: int) -> list[Action]:
-    """The first ``tries`` candidates, then the first of each defect kind left out of them: tried only
-    when all those failed (the loop stops at the first kept), so a fill of a missing part waiting
-    behind six refused cycle cuts still has its turn, and no round that kept an action before changes."""
+    """The first ``tries`` candidates, then the first of each defect kind left out of them, and every
+    fill left out (the round makes at most ``tries``): tried only when all those failed (the loop
+    stops at the first kept), so the fills of missing parts waiting behind six refused cycle cuts
+    still have their turn (one region refused leaves the next its try), and no round that kept an
+    action before changes."""
     head = actions[:tries]
     kinds = {a.code for a in head}
     rest = []
     for a in actions[tries:]:
-        if a.code not in kinds:
+        if a.code == FILL:
+            rest.append(a)
+        elif a.code not in kinds:
             kinds.add(a.code)
             rest.append(a)
     return head + rest
@@ -186,9 +190,9 @@ def repair(cloud: np.ndarray, curve: CurveSkeleton | tuple | None = None, skelet
         with clock.phase("proposals"):
             inside, voxel, route = _in_shape(ev)
             candidates = propose(cur, found, inside, p.repair_join_step * voxel, route)
-            if p.repair_fill_missing:  # only the fills in_turn may try: the round's free tries, or the first
-                fills = fill_actions(cur, found.missing, np.asarray(ev.source.args["cloud"], float))
-                candidates += islice(fills, max(1, p.repair_max_tries - len(candidates)))
+            if p.repair_fill_missing:  # the fills in_turn may try: as many as a round's tries
+                fills = fill_actions(cur, found.missing, np.asarray(ev.source.args["cloud"], float), p.repair_max_tries)
+                candidates += islice(fills, p.repair_max_tries)
         if len(candidates) < p.repair_max_tries:  # re-centrings come last: cut only when they may be tried
             if drift is None:
                 with clock.phase("re-centring cuts"):
@@ -210,9 +214,10 @@ def repair(cloud: np.ndarray, curve: CurveSkeleton | tuple | None = None, skelet
             except SkelInputError as exc:
                 rejected.append({"entries": action.entries, "why": {**why, "rejected": f"not applicable: {exc}"}})
                 continue
+            kept = new.edges.max(axis=1) < cur.n_vertices if action.code == FILL else None
             with clock.phase("first look"):  # the cheap first look (screen.py), then the rest
                 pre = ev.update(new, diagnostics=False)
-                seen, refusal = first_look(found, pre, p, recentring=action.code == RECENTRE)
+                seen, refusal = first_look(found, pre, p, recentring=action.code == RECENTRE, kept=kept)
             if refusal is not None:
                 why.update(after=_rounded(seen), defects_after=None)
                 rejected.append({"entries": action.entries, "why": {**why, "rejected": refusal}})
@@ -221,7 +226,8 @@ def repair(cloud: np.ndarray, curve: CurveSkeleton | tuple | None = None, skelet
                 new_ev = pre.complete_update(cancel)
                 new_found = read_findings(new_ev)
             why.update(after=_rounded(new_found.measures), defects_after=new_found.total)
-            refusal = verdict(found, new_found, p, recentring=action.code == RECENTRE, outside=action.code == "outside")
+            refusal = verdict(found, new_found, p, recentring=action.code == RECENTRE, outside=action.code == "outside",
+                              kept=kept)
             if refusal is not None:
                 rejected.append({"entries": action.entries, "why": {**why, "rejected": refusal}})
                 continue
