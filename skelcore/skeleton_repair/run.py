@@ -115,12 +115,13 @@ def _drift(cur: CurveSkeleton, ev: Evaluation, found: Any, p: Params, memo: dict
                     lambda a: all(a.entries != r["entries"] for r in rejected))
 
 
-def in_turn(actions: list[Action], tries: int) -> list[Action]:
+def in_turn(actions: list[Action], tries: int, late: Callable[[Action], bool] | None = None) -> list[Action]:
     """The first ``tries`` candidates, then the first of each defect kind left out of them, and every
     fill left out (the round makes at most ``tries``): tried only when all those failed (the loop
     stops at the first kept), so the fills of missing parts waiting behind six refused cycle cuts
-    still have their turn (one region refused leaves the next its try), and no round that kept an
-    action before changes."""
+    still have their turn (one region refused leaves the next its try). ``late``: the actions refused
+    since the last kept action that was not a fill, tried last (a fill only adds curve, so what was
+    refused before it mostly stays refused, and the next fill comes first); none is left out."""
     head = actions[:tries]
     kinds = {a.code for a in head}
     rest = []
@@ -130,7 +131,22 @@ def in_turn(actions: list[Action], tries: int) -> list[Action]:
         elif a.code not in kinds:
             kinds.add(a.code)
             rest.append(a)
-    return head + rest
+    if late is None:
+        return head + rest
+    back = [late(a) for a in head + rest]
+    return [a for a, x in zip(head + rest, back) if not x] + [a for a, x in zip(head + rest, back) if x]
+
+
+def _same(curve: CurveSkeleton, action: Action) -> tuple:
+    """What makes two candidates the same action across rounds whose kept actions only added curve
+    (fills: every vertex and edge stays, ids may move): its kind, its operations and the vertex pairs
+    of the edges it touches (a fill: the places of its new vertices; else its entries)."""
+    ops = tuple(e["op"] for e in action.entries)
+    if len(action.edges):
+        return action.code, ops, tuple(sorted(map(tuple, curve.edges[action.edges].tolist())))
+    if action.code == FILL:  # the new vertices' places (a kept fill moves the ids they will take)
+        return action.code, ops, tuple(tuple(e["args"]["position"]) for e in action.entries if e["op"] == "add_vertex")
+    return action.code, ops, repr(action.entries)
 
 
 def _try(curve: CurveSkeleton, action: Action) -> CurveSkeleton:
@@ -176,6 +192,7 @@ def repair(cloud: np.ndarray, curve: CurveSkeleton | tuple | None = None, skelet
     tally0 = dict(found.tally)
     stopped = f"repair_max_rounds={p.repair_max_rounds} reached"
     memo: dict = {}  # cross-sections cut by the re-centring, kept over the rounds
+    behind: set[tuple] = set()  # refused since the last kept action that was not a fill: tried last
     batches = BatchState()
     for rnd in range(p.repair_max_rounds):
         check()
@@ -202,9 +219,10 @@ def repair(cloud: np.ndarray, curve: CurveSkeleton | tuple | None = None, skelet
         if kept is not None:  # a batch of one kind's actions apart from one another (batch_round.py)
             ev, cur, found, batch_ops = kept
             ops += batch_ops
+            behind = set()
             continue
-        done = False
-        for action in in_turn(candidates, p.repair_max_tries):
+        done, refused_now = False, []
+        for action in in_turn(candidates, p.repair_max_tries, (lambda a: _same(cur, a) in behind) if behind else None):
             check()
             why: dict[str, Any] = {"defect": action.code, **action.target, "reason": action.reason,
                                    "local_before": found.local(action.edges), "before": _rounded(found.measures),
@@ -213,6 +231,7 @@ def repair(cloud: np.ndarray, curve: CurveSkeleton | tuple | None = None, skelet
                 new = _try(cur, action)
             except SkelInputError as exc:
                 rejected.append({"entries": action.entries, "why": {**why, "rejected": f"not applicable: {exc}"}})
+                refused_now.append(_same(cur, action))
                 continue
             kept = new.edges.max(axis=1) < cur.n_vertices if action.code == FILL else None
             with clock.phase("first look"):  # the cheap first look (screen.py), then the rest
@@ -221,6 +240,7 @@ def repair(cloud: np.ndarray, curve: CurveSkeleton | tuple | None = None, skelet
             if refusal is not None:
                 why.update(after=_rounded(seen), defects_after=None)
                 rejected.append({"entries": action.entries, "why": {**why, "rejected": refusal}})
+                refused_now.append(_same(cur, action))
                 continue
             with clock.phase("whole update"):
                 new_ev = pre.complete_update(cancel)
@@ -230,16 +250,19 @@ def repair(cloud: np.ndarray, curve: CurveSkeleton | tuple | None = None, skelet
                               kept=kept)
             if refusal is not None:
                 rejected.append({"entries": action.entries, "why": {**why, "rejected": refusal}})
+                refused_now.append(_same(cur, action))
                 continue
             for k, entry in enumerate(action.entries):
                 ops.append({**entry, "why": {**why, "step": f"{k + 1} of {len(action.entries)}"}})
             ev, cur, found, done = new_ev, new, new_found, True
+            behind = behind.union(refused_now) if action.code == FILL else set()
             break
         if not done and batches.rest_until:  # before giving up, the kinds resting from batches
             kept = batch_step(ev, cur, found, candidates, p, batches, clock, rejected, cancel, last=True)
             if kept is not None:
                 ev, cur, found, batch_ops = kept
                 ops += batch_ops
+                behind = set()
                 continue
         if not done:
             stopped = ("no candidate action helps" if candidates else "no action for the defects left"
