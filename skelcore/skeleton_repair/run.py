@@ -192,6 +192,7 @@ def repair(cloud: np.ndarray, curve: CurveSkeleton | tuple | None = None, skelet
     tally0 = dict(found.tally)
     stopped = f"repair_max_rounds={p.repair_max_rounds} reached"
     memo: dict = {}  # cross-sections cut by the re-centring, kept over the rounds
+    parts: dict = {}  # the missing regions' curves made for fills, kept over the rounds
     behind: set[tuple] = set()  # refused since the last kept action that was not a fill: tried last
     batches = BatchState()
     for rnd in range(p.repair_max_rounds):
@@ -208,7 +209,7 @@ def repair(cloud: np.ndarray, curve: CurveSkeleton | tuple | None = None, skelet
             inside, voxel, route = _in_shape(ev)
             candidates = propose(cur, found, inside, p.repair_join_step * voxel, route)
             if p.repair_fill_missing:  # the fills in_turn may try: as many as a round's tries
-                fills = fill_actions(cur, found.missing, np.asarray(ev.source.args["cloud"], float), p.repair_max_tries)
+                fills = fill_actions(cur, found.missing, np.asarray(ev.source.args["cloud"], float), p.repair_max_tries, parts)
                 candidates += islice(fills, p.repair_max_tries)
         if len(candidates) < p.repair_max_tries:  # re-centrings come last: cut only when they may be tried
             if drift is None:
