@@ -7,7 +7,9 @@ a time (:func:`fill_actions`): a round takes only those it may try."""
 
 from __future__ import annotations
 
-from typing import Any, Iterator
+import hashlib
+
+from typing import Any, Callable, Iterator
 
 import numpy as np
 from scipy.spatial import cKDTree
@@ -62,17 +64,34 @@ def _part_entries(curve: CurveSkeleton, part: CurveSkeleton) -> tuple[list[dict[
     return out, int(used[j[first]])
 
 
-def _skeleton_entries(curve: CurveSkeleton, pts: np.ndarray) -> tuple[list[dict[str, Any]], int] | None:
+def _made(memo: dict | None, how: str, pts: np.ndarray, make: Callable[[], CurveSkeleton | None]
+          ) -> CurveSkeleton | None:
+    """``make()``, kept in ``memo`` by ``how`` and the region's points: a region a kept fill left as
+    it was gives the same curve in the next round, made once."""
+    if memo is None:
+        return make()
+    key = (how, pts.shape, hashlib.sha1(np.ascontiguousarray(pts).tobytes()).hexdigest())
+    if key not in memo:
+        memo[key] = make()
+    return memo[key]
+
+
+def _skeleton_entries(curve: CurveSkeleton, pts: np.ndarray, memo: dict | None = None
+                      ) -> tuple[list[dict[str, Any]], int] | None:
     from ..skeleton import skeletonize
 
-    try:
-        part = skeletonize(pts, method="skelscope")[1]
-    except (SkelInputError, ValueError, np.linalg.LinAlgError, RuntimeError):
-        return None
-    return _part_entries(curve, part)
+    def make() -> CurveSkeleton | None:
+        try:
+            return skeletonize(pts, method="skelscope")[1]
+        except (SkelInputError, ValueError, np.linalg.LinAlgError, RuntimeError):
+            return None
+
+    part = _made(memo, "skeleton", pts, make)
+    return None if part is None else _part_entries(curve, part)
 
 
-def _axis_entries(curve: CurveSkeleton, pts: np.ndarray) -> tuple[list[dict[str, Any]], int] | None:
+def _axis_entries(curve: CurveSkeleton, pts: np.ndarray, memo: dict | None = None
+                  ) -> tuple[list[dict[str, Any]], int] | None:
     """The region's axis curve at its own spacing (:mod:`skelcore.skeleton.local_axis`), its largest
     piece: a thin missing branch, which the whole-region skeletonizers reduce to a few vertices."""
     from ..skeleton.local_axis import axis_contract, axis_curve
@@ -81,45 +100,55 @@ def _axis_entries(curve: CurveSkeleton, pts: np.ndarray) -> tuple[list[dict[str,
 
     if len(pts) < 20:
         return None
-    part = axis_curve(axis_contract(pts), AxisParams(curve="balls"))
-    if part.n_edges == 0:
-        return None
-    _, label = component_labels(part)
-    big = np.bincount(label[part.edges[:, 0]]).argmax()
-    edges = part.edges[label[part.edges[:, 0]] == big]
-    return _part_entries(curve, CurveSkeleton.from_raw(part.vertices, edges))
+
+    def make() -> CurveSkeleton | None:
+        part = axis_curve(axis_contract(pts), AxisParams(curve="balls"))
+        if part.n_edges == 0:
+            return None
+        _, label = component_labels(part)
+        big = np.bincount(label[part.edges[:, 0]]).argmax()
+        return CurveSkeleton.from_raw(part.vertices, part.edges[label[part.edges[:, 0]] == big])
+
+    part = _made(memo, "axis", pts, make)
+    return None if part is None else _part_entries(curve, part)
 
 
-def fill_missing(curve: CurveSkeleton, missing: Any, cloud: np.ndarray, max_regions: int = 2) -> list[Action]:
+def fill_missing(curve: CurveSkeleton, missing: Any, cloud: np.ndarray, max_regions: int = 2,
+                 memo: dict | None = None) -> list[Action]:
     """Up to three actions per counted missing region (largest first) of ``missing``
     (:class:`~skelcore.diagnostics.missing_parts.MissingParts` of the evaluated ``cloud``)."""
-    return list(fill_actions(curve, missing, cloud, max_regions))
+    return list(fill_actions(curve, missing, cloud, max_regions, memo))
 
 
-def fill_actions(curve: CurveSkeleton, missing: Any, cloud: np.ndarray, max_regions: int = 2) -> Iterator[Action]:
-    """:func:`fill_missing`'s actions one at a time, in its order: each is made (a region's
-    skeletonization, its axis curve) only when asked for."""
+def fill_actions(curve: CurveSkeleton, missing: Any, cloud: np.ndarray, max_regions: int = 2,
+                 memo: dict | None = None) -> Iterator[Action]:
+    """:func:`fill_missing`'s actions one at a time, in its order: each is made (a region's axis curve,
+    its skeletonization) only when asked for. Every region's axis curve first, then every region's
+    skeleton, then the slabs' centroids: on the tuning neurons the axis curve raised GT F1 most and
+    added no cycle, the slabs' few centroids of a large region lowered it (docs/repair.md "Fills that
+    pass"), and one region refused leaves the next one its try. ``memo``: the regions' curves made in
+    the rounds before (:func:`_made`)."""
     if missing is None or not missing.counted or len(missing.region) != len(cloud):
         return
     e = curve.edges
     step = float(np.median(np.linalg.norm(curve.vertices[e[:, 0]] - curve.vertices[e[:, 1]], axis=1)))
-    for reg in missing.counted[:max_regions]:
-        pts = cloud[missing.region == reg.id]
-        if len(pts) < 10:
-            continue
-        target = {"region": int(reg.id)}
+    regions = [(reg, cloud[missing.region == reg.id]) for reg in missing.counted[:max_regions]]
+    regions = [(reg, pts) for reg, pts in regions if len(pts) >= 10]
+    for reg, pts in regions:
+        made = _axis_entries(curve, pts, memo)
+        if made is not None:
+            entries, at = made
+            yield Action("incomplete", {"region": int(reg.id)}, f"missing region {reg.id} ({reg.n_points} points): "
+                         f"its axis curve at its own spacing attached at vertex {at}", entries)
+    for reg, pts in regions:
+        made = _skeleton_entries(curve, pts, memo)
+        if made is not None:
+            entries, at = made
+            yield Action("incomplete", {"region": int(reg.id)}, f"missing region {reg.id} ({reg.n_points} points) "
+                         f"skeletonized and attached at vertex {at}", entries)
+    for reg, pts in regions:
         line = _slab_line(pts, max(step, 1e-12))
         if len(line) >= 3:
             entries, at = _attach_polyline(curve, line)
-            yield Action("incomplete", target, f"missing region {reg.id} ({reg.n_points} points): the "
-                         f"centroids of its slabs ({len(line)}) attached at vertex {at}", entries)
-        made = _skeleton_entries(curve, pts)
-        if made is not None:
-            entries, at = made
-            yield Action("incomplete", target, f"missing region {reg.id} ({reg.n_points} points) "
-                         f"skeletonized and attached at vertex {at}", entries)
-        made = _axis_entries(curve, pts)
-        if made is not None:
-            entries, at = made
-            yield Action("incomplete", target, f"missing region {reg.id} ({reg.n_points} points): its "
-                         f"axis curve at its own spacing attached at vertex {at}", entries)
+            yield Action("incomplete", {"region": int(reg.id)}, f"missing region {reg.id} ({reg.n_points} points): "
+                         f"the centroids of its slabs ({len(line)}) attached at vertex {at}", entries)

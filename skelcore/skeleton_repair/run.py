@@ -23,7 +23,7 @@ from ..stages import evaluate
 from .checks import check_curve, check_frame
 from .findings import read_findings
 from .from_skeletal import HOW, curve_from_skeletal
-from .guard import verdict
+from .guard import FILL, verdict
 from .proposals import Action, propose
 from .batch_round import BatchState, batch_step
 from .fill import fill_actions
@@ -115,18 +115,38 @@ def _drift(cur: CurveSkeleton, ev: Evaluation, found: Any, p: Params, memo: dict
                     lambda a: all(a.entries != r["entries"] for r in rejected))
 
 
-def in_turn(actions: list[Action], tries: int) -> list[Action]:
-    """The first ``tries`` candidates, then the first of each defect kind left out of them: tried only
-    when all those failed (the loop stops at the first kept), so a fill of a missing part waiting
-    behind six refused cycle cuts still has its turn, and no round that kept an action before changes."""
+def in_turn(actions: list[Action], tries: int, late: Callable[[Action], bool] | None = None) -> list[Action]:
+    """The first ``tries`` candidates, then the first of each defect kind left out of them, and every
+    fill left out (the round makes at most ``tries``): tried only when all those failed (the loop
+    stops at the first kept), so the fills of missing parts waiting behind six refused cycle cuts
+    still have their turn (one region refused leaves the next its try). ``late``: the actions refused
+    since the last kept action that was not a fill, tried last (a fill only adds curve, so what was
+    refused before it mostly stays refused, and the next fill comes first); none is left out."""
     head = actions[:tries]
     kinds = {a.code for a in head}
     rest = []
     for a in actions[tries:]:
-        if a.code not in kinds:
+        if a.code == FILL:
+            rest.append(a)
+        elif a.code not in kinds:
             kinds.add(a.code)
             rest.append(a)
-    return head + rest
+    if late is None:
+        return head + rest
+    back = [late(a) for a in head + rest]
+    return [a for a, x in zip(head + rest, back) if not x] + [a for a, x in zip(head + rest, back) if x]
+
+
+def _same(curve: CurveSkeleton, action: Action) -> tuple:
+    """What makes two candidates the same action across rounds whose kept actions only added curve
+    (fills: every vertex and edge stays, ids may move): its kind, its operations and the vertex pairs
+    of the edges it touches (a fill: the places of its new vertices; else its entries)."""
+    ops = tuple(e["op"] for e in action.entries)
+    if len(action.edges):
+        return action.code, ops, tuple(sorted(map(tuple, curve.edges[action.edges].tolist())))
+    if action.code == FILL:  # the new vertices' places (a kept fill moves the ids they will take)
+        return action.code, ops, tuple(tuple(e["args"]["position"]) for e in action.entries if e["op"] == "add_vertex")
+    return action.code, ops, repr(action.entries)
 
 
 def _try(curve: CurveSkeleton, action: Action) -> CurveSkeleton:
@@ -172,6 +192,8 @@ def repair(cloud: np.ndarray, curve: CurveSkeleton | tuple | None = None, skelet
     tally0 = dict(found.tally)
     stopped = f"repair_max_rounds={p.repair_max_rounds} reached"
     memo: dict = {}  # cross-sections cut by the re-centring, kept over the rounds
+    parts: dict = {}  # the missing regions' curves made for fills, kept over the rounds
+    behind: set[tuple] = set()  # refused since the last kept action that was not a fill: tried last
     batches = BatchState()
     for rnd in range(p.repair_max_rounds):
         check()
@@ -186,9 +208,9 @@ def repair(cloud: np.ndarray, curve: CurveSkeleton | tuple | None = None, skelet
         with clock.phase("proposals"):
             inside, voxel, route = _in_shape(ev)
             candidates = propose(cur, found, inside, p.repair_join_step * voxel, route)
-            if p.repair_fill_missing:  # only the fills in_turn may try: the round's free tries, or the first
-                fills = fill_actions(cur, found.missing, np.asarray(ev.source.args["cloud"], float))
-                candidates += islice(fills, max(1, p.repair_max_tries - len(candidates)))
+            if p.repair_fill_missing:  # the fills in_turn may try: as many as a round's tries
+                fills = fill_actions(cur, found.missing, np.asarray(ev.source.args["cloud"], float), p.repair_max_tries, parts)
+                candidates += islice(fills, p.repair_max_tries)
         if len(candidates) < p.repair_max_tries:  # re-centrings come last: cut only when they may be tried
             if drift is None:
                 with clock.phase("re-centring cuts"):
@@ -198,9 +220,10 @@ def repair(cloud: np.ndarray, curve: CurveSkeleton | tuple | None = None, skelet
         if kept is not None:  # a batch of one kind's actions apart from one another (batch_round.py)
             ev, cur, found, batch_ops = kept
             ops += batch_ops
+            behind = set()
             continue
-        done = False
-        for action in in_turn(candidates, p.repair_max_tries):
+        done, refused_now = False, []
+        for action in in_turn(candidates, p.repair_max_tries, (lambda a: _same(cur, a) in behind) if behind else None):
             check()
             why: dict[str, Any] = {"defect": action.code, **action.target, "reason": action.reason,
                                    "local_before": found.local(action.edges), "before": _rounded(found.measures),
@@ -209,31 +232,38 @@ def repair(cloud: np.ndarray, curve: CurveSkeleton | tuple | None = None, skelet
                 new = _try(cur, action)
             except SkelInputError as exc:
                 rejected.append({"entries": action.entries, "why": {**why, "rejected": f"not applicable: {exc}"}})
+                refused_now.append(_same(cur, action))
                 continue
+            kept = new.edges.max(axis=1) < cur.n_vertices if action.code == FILL else None
             with clock.phase("first look"):  # the cheap first look (screen.py), then the rest
                 pre = ev.update(new, diagnostics=False)
-                seen, refusal = first_look(found, pre, p, recentring=action.code == RECENTRE)
+                seen, refusal = first_look(found, pre, p, recentring=action.code == RECENTRE, kept=kept)
             if refusal is not None:
                 why.update(after=_rounded(seen), defects_after=None)
                 rejected.append({"entries": action.entries, "why": {**why, "rejected": refusal}})
+                refused_now.append(_same(cur, action))
                 continue
             with clock.phase("whole update"):
                 new_ev = pre.complete_update(cancel)
                 new_found = read_findings(new_ev)
             why.update(after=_rounded(new_found.measures), defects_after=new_found.total)
-            refusal = verdict(found, new_found, p, recentring=action.code == RECENTRE, outside=action.code == "outside")
+            refusal = verdict(found, new_found, p, recentring=action.code == RECENTRE, outside=action.code == "outside",
+                              kept=kept)
             if refusal is not None:
                 rejected.append({"entries": action.entries, "why": {**why, "rejected": refusal}})
+                refused_now.append(_same(cur, action))
                 continue
             for k, entry in enumerate(action.entries):
                 ops.append({**entry, "why": {**why, "step": f"{k + 1} of {len(action.entries)}"}})
             ev, cur, found, done = new_ev, new, new_found, True
+            behind = behind.union(refused_now) if action.code == FILL else set()
             break
         if not done and batches.rest_until:  # before giving up, the kinds resting from batches
             kept = batch_step(ev, cur, found, candidates, p, batches, clock, rejected, cancel, last=True)
             if kept is not None:
                 ev, cur, found, batch_ops = kept
                 ops += batch_ops
+                behind = set()
                 continue
         if not done:
             stopped = ("no candidate action helps" if candidates else "no action for the defects left"

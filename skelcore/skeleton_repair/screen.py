@@ -14,7 +14,7 @@ from ..edit.incremental import compute_left_out
 from ..evaluation import Evaluation
 from ..params import Params
 from .findings import Findings
-from .guard import recentred, worse
+from .guard import kept_part, recentred, worse
 
 __all__ = ["first_look"]
 
@@ -33,18 +33,23 @@ def _completeness(pre: Evaluation) -> tuple[bool, float | None]:
     return True, _num(getattr(done["curve missing parts"], "completeness", None))
 
 
-def first_look(before: Findings, pre: Evaluation, params: Params, recentring: bool = False
-               ) -> tuple[dict[str, float | None], str | None]:
+def first_look(before: Findings, pre: Evaluation, params: Params, recentring: bool = False,
+               kept: np.ndarray | None = None) -> tuple[dict[str, float | None], str | None]:
     """(the measures known without defects, why the action is worse or None) for ``pre``, the
     candidate's ``update(..., diagnostics=False)``: completeness, curve boundedness and centeredness
     against ``before`` with the bounds of :func:`.guard.verdict`; the outside share stays None.
-    ``recentring``: a re-centring, refused before its completeness when it has not its gain."""
+    ``recentring``: a re-centring, refused before its completeness when it has not its gain;
+    ``kept``: a fill, curve centeredness judged on these edges (:func:`.guard.kept_part`)."""
     s = pre.summary()
     a = {"completeness": None, "outside_share": None,
          "boundedness": _num(s["boundedness"]["curve"]), "centeredness": _num(s["centeredness"]["curve"])}
     if recentring and (why_not := recentred(before.measures, a, params)) is not None:
         return a, why_not
     known, a["completeness"] = _completeness(pre)
-    why = worse(before.measures, a, params, completeness=known)
+    judged = a
+    if kept is not None and pre.curve is not None:
+        cl = pre.curve
+        judged = kept_part(a, cl.sample_edge, cl.sample_centeredness(params.beta_star), kept, params)
+    why = worse(before.measures, judged, params, completeness=known)
     return a, ("worse: " + "; ".join(why)) if why else None
 

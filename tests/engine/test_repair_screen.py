@@ -60,18 +60,20 @@ def _act(code: str, k: int) -> Action:
 
 def test_every_defect_kind_has_its_turn():
     """Eight cuts of spurious cycles before two fills of a missing part and an outside edge: the six
-    tries of a round are the first six cuts as before, then the first fill and the outside edge."""
+    tries of a round are the first six cuts as before, then both fills (a region refused leaves the
+    next its try) and the first of the other kinds left out."""
     acts = [_act("spurious_cycles", k) for k in range(8)] + [_act("incomplete", 0), _act("incomplete", 1),
-                                                             _act("outside", 0)]
+                                                             _act("outside", 0), _act("outside", 1)]
     order = [(a.code, a.target["k"]) for a in in_turn(acts, 6)]
-    assert order == [("spurious_cycles", k) for k in range(6)] + [("incomplete", 0), ("outside", 0)]
+    assert order == [("spurious_cycles", k) for k in range(6)] + [("incomplete", 0), ("incomplete", 1),
+                                                                  ("outside", 0)]
     assert in_turn(acts[:3], 6) == acts[:3]
 
 
 def test_a_fill_is_made_only_when_a_round_asks_for_it(monkeypatch):
     """A tube whose curve stops halfway: its upper half is a counted missing region. The fills come one
-    at a time in fill_missing's order, and the first (the slabs' centroids) is made without the region's
-    skeletonization, which a round whose tries are taken never asks for."""
+    at a time in fill_missing's order, and the first (the region's axis curve) is made without the
+    region's skeletonization, which a round whose tries are taken never asks for."""
     from skelcore import shapes
     from skelcore.skeleton_repair import fill
 
@@ -89,4 +91,4 @@ def test_a_fill_is_made_only_when_a_round_asks_for_it(monkeypatch):
 
     monkeypatch.setattr(fill, "_skeleton_entries", no)
     first = next(fill.fill_actions(curve, found.missing, s.cloud))
-    assert first.entries == every[0].entries and "slabs" in first.reason
+    assert first.entries == every[0].entries and "axis curve" in first.reason
