@@ -1,23 +1,19 @@
-"""Terminal branches the shape does not justify -> ``spurious_branches``.
+"""Terminal branches the shape does not justify -> ``spurious_branches`` (docs/diagnostics.md
+"Spurious branches").
 
-A terminal branch (a degree-1 end, a junction at the other) is spurious when either of the two
-classical significance measures fails:
+A terminal branch (a degree-1 end, a junction at the other) is spurious when either classical
+significance measure fails:
 
-- **reach**: its far end stays within ``spur_reach`` x r_J of its junction J, r_J the radius of
-  the medial ball at J (distance from J to the cloud): it does not leave the junction's ball;
-- **explanation**: the cloud points nearest to it (its territory) are explained by the rest of the
-  skeleton as well: a point is explained by an element x (curve point, every ``diag_step`` local
-  radii, whose ball the shape holds: :mod:`.spur_balls`) when it lies within (1 + ``spur_slack``) r(x)
-  of it. Spurious when fewer than ``spur_min_points`` of its territory, or less than ``spur_unique``
-  of it, are explained by nothing else.
+- **reach**: its far end stays within ``spur_reach`` x r_J of its junction J (r_J: distance from J
+  to the cloud), inside the junction's ball;
+- **explanation**: its territory (the cloud points nearest to it) is explained by the rest of the
+  skeleton as well (within (1 + ``spur_slack``) r(x) of a curve point x whose ball the shape holds:
+  :mod:`.spur_balls`): fewer than ``spur_min_points``, or under ``spur_unique`` of it, is its own.
 
-No tau grows the balls (r(x) is measured to the samples). Not judged: ``unresolved`` where r_J is
-under ``spur_resolved_spacings`` cloud spacings, or where a branch failing only the explanation
-measure ends under ``spur_twig_spacings`` spacings past its junction's ball (:func:`unsampled_twig`:
-no sample of its own can be expected there); ``stubs`` (short) under ``spur_stub_share`` of the
-curve's length; ``unseen`` where only the explanation measure fails on a cloud seen from one side
-(:mod:`.spur_sides`, ``spur_one_sided``). docs/diagnostics.md "Spurious branches". Size: length in
-r_J, share of the length.
+Not judged: ``unresolved`` (r_J under ``spur_resolved_spacings`` spacings, or an explanation-only
+failure ending under ``spur_twig_spacings`` spacings past the junction's ball: :func:`unsampled_twig`);
+``stubs`` under ``spur_stub_share`` of the curve's length; ``unseen`` on a cloud seen from one side
+(:mod:`.spur_sides`). Size: length in r_J, share of the length.
 """
 
 from __future__ import annotations
