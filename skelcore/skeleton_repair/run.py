@@ -131,10 +131,7 @@ def in_turn(actions: list[Action], tries: int, late: Callable[[Action], bool] | 
         elif a.code not in kinds:
             kinds.add(a.code)
             rest.append(a)
-    if late is None:
-        return head + rest
-    back = [late(a) for a in head + rest]
-    return [a for a, x in zip(head + rest, back) if not x] + [a for a, x in zip(head + rest, back) if x]
+    return head + rest if late is None else sorted(head + rest, key=late)  # stable: the late ones last
 
 
 def _same(curve: CurveSkeleton, action: Action) -> tuple:
