@@ -81,7 +81,10 @@ class Params:
     spur_twig_spacings : ... and a branch failing only the explanation measure is judged only where its
         far end reaches at least this many junction spacings past the junction's ball (spur_reach x
         r_J): a real twig that short bulges out of its parent by less than the cloud's spacing and
-        gets no sample of its own beyond the parent's grown balls (``unresolved`` too).
+        gets no sample of its own beyond the parent's grown balls (``unresolved`` too) ...
+    spur_twig_tip_spacings : ... unless its far end lies farther from the cloud than its reach past
+        the junction's ball plus this many junction spacings: a real twig's tip stands at most that
+        far past its parent's sampled surface, so such a tip is in the air (judged).
     spur_stub_share : a stub (its far end within spur_reach x r_J: inside the junction's inscribed
         ball, so inside the shape) shorter than this share of the curve's length is counted among the
         ``stubs``, not spurious: it changes no metric by more than that share.
@@ -302,6 +305,7 @@ class Params:
     spur_slack: float = 0.25
     spur_resolved_spacings: float = 2.0
     spur_twig_spacings: float = 1.5
+    spur_twig_tip_spacings: float = 3.25
     spur_stub_share: float = 0.005
     spur_one_sided: float = 0.18
     spurs_warn_count: int = 1
@@ -454,7 +458,8 @@ class Params:
                      "cycles_warn_missing", "cycles_support_voxels", "cycles_support_points"):
             if int(getattr(self, name)) < 1:
                 bad(name, "must be a positive integer")
-        for name in ("spur_slack", "spur_resolved_spacings", "spur_twig_spacings", "spur_stub_share"):
+        for name in ("spur_slack", "spur_resolved_spacings", "spur_twig_spacings", "spur_twig_tip_spacings",
+                     "spur_stub_share"):
             if not float(getattr(self, name)) >= 0:
                 bad(name, "must be >= 0")
         if int(self.spur_min_points) < 0:

@@ -11,7 +11,8 @@ significance measure fails:
   :mod:`.spur_balls`): fewer than ``spur_min_points``, or under ``spur_unique`` of it, is its own.
 
 Not judged: ``unresolved`` (r_J under ``spur_resolved_spacings`` spacings, or an explanation-only
-failure ending under ``spur_twig_spacings`` spacings past the junction's ball: :func:`unsampled_twig`);
+failure ending under ``spur_twig_spacings`` spacings past the junction's ball, its tip not in the air:
+:func:`unsampled_twig`);
 ``stubs`` under ``spur_stub_share`` of the curve's length; ``unseen`` on a cloud seen from one side
 (:mod:`.spur_sides`). Size: length in r_J, share of the length.
 """
@@ -52,7 +53,7 @@ class SpurDefects:
     was subsampled (``diag_max_points``), else None. spacing : (B,) the cloud's spacing at the
     junction; unresolved, stub : (B,) bool, terminal branches not judged (r_J under
     ``spur_resolved_spacings`` spacings, or :func:`unsampled_twig`) and short stubs under
-    ``spur_stub_share`` (neither spurious).
+    ``spur_stub_share`` (neither spurious). tip_distance : (B,) the far end's distance to the cloud.
     one_sided : how far the cloud is seen from one side (:mod:`.spur_sides`); unseen : (B,) bool,
     terminal branches failing the explanation measure alone on a one-sided cloud (not judged).
     """
@@ -75,6 +76,7 @@ class SpurDefects:
     stub: np.ndarray | None = None
     one_sided: float = 0.0
     unseen: np.ndarray | None = None
+    tip_distance: np.ndarray | None = None
 
     def _count(self, flags: np.ndarray | None) -> int:
         return int(np.count_nonzero(flags)) if flags is not None else 0
@@ -98,7 +100,8 @@ class SpurDefects:
             return None
         parts = ([f"{unresolved} in parts the cloud does not resolve (a junction ball under "
                   f"spur_resolved_spacings = {self.params.spur_resolved_spacings:g} spacings, or a twig ending under "
-                  f"spur_twig_spacings = {self.params.spur_twig_spacings:g} spacings past it)"] if unresolved else [])
+                  f"spur_twig_spacings = {self.params.spur_twig_spacings:g} spacings past it, its tip near the cloud)"]
+                 if unresolved else [])
         parts += [f"{unseen} with no point of their own on a cloud seen from one side"] if unseen else []
         return (f"{unresolved + unseen} of the curve's {len(self.terminal)} terminal branches were not judged: "
                 + "; ".join(parts))
@@ -275,6 +278,7 @@ def find_spurious_branches(
     terminal = branches.terminal()
     reach = np.full(nb, np.nan)
     r_j = np.full(nb, np.nan)
+    tip_d = np.full(nb, np.nan)
     territory = np.zeros(nb, np.int64)
     unique = np.zeros(nb, np.int64)
     subsampled = int(params.diag_max_points) if len(cloud) > params.diag_max_points else None
@@ -312,7 +316,9 @@ def find_spurious_branches(
         unique = np.bincount(own[in_term][~elsewhere], minlength=nb)[:nb]
         deg = curve.degrees()
         ends = [p[0] if deg[p[0]] != 1 else p[-1] for p in (branches.paths[b] for b in terminal)]
-        r_j[terminal] = cloud_tree.query(curve.vertices[np.asarray(ends, np.int64)])[0]  # one query, not one per branch
+        tips = [p[-1] if deg[p[0]] != 1 else p[0] for p in (branches.paths[b] for b in terminal)]
+        d_ends = cloud_tree.query(curve.vertices[np.asarray(ends + tips, np.int64)])[0]  # one query, not one per branch
+        r_j[terminal], tip_d[terminal] = d_ends[:len(ends)], d_ends[len(ends):]
         for b, j in zip(terminal, ends):
             reach_b = float(np.linalg.norm(curve.vertices[branches.paths[b]] - curve.vertices[j], axis=1).max())
             reach[b] = reach_b / r_j[b] if r_j[b] > 0 else np.inf
@@ -324,7 +330,7 @@ def find_spurious_branches(
         short = reach <= params.spur_reach
         unresolved = np.zeros(nb, bool)
         unresolved[terminal] = ((r_j < params.spur_resolved_spacings * spacing)
-                                | (lonely & ~short & unsampled_twig(reach, r_j, spacing, params)))[terminal]
+                                | (lonely & ~short & unsampled_twig(reach, r_j, spacing, params, tip_d)))[terminal]
     total_length = float(branches.length.sum())
     stub = np.zeros(nb, bool)
     stub[terminal] = (short & ~unresolved & (branches.length < params.spur_stub_share * total_length))[terminal]
@@ -345,18 +351,26 @@ def find_spurious_branches(
         branches=branches, terminal=terminal, reach=reach, junction_radius=r_j, territory=territory, unique=unique,
         branch_spurious=branch_spurious, vertex_flag=vertex_flag, sample_flag=sample_flag, length_radii=length_radii,
         total_length=total_length, subsampled=subsampled, params=params, spacing=spacing, unresolved=unresolved,
-        stub=stub, one_sided=sided, unseen=unseen,
+        stub=stub, one_sided=sided, unseen=unseen, tip_distance=tip_d,
     )  # fmt: skip
 
 
-def unsampled_twig(reach: np.ndarray, r_j: np.ndarray, spacing: np.ndarray, params: Params = Params()) -> np.ndarray:
+def unsampled_twig(reach: np.ndarray, r_j: np.ndarray, spacing: np.ndarray, params: Params = Params(),
+                   tip_distance: np.ndarray | None = None) -> np.ndarray:
     """Per branch, whether its far end reaches under ``spur_twig_spacings`` junction spacings past the
     junction's ball (``spur_reach`` r_J): a real twig that short bulges out of its parent by less than
     the cloud's spacing there, so it has no sample of its own beyond the parent's grown balls and the
     explanation measure cannot tell it from a spur (docs/diagnostics.md "Spurious branches", rule 3).
-    ``reach`` in units of ``r_j``; NaN gives False."""
+    Not when ``tip_distance`` (the far end's distance to the cloud) exceeds that part past the ball by
+    ``spur_twig_tip_spacings`` spacings: the parent's samples lie within about a spacing of where such
+    a twig leaves it, so that tip stands in the air (section "A tip in the air"). ``reach`` in units of
+    ``r_j``; NaN gives False."""
     with np.errstate(invalid="ignore"):
-        return (reach - params.spur_reach) * r_j < params.spur_twig_spacings * spacing
+        past = (reach - params.spur_reach) * r_j
+        short = past < params.spur_twig_spacings * spacing
+        if tip_distance is None:
+            return short
+        return short & ~(tip_distance - past > params.spur_twig_tip_spacings * spacing)
 
 
 def junction_spacing(cloud_tree: cKDTree, curve: CurveSkeleton, branches: Branches, terminal: np.ndarray) -> np.ndarray:

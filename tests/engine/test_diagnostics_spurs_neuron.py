@@ -92,8 +92,8 @@ def test_spurs_off_unresolved_neurites_are_not_judged(neuron):
 def test_spurs_out_of_resolved_neurites_are_flagged(neuron):
     """Four traced radii sideways from the degree-2 nodes where the cloud resolves the neurite (r_J
     at least two spacings, traced radius under 30): a spur within its junction's ball fails by reach,
-    one ending ``spur_twig_spacings`` spacings or more past it fails by explanation, both flagged; one
-    ending in between is unresolved (a real twig there has no sample of its own); the twig is never
+    one ending ``spur_twig_spacings`` spacings or more past it (or with its tip in the air,
+    ``spur_twig_tip_spacings``) fails by explanation, both flagged; one ending in between is unresolved (a real twig there has no sample of its own); the twig is never
     flagged."""
     p = Params()
     cloud, v, e, _, tip, rad = _crop(neuron, 30_000)
@@ -109,7 +109,8 @@ def test_spurs_out_of_resolved_neurites_are_flagged(neuron):
         r = find_spurious_branches(cloud, curve)
         b = r.branches.vertex_branch[spur_tip]
         past = (r.reach[b] - p.spur_reach) * r.junction_radius[b]
-        between = r.reach[b] > p.spur_reach and past < p.spur_twig_spacings * r.spacing[b]
+        between = r.reach[b] > p.spur_reach and past < p.spur_twig_spacings * r.spacing[b] and \
+            r.tip_distance[b] - past <= p.spur_twig_tip_spacings * r.spacing[b]
         assert r.branch_spurious[b] != between and r.unresolved[b] == between
         assert not r.branch_spurious[r.branches.vertex_branch[tip]]
         if r.branch_spurious[b]:

@@ -2,7 +2,10 @@
 unresolved, not spurious (docs/diagnostics.md "Spurious branches", rule 3): the cloud gives a real
 twig there no point of its own, so the explanation measure cannot tell it from a spur. Checked on the
 calibration's non-uniform cloud of a tuning neuron at 30k points, where two traced twigs within a
-traced radius of the mesh (shown by the cloud) were flagged before."""
+traced radius of the mesh (shown by the cloud) were flagged before. A twig whose tip stands in the air
+(farther from the cloud than its part past the ball plus ``spur_twig_tip_spacings`` spacings) is judged:
+a traced twig beyond the mesh on the same cloud is flagged, where the rule without the tip's test left
+it unresolved (section "A tip in the air")."""
 
 from __future__ import annotations
 
@@ -21,6 +24,9 @@ NEURON = "1734350788"  # a tuning neuron
 #: the traced nodes (SWC ids) of two twigs within a traced radius of the mesh; both fail only the
 #: explanation measure at a junction of about 2 spacings and end 0.9-1.2 spacings past its ball
 SHOWN_TWIGS = ((4292, 4293), (4415,))
+#: a traced twig 2.1-3.3 traced radii out of the mesh (beyond the cloud), 1.0 spacing past its junction's
+#: ball, its tip 5.0 spacings from the cloud
+AIR_TWIG = (4024, 4025, 4026)
 
 
 @pytest.fixture(scope="module")
@@ -51,10 +57,28 @@ def test_shown_twigs_barely_past_the_junction_ball_are_unresolved(nonuniform):
         assert new.unique[b] == 0  # no point of its own: the explanation measure alone fails
         past = (new.reach[b] - p.spur_reach) * new.junction_radius[b]
         assert 0 < past < p.spur_twig_spacings * new.spacing[b]
+        assert new.tip_distance[b] - past < p.spur_twig_tip_spacings * new.spacing[b]  # the tip near the cloud
         assert new.unresolved[b] and not new.branch_spurious[b]
         assert old.branch_spurious[_twig(old, at, nodes)]  # flagged without the rule
     assert new.to_dict()["unresolved"] > old.to_dict()["unresolved"]
     assert len(new.spurious) < len(old.spurious)
+
+
+def test_a_twig_whose_tip_stands_in_the_air_is_judged(nonuniform):
+    w, curve, at = nonuniform
+    p = Params()
+    new = find_spurious_branches(w.cloud, curve)
+    old = find_spurious_branches(w.cloud, curve, params=Params(spur_twig_tip_spacings=float("inf")))
+    assert (np.asarray(w.facts.outside_radii)[[at[n] for n in AIR_TWIG]] > TWIG_OUT).all()  # beyond the cloud
+    b = _twig(new, at, AIR_TWIG)
+    assert new.unique[b] == 0 and new.reach[b] > p.spur_reach
+    past = (new.reach[b] - p.spur_reach) * new.junction_radius[b]
+    assert 0 < past < p.spur_twig_spacings * new.spacing[b]  # within the twig rule's reach ...
+    assert new.tip_distance[b] - past > p.spur_twig_tip_spacings * new.spacing[b]  # ... but its tip in the air
+    assert new.branch_spurious[b] and not new.unresolved[b]
+    ob = _twig(old, at, AIR_TWIG)
+    assert old.unresolved[ob] and not old.branch_spurious[ob]  # the rule without the tip's test spared it
+    assert set(old.spurious) < set(new.spurious)
 
 
 def test_the_rule_reads_the_part_past_the_junction_ball_in_spacings():
@@ -69,3 +93,14 @@ def test_the_rule_reads_the_part_past_the_junction_ball_in_spacings():
     assert got(1.0, s) == [True, False, False, False, False]
     assert got(1.0, 2 * s) == [True, True, True, False, False]
     assert not any(got(0.0, s))
+
+
+def test_a_tip_beyond_its_part_past_the_ball_by_the_threshold_is_not_spared():
+    reach = np.array([1.2, 1.2, 1.2, 1.6])
+    r_j = np.full(4, 2.0)
+    s = np.ones(4)
+    tip = np.array([0.4, 3.6, 3.7, 10.0])  # minus the part past the ball (0.4, 0.4, 0.4, 1.2): 0, 3.2, 3.3, 8.8
+    p = Params(spur_twig_spacings=1.5, spur_twig_tip_spacings=3.25)
+    assert unsampled_twig(reach, r_j, s, p, tip).tolist() == [True, True, False, False]
+    assert unsampled_twig(reach, r_j, s, p).tolist() == [True, True, True, True]
+    assert unsampled_twig(reach, r_j, 2 * s, p, tip).tolist() == [True, True, True, False]  # 8.8 > 6.5
