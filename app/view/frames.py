@@ -37,9 +37,9 @@ class FrameScheduler:
         self._timer.timeout.connect(self._render_now)
         self._held_until = 0.0  # time.monotonic() before which a requested frame waits (hold)
         self._window_hold = WindowPaintHold(lambda: self.held)  # the window's repaints wait with the frames
-        self._hold_end = QtCore.QTimer()  # the window's deferred repaint once a hold runs out unreleased
+        self._hold_end = QtCore.QTimer()  # a hold that runs out unreleased ends as a release would
         self._hold_end.setSingleShot(True)
-        self._hold_end.timeout.connect(self._window_hold.resume)
+        self._hold_end.timeout.connect(self.release)  # (a coarse timer may fire a little early)
         plotter.on_frame = self.frame_done
 
     def request(self) -> None:

@@ -188,11 +188,13 @@ def test_the_window_repaints_wait_with_the_held_frames(window, qtbot):
             w.view.draw_now()
             assert painted and frames  # in the same call: one repaint of the window paints both
         qtbot.waitUntil(lambda: bool(painted and frames) and not w.view.render_pending, timeout=5000)
-    painted.clear()
-    w.view.hold_frames(30.0)  # held with no frame asked: the release alone repaints the window
-    bar.showMessage("held, no frame")
-    qtbot.wait(100)
-    assert not painted
-    w.view.release_frames()
-    qtbot.waitUntil(lambda: bool(painted), timeout=5000)
+    for end in ("release", "runs out"):  # held with no frame asked: the window repaints at the hold's end
+        painted.clear()
+        w.view.hold_frames(30.0 if end == "release" else 0.3)
+        bar.showMessage(f"held, no frame: {end}")
+        qtbot.wait(100)
+        assert not painted, end
+        if end == "release":
+            w.view.release_frames()
+        qtbot.waitUntil(lambda: bool(painted), timeout=5000)
     bar.removeEventFilter(counter)
