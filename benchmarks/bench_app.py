@@ -149,7 +149,9 @@ def test_viewer_edit_to_recoloured_frame(measure, benchmark, display, tmp_path, 
     the edit applied and its curve redrawn (the key's handler returned), ``worker_s`` the first phase's
     task started, ``frame_start_s`` the recoloured frame begun (``frame_s`` its drawing), and
     ``frames_between``, the frames drawn between the key and the recoloured one, ``over_image`` the share
-    of recoloured frames that drew only the cloud's near points over its image (app/view/cloud_layer.py).
+    of recoloured frames that drew only the cloud's near points over its image (app/view/cloud_layer.py),
+    ``window_repaints`` the window's repaints begun from the key to the recoloured frame's, that one
+    included (each composes the whole window; app/view/paint_hold.py).
     The goal: 0.15 s to the recoloured frame."""
     from PySide6 import QtCore, QtWidgets
 
@@ -175,11 +177,21 @@ def test_viewer_edit_to_recoloured_frame(measure, benchmark, display, tmp_path, 
 
     w.view.plotter.ren_win.AddObserver("EndEvent", frame_ended)
     begun: list[float] = []  # the frames' starts
+    repaints: list[float] = []  # the window's repaints (each composes the whole window through GL)
+
+    class Repaints(QtCore.QObject):
+        def eventFilter(self, obj, event):  # noqa: N802 - installed first: sees only the repaints not held
+            if event.type() == QtCore.QEvent.Type.UpdateRequest:
+                repaints.append(time.perf_counter())
+            return False
+
+    counter = Repaints()
+    w.installEventFilter(counter)
     w.view.plotter.ren_win.AddObserver("StartEvent", lambda *a: begun.append(time.perf_counter()))
     started: list[float] = []  # the first phase's task started
     w.session.runner.started.connect(lambda name: name == "evaluation" and started.append(time.perf_counter()))
     phases: dict[str, list[float]] = {k: [] for k in ("edit_s", "worker_s", "frame_start_s", "frame_s", "frames_between",
-                                                      "over_image")}
+                                                      "over_image", "window_repaints")}
     landed: list[float] = []  # the first phase's scores shown
     w.session.scores_shown.connect(lambda _ev: landed.append(time.perf_counter()))
     whole: list[float] = []  # the whole evaluation shown (the second phase)
@@ -243,6 +255,7 @@ def test_viewer_edit_to_recoloured_frame(measure, benchmark, display, tmp_path, 
             phases["frame_s"].append(end - start)
             phases["frames_between"].append(float(len([t for t in rendered if t0 < t < end])))
             phases["over_image"].append(float(over_image[end]))
+            phases["window_repaints"].append(float(len([t for t in repaints if t0 < t <= end])))
 
         scored: list[float] = []
         measure(press_delete, rounds=5, setup=setup)

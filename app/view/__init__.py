@@ -2,7 +2,7 @@
 
 Only this package touches VTK, and only on the GUI thread. Modules: :mod:`.scene_view` (the
 ``SceneView``), :mod:`.interactor` (the Qt widget and its input), :mod:`.frames` (frame
-scheduling), :mod:`.actors` (actor-building helpers), :mod:`.lod` (twins while moving), :mod:`.culling`
+scheduling), :mod:`.paint_hold` (the window's repaints held with the frames), :mod:`.actors` (actor-building helpers), :mod:`.lod` (twins while moving), :mod:`.culling`
 and :mod:`.visibility` (the points that can show at rest), :mod:`.colorbar`, :mod:`.camera`, :mod:`.style`.
 
 The names below are imported on first use: reading a camera file (:mod:`.camera`, no Qt) before any

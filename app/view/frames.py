@@ -2,6 +2,8 @@
 
 A frame costs tens to hundreds of ms in software GL, so the view never renders per change: it asks
 for a frame, and work that should follow the frame (the plots) waits for the paint to be reported.
+While frames are held (an edit's scores on their way) the window's other repaints wait too
+(:mod:`.paint_hold`).
 """
 
 from __future__ import annotations
@@ -10,6 +12,8 @@ import time
 from typing import Any, Callable
 
 from PySide6 import QtCore
+
+from .paint_hold import WindowPaintHold
 
 __all__ = ["RENDER_DELAY_MS", "FrameScheduler"]
 
@@ -32,6 +36,10 @@ class FrameScheduler:
         self._timer.setInterval(RENDER_DELAY_MS)
         self._timer.timeout.connect(self._render_now)
         self._held_until = 0.0  # time.monotonic() before which a requested frame waits (hold)
+        self._window_hold = WindowPaintHold(lambda: self.held)  # the window's repaints wait with the frames
+        self._hold_end = QtCore.QTimer()  # a hold that runs out unreleased ends as a release would
+        self._hold_end.setSingleShot(True)
+        self._hold_end.timeout.connect(self.release)  # (a coarse timer may fire a little early)
         plotter.on_frame = self.frame_done
 
     def request(self) -> None:
@@ -59,24 +67,40 @@ class FrameScheduler:
         else:
             fn()
 
+    @property
+    def held(self) -> bool:
+        """A :meth:`hold` is on (neither released nor run out)."""
+        return self._held_until > time.monotonic()
+
     def hold(self, seconds: float) -> None:
         """Requested frames wait at most ``seconds`` (or until :meth:`release`): a change whose
-        follow-up is on its way (an edited curve, its scores) makes one frame, not two."""
-        self._held_until = time.monotonic() + max(0.0, float(seconds))
+        follow-up is on its way (an edited curve, its scores) makes one frame, not two. The window's
+        other repaints wait with them (:mod:`.paint_hold`): each composes the whole window, whose
+        CPU the follow-up's computation needs."""
+        seconds = max(0.0, float(seconds))
+        self._held_until = time.monotonic() + seconds
+        self._window_hold.watch(self.plotter.window())
+        self._hold_end.start(int(seconds * 1000) + 1)
 
     def release(self) -> None:
-        """End a :meth:`hold`: a pending frame is drawn now (after the usual delay)."""
+        """End a :meth:`hold`: a pending frame is drawn now (after the usual delay), and the window's
+        deferred repaint is asked for (the pending frame's repaint, when there is one)."""
         self._held_until = 0.0
+        self._hold_end.stop()
         if self._pending:
             self._timer.start(RENDER_DELAY_MS)
+        else:
+            self._window_hold.resume()
 
     def draw_now(self) -> None:
         """Draw the pending frame at once, held or not, before Qt repaints the panels the same change
         updated (an edit's recoloured curve: the frame the user waits for, the panels' text after it;
         docs/performance.md 6.10)."""
         self._held_until = 0.0
+        self._hold_end.stop()
         if self._pending:
-            self._render_now()
+            self._render_now()  # its repaint paints the window's deferred regions with it
+        self._window_hold.resume()
 
     def _render_now(self) -> None:
         if not self._pending:
@@ -87,6 +111,7 @@ class FrameScheduler:
             return
         if getattr(self.plotter, "_closed", False) or not self.plotter.isVisible():
             self.frame_done()  # nothing to paint: whatever waited for the frame goes ahead
+            self._window_hold.resume()
             return
         # A repaint of the view now, not plotter.render() (pyvistaqt's paintGL always renders, so
         # render() followed by the paint it causes would draw every frame twice) and not update()
@@ -106,4 +131,6 @@ class FrameScheduler:
         """Stop scheduling: the plotter no longer reports frames and waiting callbacks are dropped."""
         self.plotter.on_frame = None
         self._timer.stop()
+        self._hold_end.stop()
+        self._window_hold.close()
         self._after_frame.clear()

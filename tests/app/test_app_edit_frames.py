@@ -150,3 +150,51 @@ def test_an_edit_keeps_the_curves_actors_and_swaps_their_points(window, qtbot, t
         drawn = layer.points if info["location"] == "vertices" else layer.samples
         np.testing.assert_allclose(info["xyz"], drawn[info["index"]], atol=1e-12)
         assert np.linalg.norm(np.subtract(view.world_to_display(info["xyz"]), view.world_to_display(xyz))) < 8
+
+
+def test_the_window_repaints_wait_with_the_held_frames(window, qtbot):
+    """While the view holds its frames (an edit's scores on their way) the window's other repaints
+    wait too (skelscope.view.paint_hold: each composes the whole window); the release, a hold that
+    runs out, or the held frame drawn at once paints them."""
+    from PySide6 import QtCore
+
+    w = window
+    bar = w.statusBar()
+    painted: list[int] = []
+
+    class Count(QtCore.QObject):
+        def eventFilter(self, obj, event):  # noqa: N802
+            if event.type() == QtCore.QEvent.Type.Paint:
+                painted.append(1)
+            return False
+
+    counter = Count()
+    bar.installEventFilter(counter)
+    frames: list[int] = []
+    w.view.plotter.ren_win.AddObserver("EndEvent", lambda *_a: frames.append(1))
+    qtbot.waitUntil(lambda: not w.view.render_pending, timeout=10000)
+    qtbot.wait(50)
+    for end in ("release", "runs out", "draw now"):
+        painted.clear()
+        frames.clear()
+        w.view.hold_frames(0.3 if end == "runs out" else 30.0)
+        w.view.request_render()
+        bar.showMessage(f"held: {end}")
+        qtbot.wait(150)
+        assert not painted and not frames, end  # neither the message nor the frame yet
+        if end == "release":
+            w.view.release_frames()
+        elif end == "draw now":
+            w.view.draw_now()
+            assert painted and frames  # in the same call: one repaint of the window paints both
+        qtbot.waitUntil(lambda: bool(painted and frames) and not w.view.render_pending, timeout=5000)
+    for end in ("release", "runs out"):  # held with no frame asked: the window repaints at the hold's end
+        painted.clear()
+        w.view.hold_frames(30.0 if end == "release" else 0.3)
+        bar.showMessage(f"held, no frame: {end}")
+        qtbot.wait(100)
+        assert not painted, end
+        if end == "release":
+            w.view.release_frames()
+        qtbot.waitUntil(lambda: bool(painted), timeout=5000)
+    bar.removeEventFilter(counter)
