@@ -51,9 +51,11 @@ LEFT_OUT = "left out by Evaluation.update(diagnostics=False)"
 _RAYS_CHUNK = 10
 
 
-def update_evaluation(ev: Evaluation, edited: Change | CurveSkeleton | Any, *, diagnostics: bool = True) -> Evaluation:
+def update_evaluation(ev: Evaluation, edited: Change | CurveSkeleton | Any, *, diagnostics: bool = True,
+                      scan_checks: bool = True) -> Evaluation:
     """``ev``'s evaluation of the edited curve (a Change, or the new curve in any form
-    :meth:`CurveSkeleton.coerce` takes)."""
+    :meth:`CurveSkeleton.coerce` takes); ``scan_checks`` False with ``diagnostics`` False: without the
+    real-scan trust checks (:meth:`Evaluation.update`), which :func:`complete_update` runs."""
     t0 = time.perf_counter()
     curve = edited.curve if isinstance(edited, Change) else CurveSkeleton.coerce(edited, "edited curve")
     if curve is None:
@@ -74,7 +76,7 @@ def update_evaluation(ev: Evaluation, edited: Change | CurveSkeleton | Any, *, d
     ctx = _edited_context(old, curve, src.cache)
     link_contexts(src.cache, ctx, old)
     run_graph(_tasks(old, ctx, src.cache, diagnostics, args.get("workers")), args.get("workers"))
-    out = finish(ctx, args.get("inputs"), no_checkpoint)
+    out = finish(ctx, args.get("inputs"), no_checkpoint, scan=scan_checks or diagnostics)
     out.timings = {"update": time.perf_counter() - t0}
     results = dict(ctx.results)
     out.source = EvaluationSource(args=args, ctx=ctx, cache=src.cache)

@@ -20,7 +20,7 @@ from .batch import BATCHED, Member, batch_curve, blame_lost, judge, log_entries,
 from .findings import Findings, read_findings
 from .phases import PhaseClock
 from .proposals import Action
-from .screen import first_look
+from .screen import first_look, first_update
 
 __all__ = ["BatchState", "batch_step"]
 
@@ -93,7 +93,7 @@ def batch_step(ev: Evaluation, cur: CurveSkeleton, found: Findings, candidates: 
                                    "before": _rounded(found.measures), "defects_before": found.total}
             new = batch_curve(cur, batch)
             with clock.phase("first look"):
-                pre = ev.update(new, diagnostics=False)
+                pre = first_update(ev, new)
                 seen, refusal = first_look(found, pre, p)
             if refusal is not None:
                 why.update(after=_rounded(seen), defects_after=None)

@@ -30,7 +30,7 @@ from .fill import fill_actions
 from .phases import PhaseClock
 from .recentre import RECENTRE, recentre, settled, vertex_centeredness
 from .reroute import route_inside
-from .screen import first_look
+from .screen import first_look, first_update
 from .skeletal_out import repaired_skeletal
 
 __all__ = ["RepairResult", "repair", "in_turn"]
@@ -233,7 +233,7 @@ def repair(cloud: np.ndarray, curve: CurveSkeleton | tuple | None = None, skelet
                 continue
             kept = new.edges.max(axis=1) < cur.n_vertices if action.code == FILL else None
             with clock.phase("first look"):  # the cheap first look (screen.py), then the rest
-                pre = ev.update(new, diagnostics=False)
+                pre = first_update(ev, new)
                 seen, refusal = first_look(found, pre, p, recentring=action.code == RECENTRE, kept=kept)
             if refusal is not None:
                 why.update(after=_rounded(seen), defects_after=None)

@@ -4,19 +4,27 @@ these already make worse is rejected without the curve's defects, the dear part 
 points, and a re-centring without its own gain (:func:`.guard.recentred`) before its coverage too;
 one that passes gets the whole update (:meth:`~skelcore.Evaluation.complete_update`). The measures
 are those the whole update gives (the same stages on the same inputs, computed once), so the
-decisions are the never-worse rule's own."""
+decisions are the never-worse rule's own. The first look leaves out the real-scan trust checks too
+(:func:`first_update`): it reads no warning, and the whole update runs them (docs/repair.md "The
+repair's cost")."""
 
 from __future__ import annotations
 
 import numpy as np
 
+from ..curve import CurveSkeleton
 from ..edit.incremental import compute_left_out
 from ..evaluation import Evaluation
 from ..params import Params
 from .findings import Findings
 from .guard import kept_part, recentred, worse
 
-__all__ = ["first_look"]
+__all__ = ["first_look", "first_update", "SCAN_CHECKS"]
+
+#: whether a first look runs the real-scan trust checks (the openings' search): False, since the rule
+#: reads none of their warnings and the whole update runs them; True gives the slower path, the same
+#: decisions (tests/engine/test_repair_cost.py)
+SCAN_CHECKS = False
 
 
 def _num(x: object) -> float | None:
@@ -31,6 +39,12 @@ def _completeness(pre: Evaluation) -> tuple[bool, float | None]:
     if done is None:
         return False, None
     return True, _num(getattr(done["curve missing parts"], "completeness", None))
+
+
+def first_update(ev: Evaluation, curve: CurveSkeleton) -> Evaluation:
+    """``ev``'s update to the candidate ``curve`` without its diagnostics (curve boundedness and
+    centeredness), and without the real-scan trust checks unless :data:`SCAN_CHECKS`."""
+    return ev.update(curve, diagnostics=False, scan_checks=SCAN_CHECKS)
 
 
 def first_look(before: Findings, pre: Evaluation, params: Params, recentring: bool = False,
