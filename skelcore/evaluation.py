@@ -215,13 +215,14 @@ class Evaluation:
 
         return update_evaluation(self, edited, diagnostics=diagnostics, scan_checks=scan_checks)
 
-    def complete_update(self, cancel: Any = None) -> "Evaluation":
+    def complete_update(self, cancel: Any = None, scan_checks: bool = True) -> "Evaluation":
         """This ``update(..., diagnostics=False)`` with the curve's coverage, defects and missing parts
         added: equal to ``update(change)`` (a viewer shows the four metrics first, then these); ``self``
-        when nothing was left out. ``cancel()`` True stops it (:class:`skelcore.errors.Cancelled`)."""
+        when nothing was left out. ``cancel()`` True stops it (:class:`skelcore.errors.Cancelled`).
+        ``scan_checks=False``: without the real-scan trust checks (as :meth:`update`)."""
         from .edit.incremental import complete_update
 
-        return complete_update(self, cancel)
+        return complete_update(self, cancel, scan_checks)
 
     @property
     def diagnostics_left_out(self) -> tuple[str, ...]:
