@@ -203,22 +203,26 @@ class Evaluation:
         return [w.to_dict() for w in self.warnings]
 
     # ---- proofreading: skelcore.edit.incremental, imported when called ----
-    def update(self, edited: Any, *, diagnostics: bool = True) -> "Evaluation":
+    def update(self, edited: Any, *, diagnostics: bool = True, scan_checks: bool = True) -> "Evaluation":
         """The Evaluation of the edited curve skeleton (a :class:`skelcore.edit.Change` or the new curve)
         against the same cloud, skeletal set and params; the curve samples whose position and direction
         did not change keep their values (the same as evaluating afresh). ``diagnostics=False`` leaves
-        out the curve's coverage, defects and missing parts (the slow part), named in ``not_computed``."""
+        out the curve's coverage, defects and missing parts (the slow part), named in ``not_computed``;
+        with it, ``scan_checks=False`` also leaves out the real-scan trust checks (``open_surface``,
+        ``thin_parts``, ``sparse_boundedness``: no warnings of theirs), which
+        :meth:`complete_update` runs (a repair's first look reads no warning, docs/repair.md)."""
         from .edit.incremental import update_evaluation
 
-        return update_evaluation(self, edited, diagnostics=diagnostics)
+        return update_evaluation(self, edited, diagnostics=diagnostics, scan_checks=scan_checks)
 
-    def complete_update(self, cancel: Any = None) -> "Evaluation":
+    def complete_update(self, cancel: Any = None, scan_checks: bool = True) -> "Evaluation":
         """This ``update(..., diagnostics=False)`` with the curve's coverage, defects and missing parts
         added: equal to ``update(change)`` (a viewer shows the four metrics first, then these); ``self``
-        when nothing was left out. ``cancel()`` True stops it (:class:`skelcore.errors.Cancelled`)."""
+        when nothing was left out. ``cancel()`` True stops it (:class:`skelcore.errors.Cancelled`).
+        ``scan_checks=False``: without the real-scan trust checks (as :meth:`update`)."""
         from .edit.incremental import complete_update
 
-        return complete_update(self, cancel)
+        return complete_update(self, cancel, scan_checks)
 
     @property
     def diagnostics_left_out(self) -> tuple[str, ...]:

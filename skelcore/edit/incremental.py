@@ -51,9 +51,11 @@ LEFT_OUT = "left out by Evaluation.update(diagnostics=False)"
 _RAYS_CHUNK = 10
 
 
-def update_evaluation(ev: Evaluation, edited: Change | CurveSkeleton | Any, *, diagnostics: bool = True) -> Evaluation:
+def update_evaluation(ev: Evaluation, edited: Change | CurveSkeleton | Any, *, diagnostics: bool = True,
+                      scan_checks: bool = True) -> Evaluation:
     """``ev``'s evaluation of the edited curve (a Change, or the new curve in any form
-    :meth:`CurveSkeleton.coerce` takes)."""
+    :meth:`CurveSkeleton.coerce` takes); ``scan_checks`` False with ``diagnostics`` False: without the
+    real-scan trust checks (:meth:`Evaluation.update`), which :func:`complete_update` runs."""
     t0 = time.perf_counter()
     curve = edited.curve if isinstance(edited, Change) else CurveSkeleton.coerce(edited, "edited curve")
     if curve is None:
@@ -74,7 +76,7 @@ def update_evaluation(ev: Evaluation, edited: Change | CurveSkeleton | Any, *, d
     ctx = _edited_context(old, curve, src.cache)
     link_contexts(src.cache, ctx, old)
     run_graph(_tasks(old, ctx, src.cache, diagnostics, args.get("workers")), args.get("workers"))
-    out = finish(ctx, args.get("inputs"), no_checkpoint)
+    out = finish(ctx, args.get("inputs"), no_checkpoint, scan=scan_checks or diagnostics)
     out.timings = {"update": time.perf_counter() - t0}
     results = dict(ctx.results)
     out.source = EvaluationSource(args=args, ctx=ctx, cache=src.cache)
@@ -90,11 +92,12 @@ def left_out(ev: Evaluation) -> tuple[str, ...]:
     return () if ctx is None else tuple(n for n in DIAGNOSTIC_STAGES if ctx.not_computed.get(n) == LEFT_OUT)
 
 
-def complete_update(ev: Evaluation, cancel: Callable[[], bool] | None = None) -> Evaluation:
+def complete_update(ev: Evaluation, cancel: Callable[[], bool] | None = None, scan_checks: bool = True) -> Evaluation:
     """``ev`` (an ``update(diagnostics=False)``) with the curve's coverage, defects and missing parts it
     left out: the Evaluation ``update(change)`` gives, ``ev`` itself unchanged (the second phase of an
     edit's scoring, docs/performance.md 6.10). ``cancel()`` True stops it at a stage's next checkpoint
-    (:class:`Cancelled`). ``ev`` when nothing was left out."""
+    (:class:`Cancelled`). ``ev`` when nothing was left out. ``scan_checks`` False: without the
+    real-scan trust checks (:meth:`Evaluation.update`)."""
     t0 = time.perf_counter()
     names = left_out(ev)
     if not names:
@@ -134,7 +137,7 @@ def complete_update(ev: Evaluation, cancel: Callable[[], bool] | None = None) ->
 
     run_graph([task(s) for s in stages], src.args.get("workers"))
     checkpoint()
-    out = finish(ctx, src.args.get("inputs"), checkpoint)
+    out = finish(ctx, src.args.get("inputs"), checkpoint, scan=scan_checks)
     out.timings = {"update": ev.timings.get("update", 0.0) + time.perf_counter() - t0,
                    "diagnostics": time.perf_counter() - t0}
     out.source = EvaluationSource(args=src.args, ctx=ctx, cache=src.cache)

@@ -20,7 +20,7 @@ from .batch import BATCHED, Member, batch_curve, blame_lost, judge, log_entries,
 from .findings import Findings, read_findings
 from .phases import PhaseClock
 from .proposals import Action
-from .screen import first_look
+from .screen import first_look, first_update, whole_update
 
 __all__ = ["BatchState", "batch_step"]
 
@@ -66,9 +66,9 @@ def _smaller(batch: list[Member], blamed: set[int]) -> list[Member]:
 def batch_step(ev: Evaluation, cur: CurveSkeleton, found: Findings, candidates: list[Action], p: Params,
                state: BatchState, clock: PhaseClock, rejected: list[dict[str, Any]],
                cancel: Callable[[], bool] | None = None, last: bool = False
-               ) -> tuple[Evaluation, CurveSkeleton, Findings, list[dict[str, Any]]] | None:
+               ) -> tuple[Evaluation, CurveSkeleton, Findings, list[dict[str, Any]], bool] | None:
     """The first batch the rule keeps this round: (its evaluation, curve, findings, the log's
-    operations with their ``why``), or None; refused batches are appended to ``rejected``.
+    operations with their ``why``, whether its evaluation ran the real-scan checks), or None; refused batches are appended to ``rejected``.
     ``last``: the round's single tries all failed; the resting kinds have their turn before the
     repair stops."""
     if p.repair_batch_tries < 1 or found.defects is None:
@@ -93,7 +93,7 @@ def batch_step(ev: Evaluation, cur: CurveSkeleton, found: Findings, candidates: 
                                    "before": _rounded(found.measures), "defects_before": found.total}
             new = batch_curve(cur, batch)
             with clock.phase("first look"):
-                pre = ev.update(new, diagnostics=False)
+                pre = first_update(ev, new)
                 seen, refusal = first_look(found, pre, p)
             if refusal is not None:
                 why.update(after=_rounded(seen), defects_after=None)
@@ -103,7 +103,7 @@ def batch_step(ev: Evaluation, cur: CurveSkeleton, found: Findings, candidates: 
                 batch = _smaller(batch, blamed)
                 continue
             with clock.phase("whole update"):
-                new_ev = pre.complete_update(cancel)
+                new_ev, scanned = whole_update(pre, cancel)
                 new_found = read_findings(new_ev)
             why.update(after=_rounded(new_found.measures), defects_after=new_found.total)
             refusal, blamed = judge(found, new_found, cur, new, batch, p)
@@ -129,7 +129,7 @@ def batch_step(ev: Evaluation, cur: CurveSkeleton, found: Findings, candidates: 
                 for k, entry in enumerate(member_entries):
                     ops.append({**entry, "why": {**own, "step": f"{k + 1} of {len(member_entries)}"}})
             state.turn = (BATCHED.index(code) + 1) % n
-            return new_ev, new, new_found, ops
+            return new_ev, new, new_found, ops, scanned
         state.refused[code] = state.refused.get(code, 0) + 1
         state.rest_until[code] = state.round + 2 ** state.refused[code]
     return None

@@ -1,7 +1,8 @@
 """Where a repair's time goes (docs/repair.md "Where the time goes, phase by phase"): CPU seconds of the
 process (all threads, ``time.process_time``) and the number of times each phase ran, so that a run
 says what it spent without a profiler: the first evaluation, each candidate's first look, the whole
-updates of those that pass it (their defects), the proposals and the re-centrings' cross-sections.
+updates of those that pass it (their defects), the proposals, the re-centrings' cross-sections and
+the last Evaluation's real-scan trust checks (when its update left them out, ``screen.whole_update``).
 It only reads the clock: no decision of the repair depends on it."""
 
 from __future__ import annotations
@@ -13,7 +14,7 @@ from typing import Iterator
 __all__ = ["PHASES", "PhaseClock"]
 
 #: the phases timed, in the order a round meets them
-PHASES = ("first evaluation", "proposals", "re-centring cuts", "first look", "whole update")
+PHASES = ("first evaluation", "proposals", "re-centring cuts", "first look", "whole update", "scan checks")
 
 
 class PhaseClock:

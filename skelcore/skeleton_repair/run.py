@@ -30,7 +30,7 @@ from .fill import fill_actions
 from .phases import PhaseClock
 from .recentre import RECENTRE, recentre, settled, vertex_centeredness
 from .reroute import route_inside
-from .screen import first_look
+from .screen import first_look, first_update, whole_update, with_scan_checks
 from .skeletal_out import repaired_skeletal
 
 __all__ = ["RepairResult", "repair", "in_turn"]
@@ -184,6 +184,7 @@ def repair(cloud: np.ndarray, curve: CurveSkeleton | tuple | None = None, skelet
         first = evaluate(cloud, skeletal=skeletal, curve=start, params=p, cancel=cancel)
     check_frame(first)
     ev, cur, found = first, start, read_findings(first)
+    scanned = True  # whether ev ran the real-scan trust checks (screen.whole_update)
     ops: list[dict[str, Any]] = []
     rejected: list[dict[str, Any]] = []
     tally0 = dict(found.tally)
@@ -215,7 +216,7 @@ def repair(cloud: np.ndarray, curve: CurveSkeleton | tuple | None = None, skelet
             candidates += drift
         kept = batch_step(ev, cur, found, candidates, p, batches, clock, rejected, cancel)
         if kept is not None:  # a batch of one kind's actions apart from one another (batch_round.py)
-            ev, cur, found, batch_ops = kept
+            ev, cur, found, batch_ops, scanned = kept
             ops += batch_ops
             behind = set()
             continue
@@ -233,7 +234,7 @@ def repair(cloud: np.ndarray, curve: CurveSkeleton | tuple | None = None, skelet
                 continue
             kept = new.edges.max(axis=1) < cur.n_vertices if action.code == FILL else None
             with clock.phase("first look"):  # the cheap first look (screen.py), then the rest
-                pre = ev.update(new, diagnostics=False)
+                pre = first_update(ev, new)
                 seen, refusal = first_look(found, pre, p, recentring=action.code == RECENTRE, kept=kept)
             if refusal is not None:
                 why.update(after=_rounded(seen), defects_after=None)
@@ -241,7 +242,7 @@ def repair(cloud: np.ndarray, curve: CurveSkeleton | tuple | None = None, skelet
                 refused_now.append(_same(cur, action))
                 continue
             with clock.phase("whole update"):
-                new_ev = pre.complete_update(cancel)
+                new_ev, new_scanned = whole_update(pre, cancel)
                 new_found = read_findings(new_ev)
             why.update(after=_rounded(new_found.measures), defects_after=new_found.total)
             refusal = verdict(found, new_found, p, recentring=action.code == RECENTRE, outside=action.code == "outside",
@@ -252,13 +253,13 @@ def repair(cloud: np.ndarray, curve: CurveSkeleton | tuple | None = None, skelet
                 continue
             for k, entry in enumerate(action.entries):
                 ops.append({**entry, "why": {**why, "step": f"{k + 1} of {len(action.entries)}"}})
-            ev, cur, found, done = new_ev, new, new_found, True
+            ev, cur, found, done, scanned = new_ev, new, new_found, True, new_scanned
             behind = behind.union(refused_now) if action.code == FILL else set()
             break
         if not done and batches.rest_until:  # before giving up, the kinds resting from batches
             kept = batch_step(ev, cur, found, candidates, p, batches, clock, rejected, cancel, last=True)
             if kept is not None:
-                ev, cur, found, batch_ops = kept
+                ev, cur, found, batch_ops, scanned = kept
                 ops += batch_ops
                 behind = set()
                 continue
@@ -266,6 +267,9 @@ def repair(cloud: np.ndarray, curve: CurveSkeleton | tuple | None = None, skelet
             stopped = ("no candidate action helps" if candidates else "no action for the defects left"
                        ) if found.total else _no_defect_left(found)
             break
+    if not scanned:  # the last Evaluation's real-scan warnings, which its update left out
+        with clock.phase("scan checks"):
+            ev = with_scan_checks(ev, cur)
     log = new_log(start, [])
     log["operations"] = ops
     log["rejected"] = rejected

@@ -4,19 +4,30 @@ these already make worse is rejected without the curve's defects, the dear part 
 points, and a re-centring without its own gain (:func:`.guard.recentred`) before its coverage too;
 one that passes gets the whole update (:meth:`~skelcore.Evaluation.complete_update`). The measures
 are those the whole update gives (the same stages on the same inputs, computed once), so the
-decisions are the never-worse rule's own."""
+decisions are the never-worse rule's own. The first look leaves out the real-scan trust checks too
+(:func:`first_update`): it reads no warning; so does the whole update (:func:`whole_update`) when
+they cannot change its measures, and the repair's last Evaluation gets them (:func:`with_scan_checks`;
+docs/repair.md "The repair's cost")."""
 
 from __future__ import annotations
 
+from typing import Callable
+
 import numpy as np
 
+from ..curve import CurveSkeleton
 from ..edit.incremental import compute_left_out
 from ..evaluation import Evaluation
 from ..params import Params
 from .findings import Findings
 from .guard import kept_part, recentred, worse
 
-__all__ = ["first_look"]
+__all__ = ["first_look", "first_update", "whole_update", "with_scan_checks", "SCAN_CHECKS"]
+
+#: whether every update of a candidate runs the real-scan trust checks (the openings' search): False,
+#: since the rule reads none of their warnings; True gives the slower path, the same decisions, log and
+#: curve (tests/engine/test_repair_cost.py)
+SCAN_CHECKS = False
 
 
 def _num(x: object) -> float | None:
@@ -31,6 +42,37 @@ def _completeness(pre: Evaluation) -> tuple[bool, float | None]:
     if done is None:
         return False, None
     return True, _num(getattr(done["curve missing parts"], "completeness", None))
+
+
+def first_update(ev: Evaluation, curve: CurveSkeleton) -> Evaluation:
+    """``ev``'s update to the candidate ``curve`` without its diagnostics (curve boundedness and
+    centeredness), and without the real-scan trust checks unless :data:`SCAN_CHECKS`."""
+    return ev.update(curve, diagnostics=False, scan_checks=SCAN_CHECKS)
+
+
+def _may_find_again(pre: Evaluation) -> bool:
+    """Whether the real-scan checks may change the measures of ``pre``'s whole update: an
+    ``open_surface`` warning makes the missing parts be found again when some element was left out as
+    outside (``outside_elements``; :func:`skelcore.stages.orchestrate.finish`); else they only add
+    warnings, which the rule does not read. True when the curve's missing parts are not known yet."""
+    ctx = getattr(pre.source, "ctx", None)
+    if ctx is None or "curve missing parts" not in ctx.results:
+        return True
+    return any(getattr(ctx.results.get(f"{kind} missing parts"), "outside_elements", 0)
+               for kind in ("skeletal", "curve"))
+
+
+def whole_update(pre: Evaluation, cancel: Callable[[], bool] | None = None) -> tuple[Evaluation, bool]:
+    """(``pre``'s :meth:`~skelcore.Evaluation.complete_update`, whether it ran the real-scan trust
+    checks): left out unless :data:`SCAN_CHECKS` or they may change its measures."""
+    scan = SCAN_CHECKS or _may_find_again(pre)
+    return pre.complete_update(cancel, scan_checks=scan), scan
+
+
+def with_scan_checks(ev: Evaluation, curve: CurveSkeleton) -> Evaluation:
+    """``ev`` (the Evaluation of ``curve``, made by :func:`whole_update` without the real-scan trust
+    checks) with them: its update to the same curve, the same scores and defects and every warning."""
+    return ev.update(curve)
 
 
 def first_look(before: Findings, pre: Evaluation, params: Params, recentring: bool = False,

@@ -92,9 +92,10 @@ def _skeletal_local(ctx: EvalContext, points: np.ndarray, mode: str | None, inde
     )  # fmt: skip
 
 
-def trust_warnings(ctx: EvalContext, ev: Evaluation, checkpoint: Checkpoint) -> list[TrustWarning]:
+def trust_warnings(ctx: EvalContext, ev: Evaluation, checkpoint: Checkpoint, scan: bool = True) -> list[TrustWarning]:
     """SkelScope's trust checks on the given skeletons (docs/metrics.md); ``checkpoint`` is only
-    reached by the rare frame-fit re-runs of boundedness."""
+    reached by the rare frame-fit re-runs of boundedness. ``scan`` False leaves out the real-scan
+    checks (:func:`.scan_checks.scan_warnings`: the openings' search, the dear part at 30k points)."""
     p, cloud = ctx.params, ctx.cloud
 
     def bounded_fraction(points_user: np.ndarray) -> float:
@@ -118,5 +119,6 @@ def trust_warnings(ctx: EvalContext, ev: Evaluation, checkpoint: Checkpoint) -> 
         out += smoothness_warning(ev.curve.vertex_degree)
     if ctx.mode == "none":
         out.append(no_correspondence_warning(len(ctx.skeletal), len(cloud)))
-    out += scan_warnings(ctx, ev, checkpoint)
+    if scan:
+        out += scan_warnings(ctx, ev, checkpoint)
     return out

@@ -132,11 +132,13 @@ def evaluate(
     return ev
 
 
-def finish(ctx: EvalContext, inputs: dict | None, checkpoint: Callable[[float], None]) -> Evaluation:
+def finish(ctx: EvalContext, inputs: dict | None, checkpoint: Callable[[float], None], scan: bool = True
+           ) -> Evaluation:
     """The Evaluation of ``ctx`` once its stages are done: assembled, with the trust checks and the
-    diagnostics' warnings (an edited curve's update finishes the same way)."""
+    diagnostics' warnings (an edited curve's update finishes the same way; ``scan`` False: without the
+    real-scan checks, :func:`.assemble.trust_warnings`)."""
     ev = assemble(ctx, inputs)
-    ev.warnings += trust_warnings(ctx, ev, checkpoint)
+    ev.warnings += trust_warnings(ctx, ev, checkpoint, scan)
     codes = {w.code for w in ev.warnings}
     ran = _defect_checks(ctx)
     if "frame" in codes:  # in another frame, every diagnostic would say so too

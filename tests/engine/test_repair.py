@@ -182,10 +182,11 @@ def test_a_tip_through_the_cap_is_cut_back_to_the_shape(tube):
 
 def test_the_repair_says_where_its_time_went(twig_repair):
     """One first evaluation; one first look per candidate tried, a whole update per candidate that
-    passed it (the prune kept); no phase has negative seconds."""
+    passed it (the prune kept), the real-scan checks once at most; no phase has negative seconds."""
     ph = twig_repair.phases
     assert ph["first evaluation"]["n"] == 1 and ph["proposals"]["n"] >= 1
     assert ph["first look"]["n"] == twig_repair.accepted + twig_repair.rejected
     passed = sum(1 for r in twig_repair.log["rejected"] if r["why"].get("defects_after") is not None)
     assert ph["whole update"]["n"] == twig_repair.accepted + passed
+    assert ph["scan checks"]["n"] <= 1  # the last Evaluation's, when its update left them out
     assert all(v["cpu"] >= 0.0 for v in ph.values())
