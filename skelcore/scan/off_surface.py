@@ -107,5 +107,5 @@ def behind_front(points: np.ndarray, base: np.ndarray, near: np.ndarray, radius:
     start = base[near].reshape(-1, 3)
     way = start - np.repeat(points, near.shape[1], axis=0)
     way /= np.maximum(np.linalg.norm(way, axis=1, keepdims=True), 1e-300)
-    free = free_rays(start, way, radius, tree, base.min(axis=0), base.max(axis=0))
+    free = free_rays(start, way, radius, tree, base.min(axis=0), base.max(axis=0), beyond=radius)
     return 2 * free.reshape(near.shape).sum(axis=1) > near.shape[1]

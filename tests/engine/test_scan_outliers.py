@@ -250,13 +250,17 @@ def test_a_lone_point_linked_to_a_kept_point_is_kept_a_lone_pair_is_not():
 def test_a_one_sided_neuron_scan_at_100k_has_no_stray_but_its_lone_pairs(monkeypatch):
     """Tuning neuron 1734350788 seen from one side at 100k points (the calibration's cloud): two lone
     points, each 5 spacings from a point the tests keep, were its strays before the border rule (one of
-    them the surface around it also bounds: scan/enclosed.py)."""
+    them the surface around it also bounds: scan/enclosed.py; both lie behind the front of their
+    nearest surface points once a ray is not stopped by its own patch: scan/off_surface.behind_front)."""
+    import skelcore.scan.off_surface as off
     import skelcore.scan.outliers as outliers
     from skelcore.benchmark.calibration.skeletons import world
 
     cloud = world("real", "1734350788", 100_000, "views", 0).cloud
     assert find_outliers(cloud).count == 0
     monkeypatch.setattr(outliers, "border_rows", lambda c, rows, r, tree, stays=None: np.zeros(len(rows), bool))
+    assert find_outliers(cloud).count == 0
+    monkeypatch.setattr(off, "behind_front", lambda points, *a, **k: np.zeros(len(points), bool))
     assert find_outliers(cloud).count == 1
     monkeypatch.setattr(outliers, "enclosed", lambda points, *a: np.zeros(len(points), bool))
     assert find_outliers(cloud).count == 2
