@@ -370,7 +370,7 @@ class Params:
     outlier_local_k: int = 30
     outlier_off_surface_cos: float = 0.5
     outlier_surface_points: int = 3
-    outlier_view_share: float = 0.67
+    outlier_view_share: float = 0.65
     outlier_view_cos: float = 0.5
     # ground truth (docs/metrics.md 5.3.1)
     gt_thresholds: int = 20

@@ -1,9 +1,9 @@
 """The axis a one-sided scan was seen along, read from the cloud alone (docs/metrics.md 6.4).
 
 A scanner keeps what is first along each line of sight: seen along its own axis, a one-sided scan's
-depth image keeps nearly every point (share ``outlier_view_share`` and more; 0.73-0.88 on the one-sided
-tuning neurons and synthetic shapes), while a cloud sampled all round keeps about its front half
-(0.39-0.61) along any axis.  Depth images along ``VIEW_DIRECTIONS`` directions of a sample of the
+depth image keeps most of it (share ``outlier_view_share`` and more; 0.69-0.88 on the one-sided tuning
+neurons and synthetic shapes, the rest lost on oblique parts wider than the depth tolerance), while a
+cloud sampled all round keeps about its front half (0.39-0.61) along any axis.  Depth images along ``VIEW_DIRECTIONS`` directions of a sample of the
 cloud, pixels ``VIEW_PIXEL`` spacings wide, a point kept within ``VIEW_DEPTH`` spacings of its pixel's
 front.  The sign of the axis is left open: its two ends keep nearly the same share.  A lone point lying
 along that axis from its nearest surface points (:func:`along_axis`) lies in their shadow or before

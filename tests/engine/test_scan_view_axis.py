@@ -18,8 +18,8 @@ def _tube(n: int, half: bool) -> np.ndarray:
 
 
 def test_a_one_sided_scan_has_an_axis_a_closed_one_none():
-    """The half tube's depth image along z keeps nearly all of it; the whole tube keeps about half
-    along any axis."""
+    """The half tube's depth image along z keeps most of it; the whole tube keeps about half along
+    any axis."""
     axis = view_axis(_tube(6000, half=True))
     assert axis is not None and abs(axis[2]) > 0.9
     assert view_axis(_tube(12000, half=False)) is None
