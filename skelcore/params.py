@@ -216,7 +216,7 @@ class Params:
         the surface or across a rim.
     outlier_view_share, outlier_view_cos : ... and, on a one-sided scan (the depth image along some axis
         keeps at least outlier_view_share of the cloud; scan/view_axis.py), it does not lie along that
-        axis from most of its nearest surface points (|cos| above outlier_view_cos): there it lies in
+        axis from most of its nearest surface points (``|cos|`` above outlier_view_cos): there it lies in
         their shadow, a sample whose neighbours they hide.
     outlier_skeletal_radius : a skeletal point with fewer than outlier_min_neighbours other skeletal
         points within this many cloud spacings is a stray's image (contracted sets are dense: on the

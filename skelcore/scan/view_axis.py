@@ -69,7 +69,7 @@ def view_axis(cloud: np.ndarray, params: Params = Params()) -> np.ndarray | None
 def along_axis(points: np.ndarray, base: np.ndarray, near: np.ndarray, axis: np.ndarray,
                params: Params = Params()) -> np.ndarray:
     """(len(points),) bool: for most of each point's nearest surface points (rows of ``near`` into
-    ``base``) the offset to it makes |cos| above ``params.outlier_view_cos`` with ``axis``."""
+    ``base``) the offset to it makes ``|cos|`` above ``params.outlier_view_cos`` with ``axis``."""
     points = np.asarray(points, float)
     if len(points) == 0:
         return np.zeros(0, bool)
