@@ -217,6 +217,10 @@ class Params:
         points and their normals exceeds outlier_off_surface_cos, and none of them is a rim point
         (open_k, open_angle), or it lies beyond their box.  A one-sided scan's lone points lie along
         the surface or across a rim.
+    outlier_view_share, outlier_view_cos : ... and, on a one-sided scan (the depth image along some axis
+        keeps at least outlier_view_share of the cloud; scan/view_axis.py), it does not lie along that
+        axis from most of its nearest surface points (``|cos|`` above outlier_view_cos): there it lies in
+        their shadow, a sample whose neighbours they hide.
     outlier_skeletal_radius : a skeletal point with fewer than outlier_min_neighbours other skeletal
         points within this many cloud spacings is a stray's image (contracted sets are dense: on the
         hammer and the apple tree every skeletal point has two within 1.7).
@@ -370,6 +374,8 @@ class Params:
     outlier_local_k: int = 30
     outlier_off_surface_cos: float = 0.5
     outlier_surface_points: int = 3
+    outlier_view_share: float = 0.65
+    outlier_view_cos: float = 0.5
     # ground truth (docs/metrics.md 5.3.1)
     gt_thresholds: int = 20
     gt_threshold_max: float = 1.0
@@ -473,7 +479,7 @@ class Params:
         if not 0.0 < float(self.open_angle) < 360.0:
             bad("open_angle", "must be in (0, 360) degrees")
         for name in ("open_surface_share", "cap_max_share", "thin_min_share", "open_thin_planarity", "open_one_sided",
-                     "outlier_off_surface_cos"):
+                     "outlier_off_surface_cos", "outlier_view_share", "outlier_view_cos"):
             if not 0.0 <= float(getattr(self, name)) <= 1.0:
                 bad(name, "must be in [0, 1]")
         if not float(self.viewpoint_share_cell) >= 0:

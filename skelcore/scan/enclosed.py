@@ -23,13 +23,18 @@ __all__ = ["enclosed", "free_rays"]
 #: one from far off a thin shape visits most of its tree: 1 ms a query at 300k points)
 REACH = 16.0
 
+#: the nearest points a step of a ray with ``beyond`` asks (those of the start's patch among them)
+STOP_K = 8
+
 
 def free_rays(start: np.ndarray, way: np.ndarray, radius: float, tree: cKDTree, lo: np.ndarray,
-              hi: np.ndarray) -> np.ndarray:
+              hi: np.ndarray, beyond: float | None = None) -> np.ndarray:
     """(len(start),) bool: the ray from each start along its unit ``way`` leaves the box [lo, hi]
     (widened by ``radius``) with no point of ``tree`` within ``radius`` of the points taken along it:
     the first just past the start (which it does not hold), then every ``radius``, or farther where the
-    nearest point is farther (sphere tracing, up to ``REACH`` radii: what lies between is certainly clear)."""
+    nearest point is farther (sphere tracing, up to ``REACH`` radii: what lies between is certainly clear).
+    ``beyond``: only points more than that far past the start along the ray stop it (of the
+    ``STOP_K`` nearest each step): a ray from a surface point is not stopped by its own patch."""
     start = np.asarray(start, float).reshape(-1, 3)
     free = np.ones(len(start), bool)
     if len(start) == 0 or not radius > 0:
@@ -43,8 +48,15 @@ def free_rays(start: np.ndarray, way: np.ndarray, radius: float, tree: cKDTree, 
         alive, at = alive[inside], at[inside]
         if len(alive) == 0:
             break
-        d = np.minimum(tree.query(at, k=1, distance_upper_bound=REACH * radius)[0], REACH * radius)
-        hit = d <= radius
+        if beyond is None:
+            d = np.minimum(tree.query(at, k=1, distance_upper_bound=REACH * radius)[0], REACH * radius)
+            hit = d <= radius
+        else:
+            dk, ik = tree.query(at, k=STOP_K, distance_upper_bound=REACH * radius)
+            near = dk <= radius
+            past = np.einsum("ikj,ij->ik", tree.data[np.where(near, ik, 0)] - start[alive, None, :], way[alive])
+            hit = np.any(near & (past > beyond), axis=1)
+            d = np.minimum(dk[:, 0], REACH * radius)
         free[alive[hit]] = False
         alive, d = alive[~hit], d[~hit]
         t[alive] += np.maximum(d - radius, radius)

@@ -96,16 +96,18 @@ def behind_front(points: np.ndarray, base: np.ndarray, near: np.ndarray, radius:
     """(len(points),) bool: each point lies behind the front its nearest surface points show (rows of
     ``near`` into ``base``, ``tree`` its kd-tree), for most of them: the ray from that surface point
     straight away from the point leaves the box of ``base`` with no surface point within ``radius``
-    of it (:func:`.enclosed.free_rays`).
+    of it more than ``radius`` past its start (:func:`.enclosed.free_rays`): the start's own patch,
+    whose samples rise a fraction of a spacing into the ray (noise, a scan's depth tolerance,
+    curvature), stops no ray (docs/diagnostics.md "A front's own patch").
     A scan sees a front from the open side: beyond it on that ray lies nothing, so a point on the
     other side is behind it, a sample seen past a silhouette.  Outside a closed part, the ray from its
     nearest surface points crosses the part and meets its far wall (the boundedness' rays stop there,
-    docs/metrics.md 2); a front curving towards the ray meets it at once."""
+    docs/metrics.md 2); a front curving towards the ray by more than the radius meets it at once."""
     points = np.asarray(points, float)
     if len(points) == 0 or not radius > 0:
         return np.zeros(len(points), bool)
     start = base[near].reshape(-1, 3)
     way = start - np.repeat(points, near.shape[1], axis=0)
     way /= np.maximum(np.linalg.norm(way, axis=1, keepdims=True), 1e-300)
-    free = free_rays(start, way, radius, tree, base.min(axis=0), base.max(axis=0))
+    free = free_rays(start, way, radius, tree, base.min(axis=0), base.max(axis=0), beyond=radius)
     return 2 * free.reshape(near.shape).sum(axis=1) > near.shape[1]

@@ -10,7 +10,8 @@ spacings of its ``outlier_local_k`` nearest points), so a part sampled 10 x more
 points. Last, a stray lies off the surface along its normal, where a lone sample of a one-sided scan
 lies in a gap of it (:mod:`.off_surface`); and a point within the radius of one that is kept is kept
 (:func:`border_rows`, DBSCAN's border points); a point the surface encloses is no return from the air
-(:mod:`.enclosed`). A skeletal set in pointwise correspondence is held to the
+(:mod:`.enclosed`); on a one-sided scan, a point along the view axis from its nearest surface points
+lies in their shadow (:mod:`.view_axis`). A skeletal set in pointwise correspondence is held to the
 radius test alone with the cloud's spacing (:func:`isolated_rows`): contraction stacks skeletal points, so their own spacing says nothing.
 """
 
@@ -25,6 +26,7 @@ from ..geometry import Checkpoint, Normalization, kd_tree, leaf_order, no_checkp
 from ..params import Params
 from .enclosed import enclosed
 from .off_surface import beyond_box, off_surface
+from .view_axis import along_axis, view_axis
 
 __all__ = ["Outliers", "find_outliers", "border_rows", "isolated_rows", "sparse_rows", "local_spacing"]
 
@@ -116,7 +118,13 @@ def find_outliers(cloud: np.ndarray, params: Params = Params(), *, checkpoint: C
         rows = rows[~border_rows(cloud, rows, float(params.outlier_radius) * spacing, tree, stays=beyond)]
     if len(rows):  # and in the air, not enclosed by the surface (.enclosed)
         base = cloud[surface]
-        rows = rows[~enclosed(cloud[rows], base, cKDTree(base), spacing, params)]
+        base_tree = cKDTree(base)
+        rows = rows[~enclosed(cloud[rows], base, base_tree, spacing, params)]
+        axis = view_axis(cloud, params) if len(rows) else None
+        if axis is not None:  # and not in the shadow of a one-sided scan's front (.view_axis)
+            near = base_tree.query(cloud[rows], k=int(params.outlier_surface_points))[1]
+            near = near.reshape(len(rows), -1)
+            rows = rows[~along_axis(cloud[rows], base, near, axis, params) | beyond_box(cloud, rows, base)]
     checkpoint(0.9)
     if len(rows) == 0 or len(rows) >= n - 1:
         return none

@@ -34,6 +34,13 @@ def _cube(n: int) -> np.ndarray:
     return p
 
 
+@pytest.fixture(autouse=True)
+def no_view_axis(monkeypatch):
+    """The rays' and the enclosure's rules alone: these scenes (faces seen from one side) have a view
+    axis, along which the lone points lie, and scan/view_axis.py would keep them first."""
+    monkeypatch.setattr(outliers, "view_axis", lambda cloud, params=None: None)
+
+
 @pytest.fixture
 def no_concave(monkeypatch):
     """Flat patches: the concave-side rule has no side to read, so it is left out."""
@@ -47,6 +54,27 @@ def test_a_lone_point_behind_a_front_seen_from_one_side_is_kept(no_concave, monk
     assert find_outliers(cloud).count == 0
     monkeypatch.setattr(off, "behind_front", lambda points, *a: np.zeros(len(points), bool))
     assert find_outliers(cloud).rows.tolist() == [15000]
+
+
+def test_a_front_whose_samples_rise_into_the_ray_does_not_stop_it(no_concave, monkeypatch):
+    """The same front and point, the front's samples jittered by about half a spacing along its normal
+    (noise, a scanner's depth tolerance): a ray from a front sample reaches neighbours a little above
+    it within its radius, its own patch, and only points more than that radius past its start stop it.
+    Without that, every ray stops at its start and the point is a stray.  Above a closed slab so
+    jittered, the ray still meets the far face: a stray."""
+    import skelcore.scan.enclosed as enclosed_module
+
+    jittered = _plane(0.0, 5000, 1)
+    jittered[:, 2] += np.random.default_rng(7).normal(0.0, 0.04, len(jittered))
+    below = np.vstack([jittered, _beside(), [[5.0, 5.0, -1.2]]])
+    slab = _plane(-1.0, 5000, 2)
+    slab[:, 2] += np.random.default_rng(8).normal(0.0, 0.04, len(slab))
+    above = np.vstack([jittered, slab, _beside(), [[5.0, 5.0, 1.2]]])
+    assert find_outliers(below).count == 0
+    assert find_outliers(above).rows.tolist() == [20000]
+    own_patch_stops = lambda *a, beyond=None: enclosed_module.free_rays(*a)  # noqa: E731
+    monkeypatch.setattr(off, "free_rays", own_patch_stops)
+    assert find_outliers(below).rows.tolist() == [15000]
 
 
 def test_a_stray_above_a_closed_slab_stays_a_stray(no_concave):
