@@ -34,22 +34,6 @@
  * square (a few units in the last place) and of hypot (under one), so its distance is not computed yet */
 #define REACH_SLACK 1e-6
 
-typedef struct {             /* a growing array of doubles */
-    double *v;
-    Py_ssize_t n, cap;
-} Vec;
-
-static int vec_reserve(Vec *a, Py_ssize_t need) {
-    if (need <= a->cap) return 1;
-    Py_ssize_t cap = a->cap ? a->cap : 1024;
-    while (cap < need) cap *= 2;
-    double *v = (double *)realloc(a->v, (size_t)cap * sizeof(double));
-    if (!v) return 0;
-    a->v = v;
-    a->cap = cap;
-    return 1;
-}
-
 typedef struct {             /* slab points: distance (in the pool its square, extend_head), plane coordinates, grid row */
     double *d, *fg, *fh;
     int32_t *row;
@@ -372,8 +356,8 @@ static int extend_head(Search *S) {
     return 1;
 }
 
-/* One sample's ring, appended to fx, fy. */
-static int one_ring(const Grid *G, Search *S, double growth, double first, Vec *fx, Vec *fy) {
+/* One sample's ring: the first *ring points of the head (S->head.fg, S->head.fh). */
+static int one_ring(const Grid *G, Search *S, double growth, double first, Py_ssize_t *ring) {
     double R = first;
     Py_ssize_t len = 0;  /* the ring's length within the head so far */
     int64_t box[6];
@@ -398,12 +382,8 @@ static int one_ring(const Grid *G, Search *S, double growth, double first, Vec *
     }
     for (Py_ssize_t i = 0; i < S->n_taken; i++) S->taken[S->cells[i]] = 0;
     S->n_taken = 0;
-    if (!ok || !vec_reserve(fx, fx->n + len) || !vec_reserve(fy, fy->n + len)) return 0;
-    memcpy(fx->v + fx->n, S->head.fg, (size_t)len * sizeof(double));
-    memcpy(fy->v + fy->n, S->head.fh, (size_t)len * sizeof(double));
-    fx->n += len;
-    fy->n += len;
-    return 1;
+    *ring = len;
+    return ok;
 }
 
 /* The part of ellipse_fit.ellipse_sums before its BLAS product, for sets lo..hi - 1 of x, y (set i is
@@ -476,31 +456,34 @@ static PyObject *py_design(PyObject *self, PyObject *args) {
     Py_RETURN_NONE;
 }
 
-static PyObject *doubles(const Vec *a) {
-    return PyByteArray_FromStringAndSize((const char *)a->v, (Py_ssize_t)(a->n * (Py_ssize_t)sizeof(double)));
-}
-
 /* rings(columns (3, N) f64, keys (C,) i64, starts (C,) i64, counts (C,) i64, lines (d1 d2 + 1,) i64,
  *       centres (C, 3) f64,
  *       frame (lo0, lo1, lo2, cell, size) f64, dims (3,) i64, points (S, 3), u, g, h (S, 3) f64,
- *       half, growth, first) -> (fx, fy, starts) as bytearrays of f64, f64, i64 (S + 1) */
+ *       half, growth, first, fx out (M,) f64, fy out (M,) f64, bounds out (S + 1,) i64, offset)
+ *   -> (done, need): the rings of samples 0 .. done - 1 written to fx, fy from row `offset` on, sample s's
+ *   at rows bounds[s] .. bounds[s + 1] - 1 (bounds[0] = offset); done < S when sample `done`'s ring, of
+ *   `need` points, did not fit in the M rows (the caller grows the buffers and asks again from there).
+ *   The caller's buffers are kept from call to call: no output is allocated here. */
 static PyObject *py_rings(PyObject *self, PyObject *args) {
-    Py_buffer col, ky, st, ct, ln, ce, fr, dm, pt, ub, gb, hb;
+    Py_buffer col, ky, st, ct, ln, ce, fr, dm, pt, ub, gb, hb, xo, yo, bo;
     double half, growth, first;
-    if (!PyArg_ParseTuple(args, "y*y*y*y*y*y*y*y*y*y*y*y*ddd", &col, &ky, &st, &ct, &ln, &ce, &fr, &dm, &pt, &ub,
-                          &gb, &hb, &half, &growth, &first))
+    Py_ssize_t offset;
+    if (!PyArg_ParseTuple(args, "y*y*y*y*y*y*y*y*y*y*y*y*dddw*w*w*n", &col, &ky, &st, &ct, &ln, &ce, &fr, &dm, &pt,
+                          &ub, &gb, &hb, &half, &growth, &first, &xo, &yo, &bo, &offset))
         return NULL;
-    Py_buffer *all[] = {&col, &ky, &st, &ct, &ln, &ce, &fr, &dm, &pt, &ub, &gb, &hb};
+    Py_buffer *all[] = {&col, &ky, &st, &ct, &ln, &ce, &fr, &dm, &pt, &ub, &gb, &hb, &xo, &yo, &bo};
     const int n_buf = (int)(sizeof all / sizeof all[0]);
     const Py_ssize_t n_pts = col.len / (Py_ssize_t)(3 * sizeof(double));
     const Py_ssize_t n_cells = ky.len / (Py_ssize_t)sizeof(int64_t);
     const Py_ssize_t n_s = pt.len / (Py_ssize_t)(3 * sizeof(double));
+    const Py_ssize_t cap = xo.len / (Py_ssize_t)sizeof(double);
     const double *frame = (const double *)fr.buf;
     const int64_t *dims = (const int64_t *)dm.buf;
     int ok = col.len == 3 * n_pts * (Py_ssize_t)sizeof(double) && st.len == ky.len && ct.len == ky.len
              && ce.len == 3 * n_cells * (Py_ssize_t)sizeof(double) && fr.len == 5 * (Py_ssize_t)sizeof(double)
              && dm.len == 3 * (Py_ssize_t)sizeof(int64_t) && ub.len == pt.len && gb.len == pt.len && hb.len == pt.len
-             && n_pts < INT32_MAX && n_cells < INT32_MAX && half > 0 && growth > 0 && first > 0 && frame[3] > 0;
+             && n_pts < INT32_MAX && n_cells < INT32_MAX && half > 0 && growth > 0 && first > 0 && frame[3] > 0
+             && yo.len == xo.len && bo.len == (n_s + 1) * (Py_ssize_t)sizeof(int64_t) && 0 <= offset && offset <= cap;
     for (int a = 0; ok && a < 3; a++) ok = dims[a] >= 1 && dims[a] <= 1 << 20;
     const Py_ssize_t n_lines = ok ? (Py_ssize_t)(dims[1] * dims[2]) : 0;
     const int64_t *lines = (const int64_t *)ln.buf;
@@ -514,7 +497,7 @@ static PyObject *py_rings(PyObject *self, PyObject *args) {
              && (i == 0 || keys[i] > keys[i - 1]) && keys[i] < dims[0] * dims[1] * dims[2];
     if (!ok) {
         for (int i = 0; i < n_buf; i++) PyBuffer_Release(all[i]);
-        PyErr_SetString(PyExc_ValueError, "rings: inconsistent grid or sample arrays");
+        PyErr_SetString(PyExc_ValueError, "rings: inconsistent grid, sample or output arrays");
         return NULL;
     }
     Grid G = {(const double *)col.buf, (const double *)col.buf + n_pts, (const double *)col.buf + 2 * n_pts,
@@ -522,16 +505,17 @@ static PyObject *py_rings(PyObject *self, PyObject *args) {
               {frame[0], frame[1], frame[2]}, frame[3], 0.5 * frame[3], frame[4], {dims[0], dims[1], dims[2]}};
     const double *P = (const double *)pt.buf, *U = (const double *)ub.buf, *Gv = (const double *)gb.buf,
                  *H = (const double *)hb.buf;
-    Vec fx = {0}, fy = {0};
+    double *fx = (double *)xo.buf, *fy = (double *)yo.buf;
+    int64_t *bounds = (int64_t *)bo.buf;
     Search S;
     memset(&S, 0, sizeof S);
     S.half = half;
-    int64_t *bounds = (int64_t *)malloc((size_t)(n_s + 1) * sizeof(int64_t));
     S.taken = (char *)calloc((size_t)n_cells + 1, 1);
     S.cells = (int32_t *)malloc(((size_t)n_cells + 1) * sizeof(int32_t));
-    int good = bounds && S.taken && S.cells;
+    int good = S.taken && S.cells;
+    Py_ssize_t done = 0, need = 0;
     Py_BEGIN_ALLOW_THREADS
-    if (good) bounds[0] = 0;
+    bounds[0] = (int64_t)offset;
     for (Py_ssize_t s = 0; good && s < n_s; s++) {
         double size = G.size;  /* the coordinates' magnitude, for the cell tests' allowance */
         for (int a = 0; a < 3; a++) {
@@ -540,23 +524,24 @@ static PyObject *py_rings(PyObject *self, PyObject *args) {
         }
         Grid Gs = G;
         Gs.size = size;
-        good = one_ring(&Gs, &S, growth, first, &fx, &fy);
-        bounds[s + 1] = (int64_t)fx.n;
+        Py_ssize_t len = 0;
+        good = one_ring(&Gs, &S, growth, first, &len);
+        if (!good) break;
+        const Py_ssize_t at = (Py_ssize_t)bounds[s];
+        if (len > cap - at) {
+            need = len;
+            break;
+        }
+        memcpy(fx + at, S.head.fg, (size_t)len * sizeof(double));
+        memcpy(fy + at, S.head.fh, (size_t)len * sizeof(double));
+        bounds[s + 1] = (int64_t)(at + len);
+        done = s + 1;
     }
     Py_END_ALLOW_THREADS
     for (int i = 0; i < n_buf; i++) PyBuffer_Release(all[i]);
     pts_free(&S.pool); pts_free(&S.spare); pts_free(&S.head); scratch_free(&S.sort); free(S.taken); free(S.cells);
-    PyObject *out = NULL;
-    if (good) {
-        Vec b = {(double *)bounds, n_s + 1, n_s + 1};  /* int64 and double are both 8 bytes */
-        PyObject *a = doubles(&fx), *c = doubles(&fy), *d = doubles(&b);
-        if (a && c && d) out = PyTuple_Pack(3, a, c, d);
-        Py_XDECREF(a); Py_XDECREF(c); Py_XDECREF(d);
-    } else {
-        PyErr_NoMemory();
-    }
-    free(fx.v); free(fy.v); free(bounds);
-    return out;
+    if (!good) return PyErr_NoMemory();
+    return Py_BuildValue("(nn)", done, need);
 }
 
 static PyMethodDef methods[] = {

@@ -13,6 +13,7 @@ beta* and c* without recomputing.  Departures from the paper and the reference t
 from __future__ import annotations
 
 import os
+import threading
 from typing import Callable
 
 import numpy as np
@@ -46,6 +47,7 @@ _COMPILED_RINGS = True
 # a sample's share of a batch of _CURVE_BATCH_PAIRS on small clouds with the kernel (256 samples per call by
 # default, a checkpoint between calls)
 _KERNEL_SAMPLE_PAIRS = _CURVE_BATCH_PAIRS // 256
+_RING_ROWS = 1 << 16  # the compiled rings' first buffers per thread (rows of each coordinate)
 
 
 def skeletal_centeredness(
@@ -440,12 +442,26 @@ def _kernel_rings(
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """:func:`_ring_columns` by the compiled kernel ``_rings.c``: the same rings, bit for bit (tested), from
     the grid's cells around p in growing balls (the first of reach ``_BALL_FIRST`` x alpha / 2), without the
-    kd-tree or the whole slab's arrays (docs/performance.md 6.5)."""
-    samples = (np.ascontiguousarray(a, np.float64) for a in (points, u, g, h))
-    fx, fy, starts = _rings_kernel.rings(grid.columns, grid.keys, grid.starts, grid.counts, grid.lines, grid.centres,
-                                         grid.frame, grid.dims, *samples, float(half), float(growth),
-                                         float(_BALL_FIRST * half))
-    return np.frombuffer(fx, np.float64), np.frombuffer(fy, np.float64), np.frombuffer(starts, np.int64)
+    kd-tree or the whole slab's arrays (docs/performance.md 6.5).  The kernel writes the rings into this
+    thread's buffers of the grid (:meth:`_SlabGrid.ring_buffers`), so x and y are views of them, valid until
+    this thread asks the grid for rings again; where a ring does not fit, the buffers grow and the kernel
+    goes on from that sample."""
+    n = len(points)
+    points, u, g, h = (np.ascontiguousarray(a, np.float64) for a in (points, u, g, h))
+    bounds = np.zeros(n + 1, np.int64)
+    fx, fy = grid.ring_buffers(0)
+    done = end = 0
+    while True:
+        step, need = _rings_kernel.rings(grid.columns, grid.keys, grid.starts, grid.counts, grid.lines, grid.centres,
+                                         grid.frame, grid.dims, points[done:], u[done:], g[done:], h[done:],
+                                         float(half), float(growth), float(_BALL_FIRST * half), fx, fy,
+                                         bounds[done:], end)
+        done += step
+        end = int(bounds[done])
+        if done == n:
+            return fx[:end], fy[:end], bounds
+        # the rings so far, per sample, for the samples left, with room to spare
+        fx, fy = grid.ring_buffers(end + need + (end // max(done, 1)) * (n - done) * 5 // 4, keep=end)
 
 
 def _ball_rows(grid: "_SlabGrid", points: np.ndarray, radius: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -584,6 +600,20 @@ class _SlabGrid:
         # the compiled rings' frame: the grid's corner, its cell side and the coordinates' magnitude
         self.frame = np.array([*self.lo, cell, float(np.abs(np.r_[self.lo, self.hi]).max())], dtype=float)
         self._tree: cKDTree | None = None
+        self._local = threading.local()
+
+    def ring_buffers(self, size: int, keep: int = 0) -> tuple[np.ndarray, np.ndarray]:
+        """This thread's two buffers of the compiled rings' plane coordinates, at least ``size`` rows each
+        (the first ``keep`` rows kept where they grow).  Kept with the grid: a fresh 50 MB of rings (an
+        edit's 180 moved samples at 1M points) cost as much in page faults and copies as the rings
+        themselves (docs/performance.md 6.10)."""
+        bufs = getattr(self._local, "rings", None)
+        if bufs is None or len(bufs[0]) < size:
+            grown = (np.empty(max(size, _RING_ROWS)), np.empty(max(size, _RING_ROWS)))
+            if bufs is not None and keep:
+                grown[0][:keep], grown[1][:keep] = bufs[0][:keep], bufs[1][:keep]
+            self._local.rings = bufs = grown
+        return bufs
 
     @property
     def tree(self) -> cKDTree:

@@ -122,9 +122,10 @@ def test_rings_kernel_rejects_inconsistent_arrays():
     grid = centeredness.slab_grid(np.random.default_rng(0).normal(size=(100, 3)))
     p = np.zeros((1, 3))
     u = np.array([[0.0, 0.0, 1.0]])
+    fx, fy, bounds = np.empty(200), np.empty(200), np.zeros(2, np.int64)
     args = [grid.columns, grid.keys, grid.starts, grid.counts, grid.lines, grid.centres, grid.frame, grid.dims,
-            p, u, np.array([[1.0, 0, 0]]), np.array([[0.0, 1, 0]]), 0.1, 1.5, 0.05]
-    _rings.rings(*args)
+            p, u, np.array([[1.0, 0, 0]]), np.array([[0.0, 1, 0]]), 0.1, 1.5, 0.05, fx, fy, bounds, 0]
+    assert _rings.rings(*args) == (1, 0)
     bad = list(args)
     bad[1] = grid.keys[::-1].copy()  # keys out of order
     with pytest.raises(ValueError, match="rings"):
@@ -133,6 +134,35 @@ def test_rings_kernel_rejects_inconsistent_arrays():
     bad[9] = np.zeros((2, 3))  # directions for another number of samples
     with pytest.raises(ValueError, match="rings"):
         _rings.rings(*bad)
+    for at, value in ((15, np.empty(100)), (17, np.zeros(3, np.int64)), (18, 201)):  # unequal buffers, bounds, offset
+        bad = list(args)
+        bad[at] = value
+        with pytest.raises(ValueError, match="rings"):
+            _rings.rings(*bad)
+
+
+def test_rings_that_outgrow_the_buffers_go_on_from_the_sample_that_did_not_fit(monkeypatch, scans):
+    """The kernel writes into the grid's kept buffers and stops at a ring that does not fit; the buffers
+    grow and it goes on from there: buffers of 8 rows (a regrowth at nearly every sample) and a sample with
+    an empty ring first give the rings of one call with room for all, and a second call reuses the buffers."""
+    name, cloud, points, dirs, slab = _cases(scans)[0]
+    params = Params(slab_factor=slab)
+    half = 0.5 * slab * float(np.linalg.norm(cloud.max(axis=0) - cloud.min(axis=0)))
+    u = centeredness.unit_rows(np.vstack([[1.0, 0, 0], dirs]))
+    g, h = centeredness._orthonormal_complement(u)
+    points = np.vstack([[1e3, 1e3, 1e3], points])  # an empty slab: a ring of no point
+    got = []
+    for rows in (1 << 20, 8):
+        monkeypatch.setattr(centeredness, "_RING_ROWS", rows)
+        grid = centeredness.slab_grid(cloud, params)
+        x, y, s = centeredness._kernel_rings(grid, points, u, g, h, half, params.ring_growth)
+        got.append((x.copy(), y.copy(), s.copy()))
+        assert rows > 8 or len(grid.ring_buffers(0)[0]) >= s[-1] > 8
+    (x0, y0, s0), (x1, y1, s1) = got
+    assert s0[1] == 0 and s0.tobytes() == s1.tobytes() and x0.tobytes() == x1.tobytes() and y0.tobytes() == y1.tobytes()
+    kept = grid.ring_buffers(0)[0]
+    x2, _, s2 = centeredness._kernel_rings(grid, points, u, g, h, half, params.ring_growth)
+    assert grid.ring_buffers(0)[0] is kept and x2.tobytes() == x0.tobytes() and s2.tobytes() == s0.tobytes()
 
 
 def test_ellipse_sums_are_the_numpy_loops_bit_for_bit():
