@@ -142,27 +142,45 @@ def test_rings_kernel_rejects_inconsistent_arrays():
 
 
 def test_rings_that_outgrow_the_buffers_go_on_from_the_sample_that_did_not_fit(monkeypatch, scans):
-    """The kernel writes into the grid's kept buffers and stops at a ring that does not fit; the buffers
-    grow and it goes on from there: buffers of 8 rows (a regrowth at nearly every sample) and a sample with
-    an empty ring first give the rings of one call with room for all, and a second call reuses the buffers."""
+    """The kernel writes into kept buffers and stops at a ring that does not fit; the buffers grow and it
+    goes on from there: buffers of 8 rows (a regrowth at nearly every sample) and a sample with an empty
+    ring first give the rings of one call with room for all; the grid lends its kept buffers again."""
     name, cloud, points, dirs, slab = _cases(scans)[0]
     params = Params(slab_factor=slab)
-    half = 0.5 * slab * float(np.linalg.norm(cloud.max(axis=0) - cloud.min(axis=0)))
+    grid = centeredness.slab_grid(cloud, params)
+    half = 0.5 * slab * float(np.linalg.norm(grid.hi - grid.lo))
     u = centeredness.unit_rows(np.vstack([[1.0, 0, 0], dirs]))
     g, h = centeredness._orthonormal_complement(u)
     points = np.vstack([[1e3, 1e3, 1e3], points])  # an empty slab: a ring of no point
     got = []
     for rows in (1 << 20, 8):
         monkeypatch.setattr(centeredness, "_RING_ROWS", rows)
-        grid = centeredness.slab_grid(cloud, params)
-        x, y, s = centeredness._kernel_rings(grid, points, u, g, h, half, params.ring_growth)
+        bufs = centeredness._RingBuffers()
+        x, y, s = centeredness._kernel_rings(grid, points, u, g, h, half, params.ring_growth, bufs)
         got.append((x.copy(), y.copy(), s.copy()))
-        assert rows > 8 or len(grid.ring_buffers(0)[0]) >= s[-1] > 8
+        assert rows > 8 or len(bufs.fx) >= s[-1] > 8
     (x0, y0, s0), (x1, y1, s1) = got
     assert s0[1] == 0 and s0.tobytes() == s1.tobytes() and x0.tobytes() == x1.tobytes() and y0.tobytes() == y1.tobytes()
-    kept = grid.ring_buffers(0)[0]
-    x2, _, s2 = centeredness._kernel_rings(grid, points, u, g, h, half, params.ring_growth)
-    assert grid.ring_buffers(0)[0] is kept and x2.tobytes() == x0.tobytes() and s2.tobytes() == s0.tobytes()
+    with grid.ring_buffers() as lent:
+        centeredness._kernel_rings(grid, points, u, g, h, half, params.ring_growth, lent)
+        with grid.ring_buffers() as other:  # a second caller at the same time gets its own
+            assert other is not lent
+    with grid.ring_buffers() as again:
+        assert again is other or again is lent
+
+
+@pytest.mark.parametrize("chunk", [1, 3, 1000])
+def test_a_spans_rings_in_chunks_give_the_same_centeredness(monkeypatch, scans, chunk):
+    """A span's samples go to the kernel ``_RING_CHUNK`` at a time, their fits' sums joined: the same bits
+    for chunks of 1, 3 and all (spans of 7 samples on threads, the array code the reference)."""
+    monkeypatch.setattr(centeredness, "_CURVE_AT_ONCE", 0)
+    monkeypatch.setattr(centeredness, "_RING_CHUNK", chunk)
+    name, cloud, points, dirs, slab = _cases(scans)[3]
+    got = []
+    for compiled in (False, True):
+        monkeypatch.setattr(centeredness, "_COMPILED_RINGS", compiled)
+        got.append(centeredness.curve_centeredness(cloud, points, dirs, params=Params(slab_factor=slab), span=7))
+    assert got[1].tobytes() == got[0].tobytes() and np.isfinite(got[0]).sum() > 20
 
 
 def test_ellipse_sums_are_the_numpy_loops_bit_for_bit():
