@@ -49,6 +49,9 @@ _COMPILED_RINGS = True
 # default, a checkpoint between calls)
 _KERNEL_SAMPLE_PAIRS = _CURVE_BATCH_PAIRS // 256
 _RING_ROWS = 1 << 16  # the compiled rings' first buffers (rows of each coordinate)
+# the kernel orders a ring's distances by the square roots of their squares, libm's hypot only where two come
+# within 1e-13 (the same rings; False: hypot for every point, as numpy's np.hypot)
+_BY_ROOTS = True
 _RING_CHUNK = 16  # samples per kernel call in a span (an edit's 180 at 1M points: 4.4 MB of rings a call)
 
 
@@ -469,7 +472,7 @@ def _kernel_rings(
         step, need = _rings_kernel.rings(grid.columns, grid.keys, grid.starts, grid.counts, grid.lines, grid.centres,
                                          grid.frame, grid.dims, points[done:], u[done:], g[done:], h[done:],
                                          float(half), float(growth), float(_BALL_FIRST * half), bufs.fx, bufs.fy,
-                                         bounds[done:], end)
+                                         bounds[done:], end, _BY_ROOTS)
         done += step
         end = int(bounds[done])
         if done == n:

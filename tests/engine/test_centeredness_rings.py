@@ -169,6 +169,35 @@ def test_rings_that_outgrow_the_buffers_go_on_from_the_sample_that_did_not_fit(m
         assert again is other or again is lent
 
 
+def test_rings_ordered_by_square_roots_are_those_by_hypot(monkeypatch, scans):
+    """The kernel orders distances by the square roots of their squares and takes libm's hypot only where two
+    come within 1e-13, or one within 1e-13 of R or of a ring's growth: the same rings as hypot for every
+    point on every case (exact ties, repeated points, a tube's exact radius, where it falls back to hypot),
+    and where the ring's growth rule reads the two differently: a point at hypot distance exactly 1.5 x the
+    last one's hypot (so not in the ring), whose square root is below 1.5 x that one's square root."""
+    a = np.array([0.04746668208702611, 0.06957808520711659])  # sqrt(x^2 + y^2) one unit above its hypot
+    reach = 1.5 * float(np.hypot(*a))
+    assert np.sqrt(a @ a) > np.hypot(*a) and 1.5 * np.sqrt(a @ a) > reach
+    corners = np.array([[x, y, z] for x in (-10.0, 10.0) for y in (-10.0, 10.0) for z in (-10.0, 10.0)])
+    ring = np.array([[a[0], a[1], 0.0], [0.9 * a[1], -0.9 * a[0], 0.0], [-0.8 * a[0], 0.8 * a[1], 0.0],
+                     [0.7 * a[1], 0.7 * a[0], 0.0], [-0.6 * a[1], -0.6 * a[0], 0.0], [0.0, reach, 0.0]])
+    edge = (np.vstack([corners, ring]), np.zeros((1, 3)), np.array([[0.0, 0.0, 1.0]]), 0.02)
+    cases = [c[1:] for c in _cases(scans)] + [edge]
+    for cloud, points, dirs, slab in cases:
+        params = Params(slab_factor=slab)
+        grid = centeredness.slab_grid(cloud, params)
+        half = 0.5 * slab * float(np.linalg.norm(grid.hi - grid.lo))
+        u = centeredness.unit_rows(dirs)
+        g, h = centeredness._orthonormal_complement(u)
+        got = []
+        for roots in (False, True):
+            monkeypatch.setattr(centeredness, "_BY_ROOTS", roots)
+            x, y, s = centeredness._kernel_rings(grid, points, u, g, h, half, params.ring_growth)
+            got.append((x.tobytes(), y.tobytes(), s.tobytes()))
+        assert got[0] == got[1]
+    assert s.tolist() == [0, 5]  # the edge case's ring stops before the point at 1.5 x
+
+
 @pytest.mark.parametrize("chunk", [1, 3, 1000])
 def test_a_spans_rings_in_chunks_give_the_same_centeredness(monkeypatch, scans, chunk):
     """A span's samples go to the kernel ``_RING_CHUNK`` at a time, their fits' sums joined: the same bits
