@@ -52,7 +52,9 @@ _RING_ROWS = 1 << 16  # the compiled rings' first buffers (rows of each coordina
 # the kernel orders a ring's distances by the square roots of their squares, libm's hypot only where two come
 # within 1e-13 (the same rings; False: hypot for every point, as numpy's np.hypot)
 _BY_ROOTS = True
-_RING_CHUNK = 16  # samples per kernel call in a span (an edit's 180 at 1M points: 4.4 MB of rings a call)
+_RING_CHUNK = 16  # samples of a span's first kernel call (then as many as _RING_CHUNK_ROWS ring points take)
+_RING_CHUNK_ROWS = 1 << 18  # ring points per kernel call in a span (4 MB of rings: an edit's 180 samples at 1M
+# points in 12 calls, at 100k in 2)
 
 
 def skeletal_centeredness(
@@ -324,12 +326,15 @@ def curve_centeredness(
     parts: list[EllipseSums] = []
 
     def span_sums(i0: int, i1: int) -> tuple[EllipseSums, np.ndarray, np.ndarray, np.ndarray]:
-        # _RING_CHUNK samples at a time into the grid's kept buffers: their rings are still in the caches when
-        # their fits read them (each set's sums are its own: the same bits in any grouping)
+        # about _RING_CHUNK_ROWS ring points at a time (as many samples as the rings so far say, _RING_CHUNK
+        # first) into the grid's kept buffers: their rings are still in the caches when their fits read them
+        # (each set's sums are its own: the same bits in any grouping)
         found = []
         with grid.ring_buffers() as bufs:
-            for c0 in range(i0, i1, _RING_CHUNK):
-                c1 = min(c0 + _RING_CHUNK, i1)
+            c1, rows = i0, 0
+            while c1 < i1:
+                c0 = c1
+                c1 = min(i1, c0 + (_RING_CHUNK if c0 == i0 else max(1, _RING_CHUNK_ROWS * (c0 - i0) // max(rows, 1))))
                 x, y, starts = _ring_columns(grid, points[todo[c0:c1]], u[todo[c0:c1]], g[c0:c1], h[c0:c1], half,
                                              growth, bufs=bufs)
                 sums = ellipse_sums(x, y, starts, bufs)
@@ -337,6 +342,7 @@ def curve_centeredness(
                 unfitted[sums.use] = False
                 centre, r = _spare_fits(x, y, starts, np.flatnonzero(unfitted & (np.diff(starts) >= 3)))
                 found.append((sums.shifted(c0), np.diff(starts), centre, r))
+                rows += int(starts[-1])
         if len(found) == 1:
             return found[0]
         return EllipseSums.joined([f[0] for f in found]), *(np.concatenate(a) for a in list(zip(*found))[1:])

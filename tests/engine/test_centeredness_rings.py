@@ -198,12 +198,14 @@ def test_rings_ordered_by_square_roots_are_those_by_hypot(monkeypatch, scans):
     assert s.tolist() == [0, 5]  # the edge case's ring stops before the point at 1.5 x
 
 
-@pytest.mark.parametrize("chunk", [1, 3, 1000])
-def test_a_spans_rings_in_chunks_give_the_same_centeredness(monkeypatch, scans, chunk):
-    """A span's samples go to the kernel ``_RING_CHUNK`` at a time, their fits' sums joined: the same bits
-    for chunks of 1, 3 and all (spans of 7 samples on threads, the array code the reference)."""
+@pytest.mark.parametrize("chunk, rows", [(1, 1), (3, 50), (1000, 1 << 18)])
+def test_a_spans_rings_in_chunks_give_the_same_centeredness(monkeypatch, scans, chunk, rows):
+    """A span's samples go to the kernel in chunks (``_RING_CHUNK`` first, then about ``_RING_CHUNK_ROWS``
+    ring points each), their fits' sums joined: the same bits for chunks of one sample, of a few and of all
+    (spans of 7 samples on threads, the array code the reference)."""
     monkeypatch.setattr(centeredness, "_CURVE_AT_ONCE", 0)
     monkeypatch.setattr(centeredness, "_RING_CHUNK", chunk)
+    monkeypatch.setattr(centeredness, "_RING_CHUNK_ROWS", rows)
     name, cloud, points, dirs, slab = _cases(scans)[3]
     got = []
     for compiled in (False, True):
