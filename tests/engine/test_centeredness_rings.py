@@ -54,15 +54,16 @@ def _cases(scans):
     ]
 
 
-def _rings_both_ways(monkeypatch, cloud, points, dirs, slab):
+def _rings_both_ways(monkeypatch, cloud, points, dirs, slab, flag="_COMPILED_RINGS"):
+    """The rings with ``centeredness.<flag>`` False (the array code; hypot for every point) and True."""
     params = Params(slab_factor=slab)
     grid = centeredness.slab_grid(cloud, params)
     half = 0.5 * slab * float(np.linalg.norm(grid.hi - grid.lo))
     u = centeredness.unit_rows(dirs)
     g, h = centeredness._orthonormal_complement(u)
     out = []
-    for compiled in (False, True):
-        monkeypatch.setattr(centeredness, "_COMPILED_RINGS", compiled)
+    for on in (False, True):
+        monkeypatch.setattr(centeredness, flag, on)
         out.append(centeredness._ring_columns(grid, points, u, g, h, half, params.ring_growth))
     return out
 
@@ -184,18 +185,9 @@ def test_rings_ordered_by_square_roots_are_those_by_hypot(monkeypatch, scans):
     edge = (np.vstack([corners, ring]), np.zeros((1, 3)), np.array([[0.0, 0.0, 1.0]]), 0.02)
     cases = [c[1:] for c in _cases(scans)] + [edge]
     for cloud, points, dirs, slab in cases:
-        params = Params(slab_factor=slab)
-        grid = centeredness.slab_grid(cloud, params)
-        half = 0.5 * slab * float(np.linalg.norm(grid.hi - grid.lo))
-        u = centeredness.unit_rows(dirs)
-        g, h = centeredness._orthonormal_complement(u)
-        got = []
-        for roots in (False, True):
-            monkeypatch.setattr(centeredness, "_BY_ROOTS", roots)
-            x, y, s = centeredness._kernel_rings(grid, points, u, g, h, half, params.ring_growth)
-            got.append((x.tobytes(), y.tobytes(), s.tobytes()))
-        assert got[0] == got[1]
-    assert s.tolist() == [0, 5]  # the edge case's ring stops before the point at 1.5 x
+        (x0, y0, s0), (x1, y1, s1) = _rings_both_ways(monkeypatch, cloud, points, dirs, slab, "_BY_ROOTS")
+        assert s1.tobytes() == s0.tobytes() and x1.tobytes() == x0.tobytes() and y1.tobytes() == y0.tobytes()
+    assert s1.tolist() == [0, 5]  # the edge case's ring stops before the point at 1.5 x
 
 
 @pytest.mark.parametrize("chunk, rows", [(1, 1), (3, 50), (1000, 1 << 18)])
