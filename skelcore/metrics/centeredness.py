@@ -396,9 +396,11 @@ def _rings(
     grid: "_SlabGrid", points: np.ndarray, u: np.ndarray, g: np.ndarray, h: np.ndarray, half: float, growth: float,
     tick: Callable[[], None] = lambda: None,
 ) -> tuple[np.ndarray, np.ndarray]:
-    """The rings of :func:`_ring_columns` as (M, 2) ring points and each sample's start in them."""
-    x, y, starts = _ring_columns(grid, points, u, g, h, half, growth, tick)
-    return np.column_stack([x, y]), starts
+    """The rings of :func:`_ring_columns` as (M, 2) ring points and each sample's start in them (the
+    kernel's rings in the grid's kept buffers, copied out)."""
+    with grid.ring_buffers() as bufs:
+        x, y, starts = _ring_columns(grid, points, u, g, h, half, growth, tick, bufs)
+        return np.column_stack([x, y]), starts
 
 
 def _ring_columns(
