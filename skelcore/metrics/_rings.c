@@ -16,7 +16,9 @@
  * x - p per coordinate, dot products as ((a0 b0 + a1 b1) + a2 b2), libm's hypot, and the order of a stable
  * sort by distance in grid order: an LSD radix sort of the distances' bits (non-negative doubles order as
  * their bits; NaN last, as numpy's sort), runs of equal distances then by grid row.  Built without FMA
- * contraction (the extension's flags), as numpy's loops are.
+ * contraction (the extension's flags), as numpy's loops are.  The order and the ring rule read square roots
+ * of fg^2 + fh^2 where they settle them as hypot would, hypot where two distances come within 1e-13
+ * (extend_head; docs/performance.md 6.10).  The rings go into buffers the caller lends and keeps.
  *
  * Plain C with the buffer protocol (no numpy headers at build time); the entry point releases the GIL.
  */
