@@ -16,7 +16,9 @@
  * x - p per coordinate, dot products as ((a0 b0 + a1 b1) + a2 b2), libm's hypot, and the order of a stable
  * sort by distance in grid order: an LSD radix sort of the distances' bits (non-negative doubles order as
  * their bits; NaN last, as numpy's sort), runs of equal distances then by grid row.  Built without FMA
- * contraction (the extension's flags), as numpy's loops are.
+ * contraction (the extension's flags), as numpy's loops are.  The order and the ring rule read square roots
+ * of fg^2 + fh^2 where they settle them as hypot would, hypot where two distances come within 1e-13
+ * (extend_head; docs/performance.md 6.10).  The rings go into buffers the caller lends and keeps.
  *
  * Plain C with the buffer protocol (no numpy headers at build time); the entry point releases the GIL.
  */
@@ -33,22 +35,12 @@
 /* relative: a pool point whose fg^2 + fh^2 exceeds (R (1 + this))^2 lies beyond R whatever the rounding of the
  * square (a few units in the last place) and of hypot (under one), so its distance is not computed yet */
 #define REACH_SLACK 1e-6
-
-typedef struct {             /* a growing array of doubles */
-    double *v;
-    Py_ssize_t n, cap;
-} Vec;
-
-static int vec_reserve(Vec *a, Py_ssize_t need) {
-    if (need <= a->cap) return 1;
-    Py_ssize_t cap = a->cap ? a->cap : 1024;
-    while (cap < need) cap *= 2;
-    double *v = (double *)realloc(a->v, (size_t)cap * sizeof(double));
-    if (!v) return 0;
-    a->v = v;
-    a->cap = cap;
-    return 1;
-}
+/* relative: where fg^2 + fh^2 lies in [SQ_LO, SQ_HI] (no underflow or overflow of the squares), its square
+ * root and libm's hypot differ by a few units in the last place; two distances farther apart than this are
+ * ordered (and compared with R or a ring's growth) the same by either, nearer ones are decided by hypot */
+#define CLOSE 1e-13
+#define SQ_LO 1e-290
+#define SQ_HI 1e290
 
 typedef struct {             /* slab points: distance (in the pool its square, extend_head), plane coordinates, grid row */
     double *d, *fg, *fh;
@@ -235,6 +227,8 @@ typedef struct {             /* one sample, and what its search holds */
     Pts spare;               /* the pool's merge buffer */
     Pts head;                /* the sorted head of the slab's list */
     Scratch sort;
+    int approx;              /* order by square roots first (hypot only where two come close): 0 after a sample
+                              * whose distances mostly came close (a tube's exact radius), for the call's rest */
     char *taken;             /* per cell: its points found (cleared after each sample through `cells`) */
     int32_t *cells;
     Py_ssize_t n_taken;
@@ -328,10 +322,67 @@ static int merge_pool(Search *S, Py_ssize_t a) {
     return 1;
 }
 
+/* A head or pool point's distance as libm's hypot gives it (numpy's np.hypot calls it). */
+static inline double exact_d(const Pts *a, Py_ssize_t i) { return hypot(a->fg[i], a->fh[i]); }
+
+/* Whether distance a (within a few units in the last place of its hypot, or that) is <= b (exact): decided
+ * by a where it is not within CLOSE of b, else by the hypot of pool point i. */
+static inline int within(double a, double b, const Pts *pool, Py_ssize_t i) {
+    if (a < b * (1.0 - CLOSE)) return 1;
+    if (a > b * (1.0 + CLOSE)) return 0;
+    return exact_d(pool, i) <= b;
+}
+
+/* Stable insertion sort of positions pos[0..n) by (key of their exact distance, position). */
+static void insertion_by_exact(uint64_t *key, int32_t *pos, Py_ssize_t n) {
+    for (Py_ssize_t i = 1; i < n; i++) {
+        const uint64_t k = key[i];
+        const int32_t at = pos[i];
+        Py_ssize_t j = i;
+        while (j > 0 && (key[j - 1] > k || (key[j - 1] == k && pos[j - 1] > at))) {
+            key[j] = key[j - 1];
+            pos[j] = pos[j - 1];
+            j--;
+        }
+        key[j] = k;
+        pos[j] = at;
+    }
+}
+
+/* After sorting by square roots (s->idx: positions 0..m-1 of the entries, which are in grid order): every run
+ * of neighbours within CLOSE of each other (equal ones included) takes hypot's distances and is sorted again by
+ * (distance, position), the order hypot alone gives (apart from their runs, square roots and hypot order the
+ * points alike).  0 when a run is too long for an insertion sort: the caller sorts by hypot from the start. */
+static int settle_close(Search *S, Py_ssize_t m) {
+    Pts *pool = &S->pool;
+    Scratch *s = &S->sort;
+    int32_t *idx = s->idx, *from = s->from;
+    uint64_t *key = s->key2;  /* free after the sort */
+    Py_ssize_t t = 0;
+    while (t < m) {
+        Py_ssize_t e = t + 1;
+        while (e < m && pool->d[from[idx[e]]] <= pool->d[from[idx[e - 1]]] * (1.0 + CLOSE)) e++;
+        if (e - t > 1) {
+            if (e - t > SMALL_SORT) return 0;
+            for (Py_ssize_t i = t; i < e; i++) {
+                const int32_t k = from[idx[i]];
+                pool->d[k] = exact_d(pool, k);
+                key[i] = dist_key(pool->d[k]);
+            }
+            insertion_by_exact(key + t, idx + t, e - t);
+        }
+        t = e;
+    }
+    return 1;
+}
+
 /* The pool's points within R (all when whole), in the stable order of their distances (the pool is in grid
  * order), onto the head's end; the rest stay in the pool, in grid order.  The pool holds each point's
- * fg^2 + fh^2 (take_cell): libm's hypot, the distance, is called only where that square does not already
- * put the point beyond R (REACH_SLACK below), the same test and the same distances as calling it for all. */
+ * fg^2 + fh^2 (take_cell): a point whose square already puts it beyond R (REACH_SLACK below) stays without a
+ * distance.  With S->approx the others are ordered by the square root of it, libm's hypot taken only where
+ * two distances, or a distance and R, come within CLOSE (settle_close, within); else (and where the square
+ * could underflow or overflow) by hypot itself: the same test, order and distances as calling hypot for all.
+ * The head's distances may be square roots then: the ring rule reads them through `continues`. */
 static int extend_head(Search *S) {
     Pts *pool = &S->pool, *head = &S->head;
     Scratch *s = &S->sort;
@@ -339,11 +390,13 @@ static int extend_head(Search *S) {
     Py_ssize_t m = 0, keep = 0;
     const double bound = S->R * (1.0 + REACH_SLACK), far = bound * bound;
     const int bounded = !S->whole && far > 1e-200 && far < 1e200;  /* no overflow or underflow of squares */
+    const int approx = S->approx;
     for (Py_ssize_t i = 0; i < pool->n; i++) {
         const double sq = pool->d[i];
         if (bounded && sq > far && sq < INFINITY) continue;  /* hypot > R for certain: it stays in the pool */
-        const double d = hypot(pool->fg[i], pool->fh[i]);
-        if (S->whole || d <= S->R) {
+        const int rough = approx && sq >= SQ_LO && sq <= SQ_HI;
+        const double d = rough ? sqrt(sq) : exact_d(pool, i);
+        if (S->whole || (rough ? within(d, S->R, pool, i) : d <= S->R)) {
             s->key[m] = dist_key(d);
             s->from[m] = (int32_t)i;
             pool->d[i] = d;
@@ -353,6 +406,15 @@ static int extend_head(Search *S) {
     }
     if (m == 0) return 1;
     stable_order(s, m);
+    if (approx && !settle_close(S, m)) {  /* distances mostly within CLOSE: sorted again by hypot alone */
+        S->approx = 0;
+        for (Py_ssize_t j = 0; j < m; j++) {
+            const int32_t k = s->from[j];
+            pool->d[k] = exact_d(pool, k);
+            s->key[j] = dist_key(pool->d[k]);
+        }
+        stable_order(s, m);
+    }
     for (Py_ssize_t i = 0; i < m; i++) {
         const int32_t k = s->from[s->idx[i]];
         head->d[head->n + i] = pool->d[k];
@@ -372,8 +434,17 @@ static int extend_head(Search *S) {
     return 1;
 }
 
-/* One sample's ring, appended to fx, fy. */
-static int one_ring(const Grid *G, Search *S, double growth, double first, Vec *fx, Vec *fy) {
+/* Whether head point i goes on with the ring after point i - 1 (its distance < growth x the last one), in
+ * hypot's distances: decided by the head's (maybe square-root) distances unless they come within CLOSE. */
+static inline int continues(const Pts *hd, Py_ssize_t i, double growth) {
+    const double a = hd->d[i], b = growth * hd->d[i - 1];
+    if (a < b * (1.0 - CLOSE)) return 1;
+    if (a > b * (1.0 + CLOSE)) return 0;
+    return exact_d(hd, i) < growth * exact_d(hd, i - 1);
+}
+
+/* One sample's ring: the first *ring points of the head (S->head.fg, S->head.fh). */
+static int one_ring(const Grid *G, Search *S, double growth, double first, Py_ssize_t *ring) {
     double R = first;
     Py_ssize_t len = 0;  /* the ring's length within the head so far */
     int64_t box[6];
@@ -390,20 +461,16 @@ static int one_ring(const Grid *G, Search *S, double growth, double first, Vec *
         if (!(ok = gather(G, S, box) && merge_pool(S, old) && extend_head(S))) break;
         const Pts *hd = &S->head;
         if (len == 0 && hd->n > 0) len = 1;
-        while (len < hd->n && hd->d[len] < growth * hd->d[len - 1]) len++;
-        const double last = len ? hd->d[len - 1] : 0.0;
+        while (len < hd->n && continues(hd, len, growth)) len++;
+        const double last = len ? exact_d(hd, len - 1) : 0.0;
         if (S->whole || len < hd->n || (len > 0 && growth * last <= R)) break;
         const double grown = len ? growth * last : 0.0;
         R = 2.0 * R > grown ? 2.0 * R : grown;
     }
     for (Py_ssize_t i = 0; i < S->n_taken; i++) S->taken[S->cells[i]] = 0;
     S->n_taken = 0;
-    if (!ok || !vec_reserve(fx, fx->n + len) || !vec_reserve(fy, fy->n + len)) return 0;
-    memcpy(fx->v + fx->n, S->head.fg, (size_t)len * sizeof(double));
-    memcpy(fy->v + fy->n, S->head.fh, (size_t)len * sizeof(double));
-    fx->n += len;
-    fy->n += len;
-    return 1;
+    *ring = len;
+    return ok;
 }
 
 /* The part of ellipse_fit.ellipse_sums before its BLAS product, for sets lo..hi - 1 of x, y (set i is
@@ -476,31 +543,36 @@ static PyObject *py_design(PyObject *self, PyObject *args) {
     Py_RETURN_NONE;
 }
 
-static PyObject *doubles(const Vec *a) {
-    return PyByteArray_FromStringAndSize((const char *)a->v, (Py_ssize_t)(a->n * (Py_ssize_t)sizeof(double)));
-}
-
 /* rings(columns (3, N) f64, keys (C,) i64, starts (C,) i64, counts (C,) i64, lines (d1 d2 + 1,) i64,
  *       centres (C, 3) f64,
  *       frame (lo0, lo1, lo2, cell, size) f64, dims (3,) i64, points (S, 3), u, g, h (S, 3) f64,
- *       half, growth, first) -> (fx, fy, starts) as bytearrays of f64, f64, i64 (S + 1) */
+ *       half, growth, first, fx out (M,) f64, fy out (M,) f64, bounds out (S + 1,) i64, offset, by_roots=True)
+ *   -> (done, need): the rings of samples 0 .. done - 1 written to fx, fy from row `offset` on, sample s's
+ *   at rows bounds[s] .. bounds[s + 1] - 1 (bounds[0] = offset); done < S when sample `done`'s ring, of
+ *   `need` points, did not fit in the M rows (the caller grows the buffers and asks again from there).
+ *   The caller's buffers are kept from call to call: no output is allocated here.  by_roots: distances ordered
+ *   by square roots first (extend_head); False: by hypot alone (the same rings). */
 static PyObject *py_rings(PyObject *self, PyObject *args) {
-    Py_buffer col, ky, st, ct, ln, ce, fr, dm, pt, ub, gb, hb;
+    Py_buffer col, ky, st, ct, ln, ce, fr, dm, pt, ub, gb, hb, xo, yo, bo;
     double half, growth, first;
-    if (!PyArg_ParseTuple(args, "y*y*y*y*y*y*y*y*y*y*y*y*ddd", &col, &ky, &st, &ct, &ln, &ce, &fr, &dm, &pt, &ub,
-                          &gb, &hb, &half, &growth, &first))
+    Py_ssize_t offset;
+    int by_roots = 1;
+    if (!PyArg_ParseTuple(args, "y*y*y*y*y*y*y*y*y*y*y*y*dddw*w*w*n|p", &col, &ky, &st, &ct, &ln, &ce, &fr, &dm, &pt,
+                          &ub, &gb, &hb, &half, &growth, &first, &xo, &yo, &bo, &offset, &by_roots))
         return NULL;
-    Py_buffer *all[] = {&col, &ky, &st, &ct, &ln, &ce, &fr, &dm, &pt, &ub, &gb, &hb};
+    Py_buffer *all[] = {&col, &ky, &st, &ct, &ln, &ce, &fr, &dm, &pt, &ub, &gb, &hb, &xo, &yo, &bo};
     const int n_buf = (int)(sizeof all / sizeof all[0]);
     const Py_ssize_t n_pts = col.len / (Py_ssize_t)(3 * sizeof(double));
     const Py_ssize_t n_cells = ky.len / (Py_ssize_t)sizeof(int64_t);
     const Py_ssize_t n_s = pt.len / (Py_ssize_t)(3 * sizeof(double));
+    const Py_ssize_t cap = xo.len / (Py_ssize_t)sizeof(double);
     const double *frame = (const double *)fr.buf;
     const int64_t *dims = (const int64_t *)dm.buf;
     int ok = col.len == 3 * n_pts * (Py_ssize_t)sizeof(double) && st.len == ky.len && ct.len == ky.len
              && ce.len == 3 * n_cells * (Py_ssize_t)sizeof(double) && fr.len == 5 * (Py_ssize_t)sizeof(double)
              && dm.len == 3 * (Py_ssize_t)sizeof(int64_t) && ub.len == pt.len && gb.len == pt.len && hb.len == pt.len
-             && n_pts < INT32_MAX && n_cells < INT32_MAX && half > 0 && growth > 0 && first > 0 && frame[3] > 0;
+             && n_pts < INT32_MAX && n_cells < INT32_MAX && half > 0 && growth > 0 && first > 0 && frame[3] > 0
+             && yo.len == xo.len && bo.len == (n_s + 1) * (Py_ssize_t)sizeof(int64_t) && 0 <= offset && offset <= cap;
     for (int a = 0; ok && a < 3; a++) ok = dims[a] >= 1 && dims[a] <= 1 << 20;
     const Py_ssize_t n_lines = ok ? (Py_ssize_t)(dims[1] * dims[2]) : 0;
     const int64_t *lines = (const int64_t *)ln.buf;
@@ -514,7 +586,7 @@ static PyObject *py_rings(PyObject *self, PyObject *args) {
              && (i == 0 || keys[i] > keys[i - 1]) && keys[i] < dims[0] * dims[1] * dims[2];
     if (!ok) {
         for (int i = 0; i < n_buf; i++) PyBuffer_Release(all[i]);
-        PyErr_SetString(PyExc_ValueError, "rings: inconsistent grid or sample arrays");
+        PyErr_SetString(PyExc_ValueError, "rings: inconsistent grid, sample or output arrays");
         return NULL;
     }
     Grid G = {(const double *)col.buf, (const double *)col.buf + n_pts, (const double *)col.buf + 2 * n_pts,
@@ -522,16 +594,18 @@ static PyObject *py_rings(PyObject *self, PyObject *args) {
               {frame[0], frame[1], frame[2]}, frame[3], 0.5 * frame[3], frame[4], {dims[0], dims[1], dims[2]}};
     const double *P = (const double *)pt.buf, *U = (const double *)ub.buf, *Gv = (const double *)gb.buf,
                  *H = (const double *)hb.buf;
-    Vec fx = {0}, fy = {0};
+    double *fx = (double *)xo.buf, *fy = (double *)yo.buf;
+    int64_t *bounds = (int64_t *)bo.buf;
     Search S;
     memset(&S, 0, sizeof S);
     S.half = half;
-    int64_t *bounds = (int64_t *)malloc((size_t)(n_s + 1) * sizeof(int64_t));
+    S.approx = by_roots;
     S.taken = (char *)calloc((size_t)n_cells + 1, 1);
     S.cells = (int32_t *)malloc(((size_t)n_cells + 1) * sizeof(int32_t));
-    int good = bounds && S.taken && S.cells;
+    int good = S.taken && S.cells;
+    Py_ssize_t done = 0, need = 0;
     Py_BEGIN_ALLOW_THREADS
-    if (good) bounds[0] = 0;
+    bounds[0] = (int64_t)offset;
     for (Py_ssize_t s = 0; good && s < n_s; s++) {
         double size = G.size;  /* the coordinates' magnitude, for the cell tests' allowance */
         for (int a = 0; a < 3; a++) {
@@ -540,23 +614,24 @@ static PyObject *py_rings(PyObject *self, PyObject *args) {
         }
         Grid Gs = G;
         Gs.size = size;
-        good = one_ring(&Gs, &S, growth, first, &fx, &fy);
-        bounds[s + 1] = (int64_t)fx.n;
+        Py_ssize_t len = 0;
+        good = one_ring(&Gs, &S, growth, first, &len);
+        if (!good) break;
+        const Py_ssize_t at = (Py_ssize_t)bounds[s];
+        if (len > cap - at) {
+            need = len;
+            break;
+        }
+        memcpy(fx + at, S.head.fg, (size_t)len * sizeof(double));
+        memcpy(fy + at, S.head.fh, (size_t)len * sizeof(double));
+        bounds[s + 1] = (int64_t)(at + len);
+        done = s + 1;
     }
     Py_END_ALLOW_THREADS
     for (int i = 0; i < n_buf; i++) PyBuffer_Release(all[i]);
     pts_free(&S.pool); pts_free(&S.spare); pts_free(&S.head); scratch_free(&S.sort); free(S.taken); free(S.cells);
-    PyObject *out = NULL;
-    if (good) {
-        Vec b = {(double *)bounds, n_s + 1, n_s + 1};  /* int64 and double are both 8 bytes */
-        PyObject *a = doubles(&fx), *c = doubles(&fy), *d = doubles(&b);
-        if (a && c && d) out = PyTuple_Pack(3, a, c, d);
-        Py_XDECREF(a); Py_XDECREF(c); Py_XDECREF(d);
-    } else {
-        PyErr_NoMemory();
-    }
-    free(fx.v); free(fy.v); free(bounds);
-    return out;
+    if (!good) return PyErr_NoMemory();
+    return Py_BuildValue("(nn)", done, need);
 }
 
 static PyMethodDef methods[] = {

@@ -13,7 +13,9 @@ beta* and c* without recomputing.  Departures from the paper and the reference t
 from __future__ import annotations
 
 import os
-from typing import Callable
+import threading
+from contextlib import contextmanager
+from typing import Callable, Iterator
 
 import numpy as np
 from scipy.spatial import cKDTree
@@ -46,6 +48,13 @@ _COMPILED_RINGS = True
 # a sample's share of a batch of _CURVE_BATCH_PAIRS on small clouds with the kernel (256 samples per call by
 # default, a checkpoint between calls)
 _KERNEL_SAMPLE_PAIRS = _CURVE_BATCH_PAIRS // 256
+_RING_ROWS = 1 << 16  # the compiled rings' first buffers (rows of each coordinate)
+# the kernel orders a ring's distances by the square roots of their squares, libm's hypot only where two come
+# within 1e-13 (the same rings; False: hypot for every point, as numpy's np.hypot)
+_BY_ROOTS = True
+_RING_CHUNK = 16  # samples of a span's first kernel call (then as many as _RING_CHUNK_ROWS ring points take)
+_RING_CHUNK_ROWS = 1 << 20  # ring points per kernel call in a span (16 MB of rings: an edit's 180 samples at 1M
+# points in 4 calls, at 100k in 2; 2^18: 12 calls, 5 % more CPU in the calls' own work)
 
 
 def skeletal_centeredness(
@@ -302,13 +311,14 @@ def curve_centeredness(
                                                return_length=True)
             bounds = np.r_[0, np.cumsum(first)]
         lo = 0
-        while lo < len(todo):
-            hi = lo + max(1, int(np.searchsorted(bounds[lo:], bounds[lo] + _CURVE_BATCH_PAIRS, side="right")) - 1)
-            x, y, starts = _ring_columns(grid, points[todo[lo:hi]], u[todo[lo:hi]], g[lo:hi], h[lo:hi], half, growth,
-                                         lambda: checkpoint(lo / len(todo)))
-            out[todo[lo:hi]] = _rings_centeredness(x, y, starts)
-            lo = hi
-            checkpoint(lo / len(todo))
+        with grid.ring_buffers() as bufs:
+            while lo < len(todo):
+                hi = lo + max(1, int(np.searchsorted(bounds[lo:], bounds[lo] + _CURVE_BATCH_PAIRS, side="right")) - 1)
+                x, y, starts = _ring_columns(grid, points[todo[lo:hi]], u[todo[lo:hi]], g[lo:hi], h[lo:hi], half,
+                                             growth, lambda: checkpoint(lo / len(todo)), bufs)
+                out[todo[lo:hi]] = _rings_centeredness(x, y, starts)
+                lo = hi
+                checkpoint(lo / len(todo))
         return out
 
     counts = np.zeros(len(todo), np.int64)
@@ -316,12 +326,26 @@ def curve_centeredness(
     parts: list[EllipseSums] = []
 
     def span_sums(i0: int, i1: int) -> tuple[EllipseSums, np.ndarray, np.ndarray, np.ndarray]:
-        x, y, starts = _ring_columns(grid, points[todo[i0:i1]], u[todo[i0:i1]], g[i0:i1], h[i0:i1], half, growth)
-        sums = ellipse_sums(x, y, starts)
-        unfitted = np.ones(len(starts) - 1, bool)
-        unfitted[sums.use] = False
-        centre, r = _spare_fits(x, y, starts, np.flatnonzero(unfitted & (np.diff(starts) >= 3)))
-        return sums.shifted(i0), np.diff(starts), centre, r
+        # about _RING_CHUNK_ROWS ring points at a time (as many samples as the rings so far say, _RING_CHUNK
+        # first) into the grid's kept buffers, which stay that size (each set's sums are its own: the same
+        # bits in any grouping)
+        found = []
+        with grid.ring_buffers() as bufs:
+            c1, rows = i0, 0
+            while c1 < i1:
+                c0 = c1
+                c1 = min(i1, c0 + (_RING_CHUNK if c0 == i0 else max(1, _RING_CHUNK_ROWS * (c0 - i0) // max(rows, 1))))
+                x, y, starts = _ring_columns(grid, points[todo[c0:c1]], u[todo[c0:c1]], g[c0:c1], h[c0:c1], half,
+                                             growth, bufs=bufs)
+                sums = ellipse_sums(x, y, starts, bufs)
+                unfitted = np.ones(len(starts) - 1, bool)
+                unfitted[sums.use] = False
+                centre, r = _spare_fits(x, y, starts, np.flatnonzero(unfitted & (np.diff(starts) >= 3)))
+                found.append((sums.shifted(c0), np.diff(starts), centre, r))
+                rows += int(starts[-1])
+        if len(found) == 1:
+            return found[0]
+        return EllipseSums.joined([f[0] for f in found]), *(np.concatenate(a) for a in list(zip(*found))[1:])
 
     def store(span_: tuple[int, int], found: tuple) -> None:
         parts.append(found[0])
@@ -348,8 +372,9 @@ def curve_centeredness(
 
     def span_spares(i0: int, i1: int) -> tuple[np.ndarray, np.ndarray]:
         ids = redo[i0:i1]
-        x, y, starts = _ring_columns(grid, points[todo[ids]], u[todo[ids]], g[ids], h[ids], half, growth)
-        return _spare_fits(x, y, starts, np.arange(len(ids)))
+        with grid.ring_buffers() as bufs:
+            x, y, starts = _ring_columns(grid, points[todo[ids]], u[todo[ids]], g[ids], h[ids], half, growth, bufs=bufs)
+            return _spare_fits(x, y, starts, np.arange(len(ids)))
 
     def keep(span_: tuple[int, int], found: tuple[np.ndarray, np.ndarray]) -> None:
         ids = redo[span_[0] : span_[1]]
@@ -371,14 +396,16 @@ def _rings(
     grid: "_SlabGrid", points: np.ndarray, u: np.ndarray, g: np.ndarray, h: np.ndarray, half: float, growth: float,
     tick: Callable[[], None] = lambda: None,
 ) -> tuple[np.ndarray, np.ndarray]:
-    """The rings of :func:`_ring_columns` as (M, 2) ring points and each sample's start in them."""
-    x, y, starts = _ring_columns(grid, points, u, g, h, half, growth, tick)
-    return np.column_stack([x, y]), starts
+    """The rings of :func:`_ring_columns` as (M, 2) ring points and each sample's start in them (the
+    kernel's rings in the grid's kept buffers, copied out)."""
+    with grid.ring_buffers() as bufs:
+        x, y, starts = _ring_columns(grid, points, u, g, h, half, growth, tick, bufs)
+        return np.column_stack([x, y]), starts
 
 
 def _ring_columns(
     grid: "_SlabGrid", points: np.ndarray, u: np.ndarray, g: np.ndarray, h: np.ndarray, half: float, growth: float,
-    tick: Callable[[], None] = lambda: None,
+    tick: Callable[[], None] = lambda: None, bufs: "_RingBuffers | None" = None,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """The rings of the samples (p, u) with plane axes (g, h): the ring points' plane coordinates x and y
     (p at the origin) sample after sample, and each sample's start in them.
@@ -393,7 +420,7 @@ def _ring_columns(
     ``_COMPILED_RINGS`` (the default) :func:`_kernel_rings` answers; the array code here is its reference.
     """
     if _COMPILED_RINGS:
-        return _kernel_rings(grid, points, u, g, h, half, growth)
+        return _kernel_rings(grid, points, u, g, h, half, growth, bufs)
     n = len(points)
     far = np.linalg.norm(np.maximum(np.abs(grid.lo - points), np.abs(grid.hi - points)), axis=1) * (1.0 + _BALL_MARGIN)
     reach = np.full(n, _BALL_FIRST * half)
@@ -437,15 +464,47 @@ def _ring_columns(
 
 def _kernel_rings(
     grid: "_SlabGrid", points: np.ndarray, u: np.ndarray, g: np.ndarray, h: np.ndarray, half: float, growth: float,
+    bufs: "_RingBuffers | None" = None,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """:func:`_ring_columns` by the compiled kernel ``_rings.c``: the same rings, bit for bit (tested), from
     the grid's cells around p in growing balls (the first of reach ``_BALL_FIRST`` x alpha / 2), without the
-    kd-tree or the whole slab's arrays (docs/performance.md 6.5)."""
-    samples = (np.ascontiguousarray(a, np.float64) for a in (points, u, g, h))
-    fx, fy, starts = _rings_kernel.rings(grid.columns, grid.keys, grid.starts, grid.counts, grid.lines, grid.centres,
-                                         grid.frame, grid.dims, *samples, float(half), float(growth),
-                                         float(_BALL_FIRST * half))
-    return np.frombuffer(fx, np.float64), np.frombuffer(fy, np.float64), np.frombuffer(starts, np.int64)
+    kd-tree or the whole slab's arrays (docs/performance.md 6.5).  The kernel writes the rings into ``bufs``
+    (new ones when None), so x and y are views of them, valid until ``bufs`` is written again; where a ring
+    does not fit, the buffers grow and the kernel goes on from that sample."""
+    n = len(points)
+    bufs = _RingBuffers() if bufs is None else bufs
+    points, u, g, h = (np.ascontiguousarray(a, np.float64) for a in (points, u, g, h))
+    bounds = np.zeros(n + 1, np.int64)
+    done = end = 0
+    while True:
+        step, need = _rings_kernel.rings(grid.columns, grid.keys, grid.starts, grid.counts, grid.lines, grid.centres,
+                                         grid.frame, grid.dims, points[done:], u[done:], g[done:], h[done:],
+                                         float(half), float(growth), float(_BALL_FIRST * half), bufs.fx, bufs.fy,
+                                         bounds[done:], end, _BY_ROOTS)
+        done += step
+        end = int(bounds[done])
+        if done == n:
+            return bufs.fx[:end], bufs.fy[:end], bounds
+        # the rings so far, per sample, for the samples left, with room to spare
+        bufs.grow(end + need + (end // max(done, 1)) * (n - done) * 5 // 4, keep=end)
+
+
+class _RingBuffers:
+    """The compiled rings' output rows (each coordinate's column) and the ellipse fit's design rows, grown as
+    needed and kept by the grid (:meth:`_SlabGrid.ring_buffers`): fresh buffers for an edit's 180 moved
+    samples at 1M points cost about as much in page faults and copies as the rings themselves
+    (docs/performance.md 6.10)."""
+
+    def __init__(self) -> None:
+        self.fx, self.fy = np.empty(_RING_ROWS), np.empty(_RING_ROWS)
+        self.design = np.empty((0, 6))
+
+    def grow(self, size: int, keep: int = 0) -> None:
+        """At least ``size`` rows each, the first ``keep`` rows kept."""
+        if len(self.fx) < size:
+            fx, fy = np.empty(size), np.empty(size)
+            fx[:keep], fy[:keep] = self.fx[:keep], self.fy[:keep]
+            self.fx, self.fy = fx, fy
 
 
 def _ball_rows(grid: "_SlabGrid", points: np.ndarray, radius: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -584,6 +643,20 @@ class _SlabGrid:
         # the compiled rings' frame: the grid's corner, its cell side and the coordinates' magnitude
         self.frame = np.array([*self.lo, cell, float(np.abs(np.r_[self.lo, self.hi]).max())], dtype=float)
         self._tree: cKDTree | None = None
+        self._spare: list[_RingBuffers] = []
+        self._lock = threading.Lock()
+
+    @contextmanager
+    def ring_buffers(self) -> Iterator[_RingBuffers]:
+        """Buffers for the compiled rings, this caller's alone until the block ends, then kept for the next
+        (as many as ever ran at once: one per core at most)."""
+        with self._lock:
+            bufs = self._spare.pop() if self._spare else _RingBuffers()
+        try:
+            yield bufs
+        finally:
+            with self._lock:
+                self._spare.append(bufs)
 
     @property
     def tree(self) -> cKDTree:

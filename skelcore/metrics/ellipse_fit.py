@@ -6,7 +6,7 @@ prefers a fitted ellipse to the barycentre as the centre of a partly sampled cro
 
 from __future__ import annotations
 
-from typing import NamedTuple
+from typing import Any, NamedTuple
 
 import numpy as np
 
@@ -95,20 +95,26 @@ class EllipseSums(NamedTuple):
         return EllipseSums(*(np.concatenate(arrays) for arrays in zip(*parts)))
 
 
-def ellipse_sums(x: np.ndarray, y: np.ndarray, starts: np.ndarray) -> EllipseSums:
+def ellipse_sums(x: np.ndarray, y: np.ndarray, starts: np.ndarray, scratch: Any = None) -> EllipseSums:
     """Centroid, RMS radius and scatter matrix of every set ``x[starts[i]:starts[i + 1]]`` (and y): the
     points centred and scaled to unit RMS radius (the constrained problem is invariant under both), then
     D^T D of D = [x^2, xy, y^2, x, y, 1] (one BLAS product per set: a set may hold tens of thousands of
     points).  Centroids, radii and the rows of D come from the compiled ``_rings.design`` for many sets per
     call (numpy's arithmetic: running sums, a pairwise mean; the same bits as :func:`_reference_sums`,
-    tested), into one reused buffer; only the products stay per set (docs/performance.md 6.5)."""
+    tested), into one reused buffer; only the products stay per set (docs/performance.md 6.5).  ``scratch``:
+    an object whose ``design`` array is that buffer, kept by the caller (grown here when too small)."""
     x, y = np.ascontiguousarray(x, dtype=float), np.ascontiguousarray(y, dtype=float)
     starts = np.ascontiguousarray(starts, dtype=np.int64)
     n_sets = len(starts) - 1
     if n_sets < 1:
         return EllipseSums.joined([])
     big = int(np.diff(starts).max())
-    design = np.empty((min(int(starts[-1] - starts[0]), max(big, _DESIGN_ROWS)), 6))
+    rows = min(int(starts[-1] - starts[0]), max(big, _DESIGN_ROWS))
+    design = getattr(scratch, "design", None)
+    if design is None or len(design) < rows:
+        design = np.empty((max(rows, _DESIGN_ROWS if scratch is not None else 0), 6))
+        if scratch is not None:
+            scratch.design = design
     parts, scs = [], []
     lo = 0
     while lo < n_sets:  # sets lo .. hi - 1: at most _DESIGN_ROWS rows (or one larger set)

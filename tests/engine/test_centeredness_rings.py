@@ -54,15 +54,16 @@ def _cases(scans):
     ]
 
 
-def _rings_both_ways(monkeypatch, cloud, points, dirs, slab):
+def _rings_both_ways(monkeypatch, cloud, points, dirs, slab, flag="_COMPILED_RINGS"):
+    """The rings with ``centeredness.<flag>`` False (the array code; hypot for every point) and True."""
     params = Params(slab_factor=slab)
     grid = centeredness.slab_grid(cloud, params)
     half = 0.5 * slab * float(np.linalg.norm(grid.hi - grid.lo))
     u = centeredness.unit_rows(dirs)
     g, h = centeredness._orthonormal_complement(u)
     out = []
-    for compiled in (False, True):
-        monkeypatch.setattr(centeredness, "_COMPILED_RINGS", compiled)
+    for on in (False, True):
+        monkeypatch.setattr(centeredness, flag, on)
         out.append(centeredness._ring_columns(grid, points, u, g, h, half, params.ring_growth))
     return out
 
@@ -122,9 +123,10 @@ def test_rings_kernel_rejects_inconsistent_arrays():
     grid = centeredness.slab_grid(np.random.default_rng(0).normal(size=(100, 3)))
     p = np.zeros((1, 3))
     u = np.array([[0.0, 0.0, 1.0]])
+    fx, fy, bounds = np.empty(200), np.empty(200), np.zeros(2, np.int64)
     args = [grid.columns, grid.keys, grid.starts, grid.counts, grid.lines, grid.centres, grid.frame, grid.dims,
-            p, u, np.array([[1.0, 0, 0]]), np.array([[0.0, 1, 0]]), 0.1, 1.5, 0.05]
-    _rings.rings(*args)
+            p, u, np.array([[1.0, 0, 0]]), np.array([[0.0, 1, 0]]), 0.1, 1.5, 0.05, fx, fy, bounds, 0]
+    assert _rings.rings(*args) == (1, 0)
     bad = list(args)
     bad[1] = grid.keys[::-1].copy()  # keys out of order
     with pytest.raises(ValueError, match="rings"):
@@ -133,6 +135,75 @@ def test_rings_kernel_rejects_inconsistent_arrays():
     bad[9] = np.zeros((2, 3))  # directions for another number of samples
     with pytest.raises(ValueError, match="rings"):
         _rings.rings(*bad)
+    for at, value in ((15, np.empty(100)), (17, np.zeros(3, np.int64)), (18, 201)):  # unequal buffers, bounds, offset
+        bad = list(args)
+        bad[at] = value
+        with pytest.raises(ValueError, match="rings"):
+            _rings.rings(*bad)
+
+
+def test_rings_that_outgrow_the_buffers_go_on_from_the_sample_that_did_not_fit(monkeypatch, scans):
+    """The kernel writes into kept buffers and stops at a ring that does not fit; the buffers grow and it
+    goes on from there: buffers of 8 rows (a regrowth at nearly every sample) and a sample with an empty
+    ring first give the rings of one call with room for all; the grid lends its kept buffers again."""
+    name, cloud, points, dirs, slab = _cases(scans)[0]
+    params = Params(slab_factor=slab)
+    grid = centeredness.slab_grid(cloud, params)
+    half = 0.5 * slab * float(np.linalg.norm(grid.hi - grid.lo))
+    u = centeredness.unit_rows(np.vstack([[1.0, 0, 0], dirs]))
+    g, h = centeredness._orthonormal_complement(u)
+    points = np.vstack([[1e3, 1e3, 1e3], points])  # an empty slab: a ring of no point
+    got = []
+    for rows in (1 << 20, 8):
+        monkeypatch.setattr(centeredness, "_RING_ROWS", rows)
+        bufs = centeredness._RingBuffers()
+        x, y, s = centeredness._kernel_rings(grid, points, u, g, h, half, params.ring_growth, bufs)
+        got.append((x.copy(), y.copy(), s.copy()))
+        assert rows > 8 or len(bufs.fx) >= s[-1] > 8
+    (x0, y0, s0), (x1, y1, s1) = got
+    assert s0[1] == 0 and s0.tobytes() == s1.tobytes() and x0.tobytes() == x1.tobytes() and y0.tobytes() == y1.tobytes()
+    with grid.ring_buffers() as lent:
+        centeredness._kernel_rings(grid, points, u, g, h, half, params.ring_growth, lent)
+        with grid.ring_buffers() as other:  # a second caller at the same time gets its own
+            assert other is not lent
+    with grid.ring_buffers() as again:
+        assert again is other or again is lent
+
+
+def test_rings_ordered_by_square_roots_are_those_by_hypot(monkeypatch, scans):
+    """The kernel orders distances by the square roots of their squares and takes libm's hypot only where two
+    come within 1e-13, or one within 1e-13 of R or of a ring's growth: the same rings as hypot for every
+    point on every case (exact ties, repeated points, a tube's exact radius, where it falls back to hypot),
+    and where the ring's growth rule reads the two differently: a point at hypot distance exactly 1.5 x the
+    last one's hypot (so not in the ring), whose square root is below 1.5 x that one's square root."""
+    a = np.array([0.04746668208702611, 0.06957808520711659])  # sqrt(x^2 + y^2) one unit above its hypot
+    reach = 1.5 * float(np.hypot(*a))
+    assert np.sqrt(a @ a) > np.hypot(*a) and 1.5 * np.sqrt(a @ a) > reach
+    corners = np.array([[x, y, z] for x in (-10.0, 10.0) for y in (-10.0, 10.0) for z in (-10.0, 10.0)])
+    ring = np.array([[a[0], a[1], 0.0], [0.9 * a[1], -0.9 * a[0], 0.0], [-0.8 * a[0], 0.8 * a[1], 0.0],
+                     [0.7 * a[1], 0.7 * a[0], 0.0], [-0.6 * a[1], -0.6 * a[0], 0.0], [0.0, reach, 0.0]])
+    edge = (np.vstack([corners, ring]), np.zeros((1, 3)), np.array([[0.0, 0.0, 1.0]]), 0.02)
+    cases = [c[1:] for c in _cases(scans)] + [edge]
+    for cloud, points, dirs, slab in cases:
+        (x0, y0, s0), (x1, y1, s1) = _rings_both_ways(monkeypatch, cloud, points, dirs, slab, "_BY_ROOTS")
+        assert s1.tobytes() == s0.tobytes() and x1.tobytes() == x0.tobytes() and y1.tobytes() == y0.tobytes()
+    assert s1.tolist() == [0, 5]  # the edge case's ring stops before the point at 1.5 x
+
+
+@pytest.mark.parametrize("chunk, rows", [(1, 1), (3, 50), (1000, 1 << 18)])
+def test_a_spans_rings_in_chunks_give_the_same_centeredness(monkeypatch, scans, chunk, rows):
+    """A span's samples go to the kernel in chunks (``_RING_CHUNK`` first, then about ``_RING_CHUNK_ROWS``
+    ring points each), their fits' sums joined: the same bits for chunks of one sample, of a few and of all
+    (spans of 7 samples on threads, the array code the reference)."""
+    monkeypatch.setattr(centeredness, "_CURVE_AT_ONCE", 0)
+    monkeypatch.setattr(centeredness, "_RING_CHUNK", chunk)
+    monkeypatch.setattr(centeredness, "_RING_CHUNK_ROWS", rows)
+    name, cloud, points, dirs, slab = _cases(scans)[3]
+    got = []
+    for compiled in (False, True):
+        monkeypatch.setattr(centeredness, "_COMPILED_RINGS", compiled)
+        got.append(centeredness.curve_centeredness(cloud, points, dirs, params=Params(slab_factor=slab), span=7))
+    assert got[1].tobytes() == got[0].tobytes() and np.isfinite(got[0]).sum() > 20
 
 
 def test_ellipse_sums_are_the_numpy_loops_bit_for_bit():
