@@ -16,6 +16,7 @@ from .actions import Menus
 from .exports import (
     data_stem, export_coloured_ply, export_results, ply_export_names, result_export_names, with_thresholds, write_png,
 )
+from .gui_collector import CollectorHold
 from .panels import BarcodePanel, DisplayPanel, HistogramPanel, PickPanel, SettingsPanel, SummaryPanel
 from .panels._plot import preload_matplotlib
 from .scene import LAYER_ORDER, METRICS, Scene, SceneEvent
@@ -53,6 +54,8 @@ class MainWindow(QtWidgets.QMainWindow):
         self.interactive = True  # False in the scripted mode: errors go to ``errors``, not dialogs
         self.errors: list[str] = []
         self.bug: str | None = None  # an uncaught exception's traceback (the scripted mode exits 1)
+        self._collector_hold = CollectorHold()  # cyclic collection on this thread while the window is open
+        self.destroyed.connect(self._collector_hold.release)  # (a window never closed)
         self.scene = Scene()
         self.session = Session(self.scene, self)
         self.view = SceneView(self.scene, self)
@@ -782,6 +785,8 @@ class MainWindow(QtWidgets.QMainWindow):
         self.settings.sync()  # the process may end with os._exit (a task still inside the engine)
         self.view.close()
         super().closeEvent(event)
+        if event.isAccepted():
+            self._collector_hold.release()
 
 
 def scrolling(widget: QtWidgets.QWidget, parent: QtWidgets.QWidget) -> QtWidgets.QScrollArea:

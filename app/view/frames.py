@@ -9,6 +9,7 @@ While frames are held (an edit's scores on their way) the window's other repaint
 from __future__ import annotations
 
 import time
+import weakref
 from typing import Any, Callable
 
 from PySide6 import QtCore
@@ -36,7 +37,8 @@ class FrameScheduler:
         self._timer.setInterval(RENDER_DELAY_MS)
         self._timer.timeout.connect(self._render_now)
         self._held_until = 0.0  # time.monotonic() before which a requested frame waits (hold)
-        self._window_hold = WindowPaintHold(lambda: self.held)  # the window's repaints wait with the frames
+        me = weakref.ref(self)  # no reference cycle: a Qt object is freed where its last reference goes
+        self._window_hold = WindowPaintHold(lambda: (s := me()) is not None and s.held)  # the window's repaints wait with the frames
         self._hold_end = QtCore.QTimer()  # a hold that runs out unreleased ends as a release would
         self._hold_end.setSingleShot(True)
         self._hold_end.timeout.connect(self.release)  # (a coarse timer may fire a little early)
