@@ -27,6 +27,7 @@ from scipy.spatial import cKDTree
 from ..geometry import Checkpoint, no_checkpoint
 from ..params import Params
 from .boundary import boundary_mask, largest_angle_gap
+from .surround import surrounded
 
 __all__ = ["Opening", "find_openings", "thin_parts", "median_spacing", "fill_rim"]
 
@@ -34,8 +35,6 @@ __all__ = ["Opening", "find_openings", "thin_parts", "median_spacing", "fill_rim
 RIM_SAMPLE = 512
 #: grid points of one opening's fill at most (the grid step grows beyond)
 MAX_FILL = 200_000
-#: grid points per batch of the surround test
-FILL_CHUNK = 2048
 _MEMO_RIMS = 4096  # rims' openings a memo keeps (emptied beyond)
 
 
@@ -308,14 +307,7 @@ def fill_rim(uv: np.ndarray, off: np.ndarray, spacing: float, angle: float) -> t
         return np.empty((0, 3)), np.empty(0), step
     grid = np.column_stack([np.repeat(gu, len(gv)), np.tile(gv, len(gu))])
     pick = np.linspace(0, len(uv) - 1, min(len(uv), RIM_SAMPLE)).astype(int)
-    ring = np.column_stack([uv[pick], np.zeros(len(pick))])
-    plane = np.eye(3)[None]
-    inside = np.zeros(len(grid), bool)
-    for i0 in range(0, len(grid), FILL_CHUNK):
-        g = np.column_stack([grid[i0:i0 + FILL_CHUNK], np.zeros(min(FILL_CHUNK, len(grid) - i0))])
-        vec = ring[None, :, :] - g[:, None, :]
-        inside[i0:i0 + FILL_CHUNK] = largest_angle_gap(vec, np.repeat(plane, len(g), axis=0)) < angle
-    grid = grid[inside]
+    grid = grid[surrounded(uv[pick], grid, angle)]
     if len(grid) == 0:
         return np.empty((0, 3)), np.empty(0), step
     rim_tree = cKDTree(uv)
