@@ -35,8 +35,9 @@ class GuiCollector(QtCore.QObject):
         self._timer.timeout.connect(self.collect_due)
 
     @property
-    def active(self) -> bool:
-        return self._users > 0
+    def users(self) -> int:
+        """The windows holding it (the automatic collection is off while there is one)."""
+        return self._users
 
     def acquire(self) -> None:
         if self._users == 0:

@@ -59,11 +59,13 @@ def test_the_last_release_gives_the_collection_back_as_it_was(qtbot):
 def test_closing_the_window_gives_the_collection_back(qtbot, tmp_path):
     from PySide6 import QtCore
 
+    from skelscope.gui_collector import gui_collector
     from skelscope.main_window import MainWindow
 
-    gc.enable()
+    before = gui_collector().users  # another test's window may still be open
     w = MainWindow(settings=QtCore.QSettings(str(tmp_path / "settings.ini"), QtCore.QSettings.Format.IniFormat))
-    assert not gc.isenabled()
+    assert gui_collector().users == before + 1 and not gc.isenabled()
     w.close()
-    assert gc.isenabled()
+    assert gui_collector().users == before
+    assert gc.isenabled() == (before == 0)
     w.deleteLater()
