@@ -46,7 +46,12 @@ def run_edit(args: argparse.Namespace) -> int:
     check_output_file(out, inputs)
     curve = load_curve(args.curve)
     log = read_log(args.ops)
-    edited, changes = replay(curve, log)
+    try:
+        edited, changes = replay(curve, log)
+    except SkelInputError as exc:  # the log's fault: name it, and the curve it was replayed on
+        if exc.path is not None:
+            raise
+        raise SkelInputError(f"{exc}; the curve: {args.curve}", args.ops) from None
     loss = curve_loss(out, edited)
     if loss and not args.lossy:
         raise SkelInputError(f"{loss} (give --lossy to write anyway)", out)
