@@ -1,8 +1,8 @@
 """``skelcore repair CLOUD --curve C [--skeletal S] --out-curve C2 [--out-skeletal S2] [--log F]``: repair
 a curve skeleton from the judge's findings (docs/repair.md) and write the repaired curve, the repaired
 skeletal set and the edit log (replayable with ``skelcore edit``). Without --curve the curve is
-extracted from S. Never overwrites a file nor an input; refuses in one line (exit 2) a curve without
-edges, one in another frame, one of too many components."""
+extracted from S. Never overwrites a file nor an input; refuses in one line naming the file (exit 2) a
+curve without edges, one in another frame (saying how to map it), one of too many components."""
 
 from __future__ import annotations
 
@@ -80,7 +80,13 @@ def run_repair(args: argparse.Namespace) -> int:
         print(f"skelcore: {args.skeletal}: no --curve: the curve was extracted from the skeletal set by {HOW}",
               file=sys.stderr)
     progress = stderr_progress(args.quiet)
-    result = repair(cloud, curve, skeletal=skeletal, progress=progress)
+    try:
+        result = repair(cloud, curve, skeletal=skeletal, progress=progress)
+    except SkelInputError as exc:  # a refused curve (no edges, too many pieces, another frame): name it
+        clear_progress_line(progress)
+        if exc.path is not None:
+            raise
+        raise SkelInputError(_refusal(str(exc)), args.curve or args.skeletal) from None
     clear_progress_line(progress)
     if result.extracted:
         result.log["repair"]["extracted"] = f"the curve was extracted from the skeletal set {args.skeletal} by {HOW}"
@@ -100,6 +106,15 @@ def run_repair(args: argparse.Namespace) -> int:
     print(f"{start}: {first.n_vertices} vertices, {first.n_edges} edges; {repair_summary(result)} "
           f"({result.stopped}); {out}: {result.curve.n_vertices} vertices, {result.curve.n_edges} edges{moved}")
     return 0
+
+
+def _refusal(message: str) -> str:
+    """The repair's refusal, with the frame warning's remedy made a command: repair has no mapping flags,
+    ``skelcore convert`` writes the skeleton mapped into the cloud's frame (docs/guide/cli.md)."""
+    if "--skeleton-scale" not in message:
+        return message
+    return (f"{message}; write it mapped with skelcore convert C C_MAPPED --skeleton-scale S --skeleton-offset X Y Z "
+            "(and the skeletal set with --as points), then repair that")
 
 
 def _outputs(out: Path, args: argparse.Namespace, point_suffixes: tuple[str, ...], inputs: tuple[str, ...]

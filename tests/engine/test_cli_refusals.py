@@ -1,0 +1,97 @@
+"""The command line's refusals of bad inputs, as a user meets them (docs/guide/cli.md, "Exit codes"): one
+line naming the file at fault and the problem, exit 2, nothing written. A repair refused for a curve
+in another frame says how to map it, and ``skelcore convert --skeleton-scale/--skeleton-offset``
+does the mapping; a curve whose every edge touches a NaN vertex is no curve; a binary_compressed PCD
+promising more data than LZF can expand its bytes to is refused before anything is allocated."""
+
+from __future__ import annotations
+
+import struct
+
+import numpy as np
+import pytest
+
+from skelcore import SkelInputError, shapes
+from skelcore.cli import main
+from skelcore.io import load_cloud, load_curve, write_curve_ply, write_points_ply
+from skelcore.io.lzf import lzf_decompress
+
+SCALE, OFFSET = 100.0, np.array([500.0, -300.0, 40.0])
+
+
+@pytest.fixture(scope="module")
+def files(tmp_path_factory):
+    d = tmp_path_factory.mktemp("refusals")
+    s = shapes.cylinder(1500, seed=4)
+    write_points_ply(d / "cloud.ply", s.cloud)
+    write_curve_ply(d / "axis.ply", s.curve_vertices, s.curve_edges)
+    write_curve_ply(d / "far.ply", s.curve_vertices * SCALE + OFFSET, s.curve_edges)
+    v = np.repeat(s.cloud[:600:2] * 0.9, 2, axis=0)
+    v[1::2] += 0.01
+    write_curve_ply(d / "bits.ply", v, np.arange(len(v)).reshape(-1, 2))  # 300 two-vertex pieces
+    return d
+
+
+def _refused(argv: list[str], capsys) -> str:
+    code = main(argv)
+    err = capsys.readouterr().err
+    assert code == 2 and err.count("\n") == 1 and "Traceback" not in err, err
+    return err
+
+
+@pytest.mark.parametrize("curve, says", [("far.ply", "another frame"), ("bits.ply", "300 components")])
+def test_a_refused_repair_names_the_curve(files, capsys, curve, says):
+    d = files
+    err = _refused(["repair", str(d / "cloud.ply"), "--curve", str(d / curve), "--out-curve", str(d / "x.ply"),
+                    "--quiet"], capsys)
+    assert says in err and str(d / curve) in err
+    assert not (d / "x.ply").exists()
+
+
+def test_a_curve_in_another_frame_is_mapped_by_convert_as_the_refusal_says(files, capsys):
+    d = files
+    err = _refused(["repair", str(d / "cloud.ply"), "--curve", str(d / "far.ply"), "--out-curve",
+                    str(d / "x.ply"), "--quiet"], capsys)
+    assert "skelcore convert" in err and "--skeleton-scale" in err  # a command that takes those flags
+    out = d / "mapped.ply"
+    assert main(["convert", str(d / "far.ply"), str(out), "--skeleton-scale", str(1 / SCALE),
+                 "--skeleton-offset", *(str(-x / SCALE) for x in OFFSET)]) == 0
+    said = capsys.readouterr().out
+    assert "mapped" in said and "read back: the same" in said
+    np.testing.assert_allclose(load_curve(out).vertices, load_curve(d / "axis.ply").vertices, atol=1e-9)
+    points = d / "mapped_points.ply"
+    assert main(["convert", str(d / "far.ply"), str(points), "--as", "points", "--skeleton-scale", "2"]) == 0
+    np.testing.assert_allclose(load_cloud(points), 2 * load_curve(d / "far.ply").vertices, rtol=1e-12)
+
+
+def test_convert_refuses_a_bad_map_in_one_line(files, capsys):
+    d = files
+    err = _refused(["convert", str(d / "axis.ply"), str(d / "y.ply"), "--skeleton-scale", "0"], capsys)
+    assert "--skeleton-scale" in err
+    assert not (d / "y.ply").exists()
+
+
+def test_a_curve_with_no_edge_left_after_its_nan_vertices_is_refused(files, capsys):
+    d = files
+    path = d / "nan_middle.ply"
+    path.write_text("ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\n"
+                    "element edge 2\nproperty int vertex1\nproperty int vertex2\nend_header\n"
+                    "0 0 1\nnan 0 2\n0 0 3\n0 1\n1 2\n")
+    err = _refused(["evaluate", str(d / "cloud.ply"), "--curve", str(path), "--quiet"], capsys)
+    assert str(path) in err and "NaN" in err and "nan " not in err and "warning" not in err
+
+
+def test_lzf_refuses_an_output_its_input_cannot_expand_to(tmp_path):
+    # a back-reference token of 3 bytes yields at most 264 bytes: 10 bytes cannot become 1.2 GB, and the
+    # refusal comes before the output buffer is allocated (a 150-byte file must not cost 1.2 GB)
+    with pytest.raises(ValueError, match="cannot expand"):
+        lzf_decompress(b"\x00" * 10, 1_200_000_000)
+    data = b"\x02abc" + bytes([0xE0, 0xFF, 0x02])  # 3 literals, then one reference copying 264 bytes
+    assert lzf_decompress(data, 3 + 264) == b"abc" * 89
+    pcd = (b"# .PCD v0.7\nVERSION 0.7\nFIELDS x y z\nSIZE 4 4 4\nTYPE F F F\nCOUNT 1 1 1\nWIDTH 100000000\n"
+           b"HEIGHT 1\nVIEWPOINT 0 0 0 1 0 0 0\nPOINTS 100000000\nDATA binary_compressed\n"
+           + struct.pack("<II", 10, 1_200_000_000) + b"\x00" * 10)
+    path = tmp_path / "bomb.pcd"
+    path.write_bytes(pcd)
+    with pytest.raises(SkelInputError, match="cannot expand"):
+        load_cloud(path)
