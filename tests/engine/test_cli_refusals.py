@@ -95,3 +95,11 @@ def test_lzf_refuses_an_output_its_input_cannot_expand_to(tmp_path):
     path.write_bytes(pcd)
     with pytest.raises(SkelInputError, match="cannot expand"):
         load_cloud(path)
+
+
+@pytest.mark.parametrize("offset", [("nan", "0", "0"), ("0", "inf", "0")])
+def test_evaluate_refuses_an_offset_that_is_not_finite_before_loading(files, capsys, offset):
+    d = files
+    err = _refused(["evaluate", str(d / "cloud.ply"), "--curve", str(d / "axis.ply"), "--skeleton-offset", *offset,
+                    "--quiet"], capsys)
+    assert "--skeleton-offset" in err and "finite" in err
