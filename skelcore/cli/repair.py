@@ -39,35 +39,24 @@ def register(subparsers: argparse._SubParsersAction) -> argparse.ArgumentParser:
     return p
 
 
-def _new_file(path: Path, inputs: tuple[str, ...]) -> None:
-    from ..errors import SkelInputError
-    from ..io.atomic import check_not_input, check_output_file
-
-    check_not_input(path, inputs)
-    if path.exists():
-        raise SkelInputError("exists: refusing to overwrite it", path)
-    check_output_file(path, inputs)
-
-
 def run_repair(args: argparse.Namespace) -> int:
     from .. import io
     from ..edit import write_log
     from ..errors import SkelInputError
     from ..io.correspondence_files import load_skeletal
-    from ..io.writers import CURVE_SUFFIXES, POINT_SUFFIXES, write_curve, write_point_set
+    from ..io.writers import write_curve, write_point_set
     from ..skeleton_repair import repair
     from ..skeleton_repair.from_skeletal import HOW
     from ..skeleton_repair.skeletal_out import repaired_skeletal
     from .common import clear_progress_line, stderr_progress
+    from .outputs import checked_outputs
 
     if not (args.curve or args.skeletal):
         raise SkelInputError("nothing to repair: give --curve and/or --skeletal")
     out = Path(args.out_curve)
     inputs = tuple(p for p in (args.cloud, args.curve, args.skeletal) if p)
-    if out.suffix.lower() not in CURVE_SUFFIXES:
-        raise SkelInputError(f"no curve writer for {out.suffix or '(no extension)'} "
-                             f"(writable: {', '.join(CURVE_SUFFIXES)})", out)
-    outs = _outputs(out, args, POINT_SUFFIXES, inputs)
+    outs = checked_outputs([("--out-curve", args.out_curve, "curve"), ("--out-skeletal", args.out_skeletal, "points"),
+                            ("--log", args.log, "any")], inputs, new=True)
     cloud = io.load_cloud(args.cloud)
     skeletal = None
     if args.skeletal:
@@ -115,27 +104,6 @@ def _refusal(message: str) -> str:
         return message
     return (f"{message}; write it mapped with skelcore convert C C_MAPPED --skeleton-scale S --skeleton-offset X Y Z "
             "(and the skeletal set with --as points), then repair that")
-
-
-def _outputs(out: Path, args: argparse.Namespace, point_suffixes: tuple[str, ...], inputs: tuple[str, ...]
-             ) -> list[Path]:
-    """The files to write, each checked: new, not an input, not another output, a known format."""
-    from ..errors import SkelInputError
-
-    outs = [out]
-    for flag, name in (("--out-skeletal", args.out_skeletal), ("--log", args.log)):
-        if not name:
-            continue
-        path = Path(name)
-        if flag == "--out-skeletal" and path.suffix.lower() not in point_suffixes:
-            raise SkelInputError(f"no point-set writer for {path.suffix or '(no extension)'} "
-                                 f"(writable: {', '.join(point_suffixes)})", path)
-        if any(path.resolve() == o.resolve() for o in outs):
-            raise SkelInputError(f"{flag} names a file another output names", path)
-        outs.append(path)
-    for path in outs:
-        _new_file(path, inputs)
-    return outs
 
 
 def repair_summary(result: Any) -> str:

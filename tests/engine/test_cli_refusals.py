@@ -103,3 +103,24 @@ def test_evaluate_refuses_an_offset_that_is_not_finite_before_loading(files, cap
     err = _refused(["evaluate", str(d / "cloud.ply"), "--curve", str(d / "axis.ply"), "--skeleton-offset", *offset,
                     "--quiet"], capsys)
     assert "--skeleton-offset" in err and "finite" in err
+
+
+@pytest.mark.parametrize("skeletal, curve, says", [
+    ("same.ply", "same.ply", "another output names"),
+    ("s.ply", "c.xyz", "no curve writer for .xyz"),
+    ("s.swcx", "c.ply", "no point-set writer for .swcx"),
+])
+def test_skeletonize_refuses_outputs_it_cannot_write_as_named(files, capsys, skeletal, curve, says):
+    d = files
+    err = _refused(["skeletonize", str(d / "cloud.ply"), "--out-skeletal", str(d / skeletal), "--out-curve",
+                    str(d / curve), "--raw", "--quiet"], capsys)
+    assert says in err
+    assert not (d / skeletal).exists() and not (d / curve).exists()
+
+
+def test_skeletonize_writes_each_output_in_its_extensions_format(files, capsys):
+    d = files
+    assert main(["skeletonize", str(d / "cloud.ply"), "--out-skeletal", str(d / "sk.npy"), "--out-curve",
+                 str(d / "cu.json"), "--raw", "--quiet"]) == 0
+    assert np.load(d / "sk.npy").shape == (1500, 3)
+    assert load_curve(d / "cu.json").n_edges > 0
