@@ -75,7 +75,7 @@ def run_repair(args: argparse.Namespace) -> int:
         clear_progress_line(progress)
         if exc.path is not None:
             raise
-        raise SkelInputError(_refusal(str(exc)), args.curve or args.skeletal) from None
+        raise SkelInputError(_refusal(str(exc), args.curve or args.skeletal), args.curve or args.skeletal) from None
     clear_progress_line(progress)
     if result.extracted:
         result.log["repair"]["extracted"] = f"the curve was extracted from the skeletal set {args.skeletal} by {HOW}"
@@ -97,13 +97,15 @@ def run_repair(args: argparse.Namespace) -> int:
     return 0
 
 
-def _refusal(message: str) -> str:
+def _refusal(message: str, path: str) -> str:
     """The repair's refusal, with the frame warning's remedy made a command: repair has no mapping flags,
     ``skelcore convert`` writes the skeleton mapped into the cloud's frame (docs/guide/cli.md)."""
     if "--skeleton-scale" not in message:
         return message
-    return (f"{message}; write it mapped with skelcore convert C C_MAPPED --skeleton-scale S --skeleton-offset X Y Z "
-            "(and the skeletal set with --as points), then repair that")
+    p = Path(path)
+    mapped = p.with_name(f"{p.stem}_mapped{p.suffix}")
+    return (f"{message}; write it mapped with skelcore convert {path} {mapped} --skeleton-scale S --skeleton-offset "
+            "X Y Z (a skeletal set too, with --as points), then repair that")
 
 
 def repair_summary(result: Any) -> str:
