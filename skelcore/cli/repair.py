@@ -1,4 +1,4 @@
-"""``skelcore repair CLOUD --curve C [--skeletal S] --out-curve C2 [--out-skeletal S2] [--log F]``: repair
+"""``skelcore repair CLOUD --curve C [--skeletal S] --out-curve C2 [--out-skeletal S2] [--log F] [--lossy]``: repair
 a curve skeleton from the judge's findings (docs/repair.md) and write the repaired curve, the repaired
 skeletal set and the edit log (replayable with ``skelcore edit``). Without --curve the curve is
 extracted from S. Never overwrites a file nor an input; refuses in one line naming the file (exit 2) a
@@ -34,6 +34,8 @@ def register(subparsers: argparse._SubParsersAction) -> argparse.ArgumentParser:
     p.add_argument("--out-skeletal", metavar="S2",
                    help="the repaired skeletal set to write, one row per cloud row (a new file; docs/repair.md)")
     p.add_argument("--log", metavar="F", help="the edit log to write (JSON, a new file)")
+    p.add_argument("--lossy", action="store_true", help="write C2 even when its format loses something of the "
+                   "repaired curve (a cycle in SWC, radii in OBJ); else that is refused, nothing written")
     p.add_argument("--quiet", action="store_true", help="no progress line")
     p.set_defaults(func=run_repair)
     return p
@@ -44,7 +46,7 @@ def run_repair(args: argparse.Namespace) -> int:
     from ..edit import write_log
     from ..errors import SkelInputError
     from ..io.correspondence_files import load_skeletal
-    from ..io.writers import write_curve, write_point_set
+    from ..io.writers import curve_loss, write_curve, write_point_set
     from ..skeleton_repair import repair
     from ..skeleton_repair.from_skeletal import HOW
     from ..skeleton_repair.skeletal_out import repaired_skeletal
@@ -79,6 +81,9 @@ def run_repair(args: argparse.Namespace) -> int:
     clear_progress_line(progress)
     if result.extracted:
         result.log["repair"]["extracted"] = f"the curve was extracted from the skeletal set {args.skeletal} by {HOW}"
+    loss = curve_loss(out, result.curve)
+    if loss and not args.lossy:  # known only now: the file would not hold the curve the log leads to
+        raise SkelInputError(f"{loss} (give --lossy to write it anyway, or name a .ply or .json file)", out)
     for path in outs:
         if path.exists():  # appeared while we worked
             raise SkelInputError("exists: refusing to overwrite it", path)

@@ -17,7 +17,8 @@ def register(subparsers: argparse._SubParsersAction) -> argparse.ArgumentParser:
         "skeletonize",
         help="skeletonize a cloud (Laplacian contraction): skeletal points and curve skeleton",
         description="Laplacian-based contraction (Cao et al. 2010): writes the skeletal point set "
-        "(one point per cloud point, same order) and the curve skeleton, each in its extension's format. The curve is then repaired "
+        "(one point per cloud point, same order) and the curve skeleton, each in its extension's format. "
+        "The curve is then repaired "
         "from its defects (skelcore repair: each action kept only when nothing gets worse; docs/repair.md); "
         "--raw writes the algorithm's curve as it is. With --method cao and no --raw, a cloud whose parts are "
         "far thinner than cao's sampling ball (a neuron's dendrites) starts from the axis curve at the "

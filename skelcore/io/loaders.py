@@ -253,7 +253,8 @@ def _curve(raw: RawData, path: str | os.PathLike) -> CurveSkeleton:
         curve = CurveSkeleton.from_raw(raw.vertices, raw.edges, path, radius=raw.radius)
     if curve.n_edges == 0:  # every edge touched a NaN vertex or was a self-loop: one line, no warning before it
         bad = int((~np.all(np.isfinite(np.asarray(raw.vertices, dtype=float)), axis=1)).sum())
-        why = f"every edge touches one of its {bad} vertices with NaN coordinates" if bad else "every edge is a self-loop"
+        why = (f"every edge touches one of its {bad} vertices with NaN coordinates" if bad
+               else "every edge is a self-loop")
         raise SkelInputError(f"no edge left: {why}", path)
     for w in dropped:
         warnings.warn(w.message, w.category, stacklevel=3)

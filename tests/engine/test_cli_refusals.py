@@ -124,3 +124,16 @@ def test_skeletonize_writes_each_output_in_its_extensions_format(files, capsys):
                  str(d / "cu.json"), "--raw", "--quiet"]) == 0
     assert np.load(d / "sk.npy").shape == (1500, 3)
     assert load_curve(d / "cu.json").n_edges > 0
+
+
+def test_repair_refuses_a_format_that_would_lose_the_repaired_curve(tmp_path, capsys):
+    s = shapes.torus(1500, seed=5)
+    write_points_ply(tmp_path / "ring.ply", s.cloud)
+    write_curve_ply(tmp_path / "axis.ply", s.curve_vertices, s.curve_edges)
+    argv = ["repair", str(tmp_path / "ring.ply"), "--curve", str(tmp_path / "axis.ply"), "--out-curve",
+            str(tmp_path / "fixed.swc"), "--log", str(tmp_path / "fixed.json"), "--quiet"]
+    err = _refused(argv, capsys)
+    assert "cycle" in err and "--lossy" in err and str(tmp_path / "fixed.swc") in err
+    assert not (tmp_path / "fixed.swc").exists() and not (tmp_path / "fixed.json").exists()
+    assert main([*argv, "--lossy"]) == 0
+    assert load_curve(tmp_path / "fixed.swc").n_edges == len(s.curve_edges) - 1  # SWC holds trees only
