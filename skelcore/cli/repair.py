@@ -34,6 +34,8 @@ def register(subparsers: argparse._SubParsersAction) -> argparse.ArgumentParser:
     p.add_argument("--out-skeletal", metavar="S2",
                    help="the repaired skeletal set to write, one row per cloud row (a new file; docs/repair.md)")
     p.add_argument("--log", metavar="F", help="the edit log to write (JSON, a new file)")
+    p.add_argument("--out-extracted", metavar="C0", help="without --curve: write the curve extracted from S, the "
+                   "one the log starts from (skelcore edit C0 --ops F replays it; a new file)")
     p.add_argument("--lossy", action="store_true", help="write C2 even when its format loses something of the "
                    "repaired curve (a cycle in SWC, radii in OBJ); else that is refused, nothing written")
     p.add_argument("--quiet", action="store_true", help="no progress line")
@@ -55,10 +57,13 @@ def run_repair(args: argparse.Namespace) -> int:
 
     if not (args.curve or args.skeletal):
         raise SkelInputError("nothing to repair: give --curve and/or --skeletal")
+    if args.out_extracted and args.curve:
+        raise SkelInputError("--out-extracted writes the curve extracted from --skeletal: it goes without --curve")
     out = Path(args.out_curve)
     inputs = tuple(p for p in (args.cloud, args.curve, args.skeletal) if p)
     outs = checked_outputs([("--out-curve", args.out_curve, "curve"), ("--out-skeletal", args.out_skeletal, "points"),
-                            ("--log", args.log, "any")], inputs, new=True)
+                            ("--log", args.log, "any"), ("--out-extracted", args.out_extracted, "curve")],
+                           inputs, new=True)
     cloud = io.load_cloud(args.cloud)
     skeletal = None
     if args.skeletal:
@@ -68,7 +73,9 @@ def run_repair(args: argparse.Namespace) -> int:
                                  f"the cloud has {len(cloud)})", args.skeletal)
     curve = io.load_curve(args.curve) if args.curve else None
     if curve is None:
-        print(f"skelcore: {args.skeletal}: no --curve: the curve was extracted from the skeletal set by {HOW}",
+        replay = "" if args.out_extracted or not args.log else \
+            "; the log replays on that curve: --out-extracted C0 writes it"
+        print(f"skelcore: {args.skeletal}: no --curve: the curve was extracted from the skeletal set by {HOW}{replay}",
               file=sys.stderr)
     progress = stderr_progress(args.quiet)
     try:
@@ -84,6 +91,9 @@ def run_repair(args: argparse.Namespace) -> int:
     loss = curve_loss(out, result.curve)
     if loss and not args.lossy:  # known only now: the file would not hold the curve the log leads to
         raise SkelInputError(f"{loss} (give --lossy to write it anyway, or name a .ply or .json file)", out)
+    loss = curve_loss(args.out_extracted, result.start) if args.out_extracted else None
+    if loss:  # the log's hash is of the curve itself: a lossy copy would not replay
+        raise SkelInputError(f"{loss}: the log would not replay on it; name a .ply or .json file", args.out_extracted)
     for path in outs:
         if path.exists():  # appeared while we worked
             raise SkelInputError("exists: refusing to overwrite it", path)
@@ -95,6 +105,8 @@ def run_repair(args: argparse.Namespace) -> int:
         moved = f"; {args.out_skeletal}: {len(s2)} skeletal points, {n_moved} moved onto the repaired curve"
     if args.log:
         write_log(args.log, result.log, inputs)
+    if args.out_extracted:
+        write_curve(args.out_extracted, result.start, inputs=inputs, lossy=True)
     start = args.curve or f"the curve of {args.skeletal}"
     first = result.start
     print(f"{start}: {first.n_vertices} vertices, {first.n_edges} edges; {repair_summary(result)} "

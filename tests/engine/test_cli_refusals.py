@@ -137,3 +137,22 @@ def test_repair_refuses_a_format_that_would_lose_the_repaired_curve(tmp_path, ca
     assert not (tmp_path / "fixed.swc").exists() and not (tmp_path / "fixed.json").exists()
     assert main([*argv, "--lossy"]) == 0
     assert load_curve(tmp_path / "fixed.swc").n_edges == len(s.curve_edges) - 1  # SWC holds trees only
+
+
+def test_a_skeletal_set_alone_repairs_and_its_log_replays_on_the_extracted_curve(files, tmp_path, capsys):
+    s = shapes.cylinder(1500, seed=4)  # the cloud of `files`; its skeletal set: each point's foot on the axis
+    write_points_ply(tmp_path / "sk.ply", s.skeletal)
+    base = ["repair", str(files / "cloud.ply"), "--skeletal", str(tmp_path / "sk.ply"), "--out-curve"]
+    assert main([*base, str(tmp_path / "c2.ply"), "--log", str(tmp_path / "f.json"), "--out-extracted",
+                 str(tmp_path / "c0.ply"), "--quiet"]) == 0
+    assert "--out-extracted" not in capsys.readouterr().err
+    assert main(["edit", str(tmp_path / "c0.ply"), "--ops", str(tmp_path / "f.json"), "--out",
+                 str(tmp_path / "c3.ply")]) == 0
+    a, b = load_curve(tmp_path / "c2.ply"), load_curve(tmp_path / "c3.ply")
+    assert np.array_equal(a.vertices, b.vertices) and np.array_equal(a.edges, b.edges)
+    capsys.readouterr()
+    assert main([*base, str(tmp_path / "c4.ply"), "--log", str(tmp_path / "g.json"), "--quiet"]) == 0
+    assert "--out-extracted" in capsys.readouterr().err  # a log without its start curve: said how to get it
+    err = _refused(["repair", str(files / "cloud.ply"), "--curve", str(files / "axis.ply"), "--out-curve",
+                    str(tmp_path / "c5.ply"), "--out-extracted", str(tmp_path / "c6.ply"), "--quiet"], capsys)
+    assert "--out-extracted" in err and not (tmp_path / "c5.ply").exists()
