@@ -1,5 +1,6 @@
 """``skelcore convert IN OUT``: any readable curve or point set to any writable format, read back and
-compared (vertex and edge counts, components, cycles, the largest coordinate change)."""
+compared (vertex and edge counts, components, cycles, the largest coordinate change); with
+--skeleton-scale/--skeleton-offset written mapped into another frame (a skeleton into its cloud's)."""
 
 from __future__ import annotations
 
@@ -10,7 +11,8 @@ __all__ = ["register", "run_convert_cli"]
 
 
 def register(subparsers: argparse._SubParsersAction) -> argparse.ArgumentParser:
-    """Add ``skelcore convert IN OUT [--lossy] [--force] [--as curve|points] [--ascii]``."""
+    """Add ``skelcore convert IN OUT [--lossy] [--force] [--as curve|points] [--ascii]
+    [--skeleton-scale S] [--skeleton-offset X Y Z]``."""
     p = subparsers.add_parser(
         "convert",
         help="convert a curve skeleton or point set to another format, then read it back and compare",
@@ -26,6 +28,11 @@ def register(subparsers: argparse._SubParsersAction) -> argparse.ArgumentParser:
     p.add_argument("--as", dest="as_kind", choices=("curve", "points"),
                    help="read IN as this (default: a file with edges is a curve, else a point set)")
     p.add_argument("--ascii", action="store_true", help="write PLY as text (default: binary)")
+    p.add_argument("--skeleton-scale", type=float, metavar="S", default=1.0,
+                   help="multiply the coordinates (and a curve's radii) by S ...")
+    p.add_argument("--skeleton-offset", type=float, nargs=3, metavar=("X", "Y", "Z"), default=(0.0, 0.0, 0.0),
+                   help="... then add this offset: the map of skelcore evaluate's flags of these names, to write "
+                   "a skeleton in its cloud's frame")
     p.set_defaults(func=run_convert_cli)
     return p
 
@@ -36,11 +43,15 @@ def run_convert_cli(args: argparse.Namespace) -> int:
 
     try:
         result = convert_file(args.input, args.output, lossy=args.lossy, force=args.force, as_kind=args.as_kind,
-                              binary=not args.ascii)
+                              binary=not args.ascii, scale=args.skeleton_scale,
+                              offset=tuple(args.skeleton_offset))
     except SkelInputError as exc:
         print(f"skelcore: error: {exc}", file=sys.stderr)
         return 2
     print(f"in : {args.input} ({result.source.line()})")
+    if (args.skeleton_scale, tuple(args.skeleton_offset)) != (1.0, (0.0, 0.0, 0.0)):
+        off = " ".join(f"{x:.9g}" for x in args.skeleton_offset)
+        print(f"mapped: coordinates x {args.skeleton_scale:.9g} + ({off})")
     print(f"out: {args.output} ({result.written.line()})")
     change = f"largest coordinate change {result.max_coordinate_change:.3g}"
     if result.max_radius_change is not None:

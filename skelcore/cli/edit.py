@@ -33,20 +33,19 @@ def run_edit(args: argparse.Namespace) -> int:
     from ..edit import read_log, replay
     from ..errors import SkelInputError
     from ..io import load_curve
-    from ..io.atomic import check_not_input, check_output_file
-    from ..io.writers import CURVE_SUFFIXES, curve_loss, write_curve
+    from ..io.writers import curve_loss, write_curve
+    from .outputs import checked_outputs
 
     out, inputs = Path(args.out), (args.curve, args.ops)
-    if out.suffix.lower() not in CURVE_SUFFIXES:
-        raise SkelInputError(f"no curve writer for {out.suffix or '(no extension)'} "
-                             f"(writable: {', '.join(CURVE_SUFFIXES)})", out)
-    check_not_input(out, inputs)
-    if out.exists() and out.is_file():
-        raise SkelInputError("exists: refusing to overwrite it", out)
-    check_output_file(out, inputs)
+    checked_outputs([("--out", args.out, "curve")], inputs, new=True)
     curve = load_curve(args.curve)
     log = read_log(args.ops)
-    edited, changes = replay(curve, log)
+    try:
+        edited, changes = replay(curve, log)
+    except SkelInputError as exc:  # the log's fault: name it, and the curve it was replayed on
+        if exc.path is not None:
+            raise
+        raise SkelInputError(f"{exc}; the curve: {args.curve}", args.ops) from None
     loss = curve_loss(out, edited)
     if loss and not args.lossy:
         raise SkelInputError(f"{loss} (give --lossy to write anyway)", out)

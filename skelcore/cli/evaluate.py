@@ -10,7 +10,7 @@ import numpy as np
 
 from ..errors import SkelInputError
 from ..params import Params
-from ..skeleton_mapping import map_skeleton
+from ..skeleton_mapping import check_mapping, map_skeleton
 from .common import (clear_progress_line, format_defects, format_ground_truth, format_reference, format_table, params_from_args, positive_float,
                      print_warnings, stderr_progress)
 
@@ -163,6 +163,10 @@ def run_evaluate(args: argparse.Namespace) -> int:
               "reference_facts": args.reference_facts}
     guard = tuple(p for p in inputs.values() if p)
     _check_outputs(args, guard)
+    try:
+        check_mapping(args.skeleton_scale, tuple(args.skeleton_offset))
+    except ValueError as exc:  # argparse's float takes "nan" and "inf"
+        raise SkelInputError(f"--skeleton-scale/--skeleton-offset: {exc}") from None
     if args.barcodes and args.skeletal is None and args.correspondence != "reverse":
         raise SkelInputError("--barcodes needs --skeletal (barcodes compare the cloud with the skeletal set)")
 

@@ -1,8 +1,8 @@
-"""``skelcore repair CLOUD --curve C [--skeletal S] --out-curve C2 [--out-skeletal S2] [--log F]``: repair
+"""``skelcore repair CLOUD --curve C [--skeletal S] --out-curve C2 [--out-skeletal S2] [--log F] [--lossy]``: repair
 a curve skeleton from the judge's findings (docs/repair.md) and write the repaired curve, the repaired
 skeletal set and the edit log (replayable with ``skelcore edit``). Without --curve the curve is
-extracted from S. Never overwrites a file nor an input; refuses in one line (exit 2) a curve without
-edges, one in another frame, one of too many components."""
+extracted from S. Never overwrites a file nor an input; refuses in one line naming the file (exit 2) a
+curve without edges, one in another frame (saying how to map it), one of too many components."""
 
 from __future__ import annotations
 
@@ -34,19 +34,13 @@ def register(subparsers: argparse._SubParsersAction) -> argparse.ArgumentParser:
     p.add_argument("--out-skeletal", metavar="S2",
                    help="the repaired skeletal set to write, one row per cloud row (a new file; docs/repair.md)")
     p.add_argument("--log", metavar="F", help="the edit log to write (JSON, a new file)")
+    p.add_argument("--out-extracted", metavar="C0", help="without --curve: write the curve extracted from S, the "
+                   "one the log starts from (skelcore edit C0 --ops F replays it; a new file)")
+    p.add_argument("--lossy", action="store_true", help="write C2 even when its format loses something of the "
+                   "repaired curve (a cycle in SWC, radii in OBJ); else that is refused, nothing written")
     p.add_argument("--quiet", action="store_true", help="no progress line")
     p.set_defaults(func=run_repair)
     return p
-
-
-def _new_file(path: Path, inputs: tuple[str, ...]) -> None:
-    from ..errors import SkelInputError
-    from ..io.atomic import check_not_input, check_output_file
-
-    check_not_input(path, inputs)
-    if path.exists():
-        raise SkelInputError("exists: refusing to overwrite it", path)
-    check_output_file(path, inputs)
 
 
 def run_repair(args: argparse.Namespace) -> int:
@@ -54,20 +48,22 @@ def run_repair(args: argparse.Namespace) -> int:
     from ..edit import write_log
     from ..errors import SkelInputError
     from ..io.correspondence_files import load_skeletal
-    from ..io.writers import CURVE_SUFFIXES, POINT_SUFFIXES, write_curve, write_point_set
+    from ..io.writers import curve_loss, write_curve, write_point_set
     from ..skeleton_repair import repair
     from ..skeleton_repair.from_skeletal import HOW
     from ..skeleton_repair.skeletal_out import repaired_skeletal
     from .common import clear_progress_line, stderr_progress
+    from .outputs import checked_outputs
 
     if not (args.curve or args.skeletal):
         raise SkelInputError("nothing to repair: give --curve and/or --skeletal")
+    if args.out_extracted and args.curve:
+        raise SkelInputError("--out-extracted writes the curve extracted from --skeletal: it goes without --curve")
     out = Path(args.out_curve)
     inputs = tuple(p for p in (args.cloud, args.curve, args.skeletal) if p)
-    if out.suffix.lower() not in CURVE_SUFFIXES:
-        raise SkelInputError(f"no curve writer for {out.suffix or '(no extension)'} "
-                             f"(writable: {', '.join(CURVE_SUFFIXES)})", out)
-    outs = _outputs(out, args, POINT_SUFFIXES, inputs)
+    outs = checked_outputs([("--out-curve", args.out_curve, "curve"), ("--out-skeletal", args.out_skeletal, "points"),
+                            ("--log", args.log, "any"), ("--out-extracted", args.out_extracted, "curve")],
+                           inputs, new=True)
     cloud = io.load_cloud(args.cloud)
     skeletal = None
     if args.skeletal:
@@ -77,13 +73,27 @@ def run_repair(args: argparse.Namespace) -> int:
                                  f"the cloud has {len(cloud)})", args.skeletal)
     curve = io.load_curve(args.curve) if args.curve else None
     if curve is None:
-        print(f"skelcore: {args.skeletal}: no --curve: the curve was extracted from the skeletal set by {HOW}",
+        replay = "" if args.out_extracted or not args.log else \
+            "; the log replays on that curve: --out-extracted C0 writes it"
+        print(f"skelcore: {args.skeletal}: no --curve: the curve was extracted from the skeletal set by {HOW}{replay}",
               file=sys.stderr)
     progress = stderr_progress(args.quiet)
-    result = repair(cloud, curve, skeletal=skeletal, progress=progress)
+    try:
+        result = repair(cloud, curve, skeletal=skeletal, progress=progress)
+    except SkelInputError as exc:  # a refused curve (no edges, too many pieces, another frame): name it
+        clear_progress_line(progress)
+        if exc.path is not None:
+            raise
+        raise SkelInputError(_refusal(str(exc), args.curve or args.skeletal), args.curve or args.skeletal) from None
     clear_progress_line(progress)
     if result.extracted:
         result.log["repair"]["extracted"] = f"the curve was extracted from the skeletal set {args.skeletal} by {HOW}"
+    loss = curve_loss(out, result.curve)
+    if loss and not args.lossy:  # known only now: the file would not hold the curve the log leads to
+        raise SkelInputError(f"{loss} (give --lossy to write it anyway, or name a .ply or .json file)", out)
+    loss = curve_loss(args.out_extracted, result.start) if args.out_extracted else None
+    if loss:  # the log's hash is of the curve itself: a lossy copy would not replay
+        raise SkelInputError(f"{loss}: the log would not replay on it; name a .ply or .json file", args.out_extracted)
     for path in outs:
         if path.exists():  # appeared while we worked
             raise SkelInputError("exists: refusing to overwrite it", path)
@@ -95,6 +105,8 @@ def run_repair(args: argparse.Namespace) -> int:
         moved = f"; {args.out_skeletal}: {len(s2)} skeletal points, {n_moved} moved onto the repaired curve"
     if args.log:
         write_log(args.log, result.log, inputs)
+    if args.out_extracted:
+        write_curve(args.out_extracted, result.start, inputs=inputs, lossy=True)
     start = args.curve or f"the curve of {args.skeletal}"
     first = result.start
     print(f"{start}: {first.n_vertices} vertices, {first.n_edges} edges; {repair_summary(result)} "
@@ -102,25 +114,15 @@ def run_repair(args: argparse.Namespace) -> int:
     return 0
 
 
-def _outputs(out: Path, args: argparse.Namespace, point_suffixes: tuple[str, ...], inputs: tuple[str, ...]
-             ) -> list[Path]:
-    """The files to write, each checked: new, not an input, not another output, a known format."""
-    from ..errors import SkelInputError
-
-    outs = [out]
-    for flag, name in (("--out-skeletal", args.out_skeletal), ("--log", args.log)):
-        if not name:
-            continue
-        path = Path(name)
-        if flag == "--out-skeletal" and path.suffix.lower() not in point_suffixes:
-            raise SkelInputError(f"no point-set writer for {path.suffix or '(no extension)'} "
-                                 f"(writable: {', '.join(point_suffixes)})", path)
-        if any(path.resolve() == o.resolve() for o in outs):
-            raise SkelInputError(f"{flag} names a file another output names", path)
-        outs.append(path)
-    for path in outs:
-        _new_file(path, inputs)
-    return outs
+def _refusal(message: str, path: str) -> str:
+    """The repair's refusal, with the frame warning's remedy made a command: repair has no mapping flags,
+    ``skelcore convert`` writes the skeleton mapped into the cloud's frame (docs/guide/cli.md)."""
+    if "--skeleton-scale" not in message:
+        return message
+    p = Path(path)
+    mapped = p.with_name(f"{p.stem}_mapped{p.suffix}")
+    return (f"{message}; write it mapped with skelcore convert {path} {mapped} --skeleton-scale S --skeleton-offset "
+            "X Y Z (a skeletal set too, with --as points), then repair that")
 
 
 def repair_summary(result: Any) -> str:

@@ -17,15 +17,18 @@ def register(subparsers: argparse._SubParsersAction) -> argparse.ArgumentParser:
         "skeletonize",
         help="skeletonize a cloud (Laplacian contraction): skeletal points and curve skeleton",
         description="Laplacian-based contraction (Cao et al. 2010): writes the skeletal point set "
-        "(one point per cloud point, same order) and the curve skeleton as PLY. The curve is then repaired "
+        "(one point per cloud point, same order) and the curve skeleton, each in its extension's format. "
+        "The curve is then repaired "
         "from its defects (skelcore repair: each action kept only when nothing gets worse; docs/repair.md); "
         "--raw writes the algorithm's curve as it is. With --method cao and no --raw, a cloud whose parts are "
         "far thinner than cao's sampling ball (a neuron's dendrites) starts from the axis curve at the "
         "cloud's own spacing instead (docs/skeletonize.md, thin parts).",
     )
     p.add_argument("cloud", help="point cloud file")
-    p.add_argument("--out-skeletal", metavar="F", help="write the skeletal point set (PLY)")
-    p.add_argument("--out-curve", metavar="F", help="write the curve skeleton (PLY with an edge element)")
+    p.add_argument("--out-skeletal", metavar="F", help="write the skeletal point set (its extension picks the "
+                   "format: .ply .xyz .txt .npy)")
+    p.add_argument("--out-curve", metavar="F", help="write the curve skeleton (its extension picks the format: "
+                   ".ply .obj .swc .cg .graphml .json)")
     p.add_argument("--method", choices=("cao", "skelscope"), default="cao",
                    help="cao: the paper's toolbox algorithm, step by step (default); skelscope: ours, "
                    "with clean-up of shortcuts, cycles and spurs (sturdier on noisy scans)")
@@ -39,16 +42,17 @@ def register(subparsers: argparse._SubParsersAction) -> argparse.ArgumentParser:
 
 def run_skeletonize_cli(args: argparse.Namespace) -> int:
     from .. import io
+    from ..io.writers import curve_loss, write_curve, write_point_set
     from ..skeleton import skeletonize
+    from .outputs import checked_outputs
 
     try:
         if not (args.out_skeletal or args.out_curve):
             raise SkelInputError("nothing to write: give --out-skeletal and/or --out-curve")
         if args.log and (args.raw or not args.out_curve):
             raise SkelInputError("--log is the repair's edit log: it needs --out-curve and no --raw")
-        for out in (args.out_skeletal, args.out_curve, args.log):
-            if out:
-                io.atomic.check_output_file(out, (args.cloud,))
+        checked_outputs([("--out-skeletal", args.out_skeletal, "points"), ("--out-curve", args.out_curve, "curve"),
+                         ("--log", args.log, "any")], (args.cloud,))
         cloud = io.load_cloud(args.cloud)
         progress = stderr_progress(args.quiet)
         choice = None
@@ -62,11 +66,14 @@ def run_skeletonize_cli(args: argparse.Namespace) -> int:
         repaired = None
         if args.out_curve and not args.raw:
             repaired = _repaired(cloud, curve, progress)
+        out = curve if repaired is None else repaired.curve
+        loss = curve_loss(args.out_curve, out) if args.out_curve else None
+        if loss:  # known only now (a cycle for SWC): refused before anything is written
+            raise SkelInputError(f"{loss}; name a .ply, .json or .graphml file", args.out_curve)
         if args.out_skeletal:
-            io.write_points_ply(args.out_skeletal, skeletal, inputs=(args.cloud,))
+            write_point_set(args.out_skeletal, skeletal, inputs=(args.cloud,))
         if args.out_curve:
-            out = curve if repaired is None else repaired.curve
-            io.write_curve_ply(args.out_curve, out.vertices, out.edges, inputs=(args.cloud,))
+            write_curve(args.out_curve, out, inputs=(args.cloud,))
         if args.log and repaired is not None:
             from ..edit import write_log
 

@@ -2,7 +2,10 @@
 the output's format, read the written file back and compare (vertex and edge counts, components,
 cycles, the largest coordinate and radius change). A target that cannot hold the input (a cycle in
 SWC, radii in OBJ, edges in XYZ) is refused with the reason unless ``lossy``; the input is never
-overwritten and an existing output is replaced only with ``force``.
+overwritten and an existing output is replaced only with ``force``. With ``scale`` and ``offset`` the
+coordinates are written mapped into another frame, ``v * scale + offset`` (a radius times ``scale``), the
+map of ``skelcore evaluate --skeleton-scale/--skeleton-offset`` (``skelcore.skeleton_mapping``), so a
+skeleton in a tool's own frame becomes a file in its cloud's (docs/guide/cli.md, ``skelcore convert``).
 """
 
 from __future__ import annotations
@@ -16,6 +19,7 @@ import numpy as np
 
 from ..curve import CurveSkeleton
 from ..errors import SkelInputError
+from ..skeleton_mapping import check_mapping, is_identity
 from . import atomic
 from .loaders import Loaded, load_any, load_curve, load_points
 from .writers import CURVE_SUFFIXES, POINT_SUFFIXES, curve_loss, points_loss, write_curve, write_point_set
@@ -88,9 +92,15 @@ def _largest_change(a: np.ndarray, b: np.ndarray) -> float:
 
 
 def convert_file(source: str | os.PathLike, target: str | os.PathLike, *, lossy: bool = False, force: bool = False,
-                 as_kind: str | None = None, binary: bool = True) -> Conversion:
-    """Convert ``source`` to ``target``'s format (by its extension), then read ``target`` back and
-    compare. SkelInputError (one line) for an unreadable input, an unwritable or lossy target."""
+                 as_kind: str | None = None, binary: bool = True, scale: float = 1.0,
+                 offset: tuple[float, float, float] = (0.0, 0.0, 0.0)) -> Conversion:
+    """Convert ``source`` to ``target``'s format (by its extension), mapped by ``v * scale + offset``,
+    then read ``target`` back and compare with what was meant to be written. SkelInputError (one line)
+    for an unreadable input, an unwritable or lossy target, a scale or offset that is not finite."""
+    try:
+        scale, offset = check_mapping(scale, offset)
+    except ValueError as exc:
+        raise SkelInputError(f"--skeleton-scale/--skeleton-offset: {exc}") from None
     src, dst = Path(source), Path(target)
     if src.exists() and dst.exists() and src.resolve() == dst.resolve():
         raise SkelInputError("is the input: convert never overwrites its input", dst)
@@ -108,6 +118,8 @@ def convert_file(source: str | os.PathLike, target: str | os.PathLike, *, lossy:
     else:
         loaded = load_any(source)
     before = describe(loaded)
+    if not is_identity(scale, offset):
+        loaded = _mapped(loaded, scale, np.asarray(offset))
     reason = curve_loss(dst, loaded.curve) if loaded.kind == "curve" else points_loss(dst)
     if reason is not None and loaded.kind == "points":
         raise SkelInputError(reason, dst)
@@ -136,6 +148,14 @@ def convert_file(source: str | os.PathLike, target: str | os.PathLike, *, lossy:
         r_change = float(np.where(both_nan, 0.0, diff).max())
         r_change = math.inf if math.isnan(r_change) else r_change
     return Conversion(before, after, _largest_change(_vertices(loaded), _vertices(back)), r_change, reason)
+
+
+def _mapped(loaded: Loaded, scale: float, offset: np.ndarray) -> Loaded:
+    """The loaded file's coordinates ``* scale + offset`` (a curve's radius ``* scale``)."""
+    if loaded.kind == "points":
+        return Loaded(kind="points", path=loaded.path, format=loaded.format, points=loaded.points * scale + offset)
+    curve = loaded.curve.transformed(lambda v: v * scale + offset, radius_scale=scale)
+    return Loaded(kind="curve", path=loaded.path, format=loaded.format, curve=curve)
 
 
 def _format_of(path: str | os.PathLike) -> str:

@@ -10,6 +10,7 @@ takes another library's object instead of a path (:mod:`skelcore.interop`) and c
 from __future__ import annotations
 
 import os
+import warnings
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Callable
@@ -247,7 +248,16 @@ def _curve(raw: RawData, path: str | os.PathLike) -> CurveSkeleton:
         raise SkelInputError(
             f"{raw.format} file has no edges: it is a point set, not a curve skeleton", path
         )
-    curve = CurveSkeleton.from_raw(raw.vertices, raw.edges, path, radius=raw.radius)
+    with warnings.catch_warnings(record=True) as dropped:  # said below, unless nothing is left to score
+        warnings.simplefilter("always")
+        curve = CurveSkeleton.from_raw(raw.vertices, raw.edges, path, radius=raw.radius)
+    if curve.n_edges == 0:  # every edge touched a NaN vertex or was a self-loop: one line, no warning before it
+        bad = int((~np.all(np.isfinite(np.asarray(raw.vertices, dtype=float)), axis=1)).sum())
+        why = (f"every edge touches one of its {bad} vertices with NaN coordinates" if bad
+               else "every edge is a self-loop")
+        raise SkelInputError(f"no edge left: {why}", path)
+    for w in dropped:
+        warnings.warn(w.message, w.category, stacklevel=3)
     if curve.n_vertices and np.all(curve.vertices == curve.vertices[0]):
         raise SkelInputError(f"all {curve.n_vertices} curve vertices are at the same position", path)
     return curve

@@ -3,16 +3,22 @@
 A control byte below 32 starts a run of ctrl + 1 literal bytes; otherwise its top 3 bits give a
 back-reference length (7 = one more length byte follows) and, with the next byte, the distance
 back into the output. Works token by token with slice copies (overlapping references repeat
-their pattern), so the cost is per token, not per byte.
+their pattern), so the cost is per token, not per byte. No token yields more than 88 bytes per byte it
+takes (a 3-byte reference copies at most 264), so an output size beyond that is refused before its
+buffer is allocated: a header cannot make a small file cost gigabytes.
 """
 
 from __future__ import annotations
 
-__all__ = ["lzf_decompress"]
+__all__ = ["MAX_EXPANSION", "lzf_decompress"]
+
+MAX_EXPANSION = 88  # the most output bytes per input byte: a 3-byte back-reference copies 264
 
 
 def lzf_decompress(src: bytes, out_len: int) -> bytes:
     """Decompress ``src`` into exactly ``out_len`` bytes; ValueError on corrupt or short data."""
+    if out_len > MAX_EXPANSION * len(src):
+        raise ValueError(f"{len(src)} bytes cannot expand to {out_len} (at most {MAX_EXPANSION} x)")
     out = bytearray(out_len)
     n = len(src)
     ip = op = 0

@@ -151,4 +151,5 @@ def test_cli_edit_replays_and_refuses(curve, tmp_path, capsys):
         assert main(["edit", str(src), "--ops", str(log), "--out", str(target)]) == 2
         err = capsys.readouterr().err.strip()
         assert says in err and len(err.splitlines()) == 1, err
+        assert str(target if says in ("exists", "input") else log) in err, err  # the file at fault is named
     assert not (tmp_path / "a.ply").exists()
