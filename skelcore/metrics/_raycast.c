@@ -861,7 +861,8 @@ static int64_t near_raster(const Raster *r, const Tree *t, const Near *near, int
  *          starts (k1 - k0 + 1) i64 into queries, centres (k,3) f64, reach (k) f64 (all clusters),
  *          cluster range [k0, k1), h, rows, bins, beta out (q) f64,
  *          stats out (6) i64: node visits, near caps, far rays, near points, hint tries, hint hits,
- *          stop (1) i32, done out (1) i64[, hint_min, hint_rest: HINT_MIN, HINT_REST])
+ *          stop (1) i32, done out (1) i64[, hint_min, hint_rest: HINT_MIN, HINT_REST[, prefetch_from:
+ *          PREFETCH_FROM bytes]])
  * beta of the queries of clusters k0..k1-1 (queries holds just theirs, grouped by cluster), one cluster
  * after the other, so that each far ray can start from the leaf its sample hit from the previous cluster.
  * `done` counts the clusters finished (read by another thread for progress); once another thread sets
@@ -870,9 +871,10 @@ static PyObject *py_clusters(PyObject *self, PyObject *args) {
     Py_buffer pts, nds, lvs, qs, starts, cen, rch, beta, stats, stop_buf, done_buf;
     int k0, k1, rows, bins;
     double h;
-    int hint_min = HINT_MIN, hint_rest = HINT_REST;
-    if (!PyArg_ParseTuple(args, "y*y*y*y*y*y*y*iidiiw*w*w*w*|ii", &pts, &nds, &lvs, &qs, &starts, &cen, &rch,
-                          &k0, &k1, &h, &rows, &bins, &beta, &stats, &stop_buf, &done_buf, &hint_min, &hint_rest))
+    int hint_min = HINT_MIN, hint_rest = HINT_REST, prefetch_from = PREFETCH_FROM;
+    if (!PyArg_ParseTuple(args, "y*y*y*y*y*y*y*iidiiw*w*w*w*|iii", &pts, &nds, &lvs, &qs, &starts, &cen, &rch,
+                          &k0, &k1, &h, &rows, &bins, &beta, &stats, &stop_buf, &done_buf, &hint_min, &hint_rest,
+                          &prefetch_from))
         return NULL;
     volatile const int32_t *stop = (volatile const int32_t *)stop_buf.buf;
     volatile int64_t *done_count = (volatile int64_t *)done_buf.buf;
@@ -928,7 +930,7 @@ static PyObject *py_clusters(PyObject *self, PyObject *args) {
     for (int l = 0; l < PACKET; l++) pk.sx[l] = pk.sy[l] = pk.sz[l] = NAN;  /* never uninitialised lanes */
     int64_t caps = 0, rays = 0, nears = 0;
     const double h2 = h * h;
-    const int big = (size_t)n * 3 * sizeof(float) > PREFETCH_FROM;  /* prefetch_hints */
+    const int big = (int64_t)n * 3 * (int64_t)sizeof(float) > (int64_t)prefetch_from;  /* prefetch_hints */
     const double total = (double)rows * bins;
     double prev[3] = {0.0, 0.0, 0.0};
     int64_t recent_tried = 0, recent_hits = 0;  /* the hints' recent rays and hits (HINT_MIN) */
