@@ -768,6 +768,26 @@ static void walk_packet(const Tree *t, Walker *w, Packet *pk, const float *o, fl
     pk->n = 0;
 }
 
+/* The hints of a tile's needed samples asked of memory before its rays are cast: each sample's hint point
+ * and its leaf's node (at 100k points the tree and its points, about 3 MB, outgrow a core's L2, and a ray's
+ * first tests wait on them one after the other); only for points beyond PREFETCH_FROM bytes (the hammer's
+ * 48 KB stay in the caches, and the extra pass over the tile costs 5 %).  No value depends on it
+ * (docs/boundedness.md 3.17). */
+#define PREFETCH_FROM (512 * 1024)
+static inline void prefetch_hints(const Tree *t, const Raster *r, const uint64_t *need, const int32_t *hints,
+                                  int j0, int j1, int b0, int x, int bins) {
+    for (int j = j0; j < j1; j++) {
+        uint64_t todo = (need[(size_t)j * r->words + x] >> (b0 & 63)) & TILE_MASK;
+        while (todo) {
+            const int b = b0 + __builtin_ctzll(todo);
+            todo &= todo - 1;
+            const int32_t *hint = hints + 2 * ((size_t)j * bins + b);
+            if (hint[1] >= 0) __builtin_prefetch(t->pts + 3 * (size_t)hint[1]);
+            if (hint[0] >= 0) __builtin_prefetch(t->nodes + hint[0]);
+        }
+    }
+}
+
 /* Points with |p - c| <= reach, nearest shell first (shell_order), into out; returns their number */
 typedef struct { double d2; int32_t i; } Near;
 
@@ -841,7 +861,8 @@ static int64_t near_raster(const Raster *r, const Tree *t, const Near *near, int
  *          starts (k1 - k0 + 1) i64 into queries, centres (k,3) f64, reach (k) f64 (all clusters),
  *          cluster range [k0, k1), h, rows, bins, beta out (q) f64,
  *          stats out (6) i64: node visits, near caps, far rays, near points, hint tries, hint hits,
- *          stop (1) i32, done out (1) i64[, hint_min, hint_rest: HINT_MIN, HINT_REST])
+ *          stop (1) i32, done out (1) i64[, hint_min, hint_rest: HINT_MIN, HINT_REST[, prefetch_from:
+ *          PREFETCH_FROM bytes]])
  * beta of the queries of clusters k0..k1-1 (queries holds just theirs, grouped by cluster), one cluster
  * after the other, so that each far ray can start from the leaf its sample hit from the previous cluster.
  * `done` counts the clusters finished (read by another thread for progress); once another thread sets
@@ -850,9 +871,10 @@ static PyObject *py_clusters(PyObject *self, PyObject *args) {
     Py_buffer pts, nds, lvs, qs, starts, cen, rch, beta, stats, stop_buf, done_buf;
     int k0, k1, rows, bins;
     double h;
-    int hint_min = HINT_MIN, hint_rest = HINT_REST;
-    if (!PyArg_ParseTuple(args, "y*y*y*y*y*y*y*iidiiw*w*w*w*|ii", &pts, &nds, &lvs, &qs, &starts, &cen, &rch,
-                          &k0, &k1, &h, &rows, &bins, &beta, &stats, &stop_buf, &done_buf, &hint_min, &hint_rest))
+    int hint_min = HINT_MIN, hint_rest = HINT_REST, prefetch_from = PREFETCH_FROM;
+    if (!PyArg_ParseTuple(args, "y*y*y*y*y*y*y*iidiiw*w*w*w*|iii", &pts, &nds, &lvs, &qs, &starts, &cen, &rch,
+                          &k0, &k1, &h, &rows, &bins, &beta, &stats, &stop_buf, &done_buf, &hint_min, &hint_rest,
+                          &prefetch_from))
         return NULL;
     volatile const int32_t *stop = (volatile const int32_t *)stop_buf.buf;
     volatile int64_t *done_count = (volatile int64_t *)done_buf.buf;
@@ -908,6 +930,7 @@ static PyObject *py_clusters(PyObject *self, PyObject *args) {
     for (int l = 0; l < PACKET; l++) pk.sx[l] = pk.sy[l] = pk.sz[l] = NAN;  /* never uninitialised lanes */
     int64_t caps = 0, rays = 0, nears = 0;
     const double h2 = h * h;
+    const int big = (int64_t)n * 3 * (int64_t)sizeof(float) > (int64_t)prefetch_from;  /* prefetch_hints */
     const double total = (double)rows * bins;
     double prev[3] = {0.0, 0.0, 0.0};
     int64_t recent_tried = 0, recent_hits = 0;  /* the hints' recent rays and hits (HINT_MIN) */
@@ -956,6 +979,7 @@ static PyObject *py_clusters(PyObject *self, PyObject *args) {
                 const int j1 = j0 + TILE_ROWS < rows ? j0 + TILE_ROWS : rows;
                 for (int b0 = 0; b0 < bins; b0 += TILE_BINS) {
                     const int x = b0 >> 6;
+                    if (use_hints && big) prefetch_hints(&t, &r, need, hints, j0, j1, b0, x, bins);
                     for (int j = j0; j < j1; j++) {
                         uint64_t todo = (need[(size_t)j * r.words + x] >> (b0 & 63)) & TILE_MASK;
                         while (todo) {

@@ -1,6 +1,7 @@
 """The rays kernel's far rays (docs/boundedness.md 3.10-3.11) against an exhaustive ray test of every point:
-whatever prunes the walks (packets' lane groups with no open ray, the walk up from a hint, hints skipped
-or always tried), a sample is hit iff some point beyond the cut passes the kernel's float32 ball test."""
+whatever prunes or orders the walks (packets' lane groups with no open ray, the walk up from a hint, hints
+skipped, always tried or asked of memory ahead), a sample is hit iff some point beyond the cut passes the
+kernel's float32 ball test."""
 
 from __future__ import annotations
 
@@ -59,11 +60,13 @@ def case():
     return tree, queries, h, _exhaustive_beta(tree.points, queries, h)
 
 
-@pytest.mark.parametrize("policy", [(), (0, 0), (1001, 10**6)], ids=["default", "hints-always", "hints-never"])
+@pytest.mark.parametrize("policy", [(), (0, 0), (1001, 10**6), (250, 7, 0)],
+                         ids=["default", "hints-always", "hints-never", "hints-prefetched"])
 def test_far_rays_hit_exactly_where_some_point_passes_the_ball_test(case, policy):
     """Clusters of one query at its own position with reach h: no near caps, every sample a far ray; each
     build's beta equals the exhaustive test's bit for bit (a lane group skipped with an open ray, or a
-    walk cut short, would lose hits)."""
+    walk cut short, would lose hits); "hints-prefetched" asks memory for the hints of every tile, as for
+    a cloud beyond the kernel's PREFETCH_FROM bytes (docs/boundedness.md 3.17)."""
     from skelcore.metrics import _raycast
 
     modules = [_raycast]
