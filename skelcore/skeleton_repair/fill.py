@@ -3,7 +3,8 @@ region becomes a new stretch of curve attached at the nearest vertex: the centro
 region's slabs along its main axis (a tube's end seen all around: the slab centroids lie on its axis)
 the region skeletonized by :func:`skelcore.skeletonize` (``skelscope``), or the region's axis curve
 at its own spacing (:mod:`skelcore.skeleton.local_axis`: a thin branch). Tried last, and made one at
-a time (:func:`fill_actions`): a round takes only those it may try."""
+a time (:func:`fill_actions`), each when its try is reached (:class:`Fills`; docs/repair.md "The
+repair's cost")."""
 
 from __future__ import annotations
 
