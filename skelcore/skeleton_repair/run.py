@@ -221,7 +221,8 @@ def repair(cloud: np.ndarray, curve: CurveSkeleton | tuple | None = None, skelet
             fills = Fills(fill_actions(cur, found.missing, np.asarray(ev.source.args["cloud"], float),
                                        p.repair_max_tries, parts) if p.repair_fill_missing else iter(()),
                           p.repair_max_tries, lambda: clock.phase("proposals"))
-        candidates += fills.first(p.repair_max_tries - len(candidates))  # those the head and the count need
+        ahead = fills.first(p.repair_max_tries - len(candidates))  # those the head and the count need
+        candidates += ahead
         if len(candidates) < p.repair_max_tries:  # re-centrings come last: cut only when they may be tried
             if drift is None:
                 with clock.phase("re-centring cuts"):
@@ -235,7 +236,7 @@ def repair(cloud: np.ndarray, curve: CurveSkeleton | tuple | None = None, skelet
             continue
         done, refused_now = False, []
         late = (lambda a: _same(cur, a) in behind) if behind else None
-        for action in tries_in_turn(candidates, p.repair_max_tries, late, fills.after(len(fills.made))):
+        for action in tries_in_turn(candidates, p.repair_max_tries, late, fills.after(len(ahead))):
             check()
             why: dict[str, Any] = {"defect": action.code, **action.target, "reason": action.reason,
                                    "local_before": found.local(action.edges), "before": _rounded(found.measures),
