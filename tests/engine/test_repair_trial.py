@@ -61,25 +61,39 @@ def test_a_run_of_adds_is_the_edits_curve_to_the_bit(middle):
 
 def test_fills_made_when_reached_give_the_same_repair(middle, monkeypatch):
     """The same log (kept and refused, with their measures) and the same curve to the bit as making
-    every fill a round may try first and applying every entry alone; and fewer regions' curves made."""
+    every fill a round may try first and applying every entry alone. A candidate that fails (a vertex
+    moved out of the shape) heads every round and a round tries three, so that fills wait beyond the
+    round's first tries, made only when reached, and the refused one goes last after a kept fill."""
+    from skelcore import Params
+    from skelcore.skeleton_repair.proposals import Action
+
     cloud, curve = middle
-    made = []
-    memoized = fill._made
+    propose, after = run.propose, fill.Fills.after
 
-    def counted(memo, how, pts, make):
-        return memoized(memo, how, pts, lambda: (made.append(how), make())[1])
+    def with_refused(cur, *args, **kwargs):
+        out = {"op": "move_vertex", "args": {"vertex": 1, "position": [float(x) for x in cur.vertices[1] + [1.0, 0, 0]]}}
+        return [Action("outside", {"vertex": 1}, "moved out", [out])] + propose(cur, *args, **kwargs)
 
-    monkeypatch.setattr(fill, "_made", counted)
+    reached: list[int] = []
+
+    def counted(self, k):
+        for a in after(self, k):
+            reached.append(k)
+            yield a
+
+    monkeypatch.setattr(run, "propose", with_refused)
+    monkeypatch.setattr(fill.Fills, "after", counted)
+    p = Params(repair_max_tries=3)
     assert fill.WHEN_REACHED is True
-    fast = repair(cloud, curve)
-    n_fast, made[:] = len(made), []
+    fast = repair(cloud, curve, params=p)
+    assert reached  # fills made when reached
     monkeypatch.setattr(fill, "WHEN_REACHED", False)
     monkeypatch.setattr(run, "tried", tried_one_by_one)
-    slow = repair(cloud, curve)
-    assert sum(o["why"]["defect"] == "incomplete" for o in fast.log["operations"]) >= 2  # both ends filled
+    slow = repair(cloud, curve, params=p)
+    assert sum(o["why"]["defect"] == "incomplete" for o in fast.log["operations"]) >= 1
+    assert sum(r["why"]["defect"] == "outside" for r in fast.log["rejected"]) >= 2
     assert fast.log == slow.log and _same_bits(fast.curve, slow.curve)
     assert fast.after.summary() == slow.after.summary()
-    assert n_fast <= len(made)
 
 
 def test_a_fill_is_made_when_its_try_is_reached():
