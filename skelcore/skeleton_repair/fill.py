@@ -3,12 +3,13 @@ region becomes a new stretch of curve attached at the nearest vertex: the centro
 region's slabs along its main axis (a tube's end seen all around: the slab centroids lie on its axis)
 the region skeletonized by :func:`skelcore.skeletonize` (``skelscope``), or the region's axis curve
 at its own spacing (:mod:`skelcore.skeleton.local_axis`: a thin branch). Tried last, and made one at
-a time (:func:`fill_actions`): a round takes only those it may try."""
+a time (:func:`fill_actions`), each when its try is reached (:class:`Fills`; docs/repair.md "The
+repair's cost")."""
 
 from __future__ import annotations
 
 import hashlib
-
+from contextlib import AbstractContextManager, nullcontext
 from typing import Any, Callable, Iterator
 
 import numpy as np
@@ -18,7 +19,12 @@ from ..curve import CurveSkeleton
 from ..errors import SkelInputError
 from .proposals import Action
 
-__all__ = ["fill_missing", "fill_actions"]
+__all__ = ["fill_missing", "fill_actions", "Fills", "WHEN_REACHED"]
+
+#: whether a round makes a fill only when its try is reached (:class:`Fills`): True; False makes every
+#: fill a round may try before the first try, the slower path, the same tries, log and curve
+#: (tests/engine/test_repair_trial.py)
+WHEN_REACHED = True
 
 
 def _slab_line(pts: np.ndarray, step: float) -> np.ndarray:
@@ -152,3 +158,40 @@ def fill_actions(curve: CurveSkeleton, missing: Any, cloud: np.ndarray, max_regi
             entries, at = _attach_polyline(curve, line)
             yield Action("incomplete", {"region": int(reg.id)}, f"missing region {reg.id} ({reg.n_points} points): "
                          f"the centroids of its slabs ({len(line)}) attached at vertex {at}", entries)
+
+
+class Fills:
+    """A round's fills (:func:`fill_actions`, at most ``cap``), each made when first asked for: the
+    round tries them after its other candidates and stops at the first action kept, so the fills
+    behind a kept one (the axis curves and skeletons of the regions it did not reach) are not made
+    that round (docs/repair.md "The repair's cost"). The actions and their order are those of the
+    whole list; ``timer()``: the context each making runs in (the repair's phase clock)."""
+
+    def __init__(self, actions: Iterator[Action], cap: int,
+                 timer: Callable[[], AbstractContextManager] = nullcontext) -> None:
+        self._next, self.cap, self._timer = actions, cap, timer
+        self.made: list[Action] = []
+        if not WHEN_REACHED:
+            self.first(cap)
+
+    def _more(self) -> bool:
+        with self._timer():
+            a = next(self._next, None)
+        if a is None:
+            self.cap = len(self.made)
+            return False
+        self.made.append(a)
+        return True
+
+    def first(self, k: int) -> list[Action]:
+        """The first ``k`` fills (fewer when there are fewer), made now."""
+        while len(self.made) < min(k, self.cap) and self._more():
+            pass
+        return self.made[:max(k, 0)]
+
+    def after(self, k: int) -> Iterator[Action]:
+        """The fills after the first ``k``, each made when reached."""
+        i = k
+        while i < self.cap and (i < len(self.made) or self._more()):
+            yield self.made[i]
+            i += 1

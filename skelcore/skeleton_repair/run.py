@@ -7,15 +7,15 @@ ones under ``rejected``."""
 from __future__ import annotations
 
 import time
-from itertools import islice
+from itertools import chain
 from dataclasses import dataclass, field
 from functools import cached_property
-from typing import Any, Callable
+from typing import Any, Callable, Iterable, Iterator
 
 import numpy as np
 
 from ..curve import CurveSkeleton
-from ..edit import apply, new_log
+from ..edit import new_log
 from ..errors import Cancelled, SkelInputError
 from ..evaluation import Evaluation
 from ..params import Params
@@ -26,14 +26,15 @@ from .from_skeletal import HOW, curve_from_skeletal
 from .guard import FILL, verdict
 from .proposals import Action, propose
 from .batch_round import BatchState, batch_step
-from .fill import fill_actions
+from .fill import Fills, fill_actions
 from .phases import PhaseClock
 from .recentre import RECENTRE, recentre, settled, vertex_centeredness
 from .reroute import route_inside
 from .screen import first_look, first_update, whole_update, with_scan_checks
 from .skeletal_out import repaired_skeletal
+from .trial import tried
 
-__all__ = ["RepairResult", "repair", "in_turn"]
+__all__ = ["RepairResult", "repair", "in_turn", "tries_in_turn"]
 
 #: defect warnings no action answers yet (docs/repair.md "What is left")
 UNTALLIED = {"incomplete"}
@@ -122,6 +123,13 @@ def in_turn(actions: list[Action], tries: int, late: Callable[[Action], bool] | 
     still have their turn (one region refused leaves the next its try). ``late``: the actions refused
     since the last kept action that was not a fill, tried last (a fill only adds curve, so what was
     refused before it mostly stays refused, and the next fill comes first); none is left out."""
+    return list(tries_in_turn(actions, tries, late))
+
+
+def tries_in_turn(actions: list[Action], tries: int, late: Callable[[Action], bool] | None = None,
+                  more: Iterable[Action] = ()) -> Iterator[Action]:
+    """:func:`in_turn`'s order of ``actions`` followed by ``more`` (fills, beyond the first ``tries``
+    candidates), one at a time: a fill of ``more`` is made only when it is reached (:class:`.fill.Fills`)."""
     head = actions[:tries]
     kinds = {a.code for a in head}
     rest = []
@@ -131,7 +139,17 @@ def in_turn(actions: list[Action], tries: int, late: Callable[[Action], bool] | 
         elif a.code not in kinds:
             kinds.add(a.code)
             rest.append(a)
-    return head + rest if late is None else sorted(head + rest, key=late)  # stable: the late ones last
+    if late is None:
+        yield from head + rest
+        yield from more
+        return
+    last = []  # stable: the late ones last, in their order
+    for a in chain(head + rest, more):
+        if late(a):
+            last.append(a)
+        else:
+            yield a
+    yield from last
 
 
 def _same(curve: CurveSkeleton, action: Action) -> tuple:
@@ -144,12 +162,6 @@ def _same(curve: CurveSkeleton, action: Action) -> tuple:
     if action.code == FILL:  # the new vertices' places (a kept fill moves the ids they will take)
         return action.code, ops, tuple(tuple(e["args"]["position"]) for e in action.entries if e["op"] == "add_vertex")
     return action.code, ops, repr(action.entries)
-
-
-def _try(curve: CurveSkeleton, action: Action) -> CurveSkeleton:
-    for i, entry in enumerate(action.entries):
-        curve, _ = apply(curve, entry, f"{action.code} step {i}")
-    return curve
 
 
 def repair(cloud: np.ndarray, curve: CurveSkeleton | tuple | None = None, skeletal: np.ndarray | None = None,
@@ -206,9 +218,11 @@ def repair(cloud: np.ndarray, curve: CurveSkeleton | tuple | None = None, skelet
         with clock.phase("proposals"):
             inside, voxel, route = _in_shape(ev)
             candidates = propose(cur, found, inside, p.repair_join_step * voxel, route)
-            if p.repair_fill_missing:  # the fills in_turn may try: as many as a round's tries
-                fills = fill_actions(cur, found.missing, np.asarray(ev.source.args["cloud"], float), p.repair_max_tries, parts)
-                candidates += islice(fills, p.repair_max_tries)
+            fills = Fills(fill_actions(cur, found.missing, np.asarray(ev.source.args["cloud"], float),
+                                       p.repair_max_tries, parts) if p.repair_fill_missing else iter(()),
+                          p.repair_max_tries, lambda: clock.phase("proposals"))
+        ahead = fills.first(p.repair_max_tries - len(candidates))  # those the head and the count need
+        candidates += ahead
         if len(candidates) < p.repair_max_tries:  # re-centrings come last: cut only when they may be tried
             if drift is None:
                 with clock.phase("re-centring cuts"):
@@ -221,13 +235,14 @@ def repair(cloud: np.ndarray, curve: CurveSkeleton | tuple | None = None, skelet
             behind = set()
             continue
         done, refused_now = False, []
-        for action in in_turn(candidates, p.repair_max_tries, (lambda a: _same(cur, a) in behind) if behind else None):
+        late = (lambda a: _same(cur, a) in behind) if behind else None
+        for action in tries_in_turn(candidates, p.repair_max_tries, late, fills.after(len(ahead))):
             check()
             why: dict[str, Any] = {"defect": action.code, **action.target, "reason": action.reason,
                                    "local_before": found.local(action.edges), "before": _rounded(found.measures),
                                    "defects_before": found.total}
             try:
-                new = _try(cur, action)
+                new = tried(cur, action.entries, action.code)
             except SkelInputError as exc:
                 rejected.append({"entries": action.entries, "why": {**why, "rejected": f"not applicable: {exc}"}})
                 refused_now.append(_same(cur, action))
