@@ -90,3 +90,41 @@ def test_the_barcode_hint_is_never_cut_sideways(qtbot):
         box = panel._empty.get_window_extent(renderer=panel.canvas.get_renderer())
         assert panel._empty.get_visible() and "evaluation" in panel._empty.get_text()
         assert box.x0 >= 0 and box.x1 <= fig.bbox.width, (width, box, fig.bbox.width)
+
+
+def _legend_text_height(dpi: int, size: tuple[int, int]) -> int:
+    """The tallest run of dark rows (black text) inside the defect legend's box, in pixels."""
+    import numpy as np
+    import pyvista as pv
+
+    from skelscope.view.defect_overlay import LEGEND_LABELS, defect_legend, keep_fitted
+
+    keys = ["incomplete", "spurious_branches", "outside"]
+    plotter = pv.Plotter(off_screen=True, window_size=size)
+    try:
+        plotter.ren_win.SetDPI(dpi)  # what pyvistaqt sets: 72 x the device pixel ratio
+        legend = defect_legend(keys)
+        plotter.renderer.AddViewProp(legend)
+        keep_fitted(legend, plotter.renderer, [LEGEND_LABELS[k] for k in keys])
+        img = np.asarray(plotter.screenshot(return_img=True))[..., :3].astype(int)
+        h, w = img.shape[:2]
+        (x0, y0), (bw, bh) = legend.GetPosition(), legend.GetPosition2()
+        box = img[int(h * (1 - y0 - bh)) + 2:int(h * (1 - y0)) - 2, int(w * x0) + 2:int(w * (x0 + bw)) - 2]
+        assert x0 >= 0 and x0 + bw <= 1, (x0, bw)  # inside the view
+        dark = (box.max(axis=-1) < 80).any(axis=1)
+        runs, run = [], 0
+        for on in dark:
+            run = run + 1 if on else 0
+            runs.append(run)
+        return max(runs)
+    finally:
+        plotter.close()
+
+
+def test_the_defect_legend_text_grows_with_the_device_pixel_ratio():
+    """At QT_SCALE_FACTOR 1.5 the text is drawn at 1.5 x 72 DPI, in points as the colour bar's
+    labels are (it was about 7 pixels high, fitted to a box that did not grow)."""
+    size = (520, 620)  # the 3-D view at 1366 x 768, scale 1.5 (device pixels)
+    one, scaled = _legend_text_height(72, size), _legend_text_height(108, size)
+    assert scaled >= 12, scaled
+    assert 1.3 <= scaled / one <= 1.7, (one, scaled)
