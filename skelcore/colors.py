@@ -36,12 +36,13 @@ NAN_COLOR: tuple[int, int, int] = MAGENTA
 CLOUD_GREY: tuple[int, int, int] = (170, 170, 170)
 #: Uncoloured skeletal points (no metric selected).
 SKELETAL_COLOR: tuple[int, int, int] = (31, 119, 180)
-#: The curve skeleton's edges and vertices (no metric selected): a teal that no defect colour, the pick
-#: marker or magenta can be mistaken for (at least 100 RGB units and 45 CIELAB units from each: a red
-#: curve beside the rose spurious-branch halo and the dark-red stray points read as flagged all over),
-#: with a contrast ratio of at least 3 on the white and black backgrounds and 30 CIELAB units from the
-#: grey cloud. It lies on the viridis map, which colours the curve itself whenever a metric is shown.
-CURVE_COLOR: tuple[int, int, int] = (0, 128, 128)
+#: The curve skeleton's edges (always, as lines: beside vertices coloured by a metric) and its vertices
+#: (no metric selected): an olive that no defect colour, the pick marker or magenta can be mistaken for
+#: (at least 100 RGB units and 45 CIELAB units from each: a red curve beside the rose spurious-branch
+#: halo and the dark-red stray points read as flagged all over), off the colour map (40 CIELAB units
+#: from every viridis entry: an edge must not read as a value), with a contrast ratio of at least 3 on
+#: the white and black backgrounds and 45 CIELAB units from the grey cloud.
+CURVE_COLOR: tuple[int, int, int] = (145, 125, 0)
 #: The skeleton in report.html's defect picture (skelcore/compare/render_defects.py), under the defects
 #: drawn in DEFECT_COLORS (below, the viewer's too): a neutral grey, darker than the cloud's.
 DEFECT_SKELETON: tuple[int, int, int] = (110, 110, 110)

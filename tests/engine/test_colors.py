@@ -121,12 +121,14 @@ def test_the_colour_helpers_give_the_known_values():
     assert _contrast((118, 118, 118), (255, 255, 255)) == pytest.approx(4.54, abs=0.01)  # WCAG's AA grey
 
 
-def test_the_curve_colour_is_no_defect_s_and_reads_on_every_background():
+def test_the_curve_colour_is_no_defect_s_no_value_s_and_reads_on_every_background():
     """The plain curve is never taken for a flagged one: at least 100 RGB and 45 CIELAB units from
     every defect colour, the pick marker and magenta (the former red was 82 RGB / 40 CIELAB units
-    from the rose spurious-branch halo and 28 CIELAB units from the dark-red stray points); it
-    reads on the white and black backgrounds (contrast >= 3) and on the grey cloud (30 CIELAB units)."""
-    from skelcore.colors import CLOUD_GREY, CURVE_COLOR, DEFECT_COLORS, PICK_COLOR
+    from the rose spurious-branch halo and 28 CIELAB units from the dark-red stray points); its edges,
+    drawn beside vertices coloured by a metric, are off the colour map (40 CIELAB units: a teal was 5
+    from viridis); it reads on the white and black backgrounds (contrast >= 3) and on the grey cloud
+    (45 CIELAB units)."""
+    from skelcore.colors import CLOUD_GREY, CURVE_COLOR, DEFECT_COLORS, METRIC_COLORMAP, PICK_COLOR
 
     flagged = {**DEFECT_COLORS, "pick": PICK_COLOR, "magenta": MAGENTA}
     for name, c in flagged.items():
@@ -134,6 +136,7 @@ def test_the_curve_colour_is_no_defect_s_and_reads_on_every_background():
         assert np.linalg.norm(_lab(CURVE_COLOR) - _lab(c)) >= 45, name
     for background in ((255, 255, 255), (0, 0, 0)):
         assert _contrast(CURVE_COLOR, background) >= 3, background
-    assert np.linalg.norm(_lab(CURVE_COLOR) - _lab(CLOUD_GREY)) >= 30
+    assert np.linalg.norm(_lab(CURVE_COLOR) - _lab(CLOUD_GREY)) >= 45
+    assert min(np.linalg.norm(_lab(CURVE_COLOR) - _lab(c)) for c in lookup_table(METRIC_COLORMAP, 256)) >= 40
     old_red = (214, 39, 40)  # the check tells the fault it guards against
     assert min(np.linalg.norm(_lab(old_red) - _lab(c)) for c in flagged.values()) < 45
