@@ -25,13 +25,14 @@ def compared_bars(barcode: np.ndarray, k: int) -> np.ndarray:
     return bars[order[: max(int(k), 0)]]
 
 
-_HINT = "H0 barcodes appear here after an evaluation\nwith a skeletal point set"
+_HINT = "H0 barcodes appear here after an evaluation with a skeletal point set"  # wrapped to the panel
 MARGINS_PX = {"left": 46, "right": 16, "top": 30, "bottom": 36}
 """Room around the two axes, in device-independent pixels: y labels, the last x tick label's right half,
 title, x labels."""
 TITLE_MARGIN_PX = 6  # the title's least distance from either edge (else it goes on two lines)
 TITLE_LINE_PX = 14  # the top margin's growth for a title on two lines
 TICK_SPACING_PX = 52  # at least this much width per persistence tick label
+HINT_LINE_PX = 300  # the hint's longest line in a wide panel (device-independent pixels)
 
 
 def tick_text(value: float, _pos: object = None) -> str:
@@ -170,26 +171,23 @@ class BarcodePanel(PlotPanel):
         return True
 
     def _wrap_hint(self, width: float, ratio: float) -> None:
-        """The hint's lines, each broken between words where it would come nearer than
-        TITLE_MARGIN_PX to either edge of ``width`` (device-independent pixels): never cut sideways."""
-        room = width - 2 * TITLE_MARGIN_PX
+        """The hint broken into lines between words where a line would come nearer than TITLE_MARGIN_PX
+        to either edge of ``width`` (device-independent pixels), or pass HINT_LINE_PX: never cut sideways."""
+        room = min(width - 2 * TITLE_MARGIN_PX, HINT_LINE_PX)
         renderer = self.canvas.get_renderer()
 
         def fits(line: str) -> bool:
             self._empty.set_text(line)
             return self._empty.get_window_extent(renderer=renderer).width / ratio <= room
 
-        lines: list[str] = []
-        for paragraph in _HINT.split("\n"):
-            line = ""
-            for word in paragraph.split():
-                if line and not fits(f"{line} {word}"):
-                    lines.append(line)
-                    line = word
-                else:
-                    line = f"{line} {word}" if line else word
-            lines.append(line)
-        self._empty.set_text("\n".join(lines))
+        lines, line = [], ""
+        for word in _HINT.split():
+            if line and not fits(f"{line} {word}"):
+                lines.append(line)
+                line = word
+            else:
+                line = f"{line} {word}" if line else word
+        self._empty.set_text("\n".join([*lines, line]))
 
     def _draw_stages(self) -> list[list[Any]] | None:
         """The cloud's diagram, then the skeletal points' (~20-30 ms each in Agg): two event-loop
