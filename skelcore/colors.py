@@ -34,9 +34,15 @@ MAGENTA: tuple[int, int, int] = (255, 0, 255)
 NAN_COLOR: tuple[int, int, int] = MAGENTA
 #: The original cloud, drawn as context behind the skeleton.
 CLOUD_GREY: tuple[int, int, int] = (170, 170, 170)
-#: Uncoloured skeletal points and curve (no metric selected).
+#: Uncoloured skeletal points (no metric selected).
 SKELETAL_COLOR: tuple[int, int, int] = (31, 119, 180)
-CURVE_COLOR: tuple[int, int, int] = (214, 39, 40)
+#: The curve skeleton's edges (always, as lines: beside vertices coloured by a metric) and its vertices
+#: (no metric selected): an olive that no defect colour, the pick marker or magenta can be mistaken for
+#: (at least 100 RGB units and 45 CIELAB units from each: a red curve beside the rose spurious-branch
+#: halo and the dark-red stray points read as flagged all over), off the colour map (40 CIELAB units
+#: from every viridis entry: an edge must not read as a value), with a contrast ratio of at least 3 on
+#: the white and black backgrounds and 45 CIELAB units from the grey cloud.
+CURVE_COLOR: tuple[int, int, int] = (145, 125, 0)
 #: The skeleton in report.html's defect picture (skelcore/compare/render_defects.py), under the defects
 #: drawn in DEFECT_COLORS (below, the viewer's too): a neutral grey, darker than the cloud's.
 DEFECT_SKELETON: tuple[int, int, int] = (110, 110, 110)
@@ -50,7 +56,7 @@ PICK_COLOR: tuple[int, int, int] = (255, 140, 0)
 #: The picked element's support (the viewer's Support dock and 3-D overlay, the same colour for the
 #: same thing in both), chosen apart from the skeleton's and the cloud's colours above, from magenta,
 #: from the pick marker and from the viridis map (dark purple -> teal -> yellow): browns, black and a
-#: light sky blue (a red slab would be mistaken for the red curve).
+#: light sky blue (a slab in the curve's colour would be mistaken for the curve).
 SUPPORT_COLORS: dict[str, tuple[int, int, int]] = {
     "slab": (214, 160, 90),  # the slab's cloud points; a skeletal point's corresponding cloud points
     "ring": (120, 66, 18),  # the ring kept; a skeletal point's or vertex's neighbours

@@ -43,6 +43,7 @@ class PlotPanel(QtWidgets.QWidget):
         self._hint.setAlignment(QtCore.Qt.AlignmentFlag.AlignHCenter | QtCore.Qt.AlignmentFlag.AlignTop)
         self._hint.setContentsMargins(0, 24, 0, 0)
         self._hint.setStyleSheet("color: grey")
+        self._hint.setWordWrap(True)  # a narrow panel wraps it, never cuts it sideways
         self._hint.setMinimumHeight(min_height)
         self._layout.addWidget(self._hint)
         self._draw_timer = QtCore.QTimer(self)

@@ -4,7 +4,8 @@ global rc), so the viewer never changes anyone else's plots.
 
 The persistence axis keeps its labels inside the panel at any width (a label such as "0.0200" is not cut at
 the right edge): the margins are set in pixels on every resize, the labels are the shortest form of
-each value ("0.02", not "0.0200") and there are only as many as the width holds."""
+each value ("0.02", not "0.0200") and there are only as many as the width holds. The hint shown
+before a result wraps to the panel's width (docs/guide/viewer.md: nothing is cut off sideways)."""
 
 from __future__ import annotations
 
@@ -24,13 +25,14 @@ def compared_bars(barcode: np.ndarray, k: int) -> np.ndarray:
     return bars[order[: max(int(k), 0)]]
 
 
-_HINT = "H0 barcodes appear here after an evaluation\nwith a skeletal point set"
+_HINT = "H0 barcodes appear here after an evaluation with a skeletal point set"  # wrapped to the panel
 MARGINS_PX = {"left": 46, "right": 16, "top": 30, "bottom": 36}
 """Room around the two axes, in device-independent pixels: y labels, the last x tick label's right half,
 title, x labels."""
 TITLE_MARGIN_PX = 6  # the title's least distance from either edge (else it goes on two lines)
 TITLE_LINE_PX = 14  # the top margin's growth for a title on two lines
 TICK_SPACING_PX = 52  # at least this much width per persistence tick label
+HINT_LINE_PX = 300  # the hint's longest line in a wide panel (device-independent pixels)
 
 
 def tick_text(value: float, _pos: object = None) -> str:
@@ -71,6 +73,9 @@ class BarcodePanel(PlotPanel):
         ratio = float(getattr(self.canvas, "device_pixel_ratio", 1.0) or 1.0)  # Qt's scale factor: text grows too
         w, h = fig.bbox.width / ratio, fig.bbox.height / ratio  # device-independent pixels
         m = dict(MARGINS_PX)
+        if w <= 0:
+            return
+        self._wrap_hint(w, ratio)
         if w < 4 * (m["left"] + m["right"]) / 3 or h < 2 * (m["top"] + m["bottom"]):
             return  # not laid out yet (or absurdly small): keep the previous margins
         if self._wrap_title(w, ratio):
@@ -164,6 +169,25 @@ class BarcodePanel(PlotPanel):
             return False
         self._title.set_text("\n".join(lines))
         return True
+
+    def _wrap_hint(self, width: float, ratio: float) -> None:
+        """The hint broken into lines between words where a line would come nearer than TITLE_MARGIN_PX
+        to either edge of ``width`` (device-independent pixels), or pass HINT_LINE_PX: never cut sideways."""
+        room = min(width - 2 * TITLE_MARGIN_PX, HINT_LINE_PX)
+        renderer = self.canvas.get_renderer()
+
+        def fits(line: str) -> bool:
+            self._empty.set_text(line)
+            return self._empty.get_window_extent(renderer=renderer).width / ratio <= room
+
+        lines, line = [], ""
+        for word in _HINT.split():
+            if line and not fits(f"{line} {word}"):
+                lines.append(line)
+                line = word
+            else:
+                line = f"{line} {word}" if line else word
+        self._empty.set_text("\n".join([*lines, line]))
 
     def _draw_stages(self) -> list[list[Any]] | None:
         """The cloud's diagram, then the skeletal points' (~20-30 ms each in Agg): two event-loop

@@ -16,8 +16,8 @@ from skelcore.params import Params
 from skelcore.scores import Scores, paper_table
 
 COLUMNS = ("skeletal points", "curve skeleton")
-#: the panel's cells (em dash where not computed, counts spaced)
-_STYLE = {"missing": "—", "sep": "  ", "count": "n = {}"}
+#: the panel's cells (em dash where not computed, counts spaced and in thousands: "n = 4,687")
+_STYLE = {"missing": "—", "sep": "  ", "count": "n = {:,}"}
 ROWS = tuple(row for row, _s, _c in paper_table(None, **_STYLE))
 
 
@@ -33,19 +33,19 @@ def summary_cells(summary: Scores | dict[str, Any] | None, evaluation: Any = Non
             and sk.rows is not None and summary.n_centeredness_skeletal:
         r = ROWS.index("centeredness")
         n_points = len(np.unique(sk.rows))
-        cells[r][0] = (f"{summary.text('centeredness_skeletal')}  (n = {summary.n_centeredness_skeletal} cloud rows "
-                       f"on {n_points} of {len(sk.points)} skeletal points)")
+        cells[r][0] = (f"{summary.text('centeredness_skeletal')}  (n = {summary.n_centeredness_skeletal:,} cloud rows "
+                       f"on {n_points:,} of {len(sk.points):,} skeletal points)")
     return cells
 
 
 def cell_lines(text: str) -> str:
-    """A cell as the panel shows it: the value, then its count on a line of its own that breaks only
-    between its parts ("1.000  (n = 4000)" -> "1.000" / "(n = 4000)"), so that a narrow column wraps
-    where it reads well."""
+    """A cell as the panel shows it: the value, then its count on a line of its own
+    ("1.000  (n = 4,000)" -> "1.000" / "(n = 4,000)"); a column too narrow for the count breaks it
+    after the "=" ("(n =" / "4,000)"), never inside the number, which the table never elides."""
     value, sep, rest = text.partition("  (")
     if not sep:
         return text
-    return value + "\n(" + rest.replace(" = ", "\u202f=\u202f")
+    return value + "\n(" + rest.replace(" = ", "\u202f= ")
 
 
 def window_warning(w: Any) -> str:
@@ -158,6 +158,9 @@ class SummaryPanel(QtWidgets.QWidget):
         self.table.verticalHeader().setSectionResizeMode(QtWidgets.QHeaderView.ResizeMode.ResizeToContents)
         self.table.setVerticalScrollBarPolicy(QtCore.Qt.ScrollBarPolicy.ScrollBarAlwaysOff)
         self.table.setSizeAdjustPolicy(QtWidgets.QAbstractScrollArea.SizeAdjustPolicy.AdjustToContents)
+        # a number is never cut: a cell wraps between its words, each row as tall as its wrapped text
+        self.table.setWordWrap(True)
+        self.table.setTextElideMode(QtCore.Qt.TextElideMode.ElideNone)
         defaults = Params()
         self.beta_star = self._spin("bounded means beta > beta* (docs/metrics.md 2)", defaults.beta_star)
         self.c_star = self._spin("centred means c > c* (docs/metrics.md 3)", defaults.c_star)

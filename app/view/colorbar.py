@@ -1,10 +1,12 @@
-"""The view's single colour bar (which metric the coloured actor shows) and its NaN legend.
+"""The view's single colour bar (which metric the coloured actor shows) and its legend of invalid values.
 
 pyvista's ``add_scalar_bar`` costs several ms and a new bar re-renders its text, so the bar is made
 only when the coloured actor or the metric changes and is otherwise updated in place; with nothing
 coloured it is hidden, not removed (an edit's curve uncoloured until its scores land). The NaN legend
-is a magenta swatch with its label to the right of it (never over it, at any size or scale), below
-the bar, shown while any shown value is invalid (docs/metrics.md 5.5).
+is a magenta swatch labelled "invalid", the word docs/metrics.md 5.5 uses for NaN values, to the right of
+it (never over it, at any size or scale), below the bar, shown while any shown value is invalid; in a
+view too narrow for the label beside the bar's column, swatch and label move left together until the
+label ends inside the view.
 
 The bar's title is a text actor of its own, laid out before every frame from the view's size in
 pixels: centred over the bar but never past the view's right edge, its bottom half a label plus a
@@ -24,11 +26,12 @@ from .style import MAGENTA
 __all__ = ["ColourBar", "BAR_X", "BAR_WIDTH", "NAN_LABEL", "TEXT_COLOURS"]
 
 BAR_X, BAR_Y, BAR_WIDTH, BAR_HEIGHT = 0.87, 0.25, 0.06, 0.5  # normalized viewport
-NAN_LABEL = "NaN"  # short: it must fit right of the swatch in a narrow view
+NAN_LABEL = "invalid"  # docs/metrics.md 5.5's word, as in docs/guide/viewer.md
 _SWATCH = (0.875, 0.18, 0.895, 0.20)  # x0, y0, x1, y1 (normalized viewport)
 _TITLE_SIZE, _LABEL_SIZE = 14, 12
 _TITLE_GAP = 4  # pixels between the top label's top and the title's baseline
-_RIGHT_MARGIN = 4  # pixels between the title's end and the view's right edge
+_RIGHT_MARGIN = 4  # pixels between the title's (and the invalid label's) end and the view's right edge
+_LABEL_GAP = 0.008  # normalized viewport between the swatch's right side and its label
 TEXT_COLOURS = {"white": (0.0, 0.0, 0.0), "transparent": (0.0, 0.0, 0.0), "black": (1.0, 1.0, 1.0)}
 """The annotations' text colour on each picture background."""
 
@@ -39,6 +42,7 @@ class ColourBar:
     def __init__(self, plotter: Any) -> None:
         self.plotter = plotter
         self.actor: Any = None  # the actor the colour bar describes
+        self._nan_shift = 0.0  # how far left of its place the invalid legend is drawn (normalized)
         self.swatch, self.label = self._make_nan_legend()
         self.title = self._make_title()
         self.held = False  # True while the camera moves: the view's size holds, so does the layout
@@ -104,6 +108,7 @@ class ColourBar:
         mapper.SetTransformCoordinate(coord)
         swatch = vtkActor2D()
         swatch.SetMapper(mapper)
+        self._swatch_points = pts
         swatch.GetProperty().SetColor(*(c / 255.0 for c in MAGENTA))
         label = vtkTextActor()
         label.SetInput(NAN_LABEL)
@@ -113,7 +118,7 @@ class ColourBar:
         prop.SetJustificationToLeft()
         prop.SetVerticalJustificationToCentered()
         label.GetPositionCoordinate().SetCoordinateSystemToNormalizedViewport()
-        label.SetPosition(x1 + 0.008, (y0 + y1) / 2)  # starts right of the swatch: cannot overlap it
+        label.SetPosition(x1 + _LABEL_GAP, (y0 + y1) / 2)  # starts right of the swatch: cannot overlap it
         for a in (swatch, label):
             a.SetVisibility(False)
             self.plotter.renderer.AddViewProp(a)
@@ -138,10 +143,13 @@ class ColourBar:
         scaled picture renders its tiles: the layout of the view at scale 1 holds (see the module)."""
         ren = self.plotter.renderer
         win = ren.GetRenderWindow()
-        if win is None or tuple(win.GetTileScale()) != (1, 1) or not self.title.GetVisibility():
+        if win is None or tuple(win.GetTileScale()) != (1, 1):
             return
         w, h = ren.GetSize()
         if w <= 0 or h <= 0:
+            return
+        self._place_nan_legend(w)
+        if not self.title.GetVisibility():
             return
         size = [0.0, 0.0]
         self.title.GetSize(ren, size)
@@ -156,6 +164,31 @@ class ColourBar:
         label_px = self._label_height()
         self.title.SetPosition(x, BAR_Y + BAR_HEIGHT + (label_px / 2 + _TITLE_GAP) / h)
 
+    def _place_nan_legend(self, w: int) -> None:
+        """Swatch and label at their place under the bar, or further left by as much as the label
+        would run past the view's right edge (``w`` pixels wide)."""
+        x0, y0, x1, y1 = _SWATCH
+        size = [0.0, 0.0]
+        self.label.GetSize(self.plotter.renderer, size)
+        end = x1 + _LABEL_GAP + size[0] / w  # the label's right end, normalized
+        shift = max(0.0, end - (1.0 - _RIGHT_MARGIN / w))
+        shift = min(shift, x0)  # never past the left edge
+        if abs(shift - self._nan_shift) < 1e-9:
+            return
+        self._nan_shift = shift
+        for i, (x, y) in enumerate(((x0, y0), (x1, y0), (x1, y1), (x0, y1))):
+            self._swatch_points.SetPoint(i, x - shift, y, 0.0)
+        self._swatch_points.Modified()
+        self.label.SetPosition(x1 - shift + _LABEL_GAP, (y0 + y1) / 2)
+
+    def nan_legend_inside(self) -> bool:
+        """The label starts right of the swatch and ends inside the view (for tests)."""
+        w = self.plotter.renderer.GetSize()[0]
+        size = [0.0, 0.0]
+        self.label.GetSize(self.plotter.renderer, size)
+        x = float(self.label.GetPosition()[0])
+        return self.label_starts_right_of_swatch() and x * w + size[0] <= w
+
     def _label_height(self) -> float:
         """The bar's label height in pixels (the top label is centred on the bar's top)."""
         bars = list(self.plotter.scalar_bars.values())
@@ -167,7 +200,7 @@ class ColourBar:
         return float(self.title.GetPosition()[1]) - (BAR_Y + BAR_HEIGHT)
 
     def label_starts_right_of_swatch(self) -> bool:
-        return self.label.GetPosition()[0] > _SWATCH[2]
+        return self.label.GetPosition()[0] > self._swatch_points.GetPoint(1)[0]
 
     def for_picture(self, scale: int = 1, visible: bool = True, background: str = "white") -> list[Callable[[], None]]:
         """Bar, title and NaN legend for a picture ``scale`` times the view's size: hidden when not

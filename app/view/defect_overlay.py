@@ -7,7 +7,8 @@ the shape are dashed; openings are their boundary loops (each rim followed along
 chord longer than a few spacings); stray points are large dark-red points. The selected defect (the
 Defects panel's row) or branch (a click on the curve) is redrawn in the pick colour. A legend of the
 styles shown sits in the view's bottom right (the support legend holds the top left, the colour bar
-the right, the axes the bottom left). Actors are named ``defect-*``; only this module draws them.
+the right, the axes the bottom left), its box sized from its text in points at the window's DPI, so
+it grows with Qt's scale factor as the colour bar's labels do. Actors are named ``defect-*``; only this module draws them.
 """
 
 from __future__ import annotations
@@ -24,7 +25,7 @@ from .actors import display_coordinates, draw_in_front
 from .lod import lod_indices
 from .style import greyed
 
-__all__ = ["DefectOverlay", "LEGEND_LABELS", "STYLES", "defect_legend"]
+__all__ = ["DefectOverlay", "LEGEND_LABELS", "STYLES", "defect_legend", "fit_legend", "LEGEND_FONT_PT"]
 
 #: per drawn set: (style, legend label)
 STYLES: dict[str, tuple[str, str]] = {
@@ -40,6 +41,14 @@ LEGEND_LABELS = {key: label for key, (_style, label) in STYLES.items()}
 HALO_WIDTH, SELECTED_WIDTH, DASH_WIDTH, LOOP_WIDTH = 11.0, 14.0, 5.0, 3.0
 MAX_DRAWN = 300_000  # at most this many missing-part points drawn (an even subsample beyond)
 DASHES_PER_EDGE = 4  # each outside edge drawn as this many dashes with gaps between
+LEGEND_FONT_PT = 10
+"""The legend's text in points. VTK turns points into pixels at the render window's DPI (72 x the
+device pixel ratio, set by pyvistaqt), as for the colour bar's labels, so the legend grows with Qt's
+scale factor; a legend box sized as a share of the view fitted its text to the box instead (7 pixels
+at QT_SCALE_FACTOR 1.5 on a 1366 x 768 screen)."""
+LEGEND_ENTRY = 1.6  # an entry's height per line of text (the symbol is as tall)
+LEGEND_PAD = 3  # vtkLegendBoxActor's padding, pixels at 72 DPI
+LEGEND_MARGIN = 0.01  # normalized viewport between the box and the view's right and bottom edges
 
 
 def _segments(points: np.ndarray, pairs: np.ndarray) -> pv.PolyData:
@@ -106,6 +115,56 @@ def defect_legend(keys: list[str], stale: bool = False) -> Any:
     return legend
 
 
+def fit_legend(legend: Any, renderer: Any, labels: list[str]) -> bool:
+    """Size ``legend``'s box in pixels from its ``labels`` at :data:`LEGEND_FONT_PT` and the window's
+    DPI, in the bottom right of ``renderer``'s viewport; a view too small for it shrinks the whole box
+    (to 98 % of the width, 60 % of the height). Skipped while a scaled picture renders its tiles (the
+    box, in normalized coordinates, grows with the picture). Whether the box was placed."""
+    from vtkmodules.vtkRenderingCore import vtkTextProperty, vtkTextRenderer
+
+    win = renderer.GetRenderWindow()
+    w, h = renderer.GetSize()
+    if win is None or w <= 0 or h <= 0 or not labels or tuple(win.GetTileScale()) != (1, 1):
+        return False
+    dpi = int(win.GetDPI())
+    prop = vtkTextProperty()
+    prop.SetFontSize(LEGEND_FONT_PT)
+    text = vtkTextRenderer.GetInstance()
+    widths, line = [], 1
+    for label in labels:
+        box = [0, 0, 0, 0]
+        text.GetBoundingBox(prop, label, box, dpi)
+        widths.append(box[1] - box[0] + 1)
+        line = max(line, box[3] - box[2] + 1)
+    pad = LEGEND_PAD * dpi / 72
+    entry = LEGEND_ENTRY * line
+    width = max(widths) + entry + 4 * pad  # symbol, text and the paddings between and around them
+    height = len(labels) * entry + 2 * pad
+    shrink = min(1.0, 0.98 * w / width, 0.6 * h / height)
+    width, height = width * shrink / w, height * shrink / h
+    legend.GetPositionCoordinate().SetValue(max(0.0, 1.0 - LEGEND_MARGIN - width), LEGEND_MARGIN)
+    legend.GetPosition2Coordinate().SetValue(width, height)
+    legend.SetPadding(max(1, round(pad)))
+    return True
+
+
+def keep_fitted(legend: Any, renderer: Any, labels: list[str]) -> int:
+    """Fit ``legend`` now and before every frame of ``renderer`` whose size or DPI changed (a
+    resized view, a window moved to another screen); the observer's tag, to remove it with the legend."""
+    last: list[tuple[int, int, int]] = []
+
+    def fit(*_: Any) -> None:
+        win = renderer.GetRenderWindow()
+        key = (*renderer.GetSize(), int(win.GetDPI()) if win is not None else 0)
+        if last and last[0] == key:
+            return
+        if fit_legend(legend, renderer, labels):
+            last[:] = [key]
+
+    fit()
+    return int(renderer.AddObserver("StartEvent", fit))
+
+
 class DefectOverlay:
     """Draws :class:`~skelscope.scene.defects.DefectRow` geometry into a :class:`~skelscope.view.SceneView`'s plotter."""
 
@@ -114,6 +173,7 @@ class DefectOverlay:
         self.names: list[str] = []
         self.shown: list[str] = []  # the drawn sets' keys (STYLES), in legend order
         self.legend: Any = None
+        self._legend_observer = 0  # the renderer's observer that keeps the legend fitted (keep_fitted)
         self._selected: list[str] = []
         self.stale = False
 
@@ -257,11 +317,13 @@ class DefectOverlay:
         support overlay's)."""
         if self.legend is not None:
             self.plotter.renderer.RemoveViewProp(self.legend)
+            self.plotter.renderer.RemoveObserver(self._legend_observer)
             self.legend = None
         if not self.shown:
             return
         legend = defect_legend(self.shown, self.stale)
         self.plotter.renderer.AddViewProp(legend)
+        self._legend_observer = keep_fitted(legend, self.plotter.renderer, self.legend_labels)
         self.legend = legend
 
     @property

@@ -35,14 +35,14 @@ for w in ev.warnings:
 flags = ev.diagnostics.arrays["curve_vertex_defects"]
 spurious = (flags & DEFECT_BITS["spurious_branches"]) > 0
 
-grey, red, magenta = (colors.hex_color(c) for c in (colors.CLOUD_GREY, colors.CURVE_COLOR,
+grey, curve, magenta = (colors.hex_color(c) for c in (colors.CLOUD_GREY, colors.CURVE_COLOR,
                                                       colors.NAN_COLOR))
 fig, ax = plt.subplots(figsize=(6, 5))
 ax.scatter(y.cloud[:, 0], y.cloud[:, 1], s=1, color=grey, alpha=0.3)
 for a, b in edges:
     both = spurious[a] and spurious[b]
-    ax.plot(*verts[[a, b], :2].T, color=magenta if both else red, linewidth=3 if both else 1.5)
-ax.scatter(*verts[~spurious, :2].T, s=10, color=red, label="curve vertex")
+    ax.plot(*verts[[a, b], :2].T, color=magenta if both else curve, linewidth=3 if both else 1.5)
+ax.scatter(*verts[~spurious, :2].T, s=10, color=curve, label="curve vertex")
 ax.scatter(*verts[spurious, :2].T, s=25, color=magenta, label="on a spurious branch")
 ax.set_aspect("equal")
 ax.set_title(f"{found['spurious']} spurious branch found "

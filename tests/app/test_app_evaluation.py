@@ -61,10 +61,10 @@ def test_loading_inputs_runs_one_evaluation_in_the_worker_and_fills_the_panels(w
     assert ev is not None and len(calls) == 1
     summary = ev.summary()
     assert w.summary.cell_text("boundedness", "skeletal points") == (
-        f"{summary['boundedness']['skeletal']:.3f}  (n = {summary['counts']['boundedness']['skeletal']})"
+        f"{summary['boundedness']['skeletal']:.3f}  (n = {summary['counts']['boundedness']['skeletal']:,})"
     )
     assert w.summary.cell_text("d_B / d_Wp", "skeletal points").startswith(f"{summary['topology']['bottleneck']:.4f}")
-    assert w.summary.cell_text("smoothness", "curve skeleton").endswith(f"(n = {summary['counts']['smoothness']['curve']})")
+    assert w.summary.cell_text("smoothness", "curve skeleton").endswith(f"(n = {summary['counts']['smoothness']['curve']:,})")
     w.docks["Barcodes"].raise_()
     qtbot.waitUntil(lambda: "d_B" in w.barcodes.title(), timeout=30000)
     title = w.barcodes.title()
@@ -84,7 +84,7 @@ def test_thresholds_change_the_summary_at_once_without_recomputing(evaluated):
     before = w.summary.cell_text("boundedness", "skeletal points")
     c_before = w.scene.skeletal.quantities["centeredness"].values.copy()
     w.summary.beta_star.setValue(1.0)  # nothing is > 1: every element unbounded, centeredness 0
-    assert w.summary.cell_text("boundedness", "skeletal points") == "0.000  (n = 1500)"
+    assert w.summary.cell_text("boundedness", "skeletal points") == "0.000  (n = 1,500)"
     assert w.summary.cell_text("boundedness", "skeletal points") != before
     assert np.all(w.scene.skeletal.quantities["centeredness"].values == 0.0)
     assert not np.array_equal(c_before, w.scene.skeletal.quantities["centeredness"].values)

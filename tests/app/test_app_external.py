@@ -76,8 +76,8 @@ def test_a_point_set_of_another_count_is_offered_as_a_reverse_projected_skeletal
     assert ev.correspondence == "reverse" and ev.topology is not None and w.dialogs == []
     n_points = len(np.unique(ev.skeletal.rows))
     cell = w.summary.cell_text("centeredness", "skeletal points")
-    assert f"(n = {len(sh.cloud)} cloud rows on {n_points} of {N_SUB} skeletal points)" in cell
-    assert f"(n = {N_SUB})" in w.summary.cell_text("boundedness", "skeletal points")
+    assert f"(n = {len(sh.cloud):,} cloud rows on {n_points:,} of {N_SUB:,} skeletal points)" in cell
+    assert f"(n = {N_SUB:,})" in w.summary.cell_text("boundedness", "skeletal points")
 
 
 def test_a_skeletal_set_with_an_index_file_is_scored_through_its_index(window, qtbot, files):

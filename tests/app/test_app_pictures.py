@@ -1,5 +1,5 @@
 """Pictures for a paper, checked by content under Xvfb: sizes follow the scale, the colour bar and
-its NaN legend, tubes coloured by the metric, skeletal points visible under a curve, the empty
+its legend of invalid values, tubes coloured by the metric, skeletal points visible under a curve, the empty
 window's hint, figure options, camera files, the level of detail while the camera moves."""
 
 from __future__ import annotations
@@ -78,13 +78,28 @@ def test_point_sizes_and_line_widths_follow_the_screenshot_scale(window, files):
     assert window.view._actors["cloud"].prop.point_size == window.scene.cloud.point_size
 
 
-def test_the_colour_bar_can_be_left_out_and_its_nan_label_sits_right_of_the_swatch(evaluated):
+@pytest.mark.parametrize("docks", ["shown", "hidden"])  # a narrow view and a wide one
+def test_the_colour_bar_can_be_left_out_and_its_invalid_label_sits_right_of_the_swatch(evaluated, docks):
+    """The legend of NaN values says "invalid" (docs/metrics.md 5.5), right of its swatch and whole."""
     w = evaluated
+    if docks == "hidden":
+        for dock in w.docks.values():
+            dock.hide()
     w.scene.set_metric("smoothness")  # NaN at the Y's junction and tips
+    w.view.image()  # one frame at the view's final size
     with_bar = w.view.image()
     without = w.view.image(colour_bar=False)
     bar = w.view._colour_bar
-    assert bar.nan_shown and bar.label_starts_right_of_swatch()
+    assert bar.label.GetInput() == "invalid"
+    assert bar.nan_shown and bar.label_starts_right_of_swatch() and bar.nan_legend_inside()
+    assert not (_rgb(with_bar)[:, -2:].max(axis=-1) < 60).any()  # no text cut at the right edge
+    size = [0.0, 0.0]
+    bar.label.GetSize(w.view.plotter.renderer, size)
+    narrow = 220  # a view too narrow for the label at its place: swatch and label move left together
+    bar._place_nan_legend(narrow)
+    assert bar.label_starts_right_of_swatch() and bar.label.GetPosition()[0] * narrow + size[0] <= narrow
+    bar.layout()
+    assert bar.nan_legend_inside()
     right = slice(int(with_bar.shape[1] * 0.86), None)
     dark = lambda img: int((_rgb(img)[:, right].max(axis=-1) < 60).sum())  # noqa: E731 - bar text and labels
     assert dark(with_bar) > 100 and dark(without) < dark(with_bar) / 10

@@ -50,7 +50,7 @@ def test_skeletal_set_of_another_size_scores_by_the_chosen_correspondence(qtbot,
     assert "correspondence: reverse" in w.summary.details_text()
     # counted per cloud row; the cell says how many cloud rows and how many skeletal points
     n_points = len(np.unique(ev.skeletal.rows))
-    assert f"(n = 1200 cloud rows on {n_points} of 150 skeletal points)" in w.summary.cell_text("centeredness",
+    assert f"(n = 1,200 cloud rows on {n_points} of 150 skeletal points)" in w.summary.cell_text("centeredness",
                                                                                                 "skeletal points")
     assert "(n = 150)" in w.summary.cell_text("boundedness", "skeletal points")
     cov = w.summary.cell_text("coverage*", "skeletal points")

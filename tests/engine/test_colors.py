@@ -93,3 +93,50 @@ def test_defect_colours_are_on_no_colour_map_and_apart_from_the_scene_and_each_o
         assert np.linalg.norm(fixed - c, axis=1).min() > 45, name
     d = np.linalg.norm(colours[:, None] - colours[None], axis=2)
     assert d[np.triu_indices(len(colours), 1)].min() > 60
+
+
+def _lab(rgb) -> np.ndarray:
+    """sRGB (0..255) -> CIELAB (D65): the distance in it is what the eye sees as a colour difference."""
+    c = np.asarray(rgb, dtype=float) / 255.0
+    c = np.where(c <= 0.04045, c / 12.92, ((c + 0.055) / 1.055) ** 2.4)
+    xyz = np.array([[0.4124, 0.3576, 0.1805], [0.2126, 0.7152, 0.0722], [0.0193, 0.1192, 0.9505]]) @ c
+    f = xyz / np.array([0.95047, 1.0, 1.08883])
+    f = np.where(f > 216 / 24389, np.cbrt(f), (24389 / 27 * f + 16) / 116)
+    return np.array([116 * f[1] - 16, 500 * (f[0] - f[1]), 200 * (f[1] - f[2])])
+
+
+def _contrast(a, b) -> float:
+    """WCAG contrast ratio of two sRGB colours (1 = none, 21 = black on white)."""
+    def lum(rgb):
+        c = np.asarray(rgb, dtype=float) / 255.0
+        return float(np.where(c <= 0.03928, c / 12.92, ((c + 0.055) / 1.055) ** 2.4) @ [0.2126, 0.7152, 0.0722])
+    lo, hi = sorted((lum(a), lum(b)))
+    return (hi + 0.05) / (lo + 0.05)
+
+
+def test_the_colour_helpers_give_the_known_values():
+    assert np.allclose(_lab((255, 255, 255)), (100, 0, 0), atol=0.05)
+    assert np.allclose(_lab((255, 0, 0)), (53.24, 80.09, 67.20), atol=0.05)  # the standard sRGB red
+    assert _contrast((0, 0, 0), (255, 255, 255)) == pytest.approx(21.0)
+    assert _contrast((118, 118, 118), (255, 255, 255)) == pytest.approx(4.54, abs=0.01)  # WCAG's AA grey
+
+
+def test_the_curve_colour_is_no_defect_s_no_value_s_and_reads_on_every_background():
+    """The plain curve is never taken for a flagged one: at least 100 RGB and 45 CIELAB units from
+    every defect colour, the pick marker and magenta (the former red was 82 RGB / 40 CIELAB units
+    from the rose spurious-branch halo and 28 CIELAB units from the dark-red stray points); its edges,
+    drawn beside vertices coloured by a metric, are off the colour map (40 CIELAB units: a teal was 5
+    from viridis); it reads on the white and black backgrounds (contrast >= 3) and on the grey cloud
+    (45 CIELAB units)."""
+    from skelcore.colors import CLOUD_GREY, CURVE_COLOR, DEFECT_COLORS, METRIC_COLORMAP, PICK_COLOR
+
+    flagged = {**DEFECT_COLORS, "pick": PICK_COLOR, "magenta": MAGENTA}
+    for name, c in flagged.items():
+        assert np.linalg.norm(np.subtract(CURVE_COLOR, c)) >= 100, name
+        assert np.linalg.norm(_lab(CURVE_COLOR) - _lab(c)) >= 45, name
+    for background in ((255, 255, 255), (0, 0, 0)):
+        assert _contrast(CURVE_COLOR, background) >= 3, background
+    assert np.linalg.norm(_lab(CURVE_COLOR) - _lab(CLOUD_GREY)) >= 45
+    assert min(np.linalg.norm(_lab(CURVE_COLOR) - _lab(c)) for c in lookup_table(METRIC_COLORMAP, 256)) >= 40
+    old_red = (214, 39, 40)  # the check tells the fault it guards against
+    assert min(np.linalg.norm(_lab(old_red) - _lab(c)) for c in flagged.values()) < 45
