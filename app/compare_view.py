@@ -134,7 +134,7 @@ class CompareWindow(QtWidgets.QWidget):
         # an edit's first phase whose defects Esc stopped: its defect counts are not known, not 0
         self.pending = tuple(defects_pending(ev) for ev in (ev_a, ev_b))
         self.vacuous = (vacuous_scores(ev_a), vacuous_scores(ev_b))
-        self._legends: list[Any] = []  # the defect legends, one per half that draws defects
+        self._legends: list[Any] = []  # (renderer, legend, fit observer): one per half that draws defects
         self.sound = (sound_line(ev_a), sound_line(ev_b))
         self._fill_table()
         self.draw()
@@ -215,7 +215,8 @@ class CompareWindow(QtWidgets.QWidget):
         b_star, _c_star = self.thresholds
         lut = make_lut((0.0, 1.0))
         self.plotter.clear_actors()  # every renderer's
-        for renderer, legend in self._legends:
+        for renderer, legend, observer in self._legends:
+            renderer.RemoveObserver(observer)
             renderer.RemoveViewProp(legend)
         self._legends = []
         for title in list(self.plotter.scalar_bars.keys()):
@@ -277,16 +278,18 @@ class CompareWindow(QtWidgets.QWidget):
         if ev.curve is not None:
             drawn += self._draw_curve_defects(ev, rows)
         if drawn:
-            from .view.defect_overlay import defect_legend
+            from .view.defect_overlay import LEGEND_LABELS, defect_legend, keep_fitted
 
             legend = defect_legend(drawn)
-            self.plotter.renderer.AddViewProp(legend)
-            self._legends.append((self.plotter.renderer, legend))
+            renderer = self.plotter.renderer
+            renderer.AddViewProp(legend)
+            observer = keep_fitted(legend, renderer, [LEGEND_LABELS[k] for k in drawn])
+            self._legends.append((renderer, legend, observer))
 
     def legend_labels(self, col: int) -> list[str]:
         """The defect legend's entries of half ``col`` (0: A, 1: B); [] when it draws no defect."""
         renderer = self.plotter.renderers[col]
-        return [legend.GetEntryString(i) for r, legend in self._legends if r is renderer
+        return [legend.GetEntryString(i) for r, legend, _observer in self._legends if r is renderer
                 for i in range(legend.GetNumberOfEntries())]
 
     def _draw_curve_defects(self, ev: Any, rows: list[Any]) -> list[str]:

@@ -248,6 +248,15 @@ def test_the_ab_view_greys_vacuous_scores_shows_coverage_and_the_defect_legend(w
         view.metric_box.setCurrentText("boundedness")  # redrawn: one legend per half still
         assert view.legend_labels(0) == [LEGEND_LABELS[k] for k in ("incomplete", "spurious_branches", "outside")]
         assert len(view._legends) == 1 + bool(view.legend_labels(1))
+        # each legend is kept fitted to its half (text sized at the screen's DPI), one observer per legend
+        for renderer, legend, observer in view._legends:
+            assert renderer.HasObserver("StartEvent") and observer
+            assert legend.GetPosition2()[0] < 0.5  # fitted to its text, not a fixed share of the view
+        renderer = view._legends[0][0]
+        view.metric_box.setCurrentText("centeredness")  # redrawn: the old legends' observers removed
+        tags = [o for r, _legend, o in view._legends if r is renderer]
+        assert len(tags) == 1
+        assert renderer.GetCommand(tags[0]) is not None
     finally:
         view.close()
 
