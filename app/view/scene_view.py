@@ -138,6 +138,11 @@ class SceneView:
     def release_frames(self) -> None:
         self._frames.release()
 
+    @property
+    def frames_held(self) -> bool:
+        """Frames wait for an edit's scores (:meth:`hold_frames`, neither released nor run out)."""
+        return self._frames.held
+
     def draw_now(self) -> None:
         """The pending frame drawn at once, before the panels' repaint (:meth:`.frames.FrameScheduler.draw_now`)."""
         self._frames.draw_now()
