@@ -497,10 +497,7 @@ class MainWindow(QtWidgets.QMainWindow):
         self.progress.setValue(0)
         for w in (self.stage, self.progress, self.cancel_button):
             w.setVisible(True)
-        if self.view.frames_held:  # an edit's second phase, started as its scores land: after the frame
-            self.view.after_render(self._after_frame_panels)
-        else:
-            self._update_actions()
+        self._update_actions()
         self._update_no_result()
 
     def _update_no_result(self) -> None:
@@ -562,12 +559,13 @@ class MainWindow(QtWidgets.QMainWindow):
             self._plots_stale.add("histogram")
             self._summary_due = True
             if self.view.frames_held:
-                # An edit's scores on their way (or landing): the Summary, the actions and the plots
-                # follow the recoloured frame, once, not on its path (docs/performance.md 6.10).
+                # An edit's scores on their way (or landing): the Summary and the plots follow the
+                # recoloured frame, once, not on its path (docs/performance.md 6.10). The actions'
+                # states do not wait (Esc cancels the scoring meanwhile).
                 self.view.after_render(self._after_frame_panels)
-                return
-            self._show_summary()
-            self._schedule_plots()
+            else:
+                self._show_summary()
+                self._schedule_plots()
         elif event.kind in ("colouring", "display", "stale"):
             self._plots_stale.add("histogram")
             self._schedule_plots()
@@ -579,9 +577,6 @@ class MainWindow(QtWidgets.QMainWindow):
                 names.append("curve (edited)")
             self.setWindowTitle("SkelScope" + (f" — {', '.join(names)}" if names else ""))
             self._update_no_result()
-        if self.view.frames_held:
-            self.view.after_render(self._after_frame_panels)
-            return
         self._update_actions()
 
     _summary_due = False  # a scene change the Summary has not shown yet
@@ -601,7 +596,6 @@ class MainWindow(QtWidgets.QMainWindow):
 
     def _panels_after_frame(self) -> None:
         self._show_summary()
-        self._update_actions()
         self._schedule_plots()
 
     def _prepare_plots(self) -> None:
