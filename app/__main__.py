@@ -118,7 +118,10 @@ def main(argv: Sequence[str] | None = None) -> int:
     window = MainWindow()
     _install_exception_hook(window)
     code = run(app, window, startup)
-    return _exited(app.exec()) if code is None else code
+    if code is None:
+        return _exited(app.exec())
+    window.close()  # a scripted run's end, an error's too: the window and its hold on the collector go
+    return code
 
 
 def import_view_libraries() -> None:

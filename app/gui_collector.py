@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import gc
 
+import shiboken6
 from PySide6 import QtCore
 
 __all__ = ["GuiCollector", "CollectorHold", "gui_collector", "COLLECT_INTERVAL_MS"]
@@ -51,7 +52,8 @@ class GuiCollector(QtCore.QObject):
             return
         self._users -= 1
         if self._users == 0:
-            self._timer.stop()
+            if shiboken6.isValid(self._timer):  # not at the process's end, Qt's objects already gone
+                self._timer.stop()
             if self._was_enabled:
                 gc.enable()
 

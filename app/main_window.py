@@ -551,17 +551,21 @@ class MainWindow(QtWidgets.QMainWindow):
     # ---- scene -> panels ------------------------------------------------------------------
     def _on_scene(self, event: SceneEvent) -> None:
         if event.kind in ("quantities", "thresholds"):
-            ev = self.scene.evaluation
-            if event.kind == "quantities" and ev is not None:
-                self.summary.set_thresholds(self.scene.beta_star, self.scene.c_star)
-            self.summary.show_summary(self.scene.scores(), ev)
             if event.kind == "quantities":
                 self._plots_stale.add("barcodes")
                 self.pick.show_info(None)
-                if ev is None:
+                if self.scene.evaluation is None:
                     self.statusBar().clearMessage()  # "evaluation done in …" must not outlive the result
             self._plots_stale.add("histogram")
-            self._schedule_plots()
+            self._summary_due = True
+            if self.view.frames_held:
+                # An edit's scores on their way (or landing): the Summary and the plots follow the
+                # recoloured frame, once, not on its path (docs/performance.md 6.10). The actions'
+                # states do not wait (Esc cancels the scoring meanwhile).
+                self.view.after_render(self._after_frame_panels)
+            else:
+                self._show_summary()
+                self._schedule_plots()
         elif event.kind in ("colouring", "display", "stale"):
             self._plots_stale.add("histogram")
             self._schedule_plots()
@@ -574,6 +578,25 @@ class MainWindow(QtWidgets.QMainWindow):
             self.setWindowTitle("SkelScope" + (f" — {', '.join(names)}" if names else ""))
             self._update_no_result()
         self._update_actions()
+
+    _summary_due = False  # a scene change the Summary has not shown yet
+
+    def _show_summary(self) -> None:
+        if self._summary_due:
+            self._summary_due = False
+            ev = self.scene.evaluation
+            if ev is not None:
+                self.summary.set_thresholds(self.scene.beta_star, self.scene.c_star)
+            self.summary.show_summary(self.scene.scores(), ev)
+
+    def _after_frame_panels(self) -> None:
+        """The panels' part of the scene changes made while the view held its frames, at the event
+        loop's next turn after the frame (not inside its paint)."""
+        QtCore.QTimer.singleShot(0, self, self._panels_after_frame)
+
+    def _panels_after_frame(self) -> None:
+        self._show_summary()
+        self._schedule_plots()
 
     def _prepare_plots(self) -> None:
         """Make the barcode axes while idle (once matplotlib is loaded), not when a result lands."""

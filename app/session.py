@@ -591,10 +591,13 @@ class Session(QtCore.QObject):
     def _task_succeeded(self, name: str, result: Any) -> None:
         scene = self.scene
         if name == "evaluation":
-            self.release_frames()  # after this event's changes: one frame shows them all
-        if name == "evaluation":
             if self._evaluated_layers != (scene.cloud, scene.skeletal, scene.curve):
+                self.release_frames()
                 return  # inputs changed meanwhile: this result describes other data
+            if not defects_pending(result):
+                self.release_frames()  # after this event's changes: one frame shows them all
+            # else an edit's first phase: the frames stay held while its scores are set (the panels
+            # then wait for the frame, docs/performance.md 6.10) and draw_now below draws it
             painted = threading.Event()
             if defects_pending(result):  # an edit's first phase: its defects in a second task, started
                 # before the scores are shown, so every panel says "updating" at once (not "cancelled"
@@ -609,9 +612,9 @@ class Session(QtCore.QObject):
             self.check_stale()
             if defects_pending(result):
                 self.after_scores(painted.set)  # it starts once the recoloured frame is on screen
-                self.message.emit(f"scores of the edited curve shown; {UPDATING}")
                 self.scores_shown.emit(result)
                 self.draw_now()
+                self.message.emit(f"scores of the edited curve shown; {UPDATING}")  # after the frame
                 return
             total = result.timings.get("total") if result.timings else None
             self.message.emit("evaluation done" + (f" in {total:.2f} s" if total is not None else ""))

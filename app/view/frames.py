@@ -54,7 +54,9 @@ class FrameScheduler:
         """
         if not self._pending:
             self._pending = True
-            QtCore.QTimer.singleShot(0, self._timer, self._timer.start)
+            # the delay given each time: a frame that waited out a hold restarted the timer with the
+            # hold's remainder, which QTimer.start(ms) keeps as its interval
+            QtCore.QTimer.singleShot(0, self._timer, lambda: self._timer.start(RENDER_DELAY_MS))
 
     @property
     def pending(self) -> bool:

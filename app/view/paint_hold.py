@@ -13,6 +13,7 @@ from __future__ import annotations
 
 from typing import Callable
 
+import shiboken6
 from PySide6 import QtCore, QtWidgets
 
 __all__ = ["WindowPaintHold"]
@@ -54,7 +55,8 @@ class WindowPaintHold(QtCore.QObject):
             QtCore.QCoreApplication.postEvent(self._window, QtCore.QEvent(QtCore.QEvent.Type.UpdateRequest))
 
     def close(self) -> None:
-        if self._window is not None:
+        """Stop filtering (nothing to undo when the window was destroyed first)."""
+        if self._window is not None and shiboken6.isValid(self._window):
             self._window.removeEventFilter(self)
             self._window = None
         self.deferred = False

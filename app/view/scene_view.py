@@ -15,6 +15,7 @@ from typing import Any, Callable
 
 import numpy as np
 import pyvista as pv
+import shiboken6
 from PySide6 import QtCore
 
 from ..scene import CURVE_LOCATION, Scene, SceneEvent
@@ -72,6 +73,7 @@ class SceneView:
         # every render, also those VTK's interaction starts itself, draws the points of its own camera
         self._start_observer = self.plotter.ren_win.AddObserver("StartEvent", lambda *_: self._before_render())
         self._picture = False  # a picture is being rendered (image()): the cloud drawn whole
+        self._closed = False
         self._cloud_layer = CloudLayer(self.plotter, self._cloud_frame)  # the far cloud drawn once (at rest)
         self._frames = FrameScheduler(self.plotter)  # also sets plotter.on_frame
         self.plotter.before_frame = self._before_frame
@@ -135,6 +137,11 @@ class SceneView:
 
     def release_frames(self) -> None:
         self._frames.release()
+
+    @property
+    def frames_held(self) -> bool:
+        """Frames wait for an edit's scores (:meth:`hold_frames`, neither released nor run out)."""
+        return self._frames.held
 
     def draw_now(self) -> None:
         """The pending frame drawn at once, before the panels' repaint (:meth:`.frames.FrameScheduler.draw_now`)."""
@@ -781,13 +788,24 @@ class SceneView:
         return np.asarray(img)
 
     def close(self) -> None:
+        """Let go of the scene, the view's filters, timers and VTK's window. Safe to call again (the
+        main window's close, then its owner's) and after the widget was destroyed with its window
+        (Qt's half then is gone: only the scene, VTK's observer and the timers are let go)."""
+        if self._closed:
+            return
+        self._closed = True
         self.scene.unsubscribe(self._on_scene)
-        self.plotter.removeEventFilter(self._motion_filter)
-        self.plotter.ren_win.RemoveObserver(self._start_observer)  # VTK's hold on this view let go
+        alive = shiboken6.isValid(self.plotter)
+        if alive:
+            self.plotter.removeEventFilter(self._motion_filter)
+        window = getattr(self.plotter, "ren_win", None)  # None once pyvista closed it
+        if window is not None:
+            window.RemoveObserver(self._start_observer)  # VTK's hold on this view let go
         self._frames.close()
         self._cloud_layer.close()
-        self.eye_dome.close()
-        self.plotter.close()
+        if alive:
+            self.eye_dome.close()
+            self.plotter.close()
 
 
 BACKGROUNDS = ("white", "black", "transparent")

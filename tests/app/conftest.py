@@ -69,3 +69,29 @@ def window(request, qtbot, tmp_path, monkeypatch):
     yield w
     w.compare.close_views()
     w.session.runner.shutdown()
+
+
+def _collector_users() -> int:
+    """The windows holding the GUI thread's collector (app/gui_collector.py); 0 before any window."""
+    import sys
+
+    module = sys.modules.get("skelscope.gui_collector")
+    return 0 if module is None or module._collector is None else module._collector.users
+
+
+@pytest.hookimpl(wrapper=True)
+def pytest_runtest_setup(item):
+    item.collector_users_before = _collector_users()
+    return (yield)
+
+
+@pytest.hookimpl(wrapper=True)
+def pytest_runtest_teardown(item):
+    """A test that leaves a main window open (its hold on the collector kept: the automatic collection
+    off for every later test) fails its teardown, named."""
+    result = yield
+    users, before = _collector_users(), getattr(item, "collector_users_before", 0)
+    if users > before:
+        raise AssertionError(f"{item.nodeid} left {users - before} main window(s) open "
+                             "(app/gui_collector.py: the collector's users)")
+    return result

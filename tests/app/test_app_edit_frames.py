@@ -198,3 +198,26 @@ def test_the_window_repaints_wait_with_the_held_frames(window, qtbot):
             w.view.release_frames()
         qtbot.waitUntil(lambda: bool(painted), timeout=5000)
     bar.removeEventFilter(counter)
+
+
+def test_a_frame_after_a_held_one_drawn_at_once_comes_without_the_holds_delay(window, qtbot):
+    """A frame that waited in a hold (its timer restarted for the hold's remainder), then drawn at once
+    (an edit's scores landing): the next frame asked for comes after the usual delay, not the hold's
+    remainder (QTimer.start(ms) kept it as the timer's interval: the second phase's frame came a
+    second late)."""
+    import time
+
+    w = window
+    frames: list[float] = []
+    w.view.plotter.ren_win.AddObserver("EndEvent", lambda *_a: frames.append(time.perf_counter()))
+    qtbot.waitUntil(lambda: not w.view.render_pending, timeout=10000)
+    w.view.hold_frames(5.0)
+    w.view.request_render()
+    qtbot.wait(100)  # the frame's timer fired in the hold and waits for its remainder
+    assert not frames
+    w.view.draw_now()
+    assert len(frames) == 1
+    asked = time.perf_counter()
+    w.view.request_render()
+    qtbot.waitUntil(lambda: len(frames) == 2, timeout=10000)
+    assert frames[1] - asked < 1.0  # 4.9 s before

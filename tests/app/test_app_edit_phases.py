@@ -74,7 +74,8 @@ def test_the_defects_follow_the_scores_and_never_mix_with_them(window, qtbot, tm
     assert w.defects.rows == [] and w.defects.panel.pending == UPDATING and w.defects.panel.status.text() == UPDATING
     assert w.defects.marks == marks  # kept: the rows they belong to are not known yet
     assert w.edits.evaluation_of(edited) is None and landed == []
-    assert "updating" in w.summary.details_text()
+    # the Summary follows the recoloured frame (main_window: the panels after the frame)
+    qtbot.waitUntil(lambda: "updating" in w.summary.details_text(), timeout=5000)
     held.set()
     wait_evaluated(qtbot, w)
     assert landed == [w.scene.evaluation] and not w.defects.panel.pending

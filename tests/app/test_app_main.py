@@ -127,3 +127,15 @@ def test_an_uncaught_exception_becomes_a_dialog_with_the_traceback(window, monke
         sys.excepthook(*sys.exc_info())
     assert shown[0][0] == "ZeroDivisionError: division by zero" and "Traceback" in shown[0][1]
     assert w.isVisible() and w.bug is not None
+
+
+def test_a_scripted_run_that_fails_closes_its_window(files, tmp_path, capsys, no_user_settings):
+    """An error after the window was made (a missing file) returns 2 with the window closed: no window
+    left holding the GUI thread's collector (app/gui_collector.py)."""
+    from skelscope.gui_collector import gui_collector
+
+    before = gui_collector().users
+    shown = [w for w in QtWidgets.QApplication.topLevelWidgets() if w.isVisible()]
+    assert main([str(tmp_path / "missing.ply"), "--screenshot", str(tmp_path / "o.png"), "--quit"]) == 2
+    assert gui_collector().users == before
+    assert [w for w in QtWidgets.QApplication.topLevelWidgets() if w.isVisible()] == shown
