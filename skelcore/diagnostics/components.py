@@ -41,7 +41,8 @@ class CurveComponents:
     they lie in; extra : n_pieces - n_cloud_pieces (0: sound). extra_branches : the branches of the
     pieces beyond the largest (by length) in each cloud piece, flagged. gap : the largest of those
     pieces' distances to the nearest other piece in their cloud piece, in local radii at its ends
-    (the mean of their distances to the cloud), with ``gap_branches`` the branches at its two ends;
+    (the mean of their distances to the cloud; NaN when both lie on cloud points), with
+    ``gap_branches`` the branches at its two ends;
     vertex_flag : (V,) bool, the flagged branches' vertices.
     """
 
@@ -61,15 +62,16 @@ class CurveComponents:
             return []
         cloud = "one" if self.n_cloud_pieces == 1 else f"{self.n_cloud_pieces} pieces"
         a, b = self.gap_branches
+        radii = f" {self.gap:.2g} local radii" if np.isfinite(self.gap) else ""  # ends on cloud points: no radius
         return [TrustWarning(
             "disconnected",
-            f"the curve skeleton is in {self.n_pieces} pieces where the cloud is {cloud}; the largest gap "
-            f"{self.gap:.2g} local radii between branch {a} and branch {b}",
+            f"the curve skeleton is in {self.n_pieces} pieces where the cloud is {cloud}; the largest gap"
+            f"{radii} between branch {a} and branch {b}",
         )]  # fmt: skip
 
     def to_dict(self) -> dict:
         return {"pieces": int(self.n_pieces), "cloud_pieces": int(self.n_cloud_pieces), "extra": int(self.extra),
-                "branches": [int(b) for b in self.extra_branches], "gap_radii": float(self.gap),
+                "branches": [int(b) for b in self.extra_branches], "gap_radii": float(self.gap) if np.isfinite(self.gap) else None,
                 "gap_branches": [int(b) for b in self.gap_branches]}
 
 
@@ -168,7 +170,7 @@ def find_components(curve: CurveSkeleton, branches: Branches, cloud_tree: cKDTre
     # the gaps: per extra piece, to the nearest other piece of the same cloud piece
     gap_r, ends = 0.0, (-1, -1)
     if len(extra):
-        gaps = np.zeros(len(extra))
+        gaps, dist = np.full(len(extra), np.nan), np.zeros(len(extra))
         pair = np.zeros((len(extra), 2), np.int64)
         for h in np.unique(home[extra]):
             mine = np.flatnonzero(home == h)
@@ -180,9 +182,10 @@ def find_components(curve: CurveSkeleton, branches: Branches, cloud_tree: cKDTre
             at = np.isin(extra, mine)
             lid = local[extra[at]]
             rad = 0.5 * (radius[own[lid]] + radius[oth[lid]])
-            gaps[at] = np.where(rad > 0, g[lid] / np.where(rad > 0, rad, 1.0), 0.0)
+            gaps[at] = np.where(rad > 0, g[lid] / np.where(rad > 0, rad, 1.0), np.nan)
+            dist[at] = g[lid]
             pair[at] = np.column_stack([own[lid], oth[lid]])
-        w = int(np.argmax(gaps))
+        w = int(np.argmax(dist))  # the widest gap, in local radii where they are known
         gap_r = float(gaps[w])
         ends = (_branch_at(int(pair[w, 0]), branches, curve), _branch_at(int(pair[w, 1]), branches, curve))
     vflag = np.isin(piece, extra)
