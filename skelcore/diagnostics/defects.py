@@ -16,7 +16,7 @@ from ..geometry import Checkpoint, kd_tree, no_checkpoint
 from ..params import Params
 from .trust_warning import TrustWarning
 from .branches import Branches, decompose_branches
-from .components import CurveComponents, find_components
+from .pieces import CurveComponents, find_components
 from .cycles import CycleDefects, find_cycle_defects
 from .interior import VoxelShape, cloud_subsample, voxelize_interior
 from .outside import OutsideDefects, find_outside

@@ -14,7 +14,7 @@ import skelcore.edit as E
 from skelcore.benchmark.neurons import MeshSampler, load_neuron
 from skelcore.curve import CurveSkeleton
 from skelcore.diagnostics.branches import decompose_branches
-from skelcore.diagnostics.components import curve_pieces, find_components
+from skelcore.diagnostics.pieces import curve_pieces, find_components
 from skelcore.diagnostics.record import DEFECT_BITS
 from skelcore.geometry import Normalization, kd_tree
 
