@@ -3,7 +3,8 @@
 
 The curve's pieces are its connected components (edges only; an isolated vertex is no piece, as the
 repair's tally counts them). Each piece lies in the cloud's piece that most of its vertices' nearest
-cloud points belong to; the cloud's pieces are its components when each point is joined to its
+cloud points belong to (pieces under ``components_min_share`` of the points are stray bits and
+skipped); the cloud's pieces are its components when each point is joined to its
 nearest few within ``components_link`` x the median spacing of the points the diagnostics' KD-tree
 holds. Coverage's tau (2 spacings, docs/metrics.md 5.2) is too fine for this: a random surface sample
 falls into hundreds of bits at it (the bundled samples: 539-606 pieces), into one at 4 spacings. A
@@ -153,7 +154,13 @@ def find_components(curve: CurveSkeleton, branches: Branches, cloud_tree: cKDTre
     v = np.asarray(curve.vertices, float)
     used = np.flatnonzero(piece >= 0)
     r, near = cloud_tree.query(v[used])
-    cloud_lab = _cloud_pieces(cloud_tree, params)[near]
+    lab = _cloud_pieces(cloud_tree, params)
+    size = np.bincount(lab)
+    bits = size[lab] < params.components_min_share * len(lab)
+    if bits.any() and not bits.all():  # stray bits: the nearest point of a piece that is not one
+        kept = np.flatnonzero(~bits)
+        near = kept[cKDTree(cloud_tree.data[kept]).query(v[used])[1]]
+    cloud_lab = lab[near]
     # each curve piece's cloud piece: the one most of its vertices are nearest to
     pairs, counts = np.unique(np.column_stack([piece[used], cloud_lab]), axis=0, return_counts=True)
     top = np.lexsort((-counts, pairs[:, 0]))
