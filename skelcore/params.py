@@ -131,7 +131,8 @@ class Params:
     outside_link : see outside_skeletal_share.
     components_link : the cloud's pieces join its points within this many median spacings (each to
         its nearest few): ``disconnected`` fires when a piece of the cloud holds more than one piece of
-        the curve (at 2 spacings a random surface sample falls into hundreds of bits, at 4 it is one).
+        the curve (at 2 spacings a random surface sample falls into hundreds of bits, at 4 it is one;
+        8 from the tuning neurons, whose one-sided and unevenly sampled clouds fall apart at 4).
     components_min_share : cloud pieces under this share of the points are stray bits (outliers in a
         tube's hollow lie nearer its axis than the surface does): a curve vertex lies in the piece of
         its nearest point outside them.
@@ -336,7 +337,7 @@ class Params:
     outside_voxel_radii: float = 3.0
     outside_skeletal_share: float = 0.05
     outside_link: float = 3.0
-    components_link: float = 4.0
+    components_link: float = 8.0
     components_min_share: float = 0.01
 
     # diagnostics: missing parts (docs/diagnostics.md)
