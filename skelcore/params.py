@@ -133,9 +133,6 @@ class Params:
         its nearest few): ``disconnected`` fires when a piece of the cloud holds more than one piece of
         the curve (at 2 spacings a random surface sample falls into hundreds of bits, at 4 it is one;
         8 from the tuning neurons, whose one-sided and unevenly sampled clouds fall apart at 4).
-    components_min_share : cloud pieces under this share of the points are stray bits (outliers in a
-        tube's hollow lie nearer its axis than the surface does): a curve vertex lies in the piece of
-        its nearest point outside them.
     missing_depth : a region of unexplained cloud points (beyond every skeleton element's ball grown
         by coverage_slack and tau) counts as a missing part (warning ``incomplete``) when it reaches
         this many radii of its border beyond that border (the border: its points next to explained
@@ -338,7 +335,6 @@ class Params:
     outside_skeletal_share: float = 0.05
     outside_link: float = 3.0
     components_link: float = 8.0
-    components_min_share: float = 0.01
 
     # diagnostics: missing parts (docs/diagnostics.md)
     missing_depth: float = 1.25
@@ -466,7 +462,7 @@ class Params:
                      "outside_reach", "outside_voxel_radii"):
             if not float(getattr(self, name)) > 0:
                 bad(name, "must be > 0")
-        for name in ("spur_unique", "spur_one_sided", "outside_min_share", "outside_skeletal_share", "components_min_share", "outside_one_sided",
+        for name in ("spur_unique", "spur_one_sided", "outside_min_share", "outside_skeletal_share", "outside_one_sided",
                      "cycles_support_share", "cycles_strict_share"):
             if not 0.0 <= float(getattr(self, name)) <= 1.0:
                 bad(name, "must be in [0, 1]")

@@ -3,8 +3,8 @@
 
 The curve's pieces are its connected components (edges only; an isolated vertex is no piece, as the
 repair's tally counts them). Each piece lies in the cloud's piece that most of its vertices' nearest
-cloud points belong to (pieces under ``components_min_share`` of the points are stray bits and
-skipped); the cloud's pieces are its components when each point is joined to its
+cloud points (16 per vertex) belong to; the cloud's pieces are its components when each point is
+joined to its
 nearest few within ``components_link`` x the median spacing of the points the diagnostics' KD-tree
 holds. Coverage's tau (2 spacings, docs/metrics.md 5.2) is too fine for this: a random surface sample
 falls into hundreds of bits at it (the bundled samples: 539-606 pieces), into one at 4 spacings; the
@@ -34,6 +34,7 @@ __all__ = ["CurveComponents", "find_components", "curve_pieces"]
 # the last tree's pieces (the tree, its link, the labels): an edit's updates share the evaluation's tree,
 # so a curve split by an edit and edited again searches the cloud once (2.4 CPU s at 200,000 points)
 _last_pieces: list = []
+_VOTERS = 16  # nearest cloud points per curve vertex voting for its cloud piece
 _LINKED = 10  # cloud neighbours each point is joined to (within components_link)
 _K = 8  # nearest vertices searched first for another piece's (a piece with none among them: its own search)
 
@@ -163,16 +164,15 @@ def find_components(curve: CurveSkeleton, branches: Branches, cloud_tree: cKDTre
     n_p, piece = curve_pieces(curve)
     v = np.asarray(curve.vertices, float)
     used = np.flatnonzero(piece >= 0)
-    r, near = cloud_tree.query(v[used])
-    lab = _cloud_pieces(cloud_tree, params)
-    size = np.bincount(lab)
-    bits = size[lab] < params.components_min_share * len(lab)
-    if bits.any() and not bits.all():  # stray bits: the nearest point of a piece that is not one
-        kept = np.flatnonzero(~bits)
-        near = kept[cKDTree(cloud_tree.data[kept]).query(v[used])[1]]
-    cloud_lab = lab[near]
-    # each curve piece's cloud piece: the one most of its vertices are nearest to
-    pairs, counts = np.unique(np.column_stack([piece[used], cloud_lab]), axis=0, return_counts=True)
+    k = min(_VOTERS, cloud_tree.n)
+    d, near = cloud_tree.query(v[used], k=k)
+    d, near = d.reshape(len(used), k), near.reshape(len(used), k)
+    r = d[:, 0]
+    cloud_lab = _cloud_pieces(cloud_tree, params)[near]
+    # each curve piece's cloud piece: the one most of its vertices' nearest cloud points lie in (a stray
+    # point in a tube's hollow, nearer the axis than the surface, is outvoted by the surface's ring)
+    pairs, counts = np.unique(np.column_stack([np.repeat(piece[used], k), cloud_lab.ravel()]), axis=0,
+                              return_counts=True)
     top = np.lexsort((-counts, pairs[:, 0]))
     first = np.unique(pairs[top, 0], return_index=True)[1]
     home = np.empty(n_p, np.int64)
