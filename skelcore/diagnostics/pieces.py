@@ -2,16 +2,15 @@
 (docs/diagnostics.md "Disconnected").
 
 The curve's pieces are its connected components (edges only; an isolated vertex is no piece, as the
-repair's tally counts them). Each piece lies in the cloud's piece that most of its vertices' nearest
+repair's tally counts them). Each piece lies in the cloud piece that most of its vertices' nearest
 cloud points (16 per vertex) belong to; the cloud's pieces are its components when each point is
-joined to its
-nearest few within ``components_link`` x the median spacing of the points the diagnostics' KD-tree
-holds. Coverage's tau (2 spacings, docs/metrics.md 5.2) is too fine for this: a random surface sample
-falls into hundreds of bits at it (the bundled samples: 539-606 pieces), into one at 4 spacings; the
-tuning neurons' one-sided and unevenly sampled clouds need 8. A cloud cut too finely only hides a
-break (a curve piece in a bit of its own), never invents one. Every cloud piece holding more than one curve piece is a defect: the
-skeleton of one part of the shape is broken. A curve in one piece (the usual case) costs one pass over
-its edges and no search of the cloud.
+joined to its nearest few within ``components_link`` x the median spacing of the points the
+diagnostics' KD-tree holds. Coverage's tau (2 spacings, docs/metrics.md 5.2) is too fine for this: a
+random surface sample falls into hundreds of bits at it (the bundled samples: 539-606 pieces), into
+one at 4 spacings; the tuning neurons' one-sided and unevenly sampled clouds need 8. A cloud cut too
+finely only hides a break (a curve piece in a bit of its own), never invents one. Every cloud piece
+holding more than one curve piece is a defect: the skeleton of one part of the shape is broken. A
+curve in one piece (the usual case) costs one pass over its edges and no search of the cloud.
 """
 
 from __future__ import annotations
