@@ -129,6 +129,10 @@ class Params:
         is outside (unbounded, in no inside voxel) in one cluster (points within outside_link x the
         cloud's median spacing).
     outside_link : see outside_skeletal_share.
+    components_link : the cloud's pieces join its points within this many median spacings (each to
+        its nearest few): ``disconnected`` fires when a piece of the cloud holds more than one piece of
+        the curve (at 2 spacings a random surface sample falls into hundreds of bits, at 4 it is one;
+        8 from the tuning neurons, whose one-sided and unevenly sampled clouds fall apart at 4).
     missing_depth : a region of unexplained cloud points (beyond every skeleton element's ball grown
         by coverage_slack and tau) counts as a missing part (warning ``incomplete``) when it reaches
         this many radii of its border beyond that border (the border: its points next to explained
@@ -330,6 +334,7 @@ class Params:
     outside_voxel_radii: float = 3.0
     outside_skeletal_share: float = 0.05
     outside_link: float = 3.0
+    components_link: float = 8.0
 
     # diagnostics: missing parts (docs/diagnostics.md)
     missing_depth: float = 1.25
@@ -453,6 +458,7 @@ class Params:
         if self.k_center is not None and int(self.k_center) < 1:
             bad("k_center", "must be a positive integer or None")
         for name in ("diag_step", "spur_reach", "cycles_voxel_spacing", "cycles_resolved_voxels", "outside_min_radii", "outside_link",
+                     "components_link",
                      "outside_reach", "outside_voxel_radii"):
             if not float(getattr(self, name)) > 0:
                 bad(name, "must be > 0")

@@ -1,7 +1,8 @@
 """report.html's defect picture of one job (docs/compare.md "Defects decide"): the cloud in
 faint grey, the skeleton in a neutral grey, and on it only the defects the job was warned of, each in
 its colour of :data:`skelcore.colors.DEFECT_COLORS`: the missing parts' cloud points (``incomplete``),
-the curve's edges on spurious branches, on spurious cycles and outside the shape. The per-element
+the curve's edges on spurious branches, on spurious cycles, outside the shape and on the pieces of a
+broken curve (``disconnected``). The per-element
 arrays are the Evaluation's diagnostics (``ev_diag_*`` in the job's npz; docs/diagnostics.md "In the
 evaluation"). pyvista is imported inside the renderer (skelcore never imports plotting at module level).
 """
@@ -24,14 +25,15 @@ __all__ = ["DEFECT_VIEW", "DRAWN", "DEFECT_LABELS", "DefectLayers", "defect_laye
 DEFECT_VIEW = "defects"
 #: the codes drawn element by element, in drawing order (the widest line first, so that an edge with
 #: two defects shows both: a core on a halo)
-DRAWN = ("incomplete", "outside", "spurious_cycles", "spurious_branches")
+DRAWN = ("incomplete", "disconnected", "outside", "spurious_cycles", "spurious_branches")
 DEFECT_LABELS = {
     "incomplete": "missing parts",
+    "disconnected": "pieces of the curve beyond one per piece of the cloud",
     "outside": "edges outside the shape",
     "spurious_cycles": "spurious cycles",
     "spurious_branches": "spurious branches",
 }
-_LINE_WIDTH = {"outside": 9, "spurious_cycles": 6, "spurious_branches": 4}
+_LINE_WIDTH = {"disconnected": 12, "outside": 9, "spurious_cycles": 6, "spurious_branches": 4}
 _SIZE = (320, 320)
 
 
@@ -81,7 +83,7 @@ def defect_layers(arrays: dict[str, np.ndarray], codes: list[str] | set[str]) ->
     n_edges = len(arrays.get("curve_edges", ()))
     if n_edges:
         bits = _edge_bits(arrays, n_edges)
-        for code in ("outside", "spurious_cycles", "spurious_branches"):
+        for code in DRAWN[1:]:
             if code in found:
                 edges[code] = (bits & DEFECT_BITS[code]) != 0
     return DefectLayers(found=found, missing=missing, edges=edges)

@@ -1,10 +1,10 @@
 """All of a curve skeleton's defects at once: one KD-tree of the cloud
-and one branch decomposition shared by the spurious-branch, cycle and outside diagnostics, and the
-branches flagged with what each found (docs/diagnostics.md)."""
+and one branch decomposition shared by the spurious-branch, cycle, outside and disconnected
+diagnostics, and the branches flagged with what each found (docs/diagnostics.md)."""
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Callable
 
 import numpy as np
@@ -16,6 +16,7 @@ from ..geometry import Checkpoint, kd_tree, no_checkpoint
 from ..params import Params
 from .trust_warning import TrustWarning
 from .branches import Branches, decompose_branches
+from .pieces import CurveComponents, find_components
 from .cycles import CycleDefects, find_cycle_defects
 from .interior import VoxelShape, cloud_subsample, voxelize_interior
 from .outside import OutsideDefects, find_outside
@@ -27,34 +28,40 @@ __all__ = ["CurveDefects", "find_curve_defects"]
 
 @dataclass
 class CurveDefects:
-    """The branches (flagged ``spurious_branches``, ``spurious_cycles``, ``outside``) and each
-    diagnostic's result; per-element defect flags by code."""
+    """The branches (flagged ``spurious_branches``, ``spurious_cycles``, ``outside``,
+    ``disconnected``) and each diagnostic's result; per-element defect flags by code."""
 
     branches: Branches
     spurs: SpurDefects
     cycles: CycleDefects
     outside: OutsideDefects
     timings: dict
+    components: CurveComponents = field(default_factory=CurveComponents)
 
     def warnings(self) -> list[TrustWarning]:
-        return self.spurs.warnings() + self.cycles.warnings() + self.outside.warnings()
+        return self.spurs.warnings() + self.cycles.warnings() + self.outside.warnings() + self.components.warnings()
 
     def vertex_flags(self) -> dict[str, np.ndarray]:
         return {"spurious_branches": self.spurs.vertex_flag, "spurious_cycles": self.cycles.vertex_flag,
-                "outside": self.outside.vertex_flag}
+                "outside": self.outside.vertex_flag, "disconnected": self.components.vertex_flag}
 
     def sample_flags(self) -> dict[str, np.ndarray | None]:
         return {"spurious_branches": self.spurs.sample_flag, "spurious_cycles": self.cycles.sample_flag,
-                "outside": self.outside.sample_outside}
+                "outside": self.outside.sample_outside, "disconnected": self._sample_disconnected()}
+
+    def _sample_disconnected(self) -> np.ndarray | None:
+        sb = self.branches.sample_branch
+        return None if sb is None else np.isin(sb, self.components.extra_branches)
 
     def edge_flags(self) -> dict[str, np.ndarray]:
-        """Per curve edge: on a spurious branch, on a spurious cycle's branch, with length outside
-        (what report.html draws in each defect's colour)."""
+        """Per curve edge: on a spurious branch, on a spurious cycle's branch, with length outside, on
+        a piece beyond one per cloud piece (what report.html draws in each defect's colour)."""
         eb = np.asarray(self.branches.edge_branch, dtype=np.int64)
         return {"spurious_branches": np.isin(eb, self.spurs.spurious),
                 "spurious_cycles": np.asarray(self.cycles.branch_spurious, bool)[eb] if len(eb) else np.zeros(0, bool),
                 "outside": (np.asarray(self.outside.edge_outside_length) > 0)
-                | np.isin(eb, self.outside.far_branches())}
+                | np.isin(eb, self.outside.far_branches()),
+                "disconnected": np.isin(eb, self.components.extra_branches)}
 
     def to_dict(self) -> dict:
         return {
@@ -62,6 +69,7 @@ class CurveDefects:
             "spurious_branches": self.spurs.to_dict(),
             "cycles": self.cycles.to_dict(),
             "outside": self.outside.to_dict(),
+            "components": self.components.to_dict(),
             "warnings": [w.to_dict() for w in self.warnings()],
         }
 
@@ -80,7 +88,8 @@ def find_curve_defects(
     cloud_tree: cKDTree | None = None,
     spur_memo: SpurMemo | None = None,
 ) -> CurveDefects:
-    """Branches, spurious branches, cycles and the parts outside of ``curve`` (and of ``skeletal``),
+    """Branches, spurious branches, cycles, the parts outside of ``curve`` (and of ``skeletal``) and
+    its pieces beyond one per piece of the cloud (:mod:`.components`),
     all normalized (docs/metrics.md 0); ``sample_boundedness`` are the boundedness values of ``samples``. The
     local radii come from at most ``diag_max_points`` of the cloud (``spurs.subsampled`` says when).
     ``interior(checkpoint)`` gives the cloud's voxelized interior when it is shared (the evaluation's
@@ -120,7 +129,12 @@ def find_curve_defects(
                            skeletal_boundedness=skeletal_boundedness, params=params, branches=branches,
                            cloud_tree=tree, voxel_shape=shape, checkpoint=lambda f: checkpoint(0.9 + 0.1 * f))
     t["outside"] = time.perf_counter() - t0
+    t0 = time.perf_counter()
+    components = find_components(curve, branches, tree, params)
+    t["components"] = time.perf_counter() - t0
     flagged = branches.flagged("spurious_branches", spurs.spurious)
     flagged = flagged.flagged("spurious_cycles", np.flatnonzero(cycles.branch_spurious))
     flagged = flagged.flagged("outside", outside.defective_branches())
-    return CurveDefects(branches=flagged, spurs=spurs, cycles=cycles, outside=outside, timings=t)
+    flagged = flagged.flagged("disconnected", components.extra_branches)
+    return CurveDefects(branches=flagged, spurs=spurs, cycles=cycles, outside=outside, timings=t,
+                        components=components)
