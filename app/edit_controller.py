@@ -349,6 +349,12 @@ class EditController(QtCore.QObject):
             out.append((text, lambda: self.apply(done, ops)))
         elif row.code == "spurious_cycles" and edges:
             out.append(("Cut this cycle", lambda: self._cut_first(edges)))
+        elif row.code == "disconnected" and edges:
+            pair = _nearest_join(layer.curve, edges)
+            if pair is not None:
+                a, b = pair
+                out.append(("Join this piece", lambda: self.apply(f"join vertices #{a} and #{b}",
+                                                                  [lambda c: edit.add_edge(c, (a, b))])))
         return out
 
     def _cut_first(self, edges: list[tuple[int, int]]) -> bool:
@@ -459,3 +465,20 @@ class EditController(QtCore.QObject):
                 self.save(path)
             except (ValueError, OSError, SkelInputError) as exc:
                 self.window.show_error("Save skeleton failed", str(exc))
+
+
+def _nearest_join(curve: Any, edges: list[tuple[int, int]]) -> tuple[int, int] | None:
+    """The closest pair (a vertex of the piece holding ``edges``, a vertex of the rest of the curve
+    with an edge): where "Join this piece" adds its edge (docs/guide/editing.md)."""
+    import numpy as np
+    from scipy.spatial import cKDTree
+    from skelcore.diagnostics.pieces import curve_pieces
+
+    _n, piece = curve_pieces(curve)
+    mine = np.flatnonzero(piece == piece[edges[0][0]])
+    rest = np.flatnonzero((piece >= 0) & (piece != piece[edges[0][0]]))
+    if not len(mine) or not len(rest):
+        return None
+    d, j = cKDTree(curve.vertices[rest]).query(curve.vertices[mine])
+    i = int(np.argmin(d))
+    return int(mine[i]), int(rest[j[i]])

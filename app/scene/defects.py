@@ -28,6 +28,7 @@ DEFECT_TITLES = {
     "spurious_cycles": "spurious cycle",
     "missing_cycles": "missing cycle",
     "outside": "outside the shape",
+    "disconnected": "broken curve",
     "collapse": "collapse",
     "frame": "frame",
     "open_surface": "opening",
@@ -256,6 +257,40 @@ def _outside_rows(ev: Any) -> list[DefectRow]:
     return rows
 
 
+def _piece_rows(ev: Any) -> list[DefectRow]:
+    """One row per extra piece of the curve (``disconnected``, docs/diagnostics.md "Disconnected"):
+    its branches, length and place; the warning's own words when the pieces' branches are not known."""
+    if "disconnected" not in _codes(ev):
+        return []
+    from skelcore.diagnostics.pieces import curve_pieces  # at use: the window's first frame needs no engine
+
+    info = _summary(ev).get("components") or {}
+    ids = [int(b) for b in info.get("branches") or []]
+    curve = _curve(ev)
+    rows: list[DefectRow] = []
+    if curve is not None and ids:
+        _n, piece = curve_pieces(curve)
+        edges = np.asarray(curve.edges, np.int64).reshape(-1, 2)
+        by_piece: dict[int, list[int]] = {}
+        for b in ids:
+            e = branch_edges(ev, (b,))
+            if len(e):
+                by_piece.setdefault(int(piece[edges[e[0], 0]]), []).append(b)
+        branches = (_summary(ev).get("branches") or {}).get("branches") or []
+        total = sum(b["length"] for b in branches) or 1.0
+        for k, members in enumerate(by_piece.values(), start=1):
+            length = sum(branches[b]["length"] for b in members if b < len(branches))
+            rows.append(DefectRow("disconnected", f"broken curve: piece {k} of {len(by_piece)} apart",
+                                  f"{len(members)} branches, {length / total:.1%} of the curve's length, apart from "
+                                  f"the curve's main piece in one piece of the cloud", "curve",
+                                  branches=tuple(members), edges=branch_edges(ev, tuple(members)),
+                                  points=branch_points(ev, tuple(members))))
+    if not rows:
+        rows = [DefectRow("disconnected", DEFECT_TITLES["disconnected"], w.message, "curve")
+                for w in _warnings(ev) if w.code == "disconnected"]
+    return rows
+
+
 def _outside_edges(ev: Any, arrays: dict[str, np.ndarray]) -> np.ndarray:
     """Curve edges holding a sample flagged ``outside``."""
     from skelcore.diagnostics.record import DEFECT_BITS
@@ -452,8 +487,8 @@ def defect_rows(ev: Any) -> list[DefectRow]:
     scan's openings, stray points, thin parts and sparse sampling; [] for None."""
     if ev is None:
         return []
-    return (_missing_rows(ev) + _spur_rows(ev) + _cycle_rows(ev) + _outside_rows(ev) + _trust_rows(ev)
-            + _scan_rows(ev))
+    return (_missing_rows(ev) + _spur_rows(ev) + _cycle_rows(ev) + _outside_rows(ev) + _piece_rows(ev)
+            + _trust_rows(ev) + _scan_rows(ev))
 
 
 def defect_counts(ev: Any) -> dict[str, int]:

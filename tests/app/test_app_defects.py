@@ -284,3 +284,35 @@ def test_the_ab_window_fits_the_screen(window, defective):
         assert Laptop().availableGeometry().contains(QtCore.QRect(view.pos(), view.size()))
     finally:
         view.close()
+
+
+def test_a_broken_curve_lists_each_extra_piece_and_draws_it_with_a_halo(window):
+    """``disconnected`` (docs/diagnostics.md "Disconnected"): one Defects row per extra piece of the
+    curve, its branches and edges, drawn as a halo in its own colour with a legend entry."""
+    from pathlib import Path
+
+    import skelcore
+    from skelcore.diagnostics.pieces import curve_pieces
+
+    samples = Path(__file__).resolve().parents[2] / "resources" / "samples"
+    cloud, curve = skelcore.load_cloud(samples / "yshape_cloud.ply"), skelcore.load_curve(samples / "yshape_curve.ply")
+    e = np.sort(np.asarray(curve.edges), axis=1)
+    keep = ~((e == [3, 4]).all(axis=1) | (e == [14, 15]).all(axis=1))
+    broken = CurveSkeleton.from_raw(curve.vertices, np.asarray(curve.edges)[keep])
+    ev = evaluate(cloud, curve=broken)
+    assert "disconnected" in {x.code for x in ev.warnings}
+    w = window
+    w.session.show_arrays(cloud, None, broken, ev)
+    w.view.image()
+    rows = [r for r in w.defects.rows if r.code == "disconnected"]
+    assert [r.title for r in rows] == ["broken curve: piece 1 of 2 apart", "broken curve: piece 2 of 2 apart"]
+    _n, piece = curve_pieces(broken)
+    edges = np.asarray(broken.edges)
+    main = np.argmax(np.bincount(piece[edges[:, 0]], weights=broken.edge_lengths()))
+    pieces = [set(piece[edges[r.edges, 0]].tolist()) for r in rows]
+    assert all(len(p) == 1 for p in pieces) and {p.pop() for p in pieces} == set(range(3)) - {main}
+    assert all(len(r.points) and "of the curve's length" in r.size and "nan" not in r.size for r in rows)
+    halo = w.view.plotter.actors["defect-disconnected"]
+    assert halo.GetMapper().GetInput().GetNumberOfCells() == sum(len(r.edges) for r in rows)
+    assert "broken curve (extra piece)" in w.defects.overlay.legend_labels
+    assert _has_colour(w.view.image(), DEFECT_COLORS["disconnected"])

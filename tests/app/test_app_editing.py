@@ -323,3 +323,31 @@ def test_an_edit_while_the_loaded_curve_is_scored_for_the_ab_view_cancels_that_v
     qtbot.wait(200)
     assert w.compare.views == []
     assert_same_scores(w.scene.scores(), skelcore.evaluate(w.scene.evaluation.cloud, curve=w.scene.curve.curve).scores())
+
+
+def test_a_broken_curves_row_joins_its_piece_to_the_rest(window, qtbot, tmp_path):
+    """The ``disconnected`` row's fix: an edge from the piece's vertex nearest the rest of the curve to
+    that vertex of the rest; scored again, the curve is one piece and the warning is gone."""
+    from pathlib import Path
+
+    from skelcore.io.writers import write_curve
+
+    samples = Path(__file__).resolve().parents[2] / "resources" / "samples"
+    curve = skelcore.load_curve(samples / "yshape_curve.ply")
+    e = np.sort(np.asarray(curve.edges), axis=1)
+    broken = CurveSkeleton.from_raw(curve.vertices, np.asarray(curve.edges)[~(e == [3, 4]).all(axis=1)])
+    path = str(tmp_path / "broken_curve.ply")
+    write_curve(path, broken)
+    w = window
+    assert w.session.load_roles({"cloud": str(samples / "yshape_cloud.ply"), "curve": path}) == []
+    w.session.start_evaluation()
+    wait_evaluated(qtbot, w)
+    i = next(k for k, r in enumerate(w.defects.rows) if r.code == "disconnected")
+    assert [t for t, _ in w.defects.actions_of(i)] == ["Join this piece"]
+    w.defects.select(i)
+    w.defects.fix_button.click()
+    assert w.scene.curve.curve.n_edges == broken.n_edges + 1
+    assert {tuple(sorted(x)) for x in np.asarray(w.scene.curve.curve.edges).tolist()} >= {(3, 4)}
+    wait_evaluated(qtbot, w)
+    assert "disconnected" not in {x.code for x in w.scene.evaluation.warnings}
+    assert not any(r.code == "disconnected" for r in w.defects.rows)
