@@ -23,6 +23,7 @@ from scipy.sparse.csgraph import connected_components
 from scipy.spatial import cKDTree
 
 from ..curve import CurveSkeleton
+from ..geometry import query_workers
 from ..params import Params
 from .branches import Branches
 from .interior import median_spacing
@@ -102,7 +103,8 @@ def _cloud_pieces(tree: cKDTree, params: Params) -> np.ndarray:
     pts = tree.data
     n = len(pts)
     k = min(_LINKED + 1, n)
-    d, j = tree.query(pts, k=k, distance_upper_bound=params.components_link * median_spacing(pts))
+    d, j = tree.query(pts, k=k, distance_upper_bound=params.components_link * median_spacing(pts),
+                      workers=query_workers(n))
     d, j = d.reshape(n, k), j.reshape(n, k)
     ok = np.isfinite(d)
     rows = np.repeat(np.arange(n), k).reshape(n, k)
