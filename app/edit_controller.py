@@ -468,17 +468,11 @@ class EditController(QtCore.QObject):
 
 
 def _nearest_join(curve: Any, edges: list[tuple[int, int]]) -> tuple[int, int] | None:
-    """The closest pair (a vertex of the piece holding ``edges``, a vertex of the rest of the curve
-    with an edge): where "Join this piece" adds its edge (docs/guide/editing.md)."""
-    import numpy as np
-    from scipy.spatial import cKDTree
-    from skelcore.diagnostics.pieces import curve_pieces
+    """The closest pair (a vertex of the piece holding ``edges``, a vertex of another piece): where
+    "Join this piece" adds its edge (:func:`~skelcore.diagnostics.pieces.nearest_other_piece`)."""
+    from skelcore.diagnostics.pieces import curve_pieces, nearest_other_piece
 
     _n, piece = curve_pieces(curve)
-    mine = np.flatnonzero(piece == piece[edges[0][0]])
-    rest = np.flatnonzero((piece >= 0) & (piece != piece[edges[0][0]]))
-    if not len(mine) or not len(rest):
-        return None
-    d, j = cKDTree(curve.vertices[rest]).query(curve.vertices[mine])
-    i = int(np.argmin(d))
-    return int(mine[i]), int(rest[j[i]])
+    _gap, own, other = nearest_other_piece(curve.vertices, piece)
+    p = int(piece[edges[0][0]])
+    return None if p < 0 or own[p] < 0 else (int(own[p]), int(other[p]))

@@ -29,7 +29,7 @@ from .branches import Branches
 from .interior import median_spacing
 from .trust_warning import TrustWarning
 
-__all__ = ["CurveComponents", "find_components", "curve_pieces"]
+__all__ = ["CurveComponents", "find_components", "curve_pieces", "nearest_other_piece"]
 
 # the last tree's pieces (the tree, its link, the labels): an edit's updates share the evaluation's tree,
 # so a curve split by an edit and edited again searches the cloud once (2.4 CPU s at 200,000 points)
@@ -115,7 +115,7 @@ def _cloud_pieces(tree: cKDTree, params: Params) -> np.ndarray:
     return lab
 
 
-def _nearest_other(v: np.ndarray, piece: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+def nearest_other_piece(v: np.ndarray, piece: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Per piece (indexed by ``piece``'s values, -1 left out): its distance to the nearest vertex of
     another piece, and the two vertices (its own, the other's); inf where it is alone."""
     n_p = int(piece.max(initial=-1)) + 1
@@ -196,7 +196,7 @@ def find_components(curve: CurveSkeleton, branches: Branches, cloud_tree: cKDTre
             local = np.full(n_p, -1, np.int64)
             local[mine] = np.arange(len(mine))
             sub = np.where(sub >= 0, local[np.maximum(sub, 0)], -1)
-            g, own, oth = _nearest_other(v, sub)
+            g, own, oth = nearest_other_piece(v, sub)
             at = np.isin(extra, mine)
             lid = local[extra[at]]
             rad = 0.5 * (radius[own[lid]] + radius[oth[lid]])
