@@ -284,6 +284,12 @@ class RunBrowser(QtCore.QObject):
         window.add_action(ActionSpec("open_compare_run", "Open comparison run (skelcore compare folder)…",
                                      "file.compare", self.choose))
         window.add_drop_handler(self.accepts, self.dropped)  # on the 3-D view and anywhere on the window
+        window.closing.connect(self.close_dialog)  # the run's dialog closes with the main window
+
+    def close_dialog(self) -> None:
+        if self.dialog is not None:
+            self.dialog.close()
+            self.dialog = None
 
     @staticmethod
     def run_path(paths: list[str]) -> str | None:

@@ -217,8 +217,11 @@ def test_dropping_a_run_folder_or_its_index_opens_the_dialog(window, run_dir, qt
     window.compare_run.dialog.close()
     window.compare_run.dialog = None
     assert _drop(window, out / "index.json", qtbot)  # on the window itself
-    assert window.compare_run.dialog is not None and window.compare_run.dialog.isVisible()
+    dialog = window.compare_run.dialog
+    assert dialog is not None and dialog.isVisible()
     assert errors == [] and window.scene.cloud is None  # nothing was loaded as a cloud
+    window.closing.emit()  # the main window closing: the run's dialog goes with it
+    assert not dialog.isVisible() and window.compare_run.dialog is None
 
 
 def test_a_dropped_folder_that_is_not_a_run_is_refused_in_one_line_naming_it(window, tmp_path, qtbot, errors):
