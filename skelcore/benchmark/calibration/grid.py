@@ -16,7 +16,8 @@ TASK_VERSION = 5
 
 #: every warning code the evaluation emits, in the tables' order
 CODES = ("spurious_branches", "spurious_cycles", "missing_cycles", "outside", "incomplete", "disconnected",
-         "collapse", "frame", "outliers", "open_surface", "thin_parts", "sparse_boundedness", "trivial_smoothness", "no_correspondence")
+         "collapse", "frame", "outliers", "open_surface", "thin_parts", "sparse_boundedness", "trivial_smoothness",
+         "no_correspondence")
 
 #: the scan conditions: the benchmark's effect and level (docs/benchmark.md), clean first
 CONDITIONS: dict[str, tuple[str, Any]] = {

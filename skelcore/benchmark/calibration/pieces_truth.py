@@ -3,9 +3,10 @@
 warning").
 
 ``disconnected`` is true on a broken curve when its pieces exceed the reference's, false on every
-other kind with as many pieces as the reference, and left out on a cloud whose reference is in more pieces than the cloud shows: two of its
-pieces in one part of the surface, or a piece whose part the cloud holds no point of. A warning is a
-hit only when it flags a piece the cut made (``pieces_located``), not a piece of the reference.
+other kind with as many pieces as the reference, and left out on a cloud whose reference is in more
+pieces than the cloud shows: two of its pieces in one part of the surface, or a piece whose part the
+cloud holds no point of. A warning is a hit only when it flags a piece the cut made
+(``pieces_located``), not a piece of the reference.
 """
 
 from __future__ import annotations

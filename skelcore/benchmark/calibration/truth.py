@@ -242,7 +242,8 @@ def row_truth(made: Made, w: World, condition: str, fired: set[str], arrays: dic
     if k == "spurs" and "spurious_branches" in fired:
         located = _spurs_located(made, orig, None if vflags is None else (vflags & DEFECT_BITS["spurious_branches"]) > 0)
     out = {f"truth_{c}": v for c, v in t.items()}
-    out.update(disconnected_truth(made, w, orig, fired, None if vflags is None else (vflags & DEFECT_BITS["disconnected"]) > 0))
+    pieces_flag = None if vflags is None else (vflags & DEFECT_BITS["disconnected"]) > 0
+    out.update(disconnected_truth(made, w, orig, fired, pieces_flag))
     out.update(outside_depth=depth, outside_seen=seen, uncovered_radii=missing, uncovered_area=area, thin_share=thin,
                spurs_located=located, sparse_drop=float("nan") if drop is None or not first else drop, **twigs)
     return out
