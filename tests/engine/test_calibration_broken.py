@@ -54,12 +54,13 @@ def test_disconnected_truth_counts_the_intact_curve_and_leaves_out_a_reference_s
     flag[5:] = True  # a piece the cut made
     t = disconnected_truth(broken, w, origin(broken, v), {"disconnected"}, flag)
     assert (t["truth_disconnected"], t["pieces_located"]) == (1, True)
-    # a shortcut-like kind joining nothing, one piece fewer than the reference: left out
     v2, e2 = _path(5, 20.0)
     two_v, two_e = np.vstack([v, v2]), np.vstack([e, e2 + len(v)])
     assert reference_split(_world(two_v, two_e))  # a generated shape's reference in two pieces: left out
     # a neuron's reference in two pieces, each in its own part of the mesh the cloud shows: counted
-    parts = lambda p: (np.asarray(p)[:, 0] > 15).astype(int)  # noqa: E731
+    def parts(p):  # the path's part of the surface, and the fragment's
+        return (np.asarray(p)[:, 0] > 15).astype(int)
+
     wn = _world(two_v, two_e, parts)
     assert not reference_split(wn)
     intact2 = Made("intact", two_v, two_e)
