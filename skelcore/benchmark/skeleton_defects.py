@@ -25,7 +25,7 @@ from scipy.spatial import cKDTree
 
 __all__ = ["Defect", "DEFECTS", "apply_defect", "inner_vertices", "tangent", "perpendicular", "polyline",
            "add_spurs", "add_chord", "join", "out_branch", "collapse_points", "drop_vertices", "truncate",
-           "drop_branches", "add_shortcuts", "break_cycle", "skeleton_noise", "offset", "oversmooth"]
+           "drop_branches", "add_shortcuts", "break_cycle", "cut_edges", "skeleton_noise", "offset", "oversmooth"]
 
 Graph = tuple[np.ndarray, np.ndarray]
 Inside = Callable[[np.ndarray], np.ndarray]  # points -> signed distance to the shape's surface (< 0 inside)
@@ -265,6 +265,28 @@ def break_cycle(v: np.ndarray, e: np.ndarray, r: np.ndarray, gap: float, rng: np
         v2, e2 = _drop_isolated(v, e[~drop_e])
         return v2, e2
     return None
+
+
+def _pieces(n: int, e: np.ndarray) -> int:
+    """Connected components with at least one edge (an isolated vertex is no piece)."""
+    if not len(e):
+        return 0
+    _, lab = connected_components(coo_matrix((np.ones(len(e)), (e[:, 0], e[:, 1])), shape=(n, n)), directed=False)
+    return len(np.unique(lab[e.ravel()]))
+
+
+def cut_edges(v: np.ndarray, e: np.ndarray, count: int, rng: np.random.Generator) -> Graph | None:
+    """``count`` random edges deleted whose ends both have degree >= 2 (a cut inside the curve, not a
+    tip dropped; isolated vertices go): the broken curve of docs/diagnostics.md "Disconnected". None
+    when there are fewer such edges or the curve did not split (two cuts on one ring)."""
+    deg = _degrees(len(v), e)
+    inner = np.flatnonzero((deg[e[:, 0]] >= 2) & (deg[e[:, 1]] >= 2))
+    if len(inner) < count:
+        return None
+    rest = np.delete(e, rng.choice(inner, size=count, replace=False), axis=0)
+    if _pieces(len(v), rest) <= _pieces(len(v), e):
+        return None
+    return _drop_isolated(v, rest)
 
 
 def skeleton_noise(v: np.ndarray, e: np.ndarray, r: np.ndarray, sigma: float, rng: np.random.Generator) -> Graph:

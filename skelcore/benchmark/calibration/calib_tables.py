@@ -32,6 +32,7 @@ REAL_TUNING = "real, tuning neurons"
 TUNED_ON = {c: "synthetic" for c in CODES}
 TUNED_ON.update({c: "synthetic + tuning neurons" for c in
                  ("spurious_branches", "missing_cycles", "outside", "outliers", "open_surface")})
+TUNED_ON["disconnected"] = "tuning neurons (components_link)"
 TUNED_ON.update(trivial_smoothness="none (a fact of the curve)", no_correspondence="none (a fact of the inputs)")
 
 
@@ -45,13 +46,16 @@ def group_of(row: dict[str, Any]) -> str:
 
 def outcome(row: dict[str, Any], code: str) -> str | None:
     """"tp", "fn", "fp", "tn" or None (truth left out); a spur warning counts as a hit only when
-    every injected spur is among the flagged branches."""
+    every injected spur is among the flagged branches, a disconnected one only when it flags a piece
+    the cut made."""
     truth = row.get(f"truth_{code}")
     if truth is None:
         return None
     fired = bool(row.get(f"fired_{code}"))
     if truth:
         if fired and code == "spurious_branches" and row.get("spurs_located") is False:
+            return "fn"
+        if fired and code == "disconnected" and row.get("pieces_located") is False:
             return "fn"
         return "tp" if fired else "fn"
     return "fp" if fired else "tn"

@@ -12,22 +12,23 @@ from typing import Any, Callable
 
 import numpy as np
 
-from ..skeleton_defects import add_chord, add_shortcuts, add_spurs, break_cycle, collapse_points, drop_branches, \
-    truncate
+from ..skeleton_defects import add_chord, add_shortcuts, add_spurs, break_cycle, collapse_points, cut_edges, \
+    drop_branches, truncate
 from .uncovered import visible_removal
 
 __all__ = ["World", "Made", "world", "make_kind", "nodes_only", "LEVELS"]
 
 #: the one level of each injected defect (docs/validity.md's middle level; collapse its strongest)
 LEVELS: dict[str, Any] = {"spurs": (3, 2.0), "shortcut": 1, "chord_cycle": 2.0, "broken_cycle": 2.0,
-                          "missing_branch": 1, "truncation": 0.3, "collapse": 0.9, "frame": 100.0}
+                          "missing_branch": 1, "truncation": 0.3, "collapse": 0.9, "frame": 100.0, "broken": 2}
 
 
 @dataclass
 class World:
     """The cloud and what the suite knows: the reference (vertices, edges, radius), each cloud point's
     local radius (NaN for a stray point), ``depth(points)`` = how far out of the shape (units, < 0
-    inside), the surface's closedness, and for a neuron its per-node facts."""
+    inside), the surface's closedness, and for a neuron its per-node facts and ``surface_part(points)``
+    (the connected part of its mesh nearest each point: the cloud's true pieces)."""
 
     cloud: np.ndarray
     local_radius: np.ndarray
@@ -35,6 +36,7 @@ class World:
     depth: Callable[[np.ndarray], np.ndarray]
     closed: bool
     facts: Any = None
+    surface_part: Callable[[np.ndarray], np.ndarray] | None = None
 
 
 @dataclass
@@ -76,6 +78,20 @@ def _mesh_depth(mesh) -> Callable[[np.ndarray], np.ndarray]:
     return depth
 
 
+def _mesh_parts(mesh) -> Callable[[np.ndarray], np.ndarray]:
+    """Each point -> the connected part (shared edges) of ``mesh`` its nearest mesh vertex lies in."""
+    from scipy.sparse import coo_matrix
+    from scipy.sparse.csgraph import connected_components
+    from scipy.spatial import cKDTree
+
+    f = np.asarray(mesh.faces, np.int64)
+    n = len(mesh.vertices)
+    e = np.vstack([f[:, [0, 1]], f[:, [1, 2]], f[:, [2, 0]]])
+    _, part = connected_components(coo_matrix((np.ones(len(e)), (e[:, 0], e[:, 1])), shape=(n, n)), directed=False)
+    tree = cKDTree(np.asarray(mesh.vertices, float))
+    return lambda points: part[tree.query(np.asarray(points, float).reshape(-1, 3))[1]]
+
+
 def world(suite: str, shape: str, size: int, condition: str, suite_seed: int) -> World:
     """The cloud of ``shape`` under ``condition`` as ``skelcore bench make`` draws it, and its facts."""
     from ..real_suite import RealCase
@@ -93,7 +109,7 @@ def world(suite: str, shape: str, size: int, condition: str, suite_seed: int) ->
         ref = (sk.vertices, sk.edges, np.asarray(sk.radius, float))
         closed = neuron.mesh.boundary_edges() == 0
         return World(got.cloud, got.local_radius, ref, _mesh_depth(neuron.mesh), closed and effect != "views",
-                     facts)
+                     facts, _mesh_parts(neuron.mesh))
     bench, sampler, ref = _shape(shape, suite_seed)
     case = _case(shape, effect, level, size)
     got = scan(sampler, case.effects, rng_for(case.seed(suite_seed)))
@@ -162,6 +178,8 @@ def make_kind(kind: str, w: World, key: str, suite_seed: int) -> Made | None:
         got = (collapse_points(v, float(level)), e)
     elif kind == "frame":
         got = (v * float(level) + 10.0 * float(level) * np.ptp(v, axis=0), e)
+    elif kind == "broken":
+        got = cut_edges(v, e, int(level), rng)
     elif kind == "nodes_only":
         got = nodes_only(v, e)
     elif kind == "no_correspondence":

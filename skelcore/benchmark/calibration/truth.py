@@ -23,6 +23,7 @@ from scipy.sparse.csgraph import connected_components
 from scipy.spatial import cKDTree
 
 from ...params import Params
+from .pieces_truth import cycles_cut, disconnected_truth
 from .skeletons import Made, World
 from .uncovered import MISS_AREA, _radius_at, _samples, uncovered_area, uncovered_radii
 
@@ -190,6 +191,8 @@ def row_truth(made: Made, w: World, condition: str, fired: set[str], arrays: dic
     t["spurious_branches"] = (1 if k == "spurs" else 0) if skeleton_ok else None
     t["spurious_cycles"] = None if not skeleton_ok or k == "shortcut" else int(k == "chord_cycle")
     t["missing_cycles"] = int(k == "broken_cycle") if skeleton_ok else None
+    if k == "broken":  # a cut through a ring opens it
+        t["missing_cycles"] = cycles_cut(made, w)
     depth = outside_depth(made, w, orig) if k not in ("frame", "no_correspondence") else float("nan")
     t["outside"] = None if not np.isfinite(depth) else (1 if depth >= OUT_YES else 0 if depth <= OUT_NO else None)
     missing = uncovered_radii(made, w) if k not in ("frame", "no_correspondence") else float("nan")
@@ -239,6 +242,8 @@ def row_truth(made: Made, w: World, condition: str, fired: set[str], arrays: dic
     if k == "spurs" and "spurious_branches" in fired:
         located = _spurs_located(made, orig, None if vflags is None else (vflags & DEFECT_BITS["spurious_branches"]) > 0)
     out = {f"truth_{c}": v for c, v in t.items()}
+    pieces_flag = None if vflags is None else (vflags & DEFECT_BITS["disconnected"]) > 0
+    out.update(disconnected_truth(made, w, orig, fired, pieces_flag))
     out.update(outside_depth=depth, outside_seen=seen, uncovered_radii=missing, uncovered_area=area, thin_share=thin,
                spurs_located=located, sparse_drop=float("nan") if drop is None or not first else drop, **twigs)
     return out
