@@ -214,7 +214,7 @@ def _defect_checks(ctx: EvalContext) -> list[str]:
     if "skeletal missing parts" in got or "curve missing parts" in got:
         out.append("incomplete")
     if "curve defects" in got:
-        out += ["spurious_branches", "spurious_cycles", "missing_cycles", "disconnected"]
+        out += ["spurious_branches", "spurious_cycles", "missing_cycles", "disconnected", "along_surface"]
     if "curve defects" in got or "skeletal outside" in got:
         out.append("outside")
     return out
