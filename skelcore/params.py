@@ -139,8 +139,11 @@ class Params:
     surface_junction_radii : samples within this many of a junction's local radii of it are not judged
         (the slab cuts the other branches there).
     surface_min_samples, surface_min_share, surface_min_radii : ``along_surface`` fires for a branch
-        with at least this many off-axis samples, this share of its samples with a value, and this
-        many local radii of their stretches.
+        with at least this many off-axis samples, this share of its samples judged, and this many
+        local radii of their stretches.
+    surface_slab_radii : branches are judged only when half the centeredness slab (slab_factor x the
+        diagonal) is at most this many median local radii (the synthetic suite: up to 2.8 with its
+        offset axes; the traced neurons at 30k: 12, where the slab cuts stretches of neurite).
     missing_depth : a region of unexplained cloud points (beyond every skeleton element's ball grown
         by coverage_slack and tau) counts as a missing part (warning ``incomplete``) when it reaches
         this many radii of its border beyond that border (the border: its points next to explained
@@ -343,11 +346,12 @@ class Params:
     outside_skeletal_share: float = 0.05
     outside_link: float = 3.0
     components_link: float = 8.0
-    surface_max_centeredness: float = 0.35
+    surface_max_centeredness: float = 0.45
     surface_junction_radii: float = 1.5
-    surface_min_samples: int = 3
+    surface_min_samples: int = 2
     surface_min_share: float = 0.5
     surface_min_radii: float = 2.0
+    surface_slab_radii: float = 4.0
 
     # diagnostics: missing parts (docs/diagnostics.md)
     missing_depth: float = 1.25
@@ -471,7 +475,7 @@ class Params:
         if self.k_center is not None and int(self.k_center) < 1:
             bad("k_center", "must be a positive integer or None")
         for name in ("diag_step", "spur_reach", "cycles_voxel_spacing", "cycles_resolved_voxels", "outside_min_radii", "outside_link",
-                     "components_link", "surface_min_radii",
+                     "components_link", "surface_min_radii", "surface_slab_radii",
                      "outside_reach", "outside_voxel_radii"):
             if not float(getattr(self, name)) > 0:
                 bad(name, "must be > 0")

@@ -6,14 +6,19 @@ cloud (no ``incomplete``) and is a real branch (no ``spurious_branches``); only 
 centeredness falls (Eq. 11, docs/metrics.md 3.2): c = 1 - |p - centre| / r of the sample's cross-section,
 so on a round section the sample lies c x r from the wall. This module reads the values the evaluation
 computed (raw centeredness and boundedness per curve sample) and searches the cloud only for the
-junctions' local radii: a sample is **off axis** when it is bounded (beta > beta*: leaving the shape is
-``outside``'s), its centeredness is finite and below ``surface_max_centeredness``, and it lies beyond
-``surface_junction_radii`` local radii of its branch's junctions (there the slab cuts the other
-branches too and c means nothing). A branch is flagged when at least ``surface_min_samples`` of its
+junctions' local radii: a sample is **judged** when it is bounded (beta > beta*: leaving the shape is
+``outside``'s), its centeredness is finite and above 0, and it lies beyond ``surface_junction_radii``
+local radii of its branch's junctions (there the slab cuts the other branches too); it is **off
+axis** when its centeredness is below ``surface_max_centeredness``. A value of exactly 0 is Eq. 11's
+clip: the fitted section does not enclose the sample (a flat plate's section, stray points in the
+ring), no measure of where it lies. A branch is flagged when at least ``surface_min_samples`` of its
 samples are off axis, they are at least ``surface_min_share`` of its samples with a value, and their
 stretches (each sample stands for its stretch of its edge, docs/metrics.md 3.2) sum to at least
 ``surface_min_radii`` local radii (the unit of ``outside``: the median of the branches' median local
-radius).
+radius). Eq. 11's slab is ``slab_factor`` x the cloud's diagonal thick whatever the part: where its half
+is more than ``surface_slab_radii`` of those radii (a traced neuron: 12) the "section" is a stretch of
+neurite, not a cross-section, and its centre says nothing of the axis; then no branch is judged
+(``unchecked``).
 """
 
 from __future__ import annotations
@@ -36,9 +41,9 @@ __all__ = ["SurfaceRuns", "find_along_surface"]
 class SurfaceRuns:
     """Where the curve runs along the surface.
 
-    sample_off : (S,) bool per curve sample: off axis (bounded, centeredness below the threshold,
-    beyond its junctions' balls). branch_samples, branch_off : (B,) per branch its samples with a
-    value and those off axis; branch_length : (B,) the off-axis samples' stretches (normalized
+    sample_off : (S,) bool per curve sample: off axis (bounded, centeredness above 0 and below the
+    threshold, beyond its junctions' balls). branch_samples, branch_off : (B,) per branch its samples
+    judged and those off axis; branch_length : (B,) the off-axis samples' stretches (normalized
     units); branch_centeredness : (B,) the median centeredness of its off-axis samples (NaN where
     none). radius : the local radius the lengths are measured in. flagged : the branches flagged.
     vertex_flag : (V,) bool, the flagged branches' vertices.
@@ -52,6 +57,16 @@ class SurfaceRuns:
     radius: float = 0.0
     flagged: np.ndarray = field(default_factory=lambda: np.zeros(0, np.int64))
     vertex_flag: np.ndarray = field(default_factory=lambda: np.zeros(0, bool))
+    slab_radii: float = 0.0
+    params: Params = field(default_factory=Params)
+
+    @property
+    def unchecked(self) -> str | None:
+        """Why no branch was judged (the slab thicker than the parts), or None."""
+        if not self.slab_radii > self.params.surface_slab_radii:
+            return None
+        return (f"the centeredness slab's half ({self.slab_radii:.2g} local radii) is thicker than surface_slab_radii = "
+                f"{self.params.surface_slab_radii:g}: its sections are stretches of the parts, not cross-sections")
 
     @property
     def branch_radii(self) -> np.ndarray:
@@ -84,7 +99,7 @@ class SurfaceRuns:
                               "centeredness": float(self.branch_centeredness[b]),
                               "samples_off": int(self.branch_off[b]), "samples": int(self.branch_samples[b])}
                              for b in self.flagged],
-                "radius": float(self.radius)}
+                "radius": float(self.radius), "slab_radii": float(self.slab_radii) if np.isfinite(self.slab_radii) else None}
 
 
 def _stretches(curve: CurveSkeleton, samples: CurveSamples) -> np.ndarray:
@@ -125,15 +140,18 @@ def find_along_surface(curve: CurveSkeleton, branches: Branches, samples: CurveS
     ``sample_boundedness``: per sample; ``radius``: the local radius the lengths are given in."""
     nb, nv = len(branches), curve.n_vertices
     sb = branches.sample_branch
+    half = 0.5 * params.slab_factor * float(np.linalg.norm(cloud_tree.maxes - cloud_tree.mins)) if cloud_tree.n else 0.0
+    slab_radii = half / radius if radius > 0 else np.inf
     if (samples is None or sample_centeredness is None or sample_boundedness is None or sb is None
-            or len(sb) != len(sample_centeredness) or not len(sb)):
+            or len(sb) != len(sample_centeredness) or not len(sb) or slab_radii > params.surface_slab_radii):
         return SurfaceRuns(branch_samples=np.zeros(nb, np.int64), branch_off=np.zeros(nb, np.int64),
                            branch_length=np.zeros(nb), branch_centeredness=np.full(nb, np.nan),
-                           radius=float(radius), vertex_flag=np.zeros(nv, bool))
+                           radius=float(radius), vertex_flag=np.zeros(nv, bool), slab_radii=float(slab_radii),
+                           params=params)
     c = np.asarray(sample_centeredness, float)
     beta = np.asarray(sample_boundedness, float)
     sb = np.asarray(sb, np.int64)
-    valid = (sb >= 0) & np.isfinite(c) & (beta > params.beta_star)
+    valid = (sb >= 0) & np.isfinite(c) & (c > 0) & (beta > params.beta_star)
     valid &= ~_near_junction(curve, branches, samples, sb, cloud_tree, params.surface_junction_radii)
     off = valid & (c < params.surface_max_centeredness)
     n_valid = np.bincount(sb[valid], minlength=nb)
@@ -157,4 +175,5 @@ def find_along_surface(curve: CurveSkeleton, branches: Branches, samples: CurveS
         vflag[e.ravel()] = True
     return SurfaceRuns(sample_off=off, branch_samples=n_valid.astype(np.int64), branch_off=n_off.astype(np.int64),
                        branch_length=length, branch_centeredness=med, radius=float(radius),
-                       flagged=flagged.astype(np.int64), vertex_flag=vflag)
+                       flagged=flagged.astype(np.int64), vertex_flag=vflag, slab_radii=float(slab_radii),
+                       params=params)

@@ -172,6 +172,8 @@ def finish(ctx: EvalContext, inputs: dict | None, checkpoint: Callable[[float], 
             ev.not_computed["outside"] = defects.outside.unchecked
         if defects is not None and defects.spurs.unchecked:  # twigs the cloud cannot show: not judged
             ev.not_computed["spurious_branches"] = defects.spurs.unchecked
+        if defects is not None and defects.surface.unchecked:  # a slab thicker than the parts: not judged
+            ev.not_computed["along_surface"] = defects.surface.unchecked
     return ev
 
 
