@@ -116,3 +116,21 @@ def test_the_message_names_the_longest_branch_and_never_nan():
     assert runs.warnings()[0].message == ("2 branches run along the surface, the longest branch 2 "
                                           "(0.25 cross-section radii from the wall, median)")
     assert "nan" not in str(runs.to_dict()).lower()
+
+
+def test_the_calibrations_truth_reads_the_move_across_the_axis():
+    """``offset`` moves every vertex 0.8 radii one way: true when most of it is across the tube's axis;
+    the intact skeleton and one moved 0.2 radii are false."""
+    from dataclasses import replace
+
+    from skelcore.benchmark.calibration.skeletons import make_kind, world
+    from skelcore.benchmark.calibration.truth import along_surface_truth
+    from skelcore.benchmark.skeleton_defects import offset
+
+    w = world("synthetic", "tube_a", 1200, "clean", 0)
+    moved = make_kind("offset", w, "tube_a", 0)
+    intact = make_kind("intact", w, "tube_a", 0)
+    assert along_surface_truth(moved, w) == 1 and along_surface_truth(intact, w) == 0
+    v, e, r = (np.asarray(x) for x in w.ref)
+    little = offset(v.astype(float), e, r.astype(float), 0.2, np.random.default_rng(0))[0]
+    assert along_surface_truth(replace(moved, vertices=little), w) == 0
