@@ -16,6 +16,7 @@ import os
 import numpy as np
 
 from skelcore import evaluate
+from skelcore.benchmark.skeleton_defects import vertex_tangents
 from skelcore.curve import CurveSkeleton
 from skelcore.io.loaders import load_cloud, load_curve
 
@@ -27,12 +28,7 @@ def moved(curve: CurveSkeleton, share: float) -> CurveSkeleton:
     if share == 0:
         return curve
     v, e, r = np.asarray(curve.vertices, float), np.asarray(curve.edges), np.asarray(curve.radius, float)
-    d = v[e[:, 1]] - v[e[:, 0]]
-    d /= np.maximum(np.linalg.norm(d, axis=1, keepdims=True), 1e-12)
-    t = np.zeros_like(v)
-    np.add.at(t, e[:, 0], d)
-    np.add.at(t, e[:, 1], d)
-    t /= np.maximum(np.linalg.norm(t, axis=1, keepdims=True), 1e-12)
+    t = vertex_tangents(v, e)
     p = _TOWARDS - (t @ _TOWARDS)[:, None] * t
     p /= np.maximum(np.linalg.norm(p, axis=1, keepdims=True), 1e-12)
     return CurveSkeleton.from_raw(v + share * r[:, None] * p, e, radius=r)

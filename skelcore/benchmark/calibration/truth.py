@@ -23,6 +23,7 @@ from scipy.sparse.csgraph import connected_components
 from scipy.spatial import cKDTree
 
 from ...params import Params
+from ..skeleton_defects import vertex_tangents
 from .skeletons import Made, World
 from .uncovered import MISS_AREA, _radius_at, _samples, uncovered_area, uncovered_radii
 
@@ -184,13 +185,7 @@ def along_surface_truth(made: Made, w: World) -> int | None:
     if made.kind == "intact":
         return 0
     v, e, r = (np.asarray(x, float) for x in w.ref)
-    e = e.astype(np.int64)
-    d = v[e[:, 1]] - v[e[:, 0]]
-    d /= np.maximum(np.linalg.norm(d, axis=1, keepdims=True), 1e-300)
-    t = np.zeros_like(v)
-    np.add.at(t, e[:, 0], d)
-    np.add.at(t, e[:, 1], d)
-    t /= np.maximum(np.linalg.norm(t, axis=1, keepdims=True), 1e-300)
+    t = vertex_tangents(v, e.astype(np.int64))
     move = np.asarray(made.vertices, float) - v
     across = float(np.median(np.linalg.norm(move - np.sum(move * t, axis=1)[:, None] * t, axis=1) / r))
     return 1 if across >= SURF_YES else 0 if across <= SURF_NO else None
