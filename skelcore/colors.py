@@ -76,6 +76,7 @@ DEFECT_COLORS: dict[str, tuple[int, int, int]] = {
     "spurious_cycles": (0, 100, 0),  # halo around a spurious cycle's branches (dark green)
     "outside": (120, 0, 200),  # dashes over the curve's edges outside the shape (violet)
     "disconnected": (120, 135, 255),  # the curve's pieces beyond one per piece of the cloud (periwinkle)
+    "along_surface": (0, 240, 255),  # halo around a branch running along the surface (cyan)
     "open_surface": (0, 0, 140),  # an opening's boundary loop (navy)
     "outliers": (128, 0, 0),  # stray points (dark red, large)
 }

@@ -133,6 +133,17 @@ class Params:
         its nearest few): ``disconnected`` fires when a piece of the cloud holds more than one piece of
         the curve (at 2 spacings a random surface sample falls into hundreds of bits, at 4 it is one;
         8 from the tuning neurons, whose one-sided and unevenly sampled clouds fall apart at 4).
+    surface_max_centeredness : a bounded curve sample whose raw centeredness (Eq. 11) is below this is
+        off axis: on a round cross-section it lies less than this share of the radius from the wall
+        (docs/diagnostics.md "Along the surface"; traced neurons' nodes lie 0.3-0.5 radii off centre).
+    surface_junction_radii : samples within this many of a junction's local radii of it are not judged
+        (the slab cuts the other branches there).
+    surface_min_samples, surface_min_share, surface_min_radii : ``along_surface`` fires for a branch
+        with at least this many off-axis samples, this share of its samples judged, and this many
+        local radii of their stretches.
+    surface_slab_radii : branches are judged only when half the centeredness slab (slab_factor x the
+        diagonal) is at most this many median local radii (the synthetic suite: up to 2.8 with its
+        offset axes; the traced neurons at 30k: 12, where the slab cuts stretches of neurite).
     missing_depth : a region of unexplained cloud points (beyond every skeleton element's ball grown
         by coverage_slack and tau) counts as a missing part (warning ``incomplete``) when it reaches
         this many radii of its border beyond that border (the border: its points next to explained
@@ -335,6 +346,12 @@ class Params:
     outside_skeletal_share: float = 0.05
     outside_link: float = 3.0
     components_link: float = 8.0
+    surface_max_centeredness: float = 0.45
+    surface_junction_radii: float = 1.5
+    surface_min_samples: int = 2
+    surface_min_share: float = 0.5
+    surface_min_radii: float = 2.0
+    surface_slab_radii: float = 4.0
 
     # diagnostics: missing parts (docs/diagnostics.md)
     missing_depth: float = 1.25
@@ -458,19 +475,19 @@ class Params:
         if self.k_center is not None and int(self.k_center) < 1:
             bad("k_center", "must be a positive integer or None")
         for name in ("diag_step", "spur_reach", "cycles_voxel_spacing", "cycles_resolved_voxels", "outside_min_radii", "outside_link",
-                     "components_link",
+                     "components_link", "surface_min_radii", "surface_slab_radii",
                      "outside_reach", "outside_voxel_radii"):
             if not float(getattr(self, name)) > 0:
                 bad(name, "must be > 0")
-        for name in ("spur_unique", "spur_one_sided", "outside_min_share", "outside_skeletal_share", "outside_one_sided",
+        for name in ("surface_max_centeredness", "surface_min_share", "spur_unique", "spur_one_sided", "outside_min_share", "outside_skeletal_share", "outside_one_sided",
                      "cycles_support_share", "cycles_strict_share"):
             if not 0.0 <= float(getattr(self, name)) <= 1.0:
                 bad(name, "must be in [0, 1]")
-        for name in ("diag_max_points", "cycles_voxels", "cycles_close_voxels", "spurs_warn_count", "cycles_warn_spurious",
+        for name in ("surface_min_samples", "diag_max_points", "cycles_voxels", "cycles_close_voxels", "spurs_warn_count", "cycles_warn_spurious",
                      "cycles_warn_missing", "cycles_support_voxels", "cycles_support_points"):
             if int(getattr(self, name)) < 1:
                 bad(name, "must be a positive integer")
-        for name in ("spur_slack", "spur_resolved_spacings", "spur_twig_spacings", "spur_twig_tip_spacings",
+        for name in ("surface_junction_radii", "spur_slack", "spur_resolved_spacings", "spur_twig_spacings", "spur_twig_tip_spacings",
                      "spur_stub_share"):
             if not float(getattr(self, name)) >= 0:
                 bad(name, "must be >= 0")

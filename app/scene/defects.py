@@ -29,6 +29,7 @@ DEFECT_TITLES = {
     "missing_cycles": "missing cycle",
     "outside": "outside the shape",
     "disconnected": "broken curve",
+    "along_surface": "along the surface",
     "collapse": "collapse",
     "frame": "frame",
     "open_surface": "opening",
@@ -291,6 +292,21 @@ def _piece_rows(ev: Any) -> list[DefectRow]:
     return rows
 
 
+def _surface_rows(ev: Any) -> list[DefectRow]:
+    """One row per branch running along the surface (``along_surface``, docs/diagnostics.md "Along the surface")."""
+    if "along_surface" not in _codes(ev):
+        return []
+    rows = []
+    for b in (_summary(ev).get("along_surface") or {}).get("branches") or []:
+        radii = "" if b.get("radii") is None else f"{b['radii']:.2g} local radii, "
+        rows.append(DefectRow("along_surface", f"branch #{b['id']} along the surface",
+                              f"{radii}{b['centeredness']:.2g} cross-section radii from the wall (median), "
+                              f"{b['samples_off']} of its {b['samples']} samples off axis", "curve",
+                              branches=(b["id"],), edges=branch_edges(ev, (b["id"],)),
+                              points=branch_points(ev, (b["id"],))))
+    return rows
+
+
 def _outside_edges(ev: Any, arrays: dict[str, np.ndarray]) -> np.ndarray:
     """Curve edges holding a sample flagged ``outside``."""
     from skelcore.diagnostics.record import DEFECT_BITS
@@ -488,7 +504,7 @@ def defect_rows(ev: Any) -> list[DefectRow]:
     if ev is None:
         return []
     return (_missing_rows(ev) + _spur_rows(ev) + _cycle_rows(ev) + _outside_rows(ev) + _piece_rows(ev)
-            + _trust_rows(ev) + _scan_rows(ev))
+            + _surface_rows(ev) + _trust_rows(ev) + _scan_rows(ev))
 
 
 def defect_counts(ev: Any) -> dict[str, int]:

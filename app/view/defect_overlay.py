@@ -34,6 +34,7 @@ STYLES: dict[str, tuple[str, str]] = {
     "spurious_cycles": ("halo", "spurious cycle"),
     "outside": ("dashes", "edge outside the shape"),
     "disconnected": ("halo", "broken curve (extra piece)"),
+    "along_surface": ("halo", "branch along the surface"),
     "open_surface": ("loop", "opening (boundary loop)"),
     "outliers": ("large points", "stray point (outlier)"),
     "selected": ("halo", "selected (defect or branch)"),
@@ -217,7 +218,7 @@ class DefectOverlay:
         if curve is not None:
             verts = np.asarray(curve.vertices, dtype=float)
             edges = np.asarray(curve.edges, dtype=np.int64).reshape(-1, 2)
-            for code in ("spurious_branches", "spurious_cycles", "disconnected"):
+            for code in ("spurious_branches", "spurious_cycles", "disconnected", "along_surface"):
                 ids = [r.edges for r in by_code.get(code, []) if len(r.edges)]
                 if ids:
                     self._lines(code, _segments(verts, edges[np.unique(np.concatenate(ids))]), colours[code],

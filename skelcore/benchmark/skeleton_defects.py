@@ -23,7 +23,7 @@ from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import connected_components, dijkstra
 from scipy.spatial import cKDTree
 
-__all__ = ["Defect", "DEFECTS", "apply_defect", "inner_vertices", "tangent", "perpendicular", "polyline",
+__all__ = ["Defect", "DEFECTS", "apply_defect", "inner_vertices", "tangent", "vertex_tangents", "perpendicular", "polyline",
            "add_spurs", "add_chord", "join", "out_branch", "collapse_points", "drop_vertices", "truncate",
            "drop_branches", "add_shortcuts", "break_cycle", "cut_edges", "skeleton_noise", "offset", "oversmooth"]
 
@@ -42,6 +42,16 @@ def tangent(verts: np.ndarray, edges: np.ndarray, v: int) -> np.ndarray:
     nb = np.concatenate([edges[edges[:, 0] == v, 1], edges[edges[:, 1] == v, 0]])
     t = verts[nb[1]] - verts[nb[0]] if len(nb) >= 2 else verts[nb[0]] - verts[v]
     return t / np.linalg.norm(t)
+
+
+def vertex_tangents(verts: np.ndarray, edges: np.ndarray) -> np.ndarray:
+    """(V, 3) the unit tangent at every vertex: the sum of its edges' unit directions (0 where none)."""
+    d = verts[edges[:, 1]] - verts[edges[:, 0]]
+    d /= np.maximum(np.linalg.norm(d, axis=1, keepdims=True), 1e-300)
+    t = np.zeros_like(verts, dtype=float)
+    np.add.at(t, edges[:, 0], d)
+    np.add.at(t, edges[:, 1], d)
+    return t / np.maximum(np.linalg.norm(t, axis=1, keepdims=True), 1e-300)
 
 
 def perpendicular(t: np.ndarray, rng: np.random.Generator) -> np.ndarray:

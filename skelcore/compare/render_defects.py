@@ -1,8 +1,8 @@
 """report.html's defect picture of one job (docs/compare.md "Defects decide"): the cloud in
 faint grey, the skeleton in a neutral grey, and on it only the defects the job was warned of, each in
 its colour of :data:`skelcore.colors.DEFECT_COLORS`: the missing parts' cloud points (``incomplete``),
-the curve's edges on spurious branches, on spurious cycles, outside the shape and on the pieces of a
-broken curve (``disconnected``). The per-element
+the curve's edges on spurious branches, on spurious cycles, outside the shape, on the pieces of a
+broken curve (``disconnected``) and on branches along the surface (``along_surface``). The per-element
 arrays are the Evaluation's diagnostics (``ev_diag_*`` in the job's npz; docs/diagnostics.md "In the
 evaluation"). pyvista is imported inside the renderer (skelcore never imports plotting at module level).
 """
@@ -25,15 +25,16 @@ __all__ = ["DEFECT_VIEW", "DRAWN", "DEFECT_LABELS", "DefectLayers", "defect_laye
 DEFECT_VIEW = "defects"
 #: the codes drawn element by element, in drawing order (the widest line first, so that an edge with
 #: two defects shows both: a core on a halo)
-DRAWN = ("incomplete", "disconnected", "outside", "spurious_cycles", "spurious_branches")
+DRAWN = ("incomplete", "disconnected", "outside", "along_surface", "spurious_cycles", "spurious_branches")
 DEFECT_LABELS = {
     "incomplete": "missing parts",
     "disconnected": "pieces of the curve beyond one per piece of the cloud",
     "outside": "edges outside the shape",
+    "along_surface": "branches along the surface",
     "spurious_cycles": "spurious cycles",
     "spurious_branches": "spurious branches",
 }
-_LINE_WIDTH = {"disconnected": 12, "outside": 9, "spurious_cycles": 6, "spurious_branches": 4}
+_LINE_WIDTH = {"disconnected": 12, "outside": 9, "along_surface": 7, "spurious_cycles": 6, "spurious_branches": 4}
 _SIZE = (320, 320)
 
 

@@ -1,6 +1,6 @@
 """All of a curve skeleton's defects at once: one KD-tree of the cloud
-and one branch decomposition shared by the spurious-branch, cycle, outside and disconnected
-diagnostics, and the branches flagged with what each found (docs/diagnostics.md)."""
+and one branch decomposition shared by the spurious-branch, cycle, outside, disconnected and
+along-the-surface diagnostics, and the branches flagged with what each found (docs/diagnostics.md)."""
 
 from __future__ import annotations
 
@@ -22,6 +22,7 @@ from .interior import VoxelShape, cloud_subsample, voxelize_interior
 from .outside import OutsideDefects, find_outside
 from .spur_cache import SpurMemo
 from .spurs import SpurDefects, find_spurious_branches
+from .surface import SurfaceRuns, find_along_surface
 
 __all__ = ["CurveDefects", "find_curve_defects"]
 
@@ -29,7 +30,7 @@ __all__ = ["CurveDefects", "find_curve_defects"]
 @dataclass
 class CurveDefects:
     """The branches (flagged ``spurious_branches``, ``spurious_cycles``, ``outside``,
-    ``disconnected``) and each diagnostic's result; per-element defect flags by code."""
+    ``disconnected``, ``along_surface``) and each diagnostic's result; per-element defect flags by code."""
 
     branches: Branches
     spurs: SpurDefects
@@ -37,17 +38,21 @@ class CurveDefects:
     outside: OutsideDefects
     timings: dict
     components: CurveComponents = field(default_factory=CurveComponents)
+    surface: SurfaceRuns = field(default_factory=SurfaceRuns)
 
     def warnings(self) -> list[TrustWarning]:
-        return self.spurs.warnings() + self.cycles.warnings() + self.outside.warnings() + self.components.warnings()
+        return (self.spurs.warnings() + self.cycles.warnings() + self.outside.warnings() + self.components.warnings()
+                + self.surface.warnings())
 
     def vertex_flags(self) -> dict[str, np.ndarray]:
         return {"spurious_branches": self.spurs.vertex_flag, "spurious_cycles": self.cycles.vertex_flag,
-                "outside": self.outside.vertex_flag, "disconnected": self.components.vertex_flag}
+                "outside": self.outside.vertex_flag, "disconnected": self.components.vertex_flag,
+                "along_surface": self.surface.vertex_flag}
 
     def sample_flags(self) -> dict[str, np.ndarray | None]:
         return {"spurious_branches": self.spurs.sample_flag, "spurious_cycles": self.cycles.sample_flag,
-                "outside": self.outside.sample_outside, "disconnected": self._sample_disconnected()}
+                "outside": self.outside.sample_outside, "disconnected": self._sample_disconnected(),
+                "along_surface": self.surface.sample_flag(self.branches.sample_branch)}
 
     def _sample_disconnected(self) -> np.ndarray | None:
         sb = self.branches.sample_branch
@@ -61,7 +66,8 @@ class CurveDefects:
                 "spurious_cycles": np.asarray(self.cycles.branch_spurious, bool)[eb] if len(eb) else np.zeros(0, bool),
                 "outside": (np.asarray(self.outside.edge_outside_length) > 0)
                 | np.isin(eb, self.outside.far_branches()),
-                "disconnected": np.isin(eb, self.components.extra_branches)}
+                "disconnected": np.isin(eb, self.components.extra_branches),
+                "along_surface": np.isin(eb, self.surface.flagged)}
 
     def to_dict(self) -> dict:
         return {
@@ -70,6 +76,7 @@ class CurveDefects:
             "cycles": self.cycles.to_dict(),
             "outside": self.outside.to_dict(),
             "components": self.components.to_dict(),
+            "along_surface": self.surface.to_dict(),
             "warnings": [w.to_dict() for w in self.warnings()],
         }
 
@@ -80,6 +87,7 @@ def find_curve_defects(
     *,
     samples: CurveSamples | None = None,
     sample_boundedness: np.ndarray | None = None,
+    sample_centeredness: np.ndarray | None = None,
     skeletal: np.ndarray | None = None,
     skeletal_boundedness: np.ndarray | None = None,
     params: Params = Params(),
@@ -89,8 +97,9 @@ def find_curve_defects(
     spur_memo: SpurMemo | None = None,
 ) -> CurveDefects:
     """Branches, spurious branches, cycles, the parts outside of ``curve`` (and of ``skeletal``) and
-    its pieces beyond one per piece of the cloud (:mod:`.components`),
-    all normalized (docs/metrics.md 0); ``sample_boundedness`` are the boundedness values of ``samples``. The
+    its pieces beyond one per piece of the cloud (:mod:`.pieces`) and its branches along the surface
+    (:mod:`.surface`), all normalized (docs/metrics.md 0); ``sample_boundedness`` and
+    ``sample_centeredness`` (raw, Eq. 11) are the values of ``samples`` the evaluation computed. The
     local radii come from at most ``diag_max_points`` of the cloud (``spurs.subsampled`` says when).
     ``interior(checkpoint)`` gives the cloud's voxelized interior when it is shared (the evaluation's
     stages make it once); default :func:`.interior.voxelize_interior` with ``params``. ``cloud_tree``: the
@@ -132,9 +141,14 @@ def find_curve_defects(
     t0 = time.perf_counter()
     components = find_components(curve, branches, tree, params)
     t["components"] = time.perf_counter() - t0
+    t0 = time.perf_counter()
+    surface = find_along_surface(curve, branches, samples, sample_centeredness, sample_boundedness, tree,
+                                 outside.radius, params)
+    t["along_surface"] = time.perf_counter() - t0
     flagged = branches.flagged("spurious_branches", spurs.spurious)
     flagged = flagged.flagged("spurious_cycles", np.flatnonzero(cycles.branch_spurious))
     flagged = flagged.flagged("outside", outside.defective_branches())
     flagged = flagged.flagged("disconnected", components.extra_branches)
+    flagged = flagged.flagged("along_surface", surface.flagged)
     return CurveDefects(branches=flagged, spurs=spurs, cycles=cycles, outside=outside, timings=t,
-                        components=components)
+                        components=components, surface=surface)

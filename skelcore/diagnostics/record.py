@@ -17,7 +17,8 @@ from .outside import OutsideDefects
 __all__ = ["Diagnostics", "DEFECT_BITS", "diagnostics_record", "defect_names"]
 
 #: one bit per element-level defect code, in the per-element ``*_defects`` arrays
-DEFECT_BITS = {"spurious_branches": 1, "spurious_cycles": 2, "outside": 4, "incomplete": 8, "disconnected": 16}
+DEFECT_BITS = {"spurious_branches": 1, "spurious_cycles": 2, "outside": 4, "incomplete": 8, "disconnected": 16,
+               "along_surface": 32}
 
 
 class Diagnostics:
@@ -114,14 +115,14 @@ def diagnostics_record(curve: CurveDefects | None, missing_skeletal: MissingPart
         "missing_parts": lambda: {"skeletal": None if missing_skeletal is None else missing_skeletal.to_dict(),
                                   "curve": None if missing_curve is None else missing_curve.to_dict()},
         "branches": nothing, "spurious_branches": nothing, "cycles": nothing, "outside": nothing,
-        "components": nothing,
+        "components": nothing, "along_surface": nothing,
         "skeletal_outside": nothing,
     }
     arrays: dict[str, np.ndarray] = {}
     if curve is not None:
         parts.update(branches=curve.branches.to_dict, spurious_branches=curve.spurs.to_dict,
                      cycles=curve.cycles.to_dict, outside=curve.outside.to_dict,
-                     components=curve.components.to_dict)
+                     components=curve.components.to_dict, along_surface=curve.surface.to_dict)
         b = curve.branches
         arrays["curve_vertex_branch"] = np.asarray(b.vertex_branch, np.int64)
         arrays["curve_vertex_defects"] = _flags(curve.vertex_flags(), len(b.vertex_branch))

@@ -222,7 +222,7 @@ def frame_fit_warning(
 #: to resolve) and ``sparse_boundedness`` (boundedness falls where the cloud is sparse) are facts about
 #: the cloud, true of every skeleton evaluated on it, not faults of the skeleton.
 DEFECT_CODES = frozenset({"frame", "collapse", "incomplete", "spurious_branches", "spurious_cycles",
-                          "missing_cycles", "outside", "disconnected"})
+                          "missing_cycles", "outside", "disconnected", "along_surface"})
 
 
 def defect_codes(warnings: list[dict[str, str]] | list[TrustWarning]) -> list[str]:

@@ -137,9 +137,10 @@ def _ground_truth(ctx: EvalContext, checkpoint: Checkpoint):
 
 
 def _curve_defects(ctx: EvalContext, checkpoint: Checkpoint):
-    """Branches, spurious branches, cycles, the parts outside (docs/diagnostics.md)."""
+    """Branches, spurious branches, cycles, the parts outside, the branches along the surface (docs/diagnostics.md)."""
     return find_curve_defects(ctx.cloud_n, ctx.curve_n, samples=ctx.samples,
-                              sample_boundedness=ctx.results["curve boundedness"], params=ctx.params,
+                              sample_boundedness=ctx.results["curve boundedness"],
+                              sample_centeredness=ctx.results.get("curve centeredness"), params=ctx.params,
                               checkpoint=checkpoint, interior=ctx.interior,
                               cloud_tree=ctx.diag_tree(lambda f: checkpoint(0.05 * f)), spur_memo=ctx.spur_memo)
 
@@ -261,7 +262,8 @@ CATALOGUE: tuple[Stage, ...] = (
           fn=_ground_truth),
     Stage("stray points", weight=0.1, column="", inputs=("cloud", "skeletal set"), applies=_strays_not_yet_found,
           fn=_stray_points),
-    Stage("curve defects", weight=0.5, column="", inputs=("cloud", "curve", "samples", "curve boundedness"),
+    Stage("curve defects", weight=0.5, column="",
+          inputs=("cloud", "curve", "samples", "curve boundedness", "curve centeredness"),
           applies=_curve, fn=_curve_defects, start=LAST),
     Stage("skeletal outside", weight=0.1, column="", inputs=("cloud", "skeletal set", "skeletal boundedness"),
           applies=_skeletal_set, fn=_skeletal_outside, start=LAST),

@@ -39,10 +39,11 @@ CORRESPONDENCE_CHOICES = ("auto", "reverse")
 #: when no set is given), "rows" the reverse correspondence (made by that stage too), "unseen" what the
 #: skeletal boundedness stage found behind the skeletal points with viewpoints (docs/metrics.md 6.3).
 CONTEXT_ITEMS = ("cloud", "skeletal set", "skeletal points", "rows", "index", "curve", "samples", "reference", "tau",
-                 "unseen", "curve boundedness", "skeletal boundedness", "skeletal coverage", "curve coverage")
+                 "unseen", "curve boundedness", "curve centeredness", "skeletal boundedness", "skeletal coverage",
+                 "curve coverage")
 #: items that are other stages' results (the diagnostics read them), made by the stage of that name
 #: when it runs in this evaluation (the coverage stages only below coverage_max_points)
-STAGE_RESULTS = ("curve boundedness", "skeletal boundedness", "skeletal coverage", "curve coverage")
+STAGE_RESULTS = ("curve boundedness", "curve centeredness", "skeletal boundedness", "skeletal coverage", "curve coverage")
 
 
 @dataclass
@@ -123,7 +124,7 @@ class EvalContext:
             return "correspondence"
         if item == "rows" and self.skeletal_mode == "reverse":
             return "correspondence"
-        if item == "curve boundedness":
+        if item in ("curve boundedness", "curve centeredness"):
             return item if self.curve is not None else None
         if item == "skeletal boundedness":
             return item if self.has_skeletal_column else None

@@ -172,6 +172,8 @@ def finish(ctx: EvalContext, inputs: dict | None, checkpoint: Callable[[float], 
             ev.not_computed["outside"] = defects.outside.unchecked
         if defects is not None and defects.spurs.unchecked:  # twigs the cloud cannot show: not judged
             ev.not_computed["spurious_branches"] = defects.spurs.unchecked
+        if defects is not None and defects.surface.unchecked:  # a slab thicker than the parts: not judged
+            ev.not_computed["along_surface"] = defects.surface.unchecked
     return ev
 
 
@@ -214,7 +216,7 @@ def _defect_checks(ctx: EvalContext) -> list[str]:
     if "skeletal missing parts" in got or "curve missing parts" in got:
         out.append("incomplete")
     if "curve defects" in got:
-        out += ["spurious_branches", "spurious_cycles", "missing_cycles", "disconnected"]
+        out += ["spurious_branches", "spurious_cycles", "missing_cycles", "disconnected", "along_surface"]
     if "curve defects" in got or "skeletal outside" in got:
         out.append("outside")
     return out

@@ -127,7 +127,7 @@ def test_curve_defects_share_one_decomposition_and_flag_branches():
     assert d.vertex_flags()["spurious_branches"][ids].all()
     out = d.to_dict()
     assert out["spurious_branches"]["spurious"] == 1 and out["cycles"]["missing"] == 0
-    assert set(d.timings) == {"branches", "interior", "spurs", "cycles", "outside", "components"}
+    assert set(d.timings) == {"branches", "interior", "spurs", "cycles", "outside", "components", "along_surface"}
 
 
 def test_cancel_reaches_every_diagnostic():

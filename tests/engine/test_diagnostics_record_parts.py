@@ -22,7 +22,7 @@ def _eager(ctx) -> dict:
         "completeness": {"skeletal": None if ms is None else ms.completeness, "curve": None if mc is None else mc.completeness},
         "missing_parts": {"skeletal": None if ms is None else ms.to_dict(), "curve": None if mc is None else mc.to_dict()},
         "branches": d["branches"], "spurious_branches": d["spurious_branches"], "cycles": d["cycles"],
-        "outside": d["outside"], "components": d["components"],
+        "outside": d["outside"], "components": d["components"], "along_surface": d["along_surface"],
         "skeletal_outside": so.to_dict().get("skeletal") if so is not None and so.skeletal_outside is not None else None,
     })
 

@@ -29,7 +29,7 @@ def test_every_stage_is_declared_once_with_a_weight_and_known_inputs():
 
 #: the diagnostics start last and wait for the results they read
 DIAG = ["curve defects", "skeletal outside", "skeletal missing parts", "curve missing parts"]
-DIAG_WAITS = {"curve defects": ("curve boundedness",), "skeletal outside": ("skeletal boundedness",),
+DIAG_WAITS = {"curve defects": ("curve boundedness", "curve centeredness"), "skeletal outside": ("skeletal boundedness",),
               "skeletal missing parts": ("skeletal coverage",), "curve missing parts": ("curve coverage",)}
 
 
@@ -48,14 +48,14 @@ DIAG_WAITS = {"curve defects": ("curve boundedness",), "skeletal outside": ("ske
       "curve missing parts"],
      {**{s: ("correspondence",) for s in ("topology", "skeletal boundedness", "skeletal centeredness",
                                           "skeletal smoothness")},
-      "curve defects": ("curve boundedness",), "curve missing parts": ("curve coverage",)}),
+      "curve defects": ("curve boundedness", "curve centeredness"), "curve missing parts": ("curve coverage",)}),
     # without coverage the missing parts compute their own (on a subsample above missing_max_points)
     (dict(every=5, params=Params(coverage_max_points=100)),
      ["curve boundedness", "skeletal boundedness", "skeletal smoothness", "curve centeredness", "curve smoothness",
-      "stray points", *DIAG], {"curve defects": ("curve boundedness",), "skeletal outside": ("skeletal boundedness",)}),
+      "stray points", *DIAG], {"curve defects": ("curve boundedness", "curve centeredness"), "skeletal outside": ("skeletal boundedness",)}),
     (dict(skeletal=False), ["curve boundedness", "curve centeredness", "curve smoothness", "curve coverage",
                             "stray points", "curve defects", "curve missing parts"],
-     {"curve defects": ("curve boundedness",), "curve missing parts": ("curve coverage",)}),
+     {"curve defects": ("curve boundedness", "curve centeredness"), "curve missing parts": ("curve coverage",)}),
 ])
 def test_stages_are_selected_started_and_wait_by_the_declared_rules(case, started, waits):
     ctx = _ctx(**case)

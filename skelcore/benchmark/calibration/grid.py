@@ -12,12 +12,12 @@ from ...errors import SkelInputError
 __all__ = ["CODES", "CONDITIONS", "KINDS", "SUITES", "Task", "calibration_tasks", "TASK_VERSION"]
 
 #: bumped whenever a change alters a task's rows for the same spec (stored tasks are then redone)
-TASK_VERSION = 5
+TASK_VERSION = 6
 
 #: every warning code the evaluation emits, in the tables' order
 CODES = ("spurious_branches", "spurious_cycles", "missing_cycles", "outside", "incomplete", "disconnected",
          "collapse", "frame", "outliers", "open_surface", "thin_parts", "sparse_boundedness", "trivial_smoothness",
-         "no_correspondence")
+         "no_correspondence", "along_surface")
 
 #: the scan conditions: the benchmark's effect and level (docs/benchmark.md), clean first
 CONDITIONS: dict[str, tuple[str, Any]] = {
@@ -28,7 +28,8 @@ CONDITIONS: dict[str, tuple[str, Any]] = {
 #: the skeleton kinds per (suite, condition): the intact skeleton and the injected defects
 KINDS: dict[tuple[str, str], tuple[str, ...]] = {
     ("synthetic", "clean"): ("intact", "spurs", "shortcut", "chord_cycle", "broken_cycle", "missing_branch",
-                             "truncation", "collapse", "frame", "nodes_only", "no_correspondence", "broken"),
+                             "truncation", "collapse", "frame", "nodes_only", "no_correspondence", "broken",
+                             "offset"),
     ("synthetic", "other"): ("intact", "spurs", "broken"),
     ("real", "clean"): ("intact", "spurs", "shortcut", "chord_cycle", "missing_branch", "broken"),
     ("real", "other"): ("intact", "broken"),

@@ -13,14 +13,15 @@ from typing import Any, Callable
 import numpy as np
 
 from ..skeleton_defects import add_chord, add_shortcuts, add_spurs, break_cycle, collapse_points, cut_edges, \
-    drop_branches, truncate
+    drop_branches, offset, truncate
 from .uncovered import visible_removal
 
 __all__ = ["World", "Made", "world", "make_kind", "nodes_only", "LEVELS"]
 
 #: the one level of each injected defect (docs/validity.md's middle level; collapse its strongest)
 LEVELS: dict[str, Any] = {"spurs": (3, 2.0), "shortcut": 1, "chord_cycle": 2.0, "broken_cycle": 2.0,
-                          "missing_branch": 1, "truncation": 0.3, "collapse": 0.9, "frame": 100.0, "broken": 2}
+                          "missing_branch": 1, "truncation": 0.3, "collapse": 0.9, "frame": 100.0, "broken": 2,
+                          "offset": 0.8}
 
 
 @dataclass
@@ -174,6 +175,8 @@ def make_kind(kind: str, w: World, key: str, suite_seed: int) -> Made | None:
         got = drop_branches(v, e, int(level), rng)
     elif kind == "truncation":
         got = truncate(v, e, float(level))
+    elif kind == "offset":  # every vertex moved off the axis (along_surface)
+        got = offset(v, e, r, float(level), rng)
     elif kind == "collapse":
         got = (collapse_points(v, float(level)), e)
     elif kind == "frame":

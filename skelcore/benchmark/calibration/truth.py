@@ -24,12 +24,13 @@ from scipy.spatial import cKDTree
 
 from ...params import Params
 from .pieces_truth import cycles_cut, disconnected_truth
+from ..skeleton_defects import vertex_tangents
 from .skeletons import Made, World
 from .uncovered import MISS_AREA, _radius_at, _samples, uncovered_area, uncovered_radii
 
 __all__ = ["OUT_YES", "OUT_NO", "MISS_YES", "MISS_NO", "MISS_AREA", "origin", "outside_depth", "outside_seen",
            "uncovered_radii", "uncovered_area", "thin_share", "unbounded_share", "sparse_drop", "row_truth", "TWIG_OUT",
-           "twig_kinds"]
+           "twig_kinds", "along_surface_truth", "SURF_YES", "SURF_NO"]
 
 #: ``outside`` is true from this depth out of the shape (local radii; the shortcut generator's promise)
 OUT_YES = 0.5
@@ -44,6 +45,10 @@ MISS_YES, MISS_NO = 2.0, 1.0
 TWIG_OUT = 1.0
 #: kinds that move the whole skeleton: every branch and cycle verdict on them is left out
 GLOBAL_KINDS = ("collapse", "frame", "nodes_only")
+#: ``along_surface`` is true when the offset skeleton's vertices lie at least this many local radii off
+#: the axis across it (the median; the part along the axis moves nothing off it), false at most SURF_NO
+SURF_YES = 0.6
+SURF_NO = 0.3
 
 
 def origin(made: Made, ref_v: np.ndarray) -> np.ndarray:
@@ -171,6 +176,22 @@ def _spurs_located(made: Made, orig: np.ndarray, flag: np.ndarray | None) -> boo
     return all(flag[new[comp[new] == c]].any() for c in np.unique(comp[new]))
 
 
+def along_surface_truth(made: Made, w: World) -> int | None:
+    """1 for an offset skeleton moved at least ``SURF_YES`` local radii across its axis (the median over
+    its vertices of the move's part perpendicular to the reference's tangent), 0 for the intact one or
+    one moved at most ``SURF_NO``; None otherwise and on a neuron, where the check does not run
+    (docs/diagnostics.md "Along the surface")."""
+    if w.facts is not None or made.kind not in ("intact", "offset"):
+        return None
+    if made.kind == "intact":
+        return 0
+    v, e, r = (np.asarray(x, float) for x in w.ref)
+    t = vertex_tangents(v, e.astype(np.int64))
+    move = np.asarray(made.vertices, float) - v
+    across = float(np.median(np.linalg.norm(move - np.sum(move * t, axis=1)[:, None] * t, axis=1) / r))
+    return 1 if across >= SURF_YES else 0 if across <= SURF_NO else None
+
+
 def row_truth(made: Made, w: World, condition: str, fired: set[str], arrays: dict[str, np.ndarray],
               first: bool, params: Params = Params(), drop: float | None = None) -> dict[str, Any]:
     """Truth per code (``truth_{code}``: 1, 0 or None) and the facts behind it for one skeleton;
@@ -206,6 +227,7 @@ def row_truth(made: Made, w: World, condition: str, fired: set[str], arrays: dic
         if t["incomplete"] == 1:
             area = uncovered_area(made, w)
             t["incomplete"] = 1 if area >= MISS_AREA else None
+    t["along_surface"] = along_surface_truth(made, w)
     t["collapse"] = int(k == "collapse")
     t["frame"] = int(k == "frame")
     if first:
