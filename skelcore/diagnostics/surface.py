@@ -1,24 +1,15 @@
 """Branches that run along the shape's wall instead of its axis -> ``along_surface``
 (docs/diagnostics.md "Along the surface").
 
-A TEASAR-like skeleton whose branch hugs the wall is inside the shape (no ``outside``), explains the
-cloud (no ``incomplete``) and is a real branch (no ``spurious_branches``); only the paper's curve
-centeredness falls (Eq. 11, docs/metrics.md 3.2): c = 1 - |p - centre| / r of the sample's cross-section,
-so on a round section the sample lies c x r from the wall. This module reads the values the evaluation
-computed (raw centeredness and boundedness per curve sample) and searches the cloud only for the
-junctions' local radii: a sample is **judged** when it is bounded (beta > beta*: leaving the shape is
-``outside``'s), its centeredness is finite and above 0, and it lies beyond ``surface_junction_radii``
-local radii of its branch's junctions (there the slab cuts the other branches too); it is **off
-axis** when its centeredness is below ``surface_max_centeredness``. A value of exactly 0 is Eq. 11's
-clip: the fitted section does not enclose the sample (a flat plate's section, stray points in the
-ring), no measure of where it lies. A branch is flagged when at least ``surface_min_samples`` of its
-samples are off axis, they are at least ``surface_min_share`` of its samples with a value, and their
-stretches (each sample stands for its stretch of its edge, docs/metrics.md 3.2) sum to at least
-``surface_min_radii`` local radii (the unit of ``outside``: the median of the branches' median local
-radius). Eq. 11's slab is ``slab_factor`` x the cloud's diagonal thick whatever the part: where its half
-is more than ``surface_slab_radii`` of those radii (a traced neuron: 12) the "section" is a stretch of
-neurite, not a cross-section, and its centre says nothing of the axis; then no branch is judged
-(``unchecked``).
+A TEASAR-like branch hugging the wall is inside (no ``outside``), explains the cloud (no
+``incomplete``) and is real (no ``spurious_branches``); only the paper's curve centeredness falls
+(Eq. 11, docs/metrics.md 3.2: on a round section a sample lies c x r from the wall). This module reads
+the evaluation's raw centeredness and boundedness per curve sample and searches the cloud only for the
+junctions' local radii. A bounded sample with a centeredness above 0 (0 is Eq. 11's clip, no measure),
+beyond ``surface_junction_radii`` of its branch's junctions, is off axis below
+``surface_max_centeredness``; a branch is flagged when enough of its samples and length are off axis.
+Where Eq. 11's slab is thicker than ``surface_slab_radii`` local radii (a traced neuron) its section
+says nothing of the axis: no branch is judged (``unchecked``). The rule's details are in the docs.
 """
 
 from __future__ import annotations
