@@ -1,0 +1,51 @@
+"""The far-ray hints a lone query's rays leave (the leaf and the point each ray of the raster hit), kept
+per query so that a later call on queries nearby starts from them (docs/boundedness.md 3.18).
+
+An edit's update scores its moved curve samples with the exact plan, in curve order, each sample's rays
+first trying the hits of the sample cast before it, 2-4 h away on a 100k tube; the samples of the curve
+it was edited from lie nearer (a pruned Y's: 0.3-1.6 h). Their tables, kept by the evaluation, seed
+each moved sample whose nearest old sample is nearer than the sample cast before it. Hints only order
+the kernel's search (every hit is an exact ball test, every miss an exhaustive walk), so beta is the
+same bit for bit with or without them.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from scipy.spatial import cKDTree
+
+__all__ = ["HintTables", "TABLES_MOST_BYTES", "seeds_for"]
+
+#: the most bytes of tables one call keeps (2 int32 per raster cell: 36,864 bytes a query at 48 rows):
+#: a curve of up to about 900 samples; above it none are kept and an update casts without seeds
+TABLES_MOST_BYTES = 32 * 1024 * 1024
+
+
+@dataclass(frozen=True)
+class HintTables:
+    """Lone queries' hint tables against one prepared cloud's tree: ``tree`` (the object the indices
+    point into), ``origins`` (S, 3) the queries in the raster frame, ``tables`` (S, 2 x rows x bins)
+    int32 (leaf, point per raster cell, -1 none)."""
+
+    tree: object
+    origins: np.ndarray
+    tables: np.ndarray
+
+    def __len__(self) -> int:
+        return int(len(self.origins))
+
+
+def seeds_for(kept: HintTables | None, tree: object, centres: np.ndarray, firsts: list[int]) -> np.ndarray | None:
+    """Per cluster centre (in the order cast; ``firsts``: the clusters that start a stream, cast with no
+    cluster before them), the row of ``kept`` to start its rays from, or -1: the nearest kept origin
+    where it lies nearer than the centre cast before (whose hits the rays would start from otherwise;
+    the kernel drops any start more than two reaches away). None when nothing is kept for this tree."""
+    if kept is None or kept.tree is not tree or not len(kept) or not len(centres):
+        return None
+    d, row = cKDTree(kept.origins).query(centres)
+    before = np.full(len(centres), np.inf)
+    before[1:] = np.linalg.norm(np.diff(centres, axis=0), axis=1)
+    before[np.asarray(firsts, np.int64)] = np.inf
+    return np.where(d < before, row, -1).astype(np.int32)
