@@ -16,7 +16,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.spatial import cKDTree
 
-__all__ = ["HintTables", "TABLES_MOST_BYTES", "seeds_for"]
+__all__ = ["HintTables", "TABLES_MOST_BYTES", "seeds_for", "merged_tables"]
 
 #: the most bytes of tables one call keeps (2 int32 per raster cell: 36,864 bytes a query at 48 rows):
 #: a curve of up to about 900 samples; above it none are kept and an update casts without seeds
@@ -49,3 +49,22 @@ def seeds_for(kept: HintTables | None, tree: object, centres: np.ndarray, firsts
     before[1:] = np.linalg.norm(np.diff(centres, axis=0), axis=1)
     before[np.asarray(firsts, np.int64)] = np.inf
     return np.where(d < before, row, -1).astype(np.int32)
+
+
+def merged_tables(old: HintTables | None, made: list[HintTables], kept_at: np.ndarray) -> HintTables | None:
+    """One :class:`HintTables` of an edited curve's samples: the rows of ``old`` at the samples kept in
+    place (``kept_at``, raster frame; an origin within 1e-9 of one, since only the search's order
+    hangs on it) and the tables ``made`` for the moved ones, all of one tree (others are dropped)."""
+    tree = made[0].tree if made else (old.tree if old is not None else None)
+    parts = [m for m in made if m.tree is tree]
+    if old is not None and old.tree is tree and len(old) and len(kept_at):
+        d, row = cKDTree(old.origins).query(np.asarray(kept_at, np.float64).reshape(-1, 3))
+        row = np.unique(row[d <= 1e-9])
+        if len(row):
+            parts.insert(0, HintTables(tree, old.origins[row], old.tables[row]))
+    if not parts:
+        return None
+    if len(parts) == 1:
+        return parts[0]
+    return HintTables(tree, np.ascontiguousarray(np.vstack([p.origins for p in parts])),
+                      np.ascontiguousarray(np.vstack([p.tables for p in parts])))

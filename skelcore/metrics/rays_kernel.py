@@ -380,6 +380,8 @@ def run_plan(
     reach = np.ascontiguousarray(plan.reach, np.float64)
     centres = np.ascontiguousarray(plan.centres, np.float64)
     starts = np.ascontiguousarray(plan.starts, np.int64)
+    if seeds is not None and seeds.tables.shape[1:] != (2 * rows * bins,):
+        seeds = None  # another raster's tables
     seed_of = seeds_for(seeds, tree, centres, bounds[:-1])
     none = np.zeros(0, np.int32)
     if kept is not None and kept.shape != (n_clusters, 2 * rows * bins):
