@@ -249,8 +249,8 @@ def boundedness_rays(
     share_far_field : None = decide by cost as above; True = always share; False = every pair.
     workers : threads running the compiled kernel (None = all cores); the values do not depend on it.
     checkpoint : called with the fraction done, about every 0.05 s of work; may raise ``Cancelled``.
-    seeds : hint tables kept by an earlier call on lone queries of the same cloud: each lone query
-        here starts its far rays from the nearest one's hits (docs/boundedness.md 3.18).
+    seeds : hint tables kept by an earlier call on lone queries of the same cloud array: each lone
+        query here starts its far rays from the nearest one's hits (docs/boundedness.md 3.18).
     keep : when every query is scored on its own (the exact plan) and their tables fit in
         ``TABLES_MOST_BYTES``, the :class:`HintTables` of this call's distinct queries is appended.
 
@@ -265,8 +265,11 @@ def boundedness_rays(
     >>> bool(beta[0] > 0.9), bool(0.05 < beta[1] < 0.12)
     (True, True)
     """
+    given = cloud  # the hint tables' key (HintTables.cloud)
     cloud = _as_points("cloud", cloud)
     queries = _as_points("queries", queries)
+    if seeds is not None and seeds.cloud is not given:
+        seeds = None
     if not radius_factor > 0:
         raise ValueError(f"radius_factor must be > 0, got {radius_factor!r}")
     if not (0 < near_angle < 1 and cluster_cell > 0):
@@ -296,7 +299,7 @@ def boundedness_rays(
         kept = np.empty((len(q_r), 2 * rows * bins), np.int32)
     beta = run_plan(tree, plan, q_r, h, rows, bins, workers, checkpoint, seeds=seeds, kept=kept)
     if kept is not None:
-        keep.append(HintTables(tree, np.ascontiguousarray(q_r, np.float64), kept))
+        keep.append(HintTables(given, np.ascontiguousarray(q_r, np.float64), kept))
     out[:] = beta[inverse]
     return out
 

@@ -25,11 +25,13 @@ TABLES_MOST_BYTES = 32 * 1024 * 1024
 
 @dataclass(frozen=True)
 class HintTables:
-    """Lone queries' hint tables against one prepared cloud's tree: ``tree`` (the object the indices
-    point into), ``origins`` (S, 3) the queries in the raster frame, ``tables`` (S, 2 x rows x bins)
-    int32 (leaf, point per raster cell, -1 none)."""
+    """Lone queries' hint tables against one cloud's kernel tree: ``cloud`` (the array given to
+    ``boundedness_rays``: its tree is built the same for the same points, so the indices hold while it
+    is the same array; a stale index only misorders the search, the kernel drops one out of range),
+    ``origins`` (S, 3) the queries in the raster frame, ``tables`` (S, 2 x rows x bins) int32 (leaf,
+    point per raster cell, -1 none)."""
 
-    tree: object
+    cloud: object
     origins: np.ndarray
     tables: np.ndarray
 
@@ -37,12 +39,12 @@ class HintTables:
         return int(len(self.origins))
 
 
-def seeds_for(kept: HintTables | None, tree: object, centres: np.ndarray, firsts: list[int]) -> np.ndarray | None:
+def seeds_for(kept: HintTables | None, centres: np.ndarray, firsts: list[int]) -> np.ndarray | None:
     """Per cluster centre (in the order cast; ``firsts``: the clusters that start a stream, cast with no
     cluster before them), the row of ``kept`` to start its rays from, or -1: the nearest kept origin
     where it lies nearer than the centre cast before (whose hits the rays would start from otherwise;
-    the kernel drops any start more than two reaches away). None when nothing is kept for this tree."""
-    if kept is None or kept.tree is not tree or not len(kept) or not len(centres):
+    the kernel drops any start more than two reaches away). None when nothing is kept."""
+    if kept is None or not len(kept) or not len(centres):
         return None
     d, row = cKDTree(kept.origins).query(centres)
     before = np.full(len(centres), np.inf)
@@ -54,17 +56,17 @@ def seeds_for(kept: HintTables | None, tree: object, centres: np.ndarray, firsts
 def merged_tables(old: HintTables | None, made: list[HintTables], kept_at: np.ndarray) -> HintTables | None:
     """One :class:`HintTables` of an edited curve's samples: the rows of ``old`` at the samples kept in
     place (``kept_at``, raster frame; an origin within 1e-9 of one, since only the search's order
-    hangs on it) and the tables ``made`` for the moved ones, all of one tree (others are dropped)."""
-    tree = made[0].tree if made else (old.tree if old is not None else None)
-    parts = [m for m in made if m.tree is tree]
-    if old is not None and old.tree is tree and len(old) and len(kept_at):
+    hangs on it) and the tables ``made`` for the moved ones, all of one cloud (others are dropped)."""
+    cloud = made[0].cloud if made else (old.cloud if old is not None else None)
+    parts = [m for m in made if m.cloud is cloud]
+    if old is not None and old.cloud is cloud and len(old) and len(kept_at):
         d, row = cKDTree(old.origins).query(np.asarray(kept_at, np.float64).reshape(-1, 3))
         row = np.unique(row[d <= 1e-9])
         if len(row):
-            parts.insert(0, HintTables(tree, old.origins[row], old.tables[row]))
+            parts.insert(0, HintTables(cloud, old.origins[row], old.tables[row]))
     if not parts:
         return None
     if len(parts) == 1:
         return parts[0]
-    return HintTables(tree, np.ascontiguousarray(np.vstack([p.origins for p in parts])),
+    return HintTables(cloud, np.ascontiguousarray(np.vstack([p.origins for p in parts])),
                       np.ascontiguousarray(np.vstack([p.tables for p in parts])))

@@ -94,3 +94,42 @@ def test_the_kernel_in_use_is_one_of_the_two_builds():
 
     assert rays_kernel._raycast.__name__.rsplit(".", 1)[-1] in ("_raycast", "_raycast_avx2")
     assert _raycast.LEAF_SIZE == rays_kernel.LEAF_SIZE
+
+
+@pytest.mark.parametrize("seeds", ["kept", "garbage"])
+def test_far_rays_seeded_from_kept_tables_hit_exactly_as_the_ball_test(case, seeds):
+    """Each cluster starting from a hint table (docs/boundedness.md 3.18): the tables one pass kept of the
+    queries shifted by half a step (the moved hints then read the seeds' origins), or tables of random
+    indices (inner nodes and rows out of range among them, which the kernel must drop, not walk): beta
+    equals the exhaustive test's bit for bit on both builds."""
+    from skelcore.metrics import _raycast
+
+    modules = [_raycast]
+    if _raycast.cpu_has_avx2():
+        try:
+            from skelcore.metrics import _raycast_avx2
+
+            modules.append(_raycast_avx2)
+        except ImportError:
+            pass
+    tree, queries, h, ref = case
+    n, table = len(queries), 2 * ROWS * BINS
+    origins = np.ascontiguousarray(queries + [0.75 * h, 0.0, 0.0])
+    rng = np.random.default_rng(7)
+    for module in modules:
+        if seeds == "kept":
+            tables = np.full((n, table), -1, np.int32)
+            module.clusters(tree.points, tree.nodes, tree.leaves, origins, np.arange(n + 1, dtype=np.int64), origins,
+                            np.full(n, h), 0, n, float(h), ROWS, BINS, np.zeros(n), np.zeros(6, np.int64),
+                            np.zeros(1, np.int32), np.zeros(1, np.int64), -1, -1, -1, np.zeros(0, np.int32),
+                            np.zeros(0), np.zeros(0, np.int32), tables, np.arange(n, dtype=np.int32))
+            assert (tables[:, 1::2] >= 0).mean() > 0.3  # the pass kept its hits
+        else:
+            tables = rng.integers(-5, len(tree.nodes) + len(tree.points) + 5, (n, table)).astype(np.int32)
+        beta, stats = np.zeros(n), np.zeros(6, np.int64)
+        module.clusters(tree.points, tree.nodes, tree.leaves, queries, np.arange(n + 1, dtype=np.int64), queries,
+                        np.full(n, h), 0, n, float(h), ROWS, BINS, beta, stats, np.zeros(1, np.int32),
+                        np.zeros(1, np.int64), 0 if seeds == "garbage" else -1, -1, -1, tables, origins,
+                        np.arange(n, dtype=np.int32), np.zeros(0, np.int32), np.zeros(0, np.int32))
+        assert stats[4] > 0  # the hints were tried
+        assert np.array_equal(beta, ref), module.__name__
