@@ -299,7 +299,7 @@ def boundedness_rays(
         kept = np.empty((len(q_r), 2 * rows * bins), np.int32)
     beta = run_plan(tree, plan, q_r, h, rows, bins, workers, checkpoint, seeds=seeds, kept=kept)
     if kept is not None:
-        keep.append(HintTables(given, np.ascontiguousarray(q_r, np.float64), kept))
+        keep.append(HintTables.of(given, np.ascontiguousarray(q_r, np.float64), kept))
     out[:] = beta[inverse]
     return out
 

@@ -11,7 +11,7 @@ same bit for bit with or without them.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 from scipy.spatial import cKDTree
@@ -29,11 +29,25 @@ class HintTables:
     ``boundedness_rays``: its tree is built the same for the same points, so the indices hold while it
     is the same array; a stale index only misorders the search, the kernel drops one out of range),
     ``origins`` (S, 3) the queries in the raster frame, ``tables`` (S, 2 x rows x bins) int32 (leaf,
-    point per raster cell, -1 none)."""
+    point per raster cell, -1 none), made from ``parts`` (arrays and the rows taken of each, None: all)
+    when first read: an edited curve's tables are joined only when an edit after it reads them, not in
+    the update that made them (7.7 MB for the Y's 200 samples, 1.7 ms)."""
 
     cloud: object
     origins: np.ndarray
-    tables: np.ndarray
+    parts: tuple
+    _joined: list = field(default_factory=list, compare=False, repr=False)
+
+    @classmethod
+    def of(cls, cloud: object, origins: np.ndarray, tables: np.ndarray) -> "HintTables":
+        return cls(cloud, origins, ((tables, None),))
+
+    @property
+    def tables(self) -> np.ndarray:
+        if not self._joined:
+            arrays = [a if rows is None else a[rows] for a, rows in self.parts]
+            self._joined.append(arrays[0] if len(arrays) == 1 else np.ascontiguousarray(np.vstack(arrays)))
+        return self._joined[0]
 
     def __len__(self) -> int:
         return int(len(self.origins))
@@ -53,20 +67,26 @@ def seeds_for(kept: HintTables | None, centres: np.ndarray, firsts: list[int]) -
     return np.where(d < before, row, -1).astype(np.int32)
 
 
-def merged_tables(old: HintTables | None, made: list[HintTables], kept_at: np.ndarray) -> HintTables | None:
+def merged_tables(old: HintTables | None, made: list[HintTables], kept_at: np.ndarray | None) -> HintTables | None:
     """One :class:`HintTables` of an edited curve's samples: the rows of ``old`` at the samples kept in
     place (``kept_at``, raster frame; an origin within 1e-9 of one, since only the search's order
-    hangs on it) and the tables ``made`` for the moved ones, all of one cloud (others are dropped)."""
+    hangs on it) and the tables ``made`` for the moved ones, all of one cloud (others are dropped);
+    joined when first read."""
     cloud = made[0].cloud if made else (old.cloud if old is not None else None)
     parts = [m for m in made if m.cloud is cloud]
-    if old is not None and old.cloud is cloud and len(old) and len(kept_at):
+    if old is not None and old.cloud is cloud and len(old) and kept_at is not None and len(kept_at):
         d, row = cKDTree(old.origins).query(np.asarray(kept_at, np.float64).reshape(-1, 3))
         row = np.unique(row[d <= 1e-9])
         if len(row):
-            parts.insert(0, HintTables(cloud, old.origins[row], old.tables[row]))
+            if len(old.parts) == 1:  # rows of its one array
+                a, rows = old.parts[0]
+                taken = ((a, row if rows is None else rows[row]),)
+            else:
+                taken = ((old.tables, row),)
+            parts.insert(0, HintTables(cloud, old.origins[row], taken))
     if not parts:
         return None
     if len(parts) == 1:
         return parts[0]
     return HintTables(cloud, np.ascontiguousarray(np.vstack([p.origins for p in parts])),
-                      np.ascontiguousarray(np.vstack([p.tables for p in parts])))
+                      tuple(part for p in parts for part in p.parts))

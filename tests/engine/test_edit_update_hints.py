@@ -61,9 +61,19 @@ def test_the_edited_curves_tables_cover_its_samples_the_kept_ones_carried_over()
     want = in_raster_frame(unique_rows(up.source.ctx.samples.points, no_checkpoint)[0], prep.centre)
     assert len(tables) == len(want) and tables.cloud is ctx.bounded_cloud_n
     assert {r.tobytes() for r in tables.origins} == {r.tobytes() for r in want}
+    assert not tables._joined  # joined when an edit after this one reads them
     old = {o.tobytes(): t.tobytes() for o, t in zip(ctx.ray_hints[0].origins, ctx.ray_hints[0].tables)}
     carried = [old[o.tobytes()] == t.tobytes() for o, t in zip(tables.origins, tables.tables) if o.tobytes() in old]
     assert len(carried) > 0.8 * len(want) and all(carried)
+    # an edit after it: seeded from these (a moved sample's table is the one its rays left)
+    c2 = up.curve.curve
+    again = up.update(E.move_vertex(c2, 9, c2.vertices[9] + np.array([0.0, 0.0, 0.004]))[1])
+    t2 = again.source.ctx.ray_hints[0]
+    assert len(t2) == len(unique_rows(again.source.ctx.samples.points, no_checkpoint)[0])
+    by_origin = {o.tobytes(): t.tobytes() for o, t in zip(tables.origins, tables.tables)}
+    assert sum(by_origin.get(o.tobytes()) == t.tobytes() for o, t in zip(t2.origins, t2.tables)) > 0.8 * len(t2)
+    fresh = evaluate(cloud, curve=again.curve.curve)
+    np.testing.assert_array_equal(again.curve.sample_boundedness, fresh.curve.sample_boundedness)
 
 
 def test_above_the_budget_no_tables_are_kept_and_the_update_stays_exact(monkeypatch):
