@@ -300,8 +300,9 @@ def _plan_is_exact(cloud: np.ndarray, samples: Any, params: Any, cache: dict[str
 def _sample_boundedness(old: EvalContext, ctx: EvalContext, cache: dict[str, Any],
                         beside: threading.Event | None = None) -> np.ndarray:
     """Curve boundedness of the new samples: kept where a sample was scored before at the same place,
-    when both samplings are scored pair by pair (else all again, as :func:`evaluate` would). ``beside``
-    set: the stages that run beside it are done."""
+    when both samplings are scored pair by pair (else all again, as :func:`evaluate` would); the others'
+    rays start from the hint tables the old samples nearby left, and the new curve's tables are kept in
+    ``ctx.ray_hints`` (docs/boundedness.md 3.18). ``beside`` set: the stages that run beside it are done."""
     p, s_old, s_new = ctx.params, old.samples, ctx.samples
     cloud = ctx.bounded_cloud_n
     if not (_plan_is_exact(cloud, s_old, p, cache) and _plan_is_exact(cloud, s_new, p, cache)):
