@@ -38,6 +38,10 @@ class HintTables:
     parts: tuple
     _joined: list = field(default_factory=list, compare=False, repr=False)
 
+    def __post_init__(self) -> None:
+        if not isinstance(self.parts, tuple) or not all(isinstance(p, tuple) and len(p) == 2 for p in self.parts):
+            raise TypeError("HintTables.parts: a tuple of (array, rows or None) pairs (HintTables.of for one array)")
+
     @classmethod
     def of(cls, cloud: object, origins: np.ndarray, tables: np.ndarray) -> "HintTables":
         return cls(cloud, origins, ((tables, None),))
