@@ -45,6 +45,21 @@ def _exhaustive_beta(points: np.ndarray, origins: np.ndarray, h: float) -> np.nd
     return out
 
 
+def _builds() -> list:
+    """The kernel's builds this machine runs: the generic one, and the AVX2 one where the CPU has it."""
+    from skelcore.metrics import _raycast
+
+    modules = [_raycast]
+    if _raycast.cpu_has_avx2():
+        try:
+            from skelcore.metrics import _raycast_avx2
+
+            modules.append(_raycast_avx2)
+        except ImportError:
+            pass
+    return modules
+
+
 @pytest.fixture(scope="module")
 def case():
     shape = torus(1200, 1.0, 0.3, n_curve=32, seed=4)
@@ -67,16 +82,7 @@ def test_far_rays_hit_exactly_where_some_point_passes_the_ball_test(case, policy
     build's beta equals the exhaustive test's bit for bit (a lane group skipped with an open ray, or a
     walk cut short, would lose hits); "hints-prefetched" asks memory for the hints of every tile, as for
     a cloud beyond the kernel's PREFETCH_FROM bytes (docs/boundedness.md 3.17)."""
-    from skelcore.metrics import _raycast
-
-    modules = [_raycast]
-    if _raycast.cpu_has_avx2():
-        try:
-            from skelcore.metrics import _raycast_avx2
-
-            modules.append(_raycast_avx2)
-        except ImportError:
-            pass
+    modules = _builds()
     tree, queries, h, ref = case
     n = len(queries)
     assert 0.05 < float(np.mean(ref > 0.9)) < 0.95  # bounded and open queries both present
@@ -102,16 +108,7 @@ def test_far_rays_seeded_from_kept_tables_hit_exactly_as_the_ball_test(case, see
     queries shifted by half a step (the moved hints then read the seeds' origins), or tables of random
     indices (inner nodes and rows out of range among them, which the kernel must drop, not walk): beta
     equals the exhaustive test's bit for bit on both builds."""
-    from skelcore.metrics import _raycast
-
-    modules = [_raycast]
-    if _raycast.cpu_has_avx2():
-        try:
-            from skelcore.metrics import _raycast_avx2
-
-            modules.append(_raycast_avx2)
-        except ImportError:
-            pass
+    modules = _builds()
     tree, queries, h, ref = case
     n, table = len(queries), 2 * ROWS * BINS
     origins = np.ascontiguousarray(queries + [0.75 * h, 0.0, 0.0])
