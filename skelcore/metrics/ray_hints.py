@@ -37,6 +37,7 @@ class HintTables:
     origins: np.ndarray
     parts: tuple
     _joined: list = field(default_factory=list, compare=False, repr=False)
+    _search: list = field(default_factory=list, compare=False, repr=False)
 
     def __post_init__(self) -> None:
         if not isinstance(self.parts, tuple) or not all(isinstance(p, tuple) and len(p) == 2 for p in self.parts):
@@ -56,6 +57,13 @@ class HintTables:
     def __len__(self) -> int:
         return int(len(self.origins))
 
+    def nearest(self, points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Each point's distance to its nearest origin and that origin's row (a tree of the origins made
+        at the first ask: an update asks it once per call of the kernel)."""
+        if not self._search:
+            self._search.append(cKDTree(self.origins))
+        return self._search[0].query(points)
+
 
 def seeds_for(kept: HintTables | None, centres: np.ndarray, firsts: list[int]) -> np.ndarray | None:
     """Per cluster centre (in the order cast; ``firsts``: the clusters that start a stream, cast with no
@@ -64,7 +72,7 @@ def seeds_for(kept: HintTables | None, centres: np.ndarray, firsts: list[int]) -
     the kernel drops any start more than two reaches away). None when nothing is kept."""
     if kept is None or not len(kept) or not len(centres):
         return None
-    d, row = cKDTree(kept.origins).query(centres)
+    d, row = kept.nearest(centres)
     before = np.full(len(centres), np.inf)
     before[1:] = np.linalg.norm(np.diff(centres, axis=0), axis=1)
     before[np.asarray(firsts, np.int64)] = np.inf
@@ -79,7 +87,7 @@ def merged_tables(old: HintTables | None, made: list[HintTables], kept_at: np.nd
     cloud = made[0].cloud if made else (old.cloud if old is not None else None)
     parts = [m for m in made if m.cloud is cloud]
     if old is not None and old.cloud is cloud and len(old) and kept_at is not None and len(kept_at):
-        d, row = cKDTree(old.origins).query(np.asarray(kept_at, np.float64).reshape(-1, 3))
+        d, row = old.nearest(np.asarray(kept_at, np.float64).reshape(-1, 3))
         row = np.unique(row[d <= 1e-9])
         if len(row):
             if len(old.parts) == 1:  # rows of its one array
