@@ -26,7 +26,8 @@ from ..errors import Cancelled, SkelInputError
 from ..evaluation import Evaluation
 from ..geometry import check_magnitude, no_checkpoint, unique_rows
 from ..metrics.ball_tree import BallTree
-from ..metrics.boundedness import boundedness, rays_plan_is_exact
+from ..metrics.boundedness import boundedness, in_raster_frame, prepared_cloud, rays_plan_is_exact
+from ..metrics.ray_hints import merged_tables
 from ..metrics.centeredness import curve_centeredness, slab_grid
 from ..metrics.curve_sampling import sample_curve
 from ..parallel import GraphTask, run_graph
@@ -229,7 +230,8 @@ def _edited_context(old: EvalContext, curve: CurveSkeleton, cache: dict[str, Any
     kept = {k: v for k, v in old.results.items() if k not in CURVE_STAGES}
     unset = {k: v for k, v in old.not_computed.items() if v != LEFT_OUT}  # an update of a first phase
     return replace(old, curve=curve, curve_n=curve_n, samples=samples, results=kept, not_computed=unset,
-                   unseen=dict(old.unseen), spur_memo=old.spur_memo.next(), _diag_tree=_diag_tree(old, cache))
+                   unseen=dict(old.unseen), spur_memo=old.spur_memo.next(), _diag_tree=_diag_tree(old, cache),
+                   ray_hints=[])
 
 
 def _diag_tree(old: EvalContext, cache: dict[str, Any]) -> list:
@@ -298,14 +300,18 @@ def _plan_is_exact(cloud: np.ndarray, samples: Any, params: Any, cache: dict[str
 def _sample_boundedness(old: EvalContext, ctx: EvalContext, cache: dict[str, Any],
                         beside: threading.Event | None = None) -> np.ndarray:
     """Curve boundedness of the new samples: kept where a sample was scored before at the same place,
-    when both samplings are scored pair by pair (else all again, as :func:`evaluate` would). ``beside``
-    set: the stages that run beside it are done."""
+    when both samplings are scored pair by pair (else all again, as :func:`evaluate` would); the others'
+    rays start from the hint tables the old samples nearby left, and the new curve's tables are kept in
+    ``ctx.ray_hints`` (docs/boundedness.md 3.18). ``beside`` set: the stages that run beside it are done."""
     p, s_old, s_new = ctx.params, old.samples, ctx.samples
     cloud = ctx.bounded_cloud_n
     if not (_plan_is_exact(cloud, s_old, p, cache) and _plan_is_exact(cloud, s_new, p, cache)):
-        return ctx.boundedness(s_new.points)
+        return ctx.boundedness(s_new.points, keep=ctx.ray_hints)
     beta, todo = _reuse(_keys(s_old.points), old.results["curve boundedness"], _keys(s_new.points))
     rows = np.flatnonzero(todo)
+    # the moved samples' rays start from the hits of the old samples nearby (docs/boundedness.md 3.18)
+    seeds = old.ray_hints[0] if old.ray_hints else None
+    made: list = []
     # while the other lane's stages hold their core, a third of the samples left in streams on the other
     # cores (one on two cores); once they are done (or few are left), the rest in one call on every core. In one call, its
     # second stream waited for the core those stages held and ran alone after them (a pruned branch's
@@ -317,8 +323,11 @@ def _sample_boundedness(old: EvalContext, ctx: EvalContext, cache: dict[str, Any
         take = max(_RAYS_CHUNK, left // 3) if alone else left
         part = rows[lo:lo + take]
         beta[part] = boundedness(cloud, s_new.points[part], params=ctx.bounded_params or p, share_far_field=False,
-                                 workers=max(1, (os.cpu_count() or 1) - 1) if alone else None)
+                                 workers=max(1, (os.cpu_count() or 1) - 1) if alone else None, seeds=seeds,
+                                 keep=made)
         lo += take
+    kept_at = in_raster_frame(s_new.points[~todo], prepared_cloud(cloud).centre) if seeds is not None else None
+    ctx.ray_hints[:] = [t for t in [merged_tables(seeds, made, kept_at)] if t is not None]
     return beta
 
 

@@ -869,13 +869,19 @@ static int64_t near_raster(const Raster *r, const Tree *t, const Near *near, int
  * `stop`, the call returns after the cluster it is in.  Returns the number of clusters finished. */
 static PyObject *py_clusters(PyObject *self, PyObject *args) {
     Py_buffer pts, nds, lvs, qs, starts, cen, rch, beta, stats, stop_buf, done_buf;
+    /* optional: seed tables, their origins, each cluster's seed row (or -1); the tables kept after each
+     * cluster and each cluster's row there (or -1): seeded hints (docs/boundedness.md 3.18) */
+    Py_buffer sd = {0}, sd_at = {0}, sd_of = {0}, kp = {0}, kp_of = {0};
     int k0, k1, rows, bins;
     double h;
     int hint_min = HINT_MIN, hint_rest = HINT_REST, prefetch_from = PREFETCH_FROM;
-    if (!PyArg_ParseTuple(args, "y*y*y*y*y*y*y*iidiiw*w*w*w*|iii", &pts, &nds, &lvs, &qs, &starts, &cen, &rch,
-                          &k0, &k1, &h, &rows, &bins, &beta, &stats, &stop_buf, &done_buf, &hint_min, &hint_rest,
-                          &prefetch_from))
+    if (!PyArg_ParseTuple(args, "y*y*y*y*y*y*y*iidiiw*w*w*w*|iiiy*y*y*w*y*", &pts, &nds, &lvs, &qs, &starts, &cen,
+                          &rch, &k0, &k1, &h, &rows, &bins, &beta, &stats, &stop_buf, &done_buf, &hint_min, &hint_rest,
+                          &prefetch_from, &sd, &sd_at, &sd_of, &kp, &kp_of))
         return NULL;
+    if (hint_min < 0) hint_min = HINT_MIN;  /* < 0: the default (the seeds come after these three) */
+    if (hint_rest < 0) hint_rest = HINT_REST;
+    if (prefetch_from < 0) prefetch_from = PREFETCH_FROM;
     volatile const int32_t *stop = (volatile const int32_t *)stop_buf.buf;
     volatile int64_t *done_count = (volatile int64_t *)done_buf.buf;
     int64_t finished = 0;
@@ -905,6 +911,23 @@ static PyObject *py_clusters(PyObject *self, PyObject *args) {
         PyErr_SetString(PyExc_ValueError, "clusters: bad raster");
         goto done;
     }
+    const size_t table = 2 * (size_t)rows * bins;  /* one hint table: leaf, point per sample */
+    const int32_t *seeds = (const int32_t *)sd.buf, *seed_of = sd_of.len > 0 ? (const int32_t *)sd_of.buf : NULL;
+    const double *seed_at = (const double *)sd_at.buf;
+    int32_t *kept = (int32_t *)kp.buf;
+    const int32_t *keep_of = kp_of.len > 0 ? (const int32_t *)kp_of.buf : NULL;
+    const int64_t n_seeds = (int64_t)(sd.len / (Py_ssize_t)(sizeof(int32_t) * table));
+    const int64_t n_kept = (int64_t)(kp.len / (Py_ssize_t)(sizeof(int32_t) * table));
+    if ((seed_of && (sd_of.len < (Py_ssize_t)sizeof(int32_t) * (k1 - k0) ||
+                     sd_at.len < (Py_ssize_t)sizeof(double) * 3 * n_seeds)) ||
+        (keep_of && kp_of.len < (Py_ssize_t)sizeof(int32_t) * (k1 - k0))) {
+        PyErr_SetString(PyExc_ValueError, "clusters: seed_of and keep_of need one row per cluster, seed_at 3 per seed");
+        goto done;
+    }
+    for (int k = 0; seed_of && k < k1 - k0; k++)
+        if (seed_of[k] >= n_seeds) { PyErr_SetString(PyExc_ValueError, "clusters: seed row out of range"); goto done; }
+    for (int k = 0; keep_of && k < k1 - k0; k++)
+        if (keep_of[k] >= n_kept) { PyErr_SetString(PyExc_ValueError, "clusters: kept row out of range"); goto done; }
     size_t nw = (size_t)rows * r.words;
     /* member rasters for the largest cluster of the stream, at most MEMBER_CHUNK (fresh pages cost) */
     int64_t slots = 1;
@@ -946,9 +969,21 @@ static PyObject *py_clusters(PyObject *self, PyObject *args) {
         const double cut = reach > h ? reach : h;
         const int64_t q0 = st[k - k0], q1 = st[k - k0 + 1];
         const int64_t n_mem = q1 - q0;
+        /* a seed: the hints a lone query nearby left (its table and origin), instead of the previous cluster's */
+        const int32_t seed = seed_of ? seed_of[k - k0] : -1;
+        if (seed >= 0) {
+            const int32_t *from = seeds + (size_t)seed * table;
+            for (size_t i = 0; i < table; i += 2) {  /* a leaf of this tree and one of its points, else none */
+                const int32_t leaf = from[i], pt = from[i + 1];
+                const int ok = leaf >= 0 && leaf < t.n_nodes && t.nodes[leaf].kid < 0 && pt >= 0 && pt < n;
+                hints[i] = ok ? leaf : -1;
+                hints[i + 1] = ok ? pt : -1;
+            }
+            memcpy(prev, seed_at + 3 * (size_t)seed, sizeof prev);
+        }
         /* hints from a cluster far away would only lengthen the walks */
         double jx = c[0] - prev[0], jy = c[1] - prev[1], jz = c[2] - prev[2];
-        const int reset = k == k0 || jx * jx + jy * jy + jz * jz > 4.0 * reach * reach;
+        const int reset = (k == k0 && seed < 0) || jx * jx + jy * jy + jz * jz > 4.0 * reach * reach;
         if (reset)
             for (int i = 0; i < 2 * rows * bins; i++) hints[i] = -1;
         Move mv = {{(float)jx, (float)jy, (float)jz}, !reset && (jx != 0.0 || jy != 0.0 || jz != 0.0), rows, bins,
@@ -1024,6 +1059,8 @@ static PyObject *py_clusters(PyObject *self, PyObject *args) {
             for (size_t x = 0; x < nw; x++) count += __builtin_popcountll(mb[x] | far[x]);
             out[i] = (double)count / total;
         }
+        if (keep_of && keep_of[k - k0] >= 0)
+            memcpy(kept + (size_t)keep_of[k - k0] * table, hints, sizeof(int32_t) * table);
         *done_count = ++finished;
     }
     stat[0] += w.visits;
@@ -1040,6 +1077,7 @@ done:
     PyBuffer_Release(&pts); PyBuffer_Release(&nds); PyBuffer_Release(&lvs); PyBuffer_Release(&qs); PyBuffer_Release(&starts);
     PyBuffer_Release(&cen); PyBuffer_Release(&rch);
     PyBuffer_Release(&beta); PyBuffer_Release(&stats); PyBuffer_Release(&stop_buf); PyBuffer_Release(&done_buf);
+    PyBuffer_Release(&sd); PyBuffer_Release(&sd_at); PyBuffer_Release(&sd_of); PyBuffer_Release(&kp); PyBuffer_Release(&kp_of);
     return result;
 }
 

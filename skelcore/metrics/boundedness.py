@@ -28,6 +28,7 @@ from scipy.spatial import ConvexHull, Delaunay, QhullError
 from ..geometry import Checkpoint, bounding_box, no_checkpoint, unique_rows
 from ..params import Params
 from ._rays import FRAME
+from .ray_hints import TABLES_MOST_BYTES, HintTables
 from .rays_kernel import BallTree, choose_plan, run_plan
 
 __all__ = ["boundedness", "rays_plan_is_exact", "boundedness_rays", "boundedness_paper", "rays_radius", "paper_triangles", "PaperTriangles",
@@ -41,12 +42,15 @@ def boundedness(
     checkpoint: Checkpoint = no_checkpoint,
     share_far_field: bool | None = None,
     workers: int | None = None,
+    seeds: HintTables | None = None,
+    keep: list | None = None,
 ) -> np.ndarray:
     """beta(q) for every query row with the estimator ``params.boundedness_method`` (docs/metrics.md 2).
 
     Inputs are in normalized units (docs/metrics.md 0).  Returns one value per query row, in [0, 1] for
     ``rays``.  An empty query set gives an empty array; an empty cloud gives zeros.  ``share_far_field``
-    and ``workers`` (threads of the rays kernel, None = all cores; the values do not depend on it):
+    and ``workers`` (threads of the rays kernel, None = all cores; the values do not depend on it),
+    ``seeds`` and ``keep`` (the far rays' hint tables, which do not change them either):
     :func:`boundedness_rays`' (None: decided by cost).
     """
     if params.boundedness_method == "paper":
@@ -68,6 +72,8 @@ def boundedness(
         share_far_field=share_far_field,
         checkpoint=checkpoint,
         workers=workers,
+        seeds=seeds,
+        keep=keep,
     )
 
 
@@ -90,10 +96,7 @@ def rays_plan_is_exact(cloud: np.ndarray, queries: np.ndarray, params: Params = 
     rows = int(params.rays_rows)
     plan = choose_plan(prepared.tree, q_r, h, near, params.rays_cluster_cell * h, rows * 2 * rows,
                        params.rays_exact_pairs, None)
-    n = len(q_r)
-    return bool(len(plan.starts) == n + 1 and np.array_equal(plan.starts, np.arange(n + 1))
-                and np.array_equal(plan.order, np.arange(n)) and np.array_equal(plan.centres, q_r)
-                and np.all(plan.reach == near))
+    return _lone(plan, q_r) and bool(np.all(plan.reach == near))
 
 
 def rays_radius(cloud: np.ndarray, radius_factor: float = 2.0, checkpoint: Checkpoint = no_checkpoint) -> float:
@@ -228,6 +231,8 @@ def boundedness_rays(
     share_far_field: bool | None = None,
     workers: int | None = None,
     checkpoint: Checkpoint = no_checkpoint,
+    seeds: HintTables | None = None,
+    keep: list | None = None,
 ) -> np.ndarray:
     """Fraction of rays from each query that hit a ball of radius h around a cloud point (docs/metrics.md 2).
 
@@ -244,6 +249,10 @@ def boundedness_rays(
     share_far_field : None = decide by cost as above; True = always share; False = every pair.
     workers : threads running the compiled kernel (None = all cores); the values do not depend on it.
     checkpoint : called with the fraction done, about every 0.05 s of work; may raise ``Cancelled``.
+    seeds : hint tables kept by an earlier call on lone queries of the same cloud array: each lone
+        query here starts its far rays from the nearest one's hits (docs/boundedness.md 3.18).
+    keep : when every query is scored on its own (the exact plan) and their tables fit in
+        ``TABLES_MOST_BYTES``, the :class:`HintTables` of this call's distinct queries is appended.
 
     Returns
     -------
@@ -256,8 +265,11 @@ def boundedness_rays(
     >>> bool(beta[0] > 0.9), bool(0.05 < beta[1] < 0.12)
     (True, True)
     """
+    given = cloud  # the hint tables' key (HintTables.cloud)
     cloud = _as_points("cloud", cloud)
     queries = _as_points("queries", queries)
+    if seeds is not None and seeds.cloud is not given:
+        seeds = None
     if not radius_factor > 0:
         raise ValueError(f"radius_factor must be > 0, got {radius_factor!r}")
     if not (0 < near_angle < 1 and cluster_cell > 0):
@@ -282,9 +294,21 @@ def boundedness_rays(
         tree, q_r, h, h / near_angle, cluster_cell * h, rows * bins, exact_pairs, share_far_field,
         checkpoint,
     )
-    beta = run_plan(tree, plan, q_r, h, rows, bins, workers, checkpoint)
+    kept = None
+    if keep is not None and _lone(plan, q_r) and len(q_r) * 8 * rows * bins <= TABLES_MOST_BYTES:
+        kept = np.empty((len(q_r), 2 * rows * bins), np.int32)
+    beta = run_plan(tree, plan, q_r, h, rows, bins, workers, checkpoint, seeds=seeds, kept=kept)
+    if kept is not None:
+        keep.append(HintTables.of(given, np.ascontiguousarray(q_r, np.float64), kept))
     out[:] = beta[inverse]
     return out
+
+
+def _lone(plan, q_r: np.ndarray) -> bool:
+    """Whether the plan scores every query on its own at its own position, in the queries' order."""
+    n = len(q_r)
+    return bool(len(plan.starts) == n + 1 and np.array_equal(plan.starts, np.arange(n + 1))
+                and np.array_equal(plan.order, np.arange(n)) and np.array_equal(plan.centres, q_r))
 
 
 # --------------------------------------------------------------------------------------------------

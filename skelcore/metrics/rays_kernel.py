@@ -19,6 +19,7 @@ from dataclasses import dataclass
 import numpy as np
 from ..geometry import Checkpoint, no_checkpoint, take_rows
 from ..parallel import on_threads, polled_build, polled_streams
+from .ray_hints import HintTables, seeds_for
 from . import _raycast as _generic_kernel
 
 
@@ -353,9 +354,13 @@ def _distinct_rows(keys: np.ndarray, checkpoint: Checkpoint = no_checkpoint) -> 
 def run_plan(
     tree: BallTree, plan: Plan, queries: np.ndarray, h: float, rows: int, bins: int, workers: int | None = None,
     checkpoint: Checkpoint = no_checkpoint, stats: np.ndarray | None = None,
+    seeds: HintTables | None = None, kept: np.ndarray | None = None,
 ) -> np.ndarray:
     """beta of every query row (in the input order), the plan's clusters in contiguous streams of about
-    equal estimated cost on ``workers`` threads; the checkpoint is called every ``POLL`` s meanwhile."""
+    equal estimated cost on ``workers`` threads; the checkpoint is called every ``POLL`` s meanwhile.
+    ``seeds``: kept hint tables of this tree's cloud whose nearest start a cluster's rays where nearer than the
+    cluster cast before (:func:`.ray_hints.seeds_for`); ``kept`` (K, 2 x rows x bins) int32: filled
+    with each cluster's hint table after its rays (docs/boundedness.md 3.18). Neither changes beta."""
     q_sorted = np.ascontiguousarray(take_rows(queries, plan.order), np.float64)
     n_clusters = len(plan.starts) - 1
     if n_clusters == 0:
@@ -375,13 +380,24 @@ def run_plan(
     reach = np.ascontiguousarray(plan.reach, np.float64)
     centres = np.ascontiguousarray(plan.centres, np.float64)
     starts = np.ascontiguousarray(plan.starts, np.int64)
+    if seeds is not None and seeds.tables.shape[1:] != (2 * rows * bins,):
+        seeds = None  # another raster's tables
+    seed_of = seeds_for(seeds, centres, bounds[:-1])
+    none = np.zeros(0, np.int32)
+    if kept is not None and kept.shape != (n_clusters, 2 * rows * bins):
+        raise ValueError(f"run_plan: kept needs shape ({n_clusters}, {2 * rows * bins}), got {kept.shape}")
 
     def stream(i: int) -> None:
         k0, k1 = streams[i]
+        extra = () if seed_of is None and kept is None else (
+            -1, -1, -1,  # the kernel's own hint rule and prefetch threshold
+            none if seed_of is None else seeds.tables, none if seed_of is None else seeds.origins,
+            none if seed_of is None else np.ascontiguousarray(seed_of[k0:k1]),
+            none if kept is None else kept[k0:k1], none if kept is None else np.arange(k1 - k0, dtype=np.int32))
         _raycast.clusters(
             tree.points, tree.nodes, tree.leaves, q_sorted[starts[k0] : starts[k1]], np.ascontiguousarray(starts[k0 : k1 + 1] - starts[k0]),
             centres, reach, k0, k1, float(h), rows, bins, out_sorted[starts[k0] : starts[k1]], stream_stats[i], stop,
-            done[i : i + 1],
+            done[i : i + 1], *extra,
         )
 
     polled_streams(stream, [(i,) for i in range(len(streams))], workers, checkpoint,

@@ -100,7 +100,9 @@ def _skeletal_smoothness(ctx: EvalContext, checkpoint: Checkpoint) -> np.ndarray
 
 
 def _curve_boundedness(ctx: EvalContext, checkpoint: Checkpoint) -> np.ndarray:
-    return ctx.boundedness(ctx.samples.points, checkpoint)
+    # the samples' hint tables kept for an update's moved samples (docs/boundedness.md 3.18)
+    ctx.ray_hints.clear()
+    return ctx.boundedness(ctx.samples.points, checkpoint, keep=ctx.ray_hints)
 
 
 def _curve_centeredness(ctx: EvalContext, checkpoint: Checkpoint) -> np.ndarray:

@@ -94,6 +94,9 @@ class EvalContext:
     #: the spur test's search of this curve, and of the curve an update started from (its next update
     #: asks again only what the edit can change: skelcore.diagnostics.spur_cache)
     spur_memo: SpurMemo = field(default_factory=SpurMemo, repr=False)
+    #: the far rays' hint tables the curve samples' boundedness left (skelcore.metrics.ray_hints; one
+    #: entry or none): an update's moved samples start their rays from them (docs/boundedness.md 3.18)
+    ray_hints: list = field(default_factory=list, repr=False)
     #: the openings' boundary test of the cloud and each rim's opening, shared along the updates
     #: (skelcore.scan.openings.find_openings)
     openings_memo: dict = field(default_factory=dict, repr=False)
@@ -151,14 +154,15 @@ class EvalContext:
         return self.cloud_n if self.capped_cloud_n is None else self.capped_cloud_n
 
     def boundedness(self, points_n: np.ndarray, checkpoint: Checkpoint = no_checkpoint,
-                    unseen: str | None = None) -> np.ndarray:
+                    unseen: str | None = None, keep: list | None = None) -> np.ndarray:
         """Boundedness of normalized points as the stages score it: the paper's (docs/metrics.md 2), or with
         viewpoints the share of the seen directions that are covered (docs/metrics.md 6.3); then, given a
         name in ``unseen``, also keeps there (``self.unseen``) how much of each point's unseen directions
-        the cloud leaves uncovered."""
+        the cloud leaves uncovered. ``keep``: the far rays' hint tables of lone queries are appended to it
+        (without viewpoints; :func:`boundedness`)."""
         if self.viewpoints_n is None:
             return boundedness(self.bounded_cloud_n, points_n, params=self.bounded_params or self.params,
-                               checkpoint=checkpoint)
+                               checkpoint=checkpoint, keep=keep)
         if unseen is None:
             return seen_boundedness(self.bounded_cloud_n, points_n, self.viewpoints_n,
                                     params=self.bounded_params or self.params, checkpoint=checkpoint)

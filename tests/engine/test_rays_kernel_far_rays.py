@@ -45,6 +45,21 @@ def _exhaustive_beta(points: np.ndarray, origins: np.ndarray, h: float) -> np.nd
     return out
 
 
+def _builds() -> list:
+    """The kernel's builds this machine runs: the generic one, and the AVX2 one where the CPU has it."""
+    from skelcore.metrics import _raycast
+
+    modules = [_raycast]
+    if _raycast.cpu_has_avx2():
+        try:
+            from skelcore.metrics import _raycast_avx2
+
+            modules.append(_raycast_avx2)
+        except ImportError:
+            pass
+    return modules
+
+
 @pytest.fixture(scope="module")
 def case():
     shape = torus(1200, 1.0, 0.3, n_curve=32, seed=4)
@@ -67,16 +82,7 @@ def test_far_rays_hit_exactly_where_some_point_passes_the_ball_test(case, policy
     build's beta equals the exhaustive test's bit for bit (a lane group skipped with an open ray, or a
     walk cut short, would lose hits); "hints-prefetched" asks memory for the hints of every tile, as for
     a cloud beyond the kernel's PREFETCH_FROM bytes (docs/boundedness.md 3.17)."""
-    from skelcore.metrics import _raycast
-
-    modules = [_raycast]
-    if _raycast.cpu_has_avx2():
-        try:
-            from skelcore.metrics import _raycast_avx2
-
-            modules.append(_raycast_avx2)
-        except ImportError:
-            pass
+    modules = _builds()
     tree, queries, h, ref = case
     n = len(queries)
     assert 0.05 < float(np.mean(ref > 0.9)) < 0.95  # bounded and open queries both present
@@ -94,3 +100,33 @@ def test_the_kernel_in_use_is_one_of_the_two_builds():
 
     assert rays_kernel._raycast.__name__.rsplit(".", 1)[-1] in ("_raycast", "_raycast_avx2")
     assert _raycast.LEAF_SIZE == rays_kernel.LEAF_SIZE
+
+
+@pytest.mark.parametrize("seeds", ["kept", "garbage"])
+def test_far_rays_seeded_from_kept_tables_hit_exactly_as_the_ball_test(case, seeds):
+    """Each cluster starting from a hint table (docs/boundedness.md 3.18): the tables one pass kept of the
+    queries shifted by half a step (the moved hints then read the seeds' origins), or tables of random
+    indices (inner nodes and rows out of range among them, which the kernel must drop, not walk): beta
+    equals the exhaustive test's bit for bit on both builds."""
+    modules = _builds()
+    tree, queries, h, ref = case
+    n, table = len(queries), 2 * ROWS * BINS
+    origins = np.ascontiguousarray(queries + [0.75 * h, 0.0, 0.0])
+    rng = np.random.default_rng(7)
+    for module in modules:
+        if seeds == "kept":
+            tables = np.full((n, table), -1, np.int32)
+            module.clusters(tree.points, tree.nodes, tree.leaves, origins, np.arange(n + 1, dtype=np.int64), origins,
+                            np.full(n, h), 0, n, float(h), ROWS, BINS, np.zeros(n), np.zeros(6, np.int64),
+                            np.zeros(1, np.int32), np.zeros(1, np.int64), -1, -1, -1, np.zeros(0, np.int32),
+                            np.zeros(0), np.zeros(0, np.int32), tables, np.arange(n, dtype=np.int32))
+            assert (tables[:, 1::2] >= 0).mean() > 0.3  # the pass kept its hits
+        else:
+            tables = rng.integers(-5, len(tree.nodes) + len(tree.points) + 5, (n, table)).astype(np.int32)
+        beta, stats = np.zeros(n), np.zeros(6, np.int64)
+        module.clusters(tree.points, tree.nodes, tree.leaves, queries, np.arange(n + 1, dtype=np.int64), queries,
+                        np.full(n, h), 0, n, float(h), ROWS, BINS, beta, stats, np.zeros(1, np.int32),
+                        np.zeros(1, np.int64), 0 if seeds == "garbage" else -1, -1, -1, tables, origins,
+                        np.arange(n, dtype=np.int32), np.zeros(0, np.int32), np.zeros(0, np.int32))
+        assert stats[4] > 0  # the hints were tried
+        assert np.array_equal(beta, ref), module.__name__
