@@ -32,13 +32,17 @@ def outside_of(pre: Evaluation) -> OutsideDefects | None:
 
 def outside_named(out: OutsideDefects, new_edges: np.ndarray) -> str:
     """The outside branches of ``out`` that hold one of the edge ids ``new_edges`` (the fill's own; all of
-    them when none does), each with its length outside and its reach in local radii (docs/diagnostics.md
-    "Outside")."""
+    them when none does), each with its reach and, when the length test ran (``length_test``: voxels fine
+    enough), its length outside, in local radii (docs/diagnostics.md "Outside")."""
     bad = out.defective_branches()
     eb = np.asarray(out.branches.edge_branch, np.int64) if out.branches is not None else np.zeros(0, np.int64)
     own = np.intersect1d(bad, eb[np.asarray(new_edges, np.int64)]) if len(eb) else np.zeros(0, np.int64)
     which, whose = (own, "the fill's") if len(own) else (bad, "the curve's")
     reach = out.reach if len(out.reach) else np.zeros(len(out.branch_outside_length))
-    named = ", ".join(f"branch {int(b)} ({out.branch_radii[b]:.2g} local radii outside, reaching {reach[b]:.2g} out)"
-                      for b in which)
+
+    def one(b: int) -> str:
+        length = f"{out.branch_radii[b]:.2g} local radii of length outside, " if out.length_test else ""
+        return f"branch {b} ({length}reaching {reach[b]:.2g} local radii out)"
+
+    named = ", ".join(one(int(b)) for b in which)
     return f"{whose} outside {'branch' if len(which) == 1 else 'branches'}: {named}"

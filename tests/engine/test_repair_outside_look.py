@@ -72,7 +72,7 @@ def test_a_fill_adding_an_outside_branch_is_refused_at_first_look(middle):
             assert why is None
             continue
         assert why.startswith("no progress: more outside (0 -> 1): the fill's outside branch: branch ")
-        assert "local radii outside, reaching" in why and seen["outside_share"] > 0
+        assert "local radii of length outside, reaching" in why and "local radii out)" in why and seen["outside_share"] > 0
         whole = read_findings(screen.whole_update(pre)[0])
         assert "outside (0 -> 1)" in verdict(before, whole, LOOSE, kept=kept)
         assert whole.measures["outside_share"] == seen["outside_share"]
