@@ -21,13 +21,18 @@ from ..evaluation import Evaluation
 from ..params import Params
 from .findings import Findings
 from .guard import kept_part, recentred, worse
+from .outside_look import outside_named, outside_of
 
-__all__ = ["first_look", "first_update", "whole_update", "with_scan_checks", "SCAN_CHECKS"]
+__all__ = ["first_look", "first_update", "whole_update", "with_scan_checks", "SCAN_CHECKS", "OUTSIDE_FIRST"]
 
 #: whether every update of a candidate runs the real-scan trust checks (the openings' search): False,
 #: since the rule reads none of their warnings; True gives the slower path, the same decisions, log and
 #: curve (tests/engine/test_repair_cost.py)
 SCAN_CHECKS = False
+#: whether a fill's first look runs the outside test (:mod:`.outside_look`) and refuses a fill that adds an
+#: outside branch without its whole update: True; False gives the slower path, the same decisions and
+#: curve, the refusal logged with every defect (tests/engine/test_repair_cost.py)
+OUTSIDE_FIRST = True
 
 
 def _num(x: object) -> float | None:
@@ -81,7 +86,9 @@ def first_look(before: Findings, pre: Evaluation, params: Params, recentring: bo
     candidate's ``update(..., diagnostics=False)``: completeness, curve boundedness and centeredness
     against ``before`` with the bounds of :func:`.guard.verdict`; the outside share stays None.
     ``recentring``: a re-centring, refused before its completeness when it has not its gain;
-    ``kept``: a fill, curve centeredness judged on these edges (:func:`.guard.kept_part`)."""
+    ``kept``: a fill, curve centeredness judged on these edges (:func:`.guard.kept_part`), and, with
+    :data:`OUTSIDE_FIRST`, its outside share and outside branches (:mod:`.outside_look`): one that adds
+    an outside branch is refused, the reason naming them (docs/repair.md "The repair's cost")."""
     s = pre.summary()
     a = {"completeness": None, "outside_share": None,
          "boundedness": _num(s["boundedness"]["curve"]), "centeredness": _num(s["centeredness"]["curve"])}
@@ -93,5 +100,14 @@ def first_look(before: Findings, pre: Evaluation, params: Params, recentring: bo
         cl = pre.curve
         judged = kept_part(a, cl.sample_edge, cl.sample_centeredness(params.beta_star), kept, params)
     why = worse(before.measures, judged, params, completeness=known)
-    return a, ("worse: " + "; ".join(why)) if why else None
+    if why or kept is None or not OUTSIDE_FIRST or (out := outside_of(pre)) is None:
+        return a, ("worse: " + "; ".join(why)) if why else None
+    a["outside_share"] = judged["outside_share"] = out.length_share
+    why = worse(before.measures, judged, params, completeness=known)
+    if why:  # the outside share, the one measure not judged above
+        return a, "worse: " + "; ".join(why)
+    n_before, n_after = before.tally["outside"], len(out.defective_branches())
+    if n_after > n_before:  # the rule refuses a fill that adds a defect of another kind (guard._filled)
+        return a, f"no progress: more outside ({n_before} -> {n_after}): {outside_named(out, np.flatnonzero(~np.asarray(kept, bool)))}"
+    return a, None
 
