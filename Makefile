@@ -33,7 +33,8 @@ run: setup
 	bash scripts/run_main_job.sh
 
 # Two workers (pytest-xdist), one test file per worker at a time (--dist loadfile: a file's fixtures are
-# built once); each worker has its own Xvfb (pytest-xvfb). One worker took 8.7 min, two 4.9 (docs/guide/testing.md).
+# built once), the files heaviest first by tests/file_costs.txt (tests/conftest.py); each worker has its own
+# Xvfb (pytest-xvfb). One worker took 8.7 min, two 4.9 (docs/guide/testing.md).
 test: setup
 	$(PY) -m pytest -q -p no:cacheprovider -n 2 --dist loadfile tests
 

@@ -6,6 +6,7 @@ imported by skelcore or the viewer, no engine module importing the command line,
 from __future__ import annotations
 
 import ast
+import functools
 from pathlib import Path
 
 import pytest
@@ -26,13 +27,19 @@ def _module_name(path: Path) -> str:
     return ".".join(parts)
 
 
+@functools.cache
+def _tree(path: Path) -> ast.Module:
+    """The parsed file, once per run: every rule walks the same trees (none changes them)."""
+    return ast.parse(path.read_text(encoding="utf-8"), filename=str(path))
+
+
 def _modules(package: str) -> dict[str, Path]:
     return {_module_name(p): p for p in sorted((ROOT / package).rglob("*.py"))}
 
 
 def _imports(name: str, path: Path, known: set[str]) -> list[tuple[str, int, bool]]:
     """(imported module, line, at module level) for every import statement of the file."""
-    tree = ast.parse(path.read_text(encoding="utf-8"), filename=str(path))
+    tree = _tree(path)
     is_pkg = path.name == "__init__.py"
     base = name.split(".") if is_pkg else name.split(".")[:-1]
     top_level = {id(n) for n in tree.body}
@@ -311,7 +318,7 @@ def test_package_inits_only_re_export(package):
     """An ``__init__.py`` holds a docstring, imports, ``__all__`` and at most a tiny helper."""
     heavy = []
     for path in sorted((ROOT / package).rglob("__init__.py")):
-        tree = ast.parse(path.read_text(encoding="utf-8"))
+        tree = _tree(path)
         defs = [n for n in tree.body if isinstance(n, (ast.FunctionDef, ast.ClassDef, ast.AsyncFunctionDef))]
         code_lines = sum((n.end_lineno or n.lineno) - n.lineno + 1 for n in defs)
         if code_lines > 15:
@@ -323,7 +330,7 @@ def test_module_docstrings_are_short():
     """What and why in about 15 lines; measurement history belongs in docs/."""
     long = []
     for name, path in _modules("skelcore").items():
-        doc = ast.get_docstring(ast.parse(path.read_text(encoding="utf-8")))
+        doc = ast.get_docstring(_tree(path))
         if doc is None and path.stat().st_size > 200:
             long.append(f"{name}: no module docstring")
         elif doc is not None and len(doc.splitlines()) > 18:
@@ -349,10 +356,41 @@ def test_engine_top_level_is_small():
     assert len(top) <= 12, sorted(top)
 
 
+# Each module named on the command line imported first, in a child forked from one interpreter that has
+# loaded the third-party libraries but no skelcore module: the same import order as a fresh interpreter
+# per module (a cycle fails the same way), without paying numpy's and scipy's import once per module.
+_IMPORTS_FIRST = """
+import importlib, os, sys, traceback
+names = sys.argv[1:]
+for name in names:
+    try:
+        importlib.import_module(name)
+    except BaseException:
+        pass  # reported by its own child below
+for key in [k for k in sys.modules if k == "skelcore" or k.startswith("skelcore.")]:
+    del sys.modules[key]
+for name in names:
+    sys.stdout.flush()
+    pid = os.fork()
+    if pid == 0:
+        try:
+            importlib.import_module(name)
+        except BaseException:
+            traceback.print_exc()
+            os._exit(1)
+        print(name, "ok", flush=True)
+        os._exit(0)
+    _, status = os.waitpid(pid, 0)
+    if status:
+        print(name, "failed", flush=True)
+"""
+
+
 def test_the_warning_record_loads_no_diagnostic_and_every_diagnostics_module_imports_first():
     """skelcore.diagnostics.trust_warning is the foundation's: importing it (a fresh interpreter) loads
     none of the diagnostics nor scipy; each diagnostics module, and each user of the record, imports
     first without a cycle; the package's names resolve (``missing_parts`` the function)."""
+    import os
     import subprocess
     import sys
 
@@ -362,8 +400,9 @@ def test_the_warning_record_loads_no_diagnostic_and_every_diagnostics_module_imp
     assert out.strip() == "['skelcore.diagnostics.trust_warning']"
     mods = [m for m in _modules("skelcore") if m.startswith("skelcore.diagnostics.")]
     mods += ["skelcore.scan.scan_report", "skelcore.evaluation", "skelcore.stages.scan_checks"]
-    for m in mods:
-        subprocess.run([sys.executable, "-c", f"import {m}"], capture_output=True, text=True, check=True)
+    out = subprocess.run([sys.executable, "-c", _IMPORTS_FIRST, *mods], capture_output=True, text=True,
+                         env={**os.environ, "OPENBLAS_NUM_THREADS": "1"}, check=True).stdout
+    assert out.splitlines() == [f"{m} ok" for m in mods]
     code = ("import skelcore.stages, skelcore.diagnostics.missing_parts\n"
             "from skelcore.diagnostics import missing_parts, find_curve_defects, JUNCTION\n"
             "import skelcore.diagnostics as d\n"
@@ -391,7 +430,7 @@ def _third_party_imports(folder: str) -> dict[str, bool]:
     found: dict[str, bool] = {}
     own = {"skelcore", "skelscope", "app"}
     for path in (ROOT / folder).rglob("*.py"):
-        tree = ast.parse(path.read_text(encoding="utf-8"))
+        tree = _tree(path)
         top_level = {id(n) for n in tree.body}
         for node in ast.walk(tree):
             if isinstance(node, ast.Import):

@@ -1,4 +1,4 @@
-"""The wheel is complete: built from the repository, installed into a fresh venv, ``skelcore
+"""The wheel is complete: built from the repository's sdist, installed into a fresh venv, ``skelcore
 evaluate`` runs from outside the repository on a generated cloud and imports only the wheel's code."""
 
 from __future__ import annotations
@@ -21,10 +21,31 @@ ROOT = Path(__file__).resolve().parents[2]
 
 
 @pytest.fixture(scope="module")
-def wheel(tmp_path_factory) -> Path:
+def sdist(tmp_path_factory) -> tuple[set[str], Path]:
+    """The source distribution built from the repository: its member names (the top folder left off) and
+    its unpacked tree."""
+    import tarfile
+
+    tmp = tmp_path_factory.mktemp("sdist")
+    out = tmp / "dist"
+    proc = subprocess.run([sys.executable, "-m", "build", "--sdist", "--no-isolation", "-o", str(out), str(ROOT)],
+                          capture_output=True, text=True, timeout=300)
+    assert proc.returncode == 0, proc.stdout + proc.stderr
+    (sdist,) = out.glob("skelscope-*.tar.gz")
+    with tarfile.open(sdist) as tar:
+        names = {n.split("/", 1)[1] for n in tar.getnames() if "/" in n}
+        tar.extractall(tmp / "src", filter="data")
+    (src,) = (tmp / "src").iterdir()
+    return names, src
+
+
+@pytest.fixture(scope="module")
+def wheel(sdist, tmp_path_factory) -> Path:
+    """The wheel pip builds from the unpacked sdist in an isolated build environment (the path of an install
+    from the package index, and the one `python -m build` takes): built once for the module's tests."""
     out = tmp_path_factory.mktemp("wheel")
     proc = subprocess.run(
-        [sys.executable, "-m", "pip", "wheel", "-q", "--no-deps", "-w", str(out), str(ROOT)],
+        [sys.executable, "-m", "pip", "wheel", "-q", "--no-deps", "-w", str(out), str(sdist[1])],
         capture_output=True, text=True, timeout=300,
     )
     assert proc.returncode == 0, proc.stderr
@@ -151,29 +172,18 @@ def test_viewer_without_its_libraries_says_so_in_one_line(wheel, tmp_path):
     assert engine.returncode == 0, engine.stderr
 
 
-def test_sdist_holds_the_project_and_builds_the_wheel(tmp_path):
+def test_sdist_holds_the_project_and_builds_the_wheel(sdist, wheel):
     """The source distribution is the whole tracked project (tests, docs, examples, samples, scans), and
-    its unpacked tree builds the wheel; the long description renders as the package index renders it."""
-    import tarfile
-
+    its unpacked tree builds the wheel (the module's wheel is built from it); the long description renders
+    as the package index renders it."""
     from readme_renderer.markdown import render
 
-    out = tmp_path / "dist"
-    proc = subprocess.run([sys.executable, "-m", "build", "--sdist", "--no-isolation", "-o", str(out), str(ROOT)],
-                          capture_output=True, text=True, timeout=300)
-    assert proc.returncode == 0, proc.stdout + proc.stderr
-    (sdist,) = out.glob("skelscope-*.tar.gz")
-    with tarfile.open(sdist) as tar:
-        names = {n.split("/", 1)[1] for n in tar.getnames() if "/" in n}
-        tar.extractall(tmp_path / "src", filter="data")
+    names, _src = sdist
     tracked = subprocess.run(["git", "ls-files"], cwd=ROOT, capture_output=True, text=True, check=True).stdout.split()
     left_out = [f for f in tracked if f not in names and not f.startswith((".gitignore", "."))]
     assert left_out == []
-    (src,) = (tmp_path / "src").iterdir()
-    _pip("wheel", "-q", "--no-deps", "--no-build-isolation", "-w", str(tmp_path / "whl"), str(src))
-    (whl,) = (tmp_path / "whl").glob("skelscope-*.whl")
-    meta = next(n for n in zipfile.ZipFile(whl).namelist() if n.endswith("METADATA"))
-    text = zipfile.ZipFile(whl).read(meta).decode()
+    meta = next(n for n in zipfile.ZipFile(wheel).namelist() if n.endswith("METADATA"))
+    text = zipfile.ZipFile(wheel).read(meta).decode()
     description = text.split("\n\n", 1)[1]
     assert "Description-Content-Type: text/markdown" in text
     assert render(description) is not None and len(description) > 500
