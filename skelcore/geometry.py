@@ -228,6 +228,22 @@ def take_rows(array: np.ndarray, index: np.ndarray) -> np.ndarray:
     return np.take(array, index, axis=0)
 
 
+def group_min_median_max(values: np.ndarray, groups: np.ndarray, n: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Per group 0..n-1 the min, median and max of ``values`` (NaN for an empty group; groups outside
+    0..n-1 left out), all groups in one sort; the median is np.median's (the middle value, or the mean
+    of the two middle ones)."""
+    lo_v, med, hi_v = np.full(n, np.nan), np.full(n, np.nan), np.full(n, np.nan)
+    order = np.lexsort((values, groups))
+    vs = values[order]
+    bounds = np.searchsorted(groups[order], np.arange(n + 1))
+    count = np.diff(bounds)
+    has = count > 0
+    lo, count = bounds[:-1][has], count[has]
+    lo_v[has], hi_v[has] = vs[lo], vs[lo + count - 1]
+    med[has] = (vs[lo + (count - 1) // 2] + vs[lo + count // 2]) / 2.0
+    return lo_v, med, hi_v
+
+
 def stable_argsort(values: np.ndarray) -> np.ndarray:
     """``np.argsort(values, kind="stable")`` of a 1-D array (equal values by index; NaN last), by numpy's
     unstable (vectorised) sort and a re-sort of the indices inside each run of equal values: 2-3 x faster

@@ -21,7 +21,7 @@ from scipy.sparse.csgraph import connected_components, depth_first_order
 from scipy.spatial import cKDTree
 
 from ..curve import CurveSkeleton
-from ..geometry import Checkpoint, kd_tree, no_checkpoint
+from ..geometry import Checkpoint, group_min_median_max, kd_tree, no_checkpoint
 
 __all__ = ["Branches", "decompose_branches", "branch_paths", "densify", "JUNCTION"]
 
@@ -500,16 +500,7 @@ def decompose_branches(
         tree = cloud_tree if cloud_tree is not None else kd_tree(np.asarray(cloud, float))
         r, _ = tree.query(pts)
         checkpoint(0.8)
-        # per branch its radii's min, median and max, all branches in one sort (np.median's values:
-        # the middle one, or the mean of the two middle ones)
-        order = np.lexsort((r, pb))
-        rs = r[order]
-        bounds = np.searchsorted(pb[order], np.arange(nb + 1))
-        n_on = np.diff(bounds)
-        has = n_on > 0
-        lo, n_on = bounds[:-1][has], n_on[has]
-        rmin[has], rmax[has] = rs[lo], rs[lo + n_on - 1]
-        rmed[has] = (rs[lo + (n_on - 1) // 2] + rs[lo + n_on // 2]) / 2.0
+        rmin, rmed, rmax = group_min_median_max(r, pb, nb)  # per branch its radii's min, median, max
     sample_branch = None
     if sample_edge is not None:
         se = np.asarray(sample_edge, dtype=np.int64)

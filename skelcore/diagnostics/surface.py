@@ -20,6 +20,7 @@ import numpy as np
 from scipy.spatial import cKDTree
 
 from ..curve import CurveSkeleton
+from ..geometry import group_min_median_max
 from ..metrics.curve_sampling import CurveSamples
 from ..params import Params
 from .branches import Branches
@@ -148,13 +149,7 @@ def find_along_surface(curve: CurveSkeleton, branches: Branches, samples: CurveS
     n_valid = np.bincount(sb[valid], minlength=nb)
     n_off = np.bincount(sb[off], minlength=nb)
     length = np.bincount(sb[off], weights=_stretches(curve, samples)[off], minlength=nb)
-    med = np.full(nb, np.nan)
-    order = np.lexsort((c[off], sb[off]))
-    sbo, co = sb[off][order], c[off][order]
-    bounds = np.searchsorted(sbo, np.arange(nb + 1))
-    has = np.flatnonzero(np.diff(bounds) > 0)
-    lo, n = bounds[has], np.diff(bounds)[has]
-    med[has] = (co[lo + (n - 1) // 2] + co[lo + n // 2]) / 2.0
+    med = group_min_median_max(c[off], sb[off], nb)[1]
     with np.errstate(invalid="ignore", divide="ignore"):
         share = np.where(n_valid > 0, n_off / np.maximum(n_valid, 1), 0.0)
     enough = length >= params.surface_min_radii * radius if radius > 0 else np.ones(nb, bool)

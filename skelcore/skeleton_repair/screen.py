@@ -31,7 +31,7 @@ __all__ = ["first_look", "first_update", "whole_update", "with_scan_checks", "SC
 SCAN_CHECKS = False
 #: whether a fill's first look runs the outside test (:mod:`.outside_look`) and refuses a fill that adds an
 #: outside branch without its whole update: True; False gives the slower path, the same decisions and
-#: curve, the refusal logged with every defect (tests/engine/test_repair_cost.py)
+#: curve, the refusal logged with every defect (tests/engine/test_repair_outside_look.py)
 OUTSIDE_FIRST = True
 
 
