@@ -134,3 +134,37 @@ def test_the_calibrations_truth_reads_the_move_across_the_axis():
     v, e, r = (np.asarray(x) for x in w.ref)
     little = offset(v.astype(float), e, r.astype(float), 0.2, np.random.default_rng(0))[0]
     assert along_surface_truth(replace(moved, vertices=little), w) == 0
+
+
+def test_the_kimimaro_hammer_knob_is_flagged_and_its_head_is_centred():
+    """kimimaro's hammer (docs/diagnostics.md "Along the surface", "The hammer's head"): the knob's two
+    branches along opposite walls are flagged; the head's branches run within a fifth of the head's
+    half-width of its section's centre (by the cloud alone) and their judged samples have c above 0.8,
+    so the head is quiet because its branches are centred, not because no sample of it is judged."""
+    pytest.importorskip("kimimaro")
+    from skelcore import adapters
+    from skelcore.io.loaders import load_cloud
+
+    cloud = np.asarray(load_cloud("resources/scans/hammer_4096.ply"), float)
+    ev = skelcore.evaluate(cloud, None, adapters.run("kimimaro", cloud).curve, workers=1)
+    ctx = ev.source.ctx
+    cd = ctx.results["curve defects"]
+    sb, runs = cd.branches.sample_branch, cd.surface
+    pts = ctx.norm.invert(ctx.samples.points)  # the scan's units: the head is y > 86
+    top = np.array([pts[sb == b, 1].min() if (sb == b).any() else -np.inf for b in range(len(cd.branches))])
+    knob = np.flatnonzero(np.array([pts[sb == b, 1].max() if (sb == b).any() else np.inf
+                                    for b in range(len(cd.branches))]) < -160)
+    head = np.flatnonzero(top > 86)
+    assert len(head) >= 3 and set(runs.flagged) & set(knob) and not set(runs.flagged) & set(head)
+    on_head = np.isin(sb, head)
+    c = np.asarray(ctx.results["curve centeredness"], float)[on_head]
+    judged = c[c > 0]
+    assert len(judged) >= 10 and np.median(judged) > 0.8
+    # each head sample's offset from its section's centre (the head's points within 2 units of its z)
+    cloud_head = cloud[cloud[:, 1] > 86]
+    share = []
+    for p in pts[on_head]:
+        sec = cloud_head[np.abs(cloud_head[:, 2] - p[2]) < 2.0][:, :2]
+        lo, hi = sec.min(axis=0), sec.max(axis=0)
+        share.append(np.max(np.abs(p[:2] - (lo + hi) / 2) / ((hi - lo) / 2)))
+    assert np.median(share) < 0.2
