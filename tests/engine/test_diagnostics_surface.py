@@ -140,13 +140,15 @@ def test_the_kimimaro_hammer_knob_is_flagged_and_its_head_is_centred():
     """kimimaro's hammer (docs/diagnostics.md "Along the surface", "The hammer's head"): the knob's two
     branches along opposite walls are flagged; the head's branches run within a fifth of the head's
     half-width of its section's centre (by the cloud alone) and their judged samples have c above 0.8,
-    so the head is quiet because its branches are centred, not because no sample of it is judged."""
+    so the head is quiet because its branches are centred, not because no sample of it is judged; moved
+    towards a face, a head branch is flagged."""
     pytest.importorskip("kimimaro")
     from skelcore import adapters
     from skelcore.io.loaders import load_cloud
 
     cloud = np.asarray(load_cloud("resources/scans/hammer_4096.ply"), float)
-    ev = skelcore.evaluate(cloud, None, adapters.run("kimimaro", cloud).curve, workers=1)
+    curve = adapters.run("kimimaro", cloud).curve
+    ev = skelcore.evaluate(cloud, None, curve, workers=1)
     ctx = ev.source.ctx
     cd = ctx.results["curve defects"]
     sb, runs = cd.branches.sample_branch, cd.surface
@@ -168,3 +170,10 @@ def test_the_kimimaro_hammer_knob_is_flagged_and_its_head_is_centred():
         lo, hi = sec.min(axis=0), sec.max(axis=0)
         share.append(np.max(np.abs(p[:2] - (lo + hi) / 2) / ((hi - lo) / 2)))
     assert np.median(share) < 0.2
+    # the head's vertices moved 12 units towards its +x face (0.65 of the middle's half-width): seen
+    v = np.asarray(curve.vertices, float).copy()
+    v[v[:, 1] > 88, 0] += 12.0
+    moved = skelcore.evaluate(cloud, None, CurveSkeleton.from_raw(v, curve.edges), workers=1)
+    mcd = moved.source.ctx.results["curve defects"]
+    mpts, msb = moved.source.ctx.norm.invert(moved.source.ctx.samples.points), mcd.branches.sample_branch
+    assert any((msb == b).any() and mpts[msb == b, 1].min() > 86 for b in mcd.surface.flagged)
