@@ -8,7 +8,8 @@ ball. Its tip differs from a spur's by what lies ahead of it: the curve goes on.
 end** when the nearest vertex q of another piece of the curve lies within ``spur_cut_gap`` local
 radii of it (the larger of the two ends' distances to the cloud), ahead of it (the gap's direction
 within ``spur_cut_angle`` degrees of the branch's own at its tip, read over one local radius of it),
-and the cloud fills the gap: every point of the segment from the tip to q, every ``diag_step`` local
+the tip is in turn its piece's nearest vertex to q (the two ends of a cut face each other; a twig
+beside another piece's neurite has its own piece's nodes nearer to it), and the cloud fills the gap: every point of the segment from the tip to q, every ``diag_step`` local
 radii, lies within (1 + ``spur_slack``) times the radius interpolated between its ends of the cloud,
 the same grown balls the explanation measure reads. A spur's tip lies where the cloud ends or in the
 air; no piece continues it through the shape. A curve in one piece costs one count of its pieces.
@@ -54,22 +55,24 @@ def _tip_direction(v: np.ndarray, path: np.ndarray, tip_first: bool, length: flo
     return u / n if n > 0 else u
 
 
-def _nearest_other(v: np.ndarray, piece: np.ndarray, tips: np.ndarray) -> np.ndarray:
-    """Per tip, the nearest vertex of another piece (-1: the curve has no other piece)."""
+def _nearest_of(v: np.ndarray, piece: np.ndarray, at: np.ndarray, target: np.ndarray, same: bool) -> np.ndarray:
+    """Per vertex ``at[i]``, the nearest vertex whose piece is ``target[i]`` (``same``) or is not (-1:
+    none such)."""
     used = np.flatnonzero(piece >= 0)
-    out = np.full(len(tips), -1, np.int64)
-    if not len(tips) or len(np.unique(piece[used])) < 2:
+    out = np.full(len(at), -1, np.int64)
+    if not len(at) or not len(used):
         return out
     tree = cKDTree(v[used])
     k = min(_K, len(used))
-    _, j = tree.query(v[tips], k=k)
-    j = used[np.asarray(j).reshape(len(tips), k)]
-    other = piece[j] != piece[tips][:, None]
-    has = other.any(axis=1)
-    out[has] = j[has, np.argmax(other[has], axis=1)]
-    for i in np.flatnonzero(~has):  # every one of the k nearest on its own piece
-        rest = used[piece[used] != piece[tips[i]]]
-        out[i] = rest[int(cKDTree(v[rest]).query(v[tips[i]])[1])]
+    _, j = tree.query(v[at], k=k)
+    j = used[np.asarray(j).reshape(len(at), k)]
+    hit = (piece[j] == target[:, None]) == same
+    has = hit.any(axis=1)
+    out[has] = j[has, np.argmax(hit[has], axis=1)]
+    for i in np.flatnonzero(~has):  # none among the k nearest: a search of its own
+        rest = used[(piece[used] == target[i]) == same]
+        if len(rest):
+            out[i] = rest[int(cKDTree(v[rest]).query(v[at[i]])[1])]
     return out
 
 
@@ -88,7 +91,7 @@ def cut_ends(curve: CurveSkeleton, branches: Branches, terminal: np.ndarray, clo
     paths = [np.asarray(branches.paths[b], np.int64) for b in terminal]
     tip_first = np.array([deg[p[0]] == 1 for p in paths])
     tips = np.array([p[0] if f else p[-1] for p, f in zip(paths, tip_first)], np.int64)
-    other = _nearest_other(v, piece, tips)
+    other = _nearest_of(v, piece, tips, piece[tips], same=False)
     ok = np.flatnonzero(other >= 0)
     if not len(ok):
         return res
@@ -104,6 +107,8 @@ def cut_ends(curve: CurveSkeleton, branches: Branches, terminal: np.ndarray, clo
         g = v[other[i]] - v[tips[i]]
         res.cos[i] = float(u @ g / dist[t]) if dist[t] > 0 else 1.0
     near = ok[(res.gap[ok] <= params.spur_cut_gap) & (res.cos[ok] >= np.cos(np.radians(params.spur_cut_angle)))]
+    # the two ends of a cut face each other: the tip is the nearest vertex of its piece to q too
+    near = near[_nearest_of(v, piece, other[near], piece[tips[near]], same=True) == tips[near]]
     if not len(near):
         return res
     # the gap's points every diag_step radii against the balls interpolated between its ends
