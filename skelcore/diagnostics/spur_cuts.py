@@ -1,5 +1,5 @@
 """Terminal branches that end at a cut in the curve, not in the shape: not spurs (docs/diagnostics.md
-"Spurious branches", rule 6, and "Cut ends").
+"Spurious branches", rule 6, and "Cut ends of a broken curve").
 
 A curve broken into pieces (an edge lost: docs/diagnostics.md "Disconnected") gives each side of the
 cut a new free end. The branch from a junction to such an end can fail both spur measures: the piece
@@ -9,9 +9,10 @@ end** when the nearest vertex q of another piece of the curve lies within ``spur
 radii of it (the larger of the two ends' distances to the cloud), ahead of it (the gap's direction
 within ``spur_cut_angle`` degrees of the branch's own at its tip, read over one local radius of it),
 the tip is in turn its piece's nearest vertex to q (the two ends of a cut face each other; a twig
-beside another piece's neurite has its own piece's nodes nearer to it), and the cloud fills the gap: every point of the segment from the tip to q, every ``diag_step`` local
-radii, lies within (1 + ``spur_slack``) times the radius interpolated between its ends of the cloud,
-the same grown balls the explanation measure reads. A spur's tip lies where the cloud ends or in the
+beside another piece's neurite has its own piece's nodes nearer to it), and the cloud fills the gap:
+every point of the segment from the tip to q, every ``diag_step`` local radii, lies within
+(1 + ``spur_slack``) times the radius interpolated between its ends of the cloud, the same grown
+balls the explanation measure reads. A spur's tip lies where the cloud ends or in the
 air; no piece continues it through the shape. A curve in one piece costs one count of its pieces.
 """
 
@@ -102,7 +103,7 @@ def cut_ends(curve: CurveSkeleton, branches: Branches, terminal: np.ndarray, clo
     res.other[ok] = other[ok]
     with np.errstate(divide="ignore", invalid="ignore"):
         res.gap[ok] = np.where(scale > 0, dist / scale, np.where(dist > 0, np.inf, 0.0))
-    for i, t in zip(ok, range(len(ok))):
+    for t, i in enumerate(ok):
         u = _tip_direction(v, paths[i], bool(tip_first[i]), float(r_tip[t]))
         g = v[other[i]] - v[tips[i]]
         res.cos[i] = float(u @ g / dist[t]) if dist[t] > 0 else 1.0

@@ -14,9 +14,8 @@ Not judged: ``unresolved`` (r_J under ``spur_resolved_spacings`` spacings, or an
 failure ending under ``spur_twig_spacings`` spacings past the junction's ball, its tip not in the air:
 :func:`unsampled_twig`);
 ``stubs`` under ``spur_stub_share`` of the curve's length; ``unseen`` on a cloud seen from one side
-(:mod:`.spur_sides`); ``cut_end``: a tip where the curve is broken and another piece goes on across a
-gap the cloud fills (:mod:`.spur_cuts`; ``disconnected`` names the break). Size: length in r_J, share
-of the length.
+(:mod:`.spur_sides`); ``cut_end``, a tip at a break of the curve (:mod:`.spur_cuts`). Size: length in
+r_J, share of the length.
 """
 
 from __future__ import annotations
