@@ -91,6 +91,11 @@ class Params:
     spur_one_sided : on a cloud seen from one side (the mean direction from the curve to its cloud
         points, across the axis, at least this long: docs/diagnostics.md "Spurious branches") a
         terminal branch failing only the explanation measure is counted ``unseen``, not judged.
+    spur_cut_gap : a terminal branch's tip is a cut end (not judged: the curve is broken there, which
+        ``disconnected`` names) when another piece of the curve lies within this many local radii of
+        it (the larger of the two ends'), ahead of it ...
+    spur_cut_angle : ... the gap's direction within this many degrees of the branch's own at its tip,
+        and the cloud fills the gap (within (1 + spur_slack) x the radius interpolated between its ends).
     spurs_warn_count : ``spurious_branches`` fires from this many spurious branches.
     cycles_voxels : voxels along the longest side of the cloud's box for the shape's interior ...
     cycles_voxel_spacing : ... but a voxel is at least this many median nearest-neighbour spacings
@@ -327,6 +332,8 @@ class Params:
     spur_twig_tip_spacings: float = 3.25
     spur_stub_share: float = 0.005
     spur_one_sided: float = 0.18
+    spur_cut_gap: float = 3.0
+    spur_cut_angle: float = 60.0
     spurs_warn_count: int = 1
     cycles_voxels: int = 96
     cycles_voxel_spacing: float = 1.5
@@ -474,6 +481,8 @@ class Params:
                 bad(name, "must be an integer >= 1000")
         if self.k_center is not None and int(self.k_center) < 1:
             bad("k_center", "must be a positive integer or None")
+        if not 0.0 <= float(self.spur_cut_angle) <= 180.0:
+            bad("spur_cut_angle", "must be in [0, 180]")
         for name in ("diag_step", "spur_reach", "cycles_voxel_spacing", "cycles_resolved_voxels", "outside_min_radii", "outside_link",
                      "components_link", "surface_min_radii", "surface_slab_radii",
                      "outside_reach", "outside_voxel_radii"):
@@ -488,7 +497,7 @@ class Params:
             if int(getattr(self, name)) < 1:
                 bad(name, "must be a positive integer")
         for name in ("surface_junction_radii", "spur_slack", "spur_resolved_spacings", "spur_twig_spacings", "spur_twig_tip_spacings",
-                     "spur_stub_share"):
+                     "spur_stub_share", "spur_cut_gap"):
             if not float(getattr(self, name)) >= 0:
                 bad(name, "must be >= 0")
         if int(self.spur_min_points) < 0:

@@ -14,7 +14,8 @@ Not judged: ``unresolved`` (r_J under ``spur_resolved_spacings`` spacings, or an
 failure ending under ``spur_twig_spacings`` spacings past the junction's ball, its tip not in the air:
 :func:`unsampled_twig`);
 ``stubs`` under ``spur_stub_share`` of the curve's length; ``unseen`` on a cloud seen from one side
-(:mod:`.spur_sides`). Size: length in r_J, share of the length.
+(:mod:`.spur_sides`); ``cut_end``, a tip at a break of the curve (:mod:`.spur_cuts`). Size: length in
+r_J, share of the length.
 """
 
 from __future__ import annotations
@@ -34,6 +35,7 @@ from .interior import cloud_subsample
 from .spur_pairs import explained_by_balls
 from .spur_cache import SpurMemo
 from .spur_sides import one_sidedness
+from .spur_cuts import cut_ends
 from .spur_balls import balls_in_shape
 from .interior import VoxelShape
 
@@ -56,6 +58,8 @@ class SpurDefects:
     ``spur_stub_share`` (neither spurious). tip_distance : (B,) the far end's distance to the cloud.
     one_sided : how far the cloud is seen from one side (:mod:`.spur_sides`); unseen : (B,) bool,
     terminal branches failing the explanation measure alone on a one-sided cloud (not judged).
+    cut_end : (B,) bool, terminal branches whose tip is a cut in the curve (:mod:`.spur_cuts`; not
+    spurious, ``disconnected``'s).
     """
 
     branches: Branches
@@ -77,6 +81,7 @@ class SpurDefects:
     one_sided: float = 0.0
     unseen: np.ndarray | None = None
     tip_distance: np.ndarray | None = None
+    cut_end: np.ndarray | None = None
 
     def _count(self, flags: np.ndarray | None) -> int:
         return int(np.count_nonzero(flags)) if flags is not None else 0
@@ -116,6 +121,8 @@ class SpurDefects:
         aside = f"; {unresolved} more in parts the cloud does not resolve, not judged" if unresolved else ""
         unseen = self._count(self.unseen)
         aside += f"; {unseen} more with no point of their own on a cloud seen from one side, not judged" if unseen else ""
+        cut = self._count(self.cut_end)
+        aside += f"; {cut} more ending where the curve is broken, not judged (disconnected)" if cut else ""
         return [TrustWarning(
             "spurious_branches",
             f"{n} of the curve's {len(self.terminal)} terminal branches are spurious (reach no farther than "
@@ -134,6 +141,7 @@ class SpurDefects:
             "unresolved": self._count(self.unresolved),
             "stubs": self._count(self.stub),
             "unseen": self._count(self.unseen),
+            "cut_ends": self._count(self.cut_end),
             "one_sided": float(self.one_sided),
             "branches": [
                 {"id": int(b), "reach": num(self.reach[b]), "length_radii": num(self.length_radii[b]),
@@ -141,7 +149,8 @@ class SpurDefects:
                  "spurious": bool(self.branch_spurious[b]),
                  "unresolved": bool(self.unresolved[b]) if self.unresolved is not None else False,
                  "stub": bool(self.stub[b]) if self.stub is not None else False,
-                 "unseen": bool(self.unseen[b]) if self.unseen is not None else False}
+                 "unseen": bool(self.unseen[b]) if self.unseen is not None else False,
+                 "cut_end": bool(self.cut_end[b]) if self.cut_end is not None else False}
                 for b in self.terminal
             ],
             "subsampled": self.subsampled,
@@ -326,19 +335,22 @@ def find_spurious_branches(
     if len(terminal) and len(cloud):
         spacing[terminal] = junction_spacing(cloud_tree, curve, branches, terminal)
     lonely = (unique < params.spur_min_points) | (unique < params.spur_unique * np.maximum(territory, 1))
+    cut = np.zeros(nb, bool)  # a tip where the curve is broken: disconnected's, not a spur
+    if len(terminal) and len(cloud):
+        cut[terminal] = cut_ends(curve, branches, terminal, cloud_tree, params).cut
     with np.errstate(invalid="ignore"):
         short = reach <= params.spur_reach
         unresolved = np.zeros(nb, bool)
-        unresolved[terminal] = ((r_j < params.spur_resolved_spacings * spacing)
-                                | (lonely & ~short & unsampled_twig(reach, r_j, spacing, params, tip_d)))[terminal]
+        unresolved[terminal] = (~cut & ((r_j < params.spur_resolved_spacings * spacing)
+                                        | (lonely & ~short & unsampled_twig(reach, r_j, spacing, params, tip_d))))[terminal]
     total_length = float(branches.length.sum())
     stub = np.zeros(nb, bool)
-    stub[terminal] = (short & ~unresolved & (branches.length < params.spur_stub_share * total_length))[terminal]
+    stub[terminal] = (short & ~unresolved & ~cut & (branches.length < params.spur_stub_share * total_length))[terminal]
     unseen = np.zeros(nb, bool)
     if sided >= params.spur_one_sided:  # a twig the sensor did not see has no point: not judged
-        unseen[terminal] = (lonely & ~short & ~unresolved)[terminal]
+        unseen[terminal] = (lonely & ~short & ~unresolved & ~cut)[terminal]
     branch_spurious = np.zeros(nb, bool)
-    branch_spurious[terminal] = ((short | lonely) & ~unresolved & ~stub & ~unseen)[terminal]
+    branch_spurious[terminal] = ((short | lonely) & ~unresolved & ~stub & ~unseen & ~cut)[terminal]
     with np.errstate(divide="ignore", invalid="ignore"):
         length_radii = np.where(r_j > 0, branches.length / r_j, np.nan)
     vertex_flag = np.zeros(curve.n_vertices, bool)
@@ -351,7 +363,7 @@ def find_spurious_branches(
         branches=branches, terminal=terminal, reach=reach, junction_radius=r_j, territory=territory, unique=unique,
         branch_spurious=branch_spurious, vertex_flag=vertex_flag, sample_flag=sample_flag, length_radii=length_radii,
         total_length=total_length, subsampled=subsampled, params=params, spacing=spacing, unresolved=unresolved,
-        stub=stub, one_sided=sided, unseen=unseen, tip_distance=tip_d,
+        stub=stub, one_sided=sided, unseen=unseen, tip_distance=tip_d, cut_end=cut,
     )  # fmt: skip
 
 
