@@ -6,6 +6,7 @@ main window connects to message boxes (and tests or the scripted mode replace).
 
 from __future__ import annotations
 
+import dataclasses
 import os
 import threading
 from typing import Any, Callable
@@ -274,7 +275,7 @@ class Session(QtCore.QObject):
             return "settings changed"
         if self._shown_scan_options is not None and self.scan_options_provider() != self._shown_scan_options:
             return "settings changed"
-        return "" if now.replace(beta_star=shown.beta_star, c_star=shown.c_star) == shown else "settings changed"
+        return "" if same_but_thresholds(now, shown) else "settings changed"
 
     _shown_correspondence: str | None = None  # what the shown evaluation was asked for (None: unknown)
     _shown_viewpoints: list | None = None  # the viewpoints the shown evaluation was asked with (None: unknown)
@@ -430,7 +431,15 @@ class Session(QtCore.QObject):
 
     # ---- computing ------------------------------------------------------------------------
     def params(self) -> Params:
-        return self.params_provider().replace(beta_star=self.scene.beta_star, c_star=self.scene.c_star)
+        """The Settings panel's parameters with the summary's thresholds: the same (frozen) object while
+        neither changes (asked several times per edit: docs/performance.md 6.10)."""
+        chosen, beta, c = self.params_provider(), self.scene.beta_star, self.scene.c_star
+        made = self._params_made
+        if made is None or made[0] is not chosen or made[1] != beta or made[2] != c:
+            made = self._params_made = (chosen, beta, c, chosen.replace(beta_star=beta, c_star=c))
+        return made[3]
+
+    _params_made: tuple | None = None
 
     def start_evaluation(self, params: Params | None = None) -> bool:
         """Evaluate the loaded inputs in the worker thread (cancelling any run in progress)."""
@@ -513,7 +522,7 @@ class Session(QtCore.QObject):
         if known is not None:
             try:
                 now = self.params()
-                if known.params.replace(beta_star=now.beta_star, c_star=now.c_star) != now:
+                if not same_but_thresholds(known.params, now):
                     known = None  # kept under other settings: scored again
             except ValueError:
                 known = None
@@ -656,6 +665,17 @@ class Session(QtCore.QObject):
     _scoring_swap = False  # ... whose first phase already runs (it describes the new curve: kept)
     #: the last evaluation was cancelled (Esc, Cancel) and neither a new run nor new inputs came since
     evaluation_cancelled = False
+
+
+#: the parameters every evaluation reads (the thresholds beta* and c* re-score at once and never stale a result)
+_SETTINGS = tuple(f.name for f in dataclasses.fields(Params) if f.name not in ("beta_star", "c_star"))
+
+
+def same_but_thresholds(a: Params, b: Params) -> bool:
+    """Whether ``a`` and ``b`` agree on every parameter but the thresholds: ``a`` with ``b``'s thresholds
+    equals ``b`` (the dataclass' comparison, field by field), without making that copy."""
+    return a is b or (type(a) is type(b) and all((x is y or x == y) for x, y in
+                                                 ((getattr(a, n), getattr(b, n)) for n in _SETTINGS)))
 
 
 _ROLE_TITLES = {"cloud": "cloud", "skeletal": "skeletal point set", "curve": "curve skeleton"}

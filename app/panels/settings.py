@@ -142,9 +142,10 @@ class SettingsPanel(QtWidgets.QWidget):
         self.cap_openings.setChecked(bool(cap_openings))
 
     def params(self, base: Params | None = None) -> Params:
-        """The chosen parameters on top of ``base`` (thresholds are set in the summary panel)."""
-        base = base or Params()
-        return base.replace(
+        """The chosen parameters on top of ``base`` (thresholds are set in the summary panel). On the
+        defaults, the same (frozen) object while the choices stay: the window asks for them several
+        times per edit, and each validated copy costs about a millisecond (docs/performance.md 6.10)."""
+        chosen = dict(
             boundedness_method=self.boundedness_method.currentText(),
             normalize_by=self.normalize_by.currentText(),
             k_center=None if self.k_center.value() == 0 else self.k_center.value(),
@@ -153,6 +154,12 @@ class SettingsPanel(QtWidgets.QWidget):
             curve_samples=self.curve_samples.value(),
             eps_quantile=self.eps_quantile.value(),
         )
+        if base is not None:
+            return base.replace(**chosen)
+        made = getattr(self, "_made", None)
+        if made is None or made[0] != chosen:
+            made = self._made = (chosen, Params().replace(**chosen))
+        return made[1]
 
     def set_params(self, params: Params) -> None:
         self.boundedness_method.setCurrentText(params.boundedness_method)

@@ -758,8 +758,10 @@ def _cloud_neighbours(tree: cKDTree, up: np.ndarray, q: np.ndarray, kk: int, lin
         redo = np.arange(len(q))
     else:
         fd, fj, _ = kept
-        jj = np.where(np.isfinite(fd[q, :kk]), fj[q, :kk], n)
-        redo = np.flatnonzero(~_unique_first(fd[q], kk))
+        if len(q) < len(fd):
+            fd, fj = fd[q], fj[q]  # else q is every row, in order (a pruned arm's one region): no copies
+        jj = np.where(np.isfinite(fd[:, :kk]), fj[:, :kk], n)
+        redo = np.flatnonzero(~_unique_first(fd, kk))
     if len(redo):
         dd, j = tree.query(up[q[redo]], k=kk, distance_upper_bound=link, workers=query_workers(len(redo)))
         dd, j = dd.reshape(len(redo), -1), j.reshape(len(redo), -1)

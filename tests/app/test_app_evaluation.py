@@ -93,6 +93,30 @@ def test_thresholds_change_the_summary_at_once_without_recomputing(evaluated):
     assert not w.session.runner.running
 
 
+def test_the_settings_parameters_are_one_object_until_a_choice_or_threshold_changes(evaluated):
+    """The window asks for its parameters several times per edit: the same object while nothing
+    changed, a new one (with the change) after a setting or a threshold moved; the staleness test
+    compares every parameter but the thresholds, as a copy with the shown thresholds would."""
+    from skelscope.session import same_but_thresholds
+
+    w = evaluated
+    first = w.session.params()
+    assert w.session.params() is first and w.settings_panel.params() is w.settings_panel.params()
+    assert w.session.stale_reason() == ""
+    w.summary.beta_star.setValue(0.5)
+    moved = w.session.params()
+    assert moved is not first and moved.beta_star == 0.5 and w.session.stale_reason() == ""
+    w.settings_panel.tangent_k.setValue(w.settings_panel.tangent_k.value() + 2)
+    assert w.session.params().tangent_k == moved.tangent_k + 2 and w.session.stale_reason() == "settings changed"
+    w.settings_panel.tangent_k.setValue(w.settings_panel.tangent_k.value() - 2)
+    assert w.session.params() == moved and w.session.stale_reason() == ""
+    base = Params()
+    for change in ({}, {"beta_star": 0.3}, {"c_star": 0.1, "beta_star": 0.9}, {"tangent_k": 7},
+                   {"k_center": 11, "c_star": 0.2}, {"eps_quantile": 0.5}):
+        other = base.replace(**change)
+        assert same_but_thresholds(base, other) == (other.replace(beta_star=base.beta_star, c_star=base.c_star) == base)
+
+
 def test_cancel_stops_a_long_evaluation_and_no_result_lands(window, files, qtbot):
     w = window
     w.session.auto_evaluate = False

@@ -249,3 +249,29 @@ def test_a_ring_that_reaches_the_first_ball_s_edge_keeps_its_outer_points(monkey
     (x0, y0, s0), (x1, y1, s1) = _rings_both_ways(monkeypatch, cloud, points, dirs, params.slab_factor)
     assert s0.tolist() == [0, 48]  # both circles in the ring
     assert s1.tobytes() == s0.tobytes() and x1.tobytes() == x0.tobytes() and y1.tobytes() == y0.tobytes()
+
+
+def test_each_ring_of_one_call_is_its_ring_alone():
+    """What a kernel call carries from sample to sample (its buffers, the order by square roots given up
+    after rings of one exact radius) changes no ring: samples alternating between a thick and a thin tube,
+    and a sample whose slab is empty, in one call give the rings each gives alone, bit for bit."""
+    rng = np.random.default_rng(5)
+    t = rng.uniform(0.0, 2.0 * np.pi, 8000)
+    z = rng.uniform(0.0, 10.0, 8000)
+    thick = np.column_stack([np.cos(t), np.sin(t), z])
+    thin = np.column_stack([0.05 * np.cos(t), 0.05 * np.sin(t), z + 20.0])
+    cloud = np.vstack([thick, thin, [[0.0, 0.0, 60.0]]])
+    params = Params(slab_factor=0.01)
+    grid = centeredness.slab_grid(cloud, params)
+    half = 0.5 * params.slab_factor * float(np.linalg.norm(grid.hi - grid.lo))
+    points = np.array([[0.0, 0.0, 3.0], [0.0, 0.0, 23.0], [0.0, 0.0, 5.0], [0.0, 0.0, 45.0], [0.0, 0.0, 25.0],
+                       [0.0, 0.0, 27.0], [0.1, 0.0, 7.0], [0.0, 0.0, 8.0]])
+    u = centeredness.unit_rows(np.tile([0.0, 0.0, 1.0], (len(points), 1)) + rng.normal(0, 0.01, (len(points), 3)))
+    g, h = centeredness._orthonormal_complement(u)
+    x, y, s = (a.copy() for a in centeredness._kernel_rings(grid, points, u, g, h, half, params.ring_growth))
+    size = [float(np.hypot(x[a:b], y[a:b]).max()) if b > a else 0.0 for a, b in zip(s[:-1], s[1:])]
+    assert size[3] == 0.0 and min(size[0], size[2]) > 10 * max(size[1], size[4], size[5]) > 0  # empty; thick, thin
+    for i in range(len(points)):
+        xi, yi, si = centeredness._kernel_rings(grid, points[i:i + 1], u[i:i + 1], g[i:i + 1], h[i:i + 1], half,
+                                                params.ring_growth)
+        assert xi.tobytes() == x[s[i]:s[i + 1]].tobytes() and yi.tobytes() == y[s[i]:s[i + 1]].tobytes()
