@@ -840,9 +840,9 @@ static int64_t cast_band(const Tree *t, Walker *w, Packet *pk, const Raster *r, 
 /* A lone query of a block (BLOCK): its origin, cut, move, the table its band's hints come from and its hint counts */
 typedef struct {
     Move mv;
-    const int32_t *src;
+    const int32_t *src;      /* NULL: no hints */
     float cf[3], cut;
-    int use;
+    int use, seeded;
     int64_t tried, hits;
 } Lone;
 
@@ -1047,21 +1047,11 @@ static PyObject *py_clusters(PyObject *self, PyObject *args) {
             const double reach = rr[k];
             L->cut = (float)(reach > h ? reach : h);
             const int32_t seed = seed_of ? seed_of[k - k0] : -1;
-            if (seed >= 0) {
-                const int32_t *from = seeds + (size_t)seed * table;
-                for (size_t x = 0; x < table; x += 2) {
-                    const int32_t leaf = from[x], pt = from[x + 1];
-                    const int ok = leaf >= 0 && leaf < t.n_nodes && t.nodes[leaf].kid < 0 && pt >= 0 && pt < n;
-                    tab[x] = ok ? leaf : -1;
-                    tab[x + 1] = ok ? pt : -1;
-                }
-                memcpy(prev, seed_at + 3 * (size_t)seed, sizeof prev);
-            }
+            if (seed >= 0) memcpy(prev, seed_at + 3 * (size_t)seed, sizeof prev);
             double jx = c[0] - prev[0], jy = c[1] - prev[1], jz = c[2] - prev[2];
             const int reset = (k == k0 && seed < 0) || jx * jx + jy * jy + jz * jz > 4.0 * reach * reach;
-            if (reset)
-                for (size_t x = 0; x < table; x++) tab[x] = -1;
-            L->src = seed >= 0 || reset ? NULL : tabs + (size_t)i * table;
+            L->src = reset ? NULL : seed >= 0 ? seeds + (size_t)seed * table : tabs + (size_t)i * table;
+            L->seeded = !reset && seed >= 0;
             Move mv = {{(float)jx, (float)jy, (float)jz}, !reset && (jx != 0.0 || jy != 0.0 || jz != 0.0), rows, bins,
                        tab, lon_scale, 0, bands_across};
             L->mv = mv;
@@ -1090,10 +1080,23 @@ static PyObject *py_clusters(PyObject *self, PyObject *args) {
                 for (int i = 0; i < kn; i++) {
                     Lone *L = lones + i;
                     int32_t *tab = tabs + (size_t)(i + 1) * table;
-                    if (L->src)
-                        for (int j = j0; j < j1; j++)
-                            memcpy(tab + 2 * ((size_t)j * bins + b0), L->src + 2 * ((size_t)j * bins + b0),
-                                   sizeof(int32_t) * 2 * (size_t)(b1 - b0));
+                    for (int j = j0; j < j1; j++) {  /* the band's hints: none, a seed's (checked) or the query before's */
+                        int32_t *to = tab + 2 * ((size_t)j * bins + b0);
+                        const size_t cells = 2 * (size_t)(b1 - b0);
+                        if (!L->src) {
+                            for (size_t x = 0; x < cells; x++) to[x] = -1;
+                        } else if (L->seeded) {
+                            const int32_t *from = L->src + 2 * ((size_t)j * bins + b0);
+                            for (size_t x = 0; x < cells; x += 2) {  /* a leaf of this tree and one of its points */
+                                const int32_t leaf = from[x], pt = from[x + 1];
+                                const int ok = leaf >= 0 && leaf < t.n_nodes && t.nodes[leaf].kid < 0 && pt >= 0 && pt < n;
+                                to[x] = ok ? leaf : -1;
+                                to[x + 1] = ok ? pt : -1;
+                            }
+                        } else {
+                            memcpy(to, L->src + 2 * ((size_t)j * bins + b0), sizeof(int32_t) * cells);
+                        }
+                    }
                     L->mv.band = band;
                     const int64_t hits_before = w.hint_hits;
                     uint64_t *nd = lone_far + (size_t)(3 * i + 1) * nw;
