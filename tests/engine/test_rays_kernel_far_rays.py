@@ -77,22 +77,23 @@ def case():
 
 def _no_seeds(block: int) -> tuple:
     """The kernel's optional arguments after the hint policy: no seed tables, none kept, ``block`` lone
-    queries cast together (-1: the kernel's BLOCK; 0: one by one)."""
+    queries cast together (0: one by one; -1: the kernel's BLOCK where the points exceed BLOCK_FROM bytes,
+    else one by one, as for this small torus)."""
     none = np.zeros(0, np.int32)
     return (none, np.zeros(0), none, none, none, block)
 
 
-@pytest.mark.parametrize("policy", [(), (0, 0), (1001, 10**6), (250, 7, 0), (-1, -1, -1, *_no_seeds(0)),
+@pytest.mark.parametrize("policy", [(), (0, 0), (1001, 10**6), (250, 7, 0), (-1, -1, -1, *_no_seeds(32)),
                                     (-1, -1, -1, *_no_seeds(5)), (0, 0, 0, *_no_seeds(7))],
-                         ids=["default", "hints-always", "hints-never", "hints-prefetched", "one-by-one", "blocks-of-5",
+                         ids=["default", "hints-always", "hints-never", "hints-prefetched", "blocks-of-32", "blocks-of-5",
                               "blocks-of-7-hints-always-prefetched"])
 def test_far_rays_hit_exactly_where_some_point_passes_the_ball_test(case, policy):
     """Clusters of one query at its own position with reach h: no near caps, every sample a far ray; each
     build's beta equals the exhaustive test's bit for bit (a lane group skipped with an open ray, or a
     walk cut short, would lose hits); "hints-prefetched" asks memory for the hints of every tile, as for
-    a cloud beyond the kernel's PREFETCH_FROM bytes (docs/boundedness.md 3.17); lone queries are cast in
-    blocks band by band by default (BLOCK, 3.19), here also one by one and in blocks that end inside the
-    arcs of queries."""
+    a cloud beyond the kernel's PREFETCH_FROM bytes (docs/boundedness.md 3.17); lone queries are cast one
+    by one here by default (the torus is below BLOCK_FROM bytes), and in blocks band by band (BLOCK, 3.19),
+    of 32 as for a larger cloud and of 5 and 7 that end inside the arcs of queries."""
     modules = _builds()
     tree, queries, h, ref = case
     n = len(queries)
@@ -113,7 +114,7 @@ def test_the_kernel_in_use_is_one_of_the_two_builds():
     assert _raycast.LEAF_SIZE == rays_kernel.LEAF_SIZE
 
 
-@pytest.mark.parametrize("block", [-1, 0, 5], ids=["blocks", "one-by-one", "blocks-of-5"])
+@pytest.mark.parametrize("block", [32, 0, 5], ids=["blocks-of-32", "one-by-one", "blocks-of-5"])
 @pytest.mark.parametrize("seeds", ["kept", "garbage"])
 def test_far_rays_seeded_from_kept_tables_hit_exactly_as_the_ball_test(case, seeds, block):
     """Each cluster starting from a hint table (docs/boundedness.md 3.18): the tables one pass kept of the
