@@ -1117,7 +1117,8 @@ static PyObject *py_clusters(PyObject *self, PyObject *args) {
             if (L->use && L->tried > 0) {
                 recent_tried = recent_tried / 2 + L->tried;
                 recent_hits = recent_hits / 2 + L->hits;
-                if (1000 * recent_hits < (int64_t)hint_min * recent_tried) rest = hint_rest;
+                /* the next hint_rest blocks skip them: the rule decides once a block, so per block */
+                if (1000 * recent_hits < (int64_t)hint_min * recent_tried) rest = hint_rest * block;
             }
             const uint64_t *mb = lone_far + (size_t)(3 * i) * nw, *fa = mb + 2 * nw;
             int64_t count = 0;
