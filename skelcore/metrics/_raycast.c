@@ -841,6 +841,17 @@ static int64_t cast_band(const Tree *t, Walker *w, Packet *pk, const Raster *r, 
     return tried;
 }
 
+/* A seed table's cells (leaf, point; `len` int32 in all) copied as hints: a leaf of this tree and one of its
+ * points, else none (a seed is only an index into arrays the kernel reads, docs/boundedness.md 3.18) */
+static inline void seed_cells(const Tree *t, int32_t n, const int32_t *from, int32_t *to, size_t len) {
+    for (size_t x = 0; x < len; x += 2) {
+        const int32_t leaf = from[x], pt = from[x + 1];
+        const int ok = leaf >= 0 && leaf < t->n_nodes && t->nodes[leaf].kid < 0 && pt >= 0 && pt < n;
+        to[x] = ok ? leaf : -1;
+        to[x + 1] = ok ? pt : -1;
+    }
+}
+
 /* A lone query of a block (BLOCK): its origin, cut, move, the table its band's hints come from and its hint counts */
 typedef struct {
     Move mv;
@@ -1090,13 +1101,7 @@ static PyObject *py_clusters(PyObject *self, PyObject *args) {
                         if (!L->src) {
                             for (size_t x = 0; x < cells; x++) to[x] = -1;
                         } else if (L->seeded) {
-                            const int32_t *from = L->src + 2 * ((size_t)j * bins + b0);
-                            for (size_t x = 0; x < cells; x += 2) {  /* a leaf of this tree and one of its points */
-                                const int32_t leaf = from[x], pt = from[x + 1];
-                                const int ok = leaf >= 0 && leaf < t.n_nodes && t.nodes[leaf].kid < 0 && pt >= 0 && pt < n;
-                                to[x] = ok ? leaf : -1;
-                                to[x + 1] = ok ? pt : -1;
-                            }
+                            seed_cells(&t, n, L->src + 2 * ((size_t)j * bins + b0), to, cells);
                         } else {
                             memcpy(to, L->src + 2 * ((size_t)j * bins + b0), sizeof(int32_t) * cells);
                         }
@@ -1145,13 +1150,7 @@ static PyObject *py_clusters(PyObject *self, PyObject *args) {
         /* a seed: the hints a lone query nearby left (its table and origin), instead of the previous cluster's */
         const int32_t seed = seed_of ? seed_of[k - k0] : -1;
         if (seed >= 0) {
-            const int32_t *from = seeds + (size_t)seed * table;
-            for (size_t i = 0; i < table; i += 2) {  /* a leaf of this tree and one of its points, else none */
-                const int32_t leaf = from[i], pt = from[i + 1];
-                const int ok = leaf >= 0 && leaf < t.n_nodes && t.nodes[leaf].kid < 0 && pt >= 0 && pt < n;
-                hints[i] = ok ? leaf : -1;
-                hints[i + 1] = ok ? pt : -1;
-            }
+            seed_cells(&t, n, seeds + (size_t)seed * table, hints, table);
             memcpy(prev, seed_at + 3 * (size_t)seed, sizeof prev);
         }
         /* hints from a cluster far away would only lengthen the walks */
