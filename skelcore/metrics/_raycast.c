@@ -935,11 +935,13 @@ static int64_t near_raster(const Raster *r, const Tree *t, const Near *near, int
  *          cluster range [k0, k1), h, rows, bins, beta out (q) f64,
  *          stats out (6) i64: node visits, near caps, far rays, near points, hint tries, hint hits,
  *          stop (1) i32, done out (1) i64[, hint_min, hint_rest: HINT_MIN, HINT_REST[, prefetch_from:
- *          PREFETCH_FROM bytes]])
+ *          PREFETCH_FROM bytes[, seeds, seed origins, seed_of, kept, keep_of (3.18)[, block: lone queries
+ *          cast together, BLOCK where the points exceed BLOCK_FROM bytes (< 0), 0 or 1 one by one]]]])
  * beta of the queries of clusters k0..k1-1 (queries holds just theirs, grouped by cluster), one cluster
- * after the other, so that each far ray can start from the leaf its sample hit from the previous cluster.
- * `done` counts the clusters finished (read by another thread for progress); once another thread sets
- * `stop`, the call returns after the cluster it is in.  Returns the number of clusters finished. */
+ * after the other (lone queries a block at a time, band by band), so that each far ray can start from the
+ * leaf its sample hit from the previous cluster.  `done` counts the clusters finished (read by another
+ * thread for progress); once another thread sets `stop`, the call returns after the cluster (or the band
+ * of a block) it is in.  Returns the number of clusters finished. */
 static PyObject *py_clusters(PyObject *self, PyObject *args) {
     Py_buffer pts, nds, lvs, qs, starts, cen, rch, beta, stats, stop_buf, done_buf;
     /* optional: seed tables, their origins, each cluster's seed row (or -1); the tables kept after each
@@ -1088,7 +1090,7 @@ static PyObject *py_clusters(PyObject *self, PyObject *args) {
         }
         /* the far rays, band by band, each band from every query in turn */
         int band = 0;
-        for (int j0 = 0; n > 0 && j0 < rows; j0 += TILE_ROWS) {
+        for (int j0 = 0; n > 0 && j0 < rows && !*stop; j0 += TILE_ROWS) {
             const int j1 = j0 + TILE_ROWS < rows ? j0 + TILE_ROWS : rows;
             for (int b0 = 0; b0 < bins; b0 += BAND_BINS, band++) {
                 const int b1 = b0 + BAND_BINS < bins ? b0 + BAND_BINS : bins;
@@ -1116,6 +1118,7 @@ static PyObject *py_clusters(PyObject *self, PyObject *args) {
                 }
             }
         }
+        if (*stop) break;  /* a cancel: the block's queries unfinished, as a cluster's after it */
         for (int i = 0; i < kn; i++) {
             const int k = kb + i;
             Lone *L = lones + i;
