@@ -543,12 +543,34 @@ static int32_t walk(const Tree *t, Walker *w, int32_t root, int32_t skip, int32_
 #define HINT_MIN 250
 #define HINT_REST 7
 
+/* The needed samples are cast tile by tile, TILE_ROWS rows x TILE_BINS bins (a power of 2 up to 64, so a
+ * tile lies in one word of a row), rows in turn within a tile: the rays a packet collects then point
+ * into one compact patch of the sphere (8 x 4 cells, about 19 x 15 degrees at the equator) instead of a
+ * strip of one row, and share more nodes (docs/boundedness.md 3.10). */
+#define TILE_ROWS 8
+#define TILE_BINS 4
+#define TILE_MASK ((TILE_BINS) >= 64 ? ~UINT64_C(0) : (UINT64_C(1) << (TILE_BINS)) - 1)
+
+/* Lone queries (clusters of one member) are cast BLOCK at a time, band by band: a band (TILE_ROWS rows x
+ * BAND_BINS bins, a multiple of TILE_BINS) of every query of the block, then the next band.  Consecutive
+ * queries lie a few h apart, so the rays of one band from them meet the same part of the cloud and its
+ * nodes, leaves and points stay in the caches from one query to the next, where one query's whole raster
+ * reaches more of the tree than the caches hold (docs/boundedness.md 3.19).  Only the order of the rays
+ * changes: every hit is the same exact test, so beta is the same bit for bit. */
+#define BLOCK 32
+#define BAND_BINS 32
+/* ... where the points exceed this many bytes (the `clusters` call's `block` > 1 casts blocks of that many at any
+ * size): the hammer's 48 KB stay in the caches anyway, and there its 208 curve samples took 20 % more CPU in
+ * blocks (the hints skipped per block, HINT_MIN, rather than per query) */
+#define BLOCK_FROM (512 * 1024)
+
 /* The move of the rays' origin since the previous cluster, and the raster's hints (moved_hint) */
 typedef struct {
     float d[3];
     int on, rows, bins;
     int32_t *hints;
     const float *lon_scale;  /* per row: bins / 2 pi / s_j^2 (longitude change in bins per unit of x dy - y dx) */
+    int band, bands_across;  /* cast band by band (BLOCK): cells of a later band than `band` hold no hint yet */
 } Move;
 
 /* The hint of the sample whose ray from the previous origin passed where this ray passes now: the sample's
@@ -573,6 +595,7 @@ static inline const int32_t *moved_hint(const Tree *t, const Move *mv, const flo
     int b2 = b + (int)floorf(lon + 0.5f);
     if (b2 == b && j2 == j) return NULL;
     b2 += b2 < 0 ? mv->bins : b2 >= mv->bins ? -mv->bins : 0;
+    if ((j2 / TILE_ROWS) * mv->bands_across + b2 / BAND_BINS > mv->band) return NULL;
     const int32_t *cand = mv->hints + 2 * ((size_t)j2 * mv->bins + b2);
     return cand[1] >= 0 && cand[1] != pt ? cand : NULL;
 }
@@ -656,13 +679,6 @@ static inline void prefetch_below(const Tree *t, const Node *nd) {
  * not depend on which rays share a packet (docs/boundedness.md 3.10-3.11). */
 #define PACKET 32
 
-/* The needed samples are cast tile by tile, TILE_ROWS rows x TILE_BINS bins (a power of 2 up to 64, so a
- * tile lies in one word of a row), rows in turn within a tile: the rays a packet collects then point
- * into one compact patch of the sphere (8 x 4 cells, about 19 x 15 degrees at the equator) instead of a
- * strip of one row, and share more nodes (docs/boundedness.md 3.10). */
-#define TILE_ROWS 8
-#define TILE_BINS 4
-#define TILE_MASK ((TILE_BINS) >= 64 ? ~UINT64_C(0) : (UINT64_C(1) << (TILE_BINS)) - 1)
 typedef struct {
     float sx[PACKET], sy[PACKET], sz[PACKET];  /* the rays' directions; lanes from n on are masked out */
     int32_t *hint[PACKET];
@@ -788,6 +804,63 @@ static inline void prefetch_hints(const Tree *t, const Raster *r, const uint64_t
     }
 }
 
+/* The far rays of the needed samples of rows [j0, j1) x bins [b0, b1) (whole tiles) from cf, tile by tile:
+ * each tries its hints (ray_hits) when use_hints, the rest go to packets (the last one left for the caller
+ * to walk); hits set in `far`.  Returns the rays whose hints were tried. */
+static int64_t cast_band(const Tree *t, Walker *w, Packet *pk, const Raster *r, const uint64_t *need, uint64_t *far,
+                         int32_t *hints, const Move *mv, const float *cf, float cut, float h, int use_hints, int big,
+                         int j0, int j1, int b0, int b1, int64_t *rays) {
+    int64_t tried = 0;
+    const int bins = r->bins;
+    for (int b = b0; b < b1; b += TILE_BINS) {
+        const int x = b >> 6;
+        if (use_hints && big) prefetch_hints(t, r, need, hints, j0, j1, b, x, bins);
+        for (int j = j0; j < j1; j++) {
+            uint64_t todo = (need[(size_t)j * r->words + x] >> (b & 63)) & TILE_MASK;
+            while (todo) {
+                const int bb = b + __builtin_ctzll(todo);
+                todo &= todo - 1;
+                float s[3] = {(float)(r->s[j] * r->cos_lon[bb]), (float)(r->s[j] * r->sin_lon[bb]), (float)r->z[j]};
+                (*rays)++;
+                int32_t *hint = hints + 2 * ((size_t)j * bins + bb);
+                uint64_t *word = far + (size_t)j * r->words + x, bit = UINT64_C(1) << (bb & 63);
+                int hit = -1;
+                if (use_hints) {
+                    hit = ray_hits(t, w, cf, s, cut, h, hint, mv, j, bb);
+                    tried++;
+                }
+                if (hit > 0) *word |= bit;
+                if (hit < 0) {
+                    pk->sx[pk->n] = s[0]; pk->sy[pk->n] = s[1]; pk->sz[pk->n] = s[2];
+                    pk->hint[pk->n] = hint; pk->word[pk->n] = word; pk->bit[pk->n] = bit;
+                    if (++pk->n == PACKET) walk_packet(t, w, pk, cf, cut, h);
+                }
+            }
+        }
+    }
+    return tried;
+}
+
+/* A seed table's cells (leaf, point; `len` int32 in all) copied as hints: a leaf of this tree and one of its
+ * points, else none (a seed is only an index into arrays the kernel reads, docs/boundedness.md 3.18) */
+static inline void seed_cells(const Tree *t, int32_t n, const int32_t *from, int32_t *to, size_t len) {
+    for (size_t x = 0; x < len; x += 2) {
+        const int32_t leaf = from[x], pt = from[x + 1];
+        const int ok = leaf >= 0 && leaf < t->n_nodes && t->nodes[leaf].kid < 0 && pt >= 0 && pt < n;
+        to[x] = ok ? leaf : -1;
+        to[x + 1] = ok ? pt : -1;
+    }
+}
+
+/* A lone query of a block (BLOCK): its origin, cut, move, the table its band's hints come from and its hint counts */
+typedef struct {
+    Move mv;
+    const int32_t *src;      /* NULL: no hints */
+    float cf[3], cut;
+    int use, seeded;
+    int64_t tried, hits;
+} Lone;
+
 /* Points with |p - c| <= reach, nearest shell first (shell_order), into out; returns their number */
 typedef struct { double d2; int32_t i; } Near;
 
@@ -862,11 +935,13 @@ static int64_t near_raster(const Raster *r, const Tree *t, const Near *near, int
  *          cluster range [k0, k1), h, rows, bins, beta out (q) f64,
  *          stats out (6) i64: node visits, near caps, far rays, near points, hint tries, hint hits,
  *          stop (1) i32, done out (1) i64[, hint_min, hint_rest: HINT_MIN, HINT_REST[, prefetch_from:
- *          PREFETCH_FROM bytes]])
+ *          PREFETCH_FROM bytes[, seeds, seed origins, seed_of, kept, keep_of (3.18)[, block: lone queries
+ *          cast together, BLOCK where the points exceed BLOCK_FROM bytes (< 0), 0 or 1 one by one]]]])
  * beta of the queries of clusters k0..k1-1 (queries holds just theirs, grouped by cluster), one cluster
- * after the other, so that each far ray can start from the leaf its sample hit from the previous cluster.
- * `done` counts the clusters finished (read by another thread for progress); once another thread sets
- * `stop`, the call returns after the cluster it is in.  Returns the number of clusters finished. */
+ * after the other (lone queries a block at a time, band by band), so that each far ray can start from the
+ * leaf its sample hit from the previous cluster.  `done` counts the clusters finished (read by another
+ * thread for progress); once another thread sets `stop`, the call returns after the cluster (or the band
+ * of a block) it is in.  Returns the number of clusters finished. */
 static PyObject *py_clusters(PyObject *self, PyObject *args) {
     Py_buffer pts, nds, lvs, qs, starts, cen, rch, beta, stats, stop_buf, done_buf;
     /* optional: seed tables, their origins, each cluster's seed row (or -1); the tables kept after each
@@ -874,11 +949,12 @@ static PyObject *py_clusters(PyObject *self, PyObject *args) {
     Py_buffer sd = {0}, sd_at = {0}, sd_of = {0}, kp = {0}, kp_of = {0};
     int k0, k1, rows, bins;
     double h;
-    int hint_min = HINT_MIN, hint_rest = HINT_REST, prefetch_from = PREFETCH_FROM;
-    if (!PyArg_ParseTuple(args, "y*y*y*y*y*y*y*iidiiw*w*w*w*|iiiy*y*y*w*y*", &pts, &nds, &lvs, &qs, &starts, &cen,
+    int hint_min = HINT_MIN, hint_rest = HINT_REST, prefetch_from = PREFETCH_FROM, block = -1;
+    if (!PyArg_ParseTuple(args, "y*y*y*y*y*y*y*iidiiw*w*w*w*|iiiy*y*y*w*y*i", &pts, &nds, &lvs, &qs, &starts, &cen,
                           &rch, &k0, &k1, &h, &rows, &bins, &beta, &stats, &stop_buf, &done_buf, &hint_min, &hint_rest,
-                          &prefetch_from, &sd, &sd_at, &sd_of, &kp, &kp_of))
+                          &prefetch_from, &sd, &sd_at, &sd_of, &kp, &kp_of, &block))
         return NULL;
+    if (block < 0) block = (int64_t)(pts.len) > (int64_t)BLOCK_FROM ? BLOCK : 0;
     if (hint_min < 0) hint_min = HINT_MIN;  /* < 0: the default (the seeds come after these three) */
     if (hint_rest < 0) hint_rest = HINT_REST;
     if (prefetch_from < 0) prefetch_from = PREFETCH_FROM;
@@ -895,8 +971,10 @@ static PyObject *py_clusters(PyObject *self, PyObject *args) {
     double *out = (double *)beta.buf;
     int64_t *stat = (int64_t *)stats.buf;
     uint64_t *far = NULL, *need = NULL, *bits = NULL;
-    uint8_t *full = NULL;
-    int32_t *stack = NULL, *hints = NULL;
+    uint8_t *full = NULL, *lone_full = NULL;
+    int32_t *stack = NULL, *hints = NULL, *tabs = NULL;
+    uint64_t *lone_far = NULL;
+    Lone *lones = NULL;
     float *lon_scale = NULL;
     Near *near = NULL;
     if (stop_buf.len < (Py_ssize_t)sizeof(int32_t) || done_buf.len < (Py_ssize_t)sizeof(int64_t)) {
@@ -942,6 +1020,16 @@ static PyObject *py_clusters(PyObject *self, PyObject *args) {
     near = (Near *)malloc(2 * sizeof(Near) * (size_t)(n > 0 ? n : 1));  /* and shell_order's scratch */
     lon_scale = (float *)malloc(sizeof(float) * (size_t)rows);
     if (!far || !full || !stack || !near || !hints || !lon_scale) { PyErr_NoMemory(); goto done; }
+    /* lone queries only: cast BLOCK at a time, band by band, each with its own hint table (BLOCK) */
+    int lone = block > 1 && k1 - k0 > 1;
+    for (int k = k0; lone && k < k1; k++) lone = st[k - k0 + 1] - st[k - k0] == 1;
+    if (lone) {
+        tabs = (int32_t *)malloc(sizeof(int32_t) * (1 + (size_t)block) * table);
+        lone_far = (uint64_t *)calloc(3 * (size_t)block * nw, sizeof(uint64_t));
+        lone_full = (uint8_t *)calloc((size_t)block * rows, 1);
+        lones = (Lone *)calloc((size_t)block, sizeof(Lone));
+        if (!tabs || !lone_far || !lone_full || !lones) { PyErr_NoMemory(); goto done; }
+    }
     for (int i = 0; i < 2 * rows * bins; i++) hints[i] = -1;
     for (int j = 0; j < rows; j++) lon_scale[j] = (float)(bins / TWO_PI / (r.s[j] * r.s[j]));
     need = far + nw;
@@ -958,7 +1046,100 @@ static PyObject *py_clusters(PyObject *self, PyObject *args) {
     double prev[3] = {0.0, 0.0, 0.0};
     int64_t recent_tried = 0, recent_hits = 0;  /* the hints' recent rays and hits (HINT_MIN) */
     int rest = 0;  /* clusters left whose far rays skip their hints (HINT_MIN) */
-    for (int k = k0; k < k1 && !*stop; k++) {
+    const int bands_across = (bins + BAND_BINS - 1) / BAND_BINS;
+    if (lone) for (size_t i = 0; i < table; i++) tabs[i] = -1;  /* the table before the block: none yet */
+    for (int kb = k0; lone && kb < k1 && !*stop; kb += block) {
+        const int kn = k1 - kb < block ? k1 - kb : block;
+        /* each query's near caps, needed samples, hint table (a seed's, none, or its band's cells copied from
+         * the query before it as the bands go: src) and move */
+        for (int i = 0; i < kn; i++) {
+            const int k = kb + i;
+            Lone *L = lones + i;
+            int32_t *tab = tabs + (size_t)(i + 1) * table;
+            const double *c = cc + 3 * (size_t)k;
+            L->use = rest == 0;
+            if (rest > 0) rest--;
+            L->tried = L->hits = 0;
+            for (int a = 0; a < 3; a++) L->cf[a] = (float)c[a];
+            const double reach = rr[k];
+            L->cut = (float)(reach > h ? reach : h);
+            const int32_t seed = seed_of ? seed_of[k - k0] : -1;
+            if (seed >= 0) memcpy(prev, seed_at + 3 * (size_t)seed, sizeof prev);
+            double jx = c[0] - prev[0], jy = c[1] - prev[1], jz = c[2] - prev[2];
+            const int reset = (k == k0 && seed < 0) || jx * jx + jy * jy + jz * jz > 4.0 * reach * reach;
+            L->src = reset ? NULL : seed >= 0 ? seeds + (size_t)seed * table : tabs + (size_t)i * table;
+            L->seeded = !reset && seed >= 0;
+            Move mv = {{(float)jx, (float)jy, (float)jz}, !reset && (jx != 0.0 || jy != 0.0 || jz != 0.0), rows, bins,
+                       tab, lon_scale, 0, bands_across};
+            L->mv = mv;
+            memcpy(prev, c, sizeof prev);
+            int32_t m = n > 0 ? collect_near(&t, stack, c, reach, near) : 0;
+            nears += m;
+            uint64_t *mb = lone_far + (size_t)(3 * i) * nw, *nd = mb + nw, *fa = nd + nw;
+            uint8_t *mf = lone_full + (size_t)i * rows;
+            caps += near_raster(&r, &t, near, m, q + 3 * (size_t)(st[k - k0]), h, h2, mb, mf);
+            memset(nd, 0, nw * sizeof(uint64_t));
+            memset(fa, 0, nw * sizeof(uint64_t));
+            for (int j = 0; j < rows; j++) {
+                if (mf[j]) continue;
+                for (int x = 0; x < r.words; x++) {
+                    uint64_t valid = (x == r.words - 1) ? r.last_mask : ~UINT64_C(0);
+                    nd[(size_t)j * r.words + x] = ~mb[(size_t)j * r.words + x] & valid;
+                }
+            }
+        }
+        /* the far rays, band by band, each band from every query in turn */
+        int band = 0;
+        for (int j0 = 0; n > 0 && j0 < rows && !*stop; j0 += TILE_ROWS) {
+            const int j1 = j0 + TILE_ROWS < rows ? j0 + TILE_ROWS : rows;
+            for (int b0 = 0; b0 < bins; b0 += BAND_BINS, band++) {
+                const int b1 = b0 + BAND_BINS < bins ? b0 + BAND_BINS : bins;
+                for (int i = 0; i < kn; i++) {
+                    Lone *L = lones + i;
+                    int32_t *tab = tabs + (size_t)(i + 1) * table;
+                    for (int j = j0; j < j1; j++) {  /* the band's hints: none, a seed's (checked) or the query before's */
+                        int32_t *to = tab + 2 * ((size_t)j * bins + b0);
+                        const size_t cells = 2 * (size_t)(b1 - b0);
+                        if (!L->src) {
+                            for (size_t x = 0; x < cells; x++) to[x] = -1;
+                        } else if (L->seeded) {
+                            seed_cells(&t, n, L->src + 2 * ((size_t)j * bins + b0), to, cells);
+                        } else {
+                            memcpy(to, L->src + 2 * ((size_t)j * bins + b0), sizeof(int32_t) * cells);
+                        }
+                    }
+                    L->mv.band = band;
+                    const int64_t hits_before = w.hint_hits;
+                    uint64_t *nd = lone_far + (size_t)(3 * i + 1) * nw;
+                    L->tried += cast_band(&t, &w, &pk, &r, nd, nd + nw, tab, &L->mv, L->cf, L->cut, (float)h, L->use,
+                                          big, j0, j1, b0, b1, &rays);
+                    if (pk.n) walk_packet(&t, &w, &pk, L->cf, L->cut, (float)h);
+                    L->hits += w.hint_hits - hits_before;
+                }
+            }
+        }
+        if (*stop) break;  /* a cancel: the block's queries unfinished, as a cluster's after it */
+        for (int i = 0; i < kn; i++) {
+            const int k = kb + i;
+            Lone *L = lones + i;
+            if (L->use && L->tried > 0) {
+                recent_tried = recent_tried / 2 + L->tried;
+                recent_hits = recent_hits / 2 + L->hits;
+                /* the next hint_rest blocks skip them: the rule decides once a block, so per block */
+                if (1000 * recent_hits < (int64_t)hint_min * recent_tried) rest = hint_rest * block;
+            }
+            const uint64_t *mb = lone_far + (size_t)(3 * i) * nw, *fa = mb + 2 * nw;
+            int64_t count = 0;
+            for (size_t x = 0; x < nw; x++) count += __builtin_popcountll(mb[x] | fa[x]);
+            out[st[k - k0]] = (double)count / total;
+            if (keep_of && keep_of[k - k0] >= 0)
+                memcpy(kept + (size_t)keep_of[k - k0] * table, tabs + (size_t)(i + 1) * table, sizeof(int32_t) * table);
+        }
+        memcpy(tabs, tabs + (size_t)kn * table, sizeof(int32_t) * table);
+        finished += kn;
+        *done_count = finished;
+    }
+    for (int k = lone ? k1 : k0; k < k1 && !*stop; k++) {
         const double *c = cc + 3 * (size_t)k;
         const int use_hints = rest == 0;
         if (rest > 0) rest--;
@@ -972,13 +1153,7 @@ static PyObject *py_clusters(PyObject *self, PyObject *args) {
         /* a seed: the hints a lone query nearby left (its table and origin), instead of the previous cluster's */
         const int32_t seed = seed_of ? seed_of[k - k0] : -1;
         if (seed >= 0) {
-            const int32_t *from = seeds + (size_t)seed * table;
-            for (size_t i = 0; i < table; i += 2) {  /* a leaf of this tree and one of its points, else none */
-                const int32_t leaf = from[i], pt = from[i + 1];
-                const int ok = leaf >= 0 && leaf < t.n_nodes && t.nodes[leaf].kid < 0 && pt >= 0 && pt < n;
-                hints[i] = ok ? leaf : -1;
-                hints[i + 1] = ok ? pt : -1;
-            }
+            seed_cells(&t, n, seeds + (size_t)seed * table, hints, table);
             memcpy(prev, seed_at + 3 * (size_t)seed, sizeof prev);
         }
         /* hints from a cluster far away would only lengthen the walks */
@@ -987,7 +1162,7 @@ static PyObject *py_clusters(PyObject *self, PyObject *args) {
         if (reset)
             for (int i = 0; i < 2 * rows * bins; i++) hints[i] = -1;
         Move mv = {{(float)jx, (float)jy, (float)jz}, !reset && (jx != 0.0 || jy != 0.0 || jz != 0.0), rows, bins,
-                   hints, lon_scale};
+                   hints, lon_scale, INT32_MAX, 0};
         memcpy(prev, c, sizeof prev);
         int32_t m = n > 0 ? collect_near(&t, stack, c, reach, near) : 0;
         nears += m;
@@ -1010,36 +1185,9 @@ static PyObject *py_clusters(PyObject *self, PyObject *args) {
         memset(far, 0, nw * sizeof(uint64_t));
         w.last_leaf = -1;
         if (n > 0) {
-            for (int j0 = 0; j0 < rows; j0 += TILE_ROWS) {
-                const int j1 = j0 + TILE_ROWS < rows ? j0 + TILE_ROWS : rows;
-                for (int b0 = 0; b0 < bins; b0 += TILE_BINS) {
-                    const int x = b0 >> 6;
-                    if (use_hints && big) prefetch_hints(&t, &r, need, hints, j0, j1, b0, x, bins);
-                    for (int j = j0; j < j1; j++) {
-                        uint64_t todo = (need[(size_t)j * r.words + x] >> (b0 & 63)) & TILE_MASK;
-                        while (todo) {
-                            int b = b0 + __builtin_ctzll(todo);
-                            todo &= todo - 1;
-                            float s[3] = {(float)(r.s[j] * r.cos_lon[b]), (float)(r.s[j] * r.sin_lon[b]),
-                                          (float)r.z[j]};
-                            rays++;
-                            int32_t *hint = hints + 2 * ((size_t)j * bins + b);
-                            uint64_t *word = far + (size_t)j * r.words + x, bit = UINT64_C(1) << (b & 63);
-                            int hit = -1;
-                            if (use_hints) {
-                                hit = ray_hits(&t, &w, cf, s, (float)cut, (float)h, hint, &mv, j, b);
-                                tried++;
-                            }
-                            if (hit > 0) *word |= bit;
-                            if (hit < 0) {
-                                pk.sx[pk.n] = s[0]; pk.sy[pk.n] = s[1]; pk.sz[pk.n] = s[2];
-                                pk.hint[pk.n] = hint; pk.word[pk.n] = word; pk.bit[pk.n] = bit;
-                                if (++pk.n == PACKET) walk_packet(&t, &w, &pk, cf, (float)cut, (float)h);
-                            }
-                        }
-                    }
-                }
-            }
+            for (int j0 = 0; j0 < rows; j0 += TILE_ROWS)
+                tried += cast_band(&t, &w, &pk, &r, need, far, hints, &mv, cf, (float)cut, (float)h, use_hints, big, j0,
+                                   j0 + TILE_ROWS < rows ? j0 + TILE_ROWS : rows, 0, bins, &rays);
             if (pk.n) walk_packet(&t, &w, &pk, cf, (float)cut, (float)h);
         }
         /* hints that hit under hint_min per mille of the recent rays tried: the next hint_rest clusters go
@@ -1074,6 +1222,7 @@ static PyObject *py_clusters(PyObject *self, PyObject *args) {
 done:
     raster_free(&r);
     free(far); free(full); free(stack); free(near); free(hints); free(lon_scale);
+    free(tabs); free(lone_far); free(lone_full); free(lones);
     PyBuffer_Release(&pts); PyBuffer_Release(&nds); PyBuffer_Release(&lvs); PyBuffer_Release(&qs); PyBuffer_Release(&starts);
     PyBuffer_Release(&cen); PyBuffer_Release(&rch);
     PyBuffer_Release(&beta); PyBuffer_Release(&stats); PyBuffer_Release(&stop_buf); PyBuffer_Release(&done_buf);

@@ -6,7 +6,8 @@ beta(q) is the share of raster samples whose ray from q meets a ball of radius h
 (points beyond its reach) is ray cast once from its centroid, its near field rasterised as exact caps
 from every member.  A cluster of one query at its own position is exact.  Clusters run in long contiguous
 streams on a thread pool (the kernel releases the GIL and keeps each sample's hint from one cluster to the
-next), while the caller's thread polls its checkpoint; a cancel stops the kernel within one cluster.  The
+next; lone queries of a cloud beyond the caches a block at a time, band by band of the raster), while the
+caller's thread polls its checkpoint; a cancel stops the kernel within one cluster or band.  The
 kernel tests in SIMD lanes; on x86-64 it is also built for AVX2, used where the CPU has it (the same bits).
 Design, costs and errors: docs/boundedness.md section 3.
 """

@@ -670,6 +670,14 @@ def test_the_kernel_counts_finished_clusters_and_returns_at_once_when_stopped():
     assert not beta.any() and stats[2] == 0  # stopped before the first cluster: no ray cast
     assert _raycast.clusters(*args, beta, stats, np.zeros(1, np.int32), done) == 30 and done[0] == 30
     assert beta.any() and stats[2] > 0
+    # lone queries a block at a time (docs/boundedness.md 3.19): the same count, the same bits
+    none = np.zeros(0, np.int32)
+    blocks = (-1, -1, -1, none, np.zeros(0), none, none, none, 8)
+    beta8, stats8, done8 = np.zeros(30), np.zeros(6, np.int64), np.zeros(1, np.int64)
+    assert _raycast.clusters(*args, beta8, stats8, np.ones(1, np.int32), done8, *blocks) == 0 and done8[0] == 0
+    assert not beta8.any() and stats8[2] == 0
+    assert _raycast.clusters(*args, beta8, stats8, np.zeros(1, np.int32), done8, *blocks) == 30 and done8[0] == 30
+    assert np.array_equal(beta8, beta) and stats8[2] == stats[2]
 
 
 def test_cell_counts_of_every_size_equal_flooring_the_points_at_that_size():

@@ -1,7 +1,7 @@
 """The rays kernel's far rays (docs/boundedness.md 3.10-3.11) against an exhaustive ray test of every point:
 whatever prunes or orders the walks (packets' lane groups with no open ray, the walk up from a hint, hints
-skipped, always tried or asked of memory ahead), a sample is hit iff some point beyond the cut passes the
-kernel's float32 ball test."""
+skipped, always tried or asked of memory ahead, lone queries cast one by one or a block at a time band by
+band), a sample is hit iff some point beyond the cut passes the kernel's float32 ball test."""
 
 from __future__ import annotations
 
@@ -75,13 +75,25 @@ def case():
     return tree, queries, h, _exhaustive_beta(tree.points, queries, h)
 
 
-@pytest.mark.parametrize("policy", [(), (0, 0), (1001, 10**6), (250, 7, 0)],
-                         ids=["default", "hints-always", "hints-never", "hints-prefetched"])
+def _no_seeds(block: int) -> tuple:
+    """The kernel's optional arguments after the hint policy: no seed tables, none kept, ``block`` lone
+    queries cast together (0: one by one; -1: the kernel's BLOCK where the points exceed BLOCK_FROM bytes,
+    else one by one, as for this small torus)."""
+    none = np.zeros(0, np.int32)
+    return (none, np.zeros(0), none, none, none, block)
+
+
+@pytest.mark.parametrize("policy", [(), (0, 0), (1001, 10**6), (250, 7, 0), (-1, -1, -1, *_no_seeds(32)),
+                                    (-1, -1, -1, *_no_seeds(5)), (0, 0, 0, *_no_seeds(7))],
+                         ids=["default", "hints-always", "hints-never", "hints-prefetched", "blocks-of-32", "blocks-of-5",
+                              "blocks-of-7-hints-always-prefetched"])
 def test_far_rays_hit_exactly_where_some_point_passes_the_ball_test(case, policy):
     """Clusters of one query at its own position with reach h: no near caps, every sample a far ray; each
     build's beta equals the exhaustive test's bit for bit (a lane group skipped with an open ray, or a
     walk cut short, would lose hits); "hints-prefetched" asks memory for the hints of every tile, as for
-    a cloud beyond the kernel's PREFETCH_FROM bytes (docs/boundedness.md 3.17)."""
+    a cloud beyond the kernel's PREFETCH_FROM bytes (docs/boundedness.md 3.17); lone queries are cast one
+    by one here by default (the torus is below BLOCK_FROM bytes), and in blocks band by band (BLOCK, 3.19),
+    of 32 as for a larger cloud and of 5 and 7 that end inside the arcs of queries."""
     modules = _builds()
     tree, queries, h, ref = case
     n = len(queries)
@@ -102,12 +114,13 @@ def test_the_kernel_in_use_is_one_of_the_two_builds():
     assert _raycast.LEAF_SIZE == rays_kernel.LEAF_SIZE
 
 
+@pytest.mark.parametrize("block", [32, 0, 5], ids=["blocks-of-32", "one-by-one", "blocks-of-5"])
 @pytest.mark.parametrize("seeds", ["kept", "garbage"])
-def test_far_rays_seeded_from_kept_tables_hit_exactly_as_the_ball_test(case, seeds):
+def test_far_rays_seeded_from_kept_tables_hit_exactly_as_the_ball_test(case, seeds, block):
     """Each cluster starting from a hint table (docs/boundedness.md 3.18): the tables one pass kept of the
     queries shifted by half a step (the moved hints then read the seeds' origins), or tables of random
     indices (inner nodes and rows out of range among them, which the kernel must drop, not walk): beta
-    equals the exhaustive test's bit for bit on both builds."""
+    equals the exhaustive test's bit for bit on both builds, lone queries cast in blocks or one by one (3.19)."""
     modules = _builds()
     tree, queries, h, ref = case
     n, table = len(queries), 2 * ROWS * BINS
@@ -119,7 +132,7 @@ def test_far_rays_seeded_from_kept_tables_hit_exactly_as_the_ball_test(case, see
             module.clusters(tree.points, tree.nodes, tree.leaves, origins, np.arange(n + 1, dtype=np.int64), origins,
                             np.full(n, h), 0, n, float(h), ROWS, BINS, np.zeros(n), np.zeros(6, np.int64),
                             np.zeros(1, np.int32), np.zeros(1, np.int64), -1, -1, -1, np.zeros(0, np.int32),
-                            np.zeros(0), np.zeros(0, np.int32), tables, np.arange(n, dtype=np.int32))
+                            np.zeros(0), np.zeros(0, np.int32), tables, np.arange(n, dtype=np.int32), block)
             assert (tables[:, 1::2] >= 0).mean() > 0.3  # the pass kept its hits
         else:
             tables = rng.integers(-5, len(tree.nodes) + len(tree.points) + 5, (n, table)).astype(np.int32)
@@ -127,6 +140,6 @@ def test_far_rays_seeded_from_kept_tables_hit_exactly_as_the_ball_test(case, see
         module.clusters(tree.points, tree.nodes, tree.leaves, queries, np.arange(n + 1, dtype=np.int64), queries,
                         np.full(n, h), 0, n, float(h), ROWS, BINS, beta, stats, np.zeros(1, np.int32),
                         np.zeros(1, np.int64), 0 if seeds == "garbage" else -1, -1, -1, tables, origins,
-                        np.arange(n, dtype=np.int32), np.zeros(0, np.int32), np.zeros(0, np.int32))
+                        np.arange(n, dtype=np.int32), np.zeros(0, np.int32), np.zeros(0, np.int32), block)
         assert stats[4] > 0  # the hints were tried
         assert np.array_equal(beta, ref), module.__name__
