@@ -92,3 +92,43 @@ def test_a_fill_is_made_only_when_a_round_asks_for_it(monkeypatch):
     monkeypatch.setattr(fill, "_skeleton_entries", no)
     first = next(fill.fill_actions(curve, found.missing, s.cloud))
     assert first.entries == every[0].entries and "axis curve" in first.reason
+
+
+def test_a_first_look_reads_the_completeness_alone(crop):
+    """Terminal branches of the crop pruned in turn: the completeness read from the coverage alone is
+    the whole missing parts' to the bit; a refused action leaves its missing parts' regions unfound,
+    one that passes has them found before its whole update, which reads them."""
+    cloud, curve = crop
+    p = Params()
+    ev = skelcore.evaluate(cloud, curve=curve)
+    found = read_findings(ev)
+    terminal = [b for b, kind in enumerate(found.defects.branches.kind) if kind == "terminal"]
+    refused = 0
+    for act in _prunes(found, np.asarray(terminal[:4]), "spurious_branches", "test"):
+        new = apply(curve, act.entries[0], "test")[0]
+        pre = ev.update(new, diagnostics=False)
+        seen, why = first_look(found, pre, p)
+        assert seen["completeness"] == read_findings(ev.update(new)).measures["completeness"]
+        assert ("curve missing parts" in pre.diagnostics_left_out) == (why is not None)
+        refused += why is not None
+    assert refused >= 1
+
+
+def test_the_repair_is_the_same_with_the_completeness_alone(monkeypatch):
+    """A tube whose curve stops halfway (a fill kept, one refused at first look): the same log, curve
+    and last Evaluation whether the first looks find the missing parts' regions or not."""
+    from skelcore import shapes
+    from skelcore.skeleton_repair import repair, screen
+
+    s = shapes.cylinder(1500)
+    half = s.curve_edges[(s.curve_edges < 11).all(axis=1)]
+    curve = CurveSkeleton.from_raw(s.curve_vertices[:11], half)
+    assert screen.COMPLETENESS_ALONE is True
+    fast = repair(s.cloud, curve)
+    monkeypatch.setattr(screen, "COMPLETENESS_ALONE", False)
+    slow = repair(s.cloud, curve)
+    assert fast.accepted >= 1 and any(r["why"]["defects_after"] is None for r in fast.log["rejected"])
+    assert fast.log == slow.log and fast.stopped == slow.stopped
+    assert all(np.array_equal(getattr(fast.curve, f), getattr(slow.curve, f)) for f in ("vertices", "edges"))
+    assert fast.after.summary() == slow.after.summary()
+    assert [w.message for w in fast.after.warnings] == [w.message for w in slow.after.warnings]
