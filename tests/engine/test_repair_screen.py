@@ -95,9 +95,12 @@ def test_a_fill_is_made_only_when_a_round_asks_for_it(monkeypatch):
 
 
 def test_a_first_look_reads_the_completeness_alone(crop):
-    """Terminal branches of the crop pruned in turn: the completeness read from the coverage alone is
-    the whole missing parts' to the bit; a refused action leaves its missing parts' regions unfound,
-    one that passes has them found before its whole update, which reads them."""
+    """Terminal branches of the crop pruned in turn: the first look's completeness is the whole
+    missing parts' to the bit; a refused action leaves its missing parts' regions unfound when the
+    coverage holds (else, an element in the air, they were found to know it), one that passes has them
+    found before its whole update, which reads them."""
+    from skelcore.diagnostics.missing_parts import coverage_holds
+
     cloud, curve = crop
     p = Params()
     ev = skelcore.evaluate(cloud, curve=curve)
@@ -109,7 +112,9 @@ def test_a_first_look_reads_the_completeness_alone(crop):
         pre = ev.update(new, diagnostics=False)
         seen, why = first_look(found, pre, p)
         assert seen["completeness"] == read_findings(ev.update(new)).measures["completeness"]
-        assert ("curve missing parts" in pre.diagnostics_left_out) == (why is not None)
+        ctx = pre.source.ctx
+        held = coverage_holds(ctx.cloud_n, ctx.curve_n, ctx.results["curve coverage"], p, ctx.solid_test())
+        assert ("curve missing parts" in pre.diagnostics_left_out) == (why is not None and held)
         refused += why is not None
     assert refused >= 1
 
@@ -124,7 +129,11 @@ def test_the_repair_is_the_same_with_the_completeness_alone(monkeypatch):
     half = s.curve_edges[(s.curve_edges < 11).all(axis=1)]
     curve = CurveSkeleton.from_raw(s.curve_vertices[:11], half)
     assert screen.COMPLETENESS_ALONE is True
+    alone = []
+    made = screen.completeness_alone
+    monkeypatch.setattr(screen, "completeness_alone", lambda *a: alone.append(made(*a)) or alone[-1])
     fast = repair(s.cloud, curve)
+    assert alone and None not in alone  # the tube's coverage holds: every first look read it alone
     monkeypatch.setattr(screen, "COMPLETENESS_ALONE", False)
     slow = repair(s.cloud, curve)
     assert fast.accepted >= 1 and any(r["why"]["defects_after"] is None for r in fast.log["rejected"])
