@@ -1,6 +1,7 @@
 """A candidate's cheap first look (docs/repair.md "Never worse"): the edited curve's update without its
-diagnostics (curve boundedness and centeredness), then its coverage and completeness alone. An action
-these already make worse is rejected without the curve's defects, the dear part of an update at 100k
+diagnostics (curve boundedness and centeredness), then its coverage and completeness alone (read from
+the coverage, the missing parts' regions found only for an action that passes). An action these
+already make worse is rejected without the curve's defects, the dear part of an update at 100k
 points, and a re-centring without its own gain (:func:`.guard.recentred`) before its coverage too;
 one that passes gets the whole update (:meth:`~skelcore.Evaluation.complete_update`). The measures
 are those the whole update gives (the same stages on the same inputs, computed once), so the
