@@ -37,7 +37,7 @@ from .spur_cache import find_rows, row_hash, row_words
 from .trust_warning import TrustWarning
 
 __all__ = ["MissingRegion", "MissingParts", "missing_parts", "skeleton_elements", "coverage_elements", "depth_clause",
-           "coverage_holds", "completeness_alone"]
+           "coverage_holds", "explained_alone", "completeness_alone"]
 
 # neighbours per unexplained point in the region graph (edges also need to be shorter than the link)
 LINK_K = 8
@@ -389,18 +389,27 @@ def coverage_holds(cloud: np.ndarray, skeleton: np.ndarray | CurveSkeleton, cov:
     return not (len(elements) and _in_air(elements, inside, np.asarray(cloud, dtype=float).reshape(-1, 3), p).any())
 
 
+def explained_alone(cloud: np.ndarray, skeleton: np.ndarray | CurveSkeleton, cov: Coverage, p: Params,
+                    inside: Callable[[np.ndarray], np.ndarray] | None) -> np.ndarray | None:
+    """The verdict per cloud point :func:`missing_parts` gives (``MissingParts.explained``) from the
+    coverage ``cov``, without finding the regions: ``cov``'s own (on the whole cloud also when it was
+    estimated on a sample). None when :func:`missing_parts` would not take ``cov`` as it is
+    (:func:`coverage_holds`) or would refuse it."""
+    covered = np.asarray(cov.covered, bool)
+    if len(covered) != len(np.asarray(cloud).reshape(-1, 3)) or not coverage_holds(cloud, skeleton, cov, p, inside):
+        return None
+    return covered
+
+
 def completeness_alone(cloud: np.ndarray, skeleton: np.ndarray | CurveSkeleton, cov: Coverage, p: Params,
                        inside: Callable[[np.ndarray], np.ndarray] | None) -> float | None:
-    """The completeness :func:`missing_parts` gives from the coverage ``cov`` (the share of the cloud it
-    explains, on the whole cloud also when ``cov`` was estimated on a sample), without finding the
-    regions: a repair's first look reads it alone (docs/repair.md "The repair's cost"). None when
-    :func:`missing_parts` would not take ``cov`` as it is (:func:`coverage_holds`)."""
-    if not coverage_holds(cloud, skeleton, cov, p, inside):
+    """The completeness :func:`missing_parts` gives from the coverage ``cov`` (the share of the cloud
+    :func:`explained_alone` finds explained): a repair's first look reads it alone (docs/repair.md
+    "The repair's cost"). None when :func:`explained_alone` is."""
+    explained = explained_alone(cloud, skeleton, cov, p, inside)
+    if explained is None:
         return None
-    covered = np.asarray(cov.covered, bool)
-    if len(covered) != len(np.asarray(cloud).reshape(-1, 3)):
-        return None  # missing_parts refuses it
-    return float(covered.mean()) if len(covered) else 1.0
+    return float(explained.mean()) if len(explained) else 1.0
 
 
 def sampled_points(cloud: np.ndarray, p: Params

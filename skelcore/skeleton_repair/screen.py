@@ -17,7 +17,7 @@ from typing import Callable
 import numpy as np
 
 from ..curve import CurveSkeleton
-from ..diagnostics.missing_parts import completeness_alone
+from ..diagnostics.missing_parts import completeness_alone, explained_alone
 from ..edit.incremental import LEFT_OUT, compute_left_out
 from ..evaluation import Evaluation
 from ..params import Params
@@ -27,7 +27,7 @@ from .guard import kept_part, recentred, worse
 from .outside_look import outside_named, outside_of
 
 __all__ = ["first_look", "first_update", "whole_update", "with_scan_checks", "SCAN_CHECKS", "OUTSIDE_FIRST",
-           "COMPLETENESS_ALONE"]
+           "COMPLETENESS_ALONE", "explained"]
 
 #: whether every update of a candidate runs the real-scan trust checks (the openings' search): False,
 #: since the rule reads none of their warnings; True gives the slower path, the same decisions, log and
@@ -72,6 +72,20 @@ def _completeness(pre: Evaluation) -> tuple[bool, float | None]:
         if alone is not None:
             return True, _num(alone)
     return True, _num(getattr(_with_missing_parts(pre), "completeness", None))
+
+
+def explained(ev: Evaluation) -> np.ndarray | None:
+    """The curve missing parts' verdict per cloud point (what completeness is the share of) of ``ev``,
+    also of a first look that read its completeness alone (the coverage's, :func:`explained_alone`:
+    the verdict the stage gives); None when unknown."""
+    ctx = getattr(ev.source, "ctx", None)
+    mp = None if ctx is None else ctx.results.get(_MISSING.name)
+    if mp is not None:
+        return np.asarray(mp.explained, bool)
+    cov = None if ctx is None else ctx.results.get("curve coverage")
+    if cov is None or not _missing_left_out(ev):
+        return None
+    return explained_alone(ctx.cloud_n, ctx.curve_n, cov, ctx.params, ctx.solid_test())
 
 
 def _with_missing_parts(pre: Evaluation) -> object:
