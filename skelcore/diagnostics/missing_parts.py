@@ -36,7 +36,8 @@ from ..params import Params
 from .spur_cache import find_rows, row_hash, row_words
 from .trust_warning import TrustWarning
 
-__all__ = ["MissingRegion", "MissingParts", "missing_parts", "skeleton_elements", "coverage_elements", "depth_clause"]
+__all__ = ["MissingRegion", "MissingParts", "missing_parts", "skeleton_elements", "coverage_elements", "depth_clause",
+           "coverage_holds", "explained_alone", "completeness_alone"]
 
 # neighbours per unexplained point in the region graph (edges also need to be shorter than the link)
 LINK_K = 8
@@ -298,8 +299,7 @@ def missing_parts(
         skeleton, keep = np.asarray(skeleton, dtype=float).reshape(-1, 3)[np.asarray(keep, dtype=bool)], None
     if inside is not None and cov is not None:  # the evaluation's coverage holds while every element is inside
         tau = float(cov.tau)
-        elements = skeleton_elements(skeleton, tau / float(p.coverage_tau_factor), int(p.missing_max_elements))
-        if len(elements) and _in_air(elements, inside, cloud, p).any():
+        if not coverage_holds(cloud, skeleton, cov, p, inside):
             cov = None
     sub: np.ndarray | None = None
     spread_factor = 1.0
@@ -376,6 +376,40 @@ def missing_parts(
                     "missing_large_share": float(p.missing_large_share),
                     "missing_min_completeness": float(p.missing_min_completeness)},
     )
+
+
+def coverage_holds(cloud: np.ndarray, skeleton: np.ndarray | CurveSkeleton, cov: Coverage, p: Params,
+                   inside: Callable[[np.ndarray], np.ndarray] | None) -> bool:
+    """Whether :func:`missing_parts` takes the evaluation's coverage ``cov`` of ``skeleton`` as it is:
+    no ``inside`` test, or no element in the air (:func:`_in_air`; else the coverage is computed again
+    without those elements)."""
+    if inside is None:
+        return True
+    elements = skeleton_elements(skeleton, float(cov.tau) / float(p.coverage_tau_factor), int(p.missing_max_elements))
+    return not (len(elements) and _in_air(elements, inside, np.asarray(cloud, dtype=float).reshape(-1, 3), p).any())
+
+
+def explained_alone(cloud: np.ndarray, skeleton: np.ndarray | CurveSkeleton, cov: Coverage, p: Params,
+                    inside: Callable[[np.ndarray], np.ndarray] | None) -> np.ndarray | None:
+    """The verdict per cloud point :func:`missing_parts` gives (``MissingParts.explained``) from the
+    coverage ``cov``, without finding the regions: ``cov``'s own (on the whole cloud also when it was
+    estimated on a sample). None when :func:`missing_parts` would not take ``cov`` as it is
+    (:func:`coverage_holds`) or would refuse it."""
+    covered = np.asarray(cov.covered, bool)
+    if len(covered) != len(np.asarray(cloud).reshape(-1, 3)) or not coverage_holds(cloud, skeleton, cov, p, inside):
+        return None
+    return covered
+
+
+def completeness_alone(cloud: np.ndarray, skeleton: np.ndarray | CurveSkeleton, cov: Coverage, p: Params,
+                       inside: Callable[[np.ndarray], np.ndarray] | None) -> float | None:
+    """The completeness :func:`missing_parts` gives from the coverage ``cov`` (the share of the cloud
+    :func:`explained_alone` finds explained): a repair's first look reads it alone (docs/repair.md
+    "The repair's cost"). None when :func:`explained_alone` is."""
+    explained = explained_alone(cloud, skeleton, cov, p, inside)
+    if explained is None:
+        return None
+    return float(explained.mean()) if len(explained) else 1.0
 
 
 def sampled_points(cloud: np.ndarray, p: Params

@@ -20,7 +20,7 @@ from .batch import BATCHED, Member, batch_curve, blame_lost, judge, log_entries,
 from .findings import Findings, read_findings
 from .phases import PhaseClock
 from .proposals import Action
-from .screen import first_look, first_update, whole_update
+from .screen import explained, first_look, first_update, whole_update
 
 __all__ = ["BatchState", "batch_step"]
 
@@ -40,13 +40,6 @@ class BatchState:
 
 def _rounded(measures: dict[str, float | None]) -> dict[str, float | None]:
     return {k: None if v is None else round(v, 4) for k, v in measures.items()}
-
-
-def _explained(ev: Evaluation) -> np.ndarray | None:
-    """The curve's missing parts' verdict per cloud point (what completeness is the share of)."""
-    ctx = getattr(ev.source, "ctx", None)
-    mp = None if ctx is None else ctx.results.get("curve missing parts")
-    return None if mp is None else np.asarray(mp.explained, bool)
 
 
 def _gap(curve: CurveSkeleton, p: Params) -> float:
@@ -97,7 +90,7 @@ def batch_step(ev: Evaluation, cur: CurveSkeleton, found: Findings, candidates: 
                 seen, refusal = first_look(found, pre, p)
             if refusal is not None:
                 why.update(after=_rounded(seen), defects_after=None)
-                blamed = blame_lost(cur, batch, cloud, _explained(ev), _explained(pre), _gap(cur, p))
+                blamed = blame_lost(cur, batch, cloud, explained(ev), explained(pre), _gap(cur, p))
                 rejected.append({"entries": [], "why": {**why, "rejected": refusal, "blamed": len(blamed)}})
                 state.blamed |= {batch[i].key for i in blamed}
                 batch = _smaller(batch, blamed)
