@@ -12,26 +12,35 @@ from pathlib import Path
 import numpy as np
 
 from ..display.barcodes import barcode_png, draw_barcodes
-from ..display.plotter import render_png
+from ..display.plotter import OffscreenPlotter, render_png
+from ..display.scene import add_scene
 from ..io.atomic import atomic_open
 from ..scores import LOCAL_METRICS
 
-__all__ = ["VIEWS", "render_job", "draw_barcodes", "barcode_png"]
+__all__ = ["VIEWS", "SIZE", "render_job", "draw_barcodes", "barcode_png"]
 
 VIEWS = ("skeleton", "barcodes", *LOCAL_METRICS)
-_SIZE = (320, 320)
+SIZE = (320, 320)  # pixels of each picture of the graphic table
 
 
 def render_job(out_dir: str | os.PathLike, key: str, arrays: dict[str, np.ndarray],
-               size: tuple[int, int] = _SIZE) -> dict[str, Path]:
-    """PNG path per view of the job, rendered once (cached in ``out_dir/renders``)."""
+               size: tuple[int, int] = SIZE, plotter: OffscreenPlotter | None = None) -> dict[str, Path]:
+    """PNG path per view of the job, rendered once (cached in ``out_dir/renders``); the 3D views on
+    ``plotter`` when one of ``size`` is given (the report's, shared by its jobs: the same bytes, less
+    time), else each on a plotter of its own."""
     folder = Path(out_dir) / "renders"
     folder.mkdir(exist_ok=True)
+    shared = plotter if plotter is not None and plotter.size == tuple(size) else None
     paths = {}
     for view in VIEWS:
         path = folder / f"{key}_{view}.png"
         if not path.exists():
-            data = barcode_png(arrays, size) if view == "barcodes" else render_png([(arrays, None)], view, size)
+            if view == "barcodes":
+                data = barcode_png(arrays, size)
+            elif shared is not None:
+                data = shared.png(lambda pl, v=view: add_scene(pl, arrays, v))
+            else:
+                data = render_png([(arrays, None)], view, size)
             with atomic_open(path, "wb") as fh:
                 fh.write(data)
         paths[view] = path

@@ -12,12 +12,15 @@ from __future__ import annotations
 import os
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
 from .. import colors
 from ..diagnostics.record import DEFECT_BITS
+from ..display.plotter import OffscreenPlotter
 from ..io.atomic import atomic_open
+from .render import SIZE
 
 __all__ = ["DEFECT_VIEW", "DRAWN", "DEFECT_LABELS", "DefectLayers", "defect_layers", "render_defects",
            "legend_html"]
@@ -35,7 +38,6 @@ DEFECT_LABELS = {
     "spurious_branches": "spurious branches",
 }
 _LINE_WIDTH = {"disconnected": 12, "outside": 9, "along_surface": 7, "spurious_cycles": 6, "spurious_branches": 4}
-_SIZE = (320, 320)
 
 
 @dataclass
@@ -94,52 +96,51 @@ def _rgb(c: tuple[int, int, int]) -> tuple[float, float, float]:
     return tuple(v / 255 for v in c)  # type: ignore[return-value]
 
 
-def _render(arrays: dict[str, np.ndarray], layers: DefectLayers, size: tuple[int, int]) -> bytes:
-    import pyvista as pv
+def _draw(pl: Any, arrays: dict[str, np.ndarray], layers: DefectLayers) -> None:
+    from ..display.scene import _bounds, _lines
 
-    from ..display.plotter import png_bytes
-    from ..display.scene import _bounds, _lines, quiet_vtk
+    pl.set_background("white")
+    cloud = np.asarray(arrays["cloud"], float)
+    rest = cloud[~layers.missing]
+    if len(rest):
+        pl.add_points(rest, color=_rgb(colors.CLOUD_GREY), point_size=2, opacity=0.2,
+                      render_points_as_spheres=False, lighting=False)
+    if layers.missing.any():
+        pl.add_points(cloud[layers.missing], color=_rgb(colors.DEFECT_COLORS["incomplete"]), point_size=5,
+                      render_points_as_spheres=False, lighting=False)
+    verts = np.asarray(arrays.get("curve_vertices", np.zeros((0, 3))), float)
+    edges = np.asarray(arrays.get("curve_edges", np.zeros((0, 2))), np.int64)
+    if len(edges):
+        pl.add_mesh(_lines(verts, edges), color=_rgb(colors.DEFECT_SKELETON), line_width=2, lighting=False)
+        for code in DRAWN[1:]:
+            sel = layers.edges.get(code)
+            if sel is not None and sel.any():
+                pl.add_mesh(_lines(verts, edges[sel]), color=_rgb(colors.DEFECT_COLORS[code]),
+                            line_width=_LINE_WIDTH[code], lighting=False)
+    elif "skeletal" in arrays and len(arrays["skeletal"]):
+        pl.add_points(np.asarray(arrays["skeletal"], float), color=_rgb(colors.DEFECT_SKELETON), point_size=3,
+                      render_points_as_spheres=False, lighting=False)
+    pl.camera_position = "iso"
+    pl.reset_camera(bounds=_bounds(cloud))
 
-    quiet_vtk()
-    pl = pv.Plotter(off_screen=True, window_size=list(size))
-    try:
-        pl.set_background("white")
-        cloud = np.asarray(arrays["cloud"], float)
-        rest = cloud[~layers.missing]
-        if len(rest):
-            pl.add_points(rest, color=_rgb(colors.CLOUD_GREY), point_size=2, opacity=0.2,
-                          render_points_as_spheres=False, lighting=False)
-        if layers.missing.any():
-            pl.add_points(cloud[layers.missing], color=_rgb(colors.DEFECT_COLORS["incomplete"]), point_size=5,
-                          render_points_as_spheres=False, lighting=False)
-        verts = np.asarray(arrays.get("curve_vertices", np.zeros((0, 3))), float)
-        edges = np.asarray(arrays.get("curve_edges", np.zeros((0, 2))), np.int64)
-        if len(edges):
-            pl.add_mesh(_lines(verts, edges), color=_rgb(colors.DEFECT_SKELETON), line_width=2, lighting=False)
-            for code in DRAWN[1:]:
-                sel = layers.edges.get(code)
-                if sel is not None and sel.any():
-                    pl.add_mesh(_lines(verts, edges[sel]), color=_rgb(colors.DEFECT_COLORS[code]),
-                                line_width=_LINE_WIDTH[code], lighting=False)
-        elif "skeletal" in arrays and len(arrays["skeletal"]):
-            pl.add_points(np.asarray(arrays["skeletal"], float), color=_rgb(colors.DEFECT_SKELETON), point_size=3,
-                          render_points_as_spheres=False, lighting=False)
-        pl.camera_position = "iso"
-        pl.reset_camera(bounds=_bounds(cloud))
-        img = pl.screenshot(return_img=True)
-    finally:
-        pl.close()
-    return png_bytes(img)
+
+def _render(arrays: dict[str, np.ndarray], layers: DefectLayers, size: tuple[int, int],
+            plotter: OffscreenPlotter | None = None) -> bytes:
+    """The picture's PNG, on ``plotter`` when one of ``size`` is given, else on a plotter of its own."""
+    if plotter is not None and plotter.size == tuple(size):
+        return plotter.png(lambda pl: _draw(pl, arrays, layers))
+    with OffscreenPlotter(size) as own:
+        return own.png(lambda pl: _draw(pl, arrays, layers))
 
 
 def render_defects(out_dir: str | os.PathLike, key: str, arrays: dict[str, np.ndarray], layers: DefectLayers,
-                   size: tuple[int, int] = _SIZE) -> Path:
+                   size: tuple[int, int] = SIZE, plotter: OffscreenPlotter | None = None) -> Path:
     """The job's defect picture, rendered once (cached as ``out_dir/renders/KEY_defects.png``)."""
     folder = Path(out_dir) / "renders"
     folder.mkdir(exist_ok=True)
     path = folder / f"{key}_{DEFECT_VIEW}.png"
     if not path.exists():
-        data = _render(arrays, layers, size)
+        data = _render(arrays, layers, size, plotter)
         with atomic_open(path, "wb") as fh:
             fh.write(data)
     return path

@@ -17,6 +17,7 @@ from typing import Any
 
 import numpy as np
 
+from ..display.plotter import OffscreenPlotter
 from ..io.atomic import atomic_open
 from ..scores import COLUMN, column_keys, format_score, paired_columns
 from ..colors import REFERENCE_COLOR, hex_color
@@ -24,7 +25,7 @@ from ..diagnostics.trust import DEFECT_CODES, unchecked_defects
 from .leaderboard import Leaderboard
 from .leaderboard_html import LEADERBOARD_CSS, leaderboard_html
 from .profiles import Profile
-from .render import VIEWS, render_job
+from .render import SIZE, VIEWS, render_job
 from .render_defects import DEFECT_VIEW, defect_layers, legend_html, render_defects
 from .job_store import Store
 
@@ -153,16 +154,24 @@ def _warnings_html(store: Store, r: dict[str, Any]) -> str:
     return f"<ul class=warnings>{items}</ul>"
 
 
-def _defects_cell(out_dir: str, store: Store, r: dict[str, Any], arrays: dict[str, np.ndarray], alt: str) -> str:
+def _defects_cell(out_dir: str, store: Store, r: dict[str, Any], arrays: dict[str, np.ndarray], alt: str,
+                  plotter: OffscreenPlotter | None = None) -> str:
     """The job's defect picture (only the defects it was warned of, each in its colour) and its legend."""
     doc = (store.get(r["key"]) or {}).get("evaluation") or {}
     layers = defect_layers(arrays, [w["code"] for w in doc.get("warnings") or [] if w["code"] in DEFECT_CODES])
-    png = render_defects(out_dir, r["key"], arrays, layers)
+    png = render_defects(out_dir, r["key"], arrays, layers, plotter=plotter)
     return f"<td>{_img(png.read_bytes(), alt)}{legend_html(layers)}</td>"
 
 
 def _graphic_table(out_dir: str, rows: list[dict[str, Any]], store: Store, shapes: list[str], methods: list[str],
                    conditions: list[str]) -> str:
+    """Every job's pictures, the 3D ones drawn on one off-screen plotter for the whole table."""
+    with OffscreenPlotter(SIZE) as plotter:
+        return _graphic_rows(out_dir, rows, store, shapes, methods, conditions, plotter)
+
+
+def _graphic_rows(out_dir: str, rows: list[dict[str, Any]], store: Store, shapes: list[str], methods: list[str],
+                  conditions: list[str], plotter: OffscreenPlotter) -> str:
     out = []
     for shape in shapes:
         out.append(f"<h3>{html.escape(shape)}</h3><table class=gt><tr><th>condition / method</th>"
@@ -179,9 +188,9 @@ def _graphic_table(out_dir: str, rows: list[dict[str, Any]], store: Store, shape
                                f"{html.escape(str(r.get('error', '')))}</td></tr>")
                     continue
                 arrays = store.arrays(r["key"])
-                pngs = render_job(out_dir, r["key"], arrays)
+                pngs = render_job(out_dir, r["key"], arrays, plotter=plotter)
                 imgs = "".join(f"<td>{_img(pngs[v].read_bytes(), f'{shape} {cond} {meth} {v}')}</td>" for v in VIEWS)
-                imgs += _defects_cell(out_dir, store, r, arrays, f"{shape} {cond} {meth} {DEFECT_VIEW}")
+                imgs += _defects_cell(out_dir, store, r, arrays, f"{shape} {cond} {meth} {DEFECT_VIEW}", plotter)
                 out.append(f"<tr>{head}{imgs}<td>{_scores_line(r)}{_ground_truth_line(r)}{_warnings_html(store, r)}</td></tr>")
         out.append("</table>")
     return "".join(out)

@@ -137,8 +137,12 @@ for name, dock in w.docks.items():
         "rect": global_rect(dock), "viewport": [area.viewport().width(), area.viewport().height()],
         "panel_min_h": panel.minimumSizeHint().height(), "scroll_max": bar.maximum(),
         "in_view_menu": dock.toggleViewAction() in view_menu.actions()}
+print("PROBE " + json.dumps(out), flush=True)
+"""
+
+# the end of a probe
+_CLOSE = r"""
 w.session.runner.shutdown()
-print("PROBE " + json.dumps(out))
 w.close()
 """
 
@@ -154,23 +158,40 @@ def _inside(inner, outer) -> bool:
     return x >= ox and y >= oy and x + w <= ox + ow and y + h <= oy + oh
 
 
-@pytest.mark.slow
-@pytest.mark.parametrize("scale", ["1", "1.5", "2"])
-def test_at_each_scale_factor_the_window_fits_1366x768_and_every_dock_is_reachable(scale, sample_files, tmp_path):
-    """A fresh process under its own Xvfb screen of 1366 x 768 pixels (683 x 384 device-independent
-    pixels at scale 2); no window manager, so the window's own geometry is what the screen shows."""
+@pytest.fixture(scope="module")
+def probes(sample_files, tmp_path_factory):
+    """Runs of the probes by scale factor, each made when first asked for: a fresh process under its own
+    Xvfb screen of 1366 x 768 pixels; at 1.5 the content probe follows in the same process. Returns the
+    dict of what each probe printed (its "PROBE" and "CONTENT" lines), by scale."""
     if shutil.which("xvfb-run") is None:
         pytest.skip("xvfb-run not installed")
-    env = dict(os.environ, QT_SCALE_FACTOR=scale, QT_QPA_PLATFORM="xcb",
-               PYTHONPATH=str(ROOT) + os.pathsep + os.environ.get("PYTHONPATH", ""))
-    env.pop("DISPLAY", None)
-    cmd = ["xvfb-run", "-a", "-s", f"-screen 0 {LAPTOP[0]}x{LAPTOP[1]}x24", sys.executable, "-c",
-           textwrap.dedent(_PROBE), str(tmp_path / "s.ini"),
-           sample_files["cloud"], sample_files["skeletal"], sample_files["curve"]]
-    run = subprocess.run(cmd, capture_output=True, text=True, cwd=ROOT, env=env, timeout=300)
-    line = next((ln for ln in run.stdout.splitlines() if ln.startswith("PROBE ")), None)
-    assert line is not None, run.stdout + run.stderr
-    got = json.loads(line[len("PROBE "):])
+    made: dict[str, dict] = {}
+
+    def get(scale: str) -> dict:
+        if scale not in made:
+            env = dict(os.environ, QT_SCALE_FACTOR=scale, QT_QPA_PLATFORM="xcb",
+                       PYTHONPATH=str(ROOT) + os.pathsep + os.environ.get("PYTHONPATH", ""))
+            env.pop("DISPLAY", None)
+            script = _PROBE + _CLOSE + (_CONTENT_PROBE + _CLOSE if scale == "1.5" else "")
+            cmd = ["xvfb-run", "-a", "-s", f"-screen 0 {LAPTOP[0]}x{LAPTOP[1]}x24", sys.executable, "-c",
+                   textwrap.dedent(script), str(tmp_path_factory.mktemp("probe") / "s.ini"),
+                   sample_files["cloud"], sample_files["skeletal"], sample_files["curve"]]
+            run = subprocess.run(cmd, capture_output=True, text=True, cwd=ROOT, env=env, timeout=300)
+            lines = dict(ln.split(" ", 1) for ln in run.stdout.splitlines() if ln.startswith(("PROBE ", "CONTENT ")))
+            made[scale] = {"run": run.stdout + run.stderr, **{k: json.loads(v) for k, v in lines.items()}}
+        return made[scale]
+
+    return get
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("scale", ["1", "1.5", "2"])
+def test_at_each_scale_factor_the_window_fits_1366x768_and_every_dock_is_reachable(scale, probes):
+    """A fresh process under its own Xvfb screen of 1366 x 768 pixels (683 x 384 device-independent
+    pixels at scale 2); no window manager, so the window's own geometry is what the screen shows."""
+    probe = probes(scale)
+    assert "PROBE" in probe, probe["run"]
+    got = probe["PROBE"]
     screen = got["screen"]
     expected = [round(v / float(scale)) for v in LAPTOP]
     assert abs(screen[2] - expected[0]) <= 1 and abs(screen[3] - expected[1]) <= 1, screen  # the factor applied
@@ -186,18 +207,15 @@ def test_at_each_scale_factor_the_window_fits_1366x768_and_every_dock_is_reachab
         assert dock["viewport"][1] > 0 and dock["viewport"][1] + dock["scroll_max"] >= dock["panel_min_h"], (name, dock)
 
 
+# The content checks, run after the scale-1.5 layout probe in the same process (one start-up of the
+# interpreter and the viewer's imports instead of two) on a second window of its own, with its own
+# settings file, given the whole screen before it is shown.
 _CONTENT_PROBE = r"""
-import json, sys
-from PySide6 import QtCore, QtWidgets
-app = QtWidgets.QApplication(["probe"])
-from skelscope.main_window import MainWindow
 from skelscope.panels.settings import ElidingComboBox
-w = MainWindow(settings=QtCore.QSettings(sys.argv[1], QtCore.QSettings.Format.IniFormat))
+w = MainWindow(settings=QtCore.QSettings(sys.argv[1] + ".content.ini", QtCore.QSettings.Format.IniFormat))
 w.session.ask = lambda q, o: o[0]
 w.setGeometry(w.screen().availableGeometry())
 w.show()
-def settle(ms=300):
-    loop = QtCore.QEventLoop(); QtCore.QTimer.singleShot(ms, loop.quit); loop.exec()
 settle()
 w.session.load_files(sys.argv[2:5])
 while w.session.runner.running:
@@ -248,29 +266,19 @@ w.resizeDocks([w.docks["Barcodes"]], [180], QtCore.Qt.Orientation.Horizontal)
 settle(300)
 out["tabs"] = [[bar.tabText(i), bar.tabRect(i).width(), bar.fontMetrics().horizontalAdvance(bar.tabText(i))]
                for bar in w.findChildren(QtWidgets.QTabBar) if bar.isVisible() for i in range(bar.count())]
-print("PROBE " + json.dumps(out))
-w.session.runner.shutdown()
-w.close()
+print("CONTENT " + json.dumps(out))
 """
 
 
-def test_at_scale_1_5_on_1366x768_the_panels_show_their_content_whole(sample_files, tmp_path):
-    """In a fresh process at QT_SCALE_FACTOR=1.5 (911 x 512 device-independent pixels): no dock scrolls
-    sideways; the Summary shows both columns with every value and count whole; the Settings show every
-    label whole and every choice whole or elided with its full text in the tooltip; the barcode
-    panel's title keeps clear of the figure's edges; the docks' tabs show their titles whole."""
-    if shutil.which("xvfb-run") is None:
-        pytest.skip("xvfb-run not installed")
-    env = dict(os.environ, QT_SCALE_FACTOR="1.5", QT_QPA_PLATFORM="xcb",
-               PYTHONPATH=str(ROOT) + os.pathsep + os.environ.get("PYTHONPATH", ""))
-    env.pop("DISPLAY", None)
-    cmd = ["xvfb-run", "-a", "-s", f"-screen 0 {LAPTOP[0]}x{LAPTOP[1]}x24", sys.executable, "-c",
-           textwrap.dedent(_CONTENT_PROBE), str(tmp_path / "s.ini"),
-           sample_files["cloud"], sample_files["skeletal"], sample_files["curve"]]
-    run = subprocess.run(cmd, capture_output=True, text=True, cwd=ROOT, env=env, timeout=300)
-    line = next((ln for ln in run.stdout.splitlines() if ln.startswith("PROBE ")), None)
-    assert line is not None, run.stdout + run.stderr
-    got = json.loads(line[len("PROBE "):])
+def test_at_scale_1_5_on_1366x768_the_panels_show_their_content_whole(probes):
+    """In a fresh window at QT_SCALE_FACTOR=1.5 (911 x 512 device-independent pixels) given the whole
+    screen, after its evaluation: no dock scrolls sideways; the Summary shows
+    both columns with every value and count whole; the Settings show every label whole and every
+    choice whole or elided with its full text in the tooltip; the barcode panel's title keeps clear
+    of the figure's edges; the docks' tabs show their titles whole."""
+    probe = probes("1.5")
+    assert "CONTENT" in probe, probe["run"]
+    got = probe["CONTENT"]
     for name, dock in got["docks"].items():
         assert dock["hscroll"] == 0, (name, dock)
     summary = got["summary"]

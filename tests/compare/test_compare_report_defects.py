@@ -190,3 +190,24 @@ def test_the_legend_names_only_what_was_found(run):
     assert "spurious branches" in by["spurs"] and "outside the shape" in by["spurs"]
     assert hexes["spurious_cycles"] in named["loop"] and "spurious cycles" in by["loop"]
     assert "<th>defects</th>" in page
+
+
+def test_the_pictures_drawn_on_the_report_s_shared_plotter_are_those_of_a_plotter_each(run, tmp_path):
+    """report.html draws every 3D picture on one off-screen plotter (skelcore.display.plotter.OffscreenPlotter):
+    the last job's pictures, drawn after the other jobs' on it, are byte for byte those drawn each on a
+    plotter of its own."""
+    from skelcore.compare.job_store import Store
+    from skelcore.compare.render import VIEWS, render_job
+    from skelcore.compare.render_defects import defect_layers, render_defects
+    from skelcore.diagnostics.trust import DEFECT_CODES
+
+    out, rows, _sh, _c = run
+    store = Store(out)
+    key = rows["loop"]["key"]  # the last in the table
+    arrays = store.arrays(key)
+    fresh = render_job(tmp_path, key, arrays)
+    for view in VIEWS:
+        assert fresh[view].read_bytes() == (out / "renders" / f"{key}_{view}.png").read_bytes(), view
+    codes = [w["code"] for w in store.get(key)["evaluation"]["warnings"] if w["code"] in DEFECT_CODES]
+    alone = render_defects(tmp_path, key, arrays, defect_layers(arrays, codes))
+    assert alone.read_bytes() == (out / "renders" / f"{key}_defects.png").read_bytes()
