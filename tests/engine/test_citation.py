@@ -91,3 +91,18 @@ def test_citation_cff_names_skelscope_the_paper_and_the_toolbox():
     assert any(r["title"] == PAPER for r in cff["references"])
     credits = " ".join((ROOT / "docs" / "credits.md").read_text(encoding="utf-8").split())  # lines unwrapped
     assert PAPER in credits and "CITATION.cff" in credits and TOOLBOX in credits
+
+
+def test_the_version_is_one_in_citation_package_and_changelog():
+    """A release names one version and one date: CITATION.cff's, the package's and the newest release
+    heading of CHANGELOG.md (Keep a Changelog: ``## [X.Y.Z] - YYYY-MM-DD`` below ``## [Unreleased]``)."""
+    from skelcore.version import __version__
+
+    cff = _cff()
+    assert isinstance(cff["version"], str) and isinstance(cff["date-released"], str)
+    assert re.fullmatch(r"\d{4}-\d{2}-\d{2}", cff["date-released"])
+    assert cff["version"] == __version__
+    headings = re.findall(r"^## \[([^\]]+)\](?: - (\S+))?$",
+                          (ROOT / "CHANGELOG.md").read_text(encoding="utf-8"), flags=re.M)
+    assert headings[0] == ("Unreleased", "")
+    assert headings[1] == (__version__, cff["date-released"])
