@@ -130,6 +130,16 @@ def with_scan_checks(ev: Evaluation, curve: CurveSkeleton) -> Evaluation:
 
 def first_look(before: Findings, pre: Evaluation, params: Params, recentring: bool = False,
                kept: np.ndarray | None = None) -> tuple[dict[str, float | None], str | None]:
+    """:func:`_judged`; an action that passes gets its curve missing parts now (the regions, left out
+    while only its completeness was read), so that its whole update adds the defects alone."""
+    a, why = _judged(before, pre, params, recentring, kept)
+    if why is None and COMPLETENESS_ALONE:
+        _with_missing_parts(pre)
+    return a, why
+
+
+def _judged(before: Findings, pre: Evaluation, params: Params, recentring: bool,
+            kept: np.ndarray | None) -> tuple[dict[str, float | None], str | None]:
     """(the measures known without defects, why the action is worse or None) for ``pre``, the
     candidate's ``update(..., diagnostics=False)``: completeness, curve boundedness and centeredness
     against ``before`` with the bounds of :func:`.guard.verdict`; the outside share stays None.
@@ -149,7 +159,7 @@ def first_look(before: Findings, pre: Evaluation, params: Params, recentring: bo
         judged = kept_part(a, cl.sample_edge, cl.sample_centeredness(params.beta_star), kept, params)
     why = worse(before.measures, judged, params, completeness=known)
     if why or kept is None or not OUTSIDE_FIRST or (out := outside_of(pre)) is None:
-        return a, ("worse: " + "; ".join(why)) if why else _passed(pre)
+        return a, ("worse: " + "; ".join(why)) if why else None
     a["outside_share"] = judged["outside_share"] = out.length_share
     why = worse(before.measures, judged, params, completeness=known)
     if why:  # the outside share, the one measure not judged above
@@ -157,13 +167,5 @@ def first_look(before: Findings, pre: Evaluation, params: Params, recentring: bo
     n_before, n_after = before.tally["outside"], len(out.defective_branches())
     if n_after > n_before:  # the rule refuses a fill that adds a defect of another kind (guard._filled)
         return a, f"no progress: more outside ({n_before} -> {n_after}): {outside_named(out, np.flatnonzero(~np.asarray(kept, bool)))}"
-    return a, _passed(pre)
-
-
-def _passed(pre: Evaluation) -> None:
-    """An action that passes its first look: its curve missing parts found now (the regions, left out
-    while only its completeness was read), so that its whole update adds the defects alone."""
-    if COMPLETENESS_ALONE:
-        _with_missing_parts(pre)
-    return None
+    return a, None
 
