@@ -1,0 +1,69 @@
+"""The compiled passes over points (skelcore/metrics/point_passes.py) give the bits of the numpy expressions
+they replace (docs/performance.md 6.10), NaN and infinite coordinates included."""
+
+import numpy as np
+import pytest
+
+from skelcore.metrics.point_passes import near_box, nearest_squared
+
+
+def _near_box_numpy(points, lo, hi, reach, cover):
+    bound = np.maximum(reach, cover) * (1 + 1e-9) + 1e-12
+    loose = bound * (1 + 1e-9)
+    inside = np.all((points >= lo - loose[:, None]) & (points <= hi + loose[:, None]), axis=1)
+    t = np.maximum(np.maximum(lo - points, points - hi), 0.0)
+    d = np.sqrt((t[:, 0] * t[:, 0] + t[:, 1] * t[:, 1]) + t[:, 2] * t[:, 2])
+    return inside & (d <= bound)
+
+
+def _nearest_squared_numpy(points, centres):
+    out = np.full(len(points), np.inf)
+    for c in centres:
+        d = points - c
+        out = np.minimum(out, (d[:, 0] * d[:, 0] + d[:, 1] * d[:, 1]) + d[:, 2] * d[:, 2])
+    return out
+
+
+def _cases(rng, n):
+    pts = rng.normal(size=(n, 3)) * rng.uniform(2, 6)
+    centres = rng.normal(size=(int(rng.integers(1, 40)), 3))
+    return pts, centres
+
+
+@pytest.mark.parametrize("seed", range(6))
+def test_near_box_is_numpy_s_test(seed):
+    rng = np.random.default_rng(seed)
+    pts, centres = _cases(rng, 2000 + seed)
+    reach = np.abs(rng.normal(size=len(pts))) * rng.uniform(0.1, 1)
+    if seed % 2:
+        reach[::5], pts[::9] = np.nan, np.nan
+    lo, hi = centres.min(axis=0), centres.max(axis=0)
+    for cover in (0.0, 0.7):
+        got = near_box(pts, lo, hi, reach, cover)
+        want = _near_box_numpy(pts, lo, hi, reach, cover)
+        assert np.array_equal(got, want)
+        assert 0 < np.count_nonzero(got) < len(pts)  # the cases test both answers
+    # a point exactly on the bound (a box of one point, a point at distance 1 along x) is near
+    one = np.zeros((1, 3))
+    assert near_box(np.array([[1.0, 0, 0]]), one[0], one[0], np.array([1.0]), 0.0)[0]
+    assert not near_box(np.array([[1.0 + 1e-6, 0, 0]]), one[0], one[0], np.array([1.0]), 0.0)[0]
+
+
+@pytest.mark.parametrize("seed", range(6))
+def test_nearest_squared_is_numpy_s_minimum(seed):
+    rng = np.random.default_rng(100 + seed)
+    pts, centres = _cases(rng, 1001 + 7 * seed)  # not a whole number of the kernel's blocks
+    if seed % 3 == 1:
+        pts[::9] = np.nan
+    if seed % 3 == 2:
+        pts[::13, 1], centres[::3, 2] = np.inf, -np.inf
+    got = nearest_squared(pts, centres)
+    assert np.array_equal(got.view(np.int64), _nearest_squared_numpy(pts, centres).view(np.int64))
+    assert np.array_equal(nearest_squared(pts, np.zeros((0, 3))), np.full(len(pts), np.inf))
+
+
+def test_sizes_are_checked():
+    with pytest.raises(ValueError):
+        near_box(np.zeros((4, 2)), np.zeros(3), np.zeros(3), np.zeros(4), 0.0)
+    with pytest.raises(ValueError):
+        near_box(np.zeros((4, 3)), np.zeros(3), np.zeros(3), np.zeros(5), 0.0)
