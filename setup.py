@@ -73,6 +73,11 @@ setup(
             extra_compile_args=["-O3", "-std=c99", "-ffp-contract=off"],
         ),
         Extension(
+            "skelcore.metrics._region_links",
+            sources=["skelcore/metrics/_region_links.c"],
+            extra_compile_args=["-O3", "-std=c99"],
+        ),
+        Extension(
             "skelcore.metrics._surround",
             sources=["skelcore/metrics/_surround.c"],
             extra_compile_args=["-O3", "-std=c99"],

@@ -33,6 +33,7 @@ from ..metrics.cloud_index import CloudIndex, kept_index
 from ..metrics.components import undirected_components
 from ..metrics.coverage import Coverage, coverage, coverage_tau
 from ..metrics.point_passes import nearest_squared
+from ..metrics.region_links import region_links
 from ..params import Params
 from .spur_cache import find_rows, row_hash, row_words
 from .trust_warning import TrustWarning
@@ -586,17 +587,17 @@ def _regions(pts: np.ndarray, cov: Coverage, spacing: float, p: Params, checkpoi
     up = pts[miss]
     link = float(p.missing_link_factor) * spacing
     k = min(LINK_K + 1, len(miss))
-    # with a kept tree, one search of it gives most points' neighbours both ways (_from_kept)
+    kk = min(LINK_K + 1, n)
+    # with a kept tree, one search of it gives most points' neighbours both ways (_from_kept), read in one
+    # compiled pass (region_links: the links and the border it settles)
     kept = None if tree is None or k < 2 else _from_kept(pts_tree(), up, miss, link, neighbours)
+    passed = None if kept is None else region_links(*kept, cov.covered, k, kk)
     if k > 1:
-        d, j = _unexplained_neighbours(up, k, link, kept, None if kept is None else (pts_tree(), miss))
-        ok = np.isfinite(d[:, 1:])
-        cols = j[:, 1:][ok]
-        starts = np.concatenate([[0], np.cumsum(ok.sum(axis=1))])
+        heads, tails = _unexplained_links(up, k, link, passed, None if kept is None else (pts_tree(), miss))
     else:
-        cols, starts = np.empty(0, np.int64), np.zeros(len(miss) + 1, np.int64)
-    # each row's links as edges: scipy's undirected labels by a union-find (docs/performance.md 6.10)
-    n_comp, label = undirected_components(len(miss), np.repeat(np.arange(len(miss)), np.diff(starts)), cols)
+        heads, tails = np.empty(0, np.int64), np.empty(0, np.int64)
+    # the links as edges: scipy's undirected labels by a union-find, whatever their order (docs/performance.md 6.10)
+    n_comp, label = undirected_components(len(miss), heads, tails)
     checkpoint(0.75)
     size = np.bincount(label, minlength=n_comp)
     rank = np.empty(n_comp, np.int64)
@@ -618,11 +619,8 @@ def _regions(pts: np.ndarray, cov: Coverage, spacing: float, p: Params, checkpoi
         # border points of the big regions: an explained cloud point among their neighbours
         in_big = np.isin(label, big)
         q = np.flatnonzero(in_big)
-        kk = min(LINK_K + 1, n)
-        jj = _cloud_neighbours(pts_tree(), up, q, kk, link, kept)
-        explained = np.concatenate([cov.covered, [False]])
         border = np.zeros(len(miss), bool)
-        border[q] = explained[jj].any(axis=1)
+        border[q] = _border(pts_tree(), up, q, kk, link, passed, cov.covered)
         # pieces of the border (the two rings of an arc cut out of a loop): border points closer than
         # BORDER_LINK links are one piece (the border of a scan's region is sparse and ragged)
         bi = np.flatnonzero(border)
@@ -704,17 +702,20 @@ def _from_kept(tree: cKDTree, up: np.ndarray, miss: np.ndarray, link: float,
                neighbours: Callable[[cKDTree, np.ndarray, int, float], tuple[np.ndarray, np.ndarray]] | None = None,
                ) -> tuple[np.ndarray, ...]:
     """The ``LINK_K + 2`` nearest cloud points within the link of each unexplained point ``up``
-    (rows ``miss`` of the cloud) from the cloud's tree (or its answers kept, ``neighbours``):
-    (distances, cloud rows, n where none, their rows in ``up`` or -1)."""
+    (rows ``miss`` of the cloud) from the cloud's tree (or its answers kept, ``neighbours``, read in
+    place): (a table of distances, of cloud rows (int32, n where none), each unexplained point's row of
+    the table, each cloud row's unexplained row or -1 (n + 1 entries)), as :func:`region_links` reads them."""
     n = tree.n
     if neighbours is not None:
         d, j = neighbours(tree, miss, min(LINK_K + 2, n), link)
+        rows = miss
     else:
         d, j = tree.query(up, k=min(LINK_K + 2, n), distance_upper_bound=link, workers=query_workers(len(up)))
-    d, j = d.reshape(len(up), -1), j.reshape(len(up), -1)
-    at = np.full(n + 1, -1, np.int64)
+        rows = np.arange(len(up))
+    d, j = d.reshape(len(d), -1), np.asarray(j, np.int32).reshape(len(d), -1)
+    at = np.full(n + 1, -1, np.int32)
     at[miss] = np.arange(len(miss))
-    return d, j, at[j]
+    return d, j, rows, at
 
 
 def _unique_first(d: np.ndarray, c: int) -> np.ndarray:
@@ -725,30 +726,38 @@ def _unique_first(d: np.ndarray, c: int) -> np.ndarray:
     return ~np.isfinite(d[:, c - 1]) | (d[:, c] > d[:, c - 1])
 
 
-def _unexplained_neighbours(up: np.ndarray, k: int, link: float, kept: tuple | None,
-                            cloud: tuple[cKDTree, np.ndarray] | None = None) -> tuple[np.ndarray, ...]:
-    """Each unexplained point's ``k`` nearest unexplained points within the link, as
-    ``cKDTree(up).query`` gives them (the same sets; equally near ones may come in another order):
-    from ``kept`` where its ``k`` nearest cloud points are the only ones, all unexplained and none as
-    near as the point itself (the same sets, themselves first); the others from :func:`_near_rows`
-    when the cloud's tree and the unexplained rows ``cloud`` are given, else searched."""
-    if kept is None:
-        return cKDTree(up).query(up, k=k, distance_upper_bound=link, workers=query_workers(len(up)))
-    fd, _, fu = kept
-    d, j = fd[:, :k].copy(), fu[:, :k].copy()
-    found = np.isfinite(d)
-    clean = _unique_first(fd, k) & ((j >= 0) | ~found).all(axis=1)
-    if k > 1:
-        clean &= d[:, 1] > 0
-    j[~found] = len(up)
-    redo = np.flatnonzero(~clean)
+def _edges(d: np.ndarray, j: np.ndarray, rows: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The links of the unexplained points ``rows`` from their ``k`` nearest (distances ``d``, rows ``j``,
+    themselves first): each row to every other one found within the link."""
+    d, j = d.reshape(len(rows), -1), j.reshape(len(rows), -1)
+    ok = np.isfinite(d[:, 1:])
+    return np.repeat(np.asarray(rows, np.int64), ok.sum(axis=1)), np.asarray(j[:, 1:][ok], np.int64)
+
+
+def _unexplained_links(up: np.ndarray, k: int, link: float, passed: tuple | None,
+                       cloud: tuple[cKDTree, np.ndarray] | None = None) -> tuple[np.ndarray, np.ndarray]:
+    """Each unexplained point's links (heads, tails) to its ``k - 1`` nearest other unexplained points within
+    the link, the sets ``cKDTree(up).query(k=k)`` gives (equally near ones may come in another order): from
+    ``passed`` (:func:`region_links` of the kept answers) where its ``k`` nearest cloud points are the only
+    ones, all unexplained and none as near as the point itself; the others from :func:`_near_rows` when the
+    cloud's tree and the unexplained rows ``cloud`` are given, else searched."""
+    if passed is None:
+        d, j = cKDTree(up).query(up, k=k, distance_upper_bound=link, workers=query_workers(len(up)))
+        return _edges(d, j, np.arange(len(up)))
+    heads, tails = [passed[0]], [passed[1]]
+    redo = np.flatnonzero(passed[2])
     if len(redo) and cloud is not None and len(redo) <= NEAR_ROWS_SHARE * len(up):
-        d[redo], j[redo], left = _near_rows(up, redo, k, link, *cloud)
+        d, j, left = _near_rows(up, redo, k, link, *cloud)
+        h, t = _edges(d[~left], j[~left], redo[~left])
+        heads.append(h)
+        tails.append(t)
         redo = redo[left]
     if len(redo):
-        d[redo], j[redo] = cKDTree(up).query(up[redo], k=k, distance_upper_bound=link,
-                                             workers=query_workers(len(redo)))
-    return d, j
+        d, j = cKDTree(up).query(up[redo], k=k, distance_upper_bound=link, workers=query_workers(len(redo)))
+        h, t = _edges(d, j, redo)
+        heads.append(h)
+        tails.append(t)
+    return np.concatenate(heads), np.concatenate(tails)
 
 
 def _near_rows(up: np.ndarray, rows: np.ndarray, k: int, link: float, tree: cKDTree,
@@ -773,22 +782,18 @@ def _near_rows(up: np.ndarray, rows: np.ndarray, k: int, link: float, tree: cKDT
     return dd[:, :k], jj[:, :k], left
 
 
-def _cloud_neighbours(tree: cKDTree, up: np.ndarray, q: np.ndarray, kk: int, link: float,
-                      kept: tuple | None) -> np.ndarray:
-    """The cloud rows of the ``kk`` nearest cloud points within the link of the unexplained points
-    ``up[q]`` (n where fewer): from ``kept`` where they are the only ``kk`` nearest, else searched."""
-    n = tree.n
-    if kept is None:
-        jj = np.zeros((len(q), kk), np.int64)
-        redo = np.arange(len(q))
+def _border(tree: cKDTree, up: np.ndarray, q: np.ndarray, kk: int, link: float, passed: tuple | None,
+            covered: np.ndarray) -> np.ndarray:
+    """Whether an explained cloud point is among the ``kk`` nearest cloud points within the link of each
+    unexplained point ``up[q]``: from ``passed`` (:func:`region_links`) where they are the only ``kk``
+    nearest, else searched."""
+    if passed is None:
+        out, redo = np.zeros(len(q), bool), np.arange(len(q))
     else:
-        fd, fj, _ = kept
-        if len(q) < len(fd):
-            fd, fj = fd[q], fj[q]  # else q is every row, in order (a pruned arm's one region): no copies
-        jj = np.where(np.isfinite(fd[:, :kk]), fj[:, :kk], n)
-        redo = np.flatnonzero(~_unique_first(fd, kk))
+        out, redo = passed[3][q], np.flatnonzero(passed[4][q])
     if len(redo):
         dd, j = tree.query(up[q[redo]], k=kk, distance_upper_bound=link, workers=query_workers(len(redo)))
         dd, j = dd.reshape(len(redo), -1), j.reshape(len(redo), -1)
-        jj[redo] = np.where(np.isfinite(dd), j, n)
-    return jj
+        explained = np.concatenate([covered, [False]])
+        out[redo] = explained[np.where(np.isfinite(dd), j, tree.n)].any(axis=1)
+    return out

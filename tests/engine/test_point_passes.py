@@ -1,5 +1,5 @@
-"""The compiled passes over points (skelcore/metrics/point_passes.py) give the bits of the numpy expressions
-they replace (docs/performance.md 6.10), NaN and infinite coordinates included."""
+"""The compiled passes over points (skelcore/metrics/point_passes.py, region_links.py) give the bits of the
+numpy expressions they replace (docs/performance.md 6.10), NaN and infinite coordinates included."""
 
 import numpy as np
 import pytest
@@ -67,3 +67,41 @@ def test_sizes_are_checked():
         near_box(np.zeros((4, 2)), np.zeros(3), np.zeros(3), np.zeros(4), 0.0)
     with pytest.raises(ValueError):
         near_box(np.zeros((4, 3)), np.zeros(3), np.zeros(3), np.zeros(5), 0.0)
+
+
+def test_region_links_read_the_kept_answers_as_numpy_did():
+    """The missing regions' compiled pass (skelcore/metrics/region_links.py) against the numpy reading it
+    replaced, on a lattice with repeated points (ties and zero distances: rows unsettled and unsure)."""
+    from scipy.spatial import cKDTree
+
+    from skelcore.metrics.region_links import region_links
+
+    rng = np.random.default_rng(5)
+    grid = np.stack(np.meshgrid(np.arange(12), np.arange(12), np.arange(4), indexing="ij"), -1).reshape(-1, 3)
+    grid = np.vstack([grid, grid[rng.choice(len(grid), 100)]]).astype(float)
+    n, width, k, kk = len(grid), 10, 9, 9
+    covered = rng.random(n) > 0.5
+    miss = np.flatnonzero(~covered)
+    d, j = cKDTree(grid).query(grid, k=width, distance_upper_bound=1.5)
+    at = np.full(n + 1, -1, np.int32)
+    at[miss] = np.arange(len(miss))
+    heads, tails, unsettled, border, unsure = region_links(d, j, miss, at, covered, k, kk)
+    fd, fj = d[miss], j[miss]
+    fu = at[fj]
+
+    def unique_first(c):
+        return ~np.isfinite(fd[:, c - 1]) | (fd[:, c] > fd[:, c - 1])
+
+    found = np.isfinite(fd[:, :k])
+    clean = unique_first(k) & ((fu[:, :k] >= 0) | ~found).all(axis=1) & (fd[:, 1] > 0)
+    assert np.array_equal(unsettled, ~clean) and clean.any() and (~clean).any()
+    ok = np.isfinite(fd[:, 1:k]) & clean[:, None]
+    assert np.array_equal(heads, np.repeat(np.arange(len(miss)), ok.sum(axis=1)))
+    assert np.array_equal(tails, fu[:, 1:k][ok])
+    explained = np.concatenate([covered, [False]])
+    assert np.array_equal(border, explained[np.where(np.isfinite(fd[:, :kk]), fj[:, :kk], n)].any(axis=1))
+    assert np.array_equal(unsure, ~unique_first(kk)) and unsure.any()
+    with pytest.raises(ValueError):  # a cloud row beyond n in a row read
+        bad = j.copy()
+        bad[miss[0], 3] = n + 1
+        region_links(d, bad, miss, at, covered, k, kk)
