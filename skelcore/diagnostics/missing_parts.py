@@ -70,6 +70,9 @@ NEAR_ROWS_SHARE = 0.25
 # the bounds from QUANTILE_CENTRES of the border points leave them near the quantile (_quantile_distance)
 QUANTILE_FEWEST = 2048
 QUANTILE_CENTRES = 16
+# up to this many (point, border point) pairs the depth's distances are taken pair by pair in one compiled
+# pass (_border_distance; about 1.5 ns a pair), beyond it from a tree of the border
+BORDER_PAIRS = 4_000_000
 
 
 @dataclass
@@ -656,9 +659,8 @@ def _quantile_distance(border: np.ndarray, pts: np.ndarray, q: float) -> float:
     (above) those statistics enter as -inf (inf), which moves no statistic between them. A region of
     30k points whose border is a ring of 189 took 18 ms of CPU searched whole."""
     n = len(pts)
-    tree = cKDTree(border)
     if n < QUANTILE_FEWEST or len(border) < 2 * QUANTILE_CENTRES:
-        return float(np.quantile(tree.query(pts, workers=query_workers(n))[0], q))
+        return float(np.quantile(_border_distance(border, pts), q))
     centres = border[:: len(border) // QUANTILE_CENTRES]
     to_c = np.sqrt(_nearest_squared(pts, centres))
     reach = float(np.sqrt(_nearest_squared(border, centres).max())) * (1 + 1e-9)
@@ -670,8 +672,19 @@ def _quantile_distance(border: np.ndarray, pts: np.ndarray, q: float) -> float:
     above = lower > np.partition(upper, k1)[k1]
     ask = np.flatnonzero(~below & ~above)
     dist = np.where(below, -np.inf, np.inf)
-    dist[ask] = tree.query(pts[ask], workers=query_workers(len(ask)))[0]
+    dist[ask] = _border_distance(border, pts[ask])
     return float(np.quantile(dist, q))
+
+
+def _border_distance(border: np.ndarray, pts: np.ndarray) -> np.ndarray:
+    """``cKDTree(border).query(pts)[0]``, the same bits: up to ``BORDER_PAIRS`` pairs the square root of
+    each point's least ``(dx^2 + dy^2) + dz^2`` over the border (scipy's squared distance, summed in that
+    order, its root taken last; :func:`_nearest_squared`), else the tree's. A far point sees a ring of
+    border points all about as near, and the tree visits most of them: the prune's 3,345 points asked of
+    a ring of 189, 3.3 -> 1.0 ms (docs/performance.md 6.10)."""
+    if len(pts) * len(border) <= BORDER_PAIRS:
+        return np.sqrt(_nearest_squared(pts, border))
+    return cKDTree(border).query(pts, workers=query_workers(len(pts)))[0]
 
 
 def _nearest_squared(pts: np.ndarray, centres: np.ndarray) -> np.ndarray:

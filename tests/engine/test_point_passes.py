@@ -105,3 +105,26 @@ def test_region_links_read_the_kept_answers_as_numpy_did():
         bad = j.copy()
         bad[miss[0], 3] = n + 1
         region_links(d, bad, miss, at, covered, k, kk)
+
+
+@pytest.mark.parametrize("seed", range(4))
+def test_the_border_distance_pair_by_pair_is_the_trees(seed, monkeypatch):
+    """A missing region's distances to its border taken pair by pair (missing_parts._border_distance) are
+    cKDTree's to the bit (its squared distance summed in the same order, its root last), at any scale,
+    and the tree's beyond BORDER_PAIRS."""
+    import sys
+
+    from scipy.spatial import cKDTree
+
+    import skelcore.diagnostics.missing_parts  # noqa: F401  (the package exports a function of that name)
+
+    MP = sys.modules["skelcore.diagnostics.missing_parts"]
+    rng = np.random.default_rng(200 + seed)
+    for _ in range(40):
+        s = 10.0 ** rng.uniform(-6, 6)
+        border = rng.normal(size=(int(rng.integers(1, 300)), 3)) * s + rng.normal(size=3) * s * rng.uniform(0, 100)
+        pts = rng.normal(size=(400, 3)) * s * rng.uniform(0.1, 10)
+        want = cKDTree(border).query(pts)[0]
+        assert np.array_equal(MP._border_distance(border, pts).view(np.int64), want.view(np.int64))
+    monkeypatch.setattr(MP, "BORDER_PAIRS", 10)
+    assert np.array_equal(MP._border_distance(border, pts), want)
