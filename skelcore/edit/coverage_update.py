@@ -22,7 +22,7 @@ from ..geometry import kd_tree, no_checkpoint, unique_rows
 from ..metrics.ball_tree import COVER_EPS, BallTree
 from ..metrics.coverage import (NOISE_MIN_POINTS, SAMPLE_SEED, Coverage, _noise_sample, _summary, coverage,
                                 curve_elements, noise_shortfall)
-from ..metrics.point_passes import near_box
+from ..metrics.point_passes import near_box, nearest_two
 
 __all__ = ["CoverageMemo", "curve_coverage", "coverage_from", "link_contexts", "carry_memo"]
 
@@ -317,6 +317,18 @@ def _by_difference(ctx: EvalContext, old: CoverageMemo, elements: np.ndarray,
     return _to_cloud(ctx, memo, tau, s), memo
 
 
+def _two_nearest(elements: np.ndarray, pts: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """``kd_tree(elements).query(pts, k=2)``'s two distances and a nearest element (the only one where they
+    differ), the same bits: by the compiled blocks of :func:`skelcore.metrics.point_passes.nearest_two`
+    (``elements`` in the ball tree's order, its blocks' boxes small) when every coordinate is finite. A pruned
+    arm's 6,595 sampled points, their nearest element removed, are far from every element left, where the
+    tree visits most of its nodes near the junction (8.8 -> 2 ms, docs/performance.md 6.10)."""
+    if np.isfinite(elements).all() and np.isfinite(pts).all():
+        return nearest_two(pts, elements)
+    d, i = kd_tree(elements).query(pts, k=2)
+    return d[:, 0], i[:, 0], d[:, 1]
+
+
 def _sample_nearest(ctx: EvalContext, elements: np.ndarray, old: CoverageMemo | None,
                     at: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray] | None:
     """Each point of the noise shortfall's sample: its nearest element's distance and row, and whether
@@ -349,10 +361,10 @@ def _sample_nearest(ctx: EvalContext, elements: np.ndarray, old: CoverageMemo | 
         tie[ok] = (d[:, 0] == dist[ok]) & ~nearer
         if d.shape[1] > 1:
             tie[ok] |= nearer & (d[:, 0] == d[:, 1])
-    if redo.any():
-        d, i = kd_tree(elements).query(pts[redo], k=2)
-        dist[redo], owner[redo] = d[:, 0], i[:, 0]
-        tie[redo] = d[:, 0] == d[:, 1]
+    if redo.any():  # the same distances as the shortfall's kd_tree(elements).query(k=2), its nearest where no tie
+        d0, i0, d1 = _two_nearest(elements, pts[redo])
+        dist[redo], owner[redo] = d0, i0
+        tie[redo] = d0 == d1
     if tie.any():
         dist[tie], owner[tie] = cKDTree(elements).query(pts[tie])
     return dist, owner, tie

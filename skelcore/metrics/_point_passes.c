@@ -5,16 +5,21 @@
  *   near_box        the points within a per-point bound of a box (an edited curve's coverage asks again
  *                   only the cloud points near its removed and added balls, skelcore/edit/coverage_update.py);
  *   nearest_squared each point's squared distance to the nearest of a few centres (the bounds of a missing
- *                   region's depth quantile, skelcore/diagnostics/missing_parts.py).
+ *                   region's depth quantile and its distances to a small border, skelcore/diagnostics/missing_parts.py);
+ *   nearest_two     each point's two nearest of some hundreds of centres, their blocks' boxes skipped when
+ *                   farther than the second nearest found (the noise sample's points whose nearest element
+ *                   an edit removed, skelcore/edit/coverage_update.py).
  *
  * Each computes numpy's expressions in numpy's order, so the same bits: (dx^2 + dy^2) + dz^2 with no fused
- * multiply-add (built with -ffp-contract=off), numpy's maximum and minimum (a NaN wins), libm's sqrt.
+ * multiply-add (built with -ffp-contract=off), numpy's maximum and minimum (a NaN wins), libm's sqrt; that is
+ * also scipy's cKDTree's squared distance (summed over the coordinates in order, the root taken last).
  * Plain C with the buffer protocol (no numpy headers at build time); the entry points release the GIL.
  */
 #define PY_SSIZE_T_CLEAN
 #include <Python.h>
 #include <math.h>
 #include <stdint.h>
+#include <stdlib.h>
 
 /* np.maximum and np.minimum of two doubles: a NaN on either side is the answer */
 static inline double np_max(double a, double b) { return (a >= b || a != a) ? a : b; }
@@ -125,9 +130,92 @@ static PyObject *py_nearest_squared(PyObject *self, PyObject *args) {
     Py_RETURN_NONE;
 }
 
+/* nearest_two(points (n, 3) f64, centres (m, 3) f64, d0 (n,) f64, i0 (n,) i64, d1 (n,) f64), m >= 2, every
+ * coordinate finite: d0 and d1 the square roots of each point's two least squared distances (a repeat
+ * counts twice), i0 a centre at d0.  The centres in blocks of NT_BLOCK in their order (a tree's order keeps
+ * a block's box small); the box nearest the point first, then every block whose box's squared distance is
+ * below the second least found.  The box's squared distance, rounded as the points' ((t0^2 + t1^2) + t2^2,
+ * each t no larger than that coordinate's |dx|), is at most each of its centres' computed one (rounding
+ * is monotone), so a block skipped holds nothing under the second least: the two least are exact. */
+#define NT_BLOCK 16
+static PyObject *py_nearest_two(PyObject *self, PyObject *args) {
+    Py_buffer pb, cb, d0b, i0b, d1b;
+    if (!PyArg_ParseTuple(args, "y*y*w*w*w*", &pb, &cb, &d0b, &i0b, &d1b)) return NULL;
+    const Py_ssize_t n = d0b.len / (Py_ssize_t)sizeof(double), m = cb.len / (3 * (Py_ssize_t)sizeof(double));
+    int ok = m >= 2 && pb.len == 3 * n * (Py_ssize_t)sizeof(double) && cb.len == 3 * m * (Py_ssize_t)sizeof(double)
+             && d1b.len == d0b.len && i0b.len == n * (Py_ssize_t)sizeof(int64_t);
+    const Py_ssize_t nb = (m + NT_BLOCK - 1) / NT_BLOCK;
+    double *box = ok ? (double *)malloc((size_t)nb * 7 * sizeof(double)) : NULL;  /* lo, hi, then a lower bound */
+    if (ok && box) {
+        const double *p = (const double *)pb.buf, *c = (const double *)cb.buf;
+        double *d0 = (double *)d0b.buf, *d1 = (double *)d1b.buf;
+        int64_t *i0 = (int64_t *)i0b.buf;
+        Py_BEGIN_ALLOW_THREADS
+        for (Py_ssize_t b = 0; b < nb; b++) {
+            double *lo = box + 7 * b, *hi = lo + 3;
+            const Py_ssize_t end = (b + 1) * NT_BLOCK < m ? (b + 1) * NT_BLOCK : m;
+            for (int k = 0; k < 3; k++) lo[k] = hi[k] = c[3 * b * NT_BLOCK + k];
+            for (Py_ssize_t j = b * NT_BLOCK; j < end; j++)
+                for (int k = 0; k < 3; k++) {
+                    if (c[3 * j + k] < lo[k]) lo[k] = c[3 * j + k];
+                    if (c[3 * j + k] > hi[k]) hi[k] = c[3 * j + k];
+                }
+        }
+        for (Py_ssize_t i = 0; i < n; i++) {
+            const double *x = p + 3 * i;
+            Py_ssize_t first = 0;
+            for (Py_ssize_t b = 0; b < nb; b++) {
+                const double *lo = box + 7 * b, *hi = lo + 3;
+                double lb = 0.0;
+                for (int k = 0; k < 3; k++) {
+                    double t = lo[k] - x[k], u = x[k] - hi[k];
+                    t = t > u ? t : u;
+                    t = t > 0.0 ? t : 0.0;
+                    lb += t * t;
+                }
+                box[7 * b + 6] = lb;
+                if (lb < box[7 * first + 6]) first = b;
+            }
+            double s0 = INFINITY, s1 = INFINITY;
+            Py_ssize_t at = 0;
+            for (Py_ssize_t step = -1; step < nb; step++) {
+                const Py_ssize_t b = step < 0 ? first : step;
+                if ((step >= 0 && b == first) || !(box[7 * b + 6] < s1)) continue;
+                const Py_ssize_t end = (b + 1) * NT_BLOCK < m ? (b + 1) * NT_BLOCK : m;
+                for (Py_ssize_t j = b * NT_BLOCK; j < end; j++) {
+                    const double dx = x[0] - c[3 * j], dy = x[1] - c[3 * j + 1], dz = x[2] - c[3 * j + 2];
+                    double d = dx * dx;
+                    d += dy * dy;
+                    d += dz * dz;
+                    if (d < s0) {
+                        s1 = s0;
+                        s0 = d;
+                        at = j;
+                    } else if (d < s1) {
+                        s1 = d;
+                    }
+                }
+            }
+            d0[i] = sqrt(s0);
+            d1[i] = sqrt(s1);
+            i0[i] = at;
+        }
+        Py_END_ALLOW_THREADS
+    }
+    free(box);
+    PyBuffer_Release(&pb); PyBuffer_Release(&cb); PyBuffer_Release(&d0b); PyBuffer_Release(&i0b); PyBuffer_Release(&d1b);
+    if (!ok) {
+        PyErr_SetString(PyExc_ValueError, "nearest_two: inconsistent array sizes or fewer than two centres");
+        return NULL;
+    }
+    if (!box) return PyErr_NoMemory();
+    Py_RETURN_NONE;
+}
+
 static PyMethodDef methods[] = {
     {"near_box", py_near_box, METH_VARARGS, "The points within a per-point bound of a box, as numpy computes it."},
     {"nearest_squared", py_nearest_squared, METH_VARARGS, "Each point's squared distance to its nearest centre."},
+    {"nearest_two", py_nearest_two, METH_VARARGS, "Each point's two nearest centres' distances, and the nearest."},
     {NULL, NULL, 0, NULL},
 };
 

@@ -75,7 +75,7 @@ def coverage_tau(cloud: np.ndarray, params: Params = Params(), checkpoint: Check
     values of ``geometry.nearest_neighbor_distances``, from the kernel's tree); with ``index`` (the
     cloud's :class:`.cloud_index.CloudIndex`) from its shared spacings, the same value."""
     if index is not None:
-        return float(params.coverage_tau_factor * np.median(index.spacings(checkpoint)))
+        return float(params.coverage_tau_factor * index.median_spacing(checkpoint))
     cloud = np.asarray(cloud, dtype=float).reshape(-1, 3)
     if len(cloud) < 2:
         return 0.0

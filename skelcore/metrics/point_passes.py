@@ -8,7 +8,7 @@ import numpy as np
 
 from . import _point_passes
 
-__all__ = ["near_box", "nearest_squared"]
+__all__ = ["near_box", "nearest_squared", "nearest_two"]
 
 
 def _points(points: np.ndarray) -> np.ndarray:
@@ -38,3 +38,15 @@ def nearest_squared(points: np.ndarray, centres: np.ndarray) -> np.ndarray:
     out = np.empty(len(pts))
     _point_passes.nearest_squared(pts, _points(np.reshape(centres, (-1, 3))), out)
     return out
+
+
+def nearest_two(points: np.ndarray, centres: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Each point's two nearest of ``centres`` (at least two; finite coordinates): the distances
+    ``d0 <= d1`` (``cKDTree(centres).query(points, k=2)``'s, the same bits: square roots of
+    ``(dx^2 + dy^2) + dz^2``) and a centre at ``d0`` (the only one where ``d0 < d1``). The centres are
+    searched in blocks of their order, a block skipped when its box is no nearer than the second found:
+    give them in a tree's order (the boxes small)."""
+    pts, cen = _points(points), _points(centres)
+    d0, d1, i0 = np.empty(len(pts)), np.empty(len(pts)), np.empty(len(pts), np.int64)
+    _point_passes.nearest_two(pts, cen, d0, i0, d1)
+    return d0, i0, d1

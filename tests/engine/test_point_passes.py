@@ -128,3 +128,32 @@ def test_the_border_distance_pair_by_pair_is_the_trees(seed, monkeypatch):
         assert np.array_equal(MP._border_distance(border, pts).view(np.int64), want.view(np.int64))
     monkeypatch.setattr(MP, "BORDER_PAIRS", 10)
     assert np.array_equal(MP._border_distance(border, pts), want)
+
+
+@pytest.mark.parametrize("seed", range(4))
+def test_nearest_two_are_the_kd_trees_two_nearest(seed):
+    """The two nearest centres by blocks (point_passes.nearest_two) against ``kd_tree(centres).query(k=2)``:
+    the same distance bits, the same nearest where the two differ, on repeated centres and ties too, the
+    centres in any order or a ball tree's."""
+    from skelcore.geometry import kd_tree
+    from skelcore.metrics.ball_tree import BallTree
+    from skelcore.metrics.point_passes import nearest_two
+
+    rng = np.random.default_rng(300 + seed)
+    ties = 0
+    for t in range(30):
+        s = 10.0 ** rng.uniform(-5, 5)
+        centres = rng.normal(size=(int(rng.integers(2, 600)), 3)) * s
+        pts = rng.normal(size=(300, 3)) * s * rng.uniform(0.2, 5)
+        if t % 3 == 0:  # on a lattice: repeats and ties
+            centres, pts = np.round(centres / s * 4) * s / 4, np.round(pts / s * 4) * s / 4
+        if t % 2:
+            centres = BallTree(centres).points
+        d, i = kd_tree(centres).query(pts, k=2)
+        d0, i0, d1 = nearest_two(pts, centres)
+        assert np.array_equal(d0.view(np.int64), d[:, 0].view(np.int64))
+        assert np.array_equal(d1.view(np.int64), d[:, 1].view(np.int64))
+        alone = d0 < d1
+        assert np.array_equal(i0[alone], i[alone, 0])
+        ties += int(np.count_nonzero(~alone))
+    assert ties > 0
