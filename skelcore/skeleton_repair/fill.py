@@ -17,6 +17,7 @@ from scipy.spatial import cKDTree
 
 from ..curve import CurveSkeleton
 from ..errors import SkelInputError
+from .all_round import all_round_share
 from .proposals import Action
 
 __all__ = ["fill_missing", "fill_actions", "Fills", "WHEN_REACHED"]
@@ -140,23 +141,29 @@ def fill_actions(curve: CurveSkeleton, missing: Any, cloud: np.ndarray, max_regi
     step = float(np.median(np.linalg.norm(curve.vertices[e[:, 0]] - curve.vertices[e[:, 1]], axis=1)))
     regions = [(reg, cloud[missing.region == reg.id]) for reg in missing.counted[:max_regions]]
     regions = [(reg, pts) for reg, pts in regions if len(pts) >= 10]
+    whole = {reg.id: all_round_share(cloud, missing.region == reg.id, max(step, 1e-12)) for reg, _ in regions}
+
+    def target(reg: Any) -> dict[str, Any]:
+        share = whole[reg.id]
+        return {"region": int(reg.id), "all_round": None if share is None else round(share, 4)}
+
     for reg, pts in regions:
         made = _axis_entries(curve, pts, memo)
         if made is not None:
             entries, at = made
-            yield Action("incomplete", {"region": int(reg.id)}, f"missing region {reg.id} ({reg.n_points} points): "
+            yield Action("incomplete", target(reg), f"missing region {reg.id} ({reg.n_points} points): "
                          f"its axis curve at its own spacing attached at vertex {at}", entries)
     for reg, pts in regions:
         made = _skeleton_entries(curve, pts, memo)
         if made is not None:
             entries, at = made
-            yield Action("incomplete", {"region": int(reg.id)}, f"missing region {reg.id} ({reg.n_points} points) "
+            yield Action("incomplete", target(reg), f"missing region {reg.id} ({reg.n_points} points) "
                          f"skeletonized and attached at vertex {at}", entries)
     for reg, pts in regions:
         line = _slab_line(pts, max(step, 1e-12))
         if len(line) >= 3:
             entries, at = _attach_polyline(curve, line)
-            yield Action("incomplete", {"region": int(reg.id)}, f"missing region {reg.id} ({reg.n_points} points): "
+            yield Action("incomplete", target(reg), f"missing region {reg.id} ({reg.n_points} points): "
                          f"the centroids of its slabs ({len(line)}) attached at vertex {at}", entries)
 
 

@@ -248,9 +248,13 @@ def repair(cloud: np.ndarray, curve: CurveSkeleton | tuple | None = None, skelet
                 refused_now.append(_same(cur, action))
                 continue
             kept = new.edges.max(axis=1) < cur.n_vertices if action.code == FILL else None
+            whole = kept is not None and (action.target.get("all_round") or 0.0) >= p.repair_all_round
             with clock.phase("first look"):  # the cheap first look (screen.py), then the rest
                 pre = first_update(ev, new)
-                seen, refusal = first_look(found, pre, p, recentring=action.code == RECENTRE, kept=kept)
+                seen, refusal = first_look(found, pre, p, recentring=action.code == RECENTRE, kept=kept,
+                                           all_round=whole)
+            if "fill_centeredness" in seen:
+                why["fill_centeredness"] = _rounded({"c": seen.pop("fill_centeredness")})["c"]
             if refusal is not None:
                 why.update(after=_rounded(seen), defects_after=None)
                 rejected.append({"entries": action.entries, "why": {**why, "rejected": refusal}})
@@ -261,7 +265,7 @@ def repair(cloud: np.ndarray, curve: CurveSkeleton | tuple | None = None, skelet
                 new_found = read_findings(new_ev)
             why.update(after=_rounded(new_found.measures), defects_after=new_found.total)
             refusal = verdict(found, new_found, p, recentring=action.code == RECENTRE, outside=action.code == "outside",
-                              kept=kept)
+                              kept=kept, all_round=whole)
             if refusal is not None:
                 rejected.append({"entries": action.entries, "why": {**why, "rejected": refusal}})
                 refused_now.append(_same(cur, action))
