@@ -430,7 +430,7 @@ class Params:
     repair_score_drop: float = 0.02
     repair_join_step: float = 0.5
     repair_fill_missing: bool = True
-    repair_all_round: float = 0.97
+    repair_all_round: float = 0.93
     repair_fill_centred: float = 0.5
     repair_recentre: bool = True
     repair_centre_gain: float = 0.01

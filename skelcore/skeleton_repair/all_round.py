@@ -1,19 +1,24 @@
 """Whether a missing region is seen all round (docs/repair.md "A thick part's fill"): the share of the
 cloud's cross-sections through the region that is the region's own. The region is cut in slabs across
 its main axis (those of the slabs' centroids, :func:`.fill._slab_line`); in each slab the cloud points
-within the region's farthest point from the slab's centroid (across the axis) are the cross-section.
-A tube's end or a whole thick part cut off is its cross-sections whole (share near 1); the
-unexplained side of a tube the curve runs along shares them with the explained side (0.55-0.89 on the
-tuning neurons' cao curves at 30k points); a whole missing thin branch is whole too (0.95-0.99)."""
+within :data:`REACH` times the region's farthest point from the slab's centroid (across the axis) are
+the cross-section. A tube's end or a whole thick part cut off is its cross-sections whole (share near
+1); the unexplained side of a tube the curve runs along shares them with the explained side (half a
+ring: 0.51; 0.34-0.89 on the tuning neurons' cao curves at 30k points); a whole missing thin branch is
+whole too (0.99-1.0; docs/repair.md "A thick part's fill")."""
 
 from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["all_round_share", "SLAB_FEWEST"]
+__all__ = ["all_round_share", "SLAB_FEWEST", "REACH"]
 
 #: a slab with fewer region points than this is no cross-section (left out)
 SLAB_FEWEST = 8
+#: the cross-section's radius in the region's farthest point from the slab's centroid: half a ring of
+#: radius r has its centroid 2r/pi off the axis, its farthest point 1.19 r away and the ring's far side
+#: 1.64 r; at 1 the cross-section would miss most of the far side (a half tube's share 0.95)
+REACH = 1.5
 
 
 def all_round_share(cloud: np.ndarray, in_region: np.ndarray, step: float) -> float | None:
@@ -40,7 +45,7 @@ def all_round_share(cloud: np.ndarray, in_region: np.ndarray, step: float) -> fl
     r = np.linalg.norm(across - centre[slab], axis=1)
     reach = np.zeros(n_slabs)
     np.maximum.at(reach, slab[own], r[own])
-    near = r <= reach[slab]
+    near = r <= REACH * reach[slab]
     n_near = np.bincount(slab[near], minlength=n_slabs)
     n_near_own = np.bincount(slab[near & own], minlength=n_slabs)
     ok = n_own >= SLAB_FEWEST
