@@ -274,10 +274,9 @@ class Params:
     repair_score_drop : ... or when curve boundedness or curve centeredness drops by more than this.
     repair_fill_missing : skelcore.repair also tries to fill a missing part (a new stretch of curve).
     repair_all_round : a missing region is seen all round when at least this share of the cloud's
-        cross-sections through it is its own (a tube's end, a thick part cut off; docs/repair.md
-        "A thick part's fill").
-    repair_fill_centred : a fill of a region seen all round is refused when under this share of its own
-        stretch's samples is centred (c > c_star): a tangle on the region's surface.
+        cross-sections through it is its own (a tube's end, a thick part cut off, a whole missing
+        branch); its slabs' centroids are tried before its axis curve (docs/repair.md "A thick part's
+        fill").
     repair_join_step : a join between components is tried only when every point along it, every this
         many x the voxel size of the shape's interior, lies inside the shape.
     repair_recentre : skelcore.repair also moves off-centre curve vertices (c <= c_star) to the centre of
@@ -431,7 +430,6 @@ class Params:
     repair_join_step: float = 0.5
     repair_fill_missing: bool = True
     repair_all_round: float = 0.93
-    repair_fill_centred: float = 0.5
     repair_recentre: bool = True
     repair_centre_gain: float = 0.01
     repair_outside_gain: float = 0.01
@@ -539,9 +537,8 @@ class Params:
                      "repair_outside_gain"):
             if not float(getattr(self, name)) >= 0:
                 bad(name, "must be >= 0")
-        for name in ("repair_all_round", "repair_fill_centred"):
-            if not 0.0 <= float(getattr(self, name)) <= 1.0:
-                bad(name, "must be in [0, 1]")
+        if not 0.0 <= float(self.repair_all_round) <= 1.0:
+            bad("repair_all_round", "must be in [0, 1]")
         if not float(self.repair_join_step) > 0:
             bad("repair_join_step", "must be > 0")
         if int(self.repair_batch_tries) < 0:

@@ -219,7 +219,8 @@ def repair(cloud: np.ndarray, curve: CurveSkeleton | tuple | None = None, skelet
             inside, voxel, route = _in_shape(ev)
             candidates = propose(cur, found, inside, p.repair_join_step * voxel, route)
             fills = Fills(fill_actions(cur, found.missing, np.asarray(ev.source.args["cloud"], float),
-                                       p.repair_max_tries, parts) if p.repair_fill_missing else iter(()),
+                                       p.repair_max_tries, parts, p.repair_all_round)
+                          if p.repair_fill_missing else iter(()),
                           p.repair_max_tries, lambda: clock.phase("proposals"))
         ahead = fills.first(p.repair_max_tries - len(candidates))  # those the head and the count need
         candidates += ahead
@@ -248,11 +249,9 @@ def repair(cloud: np.ndarray, curve: CurveSkeleton | tuple | None = None, skelet
                 refused_now.append(_same(cur, action))
                 continue
             kept = new.edges.max(axis=1) < cur.n_vertices if action.code == FILL else None
-            whole = kept is not None and (action.target.get("all_round") or 0.0) >= p.repair_all_round
             with clock.phase("first look"):  # the cheap first look (screen.py), then the rest
                 pre = first_update(ev, new)
-                seen, refusal = first_look(found, pre, p, recentring=action.code == RECENTRE, kept=kept,
-                                           all_round=whole)
+                seen, refusal = first_look(found, pre, p, recentring=action.code == RECENTRE, kept=kept)
             if "fill_centeredness" in seen:
                 why["fill_centeredness"] = _rounded({"c": seen.pop("fill_centeredness")})["c"]
             if refusal is not None:
@@ -265,7 +264,7 @@ def repair(cloud: np.ndarray, curve: CurveSkeleton | tuple | None = None, skelet
                 new_found = read_findings(new_ev)
             why.update(after=_rounded(new_found.measures), defects_after=new_found.total)
             refusal = verdict(found, new_found, p, recentring=action.code == RECENTRE, outside=action.code == "outside",
-                              kept=kept, all_round=whole)
+                              kept=kept)
             if refusal is not None:
                 rejected.append({"entries": action.entries, "why": {**why, "rejected": refusal}})
                 refused_now.append(_same(cur, action))

@@ -23,7 +23,7 @@ from ..evaluation import Evaluation
 from ..params import Params
 from ..stages.catalogue import CATALOGUE
 from .findings import Findings
-from .guard import kept_part, own_part, own_refused, recentred, worse
+from .guard import kept_part, own_part, recentred, worse
 from .outside_look import outside_named, outside_of
 
 __all__ = ["first_look", "first_update", "whole_update", "with_scan_checks", "SCAN_CHECKS", "OUTSIDE_FIRST",
@@ -129,17 +129,17 @@ def with_scan_checks(ev: Evaluation, curve: CurveSkeleton) -> Evaluation:
 
 
 def first_look(before: Findings, pre: Evaluation, params: Params, recentring: bool = False,
-               kept: np.ndarray | None = None, all_round: bool = False) -> tuple[dict[str, float | None], str | None]:
+               kept: np.ndarray | None = None) -> tuple[dict[str, float | None], str | None]:
     """:func:`_judged`; an action that passes gets its curve missing parts now (the regions, left out
     while only its completeness was read), so that its whole update adds the defects alone."""
-    a, why = _judged(before, pre, params, recentring, kept, all_round)
+    a, why = _judged(before, pre, params, recentring, kept)
     if why is None and COMPLETENESS_ALONE:
         _with_missing_parts(pre)
     return a, why
 
 
 def _judged(before: Findings, pre: Evaluation, params: Params, recentring: bool,
-            kept: np.ndarray | None, all_round: bool = False) -> tuple[dict[str, float | None], str | None]:
+            kept: np.ndarray | None) -> tuple[dict[str, float | None], str | None]:
     """(the measures known without defects, why the action is worse or None) for ``pre``, the
     candidate's ``update(..., diagnostics=False)``: completeness, curve boundedness and centeredness
     against ``before`` with the bounds of :func:`.guard.verdict`; the outside share stays None.
@@ -147,8 +147,7 @@ def _judged(before: Findings, pre: Evaluation, params: Params, recentring: bool,
     ``kept``: a fill, curve centeredness judged on these edges (:func:`.guard.kept_part`), and, with
     :data:`OUTSIDE_FIRST`, its outside share and outside branches (:mod:`.outside_look`): one that adds
     an outside branch is refused, the reason naming them (docs/repair.md "The repair's cost"); the
-    centeredness of its own stretch is given (``fill_centeredness``) and, ``all_round`` (its region seen
-    all round), judged (:func:`.guard.own_refused`)."""
+    centeredness of its own stretch is given (``fill_centeredness``, :func:`.guard.own_part`)."""
     s = pre.summary()
     a = {"completeness": None, "outside_share": None,
          "boundedness": _num(s["boundedness"]["curve"]), "centeredness": _num(s["centeredness"]["curve"])}
@@ -156,14 +155,12 @@ def _judged(before: Findings, pre: Evaluation, params: Params, recentring: bool,
         return a, why_not
     known, a["completeness"] = _completeness(pre)
     judged = a
-    why_own: list[str] = []
     if kept is not None and pre.curve is not None:
         cl = pre.curve
         sample_c = cl.sample_centeredness(params.beta_star)
         judged = kept_part(a, cl.sample_edge, sample_c, kept, params)
         a["fill_centeredness"] = own_part(cl.sample_edge, sample_c, kept, params)
-        why_own = own_refused(cl.sample_edge, sample_c, kept, params) if all_round else []
-    why = worse(before.measures, judged, params, completeness=known) + why_own
+    why = worse(before.measures, judged, params, completeness=known)
     if why or kept is None or not OUTSIDE_FIRST or (out := outside_of(pre)) is None:
         return a, ("worse: " + "; ".join(why)) if why else None
     a["outside_share"] = judged["outside_share"] = out.length_share

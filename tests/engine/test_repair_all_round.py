@@ -8,6 +8,7 @@ from __future__ import annotations
 import numpy as np
 from broken_hammer import broken_hammer_curve
 
+import skelcore.skeleton_repair.fill as fill
 from skelcore.params import Params
 from skelcore.skeleton_repair import repair
 from skelcore.skeleton_repair.all_round import all_round_share
@@ -34,14 +35,16 @@ def _tips(curve) -> int:
     return int(np.count_nonzero(deg == 1))
 
 
-def test_the_broken_hammers_ends_are_filled_by_clean_axes_not_a_tangle():
+def test_the_broken_hammers_ends_are_filled_by_clean_axes_not_a_tangle(monkeypatch):
     cloud, broken = broken_hammer_curve()
     r = repair(cloud, broken)
     after = r.log["repair"]["measures_after"]
     assert r.tally_after["missing_parts"] == 0 and after["completeness"] > 0.9
     assert after["centeredness"] > 0.8 and _tips(r.curve) <= 4
-    refused = [o["why"]["rejected"] for o in r.log["rejected"] if o["why"]["defect"] == "incomplete"]
-    assert any("repair_fill_centred" in why for why in refused)  # the handle's end's axis curve
-    # the rule before: the axis curve of the handle's end kept, a tangle on its surface
-    old = repair(cloud, broken, params=Params(repair_fill_centred=0.0))
+    fills = [o["why"] for o in r.log["operations"] if o["why"]["defect"] == "incomplete"]
+    assert {w["region"] for w in fills} and all("centroids of its slabs" in w["reason"] for w in fills)
+    assert all(w["all_round"] >= Params().repair_all_round for w in fills)
+    # the order before: the axis curve of the handle's end kept, a tangle on its surface
+    monkeypatch.setattr(fill, "SLABS_FIRST", False)
+    old = repair(cloud, broken)
     assert old.log["repair"]["measures_after"]["centeredness"] < 0.5 and _tips(old.curve) > 20
