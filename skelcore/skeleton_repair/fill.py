@@ -43,34 +43,18 @@ def _slab_line(pts: np.ndarray, step: float) -> np.ndarray:
 
 
 def _attach_polyline(curve: CurveSkeleton, line: np.ndarray) -> tuple[list[dict[str, Any]], int] | None:
-    """The edit-log entries adding ``line`` (slab centroids in order), attached at the curve's vertex
-    nearest its nearest point: by an end (its slab at the curve left out: it holds the junction's
-    surface too, off the axis), or, when a point at least a quarter of the line (and two slabs) from
-    both ends is nearest (a thick part met at its side, the hammer's head on its handle), there, as two
-    arms (docs/repair.md "A thick part's fill")."""
     used = np.flatnonzero(np.bincount(curve.edges.ravel(), minlength=curve.n_vertices) > 0)
-    tree = cKDTree(curve.vertices[used])
-    d, j = tree.query(line)
-    k = int(np.argmin(d))
-    n = curve.n_vertices
-    if min(k, len(line) - 1 - k) >= max(2, len(line) // 4):
-        at = int(used[j[k]])
-        arms = [line[k:], line[k - 1::-1]]
-        out = [{"op": "add_vertex", "args": {"position": [float(x) for x in p], "attach_to": at if i == 0 else n + i - 1}}
-               for i, p in enumerate(arms[0])]
-        m = n + len(arms[0])
-        out += [{"op": "add_vertex", "args": {"position": [float(x) for x in p], "attach_to": n if i == 0 else m + i - 1}}
-                for i, p in enumerate(arms[1])]
-        return out, at
-    if d[-1] < d[0]:
-        line = line[::-1]
+    d, j = cKDTree(curve.vertices[used]).query(line[[0, -1]])
+    if d[1] < d[0]:
+        line, d, j = line[::-1], d[::-1], j[::-1]
     line = line[1:]  # the slab at the curve holds the junction's surface too: off the axis
-    prev, out = int(used[int(tree.query(line[0])[1])]), []
-    at = prev
+    j0 = int(cKDTree(curve.vertices[used]).query(line[0])[1])
+    j = (j0, j[1])
+    prev, n, out = int(used[j[0]]), curve.n_vertices, []
     for i, p in enumerate(line):
         out.append({"op": "add_vertex", "args": {"position": [float(x) for x in p], "attach_to": prev}})
         prev = n + i
-    return out, at
+    return out, int(used[j[0]])
 
 
 def _part_entries(curve: CurveSkeleton, part: CurveSkeleton) -> tuple[list[dict[str, Any]], int] | None:
