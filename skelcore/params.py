@@ -273,6 +273,10 @@ class Params:
         curve's completeness drops, or its outside length share rises, by more than this.
     repair_score_drop : ... or when curve boundedness or curve centeredness drops by more than this.
     repair_fill_missing : skelcore.repair also tries to fill a missing part (a new stretch of curve).
+    repair_all_round : a missing region is seen all round when at least this share of the cloud's
+        cross-sections through it is its own (a tube's end, a thick part cut off, a whole missing
+        branch); its slabs' centroids are tried before its axis curve (docs/repair.md "A thick part's
+        fill").
     repair_join_step : a join between components is tried only when every point along it, every this
         many x the voxel size of the shape's interior, lies inside the shape.
     repair_recentre : skelcore.repair also moves off-centre curve vertices (c <= c_star) to the centre of
@@ -425,6 +429,7 @@ class Params:
     repair_score_drop: float = 0.02
     repair_join_step: float = 0.5
     repair_fill_missing: bool = True
+    repair_all_round: float = 0.93
     repair_recentre: bool = True
     repair_centre_gain: float = 0.01
     repair_outside_gain: float = 0.01
@@ -532,6 +537,8 @@ class Params:
                      "repair_outside_gain"):
             if not float(getattr(self, name)) >= 0:
                 bad(name, "must be >= 0")
+        if not 0.0 <= float(self.repair_all_round) <= 1.0:
+            bad("repair_all_round", "must be in [0, 1]")
         if not float(self.repair_join_step) > 0:
             bad("repair_join_step", "must be > 0")
         if int(self.repair_batch_tries) < 0:

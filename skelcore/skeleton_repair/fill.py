@@ -17,6 +17,7 @@ from scipy.spatial import cKDTree
 
 from ..curve import CurveSkeleton
 from ..errors import SkelInputError
+from .all_round import all_round_share
 from .proposals import Action
 
 __all__ = ["fill_missing", "fill_actions", "Fills", "WHEN_REACHED"]
@@ -25,6 +26,10 @@ __all__ = ["fill_missing", "fill_actions", "Fills", "WHEN_REACHED"]
 #: fill a round may try before the first try, the slower path, the same tries, log and curve
 #: (tests/engine/test_repair_trial.py)
 WHEN_REACHED = True
+
+#: whether a region seen all round (its share of its cross-sections at least ``all_round``,
+#: :mod:`.all_round`) has its slabs' centroids tried before its axis curve
+SLABS_FIRST = True
 
 
 def _slab_line(pts: np.ndarray, step: float) -> np.ndarray:
@@ -127,37 +132,54 @@ def fill_missing(curve: CurveSkeleton, missing: Any, cloud: np.ndarray, max_regi
 
 
 def fill_actions(curve: CurveSkeleton, missing: Any, cloud: np.ndarray, max_regions: int = 2,
-                 memo: dict | None = None) -> Iterator[Action]:
+                 memo: dict | None = None, all_round: float = np.inf) -> Iterator[Action]:
     """:func:`fill_missing`'s actions one at a time, in its order: each is made (a region's axis curve,
     its skeletonization) only when asked for. Every region's axis curve first, then every region's
     skeleton, then the slabs' centroids: on the tuning neurons the axis curve raised GT F1 most and
     added no cycle, the slabs' few centroids of a large region lowered it (docs/repair.md "Fills that
-    pass"), and one region refused leaves the next one its try. ``memo``: the regions' curves made in
-    the rounds before (:func:`_made`)."""
+    pass"), and one region refused leaves the next one its try. A region seen all round (the share of
+    its cross-sections it holds, :mod:`.all_round`, at least ``all_round``: a tube's end, a thick part
+    cut off, a whole missing branch) has its slabs' centroids tried before its axis curve: its axis
+    lies inside it, where the slabs' centroids are, while the axis curve of a thick part is a tangle on
+    its surface (docs/repair.md "A thick part's fill"). ``memo``: the regions' curves made in the
+    rounds before (:func:`_made`)."""
     if missing is None or not missing.counted or len(missing.region) != len(cloud):
         return
     e = curve.edges
     step = float(np.median(np.linalg.norm(curve.vertices[e[:, 0]] - curve.vertices[e[:, 1]], axis=1)))
     regions = [(reg, cloud[missing.region == reg.id]) for reg in missing.counted[:max_regions]]
     regions = [(reg, pts) for reg, pts in regions if len(pts) >= 10]
+    whole = {reg.id: all_round_share(cloud, missing.region == reg.id, max(step, 1e-12)) for reg, _ in regions}
+
+    def target(reg: Any) -> dict[str, Any]:
+        share = whole[reg.id]
+        return {"region": int(reg.id), "all_round": None if share is None else round(share, 4)}
+
+    def slabs(reg: Any, pts: np.ndarray) -> Iterator[Action]:
+        line = _slab_line(pts, max(step, 1e-12))
+        if len(line) >= 3:
+            entries, at = _attach_polyline(curve, line)
+            yield Action("incomplete", target(reg), f"missing region {reg.id} ({reg.n_points} points): "
+                         f"the centroids of its slabs ({len(line)}) attached at vertex {at}", entries)
+
+    first = {reg.id for reg, _ in regions if SLABS_FIRST and (whole[reg.id] or 0.0) >= all_round}
     for reg, pts in regions:
+        if reg.id in first:
+            yield from slabs(reg, pts)
         made = _axis_entries(curve, pts, memo)
         if made is not None:
             entries, at = made
-            yield Action("incomplete", {"region": int(reg.id)}, f"missing region {reg.id} ({reg.n_points} points): "
+            yield Action("incomplete", target(reg), f"missing region {reg.id} ({reg.n_points} points): "
                          f"its axis curve at its own spacing attached at vertex {at}", entries)
     for reg, pts in regions:
         made = _skeleton_entries(curve, pts, memo)
         if made is not None:
             entries, at = made
-            yield Action("incomplete", {"region": int(reg.id)}, f"missing region {reg.id} ({reg.n_points} points) "
+            yield Action("incomplete", target(reg), f"missing region {reg.id} ({reg.n_points} points) "
                          f"skeletonized and attached at vertex {at}", entries)
     for reg, pts in regions:
-        line = _slab_line(pts, max(step, 1e-12))
-        if len(line) >= 3:
-            entries, at = _attach_polyline(curve, line)
-            yield Action("incomplete", {"region": int(reg.id)}, f"missing region {reg.id} ({reg.n_points} points): "
-                         f"the centroids of its slabs ({len(line)}) attached at vertex {at}", entries)
+        if reg.id not in first:
+            yield from slabs(reg, pts)
 
 
 class Fills:

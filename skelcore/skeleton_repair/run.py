@@ -219,7 +219,8 @@ def repair(cloud: np.ndarray, curve: CurveSkeleton | tuple | None = None, skelet
             inside, voxel, route = _in_shape(ev)
             candidates = propose(cur, found, inside, p.repair_join_step * voxel, route)
             fills = Fills(fill_actions(cur, found.missing, np.asarray(ev.source.args["cloud"], float),
-                                       p.repair_max_tries, parts) if p.repair_fill_missing else iter(()),
+                                       p.repair_max_tries, parts, p.repair_all_round)
+                          if p.repair_fill_missing else iter(()),
                           p.repair_max_tries, lambda: clock.phase("proposals"))
         ahead = fills.first(p.repair_max_tries - len(candidates))  # those the head and the count need
         candidates += ahead
@@ -251,6 +252,8 @@ def repair(cloud: np.ndarray, curve: CurveSkeleton | tuple | None = None, skelet
             with clock.phase("first look"):  # the cheap first look (screen.py), then the rest
                 pre = first_update(ev, new)
                 seen, refusal = first_look(found, pre, p, recentring=action.code == RECENTRE, kept=kept)
+            if "fill_centeredness" in seen:
+                why["fill_centeredness"] = _rounded({"c": seen.pop("fill_centeredness")})["c"]
             if refusal is not None:
                 why.update(after=_rounded(seen), defects_after=None)
                 rejected.append({"entries": action.entries, "why": {**why, "rejected": refusal}})

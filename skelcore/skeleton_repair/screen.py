@@ -23,7 +23,7 @@ from ..evaluation import Evaluation
 from ..params import Params
 from ..stages.catalogue import CATALOGUE
 from .findings import Findings
-from .guard import kept_part, recentred, worse
+from .guard import kept_part, own_part, recentred, worse
 from .outside_look import outside_named, outside_of
 
 __all__ = ["first_look", "first_update", "whole_update", "with_scan_checks", "SCAN_CHECKS", "OUTSIDE_FIRST",
@@ -146,7 +146,8 @@ def _judged(before: Findings, pre: Evaluation, params: Params, recentring: bool,
     ``recentring``: a re-centring, refused before its completeness when it has not its gain;
     ``kept``: a fill, curve centeredness judged on these edges (:func:`.guard.kept_part`), and, with
     :data:`OUTSIDE_FIRST`, its outside share and outside branches (:mod:`.outside_look`): one that adds
-    an outside branch is refused, the reason naming them (docs/repair.md "The repair's cost")."""
+    an outside branch is refused, the reason naming them (docs/repair.md "The repair's cost"); the
+    centeredness of its own stretch is given (``fill_centeredness``, :func:`.guard.own_part`)."""
     s = pre.summary()
     a = {"completeness": None, "outside_share": None,
          "boundedness": _num(s["boundedness"]["curve"]), "centeredness": _num(s["centeredness"]["curve"])}
@@ -156,7 +157,9 @@ def _judged(before: Findings, pre: Evaluation, params: Params, recentring: bool,
     judged = a
     if kept is not None and pre.curve is not None:
         cl = pre.curve
-        judged = kept_part(a, cl.sample_edge, cl.sample_centeredness(params.beta_star), kept, params)
+        sample_c = cl.sample_centeredness(params.beta_star)
+        judged = kept_part(a, cl.sample_edge, sample_c, kept, params)
+        a["fill_centeredness"] = own_part(cl.sample_edge, sample_c, kept, params)
     why = worse(before.measures, judged, params, completeness=known)
     if why or kept is None or not OUTSIDE_FIRST or (out := outside_of(pre)) is None:
         return a, ("worse: " + "; ".join(why)) if why else None

@@ -3,10 +3,8 @@ pc-skeletor's broken hammer opened in the window, its defects walked with N, fix
 rows' fixes, the fix undone and redone, the skeleton saved, and ``skelcore evaluate`` of the saved
 file giving the scores the window shows.
 
-The broken hammer: the real hammer scan (resources/scans/hammer_4096.ply) with the cao curve cut to
-the middle of its handle (no head, no far end: pc-skeletor's truncated output, as in
-scripts/make_screenshots.py) and a two-edge twig from the handle out through its side (a spur that
-leaves the shape)."""
+The broken hammer: tests/broken_hammer.py (the real hammer scan, cao's curve cut to the middle of
+its handle and a twig out through its side)."""
 
 from __future__ import annotations
 
@@ -15,38 +13,25 @@ import subprocess
 import sys
 from pathlib import Path
 
-import numpy as np
 import pytest
+from broken_hammer import broken_hammer_curve
 from PySide6 import QtGui
 
 import skelcore.edit as edit
-from skelcore.curve import CurveSkeleton
-from skelcore.io import load_cloud, load_curve
+from skelcore.io import load_curve
 from skelcore.io.writers import write_curve, write_point_set
 
 pytestmark = [pytest.mark.gui, pytest.mark.window(size=(1100, 750), questions="default")]
 
-ROOT = Path(__file__).resolve().parents[2]
 SHOWN = (("boundedness", "boundedness_curve"), ("centeredness", "centeredness_curve"),
          ("smoothness", "smoothness_curve"))
 
 
 def broken_hammer(folder: Path) -> tuple[str, str]:
-    from skelcore.skeleton import skeletonize
-
-    cloud = load_cloud(str(ROOT / "resources" / "scans" / "hammer_4096.ply"))
-    _skeletal, curve = skeletonize(cloud, method="cao")
-    y = curve.vertices[:, 1]  # the handle runs along y from -199 to about 80, the head beyond
-    keep = (y > -60) & (y < 85)
-    new = -np.ones(len(keep), np.int64)
-    new[keep] = np.arange(int(keep.sum()))
-    v, e = curve.vertices[keep], new[curve.edges[keep[curve.edges].all(axis=1)]]
-    mid = int(np.argmin(np.abs(v[:, 1] - 10.0)))  # the handle is about 10 across: out to 30 sideways
-    v = np.vstack([v, v[mid] + [0.0, 0.0, 12.0], v[mid] + [0.0, 0.0, 30.0]])
-    e = np.vstack([e, [[mid, len(v) - 2], [len(v) - 2, len(v) - 1]]])
+    cloud, curve = broken_hammer_curve()
     paths = str(folder / "hammer.ply"), str(folder / "hammer_pc_skeletor_curve.ply")
     write_point_set(paths[0], cloud)
-    write_curve(paths[1], CurveSkeleton.from_raw(v, e))
+    write_curve(paths[1], curve)
     return paths
 
 

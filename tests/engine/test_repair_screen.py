@@ -125,11 +125,12 @@ def test_the_repair_is_the_same_with_the_completeness_alone(monkeypatch):
     """A tube whose curve stops halfway (a fill kept, one refused at first look): the same log, curve
     and last Evaluation whether the first looks find the missing parts' regions or not."""
     from skelcore import shapes
-    from skelcore.skeleton_repair import repair, screen
+    from skelcore.skeleton_repair import fill, repair, screen
 
     s = shapes.cylinder(1500)
     half = s.curve_edges[(s.curve_edges < 11).all(axis=1)]
     curve = CurveSkeleton.from_raw(s.curve_vertices[:11], half)
+    monkeypatch.setattr(fill, "SLABS_FIRST", False)  # the tube's end seen all round: a fill refused all the same
     assert screen.COMPLETENESS_ALONE is True
     alone = []
     made = screen.completeness_alone
