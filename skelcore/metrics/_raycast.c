@@ -910,11 +910,15 @@ static int64_t cast_band(const Tree *t, Walker *w, Packet *pk, const Raster *r, 
 }
 
 /* A seed table's cells (leaf, point; `len` int32 in all) copied as hints: a leaf of this tree and one of its
- * points, else none (a seed is only an index into arrays the kernel reads, docs/boundedness.md 3.18) */
-static inline void seed_cells(const Tree *t, int32_t n, const int32_t *from, int32_t *to, size_t len) {
+ * points, else none (a seed is only an index into arrays the kernel reads, docs/boundedness.md 3.18).  Which
+ * nodes are leaves comes from a bit per node (`leaf_bits`, a few KB that stay in L1), not from each cell's
+ * node: a seeded query's 4608 cells read that many nodes scattered over the tree, at 100k points (800 KB
+ * of nodes) each a wait on memory (docs/boundedness.md 3.20). */
+static inline void seed_cells(const uint64_t *leaf_bits, int32_t n_nodes, int32_t n, const int32_t *from, int32_t *to,
+                              size_t len) {
     for (size_t x = 0; x < len; x += 2) {
         const int32_t leaf = from[x], pt = from[x + 1];
-        const int ok = leaf >= 0 && leaf < t->n_nodes && t->nodes[leaf].kid < 0 && pt >= 0 && pt < n;
+        const int ok = leaf >= 0 && leaf < n_nodes && (leaf_bits[leaf >> 6] >> (leaf & 63) & 1) && pt >= 0 && pt < n;
         to[x] = ok ? leaf : -1;
         to[x + 1] = ok ? pt : -1;
     }
@@ -1041,7 +1045,7 @@ static PyObject *py_clusters(PyObject *self, PyObject *args) {
     uint64_t *far = NULL, *need = NULL, *bits = NULL;
     uint8_t *full = NULL, *lone_full = NULL;
     int32_t *stack = NULL, *hints = NULL, *tabs = NULL;
-    uint64_t *lone_far = NULL;
+    uint64_t *lone_far = NULL, *leaf_bits = NULL;
     Lone *lones = NULL;
     float *lon_scale = NULL;
     Near *near = NULL;
@@ -1097,6 +1101,12 @@ static PyObject *py_clusters(PyObject *self, PyObject *args) {
         lone_full = (uint8_t *)calloc((size_t)block * rows, 1);
         lones = (Lone *)calloc((size_t)block, sizeof(Lone));
         if (!tabs || !lone_far || !lone_full || !lones) { PyErr_NoMemory(); goto done; }
+    }
+    if (n_seeds > 0) {  /* seed_cells: a bit per node, set for the leaves */
+        leaf_bits = (uint64_t *)calloc((size_t)t.n_nodes / 64 + 1, sizeof(uint64_t));
+        if (!leaf_bits) { PyErr_NoMemory(); goto done; }
+        for (int32_t i = 0; i < t.n_nodes; i++)
+            if (t.nodes[i].kid < 0) leaf_bits[i >> 6] |= UINT64_C(1) << (i & 63);
     }
     for (int i = 0; i < 2 * rows * bins; i++) hints[i] = -1;
     for (int j = 0; j < rows; j++) lon_scale[j] = (float)(bins / TWO_PI / (r.s[j] * r.s[j]));
@@ -1171,7 +1181,7 @@ static PyObject *py_clusters(PyObject *self, PyObject *args) {
                         if (!L->src) {
                             for (size_t x = 0; x < cells; x++) to[x] = -1;
                         } else if (L->seeded) {
-                            seed_cells(&t, n, L->src + 2 * ((size_t)j * bins + b0), to, cells);
+                            seed_cells(leaf_bits, t.n_nodes, n, L->src + 2 * ((size_t)j * bins + b0), to, cells);
                         } else {
                             memcpy(to, L->src + 2 * ((size_t)j * bins + b0), sizeof(int32_t) * cells);
                         }
@@ -1221,7 +1231,7 @@ static PyObject *py_clusters(PyObject *self, PyObject *args) {
         /* a seed: the hints a lone query nearby left (its table and origin), instead of the previous cluster's */
         const int32_t seed = seed_of ? seed_of[k - k0] : -1;
         if (seed >= 0) {
-            seed_cells(&t, n, seeds + (size_t)seed * table, hints, table);
+            seed_cells(leaf_bits, t.n_nodes, n, seeds + (size_t)seed * table, hints, table);
             memcpy(prev, seed_at + 3 * (size_t)seed, sizeof prev);
         }
         /* hints from a cluster far away would only lengthen the walks */
@@ -1290,7 +1300,7 @@ static PyObject *py_clusters(PyObject *self, PyObject *args) {
 done:
     raster_free(&r);
     free(far); free(full); free(stack); free(near); free(hints); free(lon_scale);
-    free(tabs); free(lone_far); free(lone_full); free(lones);
+    free(tabs); free(lone_far); free(lone_full); free(lones); free(leaf_bits);
     PyBuffer_Release(&pts); PyBuffer_Release(&nds); PyBuffer_Release(&lvs); PyBuffer_Release(&qs); PyBuffer_Release(&starts);
     PyBuffer_Release(&cen); PyBuffer_Release(&rch);
     PyBuffer_Release(&beta); PyBuffer_Release(&stats); PyBuffer_Release(&stop_buf); PyBuffer_Release(&done_buf);
