@@ -605,10 +605,12 @@ static inline const int32_t *moved_hint(const Tree *t, const Move *mv, const flo
  * search.  hint[0], hint[1] = the leaf and the point a nearby ray hit (the same sample from the previous
  * cluster): that point first (a centre one cell away usually still sees it; the caller has tested it, in
  * lanes over a tile's rays: cast_band), then the point and the leaf of
- * the sample its hit moved to (moved_hint), then its leaf, then the previous ray's leaf, then the subtrees of
- * the WALK_UP nearest ancestors of the moved hint's leaf where it was tried, else of the hinted leaf. */
+ * the sample its hit moved to (moved_hint), then its leaf, then (`sibling`: where the points exceed
+ * PREFETCH_FROM) that leaf's sibling where it is a leaf, then the previous ray's leaf, then the subtrees of
+ * the WALK_UP nearest ancestors of the moved hint's leaf where it was tried, else of the hinted leaf
+ * (docs/boundedness.md 3.14, 3.20). */
 static int ray_hits(const Tree *t, Walker *w, const float *o, const float *s, float cut, float h,
-                    int32_t *hint, const Move *mv, int j, int bin) {
+                    int32_t *hint, const Move *mv, int j, int bin, int sibling) {
     const float h2 = h * h, cut2 = cut * cut;
     int32_t a = hint[0], b = w->last_leaf, p, up_from = -1;
     if (hint[1] >= 0) {  /* its point missed */
@@ -634,6 +636,14 @@ static int ray_hits(const Tree *t, Walker *w, const float *o, const float *s, fl
     if (a >= 0) {
         w->hint_tries++;
         if ((p = leaf_hit(t, a, o, s, cut2, h2)) >= 0) { w->hint_hits++; w->last_leaf = a; hint[1] = p; return 1; }
+        /* its sibling where that is a leaf too (the same cache line of nodes, the next leaf block) */
+        const int32_t sib = (a & 1) ? a + 1 : a - 1;
+        if (sibling && a > 0 && sib < t->n_nodes && sib != b && t->nodes[sib].kid < 0) {
+            w->hint_tries++;
+            if ((p = leaf_hit(t, sib, o, s, cut2, h2)) >= 0) {
+                w->hint_hits++; hint[0] = sib; hint[1] = p; w->last_leaf = sib; return 1;
+            }
+        }
     }
     if (b >= 0 && b != a) {
         w->hint_tries++;
@@ -896,7 +906,7 @@ static int64_t cast_band(const Tree *t, Walker *w, Packet *pk, const Raster *r, 
             int hit = -1;
             if (use_hints) {
                 const float s[3] = {sx[l], sy[l], sz[l]};
-                hit = ray_hits(t, w, cf, s, cut, h, hint, mv, j, bb);
+                hit = ray_hits(t, w, cf, s, cut, h, hint, mv, j, bb, big);
             }
             if (hit > 0) *word |= bit;
             if (hit < 0) {
