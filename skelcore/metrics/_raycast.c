@@ -603,16 +603,17 @@ static inline const int32_t *moved_hint(const Tree *t, const Move *mv, const flo
 /* Does the ray from o along s meet a ball around a point with |p - o| > cut?  1 yes, 0 no, -1 not settled:
  * the caller walks it from the root in a packet (walk_packet).  Exact either way; the hints only order the
  * search.  hint[0], hint[1] = the leaf and the point a nearby ray hit (the same sample from the previous
- * cluster): that point first (a centre one cell away usually still sees it), then the point and the leaf of
- * the sample its hit moved to (moved_hint), then its leaf, then the previous ray's leaf, then the subtrees of
- * the WALK_UP nearest ancestors of the moved hint's leaf where it was tried, else of the hinted leaf. */
+ * cluster): that point first (a centre one cell away usually still sees it; the caller has tested it, in
+ * lanes over a tile's rays: cast_band), then the point and the leaf of
+ * the sample its hit moved to (moved_hint), then its leaf, then (`sibling`: where the points exceed
+ * PREFETCH_FROM) that leaf's sibling where it is a leaf, then the previous ray's leaf, then the subtrees of
+ * the WALK_UP nearest ancestors of the moved hint's leaf where it was tried, else of the hinted leaf
+ * (docs/boundedness.md 3.14, 3.20). */
 static int ray_hits(const Tree *t, Walker *w, const float *o, const float *s, float cut, float h,
-                    int32_t *hint, const Move *mv, int j, int bin) {
+                    int32_t *hint, const Move *mv, int j, int bin, int sibling) {
     const float h2 = h * h, cut2 = cut * cut;
     int32_t a = hint[0], b = w->last_leaf, p, up_from = -1;
-    if (hint[1] >= 0) {
-        w->hint_tries++;
-        if (point_hit(t, hint[1], o, s, cut2, h2)) { w->hint_hits++; w->last_leaf = a; return 1; }
+    if (hint[1] >= 0) {  /* its point missed */
         const int32_t *cand = mv->on ? moved_hint(t, mv, o, s, j, bin, hint[1]) : NULL;
         if (cand) {
             w->hint_tries++;
@@ -635,6 +636,14 @@ static int ray_hits(const Tree *t, Walker *w, const float *o, const float *s, fl
     if (a >= 0) {
         w->hint_tries++;
         if ((p = leaf_hit(t, a, o, s, cut2, h2)) >= 0) { w->hint_hits++; w->last_leaf = a; hint[1] = p; return 1; }
+        /* its sibling where that is a leaf too (the same cache line of nodes, the next leaf block) */
+        const int32_t sib = (a & 1) ? a + 1 : a - 1;
+        if (sibling && a > 0 && sib < t->n_nodes && sib != b && t->nodes[sib].kid < 0) {
+            w->hint_tries++;
+            if ((p = leaf_hit(t, sib, o, s, cut2, h2)) >= 0) {
+                w->hint_hits++; hint[0] = sib; hint[1] = p; w->last_leaf = sib; return 1;
+            }
+        }
     }
     if (b >= 0 && b != a) {
         w->hint_tries++;
@@ -806,35 +815,104 @@ static inline void prefetch_hints(const Tree *t, const Raster *r, const uint64_t
 
 /* The far rays of the needed samples of rows [j0, j1) x bins [b0, b1) (whole tiles) from cf, tile by tile:
  * each tries its hints (ray_hits) when use_hints, the rest go to packets (the last one left for the caller
- * to walk); hits set in `far`.  Returns the rays whose hints were tried. */
+ * to walk); hits set in `far`.  A tile's rays first test their own hint points together, VF lanes at a
+ * time (point_hit's operations in its order, so the same bits; a ray with no hint point gets NaN lanes,
+ * which never hit): the hit or miss of each, about even, is then a bit of a mask instead of a branch that
+ * mispredicts half the time.  Then the rays in the order they had, each hit as before or on to its other
+ * hints (ray_hits), so every ray meets the same tests with the same hints as one by one
+ * (docs/boundedness.md 3.20).  Returns the rays whose hints were tried. */
+#define TILE_RAYS (TILE_ROWS * TILE_BINS)
 static int64_t cast_band(const Tree *t, Walker *w, Packet *pk, const Raster *r, const uint64_t *need, uint64_t *far,
                          int32_t *hints, const Move *mv, const float *cf, float cut, float h, int use_hints, int big,
                          int j0, int j1, int b0, int b1, int64_t *rays) {
     int64_t tried = 0;
     const int bins = r->bins;
+    const float cut2 = cut * cut, h2 = h * h;
+    float sx[TILE_RAYS], sy[TILE_RAYS], sz[TILE_RAYS], px[TILE_RAYS], py[TILE_RAYS], pz[TILE_RAYS];
+    int32_t cell[TILE_RAYS];
+    uint8_t row[TILE_RAYS];
     for (int b = b0; b < b1; b += TILE_BINS) {
         const int x = b >> 6;
         if (use_hints && big) prefetch_hints(t, r, need, hints, j0, j1, b, x, bins);
+        int nr = 0;
+        uint32_t with_point = 0;  /* the rays with a hint point */
         for (int j = j0; j < j1; j++) {
             uint64_t todo = (need[(size_t)j * r->words + x] >> (b & 63)) & TILE_MASK;
             while (todo) {
                 const int bb = b + __builtin_ctzll(todo);
                 todo &= todo - 1;
-                float s[3] = {(float)(r->s[j] * r->cos_lon[bb]), (float)(r->s[j] * r->sin_lon[bb]), (float)r->z[j]};
-                (*rays)++;
-                int32_t *hint = hints + 2 * ((size_t)j * bins + bb);
-                uint64_t *word = far + (size_t)j * r->words + x, bit = UINT64_C(1) << (bb & 63);
-                int hit = -1;
-                if (use_hints) {
-                    hit = ray_hits(t, w, cf, s, cut, h, hint, mv, j, bb);
-                    tried++;
+                sx[nr] = (float)(r->s[j] * r->cos_lon[bb]);
+                sy[nr] = (float)(r->s[j] * r->sin_lon[bb]);
+                sz[nr] = (float)r->z[j];
+                cell[nr] = j * bins + bb;
+                row[nr] = (uint8_t)(j - j0);
+                const int32_t pt = hints[2 * (size_t)cell[nr] + 1];
+                if (use_hints && pt >= 0) {
+                    const float *p = t->pts + 3 * (size_t)pt;
+                    px[nr] = p[0]; py[nr] = p[1]; pz[nr] = p[2];
+                    with_point |= 1u << nr;
+                } else {
+                    px[nr] = py[nr] = pz[nr] = NAN;
                 }
-                if (hit > 0) *word |= bit;
-                if (hit < 0) {
-                    pk->sx[pk->n] = s[0]; pk->sy[pk->n] = s[1]; pk->sz[pk->n] = s[2];
-                    pk->hint[pk->n] = hint; pk->word[pk->n] = word; pk->bit[pk->n] = bit;
-                    if (++pk->n == PACKET) walk_packet(t, w, pk, cf, cut, h);
+                nr++;
+            }
+        }
+        if (!nr) continue;
+        *rays += nr;
+        for (int l = nr; l < TILE_RAYS && (l & (VF - 1)); l++) px[l] = py[l] = pz[l] = sx[l] = sy[l] = sz[l] = NAN;
+        uint32_t own = 0;  /* the rays whose own hint point they hit */
+        const uint32_t all = nr == TILE_RAYS ? ~0u : (1u << nr) - 1u;
+        if (use_hints) {
+            for (int g = 0; g < nr; g += VF) {
+                vf X, Y, Z, S0, S1, S2;
+                memcpy(&X, px + g, sizeof X); memcpy(&Y, py + g, sizeof Y); memcpy(&Z, pz + g, sizeof Z);
+                memcpy(&S0, sx + g, sizeof S0); memcpy(&S1, sy + g, sizeof S1); memcpy(&S2, sz + g, sizeof S2);
+                vf wx = X - cf[0], wy = Y - cf[1], wz = Z - cf[2];
+                vf d2 = wx * wx + wy * wy + wz * wz;
+                vf tt = wx * S0 + wy * S1 + wz * S2;
+                vfi hit = (d2 > cut2) & (tt > 0.0f) & (d2 - tt * tt <= h2);
+                own |= (uint32_t)lane_mask(hit) << g;
+            }
+            own &= all;
+            tried += nr;
+            w->hint_tries += __builtin_popcount(with_point);
+            w->hint_hits += __builtin_popcount(own);
+            for (uint32_t m = own; m; m &= m - 1) {
+                const int l = __builtin_ctz(m), j = j0 + row[l];
+                far[(size_t)j * r->words + x] |= UINT64_C(1) << ((cell[l] - j * bins) & 63);
+            }
+        }
+        if (use_hints && big)  /* the misses' hinted leaf blocks (their nodes were asked of memory with the points) */
+            for (uint32_t m = all & ~own; m; m &= m - 1) {
+                const int32_t leaf = hints[2 * (size_t)cell[__builtin_ctz(m)]];
+                if (leaf >= 0) {
+                    const float *L = t->leaf + 3 * LEAF_SIZE * (size_t)(-1 - t->nodes[leaf].kid);
+                    __builtin_prefetch(L);
+                    __builtin_prefetch(L + 3 * LEAF_SIZE - 1);
                 }
+            }
+        /* the others in order; the previous ray's leaf (a hint) as one by one: the leaf of the last own hit
+         * since the ray before, if any */
+        uint64_t seen = 0;  /* rays [0, seen) done */
+        for (uint32_t m = all & ~own; ; m &= m - 1) {
+            const int l = m ? __builtin_ctz(m) : nr;
+            const uint32_t since = own & (uint32_t)(((UINT64_C(1) << l) - 1) & ~((UINT64_C(1) << seen) - 1));
+            if (since) w->last_leaf = hints[2 * (size_t)cell[31 - __builtin_clz(since)]];
+            if (!m) break;
+            seen = (uint64_t)l + 1;
+            const int j = j0 + row[l], bb = cell[l] - j * bins;
+            int32_t *hint = hints + 2 * (size_t)cell[l];
+            uint64_t *word = far + (size_t)j * r->words + x, bit = UINT64_C(1) << (bb & 63);
+            int hit = -1;
+            if (use_hints) {
+                const float s[3] = {sx[l], sy[l], sz[l]};
+                hit = ray_hits(t, w, cf, s, cut, h, hint, mv, j, bb, big);
+            }
+            if (hit > 0) *word |= bit;
+            if (hit < 0) {
+                pk->sx[pk->n] = sx[l]; pk->sy[pk->n] = sy[l]; pk->sz[pk->n] = sz[l];
+                pk->hint[pk->n] = hint; pk->word[pk->n] = word; pk->bit[pk->n] = bit;
+                if (++pk->n == PACKET) walk_packet(t, w, pk, cf, cut, h);
             }
         }
     }
@@ -842,11 +920,15 @@ static int64_t cast_band(const Tree *t, Walker *w, Packet *pk, const Raster *r, 
 }
 
 /* A seed table's cells (leaf, point; `len` int32 in all) copied as hints: a leaf of this tree and one of its
- * points, else none (a seed is only an index into arrays the kernel reads, docs/boundedness.md 3.18) */
-static inline void seed_cells(const Tree *t, int32_t n, const int32_t *from, int32_t *to, size_t len) {
+ * points, else none (a seed is only an index into arrays the kernel reads, docs/boundedness.md 3.18).  Which
+ * nodes are leaves comes from a bit per node (`leaf_bits`, a few KB that stay in L1), not from each cell's
+ * node: a seeded query's 4608 cells read that many nodes scattered over the tree, at 100k points (800 KB
+ * of nodes) each a wait on memory (docs/boundedness.md 3.20). */
+static inline void seed_cells(const uint64_t *leaf_bits, int32_t n_nodes, int32_t n, const int32_t *from, int32_t *to,
+                              size_t len) {
     for (size_t x = 0; x < len; x += 2) {
         const int32_t leaf = from[x], pt = from[x + 1];
-        const int ok = leaf >= 0 && leaf < t->n_nodes && t->nodes[leaf].kid < 0 && pt >= 0 && pt < n;
+        const int ok = leaf >= 0 && leaf < n_nodes && (leaf_bits[leaf >> 6] >> (leaf & 63) & 1) && pt >= 0 && pt < n;
         to[x] = ok ? leaf : -1;
         to[x + 1] = ok ? pt : -1;
     }
@@ -973,7 +1055,7 @@ static PyObject *py_clusters(PyObject *self, PyObject *args) {
     uint64_t *far = NULL, *need = NULL, *bits = NULL;
     uint8_t *full = NULL, *lone_full = NULL;
     int32_t *stack = NULL, *hints = NULL, *tabs = NULL;
-    uint64_t *lone_far = NULL;
+    uint64_t *lone_far = NULL, *leaf_bits = NULL;
     Lone *lones = NULL;
     float *lon_scale = NULL;
     Near *near = NULL;
@@ -1029,6 +1111,12 @@ static PyObject *py_clusters(PyObject *self, PyObject *args) {
         lone_full = (uint8_t *)calloc((size_t)block * rows, 1);
         lones = (Lone *)calloc((size_t)block, sizeof(Lone));
         if (!tabs || !lone_far || !lone_full || !lones) { PyErr_NoMemory(); goto done; }
+    }
+    if (n_seeds > 0) {  /* seed_cells: a bit per node, set for the leaves */
+        leaf_bits = (uint64_t *)calloc((size_t)t.n_nodes / 64 + 1, sizeof(uint64_t));
+        if (!leaf_bits) { PyErr_NoMemory(); goto done; }
+        for (int32_t i = 0; i < t.n_nodes; i++)
+            if (t.nodes[i].kid < 0) leaf_bits[i >> 6] |= UINT64_C(1) << (i & 63);
     }
     for (int i = 0; i < 2 * rows * bins; i++) hints[i] = -1;
     for (int j = 0; j < rows; j++) lon_scale[j] = (float)(bins / TWO_PI / (r.s[j] * r.s[j]));
@@ -1103,7 +1191,7 @@ static PyObject *py_clusters(PyObject *self, PyObject *args) {
                         if (!L->src) {
                             for (size_t x = 0; x < cells; x++) to[x] = -1;
                         } else if (L->seeded) {
-                            seed_cells(&t, n, L->src + 2 * ((size_t)j * bins + b0), to, cells);
+                            seed_cells(leaf_bits, t.n_nodes, n, L->src + 2 * ((size_t)j * bins + b0), to, cells);
                         } else {
                             memcpy(to, L->src + 2 * ((size_t)j * bins + b0), sizeof(int32_t) * cells);
                         }
@@ -1153,7 +1241,7 @@ static PyObject *py_clusters(PyObject *self, PyObject *args) {
         /* a seed: the hints a lone query nearby left (its table and origin), instead of the previous cluster's */
         const int32_t seed = seed_of ? seed_of[k - k0] : -1;
         if (seed >= 0) {
-            seed_cells(&t, n, seeds + (size_t)seed * table, hints, table);
+            seed_cells(leaf_bits, t.n_nodes, n, seeds + (size_t)seed * table, hints, table);
             memcpy(prev, seed_at + 3 * (size_t)seed, sizeof prev);
         }
         /* hints from a cluster far away would only lengthen the walks */
@@ -1222,7 +1310,7 @@ static PyObject *py_clusters(PyObject *self, PyObject *args) {
 done:
     raster_free(&r);
     free(far); free(full); free(stack); free(near); free(hints); free(lon_scale);
-    free(tabs); free(lone_far); free(lone_full); free(lones);
+    free(tabs); free(lone_far); free(lone_full); free(lones); free(leaf_bits);
     PyBuffer_Release(&pts); PyBuffer_Release(&nds); PyBuffer_Release(&lvs); PyBuffer_Release(&qs); PyBuffer_Release(&starts);
     PyBuffer_Release(&cen); PyBuffer_Release(&rch);
     PyBuffer_Release(&beta); PyBuffer_Release(&stats); PyBuffer_Release(&stop_buf); PyBuffer_Release(&done_buf);
