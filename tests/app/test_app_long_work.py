@@ -88,9 +88,9 @@ _QUIT_SCRIPT = textwrap.dedent(r"""
 
 def test_quitting_while_an_evaluation_in_a_child_process_runs_exits_0_without_a_qthread_abort(tmp_path):
     """The cloud and its skeletal set of PROCESS_FROM points together: the least the window evaluates
-    in a child process, read by a thread of its own (a 1M cloud checked the same in 12 s instead of
-    about 3); the quit lands 0.3 s after the first progress, and the test fails if the evaluation was
-    no longer running then."""
+    in a child process, read by a thread of its own (a 1M cloud made the same checks draw and send a
+    million points); the quit lands 0.3 s after the first progress, and the test fails if the
+    evaluation was no longer running then."""
     from skelscope.session import PROCESS_FROM
 
     env = dict(os.environ, PYTHONPATH=str(ROOT) + os.pathsep + os.environ.get("PYTHONPATH", ""))
