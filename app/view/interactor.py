@@ -1,7 +1,6 @@
 """The Qt widget the 3D view draws in, and the input it handles itself.
 
-``ClosingInteractor`` lets go of Qt's GL surface when it closes and draws a resize in the window's next
-repaint, not in the resize itself; ``DropInteractor`` (the main view)
+``ClosingInteractor`` lets go of Qt's GL surface when it closes; ``DropInteractor`` (the main view)
 also hands drops to the viewer's loader, reports each painted frame and turns off multisampling under
 software GL, timing each. ``ClickFilter`` tells a click (a pick) from a camera drag.
 """
@@ -26,27 +25,6 @@ class ClosingInteractor(QtInteractor):
     (seen in CI: ``QMenu.addSeparator()`` returned a ``QSurface`` in the next window's menu bar).
     A closed view never draws again, so the handles are let go while the C++ objects still live.
     """
-
-    _in_resize = False
-
-    def resizeEvent(self, event: QtGui.QResizeEvent) -> None:  # noqa: N802
-        """A resize draws no frame of its own: the window's next repaint draws it (:meth:`paintGL`).
-
-        ``QOpenGLWidget.resizeEvent`` paints at once, and the window's repaint that follows paints
-        again: every resize cost two renders, and a window being laid out at its start (shown, the
-        Display | Settings tabs made, the docks sized) drew four frames before its first was on screen
-        (docs/performance.md, "The window's start")."""
-        self._in_resize = True
-        try:
-            super().resizeEvent(event)
-        finally:
-            self._in_resize = False
-        self.update()
-
-    def paintGL(self) -> None:  # noqa: N802
-        if self._in_resize:
-            return  # the resize's own paint: the repaint asked for in resizeEvent draws the frame
-        super().paintGL()
 
     def close(self) -> bool:  # pyvistaqt tears VTK down here and in closeEvent
         result = super().close()
@@ -106,8 +84,6 @@ class DropInteractor(ClosingInteractor):
                     renderers.GetNextItem().SetUseOIT(False)
 
     def paintGL(self) -> None:  # noqa: N802
-        if self._in_resize:
-            return  # drawn by the window's next repaint (ClosingInteractor.resizeEvent)
         if self.before_frame is not None:
             self.before_frame()
         start = time.perf_counter()
