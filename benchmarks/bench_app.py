@@ -9,6 +9,7 @@ mouse events on the view (press, moves, release): one frame while the button is 
 release to the full-detail frame (each layer drawing the points that can show, app/view/culling.py);
 frames are counted at the render window's EndEvent.
 Editing: Delete on a curve of the 100k Y, to the frame recoloured by its new scores (see its case).
+The window's start: an empty main window made and shown in this process, to its first frame on screen.
 Needs a display: pytest-xvfb starts Xvfb for the run when it is installed (software OpenGL);
 without DISPLAY the cases are skipped."""
 
@@ -99,6 +100,53 @@ def test_viewer_start_up(measure, benchmark, display, tmp_path, n, skeletal):
     assert int(points) == n and render != "inf"
     benchmark.extra_info.update(n_points=n, skeletal_points=n if skeletal else 0, display=display, imported_s=float(imported), window_s=float(window),
                                 loaded_s=float(loaded), first_frame_s=float(render))
+
+
+def test_viewer_window_start(measure, benchmark, display, tmp_path):
+    """An empty main window made, shown and exposed, to the first frame of its 3D view rendered after
+    the window is on screen (the frame the user sees); closed before the next round. extra_info: the
+    renders of the view until then (``renders``: each resize of the view rendered a frame of its own
+    before, docs/performance.md "The window's start"), and the CPU seconds of the construction and of
+    the show to that frame (medians)."""
+    from PySide6 import QtCore, QtWidgets
+
+    from skelscope.main_window import MainWindow
+
+    app = QtWidgets.QApplication.instance() or QtWidgets.QApplication([])
+    open_windows: list[MainWindow] = []
+    renders: list[int] = []
+    construct_cpu: list[float] = []
+    show_cpu: list[float] = []
+
+    def close_previous():
+        while open_windows:
+            w = open_windows.pop()
+            w.session.runner.shutdown()
+            w.close()
+            w.deleteLater()
+            QtCore.QCoreApplication.sendPostedEvents(None, QtCore.QEvent.Type.DeferredDelete)
+        return (), {}
+
+    def start():
+        c0 = time.process_time()
+        w = MainWindow(settings=QtCore.QSettings(str(tmp_path / "s.ini"), QtCore.QSettings.Format.IniFormat))
+        open_windows.append(w)
+        ends: list[bool] = []  # per render: the window was exposed when it ended
+        w.view.plotter.ren_win.AddObserver("EndEvent", lambda *a: ends.append(w.windowHandle().isExposed()))
+        c1 = time.process_time()
+        w.show()
+        deadline = time.perf_counter() + 60
+        while not any(ends) and time.perf_counter() < deadline:
+            app.processEvents(QtCore.QEventLoop.ProcessEventsFlag.AllEvents, 5)
+        assert any(ends), "no frame after the window was exposed"
+        construct_cpu.append(c1 - c0)
+        show_cpu.append(time.process_time() - c1)
+        renders.append(len(ends))
+
+    measure(start, rounds=7, warmup=1, setup=close_previous)
+    close_previous()
+    benchmark.extra_info.update(renders=max(renders), construct_cpu_s=round(float(np.median(construct_cpu[1:])), 4),
+                                show_to_frame_cpu_s=round(float(np.median(show_cpu[1:])), 4))
 
 
 @pytest.mark.parametrize("n", [100_000, pytest.param(1_000_000, marks=pytest.mark.large)])
