@@ -265,6 +265,10 @@ class SceneView:
         from the same array is recoloured in place: a new result re-uploads scalars, not geometry.
         A layer of more than LOD_POINTS points also gets a subsampled twin, shown while the camera moves."""
         actor = self._actors.get(key)
+        if (not lod and values is None and actor is not None and self._sources.get(key) is points
+                and self._coloured.get(key) is False and f"{key}-nan" not in self._actors):
+            actor.SetVisibility(self._shown(key, layer))  # plain already: the landing's curve vertices
+            return
         if (actor is None or self._sources.get(key) is not points) and not lod:
             actor = self._swap_points(key, points, layer, size, pickable)
         if actor is None or self._sources.get(key) is not points:
