@@ -112,14 +112,24 @@ class SceneView:
             # element stays marked while only the colouring changes (another metric, thresholds).
             if event.kind == "quantities":
                 self._remove_marker()
-            self._colour_skeletal()
-            self._colour_curve()
-            if self.scene.edges_as_tubes:
-                self._build_curve_edges()
+            # A layer just replaced (its evaluation cleared before its "layer" event, Scene._replace)
+            # is rebuilt by that event: coloured once, not twice (an edit's key, docs/performance.md 6.10).
+            if not self._replaced("skeletal", "skeletal"):
+                self._colour_skeletal()
+            if not self._replaced("curve", "curve-vertices"):
+                self._colour_curve()
+                if self.scene.edges_as_tubes:
+                    self._build_curve_edges()
         elif event.kind == "style":
             self._apply_style()
         self._update_scalar_bar()
         self.request_render()
+
+    def _replaced(self, name: str, key: str) -> bool:
+        """Layer ``name``'s actor ``key`` was built from points the layer no longer has: the layer
+        was replaced and its "layer" event, which rebuilds the actor, is still to come."""
+        layer = self.scene.layers.get(name)
+        return layer is not None and key in self._sources and self._sources[key] is not layer.points
 
     def request_render(self) -> None:
         """Render once, soon, however many scene changes arrive meanwhile (see :mod:`.frames`)."""
@@ -255,6 +265,10 @@ class SceneView:
         from the same array is recoloured in place: a new result re-uploads scalars, not geometry.
         A layer of more than LOD_POINTS points also gets a subsampled twin, shown while the camera moves."""
         actor = self._actors.get(key)
+        if (not lod and values is None and actor is not None and self._sources.get(key) is points
+                and self._coloured.get(key) is False and f"{key}-nan" not in self._actors):
+            actor.SetVisibility(self._shown(key, layer))  # plain already: the landing's curve vertices
+            return
         if (actor is None or self._sources.get(key) is not points) and not lod:
             actor = self._swap_points(key, points, layer, size, pickable)
         if actor is None or self._sources.get(key) is not points:

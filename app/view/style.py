@@ -42,9 +42,16 @@ def make_lut(clim: tuple[float, float], cmap: str = COLORMAP, stale: bool = Fals
     return lut
 
 
+_PLAIN: dict[tuple[int, int, int], pv.LookupTable] = {}
+
+
 def plain_lut(colour: tuple[int, int, int]) -> pv.LookupTable:
-    """A lookup table that maps every value to one colour (exactly: no lighting on points)."""
-    lut = pv.LookupTable()
-    lut.values = [(int(colour[0]), int(colour[1]), int(colour[2]), 255)] * 256
-    lut.scalar_range = (0.0, 1.0)
+    """A lookup table that maps every value to one colour (exactly: no lighting on points). One
+    table per colour, shared: every plain recolouring (an edit's curve) would otherwise build one."""
+    key = (int(colour[0]), int(colour[1]), int(colour[2]))
+    lut = _PLAIN.get(key)
+    if lut is None:
+        lut = _PLAIN[key] = pv.LookupTable()
+        lut.values = [(*key, 255)] * 256
+        lut.scalar_range = (0.0, 1.0)
     return lut

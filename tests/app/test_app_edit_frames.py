@@ -152,6 +152,24 @@ def test_an_edit_keeps_the_curves_actors_and_swaps_their_points(window, qtbot, t
         assert np.linalg.norm(np.subtract(view.world_to_display(info["xyz"]), view.world_to_display(xyz))) < 8
 
 
+def test_an_edits_key_gives_the_curves_actors_their_new_points_once(window, qtbot, tmp_path):
+    """The curve replaced clears its evaluation before its "layer" event: the view recolours a
+    replaced layer's actors at that event only, so the key swaps the new vertices in once, not twice."""
+    w = window
+    _cloud, _curve, tip = loaded(qtbot, w, tmp_path)
+    view = w.view
+    swapped: list[str] = []
+    swap = view._swap_points
+    view._swap_points = lambda key, *a, **k: swapped.append(key) or swap(key, *a, **k)
+    key(qtbot, w, "E")
+    w.select_element("curve", "vertices", tip)
+    key(qtbot, w, "Delete")
+    assert swapped == ["curve-vertices"]  # the samples come with the scores
+    assert view._sources["curve-vertices"] is w.scene.curve.points
+    wait_evaluated(qtbot, w)
+    assert swapped[:2] == ["curve-vertices", "curve-samples"]  # the scores' samples (the defects' after them)
+
+
 def test_the_window_repaints_wait_with_the_held_frames(window, qtbot):
     """While the view holds its frames (an edit's scores on their way) the window's other repaints
     wait too (skelscope.view.paint_hold: each composes the whole window); the release, a hold that
