@@ -1,6 +1,6 @@
 # One-command set-up on a fresh Debian machine as root: system packages, .venv, the project.
 # chromium: the test suite renders skelcore compare's report.html in headless Chromium.
-# gcc, python3-dev: the install compiles the kernels (skelcore/metrics/_raycast.c, _balls.c, _centroids.c, _rings.c, _emst.c, _components.c).
+# gcc, python3-dev: the install compiles the kernels (skelcore/metrics/_raycast.c, _balls.c, _centroids.c, _rings.c, _emst.c, _components.c, _surround.c, _point_passes.c, _region_links.c; skelcore/skeleton/_farthest.c).
 SHELL := /bin/bash
 PYTHON ?= python3
 VENV := .venv
@@ -19,7 +19,7 @@ system:
 	  $$SUDO apt-get update -qq && DEBIAN_FRONTEND=noninteractive $$SUDO apt-get install -y -qq $$missing >/dev/null; \
 	fi
 
-$(VENV)/.installed: pyproject.toml setup.py skelcore/metrics/_raycast.c skelcore/metrics/_balls.c skelcore/metrics/_centroids.c skelcore/metrics/_rings.c skelcore/metrics/_pairwise_sum.h skelcore/metrics/_emst.c skelcore/metrics/_components.c
+$(VENV)/.installed: pyproject.toml setup.py skelcore/metrics/_raycast.c skelcore/metrics/_balls.c skelcore/metrics/_centroids.c skelcore/metrics/_rings.c skelcore/metrics/_pairwise_sum.h skelcore/metrics/_emst.c skelcore/metrics/_components.c skelcore/metrics/_surround.c skelcore/metrics/_point_passes.c skelcore/metrics/_region_links.c skelcore/skeleton/_farthest.c
 	test -x $(PY) || $(PYTHON) -m venv $(VENV)
 	$(PY) -m pip install -q --upgrade pip
 	$(PY) -m pip install -q -e '.[test]'

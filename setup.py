@@ -1,7 +1,9 @@
 """Build step for the compiled modules: the rays boundedness kernel (docs/boundedness.md, section 3), the
 coverage kernel (docs/metrics.md, section 5.2), skeletal centeredness' neighbour sums, curve centeredness'
 rings, the topology stage's EMST, the missing parts' connected components, the passes over a removed
-arm's points (docs/performance.md, sections 6.4, 6.5, 6.1 and 6.10) and the first pass of the openings' surround test (docs/metrics.md 6.1).
+arm's points (docs/performance.md, sections 6.4, 6.5, 6.1 and 6.10), the first pass of the openings'
+surround test (docs/metrics.md 6.1) and the farthest-point sampling by spheres of cao's curve and the
+repair's fills (docs/repair.md "The repair's cost").
 
 Also here: the package list (the viewer's folder ``app/`` installs as ``skelscope``) and the package
 index's long description; everything else is declared in pyproject.toml.  The kernels are plain C against the CPython API (no numpy
@@ -81,6 +83,11 @@ setup(
             "skelcore.metrics._surround",
             sources=["skelcore/metrics/_surround.c"],
             extra_compile_args=["-O3", "-std=c99"],
+        ),
+        Extension(
+            "skelcore.skeleton._farthest",
+            sources=["skelcore/skeleton/_farthest.c"],
+            extra_compile_args=["-O3", "-std=gnu99", "-ffp-contract=off"],
         ),
         Extension(
             "skelcore.metrics._emst",

@@ -18,6 +18,7 @@ from typing import Callable
 import numpy as np
 from scipy.spatial import cKDTree
 
+from . import _farthest
 from .cao import Rings
 
 __all__ = ["farthest_sampling_by_sphere", "connect_by_inherit_neigh", "edge_collapse_update", "cao_curve"]
@@ -27,7 +28,25 @@ def farthest_sampling_by_sphere(
     pts: np.ndarray, radius: float, check: Callable[[], None] | None = None
 ) -> tuple[np.ndarray, np.ndarray]:
     """(sample point indices, per-point sample index). The toolbox's ``max(mindst)`` (first index of
-    the largest, NaN ignored) is a heap of (-distance, index) with stale entries skipped."""
+    the largest, NaN ignored) is a heap of (-distance, index) with stale entries skipped. Run by the
+    compiled loop ``_farthest.c`` (the same samples and labels, bit for bit: docs/repair.md "The fill
+    curves compiled"); :func:`_farthest_sampling_loop` where it cannot run (a radius not positive and
+    finite, a point not finite, a grid of balls too large)."""
+    pts = np.ascontiguousarray(pts, dtype=float).reshape(-1, 3)
+    n = len(pts)
+    if n and np.isfinite(radius) and radius > 0 and np.isfinite(pts).all():
+        corresp = np.empty(n, np.int64)
+        samples = np.empty(n, np.int64)
+        count = _farthest.sample(pts, float(radius), check, corresp, samples)
+        if count is not None:
+            return samples[:count].copy(), corresp
+    return _farthest_sampling_loop(pts, radius, check)
+
+
+def _farthest_sampling_loop(
+    pts: np.ndarray, radius: float, check: Callable[[], None] | None = None
+) -> tuple[np.ndarray, np.ndarray]:
+    """:func:`farthest_sampling_by_sphere` in Python: a KD-tree's ball per sample tried."""
     check = check or (lambda: None)
     n = len(pts)
     tree = cKDTree(pts)
