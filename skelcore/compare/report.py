@@ -92,6 +92,7 @@ def distributions_png(rows: list[dict[str, Any]], methods: list[str], conditions
                 seen.setdefault(lab, h)
             ax.legend(seen.values(), seen.keys(), fontsize=7, loc="best")
     fig.tight_layout()
+    fig.set_layout_engine(None)  # tight_layout leaves a placeholder engine, for which savefig draws twice
     buf = _io.BytesIO()
     fig.savefig(buf, format="png")
     return buf.getvalue()

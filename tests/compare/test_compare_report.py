@@ -3,6 +3,7 @@ the network) and ``skelcore figure`` (PNG and PDF of the graphic table)."""
 
 from __future__ import annotations
 
+import io
 import re
 import shutil
 from pathlib import Path
@@ -107,6 +108,22 @@ def test_a_rerun_redraws_nothing(run):
     assert again.summary.skipped == again.summary.total == 6
     assert {p: p.stat().st_mtime_ns for p in (root / "out" / "renders").iterdir()} == before
 
+
+def test_the_distributions_figure_is_drawn_once(run, monkeypatch):
+    """The layout is computed once and the picture drawn once (savefig would draw it twice more under
+    the placeholder engine that ``tight_layout`` leaves behind)."""
+    from matplotlib.figure import Figure
+
+    from skelcore.compare.report import distributions_png
+
+    _root, res = run
+    draws = []
+    draw = Figure.draw
+    monkeypatch.setattr(Figure, "draw", lambda self, renderer: draws.append(1) or draw(self, renderer))
+    png = distributions_png(res.rows, ["truth", "line", "crash"], ["normal"])
+    assert len(draws) == 1
+    img = _image(io.BytesIO(png))
+    assert img.shape[1] == 4 * 288 and _not_blank(img) > 0.02
 
 def test_figure_png_and_pdf(run, tmp_path, capsys):
     root, _res = run
