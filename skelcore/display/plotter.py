@@ -68,9 +68,15 @@ class OffscreenPlotter:
 
             quiet_vtk()
             self._pl = pv.Plotter(off_screen=True, window_size=list(self.size), border=False)
-        self._pl.clear()
-        draw(self._pl)
-        return png_bytes(self._pl.screenshot(return_img=True))
+        pl = self._pl
+        pl.suppress_rendering = True  # once drawn, pyvista renders at every actor added and camera reset
+        try:
+            pl.clear()
+            draw(pl)
+        finally:
+            pl.suppress_rendering = False
+        pl.render()  # the one render of the picture (a no-op before the first screenshot, which renders)
+        return png_bytes(pl.screenshot(return_img=True))
 
     def close(self) -> None:
         if self._pl is not None:
