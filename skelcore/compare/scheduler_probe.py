@@ -3,7 +3,7 @@
 Dask's ``Client`` retries a refused connection until its timeout (5 s in :mod:`.backends`), so a
 mistyped port or a scheduler that is not running would cost that wait before the one-line error.
 A refused TCP connection is a definite answer: one plain socket connect reports it at once
-(docs/compare.md, "Where the jobs run"). Anything else (an address that is not ``tcp://HOST:PORT``,
+(docs/compare.md, "Backends"). Anything else (an address that is not ``tcp://HOST:PORT``,
 a host that does not answer at all) is left to Dask's own connect and its timeout.
 """
 

@@ -56,7 +56,8 @@ class OffscreenPlotter:
     report draws five per job): a new VTK render window per picture pays its OpenGL context and
     shaders again (under llvmpipe about 0.1 s of a 320-pixel picture's 0.25 s, docs/performance.md
     6.11). Cleared before each picture, it gives the same PNG bytes as a plotter of
-    its own. A context manager; ``png(draw)`` calls ``draw(plotter)`` and returns the PNG."""
+    its own, rendered once per picture (6.12). A context manager; ``png(draw)`` calls ``draw(plotter)``
+    and returns the PNG."""
 
     def __init__(self, size: tuple[int, int]) -> None:
         self.size = (int(size[0]), int(size[1]))

@@ -3,7 +3,7 @@
 ``Figure.tight_layout`` leaves a placeholder engine on the figure, and ``savefig`` draws a figure
 that has any engine one extra time before the real draw (matplotlib's ``print_figure``). The layout is
 already fixed, so that extra draw only costs time: without the engine the PNG is the same, byte for
-byte, drawn once (docs/performance.md, "Figures drawn once").
+byte, drawn once (docs/performance.md 6.12).
 """
 
 from __future__ import annotations
