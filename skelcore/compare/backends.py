@@ -228,6 +228,11 @@ def _run_dask(todo: list[Any], backend: Backend, file: Callable[[dict[str, Any]]
     cluster = None
     try:
         if backend.address:
+            from .scheduler_probe import refused
+
+            no = refused(backend.address)
+            if no is not None:  # at once, not after Dask's retries
+                raise SkelInputError(f"cannot reach the Dask scheduler at {backend.address}: {no}")
             try:
                 client = Client(backend.address, timeout="5s")
             except (OSError, TimeoutError) as exc:

@@ -18,6 +18,7 @@ from typing import Any
 import numpy as np
 
 from ..display.plotter import OffscreenPlotter
+from ..display.tight_once import tight_layout_once
 from ..io.atomic import atomic_open
 from ..scores import COLUMN, column_keys, format_score, paired_columns
 from ..colors import REFERENCE_COLOR, hex_color
@@ -91,7 +92,7 @@ def distributions_png(rows: list[dict[str, Any]], methods: list[str], conditions
             for h, lab in zip(handles, labels):
                 seen.setdefault(lab, h)
             ax.legend(seen.values(), seen.keys(), fontsize=7, loc="best")
-    fig.tight_layout()
+    tight_layout_once(fig)
     buf = _io.BytesIO()
     fig.savefig(buf, format="png")
     return buf.getvalue()

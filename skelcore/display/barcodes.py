@@ -13,6 +13,7 @@ from typing import Any
 import numpy as np
 
 from .. import colors
+from .tight_once import tight_layout_once
 
 __all__ = ["draw_barcodes", "fill_barcode_figure", "barcode_figure", "barcode_title", "barcode_png", "figure_png"]
 
@@ -57,8 +58,7 @@ def fill_barcode_figure(fig: Any, arrays: dict[str, np.ndarray], title: str | No
     draw_barcodes(ax, arrays)
     if title:
         ax.set_title(title, fontsize=8)
-    fig.tight_layout()
-    return fig
+    return tight_layout_once(fig)
 
 
 def barcode_title(topology: Any) -> str:

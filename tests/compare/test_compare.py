@@ -389,6 +389,23 @@ def test_an_unreachable_scheduler_is_one_line(data, tmp_path, capsys):
     assert rc == 2 and "cannot reach the Dask scheduler at tcp://127.0.0.1:9" in err and len(err.strip().splitlines()) == 1
 
 
+
+def test_the_scheduler_probe_tells_a_refused_port_from_a_listening_one():
+    """A port nobody listens on is refused at once (no Dask retries); a listening one, another scheme or
+    no port is left to Dask's connect."""
+    import socket
+
+    from skelcore.compare.scheduler_probe import refused
+
+    with socket.socket() as listening:
+        listening.bind(("127.0.0.1", 0))
+        listening.listen()
+        port = listening.getsockname()[1]
+        assert refused(f"tcp://127.0.0.1:{port}") is None
+    assert isinstance(refused(f"tcp://127.0.0.1:{port}"), ConnectionRefusedError)  # closed now
+    assert refused(f"tls://127.0.0.1:{port}") is None and refused("tcp://127.0.0.1") is None
+    assert refused("local:2") is None
+
 def test_study_is_a_compare_run_with_one_shape_and_one_method(data, tmp_path):
     """The same cloud, command, conditions and seed: the study's table equals compare's results."""
     from skelcore.experiments.study import run_study

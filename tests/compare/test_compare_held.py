@@ -3,25 +3,36 @@ a real suite's case (``bench make --suite real-small``: a traced neuron sampled 
 compare.toml naming the case's facts file as ``reference_facts``), ``skelcore compare`` gives held
 precision / recall / F1 beside the plain ones in results.csv, the job's record, the leaderboard (text,
 CSV and report.html, looked at in headless Chromium), equal to the ground truth computed directly;
-a facts file that does not match its reference is one line naming it, exit 2, before any job runs."""
+a facts file that does not match its reference is one line naming it, exit 2, before any job runs.
+The same folder, made once here, is the check of ``bench make --suite real-small`` itself: the files
+compare accepts, the case's record and facts, a rerun that keeps the case."""
 
 from __future__ import annotations
 
+import contextlib
 import csv
+import io
 import json
 import re
 import shutil
+import sys
 
+import numpy as np
 import pytest
 
 from headless_chromium import browser
 from skelcore import Params
-from skelcore.benchmark.neurons import NEURON_IDS, read_outside_radii
+from skelcore.benchmark.neurons import NEURON_IDS, load_neuron, read_outside_radii, surface_distance
 from skelcore.cli import main
 from skelcore.compare.jobs import make_jobs
 from skelcore.compare.manifest import load_manifest
 from skelcore.io import load_cloud, load_curve, write_curve_ply
 from skelcore.metrics.ground_truth import ground_truth
+
+if sys.version_info >= (3, 11):
+    import tomllib
+else:  # pragma: no cover
+    import tomli as tomllib
 
 CASE = f"{NEURON_IDS[0]}_30k__clean"
 FACTS = f"truth/{NEURON_IDS[0]}_gt_facts.csv"
@@ -49,9 +60,18 @@ def _manifest(folder, name: str = "held.toml", facts_line: str | None = None) ->
 
 
 @pytest.fixture(scope="module")
-def suite(tmp_path_factory):
+def made(tmp_path_factory):
+    """``bench make --suite real-small`` into a fresh folder: the folder and what the command printed."""
     folder = tmp_path_factory.mktemp("held") / "real"
-    assert main(["bench", "make", str(folder), "--suite", "real-small", "--quiet"]) == 0
+    with contextlib.redirect_stdout(io.StringIO()) as printed:
+        assert main(["bench", "make", str(folder), "--suite", "real-small", "--quiet"]) == 0
+    return folder, printed.getvalue()
+
+
+@pytest.fixture(scope="module")
+def suite(made):
+    """The made folder with the precomputed held-part curve under skeletons/."""
+    folder, _printed = made
     ref = load_curve(folder / "truth" / f"{CASE}_reference.ply")
     held = read_outside_radii(folder / FACTS, ref.n_vertices) <= Params().gt_held_radii
     (folder / "skeletons").mkdir()
@@ -68,6 +88,40 @@ def run(suite):
         (row,) = list(csv.DictReader(fh))
     (rec,) = [json.loads(p.read_text()) for p in (out / "jobs").glob("*.json")]
     return out, row, rec
+
+
+
+def test_bench_make_real_small_writes_a_folder_compare_accepts(made, tmp_path, capsys):
+    from skelcore.compare.manifest import parse_manifest
+
+    folder, printed = made
+    assert "1 cases of the 'real-small' suite" in printed and "1 made, 0 already there" in printed
+    name = f"{NEURON_IDS[0]}_30k__clean"
+    doc = tomllib.loads((folder / "compare.toml").read_text())
+    assert [s["name"] for s in doc["shapes"]] == [name] and doc["shapes"][0]["tree"] is True
+    m = parse_manifest(doc, str(folder / "compare.toml"))  # references checked: files, frame, no cycle
+    assert [s.name for s in m.shapes] == [name]
+    rec = json.loads((folder / "cases" / f"{name}.json").read_text())
+    assert rec["points"] == 30000 and rec["curve_skeleton"] == "traced" and rec["gt_facts"]["closed"] is True
+    assert 0.45 < rec["gt_facts"]["outside_fraction"] < 0.55
+    from skelcore.benchmark import read_reference
+
+    ref = read_reference(folder / "truth" / f"{name}_reference.ply")
+    neuron = load_neuron(NEURON_IDS[0])
+    assert np.array_equal(ref.curve.vertices, neuron.skeleton.vertices) and np.allclose(ref.radius, neuron.skeleton.radius)
+    cloud = load_cloud(folder / "clouds" / f"{name}.ply")
+    assert np.allclose(surface_distance(neuron.mesh, cloud[:200]), 0.0, atol=1e-6)  # on the mesh
+    with open(folder / "truth" / f"{NEURON_IDS[0]}_gt_facts.csv", newline="") as fh:
+        rows = list(csv.DictReader(fh))
+    assert len(rows) == len(neuron.skeleton.vertices) and rows[0]["swc_id"] == "1"
+    inside = np.array([int(r["inside"]) for r in rows], bool)
+    assert np.mean(~inside) == pytest.approx(rec["gt_facts"]["outside_fraction"], abs=1e-6)
+    assert all(float(r["outside_by"]) == 0 for r in rows if r["inside"] == "1")
+    # a rerun keeps the case; sizes only for the real suites
+    assert main(["bench", "make", str(folder), "--suite", "real-small", "--quiet"]) == 0
+    assert "0 made, 1 already there" in capsys.readouterr().out
+    assert main(["bench", "make", str(tmp_path / "gen"), "--suite", "small", "--sizes", "2000", "--quiet"]) == 2
+    assert "sizes apply to the real suites only" in capsys.readouterr().err
 
 
 def test_the_suites_manifest_names_the_facts(suite):

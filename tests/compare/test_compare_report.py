@@ -3,6 +3,7 @@ the network) and ``skelcore figure`` (PNG and PDF of the graphic table)."""
 
 from __future__ import annotations
 
+import io
 import re
 import shutil
 from pathlib import Path
@@ -107,6 +108,29 @@ def test_a_rerun_redraws_nothing(run):
     assert again.summary.skipped == again.summary.total == 6
     assert {p: p.stat().st_mtime_ns for p in (root / "out" / "renders").iterdir()} == before
 
+
+def test_the_distributions_and_barcode_figures_are_drawn_once(run, monkeypatch):
+    """Each figure is laid out once and drawn once (savefig would draw it once more under the
+    placeholder engine that ``tight_layout`` leaves behind)."""
+    from matplotlib.figure import Figure
+
+    from skelcore.compare.job_store import Store
+    from skelcore.compare.report import distributions_png
+    from skelcore.compare.render import SIZE
+    from skelcore.display.barcodes import barcode_png
+
+    root, res = run
+    draws = []
+    draw = Figure.draw
+    monkeypatch.setattr(Figure, "draw", lambda self, renderer: draws.append(1) or draw(self, renderer))
+    png = distributions_png(res.rows, ["truth", "line", "crash"], ["normal"])
+    assert len(draws) == 1
+    img = _image(io.BytesIO(png))
+    assert img.shape[1] == 4 * 288 and _not_blank(img) > 0.02
+    key = next(r["key"] for r in res.rows if r["status"] == "ok")
+    png = barcode_png(Store(root / "out").arrays(key), SIZE)
+    assert len(draws) == 2
+    assert png == (root / "out" / "renders" / f"{key}_barcodes.png").read_bytes()  # the report's picture
 
 def test_figure_png_and_pdf(run, tmp_path, capsys):
     root, _res = run

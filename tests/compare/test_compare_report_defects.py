@@ -211,3 +211,24 @@ def test_the_pictures_drawn_on_the_report_s_shared_plotter_are_those_of_a_plotte
     codes = [w["code"] for w in store.get(key)["evaluation"]["warnings"] if w["code"] in DEFECT_CODES]
     alone = render_defects(tmp_path, key, arrays, defect_layers(arrays, codes))
     assert alone.read_bytes() == (out / "renders" / f"{key}_defects.png").read_bytes()
+
+
+def test_the_shared_plotter_renders_each_picture_once(run, tmp_path):
+    """pyvista renders a shown plotter at every actor added and camera reset; the shared plotter holds
+    that back while a picture is drawn and renders it once (VTK's render-window StartEvent counted)."""
+    from skelcore.compare.job_store import Store
+    from skelcore.compare.render import SIZE, VIEWS, render_job
+    from skelcore.display.plotter import OffscreenPlotter
+
+    out, rows, _sh, _c = run
+    key = rows["loop"]["key"]
+    arrays = Store(out).arrays(key)
+    renders = []
+    with OffscreenPlotter(SIZE) as shared:
+        shared.png(lambda pl: pl.add_points(arrays["cloud"]))  # the first picture makes the window
+        shared._pl.render_window.AddObserver("StartEvent", lambda *_: renders.append(1))
+        paths = render_job(tmp_path, key, arrays, plotter=shared)
+    three_d = [v for v in VIEWS if v != "barcodes"]
+    assert len(renders) == len(three_d)
+    for view in VIEWS:
+        assert paths[view].read_bytes() == (out / "renders" / f"{key}_{view}.png").read_bytes(), view

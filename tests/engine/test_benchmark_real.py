@@ -5,9 +5,6 @@ real-small`` writing a folder compare accepts."""
 
 from __future__ import annotations
 
-import csv
-import json
-import sys
 from pathlib import Path
 
 import numpy as np
@@ -18,11 +15,6 @@ from skelcore.benchmark.neurons import (NEURON_IDS, TWIG_RADIUS, MeshSampler, in
 from skelcore.cli.main import main
 from skelcore.errors import SkelInputError
 from skelcore.io.mesh import TriangleMesh, read_obj_mesh
-
-if sys.version_info >= (3, 11):
-    import tomllib
-else:  # pragma: no cover
-    import tomli as tomllib
 
 
 @pytest.fixture(scope="module")
@@ -159,38 +151,3 @@ def test_the_neurons_facts(neurons):
         assert 0.44 <= out.mean() <= 0.55, nid
         assert 0.72 <= out[r < TWIG_RADIUS].mean() <= 0.86, nid
         assert out[r < TWIG_RADIUS].mean() > out[r >= TWIG_RADIUS].mean() + 0.3, nid
-
-
-def test_bench_make_real_small_writes_a_folder_compare_accepts(tmp_path, capsys):
-    from skelcore.compare.manifest import parse_manifest
-
-    folder = tmp_path / "real"
-    assert main(["bench", "make", str(folder), "--suite", "real-small", "--quiet"]) == 0
-    assert "1 cases of the 'real-small' suite" in capsys.readouterr().out
-    name = f"{NEURON_IDS[0]}_30k__clean"
-    doc = tomllib.loads((folder / "compare.toml").read_text())
-    assert [s["name"] for s in doc["shapes"]] == [name] and doc["shapes"][0]["tree"] is True
-    m = parse_manifest(doc, str(folder / "compare.toml"))  # references checked: files, frame, no cycle
-    assert [s.name for s in m.shapes] == [name]
-    rec = json.loads((folder / "cases" / f"{name}.json").read_text())
-    assert rec["points"] == 30000 and rec["curve_skeleton"] == "traced" and rec["gt_facts"]["closed"] is True
-    assert 0.45 < rec["gt_facts"]["outside_fraction"] < 0.55
-    from skelcore.benchmark import read_reference
-    from skelcore.io import load_cloud
-
-    ref = read_reference(folder / "truth" / f"{name}_reference.ply")
-    neuron = load_neuron(NEURON_IDS[0])
-    assert np.array_equal(ref.curve.vertices, neuron.skeleton.vertices) and np.allclose(ref.radius, neuron.skeleton.radius)
-    cloud = load_cloud(folder / "clouds" / f"{name}.ply")
-    assert np.allclose(surface_distance(neuron.mesh, cloud[:200]), 0.0, atol=1e-6)  # on the mesh
-    with open(folder / "truth" / f"{NEURON_IDS[0]}_gt_facts.csv", newline="") as fh:
-        rows = list(csv.DictReader(fh))
-    assert len(rows) == len(neuron.skeleton.vertices) and rows[0]["swc_id"] == "1"
-    inside = np.array([int(r["inside"]) for r in rows], bool)
-    assert np.mean(~inside) == pytest.approx(rec["gt_facts"]["outside_fraction"], abs=1e-6)
-    assert all(float(r["outside_by"]) == 0 for r in rows if r["inside"] == "1")
-    # a rerun keeps the case; sizes only for the real suites
-    assert main(["bench", "make", str(folder), "--suite", "real-small", "--quiet"]) == 0
-    assert "0 made, 1 already there" in capsys.readouterr().out
-    assert main(["bench", "make", str(tmp_path / "gen"), "--suite", "small", "--sizes", "2000", "--quiet"]) == 2
-    assert "sizes apply to the real suites only" in capsys.readouterr().err
