@@ -18,7 +18,7 @@ from typing import Callable
 import numpy as np
 from scipy.spatial import cKDTree
 
-from . import _farthest
+from ._farthest import sample as _farthest_sample
 from .cao import Rings
 
 __all__ = ["farthest_sampling_by_sphere", "connect_by_inherit_neigh", "edge_collapse_update", "cao_curve"]
@@ -37,7 +37,7 @@ def farthest_sampling_by_sphere(
     if n and np.isfinite(radius) and radius > 0 and np.isfinite(pts).all():
         corresp = np.empty(n, np.int64)
         samples = np.empty(n, np.int64)
-        count = _farthest.sample(pts, float(radius), check, corresp, samples)
+        count = _farthest_sample(pts, float(radius), check, corresp, samples)
         if count is not None:
             return samples[:count].copy(), corresp
     return _farthest_sampling_loop(pts, radius, check)
