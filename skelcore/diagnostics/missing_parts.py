@@ -662,8 +662,8 @@ def _quantile_distance(border: np.ndarray, pts: np.ndarray, q: float) -> float:
     if n < QUANTILE_FEWEST or len(border) < 2 * QUANTILE_CENTRES:
         return float(np.quantile(_border_distance(border, pts), q))
     centres = border[:: len(border) // QUANTILE_CENTRES]
-    to_c = np.sqrt(_nearest_squared(pts, centres))
-    reach = float(np.sqrt(_nearest_squared(border, centres).max())) * (1 + 1e-9)
+    to_c = np.sqrt(nearest_squared(pts, centres))
+    reach = float(np.sqrt(nearest_squared(border, centres).max())) * (1 + 1e-9)
     upper = to_c * (1 + 1e-9)  # a relative 1e-9 for the rounding of either search
     lower = to_c * (1 - 1e-9) - reach
     h = int(np.floor((n - 1) * q))
@@ -679,19 +679,12 @@ def _quantile_distance(border: np.ndarray, pts: np.ndarray, q: float) -> float:
 def _border_distance(border: np.ndarray, pts: np.ndarray) -> np.ndarray:
     """``cKDTree(border).query(pts)[0]``, the same bits: up to ``BORDER_PAIRS`` pairs the square root of
     each point's least ``(dx^2 + dy^2) + dz^2`` over the border (scipy's squared distance, summed in that
-    order, its root taken last; :func:`_nearest_squared`), else the tree's. A far point sees a ring of
-    border points all about as near, and the tree visits most of them: the prune's 3,345 points asked of
-    a ring of 189, 3.3 -> 1.0 ms (docs/performance.md 6.10)."""
+    order, its root taken last; :func:`skelcore.metrics.point_passes.nearest_squared`), else the tree's.
+    A far point sees a ring of border points all about as near, and the tree visits most of them: the
+    prune's 3,345 points asked of a ring of 189, 3.3 -> 1.0 ms (docs/performance.md 6.10)."""
     if len(pts) * len(border) <= BORDER_PAIRS:
-        return np.sqrt(_nearest_squared(pts, border))
+        return np.sqrt(nearest_squared(pts, border))
     return cKDTree(border).query(pts, workers=query_workers(len(pts)))[0]
-
-
-def _nearest_squared(pts: np.ndarray, centres: np.ndarray) -> np.ndarray:
-    """Each point's squared distance to its nearest centre, ``(dx^2 + dy^2) + dz^2`` (a few centres: one
-    compiled pass over the points, :func:`skelcore.metrics.point_passes.nearest_squared`; a region's 30k
-    points and 16 centres 2.0 -> 0.9 ms, docs/performance.md 6.10)."""
-    return nearest_squared(pts, centres)
 
 
 def _last_largest(values: np.ndarray, label: np.ndarray, n_labels: int) -> np.ndarray:
