@@ -102,6 +102,7 @@ typedef struct {
     const Node *nodes;
     int32_t n_nodes;
     const float *leaf;      /* (leaves, 3, LEAF_SIZE): leaf b's points as x[8], y[8], z[8] (unused lanes NaN) */
+    const struct Wide *wide; /* the same tree with 4 children a node, for the packets (wide_tree); NULL: none */
 } Tree;
 
 static inline void swap_rows(double *key, int32_t *idx, double *wp, int32_t i, int32_t j) {
@@ -716,7 +717,9 @@ static inline unsigned packet_pass(const Node *nd, const float *o, const vf *sx,
     return m & pass;
 }
 
+static void walk_packet_wide(const Tree *t, Walker *w, Packet *pk, const float *o, float cut, float h);
 static void walk_packet(const Tree *t, Walker *w, Packet *pk, const float *o, float cut, float h) {
+    if (t->wide) { walk_packet_wide(t, w, pk, o, cut, h); return; }
     const float h2 = h * h, cut2 = cut * cut;
     unsigned active = pk->n >= 32 ? ~0u : (1u << pk->n) - 1u;
     uint32_t masks[256];
@@ -788,6 +791,233 @@ static void walk_packet(const Tree *t, Walker *w, Packet *pk, const float *o, fl
         } else {
             if (ma) { w->stack[sp] = k; masks[sp] = ma; sp++; }
             if (mb) { w->stack[sp] = k + 1; masks[sp] = mb; sp++; }
+        }
+    }
+    pk->n = 0;
+}
+
+/* The same tree with up to 4 children a node, for the packets: a wide node holds the spheres of a binary
+ * node's grandchildren (or of a child that is a leaf) side by side, so a packet's walk tests 4 spheres at one
+ * pop, from two cache lines read together, and pops half as often (a leaf lies about 7 wide levels below
+ * the root at 100k points instead of 14).  The spheres are the binary tree's own, tested as packet_pass tests
+ * them, so every pruned subtree is one the binary walk prunes too at that node; a ray is still hit only by a
+ * leaf's exact ball test and missed only by an exhaustive walk (docs/boundedness.md 3.21).  Empty slots
+ * have NaN spheres, which no ray passes. */
+#define WIDE 4
+typedef struct Wide {
+    float cx[WIDE], cy[WIDE], cz[WIDE], r[WIDE];  /* the slots' spheres */
+    int32_t ref[WIDE];   /* a wide node, or -1 - n for the binary tree's leaf n */
+    int32_t blk[WIDE];   /* a leaf slot's block (-1 - its kid) */
+    int32_t lo[WIDE];    /* a leaf slot's first point */
+    int32_t pad[WIDE];
+} Wide;                  /* 128 bytes: two cache lines */
+
+/* the binary node's descendants as the slots of wide node `at` (the next free one is *next) */
+static void wide_fill(const Node *nodes, Wide *wd, int32_t at, int32_t node, int32_t *next) {
+    int32_t slot[WIDE], n = 0;
+    const int32_t k = nodes[node].kid;
+    for (int c = k; c < k + 2; c++) {
+        if (nodes[c].kid < 0) { slot[n++] = c; continue; }
+        slot[n++] = nodes[c].kid;
+        slot[n++] = nodes[c].kid + 1;
+    }
+    Wide *w = wd + at;
+    for (int i = 0; i < WIDE; i++) {
+        w->cx[i] = w->cy[i] = w->cz[i] = w->r[i] = NAN;
+        w->ref[i] = w->blk[i] = w->lo[i] = w->pad[i] = 0;
+    }
+    for (int i = 0; i < n; i++) {
+        const Node *c = nodes + slot[i];
+        w->cx[i] = c->c[0]; w->cy[i] = c->c[1]; w->cz[i] = c->c[2]; w->r[i] = c->r;
+        if (c->kid < 0) {
+            w->ref[i] = -1 - slot[i];
+            w->blk[i] = -1 - c->kid;
+            w->lo[i] = c->lo;
+        } else {
+            w->ref[i] = (*next)++;
+        }
+    }
+    for (int i = 0; i < n; i++)
+        if (w->ref[i] >= 0) wide_fill(nodes, wd, w->ref[i], slot[i], next);
+}
+
+/* wide_tree(nodes, out) -> count: the wide tree of a binary tree of at least 3 nodes (wide node 0 below the
+ * root) into `out` (bytes for n_nodes / 2 + 1 wide nodes; a wide node per binary node with a child that is not
+ * a leaf), 0 for a smaller tree.  Built once per tree (BallTree.wide): at 1M points about 4 ms, which every
+ * kernel call would pay again. */
+static PyObject *py_wide_tree(PyObject *self, PyObject *args) {
+    Py_buffer nds, out;
+    if (!PyArg_ParseTuple(args, "y*w*", &nds, &out)) return NULL;
+    const int32_t n_nodes = (int32_t)(nds.len / (Py_ssize_t)sizeof(Node));
+    int32_t next = 0;
+    if (out.len < (Py_ssize_t)sizeof(Wide) * (n_nodes / 2 + 1)) {
+        PyErr_SetString(PyExc_ValueError, "wide_tree: out needs n_nodes / 2 + 1 wide nodes");
+    } else if (n_nodes >= 3) {
+        Py_BEGIN_ALLOW_THREADS
+        next = 1;
+        wide_fill((const Node *)nds.buf, (Wide *)out.buf, 0, 0, &next);
+        Py_END_ALLOW_THREADS
+    }
+    PyBuffer_Release(&nds);
+    PyBuffer_Release(&out);
+    if (PyErr_Occurred()) return NULL;
+    return PyLong_FromLong(next);
+}
+
+/* Is `wd` (n_wide nodes) a wide tree the walk can follow over these nodes?  Every wide child numbered after
+ * its parent (no cycle), every leaf slot a leaf of this tree with its own block and first point; a tree
+ * smaller than 3 nodes has none.  Only what keeps the walk in bounds: the spheres are BallTree's. */
+static int wide_ok(const Wide *wd, int64_t n_wide, const Tree *t) {
+    if (t->n_nodes < 3 || n_wide < 1) return 0;
+    for (int64_t a = 0; a < n_wide; a++)
+        for (int i = 0; i < WIDE; i++) {
+            const int32_t r = wd[a].ref[i];
+            if (!(wd[a].r[i] == wd[a].r[i])) continue;  /* an empty slot */
+            if (r >= 0) {
+                if (r <= a || r >= n_wide) return 0;
+            } else {
+                const int64_t node = -1 - (int64_t)r;
+                if (node >= t->n_nodes || t->nodes[node].kid >= 0 || wd[a].blk[i] != -1 - t->nodes[node].kid ||
+                    wd[a].lo[i] != t->nodes[node].lo)
+                    return 0;
+            }
+        }
+    return 1;
+}
+
+typedef float v4f __attribute__((vector_size(16)));
+typedef int32_t v4i __attribute__((vector_size(16)));
+
+/* The rays of `m` that each slot of the wide node can hold a hit for: packet_pass's test per slot and ray, in
+ * its operations and order.  Where few rays are open (about half the pops hold one) ray by ray, the 4 slots
+ * in one set of lanes; else slot by slot, the rays VF lanes at a time. */
+#define WIDE_RAYWISE 8
+static inline void wide_pass(const Wide *wn, const float *o, const float *px, const float *py, const float *pz,
+                             const vf *sx, const vf *sy, const vf *sz, float cut, float h, unsigned m, unsigned *out) {
+    v4f cx, cy, cz, rad;
+    memcpy(&cx, wn->cx, sizeof cx); memcpy(&cy, wn->cy, sizeof cy);
+    memcpy(&cz, wn->cz, sizeof cz); memcpy(&rad, wn->r, sizeof rad);
+    const v4f wx = cx - o[0], wy = cy - o[1], wz = cz - o[2];
+    const v4f d2 = wx * wx + wy * wy + wz * wz;
+    const v4f lim = cut - rad;
+    const v4i inside = (lim > 0.0f) & (d2 <= lim * lim);
+    const v4f reach = rad + h;
+    const v4f reach2 = reach * reach;
+    /* a slot some ray may pass: not wholly within the cut, not empty (NaN never compares) */
+    const v4i live = ~inside & (rad == rad);
+    if (__builtin_popcount(m) <= WIDE_RAYWISE) {
+        v4i acc = {0, 0, 0, 0};
+        for (unsigned open = m; open; open &= open - 1) {
+            const int l = __builtin_ctz(open);
+            const v4f tt = wx * px[l] + wy * py[l] + wz * pz[l];
+            const v4f sq = (v4f)((v4i)(tt * tt) & (tt > 0.0f));
+            acc |= (d2 - sq <= reach2) & (int32_t)(1u << l);
+        }
+        acc &= live;
+        for (int i = 0; i < WIDE; i++) out[i] = (unsigned)acc[i];
+        return;
+    }
+    for (int i = 0; i < WIDE; i++) {
+        out[i] = 0;
+        if (!live[i]) continue;
+        const float d2i = d2[i], r2i = reach2[i], xi = wx[i], yi = wy[i], zi = wz[i];
+        unsigned pass = 0;
+        for (int g = 0; g < PACKET / VF; g++) {
+            vf tt = xi * sx[g] + yi * sy[g] + zi * sz[g];
+            vf sq = (vf)((vfi)(tt * tt) & (tt > 0.0f));
+            pass |= lane_mask(d2i - sq <= r2i) << (VF * g);
+        }
+        out[i] = m & pass;
+    }
+}
+
+/* walk_packet on the wide tree: the root tested as there, then each popped wide node's slots tested together,
+ * those with an open ray pushed, the nearest along the rays' summed direction popped first; a leaf slot
+ * tested ray by ray as walk_packet tests its leaves */
+static void walk_packet_wide(const Tree *t, Walker *w, Packet *pk, const float *o, float cut, float h) {
+    const float h2 = h * h, cut2 = cut * cut;
+    unsigned active = pk->n >= 32 ? ~0u : (1u << pk->n) - 1u;
+    int32_t stack[256], blks[256], los[256];  /* a wide node, or a leaf slot's binary node, block, first point */
+    uint32_t masks[256];
+    float mx = 0.0f, my = 0.0f, mz = 0.0f;
+    for (int l = 0; l < pk->n; l++) { mx += pk->sx[l]; my += pk->sy[l]; mz += pk->sz[l]; }
+    vf sx[PACKET / VF], sy[PACKET / VF], sz[PACKET / VF];
+    for (int g = 0; g < PACKET / VF; g++) {
+        memcpy(&sx[g], pk->sx + VF * g, sizeof(vf));
+        memcpy(&sy[g], pk->sy + VF * g, sizeof(vf));
+        memcpy(&sz[g], pk->sz + VF * g, sizeof(vf));
+    }
+    const Wide *wd = t->wide;
+    int sp = 0;
+    w->visits++;
+    unsigned m0 = packet_pass(t->nodes, o, sx, sy, sz, cut, h, active);
+    if (m0) { stack[sp] = 0; masks[sp] = m0; sp++; }
+    while (sp > 0 && active) {
+        sp--;
+        const int32_t ref = stack[sp];
+        const unsigned m = masks[sp] & active;
+        if (!m) continue;
+        if (ref < 0) {  /* a leaf slot: its binary node, block and first point */
+            const int32_t node = -1 - ref, lo = los[sp];
+            const float *L = t->leaf + 3 * LEAF_SIZE * (size_t)blks[sp];
+            vf lx[LEAF_SIZE / VF], ly[LEAF_SIZE / VF], lz[LEAF_SIZE / VF], ld2[LEAF_SIZE / VF];
+            vfi lfar[LEAF_SIZE / VF];
+            for (int g = 0; g < LEAF_SIZE / VF; g++) {
+                vf x, y, z;
+                memcpy(&x, L + VF * g, sizeof x);
+                memcpy(&y, L + LEAF_SIZE + VF * g, sizeof y);
+                memcpy(&z, L + 2 * LEAF_SIZE + VF * g, sizeof z);
+                lx[g] = x - o[0]; ly[g] = y - o[1]; lz[g] = z - o[2];
+                ld2[g] = lx[g] * lx[g] + ly[g] * ly[g] + lz[g] * lz[g];
+                lfar[g] = ld2[g] > cut2;
+            }
+            for (unsigned open = m; open; open &= open - 1) {
+                const int l = __builtin_ctz(open);
+                const float s0 = pk->sx[l], s1 = pk->sy[l], s2 = pk->sz[l];
+                unsigned mask = 0;
+                for (int g = 0; g < LEAF_SIZE / VF; g++) {
+                    vf tt = lx[g] * s0 + ly[g] * s1 + lz[g] * s2;
+                    vfi hit = lfar[g] & (tt > 0.0f) & (ld2[g] - tt * tt <= h2);
+                    mask |= lane_mask(hit) << (VF * g);
+                }
+                if (!mask) continue;
+                int32_t p = lo + __builtin_ctz(mask);
+                active &= ~(1u << l);
+                pk->hint[l][0] = node;
+                pk->hint[l][1] = p;
+                *pk->word[l] |= pk->bit[l];
+                w->last_leaf = node;
+            }
+            continue;
+        }
+        const Wide *wn = wd + ref;
+        unsigned ms[WIDE];
+        wide_pass(wn, o, pk->sx, pk->sy, pk->sz, sx, sy, sz, cut, h, m, ms);
+        w->visits += WIDE;
+        /* the passing slots by their centres' distance along the summed direction, the nearest pushed last */
+        float key[WIDE];
+        int idx[WIDE], n = 0;
+        for (int i = 0; i < WIDE; i++) {
+            if (!ms[i]) continue;
+            const float kk = wn->cx[i] * mx + wn->cy[i] * my + wn->cz[i] * mz;
+            int j = n++;
+            while (j > 0 && key[j - 1] < kk) { key[j] = key[j - 1]; idx[j] = idx[j - 1]; j--; }
+            key[j] = kk; idx[j] = i;
+        }
+        for (int j = 0; j < n; j++) {
+            const int i = idx[j];
+            const int32_t r = wn->ref[i];
+            if (r >= 0) {
+                __builtin_prefetch(wd + r);
+                __builtin_prefetch((const char *)(wd + r) + 64);
+            } else {
+                const float *L = t->leaf + 3 * LEAF_SIZE * (size_t)wn->blk[i];
+                __builtin_prefetch(L);
+                __builtin_prefetch(L + 3 * LEAF_SIZE - 1);
+                blks[sp] = wn->blk[i];
+                los[sp] = wn->lo[i];
+            }
+            stack[sp] = r; masks[sp] = ms[i]; sp++;
         }
     }
     pk->n = 0;
@@ -1029,12 +1259,13 @@ static PyObject *py_clusters(PyObject *self, PyObject *args) {
     /* optional: seed tables, their origins, each cluster's seed row (or -1); the tables kept after each
      * cluster and each cluster's row there (or -1): seeded hints (docs/boundedness.md 3.18) */
     Py_buffer sd = {0}, sd_at = {0}, sd_of = {0}, kp = {0}, kp_of = {0};
+    Py_buffer wdb = {0};  /* optional, last: the wide tree (BallTree.wide) the packets walk; empty: the binary one */
     int k0, k1, rows, bins;
     double h;
     int hint_min = HINT_MIN, hint_rest = HINT_REST, prefetch_from = PREFETCH_FROM, block = -1;
-    if (!PyArg_ParseTuple(args, "y*y*y*y*y*y*y*iidiiw*w*w*w*|iiiy*y*y*w*y*i", &pts, &nds, &lvs, &qs, &starts, &cen,
+    if (!PyArg_ParseTuple(args, "y*y*y*y*y*y*y*iidiiw*w*w*w*|iiiy*y*y*w*y*iy*", &pts, &nds, &lvs, &qs, &starts, &cen,
                           &rch, &k0, &k1, &h, &rows, &bins, &beta, &stats, &stop_buf, &done_buf, &hint_min, &hint_rest,
-                          &prefetch_from, &sd, &sd_at, &sd_of, &kp, &kp_of, &block))
+                          &prefetch_from, &sd, &sd_at, &sd_of, &kp, &kp_of, &block, &wdb))
         return NULL;
     if (block < 0) block = (int64_t)(pts.len) > (int64_t)BLOCK_FROM ? BLOCK : 0;
     if (hint_min < 0) hint_min = HINT_MIN;  /* < 0: the default (the seeds come after these three) */
@@ -1070,6 +1301,13 @@ static PyObject *py_clusters(PyObject *self, PyObject *args) {
     if (rows < 1 || bins < 1 || raster_init(&r, rows, bins) != 0) {
         PyErr_SetString(PyExc_ValueError, "clusters: bad raster");
         goto done;
+    }
+    if (wdb.len > 0) {
+        if (((uintptr_t)wdb.buf & 63) || !wide_ok((const Wide *)wdb.buf, (int64_t)(wdb.len / (Py_ssize_t)sizeof(Wide)), &t)) {
+            PyErr_SetString(PyExc_ValueError, "clusters: the wide tree is not one of these nodes (or not on a 64-byte line)");
+            goto done;
+        }
+        t.wide = (const Wide *)wdb.buf;
     }
     const size_t table = 2 * (size_t)rows * bins;  /* one hint table: leaf, point per sample */
     const int32_t *seeds = (const int32_t *)sd.buf, *seed_of = sd_of.len > 0 ? (const int32_t *)sd_of.buf : NULL;
@@ -1315,6 +1553,7 @@ done:
     PyBuffer_Release(&cen); PyBuffer_Release(&rch);
     PyBuffer_Release(&beta); PyBuffer_Release(&stats); PyBuffer_Release(&stop_buf); PyBuffer_Release(&done_buf);
     PyBuffer_Release(&sd); PyBuffer_Release(&sd_at); PyBuffer_Release(&sd_of); PyBuffer_Release(&kp); PyBuffer_Release(&kp_of);
+    PyBuffer_Release(&wdb);
     return result;
 }
 
@@ -1465,6 +1704,7 @@ static PyMethodDef methods[] = {
     {"build_tree", py_build_tree, METH_VARARGS, "KD-tree of bounding spheres (boundedness rays kernel)."},
     {"near_stats", py_near_stats, METH_VARARGS, "Points within a radius and bounded clearance per query."},
     {"nn_dist", py_nn_dist, METH_VARARGS, "Distance of each point to its nearest other point (tree order)."},
+    {"wide_tree", py_wide_tree, METH_VARARGS, "The tree with 4 children a node (the rays kernel's packets)."},
     {"clusters", py_clusters, METH_VARARGS, "beta of the queries of a range of clusters (rays kernel)."},
     {NULL, NULL, 0, NULL},
 };
@@ -1476,5 +1716,6 @@ static struct PyModuleDef module = {PyModuleDef_HEAD_INIT, STR(MODULE_NAME),
 PyMODINIT_FUNC CAT(PyInit_, MODULE_NAME)(void) {
     PyObject *m = PyModule_Create(&module);
     if (m && PyModule_AddIntConstant(m, "LEAF_SIZE", LEAF_SIZE) < 0) Py_CLEAR(m);  /* rays_kernel's leaf blocks */
+    if (m && PyModule_AddIntConstant(m, "WIDE_BYTES", (long)sizeof(Wide)) < 0) Py_CLEAR(m);  /* BallTree.wide */
     return m;
 }

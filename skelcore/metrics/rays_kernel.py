@@ -81,6 +81,7 @@ class BallTree:
         nodes = _aligned(nodes[:m], 32)
         self.leaves = _aligned(_leaf_blocks(nodes, tree_points), 0)
         self.nodes = nodes
+        self.wide = _wide_tree(nodes)
         self.perm = perm
         self.n = n
         self.depth = max(1.0, float(np.log2(max(2.0, n / 8.0))))
@@ -144,6 +145,17 @@ def _aligned(a: np.ndarray, offset: int) -> np.ndarray:
     out = raw[skip : skip + a.nbytes].view(a.dtype).reshape(a.shape)
     out[...] = a
     return out
+
+
+def _wide_tree(nodes: np.ndarray) -> np.ndarray:
+    """The tree with up to 4 children a node (a node's grandchildren side by side) that the kernel's packets
+    walk, as bytes on a 64-byte line; empty for a tree of fewer than 3 nodes (docs/boundedness.md 3.21)."""
+    size = _raycast.WIDE_BYTES
+    raw = np.empty((len(nodes) // 2 + 1) * size + 64, np.uint8)
+    skip = -raw.ctypes.data % 64
+    out = raw[skip : skip + (len(nodes) // 2 + 1) * size]
+    count = _raycast.wide_tree(nodes, out)
+    return out[: count * size]
 
 
 def _leaf_blocks(nodes: np.ndarray, points: np.ndarray) -> np.ndarray:
@@ -390,11 +402,12 @@ def run_plan(
 
     def stream(i: int) -> None:
         k0, k1 = streams[i]
-        extra = () if seed_of is None and kept is None else (
+        extra = (
             -1, -1, -1,  # the kernel's own hint rule and prefetch threshold
             none if seed_of is None else seeds.tables, none if seed_of is None else seeds.origins,
             none if seed_of is None else np.ascontiguousarray(seed_of[k0:k1]),
-            none if kept is None else kept[k0:k1], none if kept is None else np.arange(k1 - k0, dtype=np.int32))
+            none if kept is None else kept[k0:k1], none if kept is None else np.arange(k1 - k0, dtype=np.int32),
+            -1, tree.wide)  # the kernel's own block rule; the wide tree its packets walk
         _raycast.clusters(
             tree.points, tree.nodes, tree.leaves, q_sorted[starts[k0] : starts[k1]], np.ascontiguousarray(starts[k0 : k1 + 1] - starts[k0]),
             centres, reach, k0, k1, float(h), rows, bins, out_sorted[starts[k0] : starts[k1]], stream_stats[i], stop,
