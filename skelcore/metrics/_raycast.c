@@ -102,7 +102,7 @@ typedef struct {
     const Node *nodes;
     int32_t n_nodes;
     const float *leaf;      /* (leaves, 3, LEAF_SIZE): leaf b's points as x[8], y[8], z[8] (unused lanes NaN) */
-    const struct Wide *wide; /* the same tree with 4 children a node, for the packets (wide_tree); NULL: none */
+    const struct Wide *wide; /* the same tree with 8 children a node, for the packets (wide_tree); NULL: none */
 } Tree;
 
 static inline void swap_rows(double *key, int32_t *idx, double *wp, int32_t i, int32_t j) {
@@ -796,30 +796,40 @@ static void walk_packet(const Tree *t, Walker *w, Packet *pk, const float *o, fl
     pk->n = 0;
 }
 
-/* The same tree with up to 4 children a node, for the packets: a wide node holds the spheres of a binary
- * node's grandchildren (or of a child that is a leaf) side by side, so a packet's walk tests 4 spheres at one
- * pop, from two cache lines read together, and pops half as often (a leaf lies about 7 wide levels below
- * the root at 100k points instead of 14).  The spheres are the binary tree's own, tested as packet_pass tests
- * them, so every pruned subtree is one the binary walk prunes too at that node; a ray is still hit only by a
- * leaf's exact ball test and missed only by an exhaustive walk (docs/boundedness.md 3.21).  Empty slots
+/* The same tree with up to WIDE children a node, for the packets: a wide node holds the spheres of a binary
+ * node's descendants three levels down (or of those above that are leaves) side by side, so a packet's walk
+ * tests 8 spheres at one pop, one ray against all 8 in one set of lanes, from four cache lines read together,
+ * and pops a third as often (a leaf lies about 5 wide levels below the root at 100k points instead of 14).
+ * The spheres are the binary tree's own, tested as packet_pass tests them, so every subtree pruned is one
+ * whose sphere no ray of it passes; a ray is still hit only by a leaf's exact ball test and missed only by
+ * an exhaustive walk (docs/boundedness.md 3.21: 8 slots beat 4 at 1M points and tie at 100k).  Empty slots
  * have NaN spheres, which no ray passes. */
-#define WIDE 4
+#define WIDE 8
 typedef struct Wide {
     float cx[WIDE], cy[WIDE], cz[WIDE], r[WIDE];  /* the slots' spheres */
     int32_t ref[WIDE];   /* a wide node, or -1 - n for the binary tree's leaf n */
     int32_t blk[WIDE];   /* a leaf slot's block (-1 - its kid) */
     int32_t lo[WIDE];    /* a leaf slot's first point */
     int32_t pad[WIDE];
-} Wide;                  /* 128 bytes: two cache lines */
+} Wide;                  /* 32 x WIDE bytes: four cache lines */
 
 /* the binary node's descendants as the slots of wide node `at` (the next free one is *next) */
 static void wide_fill(const Node *nodes, Wide *wd, int32_t at, int32_t node, int32_t *next) {
-    int32_t slot[WIDE], n = 0;
-    const int32_t k = nodes[node].kid;
-    for (int c = k; c < k + 2; c++) {
-        if (nodes[c].kid < 0) { slot[n++] = c; continue; }
-        slot[n++] = nodes[c].kid;
-        slot[n++] = nodes[c].kid + 1;
+    /* the children, then each slot that is not a leaf replaced by its two children while there is room,
+     * level by level (8 slots: the descendants three levels down) */
+    int32_t slot[WIDE], n = 2;
+    slot[0] = nodes[node].kid;
+    slot[1] = nodes[node].kid + 1;
+    for (int grew = 1; grew;) {
+        grew = 0;
+        int32_t next_slot[WIDE], m = 0;
+        for (int i = 0; i < n; i++) {
+            const int32_t k = nodes[slot[i]].kid;
+            if (k >= 0 && m + (n - i) + 1 <= WIDE) { next_slot[m++] = k; next_slot[m++] = k + 1; grew = 1; }
+            else next_slot[m++] = slot[i];
+        }
+        memcpy(slot, next_slot, sizeof(int32_t) * (size_t)m);
+        n = m;
     }
     Wide *w = wd + at;
     for (int i = 0; i < WIDE; i++) {
@@ -885,32 +895,33 @@ static int wide_ok(const Wide *wd, int64_t n_wide, const Tree *t) {
     return 1;
 }
 
-typedef float v4f __attribute__((vector_size(16)));
-typedef int32_t v4i __attribute__((vector_size(16)));
+typedef float vw __attribute__((vector_size(4 * WIDE)));     /* a wide node's slots, one a lane */
+typedef int32_t vwi __attribute__((vector_size(4 * WIDE)));
 
 /* The rays of `m` that each slot of the wide node can hold a hit for: packet_pass's test per slot and ray, in
- * its operations and order.  Where few rays are open (about half the pops hold one) ray by ray, the 4 slots
- * in one set of lanes; else slot by slot, the rays VF lanes at a time. */
+ * its operations and order.  Where few rays are open (about half the pops hold one) ray by ray, the WIDE slots
+ * in one set of lanes; else slot by slot, the rays VF lanes at a time (the switch at 4, 8, 16 or 32 open rays:
+ * the same CPU within the noise, docs/boundedness.md 3.21). */
 #define WIDE_RAYWISE 8
 static inline void wide_pass(const Wide *wn, const float *o, const float *px, const float *py, const float *pz,
                              const vf *sx, const vf *sy, const vf *sz, float cut, float h, unsigned m, unsigned *out) {
-    v4f cx, cy, cz, rad;
+    vw cx, cy, cz, rad;
     memcpy(&cx, wn->cx, sizeof cx); memcpy(&cy, wn->cy, sizeof cy);
     memcpy(&cz, wn->cz, sizeof cz); memcpy(&rad, wn->r, sizeof rad);
-    const v4f wx = cx - o[0], wy = cy - o[1], wz = cz - o[2];
-    const v4f d2 = wx * wx + wy * wy + wz * wz;
-    const v4f lim = cut - rad;
-    const v4i inside = (lim > 0.0f) & (d2 <= lim * lim);
-    const v4f reach = rad + h;
-    const v4f reach2 = reach * reach;
+    const vw wx = cx - o[0], wy = cy - o[1], wz = cz - o[2];
+    const vw d2 = wx * wx + wy * wy + wz * wz;
+    const vw lim = cut - rad;
+    const vwi inside = (lim > 0.0f) & (d2 <= lim * lim);
+    const vw reach = rad + h;
+    const vw reach2 = reach * reach;
     /* a slot some ray may pass: not wholly within the cut, not empty (NaN never compares) */
-    const v4i live = ~inside & (rad == rad);
+    const vwi live = ~inside & (rad == rad);
     if (__builtin_popcount(m) <= WIDE_RAYWISE) {
-        v4i acc = {0, 0, 0, 0};
+        vwi acc = {0};
         for (unsigned open = m; open; open &= open - 1) {
             const int l = __builtin_ctz(open);
-            const v4f tt = wx * px[l] + wy * py[l] + wz * pz[l];
-            const v4f sq = (v4f)((v4i)(tt * tt) & (tt > 0.0f));
+            const vw tt = wx * px[l] + wy * py[l] + wz * pz[l];
+            const vw sq = (vw)((vwi)(tt * tt) & (tt > 0.0f));
             acc |= (d2 - sq <= reach2) & (int32_t)(1u << l);
         }
         acc &= live;
@@ -1008,8 +1019,7 @@ static void walk_packet_wide(const Tree *t, Walker *w, Packet *pk, const float *
             const int i = idx[j];
             const int32_t r = wn->ref[i];
             if (r >= 0) {
-                __builtin_prefetch(wd + r);
-                __builtin_prefetch((const char *)(wd + r) + 64);
+                for (size_t b = 0; b < sizeof(Wide); b += 64) __builtin_prefetch((const char *)(wd + r) + b);
             } else {
                 const float *L = t->leaf + 3 * LEAF_SIZE * (size_t)wn->blk[i];
                 __builtin_prefetch(L);
@@ -1704,7 +1714,7 @@ static PyMethodDef methods[] = {
     {"build_tree", py_build_tree, METH_VARARGS, "KD-tree of bounding spheres (boundedness rays kernel)."},
     {"near_stats", py_near_stats, METH_VARARGS, "Points within a radius and bounded clearance per query."},
     {"nn_dist", py_nn_dist, METH_VARARGS, "Distance of each point to its nearest other point (tree order)."},
-    {"wide_tree", py_wide_tree, METH_VARARGS, "The tree with 4 children a node (the rays kernel's packets)."},
+    {"wide_tree", py_wide_tree, METH_VARARGS, "The tree with 8 children a node (the rays kernel's packets)."},
     {"clusters", py_clusters, METH_VARARGS, "beta of the queries of a range of clusters (rays kernel)."},
     {NULL, NULL, 0, NULL},
 };

@@ -148,7 +148,7 @@ def _aligned(a: np.ndarray, offset: int) -> np.ndarray:
 
 
 def _wide_tree(nodes: np.ndarray) -> np.ndarray:
-    """The tree with up to 4 children a node (a node's grandchildren side by side) that the kernel's packets
+    """The tree with up to 8 children a node (a node's descendants three levels down side by side) that the kernel's packets
     walk, as bytes on a 64-byte line; empty for a tree of fewer than 3 nodes (docs/boundedness.md 3.21)."""
     size = _raycast.WIDE_BYTES
     raw = np.empty((len(nodes) // 2 + 1) * size + 64, np.uint8)

@@ -148,7 +148,7 @@ def test_far_rays_seeded_from_kept_tables_hit_exactly_as_the_ball_test(case, see
 @pytest.mark.parametrize("policy", [(-1, -1), (1001, 10**6), (0, 0)], ids=["default", "hints-never", "hints-always"])
 @pytest.mark.parametrize("block", [0, 32, 5], ids=["one-by-one", "blocks-of-32", "blocks-of-5"])
 def test_far_rays_of_packets_on_the_wide_tree_hit_exactly_as_the_ball_test(case, policy, block):
-    """The packets walking the tree with 4 children a node (``BallTree.wide``, docs/boundedness.md 3.21):
+    """The packets walking the tree with 8 children a node (``BallTree.wide``, docs/boundedness.md 3.21):
     beta equals the exhaustive test's bit for bit on both builds, with the hints as the kernel chooses, never
     (every ray in a packet) and always, lone queries one by one and in blocks."""
     tree, queries, h, ref = case
