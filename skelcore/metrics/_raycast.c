@@ -102,7 +102,7 @@ typedef struct {
     const Node *nodes;
     int32_t n_nodes;
     const float *leaf;      /* (leaves, 3, LEAF_SIZE): leaf b's points as x[8], y[8], z[8] (unused lanes NaN) */
-    const struct Wide *wide; /* the same tree with 8 children a node, for the packets (wide_tree); NULL: none */
+    const struct Wide *wide; /* the same tree with WIDE children a node, for the packets (wide_tree); NULL: none */
 } Tree;
 
 static inline void swap_rows(double *key, int32_t *idx, double *wp, int32_t i, int32_t j) {
@@ -797,26 +797,27 @@ static void walk_packet(const Tree *t, Walker *w, Packet *pk, const float *o, fl
 }
 
 /* The same tree with up to WIDE children a node, for the packets: a wide node holds the spheres of a binary
- * node's descendants three levels down (or of those above that are leaves) side by side, so a packet's walk
- * tests 8 spheres at one pop, one ray against all 8 in one set of lanes, from four cache lines read together,
- * and pops a third as often (a leaf lies about 5 wide levels below the root at 100k points instead of 14).
- * The spheres are the binary tree's own, tested as packet_pass tests them, so every subtree pruned is one
- * whose sphere no ray of it passes; a ray is still hit only by a leaf's exact ball test and missed only by
- * an exhaustive walk (docs/boundedness.md 3.21: 8 slots beat 4 at 1M points and tie at 100k).  Empty slots
- * have NaN spheres, which no ray passes. */
-#define WIDE 8
+ * node's descendants three levels down (AVX2: 8 slots; two levels, 4 slots, in the build for any x86-64 CPU:
+ * as many as a set of float lanes holds), or of those above that are leaves, side by side, so a packet's walk
+ * tests them at one pop, one ray against all of them in one set of lanes, and pops a third as often (a leaf
+ * lies about 5 wide levels below the root at 100k points instead of 14).  The spheres are the binary tree's
+ * own, tested as packet_pass tests them, so every subtree pruned is one whose sphere no ray of it passes; a
+ * ray is still hit only by a leaf's exact ball test and missed only by an exhaustive walk (docs/boundedness.md
+ * 3.21: with AVX2 8 slots beat 4 at 1M points and tie at 100k; without it 8 slots cost 5-10 % more CPU).
+ * Empty slots have NaN spheres, which no ray passes.  Each build makes its own (wide_tree, WIDE_BYTES). */
+#define WIDE VF
 typedef struct Wide {
     float cx[WIDE], cy[WIDE], cz[WIDE], r[WIDE];  /* the slots' spheres */
     int32_t ref[WIDE];   /* a wide node, or -1 - n for the binary tree's leaf n */
     int32_t blk[WIDE];   /* a leaf slot's block (-1 - its kid) */
     int32_t lo[WIDE];    /* a leaf slot's first point */
     int32_t pad[WIDE];
-} Wide;                  /* 32 x WIDE bytes: four cache lines */
+} Wide;                  /* 32 x WIDE bytes: four cache lines with AVX2, two without */
 
 /* the binary node's descendants as the slots of wide node `at` (the next free one is *next) */
 static void wide_fill(const Node *nodes, Wide *wd, int32_t at, int32_t node, int32_t *next) {
     /* the children, then each slot that is not a leaf replaced by its two children while there is room,
-     * level by level (8 slots: the descendants three levels down) */
+     * level by level (8 slots: the descendants three levels down; 4: two levels) */
     int32_t slot[WIDE], n = 2;
     slot[0] = nodes[node].kid;
     slot[1] = nodes[node].kid + 1;
@@ -1714,7 +1715,7 @@ static PyMethodDef methods[] = {
     {"build_tree", py_build_tree, METH_VARARGS, "KD-tree of bounding spheres (boundedness rays kernel)."},
     {"near_stats", py_near_stats, METH_VARARGS, "Points within a radius and bounded clearance per query."},
     {"nn_dist", py_nn_dist, METH_VARARGS, "Distance of each point to its nearest other point (tree order)."},
-    {"wide_tree", py_wide_tree, METH_VARARGS, "The tree with 8 children a node (the rays kernel's packets)."},
+    {"wide_tree", py_wide_tree, METH_VARARGS, "The tree with WIDE_BYTES / 32 children a node (the rays kernel's packets)."},
     {"clusters", py_clusters, METH_VARARGS, "beta of the queries of a range of clusters (rays kernel)."},
     {NULL, NULL, 0, NULL},
 };

@@ -81,7 +81,7 @@ class BallTree:
         nodes = _aligned(nodes[:m], 32)
         self.leaves = _aligned(_leaf_blocks(nodes, tree_points), 0)
         self.nodes = nodes
-        self.wide = _wide_tree(nodes)
+        self._wide: dict[str, np.ndarray] = {}
         self.perm = perm
         self.n = n
         self.depth = max(1.0, float(np.log2(max(2.0, n / 8.0))))
@@ -130,6 +130,14 @@ class BallTree:
         on_threads(chunk, [(i, min(i + NN_CHUNK, len(q))) for i in range(0, len(q), NN_CHUNK)], workers, checkpoint)
         return out
 
+    def wide(self, kernel=None) -> np.ndarray:
+        """The tree with 8 (AVX2) or 4 children a node that ``kernel``'s packets walk (default: the kernel in
+        use), made once per build (each build's own layout, docs/boundedness.md 3.21)."""
+        kernel = kernel or _raycast
+        if kernel.__name__ not in self._wide:
+            self._wide[kernel.__name__] = _wide_tree(self.nodes, kernel)
+        return self._wide[kernel.__name__]
+
     @property
     def ray_cost(self) -> float:
         """Cost units of one far ray (node visits grow with the depth)."""
@@ -147,14 +155,15 @@ def _aligned(a: np.ndarray, offset: int) -> np.ndarray:
     return out
 
 
-def _wide_tree(nodes: np.ndarray) -> np.ndarray:
-    """The tree with up to 8 children a node (a node's descendants three levels down side by side) that the kernel's packets
-    walk, as bytes on a 64-byte line; empty for a tree of fewer than 3 nodes (docs/boundedness.md 3.21)."""
-    size = _raycast.WIDE_BYTES
+def _wide_tree(nodes: np.ndarray, kernel) -> np.ndarray:
+    """The tree with up to 8 (AVX2) or 4 children a node (a node's descendants three or two levels down side by
+    side) that ``kernel``'s packets walk, as bytes on a 64-byte line; empty for a tree of fewer than 3 nodes
+    (docs/boundedness.md 3.21)."""
+    size = kernel.WIDE_BYTES
     raw = np.empty((len(nodes) // 2 + 1) * size + 64, np.uint8)
     skip = -raw.ctypes.data % 64
     out = raw[skip : skip + (len(nodes) // 2 + 1) * size]
-    count = _raycast.wide_tree(nodes, out)
+    count = kernel.wide_tree(nodes, out)
     return out[: count * size]
 
 
@@ -400,6 +409,8 @@ def run_plan(
     if kept is not None and kept.shape != (n_clusters, 2 * rows * bins):
         raise ValueError(f"run_plan: kept needs shape ({n_clusters}, {2 * rows * bins}), got {kept.shape}")
 
+    wide = tree.wide(_raycast)
+
     def stream(i: int) -> None:
         k0, k1 = streams[i]
         extra = (
@@ -407,7 +418,7 @@ def run_plan(
             none if seed_of is None else seeds.tables, none if seed_of is None else seeds.origins,
             none if seed_of is None else np.ascontiguousarray(seed_of[k0:k1]),
             none if kept is None else kept[k0:k1], none if kept is None else np.arange(k1 - k0, dtype=np.int32),
-            -1, tree.wide)  # the kernel's own block rule; the wide tree its packets walk
+            -1, wide)  # the kernel's own block rule; the wide tree its packets walk
         _raycast.clusters(
             tree.points, tree.nodes, tree.leaves, q_sorted[starts[k0] : starts[k1]], np.ascontiguousarray(starts[k0 : k1 + 1] - starts[k0]),
             centres, reach, k0, k1, float(h), rows, bins, out_sorted[starts[k0] : starts[k1]], stream_stats[i], stop,

@@ -148,29 +148,36 @@ def test_far_rays_seeded_from_kept_tables_hit_exactly_as_the_ball_test(case, see
 @pytest.mark.parametrize("policy", [(-1, -1), (1001, 10**6), (0, 0)], ids=["default", "hints-never", "hints-always"])
 @pytest.mark.parametrize("block", [0, 32, 5], ids=["one-by-one", "blocks-of-32", "blocks-of-5"])
 def test_far_rays_of_packets_on_the_wide_tree_hit_exactly_as_the_ball_test(case, policy, block):
-    """The packets walking the tree with 8 children a node (``BallTree.wide``, docs/boundedness.md 3.21):
+    """The packets walking the tree with 8 (AVX2) or 4 children a node (``BallTree.wide``, docs/boundedness.md 3.21):
     beta equals the exhaustive test's bit for bit on both builds, with the hints as the kernel chooses, never
     (every ray in a packet) and always, lone queries one by one and in blocks."""
     tree, queries, h, ref = case
     n = len(queries)
-    assert len(tree.wide) > 0
     for module in _builds():
+        assert len(tree.wide(module)) > 0
         beta, stats = np.zeros(n), np.zeros(6, np.int64)
         module.clusters(tree.points, tree.nodes, tree.leaves, queries, np.arange(n + 1, dtype=np.int64), queries,
                         np.full(n, h), 0, n, float(h), ROWS, BINS, beta, stats, np.zeros(1, np.int32),
-                        np.zeros(1, np.int64), *policy, 0, *_no_seeds(block), tree.wide)
+                        np.zeros(1, np.int64), *policy, 0, *_no_seeds(block), tree.wide(module))
         assert np.array_equal(beta, ref), module.__name__
 
 
 def test_a_wide_tree_of_other_nodes_is_refused(case):
     """The kernel follows the wide tree's indices: one made for another tree (here a smaller one) is refused
-    before any ray is cast, as is one off its 64-byte line."""
+    before any ray is cast, as is one off its 64-byte line and, where both builds run, the other build's."""
     tree, queries, h, _ = case
     other = BallTree(tree.points[:300].astype(np.float64) * 2.0)
     n = len(queries)
     for module in _builds():
-        for wide in (other.wide, tree.wide[1:]):
+        for wide in (other.wide(module), tree.wide(module)[1:]):
             with pytest.raises(ValueError, match="wide tree"):
                 module.clusters(tree.points, tree.nodes, tree.leaves, queries, np.arange(n + 1, dtype=np.int64),
                                 queries, np.full(n, h), 0, n, float(h), ROWS, BINS, np.zeros(n), np.zeros(6, np.int64),
                                 np.zeros(1, np.int32), np.zeros(1, np.int64), -1, -1, 0, *_no_seeds(0), wide)
+    builds = _builds()
+    if len(builds) == 2 and builds[0].WIDE_BYTES != builds[1].WIDE_BYTES:
+        with pytest.raises(ValueError, match="wide tree"):
+            builds[0].clusters(tree.points, tree.nodes, tree.leaves, queries, np.arange(n + 1, dtype=np.int64),
+                               queries, np.full(n, h), 0, n, float(h), ROWS, BINS, np.zeros(n), np.zeros(6, np.int64),
+                               np.zeros(1, np.int32), np.zeros(1, np.int64), -1, -1, 0, *_no_seeds(0),
+                               tree.wide(builds[1]))
