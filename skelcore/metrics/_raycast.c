@@ -717,20 +717,64 @@ static inline unsigned packet_pass(const Node *nd, const float *o, const vf *sx,
     return m & pass;
 }
 
+/* The packet's directions in lanes and their sum */
+static inline void packet_lanes(const Packet *pk, vf *sx, vf *sy, vf *sz, float *sum) {
+    float mx = 0.0f, my = 0.0f, mz = 0.0f;
+    for (int l = 0; l < pk->n; l++) { mx += pk->sx[l]; my += pk->sy[l]; mz += pk->sz[l]; }
+    sum[0] = mx; sum[1] = my; sum[2] = mz;
+    for (int g = 0; g < PACKET / VF; g++) {
+        memcpy(&sx[g], pk->sx + VF * g, sizeof(vf));
+        memcpy(&sy[g], pk->sy + VF * g, sizeof(vf));
+        memcpy(&sz[g], pk->sz + VF * g, sizeof(vf));
+    }
+}
+
+/* leaf_hit for every open ray of `m` against leaf `node` (block `blk`, first point `lo`), the rays' common
+ * part (w = p - o, d2 > cut2) once: each ray hit leaves the packet, its hint and far bit set; the rays still
+ * open returned */
+static inline unsigned packet_leaf(const Tree *t, Walker *w, Packet *pk, int32_t node, int32_t blk, int32_t lo,
+                                   unsigned m, unsigned active, const float *o, float cut2, float h2) {
+    const float *L = t->leaf + 3 * LEAF_SIZE * (size_t)blk;
+    vf lx[LEAF_SIZE / VF], ly[LEAF_SIZE / VF], lz[LEAF_SIZE / VF], ld2[LEAF_SIZE / VF];
+    vfi lfar[LEAF_SIZE / VF];
+    for (int g = 0; g < LEAF_SIZE / VF; g++) {
+        vf x, y, z;
+        memcpy(&x, L + VF * g, sizeof x);
+        memcpy(&y, L + LEAF_SIZE + VF * g, sizeof y);
+        memcpy(&z, L + 2 * LEAF_SIZE + VF * g, sizeof z);
+        lx[g] = x - o[0]; ly[g] = y - o[1]; lz[g] = z - o[2];
+        ld2[g] = lx[g] * lx[g] + ly[g] * ly[g] + lz[g] * lz[g];
+        lfar[g] = ld2[g] > cut2;
+    }
+    for (unsigned open = m; open; open &= open - 1) {
+        const int l = __builtin_ctz(open);
+        const float s0 = pk->sx[l], s1 = pk->sy[l], s2 = pk->sz[l];
+        unsigned mask = 0;
+        for (int g = 0; g < LEAF_SIZE / VF; g++) {
+            vf tt = lx[g] * s0 + ly[g] * s1 + lz[g] * s2;
+            vfi hit = lfar[g] & (tt > 0.0f) & (ld2[g] - tt * tt <= h2);
+            mask |= lane_mask(hit) << (VF * g);
+        }
+        if (!mask) continue;
+        active &= ~(1u << l);
+        pk->hint[l][0] = node;
+        pk->hint[l][1] = lo + __builtin_ctz(mask);
+        *pk->word[l] |= pk->bit[l];
+        w->last_leaf = node;
+    }
+    return active;
+}
+
 static void walk_packet_wide(const Tree *t, Walker *w, Packet *pk, const float *o, float cut, float h);
 static void walk_packet(const Tree *t, Walker *w, Packet *pk, const float *o, float cut, float h) {
     if (t->wide) { walk_packet_wide(t, w, pk, o, cut, h); return; }
     const float h2 = h * h, cut2 = cut * cut;
     unsigned active = pk->n >= 32 ? ~0u : (1u << pk->n) - 1u;
     uint32_t masks[256];
-    float mx = 0.0f, my = 0.0f, mz = 0.0f;  /* the rays' summed direction: children in its order */
-    for (int l = 0; l < pk->n; l++) { mx += pk->sx[l]; my += pk->sy[l]; mz += pk->sz[l]; }
+    float m3[3];  /* the rays' summed direction: children in its order */
     vf sx[PACKET / VF], sy[PACKET / VF], sz[PACKET / VF];
-    for (int g = 0; g < PACKET / VF; g++) {
-        memcpy(&sx[g], pk->sx + VF * g, sizeof(vf));
-        memcpy(&sy[g], pk->sy + VF * g, sizeof(vf));
-        memcpy(&sz[g], pk->sz + VF * g, sizeof(vf));
-    }
+    packet_lanes(pk, sx, sy, sz, m3);
+    const float mx = m3[0], my = m3[1], mz = m3[2];
     int sp = 0;
     w->visits++;
     unsigned m0 = packet_pass(t->nodes, o, sx, sy, sz, cut, h, active);
@@ -743,36 +787,7 @@ static void walk_packet(const Tree *t, Walker *w, Packet *pk, const float *o, fl
         const Node *nd = t->nodes + node;
         int32_t k = nd->kid;
         if (k < 0) {
-            /* leaf_hit for every open ray, the rays' common part (w = p - o, d2 > cut2) once */
-            const float *L = t->leaf + 3 * LEAF_SIZE * (size_t)(-1 - k);
-            vf lx[LEAF_SIZE / VF], ly[LEAF_SIZE / VF], lz[LEAF_SIZE / VF], ld2[LEAF_SIZE / VF];
-            vfi lfar[LEAF_SIZE / VF];
-            for (int g = 0; g < LEAF_SIZE / VF; g++) {
-                vf x, y, z;
-                memcpy(&x, L + VF * g, sizeof x);
-                memcpy(&y, L + LEAF_SIZE + VF * g, sizeof y);
-                memcpy(&z, L + 2 * LEAF_SIZE + VF * g, sizeof z);
-                lx[g] = x - o[0]; ly[g] = y - o[1]; lz[g] = z - o[2];
-                ld2[g] = lx[g] * lx[g] + ly[g] * ly[g] + lz[g] * lz[g];
-                lfar[g] = ld2[g] > cut2;
-            }
-            for (unsigned open = m; open; open &= open - 1) {
-                const int l = __builtin_ctz(open);
-                const float s0 = pk->sx[l], s1 = pk->sy[l], s2 = pk->sz[l];
-                unsigned mask = 0;
-                for (int g = 0; g < LEAF_SIZE / VF; g++) {
-                    vf tt = lx[g] * s0 + ly[g] * s1 + lz[g] * s2;
-                    vfi hit = lfar[g] & (tt > 0.0f) & (ld2[g] - tt * tt <= h2);
-                    mask |= lane_mask(hit) << (VF * g);
-                }
-                if (!mask) continue;
-                int32_t p = nd->lo + __builtin_ctz(mask);
-                active &= ~(1u << l);
-                pk->hint[l][0] = node;
-                pk->hint[l][1] = p;
-                *pk->word[l] |= pk->bit[l];
-                w->last_leaf = node;
-            }
+            active = packet_leaf(t, w, pk, node, -1 - k, nd->lo, m, active, o, cut2, h2);
             continue;
         }
         /* both children tested here (their pair shares a cache line), only those with an open ray pushed (fewer
@@ -951,14 +966,10 @@ static void walk_packet_wide(const Tree *t, Walker *w, Packet *pk, const float *
     unsigned active = pk->n >= 32 ? ~0u : (1u << pk->n) - 1u;
     int32_t stack[256], blks[256], los[256];  /* a wide node, or a leaf slot's binary node, block, first point */
     uint32_t masks[256];
-    float mx = 0.0f, my = 0.0f, mz = 0.0f;
-    for (int l = 0; l < pk->n; l++) { mx += pk->sx[l]; my += pk->sy[l]; mz += pk->sz[l]; }
+    float m3[3];  /* the rays' summed direction: children in its order */
     vf sx[PACKET / VF], sy[PACKET / VF], sz[PACKET / VF];
-    for (int g = 0; g < PACKET / VF; g++) {
-        memcpy(&sx[g], pk->sx + VF * g, sizeof(vf));
-        memcpy(&sy[g], pk->sy + VF * g, sizeof(vf));
-        memcpy(&sz[g], pk->sz + VF * g, sizeof(vf));
-    }
+    packet_lanes(pk, sx, sy, sz, m3);
+    const float mx = m3[0], my = m3[1], mz = m3[2];
     const Wide *wd = t->wide;
     int sp = 0;
     w->visits++;
@@ -970,36 +981,7 @@ static void walk_packet_wide(const Tree *t, Walker *w, Packet *pk, const float *
         const unsigned m = masks[sp] & active;
         if (!m) continue;
         if (ref < 0) {  /* a leaf slot: its binary node, block and first point */
-            const int32_t node = -1 - ref, lo = los[sp];
-            const float *L = t->leaf + 3 * LEAF_SIZE * (size_t)blks[sp];
-            vf lx[LEAF_SIZE / VF], ly[LEAF_SIZE / VF], lz[LEAF_SIZE / VF], ld2[LEAF_SIZE / VF];
-            vfi lfar[LEAF_SIZE / VF];
-            for (int g = 0; g < LEAF_SIZE / VF; g++) {
-                vf x, y, z;
-                memcpy(&x, L + VF * g, sizeof x);
-                memcpy(&y, L + LEAF_SIZE + VF * g, sizeof y);
-                memcpy(&z, L + 2 * LEAF_SIZE + VF * g, sizeof z);
-                lx[g] = x - o[0]; ly[g] = y - o[1]; lz[g] = z - o[2];
-                ld2[g] = lx[g] * lx[g] + ly[g] * ly[g] + lz[g] * lz[g];
-                lfar[g] = ld2[g] > cut2;
-            }
-            for (unsigned open = m; open; open &= open - 1) {
-                const int l = __builtin_ctz(open);
-                const float s0 = pk->sx[l], s1 = pk->sy[l], s2 = pk->sz[l];
-                unsigned mask = 0;
-                for (int g = 0; g < LEAF_SIZE / VF; g++) {
-                    vf tt = lx[g] * s0 + ly[g] * s1 + lz[g] * s2;
-                    vfi hit = lfar[g] & (tt > 0.0f) & (ld2[g] - tt * tt <= h2);
-                    mask |= lane_mask(hit) << (VF * g);
-                }
-                if (!mask) continue;
-                int32_t p = lo + __builtin_ctz(mask);
-                active &= ~(1u << l);
-                pk->hint[l][0] = node;
-                pk->hint[l][1] = p;
-                *pk->word[l] |= pk->bit[l];
-                w->last_leaf = node;
-            }
+            active = packet_leaf(t, w, pk, -1 - ref, blks[sp], los[sp], m, active, o, cut2, h2);
             continue;
         }
         const Wide *wn = wd + ref;
