@@ -495,10 +495,24 @@ class MainWindow(QtWidgets.QMainWindow):
     def _task_started(self, name: str) -> None:
         self.stage.setText(f"{name}: starting…")
         self.progress.setValue(0)
-        for w in (self.stage, self.progress, self.cancel_button):
-            w.setVisible(True)
+        if self.view.frames_held:
+            # An edit's scores on their way: the status bar's task widgets, whose showing lays the bar
+            # out on this thread beside the engine's first phase, show after the recoloured frame, as
+            # the held repaint would show them (docs/performance.md 6.10). Esc cancels meanwhile.
+            QtCore.QTimer.singleShot(0, self, lambda: self.view.after_render(self._task_widgets_after_frame))
+        else:
+            self._show_task_widgets()
         self._update_actions()
         self._update_no_result()
+
+    def _task_widgets_after_frame(self) -> None:
+        QtCore.QTimer.singleShot(0, self, self._show_task_widgets)  # not inside the frame's paint
+
+    def _show_task_widgets(self) -> None:
+        """The running task's stage, progress and Cancel button in the status bar (while one runs)."""
+        if self.session.runner.running:
+            for w in (self.stage, self.progress, self.cancel_button):
+                w.setVisible(True)
 
     def _update_no_result(self) -> None:
         """What the Summary says while it has no result: the evaluation running, cancelled, not run

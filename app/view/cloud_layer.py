@@ -73,7 +73,11 @@ def footprint_points(renderer: Any, actor: Any) -> tuple[np.ndarray, np.ndarray,
         return np.empty(0), np.empty(0), 0.0
     pts = vtk_to_numpy(data.GetPoints().GetData())
     x, y, _z = project_to_display(renderer, pick_layout(pts))
-    half = 0.5 * float(prop.GetPointSize())
+    # the point size counts only where points are drawn: a lines actor drawn as lines (no vertex
+    # cells, not as points) covers its line width alone (the curve's edges: 1.25 px, not 2.5)
+    points_drawn = (not data.GetNumberOfLines() or data.GetNumberOfVerts() or prop.GetRepresentation() == 0
+                    or prop.GetVertexVisibility())
+    half = 0.5 * float(prop.GetPointSize()) if points_drawn else 0.0
     if data.GetNumberOfLines():
         lines = data.GetLines()
         offsets = vtk_to_numpy(lines.GetOffsetsArray()).astype(np.int64)

@@ -109,3 +109,24 @@ def test_a_moved_camera_or_a_coloured_cloud_draws_the_whole_cloud(shown, qtbot):
     _frame(w)
     assert not layer.applied and not layer.build_pending
     assert w.view._meshes["cloud"].n_verts == w.scene.cloud.n_points
+
+
+def test_a_lines_actors_footprint_is_its_line_width(shown, qtbot):
+    """The curve's edges drawn as lines cover their line width, not their (undrawn) point size: fewer
+    near points for every frame; drawn as points, the point size counts again."""
+    from skelscope.view.cloud_layer import footprint_points
+
+    w, _curve = shown
+    edges = w.view._actors["curve-edges"]
+    prop = edges.GetProperty()
+    ren = w.view.plotter.renderer
+    assert prop.GetPointSize() > prop.GetLineWidth()
+    x, _y, half = footprint_points(ren, edges)
+    assert len(x) > edges.GetMapper().GetInput().GetNumberOfPoints() and half == 0.5 * prop.GetLineWidth()
+    prop.SetRepresentationToPoints()
+    try:
+        assert footprint_points(ren, edges)[2] == 0.5 * prop.GetPointSize()
+    finally:
+        prop.SetRepresentationToWireframe()
+    vertices = w.view._actors["curve-vertices"]
+    assert footprint_points(ren, vertices)[2] == 0.5 * vertices.GetProperty().GetPointSize()

@@ -239,3 +239,25 @@ def test_a_frame_after_a_held_one_drawn_at_once_comes_without_the_holds_delay(wi
     w.view.request_render()
     qtbot.waitUntil(lambda: len(frames) == 2, timeout=10000)
     assert frames[1] - asked < 1.0  # 4.9 s before
+
+
+def test_an_edits_task_widgets_show_after_its_recoloured_frame(window, qtbot, tmp_path, held):  # noqa: F811
+    """The status bar's stage, progress and Cancel button of an edit's scoring are laid out after the
+    recoloured frame (the held repaint would show them only then), not beside the first phase; Esc
+    cancels meanwhile; a plain evaluation shows them at once (test_app_evaluation)."""
+    w = window
+    _cloud, _curve, tip = loaded(qtbot, w, tmp_path)
+    at_frame: list[bool] = []
+    w.session.scores_shown.connect(lambda _ev: w.view.after_render(lambda: at_frame.append(w.cancel_button.isVisible())))
+    key(qtbot, w, "E")
+    w.select_element("curve", "vertices", tip)
+    key(qtbot, w, "Delete")
+    assert w.session.runner.running and w.actions_by_name["cancel"].isEnabled()
+    assert not w.cancel_button.isVisible() and not w.progress.isVisible()
+    qtbot.waitUntil(lambda: bool(at_frame), timeout=30000)
+    assert at_frame == [False]  # not inside the frame's paint
+    qtbot.waitUntil(lambda: w.cancel_button.isVisible(), timeout=5000)  # the second phase runs (held)
+    assert w.stage.isVisible() and w.progress.isVisible()
+    held.set()
+    wait_evaluated(qtbot, w)
+    assert not w.cancel_button.isVisible() and not w.progress.isVisible()
