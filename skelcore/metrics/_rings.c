@@ -41,6 +41,10 @@
 #define CLOSE 1e-13
 #define SQ_LO 1e-290
 #define SQ_HI 1e290
+/* a sample's first ball reaches HINT x growth x the last ring distance of the sample before it (at least the
+ * caller's first reach, at most HINT_CAP x it): the balls only find the ring, so any reach gives the same ring */
+#define HINT 1.25
+#define HINT_CAP 64.0
 
 typedef struct {             /* slab points: distance (in the pool its square, extend_head), plane coordinates, grid row */
     double *d, *fg, *fh;
@@ -252,15 +256,14 @@ static inline int take_cell(const Grid *G, Py_ssize_t at, Search *S) {
     Pts *pool = &S->pool;
     if (!pts_reserve(pool, pool->n + (r1 - r0))) return 0;
     Py_ssize_t n = pool->n;
-    for (Py_ssize_t r = r0; r < r1; r++) {
+    for (Py_ssize_t r = r0; r < r1; r++) {  /* every point written, kept by the count: no branch to mispredict */
         const double x = G->X[r] - p0, y = G->Y[r] - p1, z = G->Z[r] - p2;
-        if (!(fabs(x * u0 + y * u1 + z * u2) < half)) continue;
         const double fg = x * g0 + y * g1 + z * g2, fh = x * h0 + y * h1 + z * h2;
         pool->d[n] = fg * fg + fh * fh;  /* its square, a bound: the distance is taken in extend_head */
         pool->fg[n] = fg;
         pool->fh[n] = fh;
         pool->row[n] = (int32_t)r;
-        n++;
+        n += fabs(x * u0 + y * u1 + z * u2) < half;
     }
     pool->n = n;
     return 1;
@@ -281,6 +284,34 @@ static int ball_box(const Grid *G, const double *p, double rad, int64_t *box) {
     return whole;
 }
 
+/* The cells i0..i1 of line (j, k) of the box narrowed to those whose centres may pass take_cell's tests: within
+ * the ball's reach of p (a chord of the line) and, where the line crosses the slab at an angle, within the
+ * slab's reach of its mid-plane; 0 when none may.  A superset, by a cell and a relative allowance on each side
+ * (the centres as the grid computes them, lo + (index + 1/2) cell, may differ from these in the last place):
+ * the cells it leaves out take_cell would refuse, and the ones kept keep their order. */
+static inline int line_span(const Grid *G, const Search *S, int64_t j, int64_t k, int64_t *i0, int64_t *i1) {
+    const double cell = G->cell;
+    const double vy = G->lo[1] + ((double)j + 0.5) * cell - S->p[1], vz = G->lo[2] + ((double)k + 0.5) * cell - S->p[2];
+    const double slack = (G->size + S->ball + S->reach + cell) * 1e-9;
+    const double ball = S->ball + slack, chord2 = ball * ball - (vy * vy + vz * vz);
+    const double u0 = S->u[0], a = vy * S->u[1] + vz * S->u[2], reach = S->reach + slack;
+    if (chord2 != chord2 || a != a) return 1;  /* NaN: the whole span */
+    if (chord2 < 0.0) return 0;
+    const double chord = sqrt(chord2);
+    double lo = S->p[0] - chord, hi = S->p[0] + chord;  /* the centres' x within the ball's reach */
+    if (fabs(u0) * cell > 1e-3 * reach) {  /* the line crosses the slab: centres' x with |(x - p0) u0 + a| <= reach */
+        const double e0 = S->p[0] + (-reach - a) / u0, e1 = S->p[0] + (reach - a) / u0;
+        lo = fmax(lo, fmin(e0, e1));
+        hi = fmin(hi, fmax(e0, e1));
+    } else if (fabs(a) > reach + fabs(u0) * chord * 2.0) {  /* along the slab: the line as a whole out of it */
+        return 0;
+    }
+    const double f0 = floor((lo - G->lo[0]) / cell - 0.5) - 1.0, f1 = ceil((hi - G->lo[0]) / cell - 0.5) + 1.0;
+    if (f0 > (double)*i0) *i0 = f0 < (double)*i1 ? (int64_t)f0 : *i1;  /* NaN: as it was */
+    if (f1 < (double)*i1) *i1 = f1 > (double)*i0 ? (int64_t)f1 : *i0;
+    return f0 <= f1 || f0 != f0 || f1 != f1;
+}
+
 /* This round's new cells into the pool: those of the box meeting the ball (every cell when whole). */
 static int gather(const Grid *G, Search *S, const int64_t *box) {
     if (S->whole) {
@@ -291,8 +322,12 @@ static int gather(const Grid *G, Search *S, const int64_t *box) {
     const int64_t d0 = G->dims[0], d1 = G->dims[1];
     for (int64_t k = box[4]; k <= box[5]; k++) {
         for (int64_t j = box[2]; j <= box[3]; j++) {
-            const int64_t line = j + d1 * k, first = box[0] + d0 * line, last = box[1] + d0 * line;
+            const int64_t line = j + d1 * k;
             const Py_ssize_t end = (Py_ssize_t)G->lines[line + 1];
+            if ((Py_ssize_t)G->lines[line] == end) continue;  /* no occupied cell on the line */
+            int64_t i0 = box[0], i1 = box[1];
+            if (!line_span(G, S, j, k, &i0, &i1)) continue;
+            const int64_t first = i0 + d0 * line, last = i1 + d0 * line;
             Py_ssize_t at = lower_bound(G->keys, (Py_ssize_t)G->lines[line], end, first);
             for (; at < end && G->keys[at] <= last; at++)
                 if (!take_cell(G, at, S)) return 0;
@@ -443,9 +478,10 @@ static inline int continues(const Pts *hd, Py_ssize_t i, double growth) {
     return exact_d(hd, i) < growth * exact_d(hd, i - 1);
 }
 
-/* One sample's ring: the first *ring points of the head (S->head.fg, S->head.fh). */
-static int one_ring(const Grid *G, Search *S, double growth, double first, Py_ssize_t *ring) {
-    double R = first;
+/* One sample's ring: the first *ring points of the head (S->head.fg, S->head.fh), from a first ball of reach
+ * `first`; *ends: growth x the ring's last distance (the reach that would have ended it at once; 0: no ring). */
+static int one_ring(const Grid *G, Search *S, double growth, double first, Py_ssize_t *ring, double *ends) {
+    double R = first, last = 0.0;
     Py_ssize_t len = 0;  /* the ring's length within the head so far */
     int64_t box[6];
     S->pool.n = S->head.n = 0;
@@ -462,7 +498,7 @@ static int one_ring(const Grid *G, Search *S, double growth, double first, Py_ss
         const Pts *hd = &S->head;
         if (len == 0 && hd->n > 0) len = 1;
         while (len < hd->n && continues(hd, len, growth)) len++;
-        const double last = len ? exact_d(hd, len - 1) : 0.0;
+        last = len ? exact_d(hd, len - 1) : 0.0;
         if (S->whole || len < hd->n || (len > 0 && growth * last <= R)) break;
         const double grown = len ? growth * last : 0.0;
         R = 2.0 * R > grown ? 2.0 * R : grown;
@@ -470,6 +506,7 @@ static int one_ring(const Grid *G, Search *S, double growth, double first, Py_ss
     for (Py_ssize_t i = 0; i < S->n_taken; i++) S->taken[S->cells[i]] = 0;
     S->n_taken = 0;
     *ring = len;
+    *ends = growth * last;
     return ok;
 }
 
@@ -604,6 +641,7 @@ static PyObject *py_rings(PyObject *self, PyObject *args) {
     S.cells = (int32_t *)malloc(((size_t)n_cells + 1) * sizeof(int32_t));
     int good = S.taken && S.cells;
     Py_ssize_t done = 0, need = 0;
+    double reach = first;  /* the first ball's 2-D reach of the next sample */
     Py_BEGIN_ALLOW_THREADS
     bounds[0] = (int64_t)offset;
     for (Py_ssize_t s = 0; good && s < n_s; s++) {
@@ -615,7 +653,11 @@ static PyObject *py_rings(PyObject *self, PyObject *args) {
         Grid Gs = G;
         Gs.size = size;
         Py_ssize_t len = 0;
-        good = one_ring(&Gs, &S, growth, first, &len);
+        double ends = 0.0;
+        good = one_ring(&Gs, &S, growth, reach, &len, &ends);
+        /* the next sample, a neighbour along the curve as a rule, starts where this ring ended (a little
+         * farther): its ring is then mostly final after one ball, not after four or five doubled ones */
+        reach = ends * HINT > first ? fmin(ends * HINT, first * HINT_CAP) : first;
         if (!good) break;
         const Py_ssize_t at = (Py_ssize_t)bounds[s];
         if (len > cap - at) {
