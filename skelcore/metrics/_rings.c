@@ -29,6 +29,9 @@
 #include <stdlib.h>
 #include <string.h>
 #include "_pairwise_sum.h"
+#ifdef __SSE2__
+#include <emmintrin.h>
+#endif
 
 #define SMALL_SORT 32        /* up to this many keys an insertion sort; a bucket of over 4 x this: radix */
 #define MARGIN 1e-9          /* relative allowance of the cell tests for round-off (a superset of cells is harmless) */
@@ -521,11 +524,13 @@ static void design_rows(const double *x, const double *y, const int64_t *starts,
         const double *xs = x + a, *ys = y + a;
         ok[i - lo] = 0;
         if (n < 5) continue;
-        int finite = 1;
-        for (Py_ssize_t j = 0; j < n; j++) finite &= isfinite(xs[j]) && isfinite(ys[j]);
-        if (!finite) continue;
         double sx = xs[0], sy = ys[0];
         for (Py_ssize_t j = 1; j < n; j++) { sx += xs[j]; sy += ys[j]; }
+        if (!(isfinite(sx) && isfinite(sy))) {  /* finite sums: every point finite (inf and NaN do not cancel) */
+            int finite = 1;
+            for (Py_ssize_t j = 0; j < n; j++) finite &= isfinite(xs[j]) && isfinite(ys[j]);
+            if (!finite) continue;
+        }
         const double ox = sx / (double)n, oy = sy / (double)n;
         for (Py_ssize_t j = 0; j < n; j++) {
             const double cx = xs[j] - ox, cy = ys[j] - oy;
@@ -534,10 +539,21 @@ static void design_rows(const double *x, const double *y, const int64_t *starts,
         const double sc = sqrt(pairwise_sum(t, n) / (double)n);
         if (!(sc > 0)) continue;
         double *d = design + 6 * (a - (Py_ssize_t)starts[lo]);
+#ifdef __SSE2__
+        /* x and y divided in one instruction: a division rounds alike in either (IEEE 754), in half the time */
+        const __m128d o = _mm_set_pd(oy, ox), scv = _mm_set1_pd(sc);
+        for (Py_ssize_t j = 0; j < n; j++, d += 6) {
+            double c[2];
+            _mm_storeu_pd(c, _mm_div_pd(_mm_sub_pd(_mm_set_pd(ys[j], xs[j]), o), scv));
+            const double cx = c[0], cy = c[1];
+            d[0] = cx * cx; d[1] = cx * cy; d[2] = cy * cy; d[3] = cx; d[4] = cy; d[5] = 1.0;
+        }
+#else
         for (Py_ssize_t j = 0; j < n; j++, d += 6) {
             const double cx = (xs[j] - ox) / sc, cy = (ys[j] - oy) / sc;
             d[0] = cx * cx; d[1] = cx * cy; d[2] = cy * cy; d[3] = cx; d[4] = cy; d[5] = 1.0;
         }
+#endif
         origin[2 * (i - lo)] = ox;
         origin[2 * (i - lo) + 1] = oy;
         scale[i - lo] = sc;

@@ -209,7 +209,7 @@ def test_a_spans_rings_in_chunks_give_the_same_centeredness(monkeypatch, scans, 
 def test_ellipse_sums_are_the_numpy_loops_bit_for_bit():
     """The compiled centroids, radii and design rows (docs/performance.md 6.5) give numpy's sums: running
     sums, a pairwise mean at sizes below, at and above numpy's blocks (8, 128, 8192), sets of fewer than 5
-    points, a non-finite point, a zero radius, sets spread over several calls."""
+    points, non-finite points, finite points whose sum overflows, a zero radius, sets spread over several calls."""
     rng = np.random.default_rng(4)
     for trial in range(24):
         sizes = rng.integers(0, int(rng.choice([12, 300, 20000])), size=int(rng.integers(1, 120)))
@@ -222,7 +222,11 @@ def test_ellipse_sums_are_the_numpy_loops_bit_for_bit():
         if len(sizes) > 3:
             x[starts[1] : starts[2]], y[starts[1] : starts[2]] = 1.0, 2.0  # all points equal: radius 0
             x[starts[2]] = np.nan
-        got, want = ellipse_sums(x, y, starts), _reference_sums(x, y, starts)
+        if len(sizes) > 6 and sizes[3:6].min() >= 2:  # inf and -inf (a NaN sum), one inf, finite points whose sum overflows
+            x[starts[3]], x[starts[3] + 1], y[starts[4]] = np.inf, -np.inf, np.inf
+            x[starts[5] : starts[6]] = 1e308
+        with np.errstate(over="ignore", invalid="ignore"):  # the overflowing set's numpy reference
+            got, want = ellipse_sums(x, y, starts), _reference_sums(x, y, starts)
         for a, b in zip(got, want):
             assert a.shape == b.shape and a.tobytes() == b.tobytes()
         assert len(want.use) > 0 or sizes.max() < 5
