@@ -44,10 +44,11 @@
 #define CLOSE 1e-13
 #define SQ_LO 1e-290
 #define SQ_HI 1e290
-/* a sample's first ball reaches HINT x growth x the last ring distance of the sample before it (at least the
- * caller's first reach, at most HINT_CAP x it): the balls only find the ring, so any reach gives the same ring */
+/* where a sample's first ball does not end its ring, the second reaches at least HINT x growth x the last ring
+ * distance of the sample before it (a neighbour along the curve as a rule): a tube's cross-section in two balls,
+ * not five doubled ones; a ring the first ball ends (a neuron's thin branch) costs what it did.  The balls
+ * only find the ring, so any reach gives the same ring (docs/performance.md 6.10) */
 #define HINT 1.25
-#define HINT_CAP 64.0
 
 typedef struct {             /* slab points: distance (in the pool its square, extend_head), plane coordinates, grid row */
     double *d, *fg, *fh;
@@ -240,6 +241,30 @@ typedef struct {             /* one sample, and what its search holds */
     int32_t *cells;
     Py_ssize_t n_taken;
 } Search;
+
+/* A call's point and sort buffers, kept for the next calls (at most KEPT sets, one per call running at once):
+ * a ring of a whole slab grows them to tens of thousands of rows, and fresh ones each call cost their page
+ * faults again (evaluate's spans of 4 samples on a neuron: a third of the kernel's time).  Taken and given
+ * back while the caller holds the GIL, so no lock. */
+#define KEPT 4
+typedef struct { Pts pool, spare, head; Scratch sort; } Buffers;
+static Buffers kept[KEPT];
+static int n_kept = 0;
+
+static void lend_buffers(Search *S) {
+    if (n_kept == 0) return;
+    const Buffers *b = &kept[--n_kept];
+    S->pool = b->pool; S->spare = b->spare; S->head = b->head; S->sort = b->sort;
+}
+
+static void keep_buffers(Search *S) {
+    if (n_kept < KEPT) {
+        Buffers *b = &kept[n_kept++];
+        b->pool = S->pool; b->spare = S->spare; b->head = S->head; b->sort = S->sort;
+        return;
+    }
+    pts_free(&S->pool); pts_free(&S->spare); pts_free(&S->head); scratch_free(&S->sort);
+}
 
 /* Cell `at`'s slab points into the pool, when the cell can meet the slab (and, unless whole, the ball) and
  * was not taken before. */
@@ -482,8 +507,10 @@ static inline int continues(const Pts *hd, Py_ssize_t i, double growth) {
 }
 
 /* One sample's ring: the first *ring points of the head (S->head.fg, S->head.fh), from a first ball of reach
- * `first`; *ends: growth x the ring's last distance (the reach that would have ended it at once; 0: no ring). */
-static int one_ring(const Grid *G, Search *S, double growth, double first, Py_ssize_t *ring, double *ends) {
+ * `first`, the second at least `hint` (where the first did not end it); *ends: growth x the ring's last
+ * distance (the reach that would have ended it in one ball; 0: no ring). */
+static int one_ring(const Grid *G, Search *S, double growth, double first, double hint, Py_ssize_t *ring,
+                    double *ends) {
     double R = first, last = 0.0;
     Py_ssize_t len = 0;  /* the ring's length within the head so far */
     int64_t box[6];
@@ -505,6 +532,8 @@ static int one_ring(const Grid *G, Search *S, double growth, double first, Py_ss
         if (S->whole || len < hd->n || (len > 0 && growth * last <= R)) break;
         const double grown = len ? growth * last : 0.0;
         R = 2.0 * R > grown ? 2.0 * R : grown;
+        R = R > hint ? R : hint;
+        hint = 0.0;
     }
     for (Py_ssize_t i = 0; i < S->n_taken; i++) S->taken[S->cells[i]] = 0;
     S->n_taken = 0;
@@ -651,13 +680,14 @@ static PyObject *py_rings(PyObject *self, PyObject *args) {
     int64_t *bounds = (int64_t *)bo.buf;
     Search S;
     memset(&S, 0, sizeof S);
+    lend_buffers(&S);
     S.half = half;
     S.approx = by_roots;
     S.taken = (char *)calloc((size_t)n_cells + 1, 1);
     S.cells = (int32_t *)malloc(((size_t)n_cells + 1) * sizeof(int32_t));
     int good = S.taken && S.cells;
     Py_ssize_t done = 0, need = 0;
-    double reach = first;  /* the first ball's 2-D reach of the next sample */
+    double hint = 0.0;  /* the second ball's least 2-D reach for the next sample */
     Py_BEGIN_ALLOW_THREADS
     bounds[0] = (int64_t)offset;
     for (Py_ssize_t s = 0; good && s < n_s; s++) {
@@ -670,10 +700,8 @@ static PyObject *py_rings(PyObject *self, PyObject *args) {
         Gs.size = size;
         Py_ssize_t len = 0;
         double ends = 0.0;
-        good = one_ring(&Gs, &S, growth, reach, &len, &ends);
-        /* the next sample, a neighbour along the curve as a rule, starts where this ring ended (a little
-         * farther): its ring is then mostly final after one ball, not after four or five doubled ones */
-        reach = ends * HINT > first ? fmin(ends * HINT, first * HINT_CAP) : first;
+        good = one_ring(&Gs, &S, growth, first, hint, &len, &ends);
+        hint = ends * HINT < INFINITY ? ends * HINT : 0.0;  /* NaN: none */
         if (!good) break;
         const Py_ssize_t at = (Py_ssize_t)bounds[s];
         if (len > cap - at) {
@@ -687,7 +715,8 @@ static PyObject *py_rings(PyObject *self, PyObject *args) {
     }
     Py_END_ALLOW_THREADS
     for (int i = 0; i < n_buf; i++) PyBuffer_Release(all[i]);
-    pts_free(&S.pool); pts_free(&S.spare); pts_free(&S.head); scratch_free(&S.sort); free(S.taken); free(S.cells);
+    keep_buffers(&S);
+    free(S.taken); free(S.cells);
     if (!good) return PyErr_NoMemory();
     return Py_BuildValue("(nn)", done, need);
 }
