@@ -244,7 +244,7 @@ typedef struct {             /* one sample, and what its search holds */
 
 /* A call's point and sort buffers, kept for the next calls (at most KEPT sets, one per call running at once):
  * a ring of a whole slab grows them to tens of thousands of rows, and fresh ones each call cost their page
- * faults again (evaluate's spans of 4 samples on a neuron: a third of the kernel's time).  Taken and given
+ * faults again (evaluate's spans of 4 samples on a neuron: about a quarter of the kernel's time).  Taken and given
  * back while the caller holds the GIL, so no lock. */
 #define KEPT 4
 typedef struct { Pts pool, spare, head; Scratch sort; } Buffers;
@@ -319,7 +319,8 @@ static int ball_box(const Grid *G, const double *p, double rad, int64_t *box) {
  * the cells it leaves out take_cell would refuse, and the ones kept keep their order. */
 static inline int line_span(const Grid *G, const Search *S, int64_t j, int64_t k, int64_t *i0, int64_t *i1) {
     const double cell = G->cell;
-    const double vy = G->lo[1] + ((double)j + 0.5) * cell - S->p[1], vz = G->lo[2] + ((double)k + 0.5) * cell - S->p[2];
+    const double vy = G->lo[1] + ((double)j + 0.5) * cell - S->p[1];
+    const double vz = G->lo[2] + ((double)k + 0.5) * cell - S->p[2];
     const double slack = (G->size + S->ball + S->reach + cell) * 1e-9;
     const double ball = S->ball + slack, chord2 = ball * ball - (vy * vy + vz * vz);
     const double u0 = S->u[0], a = vy * S->u[1] + vz * S->u[2], reach = S->reach + slack;

@@ -222,7 +222,8 @@ def test_ellipse_sums_are_the_numpy_loops_bit_for_bit():
         if len(sizes) > 3:
             x[starts[1] : starts[2]], y[starts[1] : starts[2]] = 1.0, 2.0  # all points equal: radius 0
             x[starts[2]] = np.nan
-        if len(sizes) > 6 and sizes[3:6].min() >= 2:  # inf and -inf (a NaN sum), one inf, finite points whose sum overflows
+        if len(sizes) > 6 and sizes[3:6].min() >= 2:
+            # inf and -inf (a NaN sum), one inf, finite points whose sum overflows
             x[starts[3]], x[starts[3] + 1], y[starts[4]] = np.inf, -np.inf, np.inf
             x[starts[5] : starts[6]] = 1e308
         with np.errstate(over="ignore", invalid="ignore"):  # the overflowing set's numpy reference
