@@ -63,6 +63,9 @@ setup(
             sources=["skelcore/metrics/_rings.c"],
             depends=["skelcore/metrics/_pairwise_sum.h"],
             extra_compile_args=["-O3", "-std=c99", "-ffp-contract=off"],
+            # linked to libm by name: glibc binds hypot to its current version, not to the old one's wrapper
+            # (errno on overflow only; the same values, a fifth of hypot's instructions; docs/performance.md 6.5)
+            libraries=[] if platform.system() == "Windows" else ["m"],
         ),
         Extension(
             "skelcore.metrics._components",

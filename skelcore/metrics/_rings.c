@@ -29,6 +29,9 @@
 #include <stdlib.h>
 #include <string.h>
 #include "_pairwise_sum.h"
+#ifdef __SSE2__
+#include <emmintrin.h>
+#endif
 
 #define SMALL_SORT 32        /* up to this many keys an insertion sort; a bucket of over 4 x this: radix */
 #define MARGIN 1e-9          /* relative allowance of the cell tests for round-off (a superset of cells is harmless) */
@@ -41,6 +44,11 @@
 #define CLOSE 1e-13
 #define SQ_LO 1e-290
 #define SQ_HI 1e290
+/* where a sample's first ball does not end its ring, the second reaches at least HINT x growth x the last ring
+ * distance of the sample before it (a neighbour along the curve as a rule): a tube's cross-section in two balls,
+ * not five doubled ones; a ring the first ball ends (a neuron's thin branch) costs what it did.  The balls
+ * only find the ring, so any reach gives the same ring (docs/performance.md 6.10) */
+#define HINT 1.25
 
 typedef struct {             /* slab points: distance (in the pool its square, extend_head), plane coordinates, grid row */
     double *d, *fg, *fh;
@@ -234,6 +242,30 @@ typedef struct {             /* one sample, and what its search holds */
     Py_ssize_t n_taken;
 } Search;
 
+/* A call's point and sort buffers, kept for the next calls (at most KEPT sets, one per call running at once):
+ * a ring of a whole slab grows them to tens of thousands of rows, and fresh ones each call cost their page
+ * faults again (evaluate's spans of 4 samples on a neuron: about a quarter of the kernel's time).  Taken and given
+ * back while the caller holds the GIL, so no lock. */
+#define KEPT 4
+typedef struct { Pts pool, spare, head; Scratch sort; } Buffers;
+static Buffers kept[KEPT];
+static int n_kept = 0;
+
+static void lend_buffers(Search *S) {
+    if (n_kept == 0) return;
+    const Buffers *b = &kept[--n_kept];
+    S->pool = b->pool; S->spare = b->spare; S->head = b->head; S->sort = b->sort;
+}
+
+static void keep_buffers(Search *S) {
+    if (n_kept < KEPT) {
+        Buffers *b = &kept[n_kept++];
+        b->pool = S->pool; b->spare = S->spare; b->head = S->head; b->sort = S->sort;
+        return;
+    }
+    pts_free(&S->pool); pts_free(&S->spare); pts_free(&S->head); scratch_free(&S->sort);
+}
+
 /* Cell `at`'s slab points into the pool, when the cell can meet the slab (and, unless whole, the ball) and
  * was not taken before. */
 static inline int take_cell(const Grid *G, Py_ssize_t at, Search *S) {
@@ -252,15 +284,14 @@ static inline int take_cell(const Grid *G, Py_ssize_t at, Search *S) {
     Pts *pool = &S->pool;
     if (!pts_reserve(pool, pool->n + (r1 - r0))) return 0;
     Py_ssize_t n = pool->n;
-    for (Py_ssize_t r = r0; r < r1; r++) {
+    for (Py_ssize_t r = r0; r < r1; r++) {  /* every point written, kept by the count: no branch to mispredict */
         const double x = G->X[r] - p0, y = G->Y[r] - p1, z = G->Z[r] - p2;
-        if (!(fabs(x * u0 + y * u1 + z * u2) < half)) continue;
         const double fg = x * g0 + y * g1 + z * g2, fh = x * h0 + y * h1 + z * h2;
         pool->d[n] = fg * fg + fh * fh;  /* its square, a bound: the distance is taken in extend_head */
         pool->fg[n] = fg;
         pool->fh[n] = fh;
         pool->row[n] = (int32_t)r;
-        n++;
+        n += fabs(x * u0 + y * u1 + z * u2) < half;
     }
     pool->n = n;
     return 1;
@@ -281,6 +312,35 @@ static int ball_box(const Grid *G, const double *p, double rad, int64_t *box) {
     return whole;
 }
 
+/* The cells i0..i1 of line (j, k) of the box narrowed to those whose centres may pass take_cell's tests: within
+ * the ball's reach of p (a chord of the line) and, where the line crosses the slab at an angle, within the
+ * slab's reach of its mid-plane; 0 when none may.  A superset, by a cell and a relative allowance on each side
+ * (the centres as the grid computes them, lo + (index + 1/2) cell, may differ from these in the last place):
+ * the cells it leaves out take_cell would refuse, and the ones kept keep their order. */
+static inline int line_span(const Grid *G, const Search *S, int64_t j, int64_t k, int64_t *i0, int64_t *i1) {
+    const double cell = G->cell;
+    const double vy = G->lo[1] + ((double)j + 0.5) * cell - S->p[1];
+    const double vz = G->lo[2] + ((double)k + 0.5) * cell - S->p[2];
+    const double slack = (G->size + S->ball + S->reach + cell) * 1e-9;
+    const double ball = S->ball + slack, chord2 = ball * ball - (vy * vy + vz * vz);
+    const double u0 = S->u[0], a = vy * S->u[1] + vz * S->u[2], reach = S->reach + slack;
+    if (chord2 != chord2 || a != a) return 1;  /* NaN: the whole span */
+    if (chord2 < 0.0) return 0;
+    const double chord = sqrt(chord2);
+    double lo = S->p[0] - chord, hi = S->p[0] + chord;  /* the centres' x within the ball's reach */
+    if (fabs(u0) * cell > 1e-3 * reach) {  /* the line crosses the slab: centres' x with |(x - p0) u0 + a| <= reach */
+        const double e0 = S->p[0] + (-reach - a) / u0, e1 = S->p[0] + (reach - a) / u0;
+        lo = fmax(lo, fmin(e0, e1));
+        hi = fmin(hi, fmax(e0, e1));
+    } else if (fabs(a) > reach + fabs(u0) * chord * 2.0) {  /* along the slab: the line as a whole out of it */
+        return 0;
+    }
+    const double f0 = floor((lo - G->lo[0]) / cell - 0.5) - 1.0, f1 = ceil((hi - G->lo[0]) / cell - 0.5) + 1.0;
+    if (f0 > (double)*i0) *i0 = f0 < (double)*i1 ? (int64_t)f0 : *i1;  /* NaN: as it was */
+    if (f1 < (double)*i1) *i1 = f1 > (double)*i0 ? (int64_t)f1 : *i0;
+    return f0 <= f1 || f0 != f0 || f1 != f1;
+}
+
 /* This round's new cells into the pool: those of the box meeting the ball (every cell when whole). */
 static int gather(const Grid *G, Search *S, const int64_t *box) {
     if (S->whole) {
@@ -291,8 +351,12 @@ static int gather(const Grid *G, Search *S, const int64_t *box) {
     const int64_t d0 = G->dims[0], d1 = G->dims[1];
     for (int64_t k = box[4]; k <= box[5]; k++) {
         for (int64_t j = box[2]; j <= box[3]; j++) {
-            const int64_t line = j + d1 * k, first = box[0] + d0 * line, last = box[1] + d0 * line;
+            const int64_t line = j + d1 * k;
             const Py_ssize_t end = (Py_ssize_t)G->lines[line + 1];
+            if ((Py_ssize_t)G->lines[line] == end) continue;  /* no occupied cell on the line */
+            int64_t i0 = box[0], i1 = box[1];
+            if (!line_span(G, S, j, k, &i0, &i1)) continue;
+            const int64_t first = i0 + d0 * line, last = i1 + d0 * line;
             Py_ssize_t at = lower_bound(G->keys, (Py_ssize_t)G->lines[line], end, first);
             for (; at < end && G->keys[at] <= last; at++)
                 if (!take_cell(G, at, S)) return 0;
@@ -443,9 +507,12 @@ static inline int continues(const Pts *hd, Py_ssize_t i, double growth) {
     return exact_d(hd, i) < growth * exact_d(hd, i - 1);
 }
 
-/* One sample's ring: the first *ring points of the head (S->head.fg, S->head.fh). */
-static int one_ring(const Grid *G, Search *S, double growth, double first, Py_ssize_t *ring) {
-    double R = first;
+/* One sample's ring: the first *ring points of the head (S->head.fg, S->head.fh), from a first ball of reach
+ * `first`, the second at least `hint` (where the first did not end it); *ends: growth x the ring's last
+ * distance (the reach that would have ended it in one ball; 0: no ring). */
+static int one_ring(const Grid *G, Search *S, double growth, double first, double hint, Py_ssize_t *ring,
+                    double *ends) {
+    double R = first, last = 0.0;
     Py_ssize_t len = 0;  /* the ring's length within the head so far */
     int64_t box[6];
     S->pool.n = S->head.n = 0;
@@ -462,14 +529,17 @@ static int one_ring(const Grid *G, Search *S, double growth, double first, Py_ss
         const Pts *hd = &S->head;
         if (len == 0 && hd->n > 0) len = 1;
         while (len < hd->n && continues(hd, len, growth)) len++;
-        const double last = len ? exact_d(hd, len - 1) : 0.0;
+        last = len ? exact_d(hd, len - 1) : 0.0;
         if (S->whole || len < hd->n || (len > 0 && growth * last <= R)) break;
         const double grown = len ? growth * last : 0.0;
         R = 2.0 * R > grown ? 2.0 * R : grown;
+        R = R > hint ? R : hint;
+        hint = 0.0;
     }
     for (Py_ssize_t i = 0; i < S->n_taken; i++) S->taken[S->cells[i]] = 0;
     S->n_taken = 0;
     *ring = len;
+    *ends = growth * last;
     return ok;
 }
 
@@ -484,11 +554,13 @@ static void design_rows(const double *x, const double *y, const int64_t *starts,
         const double *xs = x + a, *ys = y + a;
         ok[i - lo] = 0;
         if (n < 5) continue;
-        int finite = 1;
-        for (Py_ssize_t j = 0; j < n; j++) finite &= isfinite(xs[j]) && isfinite(ys[j]);
-        if (!finite) continue;
         double sx = xs[0], sy = ys[0];
         for (Py_ssize_t j = 1; j < n; j++) { sx += xs[j]; sy += ys[j]; }
+        if (!(isfinite(sx) && isfinite(sy))) {  /* finite sums: every point finite (inf and NaN do not cancel) */
+            int finite = 1;
+            for (Py_ssize_t j = 0; j < n; j++) finite &= isfinite(xs[j]) && isfinite(ys[j]);
+            if (!finite) continue;
+        }
         const double ox = sx / (double)n, oy = sy / (double)n;
         for (Py_ssize_t j = 0; j < n; j++) {
             const double cx = xs[j] - ox, cy = ys[j] - oy;
@@ -497,10 +569,21 @@ static void design_rows(const double *x, const double *y, const int64_t *starts,
         const double sc = sqrt(pairwise_sum(t, n) / (double)n);
         if (!(sc > 0)) continue;
         double *d = design + 6 * (a - (Py_ssize_t)starts[lo]);
+#ifdef __SSE2__
+        /* x and y divided in one instruction: a division rounds alike in either (IEEE 754), in half the time */
+        const __m128d o = _mm_set_pd(oy, ox), scv = _mm_set1_pd(sc);
+        for (Py_ssize_t j = 0; j < n; j++, d += 6) {
+            double c[2];
+            _mm_storeu_pd(c, _mm_div_pd(_mm_sub_pd(_mm_set_pd(ys[j], xs[j]), o), scv));
+            const double cx = c[0], cy = c[1];
+            d[0] = cx * cx; d[1] = cx * cy; d[2] = cy * cy; d[3] = cx; d[4] = cy; d[5] = 1.0;
+        }
+#else
         for (Py_ssize_t j = 0; j < n; j++, d += 6) {
             const double cx = (xs[j] - ox) / sc, cy = (ys[j] - oy) / sc;
             d[0] = cx * cx; d[1] = cx * cy; d[2] = cy * cy; d[3] = cx; d[4] = cy; d[5] = 1.0;
         }
+#endif
         origin[2 * (i - lo)] = ox;
         origin[2 * (i - lo) + 1] = oy;
         scale[i - lo] = sc;
@@ -598,12 +681,14 @@ static PyObject *py_rings(PyObject *self, PyObject *args) {
     int64_t *bounds = (int64_t *)bo.buf;
     Search S;
     memset(&S, 0, sizeof S);
+    lend_buffers(&S);
     S.half = half;
     S.approx = by_roots;
     S.taken = (char *)calloc((size_t)n_cells + 1, 1);
     S.cells = (int32_t *)malloc(((size_t)n_cells + 1) * sizeof(int32_t));
     int good = S.taken && S.cells;
     Py_ssize_t done = 0, need = 0;
+    double hint = 0.0;  /* the second ball's least 2-D reach for the next sample */
     Py_BEGIN_ALLOW_THREADS
     bounds[0] = (int64_t)offset;
     for (Py_ssize_t s = 0; good && s < n_s; s++) {
@@ -615,7 +700,9 @@ static PyObject *py_rings(PyObject *self, PyObject *args) {
         Grid Gs = G;
         Gs.size = size;
         Py_ssize_t len = 0;
-        good = one_ring(&Gs, &S, growth, first, &len);
+        double ends = 0.0;
+        good = one_ring(&Gs, &S, growth, first, hint, &len, &ends);
+        hint = ends * HINT < INFINITY ? ends * HINT : 0.0;  /* NaN: none */
         if (!good) break;
         const Py_ssize_t at = (Py_ssize_t)bounds[s];
         if (len > cap - at) {
@@ -629,7 +716,8 @@ static PyObject *py_rings(PyObject *self, PyObject *args) {
     }
     Py_END_ALLOW_THREADS
     for (int i = 0; i < n_buf; i++) PyBuffer_Release(all[i]);
-    pts_free(&S.pool); pts_free(&S.spare); pts_free(&S.head); scratch_free(&S.sort); free(S.taken); free(S.cells);
+    keep_buffers(&S);
+    free(S.taken); free(S.cells);
     if (!good) return PyErr_NoMemory();
     return Py_BuildValue("(nn)", done, need);
 }

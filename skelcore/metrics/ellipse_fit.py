@@ -168,6 +168,27 @@ def _reference_sums(x: np.ndarray, y: np.ndarray, starts: np.ndarray) -> Ellipse
     return EllipseSums(np.array(use, np.int64), np.array(origins), np.array(scales), np.array(scs))
 
 
+def _conditioned(s3: np.ndarray) -> np.ndarray:
+    """Whether ``np.linalg.cond(s3) <= 1e12`` for each stacked 3 x 3 scatter matrix of [x, y, 1] (singular
+    exactly when the points are collinear; the cutoff is relative: unit RMS data).  The SVD only where a
+    cheap bound cannot decide: a Gram matrix's eigenvalues are its singular values, so
+    cond <= trace^3 / det (lambda_max <= trace, lambda_min >= det / trace^2), and a bound of 1e10 (the
+    determinant's round-off is ~1e-15 trace^3, the SVD's relative error in sigma_min ~1e-16 cond) leaves
+    the answer to the SVD's own margin.  Skips the SVD of nearly every set (docs/performance.md 6.5)."""
+    a, b, c = s3[:, 0, 0], s3[:, 0, 1], s3[:, 0, 2]
+    d, e, f = s3[:, 1, 1], s3[:, 1, 2], s3[:, 2, 2]
+    with np.errstate(invalid="ignore", divide="ignore", over="ignore"):
+        trace = a + d + f
+        det = a * (d * f - e * e) - b * (b * f - e * c) + c * (b * e - d * c)
+        sure = (det > 0) & (trace ** 3 <= 1e10 * det)  # False for NaN and inf
+    ok = sure.copy()
+    rest = np.flatnonzero(~sure)
+    if len(rest):
+        with np.errstate(invalid="ignore", divide="ignore", over="ignore"):
+            ok[rest] = np.linalg.cond(s3[rest]) <= 1e12
+    return ok
+
+
 def ellipses_from_sums(sums: EllipseSums, n_sets: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """The fits of :func:`fit_ellipses` from the sets' :func:`ellipse_sums` (sets 0 .. n_sets - 1; the
     ones not in ``sums.use`` are NaN): the reduced 3 x 3 eigenproblem and the conic's geometry, each step
@@ -177,9 +198,7 @@ def ellipses_from_sums(sums: EllipseSums, n_sets: int) -> tuple[np.ndarray, np.n
     if not len(use):
         return centers, axes, angles
     s1, s2, s3 = (np.ascontiguousarray(part) for part in (sums.sc[:, :3, :3], sums.sc[:, :3, 3:], sums.sc[:, 3:, 3:]))
-    # s3 is singular exactly when the points are collinear; the cutoff is relative (unit RMS data)
-    with np.errstate(invalid="ignore", divide="ignore", over="ignore"):
-        ok = np.linalg.cond(s3) <= 1e12
+    ok = _conditioned(s3)
     use, s1, s2, s3, origin, scale = use[ok], s1[ok], s2[ok], s3[ok], origin[ok], scale[ok]
     if len(use) == 0:
         return centers, axes, angles

@@ -209,7 +209,7 @@ def test_a_spans_rings_in_chunks_give_the_same_centeredness(monkeypatch, scans, 
 def test_ellipse_sums_are_the_numpy_loops_bit_for_bit():
     """The compiled centroids, radii and design rows (docs/performance.md 6.5) give numpy's sums: running
     sums, a pairwise mean at sizes below, at and above numpy's blocks (8, 128, 8192), sets of fewer than 5
-    points, a non-finite point, a zero radius, sets spread over several calls."""
+    points, non-finite points, finite points whose sum overflows, a zero radius, sets spread over several calls."""
     rng = np.random.default_rng(4)
     for trial in range(24):
         sizes = rng.integers(0, int(rng.choice([12, 300, 20000])), size=int(rng.integers(1, 120)))
@@ -222,7 +222,12 @@ def test_ellipse_sums_are_the_numpy_loops_bit_for_bit():
         if len(sizes) > 3:
             x[starts[1] : starts[2]], y[starts[1] : starts[2]] = 1.0, 2.0  # all points equal: radius 0
             x[starts[2]] = np.nan
-        got, want = ellipse_sums(x, y, starts), _reference_sums(x, y, starts)
+        if len(sizes) > 6 and sizes[3:6].min() >= 2:
+            # inf and -inf (a NaN sum), one inf, finite points whose sum overflows
+            x[starts[3]], x[starts[3] + 1], y[starts[4]] = np.inf, -np.inf, np.inf
+            x[starts[5] : starts[6]] = 1e308
+        with np.errstate(over="ignore", invalid="ignore"):  # the overflowing set's numpy reference
+            got, want = ellipse_sums(x, y, starts), _reference_sums(x, y, starts)
         for a, b in zip(got, want):
             assert a.shape == b.shape and a.tobytes() == b.tobytes()
         assert len(want.use) > 0 or sizes.max() < 5
@@ -274,4 +279,34 @@ def test_each_ring_of_one_call_is_its_ring_alone():
     for i in range(len(points)):
         xi, yi, si = centeredness._kernel_rings(grid, points[i:i + 1], u[i:i + 1], g[i:i + 1], h[i:i + 1], half,
                                                 params.ring_growth)
+        assert xi.tobytes() == x[s[i]:s[i + 1]].tobytes() and yi.tobytes() == y[s[i]:s[i + 1]].tobytes()
+
+
+def test_rings_of_slabs_along_and_across_the_grid_s_lines(monkeypatch):
+    """The kernel narrows each line of cells (along x) to the cells that may meet the slab and the ball: slabs
+    square to the lines (u along x), along them (u with no x part, or a tiny one), oblique, around a torus
+    whose large rings need several balls and a hint from the sample before; the rings equal the array code's
+    and one call's rings are each sample's alone."""
+    shape = torus(12_000, R=1.0, r=0.3, n_curve=8, seed=3)
+    rng = np.random.default_rng(8)
+    cloud = shape.cloud + rng.normal(scale=1e-3, size=shape.cloud.shape)
+    angle = np.linspace(0.0, 2.0 * np.pi, 24, endpoint=False)
+    points = np.column_stack([np.cos(angle), np.sin(angle), np.zeros(24)])
+    tangent = np.column_stack([-np.sin(angle), np.cos(angle), np.zeros(24)])
+    dirs = np.vstack([tangent, [[1.0, 0.0, 0.0]] * 3, [[0.0, 1.0, 0.0], [0.0, 0.0, 1.0], [1e-9, 1.0, 0.0],
+                                                        [1e-5, 0.0, 1.0], [0.3, 0.4, 0.5]]])
+    points = np.vstack([points, [[0.0, 1.0, 0.0], [0.0, -1.0, 0.1], [1.0, 0.0, 0.0]], points[:5]])
+    for slab in (0.02, 0.06):
+        (x0, y0, s0), (x1, y1, s1) = _rings_both_ways(monkeypatch, cloud, points, dirs, slab)
+        assert s1.tobytes() == s0.tobytes() and x1.tobytes() == x0.tobytes() and y1.tobytes() == y0.tobytes()
+        assert (np.diff(s0) >= 100).sum() > 20
+    params = Params()
+    grid = centeredness.slab_grid(cloud, params)
+    half = 0.5 * params.slab_factor * float(np.linalg.norm(grid.hi - grid.lo))
+    u = centeredness.unit_rows(dirs)
+    g, h = centeredness._orthonormal_complement(u)
+    x, y, s = (a.copy() for a in centeredness._kernel_rings(grid, points, u, g, h, half, params.ring_growth))
+    for i in range(len(points)):
+        xi, yi, _ = centeredness._kernel_rings(grid, points[i:i + 1], u[i:i + 1], g[i:i + 1], h[i:i + 1], half,
+                                               params.ring_growth)
         assert xi.tobytes() == x[s[i]:s[i + 1]].tobytes() and yi.tobytes() == y[s[i]:s[i + 1]].tobytes()

@@ -167,3 +167,27 @@ def test_column_sums_equal_the_rows_code_bit_for_bit():
               ellipse_sums(xy[starts[5]:, 0].copy(), xy[starts[5]:, 1].copy(), starts[5:] - starts[5]).shifted(5)]
     joined = ellipses_from_sums(EllipseSums.joined(halves[::-1]), len(sets))
     assert all(np.array_equal(a, b, equal_nan=True) for a, b in zip(joined, fit_ellipses(xy, starts)))
+
+
+def test_the_conditioning_bound_answers_as_the_svd():
+    """``_conditioned`` (a trace^3 / det bound, the SVD where it cannot decide) gives ``np.linalg.cond(s3) <=
+    1e12`` for scatter matrices of [x, y, 1] of unit-RMS sets from round to collinear (cond from 1 to past
+    1e20, many near the cutoff), equal points and a zero matrix (non-finite sets never get this far)."""
+    from skelcore.metrics.ellipse_fit import _conditioned
+
+    rng = np.random.default_rng(11)
+    mats = []
+    for width in 10.0 ** np.linspace(-12, 0, 300):
+        t = rng.uniform(-1, 1, int(rng.integers(5, 400)))
+        xy = np.column_stack([t, width * rng.normal(size=len(t))]) @ np.linalg.qr(rng.normal(size=(2, 2)))[0]
+        xy = (xy - xy.mean(0)) / np.sqrt(np.mean(np.sum((xy - xy.mean(0)) ** 2, axis=1)))
+        d = np.column_stack([xy, np.ones(len(xy))])
+        mats.append(d.T @ d)
+    d = np.column_stack([np.zeros((6, 2)), np.ones(6)])
+    mats += [d.T @ d, np.zeros((3, 3)), np.eye(3)]
+    s3 = np.array(mats)
+    with np.errstate(invalid="ignore", divide="ignore", over="ignore"):
+        cond = np.linalg.cond(s3)
+        want = cond <= 1e12
+    assert _conditioned(s3).tolist() == want.tolist()
+    assert want.sum() > 100 and (~want).sum() > 50 and ((cond > 1e9) & (cond < 1e15)).sum() > 20
