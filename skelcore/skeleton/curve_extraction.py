@@ -5,13 +5,15 @@ cloud's bounding-box diagonal; two samples are connected when points of their ba
 neighbours in the original cloud. Then, in order: stray single-point balls are dropped; shortcut
 edges (another path at most ``shortcut_ratio`` x as long) are removed; edges of triangles are
 collapsed (lowest mean degree first, then shortest; Cao's rule) until no triangle is left; cycles
-shorter than ``short_cycle_factor`` sample radii are collapsed shortest edge first; short end-cap
-spurs are pruned. A curve vertex sits at the centroid of the contracted points it stands for.
+shorter than ``short_cycle_factor`` sample radii are collapsed shortest edge first (the search for
+them incremental, :class:`_ShortCycles`); short end-cap spurs are pruned. A curve vertex sits at the
+centroid of the contracted points it stands for.
 Everything beyond Cao's collapse is an addition of ours (see :class:`SkeletonizeParams`).
 """
 
 from __future__ import annotations
 
+import heapq
 import math
 from typing import Callable
 
@@ -96,6 +98,9 @@ class _Graph:
                 self.adj[a].add(int(b))
                 self.adj[b].add(int(a))
         self.merged_into = np.arange(len(pos))
+        # vertices whose adjacency or position a collapse changed, and their neighbours (read and
+        # cleared by _ShortCycles)
+        self.changed: set[int] = set()
 
     def pos(self, v: int) -> tuple[float, float, float]:
         return self._pos[v]
@@ -105,6 +110,10 @@ class _Graph:
 
     def collapse(self, keep: int, gone: int) -> None:
         """Merge ``gone`` into ``keep``: the merged vertex is the centroid of both balls' points."""
+        self.changed.add(keep)
+        self.changed.add(gone)
+        self.changed.update(self.adj[keep])
+        self.changed.update(self.adj[gone])
         sk, sg = self.sum[keep], self.sum[gone]
         for i in range(3):
             sk[i] += sg[i]
@@ -177,10 +186,10 @@ def _drop_strays(g: _Graph, counts: np.ndarray, min_points: int, long_edge: floa
             changed = True
 
 
-def _shortest_path(g: _Graph, a: int, b: int, budget: float) -> list[int] | None:
-    """Shortest a -> b path (Dijkstra) no longer than ``budget``, not using the edge (a, b)."""
-    import heapq
-
+def _dijkstra(g: _Graph, a: int, b: int, budget: float) -> tuple[list[int] | None, set[int]]:
+    """Shortest a -> b path (Dijkstra, ties by vertex number) no longer than ``budget``, not using the
+    edge (a, b); also the vertices the search settled (their adjacency and every position it read are
+    theirs or their neighbours')."""
     dist = {a: 0.0}
     prev = {a: -1}
     heap = [(0.0, a)]
@@ -194,16 +203,21 @@ def _shortest_path(g: _Graph, a: int, b: int, budget: float) -> list[int] | None
             path = [b]
             while path[-1] != a:
                 path.append(prev[path[-1]])
-            return path
+            return path, done
         for w in sorted(g.adj[u]):
             if u == a and w == b:
                 continue
             nd = d + g.length(u, w)
-            if nd <= budget and nd < dist.get(w, np.inf):
+            if nd <= budget and nd < dist.get(w, math.inf):
                 dist[w] = nd
                 prev[w] = u
                 heapq.heappush(heap, (nd, w))
-    return None
+    return None, done
+
+
+def _shortest_path(g: _Graph, a: int, b: int, budget: float) -> list[int] | None:
+    """Shortest a -> b path no longer than ``budget``, not using the edge (a, b)."""
+    return _dijkstra(g, a, b, budget)[0]
 
 
 def _remove_shortcuts(g: _Graph, ratio: float) -> None:
@@ -268,18 +282,91 @@ def _roots(merged_into: np.ndarray) -> np.ndarray:
         root = nxt
 
 
-def _short_cycle(g: _Graph, max_length: float) -> list[int] | None:
-    """A cycle shorter than ``max_length`` (total edge length), as its vertex list, or None."""
-    if max_length <= 0:
+class _ShortCycles:
+    """The first cycle shorter than ``max_length`` in scan order, found again after each collapse.
+
+    The scan (edges (a, b), a < b, in increasing order; for each, the shortest a -> b path avoiding the
+    edge within ``max_length`` - |ab|) returns the first edge's cycle, as a scan from scratch would.
+    Kept between calls: the edges whose search found nothing, each with the vertices it settled, and
+    the scan's frontier (the edges from it on were never asked). A search that settled none of the
+    vertices a collapse changed (:attr:`_Graph.changed`: the pair, their neighbours) reads exactly the
+    same adjacency and lengths again, so it still finds nothing; only the other edges below the
+    frontier, and the new ones, are searched again, in scan order, before the frontier's.
+    """
+
+    def __init__(self, g: _Graph, max_length: float) -> None:
+        self.g = g
+        self.max_length = max_length
+        self.clear: set[tuple[int, int]] = set()  # edges below the frontier known to close no cycle
+        self.settled_by: dict[int, list[tuple[int, int]]] = {}  # vertex -> clear edges that settled it
+        self.pending: set[tuple[int, int]] = set()  # edges below the frontier to search again
+        self.frontier = (-1, -1)
+        g.changed.clear()
+
+    def _search(self, a: int, b: int) -> list[int] | None:
+        g = self.g
+        path, done = _dijkstra(g, a, b, self.max_length - g.length(a, b))
+        if path is None:
+            e = (a, b)
+            self.clear.add(e)
+            for v in done:
+                self.settled_by.setdefault(v, []).append(e)
+        return path
+
+    def _forget_changed(self) -> None:
+        g = self.g
+        for v in g.changed:
+            for e in self.settled_by.pop(v, ()):
+                if e in self.clear:  # an entry may be stale: the edge searched again since
+                    self.clear.discard(e)
+                    self.pending.add(e)
+        for v in g.changed:  # new edges all have a changed end
+            for w in g.adj[v]:
+                e = (v, w) if v < w else (w, v)
+                if e < self.frontier and e not in self.clear:
+                    self.pending.add(e)
+        g.changed.clear()
+
+    def find(self) -> list[int] | None:
+        """The cycle (its vertex list) the from-scratch scan would return first, or None."""
+        if self.max_length <= 0:
+            return None
+        g = self.g
+        self._forget_changed()
+        for e in sorted(self.pending):
+            a, b = e
+            if b not in g.adj[a]:
+                self.pending.discard(e)
+                continue
+            path = self._search(a, b)
+            if path is not None:
+                return path
+            self.pending.discard(e)
+        a0, b0 = self.frontier
+        for a in np.flatnonzero(g.alive[max(a0, 0):]) + max(a0, 0):
+            a = int(a)
+            for b in sorted(g.adj[a]):
+                if b > a and (a, b) >= (a0, b0):
+                    path = self._search(a, b)
+                    if path is not None:
+                        self.frontier = (a, b)
+                        return path
+        self.frontier = (len(g.adj), 0)
         return None
-    for a in np.flatnonzero(g.alive):
-        a = int(a)
-        for b in sorted(g.adj[a]):
-            if b > a:
-                path = _shortest_path(g, a, b, max_length - g.length(a, b))
-                if path is not None:
-                    return path
-    return None
+
+
+def _collapse_short_cycles(g: _Graph, max_length: float, report: Callable[[str, float], None]) -> None:
+    """Collapse the first short cycle's shortest edge (then any triangle it makes) until none is left."""
+    cycles = _ShortCycles(g, max_length)
+    while True:
+        report("curve", 0.8)
+        cycle = cycles.find()
+        if cycle is None:
+            return
+        ring = list(zip(cycle, cycle[1:] + cycle[:1]))
+        a, b = min(ring, key=lambda e: (g.length(*e), e))
+        g.collapse(a, b)
+        _collapse_triangles(g, report)
 
 
 def extract_curve(
@@ -316,15 +403,7 @@ def extract_curve(
     if params.shortcut_ratio > 1.0:
         _remove_shortcuts(g, params.shortcut_ratio)
     _collapse_triangles(g, report)
-    while True:
-        report("curve", 0.8)
-        cycle = _short_cycle(g, params.short_cycle_factor * radius)
-        if cycle is None:
-            break
-        ring = list(zip(cycle, cycle[1:] + cycle[:1]))
-        a, b = min(ring, key=lambda e: (g.length(*e), e))
-        g.collapse(a, b)
-        _collapse_triangles(g, report)
+    _collapse_short_cycles(g, params.short_cycle_factor * radius, report)
     if params.prune_branch_factor > 0 or params.prune_thickness_factor > 0:
         # local thickness: mean distance of a vertex's original points to it (about the tube radius)
         owner = _roots(g.merged_into)[np.maximum(label, 0)]
