@@ -98,9 +98,9 @@ class _Graph:
                 self.adj[a].add(int(b))
                 self.adj[b].add(int(a))
         self.merged_into = np.arange(len(pos))
-        # vertices whose adjacency or position a collapse changed, and their neighbours (read and
-        # cleared by _ShortCycles)
-        self.changed: set[int] = set()
+        # the vertices collapses kept: every edge a collapse adds or lengthens or shortens ends at one
+        # (read and cleared by _ShortCycles)
+        self.kept: set[int] = set()
 
     def pos(self, v: int) -> tuple[float, float, float]:
         return self._pos[v]
@@ -110,10 +110,7 @@ class _Graph:
 
     def collapse(self, keep: int, gone: int) -> None:
         """Merge ``gone`` into ``keep``: the merged vertex is the centroid of both balls' points."""
-        self.changed.add(keep)
-        self.changed.add(gone)
-        self.changed.update(self.adj[keep])
-        self.changed.update(self.adj[gone])
+        self.kept.add(keep)
         sk, sg = self.sum[keep], self.sum[gone]
         for i in range(3):
             sk[i] += sg[i]
@@ -186,10 +183,10 @@ def _drop_strays(g: _Graph, counts: np.ndarray, min_points: int, long_edge: floa
             changed = True
 
 
-def _dijkstra(g: _Graph, a: int, b: int, budget: float) -> tuple[list[int] | None, set[int]]:
+def _shortest_path(g: _Graph, a: int, b: int, budget: float) -> list[int] | None:
     """Shortest a -> b path (Dijkstra, ties by vertex number) no longer than ``budget``, not using the
-    edge (a, b); also the vertices the search settled (their adjacency and every position it read are
-    theirs or their neighbours')."""
+    edge (a, b)."""
+    pos, adj = g._pos, g.adj
     dist = {a: 0.0}
     prev = {a: -1}
     heap = [(0.0, a)]
@@ -203,21 +200,36 @@ def _dijkstra(g: _Graph, a: int, b: int, budget: float) -> tuple[list[int] | Non
             path = [b]
             while path[-1] != a:
                 path.append(prev[path[-1]])
-            return path, done
-        for w in sorted(g.adj[u]):
+            return path
+        pu = pos[u]
+        for w in sorted(adj[u]):
             if u == a and w == b:
                 continue
-            nd = d + g.length(u, w)
+            nd = d + math.dist(pu, pos[w])  # g.length(u, w)
             if nd <= budget and nd < dist.get(w, math.inf):
                 dist[w] = nd
                 prev[w] = u
                 heapq.heappush(heap, (nd, w))
-    return None, done
+    return None
 
 
-def _shortest_path(g: _Graph, a: int, b: int, budget: float) -> list[int] | None:
-    """Shortest a -> b path no longer than ``budget``, not using the edge (a, b)."""
-    return _dijkstra(g, a, b, budget)[0]
+def _within(g: _Graph, sources: list[int], budget: float) -> set[int]:
+    """The vertices at most ``budget`` along the graph from any of ``sources``."""
+    pos, adj = g._pos, g.adj
+    dist = dict.fromkeys(sources, 0.0)
+    heap = [(0.0, v) for v in sources]
+    done: set[int] = set()
+    while heap:
+        d, u = heapq.heappop(heap)
+        if u in done:
+            continue
+        done.add(u)
+        for w in adj[u]:
+            nd = d + math.dist(pos[u], pos[w])
+            if nd <= budget and nd < dist.get(w, math.inf):
+                dist[w] = nd
+                heapq.heappush(heap, (nd, w))
+    return done
 
 
 def _remove_shortcuts(g: _Graph, ratio: float) -> None:
@@ -287,52 +299,54 @@ class _ShortCycles:
 
     The scan (edges (a, b), a < b, in increasing order; for each, the shortest a -> b path avoiding the
     edge within ``max_length`` - |ab|) returns the first edge's cycle, as a scan from scratch would.
-    Kept between calls: the edges whose search found nothing, each with the vertices it settled, and
-    the scan's frontier (the edges from it on were never asked). A search that settled none of the
-    vertices a collapse changed (:attr:`_Graph.changed`: the pair, their neighbours) reads exactly the
-    same adjacency and lengths again, so it still finds nothing; only the other edges below the
-    frontier, and the new ones, are searched again, in scan order, before the frontier's.
+    Kept between calls: the edges whose search found nothing, and the scan's frontier (the edges from
+    it on were never asked). A collapse adds, lengthens or shortens only edges at the vertex it keeps
+    (:attr:`_Graph.kept`), so a cycle it makes passes through one of those, and both ends of each of
+    its edges lie within half its length (less than ``max_length`` / 2) of it. Only the edges with both
+    ends that near a kept vertex (one Dijkstra from all of them, with a margin for rounding), and the
+    new ones, are searched again, in scan order, before the frontier's.
     """
 
     def __init__(self, g: _Graph, max_length: float) -> None:
         self.g = g
         self.max_length = max_length
         self.clear: set[tuple[int, int]] = set()  # edges below the frontier known to close no cycle
-        self.settled_by: dict[int, list[tuple[int, int]]] = {}  # vertex -> clear edges that settled it
         self.pending: set[tuple[int, int]] = set()  # edges below the frontier to search again
         self.frontier = (-1, -1)
-        g.changed.clear()
+        g.kept.clear()
 
     def _search(self, a: int, b: int) -> list[int] | None:
         g = self.g
-        path, done = _dijkstra(g, a, b, self.max_length - g.length(a, b))
+        path = _shortest_path(g, a, b, self.max_length - g.length(a, b))
         if path is None:
-            e = (a, b)
-            self.clear.add(e)
-            for v in done:
-                self.settled_by.setdefault(v, []).append(e)
+            self.clear.add((a, b))
         return path
 
-    def _forget_changed(self) -> None:
+    def _forget_near_kept(self) -> None:
         g = self.g
-        for v in g.changed:
-            for e in self.settled_by.pop(v, ()):
-                if e in self.clear:  # an entry may be stale: the edge searched again since
-                    self.clear.discard(e)
-                    self.pending.add(e)
-        for v in g.changed:  # new edges all have a changed end
+        kept = [v for v in sorted(g.kept) if g.alive[v]]
+        g.kept.clear()
+        if not kept:
+            return
+        near = _within(g, kept, 0.5 * self.max_length * (1.0 + 1e-9))
+        for v in kept:  # new edges and moved ones: all at a kept vertex
             for w in g.adj[v]:
                 e = (v, w) if v < w else (w, v)
-                if e < self.frontier and e not in self.clear:
+                if e < self.frontier:
+                    self.clear.discard(e)
                     self.pending.add(e)
-        g.changed.clear()
+        for v in near:
+            for w in g.adj[v]:
+                if v < w and w in near and (v, w) in self.clear:
+                    self.clear.discard((v, w))
+                    self.pending.add((v, w))
 
     def find(self) -> list[int] | None:
         """The cycle (its vertex list) the from-scratch scan would return first, or None."""
         if self.max_length <= 0:
             return None
         g = self.g
-        self._forget_changed()
+        self._forget_near_kept()
         for e in sorted(self.pending):
             a, b = e
             if b not in g.adj[a]:
