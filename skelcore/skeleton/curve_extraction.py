@@ -183,40 +183,15 @@ def _drop_strays(g: _Graph, counts: np.ndarray, min_points: int, long_edge: floa
             changed = True
 
 
-def _shortest_path(g: _Graph, a: int, b: int, budget: float) -> list[int] | None:
-    """Shortest a -> b path (Dijkstra, ties by vertex number) no longer than ``budget``, not using the
-    edge (a, b)."""
+def _dijkstra(g: _Graph, sources: list[int], budget: float, target: int = -1
+              ) -> tuple[dict[int, int], set[int]]:
+    """Dijkstra from ``sources`` (ties by vertex number) up to ``budget``, not using the edge
+    (sources[0], target), stopping when ``target`` is settled: (each reached vertex's predecessor,
+    -1 at a source; the settled vertices)."""
     pos, adj = g._pos, g.adj
-    dist = {a: 0.0}
-    prev = {a: -1}
-    heap = [(0.0, a)]
-    done: set[int] = set()
-    while heap:
-        d, u = heapq.heappop(heap)
-        if u in done:
-            continue
-        done.add(u)
-        if u == b:
-            path = [b]
-            while path[-1] != a:
-                path.append(prev[path[-1]])
-            return path
-        pu = pos[u]
-        for w in sorted(adj[u]):
-            if u == a and w == b:
-                continue
-            nd = d + math.dist(pu, pos[w])  # g.length(u, w)
-            if nd <= budget and nd < dist.get(w, math.inf):
-                dist[w] = nd
-                prev[w] = u
-                heapq.heappush(heap, (nd, w))
-    return None
-
-
-def _within(g: _Graph, sources: list[int], budget: float) -> set[int]:
-    """The vertices at most ``budget`` along the graph from any of ``sources``."""
-    pos, adj = g._pos, g.adj
+    a = sources[0]
     dist = dict.fromkeys(sources, 0.0)
+    prev = dict.fromkeys(sources, -1)
     heap = [(0.0, v) for v in sources]
     done: set[int] = set()
     while heap:
@@ -224,12 +199,34 @@ def _within(g: _Graph, sources: list[int], budget: float) -> set[int]:
         if u in done:
             continue
         done.add(u)
-        for w in adj[u]:
-            nd = d + math.dist(pos[u], pos[w])
+        if u == target:
+            break
+        pu = pos[u]
+        for w in sorted(adj[u]):
+            if u == a and w == target:
+                continue
+            nd = d + math.dist(pu, pos[w])  # g.length(u, w)
             if nd <= budget and nd < dist.get(w, math.inf):
                 dist[w] = nd
+                prev[w] = u
                 heapq.heappush(heap, (nd, w))
-    return done
+    return prev, done
+
+
+def _shortest_path(g: _Graph, a: int, b: int, budget: float) -> list[int] | None:
+    """Shortest a -> b path no longer than ``budget``, not using the edge (a, b)."""
+    prev, done = _dijkstra(g, [a], budget, b)
+    if b not in done:
+        return None
+    path = [b]
+    while path[-1] != a:
+        path.append(prev[path[-1]])
+    return path
+
+
+def _within(g: _Graph, sources: list[int], budget: float) -> set[int]:
+    """The vertices at most ``budget`` along the graph from any of ``sources``."""
+    return _dijkstra(g, sources, budget)[1]
 
 
 def _remove_shortcuts(g: _Graph, ratio: float) -> None:

@@ -1,11 +1,11 @@
 """The incremental short-cycle search of the curve extraction (skelcore/skeleton/curve_extraction.py
 ``_ShortCycles``) returns, after every collapse, the cycle a scan from scratch returns first: on random
 graphs (lattice positions, so lengths tie), on the bundled samples' curves and on a traced neuron's.
-The scan from scratch is kept here as the reference (the extraction's former loop, verbatim)."""
+The scan from scratch is kept here as the reference (the extraction's former loop, each edge's
+shortest path asked of the same Dijkstra)."""
 
 from __future__ import annotations
 
-import heapq
 import math
 from pathlib import Path
 
@@ -20,29 +20,6 @@ from skelcore.skeleton import curve_extraction as ce
 SAMPLES = Path(__file__).resolve().parents[2] / "resources" / "samples"
 
 
-def _reference_path(g, a, b, budget):
-    """Shortest a -> b path within ``budget`` avoiding the edge (a, b): Dijkstra, ties by vertex."""
-    dist, prev, heap, done = {a: 0.0}, {a: -1}, [(0.0, a)], set()
-    while heap:
-        d, u = heapq.heappop(heap)
-        if u in done:
-            continue
-        done.add(u)
-        if u == b:
-            path = [b]
-            while path[-1] != a:
-                path.append(prev[path[-1]])
-            return path
-        for w in sorted(g.adj[u]):
-            if u == a and w == b:
-                continue
-            nd = d + math.dist(g.pos(u), g.pos(w))
-            if nd <= budget and nd < dist.get(w, np.inf):
-                dist[w], prev[w] = nd, u
-                heapq.heappush(heap, (nd, w))
-    return None
-
-
 def _reference_cycle(g, max_length):
     """The first cycle of the scan from scratch: every alive a, every neighbour b > a, in order."""
     if max_length <= 0:
@@ -51,7 +28,7 @@ def _reference_cycle(g, max_length):
         a = int(a)
         for b in sorted(g.adj[a]):
             if b > a:
-                path = _reference_path(g, a, b, max_length - math.dist(g.pos(a), g.pos(b)))
+                path = ce._shortest_path(g, a, b, max_length - math.dist(g.pos(a), g.pos(b)))
                 if path is not None:
                     return path
     return None
