@@ -301,7 +301,8 @@ class _ShortCycles:
     (:attr:`_Graph.kept`), so a cycle it makes passes through one of those, and both ends of each of
     its edges lie within half its length (less than ``max_length`` / 2) of it. Only the edges with both
     ends that near a kept vertex (one Dijkstra from all of them, with a margin for rounding), and the
-    new ones, are searched again, in scan order, before the frontier's.
+    new ones, are searched again, in scan order, before the frontier's (docs/repair.md "The
+    short-cycle search incremental").
     """
 
     def __init__(self, g: _Graph, max_length: float) -> None:
