@@ -5,13 +5,15 @@ cloud's bounding-box diagonal; two samples are connected when points of their ba
 neighbours in the original cloud. Then, in order: stray single-point balls are dropped; shortcut
 edges (another path at most ``shortcut_ratio`` x as long) are removed; edges of triangles are
 collapsed (lowest mean degree first, then shortest; Cao's rule) until no triangle is left; cycles
-shorter than ``short_cycle_factor`` sample radii are collapsed shortest edge first; short end-cap
-spurs are pruned. A curve vertex sits at the centroid of the contracted points it stands for.
+shorter than ``short_cycle_factor`` sample radii are collapsed shortest edge first (the search for
+them incremental, :class:`_ShortCycles`); short end-cap spurs are pruned. A curve vertex sits at the
+centroid of the contracted points it stands for.
 Everything beyond Cao's collapse is an addition of ours (see :class:`SkeletonizeParams`).
 """
 
 from __future__ import annotations
 
+import heapq
 import math
 from typing import Callable
 
@@ -96,6 +98,9 @@ class _Graph:
                 self.adj[a].add(int(b))
                 self.adj[b].add(int(a))
         self.merged_into = np.arange(len(pos))
+        # the vertices collapses kept: every edge a collapse adds or lengthens or shortens ends at one
+        # (read and cleared by _ShortCycles)
+        self.kept: set[int] = set()
 
     def pos(self, v: int) -> tuple[float, float, float]:
         return self._pos[v]
@@ -105,6 +110,7 @@ class _Graph:
 
     def collapse(self, keep: int, gone: int) -> None:
         """Merge ``gone`` into ``keep``: the merged vertex is the centroid of both balls' points."""
+        self.kept.add(keep)
         sk, sg = self.sum[keep], self.sum[gone]
         for i in range(3):
             sk[i] += sg[i]
@@ -177,33 +183,50 @@ def _drop_strays(g: _Graph, counts: np.ndarray, min_points: int, long_edge: floa
             changed = True
 
 
-def _shortest_path(g: _Graph, a: int, b: int, budget: float) -> list[int] | None:
-    """Shortest a -> b path (Dijkstra) no longer than ``budget``, not using the edge (a, b)."""
-    import heapq
-
-    dist = {a: 0.0}
-    prev = {a: -1}
-    heap = [(0.0, a)]
+def _dijkstra(g: _Graph, sources: list[int], budget: float, target: int = -1
+              ) -> tuple[dict[int, int], set[int]]:
+    """Dijkstra from ``sources`` (ties by vertex number) up to ``budget``, not using the edge
+    (sources[0], target), stopping when ``target`` is settled: (each reached vertex's predecessor,
+    -1 at a source; the settled vertices)."""
+    pos, adj = g._pos, g.adj
+    a = sources[0]
+    dist = dict.fromkeys(sources, 0.0)
+    prev = dict.fromkeys(sources, -1)
+    heap = [(0.0, v) for v in sources]
     done: set[int] = set()
     while heap:
         d, u = heapq.heappop(heap)
         if u in done:
             continue
         done.add(u)
-        if u == b:
-            path = [b]
-            while path[-1] != a:
-                path.append(prev[path[-1]])
-            return path
-        for w in sorted(g.adj[u]):
-            if u == a and w == b:
+        if u == target:
+            break
+        pu = pos[u]
+        for w in sorted(adj[u]):
+            if u == a and w == target:
                 continue
-            nd = d + g.length(u, w)
-            if nd <= budget and nd < dist.get(w, np.inf):
+            nd = d + math.dist(pu, pos[w])  # g.length(u, w)
+            if nd <= budget and nd < dist.get(w, math.inf):
                 dist[w] = nd
                 prev[w] = u
                 heapq.heappush(heap, (nd, w))
-    return None
+    return prev, done
+
+
+def _shortest_path(g: _Graph, a: int, b: int, budget: float) -> list[int] | None:
+    """Shortest a -> b path no longer than ``budget``, not using the edge (a, b)."""
+    prev, done = _dijkstra(g, [a], budget, b)
+    if b not in done:
+        return None
+    path = [b]
+    while path[-1] != a:
+        path.append(prev[path[-1]])
+    return path
+
+
+def _within(g: _Graph, sources: list[int], budget: float) -> set[int]:
+    """The vertices at most ``budget`` along the graph from any of ``sources``."""
+    return _dijkstra(g, sources, budget)[1]
 
 
 def _remove_shortcuts(g: _Graph, ratio: float) -> None:
@@ -268,18 +291,94 @@ def _roots(merged_into: np.ndarray) -> np.ndarray:
         root = nxt
 
 
-def _short_cycle(g: _Graph, max_length: float) -> list[int] | None:
-    """A cycle shorter than ``max_length`` (total edge length), as its vertex list, or None."""
-    if max_length <= 0:
+class _ShortCycles:
+    """The first cycle shorter than ``max_length`` in scan order, found again after each collapse.
+
+    The scan (edges (a, b), a < b, in increasing order; for each, the shortest a -> b path avoiding the
+    edge within ``max_length`` - |ab|) returns the first edge's cycle, as a scan from scratch would.
+    Kept between calls: the edges whose search found nothing, and the scan's frontier (the edges from
+    it on were never asked). A collapse adds, lengthens or shortens only edges at the vertex it keeps
+    (:attr:`_Graph.kept`), so a cycle it makes passes through one of those, and both ends of each of
+    its edges lie within half its length (less than ``max_length`` / 2) of it. Only the edges with both
+    ends that near a kept vertex (one Dijkstra from all of them, with a margin for rounding), and the
+    new ones, are searched again, in scan order, before the frontier's (docs/repair.md "The
+    short-cycle search incremental").
+    """
+
+    def __init__(self, g: _Graph, max_length: float) -> None:
+        self.g = g
+        self.max_length = max_length
+        self.clear: set[tuple[int, int]] = set()  # edges below the frontier known to close no cycle
+        self.pending: set[tuple[int, int]] = set()  # edges below the frontier to search again
+        self.frontier = (-1, -1)
+        g.kept.clear()
+
+    def _search(self, a: int, b: int) -> list[int] | None:
+        g = self.g
+        path = _shortest_path(g, a, b, self.max_length - g.length(a, b))
+        if path is None:
+            self.clear.add((a, b))
+        return path
+
+    def _forget_near_kept(self) -> None:
+        g = self.g
+        kept = [v for v in sorted(g.kept) if g.alive[v]]
+        g.kept.clear()
+        if not kept:
+            return
+        near = _within(g, kept, 0.5 * self.max_length * (1.0 + 1e-9))
+        for v in kept:  # new edges and moved ones: all at a kept vertex
+            for w in g.adj[v]:
+                e = (v, w) if v < w else (w, v)
+                if e < self.frontier:
+                    self.clear.discard(e)
+                    self.pending.add(e)
+        for v in near:
+            for w in g.adj[v]:
+                if v < w and w in near and (v, w) in self.clear:
+                    self.clear.discard((v, w))
+                    self.pending.add((v, w))
+
+    def find(self) -> list[int] | None:
+        """The cycle (its vertex list) the from-scratch scan would return first, or None."""
+        if self.max_length <= 0:
+            return None
+        g = self.g
+        self._forget_near_kept()
+        for e in sorted(self.pending):
+            a, b = e
+            if b not in g.adj[a]:
+                self.pending.discard(e)
+                continue
+            path = self._search(a, b)
+            if path is not None:
+                return path
+            self.pending.discard(e)
+        a0, b0 = self.frontier
+        for a in np.flatnonzero(g.alive[max(a0, 0):]) + max(a0, 0):
+            a = int(a)
+            for b in sorted(g.adj[a]):
+                if b > a and (a, b) >= (a0, b0):
+                    path = self._search(a, b)
+                    if path is not None:
+                        self.frontier = (a, b)
+                        return path
+        self.frontier = (len(g.adj), 0)
         return None
-    for a in np.flatnonzero(g.alive):
-        a = int(a)
-        for b in sorted(g.adj[a]):
-            if b > a:
-                path = _shortest_path(g, a, b, max_length - g.length(a, b))
-                if path is not None:
-                    return path
-    return None
+
+
+def _collapse_short_cycles(g: _Graph, max_length: float, report: Callable[[str, float], None]) -> None:
+    """Collapse the first short cycle's shortest edge (then any triangle it makes) until none is left."""
+    cycles = _ShortCycles(g, max_length)
+    while True:
+        report("curve", 0.8)
+        cycle = cycles.find()
+        if cycle is None:
+            return
+        ring = list(zip(cycle, cycle[1:] + cycle[:1]))
+        a, b = min(ring, key=lambda e: (g.length(*e), e))
+        g.collapse(a, b)
+        _collapse_triangles(g, report)
 
 
 def extract_curve(
@@ -316,15 +415,7 @@ def extract_curve(
     if params.shortcut_ratio > 1.0:
         _remove_shortcuts(g, params.shortcut_ratio)
     _collapse_triangles(g, report)
-    while True:
-        report("curve", 0.8)
-        cycle = _short_cycle(g, params.short_cycle_factor * radius)
-        if cycle is None:
-            break
-        ring = list(zip(cycle, cycle[1:] + cycle[:1]))
-        a, b = min(ring, key=lambda e: (g.length(*e), e))
-        g.collapse(a, b)
-        _collapse_triangles(g, report)
+    _collapse_short_cycles(g, params.short_cycle_factor * radius, report)
     if params.prune_branch_factor > 0 or params.prune_thickness_factor > 0:
         # local thickness: mean distance of a vertex's original points to it (about the tube radius)
         owner = _roots(g.merged_into)[np.maximum(label, 0)]
