@@ -12,15 +12,14 @@ import signal
 import sys
 
 from ..errors import SkelInputError
-from .common import positive_int
+from .common import LazyChoices, positive_int
 
 __all__ = ["register_calibrate", "run_calibrate_cli"]
 
 
 def register_calibrate(actions: argparse._SubParsersAction, sizes) -> argparse.ArgumentParser:
-    """Add the ``calibrate`` action to ``skelcore bench`` (``sizes`` parses --sizes)."""
-    from ..benchmark.calibration.grid import CONDITIONS, SUITES
-
+    """Add the ``calibrate`` action to ``skelcore bench`` (``sizes`` parses --sizes); the suites and
+    conditions are read from the calibration's grid only when a value is checked or the help shown."""
     p = actions.add_parser(
         "calibrate",
         help="precision and recall of every warning code: known defects injected, every scan condition",
@@ -31,7 +30,7 @@ def register_calibrate(actions: argparse._SubParsersAction, sizes) -> argparse.A
         "an earlier calibration run (resumed).",
     )
     p.add_argument("--out", required=True, metavar="DIR", help="output folder (new, empty, or a calibration run: resumed)")
-    p.add_argument("--suite", nargs="+", choices=tuple(SUITES), default=["synthetic", "real"], metavar="NAME",
+    p.add_argument("--suite", nargs="+", choices=LazyChoices(_suites), default=["synthetic", "real"], metavar="NAME",
                    help="suites: synthetic (12 shapes at 5000 points), real (5 neurons at 30k), synthetic-small, "
                    "real-small (default: synthetic real)")
     p.add_argument("--sizes", type=sizes, default=None, metavar="N,N",
@@ -39,8 +38,8 @@ def register_calibrate(actions: argparse._SubParsersAction, sizes) -> argparse.A
     p.add_argument("--points", type=sizes, default=None, metavar="N,N",
                    help="synthetic suites: the clouds' sizes in points (default 5000, small 1200)")
     p.add_argument("--shapes", nargs="+", metavar="NAME", help="only these shapes or neuron ids")
-    p.add_argument("--conditions", nargs="+", choices=tuple(CONDITIONS), metavar="NAME",
-                   help="only these scan conditions (" + ", ".join(CONDITIONS) + ")")
+    p.add_argument("--conditions", nargs="+", choices=LazyChoices(_conditions), metavar="NAME",
+                   help="only these scan conditions (%(choices)s)")
     p.add_argument("--kinds", nargs="+", metavar="NAME", help="only these skeleton kinds (intact, spurs, ...)")
     p.add_argument("--seed", type=int, default=0, metavar="N", help="the suite seed (0): the clouds of bench make")
     p.add_argument("--workers", type=positive_int, metavar="N", help="processes (default: one per core)")
@@ -50,6 +49,18 @@ def register_calibrate(actions: argparse._SubParsersAction, sizes) -> argparse.A
     p.add_argument("--quiet", action="store_true", help="no line per task")
     p.set_defaults(func=run_calibrate_cli)
     return p
+
+
+def _suites() -> list[str]:
+    from ..benchmark.calibration.grid import SUITES
+
+    return list(SUITES)
+
+
+def _conditions() -> list[str]:
+    from ..benchmark.calibration.grid import CONDITIONS
+
+    return list(CONDITIONS)
 
 
 def _terminate(signum, frame):  # noqa: ARG001

@@ -6,6 +6,7 @@ from __future__ import annotations
 import argparse
 import math
 import sys
+from typing import Callable, Iterable, Iterator, Sequence
 
 from ..errors import SkelInputError
 from ..params import Params
@@ -13,7 +14,8 @@ from ..display.summary_table import format_defects, format_table  # re-exported:
 from ..scores import Scores, format_score
 
 __all__ = ["format_table", "format_defects", "format_reference", "format_ground_truth", "print_warnings", "stderr_progress", "params_from_args",
-           "positive_int", "nonnegative_int", "positive_float", "nonnegative_float", "clear_progress_line"]
+           "positive_int", "nonnegative_int", "positive_float", "nonnegative_float", "clear_progress_line",
+           "LazyChoices"]
 
 
 def format_reference(scores: Scores | dict) -> str:
@@ -107,6 +109,34 @@ def _whole_number(text: str, least: int, what: str) -> int:
     if value < least:
         raise argparse.ArgumentTypeError(f"expected {what}, got {text!r}")
     return value
+
+
+class LazyChoices(Sequence[str]):
+    """An argument's ``choices`` read from their module when argparse first needs them (a value to check,
+    the help's ``%(choices)s``): building the parser then imports no subcommand's engine. ``skelcore bench
+    calibrate``'s suites and conditions live with the calibration, whose import (scipy.stats, the benchmark
+    package) was about 1.1 CPU s of every ``skelcore`` start (docs/performance.md 6.13)."""
+
+    def __init__(self, load: Callable[[], Iterable[str]]) -> None:
+        self._load = load
+        self._names: tuple[str, ...] | None = None
+
+    def _all(self) -> tuple[str, ...]:
+        if self._names is None:
+            self._names = tuple(self._load())
+        return self._names
+
+    def __getitem__(self, i):  # type: ignore[override]
+        return self._all()[i]
+
+    def __len__(self) -> int:
+        return len(self._all())
+
+    def __iter__(self) -> Iterator[str]:
+        return iter(self._all())
+
+    def __contains__(self, value: object) -> bool:
+        return value in self._all()
 
 
 def positive_int(text: str) -> int:

@@ -34,6 +34,10 @@ FIT_POINTS = 300
 FIT_CLOUD = 16384
 FIT_PROBES = 1024
 FIT_EVALUATIONS = 250
+# the leaf size of the cloud's KD-tree, which the objective asks for each mapped point's nearest cloud point:
+# points on or near a medial axis are nearly equidistant from many leaves, and 64 points a leaf visits fewer
+# of them than scipy's 16 (the same distances; docs/performance.md 6.14)
+FIT_TREE_LEAF = 64
 
 
 def robust_box(points: np.ndarray, quantile: float = 0.0) -> tuple[np.ndarray, np.ndarray]:
@@ -163,7 +167,7 @@ def fit_frame(
     rng = np.random.default_rng(0)
     sub = cloud if len(cloud) <= FIT_CLOUD else cloud[rng.choice(len(cloud), FIT_CLOUD, replace=False)]
     probe = sub if len(sub) <= FIT_PROBES else sub[rng.choice(len(sub), FIT_PROBES, replace=False)]
-    tree = cKDTree(sub)
+    tree = cKDTree(sub, leafsize=FIT_TREE_LEAF)
     lo, hi = bounding_box(cloud)
     centre_c = (lo + hi) / 2
     centre_s = (skeleton.min(axis=0) + skeleton.max(axis=0)) / 2

@@ -4,6 +4,8 @@ the camera or typed, used by the next evaluation (viewpoint-aware boundedness)."
 
 from __future__ import annotations
 
+import copy
+
 import numpy as np
 import pytest
 from scipy.spatial import cKDTree
@@ -20,6 +22,15 @@ def _half_cylinder():
     """The cylinder's front half (y > 0), as one sensor on the +y side sees it, with its true axis."""
     s = shapes.cylinder(n=4000, seed=1)
     return s.cloud[s.cloud[:, 1] > 0], CurveSkeleton.from_raw(s.curve_vertices, s.curve_edges)
+
+
+@pytest.fixture(scope="module")
+def half_evaluated():
+    """The front half, its axis and its evaluation (the curve alone, the engine's defaults), evaluated once
+    for the two tests that read it: the frame fit tried on its mostly unbounded axis is most of the
+    evaluation's 2-3 CPU s. The window is given a copy, so a test's window never changes another's."""
+    cloud, curve = _half_cylinder()
+    return cloud, curve, evaluate(cloud, curve=curve)
 
 
 def _has_colour(img, rgb, tol=12, at_least=5):
@@ -39,9 +50,9 @@ def _drawn_segments(w):
     return pts, np.linalg.norm(pts[lines[:, 0]] - pts[lines[:, 1]], axis=1)
 
 
-def test_openings_are_drawn_as_their_boundary_loops(window):
-    cloud, curve = _half_cylinder()
-    ev = evaluate(cloud, curve=curve)
+def test_openings_are_drawn_as_their_boundary_loops(window, half_evaluated):
+    cloud, curve, ev = half_evaluated
+    ev = copy.deepcopy(ev)
     assert ev.scan.openings and "open_surface" in {w.code for w in ev.warnings}
     w = window
     w.session.show_arrays(cloud, None, curve, ev)
@@ -122,7 +133,7 @@ def test_the_viewpoint_from_the_camera_or_typed_is_used_by_the_next_evaluation(w
     assert w.session.viewpoints == [] and w.session.stale_reason() == "settings changed"
 
 
-def test_the_scan_warnings_name_the_window_s_remedies_which_then_work(window, qtbot, tmp_path):
+def test_the_scan_warnings_name_the_window_s_remedies_which_then_work(window, qtbot, tmp_path, half_evaluated):
     """The ``outliers`` and ``open_surface`` warnings name the Settings panel's check boxes and the
     viewpoint actions, not command-line flags; ticking "evaluate without stray points" makes the next run
     leave them out (stale until then), and a saved session keeps the boxes."""
@@ -148,8 +159,7 @@ def test_the_scan_warnings_name_the_window_s_remedies_which_then_work(window, qt
                     and w.scene.evaluation.scan is not None and w.scene.evaluation.scan.outliers_removed, timeout=60000)
     assert w.session.stale_reason() == ""
     assert w.scene.evaluation.normalization.scale == pytest.approx(evaluate(s.cloud, curve=curve).normalization.scale)
-    half, half_curve = _half_cylinder()
-    opened = [x for x in evaluate(half, curve=half_curve).warnings if x.code == "open_surface"]
+    opened = [x for x in half_evaluated[2].warnings if x.code == "open_surface"]
     assert opened and "--" not in window_warning(opened[0])
     assert "Evaluate > Viewpoint from the camera" in window_warning(opened[0])
     assert "Settings > openings" in window_warning(opened[0])

@@ -8,7 +8,6 @@ import dataclasses
 import json
 import subprocess
 import sys
-import textwrap
 from importlib.metadata import version
 from pathlib import Path
 
@@ -154,22 +153,64 @@ def test_the_job_key_holds_the_tools_version(tmp_path):
         assert _job_key(dataclasses.replace(job, key="")) == job.key
 
 
-@pytest.mark.parametrize("kind, module", [("pygel", "pygel3d"), ("kimimaro", "kimimaro"), ("skimage", "skimage")])
-def test_a_missing_tool_is_one_line_and_exit_2_before_any_job(tmp_path, kind, module):
+MISSING = [("pygel", "pygel3d"), ("kimimaro", "kimimaro"), ("skimage", "skimage")]
+
+# One interpreter imports the command line (none of the tools: checked) and forks a child per tool, which
+# blocks that tool's import and runs ``skelcore compare``: each child a real process with its own exit
+# status and stderr, one interpreter start and one import of skelcore instead of three.
+_MISSING_RUNS = r"""
+import json, os, sys
+from skelcore.cli import main
+cases = json.loads(sys.argv[1])
+loaded = [module for _kind, module, _m, _out in cases if module in sys.modules]
+if loaded:
+    sys.exit(f"imported before the children block them: {loaded}")
+done = {}
+for kind, module, m, out in cases:
+    err = os.path.join(os.path.dirname(m), "stderr.txt")
+    pid = os.fork()
+    if pid == 0:
+        fd = os.open(err, os.O_WRONLY | os.O_CREAT | os.O_TRUNC)
+        os.dup2(fd, 2)
+        os.dup2(os.open(os.devnull, os.O_WRONLY), 1)
+        sys.modules[module] = None
+        try:
+            code = main(["compare", m, "--out", out])
+        except BaseException as exc:
+            print(repr(exc), file=sys.stderr)
+            code = 99
+        sys.stderr.flush()
+        os._exit(code)
+    status = os.waitstatus_to_exitcode(os.waitpid(pid, 0)[1])
+    done[kind] = {"returncode": status, "stderr": open(err).read()}
+print(json.dumps(done))
+"""
+
+
+@pytest.fixture(scope="module")
+def missing_runs(tmp_path_factory):
+    """kind -> the exit status and stderr of ``skelcore compare`` on a manifest of that tool alone, in a
+    process where the tool's import fails."""
+    cases = []
+    for kind, module in MISSING:
+        root = _dataset(tmp_path_factory.mktemp(f"missing_{kind}"))
+        m = manifest(root, f'[[shapes]]\npath = "clouds/*.ply"\n[[methods]]\nname = "t"\nkind = "{kind}"\n')
+        cases.append([kind, module, str(m), str(root / "out")])
+    proc = subprocess.run([sys.executable, "-c", _MISSING_RUNS, json.dumps(cases)], capture_output=True, text=True,
+                          cwd=ROOT)
+    assert proc.returncode == 0, proc.stderr
+    return {kind: dict(run, root=Path(m).parent) for (kind, _module, m, _out), run in
+            zip(cases, (json.loads(proc.stdout)[c[0]] for c in cases))}
+
+
+@pytest.mark.parametrize("kind", [kind for kind, _module in MISSING])
+def test_a_missing_tool_is_one_line_and_exit_2_before_any_job(missing_runs, kind):
     """The tool's import fails (sys.modules blocks it, as when it is not installed)."""
-    root = _dataset(tmp_path)
-    m = manifest(root, f'[[shapes]]\npath = "clouds/*.ply"\n[[methods]]\nname = "t"\nkind = "{kind}"\n')
-    code = textwrap.dedent(f"""
-        import sys
-        sys.modules[{module!r}] = None
-        from skelcore.cli import main
-        sys.exit(main(["compare", {str(m)!r}, "--out", {str(root / 'out')!r}]))
-    """)
-    proc = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, cwd=ROOT)
-    assert proc.returncode == 2, proc.stderr
-    lines = proc.stderr.strip().splitlines()
+    run = missing_runs[kind]
+    assert run["returncode"] == 2, run["stderr"]
+    lines = run["stderr"].strip().splitlines()
     assert len(lines) == 1 and EXTRA in lines[0] and ADAPTERS[kind].tool in lines[0] and "method 't'" in lines[0]
-    assert not (root / "out").exists()
+    assert not (run["root"] / "out").exists()
 
 
 @pytest.mark.parametrize("body, message", [

@@ -88,7 +88,11 @@ def test_open_surface_fires_with_the_share_that_escapes_and_not_after_capping():
 
 
 def test_a_missing_side_is_a_side_not_an_end_and_is_not_capped():
-    c = shapes.cylinder(8192)
+    """The front half of a cylinder of 4096 points (about 2000 left): its one opening, the whole cut, is as
+    much a side as at 8192 points (the cap refused as 61 % of the cloud against 74 %, every curve sample
+    escaping, the same warnings); the evaluation, whose frame fit is tried on the unbounded axis, about
+    2 CPU s less (7.2 -> 5.2 on a loaded machine)."""
+    c = shapes.cylinder(4096)
     front = c.cloud[c.cloud[:, 1] > 0]
     ops = find_openings(front)
     assert [o.kind for o in ops] == ["side"]
