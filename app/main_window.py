@@ -293,11 +293,12 @@ class MainWindow(QtWidgets.QMainWindow):
         self._progress_timer.timeout.connect(self._show_progress)
 
     def _size_task_widgets(self) -> None:
-        """The stage label and the progress bar: 320 and 220 px ("skeletal boundedness + topology"
-        whole), at most a fifth and a tenth of the window's width, so that a small screen (911 px at
-        1366 x 768, scale 1.5) leaves the status message half the bar (docs/guide/viewer.md "Sessions
-        and small screens"). The stage's text is elided again to its new width."""
-        stage, progress = min(320, self.width() // 5), min(220, self.width() // 10)
+        """The stage label and the progress bar: 320 and 220 px, at most 28 % and 10 % of the window's
+        width, so that a small screen (911 px at 1366 x 768, scale 1.5) leaves the status message
+        about half the bar and the stage still shows two stages ("skeletal boundedness + topology",
+        200 px) down to 750 px (docs/guide/viewer.md "Sessions and small screens"). The stage's text
+        is elided again to its new width."""
+        stage, progress = min(320, int(0.28 * self.width())), min(220, self.width() // 10)
         if self.stage.width() != stage or self.progress.width() != progress:
             self.stage.setFixedWidth(stage)
             self.progress.setFixedWidth(progress)
