@@ -10,8 +10,9 @@ from __future__ import annotations
 
 from PySide6 import QtCore, QtGui, QtWidgets
 
-#: Qt's own message margins (QStatusBarPrivate::messageRect): 6 px on the left, 2 px before a widget
-LEFT_MARGIN, WIDGET_GAP, RIGHT_MARGIN = 6, 2, 12
+#: the message's margins: Qt's own (QStatusBarPrivate::messageRect) on the left and the right, and a
+#: gap before a widget wider than Qt's 2 px, so that an elided message does not run into the stage
+LEFT_MARGIN, WIDGET_GAP, RIGHT_MARGIN = 6, 12, 12
 
 
 class StatusBar(QtWidgets.QStatusBar):
