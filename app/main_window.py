@@ -21,6 +21,7 @@ from .panels import BarcodePanel, DisplayPanel, HistogramPanel, PickPanel, Setti
 from .panels._plot import preload_matplotlib
 from .scene import LAYER_ORDER, METRICS, Scene, SceneEvent
 from .session import Session, preload_engine
+from .status_bar import StatusBar
 from .view import SceneView
 from .window_api import LEFT, RIGHT, ActionSpec
 from .window_size import initial_size
@@ -267,15 +268,16 @@ class MainWindow(QtWidgets.QMainWindow):
                           min(picked, int(0.2 * height))], QtCore.Qt.Orientation.Vertical)
 
     def _build_status_bar(self) -> None:
-        bar = self.statusBar()
+        bar = StatusBar(self)  # its message elided beside the task widgets, whole in the tooltip
+        self.setStatusBar(bar)
         # Fixed sizes: a status bar that re-lays itself out on every progress step makes Qt repaint the
-        # window, and the 3D view re-renders (100+ ms for big clouds in software GL).
+        # window, and the 3D view re-renders (100+ ms for big clouds in software GL). They follow only
+        # the window's width (``_size_task_widgets``).
         self.stage = QtWidgets.QLabel("", self)
-        self.stage.setFixedWidth(320)  # two stages side by side: "skeletal boundedness + topology"
         self.progress = QtWidgets.QProgressBar(self)
         self.progress.setRange(0, 1000)
-        self.progress.setFixedWidth(220)
         self.progress.setTextVisible(False)
+        self._size_task_widgets()
         self.cancel_button = QtWidgets.QPushButton("Cancel", self)
         self.cancel_button.clicked.connect(self.session.cancel)
         for w in (self.stage, self.progress, self.cancel_button):
@@ -289,6 +291,23 @@ class MainWindow(QtWidgets.QMainWindow):
         self._progress_timer = QtCore.QTimer(self)
         self._progress_timer.setInterval(125)
         self._progress_timer.timeout.connect(self._show_progress)
+
+    def _size_task_widgets(self) -> None:
+        """The stage label and the progress bar: 320 and 220 px, at most 28 % and 10 % of the window's
+        width, so that a small screen (911 px at 1366 x 768, scale 1.5) leaves the status message
+        about half the bar and the stage still shows two stages ("skeletal boundedness + topology",
+        200 px) down to 750 px (docs/guide/viewer.md "Sessions and small screens"). The stage's text
+        is elided again to its new width."""
+        stage, progress = min(320, int(0.28 * self.width())), min(220, self.width() // 10)
+        if self.stage.width() != stage or self.progress.width() != progress:
+            self.stage.setFixedWidth(stage)
+            self.progress.setFixedWidth(progress)
+            if self.stage.toolTip():
+                self._set_stage_text(self.stage.toolTip())
+
+    def resizeEvent(self, event: QtGui.QResizeEvent) -> None:  # noqa: N802
+        super().resizeEvent(event)
+        self._size_task_widgets()
 
     def action_table(self) -> list[ActionSpec]:
         """The window's own actions, one row each: name, text, menu group, what it does, shortcut, and
@@ -493,7 +512,7 @@ class MainWindow(QtWidgets.QMainWindow):
 
     # ---- computing ------------------------------------------------------------------------
     def _task_started(self, name: str) -> None:
-        self.stage.setText(f"{name}: starting…")
+        self._set_stage_text(f"{name}: starting…")
         self.progress.setValue(0)
         if self.view.frames_held:
             # An edit's scores on their way: the status bar's task widgets, whose showing lays the bar
