@@ -579,26 +579,46 @@ typedef struct {
  * o + tt s, which the previous origin saw along v = tt s + d; the cell of v (its row from v's z, its bin
  * from the first-order change of longitude) holds the point that ray hit.  Only a candidate, tested exactly
  * (point_hit, leaf_hit) like every hint: where the origin moves along a wall, as curve samples along a tube's
- * axis, the sample's own hint point misses by the move (docs/boundedness.md 3.14).  NULL where there is none. */
-static inline const int32_t *moved_hint(const Tree *t, const Move *mv, const float *o, const float *s, int j, int b,
-                                        int32_t pt) {
-    const float *p = t->pts + 3 * (size_t)pt;
-    const float sd = s[0] * mv->d[0] + s[1] * mv->d[1] + s[2] * mv->d[2];
-    const float tt = (p[0] - o[0]) * s[0] + (p[1] - o[1]) * s[1] + (p[2] - o[2]) * s[2] + sd;
-    if (!(tt > 0.0f)) return NULL;
-    const float inv = 1.0f / tt;
-    /* first order in d / tt: v / |v| = s + (d - (s . d) s) / tt */
-    const float z = s[2] + (mv->d[2] - s[2] * sd) * inv;
-    const float lon = (s[0] * mv->d[1] - s[1] * mv->d[0]) * inv * mv->lon_scale[j];
-    const float y = (z + 1.0f) * (0.5f * mv->rows);
-    if (!(y >= 0.0f && y < mv->rows && lon > -0.5f * mv->bins && lon < 0.5f * mv->bins)) return NULL;
-    const int j2 = (int)y;
-    int b2 = b + (int)floorf(lon + 0.5f);
-    if (b2 == b && j2 == j) return NULL;
-    b2 += b2 < 0 ? mv->bins : b2 >= mv->bins ? -mv->bins : 0;
-    if ((j2 / TILE_ROWS) * mv->bands_across + b2 / BAND_BINS > mv->band) return NULL;
-    const int32_t *cand = mv->hints + 2 * ((size_t)j2 * mv->bins + b2);
-    return cand[1] >= 0 && cand[1] != pt ? cand : NULL;
+ * axis, the sample's own hint point misses by the move (docs/boundedness.md 3.14).  The cells of a tile's rays
+ * are found together, VF lanes at a time from the offsets w = p - o its own-point test computed (the same
+ * float operations in the same order as one ray at a time, floor from a truncation; docs/boundedness.md 3.22):
+ * out[l] = the cell of ray l's candidate, or -1 where there is none (no hint point, the origin unmoved, v
+ * behind the origin, off the raster, the ray's own cell, or a later band not yet filled).  A lane from n on is
+ * NaN (tt fails). */
+static inline void moved_cells(const Move *mv, const float *wxs, const float *wys, const float *wzs, const float *sx,
+                               const float *sy, const float *sz, const float *ls, const int32_t *rj, const int32_t *rb,
+                               int n, int32_t *out) {
+    const float rows_f = (float)mv->rows, half_rows = 0.5f * mv->rows;
+    const float lon_lo = -0.5f * mv->bins, lon_hi = 0.5f * mv->bins;
+    const float d0 = mv->d[0], d1 = mv->d[1], d2 = mv->d[2];
+    for (int g = 0; g < n; g += VF) {
+        vf wx, wy, wz, s0, s1, s2, sc;
+        vfi j, b;
+        memcpy(&wx, wxs + g, sizeof wx); memcpy(&wy, wys + g, sizeof wy); memcpy(&wz, wzs + g, sizeof wz);
+        memcpy(&s0, sx + g, sizeof s0); memcpy(&s1, sy + g, sizeof s1); memcpy(&s2, sz + g, sizeof s2);
+        memcpy(&sc, ls + g, sizeof sc);
+        memcpy(&j, rj + g, sizeof j); memcpy(&b, rb + g, sizeof b);
+        const vf sd = s0 * d0 + s1 * d1 + s2 * d2;
+        const vf tt = wx * s0 + wy * s1 + wz * s2 + sd;
+        vfi ok = tt > 0.0f;
+        const vf inv = 1.0f / tt;
+        const vf z = s2 + (d2 - s2 * sd) * inv;
+        const vf lon = (s0 * d1 - s1 * d0) * inv * sc;
+        const vf y = (z + 1.0f) * half_rows;
+        ok &= (y >= 0.0f) & (y < rows_f) & (lon > lon_lo) & (lon < lon_hi);
+        /* (int)y and (int)floorf(lon + 0.5f) where ok (elsewhere 0, never converted out of range) */
+        const vf ys = (vf)((vfi)y & ok), u = (vf)((vfi)(lon + 0.5f) & ok);
+        const vfi j2 = __builtin_convertvector(ys, vfi);
+        vfi fl = __builtin_convertvector(u, vfi);
+        fl += (vfi)(__builtin_convertvector(fl, vf) > u);  /* -1 where the truncation rounded up */
+        vfi b2 = b + fl;
+        ok &= (b2 != b) | (j2 != j);
+        b2 += (vfi)(b2 < 0) & mv->bins;
+        b2 -= (vfi)(b2 >= mv->bins) & mv->bins;
+        ok &= (j2 / TILE_ROWS) * mv->bands_across + b2 / BAND_BINS <= mv->band;
+        const vfi cell = ((j2 * mv->bins + b2) & ok) | ~ok;
+        memcpy(out + g, &cell, sizeof cell);
+    }
 }
 
 /* Does the ray from o along s meet a ball around a point with |p - o| > cut?  1 yes, 0 no, -1 not settled:
@@ -606,17 +626,17 @@ static inline const int32_t *moved_hint(const Tree *t, const Move *mv, const flo
  * search.  hint[0], hint[1] = the leaf and the point a nearby ray hit (the same sample from the previous
  * cluster): that point first (a centre one cell away usually still sees it; the caller has tested it, in
  * lanes over a tile's rays: cast_band), then the point and the leaf of
- * the sample its hit moved to (moved_hint), then its leaf, then (`sibling`: where the points exceed
+ * the sample its hit moved to (the cell `moved`: moved_cells), then its leaf, then (`sibling`: where the points exceed
  * PREFETCH_FROM) that leaf's sibling where it is a leaf, then the previous ray's leaf, then the subtrees of
  * the WALK_UP nearest ancestors of the moved hint's leaf where it was tried, else of the hinted leaf
  * (docs/boundedness.md 3.14, 3.20). */
 static int ray_hits(const Tree *t, Walker *w, const float *o, const float *s, float cut, float h,
-                    int32_t *hint, const Move *mv, int j, int bin, int sibling) {
+                    int32_t *hint, const int32_t *hints, int32_t moved, int sibling) {
     const float h2 = h * h, cut2 = cut * cut;
     int32_t a = hint[0], b = w->last_leaf, p, up_from = -1;
-    if (hint[1] >= 0) {  /* its point missed */
-        const int32_t *cand = mv->on ? moved_hint(t, mv, o, s, j, bin, hint[1]) : NULL;
-        if (cand) {
+    if (hint[1] >= 0 && moved >= 0) {  /* its point missed; the moved hint's cell (moved_cells) */
+        const int32_t *cand = hints + 2 * (size_t)moved;
+        if (cand[1] >= 0 && cand[1] != hint[1]) {
             w->hint_tries++;
             if (point_hit(t, cand[1], o, s, cut2, h2)) {
                 w->hint_hits++;
@@ -1059,8 +1079,10 @@ static int64_t cast_band(const Tree *t, Walker *w, Packet *pk, const Raster *r, 
     const int bins = r->bins;
     const float cut2 = cut * cut, h2 = h * h;
     float sx[TILE_RAYS], sy[TILE_RAYS], sz[TILE_RAYS], px[TILE_RAYS], py[TILE_RAYS], pz[TILE_RAYS];
-    int32_t cell[TILE_RAYS];
+    float ls[TILE_RAYS];  /* the rays' rows' lon_scale (moved_cells) */
+    int32_t cell[TILE_RAYS], rj[TILE_RAYS], rb[TILE_RAYS], moved[TILE_RAYS];
     uint8_t row[TILE_RAYS];
+    const int moving = use_hints && mv->on;
     for (int b = b0; b < b1; b += TILE_BINS) {
         const int x = b >> 6;
         if (use_hints && big) prefetch_hints(t, r, need, hints, j0, j1, b, x, bins);
@@ -1076,6 +1098,9 @@ static int64_t cast_band(const Tree *t, Walker *w, Packet *pk, const Raster *r, 
                 sz[nr] = (float)r->z[j];
                 cell[nr] = j * bins + bb;
                 row[nr] = (uint8_t)(j - j0);
+                rj[nr] = j;
+                rb[nr] = bb;
+                ls[nr] = mv->lon_scale[j];
                 const int32_t pt = hints[2 * (size_t)cell[nr] + 1];
                 if (use_hints && pt >= 0) {
                     const float *p = t->pts + 3 * (size_t)pt;
@@ -1089,7 +1114,10 @@ static int64_t cast_band(const Tree *t, Walker *w, Packet *pk, const Raster *r, 
         }
         if (!nr) continue;
         *rays += nr;
-        for (int l = nr; l < TILE_RAYS && (l & (VF - 1)); l++) px[l] = py[l] = pz[l] = sx[l] = sy[l] = sz[l] = NAN;
+        for (int l = nr; l < TILE_RAYS && (l & (VF - 1)); l++) {
+            px[l] = py[l] = pz[l] = sx[l] = sy[l] = sz[l] = ls[l] = NAN;
+            rj[l] = rb[l] = 0;
+        }
         uint32_t own = 0;  /* the rays whose own hint point they hit */
         const uint32_t all = nr == TILE_RAYS ? ~0u : (1u << nr) - 1u;
         if (use_hints) {
@@ -1102,7 +1130,10 @@ static int64_t cast_band(const Tree *t, Walker *w, Packet *pk, const Raster *r, 
                 vf tt = wx * S0 + wy * S1 + wz * S2;
                 vfi hit = (d2 > cut2) & (tt > 0.0f) & (d2 - tt * tt <= h2);
                 own |= (uint32_t)lane_mask(hit) << g;
+                /* the offsets w = p - o kept for moved_cells (over px, py, pz) */
+                memcpy(px + g, &wx, sizeof wx); memcpy(py + g, &wy, sizeof wy); memcpy(pz + g, &wz, sizeof wz);
             }
+            if (moving) moved_cells(mv, px, py, pz, sx, sy, sz, ls, rj, rb, nr, moved);
             own &= all;
             tried += nr;
             w->hint_tries += __builtin_popcount(with_point);
@@ -1136,7 +1167,7 @@ static int64_t cast_band(const Tree *t, Walker *w, Packet *pk, const Raster *r, 
             int hit = -1;
             if (use_hints) {
                 const float s[3] = {sx[l], sy[l], sz[l]};
-                hit = ray_hits(t, w, cf, s, cut, h, hint, mv, j, bb, big);
+                hit = ray_hits(t, w, cf, s, cut, h, hint, hints, moving ? moved[l] : -1, big);
             }
             if (hit > 0) *word |= bit;
             if (hit < 0) {
@@ -1156,11 +1187,12 @@ static int64_t cast_band(const Tree *t, Walker *w, Packet *pk, const Raster *r, 
  * of nodes) each a wait on memory (docs/boundedness.md 3.20). */
 static inline void seed_cells(const uint64_t *leaf_bits, int32_t n_nodes, int32_t n, const int32_t *from, int32_t *to,
                               size_t len) {
-    for (size_t x = 0; x < len; x += 2) {
+    for (size_t x = 0; x < len; x += 2) {  /* with no branch: about half the cells are misses of the old rays */
         const int32_t leaf = from[x], pt = from[x + 1];
-        const int ok = leaf >= 0 && leaf < n_nodes && (leaf_bits[leaf >> 6] >> (leaf & 63) & 1) && pt >= 0 && pt < n;
-        to[x] = ok ? leaf : -1;
-        to[x + 1] = ok ? pt : -1;
+        const uint32_t in = (uint32_t)leaf < (uint32_t)n_nodes, li = in ? (uint32_t)leaf : 0;
+        const int32_t ok = -(int32_t)(in & (uint32_t)(leaf_bits[li >> 6] >> (li & 63)) & ((uint32_t)pt < (uint32_t)n));
+        to[x] = (leaf & ok) | ~ok;
+        to[x + 1] = (pt & ok) | ~ok;
     }
 }
 
