@@ -458,10 +458,12 @@ static inline int point_hit(const Tree *t, int32_t i, const float *o, const floa
 }
 
 /* the first point of the leaf whose ball the ray meets, or -1: point_hit on its 8 lanes, VF at once (the
- * same operations in the same order, so the same bits; a NaN lane never hits) */
+ * same operations in the same order, so the same bits; a NaN lane never hits).  A node that is no leaf (a hint
+ * from a table the kernel did not make for this tree: seed_cells checks only the ranges) holds no hit. */
 static inline int32_t leaf_hit(const Tree *t, int32_t node, const float *o, const float *s, float cut2, float h2) {
     const Node *nd = t->nodes + node;
-    const float *L = t->leaf + 3 * LEAF_SIZE * (size_t)(-1 - nd->kid);
+    const int32_t kid = nd->kid;
+    const float *L = t->leaf + 3 * LEAF_SIZE * (size_t)(kid < 0 ? -1 - kid : 0);
     unsigned mask = 0;
     for (int g = 0; g < LEAF_SIZE; g += VF) {
         vf x, y, z;
@@ -474,7 +476,7 @@ static inline int32_t leaf_hit(const Tree *t, int32_t node, const float *o, cons
         vfi hit = (d2 > cut2) & (tt > 0.0f) & (d2 - tt * tt <= h2);
         mask |= lane_mask(hit) << g;
     }
-    return mask ? nd->lo + __builtin_ctz(mask) : -1;
+    return mask && kid < 0 ? nd->lo + __builtin_ctz(mask) : -1;
 }
 
 /* Can the node hold a counted point whose ball the ray meets?  Not if every point of it lies within the
@@ -673,6 +675,7 @@ static int ray_hits(const Tree *t, Walker *w, const float *o, const float *s, fl
     if (a < 0) return -1;
     int32_t leaf = -1;
     const int32_t start = up_from >= 0 ? up_from : a;
+    if (t->nodes[start].kid >= 0) return -1;  /* no leaf (a stale seed, seed_cells): nothing below it was tested */
     int32_t prev = start, node = t->nodes[start].par;
     for (int up = 0; up < WALK_UP && node >= 0 && leaf < 0; up++) {
         leaf = walk(t, w, node, prev, a, b, o, s, cut, h);
@@ -1146,8 +1149,9 @@ static int64_t cast_band(const Tree *t, Walker *w, Packet *pk, const Raster *r, 
         if (use_hints && big)  /* the misses' hinted leaf blocks (their nodes were asked of memory with the points) */
             for (uint32_t m = all & ~own; m; m &= m - 1) {
                 const int32_t leaf = hints[2 * (size_t)cell[__builtin_ctz(m)]];
-                if (leaf >= 0) {
-                    const float *L = t->leaf + 3 * LEAF_SIZE * (size_t)(-1 - t->nodes[leaf].kid);
+                const int32_t kid = leaf >= 0 ? t->nodes[leaf].kid : 0;
+                if (kid < 0) {
+                    const float *L = t->leaf + 3 * LEAF_SIZE * (size_t)(-1 - kid);
                     __builtin_prefetch(L);
                     __builtin_prefetch(L + 3 * LEAF_SIZE - 1);
                 }
@@ -1180,17 +1184,17 @@ static int64_t cast_band(const Tree *t, Walker *w, Packet *pk, const Raster *r, 
     return tried;
 }
 
-/* A seed table's cells (leaf, point; `len` int32 in all) copied as hints: a leaf of this tree and one of its
- * points, else none (a seed is only an index into arrays the kernel reads, docs/boundedness.md 3.18).  Which
- * nodes are leaves comes from a bit per node (`leaf_bits`, a few KB that stay in L1), not from each cell's
- * node: a seeded query's 4608 cells read that many nodes scattered over the tree, at 100k points (800 KB
- * of nodes) each a wait on memory (docs/boundedness.md 3.20). */
-static inline void seed_cells(const uint64_t *leaf_bits, int32_t n_nodes, int32_t n, const int32_t *from, int32_t *to,
+/* A seed table's cells (leaf, point; `len` int32 in all) copied as hints: a node of this tree and one of its
+ * points, else none (a seed is only an index into arrays the kernel reads, docs/boundedness.md 3.18).  Only the
+ * ranges, with no branch (the compiler's lanes): a node that is no leaf holds no hit (leaf_hit), so a stale
+ * seed only misorders the search.  Checking each cell's node for a leaf (a bit per node) took 6 % of the
+ * kernel on an edit's update at 100k points, and making the bits a pass over all the nodes every call
+ * (docs/boundedness.md 3.22). */
+static inline void seed_cells(int32_t n_nodes, int32_t n, const int32_t *restrict from, int32_t *restrict to,
                               size_t len) {
-    for (size_t x = 0; x < len; x += 2) {  /* with no branch: about half the cells are misses of the old rays */
+    for (size_t x = 0; x < len; x += 2) {
         const int32_t leaf = from[x], pt = from[x + 1];
-        const uint32_t in = (uint32_t)leaf < (uint32_t)n_nodes, li = in ? (uint32_t)leaf : 0;
-        const int32_t ok = -(int32_t)(in & (uint32_t)(leaf_bits[li >> 6] >> (li & 63)) & ((uint32_t)pt < (uint32_t)n));
+        const int32_t ok = -(int32_t)(((uint32_t)leaf < (uint32_t)n_nodes) & ((uint32_t)pt < (uint32_t)n));
         to[x] = (leaf & ok) | ~ok;
         to[x + 1] = (pt & ok) | ~ok;
     }
@@ -1318,7 +1322,7 @@ static PyObject *py_clusters(PyObject *self, PyObject *args) {
     uint64_t *far = NULL, *need = NULL, *bits = NULL;
     uint8_t *full = NULL, *lone_full = NULL;
     int32_t *stack = NULL, *hints = NULL, *tabs = NULL;
-    uint64_t *lone_far = NULL, *leaf_bits = NULL;
+    uint64_t *lone_far = NULL;
     Lone *lones = NULL;
     float *lon_scale = NULL;
     Near *near = NULL;
@@ -1381,12 +1385,6 @@ static PyObject *py_clusters(PyObject *self, PyObject *args) {
         lone_full = (uint8_t *)calloc((size_t)block * rows, 1);
         lones = (Lone *)calloc((size_t)block, sizeof(Lone));
         if (!tabs || !lone_far || !lone_full || !lones) { PyErr_NoMemory(); goto done; }
-    }
-    if (n_seeds > 0) {  /* seed_cells: a bit per node, set for the leaves */
-        leaf_bits = (uint64_t *)calloc((size_t)t.n_nodes / 64 + 1, sizeof(uint64_t));
-        if (!leaf_bits) { PyErr_NoMemory(); goto done; }
-        for (int32_t i = 0; i < t.n_nodes; i++)
-            if (t.nodes[i].kid < 0) leaf_bits[i >> 6] |= UINT64_C(1) << (i & 63);
     }
     for (int i = 0; i < 2 * rows * bins; i++) hints[i] = -1;
     for (int j = 0; j < rows; j++) lon_scale[j] = (float)(bins / TWO_PI / (r.s[j] * r.s[j]));
@@ -1461,7 +1459,7 @@ static PyObject *py_clusters(PyObject *self, PyObject *args) {
                         if (!L->src) {
                             for (size_t x = 0; x < cells; x++) to[x] = -1;
                         } else if (L->seeded) {
-                            seed_cells(leaf_bits, t.n_nodes, n, L->src + 2 * ((size_t)j * bins + b0), to, cells);
+                            seed_cells(t.n_nodes, n, L->src + 2 * ((size_t)j * bins + b0), to, cells);
                         } else {
                             memcpy(to, L->src + 2 * ((size_t)j * bins + b0), sizeof(int32_t) * cells);
                         }
@@ -1511,7 +1509,7 @@ static PyObject *py_clusters(PyObject *self, PyObject *args) {
         /* a seed: the hints a lone query nearby left (its table and origin), instead of the previous cluster's */
         const int32_t seed = seed_of ? seed_of[k - k0] : -1;
         if (seed >= 0) {
-            seed_cells(leaf_bits, t.n_nodes, n, seeds + (size_t)seed * table, hints, table);
+            seed_cells(t.n_nodes, n, seeds + (size_t)seed * table, hints, table);
             memcpy(prev, seed_at + 3 * (size_t)seed, sizeof prev);
         }
         /* hints from a cluster far away would only lengthen the walks */
@@ -1580,7 +1578,7 @@ static PyObject *py_clusters(PyObject *self, PyObject *args) {
 done:
     raster_free(&r);
     free(far); free(full); free(stack); free(near); free(hints); free(lon_scale);
-    free(tabs); free(lone_far); free(lone_full); free(lones); free(leaf_bits);
+    free(tabs); free(lone_far); free(lone_full); free(lones);
     PyBuffer_Release(&pts); PyBuffer_Release(&nds); PyBuffer_Release(&lvs); PyBuffer_Release(&qs); PyBuffer_Release(&starts);
     PyBuffer_Release(&cen); PyBuffer_Release(&rch);
     PyBuffer_Release(&beta); PyBuffer_Release(&stats); PyBuffer_Release(&stop_buf); PyBuffer_Release(&done_buf);
