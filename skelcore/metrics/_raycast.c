@@ -567,7 +567,7 @@ static int32_t walk(const Tree *t, Walker *w, int32_t root, int32_t skip, int32_
  * blocks (the hints skipped per block, HINT_MIN, rather than per query) */
 #define BLOCK_FROM (512 * 1024)
 
-/* The move of the rays' origin since the previous cluster, and the raster's hints (moved_hint) */
+/* The move of the rays' origin since the previous cluster, and the raster's hints (moved_cells) */
 typedef struct {
     float d[3];
     int on, rows, bins;
