@@ -83,6 +83,11 @@ setup(
             extra_compile_args=["-O3", "-std=c99"],
         ),
         Extension(
+            "skelcore.metrics._lattice_rays",
+            sources=["skelcore/metrics/_lattice_rays.c"],
+            extra_compile_args=["-O3", "-std=c99"],
+        ),
+        Extension(
             "skelcore.metrics._surround",
             sources=["skelcore/metrics/_surround.c"],
             extra_compile_args=["-O3", "-std=c99"],

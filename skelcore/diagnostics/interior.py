@@ -23,9 +23,11 @@ import numpy as np
 from scipy import ndimage
 
 from ..geometry import Checkpoint, bounding_box, no_checkpoint
+from ..metrics import _lattice_rays
 
 __all__ = ["VoxelShape", "voxelize_interior", "betti_numbers", "wide_tunnels", "median_spacing", "cloud_subsample",
            "supported_voxels", "ray_interior", "ray_hits_share", "firm_tunnels", "resolved_part", "resolved_radius", "fill_holes", "grow_by_one",
+           "lattice_hit_counts",
            "LATTICE_DIRECTIONS"]
 
 #: the 26 lattice directions (each component -1, 0 or 1, not all 0)
@@ -104,29 +106,18 @@ def fill_holes(mask: np.ndarray) -> np.ndarray:
     return ~outside[labels]
 
 
-def _ray_hits(target: np.ndarray, d: np.ndarray) -> np.ndarray:
-    """hit[v] = some target voxel at v + t d, t >= 1: one sweep of 2-D slices against ``d``, along the
-    shortest of the axes ``d`` moves on (each step of t moves on all of them: fewer, larger slices)."""
-    moves = np.flatnonzero(d)
-    axis = int(moves[np.argmin(np.asarray(target.shape)[moves])])
-    step = int(d[axis])
-    others = [a for a in range(3) if a != axis]
-    tg = np.moveaxis(target, axis, 0)
-    hit = np.zeros_like(tg)
-    n = tg.shape[0]
-    rng = range(n - 2, -1, -1) if step > 0 else range(1, n)
-    d1, d2 = int(d[others[0]]), int(d[others[1]])
-    # hit[i] = (tg[j] | hit[j]) shifted by (d1, d2), written in place (the border stays False): no
-    # temporaries per slice (26 directions x ~100 slices per voxelization)
-    n1, n2 = tg.shape[1], tg.shape[2]
-    s1 = slice(max(0, -d1), n1 - max(0, d1))
-    s2 = slice(max(0, -d2), n2 - max(0, d2))
-    t1 = slice(max(0, d1), n1 - max(0, -d1))
-    t2 = slice(max(0, d2), n2 - max(0, -d2))
-    for i in rng:
-        j = i + step
-        np.bitwise_or(tg[j, t1, t2], hit[j, t1, t2], out=hit[i, s1, s2])
-    return np.moveaxis(hit, 0, axis)
+def lattice_hit_counts(target: np.ndarray) -> np.ndarray:
+    """Per voxel, how many of the 26 lattice directions d have a ``target`` voxel at v + t d, t >= 1
+    (uint8): the compiled sweeps of ``metrics/_lattice_rays.c``, one direction after the other, each
+    voxel reading the answer of its neighbour along d (docs/performance.md 6.7). The longest axis is
+    made the contiguous one (the 26 directions map onto themselves): fewer, longer rows."""
+    target = np.asarray(target, dtype=bool)
+    last = int(np.argmax(target.shape))
+    order = [a for a in range(3) if a != last] + [last]
+    grid = np.ascontiguousarray(target.transpose(order))
+    count = np.zeros(grid.shape, np.uint8)
+    _lattice_rays.hits(grid.view(np.uint8), *grid.shape, count)
+    return count.transpose(np.argsort(order))
 
 
 def cloud_subsample(cloud: np.ndarray, max_points: int, seed: int = 0) -> np.ndarray:
@@ -214,11 +205,8 @@ def voxelize_interior(
 
 def ray_hits_share(surface: np.ndarray, checkpoint: Checkpoint = no_checkpoint) -> np.ndarray:
     """Per voxel, the share of its 26 lattice rays that meet ``surface`` grown by one voxel."""
-    grown = grow_by_one(surface)
-    count = np.zeros(surface.shape, np.uint8)
-    for k, dvec in enumerate(LATTICE_DIRECTIONS):
-        count += _ray_hits(grown, dvec)
-        checkpoint((k + 1) / len(LATTICE_DIRECTIONS))
+    count = lattice_hit_counts(grow_by_one(surface))
+    checkpoint(1.0)
     return count / float(len(LATTICE_DIRECTIONS))
 
 
