@@ -21,10 +21,12 @@ TINY = 2.0**-40
 
 
 def explained_by_balls(pts: np.ndarray, pts_branch: np.ndarray, reach: np.ndarray, queries: np.ndarray,
-                       own: np.ndarray) -> np.ndarray | None:
+                       own: np.ndarray, tree: cKDTree | None = None) -> np.ndarray | None:
     """For each query q, whether a curve point x of another branch than ``own[q]`` has
     |q - x| <= reach(x) (the norm computed as the level search computes it); None when the balls hold
-    more than ``PAIRS_MAX`` pairs or the search is too large to count them (the caller's search then)."""
+    more than ``PAIRS_MAX`` pairs or the search is too large to count them (the caller's search then).
+    ``tree``: a KD-tree the caller has, used when its points are ``queries`` (the cloud's, when every
+    cloud point is asked): any tree finds the same pairs, which the test below decides."""
     n = len(queries)
     if n == 0 or len(pts) * n > CELLS_MAX:
         return None
@@ -36,7 +38,8 @@ def explained_by_balls(pts: np.ndarray, pts_branch: np.ndarray, reach: np.ndarra
         return None  # the level search's bound underflows for such balls (a zero ball explains nothing there)
     # a little wider than the balls (the tree's squared distances round otherwise): the test below decides
     radius = reach[idx] * (1.0 + 1e-9) + 1e-300
-    tree = cKDTree(queries)
+    if tree is None or tree.n != n or not np.array_equal(tree.data, queries):
+        tree = cKDTree(queries)
     counts = np.asarray(tree.query_ball_point(pts[idx], radius, return_length=True), np.int64)
     total = int(counts.sum())
     if total > PAIRS_MAX:

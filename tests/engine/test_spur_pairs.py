@@ -4,8 +4,10 @@ bit for bit, and leaves the large or degenerate searches to it."""
 from __future__ import annotations
 
 import numpy as np
+from scipy.spatial import cKDTree
 
 from skelcore.diagnostics import spur_pairs, spurs
+from skelcore.geometry import kd_tree
 
 
 def _levels(monkeypatch, pts, pb, reach, q, own):
@@ -34,6 +36,9 @@ def test_ball_search_matches_the_level_search(monkeypatch):
             continue
         answered += 1
         np.testing.assert_array_equal(got, _levels(monkeypatch, pts, pb, reach, q, own))
+        # the caller's tree of the queries (another build: the same pairs), and one of other points (not used)
+        for tree in (kd_tree(q), kd_tree(q[::-1]), cKDTree(q + 1.0)):
+            np.testing.assert_array_equal(spur_pairs.explained_by_balls(pts, pb, reach, q, own, tree), got)
     assert answered > 20
 
 
