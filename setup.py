@@ -83,8 +83,8 @@ setup(
             extra_compile_args=["-O3", "-std=c99"],
         ),
         Extension(
-            "skelcore.metrics._lattice_rays",
-            sources=["skelcore/metrics/_lattice_rays.c"],
+            "skelcore.metrics._voxels",
+            sources=["skelcore/metrics/_voxels.c"],
             extra_compile_args=["-O3", "-std=c99"],
         ),
         Extension(
