@@ -16,6 +16,9 @@ __all__ = ["explained_by_balls"]
 PAIRS_MAX = 1 << 18
 #: and only when queries x curve points is at most this (counting the pairs is then cheap)
 CELLS_MAX = 1 << 24
+#: up to this many queries x curve points the pairs are listed without counting them first (the lists
+#: then hold at most as many entries as a chunk of the level search, 2^20)
+CELLS_LISTED = 1 << 20
 #: balls smaller than this share of the largest (a curve point on a cloud point): the level search
 TINY = 2.0**-40
 
@@ -40,13 +43,19 @@ def explained_by_balls(pts: np.ndarray, pts_branch: np.ndarray, reach: np.ndarra
     radius = reach[idx] * (1.0 + 1e-9) + 1e-300
     if tree is None or tree.n != n or not np.array_equal(tree.data, queries):
         tree = cKDTree(queries)
-    counts = np.asarray(tree.query_ball_point(pts[idx], radius, return_length=True), np.int64)
+    found = None
+    if len(idx) * n <= CELLS_LISTED:
+        found = tree.query_ball_point(pts[idx], radius, return_sorted=False)
+        counts = np.fromiter(map(len, found), np.int64, len(idx))
+    else:  # counted first: the lists of PAIRS_MAX pairs at most
+        counts = np.asarray(tree.query_ball_point(pts[idx], radius, return_length=True), np.int64)
     total = int(counts.sum())
     if total > PAIRS_MAX:
         return None
     if total == 0:
         return out
-    found = tree.query_ball_point(pts[idx], radius, return_sorted=False)
+    if found is None:
+        found = tree.query_ball_point(pts[idx], radius, return_sorted=False)
     qi = np.fromiter(itertools.chain.from_iterable(found), np.int64, count=total)  # no generator frame per pair
     xi = np.repeat(idx, counts)
     other = pts_branch[xi] != own[qi]
