@@ -20,6 +20,8 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "_union_find.h"
+
 /* one direction (di, dj, dk): hit per voxel, added to count */
 static void sweep(const uint8_t *restrict g, uint8_t *restrict hit, uint8_t *restrict count,
                   Py_ssize_t nx, Py_ssize_t ny, Py_ssize_t nz, int di, int dj, int dk) {
@@ -129,14 +131,6 @@ static PyObject *py_cells(PyObject *self, PyObject *args) {
     return Py_BuildValue("LLLL", cubes, faces, edges, verts);
 }
 
-static inline int32_t find_root(int32_t *parent, int32_t v) {
-    while (parent[v] != v) {
-        parent[v] = parent[parent[v]];  /* path halving */
-        v = parent[v];
-    }
-    return v;
-}
-
 /* parts(solid (nx, ny, nz) u8 0/1, nx, ny, nz) -> its 26-connected parts (scipy.ndimage.label's count with
  * the 3 x 3 x 3 structure): a union-find of every solid voxel with its 13 solid neighbours behind it */
 static PyObject *py_parts(PyObject *self, PyObject *args) {
@@ -170,7 +164,7 @@ static PyObject *py_parts(PyObject *self, PyObject *args) {
                                 if (a < 0 || b < 0 || b >= ny || c < 0 || c >= nz) continue;
                                 const Py_ssize_t w = (a * ny + b) * nz + c;
                                 if (!s[w]) continue;
-                                int32_t x = find_root(parent, (int32_t)v), y = find_root(parent, (int32_t)w);
+                                int32_t x = root_of(parent, (int32_t)v), y = root_of(parent, (int32_t)w);
                                 if (x == y) continue;
                                 if (x < y) parent[y] = x;
                                 else parent[x] = y;
