@@ -1,8 +1,8 @@
 """Build step for the compiled modules: the rays boundedness kernel (docs/boundedness.md, section 3), the
 coverage kernel (docs/metrics.md, section 5.2), skeletal centeredness' neighbour sums, curve centeredness'
-rings, the topology stage's EMST, the missing parts' connected components, the passes over a removed
-arm's points (docs/performance.md, sections 6.4, 6.5, 6.1 and 6.10), the first pass of the openings'
-surround test (docs/metrics.md 6.1) and the farthest-point sampling by spheres of cao's curve and the
+rings, the topology stage's EMST, the missing parts' connected components, the interior's passes over its
+voxel grid, the passes over a removed arm's points (docs/performance.md, sections 6.4, 6.5, 6.1, 6.7 and
+6.10), the first pass of the openings' surround test (docs/metrics.md 6.1) and the farthest-point sampling by spheres of cao's curve and the
 repair's fills (docs/repair.md "The repair's cost").
 
 Also here: the package list (the viewer's folder ``app/`` installs as ``skelscope``) and the package
@@ -70,6 +70,7 @@ setup(
         Extension(
             "skelcore.metrics._components",
             sources=["skelcore/metrics/_components.c"],
+            depends=["skelcore/metrics/_union_find.h"],
             extra_compile_args=["-O3", "-std=c99"],
         ),
         Extension(
@@ -80,6 +81,12 @@ setup(
         Extension(
             "skelcore.metrics._region_links",
             sources=["skelcore/metrics/_region_links.c"],
+            extra_compile_args=["-O3", "-std=c99"],
+        ),
+        Extension(
+            "skelcore.metrics._voxels",
+            sources=["skelcore/metrics/_voxels.c"],
+            depends=["skelcore/metrics/_union_find.h"],
             extra_compile_args=["-O3", "-std=c99"],
         ),
         Extension(

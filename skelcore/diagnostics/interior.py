@@ -5,7 +5,8 @@ A voxel is inside when it holds cloud points or when the rays from its centre al
 directions hit the (one voxel thicker) cloud-holding voxels in more than beta* of them: the
 boundedness of docs/metrics.md 2 (the share of rays from a point that hit the sampled surface), on the voxel lattice.
 Scoring every voxel with the ``rays`` estimator itself would cost 13 s for a 48-voxel torus of 4096
-points; the lattice rays cost a few sweeps over the grid at any cloud size.
+points; the lattice rays cost a few sweeps over the grid at any cloud size (compiled with the cells'
+count, the parts and the hole fill: ``metrics/_voxels.c``).
 
 The interior is the union of its closed voxel cubes; its Betti numbers come from the Euler
 characteristic (beta1 = beta0 + beta2 - chi), beta0 from its 26-connected components and beta2 from
@@ -23,9 +24,11 @@ import numpy as np
 from scipy import ndimage
 
 from ..geometry import Checkpoint, bounding_box, no_checkpoint
+from ..metrics import _voxels
 
 __all__ = ["VoxelShape", "voxelize_interior", "betti_numbers", "wide_tunnels", "median_spacing", "cloud_subsample",
            "supported_voxels", "ray_interior", "ray_hits_share", "firm_tunnels", "resolved_part", "resolved_radius", "fill_holes", "grow_by_one",
+           "lattice_hit_counts",
            "LATTICE_DIRECTIONS"]
 
 #: the 26 lattice directions (each component -1, 0 or 1, not all 0)
@@ -89,44 +92,30 @@ def grow_by_one(mask: np.ndarray) -> np.ndarray:
 
 
 def fill_holes(mask: np.ndarray) -> np.ndarray:
-    """``mask`` with its holes filled: ``scipy.ndimage.binary_fill_holes`` (the same voxels), by one
-    labelling of the rest (face-connected, as there) instead of a flood from the border (a third of its
-    time on the interior's grids). Empty parts not touching the grid's border are holes."""
-    mask = np.asarray(mask, bool)
-    labels, n = ndimage.label(~mask)
-    if n == 0:
-        return mask.copy()
-    outside = np.zeros(n + 1, bool)
-    for axis in range(mask.ndim):
-        for end in (0, -1):
-            outside[np.take(labels, end, axis=axis)] = True
-    outside[0] = False  # the mask's own voxels
-    return ~outside[labels]
+    """``mask`` (3-D) with its holes filled: ``scipy.ndimage.binary_fill_holes`` (the same voxels), by a
+    compiled flood of the empty voxels face-connected to the grid's border (``metrics/_voxels.c``; a
+    labelling of the rest took ten times longer on the interior's grids, docs/performance.md 6.7).
+    Empty parts not touching the grid's border are holes."""
+    mask = np.ascontiguousarray(mask, dtype=bool)
+    if mask.ndim != 3:
+        raise ValueError(f"expected a 3-D grid, got shape {mask.shape}")
+    out = np.empty(mask.shape, bool)
+    _voxels.fill(mask.view(np.uint8), *mask.shape, out.view(np.uint8))
+    return out
 
 
-def _ray_hits(target: np.ndarray, d: np.ndarray) -> np.ndarray:
-    """hit[v] = some target voxel at v + t d, t >= 1: one sweep of 2-D slices against ``d``, along the
-    shortest of the axes ``d`` moves on (each step of t moves on all of them: fewer, larger slices)."""
-    moves = np.flatnonzero(d)
-    axis = int(moves[np.argmin(np.asarray(target.shape)[moves])])
-    step = int(d[axis])
-    others = [a for a in range(3) if a != axis]
-    tg = np.moveaxis(target, axis, 0)
-    hit = np.zeros_like(tg)
-    n = tg.shape[0]
-    rng = range(n - 2, -1, -1) if step > 0 else range(1, n)
-    d1, d2 = int(d[others[0]]), int(d[others[1]])
-    # hit[i] = (tg[j] | hit[j]) shifted by (d1, d2), written in place (the border stays False): no
-    # temporaries per slice (26 directions x ~100 slices per voxelization)
-    n1, n2 = tg.shape[1], tg.shape[2]
-    s1 = slice(max(0, -d1), n1 - max(0, d1))
-    s2 = slice(max(0, -d2), n2 - max(0, d2))
-    t1 = slice(max(0, d1), n1 - max(0, -d1))
-    t2 = slice(max(0, d2), n2 - max(0, -d2))
-    for i in rng:
-        j = i + step
-        np.bitwise_or(tg[j, t1, t2], hit[j, t1, t2], out=hit[i, s1, s2])
-    return np.moveaxis(hit, 0, axis)
+def lattice_hit_counts(target: np.ndarray) -> np.ndarray:
+    """Per voxel, how many of the 26 lattice directions d have a ``target`` voxel at v + t d, t >= 1
+    (uint8): the compiled sweeps of ``metrics/_voxels.c``, one direction after the other, each
+    voxel reading the answer of its neighbour along d (docs/performance.md 6.7). The longest axis is
+    made the contiguous one (the 26 directions map onto themselves): fewer, longer rows."""
+    target = np.asarray(target, dtype=bool)
+    last = int(np.argmax(target.shape))
+    order = [a for a in range(3) if a != last] + [last]
+    grid = np.ascontiguousarray(target.transpose(order))
+    count = np.zeros(grid.shape, np.uint8)
+    _voxels.hits(grid.view(np.uint8), *grid.shape, count)
+    return count.transpose(np.argsort(order))
 
 
 def cloud_subsample(cloud: np.ndarray, max_points: int, seed: int = 0) -> np.ndarray:
@@ -214,11 +203,8 @@ def voxelize_interior(
 
 def ray_hits_share(surface: np.ndarray, checkpoint: Checkpoint = no_checkpoint) -> np.ndarray:
     """Per voxel, the share of its 26 lattice rays that meet ``surface`` grown by one voxel."""
-    grown = grow_by_one(surface)
-    count = np.zeros(surface.shape, np.uint8)
-    for k, dvec in enumerate(LATTICE_DIRECTIONS):
-        count += _ray_hits(grown, dvec)
-        checkpoint((k + 1) / len(LATTICE_DIRECTIONS))
+    count = lattice_hit_counts(grow_by_one(surface))
+    checkpoint(1.0)
     return count / float(len(LATTICE_DIRECTIONS))
 
 
@@ -250,33 +236,12 @@ def betti_numbers(solid: np.ndarray, filled: bool = False) -> tuple[int, int, in
     an empty border): chi = V - E + F - C counted on the cubical complex. ``filled``: ``solid`` has
     no cavity (:func:`fill_holes`' output), so beta2 = 0 without labelling the rest."""
     s = np.pad(np.asarray(solid, bool), 1)
-    c = int(s.sum())
-    # a face normal to axis a lies between the two cubes beside it along a
-    faces = sum(int((s[tuple(slice(None, -1) if ax == a else slice(None) for ax in range(3))]
-                     | s[tuple(slice(1, None) if ax == a else slice(None) for ax in range(3))]).sum())
-                for a in range(3))
-    # an edge along axis a lies between the 4 cubes around it (the other two axes shifted by 0 / 1)
-    edges = 0
-    for a in range(3):
-        o = [ax for ax in range(3) if ax != a]
-        acc = None
-        for s1 in (0, 1):
-            for s2 in (0, 1):
-                sl = [slice(None)] * 3
-                sl[o[0]] = slice(s1, s.shape[o[0]] - 1 + s1)
-                sl[o[1]] = slice(s2, s.shape[o[1]] - 1 + s2)
-                part = s[tuple(sl)]
-                acc = part if acc is None else acc | part
-        edges += int(acc.sum())
-    acc = None
-    for s1 in (0, 1):
-        for s2 in (0, 1):
-            for s3 in (0, 1):
-                part = s[s1:s.shape[0] - 1 + s1, s2:s.shape[1] - 1 + s2, s3:s.shape[2] - 1 + s3]
-                acc = part if acc is None else acc | part
-    verts = int(acc.sum())
+    # a face normal to axis a lies between the two cubes beside it along a, an edge along a between the
+    # 4 cubes around it, a vertex between 8; beta0 from the 26-connected parts (``metrics/_voxels.c``,
+    # scipy.ndimage.label's count with the full structure)
+    c, faces, edges, verts = _voxels.cells(s.view(np.uint8), *s.shape)
     chi = verts - edges + faces - c
-    _, b0 = ndimage.label(s, structure=np.ones((3, 3, 3), bool))
+    b0 = _voxels.parts(s.view(np.uint8), *s.shape)
     if filled:
         return int(b0), int(b0 - chi), 0
     lab, nc = ndimage.label(~s)

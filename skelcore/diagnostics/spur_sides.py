@@ -45,17 +45,30 @@ def one_sidedness(cloud_tree: cKDTree, pts: np.ndarray, r_x: np.ndarray, r_typ: 
     kept = {} if kept is None else kept
     new = [i for i, key in enumerate(keys) if key not in kept]
     if new:
-        data = cloud_tree.data
-        for i, rows in zip(new, cloud_tree.query_ball_point(el[new], radius[new])):
-            m = None
-            if len(rows) >= 8:
-                d = data[rows] - el[i]
-                n = np.linalg.norm(d, axis=1, keepdims=True)
-                m = np.mean(np.divide(d, n, out=np.zeros_like(d), where=n > 0), axis=0)
-            kept[keys[i]] = m
+        kept.update(zip((keys[i] for i in new), _mean_directions(cloud_tree, el[new], radius[new])))
     u = []
     for i, key in enumerate(keys):
         m = kept[key]
         if m is not None:
             u.append(m - (m @ axis[i]) * axis[i])
     return float(np.linalg.norm(np.mean(u, axis=0))) if u else 0.0
+
+
+def _mean_directions(cloud_tree: cKDTree, el: np.ndarray, radius: np.ndarray) -> list[np.ndarray | None]:
+    """Per point of ``el``, the mean unit direction to the cloud points within its ``radius`` (None
+    with fewer than 8): every ball's unit directions in one array, then each ball's mean of its block
+    of rows (``np.add.reduceat`` adds them in another order: not the same bits)."""
+    found = cloud_tree.query_ball_point(el, radius)
+    counts = np.fromiter(map(len, found), np.int64, len(found))
+    out: list[np.ndarray | None] = [None] * len(found)
+    big = np.flatnonzero(counts >= 8)
+    if not len(big):
+        return out
+    rows = np.concatenate([np.asarray(found[j], np.int64) for j in big])
+    d = cloud_tree.data[rows] - np.repeat(el[big], counts[big], axis=0)
+    n = np.linalg.norm(d, axis=1, keepdims=True)
+    unit = np.divide(d, n, out=np.zeros_like(d), where=n > 0)
+    stops = np.cumsum(counts[big]).tolist()
+    for j, start, stop in zip(big.tolist(), [0] + stops[:-1], stops):
+        out[j] = np.mean(unit[start:stop], axis=0)
+    return out

@@ -21,6 +21,7 @@ r_J, share of the length.
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from functools import partial
 
 import numpy as np
 from scipy.spatial import cKDTree
@@ -172,10 +173,12 @@ _K_MAX = 256  # beyond, the rows still crowded by their own branch are answered 
 
 
 def _explained_elsewhere(
-    pts: np.ndarray, pts_branch: np.ndarray, reach: np.ndarray, queries: np.ndarray, own: np.ndarray
+    pts: np.ndarray, pts_branch: np.ndarray, reach: np.ndarray, queries: np.ndarray, own: np.ndarray,
+    query_tree: cKDTree | None = None,
 ) -> np.ndarray:
     """For each query point, whether some curve point x on another branch than ``own`` explains it
-    (|q - x| <= reach(x)).
+    (|q - x| <= reach(x)). ``query_tree``: the cloud's KD-tree, which the ball pairs' search reads
+    when the queries are its points (:func:`.spur_pairs.explained_by_balls`).
 
     The curve points are grouped by reach in levels of a factor 2 (an edge through the air has balls
     far larger than the shape's: one scale would blind the trees), each level searched by
@@ -186,7 +189,7 @@ def _explained_elsewhere(
     ok = np.isfinite(reach) & (reach >= 0)
     if not n or not ok.any():
         return out
-    few = explained_by_balls(pts, pts_branch, reach, queries, own)  # the same answers, when the balls hold few points
+    few = explained_by_balls(pts, pts_branch, reach, queries, own, query_tree)  # the same answers, when the balls hold few points
     if few is not None:
         return few
     top = float(reach[ok].max())
@@ -315,11 +318,11 @@ def find_spurious_branches(
         in_term = is_term[own]
         q = use if in_term.all() else use[in_term]  # the subsample itself when every point is terminal's
         checkpoint(0.4)
+        search = partial(_explained_elsewhere, query_tree=cloud_tree)  # a tree of q when the whole cloud is asked
         if memo is None:
-            elsewhere = _explained_elsewhere(pts, pb, explain, q, own[in_term])
+            elsewhere = search(pts, pb, explain, q, own[in_term])
         else:
-            elsewhere = memo.search(_explained_elsewhere, pts, pb, explain, q, np.flatnonzero(in_term), own[in_term],
-                                    len(use))
+            elsewhere = memo.search(search, pts, pb, explain, q, np.flatnonzero(in_term), own[in_term], len(use))
         checkpoint(0.9)
         territory = np.bincount(own[in_term], minlength=nb)[:nb]
         unique = np.bincount(own[in_term][~elsewhere], minlength=nb)[:nb]

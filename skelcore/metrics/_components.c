@@ -15,13 +15,7 @@
 #include <stdint.h>
 #include <stdlib.h>
 
-static inline int32_t root_of(int32_t *parent, int32_t v) {
-    while (parent[v] != v) {
-        parent[v] = parent[parent[v]];  /* path halving */
-        v = parent[v];
-    }
-    return v;
-}
+#include "_union_find.h"
 
 /* components(n, heads (E,) i64, tails (E,) i64, labels out (n,) i32) -> number of components; every end
  * in [0, n) (checked) */

@@ -166,21 +166,24 @@ def test_interior_cavities_are_filled_and_counted():
 
 @pytest.mark.parametrize("seed", range(3))
 def test_lattice_rays_match_a_walk_along_each_ray(seed):
-    """The sweep that counts the interior's lattice rays against walking every ray voxel by voxel."""
-    from skelcore.diagnostics.interior import LATTICE_DIRECTIONS, _ray_hits
+    """The compiled sweeps that count the interior's lattice rays against walking every ray voxel by voxel."""
+    from skelcore.diagnostics.interior import LATTICE_DIRECTIONS, lattice_hit_counts
 
     target = np.random.default_rng(seed).random((7, 9, 6)) < 0.08
     shape = np.array(target.shape)
+    want = np.zeros(target.shape, np.uint8)
     for d in LATTICE_DIRECTIONS:
-        want = np.zeros_like(target)
         for v in np.ndindex(*target.shape):
             p = np.array(v) + d
             while np.all(p >= 0) and np.all(p < shape):
                 if target[tuple(p)]:
-                    want[v] = True
+                    want[v] += 1
                     break
                 p = p + d
-        np.testing.assert_array_equal(_ray_hits(target, d), want)
+    got = lattice_hit_counts(target)
+    assert got.dtype == np.uint8 and 0 < got.max() <= 26
+    np.testing.assert_array_equal(got, want)
+    assert lattice_hit_counts(target[:, :, :1]).shape == (7, 9, 1)  # rows of one voxel
 
 
 def test_fill_and_growth_are_scipys_and_a_filled_solid_has_no_cavity():

@@ -4,8 +4,10 @@ bit for bit, and leaves the large or degenerate searches to it."""
 from __future__ import annotations
 
 import numpy as np
+from scipy.spatial import cKDTree
 
 from skelcore.diagnostics import spur_pairs, spurs
+from skelcore.geometry import kd_tree
 
 
 def _levels(monkeypatch, pts, pb, reach, q, own):
@@ -34,6 +36,12 @@ def test_ball_search_matches_the_level_search(monkeypatch):
             continue
         answered += 1
         np.testing.assert_array_equal(got, _levels(monkeypatch, pts, pb, reach, q, own))
+        # the caller's tree of the queries (another build: the same pairs), and one of other points (not used)
+        for tree in (kd_tree(q), kd_tree(q[::-1]), cKDTree(q + 1.0)):
+            np.testing.assert_array_equal(spur_pairs.explained_by_balls(pts, pb, reach, q, own, tree), got)
+        with monkeypatch.context() as m:  # the pairs counted before they are listed
+            m.setattr(spur_pairs, "CELLS_LISTED", 0)
+            np.testing.assert_array_equal(spur_pairs.explained_by_balls(pts, pb, reach, q, own), got)
     assert answered > 20
 
 
@@ -49,6 +57,8 @@ def test_ball_search_declines_large_and_degenerate_searches(monkeypatch):
     assert spur_pairs.explained_by_balls(pts, pb, zero, q, own) is None
     # balls holding more pairs than PAIRS_MAX: the level search (its memory bound)
     monkeypatch.setattr(spur_pairs, "PAIRS_MAX", 100)
+    assert spur_pairs.explained_by_balls(pts, pb, np.full(50, 2.0), q, own) is None
+    monkeypatch.setattr(spur_pairs, "CELLS_LISTED", 0)  # counted before they are listed: the same refusal
     assert spur_pairs.explained_by_balls(pts, pb, np.full(50, 2.0), q, own) is None
     np.testing.assert_array_equal(spurs._explained_elsewhere(pts, pb, np.full(50, 2.0), q, own),
                                   _levels(monkeypatch, pts, pb, np.full(50, 2.0), q, own))
