@@ -68,12 +68,13 @@ def _part_entries(curve: CurveSkeleton, part: CurveSkeleton) -> tuple[list[dict[
     d, j = cKDTree(curve.vertices[used]).query(part.vertices[keep])
     first = int(np.argmin(d))
     n = curve.n_vertices
-    new_id = {int(v): n + i for i, v in enumerate(keep)}
-    out = [{"op": "add_vertex", "args": {"position": [float(x) for x in part.vertices[v]],
-                                         "attach_to": int(used[j[first]]) if i == first else None}}
-           for i, v in enumerate(keep)]
-    out += [{"op": "add_edge", "args": {"edge": sorted([new_id[int(a)], new_id[int(b)]])}} for a, b in part.edges]
-    return out, int(used[j[first]])
+    at = int(used[j[first]])
+    new_id = np.full(part.n_vertices, -1, np.int64)
+    new_id[keep] = n + np.arange(len(keep))
+    out = [{"op": "add_vertex", "args": {"position": p, "attach_to": at if i == first else None}}
+           for i, p in enumerate(part.vertices[keep].tolist())]  # the same Python floats and ints, in bulk
+    out += [{"op": "add_edge", "args": {"edge": e}} for e in np.sort(new_id[part.edges], axis=1).tolist()]
+    return out, at
 
 
 def _made(memo: dict | None, how: str, pts: np.ndarray, make: Callable[[], CurveSkeleton | None]
