@@ -273,6 +273,9 @@ class Params:
         curve's completeness drops, or its outside length share rises, by more than this.
     repair_score_drop : ... or when curve boundedness or curve centeredness drops by more than this.
     repair_fill_missing : skelcore.repair also tries to fill a missing part (a new stretch of curve).
+    repair_fill_points : a missing region of more points is skeletonized (``skelscope``) for its fill on
+        the means of its points per cell of a grid with at most this many cells (docs/repair.md "The
+        repair's cost"; tuned on neurons 1734350788 and 1734350908).
     repair_all_round : a missing region is seen all round when at least this share of the cloud's
         cross-sections through it is its own (a tube's end, a thick part cut off, a whole missing
         branch); its slabs' centroids are tried before its axis curve (docs/repair.md "A thick part's
@@ -429,6 +432,7 @@ class Params:
     repair_score_drop: float = 0.02
     repair_join_step: float = 0.5
     repair_fill_missing: bool = True
+    repair_fill_points: int = 8000
     repair_all_round: float = 0.93
     repair_recentre: bool = True
     repair_centre_gain: float = 0.01
@@ -530,7 +534,7 @@ class Params:
         for name in ("gt_threshold_max", "gt_match_radii", "gt_branch_radii", "gt_sample_step"):
             if not float(getattr(self, name)) > 0:
                 bad(name, "must be > 0")
-        for name in ("repair_max_rounds", "repair_max_tries", "repair_max_components"):
+        for name in ("repair_max_rounds", "repair_max_tries", "repair_max_components", "repair_fill_points"):
             if int(getattr(self, name)) < 1:
                 bad(name, "must be a positive integer")
         for name in ("repair_completeness_drop", "repair_outside_rise", "repair_score_drop", "repair_centre_gain",

@@ -19,6 +19,7 @@ from ..curve import CurveSkeleton
 from ..errors import SkelInputError
 from .all_round import all_round_share
 from .proposals import Action
+from .thin_region import thinned
 
 __all__ = ["fill_missing", "fill_actions", "Fills", "WHEN_REACHED"]
 
@@ -67,12 +68,13 @@ def _part_entries(curve: CurveSkeleton, part: CurveSkeleton) -> tuple[list[dict[
     d, j = cKDTree(curve.vertices[used]).query(part.vertices[keep])
     first = int(np.argmin(d))
     n = curve.n_vertices
-    new_id = {int(v): n + i for i, v in enumerate(keep)}
-    out = [{"op": "add_vertex", "args": {"position": [float(x) for x in part.vertices[v]],
-                                         "attach_to": int(used[j[first]]) if i == first else None}}
-           for i, v in enumerate(keep)]
-    out += [{"op": "add_edge", "args": {"edge": sorted([new_id[int(a)], new_id[int(b)]])}} for a, b in part.edges]
-    return out, int(used[j[first]])
+    at = int(used[j[first]])
+    new_id = np.full(part.n_vertices, -1, np.int64)
+    new_id[keep] = n + np.arange(len(keep))
+    out = [{"op": "add_vertex", "args": {"position": p, "attach_to": at if i == first else None}}
+           for i, p in enumerate(part.vertices[keep].tolist())]  # the same Python floats and ints, in bulk
+    out += [{"op": "add_edge", "args": {"edge": e}} for e in np.sort(new_id[part.edges], axis=1).tolist()]
+    return out, at
 
 
 def _made(memo: dict | None, how: str, pts: np.ndarray, make: Callable[[], CurveSkeleton | None]
@@ -87,13 +89,15 @@ def _made(memo: dict | None, how: str, pts: np.ndarray, make: Callable[[], Curve
     return memo[key]
 
 
-def _skeleton_entries(curve: CurveSkeleton, pts: np.ndarray, memo: dict | None = None
-                      ) -> tuple[list[dict[str, Any]], int] | None:
+def _skeleton_entries(curve: CurveSkeleton, pts: np.ndarray, memo: dict | None = None,
+                      fill_points: int | None = None) -> tuple[list[dict[str, Any]], int] | None:
+    """The region's ``skelscope`` curve, on at most ``fill_points`` points (:mod:`.thin_region`; None:
+    all of them)."""
     from ..skeleton import skeletonize
 
     def make() -> CurveSkeleton | None:
         try:
-            return skeletonize(pts, method="skelscope")[1]
+            return skeletonize(pts if fill_points is None else thinned(pts, fill_points), method="skelscope")[1]
         except (SkelInputError, ValueError, np.linalg.LinAlgError, RuntimeError):
             return None
 
@@ -125,14 +129,15 @@ def _axis_entries(curve: CurveSkeleton, pts: np.ndarray, memo: dict | None = Non
 
 
 def fill_missing(curve: CurveSkeleton, missing: Any, cloud: np.ndarray, max_regions: int = 2,
-                 memo: dict | None = None) -> list[Action]:
+                 memo: dict | None = None, fill_points: int | None = None) -> list[Action]:
     """Up to three actions per counted missing region (largest first) of ``missing``
     (:class:`~skelcore.diagnostics.missing_parts.MissingParts` of the evaluated ``cloud``)."""
-    return list(fill_actions(curve, missing, cloud, max_regions, memo))
+    return list(fill_actions(curve, missing, cloud, max_regions, memo, fill_points=fill_points))
 
 
 def fill_actions(curve: CurveSkeleton, missing: Any, cloud: np.ndarray, max_regions: int = 2,
-                 memo: dict | None = None, all_round: float = np.inf) -> Iterator[Action]:
+                 memo: dict | None = None, all_round: float = np.inf, fill_points: int | None = None
+                 ) -> Iterator[Action]:
     """:func:`fill_missing`'s actions one at a time, in its order: each is made (a region's axis curve,
     its skeletonization) only when asked for. Every region's axis curve first, then every region's
     skeleton, then the slabs' centroids: on the tuning neurons the axis curve raised GT F1 most and
@@ -142,7 +147,8 @@ def fill_actions(curve: CurveSkeleton, missing: Any, cloud: np.ndarray, max_regi
     cut off, a whole missing branch) has its slabs' centroids tried before its axis curve: its axis
     lies inside it, where the slabs' centroids are, while the axis curve of a thick part is a tangle on
     its surface (docs/repair.md "A thick part's fill"). ``memo``: the regions' curves made in the
-    rounds before (:func:`_made`)."""
+    rounds before (:func:`_made`); ``fill_points``: a region's skeletonization runs on at most this
+    many points (:mod:`.thin_region`; None: all)."""
     if missing is None or not missing.counted or len(missing.region) != len(cloud):
         return
     e = curve.edges
@@ -172,7 +178,7 @@ def fill_actions(curve: CurveSkeleton, missing: Any, cloud: np.ndarray, max_regi
             yield Action("incomplete", target(reg), f"missing region {reg.id} ({reg.n_points} points): "
                          f"its axis curve at its own spacing attached at vertex {at}", entries)
     for reg, pts in regions:
-        made = _skeleton_entries(curve, pts, memo)
+        made = _skeleton_entries(curve, pts, memo, fill_points)
         if made is not None:
             entries, at = made
             yield Action("incomplete", target(reg), f"missing region {reg.id} ({reg.n_points} points) "

@@ -219,7 +219,7 @@ def repair(cloud: np.ndarray, curve: CurveSkeleton | tuple | None = None, skelet
             inside, voxel, route = _in_shape(ev)
             candidates = propose(cur, found, inside, p.repair_join_step * voxel, route)
             fills = Fills(fill_actions(cur, found.missing, np.asarray(ev.source.args["cloud"], float),
-                                       p.repair_max_tries, parts, p.repair_all_round)
+                                       p.repair_max_tries, parts, p.repair_all_round, p.repair_fill_points)
                           if p.repair_fill_missing else iter(()),
                           p.repair_max_tries, lambda: clock.phase("proposals"))
         ahead = fills.first(p.repair_max_tries - len(candidates))  # those the head and the count need

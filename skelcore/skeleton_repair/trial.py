@@ -7,6 +7,7 @@ does not take) is applied entry by entry, so the refusal and its message are the
 
 from __future__ import annotations
 
+import math
 from typing import Any
 
 import numpy as np
@@ -38,7 +39,11 @@ def _int_id(v: object, n: int) -> bool:
     return isinstance(v, (int, np.integer)) and not isinstance(v, (bool, np.bool_)) and 0 <= int(v) < n
 
 
-def _position(value: object) -> np.ndarray | None:
+def _position(value: object) -> np.ndarray | list[float] | None:
+    """The three finite coordinates of ``value`` (None when it has not them): a list of three Python
+    floats as it is (what a fill writes; the same values numpy gives), else numpy's conversion."""
+    if type(value) is list and len(value) == 3 and all(type(x) is float and math.isfinite(x) for x in value):
+        return value
     try:
         p = np.asarray(value, dtype=float).reshape(-1)
     except (TypeError, ValueError):
@@ -50,7 +55,7 @@ def _added(curve: CurveSkeleton, run: list[dict[str, Any]]) -> CurveSkeleton | N
     """``curve`` with the run of adds in one rebuild, or None when some entry is not plainly valid
     (then the edit applies them one by one and says why)."""
     n = curve.n_vertices
-    points: list[np.ndarray] = []
+    points: list[np.ndarray | list[float]] = []
     pairs: list[tuple[int, int]] = []
     for entry in run:
         args = entry.get("args")
@@ -82,7 +87,7 @@ def _added(curve: CurveSkeleton, run: list[dict[str, Any]]) -> CurveSkeleton | N
         return None  # an edge added twice: the edit refuses the second
     if curve.n_edges and np.isin(codes, curve.edges[:, 0].astype(np.int64) * m + curve.edges[:, 1]).any():
         return None  # an edge already there
-    vertices = np.vstack([curve.vertices, *points]) if points else curve.vertices
+    vertices = np.vstack([curve.vertices, np.array(points, float).reshape(-1, 3)]) if points else curve.vertices
     radius = curve.radius
     if radius is not None and points:
         radius = np.append(radius, np.full(len(points), np.nan))

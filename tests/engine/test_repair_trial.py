@@ -59,6 +59,25 @@ def test_a_run_of_adds_is_the_edits_curve_to_the_bit(middle):
             assert str(fast.value) == str(slow.value) and f"step {len(entries) - 1}" in str(fast.value)
 
 
+def test_a_run_of_adds_takes_every_form_of_position_as_the_edit_does(middle):
+    """Positions as a fill writes them (lists of three Python floats, taken as they are), and as numpy
+    arrays, tuples or integers (numpy's conversion): the edit's curve to the bit; a non-finite one is
+    refused with the edit's message."""
+    _, curve = middle
+    entries = _entries(curve, np.random.default_rng(1))
+    for k, form in ((1, np.array([0.5, 0.25, 1.0])), (2, (1.0, 2.0, 3.0)), (3, [1, 2, 3]), (4, [np.float64(0.5), 1.0, 2.0])):
+        entries[k] = {"op": "add_vertex", "args": {**entries[k]["args"], "position": form}}
+    assert _same_bits(tried(curve, entries, "x"), tried_one_by_one(curve, entries, "x"))
+    for bad in ([0.0, float("nan"), 1.0], [0.0, float("inf"), 1.0], [0.0, 1.0]):
+        wrong = [dict(e) for e in entries]
+        wrong[5] = {"op": "add_vertex", "args": {**entries[5]["args"], "position": bad}}
+        with pytest.raises(SkelInputError) as fast:
+            tried(curve, wrong, "x")
+        with pytest.raises(SkelInputError) as slow:
+            tried_one_by_one(curve, wrong, "x")
+        assert str(fast.value) == str(slow.value)
+
+
 def test_fills_made_when_reached_give_the_same_repair(middle, monkeypatch):
     """The same log (kept and refused, with their measures) and the same curve to the bit as making
     every fill a round may try first and applying every entry alone. A candidate that fails (a vertex
