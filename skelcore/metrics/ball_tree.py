@@ -11,7 +11,7 @@ from concurrent.futures import ThreadPoolExecutor
 import numpy as np
 
 from ..geometry import Checkpoint, TimedChunks, no_checkpoint
-from ..parallel import polled_build
+from ..parallel import polled_build, pool_width
 from . import _balls
 
 __all__ = ["BallTree", "NODE", "LEAF", "COVER_EPS"]
@@ -107,22 +107,31 @@ def _chunked(fn, n: int, checkpoint: Checkpoint, workers: int | None = None) -> 
     a chunk is cut in 4 x ``workers`` contiguous pieces that ``workers`` threads (None: every core;
     the kernel releases the GIL) take as they finish, so an unlucky piece delays little.  Threads only
     for ``n`` >= ``THREAD_ROWS``; a chunk is split when it holds >= 2 ``PIECE_ROWS`` (it was only from
-    ``THREAD_ROWS`` rows, so slow rows, ~0.1 s in fewer, ran on one thread: docs/performance.md 6.6)."""
-    workers = max(1, int(workers or os.cpu_count() or 1))
-    pool = ThreadPoolExecutor(max_workers=workers) if workers > 1 and n >= THREAD_ROWS else None
-    try:
-        for lo, hi in TimedChunks(n, first=256, most=MOST_ROWS):
-            if pool is None or hi - lo < 2 * PIECE_ROWS:
-                fn(lo, hi)
-            else:
-                pieces = min(4 * workers, (hi - lo) // PIECE_ROWS)
-                cuts = np.linspace(lo, hi, pieces + 1).astype(int)
-                for fut in [pool.submit(fn, a, b) for a, b in zip(cuts[:-1], cuts[1:])]:
-                    fut.result()
-            checkpoint(hi / n)
-    finally:
-        if pool is not None:
-            pool.shutdown(wait=True)
+    ``THREAD_ROWS`` rows, so slow rows, ~0.1 s in fewer, ran on one thread: docs/performance.md 6.6).  On a
+    :func:`skelcore.parallel.run_graph` lane only as many threads as it has cores (:func:`pool_width`)."""
+    if n < THREAD_ROWS:
+        _pieces(fn, n, checkpoint, None, 1)
+        return
+    with pool_width(workers) as width:  # on a lane: its own core and the free ones
+        pool = ThreadPoolExecutor(max_workers=width) if width > 1 else None
+        try:
+            _pieces(fn, n, checkpoint, pool, width)
+        finally:
+            if pool is not None:
+                pool.shutdown(wait=True)
+
+
+def _pieces(fn, n: int, checkpoint: Checkpoint, pool: ThreadPoolExecutor | None, workers: int) -> None:
+    """The timed chunks of :func:`_chunked`, each cut over ``pool``'s ``workers`` threads (None: here)."""
+    for lo, hi in TimedChunks(n, first=256, most=MOST_ROWS):
+        if pool is None or hi - lo < 2 * PIECE_ROWS:
+            fn(lo, hi)
+        else:
+            pieces = min(4 * workers, (hi - lo) // PIECE_ROWS)
+            cuts = np.linspace(lo, hi, pieces + 1).astype(int)
+            for fut in [pool.submit(fn, a, b) for a, b in zip(cuts[:-1], cuts[1:])]:
+                fut.result()
+        checkpoint(hi / n)
 
 
 def _build_polling(build, n: int, checkpoint: Checkpoint) -> int:
