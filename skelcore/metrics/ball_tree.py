@@ -82,20 +82,23 @@ class BallTree:
 
     def balls(self, queries: np.ndarray, gap: bool = True, cover: bool = True, floor: float = -np.inf,
               checkpoint: Checkpoint = no_checkpoint, workers: int | None = None,
-              top: float | None = None) -> tuple:
+              top: float | None = None, blocks: bool = False) -> tuple:
         """(min_x |q - x| - r(x), exact where above ``floor``, else some value <= floor; is some
         |q - x|^2 - R(x)^2 <= COVER_EPS R_max^2) per query row, each None unless asked for.  ``top``:
-        the R_max of that allowance (default these balls'; a subset of balls asked as their whole set)."""
+        the R_max of that allowance (default these balls'; a subset of balls asked as their whole set).
+        ``blocks``: one walk of the tree per 16 consecutive queries (``_balls.balls_block``, the same
+        answers; for many queries in spatial order far from the balls, docs/performance.md 6.10)."""
         q = np.ascontiguousarray(queries, dtype=np.float64)
         out_g = np.empty(len(q) if gap else 0)
         out_c = np.zeros(len(q) if cover else 0, np.uint8)
         if top is None:
             top = float(self.big_r.max()) if len(self.big_r) else 0.0
         eps = COVER_EPS * max(top * top, 1e-300)
+        kernel = _balls.balls_block if blocks else _balls.balls
 
         def run(i0: int, i1: int) -> None:
             st = np.zeros(2, np.int64)
-            _balls.balls(self.nodes, self.points, self.r, self.big_r, q, i0, i1, float(floor), eps, out_g, out_c, st)
+            kernel(self.nodes, self.points, self.r, self.big_r, q, i0, i1, float(floor), eps, out_g, out_c, st)
             self.stats += st
 
         _chunked(run, len(q), checkpoint, workers)
