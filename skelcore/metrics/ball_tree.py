@@ -28,6 +28,10 @@ MOST_ROWS = 262144
 THREAD_ROWS = 8192
 # covered: |p - x|^2 - R(x)^2 <= COVER_EPS x R_max^2 (the rounding allowance of the 4-D lifted query before)
 COVER_EPS = 1e-12
+# blocks=None walks the tree once per 16 queries from this many queries per ball (a curve's coverage: its
+# 100k points against 1,322 balls 51 -> 35 ms; a skeletal set's 3,912 against 4,096 balls 4.1 -> 5.6 ms:
+# docs/performance.md 6.10)
+BLOCK_QUERIES = 4
 # a timed chunk of at least twice this many rows is split over the threads (slow rows: a chunk of ~0.1 s
 # may hold only a few thousand, e.g. cloud points among a million overlapping balls)
 PIECE_ROWS = 256
@@ -82,18 +86,21 @@ class BallTree:
 
     def balls(self, queries: np.ndarray, gap: bool = True, cover: bool = True, floor: float = -np.inf,
               checkpoint: Checkpoint = no_checkpoint, workers: int | None = None,
-              top: float | None = None, blocks: bool = False) -> tuple:
+              top: float | None = None, blocks: bool | None = False) -> tuple:
         """(min_x |q - x| - r(x), exact where above ``floor``, else some value <= floor; is some
         |q - x|^2 - R(x)^2 <= COVER_EPS R_max^2) per query row, each None unless asked for.  ``top``:
         the R_max of that allowance (default these balls'; a subset of balls asked as their whole set).
-        ``blocks``: one walk of the tree per 16 consecutive queries (``_balls.balls_block``, the same
-        answers; for many queries in spatial order far from the balls, docs/performance.md 6.10)."""
+        ``blocks``: one walk of the tree per 16 consecutive queries (``_balls.balls_block``: the same gaps
+        where above ``floor``, the same verdicts; for queries in spatial order, many per ball); None: from
+        ``BLOCK_QUERIES`` queries per ball (docs/performance.md 6.10)."""
         q = np.ascontiguousarray(queries, dtype=np.float64)
         out_g = np.empty(len(q) if gap else 0)
         out_c = np.zeros(len(q) if cover else 0, np.uint8)
         if top is None:
             top = float(self.big_r.max()) if len(self.big_r) else 0.0
         eps = COVER_EPS * max(top * top, 1e-300)
+        if blocks is None:
+            blocks = len(q) >= BLOCK_QUERIES * len(self.points)
         kernel = _balls.balls_block if blocks else _balls.balls
 
         def run(i0: int, i1: int) -> None:
