@@ -200,7 +200,7 @@ def test_the_blocks_walk_gives_the_walk_per_querys_bits(case):
         r = rng.uniform(0.001, 0.2, 700)
     elif case == "torus":
         cloud, centers, _ = _torus(6000)
-        r = _dist(centers, cloud).min(axis=1)
+        r = cKDTree(cloud).query(centers)[0]
     else:
         cloud, centers = _grid_case()
         r = np.full(len(centers), 0.5)
