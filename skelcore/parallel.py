@@ -11,12 +11,13 @@ from __future__ import annotations
 import os
 import threading
 from concurrent.futures import FIRST_EXCEPTION, ThreadPoolExecutor, wait
+from contextlib import contextmanager
 from dataclasses import dataclass
-from typing import Callable
+from typing import Callable, Iterator
 
 from .geometry import Checkpoint, no_checkpoint
 
-__all__ = ["on_threads", "GraphTask", "run_graph", "polled_build", "polled_streams", "Cores"]
+__all__ = ["on_threads", "GraphTask", "run_graph", "polled_build", "polled_streams", "Cores", "pool_width"]
 
 
 def on_threads(
@@ -81,10 +82,17 @@ class Cores:
             finally:
                 self._lanes_waiting -= lane
 
-    def give(self) -> None:
+    def give(self, n: int = 1) -> None:
         with self._cond:
-            self._free += 1
+            self._free += n
             self._cond.notify_all()
+
+    def take_free(self, most: int) -> int:
+        """Up to ``most`` of the free cores, taken at once (none while a lane waits for one): how many."""
+        with self._cond:
+            got = 0 if self._lanes_waiting else max(0, min(most, self._free))
+            self._free -= got
+            return got
 
 
 # the Cores of the run_graph lane this thread is (unset outside run_graph: streams take every core)
@@ -192,6 +200,25 @@ def run_graph(tasks: list[GraphTask], workers: int | None = None, on_error: Call
     if errors:
         raise errors[0]
     return results
+
+
+@contextmanager
+def pool_width(workers: int | None) -> Iterator[int]:
+    """The threads a stage's own pool of compiled pieces may use: ``workers`` (None: every core), but on a
+    :func:`run_graph` lane its own core and the free ones it takes for the while (given back at the end),
+    as the compiled streams take them. A pool as wide as the machine beside another lane's kernel
+    streams put three threads on two cores: a pruned branch's update at 100k spent 12 ms more CPU
+    with it (thread starts, hand-overs; docs/performance.md 6.10, "The second lane's pools")."""
+    want = max(1, int(workers or os.cpu_count() or 1))
+    cores = getattr(_lane, "cores", None)
+    if cores is None or want == 1:
+        yield want
+        return
+    got = cores.take_free(want - 1)
+    try:
+        yield 1 + got
+    finally:
+        cores.give(got)
 
 
 def polled_build(build: Callable, n: int, checkpoint: Checkpoint, name: str, threaded_from: int = 65536,

@@ -480,25 +480,75 @@ static inline int second_ok(const Node *nd, const double *q, double best) {
     return s > 0.0 && dx * dx + dy * dy + dz * dz < s * s;
 }
 
+/* the arguments of balls and balls_block */
+typedef struct {
+    Py_buffer nds, pts, rg, rc, qs, gap, cov, stats;
+    Py_ssize_t i0, i1;
+    double floor_, eps;
+    const Node *nodes;
+    const double *p, *r, *R, *q;  /* centres, r, R, queries */
+    int32_t n;                    /* balls */
+    double *og;                   /* gap out */
+    uint8_t *oc;                  /* covered out */
+    int want_gap, want_cov;
+    int64_t *st;
+} BallsArgs;
+
+static int balls_args(PyObject *args, BallsArgs *a) {
+    if (!PyArg_ParseTuple(args, "y*y*y*y*y*nnddw*w*w*", &a->nds, &a->pts, &a->rg, &a->rc, &a->qs, &a->i0, &a->i1,
+                          &a->floor_, &a->eps, &a->gap, &a->cov, &a->stats))
+        return 0;
+    a->nodes = (const Node *)a->nds.buf;
+    a->p = (const double *)a->pts.buf, a->r = (const double *)a->rg.buf, a->R = (const double *)a->rc.buf;
+    a->q = (const double *)a->qs.buf;
+    a->n = (int32_t)(a->pts.len / (Py_ssize_t)(3 * sizeof(double)));
+    a->og = (double *)a->gap.buf, a->oc = (uint8_t *)a->cov.buf;
+    a->want_gap = a->gap.len > 0, a->want_cov = a->cov.len > 0;
+    a->st = (int64_t *)a->stats.buf;
+    return 1;
+}
+
+static void balls_release(BallsArgs *a) {
+    PyBuffer_Release(&a->nds); PyBuffer_Release(&a->pts); PyBuffer_Release(&a->rg); PyBuffer_Release(&a->rc);
+    PyBuffer_Release(&a->qs); PyBuffer_Release(&a->gap); PyBuffer_Release(&a->cov); PyBuffer_Release(&a->stats);
+}
+
+/* Query x against a leaf's balls: the least excess (below *best, a ball skipped only when its computed
+ * excess cannot be below it) and the first covering ball; how many times *best or the cover changed. */
+static inline int leaf_balls(const Node *nd, const double *p, const double *r, const double *R, const double *x,
+                             double eps, double floor_, double *best, int32_t *bi, int *gap_open, int *cov_open,
+                             int32_t *ci) {
+    int changed = 0;
+    for (int32_t i = nd->lo; i < nd->hi; i++) {
+        const double *b = p + 3 * (size_t)i;
+        double dx = x[0] - b[0], dy = x[1] - b[1], dz = x[2] - b[2];
+        double d2 = dx * dx + dy * dy + dz * dz;
+        if (*gap_open) {
+            /* sqrt(d2) - r < best needs d2 < (best + r)^2; the margin m keeps every
+             * skipped ball's computed excess >= best */
+            double t = *best + r[i], m = 1e-12 * (fabs(*best) + r[i]) + 1e-300;
+            if (t + m > 0.0 && d2 < (t + m) * (t + m)) {
+                double ex = sqrt(d2) - r[i];
+                if (ex < *best) { *best = ex; *bi = i; changed++; if (*best <= floor_) *gap_open = 0; }
+            }
+        }
+        if (*cov_open && d2 - R[i] * R[i] <= eps) { *cov_open = 0; *ci = i; changed++; }
+    }
+    return changed;
+}
+
 /* balls(nodes (refit), centres (n,3) f64 tree order, r (n) f64, R (n) f64, queries (m,3) f64, i0, i1,
  *       floor, eps, gap out (m) f64 or empty, covered out (m) u8 or empty, stats out (2) i64)
  * gap = min |q - x| - r(x) where it is above floor (elsewhere some value <= floor); covered = some x
  * with |q - x|^2 - R(x)^2 <= eps.  An empty output buffer skips that half. */
 static PyObject *py_balls(PyObject *self, PyObject *args) {
-    Py_buffer nds, pts, rg, rc, qs, gap, cov, stats;
-    Py_ssize_t i0, i1;
-    double floor_, eps;
-    if (!PyArg_ParseTuple(args, "y*y*y*y*y*nnddw*w*w*", &nds, &pts, &rg, &rc, &qs, &i0, &i1, &floor_, &eps,
-                          &gap, &cov, &stats))
-        return NULL;
-    const Node *nodes = (const Node *)nds.buf;
-    const double *p = (const double *)pts.buf, *r = (const double *)rg.buf, *R = (const double *)rc.buf;
-    const double *q = (const double *)qs.buf;
-    const int32_t n = (int32_t)(pts.len / (Py_ssize_t)(3 * sizeof(double)));
-    double *og = (double *)gap.buf;
-    uint8_t *oc = (uint8_t *)cov.buf;
-    const int want_gap = gap.len > 0, want_cov = cov.len > 0;
-    int64_t *st = (int64_t *)stats.buf;
+    BallsArgs a;
+    if (!balls_args(args, &a)) return NULL;
+    const Py_ssize_t i0 = a.i0, i1 = a.i1;
+    const double floor_ = a.floor_, eps = a.eps;
+    const Node *nodes = a.nodes;
+    const double *p = a.p, *r = a.r, *R = a.R, *q = a.q;
+    const int32_t n = a.n, want_gap = a.want_gap, want_cov = a.want_cov;
     Py_BEGIN_ALLOW_THREADS
     Entry stack[MAX_STACK];
     int64_t visits = 0, tests = 0;
@@ -537,21 +587,7 @@ static PyObject *py_balls(PyObject *self, PyObject *args) {
             }
             visits++;
             if (nd->kid < 0) {
-                for (int32_t i = nd->lo; i < nd->hi; i++) {
-                    const double *b = p + 3 * (size_t)i;
-                    double dx = x[0] - b[0], dy = x[1] - b[1], dz = x[2] - b[2];
-                    double d2 = dx * dx + dy * dy + dz * dz;
-                    if (gap_open) {
-                        /* sqrt(d2) - r < best needs d2 < (best + r)^2; the margin m keeps every
-                         * skipped ball's computed excess >= best */
-                        double t = best + r[i], m = 1e-12 * (fabs(best) + r[i]) + 1e-300;
-                        if (t + m > 0.0 && d2 < (t + m) * (t + m)) {
-                            double ex = sqrt(d2) - r[i];
-                            if (ex < best) { best = ex; bi = i; ver++; if (best <= floor_) gap_open = 0; }
-                        }
-                    }
-                    if (cov_open && d2 - R[i] * R[i] <= eps) { cov_open = 0; ci = i; ver++; }
-                }
+                ver += leaf_balls(nd, p, r, R, x, eps, floor_, &best, &bi, &gap_open, &cov_open, &ci);
                 tests += nd->hi - nd->lo;
                 continue;
             }
@@ -576,16 +612,129 @@ static PyObject *py_balls(PyObject *self, PyObject *args) {
                 if (need[w]) { stack[sp].node = nd->kid + w; stack[sp].ver = ver; stack[sp++].d = d2k[w]; }
             }
         }
-        if (want_gap) og[k] = best;
-        if (want_cov) oc[k] = (uint8_t)(ci >= 0);
+        if (want_gap) a.og[k] = best;
+        if (want_cov) a.oc[k] = (uint8_t)(ci >= 0);
         if (bi >= 0) seed_g = bi;
         if (ci >= 0) seed_c = ci;
     }
-    st[0] += visits;
-    st[1] += tests;
+    a.st[0] += visits;
+    a.st[1] += tests;
     Py_END_ALLOW_THREADS
-    PyBuffer_Release(&nds); PyBuffer_Release(&pts); PyBuffer_Release(&rg); PyBuffer_Release(&rc);
-    PyBuffer_Release(&qs); PyBuffer_Release(&gap); PyBuffer_Release(&cov); PyBuffer_Release(&stats);
+    balls_release(&a);
+    Py_RETURN_NONE;
+}
+
+/* balls_block: the answers of balls (the same bits: each ball's excess and cover test computed alike, the
+ * least excess taken over a superset of the balls that can hold it) for queries in tree order, walked once
+ * per block of BLOCK consecutive queries instead of once per query.  The block's walk keeps the leaves that
+ * may hold, for some query of the block, a ball with excess below that query's excess to a seed ball (the
+ * previous block's last best) or a ball that covers it: a node's bounds taken at the block's bounding sphere
+ * (its centre's distance less the sphere's radius), with a relative allowance that only adds leaves.  Each
+ * query then tests those leaves' balls, a leaf skipped by the query's own bound as the walk of balls skips
+ * it.  Queries far from every ball (the cloud around a pruned arm, asked again of the curve left) share
+ * nearly all of their walk; a block with a non-finite coordinate keeps every leaf. */
+#define BLOCK 16
+
+static PyObject *py_balls_block(PyObject *self, PyObject *args) {
+    BallsArgs a;
+    if (!balls_args(args, &a)) return NULL;
+    const Py_ssize_t i0 = a.i0, i1 = a.i1;
+    const double floor_ = a.floor_, eps = a.eps;
+    const Py_ssize_t n_nodes = a.nds.len / (Py_ssize_t)sizeof(Node);
+    const Node *nodes = a.nodes;
+    const double *p = a.p, *r = a.r, *R = a.R, *q = a.q;
+    const int32_t n = a.n, want_gap = a.want_gap, want_cov = a.want_cov;
+    int32_t *leaves = (int32_t *)malloc(sizeof(int32_t) * (size_t)(n_nodes > 0 ? n_nodes : 1));
+    if (!leaves) {
+        balls_release(&a);
+        return PyErr_NoMemory();
+    }
+    Py_BEGIN_ALLOW_THREADS
+    int32_t stack[MAX_STACK];
+    int64_t visits = 0, tests = 0;
+    const double tol = sqrt(eps > 0.0 ? eps : 0.0);  /* |q - x| <= sqrt(R^2 + eps) <= R + tol */
+    int32_t seed = 0;
+    for (Py_ssize_t b0 = i0; b0 < i1; b0 += BLOCK) {
+        const Py_ssize_t b1 = b0 + BLOCK < i1 ? b0 + BLOCK : i1;
+        const int m = (int)(b1 - b0);
+        if (n == 0) {
+            for (Py_ssize_t k = b0; k < b1; k++) {
+                if (want_gap) a.og[k] = INFINITY;
+                if (want_cov) a.oc[k] = 0;
+            }
+            continue;
+        }
+        /* the block's bounding sphere and each query's excess to the seed ball */
+        double mn[3] = {INFINITY, INFINITY, INFINITY}, mx[3] = {-INFINITY, -INFINITY, -INFINITY};
+        int finite = 1;
+        for (Py_ssize_t k = b0; k < b1; k++)
+            for (int j = 0; j < 3; j++) {
+                double v = q[3 * (size_t)k + j];
+                if (!isfinite(v)) finite = 0;
+                if (v < mn[j]) mn[j] = v;
+                if (v > mx[j]) mx[j] = v;
+            }
+        double cb[3] = {0.5 * (mn[0] + mx[0]), 0.5 * (mn[1] + mx[1]), 0.5 * (mn[2] + mx[2])}, rb = 0.0;
+        double ub[BLOCK], top = -INFINITY;
+        int32_t first = seed;
+        for (int k = 0; k < m; k++) {
+            const double *x = q + 3 * (size_t)(b0 + k), *c = p + 3 * (size_t)first;
+            double d = dist3(x, cb);
+            if (d > rb) rb = d;
+            double dx = x[0] - c[0], dy = x[1] - c[1], dz = x[2] - c[2];
+            double e = sqrt(dx * dx + dy * dy + dz * dz) - r[first];
+            ub[k] = e == e ? e : INFINITY;
+            if (ub[k] > top) top = ub[k];
+        }
+        rb = rb * (1.0 + 1e-9) + 1e-300;
+        if (!want_gap) top = -INFINITY;
+        /* the leaves any query of the block may need */
+        int nl = 0, sp = 0;
+        stack[sp++] = 0;
+        while (sp > 0) {
+            const int32_t ni = stack[--sp];
+            const Node *nd = nodes + ni;
+            double lower = -INFINITY;
+            if (finite) {
+                double d = dist3(cb, nd->c);
+                lower = d - rb - 1e-9 * (d + rb + nd->rg + nd->rc + fabs(top) + tol) - 1e-300;
+            }
+            const int g = want_gap && lower - nd->rg < top, c = want_cov && lower <= nd->rc + tol;
+            if (!g && !c) continue;
+            if (nd->kid < 0) leaves[nl++] = ni;
+            else if (sp + 2 <= MAX_STACK) { stack[sp++] = nd->kid + 1; stack[sp++] = nd->kid; }
+            else { finite = 0; sp = 0; nl = 0; stack[sp++] = 0; top = INFINITY; }  /* not reached: depth < 64 */
+        }
+        /* each query over those leaves, as the walk of balls tests them */
+        for (int k = 0; k < m; k++) {
+            const Py_ssize_t qk = b0 + k;
+            const double *x = q + 3 * (size_t)qk;
+            double best = want_gap ? ub[k] : INFINITY;
+            int32_t bi = first;
+            int gap_open = want_gap && !(best <= floor_), cov_open = want_cov;
+            int32_t ci = -1;
+            for (int l = 0; l < nl && (gap_open || cov_open); l++) {
+                const Node *nd = nodes + leaves[l];
+                double dx = x[0] - nd->c[0], dy = x[1] - nd->c[1], dz = x[2] - nd->c[2];
+                double d2 = dx * dx + dy * dy + dz * dz;
+                double sg = best + nd->rg, sc = nd->rc + tol;
+                const int g = gap_open && sg > 0.0 && d2 < sg * sg, c = cov_open && d2 <= sc * sc;
+                if (!g && !c) continue;
+                visits++;
+                leaf_balls(nd, p, r, R, x, eps, floor_, &best, &bi, &gap_open, &cov_open, &ci);
+                tests += nd->hi - nd->lo;
+            }
+            if (want_gap) a.og[qk] = best;
+            if (want_cov) a.oc[qk] = (uint8_t)(ci >= 0);
+            if (want_gap && best < INFINITY) seed = bi;
+            else if (ci >= 0) seed = ci;
+        }
+    }
+    a.st[0] += visits;
+    a.st[1] += tests;
+    Py_END_ALLOW_THREADS
+    free(leaves);
+    balls_release(&a);
     Py_RETURN_NONE;
 }
 
@@ -594,6 +743,7 @@ static PyMethodDef methods[] = {
     {"refit", py_refit, METH_VARARGS, "Ball bounds max |x - c| + r(x), max |x - c| + R(x) of a range of nodes."},
     {"nearest", py_nearest, METH_VARARGS, "Distance of each query to its nearest tree point (exact)."},
     {"balls", py_balls, METH_VARARGS, "Gap (least |q - x| - r) and cover (|q - x| <= R) of each query."},
+    {"balls_block", py_balls_block, METH_VARARGS, "balls' answers, one walk per block of queries in tree order."},
     {NULL, NULL, 0, NULL},
 };
 

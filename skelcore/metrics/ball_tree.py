@@ -11,7 +11,7 @@ from concurrent.futures import ThreadPoolExecutor
 import numpy as np
 
 from ..geometry import Checkpoint, TimedChunks, no_checkpoint
-from ..parallel import polled_build
+from ..parallel import polled_build, pool_width
 from . import _balls
 
 __all__ = ["BallTree", "NODE", "LEAF", "COVER_EPS"]
@@ -28,6 +28,10 @@ MOST_ROWS = 262144
 THREAD_ROWS = 8192
 # covered: |p - x|^2 - R(x)^2 <= COVER_EPS x R_max^2 (the rounding allowance of the 4-D lifted query before)
 COVER_EPS = 1e-12
+# blocks=None walks the tree once per 16 queries from this many queries per ball (a curve's coverage: its
+# 100k points against 1,322 balls 51 -> 35 ms; a skeletal set's 3,912 against 4,096 balls 4.1 -> 5.6 ms:
+# docs/performance.md 6.10)
+BLOCK_QUERIES = 4
 # a timed chunk of at least twice this many rows is split over the threads (slow rows: a chunk of ~0.1 s
 # may hold only a few thousand, e.g. cloud points among a million overlapping balls)
 PIECE_ROWS = 256
@@ -82,20 +86,26 @@ class BallTree:
 
     def balls(self, queries: np.ndarray, gap: bool = True, cover: bool = True, floor: float = -np.inf,
               checkpoint: Checkpoint = no_checkpoint, workers: int | None = None,
-              top: float | None = None) -> tuple:
+              top: float | None = None, blocks: bool | None = False) -> tuple:
         """(min_x |q - x| - r(x), exact where above ``floor``, else some value <= floor; is some
         |q - x|^2 - R(x)^2 <= COVER_EPS R_max^2) per query row, each None unless asked for.  ``top``:
-        the R_max of that allowance (default these balls'; a subset of balls asked as their whole set)."""
+        the R_max of that allowance (default these balls'; a subset of balls asked as their whole set).
+        ``blocks``: one walk of the tree per 16 consecutive queries (``_balls.balls_block``: the same gaps
+        where above ``floor``, the same verdicts; for queries in spatial order, many per ball); None: from
+        ``BLOCK_QUERIES`` queries per ball (docs/performance.md 6.10)."""
         q = np.ascontiguousarray(queries, dtype=np.float64)
         out_g = np.empty(len(q) if gap else 0)
         out_c = np.zeros(len(q) if cover else 0, np.uint8)
         if top is None:
             top = float(self.big_r.max()) if len(self.big_r) else 0.0
         eps = COVER_EPS * max(top * top, 1e-300)
+        if blocks is None:
+            blocks = len(q) >= BLOCK_QUERIES * len(self.points)
+        kernel = _balls.balls_block if blocks else _balls.balls
 
         def run(i0: int, i1: int) -> None:
             st = np.zeros(2, np.int64)
-            _balls.balls(self.nodes, self.points, self.r, self.big_r, q, i0, i1, float(floor), eps, out_g, out_c, st)
+            kernel(self.nodes, self.points, self.r, self.big_r, q, i0, i1, float(floor), eps, out_g, out_c, st)
             self.stats += st
 
         _chunked(run, len(q), checkpoint, workers)
@@ -107,22 +117,31 @@ def _chunked(fn, n: int, checkpoint: Checkpoint, workers: int | None = None) -> 
     a chunk is cut in 4 x ``workers`` contiguous pieces that ``workers`` threads (None: every core;
     the kernel releases the GIL) take as they finish, so an unlucky piece delays little.  Threads only
     for ``n`` >= ``THREAD_ROWS``; a chunk is split when it holds >= 2 ``PIECE_ROWS`` (it was only from
-    ``THREAD_ROWS`` rows, so slow rows, ~0.1 s in fewer, ran on one thread: docs/performance.md 6.6)."""
-    workers = max(1, int(workers or os.cpu_count() or 1))
-    pool = ThreadPoolExecutor(max_workers=workers) if workers > 1 and n >= THREAD_ROWS else None
-    try:
-        for lo, hi in TimedChunks(n, first=256, most=MOST_ROWS):
-            if pool is None or hi - lo < 2 * PIECE_ROWS:
-                fn(lo, hi)
-            else:
-                pieces = min(4 * workers, (hi - lo) // PIECE_ROWS)
-                cuts = np.linspace(lo, hi, pieces + 1).astype(int)
-                for fut in [pool.submit(fn, a, b) for a, b in zip(cuts[:-1], cuts[1:])]:
-                    fut.result()
-            checkpoint(hi / n)
-    finally:
-        if pool is not None:
-            pool.shutdown(wait=True)
+    ``THREAD_ROWS`` rows, so slow rows, ~0.1 s in fewer, ran on one thread: docs/performance.md 6.6).  On a
+    :func:`skelcore.parallel.run_graph` lane only as many threads as it has cores (:func:`pool_width`)."""
+    if n < THREAD_ROWS:
+        _pieces(fn, n, checkpoint, None, 1)
+        return
+    with pool_width(workers) as width:  # on a lane: its own core and the free ones
+        pool = ThreadPoolExecutor(max_workers=width) if width > 1 else None
+        try:
+            _pieces(fn, n, checkpoint, pool, width)
+        finally:
+            if pool is not None:
+                pool.shutdown(wait=True)
+
+
+def _pieces(fn, n: int, checkpoint: Checkpoint, pool: ThreadPoolExecutor | None, workers: int) -> None:
+    """The timed chunks of :func:`_chunked`, each cut over ``pool``'s ``workers`` threads (None: here)."""
+    for lo, hi in TimedChunks(n, first=256, most=MOST_ROWS):
+        if pool is None or hi - lo < 2 * PIECE_ROWS:
+            fn(lo, hi)
+        else:
+            pieces = min(4 * workers, (hi - lo) // PIECE_ROWS)
+            cuts = np.linspace(lo, hi, pieces + 1).astype(int)
+            for fut in [pool.submit(fn, a, b) for a, b in zip(cuts[:-1], cuts[1:])]:
+                fut.result()
+        checkpoint(hi / n)
 
 
 def _build_polling(build, n: int, checkpoint: Checkpoint) -> int:

@@ -168,7 +168,8 @@ def coverage(
         # covered, no search
         rest = np.ones(len(cloud), bool)
         rest[contact] = False
-        g, c = balls.balls(surface.points[rest], floor=0.0, checkpoint=scaled_checkpoint(checkpoint, 0.4, 1.0), workers=workers)
+        g, c = balls.balls(surface.points[rest], floor=0.0, checkpoint=scaled_checkpoint(checkpoint, 0.4, 1.0), workers=workers,
+                           blocks=None)
         gap, covered = np.zeros(len(cloud)), np.ones(len(cloud), bool)
         gap[surface.perm[rest]] = np.maximum(g, 0.0)
         covered[surface.perm[rest]] = c
@@ -356,7 +357,8 @@ def _estimated(cloud: np.ndarray, elements: np.ndarray, m: int, tau: float, s: f
     rest = np.ones(n, bool)
     rest[contact] = False
     ask = at[rest[at]]
-    g, c = balls.balls(surface.points[ask], floor=0.0, checkpoint=scaled_checkpoint(checkpoint, 0.4, 0.8), workers=workers)
+    g, c = balls.balls(surface.points[ask], floor=0.0, checkpoint=scaled_checkpoint(checkpoint, 0.4, 0.8), workers=workers,
+                       blocks=None)
     gap_t, cov_t = np.zeros(n), np.ones(n, bool)  # tree order; the sampled positions only are set
     gap_t[ask], cov_t[ask] = np.maximum(g, 0.0), c
     # every cloud point: its nearest sampled point's answer (the sampled ones: their own)

@@ -186,3 +186,39 @@ def test_the_tree_does_not_depend_on_build_threads():
         built.append((perm, srt, nodes[:m].tobytes()))
     for perm, srt, raw in built[1:]:
         assert np.array_equal(perm, built[0][0]) and np.array_equal(srt, built[0][1]) and raw == built[0][2]
+
+
+@pytest.mark.parametrize("case", ["random", "torus", "grid"])
+def test_the_blocks_walk_gives_the_walk_per_querys_bits(case):
+    """BallTree.balls(blocks=True) (one walk per 16 queries in tree order, _balls.balls_block): the same
+    gap bits (exact; clamped at the floor where one is given) and verdicts as the walk per query, gap or
+    cover alone, queries near and far from the balls, in tree order and not, a row with a NaN among them."""
+    rng = np.random.default_rng(7)
+    if case == "random":
+        cloud, centers = rng.uniform(-1, 1, (6000, 3)), rng.uniform(-0.5, 0.5, (700, 3))
+        centers[:40] = centers[40:80]  # copies
+        r = rng.uniform(0.001, 0.2, 700)
+    elif case == "torus":
+        cloud, centers, _ = _torus(6000)
+        r = cKDTree(cloud).query(centers)[0]
+    else:
+        cloud, centers = _grid_case()
+        r = np.full(len(centers), 0.5)
+    surface = BallTree(cloud)
+    tree = BallTree(centers)
+    r = np.asarray(r, float)[tree.perm]
+    tree.set_radii(r, 1.1 * r + 0.01)
+    far = surface.points + 2.0 * np.ptp(surface.points, axis=0)  # beside the cloud, outside every ball
+    nan = surface.points.copy()
+    nan[100] = np.nan
+    for queries in (surface.points, far, nan, surface.points[rng.permutation(len(cloud))]):
+        for floor in (-np.inf, 0.0, 0.05):
+            for gap, cover in ((True, True), (True, False), (False, True)):
+                g0, c0 = tree.balls(queries, gap=gap, cover=cover, floor=floor)
+                g1, c1 = tree.balls(queries, gap=gap, cover=cover, floor=floor, blocks=True)
+                if gap:
+                    assert np.maximum(g1, floor).tobytes() == np.maximum(g0, floor).tobytes()
+                if cover:
+                    assert np.array_equal(c0, c1)
+        assert not tree.balls(far)[1].any()  # the far rows: no ball covers them
+    assert tree.balls(np.zeros((0, 3)), blocks=True)[0].shape == (0,)

@@ -202,3 +202,53 @@ def test_a_lanes_first_task_holds_its_core_before_any_stream_starts(monkeypatch)
     run_graph([GraphTask("kernel", kernel_stage), GraphTask("python", python_started.set)], 2)
     assert waited_out == []
     assert _no_lane_thread()
+
+
+def _search_threads(beside_streams: bool, monkeypatch) -> tuple[set, int]:
+    """(the threads that ran a ball-tree search's pieces other than its lane's own, the free cores after):
+    two cores, the search on a run_graph lane, with another lane's kernel streams holding the other core
+    when ``beside_streams``."""
+    import skelcore.parallel as parallel
+    from skelcore.geometry import no_checkpoint
+    from skelcore.metrics import ball_tree
+
+    monkeypatch.setattr(parallel.os, "cpu_count", lambda: 2)
+    monkeypatch.setattr(ball_tree.os, "cpu_count", lambda: 2)
+    streaming, searched = threading.Event(), threading.Event()
+    ran, lane_of_search, free_after = set(), [], []
+
+    def span(i: int) -> None:
+        streaming.set()
+        searched.wait(5.0)
+
+    def kernel_stage() -> None:
+        polled_streams(span, [(0,)], None, lambda f: None, lambda: 0.0, np.zeros(1, np.int32))
+
+    def piece(lo: int, hi: int) -> None:
+        ran.add(threading.get_ident())
+        time.sleep(2e-5 * (hi - lo))
+
+    def search_stage() -> None:
+        if beside_streams:
+            streaming.wait(5.0)
+        lane_of_search.append(threading.get_ident())
+        ball_tree._chunked(piece, 3 * ball_tree.THREAD_ROWS, no_checkpoint)
+        free_after.append(parallel._lane.cores._free)
+        searched.set()
+
+    run_graph(([GraphTask("kernel", kernel_stage)] if beside_streams else []) + [GraphTask("search", search_stage)], 2)
+    return ran - set(lane_of_search), free_after[0]
+
+
+def test_a_stages_own_pool_takes_only_the_cores_its_lane_finds_free(monkeypatch):
+    """parallel.pool_width: beside another lane's streams a ball tree's search runs on its lane alone; with
+    the other core free it takes it for a pool of two and gives it back; off a lane, every core."""
+    import skelcore.parallel as parallel
+
+    others, free = _search_threads(True, monkeypatch)
+    assert others == set() and free == 0  # the streams' core, the search's lane
+    others, free = _search_threads(False, monkeypatch)
+    assert len(others) >= 1 and free == 1  # the lane's core held, the taken one given back
+    with parallel.pool_width(None) as width:
+        assert width == 2
+    assert _no_lane_thread()
