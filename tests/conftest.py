@@ -1,8 +1,10 @@
-"""Fixtures for every test: a seeded random generator, and the real scans shipped in resources/scans; and
-the order in which the xdist workers take the test files (heaviest first, from tests/file_costs.txt)."""
+"""Fixtures for every test: a seeded random generator, and the real scans shipped in resources/scans; the
+order in which the xdist workers take the test files (heaviest first, from tests/file_costs.txt); and the
+collection without the cyclic garbage collector (docs/guide/testing.md, "Order and cost")."""
 
 from __future__ import annotations
 
+import gc
 from pathlib import Path
 
 import numpy as np
@@ -54,3 +56,21 @@ def pytest_collection_modifyitems(config: pytest.Config, items: list[pytest.Item
     costs = file_costs()
     median = sorted(costs.values())[len(costs) // 2]
     items.sort(key=lambda item: -costs.get(item.nodeid.split("::", 1)[0], median))
+
+
+@pytest.hookimpl(wrapper=True)
+def pytest_collection(session: pytest.Session):
+    """Collection with the cyclic garbage collector paused, then the objects it made frozen: importing the
+    test modules (and pytest rewriting their asserts) makes hundreds of thousands of objects, which each
+    automatic collection would scan again and again (about 6 of a worker's 20-25 CPU s of collection), and
+    which every later collection of the run would scan again too. Frozen, they are left out of every later
+    collection, as the viewer does with its imports (``app/__main__.py``, ``import_view_libraries``)."""
+    collecting = gc.isenabled()
+    gc.disable()
+    try:
+        return (yield)
+    finally:
+        gc.collect()  # the garbage of the imports is freed, not frozen
+        gc.freeze()
+        if collecting:
+            gc.enable()

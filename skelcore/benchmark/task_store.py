@@ -18,7 +18,8 @@ __all__ = ["TaskRun", "task_record", "failed_record", "task_path", "stored", "re
 @dataclass
 class TaskRun:
     """What a run did: its folder, the tasks asked, kept from an earlier run, run now and failed (their
-    records), every stored row, the wall seconds and the backend's description."""
+    records), every stored row, the wall seconds and the backend's description; and the statistics tables
+    its report was written from, by set, where the run writes them (the validity study)."""
 
     folder: Path
     tasks: int
@@ -28,6 +29,7 @@ class TaskRun:
     rows: list[dict[str, Any]] = field(default_factory=list)
     wall: float = 0.0
     backend: str = ""
+    tables: dict[str, list[dict[str, Any]]] = field(default_factory=dict)
 
 
 def task_record(task: Any, rows_of: Callable[[Any], list[dict[str, Any]]]) -> dict[str, Any]:

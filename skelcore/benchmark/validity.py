@@ -248,12 +248,15 @@ def run_validity(out: str | os.PathLike, tasks: list[Task], backend: Any, *, for
                  figure: bool = True, progress: Callable[[int, int, str, str], None] | None = None,
                  suite: str = "default") -> TaskRun:
     """Run (or resume) ``tasks`` into ``out`` on ``backend`` (:class:`skelcore.compare.backends.Backend`)
-    and write ``scores.csv``, ``validity.csv``, ``validity.md`` and ``validity.png`` there."""
+    and write ``scores.csv``, ``validity.csv``, ``validity.md`` and ``validity.png`` there; the statistics
+    tables written are the result's ``tables`` (computed once: their bootstraps and permutation tests are
+    most of a resumed run's time)."""
     from ..compare.run_marker import claim_run_folder
     from .validity_report import write_report
 
     folder = claim_run_folder(out, "validity", force=force).path
     result = run_stored_tasks(folder, tasks, run_task, backend, progress)
-    write_report(folder, result.rows, figure=figure,
-                 note=f"{suite} suite, {len(tasks)} tasks, skelcore {__version__}")
+    for rec in write_report(folder, result.rows, figure=figure,
+                            note=f"{suite} suite, {len(tasks)} tasks, skelcore {__version__}"):
+        result.tables.setdefault(rec["set"], []).append(rec)
     return result

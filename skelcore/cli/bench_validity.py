@@ -72,7 +72,6 @@ def _terminate(signum, frame):  # noqa: ARG001
 
 def run_validity_cli(args: argparse.Namespace) -> int:
     from ..benchmark.validity import run_validity, validity_tasks
-    from ..benchmark.validity_report import set_tables
     from ..benchmark.validity_stats import blind_spots
 
     def progress(i: int, total: int, key: str, status: str) -> None:
@@ -91,7 +90,7 @@ def run_validity_cli(args: argparse.Namespace) -> int:
         return 2
     finally:
         signal.signal(signal.SIGTERM, previous)
-    for name, table in set_tables(result.rows).items():
+    for name, table in result.tables.items():
         for metric, blind in blind_spots(table).items():
             print(f"{name} {metric}: blind to {', '.join(blind) if blind else 'none'}")
     print(f"{result.tasks} tasks: {result.kept} already done, {result.ran} ran, {len(result.failed)} failed; "

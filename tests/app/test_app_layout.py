@@ -159,29 +159,47 @@ def _inside(inner, outer) -> bool:
 
 
 @pytest.fixture(scope="module")
-def probes(sample_files, tmp_path_factory):
-    """Runs of the probes by scale factor, each made when first asked for: a fresh process under its own
-    Xvfb screen of 1366 x 768 pixels; at 1.5 the content probe follows in the same process. Returns the
-    dict of what each probe printed (its "PROBE" and "CONTENT" lines), by scale."""
+def probes(sample_files, tmp_path_factory, request):
+    """Runs of the probes by scale factor: each a fresh process under its own Xvfb screen of 1366 x 768
+    pixels; at 1.5 the content probe follows in the same process. The probes this module's selected tests
+    ask for all start when the first is asked for and run side by side (a probe waits for its window's
+    events about a fifth of its time, which the others fill); each searches a free display from its own
+    number on. Returns the dict of what each probe printed (its "PROBE" and "CONTENT" lines), by scale."""
     if shutil.which("xvfb-run") is None:
         pytest.skip("xvfb-run not installed")
+    wanted = sorted({item.callspec.params.get("scale", "1.5") if hasattr(item, "callspec") else "1.5"
+                     for item in request.session.items
+                     if item.module is request.module and "probes" in item.fixturenames})
+    running: dict[str, subprocess.Popen] = {}
     made: dict[str, dict] = {}
 
+    def start(scale: str, display: int) -> subprocess.Popen:
+        env = dict(os.environ, QT_SCALE_FACTOR=scale, QT_QPA_PLATFORM="xcb",
+                   PYTHONPATH=str(ROOT) + os.pathsep + os.environ.get("PYTHONPATH", ""))
+        env.pop("DISPLAY", None)
+        script = _PROBE + _CLOSE + (_CONTENT_PROBE + _CLOSE if scale == "1.5" else "")
+        cmd = ["xvfb-run", "-a", "-n", str(display), "-s", f"-screen 0 {LAPTOP[0]}x{LAPTOP[1]}x24", sys.executable,
+               "-c", textwrap.dedent(script), str(tmp_path_factory.mktemp("probe") / "s.ini"),
+               sample_files["cloud"], sample_files["skeletal"], sample_files["curve"]]
+        return subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, cwd=ROOT, env=env)
+
     def get(scale: str) -> dict:
+        if not running:
+            for i, s in enumerate(wanted or [scale]):
+                running[s] = start(s, 200 + 100 * i)
+        if scale not in running:
+            running[scale] = start(scale, 200 + 100 * len(running))
         if scale not in made:
-            env = dict(os.environ, QT_SCALE_FACTOR=scale, QT_QPA_PLATFORM="xcb",
-                       PYTHONPATH=str(ROOT) + os.pathsep + os.environ.get("PYTHONPATH", ""))
-            env.pop("DISPLAY", None)
-            script = _PROBE + _CLOSE + (_CONTENT_PROBE + _CLOSE if scale == "1.5" else "")
-            cmd = ["xvfb-run", "-a", "-s", f"-screen 0 {LAPTOP[0]}x{LAPTOP[1]}x24", sys.executable, "-c",
-                   textwrap.dedent(script), str(tmp_path_factory.mktemp("probe") / "s.ini"),
-                   sample_files["cloud"], sample_files["skeletal"], sample_files["curve"]]
-            run = subprocess.run(cmd, capture_output=True, text=True, cwd=ROOT, env=env, timeout=300)
-            lines = dict(ln.split(" ", 1) for ln in run.stdout.splitlines() if ln.startswith(("PROBE ", "CONTENT ")))
-            made[scale] = {"run": run.stdout + run.stderr, **{k: json.loads(v) for k, v in lines.items()}}
+            stdout, stderr = running[scale].communicate(timeout=300)
+            lines = dict(ln.split(" ", 1) for ln in stdout.splitlines() if ln.startswith(("PROBE ", "CONTENT ")))
+            made[scale] = {"run": stdout + stderr, **{k: json.loads(v) for k, v in lines.items()}}
         return made[scale]
 
-    return get
+    yield get
+    for proc in running.values():  # a probe no test waited for (a test failed before asking)
+        if proc.poll() is None:
+            proc.kill()
+        proc.communicate()
 
 
 @pytest.mark.slow

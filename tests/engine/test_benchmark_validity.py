@@ -219,6 +219,11 @@ def test_resume_does_not_recompute(run, capsys):
     assert main([*ARGS, "--out", str(run), "--no-figure"]) == 0
     out = capsys.readouterr().out
     assert "6 tasks: 6 already done, 0 ran, 0 failed; 14 scored skeletons" in out
+    # the blind spots printed are those of the table written (validity.csv), every metric's
+    stats = [{"metric": r["metric"], "group": r["group"], "defect": r["defect"], "auc": float(r["auc"])}
+             for r in _table(run)]
+    for metric, blind in blind_spots(stats).items():
+        assert f"shapes {metric}: blind to {', '.join(blind) if blind else 'none'}\n" in out, metric
     assert {p.name: os.stat(p).st_mtime_ns for p in sorted((run / "tasks").glob("*.json"))} == before
 
 

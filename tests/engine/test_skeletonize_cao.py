@@ -247,17 +247,27 @@ def test_a_cancel_mid_solve_returns_while_the_superlu_factorization_runs():
 
 # ---- the paper's numbers (its results table), default `rays` estimator -------------------------
 
-def _scores(cloud, method="cao"):
+def _scores(cloud, method="cao", skeleton=None):
+    """The evaluation's summary of the cloud's skeleton (``skeleton``: the (skeletal, curve, info) of
+    ``skeletonize(cloud, method=method, return_info=True)`` if already made), its curve and its info."""
     import skelcore
 
-    skeletal, curve, info = skeletonize(cloud, method=method, return_info=True)
+    skeletal, curve, info = skeleton if skeleton is not None else skeletonize(cloud, method=method, return_info=True)
     return skelcore.evaluate(cloud, skeletal, curve).summary(), curve, info
 
 
-def test_hammer_reproduces_the_papers_row(scans):
+@pytest.fixture(scope="module")
+def hammer(scans):
+    """The hammer's cloud and its cao skeleton (skeletal, curve, info), made once for the paper's row and
+    the fan starts' weight."""
     from skelcore.io import load_cloud
 
-    s, curve, info = _scores(load_cloud(scans / "hammer_4096.ply"))
+    cloud = load_cloud(scans / "hammer_4096.ply")
+    return cloud, skeletonize(cloud, method="cao", return_info=True)
+
+
+def test_hammer_reproduces_the_papers_row(hammer):
+    s, curve, info = _scores(hammer[0], skeleton=hammer[1])
     assert s["topology"]["bottleneck"] == pytest.approx(0.0084, rel=0.05)
     assert s["topology"]["wasserstein"] == pytest.approx(0.0076, rel=0.05)
     assert s["centeredness"]["skeletal"] == pytest.approx(0.530, abs=0.02)
@@ -323,13 +333,10 @@ def test_fan_start_auto_uses_qhull_up_to_the_threshold():
         point_rings(np.random.default_rng(0).normal(size=(50, 3)), 8, fan_start="x")
 
 
-def test_hammer_starts_its_fans_as_the_toolbox_and_gets_its_weight(scans):
+def test_hammer_starts_its_fans_as_the_toolbox_and_gets_its_weight(hammer):
     """With Qhull's fan starts the initial W_L is the toolbox's (17.197 in Octave, docs/skeletonize.md);
     the axis start gave 17.55."""
-    from skelcore.io import load_cloud
-
-    cloud = load_cloud(scans / "hammer_4096.ply")
-    _s, curve, info = skeletonize(cloud, method="cao", return_info=True)
+    _cloud, (_s, curve, info) = hammer
     assert info.fan_start == "qhull"
     assert info.initial_weight == pytest.approx(17.197, abs=0.001)
     assert curve.n_vertices == 51
