@@ -266,35 +266,29 @@ def _support_threads() -> list:
 
 
 def test_a_new_pick_stops_the_support_still_computing(cylinder_window, qtbot, monkeypatch):
-    import time
-
     w = cylinder_window
     w.supports.background_points = 0  # every cloud counts as big: supports in a thread
     w.scene.set_metric("boundedness")
     state = _slow_first_support(monkeypatch, 5)
     assert w.supports.show_element(w.scene.element_info("skeletal", "points", 5)) is None
     qtbot.waitUntil(lambda: state["started"], timeout=5000)
-    start = time.monotonic()
     w.supports.show_element(w.scene.element_info("skeletal", "points", 7))
     qtbot.waitUntil(lambda: not w.supports.busy, timeout=10000)
-    assert time.monotonic() - start < 5.0  # not after the first one's 30 s
+    assert not state["finished"]  # shown before the first one's 30 s were over
     assert w.supports.support.index == 7 and w.supports.support.kind == "directions"
     qtbot.waitUntil(lambda: not _support_threads(), timeout=3000)  # the first computation stopped
     assert not state["finished"]
 
 
 def test_quitting_stops_the_support_still_computing(cylinder_window, qtbot, monkeypatch):
-    import time
-
     w = cylinder_window
     w.supports.background_points = 0
     w.scene.set_metric("boundedness")
     state = _slow_first_support(monkeypatch, 5)
     w.supports.show_element(w.scene.element_info("skeletal", "points", 5))
     qtbot.waitUntil(lambda: state["started"], timeout=5000)
-    start = time.monotonic()
     w.close()
-    assert time.monotonic() - start < 1.0
+    assert not state["finished"]  # closed without waiting out the first one's 30 s
     qtbot.waitUntil(lambda: not _support_threads(), timeout=3000)
     assert not state["finished"]
 
