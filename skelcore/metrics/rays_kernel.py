@@ -425,8 +425,11 @@ def run_plan(
             done[i : i + 1], *extra,
         )
 
-    polled_streams(stream, [(i,) for i in range(len(streams))], workers, checkpoint,
-                   lambda: float(done.sum()) / max(1, n_clusters), stop, POLL)
+    if len(streams) == 1 and workers == 1 and checkpoint is no_checkpoint:
+        stream(0)  # nothing to poll: the one stream on this thread, without a pool's thread start and wait
+    else:
+        polled_streams(stream, [(i,) for i in range(len(streams))], workers, checkpoint,
+                       lambda: float(done.sum()) / max(1, n_clusters), stop, POLL)
     stats[:] += stream_stats.sum(axis=0)
     out = np.empty(len(q_sorted))
     out[plan.order] = out_sorted
