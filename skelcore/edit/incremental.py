@@ -27,7 +27,7 @@ from ..errors import Cancelled, SkelInputError
 from ..evaluation import Evaluation
 from ..geometry import check_magnitude, no_checkpoint, unique_rows
 from ..metrics.ball_tree import BallTree
-from ..metrics.boundedness import LoneRays, in_raster_frame, prepared_cloud, rays_plan_is_exact
+from ..metrics.boundedness import LoneRays, in_raster_frame, rays_plan_is_exact
 from ..metrics.ray_hints import merged_tables
 from ..metrics.centeredness import curve_centeredness, slab_grid
 from ..metrics.curve_sampling import sample_curve
@@ -319,16 +319,21 @@ def _sample_boundedness(old: EvalContext, ctx: EvalContext, cache: dict[str, Any
     # cores (one on two cores); once they are done (or few are left), the rest in one call on every core. In one call, its
     # second stream waited for the core those stages held and ran alone after them (a pruned branch's
     # 180 samples at 100k points); every call's streams start without hints (docs/performance.md 6.10)
+    # the moved positions made distinct once; each call casts its part's in lexicographic order, as a
+    # call of the part's rows would
+    uniq, inverse, _ = unique_rows(s_new.points[rows], no_checkpoint)
+    others = max(1, (os.cpu_count() or 1) - 1)
+    beta[rows] = 0.0
     lo = 0
-    while lo < len(rows):
+    while cast is not None and lo < len(rows):
         left = len(rows) - lo
         alone = beside is not None and not beside.is_set() and left > 2 * _RAYS_CHUNK
         take = max(_RAYS_CHUNK, left // 3) if alone else left
-        part = rows[lo:lo + take]
-        beta[part] = 0.0 if cast is None else cast(s_new.points[part], seeds=seeds, keep=made,
-                                                   workers=max(1, (os.cpu_count() or 1) - 1) if alone else None)
+        ids = np.unique(inverse[lo:lo + take])
+        got = cast.distinct(uniq[ids], seeds=seeds, keep=made, workers=others if alone else None)
+        beta[rows[lo:lo + take]] = got[np.searchsorted(ids, inverse[lo:lo + take])]
         lo += take
-    kept_at = in_raster_frame(s_new.points[~todo], prepared_cloud(cloud).centre) if seeds is not None else None
+    kept_at = in_raster_frame(s_new.points[~todo], cast.centre) if seeds is not None and cast is not None else None
     ctx.ray_hints[:] = [t for t in [merged_tables(seeds, made, kept_at)] if t is not None]
     return beta
 

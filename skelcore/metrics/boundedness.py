@@ -356,12 +356,19 @@ class LoneRays:
         if len(queries) == 0:
             return np.zeros(0)
         uniq_q, inverse, _ = unique_rows(queries)
+        return self.distinct(uniq_q, workers=workers, seeds=seeds, keep=keep)[inverse]
+
+    def distinct(self, uniq_q: np.ndarray, *, workers: int | None = None, seeds: HintTables | None = None,
+                 keep: list | None = None) -> np.ndarray:
+        """beta of distinct queries given in lexicographic order (as :func:`unique_rows` gives them: the
+        order cast, and of the kept tables' rows), for a caller that made its queries distinct once."""
+        if len(uniq_q) == 0:
+            return np.zeros(0)
         q_r = _in_frame(uniq_q, self.centre)
         seeds = seeds if seeds is not None and seeds.cloud is self.given else None
         plan = exact_plan(q_r, self.near)
-        beta = _cast(self.given, self.tree, plan, q_r, self.h, self.rows, self.bins, workers, no_checkpoint,
+        return _cast(self.given, self.tree, plan, q_r, self.h, self.rows, self.bins, workers, no_checkpoint,
                      seeds, keep)
-        return beta[inverse]
 
 
 def _lone(plan, q_r: np.ndarray) -> bool:
