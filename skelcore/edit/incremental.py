@@ -319,18 +319,22 @@ def _sample_boundedness(old: EvalContext, ctx: EvalContext, cache: dict[str, Any
     # cores (one on two cores); once they are done (or few are left), the rest in one call on every core. In one call, its
     # second stream waited for the core those stages held and ran alone after them (a pruned branch's
     # 180 samples at 100k points); every call's streams start without hints (docs/performance.md 6.10)
-    # the moved positions made distinct once; each call casts its part's in lexicographic order, as a
-    # call of the part's rows would
+    # the moved positions made distinct (and put in the raster frame) once, the seeds' nearest asked once
+    # for all; each call casts its part's in lexicographic order, as a call of the part's rows would
     uniq, inverse, _ = unique_rows(s_new.points[rows], no_checkpoint)
     others = max(1, (os.cpu_count() or 1) - 1)
     beta[rows] = 0.0
+    if cast is not None:
+        q_r, seeds = cast.in_frame(uniq), cast.seeds(seeds)
+        near = seeds.nearest(q_r) if seeds is not None and len(seeds) and len(q_r) else None
     lo = 0
     while cast is not None and lo < len(rows):
         left = len(rows) - lo
         alone = beside is not None and not beside.is_set() and left > 2 * _RAYS_CHUNK
         take = max(_RAYS_CHUNK, left // 3) if alone else left
         ids = np.unique(inverse[lo:lo + take])
-        got = cast.distinct(uniq[ids], seeds=seeds, keep=made, workers=others if alone else None)
+        got = cast.distinct(q_r[ids], seeds=seeds, keep=made, workers=others if alone else None,
+                            nearest=None if near is None else (near[0][ids], near[1][ids]))
         beta[rows[lo:lo + take]] = got[np.searchsorted(ids, inverse[lo:lo + take])]
         lo += take
     kept_at = in_raster_frame(s_new.points[~todo], cast.centre) if seeds is not None and cast is not None else None

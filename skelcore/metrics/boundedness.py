@@ -301,13 +301,14 @@ def boundedness_rays(
 
 
 def _cast(given: np.ndarray, tree: BallTree, plan, q_r: np.ndarray, h: float, rows: int, bins: int,
-          workers: int | None, checkpoint: Checkpoint, seeds: HintTables | None, keep: list | None) -> np.ndarray:
+          workers: int | None, checkpoint: Checkpoint, seeds: HintTables | None, keep: list | None,
+          nearest: tuple[np.ndarray, np.ndarray] | None = None) -> np.ndarray:
     """beta of the distinct queries ``q_r`` (raster frame) by ``plan``; with ``keep`` (a lone plan) their
     hint tables appended to it when they fit in ``TABLES_MOST_BYTES``."""
     kept = None
     if keep is not None and len(q_r) * 8 * rows * bins <= TABLES_MOST_BYTES:
         kept = np.empty((len(q_r), 2 * rows * bins), np.int32)
-    beta = run_plan(tree, plan, q_r, h, rows, bins, workers, checkpoint, seeds=seeds, kept=kept)
+    beta = run_plan(tree, plan, q_r, h, rows, bins, workers, checkpoint, seeds=seeds, kept=kept, nearest=nearest)
     if kept is not None:
         keep.append(HintTables.of(given, np.ascontiguousarray(q_r, np.float64), kept))
     return beta
@@ -356,19 +357,28 @@ class LoneRays:
         if len(queries) == 0:
             return np.zeros(0)
         uniq_q, inverse, _ = unique_rows(queries)
-        return self.distinct(uniq_q, workers=workers, seeds=seeds, keep=keep)[inverse]
+        seeds = self.seeds(seeds)
+        return self.distinct(self.in_frame(uniq_q), workers=workers, seeds=seeds, keep=keep)[inverse]
 
-    def distinct(self, uniq_q: np.ndarray, *, workers: int | None = None, seeds: HintTables | None = None,
-                 keep: list | None = None) -> np.ndarray:
-        """beta of distinct queries given in lexicographic order (as :func:`unique_rows` gives them: the
-        order cast, and of the kept tables' rows), for a caller that made its queries distinct once."""
-        if len(uniq_q) == 0:
+    def in_frame(self, points: np.ndarray) -> np.ndarray:
+        """``points`` in the raster frame (:func:`in_raster_frame` of the prepared cloud's centre)."""
+        return _in_frame(np.asarray(points, dtype=float), self.centre)
+
+    def seeds(self, seeds: HintTables | None) -> HintTables | None:
+        """``seeds`` when they were kept on this cloud (else None, as :func:`boundedness_rays` drops them)."""
+        return seeds if seeds is not None and seeds.cloud is self.given else None
+
+    def distinct(self, q_r: np.ndarray, *, workers: int | None = None, seeds: HintTables | None = None,
+                 keep: list | None = None, nearest: tuple[np.ndarray, np.ndarray] | None = None) -> np.ndarray:
+        """beta of distinct queries in the raster frame (:meth:`in_frame`), cast in the order given (the
+        order of the kept tables' rows; :func:`unique_rows`' lexicographic order, as ``boundedness``);
+        ``seeds`` from :meth:`seeds`, ``nearest`` their ``nearest(q_r)`` when the caller asked it for
+        more queries at once. For a caller that makes its queries distinct once for several calls."""
+        if len(q_r) == 0:
             return np.zeros(0)
-        q_r = _in_frame(uniq_q, self.centre)
-        seeds = seeds if seeds is not None and seeds.cloud is self.given else None
         plan = exact_plan(q_r, self.near)
         return _cast(self.given, self.tree, plan, q_r, self.h, self.rows, self.bins, workers, no_checkpoint,
-                     seeds, keep)
+                     seeds, keep, nearest)
 
 
 def _lone(plan, q_r: np.ndarray) -> bool:

@@ -131,5 +131,12 @@ def test_the_lone_rays_setup_gives_boundednesss_bits_and_tables_inline_or_pooled
             assert beta.tobytes() == ref.tobytes()
             assert got[0].tables.tobytes() == want[0].tables.tobytes()
             assert got[0].origins.tobytes() == want[0].origins.tobytes()
+    q_r = cast.in_frame(unique_rows(q, no_checkpoint)[0])
+    seeds = cast.seeds(ctx.ray_hints[0])
+    asked = seeds.nearest(q_r[::-1])  # asked for more queries at once, taken in rows
+    got, want = [], []
+    beta = cast.distinct(q_r[1::2], seeds=seeds, keep=got, workers=1, nearest=(asked[0][-2::-2], asked[1][-2::-2]))
+    assert beta.tobytes() == cast.distinct(q_r[1::2], seeds=seeds, keep=want, workers=1).tobytes()
+    assert got[0].tables.tobytes() == want[0].tables.tobytes()
     assert cast(q[:0]).shape == (0,)
     assert LoneRays.of(ctx.bounded_cloud_n, Params(boundedness_method="paper")) is None
