@@ -380,7 +380,8 @@ def run_plan(
     nearest: tuple[np.ndarray, np.ndarray] | None = None,
 ) -> np.ndarray:
     """beta of every query row (in the input order), the plan's clusters in contiguous streams of about
-    equal estimated cost on ``workers`` threads; the checkpoint is called every ``POLL`` s meanwhile.
+    equal estimated cost on ``workers`` threads; the checkpoint is called every ``POLL`` s meanwhile (one
+    stream on one worker with ``no_checkpoint``: on this thread, nothing to poll).
     ``seeds``: kept hint tables of this tree's cloud whose nearest start a cluster's rays where nearer than the
     cluster cast before (:func:`.ray_hints.seeds_for`); ``kept`` (K, 2 x rows x bins) int32: filled
     with each cluster's hint table after its rays (docs/boundedness.md 3.18). Neither changes beta.
