@@ -15,6 +15,7 @@ from __future__ import annotations
 import os
 import threading
 import time
+from itertools import repeat
 from dataclasses import replace
 from typing import Any, Callable
 
@@ -26,7 +27,7 @@ from ..errors import Cancelled, SkelInputError
 from ..evaluation import Evaluation
 from ..geometry import check_magnitude, no_checkpoint, unique_rows
 from ..metrics.ball_tree import BallTree
-from ..metrics.boundedness import boundedness, in_raster_frame, prepared_cloud, rays_plan_is_exact
+from ..metrics.boundedness import LoneRays, in_raster_frame, rays_plan_is_exact
 from ..metrics.ray_hints import merged_tables
 from ..metrics.centeredness import curve_centeredness, slab_grid
 from ..metrics.curve_sampling import sample_curve
@@ -268,15 +269,16 @@ def _balls_of(points: np.ndarray) -> Callable[[], BallTree]:
 
 
 def _keys(*columns: np.ndarray) -> list[bytes]:
+    """Each row's bytes (the columns side by side as float64), from one view of the rows."""
     rows = np.ascontiguousarray(np.hstack(columns), dtype=np.float64)
-    return [r.tobytes() for r in rows]
+    return rows.view(np.dtype((np.void, 8 * rows.shape[1]))).ravel().tolist()
 
 
 def _reuse(old_keys: list[bytes], old_values: np.ndarray, new_keys: list[bytes]) -> tuple[np.ndarray, np.ndarray]:
     """(values, which are missing) for ``new_keys`` from the old (key, value) pairs."""
     known = dict(zip(old_keys, np.asarray(old_values, dtype=float).tolist()))
-    values = np.array([known.get(k, np.nan) for k in new_keys], dtype=float)
-    missing = np.array([k not in known for k in new_keys], dtype=bool)
+    values = np.array(list(map(known.get, new_keys, repeat(np.nan))), dtype=float)
+    missing = ~np.fromiter(map(known.__contains__, new_keys), bool, len(new_keys))
     return values, missing
 
 
@@ -312,21 +314,30 @@ def _sample_boundedness(old: EvalContext, ctx: EvalContext, cache: dict[str, Any
     # the moved samples' rays start from the hits of the old samples nearby (docs/boundedness.md 3.18)
     seeds = old.ray_hints[0] if old.ray_hints else None
     made: list = []
+    cast = LoneRays.of(cloud, ctx.bounded_params or p)  # every call's setup once (None: no rays, all 0)
     # while the other lane's stages hold their core, a third of the samples left in streams on the other
     # cores (one on two cores); once they are done (or few are left), the rest in one call on every core. In one call, its
     # second stream waited for the core those stages held and ran alone after them (a pruned branch's
     # 180 samples at 100k points); every call's streams start without hints (docs/performance.md 6.10)
+    # the moved positions made distinct (and put in the raster frame) once, the seeds' nearest asked once
+    # for all; each call casts its part's in lexicographic order, as a call of the part's rows would
+    uniq, inverse, _ = unique_rows(s_new.points[rows], no_checkpoint)
+    others = max(1, (os.cpu_count() or 1) - 1)
+    beta[rows] = 0.0
+    if cast is not None:
+        q_r, seeds = cast.in_frame(uniq), cast.seeds(seeds)
+        near = seeds.nearest(q_r) if seeds is not None and len(seeds) and len(q_r) else None
     lo = 0
-    while lo < len(rows):
+    while cast is not None and lo < len(rows):
         left = len(rows) - lo
         alone = beside is not None and not beside.is_set() and left > 2 * _RAYS_CHUNK
         take = max(_RAYS_CHUNK, left // 3) if alone else left
-        part = rows[lo:lo + take]
-        beta[part] = boundedness(cloud, s_new.points[part], params=ctx.bounded_params or p, share_far_field=False,
-                                 workers=max(1, (os.cpu_count() or 1) - 1) if alone else None, seeds=seeds,
-                                 keep=made)
+        ids = np.unique(inverse[lo:lo + take])
+        got = cast.distinct(q_r[ids], seeds=seeds, keep=made, workers=others if alone else None,
+                            nearest=None if near is None else (near[0][ids], near[1][ids]))
+        beta[rows[lo:lo + take]] = got[np.searchsorted(ids, inverse[lo:lo + take])]
         lo += take
-    kept_at = in_raster_frame(s_new.points[~todo], prepared_cloud(cloud).centre) if seeds is not None else None
+    kept_at = in_raster_frame(s_new.points[~todo], cast.centre) if seeds is not None and cast is not None else None
     ctx.ray_hints[:] = [t for t in [merged_tables(seeds, made, kept_at)] if t is not None]
     return beta
 

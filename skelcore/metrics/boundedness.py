@@ -29,10 +29,10 @@ from ..geometry import Checkpoint, bounding_box, no_checkpoint, unique_rows
 from ..params import Params
 from ._rays import FRAME
 from .ray_hints import TABLES_MOST_BYTES, HintTables
-from .rays_kernel import BallTree, choose_plan, run_plan
+from .rays_kernel import BallTree, choose_plan, exact_plan, run_plan
 
 __all__ = ["boundedness", "rays_plan_is_exact", "boundedness_rays", "boundedness_paper", "rays_radius", "paper_triangles", "PaperTriangles",
-           "prepared_cloud", "in_raster_frame"]
+           "prepared_cloud", "in_raster_frame", "LoneRays"]
 
 def boundedness(
     cloud: np.ndarray,
@@ -294,14 +294,91 @@ def boundedness_rays(
         tree, q_r, h, h / near_angle, cluster_cell * h, rows * bins, exact_pairs, share_far_field,
         checkpoint,
     )
-    kept = None
-    if keep is not None and _lone(plan, q_r) and len(q_r) * 8 * rows * bins <= TABLES_MOST_BYTES:
-        kept = np.empty((len(q_r), 2 * rows * bins), np.int32)
-    beta = run_plan(tree, plan, q_r, h, rows, bins, workers, checkpoint, seeds=seeds, kept=kept)
-    if kept is not None:
-        keep.append(HintTables.of(given, np.ascontiguousarray(q_r, np.float64), kept))
+    beta = _cast(given, tree, plan, q_r, h, rows, bins, workers, checkpoint, seeds,
+                 keep if keep is not None and _lone(plan, q_r) else None)
     out[:] = beta[inverse]
     return out
+
+
+def _cast(given: np.ndarray, tree: BallTree, plan, q_r: np.ndarray, h: float, rows: int, bins: int,
+          workers: int | None, checkpoint: Checkpoint, seeds: HintTables | None, keep: list | None,
+          nearest: tuple[np.ndarray, np.ndarray] | None = None) -> np.ndarray:
+    """beta of the distinct queries ``q_r`` (raster frame) by ``plan``; with ``keep`` (a lone plan) their
+    hint tables appended to it when they fit in ``TABLES_MOST_BYTES``."""
+    kept = None
+    if keep is not None and len(q_r) * 8 * rows * bins <= TABLES_MOST_BYTES:
+        kept = np.empty((len(q_r), 2 * rows * bins), np.int32)
+    beta = run_plan(tree, plan, q_r, h, rows, bins, workers, checkpoint, seeds=seeds, kept=kept, nearest=nearest)
+    if kept is not None:
+        keep.append(HintTables.of(given, np.ascontiguousarray(q_r, np.float64), kept))
+    return beta
+
+
+@dataclass(frozen=True)
+class LoneRays:
+    """The rays estimator for queries of one cloud that it scores each on its own (the exact plan,
+    :func:`rays_plan_is_exact`), its setup taken once: the prepared cloud, h, the near reach and the
+    raster. A caller that scores such queries in several calls (an edit's moved samples in chunks,
+    docs/performance.md 6.10) skips each call's plan choice, its checks and the cloud's lookup; each
+    query's beta is :func:`boundedness_rays`' with every pair, the same bits (docs/metrics.md 2)."""
+
+    given: np.ndarray
+    tree: BallTree
+    centre: np.ndarray
+    h: float
+    near: float
+    rows: int
+    bins: int
+
+    @classmethod
+    def of(cls, cloud: np.ndarray, params: Params = Params()) -> "LoneRays | None":
+        """The setup for ``cloud`` (the array the hint tables are keyed by) and ``params``; None where
+        :func:`boundedness` would not cast rays (the paper's estimator, an empty cloud, h = 0)."""
+        if params.boundedness_method != "rays":
+            return None
+        if not params.rays_radius_factor > 0 or not 0 < params.rays_near_angle < 1:
+            raise ValueError(f"need radius_factor > 0 and 0 < near_angle < 1, got {params.rays_radius_factor!r}, "
+                             f"{params.rays_near_angle!r}")
+        points = _as_points("cloud", cloud)
+        if len(points) == 0:
+            return None
+        prepared = _prepared_cloud(points, no_checkpoint)
+        h = params.rays_radius_factor * prepared.spacing
+        if not h > 0:
+            return None
+        rows = int(params.rays_rows)
+        return cls(cloud, prepared.tree, prepared.centre, h, h / params.rays_near_angle, rows, 2 * rows)
+
+    def __call__(self, queries: np.ndarray, *, workers: int | None = None, seeds: HintTables | None = None,
+                 keep: list | None = None) -> np.ndarray:
+        """beta of every query row, as ``boundedness(cloud, queries, share_far_field=False, workers=,
+        seeds=, keep=)``."""
+        queries = _as_points("queries", queries)
+        if len(queries) == 0:
+            return np.zeros(0)
+        uniq_q, inverse, _ = unique_rows(queries)
+        seeds = self.seeds(seeds)
+        return self.distinct(self.in_frame(uniq_q), workers=workers, seeds=seeds, keep=keep)[inverse]
+
+    def in_frame(self, points: np.ndarray) -> np.ndarray:
+        """``points`` in the raster frame (:func:`in_raster_frame` of the prepared cloud's centre)."""
+        return _in_frame(np.asarray(points, dtype=float), self.centre)
+
+    def seeds(self, seeds: HintTables | None) -> HintTables | None:
+        """``seeds`` when they were kept on this cloud (else None, as :func:`boundedness_rays` drops them)."""
+        return seeds if seeds is not None and seeds.cloud is self.given else None
+
+    def distinct(self, q_r: np.ndarray, *, workers: int | None = None, seeds: HintTables | None = None,
+                 keep: list | None = None, nearest: tuple[np.ndarray, np.ndarray] | None = None) -> np.ndarray:
+        """beta of distinct queries in the raster frame (:meth:`in_frame`), cast in the order given (the
+        order of the kept tables' rows; :func:`unique_rows`' lexicographic order, as ``boundedness``);
+        ``seeds`` from :meth:`seeds`, ``nearest`` their ``nearest(q_r)`` when the caller asked it for
+        more queries at once. For a caller that makes its queries distinct once for several calls."""
+        if len(q_r) == 0:
+            return np.zeros(0)
+        plan = exact_plan(q_r, self.near)
+        return _cast(self.given, self.tree, plan, q_r, self.h, self.rows, self.bins, workers, no_checkpoint,
+                     seeds, keep, nearest)
 
 
 def _lone(plan, q_r: np.ndarray) -> bool:

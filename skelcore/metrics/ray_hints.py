@@ -65,14 +65,16 @@ class HintTables:
         return self._search[0].query(points)
 
 
-def seeds_for(kept: HintTables | None, centres: np.ndarray, firsts: list[int]) -> np.ndarray | None:
+def seeds_for(kept: HintTables | None, centres: np.ndarray, firsts: list[int],
+              nearest: tuple[np.ndarray, np.ndarray] | None = None) -> np.ndarray | None:
     """Per cluster centre (in the order cast; ``firsts``: the clusters that start a stream, cast with no
     cluster before them), the row of ``kept`` to start its rays from, or -1: the nearest kept origin
     where it lies nearer than the centre cast before (whose hits the rays would start from otherwise;
-    the kernel drops any start more than two reaches away). None when nothing is kept."""
+    the kernel drops any start more than two reaches away). None when nothing is kept. ``nearest``:
+    ``kept.nearest(centres)`` when the caller asked it already (for more points at once)."""
     if kept is None or not len(kept) or not len(centres):
         return None
-    d, row = kept.nearest(centres)
+    d, row = kept.nearest(centres) if nearest is None else nearest
     before = np.full(len(centres), np.inf)
     before[1:] = np.linalg.norm(np.diff(centres, axis=0), axis=1)
     before[np.asarray(firsts, np.int64)] = np.inf

@@ -377,12 +377,15 @@ def run_plan(
     tree: BallTree, plan: Plan, queries: np.ndarray, h: float, rows: int, bins: int, workers: int | None = None,
     checkpoint: Checkpoint = no_checkpoint, stats: np.ndarray | None = None,
     seeds: HintTables | None = None, kept: np.ndarray | None = None,
+    nearest: tuple[np.ndarray, np.ndarray] | None = None,
 ) -> np.ndarray:
     """beta of every query row (in the input order), the plan's clusters in contiguous streams of about
-    equal estimated cost on ``workers`` threads; the checkpoint is called every ``POLL`` s meanwhile.
+    equal estimated cost on ``workers`` threads; the checkpoint is called every ``POLL`` s meanwhile (one
+    stream on one worker with ``no_checkpoint``: on this thread, nothing to poll).
     ``seeds``: kept hint tables of this tree's cloud whose nearest start a cluster's rays where nearer than the
     cluster cast before (:func:`.ray_hints.seeds_for`); ``kept`` (K, 2 x rows x bins) int32: filled
-    with each cluster's hint table after its rays (docs/boundedness.md 3.18). Neither changes beta."""
+    with each cluster's hint table after its rays (docs/boundedness.md 3.18). Neither changes beta.
+    ``nearest``: ``seeds.nearest`` of the plan's centres, when the caller has it."""
     q_sorted = np.ascontiguousarray(take_rows(queries, plan.order), np.float64)
     n_clusters = len(plan.starts) - 1
     if n_clusters == 0:
@@ -404,7 +407,7 @@ def run_plan(
     starts = np.ascontiguousarray(plan.starts, np.int64)
     if seeds is not None and seeds.tables.shape[1:] != (2 * rows * bins,):
         seeds = None  # another raster's tables
-    seed_of = seeds_for(seeds, centres, bounds[:-1])
+    seed_of = seeds_for(seeds, centres, bounds[:-1], nearest)
     none = np.zeros(0, np.int32)
     if kept is not None and kept.shape != (n_clusters, 2 * rows * bins):
         raise ValueError(f"run_plan: kept needs shape ({n_clusters}, {2 * rows * bins}), got {kept.shape}")
@@ -425,8 +428,11 @@ def run_plan(
             done[i : i + 1], *extra,
         )
 
-    polled_streams(stream, [(i,) for i in range(len(streams))], workers, checkpoint,
-                   lambda: float(done.sum()) / max(1, n_clusters), stop, POLL)
+    if len(streams) == 1 and workers == 1 and checkpoint is no_checkpoint:
+        stream(0)  # nothing to poll: the one stream on this thread, without a pool's thread start and wait
+    else:
+        polled_streams(stream, [(i,) for i in range(len(streams))], workers, checkpoint,
+                       lambda: float(done.sum()) / max(1, n_clusters), stop, POLL)
     stats[:] += stream_stats.sum(axis=0)
     out = np.empty(len(q_sorted))
     out[plan.order] = out_sorted

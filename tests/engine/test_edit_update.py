@@ -305,13 +305,13 @@ def test_the_moved_samples_boundedness_in_parts_gives_the_same_bits(monkeypatch)
     up = ev.update(change, diagnostics=False)
     np.testing.assert_array_equal(up.curve.sample_boundedness, fresh)
     calls = []
-    real = inc.boundedness
+    real = inc.LoneRays.distinct
 
-    def counted(cloud_, points, **kw):
+    def counted(self, points, **kw):
         calls.append((len(points), kw.get("workers")))
-        return real(cloud_, points, **kw)
+        return real(self, points, **kw)
 
-    monkeypatch.setattr(inc, "boundedness", counted)
+    monkeypatch.setattr(inc.LoneRays, "distinct", counted)
     monkeypatch.setattr(inc, "_RAYS_CHUNK", 4)
     old = {p.tobytes() for p in ev.curve.samples}
     moved = sum(p.tobytes() not in old for p in up.curve.samples)

@@ -13,7 +13,8 @@ import skelcore.edit as E
 from skelcore import evaluate, shapes
 from skelcore.geometry import no_checkpoint, unique_rows
 from skelcore.metrics import ray_hints, rays_kernel
-from skelcore.metrics.boundedness import in_raster_frame, prepared_cloud, rays_radius
+from skelcore.metrics.boundedness import LoneRays, boundedness, in_raster_frame, prepared_cloud, rays_radius
+from skelcore.params import Params
 
 
 @lru_cache(maxsize=None)
@@ -110,3 +111,32 @@ def test_tables_of_another_cloud_are_not_used(monkeypatch):
     assert seen[0] is kept and seen[1] is None and a.tobytes() == b.tobytes()
     got = ray_hints.seeds_for(kept, kept.origins[:5] + 1e-3, [0])
     assert got is not None and (got >= 0).all()
+
+
+def test_the_lone_rays_setup_gives_boundednesss_bits_and_tables_inline_or_pooled():
+    """:class:`LoneRays` (the setup taken once for an update's calls) against ``boundedness`` with every
+    pair: the same beta and the same kept tables, seeded or not, its one stream on the calling thread
+    (``workers=1``, no checkpoint) or the kernel's pool (a checkpoint to poll)."""
+    cloud, ev = _base()
+    ctx = ev.source.ctx
+    cast = LoneRays.of(ctx.bounded_cloud_n, ctx.params)
+    q = ctx.samples.points[::3]
+    q = np.vstack([q, q[:5]])  # copies are scored once
+    for seeds in (None, ctx.ray_hints[0]):
+        for workers in (1, None):
+            got, want = [], []
+            beta = cast(q, workers=workers, seeds=seeds, keep=got)
+            ref = boundedness(ctx.bounded_cloud_n, q, params=ctx.params, share_far_field=False, workers=workers,
+                              seeds=seeds, keep=want, checkpoint=lambda f: None)
+            assert beta.tobytes() == ref.tobytes()
+            assert got[0].tables.tobytes() == want[0].tables.tobytes()
+            assert got[0].origins.tobytes() == want[0].origins.tobytes()
+    q_r = cast.in_frame(unique_rows(q, no_checkpoint)[0])
+    seeds = cast.seeds(ctx.ray_hints[0])
+    asked = seeds.nearest(q_r[::-1])  # asked for more queries at once, taken in rows
+    got, want = [], []
+    beta = cast.distinct(q_r[1::2], seeds=seeds, keep=got, workers=1, nearest=(asked[0][-2::-2], asked[1][-2::-2]))
+    assert beta.tobytes() == cast.distinct(q_r[1::2], seeds=seeds, keep=want, workers=1).tobytes()
+    assert got[0].tables.tobytes() == want[0].tables.tobytes()
+    assert cast(q[:0]).shape == (0,)
+    assert LoneRays.of(ctx.bounded_cloud_n, Params(boundedness_method="paper")) is None
