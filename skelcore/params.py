@@ -174,6 +174,12 @@ class Params:
         regions, none large).
     missing_depth_quantile : quantile of a region's distances to its border taken as its reach
         (robust to stray points).
+    missing_beside_radii, missing_beside_quantile : a region whose ``missing_beside_quantile`` distance
+        to the skeleton is at most this many local radii (half the shape's chord along the inward
+        normal, read off the cloud) lies beside a branch: the far wall of an off-centre axis, the wide
+        sides of a flat part. It does not count, and the completeness floor counts it as explained
+        (docs/diagnostics.md "Missing parts", "Beside a branch"; 3.0 between the synthetic suite's
+        off-centre and flat curves, at most 2.7, and its missing parts, at least 3.3).
     missing_link_factor : unexplained points closer than this many median NN spacings are one region.
     missing_max_points : above this many cloud points the missing parts are found on a random
         subsample of this many and every cloud point takes its nearest sample's verdict (the result
@@ -373,6 +379,8 @@ class Params:
     missing_large_share: float = 0.5
     missing_min_completeness: float = 0.6
     missing_depth_quantile: float = 0.95
+    missing_beside_radii: float = 3.0
+    missing_beside_quantile: float = 0.95
     missing_link_factor: float = 4.0
     missing_max_points: int = 200_000
     missing_max_elements: int = 20_000

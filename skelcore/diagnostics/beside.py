@@ -1,0 +1,116 @@
+"""Unexplained regions beside a branch: the far wall of a tube whose skeleton runs off its centre line,
+the wide sides of a flat part (docs/diagnostics.md "Missing parts", "Beside a branch").
+
+A missing part reaches away from the skeleton: a missing arm or a cut end lies several local radii
+beyond any branch. What an off-centre or flat-sided curve leaves unexplained lies within the branch's own
+cross-section, at most about a local diameter from the skeleton. The local radius is read off the cloud
+alone, not off the skeleton's balls (an off-centre axis has small ones): half the chord across the shape
+along a point's inward normal (the shape diameter), its median over the cloud points whose nearest
+skeleton point lies near the region point's. A region whose ``missing_beside_quantile`` distance to the
+skeleton is at most ``missing_beside_radii`` such radii is beside the skeleton, not missing from it: it
+keeps its share in the completeness (the paper's number), and does not make the skeleton ``incomplete``.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from scipy.spatial import cKDTree
+
+from ..geometry import query_workers
+
+__all__ = ["BESIDE_SAMPLES", "CLOUD_SAMPLES", "half_chords", "beside_ratios", "beside_regions"]
+
+#: points of a region measured (evenly spread over its rows)
+BESIDE_SAMPLES = 64
+#: cloud points whose half chords give the local radii (evenly spread over the cloud)
+CLOUD_SAMPLES = 4096
+#: cloud neighbours of a point whose principal axes give its normal
+NORMAL_K = 12
+#: a chord's march starts this many spacings inside (past the point's own wall) ...
+MARCH_START = 2.0
+#: ... a cloud point within this many spacings of the march ends it (the opposite wall) ...
+HIT_RADIUS = 1.0
+#: ... and it gives up after this many spacings (the chord then counts as unknown)
+MARCH_MAX = 200
+
+
+def half_chords(pts: np.ndarray, tree: cKDTree, rows: np.ndarray, toward: np.ndarray, spacing: float) -> np.ndarray:
+    """Half the chord across the shape from each cloud row of ``rows`` along its normal (the least
+    principal axis of its ``NORMAL_K`` nearest cloud points), turned towards ``toward`` (a point inside
+    for each row): the first step, every spacing from ``MARCH_START`` on, within ``HIT_RADIUS`` spacings of
+    a cloud point. NaN where no wall is met within ``MARCH_MAX`` spacings."""
+    rows = np.asarray(rows, np.int64)
+    out = np.full(len(rows), np.nan)
+    if not len(rows) or not spacing > 0 or tree.n < 3:
+        return out
+    p = pts[rows]
+    _, nb = tree.query(p, k=min(NORMAL_K, tree.n), workers=query_workers(len(p)))
+    q = pts[nb] - pts[nb].mean(axis=1, keepdims=True)
+    normal = np.linalg.eigh(np.einsum("nki,nkj->nij", q, q))[1][:, :, 0]
+    flip = np.einsum("ni,ni->n", toward - p, normal) < 0
+    normal[flip] *= -1
+    open_ = np.ones(len(p), bool)
+    for step in np.arange(MARCH_START, MARCH_MAX + 1):
+        idx = np.flatnonzero(open_)
+        if not len(idx):
+            break
+        d, _ = tree.query(p[idx] + step * spacing * normal[idx], distance_upper_bound=HIT_RADIUS * spacing,
+                          workers=query_workers(len(idx)))
+        hit = idx[np.isfinite(d)]
+        out[hit] = 0.5 * step * spacing
+        open_[hit] = False
+    return out
+
+
+def beside_ratios(pts: np.ndarray, tree: cKDTree, rows: np.ndarray, elements: np.ndarray, spacing: float
+                  ) -> np.ndarray:
+    """Per cloud row of ``rows``: its distance to the nearest of ``elements`` over the local radius there,
+    the median :func:`half_chords` of the cloud points (``CLOUD_SAMPLES`` of them, spread evenly) whose
+    nearest element lies within that distance (at least two spacings) of the row's. NaN when none of
+    them has a chord."""
+    rows = np.asarray(rows, np.int64)
+    if not len(rows) or not len(elements):
+        return np.full(len(rows), np.nan)
+    element_tree = cKDTree(elements)
+    sample = np.unique(np.linspace(0, len(pts) - 1, min(CLOUD_SAMPLES, len(pts))).astype(np.int64))
+    _, js = element_tree.query(pts[sample], workers=query_workers(len(sample)))
+    radius = half_chords(pts, tree, sample, elements[js], spacing)
+    ok = np.isfinite(radius)
+    feet = elements[js[ok]]
+    radius = radius[ok]
+    dist, j = element_tree.query(pts[rows], workers=query_workers(len(rows)))
+    out = np.full(len(rows), np.nan)
+    if not len(radius):
+        return out
+    near = cKDTree(feet).query_ball_point(elements[j], np.maximum(dist, 2.0 * spacing))
+    for i, got in enumerate(near):
+        if got:
+            out[i] = dist[i] / max(float(np.median(radius[got])), 1e-12)
+    return out
+
+
+def beside_regions(pts: np.ndarray, tree: cKDTree, region: np.ndarray, ids: np.ndarray, elements: np.ndarray,
+                   spacing: float, quantile: float, radii: float) -> np.ndarray:
+    """Per region id of ``ids`` (``region``: each row's id, -1 explained), True when the ``quantile`` of
+    :func:`beside_ratios` over up to ``BESIDE_SAMPLES`` of its points, spread evenly over its rows, is at
+    most ``radii`` (a point without a local radius counts as far)."""
+    ids = np.asarray(ids, np.int64)
+    out = np.zeros(len(ids), bool)
+    if not len(ids) or not len(elements):
+        return out
+    picked, owner = [], []
+    for i, c in enumerate(ids):
+        members = np.flatnonzero(region == c)
+        if len(members):
+            take = np.unique(np.linspace(0, len(members) - 1, min(BESIDE_SAMPLES, len(members))).astype(np.int64))
+            picked.append(members[take])
+            owner.append(np.full(len(take), i))
+    if not picked:
+        return out
+    rows, owner = np.concatenate(picked), np.concatenate(owner)
+    ratio = beside_ratios(pts, tree, rows, elements, spacing)
+    ratio = np.where(np.isfinite(ratio), ratio, np.inf)
+    for i in range(len(ids)):
+        mine = ratio[owner == i]
+        out[i] = bool(len(mine)) and float(np.quantile(mine, quantile, method="higher")) <= radii
+    return out
