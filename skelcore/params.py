@@ -381,6 +381,7 @@ class Params:
     missing_depth_quantile: float = 0.95
     missing_beside_radii: float = 3.0
     missing_beside_quantile: float = 0.95
+    missing_beside_beyond: float = 0.5
     missing_link_factor: float = 4.0
     missing_max_points: int = 200_000
     missing_max_elements: int = 20_000

@@ -32,6 +32,11 @@ MARCH_START = 2.0
 HIT_RADIUS = 1.0
 #: ... and it gives up after this many spacings (the chord then counts as unknown)
 MARCH_MAX = 200
+#: a skeleton point is an end when the elements near it lie to one side: their mean offset over this share
+#: of their mean distance ...
+END_SIDE = 0.5
+#: ... and a cloud point within this angle (degrees) of the way out lies beyond it
+END_ANGLE = 60.0
 
 
 def half_chords(pts: np.ndarray, tree: cKDTree, rows: np.ndarray, toward: np.ndarray, spacing: float) -> np.ndarray:
@@ -63,34 +68,43 @@ def half_chords(pts: np.ndarray, tree: cKDTree, rows: np.ndarray, toward: np.nda
 
 
 def beside_ratios(pts: np.ndarray, tree: cKDTree, rows: np.ndarray, elements: np.ndarray, spacing: float
-                  ) -> np.ndarray:
-    """Per cloud row of ``rows``: its distance to the nearest of ``elements`` over the local radius there,
-    the median :func:`half_chords` of the cloud points (``CLOUD_SAMPLES`` of them, spread evenly) whose
-    nearest element lies within that distance (at least two spacings) of the row's. NaN when none of
-    them has a chord."""
+                  ) -> tuple[np.ndarray, np.ndarray]:
+    """Per cloud row of ``rows``: (its distance to the nearest of ``elements`` over the local radius there,
+    whether it lies beyond the skeleton's end). The local radius: the median :func:`half_chords` of the
+    cloud points (``CLOUD_SAMPLES`` of them, spread evenly) whose nearest element lies within that
+    distance (at least two spacings) of the row's; NaN when none of them has a chord. Beyond the end:
+    the elements within that distance of the nearest one lie to one side of it (their mean offset is
+    over ``END_SIDE`` of their mean distance) and the row lies on the other, within ``END_ANGLE`` of the
+    way out (a cut branch's stump, a head past a handle's end)."""
     rows = np.asarray(rows, np.int64)
+    ratio, beyond = np.full(len(rows), np.nan), np.zeros(len(rows), bool)
     if not len(rows) or not len(elements):
-        return np.full(len(rows), np.nan)
+        return ratio, beyond
     element_tree = cKDTree(elements)
+    dist, j = element_tree.query(pts[rows], workers=query_workers(len(rows)))
+    reach = np.maximum(dist, 2.0 * spacing)
+    cos_out = np.cos(np.radians(END_ANGLE))
+    for i, got in enumerate(element_tree.query_ball_point(elements[j], reach)):
+        off = elements[got] - elements[j[i]]
+        mean = off.mean(axis=0)
+        size = float(np.linalg.norm(mean))
+        if size > END_SIDE * float(np.linalg.norm(off, axis=1).mean()) and dist[i] > 0:
+            beyond[i] = float(-(pts[rows[i]] - elements[j[i]]) @ mean) > cos_out * dist[i] * size
     sample = np.unique(np.linspace(0, len(pts) - 1, min(CLOUD_SAMPLES, len(pts))).astype(np.int64))
     _, js = element_tree.query(pts[sample], workers=query_workers(len(sample)))
     radius = half_chords(pts, tree, sample, elements[js], spacing)
     ok = np.isfinite(radius)
-    feet = elements[js[ok]]
-    radius = radius[ok]
-    dist, j = element_tree.query(pts[rows], workers=query_workers(len(rows)))
-    out = np.full(len(rows), np.nan)
-    if not len(radius):
-        return out
-    near = cKDTree(feet).query_ball_point(elements[j], np.maximum(dist, 2.0 * spacing))
-    for i, got in enumerate(near):
+    if not ok.any():
+        return ratio, beyond
+    feet, radius = elements[js[ok]], radius[ok]
+    for i, got in enumerate(cKDTree(feet).query_ball_point(elements[j], reach)):
         if got:
-            out[i] = dist[i] / max(float(np.median(radius[got])), 1e-12)
-    return out
+            ratio[i] = dist[i] / max(float(np.median(radius[got])), 1e-12)
+    return ratio, beyond
 
 
 def beside_regions(pts: np.ndarray, tree: cKDTree, region: np.ndarray, ids: np.ndarray, elements: np.ndarray,
-                   spacing: float, quantile: float, radii: float) -> np.ndarray:
+                   spacing: float, quantile: float, radii: float, beyond_share: float) -> np.ndarray:
     """Per region id of ``ids`` (``region``: each row's id, -1 explained), True when the ``quantile`` of
     :func:`beside_ratios` over up to ``BESIDE_SAMPLES`` of its points, spread evenly over its rows, is at
     most ``radii`` (a point without a local radius counts as far)."""
@@ -108,9 +122,10 @@ def beside_regions(pts: np.ndarray, tree: cKDTree, region: np.ndarray, ids: np.n
     if not picked:
         return out
     rows, owner = np.concatenate(picked), np.concatenate(owner)
-    ratio = beside_ratios(pts, tree, rows, elements, spacing)
+    ratio, beyond = beside_ratios(pts, tree, rows, elements, spacing)
     ratio = np.where(np.isfinite(ratio), ratio, np.inf)
     for i in range(len(ids)):
-        mine = ratio[owner == i]
-        out[i] = bool(len(mine)) and float(np.quantile(mine, quantile, method="higher")) <= radii
+        mine = owner == i
+        out[i] = (bool(mine.any()) and float(np.quantile(ratio[mine], quantile, method="higher")) <= radii
+                  and float(beyond[mine].mean()) <= beyond_share)
     return out
