@@ -180,6 +180,9 @@ class Params:
         sides of a flat part. It does not count, and the completeness floor counts it as explained
         (docs/diagnostics.md "Missing parts", "Beside a branch"; 3.0 between the synthetic suite's
         off-centre and flat curves, at most 2.7, and its missing parts, at least 3.3).
+    missing_beside_end_radii, missing_beside_beyond : ... unless more than this share of its points
+        lie beyond an end of the skeleton by more than this many local radii (a cut branch, the
+        hammer's head past the handle's end: 0.3-1.0; an off-centre axis's caps: at most 0.06).
     missing_link_factor : unexplained points closer than this many median NN spacings are one region.
     missing_max_points : above this many cloud points the missing parts are found on a random
         subsample of this many and every cloud point takes its nearest sample's verdict (the result
@@ -381,7 +384,8 @@ class Params:
     missing_depth_quantile: float = 0.95
     missing_beside_radii: float = 3.0
     missing_beside_quantile: float = 0.95
-    missing_beside_beyond: float = 0.5
+    missing_beside_end_radii: float = 1.5
+    missing_beside_beyond: float = 0.15
     missing_link_factor: float = 4.0
     missing_max_points: int = 200_000
     missing_max_elements: int = 20_000

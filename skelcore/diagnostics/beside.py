@@ -104,10 +104,13 @@ def beside_ratios(pts: np.ndarray, tree: cKDTree, rows: np.ndarray, elements: np
 
 
 def beside_regions(pts: np.ndarray, tree: cKDTree, region: np.ndarray, ids: np.ndarray, elements: np.ndarray,
-                   spacing: float, quantile: float, radii: float, beyond_share: float) -> np.ndarray:
-    """Per region id of ``ids`` (``region``: each row's id, -1 explained), True when the ``quantile`` of
-    :func:`beside_ratios` over up to ``BESIDE_SAMPLES`` of its points, spread evenly over its rows, is at
-    most ``radii`` (a point without a local radius counts as far)."""
+                   spacing: float, quantile: float, radii: float, end_radii: float, beyond_share: float
+                   ) -> np.ndarray:
+    """Per region id of ``ids`` (``region``: each row's id, -1 explained), True when, over up to
+    ``BESIDE_SAMPLES`` of its points spread evenly over its rows, the ``quantile`` of their distance to
+    the skeleton in local radii (:func:`beside_ratios`; a point without a local radius counts as far) is
+    at most ``radii`` and at most ``beyond_share`` of them lie beyond an end by more than ``end_radii``
+    (a cut branch, a head past a handle's end; a rounded cap stays within about one)."""
     ids = np.asarray(ids, np.int64)
     out = np.zeros(len(ids), bool)
     if not len(ids) or not len(elements):
@@ -126,6 +129,7 @@ def beside_regions(pts: np.ndarray, tree: cKDTree, region: np.ndarray, ids: np.n
     ratio = np.where(np.isfinite(ratio), ratio, np.inf)
     for i in range(len(ids)):
         mine = owner == i
+        past = beyond[mine] & (ratio[mine] > end_radii)
         out[i] = (bool(mine.any()) and float(np.quantile(ratio[mine], quantile, method="higher")) <= radii
-                  and float(beyond[mine].mean()) <= beyond_share)
+                  and float(past.mean()) <= beyond_share)
     return out

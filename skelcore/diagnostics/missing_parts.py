@@ -416,7 +416,7 @@ def _mark_beside(regions: list[MissingRegion], pts: np.ndarray, tree: cKDTree, r
         return
     found = beside_regions(pts, tree, region, np.array([r.id for r in ask]), elements, spacing,
                            float(p.missing_beside_quantile), float(p.missing_beside_radii),
-                           float(p.missing_beside_beyond))
+                           float(p.missing_beside_end_radii), float(p.missing_beside_beyond))
     for r, b in zip(ask, found):
         if b:
             r.beside, r.counted = True, False
