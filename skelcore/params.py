@@ -490,8 +490,11 @@ class Params:
                      "missing_air_ball"):
             if not float(getattr(self, name)) > 0:
                 bad(name, "must be > 0")
+        for name in ("missing_beside_radii", "missing_beside_end_radii"):
+            if not float(getattr(self, name)) >= 0:
+                bad(name, "must be >= 0 (0: no region is beside a branch)")
         for name in ("missing_min_share", "missing_large_share", "missing_min_completeness",
-                     "missing_depth_quantile"):
+                     "missing_depth_quantile", "missing_beside_quantile", "missing_beside_beyond"):
             if not 0.0 <= float(getattr(self, name)) <= 1.0:
                 bad(name, "must be in [0, 1]")
         for name in ("missing_max_points", "missing_max_elements"):
