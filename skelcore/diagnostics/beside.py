@@ -54,13 +54,18 @@ def half_chords(pts: np.ndarray, tree: cKDTree, rows: np.ndarray, toward: np.nda
     normal = np.linalg.eigh(np.einsum("nki,nkj->nij", q, q))[1][:, :, 0]
     flip = np.einsum("ni,ni->n", toward - p, normal) < 0
     normal[flip] *= -1
+    # a ray out of the cloud's box (grown by the hit radius) never comes back into it: it is closed there
+    lo, hi = pts.min(axis=0) - HIT_RADIUS * spacing, pts.max(axis=0) + HIT_RADIUS * spacing
     open_ = np.ones(len(p), bool)
     for step in np.arange(MARCH_START, MARCH_MAX + 1):
         idx = np.flatnonzero(open_)
         if not len(idx):
             break
-        d, _ = tree.query(p[idx] + step * spacing * normal[idx], distance_upper_bound=HIT_RADIUS * spacing,
-                          workers=query_workers(len(idx)))
+        at = p[idx] + step * spacing * normal[idx]
+        gone = ~np.all((at >= lo) & (at <= hi), axis=1)
+        open_[idx[gone]] = False
+        idx, at = idx[~gone], at[~gone]
+        d, _ = tree.query(at, distance_upper_bound=HIT_RADIUS * spacing, workers=query_workers(len(idx)))
         hit = idx[np.isfinite(d)]
         out[hit] = 0.5 * step * spacing
         open_[hit] = False
