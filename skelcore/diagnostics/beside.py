@@ -23,15 +23,20 @@ __all__ = ["BESIDE_SAMPLES", "CLOUD_SAMPLES", "half_chords", "beside_ratios", "b
 #: points of a region measured (evenly spread over its rows)
 BESIDE_SAMPLES = 64
 #: cloud points whose half chords give the local radii (evenly spread over the cloud)
-CLOUD_SAMPLES = 4096
+CLOUD_SAMPLES = 1024
 #: cloud neighbours of a point whose principal axes give its normal
 NORMAL_K = 12
 #: a chord's march starts this many spacings inside (past the point's own wall) ...
 MARCH_START = 2.0
 #: ... a cloud point within this many spacings of the march ends it (the opposite wall) ...
-HIT_RADIUS = 1.0
-#: ... and it gives up after this many spacings (the chord then counts as unknown)
+HIT_RADIUS = 1.5
+#: ... and it gives up after this many spacings (the chord then counts as unknown); it steps by the
+#: distance to the cloud less the hit radius (nothing nearer can be met on the way), at least this many spacings
 MARCH_MAX = 200
+MIN_STEP = 0.5
+#: the march's search for the nearest cloud point stops at this many spacings (a point deep inside a tube
+#: sees a ring of cloud points about as near, and an unbounded search visits most of them)
+STEP_SEARCH = 8.0
 #: a skeleton point is an end when the elements near it lie to one side: their mean offset over this share
 #: of their mean distance ...
 END_SIDE = 0.5
@@ -42,8 +47,9 @@ END_ANGLE = 60.0
 def half_chords(pts: np.ndarray, tree: cKDTree, rows: np.ndarray, toward: np.ndarray, spacing: float) -> np.ndarray:
     """Half the chord across the shape from each cloud row of ``rows`` along its normal (the least
     principal axis of its ``NORMAL_K`` nearest cloud points), turned towards ``toward`` (a point inside
-    for each row): the first step, every spacing from ``MARCH_START`` on, within ``HIT_RADIUS`` spacings of
-    a cloud point. NaN where no wall is met within ``MARCH_MAX`` spacings."""
+    for each row): the first place, from ``MARCH_START`` spacings on, within ``HIT_RADIUS`` spacings of a
+    cloud point, marched by the distance to the cloud. NaN where no wall is met within ``MARCH_MAX``
+    spacings or inside the cloud's box."""
     rows = np.asarray(rows, np.int64)
     out = np.full(len(rows), np.nan)
     if not len(rows) or not spacing > 0 or tree.n < 3:
@@ -56,19 +62,22 @@ def half_chords(pts: np.ndarray, tree: cKDTree, rows: np.ndarray, toward: np.nda
     normal[flip] *= -1
     # a ray out of the cloud's box (grown by the hit radius) never comes back into it: it is closed there
     lo, hi = pts.min(axis=0) - HIT_RADIUS * spacing, pts.max(axis=0) + HIT_RADIUS * spacing
+    hit_at = HIT_RADIUS * spacing
+    t = np.full(len(p), MARCH_START * spacing)
     open_ = np.ones(len(p), bool)
-    for step in np.arange(MARCH_START, MARCH_MAX + 1):
+    while open_.any():
         idx = np.flatnonzero(open_)
-        if not len(idx):
-            break
-        at = p[idx] + step * spacing * normal[idx]
-        gone = ~np.all((at >= lo) & (at <= hi), axis=1)
+        at = p[idx] + t[idx, None] * normal[idx]
+        gone = ~np.all((at >= lo) & (at <= hi), axis=1) | (t[idx] > MARCH_MAX * spacing)
         open_[idx[gone]] = False
         idx, at = idx[~gone], at[~gone]
-        d, _ = tree.query(at, distance_upper_bound=HIT_RADIUS * spacing, workers=query_workers(len(idx)))
-        hit = idx[np.isfinite(d)]
-        out[hit] = 0.5 * step * spacing
-        open_[hit] = False
+        d, _ = tree.query(at, distance_upper_bound=STEP_SEARCH * spacing, workers=query_workers(len(idx)))
+        d = np.minimum(d, STEP_SEARCH * spacing)  # none within the search: that far is free
+        hit = d <= hit_at
+        out[idx[hit]] = 0.5 * t[idx[hit]]
+        open_[idx[hit]] = False
+        # no cloud point lies within d of the ray's point: the ray may go d - the hit radius on unmet
+        t[idx[~hit]] += np.maximum(d[~hit] - hit_at, MIN_STEP * spacing)
     return out
 
 
