@@ -74,7 +74,7 @@ def half_chords(pts: np.ndarray, tree: cKDTree, rows: np.ndarray, toward: np.nda
         d, _ = tree.query(at, distance_upper_bound=STEP_SEARCH * spacing, workers=query_workers(len(idx)))
         d = np.minimum(d, STEP_SEARCH * spacing)  # none within the search: that far is free
         hit = d <= hit_at
-        out[idx[hit]] = 0.5 * t[idx[hit]]
+        out[idx[hit]] = 0.5 * (t[idx[hit]] + hit_at)  # the march stops about a hit radius short of the wall
         open_[idx[hit]] = False
         # no cloud point lies within d of the ray's point: the ray may go d - the hit radius on unmet
         t[idx[~hit]] += np.maximum(d[~hit] - hit_at, MIN_STEP * spacing)
