@@ -11,12 +11,10 @@ handle reaches several, the wide sides of a flat part a curve crosses reach less
 A region counts (warning ``incomplete``) when depth >= ``missing_depth`` and it holds
 ``missing_min_share`` of the cloud, or depth >= ``missing_small_depth`` and it holds the surface of
 ``missing_min_area`` squared median ball radii (one branch of an arbor is a small share of it), or
-share >= ``missing_large_share``; it also fires when the completeness is
-under ``missing_min_completeness``. A region beside a branch, within its cross-section (an off-centre
-axis's far wall, a flat tube's sides: :mod:`.beside`), does not count, and that floor reads it as
-explained; the completeness keeps it unexplained. Above ``missing_max_points`` cloud points
-the work runs on a random subsample and every cloud point takes its nearest sample's verdict
-(``subsample`` says so).
+share >= ``missing_large_share``; it also fires when the completeness is under ``missing_min_completeness``.
+A region beside a branch (an off-centre axis's far wall, a flat tube's sides: :mod:`.beside`) does not
+count, and that floor reads it as explained. Above ``missing_max_points`` cloud points the work runs on a
+random subsample, every cloud point taking its nearest sample's verdict (``subsample`` says so).
 """
 
 from __future__ import annotations
