@@ -17,6 +17,7 @@ import numpy as np
 from scipy.spatial import cKDTree
 
 from ..geometry import query_workers
+from .chord_cache import ChordCache
 
 __all__ = ["BESIDE_SAMPLES", "CLOUD_SAMPLES", "half_chords", "beside_ratios", "beside_regions"]
 
@@ -44,22 +45,48 @@ END_SIDE = 0.5
 END_ANGLE = 60.0
 
 
-def half_chords(pts: np.ndarray, tree: cKDTree, rows: np.ndarray, toward: np.ndarray, spacing: float) -> np.ndarray:
+def half_chords(pts: np.ndarray, tree: cKDTree, rows: np.ndarray, toward: np.ndarray, spacing: float,
+                kept: ChordCache | None = None) -> np.ndarray:
     """Half the chord across the shape from each cloud row of ``rows`` along its normal (the least
     principal axis of its ``NORMAL_K`` nearest cloud points), turned towards ``toward`` (a point inside
     for each row): the first place, from ``MARCH_START`` spacings on, within ``HIT_RADIUS`` spacings of a
     cloud point, marched by the distance to the cloud. NaN where no wall is met within ``MARCH_MAX``
-    spacings or inside the cloud's box."""
+    spacings or inside the cloud's box. ``kept``: the normals and chords of earlier calls on the same
+    cloud and rows (:class:`.chord_cache.ChordCache`), a direction marched only on its first need (the
+    same bits); None: all computed here."""
     rows = np.asarray(rows, np.int64)
-    out = np.full(len(rows), np.nan)
     if not len(rows) or not spacing > 0 or tree.n < 3:
-        return out
+        return np.full(len(rows), np.nan)
     p = pts[rows]
+    if kept is None:
+        normal = _normals(pts, tree, p)
+        flip = np.einsum("ni,ni->n", toward - p, normal) < 0
+        normal[flip] *= -1
+        return _march(pts, tree, p, normal, spacing)
+    with kept.lock:
+        if not kept.holds(pts, rows, spacing):
+            kept.start(pts, rows, spacing, _normals(pts, tree, p))
+        side = (np.einsum("ni,ni->n", toward - p, kept.normal) < 0).astype(np.int64)
+        ask = np.flatnonzero(~kept.done[np.arange(len(rows)), side])
+        if len(ask):
+            normal = kept.normal[ask].copy()
+            normal[side[ask] == 1] *= -1
+            kept.chords[ask, side[ask]] = _march(pts, tree, p[ask], normal, spacing)
+            kept.done[ask, side[ask]] = True
+        return kept.chords[np.arange(len(rows)), side]
+
+
+def _normals(pts: np.ndarray, tree: cKDTree, p: np.ndarray) -> np.ndarray:
+    """The least principal axis of the ``NORMAL_K`` nearest cloud points of each of ``p``, as found."""
     _, nb = tree.query(p, k=min(NORMAL_K, tree.n), workers=query_workers(len(p)))
     q = pts[nb] - pts[nb].mean(axis=1, keepdims=True)
-    normal = np.linalg.eigh(np.einsum("nki,nkj->nij", q, q))[1][:, :, 0]
-    flip = np.einsum("ni,ni->n", toward - p, normal) < 0
-    normal[flip] *= -1
+    return np.linalg.eigh(np.einsum("nki,nkj->nij", q, q))[1][:, :, 0]
+
+
+def _march(pts: np.ndarray, tree: cKDTree, p: np.ndarray, normal: np.ndarray, spacing: float) -> np.ndarray:
+    """Each ray from ``p`` along ``normal`` marched to the opposite wall (:func:`half_chords`): half its
+    length, NaN where none is met."""
+    out = np.full(len(p), np.nan)
     # a ray out of the cloud's box (grown by the hit radius) never comes back into it: it is closed there
     lo, hi = pts.min(axis=0) - HIT_RADIUS * spacing, pts.max(axis=0) + HIT_RADIUS * spacing
     hit_at = HIT_RADIUS * spacing
@@ -81,15 +108,15 @@ def half_chords(pts: np.ndarray, tree: cKDTree, rows: np.ndarray, toward: np.nda
     return out
 
 
-def beside_ratios(pts: np.ndarray, tree: cKDTree, rows: np.ndarray, elements: np.ndarray, spacing: float
-                  ) -> tuple[np.ndarray, np.ndarray]:
+def beside_ratios(pts: np.ndarray, tree: cKDTree, rows: np.ndarray, elements: np.ndarray, spacing: float,
+                  kept: ChordCache | None = None) -> tuple[np.ndarray, np.ndarray]:
     """Per cloud row of ``rows``: (its distance to the nearest of ``elements`` over the local radius there,
     whether it lies beyond the skeleton's end). The local radius: the median :func:`half_chords` of the
     cloud points (``CLOUD_SAMPLES`` of them, spread evenly) whose nearest element lies within that
     distance (at least two spacings) of the row's; NaN when none of them has a chord. Beyond the end:
     the elements within that distance of the nearest one lie to one side of it (their mean offset is
     over ``END_SIDE`` of their mean distance) and the row lies on the other, within ``END_ANGLE`` of the
-    way out (a cut branch's stump, a head past a handle's end)."""
+    way out (a cut branch's stump, a head past a handle's end). ``kept``: :func:`half_chords`'."""
     rows = np.asarray(rows, np.int64)
     ratio, beyond = np.full(len(rows), np.nan), np.zeros(len(rows), bool)
     if not len(rows) or not len(elements):
@@ -106,7 +133,7 @@ def beside_ratios(pts: np.ndarray, tree: cKDTree, rows: np.ndarray, elements: np
             beyond[i] = float(-(pts[rows[i]] - elements[j[i]]) @ mean) > cos_out * dist[i] * size
     sample = np.unique(np.linspace(0, len(pts) - 1, min(CLOUD_SAMPLES, len(pts))).astype(np.int64))
     _, js = element_tree.query(pts[sample], workers=query_workers(len(sample)))
-    radius = half_chords(pts, tree, sample, elements[js], spacing)
+    radius = half_chords(pts, tree, sample, elements[js], spacing, kept)
     ok = np.isfinite(radius)
     if not ok.any():
         return ratio, beyond
@@ -118,13 +145,14 @@ def beside_ratios(pts: np.ndarray, tree: cKDTree, rows: np.ndarray, elements: np
 
 
 def beside_regions(pts: np.ndarray, tree: cKDTree, region: np.ndarray, ids: np.ndarray, elements: np.ndarray,
-                   spacing: float, quantile: float, radii: float, end_radii: float, beyond_share: float
-                   ) -> np.ndarray:
+                   spacing: float, quantile: float, radii: float, end_radii: float, beyond_share: float,
+                   kept: ChordCache | None = None) -> np.ndarray:
     """Per region id of ``ids`` (``region``: each row's id, -1 explained), True when, over up to
     ``BESIDE_SAMPLES`` of its points spread evenly over its rows, the ``quantile`` of their distance to
     the skeleton in local radii (:func:`beside_ratios`; a point without a local radius counts as far) is
     at most ``radii`` and at most ``beyond_share`` of them lie beyond an end by more than ``end_radii``
-    (a cut branch, a head past a handle's end; a rounded cap stays within about one)."""
+    (a cut branch, a head past a handle's end; a rounded cap stays within about one). ``kept``: the
+    chords of earlier calls on the same cloud (:func:`half_chords`)."""
     ids = np.asarray(ids, np.int64)
     out = np.zeros(len(ids), bool)
     if not len(ids) or not len(elements):
@@ -139,7 +167,7 @@ def beside_regions(pts: np.ndarray, tree: cKDTree, region: np.ndarray, ids: np.n
     if not picked:
         return out
     rows, owner = np.concatenate(picked), np.concatenate(owner)
-    ratio, beyond = beside_ratios(pts, tree, rows, elements, spacing)
+    ratio, beyond = beside_ratios(pts, tree, rows, elements, spacing, kept)
     ratio = np.where(np.isfinite(ratio), ratio, np.inf)
     for i in range(len(ids)):
         mine = owner == i

@@ -36,6 +36,7 @@ from ..metrics.point_passes import nearest_squared
 from ..metrics.region_links import region_links
 from ..params import Params
 from .beside import beside_regions
+from .chord_cache import ChordCache
 from .spur_cache import find_rows, row_hash, row_words
 from .trust_warning import TrustWarning
 
@@ -266,6 +267,7 @@ def missing_parts(
     neighbours: Callable[[cKDTree, np.ndarray, int, float], tuple[np.ndarray, np.ndarray]] | None = None,
     sampled: Callable[[np.ndarray, Params], tuple[np.ndarray | None, CloudIndex, Callable[[Checkpoint], float]]]
     | None = None,
+    chords: ChordCache | None = None,
     checkpoint: Checkpoint = no_checkpoint,
 ) -> MissingParts:
     """The parts of the (normalized) cloud the (normalized) skeleton does not reach, and its completeness.
@@ -303,6 +305,8 @@ def missing_parts(
     sampled : ``sampled(cloud, params)`` gives what :func:`sampled_points` gives (the subsample's rows, its
         index, its tau), kept by the caller (an edit's update: the subsample drawn, its index checked
         and its tau found once per evaluation, 39 ms of CPU a call at 1M points).
+    chords : the half chords of earlier calls on the same cloud (:class:`.chord_cache.ChordCache`, the
+        evaluation's, shared by its updates): beside a branch marches only the ones not kept.
     checkpoint : ``checkpoint(fraction)``, raises to cancel.
 
     An empty skeleton explains nothing: one region per connected part of the cloud, depth inf.
@@ -384,7 +388,7 @@ def missing_parts(
         if cov_elements is None:
             cov_elements = skeleton_elements(skeleton, spacing, int(p.missing_max_elements))
         tree = kept_tree() if kept_tree is not None else cKDTree(pts)
-        _mark_beside(out, pts, tree, region_s, cov_elements, spacing, p, completeness)
+        _mark_beside(out, pts, tree, region_s, cov_elements, spacing, p, completeness, chords)
     checkpoint(1.0)
     return MissingParts(
         outside_elements=n_out,
@@ -404,7 +408,8 @@ def missing_parts(
 
 
 def _mark_beside(regions: list[MissingRegion], pts: np.ndarray, tree: cKDTree, region: np.ndarray,
-                 elements: np.ndarray, spacing: float, p: Params, completeness: float) -> None:
+                 elements: np.ndarray, spacing: float, p: Params, completeness: float,
+                 chords: ChordCache | None = None) -> None:
     """Mark the regions beside a branch (:func:`.beside.beside_regions`) and uncount them: the counted ones,
     and while the completeness is under ``missing_min_completeness`` also the largest others of at least
     ``SMALL_FEWEST`` points (at most ``BESIDE_REGIONS`` in all; ``region``: each row of ``pts``' region)."""
@@ -416,7 +421,7 @@ def _mark_beside(regions: list[MissingRegion], pts: np.ndarray, tree: cKDTree, r
         return
     found = beside_regions(pts, tree, region, np.array([r.id for r in ask]), elements, spacing,
                            float(p.missing_beside_quantile), float(p.missing_beside_radii),
-                           float(p.missing_beside_end_radii), float(p.missing_beside_beyond))
+                           float(p.missing_beside_end_radii), float(p.missing_beside_beyond), chords)
     for r, b in zip(ask, found):
         if b:
             r.beside, r.counted = True, False
