@@ -44,3 +44,36 @@ def test_a_removed_arm_and_a_cut_end_stay_missing(shape, kind):
     mp = judged(shape, kind)
     assert mp.incomplete and mp.counted and not any(r.beside for r in mp.counted)
     assert mp.warnings()[0].code == "incomplete"
+
+
+def test_the_chords_are_kept_per_cloud_and_give_the_same_result(monkeypatch):
+    """An edit's second update on the same cloud marches no chord (the evaluation's ChordCache), and a
+    kept chord gives what a fresh march gives (skelcore.diagnostics.chord_cache)."""
+    import skelcore.diagnostics.beside as beside
+    import skelcore.edit as edit
+    from skelcore import evaluate, shapes
+    from skelcore.diagnostics.chord_cache import ChordCache
+
+    marched = []
+    march = beside._march
+    monkeypatch.setattr(beside, "_march", lambda *a: marched.append(len(a[2])) or march(*a))
+    sh = shapes.y_shape(5000, seed=0)
+    ev = evaluate(sh.cloud, curve=(sh.curve_vertices, sh.curve_edges))
+    _, change = edit.prune_branch(ev.curve.curve, 0)
+    first = ev.update(change, diagnostics=True)
+    assert marched  # the pruned Y asks beside a branch
+    done = len(marched)
+    second = ev.update(change, diagnostics=True)
+    assert len(marched) == done
+    key = "curve missing parts"
+    assert first.source.ctx.results[key].to_dict() == second.source.ctx.results[key].to_dict()
+    # the same cloud asked again with the chords kept: nothing marched, the same regions as without them
+    w = clean("tube_a")
+    made = make_kind("offset", w, "tube_a/5000/clean", 0)
+    norm = Normalization.from_cloud(w.cloud)
+    cloud, curve = norm.apply(w.cloud), CurveSkeleton.from_raw(norm.apply(made.vertices), made.edges)
+    kept = ChordCache()
+    alone = missing_parts(cloud, curve, P).to_dict()
+    assert missing_parts(cloud, curve, P, chords=kept).to_dict() == alone
+    done = len(marched)
+    assert missing_parts(cloud, curve, P, chords=kept).to_dict() == alone and len(marched) == done
