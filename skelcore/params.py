@@ -174,6 +174,15 @@ class Params:
         regions, none large).
     missing_depth_quantile : quantile of a region's distances to its border taken as its reach
         (robust to stray points).
+    missing_beside_radii, missing_beside_quantile : a region whose ``missing_beside_quantile`` distance
+        to the skeleton is at most this many local radii (half the shape's chord along the inward
+        normal, read off the cloud) lies beside a branch: the far wall of an off-centre axis, the wide
+        sides of a flat part. It does not count, and the completeness floor counts it as explained
+        (docs/diagnostics.md "Missing parts", "Beside a branch"; 3.0 between the synthetic suite's
+        off-centre and flat curves, at most 2.7, and its missing parts, at least 3.3).
+    missing_beside_end_radii, missing_beside_beyond : ... unless more than this share of its points
+        lie beyond an end of the skeleton by more than this many local radii (a cut branch, the
+        hammer's head past the handle's end: 0.3-1.0; an off-centre axis's caps: at most 0.06).
     missing_link_factor : unexplained points closer than this many median NN spacings are one region.
     missing_max_points : above this many cloud points the missing parts are found on a random
         subsample of this many and every cloud point takes its nearest sample's verdict (the result
@@ -376,6 +385,10 @@ class Params:
     missing_large_share: float = 0.5
     missing_min_completeness: float = 0.6
     missing_depth_quantile: float = 0.95
+    missing_beside_radii: float = 3.0
+    missing_beside_quantile: float = 0.95
+    missing_beside_end_radii: float = 1.5
+    missing_beside_beyond: float = 0.15
     missing_link_factor: float = 4.0
     missing_max_points: int = 200_000
     missing_max_elements: int = 20_000
@@ -481,8 +494,11 @@ class Params:
                      "missing_air_ball"):
             if not float(getattr(self, name)) > 0:
                 bad(name, "must be > 0")
+        for name in ("missing_beside_radii", "missing_beside_end_radii"):
+            if not float(getattr(self, name)) >= 0:
+                bad(name, "must be >= 0 (0: no region is beside a branch)")
         for name in ("missing_min_share", "missing_large_share", "missing_min_completeness",
-                     "missing_depth_quantile"):
+                     "missing_depth_quantile", "missing_beside_quantile", "missing_beside_beyond"):
             if not 0.0 <= float(getattr(self, name)) <= 1.0:
                 bad(name, "must be in [0, 1]")
         for name in ("missing_max_points", "missing_max_elements"):

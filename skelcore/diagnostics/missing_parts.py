@@ -11,10 +11,10 @@ handle reaches several, the wide sides of a flat part a curve crosses reach less
 A region counts (warning ``incomplete``) when depth >= ``missing_depth`` and it holds
 ``missing_min_share`` of the cloud, or depth >= ``missing_small_depth`` and it holds the surface of
 ``missing_min_area`` squared median ball radii (one branch of an arbor is a small share of it), or
-share >= ``missing_large_share``; it also fires when the completeness is
-under ``missing_min_completeness``. Above ``missing_max_points`` cloud points
-the work runs on a random subsample and every cloud point takes its nearest sample's verdict
-(``subsample`` says so).
+share >= ``missing_large_share``; it also fires when the completeness is under ``missing_min_completeness``.
+A region beside a branch (an off-centre axis's far wall, a flat tube's sides: :mod:`.beside`) does not
+count, and that floor reads it as explained. Above ``missing_max_points`` cloud points the work runs on a
+random subsample, every cloud point taking its nearest sample's verdict (``subsample`` says so).
 """
 
 from __future__ import annotations
@@ -35,6 +35,8 @@ from ..metrics.coverage import Coverage, coverage, coverage_tau
 from ..metrics.point_passes import nearest_squared
 from ..metrics.region_links import region_links
 from ..params import Params
+from .beside import beside_regions
+from .chord_cache import ChordCache
 from .spur_cache import find_rows, row_hash, row_words
 from .trust_warning import TrustWarning
 
@@ -61,6 +63,8 @@ _SMALL_ROWS = 400_000
 _SMALL_TREES = 2
 _SMALL_KEPT: list[tuple] = []
 _SMALL_LOCK = threading.Lock()
+# at most this many regions are tried beside a branch (_mark_beside), the counted ones first
+BESIDE_REGIONS = 64
 # seed of the subsample taken above missing_max_points (the verdicts must not depend on a run)
 SUBSAMPLE_SEED = 0
 # unexplained points whose neighbours the kept search does not settle are searched among the unexplained
@@ -84,7 +88,8 @@ class MissingRegion:
     for regions under both ``missing_min_share`` and ``missing_min_area``, inf for a region no
     explained point touches; ``centroid`` in the units of ``to_user`` (user units in an evaluation);
     ``deepest``: the cloud row farthest from the skeleton's balls; ``counted``: a missing part
-    (``incomplete``)."""
+    (``incomplete``); ``beside``: it lies beside a branch, within its cross-section (:mod:`.beside`),
+    and does not count whatever its size."""
 
     id: int
     n_points: int
@@ -95,12 +100,13 @@ class MissingRegion:
     centroid: np.ndarray
     deepest: int
     counted: bool
+    beside: bool = False
 
     def to_dict(self) -> dict:
         return {"id": self.id, "n_points": self.n_points, "share": self.share, "depth": self.depth,
                 "reach": self.reach, "border_radius": self.border_radius,
                 "centroid": [float(c) for c in self.centroid], "deepest_point": self.deepest,
-                "counted": self.counted}
+                "counted": self.counted, "beside": self.beside}
 
 
 @dataclass
@@ -123,13 +129,20 @@ class MissingParts:
     outside_elements: int = 0
 
     @property
+    def beside_share(self) -> float:
+        """The share of the cloud in regions beside a branch (:mod:`.beside`): unexplained, not missing."""
+        return float(sum(r.share for r in self.regions if r.beside))
+
+    @property
     def counted(self) -> list[MissingRegion]:
         return [r for r in self.regions if r.counted]
 
     @property
     def incomplete(self) -> bool:
-        """Some region counts, or the skeleton explains under ``missing_min_completeness`` of the cloud."""
-        return bool(self.counted) or self.completeness < self.thresholds.get("missing_min_completeness", 0.0)
+        """Some region counts, or the skeleton explains under ``missing_min_completeness`` of the cloud, the
+        regions beside a branch counted as explained."""
+        floor = self.thresholds.get("missing_min_completeness", 0.0)
+        return bool(self.counted) or self.completeness + self.beside_share < floor
 
     @property
     def missing(self) -> np.ndarray:
@@ -152,7 +165,7 @@ class MissingParts:
         """Completeness, the counted regions and the largest others (at most ``max_regions`` in all)."""
         shown = self.counted + [r for r in self.regions if not r.counted][: max(0, max_regions - len(self.counted))]
         return {"completeness": self.completeness, "incomplete": self.incomplete, "missing_share": self.missing_share,
-                "n_missing_parts": len(self.counted), "n_regions": len(self.regions),
+                "n_missing_parts": len(self.counted), "n_regions": len(self.regions), "beside_share": self.beside_share,
                 "regions": [r.to_dict() for r in shown], "n_elements": self.n_elements,
                 "subsample": self.subsample, "thresholds": dict(self.thresholds)}
 
@@ -254,6 +267,7 @@ def missing_parts(
     neighbours: Callable[[cKDTree, np.ndarray, int, float], tuple[np.ndarray, np.ndarray]] | None = None,
     sampled: Callable[[np.ndarray, Params], tuple[np.ndarray | None, CloudIndex, Callable[[Checkpoint], float]]]
     | None = None,
+    chords: ChordCache | None = None,
     checkpoint: Checkpoint = no_checkpoint,
 ) -> MissingParts:
     """The parts of the (normalized) cloud the (normalized) skeleton does not reach, and its completeness.
@@ -291,6 +305,8 @@ def missing_parts(
     sampled : ``sampled(cloud, params)`` gives what :func:`sampled_points` gives (the subsample's rows, its
         index, its tau), kept by the caller (an edit's update: the subsample drawn, its index checked
         and its tau found once per evaluation, 39 ms of CPU a call at 1M points).
+    chords : the half chords of earlier calls on the same cloud (:class:`.chord_cache.ChordCache`, the
+        evaluation's, shared by its updates): beside a branch marches only the ones not kept.
     checkpoint : ``checkpoint(fraction)``, raises to cancel.
 
     An empty skeleton explains nothing: one region per connected part of the cloud, depth inf.
@@ -331,8 +347,10 @@ def missing_parts(
     spacing = float(tau) / float(p.coverage_tau_factor) * spread_factor
     if keep is not None and not isinstance(skeleton, CurveSkeleton):
         skeleton = np.asarray(skeleton, dtype=float).reshape(-1, 3)[np.asarray(keep, dtype=bool)]
+    cov_elements = None
     if cov is None:
         elements, n_out = coverage_elements(skeleton, pts, spacing, p, inside, lambda f: checkpoint(0.1))
+        cov_elements = elements
         if coverage_of is not None:
             cov = coverage_of(pts, elements, float(tau), index)
         else:
@@ -365,10 +383,16 @@ def missing_parts(
             counted=bool(r["depth"] >= (p.missing_depth if share >= p.missing_min_share else p.missing_small_depth)
                          or share >= p.missing_large_share),  # NaN: not measured
         ))  # fmt: skip
+    completeness = float(explained.mean()) if n else 1.0
+    if any(r.counted for r in out) or completeness < float(p.missing_min_completeness):
+        if cov_elements is None:
+            cov_elements = skeleton_elements(skeleton, spacing, int(p.missing_max_elements))
+        tree = kept_tree() if kept_tree is not None else cKDTree(pts)
+        _mark_beside(out, pts, tree, region_s, cov_elements, spacing, p, completeness, chords)
     checkpoint(1.0)
     return MissingParts(
         outside_elements=n_out,
-        completeness=float(explained.mean()) if n else 1.0,
+        completeness=completeness,
         explained=explained,
         region=region.astype(np.int32),
         regions=out,
@@ -381,6 +405,26 @@ def missing_parts(
                     "missing_large_share": float(p.missing_large_share),
                     "missing_min_completeness": float(p.missing_min_completeness)},
     )
+
+
+def _mark_beside(regions: list[MissingRegion], pts: np.ndarray, tree: cKDTree, region: np.ndarray,
+                 elements: np.ndarray, spacing: float, p: Params, completeness: float,
+                 chords: ChordCache | None = None) -> None:
+    """Mark the regions beside a branch (:func:`.beside.beside_regions`) and uncount them: the counted ones,
+    and while the completeness is under ``missing_min_completeness`` also the largest others of at least
+    ``SMALL_FEWEST`` points (at most ``BESIDE_REGIONS`` in all; ``region``: each row of ``pts``' region)."""
+    ask = [r for r in regions if r.counted]
+    if completeness < float(p.missing_min_completeness):
+        ask += [r for r in regions if not r.counted and r.n_points >= SMALL_FEWEST]
+    ask = ask[:BESIDE_REGIONS]
+    if not ask:
+        return
+    found = beside_regions(pts, tree, region, np.array([r.id for r in ask]), elements, spacing,
+                           float(p.missing_beside_quantile), float(p.missing_beside_radii),
+                           float(p.missing_beside_end_radii), float(p.missing_beside_beyond), chords)
+    for r, b in zip(ask, found):
+        if b:
+            r.beside, r.counted = True, False
 
 
 def coverage_holds(cloud: np.ndarray, skeleton: np.ndarray | CurveSkeleton, cov: Coverage, p: Params,

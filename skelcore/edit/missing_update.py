@@ -170,5 +170,5 @@ def curve_missing_parts(ctx: EvalContext, cache: dict[str, Any], checkpoint: Che
     return missing_parts(ctx.cloud_n, ctx.curve_n, ctx.params, cov=cov, tau=None if cov is None else cov.tau,
                          what="curve skeleton", to_user=ctx.norm.invert, inside=inside,
                          cloud_tree=tree, nearest_sample=_nearest_sample(cache, tree),
-                         neighbours=_neighbours(cache), sampled=_sampled(cache), checkpoint=checkpoint,
+                         neighbours=_neighbours(cache), sampled=_sampled(cache), chords=ctx.chords, checkpoint=checkpoint,
                          coverage_of=_coverage_of(ctx, parent, cache, inside, checkpoint))

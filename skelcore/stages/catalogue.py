@@ -168,7 +168,8 @@ def _missing(kind: str) -> Callable[[EvalContext, Checkpoint], object]:
         cov = ctx.results.get(f"{kind} coverage")
         what = "skeletal point set" if kind == "skeletal" else "curve skeleton"
         return missing_parts(ctx.cloud_n, skeleton, ctx.params, cov=cov, tau=None if cov is None else cov.tau,
-                             what=what, to_user=ctx.norm.invert, inside=ctx.solid_test(), checkpoint=checkpoint)
+                             what=what, to_user=ctx.norm.invert, inside=ctx.solid_test(), chords=ctx.chords,
+                             checkpoint=checkpoint)
 
     return run
 

@@ -15,6 +15,7 @@ import numpy as np
 
 from ..curve import CurveSkeleton
 from ..metrics.curve_sampling import CurveSamples, sample_curve
+from ..diagnostics.chord_cache import ChordCache
 from ..diagnostics.spur_cache import SpurMemo
 from ..errors import SkelInputError
 from ..geometry import Checkpoint, Normalization, as_points, check_extent, check_magnitude, no_checkpoint
@@ -100,6 +101,9 @@ class EvalContext:
     #: the openings' boundary test of the cloud and each rim's opening, shared along the updates
     #: (skelcore.scan.openings.find_openings)
     openings_memo: dict = field(default_factory=dict, repr=False)
+    #: the half chords of the cloud's samples that beside a branch measured, shared along the updates
+    #: (skelcore.diagnostics.chord_cache; docs/diagnostics.md "Beside a branch")
+    chords: ChordCache = field(default_factory=ChordCache, repr=False)
 
     def __post_init__(self) -> None:
         if self.cloud_index is None:

@@ -202,7 +202,8 @@ def _every_ball_explains(ctx: EvalContext, ev: Evaluation) -> None:
         cov = ctx.results.get(f"{kind} coverage")
         ctx.results[f"{kind} missing parts"] = missing_parts(
             ctx.cloud_n, ctx.skeletal_n if kind == "skeletal" else ctx.curve_n, ctx.params, cov=cov,
-            tau=None if cov is None else cov.tau, what=found.what, to_user=ctx.norm.invert, inside=inside)
+            tau=None if cov is None else cov.tau, what=found.what, to_user=ctx.norm.invert, inside=inside,
+            chords=ctx.chords)
         redone = True
     if redone:
         ev.diagnostics = diagnostics_of(ctx)

@@ -1,0 +1,177 @@
+"""Unexplained regions beside a branch: the far wall of a tube whose skeleton runs off its centre line,
+the wide sides of a flat part (docs/diagnostics.md "Missing parts", "Beside a branch").
+
+A missing part reaches away from the skeleton: a missing arm or a cut end lies several local radii
+beyond any branch. What an off-centre or flat-sided curve leaves unexplained lies within the branch's own
+cross-section, at most about a local diameter from the skeleton. The local radius is read off the cloud
+alone, not off the skeleton's balls (an off-centre axis has small ones): half the chord across the shape
+along a point's inward normal (the shape diameter), its median over the cloud points whose nearest
+skeleton point lies near the region point's. A region whose ``missing_beside_quantile`` distance to the
+skeleton is at most ``missing_beside_radii`` such radii is beside the skeleton, not missing from it: it
+keeps its share in the completeness (the paper's number), and does not make the skeleton ``incomplete``.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from scipy.spatial import cKDTree
+
+from ..geometry import query_workers
+from .chord_cache import ChordCache
+
+__all__ = ["BESIDE_SAMPLES", "CLOUD_SAMPLES", "half_chords", "beside_ratios", "beside_regions"]
+
+#: points of a region measured (evenly spread over its rows)
+BESIDE_SAMPLES = 64
+#: cloud points whose half chords give the local radii (evenly spread over the cloud)
+CLOUD_SAMPLES = 1024
+#: cloud neighbours of a point whose principal axes give its normal
+NORMAL_K = 12
+#: a chord's march starts this many spacings inside (past the point's own wall) ...
+MARCH_START = 2.0
+#: ... a cloud point within this many spacings of the march ends it (the opposite wall) ...
+HIT_RADIUS = 1.5
+#: ... and it gives up after this many spacings (the chord then counts as unknown); it steps by the
+#: distance to the cloud less the hit radius (nothing nearer can be met on the way), at least this many spacings
+MARCH_MAX = 200
+MIN_STEP = 0.5
+#: the march's search for the nearest cloud point stops at this many spacings (a point deep inside a tube
+#: sees a ring of cloud points about as near, and an unbounded search visits most of them)
+STEP_SEARCH = 8.0
+#: a skeleton point is an end when the elements near it lie to one side: their mean offset over this share
+#: of their mean distance ...
+END_SIDE = 0.5
+#: ... and a cloud point within this angle (degrees) of the way out lies beyond it
+END_ANGLE = 60.0
+
+
+def half_chords(pts: np.ndarray, tree: cKDTree, rows: np.ndarray, toward: np.ndarray, spacing: float,
+                kept: ChordCache | None = None) -> np.ndarray:
+    """Half the chord across the shape from each cloud row of ``rows`` along its normal (the least
+    principal axis of its ``NORMAL_K`` nearest cloud points), turned towards ``toward`` (a point inside
+    for each row): the first place, from ``MARCH_START`` spacings on, within ``HIT_RADIUS`` spacings of a
+    cloud point, marched by the distance to the cloud. NaN where no wall is met within ``MARCH_MAX``
+    spacings or inside the cloud's box. ``kept``: the normals and chords of earlier calls on the same
+    cloud and rows (:class:`.chord_cache.ChordCache`), a direction marched only on its first need (the
+    same bits); None: all computed here."""
+    rows = np.asarray(rows, np.int64)
+    if not len(rows) or not spacing > 0 or tree.n < 3:
+        return np.full(len(rows), np.nan)
+    p = pts[rows]
+    if kept is None:
+        normal = _normals(pts, tree, p)
+        flip = np.einsum("ni,ni->n", toward - p, normal) < 0
+        normal[flip] *= -1
+        return _march(pts, tree, p, normal, spacing)
+    with kept.lock:
+        if not kept.holds(pts, rows, spacing):
+            kept.start(pts, rows, spacing, _normals(pts, tree, p))
+        side = (np.einsum("ni,ni->n", toward - p, kept.normal) < 0).astype(np.int64)
+        ask = np.flatnonzero(~kept.done[np.arange(len(rows)), side])
+        if len(ask):
+            normal = kept.normal[ask].copy()
+            normal[side[ask] == 1] *= -1
+            kept.chords[ask, side[ask]] = _march(pts, tree, p[ask], normal, spacing)
+            kept.done[ask, side[ask]] = True
+        return kept.chords[np.arange(len(rows)), side]
+
+
+def _normals(pts: np.ndarray, tree: cKDTree, p: np.ndarray) -> np.ndarray:
+    """The least principal axis of the ``NORMAL_K`` nearest cloud points of each of ``p``, as found."""
+    _, nb = tree.query(p, k=min(NORMAL_K, tree.n), workers=query_workers(len(p)))
+    q = pts[nb] - pts[nb].mean(axis=1, keepdims=True)
+    return np.linalg.eigh(np.einsum("nki,nkj->nij", q, q))[1][:, :, 0]
+
+
+def _march(pts: np.ndarray, tree: cKDTree, p: np.ndarray, normal: np.ndarray, spacing: float) -> np.ndarray:
+    """Each ray from ``p`` along ``normal`` marched to the opposite wall (:func:`half_chords`): half its
+    length, NaN where none is met."""
+    out = np.full(len(p), np.nan)
+    # a ray out of the cloud's box (grown by the hit radius) never comes back into it: it is closed there
+    lo, hi = pts.min(axis=0) - HIT_RADIUS * spacing, pts.max(axis=0) + HIT_RADIUS * spacing
+    hit_at = HIT_RADIUS * spacing
+    t = np.full(len(p), MARCH_START * spacing)
+    open_ = np.ones(len(p), bool)
+    while open_.any():
+        idx = np.flatnonzero(open_)
+        at = p[idx] + t[idx, None] * normal[idx]
+        gone = ~np.all((at >= lo) & (at <= hi), axis=1) | (t[idx] > MARCH_MAX * spacing)
+        open_[idx[gone]] = False
+        idx, at = idx[~gone], at[~gone]
+        d, _ = tree.query(at, distance_upper_bound=STEP_SEARCH * spacing, workers=query_workers(len(idx)))
+        d = np.minimum(d, STEP_SEARCH * spacing)  # none within the search: that far is free
+        hit = d <= hit_at
+        out[idx[hit]] = 0.5 * (t[idx[hit]] + hit_at)  # the march stops about a hit radius short of the wall
+        open_[idx[hit]] = False
+        # no cloud point lies within d of the ray's point: the ray may go d - the hit radius on unmet
+        t[idx[~hit]] += np.maximum(d[~hit] - hit_at, MIN_STEP * spacing)
+    return out
+
+
+def beside_ratios(pts: np.ndarray, tree: cKDTree, rows: np.ndarray, elements: np.ndarray, spacing: float,
+                  kept: ChordCache | None = None) -> tuple[np.ndarray, np.ndarray]:
+    """Per cloud row of ``rows``: (its distance to the nearest of ``elements`` over the local radius there,
+    whether it lies beyond the skeleton's end). The local radius: the median :func:`half_chords` of the
+    cloud points (``CLOUD_SAMPLES`` of them, spread evenly) whose nearest element lies within that
+    distance (at least two spacings) of the row's; NaN when none of them has a chord. Beyond the end:
+    the elements within that distance of the nearest one lie to one side of it (their mean offset is
+    over ``END_SIDE`` of their mean distance) and the row lies on the other, within ``END_ANGLE`` of the
+    way out (a cut branch's stump, a head past a handle's end). ``kept``: :func:`half_chords`'."""
+    rows = np.asarray(rows, np.int64)
+    ratio, beyond = np.full(len(rows), np.nan), np.zeros(len(rows), bool)
+    if not len(rows) or not len(elements):
+        return ratio, beyond
+    element_tree = cKDTree(elements)
+    dist, j = element_tree.query(pts[rows], workers=query_workers(len(rows)))
+    reach = np.maximum(dist, 2.0 * spacing)
+    cos_out = np.cos(np.radians(END_ANGLE))
+    for i, got in enumerate(element_tree.query_ball_point(elements[j], reach)):
+        off = elements[got] - elements[j[i]]
+        mean = off.mean(axis=0)
+        size = float(np.linalg.norm(mean))
+        if size > END_SIDE * float(np.linalg.norm(off, axis=1).mean()) and dist[i] > 0:
+            beyond[i] = float(-(pts[rows[i]] - elements[j[i]]) @ mean) > cos_out * dist[i] * size
+    sample = np.unique(np.linspace(0, len(pts) - 1, min(CLOUD_SAMPLES, len(pts))).astype(np.int64))
+    _, js = element_tree.query(pts[sample], workers=query_workers(len(sample)))
+    radius = half_chords(pts, tree, sample, elements[js], spacing, kept)
+    ok = np.isfinite(radius)
+    if not ok.any():
+        return ratio, beyond
+    feet, radius = elements[js[ok]], radius[ok]
+    for i, got in enumerate(cKDTree(feet).query_ball_point(elements[j], reach)):
+        if got:
+            ratio[i] = dist[i] / max(float(np.median(radius[got])), 1e-12)
+    return ratio, beyond
+
+
+def beside_regions(pts: np.ndarray, tree: cKDTree, region: np.ndarray, ids: np.ndarray, elements: np.ndarray,
+                   spacing: float, quantile: float, radii: float, end_radii: float, beyond_share: float,
+                   kept: ChordCache | None = None) -> np.ndarray:
+    """Per region id of ``ids`` (``region``: each row's id, -1 explained), True when, over up to
+    ``BESIDE_SAMPLES`` of its points spread evenly over its rows, the ``quantile`` of their distance to
+    the skeleton in local radii (:func:`beside_ratios`; a point without a local radius counts as far) is
+    at most ``radii`` and at most ``beyond_share`` of them lie beyond an end by more than ``end_radii``
+    (a cut branch, a head past a handle's end; a rounded cap stays within about one). ``kept``: the
+    chords of earlier calls on the same cloud (:func:`half_chords`)."""
+    ids = np.asarray(ids, np.int64)
+    out = np.zeros(len(ids), bool)
+    if not len(ids) or not len(elements):
+        return out
+    picked, owner = [], []
+    for i, c in enumerate(ids):
+        members = np.flatnonzero(region == c)
+        if len(members):
+            take = np.unique(np.linspace(0, len(members) - 1, min(BESIDE_SAMPLES, len(members))).astype(np.int64))
+            picked.append(members[take])
+            owner.append(np.full(len(take), i))
+    if not picked:
+        return out
+    rows, owner = np.concatenate(picked), np.concatenate(owner)
+    ratio, beyond = beside_ratios(pts, tree, rows, elements, spacing, kept)
+    ratio = np.where(np.isfinite(ratio), ratio, np.inf)
+    for i in range(len(ids)):
+        mine = owner == i
+        past = beyond[mine] & (ratio[mine] > end_radii)
+        out[i] = (bool(mine.any()) and float(np.quantile(ratio[mine], quantile, method="higher")) <= radii
+                  and float(past.mean()) <= beyond_share)
+    return out
