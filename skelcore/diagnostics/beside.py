@@ -23,6 +23,8 @@ __all__ = ["BESIDE_SAMPLES", "CLOUD_SAMPLES", "half_chords", "beside_ratios", "b
 
 #: points of a region measured (evenly spread over its rows)
 BESIDE_SAMPLES = 64
+#: the most (centre, point) pairs whose distances are held at once (:func:`_within`)
+WITHIN_BLOCK = 1 << 20
 #: cloud points whose half chords give the local radii (evenly spread over the cloud)
 CLOUD_SAMPLES = 1024
 #: cloud neighbours of a point whose principal axes give its normal
@@ -125,12 +127,15 @@ def beside_ratios(pts: np.ndarray, tree: cKDTree, rows: np.ndarray, elements: np
     dist, j = element_tree.query(pts[rows], workers=query_workers(len(rows)))
     reach = np.maximum(dist, 2.0 * spacing)
     cos_out = np.cos(np.radians(END_ANGLE))
-    for i, got in enumerate(element_tree.query_ball_point(elements[j], reach)):
-        off = elements[got] - elements[j[i]]
-        mean = off.mean(axis=0)
-        size = float(np.linalg.norm(mean))
-        if size > END_SIDE * float(np.linalg.norm(off, axis=1).mean()) and dist[i] > 0:
-            beyond[i] = float(-(pts[rows[i]] - elements[j[i]]) @ mean) > cos_out * dist[i] * size
+    got, owner = _within(elements[j], reach, elements)
+    off = elements[got] - elements[j[owner]]
+    count = np.bincount(owner, minlength=len(rows))
+    mean = _group_sums(off, owner, len(rows)) / np.maximum(count, 1)[:, None]
+    size = np.sqrt(np.einsum("ij,ij->i", mean, mean))
+    spread = np.bincount(owner, np.sqrt(np.einsum("ij,ij->i", off, off)), minlength=len(rows)) / np.maximum(count, 1)
+    side = (size > END_SIDE * spread) & (dist > 0)
+    out_dot = -np.einsum("ij,ij->i", pts[rows] - elements[j], mean)
+    beyond[side] = out_dot[side] > cos_out * dist[side] * size[side]
     sample = np.unique(np.linspace(0, len(pts) - 1, min(CLOUD_SAMPLES, len(pts))).astype(np.int64))
     _, js = element_tree.query(pts[sample], workers=query_workers(len(sample)))
     radius = half_chords(pts, tree, sample, elements[js], spacing, kept)
@@ -138,9 +143,10 @@ def beside_ratios(pts: np.ndarray, tree: cKDTree, rows: np.ndarray, elements: np
     if not ok.any():
         return ratio, beyond
     feet, radius = elements[js[ok]], radius[ok]
-    for i, got in enumerate(cKDTree(feet).query_ball_point(elements[j], reach)):
-        if got:
-            ratio[i] = dist[i] / max(float(np.median(radius[got])), 1e-12)
+    got, owner = _within(elements[j], reach, feet)
+    middle = _group_medians(radius[got], owner, len(rows))
+    has = np.isfinite(middle)
+    ratio[has] = dist[has] / np.maximum(middle[has], 1e-12)
     return ratio, beyond
 
 
@@ -174,4 +180,48 @@ def beside_regions(pts: np.ndarray, tree: cKDTree, region: np.ndarray, ids: np.n
         past = beyond[mine] & (ratio[mine] > end_radii)
         out[i] = (bool(mine.any()) and float(np.quantile(ratio[mine], quantile, method="higher")) <= radii
                   and float(past.mean()) <= beyond_share)
+    return out
+
+
+def _within(centres: np.ndarray, reach: np.ndarray, points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The rows of ``points`` within ``reach`` of each centre (squared distances summed x, y, z against
+    reach squared, as ``cKDTree.query_ball_point`` does), in ascending order per centre, and the centre
+    each belongs to; in blocks of at most ``WITHIN_BLOCK`` pairs, so memory stays bounded."""
+    step = max(1, WITHIN_BLOCK // max(len(points), 1))
+    got, owner = [], []
+    for lo in range(0, len(centres), step):
+        c = centres[lo:lo + step]
+        d2 = (c[:, None, 0] - points[None, :, 0]) ** 2
+        d2 += (c[:, None, 1] - points[None, :, 1]) ** 2
+        d2 += (c[:, None, 2] - points[None, :, 2]) ** 2
+        i, k = np.nonzero(d2 <= reach[lo:lo + step, None] ** 2)
+        got.append(k)
+        owner.append(i + lo)
+    if not got:
+        return np.zeros(0, np.int64), np.zeros(0, np.int64)
+    return np.concatenate(got), np.concatenate(owner)
+
+
+def _group_sums(values: np.ndarray, owner: np.ndarray, n: int) -> np.ndarray:
+    """Per group of ``owner`` (sorted, 0..n-1), the sum of its rows of ``values``."""
+    out = np.zeros((n, values.shape[1]))
+    for c in range(values.shape[1]):
+        out[:, c] = np.bincount(owner, values[:, c], minlength=n)
+    return out
+
+
+def _group_medians(values: np.ndarray, owner: np.ndarray, n: int) -> np.ndarray:
+    """Per group of ``owner`` (0..n-1), the median of its ``values`` (the mean of the two middle ones
+    for an even count); NaN for an empty group."""
+    out = np.full(n, np.nan)
+    if not len(values):
+        return out
+    order = np.lexsort((values, owner))
+    v, o = values[order], owner[order]
+    count = np.bincount(o, minlength=n)
+    start = np.concatenate([[0], np.cumsum(count)[:-1]])
+    has = count > 0
+    lo = start[has] + (count[has] - 1) // 2
+    hi = start[has] + count[has] // 2
+    out[has] = (v[lo] + v[hi]) / 2.0
     return out

@@ -4,6 +4,7 @@ wide sides of a flat tube are unexplained but not missing; a removed arm or a cu
 
 import functools
 
+import numpy as np
 import pytest
 
 from skelcore import Params
@@ -77,3 +78,29 @@ def test_the_chords_are_kept_per_cloud_and_give_the_same_result(monkeypatch):
     assert missing_parts(cloud, curve, P, chords=kept).to_dict() == alone
     done = len(marched)
     assert missing_parts(cloud, curve, P, chords=kept).to_dict() == alone and len(marched) == done
+
+
+def test_the_pairs_within_reach_and_the_groups_medians_match_scipys_and_numpys(monkeypatch):
+    """The beside test's pairs (centre, point) within each centre's reach: the same rows in the same
+    order as ``cKDTree.query_ball_point``, in one block or many; its per-centre medians: ``np.median``'s."""
+    from scipy.spatial import cKDTree
+
+    import skelcore.diagnostics.beside as beside
+
+    rng = np.random.default_rng(3)
+    points = rng.random((400, 3))
+    centres = np.vstack([points[:5], rng.random((45, 3))])  # some centres on a point: distance 0
+    reach = rng.uniform(0.0, 0.4, len(centres))
+    reach[:2] = 0.0  # a centre on a point with no reach: that point alone
+    lists = cKDTree(points).query_ball_point(centres, reach)
+    want = np.concatenate([np.asarray(g, np.int64) for g in lists])
+    for block in (1 << 20, 1000, 1):
+        monkeypatch.setattr(beside, "WITHIN_BLOCK", block)
+        got, owner = beside._within(centres, reach, points)
+        assert np.array_equal(got, want)
+        assert np.array_equal(owner, np.repeat(np.arange(len(centres)), [len(g) for g in lists]))
+    values = rng.random(len(got))
+    middle = beside._group_medians(values, owner, len(centres) + 1)  # the last group empty
+    for i, g in enumerate(lists):
+        assert (middle[i] == np.median(values[owner == i])) if g else np.isnan(middle[i])
+    assert np.isnan(middle[-1])
