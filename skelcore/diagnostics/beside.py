@@ -110,15 +110,28 @@ def _march(pts: np.ndarray, tree: cKDTree, p: np.ndarray, normal: np.ndarray, sp
     return out
 
 
+def local_radii(pts: np.ndarray, tree: cKDTree, elements: np.ndarray, element_tree: cKDTree, spacing: float,
+                kept: ChordCache | None = None) -> tuple[np.ndarray, np.ndarray]:
+    """The feet (nearest of ``elements``) and :func:`half_chords` of ``CLOUD_SAMPLES`` cloud points spread
+    evenly, those with a chord only: what :func:`beside_ratios` reads the local radius from."""
+    sample = np.unique(np.linspace(0, len(pts) - 1, min(CLOUD_SAMPLES, len(pts))).astype(np.int64))
+    _, js = element_tree.query(pts[sample], workers=query_workers(len(sample)))
+    radius = half_chords(pts, tree, sample, elements[js], spacing, kept)
+    ok = np.isfinite(radius)
+    return elements[js[ok]], radius[ok]
+
+
 def beside_ratios(pts: np.ndarray, tree: cKDTree, rows: np.ndarray, elements: np.ndarray, spacing: float,
-                  kept: ChordCache | None = None) -> tuple[np.ndarray, np.ndarray]:
+                  kept: ChordCache | None = None, radii: tuple[np.ndarray, np.ndarray] | None = None
+                  ) -> tuple[np.ndarray, np.ndarray]:
     """Per cloud row of ``rows``: (its distance to the nearest of ``elements`` over the local radius there,
     whether it lies beyond the skeleton's end). The local radius: the median :func:`half_chords` of the
     cloud points (``CLOUD_SAMPLES`` of them, spread evenly) whose nearest element lies within that
     distance (at least two spacings) of the row's; NaN when none of them has a chord. Beyond the end:
     the elements within that distance of the nearest one lie to one side of it (their mean offset is
     over ``END_SIDE`` of their mean distance) and the row lies on the other, within ``END_ANGLE`` of the
-    way out (a cut branch's stump, a head past a handle's end). ``kept``: :func:`half_chords`'."""
+    way out (a cut branch's stump, a head past a handle's end). ``kept``: :func:`half_chords`'; ``radii``:
+    :func:`local_radii` of these elements when already made."""
     rows = np.asarray(rows, np.int64)
     ratio, beyond = np.full(len(rows), np.nan), np.zeros(len(rows), bool)
     if not len(rows) or not len(elements):
@@ -136,13 +149,9 @@ def beside_ratios(pts: np.ndarray, tree: cKDTree, rows: np.ndarray, elements: np
     side = (size > END_SIDE * spread) & (dist > 0)
     out_dot = -np.einsum("ij,ij->i", pts[rows] - elements[j], mean)
     beyond[side] = out_dot[side] > cos_out * dist[side] * size[side]
-    sample = np.unique(np.linspace(0, len(pts) - 1, min(CLOUD_SAMPLES, len(pts))).astype(np.int64))
-    _, js = element_tree.query(pts[sample], workers=query_workers(len(sample)))
-    radius = half_chords(pts, tree, sample, elements[js], spacing, kept)
-    ok = np.isfinite(radius)
-    if not ok.any():
+    feet, radius = radii if radii is not None else local_radii(pts, tree, elements, element_tree, spacing, kept)
+    if not len(radius):
         return ratio, beyond
-    feet, radius = elements[js[ok]], radius[ok]
     got, owner = _within(elements[j], reach, feet)
     middle = _group_medians(radius[got], owner, len(rows))
     has = np.isfinite(middle)
@@ -173,9 +182,25 @@ def beside_regions(pts: np.ndarray, tree: cKDTree, region: np.ndarray, ids: np.n
     if not picked:
         return out
     rows, owner = np.concatenate(picked), np.concatenate(owner)
-    ratio, beyond = beside_ratios(pts, tree, rows, elements, spacing, kept)
+    element_tree = cKDTree(elements)
+    radii_made = local_radii(pts, tree, elements, element_tree, spacing, kept)
+    if not len(radii_made[1]):
+        return out  # no local radius anywhere: every point counts as far
+    # a row's local radius is a median of these radii, so its ratio is at least its distance over their
+    # largest: a region whose quantile of that floor is over ``radii`` is not beside, and its pairs are not
+    # searched (a removed arm reaching far from the skeleton; the same verdicts)
+    dist = element_tree.query(pts[rows], workers=query_workers(len(rows)))[0]
+    floor = dist / max(float(radii_made[1].max()), 1e-12)
+    maybe = np.array([bool((owner == i).any()) and float(np.quantile(floor[owner == i], quantile,
+                                                                     method="higher")) <= radii
+                      for i in range(len(ids))], bool)
+    ask = maybe[owner]
+    if not ask.any():
+        return out
+    rows, owner = rows[ask], owner[ask]
+    ratio, beyond = beside_ratios(pts, tree, rows, elements, spacing, kept, radii_made)
     ratio = np.where(np.isfinite(ratio), ratio, np.inf)
-    for i in range(len(ids)):
+    for i in np.flatnonzero(maybe):
         mine = owner == i
         past = beyond[mine] & (ratio[mine] > end_radii)
         out[i] = (bool(mine.any()) and float(np.quantile(ratio[mine], quantile, method="higher")) <= radii

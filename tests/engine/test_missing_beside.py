@@ -104,3 +104,29 @@ def test_the_pairs_within_reach_and_the_groups_medians_match_scipys_and_numpys(m
     for i, g in enumerate(lists):
         assert (middle[i] == np.median(values[owner == i])) if g else np.isnan(middle[i])
     assert np.isnan(middle[-1])
+
+
+def test_a_region_far_beyond_every_local_radius_is_refused_before_its_pairs_are_searched(monkeypatch):
+    """A region whose distances to the skeleton, over the largest local radius, already put its quantile
+    over the cut is not beside, and its pairs are not searched; the rows' full ratios say the same."""
+    from scipy.spatial import cKDTree
+
+    import skelcore.diagnostics.beside as beside
+
+    rng = np.random.default_rng(0)  # a tube of radius 0.5 along x from 0 to 40, its axis drawn to x = 5 only
+    x, a = rng.uniform(0.0, 40.0, 6000), rng.uniform(0.0, 2 * np.pi, 6000)
+    pts = np.column_stack([x, 0.5 * np.cos(a), 0.5 * np.sin(a)])
+    axis = np.column_stack([np.linspace(0.0, 5.0, 26), np.zeros(26), np.zeros(26)])
+    tree = cKDTree(pts)
+    spacing = float(np.median(tree.query(pts, k=2)[0][:, 1]))
+    largest = beside.local_radii(pts, tree, axis, cKDTree(axis), spacing)[1].max()
+    assert largest < 1.0  # the tube's chords: about its radius
+    far = pts[:, 0] > 20.0
+    region = np.where(far, 0, -1).astype(np.int64)
+    calls = []
+    real = beside._within
+    monkeypatch.setattr(beside, "_within", lambda *a: calls.append(1) or real(*a))
+    got = beside.beside_regions(pts, tree, region, np.array([0]), axis, spacing, 0.95, 3.0, 1.5, 0.15)
+    assert not got[0] and not calls
+    ratio, _ = beside.beside_ratios(pts, tree, np.flatnonzero(far), axis, spacing)
+    assert calls and np.quantile(np.where(np.isfinite(ratio), ratio, np.inf), 0.95, method="higher") > 3.0
