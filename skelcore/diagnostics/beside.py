@@ -19,7 +19,7 @@ from scipy.spatial import cKDTree
 from ..geometry import query_workers
 from .chord_cache import ChordCache
 
-__all__ = ["BESIDE_SAMPLES", "CLOUD_SAMPLES", "half_chords", "beside_ratios", "beside_regions"]
+__all__ = ["BESIDE_SAMPLES", "CLOUD_SAMPLES", "half_chords", "local_radii", "beside_ratios", "beside_regions"]
 
 #: points of a region measured (evenly spread over its rows)
 BESIDE_SAMPLES = 64

@@ -3,7 +3,11 @@ repair's cost"): the mean of its points in each cell of the finest cubic grid th
 ``Params.repair_fill_points`` cells. That skeletonization's cost grows with the points (robust_laplacian's
 Laplacians, docs/skeletonize.md "Speed"), while its curve samples balls of a fiftieth of the region's
 diagonal, which a few thousand points spread evenly fill; its contraction weights follow the point
-count (:func:`skelcore.skeleton.contraction.contract`), so a thinned region contracts alike."""
+count (:func:`skelcore.skeleton.contraction.contract`), so a thinned region contracts alike.
+
+Not :func:`skelcore.skeleton.degrade.voxel_grid_average`: the bisection counts a grid's cells some 15
+times, which one integer key per cell does in a 1-d unique (that function's row unique took about 1 s on
+46,000 points), and the means come in the cells' lexicographic order, which the measured fills used."""
 
 from __future__ import annotations
 
